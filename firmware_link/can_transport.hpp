@@ -1,0 +1,57 @@
+// CanTransport: what the rig-side client and the firmware emulator need from a
+// CAN interface. Backends: SocketCAN on Asio (socketcan.hpp) and an in-process
+// bus (inprocess_bus.hpp) for host tests and the in-process emulated plant.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "firmware_link/protocol.hpp"
+#include "rig/core/cancel.hpp"
+
+namespace rig::link {
+
+struct RxFrame {
+  CanFrame frame;
+  double t_s = 0;  // receive time: kernel timestamp (SocketCAN) or bus time (in-process), seconds
+};
+
+// Accept a frame when (frame.id & mask) == (id & mask), as SocketCAN's can_filter.
+struct CanFilter {
+  uint32_t id = 0;
+  uint32_t mask = 0;
+};
+
+struct TransportStats {
+  uint64_t tx = 0, rx = 0;
+  uint64_t rx_dropped = 0;     // frames the receive queue had to drop (kernel SO_RXQ_OVFL / in-process capacity)
+  uint64_t error_frames = 0;   // error frames seen (including the ones that only warn)
+};
+
+class CanTransport {
+ public:
+  virtual ~CanTransport() = default;
+  // Throws HardwareError when the frame cannot be sent (interface down, bus-off).
+  virtual void send(const CanFrame& f) = 0;
+  // Next frame, or nullopt after `timeout_s` (0 = poll). Error frames that mean
+  // the link is unusable (bus-off, error passive) throw HardwareError; warnings
+  // are counted and skipped. Cancellation throws AbortedError.
+  virtual std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) = 0;
+  // Replaces the receive filters (empty = receive everything).
+  virtual void set_filters(std::span<const CanFilter> filters) = 0;
+  virtual TransportStats stats() const = 0;
+  virtual std::string name() const = 0;  // "socketcan:vcan0", "inprocess:bus0/rig"
+};
+
+// Error-frame classification shared by the backends (linux/can/error.h layout:
+// id carries CAN_ERR_* class bits, data[1] the controller state).
+struct ErrorFrameInfo {
+  bool fatal = false;   // bus-off or error passive: the link cannot be trusted
+  std::string text;     // "bus-off", "controller error passive (rx)", ...
+};
+ErrorFrameInfo classify_error_frame(const CanFrame& f);
+
+bool filter_accepts(std::span<const CanFilter> filters, const CanFrame& f);
+
+}  // namespace rig::link

@@ -1,0 +1,38 @@
+#include "firmware_link/connect.hpp"
+
+#include "firmware_link/socketcan.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::link {
+
+namespace {
+void check_dut_keys(const toml::table& t) {
+  cfg::check_keys(t, {"can", "silence_ms", "command_timeout_ms", "command_attempts", "reorder_window", "rcvbuf_kb"},
+                  "[dut]");
+}
+}  // namespace
+
+LinkOptions link_options(const toml::table& t) {
+  check_dut_keys(t);
+  LinkOptions o;
+  o.silence_s = cfg::get_number(t, "silence_ms", 100.0, 5.0, 60000.0) / 1e3;
+  o.command_timeout_s = cfg::get_number(t, "command_timeout_ms", 250.0, 1.0, 60000.0) / 1e3;
+  o.command_attempts = static_cast<int>(cfg::get_int(t, "command_attempts", 3, 1, 100));
+  o.reorder_window = static_cast<uint32_t>(cfg::get_int(t, "reorder_window", 8, 1, 4096));
+  return o;
+}
+
+std::unique_ptr<CanDutLink> connect_dut(const toml::table& t, Clock& clock) {
+  const LinkOptions o = link_options(t);
+  const std::string iface = cfg::get_string(t, "can");
+  if (iface.empty() || iface.size() >= 16) {
+    const toml::node* n = t.get("can");
+    throw ConfigError(cfg::where(n ? *n : static_cast<const toml::node&>(t)) + ": 'can' = \"" + iface +
+                      "\" is not a network interface name (1..15 characters)");
+  }
+  SocketCanOptions so;
+  so.rcvbuf_bytes = static_cast<int>(cfg::get_int(t, "rcvbuf_kb", 8192, 16, 1 << 20) * 1024);
+  return std::make_unique<CanDutLink>(std::make_unique<SocketCanTransport>(iface, so), clock, o);
+}
+
+}  // namespace rig::link

@@ -1,0 +1,106 @@
+#include "firmware_link/inprocess_bus.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::link {
+
+// ---- bus ----
+
+std::shared_ptr<InProcessBus> InProcessBus::create(Options opts) {
+  return std::shared_ptr<InProcessBus>(new InProcessBus(std::move(opts)));
+}
+
+std::unique_ptr<CanTransport> InProcessBus::open(const std::string& port_name) {
+  std::unique_ptr<InProcessPort> p(new InProcessPort(shared_from_this(), port_name));
+  std::lock_guard lk(mu_);
+  ports_.push_back(p.get());
+  return p;
+}
+
+double InProcessBus::now() const {
+  if (opts_.now) return opts_.now();
+  using namespace std::chrono;
+  return duration<double>(steady_clock::now().time_since_epoch()).count();
+}
+
+void InProcessBus::inject(const CanFrame& f) { deliver(f, nullptr); }
+
+void InProcessBus::deliver(const CanFrame& f, const InProcessPort* from) {
+  const RxFrame rx{f, now()};
+  std::lock_guard lk(mu_);
+  for (InProcessPort* p : ports_)
+    if (p != from) p->push(rx);
+}
+
+void InProcessBus::detach(InProcessPort* p) {
+  std::lock_guard lk(mu_);
+  ports_.erase(std::remove(ports_.begin(), ports_.end(), p), ports_.end());
+}
+
+// ---- port ----
+
+InProcessPort::~InProcessPort() { bus_->detach(this); }
+
+void InProcessPort::push(const RxFrame& f) {
+  {
+    std::lock_guard lk(mu_);
+    if (!filter_accepts(filters_, f.frame)) return;
+    if (queue_.size() >= bus_->opts_.rx_capacity) {
+      ++stats_.rx_dropped;
+      return;
+    }
+    queue_.push_back(f);
+  }
+  cv_.notify_one();
+}
+
+void InProcessPort::send(const CanFrame& f) {
+  if (f.len > 8) throw HardwareError(name() + ": frame 0x" + std::to_string(f.id) + " longer than 8 bytes");
+  {
+    std::lock_guard lk(mu_);
+    ++stats_.tx;
+  }
+  bus_->deliver(f, this);
+}
+
+std::optional<RxFrame> InProcessPort::receive(double timeout_s, const CancelToken& cancel) {
+  using clock = std::chrono::steady_clock;
+  const auto deadline = clock::now() + std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(timeout_s));
+  std::unique_lock lk(mu_);
+  for (;;) {
+    cancel.throw_if_requested();
+    while (!queue_.empty()) {
+      RxFrame f = queue_.front();
+      queue_.pop_front();
+      if (f.frame.error) {
+        ++stats_.error_frames;
+        const ErrorFrameInfo e = classify_error_frame(f.frame);
+        if (e.fatal) throw HardwareError(name() + ": CAN " + e.text);
+        continue;  // warnings are counted, not fatal
+      }
+      ++stats_.rx;
+      return f;
+    }
+    const auto now = clock::now();
+    if (timeout_s <= 0 || now >= deadline) return std::nullopt;
+    // Wake at least every 20 ms to notice cancellation.
+    cv_.wait_until(lk, std::min(deadline, now + std::chrono::milliseconds(20)));
+  }
+}
+
+void InProcessPort::set_filters(std::span<const CanFilter> filters) {
+  std::lock_guard lk(mu_);
+  filters_.assign(filters.begin(), filters.end());
+}
+
+TransportStats InProcessPort::stats() const {
+  std::lock_guard lk(mu_);
+  return stats_;
+}
+
+std::string InProcessPort::name() const { return "inprocess:" + bus_->name() + "/" + name_; }
+
+}  // namespace rig::link

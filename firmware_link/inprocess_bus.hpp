@@ -1,0 +1,74 @@
+// An in-process CAN bus with the same CanTransport interface as SocketCAN: every
+// frame a port sends is delivered to every other port whose filters accept it
+// (vcan semantics: no echo to the sender). Used by host tests and by the
+// in-process emulated plant (lockstep: receive(0) polls, never sleeps).
+#pragma once
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "firmware_link/can_transport.hpp"
+
+namespace rig::link {
+
+class InProcessPort;
+
+class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
+ public:
+  struct Options {
+    std::string name = "bus0";
+    // Per-port receive queue, frames. A real socket drops when its buffer is
+    // full; so does this (counted in TransportStats::rx_dropped).
+    std::size_t rx_capacity = std::size_t{1} << 20;
+    std::function<double()> now;  // timestamp source (seconds); default: steady clock
+  };
+  static std::shared_ptr<InProcessBus> create(Options opts);
+  static std::shared_ptr<InProcessBus> create() { return create(Options{}); }
+
+  // A new node on the bus; the port keeps the bus alive.
+  std::unique_ptr<CanTransport> open(const std::string& port_name);
+  // Delivers a frame to every port as if a third node (or the controller, for
+  // error frames) had put it on the bus.
+  void inject(const CanFrame& f);
+  const std::string& name() const { return opts_.name; }
+
+ private:
+  friend class InProcessPort;
+  explicit InProcessBus(Options opts) : opts_(std::move(opts)) {}
+  void deliver(const CanFrame& f, const InProcessPort* from);
+  void detach(InProcessPort* p);
+  double now() const;
+
+  Options opts_;
+  std::mutex mu_;  // guards ports_
+  std::vector<InProcessPort*> ports_;
+};
+
+class InProcessPort final : public CanTransport {
+ public:
+  ~InProcessPort() override;
+  void send(const CanFrame& f) override;
+  std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
+  void set_filters(std::span<const CanFilter> filters) override;
+  TransportStats stats() const override;
+  std::string name() const override;
+
+ private:
+  friend class InProcessBus;
+  InProcessPort(std::shared_ptr<InProcessBus> bus, std::string name) : bus_(std::move(bus)), name_(std::move(name)) {}
+  void push(const RxFrame& f);  // called by the bus
+
+  std::shared_ptr<InProcessBus> bus_;
+  std::string name_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<RxFrame> queue_;
+  std::vector<CanFilter> filters_;
+  TransportStats stats_;
+};
+
+}  // namespace rig::link

@@ -1,0 +1,70 @@
+// The emulated quartz pendulum accelerometer: closed loop + noise + orientation,
+// stepped at the loop rate and polled by sample-and-hold at the output rate.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "plant/dut/loop_model.hpp"
+#include "plant/dut/noise.hpp"
+#include "plant/dut/params.hpp"
+#include "plant/emulated/dut_source.hpp"
+
+namespace rig::plant {
+
+class EmulatedDut final : public DutSource {
+ public:
+  EmulatedDut(const DutParams& p, uint64_t seed);
+
+  double output_rate_hz() const override { return p_.loop.output_rate_hz; }
+  void set_table_angle_deg(double deg) override;
+  void next(float& x_g, float& y_g) override;
+  void set_filter(const FilterConfig& f) override;
+  FilterConfig filter() const override { return filter_cfg_; }
+  double temperature_c() const override { return temp_c_; }
+  std::string serial() const override { return p_.serial; }
+
+  // Full-precision outputs (before the float conversion of the seam), for tests and tools.
+  void next(double& x_g, double& y_g);
+  // Gravity component along the sensitive axis at the current table angle (g).
+  double static_input_g() const { return q_static_; }
+  double time_s() const { return static_cast<double>(n_out_) / p_.loop.output_rate_hz; }
+  bool saturated() const { return st_.saturated; }
+  const DutParams& params() const { return p_; }
+  const LoopModel& loop() const { return loop_; }
+
+ private:
+  double slow_bias_g();          // bias terms updated once per output period
+  double word(double v, double& carry) const;
+
+  static constexpr int kBurstTones = 5;
+  DutParams p_;
+  LoopModel loop_;
+  LoopModel::State st_;
+  int steps_per_out_;
+  double dt_out_;
+  uint64_t n_out_ = 0;
+  double q_static_ = 0;
+  double temp_c_ = 0;
+
+  // noise sources, each with its own stream
+  enum Stream : uint64_t { kSense = 1, kInput, kFlicker, kRrw, kVib, kBurst, kIntf, kPollI, kPollQ, kPickoff };
+  noise::Rng r_sense_, r_input_, r_flicker_, r_rrw_, r_vib_, r_burst_, r_intf_, r_poll_i_, r_poll_q_;
+  noise::FlickerBank flicker_, poll_i_, poll_q_;
+  noise::BandNoise vib_;
+  noise::LineBand intf_;
+  double sense_sd_ = 0, input_sd_ = 0, rrw_step_ = 0, rrw_ = 0;
+  double sense_lsb_ = 0, sense_inv_lsb_ = 0;
+  noise::Oscillator poll_osc_;
+  std::array<noise::Oscillator, kBurstTones> burst_osc_{};
+  std::array<double, kBurstTones> burst_env_{};
+  double burst_p_ = 0, burst_decay_ = 1;
+
+  // output filter W_f(z), DF-II-T sections at the loop rate
+  FilterConfig filter_cfg_;
+  std::vector<noise::Section> filt_;
+  double carry_x_ = 0, carry_y_ = 0;
+};
+
+}  // namespace rig::plant

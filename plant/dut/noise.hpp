@@ -1,0 +1,167 @@
+// Noise generators of the emulated DUT: cheap, deterministic, portable.
+// PRNG: xoshiro256** (Blackman & Vigna 2018) seeded through splitmix64, one
+// independent stream per noise source, so adding a source leaves the others'
+// sequences unchanged. Normal deviates: Irwin-Hall sum of four 16-bit uniforms
+// from one 64-bit draw (mean 0, variance 1, tails cut at +-3.46 sigma): about
+// 10x cheaper than Box-Muller, bit-identical on every platform (integer
+// arithmetic and one multiply), and the Allan/PSD analysis sees only second moments.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace rig::plant::noise {
+
+// Round to nearest (ties to even) for |v| < 2^51 with two additions: no libm call,
+// exact and identical on every IEEE-754 platform (the project never uses -ffast-math).
+inline double round_half_even(double v) {
+  constexpr double kMagic = 6755399441055744.0;  // 1.5 * 2^52
+  return (v + kMagic) - kMagic;
+}
+
+inline uint64_t splitmix64(uint64_t& s) {
+  uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+class Rng {
+ public:
+  Rng() : Rng(0, 0) {}
+  Rng(uint64_t seed, uint64_t stream) {
+    uint64_t s = seed ^ (stream * 0xd1b54a32d192ed03ULL);
+    for (auto& w : s_) w = splitmix64(s);
+  }
+  uint64_t next() {
+    const uint64_t r = rotl(s_[1] * 5, 7) * 9;
+    const uint64_t t = s_[1] << 17;
+    s_[2] ^= s_[0];
+    s_[3] ^= s_[1];
+    s_[1] ^= s_[2];
+    s_[0] ^= s_[3];
+    s_[2] ^= t;
+    s_[3] = rotl(s_[3], 45);
+    return r;
+  }
+  // Uniform in [0, 1) with 53 random bits.
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  // Approximately standard normal (see the file comment).
+  double normal() {
+    const uint64_t r = next();
+    const int64_t sum = static_cast<int64_t>((r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48));
+    // sum of 4 U{0..65535}: mean 4*32767.5, variance 4*(65536^2-1)/12
+    constexpr double kMean = 4 * 32767.5;
+    constexpr double kInvSd = 1.0 / 37837.22695;  // 1/sqrt(4*(65536^2-1)/12)
+    return (static_cast<double>(sum) - kMean) * kInvSd;
+  }
+
+ private:
+  static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+  uint64_t s_[4];
+};
+
+// Direct-form-II-transposed second-order section (the same form the DUT's MCU uses).
+struct Section {
+  double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
+  double w1 = 0, w2 = 0;
+  double step(double in) {
+    const double out = b0 * in + w1;
+    w1 = b1 * in - a1 * out + w2;
+    w2 = b2 * in - a2 * out;
+    return out;
+  }
+};
+
+// Band-limited noise: white noise through a constant-peak-gain band-pass (RBJ
+// cookbook) between f_lo and f_hi, scaled to the requested RMS.
+class BandNoise {
+ public:
+  BandNoise() = default;
+  BandNoise(double f_lo, double f_hi, double rate_hz, double rms);
+  double step(Rng& rng) { return sec_.step(scale_ * rng.normal()); }
+
+ private:
+  Section sec_;
+  double scale_ = 0;
+};
+
+// Flicker (1/f) noise: a bank of first-order Gauss-Markov processes, three per
+// decade of correlation time with equal variances (their Lorentzian spectra sum
+// to 1/f between 1/(2 pi tau_max) and 1/(2 pi tau_min)). Each process is updated
+// only every ~tau/50 of its own, which keeps the cost per output period tiny.
+class FlickerBank {
+ public:
+  FlickerBank() = default;
+  // `b` = the bias-instability coefficient an Allan analysis reads on the flat part
+  // (sigma_flat = 0.664 B, IEEE 952 C.1), set from the bank's analytic Allan variance.
+  // The processes start in their stationary distribution, drawn from `rng`.
+  FlickerBank(double b, double tau_min, double tau_max, double dt, Rng& rng);
+  double step(Rng& rng);  // advance by dt, return the sum
+  // Analytic Allan deviation of the bank (Gauss-Markov AVAR summed over processes).
+  double adev(double tau) const { return sd_ * adev_unit(tau); }
+
+ private:
+  struct Proc {
+    double tau, phi, drive, value;
+    uint32_t every, count;
+  };
+  double adev_unit(double tau) const;  // with unit variance per process
+  std::vector<Proc> procs_;
+  double sum_ = 0;
+  double sd_ = 0;  // standard deviation of each process
+};
+
+// Narrow-band interference: `lines` carriers spread evenly over [f_lo, f_hi], each with
+// a complex envelope that wanders as a Gauss-Markov process of correlation time
+// `coherence_s` (line width ~ 1/(pi coherence)); no spectral skirts, so nothing leaks
+// to frequencies outside the band (which sampling at 1 kHz would fold to near-DC).
+class LineBand {
+ public:
+  LineBand() = default;
+  LineBand(double f_lo, double f_hi, int lines, double coherence_s, double rms, double rate_hz, double env_dt,
+           Rng& rng);
+  void update_envelopes(Rng& rng);  // once per env_dt
+  double step() {                   // once per 1/rate_hz
+    double v = 0;
+    for (Line& l : lines_) {
+      v += l.ar * l.c - l.ai * l.s;
+      const double nc = l.c * l.rc - l.s * l.rs;
+      l.s = l.s * l.rc + l.c * l.rs;
+      l.c = nc;
+    }
+    return v;
+  }
+
+ private:
+  struct Line {
+    double c, s, rc, rs;  // carrier (recursive rotation)
+    double ar, ai;        // complex envelope
+  };
+  std::vector<Line> lines_;
+  double phi_ = 0, drive_ = 0;
+};
+
+// Recursive quadrature oscillator (no sin() per step); renormalised on demand.
+struct Oscillator {
+  double c = 1, s = 0, rc = 1, rs = 0;
+  void set(double f_hz, double rate_hz, double phase) {
+    const double w = 2 * M_PI * f_hz / rate_hz;
+    rc = std::cos(w);
+    rs = std::sin(w);
+    c = std::cos(phase);
+    s = std::sin(phase);
+  }
+  void step() {
+    const double nc = c * rc - s * rs;
+    s = s * rc + c * rs;
+    c = nc;
+  }
+  void renormalise() {
+    const double k = 1.5 - 0.5 * (c * c + s * s);
+    c *= k;
+    s *= k;
+  }
+};
+
+}  // namespace rig::plant::noise

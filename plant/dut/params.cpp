@@ -1,0 +1,176 @@
+#include "plant/dut/params.hpp"
+
+#include <string>
+
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::plant {
+namespace {
+
+using cfg::get_bool;
+using cfg::get_int;
+using cfg::get_number;
+
+// Reads `key` into `v` when present (the merged table always holds the defaults).
+void num(const toml::table& t, std::string_view key, double& v, std::optional<double> lo = std::nullopt,
+         std::optional<double> hi = std::nullopt) {
+  v = get_number(t, key, v, lo, hi);
+}
+void integer(const toml::table& t, std::string_view key, int& v, int64_t lo, int64_t hi) {
+  v = static_cast<int>(get_int(t, key, v, lo, hi));
+}
+
+const toml::table& section(const toml::table& root, std::string_view key) {
+  const toml::table* t = cfg::get_table(root, key, true);
+  return *t;
+}
+
+void read_loop(const toml::table& t, LoopParams& p) {
+  cfg::check_keys(t,
+                  {"loop_rate_hz", "output_rate_hz", "g_local_m_s2", "pendulosity_kg_m", "inertia_kg_m2",
+                   "damping_n_m_s", "stiffness_n_m_rad", "angle_sensor_v_rad", "preamp_gain", "adc_bits",
+                   "adc_range_v", "pwm_full_scale_a", "pwm_counts", "torquer_n_m_a", "coil_tau_s", "delay_steps"},
+                  "plant.dut.loop");
+  num(t, "loop_rate_hz", p.loop_rate_hz, 1000, 1e6);
+  num(t, "output_rate_hz", p.output_rate_hz, 1, 1e5);
+  num(t, "g_local_m_s2", p.g_local_m_s2, 9.7, 9.9);
+  num(t, "pendulosity_kg_m", p.pendulosity_kg_m, 1e-9, 1e-2);
+  num(t, "inertia_kg_m2", p.inertia_kg_m2, 1e-12, 1e-3);
+  num(t, "damping_n_m_s", p.damping_n_m_s, 0, 1);
+  num(t, "stiffness_n_m_rad", p.stiffness_n_m_rad, 0, 10);
+  num(t, "angle_sensor_v_rad", p.angle_sensor_v_rad, 1e-3, 1e6);
+  num(t, "preamp_gain", p.preamp_gain, 1e-3, 1e6);
+  integer(t, "adc_bits", p.adc_bits, 4, 32);
+  num(t, "adc_range_v", p.adc_range_v, 1e-3, 100);
+  num(t, "pwm_full_scale_a", p.pwm_full_scale_a, 1e-6, 10);
+  integer(t, "pwm_counts", p.pwm_counts, 2, 1 << 24);
+  num(t, "torquer_n_m_a", p.torquer_n_m_a, 1e-6, 10);
+  num(t, "coil_tau_s", p.coil_tau_s, 1e-7, 1e-2);
+  integer(t, "delay_steps", p.delay_steps, 0, 1);
+  const double ratio = p.loop_rate_hz / p.output_rate_hz;
+  if (ratio < 1 || ratio != static_cast<double>(static_cast<int64_t>(ratio)))
+    throw ConfigError(cfg::where(t) + ": loop_rate_hz must be an integer multiple of output_rate_hz");
+}
+
+void read_regulator(const toml::table& t, RegulatorParams& p) {
+  cfg::check_keys(t, {"gain_a_per_v", "integral_corner_hz", "lead_zero_hz", "lead_pole_hz"},
+                  "plant.dut.regulator");
+  num(t, "gain_a_per_v", p.gain_a_per_v, 1e-9, 1e3);
+  num(t, "integral_corner_hz", p.integral_corner_hz, 0, 1e4);
+  num(t, "lead_zero_hz", p.lead_zero_hz, 0.01, 1e5);
+  num(t, "lead_pole_hz", p.lead_pole_hz, 0.01, 1e5);
+}
+
+void read_orientation(const toml::table& t, OrientationParams& p) {
+  cfg::check_keys(t,
+                  {"intrinsic_bias_g", "misalignment_rad", "cross_misalignment_rad", "table_tilt_rad",
+                   "u10_angle_deg"},
+                  "plant.dut.orientation");
+  num(t, "intrinsic_bias_g", p.intrinsic_bias_g, -1, 1);
+  num(t, "misalignment_rad", p.misalignment_rad, -0.1, 0.1);
+  num(t, "cross_misalignment_rad", p.cross_misalignment_rad, -0.1, 0.1);
+  num(t, "table_tilt_rad", p.table_tilt_rad, -0.1, 0.1);
+  num(t, "u10_angle_deg", p.u10_angle_deg, -360, 360);
+}
+
+void read_noise(const toml::table& t, NoiseParams& p) {
+  cfg::check_keys(
+      t,
+      {"enabled", "sense_white_g_rthz", "sense_adc_bits", "range_g", "output_lsb_g", "input_white_g_rthz",
+       "flicker_b_g", "flicker_tau_min_s", "flicker_tau_max_s", "rrw_k_g_per_rts", "ramp_r_g_per_s", "ambient_c",
+       "warmup_rise_c", "warmup_tau_s", "bias_tempco_g_per_c", "vibration_rms_g", "vibration_f_lo_hz",
+       "vibration_f_hi_hz", "burst_peak_g", "burst_rate_per_h",
+       "burst_decay_s", "interference_rms_g", "interference_f_lo_hz", "interference_f_hi_hz", "interference_lines",
+       "interference_coherence_s", "polling_b_g", "polling_offset_hz"},
+      "plant.dut.noise");
+  p.enabled = get_bool(t, "enabled", p.enabled);
+  num(t, "sense_white_g_rthz", p.sense_white_g_rthz, 0, 1);
+  integer(t, "sense_adc_bits", p.sense_adc_bits, 4, 40);
+  num(t, "range_g", p.range_g, 0.1, 1000);
+  num(t, "output_lsb_g", p.output_lsb_g, 0, 1);
+  num(t, "input_white_g_rthz", p.input_white_g_rthz, 0, 1);
+  num(t, "flicker_b_g", p.flicker_b_g, 0, 1);
+  num(t, "flicker_tau_min_s", p.flicker_tau_min_s, 1e-3, 1e7);
+  num(t, "flicker_tau_max_s", p.flicker_tau_max_s, 1e-3, 1e8);
+  if (p.flicker_tau_max_s <= p.flicker_tau_min_s)
+    throw ConfigError(cfg::where(t) + ": flicker_tau_max_s must exceed flicker_tau_min_s");
+  num(t, "rrw_k_g_per_rts", p.rrw_k_g_per_rts, 0, 1);
+  num(t, "ramp_r_g_per_s", p.ramp_r_g_per_s, -1, 1);
+  num(t, "ambient_c", p.ambient_c, -60, 120);
+  num(t, "warmup_rise_c", p.warmup_rise_c, -50, 50);
+  num(t, "warmup_tau_s", p.warmup_tau_s, 1e-3, 1e7);
+  num(t, "bias_tempco_g_per_c", p.bias_tempco_g_per_c, -1, 1);
+  num(t, "vibration_rms_g", p.vibration_rms_g, 0, 10);
+  num(t, "vibration_f_lo_hz", p.vibration_f_lo_hz, 0.1, 5000);
+  num(t, "vibration_f_hi_hz", p.vibration_f_hi_hz, 0.1, 5000);
+  num(t, "burst_peak_g", p.burst_peak_g, 0, 10);
+  num(t, "burst_rate_per_h", p.burst_rate_per_h, 0, 1e6);
+  num(t, "burst_decay_s", p.burst_decay_s, 1e-3, 1e4);
+  num(t, "interference_rms_g", p.interference_rms_g, 0, 10);
+  num(t, "interference_f_lo_hz", p.interference_f_lo_hz, 0.1, 5000);
+  num(t, "interference_f_hi_hz", p.interference_f_hi_hz, 0.1, 5000);
+  integer(t, "interference_lines", p.interference_lines, 1, 64);
+  num(t, "interference_coherence_s", p.interference_coherence_s, 1e-3, 1e6);
+  num(t, "polling_b_g", p.polling_b_g, 0, 1);
+  num(t, "polling_offset_hz", p.polling_offset_hz, -10, 10);
+}
+
+FilterConfig read_filter(const toml::table& t) {
+  cfg::check_keys(t, {"preset", "sections", "enabled"}, "plant.dut.filter");
+  FilterConfig f;
+  const std::string preset = cfg::get_string(t, "preset", "paper");
+  if (preset == "paper") {
+    f = paper_filter();
+  } else if (preset == "none") {
+    f.sections.clear();
+  } else if (preset == "custom") {
+    const toml::array* arr = t.get_as<toml::array>("sections");
+    if (!arr) throw ConfigError(cfg::where(t) + ": preset = \"custom\" needs sections = [[b0,b1,b2,a1,a2], ...]");
+    for (const toml::node& n : *arr) {
+      const toml::array* s = n.as_array();
+      if (!s || s->size() != 5) throw ConfigError(cfg::where(n) + ": a section is [b0, b1, b2, a1, a2]");
+      double c[5];
+      for (std::size_t i = 0; i < 5; ++i) {
+        std::optional<double> v = (*s)[i].value<double>();
+        if (!v) throw ConfigError(cfg::where((*s)[i]) + ": filter coefficients must be numbers");
+        c[i] = *v;
+      }
+      f.sections.push_back(Biquad{c[0], c[1], c[2], c[3], c[4]});
+    }
+  } else {
+    throw ConfigError(cfg::where(*t.get("preset")) + ": preset must be \"paper\", \"none\" or \"custom\", not \"" +
+                      preset + "\"");
+  }
+  f.enabled = get_bool(t, "enabled", true);
+  return f;
+}
+
+}  // namespace
+
+FilterConfig paper_filter() {
+  FilterConfig f;
+  f.rate_hz = 10000.0;
+  f.sections = {Biquad{0.148895, 0.0, 0.0, -1.228261, 0.377156}};
+  f.enabled = true;
+  return f;
+}
+
+DutParams load_dut_params(const toml::table* overrides) {
+  toml::table merged = cfg::parse_string(default_dut_toml(), "plant/dut/default.toml");
+  if (overrides) cfg::merge_into(merged, *overrides);
+  cfg::check_keys(merged, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"}, "plant.dut");
+
+  DutParams p;
+  p.serial = cfg::get_string(merged, "serial", p.serial);
+  if (merged.contains("seed")) p.seed = static_cast<uint64_t>(get_int(merged, "seed", std::nullopt, 0));
+  read_loop(section(merged, "loop"), p.loop);
+  read_regulator(section(merged, "regulator"), p.regulator);
+  read_orientation(section(merged, "orientation"), p.orientation);
+  read_noise(section(merged, "noise"), p.noise);
+  p.filter = read_filter(section(merged, "filter"));
+  p.filter.rate_hz = p.loop.loop_rate_hz;
+  return p;
+}
+
+}  // namespace rig::plant

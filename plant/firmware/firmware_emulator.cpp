@@ -1,0 +1,253 @@
+#include "plant/firmware/firmware_emulator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::plant {
+
+using link::Op;
+using link::Result;
+
+namespace {
+constexpr int64_t kTickNs = 1'000'000;  // 1 kHz output period
+constexpr double kRangeG = 10.0;        // METHOD.md: range +-10 g
+
+bool stable_section(const Biquad& b) {
+  // Poles of 1 + a1 z^-1 + a2 z^-2 strictly inside the unit circle (the stability triangle).
+  return std::abs(b.a2) < 1.0 && std::abs(b.a1) < 1.0 + b.a2;
+}
+}  // namespace
+
+FirmwareEmulator::FirmwareEmulator(DutSource& source, link::CanTransport& bus, FirmwareOptions opts)
+    : src_(source), bus_(bus), opts_(opts), counter_(opts.first_seq) {
+  // The firmware only listens to the rig's commands.
+  const link::CanFilter f[] = {{link::can_id::kCommand, 0x7FF}};
+  bus_.set_filters(f);
+}
+
+FirmwareEmulator::~FirmwareEmulator() { stop(); }
+
+void FirmwareEmulator::set_faults(FirmwareFaults f) {
+  std::lock_guard lk(mu_);
+  faults_ = std::move(f);
+}
+
+FirmwareStats FirmwareEmulator::stats() const {
+  std::lock_guard lk(mu_);
+  return stats_;
+}
+
+uint64_t FirmwareEmulator::sample_counter() const {
+  std::lock_guard lk(mu_);
+  return counter_;
+}
+
+bool FirmwareEmulator::silent() const { return faults_.silent_from && counter_ >= *faults_.silent_from; }
+
+void FirmwareEmulator::send(const link::CanFrame& f) {
+  if (silent()) return;
+  bus_.send(f);
+  ++stats_.frames_sent;
+}
+
+void FirmwareEmulator::step(double dt_s) {
+  if (!(dt_s > 0)) return;
+  time_acc_ += dt_s * 1e9;
+  while (time_acc_ >= static_cast<double>(kTickNs) - 0.5) {  // tolerate rounding of many small dt
+    tick();
+    time_acc_ -= static_cast<double>(kTickNs);
+  }
+}
+
+void FirmwareEmulator::tick() {
+  std::lock_guard lk(mu_);
+  handle_commands();
+  // The DUT's loop runs whether or not the rig listens: the physics and the
+  // sample counter advance every output period.
+  float x = 0, y = 0;
+  src_.next(x, y);
+  const uint64_t seq = counter_++;
+  if (streaming_) {
+    ++stats_.samples;
+    uint8_t status = src_.filter().enabled ? link::stream_status::kFilterOn : 0;
+    if (std::abs(x) >= kRangeG) status |= link::stream_status::kSaturated;
+    send_sample(seq, x, y, status);
+  }
+  ++ticks_;
+  const auto hb_every = static_cast<uint64_t>(std::max(1.0, std::round(1000.0 / opts_.heartbeat_hz)));
+  if (ticks_ % hb_every == 0) {
+    link::Heartbeat h;
+    h.state = (streaming_ ? link::hb_state::kStreaming : 0) | (src_.filter().enabled ? link::hb_state::kFilterOn : 0);
+    h.counter = hb_counter_++;
+    h.temperature_c = src_.temperature_c();
+    h.last_seq = static_cast<uint32_t>(seq);
+    send(link::encode(h));
+  }
+}
+
+void FirmwareEmulator::send_sample(uint64_t seq, float x, float y, uint8_t status) {
+  for (const auto& [first, count] : faults_.drop_samples)
+    if (seq >= first && seq < first + count) {
+      ++stats_.samples_dropped;
+      return;
+    }
+  const int copies = faults_.duplicate_samples.count(seq) ? 2 : 1;
+  for (int i = 0; i < copies; ++i) {
+    if (!faults_.drop_frames.count({seq, 0}))
+      send(link::encode(link::StreamHalf{link::Channel::X, static_cast<uint32_t>(seq), status, x}));
+    if (!faults_.drop_frames.count({seq, 1}))
+      send(link::encode(link::StreamHalf{link::Channel::Y, static_cast<uint32_t>(seq), status, y}));
+  }
+}
+
+void FirmwareEmulator::handle_commands() {
+  const CancelToken never;
+  while (auto rx = bus_.receive(0, never)) {
+    const link::Decoded d = link::decode(rx->frame);
+    const auto* c = std::get_if<link::Command>(&d.msg);
+    if (!c) {
+      ++stats_.bad_commands;  // malformed: a real MCU cannot answer what it cannot parse
+      continue;
+    }
+    ++stats_.commands;
+    const link::Response r = execute(*c);
+    if (r.result != Result::Ok) ++stats_.bad_commands;
+    send(link::encode(r));
+  }
+}
+
+link::Response FirmwareEmulator::execute(const link::Command& c) {
+  link::Response r;
+  r.op = c.op;
+  r.token = c.token;
+  auto bad = [&r](Result why) {
+    r.result = why;
+    return r;
+  };
+  if (!link::known_op(static_cast<uint8_t>(c.op))) return bad(Result::UnknownOp);
+  switch (c.op) {
+    case Op::StartStream:
+      streaming_ = true;
+      r.value = static_cast<uint32_t>(counter_);
+      break;
+    case Op::StopStream:
+      streaming_ = false;
+      r.value = static_cast<uint32_t>(counter_);
+      break;
+    case Op::FilterBegin: {
+      const float rate = link::bits_f32(c.value);
+      if (c.a0 > link::kMaxSections || !std::isfinite(rate) || !(rate > 0)) return bad(Result::BadArgument);
+      staged_ = FilterConfig{};
+      staged_.sections.assign(c.a0, Biquad{});
+      staged_.rate_hz = rate;
+      staged_have_.assign(static_cast<std::size_t>(c.a0) * 5, 0);
+      staging_ = true;
+      r.aux = c.a0;
+      r.value = c.value;
+      break;
+    }
+    case Op::FilterCoef: {
+      if (!staging_) return bad(Result::BadState);
+      const float v = link::bits_f32(c.value);
+      if (c.a0 >= staged_.sections.size() || c.a1 >= 5 || !std::isfinite(v)) return bad(Result::BadArgument);
+      Biquad& b = staged_.sections[c.a0];
+      double* coef[5] = {&b.b0, &b.b1, &b.b2, &b.a1, &b.a2};
+      *coef[c.a1] = v;
+      staged_have_[static_cast<std::size_t>(c.a0) * 5 + c.a1] = 1;
+      r.aux = static_cast<uint8_t>(c.a0 << 4 | c.a1);
+      r.value = c.value;
+      break;
+    }
+    case Op::FilterCommit: {
+      if (!staging_) return bad(Result::BadState);
+      const bool complete = std::all_of(staged_have_.begin(), staged_have_.end(), [](uint8_t h) { return h != 0; });
+      const bool stable = std::all_of(staged_.sections.begin(), staged_.sections.end(), stable_section);
+      if (!complete || !stable) return bad(Result::BadArgument);
+      staged_.enabled = src_.filter().enabled;
+      src_.set_filter(staged_);
+      staging_ = false;
+      r.aux = static_cast<uint8_t>(staged_.sections.size());
+      break;
+    }
+    case Op::FilterGetInfo: {
+      const FilterConfig f = src_.filter();
+      r.aux = static_cast<uint8_t>(std::min<std::size_t>(f.sections.size(), 0x7F) | (f.enabled ? 0x80u : 0u));
+      r.value = link::f32_bits(static_cast<float>(f.rate_hz));
+      break;
+    }
+    case Op::FilterGetCoef: {
+      const FilterConfig f = src_.filter();
+      if (c.a0 >= f.sections.size() || c.a1 >= 5) return bad(Result::BadArgument);
+      const Biquad& b = f.sections[c.a0];
+      const double coef[5] = {b.b0, b.b1, b.b2, b.a1, b.a2};
+      r.aux = static_cast<uint8_t>(c.a0 << 4 | c.a1);
+      r.value = link::f32_bits(static_cast<float>(coef[c.a1]));
+      break;
+    }
+    case Op::FilterEnable: {
+      if (c.a0 > 1) return bad(Result::BadArgument);
+      FilterConfig f = src_.filter();
+      f.enabled = c.a0 == 1;
+      src_.set_filter(f);
+      r.aux = c.a0;
+      break;
+    }
+    case Op::GetSerial: {
+      const std::string s = src_.serial().substr(0, link::kMaxSerial);
+      if (c.a0 * 4u >= std::max<std::size_t>(s.size(), 1)) {
+        if (c.a0 != 0) return bad(Result::BadArgument);
+      }
+      r.aux = static_cast<uint8_t>(s.size());
+      for (unsigned i = 0; i < 4; ++i) {
+        const std::size_t k = c.a0 * 4u + i;
+        if (k < s.size()) r.value |= static_cast<uint32_t>(static_cast<uint8_t>(s[k])) << (8 * i);
+      }
+      break;
+    }
+    case Op::GetVersion:
+      r.aux = static_cast<uint8_t>(opts_.version_major);
+      r.value = static_cast<uint32_t>(opts_.version_minor & 0xFFFF) | static_cast<uint32_t>(opts_.version_patch & 0xFFFF) << 16;
+      break;
+    case Op::GetTemperature:
+      r.value = link::f32_bits(static_cast<float>(src_.temperature_c()));
+      break;
+  }
+  return r;
+}
+
+void FirmwareEmulator::start_realtime() {
+  if (thread_.joinable()) return;
+  stop_ = false;
+  thread_ = std::thread([this] {
+    using clk = std::chrono::steady_clock;
+    auto t0 = clk::now();
+    uint64_t done = 0;
+    while (!stop_) {
+      const auto due = static_cast<uint64_t>((clk::now() - t0) / std::chrono::nanoseconds(kTickNs));
+      // A wake-up more than 1 s late (suspended process) restarts the schedule
+      // rather than bursting a second of samples.
+      if (due > done + 1000) {
+        t0 = clk::now();
+        done = 0;
+        continue;
+      }
+      try {
+        for (; done < due && !stop_; ++done) tick();
+      } catch (const std::exception&) {
+        // A transport error (interface went down): keep ticking, a real MCU does.
+        ++done;
+      }
+      std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(kTickNs) * (done + 1));
+    }
+  });
+}
+
+void FirmwareEmulator::stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+}  // namespace rig::plant

@@ -1,0 +1,201 @@
+#include "procedures/acceptance/profile.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include "procedures/analysis/filter.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::acceptance {
+
+const std::map<std::string, std::string>& builtin_profiles();  // generated from profiles/*.toml
+
+namespace {
+
+Orientation parse_orientation(const toml::table& t, std::string_view key, Orientation def) {
+  const std::string s = cfg::get_string(t, key, std::string(to_string(def)));
+  if (s == "U10") return Orientation::U10;
+  if (s == "U20") return Orientation::U20;
+  throw ConfigError(cfg::where(*t.get(key)) + ": '" + std::string(key) + "' must be \"U10\" or \"U20\", not \"" + s + "\"");
+}
+
+std::string digest(const toml::table& t) {
+  std::ostringstream os;
+  os << t;
+  return std::to_string(std::hash<std::string>{}(os.str()));
+}
+
+FilterConfig parse_filter(const toml::table& f, std::string& name) {
+  cfg::check_keys(f, {"preset", "sections", "rate_hz", "enabled"}, "filter");
+  FilterConfig out;
+  const std::string preset = cfg::get_string(f, "preset", std::string("custom"));
+  if (preset == "paper") {
+    out = analysis::paper_wf();
+    name = "paper W_f(z)";
+  } else if (preset == "none") {
+    out.sections.clear();
+    out.enabled = false;
+    name = "none";
+  } else if (preset == "custom") {
+    const toml::node* secs = f.get("sections");
+    if (!secs || !secs->is_array()) throw ConfigError(cfg::where(f) + ": [filter] needs preset or sections");
+    for (const toml::node& s : *secs->as_array()) {
+      const toml::array* a = s.as_array();
+      if (!a || a->size() != 5) throw ConfigError(cfg::where(s) + ": a filter section is [b0, b1, b2, a1, a2]");
+      double c[5];
+      for (std::size_t i = 0; i < 5; ++i) {
+        auto v = (*a)[i].value<double>();
+        if (!v) throw ConfigError(cfg::where((*a)[i]) + ": filter coefficient must be a number");
+        c[i] = *v;
+      }
+      out.sections.push_back({c[0], c[1], c[2], c[3], c[4]});
+    }
+    out.rate_hz = cfg::get_number(f, "rate_hz", 10000.0, 1.0, 1e7);
+    name = "custom";
+  } else {
+    throw ConfigError(cfg::where(*f.get("preset")) + ": unknown filter preset '" + preset +
+                      "' (expected paper, none or custom)");
+  }
+  out.enabled = cfg::get_bool(f, "enabled", out.enabled);
+  return out;
+}
+
+}  // namespace
+
+double Profile::planned_total_s() const {
+  return static_cast<double>(order.size()) * (run_s + settle_s) + settle_s + in_run_s + settle_s + raw_s;
+}
+
+std::vector<std::string> builtin_profile_names() {
+  std::vector<std::string> n;
+  for (const auto& [k, v] : builtin_profiles()) n.push_back(k);
+  return n;
+}
+
+const std::string& builtin_profile_text(const std::string& name) {
+  auto it = builtin_profiles().find(name);
+  if (it == builtin_profiles().end()) throw ConfigError("no built-in profile '" + name + "'");
+  return it->second;
+}
+
+Profile parse_profile(const toml::table& t, const std::string& source) {
+  cfg::check_keys(t, {"base", "profile", "procedure", "table", "filter", "analysis", "limits", "classes", "plant"},
+                  "top level");
+  Profile p;
+  p.source = source;
+  p.digest = digest(t);
+  const toml::table* prof = cfg::get_table(t, "profile", true);
+  cfg::check_keys(*prof, {"name", "description"}, "profile");
+  p.name = cfg::get_string(*prof, "name");
+  p.description = cfg::get_string(*prof, "description", std::string());
+
+  const toml::table* pr = cfg::get_table(t, "procedure", true);
+  cfg::check_keys(*pr, {"rate_hz", "order", "run_s", "settle_s", "in_run_s", "in_run_orientation", "in_run_blocks_s",
+                        "raw_s", "raw_orientation", "max_lost_samples", "retries"},
+                  "procedure");
+  p.rate_hz = cfg::get_number(*pr, "rate_hz", 1000.0, 1.0, 1e6);
+  for (const std::string& o : cfg::get_strings(*pr, "order")) {
+    if (o != "U10" && o != "U20")
+      throw ConfigError(cfg::where(*pr->get("order")) + ": 'order' entries must be \"U10\" or \"U20\", not \"" + o + "\"");
+    p.order.push_back(o == "U10" ? Orientation::U10 : Orientation::U20);
+  }
+  std::size_t n10 = 0;
+  for (auto o : p.order) n10 += o == Orientation::U10;
+  if (n10 == 0 || 2 * n10 != p.order.size())
+    throw ConfigError(cfg::where(*pr->get("order")) +
+                      ": 'order' needs as many U10 runs as U20 runs, at least one each (formulas (3), (4) pair them)");
+  const double min_s = 2.0 / p.rate_hz;
+  p.run_s = cfg::get_number(*pr, "run_s", std::nullopt, min_s, 1e6);
+  p.settle_s = cfg::get_number(*pr, "settle_s", 10.0, 0.0, 1e5);
+  p.in_run_s = cfg::get_number(*pr, "in_run_s", std::nullopt, min_s, 1e7);
+  p.in_run_orientation = parse_orientation(*pr, "in_run_orientation", Orientation::U10);
+  p.in_run_blocks_s = cfg::get_numbers(*pr, "in_run_blocks_s", std::vector<double>{100, 200});
+  for (double b : p.in_run_blocks_s)
+    if (!(b > 0) || 2 * b > p.in_run_s)
+      throw ConfigError(cfg::where(*pr) + ": each in_run_blocks_s must be > 0 and give at least 2 blocks in in_run_s = " +
+                        std::to_string(p.in_run_s));
+  p.raw_s = cfg::get_number(*pr, "raw_s", std::nullopt, min_s, 1e7);
+  p.raw_orientation = parse_orientation(*pr, "raw_orientation", Orientation::U10);
+  p.max_lost_samples = static_cast<uint64_t>(cfg::get_int(*pr, "max_lost_samples", 0, 0));
+  p.retries = static_cast<int>(cfg::get_int(*pr, "retries", 0, 0, 10));
+
+  if (const toml::table* tb = cfg::get_table(t, "table")) {
+    cfg::check_keys(*tb, {"u10_deg", "u20_deg"}, "table");
+    p.u10_deg = cfg::get_number(*tb, "u10_deg", 0.0, -360.0, 360.0);
+    p.u20_deg = cfg::get_number(*tb, "u20_deg", p.u10_deg + 180.0, -360.0, 540.0);
+  }
+  if (const toml::table* f = cfg::get_table(t, "filter")) {
+    p.filter = parse_filter(*f, p.filter_name);
+  } else {
+    p.filter = analysis::paper_wf();
+    p.filter_name = "paper W_f(z)";
+  }
+  if (const toml::table* a = cfg::get_table(t, "analysis")) {
+    cfg::check_keys(*a, {"taus", "confidence"}, "analysis");
+    p.taus = cfg::get_string(*a, "taus", p.taus);
+    p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
+  }
+  static const char* known[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
+                                "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",
+                                "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"};
+  if (const toml::table* l = cfg::get_table(t, "limits")) {
+    for (auto&& [k, v] : *l) {
+      bool ok = false;
+      for (const char* n : known) ok = ok || k.str() == n;
+      if (!ok) throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits]");
+      const std::vector<double> mm = cfg::get_numbers(*l, k.str());
+      if (mm.size() != 2 || mm[0] > mm[1])
+        throw ConfigError(cfg::where(v) + ": limits for '" + std::string(k.str()) + "' must be [min, max] with min <= max");
+      p.limits[std::string(k.str())] = {mm[0], mm[1]};
+    }
+  }
+  if (const toml::node* cn = t.get("classes")) {
+    const toml::array* arr = cn->as_array();
+    if (!arr) throw ConfigError(cfg::where(*cn) + ": 'classes' must be an array of tables ([[classes]])");
+    for (const toml::node& c : *arr) {
+      const toml::table* ct = c.as_table();
+      if (!ct) throw ConfigError(cfg::where(c) + ": each [[classes]] entry must be a table");
+      cfg::check_keys(*ct, {"name", "max_b_g"}, "classes");
+      AccuracyClass ac{cfg::get_string(*ct, "name"), cfg::get_number(*ct, "max_b_g", std::nullopt, 0.0)};
+      if (!p.classes.empty() && ac.max_b_g <= p.classes.back().max_b_g)
+        throw ConfigError(cfg::where(c) + ": [[classes]] must be in ascending max_b_g");
+      p.classes.push_back(ac);
+    }
+  }
+  if (const toml::table* pl = cfg::get_table(t, "plant")) p.plant = *pl;
+  return p;
+}
+
+Profile load_profile(const std::string& name_or_path) {
+  const auto& builtin = builtin_profiles();
+  toml::table t;
+  std::string source;
+  if (auto it = builtin.find(name_or_path); it != builtin.end()) {
+    t = cfg::parse_string(it->second, "builtin:" + name_or_path);
+    source = "builtin:" + name_or_path;
+  } else {
+    if (!std::filesystem::exists(name_or_path)) {
+      std::string names;
+      for (const auto& [k, v] : builtin) names += (names.empty() ? "" : ", ") + k;
+      throw ConfigError("profile '" + name_or_path + "': no such file and not a built-in profile (" + names + ")");
+    }
+    t = cfg::parse_file(name_or_path);
+    source = name_or_path;
+    if (const toml::node* b = t.get("base")) {
+      const auto base_name = b->value<std::string>();
+      auto bit = base_name ? builtin.find(*base_name) : builtin.end();
+      if (bit == builtin.end()) throw ConfigError(cfg::where(*b) + ": 'base' must name a built-in profile");
+      toml::table merged = cfg::parse_string(bit->second, "builtin:" + *base_name);
+      t.erase("base");
+      // A file's own [[classes]] replace the base's rather than append.
+      if (t.contains("classes")) merged.erase("classes");
+      cfg::merge_into(merged, t);
+      t = std::move(merged);
+    }
+  }
+  return parse_profile(t, source);
+}
+
+}  // namespace rig::acceptance

@@ -1,0 +1,69 @@
+// A procedure profile: the method's parameters (durations, counts, order),
+// the limits, the accuracy-class table, and the emulated plant's settings.
+// TOML; every error names file:line:column. Format: docs/profiles.md.
+#pragma once
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "rig/core/dut_link.hpp"
+#include "rig/core/types.hpp"
+
+namespace rig::acceptance {
+
+struct AccuracyClass {
+  std::string name;
+  double max_b_g;  // B (Russian method, in_run_b_gost_100s) at or below this => this class
+};
+
+struct Profile {
+  std::string name;
+  std::string description;
+  std::string source;   // file path or "builtin:NAME"
+  std::string digest;   // of the resolved profile text: a resume must use the same profile
+
+  // [procedure]
+  double rate_hz = 1000.0;
+  std::vector<Orientation> order;  // the bias/base-error runs, in order
+  double run_s = 100;
+  double settle_s = 10;
+  double in_run_s = 1800;
+  Orientation in_run_orientation = Orientation::U10;
+  std::vector<double> in_run_blocks_s{100, 200};
+  double raw_s = 3600;
+  Orientation raw_orientation = Orientation::U10;
+  uint64_t max_lost_samples = 0;  // per capture; more fails the phase (or retries it)
+  int retries = 0;                // capture retries on a gap beyond the limit
+
+  // [table]
+  double u10_deg = 0.0;
+  double u20_deg = 180.0;
+
+  // [filter]: the output filter the DUT is configured with before recording
+  FilterConfig filter;
+  std::string filter_name;
+
+  // [analysis]
+  std::string taus = "log:100";
+  double confidence = 0.683;
+
+  std::map<std::string, std::pair<double, double>> limits;  // [limits]
+  std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g
+
+  toml::table plant;  // [plant] as given (seed, dut, table): read by the emulated plant
+
+  double planned_total_s() const;
+};
+
+// "paper", "ci" (built in) or a file path. Files may say `base = "paper"` to
+// start from a built-in profile and override a few keys.
+Profile load_profile(const std::string& name_or_path);
+Profile parse_profile(const toml::table& t, const std::string& source);
+std::vector<std::string> builtin_profile_names();
+const std::string& builtin_profile_text(const std::string& name);  // throws ConfigError
+
+}  // namespace rig::acceptance

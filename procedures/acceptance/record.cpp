@@ -1,0 +1,90 @@
+#include "procedures/acceptance/record.hpp"
+
+#include <filesystem>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "rig/capture/capture.hpp"
+#include "rig/core/errors.hpp"
+
+namespace rig::acceptance {
+
+double table_angle(const Profile& p, Orientation o) { return o == Orientation::U10 ? p.u10_deg : p.u20_deg; }
+
+namespace {
+
+Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name) {
+  const auto n_total = static_cast<uint64_t>(seconds * p.rate_hz + 0.5);
+  const std::string rel = "captures/" + name + ".cap";
+  std::filesystem::create_directories(ctx.out_dir + "/captures");
+  capture::Header h;
+  h.serial = ctx.state.value("serial", "");
+  h.phase = name;
+  h.orientation = to_string(o);
+  h.started = iso8601_utc_now();
+  h.rate_hz = p.rate_hz;
+  h.extra = {{"profile", p.name},
+             {"plant", ctx.dev.plant},
+             {"table_deg", table_angle(p, o)},
+             {"filter", p.filter_name},
+             {"software", std::string("rig ") + RIG_VERSION}};
+  capture::Writer w(ctx.out_dir + "/" + rel, h);
+
+  Recorded r;
+  r.capture = rel;
+  ctx.dev.dut.reset_stats();
+  ctx.dev.dut.start_stream(ctx.cancel);
+  std::vector<Sample> buf(static_cast<std::size_t>(std::max(1.0, p.rate_hz / 10)));  // 100 ms chunks
+  double sx = 0, sy = 0;
+  try {
+    while (r.samples < n_total) {
+      const std::size_t want = static_cast<std::size_t>(std::min<uint64_t>(buf.size(), n_total - r.samples));
+      const std::size_t got = ctx.dev.dut.read(std::span<Sample>(buf.data(), want), ctx.cancel);
+      w.append(std::span<const Sample>(buf.data(), got));
+      for (std::size_t i = 0; i < got; ++i) {
+        sx += buf[i].x_g;
+        sy += buf[i].y_g;
+      }
+      r.samples += got;
+      ctx.report(static_cast<double>(r.samples) / static_cast<double>(n_total));
+    }
+  } catch (...) {
+    ctx.dev.dut.stop_stream();
+    w.close();  // keep what was recorded; the retry renames it aside
+    throw;
+  }
+  ctx.dev.dut.stop_stream();
+  w.close();
+  const LinkStats st = ctx.dev.dut.stats();
+  r.lost = st.lost;
+  r.gaps = st.gaps;
+  r.duplicates = st.duplicates;
+  r.mean_x = r.samples ? sx / static_cast<double>(r.samples) : 0;
+  r.mean_y = r.samples ? sy / static_cast<double>(r.samples) : 0;
+  return r;
+}
+
+}  // namespace
+
+Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o, double seconds,
+                             const std::string& name) {
+  for (int attempt = 1;; ++attempt) {
+    ctx.log->info("{}: table to {} ({:.4f} deg)", name, to_string(o), table_angle(p, o));
+    ctx.dev.table.move_to(table_angle(p, o), ctx.cancel);
+    ctx.dev.clock.sleep_for(p.settle_s, ctx.cancel);  // let the loop and the mount settle
+    Recorded r = record_once(ctx, p, o, seconds, name);
+    r.attempts = attempt;
+    if (r.lost <= p.max_lost_samples) {
+      ctx.log->info("{}: {} samples, mean x {:.6e} g, {} lost in {} gap(s)", name, r.samples, r.mean_x, r.lost, r.gaps);
+      return r;
+    }
+    const std::string what = fmt::format("capture {}: {} samples lost in {} gap(s) (limit {})", name, r.lost, r.gaps,
+                                         p.max_lost_samples);
+    if (attempt > p.retries) throw HardwareError(what + "; no retries left");
+    ctx.log->warn("{}; retrying ({}/{})", what, attempt, p.retries);
+    if (ctx.progress) ctx.progress->log("  " + what + ": retrying");
+  }
+}
+
+}  // namespace rig::acceptance

@@ -1,0 +1,27 @@
+// Recording a phase: stream the DUT for N seconds into a capture file while
+// keeping online sums, with the link's gap accounting checked against the profile.
+#pragma once
+#include <string>
+
+#include "procedures/acceptance/profile.hpp"
+#include "rig/executive/executive.hpp"
+
+namespace rig::acceptance {
+
+struct Recorded {
+  std::string capture;  // path relative to the run folder
+  uint64_t samples = 0;
+  uint64_t lost = 0, gaps = 0, duplicates = 0;
+  double mean_x = 0, mean_y = 0;
+  int attempts = 1;
+};
+
+// Moves the table to `o`, settles, records `seconds` into captures/<name>.cap.
+// A capture losing more than the profile allows is retried (profile.retries)
+// and then fails the phase with a HardwareError naming the gaps.
+Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o, double seconds,
+                             const std::string& name);
+
+double table_angle(const Profile& p, Orientation o);
+
+}  // namespace rig::acceptance

@@ -1,0 +1,101 @@
+// Allan-family deviations with Stable32-compatible term counts, tau grids, noise
+// identification and Greenhall-Riley confidence bounds (NIST SP 1065; IEEE Std 1139).
+//
+// Frequency data y (accelerometer output, g) is integrated to the phase x = cumsum(y)*tau0;
+// every estimator works on the phase. tau = m * tau0, tau0 = 1/rate_hz. N below is the
+// number of PHASE points (frequency points + 1).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace rig::analysis {
+
+enum class DataKind { Frequency, Phase };
+enum class Deviation { ADEV, OADEV, MDEV, TDEV, HDEV, OHDEV, TOTDEV };
+
+const char* to_string(Deviation d);   // "adev", "oadev", ...
+const char* to_string(DataKind k);    // "freq", "phase"
+Deviation parse_deviation(const std::string& s);  // throws std::invalid_argument
+DataKind parse_data_kind(const std::string& s);   // "freq"|"frequency"|"phase"
+
+struct TauGrid {
+  enum Kind { Octave, Decade, All, Log } kind = Kind::Octave;
+  int log_n = 100;  // points per full span for Kind::Log (log-spaced, duplicates merged)
+};
+TauGrid parse_tau_grid(const std::string& s);  // "octave|decade|all|log:N", throws std::invalid_argument
+
+// Largest averaging factor Stable32 evaluates for this deviation on N phase points:
+// ADEV, HDEV (N-1)/5; OADEV, MDEV, TDEV, OHDEV (N-1)/4; TOTDEV (N-1)/2.
+std::size_t max_factor(Deviation d, std::size_t n_phase);
+// The averaging factors m of a grid (octave 1,2,4..; decade 1,2,4,10,20,40..; all 1..max;
+// log:N N points log-spaced over [1, max], rounded and de-duplicated), stopped at max_factor.
+std::vector<std::size_t> tau_factors(const TauGrid& g, Deviation d, std::size_t n_phase);
+
+// Number of terms Stable32 prints in its '#' column (see tests/data/allan-reference/README.md).
+std::size_t term_count(Deviation d, std::size_t n_phase, std::size_t m);
+
+struct DevPoint {
+  std::size_t m = 0;
+  double tau_s = 0;
+  std::size_t n_terms = 0;
+  double dev = 0, lo = 0, hi = 0;  // lo/hi: chi-square bounds at DevOptions::confidence (0 if bounds off)
+  double edf = 0;
+  int alpha = 0;  // identified power-law exponent of S_y(f) used for the bounds
+};
+
+struct DevOptions {
+  Deviation type = Deviation::OADEV;
+  DataKind data = DataKind::Frequency;
+  double rate_hz = 1.0;
+  TauGrid taus;
+  double confidence = 0.683;
+  bool bounds = true;
+  std::vector<std::size_t> factors;  // explicit averaging factors; overrides `taus` when not empty
+  unsigned threads = 0;              // 0 = all hardware threads (the 2-core rig PC: both)
+};
+
+// In-memory computation. Throws std::invalid_argument for fewer than 3 phase points,
+// a non-positive rate or a non-finite value (naming its index).
+std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt);
+
+// ---- streaming: records too large for memory (50 h at 1 kHz = 1.8e8 samples) ----
+// A random-access source of the raw values (frequency or phase, as DevOptions::data says),
+// e.g. pread() over a float64 file. read_at may be called from several threads at once
+// for disjoint or overlapping ranges; it returns the number of values delivered (short
+// only at the end) and throws on a read error.
+struct ChunkSource {
+  virtual ~ChunkSource() = default;
+  virtual std::uint64_t size() const = 0;
+  virtual std::size_t read_at(std::uint64_t pos, std::span<double> out) const = 0;
+};
+
+// A ChunkSource over values already in memory (used by deviation() and by tests).
+class SpanSource final : public ChunkSource {
+ public:
+  explicit SpanSource(std::span<const double> v) : v_(v) {}
+  std::uint64_t size() const override { return v_.size(); }
+  std::size_t read_at(std::uint64_t pos, std::span<double> out) const override;
+
+ private:
+  std::span<const double> v_;
+};
+
+struct StreamOptions {
+  std::size_t memory_budget_bytes = 384u << 20;  // ring of phase points + per-tau state
+  std::size_t chunk = 1u << 16;                  // phase points per processing step
+};
+
+// Streams the source once sequentially (plus random-access cursors for the few factors
+// whose span exceeds the ring), both cores. The result equals deviation() on the same
+// values to rounding (tests/analysis: stream_matches_memory).
+std::vector<DevPoint> deviation_stream(const ChunkSource& src, const DevOptions& opt, const StreamOptions& so = {});
+
+// Several deviation types in one pass over the source (each DevOptions must agree on
+// data kind and rate). Used by `rig analyze` to get OADEV and e.g. MDEV together.
+std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std::span<const DevOptions> opts,
+                                                     const StreamOptions& so = {});
+
+}  // namespace rig::analysis

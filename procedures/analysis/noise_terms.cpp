@@ -1,0 +1,263 @@
+#include "procedures/analysis/noise_terms.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace rig::analysis {
+
+namespace {
+
+const char* const kNames[5] = {"Q", "N", "B", "K", "R"};
+const double kSlopes[5] = {-1, -0.5, 0, 0.5, 1};
+const char* const kUnits[5] = {"g*s", "g*s^0.5", "g", "g/s^0.5", "g/s"};
+
+// sigma^2 contribution of term k per unit of its squared coefficient (the model's basis).
+double basis(int k, double tau) {
+  switch (k) {
+    case 0: return 3 / (tau * tau);
+    case 1: return 1 / tau;
+    case 2: return 2 * std::numbers::ln2 / std::numbers::pi;
+    case 3: return tau / 3;
+    default: return tau * tau / 2;
+  }
+}
+
+// Term value from sigma at tau on its own slope (IEEE 952 Annex C relations).
+double term_from_sigma(int k, double sigma, double tau) {
+  switch (k) {
+    case 0: return sigma * tau / std::sqrt(3.0);
+    case 1: return sigma * std::sqrt(tau);
+    case 2: return sigma / kBiasFactor;
+    case 3: return sigma * std::sqrt(3 / tau);
+    default: return sigma * std::sqrt(2.0) / tau;
+  }
+}
+
+std::string fmt(double v) {
+  std::ostringstream o;
+  o.precision(3);
+  o << v;
+  return o.str();
+}
+
+double poly(const std::array<double, 5>& c, double x) {
+  double y = 0;
+  for (int k = 4; k >= 0; --k) y = y * x + c[static_cast<std::size_t>(k)];
+  return y;
+}
+double dpoly(const std::array<double, 5>& c, double x) {
+  return c[1] + 2 * c[2] * x + 3 * c[3] * x * x + 4 * c[4] * x * x * x;
+}
+
+PaperFit paper_fit(std::span<const DevPoint> pts) {
+  PaperFit f;
+  std::vector<double> xs, ys;
+  for (const auto& p : pts)
+    if (p.dev > 0 && p.tau_s > 0) xs.push_back(std::log10(p.tau_s)), ys.push_back(std::log10(p.dev));
+  if (xs.size() < 3) {
+    f.reason = "fewer than 3 Allan points";
+    return f;
+  }
+  f.degree = static_cast<int>(std::min<std::size_t>(4, xs.size() - 1));
+  const auto n = static_cast<Eigen::Index>(xs.size());
+  Eigen::MatrixXd A(n, f.degree + 1);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double p = 1;
+    for (int k = 0; k <= f.degree; ++k, p *= xs[static_cast<std::size_t>(i)]) A(i, k) = p;
+    b(i) = ys[static_cast<std::size_t>(i)];
+  }
+  const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
+  for (int k = 0; k <= f.degree; ++k) f.coef[static_cast<std::size_t>(k)] = c(k);
+
+  // Inflection points: roots of y'' = 2c2 + 6c3 x + 12c4 x^2 inside the measured range.
+  const double x_lo = xs.front(), x_hi = xs.back();
+  std::vector<double> infl;
+  const double qa = 12 * f.coef[4], qb = 6 * f.coef[3], qc = 2 * f.coef[2];
+  if (std::abs(qa) > 1e-12) {
+    const double disc = qb * qb - 4 * qa * qc;
+    if (disc >= 0) {
+      const double r = std::sqrt(disc);
+      infl = {(-qb - r) / (2 * qa), (-qb + r) / (2 * qa)};
+    }
+  } else if (std::abs(qb) > 1e-12) {
+    infl = {-qc / qb};
+  }
+  std::sort(infl.begin(), infl.end());
+  std::vector<double> cuts{x_lo};
+  for (double x : infl)
+    if (x > x_lo && x < x_hi) {
+      cuts.push_back(x);
+      f.inflection_tau_s.push_back(std::pow(10.0, x));
+    }
+  cuts.push_back(x_hi);
+  for (std::size_t s = 0; s + 1 < cuts.size(); ++s) {
+    Segment seg;
+    const double xm = (cuts[s] + cuts[s + 1]) / 2;
+    seg.tau_lo_s = std::pow(10.0, cuts[s]);
+    seg.tau_hi_s = std::pow(10.0, cuts[s + 1]);
+    seg.tau_mid_s = std::pow(10.0, xm);
+    seg.sigma_mid = std::pow(10.0, poly(f.coef, xm));
+    seg.slope = dpoly(f.coef, xm);
+    int best = 0;
+    for (int k = 1; k < 5; ++k)
+      if (std::abs(seg.slope - kSlopes[k]) < std::abs(seg.slope - kSlopes[best])) best = k;
+    seg.term = kNames[best];
+    seg.term_value = term_from_sigma(best, seg.sigma_mid, seg.tau_mid_s);
+    f.segments.push_back(seg);
+  }
+  f.ok = true;
+  return f;
+}
+
+// Non-negative weighted least squares over the 5 squared coefficients: the best of all
+// 2^5 active sets whose unconstrained solution is non-negative (exact for 5 unknowns).
+WlsFit wls_fit(std::span<const DevPoint> pts) {
+  WlsFit w;
+  std::vector<const DevPoint*> use;
+  for (const auto& p : pts)
+    if (p.dev > 0 && p.tau_s > 0) use.push_back(&p);
+  w.points = use.size();
+  if (use.size() < 2) {
+    w.reason = "fewer than 2 Allan points";
+    return w;
+  }
+  const auto n = static_cast<Eigen::Index>(use.size());
+  Eigen::MatrixXd X(n, 5);
+  Eigen::VectorXd y(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const DevPoint& p = *use[static_cast<std::size_t>(i)];
+    const double s2 = p.dev * p.dev;
+    // Relative weighting: sd(sigma^2) = sigma^2 sqrt(2/edf); scale rows so residuals are in sd units.
+    const double edf = p.edf > 0 ? p.edf : 2.0;
+    const double sd = s2 * std::sqrt(2.0 / edf);
+    y(i) = s2 / sd;
+    for (int k = 0; k < 5; ++k) X(i, k) = basis(k, p.tau_s) / sd;
+  }
+  double best_rss = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_theta = Eigen::VectorXd::Zero(5);
+  Eigen::MatrixXd best_cov;
+  int best_mask = 0;
+  for (int mask = 1; mask < 32; ++mask) {
+    std::vector<int> cols;
+    for (int k = 0; k < 5; ++k)
+      if (mask & (1 << k)) cols.push_back(k);
+    if (static_cast<Eigen::Index>(cols.size()) > n) continue;
+    Eigen::MatrixXd Xs(n, static_cast<Eigen::Index>(cols.size()));
+    for (std::size_t c = 0; c < cols.size(); ++c) Xs.col(static_cast<Eigen::Index>(c)) = X.col(cols[c]);
+    // Column scaling: the basis spans many decades.
+    Eigen::VectorXd scale = Xs.colwise().norm().transpose();
+    if ((scale.array() <= 0).any()) continue;
+    const Eigen::MatrixXd Xn = Xs * scale.cwiseInverse().asDiagonal();
+    const auto qr = Xn.colPivHouseholderQr();
+    if (qr.rank() < static_cast<Eigen::Index>(cols.size())) continue;
+    const Eigen::VectorXd th = qr.solve(y).cwiseQuotient(scale);
+    if ((th.array() < 0).any()) continue;
+    const double rss = (Xs * th - y).squaredNorm();
+    if (rss < best_rss) {
+      best_rss = rss;
+      best_mask = mask;
+      best_theta.setZero();
+      for (std::size_t c = 0; c < cols.size(); ++c) best_theta(cols[c]) = th(static_cast<Eigen::Index>(c));
+      const Eigen::MatrixXd cs =
+          scale.cwiseInverse().asDiagonal() * (Xn.transpose() * Xn).inverse() * scale.cwiseInverse().asDiagonal();
+      best_cov = Eigen::MatrixXd::Zero(5, 5);
+      for (std::size_t r = 0; r < cols.size(); ++r)
+        for (std::size_t c = 0; c < cols.size(); ++c)
+          best_cov(cols[r], cols[c]) = cs(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+    }
+  }
+  if (best_mask == 0) {
+    w.reason = "no non-negative solution";
+    return w;
+  }
+  const double dof = std::max<double>(1, static_cast<double>(n) - __builtin_popcount(static_cast<unsigned>(best_mask)));
+  w.chi2_per_dof = best_rss / dof;
+  const double tau_lo = use.front()->tau_s, tau_hi = use.back()->tau_s;
+  Term* terms[5] = {&w.Q, &w.N, &w.B, &w.K, &w.R};
+  for (int k = 0; k < 5; ++k) {
+    Term& t = *terms[k];
+    t.unit = kUnits[k];
+    if (!(best_mask & (1 << k))) {
+      t.reason = std::string("not resolved: the fit needs no ") + kNames[k] + " term over tau = " + fmt(tau_lo) + ".." +
+                 fmt(tau_hi) + " s";
+      continue;
+    }
+    const double th = best_theta(k);
+    // Identified only where the term dominates the model somewhere in the measured range.
+    bool dominates = false;
+    for (const DevPoint* p : use) {
+      double total = 0;
+      for (int j = 0; j < 5; ++j) total += best_theta(j) * basis(j, p->tau_s);
+      if (th * basis(k, p->tau_s) >= 0.5 * total) dominates = true;
+    }
+    const double var_th = best_cov(k, k) * std::max(1.0, w.chi2_per_dof);
+    if (!dominates) {
+      t.reason = std::string("not identifiable: ") + kNames[k] + " never dominates over tau = " + fmt(tau_lo) + ".." +
+                 fmt(tau_hi) + " s" + (k >= 3 ? "; needs a longer record" : (k == 0 ? "; needs a higher rate" : ""));
+      continue;
+    }
+    t.value = std::sqrt(th);
+    const double sd = std::sqrt(std::max(var_th, 0.0));
+    t.lo = std::sqrt(std::max(th - sd, 0.0));
+    t.hi = std::sqrt(th + sd);
+    t.reason = "weighted least squares";
+  }
+  w.ok = true;
+  return w;
+}
+
+}  // namespace
+
+NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s) {
+  NoiseTerms out;
+  out.paper = paper_fit(oadev);
+  out.wls = wls_fit(oadev);
+  out.Q = out.wls.Q;
+  out.N = out.wls.N;
+  out.K = out.wls.K;
+  out.R = out.wls.R;
+  if (!out.wls.ok) {
+    for (Term* t : {&out.Q, &out.N, &out.K, &out.R}) t->reason = "fit failed: " + out.wls.reason;
+  }
+  out.Q.unit = kUnits[0];
+  out.N.unit = kUnits[1];
+  out.K.unit = kUnits[3];
+  out.R.unit = kUnits[4];
+  out.B.unit = kUnits[2];
+  if (!out.R.value) {
+    // R (rate ramp) needs tau well beyond where K dominates; the paper puts it at > 50 h.
+    if (record_length_s < 2 * 50 * 3600.0 && out.R.reason.find("needs") == std::string::npos)
+      out.R.reason += "; needs a longer record";
+  }
+  // B by the paper's method: the flat segment (slope nearest 0, |slope| < 0.25).
+  const Segment* flat = nullptr;
+  if (out.paper.ok)
+    for (const auto& s : out.paper.segments)
+      if (std::abs(s.slope) < 0.25 && (!flat || std::abs(s.slope) < std::abs(flat->slope))) flat = &s;
+  if (flat) {
+    out.tau_cp_s = flat->tau_mid_s;
+    out.sigma_cp = flat->sigma_mid;
+    out.B.value = flat->sigma_mid / kBiasFactor;
+    out.B.reason = "paper: sigma(tau_cp) / 0.664 on the flat segment";
+    if (out.wls.B.lo && out.wls.B.value && *out.wls.B.value > 0) {
+      out.B.lo = *out.B.value * (*out.wls.B.lo / *out.wls.B.value);
+      out.B.hi = *out.B.value * (*out.wls.B.hi / *out.wls.B.value);
+    }
+  } else {
+    out.B = out.wls.B;
+    out.B.unit = kUnits[2];
+    if (out.B.value) out.B.reason = "weighted least squares (no flat segment in the paper's fit)";
+    else out.B.reason = out.paper.ok ? "no flat segment (|slope| < 0.25) in tau = " +
+                                           fmt(oadev.empty() ? 0 : oadev.front().tau_s) + ".." +
+                                           fmt(oadev.empty() ? 0 : oadev.back().tau_s) + " s"
+                                     : "paper fit failed: " + out.paper.reason;
+  }
+  return out;
+}
+
+}  // namespace rig::analysis

@@ -1,0 +1,122 @@
+// Tau grids and Stable32's stop ratios / term counts (tests/data/allan-reference/README.md).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "procedures/analysis/allan.hpp"
+
+namespace rig::analysis {
+
+const char* to_string(Deviation d) {
+  switch (d) {
+    case Deviation::ADEV: return "adev";
+    case Deviation::OADEV: return "oadev";
+    case Deviation::MDEV: return "mdev";
+    case Deviation::TDEV: return "tdev";
+    case Deviation::HDEV: return "hdev";
+    case Deviation::OHDEV: return "ohdev";
+    case Deviation::TOTDEV: return "totdev";
+  }
+  return "?";
+}
+
+const char* to_string(DataKind k) { return k == DataKind::Frequency ? "freq" : "phase"; }
+
+Deviation parse_deviation(const std::string& s) {
+  for (Deviation d : {Deviation::ADEV, Deviation::OADEV, Deviation::MDEV, Deviation::TDEV, Deviation::HDEV,
+                      Deviation::OHDEV, Deviation::TOTDEV})
+    if (s == to_string(d)) return d;
+  throw std::invalid_argument("unknown deviation '" + s + "' (adev|oadev|mdev|tdev|hdev|ohdev|totdev)");
+}
+
+DataKind parse_data_kind(const std::string& s) {
+  if (s == "freq" || s == "frequency") return DataKind::Frequency;
+  if (s == "phase") return DataKind::Phase;
+  throw std::invalid_argument("unknown data kind '" + s + "' (freq|phase)");
+}
+
+TauGrid parse_tau_grid(const std::string& s) {
+  TauGrid g;
+  if (s == "octave") g.kind = TauGrid::Octave;
+  else if (s == "decade") g.kind = TauGrid::Decade;
+  else if (s == "all") g.kind = TauGrid::All;
+  else if (s.rfind("log:", 0) == 0) {
+    g.kind = TauGrid::Log;
+    const std::string num = s.substr(4);
+    std::size_t used = 0;
+    int n = 0;
+    try {
+      n = std::stoi(num, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != num.size() || n < 2 || n > 100000)
+      throw std::invalid_argument("tau grid '" + s + "': log:N needs an integer N in 2..100000");
+    g.log_n = n;
+  } else {
+    throw std::invalid_argument("unknown tau grid '" + s + "' (octave|decade|all|log:N)");
+  }
+  return g;
+}
+
+std::size_t max_factor(Deviation d, std::size_t n_phase) {
+  if (n_phase < 2) return 0;
+  const std::size_t n1 = n_phase - 1;
+  switch (d) {
+    case Deviation::ADEV:
+    case Deviation::HDEV: return n1 / 5;
+    case Deviation::OADEV:
+    case Deviation::MDEV:
+    case Deviation::TDEV:
+    case Deviation::OHDEV: return n1 / 4;
+    case Deviation::TOTDEV: return n1 / 2;
+  }
+  return 0;
+}
+
+std::vector<std::size_t> tau_factors(const TauGrid& g, Deviation d, std::size_t n_phase) {
+  const std::size_t top = max_factor(d, n_phase);
+  std::vector<std::size_t> m;
+  if (top < 1) return m;
+  switch (g.kind) {
+    case TauGrid::Octave:
+      for (std::size_t v = 1; v <= top; v *= 2) m.push_back(v);
+      break;
+    case TauGrid::Decade:
+      for (std::size_t dec = 1; dec <= top; dec *= 10)
+        for (std::size_t k : {1u, 2u, 4u})
+          if (k * dec <= top) m.push_back(k * dec);
+      break;
+    case TauGrid::All:
+      for (std::size_t v = 1; v <= top; ++v) m.push_back(v);
+      break;
+    case TauGrid::Log: {
+      const double lt = std::log(static_cast<double>(top));
+      for (int k = 0; k < g.log_n; ++k) {
+        const double v = std::exp(lt * k / (g.log_n - 1));
+        const auto r = static_cast<std::size_t>(std::llround(v));
+        const std::size_t c = std::clamp<std::size_t>(r, 1, top);
+        if (m.empty() || c > m.back()) m.push_back(c);
+      }
+      break;
+    }
+  }
+  return m;
+}
+
+std::size_t term_count(Deviation d, std::size_t n, std::size_t m) {
+  if (m == 0) return 0;
+  auto sub = [](std::size_t a, std::size_t b) { return a > b ? a - b : 0; };
+  switch (d) {
+    case Deviation::ADEV: return sub((n - 1) / m, 1);
+    case Deviation::OADEV: return sub(n, 2 * m);
+    case Deviation::MDEV:
+    case Deviation::TDEV: return sub(n + 1, 3 * m);
+    case Deviation::HDEV: return sub((n - 1) / m, 2);
+    case Deviation::OHDEV: return sub(n, 3 * m);
+    case Deviation::TOTDEV: return sub(n, 2);
+  }
+  return 0;
+}
+
+}  // namespace rig::analysis

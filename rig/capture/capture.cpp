@@ -1,0 +1,331 @@
+#include "rig/capture/capture.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::capture {
+
+static_assert(std::endian::native == std::endian::little, "capture files are little-endian; port the codec");
+static_assert(sizeof(Sample) == kRecordSize, "Sample must match the 16-byte record layout");
+
+namespace {
+
+uint32_t crc(const void* p, std::size_t n) {
+  return static_cast<uint32_t>(crc32(0L, static_cast<const Bytef*>(p), static_cast<uInt>(n)));
+}
+
+void put_u32(unsigned char* p, uint32_t v) { std::memcpy(p, &v, 4); }
+uint32_t get_u32(const unsigned char* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+
+std::string errno_text() { return std::strerror(errno); }
+
+nlohmann::json header_json(const Header& h) {
+  return {{"format", "rig.capture/1"},
+          {"serial", h.serial},
+          {"phase", h.phase},
+          {"orientation", h.orientation},
+          {"started", h.started},
+          {"units", h.units},
+          {"rate_hz", h.rate_hz},
+          {"record", "u32 seq, f32 x, f32 y, u32 status (little-endian, 16 bytes)"},
+          {"extra", h.extra}};
+}
+
+constexpr std::size_t align16(std::size_t n) { return (n + 15) & ~std::size_t{15}; }
+
+}  // namespace
+
+std::string Recovery::summary(const std::string& path) const {
+  std::ostringstream os;
+  os << path << ": " << samples << " samples in " << blocks << " blocks";
+  if (complete) {
+    os << ", complete";
+  } else {
+    os << ", INCOMPLETE";
+    if (!problem.empty()) os << " (" << problem << ")";
+  }
+  if (damaged_blocks) os << "; " << damaged_blocks << " damaged block(s) skipped";
+  return os.str();
+}
+
+// ---------------------------------------------------------------- Writer
+
+Writer::Writer(const std::string& path, const Header& header, uint32_t block_samples)
+    : path_(path), block_samples_(block_samples) {
+  if (block_samples_ == 0 || block_samples_ > kMaxBlockSamples) throw std::invalid_argument("capture: bad block size");
+  namespace fs = std::filesystem;
+  if (fs::exists(path)) {  // keep whatever an interrupted attempt left
+    for (int i = 1;; ++i) {
+      const std::string keep = path + ".interrupted-" + std::to_string(i);
+      if (!fs::exists(keep)) {
+        fs::rename(path, keep);
+        break;
+      }
+    }
+  }
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw std::runtime_error("cannot create capture " + path + ": " + errno_text());
+  const std::string js = header_json(header).dump();
+  std::vector<unsigned char> h(align16(16 + js.size()), 0);
+  std::memcpy(h.data(), kMagic, 8);
+  put_u32(h.data() + 8, static_cast<uint32_t>(js.size()));
+  put_u32(h.data() + 12, crc(js.data(), js.size()));
+  std::memcpy(h.data() + 16, js.data(), js.size());
+  write_all(h.data(), h.size());
+  pending_.reserve(block_samples_);
+}
+
+Writer::~Writer() {
+  try {
+    close();
+  } catch (...) {  // destructor must not throw; close() errors were already reportable via close()
+  }
+}
+
+void Writer::write_all(const void* p, std::size_t n) {
+  const char* c = static_cast<const char*>(p);
+  while (n > 0) {
+    const ssize_t w = ::write(fd_, c, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error("write to capture " + path_ + " failed: " + errno_text());
+    }
+    c += w;
+    n -= static_cast<std::size_t>(w);
+  }
+}
+
+void Writer::write_block(const Sample* s, uint32_t n) {
+  // One write() per block: header and payload reach the page cache together,
+  // so a killed process leaves at most one incomplete block at the end.
+  buf_.resize(kBlockHeaderSize + std::size_t{n} * kRecordSize);
+  std::memcpy(buf_.data() + kBlockHeaderSize, s, std::size_t{n} * kRecordSize);
+  put_u32(buf_.data(), kBlockMagic);
+  put_u32(buf_.data() + 4, n);
+  put_u32(buf_.data() + 8, crc(buf_.data() + kBlockHeaderSize, std::size_t{n} * kRecordSize));
+  put_u32(buf_.data() + 12, crc(buf_.data(), 12));
+  write_all(buf_.data(), buf_.size());
+  total_ += n;
+  if (++blocks_since_sync_ >= 60) {  // bound what a power loss can take: about a minute at 1 kHz
+    ::fdatasync(fd_);
+    blocks_since_sync_ = 0;
+  }
+}
+
+void Writer::append(std::span<const Sample> samples) {
+  if (fd_ < 0) throw std::runtime_error("capture " + path_ + " is closed");
+  std::size_t i = 0;
+  // Fast path: whole blocks straight from the caller's buffer.
+  while (pending_.empty() && samples.size() - i >= block_samples_) {
+    write_block(samples.data() + i, block_samples_);
+    i += block_samples_;
+  }
+  for (; i < samples.size(); ++i) {
+    pending_.push_back(samples[i]);
+    if (pending_.size() == block_samples_) {
+      write_block(pending_.data(), block_samples_);
+      pending_.clear();
+    }
+  }
+}
+
+void Writer::flush() {
+  if (fd_ < 0 || pending_.empty()) return;
+  write_block(pending_.data(), static_cast<uint32_t>(pending_.size()));
+  pending_.clear();
+}
+
+void Writer::close() {
+  if (fd_ < 0) return;
+  flush();
+  unsigned char end[16];
+  put_u32(end, kEndMagic);
+  put_u32(end + 4, static_cast<uint32_t>(total_ & 0xffffffffu));
+  put_u32(end + 8, static_cast<uint32_t>(total_ >> 32));
+  put_u32(end + 12, crc(end, 12));
+  write_all(end, sizeof end);
+  ::fsync(fd_);
+  ::close(fd_);
+  fd_ = -1;
+}
+
+// ---------------------------------------------------------------- Reader
+
+Reader::Reader(const std::string& path) : path_(path) {
+  f_ = std::fopen(path.c_str(), "rb");
+  if (!f_) throw ConfigError(path + ": cannot open capture: " + errno_text());
+  std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
+  struct stat st {};
+  ::fstat(::fileno(f_), &st);
+  file_size_ = static_cast<uint64_t>(st.st_size);
+  unsigned char h[16];
+  if (std::fread(h, 1, 16, f_) != 16) throw ConfigError(path + ": not a rig capture (shorter than its header)");
+  if (std::memcmp(h, kMagic, 8) != 0) throw ConfigError(path + ": not a rig capture (bad magic at offset 0)");
+  const uint32_t len = get_u32(h + 8);
+  const uint32_t want_crc = get_u32(h + 12);
+  if (len > (1u << 20) || 16 + uint64_t{len} > file_size_)
+    throw ConfigError(path + ": capture header length " + std::to_string(len) + " is invalid (offset 8)");
+  std::string js(len, '\0');
+  if (std::fread(js.data(), 1, len, f_) != len) throw ConfigError(path + ": capture header truncated");
+  if (crc(js.data(), len) != want_crc) throw ConfigError(path + ": capture header CRC mismatch (offset 16)");
+  try {
+    const auto j = nlohmann::json::parse(js);
+    header_.serial = j.value("serial", "");
+    header_.phase = j.value("phase", "");
+    header_.orientation = j.value("orientation", "");
+    header_.started = j.value("started", "");
+    header_.units = j.value("units", "g");
+    header_.rate_hz = j.value("rate_hz", 1000.0);
+    header_.extra = j.value("extra", nlohmann::json::object());
+  } catch (const nlohmann::json::exception& e) {
+    throw ConfigError(path + ": capture header is not valid JSON: " + e.what());
+  }
+  data_start_ = align16(16 + len);
+  pos_ = data_start_;
+}
+
+Reader::~Reader() {
+  if (f_) std::fclose(f_);
+}
+
+// Looks for the next valid block header at 16-byte steps after damage.
+bool Reader::resync(uint64_t from) {
+  unsigned char h[kBlockHeaderSize];
+  for (uint64_t p = from; p + kBlockHeaderSize <= file_size_; p += 16) {
+    if (std::fseek(f_, static_cast<long>(p), SEEK_SET) != 0) return false;
+    if (std::fread(h, 1, kBlockHeaderSize, f_) != kBlockHeaderSize) return false;
+    const uint32_t m = get_u32(h);
+    if ((m == kBlockMagic || m == kEndMagic) && crc(h, 12) == get_u32(h + 12)) {
+      pos_ = p;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool Reader::next_block() {
+  unsigned char h[kBlockHeaderSize];
+  for (;;) {
+    if (std::fseek(f_, static_cast<long>(pos_), SEEK_SET) != 0) return false;
+    const std::size_t got = std::fread(h, 1, kBlockHeaderSize, f_);
+    if (got < kBlockHeaderSize) {
+      rec_.truncated = true;
+      rec_.problem = got == 0 ? "file ends without the end marker (writer did not close it: killed or disk full)"
+                              : "file ends inside a block header at offset " + std::to_string(pos_);
+      return false;
+    }
+    const uint32_t magic = get_u32(h);
+    const bool hdr_ok = crc(h, 12) == get_u32(h + 12);
+    if (hdr_ok && magic == kEndMagic) {
+      const uint64_t n = get_u32(h + 4) | (uint64_t{get_u32(h + 8)} << 32);
+      if (n == rec_.samples && rec_.damaged_blocks == 0) {
+        rec_.complete = true;
+      } else if (rec_.problem.empty()) {
+        rec_.problem = "end marker counts " + std::to_string(n) + " samples, " + std::to_string(rec_.samples) +
+                       " were readable";
+      }
+      return false;
+    }
+    const uint32_t count = get_u32(h + 4);
+    if (hdr_ok && magic == kBlockMagic && count > 0 && count <= kMaxBlockSamples) {
+      const uint64_t payload = uint64_t{count} * kRecordSize;
+      if (pos_ + kBlockHeaderSize + payload > file_size_) {
+        rec_.truncated = true;
+        rec_.problem = "last block at offset " + std::to_string(pos_) + " is incomplete (" +
+                       std::to_string(file_size_ - pos_ - kBlockHeaderSize) + " of " + std::to_string(payload) +
+                       " payload bytes): writer killed mid-block";
+        return false;
+      }
+      block_.resize(count);
+      if (std::fread(block_.data(), 1, payload, f_) != payload) return false;
+      if (crc(block_.data(), payload) == get_u32(h + 8)) {
+        pos_ += kBlockHeaderSize + payload;
+        block_pos_ = 0;
+        ++rec_.blocks;
+        rec_.samples += count;
+        if (gap_pending_) {
+          block_[0].status |= sample_status::kGapBefore;
+          gap_pending_ = false;
+        }
+        return true;
+      }
+      ++rec_.damaged_blocks;
+      rec_.notes.push_back("offset " + std::to_string(pos_) + ": block of " + std::to_string(count) +
+                           " samples fails its payload CRC (skipped)");
+      if (rec_.problem.empty()) rec_.problem = rec_.notes.back();
+      gap_pending_ = true;
+      pos_ += kBlockHeaderSize + payload;
+      continue;
+    }
+    // Unreadable block header: scan forward for the next valid one.
+    ++rec_.damaged_blocks;
+    rec_.notes.push_back("offset " + std::to_string(pos_) + ": damaged block header");
+    if (rec_.problem.empty()) rec_.problem = rec_.notes.back();
+    gap_pending_ = true;
+    if (!resync(pos_ + 16)) {
+      rec_.truncated = true;
+      return false;
+    }
+  }
+}
+
+std::size_t Reader::read(std::span<Sample> out) {
+  std::size_t n = 0;
+  while (n < out.size()) {
+    if (block_pos_ >= block_.size()) {
+      if (done_ || !next_block()) {
+        done_ = true;
+        block_.clear();
+        block_pos_ = 0;
+        break;
+      }
+    }
+    const std::size_t k = std::min(out.size() - n, block_.size() - block_pos_);
+    std::memcpy(out.data() + n, block_.data() + block_pos_, k * sizeof(Sample));
+    n += k;
+    block_pos_ += k;
+  }
+  return n;
+}
+
+Loaded load(const std::string& path) {
+  Reader r(path);
+  Loaded l;
+  l.header = r.header();
+  std::vector<Sample> buf(1 << 16);
+  for (;;) {
+    const std::size_t n = r.read(buf);
+    if (n == 0) break;
+    l.samples.insert(l.samples.end(), buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  l.recovery = r.recovery();
+  return l;
+}
+
+std::vector<double> channel_x(std::span<const Sample> s) {
+  std::vector<double> v(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) v[i] = s[i].x_g;
+  return v;
+}
+std::vector<double> channel_y(std::span<const Sample> s) {
+  std::vector<double> v(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) v[i] = s[i].y_g;
+  return v;
+}
+
+}  // namespace rig::capture

@@ -1,0 +1,121 @@
+// The rig's capture file: a self-describing header followed by CRC-checked
+// blocks of samples, written as samples arrive. A process killed at any point
+// leaves a file readable up to its last complete block; the reader reports
+// what it recovered and where any damage lies. Format: docs/capture-format.md.
+#pragma once
+#include <cstdint>
+#include <cstdio>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rig/core/types.hpp"
+
+namespace rig::capture {
+
+inline constexpr char kMagic[8] = {'R', 'I', 'G', 'C', 'A', 'P', '1', '\n'};
+inline constexpr uint32_t kBlockMagic = 0x314B4C42;  // "BLK1" little-endian
+inline constexpr uint32_t kEndMagic = 0x31444E45;    // "END1"
+inline constexpr std::size_t kRecordSize = 16;       // u32 seq, f32 x, f32 y, u32 status
+inline constexpr std::size_t kBlockHeaderSize = 16;  // u32 magic, u32 count, u32 payload crc, u32 header crc
+inline constexpr uint32_t kMaxBlockSamples = 1u << 20;
+
+struct Header {
+  std::string serial;
+  std::string phase;        // e.g. "run01-U10", "raw"
+  std::string orientation;  // "U10" / "U20"
+  std::string started;      // ISO 8601 UTC
+  std::string units = "g";
+  double rate_hz = 1000.0;
+  nlohmann::json extra = nlohmann::json::object();  // profile name, plant, software, filter...
+};
+
+// What the reader found. `complete` = the writer closed the file normally
+// (end marker present, sample count matches) and no block was damaged.
+struct Recovery {
+  uint64_t samples = 0;
+  uint64_t blocks = 0;
+  uint64_t damaged_blocks = 0;
+  bool complete = false;
+  bool truncated = false;  // ends without the end marker (writer killed or disk full)
+  std::string problem;     // human-readable description of the first problem, empty if none
+  std::vector<std::string> notes;  // one line per damage found ("offset 123456: block payload CRC mismatch")
+  std::string summary(const std::string& path) const;
+};
+
+class Writer {
+ public:
+  // Creates `path` (an existing file is renamed to path + ".interrupted-N" so
+  // no data is lost). Throws std::runtime_error naming the path on I/O errors.
+  Writer(const std::string& path, const Header& header, uint32_t block_samples = 1000);
+  ~Writer();
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  void append(std::span<const Sample> samples);
+  // Writes the pending partial block (the kernel holds it even if the process dies next).
+  void flush();
+  // Flushes, writes the end marker, fsyncs, closes. Idempotent.
+  void close();
+  uint64_t samples_written() const { return total_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  void write_block(const Sample* s, uint32_t n);
+  void write_all(const void* p, std::size_t n);
+  std::string path_;
+  int fd_ = -1;
+  uint32_t block_samples_;
+  std::vector<Sample> pending_;
+  std::vector<unsigned char> buf_;
+  uint64_t total_ = 0;
+  uint32_t blocks_since_sync_ = 0;
+};
+
+class Reader {
+ public:
+  // Throws ConfigError naming the file when it is missing or its header is unreadable.
+  explicit Reader(const std::string& path);
+  ~Reader();
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  const Header& header() const { return header_; }
+  // Reads the next samples (skipping damaged blocks, whose loss is flagged with
+  // sample_status::kGapBefore on the next good sample). Returns 0 at the end.
+  std::size_t read(std::span<Sample> out);
+  // Complete after read() returned 0.
+  const Recovery& recovery() const { return rec_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  bool next_block();
+  bool resync(uint64_t from);
+  std::string path_;
+  std::FILE* f_ = nullptr;
+  uint64_t file_size_ = 0;
+  uint64_t pos_ = 0;
+  uint64_t data_start_ = 0;
+  Header header_;
+  Recovery rec_;
+  std::vector<Sample> block_;
+  std::size_t block_pos_ = 0;
+  bool gap_pending_ = false;
+  bool done_ = false;
+};
+
+// Whole file into memory.
+struct Loaded {
+  Header header;
+  std::vector<Sample> samples;
+  Recovery recovery;
+};
+Loaded load(const std::string& path);
+
+// Channel helpers for analysis.
+std::vector<double> channel_x(std::span<const Sample> s);
+std::vector<double> channel_y(std::span<const Sample> s);
+
+}  // namespace rig::capture

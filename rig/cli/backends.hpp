@@ -1,0 +1,45 @@
+// Chooses the backends behind the seams at start-up (OpenHTF's plugs): the
+// emulated plant in-process, or real hardware described by a TOML file.
+#pragma once
+#include <memory>
+#include <string>
+
+#include <toml++/toml.h>
+
+#include "procedures/acceptance/profile.hpp"
+#include "rig/executive/executive.hpp"
+
+namespace rig::plant {
+class EmulatedPlant;
+}
+
+namespace rig::cli {
+
+struct Backends {
+  std::string plant;  // "emulated" | "hardware"
+  std::unique_ptr<plant::EmulatedPlant> emulated;
+  std::unique_ptr<Clock> clock;
+  std::unique_ptr<RotaryTable> table;
+  std::unique_ptr<DutLink> dut;
+  std::unique_ptr<RigIo> io;
+  Clock* clock_ptr = nullptr;
+  RotaryTable* table_ptr = nullptr;
+  DutLink* dut_ptr = nullptr;
+  RigIo* io_ptr = nullptr;
+
+  Backends();
+  ~Backends();
+  Backends(Backends&&) noexcept;
+  Backends& operator=(Backends&&) noexcept;
+  Devices devices();
+};
+
+Backends make_emulated(const acceptance::Profile& p);
+
+// The hardware file (docs/hardware-config.md): [table] (Modbus), [dut] (CAN),
+// [gpio] (libgpiod), optional [procedure] u10_deg/u20_deg overriding the
+// profile's table angles with the mount's calibration, optional [history] url.
+toml::table load_hardware_file(const std::string& path);
+Backends make_hardware(const toml::table& hw, acceptance::Profile& p);
+
+}  // namespace rig::cli

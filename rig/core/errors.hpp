@@ -1,0 +1,29 @@
+// Error types: each maps to one of the documented exit codes (CONTRACTS.md).
+#pragma once
+#include <stdexcept>
+#include <string>
+
+namespace rig {
+
+enum ExitCode : int {
+  kExitPass = 0,        // every measurement passed
+  kExitFail = 1,        // a measurement failed its limits
+  kExitUsage = 2,       // usage or configuration error
+  kExitAborted = 3,     // aborted (signal, e-stop)
+  kExitHardware = 4,    // hardware or link fault
+};
+
+// Bad configuration or input: names what and where ("profiles/x.toml:12:3: ...").
+struct ConfigError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+// A device or link failed (table alarm, dead link, CAN bus-off, capture gap limit).
+struct HardwareError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+// The run was aborted on request (signal, e-stop); `what()` says by whom.
+struct AbortedError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace rig

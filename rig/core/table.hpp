@@ -1,0 +1,47 @@
+// Rotary table seam: a dividing head driven by a positioning servo.
+// Real backend: Modbus (rig/modbus). Emulated: the same client logic over the
+// emulator's register map in-process (plant/table).
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "rig/core/cancel.hpp"
+
+namespace rig {
+
+struct TableStatus {
+  double actual_deg = 0.0;
+  double target_deg = 0.0;
+  bool ready = false;
+  bool servo_on = false;
+  bool homed = false;
+  bool homing = false;
+  bool moving = false;
+  bool in_position = false;
+  bool alarm = false;
+  bool estop = false;
+  bool interlock_ok = true;
+  uint16_t alarm_code = 0;
+  std::string alarm_text;  // meaning of alarm_code, empty when none
+  uint32_t heartbeat = 0;
+};
+
+// Every call is bounded in time; failures throw HardwareError naming what the
+// table was doing; a requested cancel throws AbortedError after a stop command.
+class RotaryTable {
+ public:
+  virtual ~RotaryTable() = default;
+  virtual TableStatus status() = 0;
+  // Homes the axis and waits until homed (bounded).
+  virtual void home(const CancelToken& cancel) = 0;
+  // Moves to `deg`, returns once in position for the settle time and the actual
+  // angle reads back within tolerance.
+  virtual void move_to(double deg, const CancelToken& cancel) = 0;
+  // Controlled stop (decelerates). Never throws on a dead link: safe-state path.
+  virtual void stop() noexcept = 0;
+  // Immediate stop (quick stop / e-stop ramp). Never throws.
+  virtual void quick_stop() noexcept = 0;
+  virtual std::string describe() const = 0;  // "modbus tcp 127.0.0.1:1502 unit 1"
+};
+
+}  // namespace rig

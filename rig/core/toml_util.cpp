@@ -1,0 +1,173 @@
+#include "rig/core/toml_util.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace rig::cfg {
+
+namespace {
+
+std::string pos(const toml::source_region& s) {
+  std::ostringstream os;
+  os << (s.path ? *s.path : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
+  return os.str();
+}
+
+[[noreturn]] void fail(const toml::node& n, const std::string& msg) { throw ConfigError(where(n) + ": " + msg); }
+
+const toml::node& need(const toml::table& t, std::string_view key) {
+  const toml::node* n = t.get(key);
+  if (!n) fail(t, "missing key '" + std::string(key) + "'");
+  return *n;
+}
+
+void check_range(const toml::node& n, std::string_view key, double v, std::optional<double> lo,
+                 std::optional<double> hi) {
+  if (!std::isfinite(v) || (lo && v < *lo) || (hi && v > *hi)) {
+    std::ostringstream os;
+    os << "'" << key << "' = " << v << " is out of range";
+    if (lo || hi) os << " [" << (lo ? std::to_string(*lo) : "-inf") << ", " << (hi ? std::to_string(*hi) : "inf") << "]";
+    fail(n, os.str());
+  }
+}
+
+}  // namespace
+
+std::string where(const toml::node& n) { return pos(n.source()); }
+
+toml::table parse_file(const std::string& path) {
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << pos(e.source()) << ": " << e.description();
+    throw ConfigError(os.str());
+  }
+}
+
+toml::table parse_string(std::string_view text, const std::string& source_name) {
+  try {
+    return toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << pos(e.source()) << ": " << e.description();
+    throw ConfigError(os.str());
+  }
+}
+
+double get_number(const toml::table& t, std::string_view key, std::optional<double> def, std::optional<double> lo,
+                  std::optional<double> hi) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (def) return *def;
+    need(t, key);
+  }
+  std::optional<double> v = n->value<double>();  // integers convert too
+  if (!v || !(n->is_floating_point() || n->is_integer())) fail(*n, "'" + std::string(key) + "' must be a number");
+  check_range(*n, key, *v, lo, hi);
+  return *v;
+}
+
+int64_t get_int(const toml::table& t, std::string_view key, std::optional<int64_t> def, std::optional<int64_t> lo,
+                std::optional<int64_t> hi) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (def) return *def;
+    need(t, key);
+  }
+  if (!n->is_integer()) fail(*n, "'" + std::string(key) + "' must be an integer");
+  const int64_t v = *n->value<int64_t>();
+  check_range(*n, key, static_cast<double>(v), lo ? std::optional<double>(static_cast<double>(*lo)) : std::nullopt,
+              hi ? std::optional<double>(static_cast<double>(*hi)) : std::nullopt);
+  return v;
+}
+
+bool get_bool(const toml::table& t, std::string_view key, std::optional<bool> def) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (def) return *def;
+    need(t, key);
+  }
+  if (!n->is_boolean()) fail(*n, "'" + std::string(key) + "' must be true or false");
+  return *n->value<bool>();
+}
+
+std::string get_string(const toml::table& t, std::string_view key, std::optional<std::string> def) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (def) return *def;
+    need(t, key);
+  }
+  if (!n->is_string()) fail(*n, "'" + std::string(key) + "' must be a string");
+  return *n->value<std::string>();
+}
+
+std::vector<double> get_numbers(const toml::table& t, std::string_view key, std::optional<std::vector<double>> def) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (def) return *def;
+    need(t, key);
+  }
+  const toml::array* a = n->as_array();
+  if (!a) fail(*n, "'" + std::string(key) + "' must be an array of numbers");
+  std::vector<double> out;
+  for (const toml::node& e : *a) {
+    std::optional<double> v = e.value<double>();
+    if (!v || !(e.is_floating_point() || e.is_integer())) fail(e, "'" + std::string(key) + "' must hold numbers");
+    check_range(e, key, *v, std::nullopt, std::nullopt);
+    out.push_back(*v);
+  }
+  return out;
+}
+
+std::vector<std::string> get_strings(const toml::table& t, std::string_view key,
+                                     std::optional<std::vector<std::string>> def) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (def) return *def;
+    need(t, key);
+  }
+  const toml::array* a = n->as_array();
+  if (!a) fail(*n, "'" + std::string(key) + "' must be an array of strings");
+  std::vector<std::string> out;
+  for (const toml::node& e : *a) {
+    if (!e.is_string()) fail(e, "'" + std::string(key) + "' must hold strings");
+    out.push_back(*e.value<std::string>());
+  }
+  return out;
+}
+
+const toml::table* get_table(const toml::table& t, std::string_view key, bool required) {
+  const toml::node* n = t.get(key);
+  if (!n) {
+    if (required) need(t, key);
+    return nullptr;
+  }
+  if (!n->is_table()) fail(*n, "'" + std::string(key) + "' must be a table");
+  return n->as_table();
+}
+
+void check_keys(const toml::table& t, std::initializer_list<std::string_view> allowed, std::string_view ctx) {
+  for (auto&& [k, v] : t) {
+    bool ok = false;
+    for (auto a : allowed) ok = ok || a == k.str();
+    if (!ok) {
+      std::string list;
+      for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      fail(v, "unknown key '" + std::string(k.str()) + "' in [" + std::string(ctx) + "] (expected one of: " + list + ")");
+    }
+  }
+}
+
+void merge_into(toml::table& base, const toml::table& over) {
+  for (auto&& [k, v] : over) {
+    toml::node* b = base.get(k.str());
+    if (b && b->is_table() && v.is_table()) {
+      merge_into(*b->as_table(), *v.as_table());
+    } else {
+      base.insert_or_assign(k, v);
+    }
+  }
+}
+
+}  // namespace rig::cfg

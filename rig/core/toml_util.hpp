@@ -1,0 +1,44 @@
+// TOML helpers that turn every configuration mistake into a ConfigError naming
+// the file, line and column (toml++ keeps source positions on every node).
+#pragma once
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::cfg {
+
+// Parses a file / a string; syntax errors become "file:line:col: message".
+toml::table parse_file(const std::string& path);
+toml::table parse_string(std::string_view text, const std::string& source_name);
+
+// "file:line:col" of a node (or of its parent table when the key is missing).
+std::string where(const toml::node& n);
+
+// Typed access. `required` throws when the key is missing; all throw when the
+// value has the wrong type or lies outside [lo, hi].
+double get_number(const toml::table& t, std::string_view key, std::optional<double> def = std::nullopt,
+                  std::optional<double> lo = std::nullopt, std::optional<double> hi = std::nullopt);
+int64_t get_int(const toml::table& t, std::string_view key, std::optional<int64_t> def = std::nullopt,
+                std::optional<int64_t> lo = std::nullopt, std::optional<int64_t> hi = std::nullopt);
+bool get_bool(const toml::table& t, std::string_view key, std::optional<bool> def = std::nullopt);
+std::string get_string(const toml::table& t, std::string_view key,
+                       std::optional<std::string> def = std::nullopt);
+std::vector<double> get_numbers(const toml::table& t, std::string_view key,
+                                std::optional<std::vector<double>> def = std::nullopt);
+std::vector<std::string> get_strings(const toml::table& t, std::string_view key,
+                                     std::optional<std::vector<std::string>> def = std::nullopt);
+// A sub-table; nullptr when absent and not required.
+const toml::table* get_table(const toml::table& t, std::string_view key, bool required = false);
+
+// Rejects keys not in `allowed` (catches typos such as "run_sec").
+void check_keys(const toml::table& t, std::initializer_list<std::string_view> allowed, std::string_view ctx);
+
+// Deep merge: values in `over` replace those in `base`; tables merge recursively.
+void merge_into(toml::table& base, const toml::table& over);
+
+}  // namespace rig::cfg

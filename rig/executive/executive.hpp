@@ -1,0 +1,109 @@
+// The procedure engine, in the manner of OpenHTF's phases and plugs: a list of
+// phases run in order against the device seams, each completed phase
+// checkpointed in the run folder, and a guaranteed safe-state teardown on
+// every exit path (normal end, abort, fault): table stopped, stream stopped,
+// DUT powered off, in that order, each step logged.
+#pragma once
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/logger.h>
+
+#include "rig/core/cancel.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/core/dut_link.hpp"
+#include "rig/core/gpio.hpp"
+#include "rig/core/table.hpp"
+#include "rig/executive/measurement.hpp"
+
+namespace rig {
+
+// The plugs a procedure runs against (real or emulated backends behind them).
+struct Devices {
+  RotaryTable& table;
+  DutLink& dut;
+  RigIo& io;
+  Clock& clock;
+  std::string plant;  // "emulated" | "hardware"
+};
+
+// Progress reporting from inside a phase (fraction of the phase's planned time).
+class ProgressSink {
+ public:
+  virtual ~ProgressSink() = default;
+  virtual void phase_started(std::size_t index, std::size_t count, const std::string& id, const std::string& title,
+                             double planned_s) = 0;
+  virtual void phase_progress(double fraction, double sim_now_s) = 0;
+  virtual void phase_finished(const std::string& id, const std::string& status, const std::string& message) = 0;
+  virtual void log(const std::string& line) = 0;
+};
+
+struct PhaseContext {
+  Devices& dev;
+  CancelToken cancel;
+  MeasurementSet& values;
+  nlohmann::json& state;  // persisted with every checkpoint; phases share results through it
+  std::string out_dir;
+  std::shared_ptr<spdlog::logger> log;
+  ProgressSink* progress = nullptr;
+  void report(double fraction) const {
+    if (progress) progress->phase_progress(fraction, dev.clock.now_s());
+  }
+};
+
+struct Phase {
+  std::string id;
+  std::string title;
+  double planned_s = 0;  // planned duration in device (simulated or real) time, for ETA
+  std::function<void(PhaseContext&)> run;
+};
+
+struct PhaseRecord {
+  std::string id, title, status, started, finished, message;  // status: done|failed|aborted|skipped|pending
+};
+
+enum class RunOutcome { Pass, Fail, Aborted, Error };
+const char* to_string(RunOutcome o);
+
+struct RunResult {
+  RunOutcome outcome = RunOutcome::Error;
+  std::string message;  // abort reason or fault text
+  bool config_error = false;  // an Error caused by bad configuration exits 2, not 4
+  std::vector<PhaseRecord> phases;
+  int exit_code() const;
+};
+
+class Executive {
+ public:
+  Executive(Devices& dev, std::string out_dir, std::shared_ptr<spdlog::logger> log, ProgressSink* progress);
+
+  // Bring-up runs on every start, resume included (power, homing: hardware
+  // state is never taken from a checkpoint). Phases already in the checkpoint
+  // are skipped when `resume` is set. `identity` (profile digest, serial, plant)
+  // must match the checkpoint's.
+  RunResult run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
+                MeasurementSet& values, nlohmann::json& state, const CancelToken& cancel, bool resume,
+                const nlohmann::json& identity);
+
+  // The safe-state sequence; public so signal paths and tests can call it.
+  static void safe_state(Devices& dev, spdlog::logger& log);
+
+  static std::string checkpoint_path(const std::string& out_dir);
+
+ private:
+  void write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
+                        const nlohmann::json& state, const nlohmann::json& identity) const;
+  Devices& dev_;
+  std::string out_dir_;
+  std::shared_ptr<spdlog::logger> log_;
+  ProgressSink* progress_;
+};
+
+// Atomic file replace: write to a temp file, fsync, rename.
+void write_file_atomic(const std::string& path, const std::string& content);
+
+}  // namespace rig

@@ -1,0 +1,115 @@
+#include "rig/executive/passport.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include <fmt/format.h>
+
+namespace rig {
+
+nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& result, const MeasurementSet& values) {
+  nlohmann::ordered_json p;
+  p["schema"] = "rig.passport/1";
+  p["serial"] = info.serial;
+  p["profile"] = info.profile;
+  p["plant"] = info.plant;
+  p["started"] = info.started;
+  p["finished"] = info.finished;
+  p["outcome"] = to_string(result.outcome);
+  p["values"] = values.to_json();
+  p["software"] = info.software;
+  p["out_dir"] = info.out_dir;
+  p["captures"] = info.captures;
+  nlohmann::ordered_json phases = nlohmann::ordered_json::array();
+  for (const auto& r : result.phases)
+    phases.push_back({{"id", r.id}, {"title", r.title}, {"status", r.status}, {"started", r.started},
+                      {"finished", r.finished}, {"message", r.message}});
+  p["phases"] = phases;
+  if (result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error)
+    p["aborted_reason"] = result.message;
+  return p;
+}
+
+void write_passport(const std::string& path, const nlohmann::ordered_json& passport) {
+  write_file_atomic(path, passport.dump(2) + "\n");
+}
+
+namespace {
+std::string xml_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      case '\'': o += "&apos;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+std::string num(const std::optional<double>& v) { return v ? fmt::format("{:.6g}", *v) : "null"; }
+}  // namespace
+
+std::string junit_xml(const PassportInfo& info, const RunResult& result, const MeasurementSet& values) {
+  std::size_t failures = 0, skipped = 0;
+  for (const auto& m : values.all()) {
+    failures += m.outcome == Outcome::Fail;
+    skipped += m.outcome == Outcome::Unset;
+  }
+  const bool aborted = result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error;
+  std::ostringstream o;
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  o << "<testsuites name=\"rig\" tests=\"" << values.all().size() + (aborted ? 1 : 0) << "\" failures=\"" << failures
+    << "\" errors=\"" << (aborted ? 1 : 0) << "\">\n";
+  o << "  <testsuite name=\"" << xml_escape("acceptance." + info.profile) << "\" tests=\""
+    << values.all().size() + (aborted ? 1 : 0) << "\" failures=\"" << failures << "\" errors=\"" << (aborted ? 1 : 0)
+    << "\" skipped=\"" << skipped << "\" timestamp=\"" << xml_escape(info.started) << "\">\n";
+  o << "    <properties><property name=\"serial\" value=\"" << xml_escape(info.serial)
+    << "\"/><property name=\"plant\" value=\"" << xml_escape(info.plant) << "\"/><property name=\"outcome\" value=\""
+    << to_string(result.outcome) << "\"/></properties>\n";
+  for (const auto& m : values.all()) {
+    o << "    <testcase classname=\"passport\" name=\"" << xml_escape(m.name) << "\">";
+    const std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
+    if (m.outcome == Outcome::Fail) {
+      o << "<failure message=\""
+        << xml_escape(fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)) << "\">"
+        << xml_escape(m.reason) << "</failure>";
+    } else if (m.outcome == Outcome::Unset) {
+      o << "<skipped message=\"" << xml_escape(m.value ? "no limits: " + num(m.value) + " " + m.unit : m.reason)
+        << "\"/>";
+    }
+    o << "<system-out>" << xml_escape(fmt::format("value={} unit={} limits={} {}", num(m.value), m.unit, lim, m.reason))
+      << "</system-out></testcase>\n";
+  }
+  if (aborted)
+    o << "    <testcase classname=\"procedure\" name=\"run\"><error message=\"" << xml_escape(result.message)
+      << "\"/></testcase>\n";
+  o << "  </testsuite>\n</testsuites>\n";
+  return o.str();
+}
+
+std::string passport_table(const nlohmann::ordered_json& p) {
+  std::ostringstream o;
+  o << fmt::format("Passport  serial {}  profile {}  plant {}\n", p.value("serial", ""), p.value("profile", ""),
+                   p.value("plant", ""));
+  o << fmt::format("{:<26} {:>13} {:>13} {:>13} {:<10} {:<28} {}\n", "measurement", "value", "lo", "hi", "unit",
+                   "limits", "outcome");
+  auto f = [](const nlohmann::ordered_json& v) { return v.is_null() ? std::string("-") : fmt::format("{:.5g}", v.get<double>()); };
+  for (auto it = p["values"].begin(); it != p["values"].end(); ++it) {
+    const auto& m = it.value();
+    std::string lim = "-";
+    if (m["limits"].is_array()) lim = fmt::format("[{:.3g}, {:.3g}]", m["limits"][0].get<double>(), m["limits"][1].get<double>());
+    std::string out = m.value("outcome", "UNSET");
+    const std::string reason = m.value("reason", "");
+    if (!reason.empty() && (out != "PASS" || m["value"].is_null() || it.key() == "accuracy_class")) out += "  " + reason;
+    o << fmt::format("{:<26} {:>13} {:>13} {:>13} {:<10} {:<28} {}\n", it.key(), f(m["value"]), f(m["lo"]), f(m["hi"]),
+                     m.value("unit", ""), lim, out);
+  }
+  o << "OUTCOME: " << p.value("outcome", "") << "\n";
+  if (p.contains("aborted_reason")) o << "reason: " << p["aborted_reason"].get<std::string>() << "\n";
+  return o.str();
+}
+
+}  // namespace rig

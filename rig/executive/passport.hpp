@@ -1,0 +1,25 @@
+// The run's outputs for people and machines: passport.json (CONTRACTS.md
+// shape, rig.passport/1) and junit.xml (one testcase per measurement).
+#pragma once
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rig/executive/executive.hpp"
+#include "rig/executive/measurement.hpp"
+
+namespace rig {
+
+struct PassportInfo {
+  std::string serial, profile, plant, started, finished, software, out_dir;
+  std::vector<std::string> captures;  // relative to out_dir
+};
+
+nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& result, const MeasurementSet& values);
+void write_passport(const std::string& path, const nlohmann::ordered_json& passport);
+std::string junit_xml(const PassportInfo& info, const RunResult& result, const MeasurementSet& values);
+// A fixed-width pass/fail table for the terminal.
+std::string passport_table(const nlohmann::ordered_json& passport);
+
+}  // namespace rig

@@ -1,0 +1,42 @@
+#include "rig/executive/signals.hpp"
+
+#include <pthread.h>
+#include <signal.h>
+
+#include <ctime>
+#include <string>
+
+namespace rig {
+
+namespace {
+sigset_t abort_signals() {
+  sigset_t s;
+  sigemptyset(&s);
+  sigaddset(&s, SIGINT);
+  sigaddset(&s, SIGTERM);
+  sigaddset(&s, SIGHUP);
+  return s;
+}
+}  // namespace
+
+SignalWatcher::SignalWatcher(CancelSource& source) : source_(source) {
+  const sigset_t s = abort_signals();
+  pthread_sigmask(SIG_BLOCK, &s, nullptr);
+  thread_ = std::thread([this, s] {
+    const timespec slice{0, 100'000'000};
+    while (!stop_.load()) {
+      const int sig = sigtimedwait(&s, nullptr, &slice);
+      if (sig > 0) source_.request(std::string(sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
+                                   " received");
+    }
+  });
+}
+
+SignalWatcher::~SignalWatcher() {
+  stop_ = true;
+  thread_.join();
+  const sigset_t s = abort_signals();
+  pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
+}
+
+}  // namespace rig

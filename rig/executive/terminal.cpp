@@ -1,0 +1,106 @@
+#include "rig/executive/terminal.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+
+#include <fmt/format.h>
+
+namespace rig {
+
+namespace {
+double wall_s() {
+  using namespace std::chrono;
+  return duration<double>(steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
+TerminalView::TerminalView(std::FILE* out, bool quiet)
+    : out_(out), tty_(::isatty(::fileno(out)) != 0), quiet_(quiet), wall_start_(wall_s()) {}
+
+std::string TerminalView::hms(double s) {
+  if (!(s >= 0)) return "--:--:--";
+  const long t = static_cast<long>(s + 0.5);
+  return fmt::format("{:02d}:{:02d}:{:02d}", t / 3600, (t / 60) % 60, t % 60);
+}
+
+void TerminalView::plan(const std::vector<Phase>& phases) {
+  planned_.clear();
+  ids_.clear();
+  double total = 0;
+  for (const auto& p : phases) {
+    planned_.push_back(p.planned_s);
+    ids_.push_back(p.id);
+    total += p.planned_s;
+  }
+  if (quiet_) return;
+  fmt::print(out_, "Plan: {} phases, {} of device time\n", phases.size(), hms(total));
+  for (std::size_t i = 0; i < phases.size(); ++i)
+    fmt::print(out_, "  {:>2}. {:<14} {:>9}  {}\n", i + 1, phases[i].id, hms(phases[i].planned_s), phases[i].title);
+  std::fflush(out_);
+}
+
+void TerminalView::phase_started(std::size_t index, std::size_t count, const std::string& id, const std::string& title,
+                                 double) {
+  index_ = index;
+  count_ = count;
+  fraction_ = 0;
+  last_quarter_ = -1;
+  done_planned_ = 0;
+  for (std::size_t i = 0; i < index && i < planned_.size(); ++i) done_planned_ += planned_[i];
+  if (!quiet_) {
+    if (tty_) std::fputs("\r\033[K", out_);
+    fmt::print(out_, "[{}/{}] {}: {}\n", index + 1, count, id, title);
+    std::fflush(out_);
+  }
+}
+
+void TerminalView::draw(bool final_line) {
+  double total = 0;
+  for (double p : planned_) total += p;
+  const double cur = index_ < planned_.size() ? planned_[index_] : 0;
+  const double done = done_planned_ + fraction_ * cur;
+  const double elapsed_wall = wall_s() - wall_start_;
+  const double speed = elapsed_wall > 0 ? done / elapsed_wall : 0;  // device seconds per wall second
+  const double left = total - done;
+  const int width = 30;
+  const int fill = static_cast<int>(fraction_ * width + 0.5);
+  const std::string bar = std::string(static_cast<std::size_t>(fill), '#') + std::string(static_cast<std::size_t>(width - fill), '.');
+  fmt::print(out_, "{}  [{}] {:3.0f}%  phase {}/{}  ETA device {}  wall {}{}", tty_ ? "\r\033[K" : "  ", bar,
+             fraction_ * 100, index_ + 1, count_, hms(left), speed > 0 ? hms(left / speed) : "--:--:--",
+             final_line || !tty_ ? "\n" : "");
+  std::fflush(out_);
+}
+
+void TerminalView::phase_progress(double fraction, double) {
+  if (quiet_) return;
+  fraction_ = std::min(std::max(fraction, 0.0), 1.0);
+  const double now = wall_s();
+  if (tty_) {
+    if (now - last_draw_wall_ < 0.1) return;
+    last_draw_wall_ = now;
+    draw(false);
+  } else {
+    const int q = static_cast<int>(fraction_ * 4);
+    if (q == last_quarter_ || q == 0 || q >= 4) return;
+    last_quarter_ = q;
+    draw(true);
+  }
+}
+
+void TerminalView::phase_finished(const std::string& id, const std::string& status, const std::string& message) {
+  if (quiet_) return;
+  if (tty_) std::fputs("\r\033[K", out_);
+  if (status != "done")
+    fmt::print(out_, "  {} {}{}{}\n", id, status, message.empty() ? "" : ": ", message);
+  std::fflush(out_);
+}
+
+void TerminalView::log(const std::string& line) {
+  if (quiet_) return;
+  if (tty_) std::fputs("\r\033[K", out_);
+  fmt::print(out_, "{}\n", line);
+  std::fflush(out_);
+}
+
+}  // namespace rig

@@ -1,0 +1,123 @@
+#include "rig/gpio/gpiod_lines.hpp"
+
+#include <system_error>
+
+#include <gpiod.hpp>
+
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::gpio {
+
+namespace {
+
+class GpiodLines final : public LineDriver {
+ public:
+  explicit GpiodLines(const GpioConfig& cfg) : cfg_(cfg) {
+    if (!cfg.chip.empty()) {
+      try {
+        chip_ = gpiod::chip(cfg.chip);  // by name, path, label or number
+      } catch (const std::exception& e) {
+        throw HardwareError("[gpio] chip = \"" + cfg.chip + "\": cannot open GPIO chip: " + e.what());
+      }
+    }
+    auto out_flags = [](bool active_low) { return active_low ? gpiod::line_request::FLAG_ACTIVE_LOW : std::bitset<32>{}; };
+    out_[0] = request("power", cfg.power, gpiod::line_request::DIRECTION_OUTPUT, out_flags(cfg.power_active_low));
+    const std::string* lamps[4] = {&cfg.lamp_ready, &cfg.lamp_running, &cfg.lamp_pass, &cfg.lamp_fail};
+    const char* keys[4] = {"lamp_ready", "lamp_running", "lamp_pass", "lamp_fail"};
+    for (int i = 0; i < 4; ++i)
+      if (!lamps[i]->empty())
+        out_[i + 1] = request(keys[i], *lamps[i], gpiod::line_request::DIRECTION_OUTPUT, {});
+    estop_ = request("estop", cfg.estop, gpiod::line_request::EVENT_BOTH_EDGES,
+                     cfg.estop_active_low ? gpiod::line_request::FLAG_ACTIVE_LOW : std::bitset<32>{});
+  }
+
+  bool has(Output o) const override { return static_cast<bool>(out_[static_cast<int>(o)]); }
+
+  void set(Output o, bool active) override {
+    auto& l = out_[static_cast<int>(o)];
+    if (!l) return;
+    try {
+      l.set_value(active ? 1 : 0);
+    } catch (const std::exception& e) {
+      throw HardwareError("GPIO line " + l.name() + ": set_value: " + e.what());
+    }
+  }
+
+  bool estop_active() override {
+    try {
+      return estop_.get_value() != 0;
+    } catch (const std::exception& e) {
+      throw HardwareError("GPIO e-stop line " + cfg_.estop + ": get_value: " + e.what());
+    }
+  }
+
+  std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) override {
+    if (!estop_.event_wait(timeout)) return std::nullopt;
+    // Edges are reported in logical (active-low corrected) terms.
+    const gpiod::line_event ev = estop_.event_read();
+    return ev.event_type == gpiod::line_event::RISING_EDGE;
+  }
+
+  std::string describe() const override {
+    std::string s = "libgpiod lines";
+    if (chip_) s += " on " + chip_.name() + " (" + chip_.label() + ")";
+    s += ": power=" + cfg_.power + ", estop=" + cfg_.estop;
+    return s;
+  }
+
+ private:
+  gpiod::line request(const char* key, const std::string& name, int type, std::bitset<32> flags) {
+    gpiod::line l;
+    try {
+      l = chip_ ? chip_.find_line(name) : gpiod::find_line(name);
+    } catch (const std::exception& e) {
+      throw HardwareError(std::string("[gpio] ") + key + " = \"" + name + "\": looking up the line: " + e.what());
+    }
+    if (!l)
+      throw HardwareError(std::string("[gpio] ") + key + " = \"" + name + "\": no GPIO line of that name" +
+                          (chip_ ? " on " + chip_.name() : std::string(" on any chip")));
+    try {
+      l.request({cfg_.consumer, type, flags}, 0);
+    } catch (const std::exception& e) {
+      throw HardwareError(std::string("[gpio] ") + key + " = \"" + name + "\": request failed (line busy?): " + e.what());
+    }
+    return l;
+  }
+
+  GpioConfig cfg_;
+  gpiod::chip chip_;
+  gpiod::line out_[kOutputs];
+  gpiod::line estop_;
+};
+
+}  // namespace
+
+GpioConfig parse_gpio_config(const toml::table& t) {
+  cfg::check_keys(t, {"chip", "power", "estop", "lamp_ready", "lamp_running", "lamp_pass", "lamp_fail",
+                      "power_active_low", "estop_active_low", "consumer"},
+                  "[gpio]");
+  GpioConfig c;
+  c.chip = cfg::get_string(t, "chip", "");
+  c.power = cfg::get_string(t, "power");
+  c.estop = cfg::get_string(t, "estop");
+  c.lamp_ready = cfg::get_string(t, "lamp_ready", "");
+  c.lamp_running = cfg::get_string(t, "lamp_running", "");
+  c.lamp_pass = cfg::get_string(t, "lamp_pass", "");
+  c.lamp_fail = cfg::get_string(t, "lamp_fail", "");
+  c.power_active_low = cfg::get_bool(t, "power_active_low", false);
+  c.estop_active_low = cfg::get_bool(t, "estop_active_low", true);
+  c.consumer = cfg::get_string(t, "consumer", "rig");
+  for (const char* key : {"power", "estop"})
+    if (cfg::get_string(t, key).empty()) throw ConfigError(cfg::where(*t.get(key)) + ": [gpio] " + key + " is empty");
+  if (c.power == c.estop) throw ConfigError(cfg::where(*t.get("estop")) + ": [gpio] estop names the same line as power");
+  return c;
+}
+
+std::unique_ptr<LineDriver> open_gpiod_lines(const GpioConfig& cfg) { return std::make_unique<GpiodLines>(cfg); }
+
+std::unique_ptr<RigIo> connect_gpio(const toml::table& gpio_cfg) {
+  return std::make_unique<LineRigIo>(open_gpiod_lines(parse_gpio_config(gpio_cfg)));
+}
+
+}  // namespace rig::gpio

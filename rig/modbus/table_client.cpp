@@ -1,0 +1,409 @@
+#include "rig/modbus/table_client.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "rig/core/toml_util.hpp"
+
+namespace rig::modbus {
+
+namespace {
+
+std::string deg_str(double d) {
+  char b[48];
+  std::snprintf(b, sizeof b, "%.4f°", d);
+  return b;
+}
+
+std::string hex_code(uint16_t c) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%04X", c);
+  return b;
+}
+
+constexpr double kRestTimeoutS = 30.0;
+
+std::string secs(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f s", s);
+  return b;
+}
+
+// Duration of a trapezoidal move of `dist` from rest to rest.
+double trapezoid_time(double dist, double v, double a) {
+  if (v <= 0 || a <= 0) return 0;
+  dist = std::fabs(dist);
+  if (dist >= v * v / a) return dist / v + v / a;
+  return 2.0 * std::sqrt(dist / a);
+}
+
+}  // namespace
+
+DriveState decode_drive_state(const std::vector<uint16_t>& r) {
+  DriveState d;
+  d.control = r[reg::kControl];
+  d.status = r[reg::kStatus];
+  d.alarm_code = r[reg::kAlarmCode];
+  d.heartbeat = join_u32(r[reg::kHeartbeat], r[reg::kHeartbeat + 1]);
+  d.actual_deg = join_i32(r[reg::kActualPos], r[reg::kActualPos + 1]) / kPosScale;
+  d.target_deg = join_i32(r[reg::kTargetPos], r[reg::kTargetPos + 1]) / kPosScale;
+  d.velocity_dps = join_u32(r[reg::kVelocity], r[reg::kVelocity + 1]) / kVelScale;
+  d.accel_dps2 = join_u32(r[reg::kAccel], r[reg::kAccel + 1]) / kVelScale;
+  d.window_deg = r[reg::kInPosWindow] / kPosScale;
+  d.settle_s = r[reg::kSettleTime] / 1000.0;
+  d.actual_vel_dps = join_i32(r[reg::kActualVel], r[reg::kActualVel + 1]) / kVelScale;
+  d.following_err_deg = join_i32(r[reg::kFollowErr], r[reg::kFollowErr + 1]) / kPosScale;
+  d.limit_neg_deg = join_i32(r[reg::kLimitNeg], r[reg::kLimitNeg + 1]) / kPosScale;
+  d.limit_pos_deg = join_i32(r[reg::kLimitPos], r[reg::kLimitPos + 1]) / kPosScale;
+  d.move_seq = r[reg::kMoveSeq];
+  return d;
+}
+
+TableStatus to_table_status(const DriveState& d) {
+  TableStatus s;
+  s.actual_deg = d.actual_deg;
+  s.target_deg = d.target_deg;
+  s.ready = d.has(sts::kReady);
+  s.servo_on = d.has(sts::kServoOn);
+  s.homed = d.has(sts::kHomed);
+  s.homing = d.has(sts::kHoming);
+  s.moving = d.has(sts::kMoving);
+  s.in_position = d.has(sts::kInPosition);
+  s.alarm = d.has(sts::kAlarm);
+  s.estop = d.has(sts::kEstop);
+  s.interlock_ok = d.has(sts::kInterlockOk);
+  s.alarm_code = d.alarm_code;
+  s.alarm_text = alarm_text(d.alarm_code);
+  s.heartbeat = d.heartbeat;
+  return s;
+}
+
+TableClient::TableClient(std::unique_ptr<RegisterTransport> transport, Clock& clock, TableOptions opt)
+    : transport_(std::move(transport)), clock_(clock), opt_(std::move(opt)) {}
+
+std::string TableClient::describe() const { return transport_->describe(); }
+
+DriveState TableClient::read_drive(const CancelToken& cancel) {
+  DriveState d = decode_drive_state(transport_->read(0, reg::kBlockEnd, cancel));
+  control_ = d.control;
+  last_actual_deg_ = d.actual_deg;
+  have_actual_ = true;
+  return d;
+}
+
+TableStatus TableClient::status() {
+  try {
+    return to_table_status(read_drive());
+  } catch (const ModbusError& e) {
+    throw HardwareError(std::string("table status: ") + e.what());
+  }
+}
+
+void TableClient::write_control(uint16_t word, const CancelToken& cancel) {
+  transport_->write(reg::kControl, {word}, cancel);
+  control_ = word;
+}
+
+std::string TableClient::at(const DriveState& d) const { return " at " + deg_str(d.actual_deg); }
+
+void TableClient::fail_on_alarm(const std::string& doing, const DriveState& d) {
+  if (!d.has(sts::kAlarm)) return;
+  std::string msg = doing + ": alarm " + hex_code(d.alarm_code) + " " + alarm_text(d.alarm_code) + at(d);
+  if (d.alarm_code == alarm::kEstop) {
+    msg += " (release the e-stop, then `rig table reset`)";
+  } else if (d.alarm_code == alarm::kInterlock) {
+    msg += " (close the interlock, then `rig table reset`)";
+  } else if (!alarm_safe_to_reset(d.alarm_code)) {
+    msg += " (inspect the table, then `rig table reset`)";
+  }
+  throw HardwareError(msg);
+}
+
+void TableClient::watch_heartbeat(const std::string& doing, const DriveState& d, double& last_change_s,
+                                  uint32_t& last_hb) {
+  const double now = clock_.now_s();
+  if (d.heartbeat != last_hb) {
+    last_hb = d.heartbeat;
+    last_change_s = now;
+  } else if (now - last_change_s > opt_.heartbeat_timeout_s) {
+    throw HardwareError(doing + ": drive heartbeat frozen at " + std::to_string(d.heartbeat) + " for " +
+                        secs(now - last_change_s) + " (drive controller not running)" + at(d));
+  }
+}
+
+void TableClient::apply_profile_once(const CancelToken& cancel) {
+  if (profile_applied_) return;
+  uint16_t w[2];
+  if (opt_.velocity_dps) {
+    split_u32(static_cast<uint32_t>(std::lround(*opt_.velocity_dps * kVelScale)), w);
+    transport_->write(reg::kVelocity, {w[0], w[1]}, cancel);
+  }
+  if (opt_.accel_dps2) {
+    split_u32(static_cast<uint32_t>(std::lround(*opt_.accel_dps2 * kVelScale)), w);
+    transport_->write(reg::kAccel, {w[0], w[1]}, cancel);
+  }
+  if (opt_.in_position_window_deg)
+    transport_->write(reg::kInPosWindow, {static_cast<uint16_t>(std::lround(*opt_.in_position_window_deg * kPosScale))},
+                      cancel);
+  if (opt_.drive_settle_s)
+    transport_->write(reg::kSettleTime, {static_cast<uint16_t>(std::lround(*opt_.drive_settle_s * 1000))}, cancel);
+  profile_applied_ = true;
+}
+
+// Brings the drive to "servo on, no alarm, ready": resets only the alarms that
+// are command refusals; anything else is reported for a technician.
+void TableClient::prepare_motion(const std::string& doing, const CancelToken& cancel) {
+  DriveState d = read_drive(cancel);
+  if (d.has(sts::kAlarm) && alarm_safe_to_reset(d.alarm_code) && !d.has(sts::kEstop) && d.has(sts::kInterlockOk)) {
+    const auto servo = static_cast<uint16_t>(control_ & ctl::kServoOn);
+    write_control(servo, cancel);
+    write_control(servo | ctl::kAlarmReset, cancel);
+    write_control(servo, cancel);
+    d = read_drive(cancel);
+  }
+  fail_on_alarm(doing, d);
+  d = wait_at_rest(doing, d, cancel);
+  if (d.has(sts::kEstop)) throw HardwareError(doing + ": emergency stop pressed" + at(d));
+  if (!d.has(sts::kInterlockOk)) throw HardwareError(doing + ": interlock open" + at(d));
+  // Clears HALT / QUICK_STOP / START / HOME so the next edge is seen.
+  if (!d.has(sts::kServoOn)) {
+    write_control(0, cancel);
+    write_control(ctl::kServoOn, cancel);
+    const double t0 = clock_.now_s();
+    for (;;) {
+      d = read_drive(cancel);
+      fail_on_alarm(doing, d);
+      if (d.has(sts::kServoOn)) break;
+      if (clock_.now_s() - t0 > opt_.ack_timeout_s)
+        throw HardwareError(doing + ": servo did not switch on within " + secs(opt_.ack_timeout_s) + at(d));
+      clock_.sleep_for(opt_.poll_s, cancel);
+    }
+  } else {
+    write_control(ctl::kServoOn, cancel);
+  }
+  apply_profile_once(cancel);
+}
+
+// A table still coasting from a stop (or moved by another master) must come
+// to rest before a new command; bounded so a runaway is reported.
+DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, const CancelToken& cancel) {
+  const double t0 = clock_.now_s();
+  while (d.has(sts::kMoving) || d.has(sts::kHoming)) {
+    if (clock_.now_s() - t0 > kRestTimeoutS)
+      throw HardwareError(doing + ": the table is still moving after " + secs(kRestTimeoutS) +
+                          " (another Modbus master?)" + at(d));
+    clock_.sleep_for(opt_.poll_s, cancel);
+    d = read_drive(cancel);
+    fail_on_alarm(doing, d);
+  }
+  return d;
+}
+
+template <class Body>
+void TableClient::guarded(const std::string& doing, Body body) {
+  try {
+    body();
+  } catch (const AbortedError&) {
+    stop();
+    throw;
+  } catch (const ModbusError& e) {
+    stop();
+    // An exception reply means the drive refused a request; no code means the link failed.
+    throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") +
+                        (have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : "") + ": " + e.what());
+  } catch (const HardwareError&) {
+    stop();
+    throw;
+  }
+}
+
+void TableClient::home(const CancelToken& cancel) {
+  const std::string doing = "home";
+  guarded(doing, [&] {
+    prepare_motion(doing, cancel);
+    const uint16_t seq0 = read_drive(cancel).move_seq;
+    write_control(ctl::kServoOn | ctl::kHome, cancel);
+    const double t0 = clock_.now_s();
+    double hb_t = t0;
+    uint32_t hb = 0;
+    bool acked = false;
+    for (;;) {
+      const DriveState d = read_drive(cancel);
+      fail_on_alarm(doing, d);
+      watch_heartbeat(doing, d, hb_t, hb);
+      const double el = clock_.now_s() - t0;
+      if (!acked) {
+        if (d.move_seq != seq0) {
+          acked = true;
+          write_control(ctl::kServoOn, cancel);
+        } else if (el > opt_.ack_timeout_s) {
+          throw HardwareError(doing + ": home command not acknowledged within " + secs(opt_.ack_timeout_s) + at(d));
+        }
+      }
+      if (acked && d.has(sts::kHomed) && !d.has(sts::kHoming) && !d.has(sts::kMoving)) return;
+      if (el > opt_.home_timeout_s)
+        throw HardwareError(doing + ": not homed after " + secs(el) + (d.has(sts::kHoming) ? " (still homing)" : "") +
+                            at(d));
+      clock_.sleep_for(opt_.poll_s, cancel);
+    }
+  });
+}
+
+void TableClient::move_to(double deg, const CancelToken& cancel) {
+  const std::string doing = "move to " + deg_str(deg);
+  if (!std::isfinite(deg) || std::fabs(deg) > 200000.0) throw ConfigError(doing + ": not a valid angle");
+  guarded(doing, [&] {
+    prepare_motion(doing, cancel);
+    DriveState d = read_drive(cancel);
+    if (!d.has(sts::kHomed)) throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d));
+    if (deg < d.limit_neg_deg || deg > d.limit_pos_deg)
+      throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d.limit_neg_deg) + ", " +
+                        deg_str(d.limit_pos_deg) + "]");
+    const auto counts = static_cast<int32_t>(std::lround(deg * kPosScale));
+    uint16_t w[2];
+    split_i32(counts, w);
+    transport_->write(reg::kTargetPos, {w[0], w[1]}, cancel);
+    const uint16_t seq0 = d.move_seq;
+    const double timeout = opt_.move_timeout_s > 0
+                               ? opt_.move_timeout_s
+                               : 2 * trapezoid_time(deg - d.actual_deg, d.velocity_dps, d.accel_dps2) + d.settle_s +
+                                     opt_.settle_s + 10.0;
+    write_control(ctl::kServoOn | ctl::kStart, cancel);
+    const double t0 = clock_.now_s();
+    double hb_t = t0, held_since = -1;
+    uint32_t hb = d.heartbeat;
+    bool acked = false;
+    for (;;) {
+      d = read_drive(cancel);
+      fail_on_alarm(doing, d);
+      watch_heartbeat(doing, d, hb_t, hb);
+      const double now = clock_.now_s();
+      if (!acked) {
+        if (d.move_seq != seq0) {
+          acked = true;
+          write_control(ctl::kServoOn, cancel);  // drop START: the next move needs a new edge
+        } else if (now - t0 > opt_.ack_timeout_s) {
+          throw HardwareError(doing + ": start not acknowledged within " + secs(opt_.ack_timeout_s) + at(d));
+        }
+      }
+      if (acked) {
+        if (std::lround(d.target_deg * kPosScale) != counts)
+          throw HardwareError(doing + ": target register changed to " + deg_str(d.target_deg) +
+                              " (another Modbus master?)" + at(d));
+        const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
+                        std::fabs(d.actual_deg - deg) <= opt_.tolerance_deg;
+        if (!ok) {
+          held_since = -1;
+        } else if (held_since < 0) {
+          held_since = now;
+        }
+        if (held_since >= 0 && now - held_since >= opt_.settle_s) return;
+      }
+      if (now - t0 > timeout) {
+        std::string state = d.has(sts::kMoving) ? "still moving" : "not in position";
+        if (!d.has(sts::kMoving) && std::fabs(d.actual_deg - deg) > opt_.tolerance_deg)
+          state = "stopped " + deg_str(std::fabs(d.actual_deg - deg)) + " off target (tolerance " +
+                  deg_str(opt_.tolerance_deg) + ")";
+        throw HardwareError(doing + ": timed out after " + secs(now - t0) + ", " + state + at(d));
+      }
+      clock_.sleep_for(opt_.poll_s, cancel);
+    }
+  });
+}
+
+void TableClient::reset_alarm(const CancelToken& cancel) {
+  const std::string doing = "alarm reset";
+  try {
+    DriveState d = read_drive(cancel);
+    if (!d.has(sts::kAlarm)) return;
+    if (d.has(sts::kEstop)) throw HardwareError(doing + ": refused, emergency stop pressed");
+    if (!d.has(sts::kInterlockOk)) throw HardwareError(doing + ": refused, interlock open");
+    const auto servo = static_cast<uint16_t>(control_ & ctl::kServoOn);
+    write_control(servo, cancel);
+    write_control(servo | ctl::kAlarmReset, cancel);
+    write_control(servo, cancel);
+    d = read_drive(cancel);
+    if (d.has(sts::kAlarm))
+      throw HardwareError(doing + ": alarm " + hex_code(d.alarm_code) + " " + alarm_text(d.alarm_code) +
+                          " persists (its cause is still present)");
+  } catch (const ModbusError& e) {
+    throw HardwareError(doing + ": link failure: " + e.what());
+  }
+}
+
+void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
+  std::string err;
+  try {
+    const uint16_t now = control_.load();
+    const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
+    if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge
+    transport_->write(reg::kControl, {static_cast<uint16_t>(servo | bit)}, CancelToken{}, true);
+    control_ = static_cast<uint16_t>(servo | bit);
+  } catch (const std::exception& e) {
+    try {
+      err = std::string(name) + " not delivered: " + e.what();
+    } catch (...) {
+    }
+  } catch (...) {
+  }
+  try {
+    std::lock_guard lk(stop_mu_);
+    last_stop_error_ = std::move(err);
+  } catch (...) {
+  }
+}
+
+void TableClient::stop() noexcept { send_stop(ctl::kHalt, "stop"); }
+void TableClient::quick_stop() noexcept { send_stop(ctl::kQuickStop, "quick stop"); }
+
+// ---------------------------------------------------------------- config
+
+TableOptions table_options_from_toml(const toml::table& t) {
+  TableOptions o;
+  o.tolerance_deg = cfg::get_number(t, "tolerance_deg", o.tolerance_deg, 0.0, 10.0);
+  o.settle_s = cfg::get_number(t, "settle_s", o.settle_s, 0.0, 600.0);
+  o.poll_s = cfg::get_number(t, "poll_s", o.poll_s, 0.001, 10.0);
+  o.move_timeout_s = cfg::get_number(t, "move_timeout_s", o.move_timeout_s, 0.0, 3600.0);
+  o.home_timeout_s = cfg::get_number(t, "home_timeout_s", o.home_timeout_s, 0.1, 3600.0);
+  o.ack_timeout_s = cfg::get_number(t, "ack_timeout_s", o.ack_timeout_s, 0.01, 60.0);
+  o.heartbeat_timeout_s = cfg::get_number(t, "heartbeat_timeout_s", o.heartbeat_timeout_s, 0.05, 600.0);
+  if (t.contains("velocity_dps")) o.velocity_dps = cfg::get_number(t, "velocity_dps", {}, 0.001, 4000.0);
+  if (t.contains("accel_dps2")) o.accel_dps2 = cfg::get_number(t, "accel_dps2", {}, 0.001, 4000.0);
+  if (t.contains("in_position_window_deg"))
+    o.in_position_window_deg = cfg::get_number(t, "in_position_window_deg", {}, 0.0001, 6.5);
+  if (t.contains("drive_settle_s")) o.drive_settle_s = cfg::get_number(t, "drive_settle_s", {}, 0.0, 65.0);
+  return o;
+}
+
+LinkOptions link_options_from_toml(const toml::table& t) {
+  LinkOptions l;
+  l.unit = static_cast<int>(cfg::get_int(t, "unit", l.unit, 0, 247));
+  l.response_timeout_s = cfg::get_number(t, "response_timeout_s", l.response_timeout_s, 0.01, 10.0);
+  l.retries = static_cast<int>(cfg::get_int(t, "retries", l.retries, 0, 10));
+  l.backoff_s = cfg::get_number(t, "backoff_s", l.backoff_s, 0.0, 10.0);
+  return l;
+}
+
+std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {
+  cfg::check_keys(t,
+                  {"modbus", "rtu", "unit", "response_timeout_s", "retries", "backoff_s", "tolerance_deg", "settle_s",
+                   "poll_s", "move_timeout_s", "home_timeout_s", "ack_timeout_s", "heartbeat_timeout_s",
+                   "velocity_dps", "accel_dps2", "in_position_window_deg", "drive_settle_s", "u10_deg", "u20_deg"},
+                  "table");
+  const bool tcp = t.contains("modbus"), rtu = t.contains("rtu");
+  if (tcp == rtu) throw ConfigError(cfg::where(t) + ": [table] needs exactly one of modbus = \"tcp:HOST:PORT\" or rtu = \"DEVICE,BAUD,P,8,1\"");
+  Endpoint ep;
+  try {
+    ep = tcp ? parse_endpoint(cfg::get_string(t, "modbus")) : parse_rtu(cfg::get_string(t, "rtu"));
+  } catch (const ConfigError& e) {
+    throw ConfigError(cfg::where(*t.get(tcp ? "modbus" : "rtu")) + ": " + e.what());
+  }
+  const TableOptions opt = table_options_from_toml(t);
+  return std::make_unique<TableClient>(make_libmodbus_transport(ep, link_options_from_toml(t), clock), clock, opt);
+}
+
+std::unique_ptr<RotaryTable> make_inprocess_table(RegisterDevice& dev, Clock& clock, TableOptions opt) {
+  return std::make_unique<TableClient>(make_inprocess_transport(dev, clock), clock, std::move(opt));
+}
+
+}  // namespace rig::modbus

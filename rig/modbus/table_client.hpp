@@ -1,0 +1,102 @@
+// The rig's rotary-table client: positions a dividing head through the register
+// map in docs/table-registers.md over any RegisterTransport (libmodbus TCP/RTU
+// on hardware, in-process in the emulated plant), so one piece of logic is
+// exercised in both.
+#pragma once
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include <toml++/toml.h>
+
+#include "rig/core/clock.hpp"
+#include "rig/core/table.hpp"
+#include "rig/modbus/transport.hpp"
+
+namespace rig::modbus {
+
+struct TableOptions {
+  double tolerance_deg = 0.01;     // |actual - commanded| accepted after the settle time
+  double settle_s = 0.5;           // in position held continuously this long (client side)
+  double poll_s = 0.05;            // status polling period while waiting
+  double move_timeout_s = 0.0;     // 0 = from the drive's profile: 2 x trapezoid time + settle + 10 s
+  double home_timeout_s = 180.0;
+  double ack_timeout_s = 1.0;      // a start/home command must be acknowledged within this
+  double heartbeat_timeout_s = 2.0;// drive heartbeat frozen this long = controller hung
+  // Written to the drive before the first motion when set (else the drive's own).
+  std::optional<double> velocity_dps, accel_dps2, in_position_window_deg, drive_settle_s;
+};
+
+// Decoded drive registers [0, reg::kBlockEnd).
+struct DriveState {
+  uint16_t control = 0, status = 0, alarm_code = 0, move_seq = 0;
+  uint32_t heartbeat = 0;
+  double actual_deg = 0, target_deg = 0, velocity_dps = 0, accel_dps2 = 0;
+  double window_deg = 0, settle_s = 0, actual_vel_dps = 0, following_err_deg = 0;
+  double limit_neg_deg = 0, limit_pos_deg = 0;
+  bool has(uint16_t status_bit) const { return (status & status_bit) != 0; }
+};
+DriveState decode_drive_state(const std::vector<uint16_t>& regs);
+TableStatus to_table_status(const DriveState& d);
+
+class TableClient final : public RotaryTable {
+ public:
+  TableClient(std::unique_ptr<RegisterTransport> transport, Clock& clock, TableOptions opt = {});
+
+  TableStatus status() override;
+  void home(const CancelToken& cancel) override;
+  void move_to(double deg, const CancelToken& cancel) override;
+  void stop() noexcept override;
+  void quick_stop() noexcept override;
+  std::string describe() const override;
+
+  // Technician's alarm reset (`rig table reset`): refused while the e-stop is
+  // pressed or the interlock is open; throws HardwareError when the alarm stays.
+  void reset_alarm(const CancelToken& cancel);
+  DriveState read_drive(const CancelToken& cancel = {});
+  // Why the last stop()/quick_stop() could not be delivered ("" when it was).
+  std::string last_stop_error() const {
+    std::lock_guard lk(stop_mu_);
+    return last_stop_error_;
+  }
+  RegisterTransport& transport() { return *transport_; }
+
+ private:
+  void write_control(uint16_t word, const CancelToken& cancel);
+  void prepare_motion(const std::string& doing, const CancelToken& cancel);
+  DriveState wait_at_rest(const std::string& doing, DriveState d, const CancelToken& cancel);
+  void apply_profile_once(const CancelToken& cancel);
+  void fail_on_alarm(const std::string& doing, const DriveState& d);
+  void watch_heartbeat(const std::string& doing, const DriveState& d, double& last_change_s, uint32_t& last_hb);
+  void send_stop(uint16_t bit, const char* name) noexcept;
+  std::string at(const DriveState& d) const;
+  template <class Body>
+  void guarded(const std::string& doing, Body body);
+
+  std::unique_ptr<RegisterTransport> transport_;
+  Clock& clock_;
+  TableOptions opt_;
+  // Last control word read or written; stop() may run on another thread
+  // (the executive's abort path) while a move polls.
+  std::atomic<uint16_t> control_{0};
+  bool profile_applied_ = false;
+  double last_actual_deg_ = 0;     // for messages when the link is lost
+  bool have_actual_ = false;
+  mutable std::mutex stop_mu_;
+  std::string last_stop_error_;
+};
+
+// Options from a [table] TOML table (hardware file); rejects unknown keys with
+// file:line. Keys: see docs/table-registers.md.
+TableOptions table_options_from_toml(const toml::table& t);
+LinkOptions link_options_from_toml(const toml::table& t);
+
+// Hardware: connects to the drive named by [table] `modbus = "tcp:HOST:PORT"` or
+// `rtu = "/dev/ttyUSB0,115200,N,8,1"`. Throws ConfigError / HardwareError.
+std::unique_ptr<RotaryTable> connect_table(const toml::table& table_cfg, Clock& clock);
+// A client over a register device in this process (the emulated drive).
+std::unique_ptr<RotaryTable> make_inprocess_table(RegisterDevice& dev, Clock& clock, TableOptions opt = {});
+
+}  // namespace rig::modbus

@@ -1,0 +1,292 @@
+#include "rig/modbus/transport.hpp"
+
+#include <modbus/modbus.h>
+
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <sstream>
+
+namespace rig::modbus {
+
+// ---------------------------------------------------------------- endpoints
+
+namespace {
+
+int parse_int(const std::string& s, const std::string& what, const std::string& spec) {
+  int v = 0;
+  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || p != s.data() + s.size() || s.empty())
+    throw ConfigError("'" + spec + "': " + what + " '" + s + "' is not a number");
+  return v;
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : s) {
+    if (c == sep) {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+}  // namespace
+
+std::string Endpoint::str() const {
+  std::ostringstream os;
+  if (kind == Kind::kTcp) {
+    os << "tcp:" << host << ':' << port;
+  } else {
+    os << "rtu:" << device << ',' << baud << ',' << parity << ',' << data_bits << ',' << stop_bits;
+  }
+  return os.str();
+}
+
+Endpoint parse_tcp(const std::string& host_port) {
+  const auto colon = host_port.rfind(':');
+  if (colon == std::string::npos || colon == 0)
+    throw ConfigError("Modbus TCP address '" + host_port + "' must be HOST:PORT");
+  Endpoint ep;
+  ep.kind = Endpoint::Kind::kTcp;
+  ep.host = host_port.substr(0, colon);
+  ep.port = parse_int(host_port.substr(colon + 1), "port", host_port);
+  if (ep.port < 0 || ep.port > 65535) throw ConfigError("Modbus TCP address '" + host_port + "': port out of range");
+  return ep;
+}
+
+Endpoint parse_rtu(const std::string& dev_spec) {
+  const auto parts = split(dev_spec, ',');
+  Endpoint ep;
+  ep.kind = Endpoint::Kind::kRtu;
+  ep.device = parts[0];
+  if (ep.device.empty()) throw ConfigError("Modbus RTU port '" + dev_spec + "' names no device");
+  if (parts.size() >= 2) ep.baud = parse_int(parts[1], "baud rate", dev_spec);
+  if (parts.size() == 3 || parts.size() > 5)
+    throw ConfigError("Modbus RTU port '" + dev_spec + "' must be DEVICE[,BAUD[,PARITY,DATABITS,STOPBITS]]");
+  if (parts.size() == 5) {
+    if (parts[2].size() != 1 || std::string("NEOneo").find(parts[2][0]) == std::string::npos)
+      throw ConfigError("Modbus RTU port '" + dev_spec + "': parity must be N, E or O");
+    ep.parity = static_cast<char>(std::toupper(static_cast<unsigned char>(parts[2][0])));
+    ep.data_bits = parse_int(parts[3], "data bits", dev_spec);
+    ep.stop_bits = parse_int(parts[4], "stop bits", dev_spec);
+    if (ep.data_bits < 5 || ep.data_bits > 8 || ep.stop_bits < 1 || ep.stop_bits > 2)
+      throw ConfigError("Modbus RTU port '" + dev_spec + "': data bits 5..8, stop bits 1..2");
+  }
+  if (ep.baud <= 0) throw ConfigError("Modbus RTU port '" + dev_spec + "': baud rate must be positive");
+  return ep;
+}
+
+Endpoint parse_endpoint(const std::string& spec) {
+  if (spec.rfind("tcp:", 0) == 0) return parse_tcp(spec.substr(4));
+  if (spec.rfind("rtu:", 0) == 0) return parse_rtu(spec.substr(4));
+  if (!spec.empty() && spec[0] == '/') return parse_rtu(spec);
+  return parse_tcp(spec);
+}
+
+// ---------------------------------------------------------------- libmodbus
+
+namespace {
+
+bool is_exception_errno(int e, uint8_t* code) {
+  const int c = e - MODBUS_ENOBASE;
+  if (e >= EMBXILFUN && e <= EMBXGTAR && c >= 1 && c <= 11) {
+    *code = static_cast<uint8_t>(c);
+    return true;
+  }
+  return false;
+}
+
+std::string hex16(unsigned v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "0x%02X", v);
+  return b;
+}
+
+class LibmodbusTransport final : public RegisterTransport {
+ public:
+  LibmodbusTransport(const Endpoint& ep, const LinkOptions& opt, Clock& clock)
+      : ep_(ep), opt_(opt), clock_(clock) {
+    if (opt.unit < 0 || opt.unit > 247) throw ConfigError("Modbus unit " + std::to_string(opt.unit) + " out of range 0..247");
+    if (ep.kind == Endpoint::Kind::kTcp) {
+      const std::string port = std::to_string(ep.port);
+      ctx_ = modbus_new_tcp_pi(ep.host.c_str(), port.c_str());
+    } else {
+      ctx_ = modbus_new_rtu(ep.device.c_str(), ep.baud, ep.parity, ep.data_bits, ep.stop_bits);
+    }
+    if (!ctx_) throw ModbusError(describe() + ": cannot create context: " + modbus_strerror(errno), 0, false);
+    modbus_set_slave(ctx_, opt.unit);
+    const double t = std::max(0.01, opt.response_timeout_s);
+    const auto sec = static_cast<uint32_t>(t);
+    const auto usec = static_cast<uint32_t>(std::lround((t - sec) * 1e6));
+    modbus_set_response_timeout(ctx_, sec, usec);
+    modbus_set_error_recovery(ctx_, MODBUS_ERROR_RECOVERY_NONE);
+    std::lock_guard lk(mu_);
+    std::string err;
+    for (int attempt = 0;; ++attempt) {
+      if (connect_locked(err)) break;
+      if (attempt >= opt_.retries) {
+        modbus_free(ctx_);
+        ctx_ = nullptr;
+        throw ModbusError(describe() + ": cannot connect: " + err, 0, false);
+      }
+      clock_.sleep_for(opt_.backoff_s * std::pow(2.0, attempt), CancelToken{});
+    }
+  }
+  ~LibmodbusTransport() override {
+    if (ctx_) {
+      modbus_close(ctx_);
+      modbus_free(ctx_);
+    }
+  }
+  LibmodbusTransport(const LibmodbusTransport&) = delete;
+  LibmodbusTransport& operator=(const LibmodbusTransport&) = delete;
+
+  std::vector<uint16_t> read(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
+    std::vector<uint16_t> out(n);
+    call("read " + std::to_string(n) + " registers at " + std::to_string(addr), cancel, urgent,
+         [&] { return modbus_read_registers(ctx_, addr, n, out.data()); });
+    return out;
+  }
+
+  void write(uint16_t addr, const std::vector<uint16_t>& values, const CancelToken& cancel, bool urgent) override {
+    const std::string what = "write " + std::to_string(values.size()) + " registers at " + std::to_string(addr);
+    if (values.size() == 1) {
+      call(what, cancel, urgent, [&] { return modbus_write_register(ctx_, addr, values[0]); });
+    } else {
+      call(what, cancel, urgent,
+           [&] { return modbus_write_registers(ctx_, addr, static_cast<int>(values.size()), values.data()); });
+    }
+  }
+
+  std::string describe() const override { return "modbus " + ep_.str() + " unit " + std::to_string(opt_.unit); }
+
+ private:
+  bool connect_locked(std::string& err) {
+    if (connected_) return true;
+    if (modbus_connect(ctx_) == 0) {
+      connected_ = true;
+      return true;
+    }
+    err = modbus_strerror(errno);
+    modbus_close(ctx_);
+    return false;
+  }
+
+  // One request with the retry policy. Exception replies are final except
+  // "busy"; link failures close the connection so the next attempt reconnects.
+  template <class Op>
+  void call(const std::string& what, const CancelToken& cancel, bool urgent, Op op) {
+    const int attempts = urgent ? 2 : 1 + std::max(0, opt_.retries);
+    std::string last;
+    bool last_timeout = false;
+    uint8_t last_exc = 0;
+    for (int attempt = 0; attempt < attempts; ++attempt) {
+      if (!urgent) cancel.throw_if_requested();
+      if (attempt > 0 && !urgent) clock_.sleep_for(opt_.backoff_s * std::pow(2.0, attempt - 1), cancel);
+      std::lock_guard lk(mu_);
+      std::string err;
+      if (!connect_locked(err)) {
+        last = "cannot connect: " + err;
+        last_timeout = false;
+        last_exc = 0;
+        continue;
+      }
+      if (op() >= 0) return;
+      const int e = errno;
+      uint8_t code = 0;
+      if (is_exception_errno(e, &code)) {
+        last = "exception " + hex16(code) + " " + exception_text(code);
+        last_exc = code;
+        last_timeout = false;
+        if (code != exc::kBusy) break;
+        continue;
+      }
+      last_exc = 0;
+      last_timeout = e == ETIMEDOUT;
+      last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
+      // Drop the link: a late reply must not be taken for the next request's.
+      modbus_close(ctx_);
+      connected_ = false;
+    }
+    throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout);
+  }
+
+  static std::string fmt_s(double s) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g s", s);
+    return b;
+  }
+
+  Endpoint ep_;
+  LinkOptions opt_;
+  Clock& clock_;
+  std::mutex mu_;
+  modbus_t* ctx_ = nullptr;
+  bool connected_ = false;
+};
+
+// ---------------------------------------------------------------- in-process
+
+class InProcessTransport final : public RegisterTransport {
+ public:
+  InProcessTransport(RegisterDevice& dev, Clock& clock, double timeout_s)
+      : dev_(dev), clock_(clock), timeout_s_(timeout_s) {}
+
+  std::vector<uint16_t> read(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
+    const std::string what = "read " + std::to_string(n) + " registers at " + std::to_string(addr);
+    wait_answer(what, cancel, urgent);
+    std::vector<uint16_t> out(n);
+    check(what, dev_.read_registers(addr, n, out.data()));
+    return out;
+  }
+
+  void write(uint16_t addr, const std::vector<uint16_t>& values, const CancelToken& cancel, bool urgent) override {
+    const std::string what = "write " + std::to_string(values.size()) + " registers at " + std::to_string(addr);
+    wait_answer(what, cancel, urgent);
+    check(what, dev_.write_registers(addr, values.data(), static_cast<uint16_t>(values.size())));
+  }
+
+  std::string describe() const override { return "in-process emulated table"; }
+
+ private:
+  // A silent device costs the response timeout of (simulated) time, as on a wire.
+  void wait_answer(const std::string& what, const CancelToken& cancel, bool urgent) {
+    if (!urgent) cancel.throw_if_requested();
+    if (dev_.answering()) return;
+    clock_.sleep_for(timeout_s_, urgent ? CancelToken{} : cancel);
+    char t[32];
+    std::snprintf(t, sizeof t, "%.3g s", timeout_s_);
+    throw ModbusError(what + " on " + describe() + ": no answer within " + t + " (timeout)", 0, true);
+  }
+  void check(const std::string& what, uint8_t code) {
+    if (code == exc::kNone) return;
+    throw ModbusError(what + " on " + describe() + ": exception " + hex16(code) + " " + exception_text(code), code,
+                      false);
+  }
+
+  RegisterDevice& dev_;
+  Clock& clock_;
+  double timeout_s_;
+};
+
+}  // namespace
+
+std::unique_ptr<RegisterTransport> make_libmodbus_transport(const Endpoint& ep, const LinkOptions& opt, Clock& clock) {
+  return std::make_unique<LibmodbusTransport>(ep, opt, clock);
+}
+
+std::unique_ptr<RegisterTransport> make_inprocess_transport(RegisterDevice& dev, Clock& clock,
+                                                            double response_timeout_s) {
+  return std::make_unique<InProcessTransport>(dev, clock, response_timeout_s);
+}
+
+}  // namespace rig::modbus

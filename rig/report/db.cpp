@@ -1,0 +1,238 @@
+#include "rig/report/db.hpp"
+
+#include <sqlite3.h>
+#include <libpq-fe.h>
+
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <regex>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::history {
+
+std::optional<double> as_double(const Value& v) {
+  if (const auto* d = std::get_if<double>(&v)) return *d;
+  if (const auto* i = std::get_if<int64_t>(&v)) return static_cast<double>(*i);
+  if (const auto* s = std::get_if<std::string>(&v)) {
+    double d = 0;
+    auto [p, ec] = std::from_chars(s->data(), s->data() + s->size(), d);
+    if (ec == std::errc() && p == s->data() + s->size()) return d;
+  }
+  return std::nullopt;
+}
+
+std::optional<int64_t> as_int(const Value& v) {
+  if (const auto* i = std::get_if<int64_t>(&v)) return *i;
+  if (const auto* d = std::get_if<double>(&v)) return static_cast<int64_t>(*d);
+  if (const auto* s = std::get_if<std::string>(&v)) {
+    int64_t i = 0;
+    auto [p, ec] = std::from_chars(s->data(), s->data() + s->size(), i);
+    if (ec == std::errc() && p == s->data() + s->size()) return i;
+  }
+  return std::nullopt;
+}
+
+std::string as_text(const Value& v) {
+  if (const auto* s = std::get_if<std::string>(&v)) return *s;
+  if (const auto* i = std::get_if<int64_t>(&v)) return std::to_string(*i);
+  if (const auto* d = std::get_if<double>(&v)) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", *d);
+    return buf;
+  }
+  return "";
+}
+
+void Db::rollback() noexcept {
+  try {
+    exec("ROLLBACK");
+  } catch (...) {  // nothing to roll back (connection lost or no transaction): keep the first error
+  }
+}
+
+namespace {
+
+// ---------------------------------------------------------------- SQLite
+class SqliteDb final : public Db {
+ public:
+  explicit SqliteDb(const std::string& path) {
+    where_ = "sqlite:" + path;
+    const std::filesystem::path p(path);
+    if (p.has_parent_path()) {
+      std::error_code ec;
+      std::filesystem::create_directories(p.parent_path(), ec);
+      if (ec) throw ConfigError(where_ + ": cannot create folder " + p.parent_path().string() + ": " + ec.message());
+    }
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                        nullptr) != SQLITE_OK) {
+      std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+      sqlite3_close(db_);
+      db_ = nullptr;
+      throw ConfigError(where_ + ": cannot open the history database: " + msg);
+    }
+    // Several rig processes may write one file: wait for a lock instead of failing.
+    sqlite3_busy_timeout(db_, 10000);
+    exec("PRAGMA foreign_keys = ON");
+  }
+  ~SqliteDb() override { sqlite3_close(db_); }
+
+  std::vector<Row> query(const std::string& sql, const std::vector<Value>& params) override {
+    sqlite3_stmt* st = nullptr;
+    if (sqlite3_prepare_v2(db_, sql.c_str(), static_cast<int>(sql.size()), &st, nullptr) != SQLITE_OK)
+      fail("prepare", sql);
+    std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> guard(st, sqlite3_finalize);
+    for (std::size_t i = 0; i < params.size(); ++i) bind(st, static_cast<int>(i + 1), params[i]);
+    std::vector<Row> rows;
+    for (;;) {
+      const int rc = sqlite3_step(st);
+      if (rc == SQLITE_DONE) break;
+      if (rc != SQLITE_ROW) fail("run", sql);
+      Row r;
+      const int n = sqlite3_column_count(st);
+      for (int c = 0; c < n; ++c) r.push_back(column(st, c));
+      rows.push_back(std::move(r));
+    }
+    return rows;
+  }
+
+  void begin_exclusive() override { exec("BEGIN IMMEDIATE"); }
+  std::string backend() const override { return "sqlite"; }
+  std::string dialect_type(const std::string& word) const override {
+    return word == "id" ? "INTEGER PRIMARY KEY AUTOINCREMENT" : word;
+  }
+  bool has_table(const std::string& name) override {
+    return !query("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", {name}).empty();
+  }
+
+ private:
+  [[noreturn]] void fail(const char* what, const std::string& sql) {
+    throw ConfigError(where_ + ": cannot " + what + " '" + sql.substr(0, 60) + "': " + sqlite3_errmsg(db_));
+  }
+  static void bind(sqlite3_stmt* st, int i, const Value& v) {
+    if (const auto* x = std::get_if<int64_t>(&v)) sqlite3_bind_int64(st, i, *x);
+    else if (const auto* d = std::get_if<double>(&v)) sqlite3_bind_double(st, i, *d);
+    else if (const auto* s = std::get_if<std::string>(&v))
+      sqlite3_bind_text(st, i, s->c_str(), static_cast<int>(s->size()), SQLITE_TRANSIENT);
+    else sqlite3_bind_null(st, i);
+  }
+  static Value column(sqlite3_stmt* st, int c) {
+    switch (sqlite3_column_type(st, c)) {
+      case SQLITE_INTEGER: return static_cast<int64_t>(sqlite3_column_int64(st, c));
+      case SQLITE_FLOAT: return sqlite3_column_double(st, c);
+      case SQLITE_NULL: return std::monostate{};
+      default: {
+        const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(st, c));
+        return std::string(t ? t : "", static_cast<std::size_t>(sqlite3_column_bytes(st, c)));
+      }
+    }
+  }
+  sqlite3* db_ = nullptr;
+};
+
+// ---------------------------------------------------------------- PostgreSQL
+// `?` placeholders -> $1..$n (outside quoted strings).
+std::string pg_placeholders(const std::string& sql) {
+  std::string out;
+  int n = 0;
+  bool quoted = false;
+  for (char c : sql) {
+    if (c == '\'') quoted = !quoted;
+    if (c == '?' && !quoted) out += "$" + std::to_string(++n);
+    else out += c;
+  }
+  return out;
+}
+
+std::string mask_password(const std::string& url) {
+  static const std::regex pw(R"(^(postgres(?:ql)?://[^:/@]*:)[^@]*@)");
+  return std::regex_replace(url, pw, "$1***@");
+}
+
+class PgDb final : public Db {
+ public:
+  explicit PgDb(const std::string& url) {
+    where_ = mask_password(url);
+    conn_ = PQconnectdb(url.c_str());
+    if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
+      std::string msg = conn_ ? PQerrorMessage(conn_) : "out of memory";
+      while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+      PQfinish(conn_);
+      conn_ = nullptr;
+      throw ConfigError(where_ + ": cannot connect to the history database: " + msg);
+    }
+    exec("SET client_min_messages = warning");  // no NOTICEs on stderr from IF NOT EXISTS
+  }
+  ~PgDb() override { PQfinish(conn_); }
+
+  std::vector<Row> query(const std::string& sql, const std::vector<Value>& params) override {
+    std::vector<std::string> text(params.size());
+    std::vector<const char*> ptrs(params.size(), nullptr);
+    for (std::size_t i = 0; i < params.size(); ++i) {
+      if (std::holds_alternative<std::monostate>(params[i])) continue;
+      text[i] = as_text(params[i]);
+      ptrs[i] = text[i].c_str();
+    }
+    const std::string q = pg_placeholders(sql);
+    std::unique_ptr<PGresult, void (*)(PGresult*)> res(
+        PQexecParams(conn_, q.c_str(), static_cast<int>(params.size()), nullptr, ptrs.data(), nullptr, nullptr, 0),
+        PQclear);
+    const ExecStatusType st = res ? PQresultStatus(res.get()) : PGRES_FATAL_ERROR;
+    if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK) {
+      std::string msg = PQerrorMessage(conn_);
+      while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+      throw ConfigError(where_ + ": cannot run '" + sql.substr(0, 60) + "': " + msg);
+    }
+    std::vector<Row> rows;
+    const int nr = PQntuples(res.get()), nc = PQnfields(res.get());
+    for (int r = 0; r < nr; ++r) {
+      Row row;
+      for (int c = 0; c < nc; ++c) row.push_back(cell(res.get(), r, c));
+      rows.push_back(std::move(row));
+    }
+    return rows;
+  }
+
+  void begin_exclusive() override {
+    exec("BEGIN");
+    exec("SELECT pg_advisory_xact_lock(7201907)");  // one writer migrates/records at a time
+  }
+  std::string backend() const override { return "postgresql"; }
+  std::string dialect_type(const std::string& word) const override {
+    return word == "id" ? "BIGSERIAL PRIMARY KEY" : word;
+  }
+  bool has_table(const std::string& name) override {
+    return !query("SELECT 1 FROM information_schema.tables WHERE table_schema = current_schema() AND table_name = ?",
+                  {name})
+                .empty();
+  }
+
+ private:
+  // Text-format results typed from the column's type OID (pg_type.h values).
+  static Value cell(const PGresult* r, int row, int col) {
+    if (PQgetisnull(r, row, col)) return std::monostate{};
+    std::string s = PQgetvalue(r, row, col);
+    switch (PQftype(r, col)) {
+      case 20: case 21: case 23: return as_int(Value(s)).value_or(0);          // int8, int2, int4
+      case 700: case 701: case 1700: return as_double(Value(s)).value_or(0.0);  // float4, float8, numeric
+      default: return s;
+    }
+  }
+  PGconn* conn_ = nullptr;
+};
+
+}  // namespace
+
+std::unique_ptr<Db> open_db(const std::string& url) {
+  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::make_unique<PgDb>(url);
+  std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
+  if (path.rfind("//", 0) == 0) path = path.substr(2);  // sqlite:///abs/path
+  if (path.empty()) throw ConfigError("history database URL '" + url + "' names no file");
+  if (url.find("://") != std::string::npos && url.rfind("sqlite:", 0) != 0)
+    throw ConfigError("history database URL '" + mask_password(url) +
+                      "': unknown scheme (expected sqlite:PATH, a path, or postgresql://...)");
+  return std::make_unique<SqliteDb>(path);
+}
+
+}  // namespace rig::history

@@ -1,0 +1,76 @@
+// A minimal SQL connection with two backends (SQLite, PostgreSQL/libpq) so the history
+// code writes one set of SQL statements. Dialect shim: statements use `?` placeholders
+// (rewritten to $1..$n for PostgreSQL) and the few type words that differ go through
+// Db::dialect_type().
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace rig::history {
+
+// A bound parameter or a result cell.
+using Value = std::variant<std::monostate, int64_t, double, std::string>;
+using Row = std::vector<Value>;
+
+std::optional<double> as_double(const Value& v);
+std::optional<int64_t> as_int(const Value& v);
+std::string as_text(const Value& v);  // "" for NULL
+
+class Db {
+ public:
+  virtual ~Db() = default;
+  Db() = default;
+  Db(const Db&) = delete;
+  Db& operator=(const Db&) = delete;
+
+  // Runs a statement; returns its result rows (empty for statements without any).
+  virtual std::vector<Row> query(const std::string& sql, const std::vector<Value>& params = {}) = 0;
+  void exec(const std::string& sql, const std::vector<Value>& params = {}) { query(sql, params); }
+
+  // A write transaction that also serialises schema migrations between processes
+  // (SQLite: BEGIN IMMEDIATE; PostgreSQL: BEGIN + a transaction-scoped advisory lock).
+  virtual void begin_exclusive() = 0;
+  void commit() { exec("COMMIT"); }
+  void rollback() noexcept;
+
+  // "sqlite" or "postgresql".
+  virtual std::string backend() const = 0;
+  // Type words that differ: "id" -> the auto-increment primary key column type.
+  virtual std::string dialect_type(const std::string& word) const = 0;
+  // Whether a table exists.
+  virtual bool has_table(const std::string& name) = 0;
+  // The URL with any password masked, for messages.
+  const std::string& where() const { return where_; }
+
+ protected:
+  std::string where_;
+};
+
+// Opens `url` ("sqlite:PATH", a plain path, "postgresql://...", "postgres://...").
+// SQLite files and their folder are created when missing. Throws rig::ConfigError.
+std::unique_ptr<Db> open_db(const std::string& url);
+
+// Keeps a transaction open until commit(); rolls back if destroyed before.
+class Transaction {
+ public:
+  explicit Transaction(Db& db) : db_(db) { db_.begin_exclusive(); }
+  ~Transaction() {
+    if (!done_) db_.rollback();
+  }
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  void commit() {
+    db_.commit();
+    done_ = true;
+  }
+
+ private:
+  Db& db_;
+  bool done_ = false;
+};
+
+}  // namespace rig::history

@@ -1,0 +1,320 @@
+#include "rig/report/history.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <map>
+
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+#include "rig/report/db.hpp"
+#include "rig/report/timefmt.hpp"
+
+namespace rig::history {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// ------------------------------------------------------------------ schema and migrations
+// Each migration takes the schema from version N-1 to N inside one transaction. Never edit
+// a released step: add a new one (docs/history.md lists them). `{id}` is the dialect's
+// auto-increment key; everything else is SQL both SQLite and PostgreSQL accept.
+namespace {
+
+struct Migration {
+  int version;
+  std::vector<std::string> ddl;
+  std::function<void(Db&)> data;  // optional data step after the DDL
+};
+
+// v2 data step: capture paths and the abort reason were only inside the stored passport.
+void backfill_v2(Db& db) {
+  for (const Row& r : db.query("SELECT id, passport FROM runs")) {
+    const int64_t id = as_int(r[0]).value_or(0);
+    const json p = json::parse(as_text(r[1]), nullptr, false);
+    if (!p.is_object()) continue;
+    if (p.contains("captures") && p["captures"].is_array()) {
+      int64_t seq = 0;
+      for (const json& c : p["captures"])
+        if (c.is_string()) db.exec("INSERT INTO run_captures (run_id, seq, path) VALUES (?, ?, ?)", {id, seq++, c.get<std::string>()});
+    }
+    if (p.contains("aborted_reason") && p["aborted_reason"].is_string())
+      db.exec("UPDATE runs SET aborted_reason = ? WHERE id = ?", {p["aborted_reason"].get<std::string>(), id});
+  }
+}
+
+const std::vector<Migration>& migrations() {
+  static const std::vector<Migration> m = {
+      {1,
+       {"CREATE TABLE runs (id {id}, serial TEXT NOT NULL, profile TEXT, plant TEXT, software TEXT, "
+        "started TEXT, finished TEXT, outcome TEXT NOT NULL, run_dir TEXT NOT NULL, passport TEXT NOT NULL)",
+        "CREATE UNIQUE INDEX runs_dir_started ON runs (run_dir, started)",
+        "CREATE INDEX runs_serial_started ON runs (serial, started)",
+        "CREATE TABLE run_values (run_id BIGINT NOT NULL REFERENCES runs (id) ON DELETE CASCADE, "
+        "name TEXT NOT NULL, value DOUBLE PRECISION, unit TEXT, lo DOUBLE PRECISION, hi DOUBLE PRECISION, "
+        "limit_min DOUBLE PRECISION, limit_max DOUBLE PRECISION, outcome TEXT, reason TEXT, "
+        "PRIMARY KEY (run_id, name))"},
+       nullptr},
+      {2,
+       {"ALTER TABLE runs ADD COLUMN station TEXT", "ALTER TABLE runs ADD COLUMN aborted_reason TEXT",
+        "ALTER TABLE runs ADD COLUMN recorded TEXT",
+        "CREATE TABLE run_captures (run_id BIGINT NOT NULL REFERENCES runs (id) ON DELETE CASCADE, "
+        "seq INTEGER NOT NULL, path TEXT NOT NULL, PRIMARY KEY (run_id, seq))",
+        "CREATE INDEX run_values_name ON run_values (name)"},
+       backfill_v2},
+  };
+  return m;
+}
+
+std::string expand(const Db& db, std::string sql) {
+  for (std::size_t p; (p = sql.find("{id}")) != std::string::npos;) sql.replace(p, 4, db.dialect_type("id"));
+  return sql;
+}
+
+int schema_version(Db& db) {
+  if (!db.has_table("schema_version")) return 0;
+  const auto rows = db.query("SELECT MAX(version) FROM schema_version");
+  return rows.empty() ? 0 : static_cast<int>(as_int(rows[0][0]).value_or(0));
+}
+
+// Brings the database to the current version; returns the version found.
+int migrate_db(Db& db) {
+  const int target = current_schema_version();
+  int found = schema_version(db);
+  if (found == target) return found;  // the common case: no lock taken
+  Transaction tx(db);
+  db.exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL PRIMARY KEY, applied TEXT NOT NULL)");
+  found = schema_version(db);  // re-read under the lock: another rig may have migrated
+  if (found > target)
+    throw ConfigError(db.where() + ": history schema version " + std::to_string(found) +
+                      " is newer than this rig understands (" + std::to_string(target) + "); upgrade rig");
+  for (const Migration& m : migrations()) {
+    if (m.version <= found) continue;
+    for (const std::string& s : m.ddl) db.exec(expand(db, s));
+    if (m.data) m.data(db);
+    db.exec("INSERT INTO schema_version (version, applied) VALUES (?, ?)", {int64_t{m.version}, utc_now_iso8601()});
+  }
+  tx.commit();
+  return found;
+}
+
+std::unique_ptr<Db> open_migrated(const std::string& url) {
+  auto db = open_db(url);
+  migrate_db(*db);
+  return db;
+}
+
+// ------------------------------------------------------------------ passport -> rows
+Value opt_number(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return std::monostate{};
+  return j[key].get<double>();
+}
+Value opt_text(const json& j, const char* key) {
+  if (!j.is_object() || !j.contains(key) || j[key].is_null()) return std::monostate{};
+  return j[key].is_string() ? j[key].get<std::string>() : j[key].dump();
+}
+Value opt_time(const json& j, const char* key) {
+  Value v = opt_text(j, key);
+  if (const auto* s = std::get_if<std::string>(&v))
+    if (auto n = normalize_iso8601(*s)) return *n;
+  return v;
+}
+
+std::string station_name(const json& passport) {
+  if (passport.contains("station") && passport["station"].is_string()) return passport["station"].get<std::string>();
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) return "";
+  return host;
+}
+
+std::string where_clause(const Filter& f, std::vector<Value>& params) {
+  std::string w = " WHERE 1 = 1";
+  auto add = [&](const std::optional<std::string>& v, const char* sql) {
+    if (!v) return;
+    w += sql;
+    params.emplace_back(*v);
+  };
+  auto time_bound = [](const std::optional<std::string>& t, const char* what) -> std::optional<std::string> {
+    if (!t) return std::nullopt;
+    auto n = normalize_iso8601(*t);
+    if (!n) throw ConfigError(std::string(what) + " '" + *t + "' is not an ISO 8601 date (YYYY-MM-DD[THH:MM[:SS]][Z|+HH:MM])");
+    return n;
+  };
+  add(f.serial, " AND r.serial = ?");
+  add(time_bound(f.since, "--since"), " AND r.started >= ?");
+  add(time_bound(f.until, "--until"), " AND r.started < ?");
+  add(f.outcome, " AND r.outcome = ?");
+  add(f.profile, " AND r.profile = ?");
+  return w;
+}
+
+// Oldest first; with a limit, the newest `limit` rows (still oldest first).
+std::string ordered(const std::string& select, const Filter& f, std::vector<Value>& params) {
+  if (f.limit <= 0) return select + " ORDER BY r.started, r.id";
+  params.emplace_back(int64_t{f.limit});
+  return "SELECT * FROM (" + select + " ORDER BY r.started DESC, r.id DESC LIMIT ?) AS newest ORDER BY newest.started, newest.id";
+}
+
+std::optional<double> num(const Value& v) { return as_double(v); }
+
+}  // namespace
+
+int current_schema_version() { return migrations().back().version; }
+
+int migrate(const std::string& db_url) {
+  auto db = open_db(db_url);
+  return migrate_db(*db);
+}
+
+long long record_run(const std::string& db_url, const json& passport, const std::string& run_dir) {
+  if (!passport.is_object()) throw ConfigError("history: the passport is not a JSON object");
+  for (const char* key : {"serial", "outcome"})
+    if (!passport.contains(key) || !passport[key].is_string())
+      throw ConfigError(std::string("history: the passport has no '") + key + "' string");
+  std::error_code ec;
+  fs::path dir = fs::weakly_canonical(fs::absolute(run_dir), ec);
+  if (ec) dir = fs::absolute(run_dir);
+
+  auto db = open_migrated(db_url);
+  Transaction tx(*db);
+  const Value started = opt_time(passport, "started");
+  db->exec("DELETE FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ?", {dir.string(), started});
+  const Value software = passport.contains("software") && passport["software"].is_string()
+                             ? Value(passport["software"].get<std::string>())
+                             : Value(std::string("rig ") + RIG_VERSION);
+  const auto ins = db->query(
+      "INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, passport, station, "
+      "aborted_reason, recorded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
+      {passport["serial"].get<std::string>(), opt_text(passport, "profile"), opt_text(passport, "plant"), software,
+       started, opt_time(passport, "finished"), passport["outcome"].get<std::string>(), dir.string(), passport.dump(),
+       station_name(passport), opt_text(passport, "aborted_reason"), utc_now_iso8601()});
+  const int64_t id = as_int(ins.at(0).at(0)).value_or(0);
+
+  if (passport.contains("values") && passport["values"].is_object()) {
+    for (const auto& [name, v] : passport["values"].items()) {
+      Value lmin, lmax;
+      if (v.is_object() && v.contains("limits") && v["limits"].is_array() && v["limits"].size() == 2) {
+        if (v["limits"][0].is_number()) lmin = v["limits"][0].get<double>();
+        if (v["limits"][1].is_number()) lmax = v["limits"][1].get<double>();
+      }
+      db->exec(
+          "INSERT INTO run_values (run_id, name, value, unit, lo, hi, limit_min, limit_max, outcome, reason) "
+          "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+          {id, name, opt_number(v, "value"), opt_text(v, "unit"), opt_number(v, "lo"), opt_number(v, "hi"), lmin, lmax,
+           opt_text(v, "outcome"), opt_text(v, "reason")});
+    }
+  }
+  if (passport.contains("captures") && passport["captures"].is_array()) {
+    int64_t seq = 0;
+    for (const json& c : passport["captures"])
+      if (c.is_string()) db->exec("INSERT INTO run_captures (run_id, seq, path) VALUES (?, ?, ?)", {id, seq++, c.get<std::string>()});
+  }
+  tx.commit();
+  return id;
+}
+
+std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
+  auto db = open_migrated(db_url);
+  std::vector<Value> params;
+  const std::string w = where_clause(f, params);
+  const std::string select =
+      "SELECT r.id, r.serial, r.profile, r.plant, r.software, r.station, r.started, r.finished, r.outcome, r.run_dir, "
+      "r.aborted_reason FROM runs r" + w;
+  std::vector<RunRow> out;
+  std::map<int64_t, std::size_t> index;
+  for (const Row& r : db->query(ordered(select, f, params), params)) {
+    RunRow x;
+    x.id = as_int(r[0]).value_or(0);
+    x.serial = as_text(r[1]);
+    x.profile = as_text(r[2]);
+    x.plant = as_text(r[3]);
+    x.software = as_text(r[4]);
+    x.station = as_text(r[5]);
+    x.started = as_text(r[6]);
+    x.finished = as_text(r[7]);
+    x.outcome = as_text(r[8]);
+    x.run_dir = as_text(r[9]);
+    x.aborted_reason = as_text(r[10]);
+    index[x.id] = out.size();
+    out.push_back(std::move(x));
+  }
+  std::vector<Value> cparams;
+  const std::string cw = where_clause(f, cparams);
+  for (const Row& r : db->query("SELECT c.run_id, c.path FROM run_captures c JOIN runs r ON r.id = c.run_id" + cw +
+                                    " ORDER BY c.run_id, c.seq",
+                                cparams)) {
+    auto it = index.find(as_int(r[0]).value_or(-1));
+    if (it != index.end()) out[it->second].captures.push_back(as_text(r[1]));
+  }
+  return out;
+}
+
+std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_name, const Filter& f) {
+  auto db = open_migrated(db_url);
+  std::vector<Value> params;
+  const std::string w = where_clause(f, params) + " AND v.name = ?";
+  params.emplace_back(value_name);
+  const std::string select =
+      "SELECT r.id, r.serial, r.outcome, v.value, v.lo, v.hi, r.started, v.limit_min, v.limit_max, v.unit, "
+      "v.outcome, v.reason FROM run_values v JOIN runs r ON r.id = v.run_id" + w;
+  std::vector<ValueRow> out;
+  for (const Row& r : db->query(ordered(select, f, params), params)) {
+    ValueRow x;
+    x.run_id = as_int(r[0]).value_or(0);
+    x.serial = as_text(r[1]);
+    x.outcome = as_text(r[2]);
+    x.value = num(r[3]);
+    x.lo = num(r[4]);
+    x.hi = num(r[5]);
+    x.started = as_text(r[6]);
+    x.limit_min = num(r[7]);
+    x.limit_max = num(r[8]);
+    x.unit = as_text(r[9]);
+    x.value_outcome = as_text(r[10]);
+    x.reason = as_text(r[11]);
+    out.push_back(std::move(x));
+  }
+  return out;
+}
+
+std::vector<std::string> value_names(const std::string& db_url) {
+  auto db = open_migrated(db_url);
+  std::vector<std::string> out;
+  for (const Row& r : db->query("SELECT DISTINCT name FROM run_values ORDER BY name")) out.push_back(as_text(r[0]));
+  return out;
+}
+
+// ------------------------------------------------------------------ default location
+std::string default_db_url() {
+  if (const char* e = std::getenv("RIG_HISTORY"); e && *e) return e;
+  const char* home = std::getenv("HOME");
+  fs::path config;
+  if (const char* c = std::getenv("RIG_CONFIG"); c && *c) {
+    config = c;
+    if (!fs::exists(config)) throw ConfigError("RIG_CONFIG names '" + config.string() + "', which does not exist");
+  } else if (home && *home && fs::exists(fs::path(home) / ".config/rig/rig.toml")) {
+    config = fs::path(home) / ".config/rig/rig.toml";
+  }
+  if (!config.empty()) {
+    const toml::table t = cfg::parse_file(config.string());
+    if (const toml::table* h = cfg::get_table(t, "history")) {
+      cfg::check_keys(*h, {"url"}, "history");
+      std::string url = cfg::get_string(*h, "url");
+      if (url.empty()) throw ConfigError(cfg::where(*h->get("url")) + ": [history] url is empty");
+      // A relative SQLite path is relative to the config file, not to the working folder.
+      const bool pg = url.rfind("postgres", 0) == 0;
+      std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
+      if (!pg && fs::path(path).is_relative()) url = "sqlite:" + (config.parent_path() / path).string();
+      return url;
+    }
+  }
+  fs::path data;
+  if (const char* x = std::getenv("XDG_DATA_HOME"); x && *x) data = x;
+  else if (home && *home) data = fs::path(home) / ".local/share";
+  else data = fs::current_path();
+  return "sqlite:" + (data / "rig" / "history.sqlite").string();
+}
+
+}  // namespace rig::history

@@ -1,0 +1,62 @@
+// The results database: every run recorded with its passport values, outcome, profile,
+// plant, software version, times, run folder and capture paths. SQLite by default (one
+// file), PostgreSQL for a line of rigs reporting to one server. Schema and migrations:
+// docs/history.md.
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rig::history {
+
+// $RIG_HISTORY if set; else `[history] url` of the rig config ($RIG_CONFIG, or
+// ~/.config/rig/rig.toml if present; a relative path is taken from the config's folder);
+// else sqlite:$XDG_DATA_HOME/rig/history.sqlite (or ~/.local/share/rig/history.sqlite).
+std::string default_db_url();
+
+// Records one run (also aborted ones). `db_url`: "sqlite:PATH", a plain path, or
+// "postgresql://..." / "postgres://...". Recording the same run (same run folder and
+// start time) again replaces the earlier record. Returns the run's id in the database.
+// Throws rig::ConfigError for a bad URL or an unreachable/unwritable database and
+// for a passport without the fields the schema needs.
+long long record_run(const std::string& db_url, const nlohmann::json& passport, const std::string& run_dir);
+
+// Query filters shared by the listing and the trend.
+struct Filter {
+  std::optional<std::string> serial;  // exact serial number
+  std::optional<std::string> since;   // ISO date or date-time (UTC), inclusive
+  std::optional<std::string> until;   // ISO date or date-time (UTC), exclusive
+  std::optional<std::string> outcome; // PASS, FAIL, ABORTED, ERROR
+  std::optional<std::string> profile;
+  int limit = 0;                      // 0 = no limit (newest first when limited)
+};
+
+struct RunRow {
+  long long id = 0;
+  std::string serial, profile, plant, software, station, started, finished, outcome, run_dir, aborted_reason;
+  std::vector<std::string> captures;
+};
+
+struct ValueRow {
+  long long run_id = 0;
+  std::string serial, started, outcome;  // run's
+  std::optional<double> value, lo, hi, limit_min, limit_max;
+  std::string unit, value_outcome, reason;
+};
+
+// Runs matching `f`, oldest first.
+std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f);
+// One measurement across the runs matching `f`, oldest first (the trend).
+std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_name, const Filter& f);
+// Names of all measurements recorded (for `rig history --value` help and errors).
+std::vector<std::string> value_names(const std::string& db_url);
+
+// The schema version this build writes and migrates to.
+int current_schema_version();
+// Opens (creating and migrating if needed) and returns the schema version found before
+// migrating (0 = new database).
+int migrate(const std::string& db_url);
+
+}  // namespace rig::history

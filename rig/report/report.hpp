@@ -1,0 +1,22 @@
+// report.html: the human-readable passport of one run, drawn from the run folder's
+// passport.json (required) and analysis.json (optional, may be partial after an abort).
+// One self-contained file: inline CSS and inline SVG plots, no scripts, no network.
+#pragma once
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace rig::report {
+
+// Reads run_dir/passport.json and run_dir/analysis.json, writes run_dir/report.html
+// (atomically: a temp file renamed into place) and returns its path.
+// Throws rig::ConfigError naming the file when passport.json is missing or malformed;
+// a missing or malformed analysis.json is reported inside the page, not thrown.
+std::string write_report(const std::string& run_dir);
+
+// The page itself, for callers that hold the documents in memory. `analysis` may be
+// null (absent); `analysis_problem` says why it is absent or partial ("" if fine).
+std::string render_report(const nlohmann::json& passport, const nlohmann::json& analysis,
+                          const std::string& analysis_problem = "");
+
+}  // namespace rig::report

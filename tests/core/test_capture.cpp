@@ -1,0 +1,197 @@
+// Capture files on real disk: round trip, truncation, corruption, SIGKILL mid-write.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "rig/capture/capture.hpp"
+#include "rig/core/errors.hpp"
+
+namespace fs = std::filesystem;
+using namespace rig;
+
+namespace {
+
+std::string tmpdir() {
+  std::string d = fs::temp_directory_path() / ("rigcap-" + std::to_string(::getpid()) + "-" +
+                                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::vector<Sample> ramp(uint32_t n, uint32_t seq0 = 0) {
+  std::vector<Sample> v(n);
+  for (uint32_t i = 0; i < n; ++i) v[i] = {seq0 + i, static_cast<float>(i) * 1e-3f, -static_cast<float>(i), i % 3};
+  return v;
+}
+
+capture::Header header() {
+  capture::Header h;
+  h.serial = "SN-42";
+  h.phase = "raw";
+  h.orientation = "U10";
+  h.started = "2026-11-22T05:00:00Z";
+  h.rate_hz = 1000;
+  h.extra = {{"profile", "ci"}};
+  return h;
+}
+
+}  // namespace
+
+TEST(Capture, RoundTripKeepsHeaderAndEverySample) {
+  const std::string p = tmpdir() + "/a.cap";
+  const auto s = ramp(2500);
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(std::span(s).subspan(0, 700));
+    w.append(std::span(s).subspan(700));
+    w.close();
+    EXPECT_EQ(w.samples_written(), 2500u);
+  }
+  const auto l = capture::load(p);
+  EXPECT_TRUE(l.recovery.complete) << l.recovery.summary(p);
+  EXPECT_EQ(l.header.serial, "SN-42");
+  EXPECT_EQ(l.header.orientation, "U10");
+  EXPECT_EQ(l.header.extra["profile"], "ci");
+  ASSERT_EQ(l.samples.size(), 2500u);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    EXPECT_EQ(l.samples[i].seq, s[i].seq);
+    EXPECT_EQ(l.samples[i].x_g, s[i].x_g);
+    EXPECT_EQ(l.samples[i].y_g, s[i].y_g);
+    EXPECT_EQ(l.samples[i].status, s[i].status);
+  }
+  EXPECT_EQ(l.recovery.blocks, 3u);
+}
+
+TEST(Capture, TruncatedFileRecoversCompleteBlocksAndSaysSo) {
+  const std::string p = tmpdir() + "/t.cap";
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(ramp(3000));
+    w.close();
+  }
+  // Cut inside the third block.
+  const auto size = fs::file_size(p);
+  fs::resize_file(p, size - 16 - 500 * 16);
+  const auto l = capture::load(p);
+  EXPECT_FALSE(l.recovery.complete);
+  EXPECT_TRUE(l.recovery.truncated);
+  EXPECT_EQ(l.samples.size(), 2000u);
+  EXPECT_NE(l.recovery.problem.find("incomplete"), std::string::npos) << l.recovery.problem;
+  EXPECT_NE(l.recovery.summary(p).find("2000 samples"), std::string::npos);
+}
+
+TEST(Capture, CorruptedBlockIsSkippedAndTheRestRecovered) {
+  const std::string p = tmpdir() + "/c.cap";
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(ramp(4000));
+    w.close();
+  }
+  const auto size = fs::file_size(p);
+  // Flip a byte in the payload of block 2 (blocks are 16 + 16000 bytes; the end marker is 16).
+  const auto data_start = size - 16 - 4 * 16016;
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(data_start + 16016 + 16 + 123));
+    char c = 0x5a;
+    f.write(&c, 1);
+  }
+  const auto l = capture::load(p);
+  EXPECT_FALSE(l.recovery.complete);
+  EXPECT_EQ(l.recovery.damaged_blocks, 1u);
+  EXPECT_EQ(l.samples.size(), 3000u);
+  ASSERT_FALSE(l.recovery.notes.empty());
+  EXPECT_NE(l.recovery.notes[0].find("CRC"), std::string::npos);
+  EXPECT_NE(l.recovery.notes[0].find("offset " + std::to_string(data_start + 16016)), std::string::npos)
+      << l.recovery.notes[0];
+  // The first sample after the lost block carries the gap flag; sequence continues at 2000.
+  EXPECT_EQ(l.samples[1000].seq, 2000u);
+  EXPECT_TRUE(l.samples[1000].status & sample_status::kGapBefore);
+}
+
+TEST(Capture, DamagedBlockHeaderResyncsToTheNextBlock) {
+  const std::string p = tmpdir() + "/h.cap";
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(ramp(3000));
+    w.close();
+  }
+  const auto size = fs::file_size(p);
+  const auto data_start = size - 16 - 3 * 16016;
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(data_start + 16016 + 4));  // count field of block 2
+    const char junk[4] = {'\x7f', '\x7f', '\x7f', '\x7f'};
+    f.write(junk, 4);
+  }
+  const auto l = capture::load(p);
+  EXPECT_EQ(l.samples.size(), 2000u);
+  EXPECT_EQ(l.recovery.damaged_blocks, 1u);
+  EXPECT_NE(l.recovery.problem.find("damaged block header"), std::string::npos);
+}
+
+TEST(Capture, NotACaptureIsAConfigErrorNamingTheFile) {
+  const std::string p = tmpdir() + "/junk.cap";
+  std::ofstream(p) << "hello, this is not a capture file at all";
+  try {
+    capture::Reader r(p);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(p), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("bad magic"), std::string::npos);
+  }
+  EXPECT_THROW(capture::Reader(tmpdir() + "/missing.cap"), ConfigError);
+}
+
+TEST(Capture, ExistingFileIsKeptAsInterrupted) {
+  const std::string d = tmpdir();
+  {
+    capture::Writer w(d + "/x.cap", header());
+    w.append(ramp(10));
+  }
+  {
+    capture::Writer w(d + "/x.cap", header());
+    w.append(ramp(20));
+  }
+  EXPECT_TRUE(fs::exists(d + "/x.cap.interrupted-1"));
+  EXPECT_EQ(capture::load(d + "/x.cap.interrupted-1").samples.size(), 10u);
+  EXPECT_EQ(capture::load(d + "/x.cap").samples.size(), 20u);
+}
+
+TEST(Capture, SigkillMidCaptureLeavesAReadableFile) {
+  const std::string p = tmpdir() + "/k.cap";
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    capture::Writer w(p, header(), 1000);
+    uint32_t seq = 0;
+    for (int i = 0; i < 5; ++i) {  // 5 complete blocks, then announce and keep writing
+      w.append(ramp(1000, seq));
+      seq += 1000;
+    }
+    w.append(ramp(400, seq));  // a partial block still in memory
+    const char c = 'r';
+    (void)!::write(ready[1], &c, 1);
+    for (;;) ::pause();
+  }
+  char c;
+  ASSERT_EQ(::read(ready[0], &c, 1), 1);
+  ::kill(pid, SIGKILL);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  ASSERT_TRUE(WIFSIGNALED(st));
+  const auto l = capture::load(p);
+  EXPECT_EQ(l.samples.size(), 5000u);
+  EXPECT_FALSE(l.recovery.complete);
+  EXPECT_TRUE(l.recovery.truncated);
+  EXPECT_NE(l.recovery.problem.find("end marker"), std::string::npos) << l.recovery.problem;
+  EXPECT_EQ(l.samples.back().seq, 4999u);
+}

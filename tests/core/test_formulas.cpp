@@ -1,0 +1,75 @@
+// Formulas (3), (4), the sign rule, and the accuracy-class table, against hand-computed cases.
+#include <gtest/gtest.h>
+
+#include "procedures/acceptance/procedure.hpp"
+#include "procedures/analysis/gost.hpp"
+
+using rig::acceptance::accuracy_class;
+using rig::acceptance::AccuracyClass;
+using rig::acceptance::bias_and_base_error;
+
+TEST(Formulas, BiasAndBaseErrorHandComputed) {
+  // x10 = bias + dA + e_i, x20 = bias - dA + f_i with bias = -5e-4, dA = 4e-4.
+  const std::vector<double> x10{-1.0e-4, -1.2e-4, -0.8e-4};
+  const std::vector<double> x20{-9.0e-4, -8.8e-4, -9.2e-4};
+  const auto r = bias_and_base_error(x10, x20);
+  // (3): mean of (x10+x20)/2 = ((-5e-4) + (-5e-4) + (-5e-4)) / 3
+  EXPECT_NEAR(r.bias, -5.0e-4, 1e-15);
+  // (4): mean of (x10-x20)/2 = (4e-4 + 3.8e-4 + 4.2e-4)/3 = 4e-4
+  EXPECT_NEAR(r.base_error, 4.0e-4, 1e-15);
+  EXPECT_EQ(r.sign_u10, +1);
+  EXPECT_NEAR(r.bias_ci_half, 0.0, 1e-15);  // every pair gives exactly -5e-4
+  EXPECT_GT(r.base_ci_half, 0.0);
+}
+
+TEST(Formulas, SignRuleWhenU20ReadsHigher) {
+  // mean(x10) < mean(x20): g_dA enters (1) with minus; it is quoted positive.
+  const std::vector<double> x10{-9.0e-4, -9.0e-4};
+  const std::vector<double> x20{-1.0e-4, -1.0e-4};
+  const auto r = bias_and_base_error(x10, x20);
+  EXPECT_NEAR(r.bias, -5.0e-4, 1e-15);
+  EXPECT_NEAR(r.base_error, 4.0e-4, 1e-15);
+  EXPECT_EQ(r.sign_u10, -1);
+}
+
+TEST(Formulas, PaperFiguresRoundTrip) {
+  // Six pairs built from the paper's g_sist and g_dA with alternating +-1e-6 noise.
+  const double bias = -5.0137e-4, dA = 3.8549e-4;
+  std::vector<double> x10, x20;
+  for (int i = 0; i < 6; ++i) {
+    const double e = (i % 2 ? 1e-6 : -1e-6);
+    x10.push_back(bias + dA + e);
+    x20.push_back(bias - dA + e);
+  }
+  const auto r = bias_and_base_error(x10, x20);
+  EXPECT_NEAR(r.bias, bias, 1e-16);
+  EXPECT_NEAR(r.base_error, dA, 1e-16);
+}
+
+TEST(Formulas, RejectsUnpairedRuns) {
+  EXPECT_THROW(bias_and_base_error({1.0, 2.0}, {1.0}), std::invalid_argument);
+  EXPECT_THROW(bias_and_base_error({}, {}), std::invalid_argument);
+}
+
+TEST(Formulas, InRunBRussianMethod) {
+  // 18 blocks of 100 samples; block means 0..17 * 1e-6 => B = (17e-6 - 0)/2.
+  std::vector<double> x;
+  for (int b = 0; b < 18; ++b)
+    for (int i = 0; i < 100; ++i) x.push_back(b * 1e-6 + (i % 2 ? 3e-7 : -3e-7));
+  const auto b100 = rig::analysis::in_run_b(x, 100);
+  EXPECT_EQ(b100.blocks, 18u);
+  EXPECT_NEAR(b100.value, 8.5e-6, 1e-15);
+  // 200-sample blocks: means 0.5, 2.5, ..., 16.5 (e-6) => B = 8e-6.
+  const auto b200 = rig::analysis::in_run_b(x, 200);
+  EXPECT_EQ(b200.blocks, 9u);
+  EXPECT_NEAR(b200.value, 8.0e-6, 1e-15);
+}
+
+TEST(Formulas, AccuracyClassTable) {
+  const std::vector<AccuracyClass> c{{"precision", 5e-6}, {"medium", 2e-5}, {"low", 1e-4}};
+  EXPECT_EQ(accuracy_class(c, 4e-6), 1u);
+  EXPECT_EQ(accuracy_class(c, 5e-6), 1u);
+  EXPECT_EQ(accuracy_class(c, 1.9e-5), 2u);
+  EXPECT_EQ(accuracy_class(c, 9e-5), 3u);
+  EXPECT_FALSE(accuracy_class(c, 2e-4).has_value());
+}

@@ -1,0 +1,112 @@
+// Profiles: the built-ins load; malformed files are rejected with file and line.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "procedures/acceptance/profile.hpp"
+#include "rig/core/errors.hpp"
+
+namespace fs = std::filesystem;
+using rig::ConfigError;
+using rig::acceptance::load_profile;
+
+namespace {
+std::string write_tmp(const std::string& name, const std::string& text) {
+  const std::string d = fs::temp_directory_path() / ("rigprof-" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  const std::string p = d + "/" + name;
+  std::ofstream(p) << text;
+  return p;
+}
+std::string error_of(const std::string& path) {
+  try {
+    load_profile(path);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(Profile, BuiltinPaperMatchesTheMethod) {
+  const auto p = load_profile("paper");
+  EXPECT_EQ(p.name, "paper");
+  EXPECT_EQ(p.order.size(), 12u);
+  EXPECT_EQ(p.run_s, 100.0);
+  EXPECT_EQ(p.in_run_s, 1800.0);
+  EXPECT_EQ(p.raw_s, 3600.0);
+  EXPECT_EQ(p.rate_hz, 1000.0);
+  ASSERT_EQ(p.in_run_blocks_s.size(), 2u);
+  EXPECT_EQ(p.in_run_blocks_s[1], 200.0);
+  ASSERT_EQ(p.filter.sections.size(), 1u);
+  EXPECT_NEAR(p.filter.sections[0].b0, 0.148895, 1e-12);
+  EXPECT_EQ(p.classes.size(), 3u);
+  EXPECT_TRUE(p.limits.count("bias"));
+}
+
+TEST(Profile, CiHasTheSamePhasesInSeconds) {
+  const auto ci = load_profile("ci");
+  const auto paper = load_profile("paper");
+  EXPECT_EQ(ci.order, paper.order);
+  EXPECT_LT(ci.planned_total_s(), 300.0);
+}
+
+TEST(Profile, SyntaxErrorNamesFileAndLine) {
+  const std::string p = write_tmp("syntax.toml", "[profile]\nname = \"x\"\n[procedure\nrun_s = 1\n");
+  const std::string e = error_of(p);
+  EXPECT_NE(e.find(p + ":3:"), std::string::npos) << e;
+}
+
+TEST(Profile, WrongTypeNamesFileLineAndKey) {
+  const std::string p = write_tmp("type.toml",
+                                  "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"
+                                  "run_s = \"long\"\nin_run_s = 10\nraw_s = 10\n");
+  const std::string e = error_of(p);
+  EXPECT_NE(e.find(p + ":5:"), std::string::npos) << e;
+  EXPECT_NE(e.find("run_s"), std::string::npos) << e;
+}
+
+TEST(Profile, UnknownKeyIsRejected) {
+  const std::string p = write_tmp("typo.toml",
+                                  "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"
+                                  "run_s = 1\nin_run_s = 10\nraw_s = 10\nrun_sec = 5\n");
+  const std::string e = error_of(p);
+  EXPECT_NE(e.find(p + ":8:"), std::string::npos) << e;
+  EXPECT_NE(e.find("run_sec"), std::string::npos) << e;
+}
+
+TEST(Profile, UnpairedOrderIsRejected) {
+  const std::string p = write_tmp("order.toml",
+                                  "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U10\", \"U20\"]\n"
+                                  "run_s = 1\nin_run_s = 10\nraw_s = 10\n");
+  EXPECT_NE(error_of(p).find("as many U10 runs as U20"), std::string::npos);
+}
+
+TEST(Profile, BadLimitsAndClassesAreRejected) {
+  const std::string base = "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\nrun_s = 1\nin_run_s = 10\nraw_s = 10\n";
+  EXPECT_NE(error_of(write_tmp("lim.toml", base + "[limits]\nbias = [1.0, -1.0]\n")).find("min <= max"),
+            std::string::npos);
+  EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais'"),
+            std::string::npos);
+  EXPECT_NE(error_of(write_tmp("cls.toml", base + "[[classes]]\nname = \"a\"\nmax_b_g = 2e-5\n[[classes]]\nname = "
+                                                  "\"b\"\nmax_b_g = 1e-5\n"))
+                .find("ascending"),
+            std::string::npos);
+}
+
+TEST(Profile, FileCanStartFromABuiltinAndOverride) {
+  const std::string p = write_tmp("short.toml", "base = \"ci\"\n[profile]\nname = \"shorter\"\n[procedure]\nraw_s = 20.0\n");
+  const auto prof = load_profile(p);
+  EXPECT_EQ(prof.name, "shorter");
+  EXPECT_EQ(prof.raw_s, 20.0);
+  EXPECT_EQ(prof.run_s, load_profile("ci").run_s);
+}
+
+TEST(Profile, MissingFileSaysWhatExists) {
+  const std::string e = error_of("/nonexistent/profile.toml");
+  EXPECT_NE(e.find("ci"), std::string::npos);
+  EXPECT_NE(e.find("paper"), std::string::npos);
+}

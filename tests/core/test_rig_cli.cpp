@@ -1,0 +1,210 @@
+// `rig` as a user and automation see it: a real child process, real files,
+// real signals. Covers the exit codes, SIGINT abort with the safe-state order,
+// SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+extern char** environ;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Child {
+  pid_t pid = -1;
+  std::string out, err;
+};
+
+std::string tmp(const std::string& name) {
+  const std::string d = fs::temp_directory_path() / ("rigcli-" + std::to_string(::getpid()) + "-" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+std::string slurp(const std::string& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Child spawn(const std::vector<std::string>& args, const std::string& io_prefix) {
+  std::vector<char*> argv;
+  std::string bin = RIG_BINARY;
+  argv.push_back(bin.data());
+  std::vector<std::string> copy = args;
+  for (auto& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  Child c;
+  c.out = io_prefix + ".stdout";
+  c.err = io_prefix + ".stderr";
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 1, c.out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 2, c.err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  // History goes to a private database so tests never touch the user's.
+  const std::string hist = "RIG_HISTORY=sqlite:" + io_prefix + ".history.sqlite";
+  std::vector<char*> envp;
+  for (char** e = environ; *e; ++e)
+    if (std::string(*e).rfind("RIG_HISTORY=", 0) != 0) envp.push_back(*e);
+  std::string h = hist;
+  envp.push_back(h.data());
+  envp.push_back(nullptr);
+  EXPECT_EQ(posix_spawn(&c.pid, bin.c_str(), &fa, nullptr, argv.data(), envp.data()), 0);
+  posix_spawn_file_actions_destroy(&fa);
+  return c;
+}
+
+int wait_exit(const Child& c) {
+  int st = 0;
+  ::waitpid(c.pid, &st, 0);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+int run(const std::vector<std::string>& args, const std::string& io_prefix) { return wait_exit(spawn(args, io_prefix)); }
+
+// Polls (bounded) until `path` exists; returns false if the child ended first.
+bool wait_for_file(const Child& c, const std::string& path) {
+  for (int i = 0; i < 60000; ++i) {
+    if (fs::exists(path)) return true;
+    int st;
+    if (::waitpid(c.pid, &st, WNOHANG) == c.pid) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return false;
+}
+
+std::size_t count(const std::string& hay, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + 1)) ++n;
+  return n;
+}
+
+const char* kContractValues[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
+                                 "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",
+                                 "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"};
+
+}  // namespace
+
+TEST(RigCli, HelpOnEverySubcommand) {
+  const std::string d = tmp("help");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"--help"}, d + "/h"), 0);
+  for (const char* s : {"run", "analyze", "plant", "table", "dut", "filter", "report", "history"})
+    EXPECT_EQ(run({s, "--help"}, d + "/h" + s), 0) << s;
+  EXPECT_EQ(run({"run", "--no-such-option"}, d + "/bad"), 2);
+}
+
+TEST(RigCli, CiProfileEndToEnd) {
+  const std::string d = tmp("ci");
+  fs::create_directories(d);
+  const int rc = run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--serial", "EMU-0001"}, d + "/io");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(rc, p["outcome"] == "PASS" ? 0 : 1) << slurp(d + "/io.stderr");
+  EXPECT_EQ(p["outcome"], "PASS") << p.dump(1);
+  EXPECT_EQ(p["schema"], "rig.passport/1");
+  EXPECT_EQ(p["serial"], "EMU-0001");
+  EXPECT_EQ(p["profile"], "ci");
+  EXPECT_EQ(p["plant"], "emulated");
+  for (const char* name : kContractValues) {
+    ASSERT_TRUE(p["values"].contains(name)) << name;
+    const auto& m = p["values"][name];
+    for (const char* f : {"value", "unit", "lo", "hi", "limits", "outcome", "reason"}) EXPECT_TRUE(m.contains(f)) << name << "." << f;
+  }
+  EXPECT_TRUE(p["values"]["bias"]["value"].is_number());
+  EXPECT_TRUE(p["values"]["r"]["value"].is_null()) << "R cannot be identified from 60 s";
+  EXPECT_FALSE(p["values"]["r"]["reason"].get<std::string>().empty());
+  const std::string junit = slurp(d + "/run/junit.xml");
+  EXPECT_EQ(count(junit, "<testcase "), p["values"].size());
+  EXPECT_TRUE(fs::exists(d + "/run/captures/raw-U10.cap"));
+  EXPECT_TRUE(fs::exists(d + "/run/captures/run12-U20.cap"));
+  EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
+  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS"), std::string::npos);
+}
+
+TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
+  const std::string d = tmp("sigint");
+  fs::create_directories(d);
+  Child c = spawn({"run", "--profile", "ci", "--yes", "--out", d + "/run"}, d + "/io");
+  // Once the in-run capture exists, the bias phase has completed.
+  ASSERT_TRUE(wait_for_file(c, d + "/run/captures/in-run-U10.cap")) << slurp(d + "/io.stderr");
+  ::kill(c.pid, SIGINT);
+  EXPECT_EQ(wait_exit(c), 3) << slurp(d + "/io.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ABORTED");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("SIGINT"), std::string::npos);
+  EXPECT_TRUE(p["values"]["bias"]["value"].is_number()) << "completed measurements are kept";
+  EXPECT_TRUE(p["values"]["base_error"]["value"].is_number());
+  const std::string log = slurp(d + "/run/run.log");
+  const auto t = log.find("safe state 1/3: stopping table");
+  const auto s = log.find("safe state 2/3: stopping DUT stream");
+  const auto pw = log.find("safe state 3/3: DUT power off");
+  ASSERT_NE(t, std::string::npos) << log;
+  EXPECT_LT(t, s);
+  EXPECT_LT(s, pw);
+  EXPECT_TRUE(fs::exists(d + "/run/junit.xml"));
+}
+
+TEST(RigCli, SigkillMidCaptureThenResumeRepeatsNoCompletedPhase) {
+  const std::string d = tmp("resume");
+  fs::create_directories(d);
+  Child c = spawn({"run", "--profile", "ci", "--yes", "--out", d + "/run"}, d + "/io1");
+  ASSERT_TRUE(wait_for_file(c, d + "/run/captures/raw-U10.cap")) << slurp(d + "/io1.stderr");
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ::kill(c.pid, SIGKILL);
+  EXPECT_EQ(wait_exit(c), 128 + SIGKILL);
+  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "PASS");
+  const std::string log = slurp(d + "/run/run.log");
+  for (const char* ph : {"run01-U10", "run12-U20", "bias", "in-run", "in-run-b"})
+    EXPECT_EQ(count(log, std::string("phase ") + ph + " start"), 1u) << ph << " ran twice:\n" << log;
+  EXPECT_EQ(count(log, "phase raw start"), 2u);
+  for (const auto& ph : p["phases"]) {
+    if (ph["id"] == "raw" || ph["id"] == "allan" || ph["id"] == "loop") EXPECT_EQ(ph["status"], "done") << ph.dump();
+    else EXPECT_EQ(ph["status"], "skipped") << ph.dump();
+  }
+  EXPECT_TRUE(fs::exists(d + "/run/captures/raw-U10.cap.interrupted-1")) << "the killed capture is kept";
+}
+
+TEST(RigCli, EstopEndsTheRunWithExit3) {
+  const std::string d = tmp("estop");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--inject", "estop@20"}, d + "/io"), 3);
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ABORTED");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("e-stop"), std::string::npos);
+}
+
+TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {
+  const std::string d = tmp("badprof");
+  fs::create_directories(d);
+  std::ofstream(d + "/bad.toml") << "base = \"ci\"\n[procedure]\nrun_s = -4\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/bad.toml", "--yes", "--out", d + "/run"}, d + "/io"), 2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find(d + "/bad.toml:3:"), std::string::npos) << err;
+  EXPECT_NE(err.find("run_s"), std::string::npos) << err;
+}
+
+TEST(RigCli, DryRunPrintsThePlanAndTouchesNothing) {
+  const std::string d = tmp("dry");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"run", "--profile", "paper", "--dry-run", "--out", d + "/run"}, d + "/io"), 0);
+  const std::string out = slurp(d + "/io.stdout");
+  EXPECT_NE(out.find("run12-U20"), std::string::npos) << out;
+  EXPECT_NE(out.find("01:5"), std::string::npos) << "about 110 min of device time:\n" << out;
+  EXPECT_FALSE(fs::exists(d + "/run"));
+}

@@ -1,0 +1,52 @@
+// [dut] of the hardware file and the SocketCAN backend's behaviour on a host
+// without it.
+#include <gtest/gtest.h>
+
+#include "firmware_link/connect.hpp"
+#include "firmware_link/socketcan.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+
+using namespace rig;
+using namespace rig::link;
+
+TEST(DutConfig, OptionsFromTheHardwareFile) {
+  const auto t = cfg::parse_string("can = \"can0\"\nsilence_ms = 80\ncommand_timeout_ms = 40\ncommand_attempts = 5\n",
+                                   "hw.toml");
+  const LinkOptions o = link_options(t);
+  EXPECT_DOUBLE_EQ(o.silence_s, 0.08);
+  EXPECT_DOUBLE_EQ(o.command_timeout_s, 0.04);
+  EXPECT_EQ(o.command_attempts, 5);
+  EXPECT_EQ(o.reorder_window, 8u);
+}
+
+TEST(DutConfig, MistakesAreConfigErrorsWithPlace) {
+  RealClock clock;
+  auto expect_err = [&](const char* text, const char* needle) {
+    try {
+      connect_dut(cfg::parse_string(text, "hw.toml"), clock);
+      ADD_FAILURE() << text;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("hw.toml:"), std::string::npos) << e.what();
+    }
+  };
+  expect_err("silence_ms = 100\n", "can");
+  expect_err("can = \"vcan0\"\nsilense_ms = 100\n", "silense_ms");
+  expect_err("can = \"vcan0\"\nsilence_ms = -1\n", "silence_ms");
+  expect_err("can = \"an-interface-name-too-long\"\n", "network interface");
+}
+
+TEST(SocketCan, UnavailableOrUnknownInterfaceIsAHardwareErrorNamingIt) {
+  // The build host's kernel has no AF_CAN; the guest kernel has it but no such
+  // interface. Both must fail the same way: HardwareError naming the interface.
+  try {
+    SocketCanTransport t("rigtest9");
+    FAIL();
+  } catch (const HardwareError& e) {
+    EXPECT_NE(std::string(e.what()).find("rigtest9"), std::string::npos) << e.what();
+    if (!socketcan_available()) {
+      EXPECT_NE(std::string(e.what()).find("no SocketCAN"), std::string::npos) << e.what();
+    }
+  }
+}

@@ -1,0 +1,102 @@
+// History checks shared by the SQLite and PostgreSQL suites: the same calls and the same
+// expectations against either backend (the SQL is the same; only the connection differs).
+#pragma once
+#include <gtest/gtest.h>
+
+#include "rig/core/errors.hpp"
+#include "rig/report/history.hpp"
+#include "tests/report/fixture.hpp"
+
+namespace rig::test {
+
+// Three DUTs, five runs, one aborted; returns nothing, checks everything.
+inline void history_round_trip(const std::string& url, const std::string& run_root) {
+  namespace h = rig::history;
+  EXPECT_EQ(h::migrate(url), 0);  // new database
+  EXPECT_EQ(h::migrate(url), h::current_schema_version());
+
+  struct R { const char* serial; const char* outcome; const char* started; double b; };
+  const R runs[] = {{"SN-1", "PASS", "2026-11-01T08:00:00Z", 2.1e-6},
+                    {"SN-2", "FAIL", "2026-11-02T08:00:00+03:00", 6.5e-6},
+                    {"SN-1", "PASS", "2026-11-03T09:30:00Z", 2.4e-6},
+                    {"SN-3", "ABORTED", "2026-11-04T10:00:00Z", 0},
+                    {"SN-1", "PASS", "2026-11-05T07:00:00Z", 2.9e-6}};
+  std::vector<long long> ids;
+  int i = 0;
+  for (const R& r : runs) {
+    json p = fixture_passport(r.serial, r.outcome, r.started);
+    p["values"]["in_run_b_allan"]["value"] = r.b;
+    if (std::string(r.outcome) == "ABORTED") {
+      p["values"].erase("in_run_b_allan");
+      p["aborted_reason"] = "e-stop line";
+      p["captures"] = json::array({"captures/run01-U10.cap"});
+    }
+    ids.push_back(h::record_run(url, p, run_root + "/run" + std::to_string(++i)));
+  }
+  // Recording the same run again replaces it (same folder + start), keeps one row.
+  json again = fixture_passport("SN-1", "PASS", "2026-11-05T07:00:00Z");
+  again["values"]["in_run_b_allan"]["value"] = 3.0e-6;
+  const long long replaced = h::record_run(url, again, run_root + "/run5");
+  EXPECT_NE(replaced, ids.back());
+
+  const auto all = h::list_runs(url, {});
+  ASSERT_EQ(all.size(), 5u);
+  EXPECT_EQ(all[0].serial, "SN-1");
+  EXPECT_EQ(all[1].started, "2026-11-02T05:00:00Z");  // +03:00 normalised to UTC
+  EXPECT_EQ(all[1].outcome, "FAIL");
+  EXPECT_EQ(all[3].outcome, "ABORTED");
+  EXPECT_EQ(all[3].aborted_reason, "e-stop line");
+  EXPECT_EQ(all[3].captures, std::vector<std::string>{"captures/run01-U10.cap"});
+  EXPECT_EQ(all[0].captures.size(), 3u);
+  EXPECT_EQ(all[0].profile, "paper");
+  EXPECT_EQ(all[0].plant, "emulated");
+  EXPECT_EQ(all[0].software, "rig 0.1.0");
+  EXPECT_EQ(all[0].finished, "2026-11-20T09:52:31Z");
+  EXPECT_TRUE(all[0].run_dir.size() > 5 && all[0].run_dir.substr(all[0].run_dir.size() - 5) == "/run1");
+  EXPECT_FALSE(all[0].station.empty());
+
+  h::Filter f;
+  f.serial = "SN-1";
+  const auto sn1 = h::list_runs(url, f);
+  ASSERT_EQ(sn1.size(), 3u);
+  f.since = "2026-11-03";
+  EXPECT_EQ(h::list_runs(url, f).size(), 2u);
+  f.until = "2026-11-05";
+  EXPECT_EQ(h::list_runs(url, f).size(), 1u);
+  h::Filter lim;
+  lim.limit = 2;
+  const auto newest = h::list_runs(url, lim);
+  ASSERT_EQ(newest.size(), 2u);
+  EXPECT_EQ(newest[0].serial, "SN-3");  // the two newest, oldest first
+  EXPECT_EQ(newest[1].started, "2026-11-05T07:00:00Z");
+  h::Filter bad;
+  bad.since = "last tuesday";
+  EXPECT_THROW(h::list_runs(url, bad), ConfigError);
+
+  // The trend of one value across DUTs, and across the runs of one DUT.
+  const auto tr = h::trend(url, "in_run_b_allan", {});
+  ASSERT_EQ(tr.size(), 4u);  // the aborted run has no such value
+  EXPECT_DOUBLE_EQ(*tr[0].value, 2.1e-6);
+  EXPECT_DOUBLE_EQ(*tr[1].value, 6.5e-6);
+  EXPECT_DOUBLE_EQ(*tr[3].value, 3.0e-6);  // the replaced record
+  EXPECT_EQ(tr[0].unit, "g");
+  EXPECT_DOUBLE_EQ(*tr[0].lo, 1.8e-6);
+  EXPECT_FALSE(tr[0].limit_min.has_value());
+  EXPECT_DOUBLE_EQ(*tr[0].limit_max, 5e-6);
+  h::Filter one;
+  one.serial = "SN-1";
+  const auto tr1 = h::trend(url, "in_run_b_allan", one);
+  EXPECT_EQ(tr1.size(), 3u);
+  const auto r = h::trend(url, "r", {});
+  ASSERT_FALSE(r.empty());
+  EXPECT_FALSE(r[0].value.has_value());  // null value with its reason
+  EXPECT_EQ(r[0].reason, "needs a record longer than 50 h");
+  const auto names = h::value_names(url);
+  EXPECT_NE(std::find(names.begin(), names.end(), "bias"), names.end());
+
+  // A passport without the fields the schema needs is refused.
+  EXPECT_THROW(h::record_run(url, json{{"outcome", "PASS"}}, run_root), ConfigError);
+  EXPECT_THROW(h::record_run(url, json::array(), run_root), ConfigError);
+}
+
+}  // namespace rig::test

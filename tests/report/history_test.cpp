@@ -1,0 +1,273 @@
+// The results database on SQLite: round trip, migration from an older schema, errors,
+// the default location, concurrent writers and the `rig history` command's output.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cstdlib>
+#include <thread>
+
+#include "rig/cli/commands.hpp"
+#include "rig/report/history.hpp"
+#include "tests/report/history_cases.hpp"
+
+namespace {
+
+using nlohmann::json;
+using rig::test::TempDir;
+namespace h = rig::history;
+
+// Runs raw SQL on a SQLite file (to build old schemas and to inspect the result).
+void raw_sql(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* err = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err);
+  const std::string msg = err ? err : "";
+  sqlite3_free(err);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << msg;
+}
+
+std::string raw_scalar(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  sqlite3_open(path.c_str(), &db);
+  sqlite3_stmt* st = nullptr;
+  std::string out;
+  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW) {
+    const auto* t = sqlite3_column_text(st, 0);
+    out = t ? reinterpret_cast<const char*>(t) : "NULL";
+  }
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return out;
+}
+
+TEST(HistorySqlite, RoundTripFiltersAndTrend) {
+  TempDir d;
+  rig::test::history_round_trip("sqlite:" + (d.path / "db" / "history.sqlite").string(), d.path.string());
+  EXPECT_TRUE(std::filesystem::exists(d.path / "db" / "history.sqlite"));  // folder created
+}
+
+TEST(HistorySqlite, PlainPathIsAnSqliteFile) {
+  TempDir d;
+  const std::string path = (d.path / "h.db").string();
+  h::record_run(path, rig::test::fixture_passport(), d.path.string());
+  EXPECT_EQ(raw_scalar(path, "SELECT serial FROM runs"), "QA-0042");
+  EXPECT_EQ(raw_scalar(path, "SELECT COUNT(*) FROM run_values"), "16");
+  EXPECT_EQ(raw_scalar(path, "SELECT MAX(version) FROM schema_version"), std::to_string(h::current_schema_version()));
+}
+
+// Version 1 as released (frozen copy of its DDL): runs + run_values, no captures table.
+constexpr const char* kSchemaV1 = R"SQL(
+CREATE TABLE schema_version (version INTEGER NOT NULL PRIMARY KEY, applied TEXT NOT NULL);
+INSERT INTO schema_version VALUES (1, '2026-10-01T00:00:00Z');
+CREATE TABLE runs (id INTEGER PRIMARY KEY AUTOINCREMENT, serial TEXT NOT NULL, profile TEXT, plant TEXT, software TEXT,
+  started TEXT, finished TEXT, outcome TEXT NOT NULL, run_dir TEXT NOT NULL, passport TEXT NOT NULL);
+CREATE UNIQUE INDEX runs_dir_started ON runs (run_dir, started);
+CREATE INDEX runs_serial_started ON runs (serial, started);
+CREATE TABLE run_values (run_id BIGINT NOT NULL REFERENCES runs (id) ON DELETE CASCADE, name TEXT NOT NULL,
+  value DOUBLE PRECISION, unit TEXT, lo DOUBLE PRECISION, hi DOUBLE PRECISION, limit_min DOUBLE PRECISION,
+  limit_max DOUBLE PRECISION, outcome TEXT, reason TEXT, PRIMARY KEY (run_id, name));
+)SQL";
+
+TEST(HistorySqlite, MigratesAVersion1DatabaseAndBackfillsCaptures) {
+  TempDir d;
+  const std::string path = (d.path / "old.sqlite").string();
+  raw_sql(path, kSchemaV1);
+  json p = rig::test::fixture_passport("OLD-1", "ABORTED", "2026-10-02T10:00:00Z");
+  p["aborted_reason"] = "operator's Ctrl-C";
+  std::string pj = p.dump();
+  for (std::size_t i = 0; (i = pj.find('\'', i)) != std::string::npos; i += 2) pj.insert(i, "'");  // SQL quoting
+  raw_sql(path, "INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, passport) "
+                "VALUES ('OLD-1', 'paper', 'hardware', 'rig 0.0.9', '2026-10-02T10:00:00Z', NULL, 'ABORTED', "
+                "'/runs/old1', '" + pj + "');"
+                "INSERT INTO run_values (run_id, name, value, unit) VALUES (1, 'bias', -5e-4, 'g');");
+
+  EXPECT_EQ(h::migrate(path), 1);  // found version 1, migrated to the current one
+  EXPECT_EQ(raw_scalar(path, "SELECT MAX(version) FROM schema_version"), std::to_string(h::current_schema_version()));
+  const auto runs = h::list_runs(path, {});
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].software, "rig 0.0.9");
+  EXPECT_EQ(runs[0].aborted_reason, "operator's Ctrl-C");  // backfilled from the stored passport
+  EXPECT_EQ(runs[0].captures.size(), 3u);
+  EXPECT_EQ(runs[0].captures[2], "captures/in-run-U10.cap");
+  const auto bias = h::trend(path, "bias", {});
+  ASSERT_EQ(bias.size(), 1u);
+  EXPECT_DOUBLE_EQ(*bias[0].value, -5e-4);
+  // New runs go in next to the old one.
+  h::record_run(path, rig::test::fixture_passport("NEW-1"), d.path.string());
+  EXPECT_EQ(h::list_runs(path, {}).size(), 2u);
+  EXPECT_EQ(h::migrate(path), h::current_schema_version());  // idempotent
+}
+
+TEST(HistorySqlite, RefusesASchemaNewerThanThisBuild) {
+  TempDir d;
+  const std::string path = (d.path / "new.sqlite").string();
+  h::migrate(path);
+  raw_sql(path, "INSERT INTO schema_version VALUES (99, '2030-01-01T00:00:00Z')");
+  try {
+    h::list_runs(path, {});
+    FAIL() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("99"), std::string::npos) << e.what();
+  }
+}
+
+TEST(HistorySqlite, BadUrlsAndUnwritablePlacesNameTheDatabase) {
+  TempDir d;
+  EXPECT_THROW(h::migrate("mysql://host/db"), rig::ConfigError);
+  EXPECT_THROW(h::migrate("sqlite:"), rig::ConfigError);
+  rig::test::write_file(d.path / "file", "x");
+  try {
+    h::migrate("sqlite:" + (d.path / "file" / "sub" / "h.sqlite").string());  // a file where a folder must be
+    FAIL() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("file/sub"), std::string::npos) << e.what();
+  }
+  rig::test::write_file(d.path / "garbage.sqlite", std::string(4096, 'x'));
+  EXPECT_THROW(h::migrate((d.path / "garbage.sqlite").string()), rig::ConfigError);
+}
+
+TEST(HistorySqlite, ConcurrentWritersAllLand) {
+  TempDir d;
+  const std::string url = "sqlite:" + (d.path / "c.sqlite").string();
+  std::vector<std::thread> ts;
+  for (int t = 0; t < 3; ++t)
+    ts.emplace_back([&, t] {
+      for (int i = 0; i < 8; ++i) {
+        char started[32];
+        std::snprintf(started, sizeof started, "2026-11-%02dT%02d:00:00Z", t + 1, i);
+        h::record_run(url, rig::test::fixture_passport("T" + std::to_string(t), "PASS", started),
+                      (d.path / ("t" + std::to_string(t))).string());
+      }
+    });
+  for (auto& t : ts) t.join();
+  EXPECT_EQ(h::list_runs(url, {}).size(), 24u);
+}
+
+// ---------------------------------------------------------------- default location
+struct EnvGuard {
+  std::vector<std::pair<std::string, std::optional<std::string>>> saved;
+  void set(const char* k, const char* v) {
+    const char* old = std::getenv(k);
+    saved.emplace_back(k, old ? std::optional<std::string>(old) : std::nullopt);
+    if (v) setenv(k, v, 1);
+    else unsetenv(k);
+  }
+  ~EnvGuard() {
+    for (auto it = saved.rbegin(); it != saved.rend(); ++it) {
+      if (it->second) setenv(it->first.c_str(), it->second->c_str(), 1);
+      else unsetenv(it->first.c_str());
+    }
+  }
+};
+
+TEST(HistoryDefaultUrl, EnvironmentThenConfigThenXdgThenHome) {
+  TempDir d;
+  EnvGuard env;
+  env.set("RIG_HISTORY", nullptr);
+  env.set("RIG_CONFIG", nullptr);
+  env.set("XDG_DATA_HOME", nullptr);
+  env.set("HOME", d.path.c_str());
+  EXPECT_EQ(h::default_db_url(), "sqlite:" + (d.path / ".local/share/rig/history.sqlite").string());
+  env.set("XDG_DATA_HOME", (d.path / "xdg").c_str());
+  EXPECT_EQ(h::default_db_url(), "sqlite:" + (d.path / "xdg/rig/history.sqlite").string());
+  // ~/.config/rig/rig.toml with a relative path: relative to the config's folder.
+  rig::test::write_file(d.path / ".config/rig/rig.toml", "[history]\nurl = \"sqlite:results/h.sqlite\"\n");
+  EXPECT_EQ(h::default_db_url(), "sqlite:" + (d.path / ".config/rig/results/h.sqlite").string());
+  // $RIG_CONFIG wins over the home config; a PostgreSQL URL is kept as is.
+  rig::test::write_file(d.path / "line.toml", "[other]\nx = 1\n[history]\nurl = \"postgresql://rig@db.line/results\"\n");
+  env.set("RIG_CONFIG", (d.path / "line.toml").c_str());
+  EXPECT_EQ(h::default_db_url(), "postgresql://rig@db.line/results");
+  // $RIG_HISTORY wins over everything.
+  env.set("RIG_HISTORY", "sqlite:/tmp/x.sqlite");
+  EXPECT_EQ(h::default_db_url(), "sqlite:/tmp/x.sqlite");
+}
+
+TEST(HistoryDefaultUrl, ConfigMistakesNameFileAndLine) {
+  TempDir d;
+  EnvGuard env;
+  env.set("RIG_HISTORY", nullptr);
+  rig::test::write_file(d.path / "bad.toml", "[history]\nurll = \"x\"\n");
+  env.set("RIG_CONFIG", (d.path / "bad.toml").c_str());
+  try {
+    h::default_db_url();
+    FAIL() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.toml:2"), std::string::npos) << e.what();
+  }
+  env.set("RIG_CONFIG", (d.path / "missing.toml").c_str());
+  EXPECT_THROW(h::default_db_url(), rig::ConfigError);
+}
+
+// ---------------------------------------------------------------- `rig history`
+std::string run_cli(std::vector<std::string> args) {
+  CLI::App app;
+  int rc = -1;
+  rig::cli::add_history(app, rc);
+  args.insert(args.begin(), "history");
+  std::reverse(args.begin(), args.end());  // CLI11 takes the arguments reversed
+  testing::internal::CaptureStdout();
+  try {
+    app.parse(args);
+  } catch (...) {
+    testing::internal::GetCapturedStdout();
+    throw;
+  }
+  EXPECT_EQ(rc, rig::kExitPass);
+  return testing::internal::GetCapturedStdout();
+}
+
+std::vector<std::string> lines(const std::string& s) {
+  std::vector<std::string> out;
+  std::istringstream in(s);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+TEST(HistoryCli, ListsTrendsAndWritesCsv) {
+  TempDir d;
+  const std::string db = "sqlite:" + (d.path / "h.sqlite").string();
+  const json a = rig::test::fixture_analysis();
+  rig::test::write_run(d.path / "r1", rig::test::fixture_passport("SN,1", "PASS", "2026-11-01T08:00:00Z"), &a);
+  EXPECT_NE(run_cli({"--db", db, "--record", (d.path / "r1").string()}).find("recorded run"), std::string::npos);
+  json p2 = rig::test::fixture_passport("SN-2", "FAIL", "2026-11-02T08:00:00Z");
+  p2["values"]["bias"]["value"] = -6.0e-4;
+  h::record_run(db, p2, (d.path / "r2").string());
+
+  const auto list = lines(run_cli({"--db", db}));
+  ASSERT_EQ(list.size(), 3u);
+  EXPECT_EQ(list[0].rfind("id", 0), 0u);
+  EXPECT_NE(list[1].find("SN,1"), std::string::npos);
+  EXPECT_NE(list[2].find("FAIL"), std::string::npos);
+
+  const auto csv = lines(run_cli({"--db", db, "--csv"}));
+  ASSERT_EQ(csv.size(), 3u);
+  EXPECT_EQ(csv[0], "id,started,serial,profile,plant,outcome,station,software,run_dir,captures\r");
+  EXPECT_NE(csv[1].find(",\"SN,1\",paper,"), std::string::npos) << csv[1];  // RFC 4180 quoting
+  EXPECT_NE(csv[1].find("captures/run01-U10.cap;captures/run02-U20.cap"), std::string::npos);
+
+  const auto trend = lines(run_cli({"--db", db, "--value", "bias", "--csv"}));
+  ASSERT_EQ(trend.size(), 3u);
+  EXPECT_EQ(trend[0].rfind("run_id,started,serial,run_outcome,name,value,unit", 0), 0u);
+  EXPECT_NE(trend[1].find(",-0.00050137000000000001,g,"), std::string::npos) << trend[1];  // every digit
+  EXPECT_NE(trend[2].find(",-0.00059999999999999995,g,"), std::string::npos) << trend[2];
+
+  const std::string text = run_cli({"--db", db, "--value", "bias"});
+  EXPECT_NE(text.find("bias over 2 run(s)"), std::string::npos);
+  EXPECT_NE(text.find("all DUTs"), std::string::npos);  // across DUTs
+  EXPECT_NE(text.find("-0.000550685"), std::string::npos) << text;  // their mean
+
+  const auto one = lines(run_cli({"--db", db, "--serial", "SN-2", "--since", "2026-11-02", "--csv"}));
+  EXPECT_EQ(one.size(), 2u);
+  EXPECT_NE(run_cli({"--db", db, "--serial", "nobody"}).find("no runs recorded match"), std::string::npos);
+  try {
+    run_cli({"--db", db, "--value", "biass"});
+    FAIL() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("recorded: "), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(run_cli({"--db", db, "--record", (d.path / "none").string()}), rig::ConfigError);
+}
+
+}  // namespace

@@ -1,0 +1,74 @@
+// Configuration of the client ([table] of a hardware file) and of the emulator
+// ([plant.table] of a profile): every mistake names file:line.
+#include <gtest/gtest.h>
+
+#include "helpers.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/modbus/table_client.hpp"
+
+namespace rig::table_test {
+namespace {
+
+namespace m = rig::modbus;
+
+template <class F>
+std::string config_error(F f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(no ConfigError)";
+}
+
+TEST(TableConfig, EndpointsParse) {
+  EXPECT_EQ(m::parse_endpoint("tcp:10.0.0.5:1502").str(), "tcp:10.0.0.5:1502");
+  EXPECT_EQ(m::parse_endpoint("localhost:502").str(), "tcp:localhost:502");
+  EXPECT_EQ(m::parse_endpoint("rtu:/dev/ttyUSB0").str(), "rtu:/dev/ttyUSB0,19200,E,8,1");
+  EXPECT_EQ(m::parse_rtu("/dev/ttyUSB0,115200,N,8,1").str(), "rtu:/dev/ttyUSB0,115200,N,8,1");
+  EXPECT_EQ(m::parse_rtu("/dev/ttyS1,9600").str(), "rtu:/dev/ttyS1,9600,E,8,1");
+  EXPECT_NE(config_error([] { m::parse_endpoint("tcp:host"); }).find("must be HOST:PORT"), std::string::npos);
+  EXPECT_NE(config_error([] { m::parse_endpoint("tcp:host:http"); }).find("port 'http' is not a number"),
+            std::string::npos);
+  EXPECT_NE(config_error([] { m::parse_rtu("/dev/ttyS1,9600,X,8,1"); }).find("parity must be N, E or O"),
+            std::string::npos);
+}
+
+TEST(TableConfig, HardwareTableKeysAreChecked) {
+  RealClock clock;
+  const toml::table typo = cfg::parse_string("modbus = \"127.0.0.1:1\"\ntolerance = 0.01\n", "hw.toml");
+  const std::string e1 = config_error([&] { m::connect_table(typo, clock); });
+  EXPECT_NE(e1.find("hw.toml:2:"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("unknown key 'tolerance'"), std::string::npos) << e1;
+  const toml::table both = cfg::parse_string("modbus = \"127.0.0.1:1\"\nrtu = \"/dev/ttyS0\"\n", "hw.toml");
+  EXPECT_NE(config_error([&] { m::connect_table(both, clock); }).find("exactly one of"), std::string::npos);
+  const toml::table bad_ep = cfg::parse_string("unit = 1\nmodbus = \"nowhere\"\n", "hw.toml");
+  const std::string e3 = config_error([&] { m::connect_table(bad_ep, clock); });
+  EXPECT_NE(e3.find("hw.toml:2:"), std::string::npos) << e3;
+  const toml::table bad_unit = cfg::parse_string("modbus = \"127.0.0.1:1\"\nunit = 300\n", "hw.toml");
+  EXPECT_NE(config_error([&] { m::connect_table(bad_unit, clock); }).find("hw.toml:2:"), std::string::npos);
+  const toml::table ok = cfg::parse_string(
+      "tolerance_deg = 0.002\nsettle_s = 2.0\nvelocity_dps = 12.5\nu10_deg = 0.0\nu20_deg = 180.0\n", "hw.toml");
+  const m::TableOptions o = m::table_options_from_toml(ok);
+  EXPECT_DOUBLE_EQ(o.tolerance_deg, 0.002);
+  EXPECT_DOUBLE_EQ(o.settle_s, 2.0);
+  ASSERT_TRUE(o.velocity_dps.has_value());
+  EXPECT_DOUBLE_EQ(*o.velocity_dps, 12.5);
+  EXPECT_FALSE(o.accel_dps2.has_value());
+}
+
+TEST(TableConfig, PlantTableKeysAreChecked) {
+  const std::string e1 = config_error([] { emulator("velocity_dps = 10.0\nspeed = 3\n"); });
+  EXPECT_NE(e1.find("test-table.toml:2:"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("unknown key 'speed' in [plant.table]"), std::string::npos) << e1;
+  const std::string e2 = config_error([] { emulator("fault = \"gremlins\"\n"); });
+  EXPECT_NE(e2.find("test-table.toml:1:"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("unknown table fault 'gremlins'"), std::string::npos) << e2;
+  const std::string e3 = config_error([] { emulator("velocity_dps = 500.0\n"); });
+  EXPECT_NE(e3.find("out of range"), std::string::npos) << e3;
+  const plant::TableParams p = plant::table_params_from_toml(nullptr);
+  EXPECT_DOUBLE_EQ(p.velocity_dps, 30.0);
+}
+
+}  // namespace
+}  // namespace rig::table_test

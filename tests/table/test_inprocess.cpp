@@ -1,0 +1,228 @@
+// The rig's TableClient over the emulated drive in this process, in simulated
+// time: the path `rig run --plant emulated` takes.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "helpers.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/modbus/inprocess.hpp"
+#include "rig/modbus/table_client.hpp"
+
+namespace rig::table_test {
+namespace {
+
+namespace m = rig::modbus;
+
+struct SimRig {
+  explicit SimRig(const std::string& cfg = "start_angle_deg = 30.0\n", uint64_t seed = 3)
+      : emu(emulator(cfg, seed)), clock([this](double dt) { emu->step(dt); }), table(m::make_inprocess_table(*emu, clock)) {}
+  std::unique_ptr<plant::TableEmulator> emu;
+  SimClock clock;
+  std::unique_ptr<RotaryTable> table;
+};
+
+template <class F>
+std::string hardware_error(F f) {
+  try {
+    f();
+  } catch (const HardwareError& e) {
+    return e.what();
+  }
+  return "(no HardwareError)";
+}
+
+TEST(TableInProcess, HomeThenMove180TakesSimulatedSecondsNotWallTime) {
+  SimRig r;
+  const auto wall0 = std::chrono::steady_clock::now();
+  r.table->home({});
+  const double t_home = r.clock.now_s();
+  EXPECT_GT(t_home, 1.5);  // 30° at 20°/s
+  r.table->move_to(180.0, {});
+  const double t_move = r.clock.now_s() - t_home;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  // 6.5 s profile + servo settling + drive settle 0.1 s + client settle 0.5 s.
+  EXPECT_GT(t_move, 7.0);
+  EXPECT_LT(t_move, 9.0);
+  EXPECT_LT(wall, t_move / 2);  // far faster than real time even unoptimised
+  const TableStatus s = r.table->status();
+  EXPECT_TRUE(s.homed);
+  EXPECT_TRUE(s.in_position);
+  EXPECT_FALSE(s.moving);
+  EXPECT_NEAR(s.actual_deg, 180.0, 0.01);
+  EXPECT_NEAR(r.emu->actual_angle_deg(), 180.0, 0.005);  // the DUT feels 180° ± repeatability
+  r.table->move_to(0.0, {});
+  EXPECT_NEAR(r.table->status().actual_deg, 0.0, 0.01);
+}
+
+TEST(TableInProcess, MoveBeforeHomingIsRefusedClearly) {
+  SimRig r;
+  const std::string err = hardware_error([&] { r.table->move_to(90.0, {}); });
+  EXPECT_NE(err.find("move to 90.0000°: table not homed"), std::string::npos) << err;
+  EXPECT_FALSE(r.emu->snapshot().moving);
+}
+
+TEST(TableInProcess, AlarmMidMoveIsReportedByCodeMeaningAndAngle) {
+  SimRig r("start_angle_deg = 0.0\nfault = \"following_error\"\nfault_on_move = 2\nfault_at = 0.5\n");
+  r.table->home({});
+  r.table->move_to(10.0, {});  // move 1 is clean
+  const std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+  EXPECT_NE(err.find("move to 180.0000°: alarm 0x0021 following error at 9"), std::string::npos) << err;
+  EXPECT_NE(err.find("rig table reset"), std::string::npos) << err;
+  const auto s = r.emu->snapshot();
+  EXPECT_FALSE(s.servo_on);
+  EXPECT_FALSE(s.moving);
+  // The client does not reset a following error on its own: the next move fails too.
+  const std::string again = hardware_error([&] { r.table->move_to(0.0, {}); });
+  EXPECT_NE(again.find("alarm 0x0021"), std::string::npos) << again;
+  // A technician's reset clears it, and the table can be homed and moved again.
+  auto* client = dynamic_cast<m::TableClient*>(r.table.get());
+  ASSERT_NE(client, nullptr);
+  client->reset_alarm({});
+  r.table->home({});
+  r.table->move_to(45.0, {});
+  EXPECT_NEAR(r.table->status().actual_deg, 45.0, 0.01);
+}
+
+TEST(TableInProcess, DriveFaultAndOverTravelMidMove) {
+  for (auto [fault, code] : {std::pair{SimFault::kDriveFault, std::string("alarm 0x0040 drive fault")},
+                             std::pair{SimFault::kOverTravel, std::string("alarm 0x0030 over-travel, positive")}}) {
+    SimRig r("start_angle_deg = 0.0\n");
+    r.table->home({});
+    r.emu->inject(fault, 0.3);
+    const std::string err = hardware_error([&] { r.table->move_to(100.0, {}); });
+    EXPECT_NE(err.find("move to 100.0000°: " + code), std::string::npos) << err;
+    EXPECT_FALSE(r.emu->snapshot().moving);
+    EXPECT_FALSE(r.emu->snapshot().servo_on);
+  }
+}
+
+TEST(TableInProcess, NoAnswerMidMoveIsALinkFailureAndBounded) {
+  SimRig r("start_angle_deg = 0.0\n");
+  r.table->home({});
+  r.emu->inject(SimFault::kNoAnswer, 0.5);
+  const double t0 = r.clock.now_s();
+  const std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+  EXPECT_NE(err.find("move to 180.0000°: link failure (last seen at"), std::string::npos) << err;
+  EXPECT_NE(err.find("timeout"), std::string::npos) << err;
+  // Failed after the profile's half way point plus the response timeouts, not the move timeout.
+  EXPECT_LT(r.clock.now_s() - t0, 5.0);
+  auto* client = dynamic_cast<m::TableClient*>(r.table.get());
+  EXPECT_NE(client->last_stop_error().find("stop not delivered"), std::string::npos);
+}
+
+TEST(TableInProcess, CancelMidMoveStopsTheTableAndThrowsAborted) {
+  SimRig r("start_angle_deg = 0.0\n");
+  r.table->home({});
+  CancelSource cs;
+  // Trip the cancel from "the executive" when the world reaches 2 s into the move.
+  const double t_start = r.clock.now_s();
+  r.clock.set_advance([&](double dt) {
+    r.emu->step(dt);
+    if (r.clock.now_s() - t_start > 2.0) cs.request("operator pressed Ctrl-C");
+  });
+  EXPECT_THROW(r.table->move_to(180.0, cs.token()), AbortedError);
+  for (int i = 0; i < 300; ++i) r.emu->step(0.01);
+  const auto s = r.emu->snapshot();
+  EXPECT_FALSE(s.moving);
+  EXPECT_EQ(s.alarm_code, 0);
+  EXPECT_LT(s.position_deg, 80.0);  // halted on the ramp, far from 180°
+  EXPECT_GT(s.position_deg, 50.0);
+}
+
+TEST(TableInProcess, ANewMoveRightAfterACancelWaitsForRest) {
+  SimRig r("start_angle_deg = 0.0\n");
+  r.table->home({});
+  CancelSource cs;
+  const double t_start = r.clock.now_s();
+  r.clock.set_advance([&](double dt) {
+    r.emu->step(dt);
+    if (r.clock.now_s() - t_start > 2.0) cs.request("abort");
+  });
+  EXPECT_THROW(r.table->move_to(180.0, cs.token()), AbortedError);
+  EXPECT_TRUE(r.emu->snapshot().moving);  // still decelerating
+  r.clock.set_advance([&](double dt) { r.emu->step(dt); });
+  r.table->move_to(20.0, {});
+  EXPECT_NEAR(r.table->status().actual_deg, 20.0, 0.01);
+}
+
+TEST(TableInProcess, EstopDuringMove) {
+  SimRig r("start_angle_deg = 0.0\n");
+  r.table->home({});
+  const double t_start = r.clock.now_s();
+  r.clock.set_advance([&](double dt) {
+    r.emu->step(dt);
+    if (r.clock.now_s() - t_start > 1.0) r.emu->set_estop(true);
+  });
+  const std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+  EXPECT_NE(err.find("alarm 0x0050 emergency stop"), std::string::npos) << err;
+}
+
+TEST(TableInProcess, FrozenHeartbeatMeansTheDriveIsNotRunning) {
+  // A SimClock whose advance does not step the drive (a wiring mistake, or a hung controller).
+  auto emu = emulator("start_angle_deg = 0.0\nhomed_at_start = true\n");
+  SimClock clock;  // time moves, the drive does not
+  auto table = m::make_inprocess_table(*emu, clock);
+  const std::string err = hardware_error([&] { table->move_to(90.0, {}); });
+  EXPECT_NE(err.find("heartbeat frozen"), std::string::npos) << err;
+}
+
+TEST(TableInProcess, MoveTimeoutHaltsTheTableAndSaysWhere) {
+  auto emu = emulator("start_angle_deg = 0.0\nhomed_at_start = true\n");
+  SimClock clock([&](double dt) { emu->step(dt); });
+  m::TableOptions opt;
+  opt.move_timeout_s = 1.0;  // a 180° move needs 6.5 s
+  auto table = m::make_inprocess_table(*emu, clock, opt);
+  const std::string err = hardware_error([&] { table->move_to(180.0, {}); });
+  EXPECT_NE(err.find("move to 180.0000°: timed out after 1.0 s, still moving at 1"), std::string::npos) << err;
+  for (int i = 0; i < 300; ++i) emu->step(0.01);
+  EXPECT_FALSE(emu->snapshot().moving);
+  EXPECT_LT(emu->snapshot().position_deg, 30.0);  // halted, not carried on to 180°
+}
+
+// A drive that ignores START (e.g. a different firmware's control word): the
+// client must not mistake the previous in-position for the new move's.
+class IgnoresStart final : public m::RegisterDevice {
+ public:
+  explicit IgnoresStart(m::RegisterDevice& inner) : inner_(inner) {}
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return inner_.read_registers(a, n, out); }
+  uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+    std::vector<uint16_t> w(v, v + n);
+    if (a == m::reg::kControl) w[0] &= static_cast<uint16_t>(~m::ctl::kStart);
+    return inner_.write_registers(a, w.data(), n);
+  }
+  bool answering() const override { return inner_.answering(); }
+
+ private:
+  m::RegisterDevice& inner_;
+};
+
+TEST(TableInProcess, UnacknowledgedStartIsAFault) {
+  auto emu = emulator("start_angle_deg = 0.0\nhomed_at_start = true\n");
+  SimClock clock([&](double dt) { emu->step(dt); });
+  IgnoresStart dev(*emu);
+  auto table = m::make_inprocess_table(static_cast<m::RegisterDevice&>(dev), clock);
+  const std::string err = hardware_error([&] { table->move_to(0.0, {}); });  // already there: in position
+  EXPECT_NE(err.find("move to 0.0000°: start not acknowledged within 1.0 s"), std::string::npos) << err;
+}
+
+TEST(TableInProcess, StopAndQuickStopOnASilentDriveReturnAndSayWhy) {
+  SimRig r("start_angle_deg = 0.0\n");
+  auto* client = dynamic_cast<m::TableClient*>(r.table.get());
+  r.table->quick_stop();
+  EXPECT_EQ(client->last_stop_error(), "");
+  r.emu->inject(SimFault::kNoAnswer);
+  const double t0 = r.clock.now_s();
+  r.table->stop();  // noexcept: a throw would terminate the test
+  EXPECT_NE(client->last_stop_error().find("stop not delivered"), std::string::npos) << client->last_stop_error();
+  r.table->quick_stop();
+  EXPECT_NE(client->last_stop_error().find("quick stop not delivered"), std::string::npos);
+  EXPECT_NE(client->last_stop_error().find("timeout"), std::string::npos);
+  // Bounded: one response timeout per call (urgent calls never retry in-process).
+  EXPECT_NEAR(r.clock.now_s() - t0, 0.6, 1e-9);
+}
+
+}  // namespace
+}  // namespace rig::table_test
