@@ -21,11 +21,6 @@ void integer(const toml::table& t, std::string_view key, int& v, int64_t lo, int
   v = static_cast<int>(get_int(t, key, v, lo, hi));
 }
 
-const toml::table& section(const toml::table& root, std::string_view key) {
-  const toml::table* t = cfg::get_table(root, key, true);
-  return *t;
-}
-
 void read_loop(const toml::table& t, LoopParams& p) {
   cfg::check_keys(t,
                   {"loop_rate_hz", "output_rate_hz", "g_local_m_s2", "pendulosity_kg_m", "inertia_kg_m2",
@@ -116,34 +111,50 @@ void read_noise(const toml::table& t, NoiseParams& p) {
   num(t, "polling_offset_hz", p.polling_offset_hz, -10, 10);
 }
 
-FilterConfig read_filter(const toml::table& t) {
+void read_filter(const toml::table& t, FilterConfig& f) {
   cfg::check_keys(t, {"preset", "sections", "enabled"}, "plant.dut.filter");
-  FilterConfig f;
-  const std::string preset = cfg::get_string(t, "preset", "paper");
-  if (preset == "paper") {
-    f = paper_filter();
-  } else if (preset == "none") {
-    f.sections.clear();
-  } else if (preset == "custom") {
-    const toml::array* arr = t.get_as<toml::array>("sections");
-    if (!arr) throw ConfigError(cfg::where(t) + ": preset = \"custom\" needs sections = [[b0,b1,b2,a1,a2], ...]");
-    for (const toml::node& n : *arr) {
-      const toml::array* s = n.as_array();
-      if (!s || s->size() != 5) throw ConfigError(cfg::where(n) + ": a section is [b0, b1, b2, a1, a2]");
-      double c[5];
-      for (std::size_t i = 0; i < 5; ++i) {
-        std::optional<double> v = (*s)[i].value<double>();
-        if (!v) throw ConfigError(cfg::where((*s)[i]) + ": filter coefficients must be numbers");
-        c[i] = *v;
+  if (const toml::node* pn = t.get("preset")) {
+    const std::string preset = cfg::get_string(t, "preset");
+    if (preset == "paper") {
+      f = paper_filter();
+    } else if (preset == "none") {
+      f.sections.clear();
+    } else if (preset == "custom") {
+      const toml::array* arr = t.get_as<toml::array>("sections");
+      if (!arr) throw ConfigError(cfg::where(*pn) + ": preset = \"custom\" needs sections = [[b0,b1,b2,a1,a2], ...]");
+      f.sections.clear();
+      for (const toml::node& n : *arr) {
+        const toml::array* s = n.as_array();
+        if (!s || s->size() != 5) throw ConfigError(cfg::where(n) + ": a section is [b0, b1, b2, a1, a2]");
+        double c[5];
+        for (std::size_t i = 0; i < 5; ++i) {
+          std::optional<double> v = (*s)[i].value<double>();
+          if (!v) throw ConfigError(cfg::where((*s)[i]) + ": filter coefficients must be numbers");
+          c[i] = *v;
+        }
+        f.sections.push_back(Biquad{c[0], c[1], c[2], c[3], c[4]});
       }
-      f.sections.push_back(Biquad{c[0], c[1], c[2], c[3], c[4]});
+    } else {
+      throw ConfigError(cfg::where(*pn) + ": preset must be \"paper\", \"none\" or \"custom\", not \"" + preset +
+                        "\"");
     }
-  } else {
-    throw ConfigError(cfg::where(*t.get("preset")) + ": preset must be \"paper\", \"none\" or \"custom\", not \"" +
-                      preset + "\"");
+  } else if (t.contains("sections")) {
+    throw ConfigError(cfg::where(*t.get("sections")) + ": sections need preset = \"custom\"");
   }
-  f.enabled = get_bool(t, "enabled", true);
-  return f;
+  f.enabled = get_bool(t, "enabled", f.enabled);
+}
+
+// Applies one layer (the compiled-in default, then the profile's overrides) onto `p`.
+// Layers are read one by one, not merged, so errors keep the file:line of their layer.
+void apply_layer(const toml::table& root, DutParams& p) {
+  cfg::check_keys(root, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"}, "plant.dut");
+  p.serial = cfg::get_string(root, "serial", p.serial);
+  if (root.contains("seed")) p.seed = static_cast<uint64_t>(get_int(root, "seed", std::nullopt, 0));
+  if (const toml::table* t = cfg::get_table(root, "loop")) read_loop(*t, p.loop);
+  if (const toml::table* t = cfg::get_table(root, "regulator")) read_regulator(*t, p.regulator);
+  if (const toml::table* t = cfg::get_table(root, "orientation")) read_orientation(*t, p.orientation);
+  if (const toml::table* t = cfg::get_table(root, "noise")) read_noise(*t, p.noise);
+  if (const toml::table* t = cfg::get_table(root, "filter")) read_filter(*t, p.filter);
 }
 
 }  // namespace
@@ -157,18 +168,10 @@ FilterConfig paper_filter() {
 }
 
 DutParams load_dut_params(const toml::table* overrides) {
-  toml::table merged = cfg::parse_string(default_dut_toml(), "plant/dut/default.toml");
-  if (overrides) cfg::merge_into(merged, *overrides);
-  cfg::check_keys(merged, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"}, "plant.dut");
-
   DutParams p;
-  p.serial = cfg::get_string(merged, "serial", p.serial);
-  if (merged.contains("seed")) p.seed = static_cast<uint64_t>(get_int(merged, "seed", std::nullopt, 0));
-  read_loop(section(merged, "loop"), p.loop);
-  read_regulator(section(merged, "regulator"), p.regulator);
-  read_orientation(section(merged, "orientation"), p.orientation);
-  read_noise(section(merged, "noise"), p.noise);
-  p.filter = read_filter(section(merged, "filter"));
+  p.filter = paper_filter();
+  apply_layer(cfg::parse_string(default_dut_toml(), "plant/dut/default.toml"), p);
+  if (overrides) apply_layer(*overrides, p);
   p.filter.rate_hz = p.loop.loop_rate_hz;
   return p;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "plant/firmware/inprocess_dut.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -16,7 +17,7 @@ constexpr double kSilenceLimitS = 0.1;
 }  // namespace
 
 EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg) : link_(*this) {
-  cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
+  cfg::check_keys(plant_cfg, {"seed", "link", "dut", "table"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   dut_ = make_dut_source(cfg::get_table(plant_cfg, "dut"), seed);
   // Separate, fixed streams per component: the table's repeatability does not
@@ -24,6 +25,31 @@ EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg) : link_(*this) {
   table_emu_ = make_table_emulator(cfg::get_table(plant_cfg, "table"), seed ^ 0x7ab1e5eedULL);
   clock_.set_advance([this](double dt) { advance(dt); });
   table_ = modbus::make_inprocess_table(*table_emu_, clock_);
+  const std::string link = cfg::get_string(plant_cfg, "link", std::string("can"));
+  if (link == "can") {
+    can_link_ = link::make_inprocess_dut(*dut_, clock_);
+  } else if (link != "direct") {
+    throw ConfigError(cfg::where(*plant_cfg.get("link")) + ": [plant] link must be \"can\" or \"direct\"");
+  }
+}
+
+DutLink& EmulatedPlant::dut() {
+  if (can_link_) return *can_link_;
+  return link_;
+}
+
+uint32_t EmulatedPlant::next_seq() const {
+  return can_link_ ? static_cast<uint32_t>(can_link_->firmware().sample_counter()) : seq_;
+}
+
+void EmulatedPlant::inject_drop(uint32_t from_seq, uint32_t count) {
+  drops_.push_back({from_seq, count});
+  if (can_link_) {
+    can_drops_.push_back({from_seq, count});
+    FirmwareFaults f;
+    f.drop_samples = can_drops_;
+    can_link_->firmware().set_faults(f);
+  }
 }
 
 EmulatedPlant::~EmulatedPlant() = default;
@@ -49,7 +75,11 @@ void EmulatedPlant::advance(double dt) {
   sample_acc_ += dt * dut_->output_rate_hz();
   const auto n = static_cast<long>(std::floor(sample_acc_ + 1e-9));
   sample_acc_ -= static_cast<double>(n);
-  if (!io_.dut_power()) return;
+  if (!io_.dut_power()) return;  // an unpowered DUT is silent
+  if (can_link_) {
+    can_link_->step(dt);
+    return;
+  }
   for (long i = 0; i < n; ++i) {
     Sample s;
     s.seq = seq_++;

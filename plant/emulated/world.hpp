@@ -3,7 +3,9 @@
 // consumer (every Clock::sleep_for and every sample read advances the world),
 // so the 110-minute procedure runs in seconds and is bit-reproducible.
 // The rig reaches the table through the real Modbus client logic over the
-// emulator's register map (rig/modbus), and the DUT through DirectDutLink.
+// emulator's register map (rig/modbus), and the DUT through the real CAN
+// client over an in-process bus to the firmware emulator ([plant] link = "can",
+// the default) or straight from the model (link = "direct", no frame codec).
 #pragma once
 #include <deque>
 #include <functional>
@@ -18,6 +20,10 @@
 #include "rig/core/dut_link.hpp"
 #include "rig/core/gpio.hpp"
 #include "rig/core/table.hpp"
+
+namespace rig::link {
+class InProcessDutLink;
+}
 
 namespace rig::plant {
 
@@ -58,18 +64,18 @@ class EmulatedPlant {
 
   SimClock& clock() { return clock_; }
   RotaryTable& table() { return *table_; }
-  DirectDutLink& dut() { return link_; }
+  DutLink& dut();
   SimGpio& io() { return io_; }
   DutSource& dut_source() { return *dut_; }
   TableEmulator& table_emulator() { return *table_emu_; }
 
   // Test hooks: an e-stop edge at simulated time t; samples [from, from+count) never arrive.
   void trip_estop_at(double t_s) { estop_at_ = t_s; }
-  void inject_drop(uint32_t from_seq, uint32_t count) { drops_.push_back({from_seq, count}); }
+  void inject_drop(uint32_t from_seq, uint32_t count);
   // An action run once when simulated time passes t (fault injection in tests).
   void at(double t_s, std::function<void()> action) { actions_.push_back({t_s, std::move(action)}); }
   // The DUT's next sequence number (free-running while powered).
-  uint32_t next_seq() const { return seq_; }
+  uint32_t next_seq() const;
 
  private:
   friend class DirectDutLink;
@@ -81,6 +87,8 @@ class EmulatedPlant {
   std::unique_ptr<RotaryTable> table_;
   SimGpio io_;
   DirectDutLink link_;
+  std::unique_ptr<link::InProcessDutLink> can_link_;  // set when [plant] link = "can"
+  std::vector<std::pair<uint64_t, uint64_t>> can_drops_;
   double sample_acc_ = 0;  // output periods owed to the DUT
   uint32_t seq_ = 0;
   std::optional<double> estop_at_;

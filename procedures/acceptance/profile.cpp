@@ -187,12 +187,11 @@ Profile load_profile(const std::string& name_or_path) {
       const auto base_name = b->value<std::string>();
       auto bit = base_name ? builtin.find(*base_name) : builtin.end();
       if (bit == builtin.end()) throw ConfigError(cfg::where(*b) + ": 'base' must name a built-in profile");
-      toml::table merged = cfg::parse_string(bit->second, "builtin:" + *base_name);
+      toml::table base = cfg::parse_string(bit->second, "builtin:" + *base_name);
       t.erase("base");
       // A file's own [[classes]] replace the base's rather than append.
-      if (t.contains("classes")) merged.erase("classes");
-      cfg::merge_into(merged, t);
-      t = std::move(merged);
+      if (t.contains("classes")) base.erase("classes");
+      cfg::fill_defaults(t, base);
     }
   }
   return parse_profile(t, source);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -15,7 +16,7 @@ namespace rig::analysis {
 
 namespace {
 
-constexpr std::size_t kNoiseIdCap = 1u << 19;  // averaged points used by the lag-1 ACF (see docs)
+constexpr std::size_t kNoiseIdCap = 1u << 17;  // averaged points used by the lag-1 ACF (see docs)
 constexpr std::size_t kAcfMinPoints = 30;      // Stable32: ACF method from 30 averaged points
 
 int diff_order(Deviation d) { return (d == Deviation::HDEV || d == Deviation::OHDEV) ? 3 : 2; }
@@ -123,27 +124,35 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
   const std::uint64_t n = kind == DataKind::Frequency ? n_src + 1 : n_src;
   if (n < 3) throw std::invalid_argument("allan: needs at least 3 phase points, got " + std::to_string(n));
 
-  // Requests: every (type, m), plus MDEV where the R(n) test needs it (fewer than 30 averages).
+  // Requests: every (type, m) once (TDEV is MDEV scaled).
   std::vector<detail::EngineRequest> req;
   std::vector<std::vector<std::size_t>> index(opts.size());
-  std::vector<std::vector<long>> mdev_index(opts.size());
   auto find_or_add = [&](Deviation t, std::size_t m) {
     for (std::size_t i = 0; i < req.size(); ++i)
       if (req[i].type == t && req[i].m == m) return i;
     req.push_back({t, m});
     return req.size() - 1;
   };
-  for (std::size_t k = 0; k < opts.size(); ++k) {
-    for (std::size_t m : factors_for(opts[k], n)) {
+  for (std::size_t k = 0; k < opts.size(); ++k)
+    for (std::size_t m : factors_for(opts[k], n))
       index[k].push_back(find_or_add(opts[k].type == Deviation::TDEV ? Deviation::MDEV : opts[k].type, m));
-      long mi = -1;
-      if (opts[k].bounds && (n - 1) / m < kAcfMinPoints && term_count(Deviation::MDEV, n, m) > 0)
-        mi = static_cast<long>(find_or_add(Deviation::MDEV, m));
-      mdev_index[k].push_back(mi);
+  detail::Engine engine(src, kind, opts[0].rate_hz, so, opts[0].threads, kNoiseIdCap);
+  const detail::EngineResult er = engine.run(req);
+
+  // Mod AVAR at m for R(n), only where B1 cannot tell white from flicker PM.
+  std::map<std::size_t, double> mvar_cache;
+  auto mod_avar = [&](std::size_t m) {
+    if (auto it = mvar_cache.find(m); it != mvar_cache.end()) return it->second;
+    double v = -1;
+    for (std::size_t i = 0; i < req.size(); ++i)
+      if (req[i].type == Deviation::MDEV && req[i].m == m)
+        v = variance(Deviation::MDEV, er.sums[i].sum, er.sums[i].terms, m, n);
+    if (v < 0 && term_count(Deviation::MDEV, n, m) > 0) {
+      const detail::Sums s = engine.extra(Deviation::MDEV, m);
+      v = variance(Deviation::MDEV, s.sum, s.terms, m, n);
     }
-  }
-  const unsigned threads = opts[0].threads;
-  const detail::EngineResult er = detail::run_engine(src, kind, opts[0].rate_hz, req, so, threads, kNoiseIdCap);
+    return mvar_cache[m] = v;
+  };
 
   std::vector<std::vector<DevPoint>> out(opts.size());
   const double tau0 = 1.0 / opts[0].rate_hz;
@@ -172,11 +181,12 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
           const std::vector<double> zr = detrend_linear(z);
           const double avar = nonoverlapped_avar(zr);
           const double b1 = avar > 0 ? sample_variance(zr) / avar : 1;
+          id = b1_rn_noise_id(b1, static_cast<double>(z.size()), -1, s.m);
+          const double av = nonoverlapped_avar(z);
           double rn = -1;
-          if (mdev_index[k][q] >= 0) {
-            const detail::Sums& ms = er.sums[static_cast<std::size_t>(mdev_index[k][q])];
-            const double av = nonoverlapped_avar(z);
-            if (av > 0) rn = variance(Deviation::MDEV, ms.sum, ms.terms, ms.m, n) / av;
+          if (id.alpha >= 1 && av > 0) {  // phase modulation: R(n) = Mod AVAR / AVAR decides
+            const double mv = mod_avar(s.m);
+            if (mv >= 0) rn = mv / av;
           }
           id = b1_rn_noise_id(b1, static_cast<double>(z.size()), rn, s.m);
         }

@@ -31,7 +31,9 @@ TauGrid parse_tau_grid(const std::string& s);  // "octave|decade|all|log:N", thr
 // ADEV, HDEV (N-1)/5; OADEV, MDEV, TDEV, OHDEV (N-1)/4; TOTDEV (N-1)/2.
 std::size_t max_factor(Deviation d, std::size_t n_phase);
 // The averaging factors m of a grid (octave 1,2,4..; decade 1,2,4,10,20,40..; all 1..max;
-// log:N N points log-spaced over [1, max], rounded and de-duplicated), stopped at max_factor.
+// log:N about N points log-spaced over [1, max]: below 64 rounded from 2^(k/q), above it
+// seeds in [64, 128) times powers of two, so that every m has 2m in the grid (which halves the
+// engine's memory traffic, see allan_stream.cpp); stopped at max_factor.
 std::vector<std::size_t> tau_factors(const TauGrid& g, Deviation d, std::size_t n_phase);
 
 // Number of terms Stable32 prints in its '#' column (see tests/data/allan-reference/README.md).
@@ -85,7 +87,7 @@ class SpanSource final : public ChunkSource {
 
 struct StreamOptions {
   std::size_t memory_budget_bytes = 384u << 20;  // ring of phase points + per-tau state
-  std::size_t chunk = 1u << 16;                  // phase points per processing step
+  std::size_t chunk = 1u << 14;                  // phase points per processing step (L2-sized windows)
 };
 
 // Streams the source once sequentially (plus random-access cursors for the few factors

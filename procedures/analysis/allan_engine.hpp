@@ -9,6 +9,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "procedures/analysis/allan.hpp"
@@ -49,7 +50,22 @@ struct EngineResult {
   std::size_t ring_points = 0, far_count = 0;
 };
 
-EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, const std::vector<EngineRequest>& req,
-                        const StreamOptions& so, unsigned threads, std::size_t noise_id_cap);
+// One analysis of one source: run() makes the pass; extra() afterwards computes one more
+// (type, m) sum by random access (from the ring when it holds the whole record, else from
+// cursors over the source), for the R(n) noise test that only some taus need.
+class Engine {
+ public:
+  Engine(const ChunkSource& src, DataKind kind, double rate_hz, const StreamOptions& so, unsigned threads,
+         std::size_t noise_id_cap);
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+  EngineResult run(const std::vector<EngineRequest>& req);
+  Sums extra(Deviation type, std::size_t m);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace rig::analysis::detail

@@ -30,10 +30,31 @@ constexpr std::size_t kCheckpointEvery = 4096;  // P checkpoints for random acce
 // Compiled for AVX-512, AVX2 and baseline; the reductions are vectorised by `omp simd`.
 #define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 
-RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t len) {
+// Four independent vector accumulators: the sum is not one long FMA dependency chain.
+using v8 = double __attribute__((vector_size(64)));
+inline v8 load8(const double* p) {
+  v8 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline double hsum(v8 v) {
   double s = 0;
-#pragma omp simd reduction(+ : s)
-  for (std::size_t t = 0; t < len; ++t) {
+  for (int i = 0; i < 8; ++i) s += v[i];
+  return s;
+}
+
+RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t len) {
+  v8 a0{}, a1{}, a2{}, a3{};
+  std::size_t t = 0;
+  for (; t + 32 <= len; t += 32) {
+    const v8 d0 = load8(w2 + t) - 2 * load8(w1 + t) + load8(w0 + t);
+    const v8 d1 = load8(w2 + t + 8) - 2 * load8(w1 + t + 8) + load8(w0 + t + 8);
+    const v8 d2 = load8(w2 + t + 16) - 2 * load8(w1 + t + 16) + load8(w0 + t + 16);
+    const v8 d3 = load8(w2 + t + 24) - 2 * load8(w1 + t + 24) + load8(w0 + t + 24);
+    a0 += d0 * d0, a1 += d1 * d1, a2 += d2 * d2, a3 += d3 * d3;
+  }
+  double s = hsum((a0 + a1) + (a2 + a3));
+  for (; t < len; ++t) {
     const double d = w2[t] - 2 * w1[t] + w0[t];
     s += d * d;
   }
@@ -41,22 +62,64 @@ RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, s
 }
 
 RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len) {
-  double s = 0;
-#pragma omp simd reduction(+ : s)
-  for (std::size_t t = 0; t < len; ++t) {
+  v8 a0{}, a1{};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 d0 = load8(w3 + t) - 3 * load8(w2 + t) + 3 * load8(w1 + t) - load8(w0 + t);
+    const v8 d1 = load8(w3 + t + 8) - 3 * load8(w2 + t + 8) + 3 * load8(w1 + t + 8) - load8(w0 + t + 8);
+    a0 += d0 * d0, a1 += d1 * d1;
+  }
+  double s = hsum(a0 + a1);
+  for (; t < len; ++t) {
     const double d = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
     s += d * d;
   }
   return s;
 }
 
-// MDEV: the m-window sum of second differences slides by one per base (inner += d[b+m] - d[b]).
+// MDEV: the m-window sum of second differences slides by one per base; its increment
+// d[b+m] - d[b] is the third difference w3 - 3w2 + 3w1 - w0. The running sum is a prefix
+// sum: done in tiles with four interleaved chains so it is not one long dependency chain.
+RIG_CLONES void third_diff(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+                           double* out) {
+#pragma omp simd
+  for (std::size_t t = 0; t < len; ++t) out[t] = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+}
+
+RIG_CLONES double sum_sq_offset(const double* v, std::size_t len, double off) {
+  double s = 0;
+#pragma omp simd reduction(+ : s)
+  for (std::size_t t = 0; t < len; ++t) s += (v[t] + off) * (v[t] + off);
+  return s;
+}
+
 double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
                 double& inner) {
+  constexpr std::size_t kTile = 1024, kQ = kTile / 4;
+  double buf[kTile];
   double s = 0;
-  for (std::size_t t = 0; t < len; ++t) {
-    inner += (w3[t] - 2 * w2[t] + w1[t]) - (w2[t] - 2 * w1[t] + w0[t]);
-    s += inner * inner;
+  for (std::size_t t0 = 0; t0 < len; t0 += kTile) {
+    const std::size_t n = std::min(kTile, len - t0);
+    third_diff(w0 + t0, w1 + t0, w2 + t0, w3 + t0, n, buf);
+    if (n < kTile) {
+      for (std::size_t t = 0; t < n; ++t) {
+        inner += buf[t];
+        s += inner * inner;
+      }
+      continue;
+    }
+    double c0 = 0, c1 = 0, c2 = 0, c3 = 0;  // local prefix sums of the four quarters
+    for (std::size_t t = 0; t < kQ; ++t) {
+      c0 += buf[t], buf[t] = c0;
+      c1 += buf[kQ + t], buf[kQ + t] = c1;
+      c2 += buf[2 * kQ + t], buf[2 * kQ + t] = c2;
+      c3 += buf[3 * kQ + t], buf[3 * kQ + t] = c3;
+    }
+    s += sum_sq_offset(buf, kQ, inner);
+    s += sum_sq_offset(buf + kQ, kQ, inner + c0);
+    s += sum_sq_offset(buf + 2 * kQ, kQ, inner + c0 + c1);
+    s += sum_sq_offset(buf + 3 * kQ, kQ, inner + c0 + c1 + c2);
+    inner += c0 + c1 + c2 + c3;
   }
   return s;
 }
@@ -229,12 +292,11 @@ PhaseSpec make_spec(const ChunkSource& src, DataKind kind, double rate_hz) {
   return s;
 }
 
-// The ring of recent phase points; capacity a power of two.
+// The ring of the most recent phase points (P[j] at j mod capacity).
 struct Ring {
   std::vector<double> buf;
-  std::size_t mask = 0;
-  double* at(std::uint64_t j) { return buf.data() + (j & mask); }
-  std::size_t room(std::uint64_t j) const { return buf.size() - (j & mask); }
+  double* at(std::uint64_t j) { return buf.data() + (j % buf.size()); }
+  std::size_t room(std::uint64_t j) const { return buf.size() - static_cast<std::size_t>(j % buf.size()); }
 };
 
 // Runs acc over bases [b0, b1) with windows read from the ring, split where a window wraps.
@@ -319,15 +381,125 @@ void parallel_for(std::size_t count, unsigned threads, Fn&& fn) {
 
 }  // namespace
 
-EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, const std::vector<EngineRequest>& req,
-                        const StreamOptions& so, unsigned threads, std::size_t noise_id_cap) {
-  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+// Groups the accumulators of one chunk into work items for the cores. Same-type pairs m, 2m,
+// 4m ... share windows (tau m reads P at b + m and b + 2m, tau 2m at b + 2m and b + 4m), so a
+// doubling chain run in ascending order finds one of its two far windows still in L2: about
+// half the memory traffic of independent taus. Chains are cut to <= 6 for load balance.
+std::vector<std::vector<std::size_t>> work_items(const std::vector<Acc>& accs, std::vector<std::size_t> idx) {
+  std::sort(idx.begin(), idx.end(), [&](std::size_t x, std::size_t y) {
+    return accs[x].type != accs[y].type ? accs[x].type < accs[y].type : accs[x].m < accs[y].m;
+  });
+  std::vector<bool> used(accs.size(), false);
+  std::vector<std::vector<std::size_t>> items;
+  for (std::size_t i : idx) {
+    if (used[i]) continue;
+    std::vector<std::size_t> chain{i};
+    used[i] = true;
+    for (std::size_t cur = i;;) {
+      std::size_t nxt = accs.size();
+      for (std::size_t j : idx)
+        if (!used[j] && accs[j].type == accs[cur].type && accs[j].m == 2 * accs[cur].m) nxt = j;
+      if (nxt == accs.size()) break;
+      used[nxt] = true;
+      chain.push_back(nxt);
+      cur = nxt;
+    }
+    for (std::size_t k = 0; k < chain.size(); k += 6)
+      items.emplace_back(chain.begin() + static_cast<std::ptrdiff_t>(k),
+                         chain.begin() + static_cast<std::ptrdiff_t>(std::min(chain.size(), k + 6)));
+  }
+  auto cost = [&](const std::vector<std::size_t>& it) {
+    std::uint64_t c = 0;
+    for (std::size_t i : it) c += (accs[i].modified() ? 2 : 1) * accs[i].bases;
+    return c;
+  };
+  std::sort(items.begin(), items.end(), [&](const auto& a, const auto& b) { return cost(a) > cost(b); });
+  return items;
+}
+
+struct Engine::Impl {
+  Impl(const ChunkSource& s, DataKind kind, double rate_hz, const StreamOptions& o, unsigned th, std::size_t c)
+      : src(s), spec(make_spec(s, kind, rate_hz)), builder(s, spec), so(o),
+        threads(th ? th : std::max(1u, std::thread::hardware_concurrency())), cap(c),
+        chunk(std::max<std::size_t>(o.chunk, 1024)) {}
+
+  const ChunkSource& src;
+  PhaseSpec spec;
+  PhaseBuilder builder;
+  StreamOptions so;
+  unsigned threads;
+  std::size_t cap, chunk;
+  Ring ring;
+  bool ring_holds_all = false;
+  std::vector<double> checkpoints;
+
+  auto reader(std::vector<double>& sc) {
+    return [this, &sc](std::uint64_t lo, std::span<double> out) {
+      if (ring_holds_all) {
+        std::copy_n(ring.at(lo), out.size(), out.begin());
+      } else {
+        builder.range(lo, out, checkpoints, sc);
+      }
+    };
+  }
+
+  // A (type, m) pair that did not fit the ring: windows rebuilt block by block.
+  void run_far(Acc& a) {
+    std::vector<double> sc;
+    auto read = reader(sc);
+    if (a.modified()) mdev_prologue(a, read, chunk);
+    std::vector<std::vector<double>> win(a.nwin, std::vector<double>(chunk));
+    const double* w[4];
+    for (std::uint64_t b = 0; b < a.bases; b += chunk) {
+      const std::size_t len = std::min<std::uint64_t>(chunk, a.bases - b);
+      for (std::size_t j = 0; j < a.nwin; ++j) {
+        read(b + j * a.m, std::span<double>(win[j].data(), len));
+        w[j] = win[j].data();
+      }
+      a.run(b, len, w);
+    }
+  }
+
+  void finish(Acc& a) {
+    std::vector<double> sc;
+    if (a.far && a.bases > 0) {
+      if (ring_holds_all) {
+        if (a.modified()) mdev_prologue(a, reader(sc), chunk);
+        const double* w[4];
+        for (std::size_t j = 0; j < a.nwin; ++j) w[j] = ring.at(j * a.m);
+        a.run(0, a.bases, w);
+      } else {
+        run_far(a);
+      }
+    }
+    if (a.type == Deviation::TOTDEV && a.m > 1) totdev_edges(a, spec.n, reader(sc), chunk);
+  }
+
+  EngineResult run(const std::vector<EngineRequest>& req);
+};
+
+Engine::Engine(const ChunkSource& src, DataKind kind, double rate_hz, const StreamOptions& so, unsigned threads,
+               std::size_t noise_id_cap)
+    : impl_(std::make_unique<Impl>(src, kind, rate_hz, so, threads, noise_id_cap)) {}
+Engine::~Engine() = default;
+EngineResult Engine::run(const std::vector<EngineRequest>& req) { return impl_->run(req); }
+
+Sums Engine::extra(Deviation type, std::size_t m) {
+  Acc a = make_acc(type, m, impl_->spec.n);
+  a.far = true;
+  impl_->finish(a);
+  Sums s;
+  s.type = type;
+  s.m = m;
+  s.sum = a.sum;
+  s.terms = a.terms;
+  return s;
+}
+
+EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   EngineResult res;
-  res.spec = make_spec(src, kind, rate_hz);
-  const PhaseSpec& spec = res.spec;
+  res.spec = spec;
   const std::uint64_t n = spec.n;
-  PhaseBuilder builder(src, spec);
-  const std::size_t chunk = std::max<std::size_t>(so.chunk, 1024);
 
   std::vector<Acc> accs;
   accs.reserve(req.size());
@@ -338,19 +510,18 @@ EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, c
   for (const auto& r : req) decim[r.m];
   std::size_t decim_bytes = 0;
   for (auto& [m, v] : decim) {
-    const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, noise_id_cap + 1);
+    const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, cap + 1);
     v.reserve(len);
     decim_bytes += len * sizeof(double);
   }
 
-  // Ring: as large as the budget allows after the noise-ID series, never larger than needed.
-  const std::size_t budget = so.memory_budget_bytes > decim_bytes + (8u << 20) ? so.memory_budget_bytes - decim_bytes
-                                                                               : (8u << 20);
-  const std::size_t ring_max = std::bit_floor(std::max<std::size_t>(budget / sizeof(double), 2 * chunk));
-  const std::size_t ring_need = std::bit_ceil(static_cast<std::size_t>(n) + chunk);
-  Ring ring;
-  ring.buf.resize(std::min(ring_max, ring_need));
-  ring.mask = ring.buf.size() - 1;
+  // Ring: what the budget leaves after the noise-ID series, never more than the record needs.
+  const std::size_t floor_bytes = 8 * chunk * sizeof(double);
+  const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes ? so.memory_budget_bytes - decim_bytes
+                                                                                : floor_bytes;
+  const std::size_t ring_need = static_cast<std::size_t>(n) + chunk;
+  ring.buf.assign(std::min(budget / sizeof(double), ring_need), 0.0);
+  ring_holds_all = ring.buf.size() >= n;
   res.ring_points = ring.buf.size();
 
   std::vector<std::size_t> near;
@@ -361,12 +532,9 @@ EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, c
     if (a.far) ++res.far_count;
     else near.push_back(i);
   }
-  // Heaviest first, for the dynamic split between cores.
-  std::sort(near.begin(), near.end(), [&](std::size_t x, std::size_t y) {
-    return (accs[x].modified() ? 3 : 1) * accs[x].bases > (accs[y].modified() ? 3 : 1) * accs[y].bases;
-  });
+  const std::vector<std::vector<std::size_t>> items = work_items(accs, near);
 
-  std::vector<double> checkpoints;
+  checkpoints.clear();
   checkpoints.reserve(n / kCheckpointEvery + 1);
 
   // ---- main pass ----
@@ -375,9 +543,10 @@ EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, c
   std::uint64_t hi = 0, hi2 = 0;
   std::atomic<std::size_t> next{0};
   bool done = false;
-  auto process_chunk = [&](unsigned /*worker*/) {
-    for (std::size_t k; (k = next.fetch_add(1)) < near.size();) {
-      Acc& a = accs[near[k]];
+  auto process_chunk = [&] {
+    for (std::size_t k; (k = next.fetch_add(1)) < items.size();)
+      for (std::size_t idx : items[k]) {
+      Acc& a = accs[idx];
       const std::uint64_t lo_b = hi >= a.span ? hi - a.span : 0;
       const std::uint64_t hi_b = std::min<std::uint64_t>(hi2 >= a.span ? hi2 - a.span : 0, a.bases);
       if (lo_b >= hi_b) continue;
@@ -386,24 +555,23 @@ EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, c
           for (std::size_t t = 0; t < out.size(); ++t) out[t] = *ring.at(j + t);
         }, chunk);
       run_from_ring(a, ring, lo_b, hi_b);
-    }
+      }
   };
   std::barrier sync(static_cast<std::ptrdiff_t>(threads));
   std::vector<std::jthread> workers;
   for (unsigned t = 1; t < threads; ++t)
-    workers.emplace_back([&, t] {
+    workers.emplace_back([&] {
       for (;;) {
         sync.arrive_and_wait();  // chunk ready (or done)
         if (done) return;
-        process_chunk(t);
+        process_chunk();
         sync.arrive_and_wait();  // chunk finished
       }
     });
 
   for (hi = 0; hi < n; hi = hi2) {
     hi2 = std::min<std::uint64_t>(n, hi + chunk);
-    // P[hi, hi2) into the ring (at most two contiguous pieces).
-    for (std::uint64_t j = hi; j < hi2;) {
+    for (std::uint64_t j = hi; j < hi2;) {  // P[hi, hi2) into the ring (at most two pieces)
       const std::size_t len = std::min<std::uint64_t>(hi2 - j, ring.room(j));
       builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
       j += len;
@@ -417,41 +585,18 @@ EngineResult run_engine(const ChunkSource& src, DataKind kind, double rate_hz, c
     }
     next = 0;
     if (threads > 1) sync.arrive_and_wait();
-    process_chunk(0);
+    process_chunk();
     if (threads > 1) sync.arrive_and_wait();
   }
   done = true;
   if (threads > 1) sync.arrive_and_wait();
   workers.clear();
 
-  // ---- far accumulators and TOTDEV edges: random access through the checkpoints ----
-  auto reader = [&](std::vector<double>& sc) {
-    return [&builder, &checkpoints, &sc](std::uint64_t lo, std::span<double> out) {
-      builder.range(lo, out, checkpoints, sc);
-    };
-  };
+  // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----
   std::vector<std::size_t> post;
   for (std::size_t i = 0; i < accs.size(); ++i)
     if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1)) post.push_back(i);
-  parallel_for(post.size(), threads, [&](std::size_t k) {
-    Acc& a = accs[post[k]];
-    std::vector<double> sc;
-    auto read = reader(sc);
-    if (a.far && a.bases > 0) {
-      if (a.modified()) mdev_prologue(a, read, chunk);
-      std::vector<std::vector<double>> win(a.nwin, std::vector<double>(chunk));
-      const double* w[4];
-      for (std::uint64_t b = 0; b < a.bases; b += chunk) {
-        const std::size_t len = std::min<std::uint64_t>(chunk, a.bases - b);
-        for (std::size_t j = 0; j < a.nwin; ++j) {
-          read(b + j * a.m, std::span<double>(win[j].data(), len));
-          w[j] = win[j].data();
-        }
-        a.run(b, len, w);
-      }
-    }
-    if (a.type == Deviation::TOTDEV && a.m > 1) totdev_edges(a, n, read, chunk);
-  });
+  parallel_for(post.size(), threads, [&](std::size_t k) { finish(accs[post[k]]); });
 
   res.sums.resize(accs.size());
   for (std::size_t i = 0; i < accs.size(); ++i) {

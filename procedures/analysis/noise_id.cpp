@@ -21,8 +21,27 @@ double lag1_acf(std::span<const double> x) {
 
 namespace {
 
-// Residual of a least-squares polynomial of degree `deg` over t = 0..n-1 (t scaled to [-1, 1]).
+// Residual of the least-squares line over t = 0..n-1 (closed form, centred t).
+std::vector<double> detrend_linear(std::span<const double> x) {
+  const double n = static_cast<double>(x.size()), tm = (n - 1) / 2;
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= n;
+  double sxy = 0, sxx = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double t = static_cast<double>(i) - tm;
+    sxy += t * (x[i] - mean);
+    sxx += t * t;
+  }
+  const double b = sxx > 0 ? sxy / sxx : 0;
+  std::vector<double> r(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) r[i] = x[i] - mean - b * (static_cast<double>(i) - tm);
+  return r;
+}
+
+// Residual of a least-squares polynomial of degree `deg` (t scaled to [-1, 1]).
 std::vector<double> detrend(std::span<const double> x, int deg) {
+  if (deg == 1) return detrend_linear(x);
   const auto n = static_cast<Eigen::Index>(x.size());
   Eigen::MatrixXd A(n, deg + 1);
   const double half = (static_cast<double>(n) - 1) / 2;

@@ -231,7 +231,7 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s) 
   out.B.unit = kUnits[2];
   if (!out.R.value) {
     // R (rate ramp) needs tau well beyond where K dominates; the paper puts it at > 50 h.
-    if (record_length_s < 2 * 50 * 3600.0 && out.R.reason.find("needs") == std::string::npos)
+    if (record_length_s < 2 * 50 * 3600.0 && out.R.reason.find("longer record") == std::string::npos)
       out.R.reason += "; needs a longer record";
   }
   // B by the paper's method: the flat segment (slope nearest 0, |slope| < 0.25).
@@ -242,20 +242,41 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s) 
   if (flat) {
     out.tau_cp_s = flat->tau_mid_s;
     out.sigma_cp = flat->sigma_mid;
-    out.B.value = flat->sigma_mid / kBiasFactor;
-    out.B.reason = "paper: sigma(tau_cp) / 0.664 on the flat segment";
-    if (out.wls.B.lo && out.wls.B.value && *out.wls.B.value > 0) {
+    out.B.reason = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment";
+  } else if (out.paper.ok) {
+    // No segment between inflection points is flat (a smooth -1/2 -> 0 -> +1/2 curve is convex and
+    // has none): read the flat bottom where the polynomial's slope crosses zero, as IEEE 952 does.
+    const double x_lo = std::log10(oadev.front().tau_s), x_hi = std::log10(oadev.back().tau_s);
+    double best_x = 0, best_y = std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= 2000; ++i) {
+      const double x = x_lo + (x_hi - x_lo) * i / 2000.0;
+      const double y = poly(out.paper.coef, x);
+      if (y < best_y) best_y = y, best_x = x;
+    }
+    const bool interior = best_x > x_lo + 0.02 * (x_hi - x_lo) && best_x < x_hi - 0.02 * (x_hi - x_lo);
+    if (interior && std::abs(dpoly(out.paper.coef, best_x)) < 0.05) {
+      out.tau_cp_s = std::pow(10.0, best_x);
+      out.sigma_cp = std::pow(10.0, best_y);
+      out.B.reason = "paper polynomial: no flat segment between inflections; tau_cp at its minimum";
+    }
+  }
+  if (out.sigma_cp) {
+    out.B.value = *out.sigma_cp / kBiasFactor;
+    if (out.wls.B.lo && out.wls.B.value && *out.wls.B.value > 0) {  // relative bounds of the fitted B
       out.B.lo = *out.B.value * (*out.wls.B.lo / *out.wls.B.value);
       out.B.hi = *out.B.value * (*out.wls.B.hi / *out.wls.B.value);
     }
   } else {
     out.B = out.wls.B;
     out.B.unit = kUnits[2];
-    if (out.B.value) out.B.reason = "weighted least squares (no flat segment in the paper's fit)";
-    else out.B.reason = out.paper.ok ? "no flat segment (|slope| < 0.25) in tau = " +
-                                           fmt(oadev.empty() ? 0 : oadev.front().tau_s) + ".." +
-                                           fmt(oadev.empty() ? 0 : oadev.back().tau_s) + " s"
-                                     : "paper fit failed: " + out.paper.reason;
+    if (out.B.value) out.B.reason = "weighted least squares (the Allan curve has no flat part to read)";
+    else if (!out.paper.ok) out.B.reason = "paper fit failed: " + out.paper.reason;
+    else {
+      std::ostringstream r;  // (a stream: GCC 12 -O3 warns falsely on long string concatenations)
+      r << "no flat segment (|slope| < 0.25) and no interior minimum in tau = " << oadev.front().tau_s << ".."
+        << oadev.back().tau_s << " s";
+      out.B.reason = r.str();
+    }
   }
   return out;
 }

@@ -91,13 +91,24 @@ std::vector<std::size_t> tau_factors(const TauGrid& g, Deviation d, std::size_t 
       for (std::size_t v = 1; v <= top; ++v) m.push_back(v);
       break;
     case TauGrid::Log: {
-      const double lt = std::log(static_cast<double>(top));
-      for (int k = 0; k < g.log_n; ++k) {
-        const double v = std::exp(lt * k / (g.log_n - 1));
-        const auto r = static_cast<std::size_t>(std::llround(v));
-        const std::size_t c = std::clamp<std::size_t>(r, 1, top);
-        if (m.empty() || c > m.back()) m.push_back(c);
+      // q points per octave so that about log_n points span [1, top].
+      const double octaves = std::max(1.0, std::log2(static_cast<double>(top)));
+      const int q = std::max(1, static_cast<int>(std::ceil((g.log_n - 1) / octaves)));
+      constexpr std::size_t kSeed = 64;
+      std::vector<std::size_t> v;
+      for (int k = 0;; ++k) {  // below the seed octave: rounded log spacing
+        const auto r = static_cast<std::size_t>(std::llround(std::exp2(static_cast<double>(k) / q)));
+        if (r >= kSeed || r > top) break;
+        v.push_back(r);
       }
+      for (int j = 0; j < q; ++j) {  // seeds and their doublings
+        const auto seed = static_cast<std::size_t>(std::llround(kSeed * std::exp2(static_cast<double>(j) / q)));
+        for (std::size_t x = seed; x <= top; x *= 2) v.push_back(x);
+      }
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+      while (!v.empty() && v.back() > top) v.pop_back();
+      m = v;
       break;
     }
   }

@@ -26,7 +26,13 @@ void check_range(const toml::node& n, std::string_view key, double v, std::optio
   if (!std::isfinite(v) || (lo && v < *lo) || (hi && v > *hi)) {
     std::ostringstream os;
     os << "'" << key << "' = " << v << " is out of range";
-    if (lo || hi) os << " [" << (lo ? std::to_string(*lo) : "-inf") << ", " << (hi ? std::to_string(*hi) : "inf") << "]";
+    if (lo || hi) {
+      os << " [";
+      if (lo) os << *lo; else os << "-inf";
+      os << ", ";
+      if (hi) os << *hi; else os << "inf";
+      os << "]";
+    }
     fail(n, os.str());
   }
 }
@@ -155,6 +161,17 @@ void check_keys(const toml::table& t, std::initializer_list<std::string_view> al
       std::string list;
       for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
       fail(v, "unknown key '" + std::string(k.str()) + "' in [" + std::string(ctx) + "] (expected one of: " + list + ")");
+    }
+  }
+}
+
+void fill_defaults(toml::table& t, const toml::table& defaults) {
+  for (auto&& [k, v] : defaults) {
+    toml::node* mine = t.get(k.str());
+    if (!mine) {
+      t.insert(k, v);
+    } else if (mine->is_table() && v.is_table()) {
+      fill_defaults(*mine->as_table(), *v.as_table());
     }
   }
 }

@@ -39,6 +39,10 @@ const toml::table* get_table(const toml::table& t, std::string_view key, bool re
 void check_keys(const toml::table& t, std::initializer_list<std::string_view> allowed, std::string_view ctx);
 
 // Deep merge: values in `over` replace those in `base`; tables merge recursively.
+// Copied nodes lose their source positions.
 void merge_into(toml::table& base, const toml::table& over);
+// Fills keys missing from `t` with `defaults`' (tables recursively). `t`'s own
+// nodes keep their source positions, so errors still name the user's file.
+void fill_defaults(toml::table& t, const toml::table& defaults);
 
 }  // namespace rig::cfg

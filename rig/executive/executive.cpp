@@ -10,6 +10,8 @@
 
 #include "rig/core/errors.hpp"
 
+#include <spdlog/spdlog.h>
+
 namespace rig {
 
 const char* to_string(RunOutcome o) {
@@ -57,20 +59,21 @@ Executive::Executive(Devices& dev, std::string out_dir, std::shared_ptr<spdlog::
 
 std::string Executive::checkpoint_path(const std::string& out_dir) { return out_dir + "/checkpoint.json"; }
 
-void Executive::safe_state(Devices& dev, spdlog::logger& log) {
+void Executive::safe_state(Devices& dev, spdlog::logger& log, bool abnormal) {
   // Order matters: stop motion first (a turning table is the hazard), then
   // the stream, then power. Each step is independent of the others' failure.
-  log.warn("safe state 1/3: stopping table ({})", dev.table.describe());
+  const auto lvl = abnormal ? spdlog::level::warn : spdlog::level::info;
+  log.log(lvl, "safe state 1/3: stopping table ({})", dev.table.describe());
   dev.table.stop();
-  log.warn("safe state 2/3: stopping DUT stream ({})", dev.dut.describe());
+  log.log(lvl, "safe state 2/3: stopping DUT stream ({})", dev.dut.describe());
   dev.dut.stop_stream();
-  log.warn("safe state 3/3: DUT power off ({})", dev.io.describe());
+  log.log(lvl, "safe state 3/3: DUT power off ({})", dev.io.describe());
   try {
     dev.io.set_dut_power(false);
   } catch (const std::exception& e) {
     log.error("safe state: DUT power off failed: {}", e.what());
   }
-  log.warn("safe state reached");
+  log.log(lvl, "safe state reached");
 }
 
 void Executive::write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
@@ -163,7 +166,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     rec.message = result.message;
     if (progress_) progress_->phase_finished(rec.id, rec.status, rec.message);
   }
-  safe_state(dev_, *log_);
+  safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
   return result;
 }
 

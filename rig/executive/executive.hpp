@@ -90,7 +90,8 @@ class Executive {
                 const nlohmann::json& identity);
 
   // The safe-state sequence; public so signal paths and tests can call it.
-  static void safe_state(Devices& dev, spdlog::logger& log);
+  // `abnormal` (abort or fault) logs the steps as warnings, otherwise as info.
+  static void safe_state(Devices& dev, spdlog::logger& log, bool abnormal = true);
 
   static std::string checkpoint_path(const std::string& out_dir);
 

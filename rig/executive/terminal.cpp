@@ -81,6 +81,8 @@ void TerminalView::phase_progress(double fraction, double) {
     last_draw_wall_ = now;
     draw(false);
   } else {
+    // Logs (CI): quarter marks for the long phases only.
+    if (index_ >= planned_.size() || planned_[index_] < 60.0) return;
     const int q = static_cast<int>(fraction_ * 4);
     if (q == last_quarter_ || q == 0 || q >= 4) return;
     last_quarter_ = q;

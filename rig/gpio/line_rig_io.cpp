@@ -1,5 +1,8 @@
 #include "rig/gpio/line_rig_io.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include "rig/core/errors.hpp"
 
 namespace rig::gpio {
@@ -36,6 +39,12 @@ LineRigIo::~LineRigIo() {
 }
 
 void LineRigIo::watch() {
+  // The e-stop path must not queue behind the rig's other threads (stream
+  // reader, recorder, analysis): run it real-time when allowed (root or
+  // CAP_SYS_NICE); otherwise it stays a normal thread that only sleeps in poll.
+  sched_param sp{};
+  sp.sched_priority = std::min(sched_get_priority_max(SCHED_FIFO), 80);
+  realtime_ = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
   using clk = std::chrono::steady_clock;
   while (!stop_) {
     std::optional<bool> edge;
@@ -96,7 +105,9 @@ void LineRigIo::on_estop(std::function<void()> handler) {
   handler_ = std::move(handler);
 }
 
-std::string LineRigIo::describe() const { return drv_->describe(); }
+std::string LineRigIo::describe() const {
+  return drv_->describe() + (realtime_ ? " (e-stop watch SCHED_FIFO)" : "");
+}
 
 // ---- SimLines ----
 

@@ -5,6 +5,7 @@
 // Drivers: GpiodLines (libgpiod 1.6, gpiod_lines.hpp) and SimLines (memory,
 // host tests: this machine's kernel has no GPIO character device).
 #pragma once
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -60,6 +61,7 @@ class LineRigIo final : public RigIo {
   std::mutex drv_mu_;  // driver writes from the rig thread and the event thread
   std::atomic<bool> power_{false}, estop_{false}, stop_{false};
   std::atomic<double> reaction_s_{0};
+  std::atomic<bool> realtime_{false};  // the watcher runs SCHED_FIFO
   std::mutex handler_mu_;
   std::function<void()> handler_;
   std::thread thread_;

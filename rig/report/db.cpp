@@ -6,7 +6,6 @@
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
-#include <regex>
 
 #include "rig/core/errors.hpp"
 
@@ -145,9 +144,16 @@ std::string pg_placeholders(const std::string& sql) {
   return out;
 }
 
+// postgresql://user:secret@host/db -> postgresql://user:***@host/db (for messages).
 std::string mask_password(const std::string& url) {
-  static const std::regex pw(R"(^(postgres(?:ql)?://[^:/@]*:)[^@]*@)");
-  return std::regex_replace(url, pw, "$1***@");
+  const std::size_t scheme = url.find("://");
+  if (scheme == std::string::npos) return url;
+  const std::size_t start = scheme + 3, end = url.find_first_of("/?", start);
+  const std::size_t at = url.rfind('@', end == std::string::npos ? std::string::npos : end);
+  if (at == std::string::npos || at < start) return url;
+  const std::size_t colon = url.find(':', start);
+  if (colon == std::string::npos || colon > at) return url;
+  return url.substr(0, colon + 1) + "***" + url.substr(at);
 }
 
 class PgDb final : public Db {

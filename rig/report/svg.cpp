@@ -113,9 +113,15 @@ std::string tick_label(double v, double step) {
   if (std::abs(v) < step * 1e-6) return "0";
   const double a = std::abs(v);
   if (a >= 1e5 || a < 1e-3) return fmt_num(v, 3);
+  // As many decimals as the step needs to be exact (a 0.0025 step needs 4, not 3).
+  int dec = 0;
+  while (dec < 9) {
+    const double scaled = step * std::pow(10.0, dec);
+    if (std::abs(scaled - std::round(scaled)) < 1e-6 * std::max(1.0, scaled)) break;
+    ++dec;
+  }
   char buf[32];
-  const int dec = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
-  std::snprintf(buf, sizeof buf, "%.*f", std::min(dec, 6), v);
+  std::snprintf(buf, sizeof buf, "%.*f", dec, v);
   return buf;
 }
 
@@ -355,20 +361,24 @@ class Writer {
     const bool left = px > (x_.p0 + x_.p1) / 2 + (x_.p1 - x_.p0) * 0.3;  // near the right edge: label to the left
     os_ << "<circle cx=\"" << n2(px) << "\" cy=\"" << n2(py) << "\" r=\"3.5\" fill=\"none\" stroke=\""
         << html_escape(m.color) << "\" stroke-width=\"1.5\"/>\n";
-    // Label box; moved away from the point in 13 px steps until it overlaps no earlier label
-    // (close PSD peaks), dropped if no free place is found (the circle stays).
+    // Label box: the preferred place first, then shifted 13 px at a time up and down, on
+    // either side of the point, until it overlaps no earlier label (close PSD peaks);
+    // dropped if no free place is found (the circle stays).
     const double w = 7.0 * static_cast<double>(m.text.size()), h = 12;
-    const double x0 = left ? px - 6 - w : px + 6;
-    double y = m.below ? std::min(py + 15, y_.p0 - 4) : std::max(py - 6, y_.p1 + 10);
-    const double step = m.below ? 13 : -13;
-    for (int tries = 0; tries < 8; ++tries, y += step) {
-      if (y < y_.p1 + 10 || y > y_.p0 - 2) break;
+    const double y_pref = m.below ? std::min(py + 15, y_.p0 - 4) : std::max(py - 6, y_.p1 + 10);
+    for (int k = 0; k < 16; ++k) {
+      const double dy = (k / 2 % 2 == 0 ? -1.0 : 1.0) * 13.0 * ((k / 4) + (k / 2 % 2 == 0 ? 0 : 1)) * (m.below ? -1 : 1);
+      const bool on_left = (k % 2 == 0) == left;
+      const double y = y_pref + dy;
+      if (y < y_.p1 + 10 || y > y_.p0 - 2) continue;
+      const double x0 = on_left ? px - 6 - w : px + 6;
+      if (x0 < x_.p0 || x0 + w > x_.p1 + kRight) continue;
       const Box b{x0, y - h, x0 + w, y};
       if (std::any_of(labels_.begin(), labels_.end(), [&](const Box& o) { return b.overlaps(o); })) continue;
       labels_.push_back(b);
-      os_ << "<text x=\"" << n2(left ? px - 6 : px + 6) << "\" y=\"" << n2(y) << "\" class=\"mark\""
-          << (left ? " text-anchor=\"end\"" : "") << " fill=\"" << html_escape(m.color) << "\">" << html_escape(m.text)
-          << "</text>\n";
+      os_ << "<text x=\"" << n2(on_left ? px - 6 : px + 6) << "\" y=\"" << n2(y) << "\" class=\"mark\""
+          << (on_left ? " text-anchor=\"end\"" : "") << " fill=\"" << html_escape(m.color) << "\">"
+          << html_escape(m.text) << "</text>\n";
       return;
     }
   }

@@ -2,7 +2,6 @@
 
 #include <cstdio>
 #include <ctime>
-#include <regex>
 
 namespace rig::history {
 
@@ -16,30 +15,72 @@ std::string format_utc(std::time_t t) {
 }
 }  // namespace
 
-std::optional<std::string> normalize_iso8601(const std::string& text) {
-  static const std::regex re(
-      R"(^\s*(\d{4})-(\d{2})-(\d{2})(?:[T ](\d{2}):(\d{2})(?::(\d{2})(?:[.,]\d+)?)?)?\s*(Z|z|[+-]\d{2}:?\d{2})?\s*$)");
-  std::smatch m;
-  if (!std::regex_match(text, m, re)) return std::nullopt;
-  auto num = [&](int i) { return m[i].matched ? std::stoi(m[i].str()) : 0; };
-  std::tm tm{};
-  tm.tm_year = num(1) - 1900;
-  tm.tm_mon = num(2) - 1;
-  tm.tm_mday = num(3);
-  tm.tm_hour = num(4);
-  tm.tm_min = num(5);
-  tm.tm_sec = num(6);
-  if (tm.tm_mon < 0 || tm.tm_mon > 11 || tm.tm_mday < 1 || tm.tm_mday > 31 || tm.tm_hour > 23 || tm.tm_min > 59 ||
-      tm.tm_sec > 60)
-    return std::nullopt;
-  std::time_t t = timegm(&tm);
-  if (m[7].matched && m[7].str() != "Z" && m[7].str() != "z") {
-    const std::string z = m[7].str();  // ±HH:MM or ±HHMM
-    const int hh = std::stoi(z.substr(1, 2)), mm = std::stoi(z.substr(z.size() - 2));
-    const long off = (hh * 60L + mm) * 60L;
-    t -= z[0] == '+' ? off : -off;
+std::optional<long long> parse_iso8601(const std::string& text) {
+  // YYYY-MM-DD[(T| )HH:MM[:SS[(.|,)fraction]]][Z|±HH[:]MM], surrounding blanks allowed.
+  // (Hand-written: std::regex trips GCC 12's -Wmaybe-uninitialized under the sanitizers.)
+  std::size_t i = text.find_first_not_of(" \t");
+  std::size_t end = text.find_last_not_of(" \t");
+  if (i == std::string::npos) return std::nullopt;
+  const std::string s = text.substr(i, end - i + 1);
+  std::size_t p = 0;
+  auto digits = [&](int n, int& out) {
+    if (p + static_cast<std::size_t>(n) > s.size()) return false;
+    out = 0;
+    for (int k = 0; k < n; ++k, ++p) {
+      if (s[p] < '0' || s[p] > '9') return false;
+      out = out * 10 + (s[p] - '0');
+    }
+    return true;
+  };
+  auto lit = [&](char c) {
+    if (p < s.size() && s[p] == c) {
+      ++p;
+      return true;
+    }
+    return false;
+  };
+  int y = 0, mo = 0, d = 0, hh = 0, mi = 0, ss = 0;
+  if (!digits(4, y) || !lit('-') || !digits(2, mo) || !lit('-') || !digits(2, d)) return std::nullopt;
+  if (p < s.size() && (s[p] == 'T' || s[p] == ' ')) {
+    ++p;
+    if (!digits(2, hh) || !lit(':') || !digits(2, mi)) return std::nullopt;
+    if (lit(':')) {
+      if (!digits(2, ss)) return std::nullopt;
+      if (lit('.') || lit(',')) {
+        const std::size_t f = p;
+        while (p < s.size() && s[p] >= '0' && s[p] <= '9') ++p;
+        if (p == f) return std::nullopt;
+      }
+    }
   }
-  return format_utc(t);
+  long offset = 0;
+  if (p < s.size() && (s[p] == 'Z' || s[p] == 'z')) {
+    ++p;
+  } else if (p < s.size() && (s[p] == '+' || s[p] == '-')) {
+    const bool plus = s[p++] == '+';
+    int oh = 0, om = 0;
+    if (!digits(2, oh)) return std::nullopt;
+    lit(':');
+    if (!digits(2, om) || oh > 23 || om > 59) return std::nullopt;
+    offset = (plus ? 1 : -1) * (oh * 60L + om) * 60L;
+  }
+  if (p != s.size()) return std::nullopt;
+  std::tm tm{};
+  tm.tm_year = y - 1900;
+  tm.tm_mon = mo - 1;
+  tm.tm_mday = d;
+  tm.tm_hour = hh;
+  tm.tm_min = mi;
+  tm.tm_sec = ss;
+  if (mo < 1 || mo > 12 || d < 1 || d > 31 || hh > 23 || mi > 59 || ss > 60) return std::nullopt;
+  const std::time_t t = timegm(&tm) - offset;
+  return static_cast<long long>(t);
+}
+
+std::optional<std::string> normalize_iso8601(const std::string& text) {
+  const auto t = parse_iso8601(text);
+  if (!t) return std::nullopt;
+  return format_utc(static_cast<std::time_t>(*t));
 }
 
 std::string utc_now_iso8601() { return format_utc(std::time(nullptr)); }

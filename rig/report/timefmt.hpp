@@ -9,6 +9,8 @@ namespace rig::history {
 // "2026-11-22", "2026-11-22T05:12:26", "...26.123Z", "...26+03:00", "... 05:12" (space)
 // -> "2026-11-22T02:12:26Z". nullopt if the text is not such a time.
 std::optional<std::string> normalize_iso8601(const std::string& text);
+// Seconds since the epoch (UTC) of such a time; nullopt if it is not one.
+std::optional<long long> parse_iso8601(const std::string& text);
 // The current time in that form.
 std::string utc_now_iso8601();
 

@@ -1,1 +1,224 @@
+// The engine itself: tau grids and stop ratios, streaming (small ring, far cursors, a real
+// file through pread) equal to the in-memory result, frequency/phase equivalence, threads,
+// white-noise theory, and input errors.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "procedures/analysis/allan.hpp"
+
+namespace rig::analysis {
+namespace {
+
+constexpr Deviation kAll[] = {Deviation::ADEV, Deviation::OADEV, Deviation::MDEV, Deviation::TDEV,
+                              Deviation::HDEV, Deviation::OHDEV, Deviation::TOTDEV};
+
+// White FM + random-walk FM + a bias, the shape of an accelerometer record.
+std::vector<double> signal(std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<double> y(n);
+  double walk = 0;
+  for (auto& v : y) {
+    walk += 2e-3 * g(rng);
+    v = -5e-4 + 0.05 * g(rng) + walk * 1e-2;
+  }
+  return y;
+}
+
+TEST(TauGrid, ParsesTheFourKindsAndRejectsOthers) {
+  EXPECT_EQ(parse_tau_grid("octave").kind, TauGrid::Octave);
+  EXPECT_EQ(parse_tau_grid("decade").kind, TauGrid::Decade);
+  EXPECT_EQ(parse_tau_grid("all").kind, TauGrid::All);
+  const TauGrid g = parse_tau_grid("log:37");
+  EXPECT_EQ(g.kind, TauGrid::Log);
+  EXPECT_EQ(g.log_n, 37);
+  for (const char* bad : {"", "octaves", "log:", "log:x", "log:1", "log:12x", "log:-5"})
+    EXPECT_THROW(parse_tau_grid(bad), std::invalid_argument) << bad;
+}
+
+TEST(TauGrid, UsesStable32StopRatios) {
+  // PHASE.DAT has 1001 phase points: the reference tables stop at these factors.
+  EXPECT_EQ(tau_factors(parse_tau_grid("octave"), Deviation::OADEV, 1001).back(), 128u);
+  EXPECT_EQ(tau_factors(parse_tau_grid("octave"), Deviation::TOTDEV, 1001).back(), 256u);
+  EXPECT_EQ(tau_factors(parse_tau_grid("all"), Deviation::OADEV, 1001).back(), 250u);
+  EXPECT_EQ(tau_factors(parse_tau_grid("all"), Deviation::ADEV, 1001).back(), 200u);
+  EXPECT_EQ(tau_factors(parse_tau_grid("all"), Deviation::TOTDEV, 1001).back(), 500u);
+  const auto dec = tau_factors(parse_tau_grid("decade"), Deviation::OADEV, 556990);
+  const std::vector<std::size_t> want = {1, 2, 4, 10, 20, 40, 100, 200, 400, 1000, 2000, 4000,
+                                         10000, 20000, 40000, 100000};
+  EXPECT_EQ(dec, want);  // Cs5071A/oadev_decade.txt
+  const auto lg = tau_factors(parse_tau_grid("log:100"), Deviation::OADEV, 3600001);
+  EXPECT_EQ(lg.front(), 1u);
+  EXPECT_EQ(lg.back(), 900000u);
+  EXPECT_TRUE(std::is_sorted(lg.begin(), lg.end()));
+  EXPECT_GT(lg.size(), 80u);
+}
+
+TEST(TermCount, FollowsTheReferenceReadme) {
+  EXPECT_EQ(term_count(Deviation::ADEV, 1001, 2), 499u);
+  EXPECT_EQ(term_count(Deviation::OADEV, 1001, 2), 997u);
+  EXPECT_EQ(term_count(Deviation::MDEV, 1001, 2), 996u);
+  EXPECT_EQ(term_count(Deviation::HDEV, 1001, 2), 498u);
+  EXPECT_EQ(term_count(Deviation::OHDEV, 1001, 2), 995u);
+  EXPECT_EQ(term_count(Deviation::TOTDEV, 1001, 2), 999u);
+}
+
+void expect_same(const std::vector<DevPoint>& a, const std::vector<DevPoint>& b, double tol, const char* what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].m, b[i].m) << what;
+    EXPECT_EQ(a[i].n_terms, b[i].n_terms) << what << " m=" << a[i].m;
+    EXPECT_NEAR(a[i].dev, b[i].dev, tol * a[i].dev) << what << " m=" << a[i].m;
+    EXPECT_EQ(a[i].alpha, b[i].alpha) << what << " m=" << a[i].m;
+    EXPECT_NEAR(a[i].lo, b[i].lo, tol * a[i].dev + 1e-300) << what << " m=" << a[i].m;
+  }
+}
+
+TEST(Stream, SmallRingAndFarCursorsEqualTheInMemoryResult) {
+  const auto y = signal(150000, 7);
+  for (Deviation d : kAll) {
+    DevOptions o;
+    o.type = d;
+    o.rate_hz = 1000;
+    o.taus = parse_tau_grid("log:40");
+    const auto mem = deviation(y, o);
+    // 1 MiB budget: a ring of 64k points, so the larger factors go through the cursors.
+    StreamOptions so;
+    so.memory_budget_bytes = 1u << 20;
+    so.chunk = 4096;
+    SpanSource src(y);
+    const auto str = deviation_stream(src, o, so);
+    expect_same(mem, str, 1e-12, to_string(d));
+  }
+}
+
+TEST(Stream, OneThreadEqualsTwo) {
+  const auto y = signal(100000, 3);
+  DevOptions o;
+  o.taus = parse_tau_grid("log:30");
+  o.threads = 1;
+  const auto one = deviation(y, o);
+  o.threads = 2;
+  const auto two = deviation(y, o);
+  expect_same(one, two, 0.0, "threads");
+}
+
+// A float64 file read with pread, as `rig analyze --input f64` does.
+class PreadSource final : public ChunkSource {
+ public:
+  explicit PreadSource(const std::string& p) : fd_(::open(p.c_str(), O_RDONLY)) {
+    n_ = static_cast<std::uint64_t>(::lseek(fd_, 0, SEEK_END)) / 8;
+  }
+  ~PreadSource() override { ::close(fd_); }
+  std::uint64_t size() const override { return n_; }
+  std::size_t read_at(std::uint64_t pos, std::span<double> out) const override {
+    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), n_ - pos));
+    const ssize_t r = ::pread(fd_, out.data(), want * 8, static_cast<off_t>(pos * 8));
+    return r > 0 ? static_cast<std::size_t>(r) / 8 : 0;
+  }
+
+ private:
+  int fd_;
+  std::uint64_t n_ = 0;
+};
+
+TEST(Stream, RealFileThroughPreadEqualsMemory) {
+  const auto y = signal(120000, 11);
+  const auto path = std::filesystem::temp_directory_path() / ("rig_allan_" + std::to_string(::getpid()) + ".f64");
+  {
+    std::ofstream f(path, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(y.data()), static_cast<std::streamsize>(y.size() * 8));
+  }
+  DevOptions o;
+  o.rate_hz = 1000;
+  o.taus = parse_tau_grid("octave");
+  PreadSource src(path.string());
+  StreamOptions so;
+  so.memory_budget_bytes = 1u << 20;
+  const auto from_file = deviation_stream(src, o, so);
+  std::filesystem::remove(path);
+  expect_same(deviation(y, o), from_file, 1e-12, "file");
+}
+
+TEST(Allan, FrequencyAndItsPhaseGiveTheSameDeviations) {
+  const auto y = signal(20000, 5);
+  const double rate = 50;
+  std::vector<double> x(y.size() + 1, 0.0);
+  for (std::size_t i = 0; i < y.size(); ++i) x[i + 1] = x[i] + y[i] / rate;
+  for (Deviation d : kAll) {
+    DevOptions fo;
+    fo.type = d;
+    fo.rate_hz = rate;
+    fo.bounds = false;
+    DevOptions po = fo;
+    po.data = DataKind::Phase;
+    const auto a = deviation(y, fo), b = deviation(x, po);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i].dev, b[i].dev, 1e-8 * a[i].dev) << to_string(d);
+  }
+}
+
+TEST(Allan, WhiteFrequencyNoiseFollowsSigmaOverRootM) {
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<double> y(400000);
+  for (auto& v : y) v = 3.0 * g(rng);
+  DevOptions o;
+  o.confidence = 0.99;
+  o.taus = parse_tau_grid("octave");
+  for (const auto& p : deviation(y, o)) {
+    const double truth = 3.0 / std::sqrt(static_cast<double>(p.m));
+    EXPECT_LT(p.lo, truth) << "m=" << p.m;
+    EXPECT_GT(p.hi, truth) << "m=" << p.m;
+    if (p.m <= 4096) {
+      EXPECT_EQ(p.alpha, 0) << "m=" << p.m;  // white FM identified
+    }
+  }
+}
+
+TEST(Allan, ExplicitFactorsAndBoundsOff) {
+  const auto y = signal(5000, 2);
+  DevOptions o;
+  o.factors = {1, 3, 7};
+  o.bounds = false;
+  const auto p = deviation(y, o);
+  ASSERT_EQ(p.size(), 3u);
+  EXPECT_EQ(p[1].m, 3u);
+  EXPECT_EQ(p[1].lo, 0.0);
+  EXPECT_EQ(p[1].edf, 0.0);
+  o.factors = {0};
+  EXPECT_THROW(deviation(y, o), std::invalid_argument);
+  o.factors = {4000};
+  EXPECT_THROW(deviation(y, o), std::invalid_argument);
+}
+
+TEST(Allan, RejectsBadInputNamingTheProblem) {
+  DevOptions o;
+  EXPECT_THROW(deviation(std::vector<double>{1.0}, o), std::invalid_argument);
+  std::vector<double> y(100, 1.0);
+  y[42] = std::nan("");
+  try {
+    deviation(y, o);
+    FAIL() << "NaN accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("42"), std::string::npos) << e.what();
+  }
+  y[42] = 1;
+  o.rate_hz = 0;
+  EXPECT_THROW(deviation(y, o), std::invalid_argument);
+  o.rate_hz = 1;
+  o.confidence = 1.5;
+  EXPECT_THROW(deviation(y, o), std::invalid_argument);
+  EXPECT_THROW(parse_deviation("avar"), std::invalid_argument);
+  EXPECT_EQ(parse_deviation("ohdev"), Deviation::OHDEV);
+}
+
+}  // namespace
+}  // namespace rig::analysis

@@ -1,1 +1,127 @@
+// Noise terms: the weighted fit recovers Q, N, B, K, R from an exact model curve; the
+// paper's polynomial finds the flat segment and tau_cp; unidentifiable terms are null with
+// a reason (never NaN); a simulated white + random-walk record gives N and K.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "procedures/analysis/noise_terms.hpp"
+
+namespace rig::analysis {
+namespace {
+
+double model(double tau, double Q, double N, double B, double K, double R) {
+  return std::sqrt(3 * Q * Q / (tau * tau) + N * N / tau + 2 * std::numbers::ln2 / std::numbers::pi * B * B +
+                   K * K * tau / 3 + R * R * tau * tau / 2);
+}
+
+std::vector<DevPoint> curve(double Q, double N, double B, double K, double R, double t0, double t1, int n) {
+  std::vector<DevPoint> v;
+  for (int i = 0; i < n; ++i) {
+    DevPoint p;
+    p.tau_s = t0 * std::pow(t1 / t0, i / (n - 1.0));
+    p.m = static_cast<std::size_t>(p.tau_s * 1000);
+    p.dev = model(p.tau_s, Q, N, B, K, R);
+    p.edf = 1000;
+    v.push_back(p);
+  }
+  return v;
+}
+
+// The paper's figures in seconds units: N = 2.2306e-7 g*h^0.5, K = 5.1167e-6 g/h^0.5, B 2.1e-6 g.
+constexpr double kN = 2.2306e-7 * 60, kK = 5.1167e-6 / 60, kB = 2.1e-6;
+
+TEST(NoiseTerms, WeightedFitRecoversTheModelTerms) {
+  const auto pts = curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100);
+  const NoiseTerms t = noise_terms(pts, 3600);
+  ASSERT_TRUE(t.wls.ok) << t.wls.reason;
+  ASSERT_TRUE(t.N.value && t.K.value && t.wls.B.value) << t.N.reason << t.K.reason << t.wls.B.reason;
+  EXPECT_NEAR(*t.N.value, kN, 1e-3 * kN);
+  EXPECT_NEAR(*t.K.value, kK, 1e-3 * kK);
+  EXPECT_NEAR(*t.wls.B.value, kB, 1e-3 * kB);
+  ASSERT_TRUE(t.Q.value) << t.Q.reason;
+  EXPECT_NEAR(*t.Q.value, 2e-6, 1e-3 * 2e-6);
+  EXPECT_LE(*t.N.lo, *t.N.value);
+  EXPECT_GE(*t.N.hi, *t.N.value);
+  EXPECT_FALSE(t.R.value);
+  EXPECT_NE(t.R.reason.find("longer record"), std::string::npos) << t.R.reason;
+  EXPECT_EQ(t.N.unit, "g*s^0.5");
+  EXPECT_NEAR(n_per_hour(*t.N.value), 2.2306e-7, 1e-3 * 2.2306e-7);
+  EXPECT_NEAR(k_per_hour(*t.K.value), 5.1167e-6, 1e-3 * 5.1167e-6);
+}
+
+TEST(NoiseTerms, RateRampIsFoundOnAFiftyHourCurve) {
+  const double R = 1e-9;  // g/s
+  const auto pts = curve(0, kN, kB, kK, R, 0.001, 45000, 120);
+  const NoiseTerms t = noise_terms(pts, 50 * 3600.0);
+  ASSERT_TRUE(t.R.value) << t.R.reason;
+  EXPECT_NEAR(*t.R.value, R, 1e-3 * R);
+  EXPECT_NEAR(r_per_hour(*t.R.value), R * 3600, 1e-3 * R * 3600);
+}
+
+TEST(NoiseTerms, PaperMethodFindsTheFlatSegmentAndTauCp) {
+  const auto pts = curve(0, kN, kB, kK, 0, 0.001, 900, 100);
+  const NoiseTerms t = noise_terms(pts, 3600);
+  ASSERT_TRUE(t.paper.ok) << t.paper.reason;
+  EXPECT_EQ(t.paper.segments.size(), t.paper.inflection_tau_s.size() + 1);
+  std::string segs;
+  for (const auto& s : t.paper.segments)
+    segs += " [" + std::to_string(s.tau_lo_s) + ".." + std::to_string(s.tau_hi_s) + " slope " + std::to_string(s.slope) + "]";
+  ASSERT_TRUE(t.tau_cp_s && t.B.value) << t.B.reason << segs;
+  // The flat part of this curve lies around the minimum, tau ~ sqrt(3) N / K ~ 270 s.
+  EXPECT_GT(*t.tau_cp_s, 20.0);
+  EXPECT_LT(*t.tau_cp_s, 900.0);
+  // sigma(tau_cp) sits above the B floor by the N and K contributions: B is over-read, by < 60 %.
+  EXPECT_GT(*t.B.value, kB);
+  EXPECT_LT(*t.B.value, 1.6 * kB);
+  bool has_n = false;
+  for (const auto& s : t.paper.segments) has_n |= s.term == "N";
+  EXPECT_TRUE(has_n);
+}
+
+TEST(NoiseTerms, NothingIdentifiableGivesReasonsNotNaN) {
+  const NoiseTerms none = noise_terms(std::vector<DevPoint>{}, 0);
+  for (const Term* t : {&none.Q, &none.N, &none.B, &none.K, &none.R}) {
+    EXPECT_FALSE(t->value);
+    EXPECT_FALSE(t->reason.empty());
+  }
+  // Pure white FM: only N.
+  const NoiseTerms w = noise_terms(curve(0, kN, 0, 0, 0, 0.001, 900, 50), 3600);
+  ASSERT_TRUE(w.N.value);
+  EXPECT_NEAR(*w.N.value, kN, 1e-6 * kN);
+  EXPECT_FALSE(w.K.value);
+  EXPECT_FALSE(w.R.value);
+  EXPECT_FALSE(w.Q.value);
+  EXPECT_FALSE(w.K.reason.empty());
+  for (const Term* t : {&w.Q, &w.N, &w.B, &w.K, &w.R})
+    if (t->value) {
+      EXPECT_TRUE(std::isfinite(*t->value));
+    }
+}
+
+TEST(NoiseTerms, SimulatedRecordGivesNAndKFromItsOwnAllanCurve) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> g(0, 1);
+  const double rate = 100, tau0 = 1 / rate, N = 1e-3, K = 2e-5;
+  std::vector<double> y(1 << 20);
+  double walk = 0;
+  for (auto& v : y) {
+    walk += K * std::sqrt(tau0) * g(rng);
+    v = N / std::sqrt(tau0) * g(rng) + walk;
+  }
+  DevOptions o;
+  o.rate_hz = rate;
+  o.taus = parse_tau_grid("log:60");
+  const auto pts = deviation(y, o);
+  const NoiseTerms t = noise_terms(pts, static_cast<double>(y.size()) / rate);
+  ASSERT_TRUE(t.N.value && t.K.value) << t.N.reason << " / " << t.K.reason;
+  EXPECT_NEAR(*t.N.value, N, 0.05 * N);
+  EXPECT_NEAR(*t.K.value, K, 0.35 * K);  // K rests on the few longest taus
+  EXPECT_LT(*t.N.lo, N * 1.05);
+  EXPECT_GT(*t.N.hi, N * 0.95);
+}
+
+}  // namespace
+}  // namespace rig::analysis

@@ -1,1 +1,90 @@
+// Welch PSD: one-sided density scaling (Parseval), a tone's peak and prominence, the white
+// level and its N = sqrt(h0/2) cross-check against the Allan deviation.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "procedures/analysis/allan.hpp"
+#include "procedures/analysis/psd.hpp"
+
+namespace rig::analysis {
+namespace {
+
+std::vector<double> tone_in_noise(std::size_t n, double rate, double f, double amp, double sigma, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0, sigma);
+  std::vector<double> x(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = amp * std::sin(2 * M_PI * f * static_cast<double>(i) / rate) + g(rng);
+  return x;
+}
+
+TEST(Welch, WhiteNoiseHasDensityTwoSigmaSquaredOverRate) {
+  const double rate = 1000, sigma = 0.05;
+  const auto x = tone_in_noise(1 << 20, rate, 0, 0, sigma, 1);
+  const Psd p = welch(x, rate);
+  const double h0 = white_level(p, 50, 450);
+  EXPECT_NEAR(h0, 2 * sigma * sigma / rate, 0.03 * 2 * sigma * sigma / rate);
+  // Parseval: the integral of the one-sided PSD is the variance.
+  double integral = 0;
+  for (std::size_t k = 0; k < p.psd.size(); ++k) integral += p.psd[k] * rate / static_cast<double>(p.segment);
+  EXPECT_NEAR(integral, sigma * sigma, 0.02 * sigma * sigma);
+  EXPECT_EQ(p.asd.size(), p.psd.size());
+  EXPECT_NEAR(p.asd[10], std::sqrt(p.psd[10]), 1e-15);
+}
+
+TEST(Welch, WhiteLevelGivesTheAllanN) {
+  // White FM: sigma^2(tau) = h0 / (2 tau), so N^2 = h0 / 2 (N in unit*s^0.5).
+  const double rate = 1000, sigma = 0.02;
+  const auto x = tone_in_noise(1 << 20, rate, 0, 0, sigma, 2);
+  const double n_psd = std::sqrt(white_level(welch(x, rate), 20, 480) / 2);
+  DevOptions o;
+  o.rate_hz = rate;
+  o.factors = {100};
+  o.bounds = false;
+  const auto a = deviation(x, o);
+  const double n_allan = a[0].dev * std::sqrt(a[0].tau_s);
+  EXPECT_NEAR(n_psd, n_allan, 0.05 * n_allan);
+  EXPECT_NEAR(n_psd, sigma / std::sqrt(rate), 0.03 * n_psd);
+}
+
+TEST(Peaks, FindsTheBuildingVibrationToneWithItsProminence) {
+  const double rate = 1000;
+  auto x = tone_in_noise(1 << 19, rate, 72.0, 0.01, 0.05, 3);
+  const auto y = tone_in_noise(1 << 19, rate, 316.0, 0.006, 0.0, 4);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] += y[i];
+  WelchOptions o;
+  o.segment = 8192;
+  const Psd p = welch(x, rate, o);
+  const auto peaks = find_peaks(p, 10.0, 5);
+  ASSERT_GE(peaks.size(), 2u);
+  EXPECT_NEAR(peaks[0].f_hz, 72.0, rate / 8192.0);
+  EXPECT_NEAR(peaks[1].f_hz, 316.0, rate / 8192.0);
+  EXPECT_GT(peaks[0].prominence_db, peaks[1].prominence_db);
+  EXPECT_GT(peaks[1].prominence_db, 10.0);
+  // Pure noise: nothing 10 dB above its surroundings.
+  const Psd q = welch(tone_in_noise(1 << 19, rate, 0, 0, 0.05, 5), rate, o);
+  EXPECT_TRUE(find_peaks(q, 10.0).empty());
+}
+
+TEST(Welch, OptionsAndErrors) {
+  const auto x = tone_in_noise(5000, 100, 0, 0, 1, 6);
+  WelchOptions o;
+  o.segment = 1024;
+  o.overlap = 0;
+  o.window = Window::Rectangular;
+  const Psd p = welch(x, 100, o);
+  EXPECT_EQ(p.segments, 4u);
+  EXPECT_EQ(p.f_hz.size(), 513u);
+  EXPECT_DOUBLE_EQ(p.f_hz.back(), 50.0);
+  o.segment = 10000;
+  EXPECT_THROW(welch(x, 100, o), std::invalid_argument);
+  o.segment = 1024;
+  o.overlap = 0.99;
+  EXPECT_THROW(welch(x, 100, o), std::invalid_argument);
+  EXPECT_THROW(parse_window("kaiser"), std::invalid_argument);
+  EXPECT_EQ(parse_window("blackman"), Window::Blackman);
+}
+
+}  // namespace
+}  // namespace rig::analysis

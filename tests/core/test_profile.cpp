@@ -86,7 +86,9 @@ TEST(Profile, UnpairedOrderIsRejected) {
 }
 
 TEST(Profile, BadLimitsAndClassesAreRejected) {
-  const std::string base = "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\nrun_s = 1\nin_run_s = 10\nraw_s = 10\n";
+  const std::string base =
+      "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\nrun_s = 1\nin_run_s = 10\nraw_s = 10\n"
+      "in_run_blocks_s = [1.0, 2.0]\n";
   EXPECT_NE(error_of(write_tmp("lim.toml", base + "[limits]\nbias = [1.0, -1.0]\n")).find("min <= max"),
             std::string::npos);
   EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais'"),

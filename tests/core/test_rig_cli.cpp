@@ -110,12 +110,12 @@ TEST(RigCli, HelpOnEverySubcommand) {
 TEST(RigCli, CiProfileEndToEnd) {
   const std::string d = tmp("ci");
   fs::create_directories(d);
-  const int rc = run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--serial", "EMU-0001"}, d + "/io");
+  const int rc = run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--serial", "EMU-QPA-0001"}, d + "/io");
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(rc, p["outcome"] == "PASS" ? 0 : 1) << slurp(d + "/io.stderr");
   EXPECT_EQ(p["outcome"], "PASS") << p.dump(1);
   EXPECT_EQ(p["schema"], "rig.passport/1");
-  EXPECT_EQ(p["serial"], "EMU-0001");
+  EXPECT_EQ(p["serial"], "EMU-QPA-0001");
   EXPECT_EQ(p["profile"], "ci");
   EXPECT_EQ(p["plant"], "emulated");
   for (const char* name : kContractValues) {
@@ -187,6 +187,15 @@ TEST(RigCli, EstopEndsTheRunWithExit3) {
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "ABORTED");
   EXPECT_NE(p["aborted_reason"].get<std::string>().find("e-stop"), std::string::npos);
+}
+
+TEST(RigCli, WrongSerialIsAConfigurationError) {
+  const std::string d = tmp("serial");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--serial", "NOT-THIS-ONE"}, d + "/io"), 2);
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ERROR");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("NOT-THIS-ONE"), std::string::npos);
 }
 
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {

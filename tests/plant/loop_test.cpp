@@ -1,1 +1,133 @@
+// The closed loop: stability, DC gain, step and frequency response, the figures.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+
+#include "plant/dut/loop_figures.hpp"
+#include "plant/dut/loop_model.hpp"
+
+namespace rig::plant {
+namespace {
+
+LoopModel default_loop() {
+  const DutParams p = load_dut_params(nullptr);
+  return LoopModel(p.loop, p.regulator);
+}
+
+TEST(Loop, LinearLoopIsStable) {
+  const LinearLoop l = default_loop().linear();
+  Eigen::EigenSolver<Eigen::MatrixXd> es(l.A);
+  double r = 0;
+  for (Eigen::Index i = 0; i < es.eigenvalues().size(); ++i) r = std::max(r, std::abs(es.eigenvalues()[i]));
+  EXPECT_LT(r, 0.999);
+  EXPECT_GT(r, 0.5);  // a slow integrator pole exists (the loop has integral action)
+}
+
+TEST(Loop, UnstableWhenGainIsFarTooHigh) {
+  DutParams p = load_dut_params(nullptr);
+  p.regulator.gain_a_per_v *= 20;
+  Eigen::EigenSolver<Eigen::MatrixXd> es(LoopModel(p.loop, p.regulator).linear().A);
+  double r = 0;
+  for (Eigen::Index i = 0; i < es.eigenvalues().size(); ++i) r = std::max(r, std::abs(es.eigenvalues()[i]));
+  EXPECT_GT(r, 1.0);
+}
+
+TEST(Loop, DcGainIsOne) {
+  const LinearLoop l = default_loop().linear();
+  EXPECT_NEAR(std::abs(loop_response(l, 0.0)), 1.0, 1e-9);
+  // the nonlinear loop (ADC, PWM quantisers) holds 1 g and -7 g on average
+  const LoopModel m = default_loop();
+  for (double q : {1.0, -7.0}) {
+    LoopModel::State st;
+    for (int k = 0; k < 2000; ++k) m.step(st, q);
+    double s = 0;
+    for (int k = 0; k < 1000; ++k) s += m.step(st, q);
+    EXPECT_NEAR(s / 1000, q, 2e-4) << q;
+    EXPECT_FALSE(st.saturated);
+  }
+}
+
+TEST(Loop, SaturatesBeyondRange) {
+  const LoopModel m = default_loop();
+  LoopModel::State st;
+  double x = 0;
+  for (int k = 0; k < 2000; ++k) x = m.step(st, 15.0);  // range is 12 g of feedback
+  EXPECT_TRUE(st.saturated);
+  EXPECT_LT(x, 12.01);
+}
+
+TEST(Loop, SimulatedStepMatchesLinearModel) {
+  const LoopModel m = default_loop();
+  const std::vector<double> lin = loop_step(m.linear(), 300);
+  LoopModel::State st;
+  double worst = 0;
+  for (std::size_t k = 0; k < lin.size(); ++k) worst = std::max(worst, std::abs(m.step(st, 1.0) - lin[k]));
+  EXPECT_LT(worst, 2e-3);  // PWM and ADC quantisation only
+}
+
+TEST(Loop, SimulatedSineMatchesFrequencyResponse) {
+  const LoopModel m = default_loop();
+  const LinearLoop l = m.linear();
+  for (double f : {50.0, 300.0, 700.0}) {
+    LoopModel::State st;
+    const double w = 2 * std::numbers::pi * f / m.rate_hz();
+    double re = 0, im = 0;
+    const int settle = 2000, n = 10000;
+    for (int k = 0; k < settle + n; ++k) {
+      const double x = m.step(st, 0.5 * std::sin(w * k));
+      if (k >= settle) {
+        re += x * std::sin(w * k);
+        im += x * std::cos(w * k);
+      }
+    }
+    const double amp = 2 * std::hypot(re, im) / n / 0.5;
+    EXPECT_NEAR(amp, std::abs(loop_response(l, f)), 0.01) << f;
+  }
+}
+
+TEST(Loop, FiguresOfTheDefaultProfileMatchThePaper) {
+  const LoopFigures f = loop_figures(nullptr, paper_filter());
+  EXPECT_NEAR(f.dc_gain, 1.0, 1e-9);
+  EXPECT_NEAR(f.bandwidth_0p5_hz, 492, 0.05 * 492);
+  EXPECT_NEAR(f.settling_time_s, 0.003, 0.2 * 0.003);
+  EXPECT_LT(f.bandwidth_3db_hz, f.bandwidth_0p5_hz);
+  // without the filter: wider band, about the same settling time (the paper's Fig. 6)
+  FilterConfig none;
+  none.enabled = false;
+  const LoopFigures g = loop_figures(nullptr, none);
+  EXPECT_GT(g.bandwidth_0p5_hz, f.bandwidth_0p5_hz * 1.2);
+  EXPECT_NEAR(g.settling_time_s, 0.003, 0.2 * 0.003);
+  ASSERT_EQ(f.freq_hz.size(), f.amp_y.size());
+  ASSERT_EQ(f.step_t_s.size(), f.step_y.size());
+}
+
+TEST(Loop, FilterResponseOfThePaperFilter) {
+  // METHOD.md: |W_f| = 0.99 at 70 Hz, 0.71 at 500 Hz, 0.50 at 800 Hz, 0.39 at 1 kHz (10 kHz rate)
+  const FilterConfig w = paper_filter();
+  EXPECT_NEAR(std::abs(filter_response(w, 0)), 1.0, 1e-5);
+  EXPECT_NEAR(std::abs(filter_response(w, 70)), 0.99, 0.01);
+  EXPECT_NEAR(std::abs(filter_response(w, 500)), 0.71, 0.01);
+  EXPECT_NEAR(std::abs(filter_response(w, 800)), 0.50, 0.01);
+  EXPECT_NEAR(std::abs(filter_response(w, 1000)), 0.39, 0.01);
+}
+
+TEST(Loop, FigureHelpers) {
+  // first-order lag: |H| = 1/sqrt(1 + (f/fc)^2) falls to 0.5 at sqrt(3) fc
+  std::vector<double> fr, amp;
+  for (double f = 1; f < 1e4; f *= 1.01) {
+    fr.push_back(f);
+    amp.push_back(1 / std::sqrt(1 + (f / 100) * (f / 100)));
+  }
+  EXPECT_NEAR(bandwidth_at(fr, amp, 0.5), 100 * std::sqrt(3.0), 0.5);
+  // 1 - exp(-t/tau) enters the 5 % band at tau ln 20
+  std::vector<double> h;
+  const double dt = 1e-4, tau = 1e-3;
+  for (int k = 0; k < 1000; ++k) h.push_back(1 - std::exp(-k * dt / tau));
+  EXPECT_NEAR(settling_time(h, dt, 0.05), tau * std::log(20.0), dt);
+}
+
+}  // namespace
+}  // namespace rig::plant

@@ -8,6 +8,7 @@
 
 #include "rig/cli/commands.hpp"
 #include "rig/report/history.hpp"
+#include "rig/report/timefmt.hpp"
 #include "tests/report/history_cases.hpp"
 
 namespace {
@@ -143,6 +144,19 @@ TEST(HistorySqlite, ConcurrentWritersAllLand) {
     });
   for (auto& t : ts) t.join();
   EXPECT_EQ(h::list_runs(url, {}).size(), 24u);
+}
+
+TEST(HistoryTime, Iso8601IsNormalisedToUtc) {
+  using h::normalize_iso8601;
+  EXPECT_EQ(normalize_iso8601("2026-11-22"), "2026-11-22T00:00:00Z");
+  EXPECT_EQ(normalize_iso8601(" 2026-11-22T05:12 "), "2026-11-22T05:12:00Z");
+  EXPECT_EQ(normalize_iso8601("2026-11-22 05:12:26.123Z"), "2026-11-22T05:12:26Z");
+  EXPECT_EQ(normalize_iso8601("2026-11-22T02:12:26+03:00"), "2026-11-21T23:12:26Z");
+  EXPECT_EQ(normalize_iso8601("2026-11-21T23:30:00-0130"), "2026-11-22T01:00:00Z");
+  EXPECT_EQ(normalize_iso8601("2026-12-31T23:59:59-01:00"), "2027-01-01T00:59:59Z");
+  for (const char* bad : {"", "yesterday", "2026-13-01", "2026-11-22T25:00", "2026-11-22T05", "2026-11-22Tx",
+                          "2026-11-22T05:12:26+3", "2026-11-22 junk", "26-11-22"})
+    EXPECT_FALSE(normalize_iso8601(bad).has_value()) << bad;
 }
 
 // ---------------------------------------------------------------- default location

@@ -1,0 +1,106 @@
+#include "plant/dut/filter_select.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "plant/dut/emulated_dut.hpp"
+#include "plant/dut/loop_figures.hpp"
+#include "procedures/analysis/filter.hpp"
+#include "rig/core/errors.hpp"
+
+namespace rig::plant {
+
+namespace {
+
+std::string butter_name(int order, double fc) {
+  std::ostringstream os;
+  os << "butter" << order << "@" << fc;
+  return os.str();
+}
+
+double rms_about_mean(const std::vector<double>& v) {
+  double m = 0;
+  for (double e : v) m += e;
+  m /= static_cast<double>(v.size());
+  std::vector<double> d(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) d[i] = v[i] - m;
+  return analysis::rms(d);
+}
+
+double emulated_rms(const DutParams& p, const FilterConfig& f, const FilterSelectOptions& opt) {
+  EmulatedDut dut(p, opt.seed);
+  dut.set_filter(f);
+  std::vector<double> y(static_cast<std::size_t>(opt.rms_seconds * dut.output_rate_hz()));
+  for (double& v : y) {
+    double x;
+    dut.next(x, v);
+  }
+  return rms_about_mean(y);
+}
+
+}  // namespace
+
+FilterConfig filter_by_name(const std::string& name, double rate_hz) {
+  if (name == "paper") {
+    FilterConfig f = analysis::paper_wf();
+    f.rate_hz = rate_hz;
+    return f;
+  }
+  if (name == "none") {
+    FilterConfig f;
+    f.enabled = false;
+    f.rate_hz = rate_hz;
+    return f;
+  }
+  int order = 0;
+  double fc = 0;
+  char at = 0;
+  std::istringstream is(name.substr(name.rfind("butter", 0) == 0 ? 6 : name.size()));
+  if (name.rfind("butter", 0) != 0 || !(is >> order >> at >> fc) || at != '@' || !is.eof())
+    throw ConfigError("filter '" + name + "': expected paper, none or butterN@FC (e.g. butter2@500)");
+  try {
+    return analysis::butterworth_lowpass(order, fc, rate_hz);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError("filter '" + name + "': " + e.what());
+  }
+}
+
+std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt) {
+  if (!(opt.f_req_hz > 0)) throw ConfigError("--f-req must be positive");
+  if (!(opt.fc_step_hz > 0) || opt.fc_max_hz < opt.fc_min_hz) throw ConfigError("bad cut-off range");
+  const DutParams p = load_dut_params(dut_cfg);
+  const double rate = p.loop.loop_rate_hz;
+
+  std::vector<FilterCandidate> c;
+  if (opt.include_paper) c.push_back({"paper", filter_by_name("paper", rate)});
+  if (opt.include_none) c.push_back({"none", filter_by_name("none", rate)});
+  for (int order : opt.orders)
+    for (double fc = opt.fc_min_hz; fc <= opt.fc_max_hz + 1e-9; fc += opt.fc_step_hz)
+      if (fc < rate / 2) c.push_back({butter_name(order, fc), filter_by_name(butter_name(order, fc), rate)});
+
+  for (FilterCandidate& k : c) {
+    const LoopFigures f = loop_figures(dut_cfg, k.filter);  // criterion 2, from the model
+    k.bandwidth_0p5_hz = f.bandwidth_0p5_hz;
+    k.settling_time_s = f.settling_time_s;
+    k.meets_band = std::abs(k.bandwidth_0p5_hz - opt.f_req_hz) <= opt.band_tol * opt.f_req_hz;
+    if (opt.recorded_x) {  // criterion 1 on a recording at the loop rate
+      if (opt.recorded_x->empty()) throw ConfigError("the recording is empty");
+      k.rms_g = rms_about_mean(analysis::apply(k.filter, *opt.recorded_x));
+    } else {
+      k.rms_g = emulated_rms(p, k.filter, opt);
+    }
+  }
+  std::stable_sort(c.begin(), c.end(), [&](const FilterCandidate& a, const FilterCandidate& b) {
+    if (a.meets_band != b.meets_band) return a.meets_band;
+    if (a.meets_band) {
+      if (a.rms_g != b.rms_g) return a.rms_g < b.rms_g;
+      return a.settling_time_s < b.settling_time_s;
+    }
+    return std::abs(a.bandwidth_0p5_hz - opt.f_req_hz) < std::abs(b.bandwidth_0p5_hz - opt.f_req_hz);
+  });
+  for (std::size_t i = 0; i < c.size(); ++i) c[i].rank = static_cast<int>(i + 1);
+  return c;
+}
+
+}  // namespace rig::plant

@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""The technician's run on a real pseudo-terminal: `rig run` asks before it
+starts (DUT mounted, serial, table clear); 'y' to each proceeds, 'n' aborts
+with exit 3 before anything moves. Usage: test_operator_prompts.py RIG_BINARY"""
+import os
+import pty
+import select
+import shutil
+import sys
+import tempfile
+
+
+def run_with_answers(rig, args, answers, env, timeout=120):
+    pid, fd = pty.fork()
+    if pid == 0:
+        os.execve(rig, [rig] + args, env)
+    out, sent = b"", 0
+    while True:
+        ready, _, _ = select.select([fd], [], [], timeout)
+        if not ready:
+            os.kill(pid, 9)
+            raise AssertionError("timed out; output so far:\n" + out.decode(errors="replace"))
+        try:
+            chunk = os.read(fd, 4096)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        out += chunk
+        if sent < len(answers) and out.count(b"[y/N]") > sent:
+            os.write(fd, answers[sent].encode() + b"\n")
+            sent += 1
+    _, status = os.waitpid(pid, 0)
+    return os.waitstatus_to_exitcode(status), out.decode(errors="replace")
+
+
+def main():
+    rig = sys.argv[1]
+    d = tempfile.mkdtemp(prefix="rig-prompts-")
+    env = dict(os.environ, RIG_HISTORY="sqlite:" + os.path.join(d, "history.sqlite"))
+    passed = failed = 0
+    try:
+        for answers, want_rc, want_text in ((["y", "y", "y"], 0, "OUTCOME: PASS"),
+                                            (["y", "n"], 3, "did not confirm the serial")):
+            out_dir = os.path.join(d, f"run-exit{want_rc}")
+            rc, out = run_with_answers(rig, ["run", "--profile", "ci", "--serial", "EMU-QPA-0001", "--out", out_dir],
+                                       answers, env)
+            ok = rc == want_rc and want_text in out and out.count("[y/N]") == len(answers)
+            if want_rc == 3:
+                ok = ok and not os.path.exists(os.path.join(out_dir, "passport.json"))  # nothing ran
+            print(f"{'ok' if ok else 'FAIL'}: answers {answers} -> exit {rc}")
+            if ok:
+                passed += 1
+            else:
+                failed += 1
+                print(out[-3000:])
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+    print(f"{passed} passed, {failed} failed")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,25 @@
+# Sourced by the end-to-end guest scripts: vcan0, the gpio-sim chip, the
+# emulated plant as a separate process (`rig plant serve`), the hardware file.
+ip link add dev vcan0 type vcan
+ip link set up vcan0
+. "$RIG_SRC/tests/kernel/guest/gpio-sim-setup.sh"
+PORT=15020
+HW=/tmp/hardware.toml
+PROFILE=$RIG_SRC/tests/kernel/config/kernel-short.toml
+sed "s/@PORT@/$PORT/" "$RIG_SRC/tests/kernel/config/hardware.toml.in" > $HW
+"$RIG_BIN/rig" plant serve --can vcan0 --modbus 127.0.0.1:$PORT --profile "$PROFILE" > /tmp/plant.log 2>&1 &
+PLANT=$!
+i=0
+until grep -q "serving" /tmp/plant.log; do
+  i=$((i + 1))
+  if [ $i -gt 600 ] || ! kill -0 $PLANT 2>/dev/null; then
+    echo "rig plant serve did not come up:"; cat /tmp/plant.log; exit 1
+  fi
+  sleep 0.1
+done
+cat /tmp/plant.log
+stop_plant() {
+  kill $PLANT 2>/dev/null || true
+  wait $PLANT 2>/dev/null || true
+  cp /tmp/plant.log "$KIL_OUT/" 2>/dev/null || true
+}
