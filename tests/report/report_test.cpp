@@ -2,6 +2,8 @@
 // and the SVG writer's axes and decimation. The browser check is in browser_test.cpp.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 
 #include "rig/cli/commands.hpp"
 #include "rig/core/errors.hpp"
@@ -264,14 +266,27 @@ TEST(Svg, CloseMarkerLabelsDoNotOverlap) {
   for (double f : {50.0, 50.5, 51.0, 51.5, 52.0, 52.5})  // six peaks within a few pixels, near the top
     p.markers.push_back({f, 0.97, "peak " + rig::report::fmt_num(f), "#d62728"});
   const std::string svg = rig::report::to_svg(p);
-  std::vector<std::string> ys;
+  struct Box { double x0, y0, x1, y1; };
+  std::vector<Box> boxes;
+  auto attr = [&](std::size_t tag, const char* name) {
+    const std::size_t at = svg.find(std::string(" ") + name + "=\"", tag);
+    return std::stod(svg.substr(at + std::strlen(name) + 3));
+  };
   for (std::size_t at = svg.find("class=\"mark\""); at != std::string::npos; at = svg.find("class=\"mark\"", at + 1)) {
-    const std::size_t y = svg.rfind(" y=\"", at);
-    ys.push_back(svg.substr(y + 4, svg.find('"', y + 4) - y - 4));
+    const std::size_t tag = svg.rfind("<text", at);
+    const double x = attr(tag, "x"), y = attr(tag, "y");
+    const std::size_t t0 = svg.find('>', at) + 1;
+    const double w = 7.0 * static_cast<double>(svg.find('<', t0) - t0);
+    const bool end = svg.substr(tag, t0 - tag).find("text-anchor=\"end\"") != std::string::npos;
+    boxes.push_back({end ? x - w : x, y - 12, end ? x : x + w, y});
   }
-  ASSERT_EQ(ys.size(), 6u);  // all placed
-  std::sort(ys.begin(), ys.end());
-  EXPECT_EQ(std::unique(ys.begin(), ys.end()), ys.end());  // at distinct heights
+  ASSERT_EQ(boxes.size(), 6u);  // all placed
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j) {
+      const Box& a = boxes[i];
+      const Box& b = boxes[j];
+      EXPECT_FALSE(a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1) << i << " overlaps " << j;
+    }
 }
 
 TEST(Svg, EmptyPlotSaysNoDataAndEscapesTitles) {
