@@ -112,8 +112,9 @@ void SocketCanTransport::send(const CanFrame& f) {
       return;
     }
     // ENOBUFS: the interface's tx queue is full (the kernel never blocks CAN
-    // writers on it); give the queue a moment to drain.
-    if (ec.value() == ENOBUFS && std::chrono::steady_clock::now() < deadline) {
+    // writers on it); EAGAIN: the socket's send buffer is. Give them a moment.
+    const bool full = ec.value() == ENOBUFS || ec == asio::error::would_block || ec == asio::error::try_again;
+    if (full && std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       continue;
     }

@@ -17,12 +17,23 @@ log_n = int(sys.argv[3]) if len(sys.argv) > 3 else 100
 y = np.fromfile(path, dtype="<f8")
 n = len(y) + 1                    # phase points
 top = (n - 1) // 4                # Stable32 stop ratio for OADEV
-ms = []
-for k in range(log_n):
-    v = int(round(np.exp(np.log(top) * k / (log_n - 1))))
-    v = min(max(v, 1), top)
-    if not ms or v > ms[-1]:
-        ms.append(v)
+# The same grid as rig's log:N (procedures/analysis/tau_grid.cpp): log-spaced below 64,
+# seeds in [64, 128) times powers of two above.
+q = max(1, int(np.ceil((log_n - 1) / max(1.0, np.log2(top)))))
+ms = set()
+k = 0
+while True:
+    r = int(np.floor(2 ** (k / q) + 0.5))
+    if r >= 64 or r > top:
+        break
+    ms.add(r)
+    k += 1
+for j in range(q):
+    x = int(np.floor(64 * 2 ** (j / q) + 0.5))
+    while x <= top:
+        ms.add(x)
+        x *= 2
+ms = sorted(ms)
 
 t0 = time.perf_counter()
 x = np.concatenate(([0.0], np.cumsum(y - y[0])))   # phase in sample units

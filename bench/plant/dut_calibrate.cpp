@@ -42,6 +42,8 @@ int main(int argc, char** argv) {
     std::printf("| R | not determinable | %s |\n", r.nt_x.R.value ? "value" : r.nt_x.R.reason.c_str());
     std::printf("| B Allan filtered, g (tau_cp s) | 0.86e-6 | %.3e (%.0f) |\n", by, r.nt_y.tau_cp_s.value_or(0));
     std::printf("| ratio unfiltered/filtered | 2.5 | %.2f |\n", bx / by);
+    const double mx = calib::b_from_minimum(r.adev_x), my = calib::b_from_minimum(r.adev_y);
+    std::printf("| B from sigma_min/0.664 (tau >= 10 s): x, y, ratio | 2.1e-6, 0.86e-6, 2.5 | %.3e, %.3e, %.2f |\n", mx, my, mx / my);
     std::printf("| RMS x, y (g) | 0.04-0.06, 0.03-0.045 | %.3e, %.3e |\n", r.rms_x, r.rms_y);
     std::printf("| settling time (5 %%), s | 0.003 | %.4f |\n", lf.settling_time_s);
     std::printf("| bandwidth 0.5 with filter, Hz | 492 | %.1f |\n", lf.bandwidth_0p5_hz);

@@ -171,7 +171,9 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
         const int d = diff_order(o.type);
         const std::vector<double> z = averages(s.decimated, s.m);
         NoiseId id;
-        if (z.size() >= kAcfMinPoints) {
+        if (o.fixed_alpha) {
+          id.alpha = *o.fixed_alpha;
+        } else if (z.size() >= kAcfMinPoints) {
           // Stable32 identifies on the m-averaged frequency for phase data too (matches its tables
           // where the decimated-phase variant of allantools does not: Cs5071A m >= 5000).
           id = acf_noise_id(z, false, d);

@@ -7,6 +7,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -57,6 +58,7 @@ struct DevOptions {
   bool bounds = true;
   std::vector<std::size_t> factors;  // explicit averaging factors; overrides `taus` when not empty
   unsigned threads = 0;              // 0 = all hardware threads (the 2-core rig PC: both)
+  std::optional<int> fixed_alpha;    // skip identification and use this noise type (Stable32's manual choice)
 };
 
 // In-memory computation. Throws std::invalid_argument for fewer than 3 phase points,

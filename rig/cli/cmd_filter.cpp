@@ -61,6 +61,12 @@ std::vector<double> read_text(const std::string& path) {
   return v;
 }
 
+std::string fmt_g(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 json candidate_json(const plant::FilterCandidate& c) {
   json s = json::array();
   for (const Biquad& b : c.filter.sections) s.push_back({b.b0, b.b1, b.b2, b.a1, b.a2});
@@ -107,8 +113,7 @@ void run_select(const SelectArgs& a) {
   }
   const std::vector<plant::FilterCandidate> c = plant::select_filters(dc.dut, o);
   std::cout << "criterion 2 from the closed-loop model; criterion 1 (RMS) on "
-            << (a.recorded.empty() ? "emulated output, " + std::to_string(a.seconds) + " s, seed " +
-                                         std::to_string(a.seed)
+            << (a.recorded.empty() ? "emulated output, " + fmt_g(a.seconds) + " s, seed " + std::to_string(a.seed)
                                    : a.recorded)
             << "\nband: |f_0.5 - " << a.f_req << " Hz| <= " << a.tol << " %\n\n";
   std::cout << std::left << std::setw(5) << "rank" << std::setw(16) << "filter" << std::right << std::setw(12)

@@ -255,9 +255,10 @@ std::string Page::identity() const {
   row("Finished", text(p_, "finished"));
   row("Duration", duration_text(seconds_between(text(p_, "started"), text(p_, "finished"))));
   row("Run folder", text(p_, "out_dir"));
-  if (const json* ac = get(p_, {"values", "accuracy_class"}); ac && !text(*ac, "reason").empty())
+  if (const json* ac = get(p_, {"values", "accuracy_class"}); ac && std::isfinite(number(*ac, "value")))
     row("Accuracy class", text(*ac, "reason") + " (" + fmt_num(number(*ac, "value"), 3) + ")");
-  if (!text(p_, "aborted_reason").empty()) row("Aborted because", text(p_, "aborted_reason"));
+  if (!text(p_, "aborted_reason").empty())
+    row(text(p_, "outcome") == "ABORTED" ? "Aborted because" : "Stopped because", text(p_, "aborted_reason"));
   os << "</dl>\n<div class=\"verdict\">" << badge(text(p_, "outcome")) << "</div></section>\n";
   return os.str();
 }

@@ -38,6 +38,13 @@ analysis::NoiseTerms allan_terms(const std::vector<double>& v, double rate_hz, s
   return analysis::noise_terms(pts, static_cast<double>(v.size()) / rate_hz);
 }
 
+double b_from_minimum(const std::vector<analysis::DevPoint>& adev, double tau_lo) {
+  double m = 0;
+  for (const auto& d : adev)
+    if (d.tau_s >= tau_lo && (m == 0 || d.dev < m)) m = d.dev;
+  return m / analysis::kBiasFactor;
+}
+
 Result run(EmulatedDut& dut, const Spec& spec) {
   Result r;
   noise::Rng table(spec.table_seed, 99);

@@ -31,6 +31,9 @@ struct Result {
 
 // Runs A, B and C in sequence on `dut` (power-on to the end, time never stops).
 Result run(EmulatedDut& dut, const Spec& spec);
+// B as sigma_min / 0.664 over tau >= tau_lo: the flat level read off the rig's OADEV
+// curve directly (used where the paper's polynomial finds no inflection, see docs/plant.md).
+double b_from_minimum(const std::vector<analysis::DevPoint>& adev, double tau_lo = 10);
 // Allan noise terms of one record at `rate_hz` (OADEV on the octave grid, as `rig analyze`).
 analysis::NoiseTerms allan_terms(const std::vector<double>& v, double rate_hz,
                                  std::vector<analysis::DevPoint>* adev = nullptr);

@@ -74,6 +74,12 @@ TEST(Report, DurationHonoursTimeZones) {
   EXPECT_NE(h.find("0 h 52 min 31 s"), std::string::npos);
   EXPECT_NE(h.find("line-2-rig-1"), std::string::npos);
   EXPECT_NE(h.find("precision (2)"), std::string::npos);  // accuracy class in the identity block
+  p["values"]["accuracy_class"]["value"] = nullptr;      // not measured: no such row
+  p["outcome"] = "ERROR";
+  p["aborted_reason"] = "DUT link lost";
+  const std::string e = rig::report::render_report(p, json());
+  EXPECT_EQ(e.find("<dt>Accuracy class</dt>"), std::string::npos);
+  EXPECT_NE(e.find("<dt>Stopped because</dt><dd>DUT link lost</dd>"), std::string::npos);
 }
 
 TEST(Report, EscapesEveryTextFromTheRunFolder) {

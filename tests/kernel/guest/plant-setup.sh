@@ -1,5 +1,8 @@
 # Sourced by the end-to-end guest scripts: vcan0, the gpio-sim chip, the
 # emulated plant as a separate process (`rig plant serve`), the hardware file.
+# vcan delivers through the per-CPU backlog (netdev_max_backlog, 1000 by
+# default): a TCG stall followed by the firmware's catch-up burst can overflow it.
+echo 100000 > /proc/sys/net/core/netdev_max_backlog
 ip link add dev vcan0 type vcan
 ip link set up vcan0
 . "$RIG_SRC/tests/kernel/guest/gpio-sim-setup.sh"
