@@ -60,7 +60,8 @@ class CanDutLink final : public DutLink {
   void dispatch(const RxFrame& f);
   // Waits for traffic for up to `budget_s` (RealClock) or advances the
   // simulated world by `budget_s` when the bus is empty (SimClock).
-  void pump(double budget_s, const CancelToken& cancel);
+  // Returns whether a frame was dispatched.
+  bool pump(double budget_s, const CancelToken& cancel);
   [[noreturn]] void fail_silent(double silent_s);
 
   std::unique_ptr<CanTransport> transport_;

@@ -60,6 +60,8 @@ void EmulatedDut::set_table_angle_deg(double deg) {
   // cross-misalignment in the hinge plane); turning the table by theta turns that
   // offset about the axis, so its vertical projection is
   //   sin(e) + cos(e) (sin(d) cos(theta) + sin(d_x) sin(theta)).
+  if (deg == angle_deg_) return;  // the world sets the angle every step; trig only on change
+  angle_deg_ = deg;
   const OrientationParams& o = p_.orientation;
   const double th = (deg - o.u10_angle_deg) * std::numbers::pi / 180.0;
   q_static_ = std::sin(o.table_tilt_rad) +

@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -46,6 +47,7 @@ class EmulatedDut final : public DutSource {
   double dt_out_;
   uint64_t n_out_ = 0;
   double q_static_ = 0;
+  double angle_deg_ = std::numeric_limits<double>::quiet_NaN();
   double temp_c_ = 0;
 
   // noise sources, each with its own stream

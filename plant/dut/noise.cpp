@@ -7,7 +7,7 @@ namespace rig::plant::noise {
 BandNoise::BandNoise(double f_lo, double f_hi, double rate_hz, double rms) {
   // RBJ audio-EQ cookbook band-pass, constant 0 dB peak gain.
   const double f0 = std::sqrt(f_lo * f_hi);
-  const double w0 = 2 * M_PI * f0 / rate_hz;
+  const double w0 = 2 * std::numbers::pi * f0 / rate_hz;
   const double bw_oct = std::log2(f_hi / f_lo);
   const double alpha = std::sin(w0) * std::sinh(std::log(2.0) / 2 * bw_oct * w0 / std::sin(w0));
   const double a0 = 1 + alpha;
@@ -37,8 +37,8 @@ LineBand::LineBand(double f_lo, double f_hi, int lines, double coherence_s, doub
   drive_ = sd * std::sqrt(1 - phi_ * phi_);
   for (int j = 0; j < lines; ++j) {
     const double f = lines == 1 ? (f_lo + f_hi) / 2 : f_lo + (f_hi - f_lo) * j / (lines - 1);
-    const double w = 2 * M_PI * f / rate_hz;
-    const double ph = 2 * M_PI * rng.uniform();
+    const double w = 2 * std::numbers::pi * f / rate_hz;
+    const double ph = 2 * std::numbers::pi * rng.uniform();
     lines_.push_back(Line{std::cos(ph), std::sin(ph), std::cos(w), std::sin(w), sd * rng.normal(), sd * rng.normal()});
   }
 }

@@ -7,6 +7,7 @@
 // arithmetic and one multiply), and the Allan/PSD analysis sees only second moments.
 #pragma once
 #include <cmath>
+#include <numbers>
 #include <cstdint>
 #include <vector>
 
@@ -146,7 +147,7 @@ class LineBand {
 struct Oscillator {
   double c = 1, s = 0, rc = 1, rs = 0;
   void set(double f_hz, double rate_hz, double phase) {
-    const double w = 2 * M_PI * f_hz / rate_hz;
+    const double w = 2 * std::numbers::pi * f_hz / rate_hz;
     rc = std::cos(w);
     rs = std::sin(w);
     c = std::cos(phase);

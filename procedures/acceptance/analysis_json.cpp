@@ -5,33 +5,65 @@
 namespace rig::acceptance {
 
 namespace {
-nlohmann::json num(std::optional<double> v) {
-  return v && std::isfinite(*v) ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
-nlohmann::json term(const analysis::Term& t) {
-  nlohmann::json j{{"value", num(t.value)}, {"unit", t.unit}};
+using json = nlohmann::json;
+namespace an = analysis;
+
+json num(std::optional<double> v) { return v && std::isfinite(*v) ? json(*v) : json(nullptr); }
+
+// A term in its input units (tau in seconds) with its bounds, and the same in
+// the passport's per-hour units where the term has them.
+json term(const an::Term& t, double (*to_hours)(double) = nullptr, const char* hour_unit = "") {
+  json j{{"value", num(t.value)}, {"unit", t.unit}};
   if (t.lo) j["lo"] = num(t.lo);
   if (t.hi) j["hi"] = num(t.hi);
-  if (!t.value || !t.reason.empty()) j["reason"] = t.reason;
+  if (!t.reason.empty()) j["reason"] = t.reason;
+  if (to_hours && t.value) {
+    j["per_hour"] = {{"value", to_hours(*t.value)}, {"unit", hour_unit}};
+    if (t.lo) j["per_hour"]["lo"] = to_hours(*t.lo);
+    if (t.hi) j["per_hour"]["hi"] = to_hours(*t.hi);
+  }
   return j;
 }
 }  // namespace
 
-nlohmann::json dev_to_json(std::span<const analysis::DevPoint> dev) {
-  nlohmann::json a = nlohmann::json::array();
+json dev_to_json(std::span<const an::DevPoint> dev) {
+  json a = json::array();
   for (const auto& p : dev)
     a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
                  {"edf", p.edf}, {"alpha", p.alpha}});
   return a;
 }
 
-nlohmann::json noise_terms_to_json(const analysis::NoiseTerms& nt) {
-  return {{"Q", term(nt.Q)},
-          {"N", term(nt.N)},
-          {"B", term(nt.B)},
-          {"tau_cp_s", num(nt.tau_cp_s)},
-          {"K", term(nt.K)},
-          {"R", term(nt.R)}};
+json noise_terms_to_json(const an::NoiseTerms& t) {
+  json j;
+  j["Q"] = term(t.Q, an::q_per_hour, "g*h");
+  j["N"] = term(t.N, an::n_per_hour, "g*h^0.5");
+  j["B"] = term(t.B);
+  j["tau_cp_s"] = num(t.tau_cp_s);
+  j["sigma_cp"] = num(t.sigma_cp);
+  j["K"] = term(t.K, an::k_per_hour, "g/h^0.5");
+  j["R"] = term(t.R, an::r_per_hour, "g/h");
+  // The paper's method: log10 sigma = sum_k poly[k] (log10 tau)^k, split at its inflections.
+  json paper{{"ok", t.paper.ok}, {"degree", t.paper.degree}, {"poly", t.paper.coef},
+             {"inflection_tau_s", t.paper.inflection_tau_s}, {"segments", json::array()}};
+  if (!t.paper.reason.empty()) paper["reason"] = t.paper.reason;
+  for (const auto& s : t.paper.segments)
+    paper["segments"].push_back({{"tau_from_s", s.tau_lo_s}, {"tau_to_s", s.tau_hi_s}, {"slope", s.slope},
+                                 {"tau_mid_s", s.tau_mid_s}, {"sigma_mid", s.sigma_mid}, {"term", s.term},
+                                 {"term_value", s.term_value}});
+  j["paper_fit"] = paper;
+  // The weighted least-squares fit of all five terms: plain values (tau in s) for
+  // plotting, the full terms with bounds under "terms".
+  json w{{"ok", t.wls.ok}, {"points", t.wls.points}, {"chi2_per_dof", t.wls.chi2_per_dof}};
+  if (!t.wls.reason.empty()) w["reason"] = t.wls.reason;
+  const std::pair<const char*, const an::Term*> wt[] = {
+      {"Q", &t.wls.Q}, {"N", &t.wls.N}, {"B", &t.wls.B}, {"K", &t.wls.K}, {"R", &t.wls.R}};
+  for (const auto& [name, tt] : wt) {
+    w[name] = num(tt->value);
+    w["terms"][name] = term(*tt);
+  }
+  j["lsq_fit"] = w;
+  return j;
 }
 
 nlohmann::json psd_to_json(const analysis::Psd& psd, const std::vector<analysis::Peak>& peaks) {
@@ -43,7 +75,12 @@ nlohmann::json psd_to_json(const analysis::Psd& psd, const std::vector<analysis:
 nlohmann::json loop_to_json(const plant::LoopFigures& f) {
   return {{"bandwidth_0p5_hz", f.bandwidth_0p5_hz},
           {"bandwidth_3db_hz", f.bandwidth_3db_hz},
-          {"settling_time_s", f.settling_time_s}};
+          {"settling_time_s", f.settling_time_s},
+          {"settling_band", f.settling_band},
+          {"overshoot", f.overshoot},
+          {"dc_gain", f.dc_gain},
+          {"step", {{"t_s", f.step_t_s}, {"x", f.step_x}, {"y", f.step_y}}},
+          {"freq", {{"f_hz", f.freq_hz}, {"mag_x", f.amp_x}, {"mag_y", f.amp_y}}}};
 }
 
 nlohmann::json analysis_document(const nlohmann::json& s) {

@@ -129,7 +129,13 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("q", nt.Q, 1.0 / 3600.0, "");
     term_value("n", nt.N, 1.0 / 60.0, "");
     term_value("k", nt.K, 60.0, "");
-    term_value("r", nt.R, 3600.0, "");
+    if (T >= p.r_min_record_s) {
+      term_value("r", nt.R, 3600.0, "");
+    } else {
+      ctx.values.set("r", std::nullopt,
+                     fmt::format("needs a record of at least {:g} h (METHOD.md); this capture is {:g} h",
+                                 p.r_min_record_s / 3600, T / 3600));
+    }
   } else {
     term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
   }
@@ -166,7 +172,8 @@ void phase_loop(PhaseContext& ctx, const Profile& p) {
   const toml::table* dut_cfg = p.plant.get_as<toml::table>("dut");
   const plant::LoopFigures f = plant::loop_figures(dut_cfg, p.filter);
   ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, "closed loop with the output filter, 0.5 level (model)");
-  ctx.values.set("settling_time", f.settling_time_s, "closed loop, 1 g step, 2 % band (model)");
+  ctx.values.set("settling_time", f.settling_time_s,
+                 fmt::format("closed loop, 1 g step, {:g} % band (model)", f.settling_band * 100));
   ctx.state["loop"] = loop_to_json(f);
 }
 

@@ -133,9 +133,10 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     p.filter_name = "paper W_f(z)";
   }
   if (const toml::table* a = cfg::get_table(t, "analysis")) {
-    cfg::check_keys(*a, {"taus", "confidence"}, "analysis");
+    cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s"}, "analysis");
     p.taus = cfg::get_string(*a, "taus", p.taus);
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
+    p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
   }
   static const char* known[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
                                 "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",

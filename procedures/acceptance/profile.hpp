@@ -50,6 +50,8 @@ struct Profile {
   // [analysis]
   std::string taus = "log:100";
   double confidence = 0.683;
+  // Rate ramp R needs a record of more than 50 h (METHOD.md); shorter captures report it null.
+  double r_min_record_s = 50 * 3600.0;
 
   std::map<std::string, std::pair<double, double>> limits;  // [limits]
   std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g

@@ -32,6 +32,14 @@ toml::table load_hardware_file(const std::string& path) {
   cfg::get_table(hw, "table", true);
   cfg::get_table(hw, "dut", true);
   cfg::get_table(hw, "gpio", true);
+  if (const toml::table* r = cfg::get_table(hw, "rig")) {
+    cfg::check_keys(*r, {"name"}, "rig");
+    cfg::get_string(*r, "name", std::string());
+  }
+  if (const toml::table* h = cfg::get_table(hw, "history")) {
+    cfg::check_keys(*h, {"url"}, "history");
+    cfg::get_string(*h, "url", std::string());
+  }
   return hw;
 }
 

@@ -13,6 +13,8 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+
+#include "procedures/acceptance/analysis_json.hpp"
 #include <optional>
 #include <sstream>
 #include <string>
@@ -38,7 +40,7 @@ struct Args {
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
   double confidence = 0.683;
-  bool no_bounds = false;
+  bool no_bounds = false, no_psd = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
   std::size_t segment = 0;
@@ -126,57 +128,6 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
     for (std::size_t i = 0; i < n; ++i) c.values.push_back(channel == "y" ? buf[i].y_g : buf[i].x_g);
   c.recovery = r.recovery();
   return c;
-}
-
-json term_json(const an::Term& t, double (*to_hours)(double), const char* hour_unit) {
-  json j = {{"value", t.value ? json(*t.value) : json(nullptr)}, {"unit", t.unit}};
-  if (t.lo) j["lo"] = *t.lo;
-  if (t.hi) j["hi"] = *t.hi;
-  if (!t.reason.empty()) j["reason"] = t.reason;
-  if (to_hours && t.value) {
-    j["per_hour"] = {{"value", to_hours(*t.value)}, {"unit", hour_unit}};
-    if (t.lo) j["per_hour"]["lo"] = to_hours(*t.lo);
-    if (t.hi) j["per_hour"]["hi"] = to_hours(*t.hi);
-  }
-  return j;
-}
-
-json points_json(const std::vector<an::DevPoint>& pts) {
-  json a = json::array();
-  for (const auto& p : pts)
-    a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
-                 {"edf", p.edf}, {"alpha", p.alpha}});
-  return a;
-}
-
-json noise_json(const an::NoiseTerms& t) {
-  static double (*const id)(double) = nullptr;
-  json j;
-  j["Q"] = term_json(t.Q, an::q_per_hour, "g*h");
-  j["N"] = term_json(t.N, an::n_per_hour, "g*h^0.5");
-  j["B"] = term_json(t.B, id, "");
-  j["K"] = term_json(t.K, an::k_per_hour, "g/h^0.5");
-  j["R"] = term_json(t.R, an::r_per_hour, "g/h");
-  j["tau_cp_s"] = t.tau_cp_s ? json(*t.tau_cp_s) : json(nullptr);
-  j["sigma_cp"] = t.sigma_cp ? json(*t.sigma_cp) : json(nullptr);
-  json paper = {{"ok", t.paper.ok}, {"degree", t.paper.degree}, {"coef_log10", t.paper.coef},
-                {"inflection_tau_s", t.paper.inflection_tau_s}};
-  if (!t.paper.reason.empty()) paper["reason"] = t.paper.reason;
-  paper["segments"] = json::array();
-  for (const auto& s : t.paper.segments)
-    paper["segments"].push_back({{"tau_lo_s", s.tau_lo_s}, {"tau_hi_s", s.tau_hi_s}, {"slope", s.slope},
-                                 {"tau_mid_s", s.tau_mid_s}, {"sigma_mid", s.sigma_mid}, {"term", s.term},
-                                 {"term_value", s.term_value}});
-  j["paper"] = paper;
-  json w = {{"ok", t.wls.ok}, {"points", t.wls.points}, {"chi2_per_dof", t.wls.chi2_per_dof}};
-  if (!t.wls.reason.empty()) w["reason"] = t.wls.reason;
-  w["Q"] = term_json(t.wls.Q, an::q_per_hour, "g*h");
-  w["N"] = term_json(t.wls.N, an::n_per_hour, "g*h^0.5");
-  w["B"] = term_json(t.wls.B, id, "");
-  w["K"] = term_json(t.wls.K, an::k_per_hour, "g/h^0.5");
-  w["R"] = term_json(t.wls.R, an::r_per_hour, "g/h");
-  j["wls"] = w;
-  return j;
 }
 
 void write_file(const std::filesystem::path& p, const std::string& text) {
@@ -273,9 +224,9 @@ int run(const Args& a) {
   j["input"] = input;
   j["record_s"] = record_s;
   j["confidence"] = a.confidence;
-  j["oadev"] = points_json(devs[0]);
-  if (devs.size() > 1) j[an::to_string(base.type)] = points_json(devs[1]);
-  j["noise_terms"] = noise_json(terms);
+  j["oadev"] = acceptance::dev_to_json(devs[0]);
+  if (devs.size() > 1) j[an::to_string(base.type)] = acceptance::dev_to_json(devs[1]);
+  j["noise_terms"] = acceptance::noise_terms_to_json(terms);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", a.channel},
@@ -285,7 +236,7 @@ int run(const Args& a) {
   // PSD (frequency data only: for phase data it would be of the integral).
   std::optional<an::Psd> psd;
   std::vector<an::Peak> peaks;
-  if (base.data == an::DataKind::Frequency) {
+  if (base.data == an::DataKind::Frequency && !a.no_psd) {
     an::WelchOptions wo;
     wo.window = an::parse_window(a.window);
     wo.segment = a.segment;
@@ -366,6 +317,7 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--dev", args->dev, "extra deviation: adev|oadev|mdev|tdev|hdev|ohdev|totdev (OADEV always)");
   sub->add_option("--confidence", args->confidence, "confidence of the bounds (default 0.683)");
   sub->add_flag("--no-bounds", args->no_bounds, "skip noise identification and bounds");
+  sub->add_flag("--no-psd", args->no_psd, "skip the PSD (Allan part only)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");
   sub->add_option("--json", args->json_out, "write the analysis as JSON (CONTRACTS.md shape)");
   sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");

@@ -107,6 +107,26 @@ void operator_prompts(const RunArgs& a, const acceptance::Profile& p) {
     throw AbortedError("operator did not confirm the table is clear");
 }
 
+// The rig's name from the hardware file's [rig] section, else the host name.
+// (load_hardware_file has validated [rig] and [history].)
+std::string cfg_station(const toml::table& hw) {
+  if (const toml::table* r = cfg::get_table(hw, "rig")) {
+    const std::string name = cfg::get_string(*r, "name", std::string());
+    if (!name.empty()) return name;
+  }
+  char host[256] = {};
+  ::gethostname(host, sizeof host - 1);
+  return host;
+}
+
+// --db, else the hardware file's [history] url, else the rig config's default.
+std::string history_url(const RunArgs& a, const toml::table& hw) {
+  if (!a.db.empty()) return a.db;
+  if (const toml::table* h = cfg::get_table(hw, "history"))
+    if (h->contains("url")) return cfg::get_string(*h, "url");
+  return history::default_db_url();
+}
+
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
   auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
   file->set_level(spdlog::level::debug);
@@ -202,6 +222,7 @@ int do_run(RunArgs a) {
   info.serial = state.value("serial", a.serial);
   info.profile = p.name;
   info.plant = a.plant;
+  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
   info.started = started;
   info.finished = iso8601_utc_now();
   info.software = std::string("rig ") + RIG_VERSION;
@@ -221,8 +242,7 @@ int do_run(RunArgs a) {
   }
   if (!a.no_history) {
     try {
-      history::record_run(a.db.empty() ? history::default_db_url() : a.db, nlohmann::json::parse(passport.dump()),
-                          info.out_dir);
+      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
     } catch (const std::exception& e) {
       log->error("history database not updated: {}", e.what());
     }

@@ -13,6 +13,7 @@ nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& 
   p["serial"] = info.serial;
   p["profile"] = info.profile;
   p["plant"] = info.plant;
+  p["station"] = info.station;
   p["started"] = info.started;
   p["finished"] = info.finished;
   p["outcome"] = to_string(result.outcome);

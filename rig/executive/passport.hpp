@@ -12,7 +12,7 @@
 namespace rig {
 
 struct PassportInfo {
-  std::string serial, profile, plant, started, finished, software, out_dir;
+  std::string serial, profile, plant, station, started, finished, software, out_dir;
   std::vector<std::string> captures;  // relative to out_dir
 };
 

@@ -1,5 +1,7 @@
 #include "rig/gpio/gpiod_lines.hpp"
 
+#include <chrono>
+#include <optional>
 #include <system_error>
 
 #include <gpiod.hpp>
@@ -56,8 +58,14 @@ class GpiodLines final : public LineDriver {
     if (!estop_.event_wait(timeout)) return std::nullopt;
     // Edges are reported in logical (active-low corrected) terms.
     const gpiod::line_event ev = estop_.event_read();
+    // The uAPI v1 stamps line events with CLOCK_MONOTONIC (Linux >= 5.7), the
+    // clock steady_clock reads on Linux.
+    last_edge_ = std::chrono::steady_clock::time_point(
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(ev.timestamp));
     return ev.event_type == gpiod::line_event::RISING_EDGE;
   }
+
+  std::optional<std::chrono::steady_clock::time_point> last_edge_time() const override { return last_edge_; }
 
   std::string describe() const override {
     std::string s = "libgpiod lines";
@@ -89,6 +97,7 @@ class GpiodLines final : public LineDriver {
   gpiod::chip chip_;
   gpiod::line out_[kOutputs];
   gpiod::line estop_;
+  std::optional<std::chrono::steady_clock::time_point> last_edge_;
 };
 
 }  // namespace

@@ -69,7 +69,8 @@ void LineRigIo::watch() {
       power_ = false;
       estop_ = true;
     }
-    reaction_s_ = std::chrono::duration<double>(clk::now() - t0).count();
+    const auto edge_t = drv_->last_edge_time().value_or(t0);
+    reaction_s_ = std::chrono::duration<double>(clk::now() - edge_t).count();
     std::function<void()> h;
     {
       std::lock_guard lk(handler_mu_);

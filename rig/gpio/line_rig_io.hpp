@@ -33,6 +33,9 @@ class LineDriver {
   // Waits up to `timeout` for an edge on the e-stop input; returns the new
   // logical level, or nullopt on timeout.
   virtual std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) = 0;
+  // When the last edge happened, on std::chrono::steady_clock (CLOCK_MONOTONIC):
+  // the kernel's event timestamp for libgpiod; nullopt when unknown.
+  virtual std::optional<std::chrono::steady_clock::time_point> last_edge_time() const { return std::nullopt; }
   virtual std::string describe() const = 0;
 };
 
@@ -51,7 +54,9 @@ class LineRigIo final : public RigIo {
   void on_estop(std::function<void()> handler) override;
   std::string describe() const override;
 
-  // Time from the e-stop edge being seen to DUT power being off, last event (seconds).
+  // Time from the last e-stop edge to DUT power being off, seconds: from the
+  // kernel's timestamp of the edge when the driver has one, else from the
+  // moment the event thread saw it.
   double last_estop_reaction_s() const { return reaction_s_; }
 
  private:

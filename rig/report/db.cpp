@@ -235,7 +235,9 @@ std::unique_ptr<Db> open_db(const std::string& url) {
   std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
   if (path.rfind("//", 0) == 0) path = path.substr(2);  // sqlite:///abs/path
   if (path.empty()) throw ConfigError("history database URL '" + url + "' names no file");
-  if (url.find("://") != std::string::npos && url.rfind("sqlite:", 0) != 0)
+  // "scheme:..." (a colon before any slash) other than sqlite: is a URL this rig cannot open.
+  const std::size_t colon = url.find(':');
+  if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
     throw ConfigError("history database URL '" + mask_password(url) +
                       "': unknown scheme (expected sqlite:PATH, a path, or postgresql://...)");
   return std::make_unique<SqliteDb>(path);

@@ -362,3 +362,15 @@ TEST(FirmwareRealtime, StreamsAtWallClockPaceToARealClockClient) {
   for (std::size_t i = 1; i < v.size(); ++i) ASSERT_EQ(v[i].seq, v[0].seq + i);
   EXPECT_EQ(link.stats().gaps, 0u);
 }
+
+TEST(InProcessDut, AReaderComingBackLateIsNotSilence) {
+  // The rig was busy for 0.5 s (longer than the 100 ms limit) while the DUT
+  // kept streaming into the queue: that is not the DUT going silent.
+  World w;
+  w.dut->start_stream({});
+  read_n(*w.dut, 100);
+  w.clock.sleep_for(0.5, {});
+  const auto v = read_n(*w.dut, 600);
+  EXPECT_EQ(v.back().seq, v.front().seq + 599);
+  EXPECT_EQ(w.dut->stats().gaps, 0u);
+}

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <numbers>
 
 #include "plant/dut/emulated_dut.hpp"
 #include "plant/dut/loop_model.hpp"
@@ -78,7 +79,7 @@ TEST(Dut, OrientationGivesBiasBaseErrorAndTilt) {
   EXPECT_NEAR(d.static_input_g(), 2e-5 + 1e-4, 1e-9);
   // a table angle error moves U20 through the cross-misalignment: repeatability shows
   d.set_table_angle_deg(180.01);
-  EXPECT_NEAR(d.static_input_g() - (2e-5 - 4e-4), -1e-4 * std::sin(0.01 * M_PI / 180), 1e-10);
+  EXPECT_NEAR(d.static_input_g() - (2e-5 - 4e-4), -1e-4 * std::sin(0.01 * std::numbers::pi / 180), 1e-10);
 }
 
 TEST(Dut, FilterOffGivesYEqualX) {

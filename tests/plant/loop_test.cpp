@@ -1,12 +1,15 @@
 // The closed loop: stability, DC gain, step and frequency response, the figures.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include <Eigen/Eigenvalues>
 
+#include "plant/dut/filter_select.hpp"
 #include "plant/dut/loop_figures.hpp"
+#include "rig/core/errors.hpp"
 #include "plant/dut/loop_model.hpp"
 
 namespace rig::plant {
@@ -127,6 +130,47 @@ TEST(Loop, FigureHelpers) {
   const double dt = 1e-4, tau = 1e-3;
   for (int k = 0; k < 1000; ++k) h.push_back(1 - std::exp(-k * dt / tau));
   EXPECT_NEAR(settling_time(h, dt, 0.05), tau * std::log(20.0), dt);
+}
+
+TEST(FilterSelect, RanksByBothCriteria) {
+  FilterSelectOptions o;
+  o.orders = {1, 2};
+  o.fc_min_hz = 300;
+  o.fc_max_hz = 700;
+  o.fc_step_hz = 200;
+  o.rms_seconds = 2;
+  const std::vector<FilterCandidate> c = select_filters(nullptr, o);
+  ASSERT_EQ(c.size(), 2u + 2u * 3u);  // paper, none, butter1/2 at 300/500/700
+  bool seen_outside = false;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    EXPECT_EQ(c[i].rank, static_cast<int>(i + 1));
+    EXPECT_EQ(c[i].meets_band, std::abs(c[i].bandwidth_0p5_hz - 500) <= 25) << c[i].name;
+    if (!c[i].meets_band) {
+      seen_outside = true;
+    } else {
+      EXPECT_FALSE(seen_outside) << "a candidate in the band ranks after one outside: " << c[i].name;
+    }
+    if (i > 0 && c[i].meets_band && c[i - 1].meets_band) {
+      EXPECT_LE(c[i - 1].rms_g, c[i].rms_g);
+    }
+    EXPECT_GT(c[i].rms_g, 0);
+  }
+  const auto paper = std::find_if(c.begin(), c.end(), [](const auto& k) { return k.name == "paper"; });
+  ASSERT_NE(paper, c.end());
+  EXPECT_TRUE(paper->meets_band);
+  const auto none = std::find_if(c.begin(), c.end(), [](const auto& k) { return k.name == "none"; });
+  ASSERT_NE(none, c.end());
+  EXPECT_GT(none->rms_g, paper->rms_g);  // criterion 1: the filter lowers the RMS
+}
+
+TEST(FilterSelect, NamesAndErrors) {
+  EXPECT_EQ(filter_by_name("butter2@500", 10000).sections.size(), 1u);
+  EXPECT_EQ(filter_by_name("butter3@500", 10000).sections.size(), 2u);
+  EXPECT_FALSE(filter_by_name("none", 10000).enabled);
+  EXPECT_THROW(filter_by_name("cheby2@500", 10000), ConfigError);
+  EXPECT_THROW(filter_by_name("butter9@500", 10000), ConfigError);
+  EXPECT_THROW(filter_by_name("butter2@6000", 10000), ConfigError);
+  EXPECT_THROW(filter_by_name("butter2@", 10000), ConfigError);
 }
 
 }  // namespace

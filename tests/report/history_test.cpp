@@ -117,6 +117,7 @@ TEST(HistorySqlite, RefusesASchemaNewerThanThisBuild) {
 TEST(HistorySqlite, BadUrlsAndUnwritablePlacesNameTheDatabase) {
   TempDir d;
   EXPECT_THROW(h::migrate("mysql://host/db"), rig::ConfigError);
+  EXPECT_THROW(h::migrate("postgresql:dbname=x"), rig::ConfigError);
   EXPECT_THROW(h::migrate("sqlite:"), rig::ConfigError);
   rig::test::write_file(d.path / "file", "x");
   try {

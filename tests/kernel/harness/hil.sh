@@ -127,7 +127,15 @@ WRAP=$OUT/guest-entry.sh
 
 log "boot guest, run $SCRIPT"
 rc=0
-KERNEL=$VMLINUX INITRD=$INITRD EXTRA_APPEND="kil.tmp=1 ${EXTRA_APPEND:-}" TIMEOUT=${TIMEOUT:-600} \
+# The guest gets a private tmpfs on /tmp. A tree that itself lives under /tmp (a CI
+# clone, say) would be hidden by it, so init binds those top folders back in (kil.keep).
+KIL_KEEP=
+for p in "$SCRIPT" "$OUT" "$HERE" "${RIG_BIN:-}"; do
+  [[ -n $p ]] || continue
+  rp=$(realpath -m "$p")
+  if [[ $rp == /tmp/?* ]]; then top=${rp#/tmp/}; top=/tmp/${top%%/*}; [[ ,$KIL_KEEP, == *,$top,* ]] || KIL_KEEP+=${KIL_KEEP:+,}$top; fi
+done
+KERNEL=$VMLINUX INITRD=$INITRD EXTRA_APPEND="kil.tmp=1 ${KIL_KEEP:+kil.keep=$KIL_KEEP }${EXTRA_APPEND:-}" TIMEOUT=${TIMEOUT:-600} \
   "$HERE/run-guest.sh" "$WRAP" "$OUT" || rc=$?
 log "guest exit status $rc"
 [[ $rc -ne 125 ]] || die "the guest never reported (crashed or timed out); console output above, log in $OUT"
