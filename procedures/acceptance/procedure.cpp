@@ -112,7 +112,14 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   opt.confidence = p.confidence;
   const std::vector<analysis::DevPoint> dev = analysis::deviation(d, opt);
   const double T = static_cast<double>(d.size()) / p.rate_hz;
-  const analysis::NoiseTerms nt = analysis::noise_terms(dev, T);
+  analysis::NoiseTerms nt = analysis::noise_terms(dev, T);
+  if (T < p.r_min_record_s) {  // the method's rule, applied before both the passport and analysis.json
+    nt.R.value.reset();
+    nt.R.lo.reset();
+    nt.R.hi.reset();
+    nt.R.reason = fmt::format("needs a record of at least {:g} h (METHOD.md); this capture is {:g} h",
+                              p.r_min_record_s / 3600, T / 3600);
+  }
   auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
     if (t.value) {
       ctx.values.set(name, *t.value * scale, why, t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,
@@ -129,13 +136,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("q", nt.Q, 1.0 / 3600.0, "");
     term_value("n", nt.N, 1.0 / 60.0, "");
     term_value("k", nt.K, 60.0, "");
-    if (T >= p.r_min_record_s) {
-      term_value("r", nt.R, 3600.0, "");
-    } else {
-      ctx.values.set("r", std::nullopt,
-                     fmt::format("needs a record of at least {:g} h (METHOD.md); this capture is {:g} h",
-                                 p.r_min_record_s / 3600, T / 3600));
-    }
+    term_value("r", nt.R, 3600.0, "");
   } else {
     term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
   }

@@ -230,7 +230,9 @@ int run(const Args& a) {
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", a.channel},
-                    {"complete", cap->recovery.complete}, {"problem", cap->recovery.problem}};
+                    {"complete", cap->recovery.complete}, {"truncated", cap->recovery.truncated},
+                    {"samples", cap->recovery.samples}, {"damaged_blocks", cap->recovery.damaged_blocks},
+                    {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes}};
   }
 
   // PSD (frequency data only: for phase data it would be of the integral).
@@ -273,6 +275,11 @@ int run(const Args& a) {
 
   // Console summary.
   std::ostream& o = std::cout;
+  if (cap) {  // what the capture reader recovered, damage included (docs/capture-format.md)
+    o << cap->recovery.summary(a.file) << "\n";
+    for (const auto& note : cap->recovery.notes) o << "  " << note << "\n";
+    if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
+  }
   o << a.file << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) {

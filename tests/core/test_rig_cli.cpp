@@ -134,6 +134,45 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS"), std::string::npos);
 }
 
+TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
+  const std::string d = tmp("analyze");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run"}, d + "/io"), 0);
+  const std::string cap = d + "/run/captures/raw-U10.cap";
+  ASSERT_EQ(run({"analyze", cap, "--input", "capture", "--json", d + "/a.json"}, d + "/a"), 0) << slurp(d + "/a.stderr");
+  auto j = nlohmann::json::parse(slurp(d + "/a.json"));
+  EXPECT_EQ(j["capture"]["complete"], true);
+  EXPECT_EQ(j["capture"]["samples"], 60000);
+  EXPECT_FALSE(j["oadev"].empty());
+  // Truncated (writer killed mid-block): analysed up to the last complete block, and said so.
+  fs::copy_file(cap, d + "/cut.cap");
+  fs::resize_file(d + "/cut.cap", fs::file_size(cap) - 16 - 8000);
+  ASSERT_EQ(run({"analyze", d + "/cut.cap", "--input", "capture", "--json", d + "/c.json"}, d + "/c"), 0);
+  j = nlohmann::json::parse(slurp(d + "/c.json"));
+  EXPECT_EQ(j["capture"]["complete"], false);
+  EXPECT_EQ(j["capture"]["truncated"], true);
+  EXPECT_EQ(j["capture"]["samples"], 59000);
+  EXPECT_NE(slurp(d + "/c.stdout").find("INCOMPLETE"), std::string::npos) << slurp(d + "/c.stdout");
+  EXPECT_NE(slurp(d + "/c.stderr").find("writer killed mid-block"), std::string::npos) << slurp(d + "/c.stderr");
+  // Corrupted block in the middle: skipped, located, the rest analysed.
+  fs::copy_file(cap, d + "/bad.cap");
+  {
+    std::fstream f(d + "/bad.cap", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(fs::file_size(cap) - 16 - 30 * 16016 + 100));
+    const char junk[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    f.write(junk, 8);
+  }
+  ASSERT_EQ(run({"analyze", d + "/bad.cap", "--input", "capture", "--json", d + "/b.json"}, d + "/b"), 0);
+  j = nlohmann::json::parse(slurp(d + "/b.json"));
+  EXPECT_EQ(j["capture"]["damaged_blocks"], 1);
+  EXPECT_EQ(j["capture"]["samples"], 59000);
+  EXPECT_NE(slurp(d + "/b.stdout").find("fails its payload CRC"), std::string::npos) << slurp(d + "/b.stdout");
+  // Not a capture at all: exit 2 naming the file.
+  std::ofstream(d + "/junk.cap") << "junk";
+  EXPECT_EQ(run({"analyze", d + "/junk.cap", "--input", "capture"}, d + "/jk"), 2);
+  EXPECT_NE(slurp(d + "/jk.stderr").find(d + "/junk.cap"), std::string::npos) << slurp(d + "/jk.stderr");
+}
+
 TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
   const std::string d = tmp("sigint");
   fs::create_directories(d);
