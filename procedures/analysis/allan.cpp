@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "procedures/analysis/allan_engine.hpp"
 #include "procedures/analysis/edf.hpp"
@@ -43,38 +46,6 @@ std::vector<double> averages(const std::vector<double>& dec, std::size_t m) {
   z.reserve(dec.size() - 1);
   for (std::size_t k = 0; k + 1 < dec.size(); ++k) z.push_back((dec[k + 1] - dec[k]) / static_cast<double>(m));
   return z;
-}
-
-double sample_variance(const std::vector<double>& z) {
-  double mu = 0;
-  for (double v : z) mu += v;
-  mu /= static_cast<double>(z.size());
-  double s = 0;
-  for (double v : z) s += (v - mu) * (v - mu);
-  return s / static_cast<double>(z.size() - 1);
-}
-
-std::vector<double> detrend_linear(const std::vector<double>& z) {
-  const double n = static_cast<double>(z.size()), tm = (n - 1) / 2;
-  double zm = 0;
-  for (double v : z) zm += v;
-  zm /= n;
-  double sxy = 0, sxx = 0;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    const double t = static_cast<double>(i) - tm;
-    sxy += t * (z[i] - zm);
-    sxx += t * t;
-  }
-  const double b = sxx > 0 ? sxy / sxx : 0;
-  std::vector<double> r(z.size());
-  for (std::size_t i = 0; i < z.size(); ++i) r[i] = z[i] - zm - b * (static_cast<double>(i) - tm);
-  return r;
-}
-
-double nonoverlapped_avar(const std::vector<double>& z) {
-  double s = 0;
-  for (std::size_t k = 0; k + 1 < z.size(); ++k) s += (z[k + 1] - z[k]) * (z[k + 1] - z[k]);
-  return s / (2 * static_cast<double>(z.size() - 1));
 }
 
 int clamp_alpha(int alpha, int d) { return std::clamp(alpha, d == 3 ? -4 : -2, 2); }
@@ -154,52 +125,79 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     return mvar_cache[m] = v;
   };
 
-  std::vector<std::vector<DevPoint>> out(opts.size());
+  // First, per point and in parallel: the deviation and, with >= 30 averages, the lag-1 ACF
+  // noise identification (the costly part: up to kNoiseIdCap points per tau).
+  struct Pending {
+    std::size_t k, q;
+    DevPoint p;
+    std::vector<double> z;
+    std::optional<NoiseId> id;
+  };
+  std::vector<Pending> pend;
+  for (std::size_t k = 0; k < opts.size(); ++k)
+    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}});
   const double tau0 = 1.0 / opts[0].rate_hz;
-  for (std::size_t k = 0; k < opts.size(); ++k) {
-    const DevOptions& o = opts[k];
-    for (std::size_t q = 0; q < index[k].size(); ++q) {
-      const detail::Sums& s = er.sums[index[k][q]];
-      DevPoint p;
-      p.m = s.m;
-      p.tau_s = static_cast<double>(s.m) * tau0;
-      p.n_terms = term_count(o.type, n, s.m);
-      double var = variance(o.type, s.sum, s.terms, s.m, n);
-      p.dev = std::sqrt(var);
-      if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
-      if (o.bounds) {
-        const int d = diff_order(o.type);
-        const std::vector<double> z = averages(s.decimated, s.m);
-        NoiseId id;
-        if (o.fixed_alpha) {
-          id.alpha = *o.fixed_alpha;
-        } else if (z.size() >= kAcfMinPoints) {
-          // Stable32 identifies on the m-averaged frequency for phase data too (matches its tables
-          // where the decimated-phase variant of allantools does not: Cs5071A m >= 5000).
-          id = acf_noise_id(z, false, d);
-        } else if (z.size() >= 3) {
-          // B1 on the linearly detrended averages (a frequency drift would otherwise read as
-          // random-walk FM), against their non-overlapped Allan variance.
-          const std::vector<double> zr = detrend_linear(z);
-          const double avar = nonoverlapped_avar(zr);
-          const double b1 = avar > 0 ? sample_variance(zr) / avar : 1;
-          id = b1_rn_noise_id(b1, static_cast<double>(z.size()), -1, s.m);
-          const double av = nonoverlapped_avar(z);
-          double rn = -1;
-          if (id.alpha >= 1 && av > 0) {  // phase modulation: R(n) = Mod AVAR / AVAR decides
-            const double mv = mod_avar(s.m);
-            if (mv >= 0) rn = mv / av;
-          }
-          id = b1_rn_noise_id(b1, static_cast<double>(z.size()), rn, s.m);
-        }
-        p.alpha = clamp_alpha(id.alpha, d);
-        p.edf = edf_for(o.type, p.alpha, s.m, n);
-        const auto [lo, hi] = chi2_bounds(p.dev, p.edf, o.confidence);
-        p.lo = lo;
-        p.hi = hi;
-      }
-      out[k].push_back(p);
+  const unsigned threads = opts[0].threads ? opts[0].threads : std::max(1u, std::thread::hardware_concurrency());
+  detail::parallel_for(pend.size(), threads, [&](std::size_t i) {
+    Pending& e = pend[i];
+    const DevOptions& o = opts[e.k];
+    const detail::Sums& s = er.sums[index[e.k][e.q]];
+    DevPoint& p = e.p;
+    p.m = s.m;
+    p.tau_s = static_cast<double>(s.m) * tau0;
+    p.n_terms = term_count(o.type, n, s.m);
+    p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
+    if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
+    if (!o.bounds || o.fixed_alpha) return;
+    e.z = averages(s.decimated, s.m);
+    if (e.z.size() < kAcfMinPoints) return;
+    if (kind == DataKind::Frequency) {
+      e.id = acf_noise_id(e.z, false, diff_order(o.type));
+    } else {
+      // Phase data: Stable32 identifies on the decimated phase itself (noise_id.hpp). The
+      // engine's P is the phase less the line through its end points, in units of tau0; the
+      // line is put back (an ACF sees it before differencing), the scale does not matter.
+      std::vector<double> x(s.decimated.size());
+      const double ramp = er.spec.slope * er.spec.rate_hz * static_cast<double>(s.m);
+      for (std::size_t j = 0; j < x.size(); ++j) x[j] = s.decimated[j] + ramp * static_cast<double>(j);
+      e.id = acf_noise_id(x, true, diff_order(o.type));
     }
+  });
+
+  // Then in order: B1/R(n) where there are fewer than 30 averages (its rules repeat the alpha
+  // of the previous tau past half the largest factor), and the bounds.
+  std::vector<std::vector<DevPoint>> out(opts.size());
+  for (Pending& e : pend) {
+    const DevOptions& o = opts[e.k];
+    const detail::Sums& s = er.sums[index[e.k][e.q]];
+    DevPoint p = e.p;
+    if (o.bounds) {
+      const int d = diff_order(o.type);
+      NoiseId id;
+      if (o.fixed_alpha) {
+        id.alpha = *o.fixed_alpha;
+      } else if (e.id) {
+        id = *e.id;
+      } else {
+        std::optional<int> previous;
+        std::size_t previous_m = 0;
+        for (const DevPoint& prior : out[e.k]) {
+          if (prior.m < s.m && prior.m >= previous_m) {
+            previous_m = prior.m;
+            previous = prior.alpha;
+          }
+        }
+        const bool modified = o.type == Deviation::MDEV || o.type == Deviation::TDEV;
+        id = b1_rn_noise_id(e.z, {s.m, p.n_terms, max_factor(o.type, n), d == 3, previous},
+                            modified ? std::function<double()>([&] { return mod_avar(s.m); }) : nullptr);
+      }
+      p.alpha = clamp_alpha(id.alpha, d);
+      p.edf = edf_for(o.type, p.alpha, s.m, n);
+      const auto [lo, hi] = chi2_bounds(p.dev, p.edf, o.confidence);
+      p.lo = lo;
+      p.hi = hi;
+    }
+    out[e.k].push_back(p);
   }
   return out;
 }
@@ -209,8 +207,20 @@ std::vector<DevPoint> deviation_stream(const ChunkSource& src, const DevOptions&
 }
 
 std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt) {
-  for (std::size_t i = 0; i < data.size(); ++i)
-    if (!std::isfinite(data[i])) throw std::invalid_argument("allan: value " + std::to_string(i) + " is not finite");
+  // x * 0 is NaN exactly for NaN and infinities; explicit lanes keep the pass vectorised.
+  using v4 = double __attribute__((vector_size(32)));
+  v4 acc{};
+  std::size_t i4 = 0;
+  for (; i4 + 4 <= data.size(); i4 += 4) {
+    v4 v;
+    std::memcpy(&v, data.data() + i4, sizeof v);
+    acc += v * 0.0;
+  }
+  double tail = 0;
+  for (; i4 < data.size(); ++i4) tail += data[i4] * 0.0;
+  if (acc[0] + acc[1] + acc[2] + acc[3] + tail != 0.0)
+    for (std::size_t i = 0; i < data.size(); ++i)
+      if (!std::isfinite(data[i])) throw std::invalid_argument("allan: value " + std::to_string(i) + " is not finite");
   SpanSource src(data);
   StreamOptions so;
   so.memory_budget_bytes = std::numeric_limits<std::size_t>::max() / 4;  // in memory: one ring holds it all

@@ -49,12 +49,16 @@ struct DevPoint {
   int alpha = 0;  // identified power-law exponent of S_y(f) used for the bounds
 };
 
+// The default confidence of the bounds: exactly one sigma, erf(1/sqrt 2). Stable32 prints it
+// as "0.683"; its tables' bounds are at this value (tests/analysis/test_allan_reference.cpp).
+inline constexpr double kOneSigma = 0.6826894921370859;
+
 struct DevOptions {
   Deviation type = Deviation::OADEV;
   DataKind data = DataKind::Frequency;
   double rate_hz = 1.0;
   TauGrid taus;
-  double confidence = 0.683;
+  double confidence = kOneSigma;
   bool bounds = true;
   std::vector<std::size_t> factors;  // explicit averaging factors; overrides `taus` when not empty
   unsigned threads = 0;              // 0 = all hardware threads (the 2-core rig PC: both)
@@ -74,6 +78,8 @@ struct ChunkSource {
   virtual ~ChunkSource() = default;
   virtual std::uint64_t size() const = 0;
   virtual std::size_t read_at(std::uint64_t pos, std::span<double> out) const = 0;
+  // All values contiguous in memory, if the source has them so (saves a copy per read).
+  virtual const double* contiguous() const { return nullptr; }
 };
 
 // A ChunkSource over values already in memory (used by deviation() and by tests).
@@ -82,6 +88,7 @@ class SpanSource final : public ChunkSource {
   explicit SpanSource(std::span<const double> v) : v_(v) {}
   std::uint64_t size() const override { return v_.size(); }
   std::size_t read_at(std::uint64_t pos, std::span<double> out) const override;
+  const double* contiguous() const override { return v_.data(); }
 
  private:
   std::span<const double> v_;

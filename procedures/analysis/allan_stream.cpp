@@ -3,11 +3,14 @@
 #include <atomic>
 #include <barrier>
 #include <bit>
+#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <thread>
+
+#include <sys/mman.h>
 
 #include "procedures/analysis/allan_engine.hpp"
 
@@ -77,6 +80,65 @@ RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, c
   return s;
 }
 
+// A doubling chain m, 2m, .., 2^(K-1) m of OADEV/TOTDEV taus aligned at a common head h (the
+// newest phase point of each term): tau 2^i m's term is P[h] - 2 P[h - 2^i m] + P[h - 2^(i+1) m],
+// so K taus need K + 2 streams, not 3K: the loads that bound sum_d2 are shared.
+// lag[j] = &P[h0 - 2^j m], j = 0..K; out[i] += sum of squared terms of tau 2^i m.
+template <int K>
+[[gnu::always_inline]] inline void chain_d2_body(const double* head, const double* const* lag, std::size_t len,
+                                                 double* out) {
+  v8 a[K][2] = {};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
+    v8 p0 = load8(lag[0] + t), p1 = load8(lag[0] + t + 8);
+#pragma GCC unroll 8
+    for (int i = 0; i < K; ++i) {
+      const v8 q0 = load8(lag[i + 1] + t), q1 = load8(lag[i + 1] + t + 8);
+      const v8 d0 = h0 - 2 * p0 + q0, d1 = h1 - 2 * p1 + q1;
+      a[i][0] += d0 * d0;
+      a[i][1] += d1 * d1;
+      p0 = q0, p1 = q1;
+    }
+  }
+  for (int i = 0; i < K; ++i) {
+    double s = hsum(a[i][0] + a[i][1]);
+    for (std::size_t u = t; u < len; ++u) {
+      const double d = head[u] - 2 * lag[i][u] + lag[i + 1][u];
+      s += d * d;
+    }
+    out[i] += s;
+  }
+}
+
+#define RIG_CHAIN(K)                                                                                 \
+  RIG_CLONES void chain_d2_##K(const double* head, const double* const* lag, std::size_t len, double* out) { \
+    chain_d2_body<K>(head, lag, len, out);                                                           \
+  }
+RIG_CHAIN(2)
+RIG_CHAIN(3)
+RIG_CHAIN(4)
+RIG_CHAIN(5)
+RIG_CHAIN(6)
+RIG_CHAIN(7)
+RIG_CHAIN(8)
+#undef RIG_CHAIN
+constexpr int kMaxChain = 8;
+
+void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out) {
+  switch (k) {
+    case 2: return chain_d2_2(head, lag, len, out);
+    case 3: return chain_d2_3(head, lag, len, out);
+    case 4: return chain_d2_4(head, lag, len, out);
+    case 5: return chain_d2_5(head, lag, len, out);
+    case 6: return chain_d2_6(head, lag, len, out);
+    case 7: return chain_d2_7(head, lag, len, out);
+    case 8: return chain_d2_8(head, lag, len, out);
+    default: break;
+  }
+  for (int i = 0; i < k; ++i) out[i] += sum_d2(lag[i + 1], lag[i], head, len);
+}
+
 // MDEV: the m-window sum of second differences slides by one per base; its increment
 // d[b+m] - d[b] is the third difference w3 - 3w2 + 3w1 - w0. The running sum is a prefix
 // sum: done in tiles with four interleaved chains so it is not one long dependency chain.
@@ -125,6 +187,11 @@ double mdev_run(const double* w0, const double* w1, const double* w2, const doub
 }
 
 // ---------------------------------------------------------------------------------------------
+struct PhaseState {
+  double C = 0;  // C_k of the block holding the next index
+  double L = 0;  // L(next index)
+};
+
 struct Acc {
   Deviation type{};
   std::size_t m = 0;
@@ -134,7 +201,11 @@ struct Acc {
   double sum = 0;
   std::size_t terms = 0;
   double inner = 0;       // MDEV state
-  bool far = false;
+  bool far = false;       // post-pass: even the newer windows do not fit the ring
+  bool cursor = false;    // in-pass, its oldest window P[b] rebuilt by its own sequential cursor
+  std::uint64_t cur_next = 0;  // cursor: next phase index to build, and P[cur_next - 1]
+  PhaseState cur_state;
+  std::vector<double> cur_buf, cur_scratch;
 
   bool strided() const { return type == Deviation::ADEV || type == Deviation::HDEV; }
   bool modified() const { return type == Deviation::MDEV || type == Deviation::TDEV; }
@@ -189,35 +260,68 @@ Acc make_acc(Deviation type, std::size_t m, std::size_t n) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Frequency data: P is built in blocks of kCheckpointEvery points, P[j] = C_k + L(j) with
+// C_k = P[k B] (the checkpoint) and L(j) the running sum of (y - c) from the block's start.
+// Every path (main pass, cursors, random access) computes each L from its block start in the
+// same order, so they agree to the bit; four blocks at a time run as independent chains, so
+// the running sum is not one long chain of dependent additions.
+// P[j0, j0 + len) into out; y holds y[j0 .. j0 + ny) (ny = len, or len - 1 at the record's end).
+void phase_run(const double* y, std::size_t len, std::size_t ny, std::uint64_t j0, double c, PhaseState& st,
+               double* out) {
+  constexpr std::size_t B = kCheckpointEvery;
+  std::size_t t = 0;
+  auto scalar_to = [&](std::size_t stop) {
+    for (; t < stop; ++t) {
+      const std::uint64_t j = j0 + t;
+      if (j % B == 0 && j != 0) st.C = st.C + st.L, st.L = 0;
+      out[t] = st.C + st.L;
+      if (t < ny) st.L = st.L + (y[t] - c);
+    }
+  };
+  // Up to the first block boundary (a boundary at j0 itself is handled by the 4-block path).
+  const std::size_t to_boundary = static_cast<std::size_t>((B - j0 % B) % B);
+  scalar_to(std::min(len, to_boundary));
+  while (t + 4 * B <= ny) {  // four whole blocks with all their y
+    if (j0 + t != 0) st.C = st.C + st.L, st.L = 0;
+    double l0 = 0, l1 = 0, l2 = 0, l3 = 0;
+    const double *y0 = y + t, *y1 = y0 + B, *y2 = y1 + B, *y3 = y2 + B;
+    double *o0 = out + t, *o1 = o0 + B, *o2 = o1 + B, *o3 = o2 + B;
+    for (std::size_t i = 0; i < B; ++i) {
+      o0[i] = l0, o1[i] = l1, o2[i] = l2, o3[i] = l3;
+      l0 = l0 + (y0[i] - c), l1 = l1 + (y1[i] - c), l2 = l2 + (y2[i] - c), l3 = l3 + (y3[i] - c);
+    }
+    const double C0 = st.C, C1 = C0 + l0, C2 = C1 + l1, C3 = C2 + l2;
+    for (std::size_t i = 0; i < B; ++i) o0[i] = C0 + o0[i], o1[i] = C1 + o1[i], o2[i] = C2 + o2[i], o3[i] = C3 + o3[i];
+    st.C = C3, st.L = l3;  // state at the start of the next block, before its boundary step
+    t += 4 * B;
+    // the next boundary step (C += L) happens at the top of the loop or in scalar_to
+  }
+  scalar_to(len);
+}
+
 // Builds P from the source, sequentially (main pass) or from a checkpoint (random access).
 class PhaseBuilder {
  public:
   PhaseBuilder(const ChunkSource& src, PhaseSpec spec) : src_(src), spec_(spec) {}
   const PhaseSpec& spec() const { return spec_; }
 
-  // Sequential: P[j] for j in [j0, j0 + out.size()), continuing from `prev` = P[j0 - 1].
-  void sequential(std::uint64_t j0, std::span<double> out, double& prev, std::vector<double>& scratch) const {
+  // Sequential: P[j] for j in [j0, j0 + out.size()), continuing from the state at j0.
+  void sequential(std::uint64_t j0, std::span<double> out, PhaseState& st, std::vector<double>& scratch) const {
     if (spec_.kind == DataKind::Phase) {
       pointwise(j0, out, scratch);
       return;
     }
-    std::size_t k = 0;
-    if (j0 == 0 && !out.empty()) {
-      out[0] = 0;
-      prev = 0;
-      k = 1;
+    if (out.empty()) return;
+    const std::size_t ny = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), spec_.n_src - j0));
+    const double* y = src_.contiguous();
+    if (y) {
+      y += j0;
+    } else {
+      scratch.resize(ny);
+      fill(j0, std::span<double>(scratch.data(), ny));
+      y = scratch.data();
     }
-    const std::size_t need = out.size() - k;
-    if (need == 0) return;
-    scratch.resize(need);
-    fill(j0 + k - 1, scratch);  // y[j-1] for P[j]
-    double p = prev;
-    const double c = spec_.shift;
-    for (std::size_t t = 0; t < need; ++t) {
-      p = p + (scratch[t] - c);
-      out[k + t] = p;
-    }
-    prev = p;
+    phase_run(y, out.size(), ny, j0, spec_.shift, st, out.data());
   }
 
   // Random access: P[lo, lo + out.size()) using the checkpoints (frequency data).
@@ -228,24 +332,14 @@ class PhaseBuilder {
       return;
     }
     const std::uint64_t cp = lo / kCheckpointEvery;
-    double p = checkpoints.at(cp);
-    std::uint64_t j = cp * kCheckpointEvery;
-    if (j < lo) {  // advance from the checkpoint to lo, bit-identically to the main pass
+    PhaseState st{checkpoints.at(cp), 0};
+    const std::uint64_t j = cp * kCheckpointEvery;
+    if (j < lo) {  // L(lo) from the block's start, in the main pass's order
       scratch.resize(lo - j);
       fill(j, scratch);
-      for (double y : scratch) p = p + (y - spec_.shift);
-      j = lo;
+      for (double y : scratch) st.L = st.L + (y - spec_.shift);
     }
-    if (out.empty()) return;
-    out[0] = p;
-    if (out.size() > 1) {
-      scratch.resize(out.size() - 1);
-      fill(lo, scratch);
-      for (std::size_t t = 1; t < out.size(); ++t) {
-        p = p + (scratch[t - 1] - spec_.shift);
-        out[t] = p;
-      }
-    }
+    sequential(lo, out, st, scratch);
   }
 
  private:
@@ -294,9 +388,27 @@ PhaseSpec make_spec(const ChunkSource& src, DataKind kind, double rate_hz) {
 
 // The ring of the most recent phase points (P[j] at j mod capacity).
 struct Ring {
-  std::vector<double> buf;
-  double* at(std::uint64_t j) { return buf.data() + (j % buf.size()); }
-  std::size_t room(std::uint64_t j) const { return buf.size() - static_cast<std::size_t>(j % buf.size()); }
+  // Not zero-filled (every slot is written before it is read); transparent huge pages where the
+  // kernel offers them: the lag windows of the long taus are far apart, so 4 KiB pages would
+  // cost a TLB walk every 512 points of every stream.
+  struct Free {
+    void operator()(double* p) const { std::free(p); }
+  };
+  std::unique_ptr<double, Free> mem;
+  std::size_t size = 0;
+
+  void allocate(std::size_t points) {
+    constexpr std::size_t kHuge = 2u << 20;
+    const std::size_t bytes = (points * sizeof(double) + kHuge - 1) / kHuge * kHuge;
+    mem.reset(static_cast<double*>(std::aligned_alloc(kHuge, bytes)));
+    if (!mem) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    ::madvise(mem.get(), bytes, MADV_HUGEPAGE);  // advisory: failure only costs speed
+#endif
+    size = points;
+  }
+  double* at(std::uint64_t j) { return mem.get() + (j % size); }
+  std::size_t room(std::uint64_t j) const { return size - static_cast<std::size_t>(j % size); }
 };
 
 // Runs acc over bases [b0, b1) with windows read from the ring, split where a window wraps.
@@ -308,6 +420,53 @@ void run_from_ring(Acc& a, Ring& ring, std::uint64_t b0, std::uint64_t b1) {
     for (std::size_t k = 0; k < a.nwin; ++k) w[k] = ring.at(b0 + k * a.m);
     a.run(b0, len, w);
     b0 += len;
+  }
+}
+
+// A doubling chain of OADEV/TOTDEV accumulators (ascending, m_{i+1} = 2 m_i, all in the ring)
+// over the heads [hi, hi2): member i has terms from h = span_i = 2 m_i on, so between span_i and
+// span_{i+1} the first i + 1 members run fused.
+void run_chain(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint64_t hi2) {
+  const std::size_t m0 = chain[0]->m;
+  const double* lag[kMaxChain + 1];
+  double part[kMaxChain];
+  for (int active = 1; active <= k; ++active) {
+    const std::uint64_t lo = std::max<std::uint64_t>(hi, chain[active - 1]->span);
+    const std::uint64_t top = active < k ? std::min<std::uint64_t>(hi2, chain[active]->span) : hi2;
+    for (std::uint64_t h = lo; h < top;) {
+      std::size_t len = std::min<std::uint64_t>(top - h, ring.room(h));
+      for (int j = 0; j <= active; ++j) len = std::min(len, ring.room(h - (std::uint64_t{m0} << j)));
+      for (int j = 0; j <= active; ++j) lag[j] = ring.at(h - (std::uint64_t{m0} << j));
+      std::fill_n(part, active, 0.0);
+      chain_d2(active, ring.at(h), lag, len, part);
+      for (int i = 0; i < active; ++i) chain[i]->sum += part[i], chain[i]->terms += len;
+      h += len;
+    }
+  }
+}
+
+// A cursor accumulator over the heads [hi, hi2): P[b] from its cursor (built sequentially from
+// P[0] exactly as the main pass builds the ring), the newer windows from the ring.
+template <class Builder>
+void run_cursor(Acc& a, Ring& ring, const Builder& builder, std::uint64_t hi, std::uint64_t hi2) {
+  const std::uint64_t h0 = std::max<std::uint64_t>(hi, a.span);
+  if (h0 >= hi2) return;
+  std::uint64_t b0 = h0 - a.span;
+  const std::uint64_t b1 = std::min<std::uint64_t>(hi2 - a.span, a.bases);
+  if (b0 >= b1) return;
+  const std::size_t n = static_cast<std::size_t>(b1 - b0);
+  a.cur_buf.resize(n);
+  // The cursor only moves forward: the bases of successive chunks are contiguous from 0.
+  builder.sequential(a.cur_next, std::span<double>(a.cur_buf.data(), n), a.cur_state, a.cur_scratch);
+  a.cur_next += n;
+  const double* w[4];
+  for (std::size_t off = 0; off < n;) {
+    std::size_t len = n - off;
+    for (std::size_t k = 1; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + off + k * a.m));
+    w[0] = a.cur_buf.data() + off;
+    for (std::size_t k = 1; k < a.nwin; ++k) w[k] = ring.at(b0 + off + k * a.m);
+    a.run(b0 + off, len, w);
+    off += len;
   }
 }
 
@@ -367,24 +526,12 @@ void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
   }
 }
 
-// Runs `fn(i)` for i in [0, count) over `threads` threads (dynamic assignment).
-template <class Fn>
-void parallel_for(std::size_t count, unsigned threads, Fn&& fn) {
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t i; (i = next.fetch_add(1)) < count;) fn(i);
-  };
-  std::vector<std::jthread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-}
-
 }  // namespace
 
 // Groups the accumulators of one chunk into work items for the cores. Same-type pairs m, 2m,
 // 4m ... share windows (tau m reads P at b + m and b + 2m, tau 2m at b + 2m and b + 4m), so a
 // doubling chain run in ascending order finds one of its two far windows still in L2: about
-// half the memory traffic of independent taus. Chains are cut to <= 6 for load balance.
+// half the memory traffic of independent taus (run_chain fuses them). Chains are cut at kMaxChain.
 std::vector<std::vector<std::size_t>> work_items(const std::vector<Acc>& accs, std::vector<std::size_t> idx) {
   std::sort(idx.begin(), idx.end(), [&](std::size_t x, std::size_t y) {
     return accs[x].type != accs[y].type ? accs[x].type < accs[y].type : accs[x].m < accs[y].m;
@@ -404,9 +551,9 @@ std::vector<std::vector<std::size_t>> work_items(const std::vector<Acc>& accs, s
       chain.push_back(nxt);
       cur = nxt;
     }
-    for (std::size_t k = 0; k < chain.size(); k += 6)
+    for (std::size_t k = 0; k < chain.size(); k += kMaxChain)
       items.emplace_back(chain.begin() + static_cast<std::ptrdiff_t>(k),
-                         chain.begin() + static_cast<std::ptrdiff_t>(std::min(chain.size(), k + 6)));
+                         chain.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(chain.size(), k + kMaxChain)));
   }
   auto cost = [&](const std::vector<std::size_t>& it) {
     std::uint64_t c = 0;
@@ -516,37 +663,71 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   }
 
   // Ring: what the budget leaves after the noise-ID series, never more than the record needs.
+  // The next chunk is built while the current one is processed: two chunks of slack.
   const std::size_t floor_bytes = 8 * chunk * sizeof(double);
   const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes ? so.memory_budget_bytes - decim_bytes
                                                                                 : floor_bytes;
-  const std::size_t ring_need = static_cast<std::size_t>(n) + chunk;
-  ring.buf.assign(std::min(budget / sizeof(double), ring_need), 0.0);
-  ring_holds_all = ring.buf.size() >= n;
-  res.ring_points = ring.buf.size();
+  const std::size_t ring_need = static_cast<std::size_t>(n) + 2 * chunk;
+  ring.allocate(std::min(budget / sizeof(double), ring_need));
+  ring_holds_all = ring.size >= n;
+  res.ring_points = ring.size;
 
-  std::vector<std::size_t> near;
+  std::vector<std::size_t> near, cursors;
   for (std::size_t i = 0; i < accs.size(); ++i) {
     Acc& a = accs[i];
-    a.far = a.span + chunk > ring.buf.size();
+    const bool fits = a.span + 2 * chunk <= ring.size;
+    // Only the oldest window outside the ring: a cursor rebuilds it in-pass (MDEV's running
+    // window sum needs P[0..3m) first, so it stays on the random-access path).
+    a.cursor = !fits && !a.modified() && a.span - a.m + 2 * chunk <= ring.size;
+    a.far = !fits && !a.cursor;
     if (a.bases == 0) continue;
     if (a.far) ++res.far_count;
+    else if (a.cursor) cursors.push_back(i);
     else near.push_back(i);
   }
-  const std::vector<std::vector<std::size_t>> items = work_items(accs, near);
+  res.cursor_count = cursors.size();
+  std::vector<std::vector<std::size_t>> items = work_items(accs, near);
+  for (std::size_t i : cursors) items.insert(items.begin(), std::vector<std::size_t>{i});  // the costliest items
 
   checkpoints.clear();
   checkpoints.reserve(n / kCheckpointEvery + 1);
 
   // ---- main pass ----
   std::vector<double> scratch;
-  double prev = 0;
-  std::uint64_t hi = 0, hi2 = 0;
-  std::atomic<std::size_t> next{0};
-  bool done = false;
-  auto process_chunk = [&] {
-    for (std::size_t k; (k = next.fetch_add(1)) < items.size();)
-      for (std::size_t idx : items[k]) {
-      Acc& a = accs[idx];
+  PhaseState prev;
+  // P[lo, hi) into the ring, with the checkpoints and the noise-ID series (one thread at a time).
+  auto produce = [&](std::uint64_t lo, std::uint64_t hi) {
+    for (std::uint64_t j = lo; j < hi;) {  // at most two pieces (the ring wraps)
+      const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
+      builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
+      j += len;
+    }
+    for (std::uint64_t j = (lo + kCheckpointEvery - 1) / kCheckpointEvery * kCheckpointEvery; j < hi;
+         j += kCheckpointEvery)
+      checkpoints.push_back(*ring.at(j));
+    for (std::uint64_t j = lo; j < hi;) {  // contiguous pieces of the ring: no modulo per point
+      const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
+      const double* piece = ring.at(j);
+      for (auto& [m, v] : decim) {
+        if (v.size() >= v.capacity()) continue;
+        for (std::uint64_t x = (j + m - 1) / m * m; x < j + len && v.size() < v.capacity(); x += m)
+          v.push_back(piece[x - j]);
+      }
+      j += len;
+    }
+  };
+  // One work item over the heads [hi, hi2) (terms whose newest phase point is in that range).
+  auto run_item = [&](const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi,
+                      std::uint64_t hi2) {
+    Acc& first = a_set[item[0]];
+    if (first.cursor) return run_cursor(first, ring, builder, hi, hi2);
+    if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV)) {
+      Acc* chain[kMaxChain];
+      for (std::size_t i = 0; i < item.size(); ++i) chain[i] = &a_set[item[i]];
+      return run_chain(chain, static_cast<int>(item.size()), ring, hi, hi2);
+    }
+    for (std::size_t idx : item) {
+      Acc& a = a_set[idx];
       const std::uint64_t lo_b = hi >= a.span ? hi - a.span : 0;
       const std::uint64_t hi_b = std::min<std::uint64_t>(hi2 >= a.span ? hi2 - a.span : 0, a.bases);
       if (lo_b >= hi_b) continue;
@@ -555,42 +736,87 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
           for (std::size_t t = 0; t < out.size(); ++t) out[t] = *ring.at(j + t);
         }, chunk);
       run_from_ring(a, ring, lo_b, hi_b);
-      }
+    }
   };
-  std::barrier sync(static_cast<std::ptrdiff_t>(threads));
-  std::vector<std::jthread> workers;
-  for (unsigned t = 1; t < threads; ++t)
-    workers.emplace_back([&] {
-      for (;;) {
-        sync.arrive_and_wait();  // chunk ready (or done)
-        if (done) return;
-        process_chunk();
-        sync.arrive_and_wait();  // chunk finished
-      }
-    });
 
-  for (hi = 0; hi < n; hi = hi2) {
-    hi2 = std::min<std::uint64_t>(n, hi + chunk);
-    for (std::uint64_t j = hi; j < hi2;) {  // P[hi, hi2) into the ring (at most two pieces)
-      const std::size_t len = std::min<std::uint64_t>(hi2 - j, ring.room(j));
-      builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
-      j += len;
+  if (ring_holds_all) {
+    // In memory: build P whole, then no barriers at all. The heads are cut into a fixed number
+    // of segments (not per thread: the sums do not depend on the thread count); a segment runs
+    // every item chunk by chunk (the newest windows stay in L2 across items), and the partial
+    // sums are added in segment order. MDEV's running window sum keeps its items whole.
+    for (std::uint64_t j = 0; j < n; j += chunk) produce(j, std::min<std::uint64_t>(n, j + chunk));
+    constexpr std::size_t kSegments = 32;
+    std::vector<std::size_t> whole, split;
+    for (std::size_t k = 0; k < items.size(); ++k) (accs[items[k][0]].modified() ? whole : split).push_back(k);
+    std::vector<std::vector<std::pair<double, std::size_t>>> part(kSegments);
+    parallel_for(whole.size() + kSegments, threads, [&](std::size_t t) {
+      if (t < whole.size()) {  // the costliest tasks first
+        const std::vector<std::size_t>& item = items[whole[t]];
+        for (std::uint64_t h = 0; h < n; h += chunk) run_item(item, accs, h, std::min<std::uint64_t>(n, h + chunk));
+        return;
+      }
+      const std::size_t g = t - whole.size();
+      std::vector<Acc> local(accs.size());  // the split items' entries only
+      for (std::size_t k : split)
+        for (std::size_t idx : items[k]) {
+          local[idx] = accs[idx];
+          local[idx].sum = 0;
+          local[idx].terms = 0;
+        }
+      const std::uint64_t h0 = n * g / kSegments, h1 = n * (g + 1) / kSegments;
+      for (std::uint64_t h = h0; h < h1; h += chunk)
+        for (std::size_t k : split) run_item(items[k], local, h, std::min(h1, h + chunk));
+      for (std::size_t k : split)
+        for (std::size_t idx : items[k]) part[g].emplace_back(local[idx].sum, local[idx].terms);
+    });
+    for (std::size_t g = 0; g < kSegments; ++g) {
+      std::size_t i = 0;
+      for (std::size_t k : split)
+        for (std::size_t idx : items[k]) {
+          accs[idx].sum += part[g][i].first;
+          accs[idx].terms += part[g][i].second;
+          ++i;
+        }
     }
-    for (std::uint64_t j = (hi + kCheckpointEvery - 1) / kCheckpointEvery * kCheckpointEvery; j < hi2;
-         j += kCheckpointEvery)
-      checkpoints.push_back(*ring.at(j));
-    for (auto& [m, v] : decim) {
-      if (v.size() >= v.capacity()) continue;
-      for (std::uint64_t j = (hi + m - 1) / m * m; j < hi2 && v.size() < v.capacity(); j += m) v.push_back(*ring.at(j));
+  } else {
+    // Streaming: a barrier per chunk; building the next chunk is one more work item, so the
+    // read and the running sum overlap the kernels (the ring keeps two chunks of slack).
+    std::uint64_t hi = 0, hi2 = 0;
+    std::atomic<std::size_t> next{0};
+    bool done = false;
+    auto process_chunk = [&] {
+      const std::size_t count = items.size() + 1;
+      for (std::size_t k; (k = next.fetch_add(1)) < count;) {
+        if (k == 0) {
+          if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
+          continue;
+        }
+        run_item(items[k - 1], accs, hi, hi2);
+      }
+    };
+    std::barrier sync(static_cast<std::ptrdiff_t>(threads));
+    std::vector<std::jthread> workers;
+    for (unsigned t = 1; t < threads; ++t)
+      workers.emplace_back([&] {
+        for (;;) {
+          sync.arrive_and_wait();  // chunk ready (or done)
+          if (done) return;
+          process_chunk();
+          sync.arrive_and_wait();  // chunk finished
+        }
+      });
+    produce(0, std::min<std::uint64_t>(n, chunk));
+    for (hi = 0; hi < n; hi = hi2) {
+      hi2 = std::min<std::uint64_t>(n, hi + chunk);
+      next = 0;
+      if (threads > 1) sync.arrive_and_wait();
+      process_chunk();
+      if (threads > 1) sync.arrive_and_wait();
     }
-    next = 0;
+    done = true;
     if (threads > 1) sync.arrive_and_wait();
-    process_chunk();
-    if (threads > 1) sync.arrive_and_wait();
+    workers.clear();
   }
-  done = true;
-  if (threads > 1) sync.arrive_and_wait();
-  workers.clear();
 
   // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----
   std::vector<std::size_t> post;
@@ -599,15 +825,18 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   parallel_for(post.size(), threads, [&](std::size_t k) { finish(accs[post[k]]); });
 
   res.sums.resize(accs.size());
+  std::map<std::size_t, std::size_t> users;  // the last user of a series takes it, the others copy
+  for (const Acc& a : accs) ++users[a.m];
   for (std::size_t i = 0; i < accs.size(); ++i) {
     Sums& s = res.sums[i];
     s.type = accs[i].type;
     s.m = accs[i].m;
     s.sum = accs[i].sum;
     s.terms = accs[i].terms;
-    const auto& v = decim[accs[i].m];
-    s.decimated = v;
+    auto& v = decim[accs[i].m];
     s.decimated_complete = v.size() == (n - 1) / accs[i].m + 1;
+    if (--users[accs[i].m] == 0) s.decimated = std::move(v);
+    else s.decimated = v;
   }
   return res;
 }

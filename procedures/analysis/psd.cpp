@@ -9,6 +9,10 @@
 #include <memory>
 #include <numeric>
 #include <mutex>
+#include <atomic>
+#include <exception>
+#include <span>
+#include <thread>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -85,37 +89,79 @@ Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
   for (double v : w) s2 += v * v;
 
   const std::size_t nb = seg / 2 + 1;
-  std::vector<double> in(seg);
-  auto* out = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * nb));
-  std::unique_ptr<fftw_complex, decltype(&fftw_free)> out_guard(out, &fftw_free);
-  std::unique_ptr<fftw_plan_s, PlanDeleter> plan;
-  {
-    std::lock_guard lock(planner_mutex());
-    plan.reset(fftw_plan_dft_r2c_1d(static_cast<int>(seg), in.data(), out, FFTW_ESTIMATE));
-  }
-  if (!plan) throw std::runtime_error("welch: FFTW could not plan a transform of " + std::to_string(seg));
-
   Psd p;
   p.segment = seg;
   p.rate_hz = rate_hz;
   p.psd.assign(nb, 0.0);
-  std::vector<double> x(seg);
-  for (std::uint64_t start = 0; start + seg <= n_total; start += step) {
-    for (std::size_t got = 0; got < seg;) {
-      const std::size_t r = src.read_at(start + got, std::span<double>(x).subspan(got));
-      if (r == 0) throw std::runtime_error("welch: source ended early at " + std::to_string(start + got));
-      got += r;
+  const std::uint64_t n_seg = (n_total - seg) / step + 1;
+  p.segments = static_cast<std::size_t>(n_seg);
+
+  // The segments are cut into a fixed number of blocks (the sum does not depend on the thread
+  // count), each with its own plan and buffers; the blocks' sums are added in order. Within a
+  // block only the new `step` values of each segment are read (the overlap is kept).
+  constexpr std::uint64_t kBlocks = 8;
+  std::vector<std::vector<double>> part(kBlocks);
+  auto run_block = [&](std::size_t b) {
+    const std::uint64_t s0 = n_seg * b / kBlocks, s1 = n_seg * (b + 1) / kBlocks;
+    std::vector<double>& acc = part[b];
+    acc.assign(nb, 0.0);
+    if (s0 >= s1) return;
+    std::vector<double> in(seg), x(seg);
+    auto* out = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * nb));
+    std::unique_ptr<fftw_complex, decltype(&fftw_free)> out_guard(out, &fftw_free);
+    std::unique_ptr<fftw_plan_s, PlanDeleter> plan;
+    {
+      std::lock_guard lock(planner_mutex());
+      plan.reset(fftw_plan_dft_r2c_1d(static_cast<int>(seg), in.data(), out, FFTW_ESTIMATE));
     }
-    double mean = 0;
-    if (opt.detrend_mean) {
-      for (std::size_t i = 0; i < seg; ++i) mean += x[i];
-      mean /= static_cast<double>(seg);
+    if (!plan) throw std::runtime_error("welch: FFTW could not plan a transform of " + std::to_string(seg));
+    auto read = [&](std::uint64_t pos, std::span<double> dst) {
+      for (std::size_t got = 0; got < dst.size();) {
+        const std::size_t r = src.read_at(pos + got, dst.subspan(got));
+        if (r == 0) throw std::runtime_error("welch: source ended early at " + std::to_string(pos + got));
+        got += r;
+      }
+    };
+    for (std::uint64_t k = s0; k < s1; ++k) {
+      const std::uint64_t start = k * step;
+      if (k > s0 && step < seg) {  // slide: keep the overlap, read the rest
+        std::copy(x.begin() + static_cast<std::ptrdiff_t>(step), x.end(), x.begin());
+        read(start + (seg - step), std::span<double>(x).subspan(seg - step));
+      } else {
+        read(start, std::span<double>(x));
+      }
+      double mean = 0;
+      if (opt.detrend_mean) {
+        for (std::size_t i = 0; i < seg; ++i) mean += x[i];
+        mean /= static_cast<double>(seg);
+      }
+      for (std::size_t i = 0; i < seg; ++i) in[i] = (x[i] - mean) * w[i];
+      fftw_execute_dft_r2c(plan.get(), in.data(), out);
+      for (std::size_t q = 0; q < nb; ++q) acc[q] += out[q][0] * out[q][0] + out[q][1] * out[q][1];
     }
-    for (std::size_t i = 0; i < seg; ++i) in[i] = (x[i] - mean) * w[i];
-    fftw_execute_dft_r2c(plan.get(), in.data(), out);
-    for (std::size_t k = 0; k < nb; ++k) p.psd[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
-    ++p.segments;
+  };
+  const unsigned threads =
+      std::min<unsigned>(opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency()), kBlocks);
+  {
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr err;
+    std::mutex err_mutex;
+    auto work = [&] {
+      for (std::size_t b; (b = next.fetch_add(1)) < kBlocks;) try {
+          run_block(b);
+        } catch (...) {
+          std::lock_guard lock(err_mutex);
+          if (!err) err = std::current_exception();
+        }
+    };
+    std::vector<std::jthread> pool;
+    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+    work();
+    pool.clear();
+    if (err) std::rethrow_exception(err);
   }
+  for (const auto& a : part)
+    for (std::size_t q = 0; q < nb; ++q) p.psd[q] += a[q];
   const double scale = 1.0 / (rate_hz * s2 * static_cast<double>(p.segments));
   p.f_hz.resize(nb);
   p.asd.resize(nb);

@@ -20,6 +20,7 @@ struct WelchOptions {
   double overlap = 0.5;     // fraction of a segment, [0, 0.95]
   Window window = Window::Hann;
   bool detrend_mean = true;  // remove each segment's mean (the bias is not noise)
+  unsigned threads = 0;      // 0 = all hardware threads; the result does not depend on it
 };
 
 struct Psd {

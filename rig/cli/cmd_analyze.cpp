@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -39,7 +40,7 @@ struct Args {
   std::string file, input = "auto", data = "freq", taus = "log:100", dev = "oadev", channel = "x";
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
-  double confidence = 0.683;
+  double confidence = an::kOneSigma;
   bool no_bounds = false, no_psd = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
@@ -77,9 +78,24 @@ class F64File final : public an::ChunkSource {
                                     (r < 0 ? std::strerror(errno) : "unexpected end"));
       got += static_cast<std::size_t>(r);
     }
-    for (std::size_t i = 0; i < want; ++i)
-      if (!std::isfinite(out[i]))
-        throw ConfigError(path_ + ": value " + std::to_string(pos + i) + " (byte " + std::to_string((pos + i) * 8) +
+    // One branch-free pass finds whether any value is NaN or infinite (x * 0 is NaN exactly
+    // then; explicit vector lanes, so no reassociation is needed); only then is the first one
+    // located for the message.
+    using v4 = double __attribute__((vector_size(32)));
+    v4 acc{};
+    std::size_t i4 = 0;
+    for (; i4 + 4 <= want; i4 += 4) {
+      v4 v;
+      std::memcpy(&v, &out[i4], sizeof v);
+      acc += v * 0.0;
+    }
+    double tail = 0;
+    for (; i4 < want; ++i4) tail += out[i4] * 0.0;
+    const bool bad = (acc[0] + acc[1] + acc[2] + acc[3] + tail) != 0.0;  // NaN != 0
+    if (bad)
+      for (std::size_t i = 0; i < want; ++i)
+        if (!std::isfinite(out[i]))
+          throw ConfigError(path_ + ": value " + std::to_string(pos + i) + " (byte " + std::to_string((pos + i) * 8) +
                           ") is not a finite number");
     return want;
   }
@@ -322,7 +338,7 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000)");
   sub->add_option("--taus", args->taus, "tau grid: octave|decade|all|log:N (default log:100)");
   sub->add_option("--dev", args->dev, "extra deviation: adev|oadev|mdev|tdev|hdev|ohdev|totdev (OADEV always)");
-  sub->add_option("--confidence", args->confidence, "confidence of the bounds (default 0.683)");
+  sub->add_option("--confidence", args->confidence, "confidence of the bounds (default one sigma, erf(1/sqrt 2) = 0.682689, Stable32's \"0.683\")");
   sub->add_flag("--no-bounds", args->no_bounds, "skip noise identification and bounds");
   sub->add_flag("--no-psd", args->no_psd, "skip the PSD (Allan part only)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");

@@ -119,6 +119,28 @@ TEST(Stream, OneThreadEqualsTwo) {
   expect_same(one, two, 0.0, "threads");
 }
 
+TEST(Stream, StreamingOneThreadEqualsTwoAndRepeats) {
+  // The streaming pass (a barrier per chunk, the next chunk built as a work item, cursors for
+  // the long taus) must not depend on which thread ran what.
+  const auto y = signal(120000, 5);
+  for (Deviation d : {Deviation::OADEV, Deviation::MDEV, Deviation::OHDEV, Deviation::TOTDEV}) {
+    DevOptions o;
+    o.type = d;
+    o.taus = parse_tau_grid("log:30");
+    StreamOptions so;
+    so.memory_budget_bytes = 1u << 20;
+    so.chunk = 4096;
+    SpanSource src(y);
+    o.threads = 1;
+    const auto one = deviation_stream(src, o, so);
+    o.threads = 2;
+    const auto two = deviation_stream(src, o, so);
+    const auto again = deviation_stream(src, o, so);
+    expect_same(one, two, 0.0, to_string(d));
+    expect_same(two, again, 0.0, to_string(d));
+  }
+}
+
 // A float64 file read with pread, as `rig analyze --input f64` does.
 class PreadSource final : public ChunkSource {
  public:

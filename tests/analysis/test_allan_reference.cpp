@@ -1,12 +1,17 @@
 // Every strict Stable32 table in tests/data/allan-reference (see its README): deviations to
-// 5e-5 relative, 68.3 % bounds to 5e-4, term counts and the identified alpha exactly.
+// 5e-5 relative, 68.3 % bounds to 5e-4 and the identified alpha on every row, term counts
+// exactly; the only rows left out are the named exceptions below.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <sstream>
+#include <string_view>
+#include <vector>
 
 #include "procedures/analysis/allan.hpp"
 #include "reference_data.hpp"
@@ -31,6 +36,30 @@ struct Case {
 
 std::ostream& operator<<(std::ostream& o, const Case& c) { return o << c.table; }
 
+// Rows whose printed alpha no Stable32 rule we know reproduces (docs/analysis.md, "Noise
+// identification and bounds"). Their alpha is not compared, nor their bounds, which follow it.
+struct Exception {
+  const char* table;
+  std::vector<std::size_t> afs;
+  const char* why;
+};
+const Exception kExceptions[] = {
+    // Lag-1 ACF rows (the only ACF exceptions in the 56 tables): the phase is non-stationary
+    // here (rho >= 0.25), it is differenced once, and Stable32 prints an alpha one below the
+    // ACF's; no rule found reproduces these nine.
+    {"Keysight53230A/tic_adev.txt", {126, 190, 360, 408, 789, 890, 1004, 1370, 1824},
+     "ACF on a non-stationary phase: Stable32 prints one alpha lower; unexplained"},
+    // B1 gives 0.695 at AF 128 (< 0.82, phase modulation: alpha 1, as for AF 127 and 129 in
+    // phase_dat_totdev.txt on the same data); Stable32 printed 0 and repeated it at AF 256.
+    {"phasedat/phase_dat_totdev_octave.txt", {128, 256}, "Stable32 prints alpha 0 where its B1 rule gives 1"},
+};
+
+const Exception* exception_for(const char* table) {
+  for (const Exception& e : kExceptions)
+    if (std::string_view(e.table) == table) return &e;
+  return nullptr;
+}
+
 // The data sets, loaded once (the Cs5071A set is 557k points).
 const std::vector<double>& dataset(const std::string& rel) {
   static std::map<std::string, std::vector<double>> cache;
@@ -52,15 +81,19 @@ TEST_P(Stable32Table, MatchesDeviationsBoundsTermsAlpha) {
   o.type = c.dev;
   o.data = c.kind;
   o.rate_hz = 1.0 / c.tau0;
-  o.confidence = 0.683;
+  // The header says "Confidence Factor = 0.683"; the bounds are Stable32's at the exact one
+  // sigma, erf(1/sqrt 2) = 0.682689 (at 0.683 the EDF-3 rows' upper bounds are 5.6e-4 off).
+  o.confidence = std::erf(1 / std::numbers::sqrt2);
   for (const auto& r : rows) o.factors.push_back(r.af);
   o.fixed_alpha = c.fixed_alpha;
   const auto pts = deviation(data, o);
   ASSERT_EQ(pts.size(), rows.size());
 
-  // Phase points and the averages each factor leaves (>= 30: lag-1 ACF identification).
+  const Exception* exc = exception_for(c.table);
+  // Phase points and the averages each factor leaves (>= 30: lag-1 ACF, else B1/R(n)).
   const std::size_t n_phase = c.kind == DataKind::Frequency ? data.size() + 1 : data.size();
-  int bad_dev = 0, bad_terms = 0, bad_alpha = 0, bad_bounds = 0, b1_rows = 0, b1_agree = 0, acf_rows = 0;
+  int bad_dev = 0, bad_terms = 0, bad_alpha = 0, bad_bounds = 0, skipped = 0;
+  int acf_rows = 0, acf_agree = 0, b1_rows = 0, b1_agree = 0;
   double worst_dev = 0, worst_bound = 0;
   std::ostringstream log;
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -77,14 +110,18 @@ TEST_P(Stable32Table, MatchesDeviationsBoundsTermsAlpha) {
       log << "  AF " << r.af << " terms " << p.n_terms << " ref " << r.terms << "\n";
     }
     const bool acf_row = (n_phase - 1) / r.af >= 30;
-    if (!acf_row) {
-      ++b1_rows;
-      b1_agree += p.alpha == r.alpha;
-    } else if (++acf_rows, c.check_alpha && p.alpha != r.alpha) {
+    (acf_row ? acf_rows : b1_rows) += 1;
+    (acf_row ? acf_agree : b1_agree) += p.alpha == r.alpha;
+    if (exc && std::find(exc->afs.begin(), exc->afs.end(), r.af) != exc->afs.end()) {
+      ++skipped;
+      if (p.alpha == r.alpha) std::printf("  %s AF %zu: excepted but agrees now, trim kExceptions\n", c.table, r.af);
+      continue;
+    }
+    if (c.check_alpha && p.alpha != r.alpha) {
       ++bad_alpha;
       log << "  AF " << r.af << " alpha " << p.alpha << " ref " << r.alpha << "\n";
     }
-    if (r.lo > 0 && c.strict_bounds && p.alpha == r.alpha) {
+    if (r.lo > 0 && c.strict_bounds) {
       const double el = std::abs(p.lo - r.lo) / r.lo, eh = std::abs(p.hi - r.hi) / r.hi;
       worst_bound = std::max({worst_bound, el, eh});
       if (el > 5e-4 || eh > 5e-4) {
@@ -94,20 +131,17 @@ TEST_P(Stable32Table, MatchesDeviationsBoundsTermsAlpha) {
       }
     }
   }
-  // Values and term counts: every row. Bounds: every row whose alpha agrees (the bounds follow
-  // from alpha). Alpha: the lag-1 ACF rows (>= 30 averages) agree to >= 90 % in every table
-  // (measured per table in docs/analysis.md); the B1/R(n) rows are reported, not asserted.
-  const double acf_agree = acf_rows ? 1.0 - static_cast<double>(bad_alpha) / acf_rows : 1.0;
-  EXPECT_TRUE(bad_dev == 0 && bad_terms == 0 && bad_bounds == 0 && acf_agree >= 0.9)
+  // Every row: values, term counts, alpha and (where printed) bounds; only kExceptions are skipped.
+  EXPECT_TRUE(bad_dev == 0 && bad_terms == 0 && bad_alpha == 0 && bad_bounds == 0)
       << c.table << ": " << bad_dev << " deviations, " << bad_terms << " term counts, " << bad_alpha << " alphas, "
-      << bad_bounds << " bounds off (worst dev " << worst_dev << ", worst bound " << worst_bound << "); B1 rows "
-      << b1_agree << "/" << b1_rows << "\n"
+      << bad_bounds << " bounds off (worst dev " << worst_dev << ", worst bound " << worst_bound << ")\n"
       << log.str().substr(0, 3000);
   RecordProperty("worst_dev_rel", std::to_string(worst_dev));
   RecordProperty("worst_bound_rel", std::to_string(worst_bound));
   RecordProperty("b1_alpha_agreement", std::to_string(b1_agree) + "/" + std::to_string(b1_rows));
-  std::printf("%-40s worst dev %.2e, worst bound %.2e, ACF-region alpha %d/%d, B1-region alpha %d/%d\n", c.table,
-              worst_dev, worst_bound, acf_rows - bad_alpha, acf_rows, b1_agree, b1_rows);
+  std::printf("%-40s worst dev %.2e, worst bound %.2e, ACF-region alpha %d/%d, B1-region alpha %d/%d%s\n", c.table,
+              worst_dev, worst_bound, acf_agree, acf_rows, b1_agree, b1_rows,
+              skipped ? (", " + std::to_string(skipped) + " excepted rows (" + exc->why + ")").c_str() : "");
 }
 
 constexpr auto F = DataKind::Frequency;

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <random>
+#include <span>
+#include <vector>
 
 #include "procedures/analysis/allan.hpp"
 #include "procedures/analysis/psd.hpp"
@@ -65,6 +67,37 @@ TEST(Peaks, FindsTheBuildingVibrationToneWithItsProminence) {
   // Pure noise: nothing 10 dB above its surroundings.
   const Psd q = welch(tone_in_noise(1 << 19, rate, 0, 0, 0.05, 5), rate, o);
   EXPECT_TRUE(find_peaks(q, 10.0).empty());
+}
+
+TEST(Welch, ThreadCountDoesNotChangeTheResult) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<double> x(300000);
+  for (double& v : x) v = g(rng);
+  WelchOptions o;
+  o.segment = 4096;
+  o.threads = 1;
+  const Psd a = welch(x, 1000, o);
+  o.threads = 2;
+  const Psd b = welch(x, 1000, o);
+  ASSERT_EQ(a.segments, b.segments);
+  EXPECT_EQ(a.segments, (x.size() - 4096) / 2048 + 1);
+  for (std::size_t k = 0; k < a.psd.size(); ++k) ASSERT_EQ(a.psd[k], b.psd[k]) << k;
+  // The sliding read (only the new half of each segment is read): half-overlapped segments are
+  // the union of two non-overlapped series, at offsets 0 and one step, each read whole.
+  std::vector<double> direct(a.psd.size(), 0.0);
+  {
+    WelchOptions one = o;
+    one.overlap = 0;  // every segment read whole
+    one.threads = 1;
+    const Psd even = welch(std::span<const double>(x), 1000, one);
+    const Psd odd = welch(std::span<const double>(x).subspan(2048), 1000, one);
+    for (std::size_t k = 0; k < direct.size(); ++k)
+      direct[k] = (even.psd[k] * static_cast<double>(even.segments) + odd.psd[k] * static_cast<double>(odd.segments)) /
+                  static_cast<double>(even.segments + odd.segments);
+    ASSERT_EQ(even.segments + odd.segments, a.segments);
+  }
+  for (std::size_t k = 0; k < a.psd.size(); ++k) EXPECT_NEAR(a.psd[k], direct[k], 1e-12 * direct[k]) << k;
 }
 
 TEST(Welch, OptionsAndErrors) {
