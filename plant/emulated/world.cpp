@@ -16,10 +16,31 @@ namespace {
 constexpr double kSilenceLimitS = 0.1;
 }  // namespace
 
+// Counts the DUT's output samples, whichever path (direct or CAN firmware) draws them: the
+// figure behind the real-time factor `rig run` reports.
+class EmulatedPlant::CountingSource final : public DutSource {
+ public:
+  CountingSource(std::unique_ptr<DutSource> inner, std::uint64_t& count) : inner_(std::move(inner)), count_(count) {}
+  double output_rate_hz() const override { return inner_->output_rate_hz(); }
+  void set_table_angle_deg(double deg) override { inner_->set_table_angle_deg(deg); }
+  void next(float& x_g, float& y_g) override {
+    ++count_;
+    inner_->next(x_g, y_g);
+  }
+  void set_filter(const FilterConfig& f) override { inner_->set_filter(f); }
+  FilterConfig filter() const override { return inner_->filter(); }
+  double temperature_c() const override { return inner_->temperature_c(); }
+  std::string serial() const override { return inner_->serial(); }
+
+ private:
+  std::unique_ptr<DutSource> inner_;
+  std::uint64_t& count_;
+};
+
 EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg) : link_(*this) {
   cfg::check_keys(plant_cfg, {"seed", "link", "dut", "table"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
-  dut_ = make_dut_source(cfg::get_table(plant_cfg, "dut"), seed);
+  dut_ = std::make_unique<CountingSource>(make_dut_source(cfg::get_table(plant_cfg, "dut"), seed), samples_);
   // Separate, fixed streams per component: the table's repeatability does not
   // shift when the DUT model draws more or fewer random numbers.
   table_emu_ = make_table_emulator(cfg::get_table(plant_cfg, "table"), seed ^ 0x7ab1e5eedULL);

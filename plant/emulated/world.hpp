@@ -76,10 +76,15 @@ class EmulatedPlant {
   void at(double t_s, std::function<void()> action) { actions_.push_back({t_s, std::move(action)}); }
   // The DUT's next sequence number (free-running while powered).
   uint32_t next_seq() const;
+  // DUT output samples generated so far (at the output rate, whether streamed or not).
+  uint64_t samples_generated() const { return samples_; }
 
  private:
   friend class DirectDutLink;
+  class CountingSource;
   void advance(double dt_s);
+
+  uint64_t samples_ = 0;  // declared before dut_: the counting wrapper refers to it
 
   SimClock clock_;
   std::unique_ptr<DutSource> dut_;

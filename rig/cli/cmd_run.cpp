@@ -1,6 +1,7 @@
 // `rig run`: the acceptance procedure, end to end, with a run folder holding
 // the captures, checkpoint, passport.json, junit.xml, analysis.json,
 // report.html and run.log. Exit codes per CONTRACTS.md.
+#include <chrono>
 #include <signal.h>
 #include <unistd.h>
 
@@ -140,6 +141,7 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 }
 
 int do_run(RunArgs a) {
+  const auto wall_start = std::chrono::steady_clock::now();
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before any backend thread exists
 
@@ -251,6 +253,17 @@ int do_run(RunArgs a) {
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
   std::cout << "\n" << passport_table(passport);
   std::cout << fmt::format("run folder: {}\n", info.out_dir);
+  if (b.emulated) {  // the emulation's own speed, as measured on this run
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const double device = b.emulated->clock().now_s();
+    const auto samples = b.emulated->samples_generated();
+    const std::string line = fmt::format(
+        "emulated plant: {:.1f} min of device time, {} DUT samples, in {:.2f} s wall: {:.0f}x real time, {:.2f} M "
+        "samples/s",
+        device / 60, samples, wall, device / wall, static_cast<double>(samples) / wall / 1e6);
+    std::cout << line << "\n";
+    log->info("{}", line);
+  }
   log->info("outcome {} (exit {})", to_string(res.outcome), res.exit_code());
   return res.exit_code();
 }
