@@ -7,16 +7,13 @@
 // not fit the ring ("far") are run afterwards from sequential cursors that rebuild P from
 // checkpoints, so memory stays bounded whatever N is.
 #pragma once
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <exception>
-#include <mutex>
 #include <memory>
-#include <thread>
 #include <vector>
 
 #include "procedures/analysis/allan.hpp"
+#include "procedures/analysis/parallel.hpp"
 
 namespace rig::analysis::detail {
 
@@ -57,30 +54,6 @@ struct EngineResult {
 // One analysis of one source: run() makes the pass; extra() afterwards computes one more
 // (type, m) sum by random access (from the ring when it holds the whole record, else from
 // cursors over the source), for the R(n) noise test that only some taus need.
-// Runs `fn(i)` for i in [0, count) over `threads` threads (dynamic assignment).
-// The first exception (e.g. a source that ends early) stops the others and is rethrown here.
-template <class Fn>
-void parallel_for(std::size_t count, unsigned threads, Fn&& fn) {
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr err;
-  std::mutex err_mutex;
-  auto work = [&] {
-    for (std::size_t i; (i = next.fetch_add(1)) < count;) try {
-        fn(i);
-      } catch (...) {
-        std::lock_guard lock(err_mutex);
-        if (!err) err = std::current_exception();
-        next = count;
-      }
-  };
-  {
-    std::vector<std::jthread> pool;
-    for (unsigned t = 1; t < threads && t < count; ++t) pool.emplace_back(work);
-    work();
-  }
-  if (err) std::rethrow_exception(err);
-}
-
 class Engine {
  public:
   Engine(const ChunkSource& src, DataKind kind, double rate_hz, const StreamOptions& so, unsigned threads,

@@ -1,5 +1,7 @@
 #include "procedures/analysis/psd.hpp"
 
+#include "procedures/analysis/parallel.hpp"
+
 #include <fftw3.h>
 
 #include <algorithm>
@@ -9,10 +11,8 @@
 #include <memory>
 #include <numeric>
 #include <mutex>
-#include <atomic>
-#include <exception>
-#include <span>
 #include <thread>
+#include <span>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -142,24 +142,7 @@ Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
   };
   const unsigned threads =
       std::min<unsigned>(opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency()), kBlocks);
-  {
-    std::atomic<std::size_t> next{0};
-    std::exception_ptr err;
-    std::mutex err_mutex;
-    auto work = [&] {
-      for (std::size_t b; (b = next.fetch_add(1)) < kBlocks;) try {
-          run_block(b);
-        } catch (...) {
-          std::lock_guard lock(err_mutex);
-          if (!err) err = std::current_exception();
-        }
-    };
-    std::vector<std::jthread> pool;
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-    work();
-    pool.clear();
-    if (err) std::rethrow_exception(err);
-  }
+  detail::parallel_for(kBlocks, threads, run_block);
   for (const auto& a : part)
     for (std::size_t q = 0; q < nb; ++q) p.psd[q] += a[q];
   const double scale = 1.0 / (rate_hz * s2 * static_cast<double>(p.segments));
