@@ -45,6 +45,7 @@ struct Args {
   unsigned threads = 0;
   std::size_t memory_mib = 384;
   std::size_t segment = 0;
+  double overlap = 0.5;
 };
 
 // Raw little-endian float64 values read with pread (thread-safe, no whole-file buffer).
@@ -172,6 +173,10 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
 }
 
 int run(const Args& a) {
+  if (!(a.overlap >= 0 && a.overlap <= 0.95))
+    throw ConfigError("--overlap " + std::to_string(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
+  if (!(a.confidence > 0 && a.confidence < 1))
+    throw ConfigError("--confidence " + std::to_string(a.confidence) + ": must be in (0, 1)");
   an::DevOptions base;
   try {
     base.data = an::parse_data_kind(a.data);
@@ -258,6 +263,8 @@ int run(const Args& a) {
     an::WelchOptions wo;
     wo.window = an::parse_window(a.window);
     wo.segment = a.segment;
+    wo.overlap = a.overlap;
+    wo.threads = a.threads;
     try {
       psd = an::welch(*src, rate, wo);
     } catch (const std::invalid_argument& e) {
@@ -346,6 +353,7 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
   sub->add_option("--segment", args->segment, "PSD segment length (default: auto)");
+  sub->add_option("--overlap", args->overlap, "PSD segment overlap, fraction in [0, 0.95] (default 0.5)");
   sub->add_option("--threads", args->threads, "threads (default: all cores)");
   sub->add_option("--memory-mib", args->memory_mib, "memory budget for streaming, MiB (default 384)");
   sub->callback([args, &rc] { rc = run(*args); });

@@ -8,10 +8,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -171,6 +174,33 @@ TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
   std::ofstream(d + "/junk.cap") << "junk";
   EXPECT_EQ(run({"analyze", d + "/junk.cap", "--input", "capture"}, d + "/jk"), 2);
   EXPECT_NE(slurp(d + "/jk.stderr").find(d + "/junk.cap"), std::string::npos) << slurp(d + "/jk.stderr");
+}
+
+TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
+  const std::string d = tmp("analyze-f64");
+  fs::create_directories(d);
+  {
+    std::vector<double> v(50000);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = 1e-6 * std::sin(0.37 * static_cast<double>(i * i % 977));
+    std::ofstream(d + "/ok.f64", std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+    v[31337] = std::numeric_limits<double>::infinity();
+    std::ofstream(d + "/inf.f64", std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+  }
+  ASSERT_EQ(run({"analyze", d + "/ok.f64", "--overlap", "0.75", "--segment", "4096", "--json", d + "/o.json"}, d + "/o"),
+            0)
+      << slurp(d + "/o.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/o.json"));
+  EXPECT_EQ(j["psd"]["segment"], 4096);
+  EXPECT_EQ(j["psd"]["segments"], (50000 - 4096) / 1024 + 1);  // 75 % overlap: a step of 1024
+  // Out-of-range options and a non-finite value: exit 2, naming the option or the value's place.
+  EXPECT_EQ(run({"analyze", d + "/ok.f64", "--overlap", "0.99"}, d + "/ov"), 2);
+  EXPECT_NE(slurp(d + "/ov.stderr").find("--overlap"), std::string::npos) << slurp(d + "/ov.stderr");
+  EXPECT_EQ(run({"analyze", d + "/ok.f64", "--confidence", "1.5"}, d + "/cf"), 2);
+  EXPECT_NE(slurp(d + "/cf.stderr").find("--confidence"), std::string::npos) << slurp(d + "/cf.stderr");
+  EXPECT_EQ(run({"analyze", d + "/inf.f64"}, d + "/nf"), 2);
+  EXPECT_NE(slurp(d + "/nf.stderr").find("value 31337 (byte 250696)"), std::string::npos) << slurp(d + "/nf.stderr");
 }
 
 TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
