@@ -26,6 +26,7 @@ EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.
   r_intf_ = noise::Rng(seed, kIntf);
   r_poll_i_ = noise::Rng(seed, kPollI);
   r_poll_q_ = noise::Rng(seed, kPollQ);
+  r_poll_drift_ = noise::Rng(seed, kPollDrift);
   const double on = n.enabled ? 1.0 : 0.0;
   // White densities (one-sided, g/sqrt(Hz)) to per-sample sd at the loop rate: sd = d sqrt(fs/2).
   sense_sd_ = on * n.sense_white_g_rthz * std::sqrt(fs / 2);
@@ -37,6 +38,10 @@ EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.
   // so the folded x reads B = polling_b_g and y reads |W_f(1 kHz)| times that.
   poll_i_ = noise::FlickerBank(on * n.polling_b_g, n.flicker_tau_min_s, n.flicker_tau_max_s, dt_out_, r_poll_i_);
   poll_q_ = noise::FlickerBank(on * n.polling_b_g, n.flicker_tau_min_s, n.flicker_tau_max_s, dt_out_, r_poll_q_);
+  // ... and a slow drift of its amplitude from the power-on value (part of the intrinsic bias):
+  // a random walk over the procedure's 110 min; in y it is cut by |W_f(1 kHz)| like the rest.
+  poll_drift_i_ = noise::GaussMarkov(on * n.polling_k_g_per_rts, n.polling_drift_tau_s, dt_out_);
+  poll_drift_q_ = noise::GaussMarkov(on * n.polling_k_g_per_rts, n.polling_drift_tau_s, dt_out_);
   poll_osc_.set(p_.loop.output_rate_hz + n.polling_offset_hz, fs, 0.0);
   rrw_step_ = on * n.rrw_k_g_per_rts * std::sqrt(dt_out_);
   vib_ = noise::BandNoise(n.vibration_f_lo_hz, n.vibration_f_hi_hz, fs, on * n.vibration_rms_g);
@@ -125,7 +130,8 @@ void EmulatedDut::next(double& x_out, double& y_out) {
     if (burst_env_[j] < 1e-15) burst_env_[j] = 0;
     burst_osc_[j].renormalise();
   }
-  const double pi_amp = poll_i_.step(r_poll_i_), pq_amp = poll_q_.step(r_poll_q_);
+  const double pi_amp = poll_i_.step(r_poll_i_) + poll_drift_i_.step(r_poll_drift_);
+  const double pq_amp = poll_q_.step(r_poll_q_) + poll_drift_q_.step(r_poll_drift_);
   intf_.update_envelopes(r_intf_);
   poll_osc_.renormalise();
 

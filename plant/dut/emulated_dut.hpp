@@ -51,9 +51,13 @@ class EmulatedDut final : public DutSource {
   double temp_c_ = 0;
 
   // noise sources, each with its own stream
-  enum Stream : uint64_t { kSense = 1, kInput, kFlicker, kRrw, kVib, kBurst, kIntf, kPollI, kPollQ, kPickoff };
-  noise::Rng r_sense_, r_input_, r_flicker_, r_rrw_, r_vib_, r_burst_, r_intf_, r_poll_i_, r_poll_q_;
+  enum Stream : uint64_t {
+    kSense = 1, kInput, kFlicker, kRrw, kVib, kBurst, kIntf, kPollI, kPollQ, kPickoff, kPollDrift
+  };
+  noise::Rng r_sense_, r_input_, r_flicker_, r_rrw_, r_vib_, r_burst_, r_intf_, r_poll_i_, r_poll_q_,
+      r_poll_drift_;
   noise::FlickerBank flicker_, poll_i_, poll_q_;
+  noise::GaussMarkov poll_drift_i_, poll_drift_q_;  // slow part of the pick-up's envelope
   noise::BandNoise vib_;
   noise::LineBand intf_;
   double sense_sd_ = 0, input_sd_ = 0, rrw_step_ = 0, rrw_ = 0;

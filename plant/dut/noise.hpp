@@ -113,6 +113,25 @@ class FlickerBank {
   double sd_ = 0;  // standard deviation of each process
 };
 
+// First-order Gauss-Markov process started at 0 (a quantity that wanders away from its
+// power-on value and is pulled back over `tau`). Its white drive has the rate-random-walk
+// coefficient `k` (g/sqrt(s)): for t, Allan tau << `tau` it is a random walk,
+// sigma(tau) = k sqrt(tau/3) (IEEE 952 C.1), its variance k^2 t; stationary sd k sqrt(tau/2).
+class GaussMarkov {
+ public:
+  GaussMarkov() = default;
+  GaussMarkov(double k, double tau, double dt)
+      : phi_(std::exp(-dt / tau)), drive_(k * std::sqrt(tau / 2 * (1 - phi_ * phi_))) {}
+  double step(Rng& rng) {
+    if (drive_ != 0) v_ = phi_ * v_ + drive_ * rng.normal();
+    return v_;
+  }
+  double value() const { return v_; }
+
+ private:
+  double phi_ = 1, drive_ = 0, v_ = 0;
+};
+
 // Narrow-band interference: `lines` carriers spread evenly over [f_lo, f_hi], each with
 // a complex envelope that wanders as a Gauss-Markov process of correlation time
 // `coherence_s` (line width ~ 1/(pi coherence)); no spectral skirts, so nothing leaks

@@ -77,7 +77,8 @@ void read_noise(const toml::table& t, NoiseParams& p) {
        "warmup_rise_c", "warmup_tau_s", "bias_tempco_g_per_c", "vibration_rms_g", "vibration_f_lo_hz",
        "vibration_f_hi_hz", "burst_peak_g", "burst_rate_per_h",
        "burst_decay_s", "interference_rms_g", "interference_f_lo_hz", "interference_f_hi_hz", "interference_lines",
-       "interference_coherence_s", "polling_b_g", "polling_offset_hz"},
+       "interference_coherence_s", "polling_b_g", "polling_offset_hz", "polling_k_g_per_rts",
+       "polling_drift_tau_s"},
       "plant.dut.noise");
   p.enabled = get_bool(t, "enabled", p.enabled);
   num(t, "sense_white_g_rthz", p.sense_white_g_rthz, 0, 1);
@@ -109,6 +110,8 @@ void read_noise(const toml::table& t, NoiseParams& p) {
   num(t, "interference_coherence_s", p.interference_coherence_s, 1e-3, 1e6);
   num(t, "polling_b_g", p.polling_b_g, 0, 1);
   num(t, "polling_offset_hz", p.polling_offset_hz, -10, 10);
+  num(t, "polling_k_g_per_rts", p.polling_k_g_per_rts, 0, 1);
+  num(t, "polling_drift_tau_s", p.polling_drift_tau_s, 1, 1e9);
 }
 
 void read_filter(const toml::table& t, FilterConfig& f) {

@@ -88,6 +88,12 @@ struct NoiseParams {
   // amplitude flickers: sampled at 1 kHz it folds to near-DC, filtered by |W_f(1 kHz)|
   double polling_b_g = 0;         // the B an Allan analysis of the folded process reads
   double polling_offset_hz = 0;   // frequency offset between DUT and rig clocks
+  // slow drift of the same pick-up's amplitude (the interfering harmonic follows the
+  // temperature / load of the equipment that radiates it): per quadrature a Gauss-Markov
+  // process started at 0 at power-on, correlation time polling_drift_tau_s; over t << tau
+  // it is a random walk with the rate-random-walk coefficient polling_k_g_per_rts
+  double polling_k_g_per_rts = 0;
+  double polling_drift_tau_s = 36000;
 };
 
 struct DutParams {

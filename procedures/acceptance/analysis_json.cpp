@@ -54,13 +54,17 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   j["paper_fit"] = paper;
   // The weighted least-squares fit of all five terms: plain values (tau in s) for
   // plotting, the full terms with bounds under "terms".
-  json w{{"ok", t.wls.ok}, {"points", t.wls.points}, {"chi2_per_dof", t.wls.chi2_per_dof}};
+  json w{{"ok", t.wls.ok}, {"points", t.wls.points}, {"chi2_per_dof", t.wls.chi2_per_dof},
+         {"model_error", t.wls.model_error}};
   if (!t.wls.reason.empty()) w["reason"] = t.wls.reason;
   const std::pair<const char*, const an::Term*> wt[] = {
       {"Q", &t.wls.Q}, {"N", &t.wls.N}, {"B", &t.wls.B}, {"K", &t.wls.K}, {"R", &t.wls.R}};
-  for (const auto& [name, tt] : wt) {
+  for (std::size_t i = 0; i < 5; ++i) {
+    const auto& [name, tt] = wt[i];
     w[name] = num(tt->value);
     w["terms"][name] = term(*tt);
+    w["terms"][name]["share"] = t.wls.share[i];  // largest share of the model sigma^2 over the taus
+    w["terms"][name]["z"] = t.wls.z[i];          // fitted coefficient over its standard error
   }
   j["lsq_fit"] = w;
   return j;

@@ -114,35 +114,34 @@ PaperFit paper_fit(std::span<const DevPoint> pts) {
   return f;
 }
 
+// The best non-negative fit for one relative model error `delta`.
+struct MaskFit {
+  double rss = std::numeric_limits<double>::infinity();
+  int mask = 0;
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(5);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(5, 5);
+  int terms() const { return __builtin_popcount(static_cast<unsigned>(mask)); }
+};
+
 // Non-negative weighted least squares over the 5 squared coefficients: the best of all
 // 2^5 active sets whose unconstrained solution is non-negative (exact for 5 unknowns).
-WlsFit wls_fit(std::span<const DevPoint> pts) {
-  WlsFit w;
-  std::vector<const DevPoint*> use;
-  for (const auto& p : pts)
-    if (p.dev > 0 && p.tau_s > 0) use.push_back(&p);
-  w.points = use.size();
-  if (use.size() < 2) {
-    w.reason = "fewer than 2 Allan points";
-    return w;
-  }
+// Row i is weighted by sd(sigma_i^2) = sigma_i^2 sqrt(2/edf_i + delta^2): the chi-square
+// scatter of the estimate (IEEE 1139 / Stable32 EDF) plus a relative model error delta.
+MaskFit best_fit(const std::vector<const DevPoint*>& use, double delta, int allowed) {
   const auto n = static_cast<Eigen::Index>(use.size());
   Eigen::MatrixXd X(n, 5);
   Eigen::VectorXd y(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const DevPoint& p = *use[static_cast<std::size_t>(i)];
     const double s2 = p.dev * p.dev;
-    // Relative weighting: sd(sigma^2) = sigma^2 sqrt(2/edf); scale rows so residuals are in sd units.
     const double edf = p.edf > 0 ? p.edf : 2.0;
-    const double sd = s2 * std::sqrt(2.0 / edf);
-    y(i) = s2 / sd;
+    const double sd = s2 * std::sqrt(2.0 / edf + delta * delta);
+    y(i) = s2 / sd;  // residuals in sd units
     for (int k = 0; k < 5; ++k) X(i, k) = basis(k, p.tau_s) / sd;
   }
-  double best_rss = std::numeric_limits<double>::infinity();
-  Eigen::VectorXd best_theta = Eigen::VectorXd::Zero(5);
-  Eigen::MatrixXd best_cov;
-  int best_mask = 0;
+  MaskFit best;
   for (int mask = 1; mask < 32; ++mask) {
+    if (mask & ~allowed) continue;
     std::vector<int> cols;
     for (int k = 0; k < 5; ++k)
       if (mask & (1 << k)) cols.push_back(k);
@@ -158,30 +157,90 @@ WlsFit wls_fit(std::span<const DevPoint> pts) {
     const Eigen::VectorXd th = qr.solve(y).cwiseQuotient(scale);
     if ((th.array() < 0).any()) continue;
     const double rss = (Xs * th - y).squaredNorm();
-    if (rss < best_rss) {
-      best_rss = rss;
-      best_mask = mask;
-      best_theta.setZero();
-      for (std::size_t c = 0; c < cols.size(); ++c) best_theta(cols[c]) = th(static_cast<Eigen::Index>(c));
+    if (rss < best.rss) {
+      best.rss = rss;
+      best.mask = mask;
+      best.theta.setZero();
+      for (std::size_t c = 0; c < cols.size(); ++c) best.theta(cols[c]) = th(static_cast<Eigen::Index>(c));
       const Eigen::MatrixXd cs =
           scale.cwiseInverse().asDiagonal() * (Xn.transpose() * Xn).inverse() * scale.cwiseInverse().asDiagonal();
-      best_cov = Eigen::MatrixXd::Zero(5, 5);
+      best.cov.setZero();
       for (std::size_t r = 0; r < cols.size(); ++r)
         for (std::size_t c = 0; c < cols.size(); ++c)
-          best_cov(cols[r], cols[c]) = cs(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+          best.cov(cols[r], cols[c]) = cs(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
     }
   }
+  return best;
+}
+
+double chi2_per_dof(const MaskFit& f, std::size_t n) {
+  return f.rss / std::max(1.0, static_cast<double>(n) - f.terms());
+}
+
+WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, bool fit_r) {
+  WlsFit w;
+  std::vector<const DevPoint*> use;
+  for (const auto& p : pts)
+    if (p.dev > 0 && p.tau_s > 0) use.push_back(&p);
+  w.points = use.size();
+  if (use.size() < 2) {
+    w.reason = "fewer than 2 Allan points";
+    return w;
+  }
+  const auto n = static_cast<Eigen::Index>(use.size());
+  // The EDF says how well each sigma is estimated, not how well the five-term model describes
+  // the curve: tones (vibration, folded pick-up) ripple the short-tau points by 10-30 % where
+  // the EDF is 1e5..1e6, and with EDF weights alone those points (chi2/dof ~ 1e4-1e5) decide
+  // which terms enter, whatever the long-tau points show. So a relative model error delta is
+  // added to every point's variance and set so that the best fit has chi2/dof = 1 (the
+  // Paule-Mandel / Birge rule for inconsistent data); delta = 0 when the model fits within the
+  // EDF scatter, and then the fit is the plain EDF-weighted one.
+  const int allowed = fit_r ? 31 : 15;
+  MaskFit fit = best_fit(use, 0.0, allowed);
+  double delta = 0;
+  if (fit.mask != 0 && static_cast<Eigen::Index>(fit.terms()) < n && chi2_per_dof(fit, use.size()) > 1) {
+    double lo = 1e-9, hi = 1e-3;
+    MaskFit f_hi = best_fit(use, hi, allowed);
+    while (f_hi.mask != 0 && chi2_per_dof(f_hi, use.size()) > 1 && hi < 1e3) f_hi = best_fit(use, hi *= 4, allowed);
+    for (int it = 0; it < 40 && hi / lo > 1.001; ++it) {  // bisection in log delta
+      const double mid = std::sqrt(lo * hi);
+      MaskFit f = best_fit(use, mid, allowed);
+      if (f.mask != 0 && chi2_per_dof(f, use.size()) > 1) lo = mid;
+      else hi = mid, f_hi = std::move(f);
+    }
+    if (f_hi.mask != 0) fit = std::move(f_hi), delta = hi;
+  }
+  const int best_mask = fit.mask;
+  const Eigen::VectorXd& best_theta = fit.theta;
+  const Eigen::MatrixXd& best_cov = fit.cov;
+  const double best_rss = fit.rss;
+  w.model_error = delta;
   if (best_mask == 0) {
     w.reason = "no non-negative solution";
     return w;
   }
-  const double dof = std::max<double>(1, static_cast<double>(n) - __builtin_popcount(static_cast<unsigned>(best_mask)));
-  w.chi2_per_dof = best_rss / dof;
+  const double dof = std::max<double>(1, static_cast<double>(n) - fit.terms());
+  {  // goodness of fit on the EDF weights alone: how far the five-term model is from the curve
+    double raw = 0;
+    for (const DevPoint* p : use) {
+      double m = 0;
+      for (int j = 0; j < 5; ++j) m += best_theta(j) * basis(j, p->tau_s);
+      const double s2 = p->dev * p->dev, edf = p->edf > 0 ? p->edf : 2.0;
+      raw += (m - s2) * (m - s2) / (s2 * s2 * 2.0 / edf);
+    }
+    w.chi2_per_dof = raw / dof;
+  }
+  const double scaled_chi2 = best_rss / dof;  // 1 when delta > 0
   const double tau_lo = use.front()->tau_s, tau_hi = use.back()->tau_s;
   Term* terms[5] = {&w.Q, &w.N, &w.B, &w.K, &w.R};
   for (int k = 0; k < 5; ++k) {
     Term& t = *terms[k];
     t.unit = kUnits[k];
+    if (!(allowed & (1 << k))) {
+      t.reason = std::string("not fitted: ") + kNames[k] + " needs a longer record (at least " +
+                 fmt(kRMinRecordS / 3600) + " h, METHOD.md; this one is " + fmt(record_s / 3600) + " h)";
+      continue;
+    }
     if (!(best_mask & (1 << k))) {
       t.reason = std::string("not resolved: the fit needs no ") + kNames[k] + " term over tau = " + fmt(tau_lo) + ".." +
                  fmt(tau_hi) + " s";
@@ -189,13 +248,26 @@ WlsFit wls_fit(std::span<const DevPoint> pts) {
     }
     const double th = best_theta(k);
     // Identified only where the term dominates the model somewhere in the measured range.
-    bool dominates = false;
+    // Its uncertainty: the fit's covariance treats the Allan points as independent, but the
+    // overlapping estimates at neighbouring taus of a log grid (several per octave) come from
+    // one realisation and are strongly correlated, so the covariance understates it. The
+    // variance is therefore at least that of reading the term off the single point where it is
+    // best determined (IEEE 952 Annex C reads each term on its own asymptote): there
+    // sd(sigma^2)/sigma^2 = sqrt(2/edf + delta^2) and the term carries `share` of sigma^2, so
+    // sd(theta)/theta = sqrt(2/edf + delta^2) / share, minimised over the points.
+    double share = 0, rel_sd = std::numeric_limits<double>::infinity();
     for (const DevPoint* p : use) {
       double total = 0;
       for (int j = 0; j < 5; ++j) total += best_theta(j) * basis(j, p->tau_s);
-      if (th * basis(k, p->tau_s) >= 0.5 * total) dominates = true;
+      const double sh = th * basis(k, p->tau_s) / total;
+      share = std::max(share, sh);
+      const double edf = p->edf > 0 ? p->edf : 2.0;
+      if (sh > 0) rel_sd = std::min(rel_sd, std::sqrt(2.0 / edf + delta * delta) / sh);
     }
-    const double var_th = best_cov(k, k) * std::max(1.0, w.chi2_per_dof);
+    const bool dominates = share >= 0.5;
+    const double var_th = std::max(best_cov(k, k) * std::max(1.0, scaled_chi2), th * th * rel_sd * rel_sd);
+    w.share[static_cast<std::size_t>(k)] = share;
+    w.z[static_cast<std::size_t>(k)] = var_th > 0 ? th / std::sqrt(var_th) : 0;
     if (!dominates) {
       t.reason = std::string("not identifiable: ") + kNames[k] + " never dominates over tau = " + fmt(tau_lo) + ".." +
                  fmt(tau_hi) + " s" + (k >= 3 ? "; needs a longer record" : (k == 0 ? "; needs a higher rate" : ""));
@@ -216,7 +288,11 @@ WlsFit wls_fit(std::span<const DevPoint> pts) {
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s) {
   NoiseTerms out;
   out.paper = paper_fit(oadev);
-  out.wls = wls_fit(oadev);
+  // R is not fitted on a record shorter than the method allows for it (METHOD.md: > 50 h): over
+  // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
+  // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
+  // (then to be discarded by the 50 h rule anyway, leaving K null).
+  out.wls = wls_fit(oadev, record_length_s, record_length_s >= kRMinRecordS);
   out.Q = out.wls.Q;
   out.N = out.wls.N;
   out.K = out.wls.K;

@@ -52,7 +52,11 @@ struct WlsFit {
   std::string reason;
   Term Q, N, B, K, R;
   std::size_t points = 0;
-  double chi2_per_dof = 0;
+  double chi2_per_dof = 0;  // of the EDF weights alone: how far the five-term model is from the curve
+  double model_error = 0;   // relative model error delta added to each point (0: EDF weights only)
+  // per term Q, N, B, K, R (0 when not in the fit): its largest share of the model sigma^2 over
+  // the measured taus, and its fitted squared coefficient over the coefficient's sd
+  std::array<double, 5> share{}, z{};
 };
 
 struct NoiseTerms {
@@ -65,6 +69,10 @@ struct NoiseTerms {
 
 // sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C).
 inline constexpr double kBiasFactor = 0.66428001915095;
+
+// The shortest record from which the method determines the rate ramp R (METHOD.md: > 50 h);
+// on a shorter record R is not part of the weighted fit.
+inline constexpr double kRMinRecordS = 50 * 3600.0;
 
 // oadev: the overlapping Allan deviation points (edf used as weights; 0 = unweighted).
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s);

@@ -116,7 +116,7 @@ TEST(Dut, PollingInterferenceFoldsToDcAndTheFilterCutsIt) {
   // against the slowest flicker process (here 20 s) for the two to carry equal power.
   EmulatedDut d(params("[noise]\nsense_white_g_rthz = 0\ninput_white_g_rthz = 0\nflicker_b_g = 0\n"
                        "rrw_k_g_per_rts = 0\nramp_r_g_per_s = 0\nbias_tempco_g_per_c = 0\nvibration_rms_g = 0\n"
-                       "burst_peak_g = 0\ninterference_rms_g = 0\noutput_lsb_g = 0\nsense_adc_bits = 30\n"
+                       "burst_peak_g = 0\ninterference_rms_g = 0\npolling_k_g_per_rts = 0\noutput_lsb_g = 0\nsense_adc_bits = 30\n"
                        "polling_b_g = 1e-4\nflicker_tau_max_s = 20\n"),
                 11);
   std::vector<double> x(600000), y(600000);

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ostream>
+#include <sstream>
+#include <string>
 
 #include "plant/dut/emulated_dut.hpp"
 #include "plant/dut/noise.hpp"
@@ -70,7 +73,7 @@ EmulatedDut quiet_dut(const std::string& extra, uint64_t seed) {
   const std::string text =
       "[noise]\nsense_white_g_rthz = 0\ninput_white_g_rthz = 0\nflicker_b_g = 0\nrrw_k_g_per_rts = 0\n"
       "ramp_r_g_per_s = 0\nbias_tempco_g_per_c = 0\nvibration_rms_g = 0\nburst_peak_g = 0\n"
-      "interference_rms_g = 0\npolling_b_g = 0\noutput_lsb_g = 0\nsense_adc_bits = 30\n";
+      "interference_rms_g = 0\npolling_b_g = 0\npolling_k_g_per_rts = 0\noutput_lsb_g = 0\nsense_adc_bits = 30\n";
   toml::table t = cfg::parse_string(text, "quiet.toml");
   cfg::merge_into(t, cfg::parse_string(extra, "test.toml"));
   return EmulatedDut(load_dut_params(&t), seed);
@@ -83,6 +86,22 @@ analysis::NoiseTerms analyse(EmulatedDut& d, double seconds) {
     d.next(v, y);
   }
   return calib::allan_terms(x, 1000);
+}
+
+std::string describe(const analysis::NoiseTerms& nt) {
+  std::ostringstream o;
+  o << "fit (model error " << nt.wls.model_error << "):";
+  const char* names = "QNBKR";
+  int i = 0;
+  for (const analysis::Term* t : {&nt.wls.Q, &nt.wls.N, &nt.wls.B, &nt.wls.K, &nt.wls.R}) {
+    o << " " << names[i] << " ";
+    if (t->value) o << *t->value << " [" << t->lo.value_or(0) << ", " << t->hi.value_or(0) << "]";
+    else o << "null";
+    o << " (share " << nt.wls.share[static_cast<std::size_t>(i)] << ")";
+    ++i;
+  }
+  o << "; paper B " << nt.B.value.value_or(0) << " at tau_cp " << nt.tau_cp_s.value_or(0);
+  return o.str();
 }
 
 // true value inside the reported 68 % bounds widened to about 2 sigma, and within `rel`.
@@ -109,33 +128,92 @@ TEST_P(WhiteRecovery, FindsN) {
 }
 INSTANTIATE_TEST_SUITE_P(Sets, WhiteRecovery, ::testing::Values(WhiteCase{2e-5, 1}, WhiteCase{2e-4, 2}));
 
-TEST(NoiseRecovery, FindsNAndK) {
-  const double dens = 2e-5, k = 2e-6;  // crossover sqrt(3) N / K = 39 s
-  EmulatedDut d = quiet_dut("[noise]\nsense_white_g_rthz = 2e-5\nrrw_k_g_per_rts = 2e-6\n", 3);
-  const analysis::NoiseTerms nt = analyse(d, 1200);
-  expect_found(nt.N, dens * std::sqrt(5.0), 0.08, "N");
-  expect_found(nt.K, k, 0.35, "K");
+// Several parameter sets of injected terms, each term placed so that it dominates the Allan
+// curve somewhere in tau <= T/4 (otherwise the method cannot see it, by design). The truths:
+// N = d sqrt(5) (white at the 10 kHz loop rate, sample-and-hold at 1 kHz), Q = lsb tau0/sqrt(12)
+// (velocity-preserving rounding, dithered), B = flicker_b_g (the bank is scaled to its analytic
+// flat level 0.664 B; tau_max 2e4 s keeps it flat over the record), K = rrw_k_g_per_rts or, for
+// the 1 kHz pick-up's drift, polling_k_g_per_rts (x sees a unit-norm projection of its I, Q).
+struct TermSet {
+  const char* name;
+  const char* toml;
+  double seconds;
+  uint64_t seed;
+  double q = 0, n = 0, b = 0, k = 0;  // injected truths (0 = not injected), seconds units
+  double rel_q = 0.15, rel_n = 0.08, rel_b = 0.35, rel_k = 0.4;
+};
+void PrintTo(const TermSet& s, std::ostream* os) { *os << s.name; }
+
+class TermRecovery : public ::testing::TestWithParam<TermSet> {};
+
+TEST_P(TermRecovery, FindsEachInjectedTermWithinItsBounds) {
+  const TermSet& s = GetParam();
+  EmulatedDut d = quiet_dut(std::string("[noise]\nflicker_tau_max_s = 2e4\n") + s.toml, s.seed);
+  const analysis::NoiseTerms nt = analyse(d, s.seconds);
+  SCOPED_TRACE(describe(nt));
+  if (s.q > 0) expect_found(nt.Q, s.q, s.rel_q, "Q");
+  if (s.n > 0) expect_found(nt.N, s.n, s.rel_n, "N");
+  if (s.b > 0) expect_found(nt.wls.B, s.b, s.rel_b, "B (weighted fit)");
+  if (s.k > 0) expect_found(nt.K, s.k, s.rel_k, "K");
+  // a term not injected is not reported (Q from the velocity quantiser needs output_lsb_g)
+  if (s.k == 0) {
+    EXPECT_FALSE(nt.K.value.has_value()) << nt.K.reason;
+  }
+  EXPECT_FALSE(nt.R.value.has_value()) << "R from " << s.seconds << " s";
 }
 
-TEST(NoiseRecovery, FindsQFromTheVelocityQuantiser) {
-  // output words with the remainder carried: x_n = v_n + e_{n-1} - e_n, Q = lsb tau0 / sqrt(12);
-  // The white noise (sd 0.35 LSB per sample) dithers the rounding so that its error is
-  // uniform and white, while Q still dominates at the shortest tau (Q dominates at tau0
-  // only if sd_white < LSB/2, so the window is narrow).
-  const double lsb = 6e-2;
-  EmulatedDut d = quiet_dut("[noise]\nsense_white_g_rthz = 3e-4\noutput_lsb_g = 6e-2\n", 4);
-  const analysis::NoiseTerms nt = analyse(d, 300);
-  expect_found(nt.Q, lsb * 1e-3 / std::sqrt(12.0), 0.15, "Q");
-  expect_found(nt.N, 3e-4 * std::sqrt(5.0), 0.15, "N");
-}
+const double kRt5 = std::sqrt(5.0), kRt12 = std::sqrt(12.0);
+INSTANTIATE_TEST_SUITE_P(
+    Sets, TermRecovery,
+    ::testing::Values(
+        // N, B, K: crossovers N/B at 10 s, B/K at 150 s; one hour
+        TermSet{"NBK", "sense_white_g_rthz = 1.414e-5\nflicker_b_g = 1.5e-5\nrrw_k_g_per_rts = 1.414e-6\n", 3600, 21,
+                0, 1.414e-5 * kRt5, 1.5e-5, 1.414e-6},
+        // N and K only (crossover sqrt(3) N / K = 39 s), 20 min
+        TermSet{"NK", "sense_white_g_rthz = 2e-5\nrrw_k_g_per_rts = 2e-6\n", 1200, 3, 0, 2e-5 * kRt5, 0, 2e-6},
+        // Q, N, B: Q dominates at tau0 only if the white sd < LSB/2, and the white noise must be
+        // >= ~0.35 LSB per sample to dither the rounding; N/B crossover at 5 s
+        TermSet{"QNB", "sense_white_g_rthz = 3e-4\noutput_lsb_g = 6e-2\nflicker_b_g = 4.5e-4\n", 1200, 4,
+                6e-2 * 1e-3 / kRt12, 3e-4 * kRt5, 4.5e-4, 0},
+        // K from the drift of the 1 kHz pick-up's envelope, folded to DC by the 1 kHz polling
+        TermSet{"NK-polling", "sense_white_g_rthz = 2e-5\npolling_k_g_per_rts = 2e-6\n", 1200, 5, 0, 2e-5 * kRt5, 0,
+                2e-6},
+        // all four: N/B at 5 s, B/K at 600 s; two hours so that K dominates below T/4
+        TermSet{"QNBK", "sense_white_g_rthz = 3e-4\noutput_lsb_g = 6e-2\nflicker_b_g = 4.5e-4\nrrw_k_g_per_rts = 2.1e-5\n",
+                7200, 6, 6e-2 * 1e-3 / kRt12, 3e-4 * kRt5, 4.5e-4, 2.1e-5}),
+    [](const ::testing::TestParamInfo<TermSet>& i) {
+      std::string n = i.param.name;
+      for (char& c : n)
+        if (c == '-') c = '_';
+      return n;
+    });
 
 TEST(NoiseRecovery, FindsBFromFlicker) {
+  // B by the paper's method (the quartic's flat segment, sigma(tau_cp) / 0.664), two seeds
   for (uint64_t seed : {5u, 6u}) {
     EmulatedDut d = quiet_dut("[noise]\nsense_white_g_rthz = 1e-6\nflicker_b_g = 2e-5\n", seed);
     const analysis::NoiseTerms nt = analyse(d, 1200);
     ASSERT_TRUE(nt.B.value.has_value()) << nt.B.reason;
     EXPECT_NEAR(*nt.B.value / 2e-5, 1.0, 0.3) << "seed " << seed << " tau_cp " << nt.tau_cp_s.value_or(0);
   }
+}
+
+TEST(Noise, GaussMarkovIsARandomWalkOverShortTimes) {
+  // ensemble of processes started at 0: variance k^2 t for t << tau, k^2 tau/2 (1 - e^{-2t/tau}) in general
+  const double k = 1e-6, tau = 1000, dt = 1e-3;
+  noise::Rng r(8, 0);
+  const int n = 2000, steps = 20000;  // 20 s
+  double s2 = 0;
+  for (int j = 0; j < n; ++j) {
+    noise::GaussMarkov g(k, tau, dt);
+    for (int i = 0; i < steps; ++i) g.step(r);
+    s2 += g.value() * g.value();
+  }
+  const double t = steps * dt, expect = k * k * tau / 2 * (1 - std::exp(-2 * t / tau));
+  EXPECT_NEAR(s2 / n / expect, 1.0, 0.1);  // 2000 samples: sd of the estimate 3 %
+  EXPECT_NEAR(expect / (k * k * t), 1.0, 0.02);
+  noise::GaussMarkov off(0, tau, dt);
+  EXPECT_EQ(off.step(r), 0.0);
 }
 
 }  // namespace

@@ -29,10 +29,12 @@ double mean(const std::vector<double>& v) {
 }
 }  // namespace
 
-analysis::NoiseTerms allan_terms(const std::vector<double>& v, double rate_hz, std::vector<analysis::DevPoint>* adev) {
+analysis::NoiseTerms allan_terms(const std::vector<double>& v, double rate_hz, std::vector<analysis::DevPoint>* adev,
+                                 const std::string& taus) {
   analysis::DevOptions o;
   o.type = analysis::Deviation::OADEV;
   o.rate_hz = rate_hz;
+  o.taus = analysis::parse_tau_grid(taus);
   const std::vector<analysis::DevPoint> pts = analysis::deviation(v, o);
   if (adev) *adev = pts;
   return analysis::noise_terms(pts, static_cast<double>(v.size()) / rate_hz);
@@ -73,8 +75,8 @@ Result run(EmulatedDut& dut, const Spec& spec) {
   // C: raw capture, Allan noise terms of x and of the filtered y.
   std::vector<double> y;
   const std::vector<double> x = record(dut, spec.capture_s, &y);
-  r.nt_x = allan_terms(x, fs, &r.adev_x);
-  r.nt_y = allan_terms(y, fs, &r.adev_y);
+  r.nt_x = allan_terms(x, fs, &r.adev_x, spec.taus);
+  r.nt_y = allan_terms(y, fs, &r.adev_y, spec.taus);
   // RMS error: of the drift (the zero-signal mean removed), as the paper's x̂.
   const double mx = mean(x), my = mean(y);
   std::vector<double> dx(x.size()), dy(y.size());

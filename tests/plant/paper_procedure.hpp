@@ -3,6 +3,7 @@
 // the calibration test and bench/plant/dut_calibrate.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "plant/dut/emulated_dut.hpp"
@@ -18,6 +19,7 @@ struct Spec {
   double inrun_s = 1800;       // procedure B at U10
   double capture_s = 3600;     // procedure C raw capture at U10
   uint64_t table_seed = 7;
+  std::string taus = "log:100";  // the Allan tau grid of profiles/paper.toml ([analysis].taus)
 };
 
 struct Result {
@@ -34,8 +36,11 @@ Result run(EmulatedDut& dut, const Spec& spec);
 // B as sigma_min / 0.664 over tau >= tau_lo: the flat level read off the rig's OADEV
 // curve directly (used where the paper's polynomial finds no inflection, see docs/plant.md).
 double b_from_minimum(const std::vector<analysis::DevPoint>& adev, double tau_lo = 10);
-// Allan noise terms of one record at `rate_hz` (OADEV on the octave grid, as `rig analyze`).
+// Allan noise terms of one record at `rate_hz`: OADEV on the tau grid `taus` (the paper
+// profile's log:100, Stable32's stop ratio tau <= T/4) and noise_terms, as the rig's
+// procedure does (procedures/acceptance allan_channel).
 analysis::NoiseTerms allan_terms(const std::vector<double>& v, double rate_hz,
-                                 std::vector<analysis::DevPoint>* adev = nullptr);
+                                 std::vector<analysis::DevPoint>* adev = nullptr,
+                                 const std::string& taus = "log:100");
 
 }  // namespace rig::plant::calib

@@ -58,6 +58,8 @@ TEST(Params, BadValuesAreRejected) {
   EXPECT_NE(error_of("[filter]\npreset = \"custom\"\nsections = [[1, 2]]\n").find("[b0, b1, b2, a1, a2]"),
             std::string::npos);
   EXPECT_NE(error_of("[noise]\nflicker_tau_max_s = 0.1\n").find("flicker_tau_max_s"), std::string::npos);
+  EXPECT_NE(error_of("[noise]\npolling_drift_tau_s = 0\n").find("polling_drift_tau_s"), std::string::npos);
+  EXPECT_NE(error_of("[noise]\npolling_k_g_per_rts = -1e-7\n").find("polling_k_g_per_rts"), std::string::npos);
 }
 
 }  // namespace
