@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "rig/core/markup.hpp"
+
 namespace rig {
 
 nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& result, const MeasurementSet& values) {
@@ -36,20 +38,7 @@ void write_passport(const std::string& path, const nlohmann::ordered_json& passp
 }
 
 namespace {
-std::string xml_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&apos;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
+std::string xml_escape(const std::string& s) { return markup_escape(s); }
 std::string num(const std::optional<double>& v) { return v ? fmt::format("{:.6g}", *v) : "null"; }
 }  // namespace
 

@@ -1,5 +1,7 @@
 #include "rig/report/svg.hpp"
 
+#include "rig/core/markup.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,21 +10,7 @@
 
 namespace rig::report {
 
-std::string html_escape(std::string_view s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string html_escape(std::string_view s) { return markup_escape(s); }
 
 std::string fmt_num(double v, int sig) {
   if (!std::isfinite(v)) return "\xE2\x80\x94";  // em dash
