@@ -48,7 +48,7 @@ struct EngineRequest {
 struct EngineResult {
   PhaseSpec spec;
   std::vector<Sums> sums;  // same order as the requests
-  std::size_t ring_points = 0, far_count = 0, cursor_count = 0;
+  std::size_t ring_points = 0, far_count = 0;
 };
 
 // One analysis of one source: run() makes the pass; extra() afterwards computes one more

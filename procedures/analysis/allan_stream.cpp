@@ -3,9 +3,11 @@
 #include <atomic>
 #include <barrier>
 #include <bit>
-#include <cstdlib>
 #include <cmath>
+#include <cstdlib>
+#include <exception>
 #include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -203,7 +205,7 @@ struct Acc {
   double inner = 0;       // MDEV state
   bool far = false;       // post-pass: even the newer windows do not fit the ring
   bool cursor = false;    // in-pass, its oldest window P[b] rebuilt by its own sequential cursor
-  std::uint64_t cur_next = 0;  // cursor: next phase index to build, and P[cur_next - 1]
+  std::uint64_t cur_next = 0;  // cursor: the next phase index it builds, and its state there
   PhaseState cur_state;
   std::vector<double> cur_buf, cur_scratch;
 
@@ -685,7 +687,6 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     else if (a.cursor) cursors.push_back(i);
     else near.push_back(i);
   }
-  res.cursor_count = cursors.size();
   std::vector<std::vector<std::size_t>> items = work_items(accs, near);
   for (std::size_t i : cursors) items.insert(items.begin(), std::vector<std::size_t>{i});  // the costliest items
 
@@ -784,15 +785,23 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     std::uint64_t hi = 0, hi2 = 0;
     std::atomic<std::size_t> next{0};
     bool done = false;
+    // A read error (or a non-finite value) may surface on either thread: the first one is kept,
+    // the chunk's remaining items are skipped, and it is rethrown here after the workers stop.
+    std::exception_ptr err;
+    std::mutex err_mutex;
     auto process_chunk = [&] {
       const std::size_t count = items.size() + 1;
-      for (std::size_t k; (k = next.fetch_add(1)) < count;) {
-        if (k == 0) {
-          if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
-          continue;
+      for (std::size_t k; (k = next.fetch_add(1)) < count;) try {
+          if (k == 0) {
+            if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
+            continue;
+          }
+          run_item(items[k - 1], accs, hi, hi2);
+        } catch (...) {
+          std::lock_guard lock(err_mutex);
+          if (!err) err = std::current_exception();
+          next = count;
         }
-        run_item(items[k - 1], accs, hi, hi2);
-      }
     };
     std::barrier sync(static_cast<std::ptrdiff_t>(threads));
     std::vector<std::jthread> workers;
@@ -805,8 +814,12 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
           sync.arrive_and_wait();  // chunk finished
         }
       });
-    produce(0, std::min<std::uint64_t>(n, chunk));
-    for (hi = 0; hi < n; hi = hi2) {
+    try {
+      produce(0, std::min<std::uint64_t>(n, chunk));
+    } catch (...) {
+      err = std::current_exception();
+    }
+    for (hi = 0; hi < n && !err; hi = hi2) {
       hi2 = std::min<std::uint64_t>(n, hi + chunk);
       next = 0;
       if (threads > 1) sync.arrive_and_wait();
@@ -816,6 +829,7 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     done = true;
     if (threads > 1) sync.arrive_and_wait();
     workers.clear();
+    if (err) std::rethrow_exception(err);
   }
 
   // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----

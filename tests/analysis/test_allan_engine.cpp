@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <stdexcept>
 
 #include "procedures/analysis/allan.hpp"
 
@@ -139,6 +140,40 @@ TEST(Stream, StreamingOneThreadEqualsTwoAndRepeats) {
     expect_same(one, two, 0.0, to_string(d));
     expect_same(two, again, 0.0, to_string(d));
   }
+}
+
+// A source whose reads fail from a given value on (a file that goes bad mid-record).
+class FailingSource final : public ChunkSource {
+ public:
+  FailingSource(std::span<const double> v, std::uint64_t bad_from) : v_(v), bad_from_(bad_from) {}
+  std::uint64_t size() const override { return v_.size(); }
+  std::size_t read_at(std::uint64_t pos, std::span<double> out) const override {
+    const std::size_t n = std::min<std::size_t>(out.size(), v_.size() - pos);
+    if (pos + n > bad_from_) throw std::runtime_error("read error at value " + std::to_string(bad_from_));
+    std::copy_n(v_.begin() + static_cast<std::ptrdiff_t>(pos), n, out.begin());
+    return n;
+  }
+
+ private:
+  std::span<const double> v_;
+  std::uint64_t bad_from_;
+};
+
+TEST(Stream, AReadErrorOnEitherThreadReachesTheCaller) {
+  // The next chunk is read as a work item, so the error may surface on the worker thread: it
+  // must come back to the caller as the exception, not end the process.
+  const auto y = signal(120000, 8);
+  for (unsigned threads : {1u, 2u})
+    for (std::uint64_t bad_from : {std::uint64_t{100}, std::uint64_t{70000}, std::uint64_t{119990}}) {
+      DevOptions o;
+      o.taus = parse_tau_grid("log:30");
+      o.threads = threads;
+      StreamOptions so;
+      so.memory_budget_bytes = 1u << 20;
+      so.chunk = 4096;
+      FailingSource src(y, bad_from);
+      EXPECT_THROW(deviation_stream(src, o, so), std::runtime_error) << threads << " threads, bad from " << bad_from;
+    }
 }
 
 // A float64 file read with pread, as `rig analyze --input f64` does.
