@@ -206,21 +206,28 @@ std::vector<DevPoint> deviation_stream(const ChunkSource& src, const DevOptions&
   return deviations_stream(src, std::span<const DevOptions>(&opt, 1), so)[0];
 }
 
-std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt) {
-  // x * 0 is NaN exactly for NaN and infinities; explicit lanes keep the pass vectorised.
+std::optional<std::size_t> first_non_finite(std::span<const double> v) {
+  // x * 0 is NaN exactly for NaN and infinities; explicit lanes keep the pass vectorised
+  // without reassociating a floating-point sum.
   using v4 = double __attribute__((vector_size(32)));
   v4 acc{};
-  std::size_t i4 = 0;
-  for (; i4 + 4 <= data.size(); i4 += 4) {
-    v4 v;
-    std::memcpy(&v, data.data() + i4, sizeof v);
-    acc += v * 0.0;
+  std::size_t i = 0;
+  for (; i + 4 <= v.size(); i += 4) {
+    v4 x;
+    std::memcpy(&x, v.data() + i, sizeof x);
+    acc += x * 0.0;
   }
   double tail = 0;
-  for (; i4 < data.size(); ++i4) tail += data[i4] * 0.0;
-  if (acc[0] + acc[1] + acc[2] + acc[3] + tail != 0.0)
-    for (std::size_t i = 0; i < data.size(); ++i)
-      if (!std::isfinite(data[i])) throw std::invalid_argument("allan: value " + std::to_string(i) + " is not finite");
+  for (; i < v.size(); ++i) tail += v[i] * 0.0;
+  if (acc[0] + acc[1] + acc[2] + acc[3] + tail == 0.0) return std::nullopt;  // NaN != 0
+  for (i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i])) return i;
+  return std::nullopt;
+}
+
+std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt) {
+  if (const auto bad = first_non_finite(data))
+    throw std::invalid_argument("allan: value " + std::to_string(*bad) + " is not finite");
   SpanSource src(data);
   StreamOptions so;
   so.memory_budget_bytes = std::numeric_limits<std::size_t>::max() / 4;  // in memory: one ring holds it all

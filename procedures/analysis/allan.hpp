@@ -65,6 +65,10 @@ struct DevOptions {
   std::optional<int> fixed_alpha;    // skip identification and use this noise type (Stable32's manual choice)
 };
 
+// The index of the first NaN or infinity in `v`, if any. One vectorised pass over the values
+// (the check every reader of raw records makes), then a search only when there is one.
+std::optional<std::size_t> first_non_finite(std::span<const double> v);
+
 // In-memory computation. Throws std::invalid_argument for fewer than 3 phase points,
 // a non-positive rate or a non-finite value (naming its index).
 std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt);

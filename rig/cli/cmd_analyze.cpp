@@ -14,13 +14,12 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-
-#include "procedures/acceptance/analysis_json.hpp"
 #include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "procedures/acceptance/analysis_json.hpp"
 #include "procedures/analysis/allan.hpp"
 #include "procedures/analysis/noise_terms.hpp"
 #include "procedures/analysis/psd.hpp"
@@ -79,25 +78,9 @@ class F64File final : public an::ChunkSource {
                                     (r < 0 ? std::strerror(errno) : "unexpected end"));
       got += static_cast<std::size_t>(r);
     }
-    // One branch-free pass finds whether any value is NaN or infinite (x * 0 is NaN exactly
-    // then; explicit vector lanes, so no reassociation is needed); only then is the first one
-    // located for the message.
-    using v4 = double __attribute__((vector_size(32)));
-    v4 acc{};
-    std::size_t i4 = 0;
-    for (; i4 + 4 <= want; i4 += 4) {
-      v4 v;
-      std::memcpy(&v, &out[i4], sizeof v);
-      acc += v * 0.0;
-    }
-    double tail = 0;
-    for (; i4 < want; ++i4) tail += out[i4] * 0.0;
-    const bool bad = (acc[0] + acc[1] + acc[2] + acc[3] + tail) != 0.0;  // NaN != 0
-    if (bad)
-      for (std::size_t i = 0; i < want; ++i)
-        if (!std::isfinite(out[i]))
-          throw ConfigError(path_ + ": value " + std::to_string(pos + i) + " (byte " + std::to_string((pos + i) * 8) +
-                          ") is not a finite number");
+    if (const auto bad = an::first_non_finite(std::span<const double>(out.data(), want)))
+      throw ConfigError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
+                        ") is not a finite number");
     return want;
   }
 
