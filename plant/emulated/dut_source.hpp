@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include <toml++/toml.h>
 
@@ -25,6 +26,26 @@ class DutSource {
   virtual FilterConfig filter() const = 0;
   virtual double temperature_c() const = 0;
   virtual std::string serial() const = 0;
+};
+
+// A DutSource wrapped around another: forwards everything; a wrapper overrides what it adds
+// to (the plant's sample counter, `rig plant serve`'s table coupling).
+class DutSourceWrapper : public DutSource {
+ public:
+  explicit DutSourceWrapper(std::unique_ptr<DutSource> inner) : inner_(std::move(inner)) {}
+  double output_rate_hz() const override { return inner_->output_rate_hz(); }
+  void set_table_angle_deg(double deg) override { inner_->set_table_angle_deg(deg); }
+  void next(float& x_g, float& y_g) override { inner_->next(x_g, y_g); }
+  void set_filter(const FilterConfig& f) override { inner_->set_filter(f); }
+  FilterConfig filter() const override { return inner_->filter(); }
+  double temperature_c() const override { return inner_->temperature_c(); }
+  std::string serial() const override { return inner_->serial(); }
+
+ protected:
+  DutSource& inner() { return *inner_; }
+
+ private:
+  std::unique_ptr<DutSource> inner_;
 };
 
 // Builds the emulated DUT. `dut_cfg` is the [plant.dut] table of the profile

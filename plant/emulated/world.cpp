@@ -18,22 +18,16 @@ constexpr double kSilenceLimitS = 0.1;
 
 // Counts the DUT's output samples, whichever path (direct or CAN firmware) draws them: the
 // figure behind the real-time factor `rig run` reports.
-class EmulatedPlant::CountingSource final : public DutSource {
+class EmulatedPlant::CountingSource final : public DutSourceWrapper {
  public:
-  CountingSource(std::unique_ptr<DutSource> inner, std::uint64_t& count) : inner_(std::move(inner)), count_(count) {}
-  double output_rate_hz() const override { return inner_->output_rate_hz(); }
-  void set_table_angle_deg(double deg) override { inner_->set_table_angle_deg(deg); }
+  CountingSource(std::unique_ptr<DutSource> inner, std::uint64_t& count)
+      : DutSourceWrapper(std::move(inner)), count_(count) {}
   void next(float& x_g, float& y_g) override {
     ++count_;
-    inner_->next(x_g, y_g);
+    DutSourceWrapper::next(x_g, y_g);
   }
-  void set_filter(const FilterConfig& f) override { inner_->set_filter(f); }
-  FilterConfig filter() const override { return inner_->filter(); }
-  double temperature_c() const override { return inner_->temperature_c(); }
-  std::string serial() const override { return inner_->serial(); }
 
  private:
-  std::unique_ptr<DutSource> inner_;
   std::uint64_t& count_;
 };
 

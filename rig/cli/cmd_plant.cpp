@@ -24,23 +24,16 @@ namespace {
 // Couples the table to the DUT: before every output period the DUT sees the
 // table's actual angle. Only the firmware thread calls into the DUT model;
 // the table emulator is thread-safe.
-class TableCoupledDut final : public plant::DutSource {
+class TableCoupledDut final : public plant::DutSourceWrapper {
  public:
   TableCoupledDut(std::unique_ptr<plant::DutSource> inner, plant::TableEmulator& table)
-      : inner_(std::move(inner)), table_(table) {}
-  double output_rate_hz() const override { return inner_->output_rate_hz(); }
-  void set_table_angle_deg(double deg) override { inner_->set_table_angle_deg(deg); }
+      : DutSourceWrapper(std::move(inner)), table_(table) {}
   void next(float& x, float& y) override {
-    inner_->set_table_angle_deg(table_.actual_angle_deg());
-    inner_->next(x, y);
+    inner().set_table_angle_deg(table_.actual_angle_deg());
+    inner().next(x, y);
   }
-  void set_filter(const FilterConfig& f) override { inner_->set_filter(f); }
-  FilterConfig filter() const override { return inner_->filter(); }
-  double temperature_c() const override { return inner_->temperature_c(); }
-  std::string serial() const override { return inner_->serial(); }
 
  private:
-  std::unique_ptr<plant::DutSource> inner_;
   plant::TableEmulator& table_;
 };
 
