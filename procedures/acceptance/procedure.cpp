@@ -112,14 +112,9 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   opt.confidence = p.confidence;
   const std::vector<analysis::DevPoint> dev = analysis::deviation(d, opt);
   const double T = static_cast<double>(d.size()) / p.rate_hz;
-  analysis::NoiseTerms nt = analysis::noise_terms(dev, T);
-  if (T < p.r_min_record_s) {  // the method's rule, applied before both the passport and analysis.json
-    nt.R.value.reset();
-    nt.R.lo.reset();
-    nt.R.hi.reset();
-    nt.R.reason = fmt::format("needs a record of at least {:g} h (METHOD.md); this capture is {:g} h",
-                              p.r_min_record_s / 3600, T / 3600);
-  }
+  // R only from a record as long as the method needs (the profile's [analysis] r_min_record_s):
+  // the passport and analysis.json carry the same fit.
+  const analysis::NoiseTerms nt = analysis::noise_terms(dev, T, p.r_min_record_s);
   auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
     if (t.value) {
       ctx.values.set(name, *t.value * scale, why, t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,

@@ -177,7 +177,7 @@ double chi2_per_dof(const MaskFit& f, std::size_t n) {
   return f.rss / std::max(1.0, static_cast<double>(n) - f.terms());
 }
 
-WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, bool fit_r) {
+WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_record_s) {
   WlsFit w;
   std::vector<const DevPoint*> use;
   for (const auto& p : pts)
@@ -195,7 +195,7 @@ WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, bool fit_r) {
   // added to every point's variance and set so that the best fit has chi2/dof = 1 (the
   // Paule-Mandel / Birge rule for inconsistent data); delta = 0 when the model fits within the
   // EDF scatter, and then the fit is the plain EDF-weighted one.
-  const int allowed = fit_r ? 31 : 15;
+  const int allowed = record_s >= r_min_record_s ? 31 : 15;
   MaskFit fit = best_fit(use, 0.0, allowed);
   double delta = 0;
   if (fit.mask != 0 && static_cast<Eigen::Index>(fit.terms()) < n && chi2_per_dof(fit, use.size()) > 1) {
@@ -238,7 +238,7 @@ WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, bool fit_r) {
     t.unit = kUnits[k];
     if (!(allowed & (1 << k))) {
       t.reason = std::string("not fitted: ") + kNames[k] + " needs a longer record (at least " +
-                 fmt(kRMinRecordS / 3600) + " h, METHOD.md; this one is " + fmt(record_s / 3600) + " h)";
+                 fmt(r_min_record_s / 3600) + " h, METHOD.md; this one is " + fmt(record_s / 3600) + " h)";
       continue;
     }
     if (!(best_mask & (1 << k))) {
@@ -285,14 +285,14 @@ WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, bool fit_r) {
 
 }  // namespace
 
-NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s) {
+NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
   NoiseTerms out;
   out.paper = paper_fit(oadev);
   // R is not fitted on a record shorter than the method allows for it (METHOD.md: > 50 h): over
   // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
   // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
   // (then to be discarded by the 50 h rule anyway, leaving K null).
-  out.wls = wls_fit(oadev, record_length_s, record_length_s >= kRMinRecordS);
+  out.wls = wls_fit(oadev, record_length_s, r_min_record_s);
   out.Q = out.wls.Q;
   out.N = out.wls.N;
   out.K = out.wls.K;

@@ -75,7 +75,9 @@ inline constexpr double kBiasFactor = 0.66428001915095;
 inline constexpr double kRMinRecordS = 50 * 3600.0;
 
 // oadev: the overlapping Allan deviation points (edf used as weights; 0 = unweighted).
-NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s);
+// r_min_record_s: R is fitted only on records at least this long (a profile may set it).
+NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
+                       double r_min_record_s = kRMinRecordS);
 
 // Passport units.
 inline double q_per_hour(double q_g_s) { return q_g_s / 3600.0; }       // g*s -> g*h

@@ -63,6 +63,15 @@ TEST(NoiseTerms, RateRampIsFoundOnAFiftyHourCurve) {
   EXPECT_NEAR(r_per_hour(*t.R.value), R * 3600, 1e-3 * R * 3600);
 }
 
+TEST(NoiseTerms, TheMinimumRecordForRIsAParameter) {
+  // The same 50-h curve with a 60-h minimum (a profile's [analysis] r_min_record_s): R is not
+  // fitted and the reason names the minimum.
+  const auto pts = curve(0, kN, kB, kK, 1e-9, 0.001, 45000, 120);
+  const NoiseTerms t = noise_terms(pts, 50 * 3600.0, 60 * 3600.0);
+  EXPECT_FALSE(t.R.value);
+  EXPECT_NE(t.R.reason.find("at least 60 h"), std::string::npos) << t.R.reason;
+}
+
 TEST(NoiseTerms, PaperMethodFindsTheFlatSegmentAndTauCp) {
   const auto pts = curve(0, kN, kB, kK, 0, 0.001, 900, 100);
   const NoiseTerms t = noise_terms(pts, 3600);
