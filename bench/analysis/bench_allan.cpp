@@ -12,9 +12,9 @@
 #include <random>
 #include <string>
 
-#include "procedures/analysis/allan.hpp"
-#include "procedures/analysis/noise_terms.hpp"
-#include "procedures/analysis/psd.hpp"
+#include "analysis/allan.hpp"
+#include "analysis/noise_terms.hpp"
+#include "analysis/psd.hpp"
 
 namespace an = rig::analysis;
 

@@ -17,7 +17,7 @@ log_n = int(sys.argv[3]) if len(sys.argv) > 3 else 100
 y = np.fromfile(path, dtype="<f8")
 n = len(y) + 1                    # phase points
 top = (n - 1) // 4                # Stable32 stop ratio for OADEV
-# The same grid as rig's log:N (procedures/analysis/tau_grid.cpp): log-spaced below 64,
+# The same grid as rig's log:N (analysis/tau_grid.cpp): log-spaced below 64,
 # seeds in [64, 128) times powers of two above.
 q = max(1, int(np.ceil((log_n - 1) / max(1.0, np.log2(top)))))
 ms = set()

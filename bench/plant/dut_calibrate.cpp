@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "plant/dut/loop_figures.hpp"
-#include "procedures/analysis/noise_terms.hpp"
+#include "analysis/noise_terms.hpp"
 #include "rig/core/toml_util.hpp"
 #include "tests/plant/paper_procedure.hpp"
 

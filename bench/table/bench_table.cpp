@@ -16,7 +16,8 @@
 #include "plant/table/table_server.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/toml_util.hpp"
-#include "rig/modbus/inprocess.hpp"
+#include "plant/table/table_emulator.hpp"
+#include "rig/modbus/table_client.hpp"
 
 extern char** environ;
 

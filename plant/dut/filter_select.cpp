@@ -6,7 +6,7 @@
 
 #include "plant/dut/emulated_dut.hpp"
 #include "plant/dut/loop_figures.hpp"
-#include "procedures/analysis/filter.hpp"
+#include "analysis/filter.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::plant {

@@ -7,7 +7,8 @@
 #include "plant/table/table_emulator.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
-#include "rig/modbus/inprocess.hpp"
+#include "plant/table/table_emulator.hpp"
+#include "rig/modbus/table_client.hpp"
 
 namespace rig::plant {
 

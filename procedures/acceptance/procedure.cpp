@@ -7,13 +7,14 @@
 #include <fmt/format.h>
 
 #include "plant/dut/loop_figures.hpp"
-#include "procedures/acceptance/analysis_json.hpp"
+#include "analysis/json.hpp"
+#include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/record.hpp"
-#include "procedures/analysis/allan.hpp"
-#include "procedures/analysis/filter.hpp"
-#include "procedures/analysis/gost.hpp"
-#include "procedures/analysis/noise_terms.hpp"
-#include "procedures/analysis/psd.hpp"
+#include "analysis/allan.hpp"
+#include "analysis/filter.hpp"
+#include "analysis/gost.hpp"
+#include "analysis/noise_terms.hpp"
+#include "analysis/psd.hpp"
 #include "rig/capture/capture.hpp"
 #include "rig/core/errors.hpp"
 
@@ -135,7 +136,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   } else {
     term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
   }
-  return {{"oadev", dev_to_json(dev)}, {"noise_terms", noise_terms_to_json(nt)}};
+  return {{"oadev", analysis::dev_to_json(dev)}, {"noise_terms", analysis::noise_terms_to_json(nt)}};
 }
 
 void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
@@ -153,7 +154,7 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
   ctx.values.set("rms_filtered", analysis::rms(y), "RMS of y(t) drift over the raw capture");
   for (const auto& [ch, v] : {std::pair{"x", &x}, std::pair{"y", &y}}) {
     const analysis::Psd psd = analysis::welch(*v, p.rate_hz);
-    a["psd"][ch] = psd_to_json(psd, analysis::find_peaks(psd));
+    a["psd"][ch] = analysis::psd_to_json(psd, analysis::find_peaks(psd));
   }
   const std::size_t n_ts = std::min<std::size_t>(x.size(), static_cast<std::size_t>(2 * p.rate_hz));
   a["timeseries"] = {{"rate_hz", p.rate_hz},

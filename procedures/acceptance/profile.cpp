@@ -5,7 +5,7 @@
 #include <map>
 #include <sstream>
 
-#include "procedures/analysis/filter.hpp"
+#include "analysis/filter.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {

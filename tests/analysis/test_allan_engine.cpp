@@ -13,7 +13,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "procedures/analysis/allan.hpp"
+#include "analysis/allan.hpp"
 
 namespace rig::analysis {
 namespace {

@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-#include "procedures/analysis/allan.hpp"
+#include "analysis/allan.hpp"
 #include "reference_data.hpp"
 
 namespace rig::analysis {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "procedures/analysis/filter.hpp"
+#include "analysis/filter.hpp"
 
 namespace rig::analysis {
 namespace {

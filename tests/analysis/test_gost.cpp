@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "procedures/analysis/gost.hpp"
+#include "analysis/gost.hpp"
 
 namespace rig::analysis {
 namespace {

@@ -1,11 +1,11 @@
-// The B1/R(n) rules of procedures/analysis/noise_id.hpp on hand-made series whose B1 ratio is
+// The B1/R(n) rules of analysis/noise_id.hpp on hand-made series whose B1 ratio is
 // known in closed form (the reference tables check them on measured data).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "procedures/analysis/noise_id.hpp"
+#include "analysis/noise_id.hpp"
 
 namespace rig::analysis {
 namespace {

@@ -9,7 +9,7 @@
 #include <random>
 #include <tuple>
 
-#include "procedures/analysis/noise_terms.hpp"
+#include "analysis/noise_terms.hpp"
 
 namespace rig::analysis {
 namespace {

@@ -7,8 +7,8 @@
 #include <span>
 #include <vector>
 
-#include "procedures/analysis/allan.hpp"
-#include "procedures/analysis/psd.hpp"
+#include "analysis/allan.hpp"
+#include "analysis/psd.hpp"
 
 namespace rig::analysis {
 namespace {

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "procedures/acceptance/procedure.hpp"
-#include "procedures/analysis/gost.hpp"
+#include "analysis/gost.hpp"
 
 using rig::acceptance::accuracy_class;
 using rig::acceptance::AccuracyClass;

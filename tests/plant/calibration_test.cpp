@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "plant/dut/loop_figures.hpp"
-#include "procedures/analysis/noise_terms.hpp"
+#include "analysis/noise_terms.hpp"
 #include "tests/plant/paper_procedure.hpp"
 
 namespace rig::plant {

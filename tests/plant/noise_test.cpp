@@ -10,7 +10,7 @@
 
 #include "plant/dut/emulated_dut.hpp"
 #include "plant/dut/noise.hpp"
-#include "procedures/analysis/psd.hpp"
+#include "analysis/psd.hpp"
 #include "rig/core/toml_util.hpp"
 #include "tests/plant/paper_procedure.hpp"
 

@@ -3,9 +3,9 @@
 #include <cmath>
 
 #include "plant/dut/noise.hpp"
-#include "procedures/analysis/allan.hpp"
-#include "procedures/analysis/filter.hpp"
-#include "procedures/analysis/gost.hpp"
+#include "analysis/allan.hpp"
+#include "analysis/filter.hpp"
+#include "analysis/gost.hpp"
 
 namespace rig::plant::calib {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "plant/dut/emulated_dut.hpp"
-#include "procedures/analysis/noise_terms.hpp"
+#include "analysis/noise_terms.hpp"
 
 namespace rig::plant::calib {
 

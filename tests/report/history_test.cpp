@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <thread>
 
-#include "rig/cli/commands.hpp"
+#include "app/commands.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/timefmt.hpp"
 #include "tests/report/history_cases.hpp"

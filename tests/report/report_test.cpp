@@ -5,7 +5,7 @@
 #include <cstring>
 
 
-#include "rig/cli/commands.hpp"
+#include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/report.hpp"
 #include "rig/report/svg.hpp"

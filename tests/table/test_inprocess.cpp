@@ -8,7 +8,8 @@
 
 #include "helpers.hpp"
 #include "rig/core/clock.hpp"
-#include "rig/modbus/inprocess.hpp"
+#include "plant/table/table_emulator.hpp"
+#include "rig/modbus/table_client.hpp"
 #include "rig/modbus/table_client.hpp"
 
 namespace rig::table_test {

@@ -1,0 +1,237 @@
+// Deviation values, noise identification and bounds from the engine's raw sums.
+#include "analysis/allan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "analysis/allan_engine.hpp"
+#include "analysis/edf.hpp"
+#include "analysis/noise_id.hpp"
+
+namespace rig::analysis {
+
+namespace {
+
+constexpr std::size_t kNoiseIdCap = 1u << 17;  // averaged points used by the lag-1 ACF (see docs)
+constexpr std::size_t kAcfMinPoints = 30;      // Stable32: ACF method from 30 averaged points
+
+int diff_order(Deviation d) { return (d == Deviation::HDEV || d == Deviation::OHDEV) ? 3 : 2; }
+
+// sigma^2 from the engine sum (P in frequency-sum units, see allan_engine.hpp).
+double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::uint64_t n) {
+  const double mm = static_cast<double>(m);
+  switch (d) {
+    case Deviation::ADEV:
+    case Deviation::OADEV: return sum / (2 * mm * mm * static_cast<double>(terms));
+    case Deviation::MDEV:
+    case Deviation::TDEV: return sum / (2 * mm * mm * mm * mm * static_cast<double>(terms));
+    case Deviation::HDEV:
+    case Deviation::OHDEV: return sum / (6 * mm * mm * static_cast<double>(terms));
+    case Deviation::TOTDEV: return sum / (2 * mm * mm * static_cast<double>(n - 2));
+  }
+  return 0;
+}
+
+// Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m.
+std::vector<double> averages(const std::vector<double>& dec, std::size_t m) {
+  std::vector<double> z;
+  if (dec.size() < 2) return z;
+  z.reserve(dec.size() - 1);
+  for (std::size_t k = 0; k + 1 < dec.size(); ++k) z.push_back((dec[k + 1] - dec[k]) / static_cast<double>(m));
+  return z;
+}
+
+int clamp_alpha(int alpha, int d) { return std::clamp(alpha, d == 3 ? -4 : -2, 2); }
+
+double edf_for(Deviation type, int alpha, std::size_t m, std::uint64_t n) {
+  switch (type) {
+    case Deviation::ADEV: return edf_greenhall(alpha, 2, m, n, false, false);
+    case Deviation::OADEV: return edf_greenhall(alpha, 2, m, n, true, false);
+    case Deviation::MDEV:
+    case Deviation::TDEV: return edf_greenhall(alpha, 2, m, n, true, true);
+    case Deviation::HDEV: return edf_greenhall(alpha, 3, m, n, false, false);
+    case Deviation::OHDEV: return edf_greenhall(alpha, 3, m, n, true, false);
+    case Deviation::TOTDEV: return edf_totdev(n, m, alpha);
+  }
+  return 0;
+}
+
+void validate(const DevOptions& o) {
+  if (!(o.rate_hz > 0) || !std::isfinite(o.rate_hz))
+    throw std::invalid_argument("allan: rate must be a positive number of Hz, got " + std::to_string(o.rate_hz));
+  if (o.bounds && !(o.confidence > 0 && o.confidence < 1))
+    throw std::invalid_argument("allan: confidence must be in (0, 1), got " + std::to_string(o.confidence));
+}
+
+std::vector<std::size_t> factors_for(const DevOptions& o, std::uint64_t n) {
+  if (o.factors.empty()) return tau_factors(o.taus, o.type, n);
+  const std::uint64_t top = o.type == Deviation::TOTDEV ? (n - 1) / 2 : n;
+  for (std::size_t m : o.factors)
+    if (m == 0 || m > top || term_count(o.type, n, m) == 0)
+      throw std::invalid_argument("allan: averaging factor " + std::to_string(m) + " is out of range for " +
+                                  std::to_string(n) + " phase points");
+  return o.factors;
+}
+
+}  // namespace
+
+std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std::span<const DevOptions> opts,
+                                                     const StreamOptions& so) {
+  if (opts.empty()) return {};
+  for (const auto& o : opts) {
+    validate(o);
+    if (o.data != opts[0].data || o.rate_hz != opts[0].rate_hz)
+      throw std::invalid_argument("allan: deviations in one pass must share data kind and rate");
+  }
+  const DataKind kind = opts[0].data;
+  const std::uint64_t n_src = src.size();
+  const std::uint64_t n = kind == DataKind::Frequency ? n_src + 1 : n_src;
+  if (n < 3) throw std::invalid_argument("allan: needs at least 3 phase points, got " + std::to_string(n));
+
+  // Requests: every (type, m) once (TDEV is MDEV scaled).
+  std::vector<detail::EngineRequest> req;
+  std::vector<std::vector<std::size_t>> index(opts.size());
+  auto find_or_add = [&](Deviation t, std::size_t m) {
+    for (std::size_t i = 0; i < req.size(); ++i)
+      if (req[i].type == t && req[i].m == m) return i;
+    req.push_back({t, m});
+    return req.size() - 1;
+  };
+  for (std::size_t k = 0; k < opts.size(); ++k)
+    for (std::size_t m : factors_for(opts[k], n))
+      index[k].push_back(find_or_add(opts[k].type == Deviation::TDEV ? Deviation::MDEV : opts[k].type, m));
+  detail::Engine engine(src, kind, opts[0].rate_hz, so, opts[0].threads, kNoiseIdCap);
+  const detail::EngineResult er = engine.run(req);
+
+  // Mod AVAR at m for R(n), only where B1 cannot tell white from flicker PM.
+  std::map<std::size_t, double> mvar_cache;
+  auto mod_avar = [&](std::size_t m) {
+    if (auto it = mvar_cache.find(m); it != mvar_cache.end()) return it->second;
+    double v = -1;
+    for (std::size_t i = 0; i < req.size(); ++i)
+      if (req[i].type == Deviation::MDEV && req[i].m == m)
+        v = variance(Deviation::MDEV, er.sums[i].sum, er.sums[i].terms, m, n);
+    if (v < 0 && term_count(Deviation::MDEV, n, m) > 0) {
+      const detail::Sums s = engine.extra(Deviation::MDEV, m);
+      v = variance(Deviation::MDEV, s.sum, s.terms, m, n);
+    }
+    return mvar_cache[m] = v;
+  };
+
+  // First, per point and in parallel: the deviation and, with >= 30 averages, the lag-1 ACF
+  // noise identification (the costly part: up to kNoiseIdCap points per tau).
+  struct Pending {
+    std::size_t k, q;
+    DevPoint p;
+    std::vector<double> z;
+    std::optional<NoiseId> id;
+  };
+  std::vector<Pending> pend;
+  for (std::size_t k = 0; k < opts.size(); ++k)
+    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}});
+  const double tau0 = 1.0 / opts[0].rate_hz;
+  const unsigned threads = opts[0].threads ? opts[0].threads : std::max(1u, std::thread::hardware_concurrency());
+  detail::parallel_for(pend.size(), threads, [&](std::size_t i) {
+    Pending& e = pend[i];
+    const DevOptions& o = opts[e.k];
+    const detail::Sums& s = er.sums[index[e.k][e.q]];
+    DevPoint& p = e.p;
+    p.m = s.m;
+    p.tau_s = static_cast<double>(s.m) * tau0;
+    p.n_terms = term_count(o.type, n, s.m);
+    p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
+    if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
+    if (!o.bounds || o.fixed_alpha) return;
+    e.z = averages(s.decimated, s.m);
+    if (e.z.size() < kAcfMinPoints) return;
+    if (kind == DataKind::Frequency) {
+      e.id = acf_noise_id(e.z, false, diff_order(o.type));
+    } else {
+      // Phase data: Stable32 identifies on the decimated phase itself (noise_id.hpp). The
+      // engine's P is the phase less the line through its end points, in units of tau0; the
+      // line is put back (an ACF sees it before differencing), the scale does not matter.
+      std::vector<double> x(s.decimated.size());
+      const double ramp = er.spec.slope * er.spec.rate_hz * static_cast<double>(s.m);
+      for (std::size_t j = 0; j < x.size(); ++j) x[j] = s.decimated[j] + ramp * static_cast<double>(j);
+      e.id = acf_noise_id(x, true, diff_order(o.type));
+    }
+  });
+
+  // Then in order: B1/R(n) where there are fewer than 30 averages (its rules repeat the alpha
+  // of the previous tau past half the largest factor), and the bounds.
+  std::vector<std::vector<DevPoint>> out(opts.size());
+  for (Pending& e : pend) {
+    const DevOptions& o = opts[e.k];
+    const detail::Sums& s = er.sums[index[e.k][e.q]];
+    DevPoint p = e.p;
+    if (o.bounds) {
+      const int d = diff_order(o.type);
+      NoiseId id;
+      if (o.fixed_alpha) {
+        id.alpha = *o.fixed_alpha;
+      } else if (e.id) {
+        id = *e.id;
+      } else {
+        std::optional<int> previous;
+        std::size_t previous_m = 0;
+        for (const DevPoint& prior : out[e.k]) {
+          if (prior.m < s.m && prior.m >= previous_m) {
+            previous_m = prior.m;
+            previous = prior.alpha;
+          }
+        }
+        const bool modified = o.type == Deviation::MDEV || o.type == Deviation::TDEV;
+        id = b1_rn_noise_id(e.z, {s.m, p.n_terms, max_factor(o.type, n), d == 3, previous},
+                            modified ? std::function<double()>([&] { return mod_avar(s.m); }) : nullptr);
+      }
+      p.alpha = clamp_alpha(id.alpha, d);
+      p.edf = edf_for(o.type, p.alpha, s.m, n);
+      const auto [lo, hi] = chi2_bounds(p.dev, p.edf, o.confidence);
+      p.lo = lo;
+      p.hi = hi;
+    }
+    out[e.k].push_back(p);
+  }
+  return out;
+}
+
+std::vector<DevPoint> deviation_stream(const ChunkSource& src, const DevOptions& opt, const StreamOptions& so) {
+  return deviations_stream(src, std::span<const DevOptions>(&opt, 1), so)[0];
+}
+
+std::optional<std::size_t> first_non_finite(std::span<const double> v) {
+  // x * 0 is NaN exactly for NaN and infinities; explicit lanes keep the pass vectorised
+  // without reassociating a floating-point sum.
+  using v4 = double __attribute__((vector_size(32)));
+  v4 acc{};
+  std::size_t i = 0;
+  for (; i + 4 <= v.size(); i += 4) {
+    v4 x;
+    std::memcpy(&x, v.data() + i, sizeof x);
+    acc += x * 0.0;
+  }
+  double tail = 0;
+  for (; i < v.size(); ++i) tail += v[i] * 0.0;
+  if (acc[0] + acc[1] + acc[2] + acc[3] + tail == 0.0) return std::nullopt;  // NaN != 0
+  for (i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i])) return i;
+  return std::nullopt;
+}
+
+std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt) {
+  if (const auto bad = first_non_finite(data))
+    throw std::invalid_argument("allan: value " + std::to_string(*bad) + " is not finite");
+  SpanSource src(data);
+  StreamOptions so;
+  so.memory_budget_bytes = std::numeric_limits<std::size_t>::max() / 4;  // in memory: one ring holds it all
+  return deviation_stream(src, opt, so);
+}
+
+}  // namespace rig::analysis

@@ -1,0 +1,859 @@
+// The one-pass Allan-family engine (see allan_engine.hpp for the design).
+#include <algorithm>
+#include <atomic>
+#include <barrier>
+#include <bit>
+#include <cmath>
+#include <cstdlib>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <sys/mman.h>
+
+#include "analysis/allan_engine.hpp"
+
+namespace rig::analysis {
+
+std::size_t SpanSource::read_at(std::uint64_t pos, std::span<double> out) const {
+  if (pos >= v_.size()) return 0;
+  const std::size_t n = std::min<std::size_t>(out.size(), v_.size() - pos);
+  std::copy_n(v_.begin() + static_cast<std::ptrdiff_t>(pos), n, out.begin());
+  return n;
+}
+
+namespace detail {
+namespace {
+
+constexpr std::size_t kCheckpointEvery = 4096;  // P checkpoints for random access (frequency data)
+
+// ---------------------------------------------------------------------------------------------
+// Kernels: sums of squared differences over contiguous windows w[k] = &P[base + k m].
+// Compiled for AVX-512, AVX2 and baseline; the reductions are vectorised by `omp simd`.
+#define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+
+// Four independent vector accumulators: the sum is not one long FMA dependency chain.
+using v8 = double __attribute__((vector_size(64)));
+inline v8 load8(const double* p) {
+  v8 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline double hsum(v8 v) {
+  double s = 0;
+  for (int i = 0; i < 8; ++i) s += v[i];
+  return s;
+}
+
+RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t len) {
+  v8 a0{}, a1{}, a2{}, a3{};
+  std::size_t t = 0;
+  for (; t + 32 <= len; t += 32) {
+    const v8 d0 = load8(w2 + t) - 2 * load8(w1 + t) + load8(w0 + t);
+    const v8 d1 = load8(w2 + t + 8) - 2 * load8(w1 + t + 8) + load8(w0 + t + 8);
+    const v8 d2 = load8(w2 + t + 16) - 2 * load8(w1 + t + 16) + load8(w0 + t + 16);
+    const v8 d3 = load8(w2 + t + 24) - 2 * load8(w1 + t + 24) + load8(w0 + t + 24);
+    a0 += d0 * d0, a1 += d1 * d1, a2 += d2 * d2, a3 += d3 * d3;
+  }
+  double s = hsum((a0 + a1) + (a2 + a3));
+  for (; t < len; ++t) {
+    const double d = w2[t] - 2 * w1[t] + w0[t];
+    s += d * d;
+  }
+  return s;
+}
+
+RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len) {
+  v8 a0{}, a1{};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 d0 = load8(w3 + t) - 3 * load8(w2 + t) + 3 * load8(w1 + t) - load8(w0 + t);
+    const v8 d1 = load8(w3 + t + 8) - 3 * load8(w2 + t + 8) + 3 * load8(w1 + t + 8) - load8(w0 + t + 8);
+    a0 += d0 * d0, a1 += d1 * d1;
+  }
+  double s = hsum(a0 + a1);
+  for (; t < len; ++t) {
+    const double d = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+    s += d * d;
+  }
+  return s;
+}
+
+// A doubling chain m, 2m, .., 2^(K-1) m of OADEV/TOTDEV taus aligned at a common head h (the
+// newest phase point of each term): tau 2^i m's term is P[h] - 2 P[h - 2^i m] + P[h - 2^(i+1) m],
+// so K taus need K + 2 streams, not 3K: the loads that bound sum_d2 are shared.
+// lag[j] = &P[h0 - 2^j m], j = 0..K; out[i] += sum of squared terms of tau 2^i m.
+template <int K>
+[[gnu::always_inline]] inline void chain_d2_body(const double* head, const double* const* lag, std::size_t len,
+                                                 double* out) {
+  v8 a[K][2] = {};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
+    v8 p0 = load8(lag[0] + t), p1 = load8(lag[0] + t + 8);
+#pragma GCC unroll 8
+    for (int i = 0; i < K; ++i) {
+      const v8 q0 = load8(lag[i + 1] + t), q1 = load8(lag[i + 1] + t + 8);
+      const v8 d0 = h0 - 2 * p0 + q0, d1 = h1 - 2 * p1 + q1;
+      a[i][0] += d0 * d0;
+      a[i][1] += d1 * d1;
+      p0 = q0, p1 = q1;
+    }
+  }
+  for (int i = 0; i < K; ++i) {
+    double s = hsum(a[i][0] + a[i][1]);
+    for (std::size_t u = t; u < len; ++u) {
+      const double d = head[u] - 2 * lag[i][u] + lag[i + 1][u];
+      s += d * d;
+    }
+    out[i] += s;
+  }
+}
+
+#define RIG_CHAIN(K)                                                                                 \
+  RIG_CLONES void chain_d2_##K(const double* head, const double* const* lag, std::size_t len, double* out) { \
+    chain_d2_body<K>(head, lag, len, out);                                                           \
+  }
+RIG_CHAIN(2)
+RIG_CHAIN(3)
+RIG_CHAIN(4)
+RIG_CHAIN(5)
+RIG_CHAIN(6)
+RIG_CHAIN(7)
+RIG_CHAIN(8)
+#undef RIG_CHAIN
+constexpr int kMaxChain = 8;
+
+void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out) {
+  switch (k) {
+    case 2: return chain_d2_2(head, lag, len, out);
+    case 3: return chain_d2_3(head, lag, len, out);
+    case 4: return chain_d2_4(head, lag, len, out);
+    case 5: return chain_d2_5(head, lag, len, out);
+    case 6: return chain_d2_6(head, lag, len, out);
+    case 7: return chain_d2_7(head, lag, len, out);
+    case 8: return chain_d2_8(head, lag, len, out);
+    default: break;
+  }
+  for (int i = 0; i < k; ++i) out[i] += sum_d2(lag[i + 1], lag[i], head, len);
+}
+
+// MDEV: the m-window sum of second differences slides by one per base; its increment
+// d[b+m] - d[b] is the third difference w3 - 3w2 + 3w1 - w0. The running sum is a prefix
+// sum: done in tiles with four interleaved chains so it is not one long dependency chain.
+RIG_CLONES void third_diff(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+                           double* out) {
+#pragma omp simd
+  for (std::size_t t = 0; t < len; ++t) out[t] = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+}
+
+RIG_CLONES double sum_sq_offset(const double* v, std::size_t len, double off) {
+  double s = 0;
+#pragma omp simd reduction(+ : s)
+  for (std::size_t t = 0; t < len; ++t) s += (v[t] + off) * (v[t] + off);
+  return s;
+}
+
+double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+                double& inner) {
+  constexpr std::size_t kTile = 1024, kQ = kTile / 4;
+  double buf[kTile];
+  double s = 0;
+  for (std::size_t t0 = 0; t0 < len; t0 += kTile) {
+    const std::size_t n = std::min(kTile, len - t0);
+    third_diff(w0 + t0, w1 + t0, w2 + t0, w3 + t0, n, buf);
+    if (n < kTile) {
+      for (std::size_t t = 0; t < n; ++t) {
+        inner += buf[t];
+        s += inner * inner;
+      }
+      continue;
+    }
+    double c0 = 0, c1 = 0, c2 = 0, c3 = 0;  // local prefix sums of the four quarters
+    for (std::size_t t = 0; t < kQ; ++t) {
+      c0 += buf[t], buf[t] = c0;
+      c1 += buf[kQ + t], buf[kQ + t] = c1;
+      c2 += buf[2 * kQ + t], buf[2 * kQ + t] = c2;
+      c3 += buf[3 * kQ + t], buf[3 * kQ + t] = c3;
+    }
+    s += sum_sq_offset(buf, kQ, inner);
+    s += sum_sq_offset(buf + kQ, kQ, inner + c0);
+    s += sum_sq_offset(buf + 2 * kQ, kQ, inner + c0 + c1);
+    s += sum_sq_offset(buf + 3 * kQ, kQ, inner + c0 + c1 + c2);
+    inner += c0 + c1 + c2 + c3;
+  }
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+struct PhaseState {
+  double C = 0;  // C_k of the block holding the next index
+  double L = 0;  // L(next index)
+};
+
+struct Acc {
+  Deviation type{};
+  std::size_t m = 0;
+  std::size_t span = 0;   // highest phase offset of a term relative to its base
+  std::size_t nwin = 0;   // windows (offsets 0, m, 2m[, 3m])
+  std::size_t bases = 0;  // term bases 0..bases-1 (stride m for ADEV/HDEV)
+  double sum = 0;
+  std::size_t terms = 0;
+  double inner = 0;       // MDEV state
+  bool far = false;       // post-pass: even the newer windows do not fit the ring
+  bool cursor = false;    // in-pass, its oldest window P[b] rebuilt by its own sequential cursor
+  std::uint64_t cur_next = 0;  // cursor: the next phase index it builds, and its state there
+  PhaseState cur_state;
+  std::vector<double> cur_buf, cur_scratch;
+
+  bool strided() const { return type == Deviation::ADEV || type == Deviation::HDEV; }
+  bool modified() const { return type == Deviation::MDEV || type == Deviation::TDEV; }
+
+  // Terms with base in [b0, b0 + len); w[k] = &P[b0 + k m], contiguous for len points.
+  void run(std::size_t b0, std::size_t len, const double* const* w) {
+    if (strided()) {
+      std::size_t t = (b0 % m == 0) ? 0 : m - b0 % m;
+      for (; t < len; t += m) {
+        double d;
+        if (nwin == 3) d = w[2][t] - 2 * w[1][t] + w[0][t];
+        else d = w[3][t] - 3 * w[2][t] + 3 * w[1][t] - w[0][t];
+        sum += d * d;
+        ++terms;
+      }
+      return;
+    }
+    if (modified()) sum += mdev_run(w[0], w[1], w[2], w[3], len, inner);
+    else if (nwin == 3) sum += sum_d2(w[0], w[1], w[2], len);
+    else sum += sum_d3(w[0], w[1], w[2], w[3], len);
+    terms += len;
+  }
+};
+
+Acc make_acc(Deviation type, std::size_t m, std::size_t n) {
+  Acc a;
+  a.type = type;
+  a.m = m;
+  const auto sub = [](std::size_t x, std::size_t y) { return x > y ? x - y : 0; };
+  switch (type) {
+    case Deviation::ADEV:
+    case Deviation::OADEV:
+    case Deviation::TOTDEV:  // interior terms; the reflected edges are added afterwards
+      a.span = 2 * m;
+      a.nwin = 3;
+      a.bases = sub(n, 2 * m);
+      break;
+    case Deviation::HDEV:
+    case Deviation::OHDEV:
+      a.span = 3 * m;
+      a.nwin = 4;
+      a.bases = sub(n, 3 * m);
+      break;
+    case Deviation::MDEV:
+    case Deviation::TDEV:
+      a.span = 3 * m;
+      a.nwin = 4;
+      a.bases = sub(n, 3 * m);  // plus the prologue term
+      break;
+  }
+  return a;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frequency data: P is built in blocks of kCheckpointEvery points, P[j] = C_k + L(j) with
+// C_k = P[k B] (the checkpoint) and L(j) the running sum of (y - c) from the block's start.
+// Every path (main pass, cursors, random access) computes each L from its block start in the
+// same order, so they agree to the bit; four blocks at a time run as independent chains, so
+// the running sum is not one long chain of dependent additions.
+// P[j0, j0 + len) into out; y holds y[j0 .. j0 + ny) (ny = len, or len - 1 at the record's end).
+void phase_run(const double* y, std::size_t len, std::size_t ny, std::uint64_t j0, double c, PhaseState& st,
+               double* out) {
+  constexpr std::size_t B = kCheckpointEvery;
+  std::size_t t = 0;
+  auto scalar_to = [&](std::size_t stop) {
+    for (; t < stop; ++t) {
+      const std::uint64_t j = j0 + t;
+      if (j % B == 0 && j != 0) st.C = st.C + st.L, st.L = 0;
+      out[t] = st.C + st.L;
+      if (t < ny) st.L = st.L + (y[t] - c);
+    }
+  };
+  // Up to the first block boundary (a boundary at j0 itself is handled by the 4-block path).
+  const std::size_t to_boundary = static_cast<std::size_t>((B - j0 % B) % B);
+  scalar_to(std::min(len, to_boundary));
+  while (t + 4 * B <= ny) {  // four whole blocks with all their y
+    if (j0 + t != 0) st.C = st.C + st.L, st.L = 0;
+    double l0 = 0, l1 = 0, l2 = 0, l3 = 0;
+    const double *y0 = y + t, *y1 = y0 + B, *y2 = y1 + B, *y3 = y2 + B;
+    double *o0 = out + t, *o1 = o0 + B, *o2 = o1 + B, *o3 = o2 + B;
+    for (std::size_t i = 0; i < B; ++i) {
+      o0[i] = l0, o1[i] = l1, o2[i] = l2, o3[i] = l3;
+      l0 = l0 + (y0[i] - c), l1 = l1 + (y1[i] - c), l2 = l2 + (y2[i] - c), l3 = l3 + (y3[i] - c);
+    }
+    const double C0 = st.C, C1 = C0 + l0, C2 = C1 + l1, C3 = C2 + l2;
+    for (std::size_t i = 0; i < B; ++i) o0[i] = C0 + o0[i], o1[i] = C1 + o1[i], o2[i] = C2 + o2[i], o3[i] = C3 + o3[i];
+    st.C = C3, st.L = l3;  // state at the start of the next block, before its boundary step
+    t += 4 * B;
+    // the next boundary step (C += L) happens at the top of the loop or in scalar_to
+  }
+  scalar_to(len);
+}
+
+// Builds P from the source, sequentially (main pass) or from a checkpoint (random access).
+class PhaseBuilder {
+ public:
+  PhaseBuilder(const ChunkSource& src, PhaseSpec spec) : src_(src), spec_(spec) {}
+  const PhaseSpec& spec() const { return spec_; }
+
+  // Sequential: P[j] for j in [j0, j0 + out.size()), continuing from the state at j0.
+  void sequential(std::uint64_t j0, std::span<double> out, PhaseState& st, std::vector<double>& scratch) const {
+    if (spec_.kind == DataKind::Phase) {
+      pointwise(j0, out, scratch);
+      return;
+    }
+    if (out.empty()) return;
+    const std::size_t ny = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), spec_.n_src - j0));
+    const double* y = src_.contiguous();
+    if (y) {
+      y += j0;
+    } else {
+      scratch.resize(ny);
+      fill(j0, std::span<double>(scratch.data(), ny));
+      y = scratch.data();
+    }
+    phase_run(y, out.size(), ny, j0, spec_.shift, st, out.data());
+  }
+
+  // Random access: P[lo, lo + out.size()) using the checkpoints (frequency data).
+  void range(std::uint64_t lo, std::span<double> out, const std::vector<double>& checkpoints,
+             std::vector<double>& scratch) const {
+    if (spec_.kind == DataKind::Phase) {
+      pointwise(lo, out, scratch);
+      return;
+    }
+    const std::uint64_t cp = lo / kCheckpointEvery;
+    PhaseState st{checkpoints.at(cp), 0};
+    const std::uint64_t j = cp * kCheckpointEvery;
+    if (j < lo) {  // L(lo) from the block's start, in the main pass's order
+      scratch.resize(lo - j);
+      fill(j, scratch);
+      for (double y : scratch) st.L = st.L + (y - spec_.shift);
+    }
+    sequential(lo, out, st, scratch);
+  }
+
+ private:
+  void fill(std::uint64_t pos, std::span<double> out) const {
+    std::size_t got = 0;
+    while (got < out.size()) {
+      const std::size_t r = src_.read_at(pos + got, out.subspan(got));
+      if (r == 0) throw std::runtime_error("allan: source ended at value " + std::to_string(pos + got) + " of " +
+                                           std::to_string(spec_.n_src));
+      got += r;
+    }
+  }
+  void pointwise(std::uint64_t j0, std::span<double> out, std::vector<double>& scratch) const {
+    scratch.resize(out.size());
+    fill(j0, scratch);
+    for (std::size_t t = 0; t < out.size(); ++t)
+      out[t] = (scratch[t] - spec_.x0 - spec_.slope * static_cast<double>(j0 + t)) * spec_.rate_hz;
+  }
+
+  const ChunkSource& src_;
+  PhaseSpec spec_;
+};
+
+PhaseSpec make_spec(const ChunkSource& src, DataKind kind, double rate_hz) {
+  PhaseSpec s;
+  s.kind = kind;
+  s.rate_hz = rate_hz;
+  s.n_src = src.size();
+  s.n = kind == DataKind::Frequency ? s.n_src + 1 : s.n_src;
+  if (s.n_src == 0) return s;
+  if (kind == DataKind::Frequency) {
+    std::vector<double> head(std::min<std::uint64_t>(s.n_src, 4096));
+    const std::size_t got = src.read_at(0, head);
+    double sum = 0;
+    for (std::size_t i = 0; i < got; ++i) sum += head[i];
+    s.shift = got ? sum / static_cast<double>(got) : 0;
+  } else {
+    double a = 0, b = 0;
+    src.read_at(0, std::span<double>(&a, 1));
+    src.read_at(s.n_src - 1, std::span<double>(&b, 1));
+    s.x0 = a;
+    s.slope = s.n_src > 1 ? (b - a) / static_cast<double>(s.n_src - 1) : 0;
+  }
+  return s;
+}
+
+// The ring of the most recent phase points (P[j] at j mod capacity).
+struct Ring {
+  // Not zero-filled (every slot is written before it is read); transparent huge pages where the
+  // kernel offers them: the lag windows of the long taus are far apart, so 4 KiB pages would
+  // cost a TLB walk every 512 points of every stream.
+  struct Free {
+    void operator()(double* p) const { std::free(p); }
+  };
+  std::unique_ptr<double, Free> mem;
+  std::size_t size = 0;
+
+  void allocate(std::size_t points) {
+    constexpr std::size_t kHuge = 2u << 20;
+    const std::size_t bytes = (points * sizeof(double) + kHuge - 1) / kHuge * kHuge;
+    mem.reset(static_cast<double*>(std::aligned_alloc(kHuge, bytes)));
+    if (!mem) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    ::madvise(mem.get(), bytes, MADV_HUGEPAGE);  // advisory: failure only costs speed
+#endif
+    size = points;
+  }
+  double* at(std::uint64_t j) { return mem.get() + (j % size); }
+  std::size_t room(std::uint64_t j) const { return size - static_cast<std::size_t>(j % size); }
+};
+
+// Runs acc over bases [b0, b1) with windows read from the ring, split where a window wraps.
+void run_from_ring(Acc& a, Ring& ring, std::uint64_t b0, std::uint64_t b1) {
+  const double* w[4];
+  while (b0 < b1) {
+    std::size_t len = b1 - b0;
+    for (std::size_t k = 0; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + k * a.m));
+    for (std::size_t k = 0; k < a.nwin; ++k) w[k] = ring.at(b0 + k * a.m);
+    a.run(b0, len, w);
+    b0 += len;
+  }
+}
+
+// A doubling chain of OADEV/TOTDEV accumulators (ascending, m_{i+1} = 2 m_i, all in the ring)
+// over the heads [hi, hi2): member i has terms from h = span_i = 2 m_i on, so between span_i and
+// span_{i+1} the first i + 1 members run fused.
+void run_chain(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint64_t hi2) {
+  const std::size_t m0 = chain[0]->m;
+  const double* lag[kMaxChain + 1];
+  double part[kMaxChain];
+  for (int active = 1; active <= k; ++active) {
+    const std::uint64_t lo = std::max<std::uint64_t>(hi, chain[active - 1]->span);
+    const std::uint64_t top = active < k ? std::min<std::uint64_t>(hi2, chain[active]->span) : hi2;
+    for (std::uint64_t h = lo; h < top;) {
+      std::size_t len = std::min<std::uint64_t>(top - h, ring.room(h));
+      for (int j = 0; j <= active; ++j) len = std::min(len, ring.room(h - (std::uint64_t{m0} << j)));
+      for (int j = 0; j <= active; ++j) lag[j] = ring.at(h - (std::uint64_t{m0} << j));
+      std::fill_n(part, active, 0.0);
+      chain_d2(active, ring.at(h), lag, len, part);
+      for (int i = 0; i < active; ++i) chain[i]->sum += part[i], chain[i]->terms += len;
+      h += len;
+    }
+  }
+}
+
+// A cursor accumulator over the heads [hi, hi2): P[b] from its cursor (built sequentially from
+// P[0] exactly as the main pass builds the ring), the newer windows from the ring.
+template <class Builder>
+void run_cursor(Acc& a, Ring& ring, const Builder& builder, std::uint64_t hi, std::uint64_t hi2) {
+  const std::uint64_t h0 = std::max<std::uint64_t>(hi, a.span);
+  if (h0 >= hi2) return;
+  std::uint64_t b0 = h0 - a.span;
+  const std::uint64_t b1 = std::min<std::uint64_t>(hi2 - a.span, a.bases);
+  if (b0 >= b1) return;
+  const std::size_t n = static_cast<std::size_t>(b1 - b0);
+  a.cur_buf.resize(n);
+  // The cursor only moves forward: the bases of successive chunks are contiguous from 0.
+  builder.sequential(a.cur_next, std::span<double>(a.cur_buf.data(), n), a.cur_state, a.cur_scratch);
+  a.cur_next += n;
+  const double* w[4];
+  for (std::size_t off = 0; off < n;) {
+    std::size_t len = n - off;
+    for (std::size_t k = 1; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + off + k * a.m));
+    w[0] = a.cur_buf.data() + off;
+    for (std::size_t k = 1; k < a.nwin; ++k) w[k] = ring.at(b0 + off + k * a.m);
+    a.run(b0 + off, len, w);
+    off += len;
+  }
+}
+
+// MDEV's first term: the window sum of d[0..m-1] (P[0..3m-1]), from any random-access reader.
+template <class ReadP>
+void mdev_prologue(Acc& a, ReadP&& read, std::size_t block) {
+  double inner = 0;
+  std::vector<double> p0, p1, p2;
+  for (std::size_t i = 0; i < a.m; i += block) {
+    const std::size_t len = std::min(block, a.m - i);
+    p0.resize(len), p1.resize(len), p2.resize(len);
+    read(i, std::span<double>(p0));
+    read(i + a.m, std::span<double>(p1));
+    read(i + 2 * a.m, std::span<double>(p2));
+    for (std::size_t t = 0; t < len; ++t) inner += p2[t] - 2 * p1[t] + p0[t];
+  }
+  a.inner = inner;
+  a.sum += inner * inner;
+  a.terms += 1;
+}
+
+// TOTDEV's reflected edge terms (NIST SP 1065 eq. 25: x*(1-j) = 2x(1) - x(1+j), x*(N+j) = 2x(N) - x(N-j)).
+template <class ReadP>
+void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
+  const std::size_t m = a.m;
+  double first = 0, last = 0;
+  read(0, std::span<double>(&first, 1));
+  read(n - 1, std::span<double>(&last, 1));
+  std::vector<double> r, c, f;
+  // Left: i in [1, m-1]: 2P0 - P[m-i] - 2P[i] + P[i+m].
+  for (std::size_t i = 1; i < m; i += block) {
+    const std::size_t len = std::min(block, m - i);
+    r.resize(len), c.resize(len), f.resize(len);
+    read(m - i - (len - 1), std::span<double>(r));  // P[m-i-len+1 .. m-i], used reversed
+    read(i, std::span<double>(c));
+    read(i + m, std::span<double>(f));
+    for (std::size_t t = 0; t < len; ++t) {
+      const double d = 2 * first - r[len - 1 - t] - 2 * c[t] + f[t];
+      a.sum += d * d;
+    }
+    a.terms += len;
+  }
+  // Right: i in [n-m, n-2]: P[i-m] - 2P[i] + 2P[n-1] - P[2(n-1) - i - m].
+  const std::uint64_t i_lo = n - m, i_hi = n - 1;
+  for (std::uint64_t i = i_lo; i < i_hi; i += block) {
+    const std::size_t len = std::min<std::uint64_t>(block, i_hi - i);
+    r.resize(len), c.resize(len), f.resize(len);
+    read(i - m, std::span<double>(f));
+    read(i, std::span<double>(c));
+    // reflected indices 2(n-1) - (i+t) - m for t = 0..len-1: descending, lowest at t = len-1
+    read(2 * (n - 1) - (i + len - 1) - m, std::span<double>(r));
+    for (std::size_t t = 0; t < len; ++t) {
+      const double d = f[t] - 2 * c[t] + 2 * last - r[len - 1 - t];
+      a.sum += d * d;
+    }
+    a.terms += len;
+  }
+}
+
+}  // namespace
+
+// Groups the accumulators of one chunk into work items for the cores. Same-type pairs m, 2m,
+// 4m ... share windows (tau m reads P at b + m and b + 2m, tau 2m at b + 2m and b + 4m), so a
+// doubling chain run in ascending order finds one of its two far windows still in L2: about
+// half the memory traffic of independent taus (run_chain fuses them). Chains are cut at kMaxChain.
+std::vector<std::vector<std::size_t>> work_items(const std::vector<Acc>& accs, std::vector<std::size_t> idx) {
+  std::sort(idx.begin(), idx.end(), [&](std::size_t x, std::size_t y) {
+    return accs[x].type != accs[y].type ? accs[x].type < accs[y].type : accs[x].m < accs[y].m;
+  });
+  std::vector<bool> used(accs.size(), false);
+  std::vector<std::vector<std::size_t>> items;
+  for (std::size_t i : idx) {
+    if (used[i]) continue;
+    std::vector<std::size_t> chain{i};
+    used[i] = true;
+    for (std::size_t cur = i;;) {
+      std::size_t nxt = accs.size();
+      for (std::size_t j : idx)
+        if (!used[j] && accs[j].type == accs[cur].type && accs[j].m == 2 * accs[cur].m) nxt = j;
+      if (nxt == accs.size()) break;
+      used[nxt] = true;
+      chain.push_back(nxt);
+      cur = nxt;
+    }
+    for (std::size_t k = 0; k < chain.size(); k += kMaxChain)
+      items.emplace_back(chain.begin() + static_cast<std::ptrdiff_t>(k),
+                         chain.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(chain.size(), k + kMaxChain)));
+  }
+  auto cost = [&](const std::vector<std::size_t>& it) {
+    std::uint64_t c = 0;
+    for (std::size_t i : it) c += (accs[i].modified() ? 2 : 1) * accs[i].bases;
+    return c;
+  };
+  std::sort(items.begin(), items.end(), [&](const auto& a, const auto& b) { return cost(a) > cost(b); });
+  return items;
+}
+
+struct Engine::Impl {
+  Impl(const ChunkSource& s, DataKind kind, double rate_hz, const StreamOptions& o, unsigned th, std::size_t c)
+      : src(s), spec(make_spec(s, kind, rate_hz)), builder(s, spec), so(o),
+        threads(th ? th : std::max(1u, std::thread::hardware_concurrency())), cap(c),
+        chunk(std::max<std::size_t>(o.chunk, 1024)) {}
+
+  const ChunkSource& src;
+  PhaseSpec spec;
+  PhaseBuilder builder;
+  StreamOptions so;
+  unsigned threads;
+  std::size_t cap, chunk;
+  Ring ring;
+  bool ring_holds_all = false;
+  std::vector<double> checkpoints;
+
+  auto reader(std::vector<double>& sc) {
+    return [this, &sc](std::uint64_t lo, std::span<double> out) {
+      if (ring_holds_all) {
+        std::copy_n(ring.at(lo), out.size(), out.begin());
+      } else {
+        builder.range(lo, out, checkpoints, sc);
+      }
+    };
+  }
+
+  // A (type, m) pair that did not fit the ring: windows rebuilt block by block.
+  void run_far(Acc& a) {
+    std::vector<double> sc;
+    auto read = reader(sc);
+    if (a.modified()) mdev_prologue(a, read, chunk);
+    std::vector<std::vector<double>> win(a.nwin, std::vector<double>(chunk));
+    const double* w[4];
+    for (std::uint64_t b = 0; b < a.bases; b += chunk) {
+      const std::size_t len = std::min<std::uint64_t>(chunk, a.bases - b);
+      for (std::size_t j = 0; j < a.nwin; ++j) {
+        read(b + j * a.m, std::span<double>(win[j].data(), len));
+        w[j] = win[j].data();
+      }
+      a.run(b, len, w);
+    }
+  }
+
+  void finish(Acc& a) {
+    std::vector<double> sc;
+    if (a.far && a.bases > 0) {
+      if (ring_holds_all) {
+        if (a.modified()) mdev_prologue(a, reader(sc), chunk);
+        const double* w[4];
+        for (std::size_t j = 0; j < a.nwin; ++j) w[j] = ring.at(j * a.m);
+        a.run(0, a.bases, w);
+      } else {
+        run_far(a);
+      }
+    }
+    if (a.type == Deviation::TOTDEV && a.m > 1) totdev_edges(a, spec.n, reader(sc), chunk);
+  }
+
+  EngineResult run(const std::vector<EngineRequest>& req);
+};
+
+Engine::Engine(const ChunkSource& src, DataKind kind, double rate_hz, const StreamOptions& so, unsigned threads,
+               std::size_t noise_id_cap)
+    : impl_(std::make_unique<Impl>(src, kind, rate_hz, so, threads, noise_id_cap)) {}
+Engine::~Engine() = default;
+EngineResult Engine::run(const std::vector<EngineRequest>& req) { return impl_->run(req); }
+
+Sums Engine::extra(Deviation type, std::size_t m) {
+  Acc a = make_acc(type, m, impl_->spec.n);
+  a.far = true;
+  impl_->finish(a);
+  Sums s;
+  s.type = type;
+  s.m = m;
+  s.sum = a.sum;
+  s.terms = a.terms;
+  return s;
+}
+
+EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
+  EngineResult res;
+  res.spec = spec;
+  const std::uint64_t n = spec.n;
+
+  std::vector<Acc> accs;
+  accs.reserve(req.size());
+  for (const auto& r : req) accs.push_back(make_acc(r.type, r.m, n));
+
+  // Decimated series for noise identification, one per distinct m.
+  std::map<std::size_t, std::vector<double>> decim;
+  for (const auto& r : req) decim[r.m];
+  std::size_t decim_bytes = 0;
+  for (auto& [m, v] : decim) {
+    const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, cap + 1);
+    v.reserve(len);
+    decim_bytes += len * sizeof(double);
+  }
+
+  // Ring: what the budget leaves after the noise-ID series, never more than the record needs.
+  // The next chunk is built while the current one is processed: two chunks of slack.
+  const std::size_t floor_bytes = 8 * chunk * sizeof(double);
+  const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes ? so.memory_budget_bytes - decim_bytes
+                                                                                : floor_bytes;
+  const std::size_t ring_need = static_cast<std::size_t>(n) + 2 * chunk;
+  ring.allocate(std::min(budget / sizeof(double), ring_need));
+  ring_holds_all = ring.size >= n;
+  res.ring_points = ring.size;
+
+  std::vector<std::size_t> near, cursors;
+  for (std::size_t i = 0; i < accs.size(); ++i) {
+    Acc& a = accs[i];
+    const bool fits = a.span + 2 * chunk <= ring.size;
+    // Only the oldest window outside the ring: a cursor rebuilds it in-pass (MDEV's running
+    // window sum needs P[0..3m) first, so it stays on the random-access path).
+    a.cursor = !fits && !a.modified() && a.span - a.m + 2 * chunk <= ring.size;
+    a.far = !fits && !a.cursor;
+    if (a.bases == 0) continue;
+    if (a.far) ++res.far_count;
+    else if (a.cursor) cursors.push_back(i);
+    else near.push_back(i);
+  }
+  std::vector<std::vector<std::size_t>> items = work_items(accs, near);
+  for (std::size_t i : cursors) items.insert(items.begin(), std::vector<std::size_t>{i});  // the costliest items
+
+  checkpoints.clear();
+  checkpoints.reserve(n / kCheckpointEvery + 1);
+
+  // ---- main pass ----
+  std::vector<double> scratch;
+  PhaseState prev;
+  // P[lo, hi) into the ring, with the checkpoints and the noise-ID series (one thread at a time).
+  auto produce = [&](std::uint64_t lo, std::uint64_t hi) {
+    for (std::uint64_t j = lo; j < hi;) {  // at most two pieces (the ring wraps)
+      const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
+      builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
+      j += len;
+    }
+    for (std::uint64_t j = (lo + kCheckpointEvery - 1) / kCheckpointEvery * kCheckpointEvery; j < hi;
+         j += kCheckpointEvery)
+      checkpoints.push_back(*ring.at(j));
+    for (std::uint64_t j = lo; j < hi;) {  // contiguous pieces of the ring: no modulo per point
+      const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
+      const double* piece = ring.at(j);
+      for (auto& [m, v] : decim) {
+        if (v.size() >= v.capacity()) continue;
+        for (std::uint64_t x = (j + m - 1) / m * m; x < j + len && v.size() < v.capacity(); x += m)
+          v.push_back(piece[x - j]);
+      }
+      j += len;
+    }
+  };
+  // One work item over the heads [hi, hi2) (terms whose newest phase point is in that range).
+  auto run_item = [&](const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi,
+                      std::uint64_t hi2) {
+    Acc& first = a_set[item[0]];
+    if (first.cursor) return run_cursor(first, ring, builder, hi, hi2);
+    if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV)) {
+      Acc* chain[kMaxChain];
+      for (std::size_t i = 0; i < item.size(); ++i) chain[i] = &a_set[item[i]];
+      return run_chain(chain, static_cast<int>(item.size()), ring, hi, hi2);
+    }
+    for (std::size_t idx : item) {
+      Acc& a = a_set[idx];
+      const std::uint64_t lo_b = hi >= a.span ? hi - a.span : 0;
+      const std::uint64_t hi_b = std::min<std::uint64_t>(hi2 >= a.span ? hi2 - a.span : 0, a.bases);
+      if (lo_b >= hi_b) continue;
+      if (a.modified() && a.terms == 0)
+        mdev_prologue(a, [&](std::uint64_t j, std::span<double> out) {
+          for (std::size_t t = 0; t < out.size(); ++t) out[t] = *ring.at(j + t);
+        }, chunk);
+      run_from_ring(a, ring, lo_b, hi_b);
+    }
+  };
+
+  if (ring_holds_all) {
+    // In memory: build P whole, then no barriers at all. The heads are cut into a fixed number
+    // of segments (not per thread: the sums do not depend on the thread count); a segment runs
+    // every item chunk by chunk (the newest windows stay in L2 across items), and the partial
+    // sums are added in segment order. MDEV's running window sum keeps its items whole.
+    for (std::uint64_t j = 0; j < n; j += chunk) produce(j, std::min<std::uint64_t>(n, j + chunk));
+    constexpr std::size_t kSegments = 32;
+    std::vector<std::size_t> whole, split;
+    for (std::size_t k = 0; k < items.size(); ++k) (accs[items[k][0]].modified() ? whole : split).push_back(k);
+    std::vector<std::vector<std::pair<double, std::size_t>>> part(kSegments);
+    parallel_for(whole.size() + kSegments, threads, [&](std::size_t t) {
+      if (t < whole.size()) {  // the costliest tasks first
+        const std::vector<std::size_t>& item = items[whole[t]];
+        for (std::uint64_t h = 0; h < n; h += chunk) run_item(item, accs, h, std::min<std::uint64_t>(n, h + chunk));
+        return;
+      }
+      const std::size_t g = t - whole.size();
+      std::vector<Acc> local(accs.size());  // the split items' entries only
+      for (std::size_t k : split)
+        for (std::size_t idx : items[k]) {
+          local[idx] = accs[idx];
+          local[idx].sum = 0;
+          local[idx].terms = 0;
+        }
+      const std::uint64_t h0 = n * g / kSegments, h1 = n * (g + 1) / kSegments;
+      for (std::uint64_t h = h0; h < h1; h += chunk)
+        for (std::size_t k : split) run_item(items[k], local, h, std::min(h1, h + chunk));
+      for (std::size_t k : split)
+        for (std::size_t idx : items[k]) part[g].emplace_back(local[idx].sum, local[idx].terms);
+    });
+    for (std::size_t g = 0; g < kSegments; ++g) {
+      std::size_t i = 0;
+      for (std::size_t k : split)
+        for (std::size_t idx : items[k]) {
+          accs[idx].sum += part[g][i].first;
+          accs[idx].terms += part[g][i].second;
+          ++i;
+        }
+    }
+  } else {
+    // Streaming: a barrier per chunk; building the next chunk is one more work item, so the
+    // read and the running sum overlap the kernels (the ring keeps two chunks of slack).
+    std::uint64_t hi = 0, hi2 = 0;
+    std::atomic<std::size_t> next{0};
+    bool done = false;
+    // A read error (or a non-finite value) may surface on either thread: the first one is kept,
+    // the chunk's remaining items are skipped, and it is rethrown here after the workers stop.
+    std::exception_ptr err;
+    std::mutex err_mutex;
+    auto process_chunk = [&] {
+      const std::size_t count = items.size() + 1;
+      for (std::size_t k; (k = next.fetch_add(1)) < count;) try {
+          if (k == 0) {
+            if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
+            continue;
+          }
+          run_item(items[k - 1], accs, hi, hi2);
+        } catch (...) {
+          std::lock_guard lock(err_mutex);
+          if (!err) err = std::current_exception();
+          next = count;
+        }
+    };
+    std::barrier sync(static_cast<std::ptrdiff_t>(threads));
+    std::vector<std::jthread> workers;
+    for (unsigned t = 1; t < threads; ++t)
+      workers.emplace_back([&] {
+        for (;;) {
+          sync.arrive_and_wait();  // chunk ready (or done)
+          if (done) return;
+          process_chunk();
+          sync.arrive_and_wait();  // chunk finished
+        }
+      });
+    try {
+      produce(0, std::min<std::uint64_t>(n, chunk));
+    } catch (...) {
+      err = std::current_exception();
+    }
+    for (hi = 0; hi < n && !err; hi = hi2) {
+      hi2 = std::min<std::uint64_t>(n, hi + chunk);
+      next = 0;
+      if (threads > 1) sync.arrive_and_wait();
+      process_chunk();
+      if (threads > 1) sync.arrive_and_wait();
+    }
+    done = true;
+    if (threads > 1) sync.arrive_and_wait();
+    workers.clear();
+    if (err) std::rethrow_exception(err);
+  }
+
+  // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----
+  std::vector<std::size_t> post;
+  for (std::size_t i = 0; i < accs.size(); ++i)
+    if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1)) post.push_back(i);
+  parallel_for(post.size(), threads, [&](std::size_t k) { finish(accs[post[k]]); });
+
+  res.sums.resize(accs.size());
+  std::map<std::size_t, std::size_t> users;  // the last user of a series takes it, the others copy
+  for (const Acc& a : accs) ++users[a.m];
+  for (std::size_t i = 0; i < accs.size(); ++i) {
+    Sums& s = res.sums[i];
+    s.type = accs[i].type;
+    s.m = accs[i].m;
+    s.sum = accs[i].sum;
+    s.terms = accs[i].terms;
+    auto& v = decim[accs[i].m];
+    s.decimated_complete = v.size() == (n - 1) / accs[i].m + 1;
+    if (--users[accs[i].m] == 0) s.decimated = std::move(v);
+    else s.decimated = v;
+  }
+  return res;
+}
+
+}  // namespace detail
+}  // namespace rig::analysis

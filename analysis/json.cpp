@@ -1,0 +1,79 @@
+#include "analysis/json.hpp"
+
+#include <cmath>
+
+namespace rig::analysis {
+
+namespace {
+using json = nlohmann::json;
+namespace an = rig::analysis;
+
+json num(std::optional<double> v) { return v && std::isfinite(*v) ? json(*v) : json(nullptr); }
+
+// A term in its input units (tau in seconds) with its bounds, and the same in
+// the passport's per-hour units where the term has them.
+json term(const an::Term& t, double (*to_hours)(double) = nullptr, const char* hour_unit = "") {
+  json j{{"value", num(t.value)}, {"unit", t.unit}};
+  if (t.lo) j["lo"] = num(t.lo);
+  if (t.hi) j["hi"] = num(t.hi);
+  if (!t.reason.empty()) j["reason"] = t.reason;
+  if (to_hours && t.value) {
+    j["per_hour"] = {{"value", to_hours(*t.value)}, {"unit", hour_unit}};
+    if (t.lo) j["per_hour"]["lo"] = to_hours(*t.lo);
+    if (t.hi) j["per_hour"]["hi"] = to_hours(*t.hi);
+  }
+  return j;
+}
+}  // namespace
+
+json dev_to_json(std::span<const an::DevPoint> dev) {
+  json a = json::array();
+  for (const auto& p : dev)
+    a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
+                 {"edf", p.edf}, {"alpha", p.alpha}});
+  return a;
+}
+
+json noise_terms_to_json(const an::NoiseTerms& t) {
+  json j;
+  j["Q"] = term(t.Q, an::q_per_hour, "g*h");
+  j["N"] = term(t.N, an::n_per_hour, "g*h^0.5");
+  j["B"] = term(t.B);
+  j["tau_cp_s"] = num(t.tau_cp_s);
+  j["sigma_cp"] = num(t.sigma_cp);
+  j["K"] = term(t.K, an::k_per_hour, "g/h^0.5");
+  j["R"] = term(t.R, an::r_per_hour, "g/h");
+  // The paper's method: log10 sigma = sum_k poly[k] (log10 tau)^k, split at its inflections.
+  json paper{{"ok", t.paper.ok}, {"degree", t.paper.degree}, {"poly", t.paper.coef},
+             {"inflection_tau_s", t.paper.inflection_tau_s}, {"segments", json::array()}};
+  if (!t.paper.reason.empty()) paper["reason"] = t.paper.reason;
+  for (const auto& s : t.paper.segments)
+    paper["segments"].push_back({{"tau_from_s", s.tau_lo_s}, {"tau_to_s", s.tau_hi_s}, {"slope", s.slope},
+                                 {"tau_mid_s", s.tau_mid_s}, {"sigma_mid", s.sigma_mid}, {"term", s.term},
+                                 {"term_value", s.term_value}});
+  j["paper_fit"] = paper;
+  // The weighted least-squares fit of all five terms: plain values (tau in s) for
+  // plotting, the full terms with bounds under "terms".
+  json w{{"ok", t.wls.ok}, {"points", t.wls.points}, {"chi2_per_dof", t.wls.chi2_per_dof},
+         {"model_error", t.wls.model_error}};
+  if (!t.wls.reason.empty()) w["reason"] = t.wls.reason;
+  const std::pair<const char*, const an::Term*> wt[] = {
+      {"Q", &t.wls.Q}, {"N", &t.wls.N}, {"B", &t.wls.B}, {"K", &t.wls.K}, {"R", &t.wls.R}};
+  for (std::size_t i = 0; i < 5; ++i) {
+    const auto& [name, tt] = wt[i];
+    w[name] = num(tt->value);
+    w["terms"][name] = term(*tt);
+    w["terms"][name]["share"] = t.wls.share[i];  // largest share of the model sigma^2 over the taus
+    w["terms"][name]["z"] = t.wls.z[i];          // fitted coefficient over its standard error
+  }
+  j["lsq_fit"] = w;
+  return j;
+}
+
+nlohmann::json psd_to_json(const analysis::Psd& psd, const std::vector<analysis::Peak>& peaks) {
+  nlohmann::json pk = nlohmann::json::array();
+  for (const auto& p : peaks) pk.push_back({{"f_hz", p.f_hz}, {"psd", p.psd}, {"prominence_db", p.prominence_db}});
+  return {{"f_hz", psd.f_hz}, {"psd", psd.psd}, {"unit", "g^2/Hz"}, {"peaks", pk}};
+}
+
+}  // namespace rig::analysis

@@ -1,0 +1,20 @@
+// JSON views of the analysis results (nlohmann::json): the deviation table, the noise terms
+// and the PSD, in the shapes of CONTRACTS' `rig analyze --json`, shared by `rig analyze` and
+// the procedure's analysis.json. Formatting only: no I/O.
+#pragma once
+#include <span>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/allan.hpp"
+#include "analysis/noise_terms.hpp"
+#include "analysis/psd.hpp"
+
+namespace rig::analysis {
+
+nlohmann::json dev_to_json(std::span<const DevPoint> dev);
+nlohmann::json noise_terms_to_json(const NoiseTerms& nt);
+nlohmann::json psd_to_json(const Psd& psd, const std::vector<Peak>& peaks);
+
+}  // namespace rig::analysis

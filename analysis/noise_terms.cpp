@@ -1,0 +1,360 @@
+#include "analysis/noise_terms.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace rig::analysis {
+
+namespace {
+
+const char* const kNames[5] = {"Q", "N", "B", "K", "R"};
+const double kSlopes[5] = {-1, -0.5, 0, 0.5, 1};
+const char* const kUnits[5] = {"g*s", "g*s^0.5", "g", "g/s^0.5", "g/s"};
+
+// sigma^2 contribution of term k per unit of its squared coefficient (the model's basis).
+double basis(int k, double tau) {
+  switch (k) {
+    case 0: return 3 / (tau * tau);
+    case 1: return 1 / tau;
+    case 2: return 2 * std::numbers::ln2 / std::numbers::pi;
+    case 3: return tau / 3;
+    default: return tau * tau / 2;
+  }
+}
+
+// Term value from sigma at tau on its own slope (IEEE 952 Annex C relations).
+double term_from_sigma(int k, double sigma, double tau) {
+  switch (k) {
+    case 0: return sigma * tau / std::sqrt(3.0);
+    case 1: return sigma * std::sqrt(tau);
+    case 2: return sigma / kBiasFactor;
+    case 3: return sigma * std::sqrt(3 / tau);
+    default: return sigma * std::sqrt(2.0) / tau;
+  }
+}
+
+std::string fmt(double v) {
+  std::ostringstream o;
+  o.precision(3);
+  o << v;
+  return o.str();
+}
+
+double poly(const std::array<double, 5>& c, double x) {
+  double y = 0;
+  for (int k = 4; k >= 0; --k) y = y * x + c[static_cast<std::size_t>(k)];
+  return y;
+}
+double dpoly(const std::array<double, 5>& c, double x) {
+  return c[1] + 2 * c[2] * x + 3 * c[3] * x * x + 4 * c[4] * x * x * x;
+}
+
+PaperFit paper_fit(std::span<const DevPoint> pts) {
+  PaperFit f;
+  std::vector<double> xs, ys;
+  for (const auto& p : pts)
+    if (p.dev > 0 && p.tau_s > 0) xs.push_back(std::log10(p.tau_s)), ys.push_back(std::log10(p.dev));
+  if (xs.size() < 3) {
+    f.reason = "fewer than 3 Allan points";
+    return f;
+  }
+  f.degree = static_cast<int>(std::min<std::size_t>(4, xs.size() - 1));
+  const auto n = static_cast<Eigen::Index>(xs.size());
+  Eigen::MatrixXd A(n, f.degree + 1);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double p = 1;
+    for (int k = 0; k <= f.degree; ++k, p *= xs[static_cast<std::size_t>(i)]) A(i, k) = p;
+    b(i) = ys[static_cast<std::size_t>(i)];
+  }
+  const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
+  for (int k = 0; k <= f.degree; ++k) f.coef[static_cast<std::size_t>(k)] = c(k);
+
+  // Inflection points: roots of y'' = 2c2 + 6c3 x + 12c4 x^2 inside the measured range.
+  const double x_lo = xs.front(), x_hi = xs.back();
+  std::vector<double> infl;
+  const double qa = 12 * f.coef[4], qb = 6 * f.coef[3], qc = 2 * f.coef[2];
+  if (std::abs(qa) > 1e-12) {
+    const double disc = qb * qb - 4 * qa * qc;
+    if (disc >= 0) {
+      const double r = std::sqrt(disc);
+      infl = {(-qb - r) / (2 * qa), (-qb + r) / (2 * qa)};
+    }
+  } else if (std::abs(qb) > 1e-12) {
+    infl = {-qc / qb};
+  }
+  std::sort(infl.begin(), infl.end());
+  std::vector<double> cuts{x_lo};
+  for (double x : infl)
+    if (x > x_lo && x < x_hi) {
+      cuts.push_back(x);
+      f.inflection_tau_s.push_back(std::pow(10.0, x));
+    }
+  cuts.push_back(x_hi);
+  for (std::size_t s = 0; s + 1 < cuts.size(); ++s) {
+    Segment seg;
+    const double xm = (cuts[s] + cuts[s + 1]) / 2;
+    seg.tau_lo_s = std::pow(10.0, cuts[s]);
+    seg.tau_hi_s = std::pow(10.0, cuts[s + 1]);
+    seg.tau_mid_s = std::pow(10.0, xm);
+    seg.sigma_mid = std::pow(10.0, poly(f.coef, xm));
+    seg.slope = dpoly(f.coef, xm);
+    int best = 0;
+    for (int k = 1; k < 5; ++k)
+      if (std::abs(seg.slope - kSlopes[k]) < std::abs(seg.slope - kSlopes[best])) best = k;
+    seg.term = kNames[best];
+    seg.term_value = term_from_sigma(best, seg.sigma_mid, seg.tau_mid_s);
+    f.segments.push_back(seg);
+  }
+  f.ok = true;
+  return f;
+}
+
+// The best non-negative fit for one relative model error `delta`.
+struct MaskFit {
+  double rss = std::numeric_limits<double>::infinity();
+  int mask = 0;
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(5);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(5, 5);
+  int terms() const { return __builtin_popcount(static_cast<unsigned>(mask)); }
+};
+
+// Non-negative weighted least squares over the 5 squared coefficients: the best of all
+// 2^5 active sets whose unconstrained solution is non-negative (exact for 5 unknowns).
+// Row i is weighted by sd(sigma_i^2) = sigma_i^2 sqrt(2/edf_i + delta^2): the chi-square
+// scatter of the estimate (IEEE 1139 / Stable32 EDF) plus a relative model error delta.
+MaskFit best_fit(const std::vector<const DevPoint*>& use, double delta, int allowed) {
+  const auto n = static_cast<Eigen::Index>(use.size());
+  Eigen::MatrixXd X(n, 5);
+  Eigen::VectorXd y(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const DevPoint& p = *use[static_cast<std::size_t>(i)];
+    const double s2 = p.dev * p.dev;
+    const double edf = p.edf > 0 ? p.edf : 2.0;
+    const double sd = s2 * std::sqrt(2.0 / edf + delta * delta);
+    y(i) = s2 / sd;  // residuals in sd units
+    for (int k = 0; k < 5; ++k) X(i, k) = basis(k, p.tau_s) / sd;
+  }
+  MaskFit best;
+  for (int mask = 1; mask < 32; ++mask) {
+    if (mask & ~allowed) continue;
+    std::vector<int> cols;
+    for (int k = 0; k < 5; ++k)
+      if (mask & (1 << k)) cols.push_back(k);
+    if (static_cast<Eigen::Index>(cols.size()) > n) continue;
+    Eigen::MatrixXd Xs(n, static_cast<Eigen::Index>(cols.size()));
+    for (std::size_t c = 0; c < cols.size(); ++c) Xs.col(static_cast<Eigen::Index>(c)) = X.col(cols[c]);
+    // Column scaling: the basis spans many decades.
+    Eigen::VectorXd scale = Xs.colwise().norm().transpose();
+    if ((scale.array() <= 0).any()) continue;
+    const Eigen::MatrixXd Xn = Xs * scale.cwiseInverse().asDiagonal();
+    const auto qr = Xn.colPivHouseholderQr();
+    if (qr.rank() < static_cast<Eigen::Index>(cols.size())) continue;
+    const Eigen::VectorXd th = qr.solve(y).cwiseQuotient(scale);
+    if ((th.array() < 0).any()) continue;
+    const double rss = (Xs * th - y).squaredNorm();
+    if (rss < best.rss) {
+      best.rss = rss;
+      best.mask = mask;
+      best.theta.setZero();
+      for (std::size_t c = 0; c < cols.size(); ++c) best.theta(cols[c]) = th(static_cast<Eigen::Index>(c));
+      const Eigen::MatrixXd cs =
+          scale.cwiseInverse().asDiagonal() * (Xn.transpose() * Xn).inverse() * scale.cwiseInverse().asDiagonal();
+      best.cov.setZero();
+      for (std::size_t r = 0; r < cols.size(); ++r)
+        for (std::size_t c = 0; c < cols.size(); ++c)
+          best.cov(cols[r], cols[c]) = cs(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+    }
+  }
+  return best;
+}
+
+double chi2_per_dof(const MaskFit& f, std::size_t n) {
+  return f.rss / std::max(1.0, static_cast<double>(n) - f.terms());
+}
+
+WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_record_s) {
+  WlsFit w;
+  std::vector<const DevPoint*> use;
+  for (const auto& p : pts)
+    if (p.dev > 0 && p.tau_s > 0) use.push_back(&p);
+  w.points = use.size();
+  if (use.size() < 2) {
+    w.reason = "fewer than 2 Allan points";
+    return w;
+  }
+  const auto n = static_cast<Eigen::Index>(use.size());
+  // The EDF says how well each sigma is estimated, not how well the five-term model describes
+  // the curve: tones (vibration, folded pick-up) ripple the short-tau points by 10-30 % where
+  // the EDF is 1e5..1e6, and with EDF weights alone those points (chi2/dof ~ 1e4-1e5) decide
+  // which terms enter, whatever the long-tau points show. So a relative model error delta is
+  // added to every point's variance and set so that the best fit has chi2/dof = 1 (the
+  // Paule-Mandel / Birge rule for inconsistent data); delta = 0 when the model fits within the
+  // EDF scatter, and then the fit is the plain EDF-weighted one.
+  const int allowed = record_s >= r_min_record_s ? 31 : 15;
+  MaskFit fit = best_fit(use, 0.0, allowed);
+  double delta = 0;
+  if (fit.mask != 0 && static_cast<Eigen::Index>(fit.terms()) < n && chi2_per_dof(fit, use.size()) > 1) {
+    double lo = 1e-9, hi = 1e-3;
+    MaskFit f_hi = best_fit(use, hi, allowed);
+    while (f_hi.mask != 0 && chi2_per_dof(f_hi, use.size()) > 1 && hi < 1e3) f_hi = best_fit(use, hi *= 4, allowed);
+    for (int it = 0; it < 40 && hi / lo > 1.001; ++it) {  // bisection in log delta
+      const double mid = std::sqrt(lo * hi);
+      MaskFit f = best_fit(use, mid, allowed);
+      if (f.mask != 0 && chi2_per_dof(f, use.size()) > 1) lo = mid;
+      else hi = mid, f_hi = std::move(f);
+    }
+    if (f_hi.mask != 0) fit = std::move(f_hi), delta = hi;
+  }
+  const int best_mask = fit.mask;
+  const Eigen::VectorXd& best_theta = fit.theta;
+  const Eigen::MatrixXd& best_cov = fit.cov;
+  const double best_rss = fit.rss;
+  w.model_error = delta;
+  if (best_mask == 0) {
+    w.reason = "no non-negative solution";
+    return w;
+  }
+  const double dof = std::max<double>(1, static_cast<double>(n) - fit.terms());
+  {  // goodness of fit on the EDF weights alone: how far the five-term model is from the curve
+    double raw = 0;
+    for (const DevPoint* p : use) {
+      double m = 0;
+      for (int j = 0; j < 5; ++j) m += best_theta(j) * basis(j, p->tau_s);
+      const double s2 = p->dev * p->dev, edf = p->edf > 0 ? p->edf : 2.0;
+      raw += (m - s2) * (m - s2) / (s2 * s2 * 2.0 / edf);
+    }
+    w.chi2_per_dof = raw / dof;
+  }
+  const double scaled_chi2 = best_rss / dof;  // 1 when delta > 0
+  const double tau_lo = use.front()->tau_s, tau_hi = use.back()->tau_s;
+  Term* terms[5] = {&w.Q, &w.N, &w.B, &w.K, &w.R};
+  for (int k = 0; k < 5; ++k) {
+    Term& t = *terms[k];
+    t.unit = kUnits[k];
+    if (!(allowed & (1 << k))) {
+      t.reason = std::string("not fitted: ") + kNames[k] + " needs a longer record (at least " +
+                 fmt(r_min_record_s / 3600) + " h, METHOD.md; this one is " + fmt(record_s / 3600) + " h)";
+      continue;
+    }
+    if (!(best_mask & (1 << k))) {
+      t.reason = std::string("not resolved: the fit needs no ") + kNames[k] + " term over tau = " + fmt(tau_lo) + ".." +
+                 fmt(tau_hi) + " s";
+      continue;
+    }
+    const double th = best_theta(k);
+    // Identified only where the term dominates the model somewhere in the measured range.
+    // Its uncertainty: the fit's covariance treats the Allan points as independent, but the
+    // overlapping estimates at neighbouring taus of a log grid (several per octave) come from
+    // one realisation and are strongly correlated, so the covariance understates it. The
+    // variance is therefore at least that of reading the term off the single point where it is
+    // best determined (IEEE 952 Annex C reads each term on its own asymptote): there
+    // sd(sigma^2)/sigma^2 = sqrt(2/edf + delta^2) and the term carries `share` of sigma^2, so
+    // sd(theta)/theta = sqrt(2/edf + delta^2) / share, minimised over the points.
+    double share = 0, rel_sd = std::numeric_limits<double>::infinity();
+    for (const DevPoint* p : use) {
+      double total = 0;
+      for (int j = 0; j < 5; ++j) total += best_theta(j) * basis(j, p->tau_s);
+      const double sh = th * basis(k, p->tau_s) / total;
+      share = std::max(share, sh);
+      const double edf = p->edf > 0 ? p->edf : 2.0;
+      if (sh > 0) rel_sd = std::min(rel_sd, std::sqrt(2.0 / edf + delta * delta) / sh);
+    }
+    const bool dominates = share >= 0.5;
+    const double var_th = std::max(best_cov(k, k) * std::max(1.0, scaled_chi2), th * th * rel_sd * rel_sd);
+    w.share[static_cast<std::size_t>(k)] = share;
+    w.z[static_cast<std::size_t>(k)] = var_th > 0 ? th / std::sqrt(var_th) : 0;
+    if (!dominates) {
+      t.reason = std::string("not identifiable: ") + kNames[k] + " never dominates over tau = " + fmt(tau_lo) + ".." +
+                 fmt(tau_hi) + " s" + (k >= 3 ? "; needs a longer record" : (k == 0 ? "; needs a higher rate" : ""));
+      continue;
+    }
+    t.value = std::sqrt(th);
+    const double sd = std::sqrt(std::max(var_th, 0.0));
+    t.lo = std::sqrt(std::max(th - sd, 0.0));
+    t.hi = std::sqrt(th + sd);
+    t.reason = "weighted least squares";
+  }
+  w.ok = true;
+  return w;
+}
+
+}  // namespace
+
+NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
+  NoiseTerms out;
+  out.paper = paper_fit(oadev);
+  // R is not fitted on a record shorter than the method allows for it (METHOD.md: > 50 h): over
+  // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
+  // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
+  // (then to be discarded by the 50 h rule anyway, leaving K null).
+  out.wls = wls_fit(oadev, record_length_s, r_min_record_s);
+  out.Q = out.wls.Q;
+  out.N = out.wls.N;
+  out.K = out.wls.K;
+  out.R = out.wls.R;
+  if (!out.wls.ok) {
+    for (Term* t : {&out.Q, &out.N, &out.K, &out.R}) t->reason = "fit failed: " + out.wls.reason;
+  }
+  out.Q.unit = kUnits[0];
+  out.N.unit = kUnits[1];
+  out.K.unit = kUnits[3];
+  out.R.unit = kUnits[4];
+  out.B.unit = kUnits[2];
+  if (!out.R.value) {
+    // R (rate ramp) needs tau well beyond where K dominates; the paper puts it at > 50 h.
+    if (record_length_s < 2 * 50 * 3600.0 && out.R.reason.find("longer record") == std::string::npos)
+      out.R.reason += "; needs a longer record";
+  }
+  // B by the paper's method: the flat segment (slope nearest 0, |slope| < 0.25).
+  const Segment* flat = nullptr;
+  if (out.paper.ok)
+    for (const auto& s : out.paper.segments)
+      if (std::abs(s.slope) < 0.25 && (!flat || std::abs(s.slope) < std::abs(flat->slope))) flat = &s;
+  if (flat) {
+    out.tau_cp_s = flat->tau_mid_s;
+    out.sigma_cp = flat->sigma_mid;
+    out.B.reason = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment";
+  } else if (out.paper.ok) {
+    // No segment between inflection points is flat (a smooth -1/2 -> 0 -> +1/2 curve is convex and
+    // has none): read the flat bottom where the polynomial's slope crosses zero, as IEEE 952 does.
+    const double x_lo = std::log10(oadev.front().tau_s), x_hi = std::log10(oadev.back().tau_s);
+    double best_x = 0, best_y = std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= 2000; ++i) {
+      const double x = x_lo + (x_hi - x_lo) * i / 2000.0;
+      const double y = poly(out.paper.coef, x);
+      if (y < best_y) best_y = y, best_x = x;
+    }
+    const bool interior = best_x > x_lo + 0.02 * (x_hi - x_lo) && best_x < x_hi - 0.02 * (x_hi - x_lo);
+    if (interior && std::abs(dpoly(out.paper.coef, best_x)) < 0.05) {
+      out.tau_cp_s = std::pow(10.0, best_x);
+      out.sigma_cp = std::pow(10.0, best_y);
+      out.B.reason = "paper polynomial: no flat segment between inflections; tau_cp at its minimum";
+    }
+  }
+  if (out.sigma_cp) {
+    out.B.value = *out.sigma_cp / kBiasFactor;
+    if (out.wls.B.lo && out.wls.B.value && *out.wls.B.value > 0) {  // relative bounds of the fitted B
+      out.B.lo = *out.B.value * (*out.wls.B.lo / *out.wls.B.value);
+      out.B.hi = *out.B.value * (*out.wls.B.hi / *out.wls.B.value);
+    }
+  } else {
+    out.B = out.wls.B;
+    out.B.unit = kUnits[2];
+    if (out.B.value) out.B.reason = "weighted least squares (the Allan curve has no flat part to read)";
+    else if (!out.paper.ok) out.B.reason = "paper fit failed: " + out.paper.reason;
+    else {
+      std::ostringstream r;  // (a stream: GCC 12 -O3 warns falsely on long string concatenations)
+      r << "no flat segment (|slope| < 0.25) and no interior minimum in tau = " << oadev.front().tau_s << ".."
+        << oadev.back().tau_s << " s";
+      out.B.reason = r.str();
+    }
+  }
+  return out;
+}
+
+}  // namespace rig::analysis

@@ -1,0 +1,200 @@
+#include "analysis/psd.hpp"
+
+#include "analysis/parallel.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <cmath>
+#include <bit>
+#include <memory>
+#include <numeric>
+#include <mutex>
+#include <thread>
+#include <span>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace rig::analysis {
+
+Window parse_window(const std::string& s) {
+  if (s == "hann") return Window::Hann;
+  if (s == "hamming") return Window::Hamming;
+  if (s == "blackman") return Window::Blackman;
+  if (s == "rect" || s == "rectangular") return Window::Rectangular;
+  throw std::invalid_argument("unknown window '" + s + "' (hann|hamming|blackman|rect)");
+}
+
+const char* to_string(Window w) {
+  switch (w) {
+    case Window::Hann: return "hann";
+    case Window::Hamming: return "hamming";
+    case Window::Blackman: return "blackman";
+    case Window::Rectangular: return "rect";
+  }
+  return "?";
+}
+
+namespace {
+
+std::vector<double> make_window(Window w, std::size_t n) {
+  std::vector<double> v(n, 1.0);
+  const double pi2 = 2 * std::numbers::pi / static_cast<double>(n);  // periodic (DFT-even) windows
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = pi2 * static_cast<double>(i);
+    switch (w) {
+      case Window::Hann: v[i] = 0.5 - 0.5 * std::cos(t); break;
+      case Window::Hamming: v[i] = 0.54 - 0.46 * std::cos(t); break;
+      case Window::Blackman: v[i] = 0.42 - 0.5 * std::cos(t) + 0.08 * std::cos(2 * t); break;
+      case Window::Rectangular: break;
+    }
+  }
+  return v;
+}
+
+// FFTW's planner is not thread-safe; plans are created under this lock.
+std::mutex& planner_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+struct PlanDeleter {
+  void operator()(fftw_plan_s* p) const {
+    std::lock_guard lock(planner_mutex());
+    fftw_destroy_plan(p);
+  }
+};
+
+}  // namespace
+
+Psd welch(std::span<const double> x, double rate_hz, const WelchOptions& opt) {
+  return welch(SpanSource(x), rate_hz, opt);
+}
+
+Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
+  const std::uint64_t n_total = src.size();
+  if (!(rate_hz > 0)) throw std::invalid_argument("welch: rate must be positive");
+  if (!(opt.overlap >= 0 && opt.overlap <= 0.95)) throw std::invalid_argument("welch: overlap must be in [0, 0.95]");
+  std::size_t seg = opt.segment;
+  if (seg == 0) seg = std::clamp<std::size_t>(std::bit_floor(std::max<std::uint64_t>(n_total / 8, 1)), 256, 65536);
+  if (seg < 8) throw std::invalid_argument("welch: segment must be at least 8 points");
+  if (n_total < seg)
+    throw std::invalid_argument("welch: " + std::to_string(n_total) + " samples are fewer than one segment of " +
+                                std::to_string(seg));
+  const auto step = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(seg * (1 - opt.overlap))));
+  const std::vector<double> w = make_window(opt.window, seg);
+  double s2 = 0;
+  for (double v : w) s2 += v * v;
+
+  const std::size_t nb = seg / 2 + 1;
+  Psd p;
+  p.segment = seg;
+  p.rate_hz = rate_hz;
+  p.psd.assign(nb, 0.0);
+  const std::uint64_t n_seg = (n_total - seg) / step + 1;
+  p.segments = static_cast<std::size_t>(n_seg);
+
+  // The segments are cut into a fixed number of blocks (the sum does not depend on the thread
+  // count), each with its own plan and buffers; the blocks' sums are added in order. Within a
+  // block only the new `step` values of each segment are read (the overlap is kept).
+  constexpr std::uint64_t kBlocks = 8;
+  std::vector<std::vector<double>> part(kBlocks);
+  auto run_block = [&](std::size_t b) {
+    const std::uint64_t s0 = n_seg * b / kBlocks, s1 = n_seg * (b + 1) / kBlocks;
+    std::vector<double>& acc = part[b];
+    acc.assign(nb, 0.0);
+    if (s0 >= s1) return;
+    std::vector<double> in(seg), x(seg);
+    auto* out = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * nb));
+    std::unique_ptr<fftw_complex, decltype(&fftw_free)> out_guard(out, &fftw_free);
+    std::unique_ptr<fftw_plan_s, PlanDeleter> plan;
+    {
+      std::lock_guard lock(planner_mutex());
+      plan.reset(fftw_plan_dft_r2c_1d(static_cast<int>(seg), in.data(), out, FFTW_ESTIMATE));
+    }
+    if (!plan) throw std::runtime_error("welch: FFTW could not plan a transform of " + std::to_string(seg));
+    auto read = [&](std::uint64_t pos, std::span<double> dst) {
+      for (std::size_t got = 0; got < dst.size();) {
+        const std::size_t r = src.read_at(pos + got, dst.subspan(got));
+        if (r == 0) throw std::runtime_error("welch: source ended early at " + std::to_string(pos + got));
+        got += r;
+      }
+    };
+    for (std::uint64_t k = s0; k < s1; ++k) {
+      const std::uint64_t start = k * step;
+      if (k > s0 && step < seg) {  // slide: keep the overlap, read the rest
+        std::copy(x.begin() + static_cast<std::ptrdiff_t>(step), x.end(), x.begin());
+        read(start + (seg - step), std::span<double>(x).subspan(seg - step));
+      } else {
+        read(start, std::span<double>(x));
+      }
+      double mean = 0;
+      if (opt.detrend_mean) {
+        for (std::size_t i = 0; i < seg; ++i) mean += x[i];
+        mean /= static_cast<double>(seg);
+      }
+      for (std::size_t i = 0; i < seg; ++i) in[i] = (x[i] - mean) * w[i];
+      fftw_execute_dft_r2c(plan.get(), in.data(), out);
+      for (std::size_t q = 0; q < nb; ++q) acc[q] += out[q][0] * out[q][0] + out[q][1] * out[q][1];
+    }
+  };
+  const unsigned threads =
+      std::min<unsigned>(opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency()), kBlocks);
+  detail::parallel_for(kBlocks, threads, run_block);
+  for (const auto& a : part)
+    for (std::size_t q = 0; q < nb; ++q) p.psd[q] += a[q];
+  const double scale = 1.0 / (rate_hz * s2 * static_cast<double>(p.segments));
+  p.f_hz.resize(nb);
+  p.asd.resize(nb);
+  for (std::size_t k = 0; k < nb; ++k) {
+    const bool edge = k == 0 || (seg % 2 == 0 && k == nb - 1);
+    p.psd[k] *= scale * (edge ? 1.0 : 2.0);  // one-sided: fold negative frequencies
+    p.f_hz[k] = rate_hz * static_cast<double>(k) / static_cast<double>(seg);
+    p.asd[k] = std::sqrt(p.psd[k]);
+  }
+  p.enbw_hz = rate_hz * static_cast<double>(seg) * s2 / std::pow(std::accumulate(w.begin(), w.end(), 0.0), 2) /
+              static_cast<double>(seg);
+  return p;
+}
+
+std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db, std::size_t max_peaks) {
+  const std::size_t n = p.psd.size();
+  std::vector<double> db(n);
+  for (std::size_t i = 0; i < n; ++i) db[i] = 10 * std::log10(std::max(p.psd[i], 1e-300));
+  std::vector<Peak> peaks;
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    if (!(db[i] > db[i - 1] && db[i] >= db[i + 1])) continue;
+    // Walk out to higher ground on each side, tracking the lowest point on the way.
+    double left_min = db[i], right_min = db[i];
+    for (std::size_t j = i; j-- > 0;) {
+      if (db[j] > db[i]) break;
+      left_min = std::min(left_min, db[j]);
+    }
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if (db[j] > db[i]) break;
+      right_min = std::min(right_min, db[j]);
+    }
+    const double prom = db[i] - std::max(left_min, right_min);
+    if (prom >= min_prominence_db) peaks.push_back({p.f_hz[i], p.psd[i], prom});
+  }
+  std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) { return a.prominence_db > b.prominence_db; });
+  if (peaks.size() > max_peaks) peaks.resize(max_peaks);
+  return peaks;
+}
+
+double white_level(const Psd& p, double f_lo, double f_hi) {
+  std::vector<double> v;
+  for (std::size_t k = 1; k < p.psd.size(); ++k)
+    if (p.f_hz[k] >= f_lo && p.f_hz[k] <= f_hi) v.push_back(p.psd[k]);
+  if (v.empty()) throw std::invalid_argument("white_level: no PSD bins in the band");
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  const double med = v[v.size() / 2];
+  // Each bin is ~ h0 chi2(k)/k with k = 2 * segments (overlap ignored): divide by its median.
+  const double k = 2.0 * static_cast<double>(std::max<std::size_t>(p.segments, 1));
+  const double med_ratio = boost::math::median(boost::math::chi_squared(k)) / k;
+  return med / med_ratio;
+}
+
+}  // namespace rig::analysis

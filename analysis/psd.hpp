@@ -1,0 +1,50 @@
+// Power spectral density by Welch's method (averaged modified periodograms; FFTW), peak
+// list with prominence, and the white-noise level that cross-checks N from the Allan
+// curve: for white frequency noise S_y(f) = h0 and sigma^2(tau) = h0 / (2 tau), so N^2 = h0 / 2.
+#pragma once
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "analysis/allan.hpp"
+
+namespace rig::analysis {
+
+enum class Window { Hann, Hamming, Blackman, Rectangular };
+Window parse_window(const std::string& s);  // hann|hamming|blackman|rect, throws std::invalid_argument
+const char* to_string(Window w);
+
+struct WelchOptions {
+  std::size_t segment = 0;  // points per segment; 0 = auto (power of two, about n/8, 256..65536)
+  double overlap = 0.5;     // fraction of a segment, [0, 0.95]
+  Window window = Window::Hann;
+  bool detrend_mean = true;  // remove each segment's mean (the bias is not noise)
+  unsigned threads = 0;      // 0 = all hardware threads; the result does not depend on it
+};
+
+struct Psd {
+  std::vector<double> f_hz, psd;  // one-sided, unit^2/Hz
+  std::vector<double> asd;        // sqrt(psd), unit/sqrt(Hz)
+  std::size_t segment = 0, segments = 0;
+  double rate_hz = 0, enbw_hz = 0;  // equivalent noise bandwidth of one bin
+};
+
+// Throws std::invalid_argument when x is shorter than one segment or options are out of range.
+Psd welch(std::span<const double> x, double rate_hz, const WelchOptions& opt = {});
+
+// The same from a random-access source (segments read one at a time: bounded memory).
+Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt = {});
+
+struct Peak {
+  double f_hz = 0, psd = 0, prominence_db = 0;
+};
+// Local maxima whose prominence (height above the higher of the two lowest points separating
+// them from higher ground, as scipy.signal.find_peaks) is at least min_prominence_db, strongest first.
+std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db = 10.0, std::size_t max_peaks = 20);
+
+// White level h0 over [f_lo, f_hi] (median of the bins, corrected to the mean of the chi-square
+// spread so that tones barely move it); unit^2/Hz.
+double white_level(const Psd& p, double f_lo, double f_hi);
+
+}  // namespace rig::analysis

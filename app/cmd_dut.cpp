@@ -1,0 +1,246 @@
+// `rig dut`: a technician's manual control of a DUT over CAN
+// (docs/can-protocol.md): info, stream, output filter, and decoding a candump
+// log with the protocol's DBC.
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "firmware_link/connect.hpp"
+#include "firmware_link/dbc.hpp"
+#include "app/commands.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+#include "rig/executive/signals.hpp"
+
+namespace rig::cli {
+
+namespace {
+
+struct DutArgs {
+  std::string can, hardware;
+  // stream
+  double seconds = 0;
+  long count = 0;
+  std::string out;
+  bool quiet = false;
+  // set-filter
+  std::vector<std::string> biquads;
+  bool paper = false;
+  double rate_hz = 10000.0;
+  bool off = false;
+  // decode
+  std::string log, dbc = std::string(RIG_SOURCE_DIR) + "/docs/rig-dut.dbc";
+  bool summary = false;
+};
+
+// [dut] from --hardware FILE, with --can overriding the interface.
+toml::table dut_config(const DutArgs& a) {
+  toml::table t;
+  if (!a.hardware.empty()) t = *cfg::get_table(cfg::parse_file(a.hardware), "dut", true);
+  if (!a.can.empty()) t.insert_or_assign("can", a.can);
+  if (!t.contains("can")) throw ConfigError("rig dut: give --can IFACE (or --hardware FILE with a [dut] can = ...)");
+  return t;
+}
+
+void print_filter(const FilterConfig& f) {
+  std::printf("filter:      %s, %zu section(s) at %.0f Hz\n", f.enabled ? "on" : "off", f.sections.size(), f.rate_hz);
+  for (std::size_t i = 0; i < f.sections.size(); ++i) {
+    const Biquad& b = f.sections[i];
+    std::printf("  section %zu: b = [%.9g, %.9g, %.9g]  a = [1, %.9g, %.9g]\n", i, b.b0, b.b1, b.b2, b.a1, b.a2);
+  }
+}
+
+int cmd_info(const DutArgs& a) {
+  RealClock clock;
+  auto link = link::connect_dut(dut_config(a), clock);
+  const CancelToken never;
+  const DutInfo i = link->info(never);
+  std::printf("link:        %s\n", link->describe().c_str());
+  std::printf("serial:      %s\nfirmware:    %s\ntemperature: %.2f degC\noutput rate: %.0f Hz\n", i.serial.c_str(),
+              i.firmware.c_str(), i.temperature_c, i.output_rate_hz);
+  print_filter(link->get_filter(never));
+  if (const auto hb = link->last_heartbeat())
+    std::printf("heartbeat:   #%u, %s, last sample %u\n", hb->counter,
+                (hb->state & link::hb_state::kStreaming) ? "streaming" : "idle", hb->last_seq);
+  return kExitPass;
+}
+
+int cmd_stream(const DutArgs& a) {
+  CancelSource cancel;
+  SignalWatcher signals(cancel);  // Ctrl-C ends the stream cleanly
+  RealClock clock;
+  auto link = link::connect_dut(dut_config(a), clock);
+  std::ofstream file;
+  std::ostream* os = &std::cout;
+  if (!a.out.empty()) {
+    file.open(a.out);
+    if (!file) throw ConfigError("rig dut stream: cannot write " + a.out);
+    os = &file;
+  }
+  const long want = a.count > 0 ? a.count : a.seconds > 0 ? static_cast<long>(a.seconds * 1000.0) : -1;
+  *os << "# seq x_g y_g status   (" << link->describe() << ")\n";
+  link->start_stream(cancel.token());
+  std::vector<Sample> buf(100);
+  long got = 0;
+  int rc = kExitPass;
+  try {
+    while (want < 0 || got < want) {
+      const std::size_t n = want < 0 ? buf.size() : std::min<std::size_t>(buf.size(), static_cast<std::size_t>(want - got));
+      link->read(std::span(buf.data(), n), cancel.token());
+      if (!a.quiet)
+        for (std::size_t i = 0; i < n; ++i) {
+          char line[96];
+          std::snprintf(line, sizeof line, "%u %.9g %.9g 0x%03X\n", buf[i].seq, static_cast<double>(buf[i].x_g),
+                        static_cast<double>(buf[i].y_g), buf[i].status);
+          *os << line;
+        }
+      got += static_cast<long>(n);
+    }
+  } catch (const AbortedError&) {
+    rc = kExitAborted;
+  }
+  link->stop_stream();
+  os->flush();
+  const LinkStats s = link->stats();
+  std::fprintf(stderr, "rig dut stream: %ld samples, %llu gaps (%llu lost), %llu duplicates/late\n", got,
+               static_cast<unsigned long long>(s.gaps), static_cast<unsigned long long>(s.lost),
+               static_cast<unsigned long long>(s.duplicates));
+  for (std::size_t i = 0; i < s.gap_list.size() && i < 20; ++i)
+    std::fprintf(stderr, "  gap at seq %llu: %llu sample(s)\n", static_cast<unsigned long long>(s.gap_list[i].first),
+                 static_cast<unsigned long long>(s.gap_list[i].second));
+  return rc;
+}
+
+Biquad parse_biquad(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw ConfigError("--biquad '" + text + "': '" + item + "' is not a number");
+    }
+  }
+  if (v.size() != 5) throw ConfigError("--biquad '" + text + "': give 5 numbers b0,b1,b2,a1,a2 (a0 = 1)");
+  return {v[0], v[1], v[2], v[3], v[4]};
+}
+
+int cmd_set_filter(const DutArgs& a) {
+  FilterConfig f;
+  f.rate_hz = a.rate_hz;
+  f.enabled = !a.off;
+  if (a.paper) f.sections.push_back({0.148895, 0, 0, -1.228261, 0.377156});  // METHOD.md, W_f(z)
+  for (const auto& b : a.biquads) f.sections.push_back(parse_biquad(b));
+  if (f.sections.empty()) throw ConfigError("rig dut set-filter: give --paper or at least one --biquad b0,b1,b2,a1,a2");
+  RealClock clock;
+  auto link = link::connect_dut(dut_config(a), clock);
+  const CancelToken never;
+  link->set_filter(f, never);
+  print_filter(link->get_filter(never));
+  return kExitPass;
+}
+
+int cmd_filter_enable(const DutArgs& a, bool on) {
+  RealClock clock;
+  auto link = link::connect_dut(dut_config(a), clock);
+  link->set_filter_enabled(on, CancelToken{});
+  std::printf("filter: %s\n", on ? "on" : "off");
+  return kExitPass;
+}
+
+int cmd_decode(const DutArgs& a) {
+  const link::Dbc dbc = link::Dbc::parse_file(a.dbc);
+  std::ifstream in(a.log);
+  if (!in) throw ConfigError(a.log + ": cannot open candump log");
+  std::map<std::string, unsigned long> per;
+  unsigned long frames = 0, foreign = 0, errors = 0;
+  std::string line;
+  for (int ln = 1; std::getline(in, line); ++ln) {
+    const auto lf = link::parse_candump_line(line);
+    if (!lf) continue;
+    ++frames;
+    if (lf->frame.error) {
+      ++errors;
+      if (!a.summary) std::printf("%.6f %s error frame: %s\n", lf->t_s, lf->iface.c_str(),
+                                  link::classify_error_frame(lf->frame).text.c_str());
+      continue;
+    }
+    std::string err;
+    const auto sig = dbc.decode(lf->frame, &err);
+    if (!sig) {
+      if (!err.empty()) throw ConfigError(a.log + ":" + std::to_string(ln) + ": " + err + " (" + a.dbc + ")");
+      ++foreign;
+      continue;
+    }
+    const std::string& name = dbc.find(lf->frame.id)->name;
+    ++per[name];
+    if (a.summary) continue;
+    std::printf("%.6f %s %s", lf->t_s, lf->iface.c_str(), name.c_str());
+    for (const auto& s : *sig) {
+      if (s.value_name.empty()) std::printf(" %s=%.9g%s%s", s.name.c_str(), s.value, s.unit.empty() ? "" : " ", s.unit.c_str());
+      else std::printf(" %s=%s", s.name.c_str(), s.value_name.c_str());
+    }
+    std::printf("\n");
+  }
+  std::printf("%s: %lu frames: ", a.log.c_str(), frames);
+  for (const auto& [k, n] : per) std::printf("%s %lu, ", k.c_str(), n);
+  std::printf("error frames %lu, other ids %lu\n", errors, foreign);
+  return kExitPass;
+}
+
+void add_link_options(CLI::App* c, DutArgs& a) {
+  c->add_option("--can", a.can, "CAN interface of the DUT (e.g. can0, vcan0)");
+  c->add_option("--hardware", a.hardware, "Take [dut] (interface, timeouts) from this hardware file");
+}
+
+}  // namespace
+
+void add_dut(CLI::App& app, int& rc) {
+  auto* dut = app.add_subcommand("dut", "Manual control of a DUT over CAN (info, stream, output filter, log decode)");
+  dut->require_subcommand(1);
+  auto a = std::make_shared<DutArgs>();
+
+  auto* info = dut->add_subcommand("info", "Serial number, firmware version, temperature and output filter");
+  add_link_options(info, *a);
+  info->callback([a, &rc] { rc = cmd_info(*a); });
+
+  auto* stream = dut->add_subcommand("stream", "Stream samples (seq x_g y_g status per line) until Ctrl-C or a limit");
+  add_link_options(stream, *a);
+  stream->add_option("--seconds", a->seconds, "Stop after this many seconds of samples (1 kHz)");
+  stream->add_option("--count", a->count, "Stop after this many samples");
+  stream->add_option("--out", a->out, "Write the samples to this file instead of stdout");
+  stream->add_flag("--quiet", a->quiet, "Only the summary (gaps, duplicates)");
+  stream->callback([a, &rc] { rc = cmd_stream(*a); });
+
+  auto* setf = dut->add_subcommand("set-filter", "Load output-filter coefficients into the DUT (biquad cascade)");
+  add_link_options(setf, *a);
+  setf->add_option("--biquad", a->biquads, "One section b0,b1,b2,a1,a2 (repeat for a cascade)");
+  setf->add_flag("--paper", a->paper, "The paper's MCU filter 0.148895 z^2/(z^2 - 1.228261 z + 0.377156)");
+  setf->add_option("--rate", a->rate_hz, "Rate the filter runs at inside the DUT, Hz")->capture_default_str();
+  setf->add_flag("--off", a->off, "Load it but leave the filter switched off");
+  setf->callback([a, &rc] { rc = cmd_set_filter(*a); });
+
+  auto* on = dut->add_subcommand("filter-on", "Switch the DUT's output filter on");
+  add_link_options(on, *a);
+  on->callback([a, &rc] { rc = cmd_filter_enable(*a, true); });
+  auto* off = dut->add_subcommand("filter-off", "Switch the DUT's output filter off");
+  add_link_options(off, *a);
+  off->callback([a, &rc] { rc = cmd_filter_enable(*a, false); });
+
+  auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -L / -l) with the protocol's DBC");
+  dec->add_option("LOG", a->log, "candump log file")->required();
+  dec->add_option("--dbc", a->dbc, "DBC file")->capture_default_str();
+  dec->add_flag("--summary", a->summary, "Only count the messages");
+  dec->callback([a, &rc] { rc = cmd_decode(*a); });
+}
+
+}  // namespace rig::cli

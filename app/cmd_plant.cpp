@@ -1,0 +1,102 @@
+// `rig plant serve`: the emulated table and DUT in real time, as separate
+// endpoints reached through the real protocols (Modbus TCP/RTU, CAN), for
+// integration tests and technicians' training.
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "plant/emulated/dut_source.hpp"
+#include "plant/firmware/can_dut_server.hpp"
+#include "plant/table/table_emulator.hpp"
+#include "plant/table/table_server.hpp"
+#include "procedures/acceptance/profile.hpp"
+#include "app/commands.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+#include "rig/executive/signals.hpp"
+
+namespace rig::cli {
+
+namespace {
+
+// Couples the table to the DUT: before every output period the DUT sees the
+// table's actual angle. Only the firmware thread calls into the DUT model;
+// the table emulator is thread-safe.
+class TableCoupledDut final : public plant::DutSourceWrapper {
+ public:
+  TableCoupledDut(std::unique_ptr<plant::DutSource> inner, plant::TableEmulator& table)
+      : DutSourceWrapper(std::move(inner)), table_(table) {}
+  void next(float& x, float& y) override {
+    inner().set_table_angle_deg(table_.actual_angle_deg());
+    inner().next(x, y);
+  }
+
+ private:
+  plant::TableEmulator& table_;
+};
+
+struct ServeArgs {
+  std::string modbus, rtu, can, profile = "paper";
+  double duration = 0;
+  int unit = 1;
+};
+
+int serve(const ServeArgs& a) {
+  if (a.modbus.empty() && a.rtu.empty() && a.can.empty())
+    throw ConfigError("rig plant serve: give at least one endpoint: --modbus HOST:PORT, --rtu DEVICE or --can IFACE");
+  CancelSource cancel;
+  SignalWatcher signals(cancel);  // before the server threads start
+  const acceptance::Profile p = acceptance::load_profile(a.profile);
+  cfg::check_keys(p.plant, {"seed", "dut", "table"}, "plant");
+  const auto seed = static_cast<uint64_t>(cfg::get_int(p.plant, "seed", 1, 0));
+  auto table = plant::make_table_emulator(cfg::get_table(p.plant, "table"), seed ^ 0x7ab1e5eedULL);
+  TableCoupledDut dut(plant::make_dut_source(cfg::get_table(p.plant, "dut"), seed), *table);
+
+  std::vector<std::unique_ptr<plant::TableServer>> tables;
+  if (!a.modbus.empty()) tables.push_back(std::make_unique<plant::TableServer>(*table, "tcp:" + a.modbus, a.unit, true));
+  // A second server on the same emulator must not step it a second time.
+  if (!a.rtu.empty())
+    tables.push_back(std::make_unique<plant::TableServer>(*table, "rtu:" + a.rtu, a.unit, tables.empty()));
+  for (auto& t : tables) {
+    t->start();
+    std::cout << "table: modbus " << t->endpoint() << " unit " << a.unit << std::endl;
+  }
+  std::unique_ptr<plant::CanDutServer> can;
+  if (!a.can.empty()) {
+    can = std::make_unique<plant::CanDutServer>(dut, a.can);
+    can->start();
+    std::cout << "dut: " << can->describe() << " serial " << dut.serial() << std::endl;
+  }
+  std::cout << "plant: serving (profile " << p.name << ", seed " << seed << "); Ctrl-C to stop" << std::endl;
+  RealClock clock;
+  int rc = kExitPass;
+  try {
+    clock.sleep_for(a.duration > 0 ? a.duration : 1e12, cancel.token());
+  } catch (const AbortedError&) {
+    std::cout << "plant: " << cancel.token().reason() << ", stopping" << std::endl;
+  }
+  if (can) can->stop();
+  for (auto& t : tables) t->stop();
+  return rc;
+}
+
+}  // namespace
+
+void add_plant(CLI::App& app, int& rc) {
+  auto* plant = app.add_subcommand("plant", "The emulated plant as real endpoints");
+  plant->require_subcommand(1);
+  auto* sub = plant->add_subcommand("serve", "Serve the emulated table (Modbus) and DUT (CAN) in real time");
+  auto a = std::make_shared<ServeArgs>();
+  sub->add_option("--modbus", a->modbus, "Modbus TCP endpoint HOST:PORT (PORT 0 picks a free port)");
+  sub->add_option("--rtu", a->rtu, "Modbus RTU serial device DEVICE[,BAUD[,P,D,S]] (e.g. one end of a socat pty pair)");
+  sub->add_option("--unit", a->unit, "Modbus unit (slave) id")->capture_default_str();
+  sub->add_option("--can", a->can, "CAN interface for the DUT firmware emulator (e.g. vcan0)");
+  sub->add_option("--profile", a->profile, "Profile whose [plant] section configures the emulated DUT and table")
+      ->capture_default_str();
+  sub->add_option("--duration", a->duration, "Stop after this many seconds (default: until SIGINT/SIGTERM)");
+  sub->callback([a, &rc] { rc = serve(*a); });
+}
+
+}  // namespace rig::cli

@@ -1,0 +1,21 @@
+// `rig report DIR`: (re)writes DIR/report.html from a finished or aborted run's folder.
+#include <iostream>
+
+#include "app/commands.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/report/report.hpp"
+
+namespace rig::cli {
+
+void add_report(CLI::App& app, int& rc) {
+  auto* sub = app.add_subcommand("report", "Write report.html (passport, plots; prints on A4) from a run folder");
+  auto dir = std::make_shared<std::string>();
+  sub->add_option("DIR", *dir, "Run folder holding passport.json (and analysis.json)")->required();
+  sub->footer("Exit codes: 0 written; 2 passport.json missing or malformed (the file is named).");
+  sub->callback([&rc, dir] {
+    std::cout << report::write_report(*dir) << "\n";
+    rc = kExitPass;
+  });
+}
+
+}  // namespace rig::cli

@@ -1,0 +1,199 @@
+// `rig table`: manual control of a real or emulated rotary table over Modbus,
+// for a technician at the rig (docs/table-registers.md).
+#include <signal.h>
+
+#include <atomic>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "app/commands.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+#include "rig/modbus/table_client.hpp"
+
+namespace rig::cli {
+
+namespace {
+
+struct TableArgs {
+  std::string modbus, rtu, hardware;
+  std::optional<int> unit;
+  std::optional<double> timeout_s;
+  double deg = 0;
+  bool json = false;
+};
+
+// The [table] settings: from --hardware FILE, overridden by the flags.
+toml::table table_config(const TableArgs& a) {
+  toml::table t;
+  if (!a.hardware.empty()) {
+    const toml::table file = cfg::parse_file(a.hardware);
+    t = *cfg::get_table(file, "table", true);
+  }
+  if (!a.modbus.empty()) {
+    t.erase("rtu");
+    t.insert_or_assign("modbus", a.modbus);
+  }
+  if (!a.rtu.empty()) {
+    t.erase("modbus");
+    t.insert_or_assign("rtu", a.rtu);
+  }
+  if (a.unit) t.insert_or_assign("unit", *a.unit);
+  if (a.timeout_s) t.insert_or_assign("response_timeout_s", *a.timeout_s);
+  if (!t.contains("modbus") && !t.contains("rtu"))
+    throw ConfigError("rig table: say where the table is: --modbus HOST:PORT, --rtu DEV[,BAUD] or --hardware FILE");
+  return t;
+}
+
+// Ctrl-C / SIGTERM trip the cancel source from a normal thread (a handler
+// may not take locks), so a move in progress halts the table and exits 3.
+class SignalCancel {
+ public:
+  SignalCancel() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGINT);
+    sigaddset(&set_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set_, &old_);
+    thread_ = std::thread([this] {
+      const timespec tick{0, 20'000'000};
+      while (!done_) {
+        const int sig = sigtimedwait(&set_, nullptr, &tick);
+        if (sig > 0) source_.request(sig == SIGINT ? "interrupted (Ctrl-C)" : "terminated (SIGTERM)");
+      }
+    });
+  }
+  ~SignalCancel() {
+    done_ = true;
+    thread_.join();
+    pthread_sigmask(SIG_SETMASK, &old_, nullptr);
+  }
+  SignalCancel(const SignalCancel&) = delete;
+  SignalCancel& operator=(const SignalCancel&) = delete;
+  CancelToken token() const { return source_.token(); }
+
+ private:
+  sigset_t set_{}, old_{};
+  CancelSource source_;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+std::string flags(const TableStatus& s) {
+  std::string f;
+  auto add = [&](bool on, const char* name) {
+    if (on) f += (f.empty() ? "" : " ") + std::string(name);
+  };
+  add(s.ready, "ready");
+  add(s.servo_on, "servo-on");
+  add(s.homed, "homed");
+  add(s.homing, "homing");
+  add(s.moving, "moving");
+  add(s.in_position, "in-position");
+  add(s.alarm, "ALARM");
+  add(s.estop, "E-STOP");
+  add(!s.interlock_ok, "INTERLOCK-OPEN");
+  return f.empty() ? "-" : f;
+}
+
+void print_status(const std::string& where, const TableStatus& s, bool json) {
+  if (json) {
+    nlohmann::json j = {{"table", where},         {"actual_deg", s.actual_deg}, {"target_deg", s.target_deg},
+                        {"ready", s.ready},       {"servo_on", s.servo_on},     {"homed", s.homed},
+                        {"homing", s.homing},     {"moving", s.moving},         {"in_position", s.in_position},
+                        {"alarm", s.alarm},       {"estop", s.estop},           {"interlock_ok", s.interlock_ok},
+                        {"alarm_code", s.alarm_code}, {"alarm_text", s.alarm_text}, {"heartbeat", s.heartbeat}};
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  char alarm[96];
+  if (s.alarm_code)
+    std::snprintf(alarm, sizeof alarm, "0x%04X %s", s.alarm_code, s.alarm_text.c_str());
+  else
+    std::snprintf(alarm, sizeof alarm, "none");
+  std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°\nstate      %s\nalarm      %s\nheartbeat  %u\n",
+              where.c_str(), s.actual_deg, s.target_deg, flags(s).c_str(), alarm, s.heartbeat);
+}
+
+template <class Body>
+void with_table(const TableArgs& a, Body body) {
+  const toml::table t = table_config(a);
+  RealClock clock;
+  std::unique_ptr<RotaryTable> table = modbus::connect_table(t, clock);
+  auto* client = dynamic_cast<modbus::TableClient*>(table.get());
+  body(*client);
+}
+
+}  // namespace
+
+void add_table(CLI::App& app, int& rc) {
+  auto a = std::make_shared<TableArgs>();
+  auto* sub = app.add_subcommand("table", "Manual control of the rotary table over Modbus (status, home, move, stop)");
+  sub->require_subcommand(1);
+  auto* where = sub->add_option("--modbus", a->modbus, "Modbus TCP drive, HOST:PORT");
+  sub->add_option("--rtu", a->rtu, "Modbus RTU drive, DEVICE[,BAUD[,PARITY,DATABITS,STOPBITS]] (default 19200,E,8,1)")
+      ->excludes(where);
+  sub->add_option("--hardware", a->hardware, "Take the [table] section of this hardware file (flags override)");
+  sub->add_option("--unit", a->unit, "Modbus unit id (default 1)")->check(CLI::Range(0, 247));
+  sub->add_option("--timeout", a->timeout_s, "Response timeout per request, seconds (default 0.3)")
+      ->check(CLI::Range(0.01, 10.0));
+
+  auto* st = sub->add_subcommand("status", "Read and print the drive's status");
+  st->add_flag("--json", a->json, "Print JSON");
+  st->callback([a, &rc] {
+    with_table(*a, [&](modbus::TableClient& t) { print_status(t.describe(), t.status(), a->json); });
+    rc = kExitPass;
+  });
+
+  sub->add_subcommand("home", "Run the homing sequence and wait until homed")->callback([a, &rc] {
+    with_table(*a, [&](modbus::TableClient& t) {
+      SignalCancel sig;
+      t.home(sig.token());
+      print_status(t.describe(), t.status(), false);
+    });
+    rc = kExitPass;
+  });
+
+  auto* mv = sub->add_subcommand("move", "Move to an angle and wait until in position and confirmed");
+  mv->add_option("DEG", a->deg, "Target angle, degrees")->required();
+  mv->callback([a, &rc] {
+    with_table(*a, [&](modbus::TableClient& t) {
+      SignalCancel sig;
+      t.move_to(a->deg, sig.token());
+      print_status(t.describe(), t.status(), false);
+    });
+    rc = kExitPass;
+  });
+
+  auto stop_cmd = [a, &rc](bool quick) {
+    with_table(*a, [&](modbus::TableClient& t) {
+      if (quick) {
+        t.quick_stop();
+      } else {
+        t.stop();
+      }
+      if (!t.last_stop_error().empty()) throw HardwareError(t.last_stop_error());
+      std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << "\n";
+    });
+    rc = kExitPass;
+  };
+  sub->add_subcommand("stop", "Controlled stop (halt on the profile ramp)")->callback([stop_cmd] { stop_cmd(false); });
+  sub->add_subcommand("quick-stop", "Quick stop (the drive's quick-stop ramp), then hold")->callback([stop_cmd] {
+    stop_cmd(true);
+  });
+  sub->add_subcommand("reset", "Reset the drive's alarm after inspection (refused while e-stop/interlock open)")
+      ->callback([a, &rc] {
+        with_table(*a, [&](modbus::TableClient& t) {
+          t.reset_alarm({});
+          print_status(t.describe(), t.status(), false);
+        });
+        rc = kExitPass;
+      });
+}
+
+}  // namespace rig::cli
