@@ -48,9 +48,9 @@ TEST(PaperFilter, ReproducesTheDerivedFigures) {
   const auto h = step(f);
   for (double v : h) EXPECT_LE(v, 1.0 + 1e-6);
   const double dt = 1 / f.rate_hz;
-  EXPECT_GT(settling_time(h, dt), 0.0);
-  EXPECT_LT(settling_time(h, dt, 0.02), 0.003);  // the paper: about 3 ms
-  EXPECT_LT(settling_time(h, dt), settling_time(h, dt, 0.02));  // the convention: 5 %
+  // The filter alone settles well inside the paper's "about 3 ms" of the loop with it.
+  EXPECT_NEAR(settling_time(h, dt), 0.9e-3, 0.5 * dt);  // the convention: 5 %
+  EXPECT_NEAR(settling_time(h, dt, 0.02), 1.1e-3, 0.5 * dt);
   EXPECT_EQ(kSettlingBand, 0.05);
 }
 
