@@ -1,5 +1,6 @@
 // Physical parameters of the emulated quartz pendulum accelerometer (METHOD.md
-// Fig. 3; its loop as designed in design/loop_params.hpp) and of its noise sources. Loaded from the default DUT profile
+// Fig. 3): its loop and regulator as designed (design/loop_params.hpp), its noise
+// sources and its geometry on the table. Loaded from the default DUT profile
 // (plant/dut/default.toml, compiled in) with a profile's [plant.dut] overrides.
 #pragma once
 #include <cstdint>
