@@ -35,7 +35,7 @@ std::string read_filter_table(const toml::table& t, std::string_view ctx, RateKe
   else
     cfg::check_keys(t, {"preset", "sections", "enabled"}, ctx);
   const toml::node* secs = t.get("sections");
-  std::string preset = cfg::get_string(t, "preset", std::string(secs ? "custom" : ""));
+  const std::string preset = cfg::get_string(t, "preset", std::string(secs ? "custom" : ""));
   if (preset == "paper") {
     f = paper_wf();
   } else if (preset == "none") {
