@@ -4,7 +4,7 @@
 
 namespace rig::acceptance {
 
-nlohmann::json loop_to_json(const plant::LoopFigures& f) {
+nlohmann::json loop_to_json(const design::LoopFigures& f) {
   return {{"bandwidth_0p5_hz", f.bandwidth_0p5_hz},
           {"bandwidth_3db_hz", f.bandwidth_3db_hz},
           {"settling_time_s", f.settling_time_s},

@@ -3,11 +3,11 @@
 #pragma once
 #include <nlohmann/json.hpp>
 
-#include "plant/dut/loop_figures.hpp"
+#include "design/loop_figures.hpp"
 
 namespace rig::acceptance {
 
-nlohmann::json loop_to_json(const plant::LoopFigures& f);
+nlohmann::json loop_to_json(const design::LoopFigures& f);
 
 // analysis.json from the procedure state accumulated by the phases.
 nlohmann::json analysis_document(const nlohmann::json& state);

@@ -11,7 +11,7 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "analysis/allan.hpp"
-#include "analysis/filter.hpp"
+#include "analysis/rms.hpp"
 #include "analysis/gost.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"
@@ -167,7 +167,7 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
 
 void phase_loop(PhaseContext& ctx, const Profile& p) {
   const toml::table* dut_cfg = p.plant.get_as<toml::table>("dut");
-  const plant::LoopFigures f = plant::loop_figures(dut_cfg, p.filter);
+  const design::LoopFigures f = plant::loop_figures(dut_cfg, p.filter);
   ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, "closed loop with the output filter, 0.5 level (model)");
   ctx.values.set("settling_time", f.settling_time_s,
                  fmt::format("closed loop, 1 g step, {:g} % band (model)", f.settling_band * 100));
