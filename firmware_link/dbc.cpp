@@ -7,6 +7,8 @@
 #endif
 
 #include <bit>
+#include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <regex>
@@ -28,7 +30,22 @@ std::string trim(const std::string& s) {
   return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
 }
 
-double num(const std::string& s) { return std::strtod(s.c_str(), nullptr); }
+// Numbers of a DBC line: decimal, in range of the field they fill, or an error naming the
+// line (a DBC from another tool can carry any digits the grammar allows).
+template <class T>
+T integer(const std::string& src, int line, const std::string& text, const char* what) {
+  T v{};
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size())
+    fail(src, line, std::string(what) + " '" + text + "' is not a whole number in range");
+  return v;
+}
+
+double num(const std::string& src, int line, const std::string& text, const char* what) {
+  const double v = std::strtod(text.c_str(), nullptr);
+  if (!std::isfinite(v)) fail(src, line, std::string(what) + " '" + text + "' is not a finite number");
+  return v;
+}
 
 }  // namespace
 
@@ -60,7 +77,7 @@ Dbc Dbc::parse(const std::string& text, const std::string& src) {
   int line = 0;
   DbcMessage* cur = nullptr;
   auto find_sig = [&](const std::string& id_s, const std::string& name) -> DbcSignal& {
-    const auto id = static_cast<uint32_t>(std::stoul(id_s));
+    const auto id = integer<uint32_t>(src, line, id_s, "message id");
     for (auto& m : dbc.messages_)
       if (m.id == id)
         for (auto& s : m.signals)
@@ -74,9 +91,9 @@ Dbc Dbc::parse(const std::string& text, const std::string& src) {
     if (l.rfind("BO_ ", 0) == 0) {
       if (!std::regex_match(l, m, bo_re)) fail(src, line, "malformed BO_ line");
       DbcMessage msg;
-      msg.id = static_cast<uint32_t>(std::stoul(m[1]));
+      msg.id = integer<uint32_t>(src, line, m[1], "message id");
       msg.name = m[2];
-      msg.dlc = std::stoi(m[3]);
+      msg.dlc = integer<int>(src, line, m[3], "DLC");
       msg.sender = m[4];
       if (msg.id & 0x80000000u) fail(src, line, "extended-id message " + msg.name + " is not supported");
       if (msg.dlc > 8) fail(src, line, "message " + msg.name + " has DLC " + std::to_string(msg.dlc) + " (> 8)");
@@ -90,18 +107,18 @@ Dbc Dbc::parse(const std::string& text, const std::string& src) {
       s.name = m[1];
       const std::string mux = m[2];
       s.multiplexor = mux == "M";
-      if (!mux.empty() && mux[0] == 'm') s.mux_value = std::stoi(mux.substr(1));
-      s.start = std::stoi(m[3]);
-      s.length = std::stoi(m[4]);
+      if (!mux.empty() && mux[0] == 'm') s.mux_value = integer<int>(src, line, mux.substr(1), "multiplexer value");
+      s.start = integer<int>(src, line, m[3], "start bit");
+      s.length = integer<int>(src, line, m[4], "bit length");
       if (m[5] == "0") fail(src, line, "signal " + s.name + ": Motorola (big-endian) byte order is not supported");
       s.is_signed = m[6] == "-";
-      s.factor = num(m[7]);
-      s.offset = num(m[8]);
-      s.min = num(m[9]);
-      s.max = num(m[10]);
+      s.factor = num(src, line, m[7], "factor");
+      s.offset = num(src, line, m[8], "offset");
+      s.min = num(src, line, m[9], "minimum");
+      s.max = num(src, line, m[10], "maximum");
       s.unit = m[11];
       s.line = line;
-      if (s.length < 1 || s.length > 64 || s.start + s.length > cur->dlc * 8)
+      if (s.length < 1 || s.length > 64 || s.start > 64 || s.start + s.length > cur->dlc * 8)
         fail(src, line, "signal " + s.name + " (" + std::to_string(s.start) + "|" + std::to_string(s.length) +
                             ") does not fit the message's " + std::to_string(cur->dlc) + " bytes");
       if (cur->signal(s.name)) fail(src, line, "signal " + s.name + " defined twice in " + cur->name);
@@ -109,7 +126,7 @@ Dbc Dbc::parse(const std::string& text, const std::string& src) {
     } else if (l.rfind("SIG_VALTYPE_ ", 0) == 0) {
       if (!std::regex_match(l, m, valtype_re)) fail(src, line, "malformed SIG_VALTYPE_ line");
       DbcSignal& s = find_sig(m[1], m[2]);
-      s.value_type = std::stoi(m[3]);
+      s.value_type = integer<int>(src, line, m[3], "value type");
       if ((s.value_type == 1 && s.length != 32) || (s.value_type == 2 && s.length != 64))
         fail(src, line, "signal " + s.name + ": float type needs 32 (or 64) bits, has " + std::to_string(s.length));
     } else if (l.rfind("VAL_ ", 0) == 0) {
@@ -117,7 +134,7 @@ Dbc Dbc::parse(const std::string& text, const std::string& src) {
       DbcSignal& s = find_sig(m[1], m[2]);
       const std::string pairs = m[3];
       for (std::sregex_iterator it(pairs.begin(), pairs.end(), pair_re), end; it != end; ++it)
-        s.value_names[std::stoll((*it)[1])] = (*it)[2];
+        s.value_names[integer<long long>(src, line, (*it)[1], "value")] = (*it)[2];
     } else if (l.empty()) {
       cur = nullptr;  // a blank line ends a message block
     }

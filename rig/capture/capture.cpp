@@ -169,6 +169,15 @@ void Writer::close() {
 Reader::Reader(const std::string& path) : path_(path) {
   f_ = std::fopen(path.c_str(), "rb");
   if (!f_) throw ConfigError(path + ": cannot open capture: " + errno_text());
+  // A constructor that throws runs no destructor: close the file on every error below, or
+  // each rejected file would leak a descriptor and its 1 MiB buffer (found by fuzz_capture).
+  struct CloseOnThrow {
+    std::FILE*& f;
+    bool armed = true;
+    ~CloseOnThrow() {
+      if (armed && f) std::fclose(f), f = nullptr;
+    }
+  } guard{f_};
   std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
   struct stat st {};
   ::fstat(::fileno(f_), &st);
@@ -197,6 +206,7 @@ Reader::Reader(const std::string& path) : path_(path) {
   }
   data_start_ = align16(16 + len);
   pos_ = data_start_;
+  guard.armed = false;
 }
 
 Reader::~Reader() {

@@ -159,3 +159,22 @@ TEST(Dbc, CandumpLogLines) {
   EXPECT_FALSE(parse_candump_line("# a comment"));
   EXPECT_FALSE(parse_candump_line("101#0102030"));  // odd number of hex digits
 }
+
+// Found by tests/fuzz (fuzz_dbc): numbers beyond their field's range ended the process with
+// std::out_of_range from std::stoi; they are configuration errors naming the line.
+TEST(Dbc, NumbersOutOfRangeAreErrorsNamingTheLine) {
+  auto error = [](const std::string& text) {
+    try {
+      Dbc::parse(text, "t.dbc");
+    } catch (const rig::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error("BO_ 256 X: 99999999999 DUT\n"), "t.dbc:1: DLC '99999999999' is not a whole number in range");
+  EXPECT_EQ(error("BO_ 99999999999 X: 8 DUT\n"), "t.dbc:1: message id '99999999999' is not a whole number in range");
+  EXPECT_EQ(error("BO_ 256 X: 8 DUT\n SG_ a : 99999999999|8@1+ (1,0) [0|1] \"\" Vector__XXX\n"),
+            "t.dbc:2: start bit '99999999999' is not a whole number in range");
+  EXPECT_EQ(error("BO_ 256 X: 8 DUT\n SG_ a : 0|8@1+ (1e999,0) [0|1] \"\" Vector__XXX\n"),
+            "t.dbc:2: factor '1e999' is not a finite number");
+}
