@@ -1,4 +1,4 @@
-// Output-filter quality (METHOD.md "Spectral analysis and the output filter"): frequency
+// Output-filter quality (docs/method.md "Spectral analysis and the output filter"): frequency
 // response of cascaded biquads, bandwidth at a level, step-response settling time, RMS,
 // Butterworth design (bilinear transform with prewarping) and the paper's W_f(z).
 #pragma once

@@ -1,6 +1,6 @@
 // `rig run`: the acceptance procedure, end to end, with a run folder holding
 // the captures, checkpoint, passport.json, junit.xml, analysis.json,
-// report.html and run.log. Exit codes per CONTRACTS.md.
+// report.html and run.log. Exit codes per docs/contracts.md.
 #include <chrono>
 #include <signal.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // Closed-loop figures of the emulated DUT with a given output filter, from the
-// same model that produces its output (the paper's criterion 2, METHOD.md).
+// same model that produces its output (the paper's criterion 2, docs/method.md).
 #pragma once
 #include <vector>
 

@@ -120,7 +120,7 @@ TEST(KernelCan, EveryCommandRoundTrips) {
   EXPECT_EQ(info.firmware, "1.4.0");
   EXPECT_FLOAT_EQ(static_cast<float>(info.temperature_c), 23.25f);
 
-  FilterConfig f;  // METHOD.md: W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156), at 10 kHz
+  FilterConfig f;  // docs/method.md: W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156), at 10 kHz
   f.sections = {{0.148895, 0, 0, -1.228261, 0.377156}};
   f.rate_hz = 10000;
   f.enabled = true;

@@ -108,7 +108,7 @@ TEST(Loop, FiguresOfTheDefaultProfileMatchThePaper) {
 }
 
 TEST(Loop, FilterResponseOfThePaperFilter) {
-  // METHOD.md: |W_f| = 0.99 at 70 Hz, 0.71 at 500 Hz, 0.50 at 800 Hz, 0.39 at 1 kHz (10 kHz rate)
+  // docs/method.md: |W_f| = 0.99 at 70 Hz, 0.71 at 500 Hz, 0.50 at 800 Hz, 0.39 at 1 kHz (10 kHz rate)
   const FilterConfig w = paper_filter();
   EXPECT_NEAR(std::abs(filter_response(w, 0)), 1.0, 1e-5);
   EXPECT_NEAR(std::abs(filter_response(w, 70)), 0.99, 0.01);
