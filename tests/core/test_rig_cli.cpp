@@ -325,6 +325,16 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   EXPECT_NE(slurp(d + "/run/report.html").find("HW-1"), std::string::npos);
 }
 
+TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
+  const std::string d = tmp("histdb");
+  fs::create_directories(d);
+  const std::string typo = d + "/histroy.sqlite";
+  EXPECT_EQ(run({"history", "--db", "sqlite:" + typo}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find(typo + ": no such history database"), std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_FALSE(fs::exists(typo));
+}
+
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {
   const std::string d = tmp("badprof");
   fs::create_directories(d);
