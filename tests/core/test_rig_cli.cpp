@@ -335,6 +335,37 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
   EXPECT_FALSE(fs::exists(typo));
 }
 
+// `rig dut decode` on logs written by can-utils (tests/data/candump): both formats, a short
+// frame skipped and named by line (exit 2), a clean log exit 0, a file of no frames exit 2.
+TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
+  const std::string d = tmp("decode");
+  fs::create_directories(d);
+  const std::string data = std::string(RIG_SOURCE_DIR) + "/tests/data/candump/";
+  for (const char* name : {"session-l.log", "session-screen.txt"}) {
+    EXPECT_EQ(run({"dut", "decode", data + name}, d + "/io"), 2) << name;
+    const std::string out = slurp(d + "/io.stdout"), err = slurp(d + "/io.stderr");
+    EXPECT_NE(out.find(": 10 frames: DUT_HEARTBEAT 1, DUT_RSP 1, DUT_STREAM_X 2, DUT_STREAM_Y 3, RIG_CMD 1, "
+                       "error frames 0, other ids 1, skipped lines 1"),
+              std::string::npos)
+        << name << "\n" << out;
+    EXPECT_NE(out.find("DUT_STREAM_Y seq=1193048"), std::string::npos) << "decoding goes on after the short frame";
+    EXPECT_NE(err.find(std::string(name) + ":8: skipped: DUT_STREAM_X: length 4, DBC says 8"), std::string::npos)
+        << err;
+  }
+  // The same session without the short frame decodes cleanly.
+  std::ifstream in(data + "session-l.log");
+  std::ofstream clean(d + "/clean.log");
+  int n = 0;
+  for (std::string line; std::getline(in, line);)
+    if (++n != 8) clean << line << "\n";
+  clean.close();
+  EXPECT_EQ(run({"dut", "decode", d + "/clean.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stdout").find("9 frames"), std::string::npos);
+  std::ofstream(d + "/notes.txt") << "this is not a candump log\n";
+  EXPECT_EQ(run({"dut", "decode", d + "/notes.txt"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("notes.txt:1: skipped: not a candump frame line"), std::string::npos);
+}
+
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {
   const std::string d = tmp("badprof");
   fs::create_directories(d);

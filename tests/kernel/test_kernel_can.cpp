@@ -18,6 +18,7 @@
 #include <linux/can/error.h>
 
 #include "firmware_link/can_dut_link.hpp"
+#include "firmware_link/candump_log.hpp"
 #include "firmware_link/dbc.hpp"
 #include "firmware_link/socketcan.hpp"
 #include "plant/firmware/firmware_emulator.hpp"
