@@ -12,7 +12,10 @@ its cmake configure and build are no-ops). Cases:
                             with it fails on a build folder that holds no test
   demo_profile_ci           `scripts/demo --profile ci` (its header's usage) runs the ci
                             profile, prints only files it wrote and where it records history;
-                            a rejected run prints no file
+                            the NumPy loader command it prints works; a rejected run prints no file
+  setup_packages            `scripts/setup --runtime` (what the demo runs) installs python3-numpy
+                            for the documented loader; every package in the README's table is in
+                            scripts/setup and the other way round
 """
 import os
 import re
@@ -112,6 +115,12 @@ def demo_profile_ci(root, build):
             fail("scripts/demo did not say where it records history:\n" + se[-1000:])
         if not os.path.isfile(db[len("sqlite:"):]):
             fail("the history database the demo names was not written")
+        loader = re.search(r"python3 (tools/rigcap\.py \S+)$", se, re.M)
+        if not loader:
+            fail("scripts/demo did not print the NumPy loader command for its capture:\n" + se[-1000:])
+        p = subprocess.run([sys.executable] + loader.group(1).split(), cwd=root, capture_output=True, text=True)
+        if p.returncode != 0 or '"serial"' not in p.stdout:
+            fail(f"the loader command the demo printed failed ({p.returncode}):\n{p.stderr[-1000:]}")
         # A run rejected at its command line writes nothing, and the demo lists nothing.
         bad = os.path.join(d, "bad")
         rc, so, se = run_demo(root, build, ["--profile", "no-such-profile", "--out", bad, "--no-history"])
@@ -122,7 +131,30 @@ def demo_profile_ci(root, build):
     print("demo --profile ci: exit 0, lists only written files and the history database; bad profile: no file listed")
 
 
-CASES = {"demo_then_test_configure": demo_then_test_configure, "no_tests_fails": no_tests_fails,
+def packages(root, *args):
+    out = subprocess.run([os.path.join(root, "scripts/setup"), *args, "--print"], capture_output=True, text=True,
+                         check=True).stdout
+    return set(out.split())
+
+
+def setup_packages(root, _build):
+    runtime, full = packages(root, "--runtime"), packages(root)
+    if "python3-numpy" not in runtime:
+        fail("scripts/setup --runtime does not install python3-numpy (README: the NumPy loader tools/rigcap.py)")
+    if not runtime <= full:
+        fail(f"--runtime installs packages the full set-up does not: {sorted(runtime - full)}")
+    readme = open(os.path.join(root, "README.md")).read()
+    table = readme.split("## Set-up and dependencies", 1)[1].split("\n## ", 1)[0]
+    listed = set()
+    for row in re.findall(r"^\| ([^|]+) \|", table, re.M):
+        listed |= {p.strip() for p in row.split(",") if p.strip() and p.strip() != "package" and "---" not in p}
+    if listed - full or full - listed - {"pkg-config"}:
+        fail(f"README's dependency table and scripts/setup differ: only in README {sorted(listed - full)}, "
+             f"only in setup {sorted(full - listed - {'pkg-config'})}")
+    print(f"setup: --runtime {len(runtime)} packages incl. python3-numpy; README table matches {len(full)} packages")
+
+
+CASES = {"setup_packages": setup_packages, "demo_then_test_configure": demo_then_test_configure, "no_tests_fails": no_tests_fails,
          "demo_profile_ci": demo_profile_ci}
 
 if __name__ == "__main__":
