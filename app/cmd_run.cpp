@@ -155,8 +155,9 @@ void prepare_run_folder(const std::string& dir) {
 
 // A run that ends before its devices open (GPIO, table or DUT unreachable, a bad device
 // section) still leaves passport.json, junit.xml, analysis.json and report.html, as every
-// ending does: outcome ERROR, every measurement UNSET, the reason in aborted_reason.
-void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p, const std::string& station,
+// ending does: outcome ERROR, every measurement UNSET, the reason in aborted_reason. It is
+// recorded in the history like any other run.
+void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
                                  const std::string& started, const std::string& reason, bool config_error,
                                  spdlog::logger& log) {
   MeasurementSet values;
@@ -169,18 +170,26 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   info.serial = a.serial;
   info.profile = p.name;
   info.plant = a.plant;
-  info.station = station;
+  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
   info.started = started;
   info.finished = iso8601_utc_now();
   info.software = std::string("rig ") + RIG_VERSION;
   info.out_dir = fs::absolute(a.out).string();
-  write_passport(a.out + "/passport.json", make_passport(info, res, values));
+  const auto passport = make_passport(info, res, values);
+  write_passport(a.out + "/passport.json", passport);
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
   write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(nlohmann::json::object()).dump(1));
   try {
     report::write_report(a.out);
   } catch (const std::exception& e) {
     log.error("report.html not written: {}", e.what());
+  }
+  if (!a.no_history) {
+    try {
+      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
+    } catch (const std::exception& e) {
+      log.error("history database not updated: {}", e.what());
+    }
   }
 }
 
@@ -236,11 +245,12 @@ int do_run(RunArgs a) {
                                                    : fmt::format(", the same in wall time"));
     return kExitPass;
   }
-  operator_prompts(a, p);
-
+  // The folder first: an operator should not answer the prompts of a run that cannot start.
   if (a.out.empty())
     a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, folder_time_utc());
   prepare_run_folder(a.out);
+  operator_prompts(a, p);
+
   if (a.resume.empty()) {
     if (fs::exists(Executive::checkpoint_path(a.out)))
       throw ConfigError(a.out + " holds an earlier run (checkpoint.json): use --resume " + a.out + " or another --out");
@@ -261,8 +271,7 @@ int do_run(RunArgs a) {
     b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(p, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
-    write_files_of_unopened_run(a, p, a.plant == "hardware" ? cfg_station(hw) : "emulated plant",
-                                invocation.value("started", iso8601_utc_now()), e.what(),
+    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),
                                 dynamic_cast<const ConfigError*>(&e) != nullptr, *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }

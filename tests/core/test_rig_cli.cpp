@@ -323,6 +323,11 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   EXPECT_NE(junit.find("<error message="), std::string::npos) << junit;
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
   EXPECT_NE(slurp(d + "/run/report.html").find("HW-1"), std::string::npos);
+  // Recorded like any other run (spawn() points RIG_HISTORY at d/io.history.sqlite).
+  const std::string db = d + "/io.history.sqlite";
+  ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
+  EXPECT_NE(slurp(d + "/list.stdout").find(",HW-1,ci,hardware,ERROR,bench-without-gpio,"), std::string::npos)
+      << slurp(d + "/list.stdout");
 }
 
 TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
