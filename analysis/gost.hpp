@@ -1,5 +1,5 @@
 // GOST R 8.736-2011 "direct multiple measurements": processing of the 100 s means
-// (bias, base error) and the in-run random component B by the (max - min)/2 rule (METHOD.md).
+// (bias, base error) and the in-run random component B by the (max - min)/2 rule (docs/method.md).
 #pragma once
 #include <cstddef>
 #include <span>
@@ -28,7 +28,7 @@ double grubbs_critical(std::size_t n, double significance = 0.05);
 std::vector<double> block_means(std::span<const double> x, std::size_t block_len);
 
 struct InRunB {
-  double value = 0;       // (max - min) / 2 of the block means (METHOD.md, procedure B)
+  double value = 0;       // (max - min) / 2 of the block means (docs/method.md, procedure B)
   std::size_t blocks = 0;
   double max_mean = 0, min_mean = 0;
 };

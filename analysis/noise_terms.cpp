@@ -238,7 +238,7 @@ WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_reco
     t.unit = kUnits[k];
     if (!(allowed & (1 << k))) {
       t.reason = std::string("not fitted: ") + kNames[k] + " needs a longer record (at least " +
-                 fmt(r_min_record_s / 3600) + " h, METHOD.md; this one is " + fmt(record_s / 3600) + " h)";
+                 fmt(r_min_record_s / 3600) + " h, docs/method.md; this one is " + fmt(record_s / 3600) + " h)";
       continue;
     }
     if (!(best_mask & (1 << k))) {
@@ -288,7 +288,7 @@ WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_reco
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
   NoiseTerms out;
   out.paper = paper_fit(oadev);
-  // R is not fitted on a record shorter than the method allows for it (METHOD.md: > 50 h): over
+  // R is not fitted on a record shorter than the method allows for it (docs/method.md: > 50 h): over
   // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
   // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
   // (then to be discarded by the 50 h rule anyway, leaving K null).

@@ -4,7 +4,7 @@
 //
 //   sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
 //
-// Two methods are reported side by side (METHOD.md, procedure C):
+// Two methods are reported side by side (docs/method.md, procedure C):
 //  (a) the paper's: a 4th-degree least-squares polynomial of log10 sigma over log10 tau, its
 //      inflection points, the segments between them with their slopes, sigma at each segment's
 //      middle tau, and B = sigma(tau_cp) / 0.664 on the flat one;
@@ -70,7 +70,7 @@ struct NoiseTerms {
 // sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C).
 inline constexpr double kBiasFactor = 0.66428001915095;
 
-// The shortest record from which the method determines the rate ramp R (METHOD.md: > 50 h);
+// The shortest record from which the method determines the rate ramp R (docs/method.md: > 50 h);
 // on a shorter record R is not part of the weighted fit.
 inline constexpr double kRMinRecordS = 50 * 3600.0;
 

@@ -1,4 +1,4 @@
-// The RMS error, criterion 1 of the output filter (METHOD.md "Spectral analysis and the
+// The RMS error, criterion 1 of the output filter (docs/method.md "Spectral analysis and the
 // output filter"). The filter itself (response, design, W_f(z), criterion 2) is design/filter.hpp.
 #pragma once
 #include <span>

@@ -34,7 +34,10 @@ struct Backends {
   Devices devices();
 };
 
-Backends make_emulated(const acceptance::Profile& p);
+// `serial` (rig run --serial), when given, becomes the emulated DUT's serial: in emulation
+// the operator names the DUT (CI jobs label passports that way), while on hardware the
+// DUT's own serial is checked against it.
+Backends make_emulated(const acceptance::Profile& p, const std::string& serial = {});
 
 // The hardware file (docs/hardware-config.md): [table] (Modbus), [dut] (CAN),
 // [gpio] (libgpiod), optional [procedure] u10_deg/u20_deg overriding the

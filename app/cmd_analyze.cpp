@@ -1,5 +1,5 @@
 // `rig analyze FILE`: overlapping Allan deviation with confidence bounds, noise terms (the
-// paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per CONTRACTS.md,
+// paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per docs/contracts.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -332,7 +332,7 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_flag("--no-bounds", args->no_bounds, "skip noise identification and bounds");
   sub->add_flag("--no-psd", args->no_psd, "skip the PSD (Allan part only)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");
-  sub->add_option("--json", args->json_out, "write the analysis as JSON (CONTRACTS.md shape)");
+  sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");
   sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
   sub->add_option("--segment", args->segment, "PSD segment length (default: auto)");

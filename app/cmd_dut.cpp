@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "design/filter.hpp"
+#include "firmware_link/candump_log.hpp"
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
 #include "app/commands.hpp"
@@ -139,7 +140,7 @@ int cmd_set_filter(const DutArgs& a) {
   FilterConfig f;
   f.rate_hz = a.rate_hz;
   f.enabled = !a.off;
-  if (a.paper) f.sections = design::paper_wf().sections;  // METHOD.md, W_f(z)
+  if (a.paper) f.sections = design::paper_wf().sections;  // docs/method.md, W_f(z)
   for (const auto& b : a.biquads) f.sections.push_back(parse_biquad(b));
   if (f.sections.empty()) throw ConfigError("rig dut set-filter: give --paper or at least one --biquad b0,b1,b2,a1,a2");
   RealClock clock;
@@ -158,44 +159,61 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
   return kExitPass;
 }
 
+// Decodes every frame it can; a line it cannot read (not a frame, CAN FD, truncated) or a
+// frame of a protocol message it cannot decode (too short for its DLC) is skipped, counted
+// and named LOG:LINE on stderr. Exit 0: every line decoded; 2: some line was skipped or the
+// log holds no frame at all (the decodable rest is still printed).
 int cmd_decode(const DutArgs& a) {
   const link::Dbc dbc = link::Dbc::parse_file(a.dbc);
   std::ifstream in(a.log);
   if (!in) throw ConfigError(a.log + ": cannot open candump log");
+  constexpr unsigned long kNamedSkips = 20;  // then only counted: a wrong file must not flood the terminal
   std::map<std::string, unsigned long> per;
-  unsigned long frames = 0, foreign = 0, errors = 0;
-  std::string line;
-  for (int ln = 1; std::getline(in, line); ++ln) {
-    const auto lf = link::parse_candump_line(line);
-    if (!lf) continue;
+  unsigned long frames = 0, foreign = 0, errors = 0, skipped = 0;
+  auto skip = [&](std::size_t line, const std::string& why) {
+    if (++skipped <= kNamedSkips) std::fprintf(stderr, "%s:%zu: skipped: %s\n", a.log.c_str(), line, why.c_str());
+  };
+  link::CandumpLogReader reader(in);
+  link::CandumpLogReader::Entry e;
+  while (reader.next(e)) {
+    if (e.parsed.kind != link::LogLineKind::Frame) {
+      skip(e.line, e.parsed.problem);
+      continue;
+    }
+    const link::LoggedFrame& lf = e.parsed.frame;
     ++frames;
-    if (lf->frame.error) {
+    if (lf.frame.error) {
       ++errors;
-      if (!a.summary) std::printf("%.6f %s error frame: %s\n", lf->t_s, lf->iface.c_str(),
-                                  link::classify_error_frame(lf->frame).text.c_str());
+      if (!a.summary) std::printf("%.6f %s error frame: %s\n", lf.t_s, lf.iface.c_str(),
+                                  link::classify_error_frame(lf.frame).text.c_str());
       continue;
     }
     std::string err;
-    const auto sig = dbc.decode(lf->frame, &err);
+    const auto sig = dbc.decode(lf.frame, &err);
     if (!sig) {
-      if (!err.empty()) throw ConfigError(a.log + ":" + std::to_string(ln) + ": " + err + " (" + a.dbc + ")");
-      ++foreign;
+      if (err.empty()) ++foreign;  // an id the DBC does not describe: counted, not an error
+      else skip(e.line, err + " (" + a.dbc + ")");
       continue;
     }
-    const std::string& name = dbc.find(lf->frame.id)->name;
+    const std::string& name = dbc.find(lf.frame.id)->name;
     ++per[name];
     if (a.summary) continue;
-    std::printf("%.6f %s %s", lf->t_s, lf->iface.c_str(), name.c_str());
+    std::printf("%.6f %s %s", lf.t_s, lf.iface.c_str(), name.c_str());
     for (const auto& s : *sig) {
       if (s.value_name.empty()) std::printf(" %s=%.9g%s%s", s.name.c_str(), s.value, s.unit.empty() ? "" : " ", s.unit.c_str());
       else std::printf(" %s=%s", s.name.c_str(), s.value_name.c_str());
     }
     std::printf("\n");
   }
+  if (skipped > kNamedSkips) std::fprintf(stderr, "%s: ... and %lu more skipped line(s)\n", a.log.c_str(), skipped - kNamedSkips);
   std::printf("%s: %lu frames: ", a.log.c_str(), frames);
   for (const auto& [k, n] : per) std::printf("%s %lu, ", k.c_str(), n);
-  std::printf("error frames %lu, other ids %lu\n", errors, foreign);
-  return kExitPass;
+  std::printf("error frames %lu, other ids %lu, skipped lines %lu\n", errors, foreign, skipped);
+  if (frames == 0 && skipped == 0) {
+    std::fprintf(stderr, "rig: %s holds no CAN frame\n", a.log.c_str());
+    return kExitUsage;
+  }
+  return skipped ? kExitUsage : kExitPass;
 }
 
 void add_link_options(CLI::App* c, DutArgs& a) {
@@ -237,7 +255,8 @@ void add_dut(CLI::App& app, int& rc) {
   add_link_options(off, *a);
   off->callback([a, &rc] { rc = cmd_filter_enable(*a, false); });
 
-  auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -L / -l) with the protocol's DBC");
+  auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -l / -L files or candump's screen output) with the protocol's DBC; "
+                                     "exit 2 when a line had to be skipped");
   dec->add_option("LOG", a->log, "candump log file")->required();
   dec->add_option("--dbc", a->dbc, "DBC file")->capture_default_str();
   dec->add_flag("--summary", a->summary, "Only count the messages");

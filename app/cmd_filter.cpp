@@ -1,4 +1,4 @@
-// `rig filter`: the output filter W_f(z) judged by the paper's two criteria (METHOD.md):
+// `rig filter`: the output filter W_f(z) judged by the paper's two criteria (docs/method.md):
 //   rig filter select --f-req 500   ranks Butterworth orders 1-4 over a range of cut-offs and
 //                                   the paper's W_f(z): bandwidth (0.5 level) -> f_req and
 //                                   settling time -> min from the DUT's closed-loop model,

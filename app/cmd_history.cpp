@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -13,6 +14,7 @@
 
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
 
 namespace rig::cli {
@@ -194,9 +196,17 @@ void add_history(CLI::App& app, int& rc) {
   sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit");
   sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
   sub->callback([&rc, a] {
-    if (a->db.empty()) a->db = history::default_db_url();
+    const bool db_given = !a->db.empty();
+    if (!db_given) a->db = history::default_db_url();
     if (!a->record.empty()) {
       record(*a);
+      rc = kExitPass;
+      return;
+    }
+    // Reading never creates a database. A --db that names no file is a mistake (exit 2, from
+    // the reader); the default database merely does not exist until the first run records.
+    if (const auto path = history::sqlite_path(a->db); !db_given && path && !std::filesystem::exists(*path)) {
+      std::cout << "no runs recorded yet (" << a->db << " does not exist)\n";
       rc = kExitPass;
       return;
     }

@@ -1,7 +1,8 @@
 // `rig run`: the acceptance procedure, end to end, with a run folder holding
 // the captures, checkpoint, passport.json, junit.xml, analysis.json,
-// report.html and run.log. Exit codes per CONTRACTS.md.
+// report.html and run.log. Exit codes per docs/contracts.md.
 #include <chrono>
+#include <ctime>
 #include <signal.h>
 #include <unistd.h>
 
@@ -128,6 +129,70 @@ std::string history_url(const RunArgs& a, const toml::table& hw) {
   return history::default_db_url();
 }
 
+// The default run folder's time stamp: ISO 8601 basic time, UTC, e.g. 2026-11-23T205900Z.
+// No colons, so a run folder copies to FAT and Windows shares; still sorts by time.
+std::string folder_time_utc() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  ::gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H%M%SZ", &tm);
+  return buf;
+}
+
+// The run folder must be creatable and writable before any device opens: a bad --out is
+// the operator's configuration (exit 2), not a fault of the rig (exit 4).
+void prepare_run_folder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw ConfigError("--out " + dir + ": cannot create the run folder: " + ec.message());
+  const std::string probe = dir + "/.rig-write-check-" + std::to_string(::getpid());
+  std::ofstream(probe) << "rig\n";
+  const bool writable = fs::file_size(probe, ec) == 4 && !ec;
+  fs::remove(probe, ec);
+  if (!writable) throw ConfigError("--out " + dir + ": the run folder is not writable");
+}
+
+// A run that ends before its devices open (GPIO, table or DUT unreachable, a bad device
+// section) still leaves passport.json, junit.xml, analysis.json and report.html, as every
+// ending does: outcome ERROR, every measurement UNSET, the reason in aborted_reason. It is
+// recorded in the history like any other run.
+void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
+                                 const std::string& started, const std::string& reason, bool config_error,
+                                 spdlog::logger& log) {
+  MeasurementSet values;
+  acceptance::declare_values(p, values);
+  RunResult res;
+  res.outcome = RunOutcome::Error;
+  res.message = reason;
+  res.config_error = config_error;
+  PassportInfo info;
+  info.serial = a.serial;
+  info.profile = p.name;
+  info.plant = a.plant;
+  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
+  info.started = started;
+  info.finished = iso8601_utc_now();
+  info.software = std::string("rig ") + RIG_VERSION;
+  info.out_dir = fs::absolute(a.out).string();
+  const auto passport = make_passport(info, res, values);
+  write_passport(a.out + "/passport.json", passport);
+  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
+  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(nlohmann::json::object()).dump(1));
+  try {
+    report::write_report(a.out);
+  } catch (const std::exception& e) {
+    log.error("report.html not written: {}", e.what());
+  }
+  if (!a.no_history) {
+    try {
+      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
+    } catch (const std::exception& e) {
+      log.error("history database not updated: {}", e.what());
+    }
+  }
+}
+
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
   auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
   file->set_level(spdlog::level::debug);
@@ -180,11 +245,12 @@ int do_run(RunArgs a) {
                                                    : fmt::format(", the same in wall time"));
     return kExitPass;
   }
+  // The folder first: an operator should not answer the prompts of a run that cannot start.
+  if (a.out.empty())
+    a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, folder_time_utc());
+  prepare_run_folder(a.out);
   operator_prompts(a, p);
 
-  if (a.out.empty())
-    a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, iso8601_utc_now());
-  fs::create_directories(a.out);
   if (a.resume.empty()) {
     if (fs::exists(Executive::checkpoint_path(a.out)))
       throw ConfigError(a.out + " holds an earlier run (checkpoint.json): use --resume " + a.out + " or another --out");
@@ -200,7 +266,15 @@ int do_run(RunArgs a) {
   auto log = make_logger(a.out, a.quiet);
   log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
 
-  Backends b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(p);
+  Backends b;
+  try {
+    b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(p, a.serial);
+  } catch (const std::exception& e) {
+    log->error("devices not opened: {}", e.what());
+    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),
+                                dynamic_cast<const ConfigError*>(&e) != nullptr, *log);
+    throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
+  }
   if (b.emulated) apply_injections(*b.emulated, a.inject);
   else if (!a.inject.empty()) throw ConfigError("--inject works with the emulated plant only");
   Devices dev = b.devices();
@@ -278,8 +352,9 @@ void add_run(CLI::App& app, int& rc) {
       ->check(CLI::ExistingFile)
       ->excludes(plant);
   sub->add_option("--profile", a->profile, "Profile: paper, ci or a TOML file")->capture_default_str();
-  sub->add_option("--serial", a->serial, "Expected DUT serial number (the DUT must report it)");
-  sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<time>)");
+  sub->add_option("--serial", a->serial,
+                  "DUT serial number: on hardware the DUT must report it; the emulated DUT takes it");
+  sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<YYYY-MM-DDTHHMMSSZ>, UTC)");
   sub->add_option("--resume", a->resume, "Continue the run in this folder after its last completed phase")
       ->check(CLI::ExistingDirectory);
   sub->add_flag("--yes,-y", a->yes, "Skip operator confirmations (automated runs)");

@@ -1,4 +1,4 @@
-// The `rig` command line: one subcommand per job (CONTRACTS.md).
+// The `rig` command line: one subcommand per job (docs/contracts.md).
 #include <iostream>
 
 #include <CLI/CLI.hpp>

@@ -1,4 +1,4 @@
-// The output filter W_f(z) (METHOD.md "Spectral analysis and the output filter"), written
+// The output filter W_f(z) (docs/method.md "Spectral analysis and the output filter"), written
 // once: the direct-form-II-transposed step every user runs (this module, the emulated DUT's
 // output filter and noise shaping, the loop model's regulator), frequency response, a cascade
 // run over a sequence, Butterworth design, the paper's W_f(z), and the figures of the paper's
@@ -35,10 +35,10 @@ std::vector<double> apply_filter(const FilterConfig& f, std::span<const double> 
 // Butterworth low-pass of order 1..4 (bilinear transform, cut-off prewarped so that
 // |H(fc)| = 1/sqrt(2) exactly). Throws std::invalid_argument for a bad order or fc >= rate/2.
 FilterConfig butterworth_lowpass(int order, double fc_hz, double rate_hz);
-// The paper's W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156), at 10 kHz (METHOD.md).
+// The paper's W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156), at 10 kHz (docs/method.md).
 FilterConfig paper_wf();
 
-// Criterion 2 (METHOD.md): bandwidth at the 0.5 level -> f_req, settling time t_рег -> min.
+// Criterion 2 (docs/method.md): bandwidth at the 0.5 level -> f_req, settling time t_рег -> min.
 // METHOD does not fix the settling band; the convention here is 5 % of the final value, the
 // usual engineering band for t_рег (Besekersky & Popov) and the one the passport has always
 // reported. It is the band at which the paper's "about 0.003 s, with and without the filter"

@@ -1,5 +1,5 @@
 // Closed-loop figures of the DUT with a given output filter, from the loop model (the
-// paper's criterion 2, METHOD.md): bandwidth at the 0.5 level and settling time of a 1 g step.
+// paper's criterion 2, docs/method.md): bandwidth at the 0.5 level and settling time of a 1 g step.
 #pragma once
 #include <vector>
 

@@ -1,4 +1,4 @@
-// The DUT's closed loop (METHOD.md Fig. 3): pendulum W_m(s) with pendulosity ml,
+// The DUT's closed loop (docs/method.md Fig. 3): pendulum W_m(s) with pendulosity ml,
 // angle sensor K_ду, preamplifier K_пу, ADC, digital regulator W_рег(z), PWM K_шим,
 // torquer K_дм. The continuous part (pendulum + torquer coil) is discretised
 // exactly for the zero-order-held PWM current by the matrix exponential.

@@ -1,4 +1,4 @@
-// The DUT's closed loop as designed (METHOD.md Fig. 3): the analogue pendulum, its pick-off
+// The DUT's closed loop as designed (docs/method.md Fig. 3): the analogue pendulum, its pick-off
 // and torquer, and the digital regulator around it. The loop model (design/loop_model.hpp)
 // is built from these; the emulated DUT's profile ([plant.dut.loop], [plant.dut.regulator])
 // fills them.

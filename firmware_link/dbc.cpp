@@ -191,40 +191,4 @@ std::optional<std::vector<DecodedSignal>> Dbc::decode(const CanFrame& f, std::st
   return out;
 }
 
-std::optional<LoggedFrame> parse_candump_line(const std::string& line) {
-  // (timestamp) iface ID#DATA   |   ID#DATA
-  static const std::regex full(R"(^\s*\((\d+\.\d+)\)\s+(\S+)\s+([0-9A-Fa-f]{3}|[0-9A-Fa-f]{8})#(R?)([0-9A-Fa-f]*)\s*$)");
-  static const std::regex bare(R"(^\s*([0-9A-Fa-f]{3}|[0-9A-Fa-f]{8})#(R?)([0-9A-Fa-f]*)\s*$)");
-  std::smatch m;
-  LoggedFrame lf;
-  std::string id, rtr, data;
-  if (std::regex_match(line, m, full)) {
-    lf.t_s = std::stod(m[1]);
-    lf.iface = m[2];
-    id = m[3];
-    rtr = m[4];
-    data = m[5];
-  } else if (std::regex_match(line, m, bare)) {
-    id = m[1];
-    rtr = m[2];
-    data = m[3];
-  } else {
-    return std::nullopt;
-  }
-  if (data.size() % 2 || data.size() > 16) return std::nullopt;
-  lf.frame.extended = id.size() == 8;
-  lf.frame.id = static_cast<uint32_t>(std::stoul(id, nullptr, 16));
-  lf.frame.rtr = !rtr.empty();
-  if (!lf.frame.extended && (lf.frame.id & 0x20000000u)) return std::nullopt;
-  if (lf.frame.extended && (lf.frame.id & 0x20000000u)) {  // candump shows error frames as 2000xxxx
-    lf.frame.error = true;
-    lf.frame.extended = false;
-    lf.frame.id &= 0x1FFFFFFFu;
-  }
-  lf.frame.len = static_cast<uint8_t>(data.size() / 2);
-  for (std::size_t i = 0; i < lf.frame.len; ++i)
-    lf.frame.data[i] = static_cast<uint8_t>(std::stoul(data.substr(2 * i, 2), nullptr, 16));
-  return lf;
-}
-
 }  // namespace rig::link

@@ -63,13 +63,6 @@ class Dbc {
 uint64_t dbc_extract_raw(const CanFrame& f, int start, int length);
 double dbc_physical(const DbcSignal& s, const CanFrame& f);
 
-// One line of a candump log: "(1700000000.123456) vcan0 010#0102..." (candump -l / -L)
-// or a bare "010#0102...". nullopt for a line that is not a frame.
-struct LoggedFrame {
-  double t_s = 0;
-  std::string iface;
-  CanFrame frame;
-};
-std::optional<LoggedFrame> parse_candump_line(const std::string& line);
+// Reading candump logs (LoggedFrame, parse_candump_line) is firmware_link/candump_log.hpp.
 
 }  // namespace rig::link

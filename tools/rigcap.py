@@ -2,7 +2,7 @@
 """Load a rig capture file (docs/capture-format.md) into NumPy.
 
     from rigcap import load
-    header, data, report = load("runs/SN-1/captures/raw-U10.cap")
+    header, data, report = load("runs/demo-2026-11-23T205900Z/captures/raw-U10.cap")  # scripts/demo prints its folder
     x = data["x"]            # float32, g (unfiltered output)
     y = data["y"]            # float32, g (filtered output)
     seq, status = data["seq"], data["status"]

@@ -1,5 +1,5 @@
 // Figures for docs/table-registers.md:
-//   build-C/bin/bench_table --benchmark_min_time=1
+//   build/bin/bench_table --benchmark_min_time=1
 // - a status read (25 registers) over loopback TCP and over an RTU pty pair
 //   (socat; a pty does not pace bytes at the baud rate, so this is the software cost),
 // - a 180° move of the in-process emulated table under a SimClock (wall cost per move),

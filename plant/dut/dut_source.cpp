@@ -1,4 +1,4 @@
-// The emulated DUT (issue 4): closed loop of METHOD.md Fig. 3 with its noise
+// The emulated DUT (issue 4): closed loop of docs/method.md Fig. 3 with its noise
 // sources, behind the DutSource seam.
 #include <cmath>
 #include <numbers>
@@ -8,7 +8,7 @@
 namespace rig::plant {
 
 namespace {
-constexpr std::array<double, 5> kBurstHz = {265, 316, 470, 627, 697};  // METHOD.md, PSD bursts
+constexpr std::array<double, 5> kBurstHz = {265, 316, 470, 627, 697};  // docs/method.md, PSD bursts
 }
 
 EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.loop, p.regulator) {

@@ -1,4 +1,4 @@
-// Model-based choice of the output filter W_f(z) (METHOD.md, the paper's two criteria):
+// Model-based choice of the output filter W_f(z) (docs/method.md, the paper's two criteria):
 //  1. RMS error of the output -> min, on emulated output (or a recording at the loop rate);
 //  2. closed-loop bandwidth at the 0.5 level -> f_req and settling time -> min, from the
 //     DUT's closed-loop model with that filter (loop_figures).

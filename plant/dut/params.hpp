@@ -1,4 +1,4 @@
-// Physical parameters of the emulated quartz pendulum accelerometer (METHOD.md
+// Physical parameters of the emulated quartz pendulum accelerometer (docs/method.md
 // Fig. 3): its loop and regulator as designed (design/loop_params.hpp), its noise
 // sources and its geometry on the table. Loaded from the default DUT profile
 // (plant/dut/default.toml, compiled in) with a profile's [plant.dut] overrides.

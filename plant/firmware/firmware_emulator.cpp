@@ -13,7 +13,7 @@ using link::Result;
 
 namespace {
 constexpr int64_t kTickNs = 1'000'000;  // 1 kHz output period
-constexpr double kRangeG = 10.0;        // METHOD.md: range +-10 g
+constexpr double kRangeG = 10.0;        // docs/method.md: range +-10 g
 
 bool stable_section(const Biquad& b) {
   // Poles of 1 + a1 z^-1 + a2 z^-2 strictly inside the unit circle (the stability triangle).

@@ -37,7 +37,7 @@ capture::Loaded load_capture(PhaseContext& ctx, const std::string& rel) {
   return l;
 }
 
-// The drift g_dr(t) = x(t) - g_sist -+ g_dA (METHOD.md, after (4)) of a capture at orientation o.
+// The drift g_dr(t) = x(t) - g_sist -+ g_dA (docs/method.md, after (4)) of a capture at orientation o.
 std::vector<double> drift(const std::vector<double>& x, const nlohmann::json& state, Orientation o) {
   std::vector<double> d(x);
   if (!state.contains("bias")) return d;  // bias phase not run: the offset does not change Allan/B/PSD
@@ -128,7 +128,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("in_run_b_allan", nt.B, 1.0, "sigma(tau_cp)/0.664 on the flat segment (paper's method)");
     if (nt.tau_cp_s) ctx.values.set("tau_cp", *nt.tau_cp_s, "middle of the flat segment");
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
-    // IEEE 952 terms quoted per hour (METHOD.md): Q g*s -> g*h, N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
+    // IEEE 952 terms quoted per hour (docs/method.md): Q g*s -> g*h, N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
     term_value("q", nt.Q, 1.0 / 3600.0, "");
     term_value("n", nt.N, 1.0 / 60.0, "");
     term_value("k", nt.K, 60.0, "");

@@ -1,4 +1,4 @@
-// The U10/U20 acceptance procedure of METHOD.md as executive phases:
+// The U10/U20 acceptance procedure of docs/method.md as executive phases:
 //   bring-up  power the DUT, identify it, configure the output filter, home the table
 //   runNN-Uxx 12 runs of run_s each, alternating orientation (procedure A)
 //   bias      formulas (3), (4) with the sign rule, GOST R 8.736 statistics
@@ -28,7 +28,7 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt);
 
 std::vector<Phase> build_phases(const Profile& p);
 
-// Formulas (3), (4) of METHOD.md with the sign rule: g_dA enters (1) with +
+// Formulas (3), (4) of docs/method.md with the sign rule: g_dA enters (1) with +
 // when mean(x10) > mean(x20). Exposed for tests.
 struct BiasBaseError {
   double bias = 0;        // g_sist, formula (3)

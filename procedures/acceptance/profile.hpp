@@ -50,7 +50,7 @@ struct Profile {
   // [analysis]
   std::string taus = "log:100";
   double confidence = 0.6826894921370859;  // one sigma, erf(1/sqrt 2)
-  // Rate ramp R needs a record of more than 50 h (METHOD.md); shorter captures report it null.
+  // Rate ramp R needs a record of more than 50 h (docs/method.md); shorter captures report it null.
   double r_min_record_s = 50 * 3600.0;
 
   std::map<std::string, std::pair<double, double>> limits;  // [limits]

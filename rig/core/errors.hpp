@@ -1,4 +1,4 @@
-// Error types: each maps to one of the documented exit codes (CONTRACTS.md).
+// Error types: each maps to one of the documented exit codes (docs/contracts.md).
 #pragma once
 #include <stdexcept>
 #include <string>

@@ -1,4 +1,4 @@
-// The run's outputs for people and machines: passport.json (CONTRACTS.md
+// The run's outputs for people and machines: passport.json (docs/contracts.md
 // shape, rig.passport/1) and junit.xml (one testcase per measurement).
 #pragma once
 #include <string>

@@ -56,16 +56,20 @@ namespace {
 // ---------------------------------------------------------------- SQLite
 class SqliteDb final : public Db {
  public:
-  explicit SqliteDb(const std::string& path) {
+  SqliteDb(const std::string& path, Access access) {
     where_ = "sqlite:" + path;
     const std::filesystem::path p(path);
-    if (p.has_parent_path()) {
+    if (access == Access::ReadOnly) {
+      if (!std::filesystem::exists(p))
+        throw ConfigError(where_ + ": no such history database (reading never creates one; check --db or "
+                                   "$RIG_HISTORY)");
+    } else if (p.has_parent_path()) {
       std::error_code ec;
       std::filesystem::create_directories(p.parent_path(), ec);
       if (ec) throw ConfigError(where_ + ": cannot create folder " + p.parent_path().string() + ": " + ec.message());
     }
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
-                        nullptr) != SQLITE_OK) {
+    const int mode = access == Access::ReadOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    if (sqlite3_open_v2(path.c_str(), &db_, mode | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
       std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
       sqlite3_close(db_);
       db_ = nullptr;
@@ -230,8 +234,8 @@ class PgDb final : public Db {
 
 }  // namespace
 
-std::unique_ptr<Db> open_db(const std::string& url) {
-  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::make_unique<PgDb>(url);
+std::optional<std::string> sqlite_path(const std::string& url) {
+  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::nullopt;
   std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
   if (path.rfind("//", 0) == 0) path = path.substr(2);  // sqlite:///abs/path
   if (path.empty()) throw ConfigError("history database URL '" + url + "' names no file");
@@ -240,7 +244,13 @@ std::unique_ptr<Db> open_db(const std::string& url) {
   if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
     throw ConfigError("history database URL '" + mask_password(url) +
                       "': unknown scheme (expected sqlite:PATH, a path, or postgresql://...)");
-  return std::make_unique<SqliteDb>(path);
+  return path;
+}
+
+std::unique_ptr<Db> open_db(const std::string& url, Access access) {
+  // PostgreSQL: the server's database exists or the connection fails; nothing is created by opening.
+  if (const auto path = sqlite_path(url)) return std::make_unique<SqliteDb>(*path, access);
+  return std::make_unique<PgDb>(url);
 }
 
 }  // namespace rig::history

@@ -50,9 +50,18 @@ class Db {
   std::string where_;
 };
 
+// How a database is opened. Reading commands use ReadOnly: they never create a database
+// (a mistyped path must not leave an empty one behind) nor change one.
+enum class Access { ReadWrite, ReadOnly };
+
 // Opens `url` ("sqlite:PATH", a plain path, "postgresql://...", "postgres://...").
-// SQLite files and their folder are created when missing. Throws rig::ConfigError.
-std::unique_ptr<Db> open_db(const std::string& url);
+// ReadWrite: SQLite files and their folder are created when missing. ReadOnly: a missing
+// SQLite file is an error and the file is opened read-only (SQLITE_OPEN_READONLY).
+// Throws rig::ConfigError.
+std::unique_ptr<Db> open_db(const std::string& url, Access access = Access::ReadWrite);
+
+// The file of an SQLite URL (nullopt for PostgreSQL); throws rig::ConfigError on a bad URL.
+std::optional<std::string> sqlite_path(const std::string& url);
 
 // Keeps a transaction open until commit(); rolls back if destroyed before.
 class Transaction {

@@ -106,6 +106,17 @@ std::unique_ptr<Db> open_migrated(const std::string& url) {
   return db;
 }
 
+// Reading commands never create a database: the SQLite file must exist and is opened
+// read-only. Only a database of an older schema is reopened for writing, to migrate it.
+std::unique_ptr<Db> open_for_reading(const std::string& url) {
+  auto db = open_db(url, Access::ReadOnly);
+  const int found = schema_version(*db);
+  if (found == current_schema_version()) return db;
+  if (found == 0) throw ConfigError(db->where() + ": not a rig history database (no schema_version table)");
+  db.reset();
+  return open_migrated(url);  // older: migrated; newer: refused with the version found
+}
+
 // ------------------------------------------------------------------ passport -> rows
 Value opt_number(const json& j, const char* key) {
   if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return std::monostate{};
@@ -216,7 +227,7 @@ long long record_run(const std::string& db_url, const json& passport, const std:
 }
 
 std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
-  auto db = open_migrated(db_url);
+  auto db = open_for_reading(db_url);
   std::vector<Value> params;
   const std::string w = where_clause(f, params);
   const std::string select =
@@ -252,7 +263,7 @@ std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
 }
 
 std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_name, const Filter& f) {
-  auto db = open_migrated(db_url);
+  auto db = open_for_reading(db_url);
   std::vector<Value> params;
   const std::string w = where_clause(f, params) + " AND v.name = ?";
   params.emplace_back(value_name);
@@ -280,7 +291,7 @@ std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_
 }
 
 std::vector<std::string> value_names(const std::string& db_url) {
-  auto db = open_migrated(db_url);
+  auto db = open_for_reading(db_url);
   std::vector<std::string> out;
   for (const Row& r : db->query("SELECT DISTINCT name FROM run_values ORDER BY name")) out.push_back(as_text(r[0]));
   return out;

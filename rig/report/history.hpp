@@ -46,6 +46,8 @@ struct ValueRow {
   std::string unit, value_outcome, reason;
 };
 
+// The reading functions below open the database read-only and never create one: a
+// missing SQLite file is a rig::ConfigError naming it.
 // Runs matching `f`, oldest first.
 std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f);
 // One measurement across the runs matching `f`, oldest first (the trend).

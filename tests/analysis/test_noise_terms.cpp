@@ -125,7 +125,7 @@ TEST(NoiseTerms, ModelErrorKeepsTheShortTausFromDecidingTheTerms) {
 }
 
 TEST(NoiseTerms, RateRampIsNotFittedOnAShortRecord) {
-  // One hour: a rise at the long taus is K (R needs > 50 h, METHOD.md); R is not a candidate,
+  // One hour: a rise at the long taus is K (R needs > 50 h, docs/method.md); R is not a candidate,
   // so it cannot take K's share of the rise, and says why.
   const auto pts = curve(0, kN, kB, 2 * kK, 0, 0.001, 900, 100);
   const NoiseTerms t = noise_terms(pts, 3600);

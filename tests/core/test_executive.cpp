@@ -170,6 +170,27 @@ TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {
   EXPECT_FALSE(f.world->io().dut_power());
 }
 
+// On hardware `rig run --serial SN` checks the serial the DUT reports (in emulation the
+// emulated DUT is given SN instead, RigCli.EmulatedDutTakesTheSerialGiven...). The check is
+// the procedure's bring-up, the same code on either plant: here the emulated DUT keeps its
+// own serial, as a real one does.
+TEST(Executive, BringUpRejectsADutReportingAnotherSerial) {
+  const auto prof = acceptance::load_profile("ci");
+  Fixture f("serial");
+  Devices d = f.dev();
+  Executive ex(d, f.out, f.log, nullptr);
+  acceptance::RunOptions ro;
+  ro.expected_serial = "NOT-THIS-ONE";
+  MeasurementSet v;
+  nlohmann::json st = nlohmann::json::object();
+  const auto r = ex.run([&](PhaseContext& c) { acceptance::bring_up(c, prof, ro); }, {}, v, st, CancelToken{}, false, {});
+  EXPECT_EQ(r.outcome, RunOutcome::Error);
+  EXPECT_EQ(r.exit_code(), kExitUsage);
+  EXPECT_NE(r.message.find("EMU-QPA-0001"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("NOT-THIS-ONE"), std::string::npos) << r.message;
+  EXPECT_FALSE(f.world->io().dut_power()) << "the safe state follows the refusal";
+}
+
 TEST(Executive, CaptureGapBeyondTheLimitIsRetriedThenFailsThePhase) {
   auto prof = acceptance::load_profile("ci");
   prof.retries = 1;

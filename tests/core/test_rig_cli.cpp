@@ -258,13 +258,117 @@ TEST(RigCli, EstopEndsTheRunWithExit3) {
   EXPECT_NE(p["aborted_reason"].get<std::string>().find("e-stop"), std::string::npos);
 }
 
-TEST(RigCli, WrongSerialIsAConfigurationError) {
+// In emulation the operator names the DUT: the emulated DUT takes --serial (CI jobs label
+// passports that way). The check that a real DUT reports the serial given is
+// Executive.BringUpRejectsADutReportingAnotherSerial (test_executive.cpp).
+TEST(RigCli, EmulatedDutTakesTheSerialGivenAndTheDefaultFolderHasNoColons) {
   const std::string d = tmp("serial");
   fs::create_directories(d);
-  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--serial", "NOT-THIS-ONE"}, d + "/io"), 2);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d);  // the default run folder is runs/... under the working directory
+  const int rc = run({"run", "--profile", "ci", "--yes", "--serial", "CI-0042"}, d + "/io");
+  fs::current_path(cwd);
+  EXPECT_EQ(rc, 0) << slurp(d + "/io.stderr");
+  std::vector<std::string> folders;
+  for (const auto& e : fs::directory_iterator(d + "/runs")) folders.push_back(e.path().filename().string());
+  ASSERT_EQ(folders.size(), 1u);
+  const std::string& f = folders[0];
+  EXPECT_EQ(f.find(':'), std::string::npos) << f << ": a colon cannot be copied to FAT or a Windows share";
+  // runs/<serial>-YYYY-MM-DDTHHMMSSZ: sortable by time, UTC
+  ASSERT_EQ(f.size(), std::string("CI-0042-2026-11-23T205900Z").size()) << f;
+  EXPECT_EQ(f.substr(0, 8), "CI-0042-");
+  EXPECT_EQ(f[12], '-');
+  EXPECT_EQ(f[18], 'T');
+  EXPECT_EQ(f.back(), 'Z');
+  const auto p = nlohmann::json::parse(slurp(d + "/runs/" + f + "/passport.json"));
+  EXPECT_EQ(p["serial"], "CI-0042");
+  EXPECT_EQ(p["outcome"], "PASS");
+}
+
+TEST(RigCli, UnwritableOutIsAConfigurationErrorNamingTheFolder) {
+  const std::string d = tmp("badout");
+  fs::create_directories(d);
+  std::ofstream(d + "/a-file") << "not a folder\n";  // fails for root too, unlike permissions
+  const std::string out = d + "/a-file/run";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", out}, d + "/io"), 2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find("configuration error: --out " + out + ": cannot create the run folder"), std::string::npos) << err;
+  EXPECT_EQ(err.find("safe state"), std::string::npos) << "no device may open before --out is checked:\n" << err;
+}
+
+// A hardware run whose GPIO chip does not exist ends before any device opens (exit 4), and
+// still leaves the files the README promises for every ending.
+TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
+  const std::string d = tmp("nogpio");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << "[rig]\nname = \"bench-without-gpio\"\n"
+                                   "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "HW-1", "--out",
+                 d + "/run"},
+                d + "/io"),
+            4)
+      << slurp(d + "/io.stderr");
+  ASSERT_TRUE(fs::exists(d + "/run/passport.json")) << slurp(d + "/io.stderr");
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "ERROR");
-  EXPECT_NE(p["aborted_reason"].get<std::string>().find("NOT-THIS-ONE"), std::string::npos);
+  EXPECT_EQ(p["plant"], "hardware");
+  EXPECT_EQ(p["serial"], "HW-1");
+  EXPECT_EQ(p["station"], "bench-without-gpio");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("rig-no-such-gpiochip"), std::string::npos) << p.dump(1);
+  for (const char* name : kContractValues) EXPECT_EQ(p["values"][name]["outcome"], "UNSET") << name;
+  const std::string junit = slurp(d + "/run/junit.xml");
+  EXPECT_NE(junit.find("<error message="), std::string::npos) << junit;
+  EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
+  EXPECT_NE(slurp(d + "/run/report.html").find("HW-1"), std::string::npos);
+  // Recorded like any other run (spawn() points RIG_HISTORY at d/io.history.sqlite).
+  const std::string db = d + "/io.history.sqlite";
+  ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
+  EXPECT_NE(slurp(d + "/list.stdout").find(",HW-1,ci,hardware,ERROR,bench-without-gpio,"), std::string::npos)
+      << slurp(d + "/list.stdout");
+}
+
+TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
+  const std::string d = tmp("histdb");
+  fs::create_directories(d);
+  const std::string typo = d + "/histroy.sqlite";
+  EXPECT_EQ(run({"history", "--db", "sqlite:" + typo}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find(typo + ": no such history database"), std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_FALSE(fs::exists(typo));
+}
+
+// `rig dut decode` on logs written by can-utils (tests/data/candump): both formats, a short
+// frame skipped and named by line (exit 2), a clean log exit 0, a file of no frames exit 2.
+TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
+  const std::string d = tmp("decode");
+  fs::create_directories(d);
+  const std::string data = std::string(RIG_SOURCE_DIR) + "/tests/data/candump/";
+  for (const char* name : {"session-l.log", "session-screen.txt"}) {
+    EXPECT_EQ(run({"dut", "decode", data + name}, d + "/io"), 2) << name;
+    const std::string out = slurp(d + "/io.stdout"), err = slurp(d + "/io.stderr");
+    EXPECT_NE(out.find(": 10 frames: DUT_HEARTBEAT 1, DUT_RSP 1, DUT_STREAM_X 2, DUT_STREAM_Y 3, RIG_CMD 1, "
+                       "error frames 0, other ids 1, skipped lines 1"),
+              std::string::npos)
+        << name << "\n" << out;
+    EXPECT_NE(out.find("DUT_STREAM_Y seq=1193048"), std::string::npos) << "decoding goes on after the short frame";
+    EXPECT_NE(err.find(std::string(name) + ":8: skipped: DUT_STREAM_X: length 4, DBC says 8"), std::string::npos)
+        << err;
+  }
+  // The same session without the short frame decodes cleanly.
+  std::ifstream in(data + "session-l.log");
+  std::ofstream clean(d + "/clean.log");
+  int n = 0;
+  for (std::string line; std::getline(in, line);)
+    if (++n != 8) clean << line << "\n";
+  clean.close();
+  EXPECT_EQ(run({"dut", "decode", d + "/clean.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stdout").find("9 frames"), std::string::npos);
+  std::ofstream(d + "/notes.txt") << "this is not a candump log\n";
+  EXPECT_EQ(run({"dut", "decode", d + "/notes.txt"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("notes.txt:1: skipped: not a candump frame line"), std::string::npos);
 }
 
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {

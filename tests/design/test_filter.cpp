@@ -1,4 +1,4 @@
-// Filter math: the paper's W_f(z) reproduces METHOD.md's derived figures; Butterworth
+// Filter math: the paper's W_f(z) reproduces docs/method.md's derived figures; Butterworth
 // designs match the bilinear-transform coefficients (scipy.signal.butter) and |H(fc)| = 0.707;
 // the criterion-2 figures (settling time, bandwidth) against closed forms.
 #include <gtest/gtest.h>
@@ -39,11 +39,11 @@ TEST(PaperFilter, ReproducesTheDerivedFigures) {
   EXPECT_NEAR(std::abs(response(f, 0)), 1.0, 1e-5);
   EXPECT_NEAR(std::abs(response(f, 70)), 0.99, 0.005);
   EXPECT_NEAR(std::abs(response(f, 500)), 0.71, 0.005);
-  EXPECT_NEAR(std::abs(response(f, 800)), 0.50, 0.01);  // 0.495: METHOD.md rounds
+  EXPECT_NEAR(std::abs(response(f, 800)), 0.50, 0.01);  // 0.495: docs/method.md rounds
   EXPECT_NEAR(std::abs(response(f, 970)), 0.40, 0.005);
   EXPECT_NEAR(std::abs(response(f, 1000)), 0.39, 0.005);
   EXPECT_NEAR(bandwidth(f, 1 / std::sqrt(2.0)), 506, 1.0);
-  EXPECT_NEAR(bandwidth(f, 0.5), 792, 2.0);  // METHOD.md: 0.50 at 800 Hz (rounded)
+  EXPECT_NEAR(bandwidth(f, 0.5), 792, 2.0);  // docs/method.md: 0.50 at 800 Hz (rounded)
   // Both poles real at z = 0.6141 (critically damped): the step response never overshoots.
   const auto h = step(f);
   for (double v : h) EXPECT_LE(v, 1.0 + 1e-6);

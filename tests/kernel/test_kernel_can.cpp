@@ -18,6 +18,7 @@
 #include <linux/can/error.h>
 
 #include "firmware_link/can_dut_link.hpp"
+#include "firmware_link/candump_log.hpp"
 #include "firmware_link/dbc.hpp"
 #include "firmware_link/socketcan.hpp"
 #include "plant/firmware/firmware_emulator.hpp"
@@ -120,7 +121,7 @@ TEST(KernelCan, EveryCommandRoundTrips) {
   EXPECT_EQ(info.firmware, "1.4.0");
   EXPECT_FLOAT_EQ(static_cast<float>(info.temperature_c), 23.25f);
 
-  FilterConfig f;  // METHOD.md: W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156), at 10 kHz
+  FilterConfig f;  // docs/method.md: W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156), at 10 kHz
   f.sections = {{0.148895, 0, 0, -1.228261, 0.377156}};
   f.rate_hz = 10000;
   f.enabled = true;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 
+#include "firmware_link/candump_log.hpp"
 #include "firmware_link/dbc.hpp"
 #include "rig/core/errors.hpp"
 

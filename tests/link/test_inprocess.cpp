@@ -220,7 +220,7 @@ TEST(InProcessDut, ASilentDutFailsCommandsAfterRetries) {
 
 TEST(InProcessDut, FilterSetGetEnableRoundTrip) {
   World w;
-  FilterConfig f;  // the paper's MCU filter (METHOD.md): 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156)
+  FilterConfig f;  // the paper's MCU filter (docs/method.md): 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156)
   f.sections = {{0.148895, 0, 0, -1.228261, 0.377156}, {0.5, 0.25, 0.125, 0.1, 0.05}};
   f.rate_hz = 10000;
   f.enabled = false;

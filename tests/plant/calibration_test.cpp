@@ -52,7 +52,7 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
     SCOPED_TRACE("seed " + std::to_string(seeds[i]));
     ASSERT_EQ(r.x10.size(), 6u);
     ASSERT_EQ(r.x20.size(), 6u);
-    EXPECT_FALSE(r.nt_x.R.value.has_value());  // R is not determinable from one hour (METHOD.md)
+    EXPECT_FALSE(r.nt_x.R.value.has_value());  // R is not determinable from one hour (docs/method.md)
     bias.push_back(r.bias);
     base.push_back(r.base_error);
     gost.push_back(r.b_gost_100);

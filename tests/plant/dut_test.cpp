@@ -111,7 +111,7 @@ TEST(Dut, FilterReducesTheSpreadOfY) {
 
 TEST(Dut, PollingInterferenceFoldsToDcAndTheFilterCutsIt) {
   // Only the 1 kHz pick-up: sampled at 1 kHz it becomes a flicker at near-DC in x;
-  // y sees it through |W_f(1 kHz)| = 0.39 (METHOD.md: the paper's 2.5x lower B). x and y
+  // y sees it through |W_f(1 kHz)| = 0.39 (docs/method.md: the paper's 2.5x lower B). x and y
   // see different projections of the line's two quadratures, so the record must be long
   // against the slowest flicker process (here 20 s) for the two to carry equal power.
   EmulatedDut d(params("[noise]\nsense_white_g_rthz = 0\ninput_white_g_rthz = 0\nflicker_b_g = 0\n"

@@ -52,7 +52,7 @@ Result run(EmulatedDut& dut, const Spec& spec) {
   noise::Rng table(spec.table_seed, 99);
   const double u10 = dut.params().orientation.u10_angle_deg;
   const double fs = dut.output_rate_hz();
-  // A: 12 runs alternating U10/U20, each averaged over 100 s (METHOD.md (3), (4)).
+  // A: 12 runs alternating U10/U20, each averaged over 100 s (docs/method.md (3), (4)).
   for (int i = 0; i < spec.runs; ++i) {
     const bool at_u10 = i % 2 == 0;
     dut.set_table_angle_deg(u10 + (at_u10 ? 0.0 : 180.0) + spec.repeat_sd_deg * table.normal());

@@ -1,4 +1,4 @@
-// The paper's procedure (METHOD.md A, B, C) run directly on the emulated DUT and
+// The paper's procedure (docs/method.md A, B, C) run directly on the emulated DUT and
 // evaluated with the rig's analysis library: the calibration harness shared by
 // the calibration test and bench/plant/dut_calibrate.
 #pragma once

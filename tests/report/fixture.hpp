@@ -1,6 +1,6 @@
 // A realistic run folder for the report and history tests, generated here so the tests do
-// not depend on `rig run`: passport.json in the CONTRACTS.md shape, and analysis.json
-// with curves shaped like the paper's (Allan curve from the METHOD.md noise figures,
+// not depend on `rig run`: passport.json in the docs/contracts.md shape, and analysis.json
+// with curves shaped like the paper's (Allan curve from the docs/method.md noise figures,
 // a PSD with 72 Hz and 970 Hz peaks, a 2nd-order loop step and amplitude response).
 #pragma once
 #include <cmath>
@@ -62,7 +62,7 @@ inline json fixture_passport(const std::string& serial = "QA-0042", const std::s
               {"values", values}};
 }
 
-// σ(τ) of the METHOD.md noise figures (seconds basis): Q, N, B, K.
+// σ(τ) of the docs/method.md noise figures (seconds basis): Q, N, B, K.
 inline double model_adev(double tau) {
   const double Q = 6.3603e-10 * 3600, N = 2.2306e-7 * 60, B = 2.1e-6 / 0.664 * 0.664, K = 5.1167e-6 / 60;
   return std::sqrt(3 * Q * Q / (tau * tau) + N * N / tau + 0.441 * B * B / 0.441 * 0.441 + K * K * tau / 3);
@@ -127,7 +127,7 @@ inline json fixture_analysis() {
   for (int i = 0; i < 2000; ++i) {
     const double t = i / 1000.0;
     const double v = -1.16e-4 + 0.05 * std::sin(2 * M_PI * 72 * t) + noise(rng);
-    const double out = 0.148895 * v + 1.228261 * yf - 0.377156 * yf1;  // W_ф(z) (METHOD.md)
+    const double out = 0.148895 * v + 1.228261 * yf - 0.377156 * yf1;  // W_ф(z) (docs/method.md)
     yf1 = yf;
     yf = out;
     x.push_back(v);

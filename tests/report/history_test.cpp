@@ -4,6 +4,7 @@
 #include <sqlite3.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <thread>
 
 #include "app/commands.hpp"
@@ -16,6 +17,7 @@ namespace {
 using nlohmann::json;
 using rig::test::TempDir;
 namespace h = rig::history;
+namespace fs = std::filesystem;
 
 // Runs raw SQL on a SQLite file (to build old schemas and to inspect the result).
 void raw_sql(const std::string& path, const std::string& sql) {
@@ -128,6 +130,37 @@ TEST(HistorySqlite, BadUrlsAndUnwritablePlacesNameTheDatabase) {
   }
   rig::test::write_file(d.path / "garbage.sqlite", std::string(4096, 'x'));
   EXPECT_THROW(h::migrate((d.path / "garbage.sqlite").string()), rig::ConfigError);
+}
+
+// A mistyped --db must not leave an empty database behind: reading opens read-only.
+TEST(HistorySqlite, ReadingNeverCreatesADatabase) {
+  TempDir d;
+  const fs::path missing = d.path / "sub" / "typo.sqlite";
+  const std::string url = "sqlite:" + missing.string();
+  for (int which = 0; which < 3; ++which) {
+    try {
+      if (which == 0) h::list_runs(url, {});
+      if (which == 1) h::trend(url, "bias", {});
+      if (which == 2) h::value_names(url);
+      FAIL() << "no exception for reader " << which;
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("typo.sqlite: no such history database"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_FALSE(fs::exists(missing));
+  EXPECT_FALSE(fs::exists(missing.parent_path())) << "not even its folder";
+  // An existing file that is not a rig history is refused, and left as it was.
+  rig::test::write_file(d.path / "empty.sqlite", "");
+  EXPECT_THROW(h::list_runs((d.path / "empty.sqlite").string(), {}), rig::ConfigError);
+  EXPECT_EQ(fs::file_size(d.path / "empty.sqlite"), 0u);
+  // A current database is read without being written.
+  const std::string good = (d.path / "good.sqlite").string();
+  h::record_run(good, rig::test::fixture_passport("RO-1"), d.path.string());
+  const auto before = fs::last_write_time(good);
+  const auto size = fs::file_size(good);
+  EXPECT_EQ(h::list_runs(good, {}).size(), 1u);
+  EXPECT_EQ(fs::last_write_time(good), before);
+  EXPECT_EQ(fs::file_size(good), size);
 }
 
 TEST(HistorySqlite, ConcurrentWritersAllLand) {
@@ -283,6 +316,24 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
     EXPECT_NE(std::string(e.what()).find("recorded: "), std::string::npos) << e.what();
   }
   EXPECT_THROW(run_cli({"--db", db, "--record", (d.path / "none").string()}), rig::ConfigError);
+}
+
+TEST(HistoryCli, AMissingDbIsAnErrorAndTheDefaultOneIsNotCreated) {
+  TempDir d;
+  const fs::path typo = d.path / "histroy.sqlite";
+  EXPECT_THROW(run_cli({"--db", "sqlite:" + typo.string()}), rig::ConfigError);
+  EXPECT_THROW(run_cli({"--db", typo.string(), "--value", "bias"}), rig::ConfigError);
+  EXPECT_FALSE(fs::exists(typo));
+  // The default location (here $RIG_HISTORY) exists only once a run has been recorded.
+  const fs::path dflt = d.path / "default" / "history.sqlite";
+  const char* old = std::getenv("RIG_HISTORY");
+  const std::string saved = old ? old : "";
+  ::setenv("RIG_HISTORY", ("sqlite:" + dflt.string()).c_str(), 1);
+  const std::string out = run_cli({});
+  if (old) ::setenv("RIG_HISTORY", saved.c_str(), 1);
+  else ::unsetenv("RIG_HISTORY");
+  EXPECT_NE(out.find("no runs recorded yet"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dflt));
 }
 
 }  // namespace

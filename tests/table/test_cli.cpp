@@ -1,5 +1,5 @@
 // `rig table status|home|move|stop|quick-stop|reset` against the emulator on a
-// real wire, checking output and the documented exit codes (CONTRACTS.md).
+// real wire, checking output and the documented exit codes (docs/contracts.md).
 #include <gtest/gtest.h>
 
 #include <chrono>

@@ -1,5 +1,5 @@
 #!/bin/bash
-# (rig: adapted from /work/shared/reference/kernel-in-the-loop/qemu)
+# (rig: adapted from a kernel-in-the-loop QEMU recipe, docs/kernel-harness.md)
 # Build a tiny initramfs: busybox-static + the listed kernel modules + /init.
 # usage: build-initramfs.sh <kernel-modules-dir> <out.cpio.gz> [extra .ko files...]
 set -euo pipefail

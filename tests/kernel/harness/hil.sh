@@ -11,8 +11,8 @@
 #
 # Never skips: anything that prevents the run (no network for the first
 # download, no QEMU, a failed module build, a guest that never reports) is an
-# error with a message saying what. Built on the measured recipe in
-# /work/shared/reference/kernel-in-the-loop (see docs/kernel-harness.md).
+# error with a message saying what. Built on a measured kernel-in-the-loop
+# recipe (see docs/kernel-harness.md).
 #
 # Environment: RIG_KERNEL_CACHE (default tests/kernel/work), KVER=... to pin a
 # kernel ABI, TIMEOUT (guest seconds, default 600), MEM, SMP.

@@ -1,5 +1,5 @@
 #!/bin/bash
-# (rig: adapted from /work/shared/reference/kernel-in-the-loop/qemu)
+# (rig: adapted from a kernel-in-the-loop QEMU recipe, docs/kernel-harness.md)
 # Boot the Debian kernel under QEMU with the host root shared read-only over
 # virtio-9p, run SCRIPT (a host path) as root inside the guest (chroot into the
 # host root), and return its exit status. Guest stdout/stderr -> OUTDIR/guest.log
