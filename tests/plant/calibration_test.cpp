@@ -8,7 +8,8 @@
 // little about the calibration: K's estimate scatters by about +-40 % between seeds and the
 // x/y ratio by more (docs/plant.md, 20 seeds). The table is asserted on the median over a
 // fixed set of nine seeds, 1..9, chosen before looking at any of them; each term must be
-// identified on at least eight. The paper profile's own seed is checked for identification below.
+// identified on at least eight (B by the paper's method: six, see below). The paper profile's own
+// seed is checked for identification below.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -52,7 +53,12 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
     if (auto v = r.value("n")) n.push_back(*v);
     if (auto v = r.value("k")) k.push_back(*v);
   }
-  for (const auto* v : {&b_x, &b_y, &q, &n, &k}) ASSERT_GE(v->size(), rs.size() - 1) << "a term is missing on 2+ seeds";
+  for (const auto* v : {&b_y, &q, &n, &k}) ASSERT_GE(v->size(), rs.size() - 1) << "a term is missing on 2+ seeds";
+  // B by the paper's method needs the curve's minimum inside tau <= T/4. On the shipped
+  // schedule (bring-up, homing, table moves, settling: the raw hour starts later than on the
+  // re-implemented schedule this table was first measured with) seeds 2, 4 and 6 have none:
+  // their N-K crossing lies beyond 836 s. Measured 6 of 9 (docs/plant.md); was 8 of 9.
+  ASSERT_GE(b_x.size(), 6u) << "B (paper's method) missing on 4+ seeds";
   std::printf("median over seeds 1..9: bias %.4e, base %.4e, B GOST100 %.3e, B Allan %.3e (%zu), B filtered %.3e (%zu), "
               "ratio %.2f, Q %.3e, N %.3e, K %.3e (%zu)\n",
               median(bias), median(base), median(gost), median(b_x), b_x.size(), median(b_y), b_y.size(),
