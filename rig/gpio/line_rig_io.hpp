@@ -96,6 +96,8 @@ class SimLines final : public LineDriver {
   std::vector<std::string> log() const;
 
  private:
+  bool push_edge_locked(bool active);  // records an edge to `active` (mu_ held); false if none
+
   bool with_lamps_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
