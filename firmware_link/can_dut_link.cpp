@@ -55,7 +55,8 @@ void CanDutLink::dispatch(const RxFrame& rx) {
     return;
   }
   if (const auto* s = std::get_if<StreamHalf>(&d.msg)) {
-    last_stream_rx_ = opts_.frame_time_is_clock_time ? rx.t_s : clock_.now_s();
+    // When it arrived, not when the client got round to it: its age on the transport's clock.
+    last_stream_rx_ = clock_.now_s() - std::max(0.0, transport_->now_s() - rx.t_s);
     if (streaming_) reasm_.push(*s);  // frames still in flight after a stop are stale
   } else if (const auto* r = std::get_if<Response>(&d.msg)) {
     responses_.push_back(*r);
@@ -66,23 +67,9 @@ void CanDutLink::dispatch(const RxFrame& rx) {
 }
 
 bool CanDutLink::pump(double budget_s, const CancelToken& cancel) {
-  if (!clock_.simulated()) {
-    if (auto f = transport_->receive(std::min(budget_s, 0.02), cancel)) {
-      dispatch(*f);
-      return true;
-    }
-    return false;
-  }
-  if (auto f = transport_->receive(0, cancel)) {
-    dispatch(*f);
-    return true;
-  }
-  clock_.sleep_for(budget_s, cancel);  // steps the world: the emulator produces frames
-  if (auto f = transport_->receive(0, cancel)) {
-    dispatch(*f);
-    return true;
-  }
-  return false;
+  const std::optional<RxFrame> f = transport_->receive(budget_s, cancel);
+  if (f) dispatch(*f);
+  return f.has_value();
 }
 
 Response CanDutLink::command(Command c, const CancelToken& cancel) {

@@ -1,9 +1,8 @@
 // The rig-side DUT client: rig::DutLink over any CanTransport.
-// Waiting is done on the rig::Clock it is given: with a RealClock it blocks on
-// the transport in 20 ms slices; with a SimClock it polls the transport and,
-// when the bus is empty, calls clock.sleep_for() so the (lockstep) world steps
-// the firmware emulator, which produces the frames. No wall-clock sleeping in
-// emulation.
+// It waits only by calling the transport's receive(timeout), and reads time off the
+// rig::Clock it is given. One path for real and simulated time: in emulation the
+// lockstep transport (inprocess_bus.hpp) owns simulated time, and its receive steps
+// the world instead of waiting, so nothing here knows whether time is simulated.
 #pragma once
 #include <cstdint>
 #include <deque>
@@ -24,10 +23,6 @@ struct LinkOptions {
   double command_timeout_s = 0.25;  // per attempt
   int command_attempts = 3;         // commands are idempotent, so a lost frame is simply re-sent
   uint32_t reorder_window = 8;      // samples a half may arrive late before its sample is declared lost
-  // The transport's frame timestamps are in the Clock's time base (the
-  // in-process bus under a SimClock): silence is then measured from when the
-  // last frame was produced, not from when the client got round to it.
-  bool frame_time_is_clock_time = false;
 };
 
 class CanDutLink final : public DutLink {
@@ -58,8 +53,7 @@ class CanDutLink final : public DutLink {
 
  private:
   void dispatch(const RxFrame& f);
-  // Waits for traffic for up to `budget_s` (RealClock) or advances the
-  // simulated world by `budget_s` when the bus is empty (SimClock).
+  // Waits up to `budget_s` for a frame on the transport and dispatches it.
   // Returns whether a frame was dispatched.
   bool pump(double budget_s, const CancelToken& cancel);
   [[noreturn]] void fail_silent(double silent_s);
@@ -73,7 +67,7 @@ class CanDutLink final : public DutLink {
   std::deque<Response> responses_;
   std::optional<Heartbeat> heartbeat_;
   uint64_t malformed_ = 0;
-  double last_stream_rx_ = 0;    // clock time of the last stream frame
+  double last_stream_rx_ = 0;    // clock time the last stream frame arrived
   bool streaming_ = false;
   uint8_t token_ = 0;
 };

@@ -14,7 +14,7 @@ namespace rig::link {
 
 struct RxFrame {
   CanFrame frame;
-  double t_s = 0;  // receive time: kernel timestamp (SocketCAN) or bus time (in-process), seconds
+  double t_s = 0;  // receive time on the transport's clock (CanTransport::now_s), seconds
 };
 
 // Accept a frame when (frame.id & mask) == (id & mask), as SocketCAN's can_filter.
@@ -38,6 +38,9 @@ class CanTransport {
   // the link is unusable (bus-off, error passive) throw HardwareError; warnings
   // are counted and skipped. Cancellation throws AbortedError.
   virtual std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) = 0;
+  // The clock RxFrame::t_s is read on (SocketCAN: the kernel's CLOCK_REALTIME stamps; the
+  // in-process bus: its own time), so a client can tell how long ago a frame arrived.
+  virtual double now_s() const = 0;
   // Replaces the receive filters (empty = receive everything).
   virtual void set_filters(std::span<const CanFilter> filters) = 0;
   virtual TransportStats stats() const = 0;

@@ -22,7 +22,7 @@ std::unique_ptr<CanTransport> InProcessBus::open(const std::string& port_name) {
 }
 
 double InProcessBus::now() const {
-  if (opts_.now) return opts_.now();
+  if (opts_.lockstep) return opts_.lockstep->now_s();
   using namespace std::chrono;
   return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
@@ -67,26 +67,46 @@ void InProcessPort::send(const CanFrame& f) {
   bus_->deliver(f, this);
 }
 
+std::optional<RxFrame> InProcessPort::take_locked() {
+  while (!queue_.empty()) {
+    RxFrame f = queue_.front();
+    queue_.pop_front();
+    if (f.frame.error) {
+      ++stats_.error_frames;
+      const ErrorFrameInfo e = classify_error_frame(f.frame);
+      if (e.fatal) throw HardwareError(name() + ": CAN " + e.text);
+      continue;  // warnings are counted, not fatal
+    }
+    ++stats_.rx;
+    return f;
+  }
+  return std::nullopt;
+}
+
+std::optional<RxFrame> InProcessPort::receive_lockstep(double timeout_s, const CancelToken& cancel) {
+  auto poll = [&]() -> std::optional<RxFrame> {
+    cancel.throw_if_requested();
+    std::lock_guard lk(mu_);
+    return take_locked();
+  };
+  if (auto f = poll()) return f;
+  if (timeout_s <= 0) return std::nullopt;
+  // Nothing queued: let the simulated time pass. The lock is not held: stepping the world
+  // makes the firmware emulator send, and its frames land in this queue.
+  bus_->opts_.lockstep->sleep_for(timeout_s, cancel);
+  return poll();
+}
+
 std::optional<RxFrame> InProcessPort::receive(double timeout_s, const CancelToken& cancel) {
+  if (bus_->opts_.lockstep) return receive_lockstep(timeout_s, cancel);
   using clock = std::chrono::steady_clock;
-  // The deadline is read off the wall clock only when the queue is empty: in emulation every
-  // sample passes through here, and the frames are nearly always already queued.
+  // The deadline is read off the wall clock only when the queue is empty: the frames are
+  // often already queued.
   std::optional<clock::time_point> deadline;
   std::unique_lock lk(mu_);
   for (;;) {
     cancel.throw_if_requested();
-    while (!queue_.empty()) {
-      RxFrame f = queue_.front();
-      queue_.pop_front();
-      if (f.frame.error) {
-        ++stats_.error_frames;
-        const ErrorFrameInfo e = classify_error_frame(f.frame);
-        if (e.fatal) throw HardwareError(name() + ": CAN " + e.text);
-        continue;  // warnings are counted, not fatal
-      }
-      ++stats_.rx;
-      return f;
-    }
+    if (auto f = take_locked()) return f;
     if (timeout_s <= 0) return std::nullopt;
     const auto now = clock::now();
     if (!deadline) deadline = now + std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(timeout_s));

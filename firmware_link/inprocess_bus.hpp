@@ -1,17 +1,22 @@
 // An in-process CAN bus with the same CanTransport interface as SocketCAN: every
 // frame a port sends is delivered to every other port whose filters accept it
 // (vcan semantics: no echo to the sender). Used by host tests and by the
-// in-process emulated plant (lockstep: receive(0) polls, never sleeps).
+// in-process emulated plant.
+// Lockstep (Options::lockstep): as in PX4's simulator, the simulation's transport owns
+// simulated time. Frames are stamped with the SimClock's time, and a receive(timeout)
+// that finds nothing queued advances the clock by `timeout` -- stepping the world, whose
+// firmware emulator puts the frames on the bus -- instead of waiting. The rig's client
+// then has one path for real and simulated time: it only ever calls receive(timeout).
 #pragma once
 #include <condition_variable>
 #include <deque>
-#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include "firmware_link/can_transport.hpp"
+#include "rig/core/clock.hpp"
 
 namespace rig::link {
 
@@ -24,7 +29,9 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
     // Per-port receive queue, frames. A real socket drops when its buffer is
     // full; so does this (counted in TransportStats::rx_dropped).
     std::size_t rx_capacity = std::size_t{1} << 20;
-    std::function<double()> now;  // timestamp source (seconds); default: steady clock
+    // Set: the bus runs in lockstep on this clock (see above); it must outlive the bus.
+    // Unset: wall time, receive() blocks (timestamps on the steady clock).
+    SimClock* lockstep = nullptr;
   };
   static std::shared_ptr<InProcessBus> create(Options opts);
   static std::shared_ptr<InProcessBus> create() { return create(Options{}); }
@@ -35,13 +42,13 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
   // error frames) had put it on the bus.
   void inject(const CanFrame& f);
   const std::string& name() const { return opts_.name; }
+  double now() const;  // the bus's time: the SimClock's in lockstep, else the steady clock
 
  private:
   friend class InProcessPort;
   explicit InProcessBus(Options opts) : opts_(std::move(opts)) {}
   void deliver(const CanFrame& f, const InProcessPort* from);
   void detach(InProcessPort* p);
-  double now() const;
 
   Options opts_;
   std::mutex mu_;  // guards ports_
@@ -53,6 +60,7 @@ class InProcessPort final : public CanTransport {
   ~InProcessPort() override;
   void send(const CanFrame& f) override;
   std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
+  double now_s() const override { return bus_->now(); }
   void set_filters(std::span<const CanFilter> filters) override;
   TransportStats stats() const override;
   std::string name() const override;
@@ -61,6 +69,8 @@ class InProcessPort final : public CanTransport {
   friend class InProcessBus;
   InProcessPort(std::shared_ptr<InProcessBus> bus, std::string name) : bus_(std::move(bus)), name_(std::move(name)) {}
   void push(const RxFrame& f);  // called by the bus
+  std::optional<RxFrame> take_locked();  // the next data frame queued, if any (mu_ held)
+  std::optional<RxFrame> receive_lockstep(double timeout_s, const CancelToken& cancel);
 
   std::shared_ptr<InProcessBus> bus_;
   std::string name_;

@@ -14,6 +14,7 @@
 #include <net/if.h>
 #include <sys/socket.h>
 #include <sys/time.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <asio/io_context.hpp>
@@ -139,6 +140,7 @@ std::optional<RxFrame> SocketCanTransport::try_read() {
   if (static_cast<std::size_t>(n) != sizeof k) throw HardwareError(name() + ": short CAN frame read");
   RxFrame rx;
   rx.frame = from_kernel(k);
+  rx.t_s = now_s();  // replaced by the kernel's timestamp when the socket gives one
   for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
     if (c->cmsg_level != SOL_SOCKET) continue;
     if (c->cmsg_type == SO_TIMESTAMP) {
@@ -152,6 +154,12 @@ std::optional<RxFrame> SocketCanTransport::try_read() {
     }
   }
   return rx;
+}
+
+double SocketCanTransport::now_s() const {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
 std::optional<RxFrame> SocketCanTransport::receive(double timeout_s, const CancelToken& cancel) {

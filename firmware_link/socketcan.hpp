@@ -28,6 +28,7 @@ class SocketCanTransport final : public CanTransport {
 
   void send(const CanFrame& f) override;
   std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
+  double now_s() const override;  // CLOCK_REALTIME, the clock of the kernel's SO_TIMESTAMP
   void set_filters(std::span<const CanFilter> filters) override;
   TransportStats stats() const override;
   std::string name() const override { return "socketcan:" + iface_; }

@@ -1,107 +1,124 @@
-// Prints the calibration table of an emulated DUT profile: the paper's procedure
-// run on the model and evaluated by the rig's own analysis (docs/plant.md).
-//   dut_calibrate [overrides.toml] [--seed N]... [--taus GRID] [--curves]
-// Several --seed give one column per seed (each a full 110 min procedure).
+// Prints the calibration table of an emulated DUT profile: the shipped acceptance procedure
+// (`rig run --plant emulated`, paper profile) on the model, read off its passport and
+// analysis.json (docs/plant.md).
+//   dut_calibrate [overrides.toml] [--seed N]... [--taus GRID] [--curves] [--rig PATH]
+// overrides.toml holds [plant.dut] keys. Several --seed give one column per seed (each a
+// full 110 min procedure, about 7 s of CPU); --rig names the rig binary (default: the one
+// built with this tool).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include "plant/dut/loop_figures.hpp"
-#include "analysis/noise_terms.hpp"
 #include "rig/core/toml_util.hpp"
-#include "tests/plant/paper_procedure.hpp"
+#include "tests/plant/paper_run.hpp"
 
-using namespace rig::plant;
+using rig::plant::calib::PaperRun;
+using json = nlohmann::json;
 
 namespace {
-double val(const rig::analysis::Term& t) { return t.value ? *t.value : std::nan(""); }
 
-// "v [lo, hi]" of a WLS term in passport units, or its reason.
-std::string term(const rig::analysis::Term& t, double scale) {
-  char b[128];
-  if (!t.value) return "null (" + t.reason + ")";
-  std::snprintf(b, sizeof b, "%.3e [%.3e, %.3e]", *t.value * scale, t.lo.value_or(NAN) * scale,
-                t.hi.value_or(NAN) * scale);
+double num_or_nan(const json& v) { return v.is_number() ? v.get<double>() : std::nan(""); }
+double val(const PaperRun& r, const char* name) { return num_or_nan(r.passport["values"][name]["value"]); }
+
+std::string num(const char* fmt, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, fmt, v);
   return b;
 }
+
+// "v [lo, hi]" of a weighted-fit term (analysis.json lsq_fit.terms) scaled to passport units, or its reason.
+std::string term(const json& t, double scale) {
+  if (!t.contains("value") || t["value"].is_null()) return "null (" + t.value("reason", std::string()) + ")";
+  char b[128];
+  std::snprintf(b, sizeof b, "%.3e [%.3e, %.3e]", num_or_nan(t["value"]) * scale, num_or_nan(t["lo"]) * scale,
+                num_or_nan(t["hi"]) * scale);
+  return b;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
     toml::table over;
+    bool have_over = false, curves = false;
     std::vector<uint64_t> seeds;
-    calib::Spec spec;
-    bool curves = false;
+    rig::plant::calib::RunSpec spec;
+    std::string rig_binary = RIG_BINARY;
     for (int i = 1; i < argc; ++i) {
       if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seeds.push_back(std::stoull(argv[++i]));
       else if (!std::strcmp(argv[i], "--taus") && i + 1 < argc) spec.taus = argv[++i];
+      else if (!std::strcmp(argv[i], "--rig") && i + 1 < argc) rig_binary = argv[++i];
       else if (!std::strcmp(argv[i], "--curves")) curves = true;
-      else over = rig::cfg::parse_file(argv[i]);
+      else {
+        over = rig::cfg::parse_file(argv[i]);
+        have_over = true;
+      }
     }
     if (seeds.empty()) seeds.push_back(1);
-    const DutParams p = load_dut_params(&over);
-    std::vector<calib::Result> rs;
-    for (uint64_t s : seeds) {
-      EmulatedDut dut(p, s);
-      rs.push_back(calib::run(dut, spec));
-    }
-    const rig::design::LoopFigures lf = loop_figures(&over, p.filter);
-    namespace A = rig::analysis;
+    if (have_over) spec.dut = &over;
+    const std::vector<PaperRun> rs = rig::plant::calib::run_seeds(rig_binary, spec, seeds, 2);
     auto row = [&](const char* name, const char* paper, auto f) {
       std::printf("| %s | %s |", name, paper);
       for (const auto& r : rs) std::printf(" %s |", f(r).c_str());
       std::printf("\n");
-    };
-    auto num = [](const char* fmt, double v) {
-      char b[64];
-      std::snprintf(b, sizeof b, fmt, v);
-      return std::string(b);
     };
     std::printf("| quantity | paper |");
     for (uint64_t s : seeds) std::printf(" seed %llu |", static_cast<unsigned long long>(s));
     std::printf("\n|---|---|");
     for (std::size_t i = 0; i < seeds.size(); ++i) std::printf("---|");
     std::printf("\n");
-    using R = calib::Result;
-    row("bias, g", "-5.0137e-4", [&](const R& r) { return num("%.5e", r.bias); });
-    row("base error, g", "3.8549e-4", [&](const R& r) { return num("%.5e", r.base_error); });
-    row("B GOST 100 s, g", "4e-6", [&](const R& r) { return num("%.3e", r.b_gost_100); });
-    row("B GOST 200 s, g", "2.5e-6", [&](const R& r) { return num("%.3e", r.b_gost_200); });
+    using R = PaperRun;
+    auto allan = [](const R& r, const char* ch) -> const json& { return r.analysis["allan"][ch]["noise_terms"]; };
+    row("bias, g", "-5.0137e-4", [&](const R& r) { return num("%.5e", val(r, "bias")); });
+    row("base error, g", "3.8549e-4", [&](const R& r) { return num("%.5e", val(r, "base_error")); });
+    row("B GOST 100 s, g", "4e-6", [&](const R& r) { return num("%.3e", val(r, "in_run_b_gost_100s")); });
+    row("B GOST 200 s, g", "2.5e-6", [&](const R& r) { return num("%.3e", val(r, "in_run_b_gost_200s")); });
     row("B Allan, g (tau_cp s)", "2.1e-6 (200)", [&](const R& r) {
-      return num("%.3e", val(r.nt_x.B)) + num(" (%.0f)", r.nt_x.tau_cp_s.value_or(0));
+      return num("%.3e", val(r, "in_run_b_allan")) + num(" (%.0f)", val(r, "tau_cp"));
     });
-    row("Q, g*h", "6.3603e-10", [&](const R& r) { return num("%.4e", A::q_per_hour(val(r.nt_x.Q))); });
-    row("N, g*h^0.5", "2.2306e-7", [&](const R& r) { return num("%.4e", A::n_per_hour(val(r.nt_x.N))); });
-    row("K, g/h^0.5", "5.1167e-6", [&](const R& r) { return num("%.4e", A::k_per_hour(val(r.nt_x.K))); });
-    row("R", "not determinable", [&](const R& r) { return r.nt_x.R.value ? std::string("value") : r.nt_x.R.reason; });
+    row("Q, g*h", "6.3603e-10", [&](const R& r) { return num("%.4e", val(r, "q")); });
+    row("N, g*h^0.5", "2.2306e-7", [&](const R& r) { return num("%.4e", val(r, "n")); });
+    row("K, g/h^0.5", "5.1167e-6", [&](const R& r) { return num("%.4e", val(r, "k")); });
+    row("R", "not determinable", [&](const R& r) {
+      return std::isnan(val(r, "r")) ? r.passport["values"]["r"].value("reason", std::string("null")) : "value";
+    });
     row("B Allan filtered, g (tau_cp s)", "0.86e-6", [&](const R& r) {
-      return num("%.3e", val(r.nt_y.B)) + num(" (%.0f)", r.nt_y.tau_cp_s.value_or(0));
+      return num("%.3e", val(r, "in_run_b_allan_filtered")) + num(" (%.0f)", num_or_nan(allan(r, "y")["tau_cp_s"]));
     });
-    row("ratio unfiltered/filtered", "2.5", [&](const R& r) { return num("%.2f", val(r.nt_x.B) / val(r.nt_y.B)); });
+    row("ratio unfiltered/filtered", "2.5",
+        [&](const R& r) { return num("%.2f", val(r, "in_run_b_allan") / val(r, "in_run_b_allan_filtered")); });
     row("RMS x, y (g)", "0.04-0.06, 0.03-0.045",
-        [&](const R& r) { return num("%.3e", r.rms_x) + num(", %.3e", r.rms_y); });
-    std::printf("| settling time (5 %%), s | 0.003 | %.4f |\n", lf.settling_time_s);
-    std::printf("| bandwidth 0.5 with filter, Hz | 492 | %.1f |\n", lf.bandwidth_0p5_hz);
-    for (std::size_t i = 0; i < rs.size(); ++i) {
-      const R& r = rs[i];
-      std::printf("\nseed %llu (taus %s):\n", static_cast<unsigned long long>(seeds[i]), spec.taus.c_str());
-      for (const auto* nt : {&r.nt_x, &r.nt_y}) {
-        std::printf(" %s segments:", nt == &r.nt_x ? "x" : "y");
-        for (const auto& s : nt->paper.segments)
-          std::printf(" [%.3g..%.3g slope %.2f %s]", s.tau_lo_s, s.tau_hi_s, s.slope, s.term.c_str());
-        std::printf("\n  wls (chi2/dof %.3g, model error %.3g): Q %s\n   N %s\n   B %s\n   K %s\n   R %s\n", nt->wls.chi2_per_dof, nt->wls.model_error,
-                    term(nt->wls.Q, 1 / 3600.0).c_str(), term(nt->wls.N, 1 / 60.0).c_str(),
-                    term(nt->wls.B, 1).c_str(), term(nt->wls.K, 60).c_str(), term(nt->wls.R, 3600).c_str());
+        [&](const R& r) { return num("%.3e", val(r, "rms_unfiltered")) + num(", %.3e", val(r, "rms_filtered")); });
+    row("settling time, s", "0.003", [&](const R& r) { return num("%.4f", val(r, "settling_time")); });
+    row("bandwidth 0.5 with filter, Hz", "492", [&](const R& r) { return num("%.1f", val(r, "bandwidth_0p5")); });
+    for (const R& r : rs) {
+      std::printf("\nseed %llu:\n", static_cast<unsigned long long>(r.seed));
+      for (const char* ch : {"x", "y"}) {
+        const json& nt = allan(r, ch);
+        std::printf(" %s segments:", ch);
+        for (const auto& s : nt["paper_fit"]["segments"])
+          std::printf(" [%.3g..%.3g slope %.2f %s]", num_or_nan(s["tau_from_s"]), num_or_nan(s["tau_to_s"]),
+                      num_or_nan(s["slope"]), s.value("term", std::string()).c_str());
+        const json& w = nt["lsq_fit"];
+        const json& t = w["terms"];
+        std::printf("\n  wls (chi2/dof %.3g, model error %.3g): Q %s\n   N %s\n   B %s\n   K %s\n   R %s\n",
+                    num_or_nan(w["chi2_per_dof"]), num_or_nan(w["model_error"]), term(t["Q"], 1 / 3600.0).c_str(),
+                    term(t["N"], 1 / 60.0).c_str(), term(t["B"], 1).c_str(), term(t["K"], 60).c_str(),
+                    term(t["R"], 3600).c_str());
         std::printf("   share/z:");
-        for (int k = 0; k < 5; ++k) std::printf(" %c %.2f/%.1f", "QNBKR"[k], nt->wls.share[static_cast<std::size_t>(k)], nt->wls.z[static_cast<std::size_t>(k)]);
+        for (const char* k : {"Q", "N", "B", "K", "R"})
+          std::printf(" %s %.2f/%.1f", k, num_or_nan(t[k]["share"]), num_or_nan(t[k]["z"]));
         std::printf("\n");
       }
       if (curves) {
+        const json& ax = r.analysis["allan"]["x"]["oadev"];
+        const json& ay = r.analysis["allan"]["y"]["oadev"];
         std::printf("  tau          x            y\n");
-        for (std::size_t j = 0; j < r.adev_x.size() && j < r.adev_y.size(); ++j)
-          std::printf("  %10.3f  %.4e  %.4e\n", r.adev_x[j].tau_s, r.adev_x[j].dev, r.adev_y[j].dev);
+        for (std::size_t j = 0; j < ax.size() && j < ay.size(); ++j)
+          std::printf("  %10.3f  %.4e  %.4e\n", num_or_nan(ax[j]["tau_s"]), num_or_nan(ax[j]["dev"]),
+                      num_or_nan(ay[j]["dev"]));
       }
     }
     return 0;

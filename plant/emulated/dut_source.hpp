@@ -1,7 +1,6 @@
 // The emulated DUT's physics as the rest of the plant sees it: one call per
 // output period (1 kHz) returns the sample-and-held x(t), y(t) in g.
-// Implemented in plant/dut (closed loop + noise); the firmware emulator and the
-// direct emulated link both read from it.
+// Implemented in plant/dut (closed loop + noise); the firmware emulator reads from it.
 #pragma once
 #include <cstdint>
 #include <memory>

@@ -2,12 +2,11 @@
 // the rig's GPIO lines and a simulated clock, stepped in lockstep by the
 // consumer (every Clock::sleep_for and every sample read advances the world),
 // so the 110-minute procedure runs in seconds and is bit-reproducible.
-// The rig reaches the table through the real Modbus client logic over the
-// emulator's register map (rig/modbus), and the DUT through the real CAN
-// client over an in-process bus to the firmware emulator ([plant] link = "can",
-// the default) or straight from the model (link = "direct", no frame codec).
+// Every seam goes through the shipped rig-side logic, once: the table through the
+// real Modbus client over the emulator's register map (rig/modbus), the DUT through
+// the real CAN client over an in-process bus to the firmware emulator, and the GPIO
+// through the real e-stop/power logic (rig/gpio LineRigIo) over simulated lines.
 #pragma once
-#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -20,6 +19,7 @@
 #include "rig/core/dut_link.hpp"
 #include "rig/core/gpio.hpp"
 #include "rig/core/table.hpp"
+#include "rig/gpio/line_rig_io.hpp"
 
 namespace rig::link {
 class InProcessDutLink;
@@ -28,33 +28,6 @@ class InProcessDutLink;
 namespace rig::plant {
 
 class TableEmulator;
-class EmulatedPlant;
-
-// The rig-side DUT link of the in-process plant: samples come straight from
-// the DUT model (no frame codec), with the same sequence/gap accounting as the
-// CAN link so gap handling is testable (inject_drop).
-class DirectDutLink final : public DutLink {
- public:
-  explicit DirectDutLink(EmulatedPlant& world) : world_(world) {}
-  DutInfo info(const CancelToken& cancel) override;
-  void start_stream(const CancelToken& cancel) override;
-  void stop_stream() noexcept override;
-  std::size_t read(std::span<Sample> out, const CancelToken& cancel) override;
-  void set_filter(const FilterConfig& f, const CancelToken& cancel) override;
-  FilterConfig get_filter(const CancelToken& cancel) override;
-  LinkStats stats() const override { return stats_; }
-  void reset_stats() override { stats_ = {}; }
-  std::string describe() const override { return "emulated DUT (in-process, lockstep)"; }
-
- private:
-  friend class EmulatedPlant;
-  void deliver(const Sample& s);  // called by the world while streaming
-  EmulatedPlant& world_;
-  std::deque<Sample> queue_;
-  bool streaming_ = false;
-  std::optional<uint32_t> last_seq_;
-  LinkStats stats_;
-};
 
 class EmulatedPlant {
  public:
@@ -65,7 +38,8 @@ class EmulatedPlant {
   SimClock& clock() { return clock_; }
   RotaryTable& table() { return *table_; }
   DutLink& dut();
-  SimGpio& io() { return io_; }
+  gpio::LineRigIo& io() { return *io_; }
+  gpio::SimLines& lines() { return *lines_; }  // the "hardware" side of the rig's GPIO lines
   DutSource& dut_source() { return *dut_; }
   TableEmulator& table_emulator() { return *table_emu_; }
 
@@ -80,7 +54,6 @@ class EmulatedPlant {
   uint64_t samples_generated() const { return samples_; }
 
  private:
-  friend class DirectDutLink;
   class CountingSource;
   void advance(double dt_s);
 
@@ -90,14 +63,11 @@ class EmulatedPlant {
   std::unique_ptr<DutSource> dut_;
   std::unique_ptr<TableEmulator> table_emu_;
   std::unique_ptr<RotaryTable> table_;
-  SimGpio io_;
-  DirectDutLink link_;
-  std::unique_ptr<link::InProcessDutLink> can_link_;  // set when [plant] link = "can"
-  std::vector<std::pair<uint64_t, uint64_t>> can_drops_;
-  double sample_acc_ = 0;  // output periods owed to the DUT
-  uint32_t seq_ = 0;
+  gpio::SimLines* lines_ = nullptr;  // owned by io_
+  std::unique_ptr<gpio::LineRigIo> io_;
+  std::unique_ptr<link::InProcessDutLink> link_;
+  std::vector<std::pair<uint64_t, uint64_t>> drops_;
   std::optional<double> estop_at_;
-  std::vector<std::pair<uint32_t, uint32_t>> drops_;
   std::vector<std::pair<double, std::function<void()>>> actions_;
 };
 

@@ -2,14 +2,13 @@
 
 namespace rig::link {
 
-InProcessDutLink::InProcessDutLink(plant::DutSource& source, Clock& clock, InProcessDutOptions opts) {
+InProcessDutLink::InProcessDutLink(plant::DutSource& source, SimClock& clock, InProcessDutOptions opts) {
   InProcessBus::Options bo;
   bo.name = "dut-bus";
-  bo.now = [&clock] { return clock.now_s(); };  // frame timestamps in the rig's (simulated) time
+  bo.lockstep = &clock;  // the bus owns simulated time: the client's receive steps the world
   bus_ = InProcessBus::create(std::move(bo));
   dut_port_ = bus_->open("dut");
   firmware_ = std::make_unique<plant::FirmwareEmulator>(source, *dut_port_, opts.firmware);
-  opts.link.frame_time_is_clock_time = true;
   client_ = std::make_unique<CanDutLink>(bus_->open("rig"), clock, opts.link);
 }
 
@@ -20,7 +19,8 @@ InProcessDutLink::~InProcessDutLink() {
 
 std::string InProcessDutLink::describe() const { return "emulated DUT firmware, " + client_->describe(); }
 
-std::unique_ptr<InProcessDutLink> make_inprocess_dut(plant::DutSource& source, Clock& clock, InProcessDutOptions opts) {
+std::unique_ptr<InProcessDutLink> make_inprocess_dut(plant::DutSource& source, SimClock& clock,
+                                                     InProcessDutOptions opts) {
   return std::make_unique<InProcessDutLink>(source, clock, std::move(opts));
 }
 

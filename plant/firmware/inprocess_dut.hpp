@@ -18,9 +18,9 @@ struct InProcessDutOptions {
 
 class InProcessDutLink final : public DutLink {
  public:
-  // `source` must outlive this object. `clock` is the clock the rig waits on
-  // (normally the SimClock whose advance calls step()).
-  InProcessDutLink(plant::DutSource& source, Clock& clock, InProcessDutOptions opts = {});
+  // `source` and `clock` must outlive this object. `clock` is the simulated time the
+  // bus owns (its advance normally calls step()); the rig's client reads time off it.
+  InProcessDutLink(plant::DutSource& source, SimClock& clock, InProcessDutOptions opts = {});
   ~InProcessDutLink() override;
 
   // Lockstep: advance the emulated firmware by dt seconds of simulated time.
@@ -48,7 +48,7 @@ class InProcessDutLink final : public DutLink {
 
 // The factory the world calls. Keep the returned pointer's step() for the
 // SimClock's advance; the object converts to std::unique_ptr<rig::DutLink>.
-std::unique_ptr<InProcessDutLink> make_inprocess_dut(plant::DutSource& source, Clock& clock,
+std::unique_ptr<InProcessDutLink> make_inprocess_dut(plant::DutSource& source, SimClock& clock,
                                                      InProcessDutOptions opts = {});
 
 }  // namespace rig::link

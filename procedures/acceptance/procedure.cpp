@@ -9,6 +9,7 @@
 #include "plant/dut/loop_figures.hpp"
 #include "analysis/json.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
+#include "procedures/acceptance/method.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/rms.hpp"
@@ -105,17 +106,11 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p) {
 
 // Allan family + noise terms of one channel; writes the passport values.
 nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vector<double>& d, bool filtered) {
-  analysis::DevOptions opt;
-  opt.type = analysis::Deviation::OADEV;
-  opt.data = analysis::DataKind::Frequency;
-  opt.rate_hz = p.rate_hz;
-  opt.taus = analysis::parse_tau_grid(p.taus);
-  opt.confidence = p.confidence;
-  const std::vector<analysis::DevPoint> dev = analysis::deviation(d, opt);
-  const double T = static_cast<double>(d.size()) / p.rate_hz;
   // R only from a record as long as the method needs (the profile's [analysis] r_min_record_s):
   // the passport and analysis.json carry the same fit.
-  const analysis::NoiseTerms nt = analysis::noise_terms(dev, T, p.r_min_record_s);
+  const AllanChannel ch = allan_channel_terms(d, allan_settings(p));
+  const std::vector<analysis::DevPoint>& dev = ch.oadev;
+  const analysis::NoiseTerms& nt = ch.terms;
   auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
     if (t.value) {
       ctx.values.set(name, *t.value * scale, why, t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,

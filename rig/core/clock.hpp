@@ -17,7 +17,6 @@ class Clock {
   // Waits dt seconds (simulated: advances the plant by dt). Throws AbortedError
   // promptly when `cancel` is requested.
   virtual void sleep_for(double dt_s, const CancelToken& cancel) = 0;
-  virtual bool simulated() const = 0;
 };
 
 // Wall-clock time; sleeps in slices of at most 20 ms so cancellation is prompt.
@@ -26,7 +25,6 @@ class RealClock final : public Clock {
   RealClock();
   double now_s() const override;
   void sleep_for(double dt_s, const CancelToken& cancel) override;
-  bool simulated() const override { return false; }
 
  private:
   double t0_;
@@ -41,7 +39,6 @@ class SimClock final : public Clock {
   void set_advance(Advance a) { advance_ = std::move(a); }
   double now_s() const override { return t_; }
   void sleep_for(double dt_s, const CancelToken& cancel) override;
-  bool simulated() const override { return true; }
 
  private:
   Advance advance_;

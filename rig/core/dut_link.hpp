@@ -1,6 +1,6 @@
 // DUT link seam: the DUT's firmware streams samples and answers commands.
-// Real backend: CAN (firmware_link/, SocketCAN). Emulated: the firmware
-// emulator on an in-process bus, or the direct emulated link (plant/emulated).
+// Real backend: CAN (firmware_link/, SocketCAN). Emulated: the same CAN client to
+// the firmware emulator on an in-process bus (plant/emulated).
 #pragma once
 #include <cstddef>
 #include <cstdint>

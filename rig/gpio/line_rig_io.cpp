@@ -126,21 +126,39 @@ bool SimLines::estop_active() {
 
 std::optional<bool> SimLines::wait_estop_edge(std::chrono::milliseconds timeout) {
   std::unique_lock lk(mu_);
+  ++waits_;  // the reader is back: whatever it took before is handled
+  handled_cv_.notify_all();
   if (!cv_.wait_for(lk, timeout, [this] { return !edges_.empty(); })) return std::nullopt;
   const bool v = edges_.front();
   edges_.erase(edges_.begin());
+  ++taken_;
+  waits_at_take_ = waits_;
   return v;
+}
+
+bool SimLines::push_edge_locked(bool active) {
+  if (estop_ == active) return false;  // no edge
+  estop_ = active;
+  edges_.push_back(active);
+  log_.push_back(std::string("estop=") + (active ? "1" : "0"));
+  return true;
 }
 
 void SimLines::drive_estop(bool active) {
   {
     std::lock_guard lk(mu_);
-    if (estop_ == active) return;  // no edge
-    estop_ = active;
-    edges_.push_back(active);
-    log_.push_back(std::string("estop=") + (active ? "1" : "0"));
+    if (!push_edge_locked(active)) return;
   }
   cv_.notify_all();
+}
+
+void SimLines::drive_estop_handled(bool active) {
+  std::unique_lock lk(mu_);
+  if (!push_edge_locked(active)) return;
+  const uint64_t ours = taken_ + edges_.size();  // edges taken once this one is
+  cv_.notify_all();
+  if (!handled_cv_.wait_for(lk, std::chrono::seconds(10), [&] { return taken_ >= ours && waits_ > waits_at_take_; }))
+    throw HardwareError("simulated e-stop edge not handled by the rig's GPIO logic within 10 s");
 }
 
 bool SimLines::level(Output o) const {

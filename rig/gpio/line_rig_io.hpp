@@ -2,8 +2,8 @@
 // every backend: an e-stop edge switches DUT power off FIRST (on the event
 // thread, microseconds after the edge), then calls the rig's handler; power
 // cannot be switched on while the e-stop is active.
-// Drivers: GpiodLines (libgpiod 1.6, gpiod_lines.hpp) and SimLines (memory,
-// host tests: this machine's kernel has no GPIO character device).
+// Drivers: GpiodLines (libgpiod 1.6, gpiod_lines.hpp) and SimLines (memory: host
+// tests, where this machine's kernel has no GPIO character device, and the emulated plant).
 #pragma once
 #include <algorithm>
 #include <atomic>
@@ -72,8 +72,8 @@ class LineRigIo final : public RigIo {
   std::thread thread_;
 };
 
-// In-memory lines for host tests. Keeps a log of what happened in order
-// ("power=1", "estop=1", ...), so a test can check power went off before the
+// In-memory lines for host tests and the emulated plant. Keeps a log of what happened in
+// order ("power=1", "estop=1", ...), so a test can check power went off before the
 // handler ran.
 class SimLines final : public LineDriver {
  public:
@@ -86,17 +86,28 @@ class SimLines final : public LineDriver {
 
   // The "hardware" side.
   void drive_estop(bool active);
+  // drive_estop, then waits until the line's reader (LineRigIo's watcher) has taken the
+  // edge and come back for the next one: power is off and the rig's handler has returned.
+  // The lockstep world calls this so an e-stop lands in the same simulated instant every
+  // run. A reader that does not come back within 10 s => HardwareError.
+  void drive_estop_handled(bool active);
   bool level(Output o) const;
   void note(const std::string& what);
   std::vector<std::string> log() const;
 
  private:
+  bool push_edge_locked(bool active);  // records an edge to `active` (mu_ held); false if none
+
   bool with_lamps_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
   bool out_[kOutputs]{};
   bool estop_ = false;
   std::vector<bool> edges_;  // pending edges (new levels)
+  std::condition_variable handled_cv_;
+  uint64_t taken_ = 0;           // edges the reader has taken
+  uint64_t waits_ = 0;           // times the reader has entered wait_estop_edge
+  uint64_t waits_at_take_ = 0;   // waits_ when it took the last edge
   std::vector<std::string> log_;
 };
 

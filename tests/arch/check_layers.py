@@ -24,7 +24,8 @@ RULES = {
     "rig/report": ["rig/core/", "analysis/"],
     "firmware_link": ["rig/core/", "design/filter_config.hpp"],
     "procedures": ["procedures/", "analysis/", "design/", "rig/core/", "rig/capture/", "rig/executive/"],
-    "plant": ["plant/", "analysis/", "design/", "rig/core/", "rig/modbus/", "firmware_link/"],
+    # The emulated plant runs the rig's own clients on its models: Modbus, CAN, GPIO lines.
+    "plant": ["plant/", "analysis/", "design/", "rig/core/", "rig/modbus/", "firmware_link/", "rig/gpio/"],
     "app": None,  # the program wires every layer together
 }
 # Production layers whose libraries must never link the emulator.

@@ -1,9 +1,10 @@
-// [dut] of the hardware file and the SocketCAN backend's behaviour on a host
-// without it.
+// [dut] of the hardware file, the SocketCAN backend's behaviour on a host
+// without it, and the emulated plant's one DUT path.
 #include <gtest/gtest.h>
 
 #include "firmware_link/connect.hpp"
 #include "firmware_link/socketcan.hpp"
+#include "plant/emulated/world.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 
@@ -47,6 +48,21 @@ TEST(SocketCan, UnavailableOrUnknownInterfaceIsAHardwareErrorNamingIt) {
     EXPECT_NE(std::string(e.what()).find("rigtest9"), std::string::npos) << e.what();
     if (!socketcan_available()) {
       EXPECT_NE(std::string(e.what()).find("no SocketCAN"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The emulated DUT has one path, the CAN link: a profile that still selects the removed
+// direct link (or names `link` at all) is refused with its file and line, not run another way.
+TEST(EmulatedPlantConfig, TheRemovedLinkKeyIsAnErrorNamingFileAndLine) {
+  for (const char* value : {"\"direct\"", "\"can\""}) {
+    const auto t = cfg::parse_string(std::string("seed = 3\nlink = ") + value + "\n", "old.toml");
+    try {
+      plant::EmulatedPlant w(t);
+      ADD_FAILURE() << "no error for link = " << value;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("old.toml:2"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("link"), std::string::npos) << e.what();
     }
   }
 }

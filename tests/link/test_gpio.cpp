@@ -4,12 +4,14 @@
 // same object the real backend uses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <thread>
 
+#include "plant/emulated/world.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/gpio/gpiod_lines.hpp"
@@ -141,14 +143,37 @@ TEST(GpioSafety, DestructionLeavesTheDutUnpowered) {
   EXPECT_EQ(lines->log().back(), "power=0");
 }
 
-TEST(GpioSafety, LeadsSimGpioTripsLikeTheRealBackend) {
-  SimGpio g;
-  g.set_dut_power(true);
+// The emulated plant has no GPIO logic of its own: its lines sit behind the same LineRigIo
+// as the rig's, so an injected e-stop (`rig run --inject estop@T`) exercises the shipped
+// path. Only LineRigIo refuses power while the e-stop is active and measures its reaction.
+TEST(GpioSafety, EmulatedPlantEstopGoesThroughLineRigIo) {
+  toml::table cfg;
+  cfg.insert("seed", 1);
+  plant::EmulatedPlant w(cfg);
+  LineRigIo& io = w.io();
+  io.set_dut_power(true);
+  EXPECT_TRUE(w.lines().level(Output::Power));
   bool power_in_handler = true;
-  g.on_estop([&] { power_in_handler = g.dut_power(); });
-  g.trip_estop();
+  double t_handler = -1;
+  io.on_estop([&] {
+    power_in_handler = w.lines().level(Output::Power);
+    t_handler = w.clock().now_s();
+    w.lines().note("handler");
+  });
+  w.trip_estop_at(0.5);
+  w.clock().sleep_for(1.0, {});
+  // The world waited for the watcher: the handler ran within the slice of the edge.
+  EXPECT_GE(t_handler, 0.49);
+  EXPECT_LE(t_handler, 0.5 + 1e-9);
   EXPECT_FALSE(power_in_handler);
-  EXPECT_TRUE(g.estop_active());
+  EXPECT_FALSE(io.dut_power());
+  EXPECT_TRUE(io.estop_active());
+  EXPECT_GT(io.last_estop_reaction_s(), 0.0);
+  EXPECT_THROW(io.set_dut_power(true), HardwareError);
+  const auto log = w.lines().log();
+  const auto at = [&](const std::string& e) { return std::find(log.begin(), log.end(), e) - log.begin(); };
+  EXPECT_LT(at("estop=1"), at("handler"));
+  EXPECT_EQ(log[static_cast<std::size_t>(at("handler")) - 1], "power=0");
 }
 
 TEST(GpioConfig, ParsesNamesAndDefaults) {

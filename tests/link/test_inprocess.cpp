@@ -114,6 +114,34 @@ TEST(InProcessBus, ReceiveHonoursCancellation) {
   EXPECT_THROW(rx->receive(1.0, src.token()), AbortedError);
 }
 
+// In lockstep the bus owns simulated time: a receive that finds nothing queued steps the
+// SimClock by its timeout (the world sends meanwhile), one that finds a frame does not, and
+// frames carry the clock's time -- so the client never needs to know time is simulated.
+TEST(InProcessBus, LockstepReceiveStepsTheSimClockOnlyWhenNothingIsQueued) {
+  SimClock clock;
+  InProcessBus::Options o;
+  o.lockstep = &clock;
+  auto bus = InProcessBus::create(o);
+  auto world = bus->open("world"), rig = bus->open("rig");
+  CanFrame f;
+  f.id = 0x100;
+  f.len = 1;
+  clock.set_advance([&](double) {
+    if (clock.now_s() >= 0.02 - 1e-9 && world->stats().tx == 0) world->send(f);  // sent in the slice from 20 ms
+  });
+  const CancelToken never;
+  EXPECT_FALSE(rig->receive(0, never));  // a poll: time does not move
+  EXPECT_EQ(clock.now_s(), 0.0);
+  const auto rx = rig->receive(0.05, never);
+  ASSERT_TRUE(rx);
+  EXPECT_NEAR(clock.now_s(), 0.05, 1e-12);  // the whole timeout was simulated
+  EXPECT_NEAR(rx->t_s, 0.02, 1e-9);         // stamped when the world sent it
+  EXPECT_DOUBLE_EQ(rig->now_s(), clock.now_s());
+  world->send(f);
+  EXPECT_TRUE(rig->receive(1.0, never));  // queued: returned at once
+  EXPECT_NEAR(clock.now_s(), 0.05, 1e-12);
+}
+
 // ---- firmware + client, lockstep ----
 
 TEST(InProcessDut, InfoRoundTrips) {

@@ -1,23 +1,22 @@
-// The calibration table (docs/plant.md) for the default profile: the paper's whole
-// procedure (110 min of DUT time) run on the model and measured by the rig's analysis
-// (OADEV on the paper profile's log:100 grid + noise_terms, GOST in-run B), every row
-// against the band.
+// The calibration table (docs/plant.md) for the default profile: the shipped acceptance
+// procedure -- `rig run --plant emulated` on the paper profile, 110 min of DUT time through
+// the CAN link, the table and the capture files -- read off its passport, every row against
+// the band. Nothing here re-implements the procedure: bias and base error are formulas
+// (3), (4) with the sign rule, the in-run B and the Allan terms those of the procedure's phases.
 //
 // One hour of raw data holds one realisation of the slow processes, so a single seed says
 // little about the calibration: K's estimate scatters by about +-40 % between seeds and the
 // x/y ratio by more (docs/plant.md, 20 seeds). The table is asserted on the median over a
 // fixed set of nine seeds, 1..9, chosen before looking at any of them; each term must be
-// identified on at least eight. The paper profile's own seed is checked for identification below.
+// identified on at least eight (B by the paper's method: six, see below). The paper profile's own
+// seed is checked for identification below.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <future>
 #include <vector>
 
-#include "plant/dut/loop_figures.hpp"
-#include "analysis/noise_terms.hpp"
-#include "tests/plant/paper_procedure.hpp"
+#include "tests/plant/paper_run.hpp"
 
 namespace rig::plant {
 namespace {
@@ -28,45 +27,38 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
 }
 
-// About 4 s of CPU per seed; two seeds at a time.
-std::vector<calib::Result> run_seeds(const std::vector<uint64_t>& seeds) {
-  std::vector<calib::Result> out(seeds.size());
-  for (std::size_t i = 0; i < seeds.size(); i += 2) {
-    std::vector<std::future<calib::Result>> f;
-    for (std::size_t j = i; j < std::min(seeds.size(), i + 2); ++j)
-      f.push_back(std::async(std::launch::async, [s = seeds[j]] {
-        EmulatedDut dut(load_dut_params(nullptr), s);
-        return calib::run(dut, calib::Spec{});
-      }));
-    for (std::size_t j = 0; j < f.size(); ++j) out[i + j] = f[j].get();
-  }
-  return out;
+// One rig run per seed, two at a time (about 7 s of CPU each).
+std::vector<calib::PaperRun> run_seeds(const std::vector<uint64_t>& seeds) {
+  return calib::run_seeds(RIG_BINARY, calib::RunSpec{}, seeds, 2);
 }
 
 TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
   const std::vector<uint64_t> seeds{1, 2, 3, 4, 5, 6, 7, 8, 9};
-  const std::vector<calib::Result> rs = run_seeds(seeds);
+  const std::vector<calib::PaperRun> rs = run_seeds(seeds);
   std::vector<double> bias, base, gost, b_x, b_y, ratio, q, n, k;
-  for (std::size_t i = 0; i < rs.size(); ++i) {
-    const calib::Result& r = rs[i];
-    SCOPED_TRACE("seed " + std::to_string(seeds[i]));
-    ASSERT_EQ(r.x10.size(), 6u);
-    ASSERT_EQ(r.x20.size(), 6u);
-    EXPECT_FALSE(r.nt_x.R.value.has_value());  // R is not determinable from one hour (docs/method.md)
-    bias.push_back(r.bias);
-    base.push_back(r.base_error);
-    gost.push_back(r.b_gost_100);
+  for (const calib::PaperRun& r : rs) {
+    SCOPED_TRACE("seed " + std::to_string(r.seed));
+    EXPECT_FALSE(r.value("r").has_value());  // R is not determinable from one hour (docs/method.md)
+    bias.push_back(r.value("bias").value());
+    base.push_back(r.value("base_error").value());
+    gost.push_back(r.value("in_run_b_gost_100s").value());
     // The noise terms are medians over the seeds that identify them (passport units: g*h,
     // g*h^0.5, g/h^0.5); a term that a realisation cannot show is null with a reason, and
     // that may happen to one seed in nine (the paper's quartic finds no flat part).
-    if (r.nt_x.B.value) b_x.push_back(*r.nt_x.B.value);
-    if (r.nt_y.B.value) b_y.push_back(*r.nt_y.B.value);
-    if (r.nt_x.B.value && r.nt_y.B.value) ratio.push_back(*r.nt_x.B.value / *r.nt_y.B.value);
-    if (r.nt_x.Q.value) q.push_back(*r.nt_x.Q.value / 3600.0);
-    if (r.nt_x.N.value) n.push_back(*r.nt_x.N.value / 60.0);
-    if (r.nt_x.K.value) k.push_back(*r.nt_x.K.value * 60.0);
+    const auto bx = r.value("in_run_b_allan"), by = r.value("in_run_b_allan_filtered");
+    if (bx) b_x.push_back(*bx);
+    if (by) b_y.push_back(*by);
+    if (bx && by) ratio.push_back(*bx / *by);
+    if (auto v = r.value("q")) q.push_back(*v);
+    if (auto v = r.value("n")) n.push_back(*v);
+    if (auto v = r.value("k")) k.push_back(*v);
   }
-  for (const auto* v : {&b_x, &b_y, &q, &n, &k}) ASSERT_GE(v->size(), rs.size() - 1) << "a term is missing on 2+ seeds";
+  for (const auto* v : {&b_y, &q, &n, &k}) ASSERT_GE(v->size(), rs.size() - 1) << "a term is missing on 2+ seeds";
+  // B by the paper's method needs the curve's minimum inside tau <= T/4. On the shipped
+  // schedule (bring-up, homing, table moves, settling: the raw hour starts later than on the
+  // re-implemented schedule this table was first measured with) seeds 2, 4 and 6 have none:
+  // their N-K crossing lies beyond 836 s. Measured 6 of 9 (docs/plant.md); was 8 of 9.
+  ASSERT_GE(b_x.size(), 6u) << "B (paper's method) missing on 4+ seeds";
   std::printf("median over seeds 1..9: bias %.4e, base %.4e, B GOST100 %.3e, B Allan %.3e (%zu), B filtered %.3e (%zu), "
               "ratio %.2f, Q %.3e, N %.3e, K %.3e (%zu)\n",
               median(bias), median(base), median(gost), median(b_x), b_x.size(), median(b_y), b_y.size(),
@@ -97,21 +89,25 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
 class CalibrationSeeds : public ::testing::TestWithParam<uint64_t> {};
 
 TEST_P(CalibrationSeeds, KAndBothBAreIdentified) {
-  EmulatedDut dut(load_dut_params(nullptr), GetParam());
-  const calib::Result r = calib::run(dut, calib::Spec{});
-  ASSERT_TRUE(r.nt_x.K.value) << r.nt_x.K.reason;
-  ASSERT_TRUE(r.nt_x.B.value) << r.nt_x.B.reason;
-  ASSERT_TRUE(r.nt_y.B.value) << r.nt_y.B.reason;
-  EXPECT_GT(*r.nt_x.B.value / *r.nt_y.B.value, 1.5);
-  EXPECT_FALSE(r.nt_x.R.value.has_value());
+  calib::RunSpec spec;
+  spec.seed = GetParam();
+  const calib::PaperRun r = calib::run_rig(RIG_BINARY, spec);
+  ASSERT_TRUE(r.value("k")) << r.passport["values"]["k"].dump();
+  ASSERT_TRUE(r.value("in_run_b_allan")) << r.passport["values"]["in_run_b_allan"].dump();
+  ASSERT_TRUE(r.value("in_run_b_allan_filtered")) << r.passport["values"]["in_run_b_allan_filtered"].dump();
+  EXPECT_GT(*r.value("in_run_b_allan") / *r.value("in_run_b_allan_filtered"), 1.5);
+  EXPECT_FALSE(r.value("r").has_value());
 }
 INSTANTIATE_TEST_SUITE_P(PaperProfileSeed, CalibrationSeeds, ::testing::Values(uint64_t{20181106}));
 
 TEST(CalibrationLoop, SettlingAndBandwidth) {
-  // closed loop with the paper's W_f: settling 0.003 s (+-20 %), bandwidth 492 Hz at 0.5 (+-5 %)
-  const design::LoopFigures f = loop_figures(nullptr, design::paper_wf());
-  EXPECT_NEAR(f.settling_time_s, 0.003, 0.2 * 0.003);
-  EXPECT_NEAR(f.bandwidth_0p5_hz, 492, 0.05 * 492);
+  // The passport's loop phase, closed loop with the paper's W_f (the ci profile's filter, a
+  // run of seconds): settling 0.003 s (+-20 %), bandwidth 492 Hz at 0.5 (+-5 %).
+  calib::RunSpec spec;
+  spec.base = "ci";
+  const calib::PaperRun r = calib::run_rig(RIG_BINARY, spec);
+  EXPECT_NEAR(r.value("settling_time").value(), 0.003, 0.2 * 0.003);
+  EXPECT_NEAR(r.value("bandwidth_0p5").value(), 492, 0.05 * 492);
 }
 
 }  // namespace

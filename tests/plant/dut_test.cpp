@@ -8,7 +8,7 @@
 #include "plant/dut/emulated_dut.hpp"
 #include "design/filter.hpp"
 #include "rig/core/toml_util.hpp"
-#include "tests/plant/paper_procedure.hpp"
+#include "procedures/acceptance/method.hpp"
 
 namespace rig::plant {
 namespace {
@@ -121,9 +121,10 @@ TEST(Dut, PollingInterferenceFoldsToDcAndTheFilterCutsIt) {
                 11);
   std::vector<double> x(600000), y(600000);
   for (std::size_t i = 0; i < x.size(); ++i) d.next(x[i], y[i]);
-  std::vector<analysis::DevPoint> ax, ay;
-  calib::allan_terms(x, 1000, &ax);
-  calib::allan_terms(y, 1000, &ay);
+  // OADEV as the shipped procedure's Allan phase computes it, with the paper profile's settings.
+  const acceptance::AllanSettings paper = acceptance::allan_settings(acceptance::load_profile("paper"));
+  const std::vector<analysis::DevPoint> ax = acceptance::allan_channel_terms(x, paper).oadev;
+  const std::vector<analysis::DevPoint> ay = acceptance::allan_channel_terms(y, paper).oadev;
   const double expect = 1 / std::abs(design::response(design::paper_wf(), 1000));
   int checked = 0;
   for (std::size_t i = 0; i < ax.size(); ++i) {

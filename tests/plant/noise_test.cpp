@@ -13,7 +13,7 @@
 #include "plant/dut/noise.hpp"
 #include "analysis/psd.hpp"
 #include "rig/core/toml_util.hpp"
-#include "tests/plant/paper_procedure.hpp"
+#include "procedures/acceptance/method.hpp"
 
 namespace rig::plant {
 namespace {
@@ -80,13 +80,19 @@ EmulatedDut quiet_dut(const std::string& extra, uint64_t seed) {
   return EmulatedDut(load_dut_params(&t), seed);
 }
 
+// The Allan phase of the shipped procedure, with the paper profile's [analysis] settings.
+analysis::NoiseTerms allan_terms(const std::vector<double>& x) {
+  static const acceptance::AllanSettings paper = acceptance::allan_settings(acceptance::load_profile("paper"));
+  return acceptance::allan_channel_terms(x, paper).terms;
+}
+
 analysis::NoiseTerms analyse(EmulatedDut& d, double seconds) {
   std::vector<double> x(static_cast<std::size_t>(seconds * 1000));
   for (double& v : x) {
     double y;
     d.next(v, y);
   }
-  return calib::allan_terms(x, 1000);
+  return allan_terms(x);
 }
 
 std::string describe(const analysis::NoiseTerms& nt) {

@@ -1,0 +1,21 @@
+#include "procedures/acceptance/method.hpp"
+
+namespace rig::acceptance {
+
+AllanSettings allan_settings(const Profile& p) { return {p.rate_hz, p.taus, p.confidence, p.r_min_record_s}; }
+
+AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanSettings& s) {
+  analysis::DevOptions opt;
+  opt.type = analysis::Deviation::OADEV;
+  opt.data = analysis::DataKind::Frequency;
+  opt.rate_hz = s.rate_hz;
+  opt.taus = analysis::parse_tau_grid(s.taus);
+  opt.confidence = s.confidence;
+  AllanChannel c;
+  c.oadev = analysis::deviation(record, opt);
+  const double T = static_cast<double>(record.size()) / s.rate_hz;
+  c.terms = analysis::noise_terms(c.oadev, T, s.r_min_record_s);
+  return c;
+}
+
+}  // namespace rig::acceptance
