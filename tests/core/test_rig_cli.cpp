@@ -95,7 +95,9 @@ std::size_t count(const std::string& hay, const std::string& needle) {
   return n;
 }
 
-const char* kContractValues[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
+// The ci profile's GOST blocks are 2 s and 4 s long: its B values are named by that length
+// (in_run_b_gost_2s, _4s); the paper profile's are the CONTRACTS names in_run_b_gost_100s, _200s.
+const char* kContractValues[] = {"bias", "base_error", "in_run_b_gost_2s", "in_run_b_gost_4s", "in_run_b_allan",
                                  "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",
                                  "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"};
 
@@ -124,8 +126,11 @@ TEST(RigCli, CiProfileEndToEnd) {
   for (const char* name : kContractValues) {
     ASSERT_TRUE(p["values"].contains(name)) << name;
     const auto& m = p["values"][name];
-    for (const char* f : {"value", "unit", "lo", "hi", "limits", "outcome", "reason"}) EXPECT_TRUE(m.contains(f)) << name << "." << f;
+    for (const char* f : {"value", "unit", "lo", "hi", "limits", "outcome", "reason", "description"})
+      EXPECT_TRUE(m.contains(f)) << name << "." << f;
+    EXPECT_FALSE(m["description"].get<std::string>().empty()) << name;
   }
+  EXPECT_FALSE(p["values"].contains("in_run_b_gost_100s")) << "the ci profile has no 100 s blocks";
   EXPECT_TRUE(p["values"]["bias"]["value"].is_number());
   EXPECT_TRUE(p["values"]["r"]["value"].is_null()) << "R cannot be identified from 60 s";
   EXPECT_FALSE(p["values"]["r"]["reason"].get<std::string>().empty());
