@@ -251,8 +251,8 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
                   p.run_s + p.settle_s + move_s, [&p, &st, i](PhaseContext& c) { phase_run(c, p, st, i); }});
   }
   ph.push_back({"bias", "bias and base error, formulas (3), (4)", 0, [&p, &st](PhaseContext& c) { phase_bias(c, p, st); },
-                {{"bias", "g", "bias g_sist, formula (3) of METHOD.md, with its GOST R 8.736 95 % interval"},
-                 {"base_error", "g", "base error g_dA, formula (4), quoted positive by the sign rule"}}});
+                {{"bias", "g", "Bias g_сист, formula (3)"},
+                 {"base_error", "g", "Base error g_δA, formula (4)"}}});
   ph.push_back({"in-run", fmt::format("in-run test at {}: {} s (procedure B)", to_string(p.in_run_orientation), p.in_run_s),
                 p.in_run_s + p.settle_s + move_s, [&p, &st](PhaseContext& c) {
                   st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s,
@@ -261,10 +261,9 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
   std::vector<MeasurementSpec> gost;
   for (const double bs : p.in_run_blocks_s)
     gost.push_back({gost_value_name(bs), "g",
-                    fmt::format("in-run B = (max - min)/2 of the {:g} s block means of the in-run record (GOST)", bs)});
+                    fmt::format("In-run B, (max − min)/2 of {:g} s averages (GOST)", bs)});
   gost.push_back({"accuracy_class", "-",
-                  "accuracy class from B of the first block length per the profile's class table (value = class "
-                  "index, reason = its name)"});
+                  fmt::format("Accuracy class from B of {:g} s averages", p.in_run_blocks_s.empty() ? 0.0 : p.in_run_blocks_s[0])});
   ph.push_back({"in-run-b", "B by the Russian method, (max-min)/2 of block means", 0,
                 [&p, &st](PhaseContext& c) { phase_in_run_b(c, p, st); }, gost});
   ph.push_back({"raw", fmt::format("raw capture at {}: {} s at {} Hz (procedure C)", to_string(p.raw_orientation),
@@ -275,19 +274,19 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
                 }});
   ph.push_back({"allan", "Allan deviation, noise terms, RMS error and PSD of x(t) and y(t)", 0,
                 [&p, &st](PhaseContext& c) { phase_raw_analysis(c, p, st); },
-                {{"in_run_b_allan", "g", "B = sigma(tau_cp)/0.664 from the Allan deviation of the raw capture x(t)"},
-                 {"tau_cp", "s", "tau_cp, the averaging time B is read at"},
-                 {"q", "g*h", "quantisation noise Q (IEEE 952 terms fitted to the Allan deviation)"},
-                 {"n", "g*h^0.5", "random walk N (IEEE 952)"},
-                 {"k", "g/h^0.5", "rate random walk K (IEEE 952)"},
-                 {"r", "g/h", "rate ramp R (IEEE 952); null with a reason when the record is too short"},
-                 {"in_run_b_allan_filtered", "g", "as in_run_b_allan, on the filtered output y(t)"},
-                 {"rms_unfiltered", "g", "RMS error of the drift of x(t) over the raw capture (criterion 1)"},
-                 {"rms_filtered", "g", "RMS error of the drift of the filtered output y(t) over the raw capture"}}});
+                {{"in_run_b_allan", "g", "In-run B from Allan deviation, σ(τ_ср)/0.664"},
+                 {"tau_cp", "s", "τ_ср, the averaging time in_run_b_allan is read at"},
+                 {"q", "g*h", "Quantisation Q"},
+                 {"n", "g*h^0.5", "Random walk N"},
+                 {"k", "g/h^0.5", "Rate random walk K"},
+                 {"r", "g/h", "Rate ramp R"},
+                 {"in_run_b_allan_filtered", "g", "In-run B from Allan deviation, filtered output y(t)"},
+                 {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
+                 {"rms_filtered", "g", "RMS error x̂ of y(t)"}}});
   ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter", 0,
                 [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
-                {{"bandwidth_0p5", "Hz", "closed-loop bandwidth with the output filter, 0.5 level"},
-                 {"settling_time", "s", "closed-loop settling time after a 1 g step"}}});
+                {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level"},
+                 {"settling_time", "s", "Closed-loop settling time, 1 g step"}}});
   return ph;
 }
 
