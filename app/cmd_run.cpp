@@ -253,14 +253,6 @@ int do_run(RunArgs a) {
     ::kill(::getpid(), SIGINT);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
-  // A signal is taken until the passport is written: after the last phase it still aborts
-  // the run (exit 3); the measurements stay judged as measured. After the passport is
-  // written it is only logged (see the end of this function).
-  if (cancel.requested() && (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail)) {
-    res.outcome = RunOutcome::Aborted;
-    res.message = "aborted after the last phase: " + cancel.token().reason();
-    log->error("{}", res.message);
-  }
 
   // Outputs: written whatever the outcome, so an aborted run keeps what it measured.
   PassportInfo info;
@@ -274,6 +266,14 @@ int do_run(RunArgs a) {
   info.out_dir = fs::absolute(a.out).string();
   info.captures = state.slot().captures();  // what was recorded, not what lies in the folder
   std::sort(info.captures.begin(), info.captures.end());
+  // A signal is taken until the passport is written: after the last phase it still aborts
+  // the run (exit 3); the measurements stay judged as measured. After the passport is
+  // written it is only logged (see the end of this function).
+  if (cancel.requested() && (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail)) {
+    res.outcome = RunOutcome::Aborted;
+    res.message = "aborted after the last phase: " + cancel.token().reason();
+    log->error("{}", res.message);
+  }
   const auto passport = make_passport(info, res, values);
   write_passport(a.out + "/passport.json", passport);
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));

@@ -19,6 +19,7 @@
 #include "plant/emulated/world.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "procedures/acceptance/record.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
 
@@ -412,4 +413,45 @@ TEST(AnalysisCancel, ThePollHookStopsADeviationAndAWelchPromptly) {
   analysis::WelchOptions wo;
   wo.poll = [] { throw AbortedError("aborted: test"); };
   EXPECT_THROW(analysis::welch(x, 1000, wo), AbortedError);
+}
+
+TEST(ProcedureState, OneJsonFormRoundTripsAndReadsTheUntypedCheckpoints) {
+  acceptance::DutState s;
+  s.dut = acceptance::DutIdentity{"SN1", "fw 1.2", 24.5};
+  acceptance::Recorded r;
+  r.capture = "captures/run01-U10.cap";
+  r.samples = 2000;
+  r.mean_x = 1e-4;
+  r.mean_y = 2e-4;
+  s.runs[1] = acceptance::RunMean{1, Orientation::U10, r};
+  s.bias = acceptance::BiasState{1e-4, 2e-5, -1};
+  r.capture = "captures/in-run-U10.cap";
+  s.in_run = r;
+  s.in_run_blocks = std::vector<acceptance::GostBlock>{{2.0, {1.0, 2.0}, 0.5}, {4.0, {1.5}, std::nullopt}};
+  s.analysis = nlohmann::json{{"allan", {{"x", 1}}}};
+  const nlohmann::json j = acceptance::to_json(s);
+  EXPECT_EQ(acceptance::to_json(acceptance::dut_state_from_json(j)), j);
+  // Every recorded capture carries the same keys, wherever it appears.
+  for (const auto* rec : {&j["runs"]["1"], &j["in_run"]})
+    for (const char* k : {"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g"})
+      EXPECT_TRUE(rec->contains(k)) << k;
+  EXPECT_EQ(s.captures(), (std::vector<std::string>{"captures/run01-U10.cap", "captures/in-run-U10.cap"}));
+  // A checkpoint written before the state was typed (no duplicates, no means on in_run) still reads.
+  const auto old = nlohmann::json::parse(R"({"serial": "SN1",
+      "runs": {"1": {"index": 1, "orientation": "U10", "mean_g": 1e-4, "mean_y_g": 2e-4, "n": 2000,
+                     "capture": "captures/run01-U10.cap", "lost": 0, "gaps": 0, "attempts": 1}},
+      "in_run": {"capture": "captures/in-run-U10.cap", "n": 40000, "lost": 0, "gaps": 0, "attempts": 1}})");
+  const acceptance::DutState o = acceptance::dut_state_from_json(old);
+  EXPECT_EQ(o.runs.at(1).rec.mean_x, 1e-4);
+  EXPECT_EQ(o.in_run->samples, 40000u);
+  // Wrong types are named by their path.
+  auto bad = old;
+  bad["runs"]["1"]["n"] = -5;
+  try {
+    acceptance::dut_state_from_json(bad);
+    ADD_FAILURE() << "a negative count was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("state.runs.1.n: expected a count >= 0, found -5"), std::string::npos)
+        << e.what();
+  }
 }
