@@ -176,7 +176,13 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       rec.started = iso8601_utc_now();
       log_->info("phase {} start: {}", p.id, p.title);
       if (progress_) progress_->phase_started(i, phases.size(), p.id, p.title, p.planned_s);
+      {
+        std::vector<std::string> names;
+        for (const auto& m : p.measures) names.push_back(m.name);
+        values.set_scope(p.id, std::move(names));  // a phase sets only what it declares
+      }
       p.run(ctx);
+      values.set_scope({}, {});
       rec.finished = iso8601_utc_now();
       rec.status = "done";
       done.push_back(p.id);
@@ -207,6 +213,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     result.message = std::string("error: ") + e.what();
     log_->error("{}", result.message);
   }
+  values.set_scope({}, {});
   if (result.outcome != RunOutcome::Pass && result.outcome != RunOutcome::Fail)
     values.judge_all(false);  // stopped early: what was measured is judged, the rest stays UNSET
   if (current < phases.size()) {

@@ -1,5 +1,6 @@
 #include "rig/executive/measurement.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -91,6 +92,8 @@ Measurement& MeasurementSet::set(const std::string& name, std::optional<double> 
                                  std::optional<double> lo, std::optional<double> hi) {
   Measurement* m = find_mut(name);
   if (!m) throw std::logic_error("measurement '" + name + "' was not declared by any phase");
+  if (!scope_phase_.empty() && std::find(scope_.begin(), scope_.end(), name) == scope_.end())
+    throw std::logic_error("phase '" + scope_phase_ + "' sets '" + name + "', which it does not declare");
   m->value = value;
   m->lo = lo;
   m->hi = hi;
@@ -98,6 +101,11 @@ Measurement& MeasurementSet::set(const std::string& name, std::optional<double> 
   m->outcome = Outcome::Unset;  // judged once, by judge_all()
   m->verdict.clear();
   return *m;
+}
+
+void MeasurementSet::set_scope(std::string phase, std::vector<std::string> names) {
+  scope_phase_ = std::move(phase);
+  scope_ = std::move(names);
 }
 
 const Measurement* MeasurementSet::find(const std::string& name) const {

@@ -56,7 +56,10 @@ class MeasurementSet {
   // Declares a measurement before it has a value; declaring a name twice updates it.
   void declare(const MeasurementSpec& spec, std::optional<std::pair<double, double>> limits = std::nullopt,
                bool required = false);
-  // Records a value. Throws std::logic_error for a name no phase declared.
+  // While a phase runs, the names it declared (the executive sets it; empty = no phase).
+  void set_scope(std::string phase, std::vector<std::string> names);
+  // Records a value. Throws std::logic_error for a name no phase declared, or one the
+  // running phase did not declare.
   Measurement& set(const std::string& name, std::optional<double> value, const std::string& reason = {},
                    std::optional<double> lo = std::nullopt, std::optional<double> hi = std::nullopt);
   const Measurement* find(const std::string& name) const;
@@ -73,6 +76,8 @@ class MeasurementSet {
  private:
   Measurement* find_mut(const std::string& name);
   std::vector<Measurement> items_;
+  std::string scope_phase_;
+  std::vector<std::string> scope_;
 };
 
 }  // namespace rig

@@ -455,3 +455,18 @@ TEST(ProcedureState, OneJsonFormRoundTripsAndReadsTheUntypedCheckpoints) {
         << e.what();
   }
 }
+
+TEST(Executive, APhaseSetsOnlyWhatItDeclares) {
+  Fixture f("scope");
+  Devices d = f.dev();
+  Executive ex(d, f.out, f.log, nullptr);
+  std::vector<Phase> phases{{"a", "a", 1, [](PhaseContext& c) { c.values.set("va", 1.0); }, {{"va", "g", ""}}},
+                            {"b", "b", 1, [](PhaseContext& c) { c.values.set("va", 2.0); }, {{"vb", "g", ""}}}};
+  MeasurementSet v;
+  declare(phases, v);
+  NoPhaseState st;
+  const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
+  EXPECT_EQ(r.outcome, RunOutcome::Error);
+  EXPECT_NE(r.message.find("phase 'b' sets 'va', which it does not declare"), std::string::npos) << r.message;
+  EXPECT_EQ(*v.find("va")->value, 1.0);
+}
