@@ -253,4 +253,28 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
   slots_.at(0) = std::move(s);
 }
 
+void ProcedureState::check_values(const MeasurementSet& values) const {
+  const DutState& s = slots_.at(0);
+  auto same = [&](const std::string& name, std::optional<double> from_state, const std::string& field) {
+    const Measurement* m = values.find(name);
+    if (!m) return;
+    const bool equal = m->value.has_value() == from_state.has_value() && (!m->value || *m->value == *from_state);
+    if (!equal)
+      throw std::invalid_argument("values." + name + ".value: " + (m->value ? fmt::format("{:g}", *m->value) : "null") +
+                                  " contradicts " + field + " = " +
+                                  (from_state ? fmt::format("{:g}", *from_state) : "null"));
+  };
+  if (s.bias) {
+    same("bias", s.bias->bias, "state.bias.bias");
+    same("base_error", s.bias->base_error, "state.bias.base_error");
+  }
+  if (s.in_run_blocks)
+    for (std::size_t i = 0; i < s.in_run_blocks->size(); ++i) {
+      const GostBlock& b = (*s.in_run_blocks)[i];
+      // A NaN B is written as null: both sides say "no value".
+      const std::optional<double> bg = b.b_g && std::isfinite(*b.b_g) ? b.b_g : std::nullopt;
+      same(gost_value_name(b.block_s), bg, "state.in_run.blocks[" + std::to_string(i) + "].b_g");
+    }
+}
+
 }  // namespace rig::acceptance

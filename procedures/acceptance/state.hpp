@@ -77,6 +77,8 @@ class ProcedureState final : public PhaseState {
 
   nlohmann::json save() const override;
   void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
+  // bias, base_error and the GOST B values must be the ones the state holds.
+  void check_values(const MeasurementSet& values) const override;
 
  private:
   void check_capture(const Recorded& r, const std::string& field, const std::string& run_dir) const;

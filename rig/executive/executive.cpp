@@ -138,6 +138,7 @@ std::vector<std::string> Executive::load_checkpoint(const std::vector<Phase>& ph
   if (!j.contains("state")) throw bad("state", "missing");
   try {
     state.restore(j["state"], done, out_dir_);
+    state.check_values(values);
   } catch (const std::invalid_argument& e) {
     throw bad(e.what(), "");
   } catch (const nlohmann::json::exception& e) {

@@ -74,6 +74,9 @@ class PhaseState {
   // `run_dir` is the run folder the captures it names are in.
   virtual void restore(const nlohmann::json& j, const std::vector<std::string>& completed,
                        const std::string& run_dir) = 0;
+  // After both are restored: throws std::invalid_argument naming the field where a restored
+  // value contradicts the state it was computed from (e.g. "values.bias.value: ...").
+  virtual void check_values(const MeasurementSet&) const {}
 };
 
 // A state for procedures whose phases hand nothing on.

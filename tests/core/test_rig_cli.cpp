@@ -388,6 +388,9 @@ TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
   j["state"]["bias"] = nullptr;  // bias nulled
   resume_damaged(j, "state.bias: missing");
   j = good;
+  j["values"]["bias"]["value"] = nullptr;  // a value nulled: contradicts the state it came from
+  resume_damaged(j, "values.bias.value: null contradicts state.bias.bias");
+  j = good;
   j.erase("values");  // every phase completed, no values
   resume_damaged(j, "values: missing");
   j = good;
