@@ -107,7 +107,13 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
   for (std::size_t k = 0; k < opts.size(); ++k)
     for (std::size_t m : factors_for(opts[k], n))
       index[k].push_back(find_or_add(opts[k].type == Deviation::TDEV ? Deviation::MDEV : opts[k].type, m));
-  detail::Engine engine(src, kind, opts[0].rate_hz, so, opts[0].threads, kNoiseIdCap);
+  StreamOptions so_polled = so;
+  if (!so_polled.poll) so_polled.poll = opts[0].poll;
+  const auto poll = [&so_polled] {
+    if (so_polled.poll) so_polled.poll();
+  };
+  poll();
+  detail::Engine engine(src, kind, opts[0].rate_hz, so_polled, opts[0].threads, kNoiseIdCap);
   const detail::EngineResult er = engine.run(req);
 
   // Mod AVAR at m for R(n), only where B1 cannot tell white from flicker PM.
@@ -139,6 +145,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
   const double tau0 = 1.0 / opts[0].rate_hz;
   const unsigned threads = opts[0].threads ? opts[0].threads : std::max(1u, std::thread::hardware_concurrency());
   detail::parallel_for(pend.size(), threads, [&](std::size_t i) {
+    poll();
     Pending& e = pend[i];
     const DevOptions& o = opts[e.k];
     const detail::Sums& s = er.sums[index[e.k][e.q]];

@@ -7,6 +7,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -63,6 +64,10 @@ struct DevOptions {
   std::vector<std::size_t> factors;  // explicit averaging factors; overrides `taus` when not empty
   unsigned threads = 0;              // 0 = all hardware threads (the 2-core rig PC: both)
   std::optional<int> fixed_alpha;    // skip identification and use this noise type (Stable32's manual choice)
+  // Cancellation hook: called between units of work (about every chunk of phase points and per
+  // tau, from any worker thread); it may throw to stop the computation, and that exception
+  // leaves deviation() after the workers stop. The math knows nothing of what it throws.
+  std::function<void()> poll;
 };
 
 // The index of the first NaN or infinity in `v`, if any. One vectorised pass over the values
@@ -101,6 +106,7 @@ class SpanSource final : public ChunkSource {
 struct StreamOptions {
   std::size_t memory_budget_bytes = 384u << 20;  // ring of phase points + per-tau state
   std::size_t chunk = 1u << 14;                  // phase points per processing step (L2-sized windows)
+  std::function<void()> poll;                    // as DevOptions::poll (deviations_stream takes the options')
 };
 
 // Streams the source once sequentially (plus random-access cursors for the few factors

@@ -578,6 +578,9 @@ struct Engine::Impl {
   StreamOptions so;
   unsigned threads;
   std::size_t cap, chunk;
+  void poll() const {
+    if (so.poll) so.poll();
+  }
   Ring ring;
   bool ring_holds_all = false;
   std::vector<double> checkpoints;
@@ -600,6 +603,7 @@ struct Engine::Impl {
     std::vector<std::vector<double>> win(a.nwin, std::vector<double>(chunk));
     const double* w[4];
     for (std::uint64_t b = 0; b < a.bases; b += chunk) {
+      poll();
       const std::size_t len = std::min<std::uint64_t>(chunk, a.bases - b);
       for (std::size_t j = 0; j < a.nwin; ++j) {
         read(b + j * a.m, std::span<double>(win[j].data(), len));
@@ -745,7 +749,10 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     // of segments (not per thread: the sums do not depend on the thread count); a segment runs
     // every item chunk by chunk (the newest windows stay in L2 across items), and the partial
     // sums are added in segment order. MDEV's running window sum keeps its items whole.
-    for (std::uint64_t j = 0; j < n; j += chunk) produce(j, std::min<std::uint64_t>(n, j + chunk));
+    for (std::uint64_t j = 0; j < n; j += chunk) {
+      if (j % (64 * chunk) == 0) poll();
+      produce(j, std::min<std::uint64_t>(n, j + chunk));
+    }
     constexpr std::size_t kSegments = 32;
     std::vector<std::size_t> whole, split;
     for (std::size_t k = 0; k < items.size(); ++k) (accs[items[k][0]].modified() ? whole : split).push_back(k);
@@ -753,7 +760,10 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     parallel_for(whole.size() + kSegments, threads, [&](std::size_t t) {
       if (t < whole.size()) {  // the costliest tasks first
         const std::vector<std::size_t>& item = items[whole[t]];
-        for (std::uint64_t h = 0; h < n; h += chunk) run_item(item, accs, h, std::min<std::uint64_t>(n, h + chunk));
+        for (std::uint64_t h = 0; h < n; h += chunk) {
+          poll();
+          run_item(item, accs, h, std::min<std::uint64_t>(n, h + chunk));
+        }
         return;
       }
       const std::size_t g = t - whole.size();
@@ -765,8 +775,10 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
           local[idx].terms = 0;
         }
       const std::uint64_t h0 = n * g / kSegments, h1 = n * (g + 1) / kSegments;
-      for (std::uint64_t h = h0; h < h1; h += chunk)
+      for (std::uint64_t h = h0; h < h1; h += chunk) {
+        poll();
         for (std::size_t k : split) run_item(items[k], local, h, std::min(h1, h + chunk));
+      }
       for (std::size_t k : split)
         for (std::size_t idx : items[k]) part[g].emplace_back(local[idx].sum, local[idx].terms);
     });
@@ -792,6 +804,7 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     auto process_chunk = [&] {
       const std::size_t count = items.size() + 1;
       for (std::size_t k; (k = next.fetch_add(1)) < count;) try {
+          poll();
           if (k == 0) {
             if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
             continue;
@@ -836,7 +849,10 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   std::vector<std::size_t> post;
   for (std::size_t i = 0; i < accs.size(); ++i)
     if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1)) post.push_back(i);
-  parallel_for(post.size(), threads, [&](std::size_t k) { finish(accs[post[k]]); });
+  parallel_for(post.size(), threads, [&](std::size_t k) {
+    poll();
+    finish(accs[post[k]]);
+  });
 
   res.sums.resize(accs.size());
   std::map<std::size_t, std::size_t> users;  // the last user of a series takes it, the others copy

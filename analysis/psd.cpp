@@ -123,6 +123,7 @@ Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
       }
     };
     for (std::uint64_t k = s0; k < s1; ++k) {
+      if (opt.poll) opt.poll();
       const std::uint64_t start = k * step;
       if (k > s0 && step < seg) {  // slide: keep the overlap, read the rest
         std::copy(x.begin() + static_cast<std::ptrdiff_t>(step), x.end(), x.begin());

@@ -3,6 +3,7 @@
 // curve: for white frequency noise S_y(f) = h0 and sigma^2(tau) = h0 / (2 tau), so N^2 = h0 / 2.
 #pragma once
 #include <cstddef>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@ struct WelchOptions {
   Window window = Window::Hann;
   bool detrend_mean = true;  // remove each segment's mean (the bias is not noise)
   unsigned threads = 0;      // 0 = all hardware threads; the result does not depend on it
+  std::function<void()> poll;  // cancellation hook, as analysis::DevOptions::poll (called per segment)
 };
 
 struct Psd {

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include <fmt/format.h>
 #include <spdlog/sinks/basic_file_sink.h>
@@ -59,9 +60,16 @@ std::string slurp(const std::string& path) {
 }
 
 // Emulated-plant fault injection (tests and technicians' training):
-// estop@T, sigint@T (a real SIGINT to this process), drop@SEQ:COUNT.
-void apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& inj) {
+// estop@T, sigint@T (a real SIGINT to this process), drop@SEQ:COUNT, and
+// sigint@end: a SIGINT after the last phase, before the passport is written
+// (the late signal of issue 13). Returns whether sigint@end was asked for.
+bool apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& inj) {
+  bool sigint_at_end = false;
   for (const std::string& s : inj) {
+    if (s == "sigint@end") {
+      sigint_at_end = true;
+      continue;
+    }
     const auto at = s.find('@');
     if (at == std::string::npos) throw ConfigError("--inject '" + s + "': expected KIND@ARG");
     const std::string kind = s.substr(0, at), arg = s.substr(at + 1);
@@ -76,12 +84,36 @@ void apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& i
         w.inject_drop(static_cast<uint32_t>(std::stoul(arg.substr(0, c))),
                       static_cast<uint32_t>(std::stoul(arg.substr(c + 1))));
       } else {
-        throw ConfigError("--inject '" + s + "': unknown fault (estop@T, sigint@T, drop@SEQ:COUNT)");
+        throw ConfigError("--inject '" + s + "': unknown fault (estop@T, sigint@T, sigint@end, drop@SEQ:COUNT)");
       }
     } catch (const std::logic_error&) {
       throw ConfigError("--inject '" + s + "': bad number");
     }
   }
+  return sigint_at_end;
+}
+
+// run.json of a run folder, checked before it is trusted: each field has its type, the
+// plant is one rig knows, and a hardware run names its hardware file.
+void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs& a) {
+  if (!inv.is_object()) throw ConfigError(path + ": expected a JSON object, found " + inv.type_name());
+  auto str = [&](const char* key, const std::string& dflt) {
+    if (!inv.contains(key)) return dflt;
+    if (!inv[key].is_string())
+      throw ConfigError(path + ": field '" + key + "': expected a string, found " + inv[key].type_name());
+    return inv[key].get<std::string>();
+  };
+  a.plant = str("plant", "emulated");
+  a.hardware = str("hardware", "");
+  a.serial = str("serial", "");
+  if (a.plant != "emulated" && a.plant != "hardware")
+    throw ConfigError(path + ": field 'plant': \"" + a.plant + "\" is neither \"emulated\" nor \"hardware\"");
+  if (a.plant == "hardware" && a.hardware.empty())
+    throw ConfigError(path + ": field 'hardware': a hardware run must name its hardware file");
+  if (a.plant == "hardware" && !fs::is_regular_file(a.hardware))
+    throw ConfigError(path + ": field 'hardware': " + a.hardware + " does not exist");
+  if (inv.contains("started") && !inv["started"].is_string())
+    throw ConfigError(path + ": field 'started': expected a string, found " + inv["started"].type_name());
 }
 
 bool confirm(const std::string& question) {
@@ -160,8 +192,10 @@ void prepare_run_folder(const std::string& dir) {
 void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
                                  const std::string& started, const std::string& reason, bool config_error,
                                  spdlog::logger& log) {
+  acceptance::ProcedureState state(p);
+  const std::vector<Phase> phases = acceptance::build_phases(p, state);
   MeasurementSet values;
-  acceptance::declare_values(p, values);
+  acceptance::declare_values(p, phases, values);
   RunResult res;
   res.outcome = RunOutcome::Error;
   res.message = reason;
@@ -178,7 +212,7 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   const auto passport = make_passport(info, res, values);
   write_passport(a.out + "/passport.json", passport);
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
-  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(nlohmann::json::object()).dump(1));
+  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(state.slot()).dump(1));
   try {
     report::write_report(a.out);
   } catch (const std::exception& e) {
@@ -222,16 +256,15 @@ int do_run(RunArgs a) {
       throw ConfigError(inv_path + ": unreadable: " + e.what());
     }
     a.out = a.resume;
-    a.plant = invocation.value("plant", "emulated");
-    a.hardware = invocation.value("hardware", "");
-    a.serial = invocation.value("serial", "");
+    read_invocation(inv_path, invocation, a);
     a.profile = a.resume + "/profile.toml";
   }
   acceptance::Profile p = acceptance::load_profile(a.profile);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware);
 
-  std::vector<Phase> phases = acceptance::build_phases(p);
+  acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
+  std::vector<Phase> phases = acceptance::build_phases(p, state);
   TerminalView view(stderr, a.quiet);
   if (a.dry_run) {
     TerminalView plan_view(stdout);
@@ -275,14 +308,14 @@ int do_run(RunArgs a) {
                                 dynamic_cast<const ConfigError*>(&e) != nullptr, *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
-  if (b.emulated) apply_injections(*b.emulated, a.inject);
+  bool sigint_at_end = false;
+  if (b.emulated) sigint_at_end = apply_injections(*b.emulated, a.inject);
   else if (!a.inject.empty()) throw ConfigError("--inject works with the emulated plant only");
   Devices dev = b.devices();
   dev.io.on_estop([&cancel] { cancel.request("e-stop line opened"); });
 
   MeasurementSet values;
-  acceptance::declare_values(p, values);
-  nlohmann::json state = nlohmann::json::object();
+  acceptance::declare_values(p, phases, values);
   const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
   acceptance::RunOptions ro;
   if (!a.serial.empty()) ro.expected_serial = a.serial;
@@ -290,12 +323,16 @@ int do_run(RunArgs a) {
   view.plan(phases);
   Executive exec(dev, a.out, log, &view);
   const std::string started = invocation.value("started", iso8601_utc_now());
-  RunResult res = exec.run([&](PhaseContext& c) { acceptance::bring_up(c, p, ro); }, phases, values, state,
-                           cancel.token(), !a.resume.empty(), identity);
+  RunResult res = exec.run([&](PhaseContext& c) { acceptance::bring_up(c, p, ro, state.slot()); }, phases, values,
+                           state, cancel.token(), !a.resume.empty(), identity);
+  if (sigint_at_end) {
+    ::kill(::getpid(), SIGINT);
+    for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
 
   // Outputs: written whatever the outcome, so an aborted run keeps what it measured.
   PassportInfo info;
-  info.serial = state.value("serial", a.serial);
+  info.serial = state.slot().dut ? state.slot().serial() : a.serial;
   info.profile = p.name;
   info.plant = a.plant;
   info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
@@ -303,14 +340,20 @@ int do_run(RunArgs a) {
   info.finished = iso8601_utc_now();
   info.software = std::string("rig ") + RIG_VERSION;
   info.out_dir = fs::absolute(a.out).string();
-  if (fs::is_directory(a.out + "/captures"))
-    for (const auto& e : fs::directory_iterator(a.out + "/captures"))
-      if (e.path().extension() == ".cap") info.captures.push_back("captures/" + e.path().filename().string());
+  info.captures = state.slot().captures();  // what was recorded, not what lies in the folder
   std::sort(info.captures.begin(), info.captures.end());
+  // A signal is taken until the passport is written: after the last phase it still aborts
+  // the run (exit 3); the measurements stay judged as measured. After the passport is
+  // written it is only logged (see the end of this function).
+  if (cancel.requested() && (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail)) {
+    res.outcome = RunOutcome::Aborted;
+    res.message = "aborted after the last phase: " + cancel.token().reason();
+    log->error("{}", res.message);
+  }
   const auto passport = make_passport(info, res, values);
   write_passport(a.out + "/passport.json", passport);
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
-  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(state).dump(1));
+  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(state.slot()).dump(1));
   try {
     report::write_report(a.out);
   } catch (const std::exception& e) {
@@ -339,6 +382,9 @@ int do_run(RunArgs a) {
     log->info("{}", line);
   }
   log->info("outcome {} (exit {})", to_string(res.outcome), res.exit_code());
+  if (cancel.requested() && res.outcome != RunOutcome::Aborted)
+    log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),
+              to_string(res.outcome), res.exit_code());
   return res.exit_code();
 }
 

@@ -1,6 +1,5 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 
-#include <algorithm>
 
 namespace rig::acceptance {
 
@@ -15,20 +14,16 @@ nlohmann::json loop_to_json(const design::LoopFigures& f) {
           {"freq", {{"f_hz", f.freq_hz}, {"mag_x", f.amp_x}, {"mag_y", f.amp_y}}}};
 }
 
-nlohmann::json analysis_document(const nlohmann::json& s) {
+nlohmann::json analysis_document(const DutState& state) {
+  const nlohmann::json s = to_json(state);
   nlohmann::json d{{"schema", "rig.analysis/1"}};
   nlohmann::json runs = nlohmann::json::array();
-  if (s.contains("runs"))
-    for (const auto& [k, r] : s["runs"].items()) runs.push_back(r);
-  std::sort(runs.begin(), runs.end(), [](const auto& x, const auto& y) { return x["index"] < y["index"]; });
+  for (const auto& [i, r] : state.runs) runs.push_back(s["runs"][std::to_string(i)]);  // std::map: by index
   d["runs"] = runs;
-  if (s.contains("bias")) d["bias"] = s["bias"];
-  if (s.contains("in_run")) d["in_run"] = s["in_run"];
-  if (s.contains("raw")) d["raw"] = s["raw"];
-  if (s.contains("analysis"))
-    for (const auto& [k, v] : s["analysis"].items()) d[k] = v;
-  if (s.contains("loop")) d["loop"] = s["loop"];
-  if (s.contains("dut")) d["dut"] = s["dut"];
+  for (const char* k : {"bias", "in_run", "raw", "loop", "dut"})
+    if (s.contains(k)) d[k] = s[k];
+  if (state.analysis)
+    for (const auto& [k, v] : state.analysis->items()) d[k] = v;
   return d;
 }
 

@@ -4,8 +4,10 @@ namespace rig::acceptance {
 
 AllanSettings allan_settings(const Profile& p) { return {p.rate_hz, p.taus, p.confidence, p.r_min_record_s}; }
 
-AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanSettings& s) {
+AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanSettings& s,
+                                 const std::function<void()>& poll) {
   analysis::DevOptions opt;
+  opt.poll = poll;
   opt.type = analysis::Deviation::OADEV;
   opt.data = analysis::DataKind::Frequency;
   opt.rate_hz = s.rate_hz;
@@ -14,6 +16,7 @@ AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanS
   AllanChannel c;
   c.oadev = analysis::deviation(record, opt);
   const double T = static_cast<double>(record.size()) / s.rate_hz;
+  if (poll) poll();
   c.terms = analysis::noise_terms(c.oadev, T, s.r_min_record_s);
   return c;
 }

@@ -3,6 +3,7 @@
 // tests and the emulated DUT's noise studies call the same functions, so what they
 // measure is what the passport measures.
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,9 @@ struct AllanChannel {
 // One channel of procedure C: the overlapping Allan deviation of the record (frequency
 // data at rate_hz) on the profile's tau grid, and the noise terms fitted to it (the
 // paper's polynomial-segment B and the IEEE 952 weighted fit; docs/analysis.md).
-AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanSettings& s);
+// `poll` (may be empty) is called between chunks of work; it throws to abandon the computation
+// (the phase passes its cancel token, so an abort is taken within a chunk).
+AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanSettings& s,
+                                 const std::function<void()>& poll = {});
 
 }  // namespace rig::acceptance

@@ -11,6 +11,7 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/method.hpp"
 #include "procedures/acceptance/record.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/rms.hpp"
 #include "analysis/gost.hpp"
@@ -39,34 +40,26 @@ capture::Loaded load_capture(PhaseContext& ctx, const std::string& rel) {
 }
 
 // The drift g_dr(t) = x(t) - g_sist -+ g_dA (docs/method.md, after (4)) of a capture at orientation o.
-std::vector<double> drift(const std::vector<double>& x, const nlohmann::json& state, Orientation o) {
+std::vector<double> drift(const std::vector<double>& x, const DutState& st, Orientation o) {
   std::vector<double> d(x);
-  if (!state.contains("bias")) return d;  // bias phase not run: the offset does not change Allan/B/PSD
-  const double bias = state["bias"]["bias"].get<double>();
-  const double base = state["bias"]["base_error"].get<double>();
-  const int s10 = state["bias"]["sign_u10"].get<int>();
-  const double off = bias + (o == Orientation::U10 ? s10 : -s10) * base;
+  if (!st.bias) return d;  // bias phase not run: the offset does not change Allan/B/PSD
+  const BiasState& b = *st.bias;
+  const double off = b.bias + (o == Orientation::U10 ? b.sign_u10 : -b.sign_u10) * b.base_error;
   for (double& v : d) v -= off;
   return d;
 }
 
-void phase_run(PhaseContext& ctx, const Profile& p, std::size_t i) {
+void phase_run(PhaseContext& ctx, const Profile& p, DutState& st, std::size_t i) {
   const Orientation o = p.order[i];
-  const Recorded r = position_and_record(ctx, p, o, p.run_s, run_id(i, o));
-  nlohmann::json& runs = ctx.state["runs"];
-  runs[std::to_string(i + 1)] = {{"index", i + 1},          {"orientation", to_string(o)}, {"mean_g", r.mean_x},
-                                 {"mean_y_g", r.mean_y},     {"n", r.samples},             {"capture", r.capture},
-                                 {"lost", r.lost},           {"gaps", r.gaps},             {"attempts", r.attempts}};
+  st.runs[i + 1] = RunMean{i + 1, o, position_and_record(ctx, p, o, p.run_s, run_id(i, o), st.serial())};
 }
 
-void phase_bias(PhaseContext& ctx, const Profile& p) {
+void phase_bias(PhaseContext& ctx, const Profile& p, DutState& st) {
   std::vector<double> x10, x20;
-  for (std::size_t i = 0; i < p.order.size(); ++i) {
-    const auto& run = ctx.state["runs"].at(std::to_string(i + 1));
-    (p.order[i] == Orientation::U10 ? x10 : x20).push_back(run["mean_g"].get<double>());
-  }
+  for (std::size_t i = 0; i < p.order.size(); ++i)
+    (p.order[i] == Orientation::U10 ? x10 : x20).push_back(st.runs.at(i + 1).rec.mean_x);
   const BiasBaseError b = bias_and_base_error(x10, x20);
-  ctx.state["bias"] = {{"bias", b.bias}, {"base_error", b.base_error}, {"sign_u10", b.sign_u10}};
+  st.bias = BiasState{b.bias, b.base_error, b.sign_u10};
   ctx.values.set("bias", b.bias, "formula (3), GOST R 8.736 95 % interval", b.bias - b.bias_ci_half,
                  b.bias + b.bias_ci_half);
   ctx.values.set("base_error", b.base_error,
@@ -74,41 +67,35 @@ void phase_bias(PhaseContext& ctx, const Profile& p) {
                  b.base_error - b.base_ci_half, b.base_error + b.base_ci_half);
 }
 
-void phase_in_run_b(PhaseContext& ctx, const Profile& p) {
-  const std::string rel = ctx.state["in_run"]["capture"].get<std::string>();
+void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
+  const std::string rel = st.in_run.value().capture;
   const capture::Loaded l = load_capture(ctx, rel);
   const std::vector<double> x = capture::channel_x(l.samples);
-  nlohmann::json blocks = nlohmann::json::array();
-  for (std::size_t k = 0; k < p.in_run_blocks_s.size(); ++k) {
-    const double bs = p.in_run_blocks_s[k];
+  std::vector<GostBlock> blocks;
+  for (const double bs : p.in_run_blocks_s) {
     const auto len = static_cast<std::size_t>(bs * p.rate_hz + 0.5);
     const analysis::InRunB b = analysis::in_run_b(x, len);
-    blocks.push_back({{"block_s", bs}, {"means_g", analysis::block_means(x, len)}, {"b_g", b.value}});
-    const std::string name = k == 0   ? "in_run_b_gost_100s"
-                             : k == 1 ? "in_run_b_gost_200s"
-                                      : fmt::format("in_run_b_gost_{}s", bs);
-    ctx.values.set(name, b.value, fmt::format("(max-min)/2 of {} block means of {} s", b.blocks, bs));
+    blocks.push_back({bs, analysis::block_means(x, len), b.value});
+    ctx.values.set(gost_value_name(bs), b.value, fmt::format("(max-min)/2 of {} block means of {} s", b.blocks, bs));
   }
-  ctx.state["in_run"]["blocks"] = blocks;
-  const Measurement* b100 = ctx.values.find("in_run_b_gost_100s");
-  if (b100 && b100->value) {
-    if (auto c = accuracy_class(p.classes, *b100->value)) {
-      ctx.values.set("accuracy_class", static_cast<double>(*c), p.classes[*c - 1].name);
-    } else {
-      Measurement& m = ctx.values.set("accuracy_class", std::nullopt,
-                                      fmt::format("B = {:.3g} g exceeds every class in the profile", *b100->value));
-      m.outcome = Outcome::Fail;
-    }
-    Measurement* m = ctx.values.find("accuracy_class");
-    if (m->value && m->outcome == Outcome::Unset) m->outcome = Outcome::Pass;  // a class was found
+  st.in_run_blocks = blocks;
+  // The class is read from B of the first block length (the paper's 100 s); its outcome is
+  // judged with every other value (required when the profile has classes).
+  const std::optional<double> b = blocks.empty() ? std::nullopt : blocks.front().b_g;
+  if (!b) {
+    ctx.values.set("accuracy_class", std::nullopt, "no B from the first block length");
+  } else if (auto c = accuracy_class(p.classes, *b)) {
+    ctx.values.set("accuracy_class", static_cast<double>(*c), p.classes[*c - 1].name);
+  } else {
+    ctx.values.set("accuracy_class", std::nullopt, fmt::format("B = {:.3g} g exceeds every class in the profile", *b));
   }
 }
 
 // Allan family + noise terms of one channel; writes the passport values.
 nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vector<double>& d, bool filtered) {
   // R only from a record as long as the method needs (the profile's [analysis] r_min_record_s):
-  // the passport and analysis.json carry the same fit.
-  const AllanChannel ch = allan_channel_terms(d, allan_settings(p));
+  // the passport and analysis.json carry the same fit. An abort is taken within a chunk of work.
+  const AllanChannel ch = allan_channel_terms(d, allan_settings(p), [&ctx] { ctx.cancel.throw_if_requested(); });
   const std::vector<analysis::DevPoint>& dev = ch.oadev;
   const analysis::NoiseTerms& nt = ch.terms;
   auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
@@ -134,11 +121,12 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   return {{"oadev", analysis::dev_to_json(dev)}, {"noise_terms", analysis::noise_terms_to_json(nt)}};
 }
 
-void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
-  const std::string rel = ctx.state["raw"]["capture"].get<std::string>();
+void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
+  const std::string rel = st.raw.value().capture;
   const capture::Loaded l = load_capture(ctx, rel);
-  const std::vector<double> x = drift(capture::channel_x(l.samples), ctx.state, p.raw_orientation);
-  const std::vector<double> y = drift(capture::channel_y(l.samples), ctx.state, p.raw_orientation);
+  ctx.cancel.throw_if_requested();
+  const std::vector<double> x = drift(capture::channel_x(l.samples), st, p.raw_orientation);
+  const std::vector<double> y = drift(capture::channel_y(l.samples), st, p.raw_orientation);
   nlohmann::json a;
   a["allan"]["x"] = allan_channel(ctx, p, x, false);
   ctx.report(0.45);
@@ -148,7 +136,9 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
   ctx.values.set("rms_unfiltered", analysis::rms(x), "RMS of x(t) drift over the raw capture");
   ctx.values.set("rms_filtered", analysis::rms(y), "RMS of y(t) drift over the raw capture");
   for (const auto& [ch, v] : {std::pair{"x", &x}, std::pair{"y", &y}}) {
-    const analysis::Psd psd = analysis::welch(*v, p.rate_hz);
+    analysis::WelchOptions wo;
+    wo.poll = [&ctx] { ctx.cancel.throw_if_requested(); };
+    const analysis::Psd psd = analysis::welch(*v, p.rate_hz, wo);
     a["psd"][ch] = analysis::psd_to_json(psd, analysis::find_peaks(psd));
   }
   const std::size_t n_ts = std::min<std::size_t>(x.size(), static_cast<std::size_t>(2 * p.rate_hz));
@@ -157,16 +147,16 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
                      {"x", std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n_ts))},
                      {"y", std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(n_ts))},
                      {"note", "first 2 s of the raw capture (drift: bias and base error removed)"}};
-  ctx.state["analysis"] = a;
+  st.analysis = a;
 }
 
-void phase_loop(PhaseContext& ctx, const Profile& p) {
+void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
   const toml::table* dut_cfg = p.plant.get_as<toml::table>("dut");
   const design::LoopFigures f = plant::loop_figures(dut_cfg, p.filter);
   ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, "closed loop with the output filter, 0.5 level (model)");
   ctx.values.set("settling_time", f.settling_time_s,
                  fmt::format("closed loop, 1 g step, {:g} % band (model)", f.settling_band * 100));
-  ctx.state["loop"] = loop_to_json(f);
+  st.loop = loop_to_json(f);
 }
 
 }  // namespace
@@ -203,29 +193,24 @@ std::optional<std::size_t> accuracy_class(const std::vector<AccuracyClass>& clas
   return std::nullopt;
 }
 
-void declare_values(const Profile& p, MeasurementSet& v) {
-  auto d = [&](const char* name, const char* unit) { v.declare(name, unit, limit(p, name)); };
-  d("bias", "g");
-  d("base_error", "g");
-  d("in_run_b_gost_100s", "g");
-  d("in_run_b_gost_200s", "g");
-  for (std::size_t k = 2; k < p.in_run_blocks_s.size(); ++k)
-    v.declare(fmt::format("in_run_b_gost_{}s", p.in_run_blocks_s[k]), "g");
-  d("in_run_b_allan", "g");
-  d("tau_cp", "s");
-  d("q", "g*h");
-  d("n", "g*h^0.5");
-  d("k", "g/h^0.5");
-  d("r", "g/h");
-  d("in_run_b_allan_filtered", "g");
-  d("rms_unfiltered", "g");
-  d("rms_filtered", "g");
-  d("bandwidth_0p5", "Hz");
-  d("settling_time", "s");
-  d("accuracy_class", "-");
+void declare_values(const Profile& p, const std::vector<Phase>& phases, MeasurementSet& v) {
+  // Passport order: every phase's measures in phase order, then the accuracy class (the
+  // passport's conclusion). A name declared twice is a programming error.
+  const MeasurementSpec* klass = nullptr;
+  std::vector<std::string> seen;
+  for (const Phase& ph : phases)
+    for (const MeasurementSpec& m : ph.measures) {
+      if (std::find(seen.begin(), seen.end(), m.name) != seen.end())
+        throw std::logic_error("measurement '" + m.name + "' declared by two phases");
+      seen.push_back(m.name);
+      if (m.name == "accuracy_class") klass = &m;
+      else v.declare(m, limit(p, m.name));
+    }
+  // With a class table, the class is required: a B that exceeds every class fails the run.
+  if (klass) v.declare(*klass, limit(p, klass->name), !p.classes.empty());
 }
 
-void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt) {
+void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutState& st) {
   ctx.dev.io.set_lamp(Lamp::Ready, false);
   ctx.dev.io.set_lamp(Lamp::Running, true);
   if (ctx.dev.io.estop_active()) throw AbortedError("e-stop/interlock is open: close it before starting");
@@ -240,8 +225,7 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt) {
   if (std::abs(info.output_rate_hz - p.rate_hz) > 1e-6 * p.rate_hz)
     throw ConfigError(fmt::format("DUT streams at {} Hz, profile '{}' expects rate_hz = {}", info.output_rate_hz, p.name,
                                   p.rate_hz));
-  ctx.state["serial"] = info.serial;
-  ctx.state["dut"] = {{"serial", info.serial}, {"firmware", info.firmware}, {"temperature_c", info.temperature_c}};
+  st.dut = DutIdentity{info.serial, info.firmware, info.temperature_c};
   ctx.log->info("output filter: {} ({} section(s) at {} Hz, {})", p.filter_name, p.filter.sections.size(),
                 p.filter.rate_hz, p.filter.enabled ? "on" : "off");
   ctx.dev.dut.set_filter(p.filter, ctx.cancel);
@@ -249,37 +233,53 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt) {
   ctx.dev.table.home(ctx.cancel);
 }
 
-std::vector<Phase> build_phases(const Profile& p) {
+std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
+  DutState& st = state.slot(0);  // a multi-DUT fixture runs each phase over its slots
   std::vector<Phase> ph;
   const double move_s = 5.0;  // planning allowance for a 180 deg move
   for (std::size_t i = 0; i < p.order.size(); ++i) {
     ph.push_back({run_id(i, p.order[i]),
                   fmt::format("run {} of {} at {}: {} s (procedure A)", i + 1, p.order.size(), to_string(p.order[i]),
                               p.run_s),
-                  p.run_s + p.settle_s + move_s, [&p, i](PhaseContext& c) { phase_run(c, p, i); }});
+                  p.run_s + p.settle_s + move_s, [&p, &st, i](PhaseContext& c) { phase_run(c, p, st, i); }});
   }
-  ph.push_back({"bias", "bias and base error, formulas (3), (4)", 0, [&p](PhaseContext& c) { phase_bias(c, p); }});
+  ph.push_back({"bias", "bias and base error, formulas (3), (4)", 0, [&p, &st](PhaseContext& c) { phase_bias(c, p, st); },
+                {{"bias", "g", "Bias g_сист, formula (3)"},
+                 {"base_error", "g", "Base error g_δA, formula (4)"}}});
   ph.push_back({"in-run", fmt::format("in-run test at {}: {} s (procedure B)", to_string(p.in_run_orientation), p.in_run_s),
-                p.in_run_s + p.settle_s + move_s, [&p](PhaseContext& c) {
-                  const Recorded r = position_and_record(c, p, p.in_run_orientation, p.in_run_s,
-                                                         std::string("in-run-") + to_string(p.in_run_orientation));
-                  c.state["in_run"] = {{"capture", r.capture}, {"n", r.samples}, {"lost", r.lost}, {"gaps", r.gaps},
-                                       {"attempts", r.attempts}};
+                p.in_run_s + p.settle_s + move_s, [&p, &st](PhaseContext& c) {
+                  st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s,
+                                                  std::string("in-run-") + to_string(p.in_run_orientation), st.serial());
                 }});
+  std::vector<MeasurementSpec> gost;
+  for (const double bs : p.in_run_blocks_s)
+    gost.push_back({gost_value_name(bs), "g",
+                    fmt::format("In-run B, (max − min)/2 of {:g} s averages (GOST)", bs)});
+  gost.push_back({"accuracy_class", "-",
+                  fmt::format("Accuracy class from B of {:g} s averages", p.in_run_blocks_s.empty() ? 0.0 : p.in_run_blocks_s[0])});
   ph.push_back({"in-run-b", "B by the Russian method, (max-min)/2 of block means", 0,
-                [&p](PhaseContext& c) { phase_in_run_b(c, p); }});
+                [&p, &st](PhaseContext& c) { phase_in_run_b(c, p, st); }, gost});
   ph.push_back({"raw", fmt::format("raw capture at {}: {} s at {} Hz (procedure C)", to_string(p.raw_orientation),
                                    p.raw_s, p.rate_hz),
-                p.raw_s + p.settle_s + move_s, [&p](PhaseContext& c) {
-                  const Recorded r = position_and_record(c, p, p.raw_orientation, p.raw_s,
-                                                         std::string("raw-") + to_string(p.raw_orientation));
-                  c.state["raw"] = {{"capture", r.capture}, {"n", r.samples}, {"lost", r.lost}, {"gaps", r.gaps},
-                                    {"attempts", r.attempts}};
+                p.raw_s + p.settle_s + move_s, [&p, &st](PhaseContext& c) {
+                  st.raw = position_and_record(c, p, p.raw_orientation, p.raw_s,
+                                               std::string("raw-") + to_string(p.raw_orientation), st.serial());
                 }});
   ph.push_back({"allan", "Allan deviation, noise terms, RMS error and PSD of x(t) and y(t)", 0,
-                [&p](PhaseContext& c) { phase_raw_analysis(c, p); }});
+                [&p, &st](PhaseContext& c) { phase_raw_analysis(c, p, st); },
+                {{"in_run_b_allan", "g", "In-run B from Allan deviation, σ(τ_ср)/0.664"},
+                 {"tau_cp", "s", "τ_ср, the averaging time in_run_b_allan is read at"},
+                 {"q", "g*h", "Quantisation Q"},
+                 {"n", "g*h^0.5", "Random walk N"},
+                 {"k", "g/h^0.5", "Rate random walk K"},
+                 {"r", "g/h", "Rate ramp R"},
+                 {"in_run_b_allan_filtered", "g", "In-run B from Allan deviation, filtered output y(t)"},
+                 {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
+                 {"rms_filtered", "g", "RMS error x̂ of y(t)"}}});
   ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter", 0,
-                [&p](PhaseContext& c) { phase_loop(c, p); }});
+                [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
+                {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level"},
+                 {"settling_time", "s", "Closed-loop settling time, 1 g step"}}});
   return ph;
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "procedures/acceptance/profile.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "rig/executive/executive.hpp"
 
 namespace rig::acceptance {
@@ -20,13 +21,16 @@ struct RunOptions {
   std::optional<std::string> expected_serial;  // --serial: the DUT must report this
 };
 
-// Declares every passport value (unit, limits) in passport order.
-void declare_values(const Profile& p, MeasurementSet& values);
+// The phases, each with the measures it declares (name, unit, description). The phases
+// read and write `state` (kept alive by the caller, as `p`).
+std::vector<Phase> build_phases(const Profile& p, ProcedureState& state);
+
+// Declares the phases' measures with the profile's limits, in passport order (phase
+// order, then accuracy_class, which is required when the profile has classes).
+void declare_values(const Profile& p, const std::vector<Phase>& phases, MeasurementSet& values);
 
 // Bring-up sequence (runs on every start and resume).
-void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt);
-
-std::vector<Phase> build_phases(const Profile& p);
+void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutState& state);
 
 // Formulas (3), (4) of docs/method.md with the sign rule: g_dA enters (1) with +
 // when mean(x10) > mean(x20). Exposed for tests.

@@ -5,6 +5,8 @@
 #include <map>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "design/filter.hpp"
 #include "design/filter_toml.hpp"
 #include "rig/core/toml_util.hpp"
@@ -36,6 +38,8 @@ std::string filter_name(const std::string& preset) { return preset == "paper" ? 
 double Profile::planned_total_s() const {
   return static_cast<double>(order.size()) * (run_s + settle_s) + settle_s + in_run_s + settle_s + raw_s;
 }
+
+std::string gost_value_name(double block_s) { return fmt::format("in_run_b_gost_{:g}s", block_s); }
 
 std::vector<std::string> builtin_profile_names() {
   std::vector<std::string> n;
@@ -108,13 +112,22 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
   }
-  static const char* known[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
-                                "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",
-                                "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"};
+  // The measurement names (docs/profiles.md); GOST B is named by its block length.
+  std::vector<std::string> known = {"bias", "base_error", "in_run_b_allan", "tau_cp", "q", "n", "k", "r",
+                                    "in_run_b_allan_filtered", "rms_unfiltered", "rms_filtered", "bandwidth_0p5",
+                                    "settling_time", "accuracy_class"};
+  std::string gost_names;
+  for (double b : p.in_run_blocks_s) {
+    known.push_back(gost_value_name(b));
+    gost_names += (gost_names.empty() ? "" : ", ") + known.back();
+  }
   if (const toml::table* l = cfg::get_table(t, "limits")) {
     for (auto&& [k, v] : *l) {
       bool ok = false;
-      for (const char* n : known) ok = ok || k.str() == n;
+      for (const auto& n : known) ok = ok || k.str() == n;
+      if (!ok && k.str().rfind("in_run_b_gost_", 0) == 0)
+        throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) +
+                          "' in [limits]: GOST B is named by its block length, and in_run_blocks_s gives " + gost_names);
       if (!ok) throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits]");
       const std::vector<double> mm = cfg::get_numbers(*l, k.str());
       if (mm.size() != 2 || mm[0] > mm[1])

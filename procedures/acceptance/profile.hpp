@@ -17,7 +17,7 @@ namespace rig::acceptance {
 
 struct AccuracyClass {
   std::string name;
-  double max_b_g;  // B (Russian method, in_run_b_gost_100s) at or below this => this class
+  double max_b_g;  // B (Russian method, of the first in_run_blocks_s length) at or below this => this class
 };
 
 struct Profile {
@@ -66,6 +66,10 @@ struct Profile {
 Profile load_profile(const std::string& name_or_path);
 Profile parse_profile(const toml::table& t, const std::string& source);
 std::vector<std::string> builtin_profile_names();
+
+// The passport name of GOST B for one block length: in_run_b_gost_<length>s, the length in
+// seconds as written in the profile (100 -> in_run_b_gost_100s, 2 -> in_run_b_gost_2s).
+std::string gost_value_name(double block_s);
 const std::string& builtin_profile_text(const std::string& name);  // throws ConfigError
 
 }  // namespace rig::acceptance

@@ -14,12 +14,13 @@ double table_angle(const Profile& p, Orientation o) { return o == Orientation::U
 
 namespace {
 
-Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name) {
+Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name,
+                     const std::string& serial) {
   const auto n_total = static_cast<uint64_t>(seconds * p.rate_hz + 0.5);
   const std::string rel = "captures/" + name + ".cap";
   std::filesystem::create_directories(ctx.out_dir + "/captures");
   capture::Header h;
-  h.serial = ctx.state.value("serial", "");
+  h.serial = serial;
   h.phase = name;
   h.orientation = to_string(o);
   h.started = iso8601_utc_now();
@@ -68,12 +69,12 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
 }  // namespace
 
 Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o, double seconds,
-                             const std::string& name) {
+                             const std::string& name, const std::string& serial) {
   for (int attempt = 1;; ++attempt) {
     ctx.log->info("{}: table to {} ({:.4f} deg)", name, to_string(o), table_angle(p, o));
     ctx.dev.table.move_to(table_angle(p, o), ctx.cancel);
     ctx.dev.clock.sleep_for(p.settle_s, ctx.cancel);  // let the loop and the mount settle
-    Recorded r = record_once(ctx, p, o, seconds, name);
+    Recorded r = record_once(ctx, p, o, seconds, name, serial);
     r.attempts = attempt;
     if (r.lost <= p.max_lost_samples) {
       ctx.log->info("{}: {} samples, mean x {:.6e} g, {} lost in {} gap(s)", name, r.samples, r.mean_x, r.lost, r.gaps);

@@ -19,8 +19,9 @@ struct Recorded {
 // Moves the table to `o`, settles, records `seconds` into captures/<name>.cap.
 // A capture losing more than the profile allows is retried (profile.retries)
 // and then fails the phase with a HardwareError naming the gaps.
+// `serial` goes into the capture header.
 Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o, double seconds,
-                             const std::string& name);
+                             const std::string& name, const std::string& serial);
 
 double table_angle(const Profile& p, Orientation o);
 

@@ -7,6 +7,7 @@
 
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
@@ -199,10 +200,18 @@ Reader::Reader(const std::string& path) : path_(path) {
     header_.orientation = j.value("orientation", "");
     header_.started = j.value("started", "");
     header_.units = j.value("units", "g");
+    if (j.contains("rate_hz") && !j["rate_hz"].is_number())
+      throw ConfigError(path + ": capture header field rate_hz is " + j["rate_hz"].dump() + ", not a number");
     header_.rate_hz = j.value("rate_hz", 1000.0);
     header_.extra = j.value("extra", nlohmann::json::object());
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError(path + ": capture header is not valid JSON: " + e.what());
+  }
+  // A rate the analysis cannot use is named here, not later as an option error or a PSD failure.
+  if (!std::isfinite(header_.rate_hz) || header_.rate_hz <= 0 || header_.rate_hz > kMaxRateHz) {
+    std::ostringstream os;
+    os << path << ": capture header rate_hz = " << header_.rate_hz << " is out of range (0, " << kMaxRateHz << "] Hz";
+    throw ConfigError(os.str());
   }
   data_start_ = align16(16 + len);
   pos_ = data_start_;
@@ -243,7 +252,13 @@ bool Reader::next_block() {
     const bool hdr_ok = crc(h, 12) == get_u32(h + 12);
     if (hdr_ok && magic == kEndMagic) {
       const uint64_t n = get_u32(h + 4) | (uint64_t{get_u32(h + 8)} << 32);
-      if (n == rec_.samples && rec_.damaged_blocks == 0) {
+      const uint64_t after = file_size_ - (pos_ + kBlockHeaderSize);
+      if (after > 0) {  // nothing follows a closed capture: say what does and ignore it
+        rec_.notes.push_back("offset " + std::to_string(pos_ + kBlockHeaderSize) + ": " + std::to_string(after) +
+                             " bytes after the end marker (ignored)");
+        if (rec_.problem.empty()) rec_.problem = rec_.notes.back();
+      }
+      if (n == rec_.samples && rec_.damaged_blocks == 0 && rec_.notes.empty()) {
         rec_.complete = true;
       } else if (rec_.problem.empty()) {
         rec_.problem = "end marker counts " + std::to_string(n) + " samples, " + std::to_string(rec_.samples) +
@@ -264,6 +279,16 @@ bool Reader::next_block() {
       block_.resize(count);
       if (std::fread(block_.data(), 1, payload, f_) != payload) return false;
       if (crc(block_.data(), payload) == get_u32(h + 8)) {
+        if (rec_.blocks > 0 && count == prev_count_ && get_u32(h + 8) == prev_crc_) {
+          // The same block twice (its sequence numbers are in the payload): counted once, noted.
+          rec_.notes.push_back("offset " + std::to_string(pos_) + ": block of " + std::to_string(count) +
+                               " samples repeats the previous block (skipped)");
+          if (rec_.problem.empty()) rec_.problem = rec_.notes.back();
+          pos_ += kBlockHeaderSize + payload;
+          continue;
+        }
+        prev_count_ = count;
+        prev_crc_ = get_u32(h + 8);
         pos_ += kBlockHeaderSize + payload;
         block_pos_ = 0;
         ++rec_.blocks;

@@ -21,6 +21,7 @@ inline constexpr uint32_t kEndMagic = 0x31444E45;    // "END1"
 inline constexpr std::size_t kRecordSize = 16;       // u32 seq, f32 x, f32 y, u32 status
 inline constexpr std::size_t kBlockHeaderSize = 16;  // u32 magic, u32 count, u32 payload crc, u32 header crc
 inline constexpr uint32_t kMaxBlockSamples = 1u << 20;
+inline constexpr double kMaxRateHz = 1e6;  // a header rate outside (0, 1 MHz] is damage (the DUTs stream at 1 kHz)
 
 struct Header {
   std::string serial;
@@ -104,6 +105,7 @@ class Reader {
   std::size_t block_pos_ = 0;
   bool gap_pending_ = false;
   bool done_ = false;
+  uint32_t prev_count_ = 0, prev_crc_ = 0;  // the last good block's, to notice a block written twice
 };
 
 // Whole file into memory.

@@ -77,42 +77,88 @@ void Executive::safe_state(Devices& dev, spdlog::logger& log, bool abnormal) {
 }
 
 void Executive::write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
-                                 const nlohmann::json& state, const nlohmann::json& identity) const {
+                                 const PhaseState& state, const nlohmann::json& identity) const {
   nlohmann::ordered_json j;
   j["schema"] = "rig.checkpoint/1";
   j["identity"] = identity;
   j["completed"] = done;
   j["values"] = values.to_json();
-  j["state"] = state;
+  j["state"] = state.save();
   write_file_atomic(checkpoint_path(out_dir_), j.dump(1));
 }
 
+// A checkpoint is trusted only after it is checked (issue 13): the schema, the
+// completed phases (a prefix of this procedure's phases), every measure of a
+// completed phase present with the right types, and the procedure's state
+// (PhaseState::restore checks its parts and the captures it names). Any
+// damage is a ConfigError naming the file and the field: never a silent PASS.
+std::vector<std::string> Executive::load_checkpoint(const std::vector<Phase>& phases, MeasurementSet& values,
+                                                    PhaseState& state, const nlohmann::json& identity) const {
+  const std::string cp = checkpoint_path(out_dir_);
+  auto bad = [&cp](const std::string& field, const std::string& what) {
+    return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) + " (damaged checkpoint; start a new run)");
+  };
+  std::ifstream in(cp);
+  if (!in) throw ConfigError(cp + ": no checkpoint to resume from");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
+  }
+  if (!j.is_object()) throw bad("(top level)", std::string("expected an object, found ") + j.type_name());
+  if (!j.contains("schema") || j["schema"] != "rig.checkpoint/1")
+    throw bad("schema", "expected \"rig.checkpoint/1\", found " + (j.contains("schema") ? j["schema"].dump() : "nothing"));
+  if (j.value("identity", nlohmann::json()) != identity)
+    throw ConfigError(cp + ": checkpoint was made with a different profile, serial or plant (" +
+                      j.value("identity", nlohmann::json()).dump() + "); start a new run instead");
+  if (!j.contains("completed") || !j["completed"].is_array())
+    throw bad("completed", "expected an array of phase ids");
+  std::vector<std::string> done;
+  for (std::size_t i = 0; i < j["completed"].size(); ++i) {
+    const auto& id = j["completed"][i];
+    const std::string field = "completed[" + std::to_string(i) + "]";
+    if (!id.is_string()) throw bad(field, std::string("expected a phase id, found ") + id.type_name());
+    // Phases complete in order: the completed list is a prefix of the procedure's phases.
+    if (i >= phases.size() || id.get<std::string>() != phases[i].id)
+      throw bad(field, "\"" + id.get<std::string>() + "\" is not phase " + std::to_string(i + 1) + " (" +
+                           (i < phases.size() ? phases[i].id : std::string("none")) + ")");
+    done.push_back(id.get<std::string>());
+  }
+  if (!j.contains("values")) throw bad("values", "missing");
+  try {
+    values.restore(j["values"]);
+  } catch (const std::invalid_argument& e) {
+    throw bad(e.what(), "");
+  }
+  for (std::size_t i = 0; i < done.size(); ++i)
+    for (const auto& m : phases[i].measures)
+      if (!j["values"].contains(m.name))
+        throw bad("values." + m.name, "missing, but phase '" + done[i] + "' that measures it is marked completed");
+  if (!j.contains("state")) throw bad("state", "missing");
+  try {
+    state.restore(j["state"], done, out_dir_);
+    state.check_values(values);
+  } catch (const std::invalid_argument& e) {
+    throw bad(e.what(), "");
+  } catch (const nlohmann::json::exception& e) {
+    throw bad("state", e.what());
+  }
+  return done;
+}
+
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
-                         MeasurementSet& values, nlohmann::json& state, const CancelToken& cancel, bool resume,
+                         MeasurementSet& values, PhaseState& state, const CancelToken& cancel, bool resume,
                          const nlohmann::json& identity) {
   RunResult result;
   std::vector<std::string> done;
   if (resume) {
-    const std::string cp = checkpoint_path(out_dir_);
-    std::ifstream in(cp);
-    if (!in) throw ConfigError(cp + ": no checkpoint to resume from");
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(in);
-    } catch (const std::exception& e) {
-      throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
-    }
-    if (j.value("identity", nlohmann::json()) != identity)
-      throw ConfigError(cp + ": checkpoint was made with a different profile, serial or plant (" +
-                        j.value("identity", nlohmann::json()).dump() + "); start a new run instead");
-    done = j.value("completed", std::vector<std::string>{});
-    values.restore(j.value("values", nlohmann::json::object()));
-    state = j.value("state", nlohmann::json::object());
+    done = load_checkpoint(phases, values, state, identity);
     log_->info("resuming {}: {} phase(s) already complete", out_dir_, done.size());
   }
   for (const auto& p : phases) result.phases.push_back({p.id, p.title, "pending", "", "", ""});
 
-  PhaseContext ctx{dev_, cancel, values, state, out_dir_, log_, progress_};
+  PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_};
   std::size_t current = phases.size();
   try {
     log_->info("bring-up");
@@ -131,7 +177,13 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       rec.started = iso8601_utc_now();
       log_->info("phase {} start: {}", p.id, p.title);
       if (progress_) progress_->phase_started(i, phases.size(), p.id, p.title, p.planned_s);
+      {
+        std::vector<std::string> names;
+        for (const auto& m : p.measures) names.push_back(m.name);
+        values.set_scope(p.id, std::move(names));  // a phase sets only what it declares
+      }
       p.run(ctx);
+      values.set_scope({}, {});
       rec.finished = iso8601_utc_now();
       rec.status = "done";
       done.push_back(p.id);
@@ -140,6 +192,9 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       if (progress_) progress_->phase_finished(p.id, "done", "");
       current = phases.size();
     }
+    // A signal between the last phase and here is still an abort (issue 13: late signals).
+    cancel.throw_if_requested();
+    values.judge_all(true);
     result.outcome = values.any_failed() ? RunOutcome::Fail : RunOutcome::Pass;
   } catch (const AbortedError& e) {
     result.outcome = RunOutcome::Aborted;
@@ -159,6 +214,9 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     result.message = std::string("error: ") + e.what();
     log_->error("{}", result.message);
   }
+  values.set_scope({}, {});
+  if (result.outcome != RunOutcome::Pass && result.outcome != RunOutcome::Fail)
+    values.judge_all(false);  // stopped early: what was measured is judged, the rest stays UNSET
   if (current < phases.size()) {
     PhaseRecord& rec = result.phases[current];
     rec.status = result.outcome == RunOutcome::Aborted ? "aborted" : "failed";

@@ -46,7 +46,6 @@ struct PhaseContext {
   Devices& dev;
   CancelToken cancel;
   MeasurementSet& values;
-  nlohmann::json& state;  // persisted with every checkpoint; phases share results through it
   std::string out_dir;
   std::shared_ptr<spdlog::logger> log;
   ProgressSink* progress = nullptr;
@@ -60,6 +59,31 @@ struct Phase {
   std::string title;
   double planned_s = 0;  // planned duration in device (simulated or real) time, for ETA
   std::function<void(PhaseContext&)> run;
+  std::vector<MeasurementSpec> measures = {};  // what the phase sets in PhaseContext::values (declared before the run)
+};
+
+// What the phases hand on to each other (typed by the procedure), saved with
+// every checkpoint. The executive only stores and restores it.
+class PhaseState {
+ public:
+  virtual ~PhaseState() = default;
+  virtual nlohmann::json save() const = 0;
+  // From a checkpoint's "state": throws std::invalid_argument naming the field ("state.bias.sign_u10: ...")
+  // when `j` is not what the phases in `completed` leave behind (wrong type, missing part, a capture it
+  // names missing or not matching).
+  // `run_dir` is the run folder the captures it names are in.
+  virtual void restore(const nlohmann::json& j, const std::vector<std::string>& completed,
+                       const std::string& run_dir) = 0;
+  // After both are restored: throws std::invalid_argument naming the field where a restored
+  // value contradicts the state it was computed from (e.g. "values.bias.value: ...").
+  virtual void check_values(const MeasurementSet&) const {}
+};
+
+// A state for procedures whose phases hand nothing on.
+class NoPhaseState final : public PhaseState {
+ public:
+  nlohmann::json save() const override { return nlohmann::json::object(); }
+  void restore(const nlohmann::json&, const std::vector<std::string>&, const std::string&) override {}
 };
 
 struct PhaseRecord {
@@ -84,9 +108,14 @@ class Executive {
   // Bring-up runs on every start, resume included (power, homing: hardware
   // state is never taken from a checkpoint). Phases already in the checkpoint
   // are skipped when `resume` is set. `identity` (profile digest, serial, plant)
-  // must match the checkpoint's.
+  // must match the checkpoint's, and the checkpoint must pass check_checkpoint()
+  // (else ConfigError naming the file and field: exit 2). `values` must hold the
+  // declarations of every phase's measures. Outcomes are judged once, at the end
+  // (MeasurementSet::judge_all), whatever the path: a resumed run is judged
+  // exactly as an uninterrupted one. A cancellation requested after the last
+  // phase still ends the run ABORTED.
   RunResult run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
-                MeasurementSet& values, nlohmann::json& state, const CancelToken& cancel, bool resume,
+                MeasurementSet& values, PhaseState& state, const CancelToken& cancel, bool resume,
                 const nlohmann::json& identity);
 
   // The safe-state sequence; public so signal paths and tests can call it.
@@ -97,7 +126,10 @@ class Executive {
 
  private:
   void write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
-                        const nlohmann::json& state, const nlohmann::json& identity) const;
+                        const PhaseState& state, const nlohmann::json& identity) const;
+  // Reads and validates the checkpoint, restores `values` and `state`; returns the completed phase ids.
+  std::vector<std::string> load_checkpoint(const std::vector<Phase>& phases, MeasurementSet& values,
+                                           PhaseState& state, const nlohmann::json& identity) const;
   Devices& dev_;
   std::string out_dir_;
   std::shared_ptr<spdlog::logger> log_;

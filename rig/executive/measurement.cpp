@@ -1,7 +1,9 @@
 #include "rig/executive/measurement.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace rig {
 
@@ -14,9 +16,21 @@ const char* to_string(Outcome o) {
   return "UNSET";
 }
 
-void judge(Measurement& m) {
-  if (!m.value || !std::isfinite(*m.value) || !m.limits) {
-    m.outcome = Outcome::Unset;
+void judge(Measurement& m, bool run_complete) {
+  m.verdict.clear();
+  const bool needed = m.limits.has_value() || m.required;
+  if (!m.value || !std::isfinite(*m.value)) {
+    // Issue 12: an acceptance passport never passes a DUT whose limited value could not be measured.
+    if (needed && run_complete) {
+      m.outcome = Outcome::Fail;
+      m.verdict = "required value not measured";
+    } else {
+      m.outcome = Outcome::Unset;
+    }
+    return;
+  }
+  if (!m.limits) {
+    m.outcome = m.required ? Outcome::Pass : Outcome::Unset;
     return;
   }
   const auto [lo, hi] = *m.limits;
@@ -24,75 +38,74 @@ void judge(Measurement& m) {
     m.outcome = Outcome::Pass;
   } else {
     m.outcome = Outcome::Fail;
-    if (m.reason.empty()) {
+    if (m.reason.empty()) {  // a phase's own note (e.g. how the value was read) is kept as the reason
       std::ostringstream os;
       os.precision(6);
       os << "value " << *m.value << " outside limits [" << lo << ", " << hi << "]";
-      m.reason = os.str();
+      m.verdict = os.str();
     }
   }
+}
+
+std::string Measurement::shown_reason() const {
+  if (verdict.empty()) return reason;
+  return reason.empty() ? verdict : verdict + ": " + reason;
 }
 
 namespace {
 nlohmann::ordered_json opt(const std::optional<double>& v) {
   return v && std::isfinite(*v) ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
 }
-std::optional<double> opt_from(const nlohmann::json& j, const char* key) {
+// number | null | absent, else an error naming the field.
+std::optional<double> opt_number(const nlohmann::json& j, const std::string& where, const char* key) {
   if (!j.contains(key) || j[key].is_null()) return std::nullopt;
+  if (!j[key].is_number())
+    throw std::invalid_argument(where + "." + key + ": expected a number or null, found " + j[key].type_name());
   return j[key].get<double>();
 }
 }  // namespace
 
 nlohmann::ordered_json to_json(const Measurement& m) {
   nlohmann::ordered_json j{{"value", opt(m.value)}, {"unit", m.unit}, {"lo", opt(m.lo)}, {"hi", opt(m.hi)},
-                   {"limits", nullptr}, {"outcome", to_string(m.outcome)}, {"reason", m.reason}};
+                   {"limits", nullptr}, {"outcome", to_string(m.outcome)}, {"reason", m.shown_reason()}};
   if (m.limits) j["limits"] = {m.limits->first, m.limits->second};
+  if (!m.description.empty()) j["description"] = m.description;
   return j;
 }
 
-Measurement measurement_from_json(const std::string& name, const nlohmann::json& j) {
-  Measurement m;
-  m.name = name;
-  m.unit = j.value("unit", "");
-  m.value = opt_from(j, "value");
-  m.lo = opt_from(j, "lo");
-  m.hi = opt_from(j, "hi");
-  if (j.contains("limits") && j["limits"].is_array() && j["limits"].size() == 2)
-    m.limits = std::make_pair(j["limits"][0].get<double>(), j["limits"][1].get<double>());
-  const std::string o = j.value("outcome", "UNSET");
-  m.outcome = o == "PASS" ? Outcome::Pass : o == "FAIL" ? Outcome::Fail : Outcome::Unset;
-  m.reason = j.value("reason", "");
-  return m;
-}
-
-void MeasurementSet::declare(const std::string& name, const std::string& unit,
-                             std::optional<std::pair<double, double>> limits) {
-  if (Measurement* m = find(name)) {
-    m->unit = unit;
-    m->limits = limits;
-    return;
+void MeasurementSet::declare(const MeasurementSpec& spec, std::optional<std::pair<double, double>> limits,
+                             bool required) {
+  Measurement* m = find_mut(spec.name);
+  if (!m) {
+    items_.emplace_back();
+    m = &items_.back();
+    m->name = spec.name;
+    m->reason = "not measured";
   }
-  Measurement m;
-  m.name = name;
-  m.unit = unit;
-  m.limits = limits;
-  m.reason = "not measured";
-  items_.push_back(m);
+  m->unit = spec.unit;
+  m->description = spec.description;
+  m->limits = limits;
+  m->required = required;
 }
 
 Measurement& MeasurementSet::set(const std::string& name, std::optional<double> value, const std::string& reason,
                                  std::optional<double> lo, std::optional<double> hi) {
-  Measurement* m = find(name);
-  if (!m) {
-    declare(name, "");
-    m = &items_.back();
-  }
+  Measurement* m = find_mut(name);
+  if (!m) throw std::logic_error("measurement '" + name + "' was not declared by any phase");
+  if (!scope_phase_.empty() && std::find(scope_.begin(), scope_.end(), name) == scope_.end())
+    throw std::logic_error("phase '" + scope_phase_ + "' sets '" + name + "', which it does not declare");
   m->value = value;
   m->lo = lo;
   m->hi = hi;
   m->reason = reason;
-  judge(*m);
+  m->outcome = Outcome::Unset;  // judged once, by judge_all()
+  m->verdict.clear();
   return *m;
+}
+
+void MeasurementSet::set_scope(std::string phase, std::vector<std::string> names) {
+  scope_phase_ = std::move(phase);
+  scope_ = std::move(names);
 }
 
 const Measurement* MeasurementSet::find(const std::string& name) const {
@@ -100,10 +113,14 @@ const Measurement* MeasurementSet::find(const std::string& name) const {
     if (m.name == name) return &m;
   return nullptr;
 }
-Measurement* MeasurementSet::find(const std::string& name) {
+Measurement* MeasurementSet::find_mut(const std::string& name) {
   for (auto& m : items_)
     if (m.name == name) return &m;
   return nullptr;
+}
+
+void MeasurementSet::judge_all(bool run_complete) {
+  for (auto& m : items_) judge(m, run_complete);
 }
 
 bool MeasurementSet::any_failed() const {
@@ -119,16 +136,22 @@ nlohmann::ordered_json MeasurementSet::to_json() const {
 }
 
 void MeasurementSet::restore(const nlohmann::json& values) {
+  if (!values.is_object()) throw std::invalid_argument(std::string("values: expected an object, found ") + values.type_name());
   for (auto it = values.begin(); it != values.end(); ++it) {
-    Measurement m = measurement_from_json(it.key(), it.value());
-    if (Measurement* cur = find(it.key())) {
-      const auto limits = cur->limits;  // limits come from the current profile
-      *cur = m;
-      cur->limits = limits;
-      judge(*cur);
-    } else {
-      items_.push_back(m);
-    }
+    const std::string where = "values." + it.key();
+    Measurement* cur = find_mut(it.key());
+    if (!cur) throw std::invalid_argument(where + ": not a measurement of this procedure");
+    const nlohmann::json& j = it.value();
+    if (!j.is_object()) throw std::invalid_argument(where + ": expected an object, found " + j.type_name());
+    if (!j.contains("value")) throw std::invalid_argument(where + ".value: missing");
+    cur->value = opt_number(j, where, "value");
+    cur->lo = opt_number(j, where, "lo");
+    cur->hi = opt_number(j, where, "hi");
+    if (j.contains("reason") && !j["reason"].is_string())
+      throw std::invalid_argument(where + ".reason: expected a string, found " + j["reason"].type_name());
+    cur->reason = j.value("reason", "");
+    cur->verdict.clear();
+    cur->outcome = Outcome::Unset;  // judged again from the value and the current profile
   }
 }
 

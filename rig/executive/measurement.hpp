@@ -1,8 +1,10 @@
 // Measurements with units, limits and outcomes (the passport's values),
-// in the manner of OpenHTF's measurements: a value is judged against the
-// profile's limits where it has them; no value or no limits gives UNSET.
+// in the manner of OpenHTF's measurements: each phase declares what it
+// measures (name, unit, description); a value may only be set on a declared
+// name. Outcomes are not set with the value: judge_all() computes every
+// outcome from the values and the profile's limits in one place, at the end of
+// a run and identically after a resume.
 #pragma once
-#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -15,40 +17,67 @@ namespace rig {
 enum class Outcome { Pass, Fail, Unset };
 const char* to_string(Outcome o);
 
+// What a phase declares it measures.
+struct MeasurementSpec {
+  std::string name;
+  std::string unit;
+  std::string description;  // one line for the passport and the report
+};
+
 struct Measurement {
   std::string name;
   std::string unit;
+  std::string description;
   std::optional<double> value;
   std::optional<double> lo, hi;                          // confidence bounds, where the value has them
   std::optional<std::pair<double, double>> limits;       // [min, max] from the profile
+  // The profile requires a value even without numeric limits (accuracy_class with a class table):
+  // a null value fails, a value passes.
+  bool required = false;
   Outcome outcome = Outcome::Unset;
-  std::string reason;                                    // why null, or the class name, or the failure
+  std::string reason;   // the phase's note: why null, how it was obtained, or the class name
+  std::string verdict;  // set by judge() on a FAIL: why it failed (empty otherwise)
+  // What the passport's "reason" shows: the verdict, with the phase's note after it.
+  std::string shown_reason() const;
 };
 
-// Sets `outcome` (and a reason on failure) from value and limits.
-void judge(Measurement& m);
+// The outcome rule, the only one (README "Exit codes"):
+//   value in limits -> PASS; outside -> FAIL;
+//   value null (or not finite) with limits or `required` -> FAIL when the run
+//     completed (`run_complete`), UNSET when it stopped early (not measured yet);
+//   value without limits -> PASS if `required`, else UNSET.
+void judge(Measurement& m, bool run_complete);
 
 nlohmann::ordered_json to_json(const Measurement& m);
-Measurement measurement_from_json(const std::string& name, const nlohmann::json& j);
 
-// Ordered set: the passport lists values in the order they were defined.
+// Ordered set: the passport lists values in the order they were declared.
 class MeasurementSet {
  public:
-  // Declares a measurement (name, unit, limits) before it has a value.
-  void declare(const std::string& name, const std::string& unit,
-               std::optional<std::pair<double, double>> limits = std::nullopt);
-  // Records a value (judged at once). Unknown names are declared on the fly.
+  // Declares a measurement before it has a value; declaring a name twice updates it.
+  void declare(const MeasurementSpec& spec, std::optional<std::pair<double, double>> limits = std::nullopt,
+               bool required = false);
+  // While a phase runs, the names it declared (the executive sets it; empty = no phase).
+  void set_scope(std::string phase, std::vector<std::string> names);
+  // Records a value. Throws std::logic_error for a name no phase declared, or one the
+  // running phase did not declare.
   Measurement& set(const std::string& name, std::optional<double> value, const std::string& reason = {},
                    std::optional<double> lo = std::nullopt, std::optional<double> hi = std::nullopt);
   const Measurement* find(const std::string& name) const;
-  Measurement* find(const std::string& name);
   const std::vector<Measurement>& all() const { return items_; }
+  // Computes every outcome (see judge()).
+  void judge_all(bool run_complete);
   bool any_failed() const;
-  nlohmann::ordered_json to_json() const;  // {"name": {...}, ...} in definition order
-  void restore(const nlohmann::json& values);  // from to_json() (resume)
+  nlohmann::ordered_json to_json() const;  // {"name": {...}, ...} in declaration order
+  // From a checkpoint's "values" (written by to_json()): only value, lo, hi and reason are
+  // taken; unit, description, limits and outcome come from the current declaration. Throws
+  // std::invalid_argument naming "values.NAME.FIELD" on an undeclared name or a wrong type.
+  void restore(const nlohmann::json& values);
 
  private:
+  Measurement* find_mut(const std::string& name);
   std::vector<Measurement> items_;
+  std::string scope_phase_;
+  std::vector<std::string> scope_;
 };
 
 }  // namespace rig

@@ -63,14 +63,14 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     o << "    <testcase classname=\"passport\" name=\"" << xml_escape(m.name) << "\">";
     const std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
     if (m.outcome == Outcome::Fail) {
-      o << "<failure message=\""
-        << xml_escape(fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)) << "\">"
-        << xml_escape(m.reason) << "</failure>";
+      const std::string what = m.value ? fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)
+                                       : fmt::format("{} is required (limits {}) but has no value", m.name, lim);
+      o << "<failure message=\"" << xml_escape(what) << "\">" << xml_escape(m.shown_reason()) << "</failure>";
     } else if (m.outcome == Outcome::Unset) {
       o << "<skipped message=\"" << xml_escape(m.value ? "no limits: " + num(m.value) + " " + m.unit : m.reason)
         << "\"/>";
     }
-    o << "<system-out>" << xml_escape(fmt::format("value={} unit={} limits={} {}", num(m.value), m.unit, lim, m.reason))
+    o << "<system-out>" << xml_escape(fmt::format("value={} unit={} limits={} {}", num(m.value), m.unit, lim, m.shown_reason()))
       << "</system-out></testcase>\n";
   }
   if (aborted)

@@ -2,16 +2,24 @@
 // resume, abort with the safe-state sequence, faults, and gap handling.
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <mutex>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 
+#include "analysis/allan.hpp"
+#include "analysis/psd.hpp"
 #include "plant/emulated/world.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "procedures/acceptance/record.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
 
@@ -44,6 +52,20 @@ void power_on(PhaseContext& c) {
   c.dev.table.home(c.cancel);
 }
 
+// A procedure state that is plain JSON (the acceptance procedure's is typed: state.hpp).
+struct JsonState final : PhaseState {
+  nlohmann::json j = nlohmann::json::object();
+  nlohmann::json save() const override { return j; }
+  void restore(const nlohmann::json& from, const std::vector<std::string>&, const std::string&) override { j = from; }
+};
+
+// Declares every phase's measures (as the procedure's declare_values does).
+void declare(const std::vector<Phase>& phases, MeasurementSet& v,
+             std::optional<std::pair<double, double>> limits = std::nullopt) {
+  for (const auto& p : phases)
+    for (const auto& m : p.measures) v.declare(m, limits);
+}
+
 }  // namespace
 
 TEST(Executive, RunsPhasesInOrderAndCheckpointsEach) {
@@ -53,13 +75,16 @@ TEST(Executive, RunsPhasesInOrderAndCheckpointsEach) {
   std::vector<std::string> ran;
   std::vector<Phase> phases;
   for (const char* id : {"a", "b", "c"})
-    phases.push_back({id, id, 1.0, [&ran, id](PhaseContext& c) {
+    phases.push_back({id, id, 1.0,
+                      [&ran, id](PhaseContext& c) {
                         ran.push_back(id);
                         c.values.set(std::string("v_") + id, 1.0);
                         c.dev.clock.sleep_for(1.0, c.cancel);
-                      }});
+                      },
+                      {{std::string("v_") + id, "g", "test value"}}});
   MeasurementSet v;
-  nlohmann::json state = nlohmann::json::object();
+  declare(phases, v);
+  JsonState state;
   const auto r = ex.run(power_on, phases, v, state, CancelToken{}, false, {{"k", 1}});
   EXPECT_EQ(r.outcome, RunOutcome::Pass);
   EXPECT_EQ(ran, (std::vector<std::string>{"a", "b", "c"}));
@@ -73,7 +98,7 @@ TEST(Executive, AbortRunsSafeStateInOrderAndKeepsMeasurements) {
   Executive ex(d, f.out, f.log, nullptr);
   CancelSource cs;
   std::vector<Phase> phases{
-      {"first", "first", 1, [](PhaseContext& c) { c.values.set("kept", 42.0); }},
+      {"first", "first", 1, [](PhaseContext& c) { c.values.set("kept", 42.0); }, {{"kept", "g", ""}}},
       {"second", "second", 1,
        [&cs](PhaseContext& c) {
          c.dev.dut.start_stream(c.cancel);
@@ -84,7 +109,8 @@ TEST(Executive, AbortRunsSafeStateInOrderAndKeepsMeasurements) {
        }},
       {"third", "third", 1, [](PhaseContext&) { FAIL() << "must not run after abort"; }}};
   MeasurementSet v;
-  nlohmann::json state = nlohmann::json::object();
+  declare(phases, v);
+  JsonState state;
   const auto r = ex.run(power_on, phases, v, state, cs.token(), false, {});
   EXPECT_EQ(r.outcome, RunOutcome::Aborted);
   EXPECT_EQ(r.exit_code(), kExitAborted);
@@ -106,12 +132,14 @@ TEST(Executive, AbortRunsSafeStateInOrderAndKeepsMeasurements) {
 TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   Fixture f("resume");
   int runs_a = 0, runs_b = 0;
+  JsonState st;
   std::vector<Phase> phases{{"a", "a", 1,
                              [&](PhaseContext& c) {
                                ++runs_a;
-                               c.state["from_a"] = 5;
+                               st.j["from_a"] = 5;
                                c.values.set("va", 1.5);
-                             }},
+                             },
+                             {{"va", "g", ""}}},
                             {"b", "b", 1, [&](PhaseContext&) {
                                ++runs_b;
                                throw HardwareError("link died");
@@ -121,19 +149,20 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
     Devices d = f.dev();
     Executive ex(d, f.out, f.log, nullptr);
     MeasurementSet v;
-    nlohmann::json st = nlohmann::json::object();
+    declare(phases, v);
     const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, id);
     EXPECT_EQ(r.outcome, RunOutcome::Error);
     EXPECT_EQ(r.exit_code(), kExitHardware);
   }
-  phases[1].run = [&](PhaseContext& c) {
+  phases[1].run = [&](PhaseContext&) {
     ++runs_b;
-    EXPECT_EQ(c.state["from_a"], 5);
+    EXPECT_EQ(st.j["from_a"], 5);
   };
+  st.j = nlohmann::json::object();
   Devices d = f.dev();
   Executive ex(d, f.out, f.log, nullptr);
   MeasurementSet v;
-  nlohmann::json st = nlohmann::json::object();
+  declare(phases, v);
   const auto r = ex.run(power_on, phases, v, st, CancelToken{}, true, id);
   EXPECT_EQ(r.outcome, RunOutcome::Pass);
   EXPECT_EQ(runs_a, 1) << "a completed phase is never repeated";
@@ -142,6 +171,7 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   EXPECT_EQ(*v.find("va")->value, 1.5);
   // A different identity refuses to resume.
   MeasurementSet v2;
+  declare(phases, v2);
   EXPECT_THROW(ex.run(power_on, phases, v2, st, CancelToken{}, true, {{"profile", "other"}}), ConfigError);
 }
 
@@ -160,7 +190,7 @@ TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {
   Executive ex(d, f.out, f.log, nullptr);
   std::vector<Phase> phases{{"wait", "wait", 10, [](PhaseContext& c) { c.dev.clock.sleep_for(10.0, c.cancel); }}};
   MeasurementSet v;
-  nlohmann::json st = nlohmann::json::object();
+  NoPhaseState st;
   const auto r = ex.run(power_on, phases, v, st, cs.token(), false, {});
   EXPECT_EQ(r.outcome, RunOutcome::Aborted);
   EXPECT_NE(r.message.find("e-stop"), std::string::npos);
@@ -199,13 +229,12 @@ TEST(Executive, CaptureGapBeyondTheLimitIsRetriedThenFailsThePhase) {
     Fixture f("gap-retry");
     Devices d = f.dev();
     MeasurementSet v;
-    nlohmann::json st = nlohmann::json::object();
-    PhaseContext c{d, CancelToken{}, v, st, f.out, f.log, nullptr};
+    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr};
     power_on(c);
     // Two seconds into the first attempt, five samples never arrive; the retry is clean.
     auto* w = f.world.get();
     w->at(c.dev.clock.now_s() + prof.settle_s + 2.0, [w] { w->inject_drop(w->next_seq() + 10, 5); });
-    const auto r = acceptance::position_and_record(c, prof, Orientation::U10, 5.0, "g");
+    const auto r = acceptance::position_and_record(c, prof, Orientation::U10, 5.0, "g", "SN");
     EXPECT_EQ(r.attempts, 2);
     EXPECT_EQ(r.lost, 0u);
     EXPECT_TRUE(fs::exists(f.out + "/captures/g.cap.interrupted-1")) << "the failed attempt's capture is kept";
@@ -215,11 +244,10 @@ TEST(Executive, CaptureGapBeyondTheLimitIsRetriedThenFailsThePhase) {
     Devices d = f.dev();
     for (uint32_t s = 0; s < 100000; s += 1000) f.world->inject_drop(s + 500, 2);  // every attempt loses samples
     MeasurementSet v;
-    nlohmann::json st = nlohmann::json::object();
-    PhaseContext c{d, CancelToken{}, v, st, f.out, f.log, nullptr};
+    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr};
     power_on(c);
     try {
-      acceptance::position_and_record(c, prof, Orientation::U10, 5.0, "g");
+      acceptance::position_and_record(c, prof, Orientation::U10, 5.0, "g", "SN");
       FAIL() << "expected HardwareError";
     } catch (const HardwareError& e) {
       EXPECT_NE(std::string(e.what()).find("samples lost"), std::string::npos) << e.what();
@@ -232,8 +260,7 @@ TEST(Executive, SameSeedGivesBitIdenticalSamples) {
     Fixture f("seed");
     Devices d = f.dev();
     MeasurementSet v;
-    nlohmann::json st = nlohmann::json::object();
-    PhaseContext c{d, CancelToken{}, v, st, f.out, f.log, nullptr};
+    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr};
     power_on(c);
     c.dev.dut.start_stream(c.cancel);
     std::vector<Sample> buf(2000);
@@ -245,4 +272,222 @@ TEST(Executive, SameSeedGivesBitIdenticalSamples) {
     ASSERT_EQ(a[i].x_g, b[i].x_g) << i;
     ASSERT_EQ(a[i].y_g, b[i].y_g) << i;
   }
+}
+
+TEST(Measurements, SettingAnUndeclaredNameIsAnError) {
+  MeasurementSet v;
+  v.declare({"bias", "g", "formula (3)"});
+  EXPECT_NO_THROW(v.set("bias", 1e-4));
+  EXPECT_THROW(v.set("bais", 1e-4), std::logic_error) << "a typo must not become a new UNSET value";
+  EXPECT_EQ(v.all().size(), 1u);
+}
+
+TEST(Measurements, ANullLimitedValueFailsACompletedRunWithItsReason) {
+  MeasurementSet v;
+  v.declare({"k", "g/h^0.5", "rate random walk"}, std::make_pair(0.0, 1e-3));
+  v.declare({"q", "g*h", "quantisation"});  // no limits: a null stays UNSET
+  v.set("k", std::nullopt, "not identifiable from this record");
+  v.set("q", std::nullopt, "not identifiable");
+  v.judge_all(false);  // a run that stopped early: not measured yet
+  EXPECT_EQ(v.find("k")->outcome, Outcome::Unset);
+  v.judge_all(true);
+  EXPECT_EQ(v.find("k")->outcome, Outcome::Fail);
+  EXPECT_EQ(v.find("q")->outcome, Outcome::Unset);
+  EXPECT_TRUE(v.any_failed());
+  const auto j = v.to_json();
+  EXPECT_EQ(j["k"]["reason"], "required value not measured: not identifiable from this record");
+  v.judge_all(true);  // judging is idempotent
+  EXPECT_EQ(v.to_json()["k"]["reason"], j["k"]["reason"]);
+  EXPECT_EQ(j["k"]["description"], "rate random walk");
+}
+
+TEST(Executive, OutcomesAreJudgedOnceTheSameAfterAResume) {
+  // A required value without limits (the accuracy class with a class table): null fails.
+  Fixture f("judge-resume");
+  int runs_b = 0;
+  std::vector<Phase> phases{
+      {"a", "a", 1, [](PhaseContext& c) { c.values.set("klass", std::nullopt, "B exceeds every class"); },
+       {{"klass", "-", "class"}}},
+      {"b", "b", 1, [&](PhaseContext&) {
+         if (++runs_b == 1) throw HardwareError("link died");
+       }}};
+  auto run = [&](bool resume) {
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    v.declare(phases[0].measures[0], std::nullopt, /*required=*/true);
+    NoPhaseState st;
+    const auto r = ex.run(power_on, phases, v, st, CancelToken{}, resume, {});
+    return std::make_pair(r, v.find("klass")->outcome);
+  };
+  const auto [first, o1] = run(false);
+  EXPECT_EQ(first.outcome, RunOutcome::Error);
+  EXPECT_EQ(o1, Outcome::Unset) << "a run that stopped early does not fail what it has not finished";
+  const auto [resumed, o2] = run(true);
+  EXPECT_EQ(resumed.outcome, RunOutcome::Fail);
+  EXPECT_EQ(resumed.exit_code(), kExitFail);
+  EXPECT_EQ(o2, Outcome::Fail);
+}
+
+TEST(Executive, ACancelAfterTheLastPhaseStillAborts) {
+  Fixture f("late-cancel");
+  Devices d = f.dev();
+  CancelSource cs;
+  Executive ex(d, f.out, f.log, nullptr);
+  std::vector<Phase> phases{{"last", "last", 1, [&cs](PhaseContext&) { cs.request("SIGINT received"); }}};
+  MeasurementSet v;
+  NoPhaseState st;
+  const auto r = ex.run(power_on, phases, v, st, cs.token(), false, {});
+  EXPECT_EQ(r.outcome, RunOutcome::Aborted);
+  EXPECT_EQ(r.exit_code(), kExitAborted);
+  EXPECT_NE(r.message.find("SIGINT"), std::string::npos);
+  EXPECT_NE(f.logtext.str().find("safe state reached"), std::string::npos);
+}
+
+TEST(Executive, DamagedCheckpointIsAConfigErrorNamingTheField) {
+  Fixture f("damaged");
+  std::vector<Phase> phases{{"a", "a", 1, [](PhaseContext& c) { c.values.set("va", 1.0); }, {{"va", "g", ""}}},
+                            {"b", "b", 1, [](PhaseContext&) { throw HardwareError("stop here"); }}};
+  {
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    declare(phases, v);
+    NoPhaseState st;
+    ASSERT_EQ(ex.run(power_on, phases, v, st, CancelToken{}, false, {}).outcome, RunOutcome::Error);
+  }
+  const std::string cp = Executive::checkpoint_path(f.out);
+  const auto good = nlohmann::json::parse(std::ifstream(cp));
+  auto expect_refused = [&](nlohmann::json j, const std::string& field) {
+    std::ofstream(cp) << j.dump();
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    declare(phases, v);
+    NoPhaseState st;
+    try {
+      ex.run(power_on, phases, v, st, CancelToken{}, true, {});
+      ADD_FAILURE() << "resumed from a damaged checkpoint: " << j.dump();
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(cp), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  auto j = good;
+  j["values"] = nlohmann::json::object();
+  expect_refused(j, "values.va");
+  j = good;
+  j["values"]["va"]["value"] = "1.0";
+  expect_refused(j, "values.va.value");
+  j = good;
+  j["completed"] = {"b"};  // phases complete in order
+  expect_refused(j, "completed[0]");
+  j = good;
+  j["completed"] = 5;
+  expect_refused(j, "completed");
+  j = good;
+  j["schema"] = "rig.checkpoint/9";
+  expect_refused(j, "schema");
+  j = good;
+  j.erase("state");
+  expect_refused(j, "state");
+  j = good;
+  j["values"]["vb"] = j["values"]["va"];
+  expect_refused(j, "values.vb");
+}
+
+TEST(AnalysisCancel, ThePollHookStopsADeviationAndAWelchPromptly) {
+  std::vector<double> x(3'600'000);  // the paper's raw capture: 1 h at 1 kHz
+  uint64_t s = 1;
+  for (double& v : x) {
+    s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+    v = static_cast<double>(s >> 11) * 0x1p-53 - 0.5;
+  }
+  analysis::DevOptions opt;
+  opt.rate_hz = 1000;
+  opt.taus = analysis::parse_tau_grid("log:100");
+  std::atomic<int> calls{0};
+  std::mutex mu;
+  auto last = std::chrono::steady_clock::now();
+  double max_gap_s = 0;
+  opt.poll = [&] {
+    ++calls;
+    std::lock_guard lk(mu);
+    const auto now = std::chrono::steady_clock::now();
+    max_gap_s = std::max(max_gap_s, std::chrono::duration<double>(now - last).count());
+    last = now;
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  (void)analysis::deviation(x, opt);
+  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Polled per chunk of 16 k phase points and per tau. The longest stretch without a poll is
+  // printed (as measured here); it bounds how late an abort is taken in the allan phase.
+  std::printf("deviation over 3.6e6 points: %.3f s, %d polls, longest gap %.4f s\n", total_s, calls.load(),
+              max_gap_s);
+  EXPECT_GT(calls.load(), 100) << "too coarse to take an abort within ~0.1 s";
+  EXPECT_LT(max_gap_s, 0.25) << "an abort in the allan phase would wait this long";
+  opt.poll = [&calls] {
+    if (++calls > 5) throw AbortedError("aborted: test");
+  };
+  calls = 0;
+  EXPECT_THROW(analysis::deviation(x, opt), AbortedError);
+  analysis::WelchOptions wo;
+  wo.poll = [] { throw AbortedError("aborted: test"); };
+  EXPECT_THROW(analysis::welch(x, 1000, wo), AbortedError);
+}
+
+TEST(ProcedureState, OneJsonFormRoundTripsAndReadsTheUntypedCheckpoints) {
+  acceptance::DutState s;
+  s.dut = acceptance::DutIdentity{"SN1", "fw 1.2", 24.5};
+  acceptance::Recorded r;
+  r.capture = "captures/run01-U10.cap";
+  r.samples = 2000;
+  r.mean_x = 1e-4;
+  r.mean_y = 2e-4;
+  s.runs[1] = acceptance::RunMean{1, Orientation::U10, r};
+  s.bias = acceptance::BiasState{1e-4, 2e-5, -1};
+  r.capture = "captures/in-run-U10.cap";
+  s.in_run = r;
+  s.in_run_blocks = std::vector<acceptance::GostBlock>{{2.0, {1.0, 2.0}, 0.5}, {4.0, {1.5}, std::nullopt}};
+  s.analysis = nlohmann::json{{"allan", {{"x", 1}}}};
+  const nlohmann::json j = acceptance::to_json(s);
+  EXPECT_EQ(acceptance::to_json(acceptance::dut_state_from_json(j)), j);
+  // Every recorded capture carries the same keys, wherever it appears.
+  for (const auto* rec : {&j["runs"]["1"], &j["in_run"]})
+    for (const char* k : {"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g"})
+      EXPECT_TRUE(rec->contains(k)) << k;
+  EXPECT_EQ(s.captures(), (std::vector<std::string>{"captures/run01-U10.cap", "captures/in-run-U10.cap"}));
+  // A checkpoint written before the state was typed (no duplicates, no means on in_run) still reads.
+  const auto old = nlohmann::json::parse(R"({"serial": "SN1",
+      "runs": {"1": {"index": 1, "orientation": "U10", "mean_g": 1e-4, "mean_y_g": 2e-4, "n": 2000,
+                     "capture": "captures/run01-U10.cap", "lost": 0, "gaps": 0, "attempts": 1}},
+      "in_run": {"capture": "captures/in-run-U10.cap", "n": 40000, "lost": 0, "gaps": 0, "attempts": 1}})");
+  const acceptance::DutState o = acceptance::dut_state_from_json(old);
+  EXPECT_EQ(o.runs.at(1).rec.mean_x, 1e-4);
+  EXPECT_EQ(o.in_run->samples, 40000u);
+  // Wrong types are named by their path.
+  auto bad = old;
+  bad["runs"]["1"]["n"] = -5;
+  try {
+    acceptance::dut_state_from_json(bad);
+    ADD_FAILURE() << "a negative count was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("state.runs.1.n: expected a count >= 0, found -5"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Executive, APhaseSetsOnlyWhatItDeclares) {
+  Fixture f("scope");
+  Devices d = f.dev();
+  Executive ex(d, f.out, f.log, nullptr);
+  std::vector<Phase> phases{{"a", "a", 1, [](PhaseContext& c) { c.values.set("va", 1.0); }, {{"va", "g", ""}}},
+                            {"b", "b", 1, [](PhaseContext& c) { c.values.set("va", 2.0); }, {{"vb", "g", ""}}}};
+  MeasurementSet v;
+  declare(phases, v);
+  NoPhaseState st;
+  const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
+  EXPECT_EQ(r.outcome, RunOutcome::Error);
+  EXPECT_NE(r.message.find("phase 'b' sets 'va', which it does not declare"), std::string::npos) << r.message;
+  EXPECT_EQ(*v.find("va")->value, 1.0);
 }

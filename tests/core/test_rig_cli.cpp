@@ -1,6 +1,8 @@
 // `rig` as a user and automation see it: a real child process, real files,
 // real signals. Covers the exit codes, SIGINT abort with the safe-state order,
-// SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run.
+// SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run; the
+// outcome rules (a resume judges as an uninterrupted run, a null limited value
+// fails), late signals, damaged checkpoints, run folders and capture headers.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -18,6 +20,8 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include "rig/capture/capture.hpp"
 
 extern char** environ;
 namespace fs = std::filesystem;
@@ -95,7 +99,9 @@ std::size_t count(const std::string& hay, const std::string& needle) {
   return n;
 }
 
-const char* kContractValues[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
+// The ci profile's GOST blocks are 2 s and 4 s long: its B values are named by that length
+// (in_run_b_gost_2s, _4s); the paper profile's are the CONTRACTS names in_run_b_gost_100s, _200s.
+const char* kContractValues[] = {"bias", "base_error", "in_run_b_gost_2s", "in_run_b_gost_4s", "in_run_b_allan",
                                  "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",
                                  "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"};
 
@@ -124,8 +130,11 @@ TEST(RigCli, CiProfileEndToEnd) {
   for (const char* name : kContractValues) {
     ASSERT_TRUE(p["values"].contains(name)) << name;
     const auto& m = p["values"][name];
-    for (const char* f : {"value", "unit", "lo", "hi", "limits", "outcome", "reason"}) EXPECT_TRUE(m.contains(f)) << name << "." << f;
+    for (const char* f : {"value", "unit", "lo", "hi", "limits", "outcome", "reason", "description"})
+      EXPECT_TRUE(m.contains(f)) << name << "." << f;
+    EXPECT_FALSE(m["description"].get<std::string>().empty()) << name;
   }
+  EXPECT_FALSE(p["values"].contains("in_run_b_gost_100s")) << "the ci profile has no 100 s blocks";
   EXPECT_TRUE(p["values"]["bias"]["value"].is_number());
   EXPECT_TRUE(p["values"]["r"]["value"].is_null()) << "R cannot be identified from 60 s";
   EXPECT_FALSE(p["values"]["r"]["reason"].get<std::string>().empty());
@@ -389,4 +398,178 @@ TEST(RigCli, DryRunPrintsThePlanAndTouchesNothing) {
   EXPECT_NE(out.find("run12-U20"), std::string::npos) << out;
   EXPECT_NE(out.find("01:5"), std::string::npos) << "about 110 min of device time:\n" << out;
   EXPECT_FALSE(fs::exists(d + "/run"));
+}
+
+// Issue 13, 1: a profile whose only accuracy class cannot be met fails, and still fails when
+// interrupted after in-run-b and resumed (the class's FAIL is judged again from the values).
+TEST(RigCli, ResumeOfAFailingProfileStillFails) {
+  const std::string d = tmp("resume-fail");
+  fs::create_directories(d);
+  std::ofstream(d + "/strict.toml") << "base = \"ci\"\n[[classes]]\nname = \"impossible\"\nmax_b_g = 1.0e-12\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/strict.toml", "--yes", "--out", d + "/whole"}, d + "/w"), 1)
+      << slurp(d + "/w.stderr");
+  const auto whole = nlohmann::json::parse(slurp(d + "/whole/passport.json"));
+  EXPECT_EQ(whole["values"]["accuracy_class"]["outcome"], "FAIL");
+
+  Child c = spawn({"run", "--profile", d + "/strict.toml", "--yes", "--out", d + "/run"}, d + "/io1");
+  ASSERT_TRUE(wait_for_file(c, d + "/run/captures/raw-U10.cap")) << slurp(d + "/io1.stderr");
+  ::kill(c.pid, SIGKILL);
+  EXPECT_EQ(wait_exit(c), 128 + SIGKILL);
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes"}, d + "/io2"), 1) << slurp(d + "/io2.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "FAIL");
+  EXPECT_EQ(p["values"]["accuracy_class"]["outcome"], "FAIL");
+  EXPECT_NE(p["values"]["accuracy_class"]["reason"].get<std::string>().find("exceeds every class"), std::string::npos);
+  for (const auto& ph : p["phases"])
+    if (ph["id"] == "in-run-b") {
+      EXPECT_EQ(ph["status"], "skipped") << "judged from the checkpoint's values";
+    }
+}
+
+// Issue 12, 5: a measurement with limits whose value is null fails the run, with the reason.
+TEST(RigCli, ALimitedValueThatIsNullFailsTheRun) {
+  const std::string d = tmp("null-limited");
+  fs::create_directories(d);
+  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[limits]\nr = [0.0, 1.0]\n";  // R is null on 60 s
+  EXPECT_EQ(run({"run", "--profile", d + "/r.toml", "--yes", "--out", d + "/run"}, d + "/io"), 1)
+      << slurp(d + "/io.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "FAIL");
+  EXPECT_TRUE(p["values"]["r"]["value"].is_null());
+  EXPECT_EQ(p["values"]["r"]["outcome"], "FAIL");
+  EXPECT_EQ(p["values"]["r"]["reason"].get<std::string>().rfind("required value not measured: ", 0), 0u)
+      << p["values"]["r"].dump();
+  const std::string junit = slurp(d + "/run/junit.xml");
+  EXPECT_NE(junit.find("<failure message=\"r is required (limits [0, 1]) but has no value\">"), std::string::npos)
+      << junit;
+  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: FAIL"), std::string::npos);
+}
+
+// Issue 13, 3: a signal after the last phase, before the passport is written, still aborts.
+TEST(RigCli, ASignalAfterTheLastPhaseStillAborts) {
+  const std::string d = tmp("late-signal");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--inject", "sigint@end"}, d + "/io"), 3)
+      << slurp(d + "/io.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ABORTED");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("after the last phase: SIGINT"), std::string::npos)
+      << p["aborted_reason"];
+  for (const auto& ph : p["phases"]) EXPECT_EQ(ph["status"], "done") << ph.dump();
+  EXPECT_TRUE(p["values"]["bias"]["value"].is_number()) << "the measurements are kept";
+  const std::string log = slurp(d + "/run/run.log");
+  EXPECT_NE(log.find("aborted after the last phase"), std::string::npos) << log;
+  EXPECT_NE(log.find("outcome ABORTED (exit 3)"), std::string::npos) << log;
+}
+
+// Issue 13, 2 and 6: a damaged checkpoint is refused (exit 2) naming the file and the field.
+TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
+  const std::string d = tmp("damaged-cp");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/good"}, d + "/g"), 0) << slurp(d + "/g.stderr");
+  const auto good = nlohmann::json::parse(slurp(d + "/good/checkpoint.json"));
+  int k = 0;
+  auto resume_damaged = [&](const nlohmann::json& cp, const std::string& field, int want = 2,
+                            const std::string& remove = "") {
+    const std::string f = d + "/f" + std::to_string(++k);
+    fs::copy(d + "/good", f, fs::copy_options::recursive);
+    fs::remove(f + "/passport.json");
+    if (!remove.empty()) fs::remove(f + "/" + remove);
+    std::ofstream(f + "/checkpoint.json") << cp.dump(1);
+    EXPECT_EQ(run({"run", "--resume", f, "--yes"}, f + "-io"), want) << field << "\n" << slurp(f + "-io.stderr");
+    if (want == 0) return;
+    const std::string err = slurp(f + "-io.stderr");
+    EXPECT_NE(err.find(f + "/checkpoint.json: " + field), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(f + "/passport.json") &&
+                 nlohmann::json::parse(slurp(f + "/passport.json"))["outcome"] == "PASS")
+        << field << ": a damaged checkpoint passed the DUT";
+  };
+  resume_damaged(good, "", 0);  // the control: an intact checkpoint resumes
+  auto j = good;
+  j["values"] = nlohmann::json::object();  // values emptied
+  resume_damaged(j, "values.bias: missing");
+  j = good;
+  j["state"]["bias"] = nullptr;  // bias nulled
+  resume_damaged(j, "state.bias: missing");
+  j = good;
+  j["values"]["bias"]["value"] = nullptr;  // a value nulled: contradicts the state it came from
+  resume_damaged(j, "values.bias.value: null contradicts state.bias.bias");
+  j = good;
+  j.erase("values");  // every phase completed, no values
+  resume_damaged(j, "values: missing");
+  j = good;
+  j["state"]["bias"]["sign_u10"] = "plus";  // a wrong JSON type: no bare json.exception, no exit 4
+  resume_damaged(j, "state.bias.sign_u10: expected an integer, found \"plus\"");
+  j = good;
+  j["values"]["k"]["value"] = true;
+  resume_damaged(j, "values.k.value: expected a number or null");
+  j = good;
+  j["completed"] = "all";
+  resume_damaged(j, "completed: expected an array");
+  resume_damaged(good, "state.raw.capture: ", 2, "captures/raw-U10.cap");  // a capture it names is gone
+}
+
+// Issue 13, 6: damaged run folders and capture headers give messages naming file and field.
+TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
+  const std::string d = tmp("damaged-folder");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/good"}, d + "/g"), 0) << slurp(d + "/g.stderr");
+  auto with_run_json = [&](const std::string& name, const nlohmann::json& inv) {
+    fs::copy(d + "/good", d + "/" + name, fs::copy_options::recursive);
+    std::ofstream(d + "/" + name + "/run.json") << inv.dump();
+    return run({"run", "--resume", d + "/" + name, "--yes"}, d + "/" + name + "-io");
+  };
+  auto inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+  inv["plant"] = "hardware";
+  EXPECT_EQ(with_run_json("hw", inv), 2);
+  EXPECT_NE(slurp(d + "/hw-io.stderr").find(d + "/hw/run.json: field 'hardware': a hardware run must name its hardware file"),
+            std::string::npos)
+      << slurp(d + "/hw-io.stderr");
+  inv["plant"] = 7;
+  EXPECT_EQ(with_run_json("type", inv), 2);
+  EXPECT_NE(slurp(d + "/type-io.stderr").find("run.json: field 'plant': expected a string, found number"),
+            std::string::npos)
+      << slurp(d + "/type-io.stderr");
+
+  // Capture headers with a rate the analysis cannot use: named at the header, exit 2.
+  auto write_capture = [&](const std::string& path, double rate) {
+    rig::capture::Header h;
+    h.phase = "raw-U10";
+    h.rate_hz = rate;
+    rig::capture::Writer w(path, h, 1000);
+    std::vector<rig::Sample> s(3000);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      s[i].seq = static_cast<uint32_t>(i);
+      s[i].x_g = static_cast<float>(1e-6 * std::sin(0.37 * static_cast<double>(i * i % 977)));
+    }
+    w.append(s);
+    w.close();
+  };
+  for (const auto& [rate, shown] : {std::pair{0.0, "rate_hz = 0 is out of range"},
+                                    std::pair{1e308, "rate_hz = 1e+308 is out of range"}}) {
+    const std::string cap = d + "/rate.cap";
+    fs::remove(cap);
+    write_capture(cap, rate);
+    EXPECT_EQ(run({"analyze", cap, "--input", "capture"}, d + "/rate"), 2) << rate;
+    EXPECT_NE(slurp(d + "/rate.stderr").find(cap + ": capture header " + shown), std::string::npos)
+        << slurp(d + "/rate.stderr");
+  }
+  // Data after the end marker, and a block written twice: analysed, but not called complete.
+  const std::string ok = d + "/ok.cap";
+  write_capture(ok, 1000);
+  std::string bytes = slurp(ok);
+  std::ofstream(d + "/tail.cap", std::ios::binary) << bytes << std::string(48, 'x');
+  EXPECT_EQ(run({"analyze", d + "/tail.cap", "--input", "capture"}, d + "/tail"), 0) << slurp(d + "/tail.stderr");
+  EXPECT_NE(slurp(d + "/tail.stdout").find("48 bytes after the end marker (ignored)"), std::string::npos)
+      << slurp(d + "/tail.stdout");
+  EXPECT_EQ(slurp(d + "/tail.stdout").find(", complete"), std::string::npos) << slurp(d + "/tail.stdout");
+  const std::size_t block = rig::capture::kBlockHeaderSize + 1000 * rig::capture::kRecordSize;
+  const std::size_t first = bytes.size() - rig::capture::kBlockHeaderSize - 3 * block;  // before the end marker
+  bytes.insert(first + block, bytes.substr(first, block));
+  std::ofstream(d + "/dup.cap", std::ios::binary) << bytes;
+  EXPECT_EQ(run({"analyze", d + "/dup.cap", "--input", "capture", "--json", d + "/dup.json"}, d + "/dup"), 0)
+      << slurp(d + "/dup.stderr");
+  EXPECT_NE(slurp(d + "/dup.stdout").find("repeats the previous block (skipped)"), std::string::npos)
+      << slurp(d + "/dup.stdout");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/dup.json"))["capture"]["samples"], 3000) << "counted once";
 }

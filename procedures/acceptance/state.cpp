@@ -1,0 +1,280 @@
+#include "procedures/acceptance/state.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "rig/capture/capture.hpp"
+#include "rig/core/errors.hpp"
+
+namespace rig::acceptance {
+
+namespace {
+
+// Reading a JSON object field by field; every error names the field's path.
+class Fields {
+ public:
+  Fields(const nlohmann::json& j, std::string path) : j_(j), path_(std::move(path)) {
+    if (!j_.is_object()) fail("", "an object");
+  }
+  const nlohmann::json& at(const std::string& key) const {
+    if (!j_.contains(key)) throw std::invalid_argument(path_ + "." + key + ": missing");
+    return j_[key];
+  }
+  bool has(const std::string& key) const { return j_.contains(key) && !j_[key].is_null(); }
+  std::string str(const std::string& key) const {
+    const auto& v = at(key);
+    if (!v.is_string()) fail(key, "a string", v);
+    return v.get<std::string>();
+  }
+  double num(const std::string& key) const {
+    const auto& v = at(key);
+    if (!v.is_number()) fail(key, "a number", v);
+    return v.get<double>();
+  }
+  std::optional<double> opt_num(const std::string& key) const {
+    if (!has(key)) return std::nullopt;
+    return num(key);
+  }
+  int64_t integer(const std::string& key) const {
+    const auto& v = at(key);
+    if (!v.is_number_integer()) fail(key, "an integer", v);
+    return v.get<int64_t>();
+  }
+  uint64_t count(const std::string& key) const {
+    const int64_t v = integer(key);
+    if (v < 0) fail(key, "a count >= 0", at(key));
+    return static_cast<uint64_t>(v);
+  }
+  Fields object(const std::string& key) const { return Fields(at(key), path_ + "." + key); }
+  const std::string& path() const { return path_; }
+  [[noreturn]] void fail(const std::string& key, const std::string& expected, const nlohmann::json& found) const {
+    throw std::invalid_argument((key.empty() ? path_ : path_ + "." + key) + ": expected " + expected + ", found " +
+                                (found.is_primitive() ? found.dump() : std::string(found.type_name())));
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& key, const std::string& expected) const { fail(key, expected, j_); }
+  const nlohmann::json& j_;
+  std::string path_;
+};
+
+Orientation orientation_from(const Fields& f, const std::string& key) {
+  const std::string s = f.str(key);
+  if (s == "U10") return Orientation::U10;
+  if (s == "U20") return Orientation::U20;
+  f.fail(key, "\"U10\" or \"U20\"", f.at(key));
+}
+
+Recorded recorded_from(const Fields& f) {
+  Recorded r;
+  r.capture = f.str("capture");
+  r.samples = f.count("n");
+  r.lost = f.count("lost");
+  r.gaps = f.count("gaps");
+  r.duplicates = f.has("duplicates") ? f.count("duplicates") : 0;  // older checkpoints lack it
+  r.attempts = static_cast<int>(f.count("attempts"));
+  r.mean_x = f.has("mean_g") ? f.num("mean_g") : 0;
+  r.mean_y = f.has("mean_y_g") ? f.num("mean_y_g") : 0;
+  return r;
+}
+
+nlohmann::json opt_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+nlohmann::json to_json(const Recorded& r) {
+  return {{"capture", r.capture}, {"n", r.samples},       {"lost", r.lost},     {"gaps", r.gaps},
+          {"duplicates", r.duplicates}, {"attempts", r.attempts}, {"mean_g", r.mean_x}, {"mean_y_g", r.mean_y}};
+}
+
+std::vector<std::string> DutState::captures() const {
+  std::vector<std::string> c;
+  for (const auto& [i, r] : runs) c.push_back(r.rec.capture);
+  if (in_run) c.push_back(in_run->capture);
+  if (raw) c.push_back(raw->capture);
+  return c;
+}
+
+nlohmann::json to_json(const DutState& s) {
+  nlohmann::json j = nlohmann::json::object();
+  if (s.dut) {
+    j["serial"] = s.dut->serial;  // read by checkpoints of earlier versions
+    j["dut"] = {{"serial", s.dut->serial}, {"firmware", s.dut->firmware}, {"temperature_c", s.dut->temperature_c}};
+  }
+  if (!s.runs.empty()) {
+    nlohmann::json runs = nlohmann::json::object();
+    for (const auto& [i, r] : s.runs) {
+      nlohmann::json e = to_json(r.rec);
+      e["index"] = r.index;
+      e["orientation"] = to_string(r.orientation);
+      runs[std::to_string(i)] = e;
+    }
+    j["runs"] = runs;
+  }
+  if (s.bias) j["bias"] = {{"bias", s.bias->bias}, {"base_error", s.bias->base_error}, {"sign_u10", s.bias->sign_u10}};
+  if (s.in_run) j["in_run"] = to_json(*s.in_run);
+  if (s.in_run_blocks) {
+    nlohmann::json blocks = nlohmann::json::array();
+    for (const auto& b : *s.in_run_blocks)
+      blocks.push_back({{"block_s", b.block_s}, {"means_g", b.means_g}, {"b_g", opt_json(b.b_g)}});
+    j["in_run"]["blocks"] = blocks;
+  }
+  if (s.raw) j["raw"] = to_json(*s.raw);
+  if (s.analysis) j["analysis"] = *s.analysis;
+  if (s.loop) j["loop"] = *s.loop;
+  return j;
+}
+
+DutState dut_state_from_json(const nlohmann::json& j) {
+  const Fields f(j, "state");
+  DutState s;
+  if (f.has("dut")) {
+    const Fields d = f.object("dut");
+    s.dut = DutIdentity{d.str("serial"), d.str("firmware"), d.num("temperature_c")};
+  }
+  if (f.has("runs")) {
+    const Fields rs = f.object("runs");
+    for (const auto& [k, v] : f.at("runs").items()) {
+      const Fields r(v, rs.path() + "." + k);
+      RunMean m;
+      m.index = static_cast<std::size_t>(r.count("index"));
+      if (std::to_string(m.index) != k) r.fail("index", "the run's key " + k, r.at("index"));
+      m.orientation = orientation_from(r, "orientation");
+      m.rec = recorded_from(r);
+      if (!r.has("mean_g")) r.fail("mean_g", "a number", nlohmann::json(nullptr));
+      s.runs[m.index] = m;
+    }
+  }
+  if (f.has("bias")) {
+    const Fields b = f.object("bias");
+    BiasState bs{b.num("bias"), b.num("base_error"), static_cast<int>(b.integer("sign_u10"))};
+    if (bs.sign_u10 != 1 && bs.sign_u10 != -1) b.fail("sign_u10", "+1 or -1", b.at("sign_u10"));
+    s.bias = bs;
+  }
+  if (f.has("in_run")) {
+    const Fields ir = f.object("in_run");
+    if (ir.has("capture")) s.in_run = recorded_from(ir);
+    if (ir.has("blocks")) {
+      const auto& arr = ir.at("blocks");
+      if (!arr.is_array()) ir.fail("blocks", "an array", arr);
+      std::vector<GostBlock> blocks;
+      for (std::size_t i = 0; i < arr.size(); ++i) {
+        const Fields b(arr[i], ir.path() + ".blocks[" + std::to_string(i) + "]");
+        GostBlock g;
+        g.block_s = b.num("block_s");
+        const auto& means = b.at("means_g");
+        if (!means.is_array()) b.fail("means_g", "an array of numbers", means);
+        for (const auto& m : means) {
+          if (!m.is_number()) b.fail("means_g", "an array of numbers", m);
+          g.means_g.push_back(m.get<double>());
+        }
+        g.b_g = b.opt_num("b_g");
+        blocks.push_back(std::move(g));
+      }
+      s.in_run_blocks = std::move(blocks);
+    }
+  }
+  if (f.has("raw")) s.raw = recorded_from(f.object("raw"));
+  if (f.has("analysis")) {
+    if (!f.at("analysis").is_object()) f.fail("analysis", "an object", f.at("analysis"));
+    s.analysis = f.at("analysis");
+  }
+  if (f.has("loop")) {
+    if (!f.at("loop").is_object()) f.fail("loop", "an object", f.at("loop"));
+    s.loop = f.at("loop");
+  }
+  return s;
+}
+
+nlohmann::json ProcedureState::save() const { return to_json(slots_.at(0)); }
+
+// A capture named by the state must be the one recorded: present, a rig capture of that
+// phase at the profile's rate, and at least as long as the samples counted when it was recorded.
+void ProcedureState::check_capture(const Recorded& r, const std::string& field, const std::string& run_dir) const {
+  const std::string path = run_dir + "/" + r.capture;
+  if (r.capture.empty() || r.capture.find("..") != std::string::npos || r.capture.front() == '/')
+    throw std::invalid_argument(field + ".capture: \"" + r.capture + "\" is not a capture in the run folder");
+  if (!std::filesystem::is_regular_file(path))
+    throw std::invalid_argument(field + ".capture: " + path + " is missing");
+  try {
+    capture::Reader rd(path);
+    const std::string phase = std::filesystem::path(r.capture).stem().string();
+    if (rd.header().phase != phase)
+      throw std::invalid_argument(field + ".capture: " + path + " holds phase '" + rd.header().phase + "', not '" +
+                                  phase + "'");
+    if (rd.header().rate_hz != profile_.rate_hz)
+      throw std::invalid_argument(field + ".capture: " + path + " was recorded at " +
+                                  fmt::format("{:g}", rd.header().rate_hz) + " Hz, the profile says " +
+                                  fmt::format("{:g}", profile_.rate_hz));
+  } catch (const ConfigError& e) {
+    throw std::invalid_argument(field + ".capture: " + e.what());
+  }
+  if (std::filesystem::file_size(path) < r.samples * capture::kRecordSize)
+    throw std::invalid_argument(field + ".n: " + std::to_string(r.samples) + " samples recorded, but " + path +
+                                " is too short to hold them");
+}
+
+void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::string>& completed,
+                             const std::string& run_dir) {
+  DutState s = dut_state_from_json(j);
+  // Each completed phase must have left its part (a phase's id tells which).
+  auto need = [](bool present, const std::string& field, const std::string& phase) {
+    if (!present)
+      throw std::invalid_argument(field + ": missing, but phase '" + phase + "' that writes it is marked completed");
+  };
+  for (const std::string& id : completed) {
+    if (id.rfind("run", 0) == 0 && id.find('-') != std::string::npos) {  // runNN-Uxx
+      const std::size_t idx = std::stoul(id.substr(3, id.find('-') - 3));
+      need(s.runs.count(idx) > 0, "state.runs." + std::to_string(idx), id);
+      const RunMean& r = s.runs.at(idx);
+      if (idx > profile_.order.size() || r.orientation != profile_.order[idx - 1])
+        throw std::invalid_argument("state.runs." + std::to_string(idx) + ".orientation: " +
+                                    to_string(r.orientation) + " does not match the profile's order");
+      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir);
+    } else if (id == "bias") {
+      need(s.bias.has_value(), "state.bias", id);
+    } else if (id == "in-run") {
+      need(s.in_run.has_value(), "state.in_run", id);
+      check_capture(*s.in_run, "state.in_run", run_dir);
+    } else if (id == "in-run-b") {
+      need(s.in_run_blocks.has_value(), "state.in_run.blocks", id);
+    } else if (id == "raw") {
+      need(s.raw.has_value(), "state.raw", id);
+      check_capture(*s.raw, "state.raw", run_dir);
+    } else if (id == "allan") {
+      need(s.analysis.has_value(), "state.analysis", id);
+    } else if (id == "loop") {
+      need(s.loop.has_value(), "state.loop", id);
+    }
+  }
+  slots_.at(0) = std::move(s);
+}
+
+void ProcedureState::check_values(const MeasurementSet& values) const {
+  const DutState& s = slots_.at(0);
+  auto same = [&](const std::string& name, std::optional<double> from_state, const std::string& field) {
+    const Measurement* m = values.find(name);
+    if (!m) return;
+    const bool equal = m->value.has_value() == from_state.has_value() && (!m->value || *m->value == *from_state);
+    if (!equal)
+      throw std::invalid_argument("values." + name + ".value: " + (m->value ? fmt::format("{:g}", *m->value) : "null") +
+                                  " contradicts " + field + " = " +
+                                  (from_state ? fmt::format("{:g}", *from_state) : "null"));
+  };
+  if (s.bias) {
+    same("bias", s.bias->bias, "state.bias.bias");
+    same("base_error", s.bias->base_error, "state.bias.base_error");
+  }
+  if (s.in_run_blocks)
+    for (std::size_t i = 0; i < s.in_run_blocks->size(); ++i) {
+      const GostBlock& b = (*s.in_run_blocks)[i];
+      // A NaN B is written as null: both sides say "no value".
+      const std::optional<double> bg = b.b_g && std::isfinite(*b.b_g) ? b.b_g : std::nullopt;
+      same(gost_value_name(b.block_s), bg, "state.in_run.blocks[" + std::to_string(i) + "].b_g");
+    }
+}
+
+}  // namespace rig::acceptance

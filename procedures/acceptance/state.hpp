@@ -1,0 +1,89 @@
+// The acceptance procedure's state: what its phases hand on to each other
+// (run means, bias, the captures recorded, the analysis curves), typed, with
+// one JSON form used by the checkpoint and by analysis.json.
+//
+// Per DUT: a fixture with N DUTs in one run holds one DutState per slot (the
+// table moves them together; each has its own link, captures and values).
+// Today's fixture has one slot; the checkpoint's "state" is slot 0's object
+// (the same keys as before the state was typed, so older checkpoints resume).
+#pragma once
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "procedures/acceptance/profile.hpp"
+#include "procedures/acceptance/record.hpp"
+#include "rig/executive/executive.hpp"
+
+namespace rig::acceptance {
+
+struct DutIdentity {
+  std::string serial, firmware;
+  double temperature_c = 0;
+};
+
+// One run of procedure A (formulas (3), (4) take its mean).
+struct RunMean {
+  std::size_t index = 0;  // 1-based, in the profile's order
+  Orientation orientation = Orientation::U10;
+  Recorded rec;
+};
+
+struct BiasState {
+  double bias = 0, base_error = 0;
+  int sign_u10 = +1;  // sign with which g_dA enters x10 (docs/method.md, after (4))
+};
+
+// B by the Russian method for one block length (GOST R 8.736 block means).
+struct GostBlock {
+  double block_s = 0;
+  std::vector<double> means_g;
+  std::optional<double> b_g;
+};
+
+struct DutState {
+  std::optional<DutIdentity> dut;       // bring-up (every start)
+  std::map<std::size_t, RunMean> runs;  // runNN phases, by index
+  std::optional<BiasState> bias;        // bias phase
+  std::optional<Recorded> in_run;       // in-run phase
+  std::optional<std::vector<GostBlock>> in_run_blocks;  // in-run-b phase
+  std::optional<Recorded> raw;          // raw phase
+  std::optional<nlohmann::json> analysis;  // allan phase: the math's JSON views (oadev, noise_terms, psd, timeseries)
+  std::optional<nlohmann::json> loop;      // loop phase: the loop figures' JSON view
+
+  std::string serial() const { return dut ? dut->serial : std::string(); }
+  // The captures recorded (relative to the run folder), in the order of the procedure.
+  std::vector<std::string> captures() const;
+};
+
+nlohmann::json to_json(const Recorded& r);
+nlohmann::json to_json(const DutState& s);
+// Throws std::invalid_argument naming the field ("state.bias.sign_u10: expected an integer, found null").
+DutState dut_state_from_json(const nlohmann::json& j);
+
+// The procedure's PhaseState. restore() also checks the state against the phases
+// marked completed (each must have left its part) and the captures it names
+// against the run folder (present, a rig capture of that phase at the profile's rate,
+// large enough for the samples recorded).
+class ProcedureState final : public PhaseState {
+ public:
+  explicit ProcedureState(const Profile& p) : profile_(p) {}
+  DutState& slot(std::size_t i = 0) { return slots_.at(i); }
+  const DutState& slot(std::size_t i = 0) const { return slots_.at(i); }
+  std::size_t slots() const { return slots_.size(); }
+
+  nlohmann::json save() const override;
+  void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
+  // bias, base_error and the GOST B values must be the ones the state holds.
+  void check_values(const MeasurementSet& values) const override;
+
+ private:
+  void check_capture(const Recorded& r, const std::string& field, const std::string& run_dir) const;
+  const Profile& profile_;
+  std::vector<DutState> slots_ = std::vector<DutState>(1);
+};
+
+}  // namespace rig::acceptance
