@@ -212,8 +212,9 @@ TEST(Executive, BringUpRejectsADutReportingAnotherSerial) {
   acceptance::RunOptions ro;
   ro.expected_serial = "NOT-THIS-ONE";
   MeasurementSet v;
-  nlohmann::json st = nlohmann::json::object();
-  const auto r = ex.run([&](PhaseContext& c) { acceptance::bring_up(c, prof, ro); }, {}, v, st, CancelToken{}, false, {});
+  acceptance::ProcedureState st(prof);
+  const auto r =
+      ex.run([&](PhaseContext& c) { acceptance::bring_up(c, prof, ro, st.slot()); }, {}, v, st, CancelToken{}, false, {});
   EXPECT_EQ(r.outcome, RunOutcome::Error);
   EXPECT_EQ(r.exit_code(), kExitUsage);
   EXPECT_NE(r.message.find("EMU-QPA-0001"), std::string::npos) << r.message;
