@@ -157,6 +157,13 @@ class LibmodbusTransport final : public RegisterTransport {
     return out;
   }
 
+  std::vector<uint16_t> read_input(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
+    std::vector<uint16_t> out(n);
+    call("read " + std::to_string(n) + " input registers at " + std::to_string(addr), cancel, urgent,
+         [&] { return modbus_read_input_registers(ctx_, addr, n, out.data()); });
+    return out;
+  }
+
   void write(uint16_t addr, const std::vector<uint16_t>& values, const CancelToken& cancel, bool urgent) override {
     const std::string what = "write " + std::to_string(values.size()) + " registers at " + std::to_string(addr);
     if (values.size() == 1) {
@@ -246,6 +253,14 @@ class InProcessTransport final : public RegisterTransport {
     wait_answer(what, cancel, urgent);
     std::vector<uint16_t> out(n);
     check(what, dev_.read_registers(addr, n, out.data()));
+    return out;
+  }
+
+  std::vector<uint16_t> read_input(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
+    const std::string what = "read " + std::to_string(n) + " input registers at " + std::to_string(addr);
+    wait_answer(what, cancel, urgent);
+    std::vector<uint16_t> out(n);
+    check(what, dev_.read_input_registers(addr, n, out.data()));
     return out;
   }
 
