@@ -391,7 +391,7 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
     control_ = word;
   } catch (const std::exception& e) {
     try {
-      err = std::string(name) + " NOT delivered (the drive may still be moving): " + e.what();
+      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
     } catch (...) {
     }
   } catch (...) {

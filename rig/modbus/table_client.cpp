@@ -357,7 +357,7 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
     control_ = static_cast<uint16_t>(servo | bit);
   } catch (const std::exception& e) {
     try {
-      err = std::string(name) + " NOT delivered (the table may still be moving): " + e.what();
+      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
     } catch (...) {
     }
   } catch (...) {
