@@ -41,7 +41,7 @@ struct TableServer::Impl {
 
 namespace {
 
-constexpr int kMapSize = 256;  // libmodbus's reply buffer; the emulator decides what is valid
+constexpr int kMapSize = 65536;  // libmodbus's reply buffer over the whole address space (maps may sit anywhere); the emulator decides what is valid
 constexpr double kSelectS = 0.005;
 
 uint16_t be16(const uint8_t* p) { return static_cast<uint16_t>((p[0] << 8) | p[1]); }

@@ -336,6 +336,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       if (r.state() != State::kOperationEnabled)
         throw HardwareError(doing + ": drive left Operation enabled" + at(r));
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
+      if (control_.load() & c4::cw::kHalt)  // stop() from another thread (the executive's abort path)
+        throw HardwareError(doing + ": halted by a stop request" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (!ok) {
         held_since = -1;
@@ -362,11 +364,16 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   });
 }
 
-void Cia402Table::reset_fault(const CancelToken& cancel) {
+uint16_t Cia402Table::reset_fault(const CancelToken& cancel) {
   const std::string doing = "fault reset";
   try {
     Cia402Reading r = read(cancel);
-    if (r.state() != State::kFault) return;
+    const double t_react = clock_.now_s();
+    while (r.state() == State::kFaultReactionActive && clock_.now_s() - t_react < opt_.ack_timeout_s) {
+      clock_.sleep_for(opt_.poll_s, cancel);  // the drive is still braking: Fault follows (transition 14)
+      r = read(cancel);
+    }
+    if (r.state() != State::kFault) return 0;
     const uint16_t code = r.error_code;
     write_controlword(0, cancel);
     write_controlword(c4::cw::kFaultReset, cancel);  // rising edge: transition 15
@@ -377,8 +384,7 @@ void Cia402Table::reset_fault(const CancelToken& cancel) {
     if (r.state() == State::kFault)
       throw HardwareError(doing + ": drive \"" + map_.name + "\" stays in Fault, error code " + hex4(r.error_code) +
                           " " + c4::error_code_text(r.error_code) + " (its cause is still present)");
-    std::fprintf(stderr, "fault reset: cleared error code %s %s\n", hex4(code).c_str(),
-                 c4::error_code_text(code).c_str());
+    return code;
   } catch (const ModbusError& e) {
     throw HardwareError(doing + ": link failure: " + e.what());
   }

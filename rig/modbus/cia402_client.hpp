@@ -40,9 +40,9 @@ class Cia402Table final : public RotaryTable {
   void quick_stop() noexcept override;  // Quick stop command (transition 11)
   std::string describe() const override;
 
-  // Technician's fault reset (`rig table reset`): names the 0x603F code;
-  // HardwareError when the drive stays in Fault.
-  void reset_fault(const CancelToken& cancel);
+  // Technician's fault reset (`rig table reset`): returns the 0x603F code it
+  // cleared (0: no fault); HardwareError naming the code when the drive stays in Fault.
+  uint16_t reset_fault(const CancelToken& cancel);
   Cia402Reading read(const CancelToken& cancel = {});
   std::string last_stop_error() const {
     std::lock_guard lk(stop_mu_);
