@@ -70,7 +70,7 @@ class Cia402Drive final : public rig::modbus::RegisterDevice {
   uint16_t controlword_ = 0, axis_control_ = 0, error_code_ = 0;
   int8_t mode_ = 0;
   int64_t target_ = 0, profile_velocity_ = 0, profile_accel_ = 0, profile_decel_ = 0, quick_stop_decel_ = 0;
-  int64_t homing_method_ = 0, home_offset_ = 0;
+  int64_t homing_method_ = 19, home_offset_ = 0;  // the drive's own homing method until one is written
   bool setpoint_ack_ = false, setpoint_pending_ = false, moving_to_target_ = false;
   bool homing_active_ = false, homing_attained_ = false, homing_error_ = false;
   bool limit_active_ = false, warning_ = false;
