@@ -197,6 +197,12 @@ void add_table(CLI::App& app, int& rc) {
 
   auto stop_cmd = [a, &rc](bool quick) {
     with_table(*a, [&](RotaryTable& t) {
+      // Learn the drive's control word first, so the stop keeps the servo /
+      // device control bits as they are (a halt must never drop the power stage).
+      try {
+        t.status();
+      } catch (const HardwareError&) {
+      }
       if (quick) {
         t.quick_stop();
       } else {

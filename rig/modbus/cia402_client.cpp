@@ -33,6 +33,7 @@ double trapezoid_time(double dist, double v, double a) {
   return 2.0 * std::sqrt(dist / a);
 }
 constexpr double kDefaultMoveTimeoutS = 120.0;  // when the profile velocity is unknown
+constexpr double kRestTimeoutS = 30.0;          // a stopping axis must be at rest within this
 
 }  // namespace
 
@@ -66,6 +67,7 @@ void Cia402Table::write_object(Obj o, int64_t value, const CancelToken& cancel, 
 void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
   write_object(Obj::kControlword, w, cancel);
   control_ = w;
+  control_known_ = true;
 }
 
 // Reads the objects of one poll, contiguous registers of one function in one request.
@@ -114,6 +116,10 @@ TableStatus Cia402Table::status() {
   Cia402Reading r;
   try {
     r = read();
+    // The controlword as the drive holds it: a stop from a fresh process
+    // (`rig table stop`) then keeps its device control bits.
+    control_ = static_cast<uint16_t>(read_object(Obj::kControlword, {}));
+    control_known_ = true;
   } catch (const ModbusError& e) {
     throw HardwareError(std::string("table status: ") + e.what());
   }
@@ -180,10 +186,19 @@ void Cia402Table::enable_operation(const std::string& doing, const CancelToken& 
   for (int step = 0; step < 6; ++step) {
     switch (r.state()) {
       case State::kOperationEnabled: return;
-      case State::kQuickStopActive:  // after our quick stop: Disable voltage (transition 12), then up again
+      case State::kQuickStopActive: {  // after our quick stop: Disable voltage (transition 12), then up again
+        // Not while the quick-stop ramp still runs: disabling would drop the axis on its brake.
+        const double t_rest = clock_.now_s();
+        while (std::fabs(r.velocity_dps) > 0.01) {
+          if (clock_.now_s() - t_rest > kRestTimeoutS)
+            throw HardwareError(doing + ": still moving " + secs(kRestTimeoutS) + " after a quick stop" + at(r));
+          clock_.sleep_for(opt_.poll_s, cancel);
+          r = read(cancel);
+        }
         write_controlword(c4::cw::kDisableVoltage, cancel);
         r = await_state(doing, "disable voltage", State::kSwitchOnDisabled, cancel);
         break;
+      }
       case State::kSwitchOnDisabled:
         write_controlword(c4::cw::kShutdown, cancel);
         r = await_state(doing, "shutdown", State::kReadyToSwitchOn, cancel);
@@ -297,6 +312,13 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     // Handshake (single set-point): new-set-point low and acknowledge clear first.
     write_controlword(c4::cw::kCmdEnableOperation, cancel);
     Cia402Reading r = read(cancel);
+    for (const double t_ack = clock_.now_s(); r.has(c4::sw::kSetPointAck);) {
+      if (clock_.now_s() - t_ack > opt_.ack_timeout_s)
+        throw HardwareError(doing + ": set-point acknowledge (bit 12) still set " + secs(opt_.ack_timeout_s) +
+                            " after new-set-point was cleared" + at(r));
+      clock_.sleep_for(opt_.poll_s, cancel);
+      r = read(cancel);
+    }
     const double start_deg = r.actual_deg;
     write_object(Obj::kTargetPosition, map_.deg_to_counts(deg), cancel);
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint, cancel);
@@ -409,9 +431,16 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
   }
 }
 
-// Halt keeps the device control bits as they are (never enables anything)
-// and drops new-set-point so no move is taken after it.
+// Halt keeps the device control bits as they are (never enables or disables
+// anything) and drops new-set-point so no move is taken after it. Not knowing
+// them (nothing read or written yet), it sends nothing rather than a guess that
+// could drop the power stage mid-move: callers read status() first.
 void Cia402Table::stop() noexcept {
+  if (!control_known_) {
+    std::lock_guard lk(stop_mu_);
+    last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";
+    return;
+  }
   const auto w = static_cast<uint16_t>((control_.load() & 0x000F) | c4::cw::kHalt);
   send_stop(w, "halt");
 }

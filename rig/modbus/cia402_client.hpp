@@ -5,6 +5,7 @@
 // halt and quick stop; every wait reads statusword, modes display, position
 // and velocity actual; every call is bounded in time.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -69,6 +70,7 @@ class Cia402Table final : public RotaryTable {
   Clock& clock_;
   TableOptions opt_;
   std::atomic<uint16_t> control_{0};
+  std::atomic<bool> control_known_{false};  // control_ was read from or written to the drive
   bool homed_ = false;            // homed by this client (when the map names no homed bit)
   bool profile_applied_ = false;
   mutable std::mutex stop_mu_;

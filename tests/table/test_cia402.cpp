@@ -341,6 +341,30 @@ TEST_P(Cia402Client, CancelMidMoveHaltsTheAxis) {
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
 }
 
+// `rig table stop` from a fresh process: the stop keeps the drive's device
+// control bits (halt, still Operation enabled), never drops the power stage.
+TEST_P(Cia402Client, AStopFromAFreshClientHaltsWithoutDisabling) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(300.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0);
+  auto fresh = r.client();
+  fresh->stop();  // nothing known yet: nothing sent, and it says so
+  EXPECT_TRUE(has(fresh->last_stop_error(), "halt not sent")) << fresh->last_stop_error();
+  fresh->status();
+  fresh->stop();
+  EXPECT_EQ(fresh->last_stop_error(), "");
+  r.run(2.0);
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
+  EXPECT_TRUE(r.axis->snapshot().servo_on);
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+  EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+}
+
 TEST_P(Cia402Client, FaultsAreNamedWithTheirErrorCode) {
   {  // following error mid-move
     Rig r(GetParam());
