@@ -19,12 +19,12 @@ namespace {
 
 // 0x603F codes the emulated drive reports for the motion model's alarms
 // (CiA 301 emergency error code classes: 0x86xx position control, 0x81xx communication).
-uint16_t error_code_for(uint16_t alarm_code, uint16_t injected) {
+uint16_t error_code_for(uint16_t alarm_code, uint16_t injected, uint16_t configured) {
   switch (alarm_code) {
     case alarm::kFollowing: return 0x8611;
     case alarm::kOverTravelPos:
     case alarm::kOverTravelNeg: return 0x8612;
-    case alarm::kDriveFault: return injected ? injected : 0x2310;
+    case alarm::kDriveFault: return injected ? injected : configured;
     case alarm::kEstop: return 0xFF01;
     case alarm::kInterlock: return 0x5441;
     case alarm::kHomingFailed: return 0x8A00;
@@ -42,6 +42,7 @@ Cia402Drive::Cia402Drive(TableEmulator& axis, m::DriveMap map) : axis_(axis), ma
   quick_stop_decel_ = std::llround(map_.dps2_to_accel_units(p.quick_stop_dps2));
   mode_ = 0;
   target_ = map_.deg_to_counts(axis_.snapshot().position_deg);
+  answer_delay_s_ = p.answer_delay_s;
 }
 
 double Cia402Drive::home_offset_deg() const { return map_.counts_to_deg(home_offset_); }
@@ -84,7 +85,7 @@ void Cia402Drive::check_axis_fault() {
     axis_control(static_cast<uint16_t>(axis_control_ & ctl::kServoOn));
     return;
   }
-  error_code_ = error_code_for(s.alarm_code, injected_code_);
+  error_code_ = error_code_for(s.alarm_code, injected_code_, axis_.params().drive_fault_code);
   limit_active_ = s.alarm_code == alarm::kOverTravelPos || s.alarm_code == alarm::kOverTravelNeg;
   homing_active_ = false;
   if (s.alarm_code == alarm::kHomingFailed) homing_error_ = true;

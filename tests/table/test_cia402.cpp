@@ -395,6 +395,13 @@ TEST_P(Cia402Client, FaultsAreNamedWithTheirErrorCode) {
     const std::string e = error_of([&] { t->move_to(90.0, {}); });
     EXPECT_TRUE(has(e, "0x4310") && has(e, "over-temperature") && has(e, "rig table reset")) << e;
   }
+  {  // configured in [plant.table]: drive_fault with its code, on the first move
+    Rig r(GetParam(), std::string(kFastAxis) + "fault = \"drive_fault\"\nfault_at = 0.3\ndrive_fault_code = 0x4310\n");
+    auto t = r.client();
+    t->home({});
+    const std::string e = error_of([&] { t->move_to(180.0, {}); });
+    EXPECT_TRUE(has(e, "0x4310") && has(e, "over-temperature")) << e;
+  }
   {  // a fault whose cause is still there is not reset
     Rig r(GetParam());
     auto t = r.client();

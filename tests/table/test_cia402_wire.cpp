@@ -115,6 +115,20 @@ TEST_P(Cia402Wire, SlowAnswersAreATimeoutNamingTheObject) {
   EXPECT_NEAR(w.axis->actual_angle_deg(), 90.0, 0.005);
 }
 
+// [plant.table] answer_delay_s: slow answers configured for `rig plant serve` (both drives).
+TEST(SlowAnswers, ConfiguredInThePlantTable) {
+  auto emu = emulator(std::string(kFastTable) + "answer_delay_s = 0.4\n");
+  plant::TableServer server(*emu, "tcp:127.0.0.1:0");
+  server.start();
+  RealClock clock;
+  m::LinkOptions lo;
+  lo.retries = 0;
+  lo.response_timeout_s = 0.2;
+  auto t = m::make_libmodbus_transport(m::parse_endpoint(server.endpoint()), lo, clock);
+  const std::string e = error_of([&] { t->read(0, 1, {}); });
+  EXPECT_TRUE(has(e, "timeout")) << e;
+}
+
 INSTANTIATE_TEST_SUITE_P(ShippedMaps, Cia402Wire,
                          ::testing::Values("generic-cia402.toml", "lowword-offset.toml"),
                          [](const auto& p) { return p.param.substr(0, p.param.find('-')); });
