@@ -83,7 +83,53 @@ void home_move_stop_fault(WireDrive& w, RotaryTable& table) {
   EXPECT_NEAR(w.axis->actual_angle_deg(), 10.0, 0.005);
 }
 
+// Following error, limit switch, cancel mid-move, then a drive gone silent.
+void fault_paths_and_cancel(WireDrive& w, RotaryTable& table) {
+  auto& c = dynamic_cast<m::Cia402Table&>(table);
+  table.home({});
+  w.axis->inject(plant::SimFault::kFollowing, 0.3);
+  std::string e = error_of([&] { table.move_to(180.0, {}); });
+  EXPECT_TRUE(has(e, "0x8611") && has(e, "following error")) << e;
+  EXPECT_EQ(c.reset_fault({}), 0x8611);
+  w.axis->inject(plant::SimFault::kOverTravel, 0.3);
+  e = error_of([&] { table.move_to(-100.0, {}); });
+  EXPECT_TRUE(has(e, "0x8612") && has(e, "limit switch")) << e;
+  EXPECT_EQ(c.reset_fault({}), 0x8612);
+  table.move_to(0.0, {});
+  CancelSource cancel;
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    cancel.request("test cancel");
+  });
+  EXPECT_THROW(table.move_to(300.0, cancel.token()), AbortedError);
+  canceller.join();
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_NEAR(w.axis->snapshot().velocity_dps, 0.0, 1e-3);
+  EXPECT_LT(w.axis->actual_angle_deg(), 290.0);
+  EXPECT_EQ(w.drive.state(), c4::State::kOperationEnabled);  // halted, not disabled
+  w.axis->inject(plant::SimFault::kNoAnswer, 0.3);
+  e = error_of([&] { table.move_to(0.0, {}); });
+  EXPECT_TRUE(has(e, "link failure") && has(e, "statusword (0x6041)") && has(e, w.map.name) && has(e, "timeout") &&
+              has(e, "halt not delivered"))
+      << e;
+}
+
 class Cia402Wire : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Cia402Wire, FaultPathsAndCancelOverTcp) {
+  WireDrive w(GetParam(), "tcp:127.0.0.1:0");
+  RealClock clock;
+  auto table = m::connect_table(client_cfg("modbus", w.server.endpoint(), GetParam()), clock);
+  fault_paths_and_cancel(w, *table);
+}
+
+TEST_P(Cia402Wire, FaultPathsAndCancelOverRtu) {
+  PtyPair pty;
+  WireDrive w(GetParam(), "rtu:" + pty.a() + ",115200,N,8,1", 3);
+  RealClock clock;
+  auto table = m::connect_table(client_cfg("rtu", pty.b() + ",115200,N,8,1", GetParam(), "unit = 3\n"), clock);
+  fault_paths_and_cancel(w, *table);
+}
 
 TEST_P(Cia402Wire, OverLoopbackTcp) {
   WireDrive w(GetParam(), "tcp:127.0.0.1:0");
