@@ -429,28 +429,46 @@ DriveMap table_drive_map(const toml::table& t) {
   return load_drive_map(p.string());
 }
 
-std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {
+namespace {
+
+struct TableConfig {
+  Endpoint ep;
+  LinkOptions link;
+  TableOptions opt;
+  std::optional<DriveMap> map;
+};
+
+// Everything [table] says, checked, without touching the drive.
+TableConfig read_table_config(const toml::table& t) {
   cfg::check_keys(t,
                   {"modbus", "rtu", "unit", "response_timeout_s", "retries", "backoff_s", "tolerance_deg", "settle_s",
                    "poll_s", "move_timeout_s", "home_timeout_s", "ack_timeout_s", "heartbeat_timeout_s",
                    "velocity_dps", "accel_dps2", "in_position_window_deg", "drive_settle_s", "u10_deg", "u20_deg",
                    "drive", "drive_map"},
                   "table");
-  const std::string drive = table_drive(t);
-  std::optional<DriveMap> map;
-  if (drive == "cia402") map = table_drive_map(t);
+  TableConfig c;
+  if (table_drive(t) == "cia402") c.map = table_drive_map(t);
   const bool tcp = t.contains("modbus"), rtu = t.contains("rtu");
   if (tcp == rtu) throw ConfigError(cfg::where(t) + ": [table] needs exactly one of modbus = \"tcp:HOST:PORT\" or rtu = \"DEVICE,BAUD,P,8,1\"");
-  Endpoint ep;
   try {
-    ep = tcp ? parse_endpoint(cfg::get_string(t, "modbus")) : parse_rtu(cfg::get_string(t, "rtu"));
+    c.ep = tcp ? parse_endpoint(cfg::get_string(t, "modbus")) : parse_rtu(cfg::get_string(t, "rtu"));
   } catch (const ConfigError& e) {
     throw ConfigError(cfg::where(*t.get(tcp ? "modbus" : "rtu")) + ": " + e.what());
   }
-  const TableOptions opt = table_options_from_toml(t);
-  auto transport = make_libmodbus_transport(ep, link_options_from_toml(t), clock);
-  if (map) return std::make_unique<Cia402Table>(std::move(transport), std::move(*map), clock, opt);
-  return std::make_unique<TableClient>(std::move(transport), clock, opt);
+  c.opt = table_options_from_toml(t);
+  c.link = link_options_from_toml(t);
+  return c;
+}
+
+}  // namespace
+
+void check_table_config(const toml::table& t) { read_table_config(t); }
+
+std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {
+  TableConfig c = read_table_config(t);
+  auto transport = make_libmodbus_transport(c.ep, c.link, clock);
+  if (c.map) return std::make_unique<Cia402Table>(std::move(transport), std::move(*c.map), clock, c.opt);
+  return std::make_unique<TableClient>(std::move(transport), clock, c.opt);
 }
 
 std::unique_ptr<RotaryTable> make_inprocess_table(RegisterDevice& dev, Clock& clock, TableOptions opt) {

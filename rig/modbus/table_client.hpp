@@ -99,6 +99,10 @@ std::string table_drive(const toml::table& table_cfg);
 // The [table] drive_map file (relative paths: beside the file naming it, else the working folder).
 DriveMap table_drive_map(const toml::table& table_cfg);
 
+// Checks every [table] key, the drive map included, without connecting
+// (ConfigError naming file:line), so a hardware file is refused before any device opens.
+void check_table_config(const toml::table& table_cfg);
+
 // Hardware: connects to the drive named by [table] `modbus = "tcp:HOST:PORT"` or
 // `rtu = "/dev/ttyUSB0,115200,N,8,1"`. Throws ConfigError / HardwareError.
 std::unique_ptr<RotaryTable> connect_table(const toml::table& table_cfg, Clock& clock);

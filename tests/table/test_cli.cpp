@@ -191,6 +191,14 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
   const std::string hw3 = write("hw3.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"badmap.toml\"\n");
   EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw3, out), 2) << out;
   EXPECT_NE(out.find("badmap.toml:3:"), std::string::npos) << out;
+  // `rig run --hardware`: the [table] mistake is exit 2 before any device is opened
+  // (here GPIO would fail with exit 4: no such chip on this machine).
+  const std::string hw4 = write("hw4.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                            "drive_map = \"badmap.toml\"\n[dut]\ncan = \"vcan9\"\n"
+                                            "[gpio]\nchip = \"nochip\"\npower = \"P\"\nestop = \"E\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " run --hardware " + hw4 + " --profile ci --yes --out " + dir + "/run4", out), 2)
+      << out;
+  EXPECT_NE(out.find("badmap.toml:3:"), std::string::npos) << out;
 }
 
 }  // namespace
