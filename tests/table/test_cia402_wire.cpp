@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <modbus/modbus.h>
+#include <sys/select.h>
 
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -200,6 +202,49 @@ TEST(RtuServer, AnswersItsUnitRightAfterARequestForAnother) {
   }
   modbus_close(ctx);
   modbus_free(ctx);
+}
+
+// The defect itself, in libmodbus's own server loop (what the emulator used
+// before): after a request for unit 6 the next request for unit 5 goes unanswered.
+TEST(RtuServer, LibmodbusReceiveDropsTheRequestAfterOneForAnotherUnit) {
+  PtyPair pty;
+  std::atomic<bool> stop{false};
+  std::thread server([&] {
+    modbus_t* s = modbus_new_rtu(pty.a().c_str(), 115200, 'N', 8, 1);
+    modbus_set_slave(s, 5);
+    modbus_mapping_t* map = modbus_mapping_new(0, 0, 16, 0);
+    if (modbus_connect(s) == 0) {
+      uint8_t q[MODBUS_RTU_MAX_ADU_LENGTH];
+      const int fd = modbus_get_socket(s);
+      while (!stop) {  // select, then receive: the old TableServer::run
+        fd_set rd;
+        FD_ZERO(&rd);
+        FD_SET(fd, &rd);
+        timeval tv{0, 20000};
+        if (select(fd + 1, &rd, nullptr, nullptr, &tv) <= 0) continue;
+        const int rc = modbus_receive(s, q);
+        if (rc > 0) modbus_reply(s, q, rc, map);
+      }
+      modbus_close(s);
+    }
+    modbus_mapping_free(map);
+    modbus_free(s);
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  modbus_t* ctx = modbus_new_rtu(pty.b().c_str(), 115200, 'N', 8, 1);
+  ASSERT_EQ(modbus_connect(ctx), 0);
+  modbus_set_response_timeout(ctx, 0, 200000);
+  uint16_t v[1];
+  modbus_set_slave(ctx, 5);
+  EXPECT_EQ(modbus_read_registers(ctx, 0, 1, v), 1);  // answered
+  modbus_set_slave(ctx, 6);
+  EXPECT_EQ(modbus_read_registers(ctx, 0, 1, v), -1);  // nobody is unit 6
+  modbus_set_slave(ctx, 5);
+  EXPECT_EQ(modbus_read_registers(ctx, 0, 1, v), -1);  // swallowed as unit 6's "reply"
+  modbus_close(ctx);
+  modbus_free(ctx);
+  stop = true;
+  server.join();
 }
 
 }  // namespace
