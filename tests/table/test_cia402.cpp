@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <iterator>
 #include <functional>
 #include <map>
 
@@ -423,6 +424,49 @@ TEST_P(Cia402Client, SilentDriveIsALinkFailureNamingObjectRegisterDriveAndTheSto
               std::to_string(r.map.spec(Obj::kStatusword).address)) && has(e, "\"" + r.map.name + "\"") &&
               has(e, "timeout") && has(e, "halt not delivered (the table may still be moving)"))
       << e;
+}
+
+// [homing] offset_deg: written to 0x607C; after homing the home switch reads
+// as the offset, so table angles are measured from offset_deg before the switch.
+TEST(Cia402ClientHoming, HomeOffsetShiftsTheTableCoordinates) {
+  std::ifstream in(kDrives + "lowword-offset.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "offset_deg = 0.0", to = "offset_deg = 5.0";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), to);
+  const std::string path = testing::TempDir() + "/offset-map.toml";
+  std::ofstream(path) << text;
+  m::DriveMap map = m::load_drive_map(path);
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, map);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  m::Cia402Table t(m::make_inprocess_transport(drive, clock), map, clock, opt);
+  t.home({});
+  EXPECT_NEAR(t.status().actual_deg, 5.0, 0.01);
+  EXPECT_NEAR(axis->actual_angle_deg(), 0.0, 0.005);  // at the switch
+  t.move_to(10.0, {});
+  EXPECT_NEAR(axis->actual_angle_deg(), 5.0, 0.005);
+}
+
+// A homing method the drive does not implement: homing error (bit 13), exit 4.
+TEST(Cia402ClientHoming, HomingErrorIsReported) {
+  std::ifstream in(kDrives + "generic-cia402.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "method = 19", to = "method = -3";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), to);
+  const std::string path = testing::TempDir() + "/bad-method-map.toml";
+  std::ofstream(path) << text;
+  m::DriveMap map = m::load_drive_map(path);
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, map);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::Cia402Table t(m::make_inprocess_transport(drive, clock), map, clock, {});
+  const std::string e = error_of([&] { t.home({}); });
+  EXPECT_TRUE(has(e, "homing error (statusword bit 13)")) << e;
+  EXPECT_FALSE(axis->snapshot().homed);
 }
 
 // A drive that keeps answering the last values it had: frozen firmware.
