@@ -118,10 +118,9 @@ void Cia402Drive::apply_controlword(uint16_t w) {
   controlword_ = w;
   if (state_ == State::kFault) {
     if (rising & c4::cw::kFaultReset) {  // transition 15, if the cause is gone
-      const uint16_t servo = 0;
-      axis_control(servo);
-      axis_control(ctl::kAlarmReset);
-      axis_control(servo);
+      axis_control(0);
+      axis_control(ctl::kAlarmReset);  // the motion model's alarm reset edge
+      axis_control(0);
       if (axis_.snapshot().alarm_code == alarm::kNone) {
         error_code_ = 0;
         injected_code_ = 0;
