@@ -56,7 +56,7 @@ bool parse_word_order(const toml::table& t, std::string_view key, bool def) {
 
 int64_t DriveMap::deg_to_counts(double deg) const { return std::llround(deg * counts_per_deg() * direction); }
 double DriveMap::counts_to_deg(int64_t counts) const {
-  return static_cast<double>(counts) * direction / counts_per_deg();
+  return static_cast<double>(counts) * direction / counts_per_deg() + 0.0;  // + 0.0: no "-0.0000°" for 0 counts
 }
 
 double DriveMap::dps_to_velocity_units(double dps) const {
