@@ -59,6 +59,9 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
   b.plant = "hardware";
   b.clock = std::make_unique<RealClock>();
   b.clock_ptr = b.clock.get();
+  // Configuration before devices: a [table] mistake (drive map included) is
+  // exit 2 naming the file, not hidden behind a device that cannot be opened.
+  modbus::check_table_config(*cfg::get_table(hw, "table", true));
   // GPIO first: the e-stop watch must be live before anything moves.
   b.io = gpio::connect_gpio(*cfg::get_table(hw, "gpio", true));
   b.io_ptr = b.io.get();

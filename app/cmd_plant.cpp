@@ -2,12 +2,15 @@
 // endpoints reached through the real protocols (Modbus TCP/RTU, CAN), for
 // integration tests and technicians' training.
 #include <iostream>
+#include <functional>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "plant/emulated/dut_source.hpp"
 #include "plant/firmware/can_dut_server.hpp"
+#include "plant/table/cia402_drive.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "plant/table/table_server.hpp"
 #include "procedures/acceptance/profile.hpp"
@@ -16,6 +19,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/executive/signals.hpp"
+#include "rig/modbus/drive_map.hpp"
 
 namespace rig::cli {
 
@@ -38,7 +42,7 @@ class TableCoupledDut final : public plant::DutSourceWrapper {
 };
 
 struct ServeArgs {
-  std::string modbus, rtu, can, profile = "paper";
+  std::string modbus, rtu, can, profile = "paper", drive = "rig-v1", drive_map;
   double duration = 0;
   int unit = 1;
 };
@@ -51,17 +55,37 @@ int serve(const ServeArgs& a) {
   const acceptance::Profile p = acceptance::load_profile(a.profile);
   cfg::check_keys(p.plant, {"seed", "dut", "table"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(p.plant, "seed", 1, 0));
-  auto table = plant::make_table_emulator(cfg::get_table(p.plant, "table"), seed ^ 0x7ab1e5eedULL);
+  if (a.drive == "cia402" && a.drive_map.empty())
+    throw ConfigError("rig plant serve: --drive cia402 needs --drive-map FILE (see drives/)");
+  if (a.drive != "cia402" && !a.drive_map.empty())
+    throw ConfigError("rig plant serve: --drive-map is for --drive cia402");
+  std::optional<modbus::DriveMap> map;
+  if (!a.drive_map.empty()) map = modbus::load_drive_map(a.drive_map);
+  plant::TableParams tp = plant::table_params_from_toml(cfg::get_table(p.plant, "table"));
+  if (map) {  // the drive's travel limits are the map's (a CiA 402 drive keeps them in 0x607D)
+    tp.limit_neg_deg = map->limit_neg_deg;
+    tp.limit_pos_deg = map->limit_pos_deg;
+  }
+  auto table = std::make_unique<plant::TableEmulator>(tp, seed ^ 0x7ab1e5eedULL);
   TableCoupledDut dut(plant::make_dut_source(cfg::get_table(p.plant, "dut"), seed), *table);
+  std::unique_ptr<plant::Cia402Drive> cia;
+  if (map) cia = std::make_unique<plant::Cia402Drive>(*table, *map);
 
-  std::vector<std::unique_ptr<plant::TableServer>> tables;
-  if (!a.modbus.empty()) tables.push_back(std::make_unique<plant::TableServer>(*table, "tcp:" + a.modbus, a.unit, true));
   // A second server on the same emulator must not step it a second time.
-  if (!a.rtu.empty())
-    tables.push_back(std::make_unique<plant::TableServer>(*table, "rtu:" + a.rtu, a.unit, tables.empty()));
+  auto server = [&](const std::string& spec, bool steps) {
+    if (!cia) return std::make_unique<plant::TableServer>(*table, spec, a.unit, steps);
+    std::function<void(double)> step;
+    if (steps) step = [d = cia.get()](double dt) { d->step(dt); };
+    return std::make_unique<plant::TableServer>(*cia, step, spec, a.unit);
+  };
+  std::vector<std::unique_ptr<plant::TableServer>> tables;
+  if (!a.modbus.empty()) tables.push_back(server("tcp:" + a.modbus, true));
+  if (!a.rtu.empty()) tables.push_back(server("rtu:" + a.rtu, tables.empty()));
   for (auto& t : tables) {
     t->start();
-    std::cout << "table: modbus " << t->endpoint() << " unit " << a.unit << std::endl;
+    std::cout << "table: modbus " << t->endpoint() << " unit " << a.unit
+              << (map ? " drive cia402 \"" + map->name + "\" (" + map->path + ")" : std::string(" drive rig-v1"))
+              << std::endl;
   }
   std::unique_ptr<plant::CanDutServer> can;
   if (!a.can.empty()) {
@@ -92,6 +116,10 @@ void add_plant(CLI::App& app, int& rc) {
   sub->add_option("--modbus", a->modbus, "Modbus TCP endpoint HOST:PORT (PORT 0 picks a free port)");
   sub->add_option("--rtu", a->rtu, "Modbus RTU serial device DEVICE[,BAUD[,P,D,S]] (e.g. one end of a socat pty pair)");
   sub->add_option("--unit", a->unit, "Modbus unit (slave) id")->capture_default_str();
+  sub->add_option("--drive", a->drive, "The emulated drive's protocol: rig-v1 (docs/table-registers.md) or cia402")
+      ->check(CLI::IsMember({"rig-v1", "cia402"}))
+      ->capture_default_str();
+  sub->add_option("--drive-map", a->drive_map, "CiA 402 drive map the emulated drive serves (drives/*.toml)");
   sub->add_option("--can", a->can, "CAN interface for the DUT firmware emulator (e.g. vcan0)");
   sub->add_option("--profile", a->profile, "Profile whose [plant] section configures the emulated DUT and table")
       ->capture_default_str();

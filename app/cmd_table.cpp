@@ -15,6 +15,7 @@
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
+#include "rig/modbus/cia402_client.hpp"
 #include "rig/modbus/table_client.hpp"
 
 namespace rig::cli {
@@ -22,20 +23,27 @@ namespace rig::cli {
 namespace {
 
 struct TableArgs {
-  std::string modbus, rtu, hardware;
+  std::string modbus, rtu, hardware, drive, drive_map;
   std::optional<int> unit;
   std::optional<double> timeout_s;
   double deg = 0;
   bool json = false;
 };
 
-// The [table] settings: from --hardware FILE, overridden by the flags.
-toml::table table_config(const TableArgs& a) {
-  toml::table t;
+// The [table] settings: from --hardware FILE, overridden by the flags. The
+// section is edited in place inside `root` (the parsed file) so the file's
+// own keys keep their line numbers in error messages.
+toml::table& table_config(const TableArgs& a, toml::table& root) {
   if (!a.hardware.empty()) {
-    const toml::table file = cfg::parse_file(a.hardware);
-    t = *cfg::get_table(file, "table", true);
+    root = cfg::parse_file(a.hardware);
+    cfg::get_table(root, "table", true);
+  } else {
+    root.insert_or_assign("table", toml::table{});
   }
+  toml::table& t = *root.get_as<toml::table>("table");
+  if (!a.drive.empty()) t.insert_or_assign("drive", a.drive);
+  if (!a.drive_map.empty()) t.insert_or_assign("drive_map", a.drive_map);
+  if (t.contains("drive") && t["drive"].value_or(std::string()) == "rig-v1") t.erase("drive_map");
   if (!a.modbus.empty()) {
     t.erase("rtu");
     t.insert_or_assign("modbus", a.modbus);
@@ -122,11 +130,25 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
 
 template <class Body>
 void with_table(const TableArgs& a, Body body) {
-  const toml::table t = table_config(a);
+  toml::table root;
+  const toml::table& t = table_config(a, root);
   RealClock clock;
   std::unique_ptr<RotaryTable> table = modbus::connect_table(t, clock);
-  auto* client = dynamic_cast<modbus::TableClient*>(table.get());
-  body(*client);
+  body(*table);
+}
+
+// The two backends' technician-only calls.
+std::string last_stop_error(RotaryTable& t) {
+  if (auto* c = dynamic_cast<modbus::TableClient*>(&t)) return c->last_stop_error();
+  if (auto* c = dynamic_cast<modbus::Cia402Table*>(&t)) return c->last_stop_error();
+  return "";
+}
+void reset(RotaryTable& t, const CancelToken& cancel) {
+  if (auto* c = dynamic_cast<modbus::TableClient*>(&t)) c->reset_alarm(cancel);
+  if (auto* c = dynamic_cast<modbus::Cia402Table*>(&t)) {
+    if (const uint16_t code = c->reset_fault(cancel))
+      std::printf("fault reset: cleared error code 0x%04X %s\n", code, modbus::cia402::error_code_text(code).c_str());
+  }
 }
 
 }  // namespace
@@ -142,16 +164,19 @@ void add_table(CLI::App& app, int& rc) {
   sub->add_option("--unit", a->unit, "Modbus unit id (default 1)")->check(CLI::Range(0, 247));
   sub->add_option("--timeout", a->timeout_s, "Response timeout per request, seconds (default 0.3)")
       ->check(CLI::Range(0.01, 10.0));
+  sub->add_option("--drive", a->drive, "Drive protocol: rig-v1 (default) or cia402")
+      ->check(CLI::IsMember({"rig-v1", "cia402"}));
+  sub->add_option("--drive-map", a->drive_map, "CiA 402 drive map file (drives/*.toml), with --drive cia402");
 
   auto* st = sub->add_subcommand("status", "Read and print the drive's status");
   st->add_flag("--json", a->json, "Print JSON");
   st->callback([a, &rc] {
-    with_table(*a, [&](modbus::TableClient& t) { print_status(t.describe(), t.status(), a->json); });
+    with_table(*a, [&](RotaryTable& t) { print_status(t.describe(), t.status(), a->json); });
     rc = kExitPass;
   });
 
   sub->add_subcommand("home", "Run the homing sequence and wait until homed")->callback([a, &rc] {
-    with_table(*a, [&](modbus::TableClient& t) {
+    with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
       t.home(sig.token());
       print_status(t.describe(), t.status(), false);
@@ -162,7 +187,7 @@ void add_table(CLI::App& app, int& rc) {
   auto* mv = sub->add_subcommand("move", "Move to an angle and wait until in position and confirmed");
   mv->add_option("DEG", a->deg, "Target angle, degrees")->required();
   mv->callback([a, &rc] {
-    with_table(*a, [&](modbus::TableClient& t) {
+    with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
       t.move_to(a->deg, sig.token());
       print_status(t.describe(), t.status(), false);
@@ -171,13 +196,19 @@ void add_table(CLI::App& app, int& rc) {
   });
 
   auto stop_cmd = [a, &rc](bool quick) {
-    with_table(*a, [&](modbus::TableClient& t) {
+    with_table(*a, [&](RotaryTable& t) {
+      // Learn the drive's control word first, so the stop keeps the servo /
+      // device control bits as they are (a halt must never drop the power stage).
+      try {
+        t.status();
+      } catch (const HardwareError&) {
+      }
       if (quick) {
         t.quick_stop();
       } else {
         t.stop();
       }
-      if (!t.last_stop_error().empty()) throw HardwareError(t.last_stop_error());
+      if (!last_stop_error(t).empty()) throw HardwareError(last_stop_error(t));
       std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << "\n";
     });
     rc = kExitPass;
@@ -188,12 +219,15 @@ void add_table(CLI::App& app, int& rc) {
   });
   sub->add_subcommand("reset", "Reset the drive's alarm after inspection (refused while e-stop/interlock open)")
       ->callback([a, &rc] {
-        with_table(*a, [&](modbus::TableClient& t) {
-          t.reset_alarm({});
+        with_table(*a, [&](RotaryTable& t) {
+          reset(t, {});
           print_status(t.describe(), t.status(), false);
         });
         rc = kExitPass;
       });
+  // The connection options may come before or after the action:
+  // `rig table home --modbus HOST:PORT` as well as `rig table --modbus HOST:PORT home`.
+  for (CLI::App* action : sub->get_subcommands({})) action->fallthrough();
 }
 
 }  // namespace rig::cli

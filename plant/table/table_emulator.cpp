@@ -43,7 +43,8 @@ TableParams table_params_from_toml(const toml::table* t) {
                   {"velocity_dps", "accel_dps2", "home_velocity_dps", "quick_stop_dps2", "max_velocity_dps",
                    "max_accel_dps2", "in_position_window_deg", "settle_s", "servo_bandwidth_hz", "damping",
                    "following_error_limit_deg", "repeatability_deg", "limit_neg_deg", "limit_pos_deg",
-                   "start_angle_deg", "homed_at_start", "comm_timeout_s", "fault", "fault_on_move", "fault_at"},
+                   "start_angle_deg", "homed_at_start", "comm_timeout_s", "fault", "fault_on_move", "fault_at",
+                   "drive_fault_code", "answer_delay_s"},
                   "plant.table");
   p.max_velocity_dps = cfg::get_number(*t, "max_velocity_dps", p.max_velocity_dps, 0.01, 4000.0);
   p.max_accel_dps2 = cfg::get_number(*t, "max_accel_dps2", p.max_accel_dps2, 0.01, 40000.0);
@@ -71,6 +72,8 @@ TableParams table_params_from_toml(const toml::table* t) {
   }
   p.fault_on_move = static_cast<int>(cfg::get_int(*t, "fault_on_move", p.fault_on_move, 1, 1000000));
   p.fault_at = cfg::get_number(*t, "fault_at", p.fault_at, 0.001, 1.0);
+  p.drive_fault_code = static_cast<uint16_t>(cfg::get_int(*t, "drive_fault_code", p.drive_fault_code, 1, 0xFFFF));
+  p.answer_delay_s = cfg::get_number(*t, "answer_delay_s", p.answer_delay_s, 0.0, 10.0);
   return p;
 }
 

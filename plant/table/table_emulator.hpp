@@ -40,6 +40,8 @@ struct TableParams {
   SimFault fault = SimFault::kNone;      // injected on move number fault_on_move (1-based) ...
   int fault_on_move = 1;
   double fault_at = 0.5;                 // ... at this fraction of its profile time
+  uint16_t drive_fault_code = 0x2310;    // 0x603F the emulated CiA 402 drive reports for drive_fault
+  double answer_delay_s = 0.0;           // slow answers: every reply waits this long
 };
 
 // Reads [plant.table] (may be null = defaults); unknown keys and bad values
@@ -61,6 +63,7 @@ class TableEmulator final : public rig::modbus::RegisterDevice {
   uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override;
   uint8_t write_registers(uint16_t addr, const uint16_t* values, uint16_t n) override;
   bool answering() const override;
+  double answer_delay_s() const override { return p_.answer_delay_s; }
 
   // Fault injection. `at_fraction` <= 0: now; otherwise when the next move
   // reaches that fraction of its profile time.

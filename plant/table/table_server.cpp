@@ -2,6 +2,8 @@
 
 #include <modbus/modbus.h>
 #include <netinet/in.h>
+#include <poll.h>
+#include <termios.h>
 #include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -10,6 +12,7 @@
 #include <chrono>
 #include <cstring>
 #include <set>
+#include <thread>
 #include <vector>
 
 #include "rig/core/errors.hpp"
@@ -38,15 +41,70 @@ struct TableServer::Impl {
 
 namespace {
 
-constexpr int kMapSize = 256;  // libmodbus's reply buffer; the emulator decides what is valid
+constexpr int kMapSize = 65536;  // libmodbus's reply buffer over the whole address space (maps may sit anywhere); the emulator decides what is valid
 constexpr double kSelectS = 0.005;
 
 uint16_t be16(const uint8_t* p) { return static_cast<uint16_t>((p[0] << 8) | p[1]); }
 
+// CRC-16/MODBUS (Modbus over Serial Line V1.02, section 6.2.2).
+uint16_t crc16(const uint8_t* p, int n) {
+  uint16_t crc = 0xFFFF;
+  for (int i = 0; i < n; ++i) {
+    crc ^= p[i];
+    for (int b = 0; b < 8; ++b) crc = (crc & 1) ? static_cast<uint16_t>((crc >> 1) ^ 0xA001) : static_cast<uint16_t>(crc >> 1);
+  }
+  return crc;
+}
+
+// Reads `n` bytes, each within `gap_ms` of the previous (a frame arrives whole
+// on a wire; a longer silence ends it). False on silence or error.
+bool read_exact(int fd, uint8_t* p, int n, int gap_ms) {
+  while (n > 0) {
+    pollfd pf{fd, POLLIN, 0};
+    if (poll(&pf, 1, gap_ms) <= 0) return false;
+    const ssize_t r = ::read(fd, p, static_cast<size_t>(n));
+    if (r <= 0) return false;
+    p += r;
+    n -= static_cast<int>(r);
+  }
+  return true;
+}
+
+// One RTU request frame, its length from the function code, CRC checked.
+// libmodbus's own modbus_receive() takes a request for another unit as the
+// start of an exchange and then swallows the next frame as that unit's reply
+// (issue 16 item 7): on a line where no other unit answers, our next request
+// was lost. Framing here keeps every frame independent: a frame for another
+// unit is skipped whole and the next one is read afresh.
+// Returns the frame length, 0 for a frame to ignore, -1 on a framing error.
+int read_rtu_request(int fd, uint8_t* q, int cap) {
+  constexpr int kGapMs = 50;  // generous for ptys and USB adapters; 3.5 characters on a real line
+  if (!read_exact(fd, q, 2, kGapMs)) return -1;
+  int len = 0;
+  switch (q[1]) {
+    case MODBUS_FC_READ_HOLDING_REGISTERS:
+    case MODBUS_FC_READ_INPUT_REGISTERS:
+    case MODBUS_FC_WRITE_SINGLE_REGISTER: len = 8; break;
+    case MODBUS_FC_WRITE_MULTIPLE_REGISTERS:
+      if (!read_exact(fd, q + 2, 5, kGapMs)) return -1;
+      len = 9 + q[6];
+      if (len > cap) return -1;
+      if (!read_exact(fd, q + 7, len - 7, kGapMs)) return -1;
+      break;
+    default: return -1;  // a function this server does not serve (or noise): resynchronise
+  }
+  if (len == 8 && !read_exact(fd, q + 2, 6, kGapMs)) return -1;
+  const uint16_t crc = crc16(q, len - 2);
+  if (q[len - 2] != (crc & 0xFF) || q[len - 1] != (crc >> 8)) return -1;
+  return len;
+}
+
 // Answers one request from the emulator's register map with proper exception
 // codes; requests go unanswered while the emulator plays "no answer".
-void serve_request(modbus_t* ctx, modbus_mapping_t* map, TableEmulator& emu, const uint8_t* q, int len) {
+void serve_request(modbus_t* ctx, modbus_mapping_t* map, m::RegisterDevice& emu, const uint8_t* q, int len) {
   if (!emu.answering()) return;
+  if (const double d = emu.answer_delay_s(); d > 0)  // injected slow answers
+    std::this_thread::sleep_for(std::chrono::duration<double>(d));
   const int off = modbus_get_header_length(ctx);
   const uint8_t fc = q[off];
   const uint16_t addr = be16(q + off + 1);
@@ -56,7 +114,12 @@ void serve_request(modbus_t* ctx, modbus_mapping_t* map, TableEmulator& emu, con
     case MODBUS_FC_READ_INPUT_REGISTERS: {
       const uint16_t n = be16(q + off + 3);
       uint16_t buf[125];
-      code = n > 125 ? m::exc::kIllegalValue : emu.read_registers(addr, n, buf);
+      if (n > 125) {
+        code = m::exc::kIllegalValue;
+      } else {
+        code = fc == MODBUS_FC_READ_HOLDING_REGISTERS ? emu.read_registers(addr, n, buf)
+                                                      : emu.read_input_registers(addr, n, buf);
+      }
       if (code == m::exc::kNone) {
         uint16_t* tab = fc == MODBUS_FC_READ_HOLDING_REGISTERS ? map->tab_registers : map->tab_input_registers;
         std::memcpy(tab + addr, buf, n * sizeof(uint16_t));
@@ -93,7 +156,11 @@ void serve_request(modbus_t* ctx, modbus_mapping_t* map, TableEmulator& emu, con
 }  // namespace
 
 TableServer::TableServer(TableEmulator& emu, const std::string& spec, int unit, bool steps_model)
-    : emu_(emu), ep_(m::parse_endpoint(spec)), unit_(unit), steps_model_(steps_model) {
+    : TableServer(emu, steps_model ? std::function<void(double)>([&emu](double dt) { emu.step(dt); }) : nullptr, spec,
+                  unit) {}
+
+TableServer::TableServer(m::RegisterDevice& dev, std::function<void(double)> step, const std::string& spec, int unit)
+    : emu_(dev), step_(std::move(step)), ep_(m::parse_endpoint(spec)), unit_(unit) {
   if (unit < 1 || unit > 247) throw ConfigError("table server: unit " + std::to_string(unit) + " out of range 1..247");
 }
 
@@ -156,9 +223,9 @@ void TableServer::run() {
     for (int fd : s.clients) add(fd);
     timeval tv{0, static_cast<suseconds_t>(kSelectS * 1e6)};
     const int n = select(maxfd + 1, &rd, nullptr, nullptr, &tv);
-    if (steps_model_) {
+    if (step_) {
       const auto now = clk::now();
-      emu_.step(std::chrono::duration<double>(now - last).count());
+      step_(std::chrono::duration<double>(now - last).count());
       last = now;
     }
     if (n <= 0) continue;
@@ -167,12 +234,12 @@ void TableServer::run() {
       if (fd >= 0) s.clients.insert(fd);
     }
     if (s.port_fd >= 0 && FD_ISSET(s.port_fd, &rd)) {
-      const int rc = modbus_receive(s.ctx, query.data());
-      if (rc > 0) {
+      const int rc = read_rtu_request(s.port_fd, query.data(), static_cast<int>(query.size()));
+      if (rc > 0 && (query[0] == unit_ || query[0] == MODBUS_BROADCAST_ADDRESS)) {
         serve_request(s.ctx, s.map, emu_, query.data(), rc);
         ++served_;
       } else if (rc < 0) {
-        modbus_flush(s.ctx);  // bad CRC / partial frame: resynchronise on the next frame
+        tcflush(s.port_fd, TCIFLUSH);  // bad CRC / partial frame: resynchronise on the next frame
         if (errno == EIO || errno == EBADF) std::this_thread::sleep_for(std::chrono::milliseconds(10));
       }
     }

@@ -4,6 +4,7 @@
 // and for tests that drive the real client over a real wire.
 #pragma once
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -20,6 +21,10 @@ class TableServer {
   // `steps_model`: the server advances `emu` by wall time (false when some
   // other loop owns the emulator's time).
   TableServer(TableEmulator& emu, const std::string& spec, int unit = 1, bool steps_model = true);
+  // Any register device (the emulated CiA 402 drive); `step` advances its
+  // model by wall time (empty when some other loop owns its time).
+  TableServer(rig::modbus::RegisterDevice& dev, std::function<void(double)> step, const std::string& spec,
+              int unit = 1);
   ~TableServer();
   TableServer(const TableServer&) = delete;
   TableServer& operator=(const TableServer&) = delete;
@@ -37,10 +42,10 @@ class TableServer {
   struct Impl;
   void run();
 
-  TableEmulator& emu_;
+  rig::modbus::RegisterDevice& emu_;
+  std::function<void(double)> step_;
   rig::modbus::Endpoint ep_;
   int unit_;
-  bool steps_model_;
   std::unique_ptr<Impl> impl_;
   std::thread thread_;
   std::atomic<bool> stop_{false};

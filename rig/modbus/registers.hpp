@@ -120,8 +120,13 @@ class RegisterDevice {
   virtual ~RegisterDevice() = default;
   virtual uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) = 0;
   virtual uint8_t write_registers(uint16_t addr, const uint16_t* values, uint16_t n) = 0;
+  // Function 04. A device without a separate input register space (the rig-v1
+  // map) serves its holding registers there too.
+  virtual uint8_t read_input_registers(uint16_t addr, uint16_t n, uint16_t* out) { return read_registers(addr, n, out); }
   // False while the device is injected "no answer": requests go unanswered.
   virtual bool answering() const = 0;
+  // Injected slow answers: the server waits this long before replying.
+  virtual double answer_delay_s() const { return 0.0; }
 };
 
 }  // namespace rig::modbus

@@ -3,7 +3,10 @@
 #include <cmath>
 #include <cstdio>
 
+#include <filesystem>
+
 #include "rig/core/toml_util.hpp"
+#include "rig/modbus/cia402_client.hpp"
 
 namespace rig::modbus {
 
@@ -84,7 +87,13 @@ TableClient::TableClient(std::unique_ptr<RegisterTransport> transport, Clock& cl
 std::string TableClient::describe() const { return transport_->describe(); }
 
 DriveState TableClient::read_drive(const CancelToken& cancel) {
-  DriveState d = decode_drive_state(transport_->read(0, reg::kBlockEnd, cancel));
+  const std::vector<uint16_t> regs = transport_->read(0, reg::kBlockEnd, cancel);
+  // A drive speaking another map version would be misread register by register.
+  if (regs[reg::kMapVersion] != reg::kMapVersionValue)
+    throw HardwareError(describe() + ": MAP_VERSION (register " + std::to_string(reg::kMapVersion) + ") reads " +
+                        std::to_string(regs[reg::kMapVersion]) + "; this rig speaks register map version " +
+                        std::to_string(reg::kMapVersionValue) + " (drive = \"rig-v1\")");
+  DriveState d = decode_drive_state(regs);
   control_ = d.control;
   last_actual_deg_ = d.actual_deg;
   have_actual_ = true;
@@ -201,6 +210,12 @@ DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, con
 
 template <class Body>
 void TableClient::guarded(const std::string& doing, Body body) {
+  // Whether the halt reached the drive belongs in the fault message: a
+  // technician must know if the table may still be turning.
+  auto stop_fate = [this] {
+    const std::string err = last_stop_error();
+    return err.empty() ? std::string("; halt delivered to the drive") : "; " + err;
+  };
   try {
     body();
   } catch (const AbortedError&) {
@@ -210,10 +225,11 @@ void TableClient::guarded(const std::string& doing, Body body) {
     stop();
     // An exception reply means the drive refused a request; no code means the link failed.
     throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") +
-                        (have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : "") + ": " + e.what());
-  } catch (const HardwareError&) {
+                        (have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : "") + ": " + e.what() +
+                        stop_fate());
+  } catch (const HardwareError& e) {
     stop();
-    throw;
+    throw HardwareError(e.what() + stop_fate());
   }
 }
 
@@ -341,7 +357,7 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
     control_ = static_cast<uint16_t>(servo | bit);
   } catch (const std::exception& e) {
     try {
-      err = std::string(name) + " not delivered: " + e.what();
+      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
     } catch (...) {
     }
   } catch (...) {
@@ -384,22 +400,75 @@ LinkOptions link_options_from_toml(const toml::table& t) {
   return l;
 }
 
-std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {
+std::string table_drive(const toml::table& t) {
+  const std::string drive = cfg::get_string(t, "drive", std::string("rig-v1"));
+  if (drive != "rig-v1" && drive != "cia402")
+    throw ConfigError(cfg::where(*t.get("drive")) + ": [table] drive = \"" + drive +
+                      "\": expected \"rig-v1\" (docs/table-registers.md) or \"cia402\" (docs/cia402-drive-maps.md)");
+  if (drive == "cia402" && !t.contains("drive_map"))
+    throw ConfigError(cfg::where(t) + ": [table] drive = \"cia402\" needs drive_map = \"FILE\" (see drives/)");
+  if (drive == "rig-v1" && t.contains("drive_map"))
+    throw ConfigError(cfg::where(*t.get("drive_map")) + ": drive_map is for drive = \"cia402\"");
+  if (drive == "cia402")
+    for (const char* k : {"in_position_window_deg", "drive_settle_s"})
+      if (const toml::node* n = t.get(k))
+        throw ConfigError(cfg::where(*n) + ": '" + k + "' is a rig-v1 register; a CiA 402 drive keeps its own");
+  return drive;
+}
+
+DriveMap table_drive_map(const toml::table& t) {
+  const toml::node* n = t.get("drive_map");
+  std::filesystem::path p = cfg::get_string(t, "drive_map");
+  // Relative to the file that names it (a hardware file travels with its maps).
+  if (p.is_relative() && n->source().path) {
+    const std::filesystem::path beside = std::filesystem::path(*n->source().path).parent_path() / p;
+    if (std::filesystem::exists(beside)) p = beside;
+  }
+  if (!std::filesystem::exists(p))
+    throw ConfigError(cfg::where(*n) + ": drive map '" + p.string() + "' not found");
+  return load_drive_map(p.string());
+}
+
+namespace {
+
+struct TableConfig {
+  Endpoint ep;
+  LinkOptions link;
+  TableOptions opt;
+  std::optional<DriveMap> map;
+};
+
+// Everything [table] says, checked, without touching the drive.
+TableConfig read_table_config(const toml::table& t) {
   cfg::check_keys(t,
                   {"modbus", "rtu", "unit", "response_timeout_s", "retries", "backoff_s", "tolerance_deg", "settle_s",
                    "poll_s", "move_timeout_s", "home_timeout_s", "ack_timeout_s", "heartbeat_timeout_s",
-                   "velocity_dps", "accel_dps2", "in_position_window_deg", "drive_settle_s", "u10_deg", "u20_deg"},
+                   "velocity_dps", "accel_dps2", "in_position_window_deg", "drive_settle_s", "u10_deg", "u20_deg",
+                   "drive", "drive_map"},
                   "table");
+  TableConfig c;
+  if (table_drive(t) == "cia402") c.map = table_drive_map(t);
   const bool tcp = t.contains("modbus"), rtu = t.contains("rtu");
   if (tcp == rtu) throw ConfigError(cfg::where(t) + ": [table] needs exactly one of modbus = \"tcp:HOST:PORT\" or rtu = \"DEVICE,BAUD,P,8,1\"");
-  Endpoint ep;
   try {
-    ep = tcp ? parse_endpoint(cfg::get_string(t, "modbus")) : parse_rtu(cfg::get_string(t, "rtu"));
+    c.ep = tcp ? parse_endpoint(cfg::get_string(t, "modbus")) : parse_rtu(cfg::get_string(t, "rtu"));
   } catch (const ConfigError& e) {
     throw ConfigError(cfg::where(*t.get(tcp ? "modbus" : "rtu")) + ": " + e.what());
   }
-  const TableOptions opt = table_options_from_toml(t);
-  return std::make_unique<TableClient>(make_libmodbus_transport(ep, link_options_from_toml(t), clock), clock, opt);
+  c.opt = table_options_from_toml(t);
+  c.link = link_options_from_toml(t);
+  return c;
+}
+
+}  // namespace
+
+void check_table_config(const toml::table& t) { read_table_config(t); }
+
+std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {
+  TableConfig c = read_table_config(t);
+  auto transport = make_libmodbus_transport(c.ep, c.link, clock);
+  if (c.map) return std::make_unique<Cia402Table>(std::move(transport), std::move(*c.map), clock, c.opt);
+  return std::make_unique<TableClient>(std::move(transport), clock, c.opt);
 }
 
 std::unique_ptr<RotaryTable> make_inprocess_table(RegisterDevice& dev, Clock& clock, TableOptions opt) {

@@ -13,6 +13,7 @@
 
 #include "rig/core/clock.hpp"
 #include "rig/core/table.hpp"
+#include "rig/modbus/drive_map.hpp"
 #include "rig/modbus/transport.hpp"
 
 namespace rig::modbus {
@@ -92,6 +93,15 @@ class TableClient final : public RotaryTable {
 // file:line. Keys: see docs/table-registers.md.
 TableOptions table_options_from_toml(const toml::table& t);
 LinkOptions link_options_from_toml(const toml::table& t);
+
+// [table] drive = "rig-v1" (default) | "cia402"; checks drive/drive_map consistency.
+std::string table_drive(const toml::table& table_cfg);
+// The [table] drive_map file (relative paths: beside the file naming it, else the working folder).
+DriveMap table_drive_map(const toml::table& table_cfg);
+
+// Checks every [table] key, the drive map included, without connecting
+// (ConfigError naming file:line), so a hardware file is refused before any device opens.
+void check_table_config(const toml::table& table_cfg);
 
 // Hardware: connects to the drive named by [table] `modbus = "tcp:HOST:PORT"` or
 // `rtu = "/dev/ttyUSB0,115200,N,8,1"`. Throws ConfigError / HardwareError.

@@ -1,6 +1,11 @@
 #include "rig/modbus/transport.hpp"
 
 #include <modbus/modbus.h>
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <chrono>
 
 #include <cctype>
 #include <cerrno>
@@ -152,14 +157,28 @@ class LibmodbusTransport final : public RegisterTransport {
 
   std::vector<uint16_t> read(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
     std::vector<uint16_t> out(n);
-    call("read " + std::to_string(n) + " registers at " + std::to_string(addr), cancel, urgent,
-         [&] { return modbus_read_registers(ctx_, addr, n, out.data()); });
+    call("read " + std::to_string(n) + " registers at " + std::to_string(addr), cancel, urgent, [&] {
+      return tcp() ? strict_read(MODBUS_FC_READ_HOLDING_REGISTERS, addr, n, out.data())
+                   : modbus_read_registers(ctx_, addr, n, out.data());
+    });
+    return out;
+  }
+
+  std::vector<uint16_t> read_input(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
+    std::vector<uint16_t> out(n);
+    call("read " + std::to_string(n) + " input registers at " + std::to_string(addr), cancel, urgent,
+         [&] {
+           return tcp() ? strict_read(MODBUS_FC_READ_INPUT_REGISTERS, addr, n, out.data())
+                        : modbus_read_input_registers(ctx_, addr, n, out.data());
+         });
     return out;
   }
 
   void write(uint16_t addr, const std::vector<uint16_t>& values, const CancelToken& cancel, bool urgent) override {
     const std::string what = "write " + std::to_string(values.size()) + " registers at " + std::to_string(addr);
-    if (values.size() == 1) {
+    if (tcp()) {
+      call(what, cancel, urgent, [&] { return strict_write(addr, values); });
+    } else if (values.size() == 1) {
       call(what, cancel, urgent, [&] { return modbus_write_register(ctx_, addr, values[0]); });
     } else {
       call(what, cancel, urgent,
@@ -170,6 +189,131 @@ class LibmodbusTransport final : public RegisterTransport {
   std::string describe() const override { return "modbus " + ep_.str() + " unit " + std::to_string(opt_.unit); }
 
  private:
+  bool tcp() const { return ep_.kind == Endpoint::Kind::kTcp; }
+
+  // ---- Modbus TCP with every response field checked (issue 13 item 8).
+  // libmodbus 3.1.6 lets a wrong protocol id through (it tests both bytes
+  // with &&), never compares the unit id of a TCP reply and reads the PDU by
+  // its function code, ignoring the MBAP length; so the rig frames TCP itself
+  // on libmodbus's connected socket: transaction id, protocol id 0, MBAP
+  // length, unit id, function echo, byte count and write echo must all match
+  // (Modbus Messaging on TCP/IP V1.0b, section 3.1.3; Application Protocol
+  // V1.1b3, sections 6.3, 6.4, 6.6, 6.12). A violation fails the request like a
+  // broken link (the connection is dropped, the request retried).
+  int violation(const std::string& what) {
+    violation_ = what;
+    errno = EMBBADDATA;
+    return -1;
+  }
+
+  // Reads exactly n bytes before `deadline`; false (errno ETIMEDOUT) when it passes.
+  bool recv_exact(int fd, uint8_t* p, size_t n, std::chrono::steady_clock::time_point deadline) {
+    while (n > 0) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      pollfd pf{fd, POLLIN, 0};
+      const int pr = left.count() > 0 ? ::poll(&pf, 1, static_cast<int>(left.count())) : 0;
+      if (pr == 0) {
+        errno = ETIMEDOUT;
+        return false;
+      }
+      if (pr < 0) return false;
+      const ssize_t r = ::recv(fd, p, n, 0);
+      if (r == 0) {
+        errno = ECONNRESET;
+        return false;
+      }
+      if (r < 0) {
+        if (errno == EINTR) continue;
+        return false;
+      }
+      p += r;
+      n -= static_cast<size_t>(r);
+    }
+    return true;
+  }
+
+  // One request PDU out, its response PDU back, MBAP checked. -1 with errno on failure.
+  int exchange(const std::vector<uint8_t>& pdu, std::vector<uint8_t>& rsp) {
+    violation_.clear();
+    const int fd = modbus_get_socket(ctx_);
+    const uint16_t tid = ++tid_;
+    const auto len = static_cast<uint16_t>(pdu.size() + 1);
+    std::vector<uint8_t> adu = {static_cast<uint8_t>(tid >> 8), static_cast<uint8_t>(tid & 0xFF), 0, 0,
+                                static_cast<uint8_t>(len >> 8), static_cast<uint8_t>(len & 0xFF),
+                                static_cast<uint8_t>(opt_.unit)};
+    adu.insert(adu.end(), pdu.begin(), pdu.end());
+    for (size_t off = 0; off < adu.size();) {
+      const ssize_t w = ::send(fd, adu.data() + off, adu.size() - off, MSG_NOSIGNAL);
+      if (w < 0) {
+        if (errno == EINTR) continue;
+        return -1;
+      }
+      off += static_cast<size_t>(w);
+    }
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::microseconds(std::lround(std::max(0.01, opt_.response_timeout_s) * 1e6));
+    uint8_t h[7];
+    if (!recv_exact(fd, h, 7, deadline)) return -1;
+    const uint16_t r_tid = static_cast<uint16_t>((h[0] << 8) | h[1]);
+    const uint16_t r_proto = static_cast<uint16_t>((h[2] << 8) | h[3]);
+    const uint16_t r_len = static_cast<uint16_t>((h[4] << 8) | h[5]);
+    if (r_tid != tid) return violation("transaction id " + std::to_string(r_tid) + " in reply to " + std::to_string(tid));
+    if (r_proto != 0) return violation("protocol id " + std::to_string(r_proto) + " (Modbus is 0)");
+    if (r_len < 3 || r_len > 254) return violation("MBAP length " + std::to_string(r_len) + " out of range 3..254");
+    if (h[6] != opt_.unit)
+      return violation("unit id " + std::to_string(h[6]) + " in reply to unit " + std::to_string(opt_.unit));
+    rsp.resize(r_len - 1u);
+    if (!recv_exact(fd, rsp.data(), rsp.size(), deadline)) {
+      if (errno == ETIMEDOUT)
+        return violation("MBAP length " + std::to_string(r_len) + " but fewer bytes followed within the timeout");
+      return -1;
+    }
+    if (rsp[0] == (pdu[0] | 0x80)) {  // exception reply: function | 0x80, one code byte
+      if (rsp.size() != 2) return violation("exception reply of " + std::to_string(rsp.size()) + " bytes (MBAP length)");
+      errno = MODBUS_ENOBASE + rsp[1];
+      return -1;
+    }
+    if (rsp[0] != pdu[0])
+      return violation("function " + hex16(rsp[0]) + " in reply to function " + hex16(pdu[0]));
+    return 0;
+  }
+
+  int strict_read(uint8_t fc, uint16_t addr, uint16_t n, uint16_t* out) {
+    std::vector<uint8_t> rsp;
+    if (exchange({fc, static_cast<uint8_t>(addr >> 8), static_cast<uint8_t>(addr & 0xFF), static_cast<uint8_t>(n >> 8),
+                  static_cast<uint8_t>(n & 0xFF)},
+                 rsp) < 0)
+      return -1;
+    if (rsp.size() < 2 || rsp[1] != 2 * n || rsp.size() != 2u + 2u * n)
+      return violation("reply to a read of " + std::to_string(n) + " registers carries byte count " +
+                       std::to_string(rsp.size() > 1 ? rsp[1] : 0) + " in a PDU of " + std::to_string(rsp.size()) +
+                       " bytes (MBAP length " + std::to_string(rsp.size() + 1) + ")");
+    for (uint16_t i = 0; i < n; ++i) out[i] = static_cast<uint16_t>((rsp[2 + 2 * i] << 8) | rsp[3 + 2 * i]);
+    return n;
+  }
+
+  int strict_write(uint16_t addr, const std::vector<uint16_t>& v) {
+    std::vector<uint8_t> pdu;
+    const auto hi = [](uint16_t x) { return static_cast<uint8_t>(x >> 8); };
+    const auto lo = [](uint16_t x) { return static_cast<uint8_t>(x & 0xFF); };
+    if (v.size() == 1) {
+      pdu = {MODBUS_FC_WRITE_SINGLE_REGISTER, hi(addr), lo(addr), hi(v[0]), lo(v[0])};
+    } else {
+      const auto n = static_cast<uint16_t>(v.size());
+      pdu = {MODBUS_FC_WRITE_MULTIPLE_REGISTERS, hi(addr), lo(addr), hi(n), lo(n), static_cast<uint8_t>(2 * n)};
+      for (uint16_t x : v) {
+        pdu.push_back(hi(x));
+        pdu.push_back(lo(x));
+      }
+    }
+    std::vector<uint8_t> rsp;
+    if (exchange(pdu, rsp) < 0) return -1;
+    // Function 06 echoes the request; function 16 echoes address and quantity.
+    if (rsp.size() != 5 || !std::equal(rsp.begin(), rsp.end(), pdu.begin()))
+      return violation("reply does not echo the write (" + std::to_string(rsp.size()) + " bytes)");
+    return static_cast<int>(v.size());
+  }
+
   bool connect_locked(std::string& err) {
     if (connected_) return true;
     if (modbus_connect(ctx_) == 0) {
@@ -212,7 +356,11 @@ class LibmodbusTransport final : public RegisterTransport {
       }
       last_exc = 0;
       last_timeout = e == ETIMEDOUT;
-      last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
+      if (e == EMBBADDATA && !violation_.empty()) {
+        last = "protocol violation: " + violation_;
+      } else {
+        last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
+      }
       // Drop the link: a late reply must not be taken for the next request's.
       modbus_close(ctx_);
       connected_ = false;
@@ -232,6 +380,8 @@ class LibmodbusTransport final : public RegisterTransport {
   std::mutex mu_;
   modbus_t* ctx_ = nullptr;
   bool connected_ = false;
+  uint16_t tid_ = 0;
+  std::string violation_;
 };
 
 // ---------------------------------------------------------------- in-process
@@ -246,6 +396,14 @@ class InProcessTransport final : public RegisterTransport {
     wait_answer(what, cancel, urgent);
     std::vector<uint16_t> out(n);
     check(what, dev_.read_registers(addr, n, out.data()));
+    return out;
+  }
+
+  std::vector<uint16_t> read_input(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent) override {
+    const std::string what = "read " + std::to_string(n) + " input registers at " + std::to_string(addr);
+    wait_answer(what, cancel, urgent);
+    std::vector<uint16_t> out(n);
+    check(what, dev_.read_input_registers(addr, n, out.data()));
     return out;
   }
 

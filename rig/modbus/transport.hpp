@@ -57,6 +57,9 @@ class RegisterTransport {
   // `urgent` = the safe-state path: one attempt (plus one reconnect), no
   // backoff, so the call is bounded by about two response timeouts.
   virtual std::vector<uint16_t> read(uint16_t addr, uint16_t n, const CancelToken& cancel, bool urgent = false) = 0;
+  // Function 04 (input registers); read() is function 03 (holding registers).
+  virtual std::vector<uint16_t> read_input(uint16_t addr, uint16_t n, const CancelToken& cancel,
+                                           bool urgent = false) = 0;
   virtual void write(uint16_t addr, const std::vector<uint16_t>& values, const CancelToken& cancel,
                      bool urgent = false) = 0;
   virtual std::string describe() const = 0;  // "modbus tcp:127.0.0.1:1502 unit 1"

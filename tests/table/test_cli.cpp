@@ -96,3 +96,110 @@ TEST_F(RigTable, CtrlCDuringAMoveHaltsTheTableAndExitsThree) {
 
 }  // namespace
 }  // namespace rig::table_test
+
+namespace rig::table_test {
+namespace {
+
+// People type the options after the action too (issue 14).
+TEST_F(RigTable, OptionsMayFollowTheAction) {
+  std::string out;
+  ASSERT_EQ(rig("status " + where_, out), 0) << out;
+  ASSERT_EQ(rig("home " + where_ + " --timeout 0.5", out), 0) << out;
+  ASSERT_EQ(rig("move 45 " + where_, out), 0) << out;
+  EXPECT_NEAR(emu_->actual_angle_deg(), 45.0, 0.005);
+  ASSERT_EQ(rig("status --json " + where_, out), 0) << out;
+  EXPECT_NE(out.find("\"homed\": true"), std::string::npos) << out;
+}
+
+// `rig plant serve --drive cia402` as its own process, `rig table --drive cia402` against it.
+class RigTableCia402 : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
+  const std::string map = std::string(RIG_SOURCE_DIR) + "/drives/" + GetParam();
+  const std::string prof = testing::TempDir() + "/fast-plant.toml";
+  {
+    FILE* f = std::fopen(prof.c_str(), "w");
+    std::fprintf(f, "base = \"ci\"\n[plant.table]\nvelocity_dps = 360.0\naccel_dps2 = 1800.0\n"
+                    "home_velocity_dps = 200.0\nsettle_s = 0.05\nstart_angle_deg = 10.0\n");
+    std::fclose(f);
+  }
+  int fd = -1;
+  Child serve({RIG_BIN, "plant", "serve", "--modbus", "127.0.0.1:0", "--drive", "cia402", "--drive-map", map,
+               "--profile", prof},
+              &fd);
+  const std::string line = read_line(fd);
+  ASSERT_NE(line.find("drive cia402"), std::string::npos) << line;
+  const std::string ep = line.substr(line.find("tcp:") + 4, line.find(" unit") - line.find("tcp:") - 4);
+  const std::string where = " --modbus " + ep + " --drive cia402 --drive-map " + map;
+  std::string out;
+  auto rig = [&](const std::string& args) { return run(std::string(RIG_BIN) + " table " + args, out); };
+  ASSERT_EQ(rig("status" + where), 0) << out;
+  EXPECT_NE(out.find("cia402"), std::string::npos) << out;
+  ASSERT_EQ(rig("home" + where), 0) << out;
+  ASSERT_EQ(rig("move 180" + where), 0) << out;
+  EXPECT_NE(out.find("actual     180.0000°"), std::string::npos) << out;
+  EXPECT_NE(out.find("in-position"), std::string::npos) << out;
+  ASSERT_EQ(rig("stop" + where), 0) << out;
+  EXPECT_NE(out.find("stop sent"), std::string::npos) << out;
+  ASSERT_EQ(rig("quick-stop" + where), 0) << out;
+  ASSERT_EQ(rig("move 0" + where), 0) << out;  // back up from Quick stop active
+  ASSERT_EQ(rig("reset" + where), 0) << out;   // no fault: nothing to clear
+  EXPECT_EQ(rig("move 1000" + where), 2) << out;  // outside the map's travel limits
+  EXPECT_NE(out.find("outside the travel limits"), std::string::npos) << out;
+  // Ctrl-C mid-move: halted, exit 3.
+  int cfd = -1;
+  Child child({RIG_BIN, "table", "move", "300", "--modbus", ep, "--drive", "cia402", "--drive-map", map}, &cfd);
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  ::kill(child.pid(), SIGINT);
+  const int st = child.wait_status();
+  close(cfd);
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 3);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ASSERT_EQ(rig("status --json" + where), 0) << out;
+  EXPECT_NE(out.find("\"moving\": false"), std::string::npos) << out;
+  const auto p = out.find("\"actual_deg\": ");
+  ASSERT_NE(p, std::string::npos) << out;
+  EXPECT_LT(std::stod(out.substr(p + 14)), 290.0) << out;
+  // The server gone: exit 4 naming the drive.
+  serve.kill_now();
+  close(fd);
+  EXPECT_EQ(rig("move 10 --timeout 0.1" + where), 4) << out;
+}
+
+INSTANTIATE_TEST_SUITE_P(ShippedMaps, RigTableCia402, ::testing::Values("generic-cia402.toml", "lowword-offset.toml"),
+                         [](const auto& p) { return p.param.substr(0, p.param.find('-')); });
+
+TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
+  const std::string dir = testing::TempDir();
+  auto write = [&](const std::string& name, const std::string& text) {
+    FILE* f = std::fopen((dir + "/" + name).c_str(), "w");
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+    return dir + "/" + name;
+  };
+  std::string out;
+  const std::string hw1 = write("hw1.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"canopen\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw1, out), 2) << out;
+  EXPECT_NE(out.find("hw1.toml:3:"), std::string::npos) << out;
+  const std::string hw2 = write("hw2.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"nomap.toml\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw2, out), 2) << out;
+  EXPECT_NE(out.find("hw2.toml:4:"), std::string::npos) << out;
+  EXPECT_NE(out.find("not found"), std::string::npos) << out;
+  // A map beside the hardware file, with an error in it: the map's file and line.
+  write("badmap.toml", "[drive]\nname = \"x\"\nbogus = 1\n");
+  const std::string hw3 = write("hw3.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"badmap.toml\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw3, out), 2) << out;
+  EXPECT_NE(out.find("badmap.toml:3:"), std::string::npos) << out;
+  // `rig run --hardware`: the [table] mistake is exit 2 before any device is opened
+  // (here GPIO would fail with exit 4: no such chip on this machine).
+  const std::string hw4 = write("hw4.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                            "drive_map = \"badmap.toml\"\n[dut]\ncan = \"vcan9\"\n"
+                                            "[gpio]\nchip = \"nochip\"\npower = \"P\"\nestop = \"E\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " run --hardware " + hw4 + " --profile ci --yes --out " + dir + "/run4", out), 2)
+      << out;
+  EXPECT_NE(out.find("badmap.toml:3:"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace rig::table_test

@@ -112,6 +112,43 @@ TEST(TableInProcess, NoAnswerMidMoveIsALinkFailureAndBounded) {
   EXPECT_LT(r.clock.now_s() - t0, 5.0);
   auto* client = dynamic_cast<m::TableClient*>(r.table.get());
   EXPECT_NE(client->last_stop_error().find("stop not delivered"), std::string::npos);
+  // The exit-4 message itself says the halt did not reach the drive (issue 13 item 8).
+  EXPECT_NE(err.find("; stop not delivered (the table may still be moving)"), std::string::npos) << err;
+}
+
+TEST(TableInProcess, FaultMessageSaysTheHaltWasDelivered) {
+  SimRig r("start_angle_deg = 0.0\n");
+  r.table->home({});
+  r.emu->inject(SimFault::kOverTravel, 0.5);
+  const std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+  EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
+}
+
+// A drive answering with another register map version is refused, not misread.
+class OtherMapVersion final : public m::RegisterDevice {
+ public:
+  explicit OtherMapVersion(m::RegisterDevice& d) : d_(d) {}
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+    const uint8_t rc = d_.read_registers(a, n, out);
+    if (rc == 0 && m::reg::kMapVersion >= a && m::reg::kMapVersion < a + n) out[m::reg::kMapVersion - a] = 2;
+    return rc;
+  }
+  uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override { return d_.write_registers(a, v, n); }
+  bool answering() const override { return true; }
+
+ private:
+  m::RegisterDevice& d_;
+};
+
+TEST(TableInProcess, MapVersionTwoIsRefused) {
+  SimRig r("start_angle_deg = 0.0\n");
+  OtherMapVersion v2(*r.emu);
+  auto t = m::make_inprocess_table(v2, r.clock);
+  const std::string e1 = hardware_error([&] { t->status(); });
+  EXPECT_NE(e1.find("MAP_VERSION (register 3) reads 2"), std::string::npos) << e1;
+  const std::string e2 = hardware_error([&] { t->home({}); });
+  EXPECT_NE(e2.find("MAP_VERSION"), std::string::npos) << e2;
+  EXPECT_FALSE(r.emu->snapshot().homing);
 }
 
 TEST(TableInProcess, CancelMidMoveStopsTheTableAndThrowsAborted) {

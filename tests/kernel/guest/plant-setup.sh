@@ -10,7 +10,16 @@ PORT=15020
 HW=/tmp/hardware.toml
 PROFILE=$RIG_SRC/tests/kernel/config/kernel-short.toml
 sed "s/@PORT@/$PORT/" "$RIG_SRC/tests/kernel/config/hardware.toml.in" > $HW
-"$RIG_BIN/rig" plant serve --can vcan0 --modbus 127.0.0.1:$PORT --profile "$PROFILE" > /tmp/plant.log 2>&1 &
+# RIG_DRIVE=cia402: the table is the emulated CiA 402 drive on the generic map (issue 14).
+DRIVE_ARGS=""
+if [ "${RIG_DRIVE:-rig-v1}" = cia402 ]; then
+  MAP=$RIG_SRC/drives/generic-cia402.toml
+  awk -v map="$MAP" '{ print } /^unit = 1$/ { print "drive = \"cia402\""; print "drive_map = \"" map "\"" }' \
+    $HW > $HW.new && mv $HW.new $HW
+  DRIVE_ARGS="--drive cia402 --drive-map $MAP"
+  grep -q 'drive = "cia402"' $HW || { echo "FAIL: hardware file without drive = cia402"; cat $HW; exit 1; }
+fi
+"$RIG_BIN/rig" plant serve --can vcan0 --modbus 127.0.0.1:$PORT --profile "$PROFILE" $DRIVE_ARGS > /tmp/plant.log 2>&1 &
 PLANT=$!
 i=0
 until grep -q "serving" /tmp/plant.log; do

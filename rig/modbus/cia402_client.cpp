@@ -1,0 +1,449 @@
+#include "rig/modbus/cia402_client.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace rig::modbus {
+
+namespace c4 = cia402;
+using c4::State;
+
+namespace {
+
+std::string deg_str(double d) {
+  char b[48];
+  std::snprintf(b, sizeof b, "%.4f°", d);
+  return b;
+}
+std::string hex4(unsigned v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%04X", v);
+  return b;
+}
+std::string secs(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f s", s);
+  return b;
+}
+double trapezoid_time(double dist, double v, double a) {
+  if (v <= 0 || a <= 0) return 0;
+  dist = std::fabs(dist);
+  if (dist >= v * v / a) return dist / v + v / a;
+  return 2.0 * std::sqrt(dist / a);
+}
+constexpr double kDefaultMoveTimeoutS = 120.0;  // when the profile velocity is unknown
+constexpr double kRestTimeoutS = 30.0;          // a stopping axis must be at rest within this
+
+}  // namespace
+
+Cia402Table::Cia402Table(std::unique_ptr<RegisterTransport> transport, DriveMap map, Clock& clock, TableOptions opt)
+    : transport_(std::move(transport)), map_(std::move(map)), clock_(clock), opt_(std::move(opt)) {}
+
+std::string Cia402Table::describe() const { return transport_->describe() + " cia402 \"" + map_.name + "\""; }
+
+// One object, named with its register and the drive when the link fails.
+int64_t Cia402Table::read_object(Obj o, const CancelToken& cancel) {
+  const ObjectSpec& s = map_.spec(o);
+  try {
+    const auto w = s.input ? transport_->read_input(s.address, static_cast<uint16_t>(s.words()), cancel)
+                           : transport_->read(s.address, static_cast<uint16_t>(s.words()), cancel);
+    return map_.decode(o, w.data());
+  } catch (const ModbusError& e) {
+    throw ModbusError("reading " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
+                      e.timeout);
+  }
+}
+
+void Cia402Table::write_object(Obj o, int64_t value, const CancelToken& cancel, bool urgent) {
+  try {
+    transport_->write(map_.spec(o).address, map_.encode(o, value), cancel, urgent);
+  } catch (const ModbusError& e) {
+    throw ModbusError("writing " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
+                      e.timeout);
+  }
+}
+
+void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
+  write_object(Obj::kControlword, w, cancel);
+  control_ = w;
+  control_known_ = true;
+}
+
+// Reads the objects of one poll, contiguous registers of one function in one request.
+Cia402Reading Cia402Table::read(const CancelToken& cancel) {
+  const Obj want[] = {Obj::kStatusword, Obj::kErrorCode, Obj::kModesDisplay, Obj::kPositionActual,
+                      Obj::kVelocityActual};
+  std::vector<Obj> objs(std::begin(want), std::end(want));
+  std::sort(objs.begin(), objs.end(), [&](Obj a, Obj b) {
+    const auto &sa = map_.spec(a), &sb = map_.spec(b);
+    return sa.input != sb.input ? sa.input < sb.input : sa.address < sb.address;
+  });
+  std::array<int64_t, kObjCount> val{};
+  for (size_t i = 0; i < objs.size();) {
+    size_t j = i + 1;
+    uint32_t end = map_.spec(objs[i]).address + map_.spec(objs[i]).words();
+    while (j < objs.size() && map_.spec(objs[j]).input == map_.spec(objs[i]).input &&
+           map_.spec(objs[j]).address == end && end + map_.spec(objs[j]).words() - map_.spec(objs[i]).address <= 125) {
+      end += map_.spec(objs[j]).words();
+      ++j;
+    }
+    const ObjectSpec& first = map_.spec(objs[i]);
+    const auto n = static_cast<uint16_t>(end - first.address);
+    std::vector<uint16_t> w;
+    try {
+      w = first.input ? transport_->read_input(first.address, n, cancel) : transport_->read(first.address, n, cancel);
+    } catch (const ModbusError& e) {
+      std::string names;
+      for (size_t k = i; k < j; ++k) names += (k > i ? ", " : "") + map_.describe(objs[k]);
+      throw ModbusError("reading " + names + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
+                        e.timeout);
+    }
+    for (size_t k = i; k < j; ++k)
+      val[static_cast<int>(objs[k])] = map_.decode(objs[k], w.data() + (map_.spec(objs[k]).address - first.address));
+    i = j;
+  }
+  Cia402Reading r;
+  r.statusword = static_cast<uint16_t>(val[static_cast<int>(Obj::kStatusword)]);
+  r.error_code = static_cast<uint16_t>(val[static_cast<int>(Obj::kErrorCode)]);
+  r.mode_display = static_cast<int8_t>(val[static_cast<int>(Obj::kModesDisplay)]);
+  r.actual_deg = map_.counts_to_deg(val[static_cast<int>(Obj::kPositionActual)]);
+  r.velocity_dps = map_.velocity_units_to_dps(static_cast<double>(val[static_cast<int>(Obj::kVelocityActual)]));
+  return r;
+}
+
+TableStatus Cia402Table::status() {
+  Cia402Reading r;
+  try {
+    r = read();
+    // The controlword as the drive holds it: a stop from a fresh process
+    // (`rig table stop`) then keeps its device control bits.
+    control_ = static_cast<uint16_t>(read_object(Obj::kControlword, {}));
+    control_known_ = true;
+  } catch (const ModbusError& e) {
+    throw HardwareError(std::string("table status: ") + e.what());
+  }
+  TableStatus s;
+  const State st = r.state();
+  s.actual_deg = r.actual_deg;
+  s.ready = st != State::kFault && st != State::kFaultReactionActive && st != State::kNotReadyToSwitchOn;
+  s.servo_on = st == State::kOperationEnabled || st == State::kQuickStopActive;
+  s.homed = map_.homed_bit ? r.has(static_cast<uint16_t>(1u << *map_.homed_bit)) : homed_;
+  s.homing = r.mode_display == c4::kModeHoming && s.servo_on && !r.has(c4::sw::kTargetReached);
+  // Velocity actual below 0.01 °/s is a servo holding position, not motion.
+  s.moving = std::fabs(r.velocity_dps) > 0.01 || (s.servo_on && !r.has(c4::sw::kTargetReached));
+  s.in_position = s.servo_on && r.has(c4::sw::kTargetReached) && !s.moving;
+  s.alarm = st == State::kFault || st == State::kFaultReactionActive;
+  s.alarm_code = r.error_code;
+  s.alarm_text = r.error_code ? c4::error_code_text(r.error_code) : "";
+  s.target_deg = s.actual_deg;
+  return s;
+}
+
+std::string Cia402Table::at(const Cia402Reading& r) const {
+  return " at " + deg_str(r.actual_deg) + " (" + c4::state_name(r.state()) + ", statusword " + hex4(r.statusword) + ")";
+}
+
+void Cia402Table::fail_on_fault(const std::string& doing, const Cia402Reading& r) const {
+  const State st = r.state();
+  if (st != State::kFault && st != State::kFaultReactionActive) return;
+  throw HardwareError(doing + ": drive \"" + map_.name + "\" in " + c4::state_name(st) + ", error code " +
+                      hex4(r.error_code) + " (0x603F) " + c4::error_code_text(r.error_code) + at(r) +
+                      " (inspect the table, then `rig table reset`)");
+}
+
+// Waits (bounded by the acknowledge timeout) for the state a command leads to;
+// any other state is reported, never worked around.
+Cia402Reading Cia402Table::await_state(const std::string& doing, const char* command, State want,
+                                       const CancelToken& cancel) {
+  const double t0 = clock_.now_s();
+  for (;;) {
+    const Cia402Reading r = read(cancel);
+    if (r.state() == want) return r;
+    fail_on_fault(doing, r);
+    if (clock_.now_s() - t0 > opt_.ack_timeout_s)
+      throw HardwareError(doing + ": drive \"" + map_.name + "\" did not reach " + c4::state_name(want) + " within " +
+                          secs(opt_.ack_timeout_s) + " of \"" + command + "\"" + at(r));
+    clock_.sleep_for(opt_.poll_s, cancel);
+  }
+}
+
+// Shutdown, switch on, enable operation (transitions 2, 3, 4), from wherever
+// the standard leaves a defined way; Fault needs a technician's reset.
+void Cia402Table::enable_operation(const std::string& doing, const CancelToken& cancel) {
+  Cia402Reading r = read(cancel);
+  const double t0 = clock_.now_s();
+  while (r.state() == State::kNotReadyToSwitchOn) {  // drive still initialising (transition 1 is the drive's)
+    if (clock_.now_s() - t0 > opt_.ack_timeout_s) {
+      const uint16_t s = r.statusword;
+      throw HardwareError(doing + ": drive \"" + map_.name + "\" stays Not ready to switch on (statusword " + hex4(s) +
+                          ": not a state it should keep; refusing to guess)");
+    }
+    clock_.sleep_for(opt_.poll_s, cancel);
+    r = read(cancel);
+  }
+  fail_on_fault(doing, r);
+  for (int step = 0; step < 6; ++step) {
+    switch (r.state()) {
+      case State::kOperationEnabled: return;
+      case State::kQuickStopActive: {  // after our quick stop: Disable voltage (transition 12), then up again
+        // Not while the quick-stop ramp still runs: disabling would drop the axis on its brake.
+        const double t_rest = clock_.now_s();
+        while (std::fabs(r.velocity_dps) > 0.01) {
+          if (clock_.now_s() - t_rest > kRestTimeoutS)
+            throw HardwareError(doing + ": still moving " + secs(kRestTimeoutS) + " after a quick stop" + at(r));
+          clock_.sleep_for(opt_.poll_s, cancel);
+          r = read(cancel);
+        }
+        write_controlword(c4::cw::kDisableVoltage, cancel);
+        r = await_state(doing, "disable voltage", State::kSwitchOnDisabled, cancel);
+        break;
+      }
+      case State::kSwitchOnDisabled:
+        write_controlword(c4::cw::kShutdown, cancel);
+        r = await_state(doing, "shutdown", State::kReadyToSwitchOn, cancel);
+        break;
+      case State::kReadyToSwitchOn:
+        write_controlword(c4::cw::kCmdSwitchOn, cancel);
+        r = await_state(doing, "switch on", State::kSwitchedOn, cancel);
+        break;
+      case State::kSwitchedOn:
+        write_controlword(c4::cw::kCmdEnableOperation, cancel);
+        r = await_state(doing, "enable operation", State::kOperationEnabled, cancel);
+        break;
+      default:
+        fail_on_fault(doing, r);
+        throw HardwareError(doing + ": drive \"" + map_.name + "\" in an unexpected state" + at(r) +
+                            "; refusing to guess");
+    }
+  }
+  throw HardwareError(doing + ": drive \"" + map_.name + "\" did not settle in Operation enabled" + at(r));
+}
+
+void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken& cancel) {
+  write_object(Obj::kModesOfOperation, mode, cancel);
+  const double t0 = clock_.now_s();
+  for (;;) {
+    const Cia402Reading r = read(cancel);
+    fail_on_fault(doing, r);
+    if (r.mode_display == mode) return;
+    if (clock_.now_s() - t0 > opt_.ack_timeout_s)
+      throw HardwareError(doing + ": modes of operation display (0x6061) shows " + std::to_string(r.mode_display) +
+                          ", not " + std::to_string(mode) + ", " + secs(opt_.ack_timeout_s) + " after writing 0x6060" +
+                          at(r));
+    clock_.sleep_for(opt_.poll_s, cancel);
+  }
+}
+
+template <class Body>
+void Cia402Table::guarded(const std::string& doing, Body body) {
+  auto stop_fate = [this] {
+    const std::string err = last_stop_error();
+    return err.empty() ? std::string("; halt delivered to the drive") : "; " + err;
+  };
+  try {
+    body();
+  } catch (const AbortedError&) {
+    stop();
+    throw;
+  } catch (const ModbusError& e) {
+    stop();
+    throw HardwareError(doing + (e.exception_code ? ": request refused: " : ": link failure: ") + e.what() + stop_fate());
+  } catch (const HardwareError& e) {
+    stop();
+    throw HardwareError(e.what() + stop_fate());
+  }
+}
+
+void Cia402Table::home(const CancelToken& cancel) {
+  const std::string doing = "home";
+  guarded(doing, [&] {
+    enable_operation(doing, cancel);
+    set_mode(doing, c4::kModeHoming, cancel);
+    if (map_.homing_method != 0) write_object(Obj::kHomingMethod, map_.homing_method, cancel);
+    if (map_.has(Obj::kHomeOffset)) write_object(Obj::kHomeOffset, map_.deg_to_counts(map_.home_offset_deg), cancel);
+    write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart, cancel);
+    const double t0 = clock_.now_s();
+    double changed_at = t0;
+    Cia402Reading last = read(cancel);
+    for (;;) {
+      clock_.sleep_for(opt_.poll_s, cancel);
+      const Cia402Reading r = read(cancel);
+      fail_on_fault(doing, r);
+      if (r.mode_display != c4::kModeHoming)
+        throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " during homing" + at(r));
+      if (r.has(c4::sw::kHomingError)) throw HardwareError(doing + ": homing error (statusword bit 13)" + at(r));
+      const bool done = r.has(c4::sw::kHomingAttained) && r.has(c4::sw::kTargetReached);
+      if (done) break;
+      const double now = clock_.now_s();
+      if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9) changed_at = now;
+      last = r;
+      if (now - changed_at > opt_.heartbeat_timeout_s)
+        throw HardwareError(doing + ": drive frozen: statusword and position actual unchanged for " +
+                            secs(now - changed_at) + " while homing" + at(r));
+      if (now - t0 > opt_.home_timeout_s) throw HardwareError(doing + ": not homed after " + secs(now - t0) + at(r));
+    }
+    write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    homed_ = true;
+  });
+}
+
+void Cia402Table::move_to(double deg, const CancelToken& cancel) {
+  const std::string doing = "move to " + deg_str(deg);
+  if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
+    throw ConfigError(doing + ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " +
+                      deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path);
+  guarded(doing, [&] {
+    enable_operation(doing, cancel);
+    if (map_.homed_bit && !read(cancel).has(static_cast<uint16_t>(1u << *map_.homed_bit)))
+      throw HardwareError(doing + ": table not homed (run `rig table home` first)");
+    set_mode(doing, c4::kModeProfilePosition, cancel);
+    if (!profile_applied_) {
+      if (opt_.velocity_dps && map_.has(Obj::kProfileVelocity))
+        write_object(Obj::kProfileVelocity, std::llround(map_.dps_to_velocity_units(*opt_.velocity_dps)), cancel);
+      if (opt_.accel_dps2) {
+        const auto a = std::llround(map_.dps2_to_accel_units(*opt_.accel_dps2));
+        if (map_.has(Obj::kProfileAcceleration)) write_object(Obj::kProfileAcceleration, a, cancel);
+        if (map_.has(Obj::kProfileDeceleration)) write_object(Obj::kProfileDeceleration, a, cancel);
+      }
+      profile_applied_ = true;
+    }
+    // Handshake (single set-point): new-set-point low and acknowledge clear first.
+    write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    Cia402Reading r = read(cancel);
+    for (const double t_ack = clock_.now_s(); r.has(c4::sw::kSetPointAck);) {
+      if (clock_.now_s() - t_ack > opt_.ack_timeout_s)
+        throw HardwareError(doing + ": set-point acknowledge (bit 12) still set " + secs(opt_.ack_timeout_s) +
+                            " after new-set-point was cleared" + at(r));
+      clock_.sleep_for(opt_.poll_s, cancel);
+      r = read(cancel);
+    }
+    const double start_deg = r.actual_deg;
+    write_object(Obj::kTargetPosition, map_.deg_to_counts(deg), cancel);
+    write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint, cancel);
+    double t0 = clock_.now_s();
+    for (;;) {
+      r = read(cancel);
+      fail_on_fault(doing, r);
+      if (r.has(c4::sw::kSetPointAck)) break;
+      if (clock_.now_s() - t0 > opt_.ack_timeout_s)
+        throw HardwareError(doing + ": set-point not acknowledged (statusword bit 12) within " +
+                            secs(opt_.ack_timeout_s) + (r.has(c4::sw::kInternalLimit) ? " (internal limit active)" : "") +
+                            at(r));
+      clock_.sleep_for(opt_.poll_s, cancel);
+    }
+    write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge
+    double timeout = opt_.move_timeout_s;
+    if (timeout <= 0) {
+      double v = opt_.velocity_dps.value_or(0), a = opt_.accel_dps2.value_or(0);
+      if (v <= 0 && map_.has(Obj::kProfileVelocity))
+        v = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kProfileVelocity, cancel))));
+      if (a <= 0 && map_.has(Obj::kProfileAcceleration))
+        a = map_.accel_units_to_dps2(static_cast<double>(read_object(Obj::kProfileAcceleration, cancel)));
+      const double tt = trapezoid_time(deg - start_deg, v, a);
+      timeout = tt > 0 ? 2 * tt + opt_.settle_s + 10.0 : kDefaultMoveTimeoutS;
+    }
+    t0 = clock_.now_s();
+    double held_since = -1, changed_at = t0;
+    Cia402Reading last = r;
+    for (;;) {
+      clock_.sleep_for(opt_.poll_s, cancel);
+      r = read(cancel);
+      fail_on_fault(doing, r);
+      const double now = clock_.now_s();
+      if (r.mode_display != c4::kModeProfilePosition)
+        throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) +
+                            " during the move (another Modbus master?)" + at(r));
+      if (r.state() != State::kOperationEnabled)
+        throw HardwareError(doing + ": drive left Operation enabled" + at(r));
+      if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
+      if (control_.load() & c4::cw::kHalt)  // stop() from another thread (the executive's abort path)
+        throw HardwareError(doing + ": halted by a stop request" + at(r));
+      const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
+      if (!ok) {
+        held_since = -1;
+      } else if (held_since < 0) {
+        held_since = now;
+      }
+      if (held_since >= 0 && now - held_since >= opt_.settle_s) return;
+      // No heartbeat object in CiA 402: a drive whose statusword and position
+      // stop changing while the target is not reached is taken for frozen.
+      if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9 ||
+          r.has(c4::sw::kTargetReached))
+        changed_at = now;
+      last = r;
+      if (now - changed_at > opt_.heartbeat_timeout_s)
+        throw HardwareError(doing + ": drive frozen: statusword and position actual unchanged for " +
+                            secs(now - changed_at) + " while moving" + at(r));
+      if (now - t0 > timeout) {
+        const std::string state = !r.has(c4::sw::kTargetReached) ? "target not reached"
+                                  : "stopped " + deg_str(std::fabs(r.actual_deg - deg)) + " off target (tolerance " +
+                                        deg_str(opt_.tolerance_deg) + ")";
+        throw HardwareError(doing + ": timed out after " + secs(now - t0) + ", " + state + at(r));
+      }
+    }
+  });
+}
+
+uint16_t Cia402Table::reset_fault(const CancelToken& cancel) {
+  const std::string doing = "fault reset";
+  try {
+    Cia402Reading r = read(cancel);
+    const double t_react = clock_.now_s();
+    while (r.state() == State::kFaultReactionActive && clock_.now_s() - t_react < opt_.ack_timeout_s) {
+      clock_.sleep_for(opt_.poll_s, cancel);  // the drive is still braking: Fault follows (transition 14)
+      r = read(cancel);
+    }
+    if (r.state() != State::kFault) return 0;
+    const uint16_t code = r.error_code;
+    write_controlword(0, cancel);
+    write_controlword(c4::cw::kFaultReset, cancel);  // rising edge: transition 15
+    write_controlword(0, cancel);
+    const double t0 = clock_.now_s();
+    while ((r = read(cancel)).state() == State::kFault && clock_.now_s() - t0 < opt_.ack_timeout_s)
+      clock_.sleep_for(opt_.poll_s, cancel);
+    if (r.state() == State::kFault)
+      throw HardwareError(doing + ": drive \"" + map_.name + "\" stays in Fault, error code " + hex4(r.error_code) +
+                          " " + c4::error_code_text(r.error_code) + " (its cause is still present)");
+    return code;
+  } catch (const ModbusError& e) {
+    throw HardwareError(doing + ": link failure: " + e.what());
+  }
+}
+
+void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
+  std::string err;
+  try {
+    write_object(Obj::kControlword, word, CancelToken{}, true);
+    control_ = word;
+  } catch (const std::exception& e) {
+    try {
+      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
+    } catch (...) {
+    }
+  } catch (...) {
+  }
+  try {
+    std::lock_guard lk(stop_mu_);
+    last_stop_error_ = std::move(err);
+  } catch (...) {
+  }
+}
+
+// Halt keeps the device control bits as they are (never enables or disables
+// anything) and drops new-set-point so no move is taken after it. Not knowing
+// them (nothing read or written yet), it sends nothing rather than a guess that
+// could drop the power stage mid-move: callers read status() first.
+void Cia402Table::stop() noexcept {
+  if (!control_known_) {
+    std::lock_guard lk(stop_mu_);
+    last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";
+    return;
+  }
+  const auto w = static_cast<uint16_t>((control_.load() & 0x000F) | c4::cw::kHalt);
+  send_stop(w, "halt");
+}
+void Cia402Table::quick_stop() noexcept { send_stop(c4::cw::kCmdQuickStop, "quick stop"); }
+
+}  // namespace rig::modbus

@@ -1,0 +1,80 @@
+// The rig's CiA 402 table backend: positions a dividing head driven by a CiA
+// 402 servo drive (IEC 61800-7-201) whose objects sit on Modbus registers as a
+// drive map says (rig/modbus/drive_map.hpp). State machine to Operation
+// enabled, homing mode, profile position mode with the set-point handshake,
+// halt and quick stop; every wait reads statusword, modes display, position
+// and velocity actual; every call is bounded in time.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "rig/core/clock.hpp"
+#include "rig/core/table.hpp"
+#include "rig/modbus/cia402.hpp"
+#include "rig/modbus/drive_map.hpp"
+#include "rig/modbus/table_client.hpp"
+#include "rig/modbus/transport.hpp"
+
+namespace rig::modbus {
+
+// What one poll reads.
+struct Cia402Reading {
+  uint16_t statusword = 0, error_code = 0;
+  int mode_display = 0;
+  double actual_deg = 0, velocity_dps = 0;
+  cia402::State state() const { return cia402::decode_state(statusword); }
+  bool has(uint16_t bit) const { return (statusword & bit) != 0; }
+};
+
+class Cia402Table final : public RotaryTable {
+ public:
+  Cia402Table(std::unique_ptr<RegisterTransport> transport, DriveMap map, Clock& clock, TableOptions opt = {});
+
+  TableStatus status() override;
+  void home(const CancelToken& cancel) override;
+  void move_to(double deg, const CancelToken& cancel) override;
+  void stop() noexcept override;        // halt (controlword bit 8) on the profile deceleration
+  void quick_stop() noexcept override;  // Quick stop command (transition 11)
+  std::string describe() const override;
+
+  // Technician's fault reset (`rig table reset`): returns the 0x603F code it
+  // cleared (0: no fault); HardwareError naming the code when the drive stays in Fault.
+  uint16_t reset_fault(const CancelToken& cancel);
+  Cia402Reading read(const CancelToken& cancel = {});
+  std::string last_stop_error() const {
+    std::lock_guard lk(stop_mu_);
+    return last_stop_error_;
+  }
+  const DriveMap& map() const { return map_; }
+
+ private:
+  int64_t read_object(Obj o, const CancelToken& cancel);
+  void write_object(Obj o, int64_t value, const CancelToken& cancel, bool urgent = false);
+  void write_controlword(uint16_t w, const CancelToken& cancel);
+  void enable_operation(const std::string& doing, const CancelToken& cancel);
+  void set_mode(const std::string& doing, int mode, const CancelToken& cancel);
+  Cia402Reading await_state(const std::string& doing, const char* command, cia402::State want,
+                            const CancelToken& cancel);
+  void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
+  std::string at(const Cia402Reading& r) const;
+  void send_stop(uint16_t word, const char* name) noexcept;
+  template <class Body>
+  void guarded(const std::string& doing, Body body);
+
+  std::unique_ptr<RegisterTransport> transport_;
+  DriveMap map_;
+  Clock& clock_;
+  TableOptions opt_;
+  std::atomic<uint16_t> control_{0};
+  std::atomic<bool> control_known_{false};  // control_ was read from or written to the drive
+  bool homed_ = false;            // homed by this client (when the map names no homed bit)
+  bool profile_applied_ = false;
+  mutable std::mutex stop_mu_;
+  std::string last_stop_error_;
+};
+
+}  // namespace rig::modbus

@@ -1,0 +1,552 @@
+// CiA 402 drives described by a drive map (issue 14): the map files, the
+// emulated drive's state machine (every transition the client relies on and
+// every refusal), and the rig's client against the emulated drive in process
+// (simulated time) for each shipped map: home, U10/U20, status, stop, faults,
+// cancel, a frozen drive, a drive in a state it should not be in.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <functional>
+#include <map>
+
+#include "helpers.hpp"
+#include "plant/table/cia402_drive.hpp"
+#include "rig/core/clock.hpp"
+#include "rig/modbus/cia402_client.hpp"
+
+namespace rig::table_test {
+namespace {
+
+namespace m = rig::modbus;
+namespace c4 = rig::modbus::cia402;
+using c4::State;
+using m::Obj;
+
+const std::string kDrives = RIG_SOURCE_DIR "/drives/";
+const std::vector<std::string> kMaps = {"generic-cia402.toml", "lowword-offset.toml"};
+
+template <class F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+// ---------------------------------------------------------------- map files
+
+TEST(DriveMapFile, ShippedMapsLoad) {
+  const m::DriveMap g = m::load_drive_map(kDrives + "generic-cia402.toml");
+  EXPECT_EQ(g.name, "generic CiA 402");
+  EXPECT_EQ(g.spec(Obj::kTargetPosition).address, 9);
+  EXPECT_FALSE(g.spec(Obj::kTargetPosition).low_word_first);
+  EXPECT_EQ(g.homing_method, 19);
+  EXPECT_NEAR(g.counts_to_deg(g.deg_to_counts(123.4567)), 123.4567, 1e-4);
+  const m::DriveMap l = m::load_drive_map(kDrives + "lowword-offset.toml");
+  EXPECT_EQ(l.spec(Obj::kControlword).address, 0x1000);
+  EXPECT_EQ(l.spec(Obj::kStatusword).address, 0x1000);  // input registers: another space
+  EXPECT_TRUE(l.spec(Obj::kStatusword).input);
+  EXPECT_TRUE(l.spec(Obj::kPositionActual).low_word_first);
+  EXPECT_EQ(l.direction, -1);
+  // Low word first on the wire, sign kept.
+  const auto w = l.encode(Obj::kTargetPosition, -2);
+  EXPECT_EQ(w[0], 0xFFFE);
+  EXPECT_EQ(w[1], 0xFFFF);
+  EXPECT_EQ(l.decode(Obj::kTargetPosition, w.data()), -2);
+  // 10 000 counts x 36 per turn, counted negatively: +1° = -1000 counts.
+  EXPECT_EQ(l.deg_to_counts(1.0), -1000);
+  // 30 °/s at the table = 180 motor rpm through 36:1.
+  EXPECT_NEAR(l.dps_to_velocity_units(30.0), 180.0, 1e-9);
+}
+
+std::string map_error(const std::string& body) {
+  const std::string path = testing::TempDir() + "/bad-map.toml";
+  std::ofstream(path) << body;
+  return error_of([&] { m::load_drive_map(path); });
+}
+
+const char* kHead = R"([drive]
+name = "t"
+[scaling]
+counts_per_rev = 10000
+[limits]
+neg_deg = -10.0
+pos_deg = 10.0
+[objects]
+controlword = { index = 0x6040, address = 0 }
+statusword = { index = 0x6041, address = 1 }
+error_code = { index = 0x603F, address = 2 }
+modes_of_operation = { index = 0x6060, address = 3, signed = true }
+modes_of_operation_display = { index = 0x6061, address = 4, signed = true }
+position_actual = { index = 0x6064, address = 5, width = 32, signed = true }
+velocity_actual = { index = 0x606C, address = 7, width = 32, signed = true }
+)";
+
+TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
+  const std::string ok = std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n";
+  EXPECT_EQ(map_error(ok), "(no error)");
+  // Missing required object (line 8 is [objects]).
+  std::string e = map_error(kHead);
+  EXPECT_TRUE(has(e, "bad-map.toml:8:") && has(e, "target_position") && has(e, "0x607A")) << e;
+  // Overlap: target at 8 overlaps velocity_actual (7..8).
+  e = map_error(std::string(kHead) + "target_position = { index = 0x607A, address = 8, width = 32 }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:16:") && has(e, "overlaps 'velocity_actual'") && has(e, "bad-map.toml:15:")) << e;
+  // Unknown object, unknown key inside an object, unknown section key.
+  e = map_error(ok + "statuswrod = { index = 0x6041, address = 30 }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "unknown object 'statuswrod'")) << e;
+  e = map_error(ok + "home_offset = { index = 0x607C, address = 30, widht = 32 }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "widht")) << e;
+  e = map_error(ok + "[homing]\nmehtod = 19\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:18:") && has(e, "mehtod")) << e;
+  // An index that is not the object's; a written object placed in input registers; a bad width.
+  e = map_error(std::string(kHead) + "target_position = { index = 0x607B, address = 9, width = 32 }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:16:") && has(e, "0x607A")) << e;
+  e = map_error(std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 32, function = \"input\" }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:16:") && has(e, "holding register")) << e;
+  e = map_error(std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 24 }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:16:") && has(e, "width")) << e;
+  // A homing method with nowhere to write it.
+  e = map_error(ok + "[homing]\nmethod = 19\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "homing_method")) << e;
+}
+
+// ---------------------------------------------------------------- the emulated drive
+
+const char* kFastAxis = R"(
+velocity_dps = 360.0
+accel_dps2 = 1800.0
+home_velocity_dps = 200.0
+settle_s = 0.05
+start_angle_deg = 10.0
+)";
+
+struct Rig {
+  explicit Rig(const std::string& map_file, const std::string& axis_cfg = kFastAxis)
+      : map(m::load_drive_map(kDrives + map_file)),
+        axis(emulator(axis_cfg)),
+        drive(*axis, map),
+        clock([this](double dt) {
+          drive.step(dt);
+          if (on_step) on_step();
+        }) {}
+  std::unique_ptr<m::Cia402Table> client(m::TableOptions opt = {}) {
+    opt.settle_s = 0.05;
+    return std::make_unique<m::Cia402Table>(m::make_inprocess_transport(drive, clock), map, clock, opt);
+  }
+  void control(uint16_t w) {
+    const auto v = map.encode(Obj::kControlword, w);
+    ASSERT_EQ(drive.write_registers(map.spec(Obj::kControlword).address, v.data(), static_cast<uint16_t>(v.size())), 0);
+  }
+  void write(Obj o, int64_t value) {
+    const auto v = map.encode(o, value);
+    ASSERT_EQ(drive.write_registers(map.spec(o).address, v.data(), static_cast<uint16_t>(v.size())), 0);
+  }
+  void run(double s) { clock.sleep_for(s, {}); }
+  m::DriveMap map;
+  std::function<void()> on_step;  // runs after every step of drive time
+  std::unique_ptr<plant::TableEmulator> axis;
+  plant::Cia402Drive drive;
+  SimClock clock;
+};
+
+TEST(Cia402Drive, PowerOnThenEveryTransitionTheClientUses) {
+  Rig r("generic-cia402.toml");
+  EXPECT_EQ(r.drive.state(), State::kNotReadyToSwitchOn);
+  r.control(c4::cw::kShutdown);  // refused: the drive is initialising
+  EXPECT_EQ(r.drive.state(), State::kNotReadyToSwitchOn);
+  r.run(0.05);
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);  // 1
+  r.control(c4::cw::kCmdSwitchOn);  // refused: no transition from Switch on disabled
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);
+  r.control(c4::cw::kCmdEnableOperation);  // refused too
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);
+  r.control(c4::cw::kShutdown);
+  EXPECT_EQ(r.drive.state(), State::kReadyToSwitchOn);  // 2
+  EXPECT_EQ(r.drive.statusword() & 0x6F, 0x21);
+  r.control(c4::cw::kCmdSwitchOn);
+  EXPECT_EQ(r.drive.state(), State::kSwitchedOn);  // 3
+  r.control(c4::cw::kCmdEnableOperation);
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);  // 4
+  EXPECT_TRUE(r.axis->snapshot().servo_on);
+  EXPECT_EQ(r.drive.statusword() & 0x6F, 0x27);
+  r.control(c4::cw::kCmdSwitchOn);
+  EXPECT_EQ(r.drive.state(), State::kSwitchedOn);  // 5: disable operation
+  EXPECT_FALSE(r.axis->snapshot().servo_on);
+  r.control(c4::cw::kShutdown);
+  EXPECT_EQ(r.drive.state(), State::kReadyToSwitchOn);  // 6
+  r.control(c4::cw::kCmdEnableOperation);  // switch on + enable operation: 3 + 4
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
+  r.control(c4::cw::kShutdown);
+  EXPECT_EQ(r.drive.state(), State::kReadyToSwitchOn);  // 8
+  r.control(c4::cw::kCmdQuickStop);
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);  // 7
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.control(c4::cw::kDisableVoltage);
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);  // 9
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.control(c4::cw::kCmdQuickStop);
+  EXPECT_EQ(r.drive.state(), State::kQuickStopActive);  // 11
+  EXPECT_EQ(r.drive.statusword() & 0x6F, 0x07);
+  r.control(c4::cw::kCmdEnableOperation);
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);  // 16
+  r.control(c4::cw::kCmdQuickStop);
+  r.control(c4::cw::kDisableVoltage);
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);  // 12
+}
+
+TEST(Cia402Drive, FaultReactionFaultAndReset) {
+  Rig r("generic-cia402.toml");
+  r.run(0.05);
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.drive.inject_drive_fault(0x4310);
+  EXPECT_EQ(r.drive.state(), State::kFaultReactionActive);  // 13
+  EXPECT_EQ(r.drive.statusword() & 0x4F, 0x0F);
+  r.run(0.05);
+  EXPECT_EQ(r.drive.state(), State::kFault);  // 14
+  EXPECT_EQ(r.drive.error_code(), 0x4310);
+  r.control(c4::cw::kShutdown);  // every device command is ignored in Fault
+  EXPECT_EQ(r.drive.state(), State::kFault);
+  r.control(c4::cw::kFaultReset);
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);  // 15
+  EXPECT_EQ(r.drive.error_code(), 0);
+  // A fault whose cause stays (e-stop pressed) is not reset.
+  r.control(0);
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.axis->set_estop(true);
+  r.run(0.05);
+  EXPECT_EQ(r.drive.state(), State::kFault);
+  EXPECT_EQ(r.drive.error_code(), 0xFF01);
+  r.control(0);
+  r.control(c4::cw::kFaultReset);
+  EXPECT_EQ(r.drive.state(), State::kFault);
+  r.axis->set_estop(false);
+  r.control(0);
+  r.control(c4::cw::kFaultReset);
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);
+}
+
+void enable_and_home(Rig& r) {
+  r.run(0.05);
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.write(Obj::kModesOfOperation, c4::kModeHoming);
+  r.write(Obj::kHomingMethod, 19);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kHomingAttained);
+  r.run(1.0);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kHomingAttained);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kTargetReached);
+  r.control(c4::cw::kCmdEnableOperation);
+}
+
+TEST(Cia402Drive, SetPointHandshakeTimingAndHalt) {
+  Rig r("generic-cia402.toml");
+  enable_and_home(r);
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(180.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kSetPointAck);  // not in the same request: one drive cycle later
+  r.run(plant::Cia402Drive::kSetPointLatencyS * 2);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kSetPointAck);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kTargetReached);
+  r.control(c4::cw::kCmdEnableOperation);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kSetPointAck);  // handshake completed by the master
+  r.run(0.2);
+  // Halt mid-move: target reached means "at rest" while halt is set (IEC 61800-7-201 bit 10), far from the target.
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+  r.run(1.0);
+  const double pos = r.axis->snapshot().position_deg;
+  EXPECT_GT(std::fabs(pos - 180.0), 20.0);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kTargetReached);
+  // Halt released: not at the target, so not reached (the move does not resume by itself).
+  r.control(c4::cw::kCmdEnableOperation);
+  r.run(0.2);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kTargetReached);
+  // A set-point outside the travel limits is not taken: internal limit active, no acknowledge.
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(1000.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.05);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kSetPointAck);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kInternalLimit);
+}
+
+TEST(Cia402Drive, RefusesWritesOutsideTheMap) {
+  Rig r("generic-cia402.toml");
+  uint16_t v[2] = {1, 2};
+  EXPECT_EQ(r.drive.write_registers(1, v, 1), m::exc::kIllegalAddress);  // statusword is read-only
+  EXPECT_EQ(r.drive.write_registers(10, v, 1), m::exc::kIllegalAddress); // half of a 32-bit target
+  EXPECT_EQ(r.drive.write_registers(200, v, 1), m::exc::kIllegalAddress);
+  uint16_t out[4];
+  EXPECT_EQ(r.drive.read_registers(24, 1, out), m::exc::kIllegalAddress);
+  uint16_t mode = 3;  // profile velocity mode: not implemented
+  EXPECT_EQ(r.drive.write_registers(3, &mode, 1), m::exc::kIllegalValue);
+}
+
+// ---------------------------------------------------------------- the client, in process
+
+class Cia402Client : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Cia402Client, HomeMoveToU10U20StatusStop) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  TableStatus s = t->status();
+  EXPECT_TRUE(s.homed);
+  EXPECT_TRUE(s.servo_on);
+  EXPECT_NEAR(s.actual_deg, 0.0, 0.01);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 0.0, 0.005);  // the home switch is mechanical 0
+  t->move_to(0.0, {});    // U10
+  t->move_to(180.0, {});  // U20
+  s = t->status();
+  EXPECT_TRUE(s.in_position);
+  EXPECT_FALSE(s.moving);
+  EXPECT_FALSE(s.alarm);
+  EXPECT_NEAR(s.actual_deg, 180.0, 0.01);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 180.0, 0.005);
+  t->move_to(-90.0, {});
+  EXPECT_NEAR(r.axis->actual_angle_deg(), -90.0, 0.005);
+  t->stop();
+  EXPECT_EQ(t->last_stop_error(), "");
+  t->quick_stop();
+  EXPECT_EQ(r.drive.state(), State::kQuickStopActive);
+  t->move_to(10.0, {});  // from Quick stop active back up (transition 12, then 2, 3, 4)
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 10.0, 0.005);
+  EXPECT_THROW(t->move_to(400.0, {}), ConfigError);  // outside the map's travel limits
+}
+
+TEST_P(Cia402Client, CancelMidMoveHaltsTheAxis) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  CancelSource cancel;
+  // Cancelled on the drive's time line, 0.3 s into the move.
+  const double t_cancel = r.axis->time_s() + 0.3;
+  r.on_step = [&] {
+    if (r.axis->time_s() >= t_cancel) cancel.request("test cancel");
+  };
+  EXPECT_THROW(t->move_to(300.0, cancel.token()), AbortedError);
+  r.on_step = nullptr;
+  EXPECT_EQ(t->last_stop_error(), "");
+  r.run(2.0);
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kTargetReached);  // at rest under halt
+  EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+}
+
+// `rig table stop` from a fresh process: the stop keeps the drive's device
+// control bits (halt, still Operation enabled), never drops the power stage.
+TEST_P(Cia402Client, AStopFromAFreshClientHaltsWithoutDisabling) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(300.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0);
+  auto fresh = r.client();
+  fresh->stop();  // nothing known yet: nothing sent, and it says so
+  EXPECT_TRUE(has(fresh->last_stop_error(), "halt not sent")) << fresh->last_stop_error();
+  fresh->status();
+  fresh->stop();
+  EXPECT_EQ(fresh->last_stop_error(), "");
+  r.run(2.0);
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
+  EXPECT_TRUE(r.axis->snapshot().servo_on);
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+  EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+}
+
+TEST_P(Cia402Client, FaultsAreNamedWithTheirErrorCode) {
+  {  // following error mid-move
+    Rig r(GetParam());
+    auto t = r.client();
+    t->home({});
+    r.axis->inject(plant::SimFault::kFollowing, 0.3);
+    const std::string e = error_of([&] { t->move_to(180.0, {}); });
+    EXPECT_TRUE(has(e, "0x8611") && has(e, "following error") && has(e, "Fault")) << e;
+    EXPECT_EQ(t->status().alarm_code, 0x8611);
+    t->reset_fault({});
+    EXPECT_FALSE(t->status().alarm);
+    t->move_to(20.0, {});  // back to work after the reset
+  }
+  {  // limit switch
+    Rig r(GetParam());
+    auto t = r.client();
+    t->home({});
+    r.axis->inject(plant::SimFault::kOverTravel, 0.5);
+    const std::string e = error_of([&] { t->move_to(180.0, {}); });
+    EXPECT_TRUE(has(e, "0x8612") && has(e, "limit switch")) << e;
+  }
+  {  // drive fault with a code, before the move
+    Rig r(GetParam());
+    auto t = r.client();
+    t->home({});
+    r.drive.inject_drive_fault(0x4310);
+    r.run(0.05);
+    const std::string e = error_of([&] { t->move_to(90.0, {}); });
+    EXPECT_TRUE(has(e, "0x4310") && has(e, "over-temperature") && has(e, "rig table reset")) << e;
+  }
+  {  // configured in [plant.table]: drive_fault with its code, on the first move
+    Rig r(GetParam(), std::string(kFastAxis) + "fault = \"drive_fault\"\nfault_at = 0.3\ndrive_fault_code = 0x4310\n");
+    auto t = r.client();
+    t->home({});
+    const std::string e = error_of([&] { t->move_to(180.0, {}); });
+    EXPECT_TRUE(has(e, "0x4310") && has(e, "over-temperature")) << e;
+  }
+  {  // a fault whose cause is still there is not reset
+    Rig r(GetParam());
+    auto t = r.client();
+    t->home({});
+    r.axis->set_estop(true);
+    r.run(0.05);
+    const std::string e = error_of([&] { t->reset_fault({}); });
+    EXPECT_TRUE(has(e, "stays in Fault") && has(e, "0xFF01")) << e;
+  }
+}
+
+TEST_P(Cia402Client, SilentDriveIsALinkFailureNamingObjectRegisterDriveAndTheStop) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  r.axis->inject(plant::SimFault::kNoAnswer, 0.3);
+  const std::string e = error_of([&] { t->move_to(180.0, {}); });
+  EXPECT_TRUE(has(e, "link failure") && has(e, "statusword (0x6041)") && has(e, "register " +
+              std::to_string(r.map.spec(Obj::kStatusword).address)) && has(e, "\"" + r.map.name + "\"") &&
+              has(e, "timeout") && has(e, "halt not delivered (the table may still be moving)"))
+      << e;
+}
+
+// [homing] offset_deg: written to 0x607C; after homing the home switch reads
+// as the offset, so table angles are measured from offset_deg before the switch.
+TEST(Cia402ClientHoming, HomeOffsetShiftsTheTableCoordinates) {
+  std::ifstream in(kDrives + "lowword-offset.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "offset_deg = 0.0", to = "offset_deg = 5.0";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), to);
+  const std::string path = testing::TempDir() + "/offset-map.toml";
+  std::ofstream(path) << text;
+  m::DriveMap map = m::load_drive_map(path);
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, map);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  m::Cia402Table t(m::make_inprocess_transport(drive, clock), map, clock, opt);
+  t.home({});
+  EXPECT_NEAR(t.status().actual_deg, 5.0, 0.01);
+  EXPECT_NEAR(axis->actual_angle_deg(), 0.0, 0.005);  // at the switch
+  t.move_to(10.0, {});
+  EXPECT_NEAR(axis->actual_angle_deg(), 5.0, 0.005);
+}
+
+// A homing method the drive does not implement: homing error (bit 13), exit 4.
+TEST(Cia402ClientHoming, HomingErrorIsReported) {
+  std::ifstream in(kDrives + "generic-cia402.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "method = 19", to = "method = -3";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), to);
+  const std::string path = testing::TempDir() + "/bad-method-map.toml";
+  std::ofstream(path) << text;
+  m::DriveMap map = m::load_drive_map(path);
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, map);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::Cia402Table t(m::make_inprocess_transport(drive, clock), map, clock, {});
+  const std::string e = error_of([&] { t.home({}); });
+  EXPECT_TRUE(has(e, "homing error (statusword bit 13)")) << e;
+  EXPECT_FALSE(axis->snapshot().homed);
+}
+
+// A drive that keeps answering the last values it had: frozen firmware.
+class Freezer final : public m::RegisterDevice {
+ public:
+  explicit Freezer(m::RegisterDevice& d) : d_(d) {}
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return read(false, a, n, out); }
+  uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override { return read(true, a, n, out); }
+  uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+    return frozen ? m::exc::kNone : d_.write_registers(a, v, n);
+  }
+  bool answering() const override { return true; }
+  bool frozen = false;
+
+ private:
+  uint8_t read(bool input, uint16_t a, uint16_t n, uint16_t* out) {
+    auto& cache = input ? in_ : hold_;
+    const uint32_t key = (static_cast<uint32_t>(a) << 16) | n;
+    if (frozen && cache.count(key)) {
+      std::copy(cache[key].begin(), cache[key].end(), out);
+      return 0;
+    }
+    const uint8_t rc = input ? d_.read_input_registers(a, n, out) : d_.read_registers(a, n, out);
+    cache[key].assign(out, out + n);
+    return rc;
+  }
+  m::RegisterDevice& d_;
+  std::map<uint32_t, std::vector<uint16_t>> hold_, in_;
+};
+
+TEST_P(Cia402Client, FrozenDriveIsDetected) {
+  Rig r(GetParam());
+  Freezer f(r.drive);
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  opt.heartbeat_timeout_s = 0.5;
+  m::Cia402Table t(m::make_inprocess_transport(f, r.clock), r.map, r.clock, opt);
+  t.home({});
+  // Freeze 0.2 s of drive time into the move.
+  const double t_freeze = r.axis->time_s() + 0.2;
+  r.on_step = [&] {
+    if (r.axis->time_s() >= t_freeze) f.frozen = true;
+  };
+  const std::string e = error_of([&] { t.move_to(300.0, {}); });
+  EXPECT_TRUE(has(e, "drive frozen") && has(e, "unchanged")) << e;
+}
+
+// A drive whose statusword is no CiA 402 state: the client does not guess.
+class Odd final : public m::RegisterDevice {
+ public:
+  Odd(m::RegisterDevice& d, uint16_t sw_addr, uint16_t sw) : d_(d), addr_(sw_addr), sw_(sw) {}
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+    const uint8_t rc = d_.read_registers(a, n, out);
+    if (rc == 0 && addr_ >= a && addr_ < a + n) out[addr_ - a] = sw_;
+    return rc;
+  }
+  uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override { return d_.write_registers(a, v, n); }
+  bool answering() const override { return true; }
+
+ private:
+  m::RegisterDevice& d_;
+  uint16_t addr_, sw_;
+};
+
+TEST(Cia402ClientRefusals, UnexpectedStatesAreReportedNotGuessed) {
+  Rig r("generic-cia402.toml");
+  // Stuck in Not ready to switch on.
+  Odd stuck(r.drive, r.map.spec(Obj::kStatusword).address, 0x0000);
+  m::Cia402Table t1(m::make_inprocess_transport(stuck, r.clock), r.map, r.clock, {});
+  std::string e = error_of([&] { t1.home({}); });
+  EXPECT_TRUE(has(e, "Not ready to switch on") && has(e, "refusing to guess")) << e;
+  // Switch on disabled forever: shutdown does not take.
+  Odd ignores(r.drive, r.map.spec(Obj::kStatusword).address, 0x0040);
+  m::Cia402Table t2(m::make_inprocess_transport(ignores, r.clock), r.map, r.clock, {});
+  e = error_of([&] { t2.home({}); });
+  EXPECT_TRUE(has(e, "did not reach Ready to switch on") && has(e, "shutdown")) << e;
+}
+
+INSTANTIATE_TEST_SUITE_P(ShippedMaps, Cia402Client, ::testing::ValuesIn(kMaps),
+                         [](const auto& p) { return p.param.substr(0, p.param.find('-')); });
+
+}  // namespace
+}  // namespace rig::table_test
