@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "firmware_link/can_transport.hpp"
 #include "firmware_link/reassembly.hpp"
@@ -28,6 +29,9 @@ struct LinkOptions {
   // in-process bus under a SimClock): silence is then measured from when the
   // last frame was produced, not from when the client got round to it.
   bool frame_time_is_clock_time = false;
+  // [dut] loop_test = false: the rig does not ask this DUT for the loop test (its firmware has
+  // none, or it must not be disturbed); loop_test() then answers "not supported".
+  bool loop_test = true;
 };
 
 class CanDutLink final : public DutLink {
@@ -44,6 +48,7 @@ class CanDutLink final : public DutLink {
   LinkStats stats() const override;
   void reset_stats() override;
   std::string describe() const override;
+  LoopTestResponse loop_test(const LoopTestRequest& request, const CancelToken& cancel) override;
 
   // Beyond the seam (rig dut, tests).
   void set_filter_enabled(bool on, const CancelToken& cancel);
@@ -63,6 +68,11 @@ class CanDutLink final : public DutLink {
   // Returns whether a frame was dispatched.
   bool pump(double budget_s, const CancelToken& cancel);
   [[noreturn]] void fail_silent(double silent_s);
+  // Sends `c` (a fresh token per attempt) and returns the DUT's answer whatever its result;
+  // throws HardwareError only when no answer comes within the attempts. Called with io_mu_ held.
+  Response exchange(Command c, const CancelToken& cancel);
+  // One LOOP_TEST step: the command, then its burst up to the end marker (loop_test()).
+  LoopStepRecord loop_step(const LoopTestRequest& request, const CancelToken& cancel, double& rate_hz);
 
   std::unique_ptr<CanTransport> transport_;
   Clock& clock_;
@@ -76,6 +86,10 @@ class CanDutLink final : public DutLink {
   double last_stream_rx_ = 0;    // clock time of the last stream frame
   bool streaming_ = false;
   uint8_t token_ = 0;
+  // The loop test's burst being received (token of its LOOP_TEST; frames of other tokens are stale).
+  std::optional<uint8_t> loop_token_;
+  std::vector<LoopData> loop_rx_;
+  std::optional<LoopEnd> loop_end_;
 };
 
 }  // namespace rig::link
