@@ -60,7 +60,7 @@ namespace loop_cmd {
 inline constexpr uint8_t kStep = 0;            // a0: a step of test torque
 inline constexpr uint8_t kMinRecordMs = 10;    // a1: record length, ms (0 = kDefaultRecordMs)
 inline constexpr uint8_t kMaxRecordMs = 200;
-inline constexpr uint8_t kDefaultRecordMs = 50;
+inline constexpr uint8_t kDefaultRecordMs = 100;
 inline constexpr float kMaxAmplitudeG = 5.0f;  // |value|: half the range, so the loop never saturates by design
 // End marker status bits.
 inline constexpr uint8_t kSaturated = 1u << 0;  // the PWM saturated during the record

@@ -45,7 +45,9 @@ struct LinkStats {
 struct LoopTestRequest {
   double amplitude_g = 1.0;  // METHOD.md: the settling time is quoted for a 1 g step
   int steps = 5;             // repeated steps: their scatter is the figures' uncertainty
-  double record_s = 0.05;    // per step, the step inside it after a tenth of it
+  // Per step, the step after a tenth of it. 100 ms: the loop's integrator creeps for tens of
+  // ms after the step, and the final value is read from the record's last fifth.
+  double record_s = 0.1;
 };
 // One step as the DUT recorded it, at the loop's rate: x the loop's output, y the same through
 // the output filter the DUT is configured with; the first `pre_samples` precede the step.

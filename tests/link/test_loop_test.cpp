@@ -79,9 +79,9 @@ TEST(LoopTestLink, EmulatedDutAnswersWithItsLoopRecordedAtTheLoopRate) {
   EXPECT_EQ(r.amplitude_g, 1.0);
   ASSERT_EQ(r.steps.size(), 3u);
   for (const LoopStepRecord& s : r.steps) {
-    ASSERT_EQ(s.x.size(), 500u);  // 50 ms at 10 kHz
-    ASSERT_EQ(s.y.size(), 500u);
-    EXPECT_EQ(s.pre_samples, 50u);  // the step after a tenth of the record
+    ASSERT_EQ(s.x.size(), 1000u);  // 100 ms at 10 kHz
+    ASSERT_EQ(s.y.size(), 1000u);
+    EXPECT_EQ(s.pre_samples, 100u);  // the step after a tenth of the record
     EXPECT_FALSE(s.saturated);
     // Before the step the loop holds the static input (a fraction of a mg); at the end it
     // balances the 1 g test torque on top of it, in x and through the filter in y.
@@ -89,7 +89,7 @@ TEST(LoopTestLink, EmulatedDutAnswersWithItsLoopRecordedAtTheLoopRate) {
     EXPECT_NEAR(s.x.back() - s.x[10], 1.0, 0.02);
     EXPECT_NEAR(s.y.back() - s.y[10], 1.0, 0.02);
     // The loop does not answer within one period: the torque reaches x through the pendulum.
-    EXPECT_LT(std::abs(s.x[50] - s.x[49]), 0.01);
+    EXPECT_LT(std::abs(s.x[100] - s.x[99]), 0.01);
   }
   EXPECT_EQ(w.dut->firmware().stats().loop_tests, 3u);
   EXPECT_EQ(w.dut->client().malformed_frames(), 0u);
@@ -137,7 +137,7 @@ TEST(LoopTestLink, LostBurstFramesAreAHardwareErrorNamingTheFirstMissingSample) 
     w.dut->loop_test(request(1), CancelToken{});
     FAIL() << "expected HardwareError";
   } catch (const HardwareError& e) {
-    EXPECT_NE(std::string(e.what()).find("1 of 500 samples lost"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("1 of 1000 samples lost"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("index 150"), std::string::npos) << e.what();
   }
 }
@@ -145,7 +145,7 @@ TEST(LoopTestLink, LostBurstFramesAreAHardwareErrorNamingTheFirstMissingSample) 
 TEST(LoopTestLink, ALostEndMarkerIsATimeoutWithinItsBound) {
   LoopWorld w;
   plant::FirmwareFaults f;
-  f.drop_burst_frames = {1000};  // the end marker of a 500-sample burst
+  f.drop_burst_frames = {2000};  // the end marker of a 1000-sample burst
   w.dut->firmware().set_faults(f);
   const double t0 = w.clock.now_s();
   try {
@@ -153,7 +153,7 @@ TEST(LoopTestLink, ALostEndMarkerIsATimeoutWithinItsBound) {
     FAIL() << "expected HardwareError";
   } catch (const HardwareError& e) {
     EXPECT_NE(std::string(e.what()).find("no end of burst"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("1000 of 1000 frames"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("2000 of 2000 frames"), std::string::npos) << e.what();
   }
   EXPECT_LT(w.clock.now_s() - t0, 2.0) << "bounded in device time";
 }
@@ -192,4 +192,38 @@ TEST(LoopTestLink, CancellationEndsTheWait) {
     if (w.clock.now_s() > 0.03) cs.request("operator");
   });
   EXPECT_THROW(w.dut->loop_test(request(1), cs.token()), AbortedError);
+}
+
+// ---- what the loop test measures, against the design model ----
+#include "analysis/loop_response.hpp"
+#include "plant/dut/loop_figures.hpp"
+#include "plant/dut/params.hpp"
+
+// The emulated DUT's measured figures against the design model for the same parameters (the
+// default DUT with the paper's W_f(z)): the model's value should lie inside the measured 95 %
+// interval. Coverage is statistical, so over ten seeds at least eight must hold it (at a true
+// 95 % coverage, 7 or fewer of 10 has a probability of 1.2 %); measured here: 10 of 10.
+TEST(LoopTestFigures, EmulatedMeasurementAgreesWithTheModelWithinItsUncertainty) {
+  const rig::plant::LoopFigures model = rig::plant::loop_figures(nullptr, rig::plant::paper_filter());
+  int settling_inside = 0, bandwidth_inside = 0;
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    LoopWorld w({}, seed);
+    const LoopTestResponse r = w.dut->loop_test(request(5), CancelToken{});
+    ASSERT_TRUE(r.supported);
+    std::vector<double> ts, bw;
+    for (const auto& s : r.steps) {
+      const auto f = rig::analysis::step_figures(rig::analysis::unit_step(s.y, s.pre_samples, r.amplitude_g), r.rate_hz);
+      ts.push_back(f.settling_time_s);
+      bw.push_back(f.bandwidth_0p5_hz);
+    }
+    const auto T = rig::analysis::repeated_figure(ts, 1 / r.rate_hz);
+    const auto B = rig::analysis::repeated_figure(bw, 1.0);
+    settling_inside += T.lo <= model.settling_time_s && model.settling_time_s <= T.hi;
+    bandwidth_inside += B.lo <= model.bandwidth_0p5_hz && model.bandwidth_0p5_hz <= B.hi;
+    // And the intervals are narrow enough to mean something: a few percent.
+    EXPECT_LT(T.hi - T.lo, 0.2 * T.value) << seed;
+    EXPECT_LT(B.hi - B.lo, 0.02 * B.value) << seed;
+  }
+  EXPECT_GE(settling_inside, 8);
+  EXPECT_GE(bandwidth_inside, 8);
 }
