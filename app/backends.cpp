@@ -15,10 +15,10 @@ Backends& Backends::operator=(Backends&&) noexcept = default;
 
 Devices Backends::devices() { return Devices{*table_ptr, *dut_ptr, *io_ptr, *clock_ptr, plant}; }
 
-Backends make_emulated(const acceptance::Profile& p) {
+Backends make_emulated(const toml::table& plant_cfg) {
   Backends b;
   b.plant = "emulated";
-  b.emulated = std::make_unique<plant::EmulatedPlant>(p.plant);
+  b.emulated = std::make_unique<plant::EmulatedPlant>(plant_cfg);
   b.clock_ptr = &b.emulated->clock();
   b.table_ptr = &b.emulated->table();
   b.dut_ptr = &b.emulated->dut();

@@ -34,7 +34,8 @@ struct Backends {
   Devices devices();
 };
 
-Backends make_emulated(const acceptance::Profile& p);
+// `plant_cfg`: the profile's [plant] section (plant/emulated/plant_config.hpp).
+Backends make_emulated(const toml::table& plant_cfg);
 
 // The hardware file (docs/hardware-config.md): [table] (Modbus), [dut] (CAN),
 // [gpio] (libgpiod), optional [procedure] u10_deg/u20_deg overriding the

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "plant/emulated/dut_source.hpp"
+#include "plant/emulated/plant_config.hpp"
 #include "plant/firmware/can_dut_server.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "plant/table/table_server.hpp"
@@ -48,11 +49,14 @@ int serve(const ServeArgs& a) {
     throw ConfigError("rig plant serve: give at least one endpoint: --modbus HOST:PORT, --rtu DEVICE or --can IFACE");
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before the server threads start
-  const acceptance::Profile p = acceptance::load_profile(a.profile);
-  cfg::check_keys(p.plant, {"seed", "dut", "table"}, "plant");
-  const auto seed = static_cast<uint64_t>(cfg::get_int(p.plant, "seed", 1, 0));
-  auto table = plant::make_table_emulator(cfg::get_table(p.plant, "table"), seed ^ 0x7ab1e5eedULL);
-  TableCoupledDut dut(plant::make_dut_source(cfg::get_table(p.plant, "dut"), seed), *table);
+  std::string source;
+  const toml::table profile = acceptance::load_profile_table(a.profile, source);
+  const acceptance::Profile p = acceptance::parse_profile(profile, source);
+  const toml::table plant_cfg = plant::plant_section(profile);
+  cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
+  const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
+  auto table = plant::make_table_emulator(cfg::get_table(plant_cfg, "table"), seed ^ 0x7ab1e5eedULL);
+  TableCoupledDut dut(plant::make_dut_source(cfg::get_table(plant_cfg, "dut"), seed), *table);
 
   std::vector<std::unique_ptr<plant::TableServer>> tables;
   if (!a.modbus.empty()) tables.push_back(std::make_unique<plant::TableServer>(*table, "tcp:" + a.modbus, a.unit, true));

@@ -16,6 +16,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
@@ -162,7 +163,12 @@ int do_run(RunArgs a) {
     a.serial = invocation.value("serial", "");
     a.profile = a.resume + "/profile.toml";
   }
-  acceptance::Profile p = acceptance::load_profile(a.profile);
+  std::string profile_source;
+  const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
+  acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
+  // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included.
+  const toml::table plant_cfg = plant::plant_section(profile_table);
+  if (a.plant == "emulated") plant::validate_plant_section(plant_cfg);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware);
 
@@ -200,7 +206,7 @@ int do_run(RunArgs a) {
   auto log = make_logger(a.out, a.quiet);
   log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
 
-  Backends b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(p);
+  Backends b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg);
   if (b.emulated) apply_injections(*b.emulated, a.inject);
   else if (!a.inject.empty()) throw ConfigError("--inject works with the emulated plant only");
   Devices dev = b.devices();

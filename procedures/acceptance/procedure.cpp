@@ -6,9 +6,9 @@
 
 #include <fmt/format.h>
 
-#include "plant/dut/loop_figures.hpp"
 #include "analysis/json.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
+#include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/filter.hpp"
@@ -165,15 +165,6 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
   ctx.state["analysis"] = a;
 }
 
-void phase_loop(PhaseContext& ctx, const Profile& p) {
-  const toml::table* dut_cfg = p.plant.get_as<toml::table>("dut");
-  const plant::LoopFigures f = plant::loop_figures(dut_cfg, p.filter);
-  ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, "closed loop with the output filter, 0.5 level (model)");
-  ctx.values.set("settling_time", f.settling_time_s,
-                 fmt::format("closed loop, 1 g step, {:g} % band (model)", f.settling_band * 100));
-  ctx.state["loop"] = loop_to_json(f);
-}
-
 }  // namespace
 
 BiasBaseError bias_and_base_error(const std::vector<double>& x10, const std::vector<double>& x20) {
@@ -283,7 +274,8 @@ std::vector<Phase> build_phases(const Profile& p) {
                 }});
   ph.push_back({"allan", "Allan deviation, noise terms, RMS error and PSD of x(t) and y(t)", 0,
                 [&p](PhaseContext& c) { phase_raw_analysis(c, p); }});
-  ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter", 0,
+  ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter, measured by the DUT's loop test",
+                p.loop_steps * (3 * p.loop_record_s + 0.3),
                 [&p](PhaseContext& c) { phase_loop(c, p); }});
   return ph;
 }
