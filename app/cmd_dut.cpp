@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "design/filter.hpp"
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
 #include "app/commands.hpp"
@@ -138,7 +139,7 @@ int cmd_set_filter(const DutArgs& a) {
   FilterConfig f;
   f.rate_hz = a.rate_hz;
   f.enabled = !a.off;
-  if (a.paper) f.sections.push_back({0.148895, 0, 0, -1.228261, 0.377156});  // METHOD.md, W_f(z)
+  if (a.paper) f.sections = design::paper_wf().sections;  // METHOD.md, W_f(z)
   for (const auto& b : a.biquads) f.sections.push_back(parse_biquad(b));
   if (f.sections.empty()) throw ConfigError("rig dut set-filter: give --paper or at least one --biquad b0,b1,b2,a1,a2");
   RealClock clock;

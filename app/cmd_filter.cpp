@@ -143,7 +143,7 @@ void run_show(const ShowArgs& a) {
   load_dut(a.dut_file, dc);
   const plant::DutParams p = plant::load_dut_params(dc.dut);
   const FilterConfig f = plant::filter_by_name(a.filter, p.loop.loop_rate_hz);
-  const plant::LoopFigures lf = plant::loop_figures(dc.dut, f);
+  const design::LoopFigures lf = plant::loop_figures(dc.dut, f);
   std::cout << "filter " << a.filter << " at " << p.loop.loop_rate_hz << " Hz\n"
             << "closed-loop bandwidth (0.5 level): " << lf.bandwidth_0p5_hz << " Hz\n"
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"

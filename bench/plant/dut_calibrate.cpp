@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
       EmulatedDut dut(p, s);
       rs.push_back(calib::run(dut, spec));
     }
-    const LoopFigures lf = loop_figures(&over, p.filter);
+    const rig::design::LoopFigures lf = loop_figures(&over, p.filter);
     namespace A = rig::analysis;
     auto row = [&](const char* name, const char* paper, auto f) {
       std::printf("| %s | %s |", name, paper);

@@ -79,9 +79,9 @@ void EmulatedDut::set_filter(const FilterConfig& f) {
   const bool same_shape = f.sections.size() == filter_cfg_.sections.size();
   filter_cfg_ = f;
   filter_cfg_.rate_hz = p_.loop.loop_rate_hz;
-  std::vector<noise::Section> s;
+  std::vector<design::Section> s;
   for (std::size_t i = 0; i < f.sections.size(); ++i) {
-    noise::Section sec{f.sections[i].b0, f.sections[i].b1, f.sections[i].b2, f.sections[i].a1, f.sections[i].a2};
+    design::Section sec{f.sections[i]};
     if (same_shape) {  // keep the state: the MCU swaps coefficients in place
       sec.w1 = filt_[i].w1;
       sec.w2 = filt_[i].w2;
@@ -107,7 +107,7 @@ double EmulatedDut::word(double v, double& carry) const {
   const double lsb = p_.noise.output_lsb_g;
   if (lsb <= 0) return v;
   const double want = v + carry;
-  const double out = lsb * noise::round_half_even(want / lsb);
+  const double out = lsb * design::round_half_even(want / lsb);
   carry = want - out;
   return out;
 }
@@ -152,7 +152,7 @@ void EmulatedDut::period(double q_test_g, float* x_tap, float* y_tap, double& x_
   for (double e : burst_env_) bursting = bursting || e != 0;
 
   // Hot loop: locals so the compiler keeps the states in registers.
-  LoopModel::State st = st_;
+  design::LoopModel::State st = st_;
   noise::Oscillator poll = poll_osc_;
   const bool filter_on = filter_cfg_.enabled;
   double x = 0, y = 0;
@@ -169,7 +169,7 @@ void EmulatedDut::period(double q_test_g, float* x_tap, float* y_tap, double& x_
     double xm = loop_.step(st, q) + intf_.step() + pi_amp * poll.c - pq_amp * poll.s;
     poll.step();
     if (sense_sd_ > 0) xm += sense_sd_ * r_sense_.normal();
-    x = sense_lsb_ * noise::round_half_even(xm * sense_inv_lsb_);
+    x = sense_lsb_ * design::round_half_even(xm * sense_inv_lsb_);
     y = x;
     if (filter_on)
       for (auto& sec : filt_) y = sec.step(y);

@@ -7,7 +7,8 @@
 #include <memory>
 #include <string>
 
-#include "plant/dut/loop_model.hpp"
+#include "design/filter.hpp"
+#include "design/loop_model.hpp"
 #include "plant/dut/noise.hpp"
 #include "plant/dut/params.hpp"
 #include "plant/emulated/dut_source.hpp"
@@ -35,7 +36,7 @@ class EmulatedDut final : public DutSource {
   double time_s() const { return static_cast<double>(n_out_) / p_.loop.output_rate_hz; }
   bool saturated() const { return st_.saturated; }
   const DutParams& params() const { return p_; }
-  const LoopModel& loop() const { return loop_; }
+  const design::LoopModel& loop() const { return loop_; }
 
  private:
   // One output period: `q_test_g` (the loop test's torque as input acceleration) adds to the
@@ -46,8 +47,8 @@ class EmulatedDut final : public DutSource {
 
   static constexpr int kBurstTones = 5;
   DutParams p_;
-  LoopModel loop_;
-  LoopModel::State st_;
+  design::LoopModel loop_;
+  design::LoopModel::State st_;
   int steps_per_out_;
   double dt_out_;
   uint64_t n_out_ = 0;
@@ -74,7 +75,7 @@ class EmulatedDut final : public DutSource {
 
   // output filter W_f(z), DF-II-T sections at the loop rate
   FilterConfig filter_cfg_;
-  std::vector<noise::Section> filt_;
+  std::vector<design::Section> filt_;
   double carry_x_ = 0, carry_y_ = 0;
   bool tap_saturated_ = false;  // the PWM saturated during a loop-test period
 };

@@ -6,7 +6,8 @@
 
 #include "plant/dut/emulated_dut.hpp"
 #include "plant/dut/loop_figures.hpp"
-#include "analysis/filter.hpp"
+#include "analysis/rms.hpp"
+#include "design/filter.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::plant {
@@ -43,7 +44,7 @@ double emulated_rms(const DutParams& p, const FilterConfig& f, const FilterSelec
 
 FilterConfig filter_by_name(const std::string& name, double rate_hz) {
   if (name == "paper") {
-    FilterConfig f = analysis::paper_wf();
+    FilterConfig f = design::paper_wf();
     f.rate_hz = rate_hz;
     return f;
   }
@@ -60,7 +61,7 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
   if (name.rfind("butter", 0) != 0 || !(is >> order >> at >> fc) || at != '@' || !is.eof())
     throw ConfigError("filter '" + name + "': expected paper, none or butterN@FC (e.g. butter2@500)");
   try {
-    return analysis::butterworth_lowpass(order, fc, rate_hz);
+    return design::butterworth_lowpass(order, fc, rate_hz);
   } catch (const std::invalid_argument& e) {
     throw ConfigError("filter '" + name + "': " + e.what());
   }
@@ -80,13 +81,13 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
       if (fc < rate / 2) c.push_back({butter_name(order, fc), filter_by_name(butter_name(order, fc), rate)});
 
   for (FilterCandidate& k : c) {
-    const LoopFigures f = loop_figures(dut_cfg, k.filter);  // criterion 2, from the model
+    const design::LoopFigures f = loop_figures(dut_cfg, k.filter);  // criterion 2, from the model
     k.bandwidth_0p5_hz = f.bandwidth_0p5_hz;
     k.settling_time_s = f.settling_time_s;
     k.meets_band = std::abs(k.bandwidth_0p5_hz - opt.f_req_hz) <= opt.band_tol * opt.f_req_hz;
     if (opt.recorded_x) {  // criterion 1 on a recording at the loop rate
       if (opt.recorded_x->empty()) throw ConfigError("the recording is empty");
-      k.rms_g = rms_about_mean(analysis::apply(k.filter, *opt.recorded_x));
+      k.rms_g = rms_about_mean(design::apply_filter(k.filter, *opt.recorded_x));
     } else {
       k.rms_g = emulated_rms(p, k.filter, opt);
     }

@@ -11,13 +11,9 @@ BandNoise::BandNoise(double f_lo, double f_hi, double rate_hz, double rms) {
   const double bw_oct = std::log2(f_hi / f_lo);
   const double alpha = std::sin(w0) * std::sinh(std::log(2.0) / 2 * bw_oct * w0 / std::sin(w0));
   const double a0 = 1 + alpha;
-  sec_.b0 = alpha / a0;
-  sec_.b1 = 0;
-  sec_.b2 = -alpha / a0;
-  sec_.a1 = -2 * std::cos(w0) / a0;
-  sec_.a2 = (1 - alpha) / a0;
+  sec_.c = Biquad{alpha / a0, 0, -alpha / a0, -2 * std::cos(w0) / a0, (1 - alpha) / a0};
   // Noise gain = sum of the squared impulse response.
-  Section probe = sec_;
+  design::Section probe = sec_;
   double energy = 0;
   for (int i = 0; i < 2000000; ++i) {
     const double h = probe.step(i == 0 ? 1.0 : 0.0);

@@ -11,14 +11,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace rig::plant::noise {
+#include "design/filter.hpp"
 
-// Round to nearest (ties to even) for |v| < 2^51 with two additions: no libm call,
-// exact and identical on every IEEE-754 platform (the project never uses -ffast-math).
-inline double round_half_even(double v) {
-  constexpr double kMagic = 6755399441055744.0;  // 1.5 * 2^52
-  return (v + kMagic) - kMagic;
-}
+namespace rig::plant::noise {
 
 inline uint64_t splitmix64(uint64_t& s) {
   uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
@@ -62,18 +57,6 @@ class Rng {
   uint64_t s_[4];
 };
 
-// Direct-form-II-transposed second-order section (the same form the DUT's MCU uses).
-struct Section {
-  double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
-  double w1 = 0, w2 = 0;
-  double step(double in) {
-    const double out = b0 * in + w1;
-    w1 = b1 * in - a1 * out + w2;
-    w2 = b2 * in - a2 * out;
-    return out;
-  }
-};
-
 // Band-limited noise: white noise through a constant-peak-gain band-pass (RBJ
 // cookbook) between f_lo and f_hi, scaled to the requested RMS.
 class BandNoise {
@@ -83,7 +66,7 @@ class BandNoise {
   double step(Rng& rng) { return sec_.step(scale_ * rng.normal()); }
 
  private:
-  Section sec_;
+  design::Section sec_;  // the one DF-II-T biquad (design/filter.hpp)
   double scale_ = 0;
 };
 

@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "design/filter.hpp"
+#include "design/filter_toml.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 
@@ -19,42 +21,6 @@ void num(const toml::table& t, std::string_view key, double& v, std::optional<do
 }
 void integer(const toml::table& t, std::string_view key, int& v, int64_t lo, int64_t hi) {
   v = static_cast<int>(get_int(t, key, v, lo, hi));
-}
-
-void read_loop(const toml::table& t, LoopParams& p) {
-  cfg::check_keys(t,
-                  {"loop_rate_hz", "output_rate_hz", "g_local_m_s2", "pendulosity_kg_m", "inertia_kg_m2",
-                   "damping_n_m_s", "stiffness_n_m_rad", "angle_sensor_v_rad", "preamp_gain", "adc_bits",
-                   "adc_range_v", "pwm_full_scale_a", "pwm_counts", "torquer_n_m_a", "coil_tau_s", "delay_steps"},
-                  "plant.dut.loop");
-  num(t, "loop_rate_hz", p.loop_rate_hz, 1000, 1e6);
-  num(t, "output_rate_hz", p.output_rate_hz, 1, 1e5);
-  num(t, "g_local_m_s2", p.g_local_m_s2, 9.7, 9.9);
-  num(t, "pendulosity_kg_m", p.pendulosity_kg_m, 1e-9, 1e-2);
-  num(t, "inertia_kg_m2", p.inertia_kg_m2, 1e-12, 1e-3);
-  num(t, "damping_n_m_s", p.damping_n_m_s, 0, 1);
-  num(t, "stiffness_n_m_rad", p.stiffness_n_m_rad, 0, 10);
-  num(t, "angle_sensor_v_rad", p.angle_sensor_v_rad, 1e-3, 1e6);
-  num(t, "preamp_gain", p.preamp_gain, 1e-3, 1e6);
-  integer(t, "adc_bits", p.adc_bits, 4, 32);
-  num(t, "adc_range_v", p.adc_range_v, 1e-3, 100);
-  num(t, "pwm_full_scale_a", p.pwm_full_scale_a, 1e-6, 10);
-  integer(t, "pwm_counts", p.pwm_counts, 2, 1 << 24);
-  num(t, "torquer_n_m_a", p.torquer_n_m_a, 1e-6, 10);
-  num(t, "coil_tau_s", p.coil_tau_s, 1e-7, 1e-2);
-  integer(t, "delay_steps", p.delay_steps, 0, 1);
-  const double ratio = p.loop_rate_hz / p.output_rate_hz;
-  if (ratio < 1 || ratio != static_cast<double>(static_cast<int64_t>(ratio)))
-    throw ConfigError(cfg::where(t) + ": loop_rate_hz must be an integer multiple of output_rate_hz");
-}
-
-void read_regulator(const toml::table& t, RegulatorParams& p) {
-  cfg::check_keys(t, {"gain_a_per_v", "integral_corner_hz", "lead_zero_hz", "lead_pole_hz"},
-                  "plant.dut.regulator");
-  num(t, "gain_a_per_v", p.gain_a_per_v, 1e-9, 1e3);
-  num(t, "integral_corner_hz", p.integral_corner_hz, 0, 1e4);
-  num(t, "lead_zero_hz", p.lead_zero_hz, 0.01, 1e5);
-  num(t, "lead_pole_hz", p.lead_pole_hz, 0.01, 1e5);
 }
 
 void read_orientation(const toml::table& t, OrientationParams& p) {
@@ -114,65 +80,26 @@ void read_noise(const toml::table& t, NoiseParams& p) {
   num(t, "polling_drift_tau_s", p.polling_drift_tau_s, 1, 1e9);
 }
 
-void read_filter(const toml::table& t, FilterConfig& f) {
-  cfg::check_keys(t, {"preset", "sections", "enabled"}, "plant.dut.filter");
-  if (const toml::node* pn = t.get("preset")) {
-    const std::string preset = cfg::get_string(t, "preset");
-    if (preset == "paper") {
-      f = paper_filter();
-    } else if (preset == "none") {
-      f.sections.clear();
-    } else if (preset == "custom") {
-      const toml::array* arr = t.get_as<toml::array>("sections");
-      if (!arr) throw ConfigError(cfg::where(*pn) + ": preset = \"custom\" needs sections = [[b0,b1,b2,a1,a2], ...]");
-      f.sections.clear();
-      for (const toml::node& n : *arr) {
-        const toml::array* s = n.as_array();
-        if (!s || s->size() != 5) throw ConfigError(cfg::where(n) + ": a section is [b0, b1, b2, a1, a2]");
-        double c[5];
-        for (std::size_t i = 0; i < 5; ++i) {
-          std::optional<double> v = (*s)[i].value<double>();
-          if (!v) throw ConfigError(cfg::where((*s)[i]) + ": filter coefficients must be numbers");
-          c[i] = *v;
-        }
-        f.sections.push_back(Biquad{c[0], c[1], c[2], c[3], c[4]});
-      }
-    } else {
-      throw ConfigError(cfg::where(*pn) + ": preset must be \"paper\", \"none\" or \"custom\", not \"" + preset +
-                        "\"");
-    }
-  } else if (t.contains("sections")) {
-    throw ConfigError(cfg::where(*t.get("sections")) + ": sections need preset = \"custom\"");
-  }
-  f.enabled = get_bool(t, "enabled", f.enabled);
-}
-
 // Applies one layer (the compiled-in default, then the profile's overrides) onto `p`.
 // Layers are read one by one, not merged, so errors keep the file:line of their layer.
 void apply_layer(const toml::table& root, DutParams& p) {
   cfg::check_keys(root, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"}, "plant.dut");
   p.serial = cfg::get_string(root, "serial", p.serial);
   if (root.contains("seed")) p.seed = static_cast<uint64_t>(get_int(root, "seed", std::nullopt, 0));
-  if (const toml::table* t = cfg::get_table(root, "loop")) read_loop(*t, p.loop);
-  if (const toml::table* t = cfg::get_table(root, "regulator")) read_regulator(*t, p.regulator);
+  if (const toml::table* t = cfg::get_table(root, "loop")) design::read_loop_params(*t, "plant.dut.loop", p.loop);
+  if (const toml::table* t = cfg::get_table(root, "regulator"))
+    design::read_regulator_params(*t, "plant.dut.regulator", p.regulator);
   if (const toml::table* t = cfg::get_table(root, "orientation")) read_orientation(*t, p.orientation);
   if (const toml::table* t = cfg::get_table(root, "noise")) read_noise(*t, p.noise);
-  if (const toml::table* t = cfg::get_table(root, "filter")) read_filter(*t, p.filter);
+  if (const toml::table* t = cfg::get_table(root, "filter"))
+    design::read_filter_table(*t, "plant.dut.filter", design::RateKey::absent, p.filter);
 }
 
 }  // namespace
 
-FilterConfig paper_filter() {
-  FilterConfig f;
-  f.rate_hz = 10000.0;
-  f.sections = {Biquad{0.148895, 0.0, 0.0, -1.228261, 0.377156}};
-  f.enabled = true;
-  return f;
-}
-
 DutParams load_dut_params(const toml::table* overrides) {
   DutParams p;
-  p.filter = paper_filter();
+  p.filter = design::paper_wf();
   apply_layer(cfg::parse_string(default_dut_toml(), "plant/dut/default.toml"), p);
   if (overrides) apply_layer(*overrides, p);
   p.filter.rate_hz = p.loop.loop_rate_hz;

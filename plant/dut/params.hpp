@@ -1,5 +1,6 @@
 // Physical parameters of the emulated quartz pendulum accelerometer (METHOD.md
-// Fig. 3) and of its noise sources. Loaded from the default DUT profile
+// Fig. 3): its loop and regulator as designed (design/loop_params.hpp), its noise
+// sources and its geometry on the table. Loaded from the default DUT profile
 // (plant/dut/default.toml, compiled in) with a profile's [plant.dut] overrides.
 #pragma once
 #include <cstdint>
@@ -9,38 +10,10 @@
 
 #include <toml++/toml.h>
 
-#include "rig/core/dut_link.hpp"
+#include "design/filter_config.hpp"
+#include "design/loop_params.hpp"
 
 namespace rig::plant {
-
-// The analogue pendulum, its pick-off and torquer, and the digital loop around it.
-struct LoopParams {
-  double loop_rate_hz = 10000;     // regulator / ADC / PWM rate inside the DUT
-  double output_rate_hz = 1000;    // rig polling rate (sample-and-hold of x, y)
-  double g_local_m_s2 = 9.80665;   // local gravity (converts g to m/s^2)
-  double pendulosity_kg_m = 6e-6;  // ml
-  double inertia_kg_m2 = 8e-8;     // J of pendulum + coil about the hinge
-  double damping_n_m_s = 7.5e-5;   // gas-film damping c
-  double stiffness_n_m_rad = 2e-3; // quartz flexure spring rate k
-  double angle_sensor_v_rad = 200; // K_ду (capacitive pick-off after demodulation)
-  double preamp_gain = 10;         // K_пу
-  int adc_bits = 16;               // ADC resolution over +-adc_range_v
-  double adc_range_v = 2.5;
-  double pwm_full_scale_a = 0.0156;  // K_шим: coil current at duty = 1
-  int pwm_counts = 4096;             // duty resolution (timer counts per half range)
-  double torquer_n_m_a = 0.04525;    // K_дм
-  double coil_tau_s = 2e-5;          // L/R of the torquer coil with its driver
-  int delay_steps = 1;               // computation delay of the MCU, loop periods (0 or 1)
-};
-
-// W_рег(z) = Kc * PI(z) * lead(z): PI(z) = 1 + a z/(z-1), a = 2 pi f_i T;
-// lead(z) = (1 - zl z^-1)/(1 - pl z^-1), zl/pl = exp(-2 pi f T) (matched z-transform).
-struct RegulatorParams {
-  double gain_a_per_v = 2.3e-3;
-  double integral_corner_hz = 60;
-  double lead_zero_hz = 150;
-  double lead_pole_hz = 1500;
-};
 
 // Geometry of the DUT on the table (rotation about the nominal sensitive axis).
 struct OrientationParams {
@@ -99,8 +72,8 @@ struct NoiseParams {
 struct DutParams {
   std::string serial = "EMU-QPA-0001";
   std::optional<uint64_t> seed;  // [plant.dut].seed overrides the seed given by the rig
-  LoopParams loop;
-  RegulatorParams regulator;
+  design::LoopParams loop;
+  design::RegulatorParams regulator;
   OrientationParams orientation;
   NoiseParams noise;
   FilterConfig filter;  // the output filter at power-on (the paper's W_f(z))
@@ -112,8 +85,5 @@ std::string_view default_dut_toml();
 // Defaults merged with `overrides` (the profile's [plant.dut] table, may be null).
 // Unknown keys and bad values throw ConfigError with file:line:col.
 DutParams load_dut_params(const toml::table* overrides);
-
-// The paper's W_f(z) = 0.148895 z^2 / (z^2 - 1.228261 z + 0.377156) at 10 kHz.
-FilterConfig paper_filter();
 
 }  // namespace rig::plant

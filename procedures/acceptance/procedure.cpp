@@ -11,7 +11,7 @@
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "analysis/allan.hpp"
-#include "analysis/filter.hpp"
+#include "analysis/rms.hpp"
 #include "analysis/gost.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"

@@ -5,7 +5,8 @@
 #include <map>
 #include <sstream>
 
-#include "analysis/filter.hpp"
+#include "design/filter.hpp"
+#include "design/filter_toml.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {
@@ -27,40 +28,8 @@ std::string digest(const toml::table& t) {
   return std::to_string(std::hash<std::string>{}(os.str()));
 }
 
-FilterConfig parse_filter(const toml::table& f, std::string& name) {
-  cfg::check_keys(f, {"preset", "sections", "rate_hz", "enabled"}, "filter");
-  FilterConfig out;
-  const std::string preset = cfg::get_string(f, "preset", std::string("custom"));
-  if (preset == "paper") {
-    out = analysis::paper_wf();
-    name = "paper W_f(z)";
-  } else if (preset == "none") {
-    out.sections.clear();
-    out.enabled = false;
-    name = "none";
-  } else if (preset == "custom") {
-    const toml::node* secs = f.get("sections");
-    if (!secs || !secs->is_array()) throw ConfigError(cfg::where(f) + ": [filter] needs preset or sections");
-    for (const toml::node& s : *secs->as_array()) {
-      const toml::array* a = s.as_array();
-      if (!a || a->size() != 5) throw ConfigError(cfg::where(s) + ": a filter section is [b0, b1, b2, a1, a2]");
-      double c[5];
-      for (std::size_t i = 0; i < 5; ++i) {
-        auto v = (*a)[i].value<double>();
-        if (!v) throw ConfigError(cfg::where((*a)[i]) + ": filter coefficient must be a number");
-        c[i] = *v;
-      }
-      out.sections.push_back({c[0], c[1], c[2], c[3], c[4]});
-    }
-    out.rate_hz = cfg::get_number(f, "rate_hz", 10000.0, 1.0, 1e7);
-    name = "custom";
-  } else {
-    throw ConfigError(cfg::where(*f.get("preset")) + ": unknown filter preset '" + preset +
-                      "' (expected paper, none or custom)");
-  }
-  out.enabled = cfg::get_bool(f, "enabled", out.enabled);
-  return out;
-}
+// The name the log and the passport give the profile's filter.
+std::string filter_name(const std::string& preset) { return preset == "paper" ? "paper W_f(z)" : preset; }
 
 }  // namespace
 
@@ -127,12 +96,13 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     p.u10_deg = cfg::get_number(*tb, "u10_deg", 0.0, -360.0, 360.0);
     p.u20_deg = cfg::get_number(*tb, "u20_deg", p.u10_deg + 180.0, -360.0, 540.0);
   }
+  p.filter = design::paper_wf();  // without a [filter] table
+  std::string preset = "paper";
   if (const toml::table* f = cfg::get_table(t, "filter")) {
-    p.filter = parse_filter(*f, p.filter_name);
-  } else {
-    p.filter = analysis::paper_wf();
-    p.filter_name = "paper W_f(z)";
+    const std::string read = design::read_filter_table(*f, "filter", design::RateKey::allowed, p.filter);
+    if (!read.empty()) preset = read;
   }
+  p.filter_name = filter_name(preset);
   if (const toml::table* l = cfg::get_table(t, "loop")) {
     cfg::check_keys(*l, {"amplitude_g", "steps", "record_ms"}, "loop");
     // The protocol's bounds (docs/can-protocol.md, LOOP_TEST): |A| <= 5 g, 10..200 ms.

@@ -8,20 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "design/filter_config.hpp"  // Biquad, FilterConfig: the filter the link sets
 #include "rig/core/cancel.hpp"
 #include "rig/core/types.hpp"
 
 namespace rig {
-
-// One second-order IIR section: H(z) = (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2).
-struct Biquad {
-  double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
-};
-struct FilterConfig {
-  std::vector<Biquad> sections;  // cascaded, at the DUT's inner loop rate
-  double rate_hz = 10000.0;      // the rate the filter runs at inside the DUT
-  bool enabled = true;
-};
 
 struct DutInfo {
   std::string serial;

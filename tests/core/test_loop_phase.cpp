@@ -75,7 +75,7 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   loop_phase(phases).run(ctx);
 
   // The design model for the same parameters and filter.
-  const plant::LoopFigures model = plant::loop_figures(cfg::get_table(plant_cfg, "dut"), p.filter);
+  const design::LoopFigures model = plant::loop_figures(cfg::get_table(plant_cfg, "dut"), p.filter);
   const Measurement* bw = values.find("bandwidth_0p5");
   const Measurement* ts = values.find("settling_time");
   ASSERT_TRUE(bw && bw->value && bw->lo && bw->hi) << logtext.str();

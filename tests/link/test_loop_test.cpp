@@ -197,14 +197,14 @@ TEST(LoopTestLink, CancellationEndsTheWait) {
 // ---- what the loop test measures, against the design model ----
 #include "analysis/loop_response.hpp"
 #include "plant/dut/loop_figures.hpp"
-#include "plant/dut/params.hpp"
+#include "design/filter.hpp"
 
 // The emulated DUT's measured figures against the design model for the same parameters (the
 // default DUT with the paper's W_f(z)): the model's value should lie inside the measured 95 %
 // interval. Coverage is statistical, so over ten seeds at least eight must hold it (at a true
 // 95 % coverage, 7 or fewer of 10 has a probability of 1.2 %); measured here: 10 of 10.
 TEST(LoopTestFigures, EmulatedMeasurementAgreesWithTheModelWithinItsUncertainty) {
-  const rig::plant::LoopFigures model = rig::plant::loop_figures(nullptr, rig::plant::paper_filter());
+  const rig::design::LoopFigures model = rig::plant::loop_figures(nullptr, rig::design::paper_wf());
   int settling_inside = 0, bandwidth_inside = 0;
   for (uint64_t seed = 1; seed <= 10; ++seed) {
     LoopWorld w({}, seed);

@@ -109,7 +109,7 @@ INSTANTIATE_TEST_SUITE_P(PaperProfileSeed, CalibrationSeeds, ::testing::Values(u
 
 TEST(CalibrationLoop, SettlingAndBandwidth) {
   // closed loop with the paper's W_f: settling 0.003 s (+-20 %), bandwidth 492 Hz at 0.5 (+-5 %)
-  const LoopFigures f = loop_figures(nullptr, paper_filter());
+  const design::LoopFigures f = loop_figures(nullptr, design::paper_wf());
   EXPECT_NEAR(f.settling_time_s, 0.003, 0.2 * 0.003);
   EXPECT_NEAR(f.bandwidth_0p5_hz, 492, 0.05 * 492);
 }

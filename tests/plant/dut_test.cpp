@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "plant/dut/emulated_dut.hpp"
-#include "plant/dut/loop_model.hpp"
+#include "design/filter.hpp"
 #include "rig/core/toml_util.hpp"
 #include "tests/plant/paper_procedure.hpp"
 
@@ -124,7 +124,7 @@ TEST(Dut, PollingInterferenceFoldsToDcAndTheFilterCutsIt) {
   std::vector<analysis::DevPoint> ax, ay;
   calib::allan_terms(x, 1000, &ax);
   calib::allan_terms(y, 1000, &ay);
-  const double expect = 1 / std::abs(filter_response(paper_filter(), 1000));
+  const double expect = 1 / std::abs(design::response(design::paper_wf(), 1000));
   int checked = 0;
   for (std::size_t i = 0; i < ax.size(); ++i) {
     if (ax[i].tau_s < 0.2 || ax[i].tau_s > 10) continue;

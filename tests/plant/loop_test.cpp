@@ -1,4 +1,5 @@
-// The closed loop: stability, DC gain, step and frequency response, the figures.
+// The closed loop of the emulated DUT's profile: stability, DC gain, step and frequency
+// response, the figures (the filter math and figure helpers themselves: tests/design).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,11 +10,18 @@
 
 #include "plant/dut/filter_select.hpp"
 #include "plant/dut/loop_figures.hpp"
+#include "plant/dut/params.hpp"
 #include "rig/core/errors.hpp"
-#include "plant/dut/loop_model.hpp"
+#include "design/loop_model.hpp"
 
 namespace rig::plant {
 namespace {
+
+using design::LinearLoop;
+using design::LoopFigures;
+using design::LoopModel;
+using design::loop_response;
+using design::loop_step;
 
 LoopModel default_loop() {
   const DutParams p = load_dut_params(nullptr);
@@ -92,7 +100,7 @@ TEST(Loop, SimulatedSineMatchesFrequencyResponse) {
 }
 
 TEST(Loop, FiguresOfTheDefaultProfileMatchThePaper) {
-  const LoopFigures f = loop_figures(nullptr, paper_filter());
+  const LoopFigures f = loop_figures(nullptr, design::paper_wf());
   EXPECT_NEAR(f.dc_gain, 1.0, 1e-9);
   EXPECT_NEAR(f.bandwidth_0p5_hz, 492, 0.05 * 492);
   EXPECT_NEAR(f.settling_time_s, 0.003, 0.2 * 0.003);
@@ -105,31 +113,6 @@ TEST(Loop, FiguresOfTheDefaultProfileMatchThePaper) {
   EXPECT_NEAR(g.settling_time_s, 0.003, 0.2 * 0.003);
   ASSERT_EQ(f.freq_hz.size(), f.amp_y.size());
   ASSERT_EQ(f.step_t_s.size(), f.step_y.size());
-}
-
-TEST(Loop, FilterResponseOfThePaperFilter) {
-  // METHOD.md: |W_f| = 0.99 at 70 Hz, 0.71 at 500 Hz, 0.50 at 800 Hz, 0.39 at 1 kHz (10 kHz rate)
-  const FilterConfig w = paper_filter();
-  EXPECT_NEAR(std::abs(filter_response(w, 0)), 1.0, 1e-5);
-  EXPECT_NEAR(std::abs(filter_response(w, 70)), 0.99, 0.01);
-  EXPECT_NEAR(std::abs(filter_response(w, 500)), 0.71, 0.01);
-  EXPECT_NEAR(std::abs(filter_response(w, 800)), 0.50, 0.01);
-  EXPECT_NEAR(std::abs(filter_response(w, 1000)), 0.39, 0.01);
-}
-
-TEST(Loop, FigureHelpers) {
-  // first-order lag: |H| = 1/sqrt(1 + (f/fc)^2) falls to 0.5 at sqrt(3) fc
-  std::vector<double> fr, amp;
-  for (double f = 1; f < 1e4; f *= 1.01) {
-    fr.push_back(f);
-    amp.push_back(1 / std::sqrt(1 + (f / 100) * (f / 100)));
-  }
-  EXPECT_NEAR(bandwidth_at(fr, amp, 0.5), 100 * std::sqrt(3.0), 0.5);
-  // 1 - exp(-t/tau) enters the 5 % band at tau ln 20
-  std::vector<double> h;
-  const double dt = 1e-4, tau = 1e-3;
-  for (int k = 0; k < 1000; ++k) h.push_back(1 - std::exp(-k * dt / tau));
-  EXPECT_NEAR(settling_time(h, dt, 0.05), tau * std::log(20.0), dt);
 }
 
 TEST(FilterSelect, RanksByBothCriteria) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "plant/dut/emulated_dut.hpp"
+#include "design/quantise.hpp"
 #include "plant/dut/noise.hpp"
 #include "analysis/psd.hpp"
 #include "rig/core/toml_util.hpp"
@@ -34,7 +35,7 @@ TEST(Noise, RngIsDeterministicAndNormalHasUnitMoments) {
 
 TEST(Noise, RoundHalfEvenMatchesNearbyint) {
   for (double v : {-2.5, -1.5, -0.5, 0.49, 0.5, 1.5, 2.5, 1e9 + 0.7, -123.25})
-    EXPECT_EQ(noise::round_half_even(v), std::nearbyint(v)) << v;
+    EXPECT_EQ(design::round_half_even(v), std::nearbyint(v)) << v;
 }
 
 TEST(Noise, FlickerBankIsFlatOverItsDecades) {

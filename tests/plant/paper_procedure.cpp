@@ -4,7 +4,7 @@
 
 #include "plant/dut/noise.hpp"
 #include "analysis/allan.hpp"
-#include "analysis/filter.hpp"
+#include "analysis/rms.hpp"
 #include "analysis/gost.hpp"
 
 namespace rig::plant::calib {

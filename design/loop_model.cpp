@@ -1,11 +1,11 @@
-#include "plant/dut/loop_model.hpp"
+#include "design/loop_model.hpp"
 
 #include <cmath>
 #include <numbers>
 
 #include <unsupported/Eigen/MatrixFunctions>
 
-namespace rig::plant {
+namespace rig::design {
 
 LoopModel::LoopModel(const LoopParams& lp, const RegulatorParams& rp) {
   rate_ = lp.loop_rate_hz;
@@ -32,25 +32,7 @@ LoopModel::LoopModel(const LoopParams& lp, const RegulatorParams& rp) {
   adc_lsb_ = 2 * lp.adc_range_v / std::ldexp(1.0, lp.adc_bits);
   adc_inv_lsb_ = 1 / adc_lsb_;
 
-  // W_рег(z) = Kc (1 + a z/(z-1)) (1 - zl z^-1)/(1 - pl z^-1)
-  //          = Kc ((1+a) - z^-1)(1 - zl z^-1) / ((1 - z^-1)(1 - pl z^-1)).
-  const double a = 2 * std::numbers::pi * rp.integral_corner_hz * T;
-  const double zl = std::exp(-2 * std::numbers::pi * rp.lead_zero_hz * T);
-  const double pl = std::exp(-2 * std::numbers::pi * rp.lead_pole_hz * T);
-  const double kc = rp.gain_a_per_v;
-  reg_b0_ = kc * (1 + a);
-  reg_b1_ = kc * (-(1 + a) * zl - 1);
-  reg_b2_ = kc * zl;
-  if (rp.integral_corner_hz > 0) {
-    reg_a1_ = -(1 + pl);
-    reg_a2_ = pl;
-  } else {  // no integrator: the (1 - z^-1) factors cancel
-    reg_b0_ = kc;
-    reg_b1_ = -kc * zl;
-    reg_b2_ = 0;
-    reg_a1_ = -pl;
-    reg_a2_ = 0;
-  }
+  reg_ = regulator_biquad(rp, rate_);
 
   pwm_fs_ = lp.pwm_full_scale_a;
   inv_pwm_fs_ = 1 / pwm_fs_;
@@ -71,7 +53,7 @@ LinearLoop LoopModel::linear() const {
   l.C = Eigen::RowVectorXd::Zero(n);
   // Regulator output u = w1 + b0 v as a row over z.
   Eigen::RowVectorXd u = Eigen::RowVectorXd::Zero(n);
-  u(0) = reg_b0_ * kpick_;
+  u(0) = reg_.b0 * kpick_;
   u(4) = 1;
   // i used by the plant in this period: i_cmd (delayed) or u (no delay).
   Eigen::RowVectorXd iu = Eigen::RowVectorXd::Zero(n);
@@ -81,22 +63,13 @@ LinearLoop LoopModel::linear() const {
   l.B.head(3) = bq_;
   l.A.row(3) = u;  // i_cmd' = u
   // w1' = b1 v - a1 u + w2;  w2' = b2 v - a2 u
-  l.A.row(4) = -reg_a1_ * u;
-  l.A(4, 0) += reg_b1_ * kpick_;
+  l.A.row(4) = -reg_.a1 * u;
+  l.A(4, 0) += reg_.b1 * kpick_;
   l.A(4, 5) += 1;
-  l.A.row(5) = -reg_a2_ * u;
-  l.A(5, 0) += reg_b2_ * kpick_;
+  l.A.row(5) = -reg_.a2 * u;
+  l.A(5, 0) += reg_.b2 * kpick_;
   l.C(2) = x_per_amp_;
   return l;
-}
-
-std::complex<double> filter_response(const FilterConfig& f, double f_hz) {
-  std::complex<double> h = 1.0;
-  if (!f.enabled) return h;
-  const std::complex<double> zi = std::polar(1.0, -2 * std::numbers::pi * f_hz / f.rate_hz);  // z^-1
-  for (const Biquad& s : f.sections)
-    h *= (s.b0 + s.b1 * zi + s.b2 * zi * zi) / (1.0 + s.a1 * zi + s.a2 * zi * zi);
-  return h;
 }
 
 std::complex<double> loop_response(const LinearLoop& l, double f_hz) {
@@ -117,19 +90,4 @@ std::vector<double> loop_step(const LinearLoop& l, std::size_t n) {
   return out;
 }
 
-std::vector<double> apply_filter(const FilterConfig& f, const std::vector<double>& in) {
-  if (!f.enabled) return in;
-  std::vector<double> out = in;
-  for (const Biquad& b : f.sections) {
-    double w1 = 0, w2 = 0;
-    for (double& v : out) {
-      const double y = b.b0 * v + w1;
-      w1 = b.b1 * v - b.a1 * y + w2;
-      w2 = b.b2 * v - b.a2 * y;
-      v = y;
-    }
-  }
-  return out;
-}
-
-}  // namespace rig::plant
+}  // namespace rig::design

@@ -2,16 +2,20 @@
 // angle sensor K_ду, preamplifier K_пу, ADC, digital regulator W_рег(z), PWM K_шим,
 // torquer K_дм. The continuous part (pendulum + torquer coil) is discretised
 // exactly for the zero-order-held PWM current by the matrix exponential.
+// The design-time model of the loop: the emulated DUT (plant/dut) steps it with its noise,
+// and the closed-loop figures (design/loop_figures.hpp) come from its linear form.
 #pragma once
+#include <algorithm>
 #include <complex>
 #include <vector>
 
 #include <Eigen/Dense>
 
-#include "plant/dut/noise.hpp"
-#include "plant/dut/params.hpp"
+#include "design/filter.hpp"
+#include "design/loop_params.hpp"
+#include "design/quantise.hpp"
 
-namespace rig::plant {
+namespace rig::design {
 
 // The closed loop as one linear discrete system at the loop rate (quantisers and
 // saturation left out): z' = A z + B q, x = C z. Input q and output x in g.
@@ -42,16 +46,14 @@ class LoopModel {
     // ADC of the pick-off voltage (mid-tread, clipped to its range).
     double v = kpick_ * th + pickoff_v;
     v = std::clamp(v, -adc_range_, adc_range_);
-    v = adc_lsb_ * noise::round_half_even(v * adc_inv_lsb_);
-    // W_рег(z): DF-II-T biquad.
-    const double u = reg_b0_ * v + st.w1;
-    st.w1 = reg_b1_ * v - reg_a1_ * u + st.w2;
-    st.w2 = reg_b2_ * v - reg_a2_ * u;
+    v = adc_lsb_ * round_half_even(v * adc_inv_lsb_);
+    // W_рег(z): one DF-II-T biquad.
+    const double u = df2t_step(reg_, st.w1, st.w2, v);
     // PWM: duty clipped to +-1 and quantised to the timer's counts.
     double duty = u * inv_pwm_fs_;
     st.saturated = duty > 1 || duty < -1;
     duty = std::clamp(duty, -1.0, 1.0);
-    const double i_new = pwm_fs_ * noise::round_half_even(duty * pwm_counts_) * inv_pwm_counts_;
+    const double i_new = pwm_fs_ * round_half_even(duty * pwm_counts_) * inv_pwm_counts_;
     const double i_used = delay_ ? st.i_cmd : i_new;
     st.i_cmd = i_new;
     // ZOH-exact update of the continuous part (written out: 3x3, hot path).
@@ -65,25 +67,21 @@ class LoopModel {
   double x_per_amp() const { return x_per_amp_; }
   double rate_hz() const { return rate_; }
   // The regulator's coefficients (b0, b1, b2, a1, a2), for the docs and tests.
-  Biquad regulator() const { return {reg_b0_, reg_b1_, reg_b2_, reg_a1_, reg_a2_}; }
+  Biquad regulator() const { return reg_; }
 
  private:
   Eigen::Matrix3d ad_;
   Eigen::Vector3d bq_, bi_;
   double rate_, kpick_, adc_range_, adc_lsb_, adc_inv_lsb_;
-  double reg_b0_, reg_b1_, reg_b2_, reg_a1_, reg_a2_;
+  Biquad reg_;
   double pwm_fs_, inv_pwm_fs_, pwm_counts_, inv_pwm_counts_;
   double x_per_amp_;
   bool delay_;
 };
 
-// Frequency response of a cascade of biquads at `f_hz` for a filter running at rate_hz.
-std::complex<double> filter_response(const FilterConfig& f, double f_hz);
 // Frequency response of the linear closed loop (q -> x) at f_hz.
 std::complex<double> loop_response(const LinearLoop& l, double f_hz);
 // Step response of the linear loop to a unit step in q: x at each loop period.
 std::vector<double> loop_step(const LinearLoop& l, std::size_t n);
-// Runs a biquad cascade over a sequence (zero initial state).
-std::vector<double> apply_filter(const FilterConfig& f, const std::vector<double>& in);
 
-}  // namespace rig::plant
+}  // namespace rig::design

@@ -1,0 +1,59 @@
+#include "design/filter_toml.hpp"
+
+#include <optional>
+
+#include "design/filter.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::design {
+namespace {
+
+std::vector<Biquad> read_sections(const toml::node& n) {
+  const toml::array* arr = n.as_array();
+  if (!arr) throw ConfigError(cfg::where(n) + ": sections = [[b0, b1, b2, a1, a2], ...]");
+  std::vector<Biquad> out;
+  for (const toml::node& e : *arr) {
+    const toml::array* s = e.as_array();
+    if (!s || s->size() != 5) throw ConfigError(cfg::where(e) + ": a filter section is [b0, b1, b2, a1, a2]");
+    double c[5];
+    for (std::size_t i = 0; i < 5; ++i) {
+      const std::optional<double> v = (*s)[i].value<double>();
+      if (!v) throw ConfigError(cfg::where((*s)[i]) + ": filter coefficients must be numbers");
+      c[i] = *v;
+    }
+    out.push_back(Biquad{c[0], c[1], c[2], c[3], c[4]});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string read_filter_table(const toml::table& t, std::string_view ctx, RateKey rate, FilterConfig& f) {
+  if (rate == RateKey::allowed)
+    cfg::check_keys(t, {"preset", "sections", "enabled", "rate_hz"}, ctx);
+  else
+    cfg::check_keys(t, {"preset", "sections", "enabled"}, ctx);
+  const toml::node* secs = t.get("sections");
+  const std::string preset = cfg::get_string(t, "preset", std::string(secs ? "custom" : ""));
+  if (preset == "paper") {
+    f = paper_wf();
+  } else if (preset == "none") {
+    f.sections.clear();
+    f.enabled = false;
+  } else if (preset == "custom") {
+    if (!secs) throw ConfigError(cfg::where(t) + ": preset = \"custom\" needs sections = [[b0, b1, b2, a1, a2], ...]");
+    f.sections = read_sections(*secs);
+    f.enabled = true;
+  } else if (!preset.empty()) {
+    throw ConfigError(cfg::where(*t.get("preset")) + ": filter preset must be \"paper\", \"none\" or \"custom\", not \"" +
+                      preset + "\"");
+  }
+  if (secs && preset != "custom")
+    throw ConfigError(cfg::where(*secs) + ": sections go with preset = \"custom\", not \"" + preset + "\"");
+  if (rate == RateKey::allowed) f.rate_hz = cfg::get_number(t, "rate_hz", f.rate_hz, 1.0, 1e7);
+  f.enabled = cfg::get_bool(t, "enabled", f.enabled);
+  return preset;
+}
+
+}  // namespace rig::design

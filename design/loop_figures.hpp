@@ -1,0 +1,27 @@
+// Closed-loop figures of the DUT with a given output filter, from the loop model (the
+// paper's criterion 2, METHOD.md): bandwidth at the 0.5 level and settling time of a 1 g step.
+#pragma once
+#include <vector>
+
+#include "design/filter.hpp"
+#include "design/loop_params.hpp"
+
+namespace rig::design {
+
+struct LoopFigures {
+  double bandwidth_0p5_hz = 0;   // first frequency where |H_filter * H_loop| falls to 0.5
+  double bandwidth_3db_hz = 0;   // ... to 1/sqrt(2)
+  double settling_time_s = 0;    // 1 g step: last entry into the +-band around the final value
+  double settling_band = kSettlingBand;  // the band used (fraction of the final value)
+  double overshoot = 0;          // peak over the final value, fraction
+  double dc_gain = 0;
+  // Curves for plots: step response of y (with filter) and x (without), and the
+  // amplitude response |H| of each, at the frequencies in freq_hz.
+  std::vector<double> step_t_s, step_y, step_x;
+  std::vector<double> freq_hz, amp_y, amp_x;
+};
+
+// The loop `lp` with regulator `rp` followed by `filter` (run at the loop rate, whatever its rate_hz).
+LoopFigures loop_figures(const LoopParams& lp, const RegulatorParams& rp, const FilterConfig& filter);
+
+}  // namespace rig::design

@@ -1,0 +1,105 @@
+// The loop as designed: the regulator's biquad equals its PI x lead product, the loop
+// figures are read off their own curves with the one settling band, the loop/regulator
+// tables are read with clear errors. (The loop model against simulation: tests/plant.)
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "design/loop_figures.hpp"
+#include "design/loop_model.hpp"
+#include "design/loop_params.hpp"
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::design {
+namespace {
+
+using cd = std::complex<double>;
+
+// W_рег(e^{jwT}) = Kc (1 + a z/(z-1)) (1 - zl z^-1)/(1 - pl z^-1), written out directly.
+cd regulator_formula(const RegulatorParams& r, double fs, double f_hz) {
+  const double T = 1 / fs;
+  const cd z = std::polar(1.0, 2 * std::numbers::pi * f_hz / fs);
+  const double a = 2 * std::numbers::pi * r.integral_corner_hz * T;
+  const double zl = std::exp(-2 * std::numbers::pi * r.lead_zero_hz * T);
+  const double pl = std::exp(-2 * std::numbers::pi * r.lead_pole_hz * T);
+  return r.gain_a_per_v * (1.0 + a * z / (z - 1.0)) * (1.0 - zl / z) / (1.0 - pl / z);
+}
+
+TEST(Regulator, BiquadIsThePiTimesLeadProduct) {
+  RegulatorParams r{1.3e-2, 20, 145, 3150};
+  const double fs = 10000;
+  for (double integral : {20.0, 0.0}) {  // 0: no integrator, the (1 - z^-1) factors cancel
+    r.integral_corner_hz = integral;
+    FilterConfig f;
+    f.rate_hz = fs;
+    f.sections = {regulator_biquad(r, fs)};
+    for (double fr : {1.0, 50.0, 500.0, 3000.0}) {
+      const cd want = regulator_formula(r, fs, fr);
+      EXPECT_LT(std::abs(response(f, fr) - want), 1e-9 * std::abs(want)) << integral << " " << fr;
+    }
+    if (integral == 0) {
+      EXPECT_EQ(f.sections[0].b2, 0.0);
+      EXPECT_EQ(f.sections[0].a2, 0.0);
+    }
+  }
+  const LoopModel m(LoopParams{}, r);
+  EXPECT_EQ(m.regulator().b1, regulator_biquad(r, LoopParams{}.loop_rate_hz).b1);
+}
+
+TEST(LoopFigures, AreReadOffTheirOwnCurvesWithTheOneBand) {
+  const LoopParams lp;
+  const RegulatorParams rp;
+  FilterConfig off;
+  off.enabled = false;
+  const LoopFigures g = loop_figures(lp, rp, off);
+  EXPECT_EQ(g.step_y, g.step_x);  // no filter: y is x
+  EXPECT_EQ(g.amp_y, g.amp_x);
+  EXPECT_NEAR(g.dc_gain, 1.0, 1e-9);  // integral action
+
+  const LoopFigures f = loop_figures(lp, rp, paper_wf());
+  const double dt = 1 / lp.loop_rate_hz;
+  EXPECT_EQ(f.settling_band, kSettlingBand);
+  EXPECT_EQ(f.settling_time_s, settling_time(f.step_y, dt, kSettlingBand));
+  EXPECT_GT(f.settling_time_s, 0.0);
+  EXPECT_EQ(f.bandwidth_0p5_hz, bandwidth_at(f.freq_hz, f.amp_y, 0.5));
+  EXPECT_LT(f.bandwidth_3db_hz, f.bandwidth_0p5_hz);
+  EXPECT_LT(f.bandwidth_0p5_hz, g.bandwidth_0p5_hz);  // the low-pass narrows the band
+  ASSERT_EQ(f.step_t_s.size(), f.step_y.size());
+  ASSERT_EQ(f.freq_hz.size(), f.amp_y.size());
+
+  // The filter runs at the loop rate whatever rate its description names.
+  FilterConfig at_1k = paper_wf();
+  at_1k.rate_hz = 1000;
+  EXPECT_EQ(loop_figures(lp, rp, at_1k).bandwidth_0p5_hz, f.bandwidth_0p5_hz);
+}
+
+TEST(LoopParams, TablesAreReadWithClearErrors) {
+  LoopParams lp;
+  RegulatorParams rp;
+  read_loop_params(cfg::parse_string("loop_rate_hz = 20000\nadc_bits = 18\n", "d.toml"), "dut.loop", lp);
+  EXPECT_EQ(lp.loop_rate_hz, 20000);
+  EXPECT_EQ(lp.adc_bits, 18);
+  EXPECT_EQ(lp.output_rate_hz, 1000);  // absent keys keep their value
+  read_regulator_params(cfg::parse_string("lead_pole_hz = 2000\n", "d.toml"), "dut.regulator", rp);
+  EXPECT_EQ(rp.lead_pole_hz, 2000);
+  auto error_of = [](const std::string& text) {
+    LoopParams p;
+    try {
+      read_loop_params(cfg::parse_string(text, "d.toml"), "dut.loop", p);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("output_rate_hz = 3000\n").find("integer multiple"), std::string::npos);
+  EXPECT_NE(error_of("\nadc_bits = 2\n").find("d.toml:2"), std::string::npos);
+  const std::string unknown = error_of("inertia = 1\n");
+  EXPECT_NE(unknown.find("inertia"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("dut.loop"), std::string::npos) << unknown;
+}
+
+}  // namespace
+}  // namespace rig::design
