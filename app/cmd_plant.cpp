@@ -52,7 +52,7 @@ int serve(const ServeArgs& a) {
   std::string source;
   const toml::table profile = acceptance::load_profile_table(a.profile, source);
   const acceptance::Profile p = acceptance::parse_profile(profile, source);
-  const toml::table plant_cfg = plant::plant_section(profile);
+  const toml::table& plant_cfg = plant::plant_section(profile);
   cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   auto table = plant::make_table_emulator(cfg::get_table(plant_cfg, "table"), seed ^ 0x7ab1e5eedULL);

@@ -167,7 +167,7 @@ int do_run(RunArgs a) {
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
   // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included.
-  const toml::table plant_cfg = plant::plant_section(profile_table);
+  const toml::table& plant_cfg = plant::plant_section(profile_table);
   if (a.plant == "emulated") plant::validate_plant_section(plant_cfg);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware);

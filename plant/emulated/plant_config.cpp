@@ -5,9 +5,10 @@
 
 namespace rig::plant {
 
-toml::table plant_section(const toml::table& profile) {
+const toml::table& plant_section(const toml::table& profile) {
+  static const toml::table none;
   if (const toml::table* t = cfg::get_table(profile, "plant")) return *t;
-  return {};
+  return none;
 }
 
 void validate_plant_section(const toml::table& plant) {

@@ -6,9 +6,10 @@
 
 namespace rig::plant {
 
-// The [plant] table of a profile table; an empty table when the profile has none.
-// A [plant] that is not a table is a ConfigError naming its place.
-toml::table plant_section(const toml::table& profile);
+// The [plant] table of a profile table (a reference into it, so that errors keep their
+// file:line:col: toml++ does not copy source positions); an empty table when the profile has
+// none. A [plant] that is not a table is a ConfigError naming its place.
+const toml::table& plant_section(const toml::table& profile);
 
 // Checks [plant] as the emulated plant reads it -- seed, link, [plant.dut] against the DUT's
 // parameters, [plant.table] against the table emulator's -- by building the plant from it, so

@@ -61,7 +61,7 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   std::string source;
   const toml::table profile_table = acceptance::load_profile_table("paper", source);
   const acceptance::Profile p = acceptance::parse_profile(profile_table, source);
-  const toml::table plant_cfg = plant::plant_section(profile_table);
+  const toml::table& plant_cfg = plant::plant_section(profile_table);
   plant::EmulatedPlant world(plant_cfg);
   Devices dev{world.table(), world.dut(), world.io(), world.clock(), "emulated"};
   std::ostringstream logtext;
