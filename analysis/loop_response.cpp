@@ -55,11 +55,11 @@ AmplitudeCurve step_amplitude_response(std::span<const double> h, double rate_hz
   return c;
 }
 
-double crossing_frequency(const AmplitudeCurve& c, double level) {
-  for (std::size_t k = 1; k < c.f_hz.size(); ++k)
-    if (c.amp[k] < level && c.amp[k - 1] >= level) {
-      const double a = (c.amp[k - 1] - level) / (c.amp[k - 1] - c.amp[k]);
-      return c.f_hz[k - 1] + a * (c.f_hz[k] - c.f_hz[k - 1]);
+double crossing_frequency(std::span<const double> f_hz, std::span<const double> amp, double level) {
+  for (std::size_t k = 1; k < f_hz.size() && k < amp.size(); ++k)
+    if (amp[k] < level && amp[k - 1] >= level) {
+      const double a = (amp[k - 1] - level) / (amp[k - 1] - amp[k]);
+      return std::exp(std::log(f_hz[k - 1]) + a * (std::log(f_hz[k]) - std::log(f_hz[k - 1])));
     }
   return 0;
 }
@@ -69,7 +69,7 @@ StepFigures step_figures(std::span<const double> h, double rate_hz, double band)
   f.final_value = final_value(h);
   f.settling_time_s = settling_time(h, 1.0 / rate_hz, f.final_value, band);
   f.amplitude = step_amplitude_response(h, rate_hz, f.final_value);
-  f.bandwidth_0p5_hz = crossing_frequency(f.amplitude, 0.5);
+  f.bandwidth_0p5_hz = crossing_frequency(f.amplitude.f_hz, f.amplitude.amp, 0.5);
   if (!h.empty() && f.final_value != 0)
     f.overshoot = std::max(0.0, *std::max_element(h.begin(), h.end()) / f.final_value - 1);
   return f;

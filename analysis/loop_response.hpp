@@ -10,9 +10,8 @@
 
 namespace rig::analysis {
 
-// Criterion 2's settling band: 5 % of the final value, the convention of the design model
-// (design/filter.hpp kSettlingBand) and of the passport; the paper's "about 3 ms" for a 1 g
-// step is read with it.
+// Criterion 2's settling band: 5 % of the final value, the one convention of the design model
+// (design/filter.hpp kSettlingBand is this constant; why 5 %: there) and of the passport.
 inline constexpr double kStepSettlingBand = 0.05;
 
 // A recorded step normalised to a unit step: (r - baseline) / amplitude, from the sample the
@@ -38,9 +37,11 @@ struct AmplitudeCurve {
 };
 AmplitudeCurve step_amplitude_response(std::span<const double> h, double rate_hz, double final, double step_hz = 1.0);
 
-// First frequency where the curve falls through `level` (0.5 for criterion 2), interpolated
-// linearly between the two grid points around the crossing; 0 if it never does.
-double crossing_frequency(const AmplitudeCurve& c, double level);
+// First frequency where the amplitude curve `amp` (at ascending `f_hz`) falls through `level`
+// (0.5 for criterion 2, 1/sqrt(2) for -3 dB), interpolated in log-frequency between the two
+// points around the crossing; 0 if it never does. The design model reads its figures with the
+// same two functions (design/filter.hpp bandwidth_at, settling_time).
+double crossing_frequency(std::span<const double> f_hz, std::span<const double> amp, double level);
 
 // The figures of one recorded step (normalised, see unit_step), at rate_hz.
 struct StepFigures {
