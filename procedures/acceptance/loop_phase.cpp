@@ -135,8 +135,14 @@ void phase_loop(PhaseContext& ctx, const Profile& p) {
     return;
   }
   const nlohmann::json f = loop_test_figures(r);
-  ctx.values.set("bandwidth_0p5", f["bandwidth_0p5_hz"].get<double>(), what + ", output filter on y, 0.5 level; 95 % interval",
-                 f["bandwidth_0p5_interval_hz"][0].get<double>(), f["bandwidth_0p5_interval_hz"][1].get<double>());
+  bool crossed = true;  // a step whose response never falls to 0.5 below Nyquist has no bandwidth to average
+  for (const auto& st : f["per_step"]) crossed = crossed && st["bandwidth_0p5_hz"].get<double>() > 0;
+  if (crossed)
+    ctx.values.set("bandwidth_0p5", f["bandwidth_0p5_hz"].get<double>(), what + ", output filter on y, 0.5 level; 95 % interval",
+                   f["bandwidth_0p5_interval_hz"][0].get<double>(), f["bandwidth_0p5_interval_hz"][1].get<double>());
+  else
+    ctx.values.set("bandwidth_0p5", std::nullopt,
+                   what + ": the amplitude response stays above 0.5 up to half the loop rate in some step");
   ctx.values.set("settling_time", f["settling_time_s"].get<double>(),
                  what + fmt::format(", {:g} % band; 95 % interval", analysis::kStepSettlingBand * 100),
                  f["settling_time_interval_s"][0].get<double>(), f["settling_time_interval_s"][1].get<double>());

@@ -132,3 +132,13 @@ TEST(ProcedureWithoutPlant, ADutWithoutLoopTestLeavesBothValuesNullWithTheReason
   EXPECT_FALSE(fs::exists(r.out + "/" + acceptance::kLoopTestFile));
   EXPECT_EQ(r.state["loop"]["source"], "none");
 }
+
+TEST(ProcedureWithoutPlant, ALoopThatNeverFallsToHalfHasNoBandwidth) {
+  FirstOrderDut dut(0.0, true);  // y = u: the amplitude response is 1 up to Nyquist
+  LoopRun r(dut, "flat");
+  const Measurement* bw = r.values.find("bandwidth_0p5");
+  ASSERT_NE(bw, nullptr);
+  EXPECT_FALSE(bw->value);
+  EXPECT_NE(bw->reason.find("stays above 0.5"), std::string::npos) << bw->reason;
+  EXPECT_TRUE(r.values.find("settling_time")->value) << "the settling time is still measured";
+}
