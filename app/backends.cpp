@@ -15,16 +15,10 @@ Backends& Backends::operator=(Backends&&) noexcept = default;
 
 Devices Backends::devices() { return Devices{*table_ptr, *dut_ptr, *io_ptr, *clock_ptr, plant}; }
 
-Backends make_emulated(const acceptance::Profile& p, const std::string& serial) {
-  toml::table plant_cfg = p.plant;
-  if (!serial.empty()) {
-    if (!plant_cfg.contains("dut")) plant_cfg.insert("dut", toml::table{});
-    // A [plant] dut that is not a table is left for the plant's own error message.
-    if (toml::table* dut = plant_cfg["dut"].as_table()) dut->insert_or_assign("serial", serial);
-  }
+Backends make_emulated(const toml::table& plant_cfg, const std::string& serial) {
   Backends b;
   b.plant = "emulated";
-  b.emulated = std::make_unique<plant::EmulatedPlant>(plant_cfg);
+  b.emulated = std::make_unique<plant::EmulatedPlant>(plant_cfg, serial);
   b.clock_ptr = &b.emulated->clock();
   b.table_ptr = &b.emulated->table();
   b.dut_ptr = &b.emulated->dut();

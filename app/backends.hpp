@@ -34,10 +34,11 @@ struct Backends {
   Devices devices();
 };
 
-// `serial` (rig run --serial), when given, becomes the emulated DUT's serial: in emulation
-// the operator names the DUT (CI jobs label passports that way), while on hardware the
-// DUT's own serial is checked against it.
-Backends make_emulated(const acceptance::Profile& p, const std::string& serial = {});
+// `plant_cfg`: the profile's [plant] section (plant/emulated/plant_config.hpp). `serial`
+// (rig run --serial), when given, becomes the emulated DUT's serial: in emulation the operator
+// names the DUT (CI jobs label passports that way), while on hardware the DUT's own serial is
+// checked against it.
+Backends make_emulated(const toml::table& plant_cfg, const std::string& serial = {});
 
 // The hardware file (docs/hardware-config.md): [table] (Modbus), [dut] (CAN),
 // [gpio] (libgpiod), optional [procedure] u10_deg/u20_deg overriding the

@@ -1,6 +1,6 @@
 // `rig dut`: a technician's manual control of a DUT over CAN
-// (docs/can-protocol.md): info, stream, output filter, and decoding a candump
-// log with the protocol's DBC.
+// (docs/can-protocol.md): info, stream, output filter, the loop test, and
+// decoding a candump log with the protocol's DBC.
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -15,6 +15,7 @@
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
 #include "app/commands.hpp"
+#include "procedures/acceptance/loop_phase.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -36,6 +37,9 @@ struct DutArgs {
   bool paper = false;
   double rate_hz = 10000.0;
   bool off = false;
+  // loop-test
+  LoopTestRequest loop;
+  int record_ms = 100;
   // decode
   std::string log, dbc = std::string(RIG_SOURCE_DIR) + "/docs/rig-dut.dbc";
   bool summary = false;
@@ -215,6 +219,37 @@ int cmd_decode(const DutArgs& a) {
   }
   return skipped ? kExitUsage : kExitPass;
 }
+// The loop test at the bench: the same request, analysis and record file as `rig run`'s loop phase.
+int cmd_loop_test(DutArgs a) {
+  CancelSource cancel;
+  SignalWatcher signals(cancel);
+  a.loop.record_s = a.record_ms / 1e3;
+  RealClock clock;
+  auto link = link::connect_dut(dut_config(a), clock);
+  const LoopTestResponse r = link->loop_test(a.loop, cancel.token());
+  if (!r.supported) {
+    std::printf("loop test: not supported: %s\n", r.reason.c_str());
+    return kExitHardware;
+  }
+  if (!a.out.empty()) {
+    std::ofstream f(a.out);
+    if (!(f << acceptance::loop_test_csv(r))) throw ConfigError("rig dut loop-test: cannot write " + a.out);
+  }
+  const nlohmann::json fig = acceptance::loop_test_figures(r);
+  for (std::size_t k = 0; k < fig["per_step"].size(); ++k) {
+    const auto& s = fig["per_step"][k];
+    std::printf("step %zu: settling %.2f ms, bandwidth (0.5) %.1f Hz, final %.5f, overshoot %.1f %%%s\n", k + 1,
+                s["settling_time_s"].get<double>() * 1e3, s["bandwidth_0p5_hz"].get<double>(),
+                s["final_value"].get<double>(), s["overshoot"].get<double>() * 100,
+                s["saturated"].get<bool>() ? ", SATURATED" : "");
+  }
+  std::printf("settling time (5 %% band): %.3f ms [%.3f, %.3f]\nbandwidth (0.5 level):    %.1f Hz [%.1f, %.1f]\n",
+              fig["settling_time_s"].get<double>() * 1e3, fig["settling_time_interval_s"][0].get<double>() * 1e3,
+              fig["settling_time_interval_s"][1].get<double>() * 1e3, fig["bandwidth_0p5_hz"].get<double>(),
+              fig["bandwidth_0p5_interval_hz"][0].get<double>(), fig["bandwidth_0p5_interval_hz"][1].get<double>());
+  std::printf("(%zu steps of %g g at %g Hz; 95 %% intervals over the steps)\n", r.steps.size(), r.amplitude_g, r.rate_hz);
+  return kExitPass;
+}
 
 void add_link_options(CLI::App* c, DutArgs& a) {
   c->add_option("--can", a.can, "CAN interface of the DUT (e.g. can0, vcan0)");
@@ -254,6 +289,14 @@ void add_dut(CLI::App& app, int& rc) {
   auto* off = dut->add_subcommand("filter-off", "Switch the DUT's output filter off");
   add_link_options(off, *a);
   off->callback([a, &rc] { rc = cmd_filter_enable(*a, false); });
+
+  auto* lt = dut->add_subcommand("loop-test", "Run the DUT's loop test: settling time and 0.5-level bandwidth measured");
+  add_link_options(lt, *a);
+  lt->add_option("--steps", a->loop.steps, "Steps of test torque")->capture_default_str()->check(CLI::Range(1, 100));
+  lt->add_option("--amplitude", a->loop.amplitude_g, "Step amplitude, g of input acceleration")->capture_default_str()->check(CLI::Range(-5.0, 5.0));
+  lt->add_option("--record-ms", a->record_ms, "Record per step at the loop rate, ms")->capture_default_str()->check(CLI::Range(10, 200));
+  lt->add_option("--out", a->out, "Write the raw records (loop-test.csv format) to this file");
+  lt->callback([a, &rc] { rc = cmd_loop_test(*a); });
 
   auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -l / -L files or candump's screen output) with the protocol's DBC; "
                                      "exit 2 when a line had to be skipped");

@@ -144,13 +144,15 @@ void run_show(const ShowArgs& a) {
   const plant::DutParams p = plant::load_dut_params(dc.dut);
   const FilterConfig f = plant::filter_by_name(a.filter, p.loop.loop_rate_hz);
   const design::LoopFigures lf = plant::loop_figures(dc.dut, f);
-  std::cout << "filter " << a.filter << " at " << p.loop.loop_rate_hz << " Hz\n"
+  // The design model's figures, labelled so: a DUT's own are measured by `rig run`'s loop test.
+  std::cout << "filter " << a.filter << " at " << p.loop.loop_rate_hz << " Hz (model: the DUT's design loop, not a measurement)\n"
             << "closed-loop bandwidth (0.5 level): " << lf.bandwidth_0p5_hz << " Hz\n"
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"
             << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << lf.settling_time_s * 1e3
             << " ms\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
   if (!a.json_out.empty()) {
     json j = {{"filter", a.filter},
+              {"source", "model"},
               {"bandwidth_0p5_hz", lf.bandwidth_0p5_hz},
               {"bandwidth_3db_hz", lf.bandwidth_3db_hz},
               {"settling_time_s", lf.settling_time_s},

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "plant/emulated/dut_source.hpp"
+#include "plant/emulated/plant_config.hpp"
 #include "plant/firmware/can_dut_server.hpp"
 #include "plant/table/cia402_drive.hpp"
 #include "plant/table/table_emulator.hpp"
@@ -52,22 +53,25 @@ int serve(const ServeArgs& a) {
     throw ConfigError("rig plant serve: give at least one endpoint: --modbus HOST:PORT, --rtu DEVICE or --can IFACE");
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before the server threads start
-  const acceptance::Profile p = acceptance::load_profile(a.profile);
-  cfg::check_keys(p.plant, {"seed", "dut", "table"}, "plant");
-  const auto seed = static_cast<uint64_t>(cfg::get_int(p.plant, "seed", 1, 0));
+  std::string source;
+  const toml::table profile = acceptance::load_profile_table(a.profile, source);
+  const acceptance::Profile p = acceptance::parse_profile(profile, source);
+  const toml::table& plant_cfg = plant::plant_section(profile);
+  cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
+  const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   if (a.drive == "cia402" && a.drive_map.empty())
     throw ConfigError("rig plant serve: --drive cia402 needs --drive-map FILE (see drives/)");
   if (a.drive != "cia402" && !a.drive_map.empty())
     throw ConfigError("rig plant serve: --drive-map is for --drive cia402");
   std::optional<modbus::DriveMap> map;
   if (!a.drive_map.empty()) map = modbus::load_drive_map(a.drive_map);
-  plant::TableParams tp = plant::table_params_from_toml(cfg::get_table(p.plant, "table"));
+  plant::TableParams tp = plant::table_params_from_toml(cfg::get_table(plant_cfg, "table"));
   if (map) {  // the drive's travel limits are the map's (a CiA 402 drive keeps them in 0x607D)
     tp.limit_neg_deg = map->limit_neg_deg;
     tp.limit_pos_deg = map->limit_pos_deg;
   }
   auto table = std::make_unique<plant::TableEmulator>(tp, seed ^ 0x7ab1e5eedULL);
-  TableCoupledDut dut(plant::make_dut_source(cfg::get_table(p.plant, "dut"), seed), *table);
+  TableCoupledDut dut(plant::make_dut_source(cfg::get_table(plant_cfg, "dut"), seed), *table);
   std::unique_ptr<plant::Cia402Drive> cia;
   if (map) cia = std::make_unique<plant::Cia402Drive>(*table, *map);
 

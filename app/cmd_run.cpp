@@ -18,6 +18,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
@@ -259,7 +260,12 @@ int do_run(RunArgs a) {
     read_invocation(inv_path, invocation, a);
     a.profile = a.resume + "/profile.toml";
   }
-  acceptance::Profile p = acceptance::load_profile(a.profile);
+  std::string profile_source;
+  const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
+  acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
+  // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included.
+  const toml::table& plant_cfg = plant::plant_section(profile_table);
+  if (a.plant == "emulated") plant::validate_plant_section(plant_cfg);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware);
 
@@ -301,7 +307,7 @@ int do_run(RunArgs a) {
 
   Backends b;
   try {
-    b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(p, a.serial);
+    b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),

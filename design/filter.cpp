@@ -65,23 +65,12 @@ FilterConfig paper_wf() {
 }
 
 double settling_time(std::span<const double> step, double dt, double band) {
-  if (step.empty()) return 0;
-  const double final_value = step.back();
-  const double tol = band * std::abs(final_value);
-  // t_рег is when |h(t) - h(inf)| stays within the band (Besekersky & Popov).
-  for (std::size_t k = step.size(); k-- > 0;)
-    if (std::abs(step[k] - final_value) > tol) return static_cast<double>(k + 1) * dt;
-  return 0;
+  // t_рег is when |h(t) - h(inf)| stays within the band (Besekersky & Popov); the model's step
+  // is long enough for its last sample to stand for h(inf).
+  return step.empty() ? 0 : analysis::settling_time(step, dt, step.back(), band);
 }
-
 double bandwidth_at(std::span<const double> freq, std::span<const double> amp, double level) {
-  for (std::size_t k = 1; k < freq.size() && k < amp.size(); ++k) {
-    if (amp[k] < level && amp[k - 1] >= level) {
-      const double a = (amp[k - 1] - level) / (amp[k - 1] - amp[k]);
-      return std::exp(std::log(freq[k - 1]) + a * (std::log(freq[k]) - std::log(freq[k - 1])));
-    }
-  }
-  return 0;
+  return analysis::crossing_frequency(freq, amp, level);
 }
 
 }  // namespace rig::design

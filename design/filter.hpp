@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 
+#include "analysis/loop_response.hpp"
 #include "design/filter_config.hpp"
 
 namespace rig::design {
@@ -45,7 +46,7 @@ FilterConfig paper_wf();
 // reads: the default emulated loop settles to 5 % in 3.2 ms with W_f(z) and 2.9 ms without,
 // but to 2 % only after 10.0 and 9.7 ms, because its 5 % overshoot decays with the slow
 // integrator pole; a 2 % band would measure that tail, not the speed of the loop and filter.
-inline constexpr double kSettlingBand = 0.05;
+inline constexpr double kSettlingBand = analysis::kStepSettlingBand;  // 0.05, one constant for model and measurement
 // Settling time of a step response sampled every `dt`: the time after which it stays within
 // band * |final value| of its final value (the last sample), i.e. the last sample outside the
 // band plus one period; 0 when it never leaves the band.

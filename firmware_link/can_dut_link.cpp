@@ -14,6 +14,7 @@ namespace {
 constexpr CanFilter kRxFilters[] = {
     {can_id::kResponse, 0x7FF},
     {can_id::kStreamX, 0x7FE},  // 0x100 and 0x101
+    {can_id::kLoopData, 0x7FE},  // 0x180 and 0x181: the loop test's burst and its end
     {can_id::kHeartbeat, 0x7FF},
 };
 
@@ -22,6 +23,9 @@ std::string hex_op(Op op) {
   std::snprintf(buf, sizeof buf, "%s (op 0x%02X)", to_string(op), static_cast<unsigned>(op));
   return buf;
 }
+
+// A firmware that answers UNKNOWN_OP to LOOP_TEST: not a fault, the DUT has no loop test.
+struct LoopTestUnsupported {};
 
 }  // namespace
 
@@ -63,6 +67,10 @@ void CanDutLink::dispatch(const RxFrame& rx) {
     if (responses_.size() > 32) responses_.pop_front();
   } else if (const auto* h = std::get_if<Heartbeat>(&d.msg)) {
     heartbeat_ = *h;
+  } else if (const auto* l = std::get_if<LoopData>(&d.msg)) {
+    if (loop_token_ && l->token == *loop_token_) loop_rx_.push_back(*l);
+  } else if (const auto* e = std::get_if<LoopEnd>(&d.msg)) {
+    if (loop_token_ && e->token == *loop_token_) loop_end_ = *e;
   }
 }
 
@@ -72,8 +80,7 @@ bool CanDutLink::pump(double budget_s, const CancelToken& cancel) {
   return f.has_value();
 }
 
-Response CanDutLink::command(Command c, const CancelToken& cancel) {
-  std::lock_guard io(io_mu_);
+Response CanDutLink::exchange(Command c, const CancelToken& cancel) {
   for (int attempt = 1; attempt <= opts_.command_attempts; ++attempt) {
     {
       std::lock_guard lk(state_mu_);
@@ -89,11 +96,7 @@ Response CanDutLink::command(Command c, const CancelToken& cancel) {
         if (it != responses_.end()) {
           const Response r = *it;
           responses_.erase(it);
-          if (r.result == Result::Ok) return r;
-          const std::string msg = "DUT on " + transport_->name() + " rejected " + hex_op(c.op) + ": " +
-                                  to_string(r.result);
-          if (r.result == Result::BadArgument) throw ConfigError(msg);
-          throw HardwareError(msg);
+          return r;
         }
       }
       pump(0.001, cancel);
@@ -103,6 +106,15 @@ Response CanDutLink::command(Command c, const CancelToken& cancel) {
   std::snprintf(buf, sizeof buf, " within %.0f ms (%d attempts)", opts_.command_timeout_s * 1e3,
                 opts_.command_attempts);
   throw HardwareError("DUT on " + transport_->name() + " did not acknowledge " + hex_op(c.op) + buf);
+}
+
+Response CanDutLink::command(Command c, const CancelToken& cancel) {
+  std::lock_guard io(io_mu_);
+  const Response r = exchange(c, cancel);
+  if (r.result == Result::Ok) return r;
+  const std::string msg = "DUT on " + transport_->name() + " rejected " + hex_op(c.op) + ": " + to_string(r.result);
+  if (r.result == Result::BadArgument) throw ConfigError(msg);
+  throw HardwareError(msg);
 }
 
 DutInfo CanDutLink::info(const CancelToken& cancel) {
@@ -247,6 +259,108 @@ FilterConfig CanDutLink::get_filter(const CancelToken& cancel) {
     f.sections.push_back({c[0], c[1], c[2], c[3], c[4]});
   }
   return f;
+}
+
+LoopTestResponse CanDutLink::loop_test(const LoopTestRequest& rq, const CancelToken& cancel) {
+  LoopTestResponse out;
+  if (!opts_.loop_test) {
+    out.reason = "loop test switched off for this DUT ([dut] loop_test = false in the hardware file)";
+    return out;
+  }
+  if (!(std::abs(rq.amplitude_g) > 0) || std::abs(rq.amplitude_g) > loop_cmd::kMaxAmplitudeG)
+    throw ConfigError("loop test amplitude " + std::to_string(rq.amplitude_g) + " g: must be non-zero and at most " +
+                      std::to_string(loop_cmd::kMaxAmplitudeG) + " g");
+  if (rq.steps < 1) throw ConfigError("loop test needs at least one step, not " + std::to_string(rq.steps));
+  const double ms = std::round(rq.record_s * 1e3);
+  if (!(ms >= loop_cmd::kMinRecordMs && ms <= loop_cmd::kMaxRecordMs))
+    throw ConfigError("loop test record " + std::to_string(rq.record_s) + " s: must be " +
+                      std::to_string(loop_cmd::kMinRecordMs) + ".." + std::to_string(loop_cmd::kMaxRecordMs) + " ms");
+  if (streaming_) throw HardwareError("loop test on " + transport_->name() + " asked for while the stream runs");
+  out.supported = true;
+  out.amplitude_g = rq.amplitude_g;
+  try {
+    for (int k = 0; k < rq.steps; ++k) out.steps.push_back(loop_step(rq, cancel, out.rate_hz));
+  } catch (const LoopTestUnsupported&) {
+    return {false, "the DUT's firmware has no loop test (LOOP_TEST answered UNKNOWN_OP)", 0, 0, {}};
+  }
+  return out;
+}
+
+LoopStepRecord CanDutLink::loop_step(const LoopTestRequest& rq, const CancelToken& cancel, double& rate_hz) {
+  std::lock_guard io(io_mu_);
+  const auto ms = static_cast<uint8_t>(std::lround(rq.record_s * 1e3));
+  const Command c{Op::LoopTest, 0, loop_cmd::kStep, ms, f32_bits(static_cast<float>(rq.amplitude_g))};
+  // The burst is accepted from the first frame after the command: arm before sending.
+  {
+    std::lock_guard lk(state_mu_);
+    loop_token_ = static_cast<uint8_t>(token_ + 1);
+    loop_rx_.clear();
+    loop_end_.reset();
+  }
+  struct Disarm {
+    CanDutLink& l;
+    ~Disarm() {
+      std::lock_guard lk(l.state_mu_);
+      l.loop_token_.reset();
+      l.loop_rx_.clear();
+    }
+  } disarm{*this};
+  const Response r = exchange(c, cancel);
+  if (r.result == Result::UnknownOp) throw LoopTestUnsupported{};
+  if (r.result != Result::Ok)
+    throw HardwareError("DUT on " + transport_->name() + " rejected " + hex_op(c.op) + ": " + to_string(r.result));
+  {
+    std::lock_guard lk(state_mu_);
+    loop_token_ = r.token;  // a re-sent command has its own token
+  }
+  const std::size_t n = r.value;
+  // The firmware waits one record length for the loop to be quiet, records, then sends 2n + 1
+  // frames at the bus's pace (1 Mbit/s: about 7 frames per ms); allow twice that and a second.
+  const double budget_s = 2 * (2 * rq.record_s + static_cast<double>(2 * n + 1) / 7000.0) + 1.0;
+  const double deadline = clock_.now_s() + budget_s;
+  for (;;) {
+    {
+      std::lock_guard lk(state_mu_);
+      if (loop_end_) break;
+    }
+    if (clock_.now_s() >= deadline) {
+      std::lock_guard lk(state_mu_);
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "loop test on %s: no end of burst within %.2f s (%zu of %zu frames received)",
+                    transport_->name().c_str(), budget_s, loop_rx_.size(), 2 * n);
+      throw HardwareError(buf);
+    }
+    cancel.throw_if_requested();
+    pump(0.005, cancel);
+  }
+  std::lock_guard lk(state_mu_);
+  const LoopEnd e = *loop_end_;
+  if (e.status & loop_cmd::kAborted)
+    throw HardwareError("loop test on " + transport_->name() + ": the DUT aborted the test");
+  if (e.samples != n || e.pre_samples >= n || e.rate_hz == 0)
+    throw HardwareError("loop test on " + transport_->name() + ": end marker says " + std::to_string(e.samples) +
+                        " samples (" + std::to_string(e.pre_samples) + " before the step) at " +
+                        std::to_string(e.rate_hz) + " Hz, the command announced " + std::to_string(n));
+  if (rate_hz != 0 && rate_hz != e.rate_hz)
+    throw HardwareError("loop test on " + transport_->name() + ": the loop rate changed between steps");
+  rate_hz = e.rate_hz;
+  LoopStepRecord rec;
+  rec.pre_samples = e.pre_samples;
+  rec.saturated = (e.status & loop_cmd::kSaturated) != 0;
+  rec.x.assign(n, std::nan(""));
+  rec.y.assign(n, std::nan(""));
+  for (const LoopData& d : loop_rx_)
+    if (d.index < n) (d.channel == Channel::X ? rec.x : rec.y)[d.index] = d.value_g;
+  std::size_t lost = 0, first = n;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isnan(rec.x[i]) || std::isnan(rec.y[i])) {
+      ++lost;
+      first = std::min(first, i);
+    }
+  if (lost > 0)
+    throw HardwareError("loop test on " + transport_->name() + ": " + std::to_string(lost) + " of " +
+                        std::to_string(n) + " samples lost in the burst (first at index " + std::to_string(first) + ")");
+  return rec;
 }
 
 LinkStats CanDutLink::stats() const {

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "firmware_link/can_transport.hpp"
 #include "firmware_link/reassembly.hpp"
@@ -23,6 +24,9 @@ struct LinkOptions {
   double command_timeout_s = 0.25;  // per attempt
   int command_attempts = 3;         // commands are idempotent, so a lost frame is simply re-sent
   uint32_t reorder_window = 8;      // samples a half may arrive late before its sample is declared lost
+  // [dut] loop_test = false: the rig does not ask this DUT for the loop test (its firmware has
+  // none, or it must not be disturbed); loop_test() then answers "not supported".
+  bool loop_test = true;
 };
 
 class CanDutLink final : public DutLink {
@@ -39,6 +43,7 @@ class CanDutLink final : public DutLink {
   LinkStats stats() const override;
   void reset_stats() override;
   std::string describe() const override;
+  LoopTestResponse loop_test(const LoopTestRequest& request, const CancelToken& cancel) override;
 
   // Beyond the seam (rig dut, tests).
   void set_filter_enabled(bool on, const CancelToken& cancel);
@@ -57,6 +62,11 @@ class CanDutLink final : public DutLink {
   // Returns whether a frame was dispatched.
   bool pump(double budget_s, const CancelToken& cancel);
   [[noreturn]] void fail_silent(double silent_s);
+  // Sends `c` (a fresh token per attempt) and returns the DUT's answer whatever its result;
+  // throws HardwareError only when no answer comes within the attempts. Called with io_mu_ held.
+  Response exchange(Command c, const CancelToken& cancel);
+  // One LOOP_TEST step: the command, then its burst up to the end marker (loop_test()).
+  LoopStepRecord loop_step(const LoopTestRequest& request, const CancelToken& cancel, double& rate_hz);
 
   std::unique_ptr<CanTransport> transport_;
   Clock& clock_;
@@ -70,6 +80,10 @@ class CanDutLink final : public DutLink {
   double last_stream_rx_ = 0;    // clock time the last stream frame arrived
   bool streaming_ = false;
   uint8_t token_ = 0;
+  // The loop test's burst being received (token of its LOOP_TEST; frames of other tokens are stale).
+  std::optional<uint8_t> loop_token_;
+  std::vector<LoopData> loop_rx_;
+  std::optional<LoopEnd> loop_end_;
 };
 
 }  // namespace rig::link

@@ -47,6 +47,7 @@ const char* to_string(Op op) {
     case Op::GetSerial: return "GET_SERIAL";
     case Op::GetVersion: return "GET_VERSION";
     case Op::GetTemperature: return "GET_TEMPERATURE";
+    case Op::LoopTest: return "LOOP_TEST";
   }
   return "UNKNOWN_OP";
 }
@@ -63,7 +64,8 @@ bool known_op(uint8_t op) {
     case Op::FilterEnable:
     case Op::GetSerial:
     case Op::GetVersion:
-    case Op::GetTemperature: return true;
+    case Op::GetTemperature:
+    case Op::LoopTest: return true;
   }
   return false;
 }
@@ -133,6 +135,33 @@ CanFrame encode(const Heartbeat& h) {
   return f;
 }
 
+CanFrame encode(const LoopData& d) {
+  CanFrame f;
+  f.id = can_id::kLoopData;
+  f.len = 8;
+  f.data[0] = static_cast<uint8_t>(d.index);
+  f.data[1] = static_cast<uint8_t>(d.index >> 8);
+  f.data[2] = d.channel == Channel::X ? 0 : 1;
+  f.data[3] = d.token;
+  put_u32(f.data, 4, f32_bits(d.value_g));
+  return f;
+}
+
+CanFrame encode(const LoopEnd& e) {
+  CanFrame f;
+  f.id = can_id::kLoopEnd;
+  f.len = 8;
+  f.data[0] = e.token;
+  f.data[1] = e.status;
+  f.data[2] = static_cast<uint8_t>(e.samples);
+  f.data[3] = static_cast<uint8_t>(e.samples >> 8);
+  f.data[4] = static_cast<uint8_t>(e.pre_samples);
+  f.data[5] = static_cast<uint8_t>(e.pre_samples >> 8);
+  f.data[6] = static_cast<uint8_t>(e.rate_hz);
+  f.data[7] = static_cast<uint8_t>(e.rate_hz >> 8);
+  return f;
+}
+
 Decoded decode(const CanFrame& f) {
   Decoded d;
   if (f.error || f.rtr || f.extended) return d;
@@ -180,6 +209,28 @@ Decoded decode(const CanFrame& f) {
       h.temperature_c = t16 / 100.0;
       h.last_seq = get_u32(f.data, 4);
       d.msg = h;
+      return d;
+    }
+    case can_id::kLoopData: {
+      if (f.len != 8) return {{}, malformed(f.id, "DUT_LOOP_DATA", f.len, 8)};
+      if (f.data[2] > 1) return {{}, "frame 0x180 (DUT_LOOP_DATA): channel " + std::to_string(f.data[2]) + ", expected 0 or 1"};
+      LoopData l;
+      l.index = static_cast<uint16_t>(f.data[0] | f.data[1] << 8);
+      l.channel = f.data[2] == 0 ? Channel::X : Channel::Y;
+      l.token = f.data[3];
+      l.value_g = bits_f32(get_u32(f.data, 4));
+      d.msg = l;
+      return d;
+    }
+    case can_id::kLoopEnd: {
+      if (f.len != 8) return {{}, malformed(f.id, "DUT_LOOP_END", f.len, 8)};
+      LoopEnd e;
+      e.token = f.data[0];
+      e.status = f.data[1];
+      e.samples = static_cast<uint16_t>(f.data[2] | f.data[3] << 8);
+      e.pre_samples = static_cast<uint16_t>(f.data[4] | f.data[5] << 8);
+      e.rate_hz = static_cast<uint16_t>(f.data[6] | f.data[7] << 8);
+      d.msg = e;
       return d;
     }
     default: return d;

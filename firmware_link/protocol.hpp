@@ -26,6 +26,8 @@ inline constexpr uint32_t kCommand = 0x010;    // rig -> DUT
 inline constexpr uint32_t kResponse = 0x011;   // DUT -> rig, one per command
 inline constexpr uint32_t kStreamX = 0x100;    // DUT -> rig, 1 kHz: seq24, status, x (g)
 inline constexpr uint32_t kStreamY = 0x101;    // DUT -> rig, 1 kHz: seq24, status, y (g)
+inline constexpr uint32_t kLoopData = 0x180;   // DUT -> rig, a loop test's burst: index, channel, token, value (g)
+inline constexpr uint32_t kLoopEnd = 0x181;    // DUT -> rig, the burst's end marker
 inline constexpr uint32_t kHeartbeat = 0x700;  // DUT -> rig, 10 Hz
 }  // namespace can_id
 
@@ -41,6 +43,7 @@ enum class Op : uint8_t {
   GetSerial = 0x30,      // a0 = chunk -> aux = total length, value = 4 chars of chunk a0
   GetVersion = 0x31,     // -> aux = major, value = minor | patch << 16
   GetTemperature = 0x32, // -> value = degC (f32)
+  LoopTest = 0x40,       // a0 = kind (0 = step), a1 = record ms, value = amplitude g (f32) -> value = samples per channel
 };
 const char* to_string(Op op);
 bool known_op(uint8_t op);
@@ -51,6 +54,18 @@ const char* to_string(Result r);
 inline constexpr int kMaxSections = 8;
 inline constexpr int kMaxSerial = 32;
 inline constexpr uint32_t kSeqMask = 0xFFFFFF;  // the stream's sequence counter is 24 bits on the wire
+
+// LOOP_TEST (docs/can-protocol.md "Loop test"): what the firmware accepts.
+namespace loop_cmd {
+inline constexpr uint8_t kStep = 0;            // a0: a step of test torque
+inline constexpr uint8_t kMinRecordMs = 10;    // a1: record length, ms (0 = kDefaultRecordMs)
+inline constexpr uint8_t kMaxRecordMs = 200;
+inline constexpr uint8_t kDefaultRecordMs = 100;
+inline constexpr float kMaxAmplitudeG = 5.0f;  // |value|: half the range, so the loop never saturates by design
+// End marker status bits.
+inline constexpr uint8_t kSaturated = 1u << 0;  // the PWM saturated during the record
+inline constexpr uint8_t kAborted = 1u << 1;    // the test was cut short (power, stream start)
+}  // namespace loop_cmd
 
 // Stream status byte (the low 8 bits of rig::sample_status).
 namespace stream_status {
@@ -89,6 +104,23 @@ struct StreamHalf {
   uint8_t status = 0;
   float value_g = 0;
 };
+// One loop-rate value of a loop test's burst (kLoopData): sample `index` of the record,
+// x (channel X, the loop's output) or y (channel Y, through the output filter).
+struct LoopData {
+  uint16_t index = 0;
+  Channel channel = Channel::X;
+  uint8_t token = 0;  // the LOOP_TEST command's token: a burst is never taken for another test's
+  float value_g = 0;
+};
+// The burst's end marker (kLoopEnd): how many samples per channel were sent, how many of them
+// precede the step, at what rate.
+struct LoopEnd {
+  uint8_t token = 0;
+  uint8_t status = 0;  // loop_cmd::kSaturated | kAborted
+  uint16_t samples = 0;
+  uint16_t pre_samples = 0;
+  uint16_t rate_hz = 0;
+};
 struct Heartbeat {
   uint8_t state = 0;
   uint8_t counter = 0;
@@ -103,11 +135,13 @@ CanFrame encode(const Command& c);
 CanFrame encode(const Response& r);
 CanFrame encode(const StreamHalf& s);
 CanFrame encode(const Heartbeat& h);
+CanFrame encode(const LoopData& d);
+CanFrame encode(const LoopEnd& e);
 
 // Decodes any frame of the protocol. `msg` holds monostate for a frame that is
 // not ours (other id) or malformed; then `error` says why if it was ours.
 struct Decoded {
-  std::variant<std::monostate, Command, Response, StreamHalf, Heartbeat> msg;
+  std::variant<std::monostate, Command, Response, StreamHalf, Heartbeat, LoopData, LoopEnd> msg;
   std::string error;  // non-empty: one of our ids, but malformed (names id and the problem)
 };
 Decoded decode(const CanFrame& f);

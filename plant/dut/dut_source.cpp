@@ -2,6 +2,7 @@
 // sources, behind the DutSource seam.
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "plant/dut/emulated_dut.hpp"
 
@@ -118,8 +119,20 @@ void EmulatedDut::next(float& x_g, float& y_g) {
   y_g = static_cast<float>(y);
 }
 
-void EmulatedDut::next(double& x_out, double& y_out) {
-  const double q_slow = q_static_ + slow_bias_g();
+void EmulatedDut::next(double& x_out, double& y_out) { period(0.0, nullptr, nullptr, x_out, y_out); }
+
+bool EmulatedDut::next_under_test(double torque_g, std::span<float> x_loop, std::span<float> y_loop) {
+  if (x_loop.size() < static_cast<std::size_t>(steps_per_out_) || y_loop.size() < x_loop.size())
+    throw std::invalid_argument("next_under_test: the taps need loop_steps_per_output() values each");
+  double x, y;
+  tap_saturated_ = false;
+  period(torque_g, x_loop.data(), y_loop.data(), x, y);
+  return tap_saturated_;
+}
+
+void EmulatedDut::period(double q_test_g, float* x_tap, float* y_tap, double& x_out, double& y_out) {
+  // The loop test's torque acts on the pendulum like an input acceleration (torque = ml g q).
+  const double q_slow = q_static_ + slow_bias_g() + q_test_g;
   // bursts: Poisson arrivals, exponentially decaying tones (input acceleration)
   for (std::size_t j = 0; j < burst_env_.size(); ++j) {
     burst_env_[j] *= burst_decay_;
@@ -160,6 +173,11 @@ void EmulatedDut::next(double& x_out, double& y_out) {
     y = x;
     if (filter_on)
       for (auto& sec : filt_) y = sec.step(y);
+    if (x_tap) {  // the loop test's record, at the loop rate
+      x_tap[k] = static_cast<float>(x);
+      y_tap[k] = static_cast<float>(y);
+      tap_saturated_ = tap_saturated_ || st.saturated;
+    }
   }
   st_ = st;
   poll_osc_ = poll;
@@ -169,8 +187,10 @@ void EmulatedDut::next(double& x_out, double& y_out) {
   y_out = word(y, carry_y_);
 }
 
-std::unique_ptr<DutSource> make_dut_source(const toml::table* dut_cfg, uint64_t seed) {
-  return std::make_unique<EmulatedDut>(load_dut_params(dut_cfg), seed);
+std::unique_ptr<DutSource> make_dut_source(const toml::table* dut_cfg, uint64_t seed, const std::string& serial) {
+  DutParams p = load_dut_params(dut_cfg);
+  if (!serial.empty()) p.serial = serial;
+  return std::make_unique<EmulatedDut>(p, seed);
 }
 
 }  // namespace rig::plant

@@ -26,6 +26,8 @@ class EmulatedDut final : public DutSource {
   FilterConfig filter() const override { return filter_cfg_; }
   double temperature_c() const override { return temp_c_; }
   std::string serial() const override { return p_.serial; }
+  int loop_steps_per_output() const override { return steps_per_out_; }
+  bool next_under_test(double torque_g, std::span<float> x_loop, std::span<float> y_loop) override;
 
   // Full-precision outputs (before the float conversion of the seam), for tests and tools.
   void next(double& x_g, double& y_g);
@@ -37,6 +39,9 @@ class EmulatedDut final : public DutSource {
   const design::LoopModel& loop() const { return loop_; }
 
  private:
+  // One output period: `q_test_g` (the loop test's torque as input acceleration) adds to the
+  // input; the loop-rate x and y go to the taps when given.
+  void period(double q_test_g, float* x_tap, float* y_tap, double& x_out, double& y_out);
   double slow_bias_g();          // bias terms updated once per output period
   double word(double v, double& carry) const;
 
@@ -72,6 +77,7 @@ class EmulatedDut final : public DutSource {
   FilterConfig filter_cfg_;
   std::vector<design::Section> filt_;
   double carry_x_ = 0, carry_y_ = 0;
+  bool tap_saturated_ = false;  // the PWM saturated during a loop-test period
 };
 
 }  // namespace rig::plant

@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -25,6 +26,15 @@ class DutSource {
   virtual FilterConfig filter() const = 0;
   virtual double temperature_c() const = 0;
   virtual std::string serial() const = 0;
+  // The loop test (LOOP_TEST, docs/can-protocol.md) needs the loop itself: a source that models
+  // it returns its loop periods per output period (0: no loop, the firmware has no loop test)
+  // and, in next_under_test(), advances one output period with a test torque equivalent to
+  // `torque_g` of input acceleration inside the loop, writing the loop-rate x and y of the
+  // period (loop_steps_per_output() values each). Returns whether the PWM saturated.
+  virtual int loop_steps_per_output() const { return 0; }
+  virtual bool next_under_test(double /*torque_g*/, std::span<float> /*x_loop*/, std::span<float> /*y_loop*/) {
+    return false;
+  }
 };
 
 // A DutSource wrapped around another: forwards everything; a wrapper overrides what it adds
@@ -39,6 +49,10 @@ class DutSourceWrapper : public DutSource {
   FilterConfig filter() const override { return inner_->filter(); }
   double temperature_c() const override { return inner_->temperature_c(); }
   std::string serial() const override { return inner_->serial(); }
+  int loop_steps_per_output() const override { return inner_->loop_steps_per_output(); }
+  bool next_under_test(double torque_g, std::span<float> x_loop, std::span<float> y_loop) override {
+    return inner_->next_under_test(torque_g, x_loop, y_loop);
+  }
 
  protected:
   DutSource& inner() { return *inner_; }
@@ -49,6 +63,7 @@ class DutSourceWrapper : public DutSource {
 
 // Builds the emulated DUT. `dut_cfg` is the [plant.dut] table of the profile
 // (overrides on the default DUT profile), may be null. Same seed => bit-identical output.
-std::unique_ptr<DutSource> make_dut_source(const toml::table* dut_cfg, uint64_t seed);
+// `serial`, when not empty, replaces the emulated DUT's own serial (rig run --serial in emulation).
+std::unique_ptr<DutSource> make_dut_source(const toml::table* dut_cfg, uint64_t seed, const std::string& serial = {});
 
 }  // namespace rig::plant

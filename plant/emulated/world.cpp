@@ -23,7 +23,7 @@ class EmulatedPlant::CountingSource final : public DutSourceWrapper {
   std::uint64_t& count_;
 };
 
-EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg) {
+EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& serial) {
   // `link` selected a second, direct DUT path that bypassed the CAN client; it is gone, and a
   // profile that still names it fails here rather than silently running another path.
   if (const toml::node* l = plant_cfg.get("link"))
@@ -31,7 +31,7 @@ EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg) {
                                        "CAN link (the in-process bus and the firmware emulator); delete this key");
   cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
-  dut_ = std::make_unique<CountingSource>(make_dut_source(cfg::get_table(plant_cfg, "dut"), seed), samples_);
+  dut_ = std::make_unique<CountingSource>(make_dut_source(cfg::get_table(plant_cfg, "dut"), seed, serial), samples_);
   // Separate, fixed streams per component: the table's repeatability does not
   // shift when the DUT model draws more or fewer random numbers.
   table_emu_ = make_table_emulator(cfg::get_table(plant_cfg, "table"), seed ^ 0x7ab1e5eedULL);

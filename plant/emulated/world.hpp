@@ -32,7 +32,9 @@ class TableEmulator;
 class EmulatedPlant {
  public:
   // `plant_cfg` is the profile's [plant] table: seed, [plant.dut], [plant.table].
-  explicit EmulatedPlant(const toml::table& plant_cfg);
+  // `serial`, when not empty, is the emulated DUT's serial (rig run --serial): in emulation the
+  // operator names the DUT, on hardware the DUT's own serial is checked against it.
+  explicit EmulatedPlant(const toml::table& plant_cfg, const std::string& serial = {});
   ~EmulatedPlant();
 
   SimClock& clock() { return clock_; }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <span>
 
 #include "rig/core/errors.hpp"
 
@@ -14,6 +15,9 @@ using link::Result;
 namespace {
 constexpr int64_t kTickNs = 1'000'000;  // 1 kHz output period
 constexpr double kRangeG = 10.0;        // docs/method.md: range +-10 g
+// A loop test's burst leaves at about the pace of a 1 Mbit/s bus: 8-byte frames of at most 135
+// bits (docs/can-protocol.md "Bus load") are 7.4 per ms.
+constexpr int kBurstFramesPerTick = 7;
 
 bool stable_section(const Biquad& b) {
   // Poles of 1 + a1 z^-1 + a2 z^-2 strictly inside the unit circle (the stability triangle).
@@ -68,7 +72,16 @@ void FirmwareEmulator::tick() {
   // The DUT's loop runs whether or not the rig listens: the physics and the
   // sample counter advance every output period.
   float x = 0, y = 0;
-  src_.next(x, y);
+  if (loop_ && loop_->quiet_ticks == 0) {
+    loop_test_period();
+  } else {
+    if (loop_) --loop_->quiet_ticks;
+    src_.next(x, y);
+  }
+  for (int i = 0; i < kBurstFramesPerTick && !burst_.empty(); ++i) {
+    send(burst_.front());
+    burst_.pop_front();
+  }
   const uint64_t seq = counter_++;
   if (streaming_) {
     ++stats_.samples;
@@ -130,6 +143,7 @@ link::Response FirmwareEmulator::execute(const link::Command& c) {
   if (!link::known_op(static_cast<uint8_t>(c.op))) return bad(Result::UnknownOp);
   switch (c.op) {
     case Op::StartStream:
+      if (loop_ || !burst_.empty()) return bad(Result::BadState);  // the loop test owns the DUT until its burst is out
       streaming_ = true;
       r.value = static_cast<uint32_t>(counter_);
       break;
@@ -214,8 +228,74 @@ link::Response FirmwareEmulator::execute(const link::Command& c) {
     case Op::GetTemperature:
       r.value = link::f32_bits(static_cast<float>(src_.temperature_c()));
       break;
+    case Op::LoopTest:
+      return start_loop_test(c);
   }
   return r;
+}
+
+link::Response FirmwareEmulator::start_loop_test(const link::Command& c) {
+  link::Response r{c.op, c.token, Result::Ok, c.a0, 0};
+  const int spo = src_.loop_steps_per_output();
+  if (!opts_.loop_test || spo <= 0) {
+    r.result = Result::UnknownOp;  // this firmware has no loop test
+    return r;
+  }
+  if (streaming_ || loop_ || !burst_.empty()) {
+    r.result = Result::BadState;
+    return r;
+  }
+  const int ms = c.a1 == 0 ? link::loop_cmd::kDefaultRecordMs : c.a1;
+  const float amp = link::bits_f32(c.value);
+  if (c.a0 != link::loop_cmd::kStep || ms < link::loop_cmd::kMinRecordMs || ms > link::loop_cmd::kMaxRecordMs ||
+      !std::isfinite(amp) || amp == 0 || std::abs(amp) > link::loop_cmd::kMaxAmplitudeG) {
+    r.result = Result::BadArgument;
+    return r;
+  }
+  LoopRun run;
+  run.token = c.token;
+  run.amplitude_g = amp;
+  run.quiet_ticks = ms;  // one record length without test torque first
+  run.record_ticks = ms;
+  run.pre_ticks = std::max(1, ms / 10);
+  const auto n = static_cast<std::size_t>(ms) * static_cast<std::size_t>(spo);
+  run.x.assign(n, 0.0f);
+  run.y.assign(n, 0.0f);
+  loop_ = std::move(run);
+  r.value = static_cast<uint32_t>(n);
+  return r;
+}
+
+void FirmwareEmulator::loop_test_period() {
+  LoopRun& run = *loop_;
+  const auto spo = static_cast<std::size_t>(src_.loop_steps_per_output());
+  const std::size_t at = static_cast<std::size_t>(run.done_ticks) * spo;
+  const double torque = run.done_ticks >= run.pre_ticks ? run.amplitude_g : 0.0;
+  run.saturated = src_.next_under_test(torque, std::span(run.x).subspan(at, spo), std::span(run.y).subspan(at, spo)) ||
+                  run.saturated;
+  if (++run.done_ticks == run.record_ticks) queue_burst();
+}
+
+void FirmwareEmulator::queue_burst() {
+  const LoopRun& run = *loop_;
+  const auto spo = static_cast<std::size_t>(src_.loop_steps_per_output());
+  std::size_t place = 0;
+  auto queue = [&](const link::CanFrame& f) {
+    if (!faults_.drop_burst_frames.count(place++)) burst_.push_back(f);
+  };
+  for (std::size_t i = 0; i < run.x.size(); ++i) {
+    queue(link::encode(link::LoopData{static_cast<uint16_t>(i), link::Channel::X, run.token, run.x[i]}));
+    queue(link::encode(link::LoopData{static_cast<uint16_t>(i), link::Channel::Y, run.token, run.y[i]}));
+  }
+  link::LoopEnd e;
+  e.token = run.token;
+  e.status = run.saturated ? link::loop_cmd::kSaturated : 0;
+  e.samples = static_cast<uint16_t>(run.x.size());
+  e.pre_samples = static_cast<uint16_t>(static_cast<std::size_t>(run.pre_ticks) * spo);
+  e.rate_hz = static_cast<uint16_t>(std::lround(src_.output_rate_hz() * static_cast<double>(spo)));
+  queue(link::encode(e));
+  ++stats_.loop_tests;
+  loop_.reset();
 }
 
 void FirmwareEmulator::start_realtime() {

@@ -9,6 +9,8 @@
 #pragma once
 #include <atomic>
 #include <cstdint>
+#include <deque>
+#include <optional>
 #include <mutex>
 #include <set>
 #include <string>
@@ -25,6 +27,7 @@ struct FirmwareOptions {
   int version_major = 1, version_minor = 4, version_patch = 0;
   double heartbeat_hz = 10.0;
   uint32_t first_seq = 0;  // the 32-bit sample counter at power-on
+  bool loop_test = true;   // false: a firmware without LOOP_TEST (it answers UNKNOWN_OP)
 };
 
 struct FirmwareFaults {
@@ -36,6 +39,8 @@ struct FirmwareFaults {
   std::set<uint64_t> duplicate_samples;
   // From this sample on the firmware sends nothing at all (stream, heartbeat, answers).
   std::optional<uint64_t> silent_from;
+  // Frames of every loop test's burst never sent, by their place in the burst (0 = the first).
+  std::set<std::size_t> drop_burst_frames;
 };
 
 struct FirmwareStats {
@@ -44,6 +49,7 @@ struct FirmwareStats {
   uint64_t samples_dropped = 0; // by fault injection
   uint64_t commands = 0;
   uint64_t bad_commands = 0;
+  uint64_t loop_tests = 0;      // loop tests completed (their bursts queued)
 };
 
 class FirmwareEmulator {
@@ -75,6 +81,19 @@ class FirmwareEmulator {
   void send_sample(uint64_t seq, float x, float y, uint8_t status);
   void send(const link::CanFrame& f);
   bool silent() const;
+  link::Response start_loop_test(const link::Command& c);
+  void loop_test_period();  // one output period of a running loop test
+  void queue_burst();       // the finished record as DUT_LOOP_DATA frames and the end marker
+
+  // A loop test in progress: quiet (no test torque, the loop settles from anything before),
+  // then the record: pre_ticks without torque, the rest with it.
+  struct LoopRun {
+    uint8_t token = 0;
+    double amplitude_g = 0;
+    int quiet_ticks = 0, pre_ticks = 0, record_ticks = 0, done_ticks = 0;
+    std::vector<float> x, y;
+    bool saturated = false;
+  };
 
   DutSource& src_;
   link::CanTransport& bus_;
@@ -91,6 +110,8 @@ class FirmwareEmulator {
   FilterConfig staged_;
   std::vector<uint8_t> staged_have_;  // one bit per coefficient (5 per section)
   bool staging_ = false;
+  std::optional<LoopRun> loop_;
+  std::deque<link::CanFrame> burst_;  // sent at the bus's pace, a few frames per tick
   std::thread thread_;
   std::atomic<bool> stop_{false};
 };

@@ -38,6 +38,7 @@ class InProcessDutLink final : public DutLink {
   LinkStats stats() const override { return client_->stats(); }
   void reset_stats() override { client_->reset_stats(); }
   std::string describe() const override;
+  LoopTestResponse loop_test(const LoopTestRequest& r, const CancelToken& c) override { return client_->loop_test(r, c); }
 
  private:
   std::shared_ptr<InProcessBus> bus_;

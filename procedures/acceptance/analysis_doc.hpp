@@ -1,14 +1,11 @@
 // analysis.json (rig.analysis/1, read by the report): the procedure state accumulated by
-// the phases, and the loop figures' JSON view.
+// the phases.
 #pragma once
 #include <nlohmann/json.hpp>
 
-#include "design/loop_figures.hpp"
 #include "procedures/acceptance/state.hpp"
 
 namespace rig::acceptance {
-
-nlohmann::json loop_to_json(const design::LoopFigures& f);
 
 // analysis.json from one DUT's state: "runs" (array by index), "bias", "in_run" (with
 // "blocks"), "raw", the allan phase's keys (allan, psd, timeseries) at the top, "loop", "dut".

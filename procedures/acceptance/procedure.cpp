@@ -6,10 +6,10 @@
 
 #include <fmt/format.h>
 
-#include "plant/dut/loop_figures.hpp"
 #include "analysis/json.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/method.hpp"
+#include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "analysis/allan.hpp"
@@ -150,15 +150,6 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
   st.analysis = a;
 }
 
-void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
-  const toml::table* dut_cfg = p.plant.get_as<toml::table>("dut");
-  const design::LoopFigures f = plant::loop_figures(dut_cfg, p.filter);
-  ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, "closed loop with the output filter, 0.5 level (model)");
-  ctx.values.set("settling_time", f.settling_time_s,
-                 fmt::format("closed loop, 1 g step, {:g} % band (model)", f.settling_band * 100));
-  st.loop = loop_to_json(f);
-}
-
 }  // namespace
 
 BiasBaseError bias_and_base_error(const std::vector<double>& x10, const std::vector<double>& x20) {
@@ -276,10 +267,10 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
                  {"in_run_b_allan_filtered", "g", "In-run B from Allan deviation, filtered output y(t)"},
                  {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
                  {"rms_filtered", "g", "RMS error x̂ of y(t)"}}});
-  ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter", 0,
-                [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
-                {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level"},
-                 {"settling_time", "s", "Closed-loop settling time, 1 g step"}}});
+  ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter, measured by the DUT's loop test",
+                p.loop_steps * (3 * p.loop_record_s + 0.3), [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
+                {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level, measured by the DUT's loop test"},
+                 {"settling_time", "s", "Closed-loop settling time, 1 g step, 5 % band, measured by the DUT's loop test"}}});
   return ph;
 }
 

@@ -54,7 +54,8 @@ const std::string& builtin_profile_text(const std::string& name) {
 }
 
 Profile parse_profile(const toml::table& t, const std::string& source) {
-  cfg::check_keys(t, {"base", "profile", "procedure", "table", "filter", "analysis", "limits", "classes", "plant"},
+  // [plant] is the emulated plant's (it checks it itself): allowed here, never read.
+  cfg::check_keys(t, {"base", "profile", "procedure", "table", "filter", "loop", "analysis", "limits", "classes", "plant"},
                   "top level");
   Profile p;
   p.source = source;
@@ -106,6 +107,14 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     if (!read.empty()) preset = read;
   }
   p.filter_name = filter_name(preset);
+  if (const toml::table* l = cfg::get_table(t, "loop")) {
+    cfg::check_keys(*l, {"amplitude_g", "steps", "record_ms"}, "loop");
+    // The protocol's bounds (docs/can-protocol.md, LOOP_TEST): |A| <= 5 g, 10..200 ms.
+    p.loop_amplitude_g = cfg::get_number(*l, "amplitude_g", p.loop_amplitude_g, -5.0, 5.0);
+    if (p.loop_amplitude_g == 0) throw ConfigError(cfg::where(*l->get("amplitude_g")) + ": [loop] amplitude_g must not be 0");
+    p.loop_steps = static_cast<int>(cfg::get_int(*l, "steps", p.loop_steps, 1, 100));
+    p.loop_record_s = static_cast<double>(cfg::get_int(*l, "record_ms", 100, 10, 200)) / 1e3;
+  }
   if (const toml::table* a = cfg::get_table(t, "analysis")) {
     cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s"}, "analysis");
     p.taus = cfg::get_string(*a, "taus", p.taus);
@@ -148,14 +157,18 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
       p.classes.push_back(ac);
     }
   }
-  if (const toml::table* pl = cfg::get_table(t, "plant")) p.plant = *pl;
   return p;
 }
 
 Profile load_profile(const std::string& name_or_path) {
+  std::string source;
+  const toml::table t = load_profile_table(name_or_path, source);
+  return parse_profile(t, source);
+}
+
+toml::table load_profile_table(const std::string& name_or_path, std::string& source) {
   const auto& builtin = builtin_profiles();
   toml::table t;
-  std::string source;
   if (auto it = builtin.find(name_or_path); it != builtin.end()) {
     t = cfg::parse_string(it->second, "builtin:" + name_or_path);
     source = "builtin:" + name_or_path;
@@ -178,7 +191,7 @@ Profile load_profile(const std::string& name_or_path) {
       cfg::fill_defaults(t, base);
     }
   }
-  return parse_profile(t, source);
+  return t;
 }
 
 }  // namespace rig::acceptance

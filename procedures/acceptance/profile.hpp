@@ -1,6 +1,7 @@
 // A procedure profile: the method's parameters (durations, counts, order),
-// the limits, the accuracy-class table, and the emulated plant's settings.
-// TOML; every error names file:line:column. Format: docs/profiles.md.
+// the limits and the accuracy-class table. TOML; every error names file:line:column.
+// Format: docs/profiles.md. The file's [plant] section belongs to the emulated plant, which
+// reads it from the same table (plant/emulated/plant_config.hpp); the procedure never does.
 #pragma once
 #include <map>
 #include <optional>
@@ -47,6 +48,11 @@ struct Profile {
   FilterConfig filter;
   std::string filter_name;
 
+  // [loop]: the loop test on the DUT (criterion 2 measured, docs/can-protocol.md "Loop test")
+  double loop_amplitude_g = 1.0;  // docs/method.md quotes the settling time for a 1 g step
+  int loop_steps = 5;             // their scatter gives the figures' 95 % intervals
+  double loop_record_s = 0.1;     // per step
+
   // [analysis]
   std::string taus = "log:100";
   double confidence = 0.6826894921370859;  // one sigma, erf(1/sqrt 2)
@@ -56,14 +62,15 @@ struct Profile {
   std::map<std::string, std::pair<double, double>> limits;  // [limits]
   std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g
 
-  toml::table plant;  // [plant] as given (seed, dut, table): read by the emulated plant
-
   double planned_total_s() const;
 };
 
 // "paper", "ci" (built in) or a file path. Files may say `base = "paper"` to
 // start from a built-in profile and override a few keys.
 Profile load_profile(const std::string& name_or_path);
+// The same profile as a TOML table, the base merged in, with its source ("builtin:NAME" or the
+// path): what load_profile parses, and where the emulated plant finds its [plant] section.
+toml::table load_profile_table(const std::string& name_or_path, std::string& source);
 Profile parse_profile(const toml::table& t, const std::string& source);
 std::vector<std::string> builtin_profile_names();
 

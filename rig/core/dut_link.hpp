@@ -30,6 +30,31 @@ struct LinkStats {
   std::vector<std::pair<uint64_t, uint64_t>> gap_list;  // (first missing seq, count), first 1000
 };
 
+// The loop test (docs/can-protocol.md "Loop test"): the DUT injects a test torque inside its
+// feedback loop -- a step equivalent to `amplitude_g` of input acceleration -- and records the
+// loop's response at its inner rate. `steps` tests are run one after another.
+struct LoopTestRequest {
+  double amplitude_g = 1.0;  // docs/method.md: the settling time is quoted for a 1 g step
+  int steps = 5;             // repeated steps: their scatter is the figures' uncertainty
+  // Per step, the step after a tenth of it. 100 ms: the loop's integrator creeps for tens of
+  // ms after the step, and the final value is read from the record's last fifth.
+  double record_s = 0.1;
+};
+// One step as the DUT recorded it, at the loop's rate: x the loop's output, y the same through
+// the output filter the DUT is configured with; the first `pre_samples` precede the step.
+struct LoopStepRecord {
+  std::vector<double> x, y;
+  std::size_t pre_samples = 0;
+  bool saturated = false;  // the DUT's PWM saturated during the record
+};
+struct LoopTestResponse {
+  bool supported = false;  // false: the DUT (or the rig's configuration) has no loop test
+  std::string reason;      // why not, when !supported
+  double rate_hz = 0;      // the loop rate the records are sampled at
+  double amplitude_g = 0;
+  std::vector<LoopStepRecord> steps;
+};
+
 class DutLink {
  public:
   virtual ~DutLink() = default;
@@ -46,6 +71,12 @@ class DutLink {
   virtual LinkStats stats() const = 0;
   virtual void reset_stats() = 0;
   virtual std::string describe() const = 0;
+  // Runs the loop test; bounded in time and cancellable. A DUT without one answers
+  // {supported = false, reason}; a test started but not completed (timeout, frames lost)
+  // throws HardwareError. Only while the stream is stopped.
+  virtual LoopTestResponse loop_test(const LoopTestRequest& /*request*/, const CancelToken& /*cancel*/) {
+    return {false, describe() + " has no loop test", 0, 0, {}};
+  }
 };
 
 }  // namespace rig

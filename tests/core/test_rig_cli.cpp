@@ -390,6 +390,18 @@ TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {
   EXPECT_NE(err.find("run_s"), std::string::npos) << err;
 }
 
+TEST(RigCli, DryRunValidatesTheEmulatedPlantsSection) {
+  // [plant] is read by the emulated plant, not the procedure's profile parser: --dry-run still
+  // names a bad value in it with its place.
+  const std::string d = tmp("badplant");
+  fs::create_directories(d);
+  std::ofstream(d + "/bad.toml") << "base = \"ci\"\n[plant.dut.loop]\nadc_bitz = 20\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/bad.toml", "--dry-run"}, d + "/io"), 2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find(d + "/bad.toml:3:"), std::string::npos) << err;
+  EXPECT_NE(err.find("adc_bitz"), std::string::npos) << err;
+}
+
 TEST(RigCli, DryRunPrintsThePlanAndTouchesNothing) {
   const std::string d = tmp("dry");
   fs::create_directories(d);

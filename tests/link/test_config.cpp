@@ -19,6 +19,8 @@ TEST(DutConfig, OptionsFromTheHardwareFile) {
   EXPECT_DOUBLE_EQ(o.command_timeout_s, 0.04);
   EXPECT_EQ(o.command_attempts, 5);
   EXPECT_EQ(o.reorder_window, 8u);
+  EXPECT_TRUE(o.loop_test) << "the loop test is asked for unless the hardware file says otherwise";
+  EXPECT_FALSE(link_options(cfg::parse_string("can = \"can0\"\nloop_test = false\n", "hw.toml")).loop_test);
 }
 
 TEST(DutConfig, MistakesAreConfigErrorsWithPlace) {
@@ -36,6 +38,7 @@ TEST(DutConfig, MistakesAreConfigErrorsWithPlace) {
   expect_err("can = \"vcan0\"\nsilense_ms = 100\n", "silense_ms");
   expect_err("can = \"vcan0\"\nsilence_ms = -1\n", "silence_ms");
   expect_err("can = \"an-interface-name-too-long\"\n", "network interface");
+  expect_err("can = \"vcan0\"\nloop_test = \"no\"\n", "loop_test");
 }
 
 TEST(SocketCan, UnavailableOrUnknownInterfaceIsAHardwareErrorNamingIt) {

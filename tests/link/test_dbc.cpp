@@ -38,6 +38,8 @@ TEST(Dbc, DefinesEveryProtocolMessageWithItsId) {
               {can_id::kResponse, "DUT_RSP"},
               {can_id::kStreamX, "DUT_STREAM_X"},
               {can_id::kStreamY, "DUT_STREAM_Y"},
+              {can_id::kLoopData, "DUT_LOOP_DATA"},
+              {can_id::kLoopEnd, "DUT_LOOP_END"},
               {can_id::kHeartbeat, "DUT_HEARTBEAT"}};
   ASSERT_EQ(dbc().messages().size(), std::size(want));
   for (const auto& w : want) {
@@ -61,7 +63,7 @@ TEST(Dbc, OpcodeValueTableMatchesCodec) {
       ++n;
     }
   }
-  EXPECT_EQ(n, 11);
+  EXPECT_EQ(n, 12);
 }
 
 TEST(Dbc, CommandsDecodeToCodecFields) {
@@ -131,6 +133,28 @@ TEST(Dbc, StreamAndHeartbeatDecodeToCodecFields) {
   EXPECT_EQ(m.at("hb_counter"), 77);
   EXPECT_NEAR(m.at("temperature_c"), -4.56, 1e-9);
   EXPECT_EQ(m.at("last_seq"), 4000000000.0);
+}
+
+TEST(Dbc, LoopTestCommandAndBurstDecodeToCodecFields) {
+  auto m = signals(encode(Command{Op::LoopTest, 9, loop_cmd::kStep, 50, f32_bits(-1.0f)}));
+  EXPECT_EQ(m.at("opcode"), 0x40);
+  EXPECT_EQ(m.at("loop_kind"), 0);
+  EXPECT_EQ(m.at("loop_record_ms"), 50);
+  EXPECT_EQ(m.at("loop_amplitude_g"), -1.0);
+  m = signals(encode(Response{Op::LoopTest, 9, Result::Ok, 0, 500}));
+  EXPECT_EQ(m.at("loop_samples"), 500);
+  m = signals(encode(LoopData{499, Channel::Y, 9, 0.998f}));
+  EXPECT_EQ(m.at("loop_index"), 499);
+  EXPECT_EQ(m.at("loop_channel"), 1);
+  EXPECT_EQ(m.at("loop_token"), 9);
+  EXPECT_EQ(m.at("loop_value_g"), static_cast<double>(0.998f));
+  m = signals(encode(LoopEnd{9, loop_cmd::kAborted, 500, 50, 10000}));
+  EXPECT_EQ(m.at("loop_token"), 9);
+  EXPECT_EQ(m.at("loop_saturated"), 0);
+  EXPECT_EQ(m.at("loop_aborted"), 1);
+  EXPECT_EQ(m.at("loop_samples"), 500);
+  EXPECT_EQ(m.at("loop_pre_samples"), 50);
+  EXPECT_EQ(m.at("loop_rate_hz"), 10000);
 }
 
 TEST(Dbc, ParseErrorsNameFileAndLine) {

@@ -1,0 +1,95 @@
+#include "analysis/loop_response.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <numeric>
+#include <stdexcept>
+
+#include "analysis/gost.hpp"
+
+namespace rig::analysis {
+
+std::vector<double> unit_step(std::span<const double> r, std::size_t pre, double amplitude) {
+  if (pre == 0 || pre >= r.size()) throw std::invalid_argument("unit_step: needs samples before and after the step");
+  if (amplitude == 0 || !std::isfinite(amplitude)) throw std::invalid_argument("unit_step: amplitude must be non-zero");
+  const double base = std::accumulate(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(pre), 0.0) /
+                      static_cast<double>(pre);
+  std::vector<double> h(r.size() - pre);
+  for (std::size_t k = 0; k < h.size(); ++k) h[k] = (r[pre + k] - base) / amplitude;
+  return h;
+}
+
+double final_value(std::span<const double> h, double tail_fraction) {
+  if (h.empty()) return 0;
+  const auto n = std::clamp<std::size_t>(static_cast<std::size_t>(tail_fraction * static_cast<double>(h.size())), 1,
+                                         h.size());
+  return std::accumulate(h.end() - static_cast<std::ptrdiff_t>(n), h.end(), 0.0) / static_cast<double>(n);
+}
+
+double settling_time(std::span<const double> h, double dt, double final, double band) {
+  const double tol = band * std::abs(final);
+  for (std::size_t k = h.size(); k-- > 0;)
+    if (std::abs(h[k] - final) > tol) return static_cast<double>(k + 1) * dt;
+  return 0;
+}
+
+AmplitudeCurve step_amplitude_response(std::span<const double> h, double rate_hz, double final, double step_hz) {
+  AmplitudeCurve c;
+  if (h.empty() || final == 0) return c;
+  // Impulse response: d[k] = h[k] - h[k-1], h[-1] = 0 (the normalised step starts from rest).
+  std::vector<double> d(h.size());
+  for (std::size_t k = 0; k < h.size(); ++k) d[k] = h[k] - (k ? h[k - 1] : 0.0);
+  for (double f = step_hz; f <= rate_hz / 2; f += step_hz) {
+    // H(e^{jw}) = sum d[k] e^{-jwk}, the rotation advanced by one complex multiply per sample.
+    const std::complex<double> rot = std::polar(1.0, -2 * std::numbers::pi * f / rate_hz);
+    std::complex<double> z = 1, acc = 0;
+    for (double v : d) {
+      acc += v * z;
+      z *= rot;
+    }
+    c.f_hz.push_back(f);
+    c.amp.push_back(std::abs(acc) / std::abs(final));
+  }
+  return c;
+}
+
+double crossing_frequency(std::span<const double> f_hz, std::span<const double> amp, double level) {
+  for (std::size_t k = 1; k < f_hz.size() && k < amp.size(); ++k)
+    if (amp[k] < level && amp[k - 1] >= level) {
+      const double a = (amp[k - 1] - level) / (amp[k - 1] - amp[k]);
+      return std::exp(std::log(f_hz[k - 1]) + a * (std::log(f_hz[k]) - std::log(f_hz[k - 1])));
+    }
+  return 0;
+}
+
+StepFigures step_figures(std::span<const double> h, double rate_hz, double band) {
+  StepFigures f;
+  f.final_value = final_value(h);
+  f.settling_time_s = settling_time(h, 1.0 / rate_hz, f.final_value, band);
+  f.amplitude = step_amplitude_response(h, rate_hz, f.final_value);
+  f.bandwidth_0p5_hz = crossing_frequency(f.amplitude.f_hz, f.amplitude.amp, 0.5);
+  if (!h.empty() && f.final_value != 0)
+    f.overshoot = std::max(0.0, *std::max_element(h.begin(), h.end()) / f.final_value - 1);
+  return f;
+}
+
+RepeatedFigure repeated_figure(std::span<const double> v, double resolution) {
+  if (v.empty()) throw std::invalid_argument("repeated_figure: no steps");
+  RepeatedFigure r;
+  r.n = v.size();
+  r.value = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(r.n);
+  double student = 0;
+  if (r.n >= 2) {
+    const GostSummary g = gost_summary(v, 0.95);
+    r.sd = g.sd;
+    student = g.ci_half;
+  }
+  const double half = std::hypot(student, resolution / 2);
+  r.lo = r.value - half;
+  r.hi = r.value + half;
+  return r;
+}
+
+}  // namespace rig::analysis

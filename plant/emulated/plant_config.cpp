@@ -1,0 +1,20 @@
+#include "plant/emulated/plant_config.hpp"
+
+#include "plant/emulated/world.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::plant {
+
+const toml::table& plant_section(const toml::table& profile) {
+  static const toml::table none;
+  if (const toml::table* t = cfg::get_table(profile, "plant")) return *t;
+  return none;
+}
+
+void validate_plant_section(const toml::table& plant) {
+  // Building it is the check that cannot drift from what the plant reads (cheap: no thread,
+  // no I/O, the DUT's loop locks in a fraction of a simulated second).
+  const EmulatedPlant probe(plant);
+}
+
+}  // namespace rig::plant

@@ -1,0 +1,154 @@
+#include "procedures/acceptance/loop_phase.hpp"
+
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "analysis/loop_response.hpp"
+
+namespace rig::acceptance {
+
+namespace {
+
+// The amplitude curves are computed on a 1 Hz grid; analysis.json keeps a log-spaced subset
+// (about 200 points per decade), enough for the report's plot.
+template <class Get>
+std::vector<double> log_subset(const std::vector<double>& f_hz, Get get) {
+  std::vector<double> out;
+  double next = 0;
+  for (std::size_t i = 0; i < f_hz.size(); ++i)
+    if (f_hz[i] >= next) {
+      out.push_back(get(i));
+      next = f_hz[i] * 1.0116;  // 10^(1/200)
+    }
+  return out;
+}
+
+std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
+  std::vector<double> m(rows.empty() ? 0 : rows.front().size(), 0.0);
+  for (const auto& r : rows)
+    for (std::size_t i = 0; i < m.size() && i < r.size(); ++i) m[i] += r[i] / static_cast<double>(rows.size());
+  return m;
+}
+
+}  // namespace
+
+std::string loop_test_csv(const LoopTestResponse& r) {
+  std::string s = fmt::format(
+      "# rig loop test: {} step(s) of {:g} g test torque inside the DUT's loop, recorded at {:g} Hz\n"
+      "# x_g: the loop's output; y_g: the same through the DUT's output filter; t_s from the step\n"
+      "step,index,t_s,x_g,y_g\n",
+      r.steps.size(), r.amplitude_g, r.rate_hz);
+  for (std::size_t k = 0; k < r.steps.size(); ++k) {
+    const LoopStepRecord& st = r.steps[k];
+    for (std::size_t i = 0; i < st.x.size(); ++i)
+      s += fmt::format("{},{},{:.6g},{:.9g},{:.9g}\n", k + 1, i,
+                       (static_cast<double>(i) - static_cast<double>(st.pre_samples)) / r.rate_hz, st.x[i], st.y[i]);
+  }
+  return s;
+}
+
+nlohmann::json loop_test_figures(const LoopTestResponse& r) {
+  using namespace rig::analysis;
+  std::vector<double> ts, bw, finals, overs;
+  std::vector<std::vector<double>> hx, hy, ax, ay;
+  nlohmann::json per_step = nlohmann::json::array();
+  std::vector<double> f_hz;
+  for (const LoopStepRecord& st : r.steps) {
+    // Criterion 2 is read on y, the output through the filter (as the passport always quoted
+    // it); x gives the loop alone for the plots.
+    hy.push_back(unit_step(st.y, st.pre_samples, r.amplitude_g));
+    hx.push_back(unit_step(st.x, st.pre_samples, r.amplitude_g));
+    const StepFigures fy = step_figures(hy.back(), r.rate_hz);
+    const StepFigures fx = step_figures(hx.back(), r.rate_hz);
+    ts.push_back(fy.settling_time_s);
+    bw.push_back(fy.bandwidth_0p5_hz);
+    finals.push_back(fy.final_value);
+    overs.push_back(fy.overshoot);
+    ay.push_back(fy.amplitude.amp);
+    ax.push_back(fx.amplitude.amp);
+    f_hz = fy.amplitude.f_hz;
+    per_step.push_back({{"settling_time_s", fy.settling_time_s},
+                        {"bandwidth_0p5_hz", fy.bandwidth_0p5_hz},
+                        {"final_value", fy.final_value},
+                        {"overshoot", fy.overshoot},
+                        {"saturated", st.saturated}});
+  }
+  // Resolutions: the settling time is found to one loop period; the bandwidth is interpolated
+  // on a 1 Hz grid, so its resolution term is 1 Hz (conservative).
+  const RepeatedFigure T = repeated_figure(ts, 1.0 / r.rate_hz);
+  const RepeatedFigure B = repeated_figure(bw, 1.0);
+  const std::vector<double> my = mean_of(hy), mx = mean_of(hx), may = mean_of(ay), max = mean_of(ax);
+  std::vector<double> t_s(my.size());
+  for (std::size_t i = 0; i < t_s.size(); ++i) t_s[i] = static_cast<double>(i) / r.rate_hz;
+  const double band = kStepSettlingBand;
+  return {{"source", "loop test on the DUT"},
+          {"file", kLoopTestFile},
+          {"steps", r.steps.size()},
+          {"amplitude_g", r.amplitude_g},
+          {"rate_hz", r.rate_hz},
+          {"settling_band", band},
+          {"settling_time_s", T.value},
+          {"settling_time_interval_s", {T.lo, T.hi}},
+          {"bandwidth_0p5_hz", B.value},
+          {"bandwidth_0p5_interval_hz", {B.lo, B.hi}},
+          {"interval", "Student's 95 % interval of the mean over the steps (GOST R 8.736), widened in "
+                       "quadrature by +-half the resolution (one loop period; 1 Hz)"},
+          {"dc_gain", repeated_figure(finals, 0).value},
+          {"overshoot", repeated_figure(overs, 0).value},
+          {"per_step", per_step},
+          {"step", {{"t_s", t_s}, {"x", mx}, {"y", my}}},
+          {"freq",
+           {{"f_hz", log_subset(f_hz, [&](std::size_t i) { return f_hz[i]; })},
+            {"mag_x", log_subset(f_hz, [&](std::size_t i) { return max[i]; })},
+            {"mag_y", log_subset(f_hz, [&](std::size_t i) { return may[i]; })}}}};
+}
+
+void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
+  LoopTestRequest rq;
+  rq.amplitude_g = p.loop_amplitude_g;
+  rq.steps = p.loop_steps;
+  rq.record_s = p.loop_record_s;
+  const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
+  if (!r.supported) {
+    ctx.log->warn("loop figures not measured: {}", r.reason);
+    const std::string why = "not measured: " + r.reason;
+    ctx.values.set("bandwidth_0p5", std::nullopt, why);
+    ctx.values.set("settling_time", std::nullopt, why);
+    st.loop = {{"source", "none"}, {"reason", r.reason}};
+    return;
+  }
+  write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, loop_test_csv(r));
+  ctx.report(0.5);
+  const std::string what = fmt::format("measured on the DUT (loop test, {} steps of {:g} g)", r.steps.size(), r.amplitude_g);
+  std::size_t saturated = 0;
+  for (const LoopStepRecord& st : r.steps) saturated += st.saturated;
+  if (saturated > 0) {
+    // A saturated loop is not the linear loop criterion 2 describes: no figure rather than a wrong one.
+    const std::string why = fmt::format("not measured: the DUT's loop saturated in {} of {} loop-test steps of {:g} g",
+                                        saturated, r.steps.size(), r.amplitude_g);
+    ctx.log->warn("{}", why);
+    ctx.values.set("bandwidth_0p5", std::nullopt, why);
+    ctx.values.set("settling_time", std::nullopt, why);
+    st.loop = {{"source", "loop test on the DUT"}, {"file", kLoopTestFile}, {"reason", why}};
+    return;
+  }
+  const nlohmann::json f = loop_test_figures(r);
+  bool crossed = true;  // a step whose response never falls to 0.5 below Nyquist has no bandwidth to average
+  for (const auto& st : f["per_step"]) crossed = crossed && st["bandwidth_0p5_hz"].get<double>() > 0;
+  if (crossed)
+    ctx.values.set("bandwidth_0p5", f["bandwidth_0p5_hz"].get<double>(), what + ", output filter on y, 0.5 level; 95 % interval",
+                   f["bandwidth_0p5_interval_hz"][0].get<double>(), f["bandwidth_0p5_interval_hz"][1].get<double>());
+  else
+    ctx.values.set("bandwidth_0p5", std::nullopt,
+                   what + ": the amplitude response stays above 0.5 up to half the loop rate in some step");
+  ctx.values.set("settling_time", f["settling_time_s"].get<double>(),
+                 what + fmt::format(", {:g} % band; 95 % interval", analysis::kStepSettlingBand * 100),
+                 f["settling_time_interval_s"][0].get<double>(), f["settling_time_interval_s"][1].get<double>());
+  ctx.log->info("loop test: settling time {:.4g} s, bandwidth (0.5) {:.1f} Hz over {} steps", f["settling_time_s"].get<double>(),
+                f["bandwidth_0p5_hz"].get<double>(), r.steps.size());
+  st.loop = f;
+}
+
+}  // namespace rig::acceptance

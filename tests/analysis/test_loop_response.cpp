@@ -1,0 +1,72 @@
+// Loop figures from a recorded step (analysis/loop_response.hpp) against closed forms: a
+// first-order discrete system's settling time and 0.5-level bandwidth, the normalisation of a
+// recorded step, and the repeated-step interval (Student's t of GOST R 8.736 and the resolution).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "analysis/loop_response.hpp"
+
+using namespace rig::analysis;
+
+namespace {
+// y[k] = a y[k-1] + (1 - a) u[k]: unit-step response 1 - a^(k+1).
+std::vector<double> first_order_step(double a, std::size_t n) {
+  std::vector<double> h(n);
+  for (std::size_t k = 0; k < n; ++k) h[k] = 1 - std::pow(a, static_cast<double>(k + 1));
+  return h;
+}
+}  // namespace
+
+TEST(LoopResponse, FirstOrderSettlingTimeIsTheClosedForm) {
+  const double a = 0.9, dt = 1e-4;
+  const auto h = first_order_step(a, 2000);
+  // |h[k] - 1| = a^(k+1) > band while k + 1 < ln(band) / ln(a): the last sample outside is
+  // k = floor(ln(band) / ln(a)) - 1 (at time k dt), and the settling time one period later.
+  const double want = std::floor(std::log(0.05) / std::log(a)) * dt;
+  EXPECT_NEAR(settling_time(h, dt, 1.0), want, 1e-12);
+  EXPECT_NEAR(settling_time(h, dt, 1.0, 0.02), std::floor(std::log(0.02) / std::log(a)) * dt, 1e-12);
+  EXPECT_EQ(settling_time(std::vector<double>(10, 1.0), dt, 1.0), 0.0) << "never outside the band";
+}
+
+TEST(LoopResponse, FirstOrderBandwidthAtHalfIsTheClosedForm) {
+  const double a = 0.9, rate = 10000;
+  const auto h = first_order_step(a, 2000);
+  // |H(w)|^2 = (1-a)^2 / (1 - 2a cos w + a^2) = 1/4.
+  const double w = std::acos((1 + a * a - 4 * (1 - a) * (1 - a)) / (2 * a));
+  const double want = w * rate / (2 * std::numbers::pi);
+  const StepFigures f = step_figures(h, rate);
+  EXPECT_NEAR(f.final_value, 1.0, 1e-12);
+  EXPECT_NEAR(f.bandwidth_0p5_hz, want, 0.05);  // 1 Hz grid, linear between the points
+  EXPECT_EQ(f.overshoot, 0.0);
+  EXPECT_NEAR(f.amplitude.amp.front(), 1.0, 1e-3);
+}
+
+TEST(LoopResponse, UnitStepRemovesTheBaselineAndScalesByTheAmplitude) {
+  std::vector<double> r = {0.2, 0.2, 0.2, 0.2, -1.8, -2.8, -2.8};
+  const auto h = unit_step(r, 4, -2.0);
+  ASSERT_EQ(h.size(), 3u);
+  EXPECT_DOUBLE_EQ(h[0], 1.0);
+  EXPECT_DOUBLE_EQ(h[2], 1.5);
+  EXPECT_DOUBLE_EQ(final_value(h, 0.5), 1.5);
+  EXPECT_THROW(unit_step(r, 0, 1.0), std::invalid_argument);
+  EXPECT_THROW(unit_step(r, 7, 1.0), std::invalid_argument);
+  EXPECT_THROW(unit_step(r, 2, 0.0), std::invalid_argument);
+}
+
+TEST(LoopResponse, RepeatedFigureIsStudentsIntervalWidenedByTheResolution) {
+  const std::vector<double> v = {3.0, 3.2, 3.1, 3.1, 3.1};
+  const RepeatedFigure r = repeated_figure(v, 0.1);
+  EXPECT_DOUBLE_EQ(r.value, 3.1);
+  EXPECT_EQ(r.n, 5u);
+  const double sd = std::sqrt(0.02 / 4);
+  EXPECT_NEAR(r.sd, sd, 1e-12);
+  const double t = 2.7764451051977987;  // Student's t, 0.975, 4 degrees of freedom
+  EXPECT_NEAR(r.hi - r.value, std::hypot(t * sd / std::sqrt(5.0), 0.05), 1e-9);
+  EXPECT_NEAR(r.value - r.lo, r.hi - r.value, 1e-12);
+  const RepeatedFigure one = repeated_figure(std::vector<double>{3.0}, 0.1);
+  EXPECT_NEAR(one.hi - one.lo, 0.1, 1e-12) << "one step: the resolution only";
+  EXPECT_THROW(repeated_figure(std::vector<double>{}, 0.1), std::invalid_argument);
+}

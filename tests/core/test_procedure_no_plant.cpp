@@ -1,0 +1,144 @@
+// The acceptance procedure builds and runs without the emulator: this executable links
+// rig_acceptance and nothing from plant/ (its link closure is checked below, computed by CMake),
+// and drives the loop phase through fakes of the seams. A DUT with a loop test gives figures
+// with intervals from its records; one without gives null values with the reason.
+#include <unistd.h>
+
+#include <cmath>
+#include <numbers>
+#include <filesystem>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
+#include "procedures/acceptance/loop_phase.hpp"
+#include "procedures/acceptance/procedure.hpp"
+#include "rig/core/gpio.hpp"
+
+namespace fs = std::filesystem;
+using namespace rig;
+
+namespace {
+
+class IdleTable final : public RotaryTable {
+ public:
+  TableStatus status() override { return {}; }
+  void home(const CancelToken&) override {}
+  void move_to(double, const CancelToken&) override {}
+  void stop() noexcept override {}
+  void quick_stop() noexcept override {}
+  std::string describe() const override { return "idle table"; }
+};
+
+// A DUT whose loop is first order, y[k] = a y[k-1] + (1 - a) u[k] at 10 kHz (x = y): its figures
+// are known in closed form. `loop_test` false: a DUT without one (DutLink's default answer).
+class FirstOrderDut final : public DutLink {
+ public:
+  FirstOrderDut(double a, bool has_loop_test) : a_(a), has_(has_loop_test) {}
+  DutInfo info(const CancelToken&) override { return {"FAKE-1", "0.0.1", 22, 1000}; }
+  void start_stream(const CancelToken&) override {}
+  void stop_stream() noexcept override {}
+  std::size_t read(std::span<Sample> out, const CancelToken&) override { return out.size(); }
+  void set_filter(const FilterConfig& f, const CancelToken&) override { f_ = f; }
+  FilterConfig get_filter(const CancelToken&) override { return f_; }
+  LinkStats stats() const override { return {}; }
+  void reset_stats() override {}
+  std::string describe() const override { return "first-order fake DUT"; }
+  LoopTestResponse loop_test(const LoopTestRequest& rq, const CancelToken& c) override {
+    if (!has_) return DutLink::loop_test(rq, c);
+    LoopTestResponse r{true, "", 10000, rq.amplitude_g, {}};
+    const auto n = static_cast<std::size_t>(rq.record_s * r.rate_hz);
+    for (int s = 0; s < rq.steps; ++s) {
+      LoopStepRecord rec;
+      rec.pre_samples = n / 10;
+      double y = 0.25;  // an offset before the step
+      for (std::size_t k = 0; k < n; ++k) {
+        const double u = 0.25 + (k >= rec.pre_samples ? rq.amplitude_g : 0.0);
+        y = a_ * y + (1 - a_) * u;
+        rec.x.push_back(y);
+        rec.y.push_back(y);
+      }
+      r.steps.push_back(rec);
+    }
+    return r;
+  }
+
+ private:
+  double a_;
+  bool has_;
+  FilterConfig f_;
+};
+
+struct LoopRun {
+  std::ostringstream logtext;
+  MeasurementSet values;
+  nlohmann::json state = nlohmann::json::object();
+  std::string out;
+  explicit LoopRun(DutLink& dut, const std::string& name) {
+    out = fs::temp_directory_path() / ("rignoplant-" + std::to_string(::getpid()) + "-" + name);
+    fs::create_directories(out);
+    const acceptance::Profile p = acceptance::load_profile("ci");
+    acceptance::declare_values(p, values);
+    IdleTable table;
+    SimGpio io;
+    SimClock clock;
+    Devices dev{table, dut, io, clock, "hardware"};
+    auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+    PhaseContext ctx{dev, CancelToken{}, values, state, out, log, nullptr};
+    for (const Phase& ph : acceptance::build_phases(p))
+      if (ph.id == "loop") ph.run(ctx);
+  }
+  ~LoopRun() { fs::remove_all(out); }
+};
+
+}  // namespace
+
+TEST(ProcedureWithoutPlant, LinksNoEmulatorLibrary) {
+  // RIG_ACCEPTANCE_CLOSURE: every library rig_acceptance links, transitively (tests/core/CMakeLists.txt).
+  const std::string closure = RIG_ACCEPTANCE_CLOSURE;
+  EXPECT_NE(closure.find("rig_analysis"), std::string::npos) << "the closure was computed: " << closure;
+  EXPECT_EQ(closure.find("rig_plant"), std::string::npos) << closure;
+}
+
+TEST(ProcedureWithoutPlant, LoopPhaseMeasuresAFirstOrderLoopInClosedForm) {
+  const double a = 0.9;
+  FirstOrderDut dut(a, true);
+  LoopRun r(dut, "first-order");
+  const Measurement* ts = r.values.find("settling_time");
+  const Measurement* bw = r.values.find("bandwidth_0p5");
+  ASSERT_TRUE(ts && ts->value && bw && bw->value) << r.logtext.str();
+  // Settling to 5 %: floor(ln 0.05 / ln a) periods; |H| = 0.5 where cos w = (1 + a^2 - 4 (1-a)^2) / (2a).
+  EXPECT_NEAR(*ts->value, std::floor(std::log(0.05) / std::log(a)) * 1e-4, 1e-12);
+  const double w = std::acos((1 + a * a - 4 * (1 - a) * (1 - a)) / (2 * a));
+  EXPECT_NEAR(*bw->value, w * 10000 / (2 * std::numbers::pi), 0.05);
+  // Identical steps: the interval is the resolution alone (one period; 1 Hz).
+  EXPECT_NEAR(*ts->hi - *ts->lo, 1e-4, 1e-12);
+  EXPECT_NEAR(*bw->hi - *bw->lo, 1.0, 1e-9);
+  EXPECT_NE(ts->reason.find("measured on the DUT (loop test, 5 steps of 1 g)"), std::string::npos) << ts->reason;
+  EXPECT_TRUE(fs::exists(r.out + "/" + acceptance::kLoopTestFile));
+}
+
+TEST(ProcedureWithoutPlant, ADutWithoutLoopTestLeavesBothValuesNullWithTheReason) {
+  FirstOrderDut dut(0.9, false);
+  LoopRun r(dut, "none");
+  for (const char* name : {"bandwidth_0p5", "settling_time"}) {
+    const Measurement* m = r.values.find(name);
+    ASSERT_NE(m, nullptr);
+    EXPECT_FALSE(m->value);
+    EXPECT_EQ(m->reason, "not measured: first-order fake DUT has no loop test");
+  }
+  EXPECT_FALSE(fs::exists(r.out + "/" + acceptance::kLoopTestFile));
+  EXPECT_EQ(r.state["loop"]["source"], "none");
+}
+
+TEST(ProcedureWithoutPlant, ALoopThatNeverFallsToHalfHasNoBandwidth) {
+  FirstOrderDut dut(0.0, true);  // y = u: the amplitude response is 1 up to Nyquist
+  LoopRun r(dut, "flat");
+  const Measurement* bw = r.values.find("bandwidth_0p5");
+  ASSERT_NE(bw, nullptr);
+  EXPECT_FALSE(bw->value);
+  EXPECT_NE(bw->reason.find("stays above 0.5"), std::string::npos) << bw->reason;
+  EXPECT_TRUE(r.values.find("settling_time")->value) << "the settling time is still measured";
+}
