@@ -105,7 +105,7 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
             {"mag_y", log_subset(f_hz, [&](std::size_t i) { return may[i]; })}}}};
 }
 
-void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
+void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   LoopTestRequest rq;
   rq.amplitude_g = p.loop_amplitude_g;
   rq.steps = p.loop_steps;
@@ -116,7 +116,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
     const std::string why = "not measured: " + r.reason;
     ctx.values.set("bandwidth_0p5", std::nullopt, why);
     ctx.values.set("settling_time", std::nullopt, why);
-    st.loop = {{"source", "none"}, {"reason", r.reason}};
+    dut.loop = {{"source", "none"}, {"reason", r.reason}};
     return;
   }
   write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, loop_test_csv(r));
@@ -131,7 +131,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
     ctx.log->warn("{}", why);
     ctx.values.set("bandwidth_0p5", std::nullopt, why);
     ctx.values.set("settling_time", std::nullopt, why);
-    st.loop = {{"source", "loop test on the DUT"}, {"file", kLoopTestFile}, {"reason", why}};
+    dut.loop = {{"source", "loop test on the DUT"}, {"file", kLoopTestFile}, {"reason", why}};
     return;
   }
   const nlohmann::json f = loop_test_figures(r);
@@ -148,7 +148,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st) {
                  f["settling_time_interval_s"][0].get<double>(), f["settling_time_interval_s"][1].get<double>());
   ctx.log->info("loop test: settling time {:.4g} s, bandwidth (0.5) {:.1f} Hz over {} steps", f["settling_time_s"].get<double>(),
                 f["bandwidth_0p5_hz"].get<double>(), r.steps.size());
-  st.loop = f;
+  dut.loop = f;
 }
 
 }  // namespace rig::acceptance

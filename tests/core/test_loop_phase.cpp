@@ -18,7 +18,9 @@
 #include "plant/firmware/inprocess_dut.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "rig/core/toml_util.hpp"
+#include "rig/gpio/line_rig_io.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig;
@@ -65,14 +67,15 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   plant::EmulatedPlant world(plant_cfg);
   Devices dev{world.table(), world.dut(), world.io(), world.clock(), "emulated"};
   std::ostringstream logtext;
+  acceptance::ProcedureState state(p);
+  const auto phases = acceptance::build_phases(p, state);
   MeasurementSet values;
-  acceptance::declare_values(p, values);
-  nlohmann::json state = nlohmann::json::object();
+  acceptance::declare_values(p, phases, values);
   const std::string out = fresh_dir("paper");
-  PhaseContext ctx{dev, CancelToken{}, values, state, out, quiet_log(logtext), nullptr};
-  acceptance::bring_up(ctx, p, {});  // powers the DUT and sets the profile's output filter
-  const auto phases = acceptance::build_phases(p);
+  PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr};
+  acceptance::bring_up(ctx, p, {}, state.slot());  // powers the DUT and sets the profile's output filter
   loop_phase(phases).run(ctx);
+  const nlohmann::json loop = state.slot().loop.value_or(nlohmann::json());
 
   // The design model for the same parameters and filter.
   const design::LoopFigures model = plant::loop_figures(cfg::get_table(plant_cfg, "dut"), p.filter);
@@ -95,8 +98,8 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   std::size_t lines = 0;
   for (std::string l; std::getline(csv, l);) lines += !l.empty() && l[0] != '#';
   EXPECT_EQ(lines, 1 + 5 * 1000u) << "a header and 5 steps of 100 ms at 10 kHz";
-  EXPECT_EQ(state["loop"]["file"], acceptance::kLoopTestFile);
-  EXPECT_EQ(state["loop"]["step"]["y"].size(), 900u) << "the mean normalised step after the step";
+  EXPECT_EQ(loop["file"], acceptance::kLoopTestFile);
+  EXPECT_EQ(loop["step"]["y"].size(), 900u) << "the mean normalised step after the step";
   fs::remove_all(out);
 }
 
@@ -112,16 +115,17 @@ TEST(LoopPhase, HardwareFileWithTheLoopTestOffGivesNullWithTheReason) {
   auto dut = link::make_inprocess_dut(*src, clock, o);
   clock.set_advance([&](double dt) { dut->step(dt); });
   IdleTable table;
-  SimGpio io;
+  gpio::LineRigIo io(std::make_unique<gpio::SimLines>());
   Devices dev{table, *dut, io, clock, "hardware"};
   std::ostringstream logtext;
+  acceptance::ProcedureState state(p);
+  const auto phases = acceptance::build_phases(p, state);
   MeasurementSet values;
-  acceptance::declare_values(p, values);
-  nlohmann::json state = nlohmann::json::object();
+  acceptance::declare_values(p, phases, values);
   const std::string out = fresh_dir("off");
-  PhaseContext ctx{dev, CancelToken{}, values, state, out, quiet_log(logtext), nullptr};
-  acceptance::bring_up(ctx, p, {});
-  loop_phase(acceptance::build_phases(p)).run(ctx);
+  PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr};
+  acceptance::bring_up(ctx, p, {}, state.slot());
+  loop_phase(phases).run(ctx);
   for (const char* name : {"bandwidth_0p5", "settling_time"}) {
     const Measurement* m = values.find(name);
     ASSERT_NE(m, nullptr);

@@ -15,6 +15,7 @@
 
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "rig/core/gpio.hpp"
 
 namespace fs = std::filesystem;
@@ -30,6 +31,20 @@ class IdleTable final : public RotaryTable {
   void stop() noexcept override {}
   void quick_stop() noexcept override {}
   std::string describe() const override { return "idle table"; }
+};
+
+// Rig I/O that is always powered and never trips (the loop phase only needs the DUT on).
+class QuietIo final : public RigIo {
+ public:
+  void set_dut_power(bool on) override { on_ = on; }
+  bool dut_power() const override { return on_; }
+  bool estop_active() const override { return false; }
+  void set_lamp(Lamp, bool) override {}
+  void on_estop(std::function<void()>) override {}
+  std::string describe() const override { return "quiet fake I/O"; }
+
+ private:
+  bool on_ = true;
 };
 
 // A DUT whose loop is first order, y[k] = a y[k-1] + (1 - a) u[k] at 10 kHz (x = y): its figures
@@ -74,21 +89,24 @@ class FirstOrderDut final : public DutLink {
 struct LoopRun {
   std::ostringstream logtext;
   MeasurementSet values;
-  nlohmann::json state = nlohmann::json::object();
+  nlohmann::json state;  // the DUT's state after the phase, as analysis.json carries it
   std::string out;
   explicit LoopRun(DutLink& dut, const std::string& name) {
     out = fs::temp_directory_path() / ("rignoplant-" + std::to_string(::getpid()) + "-" + name);
     fs::create_directories(out);
     const acceptance::Profile p = acceptance::load_profile("ci");
-    acceptance::declare_values(p, values);
+    acceptance::ProcedureState st(p);
+    const auto phases = acceptance::build_phases(p, st);
+    acceptance::declare_values(p, phases, values);
     IdleTable table;
-    SimGpio io;
+    QuietIo io;
     SimClock clock;
     Devices dev{table, dut, io, clock, "hardware"};
     auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
-    PhaseContext ctx{dev, CancelToken{}, values, state, out, log, nullptr};
-    for (const Phase& ph : acceptance::build_phases(p))
+    PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr};
+    for (const Phase& ph : phases)
       if (ph.id == "loop") ph.run(ctx);
+    state = acceptance::to_json(st.slot());
   }
   ~LoopRun() { fs::remove_all(out); }
 };
