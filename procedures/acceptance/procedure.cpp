@@ -11,6 +11,7 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "analysis/allan.hpp"
+#include "analysis/envelope.hpp"
 #include "analysis/filter.hpp"
 #include "analysis/gost.hpp"
 #include "analysis/noise_terms.hpp"
@@ -162,6 +163,13 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p) {
                      {"x", std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n_ts))},
                      {"y", std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(n_ts))},
                      {"note", "first 2 s of the raw capture (drift: bias and base error removed)"}};
+  // For the report: the whole capture as block means with the raw min/max, the bounds' level,
+  // and the device time the run took up to here.
+  a["output_envelope"] = analysis::envelope_to_json(analysis::block_envelope(x, p.rate_hz, 1000),
+                                                    analysis::block_envelope(y, p.rate_hz, 1000),
+                                                    "raw capture, drift: bias and base error removed");
+  a["allan"]["confidence"] = p.confidence;
+  a["device_time_s"] = ctx.dev.clock.now_s();
   ctx.state["analysis"] = a;
 }
 

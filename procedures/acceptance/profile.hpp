@@ -10,6 +10,7 @@
 
 #include <toml++/toml.h>
 
+#include "analysis/options.hpp"
 #include "rig/core/dut_link.hpp"
 #include "rig/core/types.hpp"
 
@@ -47,11 +48,11 @@ struct Profile {
   FilterConfig filter;
   std::string filter_name;
 
-  // [analysis]
-  std::string taus = "log:100";
-  double confidence = 0.6826894921370859;  // one sigma, erf(1/sqrt 2)
+  // [analysis]: unset keys take the analysis library's defaults (analysis/options.hpp)
+  std::string taus = analysis::AnalysisOptions{}.taus;
+  double confidence = analysis::AnalysisOptions{}.confidence;
   // Rate ramp R needs a record of more than 50 h (METHOD.md); shorter captures report it null.
-  double r_min_record_s = 50 * 3600.0;
+  double r_min_record_s = analysis::AnalysisOptions{}.r_min_record_s;
 
   std::map<std::string, std::pair<double, double>> limits;  // [limits]
   std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g
