@@ -208,7 +208,8 @@ h2 { font-size: 17px; margin: 28px 0 8px; padding-bottom: 3px; border-bottom: 2p
 .sub { color: var(--mute); margin: 0 0 16px; }
 .ident { display: grid; grid-template-columns: 1fr auto; gap: 16px; align-items: start; }
 dl { display: grid; grid-template-columns: max-content 1fr; gap: 3px 14px; margin: 0; }
-dt { color: var(--mute); } dd { margin: 0; font-weight: 600; overflow-wrap: anywhere; }
+dt { color: var(--mute); } dd { margin: 0; font-weight: 600; white-space: nowrap; }
+dd.wrap { white-space: normal; overflow-wrap: anywhere; }
 .verdict { text-align: center; }
 .verdict .badge { font-size: 26px; padding: 10px 22px; }
 .badge { display: inline-block; padding: 1px 8px; border-radius: 4px; font-weight: 700; color: #fff; background: var(--mute); }
@@ -228,7 +229,7 @@ figure { margin: 8px 0; break-inside: avoid; page-break-inside: avoid; }
 figcaption { color: var(--mute); font-size: 12.5px; margin-top: 2px; }
 td .lvl { color: var(--mute); font-size: 11px; }
 td.time { white-space: nowrap; }
-#passport th:first-child { width: 23%; } #passport th:last-child { width: 25%; }
+#passport td.name div { max-width: 24ch; }
 .sign { margin: 18px 0 0; break-inside: avoid; page-break-inside: avoid; }
 .sign table { width: 100%; } .sign td, .sign tbody th { height: 34px; border-bottom: 1px solid var(--ink); }
 .sign tbody th { width: 16%; background: none; vertical-align: bottom; }
@@ -244,7 +245,7 @@ footer { margin-top: 28px; color: var(--mute); font-size: 12px; border-top: 1px 
   thead { display: table-header-group; }
   figure { margin: 4mm 0; }
   svg.plot { width: 100%; max-height: 118mm; }
-  .ident dl { grid-template-columns: max-content 1fr max-content 1fr; gap: 2px 12px; }
+  .ident dl { grid-template-columns: max-content minmax(0, 1fr) max-content minmax(0, 1fr); gap: 2px 12px; }
   table { font-size: 8.5pt; } table.terms { font-size: 8.5pt; }
   td.name div { font-size: 8pt; }
 }
@@ -279,8 +280,9 @@ std::string Page::identity() const {
   os << "<h1>Acceptance test passport</h1>\n<p class=\"sub\">Quartz pendulum accelerometer with digital feedback "
         "amplifier &middot; U10/U20 method</p>\n";
   os << "<section class=\"ident\"><dl>\n";
-  auto row = [&](const char* label, const std::string& value) {
-    os << "<dt>" << label << "</dt><dd>" << html_escape(value.empty() ? "—" : value) << "</dd>\n";
+  auto row = [&](const char* label, const std::string& value, bool wrap = false) {
+    os << "<dt>" << label << "</dt><dd" << (wrap ? " class=\"wrap\"" : "") << ">"
+       << html_escape(value.empty() ? "—" : value) << "</dd>\n";
   };
   row("Serial number", text(p_, "serial"));
   // The DUT as it reported itself at bring-up (analysis.json dut).
@@ -300,11 +302,11 @@ std::string Page::identity() const {
   // device time is the rig clock at the end of the analysis, counted from this session's start.
   row("Wall time", duration_text(seconds_between(text(p_, "started"), text(p_, "finished"))));
   row("Device time", duration_text(number(get(a_, {"device_time_s"}))));
-  row("Run folder", text(p_, "out_dir"));
+  row("Run folder", text(p_, "out_dir"), true);
   if (const json* ac = get(p_, {"values", "accuracy_class"}); ac && std::isfinite(number(*ac, "value")))
     row("Accuracy class", text(*ac, "reason") + " (" + fmt_num(number(*ac, "value"), 3) + ")");
   if (!text(p_, "aborted_reason").empty())
-    row(text(p_, "outcome") == "ABORTED" ? "Aborted because" : "Stopped because", text(p_, "aborted_reason"));
+    row(text(p_, "outcome") == "ABORTED" ? "Aborted because" : "Stopped because", text(p_, "aborted_reason"), true);
   os << "</dl>\n<div class=\"verdict\">" << badge(text(p_, "outcome")) << "</div></section>\n";
   return os.str();
 }

@@ -169,6 +169,10 @@ class Writer {
     for (const RefLine& l : p_.lines) ref_line(l);
     for (const Series& s : p_.series) series(s);
     if (labelled) labelled->clear();
+    // Every marker's circle is taken before any label is placed, so no label covers a point.
+    for (const Marker& m : p_.markers)
+      if (x_.usable(m.x) && y_.usable(m.y))
+        labels_.push_back({x_.px(m.x) - 4, y_.px(m.y) - 4, x_.px(m.x) + 4, y_.px(m.y) + 4});
     for (const Marker& m : p_.markers) {
       const bool placed = marker(m);
       if (labelled) labelled->push_back(placed);
