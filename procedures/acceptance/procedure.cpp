@@ -129,11 +129,12 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("in_run_b_allan", nt.B, 1.0, "sigma(tau_cp)/0.664 on the flat segment (paper's method)");
     if (nt.tau_cp_s) ctx.values.set("tau_cp", *nt.tau_cp_s, "middle of the flat segment");
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
-    // IEEE 952 terms quoted per hour (METHOD.md): Q g*s -> g*h, N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
-    term_value("q", nt.Q, 1.0 / 3600.0, "");
-    term_value("n", nt.N, 1.0 / 60.0, "");
-    term_value("k", nt.K, 60.0, "");
-    term_value("r", nt.R, 3600.0, "");
+    // IEEE 952 terms quoted per hour (METHOD.md), by noise_terms.hpp's factors: Q g*s -> g*h,
+    // N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
+    term_value("q", nt.Q, analysis::kQToHour, "");
+    term_value("n", nt.N, analysis::kNToHour, "");
+    term_value("k", nt.K, analysis::kKToHour, "");
+    term_value("r", nt.R, analysis::kRToHour, "");
   } else {
     term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
   }
