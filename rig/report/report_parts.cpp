@@ -229,7 +229,13 @@ figure { margin: 8px 0; break-inside: avoid; page-break-inside: avoid; }
 figcaption { color: var(--mute); font-size: 12.5px; margin-top: 2px; }
 td .lvl { color: var(--mute); font-size: 11px; }
 td.time { white-space: nowrap; }
-#passport td.name div { max-width: 24ch; }
+/* Fixed column widths: the auto layout gives the unbreakable names and numbers so much that the
+   reasons wrap every two words; "lo … hi" may break after the ellipsis. */
+#passport { table-layout: fixed; }
+#passport th:nth-child(1) { width: 20%; } #passport th:nth-child(2) { width: 11%; }
+#passport th:nth-child(3) { width: 8%; } #passport th:nth-child(4) { width: 17%; }
+#passport th:nth-child(5) { width: 12%; } #passport th:nth-child(6) { width: 9%; }
+#passport td.name, #passport td:last-child { overflow-wrap: anywhere; } td.num.bounds { white-space: normal; }
 .sign { margin: 18px 0 0; break-inside: avoid; page-break-inside: avoid; }
 .sign table { width: 100%; } .sign td, .sign tbody th { height: 34px; border-bottom: 1px solid var(--ink); }
 .sign tbody th { width: 16%; background: none; vertical-align: bottom; }
@@ -245,9 +251,9 @@ footer { margin-top: 28px; color: var(--mute); font-size: 12px; border-top: 1px 
   thead { display: table-header-group; }
   figure { margin: 4mm 0; }
   svg.plot { width: 100%; max-height: 118mm; }
-  .ident dl { grid-template-columns: max-content minmax(0, 1fr) max-content minmax(0, 1fr); gap: 2px 12px; }
+  .ident dl { grid-template-columns: max-content auto max-content auto; gap: 2px 12px; }
   table { font-size: 8.5pt; } table.terms { font-size: 8.5pt; }
-  td.name div { font-size: 8pt; }
+  td.name div { font-size: 8pt; } td.name code { font-size: 8pt; }
 }
 )CSS";
 
@@ -365,7 +371,7 @@ std::string Page::passport_table() const {
     os << "<td class=\"num\">" << (val && val->is_number() ? fmt_num(val->get<double>(), 5) : html_escape(text(val).empty() ? "—" : text(val)))
        << "</td><td>" << html_escape(text(v, "unit")) << "</td>";
     const double lo = number(v, "lo"), hi = number(v, "hi");
-    os << "<td class=\"num\">" << bounds_text(lo, hi);
+    os << "<td class=\"num bounds\">" << bounds_text(lo, hi);
     if (std::isfinite(lo) || std::isfinite(hi))
       os << "<div class=\"lvl\">" << html_escape(interval_level(name, v)) << "</div>";
     os << "</td>";
