@@ -13,12 +13,7 @@
 
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rig::test::slurp;
 
 TEST(AnalyzeSvg, DrawsWithTheReportsPlotterAndEscapesTheFileName) {
   rig::test::TempDir d;

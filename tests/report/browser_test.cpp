@@ -27,12 +27,7 @@ std::string chromium_path() {
   return "";
 }
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rig::test::slurp;
 
 struct Browser {
   std::string out, err;  // stdout (the DOM with --dump-dom) and stderr (the log)

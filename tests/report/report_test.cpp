@@ -20,12 +20,7 @@ namespace {
 using nlohmann::json;
 using rig::test::TempDir;
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rig::test::slurp;
 
 std::size_t count(const std::string& hay, const std::string& needle) {
   std::size_t n = 0;

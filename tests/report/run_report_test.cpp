@@ -17,12 +17,7 @@ namespace {
 
 using nlohmann::json;
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rig::test::slurp;
 
 TEST(RunReport, CiRunCarriesWhatThePrintedPassportShows) {
   rig::test::TempDir d;
