@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "rig/report/json_read.hpp"
 #include "rig/report/svg.hpp"
 #include "rig/report/svg_plot.hpp"
 #include "rig/report/timefmt.hpp"
@@ -16,7 +17,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const char* const kBlue = "#1f77b4";
 const char* const kOrange = "#ff7f0e";
 const char* const kGreen = "#2ca02c";
@@ -24,36 +24,6 @@ const char* const kRed = "#d62728";
 const char* const kPurple = "#9467bd";
 const char* const kBrown = "#8c564b";
 const char* const kGrey = "#7f7f7f";
-
-// Walks a path of keys; nullptr when any step is absent or not an object.
-const json* get(const json& j, std::initializer_list<const char*> path) {
-  const json* cur = &j;
-  for (const char* k : path) {
-    if (!cur->is_object()) return nullptr;
-    auto it = cur->find(k);
-    if (it == cur->end()) return nullptr;
-    cur = &*it;
-  }
-  return cur;
-}
-
-double number(const json* j) { return j && j->is_number() ? j->get<double>() : kNaN; }
-double number(const json& j, const char* key) { return number(get(j, {key})); }
-
-std::string text(const json* j) {
-  if (!j || j->is_null()) return "";
-  return j->is_string() ? j->get<std::string>() : j->dump();
-}
-std::string text(const json& j, const char* key) { return text(get(j, {key})); }
-
-// A JSON array of numbers (null -> NaN); empty when absent.
-std::vector<double> numbers(const json* j) {
-  std::vector<double> out;
-  if (!j || !j->is_array()) return out;
-  out.reserve(j->size());
-  for (const json& v : *j) out.push_back(v.is_number() ? v.get<double>() : kNaN);
-  return out;
-}
 
 // What each passport measurement is (CONTRACTS.md, METHOD.md), in the passport's order.
 const std::vector<std::pair<std::string, std::string>>& descriptions() {

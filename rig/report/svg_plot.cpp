@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
+
+#include "rig/report/json_read.hpp"
 
 namespace rig::report {
 
@@ -10,25 +11,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-const json* get(const json& j, const char* key) {
-  if (!j.is_object()) return nullptr;
-  auto it = j.find(key);
-  return it == j.end() ? nullptr : &*it;
-}
-double number(const json* j) { return j && j->is_number() ? j->get<double>() : kNaN; }
-double number(const json& j, const char* key) { return number(get(j, key)); }
-std::string text(const json& j, const char* key) {
-  const json* v = get(j, key);
-  return v && v->is_string() ? v->get<std::string>() : "";
-}
-std::vector<double> numbers(const json* j) {
-  std::vector<double> out;
-  if (!j || !j->is_array()) return out;
-  for (const json& v : *j) out.push_back(v.is_number() ? v.get<double>() : kNaN);
-  return out;
-}
 std::vector<double> field(const json& arr, const char* key) {
   std::vector<double> out;
   if (!arr.is_array()) return out;
@@ -38,7 +20,7 @@ std::vector<double> field(const json& arr, const char* key) {
 
 // A term's value and unit as the passport quotes it: per hour where the term has it.
 std::string term_label(const json& t, const char* name) {
-  const json* ph = get(t, "per_hour");
+  const json* ph = get(t, {"per_hour"});
   const json& src = ph && ph->is_object() ? *ph : t;
   return std::string(name) + " = " + fmt_num(number(src, "value"), 3) + " " + text(src, "unit");
 }
@@ -57,28 +39,28 @@ Plot allan_plot(const json& oadev, const json* nt, double confidence, const std:
   p.series.push_back({"OADEV with " + level, field(oadev, "tau_s"), field(oadev, "dev"), field(oadev, "lo"),
                       field(oadev, "hi"), color, Series::Style::line_markers, false, 1.5});
   if (!nt || !nt->is_object()) return p;
-  const json* curves = get(*nt, "curves");
-  const std::vector<double> tau = curves ? numbers(get(*curves, "tau_s")) : std::vector<double>{};
+  const json* curves = get(*nt, {"curves"});
+  const std::vector<double> tau = curves ? numbers(get(*curves, {"tau_s"})) : std::vector<double>{};
   // Each identified term alone (noise_terms.hpp's sigma_X), dashed.
   const std::pair<const char*, const char*> terms[] = {
       {"Q", "#9467bd"}, {"N", "#ff7f0e"}, {"B", "#d62728"}, {"K", "#8c564b"}, {"R", "#7f7f7f"}};
   for (const auto& [name, c] : terms) {
-    const json* t = get(*nt, name);
-    const std::vector<double> y = curves ? numbers(get(*curves, name)) : std::vector<double>{};
+    const json* t = get(*nt, {name});
+    const std::vector<double> y = curves ? numbers(get(*curves, {name})) : std::vector<double>{};
     if (!t || y.empty() || y.size() != tau.size()) continue;
     p.series.push_back({term_label(*t, name), tau, y, {}, {}, c, Series::Style::line, true, 1.2, false});
   }
   if (curves) {
-    if (const std::vector<double> y = numbers(get(*curves, "lsq_fit")); !y.empty() && y.size() == tau.size())
+    if (const std::vector<double> y = numbers(get(*curves, {"lsq_fit"})); !y.empty() && y.size() == tau.size())
       p.series.push_back({"weighted least-squares fit, identified terms together", tau, y, {}, {}, "#222",
                           Series::Style::line, false, 1.0, false});
-    if (const std::vector<double> y = numbers(get(*curves, "paper_poly")); !y.empty() && y.size() == tau.size())
+    if (const std::vector<double> y = numbers(get(*curves, {"paper_poly"})); !y.empty() && y.size() == tau.size())
       p.series.push_back({"4th-degree polynomial (paper)", tau, y, {}, {}, "#17becf", Series::Style::line, false, 1.2,
                           false});
   }
   // The paper's straight segments: slope `a` through the polynomial at the segment's middle.
-  if (const json* pf = get(*nt, "paper_fit"); pf)
-    if (const json* segs = get(*pf, "segments"); segs && segs->is_array()) {
+  if (const json* pf = get(*nt, {"paper_fit"}); pf)
+    if (const json* segs = get(*pf, {"segments"}); segs && segs->is_array()) {
       int k = 0;
       for (const json& sg : *segs) {
         const double a = number(sg, "tau_from_s"), b = number(sg, "tau_to_s"), slope = number(sg, "slope"),
@@ -91,7 +73,7 @@ Plot allan_plot(const json& oadev, const json* nt, double confidence, const std:
       }
     }
   const double tau_cp = number(*nt, "tau_cp_s"), sigma_cp = number(*nt, "sigma_cp");
-  const json* b = get(*nt, "B");
+  const json* b = get(*nt, {"B"});
   if (tau_cp > 0) {
     p.lines.push_back({true, tau_cp, "τ_ср = " + fmt_num(tau_cp, 3) + " s", "#d62728"});
     if (sigma_cp > 0 && b) p.markers.push_back({tau_cp, sigma_cp, term_label(*b, "B"), "#d62728", true});
@@ -106,9 +88,9 @@ Plot psd_plot(const json& psd, const std::string& id, const std::string& title, 
   p.x_label = "f, Hz";
   p.y_label = "PSD, " + (text(psd, "unit").empty() ? std::string("g^2/Hz") : text(psd, "unit"));
   p.log_x = p.log_y = true;
-  p.series.push_back({"PSD (Welch)", numbers(get(psd, "f_hz")), numbers(get(psd, "psd")), {}, {}, color,
+  p.series.push_back({"PSD (Welch)", numbers(get(psd, {"f_hz"})), numbers(get(psd, {"psd"})), {}, {}, color,
                       Series::Style::line, false, 1.0});
-  if (const json* pk = get(psd, "peaks"); pk && pk->is_array())
+  if (const json* pk = get(psd, {"peaks"}); pk && pk->is_array())
     for (const json& k : *pk)
       p.markers.push_back({number(k, "f_hz"), number(k, "psd"), fmt_num(number(k, "f_hz"), 4) + " Hz", "#d62728"});
   return p;
