@@ -128,8 +128,10 @@ Quoted quoted(const json* t) {
   return q;
 }
 
+// "lo … hi", breakable only after the ellipsis (never inside "7.7e-10").
 std::string bounds_text(double lo, double hi) {
-  return std::isfinite(lo) || std::isfinite(hi) ? fmt_num(lo) + " … " + fmt_num(hi) : "—";
+  if (!std::isfinite(lo) && !std::isfinite(hi)) return "—";
+  return "<span class=\"nw\">" + fmt_num(lo) + " …</span> <span class=\"nw\">" + fmt_num(hi) + "</span>";
 }
 
 // The identified noise terms of one channel: the rig's values (slope method for B, the
@@ -198,7 +200,7 @@ table.terms { margin: 0 0 14px; font-size: 12.5px; }
 figure { margin: 8px 0; break-inside: avoid; page-break-inside: avoid; }
 figcaption { color: var(--mute); font-size: 12.5px; margin-top: 2px; }
 td .lvl { color: var(--mute); font-size: 11px; }
-td.time { white-space: nowrap; }
+td.time, .nw { white-space: nowrap; }
 /* Fixed column widths: the auto layout gives the unbreakable names and numbers so much that the
    reasons wrap every two words; "lo … hi" may break after the ellipsis. */
 #passport { table-layout: fixed; }
