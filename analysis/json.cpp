@@ -17,8 +17,8 @@ json term(const an::Term& t, double (*to_hours)(double) = nullptr, const char* h
   if (t.lo) j["lo"] = num(t.lo);
   if (t.hi) j["hi"] = num(t.hi);
   if (!t.reason.empty()) j["reason"] = t.reason;
-  if (to_hours && t.value) {
-    j["per_hour"] = {{"value", to_hours(*t.value)}, {"unit", hour_unit}};
+  if (to_hours) {  // the unit also when the term has no value, so a reader can quote it
+    j["per_hour"] = {{"value", t.value ? json(to_hours(*t.value)) : json(nullptr)}, {"unit", hour_unit}};
     if (t.lo) j["per_hour"]["lo"] = to_hours(*t.lo);
     if (t.hi) j["per_hour"]["hi"] = to_hours(*t.hi);
   }
@@ -59,14 +59,22 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   if (!t.wls.reason.empty()) w["reason"] = t.wls.reason;
   const std::pair<const char*, const an::Term*> wt[] = {
       {"Q", &t.wls.Q}, {"N", &t.wls.N}, {"B", &t.wls.B}, {"K", &t.wls.K}, {"R", &t.wls.R}};
+  const std::pair<double (*)(double), const char*> to_hours[] = {
+      {an::q_per_hour, "g*h"}, {an::n_per_hour, "g*h^0.5"}, {nullptr, ""}, {an::k_per_hour, "g/h^0.5"}, {an::r_per_hour, "g/h"}};
   for (std::size_t i = 0; i < 5; ++i) {
     const auto& [name, tt] = wt[i];
     w[name] = num(tt->value);
-    w["terms"][name] = term(*tt);
+    w["terms"][name] = term(*tt, to_hours[i].first, to_hours[i].second);
     w["terms"][name]["share"] = t.wls.share[i];  // largest share of the model sigma^2 over the taus
     w["terms"][name]["z"] = t.wls.z[i];          // fitted coefficient over its standard error
   }
   j["lsq_fit"] = w;
+  // The fitted curves on the Allan taus (noise_terms.hpp's relations), for plots to draw as
+  // they are; a term without a value has null.
+  const auto curve = [](const std::vector<double>& v) { return v.empty() ? json(nullptr) : json(v); };
+  j["curves"] = {{"tau_s", t.curves.tau_s}, {"Q", curve(t.curves.Q)},          {"N", curve(t.curves.N)},
+                 {"B", curve(t.curves.B)},  {"K", curve(t.curves.K)},          {"R", curve(t.curves.R)},
+                 {"lsq_fit", curve(t.curves.lsq_fit)}, {"paper_poly", curve(t.curves.paper_poly)}};
   return j;
 }
 
@@ -74,6 +82,11 @@ nlohmann::json psd_to_json(const analysis::Psd& psd, const std::vector<analysis:
   nlohmann::json pk = nlohmann::json::array();
   for (const auto& p : peaks) pk.push_back({{"f_hz", p.f_hz}, {"psd", p.psd}, {"prominence_db", p.prominence_db}});
   return {{"f_hz", psd.f_hz}, {"psd", psd.psd}, {"unit", "g^2/Hz"}, {"peaks", pk}};
+}
+
+json envelope_to_json(const Envelope& x, const Envelope& y, const std::string& note) {
+  auto channel = [](const Envelope& e) { return json{{"mean", e.mean}, {"min", e.min}, {"max", e.max}}; };
+  return {{"block_s", x.block_s}, {"t_s", x.t_s}, {"x", channel(x)}, {"y", channel(y)}, {"note", note}};
 }
 
 }  // namespace rig::analysis

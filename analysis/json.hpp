@@ -7,7 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <string>
+
 #include "analysis/allan.hpp"
+#include "analysis/envelope.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"
 
@@ -16,5 +19,7 @@ namespace rig::analysis {
 nlohmann::json dev_to_json(std::span<const DevPoint> dev);
 nlohmann::json noise_terms_to_json(const NoiseTerms& nt);
 nlohmann::json psd_to_json(const Psd& psd, const std::vector<Peak>& peaks);
+// Both channels' block envelopes (same record, same blocks) and what the record is.
+nlohmann::json envelope_to_json(const Envelope& x, const Envelope& y, const std::string& note);
 
 }  // namespace rig::analysis

@@ -15,7 +15,9 @@ const char* const kNames[5] = {"Q", "N", "B", "K", "R"};
 const double kSlopes[5] = {-1, -0.5, 0, 0.5, 1};
 const char* const kUnits[5] = {"g*s", "g*s^0.5", "g", "g/s^0.5", "g/s"};
 
-// sigma^2 contribution of term k per unit of its squared coefficient (the model's basis).
+// sigma^2 contribution of term k per unit of its squared coefficient (the model's basis):
+// the squares of the relations sigma_q .. sigma_r in noise_terms.hpp, written out so the fit
+// keeps its exact arithmetic (3 / tau^2 rather than (sqrt 3 / tau)^2).
 double basis(int k, double tau) {
   switch (k) {
     case 0: return 3 / (tau * tau);
@@ -26,7 +28,8 @@ double basis(int k, double tau) {
   }
 }
 
-// Term value from sigma at tau on its own slope (IEEE 952 Annex C relations).
+// Term value from sigma at tau on its own slope: the relations sigma_q .. sigma_r of
+// noise_terms.hpp (IEEE 952 Annex C) solved for the coefficient.
 double term_from_sigma(int k, double sigma, double tau) {
   switch (k) {
     case 0: return sigma * tau / std::sqrt(3.0);
@@ -354,7 +357,39 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
       out.B.reason = r.str();
     }
   }
+  std::vector<double> taus;
+  for (const auto& p : oadev)
+    if (p.tau_s > 0) taus.push_back(p.tau_s);
+  out.curves = fitted_curves(out, taus);
   return out;
+}
+
+FittedCurves fitted_curves(const NoiseTerms& t, std::span<const double> taus) {
+  FittedCurves c;
+  c.tau_s.assign(taus.begin(), taus.end());
+  auto curve = [&](const Term& term, double (*sigma)(double, double)) {
+    std::vector<double> v;
+    if (term.value)
+      for (double tau : taus) v.push_back(sigma(*term.value, tau));
+    return v;
+  };
+  c.Q = curve(t.Q, sigma_q);
+  c.N = curve(t.N, sigma_n);
+  c.B = curve(t.B, sigma_b);
+  c.K = curve(t.K, sigma_k);
+  c.R = curve(t.R, sigma_r);
+  const std::pair<const Term*, double (*)(double, double)> wls[] = {
+      {&t.wls.Q, sigma_q}, {&t.wls.N, sigma_n}, {&t.wls.B, sigma_b}, {&t.wls.K, sigma_k}, {&t.wls.R, sigma_r}};
+  if (std::any_of(std::begin(wls), std::end(wls), [](const auto& w) { return w.first->value.has_value(); }))
+    for (double tau : taus) {
+      double var = 0;  // the model: sigma^2 is the sum of the terms' sigma^2
+      for (const auto& [term, sigma] : wls)
+        if (term->value) var += std::pow(sigma(*term->value, tau), 2);
+      c.lsq_fit.push_back(std::sqrt(var));
+    }
+  if (t.paper.ok)
+    for (double tau : taus) c.paper_poly.push_back(std::pow(10.0, poly(t.paper.coef, std::log10(tau))));
+  return c;
 }
 
 }  // namespace rig::analysis

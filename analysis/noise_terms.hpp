@@ -12,6 +12,7 @@
 //      EDF of each point (var(sigma^2) = 2 sigma^4 / edf), with 68 % bounds.
 #pragma once
 #include <array>
+#include <cmath>
 #include <optional>
 #include <span>
 #include <string>
@@ -59,16 +60,48 @@ struct WlsFit {
   std::array<double, 5> share{}, z{};
 };
 
+// sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C).
+// NB: sqrt(2 ln2 / pi) = 0.66428247026796; this constant is 3.7e-6 (relative) below it, while
+// the weighted fit's basis uses 2 ln2 / pi exactly. Left as it is because correcting it
+// changes in_run_b_allan in the passports' last digits; to be corrected on its own commit.
+inline constexpr double kBiasFactor = 0.66428001915095;
+
+// The Allan deviation each noise term alone contributes at tau (IEEE Std 952-1997 Annex C,
+// Table C.1; docs/analysis.md). Coefficients in the input unit g with tau in seconds.
+// The model's sigma^2(tau) is the sum of their squares.
+//   quantisation          sigma_Q(tau) = sqrt(3) Q / tau        slope -1
+inline double sigma_q(double q, double tau_s) { return std::sqrt(3.0) * q / tau_s; }
+//   velocity random walk  sigma_N(tau) = N / sqrt(tau)          slope -1/2
+inline double sigma_n(double n, double tau_s) { return n / std::sqrt(tau_s); }
+//   bias instability      sigma_B      = sqrt(2 ln2 / pi) B     flat (0.664 B)
+inline double sigma_b(double b, double /*tau_s*/) { return kBiasFactor * b; }
+//   rate random walk      sigma_K(tau) = K sqrt(tau / 3)        slope +1/2
+inline double sigma_k(double k, double tau_s) { return k * std::sqrt(tau_s / 3.0); }
+//   rate ramp             sigma_R(tau) = R tau / sqrt(2)        slope +1
+inline double sigma_r(double r, double tau_s) { return r * tau_s / std::sqrt(2.0); }
+
+// The fitted curves on the Allan taus, for drawing (the report and `rig analyze --svg` only
+// draw them): each identified term's sigma_X(tau), the sum of the weighted fit's identified
+// terms sqrt(sum sigma_X^2), and the paper's polynomial 10^(sum_k coef[k] (log10 tau)^k).
+// A term without a value has an empty curve.
+struct FittedCurves {
+  std::vector<double> tau_s;
+  std::vector<double> Q, N, B, K, R;  // the rig's values (B by the paper's method)
+  std::vector<double> lsq_fit;        // the weighted fit's identified terms together
+  std::vector<double> paper_poly;     // empty when the paper's fit failed
+};
+
 struct NoiseTerms {
   Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K R by the weighted fit
   std::optional<double> tau_cp_s;  // the flat segment's middle (B = sigma(tau_cp) / 0.664)
   std::optional<double> sigma_cp;
   PaperFit paper;
   WlsFit wls;
+  FittedCurves curves;  // on the taus of the Allan points the terms were fitted to
 };
 
-// sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C).
-inline constexpr double kBiasFactor = 0.66428001915095;
+// The curves of `t` on `taus` (noise_terms() fills NoiseTerms::curves with this).
+FittedCurves fitted_curves(const NoiseTerms& t, std::span<const double> taus);
 
 // The shortest record from which the method determines the rate ramp R (docs/method.md: > 50 h);
 // on a shorter record R is not part of the weighted fit.
@@ -79,10 +112,13 @@ inline constexpr double kRMinRecordS = 50 * 3600.0;
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
                        double r_min_record_s = kRMinRecordS);
 
-// Passport units.
-inline double q_per_hour(double q_g_s) { return q_g_s / 3600.0; }       // g*s -> g*h
-inline double n_per_hour(double n_g_rts) { return n_g_rts / 60.0; }     // g*s^0.5 -> g*h^0.5
-inline double k_per_hour(double k_g_prts) { return k_g_prts * 60.0; }   // g/s^0.5 -> g/h^0.5
-inline double r_per_hour(double r_g_ps) { return r_g_ps * 3600.0; }     // g/s -> g/h
+// Passport units (docs/method.md quotes the terms per hour): 1 h = 3600 s, so a coefficient in
+// g*s^a is 3600^-a of itself in g*h^a. Written as products with the same factors the passport
+// values are scaled by (procedures/acceptance), so both carry the same bits.
+inline constexpr double kQToHour = 1.0 / 3600.0, kNToHour = 1.0 / 60.0, kKToHour = 60.0, kRToHour = 3600.0;
+inline double q_per_hour(double q_g_s) { return q_g_s * kQToHour; }       // g*s -> g*h
+inline double n_per_hour(double n_g_rts) { return n_g_rts * kNToHour; }   // g*s^0.5 -> g*h^0.5
+inline double k_per_hour(double k_g_prts) { return k_g_prts * kKToHour; } // g/s^0.5 -> g/h^0.5
+inline double r_per_hour(double r_g_ps) { return r_g_ps * kRToHour; }     // g/s -> g/h
 
 }  // namespace rig::analysis

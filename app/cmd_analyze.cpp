@@ -22,6 +22,7 @@
 #include "analysis/json.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
+#include "analysis/options.hpp"
 #include "analysis/psd.hpp"
 #include "rig/report/svg_plot.hpp"
 #include "rig/capture/capture.hpp"
@@ -36,10 +37,10 @@ namespace an = rig::analysis;
 using nlohmann::json;
 
 struct Args {
-  std::string file, input = "auto", data = "freq", taus = "log:100", dev = "oadev", channel = "x";
+  std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev", channel = "x";
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
-  double confidence = an::kOneSigma;
+  double confidence = an::AnalysisOptions{}.confidence;
   bool no_bounds = false, no_psd = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
@@ -275,8 +276,14 @@ int run(const Args& a) {
     std::filesystem::create_directories(a.svg_dir, ec);
     if (ec) throw ConfigError(a.svg_dir + ": cannot create: " + ec.message());
     const std::string name = std::filesystem::path(a.file).filename().string();
-    write_file(std::filesystem::path(a.svg_dir) / "allan.svg", report::allan_svg(devs[0], terms, "OADEV of " + name));
-    if (psd) write_file(std::filesystem::path(a.svg_dir) / "psd.svg", report::psd_svg(*psd, peaks, "PSD of " + name));
+    // The report's plotter, fed the same JSON views as --json writes.
+    write_file(std::filesystem::path(a.svg_dir) / "allan.svg",
+               report::to_svg_file(report::allan_plot(j["oadev"], &j["noise_terms"], a.confidence, "allan",
+                                                      "OADEV of " + name, "#1f77b4")));
+    if (psd)
+      write_file(std::filesystem::path(a.svg_dir) / "psd.svg",
+                 report::to_svg_file(report::psd_plot(analysis::psd_to_json(*psd, peaks), "psd", "PSD of " + name,
+                                                      "#1f77b4")));
   }
 
   // Console summary.

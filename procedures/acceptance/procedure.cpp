@@ -13,6 +13,7 @@
 #include "procedures/acceptance/record.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "analysis/allan.hpp"
+#include "analysis/envelope.hpp"
 #include "analysis/rms.hpp"
 #include "analysis/gost.hpp"
 #include "analysis/noise_terms.hpp"
@@ -110,11 +111,12 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("in_run_b_allan", nt.B, 1.0, "sigma(tau_cp)/0.664 on the flat segment (paper's method)");
     if (nt.tau_cp_s) ctx.values.set("tau_cp", *nt.tau_cp_s, "middle of the flat segment");
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
-    // IEEE 952 terms quoted per hour (docs/method.md): Q g*s -> g*h, N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
-    term_value("q", nt.Q, 1.0 / 3600.0, "");
-    term_value("n", nt.N, 1.0 / 60.0, "");
-    term_value("k", nt.K, 60.0, "");
-    term_value("r", nt.R, 3600.0, "");
+    // IEEE 952 terms quoted per hour (docs/method.md), by noise_terms.hpp's factors: Q g*s -> g*h,
+    // N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
+    term_value("q", nt.Q, analysis::kQToHour, "");
+    term_value("n", nt.N, analysis::kNToHour, "");
+    term_value("k", nt.K, analysis::kKToHour, "");
+    term_value("r", nt.R, analysis::kRToHour, "");
   } else {
     term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
   }
@@ -147,6 +149,13 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
                      {"x", std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n_ts))},
                      {"y", std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(n_ts))},
                      {"note", "first 2 s of the raw capture (drift: bias and base error removed)"}};
+  // For the report: the whole capture as block means with the raw min/max, the bounds' level,
+  // and the device time the run took up to here.
+  a["output_envelope"] = analysis::envelope_to_json(analysis::block_envelope(x, p.rate_hz, 1000),
+                                                    analysis::block_envelope(y, p.rate_hz, 1000),
+                                                    "raw capture, drift: bias and base error removed");
+  a["allan"]["confidence"] = p.confidence;
+  a["device_time_s"] = ctx.dev.clock.now_s();
   st.analysis = a;
 }
 

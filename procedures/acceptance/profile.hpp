@@ -11,6 +11,7 @@
 
 #include <toml++/toml.h>
 
+#include "analysis/options.hpp"
 #include "rig/core/dut_link.hpp"
 #include "rig/core/types.hpp"
 
@@ -53,11 +54,11 @@ struct Profile {
   int loop_steps = 5;             // their scatter gives the figures' 95 % intervals
   double loop_record_s = 0.1;     // per step
 
-  // [analysis]
-  std::string taus = "log:100";
-  double confidence = 0.6826894921370859;  // one sigma, erf(1/sqrt 2)
+  // [analysis]: unset keys take the analysis library's defaults (analysis/options.hpp)
+  std::string taus = analysis::AnalysisOptions{}.taus;
+  double confidence = analysis::AnalysisOptions{}.confidence;
   // Rate ramp R needs a record of more than 50 h (docs/method.md); shorter captures report it null.
-  double r_min_record_s = 50 * 3600.0;
+  double r_min_record_s = analysis::AnalysisOptions{}.r_min_record_s;
 
   std::map<std::string, std::pair<double, double>> limits;  // [limits]
   std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g

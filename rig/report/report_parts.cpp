@@ -6,7 +6,9 @@
 #include <map>
 #include <sstream>
 
+#include "rig/report/json_read.hpp"
 #include "rig/report/svg.hpp"
+#include "rig/report/svg_plot.hpp"
 #include "rig/report/timefmt.hpp"
 
 namespace rig::report {
@@ -15,7 +17,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const char* const kBlue = "#1f77b4";
 const char* const kOrange = "#ff7f0e";
 const char* const kGreen = "#2ca02c";
@@ -23,43 +24,6 @@ const char* const kRed = "#d62728";
 const char* const kPurple = "#9467bd";
 const char* const kBrown = "#8c564b";
 const char* const kGrey = "#7f7f7f";
-
-// Walks a path of keys; nullptr when any step is absent or not an object.
-const json* get(const json& j, std::initializer_list<const char*> path) {
-  const json* cur = &j;
-  for (const char* k : path) {
-    if (!cur->is_object()) return nullptr;
-    auto it = cur->find(k);
-    if (it == cur->end()) return nullptr;
-    cur = &*it;
-  }
-  return cur;
-}
-
-double number(const json* j) { return j && j->is_number() ? j->get<double>() : kNaN; }
-double number(const json& j, const char* key) { return number(get(j, {key})); }
-
-std::string text(const json* j) {
-  if (!j || j->is_null()) return "";
-  return j->is_string() ? j->get<std::string>() : j->dump();
-}
-std::string text(const json& j, const char* key) { return text(get(j, {key})); }
-
-// A JSON array of numbers (null -> NaN); empty when absent.
-std::vector<double> numbers(const json* j) {
-  std::vector<double> out;
-  if (!j || !j->is_array()) return out;
-  out.reserve(j->size());
-  for (const json& v : *j) out.push_back(v.is_number() ? v.get<double>() : kNaN);
-  return out;
-}
-
-std::vector<double> field(const json* arr, const char* key) {
-  std::vector<double> out;
-  if (!arr || !arr->is_array()) return out;
-  for (const json& o : *arr) out.push_back(number(o, key));
-  return out;
-}
 
 // What each passport measurement is (docs/contracts.md, docs/method.md), in the passport's order.
 const std::vector<std::pair<std::string, std::string>>& descriptions() {
@@ -97,40 +61,14 @@ std::string figure(const std::string& svg, const std::string& caption) {
   return "<figure>" + svg + "<figcaption>" + caption + "</figcaption></figure>\n";
 }
 
-// Noise-term coefficient in the seconds basis the Allan plot uses (τ in s):
-// values quoted per hour (g*h, g*h^0.5, g/h^0.5, g/h) are converted.
-double seconds_basis(const std::string& term, double v, const std::string& unit) {
-  const bool hours = unit.find('h') != std::string::npos;
-  if (!hours || !std::isfinite(v)) return v;
-  if (term == "Q") return v * 3600.0;          // g*h -> g*s
-  if (term == "N") return v * 60.0;            // g*h^0.5 -> g*s^0.5
-  if (term == "K") return v / 60.0;            // g/h^0.5 -> g/s^0.5
-  if (term == "R") return v / 3600.0;          // g/h -> g/s
-  return v;
-}
-
-// Allan deviation of each noise term vs τ (IEEE 952 / 1293; docs/method.md slope relations).
-double term_sigma(const std::string& term, double c, double tau) {
-  if (term == "Q") return std::sqrt(3.0) * c / tau;
-  if (term == "N") return c / std::sqrt(tau);
-  if (term == "B") return 0.664 * c;  // sqrt(2 ln2 / π) B
-  if (term == "K") return c * std::sqrt(tau / 3.0);
-  if (term == "R") return c * tau / std::sqrt(2.0);
-  return kNaN;
-}
-
-std::vector<double> log_grid(double lo, double hi, int n) {
-  std::vector<double> out;
-  if (!(lo > 0 && hi > lo)) return out;
-  for (int i = 0; i < n; ++i) out.push_back(lo * std::pow(hi / lo, i / double(n - 1)));
-  return out;
-}
-
 // Seconds between two ISO 8601 times (zones honoured), NaN when either is not one.
 double seconds_between(const std::string& a, const std::string& b) {
   const auto ta = history::parse_iso8601(a), tb = history::parse_iso8601(b);
   return ta && tb ? static_cast<double>(*tb - *ta) : kNaN;
 }
+
+// The sample rate of the run's records (analysis.json timeseries.rate_hz), NaN when absent.
+double record_rate(const json& a) { return number(get(a, {"timeseries", "rate_hz"})); }
 
 std::string duration_text(double s) {
   if (!std::isfinite(s) || s < 0) return "—";
@@ -140,28 +78,96 @@ std::string duration_text(double s) {
   return buf;
 }
 
-// The identified noise terms of one channel: slope method (with bounds) and the
-// least-squares fit of all terms, side by side.
+// A length of time as people say it: "40 s", "30 min", "1 h 05 min".
+std::string short_duration(double s) {
+  if (!std::isfinite(s) || s < 0) return "—";
+  char buf[48];
+  if (s < 120) std::snprintf(buf, sizeof buf, "%.3g s", s);
+  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.3g min", s / 60);
+  else std::snprintf(buf, sizeof buf, "%ld h %02ld min", std::lround(s) / 3600, (std::lround(s) / 60) % 60);
+  return buf;
+}
+
+// The block length behind each GOST in-run value (in_run_b_gost_*), read from analysis.json's
+// in_run.blocks: the block whose length the name states, else the block in the same position
+// (the procedure writes the values and the blocks in one order; a profile may set lengths the
+// names do not state).
+std::map<std::string, double> gost_block_lengths(const json& passport_values, const json& analysis) {
+  std::map<std::string, double> out;
+  const json* blocks = get(analysis, {"in_run", "blocks"});
+  if (!blocks || !blocks->is_array() || !passport_values.is_object()) return out;
+  const std::string prefix = "in_run_b_gost_";
+  std::size_t k = 0;
+  for (const auto& [name, v] : passport_values.items()) {
+    if (name.rfind(prefix, 0) != 0) continue;
+    double len = kNaN;
+    for (const json& b : *blocks)
+      if (prefix + fmt_num(number(b, "block_s"), 6) + "s" == name) len = number(b, "block_s");
+    if (std::isnan(len) && k < blocks->size()) len = number((*blocks)[k], "block_s");
+    ++k;
+    if (len > 0) out[name] = len;
+  }
+  return out;
+}
+
+// A term's value, bounds and unit in the passport's per-hour units where the term has them
+// (analysis.json carries both; the report converts nothing).
+struct Quoted {
+  double value = kNaN, lo = kNaN, hi = kNaN;
+  std::string unit;
+};
+Quoted quoted(const json* t) {
+  Quoted q;
+  if (!t || !t->is_object()) return q;
+  const json* ph = get(*t, {"per_hour"});
+  const json& src = ph && ph->is_object() ? *ph : *t;
+  q.value = number(src, "value");
+  q.lo = number(src, "lo");
+  q.hi = number(src, "hi");
+  q.unit = text(src, "unit");
+  return q;
+}
+
+// "lo … hi", breakable only after the ellipsis (never inside "7.7e-10").
+std::string bounds_text(double lo, double hi) {
+  if (!std::isfinite(lo) && !std::isfinite(hi)) return "—";
+  return "<span class=\"nw\">" + fmt_num(lo) + " …</span> <span class=\"nw\">" + fmt_num(hi) + "</span>";
+}
+
+// The identified noise terms of one channel: the rig's values (slope method for B, the
+// weighted fit for the others) with their bounds, and the weighted fit's own value of each.
 std::string terms_table(const json& nt, const std::string& ch) {
-  const json* lsq = get(nt, {"lsq_fit"});
+  const json* lsq = get(nt, {"lsq_fit", "terms"});
   std::ostringstream os;
   os << "<table class=\"terms\" id=\"terms-" << html_escape(ch) << "\"><thead><tr><th>Term (" << html_escape(ch)
-     << ")</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi)</th><th>Least-squares fit</th><th>Note</th></tr>"
-        "</thead><tbody>\n";
+     << ")</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi), 68 %</th><th>Weighted least-squares fit</th>"
+        "<th>Note</th></tr></thead><tbody>\n";
   const char* names[][2] = {{"Q", "quantisation"}, {"N", "random walk"}, {"B", "bias instability"},
                             {"K", "rate random walk"}, {"R", "rate ramp"}};
   for (const auto& [term, label] : names) {
     const json* t = get(nt, {term});
     if (!t) continue;
-    const double lo = number(*t, "lo"), hi = number(*t, "hi"), fit = lsq ? number(*lsq, term) : kNaN;
-    os << "<tr><td>" << term << " — " << label << "</td><td class=\"num\">" << fmt_num(number(*t, "value"), 4)
-       << "</td><td>" << html_escape(text(*t, "unit")) << "</td><td class=\"num\">"
-       << (std::isfinite(lo) || std::isfinite(hi) ? fmt_num(lo) + " … " + fmt_num(hi) : "—") << "</td><td class=\"num\">"
-       << fmt_num(fit, 4) << "</td><td>" << html_escape(text(*t, "reason")) << "</td></tr>\n";
+    const Quoted q = quoted(t), fit = quoted(lsq ? get(*lsq, {term}) : nullptr);
+    os << "<tr><td>" << term << " — " << label << "</td><td class=\"num\">" << fmt_num(q.value, 4) << "</td><td>"
+       << html_escape(q.unit) << "</td><td class=\"num\">" << bounds_text(q.lo, q.hi) << "</td><td class=\"num\">"
+       << fmt_num(fit.value, 4) << (std::isfinite(fit.value) && fit.unit != q.unit ? " " + html_escape(fit.unit) : "")
+       << "</td><td>" << html_escape(text(*t, "reason")) << "</td></tr>\n";
   }
   os << "<tr><td>τ_ср — middle of the flat segment</td><td class=\"num\">" << fmt_num(number(nt, "tau_cp_s"), 4)
      << "</td><td>s</td><td></td><td></td><td></td></tr>\n</tbody></table>\n";
   return os.str();
+}
+
+// The confidence level of a measurement's bounds: the passport's own "confidence" when it
+// carries one, else the level of the method that produced the bounds (docs/method.md): GOST R
+// 8.736's Student interval at 95 % for the U10/U20 statistics, one standard deviation of the
+// weighted Allan fit (68 %) for the noise terms.
+std::string interval_level(const std::string& name, const json& v) {
+  if (const double c = number(v, "confidence"); c > 0 && c < 1) return fmt_num(100 * c, 3) + " %";
+  if (name == "bias" || name == "base_error") return "95 %, GOST R 8.736";
+  if (name == "q" || name == "n" || name == "k" || name == "r" || name.rfind("in_run_b_allan", 0) == 0)
+    return "68 %, ±1 σ of the Allan fit";
+  return "level not stated";
 }
 
 const char* kCss = R"CSS(
@@ -174,7 +180,8 @@ h2 { font-size: 17px; margin: 28px 0 8px; padding-bottom: 3px; border-bottom: 2p
 .sub { color: var(--mute); margin: 0 0 16px; }
 .ident { display: grid; grid-template-columns: 1fr auto; gap: 16px; align-items: start; }
 dl { display: grid; grid-template-columns: max-content 1fr; gap: 3px 14px; margin: 0; }
-dt { color: var(--mute); } dd { margin: 0; font-weight: 600; word-break: break-all; }
+dt { color: var(--mute); } dd { margin: 0; font-weight: 600; white-space: nowrap; }
+dd.wrap { white-space: normal; overflow-wrap: anywhere; }
 .verdict { text-align: center; }
 .verdict .badge { font-size: 26px; padding: 10px 22px; }
 .badge { display: inline-block; padding: 1px 8px; border-radius: 4px; font-weight: 700; color: #fff; background: var(--mute); }
@@ -192,14 +199,19 @@ table.terms { margin: 0 0 14px; font-size: 12.5px; }
 .figs { display: grid; grid-template-columns: 1fr; gap: 10px; }
 figure { margin: 8px 0; break-inside: avoid; page-break-inside: avoid; }
 figcaption { color: var(--mute); font-size: 12.5px; margin-top: 2px; }
-svg.plot { max-width: 100%; height: auto; display: block; font-family: "DejaVu Sans", Arial, sans-serif; }
-svg .area { fill: #fff; stroke: #333; stroke-width: 1; }
-svg .grid { stroke: #dcdfe3; stroke-width: 1; } svg .grid.minor { stroke: #eff1f3; }
-svg .tick { font-size: 11px; fill: #333; } svg .alabel { font-size: 12px; fill: #222; }
-svg .ptitle { font-size: 13px; font-weight: 700; fill: #111; } svg .legend { font-size: 11px; fill: #222; }
-svg .ref { stroke-width: 1.2; stroke-dasharray: 4 3; } svg .reftext { font-size: 11px; }
-svg .mark { font-size: 11px; font-weight: 600; } svg .ebar { stroke-width: 1; opacity: .7; }
-svg .nodata { font-size: 14px; fill: #999; }
+td .lvl { color: var(--mute); font-size: 11px; }
+td.time, .nw { white-space: nowrap; }
+/* Fixed column widths: the auto layout gives the unbreakable names and numbers so much that the
+   reasons wrap every two words; "lo … hi" may break after the ellipsis. */
+#passport { table-layout: fixed; }
+#passport th:nth-child(1) { width: 20%; } #passport th:nth-child(2) { width: 11%; }
+#passport th:nth-child(3) { width: 8%; } #passport th:nth-child(4) { width: 17%; }
+#passport th:nth-child(5) { width: 12%; } #passport th:nth-child(6) { width: 9%; }
+#passport td.name, #passport td:last-child { overflow-wrap: anywhere; } td.num.bounds { white-space: normal; }
+.sign { margin: 18px 0 0; break-inside: avoid; page-break-inside: avoid; }
+.sign table { width: 100%; } .sign td, .sign tbody th { height: 34px; border-bottom: 1px solid var(--ink); }
+.sign tbody th { width: 16%; background: none; vertical-align: bottom; }
+.sign thead th:nth-child(2) { width: 34%; } .sign thead th:nth-child(3) { width: 30%; }
 footer { margin-top: 28px; color: var(--mute); font-size: 12px; border-top: 1px solid var(--line); padding-top: 8px; }
 @page { size: A4 portrait; margin: 14mm 12mm 16mm; }
 @media print {
@@ -211,6 +223,9 @@ footer { margin-top: 28px; color: var(--mute); font-size: 12px; border-top: 1px 
   thead { display: table-header-group; }
   figure { margin: 4mm 0; }
   svg.plot { width: 100%; max-height: 118mm; }
+  .ident dl { grid-template-columns: max-content auto max-content auto; gap: 2px 12px; }
+  table { font-size: 8.5pt; } table.terms { font-size: 8.5pt; }
+  td.name div { font-size: 8pt; } td.name code { font-size: 8pt; }
 }
 )CSS";
 
@@ -223,7 +238,7 @@ std::string Page::html() {
   const std::string figs = figures();  // first: fills missing_
   std::ostringstream os;
   os << "<!DOCTYPE html>\n<html lang=\"en\">\n" << head() << "<body>\n<main>\n"
-     << identity() << notices() << passport_table() << phases() << figs << captures();
+     << identity() << notices() << passport_table() << signatures() << phases() << figs << captures();
   const std::string dir = text(p_, "out_dir");
   os << "<footer>Generated by " << html_escape("rig " RIG_VERSION) << " from passport.json"
      << (a_.is_object() ? " and analysis.json" : "") << (dir.empty() ? "" : " in " + html_escape(dir))
@@ -235,7 +250,7 @@ std::string Page::html() {
 std::string Page::head() const {
   const std::string title = "Passport " + text(p_, "serial") + " — " + text(p_, "outcome");
   return "<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-         "<title>" + html_escape(title) + "</title>\n<style>" + kCss + "</style>\n</head>\n";
+         "<title>" + html_escape(title) + "</title>\n<style>" + kCss + svg_css() + "</style>\n</head>\n";
 }
 
 std::string Page::identity() const {
@@ -243,22 +258,33 @@ std::string Page::identity() const {
   os << "<h1>Acceptance test passport</h1>\n<p class=\"sub\">Quartz pendulum accelerometer with digital feedback "
         "amplifier &middot; U10/U20 method</p>\n";
   os << "<section class=\"ident\"><dl>\n";
-  auto row = [&](const char* label, const std::string& value) {
-    os << "<dt>" << label << "</dt><dd>" << html_escape(value.empty() ? "—" : value) << "</dd>\n";
+  auto row = [&](const char* label, const std::string& value, bool wrap = false) {
+    os << "<dt>" << label << "</dt><dd" << (wrap ? " class=\"wrap\"" : "") << ">"
+       << html_escape(value.empty() ? "—" : value) << "</dd>\n";
   };
   row("Serial number", text(p_, "serial"));
+  // The DUT as it reported itself at bring-up (analysis.json dut).
+  const json* dut = get(a_, {"dut"});
+  row("DUT firmware", dut ? text(*dut, "firmware") : "");
+  const double temp = dut ? number(*dut, "temperature_c") : kNaN;
+  char deg[32];
+  std::snprintf(deg, sizeof deg, "%.1f", temp);
+  row("DUT temperature", std::isfinite(temp) ? std::string(deg) + " °C (at bring-up)" : "");
   row("Profile", text(p_, "profile"));
   row("Plant", text(p_, "plant"));
   if (!text(p_, "station").empty()) row("Station", text(p_, "station"));
   row("Software", text(p_, "software"));
   row("Started", text(p_, "started"));
   row("Finished", text(p_, "finished"));
-  row("Duration", duration_text(seconds_between(text(p_, "started"), text(p_, "finished"))));
-  row("Run folder", text(p_, "out_dir"));
+  // Wall time and device time differ on the emulated plant (it runs faster than real time);
+  // device time is the rig clock at the end of the analysis, counted from this session's start.
+  row("Wall time", duration_text(seconds_between(text(p_, "started"), text(p_, "finished"))));
+  row("Device time", duration_text(number(get(a_, {"device_time_s"}))));
+  row("Run folder", text(p_, "out_dir"), true);
   if (const json* ac = get(p_, {"values", "accuracy_class"}); ac && std::isfinite(number(*ac, "value")))
     row("Accuracy class", text(*ac, "reason") + " (" + fmt_num(number(*ac, "value"), 3) + ")");
   if (!text(p_, "aborted_reason").empty())
-    row(text(p_, "outcome") == "ABORTED" ? "Aborted because" : "Stopped because", text(p_, "aborted_reason"));
+    row(text(p_, "outcome") == "ABORTED" ? "Aborted because" : "Stopped because", text(p_, "aborted_reason"), true);
   os << "</dl>\n<div class=\"verdict\">" << badge(text(p_, "outcome")) << "</div></section>\n";
   return os.str();
 }
@@ -285,8 +311,19 @@ std::string Page::passport_table() const {
     os << "<p class=\"notice\">The passport holds no measurements.</p>\n";
     return os.str();
   }
-  os << "<table id=\"passport\"><thead><tr><th>Measurement</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi)</th>"
-        "<th>Limits</th><th>Outcome</th><th>Reason</th></tr></thead><tbody>\n";
+  os << "<table id=\"passport\"><thead><tr><th>Measurement</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi), "
+        "interval level</th><th>Limits</th><th>Outcome</th><th>Reason</th></tr></thead><tbody>\n";
+  const std::map<std::string, double> gost = gost_block_lengths(*values, a_);
+  // What a row is: the passport's own description when it has one, then the report's; a GOST
+  // in-run row names the block length its value was computed from.
+  auto describe = [&](const std::string& name, const std::string& fallback) {
+    if (auto g = gost.find(name); g != gost.end())
+      return "In-run B, (max − min)/2 of " + fmt_num(g->second, 4) + " s block means (GOST)";
+    if (const json* b = get(a_, {"in_run", "blocks"}); name == "accuracy_class" && b && b->is_array() && !b->empty())
+      return "Accuracy class from B of the " + fmt_num(number((*b)[0], "block_s"), 4) + " s blocks (GOST)";
+    const std::string own = text(get(*values, {name.c_str(), "description"}));
+    return own.empty() ? fallback : own;
+  };
   // The contract's measurements first, in its order, then any others the procedure added.
   std::vector<std::pair<std::string, std::string>> order;
   for (const auto& [name, desc] : descriptions())
@@ -296,7 +333,8 @@ std::string Page::passport_table() const {
                                    [&](const auto& d) { return d.first == name; });
     if (!known) order.emplace_back(name, "");
   }
-  for (const auto& [name, desc] : order) {
+  for (const auto& [name, fallback] : order) {
+    const std::string desc = describe(name, fallback);
     const json& v = (*values)[name];
     const std::string outcome = text(v, "outcome");
     os << "<tr" << (outcome == "FAIL" ? " class=\"fail\"" : "") << "><td class=\"name\"><code>" << html_escape(name)
@@ -305,8 +343,10 @@ std::string Page::passport_table() const {
     os << "<td class=\"num\">" << (val && val->is_number() ? fmt_num(val->get<double>(), 5) : html_escape(text(val).empty() ? "—" : text(val)))
        << "</td><td>" << html_escape(text(v, "unit")) << "</td>";
     const double lo = number(v, "lo"), hi = number(v, "hi");
-    os << "<td class=\"num\">" << (std::isfinite(lo) || std::isfinite(hi) ? fmt_num(lo) + " … " + fmt_num(hi) : "—")
-       << "</td>";
+    os << "<td class=\"num bounds\">" << bounds_text(lo, hi);
+    if (std::isfinite(lo) || std::isfinite(hi))
+      os << "<div class=\"lvl\">" << html_escape(interval_level(name, v)) << "</div>";
+    os << "</td>";
     const json* lim = get(v, {"limits"});
     std::string limits = "—";
     if (lim && lim->is_array() && lim->size() == 2) {
@@ -317,6 +357,17 @@ std::string Page::passport_table() const {
        << html_escape(text(v, "reason")) << "</td></tr>\n";
   }
   os << "</tbody></table>\n";
+  return os.str();
+}
+
+// The sign-off of a paper passport: who tested, who checked, when; blank lines to sign by hand.
+std::string Page::signatures() const {
+  std::ostringstream os;
+  os << "<section class=\"sign\" id=\"signatures\"><table><thead><tr><th></th><th>Name</th><th>Signature</th>"
+        "<th>Date</th></tr></thead><tbody>\n";
+  for (const char* role : {"Tested by", "Checked by"})
+    os << "<tr><th scope=\"row\">" << role << "</th><td></td><td></td><td></td></tr>\n";
+  os << "</tbody></table></section>\n";
   return os.str();
 }
 
@@ -334,7 +385,8 @@ std::string Page::phases() const {
        << "</td><td>" << (cls.empty() ? html_escape(st) : "<span class=\"badge " +
                                                              std::string(cls == "PASS" ? "pass" : cls == "FAIL" ? "fail" : "aborted") +
                                                              "\">" + html_escape(st) + "</span>")
-       << "</td><td>" << html_escape(text(x, "started")) << "</td><td>" << html_escape(text(x, "finished"))
+       << "</td><td class=\"time\">" << html_escape(text(x, "started")) << "</td><td class=\"time\">"
+       << html_escape(text(x, "finished"))
        << "</td><td>" << html_escape(text(x, "message")) << "</td></tr>\n";
   }
   os << "</tbody></table>\n";
@@ -372,96 +424,21 @@ std::string Page::allan(const std::string& ch) {
     if (a_.is_object()) missing_.push_back("Allan deviation of the " + what + " (analysis.json allan." + ch + ")");
     return "";
   }
-  Plot p;
-  p.id = "allan-" + ch;
-  p.title = "Overlapping Allan deviation, " + what;
-  p.x_label = "τ, s";
-  p.y_label = "σ(τ), g";
-  p.log_x = p.log_y = true;
-  Series dev{"OADEV with 68 % bounds", field(od, "tau_s"), field(od, "dev"), field(od, "lo"), field(od, "hi"),
-             ch == "x" ? kBlue : kGreen, Series::Style::line_markers, false, 1.5};
-  p.series.push_back(dev);
-  double tmin = kNaN, tmax = kNaN;
-  for (double t : dev.x)
-    if (t > 0) {
-      tmin = std::isnan(tmin) ? t : std::min(tmin, t);
-      tmax = std::isnan(tmax) ? t : std::max(tmax, t);
-    }
-  const std::vector<double> grid = log_grid(tmin, tmax, 80);
-  std::string terms_caption;
-
   const json* nt = get(*al, {"noise_terms"});
+  if (nt && !get(*nt, {"curves"}))
+    missing_.push_back("the fitted noise-term curves of " + ch + " (analysis.json allan." + ch + ".noise_terms.curves)");
+  const double confidence = number(get(a_, {"allan", "confidence"}));
+  const Plot p = allan_plot(*od, nt, confidence, "allan-" + ch, "Overlapping Allan deviation, " + what,
+                            ch == "x" ? kBlue : kGreen);
+  const std::string level = std::isfinite(confidence) ? fmt_num(100 * confidence, 3) + " % " : "";
+  std::string caption = "Allan deviation of the " + html_escape(what) + " with " + level + "confidence bounds (τ in s).";
   if (nt) {
-    // Each identified term's asymptote (IEEE 952 slope relations).
-    const std::vector<std::pair<std::string, const char*>> terms = {
-        {"Q", kPurple}, {"N", kOrange}, {"B", kRed}, {"K", kBrown}, {"R", kGrey}};
-    for (const auto& [term, color] : terms) {
-      const json* t = get(*nt, {term.c_str()});
-      const double v = seconds_basis(term, number(t ? get(*t, {"value"}) : nullptr), t ? text(*t, "unit") : "");
-      if (!std::isfinite(v) || v <= 0) continue;
-      Series s{term + " = " + fmt_num(number(get(*t, {"value"})), 3) + " " + text(*t, "unit"), grid, {}, {}, {},
-               color, Series::Style::line, true, 1.2, false};
-      for (double tau : grid) s.y.push_back(term_sigma(term, v, tau));
-      p.series.push_back(std::move(s));
-    }
-    // Least-squares sum of all terms: σ² = Σ σ_term².
-    if (const json* lsq = get(*nt, {"lsq_fit"}); lsq && lsq->is_object()) {
-      Series s{"least-squares fit of all terms", grid, {}, {}, {}, "#222", Series::Style::line, false, 1.0, false};
-      bool any = false;
-      for (double tau : grid) {
-        double var = 0;
-        for (const char* term : {"Q", "N", "B", "K", "R"}) {
-          const double c = number(*lsq, term);
-          if (std::isfinite(c)) {
-            var += std::pow(term_sigma(term, c, tau), 2);
-            any = true;
-          }
-        }
-        s.y.push_back(any ? std::sqrt(var) : kNaN);
-      }
-      if (any) p.series.push_back(std::move(s));
-    }
-    // The paper's method: 4th-degree polynomial in log-log and its straight segments.
-    if (const json* pf = get(*nt, {"paper_fit"})) {
-      const std::vector<double> c = numbers(get(*pf, {"poly"}));
-      if (!c.empty()) {
-        Series s{"4th-degree polynomial (paper)", grid, {}, {}, {}, "#17becf", Series::Style::line, false, 1.2, false};
-        for (double tau : grid) {
-          double lx = std::log10(tau), ly = 0, pw = 1;
-          for (double ci : c) {
-            ly += ci * pw;
-            pw *= lx;
-          }
-          s.y.push_back(std::pow(10.0, ly));
-        }
-        p.series.push_back(std::move(s));
-      }
-      if (const json* segs = get(*pf, {"segments"}); segs && segs->is_array()) {
-        int k = 0;
-        for (const json& sg : *segs) {
-          const double a = number(sg, "tau_from_s"), b = number(sg, "tau_to_s"), slope = number(sg, "slope"),
-                       tm = number(sg, "tau_mid_s"), sm = number(sg, "sigma_mid");
-          if (!(a > 0 && b > a && tm > 0 && sm > 0 && std::isfinite(slope))) continue;
-          Series s{k++ == 0 ? "polynomial segments (slope at τ_mid)" : "", {a, b},
-                   {sm * std::pow(a / tm, slope), sm * std::pow(b / tm, slope)}, {}, {}, "#e377c2",
-                   Series::Style::line, false, 3.0, false};
-          p.series.push_back(std::move(s));
-          p.markers.push_back({tm, sm, "a = " + fmt_num(slope, 2), "#e377c2"});
-        }
-      }
-    }
-    const double tau_cp = number(*nt, "tau_cp_s");
-    const double b = number(get(*nt, {"B", "value"}));
-    if (tau_cp > 0) {
-      p.lines.push_back({true, tau_cp, "τ_ср = " + fmt_num(tau_cp, 3) + " s", kRed});
-      if (b > 0) p.markers.push_back({tau_cp, 0.664 * b, "B = " + fmt_num(b, 3) + " g", kRed, true});
-    }
-    terms_caption = " Dashed: each identified noise term's asymptote (Q −1, N −½, B 0, K +½, R +1).";
+    caption += " Dashed: each identified noise term alone (Q −1, N −½, B 0, K +½, R +1), its value in the "
+               "passport's per-hour units.";
     if (const json* r = get(*nt, {"R"}); r && !text(*r, "reason").empty())
-      terms_caption += " R: " + html_escape(text(*r, "reason")) + ".";
+      caption += " R: " + html_escape(text(*r, "reason")) + ".";
   }
-  return figure(to_svg(p), "Allan deviation of the " + html_escape(what) + " with 68 % confidence bounds." +
-                               terms_caption + " B = σ(τ_ср)/0.664 (docs/method.md, IEEE Std 952).") +
+  return figure(to_svg(p), caption + " B = σ(τ_ср)/0.664 (docs/method.md, IEEE Std 952 Annex C).") +
          (nt ? terms_table(*nt, ch) : "");
 }
 
@@ -472,48 +449,72 @@ std::string Page::psd(const std::string& ch) {
     if (a_.is_object()) missing_.push_back("power spectral density of the " + what + " (analysis.json psd." + ch + ")");
     return "";
   }
-  Plot p;
-  p.id = "psd-" + ch;
-  p.title = "Power spectral density, " + what;
-  p.x_label = "f, Hz";
-  const std::string unit = text(*ps, "unit").empty() ? "g^2/Hz" : text(*ps, "unit");
-  p.y_label = "PSD, " + unit;
-  p.log_x = p.log_y = true;
-  p.series.push_back({"PSD (" + ch + ")", numbers(get(*ps, {"f_hz"})), numbers(get(*ps, {"psd"})), {}, {},
-                      ch == "x" ? kBlue : kGreen, Series::Style::line, false, 1.0});
-  if (const json* pk = get(*ps, {"peaks"}); pk && pk->is_array())
-    for (const json& k : *pk) p.markers.push_back({number(k, "f_hz"), number(k, "psd"), fmt_num(number(k, "f_hz"), 4) + " Hz", kRed});
-  return figure(to_svg(p), "PSD (Welch) of the " + html_escape(what) +
-                               "; labelled: detected peaks (building vibration near 70–76 Hz, interference near the 1 "
-                               "kHz polling rate).");
+  const Plot p = psd_plot(*ps, "psd-" + ch, "Power spectral density, " + what, ch == "x" ? kBlue : kGreen);
+  std::vector<bool> labelled;
+  const std::string svg = to_svg(p, &labelled);
+  // The caption names exactly the peaks the plot labels.
+  const std::string peaks = labelled_peaks(p, labelled);
+  const auto unlabelled = std::count(labelled.begin(), labelled.end(), false);
+  std::string caption = "PSD (Welch) of the " + html_escape(what) + "; " +
+                        (peaks.empty() ? std::string("no peak labelled") : "labelled peaks: " + html_escape(peaks)) + ".";
+  if (unlabelled > 0)
+    caption += " " + std::to_string(unlabelled) + " further detected peak" + (unlabelled > 1 ? "s are" : " is") +
+               " circled without a label (no room).";
+  return "<figure>" + svg + "<figcaption data-peaks=\"" + html_escape(peaks) + "\">" + caption +
+         "</figcaption></figure>\n";
 }
 
+// The output over the whole raw capture, from analysis.json's block envelope, as two plots:
+// the block means alone on their own scale (the zero drift, micro-g), then each block's raw
+// minimum and maximum with the means (the spread, dominated by vibration and quantisation,
+// milli-g). One plot for both would flatten the means into a line.
 std::string Page::timeseries() {
-  const json* ts = get(a_, {"timeseries"});
-  if (!ts) {
-    if (a_.is_object()) missing_.push_back("raw and filtered output over time (analysis.json timeseries)");
+  const json* env = get(a_, {"output_envelope"});
+  const std::vector<double> t = env ? numbers(get(*env, {"t_s"})) : std::vector<double>{};
+  if (t.empty()) {
+    if (a_.is_object()) missing_.push_back("the output over the raw capture (analysis.json output_envelope)");
     return "";
   }
-  const double rate = number(*ts, "rate_hz"), t0 = std::isfinite(number(*ts, "t0_s")) ? number(*ts, "t0_s") : 0.0;
-  const std::vector<double> x = numbers(get(*ts, {"x"})), y = numbers(get(*ts, {"y"}));
-  if (!(rate > 0)) {
-    missing_.push_back("timeseries.rate_hz (output over time not drawn)");
-    return "";
+  const double block = number(*env, "block_s");
+  const std::string blocks = fmt_num(block, 3) + " s block means";
+  struct Channel {
+    const char* key;
+    const char* what;
+    const char* band;
+    const char* line;
+    double width;
+  };
+  // y under x: the filtered output's mean is drawn wider so that x stays visible on it.
+  const Channel chans[] = {{"y", "y(t), filtered", "#fdd0a2", "#e6550d", 2.2}, {"x", "x(t), no filter", "#9ecae1", "#08519c", 1.0}};
+  Plot means, range;
+  means.id = "timeseries";
+  means.title = "Output over the raw capture: " + blocks;
+  range.id = "timeseries-range";
+  range.title = "Output over the raw capture: raw minimum and maximum of each block";
+  means.x_label = range.x_label = "t, s";
+  means.y_label = "block mean, g";
+  range.y_label = "output, g";
+  for (const Channel& c : chans) {
+    const json* ch = get(*env, {c.key});
+    if (!ch) continue;
+    range.series.push_back({std::string(c.what) + ": min … max", t, numbers(get(*ch, {"mean"})),
+                            numbers(get(*ch, {"min"})), numbers(get(*ch, {"max"})), c.band, Series::Style::band, false,
+                            1.0});
   }
-  std::vector<double> t(std::max(x.size(), y.size()));
-  for (std::size_t i = 0; i < t.size(); ++i) t[i] = t0 + static_cast<double>(i) / rate;
-  Plot p;
-  p.id = "timeseries";
-  p.title = "Output over time: raw x(t) and filtered y(t)";
-  p.x_label = "t, s";
-  p.y_label = "output, g";
-  p.series.push_back({"x(t), no filter", {t.begin(), t.begin() + static_cast<std::ptrdiff_t>(x.size())}, x, {}, {},
-                      "#9ecae1", Series::Style::line, false, 0.8});
-  p.series.push_back({"y(t), with the output filter", {t.begin(), t.begin() + static_cast<std::ptrdiff_t>(y.size())},
-                      y, {}, {}, "#08519c", Series::Style::line, false, 1.0});
-  const std::string note = text(*ts, "note");
-  return figure(to_svg(p), "Raw and filtered output (cf. the paper's Fig. 5)" +
-                               (note.empty() ? std::string(".") : ": " + html_escape(note) + "."));
+  for (const Channel& c : chans) {
+    const json* ch = get(*env, {c.key});
+    if (!ch) continue;
+    const Series s{std::string(c.what) + ": " + blocks, t, numbers(get(*ch, {"mean"})), {}, {}, c.line,
+                   Series::Style::line, false, c.width};
+    means.series.push_back(s);
+    range.series.push_back(s);
+  }
+  const std::string note = text(*env, "note");
+  const std::string what = note.empty() ? std::string(".") : "; " + html_escape(note) + ".";
+  return figure(to_svg(means), "Means of " + fmt_num(block, 3) + " s blocks over the whole raw capture (cf. the "
+                               "paper's Fig. 5)" + what) +
+         figure(to_svg(range), "The minimum and maximum raw sample of each " + fmt_num(block, 3) +
+                                   " s block (shaded) around the block means" + what);
 }
 
 std::string Page::averages() {
@@ -522,9 +523,12 @@ std::string Page::averages() {
     if (a_.is_object()) missing_.push_back("the 100 s averages of the U10/U20 runs (analysis.json runs)");
     return "";
   }
+  // Each run's length from its samples, so the title says what this profile averaged.
+  const double rate = record_rate(a_), n0 = number((*runs)[0], "n");
+  const std::string run_len = rate > 0 && n0 > 0 ? fmt_num(n0 / rate, 4) + " s averages" : "Averages";
   Plot p;
   p.id = "averages";
-  p.title = "100 s averages of the U10 and U20 runs";
+  p.title = run_len + " of the U10 and U20 runs";
   p.x_label = "run";
   p.y_label = "mean output, g";
   Series u10{"U10 (pendulum down)", {}, {}, {}, {}, kBlue, Series::Style::markers, false, 1.5};
@@ -555,9 +559,11 @@ std::string Page::in_run() {
     if (a_.is_object()) missing_.push_back("the in-run block averages (analysis.json in_run)");
     return "";
   }
+  const double rate = record_rate(a_), n = number(get(a_, {"in_run", "n"}));
   Plot p;
   p.id = "in-run";
-  p.title = "In-run zero signal, block averages of the 30 min U10 run";
+  p.title = "In-run zero signal, block averages of the " +
+            (rate > 0 && n > 0 ? short_duration(n / rate) + " " : std::string()) + "in-run record";
   p.x_label = "time from start, s";
   p.y_label = "block mean, g";
   const char* colors[] = {kBlue, kRed, kGreen, kPurple};
@@ -589,8 +595,21 @@ std::string Page::step() {
   p.series.push_back({"x(t), no filter", t, numbers(get(*st, {"x"})), {}, {}, kBlue, Series::Style::line, false, 1.5});
   p.series.push_back({"y(t), with the filter", t, numbers(get(*st, {"y"})), {}, {}, kOrange, Series::Style::line, false, 1.5});
   const double ts = number(get(a_, {"loop", "settling_time_s"}));
-  if (ts > 0) p.lines.push_back({true, ts, "t_рег = " + fmt_num(ts, 3) + " s", kRed});
-  return figure(to_svg(p), "Step response (cf. the paper's Fig. 6).");
+  const double band = number(get(a_, {"loop", "settling_band"})), gain = number(get(a_, {"loop", "dc_gain"}));
+  std::string scale;
+  if (ts > 0) {
+    p.lines.push_back({true, ts, "t_рег = " + fmt_num(ts, 3) + " s", kRed});
+    // The axis spans three settling times: the transient fills the plot, and the flat tail
+    // after it shows the output has stayed in the band.
+    p.x_range = std::pair{0.0, 3 * ts};
+    scale = " Time axis: three settling times.";
+  }
+  if (band > 0 && std::isfinite(gain)) {
+    p.lines.push_back({false, gain * (1 + band), "+" + fmt_num(100 * band, 3) + " %", kGrey});
+    p.lines.push_back({false, gain * (1 - band), "−" + fmt_num(100 * band, 3) + " %", kGrey});
+  }
+  return figure(to_svg(p), "Step response (cf. the paper's Fig. 6); t_рег: the output stays within ±" +
+                               fmt_num(100 * band, 3) + " % of its final value." + scale);
 }
 
 std::string Page::freq() {

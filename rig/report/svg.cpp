@@ -160,7 +160,7 @@ class Writer {
  public:
   explicit Writer(const Plot& p) : p_(p) {}
 
-  std::string run() {
+  std::string run(std::vector<bool>* labelled, const char* style) {
     legend_rows();
     ranges();
     frame();
@@ -168,7 +168,15 @@ class Writer {
     os_ << "<g clip-path=\"url(#clip-" << html_escape(p_.id) << ")\">\n";
     for (const RefLine& l : p_.lines) ref_line(l);
     for (const Series& s : p_.series) series(s);
-    for (const Marker& m : p_.markers) marker(m);
+    if (labelled) labelled->clear();
+    // Every marker's circle is taken before any label is placed, so no label covers a point.
+    for (const Marker& m : p_.markers)
+      if (x_.usable(m.x) && y_.usable(m.y))
+        labels_.push_back({x_.px(m.x) - 4, y_.px(m.y) - 4, x_.px(m.x) + 4, y_.px(m.y) + 4});
+    for (const Marker& m : p_.markers) {
+      const bool placed = marker(m);
+      if (labelled) labelled->push_back(placed);
+    }
     os_ << "</g>\n";
     legend();
     if (!has_data_)
@@ -180,6 +188,7 @@ class Writer {
          << "\" viewBox=\"0 0 " << p_.width << ' ' << total_h_ << "\" width=\"" << p_.width << "\" height=\""
          << total_h_ << "\" role=\"img\" aria-label=\"" << html_escape(p_.title) << "\">\n"
          << "<title>" << html_escape(p_.title) << "</title>\n"
+         << (style ? std::string("<style>") + style + "</style>\n" : std::string())
          << "<defs><clipPath id=\"clip-" << html_escape(p_.id) << "\"><rect x=\"" << n2(kLeft) << "\" y=\""
          << n2(kTop) << "\" width=\"" << n2(x_.p1 - x_.p0) << "\" height=\"" << n2(y_.p0 - y_.p1)
          << "\"/></clipPath></defs>\n";
@@ -214,7 +223,7 @@ class Writer {
           continue;
         has_data_ = true;
         rx.add(s.x[i], p_.log_x);
-        ry.add(s.y[i], p_.log_y);
+        if (s.style != Series::Style::band) ry.add(s.y[i], p_.log_y);
         if (i < s.y_lo.size()) ry.add(s.y_lo[i], p_.log_y);
         if (i < s.y_hi.size()) ry.add(s.y_hi[i], p_.log_y);
       }
@@ -223,6 +232,22 @@ class Writer {
     for (const Marker& m : p_.markers) {
       rx.add(m.x, p_.log_x);
       ry.add(m.y, p_.log_y);
+    }
+    if (p_.x_range) {  // the caller's window; y still from the data inside it
+      rx.lo = p_.x_range->first;
+      rx.hi = p_.x_range->second;
+      ry = Range{};
+      for (const Series& s : p_.series) {
+        if (!s.sets_range) continue;
+        for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
+          if (!(s.x[i] >= rx.lo && s.x[i] <= rx.hi)) continue;
+          if (s.style != Series::Style::band) ry.add(s.y[i], p_.log_y);
+          if (i < s.y_lo.size()) ry.add(s.y_lo[i], p_.log_y);
+          if (i < s.y_hi.size()) ry.add(s.y_hi[i], p_.log_y);
+        }
+      }
+      for (const RefLine& l : p_.lines)
+        if (!l.vertical) ry.add(l.at, p_.log_y);
     }
     nice_range(rx, p_.log_x);
     nice_range(ry, p_.log_y);
@@ -305,8 +330,30 @@ class Writer {
     }
   }
 
+  // The area between y_lo and y_hi as one polygon per finite run: upper edge left to
+  // right, lower edge back (the x axis is monotonic for an envelope).
+  void band(const Series& s) {
+    const std::size_t n = std::min({s.x.size(), s.y_lo.size(), s.y_hi.size()});
+    std::size_t i = 0;
+    while (i < n) {
+      std::size_t j = i;
+      while (j < n && x_.usable(s.x[j]) && y_.usable(s.y_lo[j]) && y_.usable(s.y_hi[j])) ++j;
+      if (j > i) {
+        std::string pts;
+        for (std::size_t k = i; k < j; ++k) pts += n2(x_.px(s.x[k])) + "," + n2(y_.px(s.y_hi[k])) + " ";
+        for (std::size_t k = j; k-- > i;) pts += n2(x_.px(s.x[k])) + "," + n2(y_.px(s.y_lo[k])) + " ";
+        os_ << "<polygon fill=\"" << html_escape(s.color) << "\" fill-opacity=\"0.55\" stroke=\"none\" points=\"" << pts << "\"/>\n";
+      }
+      i = j + 1;
+    }
+  }
+
   void series(const Series& s) {
     const std::string color = html_escape(s.color);
+    if (s.style == Series::Style::band) {
+      band(s);
+      return;
+    }
     if (s.style != Series::Style::markers) {
       std::vector<double> xs, ys;
       decimate(x_, s.x, s.y, xs, ys);
@@ -343,8 +390,10 @@ class Writer {
     }
   }
 
-  void marker(const Marker& m) {
-    if (!x_.usable(m.x) || !y_.usable(m.y)) return;
+  // True when the marker's text label was placed.
+  bool marker(const Marker& m) {
+    if (!x_.usable(m.x) || !y_.usable(m.y)) return false;
+    if (m.x < x_.lo || m.x > x_.hi) return false;  // outside a caller's x window
     const double px = x_.px(m.x), py = y_.px(m.y);
     const bool left = px > (x_.p0 + x_.p1) / 2 + (x_.p1 - x_.p0) * 0.3;  // near the right edge: label to the left
     os_ << "<circle cx=\"" << n2(px) << "\" cy=\"" << n2(py) << "\" r=\"3.5\" fill=\"none\" stroke=\""
@@ -367,8 +416,9 @@ class Writer {
       os_ << "<text x=\"" << n2(on_left ? px - 6 : px + 6) << "\" y=\"" << n2(y) << "\" class=\"mark\""
           << (on_left ? " text-anchor=\"end\"" : "") << " fill=\"" << html_escape(m.color) << "\">"
           << html_escape(m.text) << "</text>\n";
-      return;
+      return true;
     }
+    return false;
   }
 
   void legend() {
@@ -382,9 +432,13 @@ class Writer {
         x = kLeft;
         y = p_.height - 4 + row * 16;
       }
-      os_ << "<line x1=\"" << n2(x) << "\" y1=\"" << n2(y - 4) << "\" x2=\"" << n2(x + 24) << "\" y2=\"" << n2(y - 4)
-          << "\" stroke=\"" << html_escape(s.color) << "\" stroke-width=\"2\""
-          << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+      if (s.style == Series::Style::band)
+        os_ << "<rect x=\"" << n2(x) << "\" y=\"" << n2(y - 9) << "\" width=\"24\" height=\"10\" fill=\""
+            << html_escape(s.color) << "\" fill-opacity=\"0.55\"/>\n";
+      else
+        os_ << "<line x1=\"" << n2(x) << "\" y1=\"" << n2(y - 4) << "\" x2=\"" << n2(x + 24) << "\" y2=\"" << n2(y - 4)
+            << "\" stroke=\"" << html_escape(s.color) << "\" stroke-width=\"2\""
+            << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
       os_ << "<text x=\"" << n2(x + 28) << "\" y=\"" << n2(y) << "\" class=\"legend\">" << html_escape(s.label)
           << "</text>\n";
       x += w;
@@ -406,6 +460,23 @@ class Writer {
 
 }  // namespace
 
-std::string to_svg(const Plot& p) { return Writer(p).run(); }
+const char* svg_css() {
+  return R"CSS(
+svg.plot { max-width: 100%; height: auto; display: block; font-family: "DejaVu Sans", Arial, sans-serif; }
+svg .area { fill: #fff; stroke: #333; stroke-width: 1; }
+svg .grid { stroke: #dcdfe3; stroke-width: 1; } svg .grid.minor { stroke: #eff1f3; }
+svg .tick { font-size: 11px; fill: #333; } svg .alabel { font-size: 12px; fill: #222; }
+svg .ptitle { font-size: 13px; font-weight: 700; fill: #111; } svg .legend { font-size: 11px; fill: #222; }
+svg .ref { stroke-width: 1.2; stroke-dasharray: 4 3; } svg .reftext { font-size: 11px; }
+svg .mark { font-size: 11px; font-weight: 600; } svg .ebar { stroke-width: 1; opacity: .7; }
+svg .nodata { font-size: 14px; fill: #999; }
+)CSS";
+}
+
+std::string to_svg(const Plot& p, std::vector<bool>* labelled) { return Writer(p).run(labelled, nullptr); }
+
+std::string to_svg_file(const Plot& p) {
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + Writer(p).run(nullptr, svg_css());
+}
 
 }  // namespace rig::report

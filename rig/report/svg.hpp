@@ -2,8 +2,10 @@
 // linear or log axes with ticks and grid, reference lines, labelled points and a legend.
 // Output is a standalone <svg> element; every text is escaped.
 #pragma once
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace rig::report {
@@ -14,7 +16,8 @@ std::string html_escape(std::string_view s);
 std::string fmt_num(double v, int sig = 4);
 
 struct Series {
-  enum class Style { line, markers, line_markers };
+  // band: the area between y_lo and y_hi filled (a min/max envelope); y is not drawn.
+  enum class Style { line, markers, line_markers, band };
   std::string label;  // legend text; empty = not in the legend
   std::vector<double> x, y;
   std::vector<double> y_lo, y_hi;  // optional error bars, same length as y
@@ -49,8 +52,18 @@ struct Plot {
   std::vector<Marker> markers;
   std::vector<RefLine> lines;
   int width = 900, height = 400;
+  // The x axis range instead of the data's (e.g. a step response scaled to its settling);
+  // what lies outside is clipped.
+  std::optional<std::pair<double, double>> x_range;
 };
 
-std::string to_svg(const Plot& p);
+// The <svg> element for a page that carries svg_css(). `labelled`, when given, receives for
+// each marker whether its text label was placed (a label with no free place is dropped, the
+// circle stays), so a caption can name exactly the labelled points.
+std::string to_svg(const Plot& p, std::vector<bool>* labelled = nullptr);
+// The same as a standalone .svg file: the style rules inside it.
+std::string to_svg_file(const Plot& p);
+// The CSS rules the plots' classes need (report.html carries them once).
+const char* svg_css();
 
 }  // namespace rig::report

@@ -1,18 +1,28 @@
-// SVG figures built as strings (no I/O, no plotting library): the log-log Allan plot in
-// the style of the paper's Fig. 2 (bounds as error bars, the weighted-fit terms as slope
-// lines, the paper's polynomial and segment middles tau_cp) and the PSD with its peaks.
+// The Allan and PSD figures, built from the analysis' JSON views (analysis/json.hpp: the
+// shapes of analysis.json's allan.x/psd.x and of `rig analyze --json`), for report.html and
+// `rig analyze --svg` alike: one plotter (svg.hpp), and the curves drawn as the analysis wrote
+// them (noise_terms.curves), never recomputed here.
 #pragma once
-#include <span>
 #include <string>
+#include <vector>
 
-#include "analysis/allan.hpp"
-#include "analysis/noise_terms.hpp"
-#include "analysis/psd.hpp"
+#include <nlohmann/json.hpp>
+
+#include "rig/report/svg.hpp"
 
 namespace rig::report {
 
-std::string allan_svg(std::span<const analysis::DevPoint> pts, const analysis::NoiseTerms& terms, const std::string& title,
-                      const std::string& unit = "g");
-std::string psd_svg(const analysis::Psd& p, std::span<const analysis::Peak> peaks, const std::string& title, const std::string& unit = "g");
+// OADEV points (`dev_to_json`) with their bounds at `confidence` (NaN: level not known), and,
+// when `noise_terms` (`noise_terms_to_json`) is given, each identified term's curve labelled
+// in the passport's per-hour units, the weighted fit's sum, the paper's polynomial and its
+// segments, and tau_cp with B. `color` is the points' colour.
+Plot allan_plot(const nlohmann::json& oadev, const nlohmann::json* noise_terms, double confidence,
+                const std::string& id, const std::string& title, const std::string& color);
+
+// The Welch PSD (`psd_to_json`) with its peaks circled and labelled in Hz.
+Plot psd_plot(const nlohmann::json& psd, const std::string& id, const std::string& title, const std::string& color);
+
+// "f1 Hz, f2 Hz, …" of the peaks whose labels `to_svg` placed (in the plot's marker order).
+std::string labelled_peaks(const Plot& p, const std::vector<bool>& labelled);
 
 }  // namespace rig::report

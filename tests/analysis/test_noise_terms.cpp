@@ -9,6 +9,8 @@
 #include <random>
 #include <tuple>
 
+#include "analysis/envelope.hpp"
+#include "analysis/json.hpp"
 #include "analysis/noise_terms.hpp"
 
 namespace rig::analysis {
@@ -188,6 +190,77 @@ TEST(NoiseTerms, SimulatedRecordGivesNAndKFromItsOwnAllanCurve) {
   EXPECT_NEAR(*t.K.value, K, 0.35 * K);  // K rests on the few longest taus
   EXPECT_LT(*t.N.lo, N * 1.05);
   EXPECT_GT(*t.N.hi, N * 0.95);
+}
+
+}  // namespace
+}  // namespace rig::analysis
+
+namespace rig::analysis {
+namespace {
+
+// The curves analysis.json carries for the plots are the IEEE 952 Annex C relations of the
+// fitted terms, written out here independently of noise_terms.hpp, on the Allan taus.
+TEST(NoiseTermCurves, TheJsonCurvesAreTheIeee952RelationsOfTheFittedTerms) {
+  const auto pts = curve(2e-6, kN, kB, kK, 0, 0.001, 900, 60);
+  const NoiseTerms t = noise_terms(pts, 3600);
+  ASSERT_TRUE(t.Q.value && t.N.value && t.B.value && t.K.value) << t.B.reason;
+  ASSERT_FALSE(t.R.value);
+  const nlohmann::json j = noise_terms_to_json(t);
+  const nlohmann::json& c = j.at("curves");
+  ASSERT_EQ(c.at("tau_s").size(), pts.size());
+  EXPECT_TRUE(c.at("R").is_null());  // no value, no curve
+  const double Q = *t.Q.value, N = *t.N.value, B = *t.B.value, K = *t.K.value;
+  const double flat = std::sqrt(2 * std::numbers::ln2 / std::numbers::pi);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const double tau = pts[i].tau_s;
+    EXPECT_EQ(c["tau_s"][i].get<double>(), tau);
+    EXPECT_NEAR(c["Q"][i].get<double>(), std::sqrt(3.0) * Q / tau, 1e-12 * Q / tau);
+    EXPECT_NEAR(c["N"][i].get<double>(), N / std::sqrt(tau), 1e-12 * N / std::sqrt(tau));
+    EXPECT_NEAR(c["B"][i].get<double>(), kBiasFactor * B, 1e-12 * B);
+    EXPECT_NEAR(c["K"][i].get<double>(), K * std::sqrt(tau / 3), 1e-12 * K * std::sqrt(tau));
+    // The weighted fit's identified terms together: the model sigma^2 = sum of the squares.
+    const double q = *t.wls.Q.value, n = *t.wls.N.value, b = *t.wls.B.value, k = *t.wls.K.value;
+    const double model =
+        std::sqrt(3 * q * q / (tau * tau) + n * n / tau + kBiasFactor * kBiasFactor * b * b + k * k * tau / 3);
+    EXPECT_NEAR(c["lsq_fit"][i].get<double>(), model, 1e-9 * model);
+    // The paper's polynomial: log10 sigma = sum_k coef[k] (log10 tau)^k.
+    double ly = 0;
+    for (int e = 0; e < 5; ++e) ly += t.paper.coef[static_cast<std::size_t>(e)] * std::pow(std::log10(tau), e);
+    EXPECT_NEAR(c["paper_poly"][i].get<double>(), std::pow(10.0, ly), 1e-9 * std::pow(10.0, ly));
+  }
+  // The same relations in code, one function each.
+  EXPECT_DOUBLE_EQ(sigma_q(1.0, 2.0), std::sqrt(3.0) / 2);
+  EXPECT_DOUBLE_EQ(sigma_n(1.0, 4.0), 0.5);
+  EXPECT_DOUBLE_EQ(sigma_b(1.0, 7.0), kBiasFactor);
+  // kBiasFactor is sqrt(2 ln2 / pi) to 4e-6 relative (see its comment in noise_terms.hpp).
+  EXPECT_NEAR(kBiasFactor / flat, 1.0, 4e-6);
+  EXPECT_DOUBLE_EQ(sigma_k(1.0, 12.0), 2.0);
+  EXPECT_DOUBLE_EQ(sigma_r(1.0, 2.0), std::sqrt(2.0));
+  // Per-hour views: the passport's units and factors (1 h = 3600 s).
+  EXPECT_EQ(j["N"]["per_hour"]["unit"], "g*h^0.5");
+  EXPECT_NEAR(j["N"]["per_hour"]["value"].get<double>(), N / 60, 1e-15 * N);
+  EXPECT_NEAR(j["Q"]["per_hour"]["value"].get<double>(), Q / 3600, 1e-15 * Q);
+  EXPECT_NEAR(j["K"]["per_hour"]["value"].get<double>(), K * 60, 1e-15 * K);
+  EXPECT_TRUE(j["R"]["per_hour"]["value"].is_null());
+  EXPECT_EQ(j["R"]["per_hour"]["unit"], "g/h");
+  EXPECT_EQ(j["lsq_fit"]["terms"]["K"]["per_hour"]["unit"], "g/h^0.5");
+}
+
+TEST(NoiseTermCurves, BlockEnvelopeHoldsMeansAndRawExtremesOfEveryBlock) {
+  std::vector<double> x;
+  for (int i = 0; i < 2500; ++i) x.push_back(i % 7 == 0 ? 3.0 : (i % 5 == 0 ? -2.0 : 0.5));
+  const Envelope e = block_envelope(x, 1000, 10);  // 10 blocks of 250 samples
+  ASSERT_EQ(e.mean.size(), 10u);
+  EXPECT_DOUBLE_EQ(e.block_s, 0.25);
+  EXPECT_DOUBLE_EQ(e.t_s[0], 0.125);
+  EXPECT_DOUBLE_EQ(e.min[3], -2.0);
+  EXPECT_DOUBLE_EQ(e.max[3], 3.0);
+  double sum = 0;
+  for (int i = 250; i < 500; ++i) sum += x[static_cast<std::size_t>(i)];
+  EXPECT_DOUBLE_EQ(e.mean[1], sum / 250);
+  const Envelope odd = block_envelope(std::span<const double>(x).first(2501 - 2), 1000, 1000);  // uneven tail
+  EXPECT_LE(odd.mean.size(), 1000u);
+  EXPECT_TRUE(block_envelope({}, 1000, 10).mean.empty());
 }
 
 }  // namespace

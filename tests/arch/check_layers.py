@@ -21,7 +21,7 @@ RULES = {
     "rig/executive": ["rig/core/"],
     "rig/modbus": ["rig/core/"],
     "rig/gpio": ["rig/core/"],
-    "rig/report": ["rig/core/", "analysis/"],
+    "rig/report": ["rig/core/"],                                  # draws analysis.json; no math
     "firmware_link": ["rig/core/", "design/filter_config.hpp"],
     "procedures": ["procedures/", "analysis/", "design/", "rig/core/", "rig/capture/", "rig/executive/"],
     # The emulated plant runs the rig's own clients on its models: Modbus, CAN, GPIO lines.

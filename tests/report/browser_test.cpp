@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 #include <thread>
@@ -26,12 +27,7 @@ std::string chromium_path() {
   return "";
 }
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rig::test::slurp;
 
 struct Browser {
   std::string out, err;  // stdout (the DOM with --dump-dom) and stderr (the log)
@@ -126,10 +122,62 @@ TEST_F(ReportBrowser, FullReportLoadsCleanWithEveryPlotDrawn) {
     EXPECT_TRUE(body.find("<polyline") != std::string::npos || body.find("<circle") != std::string::npos) << ids.back();
     EXPECT_EQ(body.find("no data"), std::string::npos) << ids.back();
   }
-  EXPECT_EQ(ids, (std::vector<std::string>{"allan-x", "allan-y", "psd-x", "psd-y", "timeseries", "averages", "in-run",
-                                           "step", "freq"}));
+  EXPECT_EQ(ids, (std::vector<std::string>{"allan-x", "allan-y", "psd-x", "psd-y", "timeseries", "timeseries-range",
+                                           "averages", "in-run", "step", "freq"}));
   EXPECT_NE(b.out.find("QA-0042"), std::string::npos);
   EXPECT_NE(b.out.find("<table id=\"passport\">"), std::string::npos);
+}
+
+// The printed passport's content as the browser built it: the sign-off block, each bounds
+// cell's interval level, the GOST rows' block lengths, DUT firmware and temperature, device
+// time, per-hour units only, PSD captions naming the labelled peaks, the step axis scaled.
+TEST_F(ReportBrowser, RenderedPassportCarriesWhatAMetrologistReads) {
+  TempDir d;
+  json a = rig::test::fixture_analysis();
+  a["in_run"]["blocks"][0]["block_s"] = 2.0;  // the ci profile's blocks under the ..._100s name
+  json p = rig::test::fixture_passport();
+  p["values"]["bias"]["lo"] = -5.1e-4;
+  p["values"]["bias"]["hi"] = -4.9e-4;
+  rig::test::write_run(d.path, p, &a);
+  const Browser b = run_chromium(rig::report::write_report(d.path.string()), "--dump-dom");
+  ASSERT_EQ(b.status, 0) << b.err;
+  const std::string& dom = b.out;
+  const std::size_t sig = dom.find("id=\"signatures\"");
+  ASSERT_NE(sig, std::string::npos);
+  for (const char* cell : {">Tested by<", ">Checked by<", ">Signature<", ">Date<"})
+    EXPECT_NE(dom.find(cell, sig), std::string::npos) << cell;
+  EXPECT_NE(dom.find("<div class=\"lvl\">95 %, GOST R 8.736</div>"), std::string::npos);
+  EXPECT_NE(dom.find("<div class=\"lvl\">68 %, ±1 σ of the Allan fit</div>"), std::string::npos);  // in_run_b_allan
+  EXPECT_NE(dom.find("(max − min)/2 of 2 s block means"), std::string::npos);
+  EXPECT_NE(dom.find("<dd>1.4.0</dd>"), std::string::npos);
+  EXPECT_NE(dom.find("<dd>22.5 °C (at bring-up)</dd>"), std::string::npos);
+  EXPECT_NE(dom.find("<dt>Device time</dt>"), std::string::npos);
+  EXPECT_EQ(dom.find("g*s"), std::string::npos);
+  // Each PSD caption names the peaks its plot labels.
+  for (const char* id : {"psd-x", "psd-y"}) {
+    const std::size_t at = dom.find(std::string("data-plot=\"") + id + "\"");
+    ASSERT_NE(at, std::string::npos) << id;
+    const std::string svg = dom.substr(at, dom.find("</svg>", at) - at);
+    std::vector<std::pair<double, std::string>> marks;
+    for (std::size_t m = svg.find("class=\"mark\""); m != std::string::npos; m = svg.find("class=\"mark\"", m + 1)) {
+      const std::size_t t0 = svg.find('>', m) + 1;
+      const std::string label = svg.substr(t0, svg.find('<', t0) - t0);
+      marks.emplace_back(std::stod(label), label);
+    }
+    std::sort(marks.begin(), marks.end());
+    std::string joined;
+    for (const auto& [f, label] : marks) joined += (joined.empty() ? "" : ", ") + label;
+    const std::size_t cap = dom.find("<figcaption", at);
+    EXPECT_NE(dom.substr(cap, dom.find("</figcaption>", cap) - cap).find("labelled peaks: " + joined + "."),
+              std::string::npos)
+        << id << ": " << joined;
+  }
+  // The 10 ms step record drawn over three settling times (3 ms each): ticks end below 0.01 s.
+  const std::size_t step = dom.find("data-plot=\"step\"");
+  ASSERT_NE(step, std::string::npos);
+  const std::string svg = dom.substr(step, dom.find("</svg>", step) - step);
+  EXPECT_NE(svg.find(">0.008<"), std::string::npos);
+  EXPECT_EQ(svg.find(">0.01<"), std::string::npos);
 }
 
 TEST_F(ReportBrowser, AbortedRunWithoutAnalysisLoadsClean) {

@@ -8,9 +8,15 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
+#include <vector>
 #include <string>
 
 #include <nlohmann/json.hpp>
+
+#include "analysis/envelope.hpp"
+#include "analysis/json.hpp"
+#include "analysis/noise_terms.hpp"
 
 namespace rig::test {
 
@@ -68,31 +74,54 @@ inline double model_adev(double tau) {
   return std::sqrt(3 * Q * Q / (tau * tau) + N * N / tau + 0.441 * B * B / 0.441 * 0.441 + K * K * tau / 3);
 }
 
+// One channel's allan.* object, in the analysis library's own JSON view: the docs/method.md figures
+// set as the terms (Q, N, B, K; R not identified), the curves computed by the library.
 inline json fixture_allan(double scale) {
-  json oadev = json::array();
+  namespace an = rig::analysis;
+  std::vector<an::DevPoint> pts;
   for (double tau = 0.001; tau < 1800; tau *= 2) {
-    const double dev = model_adev(tau) * scale, n_terms = 3.6e6 / (tau * 1000);
-    const double rel = 1 / std::sqrt(std::max(n_terms, 2.0));
-    oadev.push_back({{"m", std::lround(tau * 1000)}, {"tau_s", tau}, {"n_terms", n_terms}, {"dev", dev},
-                     {"lo", dev * (1 - rel)}, {"hi", dev * (1 + rel)}, {"edf", n_terms}, {"alpha", 0}});
+    an::DevPoint p;
+    p.tau_s = tau;
+    p.m = static_cast<std::size_t>(std::lround(tau * 1000));
+    p.dev = model_adev(tau) * scale;
+    p.n_terms = static_cast<std::size_t>(3.6e6 / (tau * 1000));
+    const double rel = 1 / std::sqrt(std::max(3.6e6 / (tau * 1000), 2.0));
+    p.lo = p.dev * (1 - rel);
+    p.hi = p.dev * (1 + rel);
+    p.edf = 3.6e6 / (tau * 1000);
+    pts.push_back(p);
   }
-  json nt = {{"Q", {{"value", 6.3603e-10 * 3600 * scale}, {"unit", "g*s"}}},
-             {"N", {{"value", 2.2306e-7 * 60 * scale}, {"unit", "g*s^0.5"}}},
-             {"B", {{"value", 2.1e-6 * scale}, {"unit", "g"}}},
-             {"tau_cp_s", 200.0},
-             {"K", {{"value", 5.1167e-6 / 60 * scale}, {"unit", "g/s^0.5"}}},
-             {"R", {{"value", nullptr}, {"unit", "g/s"}, {"reason", "needs a longer record"}}},
-             {"paper_fit",
-              {{"segments",
-                {{{"tau_from_s", 0.001}, {"tau_to_s", 0.05}, {"slope", -0.9}, {"tau_mid_s", 0.007},
-                  {"sigma_mid", model_adev(0.007) * scale}},
-                 {{"tau_from_s", 50}, {"tau_to_s", 800}, {"slope", 0.0}, {"tau_mid_s", 200},
-                  {"sigma_mid", model_adev(200) * scale}}}},
-               {"poly", {std::log10(model_adev(1) * scale), -0.5, 0.02, 0.004, 0.0}}}},
-             {"lsq_fit",
-              {{"Q", 6.3603e-10 * 3600 * scale}, {"N", 2.2306e-7 * 60 * scale}, {"B", 2.1e-6 * scale},
-               {"K", 5.1167e-6 / 60 * scale}, {"R", 0.0}}}};
-  return {{"oadev", oadev}, {"noise_terms", nt}};
+  auto term = [](double v, const char* unit, double rel) {
+    an::Term t;
+    t.value = v;
+    t.lo = v * (1 - rel);
+    t.hi = v * (1 + rel);
+    t.unit = unit;
+    t.reason = "weighted least squares";
+    return t;
+  };
+  an::NoiseTerms nt;
+  nt.Q = term(6.3603e-10 * 3600 * scale, "g*s", 0.2);
+  nt.N = term(2.2306e-7 * 60 * scale, "g*s^0.5", 0.1);
+  nt.B = term(2.1e-6 * scale, "g", 0.15);
+  nt.K = term(5.1167e-6 / 60 * scale, "g/s^0.5", 0.3);
+  nt.R.unit = "g/s";
+  nt.R.reason = "needs a longer record";
+  nt.tau_cp_s = 200.0;
+  nt.sigma_cp = model_adev(200) * scale;
+  nt.paper.ok = true;
+  nt.paper.coef = {std::log10(model_adev(1) * scale), -0.5, 0.02, 0.004, 0.0};
+  nt.paper.segments = {{0.001, 0.05, -0.9, 0.007, model_adev(0.007) * scale, "Q", 0},
+                       {50, 800, 0.0, 200, model_adev(200) * scale, "B", 0}};
+  nt.wls.ok = true;
+  nt.wls.Q = nt.Q;
+  nt.wls.N = nt.N;
+  nt.wls.B = nt.B;
+  nt.wls.K = nt.K;
+  std::vector<double> taus;
+  for (const auto& p : pts) taus.push_back(p.tau_s);
+  nt.curves = an::fitted_curves(nt, taus);
+  return {{"oadev", an::dev_to_json(pts)}, {"noise_terms", an::noise_terms_to_json(nt)}};
 }
 
 inline json fixture_psd(double gain_hf) {
@@ -122,17 +151,23 @@ inline json fixture_analysis() {
   json m100 = json::array(), m200 = json::array();
   for (int i = 0; i < 18; ++i) m100.push_back(-1.16e-4 + 4e-6 * std::sin(i * 0.9));
   for (int i = 0; i < 9; ++i) m200.push_back(-1.16e-4 + 2.5e-6 * std::sin(i * 1.7));
-  json x = json::array(), y = json::array();
+  // 60 s of a quantised output (steps of 2.9e-6 g) with a slow wander, and its filtered copy.
+  std::vector<double> x, y;
   double yf = 0, yf1 = 0;
-  for (int i = 0; i < 2000; ++i) {
+  for (int i = 0; i < 60000; ++i) {
     const double t = i / 1000.0;
-    const double v = -1.16e-4 + 0.05 * std::sin(2 * M_PI * 72 * t) + noise(rng);
+    const double v = 2.9e-6 * std::round((3e-6 * std::sin(t / 9) + 0.05 * std::sin(2 * M_PI * 72 * t) + noise(rng)) / 2.9e-6);
     const double out = 0.148895 * v + 1.228261 * yf - 0.377156 * yf1;  // W_ф(z) (docs/method.md)
     yf1 = yf;
     yf = out;
     x.push_back(v);
     y.push_back(out);
   }
+  const json envelope = rig::analysis::envelope_to_json(rig::analysis::block_envelope(x, 1000, 1000),
+                                                        rig::analysis::block_envelope(y, 1000, 1000),
+                                                        "raw capture, drift: bias and base error removed");
+  x.resize(2000);
+  y.resize(2000);
   json ts = json::array(), sx = json::array(), sy = json::array();
   for (int i = 0; i <= 200; ++i) {
     const double t = i * 5e-5, wn = 2 * M_PI * 700, z = 0.7;
@@ -152,16 +187,21 @@ inline json fixture_analysis() {
   }
   return {{"schema", "rig.analysis/1"},
           {"runs", runs},
-          {"in_run", {{"capture", "captures/in-run-U10.cap"},
+          {"in_run", {{"capture", "captures/in-run-U10.cap"}, {"n", 1800000},
                       {"blocks", {{{"block_s", 100}, {"means_g", m100}, {"b_g", 4e-6}},
                                   {{"block_s", 200}, {"means_g", m200}, {"b_g", 2.5e-6}}}}}},
-          {"allan", {{"x", fixture_allan(1.0)}, {"y", fixture_allan(0.41)}}},
+          {"allan", {{"x", fixture_allan(1.0)}, {"y", fixture_allan(0.41)}, {"confidence", 0.6826894921370859}}},
+          {"output_envelope", envelope},
+          {"dut", {{"serial", "QA-0042"}, {"firmware", "1.4.0"}, {"temperature_c", 22.5}}},
+          {"device_time_s", 6839.0},
           {"psd", {{"x", fixture_psd(1.0)}, {"y", fixture_psd(0.4)}}},
           {"timeseries", {{"rate_hz", 1000}, {"t0_s", 0}, {"x", x}, {"y", y}, {"note", "first 2 s of the raw capture"}}},
           {"loop", {{"step", {{"t_s", ts}, {"x", sx}, {"y", sy}}},
                     {"freq", {{"f_hz", fh}, {"mag_x", mx}, {"mag_y", my}}},
                     {"bandwidth_0p5_hz", 492},
-                    {"settling_time_s", 0.003}}}};
+                    {"settling_time_s", 0.003},
+                    {"settling_band", 0.05},
+                    {"dc_gain", 1.0}}}};
 }
 
 // A temporary folder removed at scope exit.
@@ -179,6 +219,14 @@ struct TempDir {
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
 };
+
+// A whole file as a string ("" when it cannot be read).
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
 
 inline void write_file(const std::filesystem::path& p, const std::string& text) {
   std::filesystem::create_directories(p.parent_path());

@@ -2,7 +2,11 @@
 // and the SVG writer's axes and decimation. The browser check is in browser_test.cpp.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <string>
+#include <vector>
 
 
 #include "app/commands.hpp"
@@ -16,12 +20,7 @@ namespace {
 using nlohmann::json;
 using rig::test::TempDir;
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rig::test::slurp;
 
 std::size_t count(const std::string& hay, const std::string& needle) {
   std::size_t n = 0;
@@ -29,7 +28,8 @@ std::size_t count(const std::string& hay, const std::string& needle) {
   return n;
 }
 
-const char* const kPlots[] = {"allan-x", "allan-y", "psd-x", "psd-y", "timeseries", "averages", "in-run", "step", "freq"};
+const char* const kPlots[] = {"allan-x", "allan-y", "psd-x",  "psd-y", "timeseries", "timeseries-range",
+                              "averages", "in-run",  "step", "freq"};
 
 TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
   TempDir d;
@@ -46,7 +46,7 @@ TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
                            "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"})
     EXPECT_NE(h.find("<code>" + std::string(name) + "</code>"), std::string::npos) << name;
   EXPECT_NE(h.find("-0.00050137"), std::string::npos);               // bias value
-  EXPECT_NE(h.find("1.8e-06 … 2.5e-06"), std::string::npos);         // bounds
+  EXPECT_NE(h.find("1.8e-06 …</span> <span class=\"nw\">2.5e-06"), std::string::npos);  // bounds
   EXPECT_NE(h.find("[−∞, 5e-06]"), std::string::npos);               // one-sided limit
   EXPECT_NE(h.find("needs a record longer than 50 h"), std::string::npos);  // r's reason
   // Contract order: bias before base_error before accuracy_class (not alphabetical).
@@ -66,6 +66,170 @@ TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
   EXPECT_FALSE(std::filesystem::exists(d.path / "report.html.tmp"));
 }
 
+// The <svg> element of one plot and the caption of its figure.
+std::string plot_svg(const std::string& h, const std::string& id) {
+  const std::size_t at = h.find("data-plot=\"" + id + "\"");
+  if (at == std::string::npos) return "";
+  return h.substr(h.rfind("<svg", at), h.find("</svg>", at) - h.rfind("<svg", at));
+}
+std::string caption_of(const std::string& h, const std::string& id) {
+  const std::size_t at = h.find("data-plot=\"" + id + "\"");
+  if (at == std::string::npos) return "";
+  const std::size_t c = h.find("<figcaption", at);
+  return h.substr(c, h.find("</figcaption>", c) - c);
+}
+// The texts of the elements of `cls` in an SVG, in order.
+std::vector<std::string> texts_of_class(const std::string& svg, const std::string& cls) {
+  std::vector<std::string> out;
+  for (std::size_t at = svg.find("class=\"" + cls + "\""); at != std::string::npos;
+       at = svg.find("class=\"" + cls + "\"", at + 1)) {
+    const std::size_t t0 = svg.find('>', at) + 1;
+    out.push_back(svg.substr(t0, svg.find('<', t0) - t0));
+  }
+  return out;
+}
+// The row of the passport table for one measurement.
+std::string row_of(const std::string& h, const std::string& name) {
+  const std::size_t at = h.find("<code>" + name + "</code>");
+  if (at == std::string::npos) return "";
+  return h.substr(at, h.find("</tr>", at) - at);
+}
+
+TEST(Report, PassportHasFirmwareTemperatureDeviceTimeAndSignatures) {
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), rig::test::fixture_analysis());
+  EXPECT_NE(h.find("<dt>DUT firmware</dt><dd>1.4.0</dd>"), std::string::npos);
+  EXPECT_NE(h.find("<dt>DUT temperature</dt><dd>22.5 °C"), std::string::npos);
+  // Wall time from started/finished and device time from the rig clock, side by side.
+  EXPECT_NE(h.find("<dt>Wall time</dt><dd>1 h 52 min 31 s</dd>\n<dt>Device time</dt><dd>1 h 53 min 59 s</dd>"),
+            std::string::npos);
+  // A paper passport's sign-off: who tested, who checked, with name, signature and date.
+  const std::size_t sig = h.find("id=\"signatures\"");
+  ASSERT_NE(sig, std::string::npos);
+  const std::string block = h.substr(sig, h.find("</section>", sig) - sig);
+  for (const char* cell : {">Tested by<", ">Checked by<", ">Name<", ">Signature<", ">Date<"})
+    EXPECT_NE(block.find(cell), std::string::npos) << cell;
+  EXPECT_LT(h.find("id=\"passport\""), sig);  // after the measurements it signs for
+}
+
+TEST(Report, GostRowsNameTheBlockLengthActuallyUsed) {
+  // The ci profile: values named ..._100s/_200s hold 2 s and 4 s blocks.
+  json a = rig::test::fixture_analysis();
+  a["in_run"]["blocks"][0]["block_s"] = 2.0;
+  a["in_run"]["blocks"][1]["block_s"] = 4.0;
+  a["in_run"]["n"] = 40000;
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), a);
+  EXPECT_NE(row_of(h, "in_run_b_gost_100s").find("of 2 s block means"), std::string::npos) << row_of(h, "in_run_b_gost_100s");
+  EXPECT_NE(row_of(h, "in_run_b_gost_200s").find("of 4 s block means"), std::string::npos);
+  EXPECT_NE(row_of(h, "accuracy_class").find("B of the 2 s blocks"), std::string::npos);
+  EXPECT_EQ(row_of(h, "in_run_b_gost_100s").find("100 s"), std::string::npos);
+  EXPECT_NE(h.find("2 s blocks, B = "), std::string::npos);            // the in-run plot's legend
+  EXPECT_NE(h.find("block averages of the 40 s in-run record"), std::string::npos);
+  // A name that states its length is matched by the length, wherever its block is.
+  json p = rig::test::fixture_passport();
+  p["values"]["in_run_b_gost_4s"] = p["values"]["in_run_b_gost_200s"];
+  p["values"].erase("in_run_b_gost_200s");
+  std::swap(a["in_run"]["blocks"][0], a["in_run"]["blocks"][1]);
+  const std::string g = rig::report::render_report(p, a);
+  EXPECT_NE(row_of(g, "in_run_b_gost_4s").find("of 4 s block means"), std::string::npos);
+  // The full run: 100 s runs read from their samples.
+  EXPECT_NE(g.find("100 s averages of the U10 and U20 runs"), std::string::npos);
+}
+
+TEST(Report, PsdCaptionNamesExactlyTheLabelledPeaks) {
+  json a = rig::test::fixture_analysis();
+  // A crowded spectrum: more close peaks than there is room to label.
+  for (double f = 100; f < 112; f += 0.5) a["psd"]["y"]["peaks"].push_back({{"f_hz", f}, {"psd", 1e-8}});
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), a);
+  for (const char* id : {"psd-x", "psd-y"}) {
+    std::vector<std::string> labels = texts_of_class(plot_svg(h, id), "mark");
+    ASSERT_FALSE(labels.empty()) << id;
+    std::sort(labels.begin(), labels.end(),
+              [](const std::string& l, const std::string& r) { return std::stod(l) < std::stod(r); });
+    std::string joined;
+    for (const std::string& l : labels) joined += (joined.empty() ? "" : ", ") + l;
+    const std::string cap = caption_of(h, id);
+    EXPECT_NE(cap.find("data-peaks=\"" + joined + "\""), std::string::npos) << id << ": " << cap;
+    EXPECT_NE(cap.find("labelled peaks: " + joined + "."), std::string::npos) << id << ": " << cap;
+  }
+  EXPECT_NE(caption_of(h, "psd-y").find("circled without a label"), std::string::npos);
+  EXPECT_EQ(caption_of(h, "psd-x").find("circled without a label"), std::string::npos);
+  EXPECT_EQ(h.find("building vibration"), std::string::npos);  // no claim the data do not make
+}
+
+TEST(Report, NoiseTermsAreQuotedInThePassportsPerHourUnits) {
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), rig::test::fixture_analysis());
+  // analysis.json holds the seconds basis too; the page shows only the passport's units.
+  for (const char* seconds : {"g*s", "g/s"}) EXPECT_EQ(h.find(seconds), std::string::npos) << seconds;
+  for (const char* hours : {"g*h^0.5", "g/h^0.5"}) {
+    EXPECT_NE(h.find("<td>" + std::string(hours) + "</td>"), std::string::npos) << hours;  // tables
+    EXPECT_NE(plot_svg(h, "allan-x").find(hours), std::string::npos) << hours;             // legend
+  }
+  // N of the terms table equals the passport's n (2.2306e-7 g*h^0.5) in value and unit.
+  const std::size_t terms = h.find("id=\"terms-x\"");
+  ASSERT_NE(terms, std::string::npos);
+  const std::string n_row = h.substr(h.find("N — random walk", terms), 200);
+  EXPECT_NE(n_row.find(">2.231e-07</td><td>g*h^0.5<"), std::string::npos) << n_row;
+  EXPECT_NE(plot_svg(h, "allan-x").find("τ, s"), std::string::npos);  // τ stays in seconds
+}
+
+TEST(Report, EveryBoundsCellStatesItsIntervalLevel) {
+  json p = rig::test::fixture_passport();
+  p["values"]["bias"]["lo"] = -5.1e-4;
+  p["values"]["bias"]["hi"] = -4.9e-4;
+  p["values"]["n"]["lo"] = 2.0e-7;
+  p["values"]["n"]["hi"] = 2.4e-7;
+  p["values"]["extra"] = {{"value", 1}, {"lo", 0.5}, {"hi", 1.5}, {"confidence", 0.9}};
+  const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  EXPECT_NE(row_of(h, "bias").find("<div class=\"lvl\">95 %, GOST R 8.736</div>"), std::string::npos);
+  EXPECT_NE(row_of(h, "n").find("<div class=\"lvl\">68 %, ±1 σ of the Allan fit</div>"), std::string::npos);
+  EXPECT_NE(row_of(h, "in_run_b_allan").find("68 %"), std::string::npos);
+  EXPECT_NE(row_of(h, "extra").find("<div class=\"lvl\">90 %</div>"), std::string::npos);  // the passport's own
+  EXPECT_EQ(row_of(h, "rms_filtered").find("class=\"lvl\""), std::string::npos);          // no bounds, no level
+  // Every row with bounds has its level.
+  const std::size_t t0 = h.find("id=\"passport\""), t1 = h.find("</table>", t0);
+  const std::string table = h.substr(t0, t1 - t0);
+  EXPECT_EQ(count(table, " …</span>"), count(table, "class=\"lvl\""));
+  EXPECT_NE(caption_of(h, "allan-x").find("68.3 % confidence bounds"), std::string::npos);
+}
+
+TEST(Report, StepAxisSpansThreeSettlingTimes) {
+  json a = rig::test::fixture_analysis();  // the step is recorded for 10 ms
+  a["loop"]["settling_time_s"] = 0.001;
+  const std::string svg = plot_svg(rig::report::render_report(rig::test::fixture_passport(), a), "step");
+  double last = 0;
+  for (std::size_t at = svg.find("text-anchor=\"middle\" class=\"tick\">"); at != std::string::npos;
+       at = svg.find("text-anchor=\"middle\" class=\"tick\">", at + 1))
+    last = std::stod(svg.substr(svg.find('>', at) + 1));
+  EXPECT_GT(last, 0.0025);
+  EXPECT_LE(last, 0.0031);  // not the record's 0.01 s
+  EXPECT_NE(svg.find("t_рег = 0.001 s"), std::string::npos);
+  EXPECT_NE(svg.find(">+5 %<"), std::string::npos);  // the settling band
+}
+
+TEST(Report, OutputOverTimeIsBlockMeansWithTheRawEnvelope) {
+  const json a = rig::test::fixture_analysis();
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), a);
+  // The means on their own scale, then the raw extremes around them.
+  const std::string means = plot_svg(h, "timeseries"), range = plot_svg(h, "timeseries-range");
+  EXPECT_EQ(count(means, "<polygon"), 0u);
+  EXPECT_EQ(count(means, "<polyline"), 2u);  // x and y block means
+  EXPECT_EQ(count(range, "<polygon"), 2u);   // x and y min/max bands
+  EXPECT_EQ(count(range, "<polyline"), 2u);  // with the means
+  EXPECT_NE(means.find("0.06 s block means"), std::string::npos);
+  EXPECT_NE(caption_of(h, "timeseries").find("drift"), std::string::npos);
+  // The whole 60 s capture is drawn, not its first 2 s.
+  for (const std::string* svg : {&means, &range}) EXPECT_NE(svg->find(">60<"), std::string::npos);
+  // The means' axis is scaled to the means, not to the raw spread around them.
+  auto y_top = [](const std::string& svg) {
+    double top = 0;
+    const std::string y_tick = "text-anchor=\"end\" class=\"tick\">";
+    for (std::size_t at = svg.find(y_tick); at != std::string::npos; at = svg.find(y_tick, at + 1))
+      top = std::max(top, std::abs(std::stod(svg.substr(at + y_tick.size()))));
+    return top;
+  };
+  EXPECT_LT(y_top(means), y_top(range) / 3);
+}
+
 TEST(Report, DurationHonoursTimeZones) {
   json p = rig::test::fixture_passport();
   p["finished"] = "2026-11-20T11:52:31+03:00";  // = 08:52:31Z
@@ -79,7 +243,7 @@ TEST(Report, DurationHonoursTimeZones) {
   p["aborted_reason"] = "DUT link lost";
   const std::string e = rig::report::render_report(p, json());
   EXPECT_EQ(e.find("<dt>Accuracy class</dt>"), std::string::npos);
-  EXPECT_NE(e.find("<dt>Stopped because</dt><dd>DUT link lost</dd>"), std::string::npos);
+  EXPECT_NE(e.find("<dt>Stopped because</dt><dd class=\"wrap\">DUT link lost</dd>"), std::string::npos);
 }
 
 TEST(Report, EscapesEveryTextFromTheRunFolder) {
@@ -91,7 +255,8 @@ TEST(Report, EscapesEveryTextFromTheRunFolder) {
   p["phases"][0]["message"] = "</td><script>";
   p["captures"].push_back("captures/<evil>.cap");
   json a = rig::test::fixture_analysis();
-  a["timeseries"]["note"] = "<i>note</i>";
+  a["output_envelope"]["note"] = "<i>note</i>";
+  a["dut"]["firmware"] = "<i>fw</i>";
   a["psd"]["x"]["unit"] = "g²/Hz <sup>";
   rig::test::write_run(d.path, p, &a);
   const std::string h = slurp(rig::report::write_report(d.path.string()));
@@ -131,7 +296,7 @@ TEST(Report, PartialAnalysisDrawsWhatIsThereAndListsTheRest) {
   EXPECT_EQ(count(h, "data-plot=\"allan-x\""), 1u);
   EXPECT_EQ(count(h, "data-plot=\"allan-y\""), 0u);
   EXPECT_EQ(count(h, "data-plot=\"step\""), 0u);
-  for (const char* what : {"allan.y", "psd.x", "psd.y", "timeseries", "in_run", "loop.step", "loop.freq"})
+  for (const char* what : {"allan.y", "psd.x", "psd.y", "output_envelope", "in_run", "loop.step", "loop.freq"})
     EXPECT_NE(h.find(what), std::string::npos) << what;
 }
 
@@ -150,10 +315,14 @@ TEST(Report, AnalysisWithWrongTypesDoesNotCrash) {
                   {"allan", {{"x", {{"oadev", {{{"tau_s", "1"}, {"dev", nullptr}}}}}}}},
                   {"psd", {{"x", {{"f_hz", {1, 2}}, {"psd", {-1, 0}}}}}},
                   {"timeseries", {{"rate_hz", 0}}},
+                  {"output_envelope", {{"t_s", "x"}, {"block_s", "2"}}},
+                  {"in_run", {{"blocks", 7}}},
+                  {"dut", {{"firmware", 3}, {"temperature_c", "hot"}}},
+                  {"device_time_s", "long"},
                   {"loop", {{"step", 3}, {"freq", {{"f_hz", nullptr}}}}}};
   rig::test::write_run(d.path, rig::test::fixture_passport(), &a);
   const std::string h = slurp(rig::report::write_report(d.path.string()));
-  EXPECT_NE(h.find("timeseries.rate_hz"), std::string::npos);
+  EXPECT_NE(h.find("analysis.json output_envelope"), std::string::npos);
   EXPECT_NE(h.find("no data"), std::string::npos);  // plots with nothing drawable say so
 }
 

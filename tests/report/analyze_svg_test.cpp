@@ -1,0 +1,55 @@
+// `rig analyze --svg` and report.html draw with one plotter (rig/report/svg_plot.hpp): the
+// standalone files carry the report's plot structure and styles, the fitted-term legend in the
+// passport's per-hour units, and every text escaped (quotes included).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "app/commands.hpp"
+#include "rig/core/errors.hpp"
+#include "tests/report/fixture.hpp"
+
+namespace {
+
+using rig::test::slurp;
+
+TEST(AnalyzeSvg, DrawsWithTheReportsPlotterAndEscapesTheFileName) {
+  rig::test::TempDir d;
+  // White noise at 1 kHz: N is identified; the file name holds characters to escape.
+  const std::filesystem::path data = d.path / "a\"b<c>&'.txt";
+  {
+    std::ofstream o(data);
+    std::mt19937 rng(3);
+    std::normal_distribution<double> g(0, 1e-3);
+    for (int i = 0; i < 40000; ++i) o << g(rng) << "\n";
+  }
+  CLI::App app;
+  int rc = -1;
+  rig::cli::add_analyze(app, rc);
+  const std::string svg_dir = (d.path / "svg").string();
+  std::vector<std::string> args{svg_dir, "--svg", data.string(), "analyze"};  // CLI11 parses a reversed vector
+  testing::internal::CaptureStdout();
+  app.parse(args);
+  testing::internal::GetCapturedStdout();
+  ASSERT_EQ(rc, rig::kExitPass);
+  const std::string allan = slurp(d.path / "svg" / "allan.svg"), psd = slurp(d.path / "svg" / "psd.svg");
+  for (const std::string* s : {&allan, &psd}) {
+    EXPECT_EQ(s->rfind("<?xml", 0), 0u);
+    EXPECT_NE(s->find("<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\""), std::string::npos);
+    EXPECT_NE(s->find("<style>"), std::string::npos);  // standalone: styles inside
+    EXPECT_NE(s->find("a&quot;b&lt;c&gt;&amp;&#39;.txt"), std::string::npos);
+    EXPECT_EQ(s->find("a\"b"), std::string::npos);
+    EXPECT_EQ(s->find("<c>"), std::string::npos);
+  }
+  EXPECT_NE(allan.find("data-plot=\"allan\""), std::string::npos);
+  EXPECT_NE(allan.find("OADEV with 68.3 % bounds"), std::string::npos);
+  EXPECT_NE(allan.find("N = "), std::string::npos);
+  EXPECT_NE(allan.find(" g*h^0.5"), std::string::npos);  // the per-hour unit, as in the passport
+  EXPECT_EQ(allan.find("g*s"), std::string::npos);
+  EXPECT_NE(psd.find("data-plot=\"psd\""), std::string::npos);
+  EXPECT_NE(psd.find("<polyline"), std::string::npos);
+}
+
+}  // namespace
