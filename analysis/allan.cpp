@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -225,9 +226,39 @@ std::optional<std::size_t> first_non_finite(std::span<const double> v) {
   return std::nullopt;
 }
 
+std::optional<std::size_t> first_unusable(std::span<const double> v) {
+  // |x| <= limit is false exactly for NaN, infinities and values beyond the limit; the lanes'
+  // masks are OR-ed, so the pass has no branch until the end.
+  using v4 = double __attribute__((vector_size(32)));
+  using m4 = long long __attribute__((vector_size(32)));
+  const v4 lim = {kMaxMagnitude, kMaxMagnitude, kMaxMagnitude, kMaxMagnitude};
+  const m4 abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
+  m4 bad{};
+  std::size_t i = 0;
+  for (; i + 4 <= v.size(); i += 4) {
+    m4 bits;
+    std::memcpy(&bits, v.data() + i, sizeof bits);
+    v4 ax;
+    bits &= abs_mask;
+    std::memcpy(&ax, &bits, sizeof ax);
+    bad |= ~(ax <= lim);
+  }
+  bool any = (bad[0] | bad[1] | bad[2] | bad[3]) != 0;
+  for (std::size_t t = i; t < v.size(); ++t) any = any || !(std::fabs(v[t]) <= kMaxMagnitude);
+  if (!any) return std::nullopt;
+  for (i = 0; i < v.size(); ++i)
+    if (!(std::fabs(v[i]) <= kMaxMagnitude)) return i;
+  return std::nullopt;
+}
+
 std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt) {
-  if (const auto bad = first_non_finite(data))
-    throw std::invalid_argument("allan: value " + std::to_string(*bad) + " is not finite");
+  if (const auto bad = first_unusable(data)) {
+    const double x = data[*bad];
+    char shown[32];
+    std::snprintf(shown, sizeof shown, "%.17g", x);
+    throw std::invalid_argument("allan: value " + std::to_string(*bad) + " (" + shown + ") is " +
+                                (std::isfinite(x) ? "beyond +-1e100" : "not finite"));
+  }
   SpanSource src(data);
   StreamOptions so;
   so.memory_budget_bytes = std::numeric_limits<std::size_t>::max() / 4;  // in memory: one ring holds it all

@@ -69,8 +69,17 @@ struct DevOptions {
 // (the check every reader of raw records makes), then a search only when there is one.
 std::optional<std::size_t> first_non_finite(std::span<const double> v);
 
+// No measurement in any unit the rig records (g, rad, s) comes near this magnitude: a value
+// beyond it is a corrupt record, and the phase sums and squared differences of a long record
+// of such values would overflow to inf (1e308 values gave every deviation inf). Readers reject
+// it like NaN and inf.
+inline constexpr double kMaxMagnitude = 1e100;
+// The index of the first value that is NaN, infinite or beyond +-kMaxMagnitude, if any
+// (vectorised like first_non_finite).
+std::optional<std::size_t> first_unusable(std::span<const double> v);
+
 // In-memory computation. Throws std::invalid_argument for fewer than 3 phase points,
-// a non-positive rate or a non-finite value (naming its index).
+// a non-positive rate or a non-finite or out-of-range value (naming its index).
 std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt);
 
 // ---- streaming: records too large for memory (50 h at 1 kHz = 1.8e8 samples) ----

@@ -1,10 +1,6 @@
 // `rig analyze FILE`: overlapping Allan deviation with confidence bounds, noise terms (the
 // paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per CONTRACTS.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstdint>
 #include <cmath>
@@ -20,6 +16,7 @@
 #include <vector>
 
 #include "analysis/json.hpp"
+#include "app/analyze_input.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"
@@ -46,89 +43,6 @@ struct Args {
   std::size_t segment = 0;
   double overlap = 0.5;
 };
-
-// Raw little-endian float64 values read with pread (thread-safe, no whole-file buffer).
-class F64File final : public an::ChunkSource {
- public:
-  explicit F64File(const std::string& path) : path_(path) {
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd_, &st) != 0) throw ConfigError(path + ": cannot stat: " + std::strerror(errno));
-    if (st.st_size % 8 != 0)
-      throw ConfigError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)");
-    n_ = static_cast<std::uint64_t>(st.st_size) / 8;
-    ::posix_fadvise(fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
-  }
-  ~F64File() override {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  F64File(const F64File&) = delete;
-  F64File& operator=(const F64File&) = delete;
-  std::uint64_t size() const override { return n_; }
-  std::size_t read_at(std::uint64_t pos, std::span<double> out) const override {
-    if (pos >= n_) return 0;
-    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), n_ - pos));
-    auto* p = reinterpret_cast<char*>(out.data());
-    std::size_t got = 0;
-    while (got < want * 8) {
-      const ssize_t r = ::pread(fd_, p + got, want * 8 - got, static_cast<off_t>(pos * 8 + got));
-      if (r < 0 && errno == EINTR) continue;
-      if (r <= 0) throw ConfigError(path_ + ": read error at value " + std::to_string(pos + got / 8) + ": " +
-                                    (r < 0 ? std::strerror(errno) : "unexpected end"));
-      got += static_cast<std::size_t>(r);
-    }
-    if (const auto bad = an::first_non_finite(std::span<const double>(out.data(), want)))
-      throw ConfigError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
-                        ") is not a finite number");
-    return want;
-  }
-
- private:
-  std::string path_;
-  int fd_ = -1;
-  std::uint64_t n_ = 0;
-};
-
-// One value per line; '#' starts a comment; blank lines are skipped.
-std::vector<double> read_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
-  std::vector<double> v;
-  std::string line;
-  for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    const auto b = line.find_first_not_of(" \t\r,;");
-    if (b == std::string::npos) continue;
-    const auto e = line.find_last_not_of(" \t\r,;");
-    const std::string tok = line.substr(b, e - b + 1);
-    char* end = nullptr;
-    errno = 0;
-    const double x = std::strtod(tok.c_str(), &end);
-    if (end != tok.c_str() + tok.size() || errno == ERANGE || !std::isfinite(x))
-      throw ConfigError(path + ":" + std::to_string(lineno) + ": not a number: '" + tok + "'");
-    v.push_back(x);
-  }
-  return v;
-}
-
-struct CaptureData {
-  std::vector<double> values;
-  capture::Header header;
-  capture::Recovery recovery;
-};
-
-CaptureData read_capture(const std::string& path, const std::string& channel) {
-  capture::Reader r(path);
-  CaptureData c;
-  c.header = r.header();
-  std::vector<Sample> buf(1 << 16);
-  for (std::size_t n; (n = r.read(buf)) > 0;)
-    for (std::size_t i = 0; i < n; ++i) c.values.push_back(channel == "y" ? buf[i].y_g : buf[i].x_g);
-  c.recovery = r.recovery();
-  return c;
-}
 
 void write_file(const std::filesystem::path& p, const std::string& text) {
   std::ofstream o(p);
@@ -186,7 +100,8 @@ int run(const Args& a) {
   if (input == "text") {
     mem = read_text(a.file);
   } else if (input == "f64") {
-    src = std::make_unique<F64File>(a.file);
+    // A file that fits the memory budget is mapped and analysed in place (one ring holds it all).
+    src = std::make_unique<F64File>(a.file, (a.memory_mib << 20) / 2);
   } else if (input == "capture") {
     cap = read_capture(a.file, a.channel);
     mem = std::move(cap->values);
@@ -195,9 +110,22 @@ int run(const Args& a) {
     throw ConfigError("rig analyze: --input must be text, f64 or capture, got '" + input + "'");
   }
   if (!src) src = std::make_unique<an::SpanSource>(mem);
-  if (!(rate > 0)) throw ConfigError("rig analyze: --rate must be positive");
+  if (!(rate > 0 && std::isfinite(rate)))
+    throw ConfigError(cap && !a.rate ? a.file + ": capture header rate_hz " + std::to_string(rate) +
+                                           " is not a positive number of Hz (give --rate)"
+                                     : "rig analyze: --rate must be a positive number of Hz");
   const std::uint64_t n = src->size();
-  if (n < 16) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 16 are needed");
+  // Sizes are checked where they are needed, before the long work: the deviation needs 3 phase
+  // points (deviations_stream says so), the PSD one whole segment.
+  an::WelchOptions wo;
+  wo.window = an::parse_window(a.window);
+  wo.segment = a.segment;
+  wo.overlap = a.overlap;
+  wo.threads = a.threads;
+  const bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
+  if (want_psd && n < an::welch_segment(n, wo))
+    throw ConfigError(a.file + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
+                      std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
 
   // One pass for OADEV (noise terms, the contract's "oadev") and the requested deviation.
   std::vector<an::DevOptions> opts;
@@ -217,6 +145,10 @@ int run(const Args& a) {
   } catch (const std::invalid_argument& e) {
     throw ConfigError(a.file + ": " + e.what());
   }
+  for (std::size_t k = 0; k < devs.size(); ++k)
+    if (devs[k].empty())
+      throw ConfigError(a.file + ": " + std::to_string(n) + " values are too few for any tau of " +
+                        an::to_string(opts[k].type) + " (" + a.taus + ")");
   const double record_s = static_cast<double>(n) / rate;
   const an::NoiseTerms terms = an::noise_terms(devs[0], record_s);
 
@@ -236,18 +168,14 @@ int run(const Args& a) {
                     {"orientation", cap->header.orientation}, {"channel", a.channel},
                     {"complete", cap->recovery.complete}, {"truncated", cap->recovery.truncated},
                     {"samples", cap->recovery.samples}, {"damaged_blocks", cap->recovery.damaged_blocks},
-                    {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes}};
+                    {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes},
+                    {"non_finite", cap->recovery.non_finite}};
   }
 
   // PSD (frequency data only: for phase data it would be of the integral).
   std::optional<an::Psd> psd;
   std::vector<an::Peak> peaks;
-  if (base.data == an::DataKind::Frequency && !a.no_psd) {
-    an::WelchOptions wo;
-    wo.window = an::parse_window(a.window);
-    wo.segment = a.segment;
-    wo.overlap = a.overlap;
-    wo.threads = a.threads;
+  if (want_psd) {
     try {
       psd = an::welch(*src, rate, wo);
     } catch (const std::invalid_argument& e) {
