@@ -1,0 +1,201 @@
+// The Allan engine's kernels (see allan_kernels.hpp). Four or more independent vector
+// accumulators per reduction, so a sum is not one long FMA dependency chain.
+#include "analysis/allan_kernels.hpp"
+
+#include <algorithm>
+
+namespace rig::analysis::detail::kernels {
+
+#define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+
+namespace {
+
+// Four independent vector accumulators: the sum is not one long FMA dependency chain.
+using v8 = double __attribute__((vector_size(64)));
+inline v8 load8(const double* p) {
+  v8 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline double hsum(v8 v) {
+  double s = 0;
+  for (int i = 0; i < 8; ++i) s += v[i];
+  return s;
+}
+
+}  // namespace
+
+RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t len) {
+  v8 a0{}, a1{}, a2{}, a3{};
+  std::size_t t = 0;
+  for (; t + 32 <= len; t += 32) {
+    const v8 d0 = load8(w2 + t) - 2 * load8(w1 + t) + load8(w0 + t);
+    const v8 d1 = load8(w2 + t + 8) - 2 * load8(w1 + t + 8) + load8(w0 + t + 8);
+    const v8 d2 = load8(w2 + t + 16) - 2 * load8(w1 + t + 16) + load8(w0 + t + 16);
+    const v8 d3 = load8(w2 + t + 24) - 2 * load8(w1 + t + 24) + load8(w0 + t + 24);
+    a0 += d0 * d0, a1 += d1 * d1, a2 += d2 * d2, a3 += d3 * d3;
+  }
+  double s = hsum((a0 + a1) + (a2 + a3));
+  for (; t < len; ++t) {
+    const double d = w2[t] - 2 * w1[t] + w0[t];
+    s += d * d;
+  }
+  return s;
+}
+
+RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len) {
+  v8 a0{}, a1{};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 d0 = load8(w3 + t) - 3 * load8(w2 + t) + 3 * load8(w1 + t) - load8(w0 + t);
+    const v8 d1 = load8(w3 + t + 8) - 3 * load8(w2 + t + 8) + 3 * load8(w1 + t + 8) - load8(w0 + t + 8);
+    a0 += d0 * d0, a1 += d1 * d1;
+  }
+  double s = hsum(a0 + a1);
+  for (; t < len; ++t) {
+    const double d = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+    s += d * d;
+  }
+  return s;
+}
+
+namespace {
+
+// A doubling chain m, 2m, .., 2^(K-1) m of OADEV/TOTDEV taus aligned at a common head h (the
+// newest phase point of each term): tau 2^i m's term is P[h] - 2 P[h - 2^i m] + P[h - 2^(i+1) m],
+// so K taus need K + 2 streams, not 3K: the loads that bound sum_d2 are shared.
+// lag[j] = &P[h0 - 2^j m], j = 0..K; out[i] += sum of squared terms of tau 2^i m.
+template <int K>
+[[gnu::always_inline]] inline void chain_d2_body(const double* head, const double* const* lag, std::size_t len,
+                                                 double* out) {
+  v8 a[K][2] = {};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
+    v8 p0 = load8(lag[0] + t), p1 = load8(lag[0] + t + 8);
+#pragma GCC unroll 8
+    for (int i = 0; i < K; ++i) {
+      const v8 q0 = load8(lag[i + 1] + t), q1 = load8(lag[i + 1] + t + 8);
+      const v8 d0 = h0 - 2 * p0 + q0, d1 = h1 - 2 * p1 + q1;
+      a[i][0] += d0 * d0;
+      a[i][1] += d1 * d1;
+      p0 = q0, p1 = q1;
+    }
+  }
+  for (int i = 0; i < K; ++i) {
+    double s = hsum(a[i][0] + a[i][1]);
+    for (std::size_t u = t; u < len; ++u) {
+      const double d = head[u] - 2 * lag[i][u] + lag[i + 1][u];
+      s += d * d;
+    }
+    out[i] += s;
+  }
+}
+
+#define RIG_CHAIN(K)                                                                                 \
+  RIG_CLONES void chain_d2_##K(const double* head, const double* const* lag, std::size_t len, double* out) { \
+    chain_d2_body<K>(head, lag, len, out);                                                           \
+  }
+RIG_CHAIN(2)
+RIG_CHAIN(3)
+RIG_CHAIN(4)
+RIG_CHAIN(5)
+RIG_CHAIN(6)
+RIG_CHAIN(7)
+RIG_CHAIN(8)
+#undef RIG_CHAIN
+// MDEV: the m-window sum of second differences slides by one per base; its increment
+// d[b+m] - d[b] is the third difference w3 - 3w2 + 3w1 - w0. The running sum is a prefix
+// sum: done in tiles with four interleaved chains so it is not one long dependency chain.
+RIG_CLONES void third_diff(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+                           double* out) {
+#pragma omp simd
+  for (std::size_t t = 0; t < len; ++t) out[t] = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+}
+
+RIG_CLONES double sum_sq_offset(const double* v, std::size_t len, double off) {
+  double s = 0;
+#pragma omp simd reduction(+ : s)
+  for (std::size_t t = 0; t < len; ++t) s += (v[t] + off) * (v[t] + off);
+  return s;
+}
+
+}  // namespace
+
+void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out) {
+  switch (k) {
+    case 2: return chain_d2_2(head, lag, len, out);
+    case 3: return chain_d2_3(head, lag, len, out);
+    case 4: return chain_d2_4(head, lag, len, out);
+    case 5: return chain_d2_5(head, lag, len, out);
+    case 6: return chain_d2_6(head, lag, len, out);
+    case 7: return chain_d2_7(head, lag, len, out);
+    case 8: return chain_d2_8(head, lag, len, out);
+    default: break;
+  }
+  for (int i = 0; i < k; ++i) out[i] += sum_d2(lag[i + 1], lag[i], head, len);
+}
+
+namespace {
+
+// Inclusive prefix sum of one vector: three shift-and-add steps (Hillis-Steele).
+using m8 = long long __attribute__((vector_size(64)));
+inline v8 scan8(v8 x) {
+  const v8 z{};
+  x += __builtin_shuffle(z, x, m8{0, 8, 9, 10, 11, 12, 13, 14});
+  x += __builtin_shuffle(z, x, m8{0, 1, 8, 9, 10, 11, 12, 13});
+  x += __builtin_shuffle(z, x, m8{0, 1, 2, 3, 8, 9, 10, 11});
+  return x;
+}
+
+// The local prefix sums of kParts contiguous parts of a tile, in place; totals[j] = part j's sum.
+// Each part is a chain of vector scans whose only dependency is the carried total, and the
+// parts are interleaved, so the running sum is not bound by one add's latency per point.
+constexpr std::size_t kParts = 8;
+RIG_CLONES void scan_parts(double* buf, std::size_t part_len, double* totals) {
+  v8 carry[kParts] = {};
+  for (std::size_t r = 0; r < part_len; r += 8)
+    for (std::size_t j = 0; j < kParts; ++j) {
+      double* p = buf + j * part_len + r;
+      const v8 x = scan8(load8(p)) + carry[j];
+      __builtin_memcpy(p, &x, sizeof x);
+      carry[j] = v8{} + x[7];
+    }
+  for (std::size_t j = 0; j < kParts; ++j) totals[j] = carry[j][0];
+}
+
+}  // namespace
+
+double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+                double& inner) {
+  constexpr std::size_t kTile = 1024, kQ = kTile / kParts;
+  double buf[kTile];
+  double s = 0;
+  for (std::size_t t0 = 0; t0 < len; t0 += kTile) {
+    const std::size_t n = std::min(kTile, len - t0);
+    third_diff(w0 + t0, w1 + t0, w2 + t0, w3 + t0, n, buf);
+    if (n < kTile) {
+      for (std::size_t t = 0; t < n; ++t) {
+        inner += buf[t];
+        s += inner * inner;
+      }
+      continue;
+    }
+    double tot[kParts];
+    scan_parts(buf, kQ, tot);
+    for (std::size_t j = 0; j < kParts; ++j) {
+      s += sum_sq_offset(buf + j * kQ, kQ, inner);
+      inner += tot[j];
+    }
+  }
+  return s;
+}
+
+RIG_CLONES double sum_second_diff(const double* w0, const double* w1, const double* w2, std::size_t len) {
+  double s = 0;
+#pragma omp simd reduction(+ : s)
+  for (std::size_t t = 0; t < len; ++t) s += w2[t] - 2 * w1[t] + w0[t];
+  return s;
+}
+
+}  // namespace rig::analysis::detail::kernels
