@@ -42,10 +42,10 @@ double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::
 
 // Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m.
 std::vector<double> averages(const std::vector<double>& dec, std::size_t m) {
-  std::vector<double> z;
-  if (dec.size() < 2) return z;
-  z.reserve(dec.size() - 1);
-  for (std::size_t k = 0; k + 1 < dec.size(); ++k) z.push_back((dec[k + 1] - dec[k]) / static_cast<double>(m));
+  if (dec.size() < 2) return {};
+  std::vector<double> z(dec.size() - 1);
+  const double mm = static_cast<double>(m);
+  for (std::size_t k = 0; k < z.size(); ++k) z[k] = (dec[k + 1] - dec[k]) / mm;
   return z;
 }
 

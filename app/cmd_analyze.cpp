@@ -2,6 +2,10 @@
 // paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per CONTRACTS.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
 #include <cerrno>
+#include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <cstdlib>
 #include <cstdint>
 #include <cmath>
 #include <cstring>
@@ -69,7 +73,32 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
   o << "\n";
 }
 
+// RIG_ANALYZE_TIMING=1 prints each stage's wall and CPU time (all threads) to stderr: where the
+// whole process spends its time (docs/analysis.md, "Speed"); CPU time stays meaningful on a
+// loaded machine. Off by default: one getenv, no clock reads.
+class StageTimer {
+ public:
+  StageTimer() : on_(std::getenv("RIG_ANALYZE_TIMING") != nullptr) {
+    if (on_) wall_ = std::chrono::steady_clock::now(), cpu_ = std::clock();
+  }
+  void mark(const char* stage) {
+    if (!on_) return;
+    const auto wall = std::chrono::steady_clock::now();
+    const std::clock_t cpu = std::clock();
+    std::fprintf(stderr, "rig analyze: %-12s wall %8.2f ms  cpu %8.2f ms\n", stage,
+                 std::chrono::duration<double, std::milli>(wall - wall_).count(),
+                 1e3 * static_cast<double>(cpu - cpu_) / CLOCKS_PER_SEC);
+    wall_ = wall, cpu_ = cpu;
+  }
+
+ private:
+  bool on_;
+  std::chrono::steady_clock::time_point wall_;
+  std::clock_t cpu_ = 0;
+};
+
 int run(const Args& a) {
+  StageTimer timer;
   if (!(a.overlap >= 0 && a.overlap <= 0.95))
     throw ConfigError("--overlap " + std::to_string(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
   if (!(a.confidence > 0 && a.confidence < 1))
@@ -114,6 +143,7 @@ int run(const Args& a) {
     throw ConfigError(cap && !a.rate ? a.file + ": capture header rate_hz " + std::to_string(rate) +
                                            " is not a positive number of Hz (give --rate)"
                                      : "rig analyze: --rate must be a positive number of Hz");
+  timer.mark("read");
   const std::uint64_t n = src->size();
   // Sizes are checked where they are needed, before the long work: the deviation needs 3 phase
   // points (deviations_stream says so), the PSD one whole segment.
@@ -150,7 +180,9 @@ int run(const Args& a) {
       throw ConfigError(a.file + ": " + std::to_string(n) + " values are too few for any tau of " +
                         an::to_string(opts[k].type) + " (" + a.taus + ")");
   const double record_s = static_cast<double>(n) / rate;
+  timer.mark("deviations");
   const an::NoiseTerms terms = an::noise_terms(devs[0], record_s);
+  timer.mark("noise terms");
 
   json j;
   j["n"] = n;
@@ -175,6 +207,7 @@ int run(const Args& a) {
   // PSD (frequency data only: for phase data it would be of the integral).
   std::optional<an::Psd> psd;
   std::vector<an::Peak> peaks;
+  timer.mark("json build");
   if (want_psd) {
     try {
       psd = an::welch(*src, rate, wo);
@@ -197,7 +230,9 @@ int run(const Args& a) {
     j["psd"] = pj;
   }
 
+  timer.mark("psd");
   if (!a.json_out.empty()) write_file(a.json_out, j.dump(2) + "\n");
+  timer.mark("json write");
   if (!a.svg_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(a.svg_dir, ec);
@@ -238,6 +273,7 @@ int run(const Args& a) {
     for (const auto& p : peaks) o << ' ' << p.f_hz << " Hz";
     o << "\n";
   }
+  timer.mark("console");
   return kExitPass;
 }
 
