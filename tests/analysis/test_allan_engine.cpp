@@ -305,10 +305,10 @@ TEST(Allan, FirstUnusableFindsNanInfAndHugeValuesAtAnyLane) {
   std::vector<double> v(37, -2.5);
   EXPECT_FALSE(first_unusable(v));
   v[36] = 1e-310;  // subnormal: usable
-  v[35] = -kMaxMagnitude;
+  v[35] = std::nextafter(-kMaxMagnitude, 0.0);  // the largest usable magnitude
   EXPECT_FALSE(first_unusable(v));
   for (std::size_t at : {0u, 3u, 17u, 36u})
-    for (double bad : {std::nan(""), -std::numeric_limits<double>::infinity(), -1.0000001e100, 1e308}) {
+    for (double bad : {std::nan(""), -std::numeric_limits<double>::infinity(), -kMaxMagnitude, 2e100, 1e308}) {
       std::vector<double> w = v;
       w[at] = bad;
       w[at == 36 ? 0 : 36] = bad;  // a later one too: the first is reported
