@@ -150,19 +150,21 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
     if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
     if (!o.bounds || o.fixed_alpha) return;
-    e.z = averages(s.decimated, s.m);
-    if (e.z.size() < kAcfMinPoints) return;
+    const std::vector<double>& dec = er.decimated.at(s.m);
+    e.z = averages(dec, s.m);
+    if (e.z.size() < kAcfMinPoints) return;  // kept for B1/R(n) below
     if (kind == DataKind::Frequency) {
       e.id = acf_noise_id(e.z, false, diff_order(o.type));
     } else {
       // Phase data: Stable32 identifies on the decimated phase itself (noise_id.hpp). The
       // engine's P is the phase less the line through its end points, in units of tau0; the
       // line is put back (an ACF sees it before differencing), the scale does not matter.
-      std::vector<double> x(s.decimated.size());
+      std::vector<double> x(dec.size());
       const double ramp = er.spec.slope * er.spec.rate_hz * static_cast<double>(s.m);
-      for (std::size_t j = 0; j < x.size(); ++j) x[j] = s.decimated[j] + ramp * static_cast<double>(j);
+      for (std::size_t j = 0; j < x.size(); ++j) x[j] = dec[j] + ramp * static_cast<double>(j);
       e.id = acf_noise_id(x, true, diff_order(o.type));
     }
+    std::vector<double>().swap(e.z);  // identified: the averages are not needed again (memory)
   });
 
   // Then in order: B1/R(n) where there are fewer than 30 averages (its rules repeat the alpha

@@ -728,19 +728,16 @@ void Engine::Impl::run_streaming() {
 void Engine::Impl::collect(EngineResult& res) {
   const std::uint64_t n = spec.n;
   res.sums.resize(accs.size());
-  std::map<std::size_t, std::size_t> users;  // the last user of a series takes it, the others copy
-  for (const Acc& a : accs) ++users[a.m];
   for (std::size_t i = 0; i < accs.size(); ++i) {
     Sums& s = res.sums[i];
     s.type = accs[i].type;
     s.m = accs[i].m;
     s.sum = accs[i].sum;
     s.terms = accs[i].terms;
-    auto& v = decim[accs[i].m];
-    s.decimated_complete = v.size() == (n - 1) / accs[i].m + 1;
-    if (--users[accs[i].m] == 0) s.decimated = std::move(v);
-    else s.decimated = v;
+    s.decimated_complete = decim[accs[i].m].size() == (n - 1) / accs[i].m + 1;
   }
+  res.decimated = std::move(decim);
+  decim.clear();
 }
 
 }  // namespace detail
