@@ -11,11 +11,14 @@ the deviations with noise identification and bounds, the noise terms, the JSON w
 the twin's is the NumPy computation only (the file already loaded, no bounds). Each is the
 minimum over the rounds (the machine is shared: the minimum is the least disturbed run).
 `rig analyze` always computes OADEV as well as the --dev deviation, so its MDEV ... TOTDEV
-figures include an OADEV the twin does not compute.
+figures include an OADEV the twin does not compute. The CPU columns give the same comparison in
+CPU time (rig: both threads; the twin is single-threaded), which other load on a shared
+machine disturbs much less than wall time.
 """
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -48,9 +51,12 @@ def rig_run(extra):
     out = os.path.join(tmp, "a.json")
     cmd = [args.rig, "analyze", args.file, "--input", "f64", "--rate", str(args.rate), "--taus", args.taus,
            "--json", out] + extra
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - t0, out
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, out, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
 def taus_of(json_path, key):
@@ -74,18 +80,23 @@ if args.only:
 
 print(f"# {time.strftime('%Y-%m-%d %H:%M')} {os.uname().nodename}, {os.cpu_count()} cores, "
       f"load {os.getloadavg()[0]:.2f}; n = {len(y)}, taus {args.taus}, {args.rounds} rounds (minimum)")
-print(f"{'figure':<11} {'taus':>5} {'rig s':>8} {'numpy s':>8} {'ratio':>7}")
+print(f"{'figure':<11} {'taus':>5} {'rig s':>8} {'numpy s':>8} {'ratio':>7}   {'rig cpu':>8} {'np cpu':>8} {'ratio':>7}")
 for name, extra, key, twin in figures:
-    _, out = rig_run(extra)  # warm-up, and the taus rig chose
+    _, out, _ = rig_run(extra)  # warm-up, and the taus rig chose
     ms = taus_of(out, key)
-    rig_t, np_t = [], []
+    rig_t, np_t, rig_c, np_c = [], [], [], []
     for _ in range(args.rounds):
-        rig_t.append(rig_run(extra)[0])
-        t0 = time.perf_counter()
+        w, _, c = rig_run(extra)
+        rig_t.append(w)
+        rig_c.append(c)
+        t0, c0 = time.perf_counter(), time.process_time()
         x = twins.phase_from_freq(y, tau0)  # the twin's own integration is part of its compute
         twin(x, ms)
         np_t.append(time.perf_counter() - t0)
+        np_c.append(time.process_time() - c0)
         del x
-    r, p = min(rig_t), min(np_t)
-    print(f"{name:<11} {len(ms):>5} {r:>8.3f} {p:>8.3f} {p / r:>6.1f}x", flush=True)
-print(f"# load at the end {os.getloadavg()[0]:.2f}")
+    r, p, rc, pc = min(rig_t), min(np_t), min(rig_c), min(np_c)
+    print(f"{name:<11} {len(ms):>5} {r:>8.3f} {p:>8.3f} {p / r:>6.1f}x   {rc:>8.3f} {pc:>8.3f} {pc / rc:>6.1f}x",
+          flush=True)
+print(f"# load at the end {os.getloadavg()[0]:.2f}. wall: the figures the targets name; cpu: the process's CPU time "
+      "(rig: both threads, start-up and JSON included), less disturbed by other load")
