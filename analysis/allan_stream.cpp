@@ -50,10 +50,17 @@ struct Acc {
   double inner = 0;       // MDEV state: the window sum at the next base
   bool primed = false;    // MDEV: `inner` holds the window sum of this accumulator's next base
   bool far = false;       // post-pass: even the newer windows do not fit the ring
-  bool cursor = false;    // in-pass, its oldest window P[b] rebuilt by its own sequential cursor
-  std::uint64_t cur_next = 0;  // cursor: the next phase index it builds, and its state there
-  PhaseState cur_state;
-  std::vector<double> cur_buf, cur_scratch;
+  // In-pass cursors: the oldest `cursors` windows (P[b], and P[b + m] when that is beyond the
+  // ring too) rebuilt by sequential cursors; the newer ones read from the ring.
+  struct Cursor {
+    std::uint64_t next = 0;  // the next phase index it builds, and the builder's state there
+    PhaseState state;
+    bool started = false;
+    std::vector<double> buf, scratch;
+  };
+  static constexpr std::size_t kMaxCursors = 2;
+  std::size_t cursors = 0;
+  Cursor cur[kMaxCursors];
 
   bool strided() const { return type == Deviation::ADEV || type == Deviation::HDEV; }
   bool modified() const { return type == Deviation::MDEV || type == Deviation::TDEV; }
@@ -179,15 +186,24 @@ class PhaseBuilder {
       pointwise(lo, out, scratch);
       return;
     }
+    PhaseState st = state_at(lo, checkpoints, scratch);
+    sequential(lo, out, st, scratch);
+  }
+
+  // The builder's state at phase index lo (frequency data): its block's checkpoint and L(lo)
+  // from the block's start, in the main pass's order. The checkpoint must exist; the main pass
+  // may be appending later ones meanwhile (the vector is reserved: it never moves).
+  PhaseState state_at(std::uint64_t lo, const std::vector<double>& checkpoints, std::vector<double>& scratch) const {
+    if (spec_.kind == DataKind::Phase) return {};
     const std::uint64_t cp = lo / kCheckpointEvery;
-    PhaseState st{checkpoints.at(cp), 0};
+    PhaseState st{checkpoints.data()[cp], 0};
     const std::uint64_t j = cp * kCheckpointEvery;
-    if (j < lo) {  // L(lo) from the block's start, in the main pass's order
+    if (j < lo) {
       scratch.resize(lo - j);
       fill(j, scratch);
       for (double y : scratch) st.L = st.L + (y - spec_.shift);
     }
-    sequential(lo, out, st, scratch);
+    return st;
   }
 
  private:
@@ -293,26 +309,41 @@ void run_chain(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint
   }
 }
 
-// A cursor accumulator over the heads [hi, hi2): P[b] from its cursor (built sequentially from
-// P[0] exactly as the main pass builds the ring), the newer windows from the ring.
-template <class Builder>
-void run_cursor(Acc& a, Ring& ring, const Builder& builder, std::uint64_t hi, std::uint64_t hi2) {
+// A cursor accumulator over the heads [hi, hi2): its oldest windows from its cursors (each built
+// sequentially, exactly as the main pass builds the ring, from its start k m on, whose state
+// state_at gives), the newer windows from the ring. prime(a) runs before its first term (MDEV:
+// the first window sum, by random access to P[0, 3m), all of it built by then).
+template <class Builder, class StateAt, class Prime>
+void run_cursor(Acc& a, Ring& ring, const Builder& builder, StateAt&& state_at, Prime&& prime, std::uint64_t hi,
+                std::uint64_t hi2) {
   const std::uint64_t h0 = std::max<std::uint64_t>(hi, a.span);
   if (h0 >= hi2) return;
   std::uint64_t b0 = h0 - a.span;
   const std::uint64_t b1 = std::min<std::uint64_t>(hi2 - a.span, a.bases);
   if (b0 >= b1) return;
   const std::size_t n = static_cast<std::size_t>(b1 - b0);
-  a.cur_buf.resize(n);
-  // The cursor only moves forward: the bases of successive chunks are contiguous from 0.
-  builder.sequential(a.cur_next, std::span<double>(a.cur_buf.data(), n), a.cur_state, a.cur_scratch);
-  a.cur_next += n;
+  // The cursors only move forward: the bases of successive chunks are contiguous from 0.
+  for (std::size_t k = 0; k < a.cursors; ++k) {
+    Acc::Cursor& c = a.cur[k];
+    if (!c.started) {
+      c.next = b0 + k * a.m;
+      c.state = state_at(c.next);
+      c.started = true;
+    }
+    c.buf.resize(n);
+    builder.sequential(c.next, std::span<double>(c.buf.data(), n), c.state, c.scratch);
+    c.next += n;
+  }
+  if (!a.primed) {
+    prime(a);
+    a.primed = true;
+  }
   const double* w[4];
   for (std::size_t off = 0; off < n;) {
     std::size_t len = n - off;
-    for (std::size_t k = 1; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + off + k * a.m));
-    w[0] = a.cur_buf.data() + off;
-    for (std::size_t k = 1; k < a.nwin; ++k) w[k] = ring.at(b0 + off + k * a.m);
+    for (std::size_t k = a.cursors; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + off + k * a.m));
+    for (std::size_t k = 0; k < a.nwin; ++k)
+      w[k] = k < a.cursors ? a.cur[k].buf.data() + off : ring.at(b0 + off + k * a.m);
     a.run(b0 + off, len, w);
     off += len;
   }
@@ -554,14 +585,17 @@ void Engine::Impl::plan(const std::vector<EngineRequest>& req, EngineResult& res
   std::vector<std::size_t> near, cursors;
   for (std::size_t i = 0; i < accs.size(); ++i) {
     Acc& a = accs[i];
-    const bool fits = a.span + 2 * chunk <= ring.size;
-    // Only the oldest window outside the ring: a cursor rebuilds it in-pass (MDEV's running
-    // window sum needs P[0..3m) first, so it stays on the random-access path).
-    a.cursor = !fits && !a.modified() && a.span - a.m + 2 * chunk <= ring.size;
-    a.far = !fits && !a.cursor;
+    // The windows (lags span, span - m, .. from the head) outside the ring: up to two are
+    // rebuilt in-pass by cursors (one sequential rebuild each, instead of the random-access
+    // path's rebuild of every window after the pass).
+    auto in_ring = [&](std::size_t lag) { return lag + 2 * chunk <= ring.size; };
+    std::size_t outside = 0;
+    while (outside < a.nwin && !in_ring(a.span - outside * a.m)) ++outside;
+    a.cursors = outside <= Acc::kMaxCursors && outside < a.nwin ? outside : 0;
+    a.far = outside > 0 && a.cursors == 0;
     if (a.bases == 0) continue;
     if (a.far) ++res.far_count;
-    else if (a.cursor) cursors.push_back(i);
+    else if (a.cursors) cursors.push_back(i);
     else near.push_back(i);
   }
   items = work_items(accs, near);
@@ -598,7 +632,18 @@ void Engine::Impl::produce(std::uint64_t lo, std::uint64_t hi) {
 void Engine::Impl::run_item(const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi,
                             std::uint64_t hi2) {
   Acc& first = a_set[item[0]];
-  if (first.cursor) return run_cursor(first, ring, builder, hi, hi2);
+  if (first.cursors) {
+    std::vector<double> sc;
+    auto state_at = [&](std::uint64_t j) { return builder.state_at(j, checkpoints, sc); };
+    auto prime = [&](Acc& a) {
+      if (!a.modified()) return;
+      mdev_prologue(a, [&](std::uint64_t lo, std::span<double> out) {
+        PhaseState st = builder.state_at(lo, checkpoints, sc);
+        builder.sequential(lo, out, st, sc);
+      }, chunk);
+    };
+    return run_cursor(first, ring, builder, state_at, prime, hi, hi2);
+  }
   if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV)) {
     Acc* chain[kMaxChain];
     for (std::size_t i = 0; i < item.size(); ++i) chain[i] = &a_set[item[i]];
