@@ -467,10 +467,18 @@ struct Engine::Impl {
   std::vector<double> scratch;
   PhaseState prev;
 
+  // Random access to P after the pass: from the ring where it still holds the range (all of P
+  // in memory; the record's last ring.size points when streamed: TOTDEV's right edges), else
+  // rebuilt from the checkpoints. Both give the same bits.
   auto reader(std::vector<double>& sc) {
     return [this, &sc](std::uint64_t lo, std::span<double> out) {
-      if (ring_holds_all) {
-        std::copy_n(ring.at(lo), out.size(), out.begin());
+      const std::uint64_t ring_from = spec.n > ring.size ? spec.n - ring.size : 0;
+      if (ring_holds_all || lo >= ring_from) {
+        for (std::size_t got = 0; got < out.size();) {  // at most two pieces (the ring wraps)
+          const std::size_t len = std::min<std::uint64_t>(out.size() - got, ring.room(lo + got));
+          std::copy_n(ring.at(lo + got), len, out.begin() + static_cast<std::ptrdiff_t>(got));
+          got += len;
+        }
       } else {
         builder.range(lo, out, checkpoints, sc);
       }
