@@ -104,22 +104,6 @@ RIG_CHAIN(6)
 RIG_CHAIN(7)
 RIG_CHAIN(8)
 #undef RIG_CHAIN
-// MDEV: the m-window sum of second differences slides by one per base; its increment
-// d[b+m] - d[b] is the third difference w3 - 3w2 + 3w1 - w0. The running sum is a prefix
-// sum: done in tiles with four interleaved chains so it is not one long dependency chain.
-RIG_CLONES void third_diff(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
-                           double* out) {
-#pragma omp simd
-  for (std::size_t t = 0; t < len; ++t) out[t] = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
-}
-
-RIG_CLONES double sum_sq_offset(const double* v, std::size_t len, double off) {
-  double s = 0;
-#pragma omp simd reduction(+ : s)
-  for (std::size_t t = 0; t < len; ++t) s += (v[t] + off) * (v[t] + off);
-  return s;
-}
-
 }  // namespace
 
 void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out) {
@@ -148,45 +132,52 @@ inline v8 scan8(v8 x) {
   return x;
 }
 
-// The local prefix sums of kParts contiguous parts of a tile, in place; totals[j] = part j's sum.
-// Each part is a chain of vector scans whose only dependency is the carried total, and the
-// parts are interleaved, so the running sum is not bound by one add's latency per point.
-constexpr std::size_t kParts = 8;
-RIG_CLONES void scan_parts(double* buf, std::size_t part_len, double* totals) {
-  v8 carry[kParts] = {};
+}  // namespace
+
+namespace {
+
+// One tile of kFusedParts x part_len points, fused: the third differences, their running sum
+// (a vector scan per 8 points, the parts interleaved so no single carry chain bounds it) and the
+// sums of the running sums and of their squares stay in registers. With c the part's local
+// running sum and off the window sum before the part, sum (off + c)^2 = S2 + 2 off S1 + n off^2.
+constexpr std::size_t kFusedParts = 4;
+RIG_CLONES void mdev_tile(const double* w0, const double* w1, const double* w2, const double* w3,
+                          std::size_t part_len, double* s1_out, double* s2_out, double* tot_out) {
+  v8 carry[kFusedParts] = {}, s1[kFusedParts] = {}, s2[kFusedParts] = {};
   for (std::size_t r = 0; r < part_len; r += 8)
-    for (std::size_t j = 0; j < kParts; ++j) {
-      double* p = buf + j * part_len + r;
-      const v8 x = scan8(load8(p)) + carry[j];
-      __builtin_memcpy(p, &x, sizeof x);
-      carry[j] = v8{} + x[7];
+    for (std::size_t j = 0; j < kFusedParts; ++j) {
+      const std::size_t b = j * part_len + r;
+      const v8 d = load8(w3 + b) - 3 * load8(w2 + b) + 3 * load8(w1 + b) - load8(w0 + b);
+      const v8 c = scan8(d) + carry[j];
+      carry[j] = v8{} + c[7];
+      s1[j] += c;
+      s2[j] += c * c;
     }
-  for (std::size_t j = 0; j < kParts; ++j) totals[j] = carry[j][0];
+  for (std::size_t j = 0; j < kFusedParts; ++j) {
+    s1_out[j] = hsum(s1[j]);
+    s2_out[j] = hsum(s2[j]);
+    tot_out[j] = carry[j][0];
+  }
 }
 
 }  // namespace
 
 double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
                 double& inner) {
-  constexpr std::size_t kTile = 1024, kQ = kTile / kParts;
-  double buf[kTile];
+  constexpr std::size_t kPart = 256, kTile = kFusedParts * kPart;
   double s = 0;
-  for (std::size_t t0 = 0; t0 < len; t0 += kTile) {
-    const std::size_t n = std::min(kTile, len - t0);
-    third_diff(w0 + t0, w1 + t0, w2 + t0, w3 + t0, n, buf);
-    if (n < kTile) {
-      for (std::size_t t = 0; t < n; ++t) {
-        inner += buf[t];
-        s += inner * inner;
-      }
-      continue;
-    }
-    double tot[kParts];
-    scan_parts(buf, kQ, tot);
-    for (std::size_t j = 0; j < kParts; ++j) {
-      s += sum_sq_offset(buf + j * kQ, kQ, inner);
+  std::size_t t0 = 0;
+  for (; t0 + kTile <= len; t0 += kTile) {
+    double s1[kFusedParts], s2[kFusedParts], tot[kFusedParts];
+    mdev_tile(w0 + t0, w1 + t0, w2 + t0, w3 + t0, kPart, s1, s2, tot);
+    for (std::size_t j = 0; j < kFusedParts; ++j) {
+      s += s2[j] + 2 * inner * s1[j] + static_cast<double>(kPart) * inner * inner;
       inner += tot[j];
     }
+  }
+  for (; t0 < len; ++t0) {  // the last partial tile, point by point
+    inner += w3[t0] - 3 * w2[t0] + 3 * w1[t0] - w0[t0];
+    s += inner * inner;
   }
   return s;
 }
