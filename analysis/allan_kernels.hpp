@@ -29,4 +29,10 @@ double mdev_run(const double* w0, const double* w1, const double* w2, const doub
 // sum over t < len of (w2 - 2 w1 + w0): MDEV's window sum at one base, computed directly.
 double sum_second_diff(const double* w0, const double* w1, const double* w2, std::size_t len);
 
+// TOTDEV's reflected edge terms (SP 1065 eq. 25), r read backwards (r[len - 1 - t]):
+// left  sum of ((k - r) - 2 c + f)^2, k = 2 P[0];
+// right sum of ((f - 2 c) + k - r)^2, k = 2 P[N-1]  (each term as the scalar code wrote it).
+double sum_reflected_left(double k, const double* r, const double* c, const double* f, std::size_t len);
+double sum_reflected_right(double k, const double* r, const double* c, const double* f, std::size_t len);
+
 }  // namespace rig::analysis::detail::kernels

@@ -382,10 +382,7 @@ void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
     read(m - i - (len - 1), std::span<double>(r));  // P[m-i-len+1 .. m-i], used reversed
     read(i, std::span<double>(c));
     read(i + m, std::span<double>(f));
-    for (std::size_t t = 0; t < len; ++t) {
-      const double d = 2 * first - r[len - 1 - t] - 2 * c[t] + f[t];
-      a.sum += d * d;
-    }
+    a.sum += sum_reflected_left(2 * first, r.data(), c.data(), f.data(), len);
     a.terms += len;
   }
   // Right: i in [n-m, n-2]: P[i-m] - 2P[i] + 2P[n-1] - P[2(n-1) - i - m].
@@ -397,10 +394,7 @@ void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
     read(i, std::span<double>(c));
     // reflected indices 2(n-1) - (i+t) - m for t = 0..len-1: descending, lowest at t = len-1
     read(2 * (n - 1) - (i + len - 1) - m, std::span<double>(r));
-    for (std::size_t t = 0; t < len; ++t) {
-      const double d = f[t] - 2 * c[t] + 2 * last - r[len - 1 - t];
-      a.sum += d * d;
-    }
+    a.sum += sum_reflected_right(2 * last, r.data(), c.data(), f.data(), len);
     a.terms += len;
   }
 }
