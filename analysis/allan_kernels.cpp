@@ -122,6 +122,70 @@ void chain_d2(int k, const double* head, const double* const* lag, std::size_t l
 
 namespace {
 
+// The Hadamard twin of chain_d2_body: tau 2^i m's term is P[h] - 3 P[h - 2^i m] + 3 P[h - 2^(i+1) m]
+// - P[h - 3 2^i m] (SP 1065 eq. 18); lag2[j] = &P[h0 - 2^j m], j = 0..K, lag3[i] = &P[h0 - 3 2^i m]:
+// K taus from 2K + 2 streams instead of 4K. Each term as sum_d3 writes it.
+template <int K>
+[[gnu::always_inline]] inline void chain_d3_body(const double* head, const double* const* lag2,
+                                                 const double* const* lag3, std::size_t len, double* out) {
+  v8 a[K][2] = {};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
+    v8 p0 = load8(lag2[0] + t), p1 = load8(lag2[0] + t + 8);
+#pragma GCC unroll 8
+    for (int i = 0; i < K; ++i) {
+      const v8 q0 = load8(lag2[i + 1] + t), q1 = load8(lag2[i + 1] + t + 8);
+      const v8 d0 = h0 - 3 * p0 + 3 * q0 - load8(lag3[i] + t);
+      const v8 d1 = h1 - 3 * p1 + 3 * q1 - load8(lag3[i] + t + 8);
+      a[i][0] += d0 * d0;
+      a[i][1] += d1 * d1;
+      p0 = q0, p1 = q1;
+    }
+  }
+  for (int i = 0; i < K; ++i) {
+    double s = hsum(a[i][0] + a[i][1]);
+    for (std::size_t u = t; u < len; ++u) {
+      const double d = head[u] - 3 * lag2[i][u] + 3 * lag2[i + 1][u] - lag3[i][u];
+      s += d * d;
+    }
+    out[i] += s;
+  }
+}
+
+#define RIG_CHAIN3(K)                                                                                     \
+  RIG_CLONES void chain_d3_##K(const double* head, const double* const* lag2, const double* const* lag3, \
+                               std::size_t len, double* out) {                                           \
+    chain_d3_body<K>(head, lag2, lag3, len, out);                                                         \
+  }
+RIG_CHAIN3(2)
+RIG_CHAIN3(3)
+RIG_CHAIN3(4)
+RIG_CHAIN3(5)
+RIG_CHAIN3(6)
+RIG_CHAIN3(7)
+RIG_CHAIN3(8)
+#undef RIG_CHAIN3
+
+}  // namespace
+
+void chain_d3(int k, const double* head, const double* const* lag2, const double* const* lag3, std::size_t len,
+              double* out) {
+  switch (k) {
+    case 2: return chain_d3_2(head, lag2, lag3, len, out);
+    case 3: return chain_d3_3(head, lag2, lag3, len, out);
+    case 4: return chain_d3_4(head, lag2, lag3, len, out);
+    case 5: return chain_d3_5(head, lag2, lag3, len, out);
+    case 6: return chain_d3_6(head, lag2, lag3, len, out);
+    case 7: return chain_d3_7(head, lag2, lag3, len, out);
+    case 8: return chain_d3_8(head, lag2, lag3, len, out);
+    default: break;
+  }
+  for (int i = 0; i < k; ++i) out[i] += sum_d3(lag3[i], lag2[i + 1], lag2[i], head, len);
+}
+
+namespace {
+
 // Inclusive prefix sum of one vector: three shift-and-add steps (Hillis-Steele).
 using m8 = long long __attribute__((vector_size(64)));
 inline v8 scan8(v8 x) {

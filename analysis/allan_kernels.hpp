@@ -20,6 +20,12 @@ double sum_d3(const double* w0, const double* w1, const double* w2, const double
 inline constexpr int kMaxChain = 8;
 void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out);
 
+// The same for OHDEV (SP 1065 eq. 18): tau 2^i m's term is P[h] - 3 P[h - 2^i m] + 3 P[h - 2^(i+1) m]
+// - P[h - 3 2^i m]; lag2[j] = &P[h0 - 2^j m], j = 0..k, lag3[i] = &P[h0 - 3 2^i m], i < k:
+// 2k + 2 streams instead of 4k.
+void chain_d3(int k, const double* head, const double* const* lag2, const double* const* lag3, std::size_t len,
+              double* out);
+
 // MDEV/TDEV (SP 1065 eq. 14): the m-window sum of second differences `inner` slides by one
 // base per point; its increment is the third difference w3 - 3 w2 + 3 w1 - w0. Returns the sum
 // of the squared window sums after each step and leaves `inner` at the last one.

@@ -309,6 +309,29 @@ void run_chain(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint
   }
 }
 
+// The same for a doubling chain of OHDEV accumulators (span 3 m_i).
+void run_chain3(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint64_t hi2) {
+  const std::size_t m0 = chain[0]->m;
+  const double* lag2[kMaxChain + 1];
+  const double* lag3[kMaxChain];
+  double part[kMaxChain];
+  for (int active = 1; active <= k; ++active) {
+    const std::uint64_t lo = std::max<std::uint64_t>(hi, chain[active - 1]->span);
+    const std::uint64_t top = active < k ? std::min<std::uint64_t>(hi2, chain[active]->span) : hi2;
+    for (std::uint64_t h = lo; h < top;) {
+      std::size_t len = std::min<std::uint64_t>(top - h, ring.room(h));
+      for (int j = 0; j <= active; ++j) len = std::min(len, ring.room(h - (std::uint64_t{m0} << j)));
+      for (int j = 0; j < active; ++j) len = std::min(len, ring.room(h - 3 * (std::uint64_t{m0} << j)));
+      for (int j = 0; j <= active; ++j) lag2[j] = ring.at(h - (std::uint64_t{m0} << j));
+      for (int j = 0; j < active; ++j) lag3[j] = ring.at(h - 3 * (std::uint64_t{m0} << j));
+      std::fill_n(part, active, 0.0);
+      chain_d3(active, ring.at(h), lag2, lag3, len, part);
+      for (int i = 0; i < active; ++i) chain[i]->sum += part[i], chain[i]->terms += len;
+      h += len;
+    }
+  }
+}
+
 // A cursor accumulator over the heads [hi, hi2): its oldest windows from its cursors (each built
 // sequentially, exactly as the main pass builds the ring, from its start k m on, whose state
 // state_at gives), the newer windows from the ring. prime(a) runs before its first term (MDEV:
@@ -646,9 +669,11 @@ void Engine::Impl::run_item(const std::vector<std::size_t>& item, std::vector<Ac
     };
     return run_cursor(first, ring, builder, state_at, prime, hi, hi2);
   }
-  if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV)) {
+  if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV ||
+                            first.type == Deviation::OHDEV)) {
     Acc* chain[kMaxChain];
     for (std::size_t i = 0; i < item.size(); ++i) chain[i] = &a_set[item[i]];
+    if (first.type == Deviation::OHDEV) return run_chain3(chain, static_cast<int>(item.size()), ring, hi, hi2);
     return run_chain(chain, static_cast<int>(item.size()), ring, hi, hi2);
   }
   for (std::size_t idx : item) {
