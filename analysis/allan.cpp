@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -41,10 +42,10 @@ double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::
 
 // Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m.
 std::vector<double> averages(const std::vector<double>& dec, std::size_t m) {
-  std::vector<double> z;
-  if (dec.size() < 2) return z;
-  z.reserve(dec.size() - 1);
-  for (std::size_t k = 0; k + 1 < dec.size(); ++k) z.push_back((dec[k + 1] - dec[k]) / static_cast<double>(m));
+  if (dec.size() < 2) return {};
+  std::vector<double> z(dec.size() - 1);
+  const double mm = static_cast<double>(m);
+  for (std::size_t k = 0; k < z.size(); ++k) z[k] = (dec[k + 1] - dec[k]) / mm;
   return z;
 }
 
@@ -156,19 +157,21 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
     if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
     if (!o.bounds || o.fixed_alpha) return;
-    e.z = averages(s.decimated, s.m);
-    if (e.z.size() < kAcfMinPoints) return;
+    const std::vector<double>& dec = er.decimated.at(s.m);
+    e.z = averages(dec, s.m);
+    if (e.z.size() < kAcfMinPoints) return;  // kept for B1/R(n) below
     if (kind == DataKind::Frequency) {
       e.id = acf_noise_id(e.z, false, diff_order(o.type));
     } else {
       // Phase data: Stable32 identifies on the decimated phase itself (noise_id.hpp). The
       // engine's P is the phase less the line through its end points, in units of tau0; the
       // line is put back (an ACF sees it before differencing), the scale does not matter.
-      std::vector<double> x(s.decimated.size());
+      std::vector<double> x(dec.size());
       const double ramp = er.spec.slope * er.spec.rate_hz * static_cast<double>(s.m);
-      for (std::size_t j = 0; j < x.size(); ++j) x[j] = s.decimated[j] + ramp * static_cast<double>(j);
+      for (std::size_t j = 0; j < x.size(); ++j) x[j] = dec[j] + ramp * static_cast<double>(j);
       e.id = acf_noise_id(x, true, diff_order(o.type));
     }
+    std::vector<double>().swap(e.z);  // identified: the averages are not needed again (memory)
   });
 
   // Then in order: B1/R(n) where there are fewer than 30 averages (its rules repeat the alpha
@@ -232,9 +235,35 @@ std::optional<std::size_t> first_non_finite(std::span<const double> v) {
   return std::nullopt;
 }
 
+std::optional<std::size_t> first_unusable(std::span<const double> v) {
+  // x * 2^691 is exact below 2^333 in magnitude and overflows to inf from there; times 0 that is
+  // NaN, as it is for NaN and inf: one multiply-add per value in four explicit lanes (vectorised
+  // without reassociating a floating-point sum), then a search only when there is one.
+  using v4 = double __attribute__((vector_size(32)));
+  constexpr double kScale = 0x1p691;  // 2^1024 / kMaxMagnitude
+  v4 acc{};
+  std::size_t i = 0;
+  for (; i + 4 <= v.size(); i += 4) {
+    v4 x;
+    std::memcpy(&x, v.data() + i, sizeof x);
+    acc += (x * kScale) * 0.0;
+  }
+  double tail = 0;
+  for (; i < v.size(); ++i) tail += (v[i] * kScale) * 0.0;
+  if (acc[0] + acc[1] + acc[2] + acc[3] + tail == 0.0) return std::nullopt;  // NaN != 0
+  for (i = 0; i < v.size(); ++i)
+    if (!(std::fabs(v[i]) < kMaxMagnitude)) return i;
+  return std::nullopt;
+}
+
 std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt) {
-  if (const auto bad = first_non_finite(data))
-    throw std::invalid_argument("allan: value " + std::to_string(*bad) + " is not finite");
+  if (const auto bad = first_unusable(data)) {
+    const double x = data[*bad];
+    char shown[32];
+    std::snprintf(shown, sizeof shown, "%.17g", x);
+    throw std::invalid_argument("allan: value " + std::to_string(*bad) + " (" + shown + ") is " +
+                                (std::isfinite(x) ? "beyond +-2^333 (1.7e100)" : "not finite"));
+  }
   SpanSource src(data);
   StreamOptions so;
   so.memory_budget_bytes = std::numeric_limits<std::size_t>::max() / 4;  // in memory: one ring holds it all

@@ -74,8 +74,18 @@ struct DevOptions {
 // (the check every reader of raw records makes), then a search only when there is one.
 std::optional<std::size_t> first_non_finite(std::span<const double> v);
 
+// No measurement in any unit the rig records (g, rad, s) comes near this magnitude: a value
+// at or beyond it is a corrupt record, and the phase sums and squared differences of a long
+// record of such values would overflow to inf (1e308 values gave every deviation inf). Readers
+// reject it like NaN and inf. 2^333 (about 1.7e100): scaling by 2^691 overflows exactly there,
+// which makes the check one multiply per value.
+inline constexpr double kMaxMagnitude = 0x1p333;
+// The index of the first value that is NaN, infinite or not below kMaxMagnitude in magnitude,
+// if any (vectorised like first_non_finite).
+std::optional<std::size_t> first_unusable(std::span<const double> v);
+
 // In-memory computation. Throws std::invalid_argument for fewer than 3 phase points,
-// a non-positive rate or a non-finite value (naming its index).
+// a non-positive rate or a non-finite or out-of-range value (naming its index).
 std::vector<DevPoint> deviation(std::span<const double> data, const DevOptions& opt);
 
 // ---- streaming: records too large for memory (50 h at 1 kHz = 1.8e8 samples) ----

@@ -9,6 +9,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -36,8 +37,7 @@ struct Sums {
   std::size_t m = 0;
   double sum = 0;               // sum of squared differences in P units
   std::size_t terms = 0;
-  std::vector<double> decimated;  // P[k m], k = 0.. (capped), for noise identification
-  bool decimated_complete = true;
+  bool decimated_complete = true;  // EngineResult::decimated[m] holds every P[k m]
 };
 
 struct EngineRequest {
@@ -48,6 +48,9 @@ struct EngineRequest {
 struct EngineResult {
   PhaseSpec spec;
   std::vector<Sums> sums;  // same order as the requests
+  // P[k m], k = 0.. (capped), for noise identification: one series per distinct m, shared by
+  // the deviations that use that m (counted in the memory budget once).
+  std::map<std::size_t, std::vector<double>> decimated;
   std::size_t ring_points = 0, far_count = 0;
 };
 

@@ -15,6 +15,7 @@
 #include <sys/mman.h>
 
 #include "analysis/allan_engine.hpp"
+#include "analysis/allan_kernels.hpp"
 
 namespace rig::analysis {
 
@@ -30,163 +31,7 @@ namespace {
 
 constexpr std::size_t kCheckpointEvery = 4096;  // P checkpoints for random access (frequency data)
 
-// ---------------------------------------------------------------------------------------------
-// Kernels: sums of squared differences over contiguous windows w[k] = &P[base + k m].
-// Compiled for AVX-512, AVX2 and baseline; the reductions are vectorised by `omp simd`.
-#define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-
-// Four independent vector accumulators: the sum is not one long FMA dependency chain.
-using v8 = double __attribute__((vector_size(64)));
-inline v8 load8(const double* p) {
-  v8 v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-inline double hsum(v8 v) {
-  double s = 0;
-  for (int i = 0; i < 8; ++i) s += v[i];
-  return s;
-}
-
-RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t len) {
-  v8 a0{}, a1{}, a2{}, a3{};
-  std::size_t t = 0;
-  for (; t + 32 <= len; t += 32) {
-    const v8 d0 = load8(w2 + t) - 2 * load8(w1 + t) + load8(w0 + t);
-    const v8 d1 = load8(w2 + t + 8) - 2 * load8(w1 + t + 8) + load8(w0 + t + 8);
-    const v8 d2 = load8(w2 + t + 16) - 2 * load8(w1 + t + 16) + load8(w0 + t + 16);
-    const v8 d3 = load8(w2 + t + 24) - 2 * load8(w1 + t + 24) + load8(w0 + t + 24);
-    a0 += d0 * d0, a1 += d1 * d1, a2 += d2 * d2, a3 += d3 * d3;
-  }
-  double s = hsum((a0 + a1) + (a2 + a3));
-  for (; t < len; ++t) {
-    const double d = w2[t] - 2 * w1[t] + w0[t];
-    s += d * d;
-  }
-  return s;
-}
-
-RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len) {
-  v8 a0{}, a1{};
-  std::size_t t = 0;
-  for (; t + 16 <= len; t += 16) {
-    const v8 d0 = load8(w3 + t) - 3 * load8(w2 + t) + 3 * load8(w1 + t) - load8(w0 + t);
-    const v8 d1 = load8(w3 + t + 8) - 3 * load8(w2 + t + 8) + 3 * load8(w1 + t + 8) - load8(w0 + t + 8);
-    a0 += d0 * d0, a1 += d1 * d1;
-  }
-  double s = hsum(a0 + a1);
-  for (; t < len; ++t) {
-    const double d = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
-    s += d * d;
-  }
-  return s;
-}
-
-// A doubling chain m, 2m, .., 2^(K-1) m of OADEV/TOTDEV taus aligned at a common head h (the
-// newest phase point of each term): tau 2^i m's term is P[h] - 2 P[h - 2^i m] + P[h - 2^(i+1) m],
-// so K taus need K + 2 streams, not 3K: the loads that bound sum_d2 are shared.
-// lag[j] = &P[h0 - 2^j m], j = 0..K; out[i] += sum of squared terms of tau 2^i m.
-template <int K>
-[[gnu::always_inline]] inline void chain_d2_body(const double* head, const double* const* lag, std::size_t len,
-                                                 double* out) {
-  v8 a[K][2] = {};
-  std::size_t t = 0;
-  for (; t + 16 <= len; t += 16) {
-    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
-    v8 p0 = load8(lag[0] + t), p1 = load8(lag[0] + t + 8);
-#pragma GCC unroll 8
-    for (int i = 0; i < K; ++i) {
-      const v8 q0 = load8(lag[i + 1] + t), q1 = load8(lag[i + 1] + t + 8);
-      const v8 d0 = h0 - 2 * p0 + q0, d1 = h1 - 2 * p1 + q1;
-      a[i][0] += d0 * d0;
-      a[i][1] += d1 * d1;
-      p0 = q0, p1 = q1;
-    }
-  }
-  for (int i = 0; i < K; ++i) {
-    double s = hsum(a[i][0] + a[i][1]);
-    for (std::size_t u = t; u < len; ++u) {
-      const double d = head[u] - 2 * lag[i][u] + lag[i + 1][u];
-      s += d * d;
-    }
-    out[i] += s;
-  }
-}
-
-#define RIG_CHAIN(K)                                                                                 \
-  RIG_CLONES void chain_d2_##K(const double* head, const double* const* lag, std::size_t len, double* out) { \
-    chain_d2_body<K>(head, lag, len, out);                                                           \
-  }
-RIG_CHAIN(2)
-RIG_CHAIN(3)
-RIG_CHAIN(4)
-RIG_CHAIN(5)
-RIG_CHAIN(6)
-RIG_CHAIN(7)
-RIG_CHAIN(8)
-#undef RIG_CHAIN
-constexpr int kMaxChain = 8;
-
-void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out) {
-  switch (k) {
-    case 2: return chain_d2_2(head, lag, len, out);
-    case 3: return chain_d2_3(head, lag, len, out);
-    case 4: return chain_d2_4(head, lag, len, out);
-    case 5: return chain_d2_5(head, lag, len, out);
-    case 6: return chain_d2_6(head, lag, len, out);
-    case 7: return chain_d2_7(head, lag, len, out);
-    case 8: return chain_d2_8(head, lag, len, out);
-    default: break;
-  }
-  for (int i = 0; i < k; ++i) out[i] += sum_d2(lag[i + 1], lag[i], head, len);
-}
-
-// MDEV: the m-window sum of second differences slides by one per base; its increment
-// d[b+m] - d[b] is the third difference w3 - 3w2 + 3w1 - w0. The running sum is a prefix
-// sum: done in tiles with four interleaved chains so it is not one long dependency chain.
-RIG_CLONES void third_diff(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
-                           double* out) {
-#pragma omp simd
-  for (std::size_t t = 0; t < len; ++t) out[t] = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
-}
-
-RIG_CLONES double sum_sq_offset(const double* v, std::size_t len, double off) {
-  double s = 0;
-#pragma omp simd reduction(+ : s)
-  for (std::size_t t = 0; t < len; ++t) s += (v[t] + off) * (v[t] + off);
-  return s;
-}
-
-double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
-                double& inner) {
-  constexpr std::size_t kTile = 1024, kQ = kTile / 4;
-  double buf[kTile];
-  double s = 0;
-  for (std::size_t t0 = 0; t0 < len; t0 += kTile) {
-    const std::size_t n = std::min(kTile, len - t0);
-    third_diff(w0 + t0, w1 + t0, w2 + t0, w3 + t0, n, buf);
-    if (n < kTile) {
-      for (std::size_t t = 0; t < n; ++t) {
-        inner += buf[t];
-        s += inner * inner;
-      }
-      continue;
-    }
-    double c0 = 0, c1 = 0, c2 = 0, c3 = 0;  // local prefix sums of the four quarters
-    for (std::size_t t = 0; t < kQ; ++t) {
-      c0 += buf[t], buf[t] = c0;
-      c1 += buf[kQ + t], buf[kQ + t] = c1;
-      c2 += buf[2 * kQ + t], buf[2 * kQ + t] = c2;
-      c3 += buf[3 * kQ + t], buf[3 * kQ + t] = c3;
-    }
-    s += sum_sq_offset(buf, kQ, inner);
-    s += sum_sq_offset(buf + kQ, kQ, inner + c0);
-    s += sum_sq_offset(buf + 2 * kQ, kQ, inner + c0 + c1);
-    s += sum_sq_offset(buf + 3 * kQ, kQ, inner + c0 + c1 + c2);
-    inner += c0 + c1 + c2 + c3;
-  }
-  return s;
-}
+using namespace kernels;  // allan_kernels.hpp
 
 // ---------------------------------------------------------------------------------------------
 struct PhaseState {
@@ -202,12 +47,20 @@ struct Acc {
   std::size_t bases = 0;  // term bases 0..bases-1 (stride m for ADEV/HDEV)
   double sum = 0;
   std::size_t terms = 0;
-  double inner = 0;       // MDEV state
+  double inner = 0;       // MDEV state: the window sum at the next base
+  bool primed = false;    // MDEV: `inner` holds the window sum of this accumulator's next base
   bool far = false;       // post-pass: even the newer windows do not fit the ring
-  bool cursor = false;    // in-pass, its oldest window P[b] rebuilt by its own sequential cursor
-  std::uint64_t cur_next = 0;  // cursor: the next phase index it builds, and its state there
-  PhaseState cur_state;
-  std::vector<double> cur_buf, cur_scratch;
+  // In-pass cursors: the oldest `cursors` windows (P[b], and P[b + m] when that is beyond the
+  // ring too) rebuilt by sequential cursors; the newer ones read from the ring.
+  struct Cursor {
+    std::uint64_t next = 0;  // the next phase index it builds, and the builder's state there
+    PhaseState state;
+    bool started = false;
+    std::vector<double> buf, scratch;
+  };
+  static constexpr std::size_t kMaxCursors = 2;
+  std::size_t cursors = 0;
+  Cursor cur[kMaxCursors];
 
   bool strided() const { return type == Deviation::ADEV || type == Deviation::HDEV; }
   bool modified() const { return type == Deviation::MDEV || type == Deviation::TDEV; }
@@ -333,15 +186,24 @@ class PhaseBuilder {
       pointwise(lo, out, scratch);
       return;
     }
+    PhaseState st = state_at(lo, checkpoints, scratch);
+    sequential(lo, out, st, scratch);
+  }
+
+  // The builder's state at phase index lo (frequency data): its block's checkpoint and L(lo)
+  // from the block's start, in the main pass's order. The checkpoint must exist; the main pass
+  // may be appending later ones meanwhile (the vector is reserved: it never moves).
+  PhaseState state_at(std::uint64_t lo, const std::vector<double>& checkpoints, std::vector<double>& scratch) const {
+    if (spec_.kind == DataKind::Phase) return {};
     const std::uint64_t cp = lo / kCheckpointEvery;
-    PhaseState st{checkpoints.at(cp), 0};
+    PhaseState st{checkpoints.data()[cp], 0};
     const std::uint64_t j = cp * kCheckpointEvery;
-    if (j < lo) {  // L(lo) from the block's start, in the main pass's order
+    if (j < lo) {
       scratch.resize(lo - j);
       fill(j, scratch);
       for (double y : scratch) st.L = st.L + (y - spec_.shift);
     }
-    sequential(lo, out, st, scratch);
+    return st;
   }
 
  private:
@@ -447,26 +309,64 @@ void run_chain(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint
   }
 }
 
-// A cursor accumulator over the heads [hi, hi2): P[b] from its cursor (built sequentially from
-// P[0] exactly as the main pass builds the ring), the newer windows from the ring.
-template <class Builder>
-void run_cursor(Acc& a, Ring& ring, const Builder& builder, std::uint64_t hi, std::uint64_t hi2) {
+// The same for a doubling chain of OHDEV accumulators (span 3 m_i).
+void run_chain3(Acc* const* chain, int k, Ring& ring, std::uint64_t hi, std::uint64_t hi2) {
+  const std::size_t m0 = chain[0]->m;
+  const double* lag2[kMaxChain + 1];
+  const double* lag3[kMaxChain];
+  double part[kMaxChain];
+  for (int active = 1; active <= k; ++active) {
+    const std::uint64_t lo = std::max<std::uint64_t>(hi, chain[active - 1]->span);
+    const std::uint64_t top = active < k ? std::min<std::uint64_t>(hi2, chain[active]->span) : hi2;
+    for (std::uint64_t h = lo; h < top;) {
+      std::size_t len = std::min<std::uint64_t>(top - h, ring.room(h));
+      for (int j = 0; j <= active; ++j) len = std::min(len, ring.room(h - (std::uint64_t{m0} << j)));
+      for (int j = 0; j < active; ++j) len = std::min(len, ring.room(h - 3 * (std::uint64_t{m0} << j)));
+      for (int j = 0; j <= active; ++j) lag2[j] = ring.at(h - (std::uint64_t{m0} << j));
+      for (int j = 0; j < active; ++j) lag3[j] = ring.at(h - 3 * (std::uint64_t{m0} << j));
+      std::fill_n(part, active, 0.0);
+      chain_d3(active, ring.at(h), lag2, lag3, len, part);
+      for (int i = 0; i < active; ++i) chain[i]->sum += part[i], chain[i]->terms += len;
+      h += len;
+    }
+  }
+}
+
+// A cursor accumulator over the heads [hi, hi2): its oldest windows from its cursors (each built
+// sequentially, exactly as the main pass builds the ring, from its start k m on, whose state
+// state_at gives), the newer windows from the ring. prime(a) runs before its first term (MDEV:
+// the first window sum, by random access to P[0, 3m), all of it built by then).
+template <class Builder, class StateAt, class Prime>
+void run_cursor(Acc& a, Ring& ring, const Builder& builder, StateAt&& state_at, Prime&& prime, std::uint64_t hi,
+                std::uint64_t hi2) {
   const std::uint64_t h0 = std::max<std::uint64_t>(hi, a.span);
   if (h0 >= hi2) return;
   std::uint64_t b0 = h0 - a.span;
   const std::uint64_t b1 = std::min<std::uint64_t>(hi2 - a.span, a.bases);
   if (b0 >= b1) return;
   const std::size_t n = static_cast<std::size_t>(b1 - b0);
-  a.cur_buf.resize(n);
-  // The cursor only moves forward: the bases of successive chunks are contiguous from 0.
-  builder.sequential(a.cur_next, std::span<double>(a.cur_buf.data(), n), a.cur_state, a.cur_scratch);
-  a.cur_next += n;
+  // The cursors only move forward: the bases of successive chunks are contiguous from 0.
+  for (std::size_t k = 0; k < a.cursors; ++k) {
+    Acc::Cursor& c = a.cur[k];
+    if (!c.started) {
+      c.next = b0 + k * a.m;
+      c.state = state_at(c.next);
+      c.started = true;
+    }
+    c.buf.resize(n);
+    builder.sequential(c.next, std::span<double>(c.buf.data(), n), c.state, c.scratch);
+    c.next += n;
+  }
+  if (!a.primed) {
+    prime(a);
+    a.primed = true;
+  }
   const double* w[4];
   for (std::size_t off = 0; off < n;) {
     std::size_t len = n - off;
-    for (std::size_t k = 1; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + off + k * a.m));
-    w[0] = a.cur_buf.data() + off;
-    for (std::size_t k = 1; k < a.nwin; ++k) w[k] = ring.at(b0 + off + k * a.m);
+    for (std::size_t k = a.cursors; k < a.nwin; ++k) len = std::min(len, ring.room(b0 + off + k * a.m));
+    for (std::size_t k = 0; k < a.nwin; ++k)
+      w[k] = k < a.cursors ? a.cur[k].buf.data() + off : ring.at(b0 + off + k * a.m);
     a.run(b0 + off, len, w);
     off += len;
   }
@@ -505,10 +405,7 @@ void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
     read(m - i - (len - 1), std::span<double>(r));  // P[m-i-len+1 .. m-i], used reversed
     read(i, std::span<double>(c));
     read(i + m, std::span<double>(f));
-    for (std::size_t t = 0; t < len; ++t) {
-      const double d = 2 * first - r[len - 1 - t] - 2 * c[t] + f[t];
-      a.sum += d * d;
-    }
+    a.sum += sum_reflected_left(2 * first, r.data(), c.data(), f.data(), len);
     a.terms += len;
   }
   // Right: i in [n-m, n-2]: P[i-m] - 2P[i] + 2P[n-1] - P[2(n-1) - i - m].
@@ -520,10 +417,7 @@ void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
     read(i, std::span<double>(c));
     // reflected indices 2(n-1) - (i+t) - m for t = 0..len-1: descending, lowest at t = len-1
     read(2 * (n - 1) - (i + len - 1) - m, std::span<double>(r));
-    for (std::size_t t = 0; t < len; ++t) {
-      const double d = f[t] - 2 * c[t] + 2 * last - r[len - 1 - t];
-      a.sum += d * d;
-    }
+    a.sum += sum_reflected_right(2 * last, r.data(), c.data(), f.data(), len);
     a.terms += len;
   }
 }
@@ -585,10 +479,26 @@ struct Engine::Impl {
   bool ring_holds_all = false;
   std::vector<double> checkpoints;
 
+  // State of one run(): the accumulators, their work items, the noise-ID series (one per
+  // distinct m) and the phase builder's position.
+  std::vector<Acc> accs;
+  std::vector<std::vector<std::size_t>> items;
+  std::map<std::size_t, std::vector<double>> decim;
+  std::vector<double> scratch;
+  PhaseState prev;
+
+  // Random access to P after the pass: from the ring where it still holds the range (all of P
+  // in memory; the record's last ring.size points when streamed: TOTDEV's right edges), else
+  // rebuilt from the checkpoints. Both give the same bits.
   auto reader(std::vector<double>& sc) {
     return [this, &sc](std::uint64_t lo, std::span<double> out) {
-      if (ring_holds_all) {
-        std::copy_n(ring.at(lo), out.size(), out.begin());
+      const std::uint64_t ring_from = spec.n > ring.size ? spec.n - ring.size : 0;
+      if (ring_holds_all || lo >= ring_from) {
+        for (std::size_t got = 0; got < out.size();) {  // at most two pieces (the ring wraps)
+          const std::size_t len = std::min<std::uint64_t>(out.size() - got, ring.room(lo + got));
+          std::copy_n(ring.at(lo + got), len, out.begin() + static_cast<std::ptrdiff_t>(got));
+          got += len;
+        }
       } else {
         builder.range(lo, out, checkpoints, sc);
       }
@@ -628,6 +538,12 @@ struct Engine::Impl {
     if (a.type == Deviation::TOTDEV && a.m > 1) totdev_edges(a, spec.n, reader(sc), chunk);
   }
 
+  void plan(const std::vector<EngineRequest>& req, EngineResult& res);
+  void produce(std::uint64_t lo, std::uint64_t hi);
+  void run_item(const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi, std::uint64_t hi2);
+  void run_in_memory();
+  void run_streaming();
+  void collect(EngineResult& res);
   EngineResult run(const std::vector<EngineRequest>& req);
 };
 
@@ -649,17 +565,37 @@ Sums Engine::extra(Deviation type, std::size_t m) {
   return s;
 }
 
+// One pass: the ring is sized, the accumulators classified (near / cursor / far) and grouped
+// into work items; then either the whole record is built into memory and run without barriers,
+// or it is streamed chunk by chunk; then the far accumulators and TOTDEV's edges.
 EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   EngineResult res;
+  plan(req, res);
+  if (ring_holds_all) run_in_memory();
+  else run_streaming();
+
+  // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----
+  std::vector<std::size_t> post;
+  for (std::size_t i = 0; i < accs.size(); ++i)
+    if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1)) post.push_back(i);
+  parallel_for(post.size(), threads, [&](std::size_t k) {
+    poll();
+    finish(accs[post[k]]);
+  });
+
+  collect(res);
+  return res;
+}
+
+void Engine::Impl::plan(const std::vector<EngineRequest>& req, EngineResult& res) {
   res.spec = spec;
   const std::uint64_t n = spec.n;
-
-  std::vector<Acc> accs;
+  accs.clear();
   accs.reserve(req.size());
   for (const auto& r : req) accs.push_back(make_acc(r.type, r.m, n));
 
   // Decimated series for noise identification, one per distinct m.
-  std::map<std::size_t, std::vector<double>> decim;
+  decim.clear();
   for (const auto& r : req) decim[r.m];
   std::size_t decim_bytes = 0;
   for (auto& [m, v] : decim) {
@@ -681,194 +617,215 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   std::vector<std::size_t> near, cursors;
   for (std::size_t i = 0; i < accs.size(); ++i) {
     Acc& a = accs[i];
-    const bool fits = a.span + 2 * chunk <= ring.size;
-    // Only the oldest window outside the ring: a cursor rebuilds it in-pass (MDEV's running
-    // window sum needs P[0..3m) first, so it stays on the random-access path).
-    a.cursor = !fits && !a.modified() && a.span - a.m + 2 * chunk <= ring.size;
-    a.far = !fits && !a.cursor;
+    // The windows (lags span, span - m, .. from the head) outside the ring: up to two are
+    // rebuilt in-pass by cursors (one sequential rebuild each, instead of the random-access
+    // path's rebuild of every window after the pass).
+    auto in_ring = [&](std::size_t lag) { return lag + 2 * chunk <= ring.size; };
+    std::size_t outside = 0;
+    while (outside < a.nwin && !in_ring(a.span - outside * a.m)) ++outside;
+    a.cursors = outside <= Acc::kMaxCursors && outside < a.nwin ? outside : 0;
+    a.far = outside > 0 && a.cursors == 0;
     if (a.bases == 0) continue;
     if (a.far) ++res.far_count;
-    else if (a.cursor) cursors.push_back(i);
+    else if (a.cursors) cursors.push_back(i);
     else near.push_back(i);
   }
-  std::vector<std::vector<std::size_t>> items = work_items(accs, near);
+  items = work_items(accs, near);
   for (std::size_t i : cursors) items.insert(items.begin(), std::vector<std::size_t>{i});  // the costliest items
 
   checkpoints.clear();
   checkpoints.reserve(n / kCheckpointEvery + 1);
+  prev = {};
+}
 
-  // ---- main pass ----
-  std::vector<double> scratch;
-  PhaseState prev;
-  // P[lo, hi) into the ring, with the checkpoints and the noise-ID series (one thread at a time).
-  auto produce = [&](std::uint64_t lo, std::uint64_t hi) {
-    for (std::uint64_t j = lo; j < hi;) {  // at most two pieces (the ring wraps)
-      const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
-      builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
-      j += len;
+// P[lo, hi) into the ring, with the checkpoints and the noise-ID series (one thread at a time).
+void Engine::Impl::produce(std::uint64_t lo, std::uint64_t hi) {
+  for (std::uint64_t j = lo; j < hi;) {  // at most two pieces (the ring wraps)
+    const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
+    builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
+    j += len;
+  }
+  for (std::uint64_t j = (lo + kCheckpointEvery - 1) / kCheckpointEvery * kCheckpointEvery; j < hi;
+       j += kCheckpointEvery)
+    checkpoints.push_back(*ring.at(j));
+  for (std::uint64_t j = lo; j < hi;) {  // contiguous pieces of the ring: no modulo per point
+    const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
+    const double* piece = ring.at(j);
+    for (auto& [m, v] : decim) {
+      if (v.size() >= v.capacity()) continue;
+      for (std::uint64_t x = (j + m - 1) / m * m; x < j + len && v.size() < v.capacity(); x += m)
+        v.push_back(piece[x - j]);
     }
-    for (std::uint64_t j = (lo + kCheckpointEvery - 1) / kCheckpointEvery * kCheckpointEvery; j < hi;
-         j += kCheckpointEvery)
-      checkpoints.push_back(*ring.at(j));
-    for (std::uint64_t j = lo; j < hi;) {  // contiguous pieces of the ring: no modulo per point
-      const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
-      const double* piece = ring.at(j);
-      for (auto& [m, v] : decim) {
-        if (v.size() >= v.capacity()) continue;
-        for (std::uint64_t x = (j + m - 1) / m * m; x < j + len && v.size() < v.capacity(); x += m)
-          v.push_back(piece[x - j]);
-      }
-      j += len;
-    }
-  };
-  // One work item over the heads [hi, hi2) (terms whose newest phase point is in that range).
-  auto run_item = [&](const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi,
-                      std::uint64_t hi2) {
-    Acc& first = a_set[item[0]];
-    if (first.cursor) return run_cursor(first, ring, builder, hi, hi2);
-    if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV)) {
-      Acc* chain[kMaxChain];
-      for (std::size_t i = 0; i < item.size(); ++i) chain[i] = &a_set[item[i]];
-      return run_chain(chain, static_cast<int>(item.size()), ring, hi, hi2);
-    }
-    for (std::size_t idx : item) {
-      Acc& a = a_set[idx];
-      const std::uint64_t lo_b = hi >= a.span ? hi - a.span : 0;
-      const std::uint64_t hi_b = std::min<std::uint64_t>(hi2 >= a.span ? hi2 - a.span : 0, a.bases);
-      if (lo_b >= hi_b) continue;
-      if (a.modified() && a.terms == 0)
+    j += len;
+  }
+}
+
+// One work item over the heads [hi, hi2) (terms whose newest phase point is in that range).
+void Engine::Impl::run_item(const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi,
+                            std::uint64_t hi2) {
+  Acc& first = a_set[item[0]];
+  if (first.cursors) {
+    std::vector<double> sc;
+    auto state_at = [&](std::uint64_t j) { return builder.state_at(j, checkpoints, sc); };
+    auto prime = [&](Acc& a) {
+      if (!a.modified()) return;
+      mdev_prologue(a, [&](std::uint64_t lo, std::span<double> out) {
+        PhaseState st = builder.state_at(lo, checkpoints, sc);
+        builder.sequential(lo, out, st, sc);
+      }, chunk);
+    };
+    return run_cursor(first, ring, builder, state_at, prime, hi, hi2);
+  }
+  if (item.size() >= 2 && (first.type == Deviation::OADEV || first.type == Deviation::TOTDEV ||
+                            first.type == Deviation::OHDEV)) {
+    Acc* chain[kMaxChain];
+    for (std::size_t i = 0; i < item.size(); ++i) chain[i] = &a_set[item[i]];
+    if (first.type == Deviation::OHDEV) return run_chain3(chain, static_cast<int>(item.size()), ring, hi, hi2);
+    return run_chain(chain, static_cast<int>(item.size()), ring, hi, hi2);
+  }
+  for (std::size_t idx : item) {
+    Acc& a = a_set[idx];
+    const std::uint64_t lo_b = hi >= a.span ? hi - a.span : 0;
+    const std::uint64_t hi_b = std::min<std::uint64_t>(hi2 >= a.span ? hi2 - a.span : 0, a.bases);
+    if (lo_b >= hi_b) continue;
+    if (a.modified() && !a.primed) {
+      if (lo_b == 0) {  // the record's first term
         mdev_prologue(a, [&](std::uint64_t j, std::span<double> out) {
           for (std::size_t t = 0; t < out.size(); ++t) out[t] = *ring.at(j + t);
         }, chunk);
-      run_from_ring(a, ring, lo_b, hi_b);
-    }
-  };
-
-  if (ring_holds_all) {
-    // In memory: build P whole, then no barriers at all. The heads are cut into a fixed number
-    // of segments (not per thread: the sums do not depend on the thread count); a segment runs
-    // every item chunk by chunk (the newest windows stay in L2 across items), and the partial
-    // sums are added in segment order. MDEV's running window sum keeps its items whole.
-    for (std::uint64_t j = 0; j < n; j += chunk) {
-      if (j % (64 * chunk) == 0) poll();
-      produce(j, std::min<std::uint64_t>(n, j + chunk));
-    }
-    constexpr std::size_t kSegments = 32;
-    std::vector<std::size_t> whole, split;
-    for (std::size_t k = 0; k < items.size(); ++k) (accs[items[k][0]].modified() ? whole : split).push_back(k);
-    std::vector<std::vector<std::pair<double, std::size_t>>> part(kSegments);
-    parallel_for(whole.size() + kSegments, threads, [&](std::size_t t) {
-      if (t < whole.size()) {  // the costliest tasks first
-        const std::vector<std::size_t>& item = items[whole[t]];
-        for (std::uint64_t h = 0; h < n; h += chunk) {
-          poll();
-          run_item(item, accs, h, std::min<std::uint64_t>(n, h + chunk));
-        }
-        return;
+      } else {  // a segment's first base (in memory: the whole record is in the ring)
+        a.inner = sum_second_diff(ring.at(lo_b), ring.at(lo_b + a.m), ring.at(lo_b + 2 * a.m), a.m);
       }
-      const std::size_t g = t - whole.size();
-      std::vector<Acc> local(accs.size());  // the split items' entries only
-      for (std::size_t k : split)
-        for (std::size_t idx : items[k]) {
-          local[idx] = accs[idx];
-          local[idx].sum = 0;
-          local[idx].terms = 0;
-        }
-      const std::uint64_t h0 = n * g / kSegments, h1 = n * (g + 1) / kSegments;
-      for (std::uint64_t h = h0; h < h1; h += chunk) {
-        poll();
-        for (std::size_t k : split) run_item(items[k], local, h, std::min(h1, h + chunk));
-      }
-      for (std::size_t k : split)
-        for (std::size_t idx : items[k]) part[g].emplace_back(local[idx].sum, local[idx].terms);
-    });
-    for (std::size_t g = 0; g < kSegments; ++g) {
-      std::size_t i = 0;
-      for (std::size_t k : split)
-        for (std::size_t idx : items[k]) {
-          accs[idx].sum += part[g][i].first;
-          accs[idx].terms += part[g][i].second;
-          ++i;
-        }
+      a.primed = true;
     }
-  } else {
-    // Streaming: a barrier per chunk; building the next chunk is one more work item, so the
-    // read and the running sum overlap the kernels (the ring keeps two chunks of slack).
-    std::uint64_t hi = 0, hi2 = 0;
-    std::atomic<std::size_t> next{0};
-    bool done = false;
-    // A read error (or a non-finite value) may surface on either thread: the first one is kept,
-    // the chunk's remaining items are skipped, and it is rethrown here after the workers stop.
-    std::exception_ptr err;
-    std::mutex err_mutex;
-    auto process_chunk = [&] {
-      const std::size_t count = items.size() + 1;
-      for (std::size_t k; (k = next.fetch_add(1)) < count;) try {
-          poll();
-          if (k == 0) {
-            if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
-            continue;
-          }
-          run_item(items[k - 1], accs, hi, hi2);
-        } catch (...) {
-          std::lock_guard lock(err_mutex);
-          if (!err) err = std::current_exception();
-          next = count;
-        }
-    };
-    std::barrier sync(static_cast<std::ptrdiff_t>(threads));
-    std::vector<std::jthread> workers;
-    for (unsigned t = 1; t < threads; ++t)
-      workers.emplace_back([&] {
-        for (;;) {
-          sync.arrive_and_wait();  // chunk ready (or done)
-          if (done) return;
-          process_chunk();
-          sync.arrive_and_wait();  // chunk finished
-        }
-      });
-    try {
-      produce(0, std::min<std::uint64_t>(n, chunk));
-    } catch (...) {
-      err = std::current_exception();
-    }
-    for (hi = 0; hi < n && !err; hi = hi2) {
-      hi2 = std::min<std::uint64_t>(n, hi + chunk);
-      next = 0;
-      if (threads > 1) sync.arrive_and_wait();
-      process_chunk();
-      if (threads > 1) sync.arrive_and_wait();
-    }
-    done = true;
-    if (threads > 1) sync.arrive_and_wait();
-    workers.clear();
-    if (err) std::rethrow_exception(err);
+    run_from_ring(a, ring, lo_b, hi_b);
   }
+}
 
-  // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----
-  std::vector<std::size_t> post;
-  for (std::size_t i = 0; i < accs.size(); ++i)
-    if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1)) post.push_back(i);
-  parallel_for(post.size(), threads, [&](std::size_t k) {
-    poll();
-    finish(accs[post[k]]);
+// In memory: build P whole, then no barriers at all. The heads are cut into a fixed number of
+// segments (not per thread: the sums do not depend on the thread count); a segment runs every
+// item chunk by chunk (the newest windows stay in L2 across items), and the partial sums are
+// added in segment order. An MDEV/TDEV tau starts each segment from its window sum computed
+// directly (O(m)); the few whose m makes that dearer than their share of the segment run whole.
+void Engine::Impl::run_in_memory() {
+  const std::uint64_t n = spec.n;
+  for (std::uint64_t j = 0; j < n; j += chunk) {
+    if (j % (64 * chunk) == 0) poll();
+    produce(j, std::min<std::uint64_t>(n, j + chunk));
+  }
+  constexpr std::size_t kSegments = 32;
+  auto keep_whole = [&](const std::vector<std::size_t>& item) {
+    const Acc& a = accs[item[0]];
+    return a.modified() && a.m * kSegments * 4 > n;  // its prologue (3m loads) vs ~4n/32 per segment: <= 19 %
+  };
+  std::vector<std::size_t> whole, split;
+  for (std::size_t k = 0; k < items.size(); ++k) (keep_whole(items[k]) ? whole : split).push_back(k);
+  std::vector<std::vector<std::pair<double, std::size_t>>> part(kSegments);
+  parallel_for(whole.size() + kSegments, threads, [&](std::size_t t) {
+    if (t < whole.size()) {  // the costliest tasks first
+      const std::vector<std::size_t>& item = items[whole[t]];
+      for (std::uint64_t h = 0; h < n; h += chunk) {
+        poll();
+        run_item(item, accs, h, std::min<std::uint64_t>(n, h + chunk));
+      }
+      return;
+    }
+    const std::size_t g = t - whole.size();
+    std::vector<Acc> local(accs.size());  // the split items' entries only
+    for (std::size_t k : split)
+      for (std::size_t idx : items[k]) {
+        local[idx] = accs[idx];
+        local[idx].sum = 0;
+        local[idx].terms = 0;
+      }
+    const std::uint64_t h0 = n * g / kSegments, h1 = n * (g + 1) / kSegments;
+    for (std::uint64_t h = h0; h < h1; h += chunk) {
+      poll();
+      for (std::size_t k : split) run_item(items[k], local, h, std::min(h1, h + chunk));
+    }
+    for (std::size_t k : split)
+      for (std::size_t idx : items[k]) part[g].emplace_back(local[idx].sum, local[idx].terms);
   });
+  for (std::size_t g = 0; g < kSegments; ++g) {
+    std::size_t i = 0;
+    for (std::size_t k : split)
+      for (std::size_t idx : items[k]) {
+        accs[idx].sum += part[g][i].first;
+        accs[idx].terms += part[g][i].second;
+        ++i;
+      }
+  }
+}
 
+// Streaming: a barrier per chunk; building the next chunk is one more work item, so the read
+// and the running sum overlap the kernels (the ring keeps two chunks of slack).
+void Engine::Impl::run_streaming() {
+  const std::uint64_t n = spec.n;
+  std::uint64_t hi = 0, hi2 = 0;
+  std::atomic<std::size_t> next{0};
+  bool done = false;
+  // A read error (or a non-finite value) may surface on either thread: the first one is kept,
+  // the chunk's remaining items are skipped, and it is rethrown here after the workers stop.
+  std::exception_ptr err;
+  std::mutex err_mutex;
+  auto process_chunk = [&] {
+    const std::size_t count = items.size() + 1;
+    for (std::size_t k; (k = next.fetch_add(1)) < count;) try {
+        poll();
+        if (k == 0) {
+          if (hi2 < n) produce(hi2, std::min<std::uint64_t>(n, hi2 + chunk));
+          continue;
+        }
+        run_item(items[k - 1], accs, hi, hi2);
+      } catch (...) {
+        std::lock_guard lock(err_mutex);
+        if (!err) err = std::current_exception();
+        next = count;
+      }
+  };
+  std::barrier sync(static_cast<std::ptrdiff_t>(threads));
+  std::vector<std::jthread> workers;
+  for (unsigned t = 1; t < threads; ++t)
+    workers.emplace_back([&] {
+      for (;;) {
+        sync.arrive_and_wait();  // chunk ready (or done)
+        if (done) return;
+        process_chunk();
+        sync.arrive_and_wait();  // chunk finished
+      }
+    });
+  try {
+    produce(0, std::min<std::uint64_t>(n, chunk));
+  } catch (...) {
+    err = std::current_exception();
+  }
+  for (hi = 0; hi < n && !err; hi = hi2) {
+    hi2 = std::min<std::uint64_t>(n, hi + chunk);
+    next = 0;
+    if (threads > 1) sync.arrive_and_wait();
+    process_chunk();
+    if (threads > 1) sync.arrive_and_wait();
+  }
+  done = true;
+  if (threads > 1) sync.arrive_and_wait();
+  workers.clear();
+  if (err) std::rethrow_exception(err);
+}
+
+// The sums and the noise-ID series, in the requests' order.
+void Engine::Impl::collect(EngineResult& res) {
+  const std::uint64_t n = spec.n;
   res.sums.resize(accs.size());
-  std::map<std::size_t, std::size_t> users;  // the last user of a series takes it, the others copy
-  for (const Acc& a : accs) ++users[a.m];
   for (std::size_t i = 0; i < accs.size(); ++i) {
     Sums& s = res.sums[i];
     s.type = accs[i].type;
     s.m = accs[i].m;
     s.sum = accs[i].sum;
     s.terms = accs[i].terms;
-    auto& v = decim[accs[i].m];
-    s.decimated_complete = v.size() == (n - 1) / accs[i].m + 1;
-    if (--users[accs[i].m] == 0) s.decimated = std::move(v);
-    else s.decimated = v;
+    s.decimated_complete = decim[accs[i].m].size() == (n - 1) / accs[i].m + 1;
   }
-  return res;
+  res.decimated = std::move(decim);
+  decim.clear();
 }
 
 }  // namespace detail

@@ -7,16 +7,34 @@
 
 namespace rig::analysis {
 
+// Eight fixed partial sums per reduction (lane t % 8, added in a fixed order): vectorised, and
+// the result does not depend on the machine or the thread that runs it.
 double lag1_acf(std::span<const double> x) {
   const std::size_t n = x.size();
   if (n < 2) return 0;
+  constexpr std::size_t L = 8;
+  double s[L] = {};
+  std::size_t i = 0;
+  for (; i + L <= n; i += L)
+    for (std::size_t l = 0; l < L; ++l) s[l] += x[i + l];
   double mu = 0;
-  for (double v : x) mu += v;
+  for (std::size_t l = 0; l < L; ++l) mu += s[l];
+  for (; i < n; ++i) mu += x[i];
   mu /= static_cast<double>(n);
-  double a = 0, b = 0;
-  for (std::size_t i = 0; i + 1 < n; ++i) a += (x[i] - mu) * (x[i + 1] - mu);
-  for (double v : x) b += (v - mu) * (v - mu);
-  return b > 0 ? a / b : 0;
+  // a = sum (x_i - mu)(x_{i+1} - mu) over i < n-1, b = sum (x_i - mu)^2: one pass.
+  double a[L] = {}, b[L] = {};
+  i = 0;
+  for (; i + L + 1 <= n; i += L)
+    for (std::size_t l = 0; l < L; ++l) {
+      const double u = x[i + l] - mu, v = x[i + l + 1] - mu;
+      a[l] += u * v;
+      b[l] += u * u;
+    }
+  double sa = 0, sb = 0;
+  for (std::size_t l = 0; l < L; ++l) sa += a[l], sb += b[l];
+  for (; i + 1 < n; ++i) sa += (x[i] - mu) * (x[i + 1] - mu), sb += (x[i] - mu) * (x[i] - mu);
+  sb += (x[n - 1] - mu) * (x[n - 1] - mu);
+  return sb > 0 ? sa / sb : 0;
 }
 
 NoiseId acf_noise_id(std::span<const double> series, bool phase, int dmax) {

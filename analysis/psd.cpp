@@ -73,12 +73,16 @@ Psd welch(std::span<const double> x, double rate_hz, const WelchOptions& opt) {
   return welch(SpanSource(x), rate_hz, opt);
 }
 
+std::size_t welch_segment(std::uint64_t n, const WelchOptions& opt) {
+  if (opt.segment) return opt.segment;
+  return std::clamp<std::size_t>(std::bit_floor(std::max<std::uint64_t>(n / 8, 1)), 256, 65536);
+}
+
 Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
   const std::uint64_t n_total = src.size();
   if (!(rate_hz > 0)) throw std::invalid_argument("welch: rate must be positive");
   if (!(opt.overlap >= 0 && opt.overlap <= 0.95)) throw std::invalid_argument("welch: overlap must be in [0, 0.95]");
-  std::size_t seg = opt.segment;
-  if (seg == 0) seg = std::clamp<std::size_t>(std::bit_floor(std::max<std::uint64_t>(n_total / 8, 1)), 256, 65536);
+  const std::size_t seg = welch_segment(n_total, opt);
   if (seg < 8) throw std::invalid_argument("welch: segment must be at least 8 points");
   if (n_total < seg)
     throw std::invalid_argument("welch: " + std::to_string(n_total) + " samples are fewer than one segment of " +

@@ -32,6 +32,10 @@ struct Psd {
   double rate_hz = 0, enbw_hz = 0;  // equivalent noise bandwidth of one bin
 };
 
+// The segment length welch() uses on n values: opt.segment, or the automatic choice. A caller
+// checks n >= it before a long computation, instead of learning it from welch() afterwards.
+std::size_t welch_segment(std::uint64_t n, const WelchOptions& opt);
+
 // Throws std::invalid_argument when x is shorter than one segment or options are out of range.
 Psd welch(std::span<const double> x, double rate_hz, const WelchOptions& opt = {});
 

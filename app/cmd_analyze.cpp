@@ -1,11 +1,11 @@
 // `rig analyze FILE`: overlapping Allan deviation with confidence bounds, noise terms (the
 // paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per docs/contracts.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <cerrno>
+#include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <cstdlib>
 #include <cstdint>
 #include <cmath>
 #include <cstring>
@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "analysis/json.hpp"
+#include "app/analyze_input.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/options.hpp"
@@ -48,89 +49,6 @@ struct Args {
   double overlap = 0.5;
 };
 
-// Raw little-endian float64 values read with pread (thread-safe, no whole-file buffer).
-class F64File final : public an::ChunkSource {
- public:
-  explicit F64File(const std::string& path) : path_(path) {
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd_, &st) != 0) throw ConfigError(path + ": cannot stat: " + std::strerror(errno));
-    if (st.st_size % 8 != 0)
-      throw ConfigError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)");
-    n_ = static_cast<std::uint64_t>(st.st_size) / 8;
-    ::posix_fadvise(fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
-  }
-  ~F64File() override {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  F64File(const F64File&) = delete;
-  F64File& operator=(const F64File&) = delete;
-  std::uint64_t size() const override { return n_; }
-  std::size_t read_at(std::uint64_t pos, std::span<double> out) const override {
-    if (pos >= n_) return 0;
-    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), n_ - pos));
-    auto* p = reinterpret_cast<char*>(out.data());
-    std::size_t got = 0;
-    while (got < want * 8) {
-      const ssize_t r = ::pread(fd_, p + got, want * 8 - got, static_cast<off_t>(pos * 8 + got));
-      if (r < 0 && errno == EINTR) continue;
-      if (r <= 0) throw ConfigError(path_ + ": read error at value " + std::to_string(pos + got / 8) + ": " +
-                                    (r < 0 ? std::strerror(errno) : "unexpected end"));
-      got += static_cast<std::size_t>(r);
-    }
-    if (const auto bad = an::first_non_finite(std::span<const double>(out.data(), want)))
-      throw ConfigError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
-                        ") is not a finite number");
-    return want;
-  }
-
- private:
-  std::string path_;
-  int fd_ = -1;
-  std::uint64_t n_ = 0;
-};
-
-// One value per line; '#' starts a comment; blank lines are skipped.
-std::vector<double> read_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
-  std::vector<double> v;
-  std::string line;
-  for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    const auto b = line.find_first_not_of(" \t\r,;");
-    if (b == std::string::npos) continue;
-    const auto e = line.find_last_not_of(" \t\r,;");
-    const std::string tok = line.substr(b, e - b + 1);
-    char* end = nullptr;
-    errno = 0;
-    const double x = std::strtod(tok.c_str(), &end);
-    if (end != tok.c_str() + tok.size() || errno == ERANGE || !std::isfinite(x))
-      throw ConfigError(path + ":" + std::to_string(lineno) + ": not a number: '" + tok + "'");
-    v.push_back(x);
-  }
-  return v;
-}
-
-struct CaptureData {
-  std::vector<double> values;
-  capture::Header header;
-  capture::Recovery recovery;
-};
-
-CaptureData read_capture(const std::string& path, const std::string& channel) {
-  capture::Reader r(path);
-  CaptureData c;
-  c.header = r.header();
-  std::vector<Sample> buf(1 << 16);
-  for (std::size_t n; (n = r.read(buf)) > 0;)
-    for (std::size_t i = 0; i < n; ++i) c.values.push_back(channel == "y" ? buf[i].y_g : buf[i].x_g);
-  c.recovery = r.recovery();
-  return c;
-}
-
 void write_file(const std::filesystem::path& p, const std::string& text) {
   std::ofstream o(p);
   if (!o) throw ConfigError(p.string() + ": cannot write: " + std::strerror(errno));
@@ -156,7 +74,32 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
   o << "\n";
 }
 
+// RIG_ANALYZE_TIMING=1 prints each stage's wall and CPU time (all threads) to stderr: where the
+// whole process spends its time (docs/analysis.md, "Speed"); CPU time stays meaningful on a
+// loaded machine. Off by default: one getenv, no clock reads.
+class StageTimer {
+ public:
+  StageTimer() : on_(std::getenv("RIG_ANALYZE_TIMING") != nullptr) {
+    if (on_) wall_ = std::chrono::steady_clock::now(), cpu_ = std::clock();
+  }
+  void mark(const char* stage) {
+    if (!on_) return;
+    const auto wall = std::chrono::steady_clock::now();
+    const std::clock_t cpu = std::clock();
+    std::fprintf(stderr, "rig analyze: %-12s wall %8.2f ms  cpu %8.2f ms\n", stage,
+                 std::chrono::duration<double, std::milli>(wall - wall_).count(),
+                 1e3 * static_cast<double>(cpu - cpu_) / CLOCKS_PER_SEC);
+    wall_ = wall, cpu_ = cpu;
+  }
+
+ private:
+  bool on_;
+  std::chrono::steady_clock::time_point wall_;
+  std::clock_t cpu_ = 0;
+};
+
 int run(const Args& a) {
+  StageTimer timer;
   if (!(a.overlap >= 0 && a.overlap <= 0.95))
     throw ConfigError("--overlap " + std::to_string(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
   if (!(a.confidence > 0 && a.confidence < 1))
@@ -187,7 +130,8 @@ int run(const Args& a) {
   if (input == "text") {
     mem = read_text(a.file);
   } else if (input == "f64") {
-    src = std::make_unique<F64File>(a.file);
+    // A file that fits the memory budget is mapped and analysed in place (one ring holds it all).
+    src = std::make_unique<F64File>(a.file, (a.memory_mib << 20) / 2);
   } else if (input == "capture") {
     cap = read_capture(a.file, a.channel);
     mem = std::move(cap->values);
@@ -196,9 +140,23 @@ int run(const Args& a) {
     throw ConfigError("rig analyze: --input must be text, f64 or capture, got '" + input + "'");
   }
   if (!src) src = std::make_unique<an::SpanSource>(mem);
-  if (!(rate > 0)) throw ConfigError("rig analyze: --rate must be positive");
+  if (!(rate > 0 && std::isfinite(rate)))
+    throw ConfigError(cap && !a.rate ? a.file + ": capture header rate_hz " + std::to_string(rate) +
+                                           " is not a positive number of Hz (give --rate)"
+                                     : "rig analyze: --rate must be a positive number of Hz");
+  timer.mark("read");
   const std::uint64_t n = src->size();
-  if (n < 16) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 16 are needed");
+  // Sizes are checked where they are needed, before the long work: the deviation needs 3 phase
+  // points (deviations_stream says so), the PSD one whole segment.
+  an::WelchOptions wo;
+  wo.window = an::parse_window(a.window);
+  wo.segment = a.segment;
+  wo.overlap = a.overlap;
+  wo.threads = a.threads;
+  const bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
+  if (want_psd && n < an::welch_segment(n, wo))
+    throw ConfigError(a.file + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
+                      std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
 
   // One pass for OADEV (noise terms, the contract's "oadev") and the requested deviation.
   std::vector<an::DevOptions> opts;
@@ -218,8 +176,14 @@ int run(const Args& a) {
   } catch (const std::invalid_argument& e) {
     throw ConfigError(a.file + ": " + e.what());
   }
+  for (std::size_t k = 0; k < devs.size(); ++k)
+    if (devs[k].empty())
+      throw ConfigError(a.file + ": " + std::to_string(n) + " values are too few for any tau of " +
+                        an::to_string(opts[k].type) + " (" + a.taus + ")");
   const double record_s = static_cast<double>(n) / rate;
+  timer.mark("deviations");
   const an::NoiseTerms terms = an::noise_terms(devs[0], record_s);
+  timer.mark("noise terms");
 
   json j;
   j["n"] = n;
@@ -237,18 +201,15 @@ int run(const Args& a) {
                     {"orientation", cap->header.orientation}, {"channel", a.channel},
                     {"complete", cap->recovery.complete}, {"truncated", cap->recovery.truncated},
                     {"samples", cap->recovery.samples}, {"damaged_blocks", cap->recovery.damaged_blocks},
-                    {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes}};
+                    {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes},
+                    {"non_finite", cap->recovery.non_finite}};
   }
 
   // PSD (frequency data only: for phase data it would be of the integral).
   std::optional<an::Psd> psd;
   std::vector<an::Peak> peaks;
-  if (base.data == an::DataKind::Frequency && !a.no_psd) {
-    an::WelchOptions wo;
-    wo.window = an::parse_window(a.window);
-    wo.segment = a.segment;
-    wo.overlap = a.overlap;
-    wo.threads = a.threads;
+  timer.mark("json build");
+  if (want_psd) {
     try {
       psd = an::welch(*src, rate, wo);
     } catch (const std::invalid_argument& e) {
@@ -270,7 +231,9 @@ int run(const Args& a) {
     j["psd"] = pj;
   }
 
+  timer.mark("psd");
   if (!a.json_out.empty()) write_file(a.json_out, j.dump(2) + "\n");
+  timer.mark("json write");
   if (!a.svg_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(a.svg_dir, ec);
@@ -317,6 +280,7 @@ int run(const Args& a) {
     for (const auto& p : peaks) o << ' ' << p.f_hz << " Hz";
     o << "\n";
   }
+  timer.mark("console");
   return kExitPass;
 }
 

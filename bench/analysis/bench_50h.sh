@@ -1,34 +1,51 @@
 #!/bin/sh
-# The issue's speed target, part 2: a 50-h capture (1.8e8 samples at 1 kHz, a 1.44 GB float64
-# file) through `rig analyze`: OADEV on log:100 with noise identification and bounds, the noise
-# terms and the Welch PSD, streamed from the file. Prints wall time, CPU time and peak RSS.
+# Issue 17's 50-h figures: a 50-h record (1.8e8 samples at 1 kHz, a 1.44 GB float64 file)
+# through the whole `rig analyze` process, streamed from the file (bounded memory, both cores),
+# log:100 taus with noise identification and bounds and the noise terms:
+#   oadev          OADEV without the PSD   (target: <= 5 s wall, <= 512 MiB)
+#   oadev+psd      OADEV with the Welch PSD
+#   mdev .. totdev OADEV and that deviation in one pass, no PSD (target: <= 10 s, <= 512 MiB)
+# Prints wall, user and system time and peak RSS (/usr/bin/time) of each.
 #
-#   bench/analysis/bench_50h.sh [BUILD_DIR] [DATA_DIR]
+#   bench/analysis/bench_50h.sh [BUILD_DIR] [DATA_DIR] [FIGURE...]
 #
 # The file is generated once (bench/analysis/make_signal.py, about 40 s) and kept in DATA_DIR
-# (default /tmp). The first run after generating it reads from the page cache like the rest.
+# (default /tmp); delete it when done (rm DATA_DIR/rig-bench-50h.f64). It is read into the page
+# cache first: the figure is the analysis, not the disk.
 set -eu
 build=${1:-build}
 dir=${2:-/tmp}
+[ $# -ge 2 ] && shift 2 || shift $#
+figures=${*:-oadev oadev+psd mdev tdev hdev ohdev totdev}
 here=$(cd "$(dirname "$0")" && pwd)
 file="$dir/rig-bench-50h.f64"
 [ -s "$file" ] || /usr/bin/python3 "$here/make_signal.py" "$file" 1.8e8 2
-cat "$file" > /dev/null  # into the page cache: the figure is the analysis, not the disk
+cat "$file" > /dev/null
 out=$(mktemp -d)
-/usr/bin/time -f 'wall %e s, user %U s, sys %S s, peak RSS %M KiB' \
-  "$build/bin/rig" analyze "$file" --input f64 --rate 1000 --taus log:100 --json "$out/analysis.json" > "$out/stdout" 2> "$out/time" || {
-  cat "$out/stdout" "$out/time"
-  exit 1
-}
-tail -n 1 "$out/time"
-/usr/bin/python3 - "$out/analysis.json" <<'EOF'
+echo "# $(date -u +%Y-%m-%dT%H:%MZ) $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg); $file"
+for fig in $figures; do
+  case $fig in
+    oadev) extra="--no-psd" ;;
+    oadev+psd) extra="" ;;
+    *) extra="--no-psd --dev $fig" ;;
+  esac
+  # shellcheck disable=SC2086
+  /usr/bin/time -f "wall %e s, user %U s, sys %S s, peak RSS %M KiB" \
+    "$build/bin/rig" analyze "$file" --input f64 --rate 1000 --taus log:100 $extra --json "$out/a.json" \
+    > "$out/stdout" 2> "$out/time" || {
+    cat "$out/stdout" "$out/time"
+    exit 1
+  }
+  printf '%-10s %s\n' "$fig" "$(tail -n 1 "$out/time")"
+done
+/usr/bin/python3 - "$out/a.json" <<'EOF'
 import json, sys
 a = json.load(open(sys.argv[1]))
 nt = a["noise_terms"]
 def v(t):
     x = nt[t].get("per_hour", {}).get("value")
     return "null" if x is None else f"{x:.4e}"
-print(f"n = {a['n']}, taus = {len(a['oadev'])}, N = {v('N')} g*h^0.5, K = {v('K')} g/h^0.5, "
+print(f"# last run: n = {a['n']}, taus = {len(a['oadev'])}, N = {v('N')} g*h^0.5, K = {v('K')} g/h^0.5, "
       f"R = {v('R')}, B = {nt['B'].get('value')}")
 EOF
 rm -rf "$out"

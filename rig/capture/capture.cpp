@@ -61,6 +61,7 @@ std::string Recovery::summary(const std::string& path) const {
     if (!problem.empty()) os << " (" << problem << ")";
   }
   if (damaged_blocks) os << "; " << damaged_blocks << " damaged block(s) skipped";
+  if (non_finite) os << "; " << non_finite << " sample(s) with a non-finite value (NaN or inf)";
   return os.str();
 }
 
@@ -289,6 +290,7 @@ bool Reader::next_block() {
         }
         prev_count_ = count;
         prev_crc_ = get_u32(h + 8);
+        flag_non_finite(pos_);
         pos_ += kBlockHeaderSize + payload;
         block_pos_ = 0;
         ++rec_.blocks;
@@ -315,6 +317,21 @@ bool Reader::next_block() {
     if (!resync(pos_ + 16)) {
       rec_.truncated = true;
       return false;
+    }
+  }
+}
+
+// A valid CRC only says the bytes are as written: the values may still be NaN or inf.
+void Reader::flag_non_finite(uint64_t block_pos) {
+  for (std::size_t i = 0; i < block_.size(); ++i) {
+    const Sample& s = block_[i];
+    if (std::isfinite(s.x_g) && std::isfinite(s.y_g)) continue;
+    if (rec_.non_finite++ < Recovery::kMaxNonFiniteNotes) {
+      const uint64_t offset = block_pos + kBlockHeaderSize + i * kRecordSize;
+      rec_.notes.push_back("offset " + std::to_string(offset) + ": sample " + std::to_string(rec_.samples + i) +
+                           " has x = " + std::to_string(s.x_g) + ", y = " + std::to_string(s.y_g) +
+                           " (not a finite number)");
+      if (rec_.problem.empty()) rec_.problem = rec_.notes.back();
     }
   }
 }

@@ -43,6 +43,11 @@ struct Recovery {
   bool truncated = false;  // ends without the end marker (writer killed or disk full)
   std::string problem;     // human-readable description of the first problem, empty if none
   std::vector<std::string> notes;  // one line per damage found ("offset 123456: block payload CRC mismatch")
+  // Samples whose x or y is NaN or infinite in blocks with a valid CRC (e.g. a DUT that sent a
+  // NaN float): counted, the first kMaxNonFiniteNotes located in `notes`; `complete` still
+  // describes the file, so a reader that analyses the values must check this count.
+  uint64_t non_finite = 0;
+  static constexpr std::size_t kMaxNonFiniteNotes = 8;
   std::string summary(const std::string& path) const;
 };
 
@@ -94,6 +99,7 @@ class Reader {
  private:
   bool next_block();
   bool resync(uint64_t from);
+  void flag_non_finite(uint64_t block_pos);
   std::string path_;
   std::FILE* f_ = nullptr;
   uint64_t file_size_ = 0;

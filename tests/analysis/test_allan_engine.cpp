@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -110,14 +111,19 @@ TEST(Stream, SmallRingAndFarCursorsEqualTheInMemoryResult) {
 }
 
 TEST(Stream, OneThreadEqualsTwo) {
+  // In memory every deviation's heads are cut into fixed segments (MDEV/TDEV restart their
+  // window sum at each): the sums must not depend on which thread ran which segment.
   const auto y = signal(100000, 3);
-  DevOptions o;
-  o.taus = parse_tau_grid("log:30");
-  o.threads = 1;
-  const auto one = deviation(y, o);
-  o.threads = 2;
-  const auto two = deviation(y, o);
-  expect_same(one, two, 0.0, "threads");
+  for (Deviation d : kAll) {
+    DevOptions o;
+    o.type = d;
+    o.taus = parse_tau_grid("log:30");
+    o.threads = 1;
+    const auto one = deviation(y, o);
+    o.threads = 2;
+    const auto two = deviation(y, o);
+    expect_same(one, two, 0.0, to_string(d));
+  }
 }
 
 TEST(Stream, StreamingOneThreadEqualsTwoAndRepeats) {
@@ -276,6 +282,15 @@ TEST(Allan, RejectsBadInputNamingTheProblem) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("42"), std::string::npos) << e.what();
   }
+  // Finite but beyond any measurement: the sums would overflow and every point read inf.
+  y[42] = 1e300;
+  try {
+    deviation(y, o);
+    FAIL() << "1e300 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("value 42 (1.0000000000000001e+300) is beyond"), std::string::npos)
+        << e.what();
+  }
   y[42] = 1;
   o.rate_hz = 0;
   EXPECT_THROW(deviation(y, o), std::invalid_argument);
@@ -284,6 +299,22 @@ TEST(Allan, RejectsBadInputNamingTheProblem) {
   EXPECT_THROW(deviation(y, o), std::invalid_argument);
   EXPECT_THROW(parse_deviation("avar"), std::invalid_argument);
   EXPECT_EQ(parse_deviation("ohdev"), Deviation::OHDEV);
+}
+
+TEST(Allan, FirstUnusableFindsNanInfAndHugeValuesAtAnyLane) {
+  std::vector<double> v(37, -2.5);
+  EXPECT_FALSE(first_unusable(v));
+  v[36] = 1e-310;  // subnormal: usable
+  v[35] = std::nextafter(-kMaxMagnitude, 0.0);  // the largest usable magnitude
+  EXPECT_FALSE(first_unusable(v));
+  for (std::size_t at : {0u, 3u, 17u, 36u})
+    for (double bad : {std::nan(""), -std::numeric_limits<double>::infinity(), -kMaxMagnitude, 2e100, 1e308}) {
+      std::vector<double> w = v;
+      w[at] = bad;
+      w[at == 36 ? 0 : 36] = bad;  // a later one too: the first is reported
+      ASSERT_TRUE(first_unusable(w));
+      EXPECT_EQ(*first_unusable(w), std::min<std::size_t>(at, at == 36 ? 0 : 36)) << bad;
+    }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -113,6 +114,31 @@ TEST(Capture, CorruptedBlockIsSkippedAndTheRestRecovered) {
   // The first sample after the lost block carries the gap flag; sequence continues at 2000.
   EXPECT_EQ(l.samples[1000].seq, 2000u);
   EXPECT_TRUE(l.samples[1000].status & sample_status::kGapBefore);
+}
+
+TEST(Capture, NonFiniteValuesWithValidCrcsAreCountedAndLocated) {
+  // A DUT that sends a NaN float makes a file whose CRCs are all valid: the reader must still
+  // say so, with the sample and its offset (issue 13 item 4).
+  const std::string p = tmpdir() + "/nf.cap";
+  auto s = ramp(3000);
+  s[1234].x_g = std::numeric_limits<float>::quiet_NaN();
+  s[2001].y_g = -std::numeric_limits<float>::infinity();
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(s);
+    w.close();
+  }
+  const auto data_start = fs::file_size(p) - 16 - 3 * 16016;
+  const auto l = capture::load(p);
+  EXPECT_TRUE(l.recovery.complete);  // the file is whole; its values are not
+  EXPECT_EQ(l.recovery.non_finite, 2u);
+  ASSERT_EQ(l.recovery.notes.size(), 2u);
+  EXPECT_NE(l.recovery.notes[0].find("offset " + std::to_string(data_start + 16016 + 16 + 234 * 16) + ": sample 1234 "),
+            std::string::npos)
+      << l.recovery.notes[0];
+  EXPECT_NE(l.recovery.notes[1].find("sample 2001 "), std::string::npos) << l.recovery.notes[1];
+  EXPECT_NE(l.recovery.summary(p).find("2 sample(s) with a non-finite value"), std::string::npos)
+      << l.recovery.summary(p);
 }
 
 TEST(Capture, DamagedBlockHeaderResyncsToTheNextBlock) {

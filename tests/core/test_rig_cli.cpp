@@ -212,6 +212,64 @@ TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
   EXPECT_NE(slurp(d + "/nf.stderr").find("value 31337 (byte 250696)"), std::string::npos) << slurp(d + "/nf.stderr");
 }
 
+// Issue 13 item 4: every reader refuses unusable values with file and position, reads decimal
+// floating point, and checks sizes before the work.
+TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
+  const std::string d = tmp("analyze-values");
+  fs::create_directories(d);
+  auto text = [&](const std::string& name, const std::string& bad_line, std::size_t lines = 400) {
+    std::ofstream o(d + "/" + name);
+    for (std::size_t i = 0; i < lines; ++i) o << (i == 7 ? bad_line : std::to_string(1e-6 * static_cast<double>(i % 13))) << "\n";
+  };
+  text("sub.txt", "1e-310");  // a subnormal is a number
+  EXPECT_EQ(run({"analyze", d + "/sub.txt", "--no-psd"}, d + "/sub"), 0) << slurp(d + "/sub.stderr");
+  text("hex.txt", "0x10");  // not decimal: not read as 16
+  EXPECT_EQ(run({"analyze", d + "/hex.txt", "--no-psd"}, d + "/hex"), 2);
+  EXPECT_NE(slurp(d + "/hex.stderr").find(d + "/hex.txt:8: not a decimal number: '0x10'"), std::string::npos)
+      << slurp(d + "/hex.stderr");
+  text("big.txt", "1e308");  // finite, but every deviation would be inf
+  EXPECT_EQ(run({"analyze", d + "/big.txt", "--no-psd"}, d + "/big"), 2);
+  EXPECT_NE(slurp(d + "/big.stderr").find(d + "/big.txt:8:"), std::string::npos) << slurp(d + "/big.stderr");
+  text("nan.txt", "nan");
+  EXPECT_EQ(run({"analyze", d + "/nan.txt", "--no-psd"}, d + "/nan"), 2);
+  EXPECT_NE(slurp(d + "/nan.stderr").find(d + "/nan.txt:8:"), std::string::npos) << slurp(d + "/nan.stderr");
+  {  // a float64 value beyond any measurement, located by index and byte
+    std::vector<double> v(5000, 1e-6);
+    v[4321] = 1e200;
+    std::ofstream(d + "/big.f64", std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+  }
+  EXPECT_EQ(run({"analyze", d + "/big.f64", "--no-psd"}, d + "/bf"), 2);
+  EXPECT_NE(slurp(d + "/bf.stderr").find("value 4321 (byte 34568)"), std::string::npos) << slurp(d + "/bf.stderr");
+  // Fewer values than one PSD segment: refused before the analysis, saying what would do.
+  text("short.txt", "1", 100);
+  EXPECT_EQ(run({"analyze", d + "/short.txt"}, d + "/sh"), 2);
+  EXPECT_NE(slurp(d + "/sh.stderr").find("fewer than one PSD segment of 256 (give a shorter --segment, or --no-psd)"),
+            std::string::npos)
+      << slurp(d + "/sh.stderr");
+  EXPECT_EQ(run({"analyze", d + "/short.txt", "--no-psd"}, d + "/shn"), 0) << slurp(d + "/shn.stderr");
+  // A capture with valid CRCs holding a NaN: not a clean analysis.
+  {
+    rig::capture::Header h;
+    h.rate_hz = 1000;
+    rig::capture::Writer w(d + "/nan.cap", h, 1000);
+    std::vector<rig::Sample> s(3000);
+    for (std::size_t i = 0; i < s.size(); ++i) s[i] = {static_cast<uint32_t>(i), 1e-6f * static_cast<float>(i % 7), 2e-6f * static_cast<float>(i % 5), 0};
+    s[2500].x_g = std::numeric_limits<float>::quiet_NaN();
+    w.append(s);
+    w.close();
+  }
+  EXPECT_EQ(run({"analyze", d + "/nan.cap", "--input", "capture", "--no-psd"}, d + "/nc"), 2);
+  EXPECT_NE(slurp(d + "/nc.stderr").find("sample 2500 of channel x"), std::string::npos) << slurp(d + "/nc.stderr");
+  EXPECT_NE(slurp(d + "/nc.stderr").find("offset "), std::string::npos) << slurp(d + "/nc.stderr");
+  // The other channel is clean: analysed, the capture's count reported.
+  ASSERT_EQ(run({"analyze", d + "/nan.cap", "--input", "capture", "--no-psd", "--channel", "y", "--json", d + "/y.json"},
+                d + "/ny"),
+            0)
+      << slurp(d + "/ny.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/y.json"))["capture"]["non_finite"], 1);
+}
+
 TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
   const std::string d = tmp("sigint");
   fs::create_directories(d);

@@ -1,0 +1,291 @@
+// The Allan engine's kernels (see allan_kernels.hpp). Four or more independent vector
+// accumulators per reduction, so a sum is not one long FMA dependency chain.
+#include "analysis/allan_kernels.hpp"
+
+#include <algorithm>
+
+namespace rig::analysis::detail::kernels {
+
+#define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+
+namespace {
+
+// Four independent vector accumulators: the sum is not one long FMA dependency chain.
+using v8 = double __attribute__((vector_size(64)));
+inline v8 load8(const double* p) {
+  v8 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline double hsum(v8 v) {
+  double s = 0;
+  for (int i = 0; i < 8; ++i) s += v[i];
+  return s;
+}
+
+}  // namespace
+
+RIG_CLONES double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t len) {
+  v8 a0{}, a1{}, a2{}, a3{};
+  std::size_t t = 0;
+  for (; t + 32 <= len; t += 32) {
+    const v8 d0 = load8(w2 + t) - 2 * load8(w1 + t) + load8(w0 + t);
+    const v8 d1 = load8(w2 + t + 8) - 2 * load8(w1 + t + 8) + load8(w0 + t + 8);
+    const v8 d2 = load8(w2 + t + 16) - 2 * load8(w1 + t + 16) + load8(w0 + t + 16);
+    const v8 d3 = load8(w2 + t + 24) - 2 * load8(w1 + t + 24) + load8(w0 + t + 24);
+    a0 += d0 * d0, a1 += d1 * d1, a2 += d2 * d2, a3 += d3 * d3;
+  }
+  double s = hsum((a0 + a1) + (a2 + a3));
+  for (; t < len; ++t) {
+    const double d = w2[t] - 2 * w1[t] + w0[t];
+    s += d * d;
+  }
+  return s;
+}
+
+RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len) {
+  v8 a0{}, a1{};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 d0 = load8(w3 + t) - 3 * load8(w2 + t) + 3 * load8(w1 + t) - load8(w0 + t);
+    const v8 d1 = load8(w3 + t + 8) - 3 * load8(w2 + t + 8) + 3 * load8(w1 + t + 8) - load8(w0 + t + 8);
+    a0 += d0 * d0, a1 += d1 * d1;
+  }
+  double s = hsum(a0 + a1);
+  for (; t < len; ++t) {
+    const double d = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+    s += d * d;
+  }
+  return s;
+}
+
+namespace {
+
+// A doubling chain m, 2m, .., 2^(K-1) m of OADEV/TOTDEV taus aligned at a common head h (the
+// newest phase point of each term): tau 2^i m's term is P[h] - 2 P[h - 2^i m] + P[h - 2^(i+1) m],
+// so K taus need K + 2 streams, not 3K: the loads that bound sum_d2 are shared.
+// lag[j] = &P[h0 - 2^j m], j = 0..K; out[i] += sum of squared terms of tau 2^i m.
+template <int K>
+[[gnu::always_inline]] inline void chain_d2_body(const double* head, const double* const* lag, std::size_t len,
+                                                 double* out) {
+  v8 a[K][2] = {};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
+    v8 p0 = load8(lag[0] + t), p1 = load8(lag[0] + t + 8);
+#pragma GCC unroll 8
+    for (int i = 0; i < K; ++i) {
+      const v8 q0 = load8(lag[i + 1] + t), q1 = load8(lag[i + 1] + t + 8);
+      const v8 d0 = h0 - 2 * p0 + q0, d1 = h1 - 2 * p1 + q1;
+      a[i][0] += d0 * d0;
+      a[i][1] += d1 * d1;
+      p0 = q0, p1 = q1;
+    }
+  }
+  for (int i = 0; i < K; ++i) {
+    double s = hsum(a[i][0] + a[i][1]);
+    for (std::size_t u = t; u < len; ++u) {
+      const double d = head[u] - 2 * lag[i][u] + lag[i + 1][u];
+      s += d * d;
+    }
+    out[i] += s;
+  }
+}
+
+#define RIG_CHAIN(K)                                                                                 \
+  RIG_CLONES void chain_d2_##K(const double* head, const double* const* lag, std::size_t len, double* out) { \
+    chain_d2_body<K>(head, lag, len, out);                                                           \
+  }
+RIG_CHAIN(2)
+RIG_CHAIN(3)
+RIG_CHAIN(4)
+RIG_CHAIN(5)
+RIG_CHAIN(6)
+RIG_CHAIN(7)
+RIG_CHAIN(8)
+#undef RIG_CHAIN
+}  // namespace
+
+void chain_d2(int k, const double* head, const double* const* lag, std::size_t len, double* out) {
+  switch (k) {
+    case 2: return chain_d2_2(head, lag, len, out);
+    case 3: return chain_d2_3(head, lag, len, out);
+    case 4: return chain_d2_4(head, lag, len, out);
+    case 5: return chain_d2_5(head, lag, len, out);
+    case 6: return chain_d2_6(head, lag, len, out);
+    case 7: return chain_d2_7(head, lag, len, out);
+    case 8: return chain_d2_8(head, lag, len, out);
+    default: break;
+  }
+  for (int i = 0; i < k; ++i) out[i] += sum_d2(lag[i + 1], lag[i], head, len);
+}
+
+namespace {
+
+// The Hadamard twin of chain_d2_body: tau 2^i m's term is P[h] - 3 P[h - 2^i m] + 3 P[h - 2^(i+1) m]
+// - P[h - 3 2^i m] (SP 1065 eq. 18); lag2[j] = &P[h0 - 2^j m], j = 0..K, lag3[i] = &P[h0 - 3 2^i m]:
+// K taus from 2K + 2 streams instead of 4K. Each term as sum_d3 writes it.
+template <int K>
+[[gnu::always_inline]] inline void chain_d3_body(const double* head, const double* const* lag2,
+                                                 const double* const* lag3, std::size_t len, double* out) {
+  v8 a[K][2] = {};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    const v8 h0 = load8(head + t), h1 = load8(head + t + 8);
+    v8 p0 = load8(lag2[0] + t), p1 = load8(lag2[0] + t + 8);
+#pragma GCC unroll 8
+    for (int i = 0; i < K; ++i) {
+      const v8 q0 = load8(lag2[i + 1] + t), q1 = load8(lag2[i + 1] + t + 8);
+      const v8 d0 = h0 - 3 * p0 + 3 * q0 - load8(lag3[i] + t);
+      const v8 d1 = h1 - 3 * p1 + 3 * q1 - load8(lag3[i] + t + 8);
+      a[i][0] += d0 * d0;
+      a[i][1] += d1 * d1;
+      p0 = q0, p1 = q1;
+    }
+  }
+  for (int i = 0; i < K; ++i) {
+    double s = hsum(a[i][0] + a[i][1]);
+    for (std::size_t u = t; u < len; ++u) {
+      const double d = head[u] - 3 * lag2[i][u] + 3 * lag2[i + 1][u] - lag3[i][u];
+      s += d * d;
+    }
+    out[i] += s;
+  }
+}
+
+#define RIG_CHAIN3(K)                                                                                     \
+  RIG_CLONES void chain_d3_##K(const double* head, const double* const* lag2, const double* const* lag3, \
+                               std::size_t len, double* out) {                                           \
+    chain_d3_body<K>(head, lag2, lag3, len, out);                                                         \
+  }
+RIG_CHAIN3(2)
+RIG_CHAIN3(3)
+RIG_CHAIN3(4)
+RIG_CHAIN3(5)
+RIG_CHAIN3(6)
+RIG_CHAIN3(7)
+RIG_CHAIN3(8)
+#undef RIG_CHAIN3
+
+}  // namespace
+
+void chain_d3(int k, const double* head, const double* const* lag2, const double* const* lag3, std::size_t len,
+              double* out) {
+  switch (k) {
+    case 2: return chain_d3_2(head, lag2, lag3, len, out);
+    case 3: return chain_d3_3(head, lag2, lag3, len, out);
+    case 4: return chain_d3_4(head, lag2, lag3, len, out);
+    case 5: return chain_d3_5(head, lag2, lag3, len, out);
+    case 6: return chain_d3_6(head, lag2, lag3, len, out);
+    case 7: return chain_d3_7(head, lag2, lag3, len, out);
+    case 8: return chain_d3_8(head, lag2, lag3, len, out);
+    default: break;
+  }
+  for (int i = 0; i < k; ++i) out[i] += sum_d3(lag3[i], lag2[i + 1], lag2[i], head, len);
+}
+
+namespace {
+
+// Inclusive prefix sum of one vector: three shift-and-add steps (Hillis-Steele).
+using m8 = long long __attribute__((vector_size(64)));
+inline v8 scan8(v8 x) {
+  const v8 z{};
+  x += __builtin_shuffle(z, x, m8{0, 8, 9, 10, 11, 12, 13, 14});
+  x += __builtin_shuffle(z, x, m8{0, 1, 8, 9, 10, 11, 12, 13});
+  x += __builtin_shuffle(z, x, m8{0, 1, 2, 3, 8, 9, 10, 11});
+  return x;
+}
+
+}  // namespace
+
+namespace {
+
+// One tile of kFusedParts x part_len points, fused: the third differences, their running sum
+// (a vector scan per 8 points, the parts interleaved so no single carry chain bounds it) and the
+// sums of the running sums and of their squares stay in registers. With c the part's local
+// running sum and off the window sum before the part, sum (off + c)^2 = S2 + 2 off S1 + n off^2.
+constexpr std::size_t kFusedParts = 4;
+RIG_CLONES void mdev_tile(const double* w0, const double* w1, const double* w2, const double* w3,
+                          std::size_t part_len, double* s1_out, double* s2_out, double* tot_out) {
+  v8 carry[kFusedParts] = {}, s1[kFusedParts] = {}, s2[kFusedParts] = {};
+  for (std::size_t r = 0; r < part_len; r += 8)
+    for (std::size_t j = 0; j < kFusedParts; ++j) {
+      const std::size_t b = j * part_len + r;
+      const v8 d = load8(w3 + b) - 3 * load8(w2 + b) + 3 * load8(w1 + b) - load8(w0 + b);
+      const v8 c = scan8(d) + carry[j];
+      carry[j] = v8{} + c[7];
+      s1[j] += c;
+      s2[j] += c * c;
+    }
+  for (std::size_t j = 0; j < kFusedParts; ++j) {
+    s1_out[j] = hsum(s1[j]);
+    s2_out[j] = hsum(s2[j]);
+    tot_out[j] = carry[j][0];
+  }
+}
+
+}  // namespace
+
+double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+                double& inner) {
+  constexpr std::size_t kPart = 256, kTile = kFusedParts * kPart;
+  double s = 0;
+  std::size_t t0 = 0;
+  for (; t0 + kTile <= len; t0 += kTile) {
+    double s1[kFusedParts], s2[kFusedParts], tot[kFusedParts];
+    mdev_tile(w0 + t0, w1 + t0, w2 + t0, w3 + t0, kPart, s1, s2, tot);
+    for (std::size_t j = 0; j < kFusedParts; ++j) {
+      s += s2[j] + 2 * inner * s1[j] + static_cast<double>(kPart) * inner * inner;
+      inner += tot[j];
+    }
+  }
+  for (; t0 < len; ++t0) {  // the last partial tile, point by point
+    inner += w3[t0] - 3 * w2[t0] + 3 * w1[t0] - w0[t0];
+    s += inner * inner;
+  }
+  return s;
+}
+
+RIG_CLONES double sum_second_diff(const double* w0, const double* w1, const double* w2, std::size_t len) {
+  double s = 0;
+#pragma omp simd reduction(+ : s)
+  for (std::size_t t = 0; t < len; ++t) s += w2[t] - 2 * w1[t] + w0[t];
+  return s;
+}
+
+// Eight fixed partial sums (lane t % 8): vectorised, and the same on every machine.
+RIG_CLONES double sum_reflected_left(double k, const double* r, const double* c, const double* f, std::size_t len) {
+  double acc[8] = {};
+  std::size_t t = 0;
+  for (; t + 8 <= len; t += 8)
+    for (std::size_t l = 0; l < 8; ++l) {
+      const double d = k - r[len - 1 - (t + l)] - 2 * c[t + l] + f[t + l];
+      acc[l] += d * d;
+    }
+  double s = 0;
+  for (double v : acc) s += v;
+  for (; t < len; ++t) {
+    const double d = k - r[len - 1 - t] - 2 * c[t] + f[t];
+    s += d * d;
+  }
+  return s;
+}
+
+RIG_CLONES double sum_reflected_right(double k, const double* r, const double* c, const double* f, std::size_t len) {
+  double acc[8] = {};
+  std::size_t t = 0;
+  for (; t + 8 <= len; t += 8)
+    for (std::size_t l = 0; l < 8; ++l) {
+      const double d = f[t + l] - 2 * c[t + l] + k - r[len - 1 - (t + l)];
+      acc[l] += d * d;
+    }
+  double s = 0;
+  for (double v : acc) s += v;
+  for (; t < len; ++t) {
+    const double d = f[t] - 2 * c[t] + k - r[len - 1 - t];
+    s += d * d;
+  }
+  return s;
+}
+
+}  // namespace rig::analysis::detail::kernels

@@ -1,0 +1,147 @@
+#include "app/analyze_input.hpp"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::cli {
+
+namespace an = rig::analysis;
+
+namespace {
+
+std::string shown(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
+}
+
+// Why a value the checks refused is refused.
+std::string refusal(double x) {
+  return std::isfinite(x) ? shown(x) + " is beyond +-2^333 = 1.7e100 (not a measurement)" : shown(x) + " is not a finite number";
+}
+
+}  // namespace
+
+F64File::F64File(const std::string& path, std::size_t map_limit_bytes) : path_(path) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) throw ConfigError(path + ": cannot stat: " + std::strerror(errno));
+  if (st.st_size % 8 != 0)
+    throw ConfigError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)");
+  n_ = static_cast<std::uint64_t>(st.st_size) / 8;
+  const std::size_t bytes = static_cast<std::size_t>(st.st_size);
+  if (bytes > 0 && bytes <= map_limit_bytes) {
+    // MAP_POPULATE: the pages are mapped in one call instead of one fault per 4 KiB.
+    void* p = ::mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd_, 0);
+    if (p != MAP_FAILED) {
+      map_ = static_cast<const double*>(p);
+      check(0, std::span<const double>(map_, n_));
+      return;
+    }
+  }
+  ::posix_fadvise(fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
+}
+
+F64File::~F64File() {
+  if (map_) ::munmap(const_cast<double*>(map_), n_ * 8);
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void F64File::check(std::uint64_t pos, std::span<const double> v) const {
+  if (const auto bad = an::first_unusable(v))
+    throw ConfigError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
+                      ") " + refusal(v[*bad]));
+}
+
+std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
+  if (pos >= n_) return 0;
+  const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), n_ - pos));
+  if (map_) {  // checked at open
+    std::memcpy(out.data(), map_ + pos, want * 8);
+    return want;
+  }
+  auto* p = reinterpret_cast<char*>(out.data());
+  std::size_t got = 0;
+  while (got < want * 8) {
+    const ssize_t r = ::pread(fd_, p + got, want * 8 - got, static_cast<off_t>(pos * 8 + got));
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0)
+      throw ConfigError(path_ + ": read error at value " + std::to_string(pos + got / 8) + ": " +
+                        (r < 0 ? std::strerror(errno) : "unexpected end"));
+    got += static_cast<std::size_t>(r);
+  }
+  // Only values past the checked prefix are checked: the engine's cursors and far taus re-read
+  // what its sequential pass has already read (and checked) many times over.
+  const std::uint64_t done = checked_.load(std::memory_order_acquire);
+  if (pos + want > done) {
+    const std::uint64_t from = std::max(pos, done);
+    check(from, std::span<const double>(out.data() + (from - pos), pos + want - from));
+    std::uint64_t cur = done;  // extend the prefix if this read continues it
+    while (cur >= pos && cur < pos + want &&
+           !checked_.compare_exchange_weak(cur, pos + want, std::memory_order_acq_rel)) {
+    }
+  }
+  return want;
+}
+
+std::vector<double> read_text(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  std::vector<double> v;
+  std::string line;
+  for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    const auto b = line.find_first_not_of(" \t\r,;");
+    if (b == std::string::npos) continue;
+    const auto e = line.find_last_not_of(" \t\r,;");
+    const std::string_view tok(line.data() + b, e - b + 1);
+    const auto where = [&] { return path + ":" + std::to_string(lineno) + ": "; };
+    // from_chars reads decimal floating point only ("0x10" stops after the 0), has no leading
+    // '+', and takes subnormals such as 1e-310 (strtod flags those ERANGE).
+    const std::string_view num = tok.size() > 1 && tok[0] == '+' && tok[1] != '-' ? tok.substr(1) : tok;
+    double x = 0;
+    const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), x);
+    if (ec == std::errc::result_out_of_range)
+      throw ConfigError(where() + "'" + std::string(tok) + "' is beyond the range of a double");
+    if (ec != std::errc() || end != num.data() + num.size())
+      throw ConfigError(where() + "not a decimal number: '" + std::string(tok) + "'");
+    if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + "'" + std::string(tok) + "': " + refusal(x));
+    v.push_back(x);
+  }
+  return v;
+}
+
+CaptureData read_capture(const std::string& path, const std::string& channel) {
+  capture::Reader r(path);
+  CaptureData c;
+  c.header = r.header();
+  std::vector<Sample> buf(1 << 16);
+  for (std::size_t n; (n = r.read(buf)) > 0;)
+    for (std::size_t i = 0; i < n; ++i) c.values.push_back(channel == "y" ? buf[i].y_g : buf[i].x_g);
+  c.recovery = r.recovery();
+  if (const auto bad = an::first_unusable(c.values)) {
+    std::string where;
+    for (const auto& note : c.recovery.notes)  // the reader located the first ones by file offset
+      if (note.find(": sample " + std::to_string(*bad) + " ") != std::string::npos) where = " (" + note + ")";
+    throw ConfigError(path + ": sample " + std::to_string(*bad) + " of channel " + channel + " " +
+                      refusal(c.values[*bad]) + where + "; " + std::to_string(c.recovery.non_finite) +
+                      " sample(s) with a non-finite value in the capture");
+  }
+  return c;
+}
+
+}  // namespace rig::cli

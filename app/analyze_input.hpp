@@ -1,0 +1,55 @@
+// The readers of `rig analyze`: raw float64 files, text (one value per line) and the rig's
+// captures. Every value is checked before any analysis: NaN, inf and values beyond
+// analysis::kMaxMagnitude (2^333) are a configuration error (exit 2) naming the file and the value's
+// position (value index and byte, line, or sample and capture offset). Text is decimal
+// floating point as std::from_chars reads it (subnormals accepted, hex and "inf" not).
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "analysis/allan.hpp"
+#include "rig/capture/capture.hpp"
+
+namespace rig::cli {
+
+// Raw little-endian float64 values. A file that fits `map_limit_bytes` is mapped and checked
+// whole at open (one vectorised pass; the engine then reads it in place, without copies);
+// a larger one is read with pread and checked as it is first read (bounded memory for 50-h
+// records; the engine's re-reads of a checked prefix are not checked again).
+class F64File final : public analysis::ChunkSource {
+ public:
+  F64File(const std::string& path, std::size_t map_limit_bytes);
+  ~F64File() override;
+  F64File(const F64File&) = delete;
+  F64File& operator=(const F64File&) = delete;
+  std::uint64_t size() const override { return n_; }
+  std::size_t read_at(std::uint64_t pos, std::span<double> out) const override;
+  const double* contiguous() const override { return map_; }
+
+ private:
+  void check(std::uint64_t pos, std::span<const double> v) const;
+  std::string path_;
+  int fd_ = -1;
+  std::uint64_t n_ = 0;
+  const double* map_ = nullptr;
+  mutable std::atomic<std::uint64_t> checked_{0};  // values [0, checked_) have been checked
+};
+
+// One value per line; '#' starts a comment; blank lines are skipped; ',' ';' and blanks around
+// a value are ignored. Errors name path:line.
+std::vector<double> read_text(const std::string& path);
+
+struct CaptureData {
+  std::vector<double> values;
+  capture::Header header;
+  capture::Recovery recovery;
+};
+// One channel ("x" or "y") of a capture, with what the reader recovered. A non-finite value in
+// that channel is an error naming the sample and its offset in the file.
+CaptureData read_capture(const std::string& path, const std::string& channel);
+
+}  // namespace rig::cli

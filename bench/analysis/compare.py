@@ -1,0 +1,102 @@
+#!/usr/bin/python3
+"""Issue 17's figures in one run: for each statistic, the whole `rig analyze` process against
+a straightforward NumPy twin's compute alone (bench/analysis/twins.py) on the same data and
+the same taus (read back from rig's JSON), measured alternately; prints both times and the ratio.
+
+    /usr/bin/python3 bench/analysis/compare.py [--rig build/bin/rig] [--file y.f64] [--n 3.6e6]
+                                               [--rounds 5] [--only oadev,mdev,...]
+
+The rig's figure is the wall time of the whole process (start-up, reading the float64 file,
+the deviations with noise identification and bounds, the noise terms, the JSON written);
+the twin's is the NumPy computation only (the file already loaded, no bounds). Each is the
+minimum over the rounds (the machine is shared: the minimum is the least disturbed run).
+`rig analyze` always computes OADEV as well as the --dev deviation, so its MDEV ... TOTDEV
+figures include an OADEV the twin does not compute. The CPU columns give the same comparison in
+CPU time (rig: both threads; the twin is single-threaded), which other load on a shared
+machine disturbs much less than wall time.
+"""
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+here = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, here)
+import twins  # noqa: E402
+
+ap = argparse.ArgumentParser()
+ap.add_argument("--rig", default="build/bin/rig")
+ap.add_argument("--file", default="/tmp/rig-bench-1h.f64")
+ap.add_argument("--n", type=float, default=3.6e6)
+ap.add_argument("--rate", type=float, default=1000.0)
+ap.add_argument("--taus", default="log:100")
+ap.add_argument("--rounds", type=int, default=5)
+ap.add_argument("--only", default="")
+args = ap.parse_args()
+
+if not os.path.exists(args.file):
+    subprocess.run([sys.executable, os.path.join(here, "make_signal.py"), args.file, str(args.n), "1"], check=True)
+y = np.fromfile(args.file, dtype="<f8")
+tau0 = 1.0 / args.rate
+tmp = tempfile.mkdtemp(prefix="rig-compare-")
+
+
+def rig_run(extra):
+    out = os.path.join(tmp, "a.json")
+    cmd = [args.rig, "analyze", args.file, "--input", "f64", "--rate", str(args.rate), "--taus", args.taus,
+           "--json", out] + extra
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, out, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+
+
+def taus_of(json_path, key):
+    return [p["m"] for p in json.load(open(json_path))[key]]
+
+
+def psd_segment(n):  # rig's automatic choice (analysis/psd.cpp welch_segment)
+    s = 1 << max(0, int(n // 8).bit_length() - 1)
+    return min(max(s, 256), 65536)
+
+
+# (figure, rig's extra arguments, the JSON key whose taus the twin uses, twin(x, ms) -> None)
+figures = [("oadev", ["--no-psd"], "oadev", lambda x, ms: twins.oadev(x, tau0, ms)),
+           ("oadev+psd", [], "oadev",
+            lambda x, ms: (twins.oadev(x, tau0, ms), twins.welch(y, args.rate, psd_segment(len(y)))))]
+for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]:
+    figures.append((d, ["--no-psd", "--dev", d], d, lambda x, ms, f=twins.DEVIATIONS[d]: f(x, tau0, ms)))
+if args.only:
+    keep = set(args.only.split(","))
+    figures = [f for f in figures if f[0] in keep]
+
+print(f"# {time.strftime('%Y-%m-%d %H:%M')} {os.uname().nodename}, {os.cpu_count()} cores, "
+      f"load {os.getloadavg()[0]:.2f}; n = {len(y)}, taus {args.taus}, {args.rounds} rounds (minimum)")
+print(f"{'figure':<11} {'taus':>5} {'rig s':>8} {'numpy s':>8} {'ratio':>7}   {'rig cpu':>8} {'np cpu':>8} {'ratio':>7}")
+for name, extra, key, twin in figures:
+    _, out, _ = rig_run(extra)  # warm-up, and the taus rig chose
+    ms = taus_of(out, key)
+    rig_t, np_t, rig_c, np_c = [], [], [], []
+    for _ in range(args.rounds):
+        w, _, c = rig_run(extra)
+        rig_t.append(w)
+        rig_c.append(c)
+        t0, c0 = time.perf_counter(), time.process_time()
+        x = twins.phase_from_freq(y, tau0)  # the twin's own integration is part of its compute
+        twin(x, ms)
+        np_t.append(time.perf_counter() - t0)
+        np_c.append(time.process_time() - c0)
+        del x
+    r, p, rc, pc = min(rig_t), min(np_t), min(rig_c), min(np_c)
+    print(f"{name:<11} {len(ms):>5} {r:>8.3f} {p:>8.3f} {p / r:>6.1f}x   {rc:>8.3f} {pc:>8.3f} {pc / rc:>6.1f}x",
+          flush=True)
+print(f"# load at the end {os.getloadavg()[0]:.2f}. wall: the figures the targets name; cpu: the process's CPU time "
+      "(rig: both threads, start-up and JSON included), less disturbed by other load")
