@@ -13,6 +13,7 @@
 #include <string>
 
 #include "firmware_link/can_transport.hpp"
+#include "firmware_link/dbc_stream.hpp"
 #include "firmware_link/reassembly.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/dut_link.hpp"
@@ -28,6 +29,10 @@ struct LinkOptions {
   // in-process bus under a SimClock): silence is then measured from when the
   // last frame was produced, not from when the client got round to it.
   bool frame_time_is_clock_time = false;
+  // A DBC-described stream ([dut] dbc + [dut.stream]). Null: the rig protocol's stream
+  // (docs/rig-dut.dbc with rig_protocol_stream()), decoded by the codec: the same parts,
+  // checked in tests/link/test_dbc_stream.cpp.
+  std::shared_ptr<const DbcStreamDecoder> stream;
 };
 
 class CanDutLink final : public DutLink {
@@ -70,6 +75,7 @@ class CanDutLink final : public DutLink {
   std::mutex io_mu_;             // one blocking operation at a time (read or command)
   mutable std::mutex state_mu_;  // guards the fields below, read by stats() from any thread
   StreamReassembler reasm_;
+  std::vector<StreamPart> parts_;  // scratch of dispatch()
   std::deque<Response> responses_;
   std::optional<Heartbeat> heartbeat_;
   uint64_t malformed_ = 0;

@@ -7,7 +7,8 @@ namespace rig::link {
 
 namespace {
 void check_dut_keys(const toml::table& t) {
-  cfg::check_keys(t, {"can", "silence_ms", "command_timeout_ms", "command_attempts", "reorder_window", "rcvbuf_kb"},
+  cfg::check_keys(t, {"can", "silence_ms", "command_timeout_ms", "command_attempts", "reorder_window", "rcvbuf_kb",
+                      "dbc", "stream"},
                   "[dut]");
 }
 }  // namespace
@@ -19,6 +20,7 @@ LinkOptions link_options(const toml::table& t) {
   o.command_timeout_s = cfg::get_number(t, "command_timeout_ms", 250.0, 1.0, 60000.0) / 1e3;
   o.command_attempts = static_cast<int>(cfg::get_int(t, "command_attempts", 3, 1, 100));
   o.reorder_window = static_cast<uint32_t>(cfg::get_int(t, "reorder_window", 8, 1, 4096));
+  if (t.get("dbc") || t.get("stream")) o.stream = stream_decoder_from_config(t);
   return o;
 }
 
