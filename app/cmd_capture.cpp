@@ -71,11 +71,12 @@ int cmd_import(const ImportArgs& a) {
     in.clear();
     in.seekg(0);
   }
+  const link::DbcStreamSpec& sp = decoder->spec();
   h.extra = {{"source", "candump log"},
              {"log", a.log},
              {"hardware", a.hardware},
-             {"stream", decoder->spec().x},
-             {"counter_bits", decoder->counter_bits()}};
+             {"stream", {{"counter", sp.counter}, {"counter_bits", decoder->counter_bits()}, {"x", sp.x}, {"y", sp.y},
+                         {"samples_per_frame", sp.samples_per_frame}}}};
   capture::Writer w(a.out, h);
 
   uint64_t frames = 0, stream_frames = 0, other = 0, unreadable = 0, malformed = 0;

@@ -190,6 +190,12 @@ class Cursor {
   int line_;
 };
 
+// A `length`-bit two's-complement value as int64 (shifts, so no signed overflow at 63 bits).
+int64_t sign_extend(uint64_t raw, int length) {
+  const int sh = 64 - length;
+  return static_cast<int64_t>(raw << sh) >> sh;
+}
+
 bool same_line_end(const std::vector<Token>& t, std::size_t i, int line) { return i >= t.size() || t[i].line != line; }
 
 // Bit positions of a signal, most significant first (Motorola) or least significant first
@@ -655,10 +661,10 @@ double dbc_physical(const DbcSignal& s, std::span<const uint8_t> p) {
     v = std::bit_cast<float>(static_cast<uint32_t>(raw));
   } else if (s.value_type == 2) {
     v = std::bit_cast<double>(raw);
-  } else if (s.is_signed && s.length < 64 && (raw >> (s.length - 1)) & 1) {
-    v = static_cast<double>(static_cast<int64_t>(raw) - (int64_t{1} << s.length));
+  } else if (s.is_signed) {
+    v = static_cast<double>(sign_extend(raw, s.length));
   } else {
-    v = s.is_signed ? static_cast<double>(static_cast<int64_t>(raw)) : static_cast<double>(raw);
+    v = static_cast<double>(raw);
   }
   return v * s.factor + s.offset;
 }
@@ -695,8 +701,7 @@ std::optional<std::vector<DecodedSignal>> decode_payload(const DbcMessage& m, st
     DecodedSignal d{s.name, dbc_physical(s, p), s.unit, {}};
     if (!s.value_names.empty() && s.value_type == 0) {
       const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
-      int64_t key = static_cast<int64_t>(raw);
-      if (s.is_signed && s.length < 64 && (raw >> (s.length - 1)) & 1) key -= int64_t{1} << s.length;
+      const int64_t key = s.is_signed ? sign_extend(raw, s.length) : static_cast<int64_t>(raw);
       if (auto it = s.value_names.find(key); it != s.value_names.end()) d.value_name = it->second;
     }
     out.push_back(std::move(d));
