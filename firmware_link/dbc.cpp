@@ -144,9 +144,8 @@ std::string describe(const Token& t) {
 class Cursor {
  public:
   Cursor(const std::vector<Token>& toks, std::size_t b, std::size_t e, const std::string& src, int line)
-      : t_(toks), i_(b), e_(e), src_(src), line_(line) {}
+      : t_(toks), b_(b), i_(b), e_(e), src_(src), line_(line) {}
   bool done() const { return i_ >= e_; }
-  const Token* peek() const { return done() ? nullptr : &t_[i_]; }
   bool at_punct(char c) const { return !done() && t_[i_].kind == Tok::Punct && t_[i_].text[0] == c; }
   bool at(Tok k) const { return !done() && t_[i_].kind == k; }
   int line() const { return done() ? last_line() : t_[i_].line; }
@@ -167,10 +166,9 @@ class Cursor {
     }
     ++i_;
   }
-  // A number possibly written with a separate sign token ("- 5" never occurs, but "+"/"-"
-  // glued to the previous token does not either; signs are part of the number).
+  // Numbers carry their sign ("-40", "1e-06"); the field name goes into the error.
   template <class T>
-  T integer_(const char* what) {
+  T whole(const char* what) {
     const int l = line();
     return integer<T>(src_, l, number(what), what);
   }
@@ -183,9 +181,10 @@ class Cursor {
   }
 
  private:
-  int last_line() const { return i_ > 0 && i_ - 1 < t_.size() ? t_[std::min(i_, e_) - 1].line : line_; }
+  // The line of the statement's last token read (or its keyword's): where it ended.
+  int last_line() const { return i_ > b_ ? t_[std::min(i_, e_) - 1].line : line_; }
   const std::vector<Token>& t_;
-  std::size_t i_, e_;
+  std::size_t b_, i_, e_;
   const std::string& src_;
   int line_;
 };
@@ -298,10 +297,10 @@ class DbcParser {
 
   void message(Cursor& c, int line) {
     DbcMessage msg;
-    const uint32_t raw = c.integer_<uint32_t>("message id");
+    const uint32_t raw = c.whole<uint32_t>("message id");
     msg.name = c.ident("the message name");
     c.punct(':');
-    msg.dlc = c.integer_<int>("DLC");
+    msg.dlc = c.whole<int>("DLC");
     msg.sender = c.ident("the sending node");
     c.end();
     msg.line = line;
@@ -345,9 +344,9 @@ class DbcParser {
       }
     }
     c.punct(':');
-    s.start = c.integer_<int>("start bit");
+    s.start = c.whole<int>("start bit");
     c.punct('|');
-    s.length = c.integer_<int>("bit length");
+    s.length = c.whole<int>("bit length");
     c.punct('@');
     const std::string order = c.number("byte order (0 or 1)");
     if (order != "0" && order != "1") c.error("byte order '" + order + "' is neither 0 (Motorola) nor 1 (Intel)");
@@ -391,7 +390,7 @@ class DbcParser {
   // nullptr: a message of Vector's pseudo id (its signals are ignored).
   DbcMessage* message_ref(Cursor& c) {
     const int l = c.line();
-    const uint32_t raw = c.integer_<uint32_t>("message id");
+    const uint32_t raw = c.whole<uint32_t>("message id");
     if (pseudo_ids_.count(raw)) return nullptr;
     for (auto& m : db_.messages_)
       if (m.id == (raw & 0x7FFFFFFFu) && m.extended == ((raw & 0x80000000u) != 0)) return &m;
@@ -477,7 +476,7 @@ class DbcParser {
       const std::string name = c.ident("the value table name");
       auto& table = db_.value_tables_[name];
       while (!c.done()) {
-        const auto v = c.integer_<long long>("value");
+        const auto v = c.whole<long long>("value");
         table[v] = c.str("a value description");
       }
     } else if (kw == "VAL_") {
@@ -494,7 +493,7 @@ class DbcParser {
       }
       std::map<int64_t, std::string> names;
       while (!c.done()) {
-        const auto v = c.integer_<long long>("value");
+        const auto v = c.whole<long long>("value");
         names[v] = c.str("a value description");
       }
       if (s) s->value_names = std::move(names);
@@ -538,7 +537,7 @@ class DbcParser {
       DbcSignal* s = signal_ref(c);
       if (c.at_punct(':')) c.punct(':');
       const int l = c.line();
-      const int vt = c.integer_<int>("value type");
+      const int vt = c.whole<int>("value type");
       c.end();
       if (vt < 0 || vt > 2) fail(src_, l, "value type " + std::to_string(vt) + " is not 0, 1 (float) or 2 (double)");
       if (!s) return;
@@ -549,7 +548,7 @@ class DbcParser {
       DbcMessage* m = message_ref(c);
       DbcSignalGroup g;
       g.name = c.ident("the group name");
-      g.repetitions = c.integer_<int>("repetitions");
+      g.repetitions = c.whole<int>("repetitions");
       c.punct(':');
       while (!c.done()) {
         const int l = c.line();

@@ -29,7 +29,7 @@ double unit_to_g(const std::string& unit, const std::string& what, const std::st
 
 DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec spec, const std::string& where)
     : dbc_(std::move(dbc)), spec_(std::move(spec)) {
-  auto fail = [&](const std::string& m) -> void { throw ConfigError(where + ": " + m); };
+  auto fail = [&](const std::string& m) { throw ConfigError(where + ": " + m); };
   struct Ref {
     const DbcMessage* msg = nullptr;
     std::string sig;
