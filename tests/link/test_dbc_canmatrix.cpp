@@ -11,6 +11,8 @@
 #include <map>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "firmware_link/dbc.hpp"
 #include "rig/core/errors.hpp"
 
@@ -67,7 +69,8 @@ void expect_near_rel(double got, double want, const std::string& what) {
 class CanmatrixDbc : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::path(::testing::TempDir()) / "canmatrix_dbc";
+    // One folder per process: ctest runs the tests of this suite in parallel processes.
+    dir_ = fs::path(::testing::TempDir()) / ("canmatrix_dbc-" + std::to_string(::getpid()));
     fs::create_directories(dir_);
     run("/usr/bin/python3 " + kScript + " export " + dir_.string() + " 2>/dev/null");
   }
