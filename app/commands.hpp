@@ -13,5 +13,6 @@ void add_dut(CLI::App& app, int& rc);       // cmd_dut.cpp      manual DUT contr
 void add_filter(CLI::App& app, int& rc);    // cmd_filter.cpp   output-filter evaluation/selection
 void add_report(CLI::App& app, int& rc);    // cmd_report.cpp   report.html from a run folder
 void add_history(CLI::App& app, int& rc);   // cmd_history.cpp  results database queries
+void add_capture(CLI::App& app, int& rc);   // cmd_capture.cpp  capture files from candump logs
 
 }  // namespace rig::cli

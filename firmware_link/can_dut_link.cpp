@@ -30,8 +30,14 @@ struct LoopTestUnsupported {};
 }  // namespace
 
 CanDutLink::CanDutLink(std::unique_ptr<CanTransport> transport, Clock& clock, LinkOptions opts)
-    : transport_(std::move(transport)), clock_(clock), opts_(opts), reasm_(opts.reorder_window) {
-  transport_->set_filters(kRxFilters);
+    : transport_(std::move(transport)),
+      clock_(clock),
+      opts_(opts),
+      reasm_(opts.stream ? opts.stream->make_reassembler(opts.reorder_window) : StreamReassembler(opts.reorder_window)) {
+  std::vector<CanFilter> filters(std::begin(kRxFilters), std::end(kRxFilters));
+  if (opts_.stream)
+    for (const CanFilter& f : opts_.stream->filters()) filters.push_back(f);
+  transport_->set_filters(filters);
 }
 
 CanDutLink::~CanDutLink() {
@@ -52,6 +58,21 @@ std::string CanDutLink::describe() const {
 }
 
 void CanDutLink::dispatch(const RxFrame& rx) {
+  if (opts_.stream) {  // a DBC-described stream: its frames before the protocol's
+    parts_.clear();
+    std::string err;
+    if (opts_.stream->decode(rx.frame, parts_, &err)) {
+      std::lock_guard lk(state_mu_);
+      if (!err.empty()) {
+        ++malformed_;
+        return;
+      }
+      last_stream_rx_ = opts_.frame_time_is_clock_time ? rx.t_s : clock_.now_s();
+      if (streaming_)
+        for (const StreamPart& p : parts_) reasm_.push_part(p);
+      return;
+    }
+  }
   const Decoded d = decode(rx.frame);
   std::lock_guard lk(state_mu_);
   if (!d.error.empty()) {
@@ -132,7 +153,7 @@ DutInfo CanDutLink::info(const CancelToken& cancel) {
   info.firmware = std::to_string(r.aux) + "." + std::to_string(r.value & 0xFFFF) + "." + std::to_string(r.value >> 16);
   r = command({Op::GetTemperature, 0, 0, 0, 0}, cancel);
   info.temperature_c = bits_f32(r.value);
-  info.output_rate_hz = 1000.0;  // fixed by the protocol (docs/can-protocol.md)
+  info.output_rate_hz = opts_.stream ? opts_.stream->rate_hz() : 1000.0;  // the rig protocol's is 1 kHz
   return info;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "firmware_link/can_transport.hpp"
+#include "firmware_link/dbc_stream.hpp"
 #include "firmware_link/reassembly.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/dut_link.hpp"
@@ -27,6 +28,10 @@ struct LinkOptions {
   // [dut] loop_test = false: the rig does not ask this DUT for the loop test (its firmware has
   // none, or it must not be disturbed); loop_test() then answers "not supported".
   bool loop_test = true;
+  // A DBC-described stream ([dut] dbc + [dut.stream]). Null: the rig protocol's stream
+  // (docs/rig-dut.dbc with rig_protocol_stream()), decoded by the codec: the same parts,
+  // checked in tests/link/test_dbc_stream.cpp.
+  std::shared_ptr<const DbcStreamDecoder> stream;
 };
 
 class CanDutLink final : public DutLink {
@@ -74,6 +79,7 @@ class CanDutLink final : public DutLink {
   std::mutex io_mu_;             // one blocking operation at a time (read or command)
   mutable std::mutex state_mu_;  // guards the fields below, read by stats() from any thread
   StreamReassembler reasm_;
+  std::vector<StreamPart> parts_;  // scratch of dispatch()
   std::deque<Response> responses_;
   std::optional<Heartbeat> heartbeat_;
   uint64_t malformed_ = 0;

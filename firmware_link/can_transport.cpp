@@ -41,7 +41,9 @@ ErrorFrameInfo classify_error_frame(const CanFrame& f) {
 bool filter_accepts(std::span<const CanFilter> filters, const CanFrame& f) {
   if (filters.empty() || f.error) return true;  // error frames are not subject to id filters
   return std::any_of(filters.begin(), filters.end(),
-                     [&](const CanFilter& k) { return (f.id & k.mask) == (k.id & k.mask); });
+                     [&](const CanFilter& k) {
+                       return f.extended == k.extended && (f.id & k.mask) == (k.id & k.mask);
+                     });
 }
 
 }  // namespace rig::link

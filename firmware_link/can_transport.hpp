@@ -18,9 +18,11 @@ struct RxFrame {
 };
 
 // Accept a frame when (frame.id & mask) == (id & mask), as SocketCAN's can_filter.
+// Standard-id filters match standard frames only, extended-id filters extended ones.
 struct CanFilter {
   uint32_t id = 0;
   uint32_t mask = 0;
+  bool extended = false;
 };
 
 struct TransportStats {

@@ -34,6 +34,24 @@ bool operator==(const CanFrame& a, const CanFrame& b) {
   return true;
 }
 
+CanFdFrame CanFdFrame::from(const CanFrame& f) {
+  CanFdFrame o;
+  o.id = f.id;
+  o.len = f.len > 8 ? 8 : f.len;
+  for (unsigned i = 0; i < o.len; ++i) o.data[i] = f.data[i];
+  o.extended = f.extended;
+  o.rtr = f.rtr;
+  o.error = f.error;
+  return o;
+}
+
+int canfd_round_up(int bytes) {
+  if (bytes <= 8) return bytes < 0 ? 0 : bytes;
+  for (int l : {12, 16, 20, 24, 32, 48, 64})
+    if (bytes <= l) return l;
+  return -1;
+}
+
 const char* to_string(Op op) {
   switch (op) {
     case Op::StartStream: return "START_STREAM";

@@ -20,6 +20,24 @@ struct CanFrame {
 };
 bool operator==(const CanFrame& a, const CanFrame& b);
 
+// A frame of any kind, CAN FD included (SocketCAN's canfd_frame: up to 64 data bytes):
+// what DBC decoding and DBC-described streams take, from a log or an FD-capable
+// transport. The classic codec above keeps CanFrame.
+struct CanFdFrame {
+  uint32_t id = 0;  // 11-bit (or 29-bit when `extended`)
+  uint8_t len = 0;  // 0..8, 12, 16, 20, 24, 32, 48, 64
+  std::array<uint8_t, 64> data{};
+  bool extended = false;
+  bool fd = false;   // sent as a CAN FD frame
+  bool brs = false;  // CAN FD bit-rate switch
+  bool rtr = false;
+  bool error = false;
+  static CanFdFrame from(const CanFrame& f);
+};
+// The CAN FD payload length a DLC code stands for, and the smallest valid FD length
+// holding `bytes` (FD frames are padded to 12, 16, 20, 24, 32, 48 or 64 bytes).
+int canfd_round_up(int bytes);
+
 // Frame identifiers. Lower id = higher bus priority: commands beat the stream.
 namespace can_id {
 inline constexpr uint32_t kCommand = 0x010;    // rig -> DUT

@@ -1,26 +1,42 @@
 #include "firmware_link/reassembly.hpp"
 
 #include <algorithm>
+#include <limits>
+
+#include "rig/core/errors.hpp"
 
 namespace rig::link {
 
-uint64_t StreamReassembler::widen(uint32_t seq24) const {
-  // The widened value closest to the highest seen: deltas in [-2^23, 2^23).
-  constexpr int64_t kHalf = int64_t{1} << 23, kFull = int64_t{1} << 24;
-  int64_t delta = static_cast<int64_t>((seq24 - static_cast<uint32_t>(highest_)) & kSeqMask);
+StreamReassembler::StreamReassembler(uint32_t window, int counter_bits, bool needs_y)
+    : window_(window < 1 ? 1 : window),
+      bits_(counter_bits),
+      mask_(counter_bits >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << counter_bits) - 1),
+      needs_y_(needs_y) {
+  if (counter_bits < 2 || counter_bits > 32)
+    throw ConfigError("stream counter of " + std::to_string(counter_bits) + " bits: the reassembly takes 2..32");
+  // A counter that wraps within the reorder window could not tell late from new.
+  if (uint64_t{window_} * 2 > (uint64_t{1} << counter_bits))
+    throw ConfigError("reorder window of " + std::to_string(window_) + " samples is more than half the " +
+                      std::to_string(counter_bits) + "-bit counter's period");
+}
+
+uint64_t StreamReassembler::widen(uint32_t counter) const {
+  // The widened value closest to the highest seen: deltas in [-2^(N-1), 2^(N-1)).
+  const int64_t kHalf = int64_t{1} << (bits_ - 1), kFull = int64_t{1} << bits_;
+  int64_t delta = static_cast<int64_t>((counter - static_cast<uint32_t>(highest_)) & mask_);
   if (delta >= kHalf) delta -= kFull;
   const int64_t s = static_cast<int64_t>(highest_) + delta;
   return s < 0 ? 0 : static_cast<uint64_t>(s);  // before the stream's start: late by definition
 }
 
-void StreamReassembler::push(const StreamHalf& h) {
+void StreamReassembler::push_part(const StreamPart& h) {
   uint64_t s;
   if (!started_) {
     started_ = true;
-    s = h.seq24 & kSeqMask;
+    s = h.counter & mask_;
     next_ = highest_ = s;
   } else {
-    s = widen(h.seq24 & kSeqMask);
+    s = widen(h.counter & mask_);
   }
   if (s < next_) {  // its sample was already delivered or given up
     ++stats_.duplicates;
@@ -34,13 +50,12 @@ void StreamReassembler::push(const StreamHalf& h) {
   }
   has = true;
   (h.channel == Channel::X ? p.x : p.y) = h.value_g;
-  p.status = h.status;
+  if (h.status) p.status = *h.status;
   highest_ = std::max(highest_, s);
   // Deliver what is complete; give up on samples the stream has left `window_` behind.
   const uint64_t limit = highest_ + 1 >= window_ ? highest_ + 1 - window_ : 0;
   advance_to(std::max(limit, next_));
-  while (!pending_.empty() && pending_.begin()->first == next_ && pending_.begin()->second.has_x &&
-         pending_.begin()->second.has_y) {
+  while (!pending_.empty() && pending_.begin()->first == next_ && complete(pending_.begin()->second)) {
     emit(next_, pending_.begin()->second);
     pending_.erase(pending_.begin());
     ++next_;
@@ -57,7 +72,7 @@ void StreamReassembler::advance_to(uint64_t limit) {
     }
     const Partial p = pending_.begin()->second;
     pending_.erase(pending_.begin());
-    if (p.has_x && p.has_y) {
+    if (complete(p)) {
       emit(next_, p);
     } else {
       ++orphans_;
@@ -90,7 +105,7 @@ void StreamReassembler::emit(uint64_t seq, const Partial& p) {
   Sample s;
   s.seq = static_cast<uint32_t>(seq);
   s.x_g = p.x;
-  s.y_g = p.y;
+  s.y_g = needs_y_ ? p.y : std::numeric_limits<float>::quiet_NaN();
   s.status = p.status;
   if (gap_open_) {
     close_gap();
@@ -113,7 +128,7 @@ void StreamReassembler::flush() {
   uint64_t last_complete = 0;
   bool any = false;
   for (const auto& [k, p] : pending_)
-    if (p.has_x && p.has_y) {
+    if (complete(p)) {
       last_complete = k;
       any = true;
     }

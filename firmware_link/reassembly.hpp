@@ -1,6 +1,7 @@
-// Stream reassembly: turns DUT_STREAM_X / DUT_STREAM_Y frames into samples in
-// sequence order. The 24-bit wire counter is widened to 64 bits; a sample is
-// complete when both halves arrived. Halves may arrive out of order within a
+// Stream reassembly: turns DUT_STREAM_X / DUT_STREAM_Y frames (or the parts a
+// DBC-described stream's frames carry, firmware_link/dbc_stream.hpp) into samples in
+// sequence order. The N-bit wire counter (24 bits in the rig protocol) is widened to 64
+// bits; a sample is complete when both halves arrived (x alone for a stream without y). Halves may arrive out of order within a
 // small reorder window (a CAN controller's mailboxes can swap frames); a sample
 // still incomplete when the stream has moved `window` samples past it is lost.
 // Lost runs are counted and located (LinkStats::gap_list); the next delivered
@@ -10,6 +11,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <optional>
 #include <span>
 
 #include "firmware_link/protocol.hpp"
@@ -18,12 +20,24 @@
 
 namespace rig::link {
 
+// One channel's value of one sample, as the reassembly takes it.
+struct StreamPart {
+  Channel channel = Channel::X;
+  uint32_t counter = 0;          // the wire counter (its low counter_bits bits are used)
+  std::optional<uint8_t> status;  // stream_status bits, when this frame carries them
+  float value_g = 0;
+};
+
 class StreamReassembler {
  public:
   static constexpr std::size_t kMaxGapList = 1000;
-  explicit StreamReassembler(uint32_t window = 8) : window_(window < 1 ? 1 : window) {}
+  // counter_bits: width of the wire counter (2..32; the rig protocol's is 24).
+  // needs_y = false: a stream without y; a sample is complete with x, y_g is NaN.
+  explicit StreamReassembler(uint32_t window = 8, int counter_bits = 24, bool needs_y = true);
 
-  void push(const StreamHalf& h);
+  void push_part(const StreamPart& p);
+  // The rig protocol's frames (a distinct name keeps brace-initialised calls unambiguous).
+  void push(const StreamHalf& h) { push_part(StreamPart{h.channel, h.seq24, h.status, h.value_g}); }
   // Moves up to out.size() completed samples, in order; returns how many.
   std::size_t pop(std::span<Sample> out);
   std::size_t ready() const { return ready_.size(); }
@@ -48,13 +62,17 @@ class StreamReassembler {
     float x = 0, y = 0;
     uint8_t status = 0;
   };
-  uint64_t widen(uint32_t seq24) const;
+  uint64_t widen(uint32_t counter) const;
+  bool complete(const Partial& p) const { return p.has_x && (p.has_y || !needs_y_); }
   void advance_to(uint64_t limit);  // settles every sample below `limit`
   void emit(uint64_t seq, const Partial& p);
   void lose(uint64_t first, uint64_t count);
   void close_gap();
 
   uint32_t window_;
+  int bits_;
+  uint32_t mask_;
+  bool needs_y_;
   bool started_ = false;
   uint64_t next_ = 0;     // next sample to deliver
   uint64_t highest_ = 0;  // highest widened seq seen

@@ -198,8 +198,11 @@ std::optional<RxFrame> SocketCanTransport::receive(double timeout_s, const Cance
 
 void SocketCanTransport::set_filters(std::span<const CanFilter> filters) {
   std::vector<can_filter> k;
-  for (const CanFilter& f : filters)  // standard data frames only: EFF and RTR are part of the match
-    k.push_back({f.id & CAN_SFF_MASK, (f.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG});
+  for (const CanFilter& f : filters)  // data frames of the filter's kind: EFF and RTR are part of the match
+    if (f.extended)
+      k.push_back({(f.id & CAN_EFF_MASK) | CAN_EFF_FLAG, (f.mask & CAN_EFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG});
+    else
+      k.push_back({f.id & CAN_SFF_MASK, (f.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG});
   if (k.empty()) k.push_back({0, 0});  // everything
   if (::setsockopt(impl_->sd.native_handle(), SOL_CAN_RAW, CAN_RAW_FILTER, k.data(),
                    static_cast<socklen_t>(k.size() * sizeof(can_filter))) != 0)

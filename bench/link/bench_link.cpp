@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "firmware_link/dbc_stream.hpp"
 #include "firmware_link/protocol.hpp"
 #include "firmware_link/reassembly.hpp"
 #include "plant/firmware/inprocess_dut.hpp"
@@ -22,6 +23,22 @@ static void BM_CodecStreamHalfRoundTrip(benchmark::State& st) {
   st.SetItemsProcessed(st.iterations());
 }
 BENCHMARK(BM_CodecStreamHalfRoundTrip);
+
+// A DBC-described stream's decoder on the rig protocol's frames (the codec's job, done
+// through docs/rig-dut.dbc): frames per second of host CPU.
+static void BM_DbcStreamDecodeFrame(benchmark::State& st) {
+  const DbcStreamDecoder dec(rig_protocol_dbc(), rig_protocol_stream(), "bench");
+  std::vector<StreamPart> parts;
+  uint32_t seq = 0;
+  for (auto _ : st) {
+    parts.clear();
+    dec.decode(encode(StreamHalf{(seq & 1) ? Channel::Y : Channel::X, seq & kSeqMask, 1, 1.5f}), parts);
+    ++seq;
+    benchmark::DoNotOptimize(parts.data());
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+BENCHMARK(BM_DbcStreamDecodeFrame);
 
 static void BM_ReassemblySamples(benchmark::State& st) {
   StreamReassembler r;

@@ -45,6 +45,10 @@ def can_stream():
 def dbc():
     put("dbc", "rig-dut.dbc", (ROOT / "docs" / "rig-dut.dbc").read_bytes())
     put("dbc", "minimal.dbc", 'VERSION ""\nBU_: DUT\nBO_ 256 X: 8 DUT\n SG_ seq : 0|24@1+ (1,0) [0|16777215] "" Vector__XXX\n SG_ x : 32|32@1- (1,0) [-12|12] "g" Vector__XXX\nSIG_VALTYPE_ 256 x : 1;\n')
+    # Real-world syntax: every section of the format, and a file canmatrix exported.
+    put("dbc", "hand_written.dbc", (ROOT / "tests" / "data" / "dbc" / "hand_written.dbc").read_bytes())
+    put("dbc", "canmatrix.dbc", (ROOT / "tests" / "data" / "dbc" / "canmatrix.dbc").read_bytes())
+    put("dbc", "missing_semicolon.dbc", 'BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] "" X\nCM_ SG_ 256 a "x"\nVAL_ 256 a 1 "one";\n')
     put("dbc", "motorola_ext.dbc", 'BO_ 2164260864 EXT: 8 DUT\n SG_ cnt : 7|16@0+ (1,0) [0|65535] "" Vector__XXX\n SG_ v : 23|32@0- (0.001,-5) [0|0] "g" Vector__XXX\nCM_ SG_ 2164260864 v "value";\n')
 
 

@@ -164,7 +164,7 @@ TEST(Dbc, ParseErrorsNameFileAndLine) {
   } catch (const rig::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.dbc:4:"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(Dbc::parse("BO_ 16 M: 8 RIG\n SG_ a : 0|8@0+ (1,0) [0|1] \"\" X\n", "motorola.dbc"), rig::ConfigError);
+  EXPECT_THROW(Dbc::parse("BO_ 16 M: 1 RIG\n SG_ a : 0|8@0+ (1,0) [0|1] \"\" X\n", "motorola.dbc"), rig::ConfigError);
   EXPECT_THROW(Dbc::parse_file("/nonexistent.dbc"), rig::ConfigError);
 }
 

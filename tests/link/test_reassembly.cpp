@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "firmware_link/reassembly.hpp"
+#include "rig/core/errors.hpp"
 
 using namespace rig::link;
 using rig::Sample;
@@ -158,4 +160,62 @@ TEST(Reassembly, StatusBitsPassThrough) {
   StreamReassembler r;
   push_sample(r, 0, 0.f, 0x05);
   EXPECT_EQ(drain(r).at(0).status, 0x05u);
+}
+
+// ---- counters of other widths (DBC-described streams) ------------------------------------
+
+namespace {
+void push_n(StreamReassembler& r, uint32_t counter, int bits, float v = 0) {
+  const uint32_t mask = (uint32_t{1} << bits) - 1;
+  r.push_part({Channel::X, counter & mask, uint8_t{0}, v});
+  r.push_part({Channel::Y, counter & mask, uint8_t{0}, -v});
+}
+}  // namespace
+
+TEST(Reassembly, SixteenBitCounterWrapsGapsAndLateFramesAsTwentyFour) {
+  // The same sequence as Wire24BitCounterWrapsIntoAWiderSequence, on a 16-bit counter.
+  StreamReassembler r(4, 16);
+  const uint32_t start = 0xFFFF - 5;
+  for (uint32_t i = 0; i < 12; ++i) push_n(r, start + i, 16);
+  push_n(r, start + 14, 16);
+  for (uint32_t i = 15; i < 20; ++i) push_n(r, start + i, 16);
+  push_n(r, start + 3, 16);  // a late frame from before the wrap: a duplicate, not a new sample
+  const auto out = drain(r);
+  ASSERT_EQ(out.size(), 18u);
+  EXPECT_EQ(out[5].seq, 0xFFFFu);
+  EXPECT_EQ(out[6].seq, 0x10000u);
+  EXPECT_TRUE(out[12].status & ss::kGapBefore);
+  EXPECT_EQ(r.stats().gap_list.at(0), (std::pair<uint64_t, uint64_t>{start + 12ull, 2}));
+  EXPECT_EQ(r.stats().duplicates, 2u);
+  // An outage within half the period is one gap; the widening is relative to the highest seen.
+  push_n(r, start + 20 + 30000, 16);
+  for (uint32_t i = 1; i < 6; ++i) push_n(r, start + 20 + 30000 + i, 16);
+  EXPECT_EQ(drain(r).back().seq, start + 20 + 30005);
+  EXPECT_EQ(r.stats().lost, 2u + 30000u);
+}
+
+TEST(Reassembly, StatusOnlyWhereAFrameCarriesIt) {
+  StreamReassembler r(8, 16);
+  r.push_part({Channel::X, 1, uint8_t{stream_status::kSaturated}, 1.0f});
+  r.push_part({Channel::Y, 1, std::nullopt, 2.0f});  // y's frame has no status: x's stands
+  const auto out = drain(r);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].status, stream_status::kSaturated);
+}
+
+TEST(Reassembly, WithoutYASampleIsCompleteWithX) {
+  StreamReassembler r(8, 12, false);
+  for (uint32_t k = 4090; k < 4100; ++k) r.push_part({Channel::X, k & 0xFFF, std::nullopt, 1.0f});
+  const auto out = drain(r);
+  ASSERT_EQ(out.size(), 10u);
+  EXPECT_EQ(out.back().seq, 4099u);
+  EXPECT_TRUE(std::isnan(out[0].y_g));
+}
+
+TEST(Reassembly, CounterWidthAndWindowAreChecked) {
+  EXPECT_THROW(StreamReassembler(8, 1), rig::ConfigError);
+  EXPECT_THROW(StreamReassembler(8, 33), rig::ConfigError);
+  EXPECT_THROW(StreamReassembler(200, 8), rig::ConfigError);  // the window would span the wrap
+  EXPECT_NO_THROW(StreamReassembler(128, 8));
+  EXPECT_NO_THROW(StreamReassembler(8, 32));
 }

@@ -1,0 +1,237 @@
+#include "firmware_link/dbc_stream.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+
+#include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
+
+namespace rig::link {
+
+extern const char* const kRigDutDbcText;  // docs/rig-dut.dbc, built in (rig_dut_dbc.cpp, generated)
+
+namespace {
+
+constexpr int kFilterOn = 0, kSaturated = 1, kLoopFault = 2;
+constexpr uint8_t kFlagBits[3] = {stream_status::kFilterOn, stream_status::kSaturated, stream_status::kLoopFault};
+
+// The factor from a signal's unit to g (the Sample's unit).
+double unit_to_g(const std::string& unit, const std::string& what, const std::string& where) {
+  if (unit.empty() || unit == "g") return 1.0;
+  if (unit == "mg") return 1e-3;
+  if (unit == "ug" || unit == "\xC2\xB5g" || unit == "µg") return 1e-6;
+  if (unit == "m/s^2" || unit == "m/s2" || unit == "m/s\xC2\xB2") return 1.0 / 9.80665;
+  throw ConfigError(where + ": " + what + " has unit '" + unit + "', not an acceleration (g, mg, ug, m/s^2)");
+}
+
+}  // namespace
+
+DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec spec, const std::string& where)
+    : dbc_(std::move(dbc)), spec_(std::move(spec)) {
+  auto fail = [&](const std::string& m) { throw ConfigError(where + ": " + m); };
+  struct Ref {
+    const DbcMessage* msg = nullptr;
+    std::string sig;
+  };
+  auto ref = [&](const std::string& role, const std::string& name) {
+    const auto dot = name.find('.');
+    if (dot == std::string::npos || dot == 0 || dot + 1 == name.size())
+      fail(role + " = \"" + name + "\" is not MESSAGE.SIGNAL");
+    Ref r{dbc_->find(name.substr(0, dot)), name.substr(dot + 1)};
+    if (!r.msg) fail(role + " = \"" + name + "\": the DBC has no message " + name.substr(0, dot));
+    return r;
+  };
+  const int n = spec_.samples_per_frame;
+  if (n < 1 || n > 64) fail("samples_per_frame = " + std::to_string(n) + " is not 1..64");
+  if (!(spec_.rate_hz > 0 && spec_.rate_hz <= 1e6)) fail("rate_hz = " + std::to_string(spec_.rate_hz) + " is not in (0, 1e6]");
+  if (spec_.counter.empty() || spec_.x.empty()) fail("the stream needs `counter` and `x`");
+
+  const Ref counter = ref("counter", spec_.counter);
+  const DbcSignal* cs = counter.msg->signal(counter.sig);
+  if (!cs) fail("counter = \"" + spec_.counter + "\": no signal " + counter.sig + " in " + counter.msg->name);
+  if (cs->value_type != 0 || cs->length < 2 || cs->length > 32)
+    fail("counter " + spec_.counter + " must be an integer signal of 2..32 bits (has " + std::to_string(cs->length) +
+         (cs->value_type ? ", float" : "") + ")");
+  counter_bits_ = cs->length;
+
+  // The roles' references; the messages they name carry parts of samples.
+  const Ref x = ref("x", spec_.x);
+  std::optional<Ref> y, status, flag[3];
+  if (!spec_.y.empty()) y = ref("y", spec_.y);
+  if (!spec_.status.empty()) status = ref("status", spec_.status);
+  const std::string* flag_names[3] = {&spec_.filter_on, &spec_.saturated, &spec_.loop_fault};
+  const int* flag_bits[3] = {&spec_.filter_on_bit, &spec_.saturated_bit, &spec_.loop_fault_bit};
+  const char* flag_keys[3] = {"filter_on", "saturated", "loop_fault"};
+  for (int k = 0; k < 3; ++k) {
+    if (!flag_names[k]->empty()) flag[k] = ref(flag_keys[k], *flag_names[k]);
+    if (*flag_bits[k] < -1 || *flag_bits[k] > 63)
+      fail(std::string(flag_keys[k]) + "_bit = " + std::to_string(*flag_bits[k]) + " is not a bit number");
+    if (*flag_bits[k] >= 0 && !status) fail(std::string(flag_keys[k]) + "_bit needs `status`");
+    if (*flag_bits[k] >= 0 && flag[k]) fail(std::string(flag_keys[k]) + " is given as a signal and as a status bit");
+  }
+  if (status && spec_.filter_on_bit < 0 && spec_.saturated_bit < 0 && spec_.loop_fault_bit < 0)
+    fail("status = \"" + spec_.status + "\" names no bit (filter_on_bit, saturated_bit, loop_fault_bit)");
+
+  std::set<const DbcMessage*> msgs{x.msg};
+  if (y) msgs.insert(y->msg);
+  // The signal of sample i: "NAMEi" with several samples per frame, else "NAME"; a shared
+  // (unindexed) signal is allowed where `shared_ok`.
+  auto lookup = [&](const DbcMessage* m, const std::string& base, int i, bool shared_ok) -> const DbcSignal* {
+    if (n == 1) return m->signal(base);
+    if (const DbcSignal* s = m->signal(base + std::to_string(i))) return s;
+    return shared_ok ? m->signal(base) : nullptr;
+  };
+  for (const DbcMessage* m : msgs) {
+    Roles r;
+    r.msg = m;
+    r.counter = m->signal(counter.sig);
+    if (!r.counter)
+      fail("message " + m->name + " carries part of a sample but no counter signal '" + counter.sig + "'");
+    if (r.counter->length != counter_bits_ || r.counter->value_type != 0)
+      fail("counter " + m->name + "." + counter.sig + " has " + std::to_string(r.counter->length) + " bits, " +
+           spec_.counter + " has " + std::to_string(counter_bits_));
+    r.samples.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      Slot& sl = r.samples[static_cast<std::size_t>(i)];
+      if (m == x.msg) {
+        sl.x = lookup(m, x.sig, i, false);
+        if (!sl.x) fail("x = \"" + spec_.x + "\": no signal " + x.sig + (n > 1 ? std::to_string(i) : "") + " in " + m->name);
+      }
+      if (y && m == y->msg) {
+        sl.y = lookup(m, y->sig, i, false);
+        if (!sl.y) fail("y = \"" + spec_.y + "\": no signal " + y->sig + (n > 1 ? std::to_string(i) : "") + " in " + m->name);
+      }
+      // Status and flags: required in the message named, taken from the others where present.
+      if (status) {
+        sl.status = lookup(m, status->sig, i, true);
+        if (!sl.status && m == status->msg) fail("status = \"" + spec_.status + "\": no such signal in " + m->name);
+        if (sl.status && sl.status->value_type != 0) fail("status " + m->name + "." + sl.status->name + " is a float");
+      }
+      for (int k = 0; k < 3; ++k)
+        if (flag[k]) {
+          sl.flag[k] = lookup(m, flag[k]->sig, i, true);
+          if (!sl.flag[k] && m == flag[k]->msg)
+            fail(std::string(flag_keys[k]) + " = \"" + *flag_names[k] + "\": no such signal in " + m->name);
+        }
+    }
+    by_frame_[key(m->id, m->extended)] = std::move(r);
+  }
+  if (status && !msgs.count(status->msg)) fail("status " + spec_.status + " is in a message carrying neither x nor y");
+  for (int k = 0; k < 3; ++k)
+    if (flag[k] && !msgs.count(flag[k]->msg))
+      fail(std::string(flag_keys[k]) + " " + *flag_names[k] + " is in a message carrying neither x nor y");
+  const DbcSignal* xs = by_frame_.at(key(x.msg->id, x.msg->extended)).samples[0].x;
+  x_scale_ = unit_to_g(xs->unit, "x " + x.msg->name + "." + xs->name, where);
+  if (y) {
+    const DbcSignal* ys = by_frame_.at(key(y->msg->id, y->msg->extended)).samples[0].y;
+    y_scale_ = unit_to_g(ys->unit, "y " + y->msg->name + "." + ys->name, where);
+  }
+}
+
+std::vector<CanFilter> DbcStreamDecoder::filters() const {
+  std::vector<CanFilter> f;
+  for (const auto& [k, r] : by_frame_)
+    f.push_back({r.msg->id, r.msg->extended ? 0x1FFFFFFFu : 0x7FFu, r.msg->extended});
+  return f;
+}
+
+bool DbcStreamDecoder::decode(const CanFdFrame& f, std::vector<StreamPart>& out, std::string* error) const {
+  if (error) error->clear();
+  if (f.error || f.rtr) return false;
+  const auto it = by_frame_.find(key(f.id, f.extended));
+  if (it == by_frame_.end()) return false;
+  const Roles& r = it->second;
+  const DbcMessage& m = *r.msg;
+  const int len = f.len;
+  if (len != m.dlc && !(m.dlc > 8 && len == canfd_round_up(m.dlc))) {
+    if (error) *error = m.name + ": length " + std::to_string(len) + ", DBC says " + std::to_string(m.dlc);
+    return true;
+  }
+  const std::span<const uint8_t> p(f.data.data(), static_cast<std::size_t>(std::min(len, 64)));
+  // Multiplexing: a signal is present when it is not multiplexed or its value is selected.
+  std::optional<int64_t> mux;
+  for (const auto& s : m.signals)
+    if (s.multiplexor) mux = static_cast<int64_t>(dbc_extract_raw(p, s.start, s.length, s.big_endian));
+  auto present = [&](const DbcSignal* s) { return s && (!s->mux_value || (mux && *mux == *s->mux_value)); };
+  if (!present(r.counter)) {
+    if (error) *error = m.name + ": the multiplexer selects no counter";
+    return true;
+  }
+  const uint32_t mask = counter_bits_ >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << counter_bits_) - 1;
+  const auto c0 = static_cast<uint32_t>(dbc_extract_raw(p, r.counter->start, r.counter->length, r.counter->big_endian));
+  const int* bits[3] = {&spec_.filter_on_bit, &spec_.saturated_bit, &spec_.loop_fault_bit};
+  for (std::size_t i = 0; i < r.samples.size(); ++i) {
+    const Slot& sl = r.samples[i];
+    const uint32_t seq = (c0 + static_cast<uint32_t>(i)) & mask;
+    std::optional<uint8_t> st;
+    if (present(sl.status)) {
+      const uint64_t raw = dbc_extract_raw(p, sl.status->start, sl.status->length, sl.status->big_endian);
+      uint8_t v = 0;
+      for (int k = 0; k < 3; ++k)
+        if (*bits[k] >= 0 && (raw >> *bits[k]) & 1u) v |= kFlagBits[k];
+      st = v;
+    }
+    for (int k = 0; k < 3; ++k)
+      if (present(sl.flag[k])) {
+        uint8_t v = st.value_or(0);
+        if (dbc_physical(*sl.flag[k], p) != 0) v |= kFlagBits[k];
+        st = v;
+      }
+    if (present(sl.x)) out.push_back({Channel::X, seq, st, static_cast<float>(dbc_physical(*sl.x, p) * x_scale_)});
+    if (present(sl.y)) out.push_back({Channel::Y, seq, st, static_cast<float>(dbc_physical(*sl.y, p) * y_scale_)});
+  }
+  return true;
+}
+
+std::shared_ptr<const Dbc> rig_protocol_dbc() {
+  static const auto db = std::make_shared<const Dbc>(Dbc::parse(kRigDutDbcText, "docs/rig-dut.dbc (built in)"));
+  return db;
+}
+
+DbcStreamSpec rig_protocol_stream() {
+  DbcStreamSpec s;
+  s.counter = "DUT_STREAM_X.seq";
+  s.x = "DUT_STREAM_X.x_g";
+  s.y = "DUT_STREAM_Y.y_g";
+  s.filter_on = "DUT_STREAM_X.status_filter_on";
+  s.saturated = "DUT_STREAM_X.status_saturated";
+  s.loop_fault = "DUT_STREAM_X.status_loop_fault";
+  s.rate_hz = 1000;
+  return s;
+}
+
+std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut) {
+  const toml::node* dbc_node = dut.get("dbc");
+  const toml::table* st = cfg::get_table(dut, "stream");
+  if (!dbc_node) {
+    if (st) throw ConfigError(cfg::where(*st) + ": [dut.stream] needs [dut] dbc = \"FILE\"");
+    return std::make_shared<const DbcStreamDecoder>(rig_protocol_dbc(), rig_protocol_stream(), "rig protocol");
+  }
+  std::string path = cfg::get_string(dut, "dbc");
+  // Relative to the hardware file's folder, so a hardware file and its DBC travel together.
+  if (const auto& src = dbc_node->source().path; src && std::filesystem::path(path).is_relative())
+    path = (std::filesystem::path(*src).parent_path() / path).string();
+  auto db = std::make_shared<const Dbc>(Dbc::parse_file(path));
+  if (!st) throw ConfigError(cfg::where(*dbc_node) + ": [dut] dbc needs a [dut.stream] table naming its signals");
+  cfg::check_keys(*st,
+                  {"counter", "x", "y", "status", "filter_on_bit", "saturated_bit", "loop_fault_bit", "filter_on",
+                   "saturated", "loop_fault", "samples_per_frame", "rate_hz"},
+                  "dut.stream");
+  DbcStreamSpec s;
+  s.counter = cfg::get_string(*st, "counter");
+  s.x = cfg::get_string(*st, "x");
+  s.y = cfg::get_string(*st, "y", "");
+  s.status = cfg::get_string(*st, "status", "");
+  s.filter_on_bit = static_cast<int>(cfg::get_int(*st, "filter_on_bit", -1, 0, 63));
+  s.saturated_bit = static_cast<int>(cfg::get_int(*st, "saturated_bit", -1, 0, 63));
+  s.loop_fault_bit = static_cast<int>(cfg::get_int(*st, "loop_fault_bit", -1, 0, 63));
+  s.filter_on = cfg::get_string(*st, "filter_on", "");
+  s.saturated = cfg::get_string(*st, "saturated", "");
+  s.loop_fault = cfg::get_string(*st, "loop_fault", "");
+  s.samples_per_frame = static_cast<int>(cfg::get_int(*st, "samples_per_frame", 1, 1, 64));
+  s.rate_hz = cfg::get_number(*st, "rate_hz", 1000.0, 1e-3, 1e6);
+  return std::make_shared<const DbcStreamDecoder>(std::move(db), std::move(s), cfg::where(*st) + ": [dut.stream]");
+}
+
+}  // namespace rig::link
