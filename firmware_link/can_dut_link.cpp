@@ -67,7 +67,7 @@ void CanDutLink::dispatch(const RxFrame& rx) {
         ++malformed_;
         return;
       }
-      last_stream_rx_ = opts_.frame_time_is_clock_time ? rx.t_s : clock_.now_s();
+      last_stream_rx_ = clock_.now_s() - std::max(0.0, transport_->now_s() - rx.t_s);  // as below
       if (streaming_)
         for (const StreamPart& p : parts_) reasm_.push_part(p);
       return;
