@@ -259,7 +259,10 @@ bool Reader::next_block() {
                              " bytes after the end marker (ignored)");
         if (rec_.problem.empty()) rec_.problem = rec_.notes.back();
       }
-      if (n == rec_.samples && rec_.damaged_blocks == 0 && rec_.notes.empty()) {
+      // Complete describes the file: every note but the non-finite values' (the file is whole,
+      // its values are not; Recovery::non_finite says so) is damage to the file itself.
+      const std::size_t value_notes = std::min<uint64_t>(rec_.non_finite, Recovery::kMaxNonFiniteNotes);
+      if (n == rec_.samples && rec_.damaged_blocks == 0 && rec_.notes.size() == value_notes) {
         rec_.complete = true;
       } else if (rec_.problem.empty()) {
         rec_.problem = "end marker counts " + std::to_string(n) + " samples, " + std::to_string(rec_.samples) +
