@@ -12,6 +12,20 @@ namespace {
 
 // Four independent vector accumulators: the sum is not one long FMA dependency chain.
 using v8 = double __attribute__((vector_size(64)));
+#if defined(__clang__)
+// clang (the fuzz build) refuses any call that passes or returns a 64-byte vector without
+// AVX-512 (the ABI would change), inlined or not: there the helpers are expressions. GCC, which
+// builds the rig, keeps the functions.
+using v8u = double __attribute__((vector_size(64), aligned(8), may_alias));
+#define load8(p) (*reinterpret_cast<const v8u*>(p))
+#define hsum(v)                                       \
+  __extension__({                                     \
+    const v8 hv_ = (v);                               \
+    double hs_ = 0;                                   \
+    for (int hi_ = 0; hi_ < 8; ++hi_) hs_ += hv_[hi_]; \
+    hs_;                                              \
+  })
+#else
 inline v8 load8(const double* p) {
   v8 v;
   __builtin_memcpy(&v, p, sizeof v);
@@ -22,6 +36,7 @@ inline double hsum(v8 v) {
   for (int i = 0; i < 8; ++i) s += v[i];
   return s;
 }
+#endif
 
 }  // namespace
 
@@ -187,6 +202,17 @@ void chain_d3(int k, const double* head, const double* const* lag2, const double
 namespace {
 
 // Inclusive prefix sum of one vector: three shift-and-add steps (Hillis-Steele).
+#if defined(__clang__)
+#define scan8(x_in)                                                              \
+  __extension__({                                                                \
+    v8 sx_ = (x_in);                                                             \
+    const v8 sz_{};                                                              \
+    sx_ += __builtin_shufflevector(sz_, sx_, 0, 8, 9, 10, 11, 12, 13, 14);       \
+    sx_ += __builtin_shufflevector(sz_, sx_, 0, 1, 8, 9, 10, 11, 12, 13);        \
+    sx_ += __builtin_shufflevector(sz_, sx_, 0, 1, 2, 3, 8, 9, 10, 11);          \
+    sx_;                                                                         \
+  })
+#else
 using m8 = long long __attribute__((vector_size(64)));
 inline v8 scan8(v8 x) {
   const v8 z{};
@@ -195,6 +221,7 @@ inline v8 scan8(v8 x) {
   x += __builtin_shuffle(z, x, m8{0, 1, 2, 3, 8, 9, 10, 11});
   return x;
 }
+#endif
 
 }  // namespace
 

@@ -358,11 +358,13 @@ struct XyDut {
 }  // namespace
 
 TEST(DbcStream, LinkReadsTheLayoutAndDeclaresSilence) {
-  auto bus = InProcessBus::create();
+  SimClock clock;  // the lockstep bus owns simulated time: its receive steps this clock
+  InProcessBus::Options bo;
+  bo.lockstep = &clock;
+  auto bus = InProcessBus::create(bo);
   XyDut dut;
   dut.port = bus->open("dut");
   dut.mute_after = 900;
-  SimClock clock;
   clock.set_advance([&](double dt) { dut.step(dt); });
   LinkOptions o;
   o.stream = std::make_shared<const DbcStreamDecoder>(layouts(), xy_spec(), "test");
