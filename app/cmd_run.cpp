@@ -186,6 +186,21 @@ void prepare_run_folder(const std::string& dir) {
   if (!writable) throw ConfigError("--out " + dir + ": the run folder is not writable");
 }
 
+// The passport's identity block, for every ending (finished at the time of the call).
+PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
+                           const std::string& started, const std::string& serial) {
+  PassportInfo info;
+  info.serial = serial;
+  info.profile = p.name;
+  info.plant = a.plant;
+  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
+  info.started = started;
+  info.finished = iso8601_utc_now();
+  info.software = std::string("rig ") + RIG_VERSION;
+  info.out_dir = fs::absolute(a.out).string();
+  return info;
+}
+
 // A run that ends before its devices open (GPIO, table or DUT unreachable, a bad device
 // section) still leaves passport.json, junit.xml, analysis.json and report.html, as every
 // ending does: outcome ERROR, every measurement UNSET, the reason in aborted_reason. It is
@@ -201,15 +216,7 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   res.outcome = RunOutcome::Error;
   res.message = reason;
   res.config_error = config_error;
-  PassportInfo info;
-  info.serial = a.serial;
-  info.profile = p.name;
-  info.plant = a.plant;
-  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
-  info.started = started;
-  info.finished = iso8601_utc_now();
-  info.software = std::string("rig ") + RIG_VERSION;
-  info.out_dir = fs::absolute(a.out).string();
+  const PassportInfo info = passport_info(a, p, hw, started, a.serial);
   const auto passport = make_passport(info, res, values);
   write_passport(a.out + "/passport.json", passport);
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
@@ -337,15 +344,7 @@ int do_run(RunArgs a) {
   }
 
   // Outputs: written whatever the outcome, so an aborted run keeps what it measured.
-  PassportInfo info;
-  info.serial = state.slot().dut ? state.slot().serial() : a.serial;
-  info.profile = p.name;
-  info.plant = a.plant;
-  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
-  info.started = started;
-  info.finished = iso8601_utc_now();
-  info.software = std::string("rig ") + RIG_VERSION;
-  info.out_dir = fs::absolute(a.out).string();
+  PassportInfo info = passport_info(a, p, hw, started, state.slot().dut ? state.slot().serial() : a.serial);
   info.captures = state.slot().captures();  // what was recorded, not what lies in the folder
   std::sort(info.captures.begin(), info.captures.end());
   // A signal is taken until the passport is written: after the last phase it still aborts

@@ -1,4 +1,5 @@
 #include "rig/modbus/cia402_client.hpp"
+#include "rig/modbus/motion_text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,27 +12,11 @@ using c4::State;
 
 namespace {
 
-std::string deg_str(double d) {
-  char b[48];
-  std::snprintf(b, sizeof b, "%.4f°", d);
-  return b;
-}
-std::string hex4(unsigned v) {
-  char b[16];
-  std::snprintf(b, sizeof b, "0x%04X", v);
-  return b;
-}
-std::string secs(double s) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f s", s);
-  return b;
-}
-double trapezoid_time(double dist, double v, double a) {
-  if (v <= 0 || a <= 0) return 0;
-  dist = std::fabs(dist);
-  if (dist >= v * v / a) return dist / v + v / a;
-  return 2.0 * std::sqrt(dist / a);
-}
+using detail::deg_str;
+using detail::hex4;
+using detail::secs;
+using detail::trapezoid_time;
+
 constexpr double kDefaultMoveTimeoutS = 120.0;  // when the profile velocity is unknown
 constexpr double kRestTimeoutS = 30.0;          // a stopping axis must be at rest within this
 

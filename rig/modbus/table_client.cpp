@@ -7,38 +7,18 @@
 
 #include "rig/core/toml_util.hpp"
 #include "rig/modbus/cia402_client.hpp"
+#include "rig/modbus/motion_text.hpp"
 
 namespace rig::modbus {
 
 namespace {
 
-std::string deg_str(double d) {
-  char b[48];
-  std::snprintf(b, sizeof b, "%.4f°", d);
-  return b;
-}
-
-std::string hex_code(uint16_t c) {
-  char b[16];
-  std::snprintf(b, sizeof b, "0x%04X", c);
-  return b;
-}
+using detail::deg_str;
+using detail::hex4;
+using detail::secs;
+using detail::trapezoid_time;
 
 constexpr double kRestTimeoutS = 30.0;
-
-std::string secs(double s) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f s", s);
-  return b;
-}
-
-// Duration of a trapezoidal move of `dist` from rest to rest.
-double trapezoid_time(double dist, double v, double a) {
-  if (v <= 0 || a <= 0) return 0;
-  dist = std::fabs(dist);
-  if (dist >= v * v / a) return dist / v + v / a;
-  return 2.0 * std::sqrt(dist / a);
-}
 
 }  // namespace
 
@@ -117,7 +97,7 @@ std::string TableClient::at(const DriveState& d) const { return " at " + deg_str
 
 void TableClient::fail_on_alarm(const std::string& doing, const DriveState& d) {
   if (!d.has(sts::kAlarm)) return;
-  std::string msg = doing + ": alarm " + hex_code(d.alarm_code) + " " + alarm_text(d.alarm_code) + at(d);
+  std::string msg = doing + ": alarm " + hex4(d.alarm_code) + " " + alarm_text(d.alarm_code) + at(d);
   if (d.alarm_code == alarm::kEstop) {
     msg += " (release the e-stop, then `rig table reset`)";
   } else if (d.alarm_code == alarm::kInterlock) {
@@ -340,7 +320,7 @@ void TableClient::reset_alarm(const CancelToken& cancel) {
     write_control(servo, cancel);
     d = read_drive(cancel);
     if (d.has(sts::kAlarm))
-      throw HardwareError(doing + ": alarm " + hex_code(d.alarm_code) + " " + alarm_text(d.alarm_code) +
+      throw HardwareError(doing + ": alarm " + hex4(d.alarm_code) + " " + alarm_text(d.alarm_code) +
                           " persists (its cause is still present)");
   } catch (const ModbusError& e) {
     throw HardwareError(doing + ": link failure: " + e.what());
