@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
+#include "analysis/noise_model.hpp"
 
 namespace rig::analysis {
 
@@ -64,7 +65,8 @@ struct NoiseTerms {
   std::optional<double> tau_cp_s;  // the flat segment's middle (B = sigma(tau_cp) / 0.664)
   std::optional<double> sigma_cp;
   PaperFit paper;
-  WlsFit wls;
+  WlsFit wls;          // the model fit (noise_model.hpp) in the shape of the former weighted fit
+  NoiseModelFit model;  // the one model: every term the data supports (AICc), with bounds or upper limits
 };
 
 // sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C).
