@@ -197,7 +197,14 @@ int run(const Args& a) {
   if (!src) src = std::make_unique<an::SpanSource>(mem);
   if (!(rate > 0)) throw ConfigError("rig analyze: --rate must be positive");
   const std::uint64_t n = src->size();
-  if (n < 16) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 16 are needed");
+  if (n < 3) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 3 are needed");
+  // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
+  std::vector<std::string> notes;
+  if (n < 30)
+    notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
+                    "the bounds rest on a few degrees of freedom and the noise terms on a few points");
+  const bool psd_possible = n >= 16;  // one Welch segment of at least 8 points, two of them
+  if (!psd_possible && !a.no_psd) notes.push_back("no PSD: fewer than 16 values");
 
   // One pass for OADEV (noise terms, the contract's "oadev") and the requested deviation.
   std::vector<an::DevOptions> opts;
@@ -242,7 +249,7 @@ int run(const Args& a) {
   // PSD (frequency data only: for phase data it would be of the integral).
   std::optional<an::Psd> psd;
   std::vector<an::Peak> peaks;
-  if (base.data == an::DataKind::Frequency && !a.no_psd) {
+  if (base.data == an::DataKind::Frequency && !a.no_psd && psd_possible) {
     an::WelchOptions wo;
     wo.window = an::parse_window(a.window);
     wo.segment = a.segment;
@@ -263,12 +270,18 @@ int run(const Args& a) {
       pj["peaks"].push_back({{"f_hz", p.f_hz}, {"psd", p.psd}, {"prominence_db", p.prominence_db}});
     }
     const double h0 = an::white_level(*psd, 0.05 * rate, 0.45 * rate);
-    pj["white_level"] = h0;                     // unit^2/Hz
-    pj["n_from_psd"] = std::sqrt(h0 / 2);       // N = sqrt(h0/2), unit*s^0.5
-    pj["n_from_psd_per_hour"] = an::n_per_hour(std::sqrt(h0 / 2));
+    pj["white_level"] = h0;  // unit^2/Hz, the median over 5..45 % of the rate (biased by Q)
+    // N from the PSD model (Q, N, B, K; analysis/psd.hpp psd_noise_fit) over 4 bins above DC
+    // (the window's leakage of the red terms) to 45 % of the rate; the median's N without one.
+    const an::PsdTerms pt = an::psd_noise_fit(*psd, 4 * rate / static_cast<double>(psd->segment), 0.45 * rate);
+    const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
+    pj["n_from_psd"] = n_psd;  // unit*s^0.5
+    pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
+    pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K}};
     j["psd"] = pj;
   }
 
+  if (!notes.empty()) j["notes"] = notes;
   if (!a.json_out.empty()) write_file(a.json_out, j.dump(2) + "\n");
   if (!a.svg_dir.empty()) {
     std::error_code ec;
@@ -288,6 +301,7 @@ int run(const Args& a) {
   }
   o << a.file << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
+  for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) {
     o << an::to_string(opts[k].type) << " (bounds " << a.confidence << "):\n"
       << "         m        tau_s     n_terms alpha         lo          dev           hi\n";

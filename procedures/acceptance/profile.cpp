@@ -103,10 +103,13 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   }
   p.filter_name = filter_name(preset);
   if (const toml::table* a = cfg::get_table(t, "analysis")) {
-    cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s"}, "analysis");
+    cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s", "b_allan"}, "analysis");
     p.taus = cfg::get_string(*a, "taus", p.taus);
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
+    p.b_allan = cfg::get_string(*a, "b_allan", p.b_allan);
+    if (p.b_allan != "paper" && p.b_allan != "lsq")
+      throw ConfigError("[analysis] b_allan: \"" + p.b_allan + "\" (expected \"paper\" or \"lsq\")");
   }
   static const char* known[] = {"bias", "base_error", "in_run_b_gost_100s", "in_run_b_gost_200s", "in_run_b_allan",
                                 "tau_cp", "q", "n", "k", "r", "in_run_b_allan_filtered", "rms_unfiltered",
