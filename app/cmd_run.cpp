@@ -201,6 +201,30 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
   return info;
 }
 
+// What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
+// the history row (a report or history failure is logged, never the run's outcome).
+nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
+                                         const RunResult& res, const MeasurementSet& values,
+                                         const acceptance::DutState& dut, spdlog::logger& log) {
+  auto passport = make_passport(info, res, values);
+  write_passport(a.out + "/passport.json", passport);
+  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
+  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(dut).dump(1));
+  try {
+    report::write_report(a.out);
+  } catch (const std::exception& e) {
+    log.error("report.html not written: {}", e.what());
+  }
+  if (!a.no_history) {
+    try {
+      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
+    } catch (const std::exception& e) {
+      log.error("history database not updated: {}", e.what());
+    }
+  }
+  return passport;
+}
+
 // A run that ends before its devices open (GPIO, table or DUT unreachable, a bad device
 // section) still leaves passport.json, junit.xml, analysis.json and report.html, as every
 // ending does: outcome ERROR, every measurement UNSET, the reason in aborted_reason. It is
@@ -217,22 +241,7 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   res.message = reason;
   res.config_error = config_error;
   const PassportInfo info = passport_info(a, p, hw, started, a.serial);
-  const auto passport = make_passport(info, res, values);
-  write_passport(a.out + "/passport.json", passport);
-  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
-  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(state.slot()).dump(1));
-  try {
-    report::write_report(a.out);
-  } catch (const std::exception& e) {
-    log.error("report.html not written: {}", e.what());
-  }
-  if (!a.no_history) {
-    try {
-      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
-    } catch (const std::exception& e) {
-      log.error("history database not updated: {}", e.what());
-    }
-  }
+  write_run_outputs(a, hw, info, res, values, state.slot(), log);
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
@@ -355,22 +364,7 @@ int do_run(RunArgs a) {
     res.message = "aborted after the last phase: " + cancel.token().reason();
     log->error("{}", res.message);
   }
-  const auto passport = make_passport(info, res, values);
-  write_passport(a.out + "/passport.json", passport);
-  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
-  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(state.slot()).dump(1));
-  try {
-    report::write_report(a.out);
-  } catch (const std::exception& e) {
-    log->error("report.html not written: {}", e.what());
-  }
-  if (!a.no_history) {
-    try {
-      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
-    } catch (const std::exception& e) {
-      log->error("history database not updated: {}", e.what());
-    }
-  }
+  const auto passport = write_run_outputs(a, hw, info, res, values, state.slot(), *log);
   dev.io.set_lamp(Lamp::Running, false);
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
   std::cout << "\n" << passport_table(passport);
