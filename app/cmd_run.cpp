@@ -408,7 +408,7 @@ void add_run(CLI::App& app, int& rc) {
   sub->add_option("--db", a->db, "History database URL (default: rig config / ~/.local/share/rig/history.sqlite)");
   sub->add_flag("--no-history", a->no_history, "Do not record the run in the history database");
   sub->add_option("--inject", a->inject,
-                  "Emulated plant only: inject a fault (estop@T, sigint@T, drop@SEQ:COUNT; T in device seconds)");
+                  "Emulated plant only: inject a fault (estop@T, sigint@T, sigint@end, drop@SEQ:COUNT; T in device seconds)");
   sub->callback([a, &rc] {
     if (!a->hardware.empty()) a->plant = "hardware";
     rc = do_run(*a);

@@ -108,8 +108,10 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     }
   };
   if (!filtered) {
-    term_value("in_run_b_allan", nt.B, 1.0, "sigma(tau_cp)/0.664 on the flat segment (paper's method)");
-    if (nt.tau_cp_s) ctx.values.set("tau_cp", *nt.tau_cp_s, "middle of the flat segment");
+    // The reasons say how B was actually read (flat segment, the polynomial's minimum, or the
+    // least-squares fallback): the analysis names its method, the passport repeats it.
+    term_value("in_run_b_allan", nt.B, 1.0, nt.B.reason);
+    if (nt.tau_cp_s) ctx.values.set("tau_cp", *nt.tau_cp_s, "the tau in_run_b_allan is read at (" + nt.B.reason + ")");
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
     // IEEE 952 terms quoted per hour (docs/method.md), by noise_terms.hpp's factors: Q g*s -> g*h,
     // N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.

@@ -154,6 +154,11 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   std::vector<std::string> done;
   if (resume) {
     done = load_checkpoint(phases, values, state, identity);
+    // A finished run has nothing to resume: running it again would only re-power the DUT and
+    // rewrite a final passport with every phase "skipped". Refused before any device moves.
+    if (!phases.empty() && done.size() == phases.size())
+      throw ConfigError(out_dir_ + ": the run is complete (all " + std::to_string(phases.size()) +
+                        " phases are in checkpoint.json): nothing to resume; its passport stands");
     log_->info("resuming {}: {} phase(s) already complete", out_dir_, done.size());
   }
   for (const auto& p : phases) result.phases.push_back({p.id, p.title, "pending", "", "", ""});

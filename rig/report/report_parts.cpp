@@ -167,6 +167,7 @@ std::string interval_level(const std::string& name, const json& v) {
   if (name == "bias" || name == "base_error") return "95 %, GOST R 8.736";
   if (name == "q" || name == "n" || name == "k" || name == "r" || name.rfind("in_run_b_allan", 0) == 0)
     return "68 %, ±1 σ of the Allan fit";
+  if (name == "bandwidth_0p5" || name == "settling_time") return "95 %, Student over the loop test's steps";
   return "level not stated";
 }
 

@@ -173,6 +173,17 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   MeasurementSet v2;
   declare(phases, v2);
   EXPECT_THROW(ex.run(power_on, phases, v2, st, CancelToken{}, true, {{"profile", "other"}}), ConfigError);
+  // A finished run has nothing to resume: refused, and no phase runs again.
+  MeasurementSet v3;
+  declare(phases, v3);
+  try {
+    ex.run(power_on, phases, v3, st, CancelToken{}, true, id);
+    ADD_FAILURE() << "resuming a complete run must be refused";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("the run is complete"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(runs_a, 1);
+  EXPECT_EQ(runs_b, 2);
 }
 
 TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {

@@ -554,7 +554,14 @@ TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
                  nlohmann::json::parse(slurp(f + "/passport.json"))["outcome"] == "PASS")
         << field << ": a damaged checkpoint passed the DUT";
   };
-  resume_damaged(good, "", 0);  // the control: an intact checkpoint resumes
+  {  // The control: an intact checkpoint passes every check; this one is of a finished run, so
+     // the resume is then refused as having nothing to do (the message comes after the checks).
+    const std::string f = d + "/intact";
+    fs::copy(d + "/good", f, fs::copy_options::recursive);
+    EXPECT_EQ(run({"run", "--resume", f, "--yes"}, f + "-io"), 2);
+    EXPECT_NE(slurp(f + "-io.stderr").find(f + ": the run is complete"), std::string::npos) << slurp(f + "-io.stderr");
+    EXPECT_EQ(slurp(f + "/passport.json"), slurp(d + "/good/passport.json")) << "a final passport is left as it was";
+  }
   auto j = good;
   j["values"] = nlohmann::json::object();  // values emptied
   resume_damaged(j, "values.bias: missing");

@@ -117,10 +117,11 @@ def demo_profile_ci(root, build):
             fail("scripts/demo did not say where it records history:\n" + se[-1000:])
         if not os.path.isfile(db[len("sqlite:"):]):
             fail("the history database the demo names was not written")
-        loader = re.search(r"python3 (tools/rigcap\.py \S+)$", se, re.M)
+        loader = re.search(r"(\S*python3) (tools/rigcap\.py \S+)$", se, re.M)
         if not loader:
             fail("scripts/demo did not print the NumPy loader command for its capture:\n" + se[-1000:])
-        p = subprocess.run([sys.executable] + loader.group(1).split(), cwd=root, capture_output=True, text=True)
+        # The command exactly as printed, interpreter included (a pyenv python3 may lack NumPy).
+        p = subprocess.run([loader.group(1)] + loader.group(2).split(), cwd=root, capture_output=True, text=True)
         if p.returncode != 0 or '"serial"' not in p.stdout:
             fail(f"the loader command the demo printed failed ({p.returncode}):\n{p.stderr[-1000:]}")
         # A run rejected at its command line writes nothing, and the demo lists nothing.
