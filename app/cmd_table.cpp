@@ -115,7 +115,9 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
                         {"ready", s.ready},       {"servo_on", s.servo_on},     {"homed", s.homed},
                         {"homing", s.homing},     {"moving", s.moving},         {"in_position", s.in_position},
                         {"alarm", s.alarm},       {"estop", s.estop},           {"interlock_ok", s.interlock_ok},
-                        {"alarm_code", s.alarm_code}, {"alarm_text", s.alarm_text}, {"heartbeat", s.heartbeat}};
+                        {"alarm_code", s.alarm_code}, {"alarm_text", s.alarm_text}};
+    if (s.has_heartbeat) j["heartbeat"] = s.heartbeat;
+    if (!s.drive_state.empty()) j["drive_state"] = s.drive_state;
     std::cout << j.dump(2) << "\n";
     return;
   }
@@ -124,8 +126,10 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
     std::snprintf(alarm, sizeof alarm, "0x%04X %s", s.alarm_code, s.alarm_text.c_str());
   else
     std::snprintf(alarm, sizeof alarm, "none");
-  std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°\nstate      %s\nalarm      %s\nheartbeat  %u\n",
-              where.c_str(), s.actual_deg, s.target_deg, flags(s).c_str(), alarm, s.heartbeat);
+  std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°\nstate      %s\nalarm      %s\n", where.c_str(),
+              s.actual_deg, s.target_deg, flags(s).c_str(), alarm);
+  if (!s.drive_state.empty()) std::printf("drive      %s (CiA 402)\n", s.drive_state.c_str());
+  if (s.has_heartbeat) std::printf("heartbeat  %u\n", s.heartbeat);
 }
 
 template <class Body>

@@ -24,6 +24,8 @@ struct TableStatus {
   uint16_t alarm_code = 0;
   std::string alarm_text;  // meaning of alarm_code, empty when none
   uint32_t heartbeat = 0;
+  bool has_heartbeat = true;  // a CiA 402 drive has no heartbeat register (frozen = no change)
+  std::string drive_state;    // the drive's own state name where it has one (CiA 402), else empty
 };
 
 // Every call is bounded in time; failures throw HardwareError naming what the

@@ -122,6 +122,8 @@ TableStatus Cia402Table::status() {
   s.alarm_code = r.error_code;
   s.alarm_text = r.error_code ? c4::error_code_text(r.error_code) : "";
   s.target_deg = s.actual_deg;
+  s.has_heartbeat = false;
+  s.drive_state = c4::state_name(st);  // e.g. "Quick stop active", which the flags do not show
   return s;
 }
 

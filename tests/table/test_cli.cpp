@@ -142,6 +142,9 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   ASSERT_EQ(rig("stop" + where), 0) << out;
   EXPECT_NE(out.find("stop sent"), std::string::npos) << out;
   ASSERT_EQ(rig("quick-stop" + where), 0) << out;
+  ASSERT_EQ(rig("status" + where), 0) << out;  // the drive's own state, which the flags cannot show
+  EXPECT_NE(out.find("drive      Quick stop active (CiA 402)"), std::string::npos) << out;
+  EXPECT_EQ(out.find("heartbeat"), std::string::npos) << "a CiA 402 drive has no heartbeat register: " << out;
   ASSERT_EQ(rig("move 0" + where), 0) << out;  // back up from Quick stop active
   ASSERT_EQ(rig("reset" + where), 0) << out;   // no fault: nothing to clear
   EXPECT_EQ(rig("move 1000" + where), 2) << out;  // outside the map's travel limits
