@@ -262,6 +262,9 @@ void add_dut(CLI::App& app, int& rc) {
   auto* dut = app.add_subcommand("dut", "Manual control of a DUT over CAN (info, stream, output filter, log decode)");
   dut->require_subcommand(1);
   auto a = std::make_shared<DutArgs>();
+  // The link options may come before or after the action, as the README's synopsis writes them
+  // (`rig dut --can can0 info`) and as people type them (`rig dut info --can can0`).
+  add_link_options(dut, *a);
 
   auto* info = dut->add_subcommand("info", "Serial number, firmware version, temperature and output filter");
   add_link_options(info, *a);
@@ -304,6 +307,7 @@ void add_dut(CLI::App& app, int& rc) {
   dec->add_option("--dbc", a->dbc, "DBC file")->capture_default_str();
   dec->add_flag("--summary", a->summary, "Only count the messages");
   dec->callback([a, &rc] { rc = cmd_decode(*a); });
+  for (CLI::App* action : dut->get_subcommands({})) action->fallthrough();
 }
 
 }  // namespace rig::cli

@@ -409,6 +409,20 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
 
 // `rig dut decode` on logs written by can-utils (tests/data/candump): both formats, a short
 // frame skipped and named by line (exit 2), a clean log exit 0, a file of no frames exit 2.
+// The link options before the action, as the README's synopsis writes them (issue 16 review): the
+// command line parses (no usage error, exit 2); on this host the CAN interface is then missing.
+TEST(RigCli, DutTakesItsLinkOptionsBeforeOrAfterTheAction) {
+  const std::string d = tmp("dut-order");
+  fs::create_directories(d);
+  for (const auto& args : {std::vector<std::string>{"dut", "--can", "rigtest-nocan0", "info"},
+                           std::vector<std::string>{"dut", "info", "--can", "rigtest-nocan0"}}) {
+    const int rc = run(args, d + "/io");
+    const std::string err = slurp(d + "/io.stderr");
+    EXPECT_EQ(err.find("not expected"), std::string::npos) << err;
+    EXPECT_EQ(rc, 4) << err;  // no such CAN interface: a link fault, not a usage error
+  }
+}
+
 TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
   const std::string d = tmp("decode");
   fs::create_directories(d);
