@@ -224,22 +224,8 @@ void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken
 
 template <class Body>
 void Cia402Table::guarded(const std::string& doing, Body body) {
-  auto stop_fate = [this] {
-    const std::string err = last_stop_error();
-    return err.empty() ? std::string("; halt delivered to the drive") : "; " + err;
-  };
-  try {
-    body();
-  } catch (const AbortedError&) {
-    stop();
-    throw;
-  } catch (const ModbusError& e) {
-    stop();
-    throw HardwareError(doing + (e.exception_code ? ": request refused: " : ": link failure: ") + e.what() + stop_fate());
-  } catch (const HardwareError& e) {
-    stop();
-    throw HardwareError(e.what() + stop_fate());
-  }
+  detail::guarded_call(
+      doing, body, [] { return std::string(); }, [this] { stop(); }, [this] { return last_stop_error(); });
 }
 
 void Cia402Table::home(const CancelToken& cancel) {

@@ -1,9 +1,13 @@
 // Small pieces both table clients (rig-v1 map and CiA 402) use in their waits and messages:
-// angle, code and duration formatting, and a trapezoidal move's duration for time bounds.
+// angle, code and duration formatting, a trapezoidal move's duration for time bounds, and the
+// one way a table call fails (stop first, then say what was being done and the stop's fate).
 #pragma once
 #include <cmath>
 #include <cstdio>
 #include <string>
+
+#include "rig/core/errors.hpp"
+#include "rig/modbus/transport.hpp"
 
 namespace rig::modbus::detail {
 
@@ -31,6 +35,33 @@ inline double trapezoid_time(double dist, double v, double a) {
   dist = std::fabs(dist);
   if (dist >= v * v / a) return dist / v + v / a;
   return 2.0 * std::sqrt(dist / a);
+}
+
+// Runs `body`; on an abort or a fault it stops the axis first (`stop`, which never throws) and
+// rethrows. A fault's message says what was being done, `where()` (read at the fault: e.g. the
+// last angle seen) and
+// whether the halt reached the drive (`stop_error()` empty: delivered) — a technician must know
+// if the table may still be turning. An exception reply means the drive refused a request; no
+// code means the link failed.
+template <class Body, class Where, class Stop, class StopError>
+void guarded_call(const std::string& doing, Body body, Where where, Stop stop, StopError stop_error) {
+  auto stop_fate = [&] {
+    const std::string err = stop_error();
+    return err.empty() ? std::string("; halt delivered to the drive") : "; " + err;
+  };
+  try {
+    body();
+  } catch (const AbortedError&) {
+    stop();
+    throw;
+  } catch (const ModbusError& e) {
+    stop();
+    throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") + where() + ": " +
+                        e.what() + stop_fate());
+  } catch (const HardwareError& e) {
+    stop();
+    throw HardwareError(e.what() + stop_fate());
+  }
 }
 
 }  // namespace rig::modbus::detail

@@ -190,27 +190,10 @@ DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, con
 
 template <class Body>
 void TableClient::guarded(const std::string& doing, Body body) {
-  // Whether the halt reached the drive belongs in the fault message: a
-  // technician must know if the table may still be turning.
-  auto stop_fate = [this] {
-    const std::string err = last_stop_error();
-    return err.empty() ? std::string("; halt delivered to the drive") : "; " + err;
-  };
-  try {
-    body();
-  } catch (const AbortedError&) {
-    stop();
-    throw;
-  } catch (const ModbusError& e) {
-    stop();
-    // An exception reply means the drive refused a request; no code means the link failed.
-    throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") +
-                        (have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : "") + ": " + e.what() +
-                        stop_fate());
-  } catch (const HardwareError& e) {
-    stop();
-    throw HardwareError(e.what() + stop_fate());
-  }
+  detail::guarded_call(
+      doing, body,
+      [this] { return have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : std::string(); },
+      [this] { stop(); }, [this] { return last_stop_error(); });
 }
 
 void TableClient::home(const CancelToken& cancel) {
