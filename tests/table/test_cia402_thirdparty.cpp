@@ -60,13 +60,15 @@ TEST(Cia402ThirdParty, MbpollFollowsTheMapPage) {
     }
     ADD_FAILURE() << what << ": statusword " << std::hex << statusword();
   };
-  EXPECT_EQ(statusword() & 0x4F, 0x40);  // Switch on disabled
+  // The drive leaves Not ready to switch on by itself once its server has stepped it, and takes
+  // each controlword on its next step: a master polls for the state, as the map page says.
+  wait_for([](long sw) { return (sw & 0x4F) == 0x40; }, "switch on disabled");
   write(0, "6");
-  EXPECT_EQ(statusword() & 0x6F, 0x21);
+  wait_for([](long sw) { return (sw & 0x6F) == 0x21; }, "ready to switch on");
   write(0, "7");
-  EXPECT_EQ(statusword() & 0x6F, 0x23);
+  wait_for([](long sw) { return (sw & 0x6F) == 0x23; }, "switched on");
   write(0, "15");
-  EXPECT_EQ(statusword() & 0x6F, 0x27);
+  wait_for([](long sw) { return (sw & 0x6F) == 0x27; }, "operation enabled");
   write(3, "6");
   write(19, "19");
   write(0, "31");
