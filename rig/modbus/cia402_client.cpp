@@ -386,22 +386,13 @@ uint16_t Cia402Table::reset_fault(const CancelToken& cancel) {
 }
 
 void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
-  std::string err;
-  try {
-    write_object(Obj::kControlword, word, CancelToken{}, true);
-    control_ = word;
-  } catch (const std::exception& e) {
-    try {
-      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
-    } catch (...) {
-    }
-  } catch (...) {
-  }
-  try {
-    std::lock_guard lk(stop_mu_);
-    last_stop_error_ = std::move(err);
-  } catch (...) {
-  }
+  detail::deliver_stop(
+      name,
+      [&] {
+        write_object(Obj::kControlword, word, CancelToken{}, true);
+        control_ = word;
+      },
+      stop_mu_, last_stop_error_);
 }
 
 // Halt keeps the device control bits as they are (never enables or disables

@@ -4,6 +4,7 @@
 #pragma once
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <string>
 
 #include "rig/core/errors.hpp"
@@ -35,6 +36,28 @@ inline double trapezoid_time(double dist, double v, double a) {
   dist = std::fabs(dist);
   if (dist >= v * v / a) return dist / v + v / a;
   return 2.0 * std::sqrt(dist / a);
+}
+
+// One attempt to deliver a stop (`write` sends it) on the safe-state path: never throws, and
+// records under `mu` in `last_error` whether it reached the drive (empty) or why not, for the
+// fault messages (guarded_call) and `rig table stop`.
+template <class Write>
+void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& last_error) noexcept {
+  std::string err;
+  try {
+    write();
+  } catch (const std::exception& e) {
+    try {
+      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
+    } catch (...) {
+    }
+  } catch (...) {
+  }
+  try {
+    std::lock_guard lk(mu);
+    last_error = std::move(err);
+  } catch (...) {
+  }
 }
 
 // Runs `body`; on an abort or a fault it stops the axis first (`stop`, which never throws) and

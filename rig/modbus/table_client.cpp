@@ -311,25 +311,16 @@ void TableClient::reset_alarm(const CancelToken& cancel) {
 }
 
 void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
-  std::string err;
-  try {
-    const uint16_t now = control_.load();
-    const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
-    if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge
-    transport_->write(reg::kControl, {static_cast<uint16_t>(servo | bit)}, CancelToken{}, true);
-    control_ = static_cast<uint16_t>(servo | bit);
-  } catch (const std::exception& e) {
-    try {
-      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
-    } catch (...) {
-    }
-  } catch (...) {
-  }
-  try {
-    std::lock_guard lk(stop_mu_);
-    last_stop_error_ = std::move(err);
-  } catch (...) {
-  }
+  detail::deliver_stop(
+      name,
+      [&] {
+        const uint16_t now = control_.load();
+        const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
+        if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge
+        transport_->write(reg::kControl, {static_cast<uint16_t>(servo | bit)}, CancelToken{}, true);
+        control_ = static_cast<uint16_t>(servo | bit);
+      },
+      stop_mu_, last_stop_error_);
 }
 
 void TableClient::stop() noexcept { send_stop(ctl::kHalt, "stop"); }

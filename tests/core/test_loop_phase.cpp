@@ -18,6 +18,7 @@
 #include "plant/firmware/inprocess_dut.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
+#include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/gpio/line_rig_io.hpp"
@@ -46,16 +47,7 @@ const Phase& loop_phase(const std::vector<Phase>& phases) {
   throw std::runtime_error("no loop phase");
 }
 
-// A table that is never moved (the loop phase does not touch it).
-class IdleTable final : public RotaryTable {
- public:
-  TableStatus status() override { return {}; }
-  void home(const CancelToken&) override {}
-  void move_to(double, const CancelToken&) override {}
-  void stop() noexcept override {}
-  void quick_stop() noexcept override {}
-  std::string describe() const override { return "idle table"; }
-};
+using test::IdleTable;
 
 }  // namespace
 

@@ -15,6 +15,7 @@
 
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
+#include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/gpio.hpp"
 
@@ -23,15 +24,7 @@ using namespace rig;
 
 namespace {
 
-class IdleTable final : public RotaryTable {
- public:
-  TableStatus status() override { return {}; }
-  void home(const CancelToken&) override {}
-  void move_to(double, const CancelToken&) override {}
-  void stop() noexcept override {}
-  void quick_stop() noexcept override {}
-  std::string describe() const override { return "idle table"; }
-};
+using test::IdleTable;
 
 // Rig I/O that is always powered and never trips (the loop phase only needs the DUT on).
 class QuietIo final : public RigIo {

@@ -130,4 +130,16 @@ class PtyPair {
   std::unique_ptr<Child> socat_;
 };
 
+// The message a call fails with, or "(no error)".
+template <class F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+inline bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
 }  // namespace rig::table_test

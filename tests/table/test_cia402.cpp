@@ -26,16 +26,6 @@ using m::Obj;
 const std::string kDrives = RIG_SOURCE_DIR "/drives/";
 const std::vector<std::string> kMaps = {"generic-cia402.toml", "lowword-offset.toml"};
 
-template <class F>
-std::string error_of(F f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 // ---------------------------------------------------------------- map files
 

@@ -26,16 +26,6 @@ namespace c4 = rig::modbus::cia402;
 
 const std::string kDrives = RIG_SOURCE_DIR "/drives/";
 
-template <class F>
-std::string error_of(F f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 struct WireDrive {
   WireDrive(const std::string& map_file, const std::string& spec, int unit = 1)
