@@ -14,6 +14,7 @@
 #include "firmware_link/candump_log.hpp"
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
+#include "firmware_link/dbc_stream.hpp"
 #include "app/commands.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "rig/core/clock.hpp"
@@ -41,7 +42,7 @@ struct DutArgs {
   LoopTestRequest loop;
   int record_ms = 100;
   // decode
-  std::string log, dbc = std::string(RIG_SOURCE_DIR) + "/docs/rig-dut.dbc";
+  std::string log, dbc;  // empty: the rig protocol's DBC built into the program
   bool summary = false;
 };
 
@@ -168,7 +169,10 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
 // and named LOG:LINE on stderr. Exit 0: every line decoded; 2: some line was skipped or the
 // log holds no frame at all (the decodable rest is still printed).
 int cmd_decode(const DutArgs& a) {
-  const link::Dbc dbc = link::Dbc::parse_file(a.dbc);
+  const std::shared_ptr<const link::Dbc> db =
+      a.dbc.empty() ? link::rig_protocol_dbc() : std::make_shared<const link::Dbc>(link::Dbc::parse_file(a.dbc));
+  const link::Dbc& dbc = *db;
+  const std::string dbc_name = a.dbc.empty() ? "docs/rig-dut.dbc, built in" : a.dbc;
   std::ifstream in(a.log);
   if (!in) throw ConfigError(a.log + ": cannot open candump log");
   constexpr unsigned long kNamedSkips = 20;  // then only counted: a wrong file must not flood the terminal
@@ -196,7 +200,7 @@ int cmd_decode(const DutArgs& a) {
     const auto sig = dbc.decode(lf.frame, &err);
     if (!sig) {
       if (err.empty()) ++foreign;  // an id the DBC does not describe: counted, not an error
-      else skip(e.line, err + " (" + a.dbc + ")");
+      else skip(e.line, err + " (" + dbc_name + ")");
       continue;
     }
     const std::string& name = dbc.find(lf.frame.id)->name;
@@ -304,7 +308,7 @@ void add_dut(CLI::App& app, int& rc) {
   auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -l / -L files or candump's screen output) with the protocol's DBC; "
                                      "exit 2 when a line had to be skipped");
   dec->add_option("LOG", a->log, "candump log file")->required();
-  dec->add_option("--dbc", a->dbc, "DBC file")->capture_default_str();
+  dec->add_option("--dbc", a->dbc, "DBC file (default: the rig protocol's, docs/rig-dut.dbc, built into the program)");
   dec->add_flag("--summary", a->summary, "Only count the messages");
   dec->callback([a, &rc] { rc = cmd_decode(*a); });
   for (CLI::App* action : dut->get_subcommands({})) action->fallthrough();
