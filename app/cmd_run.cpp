@@ -23,6 +23,7 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
+#include "app/fast_forward.hpp"
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -345,8 +346,16 @@ int do_run(RunArgs a) {
   view.plan(phases);
   Executive exec(dev, a.out, log, &view);
   const std::string started = invocation.value("started", iso8601_utc_now());
-  RunResult res = exec.run([&](PhaseContext& c) { acceptance::bring_up(c, p, ro, state.slot()); }, phases, values,
-                           state, cancel.token(), !a.resume.empty(), identity);
+  // In emulation a resume rebuilds the plant as the checkpoint left it (app/fast_forward.hpp):
+  // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
+  // passport equals the uninterrupted run's bit for bit. Hardware is only brought up again.
+  const bool fast_forward = b.emulated && !a.resume.empty();
+  RunResult res = exec.run(
+      [&](PhaseContext& c) {
+        acceptance::bring_up(c, p, ro, state.slot());
+        if (fast_forward) fast_forward_emulated(c, p, completed_phases(a.out), *log);
+      },
+      phases, values, state, cancel.token(), !a.resume.empty(), identity);
   if (sigint_at_end) {
     ::kill(::getpid(), SIGINT);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
