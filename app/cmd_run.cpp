@@ -23,6 +23,7 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
+#include "app/fast_forward.hpp"
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -60,15 +61,24 @@ std::string slurp(const std::string& path) {
   return ss.str();
 }
 
-// Emulated-plant fault injection (tests and technicians' training):
-// estop@T, sigint@T (a real SIGINT to this process), drop@SEQ:COUNT, and
-// sigint@end: a SIGINT after the last phase, before the passport is written
-// (the late signal of issue 13). Returns whether sigint@end was asked for.
-bool apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& inj) {
-  bool sigint_at_end = false;
+// A signal --inject can send this process, by name.
+int injected_signal(const std::string& kind) {
+  if (kind == "sigint") return SIGINT;
+  if (kind == "sigterm") return SIGTERM;
+  if (kind == "sigkill") return SIGKILL;
+  return 0;
+}
+
+// Emulated-plant fault injection (tests, campaigns and technicians' training):
+// estop@T, sigint@T / sigterm@T / sigkill@T (a real signal to this process at device time T:
+// the campaigns' random points, reproducible to the sample), drop@SEQ:COUNT, and
+// sigint@end / sigterm@end: the signal after the last phase, before the passport is written
+// (the late signal of issue 13). Returns the signal asked for at the end, or 0.
+int apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& inj) {
+  int signal_at_end = 0;
   for (const std::string& s : inj) {
-    if (s == "sigint@end") {
-      sigint_at_end = true;
+    if (s == "sigint@end" || s == "sigterm@end") {
+      signal_at_end = injected_signal(s.substr(0, s.find('@')));
       continue;
     }
     const auto at = s.find('@');
@@ -77,21 +87,23 @@ bool apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& i
     try {
       if (kind == "estop") {
         w.trip_estop_at(std::stod(arg));
-      } else if (kind == "sigint") {
-        w.at(std::stod(arg), [] { ::kill(::getpid(), SIGINT); });
+      } else if (const int sig = injected_signal(kind)) {
+        w.at(std::stod(arg), [sig] { ::kill(::getpid(), sig); });
       } else if (kind == "drop") {
         const auto c = arg.find(':');
         if (c == std::string::npos) throw ConfigError("--inject drop@SEQ:COUNT");
         w.inject_drop(static_cast<uint32_t>(std::stoul(arg.substr(0, c))),
                       static_cast<uint32_t>(std::stoul(arg.substr(c + 1))));
       } else {
-        throw ConfigError("--inject '" + s + "': unknown fault (estop@T, sigint@T, sigint@end, drop@SEQ:COUNT)");
+        throw ConfigError("--inject '" + s +
+                          "': unknown fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, sigterm@end, "
+                          "drop@SEQ:COUNT)");
       }
     } catch (const std::logic_error&) {
       throw ConfigError("--inject '" + s + "': bad number");
     }
   }
-  return sigint_at_end;
+  return signal_at_end;
 }
 
 // run.json of a run folder, checked before it is trusted: each field has its type, the
@@ -330,8 +342,8 @@ int do_run(RunArgs a) {
                                 dynamic_cast<const ConfigError*>(&e) != nullptr, *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
-  bool sigint_at_end = false;
-  if (b.emulated) sigint_at_end = apply_injections(*b.emulated, a.inject);
+  int signal_at_end = 0;
+  if (b.emulated) signal_at_end = apply_injections(*b.emulated, a.inject);
   else if (!a.inject.empty()) throw ConfigError("--inject works with the emulated plant only");
   Devices dev = b.devices();
   dev.io.on_estop([&cancel] { cancel.request("e-stop line opened"); });
@@ -345,10 +357,18 @@ int do_run(RunArgs a) {
   view.plan(phases);
   Executive exec(dev, a.out, log, &view);
   const std::string started = invocation.value("started", iso8601_utc_now());
-  RunResult res = exec.run([&](PhaseContext& c) { acceptance::bring_up(c, p, ro, state.slot()); }, phases, values,
-                           state, cancel.token(), !a.resume.empty(), identity);
-  if (sigint_at_end) {
-    ::kill(::getpid(), SIGINT);
+  // In emulation a resume rebuilds the plant as the checkpoint left it (app/fast_forward.hpp):
+  // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
+  // passport equals the uninterrupted run's bit for bit. Hardware is only brought up again.
+  const bool fast_forward = b.emulated && !a.resume.empty();
+  RunResult res = exec.run(
+      [&](PhaseContext& c) {
+        acceptance::bring_up(c, p, ro, state.slot());
+        if (fast_forward) fast_forward_emulated(c, p, completed_phases(a.out), *log);
+      },
+      phases, values, state, cancel.token(), !a.resume.empty(), identity);
+  if (signal_at_end) {
+    ::kill(::getpid(), signal_at_end);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
 
@@ -408,7 +428,8 @@ void add_run(CLI::App& app, int& rc) {
   sub->add_option("--db", a->db, "History database URL (default: rig config / ~/.local/share/rig/history.sqlite)");
   sub->add_flag("--no-history", a->no_history, "Do not record the run in the history database");
   sub->add_option("--inject", a->inject,
-                  "Emulated plant only: inject a fault (estop@T, sigint@T, sigint@end, drop@SEQ:COUNT; T in device seconds)");
+                  "Emulated plant only: inject a fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, "
+                  "sigterm@end, drop@SEQ:COUNT; T in device seconds)");
   sub->callback([a, &rc] {
     if (!a->hardware.empty()) a->plant = "hardware";
     rc = do_run(*a);

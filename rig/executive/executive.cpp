@@ -98,8 +98,14 @@ std::vector<std::string> Executive::load_checkpoint(const std::vector<Phase>& ph
   auto bad = [&cp](const std::string& field, const std::string& what) {
     return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) + " (damaged checkpoint; start a new run)");
   };
+  // No checkpoint: the run stopped before its first phase completed (run.json is written
+  // before any device opens). Nothing was measured, so the resume starts over from bring-up.
+  if (!std::filesystem::exists(cp)) {
+    log_->info("{}: no checkpoint (stopped before the first phase completed): starting from bring-up", cp);
+    return {};
+  }
   std::ifstream in(cp);
-  if (!in) throw ConfigError(cp + ": no checkpoint to resume from");
+  if (!in) throw ConfigError(cp + ": cannot read the checkpoint");
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);

@@ -107,7 +107,8 @@ class Executive {
 
   // Bring-up runs on every start, resume included (power, homing: hardware
   // state is never taken from a checkpoint). Phases already in the checkpoint
-  // are skipped when `resume` is set. `identity` (profile digest, serial, plant)
+  // are skipped when `resume` is set; a run folder without a checkpoint (stopped
+  // before its first phase completed) resumes from bring-up. `identity` (profile digest, serial, plant)
   // must match the checkpoint's, and the checkpoint must pass check_checkpoint()
   // (else ConfigError naming the file and field: exit 2). `values` must hold the
   // declarations of every phase's measures. Outcomes are judged once, at the end

@@ -3,12 +3,6 @@
 // SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run; the
 // outcome rules (a resume judges as an uninterrupted run, a null limited value
 // fails), late signals, damaged checkpoints, run folders and capture headers.
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -22,82 +16,12 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/capture/capture.hpp"
+#include "tests/core/rig_process.hpp"
 
-extern char** environ;
 namespace fs = std::filesystem;
+using namespace rig::test;
 
 namespace {
-
-struct Child {
-  pid_t pid = -1;
-  std::string out, err;
-};
-
-std::string tmp(const std::string& name) {
-  const std::string d = fs::temp_directory_path() / ("rigcli-" + std::to_string(::getpid()) + "-" + name);
-  fs::remove_all(d);
-  return d;
-}
-
-std::string slurp(const std::string& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-Child spawn(const std::vector<std::string>& args, const std::string& io_prefix) {
-  std::vector<char*> argv;
-  std::string bin = RIG_BINARY;
-  argv.push_back(bin.data());
-  std::vector<std::string> copy = args;
-  for (auto& a : copy) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  Child c;
-  c.out = io_prefix + ".stdout";
-  c.err = io_prefix + ".stderr";
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, c.out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, c.err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  // History goes to a private database so tests never touch the user's.
-  const std::string hist = "RIG_HISTORY=sqlite:" + io_prefix + ".history.sqlite";
-  std::vector<char*> envp;
-  for (char** e = environ; *e; ++e)
-    if (std::string(*e).rfind("RIG_HISTORY=", 0) != 0) envp.push_back(*e);
-  std::string h = hist;
-  envp.push_back(h.data());
-  envp.push_back(nullptr);
-  EXPECT_EQ(posix_spawn(&c.pid, bin.c_str(), &fa, nullptr, argv.data(), envp.data()), 0);
-  posix_spawn_file_actions_destroy(&fa);
-  return c;
-}
-
-int wait_exit(const Child& c) {
-  int st = 0;
-  ::waitpid(c.pid, &st, 0);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-}
-
-int run(const std::vector<std::string>& args, const std::string& io_prefix) { return wait_exit(spawn(args, io_prefix)); }
-
-// Polls (bounded) until `path` exists; returns false if the child ended first.
-bool wait_for_file(const Child& c, const std::string& path) {
-  for (int i = 0; i < 60000; ++i) {
-    if (fs::exists(path)) return true;
-    int st;
-    if (::waitpid(c.pid, &st, WNOHANG) == c.pid) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  return false;
-}
-
-std::size_t count(const std::string& hay, const std::string& needle) {
-  std::size_t n = 0;
-  for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + 1)) ++n;
-  return n;
-}
 
 // The ci profile's GOST blocks are 2 s and 4 s long: its B values are named by that length
 // (in_run_b_gost_2s, _4s); the paper profile's are the CONTRACTS names in_run_b_gost_100s, _200s.

@@ -1,0 +1,92 @@
+#include "app/fast_forward.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "procedures/acceptance/procedure.hpp"
+#include "procedures/acceptance/state.hpp"
+
+namespace rig::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+nlohmann::json read_checkpoint(const std::string& run_dir) {
+  std::ifstream in(Executive::checkpoint_path(run_dir));
+  if (!in) return nlohmann::json();
+  return nlohmann::json::parse(in);
+}
+
+// The first field where the replay's record of a phase differs from the checkpoint's, or "".
+// Both come from the same to_json (doubles written with round-trip precision), so equal
+// values compare equal exactly.
+std::string first_difference(const nlohmann::json& replay, const nlohmann::json& checkpoint, const std::string& path) {
+  if (replay.is_object()) {
+    for (const auto& [k, v] : replay.items()) {
+      if (!checkpoint.is_object() || !checkpoint.contains(k)) return path + "." + k + " (not in the checkpoint)";
+      const std::string d = first_difference(v, checkpoint[k], path + "." + k);
+      if (!d.empty()) return d;
+    }
+    return "";
+  }
+  return replay == checkpoint ? "" : path + " (replay " + replay.dump() + ", checkpoint " + checkpoint.dump() + ")";
+}
+
+}  // namespace
+
+std::vector<std::string> completed_phases(const std::string& run_dir) {
+  const nlohmann::json cp = read_checkpoint(run_dir);
+  std::vector<std::string> done;
+  if (cp.is_object() && cp.contains("completed"))
+    for (const auto& id : cp["completed"]) done.push_back(id.get<std::string>());
+  return done;
+}
+
+void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, const std::vector<std::string>& completed,
+                           spdlog::logger& log) {
+  // The replay's own procedure state, values and captures: nothing of it reaches the run's.
+  acceptance::ProcedureState replay_state(p);
+  const std::vector<Phase> phases = acceptance::build_phases(p, replay_state);
+  MeasurementSet replay_values;
+  acceptance::declare_values(p, phases, replay_values);
+  const std::string scratch = ctx.out_dir + "/.fast-forward";
+  fs::remove_all(scratch);  // left by a run killed during its own fast-forward
+  fs::create_directories(scratch);
+  auto quiet = std::make_shared<spdlog::logger>("fast-forward");  // no sinks: the replay is not the run's log
+  PhaseContext replay{ctx.dev, ctx.cancel, replay_values, scratch, quiet, nullptr};
+  std::size_t replayed = 0;
+  if (ctx.progress && !completed.empty())
+    ctx.progress->log("  emulated plant: replaying the completed recordings to rebuild its state at the checkpoint");
+  for (const Phase& ph : phases) {
+    if (std::find(completed.begin(), completed.end(), ph.id) == completed.end()) continue;
+    if (ph.planned_s <= 0) continue;  // computes from captures: leaves the devices alone
+    log.info("fast-forward: replaying phase {} against the emulated plant (device time {:.3f} s)", ph.id,
+             ctx.dev.clock.now_s());
+    ph.run(replay);
+    ++replayed;
+  }
+  fs::remove_all(scratch);
+  const nlohmann::json cp = read_checkpoint(ctx.out_dir);
+  const nlohmann::json mine = acceptance::to_json(replay_state.slot());
+  std::string diff;
+  for (const char* part : {"runs", "in_run", "raw"})
+    if (diff.empty() && mine.contains(part))
+      diff = first_difference(mine[part], cp.is_object() && cp.contains("state") ? cp["state"].value(part, nlohmann::json())
+                                                                                 : nlohmann::json(),
+                              std::string("state.") + part);
+  if (!diff.empty()) {
+    log.warn("fast-forward: the replay does not reproduce {}: {}; this build's emulated plant is not the one that "
+             "wrote the checkpoint, so the resumed passport will differ from an uninterrupted run's",
+             Executive::checkpoint_path(ctx.out_dir), diff);
+    return;
+  }
+  log.info("fast-forward: {} recorded phase(s) replayed to device time {:.3f} s; their recordings match the "
+           "checkpoint bit for bit",
+           replayed, ctx.dev.clock.now_s());
+}
+
+}  // namespace rig::cli

@@ -1,0 +1,332 @@
+// Issue 13's campaigns as tests: a run aborted or killed at random points, with the random
+// points drawn from fixed seeds in device time (`--inject KIND@T` fires at device time T, so
+// each point is reproducible to the sample whatever the machine's load), then resumed.
+// Asserted every time: the exit code (3 aborted, 128+9 killed), the safe state in order in
+// run.log, the outcome, and that the resumed passport equals the uninterrupted run's with the
+// same seed bit for bit (minus kSessionFields). The damaged-checkpoint cases extend
+// RigCli.DamagedCheckpointsAreRefusedNamingFileAndField (test_rig_cli.cpp).
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/core/rig_process.hpp"
+
+namespace fs = std::filesystem;
+using namespace rig::test;
+using nlohmann::json;
+
+namespace {
+
+// What legitimately differs between a resumed run and an uninterrupted one: when and where it
+// ran (started, finished, out_dir) and, per phase, what this session did with it (status
+// "skipped" for a phase completed before the resume, its times and message). Everything else
+// of passport.json (serial, profile, plant, station, software, outcome, every value with its
+// limits, reason and outcome, captures, phase ids and titles) must be equal.
+const char* kSessionFields[] = {"started", "finished", "out_dir"};
+const char* kSessionPhaseFields[] = {"status", "started", "finished", "message"};
+
+json without_session_fields(json p) {
+  for (const char* f : kSessionFields) p.erase(f);
+  for (auto& ph : p["phases"])
+    for (const char* f : kSessionPhaseFields) ph.erase(f);
+  return p;
+}
+
+json read_json(const std::string& path) { return json::parse(slurp(path)); }
+
+// The ci profile's run takes 228.5 s of device time (bring-up 7.7 s, the loop phase from
+// 227.5 s); the random points are drawn from [0, kCiDeviceS), where every one interrupts it.
+constexpr double kCiDeviceS = 228.0;
+constexpr double kCiLoopPhaseS = 227.9;  // a fixed point inside the short loop phase
+constexpr double kPaperDeviceS = 6800.0;  // 114 min
+
+// The uninterrupted run the campaigns compare with.
+struct Reference {
+  json passport, analysis;
+};
+Reference uninterrupted(const std::string& d, const std::string& profile, std::vector<std::string> extra = {}) {
+  std::vector<std::string> args = {"run", "--profile", profile, "--yes", "--no-history", "--out", d + "/whole"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  EXPECT_EQ(run(args, d + "/whole-io"), 0) << slurp(d + "/whole-io.stderr");
+  return {read_json(d + "/whole/passport.json"), read_json(d + "/whole/analysis.json")};
+}
+
+// run.log holds the three safe-state steps in order, then "safe state reached".
+void expect_safe_state_in_order(const std::string& log, const std::string& what) {
+  const auto t = log.find("safe state 1/3: stopping table");
+  const auto s = log.find("safe state 2/3: stopping DUT stream");
+  const auto p = log.find("safe state 3/3: DUT power off");
+  const auto r = log.find("safe state reached");
+  ASSERT_NE(t, std::string::npos) << what << "\n" << log;
+  EXPECT_LT(t, s) << what;
+  EXPECT_LT(s, p) << what;
+  EXPECT_LT(p, r) << what;
+}
+
+// Resumes `run_dir` (no fault injected) and checks the result against the uninterrupted run.
+void resume_and_compare(const std::string& run_dir, const Reference& ref, const std::string& what) {
+  const int rc = run({"run", "--resume", run_dir, "--yes", "--no-history"}, run_dir + "-resume");
+  ASSERT_EQ(rc, 0) << what << "\n" << slurp(run_dir + "-resume.stderr");
+  const json p = read_json(run_dir + "/passport.json");
+  EXPECT_EQ(without_session_fields(p), without_session_fields(ref.passport))
+      << what << ": the resumed passport differs from the uninterrupted run's";
+  EXPECT_EQ(read_json(run_dir + "/analysis.json"), ref.analysis) << what << ": analysis.json differs";
+  EXPECT_FALSE(fs::exists(run_dir + "/.fast-forward")) << what << ": the replay's scratch folder is left behind";
+  const std::string log = slurp(run_dir + "/run.log");
+  EXPECT_EQ(log.find("does not reproduce"), std::string::npos) << what << "\n" << log;
+}
+
+std::vector<double> random_points(unsigned seed, int n, double lo, double hi) {
+  std::mt19937_64 g(seed);  // fixed: the campaign is the same on every machine and every run
+  std::vector<double> t;
+  for (int i = 0; i < n; ++i) {
+    const double u = static_cast<double>(g() >> 11) * 0x1.0p-53;
+    t.push_back(lo + (hi - lo) * u);
+  }
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+std::string fmt_t(double t) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", t);
+  return b;
+}
+
+}  // namespace
+
+// Issue 13, 7: SIGKILL at random device times (inside captures, at phase boundaries, during
+// analysis), then --resume: exit 137, no passport, and the resumed passport equals the
+// uninterrupted run's. Fails on the code before the fast-forward (the resumed plant restarted
+// its noise from device time 0: 26 of 27 paper resumes differed).
+TEST(Campaign, SigkillAtRandomPointsThenResumeEqualsTheUninterruptedRun) {
+  const std::string d = tmp("campaign-kill");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "ci");
+  int k = 0;
+  std::vector<double> points = random_points(1301, 6, 8.0, kCiDeviceS);
+  points.push_back(kCiLoopPhaseS);
+  for (const double t : points) {
+    const std::string r = d + "/k" + std::to_string(++k), what = "sigkill@" + fmt_t(t);
+    EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", what}, r + "-io"),
+              128 + SIGKILL)
+        << what << "\n" << slurp(r + "-io.stderr");
+    EXPECT_FALSE(fs::exists(r + "/passport.json")) << what;
+    resume_and_compare(r, ref, what);
+  }
+}
+
+// Issue 13, 7: a run killed before its first checkpoint (during bring-up, inside the first
+// capture) resumes in the same folder from bring-up, with the uninterrupted run's result.
+TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
+  const std::string d = tmp("campaign-early");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "ci");
+  for (const double t : {0.5, 3.0, 8.5}) {  // power-up, homing, the first run's capture
+    const std::string r = d + "/at" + fmt_t(t), what = "sigkill@" + fmt_t(t);
+    EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", what}, r + "-io"),
+              128 + SIGKILL);
+    ASSERT_FALSE(fs::exists(r + "/checkpoint.json")) << what << ": a phase completed before the kill";
+    resume_and_compare(r, ref, what);
+    EXPECT_NE(slurp(r + "/run.log").find("no checkpoint (stopped before the first phase completed)"),
+              std::string::npos)
+        << what;
+  }
+}
+
+// SIGINT and SIGTERM at random device times: exit 3, ABORTED naming the signal, the safe state
+// in order, the measurements of completed phases kept; then the resume equals the
+// uninterrupted run.
+TEST(Campaign, SigintAndSigtermAtRandomPointsAbortSafelyAndResumeLosslessly) {
+  const std::string d = tmp("campaign-signal");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "ci");
+  int k = 0;
+  for (const double t : random_points(1302, 6, 0.0, kCiDeviceS)) {
+    const std::string sig = k % 2 ? "sigterm" : "sigint", name = k % 2 ? "SIGTERM" : "SIGINT";
+    const std::string r = d + "/s" + std::to_string(++k), what = sig + "@" + fmt_t(t);
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", what}, r + "-io"), 3)
+        << what << "\n" << slurp(r + "-io.stderr");
+    const json p = read_json(r + "/passport.json");
+    EXPECT_EQ(p["outcome"], "ABORTED") << what;
+    EXPECT_NE(p["aborted_reason"].get<std::string>().find(name), std::string::npos) << what << p["aborted_reason"];
+    expect_safe_state_in_order(slurp(r + "/run.log"), what);
+    for (const auto& [n, v] : p["values"].items()) EXPECT_NE(v["outcome"], "FAIL") << what << ": " << n;
+    // Everything measured before the signal is kept: the values equal the uninterrupted run's.
+    for (const auto& [n, v] : p["values"].items()) {
+      if (!v["value"].is_null()) {
+        EXPECT_EQ(v["value"], ref.passport["values"][n]["value"]) << what << ": " << n;
+      }
+    }
+    resume_and_compare(r, ref, what);
+  }
+}
+
+// The e-stop line opened at random device times (through the emulated GPIO and the rig's
+// e-stop logic): exit 3, ABORTED for the e-stop, the safe state in order; resumable.
+TEST(Campaign, EstopAtRandomPointsAbortsSafely) {
+  const std::string d = tmp("campaign-estop");
+  fs::create_directories(d);
+  // With a --serial: it travels over the emulated CAN link (its length shifts the device time
+  // of everything after bring-up), and the resume takes it from run.json.
+  const Reference ref = uninterrupted(d, "ci", {"--serial", "EMU-ESTOP-7"});
+  int k = 0;
+  for (const double t : random_points(1303, 4, 0.0, kCiDeviceS)) {
+    const std::string r = d + "/e" + std::to_string(++k), what = "estop@" + fmt_t(t);
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--serial", "EMU-ESTOP-7", "--out", r, "--inject",
+                   what},
+                  r + "-io"),
+              3)
+        << what << "\n" << slurp(r + "-io.stderr");
+    const json p = read_json(r + "/passport.json");
+    EXPECT_EQ(p["outcome"], "ABORTED") << what;
+    EXPECT_NE(p["aborted_reason"].get<std::string>().find("e-stop"), std::string::npos) << what << p["aborted_reason"];
+    expect_safe_state_in_order(slurp(r + "/run.log"), what);
+    resume_and_compare(r, ref, what);
+  }
+}
+
+// Late signals: SIGINT or SIGTERM after the last phase (before the passport is written) still
+// end the run ABORTED with exit 3, the measurements kept; such a run is complete (every phase
+// is in its checkpoint), so a resume is refused and its passport stands.
+TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
+  const std::string d = tmp("campaign-late");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "ci");
+  for (const std::string sig : {"sigint", "sigterm"}) {
+    const std::string r = d + "/" + sig, what = sig + "@end";
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", what}, r + "-io"), 3)
+        << what << "\n" << slurp(r + "-io.stderr");
+    const json p = read_json(r + "/passport.json");
+    EXPECT_EQ(p["outcome"], "ABORTED");
+    const std::string name = sig == "sigint" ? "SIGINT" : "SIGTERM";
+    EXPECT_NE(p["aborted_reason"].get<std::string>().find("after the last phase: " + name), std::string::npos)
+        << p["aborted_reason"];
+    for (const auto& [n, v] : p["values"].items()) EXPECT_EQ(v["value"], ref.passport["values"][n]["value"]) << n;
+    const std::string log = slurp(r + "/run.log");
+    expect_safe_state_in_order(log, what);
+    EXPECT_NE(log.find("outcome ABORTED (exit 3)"), std::string::npos) << log;
+    const std::string before = slurp(r + "/passport.json");
+    EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-resume"), 2);
+    EXPECT_EQ(slurp(r + "/passport.json"), before) << "a final passport is left as it was";
+  }
+}
+
+// A SIGTERM from outside (a service manager stopping rig), not injected: taken like SIGINT.
+// (Wall-time points are not drawn at random here: whether a signal lands before or after the
+// passport is final would then depend on the machine's load; the late points are the
+// sigint@end / sigterm@end cases above.)
+TEST(Campaign, ExternalSigtermIsTakenLikeSigint) {
+  const std::string d = tmp("campaign-external");
+  fs::create_directories(d);
+  const std::string r = d + "/x";
+  Child c = spawn({"run", "--profile", "ci", "--yes", "--no-history", "--out", r}, r + "-io");
+  ASSERT_TRUE(wait_for_file(c, r + "/captures/in-run-U10.cap")) << slurp(r + "-io.stderr");
+  ::kill(c.pid, SIGTERM);
+  ASSERT_EQ(wait_exit(c), 3) << slurp(r + "-io.stderr");
+  const json p = read_json(r + "/passport.json");
+  EXPECT_EQ(p["outcome"], "ABORTED");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("SIGTERM"), std::string::npos) << p["aborted_reason"];
+  expect_safe_state_in_order(slurp(r + "/run.log"), "external SIGTERM");
+}
+
+// Two paper runs (the issue's profile): killed at a random point of its 114 min of device
+// time, resumed, and equal to the uninterrupted paper run bit for bit.
+TEST(Campaign, PaperSigkillThenResumeEqualsTheUninterruptedRun) {
+  const std::string d = tmp("campaign-paper");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "paper");
+  EXPECT_EQ(ref.passport["outcome"], "PASS");
+  const double t = random_points(1305, 1, 1500.0, kPaperDeviceS)[0];
+  const std::string r = d + "/k", what = "sigkill@" + fmt_t(t);
+  EXPECT_EQ(run({"run", "--profile", "paper", "--yes", "--no-history", "--out", r, "--inject", what}, r + "-io"),
+            128 + SIGKILL)
+      << slurp(r + "-io.stderr");
+  resume_and_compare(r, ref, what);
+}
+
+// The damaged-checkpoint set beyond the fields RigCli.DamagedCheckpointsAreRefusedNamingFileAndField
+// covers: a checkpoint cut mid-write, of another schema, with phases out of order, of another
+// profile, naming a capture shorter than what it recorded: each exit 2 naming the checkpoint,
+// never a passport. A stale checkpoint.json.tmp (a kill during the atomic write) is ignored.
+TEST(Campaign, DamagedCheckpointSet) {
+  const std::string d = tmp("campaign-damaged");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "ci");
+  const std::string base = d + "/base";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", base, "--inject", "sigkill@180"},
+                d + "/base-io"),
+            128 + SIGKILL);
+  const std::string good = slurp(base + "/checkpoint.json");
+  const json cp = json::parse(good);
+  ASSERT_TRUE(cp["state"].contains("in_run")) << "killed after the in-run capture";
+  int k = 0;
+  auto copy = [&] {
+    const std::string f = d + "/f" + std::to_string(++k);
+    fs::copy(base, f, fs::copy_options::recursive);
+    return f;
+  };
+  auto refused = [&](const std::string& f, const std::string& says) {
+    EXPECT_EQ(run({"run", "--resume", f, "--yes", "--no-history"}, f + "-io"), 2) << says;
+    const std::string err = slurp(f + "-io.stderr");
+    EXPECT_NE(err.find(f + "/checkpoint.json: "), std::string::npos) << err;
+    EXPECT_NE(err.find(says), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(f + "/passport.json")) << says;
+  };
+  {
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << good.substr(0, good.size() / 2);  // cut mid-write
+    refused(f, "unreadable checkpoint");
+  }
+  {
+    json j = cp;
+    j["schema"] = "rig.checkpoint/9";
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "schema");
+  }
+  {
+    json j = cp;
+    std::swap(j["completed"][0], j["completed"][1]);
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "completed[0]: \"run02-U20\" is not phase 1 (run01-U10)");
+  }
+  {
+    json j = cp;
+    j["identity"]["profile_digest"] = "0000";
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "different profile, serial or plant");
+  }
+  {
+    const std::string f = copy();
+    const std::string cap = f + "/" + cp["state"]["in_run"]["capture"].get<std::string>();
+    fs::resize_file(cap, fs::file_size(cap) / 2);
+    refused(f, "state.in_run");
+  }
+  {  // A checkpoint whose recordings this plant does not reproduce (here a run's mean edited;
+     // in practice one written by another build): the resume goes on, and says so.
+    json j = cp;
+    j["state"]["runs"]["3"]["mean_g"] = j["state"]["runs"]["3"]["mean_g"].get<double>() * (1 + 1e-15);
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    EXPECT_EQ(run({"run", "--resume", f, "--yes", "--no-history"}, f + "-io"), 0) << slurp(f + "-io.stderr");
+    const std::string err = slurp(f + "-io.stderr");
+    EXPECT_NE(err.find("fast-forward: the replay does not reproduce " + f + "/checkpoint.json: state.runs.3.mean_g"),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("the resumed passport will differ"), std::string::npos) << err;
+  }
+  {  // A kill between writing checkpoint.json.tmp and its rename: the previous checkpoint stands.
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json.tmp") << good.substr(0, 100);
+    resume_and_compare(f, ref, "stale checkpoint.json.tmp");
+  }
+}
