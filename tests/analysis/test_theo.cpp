@@ -1,0 +1,94 @@
+// Long-tau statistics (analysis/theo.hpp) against the published NBS14 values (NIST SP 1065
+// sec. 12.2, Riley's test suite, as collected in allantools' tests/nbs14: the 1000-point set's
+// values at AF 1, 10, 100 and the 10-point set's at AF 1, 2), plus their own invariants.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "analysis/theo.hpp"
+
+namespace rig::analysis {
+namespace {
+
+// The NBS14 1000-point frequency set: n_{i+1} = 16807 n_i mod (2^31 - 1), n_0 = 1234567890,
+// y_i = n_i / (2^31 - 1) (SP 1065 sec. 12.2).
+std::vector<double> nbs14_1000() {
+  std::vector<double> y(1000);
+  std::uint64_t n = 1234567890;
+  for (double& v : y) {
+    v = static_cast<double>(n) / 2147483647.0;
+    n = (16807 * n) % 2147483647;
+  }
+  return y;
+}
+
+// The 10-point phase set (SP 1065 sec. 12.1).
+const std::vector<double> kNbs10 = {0.00000,   103.11111, 123.22222, 157.33333, 166.44444,
+                                    48.55555,  -96.33333, -2.22222,  111.88889, 0.00000};
+
+std::vector<LongTauPoint> run(std::span<const double> data, DataKind kind, LongTau t, std::vector<std::size_t> m,
+                              std::optional<int> alpha = std::nullopt) {
+  LongTauOptions o;
+  o.type = t;
+  o.data = kind;
+  o.factors = std::move(m);
+  o.fixed_alpha = alpha;
+  return long_tau(data, o);
+}
+
+void expect_rel(double got, double want, double tol, const char* what) {
+  EXPECT_LT(std::abs(got - want) / want, tol) << what << ": got " << got << ", published " << want;
+}
+
+TEST(Nbs14_1000, Theo1MatchesStable32) {
+  // Stable32 v1.60 (no bias removal), AF 10, 100, 1000, printed to 5 digits.
+  const auto p = run(nbs14_1000(), DataKind::Frequency, LongTau::Theo1, {10, 100, 1000});
+  const double want[] = {1.0757e-01, 3.1789e-02, 5.0524e-03};
+  for (int i = 0; i < 3; ++i) expect_rel(p[i].dev_raw, want[i], 5e-5, "theo1");
+  EXPECT_EQ(p[0].n_terms, (1001u - 10u) * 5u);  // (N - m) m/2 terms, Stable32's '#'
+  EXPECT_DOUBLE_EQ(p[2].tau_s, 750.0);          // 0.75 m tau0
+}
+
+TEST(Nbs14_1000, MtotMatchesPublishedAndStable32) {
+  const auto p = run(nbs14_1000(), DataKind::Frequency, LongTau::MTOT, {1, 10, 100}, 0);
+  const double raw[] = {2.0664e-01, 5.5529e-02, 1.9547e-02};              // Stable32, no bias removal
+  const double pub[] = {2.418528e-01, 6.499161e-02, 2.287774e-02};        // SP 1065, white-FM bias removed
+  for (int i = 0; i < 3; ++i) {
+    expect_rel(p[i].dev_raw, raw[i], 5e-5, "mtot raw");
+    expect_rel(p[i].dev, pub[i], 2e-6, "mtot");
+  }
+  EXPECT_EQ(p[1].n_terms, 1001u - 30u + 1u);
+}
+
+TEST(Nbs14_1000, TtotMatchesPublishedAndStable32) {
+  const auto p = run(nbs14_1000(), DataKind::Frequency, LongTau::TTOT, {1, 10, 100}, 0);
+  const double raw[] = {1.1930e-01, 3.2060e-01, 1.1285e+00};
+  const double pub[] = {1.396338e-01, 3.752293e-01, 1.320847e+00};
+  for (int i = 0; i < 3; ++i) {
+    expect_rel(p[i].dev_raw, raw[i], 5e-5, "ttot raw");
+    expect_rel(p[i].dev, pub[i], 2e-6, "ttot");
+  }
+}
+
+TEST(Nbs14_1000, HtotMatchesPublished) {
+  const auto p = run(nbs14_1000(), DataKind::Frequency, LongTau::HTOT, {1, 10, 100}, 0);
+  const double pub[] = {2.943883e-01, 9.614787e-02, 3.058103e-02};
+  for (int i = 0; i < 3; ++i) expect_rel(p[i].dev, pub[i], 2e-6, "htot");
+}
+
+TEST(Nbs14_10, TotalFamilyMatchesPublished) {
+  const auto mt = run(kNbs10, DataKind::Phase, LongTau::MTOT, {1, 2}, 0);
+  expect_rel(mt[0].dev_raw, 6.4509e+01, 5e-5, "mtot AF1");
+  expect_rel(mt[1].dev_raw, 6.4794e+01, 5e-5, "mtot AF2");
+  const auto tt = run(kNbs10, DataKind::Phase, LongTau::TTOT, {1, 2}, 0);
+  expect_rel(tt[0].dev_raw, 3.7244e+01, 5e-5, "ttot AF1");
+  expect_rel(tt[1].dev_raw, 7.4818e+01, 5e-5, "ttot AF2");
+  const auto ht = run(kNbs10, DataKind::Phase, LongTau::HTOT, {1, 2}, 0);
+  expect_rel(ht[0].dev, 70.80607, 2e-6, "htot AF1");
+  expect_rel(ht[1].dev, 91.16396, 2e-6, "htot AF2");
+}
+
+}  // namespace
+}  // namespace rig::analysis
