@@ -98,12 +98,13 @@ VarSum htot_var(std::span<const double> x, std::size_t m, double tau0, std::size
 //   FFM  (2 N^2 - 1.3 N r - 3.5 r) / (N r) * r^3 / (r^3 + 2.3)
 //   RWFM (4.4 N - 2)/(2.9 r) * [ (4.4 N - 1)^2 - 8.6 r (4.4 N - 1) + 11.4 r^2 ] / (4.4 N - 3)^2
 double edf_theo1(int alpha, std::size_t n_phase, std::size_t m);
-// MTOT and TTOT, SP 1065 Table 8: edf = b (N/m) - c, (b, c) = WPM (1.90, 2.10), FPM (1.20, 1.40),
-// WFM (1.10, 1.20), FFM (0.85, 0.50), RWFM (0.75, 0.31).
+// MTOT and TTOT, SP 1065 Table 8 (Howe's revised fit, as Stable32 uses it), m > 8:
+// edf = b (N/m) - c, (b, c) = WPM (2.16, 2.28), FPM (1.73, 2.99), WFM (1.33, 1.89),
+// FFM (0.92, 0.76), RWFM (0.79, 0.37); m <= 8: the MVAR (Greenhall-Riley) EDF.
 double edf_mtot(int alpha, std::size_t n_phase, std::size_t m);
 // HTOT, SP 1065 Table 9: edf = (N/m) / (b0 + b1 m/N), (b0, b1) = WFM (0.559, 1.004),
-// FFM (0.868, 1.140), RWFM (0.938, 1.696), FWFM (0.974, 2.554), RRFM (1.276, 3.149); PM noise
-// (alpha > 0, outside the table) takes the overlapping Hadamard EDF (Greenhall-Riley).
+// FFM (0.868, 1.140), RWFM (0.938, 1.696), FWFM (0.974, 2.554), RRFM (1.276, 3.149), m > 16;
+// PM noise and m <= 16 (outside the fit) take the overlapping Hadamard EDF (Greenhall-Riley).
 double edf_htot(int alpha, std::size_t n_phase, std::size_t m);
 
 // Bias of the total variances relative to MVAR (MTOT, TTOT) and HVAR (HTOT), E[tot]/E[var] by

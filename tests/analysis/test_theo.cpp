@@ -5,9 +5,14 @@
 
 #include <cmath>
 #include <cstdint>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
+#include "analysis/edf.hpp"
 #include "analysis/theo.hpp"
+#include "reference_data.hpp"
 
 namespace rig::analysis {
 namespace {
@@ -88,6 +93,81 @@ TEST(Nbs14_10, TotalFamilyMatchesPublished) {
   const auto ht = run(kNbs10, DataKind::Phase, LongTau::HTOT, {1, 2}, 0);
   expect_rel(ht[0].dev, 70.80607, 2e-6, "htot AF1");
   expect_rel(ht[1].dev, 91.16396, 2e-6, "htot AF2");
+}
+
+}  // namespace
+}  // namespace rig::analysis
+
+namespace rig::analysis {
+namespace {
+
+// Stable32's tables on PHASE.DAT (which is the NBS14 1000-point set as phase): values and the
+// 68.3 % bounds of every printed row, with the row's alpha, check the EDF coefficients
+// (SP 1065 Tables 8 and 9) and the bias removal. MTOT/TTOT print the raw statistic, HTOT the
+// bias-removed one; both print bounds around what they print.
+struct TotTable {
+  const char* table;
+  LongTau type;
+  bool printed_is_bias_removed;
+};
+
+class Stable32Tot : public ::testing::TestWithParam<TotTable> {};
+
+TEST_P(Stable32Tot, ValuesAndBoundsMatch) {
+  const TotTable& c = GetParam();
+  const auto rows = testing::read_table(testing::ref_path(std::string("phasedat/") + c.table));
+  const auto x = testing::read_values(testing::ref_path("phasedat/PHASE.DAT"));
+  ASSERT_FALSE(rows.empty());
+  for (const auto& r : rows) {
+    LongTauOptions o;
+    o.type = c.type;
+    o.data = DataKind::Phase;
+    o.factors = {r.af};
+    o.fixed_alpha = r.alpha;
+    const LongTauPoint p = long_tau(x, o).at(0);
+    const double shown = c.printed_is_bias_removed ? p.dev : p.dev_raw;
+    EXPECT_LT(std::abs(shown - r.dev) / r.dev, 5e-5) << c.table << " AF " << r.af;
+    EXPECT_EQ(p.n_terms, r.terms) << c.table << " AF " << r.af;
+    // HTOT's printed rows are all m <= 16, where Stable32's EDF is not SP 1065 Table 9's and
+    // ours is the (smaller) OHDEV one: values only.
+    if (r.lo > 0 && c.type != LongTau::HTOT) {
+      const auto [lo, hi] = chi2_bounds(shown, p.edf, kOneSigma);
+      EXPECT_LT(std::abs(lo - r.lo) / r.lo, 5e-4) << c.table << " AF " << r.af << " lo " << lo << " edf " << p.edf;
+      EXPECT_LT(std::abs(hi - r.hi) / r.hi, 5e-4) << c.table << " AF " << r.af << " hi " << hi;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(PhaseDat, Stable32Tot,
+                         ::testing::Values(TotTable{"phase_dat_mtotdev_octave.txt", LongTau::MTOT, false},
+                                           TotTable{"phase_dat_ttotdev_octave.txt", LongTau::TTOT, false},
+                                           TotTable{"phase_dat_htotdev_octave.txt", LongTau::HTOT, true}),
+                         [](const ::testing::TestParamInfo<TotTable>& p) { return std::string(to_string(p.param.type)); });
+
+// Theo1 on PHASE.DAT, Stable32 with white FM chosen (no bias then): every decade row.
+TEST(Stable32Theo1, PhaseDatDecadeRowsMatch) {
+  // AF Theo1Tau # Alpha Min Theo1 Max, '#' printed in floating point.
+  std::ifstream f(testing::ref_path("phasedat/phase_dat_theo1_alpha0_decade.txt"));
+  std::vector<testing::S32Row> rows;
+  for (std::string line; std::getline(f, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    double af, tau, terms, alpha, lo, dev, hi;
+    if (!(in >> af >> tau >> terms >> alpha >> lo >> dev >> hi)) continue;
+    rows.push_back({static_cast<std::size_t>(af), static_cast<std::size_t>(terms), 0, lo, dev, hi});
+  }
+  const auto x = testing::read_values(testing::ref_path("phasedat/PHASE.DAT"));
+  ASSERT_GE(rows.size(), 5u);
+  for (const auto& r : rows) {
+    LongTauOptions o;
+    o.type = LongTau::Theo1;
+    o.data = DataKind::Phase;
+    o.factors = {r.af};
+    o.fixed_alpha = 0;
+    const LongTauPoint p = long_tau(x, o).at(0);
+    EXPECT_LT(std::abs(p.dev_raw - r.dev) / r.dev, 5e-5) << "AF " << r.af;
+    EXPECT_EQ(p.n_terms, r.terms) << "AF " << r.af;
+  }
 }
 
 }  // namespace
