@@ -34,6 +34,15 @@ json dev_to_json(std::span<const an::DevPoint> dev) {
   return a;
 }
 
+json long_tau_to_json(std::span<const an::LongTauPoint> pts) {
+  json a = json::array();
+  for (const auto& p : pts)
+    a.push_back({{"m", p.m},         {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev},
+                 {"dev_raw", p.dev_raw}, {"lo", p.lo},   {"hi", p.hi},           {"edf", p.edf},
+                 {"alpha", p.alpha}, {"stride", p.stride}, {"estimator", p.estimator}});
+  return a;
+}
+
 json noise_terms_to_json(const an::NoiseTerms& t) {
   json j;
   j["Q"] = term(t.Q, an::q_per_hour, "g*h");
