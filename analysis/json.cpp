@@ -30,7 +30,7 @@ json dev_to_json(std::span<const an::DevPoint> dev) {
   json a = json::array();
   for (const auto& p : dev)
     a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
-                 {"edf", p.edf}, {"alpha", p.alpha}});
+                 {"edf", p.edf}, {"alpha", p.alpha}, {"edf_alpha", p.edf_alpha}});
   return a;
 }
 
