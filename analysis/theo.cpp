@@ -220,10 +220,12 @@ double tot_bias(LongTau s, int alpha) {
 }
 
 int alpha_at(std::span<const DevPoint> ref, double tau_s) {
+  // edf_alpha: the type OADEV's own bounds use, i.e. after the EDF guard (a PM reading at the
+  // last OADEV taus of an FM curve must not carry over to the longer taus here).
   if (ref.empty()) return 0;
-  int a = ref.front().alpha;
+  int a = ref.front().edf_alpha;
   for (const DevPoint& p : ref)
-    if (p.tau_s <= tau_s * (1 + 1e-12)) a = p.alpha;
+    if (p.tau_s <= tau_s * (1 + 1e-12)) a = p.edf_alpha;
   return a;
 }
 

@@ -48,8 +48,8 @@ struct LongTauOptions {
   double confidence = kOneSigma;
   bool bounds = true;
   std::optional<int> fixed_alpha;      // noise type for EDF and bias instead of identification
-  // Noise types come from OADEV's identification (with its EDF guard) at the nearest tau at or
-  // below the point's: the process's noise type does not depend on the estimator. Empty: an
+  // Noise types come from OADEV's identification (its edf_alpha, after the EDF guard) at the
+  // nearest tau at or below the point's: the process's noise type does not depend on the estimator. Empty: an
   // octave OADEV of the same data is computed for it.
   std::vector<DevPoint> noise_ref;
   // Work cap: at most about this many squared terms per tau. Beyond it every k-th subsequence
@@ -116,8 +116,8 @@ double tot_bias(LongTau s, int alpha);
 // for fewer than 3 phase points (TheoH, Theo1: 4), a non-positive rate or a non-finite value.
 std::vector<LongTauPoint> long_tau(std::span<const double> data, const LongTauOptions& opt);
 
-// The noise type of `noise_ref` at tau (the point at the largest tau <= it; the first point
-// if none); 0 (white FM) for an empty list.
+// The noise type of `noise_ref` at tau: the `edf_alpha` (the type after the EDF guard) of the
+// point at the largest tau <= it (the first point if none); 0 (white FM) for an empty list.
 int alpha_at(std::span<const DevPoint> noise_ref, double tau_s);
 
 // Phase from the record, less the line through its end points (every statistic here ignores

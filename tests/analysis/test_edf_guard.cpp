@@ -10,6 +10,7 @@
 
 #include "analysis/allan.hpp"
 #include "analysis/edf.hpp"
+#include "analysis/theo.hpp"
 
 namespace rig::analysis {
 namespace {
@@ -90,6 +91,24 @@ TEST(EdfGuard, ThresholdSeparatesFmChangesFromPmReadings) {
       const double fp = edf_greenhall(1, 2, m, n, true, false);
       EXPECT_LE(wf / rw, 1.8) << "N " << n << " m " << m;
       EXPECT_GT(fp / wf, 2.0) << "N " << n << " m " << m;
+    }
+}
+
+// The long-tau statistics take OADEV's guarded type: Theo1 beyond AF 512 on the same record is
+// bounded as random-walk FM, not as the flicker PM that B1 read.
+TEST(EdfGuard, LongTauStatisticsTakeTheGuardedType) {
+  const auto y = random_walk_record();
+  LongTauOptions o;
+  o.type = LongTau::Theo1;
+  o.taus = parse_tau_grid("octave");
+  o.noise_ref = oadev(y, true);
+  ASSERT_EQ(o.noise_ref.back().alpha, 1);  // what B1 read at the last OADEV tau
+  const auto pts = long_tau(y, o);
+  ASSERT_FALSE(pts.empty());
+  for (const LongTauPoint& p : pts)
+    if (p.tau_s >= 512) {
+      EXPECT_EQ(p.alpha, -2) << "m " << p.m;
+      EXPECT_DOUBLE_EQ(p.edf, edf_theo1(-2, y.size() + 1, p.m)) << "m " << p.m;
     }
 }
 
