@@ -54,7 +54,8 @@ struct LongTauOptions {
   std::vector<DevPoint> noise_ref;
   // Work cap: at most about this many squared terms per tau. Beyond it every k-th subsequence
   // start is summed (at least kMinStarts of them, spread over the record); the point says k.
-  // Exact (k = 1) for records up to ~1e4 points on any tau; see docs/analysis.md for the cost.
+  // Exact (k = 1) on every tau for records up to ~6900 points (the total family, 1.25 N^2 terms
+  // at m = N/6) and ~21000 (Theo1, N^2/8 at m = N/2); docs/analysis.md has the cost.
   double max_terms_per_tau = 6.0e7;
   unsigned threads = 0;                // 0 = all cores
   std::function<void()> poll;          // cancellation hook, as DevOptions::poll

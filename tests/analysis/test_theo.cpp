@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -167,6 +168,48 @@ TEST(Stable32Theo1, PhaseDatDecadeRowsMatch) {
     const LongTauPoint p = long_tau(x, o).at(0);
     EXPECT_LT(std::abs(p.dev_raw - r.dev) / r.dev, 5e-5) << "AF " << r.af;
     EXPECT_EQ(p.n_terms, r.terms) << "AF " << r.af;
+  }
+}
+
+}  // namespace
+}  // namespace rig::analysis
+
+namespace rig::analysis {
+namespace {
+
+// The work cap (LongTauOptions::max_terms_per_tau) sums every k-th subsequence start: on a
+// record where the exact sums are still affordable, the capped values stay near them, the
+// stride is reported and the EDF is held to the starts summed.
+TEST(LongTauCap, StridedSumsStayNearTheExactOnes) {
+  std::vector<double> y(20000);
+  std::uint64_t s = 12345;
+  double walk = 0;
+  for (double& v : y) {  // white FM plus a random walk (LCG, platform-independent)
+    s = (6364136223846793005ULL * s + 1442695040888963407ULL);
+    const double u1 = static_cast<double>((s >> 11) + 1) * 0x1p-53;
+    s = (6364136223846793005ULL * s + 1442695040888963407ULL);
+    const double u2 = static_cast<double>(s >> 11) * 0x1p-53;
+    const double g = std::sqrt(-2 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+    walk += 0.02 * g;
+    v = g + walk;
+  }
+  for (LongTau t : {LongTau::Theo1, LongTau::MTOT, LongTau::HTOT}) {
+    LongTauOptions o;
+    o.type = t;
+    o.factors = {200, 1000};
+    o.fixed_alpha = 0;
+    o.max_terms_per_tau = 1e12;  // every start
+    const auto exact = long_tau(y, o);
+    o.max_terms_per_tau = 2e5;
+    const auto capped = long_tau(y, o);
+    for (std::size_t i = 0; i < exact.size(); ++i) {
+      EXPECT_EQ(exact[i].stride, 1u);
+      EXPECT_GT(capped[i].stride, 1u) << to_string(t);
+      EXPECT_LT(std::abs(capped[i].dev / exact[i].dev - 1), 0.05) << to_string(t) << " m " << exact[i].m;
+      EXPECT_LE(capped[i].edf, static_cast<double>(capped[i].n_terms)) << to_string(t);
+      std::printf("%s m %zu: stride %zu, capped/exact - 1 = %+.4f\n", to_string(t), exact[i].m, capped[i].stride,
+                  capped[i].dev / exact[i].dev - 1);
+    }
   }
 }
 
