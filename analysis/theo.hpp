@@ -61,7 +61,7 @@ struct LongTauOptions {
   std::function<void()> poll;          // cancellation hook, as DevOptions::poll
 };
 
-// Subsequence starts kept at least, whatever the cap (the windows overlap by > 90 % then).
+// Subsequence starts kept at least, whatever the cap (spread evenly over the record).
 inline constexpr std::size_t kMinStarts = 64;
 
 // ---- the statistics on phase data x (N points, tau0 apart); stride: sum every k-th start ----
