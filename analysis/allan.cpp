@@ -22,6 +22,12 @@ namespace {
 
 constexpr std::size_t kNoiseIdCap = 1u << 17;  // averaged points used by the lag-1 ACF (see docs)
 constexpr std::size_t kAcfMinPoints = 30;      // Stable32: ACF method from 30 averaged points
+// The EDF guard acts where B1's type claims more than twice the EDF of the ACF's type below:
+// a real change of noise type between neighbouring octaves moves the EDF by less (Greenhall's
+// EDF: white and random-walk FM differ by at most 1.8x at equal m and N,
+// tests/analysis/test_edf_guard.cpp), a PM reading on an FM
+// curve by 3x-30x (issue 12: 25x). Stable32's tables stay unchanged (every one < 2x).
+constexpr double kEdfGuardRatio = 2.0;
 
 int diff_order(Deviation d) { return (d == Deviation::HDEV || d == Deviation::OHDEV) ? 3 : 2; }
 
@@ -174,6 +180,18 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     std::vector<double>().swap(e.z);  // identified: the averages are not needed again (memory)
   });
 
+  // The alpha of the longest tau below m (same deviation) that the lag-1 ACF identified.
+  auto acf_alpha_below = [](const std::vector<Pending>& all, const Pending& me, std::size_t m) -> std::optional<int> {
+    std::optional<int> a;
+    std::size_t best = 0;
+    for (const Pending& q : all)
+      if (q.k == me.k && q.id && q.p.m < m && q.p.m >= best) {
+        best = q.p.m;
+        a = q.id->alpha;
+      }
+    return a;
+  };
+
   // Then in order: B1/R(n) where there are fewer than 30 averages (its rules repeat the alpha
   // of the previous tau past half the largest factor), and the bounds.
   std::vector<std::vector<DevPoint>> out(opts.size());
@@ -203,6 +221,20 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
       }
       p.alpha = clamp_alpha(id.alpha, d);
       p.edf = edf_for(o.type, p.alpha, s.m, n);
+      p.edf_alpha = p.alpha;
+      // The EDF guard (docs/analysis.md, "EDF guard at long tau"): with fewer than 30 averages
+      // the B1 rule reads a few values, and a type that contradicts the reliably identified
+      // (lag-1 ACF) taus below may not claim more degrees of freedom than that type gives.
+      if (!o.fixed_alpha && !e.id && o.edf_guard) {
+        if (const auto ref = acf_alpha_below(pend, e, s.m)) {
+          const int ra = clamp_alpha(*ref, d);
+          const double cap = edf_for(o.type, ra, s.m, n);
+          if (p.edf > kEdfGuardRatio * cap) {
+            p.edf = cap;
+            p.edf_alpha = ra;
+          }
+        }
+      }
       const auto [lo, hi] = chi2_bounds(p.dev, p.edf, o.confidence);
       p.lo = lo;
       p.hi = hi;

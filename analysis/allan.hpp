@@ -47,7 +47,10 @@ struct DevPoint {
   std::size_t n_terms = 0;
   double dev = 0, lo = 0, hi = 0;  // lo/hi: chi-square bounds at DevOptions::confidence (0 if bounds off)
   double edf = 0;
-  int alpha = 0;  // identified power-law exponent of S_y(f) used for the bounds
+  int alpha = 0;  // identified power-law exponent of S_y(f) (Stable32's identification)
+  // The exponent whose EDF the bounds use: alpha, or, where the EDF guard capped the EDF of a
+  // B1-identified tau, the type the lag-1 ACF found at the longest tau below (DevOptions::edf_guard).
+  int edf_alpha = 0;
 };
 
 // The default confidence of the bounds: exactly one sigma, erf(1/sqrt 2). Stable32 prints it
@@ -64,6 +67,10 @@ struct DevOptions {
   std::vector<std::size_t> factors;  // explicit averaging factors; overrides `taus` when not empty
   unsigned threads = 0;              // 0 = all hardware threads (the 2-core rig PC: both)
   std::optional<int> fixed_alpha;    // skip identification and use this noise type (Stable32's manual choice)
+  // EDF guard: at taus with fewer than 30 averages (B1 rule), the EDF is at most that of the
+  // noise type the lag-1 ACF identified at the longest tau below (docs/analysis.md). Off:
+  // Stable32's bounds exactly.
+  bool edf_guard = true;
   // Cancellation hook: called between units of work (about every chunk of phase points and per
   // tau, from any worker thread); it may throw to stop the computation, and that exception
   // leaves deviation() after the workers stop. The math knows nothing of what it throws.

@@ -30,7 +30,16 @@ json dev_to_json(std::span<const an::DevPoint> dev) {
   json a = json::array();
   for (const auto& p : dev)
     a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
-                 {"edf", p.edf}, {"alpha", p.alpha}});
+                 {"edf", p.edf}, {"alpha", p.alpha}, {"edf_alpha", p.edf_alpha}});
+  return a;
+}
+
+json long_tau_to_json(std::span<const an::LongTauPoint> pts) {
+  json a = json::array();
+  for (const auto& p : pts)
+    a.push_back({{"m", p.m},         {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev},
+                 {"dev_raw", p.dev_raw}, {"lo", p.lo},   {"hi", p.hi},           {"edf", p.edf},
+                 {"alpha", p.alpha}, {"stride", p.stride}, {"estimator", p.estimator}});
   return a;
 }
 

@@ -13,10 +13,13 @@
 #include "analysis/envelope.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"
+#include "analysis/theo.hpp"
 
 namespace rig::analysis {
 
 nlohmann::json dev_to_json(std::span<const DevPoint> dev);
+// A long-tau statistic (theo.hpp): dev_to_json's fields plus dev_raw, stride and estimator.
+nlohmann::json long_tau_to_json(std::span<const LongTauPoint> pts);
 nlohmann::json noise_terms_to_json(const NoiseTerms& nt);
 nlohmann::json psd_to_json(const Psd& psd, const std::vector<Peak>& peaks);
 // Both channels' block envelopes (same record, same blocks) and what the record is.

@@ -1,6 +1,7 @@
 // `rig analyze FILE`: overlapping Allan deviation with confidence bounds, noise terms (the
 // paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per docs/contracts.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <ctime>
@@ -25,6 +26,7 @@
 #include "analysis/noise_terms.hpp"
 #include "analysis/options.hpp"
 #include "analysis/psd.hpp"
+#include "analysis/theo.hpp"
 #include "rig/report/svg_plot.hpp"
 #include "rig/capture/capture.hpp"
 #include "app/commands.hpp"
@@ -105,13 +107,26 @@ int run(const Args& a) {
   if (!(a.confidence > 0 && a.confidence < 1))
     throw ConfigError("--confidence " + std::to_string(a.confidence) + ": must be in (0, 1)");
   an::DevOptions base;
+  // --dev: a comma-separated list of one Allan-family deviation and/or long-tau statistics.
+  std::optional<an::Deviation> extra_dev;
+  std::vector<an::LongTau> long_taus;
   try {
     base.data = an::parse_data_kind(a.data);
     base.taus = an::parse_tau_grid(a.taus);
-    base.type = an::parse_deviation(a.dev);
+    std::stringstream names(a.dev);
+    for (std::string name; std::getline(names, name, ',');) {
+      if (const auto lt = an::parse_long_tau(name)) {
+        if (std::find(long_taus.begin(), long_taus.end(), *lt) == long_taus.end()) long_taus.push_back(*lt);
+        continue;
+      }
+      const an::Deviation d = an::parse_deviation(name);  // throws, naming the choices
+      if (extra_dev && *extra_dev != d) throw std::invalid_argument("--dev takes one Allan-family deviation, got two");
+      extra_dev = d;
+    }
+    base.type = extra_dev.value_or(an::Deviation::OADEV);
     (void)an::parse_window(a.window);
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(std::string("rig analyze: ") + e.what());
+    throw ConfigError(std::string("rig analyze: ") + e.what() + " (or theo1|theoh|mtot|ttot|htot)");
   }
   if (!(a.confidence > 0 && a.confidence < 1))
     throw ConfigError("rig analyze: --confidence must be in (0, 1), got " + std::to_string(a.confidence));
@@ -185,6 +200,38 @@ int run(const Args& a) {
   const an::NoiseTerms terms = an::noise_terms(devs[0], record_s);
   timer.mark("noise terms");
 
+  // Long-tau statistics: on the record in memory (16 bytes per value with its phase), noise
+  // types from the OADEV above (with its EDF guard).
+  std::vector<std::vector<an::LongTauPoint>> longs;
+  if (!long_taus.empty()) {
+    std::vector<double> held;
+    std::span<const double> values;
+    if (const double* p = src->contiguous()) {
+      values = std::span<const double>(p, n);
+    } else {
+      held.resize(n);
+      if (src->read_at(0, held) != n) throw ConfigError(a.file + ": the file ended early");
+      values = held;
+    }
+    for (an::LongTau t : long_taus) {
+      an::LongTauOptions lo;
+      lo.type = t;
+      lo.data = base.data;
+      lo.rate_hz = rate;
+      lo.taus = base.taus;
+      lo.confidence = a.confidence;
+      lo.bounds = !a.no_bounds;
+      lo.threads = a.threads;
+      lo.noise_ref = devs[0];
+      try {
+        longs.push_back(an::long_tau(values, lo));
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(a.file + ": " + e.what());
+      }
+    }
+    timer.mark("long tau");
+  }
+
   json j;
   j["n"] = n;
   j["rate_hz"] = rate;
@@ -195,6 +242,7 @@ int run(const Args& a) {
   j["confidence"] = a.confidence;
   j["oadev"] = analysis::dev_to_json(devs[0]);
   if (devs.size() > 1) j[an::to_string(base.type)] = analysis::dev_to_json(devs[1]);
+  for (std::size_t k = 0; k < longs.size(); ++k) j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k]);
   j["noise_terms"] = analysis::noise_terms_to_json(terms);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
@@ -268,6 +316,16 @@ int run(const Args& a) {
       o << line;
     }
   }
+  for (std::size_t k = 0; k < longs.size(); ++k) {
+    o << an::to_string(long_taus[k]) << " (bounds " << a.confidence << "; stride > 1: every stride-th start summed):\n"
+      << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
+    for (const auto& p : longs[k]) {
+      char line[200];
+      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e %8.1f %6zu %s\n", p.m, p.tau_s,
+                    p.n_terms, p.alpha, p.lo, p.dev, p.hi, p.edf, p.stride, p.estimator.c_str());
+      o << line;
+    }
+  }
   o << "noise terms (tau in s; passport units after '='):\n";
   print_term(o, "Q", terms.Q, an::q_per_hour, "g*h");
   print_term(o, "N", terms.N, an::n_per_hour, "g*h^0.5");
@@ -298,7 +356,9 @@ void add_analyze(CLI::App& app, int& rc) {
       ->check(CLI::IsMember({"freq", "frequency", "phase"}));
   sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000)");
   sub->add_option("--taus", args->taus, "tau grid: octave|decade|all|log:N (default log:100)");
-  sub->add_option("--dev", args->dev, "extra deviation: adev|oadev|mdev|tdev|hdev|ohdev|totdev (OADEV always)");
+  sub->add_option("--dev", args->dev,
+                  "extra statistics, comma-separated: one of adev|oadev|mdev|tdev|hdev|ohdev|totdev and any of "
+                  "theo1|theoh|mtot|ttot|htot (OADEV always)");
   sub->add_option("--confidence", args->confidence, "confidence of the bounds (default one sigma, erf(1/sqrt 2) = 0.682689, Stable32's \"0.683\")");
   sub->add_flag("--no-bounds", args->no_bounds, "skip noise identification and bounds");
   sub->add_flag("--no-psd", args->no_psd, "skip the PSD (Allan part only)");

@@ -5,6 +5,7 @@ the same taus (read back from rig's JSON), measured alternately; prints both tim
 
     /usr/bin/python3 bench/analysis/compare.py [--rig build/bin/rig] [--file y.f64] [--n 3.6e6]
                                                [--rounds 5] [--only oadev,mdev,...]
+                                               [--only theo1,theoh,mtot,ttot,htot] (long-tau, opt-in)
 
 The rig's figure is the wall time of the whole process (start-up, reading the float64 file,
 the deviations with noise identification and bounds, the noise terms, the JSON written);
@@ -74,6 +75,20 @@ figures = [("oadev", ["--no-psd"], "oadev", lambda x, ms: twins.oadev(x, tau0, m
             lambda x, ms: (twins.oadev(x, tau0, ms), twins.welch(y, args.rate, psd_segment(len(y)))))]
 for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]:
     figures.append((d, ["--no-psd", "--dev", d], d, lambda x, ms, f=twins.DEVIATIONS[d]: f(x, tau0, ms)))
+# Long-tau statistics (opt-in: --only theo1,theoh,mtot,ttot,htot; the twins take minutes on
+# 3.6e6 samples). rig sums every stride-th subsequence start beyond its work cap; the twin is
+# given the same strides (from rig's JSON) so both compute the same statistic.
+pts = {}
+LONG = ["theo1", "theoh", "mtot", "ttot", "htot"]
+for d in LONG:
+    if d == "theoh":
+        twin_fn = (lambda x, ms: twins.theoh(x, tau0, ms, [p["stride"] for p in pts["theoh"]],
+                                             [p["estimator"] for p in pts["theoh"]]))
+    else:
+        twin_fn = (lambda x, ms, d=d: twins.LONG_TAU[d](x, tau0, ms, [p["stride"] for p in pts[d]]))
+    figures.append((d, ["--no-psd", "--dev", d], d, twin_fn))
+if not args.only:
+    figures = [f for f in figures if f[0] not in LONG]
 if args.only:
     keep = set(args.only.split(","))
     figures = [f for f in figures if f[0] in keep]
@@ -84,6 +99,7 @@ print(f"{'figure':<11} {'taus':>5} {'rig s':>8} {'numpy s':>8} {'ratio':>7}   {'
 for name, extra, key, twin in figures:
     _, out, _ = rig_run(extra)  # warm-up, and the taus rig chose
     ms = taus_of(out, key)
+    pts[key] = json.load(open(out))[key]  # the long-tau twins' strides and TheoH's estimators
     rig_t, np_t, rig_c, np_c = [], [], [], []
     for _ in range(args.rounds):
         w, _, c = rig_run(extra)

@@ -3,6 +3,7 @@
 // SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run; the
 // outcome rules (a resume judges as an uninterrupted run, a null limited value
 // fails), late signals, damaged checkpoints, run folders and capture headers.
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -192,6 +193,37 @@ TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
             0)
       << slurp(d + "/ny.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/y.json"))["capture"]["non_finite"], 1);
+}
+
+// The long-tau statistics through the CLI on the NBS14 10-point phase set (SP 1065 sec. 12.1):
+// MTOT, TTOT and HTOT at AF 1, 2 are the published (white-FM bias-removed) values; each has its
+// own JSON key beside the unchanged "oadev".
+TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
+  const std::string d = tmp("analyze-nbs10");
+  fs::create_directories(d);
+  std::ofstream(d + "/nbs10.txt") << "0.00000\n103.11111\n123.22222\n157.33333\n166.44444\n48.55555\n-96.33333\n"
+                                     "-2.22222\n111.88889\n0.00000\n";
+  ASSERT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--rate", "1", "--no-psd", "--taus", "all", "--dev",
+                 "mtot,ttot,htot,theo1", "--json", d + "/n.json"},
+                d + "/n"),
+            0)
+      << slurp(d + "/n.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/n.json"));
+  ASSERT_TRUE(j.contains("oadev"));
+  const std::pair<const char*, std::array<double, 2>> published[] = {
+      {"mtot", {75.50203, 75.83606}}, {"ttot", {43.59112, 87.56794}}, {"htot", {70.80607, 91.16396}}};
+  for (const auto& [key, want] : published) {
+    ASSERT_TRUE(j.contains(key)) << key;
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(j[key][i]["m"], i + 1) << key;
+      EXPECT_NEAR(j[key][i]["dev"].get<double>(), want[i], 2e-6 * want[i]) << key << " AF " << i + 1;
+      EXPECT_GT(j[key][i]["edf"].get<double>(), 0) << key;
+    }
+  }
+  ASSERT_TRUE(j.contains("theo1"));
+  EXPECT_EQ(j["theo1"][0]["m"], 2);
+  EXPECT_DOUBLE_EQ(j["theo1"][0]["tau_s"].get<double>(), 1.5);
+  EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--no-psd", "--dev", "theo2"}, d + "/bad"), 2);
 }
 
 TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {

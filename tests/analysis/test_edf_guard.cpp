@@ -1,0 +1,127 @@
+// The EDF guard (analysis/allan.hpp DevOptions::edf_guard, docs/analysis.md): where B1 reads a
+// noise type from a few averages that contradicts the ACF-identified taus below, the bounds
+// may not claim more than twice the EDF of the ACF's type. Issue 12: flicker PM read at the last
+// three taus of a random-walk record gave an EDF ~25x too large.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "analysis/allan.hpp"
+#include "analysis/edf.hpp"
+#include "analysis/theo.hpp"
+
+namespace rig::analysis {
+namespace {
+
+// splitmix64 and Box-Muller: the same record on every platform and standard library.
+struct Rng {
+  std::uint64_t s;
+  std::uint64_t next() {
+    std::uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1p-53; }
+  double gauss() {
+    const double a = uniform(), b = uniform();
+    return std::sqrt(-2 * std::log(a + 0x1p-60)) * std::cos(6.283185307179586 * b);
+  }
+};
+
+// Pure random-walk FM (alpha -2): 4096 frequency values, the running sum of white noise. With
+// seed 26 the B1 rule reads white FM at AF 256 and flicker PM at AF 512 and 1024, the last
+// three octave taus (fewer than 30 averages), while the ACF says RW FM at every tau below.
+std::vector<double> random_walk_record() {
+  Rng r{26};
+  std::vector<double> y(4096);
+  double w = 0;
+  for (double& v : y) v = (w += r.gauss());
+  return y;
+}
+
+std::vector<DevPoint> oadev(const std::vector<double>& y, bool guard) {
+  DevOptions o;
+  o.type = Deviation::OADEV;
+  o.taus = parse_tau_grid("octave");
+  o.edf_guard = guard;
+  return deviation(y, o);
+}
+
+TEST(EdfGuard, RandomWalkRecordWhoseB1FlipsToFlickerPmKeepsTheNeighboursEdf) {
+  const auto y = random_walk_record();
+  const std::size_t n = y.size() + 1;
+  const auto raw = oadev(y, false);
+  const auto guarded = oadev(y, true);
+  ASSERT_EQ(raw.size(), guarded.size());
+  // The record is what the test needs: RW FM identified (ACF) up to AF 128, PM read by B1 above.
+  int flipped = 0;
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    const DevPoint& r = raw[i];
+    const DevPoint& g = guarded[i];
+    EXPECT_EQ(r.alpha, g.alpha) << "AF " << r.m << ": the identification itself is Stable32's";
+    EXPECT_DOUBLE_EQ(r.dev, g.dev);
+    if (r.m <= 128) {
+      EXPECT_EQ(r.alpha, -2) << "AF " << r.m;
+      EXPECT_EQ(g.edf, r.edf) << "AF " << r.m << ": the guard acts only where B1 identifies";
+      continue;
+    }
+    const double rw_edf = edf_greenhall(-2, 2, r.m, n, true, false);
+    if (r.alpha >= 1) {
+      ++flipped;
+      EXPECT_GT(r.edf, 5 * rw_edf) << "AF " << r.m << ": unguarded, PM claims several times RW FM's EDF";
+      EXPECT_DOUBLE_EQ(g.edf, rw_edf) << "AF " << r.m;
+      EXPECT_EQ(g.edf_alpha, -2) << "AF " << r.m;
+      EXPECT_GT(g.hi - g.lo, 2 * (r.hi - r.lo)) << "AF " << r.m << ": honest (wider) bounds";
+    } else {
+      EXPECT_LE(g.edf, 2 * rw_edf) << "AF " << r.m;
+    }
+  }
+  EXPECT_EQ(flipped, 2) << "the constructed record no longer flips: the test would prove nothing";
+}
+
+// Why the threshold is 2: a genuine change between FM types costs less than that (white vs
+// random-walk FM at most 1.8x where B1 identifies), a PM reading on an FM curve more than 2x.
+TEST(EdfGuard, ThresholdSeparatesFmChangesFromPmReadings) {
+  for (std::size_t n : {1001u, 4097u, 100001u, 3600001u})
+    for (std::size_t m = (n - 1) / 31 + 1; m <= (n - 1) / 4; m = m * 5 / 4 + 1) {
+      const double wf = edf_greenhall(0, 2, m, n, true, false), rw = edf_greenhall(-2, 2, m, n, true, false);
+      const double fp = edf_greenhall(1, 2, m, n, true, false);
+      EXPECT_LE(wf / rw, 1.8) << "N " << n << " m " << m;
+      EXPECT_GT(fp / wf, 2.0) << "N " << n << " m " << m;
+    }
+}
+
+// The long-tau statistics take OADEV's guarded type: Theo1 beyond AF 512 on the same record is
+// bounded as random-walk FM, not as the flicker PM that B1 read.
+TEST(EdfGuard, LongTauStatisticsTakeTheGuardedType) {
+  const auto y = random_walk_record();
+  LongTauOptions o;
+  o.type = LongTau::Theo1;
+  o.taus = parse_tau_grid("octave");
+  o.noise_ref = oadev(y, true);
+  ASSERT_EQ(o.noise_ref.back().alpha, 1);  // what B1 read at the last OADEV tau
+  const auto pts = long_tau(y, o);
+  ASSERT_FALSE(pts.empty());
+  for (const LongTauPoint& p : pts)
+    if (p.tau_s >= 512) {
+      EXPECT_EQ(p.alpha, -2) << "m " << p.m;
+      EXPECT_DOUBLE_EQ(p.edf, edf_theo1(-2, y.size() + 1, p.m)) << "m " << p.m;
+    }
+}
+
+TEST(EdfGuard, AFixedNoiseTypeIsNeverOverridden) {
+  const auto y = random_walk_record();
+  DevOptions o;
+  o.taus = parse_tau_grid("octave");
+  o.fixed_alpha = 1;
+  for (const DevPoint& p : deviation(y, o)) {
+    EXPECT_EQ(p.alpha, 1);
+    EXPECT_EQ(p.edf_alpha, 1);
+  }
+}
+
+}  // namespace
+}  // namespace rig::analysis
