@@ -180,7 +180,8 @@ double chi2_per_dof(const MaskFit& f, std::size_t n) {
   return f.rss / std::max(1.0, static_cast<double>(n) - f.terms());
 }
 
-WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_record_s) {
+// The former weighted fit, superseded by noise_model.hpp (kept for comparison; not called).
+[[maybe_unused]] WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_record_s) {
   WlsFit w;
   std::vector<const DevPoint*> use;
   for (const auto& p : pts)
@@ -286,6 +287,39 @@ WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_reco
   return w;
 }
 
+// The one model (noise_model.hpp) as the rig's terms: a term in the model with its bounds, a
+// term not in it null with its upper limit in `hi`.
+WlsFit wls_from_model(const NoiseModelFit& m) {
+  WlsFit w;
+  w.ok = m.ok;
+  w.reason = m.reason;
+  w.points = m.tau_s.size();
+  w.chi2_per_dof = m.chi2_per_dof;
+  w.model_error = m.model_error;
+  w.share = m.share;
+  w.z = m.z;
+  Term* terms[5] = {&w.Q, &w.N, &w.B, &w.K, &w.R};
+  const std::string range =
+      m.tau_s.empty() ? std::string() : " over tau = " + fmt(m.tau_s.front()) + ".." + fmt(m.tau_s.back()) + " s";
+  for (std::size_t k = 0; k < 5; ++k) {
+    Term& t = *terms[k];
+    t.unit = kUnits[k];
+    if (!m.ok) {
+      t.reason = "model fit failed: " + m.reason;
+    } else if (m.in_model[k]) {
+      t.value = m.value[k];
+      t.lo = m.lo[k];
+      t.hi = m.hi[k];
+      t.reason = std::string("model (maximum likelihood on the octave Allan points, AICc selection)") + range;
+    } else {
+      t.hi = m.upper[k];
+      t.reason = std::string("not supported by the data (AICc)") + range + "; upper limit " + kNames[k] + " <= " +
+                 fmt(m.upper[k]) + " " + kUnits[k];
+    }
+  }
+  return w;
+}
+
 }  // namespace
 
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
@@ -295,7 +329,11 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
   // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
   // (then to be discarded by the 50 h rule anyway, leaving K null).
-  out.wls = wls_fit(oadev, record_length_s, r_min_record_s);
+  // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
+  out.model = fit_noise_model(oadev, record_length_s);
+  out.wls = wls_from_model(out.model);
+  if (out.wls.R.value && record_length_s < r_min_record_s)
+    out.wls.R.reason += "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";
   out.Q = out.wls.Q;
   out.N = out.wls.N;
   out.K = out.wls.K;

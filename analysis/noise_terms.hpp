@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
+#include "analysis/noise_model.hpp"
 
 namespace rig::analysis {
 
@@ -96,7 +97,8 @@ struct NoiseTerms {
   std::optional<double> tau_cp_s;  // the flat segment's middle (B = sigma(tau_cp) / 0.664)
   std::optional<double> sigma_cp;
   PaperFit paper;
-  WlsFit wls;
+  WlsFit wls;          // the model fit (noise_model.hpp) in the shape of the former weighted fit
+  NoiseModelFit model;  // the one model: every term the data supports (AICc), with bounds or upper limits
   FittedCurves curves;  // on the taus of the Allan points the terms were fitted to
 };
 

@@ -10,7 +10,7 @@
 //   N  white rate: y_n += N/sqrt(tau0) w_n (one-sided S_y = 2 N^2 -> N^2/tau).
 //   B  flicker: S_y(f) = h_{-1}/f with 2 ln2 h_{-1} = (2 ln2/pi) B^2, i.e. h_{-1} = B^2/pi, as a
 //      sum of Ornstein-Uhlenbeck (AR(1)) processes with corner frequencies f_j spaced 3 per
-//      decade from 1/(10 T) to rate/4: sum_j (c/f_j)/(1 + (f/f_j)^2) = pi c/(2 f ln r) for
+//      decade from 1/(1000 T) to rate/4: sum_j (c/f_j)/(1 + (f/f_j)^2) = pi c/(2 f ln r) for
 //      spacing ratio r, so each process has one-sided level A_j = 2 h ln r/(pi f_j) and
 //      variance A_j f_j pi/2 = h ln r (a standard 1/f synthesis; ripple < 1 % at 3/decade).
 //   K  rate random walk: y_n += u_n, u_n = u_{n-1} + K sqrt(tau0) w_n (K^2 tau/3).
@@ -66,7 +66,7 @@ inline std::vector<double> generate(const Terms& t, double rate_hz, std::size_t 
   if (t.B > 0) {
     const double h = t.B * t.B / std::numbers::pi, r = std::pow(10.0, 1.0 / 3.0);
     const double var_j = h * std::log(r);
-    for (double fc = 1 / (10 * T); fc <= rate_hz / 4; fc *= r) {
+    for (double fc = rate_hz / 4; fc >= 1 / (1000 * T); fc /= r) {
       const double a = std::exp(-2 * std::numbers::pi * fc * tau0), b = std::sqrt(var_j * (1 - a * a));
       double u = std::sqrt(var_j) * g(rng);  // stationary start
       for (std::size_t i = 0; i < n; ++i) {

@@ -62,7 +62,7 @@ struct Reported {
   Term t;
 };
 inline std::vector<Reported> reported_terms(const NoiseTerms& nt) {
-  return {{"Q", 0, nt.Q}, {"N", 1, nt.N}, {"B", 2, nt.B}, {"B(lsq)", 2, nt.wls.B}, {"K", 3, nt.K}, {"R", 4, nt.R}};
+  return {{"Q", 0, nt.Q}, {"N", 1, nt.N}, {"B", 2, nt.B}, {"B(model)", 2, nt.wls.B}, {"K", 3, nt.K}, {"R", 4, nt.R}};
 }
 
 inline void score(Cell& c, const Term& t, double truth) {

@@ -7,7 +7,6 @@
 #include "tests/analysis/noise_coverage.hpp"
 
 namespace rig::analysis::injected {
-namespace {
 
 // Mean OADEV^2 over seeds at a few taus against the model: white phase, white rate, flicker,
 // random walk and ramp, one at a time (8 seeds, 1e5 samples at 100 Hz).
@@ -39,8 +38,28 @@ TEST(InjectedNoise, EachTermGivesItsAllanVariance) {
 TEST(NoiseCoverage, CiSized) {
   const auto cells = run_coverage(sets(true), 6, 9000);
   std::printf("%s", coverage_table(cells).c_str());
-  for (const Cell& c : cells) EXPECT_EQ(c.runs, 6);
+  // Pooled over the terms of the one model (Q, N, B(model), K, R; the paper's B is the
+  // passport's and judged on its own): the stated 68.3 % bounds of dominant terms hold the
+  // truth at 50..85 % (6 seeds x 6 sets: about +-7 points of sampling scatter around the
+  // target); a term that never dominates comes back null or with an upper limit that holds it
+  // in at least 75 %; a value more than 3x off the truth with bounds excluding it at most twice
+  // in the suite (the acceptance target is none: docs/analysis.md reports how often it happens).
+  int dom = 0, dom_cov = 0, nd = 0, nd_ok = 0, off3 = 0;
+  for (const Cell& c : cells) {
+    EXPECT_EQ(c.runs, 6);
+    if (c.term == "B") continue;
+    off3 += c.excluded_3x;
+    if (!c.injected) continue;
+    if (c.dominant) dom += c.runs, dom_cov += c.covered;
+    else nd += c.runs, nd_ok += c.upper_holds;
+  }
+  const double cov = static_cast<double>(dom_cov) / dom, nd_frac = static_cast<double>(nd_ok) / nd;
+  std::printf("dominant: bounds hold %d/%d (%.1f %%); non-dominant: upper limit holds %d/%d; > 3x excluded: %d\n",
+              dom_cov, dom, 100 * cov, nd_ok, nd, off3);
+  EXPECT_GE(cov, 0.50);
+  EXPECT_LE(cov, 0.85);
+  EXPECT_GE(nd_frac, 0.75);
+  EXPECT_LE(off3, 2);
 }
 
-}  // namespace
 }  // namespace rig::analysis::injected
