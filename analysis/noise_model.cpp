@@ -275,8 +275,8 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     p.m.push_back(d.m);
   }
   const std::size_t n = p.tau.size();
-  if (n < 2) {
-    out.reason = "fewer than 2 Allan points";
+  if (n < 3) {  // AICc needs n - k - 1 > 0 for one term
+    out.reason = "fewer than 3 octave Allan points";
     return out;
   }
   const double tau0 = p.tau.front() / static_cast<double>(p.m.front());

@@ -1,5 +1,7 @@
 #include "analysis/noise_terms.hpp"
 
+#include "analysis/edf.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -320,6 +322,26 @@ WlsFit wls_from_model(const NoiseModelFit& m) {
   return w;
 }
 
+// The EDF of sigma(tau_cp), the paper method's reading: the model's EDF (model_edf: the noise the
+// fitted terms imply, not the per-tau identification's) at the Allan point nearest tau_cp;
+// without a model, that point's own EDF.
+std::optional<double> paper_b_edf(std::span<const DevPoint> pts, const NoiseModelFit& m, double tau_cp, double record_s) {
+  const DevPoint* near = nullptr;
+  for (const DevPoint& p : pts)
+    if (p.tau_s > 0 && p.m > 0 && (!near || std::abs(std::log(p.tau_s / tau_cp)) < std::abs(std::log(near->tau_s / tau_cp))))
+      near = &p;
+  if (!near) return std::nullopt;
+  if (m.ok) {
+    const double tau0 = near->tau_s / static_cast<double>(near->m);
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k)
+      mu[static_cast<std::size_t>(k)] = m.value[static_cast<std::size_t>(k)] * m.value[static_cast<std::size_t>(k)] * noise_basis(k, near->tau_s);
+    return model_edf(mu, near->m, static_cast<std::size_t>(std::llround(record_s / tau0)) + 1);
+  }
+  if (near->edf > 0) return near->edf;
+  return std::nullopt;
+}
+
 }  // namespace
 
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
@@ -359,7 +381,11 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   if (flat) {
     out.tau_cp_s = flat->tau_mid_s;
     out.sigma_cp = flat->sigma_mid;
-    out.B.reason = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment";
+    out.b_method = "flat_segment";
+    out.flat_tau_from_s = flat->tau_lo_s;
+    out.flat_tau_to_s = flat->tau_hi_s;
+    out.B.reason = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment tau = " + fmt(flat->tau_lo_s) +
+                   ".." + fmt(flat->tau_hi_s) + " s";
   } else if (out.paper.ok) {
     // No segment between inflection points is flat (a smooth -1/2 -> 0 -> +1/2 curve is convex and
     // has none): read the flat bottom where the polynomial's slope crosses zero, as IEEE 952 does.
@@ -374,19 +400,23 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
     if (interior && std::abs(dpoly(out.paper.coef, best_x)) < 0.05) {
       out.tau_cp_s = std::pow(10.0, best_x);
       out.sigma_cp = std::pow(10.0, best_y);
+      out.b_method = "polynomial_minimum";
       out.B.reason = "paper polynomial: no flat segment between inflections; tau_cp at its minimum";
     }
   }
   if (out.sigma_cp) {
     out.B.value = *out.sigma_cp / kBiasFactor;
-    if (out.wls.B.lo && out.wls.B.value && *out.wls.B.value > 0) {  // relative bounds of the fitted B
-      out.B.lo = *out.B.value * (*out.wls.B.lo / *out.wls.B.value);
-      out.B.hi = *out.B.value * (*out.wls.B.hi / *out.wls.B.value);
+    out.b_edf = paper_b_edf(oadev, out.model, *out.tau_cp_s, record_length_s);
+    if (out.b_edf) {  // the chi-square bounds of sigma(tau_cp) at that EDF, over 0.664
+      const auto [lo, hi] = chi2_bounds(*out.B.value, *out.b_edf, kOneSigma);
+      out.B.lo = lo;
+      out.B.hi = hi;
     }
   } else {
     out.B = out.wls.B;
     out.B.unit = kUnits[2];
-    if (out.B.value) out.B.reason = "weighted least squares (the Allan curve has no flat part to read)";
+    if (out.B.value) out.b_method = "least_squares";
+    if (out.B.value) out.B.reason = "least squares (the model's B: the Allan curve has no flat part to read)";
     else if (!out.paper.ok) out.B.reason = "paper fit failed: " + out.paper.reason;
     else {
       std::ostringstream r;  // (a stream: GCC 12 -O3 warns falsely on long string concatenations)

@@ -99,6 +99,13 @@ struct NoiseTerms {
   PaperFit paper;
   WlsFit wls;          // the model fit (noise_model.hpp) in the shape of the former weighted fit
   NoiseModelFit model;  // the one model: every term the data supports (AICc), with bounds or upper limits
+  // How B was read (B above): "flat_segment" (the paper's, tau_cp the middle of the segment
+  // flat_tau_from_s..flat_tau_to_s), "polynomial_minimum" (no flat segment: the quartic's
+  // interior minimum), "least_squares" (neither: the model's B), or "" (no B). The paper
+  // method's bounds are the chi-square bounds of sigma(tau_cp) at the EDF the model implies at
+  // the Allan point nearest tau_cp (b_edf), over 0.664: its scatter, not its bias.
+  std::string b_method;
+  std::optional<double> flat_tau_from_s, flat_tau_to_s, b_edf;
   FittedCurves curves;  // on the taus of the Allan points the terms were fitted to
 };
 

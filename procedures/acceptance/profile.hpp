@@ -59,6 +59,9 @@ struct Profile {
   double confidence = analysis::AnalysisOptions{}.confidence;
   // Rate ramp R needs a record of more than 50 h (docs/method.md); shorter captures report it null.
   double r_min_record_s = analysis::AnalysisOptions{}.r_min_record_s;
+  // Which B the passport's in_run_b_allan (and its limit) is: "paper" (the paper's method,
+  // sigma(tau_cp)/0.664) or "lsq" (the least-squares model's B). Both are in analysis.json.
+  std::string b_allan = "paper";
 
   std::map<std::string, std::pair<double, double>> limits;  // [limits]
   std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g

@@ -146,6 +146,32 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS"), std::string::npos);
 }
 
+TEST(RigCli, AnalyzeTakesNbs14NinePoints) {
+  // NIST SP 1065's NBS14 9-point frequency set (x1e-3): OADEV 91.22945 at tau 1 and 85.95287 at
+  // tau 2 (published, x1e-3); a short record is analysed with a note, no PSD, 3 values suffice.
+  const std::string d = tmp("nbs14");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/nbs14.txt");
+    for (double v : {0.892, 0.809, 0.823, 0.798, 0.671, 0.644, 0.883, 0.903, 0.677}) f << v << "\n";
+    std::ofstream g(d + "/three.txt");
+    g << "1\n2\n4\n";
+    std::ofstream h(d + "/two.txt");
+    h << "1\n2\n";
+  }
+  ASSERT_EQ(run({"analyze", d + "/nbs14.txt", "--rate", "1", "--taus", "octave", "--json", d + "/n.json"}, d + "/n"), 0)
+      << slurp(d + "/n.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/n.json"));
+  ASSERT_EQ(j["oadev"].size(), 2u);
+  EXPECT_NEAR(j["oadev"][0]["dev"].get<double>(), 91.22945e-3, 1e-8);
+  EXPECT_NEAR(j["oadev"][1]["dev"].get<double>(), 85.95287e-3, 1e-8);
+  ASSERT_TRUE(j.contains("notes"));
+  EXPECT_FALSE(j.contains("psd"));
+  EXPECT_TRUE(j["noise_terms"]["N"]["value"].is_null());
+  EXPECT_EQ(run({"analyze", d + "/three.txt", "--rate", "1", "--json", d + "/t.json"}, d + "/t"), 0) << slurp(d + "/t.stderr");
+  EXPECT_EQ(run({"analyze", d + "/two.txt", "--rate", "1"}, d + "/w"), 2);
+}
+
 TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
   const std::string d = tmp("analyze");
   fs::create_directories(d);
