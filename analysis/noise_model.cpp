@@ -23,17 +23,17 @@ double noise_basis(int k, double tau) {
 }
 
 double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
-  static const int kAlpha[4] = {2, 0, -1, -2};
+  static const int kAlpha[5] = {2, 0, -1, -2, -2};
   double total = 0, sd = 0, cross = 0;
   for (int k = 0; k < 5; ++k) total += mu[static_cast<std::size_t>(k)];
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < 5; ++k) {
     const double u = mu[static_cast<std::size_t>(k)];
     if (u <= 0) continue;
     const double nu = edf_greenhall(kAlpha[k], 2, m, n_phase, true, false);
     sd += u * std::sqrt(2 / nu);
     cross += u / nu;
   }
-  const double var = sd * sd + 4 * mu[4] * cross;
+  const double var = sd * sd;
   if (var <= 0) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
   return 2 * total * total / var;
 }
@@ -165,15 +165,28 @@ double octave_corr(int k, int lag) {
   return 0;
 }
 
-// Covariance of ln s_i under the model theta: Sigma_ij = C_ij sqrt(v_i v_j) + delta^2 [i = j],
+// (mu_Q + mu_N) / mu at tau: the share of the white (high-frequency) terms in the model; 1 when
+// the model has none of the five terms.
+double white_share(const std::array<double, 5>& theta, double tau) {
+  double w = 0, all = 0;
+  for (int k = 0; k < 5; ++k) {
+    const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, tau);
+    all += mu;
+    if (k < 2) w += mu;
+  }
+  return all > 0 && w > 0 ? w / all : 1;
+}
+
+// Covariance of ln s_i under the model theta: Sigma_ij = C_ij sqrt(v_i v_j) + (delta h_i)^2 [i = j],
+// h_i = (mu_Q + mu_N)/mu at tau_i (the model error's profile, see fit_noise_model),
 // v_i = 2/nu_i; C_ij = sum_k w_ik w_jk rho_k(L_ij) / sqrt(sum_k w_ik^2 sum_k w_jk^2) with
 // w_ik = mu_ik / sqrt(nu_ik) (each random term's share of the scatter) and L_ij the octaves apart.
 Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std::size_t n_phase, double delta) {
-  static const int kAlpha[4] = {2, 0, -1, -2};
+  static const int kAlpha[5] = {2, 0, -1, -2, -2};
   const std::size_t n = p.tau.size();
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 4);
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 5);
   for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 5; ++k) {
       const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
       if (mu > 0) w(static_cast<Eigen::Index>(i), k) = mu / std::sqrt(edf_greenhall(kAlpha[k], 2, p.m[i], n_phase, true, false));
     }
@@ -186,10 +199,10 @@ Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std:
       const double ni = w.row(ii).norm(), nj = w.row(jj).norm();
       if (i != j && ni > 0 && nj > 0) {
         c = 0;
-        for (int k = 0; k < 4; ++k) c += w(ii, k) * w(jj, k) * octave_corr(k, lag);
+        for (int k = 0; k < 5; ++k) c += w(ii, k) * w(jj, k) * octave_corr(std::min(k, 3), lag);
         c /= ni * nj;
       }
-      S(ii, jj) = c * std::sqrt(2 / p.nu[i] * 2 / p.nu[j]) + (i == j ? delta * delta : 0);
+      S(ii, jj) = c * std::sqrt(2 / p.nu[i] * 2 / p.nu[j]) + (i == j ? std::pow(delta * white_share(theta, p.tau[i]), 2) : 0);
     }
   return S;
 }
@@ -305,8 +318,14 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
       for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = best.theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
       p.nu[i] = model_edf(mu, p.m[i], n_phase);
     }
-    // Birge / Paule-Mandel: a relative model error delta when the model does not describe the
-    // points within their scatter (var(ln s_i) = 2/nu_i + delta^2), so that chi2/dof = 1.
+    // Birge / Paule-Mandel: a relative model error when the model does not describe the points
+    // within their scatter, so that chi2/dof = 1: var(ln s_i) = 2/nu_i + (delta h_i)^2 with h_i
+    // the white terms' (Q, N) share of the model at tau_i. What the five terms miss on a real
+    // DUT is high-frequency (tones, folded pick-up, the output filter's shape): its Allan
+    // variance falls as 1/tau or faster, like Q's and N's, so the error it causes is carried
+    // where they carry the curve and fades where B, K, R do. One delta for every point let the
+    // short-tau ripple (delta ~ 0.4 on the emulated DUT) drown the long-tau points that decide
+    // K and R (K was dropped on every seed of the paper profile).
     Eigen::VectorXd r(static_cast<Eigen::Index>(n));
     for (std::size_t i = 0; i < n; ++i) {
       double mu = 0;

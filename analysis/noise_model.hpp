@@ -49,10 +49,12 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
 double noise_basis(int k, double tau);
 
 // The EDF of an overlapping Allan variance at factor m of n_phase points whose true variance is
-// the sum of the components mu[k] (independent processes): sd(s) <= sum_k mu_k sqrt(2/nu_k) for
-// the random terms (nu_k: Greenhall & Riley for Q alpha 2, N 0, B -1, K -2; the bound of the
-// cross-covariances by Cauchy-Schwarz, exact when all nu_k are equal), plus the cross term
-// 4 mu_R sum_k mu_k / nu_k of the deterministic ramp R with the noise; edf = 2 (sum mu)^2 / var(s).
+// the sum of the components mu[k] (independent processes): sd(s) <= sum_k mu_k sqrt(2/nu_k)
+// (nu_k: Greenhall & Riley for Q alpha 2, N 0, B -1, K -2; the bound of the cross-covariances by
+// Cauchy-Schwarz, exact when all nu_k are equal); edf = 2 (sum mu)^2 / var(s). R is given
+// random walk's EDF (alpha -2): a ramp on one record is not told from a random walk's
+// realisation that rises like one, and a deterministic ramp's near-infinite EDF made a model
+// with R weigh its own long-tau points up and choose itself.
 double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
 
 }  // namespace rig::analysis
