@@ -194,7 +194,7 @@ Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std:
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) {
       const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
-      const int lag = static_cast<int>(std::lround(std::abs(std::log2(p.tau[j] / p.tau[i]))));
+      const int lag = std::max(1, static_cast<int>(std::lround(std::abs(std::log2(p.tau[j] / p.tau[i])))));
       double c = i == j ? 1 : 0;
       const double ni = w.row(ii).norm(), nj = w.row(jj).norm();
       if (i != j && ni > 0 && nj > 0) {
@@ -287,6 +287,18 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     p.s.push_back(d.dev * d.dev);
     p.m.push_back(d.m);
   }
+  // The longest tau too when it is at least 1.5x the last octave point (log:N ends at the stop
+  // ratio, (N-1)/4, up to an octave past the last power of two: the points that see K and R
+  // most); its correlation with the octave point before it is taken as one octave's.
+  for (auto it = oadev.rbegin(); it != oadev.rend(); ++it)
+    if (it->dev > 0 && it->tau_s > 0 && it->m > 0) {
+      if (!p.tau.empty() && it->tau_s >= 1.5 * p.tau.back()) {
+        p.tau.push_back(it->tau_s);
+        p.s.push_back(it->dev * it->dev);
+        p.m.push_back(it->m);
+      }
+      break;
+    }
   const std::size_t n = p.tau.size();
   if (n < 3) {  // AICc needs n - k - 1 > 0 for one term
     out.reason = "fewer than 3 octave Allan points";
