@@ -8,8 +8,8 @@
 //  (a) the paper's: a 4th-degree least-squares polynomial of log10 sigma over log10 tau, its
 //      inflection points, the segments between them with their slopes, sigma at each segment's
 //      middle tau, and B = sigma(tau_cp) / 0.664 on the flat one;
-//  (b) a weighted least-squares fit of the model above with non-negative terms, weighted by the
-//      EDF of each point (var(sigma^2) = 2 sigma^4 / edf), with 68 % bounds.
+//  (b) one model of all five terms (noise_model.hpp: GLS on the octave Allan points with the
+//      model's EDF and covariance, AICc selection), with 68 % bounds or upper limits.
 #pragma once
 #include <array>
 #include <cmath>
@@ -93,7 +93,7 @@ struct FittedCurves {
 };
 
 struct NoiseTerms {
-  Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K R by the weighted fit
+  Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K R by the model
   std::optional<double> tau_cp_s;  // the flat segment's middle (B = sigma(tau_cp) / 0.664)
   std::optional<double> sigma_cp;
   PaperFit paper;
@@ -113,11 +113,11 @@ struct NoiseTerms {
 FittedCurves fitted_curves(const NoiseTerms& t, std::span<const double> taus);
 
 // The shortest record from which the method determines the rate ramp R (docs/method.md: > 50 h);
-// on a shorter record R is not part of the weighted fit.
+// a shorter record's R (still fitted: the model has R as a candidate on every record) says so.
 inline constexpr double kRMinRecordS = 50 * 3600.0;
 
 // oadev: the overlapping Allan deviation points (edf used as weights; 0 = unweighted).
-// r_min_record_s: R is fitted only on records at least this long (a profile may set it).
+// r_min_record_s: the record length a profile requires for R; a shorter record's R notes it.
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
                        double r_min_record_s = kRMinRecordS);
 

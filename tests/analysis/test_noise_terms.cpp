@@ -123,11 +123,10 @@ TEST(NoiseTerms, ModelErrorKeepsTheShortTausFromDecidingTheTerms) {
   EXPECT_GT(t.wls.chi2_per_dof, 100);  // how far the model is from the curve on the EDF alone
   ASSERT_TRUE(t.N.value && t.wls.B.value) << t.N.reason << " / " << t.wls.B.reason;
   // The ripple is systematic, so it biases the short-tau terms a little beyond their
-  // statistical bounds. The model error is one relative delta for every point (Paule-Mandel), so
-  // it also widens the long-tau points, where the curve is exact: from one hour K then is not
-  // supported (null with an upper limit that holds it) and B takes part of its rise (B reads
-  // 1.6x here, with bounds excluding the truth: a known limit of a uniform model error,
-  // docs/analysis.md).
+  // statistical bounds. The model error follows the white terms' share (noise_model.cpp), which
+  // still reaches the long taus through N, where the curve is exact: from one hour K may then
+  // not be supported (null with an upper limit that holds it) and B take part of its rise (a
+  // known limit, docs/analysis.md).
   EXPECT_NEAR(*t.N.value / kN, 1.0, 0.2);
   EXPECT_GT(*t.wls.B.value / kB, 0.8);
   EXPECT_LT(*t.wls.B.value / kB, 2.0);
