@@ -312,7 +312,7 @@ WlsFit wls_from_model(const NoiseModelFit& m) {
       t.value = m.value[k];
       t.lo = m.lo[k];
       t.hi = m.hi[k];
-      t.reason = std::string("model (maximum likelihood on the octave Allan points, AICc selection)") + range;
+      t.reason = std::string("model (GLS on the octave Allan points, AICc selection)") + range;
     } else {
       t.hi = m.upper[k];
       t.reason = std::string("not supported by the data (AICc)") + range + "; upper limit " + kNames[k] + " <= " +
