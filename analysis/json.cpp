@@ -67,7 +67,8 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   // with the model's EDF, its AICc, and every term's upper limit.
   {
     json m{{"ok", t.model.ok}, {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance, AICc"},
-           {"aicc", t.model.aicc}, {"chi2_per_dof", t.model.chi2_per_dof}, {"model_error", t.model.model_error},
+           {"aicc", t.model.aicc}, {"chi2_per_dof", t.model.chi2_per_dof}, {"gof_p", t.model.gof_p},
+           {"dropped_short", t.model.dropped_short}, {"model_error", t.model.model_error},
            {"tau_s", t.model.tau_s}, {"avar", t.model.avar}, {"edf", t.model.edf}};
     if (!t.model.reason.empty()) m["reason"] = t.model.reason;
     const char* names[5] = {"Q", "N", "B", "K", "R"};

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/digamma.hpp>
 #include <cmath>
@@ -274,41 +275,48 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   return f;
 }
 
-}  // namespace
 
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence) {
-  NoiseModelFit out;
-  // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
-  Pts p;
-  for (const DevPoint& d : oadev) {
-    if (!(d.dev > 0) || !(d.tau_s > 0) || d.m == 0) continue;
-    if (!p.tau.empty() && d.tau_s < 2 * p.tau.back() * (1 - 1e-9)) continue;
-    p.tau.push_back(d.tau_s);
-    p.s.push_back(d.dev * d.dev);
-    p.m.push_back(d.m);
-  }
-  // The longest tau too when it is at least 1.5x the last octave point (log:N ends at the stop
-  // ratio, (N-1)/4, up to an octave past the last power of two: the points that see K and R
-  // most); its correlation with the octave point before it is taken as one octave's.
-  for (auto it = oadev.rbegin(); it != oadev.rend(); ++it)
-    if (it->dev > 0 && it->tau_s > 0 && it->m > 0) {
-      if (!p.tau.empty() && it->tau_s >= 1.5 * p.tau.back()) {
-        p.tau.push_back(it->tau_s);
-        p.s.push_back(it->dev * it->dev);
-        p.m.push_back(it->m);
-      }
-      break;
-    }
+// The model selected on the points `p` (EDF and covariance from the model, GLS over every subset,
+// AICc), with its goodness of fit. allow_error: add the Birge model error delta when the
+// selected model's chi2/dof > 1 (the fallback when no tau range is adequate, see fit_noise_model).
+struct Selection {
+  bool ok = false;
+  SubsetFit best;
+  Eigen::MatrixXd W;      // the inverse covariance of ln s_i the terms were fitted with
+  double delta = 0;       // the model error in W
+  double chi2 = 0;        // GLS chi-square of the selected model on its own covariance, delta = 0
+  double dof = 1;         // points - terms
+  double p_value = 0;     // P(chi2_dof >= chi2)
+  double aicc = 0;
+  std::string reason;
+};
+
+// chi2 of the residuals of `theta` on p (EDF from theta) under the model covariance with error d.
+double gls_chi2(const Pts& p, const std::array<double, 5>& theta, std::size_t n_phase, double d) {
   const std::size_t n = p.tau.size();
-  if (n < 3) {  // AICc needs n - k - 1 > 0 for one term
-    out.reason = "fewer than 3 octave Allan points";
-    return out;
+  Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    double mu = 0;
+    for (int k = 0; k < 5; ++k) mu += theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu[i]);
   }
-  const double tau0 = p.tau.front() / static_cast<double>(p.m.front());
-  const auto n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+  const Eigen::MatrixXd S = model_cov(p, theta, n_phase, d);
+  return r.dot(S.ldlt().solve(r));
+}
+
+void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_phase) {
+  for (std::size_t i = 0; i < p.tau.size(); ++i) {
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    p.nu[i] = model_edf(mu, p.m[i], n_phase);
+  }
+}
+
+Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
+  Selection out;
+  const std::size_t n = p.tau.size();
   p.nu.resize(n);
   for (std::size_t i = 0; i < n; ++i) p.nu[i] = edf_greenhall(0, 2, p.m[i], n_phase, true, false);  // start: white FM
-
   // Start: the best subset with independent chi-square points (Gamma likelihood).
   SubsetFit best;
   double best_aic = std::numeric_limits<double>::infinity();
@@ -321,52 +329,31 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     return out;
   }
   // Then: EDF and covariance from the model, GLS over every subset, select, repeat.
-  double delta = 0;
-  Eigen::MatrixXd W;
   for (int iter = 0; iter < 5; ++iter) {
     const int prev_mask = best.mask;
-    for (std::size_t i = 0; i < n; ++i) {
-      std::array<double, 5> mu{};
-      for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = best.theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
-      p.nu[i] = model_edf(mu, p.m[i], n_phase);
-    }
-    // Birge / Paule-Mandel: a relative model error when the model does not describe the points
-    // within their scatter, so that chi2/dof = 1: var(ln s_i) = 2/nu_i + (delta h_i)^2 with h_i
-    // the white terms' (Q, N) share of the model at tau_i. What the five terms miss on a real
-    // DUT is high-frequency (tones, folded pick-up, the output filter's shape): its Allan
-    // variance falls as 1/tau or faster, like Q's and N's, so the error it causes is carried
-    // where they carry the curve and fades where B, K, R do. One delta for every point let the
-    // short-tau ripple (delta ~ 0.4 on the emulated DUT) drown the long-tau points that decide
-    // K and R (K was dropped on every seed of the paper profile).
-    Eigen::VectorXd r(static_cast<Eigen::Index>(n));
-    for (std::size_t i = 0; i < n; ++i) {
-      double mu = 0;
-      for (int k = 0; k < 5; ++k) mu += best.theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
-      r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu[i]);
-    }
+    set_model_edf(p, best.theta, n_phase);
     const double dof = std::max(1.0, static_cast<double>(n) - best.k);
-    auto chi2 = [&](double d) {
-      const Eigen::MatrixXd S = model_cov(p, best.theta, n_phase, d);
-      return r.dot(S.ldlt().solve(r)) / dof;
-    };
-    out.chi2_per_dof = chi2(0);
-    delta = 0;
-    if (out.chi2_per_dof > 1) {
+    out.delta = 0;
+    // Birge / Paule-Mandel (fallback only): a relative model error so that chi2/dof = 1:
+    // var(ln s_i) = 2/nu_i + (delta h_i)^2 with h_i the white terms' (Q, N) share of the model
+    // at tau_i: what the five terms miss on a real DUT is high-frequency (tones, folded pick-up,
+    // the output filter's shape), falling with tau like Q and N.
+    if (allow_error && gls_chi2(p, best.theta, n_phase, 0) / dof > 1) {
       double lo = 0, hi = 0.1;
-      while (chi2(hi) > 1 && hi < 10) hi *= 2;
+      while (gls_chi2(p, best.theta, n_phase, hi) / dof > 1 && hi < 10) hi *= 2;
       for (int it = 0; it < 40; ++it) {
         const double mid = (lo + hi) / 2;
-        (chi2(mid) > 1 ? lo : hi) = mid;
+        (gls_chi2(p, best.theta, n_phase, mid) / dof > 1 ? lo : hi) = mid;
       }
-      delta = hi;
+      out.delta = hi;
     }
-    W = model_cov(p, best.theta, n_phase, delta).inverse();
+    out.W = model_cov(p, best.theta, n_phase, out.delta).inverse();
     SubsetFit sel;
     best_aic = std::numeric_limits<double>::infinity();
     for (int mask = 1; mask < 32; ++mask) {
       const SubsetFit g = fit_subset(p, mask, true);
       if (!g.ok) continue;
-      const SubsetFit f = gls_subset(p, W, mask, g.theta, true);
+      const SubsetFit f = gls_subset(p, out.W, mask, g.theta, true);
       if (f.ok && aicc(f, n) < best_aic) best_aic = aicc(f, n), sel = f;
     }
     if (!sel.ok) break;
@@ -374,7 +361,91 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     out.aicc = best_aic;
     if (iter > 0 && best.mask == prev_mask) break;
   }
-  out.model_error = delta;
+  // Goodness of fit of the selected model on the covariance it implies (no model error).
+  set_model_edf(p, best.theta, n_phase);
+  out.dof = std::max(1.0, static_cast<double>(n) - best.k);
+  out.chi2 = gls_chi2(p, best.theta, n_phase, 0);
+  out.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(out.dof), out.chi2));
+  out.best = best;
+  out.ok = true;
+  return out;
+}
+
+Pts tail_of(const Pts& p, std::size_t from) {
+  Pts q;
+  q.tau.assign(p.tau.begin() + static_cast<std::ptrdiff_t>(from), p.tau.end());
+  q.s.assign(p.s.begin() + static_cast<std::ptrdiff_t>(from), p.s.end());
+  q.m.assign(p.m.begin() + static_cast<std::ptrdiff_t>(from), p.m.end());
+  return q;
+}
+
+}  // namespace
+
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence) {
+  NoiseModelFit out;
+  // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
+  Pts all;
+  for (const DevPoint& d : oadev) {
+    if (!(d.dev > 0) || !(d.tau_s > 0) || d.m == 0) continue;
+    if (!all.tau.empty() && d.tau_s < 2 * all.tau.back() * (1 - 1e-9)) continue;
+    all.tau.push_back(d.tau_s);
+    all.s.push_back(d.dev * d.dev);
+    all.m.push_back(d.m);
+  }
+  // The longest tau too when it is at least 1.5x the last octave point (log:N ends at the stop
+  // ratio, (N-1)/4, up to an octave past the last power of two: the points that see K and R
+  // most); its correlation with the octave point before it is taken as one octave's.
+  for (auto it = oadev.rbegin(); it != oadev.rend(); ++it)
+    if (it->dev > 0 && it->tau_s > 0 && it->m > 0) {
+      if (!all.tau.empty() && it->tau_s >= 1.5 * all.tau.back()) {
+        all.tau.push_back(it->tau_s);
+        all.s.push_back(it->dev * it->dev);
+        all.m.push_back(it->m);
+      }
+      break;
+    }
+  const std::size_t n_all = all.tau.size();
+  if (n_all < 3) {  // AICc needs n - k - 1 > 0 for one term
+    out.reason = "fewer than 3 octave Allan points";
+    return out;
+  }
+  const double tau0 = all.tau.front() / static_cast<double>(all.m.front());
+  const auto n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+
+  // The tau range where the IEEE 952 model is adequate (docs/analysis.md "Goodness of fit"): the
+  // model is selected on the octave points from the shortest tau on; when its chi-square on the
+  // covariance it implies is improbable (p < kGofAlpha), the shortest point is dropped and the
+  // model selected again. What the five power laws miss on a real DUT is high-frequency (tones
+  // folded by the sampling, the output filter, bursts): it sits at the shortest taus, where the
+  // EDF is 1e5..1e6 and a 10 % ripple is hundreds of sigma, and it would otherwise decide the
+  // model (and, carried as a model error, drown the long-tau points that decide K and R). When
+  // no range of at least kMinGofPoints points is adequate, the last range tried is fitted with
+  // the Birge model error instead, and the fit says so.
+  Selection sel;
+  std::size_t from = 0;
+  const std::size_t last_from = n_all > kMinGofPoints ? n_all - kMinGofPoints : 0;
+  for (;; ++from) {
+    sel = select_model(tail_of(all, from), n_phase, false);
+    if ((sel.ok && sel.p_value >= kGofAlpha) || from >= last_from) break;
+  }
+  out.gof_p = sel.ok ? sel.p_value : 0;
+  out.dropped_short = from;
+  if (sel.ok && sel.p_value < kGofAlpha) {
+    sel = select_model(tail_of(all, from), n_phase, true);
+    out.model_error = sel.delta;
+  }
+  if (!sel.ok) {
+    out.reason = sel.reason;
+    return out;
+  }
+  Pts p = tail_of(all, from);
+  const std::size_t n = p.tau.size();
+  p.nu.resize(n);
+  set_model_edf(p, sel.best.theta, n_phase);
+  const SubsetFit& best = sel.best;
+  const Eigen::MatrixXd& W = sel.W;
+  out.aicc = sel.aicc;
+  out.chi2_per_dof = sel.chi2 / sel.dof;
   out.tau_s = p.tau;
   out.avar = p.s;
   out.edf = p.nu;

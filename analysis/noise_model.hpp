@@ -37,9 +37,16 @@ struct NoiseModelFit {
   std::array<double, 5> z{};           // theta / sd(theta) of a term in the model
   std::vector<double> tau_s, avar, edf;  // the points fitted: tau, measured sigma^2, model EDF
   double aicc = 0;
-  double chi2_per_dof = 0;  // Pearson chi2 of the selected model on the model EDFs, per dof
-  double model_error = 0;   // relative model error delta added when chi2/dof > 1 (Birge)
+  double chi2_per_dof = 0;  // GLS chi2 of the selected model on the covariance it implies, per dof
+  double gof_p = 0;         // P(chi2 >= that): the goodness of fit over the points fitted
+  std::size_t dropped_short = 0;  // octave points below tau_s.front() left out as not described by the model
+  double model_error = 0;   // relative model error delta (Birge), only when no tau range fitted (gof_p < kGofAlpha)
 };
+
+// Goodness of fit: a model whose chi-square has a probability below kGofAlpha does not describe
+// the points; the shortest tau is dropped until it does, keeping at least kMinGofPoints points.
+inline constexpr double kGofAlpha = 1e-3;
+inline constexpr std::size_t kMinGofPoints = 6;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
 // is taken from it); record_s: its length; confidence: of the bounds (default one sigma).

@@ -94,8 +94,9 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
 
 // Allan family + noise terms of one channel; writes the passport values.
 nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vector<double>& d, bool filtered) {
-  // R only from a record as long as the method needs (the profile's [analysis] r_min_record_s):
-  // the passport and analysis.json carry the same fit. An abort is taken within a chunk of work.
+  // One model fit (R a candidate on every record; its reason notes a record shorter than the
+  // profile's [analysis] r_min_record_s): the passport and analysis.json carry the same fit. An
+  // abort is taken within a chunk of work.
   const AllanChannel ch = allan_channel_terms(d, allan_settings(p), [&ctx] { ctx.cancel.throw_if_requested(); });
   const std::vector<analysis::DevPoint>& dev = ch.oadev;
   const analysis::NoiseTerms& nt = ch.terms;

@@ -113,27 +113,32 @@ std::vector<DevPoint> rippled(double Q, double N, double B, double K, double rec
   return v;
 }
 
-TEST(NoiseTerms, ModelErrorKeepsTheShortTausFromDecidingTheTerms) {
-  // EDF weights alone: the rippled ms points (edf ~ 1e6, chi2/dof ~ 1e4) decide the fit and K
-  // (visible only at the few long taus) is left out. With the model error added to each point's
-  // variance (chi2/dof = 1), N, B and K come back.
+TEST(NoiseTerms, TheFitStartsWhereTheModelDescribesTheCurve) {
+  // The rippled ms points (model EDF ~ 1e6: a 25 % ripple is hundreds of sigma) fail the
+  // goodness-of-fit test, so the shortest taus are dropped until the model's chi-square is
+  // probable (noise_model.hpp kGofAlpha); over the rest the curve is exact and N, B, K come
+  // back with no model error, from the taus where the ripple has ended (>= 1 s).
   const NoiseTerms t = noise_terms(rippled(2e-6, kN, kB, 2 * kK, 3600), 3600);
   ASSERT_TRUE(t.wls.ok) << t.wls.reason;
-  EXPECT_GT(t.wls.model_error, 0.05);
-  EXPECT_GT(t.wls.chi2_per_dof, 100);  // how far the model is from the curve on the EDF alone
-  ASSERT_TRUE(t.N.value && t.wls.B.value) << t.N.reason << " / " << t.wls.B.reason;
-  // The ripple is systematic, so it biases the short-tau terms a little beyond their
-  // statistical bounds. The model error follows the white terms' share (noise_model.cpp), which
-  // still reaches the long taus through N, where the curve is exact: from one hour K may then
-  // not be supported (null with an upper limit that holds it) and B take part of its rise (a
-  // known limit, docs/analysis.md).
-  EXPECT_NEAR(*t.N.value / kN, 1.0, 0.2);
-  EXPECT_GT(*t.wls.B.value / kB, 0.8);
-  EXPECT_LT(*t.wls.B.value / kB, 2.0);
-  ASSERT_TRUE(t.K.hi);
-  EXPECT_GE(*t.K.hi, 2 * kK) << t.K.reason;
-  // an exact curve needs no model error
-  EXPECT_EQ(noise_terms(curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100), 3600).wls.model_error, 0.0);
+  EXPECT_GT(t.model.dropped_short, 0u);
+  ASSERT_FALSE(t.model.tau_s.empty());
+  EXPECT_GE(t.model.tau_s.front(), 1.0);
+  EXPECT_GE(t.model.gof_p, kGofAlpha);
+  EXPECT_EQ(t.wls.model_error, 0.0);
+  // N dominates from 1 s to ~100 s and is found. From the nine octave points left, AICc's
+  // small-sample penalty leaves B out of this exact curve (its chi-square gain is below the
+  // penalty), and its flat share goes into N (+3 %) and K (1.7x, bounds excluding the truth):
+  // a known limit of dropping points, docs/analysis.md. K is still found.
+  ASSERT_TRUE(t.N.value && t.K.value) << t.N.reason << " / " << t.K.reason;
+  EXPECT_NEAR(*t.N.value / kN, 1.0, 0.05);
+  EXPECT_GT(*t.K.value / (2 * kK), 1.0);
+  EXPECT_LT(*t.K.value / (2 * kK), 2.0);
+  // the reasons name the range fitted
+  EXPECT_NE(t.N.reason.find("over tau = 1"), std::string::npos) << t.N.reason;
+  // an exact curve keeps every point and needs no model error
+  const NoiseTerms exact = noise_terms(curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100), 3600);
+  EXPECT_EQ(exact.model.dropped_short, 0u);
+  EXPECT_EQ(exact.wls.model_error, 0.0);
 }
 
 TEST(NoiseTerms, RateRampIsACandidateOnAShortRecord) {
@@ -212,9 +217,11 @@ namespace {
 // The curves analysis.json carries for the plots are the IEEE 952 Annex C relations of the
 // fitted terms, written out here independently of noise_terms.hpp, on the Allan taus.
 TEST(NoiseTermCurves, TheJsonCurvesAreTheIeee952RelationsOfTheFittedTerms) {
-  const auto pts = curve(2e-6, kN, kB, kK, 0, 0.001, 900, 60);
+  // K at twice the paper's, so that it dominates within the hour (at the paper's K it never
+  // does, and the model leaves it out: null with an upper limit, no curve to draw).
+  const auto pts = curve(2e-6, kN, kB, 2 * kK, 0, 0.001, 900, 60);
   const NoiseTerms t = noise_terms(pts, 3600);
-  ASSERT_TRUE(t.Q.value && t.N.value && t.B.value && t.K.value) << t.B.reason;
+  ASSERT_TRUE(t.Q.value && t.N.value && t.B.value && t.K.value) << t.B.reason << " / " << t.K.reason;
   ASSERT_FALSE(t.R.value);
   const nlohmann::json j = noise_terms_to_json(t);
   const nlohmann::json& c = j.at("curves");

@@ -267,12 +267,22 @@ TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
   }
   EXPECT_EQ(run({"analyze", d + "/big.f64", "--no-psd"}, d + "/bf"), 2);
   EXPECT_NE(slurp(d + "/bf.stderr").find("value 4321 (byte 34568)"), std::string::npos) << slurp(d + "/bf.stderr");
-  // Fewer values than one PSD segment: refused before the analysis, saying what would do.
+  // Fewer values than the default PSD segment (256): analysed, no PSD, a note says why (issue 12,
+  // 7); a --segment the record cannot fill is refused before the analysis, saying what would do.
   text("short.txt", "1", 100);
-  EXPECT_EQ(run({"analyze", d + "/short.txt"}, d + "/sh"), 2);
-  EXPECT_NE(slurp(d + "/sh.stderr").find("fewer than one PSD segment of 256 (give a shorter --segment, or --no-psd)"),
+  ASSERT_EQ(run({"analyze", d + "/short.txt", "--json", d + "/sh.json"}, d + "/sh"), 0) << slurp(d + "/sh.stderr");
+  {
+    const auto j = nlohmann::json::parse(slurp(d + "/sh.json"));
+    EXPECT_FALSE(j.contains("psd"));
+    ASSERT_TRUE(j.contains("notes")) << j.dump();
+    EXPECT_NE(j["notes"].dump().find("no PSD: 100 values are fewer than one Welch segment of 256"), std::string::npos)
+        << j["notes"].dump();
+    EXPECT_NE(slurp(d + "/sh.stdout").find("note: no PSD: 100 values"), std::string::npos) << slurp(d + "/sh.stdout");
+  }
+  EXPECT_EQ(run({"analyze", d + "/short.txt", "--segment", "128"}, d + "/ss"), 2);
+  EXPECT_NE(slurp(d + "/ss.stderr").find("fewer than one PSD segment of 128 (give a shorter --segment, or --no-psd)"),
             std::string::npos)
-      << slurp(d + "/sh.stderr");
+      << slurp(d + "/ss.stderr");
   EXPECT_EQ(run({"analyze", d + "/short.txt", "--no-psd"}, d + "/shn"), 0) << slurp(d + "/shn.stderr");
   // A capture with valid CRCs holding a NaN: not a clean analysis.
   {
