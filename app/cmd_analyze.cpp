@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cmath>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -183,11 +184,23 @@ int run(const Args& a) {
   if (base.type != an::Deviation::OADEV) opts.push_back(base);
   an::StreamOptions so;
   so.memory_budget_bytes = a.memory_mib << 20;
+  // A record too short for any tau of the grid (the grids stop at T/4, Stable32's rule: 3..8
+  // values have none) is still analysed at tau0 (m = 1, which every deviation's estimator
+  // allows from 3 values on), with a note.
   std::vector<std::vector<an::DevPoint>> devs;
-  try {
-    devs = an::deviations_stream(*src, opts, so);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(a.file + ": " + e.what());
+  const auto compute = [&] {
+    try {
+      devs = an::deviations_stream(*src, opts, so);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(a.file + ": " + e.what());
+    }
+  };
+  compute();
+  if (std::any_of(devs.begin(), devs.end(), [](const auto& d) { return d.empty(); })) {
+    notes.push_back("the tau grid " + a.taus + " has no tau within T/4 of " + std::to_string(n) +
+                    " values: tau0 only (m = 1)");
+    for (an::DevOptions& o : opts) o.factors = {1};
+    compute();
   }
   for (std::size_t k = 0; k < devs.size(); ++k)
     if (devs[k].empty())

@@ -168,7 +168,16 @@ TEST(RigCli, AnalyzeTakesNbs14NinePoints) {
   ASSERT_TRUE(j.contains("notes"));
   EXPECT_FALSE(j.contains("psd"));
   EXPECT_TRUE(j["noise_terms"]["N"]["value"].is_null());
-  EXPECT_EQ(run({"analyze", d + "/three.txt", "--rate", "1", "--json", d + "/t.json"}, d + "/t"), 0) << slurp(d + "/t.stderr");
+  // 3 values: no tau of the grid within T/4; analysed at tau0 with a note (issue 12, 7)
+  ASSERT_EQ(run({"analyze", d + "/three.txt", "--rate", "1", "--json", d + "/t.json"}, d + "/t"), 0) << slurp(d + "/t.stderr");
+  {
+    const auto t = nlohmann::json::parse(slurp(d + "/t.json"));
+    ASSERT_EQ(t["oadev"].size(), 1u);
+    EXPECT_EQ(t["oadev"][0]["m"], 1);
+    // frequency 1, 2, 4: second differences of the phase are 1 and 2, OADEV^2 = (1 + 4) / (2 * 2)
+    EXPECT_NEAR(t["oadev"][0]["dev"].get<double>(), std::sqrt(5.0 / 4), 1e-12);
+    EXPECT_NE(t["notes"].dump().find("tau0 only (m = 1)"), std::string::npos) << t["notes"].dump();
+  }
   EXPECT_EQ(run({"analyze", d + "/two.txt", "--rate", "1"}, d + "/w"), 2);
 }
 
