@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -179,6 +180,33 @@ TEST(RigCli, AnalyzeTakesNbs14NinePoints) {
     EXPECT_NE(t["notes"].dump().find("tau0 only (m = 1)"), std::string::npos) << t["notes"].dump();
   }
   EXPECT_EQ(run({"analyze", d + "/two.txt", "--rate", "1"}, d + "/w"), 2);
+}
+
+// Issue 12, 7: the JSON keys docs/analysis.md names under noise_terms and psd are the ones the
+// program writes (the docs once named `paper` and `wls` where the program wrote others).
+TEST(RigCli, AnalyzeJsonHasTheKeysTheDocsName) {
+  const std::string d = tmp("analyze-keys");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/w.txt");
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> g(0.0, 1e-3);
+    for (int i = 0; i < 4096; ++i) f << g(rng) << "\n";
+  }
+  ASSERT_EQ(run({"analyze", d + "/w.txt", "--rate", "100", "--json", d + "/w.json"}, d + "/w"), 0) << slurp(d + "/w.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/w.json"));
+  const nlohmann::json& nt = j.at("noise_terms");
+  for (const char* k : {"Q", "N", "B", "K", "R", "tau_cp_s", "paper_fit", "b_method", "flat_tau_from_s", "flat_tau_to_s",
+                        "b_edf", "B_paper", "B_lsq", "lsq_fit", "model_fit", "curves"})
+    EXPECT_TRUE(nt.contains(k)) << k;
+  for (const char* k : {"poly", "inflection_tau_s", "segments"}) EXPECT_TRUE(nt["paper_fit"].contains(k)) << k;
+  for (const char* k : {"ok", "points", "chi2_per_dof", "model_error", "terms"}) EXPECT_TRUE(nt["lsq_fit"].contains(k)) << k;
+  for (const char* k : {"tau_s", "avar", "edf", "aicc", "chi2_per_dof", "gof_p", "dropped_short", "model_error", "terms"})
+    EXPECT_TRUE(nt["model_fit"].contains(k)) << k;
+  for (const char* k : {"in_model", "value", "lo", "hi", "upper", "share", "z"})
+    EXPECT_TRUE(nt["model_fit"]["terms"]["K"].contains(k)) << k;
+  for (const char* k : {"peaks", "white_level", "psd_fit", "n_from_psd"}) EXPECT_TRUE(j.at("psd").contains(k)) << k;
+  for (const char* k : {"paper", "wls"}) EXPECT_FALSE(nt.contains(k)) << k;
 }
 
 TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
