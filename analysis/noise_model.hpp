@@ -13,7 +13,12 @@
 // AICc is the model (Akaike's criterion with the small-sample correction: a term enters when
 // it lowers the GLS chi-square by more than its 2 + correction). A term in the model is reported with bounds from the Fisher
 // information; a term not in it is null with an upper limit. No record-length rule: R is a
-// candidate on every record. docs/analysis.md ("One model") gives the reasoning and coverage.
+// candidate on every record. The points fitted start where the model describes the curve: the
+// shortest octave points are dropped while the selected model's chi-square is improbable
+// (kGofAlpha), since what the five power laws miss on a DUT (folded tones, the output filter)
+// sits at the shortest taus. docs/analysis.md ("One model") gives the reasoning and coverage.
+// Long-tau points of other estimators (TOTDEV, TheoH: more EDF near T) are not used yet; they
+// would enter as further points with their own EDF and the model covariance extended to them.
 #pragma once
 #include <array>
 #include <cstddef>
