@@ -54,8 +54,8 @@ struct WlsFit {
   std::string reason;
   Term Q, N, B, K, R;
   std::size_t points = 0;
-  double chi2_per_dof = 0;  // of the EDF weights alone: how far the five-term model is from the curve
-  double model_error = 0;   // relative model error delta added to each point (0: EDF weights only)
+  double chi2_per_dof = 0;  // the model's GLS chi-square per dof over the points fitted (noise_model.hpp)
+  double model_error = 0;   // Birge model error delta (0 unless no tau range passed the goodness-of-fit test)
   // per term Q, N, B, K, R (0 when not in the fit): its largest share of the model sigma^2 over
   // the measured taus, and its fitted squared coefficient over the coefficient's sd
   std::array<double, 5> share{}, z{};
