@@ -21,6 +21,8 @@ json term(const an::Term& t, double (*to_hours)(double) = nullptr, const char* h
     j["per_hour"] = {{"value", t.value ? json(to_hours(*t.value)) : json(nullptr)}, {"unit", hour_unit}};
     if (t.lo) j["per_hour"]["lo"] = to_hours(*t.lo);
     if (t.hi) j["per_hour"]["hi"] = to_hours(*t.hi);
+  } else if (to_hours && t.hi) {  // null with an upper limit
+    j["per_hour"] = {{"value", nullptr}, {"unit", hour_unit}, {"hi", to_hours(*t.hi)}};
   }
   return j;
 }
@@ -61,6 +63,30 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
                                  {"tau_mid_s", s.tau_mid_s}, {"sigma_mid", s.sigma_mid}, {"term", s.term},
                                  {"term_value", s.term_value}});
   j["paper_fit"] = paper;
+  // How the rig's B was read (noise_terms.hpp b_method) and both B values side by side: the
+  // paper method's (B) and the least-squares model's (B_lsq); a profile says which one the
+  // passport's in_run_b_allan limit applies to ([analysis] b_allan, docs/profiles.md).
+  j["b_method"] = t.b_method;
+  j["flat_tau_from_s"] = num(t.flat_tau_from_s);
+  j["flat_tau_to_s"] = num(t.flat_tau_to_s);
+  j["b_edf"] = num(t.b_edf);
+  j["B_paper"] = term(t.B);
+  j["B_lsq"] = term(t.wls.B);
+  // The one model (noise_model.hpp): which terms the data support, the octave points it fitted
+  // with the model's EDF, its AICc, and every term's upper limit.
+  {
+    json m{{"ok", t.model.ok}, {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance, AICc"},
+           {"aicc", t.model.aicc}, {"chi2_per_dof", t.model.chi2_per_dof}, {"gof_p", t.model.gof_p},
+           {"dropped_short", t.model.dropped_short}, {"model_error", t.model.model_error},
+           {"tau_s", t.model.tau_s}, {"avar", t.model.avar}, {"edf", t.model.edf}};
+    if (!t.model.reason.empty()) m["reason"] = t.model.reason;
+    const char* names[5] = {"Q", "N", "B", "K", "R"};
+    for (std::size_t k = 0; k < 5; ++k)
+      m["terms"][names[k]] = {{"in_model", t.model.in_model[k]}, {"value", t.model.in_model[k] ? json(t.model.value[k]) : json(nullptr)},
+                              {"lo", t.model.lo[k]}, {"hi", t.model.hi[k]}, {"upper", t.model.upper[k]},
+                              {"share", t.model.share[k]}, {"z", t.model.z[k]}};
+    j["model_fit"] = m;
+  }
   // The weighted least-squares fit of all five terms: plain values (tau in s) for
   // plotting, the full terms with bounds under "terms".
   json w{{"ok", t.wls.ok}, {"points", t.wls.points}, {"chi2_per_dof", t.wls.chi2_per_dof},

@@ -1,5 +1,7 @@
 #include "analysis/noise_terms.hpp"
 
+#include "analysis/edf.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -14,19 +16,6 @@ namespace {
 const char* const kNames[5] = {"Q", "N", "B", "K", "R"};
 const double kSlopes[5] = {-1, -0.5, 0, 0.5, 1};
 const char* const kUnits[5] = {"g*s", "g*s^0.5", "g", "g/s^0.5", "g/s"};
-
-// sigma^2 contribution of term k per unit of its squared coefficient (the model's basis):
-// the squares of the relations sigma_q .. sigma_r in noise_terms.hpp, written out so the fit
-// keeps its exact arithmetic (3 / tau^2 rather than (sqrt 3 / tau)^2).
-double basis(int k, double tau) {
-  switch (k) {
-    case 0: return 3 / (tau * tau);
-    case 1: return 1 / tau;
-    case 2: return 2 * std::numbers::ln2 / std::numbers::pi;
-    case 3: return tau / 3;
-    default: return tau * tau / 2;
-  }
-}
 
 // Term value from sigma at tau on its own slope: the relations sigma_q .. sigma_r of
 // noise_terms.hpp (IEEE 952 Annex C) solved for the coefficient.
@@ -117,173 +106,57 @@ PaperFit paper_fit(std::span<const DevPoint> pts) {
   return f;
 }
 
-// The best non-negative fit for one relative model error `delta`.
-struct MaskFit {
-  double rss = std::numeric_limits<double>::infinity();
-  int mask = 0;
-  Eigen::VectorXd theta = Eigen::VectorXd::Zero(5);
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(5, 5);
-  int terms() const { return __builtin_popcount(static_cast<unsigned>(mask)); }
-};
-
-// Non-negative weighted least squares over the 5 squared coefficients: the best of all
-// 2^5 active sets whose unconstrained solution is non-negative (exact for 5 unknowns).
-// Row i is weighted by sd(sigma_i^2) = sigma_i^2 sqrt(2/edf_i + delta^2): the chi-square
-// scatter of the estimate (IEEE 1139 / Stable32 EDF) plus a relative model error delta.
-MaskFit best_fit(const std::vector<const DevPoint*>& use, double delta, int allowed) {
-  const auto n = static_cast<Eigen::Index>(use.size());
-  Eigen::MatrixXd X(n, 5);
-  Eigen::VectorXd y(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const DevPoint& p = *use[static_cast<std::size_t>(i)];
-    const double s2 = p.dev * p.dev;
-    const double edf = p.edf > 0 ? p.edf : 2.0;
-    const double sd = s2 * std::sqrt(2.0 / edf + delta * delta);
-    y(i) = s2 / sd;  // residuals in sd units
-    for (int k = 0; k < 5; ++k) X(i, k) = basis(k, p.tau_s) / sd;
-  }
-  MaskFit best;
-  for (int mask = 1; mask < 32; ++mask) {
-    if (mask & ~allowed) continue;
-    std::vector<int> cols;
-    for (int k = 0; k < 5; ++k)
-      if (mask & (1 << k)) cols.push_back(k);
-    if (static_cast<Eigen::Index>(cols.size()) > n) continue;
-    Eigen::MatrixXd Xs(n, static_cast<Eigen::Index>(cols.size()));
-    for (std::size_t c = 0; c < cols.size(); ++c) Xs.col(static_cast<Eigen::Index>(c)) = X.col(cols[c]);
-    // Column scaling: the basis spans many decades.
-    Eigen::VectorXd scale = Xs.colwise().norm().transpose();
-    if ((scale.array() <= 0).any()) continue;
-    const Eigen::MatrixXd Xn = Xs * scale.cwiseInverse().asDiagonal();
-    const auto qr = Xn.colPivHouseholderQr();
-    if (qr.rank() < static_cast<Eigen::Index>(cols.size())) continue;
-    const Eigen::VectorXd th = qr.solve(y).cwiseQuotient(scale);
-    if ((th.array() < 0).any()) continue;
-    const double rss = (Xs * th - y).squaredNorm();
-    if (rss < best.rss) {
-      best.rss = rss;
-      best.mask = mask;
-      best.theta.setZero();
-      for (std::size_t c = 0; c < cols.size(); ++c) best.theta(cols[c]) = th(static_cast<Eigen::Index>(c));
-      const Eigen::MatrixXd cs =
-          scale.cwiseInverse().asDiagonal() * (Xn.transpose() * Xn).inverse() * scale.cwiseInverse().asDiagonal();
-      best.cov.setZero();
-      for (std::size_t r = 0; r < cols.size(); ++r)
-        for (std::size_t c = 0; c < cols.size(); ++c)
-          best.cov(cols[r], cols[c]) = cs(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
-    }
-  }
-  return best;
-}
-
-double chi2_per_dof(const MaskFit& f, std::size_t n) {
-  return f.rss / std::max(1.0, static_cast<double>(n) - f.terms());
-}
-
-WlsFit wls_fit(std::span<const DevPoint> pts, double record_s, double r_min_record_s) {
+// The one model (noise_model.hpp) as the rig's terms: a term in the model with its bounds, a
+// term not in it null with its upper limit in `hi`.
+WlsFit wls_from_model(const NoiseModelFit& m) {
   WlsFit w;
-  std::vector<const DevPoint*> use;
-  for (const auto& p : pts)
-    if (p.dev > 0 && p.tau_s > 0) use.push_back(&p);
-  w.points = use.size();
-  if (use.size() < 2) {
-    w.reason = "fewer than 2 Allan points";
-    return w;
-  }
-  const auto n = static_cast<Eigen::Index>(use.size());
-  // The EDF says how well each sigma is estimated, not how well the five-term model describes
-  // the curve: tones (vibration, folded pick-up) ripple the short-tau points by 10-30 % where
-  // the EDF is 1e5..1e6, and with EDF weights alone those points (chi2/dof ~ 1e4-1e5) decide
-  // which terms enter, whatever the long-tau points show. So a relative model error delta is
-  // added to every point's variance and set so that the best fit has chi2/dof = 1 (the
-  // Paule-Mandel / Birge rule for inconsistent data); delta = 0 when the model fits within the
-  // EDF scatter, and then the fit is the plain EDF-weighted one.
-  const int allowed = record_s >= r_min_record_s ? 31 : 15;
-  MaskFit fit = best_fit(use, 0.0, allowed);
-  double delta = 0;
-  if (fit.mask != 0 && static_cast<Eigen::Index>(fit.terms()) < n && chi2_per_dof(fit, use.size()) > 1) {
-    double lo = 1e-9, hi = 1e-3;
-    MaskFit f_hi = best_fit(use, hi, allowed);
-    while (f_hi.mask != 0 && chi2_per_dof(f_hi, use.size()) > 1 && hi < 1e3) f_hi = best_fit(use, hi *= 4, allowed);
-    for (int it = 0; it < 40 && hi / lo > 1.001; ++it) {  // bisection in log delta
-      const double mid = std::sqrt(lo * hi);
-      MaskFit f = best_fit(use, mid, allowed);
-      if (f.mask != 0 && chi2_per_dof(f, use.size()) > 1) lo = mid;
-      else hi = mid, f_hi = std::move(f);
-    }
-    if (f_hi.mask != 0) fit = std::move(f_hi), delta = hi;
-  }
-  const int best_mask = fit.mask;
-  const Eigen::VectorXd& best_theta = fit.theta;
-  const Eigen::MatrixXd& best_cov = fit.cov;
-  const double best_rss = fit.rss;
-  w.model_error = delta;
-  if (best_mask == 0) {
-    w.reason = "no non-negative solution";
-    return w;
-  }
-  const double dof = std::max<double>(1, static_cast<double>(n) - fit.terms());
-  {  // goodness of fit on the EDF weights alone: how far the five-term model is from the curve
-    double raw = 0;
-    for (const DevPoint* p : use) {
-      double m = 0;
-      for (int j = 0; j < 5; ++j) m += best_theta(j) * basis(j, p->tau_s);
-      const double s2 = p->dev * p->dev, edf = p->edf > 0 ? p->edf : 2.0;
-      raw += (m - s2) * (m - s2) / (s2 * s2 * 2.0 / edf);
-    }
-    w.chi2_per_dof = raw / dof;
-  }
-  const double scaled_chi2 = best_rss / dof;  // 1 when delta > 0
-  const double tau_lo = use.front()->tau_s, tau_hi = use.back()->tau_s;
+  w.ok = m.ok;
+  w.reason = m.reason;
+  w.points = m.tau_s.size();
+  w.chi2_per_dof = m.chi2_per_dof;
+  w.model_error = m.model_error;
+  w.share = m.share;
+  w.z = m.z;
   Term* terms[5] = {&w.Q, &w.N, &w.B, &w.K, &w.R};
-  for (int k = 0; k < 5; ++k) {
+  const std::string range =
+      m.tau_s.empty() ? std::string() : " over tau = " + fmt(m.tau_s.front()) + ".." + fmt(m.tau_s.back()) + " s";
+  for (std::size_t k = 0; k < 5; ++k) {
     Term& t = *terms[k];
     t.unit = kUnits[k];
-    if (!(allowed & (1 << k))) {
-      t.reason = std::string("not fitted: ") + kNames[k] + " needs a longer record (at least " +
-                 fmt(r_min_record_s / 3600) + " h, docs/method.md; this one is " + fmt(record_s / 3600) + " h)";
-      continue;
+    if (!m.ok) {
+      t.reason = "model fit failed: " + m.reason;
+    } else if (m.in_model[k]) {
+      t.value = m.value[k];
+      t.lo = m.lo[k];
+      t.hi = m.hi[k];
+      t.reason = std::string("model (GLS on the octave Allan points, AICc selection)") + range;
+    } else {
+      t.hi = m.upper[k];
+      t.reason = std::string("not supported by the data (AICc)") + range + "; upper limit " + kNames[k] + " <= " +
+                 fmt(m.upper[k]) + " " + kUnits[k];
     }
-    if (!(best_mask & (1 << k))) {
-      t.reason = std::string("not resolved: the fit needs no ") + kNames[k] + " term over tau = " + fmt(tau_lo) + ".." +
-                 fmt(tau_hi) + " s";
-      continue;
-    }
-    const double th = best_theta(k);
-    // Identified only where the term dominates the model somewhere in the measured range.
-    // Its uncertainty: the fit's covariance treats the Allan points as independent, but the
-    // overlapping estimates at neighbouring taus of a log grid (several per octave) come from
-    // one realisation and are strongly correlated, so the covariance understates it. The
-    // variance is therefore at least that of reading the term off the single point where it is
-    // best determined (IEEE 952 Annex C reads each term on its own asymptote): there
-    // sd(sigma^2)/sigma^2 = sqrt(2/edf + delta^2) and the term carries `share` of sigma^2, so
-    // sd(theta)/theta = sqrt(2/edf + delta^2) / share, minimised over the points.
-    double share = 0, rel_sd = std::numeric_limits<double>::infinity();
-    for (const DevPoint* p : use) {
-      double total = 0;
-      for (int j = 0; j < 5; ++j) total += best_theta(j) * basis(j, p->tau_s);
-      const double sh = th * basis(k, p->tau_s) / total;
-      share = std::max(share, sh);
-      const double edf = p->edf > 0 ? p->edf : 2.0;
-      if (sh > 0) rel_sd = std::min(rel_sd, std::sqrt(2.0 / edf + delta * delta) / sh);
-    }
-    const bool dominates = share >= 0.5;
-    const double var_th = std::max(best_cov(k, k) * std::max(1.0, scaled_chi2), th * th * rel_sd * rel_sd);
-    w.share[static_cast<std::size_t>(k)] = share;
-    w.z[static_cast<std::size_t>(k)] = var_th > 0 ? th / std::sqrt(var_th) : 0;
-    if (!dominates) {
-      t.reason = std::string("not identifiable: ") + kNames[k] + " never dominates over tau = " + fmt(tau_lo) + ".." +
-                 fmt(tau_hi) + " s" + (k >= 3 ? "; needs a longer record" : (k == 0 ? "; needs a higher rate" : ""));
-      continue;
-    }
-    t.value = std::sqrt(th);
-    const double sd = std::sqrt(std::max(var_th, 0.0));
-    t.lo = std::sqrt(std::max(th - sd, 0.0));
-    t.hi = std::sqrt(th + sd);
-    t.reason = "weighted least squares";
   }
-  w.ok = true;
   return w;
+}
+
+// The EDF of sigma(tau_cp), the paper method's reading: the model's EDF (model_edf: the noise the
+// fitted terms imply, not the per-tau identification's) at the Allan point nearest tau_cp;
+// without a model, that point's own EDF.
+std::optional<double> paper_b_edf(std::span<const DevPoint> pts, const NoiseModelFit& m, double tau_cp, double record_s) {
+  const DevPoint* near = nullptr;
+  for (const DevPoint& p : pts)
+    if (p.tau_s > 0 && p.m > 0 && (!near || std::abs(std::log(p.tau_s / tau_cp)) < std::abs(std::log(near->tau_s / tau_cp))))
+      near = &p;
+  if (!near) return std::nullopt;
+  if (m.ok) {
+    const double tau0 = near->tau_s / static_cast<double>(near->m);
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k)
+      mu[static_cast<std::size_t>(k)] = m.value[static_cast<std::size_t>(k)] * m.value[static_cast<std::size_t>(k)] * noise_basis(k, near->tau_s);
+    return model_edf(mu, near->m, static_cast<std::size_t>(std::llround(record_s / tau0)) + 1);
+  }
+  if (near->edf > 0) return near->edf;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -295,7 +168,11 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
   // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
   // (then to be discarded by the 50 h rule anyway, leaving K null).
-  out.wls = wls_fit(oadev, record_length_s, r_min_record_s);
+  // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
+  out.model = fit_noise_model(oadev, record_length_s);
+  out.wls = wls_from_model(out.model);
+  if (out.wls.R.value && record_length_s < r_min_record_s)
+    out.wls.R.reason += "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";
   out.Q = out.wls.Q;
   out.N = out.wls.N;
   out.K = out.wls.K;
@@ -321,7 +198,11 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   if (flat) {
     out.tau_cp_s = flat->tau_mid_s;
     out.sigma_cp = flat->sigma_mid;
-    out.B.reason = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment";
+    out.b_method = "flat_segment";
+    out.flat_tau_from_s = flat->tau_lo_s;
+    out.flat_tau_to_s = flat->tau_hi_s;
+    out.B.reason = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment tau = " + fmt(flat->tau_lo_s) +
+                   ".." + fmt(flat->tau_hi_s) + " s";
   } else if (out.paper.ok) {
     // No segment between inflection points is flat (a smooth -1/2 -> 0 -> +1/2 curve is convex and
     // has none): read the flat bottom where the polynomial's slope crosses zero, as IEEE 952 does.
@@ -336,19 +217,23 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
     if (interior && std::abs(dpoly(out.paper.coef, best_x)) < 0.05) {
       out.tau_cp_s = std::pow(10.0, best_x);
       out.sigma_cp = std::pow(10.0, best_y);
+      out.b_method = "polynomial_minimum";
       out.B.reason = "paper polynomial: no flat segment between inflections; tau_cp at its minimum";
     }
   }
   if (out.sigma_cp) {
     out.B.value = *out.sigma_cp / kBiasFactor;
-    if (out.wls.B.lo && out.wls.B.value && *out.wls.B.value > 0) {  // relative bounds of the fitted B
-      out.B.lo = *out.B.value * (*out.wls.B.lo / *out.wls.B.value);
-      out.B.hi = *out.B.value * (*out.wls.B.hi / *out.wls.B.value);
+    out.b_edf = paper_b_edf(oadev, out.model, *out.tau_cp_s, record_length_s);
+    if (out.b_edf) {  // the chi-square bounds of sigma(tau_cp) at that EDF, over 0.664
+      const auto [lo, hi] = chi2_bounds(*out.B.value, *out.b_edf, kOneSigma);
+      out.B.lo = lo;
+      out.B.hi = hi;
     }
   } else {
     out.B = out.wls.B;
     out.B.unit = kUnits[2];
-    if (out.B.value) out.B.reason = "weighted least squares (the Allan curve has no flat part to read)";
+    if (out.B.value) out.b_method = "least_squares";
+    if (out.B.value) out.B.reason = "least squares (the model's B: the Allan curve has no flat part to read)";
     else if (!out.paper.ok) out.B.reason = "paper fit failed: " + out.paper.reason;
     else {
       std::ostringstream r;  // (a stream: GCC 12 -O3 warns falsely on long string concatenations)

@@ -8,8 +8,8 @@
 //  (a) the paper's: a 4th-degree least-squares polynomial of log10 sigma over log10 tau, its
 //      inflection points, the segments between them with their slopes, sigma at each segment's
 //      middle tau, and B = sigma(tau_cp) / 0.664 on the flat one;
-//  (b) a weighted least-squares fit of the model above with non-negative terms, weighted by the
-//      EDF of each point (var(sigma^2) = 2 sigma^4 / edf), with 68 % bounds.
+//  (b) one model of all five terms (noise_model.hpp: GLS on the octave Allan points with the
+//      model's EDF and covariance, AICc selection), with 68 % bounds or upper limits.
 #pragma once
 #include <array>
 #include <cmath>
@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
+#include "analysis/noise_model.hpp"
 
 namespace rig::analysis {
 
@@ -53,8 +54,8 @@ struct WlsFit {
   std::string reason;
   Term Q, N, B, K, R;
   std::size_t points = 0;
-  double chi2_per_dof = 0;  // of the EDF weights alone: how far the five-term model is from the curve
-  double model_error = 0;   // relative model error delta added to each point (0: EDF weights only)
+  double chi2_per_dof = 0;  // the model's GLS chi-square per dof over the points fitted (noise_model.hpp)
+  double model_error = 0;   // Birge model error delta (0 unless no tau range passed the goodness-of-fit test)
   // per term Q, N, B, K, R (0 when not in the fit): its largest share of the model sigma^2 over
   // the measured taus, and its fitted squared coefficient over the coefficient's sd
   std::array<double, 5> share{}, z{};
@@ -92,11 +93,19 @@ struct FittedCurves {
 };
 
 struct NoiseTerms {
-  Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K R by the weighted fit
+  Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K R by the model
   std::optional<double> tau_cp_s;  // the flat segment's middle (B = sigma(tau_cp) / 0.664)
   std::optional<double> sigma_cp;
   PaperFit paper;
-  WlsFit wls;
+  WlsFit wls;          // the model fit (noise_model.hpp) in the shape of the former weighted fit
+  NoiseModelFit model;  // the one model: every term the data supports (AICc), with bounds or upper limits
+  // How B was read (B above): "flat_segment" (the paper's, tau_cp the middle of the segment
+  // flat_tau_from_s..flat_tau_to_s), "polynomial_minimum" (no flat segment: the quartic's
+  // interior minimum), "least_squares" (neither: the model's B), or "" (no B). The paper
+  // method's bounds are the chi-square bounds of sigma(tau_cp) at the EDF the model implies at
+  // the Allan point nearest tau_cp (b_edf), over 0.664: its scatter, not its bias.
+  std::string b_method;
+  std::optional<double> flat_tau_from_s, flat_tau_to_s, b_edf;
   FittedCurves curves;  // on the taus of the Allan points the terms were fitted to
 };
 
@@ -104,11 +113,11 @@ struct NoiseTerms {
 FittedCurves fitted_curves(const NoiseTerms& t, std::span<const double> taus);
 
 // The shortest record from which the method determines the rate ramp R (docs/method.md: > 50 h);
-// on a shorter record R is not part of the weighted fit.
+// a shorter record's R (still fitted: the model has R as a candidate on every record) says so.
 inline constexpr double kRMinRecordS = 50 * 3600.0;
 
 // oadev: the overlapping Allan deviation points (edf used as weights; 0 = unweighted).
-// r_min_record_s: R is fitted only on records at least this long (a profile may set it).
+// r_min_record_s: the record length a profile requires for R; a shorter record's R notes it.
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
                        double r_min_record_s = kRMinRecordS);
 

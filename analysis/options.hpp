@@ -12,7 +12,7 @@ namespace rig::analysis {
 struct AnalysisOptions {
   std::string taus = "log:100";          // tau grid, parse_tau_grid's syntax
   double confidence = kOneSigma;         // of the Allan bounds: one sigma, Stable32's "0.683"
-  double r_min_record_s = kRMinRecordS;  // R is fitted only on records at least this long
+  double r_min_record_s = kRMinRecordS;  // the record R asks for (a shorter one's R says so)
 };
 
 }  // namespace rig::analysis

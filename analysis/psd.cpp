@@ -4,11 +4,14 @@
 
 #include <fftw3.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <bit>
+#include <limits>
 #include <memory>
+#include <numbers>
 #include <numeric>
 #include <mutex>
 #include <thread>
@@ -200,6 +203,67 @@ double white_level(const Psd& p, double f_lo, double f_hi) {
   const double k = 2.0 * static_cast<double>(std::max<std::size_t>(p.segments, 1));
   const double med_ratio = boost::math::median(boost::math::chi_squared(k)) / k;
   return med / med_ratio;
+}
+
+PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi) {
+  PsdTerms out;
+  const double tau0 = 1 / p.rate_hz;
+  std::vector<double> f, y;
+  for (std::size_t i = 0; i < p.f_hz.size(); ++i)
+    if (p.f_hz[i] >= f_lo && p.f_hz[i] <= f_hi && p.f_hz[i] > 0 && p.psd[i] > 0) f.push_back(p.f_hz[i]), y.push_back(p.psd[i]);
+  out.bins = f.size();
+  if (f.size() < 5) return out;
+  auto basis = [&](int k, double fr) {
+    switch (k) {
+      case 0: return 8 * std::pow(std::sin(std::numbers::pi * fr * tau0), 2) / tau0;
+      case 1: return 2.0;
+      case 2: return 1 / (std::numbers::pi * fr);
+      default: return 1 / (2 * std::numbers::pi * std::numbers::pi * fr * fr);
+    }
+  };
+  const auto n = static_cast<Eigen::Index>(f.size());
+  Eigen::MatrixXd X(n, 4);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int k = 0; k < 4; ++k) X(i, k) = basis(k, f[static_cast<std::size_t>(i)]);
+  Eigen::VectorXd yv = Eigen::Map<const Eigen::VectorXd>(y.data(), n);
+  Eigen::VectorXd mu = yv, theta = Eigen::VectorXd::Zero(4);
+  for (int it = 0; it < 6; ++it) {
+    const Eigen::VectorXd w = mu.cwiseInverse();
+    const Eigen::MatrixXd Xw = w.asDiagonal() * X;
+    const Eigen::VectorXd yw = w.cwiseProduct(yv);
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd best_th = Eigen::VectorXd::Zero(4);
+    for (int mask = 1; mask < 16; ++mask) {
+      std::vector<int> cols;
+      for (int k = 0; k < 4; ++k)
+        if (mask & (1 << k)) cols.push_back(k);
+      Eigen::MatrixXd A(n, static_cast<Eigen::Index>(cols.size()));
+      for (std::size_t c = 0; c < cols.size(); ++c) A.col(static_cast<Eigen::Index>(c)) = Xw.col(cols[c]);
+      const Eigen::VectorXd sc = A.colwise().norm().transpose();
+      if ((sc.array() <= 0).any()) continue;
+      const Eigen::MatrixXd An = A * sc.cwiseInverse().asDiagonal();
+      const auto qr = An.colPivHouseholderQr();
+      if (qr.rank() < static_cast<Eigen::Index>(cols.size())) continue;
+      const Eigen::VectorXd t = qr.solve(yw).cwiseQuotient(sc);
+      if ((t.array() < 0).any()) continue;
+      const double rss = (A * t - yw).squaredNorm();
+      if (rss < best) {
+        best = rss;
+        best_th.setZero();
+        for (std::size_t c = 0; c < cols.size(); ++c) best_th(cols[c]) = t(static_cast<Eigen::Index>(c));
+      }
+    }
+    if (!std::isfinite(best)) return out;
+    theta = best_th;
+    mu = X * theta;
+    if ((mu.array() <= 0).any()) return out;
+  }
+  out.ok = true;
+  out.Q = std::sqrt(theta(0));
+  out.N = std::sqrt(theta(1));
+  out.B = std::sqrt(theta(2));
+  out.K = std::sqrt(theta(3));
+  return out;
 }
 
 }  // namespace rig::analysis

@@ -53,4 +53,20 @@ std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db = 10.0, std:
 // spread so that tones barely move it); unit^2/Hz.
 double white_level(const Psd& p, double f_lo, double f_hi);
 
+// The IEEE 952 terms from the PSD of the output y (one-sided, tau0 = 1/rate):
+//   S(f) = Q^2 8 sin^2(pi f tau0)/tau0 + 2 N^2 + B^2/(pi f) + K^2/(2 pi^2 f^2)
+// (white phase Q: y = (e_n - e_{n-1})/tau0 with var e = Q^2, rising as f^2; white rate N,
+// S = 2 N^2; flicker, S = h_-1/f with h_-1 = B^2/pi, the level whose Allan variance is
+// (2 ln2/pi) B^2; rate random walk K, S = K^2/(2 pi^2 f^2); IEEE 952 Annex C / NIST SP 1065
+// Table 2 in these units). Fitted to the Welch bins in [f_lo, f_hi] by non-negative least
+// squares on the relative scale (each bin ~ S chi2(2 segments)/(2 segments): weights 1/S_model^2,
+// iterated), the best of the non-negative active sets. N = the cross-check of the Allan N that
+// quantisation (Q) does not bias, unlike white_level's median.
+struct PsdTerms {
+  bool ok = false;
+  double Q = 0, N = 0, B = 0, K = 0;  // g*s, g*s^0.5, g, g/s^0.5
+  std::size_t bins = 0;
+};
+PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi);
+
 }  // namespace rig::analysis

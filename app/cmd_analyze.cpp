@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cmath>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -161,17 +162,30 @@ int run(const Args& a) {
                                      : "rig analyze: --rate must be a positive number of Hz");
   timer.mark("read");
   const std::uint64_t n = src->size();
+  if (n < 3) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 3 are needed");
+  // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
+  std::vector<std::string> notes;
+  if (n < 30)
+    notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
+                    "the bounds rest on a few degrees of freedom and the noise terms on a few points");
   // Sizes are checked where they are needed, before the long work: the deviation needs 3 phase
-  // points (deviations_stream says so), the PSD one whole segment.
+  // points (deviations_stream says so), the PSD one whole segment. A record shorter than the
+  // default segment gets no PSD and a note (the deviations are still meaningful); a --segment
+  // the record cannot fill is the caller's error.
   an::WelchOptions wo;
   wo.window = an::parse_window(a.window);
   wo.segment = a.segment;
   wo.overlap = a.overlap;
   wo.threads = a.threads;
-  const bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
-  if (want_psd && n < an::welch_segment(n, wo))
-    throw ConfigError(a.file + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
-                      std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
+  bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
+  if (want_psd && n < an::welch_segment(n, wo)) {
+    if (a.segment)
+      throw ConfigError(a.file + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
+                        std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
+    notes.push_back("no PSD: " + std::to_string(n) + " values are fewer than one Welch segment of " +
+                    std::to_string(an::welch_segment(n, wo)) + " (give --segment to have one)");
+    want_psd = false;
+  }
 
   // One pass for OADEV (noise terms, the contract's "oadev") and the requested deviation.
   std::vector<an::DevOptions> opts;
@@ -185,11 +199,23 @@ int run(const Args& a) {
   if (base.type != an::Deviation::OADEV) opts.push_back(base);
   an::StreamOptions so;
   so.memory_budget_bytes = a.memory_mib << 20;
+  // A record too short for any tau of the grid (the grids stop at T/4, Stable32's rule: 3..8
+  // values have none) is still analysed at tau0 (m = 1, which every deviation's estimator
+  // allows from 3 values on), with a note.
   std::vector<std::vector<an::DevPoint>> devs;
-  try {
-    devs = an::deviations_stream(*src, opts, so);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(a.file + ": " + e.what());
+  const auto compute = [&] {
+    try {
+      devs = an::deviations_stream(*src, opts, so);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(a.file + ": " + e.what());
+    }
+  };
+  compute();
+  if (std::any_of(devs.begin(), devs.end(), [](const auto& d) { return d.empty(); })) {
+    notes.push_back("the tau grid " + a.taus + " has no tau within T/4 of " + std::to_string(n) +
+                    " values: tau0 only (m = 1)");
+    for (an::DevOptions& o : opts) o.factors = {1};
+    compute();
   }
   for (std::size_t k = 0; k < devs.size(); ++k)
     if (devs[k].empty())
@@ -273,12 +299,18 @@ int run(const Args& a) {
       pj["peaks"].push_back({{"f_hz", p.f_hz}, {"psd", p.psd}, {"prominence_db", p.prominence_db}});
     }
     const double h0 = an::white_level(*psd, 0.05 * rate, 0.45 * rate);
-    pj["white_level"] = h0;                     // unit^2/Hz
-    pj["n_from_psd"] = std::sqrt(h0 / 2);       // N = sqrt(h0/2), unit*s^0.5
-    pj["n_from_psd_per_hour"] = an::n_per_hour(std::sqrt(h0 / 2));
+    pj["white_level"] = h0;  // unit^2/Hz, the median over 5..45 % of the rate (biased by Q)
+    // N from the PSD model (Q, N, B, K; analysis/psd.hpp psd_noise_fit) over 4 bins above DC
+    // (the window's leakage of the red terms) to 45 % of the rate; the median's N without one.
+    const an::PsdTerms pt = an::psd_noise_fit(*psd, 4 * rate / static_cast<double>(psd->segment), 0.45 * rate);
+    const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
+    pj["n_from_psd"] = n_psd;  // unit*s^0.5
+    pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
+    pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K}};
     j["psd"] = pj;
   }
 
+  if (!notes.empty()) j["notes"] = notes;
   timer.mark("psd");
   if (!a.json_out.empty()) write_file(a.json_out, j.dump(2) + "\n");
   timer.mark("json write");
@@ -306,6 +338,7 @@ int run(const Args& a) {
   }
   o << a.file << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
+  for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) {
     o << an::to_string(opts[k].type) << " (bounds " << a.confidence << "):\n"
       << "         m        tau_s     n_terms alpha         lo          dev           hi\n";

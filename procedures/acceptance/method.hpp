@@ -18,7 +18,7 @@ struct AllanSettings {
   double rate_hz;
   std::string taus;       // the tau grid (analysis::parse_tau_grid)
   double confidence;      // of the deviation's bounds
-  double r_min_record_s;  // R is fitted only on records at least this long
+  double r_min_record_s;  // the record R asks for (a shorter one's R says so in its reason)
 };
 AllanSettings allan_settings(const Profile& p);
 

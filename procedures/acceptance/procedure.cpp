@@ -94,24 +94,29 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
 
 // Allan family + noise terms of one channel; writes the passport values.
 nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vector<double>& d, bool filtered) {
-  // R only from a record as long as the method needs (the profile's [analysis] r_min_record_s):
-  // the passport and analysis.json carry the same fit. An abort is taken within a chunk of work.
+  // One model fit (R a candidate on every record; its reason notes a record shorter than the
+  // profile's [analysis] r_min_record_s): the passport and analysis.json carry the same fit. An
+  // abort is taken within a chunk of work.
   const AllanChannel ch = allan_channel_terms(d, allan_settings(p), [&ctx] { ctx.cancel.throw_if_requested(); });
   const std::vector<analysis::DevPoint>& dev = ch.oadev;
   const analysis::NoiseTerms& nt = ch.terms;
   auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
     if (t.value) {
-      ctx.values.set(name, *t.value * scale, why, t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,
+      ctx.values.set(name, *t.value * scale, why.empty() ? t.reason : why,
+                     t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,
                      t.hi ? std::optional<double>(*t.hi * scale) : std::nullopt);
     } else {
       ctx.values.set(name, std::nullopt, t.reason.empty() ? "not identifiable from this record" : t.reason);
     }
   };
   if (!filtered) {
-    // The reasons say how B was actually read (flat segment, the polynomial's minimum, or the
-    // least-squares fallback): the analysis names its method, the passport repeats it.
-    term_value("in_run_b_allan", nt.B, 1.0, nt.B.reason);
-    if (nt.tau_cp_s) ctx.values.set("tau_cp", *nt.tau_cp_s, "the tau in_run_b_allan is read at (" + nt.B.reason + ")");
+    // B as the profile's [analysis] b_allan says: "paper" (sigma(tau_cp)/0.664; its reason names
+    // flat segment, polynomial minimum or least-squares fallback) or "lsq" (the model's B).
+    term_value("in_run_b_allan", p.b_allan == "lsq" ? nt.wls.B : nt.B, 1.0, "");
+    if (nt.tau_cp_s && nt.b_method == "flat_segment")
+      ctx.values.set("tau_cp", *nt.tau_cp_s, nt.B.reason);
+    else if (nt.tau_cp_s)
+      ctx.values.set("tau_cp", *nt.tau_cp_s, "minimum of the paper's polynomial (no flat segment)");
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
     // IEEE 952 terms quoted per hour (docs/method.md), by noise_terms.hpp's factors: Q g*s -> g*h,
     // N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.

@@ -116,10 +116,13 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     p.loop_record_s = static_cast<double>(cfg::get_int(*l, "record_ms", 100, 10, 200)) / 1e3;
   }
   if (const toml::table* a = cfg::get_table(t, "analysis")) {
-    cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s"}, "analysis");
+    cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s", "b_allan"}, "analysis");
     p.taus = cfg::get_string(*a, "taus", p.taus);
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
+    p.b_allan = cfg::get_string(*a, "b_allan", p.b_allan);
+    if (p.b_allan != "paper" && p.b_allan != "lsq")
+      throw ConfigError("[analysis] b_allan: \"" + p.b_allan + "\" (expected \"paper\" or \"lsq\")");
   }
   // The measurement names (docs/profiles.md); GOST B is named by its block length.
   std::vector<std::string> known = {"bias", "base_error", "in_run_b_allan", "tau_cp", "q", "n", "k", "r",

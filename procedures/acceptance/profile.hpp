@@ -57,8 +57,12 @@ struct Profile {
   // [analysis]: unset keys take the analysis library's defaults (analysis/options.hpp)
   std::string taus = analysis::AnalysisOptions{}.taus;
   double confidence = analysis::AnalysisOptions{}.confidence;
-  // Rate ramp R needs a record of more than 50 h (docs/method.md); shorter captures report it null.
+  // The record length the method asks for R (docs/method.md: > 50 h). R is fitted on any record
+  // (analysis/noise_model.hpp); a shorter record's R says in its reason that it is shorter.
   double r_min_record_s = analysis::AnalysisOptions{}.r_min_record_s;
+  // Which B the passport's in_run_b_allan (and its limit) is: "paper" (the paper's method,
+  // sigma(tau_cp)/0.664) or "lsq" (the least-squares model's B). Both are in analysis.json.
+  std::string b_allan = "paper";
 
   std::map<std::string, std::pair<double, double>> limits;  // [limits]
   std::vector<AccuracyClass> classes;                      // [[classes]], ascending max_b_g

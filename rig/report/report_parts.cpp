@@ -33,7 +33,7 @@ const std::vector<std::pair<std::string, std::string>>& descriptions() {
       {"in_run_b_gost_100s", "In-run B, (max − min)/2 of 100 s averages (GOST)"},
       {"in_run_b_gost_200s", "In-run B, (max − min)/2 of 200 s averages (GOST)"},
       {"in_run_b_allan", "In-run B from Allan deviation, σ(τ_ср)/0.664"},
-      {"tau_cp", "τ_ср, middle of the flat Allan segment"},
+      {"tau_cp", "τ_ср, the averaging time in_run_b_allan is read at"},
       {"q", "Quantisation Q"},
       {"n", "Random walk N"},
       {"k", "Rate random walk K"},
@@ -134,13 +134,14 @@ std::string bounds_text(double lo, double hi) {
   return "<span class=\"nw\">" + fmt_num(lo) + " …</span> <span class=\"nw\">" + fmt_num(hi) + "</span>";
 }
 
-// The identified noise terms of one channel: the rig's values (slope method for B, the
-// weighted fit for the others) with their bounds, and the weighted fit's own value of each.
+// The identified noise terms of one channel: the rig's values (the paper's method for B, the
+// least-squares model for the others) with their bounds, and the model's own value of each
+// (so both B values stand side by side; B's note says how the paper's B was read).
 std::string terms_table(const json& nt, const std::string& ch) {
   const json* lsq = get(nt, {"lsq_fit", "terms"});
   std::ostringstream os;
   os << "<table class=\"terms\" id=\"terms-" << html_escape(ch) << "\"><thead><tr><th>Term (" << html_escape(ch)
-     << ")</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi), 68 %</th><th>Weighted least-squares fit</th>"
+     << ")</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi), 68 %</th><th>Least-squares model (GLS)</th>"
         "<th>Note</th></tr></thead><tbody>\n";
   const char* names[][2] = {{"Q", "quantisation"}, {"N", "random walk"}, {"B", "bias instability"},
                             {"K", "rate random walk"}, {"R", "rate ramp"}};
@@ -153,8 +154,12 @@ std::string terms_table(const json& nt, const std::string& ch) {
        << fmt_num(fit.value, 4) << (std::isfinite(fit.value) && fit.unit != q.unit ? " " + html_escape(fit.unit) : "")
        << "</td><td>" << html_escape(text(*t, "reason")) << "</td></tr>\n";
   }
-  os << "<tr><td>τ_ср — middle of the flat segment</td><td class=\"num\">" << fmt_num(number(nt, "tau_cp_s"), 4)
-     << "</td><td>s</td><td></td><td></td><td></td></tr>\n</tbody></table>\n";
+  // tau_cp is where B was read: a flat segment's middle, or the polynomial's minimum (b_method).
+  const std::string how = text(nt, "b_method") == "flat_segment" ? "middle of the flat segment"
+                          : text(nt, "b_method") == "polynomial_minimum" ? "minimum of the paper's polynomial"
+                                                                         : "where B was read";
+  os << "<tr><td>τ_ср — " << how << "</td><td class=\"num\">" << fmt_num(number(nt, "tau_cp_s"), 4)
+     << "</td><td>s</td><td></td><td></td><td>" << html_escape(text(nt, "b_method")) << "</td></tr>\n</tbody></table>\n";
   return os.str();
 }
 

@@ -38,22 +38,26 @@ std::vector<DevPoint> curve(double Q, double N, double B, double K, double R, do
 constexpr double kN = 2.2306e-7 * 60, kK = 5.1167e-6 / 60, kB = 2.1e-6;
 
 TEST(NoiseTerms, WeightedFitRecoversTheModelTerms) {
+  // The exact curve to 900 s from a 100-h record: the model's EDFs at 900 s are large (~500),
+  // so every term is determined (from 1 h, K at the paper's level is within the scatter of the
+  // last points and the fit need not take it: RateRampIsACandidateOnAShortRecord).
   const auto pts = curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100);
-  const NoiseTerms t = noise_terms(pts, 3600);
+  const NoiseTerms t = noise_terms(pts, 100 * 3600);
   ASSERT_TRUE(t.wls.ok) << t.wls.reason;
   ASSERT_TRUE(t.N.value && t.K.value && t.wls.B.value) << t.N.reason << t.K.reason << t.wls.B.reason;
   EXPECT_NEAR(*t.N.value, kN, 1e-3 * kN);
-  EXPECT_NEAR(*t.K.value, kK, 1e-3 * kK);
-  EXPECT_NEAR(*t.wls.B.value, kB, 1e-3 * kB);
+  EXPECT_NEAR(*t.K.value, kK, 5e-3 * kK);  // ln sigma^2's chi-square bias at EDF ~500: 0.2 %
+  EXPECT_NEAR(*t.wls.B.value, kB, 5e-3 * kB);
   ASSERT_TRUE(t.Q.value) << t.Q.reason;
   EXPECT_NEAR(*t.Q.value, 2e-6, 1e-3 * 2e-6);
   EXPECT_LE(*t.N.lo, *t.N.value);
   EXPECT_GE(*t.N.hi, *t.N.value);
   EXPECT_FALSE(t.R.value);
-  EXPECT_NE(t.R.reason.find("longer record"), std::string::npos) << t.R.reason;
+  ASSERT_TRUE(t.R.hi);  // not in the model: null with an upper limit
+  EXPECT_NE(t.R.reason.find("upper limit"), std::string::npos) << t.R.reason;
   EXPECT_EQ(t.N.unit, "g*s^0.5");
   EXPECT_NEAR(n_per_hour(*t.N.value), 2.2306e-7, 1e-3 * 2.2306e-7);
-  EXPECT_NEAR(k_per_hour(*t.K.value), 5.1167e-6, 1e-3 * 5.1167e-6);
+  EXPECT_NEAR(k_per_hour(*t.K.value), 5.1167e-6, 5e-3 * 5.1167e-6);
 }
 
 TEST(NoiseTerms, RateRampIsFoundOnAFiftyHourCurve) {
@@ -61,17 +65,21 @@ TEST(NoiseTerms, RateRampIsFoundOnAFiftyHourCurve) {
   const auto pts = curve(0, kN, kB, kK, R, 0.001, 45000, 120);
   const NoiseTerms t = noise_terms(pts, 50 * 3600.0);
   ASSERT_TRUE(t.R.value) << t.R.reason;
-  EXPECT_NEAR(*t.R.value, R, 1e-3 * R);
-  EXPECT_NEAR(r_per_hour(*t.R.value), R * 3600, 1e-3 * R * 3600);
+  // The fit reads ln sigma^2 with its chi-square bias (a few % at the last points' EDF of ~5):
+  // on an exact curve R comes back within its bounds and 10 %.
+  EXPECT_NEAR(*t.R.value, R, 0.1 * R);
+  EXPECT_LE(*t.R.lo, R);
+  EXPECT_GE(*t.R.hi, R);
+  EXPECT_NEAR(r_per_hour(*t.R.value), *t.R.value * 3600, 1e-12);
 }
 
 TEST(NoiseTerms, TheMinimumRecordForRIsAParameter) {
-  // The same 50-h curve with a 60-h minimum (a profile's [analysis] r_min_record_s): R is not
-  // fitted and the reason names the minimum.
+  // The same 50-h curve with a 60-h minimum (a profile's [analysis] r_min_record_s): R is still
+  // fitted (the fit never pretends R is zero) and the reason names the profile's minimum.
   const auto pts = curve(0, kN, kB, kK, 1e-9, 0.001, 45000, 120);
   const NoiseTerms t = noise_terms(pts, 50 * 3600.0, 60 * 3600.0);
-  EXPECT_FALSE(t.R.value);
-  EXPECT_NE(t.R.reason.find("at least 60 h"), std::string::npos) << t.R.reason;
+  ASSERT_TRUE(t.R.value) << t.R.reason;
+  EXPECT_NE(t.R.reason.find("60 h the profile requires"), std::string::npos) << t.R.reason;
 }
 
 TEST(NoiseTerms, PaperMethodFindsTheFlatSegmentAndTauCp) {
@@ -105,47 +113,55 @@ std::vector<DevPoint> rippled(double Q, double N, double B, double K, double rec
   return v;
 }
 
-TEST(NoiseTerms, ModelErrorKeepsTheShortTausFromDecidingTheTerms) {
-  // EDF weights alone: the rippled ms points (edf ~ 1e6, chi2/dof ~ 1e4) decide the fit and K
-  // (visible only at the few long taus) is left out. With the model error added to each point's
-  // variance (chi2/dof = 1), N, B and K come back.
+TEST(NoiseTerms, TheFitStartsWhereTheModelDescribesTheCurve) {
+  // The rippled ms points (model EDF ~ 1e6: a 25 % ripple is hundreds of sigma) fail the
+  // goodness-of-fit test, so the shortest taus are dropped until the model's chi-square is
+  // probable (noise_model.hpp kGofAlpha); over the rest the curve is exact and N, B, K come
+  // back with no model error, from the taus where the ripple has ended (>= 1 s).
   const NoiseTerms t = noise_terms(rippled(2e-6, kN, kB, 2 * kK, 3600), 3600);
   ASSERT_TRUE(t.wls.ok) << t.wls.reason;
-  EXPECT_GT(t.wls.model_error, 0.05);
-  EXPECT_GT(t.wls.chi2_per_dof, 100);  // how far the model is from the curve on the EDF alone
-  ASSERT_TRUE(t.N.value && t.K.value && t.wls.B.value) << t.N.reason << " / " << t.K.reason << " / " << t.wls.B.reason;
-  // The ripple is systematic, so it biases the short-tau terms a little (N by -6 %) beyond their
-  // statistical bounds; the terms at the long taus, where the ripple is absent, are covered.
-  for (const auto& [term, truth, name] : {std::tuple{&t.N, kN, "N"}, {&t.wls.B, kB, "B"}, {&t.K, 2 * kK, "K"}})
-    EXPECT_NEAR(*term->value / truth, 1.0, 0.2) << name;
-  for (const auto& [term, truth, name] : {std::tuple{&t.wls.B, kB, "B"}, {&t.K, 2 * kK, "K"}}) {
-    EXPECT_GE(truth, *term->value - 2 * (*term->value - *term->lo)) << name;
-    EXPECT_LE(truth, *term->value + 2 * (*term->hi - *term->value)) << name;
-  }
-  // an exact curve needs no model error: the plain EDF-weighted fit
-  EXPECT_EQ(noise_terms(curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100), 3600).wls.model_error, 0.0);
+  EXPECT_GT(t.model.dropped_short, 0u);
+  ASSERT_FALSE(t.model.tau_s.empty());
+  EXPECT_GE(t.model.tau_s.front(), 1.0);
+  EXPECT_GE(t.model.gof_p, kGofAlpha);
+  EXPECT_EQ(t.wls.model_error, 0.0);
+  // N dominates from 1 s to ~100 s and is found. From the nine octave points left, AICc's
+  // small-sample penalty leaves B out of this exact curve (its chi-square gain is below the
+  // penalty), and its flat share goes into N (+3 %) and K (1.7x, bounds excluding the truth):
+  // a known limit of dropping points, docs/analysis.md. K is still found.
+  ASSERT_TRUE(t.N.value && t.K.value) << t.N.reason << " / " << t.K.reason;
+  EXPECT_NEAR(*t.N.value / kN, 1.0, 0.05);
+  EXPECT_GT(*t.K.value / (2 * kK), 1.0);
+  EXPECT_LT(*t.K.value / (2 * kK), 2.0);
+  // the reasons name the range fitted
+  EXPECT_NE(t.N.reason.find("over tau = 1"), std::string::npos) << t.N.reason;
+  // an exact curve keeps every point and needs no model error
+  const NoiseTerms exact = noise_terms(curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100), 3600);
+  EXPECT_EQ(exact.model.dropped_short, 0u);
+  EXPECT_EQ(exact.wls.model_error, 0.0);
 }
 
-TEST(NoiseTerms, RateRampIsNotFittedOnAShortRecord) {
-  // One hour: a rise at the long taus is K (R needs > 50 h, docs/method.md); R is not a candidate,
-  // so it cannot take K's share of the rise, and says why.
+TEST(NoiseTerms, RateRampIsACandidateOnAShortRecord) {
+  // One hour, a rise at the long taus that is K: R is a candidate (no record-length rule) but the
+  // data do not support it, so R is null with an upper limit and K takes the rise.
   const auto pts = curve(0, kN, kB, 2 * kK, 0, 0.001, 900, 100);
   const NoiseTerms t = noise_terms(pts, 3600);
   ASSERT_TRUE(t.K.value) << t.K.reason;
-  EXPECT_NEAR(*t.K.value, 2 * kK, 1e-3 * kK);
+  EXPECT_LE(*t.K.lo, 2 * kK);
+  EXPECT_GE(*t.K.hi, 2 * kK);
   EXPECT_FALSE(t.R.value);
-  EXPECT_NE(t.R.reason.find("50 h"), std::string::npos) << t.R.reason;
+  ASSERT_TRUE(t.R.hi) << t.R.reason;
   EXPECT_EQ(t.wls.share[4], 0.0);
 }
 
-TEST(NoiseTerms, ATermIsReportedOnlyWhereItDominates) {
-  // K at a quarter of the paper's: fitted (the curve is exact) but under 50 % of the model at
-  // every measured tau, so not reported; its share and significance are kept for diagnosis.
+TEST(NoiseTerms, ATermTheDataDoNotSupportIsNullWithAnUpperLimit) {
+  // K at a quarter of the paper's on 1 h: within the scatter of the last points, so not in the
+  // model; null with an upper limit that holds it. B dominates.
   const NoiseTerms t = noise_terms(curve(0, kN, kB, kK / 4, 0, 0.001, 900, 100), 3600);
   EXPECT_FALSE(t.K.value);
-  EXPECT_NE(t.K.reason.find("never dominates"), std::string::npos) << t.K.reason;
-  EXPECT_GT(t.wls.share[3], 0.0);
-  EXPECT_LT(t.wls.share[3], 0.5);
+  ASSERT_TRUE(t.K.hi) << t.K.reason;
+  EXPECT_GE(*t.K.hi, kK / 4);
+  EXPECT_NE(t.K.reason.find("not supported"), std::string::npos) << t.K.reason;
   ASSERT_TRUE(t.wls.B.value);
   EXPECT_GE(t.wls.share[2], 0.5);
 }
@@ -201,9 +217,11 @@ namespace {
 // The curves analysis.json carries for the plots are the IEEE 952 Annex C relations of the
 // fitted terms, written out here independently of noise_terms.hpp, on the Allan taus.
 TEST(NoiseTermCurves, TheJsonCurvesAreTheIeee952RelationsOfTheFittedTerms) {
-  const auto pts = curve(2e-6, kN, kB, kK, 0, 0.001, 900, 60);
+  // K at twice the paper's, so that it dominates within the hour (at the paper's K it never
+  // does, and the model leaves it out: null with an upper limit, no curve to draw).
+  const auto pts = curve(2e-6, kN, kB, 2 * kK, 0, 0.001, 900, 60);
   const NoiseTerms t = noise_terms(pts, 3600);
-  ASSERT_TRUE(t.Q.value && t.N.value && t.B.value && t.K.value) << t.B.reason;
+  ASSERT_TRUE(t.Q.value && t.N.value && t.B.value && t.K.value) << t.B.reason << " / " << t.K.reason;
   ASSERT_FALSE(t.R.value);
   const nlohmann::json j = noise_terms_to_json(t);
   const nlohmann::json& c = j.at("curves");

@@ -9,6 +9,7 @@
 
 #include "analysis/allan.hpp"
 #include "analysis/psd.hpp"
+#include "tests/analysis/injected_noise.hpp"
 
 namespace rig::analysis {
 namespace {
@@ -117,6 +118,25 @@ TEST(Welch, OptionsAndErrors) {
   EXPECT_THROW(welch(x, 100, o), std::invalid_argument);
   EXPECT_THROW(parse_window("kaiser"), std::invalid_argument);
   EXPECT_EQ(parse_window("blackman"), Window::Blackman);
+}
+
+TEST(Welch, ModelFitGivesNWithQuantisationPresent) {
+  // Injected white phase Q (rising as f^2) and white rate N (the paper's N): the median over
+  // 5..45 % of the rate reads Q's rise as N; the four-term PSD model recovers N (and Q).
+  const double rate = 1000, Q = 1.73e-6, N = 2.2306e-7 * 60;
+  const auto y = injected::generate({Q, N, 0, 0, 0}, rate, 1 << 20, 77);
+  const Psd p = welch(y, rate);
+  const double n_median = std::sqrt(white_level(p, 0.05 * rate, 0.45 * rate) / 2);
+  const PsdTerms t = psd_noise_fit(p, 4 * rate / static_cast<double>(p.segment), 0.45 * rate);
+  ASSERT_TRUE(t.ok);
+  EXPECT_GT(n_median / N, 1.5);  // the old cross-check: biased by Q
+  EXPECT_NEAR(t.N / N, 1.0, 0.05);
+  EXPECT_NEAR(t.Q / Q, 1.0, 0.05);
+  // Q = 0: the model gives the white level's N too.
+  const Psd w = welch(injected::generate({0, N, 0, 0, 0}, rate, 1 << 20, 78), rate);
+  const PsdTerms tw = psd_noise_fit(w, 4 * rate / static_cast<double>(w.segment), 0.45 * rate);
+  ASSERT_TRUE(tw.ok);
+  EXPECT_NEAR(tw.N / N, 1.0, 0.03);
 }
 
 }  // namespace

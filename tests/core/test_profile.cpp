@@ -107,6 +107,14 @@ TEST(Profile, FileCanStartFromABuiltinAndOverride) {
   EXPECT_EQ(prof.run_s, load_profile("ci").run_s);
 }
 
+TEST(Profile, BAllanSaysWhichBThePassportLimits) {
+  EXPECT_EQ(load_profile("paper").b_allan, "paper");
+  const auto prof = load_profile(write_tmp("lsq.toml", "base = \"ci\"\n[analysis]\nb_allan = \"lsq\"\n"));
+  EXPECT_EQ(prof.b_allan, "lsq");
+  EXPECT_NE(error_of(write_tmp("bad.toml", "base = \"ci\"\n[analysis]\nb_allan = \"gmwm\"\n")).find("b_allan"),
+            std::string::npos);
+}
+
 TEST(Profile, MissingFileSaysWhatExists) {
   const std::string e = error_of("/nonexistent/profile.toml");
   EXPECT_NE(e.find("ci"), std::string::npos);

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -69,6 +70,68 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_TRUE(fs::exists(d + "/run/captures/run12-U20.cap"));
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
   EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS"), std::string::npos);
+}
+
+TEST(RigCli, AnalyzeTakesNbs14NinePoints) {
+  // NIST SP 1065's NBS14 9-point frequency set (x1e-3): OADEV 91.22945 at tau 1 and 85.95287 at
+  // tau 2 (published, x1e-3); a short record is analysed with a note, no PSD, 3 values suffice.
+  const std::string d = tmp("nbs14");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/nbs14.txt");
+    for (double v : {0.892, 0.809, 0.823, 0.798, 0.671, 0.644, 0.883, 0.903, 0.677}) f << v << "\n";
+    std::ofstream g(d + "/three.txt");
+    g << "1\n2\n4\n";
+    std::ofstream h(d + "/two.txt");
+    h << "1\n2\n";
+  }
+  ASSERT_EQ(run({"analyze", d + "/nbs14.txt", "--rate", "1", "--taus", "octave", "--json", d + "/n.json"}, d + "/n"), 0)
+      << slurp(d + "/n.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/n.json"));
+  ASSERT_EQ(j["oadev"].size(), 2u);
+  EXPECT_NEAR(j["oadev"][0]["dev"].get<double>(), 91.22945e-3, 1e-8);
+  EXPECT_NEAR(j["oadev"][1]["dev"].get<double>(), 85.95287e-3, 1e-8);
+  ASSERT_TRUE(j.contains("notes"));
+  EXPECT_FALSE(j.contains("psd"));
+  EXPECT_TRUE(j["noise_terms"]["N"]["value"].is_null());
+  // 3 values: no tau of the grid within T/4; analysed at tau0 with a note (issue 12, 7)
+  ASSERT_EQ(run({"analyze", d + "/three.txt", "--rate", "1", "--json", d + "/t.json"}, d + "/t"), 0) << slurp(d + "/t.stderr");
+  {
+    const auto t = nlohmann::json::parse(slurp(d + "/t.json"));
+    ASSERT_EQ(t["oadev"].size(), 1u);
+    EXPECT_EQ(t["oadev"][0]["m"], 1);
+    // frequency 1, 2, 4: second differences of the phase are 1 and 2, OADEV^2 = (1 + 4) / (2 * 2)
+    EXPECT_NEAR(t["oadev"][0]["dev"].get<double>(), std::sqrt(5.0 / 4), 1e-12);
+    EXPECT_NE(t["notes"].dump().find("tau0 only (m = 1)"), std::string::npos) << t["notes"].dump();
+  }
+  EXPECT_EQ(run({"analyze", d + "/two.txt", "--rate", "1"}, d + "/w"), 2);
+}
+
+// Issue 12, 7: the JSON keys docs/analysis.md names under noise_terms and psd are the ones the
+// program writes (the docs once named `paper` and `wls` where the program wrote others).
+TEST(RigCli, AnalyzeJsonHasTheKeysTheDocsName) {
+  const std::string d = tmp("analyze-keys");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/w.txt");
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> g(0.0, 1e-3);
+    for (int i = 0; i < 4096; ++i) f << g(rng) << "\n";
+  }
+  ASSERT_EQ(run({"analyze", d + "/w.txt", "--rate", "100", "--json", d + "/w.json"}, d + "/w"), 0) << slurp(d + "/w.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/w.json"));
+  const nlohmann::json& nt = j.at("noise_terms");
+  for (const char* k : {"Q", "N", "B", "K", "R", "tau_cp_s", "paper_fit", "b_method", "flat_tau_from_s", "flat_tau_to_s",
+                        "b_edf", "B_paper", "B_lsq", "lsq_fit", "model_fit", "curves"})
+    EXPECT_TRUE(nt.contains(k)) << k;
+  for (const char* k : {"poly", "inflection_tau_s", "segments"}) EXPECT_TRUE(nt["paper_fit"].contains(k)) << k;
+  for (const char* k : {"ok", "points", "chi2_per_dof", "model_error", "terms"}) EXPECT_TRUE(nt["lsq_fit"].contains(k)) << k;
+  for (const char* k : {"tau_s", "avar", "edf", "aicc", "chi2_per_dof", "gof_p", "dropped_short", "model_error", "terms"})
+    EXPECT_TRUE(nt["model_fit"].contains(k)) << k;
+  for (const char* k : {"in_model", "value", "lo", "hi", "upper", "share", "z"})
+    EXPECT_TRUE(nt["model_fit"]["terms"]["K"].contains(k)) << k;
+  for (const char* k : {"peaks", "white_level", "psd_fit", "n_from_psd"}) EXPECT_TRUE(j.at("psd").contains(k)) << k;
+  for (const char* k : {"paper", "wls"}) EXPECT_FALSE(nt.contains(k)) << k;
 }
 
 TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
@@ -166,12 +229,22 @@ TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
   }
   EXPECT_EQ(run({"analyze", d + "/big.f64", "--no-psd"}, d + "/bf"), 2);
   EXPECT_NE(slurp(d + "/bf.stderr").find("value 4321 (byte 34568)"), std::string::npos) << slurp(d + "/bf.stderr");
-  // Fewer values than one PSD segment: refused before the analysis, saying what would do.
+  // Fewer values than the default PSD segment (256): analysed, no PSD, a note says why (issue 12,
+  // 7); a --segment the record cannot fill is refused before the analysis, saying what would do.
   text("short.txt", "1", 100);
-  EXPECT_EQ(run({"analyze", d + "/short.txt"}, d + "/sh"), 2);
-  EXPECT_NE(slurp(d + "/sh.stderr").find("fewer than one PSD segment of 256 (give a shorter --segment, or --no-psd)"),
+  ASSERT_EQ(run({"analyze", d + "/short.txt", "--json", d + "/sh.json"}, d + "/sh"), 0) << slurp(d + "/sh.stderr");
+  {
+    const auto j = nlohmann::json::parse(slurp(d + "/sh.json"));
+    EXPECT_FALSE(j.contains("psd"));
+    ASSERT_TRUE(j.contains("notes")) << j.dump();
+    EXPECT_NE(j["notes"].dump().find("no PSD: 100 values are fewer than one Welch segment of 256"), std::string::npos)
+        << j["notes"].dump();
+    EXPECT_NE(slurp(d + "/sh.stdout").find("note: no PSD: 100 values"), std::string::npos) << slurp(d + "/sh.stdout");
+  }
+  EXPECT_EQ(run({"analyze", d + "/short.txt", "--segment", "128"}, d + "/ss"), 2);
+  EXPECT_NE(slurp(d + "/ss.stderr").find("fewer than one PSD segment of 128 (give a shorter --segment, or --no-psd)"),
             std::string::npos)
-      << slurp(d + "/sh.stderr");
+      << slurp(d + "/ss.stderr");
   EXPECT_EQ(run({"analyze", d + "/short.txt", "--no-psd"}, d + "/shn"), 0) << slurp(d + "/shn.stderr");
   // A capture with valid CRCs holding a NaN: not a clean analysis.
   {

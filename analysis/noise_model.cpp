@@ -1,0 +1,486 @@
+#include "analysis/noise_model.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/special_functions/digamma.hpp>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "analysis/edf.hpp"
+
+namespace rig::analysis {
+
+double noise_basis(int k, double tau) {
+  switch (k) {
+    case 0: return 3 / (tau * tau);
+    case 1: return 1 / tau;
+    case 2: return 2 * std::numbers::ln2 / std::numbers::pi;
+    case 3: return tau / 3;
+    default: return tau * tau / 2;
+  }
+}
+
+double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+  static const int kAlpha[5] = {2, 0, -1, -2, -2};
+  double total = 0, sd = 0, cross = 0;
+  for (int k = 0; k < 5; ++k) total += mu[static_cast<std::size_t>(k)];
+  for (int k = 0; k < 5; ++k) {
+    const double u = mu[static_cast<std::size_t>(k)];
+    if (u <= 0) continue;
+    const double nu = edf_greenhall(kAlpha[k], 2, m, n_phase, true, false);
+    sd += u * std::sqrt(2 / nu);
+    cross += u / nu;
+  }
+  const double var = sd * sd;
+  if (var <= 0) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
+  return 2 * total * total / var;
+}
+
+namespace {
+
+struct Pts {
+  std::vector<double> tau, s, nu;  // tau, measured sigma^2, EDF in use
+  std::vector<std::size_t> m;
+};
+
+struct SubsetFit {
+  bool ok = false;
+  int mask = 0, k = 0;
+  std::array<double, 5> theta{};
+  Eigen::MatrixXd cov;  // over the subset's columns, in order
+  double nll = std::numeric_limits<double>::infinity();
+};
+
+double nll_of(const Pts& p, const std::array<double, 5>& th) {
+  double l = 0;
+  for (std::size_t i = 0; i < p.tau.size(); ++i) {
+    double mu = 0;
+    for (int k = 0; k < 5; ++k) mu += th[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    if (!(mu > 0)) return std::numeric_limits<double>::infinity();
+    l += p.nu[i] / 2 * (p.s[i] / mu + std::log(mu));
+  }
+  return l;
+}
+
+// Maximum likelihood of the terms in `mask` for s_i ~ mu_i chi2(nu_i)/nu_i: the Gamma GLM with
+// identity link, by iteratively reweighted least squares (weights nu_i / (2 mu_i^2); the score
+// equations sum nu_i b_ij (s_i - mu_i) / mu_i^2 = 0 are the likelihood's). The covariance is the
+// inverse Fisher information sum nu_i b_i b_i^T / (2 mu_i^2). nonneg: reject a negative theta.
+SubsetFit fit_subset(const Pts& p, int mask, bool nonneg) {
+  SubsetFit f;
+  f.mask = mask;
+  std::vector<int> cols;
+  for (int k = 0; k < 5; ++k)
+    if (mask & (1 << k)) cols.push_back(k);
+  f.k = static_cast<int>(cols.size());
+  const auto n = static_cast<Eigen::Index>(p.tau.size()), c = static_cast<Eigen::Index>(cols.size());
+  if (c == 0 || c > n) return f;
+  Eigen::MatrixXd X(n, c);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < c; ++j) X(i, j) = noise_basis(cols[static_cast<std::size_t>(j)], p.tau[static_cast<std::size_t>(i)]);
+  Eigen::VectorXd mu(n), y(n);
+  for (Eigen::Index i = 0; i < n; ++i) mu(i) = y(i) = p.s[static_cast<std::size_t>(i)];
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(c);
+  Eigen::MatrixXd info(c, c);
+  for (int it = 0; it < 50; ++it) {
+    Eigen::VectorXd w(n);
+    for (Eigen::Index i = 0; i < n; ++i) w(i) = std::sqrt(p.nu[static_cast<std::size_t>(i)] / 2) / mu(i);
+    const Eigen::MatrixXd Xw = w.asDiagonal() * X;
+    const Eigen::VectorXd scale = Xw.colwise().norm().transpose();
+    if ((scale.array() <= 0).any()) return f;
+    const Eigen::MatrixXd Xn = Xw * scale.cwiseInverse().asDiagonal();
+    const auto qr = Xn.colPivHouseholderQr();
+    if (qr.rank() < c) return f;
+    const Eigen::VectorXd next = qr.solve(w.cwiseProduct(y)).cwiseQuotient(scale);
+    const Eigen::VectorXd mu_next = X * next;
+    if ((mu_next.array() <= 0).any()) {
+      // The step leaves the positive means: halve towards the previous estimate.
+      if (it == 0) return f;
+      bool fixed = false;
+      Eigen::VectorXd t2 = next;
+      for (int h = 0; h < 30 && !fixed; ++h) {
+        t2 = (t2 + th) / 2;
+        fixed = ((X * t2).array() > 0).all();
+      }
+      if (!fixed) return f;
+      th = t2;
+    } else {
+      const double change = (next - th).cwiseAbs().cwiseQuotient(next.cwiseAbs().cwiseMax(1e-300)).maxCoeff();
+      th = next;
+      if (change < 1e-10) {
+        mu = X * th;
+        break;
+      }
+    }
+    mu = X * th;
+  }
+  for (Eigen::Index j = 0; j < c; ++j) f.theta[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = th(j);
+  if (nonneg && (th.array() < 0).any()) return f;
+  Eigen::VectorXd w(n);
+  for (Eigen::Index i = 0; i < n; ++i) w(i) = std::sqrt(p.nu[static_cast<std::size_t>(i)] / 2) / mu(i);
+  const Eigen::MatrixXd Xw = w.asDiagonal() * X;
+  const Eigen::VectorXd scale = Xw.colwise().norm().transpose();
+  const Eigen::MatrixXd Xn = Xw * scale.cwiseInverse().asDiagonal();
+  info = Xn.transpose() * Xn;
+  f.cov = scale.cwiseInverse().asDiagonal() * info.inverse() * scale.cwiseInverse().asDiagonal();
+  f.nll = nll_of(p, f.theta);
+  f.ok = std::isfinite(f.nll);
+  return f;
+}
+
+// AICc = 2 nll + 2k + 2k(k+1)/(n-k-1) (Hurvich & Tsai 1989); n-k-1 <= 0: the subset is too large.
+double aicc(const SubsetFit& f, std::size_t n) {
+  const double k = f.k, dn = static_cast<double>(n);
+  if (dn - k - 1 <= 0) return std::numeric_limits<double>::infinity();
+  return 2 * f.nll + 2 * k + 2 * k * (k + 1) / (dn - k - 1);
+}
+
+double sd_of(const SubsetFit& f, int term) {
+  int j = 0;
+  for (int k = 0; k < term; ++k)
+    if (f.mask & (1 << k)) ++j;
+  return std::sqrt(std::max(0.0, f.cov(j, j)));
+}
+
+
+// Correlation of ln(OADEV^2) at factors m and 2^L m for one power law, L = 1..5 octaves apart,
+// measured by simulation (NumPy, 400 records of 65536 points per law, m = 4..256, averaged over
+// m; tests/analysis/test_noise_coverage.cpp checks the white-FM and random-walk values). White PM
+// stays near 0.53 at any distance (every factor's estimate shares sum x_n^2); beyond 5 octaves
+// random walk decays by 0.8 per octave, the others are 0. Negative values (flicker, -0.07 at 5)
+// are taken as 0.
+constexpr double kOctaveCorr[4][5] = {
+    {0.41, 0.52, 0.53, 0.54, 0.53},  // white PM (Q)
+    {0.51, 0.16, 0.06, 0.02, 0.0},   // white FM (N)
+    {0.66, 0.24, 0.04, 0.0, 0.0},    // flicker FM (B)
+    {0.88, 0.66, 0.47, 0.35, 0.28},  // random walk FM (K)
+};
+double octave_corr(int k, int lag) {
+  if (lag == 0) return 1;
+  if (lag <= 5) return kOctaveCorr[k][lag - 1];
+  if (k == 0) return kOctaveCorr[0][4];
+  if (k == 3) return kOctaveCorr[3][4] * std::pow(0.8, lag - 5);
+  return 0;
+}
+
+// (mu_Q + mu_N) / mu at tau: the share of the white (high-frequency) terms in the model; 1 when
+// the model has none of the five terms.
+double white_share(const std::array<double, 5>& theta, double tau) {
+  double w = 0, all = 0;
+  for (int k = 0; k < 5; ++k) {
+    const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, tau);
+    all += mu;
+    if (k < 2) w += mu;
+  }
+  return all > 0 && w > 0 ? w / all : 1;
+}
+
+// Covariance of ln s_i under the model theta: Sigma_ij = C_ij sqrt(v_i v_j) + (delta h_i)^2 [i = j],
+// h_i = (mu_Q + mu_N)/mu at tau_i (the model error's profile, see fit_noise_model),
+// v_i = 2/nu_i; C_ij = sum_k w_ik w_jk rho_k(L_ij) / sqrt(sum_k w_ik^2 sum_k w_jk^2) with
+// w_ik = mu_ik / sqrt(nu_ik) (each random term's share of the scatter) and L_ij the octaves apart.
+Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std::size_t n_phase, double delta) {
+  static const int kAlpha[5] = {2, 0, -1, -2, -2};
+  const std::size_t n = p.tau.size();
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 5);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 5; ++k) {
+      const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+      if (mu > 0) w(static_cast<Eigen::Index>(i), k) = mu / std::sqrt(edf_greenhall(kAlpha[k], 2, p.m[i], n_phase, true, false));
+    }
+  Eigen::MatrixXd S(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
+      const int lag = std::max(1, static_cast<int>(std::lround(std::abs(std::log2(p.tau[j] / p.tau[i])))));
+      double c = i == j ? 1 : 0;
+      const double ni = w.row(ii).norm(), nj = w.row(jj).norm();
+      if (i != j && ni > 0 && nj > 0) {
+        c = 0;
+        for (int k = 0; k < 5; ++k) c += w(ii, k) * w(jj, k) * octave_corr(std::min(k, 3), lag);
+        c /= ni * nj;
+      }
+      S(ii, jj) = c * std::sqrt(2 / p.nu[i] * 2 / p.nu[j]) + (i == j ? std::pow(delta * white_share(theta, p.tau[i]), 2) : 0);
+    }
+  return S;
+}
+
+// E[ln(chi2_nu / nu)] = digamma(nu/2) - ln(nu/2): the bias of ln s_i.
+double log_bias(double nu) { return boost::math::digamma(nu / 2) - std::log(nu / 2); }
+
+// Generalized least squares of ln s_i = ln mu_i(theta) + bias_i with the covariance W^-1 (fixed),
+// Gauss-Newton from `start` over the terms in `mask`; cov = (J^T W J)^-1, nll = r^T W r / 2.
+SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::array<double, 5> start, bool nonneg) {
+  SubsetFit f;
+  f.mask = mask;
+  std::vector<int> cols;
+  for (int k = 0; k < 5; ++k)
+    if (mask & (1 << k)) cols.push_back(k);
+  f.k = static_cast<int>(cols.size());
+  const auto n = static_cast<Eigen::Index>(p.tau.size()), c = static_cast<Eigen::Index>(cols.size());
+  if (c == 0 || c > n) return f;
+  Eigen::MatrixXd X(n, c);
+  Eigen::VectorXd ly(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto si = static_cast<std::size_t>(i);
+    for (Eigen::Index j = 0; j < c; ++j) X(i, j) = noise_basis(cols[static_cast<std::size_t>(j)], p.tau[si]);
+    ly(i) = std::log(p.s[si]) - log_bias(p.nu[si]);
+  }
+  Eigen::VectorXd th(c);
+  for (Eigen::Index j = 0; j < c; ++j) th(j) = start[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
+  auto objective = [&](const Eigen::VectorXd& t, Eigen::VectorXd* r) {
+    const Eigen::VectorXd mu = X * t;
+    if ((mu.array() <= 0).any()) return std::numeric_limits<double>::infinity();
+    const Eigen::VectorXd res = ly - mu.array().log().matrix();
+    if (r) *r = res;
+    return res.dot(W * res);
+  };
+  Eigen::VectorXd r;
+  double F = objective(th, &r);
+  if (!std::isfinite(F)) return f;
+  Eigen::MatrixXd J(n, c);
+  for (int it = 0; it < 100; ++it) {
+    const Eigen::VectorXd mu = X * th;
+    J = mu.cwiseInverse().asDiagonal() * X;  // d ln mu / d theta
+    const Eigen::VectorXd scale = J.colwise().norm().transpose();
+    if ((scale.array() <= 0).any()) return f;
+    const Eigen::MatrixXd Jn = J * scale.cwiseInverse().asDiagonal();
+    const Eigen::MatrixXd A = Jn.transpose() * W * Jn;
+    const Eigen::VectorXd step = A.ldlt().solve(Jn.transpose() * W * r).cwiseQuotient(scale);
+    double lam = 1, Fn = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd tn, rn;
+    for (int h = 0; h < 40; ++h, lam /= 2) {
+      tn = th + lam * step;
+      Fn = objective(tn, &rn);
+      if (Fn <= F) break;
+    }
+    if (!(Fn <= F)) break;
+    const double gain = F - Fn;
+    th = tn, r = rn, F = Fn;
+    if (gain < 1e-12 * (1 + F)) break;
+  }
+  for (Eigen::Index j = 0; j < c; ++j) f.theta[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = th(j);
+  if (nonneg && (th.array() < 0).any()) return f;
+  const Eigen::VectorXd mu = X * th;
+  J = mu.cwiseInverse().asDiagonal() * X;
+  const Eigen::VectorXd scale = J.colwise().norm().transpose();
+  const Eigen::MatrixXd Jn = J * scale.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd A = Jn.transpose() * W * Jn;
+  f.cov = scale.cwiseInverse().asDiagonal() * A.inverse() * scale.cwiseInverse().asDiagonal();
+  f.nll = F / 2;
+  f.ok = std::isfinite(f.nll) && f.cov.allFinite();
+  return f;
+}
+
+
+// The model selected on the points `p` (EDF and covariance from the model, GLS over every subset,
+// AICc), with its goodness of fit. allow_error: add the Birge model error delta when the
+// selected model's chi2/dof > 1 (the fallback when no tau range is adequate, see fit_noise_model).
+struct Selection {
+  bool ok = false;
+  SubsetFit best;
+  Eigen::MatrixXd W;      // the inverse covariance of ln s_i the terms were fitted with
+  double delta = 0;       // the model error in W
+  double chi2 = 0;        // GLS chi-square of the selected model on its own covariance, delta = 0
+  double dof = 1;         // points - terms
+  double p_value = 0;     // P(chi2_dof >= chi2)
+  double aicc = 0;
+  std::string reason;
+};
+
+// chi2 of the residuals of `theta` on p (EDF from theta) under the model covariance with error d.
+double gls_chi2(const Pts& p, const std::array<double, 5>& theta, std::size_t n_phase, double d) {
+  const std::size_t n = p.tau.size();
+  Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    double mu = 0;
+    for (int k = 0; k < 5; ++k) mu += theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu[i]);
+  }
+  const Eigen::MatrixXd S = model_cov(p, theta, n_phase, d);
+  return r.dot(S.ldlt().solve(r));
+}
+
+void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_phase) {
+  for (std::size_t i = 0; i < p.tau.size(); ++i) {
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    p.nu[i] = model_edf(mu, p.m[i], n_phase);
+  }
+}
+
+Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
+  Selection out;
+  const std::size_t n = p.tau.size();
+  p.nu.resize(n);
+  for (std::size_t i = 0; i < n; ++i) p.nu[i] = edf_greenhall(0, 2, p.m[i], n_phase, true, false);  // start: white FM
+  // Start: the best subset with independent chi-square points (Gamma likelihood).
+  SubsetFit best;
+  double best_aic = std::numeric_limits<double>::infinity();
+  for (int mask = 1; mask < 32; ++mask) {
+    const SubsetFit f = fit_subset(p, mask, true);
+    if (f.ok && aicc(f, n) < best_aic) best_aic = aicc(f, n), best = f;
+  }
+  if (!best.ok) {
+    out.reason = "no non-negative model fits the Allan points";
+    return out;
+  }
+  // Then: EDF and covariance from the model, GLS over every subset, select, repeat.
+  for (int iter = 0; iter < 5; ++iter) {
+    const int prev_mask = best.mask;
+    set_model_edf(p, best.theta, n_phase);
+    const double dof = std::max(1.0, static_cast<double>(n) - best.k);
+    out.delta = 0;
+    // Birge / Paule-Mandel (fallback only): a relative model error so that chi2/dof = 1:
+    // var(ln s_i) = 2/nu_i + (delta h_i)^2 with h_i the white terms' (Q, N) share of the model
+    // at tau_i: what the five terms miss on a real DUT is high-frequency (tones, folded pick-up,
+    // the output filter's shape), falling with tau like Q and N.
+    if (allow_error && gls_chi2(p, best.theta, n_phase, 0) / dof > 1) {
+      double lo = 0, hi = 0.1;
+      while (gls_chi2(p, best.theta, n_phase, hi) / dof > 1 && hi < 10) hi *= 2;
+      for (int it = 0; it < 40; ++it) {
+        const double mid = (lo + hi) / 2;
+        (gls_chi2(p, best.theta, n_phase, mid) / dof > 1 ? lo : hi) = mid;
+      }
+      out.delta = hi;
+    }
+    out.W = model_cov(p, best.theta, n_phase, out.delta).inverse();
+    SubsetFit sel;
+    best_aic = std::numeric_limits<double>::infinity();
+    for (int mask = 1; mask < 32; ++mask) {
+      const SubsetFit g = fit_subset(p, mask, true);
+      if (!g.ok) continue;
+      const SubsetFit f = gls_subset(p, out.W, mask, g.theta, true);
+      if (f.ok && aicc(f, n) < best_aic) best_aic = aicc(f, n), sel = f;
+    }
+    if (!sel.ok) break;
+    best = sel;
+    out.aicc = best_aic;
+    if (iter > 0 && best.mask == prev_mask) break;
+  }
+  // Goodness of fit of the selected model on the covariance it implies (no model error).
+  set_model_edf(p, best.theta, n_phase);
+  out.dof = std::max(1.0, static_cast<double>(n) - best.k);
+  out.chi2 = gls_chi2(p, best.theta, n_phase, 0);
+  out.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(out.dof), out.chi2));
+  out.best = best;
+  out.ok = true;
+  return out;
+}
+
+Pts tail_of(const Pts& p, std::size_t from) {
+  Pts q;
+  q.tau.assign(p.tau.begin() + static_cast<std::ptrdiff_t>(from), p.tau.end());
+  q.s.assign(p.s.begin() + static_cast<std::ptrdiff_t>(from), p.s.end());
+  q.m.assign(p.m.begin() + static_cast<std::ptrdiff_t>(from), p.m.end());
+  return q;
+}
+
+}  // namespace
+
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence) {
+  NoiseModelFit out;
+  // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
+  Pts all;
+  for (const DevPoint& d : oadev) {
+    if (!(d.dev > 0) || !(d.tau_s > 0) || d.m == 0) continue;
+    if (!all.tau.empty() && d.tau_s < 2 * all.tau.back() * (1 - 1e-9)) continue;
+    all.tau.push_back(d.tau_s);
+    all.s.push_back(d.dev * d.dev);
+    all.m.push_back(d.m);
+  }
+  // The longest tau too when it is at least 1.5x the last octave point (log:N ends at the stop
+  // ratio, (N-1)/4, up to an octave past the last power of two: the points that see K and R
+  // most); its correlation with the octave point before it is taken as one octave's.
+  for (auto it = oadev.rbegin(); it != oadev.rend(); ++it)
+    if (it->dev > 0 && it->tau_s > 0 && it->m > 0) {
+      if (!all.tau.empty() && it->tau_s >= 1.5 * all.tau.back()) {
+        all.tau.push_back(it->tau_s);
+        all.s.push_back(it->dev * it->dev);
+        all.m.push_back(it->m);
+      }
+      break;
+    }
+  const std::size_t n_all = all.tau.size();
+  if (n_all < 3) {  // AICc needs n - k - 1 > 0 for one term
+    out.reason = "fewer than 3 octave Allan points";
+    return out;
+  }
+  const double tau0 = all.tau.front() / static_cast<double>(all.m.front());
+  const auto n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+
+  // The tau range where the IEEE 952 model is adequate (docs/analysis.md "Goodness of fit"): the
+  // model is selected on the octave points from the shortest tau on; when its chi-square on the
+  // covariance it implies is improbable (p < kGofAlpha), the shortest point is dropped and the
+  // model selected again. What the five power laws miss on a real DUT is high-frequency (tones
+  // folded by the sampling, the output filter, bursts): it sits at the shortest taus, where the
+  // EDF is 1e5..1e6 and a 10 % ripple is hundreds of sigma, and it would otherwise decide the
+  // model (and, carried as a model error, drown the long-tau points that decide K and R). When
+  // no range of at least kMinGofPoints points is adequate, the last range tried is fitted with
+  // the Birge model error instead, and the fit says so.
+  Selection sel;
+  std::size_t from = 0;
+  const std::size_t last_from = n_all > kMinGofPoints ? n_all - kMinGofPoints : 0;
+  for (;; ++from) {
+    sel = select_model(tail_of(all, from), n_phase, false);
+    if ((sel.ok && sel.p_value >= kGofAlpha) || from >= last_from) break;
+  }
+  out.gof_p = sel.ok ? sel.p_value : 0;
+  out.dropped_short = from;
+  if (sel.ok && sel.p_value < kGofAlpha) {
+    sel = select_model(tail_of(all, from), n_phase, true);
+    out.model_error = sel.delta;
+  }
+  if (!sel.ok) {
+    out.reason = sel.reason;
+    return out;
+  }
+  Pts p = tail_of(all, from);
+  const std::size_t n = p.tau.size();
+  p.nu.resize(n);
+  set_model_edf(p, sel.best.theta, n_phase);
+  const SubsetFit& best = sel.best;
+  const Eigen::MatrixXd& W = sel.W;
+  out.aicc = sel.aicc;
+  out.chi2_per_dof = sel.chi2 / sel.dof;
+  out.tau_s = p.tau;
+  out.avar = p.s;
+  out.edf = p.nu;
+  const double z = boost::math::quantile(boost::math::normal(), (1 + confidence) / 2);
+  for (int k = 0; k < 5; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    if (best.mask & (1 << k)) {
+      const double th = best.theta[kk], sd = sd_of(best, k);
+      out.in_model[kk] = true;
+      out.z[kk] = sd > 0 ? th / sd : 0;
+      out.value[kk] = std::sqrt(th);
+      out.lo[kk] = std::sqrt(std::max(0.0, th - z * sd));
+      out.hi[kk] = out.upper[kk] = std::sqrt(th + z * sd);
+      for (std::size_t i = 0; i < n; ++i) {
+        double mu = 0;
+        for (int j = 0; j < 5; ++j) mu += best.theta[static_cast<std::size_t>(j)] * noise_basis(j, p.tau[i]);
+        out.share[kk] = std::max(out.share[kk], th * noise_basis(k, p.tau[i]) / mu);
+      }
+    } else {
+      // Upper limit: the model plus this term, its sign free (GLS from the model, theta_k = 0);
+      // theta_k^+ + z sd(theta_k).
+      SubsetFit f;
+      if (W.size() > 0) f = gls_subset(p, W, best.mask | (1 << k), best.theta, false);
+      if (f.ok) {
+        out.upper[kk] = std::sqrt(std::max(0.0, f.theta[kk]) + z * sd_of(f, k));
+      } else {
+        // No solution with the term: it cannot exceed what any one point allows alone.
+        double u = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < n; ++i) u = std::min(u, p.s[i] * (1 + z * std::sqrt(2 / p.nu[i])) / noise_basis(k, p.tau[i]));
+        out.upper[kk] = std::sqrt(u);
+      }
+    }
+  }
+  out.ok = true;
+  return out;
+}
+
+}  // namespace rig::analysis

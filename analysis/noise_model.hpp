@@ -1,0 +1,72 @@
+// One model for the IEEE Std 952 noise terms of an accelerometer, every term the data supports.
+//
+//   sigma^2(tau) = theta_Q 3/tau^2 + theta_N /tau + theta_B (2 ln2/pi) + theta_K tau/3 + theta_R tau^2/2,
+//   theta = (Q^2, N^2, B^2, K^2, R^2) >= 0                                   (IEEE 952 Annex C)
+//
+// Fitted to the overlapping Allan variances at the octave averaging factors (m = 1, 2, 4, ...:
+// the least correlated subset, Schlossberger & Howe, NIST) by generalized least squares on
+// ln s_i with the covariance the MODEL implies (GMWM-style, Guerrier et al.): the variance of
+// ln s_i is 2/nu_i with nu_i the model's EDF there (Greenhall & Riley EDF of each term's power
+// law, model_edf below), never the per-tau noise identification's; the correlation between
+// octave points is each power law's (measured, kOctaveCorr in the .cpp) mixed by the terms'
+// shares. Every subset of the five terms is fitted (non-negative); the subset with the least
+// AICc is the model (Akaike's criterion with the small-sample correction: a term enters when
+// it lowers the GLS chi-square by more than its 2 + correction). A term in the model is reported with bounds from the Fisher
+// information; a term not in it is null with an upper limit. No record-length rule: R is a
+// candidate on every record. The points fitted start where the model describes the curve: the
+// shortest octave points are dropped while the selected model's chi-square is improbable
+// (kGofAlpha), since what the five power laws miss on a DUT (folded tones, the output filter)
+// sits at the shortest taus. docs/analysis.md ("One model") gives the reasoning and coverage.
+// Long-tau points of other estimators (TOTDEV, TheoH: more EDF near T) are not used yet; they
+// would enter as further points with their own EDF and the model covariance extended to them.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "analysis/allan.hpp"
+
+namespace rig::analysis {
+
+struct NoiseModelFit {
+  bool ok = false;
+  std::string reason;
+  // per term Q, N, B, K, R (the order of theta above)
+  std::array<bool, 5> in_model{};      // selected by AICc
+  std::array<double, 5> value{};       // sqrt(theta) (0 when not in the model)
+  std::array<double, 5> lo{}, hi{};    // bounds at `confidence` (in the model)
+  std::array<double, 5> upper{};       // every term: upper limit (the interval's upper end)
+  std::array<double, 5> share{};       // the term's largest share of the model sigma^2 over the fitted taus
+  std::array<double, 5> z{};           // theta / sd(theta) of a term in the model
+  std::vector<double> tau_s, avar, edf;  // the points fitted: tau, measured sigma^2, model EDF
+  double aicc = 0;
+  double chi2_per_dof = 0;  // GLS chi2 of the selected model on the covariance it implies, per dof
+  double gof_p = 0;         // P(chi2 >= that): the goodness of fit over the points fitted
+  std::size_t dropped_short = 0;  // octave points below tau_s.front() left out as not described by the model
+  double model_error = 0;   // relative model error delta (Birge), only when no tau range fitted (gof_p < kGofAlpha)
+};
+
+// Goodness of fit: a model whose chi-square has a probability below kGofAlpha does not describe
+// the points; the shortest tau is dropped until it does, keeping at least kMinGofPoints points.
+inline constexpr double kGofAlpha = 1e-3;
+inline constexpr std::size_t kMinGofPoints = 6;
+
+// oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
+// is taken from it); record_s: its length; confidence: of the bounds (default one sigma).
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma);
+
+// sigma^2 of term k (0..4 = Q, N, B, K, R) per unit of its squared coefficient at tau (IEEE 952).
+double noise_basis(int k, double tau);
+
+// The EDF of an overlapping Allan variance at factor m of n_phase points whose true variance is
+// the sum of the components mu[k] (independent processes): sd(s) <= sum_k mu_k sqrt(2/nu_k)
+// (nu_k: Greenhall & Riley for Q alpha 2, N 0, B -1, K -2; the bound of the cross-covariances by
+// Cauchy-Schwarz, exact when all nu_k are equal); edf = 2 (sum mu)^2 / var(s). R is given
+// random walk's EDF (alpha -2): a ramp on one record is not told from a random walk's
+// realisation that rises like one, and a deterministic ramp's near-infinite EDF made a model
+// with R weigh its own long-tau points up and choose itself.
+double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
+
+}  // namespace rig::analysis
