@@ -1,5 +1,6 @@
 // The one-pass Allan-family engine (see allan_engine.hpp for the design).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <barrier>
 #include <bit>
@@ -372,22 +373,34 @@ void run_cursor(Acc& a, Ring& ring, const Builder& builder, StateAt&& state_at, 
   }
 }
 
-// MDEV's first term: the window sum of d[0..m-1] (P[0..3m-1]), from any random-access reader.
-template <class ReadP>
-void mdev_prologue(Acc& a, ReadP&& read, std::size_t block) {
+// MDEV's first term: the window sum of d[0..m-1] (P[0..3m-1]), in blocks of `block` points,
+// each block's sum from sum_second_diff. read_block(i, len) gives the three windows' pointers
+// &P[i], &P[i + m], &P[i + 2m] for len points; every path sums the same blocks in the same order,
+// so streamed and in-memory runs agree to the bit.
+template <class ReadBlock>
+void mdev_prime_first(Acc& a, ReadBlock&& read_block, std::size_t block) {
   double inner = 0;
-  std::vector<double> p0, p1, p2;
   for (std::size_t i = 0; i < a.m; i += block) {
     const std::size_t len = std::min(block, a.m - i);
-    p0.resize(len), p1.resize(len), p2.resize(len);
-    read(i, std::span<double>(p0));
-    read(i + a.m, std::span<double>(p1));
-    read(i + 2 * a.m, std::span<double>(p2));
-    for (std::size_t t = 0; t < len; ++t) inner += p2[t] - 2 * p1[t] + p0[t];
+    const auto [p0, p1, p2] = read_block(i, len);
+    inner += sum_second_diff(p0, p1, p2, len);
   }
   a.inner = inner;
   a.sum += inner * inner;
   a.terms += 1;
+}
+
+// The same from any random-access reader of P (copies the three windows block by block).
+template <class ReadP>
+void mdev_prologue(Acc& a, ReadP&& read, std::size_t block) {
+  std::vector<double> p0, p1, p2;
+  mdev_prime_first(a, [&](std::size_t i, std::size_t len) {
+    p0.resize(len), p1.resize(len), p2.resize(len);
+    read(i, std::span<double>(p0));
+    read(i + a.m, std::span<double>(p1));
+    read(i + 2 * a.m, std::span<double>(p2));
+    return std::array<const double*, 3>{p0.data(), p1.data(), p2.data()};
+  }, block);
 }
 
 // TOTDEV's reflected edge terms (NIST SP 1065 eq. 25: x*(1-j) = 2x(1) - x(1+j), x*(N+j) = 2x(N) - x(N-j)).
@@ -527,7 +540,10 @@ struct Engine::Impl {
     std::vector<double> sc;
     if (a.far && a.bases > 0) {
       if (ring_holds_all) {
-        if (a.modified()) mdev_prologue(a, reader(sc), chunk);
+        if (a.modified())
+          mdev_prime_first(a, [&](std::size_t i, std::size_t) {
+            return std::array<const double*, 3>{ring.at(i), ring.at(i + a.m), ring.at(i + 2 * a.m)};
+          }, chunk);
         const double* w[4];
         for (std::size_t j = 0; j < a.nwin; ++j) w[j] = ring.at(j * a.m);
         a.run(0, a.bases, w);
@@ -690,8 +706,9 @@ void Engine::Impl::run_item(const std::vector<std::size_t>& item, std::vector<Ac
     if (lo_b >= hi_b) continue;
     if (a.modified() && !a.primed) {
       if (lo_b == 0) {  // the record's first term
-        mdev_prologue(a, [&](std::uint64_t j, std::span<double> out) {
-          for (std::size_t t = 0; t < out.size(); ++t) out[t] = *ring.at(j + t);
+        // P[0, 3m) is in the ring unwrapped (3m + 2 chunks fit it): read in place.
+        mdev_prime_first(a, [&](std::size_t i, std::size_t) {
+          return std::array<const double*, 3>{ring.at(i), ring.at(i + a.m), ring.at(i + 2 * a.m)};
         }, chunk);
       } else {  // a segment's first base (in memory: the whole record is in the ring)
         a.inner = sum_second_diff(ring.at(lo_b), ring.at(lo_b + a.m), ring.at(lo_b + 2 * a.m), a.m);
