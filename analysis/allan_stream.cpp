@@ -51,6 +51,11 @@ struct Acc {
   double inner = 0;       // MDEV state: the window sum at the next base
   bool primed = false;    // MDEV: `inner` holds the window sum of this accumulator's next base
   bool far = false;       // post-pass: even the newer windows do not fit the ring
+  // TOTDEV: the index of the OADEV accumulator with the same m, whose sum is this one's interior
+  // (SP 1065 eq. 25's terms with i - m >= 0 and i + m <= N - 1 are OADEV's, eq. 11): the pass runs
+  // them once, and only the reflected edges are this accumulator's own work. npos: run its own.
+  static constexpr std::size_t kOwnInterior = static_cast<std::size_t>(-1);
+  std::size_t interior_of = kOwnInterior;
   // In-pass cursors: the oldest `cursors` windows (P[b], and P[b + m] when that is beyond the
   // ring too) rebuilt by sequential cursors; the newer ones read from the ring.
   struct Cursor {
@@ -598,6 +603,11 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     poll();
     finish(accs[post[k]]);
   });
+  for (Acc& a : accs)  // TOTDEV's shared interiors (every OADEV sum is final now)
+    if (a.interior_of != Acc::kOwnInterior) {
+      a.sum = accs[a.interior_of].sum + a.sum;
+      a.terms += accs[a.interior_of].terms;
+    }
 
   collect(res);
   return res;
@@ -609,6 +619,15 @@ void Engine::Impl::plan(const std::vector<EngineRequest>& req, EngineResult& res
   accs.clear();
   accs.reserve(req.size());
   for (const auto& r : req) accs.push_back(make_acc(r.type, r.m, n));
+  for (Acc& t : accs) {
+    if (t.type != Deviation::TOTDEV) continue;
+    for (std::size_t j = 0; j < accs.size(); ++j)
+      if (accs[j].type == Deviation::OADEV && accs[j].m == t.m) {
+        t.interior_of = j;
+        t.bases = 0;  // nothing of its own in the pass
+        break;
+      }
+  }
 
   // Decimated series for noise identification, one per distinct m.
   decim.clear();

@@ -110,6 +110,29 @@ TEST(Stream, SmallRingAndFarCursorsEqualTheInMemoryResult) {
   }
 }
 
+TEST(Stream, TotdevWithOadevSharesItsInteriorAndEqualsTotdevAlone) {
+  // With OADEV in the same pass, TOTDEV's interior terms are OADEV's sums at the same m (SP 1065
+  // eq. 25 vs eq. 11): run once, only the reflected edges added. The result must equal TOTDEV
+  // computed on its own, in memory and streamed through a small ring (far and cursor taus).
+  const auto y = signal(150000, 11);
+  DevOptions oa, tot;
+  oa.type = Deviation::OADEV;
+  tot.type = Deviation::TOTDEV;
+  for (DevOptions* o : {&oa, &tot}) o->rate_hz = 1000, o->taus = parse_tau_grid("log:40");
+  const auto alone = deviation(y, tot);
+  const DevOptions both[] = {oa, tot};
+  SpanSource src(y);
+  StreamOptions in_memory;
+  in_memory.memory_budget_bytes = std::size_t{1} << 40;
+  expect_same(alone, deviations_stream(src, both, in_memory)[1], 1e-12, "in memory");
+  StreamOptions small;
+  small.memory_budget_bytes = 1u << 20;
+  small.chunk = 4096;
+  const auto streamed = deviations_stream(src, both, small);
+  expect_same(alone, streamed[1], 1e-12, "streamed");
+  expect_same(deviation(y, oa), streamed[0], 1e-12, "its OADEV");
+}
+
 TEST(Stream, OneThreadEqualsTwo) {
   // In memory every deviation's heads are cut into fixed segments (MDEV/TDEV restart their
   // window sum at each): the sums must not depend on which thread ran which segment.
