@@ -74,6 +74,40 @@ RIG_CLONES double sum_d3(const double* w0, const double* w1, const double* w2, c
   return s;
 }
 
+double sum_d2_strided(const double* w0, const double* w1, const double* w2, std::size_t first, std::size_t stride,
+                      std::size_t len) {
+  double a[4] = {};
+  std::size_t t = first;
+  for (; t + 3 * stride < len; t += 4 * stride)
+    for (std::size_t l = 0; l < 4; ++l) {
+      const std::size_t u = t + l * stride;
+      const double d = w2[u] - 2 * w1[u] + w0[u];
+      a[l] += d * d;
+    }
+  for (std::size_t l = 0; t < len; t += stride, ++l) {
+    const double d = w2[t] - 2 * w1[t] + w0[t];
+    a[l] += d * d;
+  }
+  return (a[0] + a[1]) + (a[2] + a[3]);
+}
+
+double sum_d3_strided(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t first,
+                      std::size_t stride, std::size_t len) {
+  double a[4] = {};
+  std::size_t t = first;
+  for (; t + 3 * stride < len; t += 4 * stride)
+    for (std::size_t l = 0; l < 4; ++l) {
+      const std::size_t u = t + l * stride;
+      const double d = w3[u] - 3 * w2[u] + 3 * w1[u] - w0[u];
+      a[l] += d * d;
+    }
+  for (std::size_t l = 0; t < len; t += stride, ++l) {
+    const double d = w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+    a[l] += d * d;
+  }
+  return (a[0] + a[1]) + (a[2] + a[3]);
+}
+
 namespace {
 
 // A doubling chain m, 2m, .., 2^(K-1) m of OADEV/TOTDEV taus aligned at a common head h (the

@@ -74,14 +74,12 @@ struct Acc {
   // Terms with base in [b0, b0 + len); w[k] = &P[b0 + k m], contiguous for len points.
   void run(std::size_t b0, std::size_t len, const double* const* w) {
     if (strided()) {
-      std::size_t t = (b0 % m == 0) ? 0 : m - b0 % m;
-      for (; t < len; t += m) {
-        double d;
-        if (nwin == 3) d = w[2][t] - 2 * w[1][t] + w[0][t];
-        else d = w[3][t] - 3 * w[2][t] + 3 * w[1][t] - w[0][t];
-        sum += d * d;
-        ++terms;
-      }
+      const std::size_t t = (b0 % m == 0) ? 0 : m - b0 % m;
+      if (t >= len) return;
+      if (m == 1) sum += nwin == 3 ? sum_d2(w[0], w[1], w[2], len) : sum_d3(w[0], w[1], w[2], w[3], len);
+      else if (nwin == 3) sum += sum_d2_strided(w[0], w[1], w[2], t, m, len);
+      else sum += sum_d3_strided(w[0], w[1], w[2], w[3], t, m, len);
+      terms += (len - t + m - 1) / m;
       return;
     }
     if (modified()) sum += mdev_run(w[0], w[1], w[2], w[3], len, inner);
