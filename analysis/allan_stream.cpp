@@ -627,23 +627,27 @@ void Engine::Impl::plan(const std::vector<EngineRequest>& req, EngineResult& res
       }
   }
 
-  // Decimated series for noise identification, one per distinct m.
+  // Ring: the whole record when the budget holds it (then the noise-ID series are views of it,
+  // collect()); else what the budget leaves after copies of those series. The next chunk is
+  // built while the current one is processed: two chunks of slack.
   decim.clear();
-  for (const auto& r : req) decim[r.m];
-  std::size_t decim_bytes = 0;
-  for (auto& [m, v] : decim) {
-    const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, cap + 1);
-    v.reserve(len);
-    decim_bytes += len * sizeof(double);
-  }
-
-  // Ring: what the budget leaves after the noise-ID series, never more than the record needs.
-  // The next chunk is built while the current one is processed: two chunks of slack.
-  const std::size_t floor_bytes = 8 * chunk * sizeof(double);
-  const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes ? so.memory_budget_bytes - decim_bytes
-                                                                                : floor_bytes;
   const std::size_t ring_need = static_cast<std::size_t>(n) + 2 * chunk;
-  ring.allocate(std::min(budget / sizeof(double), ring_need));
+  if (ring_need <= so.memory_budget_bytes / sizeof(double)) {
+    ring.allocate(ring_need);
+  } else {
+    for (const auto& r : req) decim[r.m];  // one series per distinct m
+    std::size_t decim_bytes = 0;
+    for (auto& [m, v] : decim) {
+      const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, cap + 1);
+      v.reserve(len);
+      decim_bytes += len * sizeof(double);
+    }
+    const std::size_t floor_bytes = 8 * chunk * sizeof(double);
+    const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes
+                                   ? so.memory_budget_bytes - decim_bytes
+                                   : floor_bytes;
+    ring.allocate(std::min(budget / sizeof(double), ring_need));
+  }
   ring_holds_all = ring.size >= n;
   res.ring_points = ring.size;
 
@@ -856,9 +860,15 @@ void Engine::Impl::collect(EngineResult& res) {
     s.m = accs[i].m;
     s.sum = accs[i].sum;
     s.terms = accs[i].terms;
-    s.decimated_complete = decim[accs[i].m].size() == (n - 1) / accs[i].m + 1;
   }
-  res.decimated = std::move(decim);
+  res.decimated.clear();
+  for (const Acc& a : accs) {
+    if (res.decimated.count(a.m)) continue;
+    const std::size_t all = static_cast<std::size_t>((n - 1) / a.m + 1);
+    if (ring_holds_all) res.decimated.emplace(a.m, Decimated(ring.at(0), a.m, std::min(all, cap + 1)));
+    else res.decimated.emplace(a.m, Decimated(std::move(decim[a.m])));
+  }
+  for (Sums& s : res.sums) s.decimated_complete = res.decimated.at(s.m).size() == (n - 1) / s.m + 1;
   decim.clear();
 }
 
