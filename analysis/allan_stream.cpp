@@ -409,32 +409,53 @@ void mdev_prologue(Acc& a, ReadP&& read, std::size_t block) {
 // TOTDEV's reflected edge terms (NIST SP 1065 eq. 25: x*(1-j) = 2x(1) - x(1+j), x*(N+j) = 2x(N) - x(N-j)).
 // view(lo, len, buf) gives &P[lo] for len points: in place when the ring holds the record (the
 // copies were 18 % of a TOTDEV run), else read into buf.
+//
+// On each side the reflected point of term i is P[S - i] with S - i in the side's own range
+// [lo, hi) (S = lo + hi - 1): a block of terms [a, a + len) reads as its reflection the points
+// that the mirror block [S - a - len + 1, S - a + 1) reads as its centres. Blocks are taken in
+// such pairs from both ends, so each centre block is read once and serves twice (4 reads per
+// two blocks instead of 6: random access rebuilds P from the checkpoints, most of a streamed
+// TOTDEV); the middle, shorter than two blocks, block by block.
 template <class View>
 void totdev_edges(Acc& a, std::uint64_t n, View&& view, std::size_t block) {
   const std::size_t m = a.m;
-  std::vector<double> rb, cb, fb;
-  const double first = *view(0, 1, rb);
-  const double last = *view(n - 1, 1, rb);
+  std::vector<double> b0, b1, b2, b3;
+  const double first = *view(0, 1, b0);
+  const double last = *view(n - 1, 1, b0);
+  // One side: terms i in [lo, hi), the far neighbour P[i + f_off] (f_off = +m left, -m right).
+  auto side = [&](std::uint64_t lo, std::uint64_t hi, std::int64_t f_off, auto&& kernel) {
+    const std::uint64_t S = lo + hi - 1;
+    auto far = [&](std::uint64_t i) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(i) + f_off); };
+    std::uint64_t x = lo, y = hi;  // terms [x, y) not yet summed; S - x + 1 == y throughout
+    while (y - x >= 2 * static_cast<std::uint64_t>(block)) {
+      const std::uint64_t x2 = y - block;  // the mirror block of [x, x + block)
+      const double* c = view(x, block, b0);
+      const double* c2 = view(x2, block, b1);
+      const double* f = view(far(x), block, b2);
+      const double* f2 = view(far(x2), block, b3);
+      a.sum += kernel(c2, c, f, block);
+      a.sum += kernel(c, c2, f2, block);
+      a.terms += 2 * block;
+      x += block, y -= block;
+    }
+    for (std::uint64_t i = x; i < y; i += block) {
+      const std::size_t len = static_cast<std::size_t>(std::min<std::uint64_t>(block, y - i));
+      const double* r = view(S - i - (len - 1), len, b0);  // P[S-i-len+1 .. S-i], used reversed
+      const double* c = view(i, len, b1);
+      const double* f = view(far(i), len, b2);
+      a.sum += kernel(r, c, f, len);
+      a.terms += len;
+    }
+  };
+  const auto sm = static_cast<std::int64_t>(m);
   // Left: i in [1, m-1]: 2P0 - P[m-i] - 2P[i] + P[i+m].
-  for (std::size_t i = 1; i < m; i += block) {
-    const std::size_t len = std::min(block, m - i);
-    const double* r = view(m - i - (len - 1), len, rb);  // P[m-i-len+1 .. m-i], used reversed
-    const double* c = view(i, len, cb);
-    const double* f = view(i + m, len, fb);
-    a.sum += sum_reflected_left(2 * first, r, c, f, len);
-    a.terms += len;
-  }
+  side(1, m, sm, [&](const double* r, const double* c, const double* f, std::size_t len) {
+    return sum_reflected_left(2 * first, r, c, f, len);
+  });
   // Right: i in [n-m, n-2]: P[i-m] - 2P[i] + 2P[n-1] - P[2(n-1) - i - m].
-  const std::uint64_t i_lo = n - m, i_hi = n - 1;
-  for (std::uint64_t i = i_lo; i < i_hi; i += block) {
-    const std::size_t len = std::min<std::uint64_t>(block, i_hi - i);
-    const double* f = view(i - m, len, fb);
-    const double* c = view(i, len, cb);
-    // reflected indices 2(n-1) - (i+t) - m for t = 0..len-1: descending, lowest at t = len-1
-    const double* r = view(2 * (n - 1) - (i + len - 1) - m, len, rb);
-    a.sum += sum_reflected_right(2 * last, r, c, f, len);
-    a.terms += len;
-  }
+  side(n - m, n - 1, -sm, [&](const double* r, const double* c, const double* f, std::size_t len) {
+    return sum_reflected_right(2 * last, r, c, f, len);
+  });
 }
 
 }  // namespace
