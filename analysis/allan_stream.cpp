@@ -581,7 +581,7 @@ struct Engine::Impl {
         buf.resize(len);
         read(lo, std::span<double>(buf));
         return buf.data();
-      }, chunk);
+      }, 4 * chunk);  // longer blocks: each random read rebuilds P from a checkpoint up to 4095 points back
     }
   }
 
