@@ -47,7 +47,7 @@ double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::
 }
 
 // Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m.
-std::vector<double> averages(const std::vector<double>& dec, std::size_t m) {
+std::vector<double> averages(const detail::Decimated& dec, std::size_t m) {
   if (dec.size() < 2) return {};
   std::vector<double> z(dec.size() - 1);
   const double mm = static_cast<double>(m);
@@ -163,7 +163,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
     if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
     if (!o.bounds || o.fixed_alpha) return;
-    const std::vector<double>& dec = er.decimated.at(s.m);
+    const detail::Decimated& dec = er.decimated.at(s.m);
     e.z = averages(dec, s.m);
     if (e.z.size() < kAcfMinPoints) return;  // kept for B1/R(n) below
     if (kind == DataKind::Frequency) {

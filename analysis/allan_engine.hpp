@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "analysis/allan.hpp"
@@ -40,6 +41,31 @@ struct Sums {
   bool decimated_complete = true;  // EngineResult::decimated[m] holds every P[k m]
 };
 
+// P[k m], k = 0 .. size() - 1, for noise identification: a strided view of the ring when it holds
+// the whole record (no copy: the series of 108 taus would be some 25 MB of fresh pages), else the
+// points collected during the pass.
+class Decimated {
+ public:
+  Decimated() = default;
+  Decimated(const double* base, std::size_t stride, std::size_t count) : base_(base), stride_(stride), count_(count) {}
+  explicit Decimated(std::vector<double> own) : own_(std::move(own)), base_(own_.data()), count_(own_.size()) {}
+  Decimated(Decimated&& o) noexcept { *this = std::move(o); }
+  Decimated& operator=(Decimated&& o) noexcept {
+    const bool owns = o.base_ == o.own_.data() && !o.own_.empty();
+    own_ = std::move(o.own_);
+    base_ = owns ? own_.data() : o.base_;
+    stride_ = o.stride_, count_ = o.count_;
+    return *this;
+  }
+  std::size_t size() const { return count_; }
+  double operator[](std::size_t k) const { return base_[k * stride_]; }
+
+ private:
+  std::vector<double> own_;
+  const double* base_ = nullptr;
+  std::size_t stride_ = 1, count_ = 0;
+};
+
 struct EngineRequest {
   Deviation type;
   std::size_t m;
@@ -49,8 +75,9 @@ struct EngineResult {
   PhaseSpec spec;
   std::vector<Sums> sums;  // same order as the requests
   // P[k m], k = 0.. (capped), for noise identification: one series per distinct m, shared by
-  // the deviations that use that m (counted in the memory budget once).
-  std::map<std::size_t, std::vector<double>> decimated;
+  // the deviations that use that m (counted in the memory budget once when copied). A view into
+  // the engine's ring when it holds the record: valid while the Engine lives.
+  std::map<std::size_t, Decimated> decimated;
   std::size_t ring_points = 0, far_count = 0;
 };
 

@@ -13,6 +13,14 @@ double sum_d2(const double* w0, const double* w1, const double* w2, std::size_t 
 // sum over t < len of (w3 - 3 w2 + 3 w1 - w0)^2: one HDEV/OHDEV tau (SP 1065 eq. 17).
 double sum_d3(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len);
 
+// The non-overlapped ADEV/HDEV terms (SP 1065 eq. 10, 17): only every stride-th t, from t = first
+// while t < len; four independent accumulators (the terms are sparse: a vector load would waste
+// most of its lanes, but one chain of dependent additions is what bounded the scalar loop).
+double sum_d2_strided(const double* w0, const double* w1, const double* w2, std::size_t first, std::size_t stride,
+                      std::size_t len);
+double sum_d3_strided(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t first,
+                      std::size_t stride, std::size_t len);
+
 // A doubling chain m, 2m, .., 2^(k-1) m of OADEV/TOTDEV taus aligned at a common head h (the
 // newest phase point of each term): tau 2^i m's term is P[h] - 2 P[h - 2^i m] + P[h - 2^(i+1) m],
 // so k taus need k + 2 streams, not 3k: the loads that bound sum_d2 are shared.

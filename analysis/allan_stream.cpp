@@ -1,5 +1,6 @@
 // The one-pass Allan-family engine (see allan_engine.hpp for the design).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <barrier>
 #include <bit>
@@ -50,6 +51,11 @@ struct Acc {
   double inner = 0;       // MDEV state: the window sum at the next base
   bool primed = false;    // MDEV: `inner` holds the window sum of this accumulator's next base
   bool far = false;       // post-pass: even the newer windows do not fit the ring
+  // TOTDEV: the index of the OADEV accumulator with the same m, whose sum is this one's interior
+  // (SP 1065 eq. 25's terms with i - m >= 0 and i + m <= N - 1 are OADEV's, eq. 11): the pass runs
+  // them once, and only the reflected edges are this accumulator's own work. npos: run its own.
+  static constexpr std::size_t kOwnInterior = static_cast<std::size_t>(-1);
+  std::size_t interior_of = kOwnInterior;
   // In-pass cursors: the oldest `cursors` windows (P[b], and P[b + m] when that is beyond the
   // ring too) rebuilt by sequential cursors; the newer ones read from the ring.
   struct Cursor {
@@ -68,14 +74,12 @@ struct Acc {
   // Terms with base in [b0, b0 + len); w[k] = &P[b0 + k m], contiguous for len points.
   void run(std::size_t b0, std::size_t len, const double* const* w) {
     if (strided()) {
-      std::size_t t = (b0 % m == 0) ? 0 : m - b0 % m;
-      for (; t < len; t += m) {
-        double d;
-        if (nwin == 3) d = w[2][t] - 2 * w[1][t] + w[0][t];
-        else d = w[3][t] - 3 * w[2][t] + 3 * w[1][t] - w[0][t];
-        sum += d * d;
-        ++terms;
-      }
+      const std::size_t t = (b0 % m == 0) ? 0 : m - b0 % m;
+      if (t >= len) return;
+      if (m == 1) sum += nwin == 3 ? sum_d2(w[0], w[1], w[2], len) : sum_d3(w[0], w[1], w[2], w[3], len);
+      else if (nwin == 3) sum += sum_d2_strided(w[0], w[1], w[2], t, m, len);
+      else sum += sum_d3_strided(w[0], w[1], w[2], w[3], t, m, len);
+      terms += (len - t + m - 1) / m;
       return;
     }
     if (modified()) sum += mdev_run(w[0], w[1], w[2], w[3], len, inner);
@@ -372,54 +376,86 @@ void run_cursor(Acc& a, Ring& ring, const Builder& builder, StateAt&& state_at, 
   }
 }
 
-// MDEV's first term: the window sum of d[0..m-1] (P[0..3m-1]), from any random-access reader.
-template <class ReadP>
-void mdev_prologue(Acc& a, ReadP&& read, std::size_t block) {
+// MDEV's first term: the window sum of d[0..m-1] (P[0..3m-1]), in blocks of `block` points,
+// each block's sum from sum_second_diff. read_block(i, len) gives the three windows' pointers
+// &P[i], &P[i + m], &P[i + 2m] for len points; every path sums the same blocks in the same order,
+// so streamed and in-memory runs agree to the bit.
+template <class ReadBlock>
+void mdev_prime_first(Acc& a, ReadBlock&& read_block, std::size_t block) {
   double inner = 0;
-  std::vector<double> p0, p1, p2;
   for (std::size_t i = 0; i < a.m; i += block) {
     const std::size_t len = std::min(block, a.m - i);
-    p0.resize(len), p1.resize(len), p2.resize(len);
-    read(i, std::span<double>(p0));
-    read(i + a.m, std::span<double>(p1));
-    read(i + 2 * a.m, std::span<double>(p2));
-    for (std::size_t t = 0; t < len; ++t) inner += p2[t] - 2 * p1[t] + p0[t];
+    const auto [p0, p1, p2] = read_block(i, len);
+    inner += sum_second_diff(p0, p1, p2, len);
   }
   a.inner = inner;
   a.sum += inner * inner;
   a.terms += 1;
 }
 
-// TOTDEV's reflected edge terms (NIST SP 1065 eq. 25: x*(1-j) = 2x(1) - x(1+j), x*(N+j) = 2x(N) - x(N-j)).
+// The same from any random-access reader of P (copies the three windows block by block).
 template <class ReadP>
-void totdev_edges(Acc& a, std::uint64_t n, ReadP&& read, std::size_t block) {
+void mdev_prologue(Acc& a, ReadP&& read, std::size_t block) {
+  std::vector<double> p0, p1, p2;
+  mdev_prime_first(a, [&](std::size_t i, std::size_t len) {
+    p0.resize(len), p1.resize(len), p2.resize(len);
+    read(i, std::span<double>(p0));
+    read(i + a.m, std::span<double>(p1));
+    read(i + 2 * a.m, std::span<double>(p2));
+    return std::array<const double*, 3>{p0.data(), p1.data(), p2.data()};
+  }, block);
+}
+
+// TOTDEV's reflected edge terms (NIST SP 1065 eq. 25: x*(1-j) = 2x(1) - x(1+j), x*(N+j) = 2x(N) - x(N-j)).
+// view(lo, len, buf) gives &P[lo] for len points: in place when the ring holds the record (the
+// copies were 18 % of a TOTDEV run), else read into buf.
+//
+// On each side the reflected point of term i is P[S - i] with S - i in the side's own range
+// [lo, hi) (S = lo + hi - 1): a block of terms [a, a + len) reads as its reflection the points
+// that the mirror block [S - a - len + 1, S - a + 1) reads as its centres. Blocks are taken in
+// such pairs from both ends, so each centre block is read once and serves twice (4 reads per
+// two blocks instead of 6: random access rebuilds P from the checkpoints, most of a streamed
+// TOTDEV); the middle, shorter than two blocks, block by block.
+template <class View>
+void totdev_edges(Acc& a, std::uint64_t n, View&& view, std::size_t block) {
   const std::size_t m = a.m;
-  double first = 0, last = 0;
-  read(0, std::span<double>(&first, 1));
-  read(n - 1, std::span<double>(&last, 1));
-  std::vector<double> r, c, f;
+  std::vector<double> b0, b1, b2, b3;
+  const double first = *view(0, 1, b0);
+  const double last = *view(n - 1, 1, b0);
+  // One side: terms i in [lo, hi), the far neighbour P[i + f_off] (f_off = +m left, -m right).
+  auto side = [&](std::uint64_t lo, std::uint64_t hi, std::int64_t f_off, auto&& kernel) {
+    const std::uint64_t S = lo + hi - 1;
+    auto far = [&](std::uint64_t i) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(i) + f_off); };
+    std::uint64_t x = lo, y = hi;  // terms [x, y) not yet summed; S - x + 1 == y throughout
+    while (y - x >= 2 * static_cast<std::uint64_t>(block)) {
+      const std::uint64_t x2 = y - block;  // the mirror block of [x, x + block)
+      const double* c = view(x, block, b0);
+      const double* c2 = view(x2, block, b1);
+      const double* f = view(far(x), block, b2);
+      const double* f2 = view(far(x2), block, b3);
+      a.sum += kernel(c2, c, f, block);
+      a.sum += kernel(c, c2, f2, block);
+      a.terms += 2 * block;
+      x += block, y -= block;
+    }
+    for (std::uint64_t i = x; i < y; i += block) {
+      const std::size_t len = static_cast<std::size_t>(std::min<std::uint64_t>(block, y - i));
+      const double* r = view(S - i - (len - 1), len, b0);  // P[S-i-len+1 .. S-i], used reversed
+      const double* c = view(i, len, b1);
+      const double* f = view(far(i), len, b2);
+      a.sum += kernel(r, c, f, len);
+      a.terms += len;
+    }
+  };
+  const auto sm = static_cast<std::int64_t>(m);
   // Left: i in [1, m-1]: 2P0 - P[m-i] - 2P[i] + P[i+m].
-  for (std::size_t i = 1; i < m; i += block) {
-    const std::size_t len = std::min(block, m - i);
-    r.resize(len), c.resize(len), f.resize(len);
-    read(m - i - (len - 1), std::span<double>(r));  // P[m-i-len+1 .. m-i], used reversed
-    read(i, std::span<double>(c));
-    read(i + m, std::span<double>(f));
-    a.sum += sum_reflected_left(2 * first, r.data(), c.data(), f.data(), len);
-    a.terms += len;
-  }
+  side(1, m, sm, [&](const double* r, const double* c, const double* f, std::size_t len) {
+    return sum_reflected_left(2 * first, r, c, f, len);
+  });
   // Right: i in [n-m, n-2]: P[i-m] - 2P[i] + 2P[n-1] - P[2(n-1) - i - m].
-  const std::uint64_t i_lo = n - m, i_hi = n - 1;
-  for (std::uint64_t i = i_lo; i < i_hi; i += block) {
-    const std::size_t len = std::min<std::uint64_t>(block, i_hi - i);
-    r.resize(len), c.resize(len), f.resize(len);
-    read(i - m, std::span<double>(f));
-    read(i, std::span<double>(c));
-    // reflected indices 2(n-1) - (i+t) - m for t = 0..len-1: descending, lowest at t = len-1
-    read(2 * (n - 1) - (i + len - 1) - m, std::span<double>(r));
-    a.sum += sum_reflected_right(2 * last, r.data(), c.data(), f.data(), len);
-    a.terms += len;
-  }
+  side(n - m, n - 1, -sm, [&](const double* r, const double* c, const double* f, std::size_t len) {
+    return sum_reflected_right(2 * last, r, c, f, len);
+  });
 }
 
 }  // namespace
@@ -527,7 +563,10 @@ struct Engine::Impl {
     std::vector<double> sc;
     if (a.far && a.bases > 0) {
       if (ring_holds_all) {
-        if (a.modified()) mdev_prologue(a, reader(sc), chunk);
+        if (a.modified())
+          mdev_prime_first(a, [&](std::size_t i, std::size_t) {
+            return std::array<const double*, 3>{ring.at(i), ring.at(i + a.m), ring.at(i + 2 * a.m)};
+          }, chunk);
         const double* w[4];
         for (std::size_t j = 0; j < a.nwin; ++j) w[j] = ring.at(j * a.m);
         a.run(0, a.bases, w);
@@ -535,7 +574,15 @@ struct Engine::Impl {
         run_far(a);
       }
     }
-    if (a.type == Deviation::TOTDEV && a.m > 1) totdev_edges(a, spec.n, reader(sc), chunk);
+    if (a.type == Deviation::TOTDEV && a.m > 1) {
+      auto read = reader(sc);
+      totdev_edges(a, spec.n, [&](std::uint64_t lo, std::size_t len, std::vector<double>& buf) -> const double* {
+        if (ring_holds_all) return ring.at(lo);
+        buf.resize(len);
+        read(lo, std::span<double>(buf));
+        return buf.data();
+      }, 4 * chunk);  // longer blocks: each random read rebuilds P from a checkpoint up to 4095 points back
+    }
   }
 
   void plan(const std::vector<EngineRequest>& req, EngineResult& res);
@@ -582,6 +629,11 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
     poll();
     finish(accs[post[k]]);
   });
+  for (Acc& a : accs)  // TOTDEV's shared interiors (every OADEV sum is final now)
+    if (a.interior_of != Acc::kOwnInterior) {
+      a.sum = accs[a.interior_of].sum + a.sum;
+      a.terms += accs[a.interior_of].terms;
+    }
 
   collect(res);
   return res;
@@ -593,24 +645,37 @@ void Engine::Impl::plan(const std::vector<EngineRequest>& req, EngineResult& res
   accs.clear();
   accs.reserve(req.size());
   for (const auto& r : req) accs.push_back(make_acc(r.type, r.m, n));
-
-  // Decimated series for noise identification, one per distinct m.
-  decim.clear();
-  for (const auto& r : req) decim[r.m];
-  std::size_t decim_bytes = 0;
-  for (auto& [m, v] : decim) {
-    const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, cap + 1);
-    v.reserve(len);
-    decim_bytes += len * sizeof(double);
+  for (Acc& t : accs) {
+    if (t.type != Deviation::TOTDEV) continue;
+    for (std::size_t j = 0; j < accs.size(); ++j)
+      if (accs[j].type == Deviation::OADEV && accs[j].m == t.m) {
+        t.interior_of = j;
+        t.bases = 0;  // nothing of its own in the pass
+        break;
+      }
   }
 
-  // Ring: what the budget leaves after the noise-ID series, never more than the record needs.
-  // The next chunk is built while the current one is processed: two chunks of slack.
-  const std::size_t floor_bytes = 8 * chunk * sizeof(double);
-  const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes ? so.memory_budget_bytes - decim_bytes
-                                                                                : floor_bytes;
+  // Ring: the whole record when the budget holds it (then the noise-ID series are views of it,
+  // collect()); else what the budget leaves after copies of those series. The next chunk is
+  // built while the current one is processed: two chunks of slack.
+  decim.clear();
   const std::size_t ring_need = static_cast<std::size_t>(n) + 2 * chunk;
-  ring.allocate(std::min(budget / sizeof(double), ring_need));
+  if (ring_need <= so.memory_budget_bytes / sizeof(double)) {
+    ring.allocate(ring_need);
+  } else {
+    for (const auto& r : req) decim[r.m];  // one series per distinct m
+    std::size_t decim_bytes = 0;
+    for (auto& [m, v] : decim) {
+      const std::size_t len = std::min<std::uint64_t>((n - 1) / m + 1, cap + 1);
+      v.reserve(len);
+      decim_bytes += len * sizeof(double);
+    }
+    const std::size_t floor_bytes = 8 * chunk * sizeof(double);
+    const std::size_t budget = so.memory_budget_bytes > decim_bytes + floor_bytes
+                                   ? so.memory_budget_bytes - decim_bytes
+                                   : floor_bytes;
+    ring.allocate(std::min(budget / sizeof(double), ring_need));
+  }
   ring_holds_all = ring.size >= n;
   res.ring_points = ring.size;
 
@@ -690,8 +755,9 @@ void Engine::Impl::run_item(const std::vector<std::size_t>& item, std::vector<Ac
     if (lo_b >= hi_b) continue;
     if (a.modified() && !a.primed) {
       if (lo_b == 0) {  // the record's first term
-        mdev_prologue(a, [&](std::uint64_t j, std::span<double> out) {
-          for (std::size_t t = 0; t < out.size(); ++t) out[t] = *ring.at(j + t);
+        // P[0, 3m) is in the ring unwrapped (3m + 2 chunks fit it): read in place.
+        mdev_prime_first(a, [&](std::size_t i, std::size_t) {
+          return std::array<const double*, 3>{ring.at(i), ring.at(i + a.m), ring.at(i + 2 * a.m)};
         }, chunk);
       } else {  // a segment's first base (in memory: the whole record is in the ring)
         a.inner = sum_second_diff(ring.at(lo_b), ring.at(lo_b + a.m), ring.at(lo_b + 2 * a.m), a.m);
@@ -716,7 +782,10 @@ void Engine::Impl::run_in_memory() {
   constexpr std::size_t kSegments = 32;
   auto keep_whole = [&](const std::vector<std::size_t>& item) {
     const Acc& a = accs[item[0]];
-    return a.modified() && a.m * kSegments * 4 > n;  // its prologue (3m loads) vs ~4n/32 per segment: <= 19 %
+    // A segment's prime reads 3m cold points (about ten times the cost of the kernel's streamed
+    // points, measured: 18 % of an MDEV run at a 19 % nominal bound); split only while the
+    // primes are <= 1.2 % of the tau's points (~4n): 141 instead of 177 ms CPU for log:100 MDEV.
+    return a.modified() && a.m * kSegments * 64 > n;
   };
   std::vector<std::size_t> whole, split;
   for (std::size_t k = 0; k < items.size(); ++k) (keep_whole(items[k]) ? whole : split).push_back(k);
@@ -822,9 +891,15 @@ void Engine::Impl::collect(EngineResult& res) {
     s.m = accs[i].m;
     s.sum = accs[i].sum;
     s.terms = accs[i].terms;
-    s.decimated_complete = decim[accs[i].m].size() == (n - 1) / accs[i].m + 1;
   }
-  res.decimated = std::move(decim);
+  res.decimated.clear();
+  for (const Acc& a : accs) {
+    if (res.decimated.count(a.m)) continue;
+    const std::size_t all = static_cast<std::size_t>((n - 1) / a.m + 1);
+    if (ring_holds_all) res.decimated.emplace(a.m, Decimated(ring.at(0), a.m, std::min(all, cap + 1)));
+    else res.decimated.emplace(a.m, Decimated(std::move(decim[a.m])));
+  }
+  for (Sums& s : res.sums) s.decimated_complete = res.decimated.at(s.m).size() == (n - 1) / s.m + 1;
   decim.clear();
 }
 

@@ -45,7 +45,7 @@ struct Args {
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
   double confidence = an::AnalysisOptions{}.confidence;
-  bool no_bounds = false, no_psd = false;
+  bool no_bounds = false, no_psd = false, no_oadev = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
   std::size_t segment = 0;
@@ -132,6 +132,10 @@ int run(const Args& a) {
   if (!(a.confidence > 0 && a.confidence < 1))
     throw ConfigError("rig analyze: --confidence must be in (0, 1), got " + std::to_string(a.confidence));
   if (a.channel != "x" && a.channel != "y") throw ConfigError("rig analyze: --channel must be x or y");
+  if (a.no_oadev && base.type == an::Deviation::OADEV)
+    throw ConfigError("rig analyze: --no-oadev needs --dev with another deviation (mdev, tdev, hdev, ...)");
+  if (a.no_oadev && !a.svg_dir.empty())
+    throw ConfigError("rig analyze: --svg plots OADEV and its noise terms: not with --no-oadev");
 
   std::string input = a.input;
   if (input == "auto") {
@@ -187,7 +191,8 @@ int run(const Args& a) {
     want_psd = false;
   }
 
-  // One pass for OADEV (noise terms, the contract's "oadev") and the requested deviation.
+  // One pass for OADEV (noise terms, the contract's "oadev") and the requested deviation; with
+  // --no-oadev only the requested one (a user who wants MDEV alone does not wait for OADEV).
   std::vector<an::DevOptions> opts;
   base.rate_hz = rate;
   base.confidence = a.confidence;
@@ -195,7 +200,7 @@ int run(const Args& a) {
   base.threads = a.threads;
   an::DevOptions oadev = base;
   oadev.type = an::Deviation::OADEV;
-  opts.push_back(oadev);
+  if (!a.no_oadev) opts.push_back(oadev);
   if (base.type != an::Deviation::OADEV) opts.push_back(base);
   an::StreamOptions so;
   so.memory_budget_bytes = a.memory_mib << 20;
@@ -223,7 +228,10 @@ int run(const Args& a) {
                         an::to_string(opts[k].type) + " (" + a.taus + ")");
   const double record_s = static_cast<double>(n) / rate;
   timer.mark("deviations");
-  const an::NoiseTerms terms = an::noise_terms(devs[0], record_s);
+  const std::vector<an::DevPoint>* oadev_pts = a.no_oadev ? nullptr : &devs[0];
+  const std::vector<an::DevPoint>* extra_pts = base.type != an::Deviation::OADEV ? &devs.back() : nullptr;
+  std::optional<an::NoiseTerms> terms;  // read from OADEV
+  if (oadev_pts) terms = an::noise_terms(*oadev_pts, record_s);
   timer.mark("noise terms");
 
   // Long-tau statistics: on the record in memory (16 bytes per value with its phase), noise
@@ -248,7 +256,7 @@ int run(const Args& a) {
       lo.confidence = a.confidence;
       lo.bounds = !a.no_bounds;
       lo.threads = a.threads;
-      lo.noise_ref = devs[0];
+      if (oadev_pts) lo.noise_ref = *oadev_pts;  // else long_tau computes an octave OADEV for the noise types
       try {
         longs.push_back(an::long_tau(values, lo));
       } catch (const std::invalid_argument& e) {
@@ -266,10 +274,10 @@ int run(const Args& a) {
   j["input"] = input;
   j["record_s"] = record_s;
   j["confidence"] = a.confidence;
-  j["oadev"] = analysis::dev_to_json(devs[0]);
-  if (devs.size() > 1) j[an::to_string(base.type)] = analysis::dev_to_json(devs[1]);
+  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts);
+  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts);
   for (std::size_t k = 0; k < longs.size(); ++k) j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k]);
-  j["noise_terms"] = analysis::noise_terms_to_json(terms);
+  if (terms) j["noise_terms"] = analysis::noise_terms_to_json(*terms);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", a.channel},
@@ -359,13 +367,15 @@ int run(const Args& a) {
       o << line;
     }
   }
-  o << "noise terms (tau in s; passport units after '='):\n";
-  print_term(o, "Q", terms.Q, an::q_per_hour, "g*h");
-  print_term(o, "N", terms.N, an::n_per_hour, "g*h^0.5");
-  print_term(o, "B", terms.B, nullptr, "");
-  if (terms.tau_cp_s) o << "  tau_cp = " << *terms.tau_cp_s << " s\n";
-  print_term(o, "K", terms.K, an::k_per_hour, "g/h^0.5");
-  print_term(o, "R", terms.R, an::r_per_hour, "g/h");
+  if (terms) {
+    o << "noise terms (tau in s; passport units after '='):\n";
+    print_term(o, "Q", terms->Q, an::q_per_hour, "g*h");
+    print_term(o, "N", terms->N, an::n_per_hour, "g*h^0.5");
+    print_term(o, "B", terms->B, nullptr, "");
+    if (terms->tau_cp_s) o << "  tau_cp = " << *terms->tau_cp_s << " s\n";
+    print_term(o, "K", terms->K, an::k_per_hour, "g/h^0.5");
+    print_term(o, "R", terms->R, an::r_per_hour, "g/h");
+  }
   if (psd) {
     o << "psd: welch " << a.window << ", segment " << psd->segment << " x " << psd->segments << "; peaks:";
     for (const auto& p : peaks) o << ' ' << p.f_hz << " Hz";
@@ -395,6 +405,8 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--confidence", args->confidence, "confidence of the bounds (default one sigma, erf(1/sqrt 2) = 0.682689, Stable32's \"0.683\")");
   sub->add_flag("--no-bounds", args->no_bounds, "skip noise identification and bounds");
   sub->add_flag("--no-psd", args->no_psd, "skip the PSD (Allan part only)");
+  sub->add_flag("--no-oadev", args->no_oadev,
+                "with --dev: that deviation only, no OADEV and no noise terms (they are read from OADEV)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");
   sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");
   sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");

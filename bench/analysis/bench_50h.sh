@@ -5,7 +5,9 @@
 #   oadev          OADEV without the PSD   (target: <= 5 s wall, <= 512 MiB)
 #   oadev+psd      OADEV with the Welch PSD
 #   mdev .. totdev OADEV and that deviation in one pass, no PSD (target: <= 10 s, <= 512 MiB)
-# Prints wall, user and system time and peak RSS (/usr/bin/time) of each.
+#   mdev-only ..   that deviation alone (--no-oadev: no OADEV, no noise terms)
+# Prints wall, user and system time and peak RSS (/usr/bin/time) of each; on a machine shared
+# with other jobs, user + sys (the CPU the analysis needed) is the figure load disturbs least.
 #
 #   bench/analysis/bench_50h.sh [BUILD_DIR] [DATA_DIR] [FIGURE...]
 #
@@ -27,6 +29,7 @@ for fig in $figures; do
   case $fig in
     oadev) extra="--no-psd" ;;
     oadev+psd) extra="" ;;
+    *-only) extra="--no-psd --dev ${fig%-only} --no-oadev" ;;
     *) extra="--no-psd --dev $fig" ;;
   esac
   # shellcheck disable=SC2086
@@ -41,6 +44,8 @@ done
 /usr/bin/python3 - "$out/a.json" <<'EOF'
 import json, sys
 a = json.load(open(sys.argv[1]))
+if "noise_terms" not in a:
+    sys.exit(0)  # the last figure ran without OADEV
 nt = a["noise_terms"]
 def v(t):
     x = nt[t].get("per_hour", {}).get("value")

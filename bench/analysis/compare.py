@@ -11,10 +11,14 @@ The rig's figure is the wall time of the whole process (start-up, reading the fl
 the deviations with noise identification and bounds, the noise terms, the JSON written);
 the twin's is the NumPy computation only (the file already loaded, no bounds). Each is the
 minimum over the rounds (the machine is shared: the minimum is the least disturbed run).
-`rig analyze` always computes OADEV as well as the --dev deviation, so its MDEV ... TOTDEV
-figures include an OADEV the twin does not compute. The CPU columns give the same comparison in
-CPU time (rig: both threads; the twin is single-threaded), which other load on a shared
-machine disturbs much less than wall time.
+Figures, one row each:
+  oadev        rig analyze --no-psd                         vs  twin OADEV
+  oadev+psd    rig analyze                                  vs  twin OADEV + twin Welch PSD
+  mdev ..      rig analyze --no-psd --dev X --no-oadev      vs  twin X (the deviation alone)
+  mdev+oadev   rig analyze --no-psd --dev X                 vs  twin OADEV + twin X (the same
+               outputs: without --no-oadev the rig computes OADEV and its noise terms too)
+The CPU columns give the same comparison in CPU time (rig: both threads; the twin is
+single-threaded), which other load on a shared machine disturbs much less than wall time.
 """
 import argparse
 import json
@@ -61,7 +65,11 @@ def rig_run(extra):
 
 
 def taus_of(json_path, key):
-    return [p["m"] for p in json.load(open(json_path))[key]]
+    """The factors rig chose under `key`, or a dict of them for a tuple of keys."""
+    j = json.load(open(json_path))
+    if isinstance(key, tuple):
+        return {k: [p["m"] for p in j[k]] for k in key}
+    return [p["m"] for p in j[key]]
 
 
 def psd_segment(n):  # rig's automatic choice (analysis/psd.cpp welch_segment)
@@ -74,7 +82,11 @@ figures = [("oadev", ["--no-psd"], "oadev", lambda x, ms: twins.oadev(x, tau0, m
            ("oadev+psd", [], "oadev",
             lambda x, ms: (twins.oadev(x, tau0, ms), twins.welch(y, args.rate, psd_segment(len(y)))))]
 for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]:
-    figures.append((d, ["--no-psd", "--dev", d], d, lambda x, ms, f=twins.DEVIATIONS[d]: f(x, tau0, ms)))
+    figures.append((d, ["--no-psd", "--dev", d, "--no-oadev"], d, lambda x, ms, f=twins.DEVIATIONS[d]: f(x, tau0, ms)))
+for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]:
+    # The twin's taus per key: OADEV's and the deviation's grids differ (max factor (N-1)/4 vs /2).
+    figures.append((d + "+oadev", ["--no-psd", "--dev", d], (d, "oadev"),
+                    lambda x, ms, f=twins.DEVIATIONS[d], d=d: (twins.oadev(x, tau0, ms["oadev"]), f(x, tau0, ms[d]))))
 # Long-tau statistics (opt-in: --only theo1,theoh,mtot,ttot,htot; the twins take minutes on
 # 3.6e6 samples). rig sums every stride-th subsequence start beyond its work cap; the twin is
 # given the same strides (from rig's JSON) so both compute the same statistic.
@@ -95,11 +107,12 @@ if args.only:
 
 print(f"# {time.strftime('%Y-%m-%d %H:%M')} {os.uname().nodename}, {os.cpu_count()} cores, "
       f"load {os.getloadavg()[0]:.2f}; n = {len(y)}, taus {args.taus}, {args.rounds} rounds (minimum)")
-print(f"{'figure':<11} {'taus':>5} {'rig s':>8} {'numpy s':>8} {'ratio':>7}   {'rig cpu':>8} {'np cpu':>8} {'ratio':>7}")
+print(f"{'figure':<12} {'taus':>5} {'rig s':>8} {'numpy s':>8} {'ratio':>7}   {'rig cpu':>8} {'np cpu':>8} {'ratio':>7}")
 for name, extra, key, twin in figures:
     _, out, _ = rig_run(extra)  # warm-up, and the taus rig chose
     ms = taus_of(out, key)
-    pts[key] = json.load(open(out))[key]  # the long-tau twins' strides and TheoH's estimators
+    if key in LONG:
+        pts[key] = json.load(open(out))[key]  # the long-tau twins' strides and TheoH's estimators
     rig_t, np_t, rig_c, np_c = [], [], [], []
     for _ in range(args.rounds):
         w, _, c = rig_run(extra)
@@ -112,7 +125,7 @@ for name, extra, key, twin in figures:
         np_c.append(time.process_time() - c0)
         del x
     r, p, rc, pc = min(rig_t), min(np_t), min(rig_c), min(np_c)
-    print(f"{name:<11} {len(ms):>5} {r:>8.3f} {p:>8.3f} {p / r:>6.1f}x   {rc:>8.3f} {pc:>8.3f} {pc / rc:>6.1f}x",
+    print(f"{name:<12} {len(ms[key[0]]) if isinstance(key, tuple) else len(ms):>5} {r:>8.3f} {p:>8.3f} {p / r:>6.1f}x   {rc:>8.3f} {pc:>8.3f} {pc / rc:>6.1f}x",
           flush=True)
 print(f"# load at the end {os.getloadavg()[0]:.2f}. wall: the figures the targets name; cpu: the process's CPU time "
       "(rig: both threads, start-up and JSON included), less disturbed by other load")

@@ -110,6 +110,70 @@ TEST(Stream, SmallRingAndFarCursorsEqualTheInMemoryResult) {
   }
 }
 
+TEST(Stream, TotdevWithOadevSharesItsInteriorAndEqualsTotdevAlone) {
+  // With OADEV in the same pass, TOTDEV's interior terms are OADEV's sums at the same m (SP 1065
+  // eq. 25 vs eq. 11): run once, only the reflected edges added. The result must equal TOTDEV
+  // computed on its own, in memory and streamed through a small ring (far and cursor taus).
+  const auto y = signal(150000, 11);
+  DevOptions oa, tot;
+  oa.type = Deviation::OADEV;
+  tot.type = Deviation::TOTDEV;
+  for (DevOptions* o : {&oa, &tot}) o->rate_hz = 1000, o->taus = parse_tau_grid("log:40");
+  const auto alone = deviation(y, tot);
+  const DevOptions both[] = {oa, tot};
+  SpanSource src(y);
+  StreamOptions in_memory;
+  in_memory.memory_budget_bytes = std::size_t{1} << 40;
+  expect_same(alone, deviations_stream(src, both, in_memory)[1], 1e-12, "in memory");
+  StreamOptions small;
+  small.memory_budget_bytes = 1u << 20;
+  small.chunk = 4096;
+  const auto streamed = deviations_stream(src, both, small);
+  expect_same(alone, streamed[1], 1e-12, "streamed");
+  expect_same(deviation(y, oa), streamed[0], 1e-12, "its OADEV");
+}
+
+// TOTDEV written out as SP 1065 eq. 25 says: the phase extended by odd reflection at both ends,
+// centred second differences at i = 1 .. N-2, no engine. The engine's edge blocks (paired with
+// their mirror blocks when m spans several) must give the same, in memory and streamed.
+TEST(Stream, TotdevEqualsTheReflectedSeriesWrittenOut) {
+  const auto y = signal(30001, 13);
+  const std::size_t n = y.size() + 1;
+  std::vector<double> x(n, 0.0);  // phase in units of tau0 (the scale cancels in the ratio below)
+  for (std::size_t i = 1; i < n; ++i) x[i] = x[i - 1] + y[i - 1];
+  auto xe = [&](long long j) {  // x*(j) of eq. 25, 0-based
+    const long long last = static_cast<long long>(n) - 1;
+    if (j < 0) return 2 * x[0] - x[static_cast<std::size_t>(-j)];
+    if (j > last) return 2 * x[n - 1] - x[static_cast<std::size_t>(2 * last - j)];
+    return x[static_cast<std::size_t>(j)];
+  };
+  DevOptions o;
+  o.type = Deviation::TOTDEV;
+  o.rate_hz = 1;
+  o.bounds = false;
+  o.factors = {1, 2, 7, 1000, 2500, 9000, 15000};  // up to (N-1)/2, several edge blocks each
+  SpanSource src(y);
+  StreamOptions mem, small;
+  mem.memory_budget_bytes = std::size_t{1} << 40;
+  mem.chunk = 1024;
+  small.memory_budget_bytes = 96u << 10;
+  small.chunk = 1024;
+  for (const StreamOptions* so : {&mem, &small}) {
+    const auto got = deviation_stream(src, o, *so);
+    ASSERT_EQ(got.size(), o.factors.size());
+    for (std::size_t k = 0; k < got.size(); ++k) {
+      const long long m = static_cast<long long>(o.factors[k]);
+      double sum = 0;
+      for (long long i = 1; i + 1 < static_cast<long long>(n); ++i) {
+        const double d = xe(i - m) - 2 * xe(i) + xe(i + m);
+        sum += d * d;
+      }
+      const double want = std::sqrt(sum / (2.0 * static_cast<double>(m * m) * static_cast<double>(n - 2)));
+      EXPECT_NEAR(got[k].dev, want, 1e-11 * want) << "m=" << m << (so == &mem ? " in memory" : " streamed");
+    }
+  }
+}
+
 TEST(Stream, OneThreadEqualsTwo) {
   // In memory every deviation's heads are cut into fixed segments (MDEV/TDEV restart their
   // window sum at each): the sums must not depend on which thread ran which segment.

@@ -200,6 +200,41 @@ TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
   EXPECT_NE(slurp(d + "/nf.stderr").find("value 31337 (byte 250696)"), std::string::npos) << slurp(d + "/nf.stderr");
 }
 
+// --no-oadev: the requested deviation alone, the same values as with OADEV beside it; no "oadev",
+// no noise terms; refused without another --dev and with --svg (which plots OADEV).
+TEST(RigCli, AnalyzeNoOadevGivesTheRequestedDeviationAlone) {
+  const std::string d = tmp("analyze-no-oadev");
+  fs::create_directories(d);
+  {
+    std::vector<double> v(40000);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = 1e-6 * std::sin(0.37 * static_cast<double>(i * i % 977));
+    std::ofstream(d + "/ok.f64", std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+  }
+  ASSERT_EQ(run({"analyze", d + "/ok.f64", "--no-psd", "--dev", "mdev", "--json", d + "/both.json"}, d + "/both"), 0)
+      << slurp(d + "/both.stderr");
+  ASSERT_EQ(run({"analyze", d + "/ok.f64", "--no-psd", "--dev", "mdev", "--no-oadev", "--json", d + "/one.json"},
+                d + "/one"),
+            0)
+      << slurp(d + "/one.stderr");
+  const auto both = nlohmann::json::parse(slurp(d + "/both.json"));
+  const auto one = nlohmann::json::parse(slurp(d + "/one.json"));
+  EXPECT_FALSE(one.contains("oadev"));
+  EXPECT_FALSE(one.contains("noise_terms"));
+  EXPECT_EQ(slurp(d + "/one.stdout").find("noise terms"), std::string::npos);
+  ASSERT_EQ(one["mdev"].size(), both["mdev"].size());
+  for (std::size_t i = 0; i < one["mdev"].size(); ++i) {
+    EXPECT_EQ(one["mdev"][i]["m"], both["mdev"][i]["m"]);
+    EXPECT_EQ(one["mdev"][i]["alpha"], both["mdev"][i]["alpha"]);
+    const double a = one["mdev"][i]["dev"], b = both["mdev"][i]["dev"];
+    EXPECT_NEAR(a, b, 1e-12 * b) << "m=" << one["mdev"][i]["m"];
+  }
+  EXPECT_EQ(run({"analyze", d + "/ok.f64", "--no-psd", "--no-oadev"}, d + "/alone"), 2);
+  EXPECT_NE(slurp(d + "/alone.stderr").find("--no-oadev needs --dev"), std::string::npos) << slurp(d + "/alone.stderr");
+  EXPECT_EQ(run({"analyze", d + "/ok.f64", "--dev", "hdev", "--no-oadev", "--svg", d + "/svg"}, d + "/svg"), 2);
+  EXPECT_NE(slurp(d + "/svg.stderr").find("--svg"), std::string::npos) << slurp(d + "/svg.stderr");
+}
+
 // Issue 13 item 4: every reader refuses unusable values with file and position, reads decimal
 // floating point, and checks sizes before the work.
 TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
