@@ -17,6 +17,7 @@
 #include "procedures/acceptance/procedure.hpp"
 #include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
+#include "rig/core/errors.hpp"
 #include "rig/core/gpio.hpp"
 
 namespace fs = std::filesystem;
@@ -152,4 +153,100 @@ TEST(ProcedureWithoutPlant, ALoopThatNeverFallsToHalfHasNoBandwidth) {
   EXPECT_FALSE(bw->value);
   EXPECT_NE(bw->reason.find("stays above 0.5"), std::string::npos) << bw->reason;
   EXPECT_TRUE(r.values.find("settling_time")->value) << "the settling time is still measured";
+}
+
+namespace {
+
+// A DUT without a command channel (issue 15, 2): every command is a test failure here, since
+// the procedure must not send one; the stream is all it has.
+class NoCommandDut final : public DutLink {
+ public:
+  DutInfo info(const CancelToken&) override { return asked("info"), DutInfo{}; }
+  void start_stream(const CancelToken&) override {}
+  void stop_stream() noexcept override {}
+  std::size_t read(std::span<Sample> out, const CancelToken&) override { return out.size(); }
+  void set_filter(const FilterConfig&, const CancelToken&) override { asked("set_filter"); }
+  FilterConfig get_filter(const CancelToken&) override { return asked("get_filter"), FilterConfig{}; }
+  LinkStats stats() const override { return {}; }
+  void reset_stats() override {}
+  std::string describe() const override { return "fake DUT without commands"; }
+  LoopTestResponse loop_test(const LoopTestRequest&, const CancelToken&) override {
+    return {false, "no loop test: no command channel (fake)", 0, 0, {}};
+  }
+  DutCommandChannel command_channel() const override { return {false, "no command channel (fake)"}; }
+  std::vector<std::string> asked_for;
+
+ private:
+  void asked(const char* what) { asked_for.push_back(what); }
+};
+
+struct BringUp {
+  std::ostringstream logtext;
+  IdleTable table;
+  QuietIo io;
+  SimClock clock;
+  acceptance::Profile p = acceptance::load_profile("ci");
+  acceptance::DutState st;
+  void run(DutLink& dut, const acceptance::RunOptions& ro) {
+    Devices dev{table, dut, io, clock, "hardware"};
+    MeasurementSet values;
+    auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+    PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr};
+    acceptance::bring_up(ctx, p, ro, st);
+  }
+};
+
+}  // namespace
+
+TEST(ProcedureWithoutPlant, BringUpOfADutWithoutCommandsSkipsIdentifyAndFilterAndSaysWhy) {
+  NoCommandDut dut;
+  BringUp b;
+  acceptance::RunOptions ro;
+  ro.expected_serial = "LABEL-0412";
+  b.run(dut, ro);
+  EXPECT_TRUE(dut.asked_for.empty()) << dut.asked_for.front();
+  ASSERT_TRUE(b.st.dut);
+  EXPECT_EQ(b.st.dut->serial, "LABEL-0412");
+  EXPECT_EQ(b.st.dut->firmware, "");
+  EXPECT_FALSE(b.st.dut->temperature_c);
+  ASSERT_EQ(b.st.dut->skipped.size(), 3u);
+  EXPECT_EQ(b.st.dut->skipped[0].step, "identify");
+  EXPECT_EQ(b.st.dut->skipped[1].step, "set output filter");
+  EXPECT_EQ(b.st.dut->skipped[2].step, "loop test");
+  for (const auto& k : b.st.dut->skipped) {
+    EXPECT_NE(k.reason.find("no command channel (fake)"), std::string::npos) << k.reason;
+    EXPECT_NE(b.logtext.str().find("skipped: " + k.step), std::string::npos) << b.logtext.str();
+  }
+  ASSERT_FALSE(b.p.filter_name.empty());
+  EXPECT_NE(b.st.dut->skipped[1].reason.find("'" + b.p.filter_name + "'"), std::string::npos)
+      << "names the filter not loaded: " << b.st.dut->skipped[1].reason;
+  // The skipped steps survive the checkpoint's JSON form (a resume reads them back).
+  const acceptance::DutState back = acceptance::dut_state_from_json(acceptance::to_json(b.st));
+  ASSERT_TRUE(back.dut);
+  EXPECT_EQ(back.dut->skipped.size(), 3u);
+  EXPECT_EQ(back.dut->skipped[2].reason, b.st.dut->skipped[2].reason);
+  EXPECT_FALSE(back.dut->temperature_c);
+}
+
+TEST(ProcedureWithoutPlant, ADutWithoutCommandsNeedsTheSerialFromTheOperator) {
+  NoCommandDut dut;
+  BringUp b;
+  try {
+    b.run(dut, {});
+    FAIL() << "bring-up without --serial";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("--serial"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(dut.asked_for.empty());
+}
+
+TEST(ProcedureWithoutPlant, ADutWithoutCommandsHasNullLoopFiguresWithTheReason) {
+  NoCommandDut dut;
+  LoopRun r(dut, "no-commands");
+  for (const char* name : {"bandwidth_0p5", "settling_time"}) {
+    const Measurement* m = r.values.find(name);
+    ASSERT_NE(m, nullptr);
+    EXPECT_FALSE(m->value);
+    EXPECT_EQ(m->reason, "not measured: no loop test: no command channel (fake)");
+  }
 }
