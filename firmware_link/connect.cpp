@@ -8,7 +8,7 @@ namespace rig::link {
 namespace {
 void check_dut_keys(const toml::table& t) {
   cfg::check_keys(t, {"can", "silence_ms", "command_timeout_ms", "command_attempts", "reorder_window", "rcvbuf_kb",
-                      "loop_test", "commands", "dbc", "stream"},
+                      "loop_test", "commands", "dbc", "stream", "design"},
                   "[dut]");
 }
 }  // namespace

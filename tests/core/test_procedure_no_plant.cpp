@@ -13,12 +13,14 @@
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 
+#include "design/loop_figures.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/gpio.hpp"
+#include "rig/core/toml_util.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig;
@@ -249,4 +251,51 @@ TEST(ProcedureWithoutPlant, ADutWithoutCommandsHasNullLoopFiguresWithTheReason) 
     EXPECT_FALSE(m->value);
     EXPECT_EQ(m->reason, "not measured: no loop test: no command channel (fake)");
   }
+}
+
+// Issue 15, 5: the hardware file's [dut.design] gives the loop figures of the DUT type's design
+// model, labelled so, when the DUT has no loop test: design/'s figures for that loop and the
+// profile's filter, never the emulator's configuration.
+TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopTest) {
+  const toml::table hw = cfg::parse_string(
+      "can = \"can0\"\n[design.loop]\nloop_rate_hz = 10000.0\npendulosity_kg_m = 6.5e-6\n"
+      "[design.regulator]\ngain_a_per_v = 2.0e-3\n",
+      "line2.toml");
+  const auto model = acceptance::read_design_model(hw);
+  ASSERT_TRUE(model);
+  EXPECT_EQ(model->loop.pendulosity_kg_m, 6.5e-6);
+  EXPECT_EQ(model->regulator.gain_a_per_v, 2.0e-3);
+  EXPECT_EQ(model->source.rfind("line2.toml:", 0), 0u) << model->source;
+  EXPECT_FALSE(acceptance::read_design_model(cfg::parse_string("can = \"can0\"\n", "hw.toml")));
+  EXPECT_THROW(acceptance::read_design_model(cfg::parse_string("[design.loop]\nno_such = 1\n", "hw.toml")), ConfigError);
+
+  NoCommandDut dut;  // no loop test (no command channel)
+  acceptance::Profile p = acceptance::load_profile("ci");
+  p.design_model = model;
+  const design::LoopFigures want = design::loop_figures(model->loop, model->regulator, p.filter);
+  acceptance::ProcedureState st(p);
+  const auto phases = acceptance::build_phases(p, st);
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  IdleTable table;
+  QuietIo io;
+  SimClock clock;
+  Devices dev{table, dut, io, clock, "hardware"};
+  std::ostringstream logtext;
+  auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+  PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr};
+  for (const Phase& ph : phases)
+    if (ph.id == "loop") ph.run(ctx);
+  const Measurement* bw = values.find("bandwidth_0p5");
+  const Measurement* ts = values.find("settling_time");
+  ASSERT_TRUE(bw && bw->value && ts && ts->value);
+  EXPECT_EQ(*bw->value, want.bandwidth_0p5_hz);
+  EXPECT_EQ(*ts->value, want.settling_time_s);
+  EXPECT_GT(want.bandwidth_0p5_hz, 0);
+  for (const Measurement* m : {bw, ts}) {
+    EXPECT_EQ(m->reason.rfind("design model of the DUT type ([dut.design] at line2.toml:", 0), 0u) << m->reason;
+    EXPECT_NE(m->reason.find("not measured on this DUT: no loop test"), std::string::npos) << m->reason;
+    EXPECT_FALSE(m->lo) << "a model has no measured interval";
+  }
+  EXPECT_EQ(st.slot().loop.value()["source"], "design model");
 }

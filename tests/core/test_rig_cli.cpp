@@ -721,3 +721,22 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
   for (const auto& ph : p["phases"]) EXPECT_EQ(ph["status"], "done") << ph.dump();
   EXPECT_NE(slurp(d + "/run/run.log").find("skipped: identify"), std::string::npos);
 }
+
+// Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is
+// exit 2 naming the file and line (this file's devices do not exist: opening them would be exit 4).
+TEST(RigCli, HardwareDesignModelMistakeIsAConfigurationErrorBeforeAnyDeviceOpens) {
+  const std::string d = tmp("design-hw");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[dut.design.loop]\npendulosity_kg = 6e-6\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "LBL-1", "--out",
+                 d + "/run"},
+                d + "/io"),
+            2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find("hw.toml:6"), std::string::npos) << err;
+  EXPECT_NE(err.find("pendulosity_kg"), std::string::npos) << err;
+}
