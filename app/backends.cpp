@@ -1,6 +1,7 @@
 #include "app/backends.hpp"
 
 #include "firmware_link/connect.hpp"
+#include "procedures/acceptance/loop_phase.hpp"
 #include "plant/emulated/world.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/gpio/gpiod_lines.hpp"
@@ -56,6 +57,8 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
   // Configuration before devices: a [table] mistake (drive map included) is
   // exit 2 naming the file, not hidden behind a device that cannot be opened.
   modbus::check_table_config(*cfg::get_table(hw, "table", true));
+  // [dut.design]: the DUT type's loop, the loop figures' labelled fallback without a loop test.
+  p.design_model = acceptance::read_design_model(*cfg::get_table(hw, "dut", true));
   // GPIO first: the e-stop watch must be live before anything moves.
   b.io = gpio::connect_gpio(*cfg::get_table(hw, "gpio", true));
   b.io_ptr = b.io.get();

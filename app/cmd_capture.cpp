@@ -104,7 +104,7 @@ int cmd_import(const ImportArgs& a) {
     ++frames;
     parts.clear();
     std::string err;
-    if (!decoder->decode(lf->frame, parts, &err)) {
+    if (!decoder->decode(lf->any, parts, &err)) {  // classic or CAN FD frames as logged
       ++other;  // commands, heartbeats, other nodes' traffic
       continue;
     }

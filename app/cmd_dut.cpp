@@ -197,13 +197,13 @@ int cmd_decode(const DutArgs& a) {
       continue;
     }
     std::string err;
-    const auto sig = dbc.decode(lf.frame, &err);
+    const auto sig = dbc.decode(lf.any, &err);  // classic or CAN FD as logged
     if (!sig) {
       if (err.empty()) ++foreign;  // an id the DBC does not describe: counted, not an error
       else skip(e.line, err + " (" + dbc_name + ")");
       continue;
     }
-    const std::string& name = dbc.find(lf.frame.id)->name;
+    const std::string& name = dbc.find(lf.any.id, lf.any.extended)->name;
     ++per[name];
     if (a.summary) continue;
     std::printf("%.6f %s %s", lf.t_s, lf.iface.c_str(), name.c_str());

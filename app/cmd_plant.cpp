@@ -11,6 +11,7 @@
 #include "plant/emulated/dut_source.hpp"
 #include "plant/emulated/plant_config.hpp"
 #include "plant/firmware/can_dut_server.hpp"
+#include "plant/firmware/firmware_config.hpp"
 #include "plant/table/cia402_drive.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "plant/table/table_server.hpp"
@@ -57,7 +58,8 @@ int serve(const ServeArgs& a) {
   const toml::table profile = acceptance::load_profile_table(a.profile, source);
   const acceptance::Profile p = acceptance::parse_profile(profile, source);
   const toml::table& plant_cfg = plant::plant_section(profile);
-  cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
+  cfg::check_keys(plant_cfg, {"seed", "dut", "table", "firmware"}, "plant");
+  const plant::FirmwareOptions fw = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   if (a.drive == "cia402" && a.drive_map.empty())
     throw ConfigError("rig plant serve: --drive cia402 needs --drive-map FILE (see drives/)");
@@ -93,7 +95,7 @@ int serve(const ServeArgs& a) {
   }
   std::unique_ptr<plant::CanDutServer> can;
   if (!a.can.empty()) {
-    can = std::make_unique<plant::CanDutServer>(dut, a.can);
+    can = std::make_unique<plant::CanDutServer>(dut, a.can, fw);
     can->start();
     std::cout << "dut: " << can->describe() << " serial " << dut.serial() << std::endl;
   }

@@ -18,8 +18,10 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "firmware_link/connect.hpp"
 #include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
+#include "plant/firmware/firmware_config.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
@@ -152,6 +154,19 @@ void operator_prompts(const RunArgs& a, const acceptance::Profile& p) {
     throw AbortedError("operator did not confirm the serial number");
   if (!confirm("Is the table clear of tools, cables and hands?"))
     throw AbortedError("operator did not confirm the table is clear");
+}
+
+// A DUT without a command channel ([dut] commands = false; emulated: [plant.firmware] commands
+// = false) cannot report its serial: the operator gives it, and a run without one is refused
+// with the configuration, before any device opens.
+void check_serial_source(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
+  if (!a.serial.empty()) return;
+  const toml::table* t = a.plant == "hardware" ? cfg::get_table(hw, "dut", true) : cfg::get_table(plant_cfg, "firmware");
+  if (!t) return;
+  const bool commands = a.plant == "hardware" ? link::link_options(*t).commands : plant::firmware_options(t).commands;
+  if (commands) return;
+  throw ConfigError(cfg::where(*t->get("commands")) + ": " + (a.plant == "hardware" ? "[dut]" : "[plant.firmware]") +
+                    " commands = false: the DUT cannot report its serial; give it with --serial");
 }
 
 // The rig's name from the hardware file's [rig] section, else the host name.
@@ -296,6 +311,7 @@ int do_run(RunArgs a) {
   if (a.plant == "emulated") plant::validate_plant_section(plant_cfg);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware);
+  check_serial_source(a, hw, plant_cfg);
 
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state);
@@ -375,6 +391,8 @@ int do_run(RunArgs a) {
   // Outputs: written whatever the outcome, so an aborted run keeps what it measured.
   PassportInfo info = passport_info(a, p, hw, started, state.slot().dut ? state.slot().serial() : a.serial);
   info.captures = state.slot().captures();  // what was recorded, not what lies in the folder
+  if (state.slot().dut)
+    for (const acceptance::SkippedStep& k : state.slot().dut->skipped) info.skipped.emplace_back(k.step, k.reason);
   std::sort(info.captures.begin(), info.captures.end());
   // A signal is taken until the passport is written: after the last phase it still aborts
   // the run (exit 3); the measurements stay judged as measured. After the passport is

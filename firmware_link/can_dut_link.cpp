@@ -27,6 +27,8 @@ std::string hex_op(Op op) {
 // A firmware that answers UNKNOWN_OP to LOOP_TEST: not a fault, the DUT has no loop test.
 struct LoopTestUnsupported {};
 
+constexpr const char* kNoCommands = "the DUT has no command channel ([dut] commands = false in the hardware file)";
+
 }  // namespace
 
 CanDutLink::CanDutLink(std::unique_ptr<CanTransport> transport, Clock& clock, LinkOptions opts)
@@ -42,7 +44,7 @@ CanDutLink::CanDutLink(std::unique_ptr<CanTransport> transport, Clock& clock, Li
 
 CanDutLink::~CanDutLink() {
   // Fire-and-forget: waiting here could step a (simulated) world that is already gone.
-  if (!streaming_) return;
+  if (!streaming_ || !opts_.commands) return;
   try {
     transport_->send(encode(Command{Op::StopStream, 0, 0, 0, 0}));
   } catch (...) {
@@ -51,28 +53,44 @@ CanDutLink::~CanDutLink() {
 
 std::string CanDutLink::describe() const {
   char buf[160];
+  if (!opts_.commands) {
+    std::snprintf(buf, sizeof buf, "CAN DUT link on %s (silence limit %.0f ms, no command channel)",
+                  transport_->name().c_str(), opts_.silence_s * 1e3);
+    return buf;
+  }
   std::snprintf(buf, sizeof buf, "CAN DUT link on %s (silence limit %.0f ms, command timeout %.0f ms x %d)",
                 transport_->name().c_str(), opts_.silence_s * 1e3, opts_.command_timeout_s * 1e3,
                 opts_.command_attempts);
   return buf;
 }
 
+bool CanDutLink::accept_stream_frame(double rx_t_s, bool has_x) {
+  if (!streaming_) return false;  // frames still in flight after a stop are stale
+  if (!joining_) return true;
+  if (rx_t_s < join_t_ || !has_x) return false;
+  joining_ = false;
+  return true;
+}
+
 void CanDutLink::dispatch(const RxFrame& rx) {
   if (opts_.stream) {  // a DBC-described stream: its frames before the protocol's
     parts_.clear();
     std::string err;
-    if (opts_.stream->decode(rx.frame, parts_, &err)) {
+    if (rx.fd ? opts_.stream->decode(*rx.fd, parts_, &err) : opts_.stream->decode(rx.frame, parts_, &err)) {
       std::lock_guard lk(state_mu_);
       if (!err.empty()) {
         ++malformed_;
         return;
       }
+      const bool has_x =
+          std::any_of(parts_.begin(), parts_.end(), [](const StreamPart& p) { return p.channel == Channel::X; });
+      if (!accept_stream_frame(rx.t_s, has_x)) return;  // stale frames do not count as the stream's life either
       last_stream_rx_ = clock_.now_s() - std::max(0.0, transport_->now_s() - rx.t_s);  // as below
-      if (streaming_)
-        for (const StreamPart& p : parts_) reasm_.push_part(p);
+      for (const StreamPart& p : parts_) reasm_.push_part(p);
       return;
     }
   }
+  if (rx.fd) return;  // the rig protocol is classic CAN: an FD frame is another node's
   const Decoded d = decode(rx.frame);
   std::lock_guard lk(state_mu_);
   if (!d.error.empty()) {
@@ -80,9 +98,11 @@ void CanDutLink::dispatch(const RxFrame& rx) {
     return;
   }
   if (const auto* s = std::get_if<StreamHalf>(&d.msg)) {
-    // When it arrived, not when the client got round to it: its age on the transport's clock.
-    last_stream_rx_ = clock_.now_s() - std::max(0.0, transport_->now_s() - rx.t_s);
-    if (streaming_) reasm_.push(*s);  // frames still in flight after a stop are stale
+    if (opts_.commands || accept_stream_frame(rx.t_s, s->channel == Channel::X)) {
+      // When it arrived, not when the client got round to it: its age on the transport's clock.
+      last_stream_rx_ = clock_.now_s() - std::max(0.0, transport_->now_s() - rx.t_s);
+      if (streaming_) reasm_.push(*s);  // frames still in flight after a stop are stale
+    }
   } else if (const auto* r = std::get_if<Response>(&d.msg)) {
     responses_.push_back(*r);
     if (responses_.size() > 32) responses_.pop_front();
@@ -130,6 +150,8 @@ Response CanDutLink::exchange(Command c, const CancelToken& cancel) {
 }
 
 Response CanDutLink::command(Command c, const CancelToken& cancel) {
+  if (!opts_.commands)
+    throw ConfigError("DUT on " + transport_->name() + ": cannot send " + hex_op(c.op) + ": " + kNoCommands);
   std::lock_guard io(io_mu_);
   const Response r = exchange(c, cancel);
   if (r.result == Result::Ok) return r;
@@ -157,7 +179,21 @@ DutInfo CanDutLink::info(const CancelToken& cancel) {
   return info;
 }
 
+DutCommandChannel CanDutLink::command_channel() const {
+  if (opts_.commands) return {};
+  return {false, kNoCommands};
+}
+
 void CanDutLink::start_stream(const CancelToken& cancel) {
+  if (!opts_.commands) {  // the DUT streams from power-on: join it from now on
+    std::lock_guard lk(state_mu_);
+    reasm_.restart();
+    streaming_ = true;
+    joining_ = true;
+    join_t_ = transport_->now_s();
+    last_stream_rx_ = clock_.now_s();
+    return;
+  }
   {
     std::lock_guard lk(state_mu_);
     reasm_.restart();
@@ -176,6 +212,13 @@ void CanDutLink::start_stream(const CancelToken& cancel) {
 }
 
 void CanDutLink::stop_stream() noexcept {
+  if (!opts_.commands) {  // nothing to tell the DUT: stop listening
+    std::lock_guard lk(state_mu_);
+    reasm_.flush();
+    streaming_ = false;
+    joining_ = false;
+    return;
+  }
   // Safe-state path: may run on another thread while read() blocks; then the
   // STOP is sent without waiting for its acknowledgement.
   std::unique_lock io(io_mu_, std::try_to_lock);
@@ -284,6 +327,10 @@ FilterConfig CanDutLink::get_filter(const CancelToken& cancel) {
 
 LoopTestResponse CanDutLink::loop_test(const LoopTestRequest& rq, const CancelToken& cancel) {
   LoopTestResponse out;
+  if (!opts_.commands) {
+    out.reason = std::string("no loop test: ") + kNoCommands;
+    return out;
+  }
   if (!opts_.loop_test) {
     out.reason = "loop test switched off for this DUT ([dut] loop_test = false in the hardware file)";
     return out;

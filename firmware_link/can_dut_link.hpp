@@ -28,6 +28,10 @@ struct LinkOptions {
   // [dut] loop_test = false: the rig does not ask this DUT for the loop test (its firmware has
   // none, or it must not be disturbed); loop_test() then answers "not supported".
   bool loop_test = true;
+  // [dut] commands = false: the DUT has no command channel; it streams from power-on and
+  // ignores the rig's commands. The link sends none: start_stream() joins the running stream
+  // (frames older than the call are dropped), stop_stream() stops listening.
+  bool commands = true;
   // A DBC-described stream ([dut] dbc + [dut.stream]). Null: the rig protocol's stream
   // (docs/rig-dut.dbc with rig_protocol_stream()), decoded by the codec: the same parts,
   // checked in tests/link/test_dbc_stream.cpp.
@@ -49,6 +53,7 @@ class CanDutLink final : public DutLink {
   void reset_stats() override;
   std::string describe() const override;
   LoopTestResponse loop_test(const LoopTestRequest& request, const CancelToken& cancel) override;
+  DutCommandChannel command_channel() const override;
 
   // Beyond the seam (rig dut, tests).
   void set_filter_enabled(bool on, const CancelToken& cancel);
@@ -63,6 +68,9 @@ class CanDutLink final : public DutLink {
 
  private:
   void dispatch(const RxFrame& f);
+  // Whether a stream frame received at rx_t_s (transport clock) is taken; ends the join on the
+  // first fresh frame carrying an x. Called with state_mu_ held.
+  bool accept_stream_frame(double rx_t_s, bool has_x);
   // Waits up to `budget_s` for a frame on the transport and dispatches it.
   // Returns whether a frame was dispatched.
   bool pump(double budget_s, const CancelToken& cancel);
@@ -85,6 +93,11 @@ class CanDutLink final : public DutLink {
   uint64_t malformed_ = 0;
   double last_stream_rx_ = 0;    // clock time the last stream frame arrived
   bool streaming_ = false;
+  // Without commands: joining a stream that runs from power-on. Frames received before
+  // join_t_ (transport clock) are stale; the first sample taken is the first whose x arrives,
+  // so that a sample cut in half by the join is not counted as lost.
+  bool joining_ = false;
+  double join_t_ = 0;
   uint8_t token_ = 0;
   // The loop test's burst being received (token of its LOOP_TEST; frames of other tokens are stale).
   std::optional<uint8_t> loop_token_;

@@ -1,10 +1,21 @@
 #include "firmware_link/can_transport.hpp"
 
 #include <algorithm>
+#include <cstdio>
+
+#include "rig/core/errors.hpp"
 
 #include <linux/can/error.h>
 
 namespace rig::link {
+
+void CanTransport::send_fd(const CanFdFrame& f) {
+  throw HardwareError(name() + ": cannot send a CAN FD frame (id 0x" + [&] {
+    char b[12];
+    std::snprintf(b, sizeof b, "%X", f.id);
+    return std::string(b);
+  }() + ", " + std::to_string(f.len) + " bytes): this transport carries classic CAN only");
+}
 
 ErrorFrameInfo classify_error_frame(const CanFrame& f) {
   ErrorFrameInfo info;

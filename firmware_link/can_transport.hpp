@@ -13,8 +13,9 @@
 namespace rig::link {
 
 struct RxFrame {
-  CanFrame frame;
+  CanFrame frame;  // a classic frame (empty when `fd` holds a CAN FD frame)
   double t_s = 0;  // receive time on the transport's clock (CanTransport::now_s), seconds
+  std::optional<CanFdFrame> fd;  // a CAN FD frame, from a transport that carries them
 };
 
 // Accept a frame when (frame.id & mask) == (id & mask), as SocketCAN's can_filter.
@@ -36,6 +37,9 @@ class CanTransport {
   virtual ~CanTransport() = default;
   // Throws HardwareError when the frame cannot be sent (interface down, bus-off).
   virtual void send(const CanFrame& f) = 0;
+  // Sends a CAN FD frame (up to 64 bytes; DBC layouts with several samples per frame). A
+  // transport or interface without CAN FD throws HardwareError saying so.
+  virtual void send_fd(const CanFdFrame& f);
   // Next frame, or nullopt after `timeout_s` (0 = poll). Error frames that mean
   // the link is unusable (bus-off, error passive) throw HardwareError; warnings
   // are counted and skipped. Cancellation throws AbortedError.

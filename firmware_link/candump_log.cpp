@@ -1,5 +1,6 @@
 #include "firmware_link/candump_log.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <vector>
@@ -33,7 +34,7 @@ std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
 
 // candump prints identifiers as 3 (standard) or 8 (extended) hex digits; an extended id
 // with bit 29 set is an error frame (CAN_ERR_FLAG), its class bits below.
-bool set_id(std::string_view id, CanFrame& f, std::string& problem) {
+bool set_id(std::string_view id, CanFdFrame& f, std::string& problem) {
   if (!all_hex(id) || (id.size() != 3 && id.size() != 8)) {
     problem = "not a CAN identifier (3 or 8 hex digits): " + quoted(id);
     return false;
@@ -52,16 +53,22 @@ bool set_id(std::string_view id, CanFrame& f, std::string& problem) {
   return true;
 }
 
-// "ID#DATA", "ID#R" (remote request), "ID##..." (CAN FD: not this protocol's).
-bool log_frame(std::string_view tok, CanFrame& f, std::string& problem) {
+// "ID#DATA", "ID#R" (remote request), "ID##FDATA" (CAN FD: F is one hex digit of flags,
+// bit 0 bit-rate switch, bit 1 error state indicator; then 0..64 data bytes of a valid FD length).
+bool log_frame(std::string_view tok, CanFdFrame& f, std::string& problem) {
   const auto hash = tok.find('#');
   if (!set_id(tok.substr(0, hash), f, problem)) return false;
   std::string_view data = tok.substr(hash + 1);
   if (!data.empty() && data[0] == '#') {
-    problem = "CAN FD frame " + quoted(tok) + " (the DUT's protocol is classic CAN)";
-    return false;
+    if (data.size() < 2 || !std::isxdigit(static_cast<unsigned char>(data[1]))) {
+      problem = "CAN FD frame " + quoted(tok) + " without its flags digit (ID##F<data>)";
+      return false;
+    }
+    f.fd = true;
+    f.brs = (std::strtoul(std::string(data.substr(1, 1)).c_str(), nullptr, 16) & 1u) != 0;
+    data = data.substr(2);
   }
-  if (!data.empty() && (data[0] == 'R' || data[0] == 'r')) {
+  if (!f.fd && !data.empty() && (data[0] == 'R' || data[0] == 'r')) {
     f.rtr = true;
     return true;
   }
@@ -76,8 +83,14 @@ bool log_frame(std::string_view tok, CanFrame& f, std::string& problem) {
     problem = "odd number of hex digits in the data: " + quoted(data) + " (a truncated line?)";
     return false;
   }
-  if (hex.size() > 16) {
-    problem = "more than 8 data bytes: " + quoted(data);
+  const std::size_t bytes = hex.size() / 2;
+  if (!f.fd && bytes > 8) {
+    problem = "more than 8 data bytes in a classic frame: " + quoted(data);
+    return false;
+  }
+  if (f.fd && (bytes > 64 || canfd_round_up(static_cast<int>(bytes)) != static_cast<int>(bytes))) {
+    problem = "CAN FD frame of " + std::to_string(bytes) + " data bytes (valid: 0..8, 12, 16, 20, 24, 32, 48, 64): " +
+              quoted(tok);
     return false;
   }
   f.len = static_cast<uint8_t>(hex.size() / 2);
@@ -86,7 +99,8 @@ bool log_frame(std::string_view tok, CanFrame& f, std::string& problem) {
 }
 
 // "ID [N] B0 B1 ..." with optional trailers: "remote request", "ERRORFRAME", an -a ASCII column.
-bool screen_frame(const std::vector<std::string_view>& t, std::size_t i, CanFrame& f, std::string& problem) {
+// A CAN FD frame's length is printed with two digits ("[08]", "[64]"), a classic one's with one.
+bool screen_frame(const std::vector<std::string_view>& t, std::size_t i, CanFdFrame& f, std::string& problem) {
   if (!set_id(t[i], f, problem)) return false;
   const std::string_view dlc = t[i + 1];
   const std::string_view n = dlc.substr(1, dlc.size() - 2);
@@ -96,12 +110,13 @@ bool screen_frame(const std::vector<std::string_view>& t, std::size_t i, CanFram
     return false;
   }
   const unsigned len = static_cast<unsigned>(std::strtoul(std::string(n).c_str(), nullptr, 10));
-  if (len > 8 || n.size() == 2) {
-    problem = "CAN FD frame of length " + quoted(dlc) + " (the DUT's protocol is classic CAN)";
+  f.fd = n.size() == 2;
+  if ((!f.fd && len > 8) || (f.fd && (len > 64 || canfd_round_up(static_cast<int>(len)) != static_cast<int>(len)))) {
+    problem = "bad length " + quoted(dlc) + (f.fd ? " for a CAN FD frame" : " for a classic frame");
     return false;
   }
   std::size_t k = i + 2;
-  if (k < t.size() && t[k] == "remote") {
+  if (!f.fd && k < t.size() && t[k] == "remote") {
     f.rtr = true;
     f.len = static_cast<uint8_t>(len);
     return true;
@@ -135,6 +150,7 @@ LogLine read_candump_line(std::string_view line) {
   out.kind = LogLineKind::Unreadable;
   std::size_t i = 0;
   LoggedFrame& lf = out.frame;
+  CanFdFrame& any = lf.any;
   if (t[0].front() == '(') {
     if (t[0].back() != ')') {
       out.problem = "bad timestamp " + quoted(t[0]);
@@ -152,25 +168,35 @@ LogLine read_candump_line(std::string_view line) {
   const std::size_t rest = t.size() - i;
   bool ok = false;
   if (rest >= 1 && t[i].find('#') != std::string_view::npos) {  // bare ID#DATA
-    ok = log_frame(t[i], lf.frame, out.problem);
+    ok = log_frame(t[i], any, out.problem);
     if (ok && rest > 1) {
       out.problem = "text after the frame: " + quoted(t[i + 1]);
       ok = false;
     }
   } else if (rest >= 2 && t[i + 1].find('#') != std::string_view::npos) {  // IFACE ID#DATA [R|T]
     lf.iface = std::string(t[i]);
-    ok = log_frame(t[i + 1], lf.frame, out.problem);
+    ok = log_frame(t[i + 1], any, out.problem);
     if (ok && rest > 2 && !(rest == 3 && (t[i + 2] == "R" || t[i + 2] == "T"))) {
       out.problem = "text after the frame: " + quoted(t[i + 2]);
       ok = false;
     }
   } else if (rest >= 3 && t[i + 2].front() == '[' && t[i + 2].back() == ']') {  // IFACE ID [N] bytes
     lf.iface = std::string(t[i]);
-    ok = screen_frame(t, i + 1, lf.frame, out.problem);
+    ok = screen_frame(t, i + 1, any, out.problem);
   } else {
     out.problem = "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES)";
   }
-  if (ok) out.kind = LogLineKind::Frame;
+  if (ok) {
+    out.kind = LogLineKind::Frame;
+    if (!any.fd) {  // the classic view the rig protocol's codec takes
+      lf.frame.id = any.id;
+      lf.frame.extended = any.extended;
+      lf.frame.rtr = any.rtr;
+      lf.frame.error = any.error;
+      lf.frame.len = any.len;
+      std::copy_n(any.data.begin(), 8, lf.frame.data.begin());
+    }
+  }
   return out;
 }
 

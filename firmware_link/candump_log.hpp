@@ -6,7 +6,9 @@
 //   screen format, plain `candump` (optionally -ta/-td/-tz timestamps, -a ASCII column):
 //       (1700000000.123456)  vcan0  100   [8]  56 34 12 05 00 00 80 3F
 //         vcan0  010   [0]  remote request
-// A line that is none of these (CAN FD, a truncated last line, text) is reported with the
+// CAN FD frames in both: `ID##F<data>` in the log format (F: one hex digit of flags, bit 0 BRS),
+// a two-digit length `[12]` .. `[64]` on screen.
+// A line that is none of these (a truncated last line, text) is reported with the
 // reason, not silently dropped, so a decoder can count and name it.
 #pragma once
 #include <cstddef>
@@ -24,7 +26,8 @@ namespace rig::link {
 struct LoggedFrame {
   double t_s = 0;
   std::string iface;
-  CanFrame frame;
+  CanFdFrame any;  // the frame as logged, classic or CAN FD (any.fd): what DBC decoding takes
+  CanFrame frame;  // the same frame in classic form, when !any.fd (else empty): the rig codec's
 };
 
 enum class LogLineKind { Empty, Frame, Unreadable };  // Empty: blank or a `#` comment

@@ -8,7 +8,7 @@ namespace rig::link {
 namespace {
 void check_dut_keys(const toml::table& t) {
   cfg::check_keys(t, {"can", "silence_ms", "command_timeout_ms", "command_attempts", "reorder_window", "rcvbuf_kb",
-                      "loop_test", "dbc", "stream"},
+                      "loop_test", "commands", "dbc", "stream", "design"},
                   "[dut]");
 }
 }  // namespace
@@ -21,6 +21,7 @@ LinkOptions link_options(const toml::table& t) {
   o.command_attempts = static_cast<int>(cfg::get_int(t, "command_attempts", 3, 1, 100));
   o.reorder_window = static_cast<uint32_t>(cfg::get_int(t, "reorder_window", 8, 1, 4096));
   o.loop_test = cfg::get_bool(t, "loop_test", true);
+  o.commands = cfg::get_bool(t, "commands", true);
   if (t.get("dbc") || t.get("stream")) o.stream = stream_decoder_from_config(t);
   return o;
 }

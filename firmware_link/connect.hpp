@@ -11,7 +11,8 @@
 namespace rig::link {
 
 // [dut] keys: can = "can0" (required), silence_ms = 100, command_timeout_ms = 250,
-// command_attempts = 3, reorder_window = 8, rcvbuf_kb = 8192, dbc = "FILE" with a
+// command_attempts = 3, reorder_window = 8, rcvbuf_kb = 8192, loop_test = true, commands = true
+// (false: a DUT without a command channel, streaming from power-on), dbc = "FILE" with a
 // [dut.stream] table (firmware_link/dbc_stream.hpp; absent: the rig protocol). Unknown keys and
 // bad values => ConfigError naming file:line; an interface that cannot be
 // opened => HardwareError.

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,7 @@ class DbcStreamDecoder {
   }
 
  private:
+  friend class DbcStreamEncoder;  // the inverse walks the same resolved layout
   struct Slot {  // one role of one sample within a message
     const DbcSignal* x = nullptr;
     const DbcSignal* y = nullptr;
@@ -83,6 +85,34 @@ class DbcStreamDecoder {
   int counter_bits_ = 0;
   double x_scale_ = 1, y_scale_ = 1;  // the signals' unit to g
   std::map<uint64_t, Roles> by_frame_;
+};
+
+// The inverse of the decoder, for emulated firmware and tests (never the rig's receive path):
+// the frames a DUT streaming this layout sends. Built on the decoder's resolved layout, so the
+// two cannot disagree on a signal's place, byte order, scale or multiplexer value.
+struct StreamSample {
+  float x_g = 0, y_g = 0;
+  uint8_t status = 0;  // stream_status bits (filter on, saturated, loop fault)
+};
+class DbcStreamEncoder {
+ public:
+  // A layout whose messages cannot be sent (a message whose roles need two multiplexer values
+  // at once) => ConfigError.
+  explicit DbcStreamEncoder(std::shared_ptr<const DbcStreamDecoder> layout);
+  int samples_per_frame() const { return layout_->spec().samples_per_frame; }
+  // Whether any frame is longer than 8 bytes (a CAN FD layout).
+  bool fd() const { return fd_; }
+  // The frames of samples_per_frame() samples, the first with `counter` (its low counter_bits
+  // are sent; sample i has counter + i), one frame per message of the layout in identifier
+  // order. Values beyond an integer signal's range are sent as its end value (a saturated
+  // output stays saturated); a status or flag signal shared by the samples of a frame carries
+  // the OR of their flags.
+  void encode(uint32_t counter, std::span<const StreamSample> samples, std::vector<CanFdFrame>& out) const;
+  const std::shared_ptr<const DbcStreamDecoder>& layout() const { return layout_; }
+
+ private:
+  std::shared_ptr<const DbcStreamDecoder> layout_;
+  bool fd_ = false;
 };
 
 // The rig protocol (docs/rig-dut.dbc, built into the program) and its stream section.

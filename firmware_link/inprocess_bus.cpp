@@ -27,10 +27,11 @@ double InProcessBus::now() const {
   return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-void InProcessBus::inject(const CanFrame& f) { deliver(f, nullptr); }
+void InProcessBus::inject(const CanFrame& f) { deliver(RxFrame{f, 0, std::nullopt}, nullptr); }
 
-void InProcessBus::deliver(const CanFrame& f, const InProcessPort* from) {
-  const RxFrame rx{f, now()};
+void InProcessBus::deliver(const RxFrame& f, const InProcessPort* from) {
+  RxFrame rx = f;
+  rx.t_s = now();
   std::lock_guard lk(mu_);
   for (InProcessPort* p : ports_)
     if (p != from) p->push(rx);
@@ -48,7 +49,13 @@ InProcessPort::~InProcessPort() { bus_->detach(this); }
 void InProcessPort::push(const RxFrame& f) {
   {
     std::lock_guard lk(mu_);
-    if (!filter_accepts(filters_, f.frame)) return;
+    // An FD frame is filtered on its identifier, as the kernel does.
+    CanFrame head;
+    if (f.fd) {
+      head.id = f.fd->id;
+      head.extended = f.fd->extended;
+    }
+    if (!filter_accepts(filters_, f.fd ? head : f.frame)) return;
     if (queue_.size() >= bus_->opts_.rx_capacity) {
       ++stats_.rx_dropped;
       return;
@@ -64,7 +71,20 @@ void InProcessPort::send(const CanFrame& f) {
     std::lock_guard lk(mu_);
     ++stats_.tx;
   }
-  bus_->deliver(f, this);
+  bus_->deliver(RxFrame{f, 0, std::nullopt}, this);
+}
+
+void InProcessPort::send_fd(const CanFdFrame& f) {
+  if (f.len > 64 || canfd_round_up(f.len) != f.len)
+    throw HardwareError(name() + ": CAN FD frame of " + std::to_string(f.len) + " bytes");
+  {
+    std::lock_guard lk(mu_);
+    ++stats_.tx;
+  }
+  RxFrame rx;
+  rx.fd = f;
+  rx.fd->fd = true;
+  bus_->deliver(rx, this);
 }
 
 std::optional<RxFrame> InProcessPort::take_locked() {

@@ -47,7 +47,7 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
  private:
   friend class InProcessPort;
   explicit InProcessBus(Options opts) : opts_(std::move(opts)) {}
-  void deliver(const CanFrame& f, const InProcessPort* from);
+  void deliver(const RxFrame& f, const InProcessPort* from);
   void detach(InProcessPort* p);
 
   Options opts_;
@@ -59,6 +59,7 @@ class InProcessPort final : public CanTransport {
  public:
   ~InProcessPort() override;
   void send(const CanFrame& f) override;
+  void send_fd(const CanFdFrame& f) override;  // the in-process bus carries CAN FD frames too
   std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
   double now_s() const override { return bus_->now(); }
   void set_filters(std::span<const CanFilter> filters) override;

@@ -1,6 +1,8 @@
 #include "firmware_link/socketcan.hpp"
 
+#include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -85,6 +87,8 @@ SocketCanTransport::SocketCanTransport(const std::string& iface, SocketCanOption
   ::setsockopt(s, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &own, sizeof own);
   const int one = 1;
   ::setsockopt(s, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one);
+  // CAN FD frames too (DBC layouts of several samples per frame); classic ones are unchanged.
+  ::setsockopt(s, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &one, sizeof one);
   ::setsockopt(s, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one);
   // SO_RCVBUFFORCE ignores rmem_max (needs CAP_NET_ADMIN); else the capped SO_RCVBUF.
   if (::setsockopt(s, SOL_SOCKET, SO_RCVBUFFORCE, &opts_.rcvbuf_bytes, sizeof opts_.rcvbuf_bytes) != 0)
@@ -103,11 +107,28 @@ SocketCanTransport::~SocketCanTransport() = default;
 void SocketCanTransport::send(const CanFrame& f) {
   if (f.len > 8) throw HardwareError(name() + ": frame " + to_candump(f) + " longer than 8 bytes");
   const can_frame k = to_kernel(f);
+  write_kernel(&k, sizeof k, to_candump(f));
+}
+
+void SocketCanTransport::send_fd(const CanFdFrame& f) {
+  if (f.len > 64 || canfd_round_up(f.len) != f.len)
+    throw HardwareError(name() + ": CAN FD frame of " + std::to_string(f.len) + " bytes");
+  canfd_frame k{};
+  k.can_id = f.extended ? ((f.id & CAN_EFF_MASK) | CAN_EFF_FLAG) : (f.id & CAN_SFF_MASK);
+  k.len = f.len;
+  k.flags = f.brs ? CANFD_BRS : 0;
+  std::memcpy(k.data, f.data.data(), f.len);
+  char what[48];
+  std::snprintf(what, sizeof what, "CAN FD frame 0x%X (%d bytes)", f.id, f.len);
+  write_kernel(&k, sizeof k, what);
+}
+
+void SocketCanTransport::write_kernel(const void* k, std::size_t n, const std::string& what) {
   std::lock_guard lk(impl_->tx_mu);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(opts_.send_timeout_s);
   for (;;) {
     asio::error_code ec;
-    asio::write(impl_->sd, asio::buffer(&k, sizeof k), ec);
+    asio::write(impl_->sd, asio::buffer(k, n), ec);
     if (!ec) {
       ++impl_->tx;
       return;
@@ -119,12 +140,16 @@ void SocketCanTransport::send(const CanFrame& f) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       continue;
     }
-    throw HardwareError(name() + ": sending " + to_candump(f) + ": " + ec.message());
+    // A CAN FD frame on a classic interface: the kernel refuses it with EINVAL.
+    if (n == sizeof(canfd_frame) && ec.value() == EINVAL)
+      throw HardwareError(name() + ": sending " + what + ": the interface is not in CAN FD mode (ip link set " + iface_ +
+                          " mtu 72)");
+    throw HardwareError(name() + ": sending " + what + ": " + ec.message());
   }
 }
 
 std::optional<RxFrame> SocketCanTransport::try_read() {
-  can_frame k{};
+  canfd_frame k{};  // CAN_RAW_FD_FRAMES: classic frames arrive as CAN_MTU bytes, FD ones as CANFD_MTU
   iovec iov{&k, sizeof k};
   alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(uint32_t))];
   msghdr msg{};
@@ -137,9 +162,23 @@ std::optional<RxFrame> SocketCanTransport::try_read() {
     if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return std::nullopt;
     throw HardwareError(sys_error(name() + ": recvmsg", errno));
   }
-  if (static_cast<std::size_t>(n) != sizeof k) throw HardwareError(name() + ": short CAN frame read");
   RxFrame rx;
-  rx.frame = from_kernel(k);
+  if (static_cast<std::size_t>(n) == CANFD_MTU) {
+    CanFdFrame f;
+    f.extended = (k.can_id & CAN_EFF_FLAG) != 0;
+    f.id = f.extended ? (k.can_id & CAN_EFF_MASK) : (k.can_id & CAN_SFF_MASK);
+    f.len = std::min<uint8_t>(k.len, 64);
+    f.fd = true;
+    f.brs = (k.flags & CANFD_BRS) != 0;
+    std::memcpy(f.data.data(), k.data, f.len);
+    rx.fd = f;
+  } else if (static_cast<std::size_t>(n) == CAN_MTU) {
+    can_frame c{};
+    std::memcpy(&c, &k, sizeof c);
+    rx.frame = from_kernel(c);
+  } else {
+    throw HardwareError(name() + ": short CAN frame read");
+  }
   rx.t_s = now_s();  // replaced by the kernel's timestamp when the socket gives one
   for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
     if (c->cmsg_level != SOL_SOCKET) continue;

@@ -27,6 +27,8 @@ class SocketCanTransport final : public CanTransport {
   SocketCanTransport& operator=(const SocketCanTransport&) = delete;
 
   void send(const CanFrame& f) override;
+  // Needs the interface in CAN FD mode (`ip link set IFACE mtu 72`), else HardwareError saying so.
+  void send_fd(const CanFdFrame& f) override;
   std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
   double now_s() const override;  // CLOCK_REALTIME, the clock of the kernel's SO_TIMESTAMP
   void set_filters(std::span<const CanFilter> filters) override;
@@ -36,6 +38,8 @@ class SocketCanTransport final : public CanTransport {
  private:
   struct Impl;
   std::optional<RxFrame> try_read();  // one non-blocking recvmsg
+  // Writes one kernel frame (can_frame or canfd_frame), retrying a full tx queue for send_timeout_s.
+  void write_kernel(const void* k, std::size_t n, const std::string& what);
   std::unique_ptr<Impl> impl_;
   std::string iface_;
   SocketCanOptions opts_;

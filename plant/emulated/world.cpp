@@ -1,5 +1,6 @@
 #include "plant/emulated/world.hpp"
 
+#include "plant/firmware/firmware_config.hpp"
 #include "plant/firmware/inprocess_dut.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "rig/core/errors.hpp"
@@ -29,7 +30,7 @@ EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& se
   if (const toml::node* l = plant_cfg.get("link"))
     throw ConfigError(cfg::where(*l) + ": [plant] link was removed: the emulated DUT is always reached through the "
                                        "CAN link (the in-process bus and the firmware emulator); delete this key");
-  cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
+  cfg::check_keys(plant_cfg, {"seed", "dut", "table", "firmware"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   dut_ = std::make_unique<CountingSource>(make_dut_source(cfg::get_table(plant_cfg, "dut"), seed, serial), samples_);
   // Separate, fixed streams per component: the table's repeatability does not
@@ -40,7 +41,12 @@ EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& se
   auto lines = std::make_unique<gpio::SimLines>();
   lines_ = lines.get();
   io_ = std::make_unique<gpio::LineRigIo>(std::move(lines));
-  link_ = link::make_inprocess_dut(*dut_, clock_);
+  // The rig side mirrors the firmware, as a hardware file's [dut] section would describe it.
+  link::InProcessDutOptions lo;
+  lo.firmware = firmware_options(cfg::get_table(plant_cfg, "firmware"));
+  lo.link.commands = lo.firmware.commands;
+  if (lo.firmware.stream) lo.link.stream = lo.firmware.stream->layout();
+  link_ = link::make_inprocess_dut(*dut_, clock_, lo);
 }
 
 DutLink& EmulatedPlant::dut() { return *link_; }

@@ -13,6 +13,9 @@ void CanDutServer::stop() {
   if (firmware_) firmware_->stop();
 }
 
-std::string CanDutServer::describe() const { return "emulated DUT firmware on " + transport_->name() + " (1 kHz)"; }
+std::string CanDutServer::describe() const {
+  return "emulated DUT firmware on " + transport_->name() + " (1 kHz" +
+         (firmware_->options().commands ? "" : ", no command channel: streaming from power-on") + ")";
+}
 
 }  // namespace rig::plant

@@ -30,6 +30,7 @@ FirmwareEmulator::FirmwareEmulator(DutSource& source, link::CanTransport& bus, F
   // The firmware only listens to the rig's commands.
   const link::CanFilter f[] = {{link::can_id::kCommand, 0x7FF}};
   bus_.set_filters(f);
+  streaming_ = !opts_.commands;  // without commands it streams from power-on
 }
 
 FirmwareEmulator::~FirmwareEmulator() { stop(); }
@@ -101,12 +102,54 @@ void FirmwareEmulator::tick() {
   }
 }
 
-void FirmwareEmulator::send_sample(uint64_t seq, float x, float y, uint8_t status) {
+bool FirmwareEmulator::dropped(uint64_t seq) const {
   for (const auto& [first, count] : faults_.drop_samples)
-    if (seq >= first && seq < first + count) {
-      ++stats_.samples_dropped;
-      return;
+    if (seq >= first && seq < first + count) return true;
+  return false;
+}
+
+void FirmwareEmulator::send_layout_sample(uint64_t seq, float x, float y, uint8_t status) {
+  if (block_.empty()) block_seq_ = seq;
+  block_.push_back({x, y, status});
+  const auto n = static_cast<std::size_t>(opts_.stream->samples_per_frame());
+  if (block_.size() < n) return;
+  // The faults act on what the bus carries: a dropped sample takes its frames with it (all the
+  // block's samples when they share a frame); channel c of drop_frames is the c-th message.
+  bool drop = false;
+  for (std::size_t i = 0; i < n; ++i) drop = drop || dropped(block_seq_ + i);
+  frames_.clear();
+  opts_.stream->encode(static_cast<uint32_t>(block_seq_), block_, frames_);
+  block_.clear();
+  if (drop) {
+    stats_.samples_dropped += n;
+    return;
+  }
+  const int copies = faults_.duplicate_samples.count(block_seq_) ? 2 : 1;
+  for (int k = 0; k < copies; ++k)
+    for (std::size_t c = 0; c < frames_.size(); ++c) {
+      if (faults_.drop_frames.count({block_seq_, static_cast<int>(c)})) continue;
+      const link::CanFdFrame& f = frames_[c];
+      if (f.fd) {  // a CAN FD layout: the transport must carry FD (vcan with mtu 72, the in-process bus)
+        if (silent()) continue;
+        bus_.send_fd(f);
+        ++stats_.frames_sent;
+        continue;
+      }
+      link::CanFrame cf;
+      cf.id = f.id;
+      cf.extended = f.extended;
+      cf.len = f.len;
+      std::copy_n(f.data.begin(), f.len, cf.data.begin());
+      send(cf);
     }
+}
+
+void FirmwareEmulator::send_sample(uint64_t seq, float x, float y, uint8_t status) {
+  if (opts_.stream) return send_layout_sample(seq, x, y, status);
+  if (dropped(seq)) {
+    ++stats_.samples_dropped;
+    return;
+  }
   const int copies = faults_.duplicate_samples.count(seq) ? 2 : 1;
   for (int i = 0; i < copies; ++i) {
     if (!faults_.drop_frames.count({seq, 0}))
@@ -119,6 +162,10 @@ void FirmwareEmulator::send_sample(uint64_t seq, float x, float y, uint8_t statu
 void FirmwareEmulator::handle_commands() {
   const CancelToken never;
   while (auto rx = bus_.receive(0, never)) {
+    if (!opts_.commands) {  // no command channel: what the rig sends goes unanswered
+      ++stats_.commands_ignored;
+      continue;
+    }
     const link::Decoded d = link::decode(rx->frame);
     const auto* c = std::get_if<link::Command>(&d.msg);
     if (!c) {
@@ -145,6 +192,7 @@ link::Response FirmwareEmulator::execute(const link::Command& c) {
     case Op::StartStream:
       if (loop_ || !burst_.empty()) return bad(Result::BadState);  // the loop test owns the DUT until its burst is out
       streaming_ = true;
+      block_.clear();  // a block starts with the stream
       r.value = static_cast<uint32_t>(counter_);
       break;
     case Op::StopStream:

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "firmware_link/can_transport.hpp"
+#include "firmware_link/dbc_stream.hpp"
 #include "plant/emulated/dut_source.hpp"
 
 namespace rig::plant {
@@ -28,6 +29,13 @@ struct FirmwareOptions {
   double heartbeat_hz = 10.0;
   uint32_t first_seq = 0;  // the 32-bit sample counter at power-on
   bool loop_test = true;   // false: a firmware without LOOP_TEST (it answers UNKNOWN_OP)
+  // false: a firmware without a command channel: it streams from power-on (construction) and
+  // reads nothing from the bus (docs/can-protocol.md "DUTs without commands").
+  bool commands = true;
+  // The stream's layout as a DBC describes it ([plant.firmware] dbc + stream): null, the rig
+  // protocol's two frames per sample. With N samples per frame the firmware sends a block of
+  // N samples' frames every N output periods.
+  std::shared_ptr<const link::DbcStreamEncoder> stream;
 };
 
 struct FirmwareFaults {
@@ -50,6 +58,7 @@ struct FirmwareStats {
   uint64_t commands = 0;
   uint64_t bad_commands = 0;
   uint64_t loop_tests = 0;      // loop tests completed (their bursts queued)
+  uint64_t commands_ignored = 0; // frames a firmware without commands left unanswered
 };
 
 class FirmwareEmulator {
@@ -72,6 +81,7 @@ class FirmwareEmulator {
   void set_faults(FirmwareFaults f);
   FirmwareStats stats() const;
   bool streaming() const { return streaming_; }
+  const FirmwareOptions& options() const { return opts_; }
   uint64_t sample_counter() const;  // the next sample's counter value
 
  private:
@@ -79,6 +89,9 @@ class FirmwareEmulator {
   void handle_commands();
   link::Response execute(const link::Command& c);
   void send_sample(uint64_t seq, float x, float y, uint8_t status);
+  // A DBC layout: collects samples and sends the frames of each full block.
+  void send_layout_sample(uint64_t seq, float x, float y, uint8_t status);
+  bool dropped(uint64_t seq) const;
   void send(const link::CanFrame& f);
   bool silent() const;
   link::Response start_loop_test(const link::Command& c);
@@ -111,6 +124,9 @@ class FirmwareEmulator {
   std::vector<uint8_t> staged_have_;  // one bit per coefficient (5 per section)
   bool staging_ = false;
   std::optional<LoopRun> loop_;
+  std::vector<link::StreamSample> block_;  // a DBC layout's samples not yet sent
+  uint64_t block_seq_ = 0;                 // the first one's counter
+  std::vector<link::CanFdFrame> frames_;   // scratch of send_layout_sample
   std::deque<link::CanFrame> burst_;  // sent at the bus's pace, a few frames per tick
   std::thread thread_;
   std::atomic<bool> stop_{false};

@@ -39,6 +39,7 @@ class InProcessDutLink final : public DutLink {
   void reset_stats() override { client_->reset_stats(); }
   std::string describe() const override;
   LoopTestResponse loop_test(const LoopTestRequest& r, const CancelToken& c) override { return client_->loop_test(r, c); }
+  DutCommandChannel command_channel() const override { return client_->command_channel(); }
 
  private:
   std::shared_ptr<InProcessBus> bus_;

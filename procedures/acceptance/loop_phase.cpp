@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 
 #include "analysis/loop_response.hpp"
+#include "design/loop_figures.hpp"
+#include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {
 
@@ -111,6 +113,20 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   rq.steps = p.loop_steps;
   rq.record_s = p.loop_record_s;
   const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
+  if (!r.supported && p.design_model) {
+    // The DUT type's documented loop through the profile's filter: a figure of the design, not
+    // of this DUT, and said so; no interval (the model has no scatter).
+    const design::LoopFigures f = design::loop_figures(p.design_model->loop, p.design_model->regulator, p.filter);
+    const std::string why = fmt::format("design model of the DUT type ([dut.design] at {}), with the output filter; "
+                                        "not measured on this DUT: {}",
+                                        p.design_model->source, r.reason);
+    ctx.log->warn("loop figures from the design model: {}", why);
+    ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, why);
+    ctx.values.set("settling_time", f.settling_time_s, why);
+    dut.loop = {{"source", "design model"}, {"reason", why}, {"settling_band", f.settling_band},
+                {"settling_time_s", f.settling_time_s}, {"bandwidth_0p5_hz", f.bandwidth_0p5_hz}};
+    return;
+  }
   if (!r.supported) {
     ctx.log->warn("loop figures not measured: {}", r.reason);
     const std::string why = "not measured: " + r.reason;
@@ -149,6 +165,18 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   ctx.log->info("loop test: settling time {:.4g} s, bandwidth (0.5) {:.1f} Hz over {} steps", f["settling_time_s"].get<double>(),
                 f["bandwidth_0p5_hz"].get<double>(), r.steps.size());
   dut.loop = f;
+}
+
+std::optional<Profile::DesignModel> read_design_model(const toml::table& dut) {
+  const toml::table* d = cfg::get_table(dut, "design");
+  if (!d) return std::nullopt;
+  cfg::check_keys(*d, {"loop", "regulator"}, "dut.design");
+  Profile::DesignModel m;
+  m.source = cfg::where(*d);
+  if (const toml::table* l = cfg::get_table(*d, "loop")) design::read_loop_params(*l, "dut.design.loop", m.loop);
+  if (const toml::table* r = cfg::get_table(*d, "regulator"))
+    design::read_regulator_params(*r, "dut.design.regulator", m.regulator);
+  return m;
 }
 
 }  // namespace rig::acceptance

@@ -217,6 +217,18 @@ void declare_values(const Profile& p, const std::vector<Phase>& phases, Measurem
   if (klass) v.declare(*klass, limit(p, klass->name), !p.classes.empty());
 }
 
+DutIdentity identity_without_commands(const Profile& p, const RunOptions& opt, const std::string& why) {
+  if (!opt.expected_serial || opt.expected_serial->empty())
+    throw ConfigError("the DUT cannot report its serial (" + why + "): give it with --serial");
+  DutIdentity id{*opt.expected_serial, "", std::nullopt, {}};
+  id.skipped = {
+      {"identify", "serial taken from --serial; firmware version, temperature and output rate not read (" + why + ")"},
+      {"set output filter", fmt::format("the profile's filter '{}' was not loaded: y(t) is the output of whatever filter "
+                                        "the DUT runs ({})", p.filter_name, why)},
+      {"loop test", "bandwidth_0p5 and settling_time not measured (" + why + ")"}};
+  return id;
+}
+
 void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutState& st) {
   ctx.dev.io.set_lamp(Lamp::Ready, false);
   ctx.dev.io.set_lamp(Lamp::Running, true);
@@ -224,18 +236,24 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
   ctx.log->info("DUT power on ({})", ctx.dev.io.describe());
   ctx.dev.io.set_dut_power(true);
   ctx.dev.clock.sleep_for(1.0, ctx.cancel);  // power-up: the loop captures the pendulum
-  const DutInfo info = ctx.dev.dut.info(ctx.cancel);
-  ctx.log->info("DUT serial {} firmware {} temperature {:.1f} C rate {} Hz", info.serial, info.firmware,
-                info.temperature_c, info.output_rate_hz);
-  if (opt.expected_serial && *opt.expected_serial != info.serial)
-    throw ConfigError(fmt::format("DUT reports serial '{}', expected '{}' (--serial)", info.serial, *opt.expected_serial));
-  if (std::abs(info.output_rate_hz - p.rate_hz) > 1e-6 * p.rate_hz)
-    throw ConfigError(fmt::format("DUT streams at {} Hz, profile '{}' expects rate_hz = {}", info.output_rate_hz, p.name,
-                                  p.rate_hz));
-  st.dut = DutIdentity{info.serial, info.firmware, info.temperature_c};
-  ctx.log->info("output filter: {} ({} section(s) at {} Hz, {})", p.filter_name, p.filter.sections.size(),
-                p.filter.rate_hz, p.filter.enabled ? "on" : "off");
-  ctx.dev.dut.set_filter(p.filter, ctx.cancel);
+  const DutCommandChannel commands = ctx.dev.dut.command_channel();
+  if (!commands.available) {
+    st.dut = identity_without_commands(p, opt, commands.reason);
+    for (const SkippedStep& k : st.dut->skipped) ctx.log->warn("skipped: {}: {}", k.step, k.reason);
+  } else {
+    const DutInfo info = ctx.dev.dut.info(ctx.cancel);
+    ctx.log->info("DUT serial {} firmware {} temperature {:.1f} C rate {} Hz", info.serial, info.firmware,
+                  info.temperature_c, info.output_rate_hz);
+    if (opt.expected_serial && *opt.expected_serial != info.serial)
+      throw ConfigError(fmt::format("DUT reports serial '{}', expected '{}' (--serial)", info.serial, *opt.expected_serial));
+    if (std::abs(info.output_rate_hz - p.rate_hz) > 1e-6 * p.rate_hz)
+      throw ConfigError(fmt::format("DUT streams at {} Hz, profile '{}' expects rate_hz = {}", info.output_rate_hz, p.name,
+                                    p.rate_hz));
+    st.dut = DutIdentity{info.serial, info.firmware, info.temperature_c, {}};
+    ctx.log->info("output filter: {} ({} section(s) at {} Hz, {})", p.filter_name, p.filter.sections.size(),
+                  p.filter.rate_hz, p.filter.enabled ? "on" : "off");
+    ctx.dev.dut.set_filter(p.filter, ctx.cancel);
+  }
   ctx.log->info("homing table ({})", ctx.dev.table.describe());
   ctx.dev.table.home(ctx.cancel);
 }

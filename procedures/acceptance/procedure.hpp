@@ -29,8 +29,13 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state);
 // order, then accuracy_class, which is required when the profile has classes).
 void declare_values(const Profile& p, const std::vector<Phase>& phases, MeasurementSet& values);
 
-// Bring-up sequence (runs on every start and resume).
+// Bring-up sequence (runs on every start and resume). A DUT without a command channel
+// (DutLink::command_channel) is not asked anything: its identity is identity_without_commands().
 void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutState& state);
+
+// The identity of a DUT that cannot be asked: the serial from --serial (none => ConfigError),
+// and the bring-up steps skipped -- identify, set output filter, loop test -- each with `why`.
+DutIdentity identity_without_commands(const Profile& p, const RunOptions& opt, const std::string& why);
 
 // Formulas (3), (4) of docs/method.md with the sign rule: g_dA enters (1) with +
 // when mean(x10) > mean(x20). Exposed for tests.

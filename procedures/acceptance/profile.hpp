@@ -12,6 +12,7 @@
 #include <toml++/toml.h>
 
 #include "analysis/options.hpp"
+#include "design/loop_params.hpp"
 #include "rig/core/dut_link.hpp"
 #include "rig/core/types.hpp"
 
@@ -53,6 +54,15 @@ struct Profile {
   double loop_amplitude_g = 1.0;  // docs/method.md quotes the settling time for a 1 g step
   int loop_steps = 5;             // their scatter gives the figures' 95 % intervals
   double loop_record_s = 0.1;     // per step
+  // Not from the profile: the hardware file's [dut.design], the DUT type's loop as its
+  // manufacturer documents it (read_design_model, loop_phase.hpp). Without a loop test on the
+  // DUT, the loop figures are this model's, labelled "design model"; never the emulator's.
+  struct DesignModel {
+    design::LoopParams loop;
+    design::RegulatorParams regulator;
+    std::string source;  // FILE:LINE of [dut.design]
+  };
+  std::optional<DesignModel> design_model;
 
   // [analysis]: unset keys take the analysis library's defaults (analysis/options.hpp)
   std::string taus = analysis::AnalysisOptions{}.taus;

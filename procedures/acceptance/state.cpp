@@ -102,7 +102,12 @@ nlohmann::json to_json(const DutState& s) {
   nlohmann::json j = nlohmann::json::object();
   if (s.dut) {
     j["serial"] = s.dut->serial;  // read by checkpoints of earlier versions
-    j["dut"] = {{"serial", s.dut->serial}, {"firmware", s.dut->firmware}, {"temperature_c", s.dut->temperature_c}};
+    j["dut"] = {{"serial", s.dut->serial}, {"firmware", s.dut->firmware}, {"temperature_c", opt_json(s.dut->temperature_c)}};
+    if (!s.dut->skipped.empty()) {
+      nlohmann::json sk = nlohmann::json::array();
+      for (const SkippedStep& k : s.dut->skipped) sk.push_back({{"step", k.step}, {"reason", k.reason}});
+      j["dut"]["skipped"] = sk;
+    }
   }
   if (!s.runs.empty()) {
     nlohmann::json runs = nlohmann::json::object();
@@ -133,7 +138,15 @@ DutState dut_state_from_json(const nlohmann::json& j) {
   DutState s;
   if (f.has("dut")) {
     const Fields d = f.object("dut");
-    s.dut = DutIdentity{d.str("serial"), d.str("firmware"), d.num("temperature_c")};
+    s.dut = DutIdentity{d.str("serial"), d.str("firmware"), d.opt_num("temperature_c"), {}};
+    if (d.has("skipped")) {
+      const nlohmann::json& sk = d.at("skipped");
+      if (!sk.is_array()) d.fail("skipped", "an array", sk);
+      for (std::size_t i = 0; i < sk.size(); ++i) {
+        const Fields k(sk[i], d.path() + ".skipped[" + std::to_string(i) + "]");
+        s.dut->skipped.push_back({k.str("step"), k.str("reason")});
+      }
+    }
   }
   if (f.has("runs")) {
     const Fields rs = f.object("runs");

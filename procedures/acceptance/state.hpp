@@ -20,9 +20,15 @@
 
 namespace rig::acceptance {
 
+// A bring-up step the DUT could not take (a DUT without a command channel), and why.
+struct SkippedStep {
+  std::string step, reason;
+};
+
 struct DutIdentity {
   std::string serial, firmware;
-  double temperature_c = 0;
+  std::optional<double> temperature_c;  // null: the DUT could not be asked
+  std::vector<SkippedStep> skipped;     // bring-up steps skipped (passport.json "skipped")
 };
 
 // One run of procedure A (formulas (3), (4) take its mean).

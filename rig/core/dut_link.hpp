@@ -55,6 +55,14 @@ struct LoopTestResponse {
   std::vector<LoopStepRecord> steps;
 };
 
+// Whether the DUT's firmware takes commands. A DUT without a command channel streams from
+// power-on and answers nothing: the rig can then neither identify it, set its output filter
+// nor run its loop test (docs/can-protocol.md "DUTs without commands").
+struct DutCommandChannel {
+  bool available = true;
+  std::string reason;  // why not, when !available
+};
+
 class DutLink {
  public:
   virtual ~DutLink() = default;
@@ -77,6 +85,9 @@ class DutLink {
   virtual LoopTestResponse loop_test(const LoopTestRequest& /*request*/, const CancelToken& /*cancel*/) {
     return {false, describe() + " has no loop test", 0, 0, {}};
   }
+  // Without a command channel, info(), set_filter() and get_filter() throw ConfigError,
+  // start_stream() only starts listening and loop_test() answers "not supported".
+  virtual DutCommandChannel command_channel() const { return {}; }
 };
 
 }  // namespace rig

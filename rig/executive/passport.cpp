@@ -23,6 +23,11 @@ nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& 
   p["software"] = info.software;
   p["out_dir"] = info.out_dir;
   p["captures"] = info.captures;
+  if (!info.skipped.empty()) {
+    nlohmann::ordered_json sk = nlohmann::ordered_json::array();
+    for (const auto& [step, why] : info.skipped) sk.push_back({{"step", step}, {"reason", why}});
+    p["skipped"] = sk;
+  }
   nlohmann::ordered_json phases = nlohmann::ordered_json::array();
   for (const auto& r : result.phases)
     phases.push_back({{"id", r.id}, {"title", r.title}, {"status", r.status}, {"started", r.started},

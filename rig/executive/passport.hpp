@@ -2,6 +2,7 @@
 // shape, rig.passport/1) and junit.xml (one testcase per measurement).
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,8 @@ namespace rig {
 struct PassportInfo {
   std::string serial, profile, plant, station, started, finished, software, out_dir;
   std::vector<std::string> captures;  // relative to out_dir
+  // Procedure steps the DUT could not take (step, why): "skipped" in passport.json, only when any.
+  std::vector<std::pair<std::string, std::string>> skipped;
 };
 
 nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& result, const MeasurementSet& values);

@@ -450,7 +450,7 @@ TEST(AnalysisCancel, ThePollHookStopsADeviationAndAWelchPromptly) {
 
 TEST(ProcedureState, OneJsonFormRoundTripsAndReadsTheUntypedCheckpoints) {
   acceptance::DutState s;
-  s.dut = acceptance::DutIdentity{"SN1", "fw 1.2", 24.5};
+  s.dut = acceptance::DutIdentity{"SN1", "fw 1.2", 24.5, {}};
   acceptance::Recorded r;
   r.capture = "captures/run01-U10.cap";
   r.samples = 2000;

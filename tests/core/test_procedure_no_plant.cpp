@@ -13,11 +13,14 @@
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 
+#include "design/loop_figures.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
+#include "rig/core/errors.hpp"
 #include "rig/core/gpio.hpp"
+#include "rig/core/toml_util.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig;
@@ -152,4 +155,147 @@ TEST(ProcedureWithoutPlant, ALoopThatNeverFallsToHalfHasNoBandwidth) {
   EXPECT_FALSE(bw->value);
   EXPECT_NE(bw->reason.find("stays above 0.5"), std::string::npos) << bw->reason;
   EXPECT_TRUE(r.values.find("settling_time")->value) << "the settling time is still measured";
+}
+
+namespace {
+
+// A DUT without a command channel (issue 15, 2): every command is a test failure here, since
+// the procedure must not send one; the stream is all it has.
+class NoCommandDut final : public DutLink {
+ public:
+  DutInfo info(const CancelToken&) override { return asked("info"), DutInfo{}; }
+  void start_stream(const CancelToken&) override {}
+  void stop_stream() noexcept override {}
+  std::size_t read(std::span<Sample> out, const CancelToken&) override { return out.size(); }
+  void set_filter(const FilterConfig&, const CancelToken&) override { asked("set_filter"); }
+  FilterConfig get_filter(const CancelToken&) override { return asked("get_filter"), FilterConfig{}; }
+  LinkStats stats() const override { return {}; }
+  void reset_stats() override {}
+  std::string describe() const override { return "fake DUT without commands"; }
+  LoopTestResponse loop_test(const LoopTestRequest&, const CancelToken&) override {
+    return {false, "no loop test: no command channel (fake)", 0, 0, {}};
+  }
+  DutCommandChannel command_channel() const override { return {false, "no command channel (fake)"}; }
+  std::vector<std::string> asked_for;
+
+ private:
+  void asked(const char* what) { asked_for.push_back(what); }
+};
+
+struct BringUp {
+  std::ostringstream logtext;
+  IdleTable table;
+  QuietIo io;
+  SimClock clock;
+  acceptance::Profile p = acceptance::load_profile("ci");
+  acceptance::DutState st;
+  void run(DutLink& dut, const acceptance::RunOptions& ro) {
+    Devices dev{table, dut, io, clock, "hardware"};
+    MeasurementSet values;
+    auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+    PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr};
+    acceptance::bring_up(ctx, p, ro, st);
+  }
+};
+
+}  // namespace
+
+TEST(ProcedureWithoutPlant, BringUpOfADutWithoutCommandsSkipsIdentifyAndFilterAndSaysWhy) {
+  NoCommandDut dut;
+  BringUp b;
+  acceptance::RunOptions ro;
+  ro.expected_serial = "LABEL-0412";
+  b.run(dut, ro);
+  EXPECT_TRUE(dut.asked_for.empty()) << dut.asked_for.front();
+  ASSERT_TRUE(b.st.dut);
+  EXPECT_EQ(b.st.dut->serial, "LABEL-0412");
+  EXPECT_EQ(b.st.dut->firmware, "");
+  EXPECT_FALSE(b.st.dut->temperature_c);
+  ASSERT_EQ(b.st.dut->skipped.size(), 3u);
+  EXPECT_EQ(b.st.dut->skipped[0].step, "identify");
+  EXPECT_EQ(b.st.dut->skipped[1].step, "set output filter");
+  EXPECT_EQ(b.st.dut->skipped[2].step, "loop test");
+  for (const auto& k : b.st.dut->skipped) {
+    EXPECT_NE(k.reason.find("no command channel (fake)"), std::string::npos) << k.reason;
+    EXPECT_NE(b.logtext.str().find("skipped: " + k.step), std::string::npos) << b.logtext.str();
+  }
+  ASSERT_FALSE(b.p.filter_name.empty());
+  EXPECT_NE(b.st.dut->skipped[1].reason.find("'" + b.p.filter_name + "'"), std::string::npos)
+      << "names the filter not loaded: " << b.st.dut->skipped[1].reason;
+  // The skipped steps survive the checkpoint's JSON form (a resume reads them back).
+  const acceptance::DutState back = acceptance::dut_state_from_json(acceptance::to_json(b.st));
+  ASSERT_TRUE(back.dut);
+  EXPECT_EQ(back.dut->skipped.size(), 3u);
+  EXPECT_EQ(back.dut->skipped[2].reason, b.st.dut->skipped[2].reason);
+  EXPECT_FALSE(back.dut->temperature_c);
+}
+
+TEST(ProcedureWithoutPlant, ADutWithoutCommandsNeedsTheSerialFromTheOperator) {
+  NoCommandDut dut;
+  BringUp b;
+  try {
+    b.run(dut, {});
+    FAIL() << "bring-up without --serial";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("--serial"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(dut.asked_for.empty());
+}
+
+TEST(ProcedureWithoutPlant, ADutWithoutCommandsHasNullLoopFiguresWithTheReason) {
+  NoCommandDut dut;
+  LoopRun r(dut, "no-commands");
+  for (const char* name : {"bandwidth_0p5", "settling_time"}) {
+    const Measurement* m = r.values.find(name);
+    ASSERT_NE(m, nullptr);
+    EXPECT_FALSE(m->value);
+    EXPECT_EQ(m->reason, "not measured: no loop test: no command channel (fake)");
+  }
+}
+
+// Issue 15, 5: the hardware file's [dut.design] gives the loop figures of the DUT type's design
+// model, labelled so, when the DUT has no loop test: design/'s figures for that loop and the
+// profile's filter, never the emulator's configuration.
+TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopTest) {
+  const toml::table hw = cfg::parse_string(
+      "can = \"can0\"\n[design.loop]\nloop_rate_hz = 10000.0\npendulosity_kg_m = 6.5e-6\n"
+      "[design.regulator]\ngain_a_per_v = 2.0e-3\n",
+      "line2.toml");
+  const auto model = acceptance::read_design_model(hw);
+  ASSERT_TRUE(model);
+  EXPECT_EQ(model->loop.pendulosity_kg_m, 6.5e-6);
+  EXPECT_EQ(model->regulator.gain_a_per_v, 2.0e-3);
+  EXPECT_EQ(model->source.rfind("line2.toml:", 0), 0u) << model->source;
+  EXPECT_FALSE(acceptance::read_design_model(cfg::parse_string("can = \"can0\"\n", "hw.toml")));
+  EXPECT_THROW(acceptance::read_design_model(cfg::parse_string("[design.loop]\nno_such = 1\n", "hw.toml")), ConfigError);
+
+  NoCommandDut dut;  // no loop test (no command channel)
+  acceptance::Profile p = acceptance::load_profile("ci");
+  p.design_model = model;
+  const design::LoopFigures want = design::loop_figures(model->loop, model->regulator, p.filter);
+  acceptance::ProcedureState st(p);
+  const auto phases = acceptance::build_phases(p, st);
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  IdleTable table;
+  QuietIo io;
+  SimClock clock;
+  Devices dev{table, dut, io, clock, "hardware"};
+  std::ostringstream logtext;
+  auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+  PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr};
+  for (const Phase& ph : phases)
+    if (ph.id == "loop") ph.run(ctx);
+  const Measurement* bw = values.find("bandwidth_0p5");
+  const Measurement* ts = values.find("settling_time");
+  ASSERT_TRUE(bw && bw->value && ts && ts->value);
+  EXPECT_EQ(*bw->value, want.bandwidth_0p5_hz);
+  EXPECT_EQ(*ts->value, want.settling_time_s);
+  EXPECT_GT(want.bandwidth_0p5_hz, 0);
+  for (const Measurement* m : {bw, ts}) {
+    EXPECT_EQ(m->reason.rfind("design model of the DUT type ([dut.design] at line2.toml:", 0), 0u) << m->reason;
+    EXPECT_NE(m->reason.find("not measured on this DUT: no loop test"), std::string::npos) << m->reason;
+    EXPECT_FALSE(m->lo) << "a model has no measured interval";
+  }
+  EXPECT_EQ(st.slot().loop.value()["source"], "design model");
 }

@@ -728,3 +728,79 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
       << slurp(d + "/dup.stdout");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/dup.json"))["capture"]["samples"], 3000) << "counted once";
 }
+
+// Issue 15, 2: a DUT without a command channel. On hardware the serial must come from --serial,
+// checked with the configuration, before any device opens (this file's devices do not exist:
+// opening them would be exit 4).
+TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
+  const std::string d = tmp("nocmd-hw");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "commands = false\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--out", d + "/run"}, d + "/io"), 2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find("hw.toml:5"), std::string::npos) << err;
+  EXPECT_NE(err.find("give it with --serial"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(d + "/run")) << "refused with the configuration";
+  // With the serial the configuration is accepted and the run goes on to open the devices.
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "LBL-1", "--out",
+                 d + "/run"},
+                d + "/io2"),
+            4)
+      << slurp(d + "/io2.stderr");
+}
+
+// The same DUT emulated end to end: the firmware streams from power-on and ignores commands
+// ([plant.firmware] commands = false); the run completes, the passport names the skipped steps,
+// and the loop figures, which have limits in the ci profile, are null and fail the run.
+TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
+  const std::string d = tmp("nocmd-emu");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[plant.firmware]\ncommands = false\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--out", d + "/bad"}, d + "/io0"), 2)
+      << "no serial: the DUT cannot tell it";
+  EXPECT_NE(slurp(d + "/io0.stderr").find("--serial"), std::string::npos) << slurp(d + "/io0.stderr");
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--serial", "LBL-7", "--out", d + "/run"}, d + "/io"), 1)
+      << slurp(d + "/io.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "FAIL");
+  EXPECT_EQ(p["serial"], "LBL-7");
+  ASSERT_TRUE(p.contains("skipped")) << p.dump(1);
+  ASSERT_EQ(p["skipped"].size(), 3u);
+  EXPECT_EQ(p["skipped"][0]["step"], "identify");
+  EXPECT_EQ(p["skipped"][1]["step"], "set output filter");
+  EXPECT_EQ(p["skipped"][2]["step"], "loop test");
+  for (const char* name : {"bandwidth_0p5", "settling_time"}) {
+    EXPECT_TRUE(p["values"][name]["value"].is_null()) << name;
+    EXPECT_EQ(p["values"][name]["outcome"], "FAIL") << name;
+    EXPECT_NE(p["values"][name]["reason"].get<std::string>().find("no command channel"), std::string::npos)
+        << p["values"][name].dump();
+  }
+  // Everything the stream gives was measured and judged as for any DUT.
+  for (const char* name : {"bias", "base_error", "in_run_b_gost_2s", "rms_filtered"})
+    EXPECT_EQ(p["values"][name]["outcome"], "PASS") << name << " " << p["values"][name].dump();
+  for (const auto& ph : p["phases"]) EXPECT_EQ(ph["status"], "done") << ph.dump();
+  EXPECT_NE(slurp(d + "/run/run.log").find("skipped: identify"), std::string::npos);
+}
+
+// Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is
+// exit 2 naming the file and line (this file's devices do not exist: opening them would be exit 4).
+TEST(RigCli, HardwareDesignModelMistakeIsAConfigurationErrorBeforeAnyDeviceOpens) {
+  const std::string d = tmp("design-hw");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[dut.design.loop]\npendulosity_kg = 6e-6\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "LBL-1", "--out",
+                 d + "/run"},
+                d + "/io"),
+            2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find("hw.toml:6"), std::string::npos) << err;
+  EXPECT_NE(err.find("pendulosity_kg"), std::string::npos) << err;
+}

@@ -87,8 +87,10 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
   const std::pair<const char*, const char*> bad[] = {
       {"101#0102030", "odd number of hex digits"},
       {"(1.0) can0 100#563412050000803F11", "more than 8 data bytes"},
-      {"(1.0) can0 100##1563412", "CAN FD"},
-      {"  can0  100  [12]  00 11 22 33 44 55 66 77 88 99 AA BB", "CAN FD"},
+      {"(1.0) can0 100##1001122334455667788", "CAN FD frame of 9 data bytes"},
+      {"(1.0) can0 100##", "without its flags digit"},
+      {"  can0  100  [13]  00 11 22 33 44 55 66 77 88 99 AA BB CC", "for a CAN FD frame"},
+      {"  can0  100  [9]  00 11 22 33 44 55 66 77 88", "for a classic frame"},
       {"  can0  100   [8]  56 34 12", "only 3 data byte(s)"},
       {"(1.0) can0 1000#00", "not a CAN identifier"},
       {"(1.0 can0 100#00", "bad timestamp"},
@@ -112,4 +114,40 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
   EXPECT_EQ(e.line, 4u);
   EXPECT_EQ(e.parsed.kind, LogLineKind::Unreadable);
   EXPECT_FALSE(r.next(e));
+}
+
+// Issue 15, 3: CAN FD frames as candump logs them: `ID##F<data>` (-l, -L; F the flags digit,
+// bit 0 the bit-rate switch) and a two-digit length on screen (as can-utils' log2long prints).
+TEST(CandumpLog, CanFdFramesInLogAndScreenFormats) {
+  std::string data;
+  for (int i = 0; i < 64; ++i) data += "0123456789ABCDEF"[i % 16], data += "0123456789ABCDEF"[(i * 7) % 16];
+  const LogLine l = read_candump_line("(1732255200.000000) vcan0 18FF2000##1" + data);
+  ASSERT_EQ(l.kind, LogLineKind::Frame) << l.problem;
+  EXPECT_TRUE(l.frame.any.fd);
+  EXPECT_TRUE(l.frame.any.brs);
+  EXPECT_TRUE(l.frame.any.extended);
+  EXPECT_EQ(l.frame.any.id, 0x18FF2000u);
+  ASSERT_EQ(l.frame.any.len, 64);
+  EXPECT_EQ(l.frame.any.data[63], 0xF9);
+  EXPECT_EQ(l.frame.frame.len, 0) << "no classic view of an FD frame";
+  const LogLine short_fd = read_candump_line("(1.5) can0 123##0AABB R");
+  ASSERT_EQ(short_fd.kind, LogLineKind::Frame) << short_fd.problem;
+  EXPECT_TRUE(short_fd.frame.any.fd);
+  EXPECT_FALSE(short_fd.frame.any.brs);
+  EXPECT_EQ(short_fd.frame.any.len, 2);
+  std::string bytes;
+  for (int i = 0; i < 12; ++i) bytes += " 5A";
+  const LogLine scr = read_candump_line("(1732255200.007000)  vcan0       123  [12] " + bytes);
+  ASSERT_EQ(scr.kind, LogLineKind::Frame) << scr.problem;
+  EXPECT_TRUE(scr.frame.any.fd);
+  EXPECT_EQ(scr.frame.any.len, 12);
+  EXPECT_EQ(scr.frame.any.data[11], 0x5A);
+  const LogLine fd8 = read_candump_line("  vcan0  123  [08]  01 02 03 04 05 06 07 08");
+  ASSERT_EQ(fd8.kind, LogLineKind::Frame) << fd8.problem;
+  EXPECT_TRUE(fd8.frame.any.fd) << "[08] is an FD frame of 8 bytes";
+  const LogLine classic = read_candump_line("  vcan0  123   [8]  01 02 03 04 05 06 07 08");
+  ASSERT_EQ(classic.kind, LogLineKind::Frame);
+  EXPECT_FALSE(classic.frame.any.fd);
+  EXPECT_EQ(classic.frame.frame.len, 8);
+  EXPECT_EQ(classic.frame.frame.data[7], 8);
 }

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "firmware_link/dbc.hpp"
+#include "firmware_link/dbc_stream.hpp"
 #include "firmware_link/protocol.hpp"
 #include "rig/capture/capture.hpp"
 
@@ -157,4 +158,95 @@ TEST(CaptureImport, DbcLayoutWith16BitCounterAndAnUnreadableLine) {
   EXPECT_NE(slurp(dir() / "bad.err").find("hw-bad.toml:4:1: [dut.stream]: x = \"ACC_XY.nope\": no signal nope in ACC_XY"),
             std::string::npos)
       << slurp(dir() / "bad.err");
+}
+
+namespace {
+
+// A CAN FD frame as candump -l / -L writes it: ID##F then the data, upper-case hex.
+std::string fd_log_line(double t, const CanFdFrame& f) {
+  char head[64];
+  std::snprintf(head, sizeof head, f.extended ? "(%.6f) vcan0 %08X##%X" : "(%.6f) vcan0 %03X##%X", t, f.id,
+                f.brs ? 1u : 0u);
+  std::string s = head;
+  for (int i = 0; i < f.len; ++i) {
+    char b[3];
+    std::snprintf(b, sizeof b, "%02X", f.data[static_cast<std::size_t>(i)]);
+    s += b;
+  }
+  return s + "\n";
+}
+
+}  // namespace
+
+// Issue 15, 3: CAN FD frames in candump logs, -l/-L format and (through can-utils' own
+// log2long) the screen format: duts/qpa-fd.dbc's 7 samples per 64-byte frame, both formats
+// imported into identical captures; a frame lost is one located gap of 7 samples.
+TEST(CaptureImport, CanFdLayoutInBothCandumpFormats) {
+  const std::string duts = std::string(RIG_SOURCE_DIR) + "/duts/";
+  std::ofstream(dir() / "hw-fd.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << duts
+                                      << "qpa-fd.dbc\"\n[dut.stream]\ncounter = \"QPA_FD.cnt\"\nx = \"QPA_FD.x\"\n"
+                                         "y = \"QPA_FD.y\"\nstatus = \"QPA_FD.status\"\nfilter_on_bit = 0\n"
+                                         "saturated_bit = 1\nsamples_per_frame = 7\n";
+  DbcStreamSpec sp;
+  sp.counter = "QPA_FD.cnt";
+  sp.x = "QPA_FD.x";
+  sp.y = "QPA_FD.y";
+  sp.status = "QPA_FD.status";
+  sp.filter_on_bit = 0;
+  sp.samples_per_frame = 7;
+  const DbcStreamEncoder enc(std::make_shared<const DbcStreamDecoder>(
+      std::make_shared<const Dbc>(Dbc::parse_file(duts + "qpa-fd.dbc")), sp, "test"));
+  std::ostringstream log;
+  double t = 1732255200.0;
+  const uint64_t k0 = 65536 - 7 * 100;  // the 16-bit counter wraps inside the log
+  std::vector<CanFdFrame> frames;
+  for (uint64_t b = 0; b < 300; ++b, t += 7e-3) {
+    const uint64_t k = k0 + 7 * b;
+    std::vector<StreamSample> s;
+    for (uint64_t i = 0; i < 7; ++i) s.push_back({x_of(k + i), -x_of(k + i), stream_status::kFilterOn});
+    frames.clear();
+    enc.encode(static_cast<uint32_t>(k), s, frames);
+    ASSERT_EQ(frames.size(), 1u);
+    frames[0].brs = b % 2 == 0;  // the bit-rate switch flag is logged and does not matter
+    if (b == 150) continue;      // one frame lost: 7 samples, after the wrap
+    log << fd_log_line(t, frames[0]);
+  }
+  std::ofstream(dir() / "fd.log") << log.str();
+  const fs::path cap = dir() / "fd.rigcap";
+  ASSERT_EQ(run_rig("capture import " + (dir() / "fd.log").string() + " --hardware " + (dir() / "hw-fd.toml").string() +
+                    " --out " + cap.string(),
+                "fd"),
+            0)
+      << slurp(dir() / "fd.err");
+  const auto c = rig::capture::load(cap.string());
+  ASSERT_EQ(c.samples.size(), 7u * 299);
+  EXPECT_EQ(c.samples.front().seq, k0);
+  EXPECT_EQ(c.samples.back().seq, k0 + 7 * 300 - 1) << "widened past the 16-bit wrap";
+  for (const auto& s : c.samples) {
+    ASSERT_NEAR(s.x_g, x_of(s.seq), 1e-7) << s.seq;  // 0.01 ug counts
+    ASSERT_NEAR(s.y_g, -x_of(s.seq), 1e-7) << s.seq;
+  }
+  const std::string out = slurp(dir() / "fd.out") + slurp(dir() / "fd.err");
+  EXPECT_NE(out.find("gap at seq " + std::to_string(k0 + 7 * 150) + ": 7 samples"), std::string::npos) << out;
+
+  // The screen format of the same frames, written by can-utils itself.
+  ASSERT_EQ(std::system(("log2long < " + (dir() / "fd.log").string() + " > " + (dir() / "fd-screen.txt").string()).c_str()),
+            0)
+      << "log2long (can-utils) must be installed: scripts/setup";
+  const std::string screen = slurp(dir() / "fd-screen.txt");
+  ASSERT_NE(screen.find("[64]"), std::string::npos) << screen.substr(0, 300);
+  const fs::path cap2 = dir() / "fd-screen.rigcap";
+  ASSERT_EQ(run_rig("capture import " + (dir() / "fd-screen.txt").string() + " --hardware " +
+                    (dir() / "hw-fd.toml").string() + " --out " + cap2.string(),
+                "fd-screen"),
+            0)
+      << slurp(dir() / "fd-screen.err");
+  const auto c2 = rig::capture::load(cap2.string());
+  ASSERT_EQ(c2.samples.size(), c.samples.size());
+  for (std::size_t i = 0; i < c.samples.size(); ++i) {
+    ASSERT_EQ(c2.samples[i].seq, c.samples[i].seq);
+    ASSERT_EQ(c2.samples[i].x_g, c.samples[i].x_g);
+    ASSERT_EQ(c2.samples[i].y_g, c.samples[i].y_g);
+    ASSERT_EQ(c2.samples[i].status, c.samples[i].status);
+  }
 }

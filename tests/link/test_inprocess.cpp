@@ -402,3 +402,60 @@ TEST(InProcessDut, AReaderComingBackLateIsNotSilence) {
   EXPECT_EQ(v.back().seq, v.front().seq + 599);
   EXPECT_EQ(w.dut->stats().gaps, 0u);
 }
+
+// Issue 15, 2: a DUT without a command channel streams from power-on and answers nothing; the
+// link ([dut] commands = false) sends nothing, joins the running stream at start_stream (frames
+// queued before it are stale), loses no sample at the join or after a stop/start, and refuses
+// what needs a command with the reason.
+TEST(InProcessDut, WithoutCommandsTheLinkJoinsTheRunningStreamAndSendsNothing) {
+  InProcessDutOptions o;
+  o.firmware.commands = false;
+  o.link.commands = false;
+  World w(o);
+  EXPECT_TRUE(w.dut->firmware().streaming()) << "streams from power-on";
+  EXPECT_FALSE(w.dut->command_channel().available);
+  EXPECT_NE(w.dut->command_channel().reason.find("[dut] commands = false"), std::string::npos);
+  w.clock.sleep_for(0.3, {});  // 300 samples queued on the rig's port, never asked for
+  const uint64_t at_start = w.dut->firmware().sample_counter();
+  w.dut->start_stream({});
+  const auto a = read_n(*w.dut, 2000);
+  EXPECT_GE(a.front().seq, at_start) << "no stale frame from before start_stream";
+  EXPECT_LE(a.front().seq, at_start + 2) << "joined at once";
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].seq, a.front().seq + i);
+    ASSERT_EQ(a[i].x_g, RampSource::x_of(a[i].seq));
+    ASSERT_EQ(a[i].y_g, RampSource::y_of(a[i].seq));
+  }
+  w.dut->stop_stream();
+  w.clock.sleep_for(0.25, {});
+  w.dut->start_stream({});
+  const auto b = read_n(*w.dut, 500);
+  EXPECT_GE(b.front().seq, a.back().seq + 250);
+  w.dut->stop_stream();
+  const LinkStats s = w.dut->stats();
+  EXPECT_EQ(s.received, 2500u);
+  EXPECT_EQ(s.gaps, 0u);
+  EXPECT_EQ(s.lost, 0u);
+  EXPECT_EQ(s.duplicates, 0u);
+  EXPECT_EQ(w.dut->client().transport_stats().tx, 0u) << "not one command sent";
+  EXPECT_EQ(w.dut->firmware().stats().commands, 0u);
+  EXPECT_THROW(w.dut->info({}), ConfigError);
+  EXPECT_THROW(w.dut->set_filter(FilterConfig{}, {}), ConfigError);
+  const LoopTestResponse lt = w.dut->loop_test({}, {});
+  EXPECT_FALSE(lt.supported);
+  EXPECT_NE(lt.reason.find("no command channel"), std::string::npos) << lt.reason;
+  EXPECT_EQ(w.dut->firmware().stats().commands_ignored, 0u);
+}
+
+// The firmware side alone: with commands off, what the rig sends goes unanswered.
+TEST(InProcessDut, FirmwareWithoutCommandsIgnoresThemAndKeepsStreaming) {
+  InProcessDutOptions o;
+  o.firmware.commands = false;
+  o.link.command_attempts = 1;
+  o.link.command_timeout_s = 0.02;
+  World w(o);  // the link believes the DUT takes commands
+  EXPECT_THROW(w.dut->info({}), HardwareError) << "no answer within the attempts";
+  EXPECT_GE(w.dut->firmware().stats().commands_ignored, 1u);
+  EXPECT_EQ(w.dut->firmware().stats().commands, 0u);
+  EXPECT_TRUE(w.dut->firmware().streaming());
+}

@@ -4,12 +4,20 @@
 # default): a TCG stall followed by the firmware's catch-up burst can overflow it.
 echo 100000 > /proc/sys/net/core/netdev_max_backlog
 ip link add dev vcan0 type vcan
+# RIG_VCAN_FD=1: a CAN FD vcan (classic frames pass unchanged).
+if [ "${RIG_VCAN_FD:-0}" = 1 ]; then ip link set vcan0 mtu 72; fi
 ip link set up vcan0
 . "$RIG_SRC/tests/kernel/guest/gpio-sim-setup.sh"
 PORT=15020
 HW=/tmp/hardware.toml
-PROFILE=$RIG_SRC/tests/kernel/config/kernel-short.toml
+PROFILE=${RIG_PROFILE:-$RIG_SRC/tests/kernel/config/kernel-short.toml}
 sed "s/@PORT@/$PORT/" "$RIG_SRC/tests/kernel/config/hardware.toml.in" > $HW
+# RIG_DUT_KEYS: lines added to the hardware file's [dut] (e.g. commands = false, dbc = ...);
+# RIG_HW_TAIL: text appended to it (e.g. a [dut.stream] table).
+if [ -n "${RIG_DUT_KEYS:-}" ]; then
+  awk -v keys="$RIG_DUT_KEYS" '{ print } /^can = "vcan0"$/ { print keys }' $HW > $HW.new && mv $HW.new $HW
+fi
+if [ -n "${RIG_HW_TAIL:-}" ]; then printf '%s\n' "$RIG_HW_TAIL" >> $HW; fi
 # RIG_DRIVE=cia402: the table is the emulated CiA 402 drive on the generic map (issue 14).
 DRIVE_ARGS=""
 if [ "${RIG_DRIVE:-rig-v1}" = cia402 ]; then
