@@ -62,9 +62,9 @@ class CanDutLink final : public DutLink {
   bool streaming() const { return streaming_; }
 
  private:
-  void dispatch(const RxFrame& f);
-  // Waits up to `budget_s` for a frame on the transport and dispatches it.
-  // Returns whether a frame was dispatched.
+  void dispatch(const RxFrame& f);  // state_mu_ held
+  // Waits up to `budget_s` for a frame on the transport and dispatches it and every frame
+  // queued behind it (one batch, one lock). Returns whether a frame was dispatched.
   bool pump(double budget_s, const CancelToken& cancel);
   [[noreturn]] void fail_silent(double silent_s);
   // Sends `c` (a fresh token per attempt) and returns the DUT's answer whatever its result;
@@ -80,6 +80,7 @@ class CanDutLink final : public DutLink {
   mutable std::mutex state_mu_;  // guards the fields below, read by stats() from any thread
   StreamReassembler reasm_;
   std::vector<StreamPart> parts_;  // scratch of dispatch()
+  std::vector<RxFrame> rx_;        // scratch of pump() (io_mu_ held)
   std::deque<Response> responses_;
   std::optional<Heartbeat> heartbeat_;
   uint64_t malformed_ = 0;

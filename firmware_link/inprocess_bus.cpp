@@ -29,11 +29,12 @@ double InProcessBus::now() const {
 
 void InProcessBus::inject(const CanFrame& f) { deliver(f, nullptr); }
 
-void InProcessBus::deliver(const CanFrame& f, const InProcessPort* from) {
-  const RxFrame rx{f, now()};
+void InProcessBus::deliver(std::span<const CanFrame> frames, const InProcessPort* from) {
+  if (frames.empty()) return;
+  const double t = now();
   std::lock_guard lk(mu_);
   for (InProcessPort* p : ports_)
-    if (p != from) p->push(rx);
+    if (p != from) p->push(frames, t);
 }
 
 void InProcessBus::detach(InProcessPort* p) {
@@ -45,26 +46,36 @@ void InProcessBus::detach(InProcessPort* p) {
 
 InProcessPort::~InProcessPort() { bus_->detach(this); }
 
-void InProcessPort::push(const RxFrame& f) {
+void InProcessPort::push(std::span<const CanFrame> frames, double t_s) {
+  bool queued = false;
   {
     std::lock_guard lk(mu_);
-    if (!filter_accepts(filters_, f.frame)) return;
-    if (queue_.size() >= bus_->opts_.rx_capacity) {
-      ++stats_.rx_dropped;
-      return;
+    for (const CanFrame& f : frames) {
+      if (!filter_accepts(filters_, f)) continue;
+      if (queue_.size() >= bus_->opts_.rx_capacity) {
+        ++stats_.rx_dropped;
+        continue;
+      }
+      queue_.push_back({f, t_s});
+      queued = true;
     }
-    queue_.push_back(f);
   }
-  cv_.notify_one();
+  if (queued) cv_.notify_one();
 }
 
-void InProcessPort::send(const CanFrame& f) {
-  if (f.len > 8) throw HardwareError(name() + ": frame 0x" + std::to_string(f.id) + " longer than 8 bytes");
-  {
-    std::lock_guard lk(mu_);
-    ++stats_.tx;
+void InProcessPort::send_batch(std::span<const CanFrame> frames) {
+  // As frame-by-frame sends would: the frames before a bad one go out, then the error.
+  const auto bad = std::find_if(frames.begin(), frames.end(), [](const CanFrame& f) { return f.len > 8; });
+  const auto good = frames.first(static_cast<std::size_t>(bad - frames.begin()));
+  if (!good.empty()) {
+    {
+      std::lock_guard lk(mu_);
+      stats_.tx += good.size();
+    }
+    bus_->deliver(good, this);
   }
-  bus_->deliver(f, this);
+  if (bad != frames.end())
+    throw HardwareError(name() + ": frame 0x" + std::to_string(bad->id) + " longer than 8 bytes");
 }
 
 std::optional<RxFrame> InProcessPort::take_locked() {
@@ -81,6 +92,33 @@ std::optional<RxFrame> InProcessPort::take_locked() {
     return f;
   }
   return std::nullopt;
+}
+
+std::size_t InProcessPort::take_all_locked(std::vector<RxFrame>& out, std::size_t max) {
+  std::size_t n = 0;
+  for (; n < max; ++n) {
+    std::optional<RxFrame> f = take_locked();
+    if (!f) break;
+    out.push_back(*f);
+  }
+  return n;
+}
+
+std::size_t InProcessPort::receive_batch(std::vector<RxFrame>& out, std::size_t max, double timeout_s,
+                                         const CancelToken& cancel) {
+  // Wall time: frame by frame (the base class), as a socket would be read.
+  if (!bus_->opts_.lockstep) return CanTransport::receive_batch(out, max, timeout_s, cancel);
+  // Lockstep: as receive_lockstep() below, but everything queued under one lock.
+  auto poll = [&] {
+    cancel.throw_if_requested();
+    std::lock_guard lk(mu_);
+    return take_all_locked(out, max);
+  };
+  if (max == 0) return 0;
+  if (const std::size_t n = poll()) return n;
+  if (timeout_s <= 0) return 0;
+  bus_->opts_.lockstep->sleep_for(timeout_s, cancel);
+  return poll();
 }
 
 std::optional<RxFrame> InProcessPort::receive_lockstep(double timeout_s, const CancelToken& cancel) {

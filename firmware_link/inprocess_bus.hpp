@@ -12,6 +12,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -47,7 +48,10 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
  private:
   friend class InProcessPort;
   explicit InProcessBus(Options opts) : opts_(std::move(opts)) {}
-  void deliver(const CanFrame& f, const InProcessPort* from);
+  void deliver(const CanFrame& f, const InProcessPort* from) { deliver(std::span(&f, 1), from); }
+  // One lock of the bus and one of each receiving port per batch, not per frame; the frames
+  // of a batch share one timestamp (in lockstep the simulated time cannot move during a send).
+  void deliver(std::span<const CanFrame> frames, const InProcessPort* from);
   void detach(InProcessPort* p);
 
   Options opts_;
@@ -58,8 +62,11 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
 class InProcessPort final : public CanTransport {
  public:
   ~InProcessPort() override;
-  void send(const CanFrame& f) override;
+  void send(const CanFrame& f) override { send_batch(std::span(&f, 1)); }
+  void send_batch(std::span<const CanFrame> frames) override;
   std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
+  std::size_t receive_batch(std::vector<RxFrame>& out, std::size_t max, double timeout_s,
+                            const CancelToken& cancel) override;
   double now_s() const override { return bus_->now(); }
   void set_filters(std::span<const CanFilter> filters) override;
   TransportStats stats() const override;
@@ -68,7 +75,8 @@ class InProcessPort final : public CanTransport {
  private:
   friend class InProcessBus;
   InProcessPort(std::shared_ptr<InProcessBus> bus, std::string name) : bus_(std::move(bus)), name_(std::move(name)) {}
-  void push(const RxFrame& f);  // called by the bus
+  void push(std::span<const CanFrame> frames, double t_s);  // called by the bus
+  std::size_t take_all_locked(std::vector<RxFrame>& out, std::size_t max);  // mu_ held
   std::optional<RxFrame> take_locked();  // the next data frame queued, if any (mu_ held)
   std::optional<RxFrame> receive_lockstep(double timeout_s, const CancelToken& cancel);
 

@@ -53,8 +53,19 @@ bool FirmwareEmulator::silent() const { return faults_.silent_from && counter_ >
 
 void FirmwareEmulator::send(const link::CanFrame& f) {
   if (silent()) return;
-  bus_.send(f);
-  ++stats_.frames_sent;
+  tx_.push_back(f);
+}
+
+// A tick's frames leave together at its end, in the order they were sent: a real MCU's CAN
+// controller also queues them within the period, and the in-process bus takes its locks
+// once per batch instead of once per frame (issue 17).
+void FirmwareEmulator::flush_sends() {
+  std::vector<link::CanFrame> frames;
+  frames.swap(tx_);  // a send that throws leaves no frames behind for the next tick
+  bus_.send_batch(frames);
+  stats_.frames_sent += frames.size();
+  frames.clear();
+  tx_.swap(frames);  // keep the capacity
 }
 
 void FirmwareEmulator::step(double dt_s) {
@@ -99,6 +110,7 @@ void FirmwareEmulator::tick() {
     h.last_seq = static_cast<uint32_t>(seq);
     send(link::encode(h));
   }
+  flush_sends();
 }
 
 void FirmwareEmulator::send_sample(uint64_t seq, float x, float y, uint8_t status) {

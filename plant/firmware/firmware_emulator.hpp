@@ -79,7 +79,8 @@ class FirmwareEmulator {
   void handle_commands();
   link::Response execute(const link::Command& c);
   void send_sample(uint64_t seq, float x, float y, uint8_t status);
-  void send(const link::CanFrame& f);
+  void send(const link::CanFrame& f);  // queues it for the end of the tick (flush_sends)
+  void flush_sends();                   // the tick's frames, in order, in one batch
   bool silent() const;
   link::Response start_loop_test(const link::Command& c);
   void loop_test_period();  // one output period of a running loop test
@@ -112,6 +113,7 @@ class FirmwareEmulator {
   bool staging_ = false;
   std::optional<LoopRun> loop_;
   std::deque<link::CanFrame> burst_;  // sent at the bus's pace, a few frames per tick
+  std::vector<link::CanFrame> tx_;    // this tick's frames (send() .. flush_sends())
   std::thread thread_;
   std::atomic<bool> stop_{false};
 };
