@@ -59,6 +59,7 @@ void InProcessPort::push(std::span<const CanFrame> frames, double t_s) {
       queue_.push_back({f, t_s});
       queued = true;
     }
+    queued_.store(queue_.size(), std::memory_order_release);
   }
   if (queued) cv_.notify_one();
 }
@@ -82,6 +83,7 @@ std::optional<RxFrame> InProcessPort::take_locked() {
   while (!queue_.empty()) {
     RxFrame f = queue_.front();
     queue_.pop_front();
+    queued_.store(queue_.size(), std::memory_order_relaxed);
     if (f.frame.error) {
       ++stats_.error_frames;
       const ErrorFrameInfo e = classify_error_frame(f.frame);
@@ -109,8 +111,9 @@ std::size_t InProcessPort::receive_batch(std::vector<RxFrame>& out, std::size_t 
   // Wall time: frame by frame (the base class), as a socket would be read.
   if (!bus_->opts_.lockstep) return CanTransport::receive_batch(out, max, timeout_s, cancel);
   // Lockstep: as receive_lockstep() below, but everything queued under one lock.
-  auto poll = [&] {
+  auto poll = [&]() -> std::size_t {
     cancel.throw_if_requested();
+    if (queued_.load(std::memory_order_acquire) == 0) return 0;
     std::lock_guard lk(mu_);
     return take_all_locked(out, max);
   };
@@ -124,6 +127,7 @@ std::size_t InProcessPort::receive_batch(std::vector<RxFrame>& out, std::size_t 
 std::optional<RxFrame> InProcessPort::receive_lockstep(double timeout_s, const CancelToken& cancel) {
   auto poll = [&]() -> std::optional<RxFrame> {
     cancel.throw_if_requested();
+    if (queued_.load(std::memory_order_acquire) == 0) return std::nullopt;
     std::lock_guard lk(mu_);
     return take_locked();
   };

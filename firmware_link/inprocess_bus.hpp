@@ -8,6 +8,7 @@
 // firmware emulator puts the frames on the bus -- instead of waiting. The rig's client
 // then has one path for real and simulated time: it only ever calls receive(timeout).
 #pragma once
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <memory>
@@ -85,6 +86,10 @@ class InProcessPort final : public CanTransport {
   mutable std::mutex mu_;
   std::condition_variable cv_;
   std::deque<RxFrame> queue_;
+  // queue_.size(), written under mu_: a lockstep poll of an empty queue (the firmware's command
+  // poll every tick) reads it instead of taking mu_. A frame pushed by another thread just
+  // after the read is seen by the next poll, as it would be had the poll locked first.
+  std::atomic<std::size_t> queued_{0};
   std::vector<CanFilter> filters_;
   TransportStats stats_;
 };
