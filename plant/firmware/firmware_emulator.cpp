@@ -96,7 +96,7 @@ void FirmwareEmulator::tick() {
   const uint64_t seq = counter_++;
   if (streaming_) {
     ++stats_.samples;
-    uint8_t status = src_.filter().enabled ? link::stream_status::kFilterOn : 0;
+    uint8_t status = src_.filter_enabled() ? link::stream_status::kFilterOn : 0;
     if (std::abs(x) >= kRangeG) status |= link::stream_status::kSaturated;
     send_sample(seq, x, y, status);
   }
@@ -104,7 +104,7 @@ void FirmwareEmulator::tick() {
   const auto hb_every = static_cast<uint64_t>(std::max(1.0, std::round(1000.0 / opts_.heartbeat_hz)));
   if (ticks_ % hb_every == 0) {
     link::Heartbeat h;
-    h.state = (streaming_ ? link::hb_state::kStreaming : 0) | (src_.filter().enabled ? link::hb_state::kFilterOn : 0);
+    h.state = (streaming_ ? link::hb_state::kStreaming : 0) | (src_.filter_enabled() ? link::hb_state::kFilterOn : 0);
     h.counter = hb_counter_++;
     h.temperature_c = src_.temperature_c();
     h.last_seq = static_cast<uint32_t>(seq);
