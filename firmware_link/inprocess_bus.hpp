@@ -91,7 +91,10 @@ class InProcessPort final : public CanTransport {
   // after the read is seen by the next poll, as it would be had the poll locked first.
   std::atomic<std::size_t> queued_{0};
   std::vector<CanFilter> filters_;
-  TransportStats stats_;
+  TransportStats stats_;  // tx aside: it is tx_
+  // Frames sent: a counter of its own, so that a send takes no lock of this port (the sender's
+  // count needs no ordering with the receive queue that mu_ guards).
+  std::atomic<uint64_t> tx_{0};
 };
 
 }  // namespace rig::link
