@@ -77,7 +77,6 @@ void CanDutLink::dispatch(const RxFrame& rx) {
     parts_.clear();
     std::string err;
     if (rx.fd ? opts_.stream->decode(*rx.fd, parts_, &err) : opts_.stream->decode(rx.frame, parts_, &err)) {
-      std::lock_guard lk(state_mu_);
       if (!err.empty()) {
         ++malformed_;
         return;
@@ -92,7 +91,6 @@ void CanDutLink::dispatch(const RxFrame& rx) {
   }
   if (rx.fd) return;  // the rig protocol is classic CAN: an FD frame is another node's
   const Decoded d = decode(rx.frame);
-  std::lock_guard lk(state_mu_);
   if (!d.error.empty()) {
     ++malformed_;
     return;
@@ -116,9 +114,15 @@ void CanDutLink::dispatch(const RxFrame& rx) {
 }
 
 bool CanDutLink::pump(double budget_s, const CancelToken& cancel) {
-  const std::optional<RxFrame> f = transport_->receive(budget_s, cancel);
-  if (f) dispatch(*f);
-  return f.has_value();
+  // Every queued frame at once: the same frames in the same order as one receive() per
+  // call, with the transport's and the state's lock taken once per batch (issue 17). The
+  // batch is bounded so that a stream never starves the caller's checks between batches.
+  constexpr std::size_t kMaxBatch = 512;
+  rx_.clear();
+  if (transport_->receive_batch(rx_, kMaxBatch, budget_s, cancel) == 0) return false;
+  std::lock_guard lk(state_mu_);
+  for (const RxFrame& f : rx_) dispatch(f);
+  return true;
 }
 
 Response CanDutLink::exchange(Command c, const CancelToken& cancel) {

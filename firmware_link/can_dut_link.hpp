@@ -67,12 +67,12 @@ class CanDutLink final : public DutLink {
   bool streaming() const { return streaming_; }
 
  private:
-  void dispatch(const RxFrame& f);
+  void dispatch(const RxFrame& f);  // state_mu_ held
   // Whether a stream frame received at rx_t_s (transport clock) is taken; ends the join on the
   // first fresh frame carrying an x. Called with state_mu_ held.
   bool accept_stream_frame(double rx_t_s, bool has_x);
-  // Waits up to `budget_s` for a frame on the transport and dispatches it.
-  // Returns whether a frame was dispatched.
+  // Waits up to `budget_s` for a frame on the transport and dispatches it and every frame
+  // queued behind it (one batch, one lock). Returns whether a frame was dispatched.
   bool pump(double budget_s, const CancelToken& cancel);
   [[noreturn]] void fail_silent(double silent_s);
   // Sends `c` (a fresh token per attempt) and returns the DUT's answer whatever its result;
@@ -88,6 +88,7 @@ class CanDutLink final : public DutLink {
   mutable std::mutex state_mu_;  // guards the fields below, read by stats() from any thread
   StreamReassembler reasm_;
   std::vector<StreamPart> parts_;  // scratch of dispatch()
+  std::vector<RxFrame> rx_;        // scratch of pump() (io_mu_ held)
   std::deque<Response> responses_;
   std::optional<Heartbeat> heartbeat_;
   uint64_t malformed_ = 0;

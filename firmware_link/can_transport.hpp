@@ -6,6 +6,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "firmware_link/protocol.hpp"
 #include "rig/core/cancel.hpp"
@@ -40,6 +41,27 @@ class CanTransport {
   // Sends a CAN FD frame (up to 64 bytes; DBC layouts with several samples per frame). A
   // transport or interface without CAN FD throws HardwareError saying so.
   virtual void send_fd(const CanFdFrame& f);
+  // Sends the frames in order, as send() would one by one (stopping at the first that
+  // throws). A backend may do it in one step: the in-process bus takes its locks once per
+  // batch instead of once per frame (the emulated firmware sends each tick's frames so).
+  virtual void send_batch(std::span<const CanFrame> frames) {
+    for (const CanFrame& f : frames) send(f);
+  }
+  // Every frame queued now (at most `max`), appended to `out` in order, waiting up to
+  // `timeout_s` for the first as receive() does; returns how many. Same errors as receive()
+  // (the frames taken before the error stay in `out`). A backend may take them in one step
+  // (the in-process bus: one lock per batch).
+  virtual std::size_t receive_batch(std::vector<RxFrame>& out, std::size_t max, double timeout_s,
+                                    const CancelToken& cancel) {
+    std::size_t n = 0;
+    for (double t = timeout_s; n < max; t = 0) {
+      std::optional<RxFrame> f = receive(t, cancel);
+      if (!f) break;
+      out.push_back(*f);
+      ++n;
+    }
+    return n;
+  }
   // Next frame, or nullopt after `timeout_s` (0 = poll). Error frames that mean
   // the link is unusable (bus-off, error passive) throw HardwareError; warnings
   // are counted and skipped. Cancellation throws AbortedError.

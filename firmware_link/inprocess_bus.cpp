@@ -27,14 +27,22 @@ double InProcessBus::now() const {
   return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-void InProcessBus::inject(const CanFrame& f) { deliver(RxFrame{f, 0, std::nullopt}, nullptr); }
+void InProcessBus::inject(const CanFrame& f) { deliver(f, nullptr); }
 
-void InProcessBus::deliver(const RxFrame& f, const InProcessPort* from) {
+void InProcessBus::deliver(std::span<const CanFrame> frames, const InProcessPort* from) {
+  if (frames.empty()) return;
+  const double t = now();
+  std::lock_guard lk(mu_);
+  for (InProcessPort* p : ports_)
+    if (p != from) p->push(frames, t);
+}
+
+void InProcessBus::deliver_fd(const RxFrame& f, const InProcessPort* from) {
   RxFrame rx = f;
   rx.t_s = now();
   std::lock_guard lk(mu_);
   for (InProcessPort* p : ports_)
-    if (p != from) p->push(rx);
+    if (p != from) p->push_fd(rx);
 }
 
 void InProcessBus::detach(InProcessPort* p) {
@@ -46,51 +54,69 @@ void InProcessBus::detach(InProcessPort* p) {
 
 InProcessPort::~InProcessPort() { bus_->detach(this); }
 
-void InProcessPort::push(const RxFrame& f) {
+void InProcessPort::push(std::span<const CanFrame> frames, double t_s) {
+  bool queued = false;
+  {
+    std::lock_guard lk(mu_);
+    for (const CanFrame& f : frames) {
+      if (!filter_accepts(filters_, f)) continue;
+      if (queue_.size() >= bus_->opts_.rx_capacity) {
+        ++stats_.rx_dropped;
+        continue;
+      }
+      queue_.push_back({f, t_s, std::nullopt});
+      queued = true;
+    }
+    queued_.store(queue_.size(), std::memory_order_release);
+  }
+  if (queued) cv_.notify_one();
+}
+
+void InProcessPort::push_fd(const RxFrame& f) {
   {
     std::lock_guard lk(mu_);
     // An FD frame is filtered on its identifier, as the kernel does.
     CanFrame head;
-    if (f.fd) {
-      head.id = f.fd->id;
-      head.extended = f.fd->extended;
-    }
-    if (!filter_accepts(filters_, f.fd ? head : f.frame)) return;
+    head.id = f.fd->id;
+    head.extended = f.fd->extended;
+    if (!filter_accepts(filters_, head)) return;
     if (queue_.size() >= bus_->opts_.rx_capacity) {
       ++stats_.rx_dropped;
       return;
     }
     queue_.push_back(f);
+    queued_.store(queue_.size(), std::memory_order_release);
   }
   cv_.notify_one();
-}
-
-void InProcessPort::send(const CanFrame& f) {
-  if (f.len > 8) throw HardwareError(name() + ": frame 0x" + std::to_string(f.id) + " longer than 8 bytes");
-  {
-    std::lock_guard lk(mu_);
-    ++stats_.tx;
-  }
-  bus_->deliver(RxFrame{f, 0, std::nullopt}, this);
 }
 
 void InProcessPort::send_fd(const CanFdFrame& f) {
   if (f.len > 64 || canfd_round_up(f.len) != f.len)
     throw HardwareError(name() + ": CAN FD frame of " + std::to_string(f.len) + " bytes");
-  {
-    std::lock_guard lk(mu_);
-    ++stats_.tx;
-  }
+  tx_.fetch_add(1, std::memory_order_relaxed);
   RxFrame rx;
   rx.fd = f;
   rx.fd->fd = true;
-  bus_->deliver(rx, this);
+  bus_->deliver_fd(rx, this);
+}
+
+void InProcessPort::send_batch(std::span<const CanFrame> frames) {
+  // As frame-by-frame sends would: the frames before a bad one go out, then the error.
+  const auto bad = std::find_if(frames.begin(), frames.end(), [](const CanFrame& f) { return f.len > 8; });
+  const auto good = frames.first(static_cast<std::size_t>(bad - frames.begin()));
+  if (!good.empty()) {
+    tx_.fetch_add(good.size(), std::memory_order_relaxed);
+    bus_->deliver(good, this);
+  }
+  if (bad != frames.end())
+    throw HardwareError(name() + ": frame 0x" + std::to_string(bad->id) + " longer than 8 bytes");
 }
 
 std::optional<RxFrame> InProcessPort::take_locked() {
   while (!queue_.empty()) {
     RxFrame f = queue_.front();
     queue_.pop_front();
+    queued_.store(queue_.size(), std::memory_order_relaxed);
     if (f.frame.error) {
       ++stats_.error_frames;
       const ErrorFrameInfo e = classify_error_frame(f.frame);
@@ -103,9 +129,38 @@ std::optional<RxFrame> InProcessPort::take_locked() {
   return std::nullopt;
 }
 
+std::size_t InProcessPort::take_all_locked(std::vector<RxFrame>& out, std::size_t max) {
+  std::size_t n = 0;
+  for (; n < max; ++n) {
+    std::optional<RxFrame> f = take_locked();
+    if (!f) break;
+    out.push_back(*f);
+  }
+  return n;
+}
+
+std::size_t InProcessPort::receive_batch(std::vector<RxFrame>& out, std::size_t max, double timeout_s,
+                                         const CancelToken& cancel) {
+  // Wall time: frame by frame (the base class), as a socket would be read.
+  if (!bus_->opts_.lockstep) return CanTransport::receive_batch(out, max, timeout_s, cancel);
+  // Lockstep: as receive_lockstep() below, but everything queued under one lock.
+  auto poll = [&]() -> std::size_t {
+    cancel.throw_if_requested();
+    if (queued_.load(std::memory_order_acquire) == 0) return 0;
+    std::lock_guard lk(mu_);
+    return take_all_locked(out, max);
+  };
+  if (max == 0) return 0;
+  if (const std::size_t n = poll()) return n;
+  if (timeout_s <= 0) return 0;
+  bus_->opts_.lockstep->sleep_for(timeout_s, cancel);
+  return poll();
+}
+
 std::optional<RxFrame> InProcessPort::receive_lockstep(double timeout_s, const CancelToken& cancel) {
   auto poll = [&]() -> std::optional<RxFrame> {
     cancel.throw_if_requested();
+    if (queued_.load(std::memory_order_acquire) == 0) return std::nullopt;
     std::lock_guard lk(mu_);
     return take_locked();
   };
@@ -143,7 +198,9 @@ void InProcessPort::set_filters(std::span<const CanFilter> filters) {
 
 TransportStats InProcessPort::stats() const {
   std::lock_guard lk(mu_);
-  return stats_;
+  TransportStats s = stats_;
+  s.tx = tx_.load(std::memory_order_relaxed);
+  return s;
 }
 
 std::string InProcessPort::name() const { return "inprocess:" + bus_->name() + "/" + name_; }

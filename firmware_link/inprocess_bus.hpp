@@ -8,10 +8,12 @@
 // firmware emulator puts the frames on the bus -- instead of waiting. The rig's client
 // then has one path for real and simulated time: it only ever calls receive(timeout).
 #pragma once
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -47,7 +49,11 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
  private:
   friend class InProcessPort;
   explicit InProcessBus(Options opts) : opts_(std::move(opts)) {}
-  void deliver(const RxFrame& f, const InProcessPort* from);
+  void deliver(const CanFrame& f, const InProcessPort* from) { deliver(std::span(&f, 1), from); }
+  // One lock of the bus and one of each receiving port per batch, not per frame; the frames
+  // of a batch share one timestamp (in lockstep the simulated time cannot move during a send).
+  void deliver(std::span<const CanFrame> frames, const InProcessPort* from);
+  void deliver_fd(const RxFrame& f, const InProcessPort* from);  // one CAN FD frame (f.fd set)
   void detach(InProcessPort* p);
 
   Options opts_;
@@ -58,9 +64,12 @@ class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
 class InProcessPort final : public CanTransport {
  public:
   ~InProcessPort() override;
-  void send(const CanFrame& f) override;
+  void send(const CanFrame& f) override { send_batch(std::span(&f, 1)); }
+  void send_batch(std::span<const CanFrame> frames) override;
   void send_fd(const CanFdFrame& f) override;  // the in-process bus carries CAN FD frames too
   std::optional<RxFrame> receive(double timeout_s, const CancelToken& cancel) override;
+  std::size_t receive_batch(std::vector<RxFrame>& out, std::size_t max, double timeout_s,
+                            const CancelToken& cancel) override;
   double now_s() const override { return bus_->now(); }
   void set_filters(std::span<const CanFilter> filters) override;
   TransportStats stats() const override;
@@ -69,7 +78,9 @@ class InProcessPort final : public CanTransport {
  private:
   friend class InProcessBus;
   InProcessPort(std::shared_ptr<InProcessBus> bus, std::string name) : bus_(std::move(bus)), name_(std::move(name)) {}
-  void push(const RxFrame& f);  // called by the bus
+  void push(std::span<const CanFrame> frames, double t_s);  // called by the bus
+  void push_fd(const RxFrame& f);                            // called by the bus
+  std::size_t take_all_locked(std::vector<RxFrame>& out, std::size_t max);  // mu_ held
   std::optional<RxFrame> take_locked();  // the next data frame queued, if any (mu_ held)
   std::optional<RxFrame> receive_lockstep(double timeout_s, const CancelToken& cancel);
 
@@ -78,8 +89,15 @@ class InProcessPort final : public CanTransport {
   mutable std::mutex mu_;
   std::condition_variable cv_;
   std::deque<RxFrame> queue_;
+  // queue_.size(), written under mu_: a lockstep poll of an empty queue (the firmware's command
+  // poll every tick) reads it instead of taking mu_. A frame pushed by another thread just
+  // after the read is seen by the next poll, as it would be had the poll locked first.
+  std::atomic<std::size_t> queued_{0};
   std::vector<CanFilter> filters_;
-  TransportStats stats_;
+  TransportStats stats_;  // tx aside: it is tx_
+  // Frames sent: a counter of its own, so that a send takes no lock of this port (the sender's
+  // count needs no ordering with the receive queue that mu_ guards).
+  std::atomic<uint64_t> tx_{0};
 };
 
 }  // namespace rig::link

@@ -5,13 +5,18 @@
 # own line (real-time factor) and a digest of the passport's values, which must not change
 # between builds for the same seed (target: <= 3 s wall, <= 256 MiB, same passport).
 #
-#   bench/analysis/bench_paper.sh [BUILD_DIR] [RUNS]
+#   bench/analysis/bench_paper.sh [BUILD_DIR] [RUNS] [callgrind]
+#
+# `callgrind` also counts the instructions of one `--profile ci` run (same code paths, about 4
+# min of device time) under valgrind: a figure that the machine's load does not disturb, for
+# before/after comparisons on a shared machine (wall time there is noise).
 #
 # Where the time goes (callgrind on the short `ci` profile, same code paths): docs/analysis.md,
 # "Speed and memory".
 set -eu
 build=${1:-build}
 runs=${2:-3}
+mode=${3:-}
 out=$(mktemp -d)
 echo "# $(date -u +%Y-%m-%dT%H:%MZ) $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
 i=0
@@ -31,4 +36,11 @@ print(hashlib.sha256(json.dumps(p.get('values'), sort_keys=True).encode()).hexdi
   printf 'run %s: %s; passport values sha256 %s\n' "$i" "$(tail -n 1 "$out/time")" "$digest"
   grep -h "emulated plant:" "$out/stdout" "$out/time" 2>/dev/null | head -n 1 || true
 done
+if [ "$mode" = callgrind ]; then
+  command -v valgrind > /dev/null || { echo "bench_paper.sh: callgrind needs valgrind (apt-get install valgrind)" >&2; exit 2; }
+  valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" \
+    "$build/bin/rig" run --plant emulated --profile ci --yes --quiet --no-history --out "$out/ci" \
+    > "$out/cg.log" 2>&1 || true
+  printf 'callgrind, --profile ci: %s instructions\n' "$(sed -n 's/.*I *refs: *//p' "$out/cg.log" | tr -d ,)"
+fi
 rm -rf "$out"

@@ -24,6 +24,7 @@ class EmulatedDut final : public DutSource {
   void next(float& x_g, float& y_g) override;
   void set_filter(const FilterConfig& f) override;
   FilterConfig filter() const override { return filter_cfg_; }
+  bool filter_enabled() const override { return filter_cfg_.enabled; }
   double temperature_c() const override { return temp_c_; }
   std::string serial() const override { return p_.serial; }
   int loop_steps_per_output() const override { return steps_per_out_; }

@@ -24,6 +24,8 @@ class DutSource {
   virtual void next(float& x_g, float& y_g) = 0;
   virtual void set_filter(const FilterConfig& f) = 0;
   virtual FilterConfig filter() const = 0;
+  // filter().enabled without copying the filter (the firmware asks every output period).
+  virtual bool filter_enabled() const { return filter().enabled; }
   virtual double temperature_c() const = 0;
   virtual std::string serial() const = 0;
   // The loop test (LOOP_TEST, docs/can-protocol.md) needs the loop itself: a source that models
@@ -47,6 +49,7 @@ class DutSourceWrapper : public DutSource {
   void next(float& x_g, float& y_g) override { inner_->next(x_g, y_g); }
   void set_filter(const FilterConfig& f) override { inner_->set_filter(f); }
   FilterConfig filter() const override { return inner_->filter(); }
+  bool filter_enabled() const override { return inner_->filter_enabled(); }
   double temperature_c() const override { return inner_->temperature_c(); }
   std::string serial() const override { return inner_->serial(); }
   int loop_steps_per_output() const override { return inner_->loop_steps_per_output(); }

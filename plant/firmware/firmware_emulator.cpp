@@ -54,8 +54,19 @@ bool FirmwareEmulator::silent() const { return faults_.silent_from && counter_ >
 
 void FirmwareEmulator::send(const link::CanFrame& f) {
   if (silent()) return;
-  bus_.send(f);
-  ++stats_.frames_sent;
+  tx_.push_back(f);
+}
+
+// A tick's frames leave together at its end, in the order they were sent: a real MCU's CAN
+// controller also queues them within the period, and the in-process bus takes its locks
+// once per batch instead of once per frame (issue 17).
+void FirmwareEmulator::flush_sends() {
+  std::vector<link::CanFrame> frames;
+  frames.swap(tx_);  // a send that throws leaves no frames behind for the next tick
+  bus_.send_batch(frames);
+  stats_.frames_sent += frames.size();
+  frames.clear();
+  tx_.swap(frames);  // keep the capacity
 }
 
 void FirmwareEmulator::step(double dt_s) {
@@ -86,7 +97,7 @@ void FirmwareEmulator::tick() {
   const uint64_t seq = counter_++;
   if (streaming_) {
     ++stats_.samples;
-    uint8_t status = src_.filter().enabled ? link::stream_status::kFilterOn : 0;
+    uint8_t status = src_.filter_enabled() ? link::stream_status::kFilterOn : 0;
     if (std::abs(x) >= kRangeG) status |= link::stream_status::kSaturated;
     send_sample(seq, x, y, status);
   }
@@ -94,12 +105,13 @@ void FirmwareEmulator::tick() {
   const auto hb_every = static_cast<uint64_t>(std::max(1.0, std::round(1000.0 / opts_.heartbeat_hz)));
   if (ticks_ % hb_every == 0) {
     link::Heartbeat h;
-    h.state = (streaming_ ? link::hb_state::kStreaming : 0) | (src_.filter().enabled ? link::hb_state::kFilterOn : 0);
+    h.state = (streaming_ ? link::hb_state::kStreaming : 0) | (src_.filter_enabled() ? link::hb_state::kFilterOn : 0);
     h.counter = hb_counter_++;
     h.temperature_c = src_.temperature_c();
     h.last_seq = static_cast<uint32_t>(seq);
     send(link::encode(h));
   }
+  flush_sends();
 }
 
 bool FirmwareEmulator::dropped(uint64_t seq) const {
@@ -131,6 +143,7 @@ void FirmwareEmulator::send_layout_sample(uint64_t seq, float x, float y, uint8_
       const link::CanFdFrame& f = frames_[c];
       if (f.fd) {  // a CAN FD layout: the transport must carry FD (vcan with mtu 72, the in-process bus)
         if (silent()) continue;
+        flush_sends();  // the tick's classic frames queued before it leave first, as sent
         bus_.send_fd(f);
         ++stats_.frames_sent;
         continue;

@@ -142,6 +142,49 @@ TEST(InProcessBus, LockstepReceiveStepsTheSimClockOnlyWhenNothingIsQueued) {
   EXPECT_NEAR(clock.now_s(), 0.05, 1e-12);
 }
 
+// The batch calls (issue 17) must mean exactly what their frame-by-frame loops mean.
+TEST(InProcessBus, BatchesKeepOrderFiltersAndCountsOfSingleFrames) {
+  SimClock clock;
+  InProcessBus::Options o;
+  o.lockstep = &clock;
+  auto bus = InProcessBus::create(o);
+  auto a = bus->open("a"), b = bus->open("b"), c = bus->open("c");
+  const CanFilter odd_only[] = {{0x101, 0x7FF}, {0x103, 0x7FF}};
+  c->set_filters(odd_only);
+  std::vector<CanFrame> frames(5);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    frames[i].id = 0x100 + static_cast<uint32_t>(i);
+    frames[i].len = 1;
+  }
+  frames[4].len = 9;  // a bad frame: the ones before it go out, then the error
+  EXPECT_THROW(a->send_batch(frames), HardwareError);
+  EXPECT_EQ(a->stats().tx, 4u);
+  const CancelToken never;
+  std::vector<RxFrame> got;
+  EXPECT_EQ(b->receive_batch(got, 3, 0, never), 3u);  // at most `max`
+  EXPECT_EQ(b->receive_batch(got, 100, 0, never), 1u);
+  ASSERT_EQ(got.size(), 4u);
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].frame.id, 0x100u + i);
+  EXPECT_EQ(b->stats().rx, 4u);
+  got.clear();
+  EXPECT_EQ(c->receive_batch(got, 100, 0, never), 2u);  // through its filters
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].frame.id, 0x101u);
+  EXPECT_EQ(got[1].frame.id, 0x103u);
+  // Nothing queued: a poll leaves time alone; a timeout steps the world once, as receive() does.
+  int advances = 0;
+  clock.set_advance([&](double) {
+    if (++advances == 1) a->send_batch(std::span(frames).first(2));
+  });
+  got.clear();
+  EXPECT_EQ(b->receive_batch(got, 100, 0, never), 0u);
+  EXPECT_EQ(advances, 0);
+  EXPECT_EQ(b->receive_batch(got, 100, 0.01, never), 2u);
+  EXPECT_NEAR(clock.now_s(), 0.01, 1e-12);
+  EXPECT_EQ(got[0].t_s, got[1].t_s);  // one batch, one timestamp
+  EXPECT_FALSE(b->receive(0, never));
+}
+
 // ---- firmware + client, lockstep ----
 
 TEST(InProcessDut, InfoRoundTrips) {
