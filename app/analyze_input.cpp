@@ -129,7 +129,7 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
   capture::Reader r(path);
   CaptureData c;
   c.header = r.header();
-  std::vector<Sample> buf(1 << 16);
+  std::vector<Sample> buf(4096);  // 64 KiB: large enough to amortise the calls, small to zero-fill
   for (std::size_t n; (n = r.read(buf)) > 0;)
     for (std::size_t i = 0; i < n; ++i) c.values.push_back(channel == "y" ? buf[i].y_g : buf[i].x_g);
   c.recovery = r.recovery();

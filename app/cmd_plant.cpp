@@ -57,7 +57,7 @@ int serve(const ServeArgs& a) {
   const toml::table profile = acceptance::load_profile_table(a.profile, source);
   const acceptance::Profile p = acceptance::parse_profile(profile, source);
   const toml::table& plant_cfg = plant::plant_section(profile);
-  cfg::check_keys(plant_cfg, {"seed", "dut", "table"}, "plant");
+  plant::validate_plant_section(plant_cfg);  // the same check as rig run's, --dry-run's
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   if (a.drive == "cia402" && a.drive_map.empty())
     throw ConfigError("rig plant serve: --drive cia402 needs --drive-map FILE (see drives/)");
