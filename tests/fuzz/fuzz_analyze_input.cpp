@@ -3,7 +3,8 @@
 // chunks with pread (the path of files too large to map), or one channel of a capture -- and
 // the rest is the file. Each reader either returns values the analysis may use or throws a
 // ConfigError naming the file and position. Invariant: every value delivered is finite and
-// below analysis::kMaxMagnitude (what the Allan engine's accumulators are sized for).
+// below analysis::kMaxMagnitude (what the Allan engine's accumulators are sized for), and a
+// reader leaves no descriptor open behind it, refused files included.
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -41,6 +42,12 @@ void read_f64(const std::string& path, std::size_t map_limit) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   static const int fd = memfd_create("fuzz-analyze-input", 0);
+  // The lowest free descriptor: a reader that leaks one moves it (regressions/analyze_input).
+  static const int free_fd = [] {
+    const int d = ::dup(0);
+    ::close(d);
+    return d;
+  }();
   if (fd < 0 || ftruncate(fd, 0) != 0 || pwrite(fd, data + 1, size - 1, 0) != static_cast<ssize_t>(size - 1)) return 0;
   const std::string path = "/proc/self/fd/" + std::to_string(fd);
   rig::fuzz::expect_only_rig_errors([&] {
@@ -51,5 +58,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
       case 3: check_values(rig::cli::read_capture(path, data[0] & 4 ? "y" : "x").values); break;
     }
   });
+  const int d = ::dup(0);
+  ::close(d);
+  RIG_FUZZ_CHECK(d == free_fd);
   return 0;
 }
