@@ -8,6 +8,9 @@ namespace rig::cfg {
 namespace {
 
 std::string pos(const toml::source_region& s) {
+  // A node without a position was put there by the program: a command-line option that
+  // overrides the file (rig table --unit, rig dut --can), not a line of any file.
+  if (!s.path && s.begin.line == 0) return "command-line option";
   std::ostringstream os;
   os << (s.path ? *s.path : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
   return os.str();
