@@ -4,8 +4,11 @@
 // home, move, stop, quick stop, alarm reset -- on the rig-v1 client or the CiA 402 client
 // (drives/generic-cia402.toml). Time is simulated, so every wait is bounded by its timeout
 // without sleeping. A hostile drive may only ever cause a rig error (HardwareError, exit 4);
-// statuses stay finite.
+// statuses stay finite, and a failed home or move says whether the halt reached the drive (a
+// technician must know if the table may still be turning, issue 13 item 8).
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string>
@@ -66,6 +69,20 @@ const rig::modbus::DriveMap& cia402_map() {
   return m;
 }
 
+// Runs a motion call; a fault it reports must state the stop's fate.
+template <class F>
+void motion(F f) {
+  try {
+    f();
+  } catch (const rig::HardwareError& e) {
+    const std::string m = e.what();
+    if (std::getenv("FUZZ_MODBUS_VERBOSE")) std::fprintf(stderr, "%s\n", m.c_str());
+    RIG_FUZZ_CHECK(m.find("halt delivered to the drive") != std::string::npos ||
+                   m.find(" not delivered (") != std::string::npos || m.find("halt not sent: ") != std::string::npos);
+    throw;
+  }
+}
+
 void check_status(const rig::TableStatus& s) {
   RIG_FUZZ_CHECK(std::isfinite(s.actual_deg));
   RIG_FUZZ_CHECK(std::isfinite(s.target_deg));
@@ -93,8 +110,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     rig::fuzz::expect_only_rig_errors([&] {
       switch (op % 6) {
         case 0: check_status(table->status()); break;
-        case 1: table->home(never); break;
-        case 2: table->move_to(static_cast<double>(static_cast<int16_t>(in.u16())) / 64.0, never); break;
+        case 1: motion([&] { table->home(never); }); break;
+        case 2: {
+          const double deg = static_cast<double>(static_cast<int16_t>(in.u16())) / 64.0;
+          motion([&] { table->move_to(deg, never); });
+          break;
+        }
         case 3: table->stop(); break;
         case 4: table->quick_stop(); break;
         case 5:
