@@ -746,14 +746,19 @@ TEST(HardwareFileValidation, WrongTypeNamesKeyAndValue) {
   EXPECT_NE(err.find("hw.toml:7:14: 'silence_ms' = 'fast': must be a number"), std::string::npos) << err;
 }
 
-// `rig run --hardware` (no dry run): a [table] mistake is exit 2 with its line, not the GPIO
-// chip's exit 4 (this machine has no such chip: opening GPIO first would hide the mistake).
-TEST(HardwareFileValidation, TableErrorIsReportedBeforeGpioOpens) {
+// `rig run --hardware` (no dry run): a [table] or [dut] mistake is exit 2 with its line, not
+// the GPIO chip's exit 4 (this machine has no such chip: GPIO opens first, and would hide it).
+TEST(HardwareFileValidation, TableAndDutErrorsAreReportedBeforeGpioOpens) {
   const std::string d = tmp("hw-before-gpio");
-  const std::string hw = hardware_file(d, 3, "unit = 300");
+  std::string hw = hardware_file(d, 3, "unit = 300");
   EXPECT_EQ(run({"run", "--hardware", hw, "--profile", "ci", "--yes", "--out", d + "/run"}, d + "/io"), 2)
       << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/io.stderr").find("hw.toml:3:8: 'unit' = 300"), std::string::npos) << slurp(d + "/io.stderr");
+  hw = hardware_file(d, 7, "silence_ms = 0");
+  EXPECT_EQ(run({"run", "--hardware", hw, "--profile", "ci", "--yes", "--out", d + "/run2"}, d + "/io2"), 2)
+      << slurp(d + "/io2.stderr");
+  EXPECT_NE(slurp(d + "/io2.stderr").find("hw.toml:7:14: 'silence_ms' = 0 is out of range"), std::string::npos)
+      << slurp(d + "/io2.stderr");
 }
 
 // `rig table` and `rig dut` read the same file through the same validation: file and line.
