@@ -61,7 +61,12 @@ void validate_hardware(const toml::table& hw, std::initializer_list<std::string_
     }
     s->check(*cfg::get_table(hw, k.str()));  // not a table: an error naming it
   }
-  for (std::string_view r : required) cfg::get_table(hw, r, true);
+  for (std::string_view r : required)
+    if (!hw.contains(r)) {
+      std::string names;
+      for (std::string_view n : required) names += (names.empty() ? "[" : ", [") + std::string(n) + "]";
+      throw ConfigError(cfg::where(hw) + ": no [" + std::string(r) + "] section (this command needs " + names + ")");
+    }
 }
 
 toml::table load_hardware_file(const std::string& path, std::initializer_list<std::string_view> required) {
