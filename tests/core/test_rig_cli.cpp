@@ -797,3 +797,16 @@ TEST(DryRun, OutMustBeWritable) {
       << slurp(d + "/io2.stderr");
   EXPECT_FALSE(fs::exists(d + "/new")) << "the dry run creates nothing";
 }
+
+// The hardware file docs/hardware-config.md shows first is one the validation accepts.
+TEST(HardwareFileValidation, TheDocumentedFilePasses) {
+  const std::string doc = slurp(std::string(RIG_SOURCE_DIR) + "/docs/hardware-config.md");
+  const auto b = doc.find("```toml\n");
+  ASSERT_NE(b, std::string::npos);
+  const auto e = doc.find("```", b + 8);
+  const std::string d = tmp("hw-doc");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << doc.substr(b + 8, e - b - 8);
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, d + "/hw.toml", err), 0) << err << "\n" << slurp(d + "/hw.toml");
+}
