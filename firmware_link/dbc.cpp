@@ -64,6 +64,9 @@ bool digit(char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; }
 
 std::vector<Token> tokenize(const std::string& t, const std::string& src) {
   std::vector<Token> out;
+  // About one token per 4 characters in DBC text: reserved once instead of grown by copying
+  // (the growth was a fifth of the tokenizer's time in tests/fuzz/fuzz_dbc.cpp's profile).
+  out.reserve(t.size() / 4 + 8);
   int line = 1;
   std::size_t i = 0;
   const std::size_t n = t.size();
