@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -585,6 +586,11 @@ class DbcParser {
 };
 
 Dbc Dbc::parse_file(const std::string& path) {
+  // A FIFO, a terminal or a device named as the DBC would block the reader forever (found by
+  // tests/fuzz/fuzz_hardware.cpp: dbc = "4" beside /proc/self/fd/N named a pipe).
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec) && std::filesystem::exists(path, ec))
+    throw ConfigError(path + ": not a regular file (a DBC file is read whole)");
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open DBC file");
   std::stringstream ss;
