@@ -31,6 +31,8 @@ class F64File final : public analysis::ChunkSource {
   const double* contiguous() const override { return map_; }
 
  private:
+  void open_and_check(std::size_t map_limit_bytes);
+  void release() noexcept;
   void check(std::uint64_t pos, std::span<const double> v) const;
   std::string path_;
   int fd_ = -1;

@@ -27,37 +27,17 @@ Backends make_emulated(const toml::table& plant_cfg, const std::string& serial) 
   return b;
 }
 
-toml::table load_hardware_file(const std::string& path) {
-  toml::table hw = cfg::parse_file(path);
-  cfg::check_keys(hw, {"rig", "table", "dut", "gpio", "procedure", "history"}, "hardware file");
-  cfg::get_table(hw, "table", true);
-  cfg::get_table(hw, "dut", true);
-  cfg::get_table(hw, "gpio", true);
-  if (const toml::table* r = cfg::get_table(hw, "rig")) {
-    cfg::check_keys(*r, {"name"}, "rig");
-    cfg::get_string(*r, "name", std::string());
-  }
-  if (const toml::table* h = cfg::get_table(hw, "history")) {
-    cfg::check_keys(*h, {"url"}, "history");
-    cfg::get_string(*h, "url", std::string());
-  }
-  return hw;
-}
-
 Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
-  if (const toml::table* pr = cfg::get_table(hw, "procedure")) {
-    cfg::check_keys(*pr, {"u10_deg", "u20_deg"}, "procedure");
-    p.u10_deg = cfg::get_number(*pr, "u10_deg", p.u10_deg, -360.0, 360.0);
-    p.u20_deg = cfg::get_number(*pr, "u20_deg", p.u20_deg, -360.0, 540.0);
-  }
+  // Configuration before devices: a mistake in any section (drive map included) is exit 2
+  // naming the file, not hidden behind a device that cannot be opened.
+  validate_hardware(hw, kRunSections);
+  apply_procedure_angles(hw, p);
   Backends b;
   b.plant = "hardware";
   b.clock = std::make_unique<RealClock>();
   b.clock_ptr = b.clock.get();
-  // Configuration before devices: a [table] mistake (drive map included) is
-  // exit 2 naming the file, not hidden behind a device that cannot be opened.
-  modbus::check_table_config(*cfg::get_table(hw, "table", true));
-  // [dut.design]: the DUT type's loop, the loop figures' labelled fallback without a loop test.
+  // [dut.design]: the DUT type's loop, the loop figures' labelled fallback without a loop test
+  // (checked with the whole hardware file before any device opens: app/hardware_file).
   p.design_model = acceptance::read_design_model(*cfg::get_table(hw, "dut", true));
   // GPIO first: the e-stop watch must be live before anything moves.
   b.io = gpio::connect_gpio(*cfg::get_table(hw, "gpio", true));

@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 
+#include "app/hardware_file.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "rig/executive/executive.hpp"
 
@@ -40,10 +41,9 @@ struct Backends {
 // checked against it.
 Backends make_emulated(const toml::table& plant_cfg, const std::string& serial = {});
 
-// The hardware file (docs/hardware-config.md): [table] (Modbus), [dut] (CAN),
-// [gpio] (libgpiod), optional [procedure] u10_deg/u20_deg overriding the
-// profile's table angles with the mount's calibration, optional [history] url.
-toml::table load_hardware_file(const std::string& path);
+// The devices of a hardware file (app/hardware_file.hpp, validated again here before the first
+// device opens): [gpio] first (the e-stop watch), then [table] and [dut]; [procedure]
+// u10_deg/u20_deg replace the profile's table angles with the mount's calibration.
 Backends make_hardware(const toml::table& hw, acceptance::Profile& p);
 
 }  // namespace rig::cli

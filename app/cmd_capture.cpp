@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/hardware_file.hpp"
 #include "firmware_link/candump_log.hpp"
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
@@ -46,7 +47,7 @@ std::string iso8601(double t_s) {
 int cmd_import(const ImportArgs& a) {
   if (a.orientation != "U10" && a.orientation != "U20")
     throw ConfigError("rig capture import: --orientation must be U10 or U20, got '" + a.orientation + "'");
-  const toml::table hw = cfg::parse_file(a.hardware);
+  const toml::table hw = load_hardware_file(a.hardware, {"dut"});
   const toml::table& dut = *cfg::get_table(hw, "dut", true);
   const link::LinkOptions lo = link::link_options(dut);  // validates [dut], reads its stream
   const auto decoder = lo.stream ? lo.stream : link::stream_decoder_from_config(dut);

@@ -16,6 +16,7 @@
 #include "firmware_link/dbc.hpp"
 #include "firmware_link/dbc_stream.hpp"
 #include "app/commands.hpp"
+#include "app/hardware_file.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
@@ -49,7 +50,7 @@ struct DutArgs {
 // [dut] from --hardware FILE, with --can overriding the interface.
 toml::table dut_config(const DutArgs& a) {
   toml::table t;
-  if (!a.hardware.empty()) t = *cfg::get_table(cfg::parse_file(a.hardware), "dut", true);
+  if (!a.hardware.empty()) t = *cfg::get_table(load_hardware_file(a.hardware, {"dut"}), "dut", true);
   if (!a.can.empty()) t.insert_or_assign("can", a.can);
   if (!t.contains("can")) throw ConfigError("rig dut: give --can IFACE (or --hardware FILE with a [dut] can = ...)");
   return t;

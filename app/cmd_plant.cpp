@@ -58,7 +58,7 @@ int serve(const ServeArgs& a) {
   const toml::table profile = acceptance::load_profile_table(a.profile, source);
   const acceptance::Profile p = acceptance::parse_profile(profile, source);
   const toml::table& plant_cfg = plant::plant_section(profile);
-  cfg::check_keys(plant_cfg, {"seed", "dut", "table", "firmware"}, "plant");
+  plant::validate_plant_section(plant_cfg);  // the same check as rig run's, --dry-run's
   const plant::FirmwareOptions fw = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   if (a.drive == "cia402" && a.drive_map.empty())
@@ -121,7 +121,7 @@ void add_plant(CLI::App& app, int& rc) {
   auto a = std::make_shared<ServeArgs>();
   sub->add_option("--modbus", a->modbus, "Modbus TCP endpoint HOST:PORT (PORT 0 picks a free port)");
   sub->add_option("--rtu", a->rtu, "Modbus RTU serial device DEVICE[,BAUD[,P,D,S]] (e.g. one end of a socat pty pair)");
-  sub->add_option("--unit", a->unit, "Modbus unit (slave) id")->capture_default_str();
+  sub->add_option("--unit", a->unit, "Modbus unit (slave) id")->capture_default_str()->check(CLI::Range(1, 247));
   sub->add_option("--drive", a->drive, "The emulated drive's protocol: rig-v1 (docs/table-registers.md) or cia402")
       ->check(CLI::IsMember({"rig-v1", "cia402"}))
       ->capture_default_str();

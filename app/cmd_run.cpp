@@ -213,6 +213,21 @@ void prepare_run_folder(const std::string& dir) {
   if (!writable) throw ConfigError("--out " + dir + ": the run folder is not writable");
 }
 
+// --dry-run touches nothing, yet says whether the run could write its folder: the nearest
+// existing ancestor of --out must be a directory this process may write into, and a new run
+// must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
+void check_run_folder(const std::string& dir, bool resuming) {
+  std::error_code ec;
+  fs::path p = fs::absolute(dir, ec);
+  while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
+  if (!fs::is_directory(p, ec))
+    throw ConfigError("--out " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
+  if (::access(p.c_str(), W_OK | X_OK) != 0)
+    throw ConfigError("--out " + dir + ": the run folder is not writable (" + p.string() + ")");
+  if (!resuming && fs::exists(Executive::checkpoint_path(dir), ec))
+    throw ConfigError(dir + " holds an earlier run (checkpoint.json): use --resume " + dir + " or another --out");
+}
+
 // The passport's identity block, for every ending (finished at the time of the call).
 PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
                            const std::string& started, const std::string& serial) {
@@ -310,13 +325,15 @@ int do_run(RunArgs a) {
   const toml::table& plant_cfg = plant::plant_section(profile_table);
   if (a.plant == "emulated") plant::validate_plant_section(plant_cfg);
   toml::table hw;
-  if (a.plant == "hardware") hw = load_hardware_file(a.hardware);
+  if (a.plant == "hardware") hw = load_hardware_file(a.hardware, kRunSections);
   check_serial_source(a, hw, plant_cfg);
 
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state);
   TerminalView view(stderr, a.quiet);
   if (a.dry_run) {
+    check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());
+    if (a.plant == "hardware") apply_procedure_angles(hw, p);  // the plan shows the mount's angles
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              p.source, a.plant);

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/hardware_file.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -35,8 +36,7 @@ struct TableArgs {
 // own keys keep their line numbers in error messages.
 toml::table& table_config(const TableArgs& a, toml::table& root) {
   if (!a.hardware.empty()) {
-    root = cfg::parse_file(a.hardware);
-    cfg::get_table(root, "table", true);
+    root = load_hardware_file(a.hardware, {"table"});
   } else {
     root.insert_or_assign("table", toml::table{});
   }
@@ -165,7 +165,7 @@ void add_table(CLI::App& app, int& rc) {
   sub->add_option("--rtu", a->rtu, "Modbus RTU drive, DEVICE[,BAUD[,PARITY,DATABITS,STOPBITS]] (default 19200,E,8,1)")
       ->excludes(where);
   sub->add_option("--hardware", a->hardware, "Take the [table] section of this hardware file (flags override)");
-  sub->add_option("--unit", a->unit, "Modbus unit id (default 1)")->check(CLI::Range(0, 247));
+  sub->add_option("--unit", a->unit, "Modbus unit id (default 1)")->check(CLI::Range(1, 247));
   sub->add_option("--timeout", a->timeout_s, "Response timeout per request, seconds (default 0.3)")
       ->check(CLI::Range(0.01, 10.0));
   sub->add_option("--drive", a->drive, "Drive protocol: rig-v1 (default) or cia402")

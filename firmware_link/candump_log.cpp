@@ -45,6 +45,12 @@ bool set_id(std::string_view id, CanFdFrame& f, std::string& problem) {
     problem = "standard identifier out of range: " + quoted(id);
     return false;
   }
+  // Bits 30 and 31 are SocketCAN's RTR and EFF flags, which candump never prints in the id:
+  // such an id is damage, not a 29-bit identifier (found by tests/fuzz/fuzz_candump.cpp).
+  if (f.extended && (f.id & 0xC0000000u)) {
+    problem = "extended identifier out of range (29 bits, or 2xxxxxxx for an error frame): " + quoted(id);
+    return false;
+  }
   if (f.extended && (f.id & 0x20000000u)) {
     f.error = true;
     f.extended = false;

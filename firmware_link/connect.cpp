@@ -26,17 +26,35 @@ LinkOptions link_options(const toml::table& t) {
   return o;
 }
 
-std::unique_ptr<CanDutLink> connect_dut(const toml::table& t, Clock& clock) {
-  const LinkOptions o = link_options(t);
-  const std::string iface = cfg::get_string(t, "can");
-  if (iface.empty() || iface.size() >= 16) {
+namespace {
+// What [dut] says beyond the link options: the interface and the socket's buffer.
+struct DutSocket {
+  std::string iface;
+  SocketCanOptions so;
+};
+
+DutSocket dut_socket(const toml::table& t) {
+  DutSocket d;
+  d.iface = cfg::get_string(t, "can");
+  if (d.iface.empty() || d.iface.size() >= 16) {
     const toml::node* n = t.get("can");
-    throw ConfigError(cfg::where(n ? *n : static_cast<const toml::node&>(t)) + ": 'can' = \"" + iface +
+    throw ConfigError(cfg::where(n ? *n : static_cast<const toml::node&>(t)) + ": 'can' = \"" + d.iface +
                       "\" is not a network interface name (1..15 characters)");
   }
-  SocketCanOptions so;
-  so.rcvbuf_bytes = static_cast<int>(cfg::get_int(t, "rcvbuf_kb", 8192, 16, 1 << 20) * 1024);
-  return std::make_unique<CanDutLink>(std::make_unique<SocketCanTransport>(iface, so), clock, o);
+  d.so.rcvbuf_bytes = static_cast<int>(cfg::get_int(t, "rcvbuf_kb", 8192, 16, 1 << 20) * 1024);
+  return d;
+}
+}  // namespace
+
+void check_dut_config(const toml::table& t) {
+  link_options(t);
+  dut_socket(t);
+}
+
+std::unique_ptr<CanDutLink> connect_dut(const toml::table& t, Clock& clock) {
+  const LinkOptions o = link_options(t);
+  const DutSocket d = dut_socket(t);
+  return std::make_unique<CanDutLink>(std::make_unique<SocketCanTransport>(d.iface, d.so), clock, o);
 }
 
 }  // namespace rig::link

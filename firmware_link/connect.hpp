@@ -17,6 +17,9 @@ namespace rig::link {
 // bad values => ConfigError naming file:line; an interface that cannot be
 // opened => HardwareError.
 LinkOptions link_options(const toml::table& dut_cfg);
+// Every [dut] key checked (link_options and the interface name, the socket buffer), no socket
+// opened: the hardware file's validation (app/hardware_file.cpp).
+void check_dut_config(const toml::table& dut_cfg);
 std::unique_ptr<CanDutLink> connect_dut(const toml::table& dut_cfg, Clock& clock);
 
 }  // namespace rig::link

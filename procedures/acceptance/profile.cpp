@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/allan.hpp"
 #include "design/filter.hpp"
 #include "design/filter_toml.hpp"
 #include "rig/core/toml_util.hpp"
@@ -118,6 +119,12 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   if (const toml::table* a = cfg::get_table(t, "analysis")) {
     cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s", "b_allan"}, "analysis");
     p.taus = cfg::get_string(*a, "taus", p.taus);
+    // Checked here, not first in the allan phase after the whole recording (issue 13).
+    if (const toml::node* n = a->get("taus")) try {
+        analysis::parse_tau_grid(p.taus);
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(cfg::where(*n) + ": 'taus' = \"" + p.taus + "\": " + e.what());
+      }
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
     p.b_allan = cfg::get_string(*a, "b_allan", p.b_allan);

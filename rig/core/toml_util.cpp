@@ -8,12 +8,29 @@ namespace rig::cfg {
 namespace {
 
 std::string pos(const toml::source_region& s) {
+  // A node without a position was put there by the program: a command-line option that
+  // overrides the file (rig table --unit, rig dut --can), not a line of any file.
+  if (!s.path && s.begin.line == 0) return "command-line option";
   std::ostringstream os;
   os << (s.path ? *s.path : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
   return os.str();
 }
 
 [[noreturn]] void fail(const toml::node& n, const std::string& msg) { throw ConfigError(where(n) + ": " + msg); }
+
+// The value as the file writes it, for "'key' = VALUE: must be ..." (a table is not spelled out).
+std::string shown(const toml::node& n) {
+  if (n.is_table()) return "a table";
+  std::ostringstream os;
+  n.visit([&](const auto& v) { os << v; });
+  std::string s = os.str();
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+
+[[noreturn]] void wrong_type(const toml::node& n, std::string_view key, std::string_view want) {
+  fail(n, "'" + std::string(key) + "' = " + shown(n) + ": must be " + std::string(want));
+}
 
 const toml::node& need(const toml::table& t, std::string_view key) {
   const toml::node* n = t.get(key);
@@ -69,7 +86,7 @@ double get_number(const toml::table& t, std::string_view key, std::optional<doub
     need(t, key);
   }
   std::optional<double> v = n->value<double>();  // integers convert too
-  if (!v || !(n->is_floating_point() || n->is_integer())) fail(*n, "'" + std::string(key) + "' must be a number");
+  if (!v || !(n->is_floating_point() || n->is_integer())) wrong_type(*n, key, "a number");
   check_range(*n, key, *v, lo, hi);
   return *v;
 }
@@ -81,7 +98,7 @@ int64_t get_int(const toml::table& t, std::string_view key, std::optional<int64_
     if (def) return *def;
     need(t, key);
   }
-  if (!n->is_integer()) fail(*n, "'" + std::string(key) + "' must be an integer");
+  if (!n->is_integer()) wrong_type(*n, key, "an integer");
   const int64_t v = *n->value<int64_t>();
   check_range(*n, key, static_cast<double>(v), lo ? std::optional<double>(static_cast<double>(*lo)) : std::nullopt,
               hi ? std::optional<double>(static_cast<double>(*hi)) : std::nullopt);
@@ -94,7 +111,7 @@ bool get_bool(const toml::table& t, std::string_view key, std::optional<bool> de
     if (def) return *def;
     need(t, key);
   }
-  if (!n->is_boolean()) fail(*n, "'" + std::string(key) + "' must be true or false");
+  if (!n->is_boolean()) wrong_type(*n, key, "true or false");
   return *n->value<bool>();
 }
 
@@ -104,7 +121,7 @@ std::string get_string(const toml::table& t, std::string_view key, std::optional
     if (def) return *def;
     need(t, key);
   }
-  if (!n->is_string()) fail(*n, "'" + std::string(key) + "' must be a string");
+  if (!n->is_string()) wrong_type(*n, key, "a string");
   return *n->value<std::string>();
 }
 
@@ -115,11 +132,11 @@ std::vector<double> get_numbers(const toml::table& t, std::string_view key, std:
     need(t, key);
   }
   const toml::array* a = n->as_array();
-  if (!a) fail(*n, "'" + std::string(key) + "' must be an array of numbers");
+  if (!a) wrong_type(*n, key, "an array of numbers");
   std::vector<double> out;
   for (const toml::node& e : *a) {
     std::optional<double> v = e.value<double>();
-    if (!v || !(e.is_floating_point() || e.is_integer())) fail(e, "'" + std::string(key) + "' must hold numbers");
+    if (!v || !(e.is_floating_point() || e.is_integer())) wrong_type(e, key, "an array of numbers");
     check_range(e, key, *v, std::nullopt, std::nullopt);
     out.push_back(*v);
   }
@@ -134,10 +151,10 @@ std::vector<std::string> get_strings(const toml::table& t, std::string_view key,
     need(t, key);
   }
   const toml::array* a = n->as_array();
-  if (!a) fail(*n, "'" + std::string(key) + "' must be an array of strings");
+  if (!a) wrong_type(*n, key, "an array of strings");
   std::vector<std::string> out;
   for (const toml::node& e : *a) {
-    if (!e.is_string()) fail(e, "'" + std::string(key) + "' must hold strings");
+    if (!e.is_string()) wrong_type(e, key, "an array of strings");
     out.push_back(*e.value<std::string>());
   }
   return out;
@@ -149,7 +166,7 @@ const toml::table* get_table(const toml::table& t, std::string_view key, bool re
     if (required) need(t, key);
     return nullptr;
   }
-  if (!n->is_table()) fail(*n, "'" + std::string(key) + "' must be a table");
+  if (!n->is_table()) wrong_type(*n, key, "a table");
   return n->as_table();
 }
 

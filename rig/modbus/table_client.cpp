@@ -347,7 +347,8 @@ TableOptions table_options_from_toml(const toml::table& t) {
 
 LinkOptions link_options_from_toml(const toml::table& t) {
   LinkOptions l;
-  l.unit = static_cast<int>(cfg::get_int(t, "unit", l.unit, 0, 247));
+  // 1..247: the Modbus serial-line addresses (0 is broadcast: a drive never answers it).
+  l.unit = static_cast<int>(cfg::get_int(t, "unit", l.unit, 1, 247));
   l.response_timeout_s = cfg::get_number(t, "response_timeout_s", l.response_timeout_s, 0.01, 10.0);
   l.retries = static_cast<int>(cfg::get_int(t, "retries", l.retries, 0, 10));
   l.backoff_s = cfg::get_number(t, "backoff_s", l.backoff_s, 0.0, 10.0);
@@ -411,6 +412,9 @@ TableConfig read_table_config(const toml::table& t) {
   }
   c.opt = table_options_from_toml(t);
   c.link = link_options_from_toml(t);
+  // The procedure's angles, accepted here as in [procedure] and held to the same ranges.
+  cfg::get_number(t, "u10_deg", 0.0, -360.0, 360.0);
+  cfg::get_number(t, "u20_deg", 180.0, -360.0, 540.0);
   return c;
 }
 

@@ -804,3 +804,149 @@ TEST(RigCli, HardwareDesignModelMistakeIsAConfigurationErrorBeforeAnyDeviceOpens
   EXPECT_NE(err.find("hw.toml:6"), std::string::npos) << err;
   EXPECT_NE(err.find("pendulosity_kg"), std::string::npos) << err;
 }
+
+// ---- One validation of hardware files and profiles (issue 13, item 5): every key of every
+// section is checked by the dry run and by every command that reads the file, exit 2 naming
+// FILE:LINE:COL, the key and the value, before any device is opened.
+
+const char* const kHardwareFile =
+    "[table]\n"                              // 1
+    "modbus = \"tcp:127.0.0.1:1\"\n"          // 2
+    "unit = 1\n"                             // 3
+    "response_timeout_s = 0.3\n"             // 4
+    "[dut]\n"                                // 5
+    "can = \"vcan-none\"\n"                   // 6
+    "silence_ms = 100\n"                     // 7
+    "[gpio]\n"                               // 8
+    "chip = \"/dev/rig-no-such-gpiochip\"\n"  // 9
+    "power = \"DUT_POWER\"\n"                 // 10
+    "estop = \"ESTOP\"\n"                     // 11
+    "[procedure]\n"                          // 12
+    "u10_deg = 0.0\n"                        // 13
+    "u20_deg = 180.0\n";                     // 14
+
+// The hardware file with line `line` (1-based) replaced by `text`, written to `dir`/hw.toml.
+std::string hardware_file(const std::string& dir, int line, const std::string& text) {
+  std::istringstream in(kHardwareFile);
+  std::ostringstream out;
+  std::string l;
+  for (int n = 1; std::getline(in, l); ++n) out << (n == line ? text : l) << '\n';
+  fs::create_directories(dir);
+  std::ofstream(dir + "/hw.toml") << out.str();
+  return dir + "/hw.toml";
+}
+
+// `rig run --hardware FILE --dry-run`: its exit code; stderr in `err`.
+int hardware_dry_run(const std::string& dir, const std::string& hw, std::string& err) {
+  const int rc = run({"run", "--hardware", hw, "--profile", "ci", "--dry-run", "--out", dir + "/run"}, dir + "/io");
+  err = slurp(dir + "/io.stderr");
+  return rc;
+}
+
+TEST(HardwareFileValidation, ValidFilePassesTheDryRun) {
+  const std::string d = tmp("hw-valid");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 0, ""), err), 0) << err;
+  EXPECT_FALSE(fs::exists(d + "/run")) << "the dry run touches nothing";
+}
+
+TEST(HardwareFileValidation, UnitMinusOneIsRefusedWithItsLine) {
+  const std::string d = tmp("hw-unit");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 3, "unit = -1"), err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:3:8: 'unit' = -1 is out of range [1, 247]"), std::string::npos) << err;
+}
+
+TEST(HardwareFileValidation, U20Deg1e7IsRefusedWithItsLine) {
+  const std::string d = tmp("hw-u20");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 1e7"), err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:14:11: 'u20_deg' = 1e+07 is out of range [-360, 540]"), std::string::npos) << err;
+}
+
+TEST(HardwareFileValidation, UnknownKeyInADeviceSectionIsRefused) {
+  const std::string d = tmp("hw-unknown");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 7, "silence_msec = 100"), err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:7:"), std::string::npos) << err;
+  EXPECT_NE(err.find("unknown key 'silence_msec'"), std::string::npos) << err;
+}
+
+TEST(HardwareFileValidation, NegativeResponseTimeoutIsRefused) {
+  const std::string d = tmp("hw-timeout");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 4, "response_timeout_s = -1"), err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:4:22: 'response_timeout_s' = -1 is out of range"), std::string::npos) << err;
+}
+
+TEST(HardwareFileValidation, WrongTypeNamesKeyAndValue) {
+  const std::string d = tmp("hw-type");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 7, "silence_ms = \"fast\""), err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:7:14: 'silence_ms' = 'fast': must be a number"), std::string::npos) << err;
+}
+
+// `rig run --hardware` (no dry run): a [table] or [dut] mistake is exit 2 with its line, not
+// the GPIO chip's exit 4 (this machine has no such chip: GPIO opens first, and would hide it).
+TEST(HardwareFileValidation, TableAndDutErrorsAreReportedBeforeGpioOpens) {
+  const std::string d = tmp("hw-before-gpio");
+  std::string hw = hardware_file(d, 3, "unit = 300");
+  EXPECT_EQ(run({"run", "--hardware", hw, "--profile", "ci", "--yes", "--out", d + "/run"}, d + "/io"), 2)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stderr").find("hw.toml:3:8: 'unit' = 300"), std::string::npos) << slurp(d + "/io.stderr");
+  hw = hardware_file(d, 7, "silence_ms = 0");
+  EXPECT_EQ(run({"run", "--hardware", hw, "--profile", "ci", "--yes", "--out", d + "/run2"}, d + "/io2"), 2)
+      << slurp(d + "/io2.stderr");
+  EXPECT_NE(slurp(d + "/io2.stderr").find("hw.toml:7:14: 'silence_ms' = 0 is out of range"), std::string::npos)
+      << slurp(d + "/io2.stderr");
+}
+
+// `rig table` and `rig dut` read the same file through the same validation: file and line.
+TEST(HardwareFileValidation, RigTableAndRigDutNameTheFileAndLine) {
+  const std::string d = tmp("hw-table-dut");
+  std::string hw = hardware_file(d, 4, "response_timeout_s = -1");
+  EXPECT_EQ(run({"table", "status", "--hardware", hw}, d + "/t"), 2) << slurp(d + "/t.stderr");
+  EXPECT_NE(slurp(d + "/t.stderr").find("hw.toml:4:22:"), std::string::npos) << slurp(d + "/t.stderr");
+  EXPECT_EQ(slurp(d + "/t.stderr").find("<config>"), std::string::npos) << slurp(d + "/t.stderr");
+  hw = hardware_file(d, 7, "silence_ms = 0");
+  EXPECT_EQ(run({"dut", "info", "--hardware", hw}, d + "/u"), 2) << slurp(d + "/u.stderr");
+  EXPECT_NE(slurp(d + "/u.stderr").find("hw.toml:7:14: 'silence_ms' = 0 is out of range"), std::string::npos)
+      << slurp(d + "/u.stderr");
+}
+
+TEST(ProfileValidation, BadTausIsRefusedByTheDryRun) {
+  const std::string d = tmp("taus");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[profile]\nname = \"t\"\n[analysis]\ntaus = \"log:1\"\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--dry-run", "--out", d + "/run"}, d + "/io"), 2)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stderr").find("p.toml:5:8: 'taus' = \"log:1\""), std::string::npos)
+      << slurp(d + "/io.stderr");
+}
+
+TEST(DryRun, OutMustBeWritable) {
+  const std::string d = tmp("dry-out");
+  fs::create_directories(d);
+  std::ofstream(d + "/file") << "x";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--out", d + "/file/run"}, d + "/io"), 2)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stderr").find("--out " + d + "/file/run: cannot create the run folder"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--out", d + "/new/run"}, d + "/io2"), 0)
+      << slurp(d + "/io2.stderr");
+  EXPECT_FALSE(fs::exists(d + "/new")) << "the dry run creates nothing";
+}
+
+// The hardware file docs/hardware-config.md shows first is one the validation accepts.
+TEST(HardwareFileValidation, TheDocumentedFilePasses) {
+  const std::string doc = slurp(std::string(RIG_SOURCE_DIR) + "/docs/hardware-config.md");
+  const auto b = doc.find("```toml\n");
+  ASSERT_NE(b, std::string::npos);
+  const auto e = doc.find("```", b + 8);
+  const std::string d = tmp("hw-doc");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << doc.substr(b + 8, e - b - 8);
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, d + "/hw.toml", err), 0) << err << "\n" << slurp(d + "/hw.toml");
+}

@@ -67,6 +67,89 @@ def capture(make_test_capture):
     put("capture", "damaged.cap", bytes(damaged))
 
 
+HARDWARE = """[rig]
+name = "line-2-rig-1"
+
+[table]
+modbus = "tcp:192.0.2.10:502"
+unit = 1
+response_timeout_s = 0.3
+retries = 2
+tolerance_deg = 0.01
+velocity_dps = 20.0
+
+[dut]
+can = "can0"
+loop_test = true
+silence_ms = 100
+command_timeout_ms = 250
+
+[gpio]
+chip = "gpiochip0"
+power = "DUT_POWER"
+estop = "ESTOP"
+lamp_ready = "LAMP_READY"
+lamp_running = "LAMP_RUN"
+lamp_pass = "LAMP_PASS"
+lamp_fail = "LAMP_FAIL"
+
+[procedure]
+u10_deg = 0.0
+u20_deg = 180.0
+
+[history]
+url = "sqlite:///var/lib/rig/history.sqlite"
+"""
+
+
+def hardware():
+    """Hardware files: the documented one, the partial files of rig table / rig dut, an RTU
+    table, and near-misses (a range, a type, an unknown key)."""
+    put("hardware", "documented.toml", HARDWARE)
+    put("hardware", "table_only.toml", '[table]\nrtu = "/dev/ttyUSB0,115200,N,8,1"\nunit = 247\n')
+    put("hardware", "dut_only.toml", '[dut]\ncan = "vcan0"\nreorder_window = 64\nrcvbuf_kb = 1024\n')
+    put("hardware", "unit_range.toml", HARDWARE.replace("unit = 1", "unit = -1"))
+    put("hardware", "timeout_type.toml", HARDWARE.replace("response_timeout_s = 0.3", 'response_timeout_s = "fast"'))
+    put("hardware", "unknown_key.toml", HARDWARE.replace("[procedure]", "[procedure]\nu30_deg = 1"))
+
+
+def modbus():
+    """Drive behaviour scripts (tests/fuzz/fuzz_modbus.cpp): byte 0 picks the client (even
+    rig-v1, odd CiA 402), then calls and replies interleave; past the end the drive is silent."""
+    regs = lambda words: b"".join(struct.pack("<H", w & 0xFFFF) for w in words)
+    ready = [0, 0x0007, 0, 0] + [0] * 40  # a status block: ready, servo on, homed
+    put("modbus", "status_rig_v1", b"\x00" + b"\x00" + b"\x02" + regs(ready))
+    put("modbus", "move_rig_v1", b"\x00" + b"\x02" + struct.pack("<h", 90 * 64) + (b"\x02" + regs(ready)) * 6)
+    put("modbus", "timeouts", b"\x00\x01\x10\x10\x10\x02\x00\x00\x11")
+    put("modbus", "cia402_status", b"\x01" + b"\x00" + b"\x02" + regs([0x0237, 0, 0, 0, 0, 0, 0, 0] * 4))
+    put("modbus", "cia402_home", b"\x01" + b"\x01" + (b"\x02" + regs([0x1637] + [0] * 15)) * 8)
+
+
+def analyze_input(make_test_capture):
+    """rig analyze's files behind a selector byte: 0 text, 1 float64 mapped, 2 float64 read in
+    chunks, 3 a capture's x channel (7: its y)."""
+    import subprocess, tempfile
+    put("analyze_input", "text.txt", b"\x00" + b"# bias, g\n1.5e-3\n -2.25e-3 ,\n+4e-4;\n\n1e-310\n")
+    put("analyze_input", "text_bad.txt", b"\x00" + b"0x10\ninf\n1e400\n")
+    values = struct.pack("<6d", 1e-3, -2e-3, 0.0, 5e-324, 1e99, -7.5)
+    put("analyze_input", "f64_mapped.bin", b"\x01" + values)
+    put("analyze_input", "f64_pread.bin", b"\x02" + values + struct.pack("<d", float("nan")))
+    with tempfile.TemporaryDirectory() as t:
+        cap = pathlib.Path(t) / "c.cap"
+        subprocess.run([make_test_capture, str(cap)], check=True)
+        put("analyze_input", "capture_x.cap", b"\x03" + cap.read_bytes())
+
+
+def candump():
+    """Every format candump_log.hpp documents, and lines it must refuse with a reason."""
+    put("candump", "log_format.log", "(1700000000.123456) vcan0 100#563412050000803F\n"
+        "(1700000000.124456) can0 101#56341205 R\n(1700000000.125) vcan0 1FFFFFFF#00\n")
+    put("candump", "cansend.log", "100#563412050000803F\n010#R\n12345678#0102\n# comment\n\n")
+    put("candump", "screen.log", "(1700000000.123456)  vcan0  100   [8]  56 34 12 05 00 00 80 3F\n"
+        "  vcan0  010   [0]  remote request\n  vcan0  7FF   [2]  01 02   '..'\n")
+    put("candump", "bad.log", "vcan0 100##0102\n(x) vcan0 100#01\n100#0G\n800#01\n100#010203040506070809\n(1.0) vcan0 100#01")
+
+
 def main():
     import sys
     if len(sys.argv) != 2:
@@ -80,6 +163,11 @@ def main():
         put("profile", p + ".toml", (ROOT / "profiles" / (p + ".toml")).read_text())
     put("profile", "based.toml", 'base = "ci"\n[profile]\nname = "short"\n[procedure]\nrun_s = 1\n')
     put("profile", "bad_type.toml", '[profile]\nname = 3\n')
+    put("profile", "bad_taus.toml", 'base = "ci"\n[profile]\nname = "t"\n[analysis]\ntaus = "log:1"\n')
+    hardware()
+    modbus()
+    analyze_input(sys.argv[1])
+    candump()
 
 
 if __name__ == "__main__":

@@ -98,6 +98,7 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
       {"(1.0) can0 100#00 trailing words", "text after the frame"},
       {"hello world", "not a candump frame line"},
       {"(1.0) can0 800#00", "standard identifier out of range"},
+      {"(1.0) can0 CFFFFFFF#00", "extended identifier out of range"},  // found by fuzz_candump
   };
   for (const auto& [line, why] : bad) {
     const LogLine l = read_candump_line(line);
