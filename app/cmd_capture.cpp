@@ -6,6 +6,7 @@
 // recorded by can-utils or any tool writing that format.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -134,6 +135,16 @@ int cmd_import(const ImportArgs& a) {
                 static_cast<unsigned long long>(st.gap_list[i].second));
   if (st.gap_list.size() > 20) std::printf("  ... %zu more gaps\n", st.gap_list.size() - 20);
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
+  if (w.samples_written() == 0) {
+    // Nothing of the [dut] stream in the log (another DUT's layout, --iface naming no frame, an
+    // empty file): an empty capture would only fail later in rig analyze, far from the cause.
+    std::error_code ec;
+    std::filesystem::remove(a.out, ec);
+    std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
+                 a.hardware.c_str(), static_cast<unsigned long long>(frames),
+                 a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
+    return kExitUsage;
+  }
   if (unreadable + malformed > 0) {
     std::fprintf(stderr, "%llu line(s) could not be read, %llu stream frame(s) malformed; the capture holds the rest\n",
                  static_cast<unsigned long long>(unreadable), static_cast<unsigned long long>(malformed));

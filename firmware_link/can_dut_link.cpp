@@ -27,7 +27,7 @@ std::string hex_op(Op op) {
 // A firmware that answers UNKNOWN_OP to LOOP_TEST: not a fault, the DUT has no loop test.
 struct LoopTestUnsupported {};
 
-constexpr const char* kNoCommands = "the DUT has no command channel ([dut] commands = false in the hardware file)";
+constexpr const char* kNoCommands = "the DUT has no command channel (commands = false: [dut] of the hardware file, or [plant.firmware] of an emulated plant)";
 
 }  // namespace
 

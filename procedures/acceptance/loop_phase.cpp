@@ -129,7 +129,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   }
   if (!r.supported) {
     ctx.log->warn("loop figures not measured: {}", r.reason);
-    const std::string why = "not measured: " + r.reason;
+    const std::string why = r.reason;  // "required value not measured" comes with the verdict
     ctx.values.set("bandwidth_0p5", std::nullopt, why);
     ctx.values.set("settling_time", std::nullopt, why);
     dut.loop = {{"source", "none"}, {"reason", r.reason}};
@@ -142,7 +142,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   for (const LoopStepRecord& st : r.steps) saturated += st.saturated;
   if (saturated > 0) {
     // A saturated loop is not the linear loop criterion 2 describes: no figure rather than a wrong one.
-    const std::string why = fmt::format("not measured: the DUT's loop saturated in {} of {} loop-test steps of {:g} g",
+    const std::string why = fmt::format("the DUT's loop saturated in {} of {} loop-test steps of {:g} g",
                                         saturated, r.steps.size(), r.amplitude_g);
     ctx.log->warn("{}", why);
     ctx.values.set("bandwidth_0p5", std::nullopt, why);

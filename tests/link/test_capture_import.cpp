@@ -250,3 +250,23 @@ TEST(CaptureImport, CanFdLayoutInBothCandumpFormats) {
     ASSERT_EQ(c2.samples[i].status, c.samples[i].status);
   }
 }
+
+// A log with no sample of the [dut] stream (only commands and heartbeats; or --iface naming no
+// frame) writes no capture and exits 2 naming the log: an empty capture would fail only later,
+// in rig analyze, far from the cause (found by a newcomer's review).
+TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
+  std::ostringstream log;
+  double t = 1732255200.0;
+  log << log_line(t, encode(Command{Op::StartStream, 1, 0, 0, 0}));
+  for (int i = 0; i < 5; ++i, t += 0.1) log << log_line(t, encode(Heartbeat{1, static_cast<uint8_t>(i), 23.5, 0}));
+  std::ofstream(dir() / "nostream.log") << log.str();
+  std::ofstream(dir() / "hw-ns.toml") << "[dut]\ncan = \"vcan0\"\n";
+  const fs::path cap = dir() / "nostream.rigcap";
+  EXPECT_EQ(run_rig("capture import " + (dir() / "nostream.log").string() + " --hardware " + (dir() / "hw-ns.toml").string() +
+                        " --out " + cap.string(),
+                    "nostream"),
+            2);
+  EXPECT_FALSE(fs::exists(cap));
+  const std::string err = slurp(dir() / "nostream.err");
+  EXPECT_NE(err.find("nostream.log: no sample of the [dut] stream"), std::string::npos) << err;
+}
