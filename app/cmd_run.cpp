@@ -19,6 +19,7 @@
 #include <spdlog/spdlog.h>
 
 #include "firmware_link/connect.hpp"
+#include "procedures/acceptance/loop_phase.hpp"
 #include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
 #include "plant/firmware/firmware_config.hpp"
@@ -167,6 +168,37 @@ void check_serial_source(const RunArgs& a, const toml::table& hw, const toml::ta
   if (commands) return;
   throw ConfigError(cfg::where(*t->get("commands")) + ": " + (a.plant == "hardware" ? "[dut]" : "[plant.firmware]") +
                     " commands = false: the DUT cannot report its serial; give it with --serial");
+}
+
+// What the plan cannot do on this DUT, said before the run (the run says it again, with the
+// passport's `skipped`): the DUT's link options, or on the emulated plant its firmware's.
+std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg,
+                                       const acceptance::Profile& p) {
+  bool commands = true, loop_test = true;
+  if (a.plant == "hardware") {
+    const link::LinkOptions o = link::link_options(*cfg::get_table(hw, "dut", true));
+    commands = o.commands;
+    loop_test = o.loop_test;
+  } else {
+    const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
+    commands = o.commands;
+    loop_test = o.loop_test;
+  }
+  std::vector<std::string> out;
+  if (!commands) {
+    out.push_back("identify: the DUT has no command channel (commands = false); the serial is --serial's");
+    out.push_back("set output filter: the DUT has no command channel; y(t) is whatever filter it runs");
+  }
+  if (!commands || !loop_test) {
+    const std::string why = !commands ? "no command channel" : "loop_test = false";
+    const bool design = a.plant == "hardware" && acceptance::read_design_model(*cfg::get_table(hw, "dut", true));
+    out.push_back("loop test (" + why + "): bandwidth_0p5 and settling_time " +
+                  (design ? std::string("from [dut.design], labelled design model")
+                          : std::string("null") + (p.limits.count("bandwidth_0p5") || p.limits.count("settling_time")
+                                                        ? " (limited: the run will FAIL)"
+                                                        : "")));
+  }
+  return out;
 }
 
 // The rig's name from the hardware file's [rig] section, else the host name.
@@ -338,6 +370,7 @@ int do_run(RunArgs a) {
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              p.source, a.plant);
     plan_view.plan(phases);
+    for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
     double total = 0;
     for (const auto& ph : phases) total += ph.planned_s;
     std::cout << fmt::format("Estimated duration: {} of device time{}\n", TerminalView::hms(total),

@@ -763,6 +763,12 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
   EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--out", d + "/bad"}, d + "/io0"), 2)
       << "no serial: the DUT cannot tell it";
   EXPECT_NE(slurp(d + "/io0.stderr").find("--serial"), std::string::npos) << slurp(d + "/io0.stderr");
+  // The plan says beforehand what this DUT cannot do.
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--dry-run", "--serial", "LBL-7", "--out", d + "/plan"}, d + "/io1"), 0);
+  const std::string plan = slurp(d + "/io1.stdout");
+  for (const char* step : {"skipped: identify", "skipped: set output filter", "skipped: loop test (no command channel)"})
+    EXPECT_NE(plan.find(step), std::string::npos) << step << "\n" << plan;
+  EXPECT_NE(plan.find("limited: the run will FAIL"), std::string::npos) << plan;
   EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--serial", "LBL-7", "--out", d + "/run"}, d + "/io"), 1)
       << slurp(d + "/io.stderr");
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
