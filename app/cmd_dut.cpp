@@ -56,6 +56,16 @@ toml::table dut_config(const DutArgs& a) {
   return t;
 }
 
+// [dut] for an action that needs the DUT's command channel: refused as configuration, before
+// the socket opens, when the hardware file says the DUT has none.
+toml::table command_dut_config(const DutArgs& a, const char* action) {
+  toml::table t = dut_config(a);
+  if (!link::link_options(t).commands)
+    throw ConfigError(a.hardware + ": [dut] commands = false: the DUT has no command channel, and `rig dut " + action +
+                      "` needs one (`rig dut stream` reads a DUT without commands)");
+  return t;
+}
+
 void print_filter(const FilterConfig& f) {
   std::printf("filter:      %s, %zu section(s) at %.0f Hz\n", f.enabled ? "on" : "off", f.sections.size(), f.rate_hz);
   for (std::size_t i = 0; i < f.sections.size(); ++i) {
@@ -66,7 +76,7 @@ void print_filter(const FilterConfig& f) {
 
 int cmd_info(const DutArgs& a) {
   RealClock clock;
-  auto link = link::connect_dut(dut_config(a), clock);
+  auto link = link::connect_dut(command_dut_config(a, "info"), clock);
   const CancelToken never;
   const DutInfo i = link->info(never);
   std::printf("link:        %s\n", link->describe().c_str());
@@ -150,7 +160,7 @@ int cmd_set_filter(const DutArgs& a) {
   for (const auto& b : a.biquads) f.sections.push_back(parse_biquad(b));
   if (f.sections.empty()) throw ConfigError("rig dut set-filter: give --paper or at least one --biquad b0,b1,b2,a1,a2");
   RealClock clock;
-  auto link = link::connect_dut(dut_config(a), clock);
+  auto link = link::connect_dut(command_dut_config(a, "set-filter"), clock);
   const CancelToken never;
   link->set_filter(f, never);
   print_filter(link->get_filter(never));
@@ -159,7 +169,7 @@ int cmd_set_filter(const DutArgs& a) {
 
 int cmd_filter_enable(const DutArgs& a, bool on) {
   RealClock clock;
-  auto link = link::connect_dut(dut_config(a), clock);
+  auto link = link::connect_dut(command_dut_config(a, on ? "filter-on" : "filter-off"), clock);
   link->set_filter_enabled(on, CancelToken{});
   std::printf("filter: %s\n", on ? "on" : "off");
   return kExitPass;
@@ -230,7 +240,7 @@ int cmd_loop_test(DutArgs a) {
   SignalWatcher signals(cancel);
   a.loop.record_s = a.record_ms / 1e3;
   RealClock clock;
-  auto link = link::connect_dut(dut_config(a), clock);
+  auto link = link::connect_dut(command_dut_config(a, "loop-test"), clock);
   const LoopTestResponse r = link->loop_test(a.loop, cancel.token());
   if (!r.supported) {
     std::printf("loop test: not supported: %s\n", r.reason.c_str());

@@ -745,6 +745,11 @@ TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
   EXPECT_NE(err.find("hw.toml:5"), std::string::npos) << err;
   EXPECT_NE(err.find("give it with --serial"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d + "/run")) << "refused with the configuration";
+  // rig dut's command actions are refused as configuration (exit 2), not a socket error (4).
+  for (const char* action : {"info", "filter-on", "loop-test"}) {
+    EXPECT_EQ(run({"dut", "--hardware", d + "/hw.toml", action}, d + "/dut"), 2) << action;
+    EXPECT_NE(slurp(d + "/dut.stderr").find("no command channel"), std::string::npos) << slurp(d + "/dut.stderr");
+  }
   // With the serial the configuration is accepted and the run goes on to open the devices.
   EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "LBL-1", "--out",
                  d + "/run"},
