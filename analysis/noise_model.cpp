@@ -65,6 +65,14 @@ double nll_of(const Pts& p, const std::array<double, 5>& th) {
   return l;
 }
 
+// The terms (0..4: Q, N, B, K, R) whose bits are set in `mask`, in order.
+std::vector<int> columns_of(int mask) {
+  std::vector<int> cols;
+  for (int k = 0; k < 5; ++k)
+    if (mask & (1 << k)) cols.push_back(k);
+  return cols;
+}
+
 // Maximum likelihood of the terms in `mask` for s_i ~ mu_i chi2(nu_i)/nu_i: the Gamma GLM with
 // identity link, by iteratively reweighted least squares (weights nu_i / (2 mu_i^2); the score
 // equations sum nu_i b_ij (s_i - mu_i) / mu_i^2 = 0 are the likelihood's). The covariance is the
@@ -72,9 +80,7 @@ double nll_of(const Pts& p, const std::array<double, 5>& th) {
 SubsetFit fit_subset(const Pts& p, int mask, bool nonneg) {
   SubsetFit f;
   f.mask = mask;
-  std::vector<int> cols;
-  for (int k = 0; k < 5; ++k)
-    if (mask & (1 << k)) cols.push_back(k);
+  const std::vector<int> cols = columns_of(mask);
   f.k = static_cast<int>(cols.size());
   const auto n = static_cast<Eigen::Index>(p.tau.size()), c = static_cast<Eigen::Index>(cols.size());
   if (c == 0 || c > n) return f;
@@ -216,9 +222,7 @@ double log_bias(double nu) { return boost::math::digamma(nu / 2) - std::log(nu /
 SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::array<double, 5> start, bool nonneg) {
   SubsetFit f;
   f.mask = mask;
-  std::vector<int> cols;
-  for (int k = 0; k < 5; ++k)
-    if (mask & (1 << k)) cols.push_back(k);
+  const std::vector<int> cols = columns_of(mask);
   f.k = static_cast<int>(cols.size());
   const auto n = static_cast<Eigen::Index>(p.tau.size()), c = static_cast<Eigen::Index>(cols.size());
   if (c == 0 || c > n) return f;
