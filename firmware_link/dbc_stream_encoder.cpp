@@ -29,7 +29,8 @@ void put(std::span<uint8_t> p, const DbcSignal& s, uint64_t raw) { dbc_insert_ra
 }  // namespace
 
 DbcStreamEncoder::DbcStreamEncoder(std::shared_ptr<const DbcStreamDecoder> layout) : layout_(std::move(layout)) {
-  for (const auto& [k, r] : layout_->by_frame_) {
+  for (const auto& entry : layout_->by_frame_) {
+    const auto& r = entry.second;  // not a structured binding: clang 14 (the fuzz build) cannot capture one
     // Every role signal of a message must be selectable by one multiplexer value.
     std::optional<int> mux;
     auto need = [&](const DbcSignal* s) {
@@ -58,7 +59,8 @@ void DbcStreamEncoder::encode(uint32_t counter, std::span<const StreamSample> sa
   const int* bits[3] = {&d.spec_.filter_on_bit, &d.spec_.saturated_bit, &d.spec_.loop_fault_bit};
   uint8_t all = 0;  // shared status/flag signals carry every sample's flags
   for (const StreamSample& s : samples) all |= s.status;
-  for (const auto& [k, r] : d.by_frame_) {
+  for (const auto& entry : d.by_frame_) {
+    const auto& r = entry.second;  // not a structured binding: clang 14 (the fuzz build) cannot capture one
     const DbcMessage& m = *r.msg;
     CanFdFrame f;
     f.id = m.id;
