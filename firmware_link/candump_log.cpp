@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <vector>
 
@@ -165,7 +166,9 @@ LogLine read_candump_line(std::string_view line) {
     const std::string ts(t[0].substr(1, t[0].size() - 2));
     char* end = nullptr;
     lf.t_s = std::strtod(ts.c_str(), &end);
-    if (ts.empty() || *end != '\0') {
+    // A time stamp that overflows to inf (or reads as nan) is no time: found by fuzz_candump,
+    // whose invariant is that every frame read has a finite time.
+    if (ts.empty() || *end != '\0' || !std::isfinite(lf.t_s)) {
       out.problem = "bad timestamp " + quoted(t[0]);
       return out;
     }
