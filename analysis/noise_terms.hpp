@@ -61,11 +61,10 @@ struct WlsFit {
   std::array<double, 5> share{}, z{};
 };
 
-// sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C).
-// NB: sqrt(2 ln2 / pi) = 0.66428247026796; this constant is 3.7e-6 (relative) below it, while
-// the weighted fit's basis uses 2 ln2 / pi exactly. Left as it is because correcting it
-// changes in_run_b_allan in the passports' last digits; to be corrected on its own commit.
-inline constexpr double kBiasFactor = 0.66428001915095;
+// sigma_flat = sqrt(2 ln2 / pi) B = 0.6643 B (IEEE 952 Annex C), to double precision
+// (sqrt(2 ln2 / pi) = 0.664282470267960019...). The first version carried 0.66428001915095,
+// 3.7e-6 below it; B by the paper's method moved by +3.7e-6 (relative) when it was corrected.
+inline constexpr double kBiasFactor = 0.66428247026796002;
 
 // The Allan deviation each noise term alone contributes at tau (IEEE Std 952-1997 Annex C,
 // Table C.1; docs/analysis.md). Coefficients in the input unit g with tau in seconds.

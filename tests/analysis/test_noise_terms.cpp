@@ -250,8 +250,8 @@ TEST(NoiseTermCurves, TheJsonCurvesAreTheIeee952RelationsOfTheFittedTerms) {
   EXPECT_DOUBLE_EQ(sigma_q(1.0, 2.0), std::sqrt(3.0) / 2);
   EXPECT_DOUBLE_EQ(sigma_n(1.0, 4.0), 0.5);
   EXPECT_DOUBLE_EQ(sigma_b(1.0, 7.0), kBiasFactor);
-  // kBiasFactor is sqrt(2 ln2 / pi) to 4e-6 relative (see its comment in noise_terms.hpp).
-  EXPECT_NEAR(kBiasFactor / flat, 1.0, 4e-6);
+  // kBiasFactor is sqrt(2 ln2 / pi) to double precision (the first version was 3.7e-6 low).
+  EXPECT_NEAR(kBiasFactor / flat, 1.0, 1e-15);
   EXPECT_DOUBLE_EQ(sigma_k(1.0, 12.0), 2.0);
   EXPECT_DOUBLE_EQ(sigma_r(1.0, 2.0), std::sqrt(2.0));
   // Per-hour views: the passport's units and factors (1 h = 3600 s).
