@@ -34,6 +34,7 @@ class F64File final : public analysis::ChunkSource {
   void open_and_check(std::size_t map_limit_bytes);
   void release() noexcept;
   void check(std::uint64_t pos, std::span<const double> v) const;
+  void populate_and_check() const;
   std::string path_;
   int fd_ = -1;
   std::uint64_t n_ = 0;
