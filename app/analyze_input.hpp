@@ -17,7 +17,8 @@
 namespace rig::cli {
 
 // Raw little-endian float64 values. A file that fits `map_limit_bytes` is mapped and checked
-// whole at open (one vectorised pass; the engine then reads it in place, without copies);
+// whole at open (one vectorised pass, in two halves on two threads from 2^19 values; the
+// engine then reads it in place, without copies);
 // a larger one is read with pread and checked as it is first read (bounded memory for 50-h
 // records; the engine's re-reads of a checked prefix are not checked again).
 class F64File final : public analysis::ChunkSource {
