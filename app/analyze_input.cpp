@@ -82,7 +82,7 @@ F64File::~F64File() { release(); }
 // pages in), and every value is checked. Both take time proportional to the file and are
 // serial work at the start of every analysis: a large file is done in two halves on two
 // threads (3.6e6 values: about 6 ms of CPU before the deviations can start). The first
-// unusable value of the file is the one reported, whichever half finishes first.
+// unusable value of the file is the one reported, whichever half holds it.
 void F64File::populate_and_check() const {
   const auto part = [this](std::uint64_t lo, std::uint64_t hi) -> std::optional<std::size_t> {
     // Page-aligned: the mapping starts on a page; the range is rounded out to whole pages.
