@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -46,13 +47,18 @@ double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::
   return 0;
 }
 
-// Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m.
-std::vector<double> averages(const detail::Decimated& dec, std::size_t m) {
+// Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m, into a
+// buffer the calling thread reuses: a fresh vector of up to 2^17 values per tau cost a page
+// fault and the zeroing of each of its pages, a third of the identification's CPU.
+std::span<const double> averages(const detail::Decimated& dec, std::size_t m) {
   if (dec.size() < 2) return {};
-  std::vector<double> z(dec.size() - 1);
+  thread_local std::unique_ptr<double[]> buf;
+  thread_local std::size_t cap = 0;
+  const std::size_t len = dec.size() - 1;
+  if (cap < len) buf.reset(new double[len]), cap = len;
   const double mm = static_cast<double>(m);
-  for (std::size_t k = 0; k < z.size(); ++k) z[k] = (dec[k + 1] - dec[k]) / mm;
-  return z;
+  for (std::size_t k = 0; k < len; ++k) buf[k] = (dec[k + 1] - dec[k]) / mm;
+  return {buf.get(), len};
 }
 
 int clamp_alpha(int alpha, int d) { return std::clamp(alpha, d == 3 ? -4 : -2, 2); }
@@ -164,10 +170,13 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
     if (!o.bounds || o.fixed_alpha) return;
     const detail::Decimated& dec = er.decimated.at(s.m);
-    e.z = averages(dec, s.m);
-    if (e.z.size() < kAcfMinPoints) return;  // kept for B1/R(n) below
+    const std::span<const double> z = averages(dec, s.m);
+    if (z.size() < kAcfMinPoints) {  // kept for B1/R(n) below
+      e.z.assign(z.begin(), z.end());
+      return;
+    }
     if (kind == DataKind::Frequency) {
-      e.id = acf_noise_id(e.z, false, diff_order(o.type));
+      e.id = acf_noise_id(z, false, diff_order(o.type));
     } else {
       // Phase data: Stable32 identifies on the decimated phase itself (noise_id.hpp). The
       // engine's P is the phase less the line through its end points, in units of tau0; the
@@ -177,7 +186,6 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
       for (std::size_t j = 0; j < x.size(); ++j) x[j] = dec[j] + ramp * static_cast<double>(j);
       e.id = acf_noise_id(x, true, diff_order(o.type));
     }
-    std::vector<double>().swap(e.z);  // identified: the averages are not needed again (memory)
   });
 
   // The alpha of the longest tau below m (same deviation) that the lag-1 ACF identified.

@@ -158,6 +158,34 @@ void phase_run(const double* y, std::size_t len, std::size_t ny, std::uint64_t j
   scalar_to(len);
 }
 
+// The builder's state at phase index s (a multiple of kCheckpointEvery, s <= the values in y)
+// without writing P: each block's total L, summed as phase_run sums it (one chain of additions
+// from 0 per block: four blocks interleaved for their latency, each in its own order), and the
+// checkpoints C_{k+1} = C_k + L_k in order. Bit for bit the state phase_run reaches at s.
+PhaseState phase_state_at(const double* y, std::uint64_t s, double c) {
+  constexpr std::size_t B = kCheckpointEvery;
+  const std::uint64_t blocks = s / B;
+  if (blocks == 0) return {};
+  std::vector<double> tot(blocks);
+  std::uint64_t k = 0;
+  for (; k + 4 <= blocks; k += 4) {
+    const double *y0 = y + k * B, *y1 = y0 + B, *y2 = y1 + B, *y3 = y2 + B;
+    double l0 = 0, l1 = 0, l2 = 0, l3 = 0;
+    for (std::size_t i = 0; i < B; ++i)
+      l0 = l0 + (y0[i] - c), l1 = l1 + (y1[i] - c), l2 = l2 + (y2[i] - c), l3 = l3 + (y3[i] - c);
+    tot[k] = l0, tot[k + 1] = l1, tot[k + 2] = l2, tot[k + 3] = l3;
+  }
+  for (; k < blocks; ++k) {
+    double l = 0;
+    for (std::size_t i = 0; i < B; ++i) l = l + (y[k * B + i] - c);
+    tot[k] = l;
+  }
+  PhaseState st;  // at s: C of the last whole block and its total, before the boundary step
+  for (std::uint64_t b = 0; b + 1 < blocks; ++b) st.C = st.C + tot[b];
+  st.L = tot[blocks - 1];
+  return st;
+}
+
 // Builds P from the source, sequentially (main pass) or from a checkpoint (random access).
 class PhaseBuilder {
  public:
@@ -589,6 +617,7 @@ struct Engine::Impl {
   void produce(std::uint64_t lo, std::uint64_t hi);
   void run_item(const std::vector<std::size_t>& item, std::vector<Acc>& a_set, std::uint64_t hi, std::uint64_t hi2);
   void run_in_memory();
+  void build_in_memory();
   void run_streaming();
   void collect(EngineResult& res);
   EngineResult run(const std::vector<EngineRequest>& req);
@@ -775,10 +804,7 @@ void Engine::Impl::run_item(const std::vector<std::size_t>& item, std::vector<Ac
 // directly (O(m)); the few whose m makes that dearer than their share of the segment run whole.
 void Engine::Impl::run_in_memory() {
   const std::uint64_t n = spec.n;
-  for (std::uint64_t j = 0; j < n; j += chunk) {
-    if (j % (64 * chunk) == 0) poll();
-    produce(j, std::min<std::uint64_t>(n, j + chunk));
-  }
+  build_in_memory();
   constexpr std::size_t kSegments = 32;
   auto keep_whole = [&](const std::vector<std::size_t>& item) {
     const Acc& a = accs[item[0]];
@@ -826,11 +852,44 @@ void Engine::Impl::run_in_memory() {
   }
 }
 
-// Streaming: a barrier per chunk; building the next chunk is one more work item, so the read
-// and the running sum overlap the kernels (the ring keeps two chunks of slack).
+// P whole into the ring, with the checkpoints. On two threads when the values are contiguous
+// in memory: one builds [0, s); the other sums the blocks of [0, s) into the builder's state at
+// s (phase_state_at: the same additions in the same order) and builds [s, n). Summing is about
+// half the cost of building (no stores, no fresh pages), so s = 0.6 n balances them. The
+// result is the sequential build's, bit for bit (Stream.OneThreadEqualsTwo and the
+// stream/in-memory equalities check it).
+void Engine::Impl::build_in_memory() {
+  const std::uint64_t n = spec.n;
+  auto build = [&](std::uint64_t lo, std::uint64_t hi, PhaseState st, std::vector<double>& sc) {
+    for (std::uint64_t j = lo; j < hi; j += chunk) {
+      if ((j - lo) % (64 * chunk) == 0) poll();
+      const std::size_t len = static_cast<std::size_t>(std::min<std::uint64_t>(hi, j + chunk) - j);
+      builder.sequential(j, std::span<double>(ring.at(j), len), st, sc);
+    }
+  };
+  const double* y = src.contiguous();
+  constexpr std::uint64_t kSplitFrom = 1u << 20;  // below it a second thread costs more than it saves
+  const std::uint64_t s = n * 3 / 5 / kCheckpointEvery * kCheckpointEvery;
+  if (threads > 1 && y && n >= kSplitFrom && s > 0 && s < spec.n_src) {
+    std::vector<double> sc0, sc1;
+    parallel_for(2, 2, [&](std::size_t part) {
+      if (part == 0) return build(0, s, PhaseState{}, sc0);
+      build(s, n, spec.kind == DataKind::Frequency ? phase_state_at(y, s, spec.shift) : PhaseState{}, sc1);
+    });
+  } else {
+    build(0, n, PhaseState{}, scratch);
+  }
+  for (std::uint64_t j = 0; j < n; j += kCheckpointEvery) checkpoints.push_back(*ring.at(j));
+}
+
+// Streaming: one barrier per chunk; building the next chunk is one more work item, so the read
+// and the running sum overlap the kernels (the ring keeps two chunks of slack). The barrier's
+// completion step (run once, by the last thread to arrive, before any is released) moves to
+// the next chunk: one synchronisation per chunk instead of a "ready" and a "finished" one
+// (11000 chunks in a 50-h record; each wait spins and yields, costly on a loaded machine).
 void Engine::Impl::run_streaming() {
   const std::uint64_t n = spec.n;
-  std::uint64_t hi = 0, hi2 = 0;
+  std::uint64_t hi = 0, hi2 = std::min<std::uint64_t>(n, chunk);
   std::atomic<std::size_t> next{0};
   bool done = false;
   // A read error (or a non-finite value) may surface on either thread: the first one is kept,
@@ -852,31 +911,31 @@ void Engine::Impl::run_streaming() {
         next = count;
       }
   };
-  std::barrier sync(static_cast<std::ptrdiff_t>(threads));
-  std::vector<std::jthread> workers;
-  for (unsigned t = 1; t < threads; ++t)
-    workers.emplace_back([&] {
-      for (;;) {
-        sync.arrive_and_wait();  // chunk ready (or done)
-        if (done) return;
-        process_chunk();
-        sync.arrive_and_wait();  // chunk finished
-      }
-    });
-  try {
-    produce(0, std::min<std::uint64_t>(n, chunk));
-  } catch (...) {
-    err = std::current_exception();
-  }
-  for (hi = 0; hi < n && !err; hi = hi2) {
+  auto advance = [&]() noexcept {
+    hi = hi2;
+    if (hi >= n || err) {
+      done = true;
+      return;
+    }
     hi2 = std::min<std::uint64_t>(n, hi + chunk);
     next = 0;
-    if (threads > 1) sync.arrive_and_wait();
-    process_chunk();
-    if (threads > 1) sync.arrive_and_wait();
+  };
+  try {
+    produce(0, hi2);
+  } catch (...) {
+    err = std::current_exception();
+    done = true;
   }
-  done = true;
-  if (threads > 1) sync.arrive_and_wait();
+  std::barrier sync(static_cast<std::ptrdiff_t>(threads), advance);
+  auto loop = [&] {
+    while (!done) {
+      process_chunk();
+      sync.arrive_and_wait();
+    }
+  };
+  std::vector<std::jthread> workers;
+  for (unsigned t = 1; t < threads && !done; ++t) workers.emplace_back(loop);
+  loop();
   workers.clear();
   if (err) std::rethrow_exception(err);
 }

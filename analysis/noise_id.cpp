@@ -42,11 +42,14 @@ NoiseId acf_noise_id(std::span<const double> series, bool phase, int dmax) {
   // (frequency) or quadratic (phase) detrend here disagrees with Stable32 on the pink and
   // OCXO tables. r1 is scaled by (N-1)/N, as Stable32 does (reproduced by allantoolkit's
   // acf(); without it pink ADEV AF 218/280 and OCXO AF 113/463 disagree).
-  std::vector<double> x(series.begin(), series.end());
+  // The series is read in place; a copy is made only when it must be differenced (most taus
+  // stop at d = 0, and the copy of up to 2^17 values was a tenth of the identification's time).
+  std::vector<double> x;
   NoiseId id;
   for (int d = 0;; ++d) {
-    const double n = static_cast<double>(x.size());
-    const double r1 = lag1_acf(x) * (n - 1) / n;
+    const std::span<const double> cur = d == 0 ? series : std::span<const double>(x);
+    const double n = static_cast<double>(cur.size());
+    const double r1 = lag1_acf(cur) * (n - 1) / n;
     const double rho = r1 / (1 + r1);
     if (rho < 0.25 || d >= dmax) {
       const int add = phase ? 2 : 0;
@@ -57,6 +60,7 @@ NoiseId acf_noise_id(std::span<const double> series, bool phase, int dmax) {
       id.acf = true;
       return id;
     }
+    if (d == 0) x.assign(series.begin(), series.end());
     for (std::size_t i = 0; i + 1 < x.size(); ++i) x[i] = x[i + 1] - x[i];
     x.pop_back();
   }

@@ -17,7 +17,8 @@
 namespace rig::cli {
 
 // Raw little-endian float64 values. A file that fits `map_limit_bytes` is mapped and checked
-// whole at open (one vectorised pass; the engine then reads it in place, without copies);
+// whole at open (one vectorised pass, in two halves on two threads from 2^19 values; the
+// engine then reads it in place, without copies);
 // a larger one is read with pread and checked as it is first read (bounded memory for 50-h
 // records; the engine's re-reads of a checked prefix are not checked again).
 class F64File final : public analysis::ChunkSource {
@@ -34,6 +35,7 @@ class F64File final : public analysis::ChunkSource {
   void open_and_check(std::size_t map_limit_bytes);
   void release() noexcept;
   void check(std::uint64_t pos, std::span<const double> v) const;
+  void populate_and_check() const;
   std::string path_;
   int fd_ = -1;
   std::uint64_t n_ = 0;

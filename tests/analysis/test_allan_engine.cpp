@@ -190,6 +190,26 @@ TEST(Stream, OneThreadEqualsTwo) {
   }
 }
 
+TEST(Stream, InMemoryPhaseBuiltOnTwoThreadsEqualsTheSequentialBuildBitForBit) {
+  // From 2^20 points the in-memory phase is built in two parts on two threads, the second
+  // starting from block sums of the first: every deviation must come out bit for bit as from
+  // the one-thread (sequential) build, for frequency and phase data.
+  auto y = signal(1200000, 11);
+  for (double& v : y) v += 3.0;  // a large mean: the checkpoints' running sum is far from 0
+  for (DataKind kind : {DataKind::Frequency, DataKind::Phase})
+    for (Deviation d : {Deviation::OADEV, Deviation::MDEV, Deviation::TOTDEV}) {
+      DevOptions o;
+      o.type = d;
+      o.data = kind;
+      o.taus = parse_tau_grid("log:20");
+      o.threads = 1;
+      const auto one = deviation(y, o);
+      o.threads = 2;
+      const auto two = deviation(y, o);
+      expect_same(one, two, 0.0, to_string(d));
+    }
+}
+
 TEST(Stream, StreamingOneThreadEqualsTwoAndRepeats) {
   // The streaming pass (a barrier per chunk, the next chunk built as a work item, cursors for
   // the long taus) must not depend on which thread ran what.

@@ -200,6 +200,26 @@ TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
   EXPECT_NE(slurp(d + "/nf.stderr").find("value 31337 (byte 250696)"), std::string::npos) << slurp(d + "/nf.stderr");
 }
 
+// A mapped file of 2^19 values or more is populated and checked in two halves on two threads:
+// the value reported is still the file's first unusable one, in either half.
+TEST(RigCli, AnalyzeLargeF64FileReportsItsFirstBadValueFromEitherHalf) {
+  const std::string d = tmp("analyze-f64-halves");
+  fs::create_directories(d);
+  std::vector<double> v(1200000, 1e-6);
+  const auto write = [&](const std::string& name) {
+    std::ofstream(d + "/" + name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+  };
+  v[900001] = std::numeric_limits<double>::quiet_NaN();  // upper half only
+  write("upper.f64");
+  v[17] = 1e200;  // and one in the lower half, which comes first
+  write("both.f64");
+  EXPECT_EQ(run({"analyze", d + "/upper.f64", "--no-psd"}, d + "/u"), 2);
+  EXPECT_NE(slurp(d + "/u.stderr").find("value 900001 (byte 7200008) nan"), std::string::npos) << slurp(d + "/u.stderr");
+  EXPECT_EQ(run({"analyze", d + "/both.f64", "--no-psd"}, d + "/b"), 2);
+  EXPECT_NE(slurp(d + "/b.stderr").find("value 17 (byte 136)"), std::string::npos) << slurp(d + "/b.stderr");
+}
+
 // --no-oadev: the requested deviation alone, the same values as with OADEV beside it; no "oadev",
 // no noise terms; refused without another --dev and with --svg (which plots OADEV).
 TEST(RigCli, AnalyzeNoOadevGivesTheRequestedDeviationAlone) {
