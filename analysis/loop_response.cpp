@@ -41,16 +41,36 @@ AmplitudeCurve step_amplitude_response(std::span<const double> h, double rate_hz
   // Impulse response: d[k] = h[k] - h[k-1], h[-1] = 0 (the normalised step starts from rest).
   std::vector<double> d(h.size());
   for (std::size_t k = 0; k < h.size(); ++k) d[k] = h[k] - (k ? h[k - 1] : 0.0);
-  for (double f = step_hz; f <= rate_hz / 2; f += step_hz) {
-    // H(e^{jw}) = sum d[k] e^{-jwk}, the rotation advanced by one complex multiply per sample.
-    const std::complex<double> rot = std::polar(1.0, -2 * std::numbers::pi * f / rate_hz);
-    std::complex<double> z = 1, acc = 0;
-    for (double v : d) {
-      acc += v * z;
-      z *= rot;
+  for (double f = step_hz; f <= rate_hz / 2; f += step_hz) c.f_hz.push_back(f);
+  c.amp.resize(c.f_hz.size());
+  // H(e^{jw}) = sum d[k] e^{-jwk}, the rotation z advanced by one complex multiply per sample.
+  // Each frequency's sum is one serial chain (z depends on the z before), so one frequency at
+  // a time waits on the multiply's latency; kLanes frequencies side by side fill the pipeline
+  // and share each load of d. The operations per frequency are those of std::complex's
+  // acc += v z, z *= rot written out, in the same order: the same bits.
+  constexpr std::size_t kLanes = 8;
+  for (std::size_t f0 = 0; f0 < c.f_hz.size(); f0 += kLanes) {
+    const std::size_t lanes = std::min(kLanes, c.f_hz.size() - f0);
+    double rr[kLanes], ri[kLanes], zr[kLanes], zi[kLanes], ar[kLanes], ai[kLanes];
+    for (std::size_t j = 0; j < kLanes; ++j) {
+      const std::complex<double> rot =
+          std::polar(1.0, -2 * std::numbers::pi * c.f_hz[f0 + std::min(j, lanes - 1)] / rate_hz);
+      rr[j] = rot.real();
+      ri[j] = rot.imag();
+      zr[j] = 1;
+      zi[j] = 0;
+      ar[j] = 0;
+      ai[j] = 0;
     }
-    c.f_hz.push_back(f);
-    c.amp.push_back(std::abs(acc) / std::abs(final));
+    for (double v : d)
+      for (std::size_t j = 0; j < kLanes; ++j) {
+        ar[j] += v * zr[j];
+        ai[j] += v * zi[j];
+        const double nr = zr[j] * rr[j] - zi[j] * ri[j];
+        zi[j] = zr[j] * ri[j] + zi[j] * rr[j];
+        zr[j] = nr;
+      }
+    for (std::size_t j = 0; j < lanes; ++j) c.amp[f0 + j] = std::abs(std::complex<double>(ar[j], ai[j])) / std::abs(final);
   }
   return c;
 }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <vector>
 
@@ -42,6 +43,39 @@ TEST(LoopResponse, FirstOrderBandwidthAtHalfIsTheClosedForm) {
   EXPECT_NEAR(f.bandwidth_0p5_hz, want, 0.05);  // 1 Hz grid, linear between the points
   EXPECT_EQ(f.overshoot, 0.0);
   EXPECT_NEAR(f.amplitude.amp.front(), 1.0, 1e-3);
+}
+
+// The amplitude curve is the passport's (bandwidth) and analysis.json's (curves): computing
+// several frequencies side by side must give the bits of the plain one-frequency-at-a-time
+// std::complex sum, on every frequency (also a last, partial group of lanes).
+TEST(LoopResponse, AmplitudeCurveEqualsTheOneFrequencyAtATimeSumBitForBit) {
+  std::vector<double> h(997);
+  double y = 0, w = 0.3;
+  for (std::size_t k = 0; k < h.size(); ++k) {  // an underdamped second-order step with a wobble
+    w = 0.97 * w + 0.01 * std::sin(0.37 * static_cast<double>(k));
+    y += 0.2 * (1 - y) + 0.05 * w;
+    h[k] = y;
+  }
+  const double rate = 10000, final = 0.93;
+  for (double step : {1.0, 7.0, 1250.0}) {
+    const AmplitudeCurve c = step_amplitude_response(h, rate, final, step);
+    std::vector<double> d(h.size());
+    for (std::size_t k = 0; k < h.size(); ++k) d[k] = h[k] - (k ? h[k - 1] : 0.0);
+    std::size_t i = 0;
+    for (double f = step; f <= rate / 2; f += step, ++i) {
+      const std::complex<double> rot = std::polar(1.0, -2 * std::numbers::pi * f / rate);
+      std::complex<double> z = 1, acc = 0;
+      for (double v : d) {
+        acc += v * z;
+        z *= rot;
+      }
+      ASSERT_LT(i, c.f_hz.size());
+      ASSERT_EQ(c.f_hz[i], f);
+      ASSERT_EQ(c.amp[i], std::abs(acc) / std::abs(final)) << "step " << step << " Hz, f " << f << " Hz";
+    }
+    EXPECT_EQ(c.f_hz.size(), i);
+    EXPECT_EQ(c.amp.size(), i);
+  }
 }
 
 TEST(LoopResponse, UnitStepRemovesTheBaselineAndScalesByTheAmplitude) {
