@@ -47,7 +47,11 @@ class Rng {
   // Approximately standard normal (see the file comment).
   double normal() {
     const uint64_t r = next();
-    const int64_t sum = static_cast<int64_t>((r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48));
+    // The four 16-bit fields summed two at a time in 32-bit lanes of one word (no lane can
+    // carry into the next: each holds at most 2 * 65535); the same integer as adding them one by one.
+    constexpr uint64_t kFields02 = 0x0000ffff0000ffffULL;
+    const uint64_t pairs = (r & kFields02) + ((r >> 16) & kFields02);
+    const int64_t sum = static_cast<int64_t>((pairs & 0xffffffffULL) + (pairs >> 32));
     // sum of 4 U{0..65535}: mean 4*32767.5, variance 4*(65536^2-1)/12
     constexpr double kMean = 4 * 32767.5;
     constexpr double kInvSd = 1.0 / 37837.22695;  // 1/sqrt(4*(65536^2-1)/12)
@@ -94,6 +98,9 @@ class FlickerBank {
   };
   double adev_unit(double tau) const;  // with unit variance per process
   std::vector<Proc> procs_;
+  // Steps since the counts were last brought up to date, and the steps until the next process
+  // is due: between updates a step touches no process (most steps at dt = 1 ms).
+  uint32_t elapsed_ = 0, due_ = 1;
   double sum_ = 0;
   double sd_ = 0;  // standard deviation of each process
 };

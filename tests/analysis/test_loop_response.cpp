@@ -78,6 +78,36 @@ TEST(LoopResponse, AmplitudeCurveEqualsTheOneFrequencyAtATimeSumBitForBit) {
   }
 }
 
+// The loop test reads the bandwidth up to its crossing only and the curve at the plotted
+// points only: the same values as read off the whole curve.
+TEST(LoopResponse, PartialCurveAndCrossingEqualTheWholeCurvesBitForBit) {
+  for (double a : {0.9, 0.97}) {
+    std::vector<double> h(1500);
+    double y = 0;
+    for (std::size_t k = 0; k < h.size(); ++k) {
+      y = a * y + (1 - a) * (1 + 0.02 * std::sin(0.05 * static_cast<double>(k)));
+      h[k] = y;
+    }
+    const double rate = 10000, final = final_value(h);
+    const AmplitudeCurve whole = step_amplitude_response(h, rate, final);
+    const double want = crossing_frequency(whole.f_hz, whole.amp, 0.5);
+    ASSERT_GT(want, 0.0);
+    EXPECT_EQ(step_crossing_frequency(h, rate, final, 0.5), want);
+    EXPECT_EQ(step_crossing_frequency(h, rate, final, 1e-9), 0.0) << "never crosses";
+    const std::vector<std::size_t> at = {0, 1, 7, 8, 9, 500, 2499, whole.f_hz.size() - 1};
+    std::vector<double> f;
+    for (std::size_t i : at) f.push_back(whole.f_hz[i]);
+    const AmplitudeCurve part = step_amplitude_at(h, rate, final, f);
+    ASSERT_EQ(part.amp.size(), at.size());
+    for (std::size_t j = 0; j < at.size(); ++j) EXPECT_EQ(part.amp[j], whole.amp[at[j]]) << at[j];
+    const StepFigures full = step_figures(h, rate), sparse = step_figures(h, rate, kStepSettlingBand, f);
+    EXPECT_EQ(sparse.bandwidth_0p5_hz, full.bandwidth_0p5_hz);
+    EXPECT_EQ(sparse.settling_time_s, full.settling_time_s);
+    EXPECT_EQ(sparse.amplitude.f_hz, f);
+    EXPECT_EQ(amplitude_grid(rate), whole.f_hz);
+  }
+}
+
 TEST(LoopResponse, UnitStepRemovesTheBaselineAndScalesByTheAmplitude) {
   std::vector<double> r = {0.2, 0.2, 0.2, 0.2, -1.8, -2.8, -2.8};
   const auto h = unit_step(r, 4, -2.0);
