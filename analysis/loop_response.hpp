@@ -36,6 +36,15 @@ struct AmplitudeCurve {
   std::vector<double> f_hz, amp;
 };
 AmplitudeCurve step_amplitude_response(std::span<const double> h, double rate_hz, double final, double step_hz = 1.0);
+// That grid: step_hz, 2 step_hz, ... up to rate_hz / 2 (each the one before plus step_hz).
+std::vector<double> amplitude_grid(double rate_hz, double step_hz = 1.0);
+// The same amplitude response at the frequencies f_hz only (points of that grid, for the same
+// values): each value has the bits step_amplitude_response gives at its frequency.
+AmplitudeCurve step_amplitude_at(std::span<const double> h, double rate_hz, double final, std::span<const double> f_hz);
+// crossing_frequency(level) of step_amplitude_response's curve, the same value, evaluating the
+// grid only up to the crossing (the rest of a 1 Hz grid to rate_hz / 2 is most of the work).
+double step_crossing_frequency(std::span<const double> h, double rate_hz, double final, double level,
+                               double step_hz = 1.0);
 
 // First frequency where the amplitude curve `amp` (at ascending `f_hz`) falls through `level`
 // (0.5 for criterion 2, 1/sqrt(2) for -3 dB), interpolated in log-frequency between the two
@@ -52,6 +61,9 @@ struct StepFigures {
   AmplitudeCurve amplitude;
 };
 StepFigures step_figures(std::span<const double> h, double rate_hz, double band = kStepSettlingBand);
+// The same figures with the amplitude curve at curve_f_hz only (points of amplitude_grid, e.g.
+// the ones a report plots): the same values there, and the bandwidth read as above.
+StepFigures step_figures(std::span<const double> h, double rate_hz, double band, std::span<const double> curve_f_hz);
 
 // A figure measured over n repeated steps: their mean, and the interval
 // mean +- sqrt((t_{0.975, n-1} s / sqrt(n))^2 + (resolution / 2)^2): Student's 95 % interval of

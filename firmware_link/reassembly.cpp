@@ -42,7 +42,7 @@ void StreamReassembler::push_part(const StreamPart& h) {
     ++stats_.duplicates;
     return;
   }
-  Partial& p = pending_[s];
+  Partial& p = slot(s);
   bool& has = h.channel == Channel::X ? p.has_x : p.has_y;
   if (has) {
     ++stats_.duplicates;
@@ -57,9 +57,26 @@ void StreamReassembler::push_part(const StreamPart& h) {
   advance_to(std::max(limit, next_));
   while (!pending_.empty() && pending_.begin()->first == next_ && complete(pending_.begin()->second)) {
     emit(next_, pending_.begin()->second);
-    pending_.erase(pending_.begin());
+    release_first();
     ++next_;
   }
+}
+
+StreamReassembler::Partial& StreamReassembler::slot(uint64_t seq) {
+  const auto it = pending_.lower_bound(seq);
+  if (it != pending_.end() && it->first == seq) return it->second;
+  if (spare_.empty()) return pending_.emplace_hint(it, seq, Partial{})->second;
+  auto node = std::move(spare_.back());
+  spare_.pop_back();
+  node.key() = seq;
+  node.mapped() = Partial{};
+  return pending_.insert(it, std::move(node))->second;
+}
+
+void StreamReassembler::release_first() {
+  constexpr std::size_t kMaxSpare = 16;  // a burst of reordering may leave more; the rest are freed
+  auto node = pending_.extract(pending_.begin());
+  if (spare_.size() < kMaxSpare) spare_.push_back(std::move(node));
 }
 
 void StreamReassembler::advance_to(uint64_t limit) {
@@ -71,7 +88,7 @@ void StreamReassembler::advance_to(uint64_t limit) {
       continue;
     }
     const Partial p = pending_.begin()->second;
-    pending_.erase(pending_.begin());
+    release_first();
     if (complete(p)) {
       emit(next_, p);
     } else {

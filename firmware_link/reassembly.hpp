@@ -13,6 +13,7 @@
 #include <map>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "firmware_link/protocol.hpp"
 #include "rig/core/dut_link.hpp"
@@ -68,6 +69,8 @@ class StreamReassembler {
   void emit(uint64_t seq, const Partial& p);
   void lose(uint64_t first, uint64_t count);
   void close_gap();
+  Partial& slot(uint64_t seq);  // pending_[seq], reusing a spare node
+  void release_first();         // erases pending_.begin(), keeping its node as a spare
 
   uint32_t window_;
   int bits_;
@@ -77,6 +80,9 @@ class StreamReassembler {
   uint64_t next_ = 0;     // next sample to deliver
   uint64_t highest_ = 0;  // highest widened seq seen
   std::map<uint64_t, Partial> pending_;
+  // Nodes of settled samples, reused for the next ones: a stream in order keeps one or two
+  // samples pending, so after the first few it allocates nothing per sample.
+  std::vector<std::map<uint64_t, Partial>::node_type> spare_;
   std::deque<Sample> ready_;
   bool gap_open_ = false;
   uint64_t gap_start_ = 0, gap_len_ = 0;

@@ -1,5 +1,6 @@
 // The emulated DUT (issue 4): closed loop of docs/method.md Fig. 3 with its noise
 // sources, behind the DutSource seam.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -16,6 +17,7 @@ EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.
   const uint64_t seed = p.seed.value_or(seed_in);
   const double fs = p_.loop.loop_rate_hz;
   steps_per_out_ = static_cast<int>(std::lround(fs / p_.loop.output_rate_hz));
+  scratch_.assign(static_cast<std::size_t>(std::max(steps_per_out_, 0)), 0.0);
   dt_out_ = 1.0 / p_.loop.output_rate_hz;
   const NoiseParams& n = p_.noise;
   r_sense_ = noise::Rng(seed, kSense);
@@ -151,12 +153,19 @@ void EmulatedDut::period(double q_test_g, float* x_tap, float* y_tap, double& x_
   bool bursting = false;
   for (double e : burst_env_) bursting = bursting || e != 0;
 
+  // The interference pick-up of the whole period first: its lines do not depend on the loop,
+  // and line by line (pairs of lines side by side) their carriers stay in registers. Per step
+  // the lines add in the same order as LineBand::step's, so x gets the same bits.
+  const std::size_t n = static_cast<std::size_t>(std::max(steps_per_out_, 0));
+  const std::span<double> intf(scratch_.data(), n);
+  intf_.fill(intf);
+
   // Hot loop: locals so the compiler keeps the states in registers.
   design::LoopModel::State st = st_;
   noise::Oscillator poll = poll_osc_;
   const bool filter_on = filter_cfg_.enabled;
   double x = 0, y = 0;
-  for (int k = 0; k < steps_per_out_; ++k) {
+  for (std::size_t k = 0; k < n; ++k) {
     double q = q_slow + vib_.step(r_vib_);
     if (input_sd_ > 0) q += input_sd_ * r_input_.normal();
     if (bursting) {
@@ -166,7 +175,7 @@ void EmulatedDut::period(double q_test_g, float* x_tap, float* y_tap, double& x_
       }
     }
     // x: the torquer current through the current-sense channel, with its pick-up
-    double xm = loop_.step(st, q) + intf_.step() + pi_amp * poll.c - pq_amp * poll.s;
+    double xm = loop_.step(st, q) + intf[k] + pi_amp * poll.c - pq_amp * poll.s;
     poll.step();
     if (sense_sd_ > 0) xm += sense_sd_ * r_sense_.normal();
     x = sense_lsb_ * design::round_half_even(xm * sense_inv_lsb_);

@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "design/filter.hpp"
 #include "design/loop_model.hpp"
@@ -79,6 +80,7 @@ class EmulatedDut final : public DutSource {
   std::vector<design::Section> filt_;
   double carry_x_ = 0, carry_y_ = 0;
   bool tap_saturated_ = false;  // the PWM saturated during a loop-test period
+  std::vector<double> scratch_;  // period()'s interference pick-up, one per loop step
 };
 
 }  // namespace rig::plant

@@ -1,6 +1,7 @@
 #include "plant/dut/noise.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace rig::plant::noise {
 
@@ -99,13 +100,23 @@ double FlickerBank::adev_unit(double tau) const {
 }
 
 double FlickerBank::step(Rng& rng) {
+  if (++elapsed_ < due_) return sum_;
+  // Some process is due at this step: every count advances by the steps elapsed (none passes
+  // its `every`: due_ was the least distance to it), and the due ones draw in bank order, as
+  // counting each process every step would.
   bool changed = false;
+  uint32_t due = std::numeric_limits<uint32_t>::max();
   for (auto& p : procs_) {
-    if (++p.count < p.every) continue;
-    p.count = 0;
-    p.value = p.phi * p.value + p.drive * rng.normal();
-    changed = true;
+    p.count += elapsed_;
+    if (p.count >= p.every) {
+      p.count = 0;
+      p.value = p.phi * p.value + p.drive * rng.normal();
+      changed = true;
+    }
+    due = std::min(due, p.every - p.count);
   }
+  elapsed_ = 0;
+  due_ = due;
   if (changed) {  // re-summing (not incrementing) keeps rounding from drifting
     sum_ = 0;
     for (const auto& p : procs_) sum_ += p.value;

@@ -6,7 +6,9 @@
 // 10x cheaper than Box-Muller, bit-identical on every platform (integer
 // arithmetic and one multiply), and the Allan/PSD analysis sees only second moments.
 #pragma once
+#include <algorithm>
 #include <cmath>
+#include <span>
 #include <numbers>
 #include <cstdint>
 #include <vector>
@@ -45,7 +47,11 @@ class Rng {
   // Approximately standard normal (see the file comment).
   double normal() {
     const uint64_t r = next();
-    const int64_t sum = static_cast<int64_t>((r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48));
+    // The four 16-bit fields summed two at a time in 32-bit lanes of one word (no lane can
+    // carry into the next: each holds at most 2 * 65535); the same integer as adding them one by one.
+    constexpr uint64_t kFields02 = 0x0000ffff0000ffffULL;
+    const uint64_t pairs = (r & kFields02) + ((r >> 16) & kFields02);
+    const int64_t sum = static_cast<int64_t>((pairs & 0xffffffffULL) + (pairs >> 32));
     // sum of 4 U{0..65535}: mean 4*32767.5, variance 4*(65536^2-1)/12
     constexpr double kMean = 4 * 32767.5;
     constexpr double kInvSd = 1.0 / 37837.22695;  // 1/sqrt(4*(65536^2-1)/12)
@@ -92,6 +98,9 @@ class FlickerBank {
   };
   double adev_unit(double tau) const;  // with unit variance per process
   std::vector<Proc> procs_;
+  // Steps since the counts were last brought up to date, and the steps until the next process
+  // is due: between updates a step touches no process (most steps at dt = 1 ms).
+  uint32_t elapsed_ = 0, due_ = 1;
   double sum_ = 0;
   double sd_ = 0;  // standard deviation of each process
 };
@@ -134,6 +143,43 @@ class LineBand {
       l.c = nc;
     }
     return v;
+  }
+  // out[k] = the k-th of the next out.size() step() values, the same bits: per k the lines add
+  // in step()'s order. Two lines at a time side by side (one SSE2 register holds a pair's
+  // carriers), each pair's carriers kept in registers over the whole span; no FMA is involved
+  // (a vector multiply or add rounds each lane as the scalar one does).
+  void fill(std::span<double> out) {
+    using v2 = double __attribute__((vector_size(16)));
+    std::fill(out.begin(), out.end(), 0.0);
+    std::size_t j = 0;
+    for (; j + 1 < lines_.size(); j += 2) {
+      Line& l0 = lines_[j];
+      Line& l1 = lines_[j + 1];
+      v2 c = {l0.c, l1.c}, sn = {l0.s, l1.s};
+      const v2 rc = {l0.rc, l1.rc}, rs = {l0.rs, l1.rs}, ar = {l0.ar, l1.ar}, ai = {l0.ai, l1.ai};
+      for (double& v : out) {
+        const v2 t = ar * c - ai * sn;
+        v += t[0];
+        v += t[1];
+        const v2 nc = c * rc - sn * rs;
+        sn = sn * rc + c * rs;
+        c = nc;
+      }
+      l0.c = c[0];
+      l1.c = c[1];
+      l0.s = sn[0];
+      l1.s = sn[1];
+    }
+    for (; j < lines_.size(); ++j) {
+      Line w = lines_[j];
+      for (double& v : out) {
+        v += w.ar * w.c - w.ai * w.s;
+        const double nc = w.c * w.rc - w.s * w.rs;
+        w.s = w.s * w.rc + w.c * w.rs;
+        w.c = nc;
+      }
+      lines_[j] = w;
+    }
   }
 
  private:

@@ -72,6 +72,9 @@ void FirmwareEmulator::flush_sends() {
 void FirmwareEmulator::step(double dt_s) {
   if (!(dt_s > 0)) return;
   time_acc_ += dt_s * 1e9;
+  if (time_acc_ < static_cast<double>(kTickNs) - 0.5) return;
+  // One lock for the slice's ticks (the world steps about 10 ms at a time), not one per tick.
+  std::lock_guard lk(mu_);
   while (time_acc_ >= static_cast<double>(kTickNs) - 0.5) {  // tolerate rounding of many small dt
     tick();
     time_acc_ -= static_cast<double>(kTickNs);
@@ -79,7 +82,6 @@ void FirmwareEmulator::step(double dt_s) {
 }
 
 void FirmwareEmulator::tick() {
-  std::lock_guard lk(mu_);
   handle_commands();
   // The DUT's loop runs whether or not the rig listens: the physics and the
   // sample counter advance every output period.
@@ -376,7 +378,10 @@ void FirmwareEmulator::start_realtime() {
         continue;
       }
       try {
-        for (; done < due && !stop_; ++done) tick();
+        for (; done < due && !stop_; ++done) {
+          std::lock_guard lk(mu_);
+          tick();
+        }
       } catch (const std::exception&) {
         // A transport error (interface went down): keep ticking, a real MCU does.
         ++done;

@@ -85,7 +85,7 @@ class FirmwareEmulator {
   uint64_t sample_counter() const;  // the next sample's counter value
 
  private:
-  void tick();  // one output period
+  void tick();  // one output period; the caller holds mu_
   void handle_commands();
   link::Response execute(const link::Command& c);
   void send_sample(uint64_t seq, float x, float y, uint8_t status);

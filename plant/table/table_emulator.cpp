@@ -131,7 +131,10 @@ void TableEmulator::step(double dt_s) {
   }
 }
 
-void TableEmulator::substep(double h) {
+// Inlined into step()'s loop (about 20 substeps per call in a lockstep run): the servo's
+// position and velocity form one serial chain from substep to substep, and a call per substep
+// added its overhead to that chain (7.4 % -> 6.0 % of a `paper` run's samples, perf).
+[[gnu::always_inline]] inline void TableEmulator::substep(double h) {
   t_ += h;
   hb_acc_ += h;
   while (hb_acc_ >= kHeartbeatPeriod) {

@@ -1,5 +1,6 @@
 #include "procedures/acceptance/loop_phase.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -13,16 +14,16 @@ namespace rig::acceptance {
 
 namespace {
 
-// The amplitude curves are computed on a 1 Hz grid; analysis.json keeps a log-spaced subset
-// (about 200 points per decade), enough for the report's plot.
-template <class Get>
-std::vector<double> log_subset(const std::vector<double>& f_hz, Get get) {
+// The amplitude curves are read on a 1 Hz grid; analysis.json keeps a log-spaced subset
+// (about 200 points per decade), enough for the report's plot, and only those points are
+// computed (the bandwidth reads its own, up to its crossing).
+std::vector<double> log_subset(const std::vector<double>& f_hz) {
   std::vector<double> out;
   double next = 0;
-  for (std::size_t i = 0; i < f_hz.size(); ++i)
-    if (f_hz[i] >= next) {
-      out.push_back(get(i));
-      next = f_hz[i] * 1.0116;  // 10^(1/200)
+  for (double f : f_hz)
+    if (f >= next) {
+      out.push_back(f);
+      next = f * 1.0116;  // 10^(1/200)
     }
   return out;
 }
@@ -32,6 +33,10 @@ std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
   for (const auto& r : rows)
     for (std::size_t i = 0; i < m.size() && i < r.size(); ++i) m[i] += r[i] / static_cast<double>(rows.size());
   return m;
+}
+
+std::vector<double> first(const std::vector<double>& v, std::size_t n) {
+  return {v.begin(), v.begin() + static_cast<std::ptrdiff_t>(std::min(n, v.size()))};
 }
 
 }  // namespace
@@ -57,13 +62,14 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
   std::vector<std::vector<double>> hx, hy, ax, ay;
   nlohmann::json per_step = nlohmann::json::array();
   std::vector<double> f_hz;
+  const std::vector<double> plotted = log_subset(amplitude_grid(r.rate_hz));
   for (const LoopStepRecord& st : r.steps) {
     // Criterion 2 is read on y, the output through the filter (as the passport always quoted
     // it); x gives the loop alone for the plots.
     hy.push_back(unit_step(st.y, st.pre_samples, r.amplitude_g));
     hx.push_back(unit_step(st.x, st.pre_samples, r.amplitude_g));
-    const StepFigures fy = step_figures(hy.back(), r.rate_hz);
-    const StepFigures fx = step_figures(hx.back(), r.rate_hz);
+    const StepFigures fy = step_figures(hy.back(), r.rate_hz, kStepSettlingBand, plotted);
+    const StepFigures fx = step_figures(hx.back(), r.rate_hz, kStepSettlingBand, plotted);
     ts.push_back(fy.settling_time_s);
     bw.push_back(fy.bandwidth_0p5_hz);
     finals.push_back(fy.final_value);
@@ -102,9 +108,7 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
           {"per_step", per_step},
           {"step", {{"t_s", t_s}, {"x", mx}, {"y", my}}},
           {"freq",
-           {{"f_hz", log_subset(f_hz, [&](std::size_t i) { return f_hz[i]; })},
-            {"mag_x", log_subset(f_hz, [&](std::size_t i) { return max[i]; })},
-            {"mag_y", log_subset(f_hz, [&](std::size_t i) { return may[i]; })}}}};
+           {{"f_hz", f_hz}, {"mag_x", first(max, f_hz.size())}, {"mag_y", first(may, f_hz.size())}}}};
 }
 
 void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <vector>
 
@@ -42,6 +43,69 @@ TEST(LoopResponse, FirstOrderBandwidthAtHalfIsTheClosedForm) {
   EXPECT_NEAR(f.bandwidth_0p5_hz, want, 0.05);  // 1 Hz grid, linear between the points
   EXPECT_EQ(f.overshoot, 0.0);
   EXPECT_NEAR(f.amplitude.amp.front(), 1.0, 1e-3);
+}
+
+// The amplitude curve is the passport's (bandwidth) and analysis.json's (curves): computing
+// several frequencies side by side must give the bits of the plain one-frequency-at-a-time
+// std::complex sum, on every frequency (also a last, partial group of lanes).
+TEST(LoopResponse, AmplitudeCurveEqualsTheOneFrequencyAtATimeSumBitForBit) {
+  std::vector<double> h(997);
+  double y = 0, w = 0.3;
+  for (std::size_t k = 0; k < h.size(); ++k) {  // an underdamped second-order step with a wobble
+    w = 0.97 * w + 0.01 * std::sin(0.37 * static_cast<double>(k));
+    y += 0.2 * (1 - y) + 0.05 * w;
+    h[k] = y;
+  }
+  const double rate = 10000, final = 0.93;
+  for (double step : {1.0, 7.0, 1250.0}) {
+    const AmplitudeCurve c = step_amplitude_response(h, rate, final, step);
+    std::vector<double> d(h.size());
+    for (std::size_t k = 0; k < h.size(); ++k) d[k] = h[k] - (k ? h[k - 1] : 0.0);
+    std::size_t i = 0;
+    for (double f = step; f <= rate / 2; f += step, ++i) {
+      const std::complex<double> rot = std::polar(1.0, -2 * std::numbers::pi * f / rate);
+      std::complex<double> z = 1, acc = 0;
+      for (double v : d) {
+        acc += v * z;
+        z *= rot;
+      }
+      ASSERT_LT(i, c.f_hz.size());
+      ASSERT_EQ(c.f_hz[i], f);
+      ASSERT_EQ(c.amp[i], std::abs(acc) / std::abs(final)) << "step " << step << " Hz, f " << f << " Hz";
+    }
+    EXPECT_EQ(c.f_hz.size(), i);
+    EXPECT_EQ(c.amp.size(), i);
+  }
+}
+
+// The loop test reads the bandwidth up to its crossing only and the curve at the plotted
+// points only: the same values as read off the whole curve.
+TEST(LoopResponse, PartialCurveAndCrossingEqualTheWholeCurvesBitForBit) {
+  for (double a : {0.9, 0.97}) {
+    std::vector<double> h(1500);
+    double y = 0;
+    for (std::size_t k = 0; k < h.size(); ++k) {
+      y = a * y + (1 - a) * (1 + 0.02 * std::sin(0.05 * static_cast<double>(k)));
+      h[k] = y;
+    }
+    const double rate = 10000, final = final_value(h);
+    const AmplitudeCurve whole = step_amplitude_response(h, rate, final);
+    const double want = crossing_frequency(whole.f_hz, whole.amp, 0.5);
+    ASSERT_GT(want, 0.0);
+    EXPECT_EQ(step_crossing_frequency(h, rate, final, 0.5), want);
+    EXPECT_EQ(step_crossing_frequency(h, rate, final, 1e-9), 0.0) << "never crosses";
+    const std::vector<std::size_t> at = {0, 1, 7, 8, 9, 500, 2499, whole.f_hz.size() - 1};
+    std::vector<double> f;
+    for (std::size_t i : at) f.push_back(whole.f_hz[i]);
+    const AmplitudeCurve part = step_amplitude_at(h, rate, final, f);
+    ASSERT_EQ(part.amp.size(), at.size());
+    for (std::size_t j = 0; j < at.size(); ++j) EXPECT_EQ(part.amp[j], whole.amp[at[j]]) << at[j];
+    const StepFigures full = step_figures(h, rate), sparse = step_figures(h, rate, kStepSettlingBand, f);
+    EXPECT_EQ(sparse.bandwidth_0p5_hz, full.bandwidth_0p5_hz);
+    EXPECT_EQ(sparse.settling_time_s, full.settling_time_s);
+    EXPECT_EQ(sparse.amplitude.f_hz, f);
+    EXPECT_EQ(amplitude_grid(rate), whole.f_hz);
+  }
 }
 
 TEST(LoopResponse, UnitStepRemovesTheBaselineAndScalesByTheAmplitude) {

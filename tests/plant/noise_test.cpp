@@ -7,6 +7,7 @@
 #include <ostream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "plant/dut/emulated_dut.hpp"
 #include "design/quantise.hpp"
@@ -43,6 +44,24 @@ TEST(Noise, FlickerBankIsFlatOverItsDecades) {
   const noise::FlickerBank fb(1e-6, 0.5, 2e4, 1e-3, r);
   for (double tau : {10.0, 30.0, 100.0, 300.0, 1000.0}) EXPECT_NEAR(fb.adev(tau) / 0.664e-6, 1.0, 0.08) << tau;
   EXPECT_LT(fb.adev(0.01), 0.5 * 0.664e-6);  // below tau_min: not flicker any more
+}
+
+// The emulated DUT takes a period's interference with fill(): it must give the bits of
+// step() called once per loop step, for an even and an odd number of lines and any span.
+TEST(Noise, LineBandFillEqualsStepBitForBit) {
+  for (int lines : {1, 5, 6}) {
+    noise::Rng ra(9, 0), rb(9, 0);
+    noise::LineBand a(795, 970, lines, 2.0, 1e-3, 10000, 1e-3, ra);
+    noise::LineBand b(795, 970, lines, 2.0, 1e-3, 10000, 1e-3, rb);
+    std::vector<double> out;
+    for (std::size_t n : {10u, 1u, 7u, 10u, 0u, 33u}) {
+      a.update_envelopes(ra);
+      b.update_envelopes(rb);
+      out.assign(n, -1.0);
+      a.fill(out);
+      for (std::size_t k = 0; k < n; ++k) ASSERT_EQ(out[k], b.step()) << lines << " lines, span " << n << ", k " << k;
+    }
+  }
 }
 
 TEST(Noise, LineBandStaysInItsBand) {
