@@ -797,6 +797,29 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
   EXPECT_NE(slurp(d + "/run/run.log").find("skipped: identify"), std::string::npos);
 }
 
+// The profile's [plant] (the emulated plant's section) is checked on a hardware run too: a
+// profile serves both, and a typo there is exit 2 naming FILE:LINE:COL before any device opens
+// (this file's devices do not exist: opening them would be exit 4).
+TEST(RigCli, HardwareRunChecksTheProfilesPlantSectionBeforeAnyDeviceOpens) {
+  const std::string d = tmp("plant-hw");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[plant]\nseeed = 3\n";
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--hardware", d + "/hw.toml", "--profile", d + "/p.toml", "--yes",
+                                     "--serial", "HW-1", "--out", d + "/run"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2) << dry;
+    const std::string err = slurp(d + "/io.stderr");
+    EXPECT_NE(err.find("p.toml:3:"), std::string::npos) << err;
+    EXPECT_NE(err.find("seeed"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(d + "/run")) << "refused with the configuration";
+  }
+}
+
 // Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is
 // exit 2 naming the file and line (this file's devices do not exist: opening them would be exit 4).
 TEST(RigCli, HardwareDesignModelMistakeIsAConfigurationErrorBeforeAnyDeviceOpens) {
