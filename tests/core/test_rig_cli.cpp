@@ -820,6 +820,26 @@ TEST(RigCli, HardwareRunChecksTheProfilesPlantSectionBeforeAnyDeviceOpens) {
   }
 }
 
+// `rig dut --hardware FILE` resolves a relative [dut] dbc = ... from FILE's folder, as `rig run`
+// and `rig capture import` do, not from the working directory: run from another folder, the
+// DBC is found and the command goes on to open the CAN socket (absent here: exit 4), where a
+// DBC looked for in the working directory would be a configuration error (exit 2).
+TEST(RigCli, DutHardwareFileDbcIsRelativeToTheFileNotTheWorkingDirectory) {
+  const std::string d = tmp("dut-dbc");
+  fs::create_directories(d + "/hw");
+  fs::create_directories(d + "/elsewhere");
+  for (const char* f : {"qpa-counts.dut.toml", "qpa-counts.dbc"})
+    fs::copy_file(std::string(RIG_SOURCE_DIR) + "/duts/" + f, d + "/hw/" + f, fs::copy_options::overwrite_existing);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d + "/elsewhere");  // no qpa-counts.dbc here
+  const int rc = run({"dut", "stream", "--hardware", "../hw/qpa-counts.dut.toml", "--can", "rig-nocan0"}, d + "/io");
+  fs::current_path(cwd);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_EQ(rc, 4) << err;
+  EXPECT_EQ(err.find("qpa-counts.dbc"), std::string::npos) << err;
+  EXPECT_NE(err.find("rig-nocan0"), std::string::npos) << err;
+}
+
 // Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is
 // exit 2 naming the file and line (this file's devices do not exist: opening them would be exit 4).
 TEST(RigCli, HardwareDesignModelMistakeIsAConfigurationErrorBeforeAnyDeviceOpens) {
