@@ -795,6 +795,12 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
     EXPECT_EQ(p["values"][name]["outcome"], "PASS") << name << " " << p["values"][name].dump();
   for (const auto& ph : p["phases"]) EXPECT_EQ(ph["status"], "done") << ph.dump();
   EXPECT_NE(slurp(d + "/run/run.log").find("skipped: identify"), std::string::npos);
+  // The human-readable reports list them too: report.html's "Skipped steps" and the closing table.
+  const std::string html = slurp(d + "/run/report.html");
+  EXPECT_NE(html.find("<h2>Skipped steps</h2>"), std::string::npos);
+  for (const char* step : {"<tr><td>identify</td>", "<tr><td>set output filter</td>", "<tr><td>loop test</td>"})
+    EXPECT_NE(html.find(step), std::string::npos) << step;
+  EXPECT_NE(slurp(d + "/io.stdout").find("skipped: loop test: "), std::string::npos) << slurp(d + "/io.stdout");
 }
 
 // The profile's [plant] (the emulated plant's section) is checked on a hardware run too: a

@@ -192,6 +192,30 @@ TEST(Report, EveryBoundsCellStatesItsIntervalLevel) {
   EXPECT_NE(caption_of(h, "allan-x").find("68.3 % confidence bounds"), std::string::npos);
 }
 
+// The passport's top-level `skipped` (a DUT with [dut] commands = false) is listed, step and
+// reason, in its own section; a passport without it has no such section.
+TEST(Report, SkippedStepsAreListedAndAbsentWithoutAny) {
+  json p = rig::test::fixture_passport();
+  const std::string none = rig::report::render_report(p, rig::test::fixture_analysis());
+  EXPECT_EQ(none.find("Skipped steps"), std::string::npos);
+  EXPECT_EQ(none.find("id=\"skipped\""), std::string::npos);
+  p["skipped"] = json::array({{{"step", "identify"}, {"reason", "[dut] commands = false: no command channel"}},
+                              {{"step", "loop test"}, {"reason", "no <command> channel & no LOOP_TEST"}}});
+  const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  const std::size_t at = h.find("<h2>Skipped steps</h2>");
+  ASSERT_NE(at, std::string::npos);
+  const std::string table = h.substr(at, h.find("</table>", at) - at);
+  EXPECT_NE(table.find("<tr><td>identify</td><td>[dut] commands = false: no command channel</td></tr>"),
+            std::string::npos) << table;
+  EXPECT_NE(table.find("<tr><td>loop test</td><td>no &lt;command&gt; channel &amp; no LOOP_TEST</td></tr>"),
+            std::string::npos) << table;
+  // On page 1, after the measurements whose null values it explains, before the sign-off.
+  EXPECT_LT(h.find("id=\"passport\""), at);
+  EXPECT_LT(at, h.find("id=\"signatures\""));
+  p["skipped"] = json::array();
+  EXPECT_EQ(rig::report::render_report(p, rig::test::fixture_analysis()).find("Skipped steps"), std::string::npos);
+}
+
 TEST(Report, StepAxisSpansThreeSettlingTimes) {
   json a = rig::test::fixture_analysis();  // the step is recorded for 10 ms
   a["loop"]["settling_time_s"] = 0.001;
