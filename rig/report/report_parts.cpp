@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "rig/report/bounded.hpp"
 #include "rig/report/json_read.hpp"
 #include "rig/report/svg.hpp"
 #include "rig/report/svg_plot.hpp"
@@ -129,9 +130,20 @@ Quoted quoted(const json* t) {
 }
 
 // "lo … hi", breakable only after the ellipsis (never inside "7.7e-10").
-std::string bounds_text(double lo, double hi) {
-  if (!std::isfinite(lo) && !std::isfinite(hi)) return "—";
-  return "<span class=\"nw\">" + fmt_num(lo) + " …</span> <span class=\"nw\">" + fmt_num(hi) + "</span>";
+std::string bounds_text(const std::string& lo, const std::string& hi) {
+  return "<span class=\"nw\">" + lo + " …</span> <span class=\"nw\">" + hi + "</span>";
+}
+
+// A value and its bounds as the page shows them: rounded to the digits the bounds support
+// (bounded.hpp, the GUM's two digits of the half-width) when both bounds are there; else the
+// value with `sig` significant digits and the bounds with fmt_num's, as before.
+struct ValueCells {
+  std::string value, bounds;
+};
+ValueCells value_cells(double value, double lo, double hi, int sig) {
+  if (const auto r = round_to_bounds(value, lo, hi)) return {r->value, bounds_text(r->lo, r->hi)};
+  if (!std::isfinite(lo) && !std::isfinite(hi)) return {fmt_num(value, sig), "—"};
+  return {fmt_num(value, sig), bounds_text(fmt_num(lo), fmt_num(hi))};
 }
 
 // The identified noise terms of one channel: the rig's values (the paper's method for B, the
@@ -149,8 +161,9 @@ std::string terms_table(const json& nt, const std::string& ch) {
     const json* t = get(nt, {term});
     if (!t) continue;
     const Quoted q = quoted(t), fit = quoted(lsq ? get(*lsq, {term}) : nullptr);
-    os << "<tr><td>" << term << " — " << label << "</td><td class=\"num\">" << fmt_num(q.value, 4) << "</td><td>"
-       << html_escape(q.unit) << "</td><td class=\"num\">" << bounds_text(q.lo, q.hi) << "</td><td class=\"num\">"
+    const ValueCells cells = value_cells(q.value, q.lo, q.hi, 4);
+    os << "<tr><td>" << term << " — " << label << "</td><td class=\"num\">" << cells.value << "</td><td>"
+       << html_escape(q.unit) << "</td><td class=\"num\">" << cells.bounds << "</td><td class=\"num\">"
        << fmt_num(fit.value, 4) << (std::isfinite(fit.value) && fit.unit != q.unit ? " " + html_escape(fit.unit) : "")
        << "</td><td>" << html_escape(text(*t, "reason")) << "</td></tr>\n";
   }
@@ -346,10 +359,11 @@ std::string Page::passport_table() const {
     os << "<tr" << (outcome == "FAIL" ? " class=\"fail\"" : "") << "><td class=\"name\"><code>" << html_escape(name)
        << "</code>" << (desc.empty() ? "" : "<div>" + html_escape(desc) + "</div>") << "</td>";
     const json* val = get(v, {"value"});
-    os << "<td class=\"num\">" << (val && val->is_number() ? fmt_num(val->get<double>(), 5) : html_escape(text(val).empty() ? "—" : text(val)))
-       << "</td><td>" << html_escape(text(v, "unit")) << "</td>";
     const double lo = number(v, "lo"), hi = number(v, "hi");
-    os << "<td class=\"num bounds\">" << bounds_text(lo, hi);
+    const ValueCells cells = value_cells(number(val), lo, hi, 5);
+    os << "<td class=\"num\">" << (val && val->is_number() ? cells.value : html_escape(text(val).empty() ? "—" : text(val)))
+       << "</td><td>" << html_escape(text(v, "unit")) << "</td>";
+    os << "<td class=\"num bounds\">" << cells.bounds;
     if (std::isfinite(lo) || std::isfinite(hi))
       os << "<div class=\"lvl\">" << html_escape(interval_level(name, v)) << "</div>";
     os << "</td>";
