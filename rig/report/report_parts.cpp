@@ -484,7 +484,8 @@ std::string Page::psd(const std::string& ch) {
     if (a_.is_object()) missing_.push_back("power spectral density of the " + what + " (analysis.json psd." + ch + ")");
     return "";
   }
-  const Plot p = psd_plot(*ps, "psd-" + ch, "Power spectral density, " + what, ch == "x" ? kBlue : kGreen);
+  const double rate = record_rate(a_);  // the PSD's sampling rate: the records' (welch at the procedure's rate)
+  const Plot p = psd_plot(*ps, "psd-" + ch, "Power spectral density, " + what, ch == "x" ? kBlue : kGreen, rate);
   std::vector<bool> labelled;
   const std::string svg = to_svg(p, &labelled);
   // The caption names exactly the peaks the plot labels.
@@ -495,6 +496,7 @@ std::string Page::psd(const std::string& ch) {
   if (unlabelled > 0)
     caption += " " + std::to_string(unlabelled) + " further detected peak" + (unlabelled > 1 ? "s are" : " is") +
                " circled without a label (no room).";
+  if (!peaks.empty() && !alias_note(rate).empty()) caption += " " + html_escape(alias_note(rate));
   return "<figure>" + svg + "<figcaption data-peaks=\"" + html_escape(peaks) + "\">" + caption +
          "</figcaption></figure>\n";
 }

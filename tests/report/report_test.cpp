@@ -13,6 +13,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/report/bounded.hpp"
 #include "rig/report/report.hpp"
+#include "rig/report/svg_plot.hpp"
 #include "rig/report/svg.hpp"
 #include "tests/report/fixture.hpp"
 
@@ -57,7 +58,7 @@ TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
   EXPECT_LT(h.find("<code>settling_time</code>"), h.find("<code>accuracy_class</code>"));
   for (const char* id : kPlots) EXPECT_EQ(count(h, "data-plot=\"" + std::string(id) + "\""), 1u) << id;
   EXPECT_NE(h.find("τ_ср = 200 s"), std::string::npos);
-  EXPECT_NE(h.find(">72 Hz<"), std::string::npos);     // labelled PSD peak
+  EXPECT_NE(h.find(">72 Hz or 928 Hz<"), std::string::npos);  // labelled PSD peak, and its alias at 1 kHz
   EXPECT_NE(h.find("f_пп = 492 Hz"), std::string::npos);
   EXPECT_NE(h.find("captures/in-run-U10.cap"), std::string::npos);
   EXPECT_EQ(h.find("id=\"missing\""), std::string::npos);  // nothing missing
@@ -278,6 +279,26 @@ TEST(Bounded, RoundsToTwoSignificantDigitsOfTheHalfWidth) {
   EXPECT_FALSE(round_to_bounds(1.0, 1.0, 1.0));  // no width
   EXPECT_FALSE(round_to_bounds(1.0, 2.0, 0.5));
   EXPECT_FALSE(round_to_bounds(nan, 0.5, 1.5));
+}
+
+// A PSD peak at f of a record sampled at fs may be a line at fs − f folded by the sampling:
+// the label names both (the rig does not know what lies above Nyquist) and the caption says
+// why; without the rate (no timeseries.rate_hz) no alias is claimed.
+TEST(Report, PsdPeakLabelsNameTheAliasAtTheSamplingRate) {
+  json a = rig::test::fixture_analysis();  // sampled at 1000 Hz; peaks at 72 and 470 Hz
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), a);
+  const std::vector<std::string> labels = texts_of_class(plot_svg(h, "psd-x"), "mark");
+  EXPECT_NE(std::find(labels.begin(), labels.end(), "72 Hz or 928 Hz"), labels.end());
+  EXPECT_NE(std::find(labels.begin(), labels.end(), "470 Hz or 530 Hz"), labels.end());
+  EXPECT_NE(caption_of(h, "psd-x").find("give the same samples (aliasing)"), std::string::npos) << caption_of(h, "psd-x");
+  EXPECT_EQ(rig::report::peak_label(500, 1000), "500 Hz");  // at Nyquist f = fs − f
+  EXPECT_EQ(rig::report::peak_label(72, std::nan("")), "72 Hz");
+  a["timeseries"].erase("rate_hz");
+  const std::string u = rig::report::render_report(rig::test::fixture_passport(), a);
+  const std::vector<std::string> plain = texts_of_class(plot_svg(u, "psd-x"), "mark");
+  EXPECT_NE(std::find(plain.begin(), plain.end(), "72 Hz"), plain.end());
+  EXPECT_EQ(u.find(" or 928 Hz"), std::string::npos);
+  EXPECT_EQ(caption_of(u, "psd-x").find("aliasing"), std::string::npos);
 }
 
 TEST(Report, StepAxisSpansThreeSettlingTimes) {
