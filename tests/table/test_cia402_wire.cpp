@@ -136,7 +136,10 @@ void fault_paths_and_cancel(WireDrive& w, RotaryTable& table) {
   EXPECT_EQ(w.drive.state(), c4::State::kOperationEnabled);  // halted, not disabled
   w.axis->inject(plant::SimFault::kNoAnswer, 0.3);
   e = error_of([&] { table.move_to(0.0, {}); });
-  EXPECT_TRUE(has(e, "link failure") && has(e, "statusword (0x6041)") && has(e, w.map.name) && has(e, "timeout") &&
+  // Which request meets the silence (the statusword poll, the other readings, a controlword
+  // write) depends on where the client's cycle was when it fell: any of them is named, as a CiA
+  // 402 object of this drive's map.
+  EXPECT_TRUE(has(e, "link failure") && has(e, " (0x60") && has(e, w.map.name) && has(e, "timeout") &&
               has(e, "halt not delivered"))
       << e;
 }
