@@ -371,9 +371,14 @@ class LibmodbusTransport final : public RegisterTransport {
       } else {
         last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
       }
-      // Drop the link: a late reply must not be taken for the next request's.
-      modbus_close(ctx_);
-      connected_ = false;
+      // TCP: drop the link, so a late reply cannot be taken for the next request's. RTU: keep the
+      // port open through a timeout or a misfit reply (the quiet wait and the flush above deal
+      // with the late reply; closing a pty relayed by socat would end the relay); reopen it after
+      // any other failure (a USB adapter unplugged).
+      if (tcp() || !(last_timeout || e == EMBBADDATA)) {
+        modbus_close(ctx_);
+        connected_ = false;
+      }
     }
     throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout);
   }

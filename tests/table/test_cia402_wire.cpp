@@ -191,6 +191,32 @@ TEST_P(Cia402Wire, SlowAnswersAreATimeoutNamingTheObject) {
   EXPECT_NEAR(w.axis->actual_angle_deg(), 90.0, 0.005);
 }
 
+// RTU has no transaction id: a reply that comes after the client gave up on it must not be read
+// as the next request's reply (on a loaded machine a late reply read so gave a "statusword" 0x0384
+// that was another register, or "Invalid data"). The drive answers the statusword 0.1 s after the
+// client's 0.5 s timeout, then promptly: the next request, for the error code (one register as
+// well), gets its own value, 0, never the late statusword; and the line still works.
+TEST(RtuLateReply, IsNotTakenForTheNextRequests) {
+  PtyPair pty;
+  WireDrive w("generic-cia402.toml", "rtu:" + pty.a() + ",115200,N,8,1", 5);
+  RealClock clock;
+  m::LinkOptions lo;
+  lo.unit = 5;
+  lo.response_timeout_s = 0.5;
+  lo.retries = 0;
+  auto t = m::make_libmodbus_transport(m::parse_rtu(pty.b() + ",115200,N,8,1"), lo, clock);
+  const uint16_t sw = w.map.spec(m::Obj::kStatusword).address, ec = w.map.spec(m::Obj::kErrorCode).address;
+  w.drive.set_answer_delay(0.6);
+  const std::string e = error_of([&] { t->read(sw, 1, {}); });
+  EXPECT_TRUE(has(e, "timeout")) << e;
+  w.drive.set_answer_delay(0.0);
+  for (int i = 0; i < 3; ++i) {
+    const std::vector<uint16_t> v = t->read(ec, 1, {});
+    ASSERT_EQ(v.size(), 1u);
+    EXPECT_EQ(v[0], 0u) << "request " << i << " read the late statusword reply";
+  }
+}
+
 // [plant.table] answer_delay_s: slow answers configured for `rig plant serve` (both drives).
 TEST(SlowAnswers, ConfiguredInThePlantTable) {
   auto emu = emulator(std::string(kFastTable) + "answer_delay_s = 0.4\n");

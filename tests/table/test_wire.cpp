@@ -97,40 +97,6 @@ TEST(TableWire, HomeAndMoveOverRtuPtyPair) {
   }
 }
 
-// RTU has no transaction id: a reply that comes after the client gave up on it must not be read
-// as the next request's reply (on a loaded machine a late reply read so gave a "statusword" that
-// was another register, or "Invalid data"). The drive answers every request 0.1 s after the
-// client's 0.5 s timeout; the next request, for another register of the same size, gets a
-// timeout or its own value, never the late reply's.
-TEST(TableWire, RtuLateReplyIsNotTakenForTheNextRequests) {
-  PtyPair pty;
-  auto emu = emulator(std::string(kFastTable) + "answer_delay_s = 0.6\n");
-  plant::TableServer server(*emu, "rtu:" + pty.a() + ",115200,N,8,1", 5);
-  server.start();
-  RealClock clock;
-  m::LinkOptions lo;
-  lo.unit = 5;
-  lo.response_timeout_s = 0.5;
-  lo.retries = 0;
-  auto t = m::make_libmodbus_transport(m::parse_rtu(pty.b() + ",115200,N,8,1"), lo, clock);
-  try {
-    t->read(m::reg::kMapVersion, 1, {});  // 1 (kMapVersionValue), late
-    FAIL() << "answered within the timeout";
-  } catch (const m::ModbusError& e) {
-    EXPECT_TRUE(e.timeout) << e.what();
-  }
-  for (int i = 0; i < 2; ++i) {
-    try {
-      // The target's low word: 0 or that of the start angle (34464), never the map version's 1.
-      const std::vector<uint16_t> v = t->read(m::reg::kTargetPos + 1, 1, {});
-      ASSERT_EQ(v.size(), 1u);
-      EXPECT_NE(v[0], m::reg::kMapVersionValue) << "request " << i << " read another request's late reply";
-    } catch (const m::ModbusError& e) {
-      EXPECT_TRUE(e.timeout) << "request " << i << ": " << e.what();  // its own answer is late too
-    }
-  }
-}
-
 TEST(TableWire, ExceptionRepliesAreNamed) {
   auto emu = emulator(kFastTable);
   plant::TableServer server(*emu, "tcp:127.0.0.1:0");
