@@ -193,20 +193,21 @@ TEST_P(Cia402Wire, SlowAnswersAreATimeoutNamingTheObject) {
 
 // RTU has no transaction id: a reply that comes after the client gave up on it must not be read
 // as the next request's reply (on a loaded machine a late reply read so gave a "statusword" 0x0384
-// that was another register, or "Invalid data"). The drive answers the statusword 0.1 s after the
-// client's 0.5 s timeout, then promptly: the next request, for the error code (one register as
-// well), gets its own value, 0, never the late statusword; and the line still works.
+// that was another register, or "Invalid data"). The drive answers the statusword 0.05 s after
+// the client's 1 s timeout, then promptly: the next request, for the error code (one register as
+// well), gets its own value, 0, never the late statusword; and the line still works. (The client
+// waits one timeout for a late reply: a loaded machine may delay it by up to 0.95 s here.)
 TEST(RtuLateReply, IsNotTakenForTheNextRequests) {
   PtyPair pty;
   WireDrive w("generic-cia402.toml", "rtu:" + pty.a() + ",115200,N,8,1", 5);
   RealClock clock;
   m::LinkOptions lo;
   lo.unit = 5;
-  lo.response_timeout_s = 0.5;
+  lo.response_timeout_s = 1.0;
   lo.retries = 0;
   auto t = m::make_libmodbus_transport(m::parse_rtu(pty.b() + ",115200,N,8,1"), lo, clock);
   const uint16_t sw = w.map.spec(m::Obj::kStatusword).address, ec = w.map.spec(m::Obj::kErrorCode).address;
-  w.drive.set_answer_delay(0.6);
+  w.drive.set_answer_delay(1.05);
   const std::string e = error_of([&] { t->read(sw, 1, {}); });
   EXPECT_TRUE(has(e, "timeout")) << e;
   w.drive.set_answer_delay(0.0);
