@@ -334,7 +334,7 @@ int run(const Args& a) {
     if (psd)
       write_file(std::filesystem::path(a.svg_dir) / "psd.svg",
                  report::to_svg_file(report::psd_plot(analysis::psd_to_json(*psd, peaks), "psd", "PSD of " + name,
-                                                      "#1f77b4")));
+                                                      "#1f77b4", psd->rate_hz)));
   }
 
   // Console summary.

@@ -50,7 +50,7 @@ struct DutArgs {
 // [dut] from --hardware FILE, with --can overriding the interface.
 toml::table dut_config(const DutArgs& a) {
   toml::table t;
-  if (!a.hardware.empty()) t = *cfg::get_table(load_hardware_file(a.hardware, {"dut"}), "dut", true);
+  if (!a.hardware.empty()) t = load_hardware_section(a.hardware, "dut");  // moved: keeps file:line and dbc's folder
   if (!a.can.empty()) t.insert_or_assign("can", a.can);
   if (!t.contains("can")) throw ConfigError("rig dut: give --can IFACE (or --hardware FILE with a [dut] can = ...)");
   return t;

@@ -353,9 +353,11 @@ int do_run(RunArgs a) {
   std::string profile_source;
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
-  // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included.
+  // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included,
+  // on every plant: a profile is shared by hardware and emulated runs, and a typo there must not
+  // wait for the next emulated run to be found (before any device opens).
   const toml::table& plant_cfg = plant::plant_section(profile_table);
-  if (a.plant == "emulated") plant::validate_plant_section(plant_cfg);
+  plant::validate_plant_section(plant_cfg);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware, kRunSections);
   check_serial_source(a, hw, plant_cfg);

@@ -1,6 +1,7 @@
 #include "app/hardware_file.hpp"
 
 #include <array>
+#include <utility>
 
 #include "firmware_link/connect.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
@@ -80,6 +81,11 @@ toml::table load_hardware_file(const std::string& path, std::initializer_list<st
   toml::table hw = cfg::parse_file(path);
   validate_hardware(hw, required);
   return hw;
+}
+
+toml::table load_hardware_section(const std::string& path, std::string_view section) {
+  toml::table hw = load_hardware_file(path, {section});
+  return std::move(*hw.get_as<toml::table>(section));  // validated: present and a table
 }
 
 void apply_procedure_angles(const toml::table& hw, acceptance::Profile& p) {

@@ -31,6 +31,12 @@ std::span<const HardwareSection> hardware_sections();
 toml::table load_hardware_file(const std::string& path, std::initializer_list<std::string_view> required);
 void validate_hardware(const toml::table& hw, std::initializer_list<std::string_view> required);
 
+// load_hardware_file(path, {section}) and that section taken out of it by move: its nodes keep
+// their source (a toml++ copy drops it), so errors still name FILE:LINE:COL and a relative
+// `[dut] dbc = ...` resolves from the hardware file's folder, as in `rig run` and `rig capture
+// import`, not from the current directory.
+toml::table load_hardware_section(const std::string& path, std::string_view section);
+
 // The sections a hardware run needs.
 inline const std::initializer_list<std::string_view> kRunSections = {"table", "dut", "gpio"};
 

@@ -102,6 +102,10 @@ std::string passport_table(const nlohmann::ordered_json& p) {
     o << fmt::format("{:<26} {:>13} {:>13} {:>13} {:<10} {:<28} {}\n", it.key(), f(m["value"]), f(m["lo"]), f(m["hi"]),
                      m.value("unit", ""), lim, out);
   }
+  // The steps the DUT could not take (passport.json `skipped`), as report.html lists them.
+  if (p.contains("skipped") && p["skipped"].is_array())
+    for (const auto& k : p["skipped"])
+      if (k.is_object()) o << "skipped: " << k.value("step", "") << ": " << k.value("reason", "") << "\n";
   o << "OUTCOME: " << p.value("outcome", "") << "\n";
   if (p.contains("aborted_reason")) o << "reason: " << p["aborted_reason"].get<std::string>() << "\n";
   return o.str();

@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cerrno>
 #include <charconv>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -336,6 +337,13 @@ class LibmodbusTransport final : public RegisterTransport {
     for (int attempt = 0; attempt < attempts; ++attempt) {
       if (!urgent) cancel.throw_if_requested();
       if (attempt > 0 && !urgent) clock_.sleep_for(opt_.backoff_s * std::pow(2.0, attempt - 1), cancel);
+      // A serial line has no transaction id, and reopening the port does not stop a reply that is
+      // still coming: after a timeout (or a reply that did not fit) the next request, this call's
+      // retry or the next call's, waits until one response timeout has passed, so that a late
+      // reply has arrived and is flushed below instead of being read as its own. A stop does not
+      // wait (it is urgent; the flush still drops what has arrived).
+      if (!urgent)
+        if (const double wait = quiet_after_s_.load() - clock_.now_s(); wait > 0) clock_.sleep_for(wait, cancel);
       std::lock_guard lk(mu_);
       std::string err;
       if (!connect_locked(err)) {
@@ -344,6 +352,7 @@ class LibmodbusTransport final : public RegisterTransport {
         last_exc = 0;
         continue;
       }
+      if (!tcp()) modbus_flush(ctx_);  // RTU: what arrived since the last request is no reply to this one
       if (op() >= 0) return;
       const int e = errno;
       uint8_t code = 0;
@@ -356,14 +365,20 @@ class LibmodbusTransport final : public RegisterTransport {
       }
       last_exc = 0;
       last_timeout = e == ETIMEDOUT;
+      if (!tcp() && (last_timeout || e == EMBBADDATA)) quiet_after_s_ = clock_.now_s() + opt_.response_timeout_s;
       if (e == EMBBADDATA && !violation_.empty()) {
         last = "protocol violation: " + violation_;
       } else {
         last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
       }
-      // Drop the link: a late reply must not be taken for the next request's.
-      modbus_close(ctx_);
-      connected_ = false;
+      // TCP: drop the link, so a late reply cannot be taken for the next request's. RTU: keep the
+      // port open through a timeout or a misfit reply (the quiet wait and the flush above deal
+      // with the late reply; closing a pty relayed by socat would end the relay); reopen it after
+      // any other failure (a USB adapter unplugged).
+      if (tcp() || !(last_timeout || e == EMBBADDATA)) {
+        modbus_close(ctx_);
+        connected_ = false;
+      }
     }
     throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout);
   }
@@ -380,6 +395,7 @@ class LibmodbusTransport final : public RegisterTransport {
   std::mutex mu_;
   modbus_t* ctx_ = nullptr;
   bool connected_ = false;
+  std::atomic<double> quiet_after_s_{0.0};  // RTU: clock time before which a late reply may still come
   uint16_t tid_ = 0;
   std::string violation_;
 };

@@ -17,6 +17,7 @@ class Page {
   std::string head() const;
   std::string identity() const;
   std::string passport_table() const;
+  std::string skipped_steps() const;
   std::string signatures() const;
   std::string phases() const;
   std::string figures();

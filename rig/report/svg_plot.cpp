@@ -81,7 +81,23 @@ Plot allan_plot(const json& oadev, const json* nt, double confidence, const std:
   return p;
 }
 
-Plot psd_plot(const json& psd, const std::string& id, const std::string& title, const std::string& color) {
+std::string peak_label(double f_hz, double rate_hz) {
+  std::string label = fmt_num(f_hz, 4) + " Hz";
+  // Sampling at fs cannot tell f from fs − f (nor from k·fs ± f, whose first is fs − f): both
+  // give the same samples. Named, not judged: what lies above Nyquist is unknown to the rig.
+  if (rate_hz > 0 && f_hz > 0 && f_hz < rate_hz / 2) label += " or " + fmt_num(rate_hz - f_hz, 4) + " Hz";
+  return label;
+}
+
+std::string alias_note(double rate_hz) {
+  if (!(rate_hz > 0)) return "";
+  return "Sampled at " + fmt_num(rate_hz, 6) + " Hz, a line at f and one at " + fmt_num(rate_hz, 6) +
+         " Hz − f give the same samples (aliasing): each peak is labelled with both; the record cannot tell which "
+         "is real.";
+}
+
+Plot psd_plot(const json& psd, const std::string& id, const std::string& title, const std::string& color,
+              double rate_hz) {
   Plot p;
   p.id = id;
   p.title = title;
@@ -92,7 +108,7 @@ Plot psd_plot(const json& psd, const std::string& id, const std::string& title, 
                       Series::Style::line, false, 1.0});
   if (const json* pk = get(psd, {"peaks"}); pk && pk->is_array())
     for (const json& k : *pk)
-      p.markers.push_back({number(k, "f_hz"), number(k, "psd"), fmt_num(number(k, "f_hz"), 4) + " Hz", "#d62728"});
+      p.markers.push_back({number(k, "f_hz"), number(k, "psd"), peak_label(number(k, "f_hz"), rate_hz), "#d62728"});
   return p;
 }
 

@@ -177,19 +177,28 @@ def main():
     tally = {"valid": 0, "invalid": 0}
     with tempfile.TemporaryDirectory() as d:
         out_dir = os.path.join(d, "run")
+        valid_hw = os.path.join(d, "valid-hardware.toml")
+        with open(valid_hw, "w") as f:
+            f.write("\n".join(render(HARDWARE_KEYS)[0]) + "\n")
         for what, keys, required, head in (("hardware", HARDWARE_KEYS, HARDWARE_REQUIRED, ""),
                                            ("profile", PROFILE_KEYS, PROFILE_REQUIRED, PROFILE_HEAD)):
             path = os.path.join(d, f"mut-{what}.toml")
             for i, (text, ok, line) in enumerate(mutants(rng, keys, required, head, count)):
                 with open(path, "w") as f:
                     f.write(text)
-                args = ["--hardware", path, "--profile", "ci"] if what == "hardware" else ["--profile", path]
-                rc, err = run_dry(rig, args, out_dir)
-                tally["valid" if ok else "invalid"] += 1
-                if ok and rc != 0:
-                    failures.append(f"{what} mutant {i}: valid, refused (exit {rc}): {err.strip()}\n{text}")
-                elif not ok and (rc != 2 or f"mut-{what}.toml:{line}:" not in err):
-                    failures.append(f"{what} mutant {i}: invalid at line {line}, got exit {rc}: {err.strip()}\n{text}")
+                if what == "hardware":
+                    runs = [("", ["--hardware", path, "--profile", "ci"])]
+                else:
+                    # A profile is judged the same on both plants: its [plant] section is checked
+                    # with --hardware too (a typo there must not wait for an emulated run).
+                    runs = [("", ["--profile", path]), (" with --hardware", ["--profile", path, "--hardware", valid_hw])]
+                for how, args in runs:
+                    rc, err = run_dry(rig, args, out_dir)
+                    tally["valid" if ok else "invalid"] += 1
+                    if ok and rc != 0:
+                        failures.append(f"{what} mutant {i}{how}: valid, refused (exit {rc}): {err.strip()}\n{text}")
+                    elif not ok and (rc != 2 or f"mut-{what}.toml:{line}:" not in err):
+                        failures.append(f"{what} mutant {i}{how}: invalid at line {line}, got exit {rc}: {err.strip()}\n{text}")
     print(f"{tally['valid']} valid and {tally['invalid']} invalid mutants (seed {SEED})")
     for f in failures[:10]:
         print("FAIL", f, file=sys.stderr)

@@ -815,6 +815,55 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
     EXPECT_EQ(p["values"][name]["outcome"], "PASS") << name << " " << p["values"][name].dump();
   for (const auto& ph : p["phases"]) EXPECT_EQ(ph["status"], "done") << ph.dump();
   EXPECT_NE(slurp(d + "/run/run.log").find("skipped: identify"), std::string::npos);
+  // The human-readable reports list them too: report.html's "Skipped steps" and the closing table.
+  const std::string html = slurp(d + "/run/report.html");
+  EXPECT_NE(html.find("<h2>Skipped steps</h2>"), std::string::npos);
+  for (const char* step : {"<tr><td>identify</td>", "<tr><td>set output filter</td>", "<tr><td>loop test</td>"})
+    EXPECT_NE(html.find(step), std::string::npos) << step;
+  EXPECT_NE(slurp(d + "/io.stdout").find("skipped: loop test: "), std::string::npos) << slurp(d + "/io.stdout");
+}
+
+// The profile's [plant] (the emulated plant's section) is checked on a hardware run too: a
+// profile serves both, and a typo there is exit 2 naming FILE:LINE:COL before any device opens
+// (this file's devices do not exist: opening them would be exit 4).
+TEST(RigCli, HardwareRunChecksTheProfilesPlantSectionBeforeAnyDeviceOpens) {
+  const std::string d = tmp("plant-hw");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[plant]\nseeed = 3\n";
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--hardware", d + "/hw.toml", "--profile", d + "/p.toml", "--yes",
+                                     "--serial", "HW-1", "--out", d + "/run"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2) << dry;
+    const std::string err = slurp(d + "/io.stderr");
+    EXPECT_NE(err.find("p.toml:3:"), std::string::npos) << err;
+    EXPECT_NE(err.find("seeed"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(d + "/run")) << "refused with the configuration";
+  }
+}
+
+// `rig dut --hardware FILE` resolves a relative [dut] dbc = ... from FILE's folder, as `rig run`
+// and `rig capture import` do, not from the working directory: run from another folder, the
+// DBC is found and the command goes on to open the CAN socket (absent here: exit 4), where a
+// DBC looked for in the working directory would be a configuration error (exit 2).
+TEST(RigCli, DutHardwareFileDbcIsRelativeToTheFileNotTheWorkingDirectory) {
+  const std::string d = tmp("dut-dbc");
+  fs::create_directories(d + "/hw");
+  fs::create_directories(d + "/elsewhere");
+  for (const char* f : {"qpa-counts.dut.toml", "qpa-counts.dbc"})
+    fs::copy_file(std::string(RIG_SOURCE_DIR) + "/duts/" + f, d + "/hw/" + f, fs::copy_options::overwrite_existing);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d + "/elsewhere");  // no qpa-counts.dbc here
+  const int rc = run({"dut", "stream", "--hardware", "../hw/qpa-counts.dut.toml", "--can", "rig-nocan0"}, d + "/io");
+  fs::current_path(cwd);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_EQ(rc, 4) << err;
+  EXPECT_EQ(err.find("qpa-counts.dbc"), std::string::npos) << err;
+  EXPECT_NE(err.find("rig-nocan0"), std::string::npos) << err;
 }
 
 // Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is

@@ -11,7 +11,9 @@
 
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/report/bounded.hpp"
 #include "rig/report/report.hpp"
+#include "rig/report/svg_plot.hpp"
 #include "rig/report/svg.hpp"
 #include "tests/report/fixture.hpp"
 
@@ -46,7 +48,9 @@ TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
                            "rms_filtered", "bandwidth_0p5", "settling_time", "accuracy_class"})
     EXPECT_NE(h.find("<code>" + std::string(name) + "</code>"), std::string::npos) << name;
   EXPECT_NE(h.find("-0.00050137"), std::string::npos);               // bias value
-  EXPECT_NE(h.find("1.8e-06 …</span> <span class=\"nw\">2.5e-06"), std::string::npos);  // bounds
+  // Bounds, to the digits their half-width (0.35e-6) supports: two, the value alike.
+  EXPECT_NE(h.find("1.80e-06 …</span> <span class=\"nw\">2.50e-06"), std::string::npos);
+  EXPECT_NE(h.find(">2.10e-06</td>"), std::string::npos);  // in_run_b_allan's value
   EXPECT_NE(h.find("[−∞, 5e-06]"), std::string::npos);               // one-sided limit
   EXPECT_NE(h.find("needs a record longer than 50 h"), std::string::npos);  // r's reason
   // Contract order: bias before base_error before accuracy_class (not alphabetical).
@@ -54,7 +58,7 @@ TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
   EXPECT_LT(h.find("<code>settling_time</code>"), h.find("<code>accuracy_class</code>"));
   for (const char* id : kPlots) EXPECT_EQ(count(h, "data-plot=\"" + std::string(id) + "\""), 1u) << id;
   EXPECT_NE(h.find("τ_ср = 200 s"), std::string::npos);
-  EXPECT_NE(h.find(">72 Hz<"), std::string::npos);     // labelled PSD peak
+  EXPECT_NE(h.find(">72 Hz or 928 Hz<"), std::string::npos);  // labelled PSD peak, and its alias at 1 kHz
   EXPECT_NE(h.find("f_пп = 492 Hz"), std::string::npos);
   EXPECT_NE(h.find("captures/in-run-U10.cap"), std::string::npos);
   EXPECT_EQ(h.find("id=\"missing\""), std::string::npos);  // nothing missing
@@ -164,11 +168,13 @@ TEST(Report, NoiseTermsAreQuotedInThePassportsPerHourUnits) {
     EXPECT_NE(h.find("<td>" + std::string(hours) + "</td>"), std::string::npos) << hours;  // tables
     EXPECT_NE(plot_svg(h, "allan-x").find(hours), std::string::npos) << hours;             // legend
   }
-  // N of the terms table equals the passport's n (2.2306e-7 g*h^0.5) in value and unit.
+  // N of the terms table equals the passport's n (2.2306e-7 g*h^0.5) in value and unit, to the
+  // digits its ±10 % bounds support (half-width 2.2e-8: the 1e-9 digit).
   const std::size_t terms = h.find("id=\"terms-x\"");
   ASSERT_NE(terms, std::string::npos);
-  const std::string n_row = h.substr(h.find("N — random walk", terms), 200);
-  EXPECT_NE(n_row.find(">2.231e-07</td><td>g*h^0.5<"), std::string::npos) << n_row;
+  const std::string n_row = h.substr(h.find("N — random walk", terms), 300);
+  EXPECT_NE(n_row.find(">2.23e-07</td><td>g*h^0.5<"), std::string::npos) << n_row;
+  EXPECT_NE(n_row.find(">2.01e-07 …</span> <span class=\"nw\">2.45e-07<"), std::string::npos) << n_row;
   EXPECT_NE(plot_svg(h, "allan-x").find("τ, s"), std::string::npos);  // τ stays in seconds
 }
 
@@ -190,6 +196,109 @@ TEST(Report, EveryBoundsCellStatesItsIntervalLevel) {
   const std::string table = h.substr(t0, t1 - t0);
   EXPECT_EQ(count(table, " …</span>"), count(table, "class=\"lvl\""));
   EXPECT_NE(caption_of(h, "allan-x").find("68.3 % confidence bounds"), std::string::npos);
+}
+
+// The passport's top-level `skipped` (a DUT with [dut] commands = false) is listed, step and
+// reason, in its own section; a passport without it has no such section.
+TEST(Report, SkippedStepsAreListedAndAbsentWithoutAny) {
+  json p = rig::test::fixture_passport();
+  const std::string none = rig::report::render_report(p, rig::test::fixture_analysis());
+  EXPECT_EQ(none.find("Skipped steps"), std::string::npos);
+  EXPECT_EQ(none.find("id=\"skipped\""), std::string::npos);
+  p["skipped"] = json::array({{{"step", "identify"}, {"reason", "[dut] commands = false: no command channel"}},
+                              {{"step", "loop test"}, {"reason", "no <command> channel & no LOOP_TEST"}}});
+  const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  const std::size_t at = h.find("<h2>Skipped steps</h2>");
+  ASSERT_NE(at, std::string::npos);
+  const std::string table = h.substr(at, h.find("</table>", at) - at);
+  EXPECT_NE(table.find("<tr><td>identify</td><td>[dut] commands = false: no command channel</td></tr>"),
+            std::string::npos) << table;
+  EXPECT_NE(table.find("<tr><td>loop test</td><td>no &lt;command&gt; channel &amp; no LOOP_TEST</td></tr>"),
+            std::string::npos) << table;
+  // On page 1, after the measurements whose null values it explains, before the sign-off.
+  EXPECT_LT(h.find("id=\"passport\""), at);
+  EXPECT_LT(at, h.find("id=\"signatures\""));
+  p["skipped"] = json::array();
+  EXPECT_EQ(rig::report::render_report(p, rig::test::fixture_analysis()).find("Skipped steps"), std::string::npos);
+}
+
+// Page 1 quotes a value with bounds to the digits the bounds support (two significant digits
+// of the half-width, the value and both bounds to the same digit); a value without bounds keeps
+// its five significant digits; passport.json is not touched (the page reads it).
+TEST(Report, ValuesWithBoundsShowOnlyTheDigitsTheirBoundsSupport) {
+  json p = rig::test::fixture_passport();
+  p["values"]["bias"]["value"] = -5.01372918e-4;
+  p["values"]["bias"]["lo"] = -5.1146e-4;  // half-width 9.96e-6: "1.0e-05", the 1e-6 digit
+  p["values"]["bias"]["hi"] = -4.9154e-4;
+  p["values"]["bandwidth_0p5"]["lo"] = 487.31;  // half-width 9.3 Hz: the 0.1 Hz digit
+  p["values"]["bandwidth_0p5"]["hi"] = 505.93;
+  p["values"]["bandwidth_0p5"]["value"] = 492.123456;
+  const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  const std::string bias = row_of(h, "bias");
+  EXPECT_NE(bias.find(">-0.000501</td>"), std::string::npos) << bias;
+  EXPECT_NE(bias.find(">-0.000511 …</span> <span class=\"nw\">-0.000492<"), std::string::npos) << bias;
+  const std::string bw = row_of(h, "bandwidth_0p5");
+  EXPECT_NE(bw.find(">492.1</td>"), std::string::npos) << bw;
+  EXPECT_NE(bw.find(">487.3 …</span> <span class=\"nw\">505.9<"), std::string::npos) << bw;
+  // Without bounds: as before.
+  EXPECT_NE(row_of(h, "base_error").find(">0.00038549</td>"), std::string::npos) << row_of(h, "base_error");
+  EXPECT_NE(row_of(h, "rms_filtered").find(">0.0448</td>"), std::string::npos);
+  // One bound only gives no width: the value keeps its digits.
+  p["values"]["bias"]["hi"] = nullptr;
+  const std::string one = row_of(rig::report::render_report(p, rig::test::fixture_analysis()), "bias");
+  EXPECT_NE(one.find(">-0.00050137</td>"), std::string::npos) << one;
+}
+
+TEST(Bounded, RoundsToTwoSignificantDigitsOfTheHalfWidth) {
+  using rig::report::round_to_bounds;
+  auto r = round_to_bounds(2.1e-6, 1.8e-6, 2.5e-6);  // half-width 3.5e-7
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->value, "2.10e-06");
+  EXPECT_EQ(r->lo, "1.80e-06");
+  EXPECT_EQ(r->hi, "2.50e-06");
+  r = round_to_bounds(1234.5678, 1200.0, 1270.0);  // half-width 35: the units digit
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->value, "1235");
+  EXPECT_EQ(r->lo, "1200");
+  EXPECT_EQ(r->hi, "1270");
+  r = round_to_bounds(0.123456, 0.1, 0.15);  // half-width 0.025: the 0.001 digit, zeros kept
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->value, "0.123");
+  EXPECT_EQ(r->lo, "0.100");
+  EXPECT_EQ(r->hi, "0.150");
+  r = round_to_bounds(9.996e-7, 9.0e-7, 1.1e-6);  // half-width 1.0e-7; the value rounds up a decade
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->value, "1.00e-06");
+  r = round_to_bounds(3e-9, -2e-6, 2e-6);  // a value smaller than the last digit kept
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->value, "0");
+  EXPECT_EQ(r->lo, "-2.0e-06");
+  const double nan = std::nan("");
+  EXPECT_FALSE(round_to_bounds(1.0, nan, 2.0));
+  EXPECT_FALSE(round_to_bounds(1.0, 0.5, INFINITY));
+  EXPECT_FALSE(round_to_bounds(1.0, 1.0, 1.0));  // no width
+  EXPECT_FALSE(round_to_bounds(1.0, 2.0, 0.5));
+  EXPECT_FALSE(round_to_bounds(nan, 0.5, 1.5));
+}
+
+// A PSD peak at f of a record sampled at fs may be a line at fs − f folded by the sampling:
+// the label names both (the rig does not know what lies above Nyquist) and the caption says
+// why; without the rate (no timeseries.rate_hz) no alias is claimed.
+TEST(Report, PsdPeakLabelsNameTheAliasAtTheSamplingRate) {
+  json a = rig::test::fixture_analysis();  // sampled at 1000 Hz; peaks at 72 and 470 Hz
+  const std::string h = rig::report::render_report(rig::test::fixture_passport(), a);
+  const std::vector<std::string> labels = texts_of_class(plot_svg(h, "psd-x"), "mark");
+  EXPECT_NE(std::find(labels.begin(), labels.end(), "72 Hz or 928 Hz"), labels.end());
+  EXPECT_NE(std::find(labels.begin(), labels.end(), "470 Hz or 530 Hz"), labels.end());
+  EXPECT_NE(caption_of(h, "psd-x").find("give the same samples (aliasing)"), std::string::npos) << caption_of(h, "psd-x");
+  EXPECT_EQ(rig::report::peak_label(500, 1000), "500 Hz");  // at Nyquist f = fs − f
+  EXPECT_EQ(rig::report::peak_label(72, std::nan("")), "72 Hz");
+  a["timeseries"].erase("rate_hz");
+  const std::string u = rig::report::render_report(rig::test::fixture_passport(), a);
+  const std::vector<std::string> plain = texts_of_class(plot_svg(u, "psd-x"), "mark");
+  EXPECT_NE(std::find(plain.begin(), plain.end(), "72 Hz"), plain.end());
+  EXPECT_EQ(u.find(" or 928 Hz"), std::string::npos);
+  EXPECT_EQ(caption_of(u, "psd-x").find("aliasing"), std::string::npos);
 }
 
 TEST(Report, StepAxisSpansThreeSettlingTimes) {
