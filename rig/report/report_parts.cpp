@@ -347,7 +347,8 @@ std::string Page::passport_table() const {
   std::vector<std::pair<std::string, std::string>> order;
   for (const auto& [name, desc] : descriptions())
     if (values->contains(name)) order.emplace_back(name, desc);
-  for (const auto& [name, v] : values->items()) {
+  for (const auto& item : values->items()) {
+    const std::string& name = item.key();  // not a structured binding: clang 14 cannot capture one
     const bool known = std::any_of(descriptions().begin(), descriptions().end(),
                                    [&](const auto& d) { return d.first == name; });
     if (!known) order.emplace_back(name, "");
