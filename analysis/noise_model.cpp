@@ -23,19 +23,42 @@ double noise_basis(int k, double tau) {
   }
 }
 
-double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
-  static const int kAlpha[5] = {2, 0, -1, -2, -2};
-  double total = 0, sd = 0, cross = 0;
-  for (int k = 0; k < 5; ++k) total += mu[static_cast<std::size_t>(k)];
-  for (int k = 0; k < 5; ++k) {
-    const double u = mu[static_cast<std::size_t>(k)];
-    if (u <= 0) continue;
-    const double nu = edf_greenhall(kAlpha[k], 2, m, n_phase, true, false);
-    sd += u * std::sqrt(2 / nu);
-    cross += u / nu;
+std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+  static const int kAlpha[4] = {2, 0, -1, -2};
+  std::array<double, 5> sd{};
+  for (std::size_t k = 0; k < 4; ++k)
+    if (mu[k] > 0) sd[k] = mu[k] * std::sqrt(2 / edf_greenhall(kAlpha[k], 2, m, n_phase, true, false));
+  if (mu[4] > 0 && n_phase > 2 * m + 1) {
+    // The ramp's second differences are one constant d (mu_R = d^2/2), so s = mu_R + d ebar +
+    // s_random, and its only scatter is the cross term d ebar: var = 2 mu_R var(ebar), ebar the
+    // mean of the M = N - 2m random second differences over tau. The sum telescopes: M ebar =
+    // sum_{j<m} (ybar_{M+j} - ybar_j) (ybar_i the m-average of the frequency from sample i), so
+    // ebar = (m/M) (A_end - A_start), A the triangular-weighted means of the frequency over the
+    // record's first and last 2m samples, M apart. V = var(A_end - A_start) per term, in units of
+    // its own Allan variance mu_k at m:
+    //   Q (white PM): M ebar tau = a sum of 4m independent phases: var(ebar) = (4/3) mu_Q m / M^2;
+    //   N (white FM): var(A) = (2/3) sigma_y^2 / m each, independent: V = (4/3) mu_N;
+    //   B (flicker FM): V = 2 mu_B at lag m (adjacent averages), growing with ln(lag):
+    //       V ~ 2 mu_B (1 + log2(M/m)/2) (approximate: flicker's structure function);
+    //   K (random-walk FM, K^2 tau0 = 3 mu_K/m per sample): V = K^2 tau0 (M - 0.46 m), 0.46 m
+    //       the mean |s - t| of two triangular weights of width 2m.
+    // The cross term is uncorrelated with s_random (odd moments of Gaussian noise vanish).
+    const double dm = static_cast<double>(m), M = static_cast<double>(n_phase - 1 - 2 * m) + 1;
+    const double r = dm / M;
+    const double var_ebar = 4.0 / 3 * mu[0] * dm / (M * M) + r * r * (4.0 / 3 * mu[1] + 2 * mu[2] * (1 + std::log2(std::max(1.0, M / dm)) / 2) +
+                                                                  3 * mu[3] * std::max(0.0, M - 0.46 * dm) / dm);
+    sd[4] = std::sqrt(2 * mu[4] * var_ebar);
   }
-  const double var = sd * sd;
-  if (var <= 0) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
+  return sd;
+}
+
+double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+  double total = 0, sd_random = 0;
+  for (std::size_t k = 0; k < 5; ++k) total += mu[k];
+  const std::array<double, 5> sd = term_scatter(mu, m, n_phase);
+  for (std::size_t k = 0; k < 4; ++k) sd_random += sd[k];
+  const double var = sd_random * sd_random + sd[4] * sd[4];
+  if (!(var > 0)) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
   return 2 * total * total / var;
 }
 
@@ -187,16 +210,17 @@ double white_share(const std::array<double, 5>& theta, double tau) {
 // Covariance of ln s_i under the model theta: Sigma_ij = C_ij sqrt(v_i v_j) + (delta h_i)^2 [i = j],
 // h_i = (mu_Q + mu_N)/mu at tau_i (the model error's profile, see fit_noise_model),
 // v_i = 2/nu_i; C_ij = sum_k w_ik w_jk rho_k(L_ij) / sqrt(sum_k w_ik^2 sum_k w_jk^2) with
-// w_ik = mu_ik / sqrt(nu_ik) (each random term's share of the scatter) and L_ij the octaves apart.
+// w_ik = term_scatter (each term's share of the scatter; the ramp's cross term correlated as
+// random walk's, whose end-to-end differences it mostly is) and L_ij the octaves apart.
 Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std::size_t n_phase, double delta) {
-  static const int kAlpha[5] = {2, 0, -1, -2, -2};
   const std::size_t n = p.tau.size();
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 5);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 5; ++k) {
-      const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
-      if (mu > 0) w(static_cast<Eigen::Index>(i), k) = mu / std::sqrt(edf_greenhall(kAlpha[k], 2, p.m[i], n_phase, true, false));
-    }
+  for (std::size_t i = 0; i < n; ++i) {
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    const std::array<double, 5> sd = term_scatter(mu, p.m[i], n_phase);
+    for (int k = 0; k < 5; ++k) w(static_cast<Eigen::Index>(i), k) = sd[static_cast<std::size_t>(k)];
+  }
   Eigen::MatrixXd S(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) {
@@ -375,6 +399,34 @@ Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
   return out;
 }
 
+// The widest non-negative model on the points p: all five terms by GLS with the covariance the
+// model implies, constrained to theta >= 0 (NNLS over the subsets); the covariance re-evaluated
+// from the result, up to four rounds. No term is left out because AICc would: a term the data cannot tell from zero
+// stays in with its (wide) interval instead of landing in its neighbours. W: the inverse
+// covariance of the last round.
+SubsetFit widest_model(Pts& p, std::size_t n_phase, double delta, std::array<double, 5> start, Eigen::MatrixXd& W) {
+  SubsetFit f;
+  for (int round = 0; round < 4; ++round) {
+    set_model_edf(p, start, n_phase);
+    W = model_cov(p, start, n_phase, delta).inverse();
+    // Non-negative least squares on W: the least chi-square over the subsets whose own GLS
+    // solution is non-negative (the constrained optimum is the unconstrained one on its face);
+    // of equal chi-squares the larger subset.
+    SubsetFit best;
+    for (int mask = 1; mask < 32; ++mask) {
+      std::array<double, 5> s0 = start;
+      for (int k = 0; k < 5; ++k)
+        if (!(mask & (1 << k))) s0[static_cast<std::size_t>(k)] = 0;
+      const SubsetFit g = gls_subset(p, W, mask, s0, true);
+      if (g.ok && (!best.ok || g.nll < best.nll * (1 - 1e-9) || (g.nll <= best.nll * (1 + 1e-9) && g.k > best.k))) best = g;
+    }
+    if (!best.ok) return best;
+    f = best;
+    start = f.theta;
+  }
+  return f;
+}
+
 Pts tail_of(const Pts& p, std::size_t from) {
   Pts q;
   q.tau.assign(p.tau.begin() + static_cast<std::ptrdiff_t>(from), p.tau.end());
@@ -445,24 +497,70 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   Pts p = tail_of(all, from);
   const std::size_t n = p.tau.size();
   p.nu.resize(n);
-  set_model_edf(p, sel.best.theta, n_phase);
-  const SubsetFit& best = sel.best;
-  const Eigen::MatrixXd& W = sel.W;
+  const double z = boost::math::quantile(boost::math::normal(), (1 + confidence) / 2);
+  // The terms: the widest non-negative model on the tau range (not the AICc model, whose left-out
+  // terms land in their neighbours: R on 6 h read 1.6x with K left out, covered 15 %).
+  Eigen::MatrixXd W;
+  SubsetFit best = widest_model(p, n_phase, sel.delta, sel.best.theta, W);
+  if (!best.ok) {
+    best = sel.best;
+    W = sel.W;
+  }
+  // The covariance of the bounds: the model plus every term left out at its upper limit. A term
+  // the data cannot exclude still scatters the points (above all the ramp's cross term, which
+  // without K would make the R-dominated points look nearly exact).
+  set_model_edf(p, best.theta, n_phase);
+  std::array<double, 5> th_cov = best.theta;
+  bool widened = false;
+  for (int k = 0; k < 5; ++k) {
+    if (best.mask & (1 << k)) continue;
+    const SubsetFit g = gls_subset(p, W, best.mask | (1 << k), best.theta, false);
+    if (!g.ok) continue;
+    th_cov[static_cast<std::size_t>(k)] = std::max(0.0, g.theta[static_cast<std::size_t>(k)]) + z * sd_of(g, k);
+    widened = widened || th_cov[static_cast<std::size_t>(k)] > 0;
+  }
+  if (widened) {
+    set_model_edf(p, th_cov, n_phase);
+    W = model_cov(p, th_cov, n_phase, sel.delta).inverse();
+    const SubsetFit f = gls_subset(p, W, best.mask, best.theta, true);
+    if (f.ok) best = f;
+  }
+  // Reported (in_model): a term of this model with theta > 0 that either AICc selects (the data
+  // support it over the model without it) or whose interval at `confidence` excludes zero
+  // (theta >= z sd). Collinear terms (K and R over tau <= T/4 of a short record) can each be
+  // insignificant in the widest model while together they are not: AICc reports the one that
+  // carries the rise. The others are null with the interval's upper end as their upper limit.
+  int report = 0;
+  for (int k = 0; k < 5; ++k) {
+    const double th = best.theta[static_cast<std::size_t>(k)];
+    if ((best.mask & (1 << k)) && th > 0 && ((sel.best.mask & (1 << k)) || th >= z * sd_of(best, k))) report |= 1 << k;
+  }
   out.aicc = sel.aicc;
   out.chi2_per_dof = sel.chi2 / sel.dof;
   out.tau_s = p.tau;
   out.avar = p.s;
   out.edf = p.nu;
-  const double z = boost::math::quantile(boost::math::normal(), (1 + confidence) / 2);
   for (int k = 0; k < 5; ++k) {
     const auto kk = static_cast<std::size_t>(k);
-    if (best.mask & (1 << k)) {
+    if (!(report & (1 << k)) && (best.mask & (1 << k))) {
+      out.upper[kk] = std::sqrt(std::max(0.0, best.theta[kk]) + z * sd_of(best, k));
+    } else if (best.mask & (1 << k)) {
       const double th = best.theta[kk], sd = sd_of(best, k);
       out.in_model[kk] = true;
       out.z[kk] = sd > 0 ? th / sd : 0;
       out.value[kk] = std::sqrt(th);
       out.lo[kk] = std::sqrt(std::max(0.0, th - z * sd));
       out.hi[kk] = out.upper[kk] = std::sqrt(th + z * sd);
+      // The data do not choose between the widest model and the AICc model (their chi-squares
+      // differ by less than the terms' penalty): the bounds hold over both. A term the AICc
+      // model does without has 0 as its lower bound; one it has, the wider of the two intervals.
+      if (!(sel.best.mask & (1 << k))) {
+        out.lo[kk] = 0;
+      } else {
+        const double tha = sel.best.theta[kk], sda = sd_of(sel.best, k);
+        out.lo[kk] = std::min(out.lo[kk], std::sqrt(std::max(0.0, tha - z * sda)));
+        out.hi[kk] = out.upper[kk] = std::max(out.hi[kk], std::sqrt(tha + z * sda));
+      }
       for (std::size_t i = 0; i < n; ++i) {
         double mu = 0;
         for (int j = 0; j < 5; ++j) mu += best.theta[static_cast<std::size_t>(j)] * noise_basis(j, p.tau[i]);

@@ -9,14 +9,18 @@
 // ln s_i is 2/nu_i with nu_i the model's EDF there (Greenhall & Riley EDF of each term's power
 // law, model_edf below), never the per-tau noise identification's; the correlation between
 // octave points is each power law's (measured, kOctaveCorr in the .cpp) mixed by the terms'
-// shares. Every subset of the five terms is fitted (non-negative); the subset with the least
-// AICc is the model (Akaike's criterion with the small-sample correction: a term enters when
-// it lowers the GLS chi-square by more than its 2 + correction). A term in the model is reported with bounds from the Fisher
-// information; a term not in it is null with an upper limit. No record-length rule: R is a
-// candidate on every record. The points fitted start where the model describes the curve: the
-// shortest octave points are dropped while the selected model's chi-square is improbable
-// (kGofAlpha), since what the five power laws miss on a DUT (folded tones, the output filter)
-// sits at the shortest taus. docs/analysis.md ("One model") gives the reasoning and coverage.
+// shares. Every subset of the five terms is fitted (non-negative) and the least AICc (Akaike's
+// criterion with the small-sample correction) is the model the goodness of fit is tested on. The
+// VALUES and bounds come from the widest non-negative model on the points (all five terms,
+// theta >= 0, NNLS over the subsets: a term the AICc model leaves out would land in its
+// neighbours, R on 6 h read 1.6x with K left out), with the covariance of the model plus every
+// term left out at its upper limit (a term the data cannot exclude still scatters the points).
+// A term is reported (in_model) when AICc selects it or its interval excludes zero; otherwise
+// it is null with an upper limit. No record-length rule: R is a candidate on every record. The
+// points fitted start where the model describes the curve: the shortest octave points are
+// dropped while the AICc model's chi-square is improbable (kGofAlpha), since what the five
+// power laws miss on a DUT (folded tones, the output filter) sits at the shortest taus.
+// docs/analysis.md ("One model") gives the reasoning and coverage.
 // Long-tau points of other estimators (TOTDEV, TheoH: more EDF near T) are not used yet; they
 // would enter as further points with their own EDF and the model covariance extended to them.
 #pragma once
@@ -34,14 +38,14 @@ struct NoiseModelFit {
   bool ok = false;
   std::string reason;
   // per term Q, N, B, K, R (the order of theta above)
-  std::array<bool, 5> in_model{};      // selected by AICc
-  std::array<double, 5> value{};       // sqrt(theta) (0 when not in the model)
+  std::array<bool, 5> in_model{};      // reported: selected by AICc or its interval excludes 0
+  std::array<double, 5> value{};       // sqrt(theta) of the widest model (0 when not reported)
   std::array<double, 5> lo{}, hi{};    // bounds at `confidence` (in the model)
   std::array<double, 5> upper{};       // every term: upper limit (the interval's upper end)
   std::array<double, 5> share{};       // the term's largest share of the model sigma^2 over the fitted taus
   std::array<double, 5> z{};           // theta / sd(theta) of a term in the model
   std::vector<double> tau_s, avar, edf;  // the points fitted: tau, measured sigma^2, model EDF
-  double aicc = 0;
+  double aicc = 0;          // of the AICc model (the one the goodness of fit is tested on)
   double chi2_per_dof = 0;  // GLS chi2 of the selected model on the covariance it implies, per dof
   double gof_p = 0;         // P(chi2 >= that): the goodness of fit over the points fitted
   std::size_t dropped_short = 0;  // octave points below tau_s.front() left out as not described by the model
@@ -63,10 +67,16 @@ double noise_basis(int k, double tau);
 // The EDF of an overlapping Allan variance at factor m of n_phase points whose true variance is
 // the sum of the components mu[k] (independent processes): sd(s) <= sum_k mu_k sqrt(2/nu_k)
 // (nu_k: Greenhall & Riley for Q alpha 2, N 0, B -1, K -2; the bound of the cross-covariances by
-// Cauchy-Schwarz, exact when all nu_k are equal); edf = 2 (sum mu)^2 / var(s). R is given
-// random walk's EDF (alpha -2): a ramp on one record is not told from a random walk's
-// realisation that rises like one, and a deterministic ramp's near-infinite EDF made a model
-// with R weigh its own long-tau points up and choose itself.
+// Cauchy-Schwarz, exact when all nu_k are equal); the ramp R is deterministic and adds only its
+// cross term with the random terms (term_scatter), in quadrature; edf = 2 (sum mu)^2 / var(s).
 double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
+
+// The standard deviation each term's share contributes to an overlapping Allan variance at
+// factor m of n_phase points, mu the terms' Allan variances there: Q, N, B, K mu_k sqrt(2/nu_k)
+// (Greenhall & Riley); R (a deterministic ramp) the sd of its cross term with the random terms,
+// sqrt(2 mu_R var(ebar)), ebar the mean random second difference (derivation in the .cpp).
+// Giving R random walk's EDF instead (the previous version) put the fitted curve 1.2-1.6x above
+// the R-dominated points (the log-bias correction of EDF ~2 on points whose scatter is far less).
+std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
 
 }  // namespace rig::analysis

@@ -129,10 +129,10 @@ WlsFit wls_from_model(const NoiseModelFit& m) {
       t.value = m.value[k];
       t.lo = m.lo[k];
       t.hi = m.hi[k];
-      t.reason = std::string("model (GLS on the octave Allan points, AICc selection)") + range;
+      t.reason = std::string("model (GLS on the octave Allan points, widest non-negative model; AICc or interval excludes 0)") + range;
     } else {
       t.hi = m.upper[k];
-      t.reason = std::string("not supported by the data (AICc)") + range + "; upper limit " + kNames[k] + " <= " +
+      t.reason = std::string("not supported by the data (AICc; interval includes 0)") + range + "; upper limit " + kNames[k] + " <= " +
                  fmt(m.upper[k]) + " " + kUnits[k];
     }
   }

@@ -9,7 +9,8 @@
 //      inflection points, the segments between them with their slopes, sigma at each segment's
 //      middle tau, and B = sigma(tau_cp) / 0.664 on the flat one;
 //  (b) one model of all five terms (noise_model.hpp: GLS on the octave Allan points with the
-//      model's EDF and covariance, AICc selection), with 68 % bounds or upper limits.
+//      model's EDF and covariance, the widest non-negative model, terms reported by AICc or an
+//      interval excluding 0), with 68 % bounds or upper limits.
 #pragma once
 #include <array>
 #include <cmath>
@@ -97,7 +98,7 @@ struct NoiseTerms {
   std::optional<double> sigma_cp;
   PaperFit paper;
   WlsFit wls;          // the model fit (noise_model.hpp) in the shape of the former weighted fit
-  NoiseModelFit model;  // the one model: every term the data supports (AICc), with bounds or upper limits
+  NoiseModelFit model;  // the one model: every term the data supports, with bounds or upper limits
   // How B was read (B above): "flat_segment" (the paper's, tau_cp the middle of the segment
   // flat_tau_from_s..flat_tau_to_s), "polynomial_minimum" (no flat segment: the quartic's
   // interior minimum), "least_squares" (neither: the model's B), or "" (no B). The paper

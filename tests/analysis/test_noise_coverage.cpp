@@ -2,6 +2,7 @@
 // coverage suite) the noise-term fit's bounds hold the injected terms at their stated coverage.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "tests/analysis/noise_coverage.hpp"
@@ -33,21 +34,65 @@ TEST(InjectedNoise, EachTermGivesItsAllanVariance) {
   EXPECT_NEAR(mean_avar_ratio({0, 0, 1e-6, 0, 0}, 10), 1, 0.10);
   EXPECT_NEAR(mean_avar_ratio({0, 0, 0, 1e-7, 0}, 1), 1, 0.05);
   EXPECT_NEAR(mean_avar_ratio({0, 0, 0, 0, 1e-8}, 10, 1), 1, 1e-6);  // deterministic
+  // and at T/4 (the longest tau the fit uses, where R dominates on the 6 h and 60 h sets)
+  EXPECT_NEAR(mean_avar_ratio({0, 0, 0, 0, 1e-8}, 249.9, 1), 1, 1e-6);
+}
+
+// The ramp's scatter (noise_model.hpp term_scatter): a deterministic ramp over a random walk
+// scatters the Allan variance only by their cross term, far less than a random walk of the same
+// size would. 400 records of K + R (10 Hz, 6 h, R 75 % and 84 % of sigma^2 at T/8 and T/4): the
+// measured variance of s / mu is within 25 % of 2/model_edf (measured 0.217 vs 0.207, 0.368 vs
+// 0.327) and below 0.75 of what random walk's EDF, the previous rule for R, gives (0.339, 0.895).
+TEST(InjectedNoise, RampScatterIsItsCrossTermWithTheRandomWalk) {
+  const Terms t{0, 0, 0, 8.53e-8, 2.2e-9};
+  const double rate = 10;
+  const std::size_t n = 216000;
+  const std::vector<std::size_t> ms{27000, 53999};
+  std::vector<double> sum(ms.size()), sum2(ms.size());
+  const int seeds = 400;
+  for (int i = 0; i < seeds; ++i) {
+    const auto y = generate(t, rate, n, 777 + static_cast<std::uint64_t>(i));
+    DevOptions o;
+    o.rate_hz = rate;
+    o.bounds = false;
+    o.factors = ms;
+    const auto d = deviation(y, o);
+    for (std::size_t j = 0; j < ms.size(); ++j) {
+      const double q = d[j].dev * d[j].dev / model_avar(t, d[j].tau_s);
+      sum[j] += q, sum2[j] += q * q;
+    }
+  }
+  for (std::size_t j = 0; j < ms.size(); ++j) {
+    const double tau = static_cast<double>(ms[j]) / rate, mean = sum[j] / seeds, var = sum2[j] / seeds - mean * mean;
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = term_avar(t, k, tau);
+    const double nu = model_edf(mu, ms[j], n + 1);
+    std::array<double, 5> rw = mu;  // the ramp's share given random walk's scatter instead
+    rw[3] += rw[4], rw[4] = 0;
+    const double nu_rw = model_edf(rw, ms[j], n + 1);
+    SCOPED_TRACE("m = " + std::to_string(ms[j]));
+    EXPECT_NEAR(mean, 1, 0.1);
+    EXPECT_NEAR(var / (2 / nu), 1, 0.25) << "var " << var << ", 2/nu " << 2 / nu;
+    std::printf("m %zu: var(s/mu) %.3f, 2/nu %.3f, 2/nu(random walk) %.3f\n", ms[j], var, 2 / nu, 2 / nu_rw);
+    EXPECT_LT(var, 0.75 * 2 / nu_rw) << "random walk's EDF " << nu_rw;
+  }
 }
 
 TEST(NoiseCoverage, CiSized) {
   // 20 seeds per set (issue 12's acceptance), the same seeds as docs/analysis.md's CI-rate table.
   constexpr int kSeeds = 20;
+  constexpr int kMaxOff3 = 6;
   const auto cells = run_coverage(sets(true), kSeeds, 12000);
   std::printf("%s", coverage_table(cells).c_str());
   // Pooled over the terms of the one model (Q, N, B(model), K, R; the paper's B is the
   // passport's and judged on its own): the stated 68.3 % bounds of dominant terms hold the
   // truth within +-10 points of 68.3 % (issue 12; 14 dominant cells x 20 runs: about +-3 points
-  // of sampling scatter); a term that never dominates comes back null or with an upper limit
-  // (the upper end of the two-sided 68.3 % interval, 84 % one-sided) that holds it in at least
-  // 74 %; a value more than 3x off the truth with bounds excluding it at most 6 times in the
-  // suite (measured 5: a small flicker under K read as B 6-9x on 3 K records, once each B under N
-  // and K under B; the acceptance target is none and is not met: docs/analysis.md).
+  // of sampling scatter; measured 70.0 %, 71.9 % over 60 seeds per set); a term that never
+  // dominates comes back null or with an upper limit (the upper end of the two-sided 68.3 %
+  // interval, 84 % one-sided) that holds it in at least 74 % (measured 96 %); a value more than
+  // 3x off the truth with bounds excluding it at most kMaxOff3 times in the suite (measured 6,
+  // mostly a 3e-7 g flicker under K read as B 5-7x where B + R fits best; the acceptance target
+  // is none and is not met: docs/analysis.md).
   int dom = 0, dom_cov = 0, nd = 0, nd_ok = 0, off3 = 0;
   for (const Cell& c : cells) {
     EXPECT_EQ(c.runs, kSeeds);
@@ -63,7 +108,16 @@ TEST(NoiseCoverage, CiSized) {
   EXPECT_GE(cov, kOneSigma - 0.10);
   EXPECT_LE(cov, kOneSigma + 0.10);
   EXPECT_GE(nd_frac, 0.74);
-  EXPECT_LE(off3, 6);
+  EXPECT_LE(off3, kMaxOff3);
+  // R dominant on 6 h (from 1000 s to T/4): its bounds hold the truth in at least 8 of 20 (a
+  // calibrated 68.3 % cell falls below that with probability 0.2 %) and the median value is
+  // within 1.4x of it. The previous fit (R given random walk's EDF, values from the AICc model)
+  // held it in 2-3 of 20 with a median of 1.6x.
+  for (const Cell& c : cells)
+    if (c.set == "R 6h" && c.term == "R") {
+      EXPECT_GE(c.covered, 8) << "R on 6 h covered " << c.covered << "/" << c.runs;
+      EXPECT_LE(median(c.ratios), 1.4);
+    }
 }
 
 }  // namespace rig::analysis::injected

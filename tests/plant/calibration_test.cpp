@@ -93,17 +93,20 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
   // here is 2x (the paper's x1.5 is not met, docs/plant.md).
   within(median(q), 6.3603e-10, 2.0, "Q, g*h");
   // K: the passport's bounds (or upper limit) hold the plant's K at the stated 68.3 % on about
-  // 6 of 9 (binomial: 4 or more in 95 % of such sets); measured 6 of 9.
+  // 6 of 9 (binomial: 4 or more in 95 % of such sets); measured 7 of 9 (6 before the
+  // widest-model fit, docs/analysis.md).
   EXPECT_GE(k_held, 4) << "plant's K " << kPlantK << " g/h^0.5 held on " << k_held << " of 9";
   // R is not in the plant; one hour's random walk may rise like a ramp at the last points
-  // (docs/analysis.md): measured on 1 of 9 (seed 1), asserted on at most 3.
+  // (docs/analysis.md): measured on 2 of 9 (seeds 1 and 5), asserted on at most 3.
   EXPECT_LE(r_reported, 3);
   // B with the output filter: about 0.86e-6 (+-30 %), the unfiltered/filtered ratio 2.5 +- 0.5
   // (the folded 1 kHz pick-up cut by |W_f(1 kHz)| = 0.39)
   EXPECT_NEAR(median(b_y), 0.86e-6, 0.3 * 0.86e-6);
   EXPECT_NEAR(median(ratio), 2.5, 0.5);
-  // Every realisation: the filter lowers B.
-  for (double x : ratio) EXPECT_GT(x, 1.5);
+  // Every realisation: the filter lowers B (by more than 1.3x: where the paper's method falls
+  // back to least squares, x's B is the model's, which since the widest-model fit keeps K beside
+  // B and no longer reads the rise as flicker; seed 4 1.31e-6 g, ratio 1.44, docs/analysis.md).
+  for (double x : ratio) EXPECT_GT(x, 1.3);
 }
 
 class CalibrationSeeds : public ::testing::TestWithParam<uint64_t> {};
