@@ -73,9 +73,12 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   j["B_paper"] = term(t.B);
   j["B_lsq"] = term(t.wls.B);
   // The one model (noise_model.hpp): which terms the data support, the octave points it fitted
-  // with the model's EDF, its AICc, and every term's upper limit.
+  // with the model's EDF, its AICc, and every term's upper limit. Values come from the widest
+  // non-negative model; a term is reported when AICc selects it or its interval excludes 0.
   {
-    json m{{"ok", t.model.ok}, {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance, AICc"},
+    json m{{"ok", t.model.ok},
+           {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance; values from the widest "
+                      "non-negative model, terms reported where AICc selects them or their interval excludes 0"},
            {"aicc", t.model.aicc}, {"chi2_per_dof", t.model.chi2_per_dof}, {"gof_p", t.model.gof_p},
            {"dropped_short", t.model.dropped_short}, {"model_error", t.model.model_error},
            {"tau_s", t.model.tau_s}, {"avar", t.model.avar}, {"edf", t.model.edf}};
