@@ -174,6 +174,15 @@ TEST(Stream, TotdevEqualsTheReflectedSeriesWrittenOut) {
   }
 }
 
+// `o` computed on one thread and on two must agree bit for bit.
+void expect_one_thread_equals_two(const std::vector<double>& y, DevOptions o) {
+  o.threads = 1;
+  const auto one = deviation(y, o);
+  o.threads = 2;
+  const auto two = deviation(y, o);
+  expect_same(one, two, 0.0, to_string(o.type));
+}
+
 TEST(Stream, OneThreadEqualsTwo) {
   // In memory every deviation's heads are cut into fixed segments (MDEV/TDEV restart their
   // window sum at each): the sums must not depend on which thread ran which segment.
@@ -182,11 +191,7 @@ TEST(Stream, OneThreadEqualsTwo) {
     DevOptions o;
     o.type = d;
     o.taus = parse_tau_grid("log:30");
-    o.threads = 1;
-    const auto one = deviation(y, o);
-    o.threads = 2;
-    const auto two = deviation(y, o);
-    expect_same(one, two, 0.0, to_string(d));
+    expect_one_thread_equals_two(y, o);
   }
 }
 
@@ -202,11 +207,7 @@ TEST(Stream, InMemoryPhaseBuiltOnTwoThreadsEqualsTheSequentialBuildBitForBit) {
       o.type = d;
       o.data = kind;
       o.taus = parse_tau_grid("log:20");
-      o.threads = 1;
-      const auto one = deviation(y, o);
-      o.threads = 2;
-      const auto two = deviation(y, o);
-      expect_same(one, two, 0.0, to_string(d));
+      expect_one_thread_equals_two(y, o);
     }
 }
 
