@@ -1,6 +1,5 @@
 #include "procedures/acceptance/loop_phase.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -33,10 +32,6 @@ std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
   for (const auto& r : rows)
     for (std::size_t i = 0; i < m.size() && i < r.size(); ++i) m[i] += r[i] / static_cast<double>(rows.size());
   return m;
-}
-
-std::vector<double> first(const std::vector<double>& v, std::size_t n) {
-  return {v.begin(), v.begin() + static_cast<std::ptrdiff_t>(std::min(n, v.size()))};
 }
 
 }  // namespace
@@ -108,7 +103,7 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
           {"per_step", per_step},
           {"step", {{"t_s", t_s}, {"x", mx}, {"y", my}}},
           {"freq",
-           {{"f_hz", f_hz}, {"mag_x", first(max, f_hz.size())}, {"mag_y", first(may, f_hz.size())}}}};
+           {{"f_hz", f_hz}, {"mag_x", max}, {"mag_y", may}}}};  // all on the plotted grid
 }
 
 void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {

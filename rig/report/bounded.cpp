@@ -43,9 +43,8 @@ std::optional<BoundedText> round_to_bounds(double value, double lo, double hi) {
   if (!std::isfinite(half) || half <= 0) return std::nullopt;
   const int e = last_digit_exponent(half);
   // A value that is huge next to its width would need more than a double's digits.
-  if (std::abs(value) / std::pow(10.0, e) > 1e15 || std::abs(lo) / std::pow(10.0, e) > 1e15 ||
-      std::abs(hi) / std::pow(10.0, e) > 1e15)
-    return std::nullopt;
+  for (double x : {value, lo, hi})
+    if (std::abs(x) / std::pow(10.0, e) > 1e15) return std::nullopt;
   return BoundedText{write_to_digit(value, e), write_to_digit(lo, e), write_to_digit(hi, e)};
 }
 
