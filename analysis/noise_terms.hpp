@@ -103,7 +103,9 @@ struct NoiseTerms {
   // flat_tau_from_s..flat_tau_to_s), "polynomial_minimum" (no flat segment: the quartic's
   // interior minimum), "least_squares" (neither: the model's B), or "" (no B). The paper
   // method's bounds are the chi-square bounds of sigma(tau_cp) at the EDF the model implies at
-  // the Allan point nearest tau_cp (b_edf), over 0.664: its scatter, not its bias.
+  // the Allan point nearest tau_cp (b_edf), over 0.664: its scatter, not its bias. Every term
+  // adds to sigma^2(tau_cp), so that interval bounds B from above only; its lower end is
+  // lowered to the model's B lower bound (0 when the model has no B) where that is lower.
   std::string b_method;
   std::optional<double> flat_tau_from_s, flat_tau_to_s, b_edf;
   FittedCurves curves;  // on the taus of the Allan points the terms were fitted to

@@ -9,6 +9,7 @@
 #include <random>
 #include <tuple>
 
+#include "analysis/edf.hpp"
 #include "analysis/envelope.hpp"
 #include "analysis/json.hpp"
 #include "analysis/noise_terms.hpp"
@@ -100,6 +101,27 @@ TEST(NoiseTerms, PaperMethodFindsTheFlatSegmentAndTauCp) {
   bool has_n = false;
   for (const auto& s : t.paper.segments) has_n |= s.term == "N";
   EXPECT_TRUE(has_n);
+}
+
+TEST(NoiseTerms, ThePaperBOverAnNKCrossingIsBoundedFromAboveOnly) {
+  // A 1 h curve whose minimum is the N-K crossing over a flicker floor a tenth of the paper's
+  // (the K set of the coverage suite): sigma(tau_cp)/0.664 reads that crossing, several times
+  // the true B, with a chi-square interval of its own scatter that would exclude B. Every term
+  // adds to sigma^2(tau_cp), so that interval bounds B from above only: its lower end is the
+  // model's B lower bound (0 when the model has no B), and the interval holds the true B.
+  const double b = kB / 10;
+  auto pts = curve(0, kN, b, 2 * kK, 0, 0.001, 900, 100);
+  for (DevPoint& p : pts) p.edf = std::max(2.0, 1.5 * 3600 / p.tau_s);  // a 1 h record's EDF
+  const NoiseTerms t = noise_terms(pts, 3600);
+  ASSERT_TRUE(t.B.value && t.B.lo && t.B.hi) << t.B.reason;
+  ASSERT_NE(t.b_method, "least_squares") << t.B.reason;
+  EXPECT_GT(*t.B.value, 3 * b);  // the paper's reading: the crossing, not the floor
+  const auto [chi_lo, chi_hi] = chi2_bounds(*t.B.value, *t.b_edf, kOneSigma);
+  EXPECT_GT(chi_lo, b);  // its own scatter's interval excludes the true B ...
+  EXPECT_EQ(*t.B.hi, chi_hi);
+  EXPECT_LE(*t.B.lo, b);  // ... the reported one holds it
+  EXPECT_EQ(*t.B.lo, t.wls.B.value ? t.wls.B.lo.value_or(0.0) : 0.0);
+  EXPECT_NE(t.B.reason.find("bounds B from above"), std::string::npos) << t.B.reason;
 }
 
 // A curve the five-term model does not describe exactly: tones ripple the short-tau points
