@@ -1,5 +1,5 @@
 // The readers of `rig analyze`: raw float64 files, text (one value per line) and the rig's
-// captures. Every value is checked before any analysis: NaN, inf and values beyond
+// captures. Every value is checked before the analysis uses it: NaN, inf and values beyond
 // analysis::kMaxMagnitude (2^333) are a configuration error (exit 2) naming the file and the value's
 // position (value index and byte, line, or sample and capture offset). Text is decimal
 // floating point as std::from_chars reads it (subnormals accepted, hex and "inf" not).
