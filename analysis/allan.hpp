@@ -115,6 +115,13 @@ struct ChunkSource {
   virtual void check_range(std::uint64_t pos, std::size_t len) const {
     (void)pos, (void)len;
   }
+  // The engine is about to read contiguous() values [pos, pos + len) from the calling thread: a
+  // mapped source may fault their pages in now, in one call (each of the engine's two build
+  // threads for its own part, so the page-ins are shared, not left to whichever thread reads
+  // first). Advisory.
+  virtual void will_read(std::uint64_t pos, std::size_t len) const {
+    (void)pos, (void)len;
+  }
 };
 
 // A ChunkSource over values already in memory (used by deviation() and by tests).

@@ -34,6 +34,7 @@ class F64File final : public analysis::ChunkSource {
   std::size_t read_at(std::uint64_t pos, std::span<double> out) const override;
   const double* contiguous() const override { return map_; }
   void check_range(std::uint64_t pos, std::size_t len) const override;
+  void will_read(std::uint64_t pos, std::size_t len) const override;
 
  private:
   void open_and_check(std::size_t map_limit_bytes, bool check_in_pass);

@@ -31,7 +31,10 @@ void check_values(std::span<const double> v) {
 // part of a split pass checks its range, as the engine's second thread does.
 void read_f64(const std::string& path, std::size_t map_limit, bool check_in_pass = false) {
   const rig::cli::F64File f(path, map_limit, check_in_pass);
-  if (check_in_pass) f.check_range(f.size() / 2, f.size() - f.size() / 2);
+  if (check_in_pass) {
+    f.will_read(f.size() / 2, f.size() - f.size() / 2);
+    f.check_range(f.size() / 2, f.size() - f.size() / 2);
+  }
   std::vector<double> buf(3);
   for (int pass = 0; pass < 2; ++pass)
     for (std::uint64_t pos = pass == 0 ? 0 : f.size() / 2; pos < f.size();) {
