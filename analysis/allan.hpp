@@ -106,6 +106,22 @@ struct ChunkSource {
   virtual std::size_t read_at(std::uint64_t pos, std::span<double> out) const = 0;
   // All values contiguous in memory, if the source has them so (saves a copy per read).
   virtual const double* contiguous() const { return nullptr; }
+  // A source may leave its contiguous() values unchecked until the analysis's sequential pass
+  // reaches them (a mapped file: checked while the pass has them in cache, instead of one more
+  // pass over the file before it). The engine calls this on every range of values of that pass
+  // before it uses them, in order from 0 (or, split in two parts, reporting the lower part's
+  // refusal first); it throws naming the first unusable value of the range. Re-reads through
+  // read_at() stay the source's business. The default: values checked already.
+  virtual void check_range(std::uint64_t pos, std::size_t len) const {
+    (void)pos, (void)len;
+  }
+  // The engine is about to read contiguous() values [pos, pos + len) from the calling thread: a
+  // mapped source may fault their pages in now, in one call (each of the engine's two build
+  // threads for its own part, so the page-ins are shared, not left to whichever thread reads
+  // first). Advisory.
+  virtual void will_read(std::uint64_t pos, std::size_t len) const {
+    (void)pos, (void)len;
+  }
 };
 
 // A ChunkSource over values already in memory (used by deviation() and by tests).

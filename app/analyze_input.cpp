@@ -36,9 +36,9 @@ std::string refusal(double x) {
 
 }  // namespace
 
-F64File::F64File(const std::string& path, std::size_t map_limit_bytes) : path_(path) {
+F64File::F64File(const std::string& path, std::size_t map_limit_bytes, bool check_in_pass) : path_(path) {
   try {
-    open_and_check(map_limit_bytes);
+    open_and_check(map_limit_bytes, check_in_pass);
   } catch (...) {
     // A constructor that throws runs no destructor: without this, every refused file leaked
     // its descriptor and its mapping (found profiling tests/fuzz/fuzz_analyze_input.cpp).
@@ -54,7 +54,7 @@ void F64File::release() noexcept {
   fd_ = -1;
 }
 
-void F64File::open_and_check(std::size_t map_limit_bytes) {
+void F64File::open_and_check(std::size_t map_limit_bytes, bool check_in_pass) {
   const std::string& path = path_;
   fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
@@ -68,7 +68,9 @@ void F64File::open_and_check(std::size_t map_limit_bytes) {
     void* p = ::mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE, fd_, 0);
     if (p != MAP_FAILED) {
       map_ = static_cast<const double*>(p);
-      populate_and_check();
+      // check_in_pass: the pass's two threads fault the pages in (will_read: each its own part,
+      // instead of 2-3 ms of serial work before the pass) and check the values.
+      if (!check_in_pass) populate_and_check();
       return;
     }
   }
@@ -83,15 +85,21 @@ F64File::~F64File() { release(); }
 // serial work at the start of every analysis: a large file is done in two halves on two
 // threads (3.6e6 values: about 6 ms of CPU before the deviations can start). The first
 // unusable value of the file is the one reported, whichever half holds it.
+void F64File::populate(std::uint64_t lo, std::uint64_t hi) const {
+  // Page-aligned: the mapping starts on a page; the range is rounded out to whole pages.
+  const std::uintptr_t page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
+  const auto a = reinterpret_cast<std::uintptr_t>(map_ + lo) / page * page;
+  const auto b = reinterpret_cast<std::uintptr_t>(map_ + hi);
+#ifdef MADV_POPULATE_READ
+  ::madvise(reinterpret_cast<void*>(a), b - a, MADV_POPULATE_READ);  // advisory: failure only costs speed
+#else
+  (void)a, (void)b;
+#endif
+}
+
 void F64File::populate_and_check() const {
   const auto part = [this](std::uint64_t lo, std::uint64_t hi) -> std::optional<std::size_t> {
-    // Page-aligned: the mapping starts on a page; the range is rounded out to whole pages.
-    const std::uintptr_t page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
-    const auto a = reinterpret_cast<std::uintptr_t>(map_ + lo) / page * page;
-    const auto b = reinterpret_cast<std::uintptr_t>(map_ + hi);
-#ifdef MADV_POPULATE_READ
-    ::madvise(reinterpret_cast<void*>(a), b - a, MADV_POPULATE_READ);  // advisory: failure only costs speed
-#endif
+    populate(lo, hi);
     const auto bad = an::first_unusable(std::span<const double>(map_ + lo, hi - lo));
     return bad ? std::optional<std::size_t>(lo + *bad) : std::nullopt;
   };
@@ -109,6 +117,40 @@ void F64File::populate_and_check() const {
     if (!bad) bad = bad_hi;
   }
   if (bad) check(*bad, std::span<const double>(map_ + *bad, 1));
+  checked_ = n_;
+}
+
+void F64File::will_read(std::uint64_t pos, std::size_t len) const {
+  if (map_ && pos < n_) populate(pos, pos + std::min<std::uint64_t>(len, n_ - pos));
+}
+
+void F64File::check_range(std::uint64_t pos, std::size_t len) const {
+  if (map_ && pos < n_) check_new(pos, std::span<const double>(map_ + pos, std::min<std::uint64_t>(len, n_ - pos)));
+}
+
+// Checks v (the values from pos) unless they are known checked, and records them: a range that
+// continues the checked prefix extends it; one beyond it starts or continues the second run
+// (the upper part of the engine's split pass), which joins the prefix once the prefix reaches
+// it. Other ranges are checked again when read (cost only).
+void F64File::check_new(std::uint64_t pos, std::span<const double> v) const {
+  const std::uint64_t end = pos + v.size();
+  {
+    std::lock_guard lock(checked_mutex_);
+    if (end <= checked_ || (pos >= run_lo_ && end <= run_hi_)) return;
+  }
+  check(pos, v);
+  std::lock_guard lock(checked_mutex_);
+  if (pos <= checked_) {
+    checked_ = std::max(checked_, end);
+  } else if (run_lo_ == run_hi_) {
+    run_lo_ = pos, run_hi_ = end;
+  } else if (pos >= run_lo_ && pos <= run_hi_) {
+    run_hi_ = std::max(run_hi_, end);
+  }
+  if (run_lo_ < run_hi_ && checked_ >= run_lo_) {
+    checked_ = std::max(checked_, run_hi_);
+    run_lo_ = run_hi_ = 0;
+  }
 }
 
 void F64File::check(std::uint64_t pos, std::span<const double> v) const {
@@ -120,7 +162,8 @@ void F64File::check(std::uint64_t pos, std::span<const double> v) const {
 std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
   if (pos >= n_) return 0;
   const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), n_ - pos));
-  if (map_) {  // checked at open
+  if (map_) {  // checked at open, or in the engine's pass (else here)
+    check_new(pos, std::span<const double>(map_ + pos, want));
     std::memcpy(out.data(), map_ + pos, want * 8);
     return want;
   }
@@ -134,17 +177,9 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
                         (r < 0 ? std::strerror(errno) : "unexpected end"));
     got += static_cast<std::size_t>(r);
   }
-  // Only values past the checked prefix are checked: the engine's cursors and far taus re-read
-  // what its sequential pass has already read (and checked) many times over.
-  const std::uint64_t done = checked_.load(std::memory_order_acquire);
-  if (pos + want > done) {
-    const std::uint64_t from = std::max(pos, done);
-    check(from, std::span<const double>(out.data() + (from - pos), pos + want - from));
-    std::uint64_t cur = done;  // extend the prefix if this read continues it
-    while (cur >= pos && cur < pos + want &&
-           !checked_.compare_exchange_weak(cur, pos + want, std::memory_order_acq_rel)) {
-    }
-  }
+  // Only values not yet checked are checked: the engine's cursors and far taus re-read what its
+  // sequential pass has already read (and checked) many times over.
+  check_new(pos, std::span<const double>(out.data(), want));
   return want;
 }
 

@@ -1,10 +1,10 @@
 // The readers of `rig analyze`: raw float64 files, text (one value per line) and the rig's
-// captures. Every value is checked before any analysis: NaN, inf and values beyond
+// captures. Every value is checked before the analysis uses it: NaN, inf and values beyond
 // analysis::kMaxMagnitude (2^333) are a configuration error (exit 2) naming the file and the value's
 // position (value index and byte, line, or sample and capture offset). Text is decimal
 // floating point as std::from_chars reads it (subnormals accepted, hex and "inf" not).
 #pragma once
-#include <atomic>
+#include <mutex>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -18,29 +18,39 @@ namespace rig::cli {
 
 // Raw little-endian float64 values. A file that fits `map_limit_bytes` is mapped and checked
 // whole at open (one vectorised pass, in two halves on two threads from 2^19 values; the
-// engine then reads it in place, without copies);
+// engine then reads it in place, without copies) or, with `check_in_pass`, by check_range()
+// as the Allan engine's pass reaches each range (the values are read once, not twice: `rig
+// analyze` makes that pass before anything else uses them);
 // a larger one is read with pread and checked as it is first read (bounded memory for 50-h
-// records; the engine's re-reads of a checked prefix are not checked again).
+// records; the engine's re-reads of a checked prefix are not checked again). read_at() never
+// delivers a value that is not checked.
 class F64File final : public analysis::ChunkSource {
  public:
-  F64File(const std::string& path, std::size_t map_limit_bytes);
+  F64File(const std::string& path, std::size_t map_limit_bytes, bool check_in_pass = false);
   ~F64File() override;
   F64File(const F64File&) = delete;
   F64File& operator=(const F64File&) = delete;
   std::uint64_t size() const override { return n_; }
   std::size_t read_at(std::uint64_t pos, std::span<double> out) const override;
   const double* contiguous() const override { return map_; }
+  void check_range(std::uint64_t pos, std::size_t len) const override;
+  void will_read(std::uint64_t pos, std::size_t len) const override;
 
  private:
-  void open_and_check(std::size_t map_limit_bytes);
+  void open_and_check(std::size_t map_limit_bytes, bool check_in_pass);
   void release() noexcept;
   void check(std::uint64_t pos, std::span<const double> v) const;
+  void check_new(std::uint64_t pos, std::span<const double> v) const;
+  void populate(std::uint64_t lo, std::uint64_t hi) const;
   void populate_and_check() const;
   std::string path_;
   int fd_ = -1;
   std::uint64_t n_ = 0;
   const double* map_ = nullptr;
-  mutable std::atomic<std::uint64_t> checked_{0};  // values [0, checked_) have been checked
+  // What has been checked: values [0, checked_) and, while a second part of a split pass is
+  // ahead of the first, [run_lo_, run_hi_) (merged into the prefix when the first reaches it).
+  mutable std::mutex checked_mutex_;
+  mutable std::uint64_t checked_ = 0, run_lo_ = 0, run_hi_ = 0;
 };
 
 // One value per line; '#' starts a comment; blank lines are skipped; ',' ';' and blanks around

@@ -150,8 +150,9 @@ int run(const Args& a) {
   if (input == "text") {
     mem = read_text(a.file);
   } else if (input == "f64") {
-    // A file that fits the memory budget is mapped and analysed in place (one ring holds it all).
-    src = std::make_unique<F64File>(a.file, (a.memory_mib << 20) / 2);
+    // A file that fits the memory budget is mapped and analysed in place (one ring holds it all),
+    // its values checked by the deviations' pass (which runs first, below) as it integrates them.
+    src = std::make_unique<F64File>(a.file, (a.memory_mib << 20) / 2, /*check_in_pass=*/true);
   } else if (input == "capture") {
     cap = read_capture(a.file, a.channel);
     mem = std::move(cap->values);

@@ -400,6 +400,15 @@ TEST(Allan, FirstUnusableFindsNanInfAndHugeValuesAtAnyLane) {
       ASSERT_TRUE(first_unusable(w));
       EXPECT_EQ(*first_unusable(w), std::min<std::size_t>(at, at == 36 ? 0 : 36)) << bad;
     }
+  // Every lane of the vectorised pass's four 8-wide accumulators, and its scalar tail.
+  std::vector<double> u(70, 1.0);
+  for (std::size_t at = 0; at < u.size(); ++at)
+    for (double bad : {std::nan(""), kMaxMagnitude}) {
+      std::vector<double> w = u;
+      w[at] = bad;
+      ASSERT_TRUE(first_unusable(w)) << at;
+      EXPECT_EQ(*first_unusable(w), at);
+    }
 }
 
 }  // namespace

@@ -27,8 +27,14 @@ void check_values(std::span<const double> v) {
 
 // Reads a float64 file as the engine does: a sequential pass in small chunks, then re-reads
 // from the start and from the middle (the engine's cursors), each value checked when first read.
-void read_f64(const std::string& path, std::size_t map_limit) {
-  const rig::cli::F64File f(path, map_limit);
+// check_in_pass (a mapped file checked by the engine's pass, `rig analyze`): first the upper
+// part of a split pass checks its range, as the engine's second thread does.
+void read_f64(const std::string& path, std::size_t map_limit, bool check_in_pass = false) {
+  const rig::cli::F64File f(path, map_limit, check_in_pass);
+  if (check_in_pass) {
+    f.will_read(f.size() / 2, f.size() - f.size() / 2);
+    f.check_range(f.size() / 2, f.size() - f.size() / 2);
+  }
   std::vector<double> buf(3);
   for (int pass = 0; pass < 2; ++pass)
     for (std::uint64_t pos = pass == 0 ? 0 : f.size() / 2; pos < f.size();) {
@@ -69,7 +75,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   rig::fuzz::expect_only_rig_errors([&] {
     switch (data[0] % 4) {
       case 0: check_values(rig::cli::read_text(path)); break;
-      case 1: read_f64(path, std::size_t(1) << 30); break;  // mapped, checked whole at open
+      case 1: read_f64(path, std::size_t(1) << 30, data[0] & 4); break;  // mapped: checked at open, or in the pass
       case 2: read_f64(path, 0); break;                      // pread, checked as first read
       case 3: check_values(rig::cli::read_capture(path, data[0] & 4 ? "y" : "x").values); break;
     }
