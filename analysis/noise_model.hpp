@@ -21,11 +21,8 @@
 // dropped while the AICc model's chi-square is improbable (kGofAlpha), since what the five
 // power laws miss on a DUT (folded tones, the output filter) sits at the shortest taus.
 // docs/analysis.md ("One model") gives the reasoning and coverage.
-// Long-tau points (long_tau_fit.hpp: TOTVAR at T/2, SP 1065 sec. 5.2.11) follow the OADEV points
-// when given: their expectation is each term's basis times the estimator's factor (its bias, the
-// ramp's exactly), their EDF the mixture of SP 1065 Table 7's per-term EDFs, their correlation
-// with the OADEV points the octave chain's at the octaves between them (docs/analysis.md
-// "Long-tau points"). TheoH/Theo1 points are not used.
+// Long-tau points of other estimators (TOTDEV, TheoH: more EDF near T) are not used yet; they
+// would enter as further points with their own EDF and the model covariance extended to them.
 #pragma once
 #include <array>
 #include <cstddef>
@@ -34,7 +31,6 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
-#include "analysis/long_tau_fit.hpp"
 
 namespace rig::analysis {
 
@@ -49,7 +45,6 @@ struct NoiseModelFit {
   std::array<double, 5> share{};       // the term's largest share of the model sigma^2 over the fitted taus
   std::array<double, 5> z{};           // theta / sd(theta) of a term in the model
   std::vector<double> tau_s, avar, edf;  // the points fitted: tau, measured sigma^2, model EDF
-  std::vector<std::string> estimator;   // per point: "oadev" or "totvar" (avar is then TOTVAR)
   double aicc = 0;          // of the AICc model (the one the goodness of fit is tested on)
   double chi2_per_dof = 0;  // GLS chi2 of the selected model on the covariance it implies, per dof
   double gof_p = 0;         // P(chi2 >= that): the goodness of fit over the points fitted
@@ -64,10 +59,7 @@ inline constexpr std::size_t kMinGofPoints = 6;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
 // is taken from it); record_s: its length; confidence: of the bounds (default one sigma).
-// long_tau: further points past the OADEV grid (totvar_fit_points), used when at least 1.5x the
-// longest OADEV point fitted.
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma,
-                              std::span<const LongTauFitPoint> long_tau = {});
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma);
 
 // sigma^2 of term k (0..4 = Q, N, B, K, R) per unit of its squared coefficient at tau (IEEE 952).
 double noise_basis(int k, double tau);
@@ -86,15 +78,5 @@ double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_p
 // Giving R random walk's EDF instead (the previous version) put the fitted curve 1.2-1.6x above
 // the R-dominated points (the log-bias correction of EDF ~2 on points whose scatter is far less).
 std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
-
-// The same for a TOTVAR point (long_tau_fit.hpp) at factor m, mu its terms' TOTVAR expectations:
-// Q, N, B, K with SP 1065 Table 7's EDF (totvar_term_edf), R its cross term with them
-// (ramp_cross: LongTauFitPoint::ramp_cross); and the mixture EDF from them. scale: the per-term
-// factors on Table 7's EDF (kTotvarLnVarScale for the scatter, long_tau_fit.hpp).
-std::array<double, 5> totvar_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase,
-                                     const std::array<double, 4>& ramp_cross,
-                                     const std::array<double, 4>& scale = kTotvarLnVarScale);
-double totvar_model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase,
-                        const std::array<double, 4>& ramp_cross, const std::array<double, 4>& scale = kTotvarLnVarScale);
 
 }  // namespace rig::analysis

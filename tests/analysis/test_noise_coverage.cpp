@@ -43,66 +43,6 @@ TEST(InjectedNoise, EachTermGivesItsAllanVariance) {
 // size would. 400 records of K + R (10 Hz, 6 h, R 75 % and 84 % of sigma^2 at T/8 and T/4): the
 // measured variance of s / mu is within 25 % of 2/model_edf (measured 0.217 vs 0.207, 0.368 vs
 // 0.327) and below 0.75 of what random walk's EDF, the previous rule for R, gives (0.339, 0.895).
-// TOTVAR at T/2 (analysis/long_tau_fit.hpp) against the model's expectation for it, each term
-// alone: mean over `seeds` records of n samples at 100 Hz of TOTVAR / (AVAR_k(T/2) factor_k).
-double mean_totvar_ratio(const Terms& t, int k, int seeds, std::size_t n) {
-  const double rate = 100;
-  double s = 0;
-  for (int i = 0; i < seeds; ++i) {
-    const auto y = generate(t, rate, n, 900 + static_cast<std::uint64_t>(i));
-    const auto pts = totvar_fit_points(y, DataKind::Frequency, rate);
-    if (pts.size() != 1) return 0;
-    s += pts[0].var / (term_avar(t, k, pts[0].tau_s) * pts[0].factor[static_cast<std::size_t>(k)]);
-  }
-  return s / seeds;
-}
-
-// The estimator: with stride 1 it is SP 1065 eq. 25 (the rig's TOTDEV, exact against NBS14) to
-// rounding; with a stride (every m/512-th centre) it stays within a few % of it.
-TEST(LongTauFit, TotvarIsTotdevSquaredAtHalfTheRecord) {
-  for (const std::size_t n : {999u, 20000u}) {
-    const auto y = generate({0, 1e-5, 0, 1e-6, 0}, 100, n, 77);
-    const auto pts = totvar_fit_points(y, DataKind::Frequency, 100);
-    ASSERT_EQ(pts.size(), 1u);
-    DevOptions o;
-    o.type = Deviation::TOTDEV;
-    o.rate_hz = 100;
-    o.bounds = false;
-    o.factors = {pts[0].m};
-    const auto d = deviation(y, o);
-    ASSERT_EQ(d.size(), 1u);
-    if (pts[0].stride == 1) EXPECT_NEAR(pts[0].var / (d[0].dev * d[0].dev), 1, 1e-9) << n;
-    else EXPECT_NEAR(pts[0].var / (d[0].dev * d[0].dev), 1, 0.03) << n << " stride " << pts[0].stride;
-    EXPECT_EQ(pts[0].m, n / 2 / pts[0].stride * pts[0].stride);
-  }
-}
-
-// The expectation factors against closed forms in the continuous limit (j = K/2):
-// the ramp (x = t^2, second differences 4 t tau - 2 t^2 at the reflected edges, 2 tau^2 inside):
-// E = AVAR (1 - (14/15) tau/T) = 0.5333 at T/2; white FM unbiased (the edge terms average to the
-// interior's); random walk FM: SP 1065 sec. 5.2.11 gives 1 - 0.75 tau/T = 0.625 at T/2.
-TEST(LongTauFit, TotvarFactorsAgainstClosedForms) {
-  const auto f = totvar_factors(4096, 2048, 1);
-  EXPECT_NEAR(f[4], 1 - 14.0 / 15 / 2, 2e-3);
-  EXPECT_NEAR(f[1], 1, 2e-3);
-  EXPECT_NEAR(f[2], 1 - 0.5 / (3 * std::log(2.0)), 1e-12);
-  EXPECT_NEAR(f[3], 0.625, 0.03);
-  // strided: the same within the grid's resolution
-  const auto g = totvar_factors(1024, 512, 64);
-  for (std::size_t k = 0; k < 5; ++k) EXPECT_NEAR(g[k] / f[k], 1, 0.01) << k;
-}
-
-// Each term alone through the generator: the mean TOTVAR at T/2 over 400 records of 4000
-// samples is the model's expectation (basis times factor). TOTVAR at T/2 has 1.5-3 EDF, so the
-// mean of 400 has a relative sd of 4-6 %; the ramp is deterministic.
-TEST(InjectedNoise, EachTermGivesItsTotalVarianceAtHalfTheRecord) {
-  EXPECT_NEAR(mean_totvar_ratio({1e-6, 0, 0, 0, 0}, 0, 400, 4000), 1, 0.15);
-  EXPECT_NEAR(mean_totvar_ratio({0, 1e-5, 0, 0, 0}, 1, 400, 4000), 1, 0.15);
-  EXPECT_NEAR(mean_totvar_ratio({0, 0, 1e-6, 0, 0}, 2, 400, 4000), 1, 0.18);
-  EXPECT_NEAR(mean_totvar_ratio({0, 0, 0, 1e-7, 0}, 3, 400, 4000), 1, 0.18);
-  EXPECT_NEAR(mean_totvar_ratio({0, 0, 0, 0, 1e-8}, 4, 1, 4000), 1, 1e-6);
-}
-
 TEST(InjectedNoise, RampScatterIsItsCrossTermWithTheRandomWalk) {
   const Terms t{0, 0, 0, 8.53e-8, 2.2e-9};
   const double rate = 10;
