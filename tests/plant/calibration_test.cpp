@@ -67,6 +67,12 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
     if (auto v = r.value("n")) n.push_back(*v);
     if (auto v = r.value("k")) k.push_back(*v);
     k_held += k_holds(r, kPlantK);
+    {
+      const nlohmann::json& kj = r.analysis["allan"]["x"]["noise_terms"]["K"]["per_hour"];
+      std::printf("seed %llu: K %.3e [%.3e, %.3e] g/h^0.5 (null: 0 and its upper limit)\n", static_cast<unsigned long long>(r.seed),
+                  r.value("k").value_or(0.0), kj.contains("lo") ? kj["lo"].get<double>() : 0.0,
+                  kj.contains("hi") ? kj["hi"].get<double>() : 0.0);
+    }
     r_reported += r.value("r").has_value();
   }
   for (const auto* v : {&b_x, &b_y, &q, &n}) ASSERT_GE(v->size(), rs.size() - 1) << "a term is missing on 2+ seeds";
