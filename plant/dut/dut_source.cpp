@@ -19,9 +19,9 @@ EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.
   has_sense_ = source.has_sense();
   sense_lsb_ = 2 * n.range_g / std::ldexp(1.0, n.sense_adc_bits);
   sense_inv_lsb_ = 1 / sense_lsb_;
-  // Blocks of 128 periods (0.128 s at 1 kHz), four ahead: a hand-over per block, and the
-  // ring (about 0.25 MB of terms) stays in the caches.
-  noise_ = std::make_unique<NoisePipe>(std::move(source), 128, 4);
+  // Blocks of 128 periods (0.128 s at 1 kHz), eight ahead: a hand-over per block, a wake-up of
+  // the worker per four, and the ring (about 0.6 MB of terms) stays in the caches.
+  noise_ = std::make_unique<NoisePipe>(std::move(source), 128, 8);
   set_filter(p_.filter);
   set_table_angle_deg(p_.orientation.u10_angle_deg);
   temp_c_ = n.ambient_c;

@@ -92,23 +92,48 @@ void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
   const std::size_t n = steps_, at = i * n;
   // The interference lines of the whole period at once (LineBand::fill: step()'s bits).
   intf_.fill(std::span<double>(b.intf.data() + at, n));
-  noise::Oscillator poll = poll_osc_;
-  for (std::size_t k = 0; k < n; ++k) {
-    b.vib[at + k] = vib_.step(r_vib_);
-    if (input_sd_ > 0) b.input[at + k] = input_sd_ * r_input_.normal();
-    if (bursting) {
+  // Stream by stream over the period, each generator in locals (so the compiler keeps its
+  // state in registers rather than in this object, which the stores might alias).
+  {
+    noise::BandNoise vib = vib_;
+    noise::Rng r = r_vib_;
+    double* out = b.vib.data() + at;
+    for (std::size_t k = 0; k < n; ++k) out[k] = vib.step(r);
+    vib_ = vib;
+    r_vib_ = r;
+  }
+  if (input_sd_ > 0) {
+    noise::Rng r = r_input_;
+    double* out = b.input.data() + at;
+    for (std::size_t k = 0; k < n; ++k) out[k] = input_sd_ * r.normal();
+    r_input_ = r;
+  }
+  if (bursting) {
+    for (std::size_t k = 0; k < n; ++k) {
       double* term = b.burst.data() + (at + k) * kBurstTones;
       for (std::size_t j = 0; j < burst_env_.size(); ++j) {
         term[j] = burst_env_[j] * burst_osc_[j].c;
         burst_osc_[j].step();
       }
     }
-    b.poll_i[at + k] = pi_amp * poll.c;
-    b.poll_q[at + k] = pq_amp * poll.s;
-    poll.step();
-    if (sense_sd_ > 0) b.sense[at + k] = sense_sd_ * r_sense_.normal();
   }
-  poll_osc_ = poll;
+  {
+    noise::Oscillator poll = poll_osc_;
+    double* pi = b.poll_i.data() + at;
+    double* pq = b.poll_q.data() + at;
+    for (std::size_t k = 0; k < n; ++k) {
+      pi[k] = pi_amp * poll.c;
+      pq[k] = pq_amp * poll.s;
+      poll.step();
+    }
+    poll_osc_ = poll;
+  }
+  if (sense_sd_ > 0) {
+    noise::Rng r = r_sense_;
+    double* out = b.sense.data() + at;
+    for (std::size_t k = 0; k < n; ++k) out[k] = sense_sd_ * r.normal();
+    r_sense_ = r;
+  }
 }
 
 NoisePipe::NoisePipe(PeriodNoise source, std::size_t periods_per_block, std::size_t depth)
@@ -121,37 +146,50 @@ NoisePipe::~NoisePipe() {
     const std::lock_guard lock(m_);
     stop_ = true;
   }
-  cv_.notify_all();
+  worker_cv_.notify_one();
   worker_.join();
 }
 
 void NoisePipe::run() {
   // Only arithmetic on memory allocated before the thread started: nothing here can throw.
+  // When the ring is full the worker sleeps until half of it is free again, so the reader
+  // wakes it once per ring_.size() / 2 blocks, not at every block.
+  const std::size_t low = ring_.size() / 2;
   std::unique_lock lock(m_);
   for (;;) {
-    cv_.wait(lock, [this] { return stop_ || drawn_ - released_ < ring_.size(); });
+    if (drawn_ - released_ == ring_.size()) {
+      worker_waiting_ = true;
+      worker_cv_.wait(lock, [&] { return stop_ || drawn_ - released_ <= low; });
+      worker_waiting_ = false;
+    }
     if (stop_) return;
     NoiseBlock& b = ring_[drawn_ % ring_.size()];
     lock.unlock();  // the block is the worker's until drawn_ counts it
     source_.fill(b);
     lock.lock();
     ++drawn_;
-    cv_.notify_all();
+    if (reader_waiting_) reader_cv_.notify_one();
   }
 }
 
 const NoiseBlock& NoisePipe::front() {
   std::unique_lock lock(m_);
-  cv_.wait(lock, [this] { return drawn_ > released_; });
+  if (drawn_ == released_) {
+    reader_waiting_ = true;
+    reader_cv_.wait(lock, [this] { return drawn_ > released_; });
+    reader_waiting_ = false;
+  }
   return ring_[released_ % ring_.size()];
 }
 
 void NoisePipe::pop() {
+  bool wake = false;
   {
     const std::lock_guard lock(m_);
     ++released_;
+    wake = worker_waiting_ && drawn_ - released_ <= ring_.size() / 2;
   }
-  cv_.notify_all();
+  if (wake) worker_cv_.notify_one();
 }
 
 }  // namespace rig::plant

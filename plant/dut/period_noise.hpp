@@ -72,7 +72,8 @@ class PeriodNoise {
 };
 
 // PeriodNoise run on a worker thread, up to `depth` blocks ahead of the reader: a ring of
-// blocks handed over under one mutex (one hand-over per block, not per sample). The worker
+// blocks handed over under one mutex (one hand-over per block, not per sample; a wake-up of
+// the sleeping worker per depth / 2 blocks). The worker
 // only computes; it stops and is joined when the pipe is destroyed, whatever the reader was
 // doing (an abort, a fault in a phase).
 class NoisePipe {
@@ -92,10 +93,10 @@ class NoisePipe {
 
   PeriodNoise source_;
   std::vector<NoiseBlock> ring_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  uint64_t drawn_ = 0, released_ = 0;  // blocks, guarded by m_
-  bool stop_ = false;
+  std::mutex m_;  // guards the counts and flags below
+  std::condition_variable worker_cv_, reader_cv_;
+  uint64_t drawn_ = 0, released_ = 0;  // blocks
+  bool stop_ = false, worker_waiting_ = false, reader_waiting_ = false;
   std::thread worker_;  // last: starts after everything it reads is built
 };
 
