@@ -108,13 +108,16 @@ void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
     for (std::size_t k = 0; k < n; ++k) out[k] = input_sd_ * r.normal();
     r_input_ = r;
   }
-  if (bursting) {
-    for (std::size_t k = 0; k < n; ++k) {
-      double* term = b.burst.data() + (at + k) * kBurstTones;
-      for (std::size_t j = 0; j < burst_env_.size(); ++j) {
-        term[j] = burst_env_[j] * burst_osc_[j].c;
-        burst_osc_[j].step();
+  if (bursting) {  // tone by tone (each its own oscillator), into the step-major terms
+    double* terms = b.burst.data() + at * kBurstTones;
+    for (std::size_t j = 0; j < burst_env_.size(); ++j) {
+      noise::Oscillator osc = burst_osc_[j];
+      const double env = burst_env_[j];
+      for (std::size_t k = 0; k < n; ++k) {
+        terms[k * kBurstTones + j] = env * osc.c;
+        osc.step();
       }
+      burst_osc_[j] = osc;
     }
   }
   {
