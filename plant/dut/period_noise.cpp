@@ -92,51 +92,40 @@ void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
   const std::size_t n = steps_, at = i * n;
   // The interference lines of the whole period at once (LineBand::fill: step()'s bits).
   intf_.fill(std::span<double>(b.intf.data() + at, n));
-  // Stream by stream over the period, each generator in locals (so the compiler keeps its
-  // state in registers rather than in this object, which the stores might alias).
-  {
-    noise::BandNoise vib = vib_;
-    noise::Rng r = r_vib_;
-    double* out = b.vib.data() + at;
-    for (std::size_t k = 0; k < n; ++k) out[k] = vib.step(r);
-    vib_ = vib;
-    r_vib_ = r;
-  }
-  if (input_sd_ > 0) {
-    noise::Rng r = r_input_;
-    double* out = b.input.data() + at;
-    for (std::size_t k = 0; k < n; ++k) out[k] = input_sd_ * r.normal();
-    r_input_ = r;
-  }
-  if (bursting) {  // tone by tone (each its own oscillator), into the step-major terms
-    double* terms = b.burst.data() + at * kBurstTones;
-    for (std::size_t j = 0; j < burst_env_.size(); ++j) {
-      noise::Oscillator osc = burst_osc_[j];
-      const double env = burst_env_[j];
-      for (std::size_t k = 0; k < n; ++k) {
-        terms[k * kBurstTones + j] = env * osc.c;
-        osc.step();
+  // One pass over the period, every generator in locals (so the compiler keeps their states in
+  // registers rather than in this object, which the stores might alias): the streams are
+  // independent chains (a biquad, three random streams, six oscillators) the core overlaps.
+  noise::BandNoise vib = vib_;
+  noise::Rng r_vib = r_vib_, r_input = r_input_, r_sense = r_sense_;
+  noise::Oscillator poll = poll_osc_;
+  std::array<noise::Oscillator, kBurstTones> tone = burst_osc_;
+  const std::array<double, kBurstTones> env = burst_env_;
+  const bool input = input_sd_ > 0, sense = sense_sd_ > 0;
+  double* vib_out = b.vib.data() + at;
+  double* input_out = b.input.data() + at;
+  double* burst_out = b.burst.data() + at * kBurstTones;
+  double* pi_out = b.poll_i.data() + at;
+  double* pq_out = b.poll_q.data() + at;
+  double* sense_out = b.sense.data() + at;
+  for (std::size_t k = 0; k < n; ++k) {
+    vib_out[k] = vib.step(r_vib);
+    if (input) input_out[k] = input_sd_ * r_input.normal();
+    if (bursting)
+      for (std::size_t j = 0; j < kBurstTones; ++j) {
+        burst_out[k * kBurstTones + j] = env[j] * tone[j].c;
+        tone[j].step();
       }
-      burst_osc_[j] = osc;
-    }
+    pi_out[k] = pi_amp * poll.c;
+    pq_out[k] = pq_amp * poll.s;
+    poll.step();
+    if (sense) sense_out[k] = sense_sd_ * r_sense.normal();
   }
-  {
-    noise::Oscillator poll = poll_osc_;
-    double* pi = b.poll_i.data() + at;
-    double* pq = b.poll_q.data() + at;
-    for (std::size_t k = 0; k < n; ++k) {
-      pi[k] = pi_amp * poll.c;
-      pq[k] = pq_amp * poll.s;
-      poll.step();
-    }
-    poll_osc_ = poll;
-  }
-  if (sense_sd_ > 0) {
-    noise::Rng r = r_sense_;
-    double* out = b.sense.data() + at;
-    for (std::size_t k = 0; k < n; ++k) out[k] = sense_sd_ * r.normal();
-    r_sense_ = r;
-  }
+  vib_ = vib;
+  r_vib_ = r_vib;
+  r_input_ = r_input;
+  r_sense_ = r_sense;
+  poll_osc_ = poll;
+  burst_osc_ = tone;
 }
 
 NoisePipe::NoisePipe(PeriodNoise source, std::size_t periods_per_block, std::size_t depth)
