@@ -190,5 +190,18 @@ TEST(Dut, OutputIsPinnedBitForBit) {
   EXPECT_EQ(h, 0xebe7869c8bfe4b51ULL);
 }
 
+// The noise worker (plant/dut/period_noise.hpp) stops and is joined wherever the model is left:
+// before anything was read, in the first block, after several blocks (the worker mid-fill or
+// asleep on a full ring). A destructor that failed to wake it would hang here.
+TEST(Dut, DestroyedAtAnyPointStopsItsNoiseWorker) {
+  const DutParams p = load_dut_params(nullptr);
+  for (int reads : {0, 1, 127, 128, 129, 700, 1500}) {
+    EmulatedDut d(p, static_cast<uint64_t>(reads));
+    double x = 0, y = 0;
+    for (int i = 0; i < reads; ++i) d.next(x, y);
+    EXPECT_DOUBLE_EQ(d.time_s(), reads / 1000.0);
+  }
+}
+
 }  // namespace
 }  // namespace rig::plant
