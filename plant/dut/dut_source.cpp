@@ -117,25 +117,38 @@ void EmulatedDut::period(double q_test_g, float* x_tap, float* y_tap, double& x_
   const double* sense = b.sense.data() + at;
   design::LoopModel::State st = st_;
   const bool filter_on = filter_cfg_.enabled;
+  bool tap_saturated = tap_saturated_;
   double x = 0, y = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    double q = q_slow + vib[k];
-    if (has_input_) q += input[k];
-    if (bursting)
-      for (std::size_t j = 0; j < kBurstTones; ++j) q += burst[k * kBurstTones + j];
-    // x: the torquer current through the current-sense channel, with its pick-up
-    double xm = loop_.step(st, q) + intf[k] + poll_i[k] - poll_q[k];
-    if (has_sense_) xm += sense[k];
-    x = sense_lsb_ * design::round_half_even(xm * sense_inv_lsb_);
-    y = x;
-    if (filter_on)
-      for (auto& sec : filt_) y = sec.step(y);
-    if (x_tap) {  // the loop test's record, at the loop rate
-      x_tap[k] = static_cast<float>(x);
-      y_tap[k] = static_cast<float>(y);
-      tap_saturated_ = tap_saturated_ || st.saturated;
+  // The steps of the period, with `filter` the output filter W_f(z) of one value.
+  auto steps = [&](auto&& filter) {
+    for (std::size_t k = 0; k < n; ++k) {
+      double q = q_slow + vib[k];
+      if (has_input_) q += input[k];
+      if (bursting)
+        for (std::size_t j = 0; j < kBurstTones; ++j) q += burst[k * kBurstTones + j];
+      // x: the torquer current through the current-sense channel, with its pick-up
+      double xm = loop_.step(st, q) + intf[k] + poll_i[k] - poll_q[k];
+      if (has_sense_) xm += sense[k];
+      x = sense_lsb_ * design::round_half_even(xm * sense_inv_lsb_);
+      y = filter_on ? filter(x) : x;
+      if (x_tap) {  // the loop test's record, at the loop rate
+        x_tap[k] = static_cast<float>(x);
+        y_tap[k] = static_cast<float>(y);
+        tap_saturated = tap_saturated || st.saturated;
+      }
     }
+  };
+  if (filt_.size() == 1) {  // the usual single biquad: its state in registers, not in the vector
+    design::Section sec = filt_[0];
+    steps([&sec](double v) { return sec.step(v); });
+    filt_[0] = sec;
+  } else {
+    steps([this](double v) {
+      for (auto& sec : filt_) v = sec.step(v);
+      return v;
+    });
   }
+  tap_saturated_ = tap_saturated;
   st_ = st;
   ++n_out_;
   // The rig polls: sample-and-hold of the last x, y, no anti-alias filter.
