@@ -10,7 +10,6 @@
 #pragma once
 #include <atomic>
 #include <condition_variable>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -23,6 +22,31 @@
 namespace rig::link {
 
 class InProcessPort;
+
+// A port's receive queue: a FIFO on one vector that keeps its capacity. std::deque allocated and
+// freed a node every few frames (an RxFrame is about 100 bytes, a node 512), a cost the lockstep
+// profile showed at 13.7 million frames per paper run.
+class FrameFifo {
+ public:
+  std::size_t size() const { return v_.size() - head_; }
+  bool empty() const { return head_ == v_.size(); }
+  void push_back(const RxFrame& f) { v_.push_back(f); }
+  const RxFrame& front() const { return v_[head_]; }
+  void pop_front() {
+    if (++head_ == v_.size()) {  // drained: start over in the same storage
+      v_.clear();
+      head_ = 0;
+    } else if (head_ >= kCompactAfter && 2 * head_ >= v_.size()) {  // never drained: drop the read half
+      v_.erase(v_.begin(), v_.begin() + static_cast<std::ptrdiff_t>(head_));
+      head_ = 0;
+    }
+  }
+
+ private:
+  static constexpr std::size_t kCompactAfter = 4096;
+  std::vector<RxFrame> v_;
+  std::size_t head_ = 0;  // the first frame not yet taken
+};
 
 class InProcessBus : public std::enable_shared_from_this<InProcessBus> {
  public:
@@ -88,7 +112,7 @@ class InProcessPort final : public CanTransport {
   std::string name_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
-  std::deque<RxFrame> queue_;
+  FrameFifo queue_;
   // queue_.size(), written under mu_: a lockstep poll of an empty queue (the firmware's command
   // poll every tick) reads it instead of taking mu_. A frame pushed by another thread just
   // after the read is seen by the next poll, as it would be had the poll locked first.

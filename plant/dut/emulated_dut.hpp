@@ -1,7 +1,6 @@
 // The emulated quartz pendulum accelerometer: closed loop + noise + orientation,
 // stepped at the loop rate and polled by sample-and-hold at the output rate.
 #pragma once
-#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -10,8 +9,8 @@
 
 #include "design/filter.hpp"
 #include "design/loop_model.hpp"
-#include "plant/dut/noise.hpp"
 #include "plant/dut/params.hpp"
+#include "plant/dut/period_noise.hpp"
 #include "plant/emulated/dut_source.hpp"
 
 namespace rig::plant {
@@ -44,43 +43,30 @@ class EmulatedDut final : public DutSource {
   // One output period: `q_test_g` (the loop test's torque as input acceleration) adds to the
   // input; the loop-rate x and y go to the taps when given.
   void period(double q_test_g, float* x_tap, float* y_tap, double& x_out, double& y_out);
-  double slow_bias_g();          // bias terms updated once per output period
   double word(double v, double& carry) const;
 
-  static constexpr int kBurstTones = 5;
   DutParams p_;
   design::LoopModel loop_;
   design::LoopModel::State st_;
   int steps_per_out_;
-  double dt_out_;
   uint64_t n_out_ = 0;
   double q_static_ = 0;
   double angle_deg_ = std::numeric_limits<double>::quiet_NaN();
   double temp_c_ = 0;
 
-  // noise sources, each with its own stream
-  enum Stream : uint64_t {
-    kSense = 1, kInput, kFlicker, kRrw, kVib, kBurst, kIntf, kPollI, kPollQ, kPickoff, kPollDrift
-  };
-  noise::Rng r_sense_, r_input_, r_flicker_, r_rrw_, r_vib_, r_burst_, r_intf_, r_poll_i_, r_poll_q_,
-      r_poll_drift_;
-  noise::FlickerBank flicker_, poll_i_, poll_q_;
-  noise::GaussMarkov poll_drift_i_, poll_drift_q_;  // slow part of the pick-up's envelope
-  noise::BandNoise vib_;
-  noise::LineBand intf_;
-  double sense_sd_ = 0, input_sd_ = 0, rrw_step_ = 0, rrw_ = 0;
+  // The noise sources, drawn ahead on the pipe's worker thread (plant/dut/period_noise.hpp);
+  // the period being stepped is period_ of the front block.
+  bool has_input_ = false, has_sense_ = false;
   double sense_lsb_ = 0, sense_inv_lsb_ = 0;
-  noise::Oscillator poll_osc_;
-  std::array<noise::Oscillator, kBurstTones> burst_osc_{};
-  std::array<double, kBurstTones> burst_env_{};
-  double burst_p_ = 0, burst_decay_ = 1;
+  std::unique_ptr<NoisePipe> noise_;
+  const NoiseBlock* block_ = nullptr;
+  std::size_t period_ = 0;
 
   // output filter W_f(z), DF-II-T sections at the loop rate
   FilterConfig filter_cfg_;
   std::vector<design::Section> filt_;
   double carry_x_ = 0, carry_y_ = 0;
   bool tap_saturated_ = false;  // the PWM saturated during a loop-test period
-  std::vector<double> scratch_;  // period()'s interference pick-up, one per loop step
 };
 
 }  // namespace rig::plant

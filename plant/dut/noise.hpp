@@ -145,30 +145,21 @@ class LineBand {
     return v;
   }
   // out[k] = the k-th of the next out.size() step() values, the same bits: per k the lines add
-  // in step()'s order. Two lines at a time side by side (one SSE2 register holds a pair's
-  // carriers), each pair's carriers kept in registers over the whole span; no FMA is involved
-  // (a vector multiply or add rounds each lane as the scalar one does).
+  // in step()'s order. Two lines share one SSE2 register (a pair's carriers), and up to three
+  // pairs advance side by side in one pass over the span: their rotations are independent
+  // chains the core overlaps, and each out[k] is read and written once per three pairs. No FMA
+  // is involved (a vector multiply or add rounds each lane as the scalar one does).
   void fill(std::span<double> out) {
-    using v2 = double __attribute__((vector_size(16)));
     std::fill(out.begin(), out.end(), 0.0);
     std::size_t j = 0;
-    for (; j + 1 < lines_.size(); j += 2) {
-      Line& l0 = lines_[j];
-      Line& l1 = lines_[j + 1];
-      v2 c = {l0.c, l1.c}, sn = {l0.s, l1.s};
-      const v2 rc = {l0.rc, l1.rc}, rs = {l0.rs, l1.rs}, ar = {l0.ar, l1.ar}, ai = {l0.ai, l1.ai};
-      for (double& v : out) {
-        const v2 t = ar * c - ai * sn;
-        v += t[0];
-        v += t[1];
-        const v2 nc = c * rc - sn * rs;
-        sn = sn * rc + c * rs;
-        c = nc;
-      }
-      l0.c = c[0];
-      l1.c = c[1];
-      l0.s = sn[0];
-      l1.s = sn[1];
+    for (; j + 6 <= lines_.size(); j += 6) fill_pairs<3>(&lines_[j], out);
+    if (j + 4 <= lines_.size()) {
+      fill_pairs<2>(&lines_[j], out);
+      j += 4;
+    }
+    if (j + 2 <= lines_.size()) {
+      fill_pairs<1>(&lines_[j], out);
+      j += 2;
     }
     for (; j < lines_.size(); ++j) {
       Line w = lines_[j];
@@ -187,6 +178,40 @@ class LineBand {
     double c, s, rc, rs;  // carrier (recursive rotation)
     double ar, ai;        // complex envelope
   };
+  // Lines l[0 .. 2P) added to out (fill()'s order), P pairs side by side.
+  template <std::size_t P>
+  static void fill_pairs(Line* l, std::span<double> out) {
+    using v2 = double __attribute__((vector_size(16)));
+    v2 c[P], sn[P], rc[P], rs[P], ar[P], ai[P];
+    for (std::size_t p = 0; p < P; ++p) {
+      const Line &a = l[2 * p], &b = l[2 * p + 1];
+      c[p] = v2{a.c, b.c};
+      sn[p] = v2{a.s, b.s};
+      rc[p] = v2{a.rc, b.rc};
+      rs[p] = v2{a.rs, b.rs};
+      ar[p] = v2{a.ar, b.ar};
+      ai[p] = v2{a.ai, b.ai};
+    }
+    for (double& v : out) {
+      double acc = v;
+      for (std::size_t p = 0; p < P; ++p) {
+        const v2 t = ar[p] * c[p] - ai[p] * sn[p];
+        acc += t[0];
+        acc += t[1];
+        const v2 nc = c[p] * rc[p] - sn[p] * rs[p];
+        sn[p] = sn[p] * rc[p] + c[p] * rs[p];
+        c[p] = nc;
+      }
+      v = acc;
+    }
+    for (std::size_t p = 0; p < P; ++p) {
+      l[2 * p].c = c[p][0];
+      l[2 * p + 1].c = c[p][1];
+      l[2 * p].s = sn[p][0];
+      l[2 * p + 1].s = sn[p][1];
+    }
+  }
+
   std::vector<Line> lines_;
   double phi_ = 0, drive_ = 0;
 };

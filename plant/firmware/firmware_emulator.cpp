@@ -73,12 +73,21 @@ void FirmwareEmulator::step(double dt_s) {
   if (!(dt_s > 0)) return;
   time_acc_ += dt_s * 1e9;
   if (time_acc_ < static_cast<double>(kTickNs) - 0.5) return;
-  // One lock for the slice's ticks (the world steps about 10 ms at a time), not one per tick.
+  // One lock for the slice's ticks (the world steps about 10 ms at a time), not one per tick,
+  // and one batch of frames on the bus: in lockstep the simulated time stands still during the
+  // slice, so its ticks' frames carry one timestamp whether they leave tick by tick or together,
+  // and the rig reads none of them before the slice ends.
   std::lock_guard lk(mu_);
-  while (time_acc_ >= static_cast<double>(kTickNs) - 0.5) {  // tolerate rounding of many small dt
-    tick();
-    time_acc_ -= static_cast<double>(kTickNs);
+  try {
+    while (time_acc_ >= static_cast<double>(kTickNs) - 0.5) {  // tolerate rounding of many small dt
+      tick();
+      time_acc_ -= static_cast<double>(kTickNs);
+    }
+  } catch (...) {
+    flush_sends();  // the frames of the ticks before the fault leave, as they did tick by tick
+    throw;
   }
+  flush_sends();
 }
 
 void FirmwareEmulator::tick() {
@@ -113,7 +122,6 @@ void FirmwareEmulator::tick() {
     h.last_seq = static_cast<uint32_t>(seq);
     send(link::encode(h));
   }
-  flush_sends();
 }
 
 bool FirmwareEmulator::dropped(uint64_t seq) const {
@@ -145,7 +153,7 @@ void FirmwareEmulator::send_layout_sample(uint64_t seq, float x, float y, uint8_
       const link::CanFdFrame& f = frames_[c];
       if (f.fd) {  // a CAN FD layout: the transport must carry FD (vcan with mtu 72, the in-process bus)
         if (silent()) continue;
-        flush_sends();  // the tick's classic frames queued before it leave first, as sent
+        flush_sends();  // the classic frames queued before it leave first, as sent
         bus_.send_fd(f);
         ++stats_.frames_sent;
         continue;
@@ -381,6 +389,7 @@ void FirmwareEmulator::start_realtime() {
         for (; done < due && !stop_; ++done) {
           std::lock_guard lk(mu_);
           tick();
+          flush_sends();  // in real time each tick's frames leave at their tick
         }
       } catch (const std::exception&) {
         // A transport error (interface went down): keep ticking, a real MCU does.

@@ -85,15 +85,15 @@ class FirmwareEmulator {
   uint64_t sample_counter() const;  // the next sample's counter value
 
  private:
-  void tick();  // one output period; the caller holds mu_
+  void tick();  // one output period; the caller holds mu_ and flushes the frames it queued
   void handle_commands();
   link::Response execute(const link::Command& c);
   void send_sample(uint64_t seq, float x, float y, uint8_t status);
   // A DBC layout: collects samples and sends the frames of each full block.
   void send_layout_sample(uint64_t seq, float x, float y, uint8_t status);
   bool dropped(uint64_t seq) const;
-  void send(const link::CanFrame& f);  // queues it for the end of the tick (flush_sends)
-  void flush_sends();                   // the tick's frames, in order, in one batch
+  void send(const link::CanFrame& f);  // queues it for the end of the tick or slice (flush_sends)
+  void flush_sends();                   // the frames queued, in order, in one batch
   bool silent() const;
   link::Response start_loop_test(const link::Command& c);
   void loop_test_period();  // one output period of a running loop test
@@ -129,7 +129,7 @@ class FirmwareEmulator {
   uint64_t block_seq_ = 0;                 // the first one's counter
   std::vector<link::CanFdFrame> frames_;   // scratch of send_layout_sample
   std::deque<link::CanFrame> burst_;  // sent at the bus's pace, a few frames per tick
-  std::vector<link::CanFrame> tx_;    // this tick's frames (send() .. flush_sends())
+  std::vector<link::CanFrame> tx_;    // frames queued (send() .. flush_sends())
   std::thread thread_;
   std::atomic<bool> stop_{false};
 };

@@ -168,10 +168,19 @@ void TableEmulator::step(double dt_s) {
   if (stuck_) {
     vel_ = 0;  // seized mechanics: the reference runs away from the axis
   } else {
-    const double w = 2 * kPi * p_.servo_bandwidth_hz;
-    const double a = w * w * (ref_ - pos_) + 2 * p_.damping * w * (ref_v_ - vel_);
-    vel_ += a * h;
-    pos_ += vel_ * h;
+    // At rest the axis reaches a state the update leaves bit for bit as it is (the velocity a
+    // denormal, whose arithmetic is slow): the update is a pure function of these five values,
+    // so while they are the ones of the last fixed point it is skipped, with the same bits.
+    const ServoInput in{ref_, ref_v_, pos_, vel_, h};
+    if (!(fixed_point_ && in.same_bits(*fixed_point_))) {
+      const double w = 2 * kPi * p_.servo_bandwidth_hz;
+      const double a = w * w * (ref_ - pos_) + 2 * p_.damping * w * (ref_v_ - vel_);
+      vel_ += a * h;
+      pos_ += vel_ * h;
+      const ServoInput out{ref_, ref_v_, pos_, vel_, h};
+      if (out.same_bits(in)) fixed_point_ = in;
+      else fixed_point_.reset();
+    }
   }
   if (std::fabs(ref_ - pos_) > p_.following_error_limit_deg) {
     raise(alarm::kFollowing);

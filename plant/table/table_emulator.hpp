@@ -5,9 +5,11 @@
 // e-stop/interlock inputs and injectable faults. Advanced by step(dt); every
 // public member is thread-safe (the Modbus server thread and the plant share it).
 #pragma once
+#include <bit>
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -103,6 +105,18 @@ class TableEmulator final : public rig::modbus::RegisterDevice {
   bool moving() const;
   void image(uint16_t* drive, uint16_t* sim) const;
 
+  // The servo update's inputs (reference, its velocity, position, velocity, substep).
+  struct ServoInput {
+    double ref, ref_v, pos, vel, h;
+    bool same_bits(const ServoInput& o) const {
+      return std::bit_cast<uint64_t>(ref) == std::bit_cast<uint64_t>(o.ref) &&
+             std::bit_cast<uint64_t>(ref_v) == std::bit_cast<uint64_t>(o.ref_v) &&
+             std::bit_cast<uint64_t>(pos) == std::bit_cast<uint64_t>(o.pos) &&
+             std::bit_cast<uint64_t>(vel) == std::bit_cast<uint64_t>(o.vel) &&
+             std::bit_cast<uint64_t>(h) == std::bit_cast<uint64_t>(o.h);
+    }
+  };
+
   TableParams p_;
   mutable std::mutex mu_;
   std::mt19937_64 rng_;
@@ -112,6 +126,7 @@ class TableEmulator final : public rig::modbus::RegisterDevice {
   double pos_ = 0, vel_ = 0, mech_offset_ = 0, rep_err_ = 0;
   double ref_ = 0, ref_v_ = 0, settle_target_ = 0, in_pos_timer_ = 0;
   bool settling_ = false;
+  std::optional<ServoInput> fixed_point_;  // inputs the servo update returned unchanged
   Trajectory traj_;
   bool servo_ = false, homed_ = false, homing_ = false, stuck_ = false;
   uint16_t control_ = 0, alarm_ = 0, move_seq_ = 0;

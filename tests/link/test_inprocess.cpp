@@ -41,6 +41,38 @@ std::vector<Sample> read_n(DutLink& l, std::size_t n, const CancelToken& c = {})
 
 // ---- the bus itself ----
 
+// The port's receive queue: first in, first out through drains, refills and the compaction of
+// a queue that is never drained (more than 4096 frames read, at least half of its storage).
+TEST(FrameFifo, KeepsOrderThroughDrainsAndCompaction) {
+  FrameFifo q;
+  uint32_t pushed = 0, popped = 0;
+  auto push = [&](int n) {
+    for (int i = 0; i < n; ++i) {
+      RxFrame f;
+      f.frame.id = pushed++;
+      q.push_back(f);
+    }
+  };
+  auto pop = [&](int n) {
+    for (int i = 0; i < n; ++i) {
+      ASSERT_FALSE(q.empty());
+      ASSERT_EQ(q.front().frame.id, popped++);
+      q.pop_front();
+    }
+  };
+  push(3);
+  pop(3);  // drained: starts over
+  EXPECT_TRUE(q.empty());
+  for (int round = 0; round < 6; ++round) {  // never drained: the read part is dropped on the way
+    push(5000);
+    pop(4000);
+    EXPECT_EQ(q.size(), pushed - popped);
+  }
+  pop(static_cast<int>(pushed - popped));
+  EXPECT_TRUE(q.empty());
+  EXPECT_EQ(q.size(), 0u);
+}
+
 TEST(InProcessBus, DeliversToOtherPortsOnlyThroughFilters) {
   auto bus = InProcessBus::create();
   auto a = bus->open("a"), b = bus->open("b"), c = bus->open("c");

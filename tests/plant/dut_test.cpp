@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <numbers>
+#include <vector>
 
 #include "plant/dut/emulated_dut.hpp"
 #include "design/filter.hpp"
@@ -146,6 +148,59 @@ TEST(Dut, WarmsUpAndReportsItself) {
   EXPECT_DOUBLE_EQ(d.time_s(), 60.0);
   EXPECT_EQ(d.serial(), "EMU-QPA-0001");
   EXPECT_EQ(d.output_rate_hz(), 1000.0);
+}
+
+
+// Pins the model's output bit for bit (a digest of every double it produced, with the taps of
+// a loop test, a turn of the table, a filter swap and frequent bursts): a change to how the
+// period is computed (the noise pipeline, issue 17) must not move a single bit. The figure was
+// taken from the straightforward single-threaded model.
+uint64_t fnv1a(uint64_t h, const void* p, std::size_t n) {
+  const auto* b = static_cast<const unsigned char*>(p);
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 0x100000001b3ULL;
+  return h;
+}
+
+TEST(Dut, OutputIsPinnedBitForBit) {
+  EmulatedDut d(params("[noise]\nburst_rate_per_h = 3600\nburst_decay_s = 0.05\n"), 7);
+  uint64_t h = 0xcbf29ce484222325ULL;
+  std::vector<float> xt(static_cast<std::size_t>(d.loop_steps_per_output())), yt(xt.size());
+  for (int i = 0; i < 30000; ++i) {
+    double x = 0, y = 0;
+    if (i >= 12000 && i < 12200) {
+      h = fnv1a(h, &i, sizeof i) ^ static_cast<uint64_t>(d.next_under_test(1e-3 * (i % 7), xt, yt));
+      h = fnv1a(h, xt.data(), xt.size() * sizeof(float));
+      h = fnv1a(h, yt.data(), yt.size() * sizeof(float));
+    } else {
+      d.next(x, y);
+    }
+    h = fnv1a(h, &x, sizeof x);
+    h = fnv1a(h, &y, sizeof y);
+    if (i % 1000 == 999) {
+      const double t = d.temperature_c();
+      h = fnv1a(h, &t, sizeof t);
+    }
+    if (i == 9000) d.set_table_angle_deg(180);
+    if (i == 20000) {
+      FilterConfig f = d.filter();
+      f.enabled = false;
+      d.set_filter(f);
+    }
+  }
+  EXPECT_EQ(h, 0xebe7869c8bfe4b51ULL);
+}
+
+// The noise worker (plant/dut/period_noise.hpp) stops and is joined wherever the model is left:
+// before anything was read, in the first block, after several blocks (the worker mid-fill or
+// asleep on a full ring). A destructor that failed to wake it would hang here.
+TEST(Dut, DestroyedAtAnyPointStopsItsNoiseWorker) {
+  const DutParams p = load_dut_params(nullptr);
+  for (int reads : {0, 1, 127, 128, 129, 700, 1500}) {
+    EmulatedDut d(p, static_cast<uint64_t>(reads));
+    double x = 0, y = 0;
+    for (int i = 0; i < reads; ++i) d.next(x, y);
+    EXPECT_DOUBLE_EQ(d.time_s(), reads / 1000.0);
+  }
 }
 
 }  // namespace

@@ -47,9 +47,10 @@ TEST(Noise, FlickerBankIsFlatOverItsDecades) {
 }
 
 // The emulated DUT takes a period's interference with fill(): it must give the bits of
-// step() called once per loop step, for an even and an odd number of lines and any span.
+// step() called once per loop step, for any number of lines (groups of three, two and one pairs
+// and a single line) and any span.
 TEST(Noise, LineBandFillEqualsStepBitForBit) {
-  for (int lines : {1, 5, 6}) {
+  for (int lines : {1, 3, 5, 6, 9, 11, 13}) {
     noise::Rng ra(9, 0), rb(9, 0);
     noise::LineBand a(795, 970, lines, 2.0, 1e-3, 10000, 1e-3, ra);
     noise::LineBand b(795, 970, lines, 2.0, 1e-3, 10000, 1e-3, rb);

@@ -1,0 +1,187 @@
+#include "plant/dut/period_noise.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <span>
+
+namespace rig::plant {
+
+namespace {
+constexpr std::array<double, kBurstTones> kBurstHz = {265, 316, 470, 627, 697};  // docs/method.md, PSD bursts
+}
+
+NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in)
+    : periods(periods_in), steps(steps_in), slow_g(periods), temp_c(periods), bursting(periods),
+      vib(periods * steps), input(periods * steps), burst(periods * steps * kBurstTones), intf(periods * steps),
+      poll_i(periods * steps), poll_q(periods * steps), sense(periods * steps) {}
+
+PeriodNoise::PeriodNoise(const DutParams& p, uint64_t seed, std::size_t steps_per_period)
+    : n_(p.noise), intrinsic_bias_g_(p.orientation.intrinsic_bias_g), loop_rate_hz_(p.loop.loop_rate_hz),
+      output_rate_hz_(p.loop.output_rate_hz), dt_out_(1.0 / p.loop.output_rate_hz), steps_(steps_per_period) {
+  const NoiseParams& n = n_;
+  const double fs = loop_rate_hz_;
+  r_sense_ = noise::Rng(seed, kSense);
+  r_input_ = noise::Rng(seed, kInput);
+  r_flicker_ = noise::Rng(seed, kFlicker);
+  r_rrw_ = noise::Rng(seed, kRrw);
+  r_vib_ = noise::Rng(seed, kVib);
+  r_burst_ = noise::Rng(seed, kBurst);
+  r_intf_ = noise::Rng(seed, kIntf);
+  r_poll_i_ = noise::Rng(seed, kPollI);
+  r_poll_q_ = noise::Rng(seed, kPollQ);
+  r_poll_drift_ = noise::Rng(seed, kPollDrift);
+  const double on = n.enabled ? 1.0 : 0.0;
+  // White densities (one-sided, g/sqrt(Hz)) to per-sample sd at the loop rate: sd = d sqrt(fs/2).
+  sense_sd_ = on * n.sense_white_g_rthz * std::sqrt(fs / 2);
+  input_sd_ = on * n.input_white_g_rthz * std::sqrt(fs / 2);
+  flicker_ = noise::FlickerBank(on * n.flicker_b_g, n.flicker_tau_min_s, n.flicker_tau_max_s, dt_out_, r_flicker_);
+  // The polling-frequency line's complex envelope (I, Q): each quadrature a flicker bank,
+  // so the folded x reads B = polling_b_g and y reads |W_f(1 kHz)| times that.
+  poll_i_ = noise::FlickerBank(on * n.polling_b_g, n.flicker_tau_min_s, n.flicker_tau_max_s, dt_out_, r_poll_i_);
+  poll_q_ = noise::FlickerBank(on * n.polling_b_g, n.flicker_tau_min_s, n.flicker_tau_max_s, dt_out_, r_poll_q_);
+  // ... and a slow drift of its amplitude from the power-on value (part of the intrinsic bias):
+  // a random walk over the procedure's 110 min; in y it is cut by |W_f(1 kHz)| like the rest.
+  poll_drift_i_ = noise::GaussMarkov(on * n.polling_k_g_per_rts, n.polling_drift_tau_s, dt_out_);
+  poll_drift_q_ = noise::GaussMarkov(on * n.polling_k_g_per_rts, n.polling_drift_tau_s, dt_out_);
+  poll_osc_.set(p.loop.output_rate_hz + n.polling_offset_hz, fs, 0.0);
+  rrw_step_ = on * n.rrw_k_g_per_rts * std::sqrt(dt_out_);
+  vib_ = noise::BandNoise(n.vibration_f_lo_hz, n.vibration_f_hi_hz, fs, on * n.vibration_rms_g);
+  intf_ = noise::LineBand(n.interference_f_lo_hz, n.interference_f_hi_hz, n.interference_lines,
+                          n.interference_coherence_s, on * n.interference_rms_g, fs, dt_out_, r_intf_);
+  burst_p_ = on * n.burst_rate_per_h / 3600.0 * dt_out_;
+  burst_decay_ = std::exp(-dt_out_ / n.burst_decay_s);
+  for (std::size_t j = 0; j < burst_osc_.size(); ++j) burst_osc_[j].set(kBurstHz[j], fs, 0.0);
+}
+
+double PeriodNoise::slow_bias_g(double& temp_c) {
+  const NoiseParams& n = n_;
+  const double t = static_cast<double>(n_out_) / output_rate_hz_;  // the DUT's time_s()
+  rrw_ += rrw_step_ * r_rrw_.normal();
+  temp_c = n.ambient_c + n.warmup_rise_c * (1 - std::exp(-t / n.warmup_tau_s));
+  const double on = n.enabled ? 1.0 : 0.0;
+  return intrinsic_bias_g_ + flicker_.step(r_flicker_) + rrw_ +
+         on * (n.ramp_r_g_per_s * t + n.bias_tempco_g_per_c * (temp_c - n.ambient_c));
+}
+
+void PeriodNoise::fill(NoiseBlock& b) {
+  for (std::size_t i = 0; i < b.periods; ++i) period(b, i);
+}
+
+void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
+  b.slow_g[i] = slow_bias_g(b.temp_c[i]);
+  ++n_out_;
+  // bursts: Poisson arrivals, exponentially decaying tones (input acceleration)
+  for (std::size_t j = 0; j < burst_env_.size(); ++j) {
+    burst_env_[j] *= burst_decay_;
+    if (burst_p_ > 0 && r_burst_.uniform() < burst_p_) {
+      burst_env_[j] += n_.burst_peak_g;
+      burst_osc_[j].set(kBurstHz[j], loop_rate_hz_, 2 * std::numbers::pi * r_burst_.uniform());
+    }
+    if (burst_env_[j] < 1e-15) burst_env_[j] = 0;
+    burst_osc_[j].renormalise();
+  }
+  const double pi_amp = poll_i_.step(r_poll_i_) + poll_drift_i_.step(r_poll_drift_);
+  const double pq_amp = poll_q_.step(r_poll_q_) + poll_drift_q_.step(r_poll_drift_);
+  intf_.update_envelopes(r_intf_);
+  poll_osc_.renormalise();
+  bool bursting = false;
+  for (double e : burst_env_) bursting = bursting || e != 0;
+  b.bursting[i] = bursting;
+
+  const std::size_t n = steps_, at = i * n;
+  // The interference lines of the whole period at once (LineBand::fill: step()'s bits).
+  intf_.fill(std::span<double>(b.intf.data() + at, n));
+  // One pass over the period, every generator in locals (so the compiler keeps their states in
+  // registers rather than in this object, which the stores might alias): the streams are
+  // independent chains (a biquad, three random streams, six oscillators) the core overlaps.
+  noise::BandNoise vib = vib_;
+  noise::Rng r_vib = r_vib_, r_input = r_input_, r_sense = r_sense_;
+  noise::Oscillator poll = poll_osc_;
+  std::array<noise::Oscillator, kBurstTones> tone = burst_osc_;
+  const std::array<double, kBurstTones> env = burst_env_;
+  const bool input = input_sd_ > 0, sense = sense_sd_ > 0;
+  double* vib_out = b.vib.data() + at;
+  double* input_out = b.input.data() + at;
+  double* burst_out = b.burst.data() + at * kBurstTones;
+  double* pi_out = b.poll_i.data() + at;
+  double* pq_out = b.poll_q.data() + at;
+  double* sense_out = b.sense.data() + at;
+  for (std::size_t k = 0; k < n; ++k) {
+    vib_out[k] = vib.step(r_vib);
+    if (input) input_out[k] = input_sd_ * r_input.normal();
+    if (bursting)
+      for (std::size_t j = 0; j < kBurstTones; ++j) {
+        burst_out[k * kBurstTones + j] = env[j] * tone[j].c;
+        tone[j].step();
+      }
+    pi_out[k] = pi_amp * poll.c;
+    pq_out[k] = pq_amp * poll.s;
+    poll.step();
+    if (sense) sense_out[k] = sense_sd_ * r_sense.normal();
+  }
+  vib_ = vib;
+  r_vib_ = r_vib;
+  r_input_ = r_input;
+  r_sense_ = r_sense;
+  poll_osc_ = poll;
+  burst_osc_ = tone;
+}
+
+NoisePipe::NoisePipe(PeriodNoise source, std::size_t periods_per_block, std::size_t depth)
+    : source_(std::move(source)),
+      ring_(std::max<std::size_t>(depth, 1), NoiseBlock(periods_per_block, source_.steps_per_period())),
+      worker_([this] { run(); }) {}
+
+NoisePipe::~NoisePipe() {
+  {
+    const std::lock_guard lock(m_);
+    stop_ = true;
+  }
+  worker_cv_.notify_one();
+  worker_.join();
+}
+
+void NoisePipe::run() {
+  // Only arithmetic on memory allocated before the thread started: nothing here can throw.
+  // When the ring is full the worker sleeps until half of it is free again, so the reader
+  // wakes it once per ring_.size() / 2 blocks, not at every block.
+  const std::size_t low = ring_.size() / 2;
+  std::unique_lock lock(m_);
+  for (;;) {
+    if (drawn_ - released_ == ring_.size()) {
+      worker_waiting_ = true;
+      worker_cv_.wait(lock, [&] { return stop_ || drawn_ - released_ <= low; });
+      worker_waiting_ = false;
+    }
+    if (stop_) return;
+    NoiseBlock& b = ring_[drawn_ % ring_.size()];
+    lock.unlock();  // the block is the worker's until drawn_ counts it
+    source_.fill(b);
+    lock.lock();
+    ++drawn_;
+    if (reader_waiting_) reader_cv_.notify_one();
+  }
+}
+
+const NoiseBlock& NoisePipe::front() {
+  std::unique_lock lock(m_);
+  if (drawn_ == released_) {
+    reader_waiting_ = true;
+    reader_cv_.wait(lock, [this] { return drawn_ > released_; });
+    reader_waiting_ = false;
+  }
+  return ring_[released_ % ring_.size()];
+}
+
+void NoisePipe::pop() {
+  bool wake = false;
+  {
+    const std::lock_guard lock(m_);
+    ++released_;
+    wake = worker_waiting_ && drawn_ - released_ <= ring_.size() / 2;
+  }
+  if (wake) worker_cv_.notify_one();
+}
+
+}  // namespace rig::plant
