@@ -437,6 +437,35 @@ Pts tail_of(const Pts& p, std::size_t from) {
 
 }  // namespace
 
+// Models the data support about as well as the selected one: every non-negative subset whose
+// AICc is within kPlausibleAicc of the least, on the covariance the selected model implies
+// (Burnham & Anderson 2002, section 2.6: Delta_i <= 2 has substantial support). Collinear terms
+// (K against B + R over tau <= T/4 of one hour) give such alternatives: a bound that holds
+// over only one of them excludes what the other reads (issue 12: B 5-7x on a K record).
+constexpr double kPlausibleAicc = 2.0;
+
+std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t n_phase) {
+  const std::size_t n = p.tau.size();
+  p.nu.resize(n);
+  set_model_edf(p, sel.best.theta, n_phase);
+  const Eigen::MatrixXd W = model_cov(p, sel.best.theta, n_phase, sel.delta).inverse();
+  std::vector<std::pair<double, SubsetFit>> fits;
+  double least = std::numeric_limits<double>::infinity();
+  for (int mask = 1; mask < 32; ++mask) {
+    const SubsetFit g = fit_subset(p, mask, true);
+    if (!g.ok) continue;
+    const SubsetFit f = gls_subset(p, W, mask, g.theta, true);
+    if (!f.ok) continue;
+    const double a = aicc(f, n);
+    least = std::min(least, a);
+    fits.emplace_back(a, f);
+  }
+  std::vector<SubsetFit> out;
+  for (auto& fa : fits)
+    if (fa.first <= least + kPlausibleAicc) out.push_back(std::move(fa.second));
+  return out;
+}
+
 NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence) {
   NoiseModelFit out;
   // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
@@ -535,6 +564,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     const double th = best.theta[static_cast<std::size_t>(k)];
     if ((best.mask & (1 << k)) && th > 0 && ((sel.best.mask & (1 << k)) || th >= z * sd_of(best, k))) report |= 1 << k;
   }
+  const std::vector<SubsetFit> plausible = plausible_models(p, sel, n_phase);
   out.aicc = sel.aicc;
   out.chi2_per_dof = sel.chi2 / sel.dof;
   out.tau_s = p.tau;
@@ -561,6 +591,18 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
         out.lo[kk] = std::min(out.lo[kk], std::sqrt(std::max(0.0, tha - z * sda)));
         out.hi[kk] = out.upper[kk] = std::max(out.hi[kk], std::sqrt(tha + z * sda));
       }
+      // Likewise over every plausible model (above): one without the term (or with it at 0)
+      // lowers the bound to 0; one with it, the union of the intervals.
+      for (const SubsetFit& f : plausible) {
+        const double thf = (f.mask & (1 << k)) ? f.theta[kk] : 0.0;
+        if (!(thf > 0)) {
+          out.lo[kk] = 0;
+          continue;
+        }
+        const double sdf = sd_of(f, k);
+        out.lo[kk] = std::min(out.lo[kk], std::sqrt(std::max(0.0, thf - z * sdf)));
+        out.hi[kk] = out.upper[kk] = std::max(out.hi[kk], std::sqrt(thf + z * sdf));
+      }
       for (std::size_t i = 0; i < n; ++i) {
         double mu = 0;
         for (int j = 0; j < 5; ++j) mu += best.theta[static_cast<std::size_t>(j)] * noise_basis(j, p.tau[i]);
@@ -580,6 +622,10 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
         out.upper[kk] = std::sqrt(u);
       }
     }
+    if (!out.in_model[kk])  // a null's upper limit holds over the plausible models too
+      for (const SubsetFit& f : plausible)
+        if ((f.mask & (1 << k)) && f.theta[kk] > 0)
+          out.upper[kk] = std::max(out.upper[kk], std::sqrt(f.theta[kk] + z * sd_of(f, k)));
   }
   out.ok = true;
   return out;

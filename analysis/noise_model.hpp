@@ -15,6 +15,10 @@
 // theta >= 0, NNLS over the subsets: a term the AICc model leaves out would land in its
 // neighbours, R on 6 h read 1.6x with K left out), with the covariance of the model plus every
 // term left out at its upper limit (a term the data cannot exclude still scatters the points).
+// The bounds hold over every plausible model too (AICc within 2 of the least, Burnham &
+// Anderson): a term one of them does without has 0 as its lower bound, and a null's upper limit
+// covers what they read for it (collinear terms, K against B + R on one hour, otherwise give
+// bounds that exclude the reading of the other model).
 // A term is reported (in_model) when AICc selects it or its interval excludes zero; otherwise
 // it is null with an upper limit. No record-length rule: R is a candidate on every record. The
 // points fitted start where the model describes the curve: the shortest octave points are
