@@ -23,7 +23,6 @@ single-threaded), which other load on a shared machine disturbs much less than w
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -34,6 +33,7 @@ import numpy as np
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
 import twins  # noqa: E402
+from timed import timed  # noqa: E402
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--rig", default="build/bin/rig")
@@ -56,12 +56,8 @@ def rig_run(extra):
     out = os.path.join(tmp, "a.json")
     cmd = [args.rig, "analyze", args.file, "--input", "f64", "--rate", str(args.rate), "--taus", args.taus,
            "--json", out] + extra
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t0
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, out, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    wall, cpu = timed(cmd)
+    return wall, out, cpu
 
 
 def taus_of(json_path, key):

@@ -20,7 +20,6 @@ Each row: minimum and median wall and CPU time (user + system, all threads) over
 """
 import argparse
 import os
-import resource
 import statistics
 import subprocess
 import sys
@@ -31,6 +30,7 @@ import numpy as np
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
 import twins  # noqa: E402
+from timed import timed  # noqa: E402
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--rig", default="build/bin/rig")
@@ -48,15 +48,6 @@ rows = {
 }
 
 
-def run(cmd):
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t0
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-
-
 y = np.fromfile(args.file, dtype="<f8")
 tau0 = 1e-3
 subprocess.run(rows["hdev"], check=True, stdout=subprocess.DEVNULL)  # warm-up, and the taus
@@ -66,7 +57,7 @@ ms = [p["m"] for p in json.load(open(out))["hdev"]]
 res = {k: ([], []) for k in list(rows) + ["twin"]}
 for _ in range(args.rounds):
     for k, cmd in rows.items():
-        w, c = run(cmd)
+        w, c = timed(cmd)
         res[k][0].append(w)
         res[k][1].append(c)
     t0, c0 = time.perf_counter(), time.process_time()
