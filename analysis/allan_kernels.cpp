@@ -103,16 +103,15 @@ double sum_d3_series(const double* w0, std::size_t first, std::size_t stride, st
   const double* p = w0 + first;
   const std::size_t terms = (len - first + stride - 1) / stride;
   double d0 = p[0], d1 = p[stride], d2 = p[2 * stride];
-  std::size_t j = 0;
-  const auto term = [&](double& acc) {
+  const auto term = [&](double& acc, std::size_t j) {
     const double d3 = p[(j + 3) * stride];
     const double d = d3 - 3 * d2 + 3 * d1 - d0;
     acc += d * d;
     d0 = d1, d1 = d2, d2 = d3;
-    ++j;
   };
-  for (; j + 4 <= terms;) term(a[0]), term(a[1]), term(a[2]), term(a[3]);
-  for (std::size_t l = 0; j < terms; ++l) term(a[l]);
+  std::size_t j = 0;
+  for (; j + 4 <= terms; j += 4) term(a[0], j), term(a[1], j + 1), term(a[2], j + 2), term(a[3], j + 3);
+  for (std::size_t l = 0; j < terms; ++j, ++l) term(a[l], j);
   return (a[0] + a[1]) + (a[2] + a[3]);
 }
 
