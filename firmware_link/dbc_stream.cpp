@@ -13,7 +13,6 @@ extern const char* const kRigDutDbcText;  // docs/rig-dut.dbc, built in (rig_dut
 
 namespace {
 
-constexpr int kFilterOn = 0, kSaturated = 1, kLoopFault = 2;
 constexpr uint8_t kFlagBits[3] = {stream_status::kFilterOn, stream_status::kSaturated, stream_status::kLoopFault};
 
 // The factor from a signal's unit to g (the Sample's unit).
