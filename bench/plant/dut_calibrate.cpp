@@ -1,14 +1,20 @@
 // Prints the calibration table of an emulated DUT profile: the shipped acceptance procedure
 // (`rig run --plant emulated`, paper profile) on the model, read off its passport and
 // analysis.json (docs/plant.md).
-//   dut_calibrate [overrides.toml] [--seed N]... [--taus GRID] [--curves] [--rig PATH]
+//   dut_calibrate [overrides.toml] [--seed N]... [--taus GRID] [--curves] [--rig PATH] [--save DIR]
 // overrides.toml holds [plant.dut] keys. Several --seed give one column per seed (each a
-// full 110 min procedure, about 7 s of CPU); --rig names the rig binary (default: the one
-// built with this tool).
+// full 110 min procedure, about 3 s of CPU); --rig names the rig binary (default: the one
+// built with this tool); --save keeps each seed's passport and analysis.json as
+// DIR/seed-N.passport.json, DIR/seed-N.analysis.json (a sweep is counted from these without
+// running it again; the captures themselves are not kept).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rig/core/toml_util.hpp"
@@ -37,6 +43,19 @@ std::string term(const json& t, double scale) {
   return b;
 }
 
+// Each run's two files, as `rig` wrote them (re-serialised), for counting a sweep afterwards.
+void save_runs(const std::string& dir, const std::vector<PaperRun>& rs) {
+  std::filesystem::create_directories(dir);
+  for (const PaperRun& r : rs) {
+    const std::string stem = dir + "/seed-" + std::to_string(r.seed);
+    for (const auto& [suffix, doc] : {std::pair{".passport.json", &r.passport}, std::pair{".analysis.json", &r.analysis}}) {
+      std::ofstream out(stem + suffix);
+      out << doc->dump() << "\n";
+      if (!out) throw std::runtime_error("cannot write " + stem + suffix);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -46,10 +65,12 @@ int main(int argc, char** argv) {
     std::vector<uint64_t> seeds;
     rig::plant::calib::RunSpec spec;
     std::string rig_binary = RIG_BINARY;
+    std::string save_dir;
     for (int i = 1; i < argc; ++i) {
       if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) seeds.push_back(std::stoull(argv[++i]));
       else if (!std::strcmp(argv[i], "--taus") && i + 1 < argc) spec.taus = argv[++i];
       else if (!std::strcmp(argv[i], "--rig") && i + 1 < argc) rig_binary = argv[++i];
+      else if (!std::strcmp(argv[i], "--save") && i + 1 < argc) save_dir = argv[++i];
       else if (!std::strcmp(argv[i], "--curves")) curves = true;
       else {
         over = rig::cfg::parse_file(argv[i]);
@@ -59,6 +80,7 @@ int main(int argc, char** argv) {
     if (seeds.empty()) seeds.push_back(1);
     if (have_over) spec.dut = &over;
     const std::vector<PaperRun> rs = rig::plant::calib::run_seeds(rig_binary, spec, seeds, 2);
+    if (!save_dir.empty()) save_runs(save_dir, rs);
     auto row = [&](const char* name, const char* paper, auto f) {
       std::printf("| %s | %s |", name, paper);
       for (const auto& r : rs) std::printf(" %s |", f(r).c_str());

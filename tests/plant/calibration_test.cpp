@@ -23,8 +23,9 @@ namespace rig::plant {
 namespace {
 
 // The emulated DUT's K on x from its parameters (docs/plant.md): the pick-up drift's
-// 1.05e-7 g/s^0.5 and the bias RRW's 3e-8 g/s^0.5 together, 1.09e-7 g/s^0.5 = 6.55e-6 g/h^0.5.
-const double kPlantK = std::hypot(1.05e-7, 3e-8) * 60;
+// 8.888e-8 g/s^0.5 and the bias RRW's 3e-8 g/s^0.5 together, 9.38e-8 g/s^0.5 = 5.63e-6 g/h^0.5
+// (1.10x the paper's 5.1167e-6).
+const double kPlantK = std::hypot(8.888e-8, 3e-8) * 60;
 
 // Whether the passport's K of a run holds `truth`: a value's bounds, or a null's upper limit
 // (analysis.json's noise_terms.K.hi; the passport names it in the reason).
@@ -83,11 +84,12 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
   // bias and base error, formulas (3), (4): within 1 %
   EXPECT_NEAR(median(bias), -5.0137e-4, 0.01 * 5.0137e-4);
   EXPECT_NEAR(median(base), 3.8549e-4, 0.01 * 3.8549e-4);
-  // in-run B by GOST, 100 s blocks of the 30 min run: about 4e-6 (+-50 %)
+  // in-run B by GOST, 100 s blocks of the 30 min run: about 4e-6 (+-50 %); measured 3.42e-6
   EXPECT_NEAR(median(gost), 4e-6, 0.5 * 4e-6);
-  // in-run B by Allan (paper's method on x): 2.1e-6 (+-30 %)
+  // in-run B by Allan (paper's method on x): 2.1e-6 (+-30 %); measured 1.82e-6 (the plant's
+  // expected 1.93e-6, docs/plant.md "How it got there")
   EXPECT_NEAR(median(b_x), 2.1e-6, 0.3 * 2.1e-6);
-  // N by the model on x: within a factor of 1.5 of the paper's (measured 0.70x: the plant's
+  // N by the model on x: within a factor of 1.5 of the paper's (measured 0.71x: the plant's
   // sense white N, 9.4e-6 g*s^0.5, read past the tones' ripple, docs/plant.md)
   auto within = [](double v, double target, double factor, const char* what) {
     EXPECT_GE(v, target / factor) << what << " = " << v << ", paper " << target;
@@ -95,23 +97,29 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
   };
   within(median(n), 2.2306e-7, 1.5, "N, g*h^0.5");
   // Q: the fit starts past the tones' ripple (tau >= 0.256 s, docs/analysis.md), where Q is
-  // the word LSB's plus the folded tones' 1/tau^2 tail: measured 1.78x the paper's, so the band
+  // the word LSB's plus the folded tones' 1/tau^2 tail: measured 1.77x the paper's, so the band
   // here is 2x (the paper's x1.5 is not met, docs/plant.md).
   within(median(q), 6.3603e-10, 2.0, "Q, g*h");
   // K: the passport's bounds (or upper limit) hold the plant's K at the stated 68.3 % on about
-  // 6 of 9 (binomial: 4 or more in 95 % of such sets); measured 7 of 9 (6 before the
-  // widest-model fit, docs/analysis.md).
+  // 6 of 9 (binomial: 4 or more in 95 % of such sets); measured 7 of 9 (not seeds 2, 6).
   EXPECT_GE(k_held, 4) << "plant's K " << kPlantK << " g/h^0.5 held on " << k_held << " of 9";
+  // The "median K within 30 % of the paper", over the seeds that report K (a null is
+  // the model leaving K out, with an upper limit, not a value): measured 5.90e-6 = 1.15x on 3
+  // of 9 (seeds 3, 8, 9). Over all nine with a null counted as 0 the median is 0: from one hour
+  // the model tells K from flicker on a third of the realisations (docs/plant.md).
+  ASSERT_GE(k.size(), 2u) << "K reported on " << k.size() << " of 9";
+  within(median(k), 5.1167e-6, 1.3, "K (median over the seeds reporting it), g/h^0.5");
   // R is not in the plant; one hour's random walk may rise like a ramp at the last points
   // (docs/analysis.md): measured on 2 of 9 (seeds 1 and 5), asserted on at most 3.
   EXPECT_LE(r_reported, 3);
   // B with the output filter: about 0.86e-6 (+-30 %), the unfiltered/filtered ratio 2.5 +- 0.5
-  // (the folded 1 kHz pick-up cut by |W_f(1 kHz)| = 0.39)
+  // (the folded 1 kHz pick-up cut by |W_f(1 kHz)| = 0.39); measured 0.82e-6, 2.22
   EXPECT_NEAR(median(b_y), 0.86e-6, 0.3 * 0.86e-6);
   EXPECT_NEAR(median(ratio), 2.5, 0.5);
   // Every realisation: the filter lowers B (by more than 1.3x: where the paper's method falls
   // back to least squares, x's B is the model's, which since the widest-model fit keeps K beside
-  // B and no longer reads the rise as flicker; seed 4 1.31e-6 g, ratio 1.44, docs/analysis.md).
+  // B and no longer reads the rise as flicker; with K at 1.28x seed 4's ratio was 1.44,
+  // docs/analysis.md; with 1.10x the smallest is 1.91, seed 2).
   for (double x : ratio) EXPECT_GT(x, 1.3);
 }
 
