@@ -107,8 +107,8 @@ TEST(Calibration, PaperTableForTheDefaultProfileMedianOverNineSeeds) {
   // the model leaving K out, with an upper limit, not a value): measured 5.90e-6 = 1.15x on 3
   // of 9 (seeds 3, 8, 9). Over all nine with a null counted as 0 the median is 0: from one hour
   // the model tells K from flicker on a third of the realisations (docs/plant.md).
-  ASSERT_GE(k.size(), 2u) << "K reported on " << k.size() << " of 9";
-  within(median(k), 5.1167e-6, 1.3, "K (median over the seeds reporting it), g/h^0.5");
+  EXPECT_GE(k.size(), 2u) << "K reported on " << k.size() << " of 9";
+  if (!k.empty()) within(median(k), 5.1167e-6, 1.3, "K (median over the seeds reporting it), g/h^0.5");
   // R is not in the plant; one hour's random walk may rise like a ramp at the last points
   // (docs/analysis.md): measured on 2 of 9 (seeds 1 and 5), asserted on at most 3.
   EXPECT_LE(r_reported, 3);
