@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <cmath>
 #include <cstring>
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -378,8 +377,10 @@ int run(const Args& a) {
     print_term(o, "R", terms->R, an::r_per_hour, "g/h");
   }
   if (psd) {
+    // Each peak with its alias, as report.html and --svg label it (docs/analysis.md, "PSD peaks
+    // and aliases"): the record cannot tell f from fs - f.
     o << "psd: welch " << a.window << ", segment " << psd->segment << " x " << psd->segments << "; peaks:";
-    for (const auto& p : peaks) o << ' ' << p.f_hz << " Hz";
+    for (std::size_t i = 0; i < peaks.size(); ++i) o << (i ? ", " : " ") << report::peak_label(peaks[i].f_hz, psd->rate_hz);
     o << "\n";
   }
   timer.mark("console");

@@ -194,7 +194,7 @@ void Cia402Drive::apply_controlword(uint16_t w) {
   } else if (mode_ == c4::kModeProfilePosition) {
     if (setpoint_ack_ || setpoint_pending_) return;  // previous set-point not yet taken by the master
     setpoint_pending_ = true;
-    setpoint_at_ = t_ + kSetPointLatencyS;
+    setpoint_at_ = t_ + setpoint_latency_s_;
   }
 }
 
@@ -373,6 +373,16 @@ bool Cia402Drive::answering() const { return axis_.answering(); }
 double Cia402Drive::answer_delay_s() const {
   std::lock_guard lk(mu_);
   return answer_delay_s_;
+}
+
+void Cia402Drive::set_setpoint_latency(double s) {
+  std::lock_guard lk(mu_);
+  setpoint_latency_s_ = s;
+}
+
+bool Cia402Drive::setpoint_pending() const {
+  std::lock_guard lk(mu_);
+  return setpoint_pending_;
 }
 
 void Cia402Drive::set_answer_delay(double s) {

@@ -33,6 +33,10 @@ class Cia402Drive final : public rig::modbus::RegisterDevice {
   // Fault injection: a power-stage fault with this 0x603F code, now; slow answers.
   void inject_drive_fault(uint16_t error_code);
   void set_answer_delay(double s);
+  // A slow drive cycle: new set-points are acknowledged this long after their edge (default
+  // kSetPointLatencyS); and whether one is waiting for it.
+  void set_setpoint_latency(double s);
+  bool setpoint_pending() const;
 
   rig::modbus::cia402::State state() const;
   uint16_t statusword() const;
@@ -76,6 +80,7 @@ class Cia402Drive final : public rig::modbus::RegisterDevice {
   bool limit_active_ = false, warning_ = false;
   double target_inner_deg_ = 0;
   double answer_delay_s_ = 0;
+  double setpoint_latency_s_ = kSetPointLatencyS;
   uint16_t injected_code_ = 0;
 };
 

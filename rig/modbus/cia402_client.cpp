@@ -262,6 +262,18 @@ void Cia402Table::home(const CancelToken& cancel) {
   });
 }
 
+// What ends a profile-position move other than the drive's fault: the mode changed under us, the
+// drive left Operation enabled (quick stop, an external disable), or stop() from another thread
+// (the executive's abort path) set halt.
+void Cia402Table::fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when) const {
+  if (r.mode_display != c4::kModeProfilePosition)
+    throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " " + when +
+                        " (another Modbus master?)" + at(r));
+  if (r.state() != State::kOperationEnabled)
+    throw HardwareError(doing + ": drive left Operation enabled " + when + at(r));
+  if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
+}
+
 void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
@@ -299,6 +311,9 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     for (;;) {
       r = read(cancel);
       fail_on_fault(doing, r);
+      // Before the timeout's "not acknowledged": a drive that left Operation enabled or a stop
+      // request never acknowledges, and the reason is that, not the drive.
+      fail_unless_moving(doing, r, "waiting for the set-point acknowledge");
       if (r.has(c4::sw::kSetPointAck)) break;
       if (clock_.now_s() - t0 > opt_.ack_timeout_s)
         throw HardwareError(doing + ": set-point not acknowledged (statusword bit 12) within " +
@@ -325,14 +340,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       r = read(cancel);
       fail_on_fault(doing, r);
       const double now = clock_.now_s();
-      if (r.mode_display != c4::kModeProfilePosition)
-        throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) +
-                            " during the move (another Modbus master?)" + at(r));
-      if (r.state() != State::kOperationEnabled)
-        throw HardwareError(doing + ": drive left Operation enabled" + at(r));
+      fail_unless_moving(doing, r, "during the move");
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
-      if (control_.load() & c4::cw::kHalt)  // stop() from another thread (the executive's abort path)
-        throw HardwareError(doing + ": halted by a stop request" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (!ok) {
         held_since = -1;

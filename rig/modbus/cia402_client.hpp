@@ -61,6 +61,7 @@ class Cia402Table final : public RotaryTable {
                             const CancelToken& cancel);
   void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
   std::string at(const Cia402Reading& r) const;
+  void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when) const;
   void send_stop(uint16_t word, const char* name) noexcept;
   template <class Body>
   void guarded(const std::string& doing, Body body);

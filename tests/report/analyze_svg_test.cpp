@@ -3,6 +3,7 @@
 // passport's per-hour units, and every text escaped (quotes included).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -50,6 +51,32 @@ TEST(AnalyzeSvg, DrawsWithTheReportsPlotterAndEscapesTheFileName) {
   EXPECT_EQ(allan.find("g*s"), std::string::npos);
   EXPECT_NE(psd.find("data-plot=\"psd\""), std::string::npos);
   EXPECT_NE(psd.find("<polyline"), std::string::npos);
+}
+
+// The terminal summary names each PSD peak with its alias, as the plots do (docs/analysis.md,
+// "PSD peaks and aliases"): a 250 Hz line sampled at 1 kHz is "250 Hz or 750 Hz".
+TEST(AnalyzeSvg, TerminalSummaryNamesEachPeakWithItsAlias) {
+  rig::test::TempDir d;
+  const std::filesystem::path data = d.path / "tone.txt";
+  {
+    std::ofstream o(data);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> g(0, 1e-3);
+    const double pi = 3.141592653589793;
+    for (int i = 0; i < 40000; ++i) o << g(rng) + 1e-2 * std::sin(2 * pi * 250.0 * i / 1000.0) << "\n";
+  }
+  CLI::App app;
+  int rc = -1;
+  rig::cli::add_analyze(app, rc);
+  std::vector<std::string> args{"1000", "--rate", data.string(), "analyze"};  // CLI11 parses a reversed vector
+  testing::internal::CaptureStdout();
+  app.parse(args);
+  const std::string out = testing::internal::GetCapturedStdout();
+  ASSERT_EQ(rc, rig::kExitPass);
+  const auto line = out.find("psd: welch");
+  ASSERT_NE(line, std::string::npos) << out;
+  const std::string peaks = out.substr(line, out.find('\n', line) - line);
+  EXPECT_NE(peaks.find("peaks: 250 Hz or 750 Hz"), std::string::npos) << peaks;
 }
 
 }  // namespace

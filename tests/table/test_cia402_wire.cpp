@@ -191,6 +191,41 @@ TEST_P(Cia402Wire, SlowAnswersAreATimeoutNamingTheObject) {
   EXPECT_NEAR(w.axis->actual_angle_deg(), 90.0, 0.005);
 }
 
+// What ends a move while the drive has not yet acknowledged its set-point is named for what it
+// is, not as the drive's "set-point not acknowledged": a stop request from another thread (the
+// executive's abort path), and a drive that left Operation enabled (a quick stop). The drive's
+// cycle is slowed to 5 s so that each comes while the client waits for bit 12 (ack timeout 2 s:
+// before the change both read "set-point not acknowledged (statusword bit 12) within 2 s").
+std::string move_stopped_before_acknowledge(const std::string& map_file, bool quick) {
+  WireDrive w(map_file, "tcp:127.0.0.1:0");
+  RealClock clock;
+  auto table = m::connect_table(client_cfg("modbus", w.server.endpoint(), map_file, "ack_timeout_s = 2.0\n"), clock);
+  table->home({});
+  w.drive.set_setpoint_latency(5.0);
+  std::atomic<bool> pending{false};
+  std::thread stopper([&] {
+    for (int i = 0; i < 5000 && !(pending = w.drive.setpoint_pending()); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    quick ? table->quick_stop() : table->stop();
+  });
+  const std::string e = error_of([&] { table->move_to(10.0, {}); });
+  stopper.join();
+  EXPECT_TRUE(pending);
+  return e;
+}
+
+TEST_P(Cia402Wire, StopBeforeTheAcknowledgeIsNamed) {
+  const std::string e = move_stopped_before_acknowledge(GetParam(), false);
+  EXPECT_TRUE(has(e, "halted by a stop request waiting for the set-point acknowledge")) << e;
+  EXPECT_FALSE(has(e, "not acknowledged")) << e;
+}
+
+TEST_P(Cia402Wire, QuickStopBeforeTheAcknowledgeIsNamed) {
+  const std::string e = move_stopped_before_acknowledge(GetParam(), true);
+  EXPECT_TRUE(has(e, "drive left Operation enabled waiting for the set-point acknowledge")) << e;
+  EXPECT_FALSE(has(e, "not acknowledged")) << e;
+}
+
 // RTU has no transaction id: a reply that comes after the client gave up on it must not be read
 // as the next request's reply (on a loaded machine a late reply read so gave a "statusword" 0x0384
 // that was another register, or "Invalid data"). The drive answers the statusword 0.05 s after
