@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "analysis/allan_engine.hpp"
+#include "analysis/clones.hpp"
 #include "analysis/edf.hpp"
 #include "analysis/noise_id.hpp"
 
@@ -282,7 +283,7 @@ namespace {
 // lanes (vectorised without reassociating a floating-point sum: the lanes are 0 or NaN), four
 // independent accumulators so no chain of dependent additions bounds it, compiled for
 // AVX-512, AVX2 and baseline (this check runs on every value of every record, in the pass).
-__attribute__((target_clones("avx512f", "avx2", "default"))) bool any_unusable(const double* p, std::size_t n) {
+RIG_CLONES bool any_unusable(const double* p, std::size_t n) {
   using v8 = double __attribute__((vector_size(64)));
   constexpr double kScale = 0x1p691;  // 2^1024 / kMaxMagnitude
   v8 a0{}, a1{}, a2{}, a3{};

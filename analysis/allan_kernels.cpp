@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
-namespace rig::analysis::detail::kernels {
+#include "analysis/clones.hpp"
 
-#define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+namespace rig::analysis::detail::kernels {
 
 namespace {
 

@@ -1,0 +1,11 @@
+// RIG_CLONES: the hot kernels are compiled for AVX-512, AVX2 and baseline (target_clones) and
+// picked at load time by an ifunc resolver. ThreadSanitizer cannot run a program whose ifunc
+// resolvers run before its runtime is set up, so a TSan build (RIG_TSAN) compiles them for
+// baseline only: the same code, one target.
+#pragma once
+
+#ifdef RIG_NO_CLONES
+#define RIG_CLONES
+#else
+#define RIG_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
