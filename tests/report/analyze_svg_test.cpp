@@ -3,10 +3,12 @@
 // passport's per-hour units, and every text escaped (quotes included).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <utility>
 
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
@@ -16,25 +18,33 @@ namespace {
 
 using rig::test::slurp;
 
+// Writes 40000 values at 1 kHz: white noise of 1e-3 plus a line of amplitude `tone` at `tone_hz`.
+void write_record(const std::filesystem::path& file, unsigned seed, double tone = 0, double tone_hz = 0) {
+  std::ofstream o(file);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1e-3);
+  const double pi = 3.141592653589793;
+  for (int i = 0; i < 40000; ++i) o << g(rng) + tone * std::sin(2 * pi * tone_hz * i / 1000.0) << "\n";
+}
+
+// `rig analyze ARGS...` in process: its exit code and its standard output.
+std::pair<int, std::string> analyze(std::vector<std::string> args) {
+  CLI::App app;
+  int rc = -1;
+  rig::cli::add_analyze(app, rc);
+  args.insert(args.begin(), "analyze");
+  std::reverse(args.begin(), args.end());  // CLI11 parses a reversed vector
+  testing::internal::CaptureStdout();
+  app.parse(args);
+  return {rc, testing::internal::GetCapturedStdout()};
+}
+
 TEST(AnalyzeSvg, DrawsWithTheReportsPlotterAndEscapesTheFileName) {
   rig::test::TempDir d;
   // White noise at 1 kHz: N is identified; the file name holds characters to escape.
   const std::filesystem::path data = d.path / "a\"b<c>&'.txt";
-  {
-    std::ofstream o(data);
-    std::mt19937 rng(3);
-    std::normal_distribution<double> g(0, 1e-3);
-    for (int i = 0; i < 40000; ++i) o << g(rng) << "\n";
-  }
-  CLI::App app;
-  int rc = -1;
-  rig::cli::add_analyze(app, rc);
-  const std::string svg_dir = (d.path / "svg").string();
-  std::vector<std::string> args{svg_dir, "--svg", data.string(), "analyze"};  // CLI11 parses a reversed vector
-  testing::internal::CaptureStdout();
-  app.parse(args);
-  testing::internal::GetCapturedStdout();
-  ASSERT_EQ(rc, rig::kExitPass);
+  write_record(data, 3);
+  ASSERT_EQ(analyze({data.string(), "--svg", (d.path / "svg").string()}).first, rig::kExitPass);
   const std::string allan = slurp(d.path / "svg" / "allan.svg"), psd = slurp(d.path / "svg" / "psd.svg");
   for (const std::string* s : {&allan, &psd}) {
     EXPECT_EQ(s->rfind("<?xml", 0), 0u);
@@ -58,20 +68,8 @@ TEST(AnalyzeSvg, DrawsWithTheReportsPlotterAndEscapesTheFileName) {
 TEST(AnalyzeSvg, TerminalSummaryNamesEachPeakWithItsAlias) {
   rig::test::TempDir d;
   const std::filesystem::path data = d.path / "tone.txt";
-  {
-    std::ofstream o(data);
-    std::mt19937 rng(5);
-    std::normal_distribution<double> g(0, 1e-3);
-    const double pi = 3.141592653589793;
-    for (int i = 0; i < 40000; ++i) o << g(rng) + 1e-2 * std::sin(2 * pi * 250.0 * i / 1000.0) << "\n";
-  }
-  CLI::App app;
-  int rc = -1;
-  rig::cli::add_analyze(app, rc);
-  std::vector<std::string> args{"1000", "--rate", data.string(), "analyze"};  // CLI11 parses a reversed vector
-  testing::internal::CaptureStdout();
-  app.parse(args);
-  const std::string out = testing::internal::GetCapturedStdout();
+  write_record(data, 5, 1e-2, 250.0);
+  const auto [rc, out] = analyze({data.string(), "--rate", "1000"});
   ASSERT_EQ(rc, rig::kExitPass);
   const auto line = out.find("psd: welch");
   ASSERT_NE(line, std::string::npos) << out;
