@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <tuple>
 
 #include "analysis/allan_engine.hpp"
 #include "analysis/edf.hpp"
@@ -151,10 +152,20 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     DevPoint p;
     std::vector<double> z;
     std::optional<NoiseId> id;
+    bool bounded = false;  // alpha, EDF and bounds already set (they need no other tau's alpha)
   };
   std::vector<Pending> pend;
   for (std::size_t k = 0; k < opts.size(); ++k)
-    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}});
+    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}, false});
+  // A tau's alpha, EDF and chi-square bounds, where its alpha is its own: fixed, or identified
+  // by the lag-1 ACF (no EDF guard then). Computed in the parallel loop below; the B1 taus, whose
+  // rules read the previous tau's alpha, follow in order (the same calls either way).
+  const auto bound = [](DevPoint& p, int alpha, const DevOptions& o, std::uint64_t n_phase) {
+    const int d = diff_order(o.type);
+    p.alpha = clamp_alpha(alpha, d);
+    p.edf = edf_for(o.type, p.alpha, p.m, n_phase);
+    p.edf_alpha = p.alpha;
+  };
   const double tau0 = 1.0 / opts[0].rate_hz;
   const unsigned threads = opts[0].threads ? opts[0].threads : std::max(1u, std::thread::hardware_concurrency());
   detail::parallel_for(pend.size(), threads, [&](std::size_t i) {
@@ -168,7 +179,13 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     p.n_terms = term_count(o.type, n, s.m);
     p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
     if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
-    if (!o.bounds || o.fixed_alpha) return;
+    if (!o.bounds) return;
+    const auto finish = [&](int alpha) {
+      bound(p, alpha, o, n);
+      std::tie(p.lo, p.hi) = chi2_bounds(p.dev, p.edf, o.confidence);
+      e.bounded = true;
+    };
+    if (o.fixed_alpha) return finish(*o.fixed_alpha);
     const detail::Decimated& dec = er.decimated.at(s.m);
     const std::span<const double> z = averages(dec, s.m);
     if (z.size() < kAcfMinPoints) {  // kept for B1/R(n) below
@@ -186,6 +203,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
       for (std::size_t j = 0; j < x.size(); ++j) x[j] = dec[j] + ramp * static_cast<double>(j);
       e.id = acf_noise_id(x, true, diff_order(o.type));
     }
+    finish(e.id->alpha);
   });
 
   // The alpha of the longest tau below m (same deviation) that the lag-1 ACF identified.
@@ -207,33 +225,24 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     const DevOptions& o = opts[e.k];
     const detail::Sums& s = er.sums[index[e.k][e.q]];
     DevPoint p = e.p;
-    if (o.bounds) {
+    if (o.bounds && !e.bounded) {  // B1/R(n): fewer than 30 averages
       const int d = diff_order(o.type);
-      NoiseId id;
-      if (o.fixed_alpha) {
-        id.alpha = *o.fixed_alpha;
-      } else if (e.id) {
-        id = *e.id;
-      } else {
-        std::optional<int> previous;
-        std::size_t previous_m = 0;
-        for (const DevPoint& prior : out[e.k]) {
-          if (prior.m < s.m && prior.m >= previous_m) {
-            previous_m = prior.m;
-            previous = prior.alpha;
-          }
+      std::optional<int> previous;
+      std::size_t previous_m = 0;
+      for (const DevPoint& prior : out[e.k]) {
+        if (prior.m < s.m && prior.m >= previous_m) {
+          previous_m = prior.m;
+          previous = prior.alpha;
         }
-        const bool modified = o.type == Deviation::MDEV || o.type == Deviation::TDEV;
-        id = b1_rn_noise_id(e.z, {s.m, p.n_terms, max_factor(o.type, n), d == 3, previous},
-                            modified ? std::function<double()>([&] { return mod_avar(s.m); }) : nullptr);
       }
-      p.alpha = clamp_alpha(id.alpha, d);
-      p.edf = edf_for(o.type, p.alpha, s.m, n);
-      p.edf_alpha = p.alpha;
+      const bool modified = o.type == Deviation::MDEV || o.type == Deviation::TDEV;
+      const NoiseId id = b1_rn_noise_id(e.z, {s.m, p.n_terms, max_factor(o.type, n), d == 3, previous},
+                                        modified ? std::function<double()>([&] { return mod_avar(s.m); }) : nullptr);
+      bound(p, id.alpha, o, n);
       // The EDF guard (docs/analysis.md, "EDF guard at long tau"): with fewer than 30 averages
       // the B1 rule reads a few values, and a type that contradicts the reliably identified
       // (lag-1 ACF) taus below may not claim more degrees of freedom than that type gives.
-      if (!o.fixed_alpha && !e.id && o.edf_guard) {
+      if (o.edf_guard) {
         if (const auto ref = acf_alpha_below(pend, e, s.m)) {
           const int ra = clamp_alpha(*ref, d);
           const double cap = edf_for(o.type, ra, s.m, n);
