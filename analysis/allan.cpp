@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -12,6 +13,9 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <tuple>
+
+#include <sys/mman.h>
 
 #include "analysis/allan_engine.hpp"
 #include "analysis/clones.hpp"
@@ -50,16 +54,31 @@ double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::
 
 // Frequency averages over m from the decimated phase, z_k = (P[(k+1)m] - P[km]) / m, into a
 // buffer the calling thread reuses: a fresh vector of up to 2^17 values per tau cost a page
-// fault and the zeroing of each of its pages, a third of the identification's CPU.
+// fault and the zeroing of each of its pages, a third of the identification's CPU. The buffer is
+// on a transparent huge page where the kernel offers one: its 256 4-KiB pages were still 256
+// faults per thread and run, 0.4 ms of the first tau's 0.5 ms (2026-11-24, one thread).
 std::span<const double> averages(const detail::Decimated& dec, std::size_t m) {
   if (dec.size() < 2) return {};
-  thread_local std::unique_ptr<double[]> buf;
+  struct Free {
+    void operator()(double* p) const { std::free(p); }
+  };
+  thread_local std::unique_ptr<double, Free> buf;
   thread_local std::size_t cap = 0;
   const std::size_t len = dec.size() - 1;
-  if (cap < len) buf.reset(new double[len]), cap = len;
+  if (cap < len) {
+    constexpr std::size_t kHuge = 2u << 20;
+    const std::size_t bytes = (len * sizeof(double) + kHuge - 1) / kHuge * kHuge;
+    buf.reset(static_cast<double*>(std::aligned_alloc(kHuge, bytes)));
+    if (!buf) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    ::madvise(buf.get(), bytes, MADV_HUGEPAGE);  // advisory: failure only costs speed
+#endif
+    cap = bytes / sizeof(double);
+  }
+  double* const out = buf.get();
   const double mm = static_cast<double>(m);
-  for (std::size_t k = 0; k < len; ++k) buf[k] = (dec[k + 1] - dec[k]) / mm;
-  return {buf.get(), len};
+  for (std::size_t k = 0; k < len; ++k) out[k] = (dec[k + 1] - dec[k]) / mm;
+  return {out, len};
 }
 
 int clamp_alpha(int alpha, int d) { return std::clamp(alpha, d == 3 ? -4 : -2, 2); }
@@ -152,10 +171,20 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     DevPoint p;
     std::vector<double> z;
     std::optional<NoiseId> id;
+    bool bounded = false;  // alpha, EDF and bounds already set (they need no other tau's alpha)
   };
   std::vector<Pending> pend;
   for (std::size_t k = 0; k < opts.size(); ++k)
-    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}});
+    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}, false});
+  // A tau's alpha, EDF and chi-square bounds, where its alpha is its own: fixed, or identified
+  // by the lag-1 ACF (no EDF guard then). Computed in the parallel loop below; the B1 taus, whose
+  // rules read the previous tau's alpha, follow in order (the same calls either way).
+  const auto bound = [](DevPoint& p, int alpha, const DevOptions& o, std::uint64_t n_phase) {
+    const int d = diff_order(o.type);
+    p.alpha = clamp_alpha(alpha, d);
+    p.edf = edf_for(o.type, p.alpha, p.m, n_phase);
+    p.edf_alpha = p.alpha;
+  };
   const double tau0 = 1.0 / opts[0].rate_hz;
   const unsigned threads = opts[0].threads ? opts[0].threads : std::max(1u, std::thread::hardware_concurrency());
   detail::parallel_for(pend.size(), threads, [&](std::size_t i) {
@@ -169,7 +198,13 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     p.n_terms = term_count(o.type, n, s.m);
     p.dev = std::sqrt(variance(o.type, s.sum, s.terms, s.m, n));
     if (o.type == Deviation::TDEV) p.dev *= p.tau_s / std::sqrt(3.0);
-    if (!o.bounds || o.fixed_alpha) return;
+    if (!o.bounds) return;
+    const auto finish = [&](int alpha) {
+      bound(p, alpha, o, n);
+      std::tie(p.lo, p.hi) = chi2_bounds(p.dev, p.edf, o.confidence);
+      e.bounded = true;
+    };
+    if (o.fixed_alpha) return finish(*o.fixed_alpha);
     const detail::Decimated& dec = er.decimated.at(s.m);
     const std::span<const double> z = averages(dec, s.m);
     if (z.size() < kAcfMinPoints) {  // kept for B1/R(n) below
@@ -187,6 +222,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
       for (std::size_t j = 0; j < x.size(); ++j) x[j] = dec[j] + ramp * static_cast<double>(j);
       e.id = acf_noise_id(x, true, diff_order(o.type));
     }
+    finish(e.id->alpha);
   });
 
   // The alpha of the longest tau below m (same deviation) that the lag-1 ACF identified.
@@ -208,33 +244,24 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     const DevOptions& o = opts[e.k];
     const detail::Sums& s = er.sums[index[e.k][e.q]];
     DevPoint p = e.p;
-    if (o.bounds) {
+    if (o.bounds && !e.bounded) {  // B1/R(n): fewer than 30 averages
       const int d = diff_order(o.type);
-      NoiseId id;
-      if (o.fixed_alpha) {
-        id.alpha = *o.fixed_alpha;
-      } else if (e.id) {
-        id = *e.id;
-      } else {
-        std::optional<int> previous;
-        std::size_t previous_m = 0;
-        for (const DevPoint& prior : out[e.k]) {
-          if (prior.m < s.m && prior.m >= previous_m) {
-            previous_m = prior.m;
-            previous = prior.alpha;
-          }
+      std::optional<int> previous;
+      std::size_t previous_m = 0;
+      for (const DevPoint& prior : out[e.k]) {
+        if (prior.m < s.m && prior.m >= previous_m) {
+          previous_m = prior.m;
+          previous = prior.alpha;
         }
-        const bool modified = o.type == Deviation::MDEV || o.type == Deviation::TDEV;
-        id = b1_rn_noise_id(e.z, {s.m, p.n_terms, max_factor(o.type, n), d == 3, previous},
-                            modified ? std::function<double()>([&] { return mod_avar(s.m); }) : nullptr);
       }
-      p.alpha = clamp_alpha(id.alpha, d);
-      p.edf = edf_for(o.type, p.alpha, s.m, n);
-      p.edf_alpha = p.alpha;
+      const bool modified = o.type == Deviation::MDEV || o.type == Deviation::TDEV;
+      const NoiseId id = b1_rn_noise_id(e.z, {s.m, p.n_terms, max_factor(o.type, n), d == 3, previous},
+                                        modified ? std::function<double()>([&] { return mod_avar(s.m); }) : nullptr);
+      bound(p, id.alpha, o, n);
       // The EDF guard (docs/analysis.md, "EDF guard at long tau"): with fewer than 30 averages
       // the B1 rule reads a few values, and a type that contradicts the reliably identified
       // (lag-1 ACF) taus below may not claim more degrees of freedom than that type gives.
-      if (!o.fixed_alpha && !e.id && o.edf_guard) {
+      if (o.edf_guard) {
         if (const auto ref = acf_alpha_below(pend, e, s.m)) {
           const int ra = clamp_alpha(*ref, d);
           const double cap = edf_for(o.type, ra, s.m, n);

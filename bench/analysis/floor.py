@@ -5,7 +5,8 @@ processes that do less and less of the work, so the part of the rig's time that 
 deviation is measured rather than estimated:
 
   exec            /bin/true: the kernel's exec and exit of a minimal process
-  start-up        rig --version: exec, the dynamic loader (rig's 36 shared libraries), static
+  start-up        rig --version: exec, the dynamic loader (rig's 10 shared objects since
+                  2026-11-24's fifth pass; 36 before libpq was loaded on demand), static
                   initialisation and the command line; nothing read
   pass            rig analyze FILE --dev hdev --no-oadev --no-bounds --taus decade: start-up,
                   mapping the file, the engine's pass (page-in, value check, integration into

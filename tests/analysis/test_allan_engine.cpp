@@ -88,7 +88,12 @@ void expect_same(const std::vector<DevPoint>& a, const std::vector<DevPoint>& b,
     EXPECT_EQ(a[i].n_terms, b[i].n_terms) << what << " m=" << a[i].m;
     EXPECT_NEAR(a[i].dev, b[i].dev, tol * a[i].dev) << what << " m=" << a[i].m;
     EXPECT_EQ(a[i].alpha, b[i].alpha) << what << " m=" << a[i].m;
+    // The EDF follows from alpha, m and N alone (computed in the parallel noise-ID loop for the
+    // ACF taus, in order for the B1 taus and the EDF guard): equal, not near.
+    EXPECT_EQ(a[i].edf, b[i].edf) << what << " m=" << a[i].m;
+    EXPECT_EQ(a[i].edf_alpha, b[i].edf_alpha) << what << " m=" << a[i].m;
     EXPECT_NEAR(a[i].lo, b[i].lo, tol * a[i].dev + 1e-300) << what << " m=" << a[i].m;
+    EXPECT_NEAR(a[i].hi, b[i].hi, tol * a[i].dev + 1e-300) << what << " m=" << a[i].m;
   }
 }
 
