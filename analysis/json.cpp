@@ -72,15 +72,6 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   j["b_edf"] = num(t.b_edf);
   j["B_paper"] = term(t.B);
   j["B_lsq"] = term(t.wls.B);
-  // The long-tau points given to the model (long_tau_fit.hpp, Theo1 at T/2 and 0.75 T on the
-  // phase every `stride` samples): the estimator, its tau (0.75 m tau0), the statistic as a
-  // deviation and a variance, the model's EDF there (0: not fitted), the starts summed and the
-  // estimator's expectation per term (E/AVAR for Q, N, B, K, R).
-  j["long_tau_fit"] = json::array();
-  for (const an::LongTauFitPoint& q : t.long_tau)
-    j["long_tau_fit"].push_back({{"estimator", q.estimator}, {"m", q.m}, {"tau_s", q.tau_s}, {"tau_over_T", q.frac},
-                                 {"dev", std::sqrt(q.var)}, {"var", q.var}, {"edf", q.edf}, {"stride", q.stride},
-                                 {"starts", q.starts}, {"factor", q.factor}});
   // The one model (noise_model.hpp): which terms the data support, the octave points it fitted
   // with the model's EDF, its AICc, and every term's upper limit. Values come from the widest
   // non-negative model; a term is reported when AICc selects it or its interval excludes 0.
@@ -97,7 +88,6 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
       m["terms"][names[k]] = {{"in_model", t.model.in_model[k]}, {"value", t.model.in_model[k] ? json(t.model.value[k]) : json(nullptr)},
                               {"lo", t.model.lo[k]}, {"hi", t.model.hi[k]}, {"upper", t.model.upper[k]},
                               {"share", t.model.share[k]}, {"z", t.model.z[k]}};
-    m["estimator"] = t.model.estimator;
     j["model_fit"] = m;
   }
   // The weighted least-squares fit of all five terms: plain values (tau in s) for

@@ -10,7 +10,6 @@
 #include <numbers>
 
 #include "analysis/edf.hpp"
-#include "analysis/long_tau_fit.hpp"
 
 namespace rig::analysis {
 
@@ -24,133 +23,51 @@ double noise_basis(int k, double tau) {
   }
 }
 
-namespace {
-// The sd of the ramp's cross term with the random terms over M second differences at factor m.
-double ramp_cross_sd(const std::array<double, 5>& mu, std::size_t m, double M) {
-  // The ramp's second differences are one constant d (mu_R = d^2/2), so s = mu_R + d ebar +
-  // s_random, and its only scatter is the cross term d ebar: var = 2 mu_R var(ebar), ebar the
-  // mean of the M = N - 2m random second differences over tau. The sum telescopes: M ebar =
-  // sum_{j<m} (ybar_{M+j} - ybar_j) (ybar_i the m-average of the frequency from sample i), so
-  // ebar = (m/M) (A_end - A_start), A the triangular-weighted means of the frequency over the
-  // record's first and last 2m samples, M apart. V = var(A_end - A_start) per term, in units of
-  // its own Allan variance mu_k at m:
-  //   Q (white PM): M ebar tau = a sum of 4m independent phases: var(ebar) = (4/3) mu_Q m / M^2;
-  //   N (white FM): var(A) = (2/3) sigma_y^2 / m each, independent: V = (4/3) mu_N;
-  //   B (flicker FM): V = 2 mu_B at lag m (adjacent averages), growing with ln(lag):
-  //       V ~ 2 mu_B (1 + log2(M/m)/2) (approximate: flicker's structure function);
-  //   K (random-walk FM, K^2 tau0 = 3 mu_K/m per sample): V = K^2 tau0 (M - 0.46 m), 0.46 m
-  //       the mean |s - t| of two triangular weights of width 2m.
-  // The cross term is uncorrelated with s_random (odd moments of Gaussian noise vanish).
-  const double dm = static_cast<double>(m);
-  const double r = dm / M;
-  const double var_ebar = 4.0 / 3 * mu[0] * dm / (M * M) + r * r * (4.0 / 3 * mu[1] + 2 * mu[2] * (1 + std::log2(std::max(1.0, M / dm)) / 2) +
-                                                                3 * mu[3] * std::max(0.0, M - 0.46 * dm) / dm);
-  return std::sqrt(2 * mu[4] * var_ebar);
-}
-}  // namespace
-
 std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
   static const int kAlpha[4] = {2, 0, -1, -2};
   std::array<double, 5> sd{};
   for (std::size_t k = 0; k < 4; ++k)
     if (mu[k] > 0) sd[k] = mu[k] * std::sqrt(2 / edf_greenhall(kAlpha[k], 2, m, n_phase, true, false));
-  if (mu[4] > 0 && n_phase > 2 * m + 1) sd[4] = ramp_cross_sd(mu, m, static_cast<double>(n_phase - 1 - 2 * m) + 1);
+  if (mu[4] > 0 && n_phase > 2 * m + 1) {
+    // The ramp's second differences are one constant d (mu_R = d^2/2), so s = mu_R + d ebar +
+    // s_random, and its only scatter is the cross term d ebar: var = 2 mu_R var(ebar), ebar the
+    // mean of the M = N - 2m random second differences over tau. The sum telescopes: M ebar =
+    // sum_{j<m} (ybar_{M+j} - ybar_j) (ybar_i the m-average of the frequency from sample i), so
+    // ebar = (m/M) (A_end - A_start), A the triangular-weighted means of the frequency over the
+    // record's first and last 2m samples, M apart. V = var(A_end - A_start) per term, in units of
+    // its own Allan variance mu_k at m:
+    //   Q (white PM): M ebar tau = a sum of 4m independent phases: var(ebar) = (4/3) mu_Q m / M^2;
+    //   N (white FM): var(A) = (2/3) sigma_y^2 / m each, independent: V = (4/3) mu_N;
+    //   B (flicker FM): V = 2 mu_B at lag m (adjacent averages), growing with ln(lag):
+    //       V ~ 2 mu_B (1 + log2(M/m)/2) (approximate: flicker's structure function);
+    //   K (random-walk FM, K^2 tau0 = 3 mu_K/m per sample): V = K^2 tau0 (M - 0.46 m), 0.46 m
+    //       the mean |s - t| of two triangular weights of width 2m.
+    // The cross term is uncorrelated with s_random (odd moments of Gaussian noise vanish).
+    const double dm = static_cast<double>(m), M = static_cast<double>(n_phase - 1 - 2 * m) + 1;
+    const double r = dm / M;
+    const double var_ebar = 4.0 / 3 * mu[0] * dm / (M * M) + r * r * (4.0 / 3 * mu[1] + 2 * mu[2] * (1 + std::log2(std::max(1.0, M / dm)) / 2) +
+                                                                  3 * mu[3] * std::max(0.0, M - 0.46 * dm) / dm);
+    sd[4] = std::sqrt(2 * mu[4] * var_ebar);
+  }
   return sd;
 }
-
-std::array<double, 5> theo1_scatter(const std::array<double, 5>& mu, double frac, const std::array<double, 4>& ramp_cross,
-                                    bool for_mean) {
-  std::array<double, 5> sd{};
-  for (std::size_t k = 0; k < 4; ++k)
-    if (mu[k] > 0) {
-      const int t = static_cast<int>(k);
-      sd[k] = mu[k] * std::sqrt(2 / (for_mean ? theo1_term_edf_mean(t, frac) : theo1_term_edf_var(t, frac)));
-    }
-  // The ramp's cross term with each random term (LongTauFitPoint::ramp_cross).
-  double v = 0;
-  for (std::size_t k = 0; k < 4; ++k) v += ramp_cross[k] * mu[4] * std::max(0.0, mu[k]);
-  // On the log scale its variance is larger than the exact (linear) one (long_tau_fit.cpp).
-  if (!for_mean) v *= theo1_ramp_cross_log_scale(frac);
-  if (mu[4] > 0) sd[4] = std::sqrt(v);
-  return sd;
-}
-
-namespace {
-// edf = 2 (sum mu)^2 / var(s), the random terms' sds added (Cauchy-Schwarz), the ramp's cross
-// term in quadrature; `none`: the EDF when nothing is random.
-double mixture_edf(const std::array<double, 5>& mu, const std::array<double, 5>& sd, double none) {
-  double total = 0, sd_random = 0;
-  for (std::size_t k = 0; k < 5; ++k) total += mu[k];
-  for (std::size_t k = 0; k < 4; ++k) sd_random += sd[k];
-  const double var = sd_random * sd_random + sd[4] * sd[4];
-  if (!(var > 0)) return none;
-  return 2 * total * total / var;
-}
-}  // namespace
 
 double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
-  return mixture_edf(mu, term_scatter(mu, m, n_phase), edf_greenhall(0, 2, m, n_phase, true, false));  // none: white FM's
-}
-
-double theo1_model_edf(const std::array<double, 5>& mu, double frac, const std::array<double, 4>& ramp_cross, bool for_mean) {
-  return mixture_edf(mu, theo1_scatter(mu, frac, ramp_cross, for_mean),
-                     for_mean ? theo1_term_edf_mean(1, frac) : theo1_term_edf_var(1, frac));
+  double total = 0, sd_random = 0;
+  for (std::size_t k = 0; k < 5; ++k) total += mu[k];
+  const std::array<double, 5> sd = term_scatter(mu, m, n_phase);
+  for (std::size_t k = 0; k < 4; ++k) sd_random += sd[k];
+  const double var = sd_random * sd_random + sd[4] * sd[4];
+  if (!(var > 0)) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
+  return 2 * total * total / var;
 }
 
 namespace {
 
-// The points fitted: OADEV at octave factors, then the long-tau points (Theo1). b[i][k] is
-// E[s_i] per unit theta_k: the IEEE 952 basis at tau_i, times the estimator's factor
-// (LongTauFitPoint::factor) for a long-tau point.
 struct Pts {
   std::vector<double> tau, s, nu;  // tau, measured sigma^2, EDF in use
   std::vector<std::size_t> m;
-  std::vector<std::array<double, 5>> b;
-  std::vector<char> tot;  // 1: a Theo1 point
-  std::vector<double> frac;  // a Theo1 point's tau/T (its row in the measured tables), else 0
-  std::vector<std::array<double, 4>> rho;  // a Theo1 point's LongTauFitPoint::ramp_cross
-  // The EDF whose E[ln(chi2_nu/nu)] is the point's log bias: nu itself for an OADEV point; for a
-  // Theo1 point its own (the measured log mean, theo1_term_edf_mean), set with nu.
-  std::vector<double> nub;
-  double nu_bias(std::size_t i) const { return tot[i] && i < nub.size() && nub[i] > 0 ? nub[i] : nu[i]; }
-  void set_nub(std::size_t i, double v) {
-    if (nub.size() < tau.size()) nub.resize(tau.size(), 0.0);
-    nub[i] = v;
-  }
-  void add(double tau_i, double s_i, std::size_t m_i, const std::array<double, 5>& factor, bool is_tot,
-           const std::array<double, 4>& ramp_cross = {}, double frac_i = 0) {
-    rho.push_back(ramp_cross);
-    frac.push_back(frac_i);
-    tau.push_back(tau_i);
-    s.push_back(s_i);
-    m.push_back(m_i);
-    std::array<double, 5> bi{};
-    for (int k = 0; k < 5; ++k) bi[static_cast<std::size_t>(k)] = noise_basis(k, tau_i) * factor[static_cast<std::size_t>(k)];
-    b.push_back(bi);
-    tot.push_back(is_tot ? 1 : 0);
-  }
 };
-
-constexpr std::array<double, 5> kNoFactor{1, 1, 1, 1, 1};
-
-// The expectation of every term at point i under theta.
-std::array<double, 5> term_means(const Pts& p, std::size_t i, const std::array<double, 5>& theta) {
-  std::array<double, 5> mu{};
-  for (std::size_t k = 0; k < 5; ++k) mu[k] = theta[k] * p.b[i][k];
-  return mu;
-}
-double point_mean(const Pts& p, std::size_t i, const std::array<double, 5>& theta) {
-  double mu = 0;
-  for (std::size_t k = 0; k < 5; ++k) mu += theta[k] * p.b[i][k];
-  return mu;
-}
-// The scatter and EDF of point i per its estimator.
-std::array<double, 5> point_scatter(const Pts& p, std::size_t i, const std::array<double, 5>& mu, std::size_t n_phase) {
-  return p.tot[i] ? theo1_scatter(mu, p.frac[i], p.rho[i]) : term_scatter(mu, p.m[i], n_phase);
-}
-double point_edf(const Pts& p, std::size_t i, const std::array<double, 5>& mu, std::size_t n_phase) {
-  return p.tot[i] ? theo1_model_edf(mu, p.frac[i], p.rho[i]) : model_edf(mu, p.m[i], n_phase);
-}
 
 struct SubsetFit {
   bool ok = false;
@@ -163,7 +80,8 @@ struct SubsetFit {
 double nll_of(const Pts& p, const std::array<double, 5>& th) {
   double l = 0;
   for (std::size_t i = 0; i < p.tau.size(); ++i) {
-    const double mu = point_mean(p, i, th);
+    double mu = 0;
+    for (int k = 0; k < 5; ++k) mu += th[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
     if (!(mu > 0)) return std::numeric_limits<double>::infinity();
     l += p.nu[i] / 2 * (p.s[i] / mu + std::log(mu));
   }
@@ -191,7 +109,7 @@ SubsetFit fit_subset(const Pts& p, int mask, bool nonneg) {
   if (c == 0 || c > n) return f;
   Eigen::MatrixXd X(n, c);
   for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < c; ++j) X(i, j) = p.b[static_cast<std::size_t>(i)][static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
+    for (Eigen::Index j = 0; j < c; ++j) X(i, j) = noise_basis(cols[static_cast<std::size_t>(j)], p.tau[static_cast<std::size_t>(i)]);
   Eigen::VectorXd mu(n), y(n);
   for (Eigen::Index i = 0; i < n; ++i) mu(i) = y(i) = p.s[static_cast<std::size_t>(i)];
   Eigen::VectorXd th = Eigen::VectorXd::Zero(c);
@@ -279,9 +197,13 @@ double octave_corr(int k, int lag) {
 
 // (mu_Q + mu_N) / mu at tau: the share of the white (high-frequency) terms in the model; 1 when
 // the model has none of the five terms.
-double white_share(const Pts& p, std::size_t i, const std::array<double, 5>& theta) {
-  const std::array<double, 5> mu = term_means(p, i, theta);
-  const double all = mu[0] + mu[1] + mu[2] + mu[3] + mu[4], w = mu[0] + mu[1];
+double white_share(const std::array<double, 5>& theta, double tau) {
+  double w = 0, all = 0;
+  for (int k = 0; k < 5; ++k) {
+    const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, tau);
+    all += mu;
+    if (k < 2) w += mu;
+  }
   return all > 0 && w > 0 ? w / all : 1;
 }
 
@@ -294,37 +216,24 @@ Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std:
   const std::size_t n = p.tau.size();
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 5);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::array<double, 5> sd = point_scatter(p, i, term_means(p, i, theta), n_phase);
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    const std::array<double, 5> sd = term_scatter(mu, p.m[i], n_phase);
     for (int k = 0; k < 5; ++k) w(static_cast<Eigen::Index>(i), k) = sd[static_cast<std::size_t>(k)];
   }
-  // The last OADEV point: a Theo1 point's correlation with an OADEV point is its measured one with
-  // that point (theo1_corr_oadev) times the octave chain's from there (Markov along the chain).
-  double last_oadev = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (!p.tot[i]) last_oadev = p.tau[i];
-  auto term_corr = [&](std::size_t i, std::size_t j, int k) {
-    const int t = std::min(k, 3);
-    if (p.tot[i] && p.tot[j]) return k == 4 ? theo1_ramp_corr_pair() : theo1_corr_pair(t);
-    if (p.tot[i] || p.tot[j]) {
-      const std::size_t lt = p.tot[i] ? i : j, oa = p.tot[i] ? j : i;
-      const int lag = static_cast<int>(std::lround(std::abs(std::log2(last_oadev / p.tau[oa]))));
-      return (k == 4 ? theo1_ramp_corr_oadev(p.frac[lt]) : theo1_corr_oadev(t, p.frac[lt])) * octave_corr(t, lag);
-    }
-    const int lag = std::max(1, static_cast<int>(std::lround(std::abs(std::log2(p.tau[j] / p.tau[i])))));
-    return octave_corr(t, lag);
-  };
   Eigen::MatrixXd S(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) {
       const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
+      const int lag = std::max(1, static_cast<int>(std::lround(std::abs(std::log2(p.tau[j] / p.tau[i])))));
       double c = i == j ? 1 : 0;
       const double ni = w.row(ii).norm(), nj = w.row(jj).norm();
       if (i != j && ni > 0 && nj > 0) {
         c = 0;
-        for (int k = 0; k < 5; ++k) c += w(ii, k) * w(jj, k) * term_corr(i, j, k);
+        for (int k = 0; k < 5; ++k) c += w(ii, k) * w(jj, k) * octave_corr(std::min(k, 3), lag);
         c /= ni * nj;
       }
-      S(ii, jj) = c * std::sqrt(2 / p.nu[i] * 2 / p.nu[j]) + (i == j ? std::pow(delta * white_share(p, i, theta), 2) : 0);
+      S(ii, jj) = c * std::sqrt(2 / p.nu[i] * 2 / p.nu[j]) + (i == j ? std::pow(delta * white_share(theta, p.tau[i]), 2) : 0);
     }
   return S;
 }
@@ -345,8 +254,8 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   Eigen::VectorXd ly(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto si = static_cast<std::size_t>(i);
-    for (Eigen::Index j = 0; j < c; ++j) X(i, j) = p.b[si][static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
-    ly(i) = std::log(p.s[si]) - log_bias(p.nu_bias(si));
+    for (Eigen::Index j = 0; j < c; ++j) X(i, j) = noise_basis(cols[static_cast<std::size_t>(j)], p.tau[si]);
+    ly(i) = std::log(p.s[si]) - log_bias(p.nu[si]);
   }
   Eigen::VectorXd th(c);
   for (Eigen::Index j = 0; j < c; ++j) th(j) = start[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
@@ -415,8 +324,9 @@ double gls_chi2(const Pts& p, const std::array<double, 5>& theta, std::size_t n_
   const std::size_t n = p.tau.size();
   Eigen::VectorXd r(static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i) {
-    const double mu = point_mean(p, i, theta);
-    r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu_bias(i));
+    double mu = 0;
+    for (int k = 0; k < 5; ++k) mu += theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu[i]);
   }
   const Eigen::MatrixXd S = model_cov(p, theta, n_phase, d);
   return r.dot(S.ldlt().solve(r));
@@ -424,8 +334,9 @@ double gls_chi2(const Pts& p, const std::array<double, 5>& theta, std::size_t n_
 
 void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_phase) {
   for (std::size_t i = 0; i < p.tau.size(); ++i) {
-    p.nu[i] = point_edf(p, i, term_means(p, i, theta), n_phase);
-    if (p.tot[i]) p.set_nub(i, theo1_model_edf(term_means(p, i, theta), p.frac[i], p.rho[i], true));
+    std::array<double, 5> mu{};
+    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    p.nu[i] = model_edf(mu, p.m[i], n_phase);
   }
 }
 
@@ -433,10 +344,7 @@ Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
   Selection out;
   const std::size_t n = p.tau.size();
   p.nu.resize(n);
-  for (std::size_t i = 0; i < n; ++i)  // start: white FM
-    p.nu[i] = p.tot[i] ? theo1_term_edf_var(1, p.frac[i]) : edf_greenhall(0, 2, p.m[i], n_phase, true, false);
-  for (std::size_t i = 0; i < n; ++i)
-    if (p.tot[i]) p.set_nub(i, theo1_term_edf_mean(1, p.frac[i]));
+  for (std::size_t i = 0; i < n; ++i) p.nu[i] = edf_greenhall(0, 2, p.m[i], n_phase, true, false);  // start: white FM
   // Start: the best subset with independent chi-square points (Gamma likelihood).
   SubsetFit best;
   double best_aic = std::numeric_limits<double>::infinity();
@@ -524,10 +432,6 @@ Pts tail_of(const Pts& p, std::size_t from) {
   q.tau.assign(p.tau.begin() + static_cast<std::ptrdiff_t>(from), p.tau.end());
   q.s.assign(p.s.begin() + static_cast<std::ptrdiff_t>(from), p.s.end());
   q.m.assign(p.m.begin() + static_cast<std::ptrdiff_t>(from), p.m.end());
-  q.b.assign(p.b.begin() + static_cast<std::ptrdiff_t>(from), p.b.end());
-  q.tot.assign(p.tot.begin() + static_cast<std::ptrdiff_t>(from), p.tot.end());
-  q.rho.assign(p.rho.begin() + static_cast<std::ptrdiff_t>(from), p.rho.end());
-  q.frac.assign(p.frac.begin() + static_cast<std::ptrdiff_t>(from), p.frac.end());
   return q;
 }
 
@@ -562,33 +466,29 @@ std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t
   return out;
 }
 
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence,
-                              std::span<const LongTauFitPoint> long_tau) {
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence) {
   NoiseModelFit out;
   // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
   Pts all;
   for (const DevPoint& d : oadev) {
     if (!(d.dev > 0) || !(d.tau_s > 0) || d.m == 0) continue;
     if (!all.tau.empty() && d.tau_s < 2 * all.tau.back() * (1 - 1e-9)) continue;
-    all.add(d.tau_s, d.dev * d.dev, d.m, kNoFactor, false);
+    all.tau.push_back(d.tau_s);
+    all.s.push_back(d.dev * d.dev);
+    all.m.push_back(d.m);
   }
   // The longest tau too when it is at least 1.5x the last octave point (log:N ends at the stop
   // ratio, (N-1)/4, up to an octave past the last power of two: the points that see K and R
   // most); its correlation with the octave point before it is taken as one octave's.
   for (auto it = oadev.rbegin(); it != oadev.rend(); ++it)
     if (it->dev > 0 && it->tau_s > 0 && it->m > 0) {
-      if (!all.tau.empty() && it->tau_s >= 1.5 * all.tau.back()) all.add(it->tau_s, it->dev * it->dev, it->m, kNoFactor, false);
+      if (!all.tau.empty() && it->tau_s >= 1.5 * all.tau.back()) {
+        all.tau.push_back(it->tau_s);
+        all.s.push_back(it->dev * it->dev);
+        all.m.push_back(it->m);
+      }
       break;
     }
-  // The long-tau points past the last OADEV point (Theo1 at T/2 and 0.75 T, long_tau_fit.hpp),
-  // each with its estimator's expectation per term, its measured log-scale EDF and its measured
-  // correlation with the last OADEV point (model_cov).
-  if (!all.tau.empty()) {
-    const double last_oadev = all.tau.back();
-    for (const LongTauFitPoint& q : long_tau)
-      if (q.var > 0 && q.tau_s >= 1.5 * last_oadev && q.tau_s > all.tau.back())
-        all.add(q.tau_s, q.var, q.m, q.factor, true, q.ramp_cross, q.frac);
-  }
   const std::size_t n_all = all.tau.size();
   if (n_all < 3) {  // AICc needs n - k - 1 > 0 for one term
     out.reason = "fewer than 3 octave Allan points";
@@ -670,7 +570,6 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   out.tau_s = p.tau;
   out.avar = p.s;
   out.edf = p.nu;
-  for (std::size_t i = 0; i < n; ++i) out.estimator.push_back(p.tot[i] ? "theo1" : "oadev");
   for (int k = 0; k < 5; ++k) {
     const auto kk = static_cast<std::size_t>(k);
     if (!(report & (1 << k)) && (best.mask & (1 << k))) {
@@ -704,7 +603,11 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
         out.lo[kk] = std::min(out.lo[kk], std::sqrt(std::max(0.0, thf - z * sdf)));
         out.hi[kk] = out.upper[kk] = std::max(out.hi[kk], std::sqrt(thf + z * sdf));
       }
-      for (std::size_t i = 0; i < n; ++i) out.share[kk] = std::max(out.share[kk], th * p.b[i][kk] / point_mean(p, i, best.theta));
+      for (std::size_t i = 0; i < n; ++i) {
+        double mu = 0;
+        for (int j = 0; j < 5; ++j) mu += best.theta[static_cast<std::size_t>(j)] * noise_basis(j, p.tau[i]);
+        out.share[kk] = std::max(out.share[kk], th * noise_basis(k, p.tau[i]) / mu);
+      }
     } else {
       // Upper limit: the model plus this term, its sign free (GLS from the model, theta_k = 0);
       // theta_k^+ + z sd(theta_k).
@@ -715,7 +618,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
       } else {
         // No solution with the term: it cannot exceed what any one point allows alone.
         double u = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < n; ++i) u = std::min(u, p.s[i] * (1 + z * std::sqrt(2 / p.nu[i])) / p.b[i][kk]);
+        for (std::size_t i = 0; i < n; ++i) u = std::min(u, p.s[i] * (1 + z * std::sqrt(2 / p.nu[i])) / noise_basis(k, p.tau[i]));
         out.upper[kk] = std::sqrt(u);
       }
     }

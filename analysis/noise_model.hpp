@@ -25,11 +25,8 @@
 // dropped while the AICc model's chi-square is improbable (kGofAlpha), since what the five
 // power laws miss on a DUT (folded tones, the output filter) sits at the shortest taus.
 // docs/analysis.md ("One model") gives the reasoning and coverage.
-// Long-tau points (long_tau_fit.hpp: Theo1 at T/2 and 0.75 T, SP 1065 sec. 5.2.14) follow the
-// OADEV points when given: their expectation is each term's basis times the estimator's factor
-// (its bias against AVAR, exact per term), their EDF the mixture of the per-term log-scale EDFs
-// measured by simulation, their correlation with the OADEV points measured likewise
-// (docs/analysis.md "Theo1 points in the fit").
+// Long-tau points of other estimators (TOTDEV, TheoH: more EDF near T) are not used yet; they
+// would enter as further points with their own EDF and the model covariance extended to them.
 #pragma once
 #include <array>
 #include <cstddef>
@@ -38,7 +35,6 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
-#include "analysis/long_tau_fit.hpp"
 
 namespace rig::analysis {
 
@@ -53,7 +49,6 @@ struct NoiseModelFit {
   std::array<double, 5> share{};       // the term's largest share of the model sigma^2 over the fitted taus
   std::array<double, 5> z{};           // theta / sd(theta) of a term in the model
   std::vector<double> tau_s, avar, edf;  // the points fitted: tau, measured sigma^2, model EDF
-  std::vector<std::string> estimator;   // per point: "oadev" or "theo1" (avar is then Theo1)
   double aicc = 0;          // of the AICc model (the one the goodness of fit is tested on)
   double chi2_per_dof = 0;  // GLS chi2 of the selected model on the covariance it implies, per dof
   double gof_p = 0;         // P(chi2 >= that): the goodness of fit over the points fitted
@@ -68,10 +63,7 @@ inline constexpr std::size_t kMinGofPoints = 6;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
 // is taken from it); record_s: its length; confidence: of the bounds (default one sigma).
-// long_tau: further points past the OADEV grid (theo1_fit_points), used when at least 1.5x the
-// longest OADEV point fitted.
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma,
-                              std::span<const LongTauFitPoint> long_tau = {});
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma);
 
 // sigma^2 of term k (0..4 = Q, N, B, K, R) per unit of its squared coefficient at tau (IEEE 952).
 double noise_basis(int k, double tau);
@@ -90,14 +82,5 @@ double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_p
 // Giving R random walk's EDF instead (the previous version) put the fitted curve 1.2-1.6x above
 // the R-dominated points (the log-bias correction of EDF ~2 on points whose scatter is far less).
 std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
-
-// The same for a Theo1 point (long_tau_fit.hpp) at tau/T = frac, mu its terms' Theo1
-// expectations: Q, N, B, K with their measured log-scale EDFs (theo1_term_edf_var, or with
-// for_mean theo1_term_edf_mean, whose E[ln(chi2_nu/nu)] is the point's log bias), R its cross
-// term with them (ramp_cross: LongTauFitPoint::ramp_cross); and the mixture EDF from them.
-std::array<double, 5> theo1_scatter(const std::array<double, 5>& mu, double frac, const std::array<double, 4>& ramp_cross,
-                                    bool for_mean = false);
-double theo1_model_edf(const std::array<double, 5>& mu, double frac, const std::array<double, 4>& ramp_cross,
-                       bool for_mean = false);
 
 }  // namespace rig::analysis

@@ -185,8 +185,7 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
 
 }  // namespace
 
-NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s,
-                       std::span<const LongTauFitPoint> long_tau) {
+NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
   NoiseTerms out;
   out.paper = paper_fit(oadev);
   // R is not fitted on a record shorter than the method allows for it (docs/method.md: > 50 h): over
@@ -194,11 +193,7 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
   // (then to be discarded by the 50 h rule anyway, leaving K null).
   // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
-  out.model = fit_noise_model(oadev, record_length_s, kOneSigma, long_tau);
-  out.long_tau.assign(long_tau.begin(), long_tau.end());
-  for (LongTauFitPoint& q : out.long_tau)
-    for (std::size_t i = 0; i < out.model.tau_s.size(); ++i)
-      if (out.model.estimator[i] == q.estimator && out.model.tau_s[i] == q.tau_s) q.edf = out.model.edf[i];
+  out.model = fit_noise_model(oadev, record_length_s);
   out.wls = wls_from_model(out.model);
   if (out.wls.R.value && record_length_s < r_min_record_s)
     out.wls.R.reason += "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";

@@ -99,9 +99,6 @@ struct NoiseTerms {
   PaperFit paper;
   WlsFit wls;          // the model fit (noise_model.hpp) in the shape of the former weighted fit
   NoiseModelFit model;  // the one model: every term the data supports, with bounds or upper limits
-  // The long-tau points given to the model (Theo1 at T/2 and 0.75 T, long_tau_fit.hpp), edf the model's
-  // there (0: not fitted, e.g. not past the last OADEV point or dropped with the range).
-  std::vector<LongTauFitPoint> long_tau;
   // How B was read (B above): "flat_segment" (the paper's, tau_cp the middle of the segment
   // flat_tau_from_s..flat_tau_to_s), "polynomial_minimum" (no flat segment: the quartic's
   // interior minimum), "least_squares" (neither: the model's B), or "" (no B). The paper
@@ -123,9 +120,8 @@ inline constexpr double kRMinRecordS = 50 * 3600.0;
 
 // oadev: the overlapping Allan deviation points (edf used as weights; 0 = unweighted).
 // r_min_record_s: the record length a profile requires for R; a shorter record's R notes it.
-// long_tau: points past T/4 for the model (theo1_fit_points of the same record; empty: OADEV only).
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
-                       double r_min_record_s = kRMinRecordS, std::span<const LongTauFitPoint> long_tau = {});
+                       double r_min_record_s = kRMinRecordS);
 
 // Passport units (docs/method.md quotes the terms per hour): 1 h = 3600 s, so a coefficient in
 // g*s^a is 3600^-a of itself in g*h^a. Written as products with the same factors the passport

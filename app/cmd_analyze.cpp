@@ -25,7 +25,6 @@
 #include "app/analyze_input.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
-#include "analysis/long_tau_fit.hpp"
 #include "analysis/options.hpp"
 #include "analysis/psd.hpp"
 #include "analysis/theo.hpp"
@@ -233,11 +232,7 @@ int run(const Args& a) {
   const std::vector<an::DevPoint>* oadev_pts = a.no_oadev ? nullptr : &devs[0];
   const std::vector<an::DevPoint>* extra_pts = base.type != an::Deviation::OADEV ? &devs.back() : nullptr;
   std::optional<an::NoiseTerms> terms;  // read from OADEV
-  if (oadev_pts) {
-    // Theo1 at T/2 and 0.75 T for the model (one more pass over the record: block sums, ~1 ms on 3.6e6).
-    const std::vector<an::LongTauFitPoint> long_pts = an::theo1_fit_points(*src, base.data, rate);
-    terms = an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, long_pts);
-  }
+  if (oadev_pts) terms = an::noise_terms(*oadev_pts, record_s);
   timer.mark("noise terms");
 
   // Long-tau statistics: on the record in memory (16 bytes per value with its phase), noise

@@ -1,7 +1,5 @@
 #include "procedures/acceptance/method.hpp"
 
-#include "analysis/long_tau_fit.hpp"
-
 namespace rig::acceptance {
 
 AllanSettings allan_settings(const Profile& p) { return {p.rate_hz, p.taus, p.confidence, p.r_min_record_s}; }
@@ -19,9 +17,7 @@ AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanS
   c.oadev = analysis::deviation(record, opt);
   const double T = static_cast<double>(record.size()) / s.rate_hz;
   if (poll) poll();
-  const std::vector<analysis::LongTauFitPoint> long_pts =
-      analysis::theo1_fit_points(record, analysis::DataKind::Frequency, s.rate_hz);
-  c.terms = analysis::noise_terms(c.oadev, T, s.r_min_record_s, long_pts);
+  c.terms = analysis::noise_terms(c.oadev, T, s.r_min_record_s);
   return c;
 }
 

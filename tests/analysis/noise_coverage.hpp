@@ -10,7 +10,6 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
-#include "analysis/long_tau_fit.hpp"
 #include "analysis/noise_terms.hpp"
 #include "tests/analysis/injected_noise.hpp"
 
@@ -109,8 +108,7 @@ inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, s
       opt.rate_hz = s.rate_hz;
       opt.taus = parse_tau_grid("log:100");
       const std::vector<DevPoint> dev = deviation(y, opt);
-      const NoiseTerms nt = noise_terms(dev, static_cast<double>(n) / s.rate_hz, kRMinRecordS,
-                                        theo1_fit_points(y, DataKind::Frequency, s.rate_hz));
+      const NoiseTerms nt = noise_terms(dev, static_cast<double>(n) / s.rate_hz);
       const auto rep = reported_terms(nt);
       if (sc.empty())
         for (const auto& r : rep) {

@@ -5,7 +5,6 @@
 #include <array>
 #include <cmath>
 
-#include "analysis/theo.hpp"
 #include "tests/analysis/noise_coverage.hpp"
 
 namespace rig::analysis::injected {
@@ -44,81 +43,6 @@ TEST(InjectedNoise, EachTermGivesItsAllanVariance) {
 // size would. 400 records of K + R (10 Hz, 6 h, R 75 % and 84 % of sigma^2 at T/8 and T/4): the
 // measured variance of s / mu is within 25 % of 2/model_edf (measured 0.217 vs 0.207, 0.368 vs
 // 0.327) and below 0.75 of what random walk's EDF, the previous rule for R, gives (0.339, 0.895).
-// Theo1 at T/2 and 0.75 T (analysis/long_tau_fit.hpp) against the model's expectation for it,
-// each term alone: mean over `seeds` records of n samples at 100 Hz of Theo1 / (AVAR_k(tau)
-// factor_k), point q.
-double mean_theo1_ratio(const Terms& t, int k, std::size_t q, int seeds, std::size_t n) {
-  const double rate = 100;
-  double s = 0;
-  for (int i = 0; i < seeds; ++i) {
-    const auto y = generate(t, rate, n, 900 + static_cast<std::uint64_t>(i));
-    const auto pts = theo1_fit_points(y, DataKind::Frequency, rate);
-    if (pts.size() != 2) return 0;
-    s += pts[q].var / (term_avar(t, k, pts[q].tau_s) * pts[q].factor[static_cast<std::size_t>(k)]);
-  }
-  return s / seeds;
-}
-
-// The estimator: Theo1 (SP 1065 eq. 30) of the phase every stride-th sample. With stride 1 it is
-// the rig's Theo1 (exact against NBS14 and Stable32, test_theo.cpp) to rounding; with a stride it
-// is exactly Theo1 of the phase sampled at stride tau0 (built here independently).
-TEST(LongTauFit, Theo1PointsAreTheo1OfThePhaseOnTheirGrid) {
-  for (const std::size_t n : {999u, 20000u}) {
-    const auto y = generate({0, 1e-5, 0, 1e-6, 0}, 100, n, 77);
-    const auto pts = theo1_fit_points(y, DataKind::Frequency, 100);
-    ASSERT_EQ(pts.size(), 2u);
-    for (const LongTauFitPoint& p : pts) {
-      EXPECT_EQ(p.m % (2 * p.stride), 0u);
-      EXPECT_NEAR(p.tau_s / (p.frac * static_cast<double>(n) / 100), 1, 0.01) << n;
-      if (p.stride == 1) {
-        LongTauOptions o;
-        o.type = LongTau::Theo1;
-        o.rate_hz = 100;
-        o.bounds = false;
-        o.factors = {p.m};
-        const auto d = long_tau(y, o);
-        ASSERT_EQ(d.size(), 1u);
-        EXPECT_NEAR(p.var / (d[0].dev * d[0].dev), 1, 1e-9) << n;
-      } else {
-        std::vector<double> X(1, 0.0);
-        long double acc = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-          acc += y[i] - y[0];
-          if ((i + 1) % p.stride == 0) X.push_back(static_cast<double>(acc) / 100);
-        }
-        EXPECT_NEAR(p.var / theo1_var(X, p.m / p.stride, static_cast<double>(p.stride) / 100).var, 1, 1e-9) << n;
-      }
-    }
-  }
-}
-
-// The expectation factors: white FM is unbiased (Howe & Tasset: Theo1 matches AVAR at
-// tau = 0.75 m for white FM); the ramp (x = t^2, every bracket 2 k (m - k)) against its
-// continuous limit (4/(0.75 m^2)) m^4 int_0^1/2 u (1-u)^2 du / (2 (0.75 m)^2) = 0.2716; white PM
-// ~ ln(m/2) (sum_k 4/k); none depends on the grid's stride (stationary increments).
-TEST(LongTauFit, Theo1FactorsAgainstClosedForms) {
-  const auto f = theo1_factors(2048, 1366, 1);
-  EXPECT_NEAR(f[1], 1, 1e-9);
-  EXPECT_NEAR(f[4], 0.2716, 1e-3);
-  EXPECT_NEAR(f[0] / std::log(1366.0 / 2), 1, 0.1);
-  const auto g = theo1_factors(2048, 1366, 64);
-  for (std::size_t k = 0; k < 5; ++k) EXPECT_NEAR(g[k] / f[k], 1, 1e-6) << k;
-}
-
-// Each term alone through the generator: the mean Theo1 over 400 records of 4000 samples is the
-// model's expectation (basis times factor). The log-scale variance of a point is 0.2-3.4
-// (long_tau_fit.cpp), so the mean of 400 ratios has a relative sd of 3-10 %; the ramp is exact.
-TEST(InjectedNoise, EachTermGivesItsTheo1) {
-  EXPECT_NEAR(mean_theo1_ratio({1e-6, 0, 0, 0, 0}, 0, 0, 400, 4000), 1, 0.1);
-  EXPECT_NEAR(mean_theo1_ratio({0, 1e-5, 0, 0, 0}, 1, 0, 400, 4000), 1, 0.15);
-  EXPECT_NEAR(mean_theo1_ratio({0, 0, 1e-6, 0, 0}, 2, 0, 400, 4000), 1, 0.2);
-  EXPECT_NEAR(mean_theo1_ratio({0, 0, 0, 1e-7, 0}, 3, 0, 400, 4000), 1, 0.25);
-  EXPECT_NEAR(mean_theo1_ratio({0, 1e-5, 0, 0, 0}, 1, 1, 400, 4000), 1, 0.2);
-  EXPECT_NEAR(mean_theo1_ratio({0, 0, 0, 1e-7, 0}, 3, 1, 400, 4000), 1, 0.3);
-  EXPECT_NEAR(mean_theo1_ratio({0, 0, 0, 0, 1e-8}, 4, 0, 1, 4000), 1, 1e-6);
-  EXPECT_NEAR(mean_theo1_ratio({0, 0, 0, 0, 1e-8}, 4, 1, 1, 4000), 1, 1e-6);
-}
-
 TEST(InjectedNoise, RampScatterIsItsCrossTermWithTheRandomWalk) {
   const Terms t{0, 0, 0, 8.53e-8, 2.2e-9};
   const double rate = 10;
