@@ -2,14 +2,18 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/digamma.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <thread>
+#include <utility>
 
 #include "analysis/edf.hpp"
+#include "analysis/parallel.hpp"
 
 namespace rig::analysis {
 
@@ -304,6 +308,32 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
 }
 
 
+using Team = detail::WorkTeam;
+constexpr int kSubsets = 31;  // the non-empty subsets of {Q, N, B, K, R}: masks 1..31
+
+// fn(mask) for every subset, over the team; [mask - 1] of the result. Each subset's fit is
+// independent of the others', so the thread count does not change any result.
+template <class Fn>
+std::array<SubsetFit, kSubsets> each_subset(Team& team, Fn fn) {
+  std::array<SubsetFit, kSubsets> fits;
+  team.run(kSubsets, [&](std::size_t i) { fits[i] = fn(static_cast<int>(i) + 1); });
+  return fits;
+}
+
+// Every subset by GLS on W, each from its own Gamma-likelihood solution, non-negative; with its
+// AICc (infinite where the subset has no non-negative solution). What the selection and the
+// plausible models rank.
+std::array<std::pair<double, SubsetFit>, kSubsets> gls_every_subset(const Pts& p, const Eigen::MatrixXd& W, Team& team) {
+  const std::array<SubsetFit, kSubsets> fits = each_subset(team, [&](int mask) {
+    const SubsetFit g = fit_subset(p, mask, true);
+    return g.ok ? gls_subset(p, W, mask, g.theta, true) : SubsetFit{};
+  });
+  std::array<std::pair<double, SubsetFit>, kSubsets> out;
+  for (std::size_t i = 0; i < fits.size(); ++i)
+    out[i] = {fits[i].ok ? aicc(fits[i], p.tau.size()) : std::numeric_limits<double>::infinity(), fits[i]};
+  return out;
+}
+
 // The model selected on the points `p` (EDF and covariance from the model, GLS over every subset,
 // AICc), with its goodness of fit. allow_error: add the Birge model error delta when the
 // selected model's chi2/dof > 1 (the fallback when no tau range is adequate, see fit_noise_model).
@@ -340,7 +370,7 @@ void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_pha
   }
 }
 
-Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
+Selection select_model(Pts p, std::size_t n_phase, bool allow_error, Team& team) {
   Selection out;
   const std::size_t n = p.tau.size();
   p.nu.resize(n);
@@ -348,10 +378,8 @@ Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
   // Start: the best subset with independent chi-square points (Gamma likelihood).
   SubsetFit best;
   double best_aic = std::numeric_limits<double>::infinity();
-  for (int mask = 1; mask < 32; ++mask) {
-    const SubsetFit f = fit_subset(p, mask, true);
+  for (const SubsetFit& f : each_subset(team, [&](int mask) { return fit_subset(p, mask, true); }))
     if (f.ok && aicc(f, n) < best_aic) best_aic = aicc(f, n), best = f;
-  }
   if (!best.ok) {
     out.reason = "no non-negative model fits the Allan points";
     return out;
@@ -378,12 +406,8 @@ Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
     out.W = model_cov(p, best.theta, n_phase, out.delta).inverse();
     SubsetFit sel;
     best_aic = std::numeric_limits<double>::infinity();
-    for (int mask = 1; mask < 32; ++mask) {
-      const SubsetFit g = fit_subset(p, mask, true);
-      if (!g.ok) continue;
-      const SubsetFit f = gls_subset(p, out.W, mask, g.theta, true);
-      if (f.ok && aicc(f, n) < best_aic) best_aic = aicc(f, n), sel = f;
-    }
+    for (const auto& [a, f] : gls_every_subset(p, out.W, team))
+      if (f.ok && a < best_aic) best_aic = a, sel = f;
     if (!sel.ok) break;
     best = sel;
     out.aicc = best_aic;
@@ -404,7 +428,8 @@ Selection select_model(Pts p, std::size_t n_phase, bool allow_error) {
 // from the result, up to four rounds. No term is left out because AICc would: a term the data cannot tell from zero
 // stays in with its (wide) interval instead of landing in its neighbours. W: the inverse
 // covariance of the last round.
-SubsetFit widest_model(Pts& p, std::size_t n_phase, double delta, std::array<double, 5> start, Eigen::MatrixXd& W) {
+SubsetFit widest_model(Pts& p, std::size_t n_phase, double delta, std::array<double, 5> start, Eigen::MatrixXd& W,
+                       Team& team) {
   SubsetFit f;
   for (int round = 0; round < 4; ++round) {
     set_model_edf(p, start, n_phase);
@@ -413,13 +438,13 @@ SubsetFit widest_model(Pts& p, std::size_t n_phase, double delta, std::array<dou
     // solution is non-negative (the constrained optimum is the unconstrained one on its face);
     // of equal chi-squares the larger subset.
     SubsetFit best;
-    for (int mask = 1; mask < 32; ++mask) {
-      std::array<double, 5> s0 = start;
-      for (int k = 0; k < 5; ++k)
-        if (!(mask & (1 << k))) s0[static_cast<std::size_t>(k)] = 0;
-      const SubsetFit g = gls_subset(p, W, mask, s0, true);
+    for (const SubsetFit& g : each_subset(team, [&](int mask) {
+           std::array<double, 5> s0 = start;
+           for (int k = 0; k < 5; ++k)
+             if (!(mask & (1 << k))) s0[static_cast<std::size_t>(k)] = 0;
+           return gls_subset(p, W, mask, s0, true);
+         }))
       if (g.ok && (!best.ok || g.nll < best.nll * (1 - 1e-9) || (g.nll <= best.nll * (1 + 1e-9) && g.k > best.k))) best = g;
-    }
     if (!best.ok) return best;
     f = best;
     start = f.theta;
@@ -435,8 +460,6 @@ Pts tail_of(const Pts& p, std::size_t from) {
   return q;
 }
 
-}  // namespace
-
 // Models the data support about as well as the selected one: every non-negative subset whose
 // AICc is within kPlausibleAicc of the least, on the covariance the selected model implies
 // (Burnham & Anderson 2002, section 2.6: Delta_i <= 2 has substantial support). Collinear terms
@@ -444,29 +467,23 @@ Pts tail_of(const Pts& p, std::size_t from) {
 // over only one of them excludes what the other reads (issue 12: B 5-7x on a K record).
 constexpr double kPlausibleAicc = 2.0;
 
-std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t n_phase) {
-  const std::size_t n = p.tau.size();
-  p.nu.resize(n);
+std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t n_phase, Team& team) {
+  p.nu.resize(p.tau.size());
   set_model_edf(p, sel.best.theta, n_phase);
   const Eigen::MatrixXd W = model_cov(p, sel.best.theta, n_phase, sel.delta).inverse();
-  std::vector<std::pair<double, SubsetFit>> fits;
+  auto fits = gls_every_subset(p, W, team);
   double least = std::numeric_limits<double>::infinity();
-  for (int mask = 1; mask < 32; ++mask) {
-    const SubsetFit g = fit_subset(p, mask, true);
-    if (!g.ok) continue;
-    const SubsetFit f = gls_subset(p, W, mask, g.theta, true);
-    if (!f.ok) continue;
-    const double a = aicc(f, n);
-    least = std::min(least, a);
-    fits.emplace_back(a, f);
-  }
+  for (const auto& [a, f] : fits)
+    if (f.ok) least = std::min(least, a);
   std::vector<SubsetFit> out;
-  for (auto& fa : fits)
-    if (fa.first <= least + kPlausibleAicc) out.push_back(std::move(fa.second));
+  for (auto& [a, f] : fits)
+    if (f.ok && a <= least + kPlausibleAicc) out.push_back(std::move(f));
   return out;
 }
 
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence) {
+}  // namespace
+
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
   NoiseModelFit out;
   // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
   Pts all;
@@ -506,17 +523,20 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   // model (and, carried as a model error, drown the long-tau points that decide K and R). When
   // no range of at least kMinGofPoints points is adequate, the last range tried is fitted with
   // the Birge model error instead, and the fit says so.
+  // The subset fits of each selection round run over the cores there are (by now the deviations
+  // are done); each fit is the same on any thread.
+  Team team(std::max(1u, std::min(threads, std::thread::hardware_concurrency())));
   Selection sel;
   std::size_t from = 0;
   const std::size_t last_from = n_all > kMinGofPoints ? n_all - kMinGofPoints : 0;
   for (;; ++from) {
-    sel = select_model(tail_of(all, from), n_phase, false);
+    sel = select_model(tail_of(all, from), n_phase, false, team);
     if ((sel.ok && sel.p_value >= kGofAlpha) || from >= last_from) break;
   }
   out.gof_p = sel.ok ? sel.p_value : 0;
   out.dropped_short = from;
   if (sel.ok && sel.p_value < kGofAlpha) {
-    sel = select_model(tail_of(all, from), n_phase, true);
+    sel = select_model(tail_of(all, from), n_phase, true, team);
     out.model_error = sel.delta;
   }
   if (!sel.ok) {
@@ -530,7 +550,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   // The terms: the widest non-negative model on the tau range (not the AICc model, whose left-out
   // terms land in their neighbours: R on 6 h read 1.6x with K left out, covered 15 %).
   Eigen::MatrixXd W;
-  SubsetFit best = widest_model(p, n_phase, sel.delta, sel.best.theta, W);
+  SubsetFit best = widest_model(p, n_phase, sel.delta, sel.best.theta, W, team);
   if (!best.ok) {
     best = sel.best;
     W = sel.W;
@@ -564,7 +584,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     const double th = best.theta[static_cast<std::size_t>(k)];
     if ((best.mask & (1 << k)) && th > 0 && ((sel.best.mask & (1 << k)) || th >= z * sd_of(best, k))) report |= 1 << k;
   }
-  const std::vector<SubsetFit> plausible = plausible_models(p, sel, n_phase);
+  const std::vector<SubsetFit> plausible = plausible_models(p, sel, n_phase, team);
   out.aicc = sel.aicc;
   out.chi2_per_dof = sel.chi2 / sel.dof;
   out.tau_s = p.tau;

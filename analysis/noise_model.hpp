@@ -62,8 +62,11 @@ inline constexpr double kGofAlpha = 1e-3;
 inline constexpr std::size_t kMinGofPoints = 6;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
-// is taken from it); record_s: its length; confidence: of the bounds (default one sigma).
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma);
+// is taken from it); record_s: its length; confidence: of the bounds (default one sigma);
+// threads: over which each selection round's 31 subset fits run (the result does not depend on
+// it, bit for bit).
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma,
+                              unsigned threads = 2);
 
 // sigma^2 of term k (0..4 = Q, N, B, K, R) per unit of its squared coefficient at tau (IEEE 952).
 double noise_basis(int k, double tau);

@@ -12,6 +12,7 @@
 #include "analysis/edf.hpp"
 #include "analysis/envelope.hpp"
 #include "analysis/json.hpp"
+#include "analysis/noise_model.hpp"
 #include "analysis/noise_terms.hpp"
 
 namespace rig::analysis {
@@ -163,6 +164,31 @@ TEST(NoiseTerms, TheFitStartsWhereTheModelDescribesTheCurve) {
   const NoiseTerms exact = noise_terms(curve(2e-6, kN, kB, kK, 0, 0.001, 900, 100), 3600);
   EXPECT_EQ(exact.model.dropped_short, 0u);
   EXPECT_EQ(exact.wls.model_error, 0.0);
+}
+
+// The subset fits of each selection round run over a team of threads (noise_model.cpp); every
+// field of the fit is the same, bit for bit, on one thread and on two: on a curve whose short
+// taus are dropped (several selections), on all five terms, and on a scattered curve where
+// more than one model is plausible.
+TEST(NoiseTerms, TheFitIsTheSameOnOneThreadAndOnTwo) {
+  std::vector<DevPoint> scattered = curve(2e-6, kN, kB, kK, 1e-9, 0.001, 900, 100);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g(0, 0.05);
+  for (DevPoint& p : scattered) p.dev *= std::exp(g(rng) * std::sqrt(p.tau_s / 900));
+  for (const auto& pts : {rippled(2e-6, kN, kB, 2 * kK, 3600), curve(2e-6, kN, kB, kK, 1e-9, 0.001, 900, 100), scattered}) {
+    const NoiseModelFit one = fit_noise_model(pts, 3600, kOneSigma, 1), two = fit_noise_model(pts, 3600, kOneSigma, 2);
+    ASSERT_TRUE(one.ok && two.ok) << one.reason << " / " << two.reason;
+    EXPECT_EQ(one.in_model, two.in_model);
+    EXPECT_EQ(one.value, two.value);
+    EXPECT_EQ(one.lo, two.lo);
+    EXPECT_EQ(one.hi, two.hi);
+    EXPECT_EQ(one.upper, two.upper);
+    EXPECT_EQ(one.z, two.z);
+    EXPECT_EQ(one.edf, two.edf);
+    EXPECT_EQ(one.aicc, two.aicc);
+    EXPECT_EQ(one.gof_p, two.gof_p);
+    EXPECT_EQ(one.dropped_short, two.dropped_short);
+  }
 }
 
 TEST(NoiseTerms, RateRampIsACandidateOnAShortRecord) {
