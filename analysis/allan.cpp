@@ -15,11 +15,10 @@
 #include <thread>
 #include <tuple>
 
-#include <sys/mman.h>
-
 #include "analysis/allan_engine.hpp"
 #include "analysis/clones.hpp"
 #include "analysis/edf.hpp"
+#include "analysis/huge_buffer.hpp"
 #include "analysis/noise_id.hpp"
 
 namespace rig::analysis {
@@ -59,22 +58,10 @@ double variance(Deviation d, double sum, std::size_t terms, std::size_t m, std::
 // faults per thread and run, 0.4 ms of the first tau's 0.5 ms (2026-11-24, one thread).
 std::span<const double> averages(const detail::Decimated& dec, std::size_t m) {
   if (dec.size() < 2) return {};
-  struct Free {
-    void operator()(double* p) const { std::free(p); }
-  };
-  thread_local std::unique_ptr<double, Free> buf;
+  thread_local detail::HugeBuffer buf;
   thread_local std::size_t cap = 0;
   const std::size_t len = dec.size() - 1;
-  if (cap < len) {
-    constexpr std::size_t kHuge = 2u << 20;
-    const std::size_t bytes = (len * sizeof(double) + kHuge - 1) / kHuge * kHuge;
-    buf.reset(static_cast<double*>(std::aligned_alloc(kHuge, bytes)));
-    if (!buf) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-    ::madvise(buf.get(), bytes, MADV_HUGEPAGE);  // advisory: failure only costs speed
-#endif
-    cap = bytes / sizeof(double);
-  }
+  if (cap < len) buf = detail::huge_buffer(len, &cap);
   double* const out = buf.get();
   const double mm = static_cast<double>(m);
   for (std::size_t k = 0; k < len; ++k) out[k] = (dec[k + 1] - dec[k]) / mm;

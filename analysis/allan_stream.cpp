@@ -13,10 +13,9 @@
 #include <string>
 #include <thread>
 
-#include <sys/mman.h>
-
 #include "analysis/allan_engine.hpp"
 #include "analysis/allan_kernels.hpp"
+#include "analysis/huge_buffer.hpp"
 
 namespace rig::analysis {
 
@@ -287,20 +286,11 @@ struct Ring {
   // Not zero-filled (every slot is written before it is read); transparent huge pages where the
   // kernel offers them: the lag windows of the long taus are far apart, so 4 KiB pages would
   // cost a TLB walk every 512 points of every stream.
-  struct Free {
-    void operator()(double* p) const { std::free(p); }
-  };
-  std::unique_ptr<double, Free> mem;
+  detail::HugeBuffer mem;
   std::size_t size = 0;
 
   void allocate(std::size_t points) {
-    constexpr std::size_t kHuge = 2u << 20;
-    const std::size_t bytes = (points * sizeof(double) + kHuge - 1) / kHuge * kHuge;
-    mem.reset(static_cast<double*>(std::aligned_alloc(kHuge, bytes)));
-    if (!mem) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-    ::madvise(mem.get(), bytes, MADV_HUGEPAGE);  // advisory: failure only costs speed
-#endif
+    mem = detail::huge_buffer(points);
     size = points;
   }
   double* at(std::uint64_t j) { return mem.get() + (j % size); }
