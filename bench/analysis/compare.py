@@ -20,7 +20,6 @@ Figures, one row each:
 The CPU columns give the same comparison in CPU time (rig: both threads; the twin is
 single-threaded), which other load on a shared machine disturbs much less than wall time.
 """
-import argparse
 import json
 import os
 import subprocess
@@ -33,15 +32,12 @@ import numpy as np
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
 import twins  # noqa: E402
-from timed import timed  # noqa: E402
+from timed import bench_args, timed  # noqa: E402
 
-ap = argparse.ArgumentParser()
-ap.add_argument("--rig", default="build/bin/rig")
-ap.add_argument("--file", default="/tmp/rig-bench-1h.f64")
+ap = bench_args(5)
 ap.add_argument("--n", type=float, default=3.6e6)
 ap.add_argument("--rate", type=float, default=1000.0)
 ap.add_argument("--taus", default="log:100")
-ap.add_argument("--rounds", type=int, default=5)
 ap.add_argument("--only", default="")
 args = ap.parse_args()
 

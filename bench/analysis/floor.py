@@ -19,7 +19,6 @@ deviation is measured rather than estimated:
 
 Each row: minimum and median wall and CPU time (user + system, all threads) over the rounds.
 """
-import argparse
 import os
 import statistics
 import subprocess
@@ -31,12 +30,9 @@ import numpy as np
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
 import twins  # noqa: E402
-from timed import timed  # noqa: E402
+from timed import bench_args, timed  # noqa: E402
 
-ap = argparse.ArgumentParser()
-ap.add_argument("--rig", default="build/bin/rig")
-ap.add_argument("--file", default="/tmp/rig-bench-1h.f64")
-ap.add_argument("--rounds", type=int, default=20)
+ap = bench_args(20)
 args = ap.parse_args()
 
 out = "/tmp/rig-floor.json"

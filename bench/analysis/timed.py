@@ -1,5 +1,7 @@
-"""One timing of a child process for the bench scripts (compare.py, floor.py): its wall time
-and its CPU time (user + system, every thread), from the children's rusage around the run."""
+"""What the bench scripts (compare.py, floor.py) share: one timing of a child process, its wall
+time and its CPU time (user + system, every thread), from the children's rusage around the run;
+and their common command-line options."""
+import argparse
 import resource
 import subprocess
 import time
@@ -13,3 +15,12 @@ def timed(cmd):
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+
+
+def bench_args(rounds):
+    """The options every bench script takes: the rig under test, the record, the rounds."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--rig", default="build/bin/rig")
+    ap.add_argument("--file", default="/tmp/rig-bench-1h.f64")
+    ap.add_argument("--rounds", type=int, default=rounds)
+    return ap
