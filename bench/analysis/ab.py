@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Two builds of rig side by side (issue 17): the same `rig analyze` commands as compare.py's
-rows, each run by the build before and the build after a change, alternately in one loop (so
+rows (timed.analyze_rows), each run by the build before and the build after a change, alternately in one loop (so
 both see the same load), and the outputs compared byte for byte.
 
     /usr/bin/python3 bench/analysis/ab.py BEFORE_RIG AFTER_RIG [--file y.f64] [--rounds 15]
@@ -20,7 +20,7 @@ import tempfile
 
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
-from timed import timed  # noqa: E402
+from timed import analyze_rows, timed  # noqa: E402
 
 ap = argparse.ArgumentParser()
 ap.add_argument("before")
@@ -31,8 +31,7 @@ ap.add_argument("--only", default="")
 args = ap.parse_args()
 
 tmp = tempfile.mkdtemp(prefix="rig-ab-")
-rows = [("start-up", None), ("oadev", ["--no-psd"]), ("oadev+psd", [])]
-rows += [(d, ["--no-psd", "--dev", d, "--no-oadev"]) for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]]
+rows = [("start-up", None)] + analyze_rows()
 if args.only:
     keep = set(args.only.split(","))
     rows = [r for r in rows if r[0] in keep]

@@ -32,7 +32,7 @@ import numpy as np
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
 import twins  # noqa: E402
-from timed import bench_args, timed  # noqa: E402
+from timed import DEVIATIONS, analyze_rows, bench_args, timed  # noqa: E402
 
 ap = bench_args(5)
 ap.add_argument("--n", type=float, default=3.6e6)
@@ -70,12 +70,12 @@ def psd_segment(n):  # rig's automatic choice (analysis/psd.cpp welch_segment)
 
 
 # (figure, rig's extra arguments, the JSON key whose taus the twin uses, twin(x, ms) -> None)
-figures = [("oadev", ["--no-psd"], "oadev", lambda x, ms: twins.oadev(x, tau0, ms)),
-           ("oadev+psd", [], "oadev",
-            lambda x, ms: (twins.oadev(x, tau0, ms), twins.welch(y, args.rate, psd_segment(len(y)))))]
-for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]:
-    figures.append((d, ["--no-psd", "--dev", d, "--no-oadev"], d, lambda x, ms, f=twins.DEVIATIONS[d]: f(x, tau0, ms)))
-for d in ["mdev", "tdev", "hdev", "ohdev", "totdev"]:
+twin_of = {"oadev": lambda x, ms: twins.oadev(x, tau0, ms),
+           "oadev+psd": lambda x, ms: (twins.oadev(x, tau0, ms), twins.welch(y, args.rate, psd_segment(len(y))))}
+for d in DEVIATIONS:
+    twin_of[d] = lambda x, ms, f=twins.DEVIATIONS[d]: f(x, tau0, ms)
+figures = [(name, extra, "oadev" if name.startswith("oadev") else name, twin_of[name]) for name, extra in analyze_rows()]
+for d in DEVIATIONS:
     # The twin's taus per key: OADEV's and the deviation's grids differ (max factor (N-1)/4 vs /2).
     figures.append((d + "+oadev", ["--no-psd", "--dev", d], (d, "oadev"),
                     lambda x, ms, f=twins.DEVIATIONS[d], d=d: (twins.oadev(x, tau0, ms["oadev"]), f(x, tau0, ms[d]))))

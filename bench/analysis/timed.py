@@ -1,6 +1,6 @@
 """What the bench scripts (compare.py, floor.py) share: one timing of a child process, its wall
 time and its CPU time (user + system, every thread), from the children's rusage around the run;
-and their common command-line options."""
+their common command-line options; and the `rig analyze` rows they time."""
 import argparse
 import resource
 import subprocess
@@ -24,3 +24,14 @@ def bench_args(rounds):
     ap.add_argument("--file", default="/tmp/rig-bench-1h.f64")
     ap.add_argument("--rounds", type=int, default=rounds)
     return ap
+
+
+# The deviations timed alone (each with `--no-oadev`), besides OADEV with and without the PSD.
+DEVIATIONS = ["mdev", "tdev", "hdev", "ohdev", "totdev"]
+
+
+def analyze_rows():
+    """[(row, rig analyze's extra arguments)]: OADEV without and with the PSD, then each of
+    DEVIATIONS alone (the figures issue 17 names)."""
+    rows = [("oadev", ["--no-psd"]), ("oadev+psd", [])]
+    return rows + [(d, ["--no-psd", "--dev", d, "--no-oadev"]) for d in DEVIATIONS]
