@@ -159,6 +159,16 @@ std::optional<double> paper_b_edf(std::span<const DevPoint> pts, const NoiseMode
   return std::nullopt;
 }
 
+// The model's sigma^2 at tau: the sum of its reported terms' Allan variances (IEEE 952 Annex C).
+double model_variance(const WlsFit& model, double tau) {
+  double var = 0;
+  const std::pair<const Term*, double (*)(double, double)> terms[] = {
+      {&model.Q, sigma_q}, {&model.N, sigma_n}, {&model.B, sigma_b}, {&model.K, sigma_k}, {&model.R, sigma_r}};
+  for (const auto& [t, sigma] : terms)
+    if (t->value) var += std::pow(sigma(*t->value, tau), 2);
+  return var;
+}
+
 // sigma^2(tau_cp) is the sum of every term's share (the model, noise_terms.hpp), so
 // sigma(tau_cp)/0.664 reads B only where flicker is all of it and is above B wherever another
 // term adds (an N-K crossing read as a floor: the paper's B is biased up). Its chi-square
@@ -170,11 +180,7 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
   if (!model.ok || !b.lo) return;
   const double model_lo = model.B.value ? model.B.lo.value_or(0.0) : 0.0;
   if (model_lo >= *b.lo) return;
-  double total = 0;
-  const std::pair<const Term*, double (*)(double, double)> terms[] = {
-      {&model.Q, sigma_q}, {&model.N, sigma_n}, {&model.B, sigma_b}, {&model.K, sigma_k}, {&model.R, sigma_r}};
-  for (const auto& [t, sigma] : terms)
-    if (t->value) total += std::pow(sigma(*t->value, tau_cp), 2);
+  const double total = model_variance(model, tau_cp);
   const double flicker = model.B.value ? std::pow(sigma_b(*model.B.value, tau_cp), 2) : 0.0;
   b.lo = model_lo;
   std::ostringstream r;
@@ -188,10 +194,6 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
   NoiseTerms out;
   out.paper = paper_fit(oadev);
-  // R is not fitted on a record shorter than the method allows for it (docs/method.md: > 50 h): over
-  // tau <= T/4 of a short record R's tau^2 and K's tau are nearly collinear, a random walk's
-  // one realisation often rises like a ramp, and a fitted R would take K's share of the rise
-  // (then to be discarded by the 50 h rule anyway, leaving K null).
   // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
   out.model = fit_noise_model(oadev, record_length_s);
   out.wls = wls_from_model(out.model);
@@ -288,15 +290,9 @@ FittedCurves fitted_curves(const NoiseTerms& t, std::span<const double> taus) {
   c.B = curve(t.B, sigma_b);
   c.K = curve(t.K, sigma_k);
   c.R = curve(t.R, sigma_r);
-  const std::pair<const Term*, double (*)(double, double)> wls[] = {
-      {&t.wls.Q, sigma_q}, {&t.wls.N, sigma_n}, {&t.wls.B, sigma_b}, {&t.wls.K, sigma_k}, {&t.wls.R, sigma_r}};
-  if (std::any_of(std::begin(wls), std::end(wls), [](const auto& w) { return w.first->value.has_value(); }))
-    for (double tau : taus) {
-      double var = 0;  // the model: sigma^2 is the sum of the terms' sigma^2
-      for (const auto& [term, sigma] : wls)
-        if (term->value) var += std::pow(sigma(*term->value, tau), 2);
-      c.lsq_fit.push_back(std::sqrt(var));
-    }
+  const WlsFit& m = t.wls;
+  if (m.Q.value || m.N.value || m.B.value || m.K.value || m.R.value)
+    for (double tau : taus) c.lsq_fit.push_back(std::sqrt(model_variance(m, tau)));
   if (t.paper.ok)
     for (double tau : taus) c.paper_poly.push_back(std::pow(10.0, poly(t.paper.coef, std::log10(tau))));
   return c;
