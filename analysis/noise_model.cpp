@@ -483,29 +483,49 @@ std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t
 
 }  // namespace
 
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
-  NoiseModelFit out;
+std::vector<std::size_t> octave_points(std::span<const DevPoint> oadev) {
+  auto usable = [](const DevPoint& d) { return d.dev > 0 && d.tau_s > 0 && d.m > 0; };
   // The octave subset: from the smallest tau, each next point at least twice the last one's tau.
-  Pts all;
-  for (const DevPoint& d : oadev) {
-    if (!(d.dev > 0) || !(d.tau_s > 0) || d.m == 0) continue;
-    if (!all.tau.empty() && d.tau_s < 2 * all.tau.back() * (1 - 1e-9)) continue;
-    all.tau.push_back(d.tau_s);
-    all.s.push_back(d.dev * d.dev);
-    all.m.push_back(d.m);
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < oadev.size(); ++i) {
+    if (!usable(oadev[i])) continue;
+    if (!idx.empty() && oadev[i].tau_s < 2 * oadev[idx.back()].tau_s * (1 - 1e-9)) continue;
+    idx.push_back(i);
   }
   // The longest tau too when it is at least 1.5x the last octave point (log:N ends at the stop
   // ratio, (N-1)/4, up to an octave past the last power of two: the points that see K and R
   // most); its correlation with the octave point before it is taken as one octave's.
-  for (auto it = oadev.rbegin(); it != oadev.rend(); ++it)
-    if (it->dev > 0 && it->tau_s > 0 && it->m > 0) {
-      if (!all.tau.empty() && it->tau_s >= 1.5 * all.tau.back()) {
-        all.tau.push_back(it->tau_s);
-        all.s.push_back(it->dev * it->dev);
-        all.m.push_back(it->m);
-      }
+  for (std::size_t i = oadev.size(); i-- > 0;)
+    if (usable(oadev[i])) {
+      if (!idx.empty() && oadev[i].tau_s >= 1.5 * oadev[idx.back()].tau_s) idx.push_back(i);
       break;
     }
+  return idx;
+}
+
+LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std::size_t> m,
+                             const std::array<double, 5>& theta, std::size_t n_phase) {
+  Pts p;
+  p.tau.assign(tau_s.begin(), tau_s.end());
+  p.m.assign(m.begin(), m.end());
+  p.s.assign(p.tau.size(), 1);
+  p.nu.resize(p.tau.size());
+  set_model_edf(p, theta, n_phase);
+  LogScatter out;
+  for (const double nu : p.nu) out.bias.push_back(log_bias(nu));
+  const Eigen::MatrixXd S = model_cov(p, theta, n_phase, 0);
+  out.cov.assign(S.data(), S.data() + S.size());  // symmetric: row- and column-major alike
+  return out;
+}
+
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
+  NoiseModelFit out;
+  Pts all;
+  for (const std::size_t i : octave_points(oadev)) {
+    all.tau.push_back(oadev[i].tau_s);
+    all.s.push_back(oadev[i].dev * oadev[i].dev);
+    all.m.push_back(oadev[i].m);
+  }
   const std::size_t n_all = all.tau.size();
   if (n_all < 3) {  // AICc needs n - k - 1 > 0 for one term
     out.reason = "fewer than 3 octave Allan points";

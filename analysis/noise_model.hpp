@@ -68,6 +68,22 @@ inline constexpr std::size_t kMinGofPoints = 6;
 NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma,
                               unsigned threads = 2);
 
+// The points fit_noise_model starts from, as indices into oadev: the octave subset (from the
+// smallest tau, each next at least twice the last) and the longest tau when it is at least 1.5x
+// the last of them.
+std::vector<std::size_t> octave_points(std::span<const DevPoint> oadev);
+
+// What the fit assumes of ln s_i at the points (tau_s[i], factor m[i]) of a record of n_phase
+// points whose true terms are theta: bias[i] = E[ln(s_i / mu_i)] (the log-chi-square bias at the
+// model's EDF) and cov (n x n, row-major) the covariance of ln s_i (2/nu_i and the octave
+// correlations, no model error). For checking the fit's assumptions against simulation
+// (bench/analysis/coverage_noise --covariance).
+struct LogScatter {
+  std::vector<double> bias, cov;
+};
+LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std::size_t> m,
+                             const std::array<double, 5>& theta, std::size_t n_phase);
+
 // sigma^2 of term k (0..4 = Q, N, B, K, R) per unit of its squared coefficient at tau (IEEE 952).
 double noise_basis(int k, double tau);
 
