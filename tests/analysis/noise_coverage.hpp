@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
+#include "analysis/noise_model.hpp"
 #include "analysis/noise_terms.hpp"
 #include "tests/analysis/injected_noise.hpp"
 
@@ -157,6 +158,81 @@ inline std::string coverage_table(const std::vector<Cell>& cells) {
     out += buf;
   }
   return out;
+}
+
+// What the noise fit assumes of its points (model_log_scatter at the true terms: mean and
+// covariance of ln s_i) against `records` simulated records of the set (seeds base + i): per
+// octave point the measured and assumed mean of ln(s_i / mu_i), sd, correlation with the previous
+// point; and the records' mean GLS chi-square at the truth on the assumed covariance (the number
+// of points when the assumption is right).
+struct ScatterCheck {
+  std::vector<double> tau, mean, sd, corr_prev;  // measured (corr_prev[0] = 0)
+  LogScatter model;                              // assumed
+  double chi2 = 0;                               // mean over the records
+  std::size_t points() const { return tau.size(); }
+  double model_sd(std::size_t i) const { return std::sqrt(model.cov[i * points() + i]); }
+  double model_corr_prev(std::size_t i) const {
+    const std::size_t P = points();
+    return i ? model.cov[i * P + i - 1] / std::sqrt(model.cov[i * P + i] * model.cov[(i - 1) * P + i - 1]) : 0;
+  }
+};
+
+inline ScatterCheck check_log_scatter(const Set& s, int records, std::uint64_t base, bool progress = false) {
+  const auto n = static_cast<std::size_t>(s.hours * 3600 * s.rate_hz);
+  std::array<double, 5> theta{};
+  for (int k = 0; k < 5; ++k) theta[static_cast<std::size_t>(k)] = s.truth.at(k) * s.truth.at(k);
+  ScatterCheck c;
+  std::vector<std::size_t> m;
+  std::vector<std::vector<double>> lr;  // per record, ln(s_i / mu_i)
+  for (int r = 0; r < records; ++r) {
+    const std::vector<double> y = generate(s.truth, s.rate_hz, n, base + static_cast<std::uint64_t>(r));
+    DevOptions opt;
+    opt.rate_hz = s.rate_hz;
+    opt.taus = parse_tau_grid("log:100");
+    opt.bounds = false;
+    const std::vector<DevPoint> dev = deviation(y, opt);
+    c.tau.clear(), m.clear();
+    std::vector<double> l;
+    for (const std::size_t i : octave_points(dev)) {
+      c.tau.push_back(dev[i].tau_s);
+      m.push_back(dev[i].m);
+      l.push_back(std::log(dev[i].dev * dev[i].dev / model_avar(s.truth, dev[i].tau_s)));
+    }
+    lr.push_back(std::move(l));
+    if (progress) std::fprintf(stderr, "\r%s record %d/%d   ", s.name.c_str(), r + 1, records);
+  }
+  if (progress) std::fprintf(stderr, "\n");
+  const std::size_t P = c.tau.size();
+  c.model = model_log_scatter(c.tau, m, theta, n + 1);
+  c.mean.assign(P, 0), c.sd.assign(P, 0), c.corr_prev.assign(P, 0);
+  const double R = records;
+  for (const auto& l : lr)
+    for (std::size_t i = 0; i < P; ++i) c.mean[i] += l[i] / R;
+  for (const auto& l : lr)
+    for (std::size_t i = 0; i < P; ++i) {
+      c.sd[i] += (l[i] - c.mean[i]) * (l[i] - c.mean[i]) / (R - 1);
+      if (i) c.corr_prev[i] += (l[i] - c.mean[i]) * (l[i - 1] - c.mean[i - 1]) / (R - 1);
+    }
+  for (std::size_t i = 0; i < P; ++i) c.sd[i] = std::sqrt(c.sd[i]);
+  for (std::size_t i = 1; i < P; ++i) c.corr_prev[i] /= c.sd[i] * c.sd[i - 1];
+  // chi-square at the truth: the residuals less the assumed bias, whitened by the Cholesky factor.
+  std::vector<double> L(P * P, 0);
+  for (std::size_t i = 0; i < P; ++i)
+    for (std::size_t j = 0; j <= i; ++j) {
+      double v = c.model.cov[i * P + j];
+      for (std::size_t k = 0; k < j; ++k) v -= L[i * P + k] * L[j * P + k];
+      L[i * P + j] = i == j ? std::sqrt(v) : v / L[j * P + j];
+    }
+  for (const auto& l : lr) {
+    std::vector<double> w(P);
+    for (std::size_t i = 0; i < P; ++i) {
+      double v = l[i] - c.model.bias[i];
+      for (std::size_t k = 0; k < i; ++k) v -= L[i * P + k] * w[k];
+      w[i] = v / L[i * P + i];
+      c.chi2 += w[i] * w[i] / R;
+    }
+  }
+  return c;
 }
 
 }  // namespace rig::analysis::injected
