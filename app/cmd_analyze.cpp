@@ -423,7 +423,8 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("file", args->file, "recording (text: one value per line, '#' comments; f64: raw LE float64; "
                                       "capture: the rig's capture file)")
       ->required();
-  sub->add_option("--input", args->input, "text|f64|capture (default: by extension, .f64/.bin = f64, else text)")
+  sub->add_option("--input", args->input,
+                  "text|f64|capture (default: by extension, .f64/.bin = f64, .cap/.rigcap = capture, else text)")
       ->check(CLI::IsMember({"auto", "text", "f64", "capture"}));
   sub->add_option("--data", args->data, "freq (accelerometer output, default) or phase (its integral)")
       ->check(CLI::IsMember({"freq", "frequency", "phase"}));

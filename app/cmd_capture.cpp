@@ -159,8 +159,9 @@ void add_capture(CLI::App& app, int& rc) {
   auto* cap = app.add_subcommand("capture", "Capture files from other sources");
   cap->require_subcommand(1);
   auto a = std::make_shared<ImportArgs>();
-  auto* imp = cap->add_subcommand(
-      "import", "A candump log (-l / -L format) into a capture file, through the hardware file's [dut] stream");
+  auto* imp = cap->add_subcommand("import",
+                                  "A candump log (-l / -L files or candump's screen output) into a capture file, "
+                                  "through the hardware file's [dut] stream");
   imp->add_option("log", a->log, "candump log")->required();
   imp->add_option("--hardware", a->hardware, "hardware file whose [dut] describes the stream (dbc, [dut.stream])")
       ->required();
