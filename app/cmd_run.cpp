@@ -2,6 +2,7 @@
 // the captures, checkpoint, passport.json, junit.xml, analysis.json,
 // report.html and run.log. Exit codes per docs/contracts.md.
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <signal.h>
 #include <unistd.h>
@@ -76,36 +77,74 @@ int injected_signal(const std::string& kind) {
 // estop@T, sigint@T / sigterm@T / sigkill@T (a real signal to this process at device time T:
 // the campaigns' random points, reproducible to the sample), drop@SEQ:COUNT, and
 // sigint@end / sigterm@end: the signal after the last phase, before the passport is written
-// (the late signal of issue 13). Returns the signal asked for at the end, or 0.
-int apply_injections(plant::EmulatedPlant& w, const std::vector<std::string>& inj) {
-  int signal_at_end = 0;
-  for (const std::string& s : inj) {
-    if (s == "sigint@end" || s == "sigterm@end") {
-      signal_at_end = injected_signal(s.substr(0, s.find('@')));
-      continue;
+// (the late signal of issue 13).
+struct Injection {
+  enum class Kind { Estop, Signal, Drop, SignalAtEnd } kind = Kind::Estop;
+  double at_s = 0;  // Estop, Signal: device time
+  int signal = 0;   // Signal, SignalAtEnd
+  uint32_t seq = 0, count = 0;  // Drop
+};
+
+// Every --inject checked before anything is written or any device opens (--dry-run included):
+// a typo must not surface after the run folder exists, or after the hardware has opened.
+std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
+  auto number = [](const std::string& s, const std::string& text) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(text, &used);
+    } catch (const std::logic_error&) {
+      used = 0;
     }
+    if (used == 0 || used != text.size() || !std::isfinite(v) || v < 0)
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a device time in seconds (a number >= 0)");
+    return v;
+  };
+  auto count = [](const std::string& s, const std::string& text) {
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 9)
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number (drop@SEQ:COUNT)");
+    return static_cast<uint32_t>(std::stoul(text));
+  };
+  std::vector<Injection> out;
+  for (const std::string& s : inj) {
     const auto at = s.find('@');
     if (at == std::string::npos) throw ConfigError("--inject '" + s + "': expected KIND@ARG");
     const std::string kind = s.substr(0, at), arg = s.substr(at + 1);
-    try {
-      if (kind == "estop") {
-        w.trip_estop_at(std::stod(arg));
-      } else if (const int sig = injected_signal(kind)) {
-        w.at(std::stod(arg), [sig] { ::kill(::getpid(), sig); });
-      } else if (kind == "drop") {
-        const auto c = arg.find(':');
-        if (c == std::string::npos) throw ConfigError("--inject drop@SEQ:COUNT");
-        w.inject_drop(static_cast<uint32_t>(std::stoul(arg.substr(0, c))),
-                      static_cast<uint32_t>(std::stoul(arg.substr(c + 1))));
-      } else {
-        throw ConfigError("--inject '" + s +
-                          "': unknown fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, sigterm@end, "
-                          "drop@SEQ:COUNT)");
-      }
-    } catch (const std::logic_error&) {
-      throw ConfigError("--inject '" + s + "': bad number");
+    Injection j;
+    if ((kind == "sigint" || kind == "sigterm") && arg == "end") {
+      j.kind = Injection::Kind::SignalAtEnd;
+      j.signal = injected_signal(kind);
+    } else if (kind == "estop") {
+      j.at_s = number(s, arg);
+    } else if (const int sig = injected_signal(kind)) {
+      j.kind = Injection::Kind::Signal;
+      j.signal = sig;
+      j.at_s = number(s, arg);
+    } else if (kind == "drop") {
+      const auto c = arg.find(':');
+      if (c == std::string::npos) throw ConfigError("--inject '" + s + "': expected drop@SEQ:COUNT");
+      j.kind = Injection::Kind::Drop;
+      j.seq = count(s, arg.substr(0, c));
+      j.count = count(s, arg.substr(c + 1));
+    } else {
+      throw ConfigError("--inject '" + s +
+                        "': unknown fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, sigterm@end, "
+                        "drop@SEQ:COUNT)");
     }
+    out.push_back(j);
   }
+  return out;
+}
+
+// Arms the faults on the plant. Returns the signal asked for at the end, or 0.
+int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj) {
+  int signal_at_end = 0;
+  for (const Injection& j : inj) switch (j.kind) {
+      case Injection::Kind::SignalAtEnd: signal_at_end = j.signal; break;
+      case Injection::Kind::Estop: w.trip_estop_at(j.at_s); break;
+      case Injection::Kind::Signal: w.at(j.at_s, [sig = j.signal] { ::kill(::getpid(), sig); }); break;
+      case Injection::Kind::Drop: w.inject_drop(j.seq, j.count); break;
+    }
   return signal_at_end;
 }
 
@@ -361,6 +400,8 @@ int do_run(RunArgs a) {
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware, kRunSections);
   check_serial_source(a, hw, plant_cfg);
+  const std::vector<Injection> injections = parse_injections(a.inject);
+  if (!injections.empty() && a.plant != "emulated") throw ConfigError("--inject works with the emulated plant only");
 
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state);
@@ -411,8 +452,7 @@ int do_run(RunArgs a) {
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
-  if (b.emulated) signal_at_end = apply_injections(*b.emulated, a.inject);
-  else if (!a.inject.empty()) throw ConfigError("--inject works with the emulated plant only");
+  if (b.emulated) signal_at_end = apply_injections(*b.emulated, injections);
   Devices dev = b.devices();
   dev.io.on_estop([&cancel] { cancel.request("e-stop line opened"); });
 

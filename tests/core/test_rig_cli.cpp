@@ -567,6 +567,43 @@ TEST(RigCli, DryRunPrintsThePlanAndTouchesNothing) {
   EXPECT_FALSE(fs::exists(d + "/run"));
 }
 
+// A bad --inject is a configuration error found before anything is written or opened: with
+// --dry-run (which would otherwise pass), on a real run before the run folder exists, and on
+// the hardware plant (which takes no injection) before any device opens.
+TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
+  const std::string d = tmp("badinject");
+  fs::create_directories(d);
+  int i = 0;
+  for (const char* bad : {"foo@bar", "estop", "estop@10x", "estop@-1", "sigint@nan", "sigkill@end", "drop@5",
+                          "drop@5:x", "drop@-1:2"}) {
+    const std::string io = d + "/io" + std::to_string(i++);
+    EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", bad}, io), 2) << bad;
+    EXPECT_NE(slurp(io + ".stderr").find(std::string("--inject '") + bad + "'"), std::string::npos)
+        << bad << ": " << slurp(io + ".stderr");
+    EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--inject", bad}, io + "r"), 2) << bad;
+    EXPECT_FALSE(fs::exists(d + "/run")) << bad << ": refused before the run folder is made";
+  }
+  // Well-formed injections pass the dry run.
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", "estop@12.5", "--inject", "drop@100:3",
+                 "--inject", "sigint@end", "--inject", "sigkill@7"},
+                d + "/ok"),
+            0)
+      << slurp(d + "/ok.stderr");
+  // The hardware plant takes none: refused before its (unreachable) devices are tried (exit 2, not 4).
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--serial", "X-1",
+                                     "--yes", "--out", d + "/hwrun", "--inject", "estop@10"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/hw"), 2) << slurp(d + "/hw.stderr");
+    EXPECT_NE(slurp(d + "/hw.stderr").find("emulated plant only"), std::string::npos) << slurp(d + "/hw.stderr");
+    EXPECT_FALSE(fs::exists(d + "/hwrun"));
+  }
+}
+
 // Issue 13, 1: a profile whose only accuracy class cannot be met fails, and still fails when
 // interrupted after in-run-b and resumed (the class's FAIL is judged again from the values).
 TEST(RigCli, ResumeOfAFailingProfileStillFails) {
