@@ -216,8 +216,17 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
   CaptureData c;
   c.header = r.header();
   std::vector<Sample> buf(4096);  // 64 KiB: large enough to amortise the calls, small to zero-fill
+  std::uint32_t prev = 0;
   for (std::size_t n; (n = r.read(buf)) > 0;)
-    for (std::size_t i = 0; i < n; ++i) c.values.push_back(channel == "y" ? buf[i].y_g : buf[i].x_g);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Sample& s = buf[i];
+      if (!c.values.empty() && ((s.status & sample_status::kGapBefore) || s.seq != prev + 1u)) {
+        const std::uint32_t step = s.seq - prev;  // modulo 2^32, as the counter wraps
+        c.gaps.push_back({c.values.size(), prev, s.seq, step >= 1u && step < (1u << 31) ? step - 1u : 0u});
+      }
+      prev = s.seq;
+      c.values.push_back(channel == "y" ? s.y_g : s.x_g);
+    }
   c.recovery = r.recovery();
   if (const auto bad = an::first_unusable(c.values)) {
     std::string where;

@@ -57,13 +57,22 @@ class F64File final : public analysis::ChunkSource {
 // a value are ignored. Errors name path:line.
 std::vector<double> read_text(const std::string& path);
 
+// A break in a capture's sample sequence: values[at - 1] and values[at] were not consecutive
+// samples (the link or the reader flagged samples lost before `at`, or the DUT's counter jumps).
+struct CaptureGap {
+  std::size_t at = 0;
+  std::uint32_t seq_before = 0, seq_after = 0;
+  std::uint64_t lost = 0;  // seq_after - seq_before - 1 (modulo 2^32); 0 when the counter does not say
+};
 struct CaptureData {
   std::vector<double> values;
   capture::Header header;
   capture::Recovery recovery;
+  std::vector<CaptureGap> gaps;
 };
-// One channel ("x" or "y") of a capture, with what the reader recovered. A non-finite value in
-// that channel is an error naming the sample and its offset in the file.
+// One channel ("x" or "y") of a capture, with what the reader recovered and where the sample
+// sequence breaks. A non-finite value in that channel is an error naming the sample and its
+// offset in the file.
 CaptureData read_capture(const std::string& path, const std::string& channel);
 
 }  // namespace rig::cli

@@ -42,7 +42,9 @@ namespace an = rig::analysis;
 using nlohmann::json;
 
 struct Args {
-  std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev", channel = "x";
+  std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev";
+  std::optional<std::string> channel;  // captures only: x (default) or y
+  std::string gaps = "join";           // captures: join | longest | stop
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
   double confidence = an::AnalysisOptions{}.confidence;
@@ -102,6 +104,40 @@ class StageTimer {
   std::clock_t cpu_ = 0;
 };
 
+// What --gaps does with a capture whose sample sequence breaks (CaptureGap): the deviations
+// assume evenly spaced samples, so values joined across a gap are a (usually small) error the
+// user must know of. join: keep every value and say so; longest: keep the longest gap-free
+// stretch (values becomes it, from = its first sample); stop: a configuration error. Returns the
+// note for the console and the JSON ("" without gaps).
+std::string apply_gap_policy(const std::string& file, const std::string& policy, const std::vector<CaptureGap>& gaps,
+                             std::vector<double>& values, std::size_t& from) {
+  if (gaps.empty()) return "";
+  std::uint64_t lost = 0;
+  for (const CaptureGap& g : gaps) lost += g.lost;
+  const CaptureGap& g0 = gaps.front();
+  const std::string what = std::to_string(gaps.size()) + " gap(s) in the sample sequence, " + std::to_string(lost) +
+                           " sample(s) lost; the first before sample " + std::to_string(g0.at) + " (seq " +
+                           std::to_string(g0.seq_before) + " -> " + std::to_string(g0.seq_after) + ")";
+  if (policy == "stop")
+    throw ConfigError(file + ": " + what + "; --gaps join analyses across them, --gaps longest the longest gap-free stretch");
+  if (policy == "longest") {
+    std::size_t best_from = 0, best_len = gaps.front().at, start = 0;
+    for (std::size_t k = 0; k <= gaps.size(); ++k) {
+      const std::size_t end = k < gaps.size() ? gaps[k].at : values.size();
+      if (end - start > best_len) best_from = start, best_len = end - start;
+      start = end;
+    }
+    from = best_from;
+    values = std::vector<double>(values.begin() + static_cast<std::ptrdiff_t>(best_from),
+                                 values.begin() + static_cast<std::ptrdiff_t>(best_from + best_len));
+    return what + "; --gaps longest: samples " + std::to_string(best_from) + ".." +
+           std::to_string(best_from + best_len - 1) + " analysed, the longest of " + std::to_string(gaps.size() + 1) +
+           " gap-free stretches";
+  }
+  return what + "; joined: the statistics treat the values as contiguous (--gaps longest analyses the longest "
+                "gap-free stretch, --gaps stop refuses)";
+}
+
 int run(const Args& a) {
   StageTimer timer;
   if (!(a.overlap >= 0 && a.overlap <= 0.95))
@@ -109,30 +145,37 @@ int run(const Args& a) {
   if (!(a.confidence > 0 && a.confidence < 1))
     throw ConfigError("--confidence " + std::to_string(a.confidence) + ": must be in (0, 1)");
   an::DevOptions base;
+  // Each option's parse error names the option and its value (and, for --dev, the statistics
+  // it also takes).
+  auto parsed = [](const char* option, const std::string& value, auto parse, const char* hint = "") {
+    try {
+      return parse();
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(std::string("rig analyze: ") + option + " '" + value + "': " + e.what() + hint);
+    }
+  };
+  base.data = parsed("--data", a.data, [&] { return an::parse_data_kind(a.data); });
+  base.taus = parsed("--taus", a.taus, [&] { return an::parse_tau_grid(a.taus); });
+  (void)parsed("--window", a.window, [&] { return an::parse_window(a.window); });
   // --dev: a comma-separated list of one Allan-family deviation and/or long-tau statistics.
   std::optional<an::Deviation> extra_dev;
   std::vector<an::LongTau> long_taus;
-  try {
-    base.data = an::parse_data_kind(a.data);
-    base.taus = an::parse_tau_grid(a.taus);
-    std::stringstream names(a.dev);
-    for (std::string name; std::getline(names, name, ',');) {
-      if (const auto lt = an::parse_long_tau(name)) {
-        if (std::find(long_taus.begin(), long_taus.end(), *lt) == long_taus.end()) long_taus.push_back(*lt);
-        continue;
-      }
-      const an::Deviation d = an::parse_deviation(name);  // throws, naming the choices
-      if (extra_dev && *extra_dev != d) throw std::invalid_argument("--dev takes one Allan-family deviation, got two");
-      extra_dev = d;
+  std::stringstream names(a.dev);
+  for (std::string name; std::getline(names, name, ',');) {
+    if (const auto lt = an::parse_long_tau(name)) {
+      if (std::find(long_taus.begin(), long_taus.end(), *lt) == long_taus.end()) long_taus.push_back(*lt);
+      continue;
     }
-    base.type = extra_dev.value_or(an::Deviation::OADEV);
-    (void)an::parse_window(a.window);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(std::string("rig analyze: ") + e.what() + " (or theo1|theoh|mtot|ttot|htot)");
+    const an::Deviation d = parsed("--dev", a.dev, [&] { return an::parse_deviation(name); },  // names the choices
+                                   " (or theo1|theoh|mtot|ttot|htot)");
+    if (extra_dev && *extra_dev != d)
+      throw ConfigError("rig analyze: --dev '" + a.dev + "': one Allan-family deviation, got two (" +
+                        an::to_string(*extra_dev) + " and " + an::to_string(d) + "); theo1|theoh|mtot|ttot|htot may be added");
+    extra_dev = d;
   }
-  if (!(a.confidence > 0 && a.confidence < 1))
-    throw ConfigError("rig analyze: --confidence must be in (0, 1), got " + std::to_string(a.confidence));
-  if (a.channel != "x" && a.channel != "y") throw ConfigError("rig analyze: --channel must be x or y");
+  base.type = extra_dev.value_or(an::Deviation::OADEV);
+  const std::string channel = a.channel.value_or("x");
+  if (channel != "x" && channel != "y") throw ConfigError("rig analyze: --channel '" + channel + "': must be x or y");
   if (a.no_oadev && base.type == an::Deviation::OADEV)
     throw ConfigError("rig analyze: --no-oadev needs --dev with another deviation (mdev, tdev, hdev, ...)");
   if (a.no_oadev && !a.svg_dir.empty())
@@ -144,9 +187,13 @@ int run(const Args& a) {
     input = ext == ".f64" || ext == ".bin" ? "f64" : (ext == ".rigcap" || ext == ".cap" ? "capture" : "text");
   }
   // Source: text and captures are held in memory; float64 files are streamed.
+  if (a.channel && input != "capture")
+    throw ConfigError("rig analyze: --channel is for capture files (x or y); " + a.file + " is read as " + input);
   std::vector<double> mem;
   std::unique_ptr<an::ChunkSource> src;
   std::optional<CaptureData> cap;
+  std::string gap_note;
+  std::size_t analysed_from = 0;  // the first capture sample analysed (--gaps longest)
   double rate = a.rate.value_or(1000.0);
   if (input == "text") {
     mem = read_text(a.file);
@@ -155,9 +202,10 @@ int run(const Args& a) {
     // its values checked by the deviations' pass (which runs first, below) as it integrates them.
     src = std::make_unique<F64File>(a.file, (a.memory_mib << 20) / 2, /*check_in_pass=*/true);
   } else if (input == "capture") {
-    cap = read_capture(a.file, a.channel);
+    cap = read_capture(a.file, channel);
     mem = std::move(cap->values);
     if (!a.rate) rate = cap->header.rate_hz;
+    gap_note = apply_gap_policy(a.file, a.gaps, cap->gaps, mem, analysed_from);
   } else {
     throw ConfigError("rig analyze: --input must be text, f64 or capture, got '" + input + "'");
   }
@@ -171,6 +219,7 @@ int run(const Args& a) {
   if (n < 3) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 3 are needed");
   // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
   std::vector<std::string> notes;
+  if (!gap_note.empty()) notes.push_back(gap_note);
   if (n < 30)
     notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
                     "the bounds rest on a few degrees of freedom and the noise terms on a few points");
@@ -306,11 +355,18 @@ int run(const Args& a) {
   for (std::size_t k = 0; k < longs.size(); ++k) j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k]);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
-                    {"orientation", cap->header.orientation}, {"channel", a.channel},
+                    {"orientation", cap->header.orientation}, {"channel", channel},
                     {"complete", cap->recovery.complete}, {"truncated", cap->recovery.truncated},
                     {"samples", cap->recovery.samples}, {"damaged_blocks", cap->recovery.damaged_blocks},
                     {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes},
                     {"non_finite", cap->recovery.non_finite}};
+    std::uint64_t lost = 0;
+    for (const CaptureGap& g : cap->gaps) lost += g.lost;
+    j["capture"]["gaps"] = cap->gaps.size();
+    j["capture"]["lost"] = lost;
+    j["capture"]["gap_policy"] = a.gaps;
+    j["capture"]["analysed_from"] = analysed_from;
+    j["capture"]["analysed_samples"] = n;
   }
 
   // PSD (frequency data only: for phase data it would be of the integral).
@@ -371,6 +427,7 @@ int run(const Args& a) {
     o << cap->recovery.summary(a.file) << "\n";
     for (const auto& note : cap->recovery.notes) o << "  " << note << "\n";
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
+    if (!cap->gaps.empty() && a.gaps == "join") std::cerr << "rig analyze: warning: " << gap_note << "\n";
   }
   o << a.file << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
@@ -439,6 +496,10 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_flag("--no-oadev", args->no_oadev,
                 "with --dev: that deviation only, no OADEV and no noise terms (they are read from OADEV)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");
+  sub->add_option("--gaps", args->gaps,
+                  "capture with samples lost: join (default: analyse across the gaps as if contiguous, with a "
+                  "warning), longest (the longest gap-free stretch) or stop (exit 2)")
+      ->check(CLI::IsMember({"join", "longest", "stop"}));
   sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");
   sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");

@@ -165,10 +165,60 @@ TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
   EXPECT_EQ(j["capture"]["damaged_blocks"], 1);
   EXPECT_EQ(j["capture"]["samples"], 59000);
   EXPECT_NE(slurp(d + "/b.stdout").find("fails its payload CRC"), std::string::npos) << slurp(d + "/b.stdout");
+  // The skipped block is a gap in the sample sequence: never joined silently. By default the
+  // statistics join across it with a warning and a note; --gaps longest analyses the longest
+  // gap-free stretch; --gaps stop refuses (exit 2). A complete capture has none.
+  EXPECT_EQ(j["capture"]["gaps"], 1);
+  EXPECT_EQ(j["capture"]["lost"], 1000);
+  EXPECT_EQ(j["capture"]["gap_policy"], "join");
+  EXPECT_EQ(j["capture"]["analysed_samples"], 59000);
+  EXPECT_NE(slurp(d + "/b.stderr").find("1 gap(s) in the sample sequence, 1000 sample(s) lost"), std::string::npos)
+      << slurp(d + "/b.stderr");
+  EXPECT_NE(j["notes"].dump().find("joined"), std::string::npos) << j["notes"].dump();
+  ASSERT_EQ(run({"analyze", d + "/bad.cap", "--gaps", "longest", "--no-psd", "--json", d + "/l.json"}, d + "/l"), 0)
+      << slurp(d + "/l.stderr");
+  j = nlohmann::json::parse(slurp(d + "/l.json"));
+  const int first = j["capture"]["analysed_from"], len = j["capture"]["analysed_samples"];
+  EXPECT_GE(len, 29000);  // the corrupted block is about 30 blocks of 1000 before the end
+  EXPECT_LT(len, 59000);
+  EXPECT_TRUE(first == 0 || first + len == 59000) << first << " " << len;
+  EXPECT_NE(slurp(d + "/l.stdout").find("--gaps longest: samples"), std::string::npos) << slurp(d + "/l.stdout");
+  EXPECT_EQ(run({"analyze", d + "/bad.cap", "--gaps", "stop", "--no-psd"}, d + "/s"), 2);
+  EXPECT_NE(slurp(d + "/s.stderr").find(d + "/bad.cap: 1 gap(s)"), std::string::npos) << slurp(d + "/s.stderr");
+  EXPECT_EQ(run({"analyze", cap, "--gaps", "stop", "--no-psd", "--json", d + "/ok.json"}, d + "/ok"), 0);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/ok.json"))["capture"]["gaps"], 0);
+  // --channel picks a capture's channel: on a text file it is an error, not ignored.
+  std::ofstream(d + "/v.txt") << "1\n2\n3\n4\n";
+  EXPECT_EQ(run({"analyze", d + "/v.txt", "--channel", "y"}, d + "/ch"), 2);
+  EXPECT_NE(slurp(d + "/ch.stderr").find("--channel is for capture files"), std::string::npos) << slurp(d + "/ch.stderr");
   // Not a capture at all: exit 2 naming the file.
   std::ofstream(d + "/junk.cap") << "junk";
   EXPECT_EQ(run({"analyze", d + "/junk.cap", "--input", "capture"}, d + "/jk"), 2);
   EXPECT_NE(slurp(d + "/jk.stderr").find(d + "/junk.cap"), std::string::npos) << slurp(d + "/jk.stderr");
+}
+
+// A bad analysis option is exit 2 naming that option and its value; only --dev's error lists
+// the long-tau statistics it also takes.
+TEST(RigCli, AnalyzeOptionErrorsNameTheOptionAndValue) {
+  const std::string d = tmp("analyze-opts");
+  fs::create_directories(d);
+  std::ofstream(d + "/v.txt") << "1\n2\n3\n4\n5\n";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--window", "foo"}, "--window 'foo'"},
+      {{"--taus", "log:1"}, "--taus 'log:1'"},
+      {{"--dev", "mdev,hdev"}, "--dev 'mdev,hdev': one Allan-family deviation, got two (mdev and hdev)"},
+      {{"--dev", "bogus"}, "--dev 'bogus'"},
+      {{"--data", "volts"}, "--data"}};
+  int i = 0;
+  for (const auto& [opt, expect] : cases) {
+    std::vector<std::string> args = {"analyze", d + "/v.txt"};
+    args.insert(args.end(), opt.begin(), opt.end());
+    const std::string io = d + "/io" + std::to_string(i++);
+    EXPECT_EQ(run(args, io), 2) << expect;
+    const std::string err = slurp(io + ".stderr");
+    EXPECT_NE(err.find(expect), std::string::npos) << err;
+    EXPECT_EQ(err.find("theo1") != std::string::npos, opt[0] == "--dev") << err;
+  }
 }
 
 TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
