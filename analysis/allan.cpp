@@ -92,15 +92,19 @@ void validate(const DevOptions& o) {
 
 std::vector<std::size_t> factors_for(const DevOptions& o, std::uint64_t n) {
   if (o.factors.empty()) return tau_factors(o.taus, o.type, n);
-  const std::uint64_t top = o.type == Deviation::TOTDEV ? (n - 1) / 2 : n;
   for (std::size_t m : o.factors)
-    if (m == 0 || m > top || term_count(o.type, n, m) == 0)
+    if (!factor_in_range(o.type, n, m))
       throw std::invalid_argument("allan: averaging factor " + std::to_string(m) + " is out of range for " +
                                   std::to_string(n) + " phase points");
   return o.factors;
 }
 
 }  // namespace
+
+bool factor_in_range(Deviation d, std::uint64_t n_phase, std::size_t m) {
+  const std::uint64_t top = d == Deviation::TOTDEV ? (n_phase - 1) / 2 : n_phase;
+  return m > 0 && m <= top && term_count(d, n_phase, m) > 0;
+}
 
 std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std::span<const DevOptions> opts,
                                                      const StreamOptions& so) {

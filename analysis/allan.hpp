@@ -40,6 +40,10 @@ std::vector<std::size_t> tau_factors(const TauGrid& g, Deviation d, std::size_t 
 
 // Number of terms Stable32 prints in its '#' column (see tests/data/allan-reference/README.md).
 std::size_t term_count(Deviation d, std::size_t n_phase, std::size_t m);
+// Whether the deviation has at least one term at factor m of n_phase points (TOTDEV: m up to
+// (N-1)/2): the factors an explicit list (DevOptions::factors) may ask for, beyond the grids'
+// Stable32 caps (max_factor).
+bool factor_in_range(Deviation d, std::uint64_t n_phase, std::size_t m);
 
 struct DevPoint {
   std::size_t m = 0;

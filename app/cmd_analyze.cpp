@@ -155,7 +155,23 @@ int run(const Args& a) {
     }
   };
   base.data = parsed("--data", a.data, [&] { return an::parse_data_kind(a.data); });
-  base.taus = parsed("--taus", a.taus, [&] { return an::parse_tau_grid(a.taus); });
+  // --taus m:LIST: these averaging factors, for every deviation asked for, up to the last with a
+  // complete term (past the grids' Stable32 caps: NIST SP 1065 publishes ADEV and HDEV at AF 2
+  // of NBS14's 10 points, where the grid stops at 1); otherwise a grid.
+  std::vector<std::size_t> listed;
+  if (a.taus.rfind("m:", 0) == 0) {
+    std::stringstream list(a.taus.substr(2));
+    for (std::string m; std::getline(list, m, ',');) {
+      if (m.empty() || m.size() > 12 || m.find_first_not_of("0123456789") != std::string::npos || std::stoull(m) == 0)
+        throw ConfigError("rig analyze: --taus '" + a.taus + "': '" + m + "' is not an averaging factor (m:1,2,5: whole numbers >= 1)");
+      listed.push_back(static_cast<std::size_t>(std::stoull(m)));
+    }
+    if (listed.empty()) throw ConfigError("rig analyze: --taus '" + a.taus + "': no averaging factor (m:1,2,5)");
+    std::sort(listed.begin(), listed.end());
+    listed.erase(std::unique(listed.begin(), listed.end()), listed.end());
+  } else {
+    base.taus = parsed("--taus", a.taus, [&] { return an::parse_tau_grid(a.taus); });
+  }
   (void)parsed("--window", a.window, [&] { return an::parse_window(a.window); });
   // --dev: a comma-separated list of one Allan-family deviation and/or long-tau statistics.
   std::optional<an::Deviation> extra_dev;
@@ -174,6 +190,9 @@ int run(const Args& a) {
     extra_dev = d;
   }
   base.type = extra_dev.value_or(an::Deviation::OADEV);
+  if (!listed.empty() && !long_taus.empty())
+    throw ConfigError("rig analyze: --taus '" + a.taus + "': an explicit factor list is for the Allan family; the "
+                      "long-tau statistics (--dev theo1|theoh|mtot|ttot|htot) take a grid (octave|decade|all|log:N)");
   const std::string channel = a.channel.value_or("x");
   if (channel != "x" && channel != "y") throw ConfigError("rig analyze: --channel '" + channel + "': must be x or y");
   if (a.no_oadev && base.type == an::Deviation::OADEV)
@@ -253,6 +272,21 @@ int run(const Args& a) {
   oadev.type = an::Deviation::OADEV;
   if (!a.no_oadev) opts.push_back(oadev);
   if (base.type != an::Deviation::OADEV) opts.push_back(base);
+  if (!listed.empty()) {  // each deviation takes the listed factors it has a term at; the others are named
+    const std::uint64_t n_phase = base.data == an::DataKind::Frequency ? n + 1 : n;
+    for (an::DevOptions& o : opts) {
+      std::string dropped;
+      for (std::size_t m : listed)
+        if (an::factor_in_range(o.type, n_phase, m)) o.factors.push_back(m);
+        else dropped += (dropped.empty() ? "" : ", ") + std::to_string(m);
+      if (o.factors.empty())
+        throw ConfigError(a.file + ": --taus " + a.taus + ": no factor with a complete term of " +
+                          an::to_string(o.type) + " on " + std::to_string(n_phase) + " phase points");
+      if (!dropped.empty())
+        notes.push_back(std::string(an::to_string(o.type)) + ": factor(s) " + dropped + " of --taus " + a.taus +
+                        " left out (no complete term on " + std::to_string(n_phase) + " phase points)");
+    }
+  }
   an::StreamOptions so;
   so.memory_budget_bytes = a.memory_mib << 20;
   // A record too short for any tau of the grid (the grids stop at T/4, Stable32's rule: 3..8
@@ -486,7 +520,8 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--data", args->data, "freq (accelerometer output, default) or phase (its integral)")
       ->check(CLI::IsMember({"freq", "frequency", "phase"}));
   sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000)");
-  sub->add_option("--taus", args->taus, "tau grid: octave|decade|all|log:N (default log:100)");
+  sub->add_option("--taus", args->taus,
+                  "tau grid: octave|decade|all|log:N (default log:100), or m:LIST, averaging factors (m:1,2,5)");
   sub->add_option("--dev", args->dev,
                   "extra statistics, comma-separated: one of adev|oadev|mdev|tdev|hdev|ohdev|totdev and any of "
                   "theo1|theoh|mtot|ttot|htot (OADEV always)");

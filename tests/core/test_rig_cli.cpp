@@ -374,6 +374,53 @@ TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
 // The long-tau statistics through the CLI on the NBS14 10-point phase set (SP 1065 sec. 12.1):
 // MTOT, TTOT and HTOT at AF 1, 2 are the published (white-FM bias-removed) values; each has its
 // own JSON key beside the unchanged "oadev".
+// NIST SP 1065's NBS14 10-point phase set (sec. 12.1; its table of results, p. 107): every
+// deviation of the Allan family at AF 1 and 2 through the CLI, to the published digits.
+// ADEV and HDEV at AF 2 lie past the grids' Stable32 cap ((N-1)/5 = 1), so the factors are given
+// as a list (--taus m:1,2); a factor with no complete term is left out with a note, and a list
+// that leaves a deviation nothing is exit 2.
+TEST(RigCli, AnalyzeNbs14TenPointsEveryDeviationAtTheListedFactors) {
+  const std::string d = tmp("analyze-nbs10-all");
+  fs::create_directories(d);
+  std::ofstream(d + "/nbs10.txt") << "0.00000\n103.11111\n123.22222\n157.33333\n166.44444\n48.55555\n-96.33333\n"
+                                     "-2.22222\n111.88889\n0.00000\n";
+  const std::pair<const char*, std::array<double, 2>> published[] = {
+      {"adev", {91.22945, 115.8082}}, {"mdev", {91.22945, 74.78849}},  {"tdev", {52.67135, 86.35831}},
+      {"hdev", {70.80607, 116.7980}}, {"ohdev", {70.80607, 85.61487}}, {"totdev", {91.22945, 93.90379}}};
+  for (const auto& [key, want] : published) {
+    const std::string io = d + "/" + key;
+    ASSERT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--rate", "1", "--no-psd", "--taus", "m:1,2",
+                   "--dev", key, "--json", io + ".json"},
+                  io),
+              0)
+        << slurp(io + ".stderr");
+    const auto j = nlohmann::json::parse(slurp(io + ".json"));
+    ASSERT_EQ(j[key].size(), 2u) << key;
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(j[key][i]["m"], i + 1) << key;
+      EXPECT_NEAR(j[key][i]["dev"].get<double>(), want[i], 6e-7 * want[i]) << key << " AF " << i + 1;
+    }
+    ASSERT_EQ(j["oadev"].size(), 2u);
+    EXPECT_NEAR(j["oadev"][1]["dev"].get<double>(), 85.95287, 6e-7 * 85.95287);
+  }
+  // AF 5 has no complete ADEV term on 10 points (4 of OADEV's): left out of ADEV with a note.
+  ASSERT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--rate", "1", "--no-psd", "--taus", "m:1,2,5",
+                 "--dev", "hdev", "--json", d + "/five.json"},
+                d + "/five"),
+            0)
+      << slurp(d + "/five.stderr");
+  const auto five = nlohmann::json::parse(slurp(d + "/five.json"));
+  EXPECT_EQ(five["hdev"].size(), 2u);
+  EXPECT_NE(five["notes"].dump().find("hdev: factor(s) 5 of --taus m:1,2,5 left out"), std::string::npos)
+      << five["notes"].dump();
+  for (const char* bad : {"m:", "m:0", "m:1,x", "m:-2"}) {
+    EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", bad}, d + "/bad"), 2) << bad;
+    EXPECT_NE(slurp(d + "/bad.stderr").find(std::string("--taus '") + bad + "'"), std::string::npos) << slurp(d + "/bad.stderr");
+  }
+  EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", "m:9", "--dev", "hdev"}, d + "/nine"), 2);
+  EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", "m:1,2", "--dev", "theo1"}, d + "/theo"), 2);
+}
+
 TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
   const std::string d = tmp("analyze-nbs10");
   fs::create_directories(d);
