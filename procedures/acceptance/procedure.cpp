@@ -100,11 +100,19 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   const AllanChannel ch = allan_channel_terms(d, allan_settings(p), [&ctx] { ctx.cancel.throw_if_requested(); });
   const std::vector<analysis::DevPoint>& dev = ch.oadev;
   const analysis::NoiseTerms& nt = ch.terms;
-  auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
+  // A term as the passport value `name`, scaled into its declared unit. A null term's upper
+  // limit is restated from `hi` in that unit: analysis' reason quotes it per second, and a
+  // reason must state its numbers in its own value's unit.
+  auto term_value = [&](const char* name, const char* symbol, const analysis::Term& t, double scale,
+                        const std::string& why) {
     if (t.value) {
       ctx.values.set(name, *t.value * scale, why.empty() ? t.reason : why,
                      t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,
                      t.hi ? std::optional<double>(*t.hi * scale) : std::nullopt);
+    } else if (t.hi && !t.reason_without_limit.empty()) {
+      ctx.values.set(name, std::nullopt,
+                     fmt::format("{}; upper limit {} <= {:.3g} {}", t.reason_without_limit, symbol, *t.hi * scale,
+                                 ctx.values.find(name)->unit));
     } else {
       ctx.values.set(name, std::nullopt, t.reason.empty() ? "not identifiable from this record" : t.reason);
     }
@@ -112,7 +120,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   if (!filtered) {
     // B as the profile's [analysis] b_allan says: "paper" (sigma(tau_cp)/0.664; its reason names
     // flat segment, polynomial minimum or least-squares fallback) or "lsq" (the model's B).
-    term_value("in_run_b_allan", p.b_allan == "lsq" ? nt.wls.B : nt.B, 1.0, "");
+    term_value("in_run_b_allan", "B", p.b_allan == "lsq" ? nt.wls.B : nt.B, 1.0, "");
     if (nt.tau_cp_s && nt.b_method == "flat_segment")
       ctx.values.set("tau_cp", *nt.tau_cp_s, nt.B.reason);
     else if (nt.tau_cp_s)
@@ -120,12 +128,12 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
     // IEEE 952 terms quoted per hour (docs/method.md), by noise_terms.hpp's factors: Q g*s -> g*h,
     // N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
-    term_value("q", nt.Q, analysis::kQToHour, "");
-    term_value("n", nt.N, analysis::kNToHour, "");
-    term_value("k", nt.K, analysis::kKToHour, "");
-    term_value("r", nt.R, analysis::kRToHour, "");
+    term_value("q", "Q", nt.Q, analysis::kQToHour, "");
+    term_value("n", "N", nt.N, analysis::kNToHour, "");
+    term_value("k", "K", nt.K, analysis::kKToHour, "");
+    term_value("r", "R", nt.R, analysis::kRToHour, "");
   } else {
-    term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
+    term_value("in_run_b_allan_filtered", "B", nt.B, 1.0, "on the filtered output y(t)");
   }
   return {{"oadev", analysis::dev_to_json(dev)}, {"noise_terms", analysis::noise_terms_to_json(nt)}};
 }
