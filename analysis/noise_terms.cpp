@@ -36,6 +36,12 @@ std::string fmt(double v) {
   return o.str();
 }
 
+// A note after a term's reason, in both its forms (Term::reason_without_limit).
+void add_note(Term& t, const std::string& note) {
+  t.reason += note;
+  if (!t.reason_without_limit.empty()) t.reason_without_limit += note;
+}
+
 double poly(const std::array<double, 5>& c, double x) {
   double y = 0;
   for (int k = 4; k >= 0; --k) y = y * x + c[static_cast<std::size_t>(k)];
@@ -132,8 +138,8 @@ WlsFit wls_from_model(const NoiseModelFit& m) {
       t.reason = std::string("model (GLS on the octave Allan points, widest non-negative model; AICc or interval excludes 0)") + range;
     } else {
       t.hi = m.upper[k];
-      t.reason = std::string("not supported by the data (AICc; interval includes 0)") + range + "; upper limit " + kNames[k] + " <= " +
-                 fmt(m.upper[k]) + " " + kUnits[k];
+      t.reason_without_limit = std::string("not supported by the data (AICc; interval includes 0)") + range;
+      t.reason = t.reason_without_limit + "; upper limit " + kNames[k] + " <= " + fmt(m.upper[k]) + " " + kUnits[k];
     }
   }
   return w;
@@ -214,7 +220,7 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   if (!out.R.value) {
     // R (rate ramp) needs tau well beyond where K dominates; the paper puts it at > 50 h.
     if (record_length_s < 2 * 50 * 3600.0 && out.R.reason.find("longer record") == std::string::npos)
-      out.R.reason += "; needs a longer record";
+      add_note(out.R, "; needs a longer record");
   }
   // B by the paper's method: the flat segment (slope nearest 0, |slope| < 0.25).
   const Segment* flat = nullptr;
@@ -259,6 +265,7 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   } else {
     out.B = out.wls.B;
     out.B.unit = kUnits[2];
+    out.B.reason_without_limit.clear();  // every reason below replaces the model's, limit clause and all
     if (out.B.value) out.b_method = "least_squares";
     if (out.B.value) out.B.reason = "least squares (the model's B: the Allan curve has no flat part to read)";
     else if (!out.paper.ok) out.B.reason = "paper fit failed: " + out.paper.reason;

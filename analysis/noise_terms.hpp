@@ -28,7 +28,11 @@ struct Term {
   std::optional<double> value;
   std::optional<double> lo, hi;
   std::string unit;
-  std::string reason;  // why value is null, or which method produced it
+  std::string reason;  // why value is null, or which method produced it; numbers in `unit`
+  // A term the model leaves out (null, `hi` its upper limit): `reason` without its clause
+  // "upper limit X <= hi unit", so a reader quoting the term in other units (the passport's per
+  // hour) states the limit from `hi` in its own unit. Empty when `reason` carries no such clause.
+  std::string reason_without_limit;
 };
 
 // One segment of the paper's polynomial between inflection points.

@@ -23,6 +23,19 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // `rig bogus`: CLI11 takes an unknown first word for a stray argument and reports only the
+    // missing subcommand; name the word instead, with the subcommands there are.
+    if (app.get_subcommands().empty() && !app.remaining().empty()) {
+      const std::string word = app.remaining().front();
+      if (word.rfind('-', 0) == 0) {
+        std::cerr << "rig: unknown option '" << word << "' (see rig --help)\n";
+      } else {
+        std::cerr << "rig: unknown subcommand '" << word << "' (one of:";
+        for (const CLI::App* s : app.get_subcommands({})) std::cerr << ' ' << s->get_name();
+        std::cerr << "; see rig --help)\n";
+      }
+      return rig::kExitUsage;
+    }
     const int r = app.exit(e);
     return r == 0 ? 0 : rig::kExitUsage;  // --help/--version exit 0; usage errors exit 2
   } catch (const rig::ConfigError& e) {

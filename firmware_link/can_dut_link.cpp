@@ -386,9 +386,9 @@ LoopStepRecord CanDutLink::loop_step(const LoopTestRequest& rq, const CancelToke
     loop_token_ = r.token;  // a re-sent command has its own token
   }
   const std::size_t n = r.value;
-  // The firmware waits one record length for the loop to be quiet, records, then sends 2n + 1
-  // frames at the bus's pace (1 Mbit/s: about 7 frames per ms); allow twice that and a second.
-  const double budget_s = 2 * (2 * rq.record_s + static_cast<double>(2 * n + 1) / 7000.0) + 1.0;
+  // The step's nominal device time (quiet wait, record, burst at the bus's pace); allow twice
+  // that and a second.
+  const double budget_s = 2 * loop_step_nominal_s(rq.record_s, n) + 1.0;
   const double deadline = clock_.now_s() + budget_s;
   for (;;) {
     {

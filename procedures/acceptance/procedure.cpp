@@ -19,7 +19,9 @@
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"
 #include "rig/capture/capture.hpp"
+#include "rig/core/dut_link.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/table.hpp"
 
 namespace rig::acceptance {
 
@@ -100,11 +102,19 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   const AllanChannel ch = allan_channel_terms(d, allan_settings(p), [&ctx] { ctx.cancel.throw_if_requested(); });
   const std::vector<analysis::DevPoint>& dev = ch.oadev;
   const analysis::NoiseTerms& nt = ch.terms;
-  auto term_value = [&](const char* name, const analysis::Term& t, double scale, const std::string& why) {
+  // A term as the passport value `name`, scaled into its declared unit. A null term's upper
+  // limit is restated from `hi` in that unit: analysis' reason quotes it per second, and a
+  // reason must state its numbers in its own value's unit.
+  auto term_value = [&](const char* name, const char* symbol, const analysis::Term& t, double scale,
+                        const std::string& why) {
     if (t.value) {
       ctx.values.set(name, *t.value * scale, why.empty() ? t.reason : why,
                      t.lo ? std::optional<double>(*t.lo * scale) : std::nullopt,
                      t.hi ? std::optional<double>(*t.hi * scale) : std::nullopt);
+    } else if (t.hi && !t.reason_without_limit.empty()) {
+      ctx.values.set(name, std::nullopt,
+                     fmt::format("{}; upper limit {} <= {:.3g} {}", t.reason_without_limit, symbol, *t.hi * scale,
+                                 ctx.values.find(name)->unit));
     } else {
       ctx.values.set(name, std::nullopt, t.reason.empty() ? "not identifiable from this record" : t.reason);
     }
@@ -112,7 +122,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
   if (!filtered) {
     // B as the profile's [analysis] b_allan says: "paper" (sigma(tau_cp)/0.664; its reason names
     // flat segment, polynomial minimum or least-squares fallback) or "lsq" (the model's B).
-    term_value("in_run_b_allan", p.b_allan == "lsq" ? nt.wls.B : nt.B, 1.0, "");
+    term_value("in_run_b_allan", "B", p.b_allan == "lsq" ? nt.wls.B : nt.B, 1.0, "");
     if (nt.tau_cp_s && nt.b_method == "flat_segment")
       ctx.values.set("tau_cp", *nt.tau_cp_s, nt.B.reason);
     else if (nt.tau_cp_s)
@@ -120,12 +130,12 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     else ctx.values.set("tau_cp", std::nullopt, nt.B.reason.empty() ? "no flat segment" : nt.B.reason);
     // IEEE 952 terms quoted per hour (docs/method.md), by noise_terms.hpp's factors: Q g*s -> g*h,
     // N g*s^0.5 -> g*h^0.5, K g/s^0.5 -> g/h^0.5, R g/s -> g/h.
-    term_value("q", nt.Q, analysis::kQToHour, "");
-    term_value("n", nt.N, analysis::kNToHour, "");
-    term_value("k", nt.K, analysis::kKToHour, "");
-    term_value("r", nt.R, analysis::kRToHour, "");
+    term_value("q", "Q", nt.Q, analysis::kQToHour, "");
+    term_value("n", "N", nt.N, analysis::kNToHour, "");
+    term_value("k", "K", nt.K, analysis::kKToHour, "");
+    term_value("r", "R", nt.R, analysis::kRToHour, "");
   } else {
-    term_value("in_run_b_allan_filtered", nt.B, 1.0, "on the filtered output y(t)");
+    term_value("in_run_b_allan_filtered", "B", nt.B, 1.0, "on the filtered output y(t)");
   }
   return {{"oadev", analysis::dev_to_json(dev)}, {"noise_terms", analysis::noise_terms_to_json(nt)}};
 }
@@ -258,21 +268,33 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
   ctx.dev.table.home(ctx.cancel);
 }
 
-std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
+double TableTiming::move_s(double from_deg, double to_deg) const {
+  return trapezoid_time(to_deg - from_deg, velocity_dps, accel_dps2) + drive_settle_s + settle_s + poll_s;
+}
+
+std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table) {
   DutState& st = state.slot(0);  // a multi-DUT fixture runs each phase over its slots
   std::vector<Phase> ph;
-  const double move_s = 5.0;  // planning allowance for a 180 deg move
+  // A recording's planned device time (position_and_record): the move from where the previous
+  // recording left the table, the profile's settle, the record itself.
+  double table_at = table.home_deg;
+  auto recording_s = [&](Orientation o, double seconds) {
+    const double to = table_angle(p, o);
+    const double s = table.move_s(table_at, to) + p.settle_s + seconds;
+    table_at = to;
+    return s;
+  };
   for (std::size_t i = 0; i < p.order.size(); ++i) {
     ph.push_back({run_id(i, p.order[i]),
                   fmt::format("run {} of {} at {}: {} s (procedure A)", i + 1, p.order.size(), to_string(p.order[i]),
                               p.run_s),
-                  p.run_s + p.settle_s + move_s, [&p, &st, i](PhaseContext& c) { phase_run(c, p, st, i); }});
+                  recording_s(p.order[i], p.run_s), [&p, &st, i](PhaseContext& c) { phase_run(c, p, st, i); }});
   }
   ph.push_back({"bias", "bias and base error, formulas (3), (4)", 0, [&p, &st](PhaseContext& c) { phase_bias(c, p, st); },
                 {{"bias", "g", "Bias g_сист, formula (3)"},
                  {"base_error", "g", "Base error g_δA, formula (4)"}}});
   ph.push_back({"in-run", fmt::format("in-run test at {}: {} s (procedure B)", to_string(p.in_run_orientation), p.in_run_s),
-                p.in_run_s + p.settle_s + move_s, [&p, &st](PhaseContext& c) {
+                recording_s(p.in_run_orientation, p.in_run_s), [&p, &st](PhaseContext& c) {
                   st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s,
                                                   std::string("in-run-") + to_string(p.in_run_orientation), st.serial());
                 }});
@@ -286,7 +308,7 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
                 [&p, &st](PhaseContext& c) { phase_in_run_b(c, p, st); }, gost});
   ph.push_back({"raw", fmt::format("raw capture at {}: {} s at {} Hz (procedure C)", to_string(p.raw_orientation),
                                    p.raw_s, p.rate_hz),
-                p.raw_s + p.settle_s + move_s, [&p, &st](PhaseContext& c) {
+                recording_s(p.raw_orientation, p.raw_s), [&p, &st](PhaseContext& c) {
                   st.raw = position_and_record(c, p, p.raw_orientation, p.raw_s,
                                                std::string("raw-") + to_string(p.raw_orientation), st.serial());
                 }});
@@ -302,7 +324,10 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state) {
                  {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
                  {"rms_filtered", "g", "RMS error x̂ of y(t)"}}});
   ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter, measured by the DUT's loop test",
-                p.loop_steps * (3 * p.loop_record_s + 0.3), [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
+                // the steps at the loop's rate, the rate the output filter runs at in the DUT
+                p.loop_steps * loop_step_nominal_s(p.loop_record_s,
+                                                   static_cast<std::size_t>(std::lround(p.loop_record_s * p.filter.rate_hz))),
+                [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
                 {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level, measured by the DUT's loop test"},
                  {"settling_time", "s", "Closed-loop settling time, 1 g step, 5 % band, measured by the DUT's loop test"}}});
   return ph;

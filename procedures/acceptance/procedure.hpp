@@ -21,9 +21,28 @@ struct RunOptions {
   std::optional<std::string> expected_serial;  // --serial: the DUT must report this
 };
 
-// The phases, each with the measures it declares (name, unit, description). The phases
-// read and write `state` (kept alive by the caller, as `p`).
-std::vector<Phase> build_phases(const Profile& p, ProcedureState& state);
+// What the table's moves cost in device time, for the phases' planned durations (the dry-run
+// estimate, the progress ETA). The defaults are the emulated drive's power-on profile and
+// settle time (docs/table-registers.md, [plant.table]) and the table client's defaults (the
+// hardware file's [table] settle_s, poll_s): a hardware file or [plant.table] that sets
+// others makes the plan that much off unless the caller passes them.
+struct TableTiming {
+  double velocity_dps = 30.0;
+  double accel_dps2 = 60.0;
+  double drive_settle_s = 0.1;  // the drive's in-position settle
+  double settle_s = 0.5;        // the client's: in position held this long
+  double poll_s = 0.05;         // the client's status polling: the wait ends on a poll
+  double home_deg = 0.0;        // homing leaves the table here (ACTUAL_POS becomes 0)
+  // A move_to from `from_deg` to `to_deg`: the trapezoid, both settle times and the last poll
+  // (a move to where the table already is costs the settle times alone).
+  double move_s(double from_deg, double to_deg) const;
+};
+
+// The phases, each with the measures it declares (name, unit, description) and its planned
+// device time: each recording's move from where the previous one left the table, its settle
+// and record; the loop test's steps (no retries counted; bring-up, i.e. the DUT's power-up and
+// homing, is not a phase). The phases read and write `state` (kept alive by the caller, as `p`).
+std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table = {});
 
 // Declares the phases' measures with the profile's limits, in passport order (phase
 // order, then accuracy_class, which is required when the profile has classes).

@@ -88,9 +88,12 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   p.in_run_orientation = parse_orientation(*pr, "in_run_orientation", Orientation::U10);
   p.in_run_blocks_s = cfg::get_numbers(*pr, "in_run_blocks_s", std::vector<double>{100, 200});
   for (double b : p.in_run_blocks_s)
-    if (!(b > 0) || 2 * b > p.in_run_s)
-      throw ConfigError(cfg::where(*pr) + ": each in_run_blocks_s must be > 0 and give at least 2 blocks in in_run_s = " +
-                        std::to_string(p.in_run_s));
+    if (!(b > 0) || 2 * b > p.in_run_s) {
+      const toml::node* n = pr->get("in_run_blocks_s");
+      throw ConfigError((n ? cfg::where(*n) + ": 'in_run_blocks_s' = " + cfg::shown(*n) : cfg::where(*pr)) +
+                        ": each in_run_blocks_s must be > 0 and give at least 2 blocks in in_run_s = " +
+                        fmt::format("{:g}", p.in_run_s));
+    }
   p.raw_s = cfg::get_number(*pr, "raw_s", std::nullopt, min_s, 1e7);
   p.raw_orientation = parse_orientation(*pr, "raw_orientation", Orientation::U10);
   p.max_lost_samples = static_cast<uint64_t>(cfg::get_int(*pr, "max_lost_samples", 0, 0));
@@ -129,7 +132,8 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
     p.b_allan = cfg::get_string(*a, "b_allan", p.b_allan);
     if (p.b_allan != "paper" && p.b_allan != "lsq")
-      throw ConfigError("[analysis] b_allan: \"" + p.b_allan + "\" (expected \"paper\" or \"lsq\")");
+      throw ConfigError(cfg::where(*a->get("b_allan")) + ": 'b_allan' = \"" + p.b_allan +
+                        "\": must be \"paper\" or \"lsq\"");
   }
   // The measurement names (docs/profiles.md); GOST B is named by its block length.
   std::vector<std::string> known = {"bias", "base_error", "in_run_b_allan", "tau_cp", "q", "n", "k", "r",
@@ -150,7 +154,8 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
       if (!ok) throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits]");
       const std::vector<double> mm = cfg::get_numbers(*l, k.str());
       if (mm.size() != 2 || mm[0] > mm[1])
-        throw ConfigError(cfg::where(v) + ": limits for '" + std::string(k.str()) + "' must be [min, max] with min <= max");
+        throw ConfigError(cfg::where(v) + ": '" + std::string(k.str()) + "' = " + cfg::shown(v) +
+                          ": limits must be [min, max] with min <= max");
       p.limits[std::string(k.str())] = {mm[0], mm[1]};
     }
   }
@@ -163,7 +168,9 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
       cfg::check_keys(*ct, {"name", "max_b_g"}, "classes");
       AccuracyClass ac{cfg::get_string(*ct, "name"), cfg::get_number(*ct, "max_b_g", std::nullopt, 0.0)};
       if (!p.classes.empty() && ac.max_b_g <= p.classes.back().max_b_g)
-        throw ConfigError(cfg::where(c) + ": [[classes]] must be in ascending max_b_g");
+        throw ConfigError(cfg::where(*ct->get("max_b_g")) + ": 'max_b_g' = " + fmt::format("{:g}", ac.max_b_g) +
+                          ": [[classes]] must be in ascending max_b_g (the class before has " +
+                          fmt::format("{:g}", p.classes.back().max_b_g) + ")");
       p.classes.push_back(ac);
     }
   }
@@ -193,7 +200,8 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
     if (const toml::node* b = t.get("base")) {
       const auto base_name = b->value<std::string>();
       auto bit = base_name ? builtin.find(*base_name) : builtin.end();
-      if (bit == builtin.end()) throw ConfigError(cfg::where(*b) + ": 'base' must name a built-in profile");
+      if (bit == builtin.end())
+        throw ConfigError(cfg::where(*b) + ": 'base' = " + cfg::shown(*b) + ": must name a built-in profile");
       toml::table base = cfg::parse_string(bit->second, "builtin:" + *base_name);
       t.erase("base");
       // A file's own [[classes]] replace the base's rather than append.

@@ -40,6 +40,15 @@ struct LoopTestRequest {
   // ms after the step, and the final value is read from the record's last fifth.
   double record_s = 0.1;
 };
+// A loop test's burst leaves at the pace of the 1 Mbit/s bus: 8-byte frames of at most 135 bits
+// (docs/can-protocol.md, "Bus load"), about 7 per ms.
+inline constexpr double kLoopBurstFramesPerS = 7000.0;
+// Nominal device time of one loop-test step of `samples` samples (docs/can-protocol.md,
+// DUT_LOOP): the firmware waits one record length for the loop to be quiet, records one, then
+// sends 2 frames per sample and the end marker at the bus's pace.
+inline double loop_step_nominal_s(double record_s, std::size_t samples) {
+  return 2 * record_s + static_cast<double>(2 * samples + 1) / kLoopBurstFramesPerS;
+}
 // One step as the DUT recorded it, at the loop's rate: x the loop's output, y the same through
 // the output filter the DUT is configured with; the first `pre_samples` precede the step.
 struct LoopStepRecord {

@@ -2,6 +2,7 @@
 // Real backend: Modbus (rig/modbus). Emulated: the same client logic over the
 // emulator's register map in-process (plant/table).
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -27,6 +28,15 @@ struct TableStatus {
   bool has_heartbeat = true;  // a CiA 402 drive has no heartbeat register (frozen = no change)
   std::string drive_state;    // the drive's own state name where it has one (CiA 402), else empty
 };
+
+// Duration of a trapezoidal move of `dist` degrees from rest to rest (peak velocity v, acceleration
+// a; triangular when too short to reach v): the clients' time bounds and the procedure's plan.
+inline double trapezoid_time(double dist, double v, double a) {
+  if (v <= 0 || a <= 0) return 0;
+  dist = std::fabs(dist);
+  if (dist >= v * v / a) return dist / v + v / a;
+  return 2.0 * std::sqrt(dist / a);
+}
 
 // Every call is bounded in time; failures throw HardwareError naming what the
 // table was doing; a requested cancel throws AbortedError after a stop command.

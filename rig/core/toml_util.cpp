@@ -18,16 +18,6 @@ std::string pos(const toml::source_region& s) {
 
 [[noreturn]] void fail(const toml::node& n, const std::string& msg) { throw ConfigError(where(n) + ": " + msg); }
 
-// The value as the file writes it, for "'key' = VALUE: must be ..." (a table is not spelled out).
-std::string shown(const toml::node& n) {
-  if (n.is_table()) return "a table";
-  std::ostringstream os;
-  n.visit([&](const auto& v) { os << v; });
-  std::string s = os.str();
-  if (s.size() > 60) s = s.substr(0, 57) + "...";
-  return s;
-}
-
 [[noreturn]] void wrong_type(const toml::node& n, std::string_view key, std::string_view want) {
   fail(n, "'" + std::string(key) + "' = " + shown(n) + ": must be " + std::string(want));
 }
@@ -57,6 +47,15 @@ void check_range(const toml::node& n, std::string_view key, double v, std::optio
 }  // namespace
 
 std::string where(const toml::node& n) { return pos(n.source()); }
+
+std::string shown(const toml::node& n) {
+  if (n.is_table()) return "a table";
+  std::ostringstream os;
+  n.visit([&](const auto& v) { os << v; });
+  std::string s = os.str();
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
 
 toml::table parse_file(const std::string& path) {
   try {

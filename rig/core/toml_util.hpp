@@ -19,6 +19,10 @@ toml::table parse_string(std::string_view text, const std::string& source_name);
 // "file:line:col" of a node (or of its parent table when the key is missing).
 std::string where(const toml::node& n);
 
+// A value as the file writes it (arrays spelled out, a table as "a table", cut at 60
+// characters), for errors of the form "file:line:col: 'key' = VALUE: must be ...".
+std::string shown(const toml::node& n);
+
 // Typed access. `required` throws when the key is missing; all throw when the
 // value has the wrong type or lies outside [lo, hi].
 double get_number(const toml::table& t, std::string_view key, std::optional<double> def = std::nullopt,

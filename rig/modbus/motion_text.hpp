@@ -8,6 +8,7 @@
 #include <string>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/table.hpp"
 #include "rig/modbus/transport.hpp"
 
 namespace rig::modbus::detail {
@@ -30,13 +31,8 @@ inline std::string secs(double s) {
   return b;
 }
 
-// Duration of a trapezoidal move of `dist` from rest to rest (peak velocity v, acceleration a).
-inline double trapezoid_time(double dist, double v, double a) {
-  if (v <= 0 || a <= 0) return 0;
-  dist = std::fabs(dist);
-  if (dist >= v * v / a) return dist / v + v / a;
-  return 2.0 * std::sqrt(dist / a);
-}
+// Duration of a trapezoidal move (rig/core/table.hpp: the procedure's plan uses it too).
+using rig::trapezoid_time;
 
 // One attempt to deliver a stop (`write` sends it) on the safe-state path: never throws, and
 // records under `mu` in `last_error` whether it reached the drive (empty) or why not, for the

@@ -91,12 +91,23 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
       "in_run_blocks_s = [1.0, 2.0]\n";
   EXPECT_NE(error_of(write_tmp("lim.toml", base + "[limits]\nbias = [1.0, -1.0]\n")).find("min <= max"),
             std::string::npos);
+  // The error names file:line:column and the value as written (README: every bad-input error).
+  const std::string swapped = write_tmp("lim3.toml", base + "[limits]\nbias = [1e-3, -1e-3]\n");
+  EXPECT_EQ(error_of(swapped), swapped + ":10:8: 'bias' = [ 0.001, -0.001 ]: limits must be [min, max] with min <= max");
+  const std::string three = write_tmp("lim4.toml", base + "[limits]\nbias = [0, 1, 2]\n");
+  EXPECT_EQ(error_of(three), three + ":10:8: 'bias' = [ 0, 1, 2 ]: limits must be [min, max] with min <= max");
   EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais'"),
             std::string::npos);
-  EXPECT_NE(error_of(write_tmp("cls.toml", base + "[[classes]]\nname = \"a\"\nmax_b_g = 2e-5\n[[classes]]\nname = "
-                                                  "\"b\"\nmax_b_g = 1e-5\n"))
-                .find("ascending"),
-            std::string::npos);
+  const std::string cls = write_tmp("cls.toml", base + "[[classes]]\nname = \"a\"\nmax_b_g = 2e-5\n[[classes]]\nname = "
+                                                      "\"b\"\nmax_b_g = 1e-5\n");
+  EXPECT_EQ(error_of(cls), cls + ":14:11: 'max_b_g' = 1e-05: [[classes]] must be in ascending max_b_g (the class before "
+                                 "has 2e-05)");
+  const std::string blocks = write_tmp("blk.toml", "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"
+                                                   "run_s = 1\nin_run_s = 10\nraw_s = 10\nin_run_blocks_s = [1.0, 6.0]\n");
+  EXPECT_EQ(error_of(blocks), blocks + ":8:19: 'in_run_blocks_s' = [ 1.0, 6.0 ]: each in_run_blocks_s must be > 0 and "
+                                       "give at least 2 blocks in in_run_s = 10");
+  const std::string based = write_tmp("base.toml", "base = \"cj\"\n");
+  EXPECT_EQ(error_of(based), based + ":1:8: 'base' = 'cj': must name a built-in profile");
 }
 
 TEST(Profile, FileCanStartFromABuiltinAndOverride) {
@@ -111,6 +122,8 @@ TEST(Profile, BAllanSaysWhichBThePassportLimits) {
   EXPECT_EQ(load_profile("paper").b_allan, "paper");
   const auto prof = load_profile(write_tmp("lsq.toml", "base = \"ci\"\n[analysis]\nb_allan = \"lsq\"\n"));
   EXPECT_EQ(prof.b_allan, "lsq");
+  const std::string gmwm = write_tmp("gmwm.toml", "base = \"ci\"\n[analysis]\nb_allan = \"gmwm\"\n");
+  EXPECT_EQ(error_of(gmwm), gmwm + ":3:11: 'b_allan' = \"gmwm\": must be \"paper\" or \"lsq\"");
   EXPECT_NE(error_of(write_tmp("bad.toml", "base = \"ci\"\n[analysis]\nb_allan = \"gmwm\"\n")).find("b_allan"),
             std::string::npos);
 }

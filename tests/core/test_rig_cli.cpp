@@ -38,6 +38,14 @@ TEST(RigCli, HelpOnEverySubcommand) {
   for (const char* s : {"run", "analyze", "plant", "table", "dut", "filter", "report", "history"})
     EXPECT_EQ(run({s, "--help"}, d + "/h" + s), 0) << s;
   EXPECT_EQ(run({"run", "--no-such-option"}, d + "/bad"), 2);
+  // An unknown subcommand is named, with the ones there are (not "A subcommand is required").
+  EXPECT_EQ(run({"bogus"}, d + "/bogus"), 2);
+  const std::string err = slurp(d + "/bogus.stderr");
+  EXPECT_NE(err.find("unknown subcommand 'bogus'"), std::string::npos) << err;
+  EXPECT_NE(err.find("run analyze plant table dut filter report history capture"), std::string::npos) << err;
+  EXPECT_EQ(err.find("A subcommand is required"), std::string::npos) << err;
+  EXPECT_EQ(run({}, d + "/none"), 2);  // no word at all: CLI11's own message
+  EXPECT_NE(slurp(d + "/none.stderr").find("A subcommand is required"), std::string::npos);
 }
 
 TEST(RigCli, CiProfileEndToEnd) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -52,6 +53,24 @@ TEST(RunReport, CiRunCarriesWhatThePrintedPassportShows) {
   const json p = json::parse(slurp(d.path / "run" / "passport.json"));
   EXPECT_EQ(p["values"]["n"]["value"].get<double>(), nt["N"]["per_hour"]["value"].get<double>());
   EXPECT_EQ(p["values"]["n"]["unit"], nt["N"]["per_hour"]["unit"]);
+
+  // A null term's reason states its upper limit in the passport value's own unit (per hour), the
+  // number analysis.json's per_hour.hi holds; analysis.json's reason keeps it per second.
+  int limits_checked = 0;
+  for (const auto& [name, sym] : {std::pair{"q", "Q"}, {"n", "N"}, {"k", "K"}, {"r", "R"}}) {
+    const json& v = p["values"][name];
+    const json& ph = nt[sym]["per_hour"];
+    if (!v["value"].is_null() || !ph.contains("hi")) continue;
+    ++limits_checked;
+    char limit[64];
+    std::snprintf(limit, sizeof limit, "upper limit %s <= %.3g %s", sym, ph["hi"].get<double>(),
+                  v["unit"].get<std::string>().c_str());
+    const std::string why = v["reason"];
+    EXPECT_NE(why.find(limit), std::string::npos) << name << ": " << why << " (wanted \"" << limit << "\")";
+    EXPECT_EQ(why.find("/s"), std::string::npos) << name << ": " << why;
+    EXPECT_NE(nt[sym]["reason"].get<std::string>().find(" " + nt[sym]["unit"].get<std::string>()), std::string::npos);
+  }
+  EXPECT_GE(limits_checked, 2);  // the ci run's K and R: null with an upper limit (seeded plant)
 
   EXPECT_DOUBLE_EQ(a["allan"]["confidence"].get<double>(), 0.6826894921370859);
   EXPECT_FALSE(a["dut"]["firmware"].get<std::string>().empty());
