@@ -34,6 +34,7 @@
 #include "rig/executive/passport.hpp"
 #include "rig/executive/signals.hpp"
 #include "rig/executive/terminal.hpp"
+#include "rig/modbus/table_client.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/report.hpp"
 
@@ -369,6 +370,24 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   return log;
 }
 
+// The table timing the plan's moves are costed with: on hardware, the [table] section's client
+// settle and poll and, where it sets them, the drive's velocity, acceleration and settle (else
+// the drive keeps its own, which the plan takes as the emulated drive's power-on values); the
+// emulated plant's are the defaults.
+acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table& hw) {
+  acceptance::TableTiming t;
+  if (a.plant != "hardware") return t;
+  const toml::table* table = cfg::get_table(hw, "table");
+  if (!table) return t;
+  const modbus::TableOptions o = modbus::table_options_from_toml(*table);
+  t.settle_s = o.settle_s;
+  t.poll_s = o.poll_s;
+  t.velocity_dps = o.velocity_dps.value_or(t.velocity_dps);
+  t.accel_dps2 = o.accel_dps2.value_or(t.accel_dps2);
+  t.drive_settle_s = o.drive_settle_s.value_or(t.drive_settle_s);
+  return t;
+}
+
 int do_run(RunArgs a) {
   const auto wall_start = std::chrono::steady_clock::now();
   CancelSource cancel;
@@ -403,12 +422,13 @@ int do_run(RunArgs a) {
   const std::vector<Injection> injections = parse_injections(a.inject);
   if (!injections.empty() && a.plant != "emulated") throw ConfigError("--inject works with the emulated plant only");
 
+  // The mount's angles before the phases are planned: each move's planned time follows them.
+  if (a.plant == "hardware") apply_procedure_angles(hw, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
-  std::vector<Phase> phases = acceptance::build_phases(p, state);
+  std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw));
   TerminalView view(stderr, a.quiet);
   if (a.dry_run) {
     check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());
-    if (a.plant == "hardware") apply_procedure_angles(hw, p);  // the plan shows the mount's angles
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              p.source, a.plant);
@@ -416,9 +436,10 @@ int do_run(RunArgs a) {
     for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
     double total = 0;
     for (const auto& ph : phases) total += ph.planned_s;
-    std::cout << fmt::format("Estimated duration: {} of device time{}\n", TerminalView::hms(total),
-                             a.plant == "emulated" ? " (emulated: seconds of wall time)"
-                                                   : fmt::format(", the same in wall time"));
+    std::cout << fmt::format("Estimated duration: {} of device time{}, plus bring-up (the DUT's power-up and the "
+                             "table's homing, which depends on where the table stands) and any retries\n",
+                             TerminalView::hms(total),
+                             a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
     return kExitPass;
   }
   // The folder first: an operator should not answer the prompts of a run that cannot start.

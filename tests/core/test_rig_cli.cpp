@@ -709,6 +709,36 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
   }
 }
 
+// On hardware the plan costs each move with the hardware file's table settings and the mount's
+// angles ([procedure]): a faster drive, or U20 nearer U10, shortens the estimate; bring-up is
+// named as not estimated.
+TEST(RigCli, DryRunOnHardwarePlansWithTheTablesSettingsAndTheMountsAngles) {
+  const std::string d = tmp("dry-hw");
+  fs::create_directories(d);
+  auto estimate = [&](const std::string& name, const std::string& table_extra, const std::string& procedure) {
+    std::ofstream(d + "/" + name + ".toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n" << table_extra
+                                            << "[dut]\ncan = \"vcan-none\"\n"
+                                               "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"P\"\n"
+                                               "estop = \"E\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                               "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n"
+                                            << procedure;
+    EXPECT_EQ(run({"run", "--hardware", d + "/" + name + ".toml", "--profile", "ci", "--serial", "X-1", "--dry-run"},
+                  d + "/" + name),
+              0)
+        << slurp(d + "/" + name + ".stderr");
+    const std::string out = slurp(d + "/" + name + ".stdout");
+    const auto at = out.find("Estimated duration: ");
+    EXPECT_NE(out.find("plus bring-up"), std::string::npos) << out;
+    return at == std::string::npos ? std::string() : out.substr(at + 20, out.find(' ', at + 20) - at - 20);
+  };
+  const std::string base = estimate("base", "", "");
+  const std::string fast = estimate("fast", "velocity_dps = 90.0\naccel_dps2 = 360.0\n", "");
+  const std::string near = estimate("near", "", "[procedure]\nu10_deg = 0.0\nu20_deg = 90.0\n");
+  ASSERT_FALSE(base.empty());
+  EXPECT_LT(fast, base) << fast << " vs " << base;  // h:mm:ss of equal width compare as text
+  EXPECT_LT(near, base) << near << " vs " << base;
+}
+
 // Issue 13, 1: a profile whose only accuracy class cannot be met fails, and still fails when
 // interrupted after in-run-b and resumed (the class's FAIL is judged again from the values).
 TEST(RigCli, ResumeOfAFailingProfileStillFails) {
