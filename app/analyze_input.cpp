@@ -220,7 +220,8 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
   for (std::size_t n; (n = r.read(buf)) > 0;)
     for (std::size_t i = 0; i < n; ++i) {
       const Sample& s = buf[i];
-      if (!c.values.empty() && ((s.status & sample_status::kGapBefore) || s.seq != prev + 1u)) {
+      if (c.values.empty()) c.lost_at_start = (s.status & sample_status::kGapBefore) != 0;
+      else if ((s.status & sample_status::kGapBefore) || s.seq != prev + 1u) {
         const std::uint32_t step = s.seq - prev;  // modulo 2^32, as the counter wraps
         c.gaps.push_back({c.values.size(), prev, s.seq, step >= 1u && step < (1u << 31) ? step - 1u : 0u});
       }

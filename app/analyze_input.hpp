@@ -69,6 +69,9 @@ struct CaptureData {
   capture::Header header;
   capture::Recovery recovery;
   std::vector<CaptureGap> gaps;
+  // The first sample read is flagged kGapBefore: samples before it were lost (the first block
+  // damaged). Not a gap: nothing precedes it to be joined; the record just starts later.
+  bool lost_at_start = false;
 };
 // One channel ("x" or "y") of a capture, with what the reader recovered and where the sample
 // sequence breaks. A non-finite value in that channel is an error naming the sample and its

@@ -22,6 +22,8 @@
 #include <thread>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "analysis/json.hpp"
 #include "app/analyze_input.hpp"
 #include "analysis/allan.hpp"
@@ -44,7 +46,7 @@ using nlohmann::json;
 struct Args {
   std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev";
   std::optional<std::string> channel;  // captures only: x (default) or y
-  std::string gaps = "join";           // captures: join | longest | stop
+  std::optional<std::string> gaps;    // captures only: join (default) | longest | stop
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
   double confidence = an::AnalysisOptions{}.confidence;
@@ -141,9 +143,9 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
 int run(const Args& a) {
   StageTimer timer;
   if (!(a.overlap >= 0 && a.overlap <= 0.95))
-    throw ConfigError("--overlap " + std::to_string(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
+    throw ConfigError(fmt::format("rig analyze: --overlap {}: the PSD segment overlap must be in [0, 0.95]", a.overlap));
   if (!(a.confidence > 0 && a.confidence < 1))
-    throw ConfigError("--confidence " + std::to_string(a.confidence) + ": must be in (0, 1)");
+    throw ConfigError(fmt::format("rig analyze: --confidence {}: must be in (0, 1)", a.confidence));
   an::DevOptions base;
   // Each option's parse error names the option and its value (and, for --dev, the statistics
   // it also takes).
@@ -160,7 +162,8 @@ int run(const Args& a) {
   // of NBS14's 10 points, where the grid stops at 1); otherwise a grid.
   std::vector<std::size_t> listed;
   if (a.taus.rfind("m:", 0) == 0) {
-    std::stringstream list(a.taus.substr(2));
+    const std::string items = a.taus.substr(2);
+    std::stringstream list(items + ",");  // a trailing ',' is an empty item too
     for (std::string m; std::getline(list, m, ',');) {
       if (m.empty() || m.size() > 12 || m.find_first_not_of("0123456789") != std::string::npos || std::stoull(m) == 0)
         throw ConfigError("rig analyze: --taus '" + a.taus + "': '" + m + "' is not an averaging factor (m:1,2,5: whole numbers >= 1)");
@@ -170,7 +173,7 @@ int run(const Args& a) {
     std::sort(listed.begin(), listed.end());
     listed.erase(std::unique(listed.begin(), listed.end()), listed.end());
   } else {
-    base.taus = parsed("--taus", a.taus, [&] { return an::parse_tau_grid(a.taus); });
+    base.taus = parsed("--taus", a.taus, [&] { return an::parse_tau_grid(a.taus); }, " (or m:LIST, averaging factors: m:1,2,5)");
   }
   (void)parsed("--window", a.window, [&] { return an::parse_window(a.window); });
   // --dev: a comma-separated list of one Allan-family deviation and/or long-tau statistics.
@@ -208,6 +211,10 @@ int run(const Args& a) {
   // Source: text and captures are held in memory; float64 files are streamed.
   if (a.channel && input != "capture")
     throw ConfigError("rig analyze: --channel is for capture files (x or y); " + a.file + " is read as " + input);
+  if (a.gaps && input != "capture")
+    throw ConfigError("rig analyze: --gaps is for capture files (their sample counter shows gaps); " + a.file +
+                      " is read as " + input);
+  const std::string gap_policy = a.gaps.value_or("join");
   std::vector<double> mem;
   std::unique_ptr<an::ChunkSource> src;
   std::optional<CaptureData> cap;
@@ -224,7 +231,7 @@ int run(const Args& a) {
     cap = read_capture(a.file, channel);
     mem = std::move(cap->values);
     if (!a.rate) rate = cap->header.rate_hz;
-    gap_note = apply_gap_policy(a.file, a.gaps, cap->gaps, mem, analysed_from);
+    gap_note = apply_gap_policy(a.file, gap_policy, cap->gaps, mem, analysed_from);
   } else {
     throw ConfigError("rig analyze: --input must be text, f64 or capture, got '" + input + "'");
   }
@@ -239,6 +246,9 @@ int run(const Args& a) {
   // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
   std::vector<std::string> notes;
   if (!gap_note.empty()) notes.push_back(gap_note);
+  if (cap && cap->lost_at_start)
+    notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
+                    "notes name it); the record starts after them, nothing is joined");
   if (n < 30)
     notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
                     "the bounds rest on a few degrees of freedom and the noise terms on a few points");
@@ -398,7 +408,8 @@ int run(const Args& a) {
     for (const CaptureGap& g : cap->gaps) lost += g.lost;
     j["capture"]["gaps"] = cap->gaps.size();
     j["capture"]["lost"] = lost;
-    j["capture"]["gap_policy"] = a.gaps;
+    j["capture"]["gap_policy"] = gap_policy;
+    j["capture"]["lost_at_start"] = cap->lost_at_start;
     j["capture"]["analysed_from"] = analysed_from;
     j["capture"]["analysed_samples"] = n;
   }
@@ -461,7 +472,7 @@ int run(const Args& a) {
     o << cap->recovery.summary(a.file) << "\n";
     for (const auto& note : cap->recovery.notes) o << "  " << note << "\n";
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
-    if (!cap->gaps.empty() && a.gaps == "join") std::cerr << "rig analyze: warning: " << gap_note << "\n";
+    if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << a.file << ": " << gap_note << "\n";
   }
   o << a.file << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
@@ -532,7 +543,7 @@ void add_analyze(CLI::App& app, int& rc) {
                 "with --dev: that deviation only, no OADEV and no noise terms (they are read from OADEV)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");
   sub->add_option("--gaps", args->gaps,
-                  "capture with samples lost: join (default: analyse across the gaps as if contiguous, with a "
+                  "a capture with samples lost: join (default: analyse across the gaps as if contiguous, with a "
                   "warning), longest (the longest gap-free stretch) or stop (exit 2)")
       ->check(CLI::IsMember({"join", "longest", "stop"}));
   sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");

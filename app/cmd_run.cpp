@@ -1,6 +1,7 @@
 // `rig run`: the acceptance procedure, end to end, with a run folder holding
 // the captures, checkpoint, passport.json, junit.xml, analysis.json,
 // report.html and run.log. Exit codes per docs/contracts.md.
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -24,6 +25,7 @@
 #include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
 #include "plant/firmware/firmware_config.hpp"
+#include "plant/table/table_emulator.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
@@ -89,22 +91,21 @@ struct Injection {
 // Every --inject checked before anything is written or any device opens (--dry-run included):
 // a typo must not surface after the run folder exists, or after the hardware has opened.
 std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
+  // The whole text, decimal (std::from_chars: no blanks, no sign, no hex), finite.
   auto number = [](const std::string& s, const std::string& text) {
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(text, &used);
-    } catch (const std::logic_error&) {
-      used = 0;
-    }
-    if (used == 0 || used != text.size() || !std::isfinite(v) || v < 0)
-      throw ConfigError("--inject '" + s + "': '" + text + "' is not a device time in seconds (a number >= 0)");
+    double v = -1;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v) || v < 0)
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a device time in seconds (a decimal number >= 0)");
     return v;
   };
-  auto count = [](const std::string& s, const std::string& text) {
-    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 9)
-      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number (drop@SEQ:COUNT)");
-    return static_cast<uint32_t>(std::stoul(text));
+  auto count = [](const std::string& s, const std::string& text, std::uint32_t least) {
+    std::uint32_t v = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || v < least)
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number >= " + std::to_string(least) +
+                        " (drop@SEQ:COUNT)");
+    return v;
   };
   std::vector<Injection> out;
   for (const std::string& s : inj) {
@@ -125,8 +126,8 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
       const auto c = arg.find(':');
       if (c == std::string::npos) throw ConfigError("--inject '" + s + "': expected drop@SEQ:COUNT");
       j.kind = Injection::Kind::Drop;
-      j.seq = count(s, arg.substr(0, c));
-      j.count = count(s, arg.substr(c + 1));
+      j.seq = count(s, arg.substr(0, c), 0);
+      j.count = count(s, arg.substr(c + 1), 1);
     } else {
       throw ConfigError("--inject '" + s +
                         "': unknown fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, sigterm@end, "
@@ -372,11 +373,18 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 
 // The table timing the plan's moves are costed with: on hardware, the [table] section's client
 // settle and poll and, where it sets them, the drive's velocity, acceleration and settle (else
-// the drive keeps its own, which the plan takes as the emulated drive's power-on values); the
-// emulated plant's are the defaults.
-acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table& hw) {
+// the drive keeps its own, which the plan takes as the emulated drive's power-on values); on the
+// emulated plant, the profile's [plant.table] drive (its power-on velocity, acceleration and
+// settle) with the client's defaults.
+acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
   acceptance::TableTiming t;
-  if (a.plant != "hardware") return t;
+  if (a.plant != "hardware") {
+    const plant::TableParams d = plant::table_params_from_toml(cfg::get_table(plant_cfg, "table"));
+    t.velocity_dps = d.velocity_dps;
+    t.accel_dps2 = d.accel_dps2;
+    t.drive_settle_s = d.settle_s;
+    return t;
+  }
   const toml::table* table = cfg::get_table(hw, "table");
   if (!table) return t;
   const modbus::TableOptions o = modbus::table_options_from_toml(*table);
@@ -425,7 +433,7 @@ int do_run(RunArgs a) {
   // The mount's angles before the phases are planned: each move's planned time follows them.
   if (a.plant == "hardware") apply_procedure_angles(hw, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
-  std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw));
+  std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
   TerminalView view(stderr, a.quiet);
   if (a.dry_run) {
     check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());

@@ -58,7 +58,9 @@ int main(int argc, char** argv) {
     std::size_t k = 0;
     while (k < chosen.size() && chosen[k].name != only) ++k;
     if (k == chosen.size()) {
-      std::fprintf(stderr, "coverage_noise: no set '%s'\n", only.c_str());
+      std::string names;
+      for (const Set& c : chosen) names += (names.empty() ? "" : ", ") + ("\"" + c.name + "\"");
+      std::fprintf(stderr, "coverage_noise: no set '%s' (the sets: %s)\n", only.c_str(), names.c_str());
       return 2;
     }
     chosen = {chosen[k]};

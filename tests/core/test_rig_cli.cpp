@@ -195,10 +195,28 @@ TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
   EXPECT_NE(slurp(d + "/s.stderr").find(d + "/bad.cap: 1 gap(s)"), std::string::npos) << slurp(d + "/s.stderr");
   EXPECT_EQ(run({"analyze", cap, "--gaps", "stop", "--no-psd", "--json", d + "/ok.json"}, d + "/ok"), 0);
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/ok.json"))["capture"]["gaps"], 0);
-  // --channel picks a capture's channel: on a text file it is an error, not ignored.
+  // A damaged first block: samples lost before the first one read. Not a gap (nothing precedes
+  // them to be joined), but said: lost_at_start and a note.
+  fs::copy_file(cap, d + "/head.cap");
+  {
+    std::fstream f(d + "/head.cap", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(fs::file_size(cap) - 16 - 60 * 16016 + 100));
+    const char junk[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    f.write(junk, 8);
+  }
+  ASSERT_EQ(run({"analyze", d + "/head.cap", "--gaps", "stop", "--no-psd", "--json", d + "/h.json"}, d + "/h"), 0)
+      << slurp(d + "/h.stderr");
+  j = nlohmann::json::parse(slurp(d + "/h.json"));
+  EXPECT_EQ(j["capture"]["damaged_blocks"], 1);
+  EXPECT_EQ(j["capture"]["gaps"], 0);
+  EXPECT_EQ(j["capture"]["lost_at_start"], true);
+  EXPECT_NE(j["notes"].dump().find("lost before the first one read"), std::string::npos) << j["notes"].dump();
+  // --channel and --gaps are a capture's: on a text file they are an error, not ignored.
   std::ofstream(d + "/v.txt") << "1\n2\n3\n4\n";
   EXPECT_EQ(run({"analyze", d + "/v.txt", "--channel", "y"}, d + "/ch"), 2);
   EXPECT_NE(slurp(d + "/ch.stderr").find("--channel is for capture files"), std::string::npos) << slurp(d + "/ch.stderr");
+  EXPECT_EQ(run({"analyze", d + "/v.txt", "--gaps", "stop"}, d + "/gp"), 2);
+  EXPECT_NE(slurp(d + "/gp.stderr").find("--gaps is for capture files"), std::string::npos) << slurp(d + "/gp.stderr");
   // Not a capture at all: exit 2 naming the file.
   std::ofstream(d + "/junk.cap") << "junk";
   EXPECT_EQ(run({"analyze", d + "/junk.cap", "--input", "capture"}, d + "/jk"), 2);
@@ -421,7 +439,7 @@ TEST(RigCli, AnalyzeNbs14TenPointsEveryDeviationAtTheListedFactors) {
   EXPECT_EQ(five["hdev"].size(), 2u);
   EXPECT_NE(five["notes"].dump().find("hdev: factor(s) 5 of --taus m:1,2,5 left out"), std::string::npos)
       << five["notes"].dump();
-  for (const char* bad : {"m:", "m:0", "m:1,x", "m:-2"}) {
+  for (const char* bad : {"m:", "m:0", "m:1,x", "m:-2", "m:1,2,", "m:1,,2"}) {
     EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", bad}, d + "/bad"), 2) << bad;
     EXPECT_NE(slurp(d + "/bad.stderr").find(std::string("--taus '") + bad + "'"), std::string::npos) << slurp(d + "/bad.stderr");
   }
@@ -680,7 +698,7 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
   fs::create_directories(d);
   int i = 0;
   for (const char* bad : {"foo@bar", "estop", "estop@10x", "estop@-1", "sigint@nan", "sigkill@end", "drop@5",
-                          "drop@5:x", "drop@-1:2"}) {
+                          "drop@5:x", "drop@-1:2", "estop@ 5", "estop@0x10", "estop@+5", "drop@5:0"}) {
     const std::string io = d + "/io" + std::to_string(i++);
     EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", bad}, io), 2) << bad;
     EXPECT_NE(slurp(io + ".stderr").find(std::string("--inject '") + bad + "'"), std::string::npos)
@@ -732,6 +750,15 @@ TEST(RigCli, DryRunOnHardwarePlansWithTheTablesSettingsAndTheMountsAngles) {
     return at == std::string::npos ? std::string() : out.substr(at + 20, out.find(' ', at + 20) - at - 20);
   };
   const std::string base = estimate("base", "", "");
+  // The emulated plant: the profile's [plant.table] drive is what the plan costs the moves with.
+  std::ofstream(d + "/slow.toml") << "base = \"ci\"\n[plant.table]\nvelocity_dps = 5.0\n";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run"}, d + "/emu"), 0);
+  ASSERT_EQ(run({"run", "--profile", d + "/slow.toml", "--dry-run"}, d + "/emuslow"), 0) << slurp(d + "/emuslow.stderr");
+  const std::string emu = slurp(d + "/emu.stdout"), emuslow = slurp(d + "/emuslow.stdout");
+  const auto e0 = emu.find("Estimated duration: "), e1 = emuslow.find("Estimated duration: ");
+  ASSERT_NE(e0, std::string::npos);
+  ASSERT_NE(e1, std::string::npos);
+  EXPECT_GT(emuslow.substr(e1 + 20, 8), emu.substr(e0 + 20, 8)) << emuslow;
   const std::string fast = estimate("fast", "velocity_dps = 90.0\naccel_dps2 = 360.0\n", "");
   const std::string near = estimate("near", "", "[procedure]\nu10_deg = 0.0\nu20_deg = 90.0\n");
   ASSERT_FALSE(base.empty());
