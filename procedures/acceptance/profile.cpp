@@ -153,7 +153,10 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
                           "' in [limits]: GOST B is named by its block length, and in_run_blocks_s gives " + gost_names);
       if (!ok) throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits]");
       const std::vector<double> mm = cfg::get_numbers(*l, k.str());
-      if (mm.size() != 2 || mm[0] > mm[1])
+      if (mm.size() != 2)
+        throw ConfigError(cfg::where(v) + ": '" + std::string(k.str()) + "' = " + cfg::shown(v) +
+                          ": limits are two numbers [min, max], got " + std::to_string(mm.size()));
+      if (mm[0] > mm[1])
         throw ConfigError(cfg::where(v) + ": '" + std::string(k.str()) + "' = " + cfg::shown(v) +
                           ": limits must be [min, max] with min <= max");
       p.limits[std::string(k.str())] = {mm[0], mm[1]};

@@ -95,7 +95,7 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   const std::string swapped = write_tmp("lim3.toml", base + "[limits]\nbias = [1e-3, -1e-3]\n");
   EXPECT_EQ(error_of(swapped), swapped + ":10:8: 'bias' = [ 0.001, -0.001 ]: limits must be [min, max] with min <= max");
   const std::string three = write_tmp("lim4.toml", base + "[limits]\nbias = [0, 1, 2]\n");
-  EXPECT_EQ(error_of(three), three + ":10:8: 'bias' = [ 0, 1, 2 ]: limits must be [min, max] with min <= max");
+  EXPECT_EQ(error_of(three), three + ":10:8: 'bias' = [ 0, 1, 2 ]: limits are two numbers [min, max], got 3");
   EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais'"),
             std::string::npos);
   const std::string cls = write_tmp("cls.toml", base + "[[classes]]\nname = \"a\"\nmax_b_g = 2e-5\n[[classes]]\nname = "
