@@ -22,8 +22,6 @@
 #include <thread>
 #include <vector>
 
-#include <fmt/format.h>
-
 #include "analysis/json.hpp"
 #include "app/analyze_input.hpp"
 #include "analysis/allan.hpp"
@@ -142,10 +140,15 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
 
 int run(const Args& a) {
   StageTimer timer;
+  auto shown = [](double v) {  // as typed for any value a user would type (%g: 2, 0.96)
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return std::string(b);
+  };
   if (!(a.overlap >= 0 && a.overlap <= 0.95))
-    throw ConfigError(fmt::format("rig analyze: --overlap {}: the PSD segment overlap must be in [0, 0.95]", a.overlap));
+    throw ConfigError("rig analyze: --overlap " + shown(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
   if (!(a.confidence > 0 && a.confidence < 1))
-    throw ConfigError(fmt::format("rig analyze: --confidence {}: must be in (0, 1)", a.confidence));
+    throw ConfigError("rig analyze: --confidence " + shown(a.confidence) + ": must be in (0, 1)");
   an::DevOptions base;
   // Each option's parse error names the option and its value (and, for --dev, the statistics
   // it also takes).
