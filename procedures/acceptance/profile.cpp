@@ -90,9 +90,10 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   for (double b : p.in_run_blocks_s)
     if (!(b > 0) || 2 * b > p.in_run_s) {
       const toml::node* n = pr->get("in_run_blocks_s");
-      throw ConfigError((n ? cfg::where(*n) + ": 'in_run_blocks_s' = " + cfg::shown(*n) : cfg::where(*pr)) +
-                        ": each in_run_blocks_s must be > 0 and give at least 2 blocks in in_run_s = " +
-                        fmt::format("{:g}", p.in_run_s));
+      const std::string why =
+          "each in_run_blocks_s must be > 0 and give at least 2 blocks in in_run_s = " + fmt::format("{:g}", p.in_run_s);
+      if (n) cfg::reject(*n, "in_run_blocks_s", why);
+      throw ConfigError(cfg::where(*pr) + ": " + why);
     }
   p.raw_s = cfg::get_number(*pr, "raw_s", std::nullopt, min_s, 1e7);
   p.raw_orientation = parse_orientation(*pr, "raw_orientation", Orientation::U10);
@@ -153,12 +154,8 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
                           "' in [limits]: GOST B is named by its block length, and in_run_blocks_s gives " + gost_names);
       if (!ok) throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits]");
       const std::vector<double> mm = cfg::get_numbers(*l, k.str());
-      if (mm.size() != 2)
-        throw ConfigError(cfg::where(v) + ": '" + std::string(k.str()) + "' = " + cfg::shown(v) +
-                          ": limits are two numbers [min, max], got " + std::to_string(mm.size()));
-      if (mm[0] > mm[1])
-        throw ConfigError(cfg::where(v) + ": '" + std::string(k.str()) + "' = " + cfg::shown(v) +
-                          ": limits must be [min, max] with min <= max");
+      if (mm.size() != 2) cfg::reject(v, k.str(), "limits are two numbers [min, max], got " + std::to_string(mm.size()));
+      if (mm[0] > mm[1]) cfg::reject(v, k.str(), "limits must be [min, max] with min <= max");
       p.limits[std::string(k.str())] = {mm[0], mm[1]};
     }
   }
@@ -204,7 +201,7 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
       const auto base_name = b->value<std::string>();
       auto bit = base_name ? builtin.find(*base_name) : builtin.end();
       if (bit == builtin.end())
-        throw ConfigError(cfg::where(*b) + ": 'base' = " + cfg::shown(*b) + ": must name a built-in profile");
+        cfg::reject(*b, "base", "must name a built-in profile");
       toml::table base = cfg::parse_string(bit->second, "builtin:" + *base_name);
       t.erase("base");
       // A file's own [[classes]] replace the base's rather than append.

@@ -19,7 +19,7 @@ std::string pos(const toml::source_region& s) {
 [[noreturn]] void fail(const toml::node& n, const std::string& msg) { throw ConfigError(where(n) + ": " + msg); }
 
 [[noreturn]] void wrong_type(const toml::node& n, std::string_view key, std::string_view want) {
-  fail(n, "'" + std::string(key) + "' = " + shown(n) + ": must be " + std::string(want));
+  reject(n, key, "must be " + std::string(want));
 }
 
 const toml::node& need(const toml::table& t, std::string_view key) {
@@ -55,6 +55,10 @@ std::string shown(const toml::node& n) {
   std::string s = os.str();
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
+}
+
+void reject(const toml::node& n, std::string_view key, std::string_view why) {
+  fail(n, "'" + std::string(key) + "' = " + shown(n) + ": " + std::string(why));
 }
 
 toml::table parse_file(const std::string& path) {

@@ -23,6 +23,10 @@ std::string where(const toml::node& n);
 // characters), for errors of the form "file:line:col: 'key' = VALUE: must be ...".
 std::string shown(const toml::node& n);
 
+// Throws ConfigError "file:line:col: 'key' = VALUE: why" (where(n), shown(n)): a value of the
+// right type that breaks a rule of its own (limits in order, a known base, ...).
+[[noreturn]] void reject(const toml::node& n, std::string_view key, std::string_view why);
+
 // Typed access. `required` throws when the key is missing; all throw when the
 // value has the wrong type or lies outside [lo, hi].
 double get_number(const toml::table& t, std::string_view key, std::optional<double> def = std::nullopt,
