@@ -27,11 +27,18 @@ double noise_basis(int k, double tau) {
   }
 }
 
-std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+std::array<double, 4> random_term_factors(std::size_t m, std::size_t n_phase) {
   static const int kAlpha[4] = {2, 0, -1, -2};
+  std::array<double, 4> f{};
+  for (std::size_t k = 0; k < 4; ++k) f[k] = std::sqrt(2 / edf_greenhall(kAlpha[k], 2, m, n_phase, true, false));
+  return f;
+}
+
+std::array<double, 5> term_scatter(const std::array<double, 5>& mu, const std::array<double, 4>& factors, std::size_t m,
+                                   std::size_t n_phase) {
   std::array<double, 5> sd{};
   for (std::size_t k = 0; k < 4; ++k)
-    if (mu[k] > 0) sd[k] = mu[k] * std::sqrt(2 / edf_greenhall(kAlpha[k], 2, m, n_phase, true, false));
+    if (mu[k] > 0) sd[k] = mu[k] * factors[k];
   if (mu[4] > 0 && n_phase > 2 * m + 1) {
     // The ramp's second differences are one constant d (mu_R = d^2/2), so s = mu_R + d ebar +
     // s_random, and its only scatter is the cross term d ebar: var = 2 mu_R var(ebar), ebar the
@@ -56,14 +63,22 @@ std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t 
   return sd;
 }
 
-double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+  return term_scatter(mu, random_term_factors(m, n_phase), m, n_phase);
+}
+
+double model_edf(const std::array<double, 5>& mu, const std::array<double, 4>& factors, std::size_t m, std::size_t n_phase) {
   double total = 0, sd_random = 0;
   for (std::size_t k = 0; k < 5; ++k) total += mu[k];
-  const std::array<double, 5> sd = term_scatter(mu, m, n_phase);
+  const std::array<double, 5> sd = term_scatter(mu, factors, m, n_phase);
   for (std::size_t k = 0; k < 4; ++k) sd_random += sd[k];
   const double var = sd_random * sd_random + sd[4] * sd[4];
   if (!(var > 0)) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
   return 2 * total * total / var;
+}
+
+double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
+  return model_edf(mu, random_term_factors(m, n_phase), m, n_phase);
 }
 
 namespace {
@@ -71,7 +86,17 @@ namespace {
 struct Pts {
   std::vector<double> tau, s, nu;  // tau, measured sigma^2, EDF in use
   std::vector<std::size_t> m;
+  // random_term_factors at each point: they depend on (m, n_phase) alone, while the fit evaluates
+  // the model's EDF and covariance some thousand times (each a Greenhall sum per term: a fifth
+  // of the fit's instructions before they were kept here).
+  std::vector<std::array<double, 4>> factors;
 };
+
+// Pts::factors for the points' m on a record of n_phase points.
+void set_factors(Pts& p, std::size_t n_phase) {
+  p.factors.resize(p.m.size());
+  for (std::size_t i = 0; i < p.m.size(); ++i) p.factors[i] = random_term_factors(p.m[i], n_phase);
+}
 
 struct SubsetFit {
   bool ok = false;
@@ -222,7 +247,7 @@ Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std:
   for (std::size_t i = 0; i < n; ++i) {
     std::array<double, 5> mu{};
     for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
-    const std::array<double, 5> sd = term_scatter(mu, p.m[i], n_phase);
+    const std::array<double, 5> sd = term_scatter(mu, p.factors[i], p.m[i], n_phase);
     for (int k = 0; k < 5; ++k) w(static_cast<Eigen::Index>(i), k) = sd[static_cast<std::size_t>(k)];
   }
   Eigen::MatrixXd S(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
@@ -366,7 +391,7 @@ void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_pha
   for (std::size_t i = 0; i < p.tau.size(); ++i) {
     std::array<double, 5> mu{};
     for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
-    p.nu[i] = model_edf(mu, p.m[i], n_phase);
+    p.nu[i] = model_edf(mu, p.factors[i], p.m[i], n_phase);
   }
 }
 
@@ -457,6 +482,7 @@ Pts tail_of(const Pts& p, std::size_t from) {
   q.tau.assign(p.tau.begin() + static_cast<std::ptrdiff_t>(from), p.tau.end());
   q.s.assign(p.s.begin() + static_cast<std::ptrdiff_t>(from), p.s.end());
   q.m.assign(p.m.begin() + static_cast<std::ptrdiff_t>(from), p.m.end());
+  q.factors.assign(p.factors.begin() + static_cast<std::ptrdiff_t>(from), p.factors.end());
   return q;
 }
 
@@ -510,6 +536,7 @@ LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std:
   p.m.assign(m.begin(), m.end());
   p.s.assign(p.tau.size(), 1);
   p.nu.resize(p.tau.size());
+  set_factors(p, n_phase);
   set_model_edf(p, theta, n_phase);
   LogScatter out;
   for (const double nu : p.nu) out.bias.push_back(log_bias(nu));
@@ -533,6 +560,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   }
   const double tau0 = all.tau.front() / static_cast<double>(all.m.front());
   const auto n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+  set_factors(all, n_phase);
 
   // The tau range where the IEEE 952 model is adequate (docs/analysis.md "Goodness of fit"): the
   // model is selected on the octave points from the shortest tau on; when its chi-square on the

@@ -102,4 +102,15 @@ double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_p
 // the R-dominated points (the log-bias correction of EDF ~2 on points whose scatter is far less).
 std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase);
 
+// The part of term_scatter that depends on the point alone: sqrt(2/nu_k) of Q, N, B, K (white PM,
+// white FM, flicker FM, random walk FM; Greenhall & Riley) at factor m of n_phase points. The
+// fit evaluates the model's EDF and covariance thousands of times on the same points, so it
+// computes these once per point and passes them to the overloads below (the same values: bit
+// for bit what the three-argument forms compute).
+std::array<double, 4> random_term_factors(std::size_t m, std::size_t n_phase);
+std::array<double, 5> term_scatter(const std::array<double, 5>& mu, const std::array<double, 4>& factors, std::size_t m,
+                                   std::size_t n_phase);
+double model_edf(const std::array<double, 5>& mu, const std::array<double, 4>& factors, std::size_t m,
+                 std::size_t n_phase);
+
 }  // namespace rig::analysis
