@@ -288,44 +288,51 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   }
   Eigen::VectorXd th(c);
   for (Eigen::Index j = 0; j < c; ++j) th(j) = start[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
-  auto objective = [&](const Eigen::VectorXd& t, Eigen::VectorXd* r) {
-    const Eigen::VectorXd mu = X * t;
-    if ((mu.array() <= 0).any()) return std::numeric_limits<double>::infinity();
-    const Eigen::VectorXd res = ly - mu.array().log().matrix();
-    if (r) *r = res;
+  // The buffers of the loop are made once (a fit runs some ten iterations over a few points:
+  // the allocations had cost as much as the arithmetic). Each product below is the same Eigen
+  // expression on the same operands as before, so the results are the same bit for bit: mu of
+  // the accepted step is kept from the objective instead of being multiplied out again, and
+  // Jn^T W, which the normal matrix and its right-hand side both start with, is formed once.
+  Eigen::VectorXd mu_try(n), res(n);
+  auto objective = [&](const Eigen::VectorXd& t, Eigen::VectorXd& r) {
+    mu_try.noalias() = X * t;
+    if ((mu_try.array() <= 0).any()) return std::numeric_limits<double>::infinity();
+    res = ly - mu_try.array().log().matrix();
+    r = res;
     return res.dot(W * res);
   };
-  Eigen::VectorXd r;
-  double F = objective(th, &r);
+  Eigen::VectorXd r(n), rn(n), tn(c), step(c), scale(c), mu(n);
+  double F = objective(th, r);
   if (!std::isfinite(F)) return f;
-  Eigen::MatrixXd J(n, c);
-  for (int it = 0; it < 100; ++it) {
-    const Eigen::VectorXd mu = X * th;
+  mu.swap(mu_try);  // X * th
+  Eigen::MatrixXd J(n, c), Jn(n, c), JtW(c, n), A(c, c);
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(c);
+  // Jn = J scaled to unit columns (J = d ln mu / d theta at mu); JtW = Jn^T W; A = Jn^T W Jn.
+  const auto normal_matrix = [&] {
     J = mu.cwiseInverse().asDiagonal() * X;  // d ln mu / d theta
-    const Eigen::VectorXd scale = J.colwise().norm().transpose();
-    if ((scale.array() <= 0).any()) return f;
-    const Eigen::MatrixXd Jn = J * scale.cwiseInverse().asDiagonal();
-    const Eigen::MatrixXd A = Jn.transpose() * W * Jn;
-    const Eigen::VectorXd step = A.ldlt().solve(Jn.transpose() * W * r).cwiseQuotient(scale);
+    scale = J.colwise().norm().transpose();
+    Jn = J * scale.cwiseInverse().asDiagonal();
+    JtW = Jn.transpose() * W;
+    A = JtW * Jn;
+    return !(scale.array() <= 0).any();
+  };
+  for (int it = 0; it < 100; ++it) {
+    if (!normal_matrix()) return f;
+    step = ldlt.compute(A).solve(JtW * r).cwiseQuotient(scale);
     double lam = 1, Fn = std::numeric_limits<double>::infinity();
-    Eigen::VectorXd tn, rn;
     for (int h = 0; h < 40; ++h, lam /= 2) {
       tn = th + lam * step;
-      Fn = objective(tn, &rn);
+      Fn = objective(tn, rn);
       if (Fn <= F) break;
     }
     if (!(Fn <= F)) break;
     const double gain = F - Fn;
-    th = tn, r = rn, F = Fn;
+    th.swap(tn), r.swap(rn), mu.swap(mu_try), F = Fn;
     if (gain < 1e-12 * (1 + F)) break;
   }
   for (Eigen::Index j = 0; j < c; ++j) f.theta[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = th(j);
   if (nonneg && (th.array() < 0).any()) return f;
-  const Eigen::VectorXd mu = X * th;
-  J = mu.cwiseInverse().asDiagonal() * X;
-  const Eigen::VectorXd scale = J.colwise().norm().transpose();
-  const Eigen::MatrixXd Jn = J * scale.cwiseInverse().asDiagonal();
-  const Eigen::MatrixXd A = Jn.transpose() * W * Jn;
+  normal_matrix();  // at th
   f.cov = scale.cwiseInverse().asDiagonal() * A.inverse() * scale.cwiseInverse().asDiagonal();
   f.nll = F / 2;
   f.ok = std::isfinite(f.nll) && f.cov.allFinite();
