@@ -143,17 +143,26 @@ SubsetFit fit_subset(const Pts& p, int mask, bool nonneg) {
   for (Eigen::Index i = 0; i < n; ++i) mu(i) = y(i) = p.s[static_cast<std::size_t>(i)];
   Eigen::VectorXd th = Eigen::VectorXd::Zero(c);
   Eigen::MatrixXd info(c, c);
+  // Buffers made once, and sqrt(nu_i / 2) and X * theta of an accepted step kept: the same
+  // expressions on the same operands as when each iteration made its own (the same bits).
+  Eigen::VectorXd root_half_nu(n), w(n), scale(c), next(c), mu_next(n);
+  for (Eigen::Index i = 0; i < n; ++i) root_half_nu(i) = std::sqrt(p.nu[static_cast<std::size_t>(i)] / 2);
+  Eigen::MatrixXd Xw(n, c), Xn(n, c);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(n, c);
+  // w = sqrt(nu/2) / mu, Xw = diag(w) X, scale its column norms, Xn = Xw with unit columns.
+  const auto weigh = [&] {
+    w = root_half_nu.cwiseQuotient(mu);
+    Xw = w.asDiagonal() * X;
+    scale = Xw.colwise().norm().transpose();
+    Xn = Xw * scale.cwiseInverse().asDiagonal();
+  };
   for (int it = 0; it < 50; ++it) {
-    Eigen::VectorXd w(n);
-    for (Eigen::Index i = 0; i < n; ++i) w(i) = std::sqrt(p.nu[static_cast<std::size_t>(i)] / 2) / mu(i);
-    const Eigen::MatrixXd Xw = w.asDiagonal() * X;
-    const Eigen::VectorXd scale = Xw.colwise().norm().transpose();
+    weigh();
     if ((scale.array() <= 0).any()) return f;
-    const Eigen::MatrixXd Xn = Xw * scale.cwiseInverse().asDiagonal();
-    const auto qr = Xn.colPivHouseholderQr();
+    qr.compute(Xn);
     if (qr.rank() < c) return f;
-    const Eigen::VectorXd next = qr.solve(w.cwiseProduct(y)).cwiseQuotient(scale);
-    const Eigen::VectorXd mu_next = X * next;
+    next = qr.solve(w.cwiseProduct(y)).cwiseQuotient(scale);
+    mu_next.noalias() = X * next;
     if ((mu_next.array() <= 0).any()) {
       // The step leaves the positive means: halve towards the previous estimate.
       if (it == 0) return f;
@@ -165,23 +174,17 @@ SubsetFit fit_subset(const Pts& p, int mask, bool nonneg) {
       }
       if (!fixed) return f;
       th = t2;
+      mu.noalias() = X * th;
     } else {
       const double change = (next - th).cwiseAbs().cwiseQuotient(next.cwiseAbs().cwiseMax(1e-300)).maxCoeff();
-      th = next;
-      if (change < 1e-10) {
-        mu = X * th;
-        break;
-      }
+      th.swap(next);
+      mu.swap(mu_next);  // X * th
+      if (change < 1e-10) break;
     }
-    mu = X * th;
   }
   for (Eigen::Index j = 0; j < c; ++j) f.theta[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = th(j);
   if (nonneg && (th.array() < 0).any()) return f;
-  Eigen::VectorXd w(n);
-  for (Eigen::Index i = 0; i < n; ++i) w(i) = std::sqrt(p.nu[static_cast<std::size_t>(i)] / 2) / mu(i);
-  const Eigen::MatrixXd Xw = w.asDiagonal() * X;
-  const Eigen::VectorXd scale = Xw.colwise().norm().transpose();
-  const Eigen::MatrixXd Xn = Xw * scale.cwiseInverse().asDiagonal();
+  weigh();
   info = Xn.transpose() * Xn;
   f.cov = scale.cwiseInverse().asDiagonal() * info.inverse() * scale.cwiseInverse().asDiagonal();
   f.nll = nll_of(p, f.theta);
