@@ -7,8 +7,6 @@
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/digamma.hpp>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <numbers>
 #include <thread>
@@ -249,10 +247,7 @@ double log_bias(double nu) { return boost::math::digamma(nu / 2) - std::log(nu /
 
 // Generalized least squares of ln s_i = ln mu_i(theta) + bias_i with the covariance W^-1 (fixed),
 // Gauss-Newton from `start` over the terms in `mask`; cov = (J^T W J)^-1, nll = r^T W r / 2.
-// offset: a fixed part of the model, mu_i = sum_mask theta_k b_k(tau_i) + offset_i (a term held at
-// a value while the others are fitted: the profile of profile_bounds).
-SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::array<double, 5> start, bool nonneg,
-                     const Eigen::VectorXd* offset = nullptr) {
+SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::array<double, 5> start, bool nonneg) {
   SubsetFit f;
   f.mask = mask;
   const std::vector<int> cols = columns_of(mask);
@@ -268,9 +263,8 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   }
   Eigen::VectorXd th(c);
   for (Eigen::Index j = 0; j < c; ++j) th(j) = start[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];
-  const Eigen::VectorXd off = offset ? *offset : Eigen::VectorXd::Zero(n);
   auto objective = [&](const Eigen::VectorXd& t, Eigen::VectorXd* r) {
-    const Eigen::VectorXd mu = X * t + off;
+    const Eigen::VectorXd mu = X * t;
     if ((mu.array() <= 0).any()) return std::numeric_limits<double>::infinity();
     const Eigen::VectorXd res = ly - mu.array().log().matrix();
     if (r) *r = res;
@@ -281,7 +275,7 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   if (!std::isfinite(F)) return f;
   Eigen::MatrixXd J(n, c);
   for (int it = 0; it < 100; ++it) {
-    const Eigen::VectorXd mu = X * th + off;
+    const Eigen::VectorXd mu = X * th;
     J = mu.cwiseInverse().asDiagonal() * X;  // d ln mu / d theta
     const Eigen::VectorXd scale = J.colwise().norm().transpose();
     if ((scale.array() <= 0).any()) return f;
@@ -302,7 +296,7 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   }
   for (Eigen::Index j = 0; j < c; ++j) f.theta[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = th(j);
   if (nonneg && (th.array() < 0).any()) return f;
-  const Eigen::VectorXd mu = X * th + off;
+  const Eigen::VectorXd mu = X * th;
   J = mu.cwiseInverse().asDiagonal() * X;
   const Eigen::VectorXd scale = J.colwise().norm().transpose();
   const Eigen::MatrixXd Jn = J * scale.cwiseInverse().asDiagonal();
@@ -487,238 +481,6 @@ std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t
   return out;
 }
 
-// Profile of the GLS chi-square F = r^T W r over term k (W fixed): at theta_k = t, the least F
-// over the other terms, non-negative (the least over their subsets' non-negative solutions, as
-// widest_model; the empty subset is term k alone).
-double profile_chi2(const Pts& p, const Eigen::MatrixXd& W, int k, double t, const std::array<double, 5>& start,
-                    Team& team, std::array<double, 5>* argmin = nullptr) {
-  const auto n = static_cast<Eigen::Index>(p.tau.size());
-  Eigen::VectorXd off(n), ly(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto si = static_cast<std::size_t>(i);
-    off(i) = t * noise_basis(k, p.tau[si]);
-    ly(i) = std::log(p.s[si]) - log_bias(p.nu[si]);
-  }
-  double least = std::numeric_limits<double>::infinity();
-  std::array<double, 5> arg{};
-  arg[static_cast<std::size_t>(k)] = t;
-  if ((off.array() > 0).all()) {
-    const Eigen::VectorXd r = ly - off.array().log().matrix();
-    least = r.dot(W * r);
-  }
-  std::array<std::array<double, 5>, 15> ths{};
-  std::array<int, 15> masks{};
-  std::size_t nm = 0;
-  for (int mask = 1; mask < 32; ++mask)
-    if (!(mask & (1 << k))) masks[nm++] = mask;
-  std::array<double, 15> F;
-  F.fill(std::numeric_limits<double>::infinity());
-  team.run(nm, [&](std::size_t i) {
-    std::array<double, 5> s0{};
-    for (int j = 0; j < 5; ++j) {
-      if (!(masks[i] & (1 << j))) continue;
-      // from the fit's value, or (a term it leaves at 0) a start where it is 1 % of the least point
-      double eps = std::numeric_limits<double>::infinity();
-      for (std::size_t q = 0; q < p.tau.size(); ++q) eps = std::min(eps, 0.01 * p.s[q] / noise_basis(j, p.tau[q]));
-      s0[static_cast<std::size_t>(j)] = std::max(start[static_cast<std::size_t>(j)], eps);
-    }
-    const SubsetFit g = gls_subset(p, W, masks[i], s0, true, &off);
-    if (g.ok) F[i] = 2 * g.nll, ths[i] = g.theta;
-  });
-  for (std::size_t i = 0; i < nm; ++i)
-    if (F[i] < least) {
-      least = F[i];
-      arg = ths[i];
-      arg[static_cast<std::size_t>(k)] = t;
-    }
-  if (argmin) *argmin = arg;
-  return least;
-}
-
-// The profile-likelihood interval of theta_k at `confidence` (Wilks 1938: the chi-square's rise
-// over its least, at the profile, is chi2 with one degree of freedom; Venzon & Moolgavkar 1988
-// for finding its ends): every t >= 0 with P(t) <= F_min + z^2. On a short record K (tau) and R
-// (tau^2) are nearly collinear over the fitted taus, and the GLS on ln s is not linear in theta:
-// the interval follows the chi-square along that ridge instead of the Wald parabola at theta-hat.
-struct Interval {
-  double lo = 0, hi = 0;
-  bool excludes_zero = false;
-};
-Interval profile_interval(const Pts& p, const Eigen::MatrixXd& W, const SubsetFit& best, int k, double z, Team& team) {
-  const auto kk = static_cast<std::size_t>(k);
-  const double th = (best.mask & (1 << k)) ? std::max(0.0, best.theta[kk]) : 0.0;
-  auto P = [&](double t) { return profile_chi2(p, W, k, t, best.theta, team); };
-  const double sd = (best.mask & (1 << k)) ? sd_of(best, k) : 0.0;
-  // a scale for a term the fit leaves at 0: 1 % of the least point
-  double scale = std::numeric_limits<double>::infinity();
-  for (std::size_t q = 0; q < p.tau.size(); ++q) scale = std::min(scale, 0.01 * p.s[q] / noise_basis(k, p.tau[q]));
-  // The least chi-square on this objective: the profile's own minimum near theta-hat (the EDF in
-  // p may have been re-evaluated since `best` was fitted), found by golden-section search.
-  double a = 0, b = std::max({2 * th, 4 * sd, scale});
-  {
-    const double g = (std::sqrt(5.0) - 1) / 2;
-    double c = b - g * (b - a), d = a + g * (b - a), Pc = P(c), Pd = P(d);
-    for (int it = 0; it < 30; ++it) {
-      if (Pc <= Pd) b = d, d = c, Pd = Pc, c = b - g * (b - a), Pc = P(c);
-      else a = c, c = d, Pc = Pd, d = a + g * (b - a), Pd = P(d);
-    }
-  }
-  const double t_min = (a + b) / 2;
-  const double F_min = std::min({P(t_min), P(th), P(0)});
-  const double target = F_min + z * z;
-  Interval out;
-  const double F0 = P(0);
-  out.excludes_zero = F0 > target;
-  // Bisection on sqrt(theta) (the value's own scale) to 1e-4 relative.
-  auto solve = [&](double in, double outside) {
-    for (int it = 0; it < 40 && std::abs(std::sqrt(outside) - std::sqrt(in)) > 1e-4 * std::sqrt(std::max(in, outside)); ++it) {
-      const double mid = std::pow((std::sqrt(in) + std::sqrt(outside)) / 2, 2);
-      (P(mid) <= target ? in : outside) = mid;
-    }
-    return in;
-  };
-  out.lo = out.excludes_zero ? solve(t_min, 0) : 0;
-  // Upper end: step out from the minimum until the profile passes the target.
-  double step = std::max({t_min, sd, scale});
-  double in = t_min, outside = t_min + step;
-  for (int it = 0; it < 60 && P(outside) <= target; ++it) in = outside, step *= 2, outside = t_min + step;
-  out.hi = solve(in, outside);
-  return out;
-}
-
-// EXPERIMENT: -2 ln L of the Gaussian on ln s_i whose mean (with the log-chi-square bias) and
-// covariance are the model's at theta (up to a constant): r^T S^-1 r + ln det S.
-double neg2_loglik(Pts p, const std::array<double, 5>& th, std::size_t n_phase, double delta) {
-  const std::size_t n = p.tau.size();
-  p.nu.resize(n);
-  set_model_edf(p, th, n_phase);
-  Eigen::VectorXd r(static_cast<Eigen::Index>(n));
-  for (std::size_t i = 0; i < n; ++i) {
-    double mu = 0;
-    for (int k = 0; k < 5; ++k) mu += th[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
-    if (!(mu > 0)) return std::numeric_limits<double>::infinity();
-    r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu[i]);
-  }
-  const Eigen::MatrixXd S = model_cov(p, th, n_phase, delta);
-  const auto ldlt = S.ldlt();
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0).all()) return std::numeric_limits<double>::infinity();
-  return r.dot(ldlt.solve(r)) + ldlt.vectorD().array().log().sum();
-}
-
-// Nelder-Mead on f over x (standard coefficients), from x0 with initial steps h.
-template <class F>
-double nelder_mead(F f, std::vector<double>& x0, double h, int max_eval) {
-  const std::size_t d = x0.size();
-  if (d == 0) return f(x0);
-  std::vector<std::vector<double>> X(d + 1, x0);
-  std::vector<double> fx(d + 1);
-  for (std::size_t i = 0; i < d; ++i) X[i + 1][i] += h;
-  int ev = 0;
-  for (std::size_t i = 0; i <= d; ++i) fx[i] = f(X[i]), ++ev;
-  while (ev < max_eval) {
-    std::vector<std::size_t> o(d + 1);
-    for (std::size_t i = 0; i <= d; ++i) o[i] = i;
-    std::sort(o.begin(), o.end(), [&](std::size_t a, std::size_t b) { return fx[a] < fx[b]; });
-    const std::size_t bi = o[0], wi = o[d], sw = o[d - 1];
-    if (std::abs(fx[wi] - fx[bi]) < 1e-7 * (1 + std::abs(fx[bi]))) break;
-    std::vector<double> c(d, 0);
-    for (std::size_t i = 0; i <= d; ++i)
-      if (i != wi)
-        for (std::size_t j = 0; j < d; ++j) c[j] += X[i][j] / static_cast<double>(d);
-    auto along = [&](double a) {
-      std::vector<double> y(d);
-      for (std::size_t j = 0; j < d; ++j) y[j] = c[j] + a * (X[wi][j] - c[j]);
-      return y;
-    };
-    std::vector<double> xr = along(-1);
-    const double fr = f(xr);
-    ++ev;
-    if (fr < fx[bi]) {
-      std::vector<double> xe = along(-2);
-      const double fe = f(xe);
-      ++ev;
-      if (fe < fr) X[wi] = xe, fx[wi] = fe;
-      else X[wi] = xr, fx[wi] = fr;
-    } else if (fr < fx[sw]) {
-      X[wi] = xr, fx[wi] = fr;
-    } else {
-      std::vector<double> xc = along(fr < fx[wi] ? -0.5 : 0.5);
-      const double fc = f(xc);
-      ++ev;
-      if (fc < std::min(fr, fx[wi])) {
-        X[wi] = xc, fx[wi] = fc;
-      } else {
-        for (std::size_t i = 0; i <= d; ++i)
-          if (i != bi) {
-            for (std::size_t j = 0; j < d; ++j) X[i][j] = X[bi][j] + 0.5 * (X[i][j] - X[bi][j]);
-            fx[i] = f(X[i]), ++ev;
-          }
-      }
-    }
-  }
-  std::size_t bi = 0;
-  for (std::size_t i = 1; i <= d; ++i)
-    if (fx[i] < fx[bi]) bi = i;
-  x0 = X[bi];
-  return fx[bi];
-}
-
-// The least -2 ln L over the positive components of th other than `fixed` (-1: none), on the log
-// scale (they stay positive; components at 0 stay 0).
-double min_loglik(const Pts& p, std::array<double, 5>& th, int fixed, std::size_t n_phase, double delta) {
-  std::vector<int> idx;
-  std::vector<double> x;
-  for (int k = 0; k < 5; ++k)
-    if (k != fixed && th[static_cast<std::size_t>(k)] > 0) idx.push_back(k), x.push_back(std::log(th[static_cast<std::size_t>(k)]));
-  auto f = [&](const std::vector<double>& u) {
-    std::array<double, 5> t = th;
-    for (std::size_t j = 0; j < idx.size(); ++j) t[static_cast<std::size_t>(idx[j])] = std::exp(u[j]);
-    return neg2_loglik(p, t, n_phase, delta);
-  };
-  double v = nelder_mead(f, x, 0.3, 400);
-  // restart once from the result (Nelder-Mead can stall)
-  v = std::min(v, nelder_mead(f, x, 0.1, 300));
-  for (std::size_t j = 0; j < idx.size(); ++j) th[static_cast<std::size_t>(idx[j])] = std::exp(x[j]);
-  return v;
-}
-
-// The profile-likelihood interval of theta_k on -2 ln L (Wilks; Venzon & Moolgavkar): the other
-// terms at each t from the fixed-W profile's solution, then -2 ln L minimised over them.
-Interval loglik_interval(const Pts& p, const Eigen::MatrixXd& W, const SubsetFit& best, int k, double z, std::size_t n_phase,
-                         double delta, Team& team, double* t_hat_out) {
-  const auto kk = static_cast<std::size_t>(k);
-  auto P = [&](double t) {
-    std::array<double, 5> th{};
-    profile_chi2(p, W, k, t, best.theta, team, &th);
-    return min_loglik(p, th, k, n_phase, delta);
-  };
-  std::array<double, 5> th0 = best.theta;
-  for (double& v : th0) v = std::max(0.0, v);
-  double L_min = min_loglik(p, th0, -1, n_phase, delta);
-  const double t_hat = th0[kk];
-  L_min = std::min(L_min, P(t_hat));
-  if (t_hat_out) *t_hat_out = t_hat;
-  const double sd = (best.mask & (1 << k)) ? sd_of(best, k) : 0.0;
-  double scale = std::numeric_limits<double>::infinity();
-  for (std::size_t q = 0; q < p.tau.size(); ++q) scale = std::min(scale, 0.01 * p.s[q] / noise_basis(k, p.tau[q]));
-  const double target = L_min + z * z;
-  Interval out;
-  out.excludes_zero = P(0) > target;
-  auto solve = [&](double in, double outside) {
-    for (int it = 0; it < 30 && std::abs(std::sqrt(outside) - std::sqrt(in)) > 1e-3 * std::sqrt(std::max(in, outside)); ++it) {
-      const double mid = std::pow((std::sqrt(in) + std::sqrt(outside)) / 2, 2);
-      (P(mid) <= target ? in : outside) = mid;
-    }
-    return in;
-  };
-  out.lo = out.excludes_zero ? solve(t_hat, 0) : 0;
-  double step = std::max({t_hat, sd, scale});
-  double in = t_hat, outside = t_hat + step;
-  for (int it = 0; it < 60 && P(outside) <= target; ++it) in = outside, step *= 2, outside = t_hat + step;
-  out.hi = solve(in, outside);
-  return out;
-}
-
 }  // namespace
 
 std::vector<std::size_t> octave_points(std::span<const DevPoint> oadev) {
@@ -837,29 +599,10 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   // (theta >= z sd). Collinear terms (K and R over tau <= T/4 of a short record) can each be
   // insignificant in the widest model while together they are not: AICc reports the one that
   // carries the rise. The others are null with the interval's upper end as their upper limit.
-  // EXPERIMENT (not to be committed): RIG_PROFILE_EXP = letters: R (R only) or A (every term);
-  // u union with the Wald interval; n nulls' upper limits; s report when the profile interval excludes 0.
-  const char* ex = std::getenv("RIG_PROFILE_EXP");
-  const std::string exp = ex ? ex : "";
-  auto profiled = [&](int k) { return exp.find('A') != std::string::npos || (k == 4 && exp.find('R') != std::string::npos); };
-  std::array<Interval, 5> prof{};
-  for (int k = 0; k < 5; ++k)
-    if (profiled(k))
-      prof[static_cast<std::size_t>(k)] = exp.find('L') != std::string::npos
-                                               ? loglik_interval(p, W, best, k, z, n_phase, sel.delta, team, nullptr)
-                                               : profile_interval(p, W, best, k, z, team);
-  if (std::getenv("RIG_PROFILE_DBG") && profiled(4)) {
-    const double th = best.theta[4], sd = (best.mask & 16) ? sd_of(best, 4) : 0;
-    std::fprintf(stderr, "DBG R: th %.4g sd %.4g wald [%.4g, %.4g] prof [%.4g, %.4g] ex0 %d best %d sel %d K %.4g nplaus\n",
-                 std::sqrt(std::max(0.0, th)), sd, std::sqrt(std::max(0.0, th - z * sd)), std::sqrt(th + z * sd),
-                 std::sqrt(prof[4].lo), std::sqrt(prof[4].hi), prof[4].excludes_zero, best.mask, sel.best.mask,
-                 std::sqrt(std::max(0.0, best.theta[3])));
-  }
   int report = 0;
   for (int k = 0; k < 5; ++k) {
     const double th = best.theta[static_cast<std::size_t>(k)];
     if ((best.mask & (1 << k)) && th > 0 && ((sel.best.mask & (1 << k)) || th >= z * sd_of(best, k))) report |= 1 << k;
-    if ((best.mask & (1 << k)) && th > 0 && profiled(k) && exp.find('s') != std::string::npos && prof[static_cast<std::size_t>(k)].excludes_zero) report |= 1 << k;
   }
   const std::vector<SubsetFit> plausible = plausible_models(p, sel, n_phase, team);
   out.aicc = sel.aicc;
@@ -878,11 +621,6 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
       out.value[kk] = std::sqrt(th);
       out.lo[kk] = std::sqrt(std::max(0.0, th - z * sd));
       out.hi[kk] = out.upper[kk] = std::sqrt(th + z * sd);
-      if (profiled(k)) {
-        const bool uni = exp.find('u') != std::string::npos;
-        out.lo[kk] = uni ? std::min(out.lo[kk], std::sqrt(prof[kk].lo)) : std::sqrt(prof[kk].lo);
-        out.hi[kk] = out.upper[kk] = uni ? std::max(out.hi[kk], std::sqrt(prof[kk].hi)) : std::sqrt(prof[kk].hi);
-      }
       // The data do not choose between the widest model and the AICc model (their chi-squares
       // differ by less than the terms' penalty): the bounds hold over both. A term the AICc
       // model does without has 0 as its lower bound; one it has, the wider of the two intervals.
@@ -924,8 +662,6 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
         out.upper[kk] = std::sqrt(u);
       }
     }
-    if (!out.in_model[kk] && profiled(k) && exp.find('n') != std::string::npos)
-      out.upper[kk] = std::max(out.upper[kk], std::sqrt(prof[kk].hi));
     if (!out.in_model[kk])  // a null's upper limit holds over the plausible models too
       for (const SubsetFit& f : plausible)
         if ((f.mask & (1 << k)) && f.theta[kk] > 0)
