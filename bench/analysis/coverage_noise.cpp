@@ -1,10 +1,12 @@
 // Coverage of the noise-term bounds over injected-noise records (tests/analysis/injected_noise.hpp):
-//   coverage_noise [SEEDS=20] [BASE_SEED=12000] [--ci] [--set NAME] [--covariance]
+//   coverage_noise [SEEDS=20] [BASE_SEED=12000] [--ci] [--set NAME] [--covariance] [--records FILE]
 // prints the Markdown coverage table of docs/analysis.md. Full size: 1 h at 1 kHz, 6 h at
 // 100 Hz, 60 h at 10 Hz (about 5 min on the 2-core rig PC for 20 seeds); --ci: the test's
 // rates (10x lower). --covariance (with --set): instead of the coverage, what the noise fit
 // assumes of its points (the mean and covariance of ln s_i at the true terms, model_log_scatter)
-// against what SEEDS records of the set show.
+// against what SEEDS records of the set show. --records FILE: also every record's reported terms,
+// one line per record and term (set, seed, term, truth, value, lo, hi; tab-separated), to take a
+// cell apart (which records miss, on which side, nulls' upper limits).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -45,10 +47,12 @@ int main(int argc, char** argv) {
   int pos = 0;
   bool covariance = false;
   std::string only;  // --set NAME: that parameter set alone (e.g. "R 6h")
+  const char* records = nullptr;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--ci")) ci = true;
     else if (!std::strcmp(argv[i], "--covariance")) covariance = true;
     else if (!std::strcmp(argv[i], "--set") && i + 1 < argc) only = argv[++i];
+    else if (!std::strcmp(argv[i], "--records") && i + 1 < argc) records = argv[++i];
     else if (pos++ == 0) seeds = std::atoi(argv[i]);
     else base = std::strtoull(argv[i], nullptr, 10);
   }
@@ -74,7 +78,13 @@ int main(int argc, char** argv) {
     std::fputs(covariance_table(chosen.front(), seeds, base).c_str(), stdout);
     return 0;
   }
-  const auto cells = run_coverage(chosen, seeds, base, true);
+  std::FILE* rec = nullptr;
+  if (records && !(rec = std::fopen(records, "w"))) {
+    std::fprintf(stderr, "coverage_noise: cannot write %s\n", records);
+    return 2;
+  }
+  const auto cells = run_coverage(chosen, seeds, base, true, rec);
+  if (rec) std::fclose(rec);
   std::printf("%d seeds per set from %llu%s\n\n%s", seeds, base, ci ? " (CI rates)" : "", coverage_table(cells).c_str());
   // Pooled as docs/analysis.md states it: over the model's terms Q, N, B(model), K, R; dominant
   // cells' bounds holding, injected non-dominant cells' upper limits holding, values > 3x off

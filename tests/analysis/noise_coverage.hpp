@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -96,8 +97,10 @@ inline void score(Cell& c, const Term& t, double truth) {
 }
 
 // Runs `seeds` seeds of each set (seed = base + 1000 * set index + i) and returns the cells.
+// per_record (bench): one line per record and term, "set<TAB>seed<TAB>term<TAB>truth<TAB>value<TAB>
+// lo<TAB>hi" (a null's value and lo "-", its hi the upper limit or "-"), to take a cell apart.
 inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, std::uint64_t base,
-                                      bool progress = false) {
+                                      bool progress = false, std::FILE* per_record = nullptr) {
   std::vector<Cell> cells;
   for (std::size_t si = 0; si < sets.size(); ++si) {
     const Set& s = sets[si];
@@ -123,6 +126,17 @@ inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, s
           sc.push_back(c);
         }
       for (std::size_t j = 0; j < rep.size(); ++j) score(sc[j], rep[j].t, s.truth.at(rep[j].k));
+      if (per_record)
+        for (const auto& r : rep) {
+          auto num = [](const std::optional<double>& v) {
+            char b[32] = "-";
+            if (v) std::snprintf(b, sizeof b, "%.6g", *v);
+            return std::string(b);
+          };
+          std::fprintf(per_record, "%s\t%llu\t%s\t%.6g\t%s\t%s\t%s\n", s.name.c_str(),
+                       static_cast<unsigned long long>(base + 1000 * si + static_cast<std::uint64_t>(i)), r.name,
+                       s.truth.at(r.k), num(r.t.value).c_str(), num(r.t.lo).c_str(), num(r.t.hi).c_str());
+        }
       if (progress) std::fprintf(stderr, "\r%s seed %d/%d   ", s.name.c_str(), i + 1, seeds);
     }
     cells.insert(cells.end(), sc.begin(), sc.end());
