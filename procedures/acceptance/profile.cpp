@@ -127,14 +127,13 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     if (const toml::node* n = a->get("taus")) try {
         analysis::parse_tau_grid(p.taus);
       } catch (const std::invalid_argument& e) {
-        throw ConfigError(cfg::where(*n) + ": 'taus' = \"" + p.taus + "\": " + e.what());
+        cfg::reject(*n, "taus", e.what());
       }
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
     p.b_allan = cfg::get_string(*a, "b_allan", p.b_allan);
     if (p.b_allan != "paper" && p.b_allan != "lsq")
-      throw ConfigError(cfg::where(*a->get("b_allan")) + ": 'b_allan' = \"" + p.b_allan +
-                        "\": must be \"paper\" or \"lsq\"");
+      cfg::reject(*a->get("b_allan"), "b_allan", "must be \"paper\" or \"lsq\"");
   }
   // The measurement names (docs/profiles.md); GOST B is named by its block length.
   std::vector<std::string> known = {"bias", "base_error", "in_run_b_allan", "tau_cp", "q", "n", "k", "r",

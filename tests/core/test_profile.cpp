@@ -123,7 +123,7 @@ TEST(Profile, BAllanSaysWhichBThePassportLimits) {
   const auto prof = load_profile(write_tmp("lsq.toml", "base = \"ci\"\n[analysis]\nb_allan = \"lsq\"\n"));
   EXPECT_EQ(prof.b_allan, "lsq");
   const std::string gmwm = write_tmp("gmwm.toml", "base = \"ci\"\n[analysis]\nb_allan = \"gmwm\"\n");
-  EXPECT_EQ(error_of(gmwm), gmwm + ":3:11: 'b_allan' = \"gmwm\": must be \"paper\" or \"lsq\"");
+  EXPECT_EQ(error_of(gmwm), gmwm + ":3:11: 'b_allan' = 'gmwm': must be \"paper\" or \"lsq\"");
   EXPECT_NE(error_of(write_tmp("bad.toml", "base = \"ci\"\n[analysis]\nb_allan = \"gmwm\"\n")).find("b_allan"),
             std::string::npos);
 }
