@@ -4,9 +4,12 @@
 // every test of the process passed, the folder goes; a failure keeps it and names it on stderr
 // for the post-mortem. Without this a suite run left about 460 MB in /tmp (the paper campaign
 // alone 235 MB), and CI's sanitizer pass, the second suite run on one disk, ran out of space.
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -24,21 +27,31 @@ class PrivateTmp final : public ::testing::Environment {
     if (ec) return;
     std::string dir = (parent / "rig-test-XXXXXX").string();
     if (::mkdtemp(dir.data()) == nullptr) return;  // keep the inherited TMPDIR
+    // 0711, not mkdtemp's 0700: as root, the PostgreSQL tests run initdb as `nobody` in a
+    // folder below this one (tests/report/pg_server.hpp), and nobody must pass through.
+    ::chmod(dir.c_str(), 0711);
+    if (const char* old = std::getenv("TMPDIR")) inherited_ = old;
     root_ = dir;
     ::setenv("TMPDIR", root_.c_str(), 1);
+    // Named now too: a crash, an ASan abort or a ctest timeout never reaches TearDown, and
+    // ctest shows this output only for a test that failed.
+    std::fprintf(stderr, "private_tmp: TMPDIR=%s\n", root_.c_str());
   }
   void TearDown() override {
     if (root_.empty()) return;
-    if (::testing::UnitTest::GetInstance()->Passed()) {
-      std::error_code ec;
-      std::filesystem::remove_all(root_, ec);
-    } else {
+    if (inherited_) ::setenv("TMPDIR", inherited_->c_str(), 1);
+    else ::unsetenv("TMPDIR");
+    std::error_code ec;
+    if (::testing::UnitTest::GetInstance()->Passed()) std::filesystem::remove_all(root_, ec);
+    if (!::testing::UnitTest::GetInstance()->Passed() || ec)
       std::fprintf(stderr, "private_tmp: this process's files are kept in %s\n", root_.c_str());
-    }
+    root_.clear();
+    inherited_.reset();
   }
 
  private:
   std::string root_;
+  std::optional<std::string> inherited_;
 };
 
 // gtest owns and deletes the environment.

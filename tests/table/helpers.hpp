@@ -107,8 +107,9 @@ inline int run(const std::string& cmd, std::string& out) {
 class PtyPair {
  public:
   PtyPair() {
-    char tmpl[] = "/tmp/rig-table-pty-XXXXXX";
-    dir_ = mkdtemp(tmpl);
+    std::string tmpl = (std::filesystem::temp_directory_path() / "rig-table-pty-XXXXXX").string();
+    if (mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("mkdtemp for the pty pair failed");
+    dir_ = tmpl;
     a_ = dir_ + "/a";
     b_ = dir_ + "/b";
     socat_ = std::make_unique<Child>(std::vector<std::string>{
