@@ -32,6 +32,7 @@
 #include "rig/report/svg_plot.hpp"
 #include "rig/capture/capture.hpp"
 #include "app/commands.hpp"
+#include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::cli {
@@ -167,10 +168,13 @@ int run(const Args& a) {
   if (a.taus.rfind("m:", 0) == 0) {
     const std::string items = a.taus.substr(2);
     std::stringstream list(items + ",");  // a trailing ',' is an empty item too
+    // At most 12 digits' worth, as before: no record this program reads has a term there.
+    constexpr std::uint64_t largest_factor = 999'999'999'999;
     for (std::string m; std::getline(list, m, ',');) {
-      if (m.empty() || m.size() > 12 || m.find_first_not_of("0123456789") != std::string::npos || std::stoull(m) == 0)
+      const auto factor = whole_number(m, 1, largest_factor);
+      if (!factor)
         throw ConfigError("rig analyze: --taus '" + a.taus + "': '" + m + "' is not an averaging factor (m:1,2,5: whole numbers >= 1)");
-      listed.push_back(static_cast<std::size_t>(std::stoull(m)));
+      listed.push_back(static_cast<std::size_t>(*factor));
     }
     if (listed.empty()) throw ConfigError("rig analyze: --taus '" + a.taus + "': no averaging factor (m:1,2,5)");
     std::sort(listed.begin(), listed.end());

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -31,6 +32,7 @@
 #include "app/backends.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
+#include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/executive/passport.hpp"
@@ -100,12 +102,11 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
     return v;
   };
   auto count = [](const std::string& s, const std::string& text, std::uint32_t least) {
-    std::uint32_t v = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size() || v < least)
+    const auto v = whole_number(text, least, std::numeric_limits<std::uint32_t>::max());
+    if (!v)
       throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number >= " + std::to_string(least) +
                         " (drop@SEQ:COUNT)");
-    return v;
+    return static_cast<std::uint32_t>(*v);
   };
   std::vector<Injection> out;
   for (const std::string& s : inj) {

@@ -439,7 +439,8 @@ TEST(RigCli, AnalyzeNbs14TenPointsEveryDeviationAtTheListedFactors) {
   EXPECT_EQ(five["hdev"].size(), 2u);
   EXPECT_NE(five["notes"].dump().find("hdev: factor(s) 5 of --taus m:1,2,5 left out"), std::string::npos)
       << five["notes"].dump();
-  for (const char* bad : {"m:", "m:0", "m:1,x", "m:-2", "m:1,2,", "m:1,,2"}) {
+  for (const char* bad : {"m:", "m:0", "m:1,x", "m:-2", "m:1,2,", "m:1,,2", "m:+1", "m:1, 2", "m:0x10",
+                          "m:1000000000000", "m:18446744073709551616"}) {
     EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", bad}, d + "/bad"), 2) << bad;
     EXPECT_NE(slurp(d + "/bad.stderr").find(std::string("--taus '") + bad + "'"), std::string::npos) << slurp(d + "/bad.stderr");
   }
@@ -698,7 +699,8 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
   fs::create_directories(d);
   int i = 0;
   for (const char* bad : {"foo@bar", "estop", "estop@10x", "estop@-1", "sigint@nan", "sigkill@end", "drop@5",
-                          "drop@5:x", "drop@-1:2", "estop@ 5", "estop@0x10", "estop@+5", "drop@5:0"}) {
+                          "drop@5:x", "drop@-1:2", "estop@ 5", "estop@0x10", "estop@+5", "drop@5:0", "drop@+5:1",
+                          "drop@0x5:1", "drop@4294967296:1", "drop@5:18446744073709551616"}) {
     const std::string io = d + "/io" + std::to_string(i++);
     EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", bad}, io), 2) << bad;
     EXPECT_NE(slurp(io + ".stderr").find(std::string("--inject '") + bad + "'"), std::string::npos)

@@ -1,0 +1,26 @@
+// The one reader of a whole number typed on the command line (--taus m:LIST, --inject drop@SEQ:COUNT):
+// the callers keep their own messages, this says only whether the text is one.
+#pragma once
+#include <charconv>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string_view>
+#include <system_error>
+
+namespace rig::cli {
+
+// The whole text as a decimal whole number in [least, most], or nothing. std::from_chars on an
+// unsigned type takes digits only: no blank, no sign ('+' or '-'), no "0x"; a value past
+// uint64 is out of range, not wrapped; leading zeros are digits like any other.
+inline std::optional<std::uint64_t> whole_number(std::string_view text, std::uint64_t least,
+                                                 std::uint64_t most = std::numeric_limits<std::uint64_t>::max()) {
+  if (text.empty()) return std::nullopt;
+  std::uint64_t v = 0;
+  const char* const end = text.data() + text.size();
+  const auto [stop, ec] = std::from_chars(text.data(), end, v);
+  if (ec != std::errc() || stop != end || v < least || v > most) return std::nullopt;
+  return v;
+}
+
+}  // namespace rig::cli
