@@ -83,20 +83,40 @@ double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_p
 
 namespace {
 
+// random_term_factors at each of the factors m on a record of n_phase points.
+std::vector<std::array<double, 4>> factors_at(const std::vector<std::size_t>& m, std::size_t n_phase) {
+  std::vector<std::array<double, 4>> out(m.size());
+  for (std::size_t i = 0; i < m.size(); ++i) out[i] = random_term_factors(m[i], n_phase);
+  return out;
+}
+
+// The Allan points a fit reads. The points and their factors are fixed when built, so factors
+// always belong to m (built here from m, or sliced with it by tail); the fit sets nu alone.
 struct Pts {
-  std::vector<double> tau, s, nu;  // tau, measured sigma^2, EDF in use
-  std::vector<std::size_t> m;
+  Pts(std::vector<double> tau_s, std::vector<double> sigma2, std::vector<std::size_t> factor_m, std::size_t n_phase)
+      : tau(std::move(tau_s)), s(std::move(sigma2)), m(std::move(factor_m)), factors(factors_at(m, n_phase)),
+        nu(tau.size()) {}
+
+  // Points from..end, each with its factors.
+  Pts tail(std::size_t from) const {
+    const auto at = static_cast<std::ptrdiff_t>(from);
+    return Pts({tau.begin() + at, tau.end()}, {s.begin() + at, s.end()}, {m.begin() + at, m.end()},
+               {factors.begin() + at, factors.end()});
+  }
+
+  const std::vector<double> tau, s;  // tau, measured sigma^2
+  const std::vector<std::size_t> m;
   // random_term_factors at each point: they depend on (m, n_phase) alone, while the fit evaluates
   // the model's EDF and covariance some thousand times (each a Greenhall sum per term: a fifth
   // of the fit's instructions before they were kept here).
-  std::vector<std::array<double, 4>> factors;
-};
+  const std::vector<std::array<double, 4>> factors;
+  std::vector<double> nu;  // EDF in use, one per point
 
-// Pts::factors for the points' m on a record of n_phase points.
-void set_factors(Pts& p, std::size_t n_phase) {
-  p.factors.resize(p.m.size());
-  for (std::size_t i = 0; i < p.m.size(); ++i) p.factors[i] = random_term_factors(p.m[i], n_phase);
-}
+ private:
+  Pts(std::vector<double> tau_s, std::vector<double> sigma2, std::vector<std::size_t> factor_m,
+      std::vector<std::array<double, 4>> kept)
+      : tau(std::move(tau_s)), s(std::move(sigma2)), m(std::move(factor_m)), factors(std::move(kept)), nu(tau.size()) {}
+};
 
 struct SubsetFit {
   bool ok = false;
@@ -408,7 +428,6 @@ void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_pha
 Selection select_model(Pts p, std::size_t n_phase, bool allow_error, Team& team) {
   Selection out;
   const std::size_t n = p.tau.size();
-  p.nu.resize(n);
   for (std::size_t i = 0; i < n; ++i) p.nu[i] = edf_greenhall(0, 2, p.m[i], n_phase, true, false);  // start: white FM
   // Start: the best subset with independent chi-square points (Gamma likelihood).
   SubsetFit best;
@@ -487,15 +506,6 @@ SubsetFit widest_model(Pts& p, std::size_t n_phase, double delta, std::array<dou
   return f;
 }
 
-Pts tail_of(const Pts& p, std::size_t from) {
-  Pts q;
-  q.tau.assign(p.tau.begin() + static_cast<std::ptrdiff_t>(from), p.tau.end());
-  q.s.assign(p.s.begin() + static_cast<std::ptrdiff_t>(from), p.s.end());
-  q.m.assign(p.m.begin() + static_cast<std::ptrdiff_t>(from), p.m.end());
-  q.factors.assign(p.factors.begin() + static_cast<std::ptrdiff_t>(from), p.factors.end());
-  return q;
-}
-
 // Models the data support about as well as the selected one: every non-negative subset whose
 // AICc is within kPlausibleAicc of the least, on the covariance the selected model implies
 // (Burnham & Anderson 2002, section 2.6: Delta_i <= 2 has substantial support). Collinear terms
@@ -504,7 +514,6 @@ Pts tail_of(const Pts& p, std::size_t from) {
 constexpr double kPlausibleAicc = 2.0;
 
 std::vector<SubsetFit> plausible_models(Pts p, const Selection& sel, std::size_t n_phase, Team& team) {
-  p.nu.resize(p.tau.size());
   set_model_edf(p, sel.best.theta, n_phase);
   const Eigen::MatrixXd W = model_cov(p, sel.best.theta, n_phase, sel.delta).inverse();
   auto fits = gls_every_subset(p, W, team);
@@ -541,12 +550,7 @@ std::vector<std::size_t> octave_points(std::span<const DevPoint> oadev) {
 
 LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std::size_t> m,
                              const std::array<double, 5>& theta, std::size_t n_phase) {
-  Pts p;
-  p.tau.assign(tau_s.begin(), tau_s.end());
-  p.m.assign(m.begin(), m.end());
-  p.s.assign(p.tau.size(), 1);
-  p.nu.resize(p.tau.size());
-  set_factors(p, n_phase);
+  Pts p({tau_s.begin(), tau_s.end()}, std::vector<double>(tau_s.size(), 1), {m.begin(), m.end()}, n_phase);
   set_model_edf(p, theta, n_phase);
   LogScatter out;
   for (const double nu : p.nu) out.bias.push_back(log_bias(nu));
@@ -557,20 +561,21 @@ LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std:
 
 NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
   NoiseModelFit out;
-  Pts all;
+  std::vector<double> tau, s;
+  std::vector<std::size_t> m;
   for (const std::size_t i : octave_points(oadev)) {
-    all.tau.push_back(oadev[i].tau_s);
-    all.s.push_back(oadev[i].dev * oadev[i].dev);
-    all.m.push_back(oadev[i].m);
+    tau.push_back(oadev[i].tau_s);
+    s.push_back(oadev[i].dev * oadev[i].dev);
+    m.push_back(oadev[i].m);
   }
-  const std::size_t n_all = all.tau.size();
+  const std::size_t n_all = tau.size();
   if (n_all < 3) {  // AICc needs n - k - 1 > 0 for one term
     out.reason = "fewer than 3 octave Allan points";
     return out;
   }
-  const double tau0 = all.tau.front() / static_cast<double>(all.m.front());
+  const double tau0 = tau.front() / static_cast<double>(m.front());
   const auto n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
-  set_factors(all, n_phase);
+  const Pts all(std::move(tau), std::move(s), std::move(m), n_phase);
 
   // The tau range where the IEEE 952 model is adequate (docs/analysis.md "Goodness of fit"): the
   // model is selected on the octave points from the shortest tau on; when its chi-square on the
@@ -588,22 +593,21 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   std::size_t from = 0;
   const std::size_t last_from = n_all > kMinGofPoints ? n_all - kMinGofPoints : 0;
   for (;; ++from) {
-    sel = select_model(tail_of(all, from), n_phase, false, team);
+    sel = select_model(all.tail(from), n_phase, false, team);
     if ((sel.ok && sel.p_value >= kGofAlpha) || from >= last_from) break;
   }
   out.gof_p = sel.ok ? sel.p_value : 0;
   out.dropped_short = from;
   if (sel.ok && sel.p_value < kGofAlpha) {
-    sel = select_model(tail_of(all, from), n_phase, true, team);
+    sel = select_model(all.tail(from), n_phase, true, team);
     out.model_error = sel.delta;
   }
   if (!sel.ok) {
     out.reason = sel.reason;
     return out;
   }
-  Pts p = tail_of(all, from);
+  Pts p = all.tail(from);
   const std::size_t n = p.tau.size();
-  p.nu.resize(n);
   const double z = boost::math::quantile(boost::math::normal(), (1 + confidence) / 2);
   // The terms: the widest non-negative model on the tau range (not the AICc model, whose left-out
   // terms land in their neighbours: R on 6 h read 1.6x with K left out, covered 15 %).
