@@ -42,8 +42,9 @@ class PrivateTmp final : public ::testing::Environment {
     if (inherited_) ::setenv("TMPDIR", inherited_->c_str(), 1);
     else ::unsetenv("TMPDIR");
     std::error_code ec;
-    if (::testing::UnitTest::GetInstance()->Passed()) std::filesystem::remove_all(root_, ec);
-    if (!::testing::UnitTest::GetInstance()->Passed() || ec)
+    const bool passed = ::testing::UnitTest::GetInstance()->Passed();
+    if (passed) std::filesystem::remove_all(root_, ec);
+    if (!passed || ec)
       std::fprintf(stderr, "private_tmp: this process's files are kept in %s\n", root_.c_str());
     root_.clear();
     inherited_.reset();
