@@ -15,6 +15,7 @@
 
 #include <toml++/toml.h>
 
+#include "rig/core/table.hpp"
 #include "rig/modbus/registers.hpp"
 
 namespace rig::plant {
@@ -22,14 +23,14 @@ namespace rig::plant {
 using rig::modbus::SimFault;
 
 struct TableParams {
-  double velocity_dps = 30.0;            // profile velocity at power-on
-  double accel_dps2 = 60.0;              // profile acceleration = deceleration
+  double velocity_dps = rig::table_defaults::kVelocityDps;  // profile velocity at power-on
+  double accel_dps2 = rig::table_defaults::kAccelDps2;      // profile acceleration = deceleration
   double home_velocity_dps = 20.0;
   double quick_stop_dps2 = 600.0;        // quick-stop ramp
   double max_velocity_dps = 360.0;       // writes above are refused (exception 03)
   double max_accel_dps2 = 3600.0;
   double in_position_window_deg = 0.001;
-  double settle_s = 0.1;                 // drive's in-position settle time
+  double settle_s = rig::table_defaults::kDriveSettleS;     // drive's in-position settle time
   double servo_bandwidth_hz = 8.0;       // natural frequency of the position loop
   double damping = 0.8;
   double following_error_limit_deg = 2.0;

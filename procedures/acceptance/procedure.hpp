@@ -13,6 +13,7 @@
 
 #include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/state.hpp"
+#include "rig/core/table.hpp"
 #include "rig/executive/executive.hpp"
 
 namespace rig::acceptance {
@@ -24,14 +25,15 @@ struct RunOptions {
 // What the table's moves cost in device time, for the phases' planned durations (the dry-run
 // estimate, the progress ETA). The defaults are the emulated drive's power-on profile and
 // settle time (docs/table-registers.md, [plant.table]) and the table client's defaults (the
-// hardware file's [table] settle_s, poll_s): a hardware file or [plant.table] that sets
-// others makes the plan that much off unless the caller passes them.
+// hardware file's [table] settle_s, poll_s), both from rig/core/table.hpp's table_defaults: a
+// hardware file or [plant.table] that sets others makes the plan that much off unless the
+// caller passes them.
 struct TableTiming {
-  double velocity_dps = 30.0;
-  double accel_dps2 = 60.0;
-  double drive_settle_s = 0.1;  // the drive's in-position settle
-  double settle_s = 0.5;        // the client's: in position held this long
-  double poll_s = 0.05;         // the client's status polling: the wait ends on a poll
+  double velocity_dps = table_defaults::kVelocityDps;
+  double accel_dps2 = table_defaults::kAccelDps2;
+  double drive_settle_s = table_defaults::kDriveSettleS;  // the drive's in-position settle
+  double settle_s = table_defaults::kClientSettleS;       // the client's: in position held this long
+  double poll_s = table_defaults::kClientPollS;           // the client's status polling: the wait ends on a poll
   double home_deg = 0.0;        // homing leaves the table here (ACTUAL_POS becomes 0)
   // A move_to from `from_deg` to `to_deg`: the trapezoid, both settle times and the last poll
   // (a move to where the table already is costs the settle times alone).

@@ -38,6 +38,19 @@ inline double trapezoid_time(double dist, double v, double a) {
   return 2.0 * std::sqrt(dist / a);
 }
 
+// The table's timing where nothing sets it, in the one place the three that use it may all
+// include (they may not include each other, docs/architecture.md): the Modbus client's own
+// (rig::modbus::TableOptions), the emulated drive's power-on profile (rig::plant::TableParams,
+// docs/table-registers.md) and the procedure's plan, which costs each move with both
+// (rig::acceptance::TableTiming) unless the hardware file or [plant.table] says otherwise.
+namespace table_defaults {
+inline constexpr double kVelocityDps = 30.0;   // the drive's profile velocity at power-on
+inline constexpr double kAccelDps2 = 60.0;     // its profile acceleration = deceleration
+inline constexpr double kDriveSettleS = 0.1;   // its in-position settle time
+inline constexpr double kClientSettleS = 0.5;  // the client's: in position held this long
+inline constexpr double kClientPollS = 0.05;   // the client's status polling period while waiting
+}  // namespace table_defaults
+
 // Every call is bounded in time; failures throw HardwareError naming what the
 // table was doing; a requested cancel throws AbortedError after a stop command.
 class RotaryTable {

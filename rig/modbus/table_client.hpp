@@ -20,8 +20,8 @@ namespace rig::modbus {
 
 struct TableOptions {
   double tolerance_deg = 0.01;     // |actual - commanded| accepted after the settle time
-  double settle_s = 0.5;           // in position held continuously this long (client side)
-  double poll_s = 0.05;            // status polling period while waiting
+  double settle_s = table_defaults::kClientSettleS;  // in position held continuously this long (client side)
+  double poll_s = table_defaults::kClientPollS;      // status polling period while waiting
   double move_timeout_s = 0.0;     // 0 = from the drive's profile: 2 x trapezoid time + settle + 10 s
   double home_timeout_s = 180.0;
   double ack_timeout_s = 1.0;      // a start/home command must be acknowledged within this

@@ -14,12 +14,35 @@
 
 #include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
+#include "plant/table/table_emulator.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/toml_util.hpp"
+#include "rig/modbus/table_client.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig;
+
+// The plan's default timing is the emulated drive's power-on profile and the table client's own
+// (rig/core/table.hpp's table_defaults, which all three take: procedures/ includes neither).
+TEST(Plan, DefaultTableTimingIsTheEmulatedDrivesAndTheClients) {
+  const acceptance::TableTiming plan;
+  const plant::TableParams drive;
+  const modbus::TableOptions client;
+  EXPECT_EQ(plan.velocity_dps, drive.velocity_dps);
+  EXPECT_EQ(plan.accel_dps2, drive.accel_dps2);
+  EXPECT_EQ(plan.drive_settle_s, drive.settle_s);
+  EXPECT_EQ(plan.settle_s, client.settle_s);
+  EXPECT_EQ(plan.poll_s, client.poll_s);
+  // What [plant.table] and the hardware file's [table] read when they set nothing.
+  const plant::TableParams read_drive = plant::table_params_from_toml(nullptr);
+  EXPECT_EQ(plan.velocity_dps, read_drive.velocity_dps);
+  EXPECT_EQ(plan.accel_dps2, read_drive.accel_dps2);
+  EXPECT_EQ(plan.drive_settle_s, read_drive.settle_s);
+  const modbus::TableOptions read_client = modbus::table_options_from_toml(toml::table{});
+  EXPECT_EQ(plan.settle_s, read_client.settle_s);
+  EXPECT_EQ(plan.poll_s, read_client.poll_s);
+}
 
 TEST(Plan, EachDevicePhaseTakesItsPlannedDeviceTime) {
   std::string source;
