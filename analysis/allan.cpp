@@ -1,6 +1,8 @@
 // Deviation values, noise identification and bounds from the engine's raw sums.
 #include "analysis/allan.hpp"
 
+#include "analysis/drift.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -139,6 +141,8 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
   poll();
   detail::Engine engine(src, kind, opts[0].rate_hz, so_polled, opts[0].threads, kNoiseIdCap);
   const detail::EngineResult er = engine.run(req);
+  // The phase's frequency values are one fewer than its points (phase data: their differences).
+  if (so.drift) *so.drift = drift_from_phase_sums(n - 1, er.phase_last, er.phase_sum, 1 / opts[0].rate_hz);
 
   // Mod AVAR at m for R(n), only where B1 cannot tell white from flicker PM.
   std::map<std::size_t, double> mvar_cache;

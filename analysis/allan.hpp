@@ -14,6 +14,7 @@
 #include <vector>
 
 namespace rig::analysis {
+struct Drift;  // drift.hpp
 
 enum class DataKind { Frequency, Phase };
 enum class Deviation { ADEV, OADEV, MDEV, TDEV, HDEV, OHDEV, TOTDEV };
@@ -144,6 +145,9 @@ struct StreamOptions {
   std::size_t memory_budget_bytes = 384u << 20;  // ring of phase points + per-tau state
   std::size_t chunk = 1u << 14;                  // phase points per processing step (L2-sized windows)
   std::function<void()> poll;                    // as DevOptions::poll (deviations_stream takes the options')
+  // When set, deviations_stream also writes the record's least-squares drift there (drift.hpp),
+  // from sums its pass keeps (no pass of its own).
+  Drift* drift = nullptr;
 };
 
 // Streams the source once sequentially (plus random-access cursors for the few factors

@@ -79,6 +79,9 @@ struct EngineResult {
   // the engine's ring when it holds the record: valid while the Engine lives.
   std::map<std::size_t, Decimated> decimated;
   std::size_t ring_points = 0, far_count = 0;
+  // The sum of P[0 .. n-1] over the pass and P[n-1]: the record's drift (drift.hpp) at no pass of
+  // its own. The sum is the same on one thread or two only to rounding (it is added per part).
+  double phase_sum = 0, phase_last = 0;
 };
 
 // One analysis of one source: run() makes the pass; extra() afterwards computes one more

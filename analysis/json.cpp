@@ -54,6 +54,12 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   j["sigma_cp"] = num(t.sigma_cp);
   j["K"] = term(t.K, an::k_per_hour, "g/h^0.5");
   j["R"] = term(t.R, an::r_per_hour, "g/h");
+  // R's reading from the record's drift (noise_terms.hpp DriftReading), SI units; absent when R
+  // is the Allan model's (no record behind the points).
+  if (t.drift)
+    j["drift"] = {{"slope_g_per_s", t.drift->slope}, {"sd_g_per_s", t.drift->sd},
+                  {"edf", std::isfinite(t.drift->edf) ? json(t.drift->edf) : json(nullptr)},
+                  {"quantile", t.drift->quantile}};
   // The paper's method: log10 sigma = sum_k poly[k] (log10 tau)^k, split at its inflections.
   json paper{{"ok", t.paper.ok}, {"degree", t.paper.degree}, {"poly", t.paper.coef},
              {"inflection_tau_s", t.paper.inflection_tau_s}, {"segments", json::array()}};

@@ -2,6 +2,9 @@
 
 #include "analysis/edf.hpp"
 
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -195,20 +198,80 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
   b.reason += r.str();
 }
 
+// R from the record's drift (docs/analysis.md "R from the record's drift"). A rate ramp is a
+// deterministic slope of the output; the least-squares slope of the record estimates it without
+// bias, and the noise scatters it by sd (drift.hpp: each term's share at the model's value, a term
+// the model leaves out at its upper limit, which the data cannot exclude). On the Allan curve R
+// and K are nearly collinear up to T/4 (the random walk's realisation rises like a ramp), and
+// bounds from the curve held the truth on 50 % of 6-h records at 68.3 %; the slope's scatter is
+// that realisation's, in closed form (coverage measured in docs/analysis.md).
+// sd^2 is estimated: its EDF is Welch-Satterthwaite's over the model terms' EDFs (a term in the
+// model with theta / sd(theta) = z has EDF 2 z^2; one at its upper limit counts as known), and
+// the bounds take Student's t at that EDF. Reported when |slope| >= t sd (the interval excludes
+// 0, as a model term's does), else null with |slope| + t sd as the upper limit.
+void read_r_from_drift(NoiseTerms& out, const Drift& d) {
+  const NoiseModelFit& m = out.model;
+  if (!m.ok || !d.ok()) return;
+  std::array<double, 4> q{};
+  for (std::size_t k = 0; k < 4; ++k) q[k] = m.in_model[k] ? m.value[k] : m.upper[k];
+  const std::array<double, 4> v = drift_variance_terms(q, d);
+  double var = 0, denom = 0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    var += v[k];
+    if (m.in_model[k] && m.z[k] > 0) denom += v[k] * v[k] / (2 * m.z[k] * m.z[k]);
+  }
+  if (!(var > 0)) return;
+  DriftReading r;
+  r.slope = d.slope;
+  r.sd = std::sqrt(var);
+  r.edf = denom > 0 ? var * var / denom : std::numeric_limits<double>::infinity();
+  const double p = (1 + kOneSigma) / 2;
+  const bool estimated = std::isfinite(r.edf) && r.edf < 1e6;  // beyond, t is the normal to 1e-6
+  r.quantile = estimated ? boost::math::quantile(boost::math::students_t(std::max(r.edf, 1.0)), p)
+                         : boost::math::quantile(boost::math::normal(), p);
+  out.drift = r;
+  const double b = std::abs(d.slope), half = r.quantile * r.sd;
+  Term t;
+  t.unit = kUnits[4];
+  // No number in the term's unit here: the passport restates the reason per hour (the slope and
+  // its scatter in g/s are analysis.json's noise_terms.drift).
+  std::ostringstream how;
+  how << "least-squares drift of the record (" << (d.slope < 0 ? "falling" : "rising")
+      << "; its scatter from the model's N, B, K, ";
+  if (estimated) how << "Student's t at EDF " << fmt(r.edf) << ")";
+  else how << "normal quantile)";
+  if (b >= half) {
+    t.value = b;
+    t.lo = std::max(0.0, b - half);
+    t.hi = b + half;
+    t.reason = how.str();
+  } else {
+    t.hi = b + half;
+    t.reason_without_limit = "not supported by the data: " + how.str() + " within its scatter";
+    t.reason = t.reason_without_limit + "; upper limit R <= " + fmt(*t.hi) + " g/s";
+  }
+  out.R = t;
+}
+
 }  // namespace
 
-NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s) {
+NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s,
+                       const std::optional<Drift>& drift) {
   NoiseTerms out;
   out.paper = paper_fit(oadev);
   // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
   out.model = fit_noise_model(oadev, record_length_s);
   out.wls = wls_from_model(out.model);
-  if (out.wls.R.value && record_length_s < r_min_record_s)
-    out.wls.R.reason += "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";
+  const std::string too_short = "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";
+  if (out.wls.R.value && record_length_s < r_min_record_s) out.wls.R.reason += too_short;
   out.Q = out.wls.Q;
   out.N = out.wls.N;
   out.K = out.wls.K;
   out.R = out.wls.R;
+  if (drift) {
+    read_r_from_drift(out, *drift);
+    if (out.drift && out.R.value && record_length_s < r_min_record_s) out.R.reason += too_short;
+  }
   if (!out.wls.ok) {
     for (Term* t : {&out.Q, &out.N, &out.K, &out.R}) t->reason = "fit failed: " + out.wls.reason;
   }

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "analysis/allan.hpp"
+#include "analysis/drift.hpp"
 #include "analysis/noise_model.hpp"
 
 namespace rig::analysis {
@@ -96,8 +97,18 @@ struct FittedCurves {
   std::vector<double> paper_poly;     // empty when the paper's fit failed
 };
 
+// R read from the record's drift (noise_terms' `drift`; docs/analysis.md).
+struct DriftReading {
+  double slope = 0;     // g/s, signed: the least-squares slope of the record
+  double sd = 0;        // g/s: the noise's scatter of that slope, from the model's N, B, K (and Q)
+  double edf = 0;       // of sd^2 (Welch-Satterthwaite over the model terms'; inf when none is estimated)
+  double quantile = 0;  // Student's t at `edf` for the bounds' confidence (one sigma)
+};
+
 struct NoiseTerms {
-  Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K R by the model
+  Term Q, N, B, K, R;  // the rig's values: B by the paper's method, Q N K by the model, R by the
+                       // record's drift when noise_terms() has it (else by the model)
+  std::optional<DriftReading> drift;  // set when R was read from the drift
   std::optional<double> tau_cp_s;  // the flat segment's middle (B = sigma(tau_cp) / 0.664)
   std::optional<double> sigma_cp;
   PaperFit paper;
@@ -124,8 +135,11 @@ inline constexpr double kRMinRecordS = 50 * 3600.0;
 
 // oadev: the overlapping Allan deviation points (edf used as weights; 0 = unweighted).
 // r_min_record_s: the record length a profile requires for R; a shorter record's R notes it.
+// drift: the record's least-squares drift (drift.hpp); with it R is read from the drift, its
+// scatter from the model's other terms (the model's own R stays in `wls`); without it (Allan
+// points alone) R is the model's.
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
-                       double r_min_record_s = kRMinRecordS);
+                       double r_min_record_s = kRMinRecordS, const std::optional<Drift>& drift = std::nullopt);
 
 // Passport units (docs/method.md quotes the terms per hour): 1 h = 3600 s, so a coefficient in
 // g*s^a is 3600^-a of itself in g*h^a. Written as products with the same factors the passport

@@ -306,6 +306,8 @@ int run(const Args& a) {
   }
   an::StreamOptions so;
   so.memory_budget_bytes = a.memory_mib << 20;
+  an::Drift drift;  // R is read from it (noise_terms.hpp); the pass keeps its sums
+  so.drift = &drift;
   // A record too short for any tau of the grid (the grids stop at T/4, Stable32's rule: 3..8
   // values have none) is still analysed at tau0 (m = 1, which every deviation's estimator
   // allows from 3 values on), with a note.
@@ -345,7 +347,7 @@ int run(const Args& a) {
   std::exception_ptr fit_error;
   const auto fit_terms = [&] {
     try {
-      terms = an::noise_terms(*oadev_pts, record_s);
+      terms = an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift);
     } catch (...) {
       fit_error = std::current_exception();
     }

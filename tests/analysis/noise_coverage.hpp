@@ -112,7 +112,7 @@ inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, s
       opt.rate_hz = s.rate_hz;
       opt.taus = parse_tau_grid("log:100");
       const std::vector<DevPoint> dev = deviation(y, opt);
-      const NoiseTerms nt = noise_terms(dev, static_cast<double>(n) / s.rate_hz);
+      const NoiseTerms nt = noise_terms(dev, static_cast<double>(n) / s.rate_hz, kRMinRecordS, least_squares_drift(y, s.rate_hz));
       const auto rep = reported_terms(nt);
       if (sc.empty())
         for (const auto& r : rep) {
