@@ -207,8 +207,11 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
 // that realisation's, in closed form (coverage measured in docs/analysis.md).
 // sd^2 is estimated: its EDF is Welch-Satterthwaite's over the model terms' EDFs (a term in the
 // model with theta / sd(theta) = z has EDF 2 z^2; one at its upper limit counts as known), and
-// the bounds take Student's t at that EDF. Reported when |slope| >= t sd (the interval excludes
-// 0, as a model term's does), else null with |slope| + t sd as the upper limit.
+// the bounds take Student's t at that EDF. Reported when the drift is supported as AIC admits a
+// term to the model: fitting it lowers the chi-square by more than 2, the price of one parameter,
+// i.e. |slope| >= sqrt(2) t sd (at |slope| >= t sd, a third of records with a random walk and no
+// ramp reported one); else null with |slope| + t sd as the upper limit.
+constexpr double kDriftSupport = 1.4142135623730951;  // sqrt(2)
 void read_r_from_drift(NoiseTerms& out, const Drift& d) {
   const NoiseModelFit& m = out.model;
   if (!m.ok || !d.ok()) return;
@@ -240,7 +243,7 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
       << "; its scatter from the model's N, B, K, ";
   if (estimated) how << "Student's t at EDF " << fmt(r.edf) << ")";
   else how << "normal quantile)";
-  if (b >= half) {
+  if (b >= kDriftSupport * half) {
     t.value = b;
     t.lo = std::max(0.0, b - half);
     t.hi = b + half;

@@ -146,6 +146,7 @@ TEST(Drift, RIsReadFromTheDrift) {
   const NoiseTerms t0 = noise_terms(oadev_of(flat, rate), T, kRMinRecordS, d0);
   ASSERT_TRUE(t0.drift);
   ASSERT_FALSE(t0.R.value) << t0.R.reason;  // this seed's drift is within its scatter
+  EXPECT_LT(std::abs(d0.slope), std::sqrt(2.0) * t0.drift->quantile * t0.drift->sd);
   ASSERT_TRUE(t0.R.hi);
   EXPECT_NEAR(*t0.R.hi, std::abs(d0.slope) + t0.drift->quantile * t0.drift->sd, 1e-20);
   EXPECT_NE(t0.R.reason.find("upper limit R <="), std::string::npos) << t0.R.reason;
