@@ -80,7 +80,7 @@ struct EngineResult {
   std::map<std::size_t, Decimated> decimated;
   std::size_t ring_points = 0, far_count = 0;
   // The sum of P[0 .. n-1] over the pass and P[n-1]: the record's drift (drift.hpp) at no pass of
-  // its own. The sum is the same on one thread or two only to rounding (it is added per part).
+  // its own; the same bits on one thread or two (summed per block, allan_stream.cpp PhaseSums).
   double phase_sum = 0, phase_last = 0;
 };
 

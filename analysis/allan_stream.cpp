@@ -514,23 +514,37 @@ std::vector<std::vector<std::size_t>> work_items(const std::vector<Acc>& accs, s
   return items;
 }
 
-// The sum of P over the pass, for the record's drift (drift.hpp): each built chunk's sum while
-// it is in cache (eight chains, so the additions do not wait on one another), added across
-// chunks with compensation (Neumaier); one per build part, added in part order afterwards.
-struct PhaseSum {
-  double sum = 0, err = 0;
-  void add_chunk(const double* p, std::size_t len) {
-    double a[8] = {};
-    std::size_t i = 0;
-    for (; i + 8 <= len; i += 8)
-      for (std::size_t k = 0; k < 8; ++k) a[k] += p[i + k];
-    for (; i < len; ++i) a[0] += p[i];
-    const double x = ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
-    const double t = sum + x;
-    err += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
-    sum = t;
+// The sum of P over the pass, for the record's drift (drift.hpp). Each kCheckpointEvery-point
+// block is summed on its own (eight chains, so the additions do not wait on one another) while
+// the pass has it in cache, and the blocks are added in order with compensation (Neumaier) after
+// the pass. A block is summed in one piece whenever the pieces start on block boundaries (the
+// default chunk is a multiple of the block and the two-thread build splits at one), so the sum
+// is the same bits on one thread or two.
+struct PhaseSums {
+  std::vector<double> block;
+  void reset(std::uint64_t n) { block.assign(static_cast<std::size_t>(n / kCheckpointEvery + 1), 0.0); }
+  void add(std::uint64_t j0, const double* p, std::size_t len) {
+    for (std::size_t t = 0; t < len;) {
+      const std::uint64_t j = j0 + t;
+      const std::size_t piece = static_cast<std::size_t>(std::min<std::uint64_t>(len - t, kCheckpointEvery - j % kCheckpointEvery));
+      double a[8] = {};
+      std::size_t i = 0;
+      for (; i + 8 <= piece; i += 8)
+        for (std::size_t k = 0; k < 8; ++k) a[k] += p[t + i + k];
+      for (; i < piece; ++i) a[0] += p[t + i];
+      block[static_cast<std::size_t>(j / kCheckpointEvery)] += ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
+      t += piece;
+    }
   }
-  double value() const { return sum + err; }
+  double total() const {
+    double sum = 0, err = 0;
+    for (const double x : block) {
+      const double t = sum + x;
+      err += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
+      sum = t;
+    }
+    return sum + err;
+  }
 };
 
 struct Engine::Impl {
@@ -559,7 +573,7 @@ struct Engine::Impl {
   std::map<std::size_t, std::vector<double>> decim;
   std::vector<double> scratch;
   PhaseState prev;
-  PhaseSum phase_sum[2];  // the pass's sum of P: [0] the sequential build (or its lower part), [1] the upper part
+  PhaseSums phase_sums;   // the pass's sum of P, per block (each build part writes its own blocks)
   double phase_last = 0;  // P[n - 1]
 
   // Random access to P after the pass: from the ring where it still holds the range (all of P
@@ -696,7 +710,7 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
 void Engine::Impl::plan(const std::vector<EngineRequest>& req, EngineResult& res) {
   res.spec = spec;
   const std::uint64_t n = spec.n;
-  phase_sum[0] = phase_sum[1] = {};
+  phase_sums.reset(n);
   phase_last = 0;
   accs.clear();
   accs.reserve(req.size());
@@ -765,7 +779,7 @@ void Engine::Impl::produce(std::uint64_t lo, std::uint64_t hi) {
     const std::size_t len = std::min<std::uint64_t>(hi - j, ring.room(j));
     check_source(j, len);
     builder.sequential(j, std::span<double>(ring.at(j), len), prev, scratch);
-    phase_sum[0].add_chunk(ring.at(j), len);
+    phase_sums.add(j, ring.at(j), len);
     j += len;
   }
   if (hi == spec.n) phase_last = *ring.at(hi - 1);
@@ -893,13 +907,13 @@ void Engine::Impl::run_in_memory() {
 // stream/in-memory equalities check it).
 void Engine::Impl::build_in_memory() {
   const std::uint64_t n = spec.n;
-  auto build = [&](std::uint64_t lo, std::uint64_t hi, PhaseState st, std::vector<double>& sc, PhaseSum& sum) {
+  auto build = [&](std::uint64_t lo, std::uint64_t hi, PhaseState st, std::vector<double>& sc) {
     for (std::uint64_t j = lo; j < hi; j += chunk) {
       if ((j - lo) % (64 * chunk) == 0) poll();
       const std::size_t len = static_cast<std::size_t>(std::min<std::uint64_t>(hi, j + chunk) - j);
       check_source(j, len);  // in cache now: the check costs no pass of its own
       builder.sequential(j, std::span<double>(ring.at(j), len), st, sc);
-      sum.add_chunk(ring.at(j), len);  // and so is the chunk just built
+      phase_sums.add(j, ring.at(j), len);  // and so is the chunk just built
     }
   };
   const double* y = src.contiguous();
@@ -914,11 +928,10 @@ void Engine::Impl::build_in_memory() {
       try {
         if (part == 0) {
           src.will_read(0, s);  // each part faults in its own values' pages
-          return build(0, s, PhaseState{}, sc0, phase_sum[0]);
+          return build(0, s, PhaseState{}, sc0);
         }
         src.will_read(s, spec.n_src - s);
-        build(s, n, spec.kind == DataKind::Frequency ? phase_state_at(y, s, spec.shift) : PhaseState{}, sc1,
-              phase_sum[1]);
+        build(s, n, spec.kind == DataKind::Frequency ? phase_state_at(y, s, spec.shift) : PhaseState{}, sc1);
       } catch (...) {
         err[part] = std::current_exception();
       }
@@ -926,7 +939,7 @@ void Engine::Impl::build_in_memory() {
     for (const std::exception_ptr& e : err)
       if (e) std::rethrow_exception(e);
   } else {
-    build(0, n, PhaseState{}, scratch, phase_sum[0]);
+    build(0, n, PhaseState{}, scratch);
   }
   for (std::uint64_t j = 0; j < n; j += kCheckpointEvery) checkpoints.push_back(*ring.at(j));
   phase_last = *ring.at(n - 1);
@@ -1001,7 +1014,7 @@ void Engine::Impl::collect(EngineResult& res) {
     s.sum = accs[i].sum;
     s.terms = accs[i].terms;
   }
-  res.phase_sum = phase_sum[0].value() + phase_sum[1].value();
+  res.phase_sum = phase_sums.total();
   res.phase_last = phase_last;
   res.decimated.clear();
   for (const Acc& a : accs) {

@@ -227,10 +227,11 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
   DriftReading r;
   r.slope = d.slope;
   r.sd = std::sqrt(var);
-  r.edf = denom > 0 ? var * var / denom : std::numeric_limits<double>::infinity();
+  // (at least 1: Student's t has no quantile below; reached only by a term with z < 0.71)
+  r.edf = denom > 0 ? std::max(1.0, var * var / denom) : std::numeric_limits<double>::infinity();
   const double p = (1 + kOneSigma) / 2;
   const bool estimated = std::isfinite(r.edf) && r.edf < 1e6;  // beyond, t is the normal to 1e-6
-  r.quantile = estimated ? boost::math::quantile(boost::math::students_t(std::max(r.edf, 1.0)), p)
+  r.quantile = estimated ? boost::math::quantile(boost::math::students_t(r.edf), p)
                          : boost::math::quantile(boost::math::normal(), p);
   out.drift = r;
   const double b = std::abs(d.slope), half = r.quantile * r.sd;
@@ -240,7 +241,13 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
   // its scatter in g/s are analysis.json's noise_terms.drift).
   std::ostringstream how;
   how << "least-squares drift of the record (" << (d.slope < 0 ? "falling" : "rising")
-      << "; its scatter from the model's N, B, K, ";
+      << "; its scatter from the model's N, B, K";
+  std::string limits;  // the terms taken at their upper limits: the scatter is then an upper bound too
+  int at_limit = 0;
+  for (std::size_t k = 1; k < 4; ++k)
+    if (!m.in_model[k] && v[k] > 0.01 * var) limits += std::string(at_limit++ ? ", " : "") + kNames[k];
+  if (at_limit) how << " (" << limits << " at " << (at_limit > 1 ? "their" : "its") << " upper limit)";
+  how << ", ";
   if (estimated) how << "Student's t at EDF " << fmt(r.edf) << ")";
   else how << "normal quantile)";
   if (b >= kDriftSupport * half) {

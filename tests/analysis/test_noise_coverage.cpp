@@ -112,8 +112,8 @@ TEST(NoiseCoverage, CiSized) {
   EXPECT_LE(off3, kMaxOff3);
   // R dominant on 6 h (from 1000 s to T/4): its bounds hold the truth in at least 8 of 20 (a
   // calibrated 68.3 % cell falls below that with probability 0.2 %) and the median value is
-  // within 1.4x of it. R read from the record's drift (docs/analysis.md (c)): 12 of 20, median
-  // 1.25x on these seeds (45/60 over 60); the Allan model's R (now lsq_fit's) held it in 37/60,
+  // within 1.4x of it. R read from the record's drift (docs/analysis.md (c)): 11 of 20, median
+  // 1.25x on these seeds (44/60 over 60); the Allan model's R (now lsq_fit's) held it in 40/60,
   // and an earlier fit (R given random walk's EDF, values from the AICc model) in 2-3 of 20 at 1.6x.
   for (const Cell& c : cells)
     if (c.set == "R 6h" && c.term == "R") {
