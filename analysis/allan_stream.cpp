@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "analysis/allan_engine.hpp"
+#include "analysis/drift.hpp"
 #include "analysis/allan_kernels.hpp"
 #include "analysis/huge_buffer.hpp"
 
@@ -537,13 +538,9 @@ struct PhaseSums {
     }
   }
   double total() const {
-    double sum = 0, err = 0;
-    for (const double x : block) {
-      const double t = sum + x;
-      err += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
-      sum = t;
-    }
-    return sum + err;
+    CompensatedSum s;
+    for (const double x : block) s.add(x);
+    return s.value();
   }
 };
 

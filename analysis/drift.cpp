@@ -1,25 +1,8 @@
 #include "analysis/drift.hpp"
 
-#include <cmath>
 #include <numbers>
 
 namespace rig::analysis {
-
-namespace {
-
-// Neumaier's compensated sum (Kahan-Babuska): the drift's sums cancel almost entirely when the
-// record has no drift, so their rounding must stay at the terms' level, not the total's.
-struct Compensated {
-  double sum = 0, err = 0;
-  void add(double x) {
-    const double t = sum + x;
-    err += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
-    sum = t;
-  }
-  double value() const { return sum + err; }
-};
-
-}  // namespace
 
 Drift least_squares_drift(std::span<const double> y, double rate_hz) {
   Drift d;
@@ -27,7 +10,7 @@ Drift least_squares_drift(std::span<const double> y, double rate_hz) {
   d.tau0 = rate_hz > 0 ? 1 / rate_hz : 0;
   if (!d.ok()) return d;
   const double n = static_cast<double>(d.n), mid = (n - 1) / 2;
-  Compensated s;
+  CompensatedSum s;
   for (std::size_t k = 0; k < y.size(); ++k) s.add((static_cast<double>(k) - mid) * y[k]);
   d.slope = s.value() / (d.tau0 * n * (n * n - 1) / 12);
   return d;

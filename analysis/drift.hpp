@@ -5,10 +5,23 @@
 // determines R (docs/analysis.md "R from the record's drift").
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 
 namespace rig::analysis {
+
+// Neumaier's compensated sum (Kahan-Babuska): the drift's sums cancel almost entirely when the
+// record has no drift, so their rounding must stay at the terms' level, not the total's.
+struct CompensatedSum {
+  double sum = 0, err = 0;
+  void add(double x) {
+    const double t = sum + x;
+    err += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
+    sum = t;
+  }
+  double value() const { return sum + err; }
+};
 
 struct Drift {
   double slope = 0;       // g/s: sum_k c_k y_k / (tau0 sum_k c_k^2), c_k = k - (n - 1)/2
