@@ -49,7 +49,8 @@ Drift drift_from_phase_sums(std::uint64_t n, double p_last, double p_sum, double
 //   flicker B (h-1 = B^2 / pi):      9 B^2 / (pi T^2)        (integral |H(f)|^2 h-1/f df, = 1/16)
 //   random walk K (h-2 = K^2/2pi^2): 6 K^2 / (5 T)            (E[b^2] of K W(t) on [0, T])
 // (h_alpha from each term's Allan variance: AVAR = h0/(2 tau), 2 ln2 h-1, (2 pi^2/3) h-2 tau,
-// IEEE Std 1139 / NIST SP 1065; H(f) the transfer function of the least-squares slope). Returned per term, so a caller can weigh each by what it knows of it.
+// IEEE Std 1139 / NIST SP 1065; H(f) the transfer function of the least-squares slope).
+// Returned per term, so a caller can weigh each by what it knows of it.
 std::array<double, 4> drift_variance_terms(const std::array<double, 4>& q, const Drift& d);
 
 }  // namespace rig::analysis

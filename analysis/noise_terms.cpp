@@ -39,6 +39,14 @@ std::string fmt(double v) {
   return o.str();
 }
 
+// A term the data do not support: null, `hi` its upper limit, the reason in both forms
+// (Term::reason_without_limit: the passport states the limit again in its own unit).
+void null_with_limit(Term& t, std::size_t k, const std::string& why, double upper) {
+  t.hi = upper;
+  t.reason_without_limit = why;
+  t.reason = why + "; upper limit " + kNames[k] + " <= " + fmt(upper) + " " + kUnits[k];
+}
+
 // A note after a term's reason, in both its forms (Term::reason_without_limit).
 void add_note(Term& t, const std::string& note) {
   t.reason += note;
@@ -140,9 +148,7 @@ WlsFit wls_from_model(const NoiseModelFit& m) {
       t.hi = m.hi[k];
       t.reason = std::string("model (GLS on the octave Allan points, widest non-negative model; AICc or interval excludes 0)") + range;
     } else {
-      t.hi = m.upper[k];
-      t.reason_without_limit = std::string("not supported by the data (AICc; interval includes 0)") + range;
-      t.reason = t.reason_without_limit + "; upper limit " + kNames[k] + " <= " + fmt(m.upper[k]) + " " + kUnits[k];
+      null_with_limit(t, k, "not supported by the data (AICc; interval includes 0)" + range, m.upper[k]);
     }
   }
   return w;
@@ -211,7 +217,7 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
 // term to the model: fitting it lowers the chi-square by more than 2, the price of one parameter,
 // i.e. |slope| >= sqrt(2) t sd (at |slope| >= t sd, a third of records with a random walk and no
 // ramp reported one); else null with |slope| + t sd as the upper limit.
-constexpr double kDriftSupport = 1.4142135623730951;  // sqrt(2)
+constexpr double kDriftSupport = std::numbers::sqrt2;
 void read_r_from_drift(NoiseTerms& out, const Drift& d) {
   const NoiseModelFit& m = out.model;
   if (!m.ok || !d.ok()) return;
@@ -256,9 +262,7 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
     t.hi = b + half;
     t.reason = how.str();
   } else {
-    t.hi = b + half;
-    t.reason_without_limit = "not supported by the data: " + how.str() + " within its scatter";
-    t.reason = t.reason_without_limit + "; upper limit R <= " + fmt(*t.hi) + " g/s";
+    null_with_limit(t, 4, "not supported by the data: " + how.str() + " within its scatter", b + half);
   }
   out.R = t;
 }
