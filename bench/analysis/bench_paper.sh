@@ -3,7 +3,9 @@
 # time: 10 kHz loop model, CAN codec and in-process bus, recording, analysis of both channels),
 # whole process. Prints wall, user and system time and peak RSS (/usr/bin/time), the plant's
 # own line (real-time factor) and a digest of the passport's values, which must not change
-# between builds for the same seed (target: <= 3 s wall, <= 256 MiB, same passport).
+# between builds for the same seed on the same machine (a digest is one CPU's: the Allan kernels'
+# AVX-512 clones use fused multiply-adds, docs/analysis.md "A different machine")
+# (target: <= 3 s wall, <= 256 MiB, same passport).
 #
 #   bench/analysis/bench_paper.sh [BUILD_DIR] [RUNS] [callgrind]
 #

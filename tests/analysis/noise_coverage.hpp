@@ -130,10 +130,10 @@ inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, s
         for (const auto& r : rep) {
           auto num = [](const std::optional<double>& v) {
             char b[32] = "-";
-            if (v) std::snprintf(b, sizeof b, "%.6g", *v);
+            if (v) std::snprintf(b, sizeof b, "%.17g", *v);
             return std::string(b);
           };
-          std::fprintf(per_record, "%s\t%llu\t%s\t%.6g\t%s\t%s\t%s\n", s.name.c_str(),
+          std::fprintf(per_record, "%s\t%llu\t%s\t%.17g\t%s\t%s\t%s\n", s.name.c_str(),
                        static_cast<unsigned long long>(base + 1000 * si + static_cast<std::uint64_t>(i)), r.name,
                        s.truth.at(r.k), num(r.t.value).c_str(), num(r.t.lo).c_str(), num(r.t.hi).c_str());
         }
