@@ -87,8 +87,8 @@ TEST(NoiseCoverage, CiSized) {
   // Pooled over the terms of the one model (Q, N, B(model), K, R; the paper's B is the
   // passport's and judged on its own): the stated 68.3 % bounds of dominant terms hold the
   // truth within +-10 points of 68.3 % (issue 12; 14 dominant cells x 20 runs: about +-3 points
-  // of sampling scatter; measured 72.5 %, 74.3 % over 60 seeds per set, 72.8 % over 240 fresh seeds); a term that never
-  // dominates comes back null or with an upper limit (the upper end of the two-sided 68.3 %
+  // of sampling scatter; measured 72.5 %, 74.3 % over 60 seeds per set, 72.8 % over 240 fresh
+  // seeds); a term that never dominates comes back null or with an upper limit (the upper end of the two-sided 68.3 %
   // interval, 84 % one-sided) that holds it in at least 74 % (measured 96 %); a value more than
   // 3x off the truth with bounds excluding it at most kMaxOff3 times in the suite (measured 4
   // with the bounds held over every plausible model, 6 before: mostly a 3e-7 g flicker under K
