@@ -3,8 +3,9 @@
 # time: 10 kHz loop model, CAN codec and in-process bus, recording, analysis of both channels),
 # whole process. Prints wall, user and system time and peak RSS (/usr/bin/time), the plant's
 # own line (real-time factor) and a digest of the passport's values, which must not change
-# between builds for the same seed on the same machine (a digest is one CPU's: the Allan kernels'
-# AVX-512 clones use fused multiply-adds, docs/analysis.md "A different machine")
+# between builds for the same seed (since 2026-11-25 the build turns FMA contraction off, so one
+# build should give one digest on every CPU with AVX2 and FMA and the same glibc; before, the
+# Allan kernels' AVX-512 clones used fused multiply-adds: docs/analysis.md "A different machine")
 # (target: <= 3 s wall, <= 256 MiB, same passport).
 #
 #   bench/analysis/bench_paper.sh [BUILD_DIR] [RUNS] [callgrind]
