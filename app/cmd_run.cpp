@@ -1,10 +1,12 @@
 // `rig run`: the acceptance procedure, end to end, with a run folder holding
 // the captures, checkpoint, passport.json, junit.xml, analysis.json,
 // report.html and run.log. Exit codes per docs/contracts.md.
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -287,6 +289,22 @@ void prepare_run_folder(const std::string& dir) {
   if (!writable) throw ConfigError("--out " + dir + ": the run folder is not writable");
 }
 
+// Whether this process can create a file in the existing directory `d`.
+bool can_create_file_in(const fs::path& d) {
+  int fd = ::open(d.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);
+  if (fd >= 0) {
+    ::close(fd);
+    return true;
+  }
+  if (errno != EOPNOTSUPP && errno != EISDIR) return false;  // EISDIR: a kernel without O_TMPFILE
+  const fs::path probe = d / (".rig-write-check-" + std::to_string(::getpid()));
+  fd = ::open(probe.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0600);
+  if (fd < 0) return false;
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return true;
+}
+
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
@@ -296,7 +314,10 @@ void check_run_folder(const std::string& dir, bool resuming) {
   while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
   if (!fs::is_directory(p, ec))
     throw ConfigError("--out " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
-  if (::access(p.c_str(), W_OK | X_OK) != 0)
+  // access() says yes to root on any directory of a writable mount, /proc's included; a file
+  // actually made there does not. O_TMPFILE makes one with no name, gone at close (nothing
+  // touched); a filesystem without it gets a named probe, removed at once.
+  if (!can_create_file_in(p))
     throw ConfigError("--out " + dir + ": the run folder is not writable (" + p.string() + ")");
   if (!resuming && fs::exists(Executive::checkpoint_path(dir), ec))
     throw ConfigError(dir + " holds an earlier run (checkpoint.json): use --resume " + dir + " or another --out");

@@ -23,7 +23,6 @@ const char* const kOrange = "#ff7f0e";
 const char* const kGreen = "#2ca02c";
 const char* const kRed = "#d62728";
 const char* const kPurple = "#9467bd";
-const char* const kBrown = "#8c564b";
 const char* const kGrey = "#7f7f7f";
 
 // What each passport measurement is (docs/contracts.md, docs/method.md), in the passport's order.

@@ -1216,6 +1216,15 @@ TEST(DryRun, OutMustBeWritable) {
   EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--out", d + "/new/run"}, d + "/io2"), 0)
       << slurp(d + "/io2.stderr");
   EXPECT_FALSE(fs::exists(d + "/new")) << "the dry run creates nothing";
+  // A directory whose mode allows writing but where no file can be made: access(W_OK) says yes
+  // to root on /proc (a directory of a writable mount), the dry run must not.
+  if (fs::is_directory("/proc/self")) {  // procfs mounted
+    EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--out", "/proc/rig-run"}, d + "/io3"), 2)
+        << slurp(d + "/io3.stderr");
+    EXPECT_NE(slurp(d + "/io3.stderr").find("--out /proc/rig-run: the run folder is not writable"),
+              std::string::npos)
+        << slurp(d + "/io3.stderr");
+  }
 }
 
 // The hardware file docs/hardware-config.md shows first is one the validation accepts.
