@@ -19,9 +19,11 @@ EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.
   has_sense_ = source.has_sense();
   sense_lsb_ = 2 * n.range_g / std::ldexp(1.0, n.sense_adc_bits);
   sense_inv_lsb_ = 1 / sense_lsb_;
-  // Blocks of 128 periods (0.128 s at 1 kHz), eight ahead: a hand-over per block, a wake-up of
-  // the worker per four, and the ring (about 0.6 MB of terms) stays in the caches.
-  noise_ = std::make_unique<NoisePipe>(std::move(source), 128, 8);
+  // Blocks of 1024 periods (1.024 s at 1 kHz), sixteen ahead (about 14 MB of terms): the two
+  // threads run at about the same speed, and with blocks of 128, eight ahead, they kept meeting
+  // an empty or a full ring: 30 000 context switches per `paper` run, and 5.9 s against 3.4 s
+  // wall on a 2-core VM (2026-11-28, bench/analysis/bench_paper.sh; the same passport).
+  noise_ = std::make_unique<NoisePipe>(std::move(source), kNoiseBlockPeriods, kNoiseBlocksAhead);
   set_filter(p_.filter);
   set_table_angle_deg(p_.orientation.u10_angle_deg);
   temp_c_ = n.ambient_c;

@@ -15,6 +15,9 @@
 
 namespace rig::plant {
 
+// The noise worker's hand-over: blocks of this many output periods, this many drawn ahead.
+inline constexpr std::size_t kNoiseBlockPeriods = 1024, kNoiseBlocksAhead = 16;
+
 class EmulatedDut final : public DutSource {
  public:
   EmulatedDut(const DutParams& p, uint64_t seed);

@@ -66,6 +66,26 @@ double PeriodNoise::slow_bias_g(double& temp_c) {
 
 void PeriodNoise::fill(NoiseBlock& b) {
   for (std::size_t i = 0; i < b.periods; ++i) period(b, i);
+  // The three per-step streams that never depend on the period (vibration, input and sense
+  // white noise) over the whole block at once, each in its own loop: every stream is its own
+  // generator, so each draws what it drew inside the period loop, in the same order, and the
+  // terms keep every bit. Apart, each loop holds its state in registers; together with the
+  // period's oscillators they spilled, and a loop of ten steps per period paid its set-up ten
+  // times a millisecond (2026-11-28: the worker was the `paper` procedure's critical path).
+  const std::size_t steps = b.periods * b.steps;
+  noise::BandNoise vib = vib_;
+  noise::Rng r = r_vib_;
+  for (std::size_t k = 0; k < steps; ++k) b.vib[k] = vib.step(r);
+  vib_ = vib;
+  r_vib_ = r;
+  if (input_sd_ > 0) draw_white(r_input_, input_sd_, b.input.data(), steps);
+  if (sense_sd_ > 0) draw_white(r_sense_, sense_sd_, b.sense.data(), steps);
+}
+
+void PeriodNoise::draw_white(noise::Rng& rng, double sd, double* out, std::size_t n) {
+  noise::Rng r = rng;
+  for (std::size_t k = 0; k < n; ++k) out[k] = sd * r.normal();
+  rng = r;
 }
 
 void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
@@ -92,24 +112,16 @@ void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
   const std::size_t n = steps_, at = i * n;
   // The interference lines of the whole period at once (LineBand::fill: step()'s bits).
   intf_.fill(std::span<double>(b.intf.data() + at, n));
-  // One pass over the period, every generator in locals (so the compiler keeps their states in
-  // registers rather than in this object, which the stores might alias): the streams are
-  // independent chains (a biquad, three random streams, six oscillators) the core overlaps.
-  noise::BandNoise vib = vib_;
-  noise::Rng r_vib = r_vib_, r_input = r_input_, r_sense = r_sense_;
+  // One pass over the period's oscillators in locals (so the compiler keeps their states in
+  // registers rather than in this object, which the stores might alias): the polling line's
+  // carrier and, while a burst rings, the five tones. The white streams are fill()'s.
   noise::Oscillator poll = poll_osc_;
   std::array<noise::Oscillator, kBurstTones> tone = burst_osc_;
   const std::array<double, kBurstTones> env = burst_env_;
-  const bool input = input_sd_ > 0, sense = sense_sd_ > 0;
-  double* vib_out = b.vib.data() + at;
-  double* input_out = b.input.data() + at;
   double* burst_out = b.burst.data() + at * kBurstTones;
   double* pi_out = b.poll_i.data() + at;
   double* pq_out = b.poll_q.data() + at;
-  double* sense_out = b.sense.data() + at;
   for (std::size_t k = 0; k < n; ++k) {
-    vib_out[k] = vib.step(r_vib);
-    if (input) input_out[k] = input_sd_ * r_input.normal();
     if (bursting)
       for (std::size_t j = 0; j < kBurstTones; ++j) {
         burst_out[k * kBurstTones + j] = env[j] * tone[j].c;
@@ -118,12 +130,7 @@ void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
     pi_out[k] = pi_amp * poll.c;
     pq_out[k] = pq_amp * poll.s;
     poll.step();
-    if (sense) sense_out[k] = sense_sd_ * r_sense.normal();
   }
-  vib_ = vib;
-  r_vib_ = r_vib;
-  r_input_ = r_input;
-  r_sense_ = r_sense;
   poll_osc_ = poll;
   burst_osc_ = tone;
 }
@@ -146,7 +153,7 @@ void NoisePipe::run() {
   // Only arithmetic on memory allocated before the thread started: nothing here can throw.
   // When the ring is full the worker sleeps until half of it is free again, so the reader
   // wakes it once per ring_.size() / 2 blocks, not at every block.
-  const std::size_t low = ring_.size() / 2;
+  const std::size_t low = ring_.size() / 2, ready = std::max<std::size_t>(low, 1);
   std::unique_lock lock(m_);
   for (;;) {
     if (drawn_ - released_ == ring_.size()) {
@@ -160,15 +167,19 @@ void NoisePipe::run() {
     source_.fill(b);
     lock.lock();
     ++drawn_;
-    if (reader_waiting_) reader_cv_.notify_one();
+    // A waiting reader is woken once half the ring is drawn, not at every block: the two threads
+    // run at about the same speed, and a hand-over per block cost a futex wake and a sleep each
+    // way (30 000 context switches per `paper` run, a second of system time on a VM).
+    if (reader_waiting_ && drawn_ - released_ >= ready) reader_cv_.notify_one();
   }
 }
 
 const NoiseBlock& NoisePipe::front() {
   std::unique_lock lock(m_);
   if (drawn_ == released_) {
+    const std::size_t ready = std::max<std::size_t>(ring_.size() / 2, 1);
     reader_waiting_ = true;
-    reader_cv_.wait(lock, [this] { return drawn_ > released_; });
+    reader_cv_.wait(lock, [&] { return drawn_ - released_ >= ready; });
     reader_waiting_ = false;
   }
   return ring_[released_ % ring_.size()];

@@ -48,7 +48,8 @@ class PeriodNoise {
   bool has_sense() const { return sense_sd_ > 0; }
 
  private:
-  void period(NoiseBlock& b, std::size_t i);
+  void period(NoiseBlock& b, std::size_t i);  // the per-period terms and the oscillators
+  static void draw_white(noise::Rng& rng, double sd, double* out, std::size_t n);
   double slow_bias_g(double& temp_c);  // bias terms updated once per output period
 
   enum Stream : uint64_t {

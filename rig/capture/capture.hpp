@@ -95,6 +95,8 @@ class Reader {
   // Complete after read() returned 0.
   const Recovery& recovery() const { return rec_; }
   const std::string& path() const { return path_; }
+  // At most this many samples can follow the header (each takes 16 bytes of the file).
+  uint64_t max_samples() const { return file_size_ > data_start_ ? (file_size_ - data_start_) / kRecordSize : 0; }
 
  private:
   bool next_block();

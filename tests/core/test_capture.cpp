@@ -69,6 +69,27 @@ TEST(Capture, RoundTripKeepsHeaderAndEverySample) {
   EXPECT_EQ(l.recovery.blocks, 3u);
 }
 
+// load() reserves what the file can hold (16 bytes a sample) once and reads into it: the vector
+// never grows past the file (its doubling had copied a 60 min capture about twice over, into
+// fresh pages each time), and a file of several 64 Ki chunks still comes back whole.
+TEST(Capture, LoadReadsIntoOneReservationBoundedByTheFile) {
+  const std::string p = tmpdir() + "/big.cap";
+  const auto s = ramp(300000);
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(s);
+    w.close();
+  }
+  const auto l = capture::load(p);
+  EXPECT_TRUE(l.recovery.complete) << l.recovery.summary(p);
+  ASSERT_EQ(l.samples.size(), s.size());
+  EXPECT_LE(l.samples.capacity() * sizeof(Sample), fs::file_size(p));
+  EXPECT_EQ(l.samples.back().seq, s.back().seq);
+  EXPECT_EQ(l.samples.back().y_g, s.back().y_g);
+  EXPECT_EQ(capture::channel_x(l.samples).at(123456), static_cast<double>(s[123456].x_g));
+  EXPECT_EQ(capture::channel_y(l.samples).back(), static_cast<double>(s.back().y_g));
+}
+
 TEST(Capture, TruncatedFileRecoversCompleteBlocksAndSaysSo) {
   const std::string p = tmpdir() + "/t.cap";
   {

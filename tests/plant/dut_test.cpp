@@ -1,6 +1,7 @@
 // The emulated DUT behind the DutSource seam: determinism, orientation, filter, aliasing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -197,11 +198,42 @@ TEST(Dut, OutputIsPinnedBitForBit) {
 // asleep on a full ring). A destructor that failed to wake it would hang here.
 TEST(Dut, DestroyedAtAnyPointStopsItsNoiseWorker) {
   const DutParams p = load_dut_params(nullptr);
-  for (int reads : {0, 1, 127, 128, 129, 700, 1500}) {
+  constexpr int kBlock = static_cast<int>(kNoiseBlockPeriods), kRing = kBlock * static_cast<int>(kNoiseBlocksAhead);
+  for (int reads : {0, 1, kBlock - 1, kBlock, kBlock + 1, 3 * kBlock + 7, kRing + kBlock / 2}) {
     EmulatedDut d(p, static_cast<uint64_t>(reads));
     double x = 0, y = 0;
     for (int i = 0; i < reads; ++i) d.next(x, y);
     EXPECT_DOUBLE_EQ(d.time_s(), reads / 1000.0);
+  }
+}
+
+// The pipe hands the reader every block in the order drawn, the same terms as drawing them on
+// the reader's thread, at any depth: a ring of one (the reader and the worker take turns), of
+// two, an odd one, and the reader's and the worker's waits for half a ring.
+TEST(Dut, NoisePipeHandsOverTheBlocksInOrderAtAnyDepth) {
+  const DutParams p = params("[noise]\nburst_rate_per_h = 3600\nburst_decay_s = 0.05\n");  // bursts ring too
+  for (std::size_t depth : {1, 2, 3, 8}) {
+    PeriodNoise direct(p, 11, 10);
+    NoisePipe pipe(PeriodNoise(p, 11, 10), 4, depth);
+    NoiseBlock want(4, 10);
+    for (int k = 0; k < 40; ++k) {
+      direct.fill(want);
+      const NoiseBlock& got = pipe.front();
+      ASSERT_EQ(got.slow_g, want.slow_g) << "depth " << depth << ", block " << k;
+      ASSERT_EQ(got.vib, want.vib) << "depth " << depth << ", block " << k;
+      ASSERT_EQ(got.input, want.input);
+      ASSERT_EQ(got.sense, want.sense);
+      ASSERT_EQ(got.intf, want.intf);
+      ASSERT_EQ(got.poll_i, want.poll_i);
+      ASSERT_EQ(got.bursting, want.bursting);
+      const std::size_t per = 10 * kBurstTones;  // burst terms are written only while one rings
+      for (std::size_t i = 0; i < 4; ++i) {
+        if (!want.bursting[i]) continue;
+        const auto w = want.burst.begin() + static_cast<std::ptrdiff_t>(i * per);
+        ASSERT_TRUE(std::equal(w, w + static_cast<std::ptrdiff_t>(per), got.burst.begin() + static_cast<std::ptrdiff_t>(i * per)));
+      }
+      pipe.pop();
+    }
   }
 }
 
