@@ -4,7 +4,8 @@
 # whole process. Prints wall, user and system time and peak RSS (/usr/bin/time), the plant's
 # own line (real-time factor) and a digest of the passport's values, which must not change
 # between builds for the same seed (since 2026-11-25 the build turns FMA contraction off, so one
-# build should give one digest on every CPU with AVX2 and FMA and the same glibc; before, the
+# build gives one digest on every CPU with AVX2 and FMA and the same glibc: the same on a Zen 3
+# and an AVX-512 machine, 2026-11-28; before, the
 # Allan kernels' AVX-512 clones used fused multiply-adds: docs/analysis.md "A different machine")
 # (target: <= 3 s wall, <= 256 MiB, same passport).
 #
