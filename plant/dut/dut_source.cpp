@@ -14,16 +14,18 @@ EmulatedDut::EmulatedDut(const DutParams& p, uint64_t seed_in) : p_(p), loop_(p.
   const double fs = p_.loop.loop_rate_hz;
   steps_per_out_ = static_cast<int>(std::lround(fs / p_.loop.output_rate_hz));
   const NoiseParams& n = p_.noise;
-  PeriodNoise source(p_, seed, static_cast<std::size_t>(std::max(steps_per_out_, 0)));
+  const std::size_t steps = static_cast<std::size_t>(std::max(steps_per_out_, 0));
+  PeriodNoise source(p_, seed, steps);
   has_input_ = source.has_input();
   has_sense_ = source.has_sense();
   sense_lsb_ = 2 * n.range_g / std::ldexp(1.0, n.sense_adc_bits);
   sense_inv_lsb_ = 1 / sense_lsb_;
-  // Blocks of 1024 periods (1.024 s at 1 kHz), sixteen ahead (about 14 MB of terms): the two
-  // threads run at about the same speed, and with blocks of 128, eight ahead, they kept meeting
-  // an empty or a full ring: 30 000 context switches per `paper` run, and 5.9 s against 3.4 s
-  // wall on a 2-core VM (2026-11-28, bench/analysis/bench_paper.sh; the same passport).
-  noise_ = std::make_unique<NoisePipe>(std::move(source), kNoiseBlockPeriods, kNoiseBlocksAhead);
+  // Blocks of 1024 periods at the default rates (1.024 s), sixteen ahead (about 14 MB of
+  // terms): the two threads run at about the same speed, and with blocks of 128, eight ahead,
+  // they kept meeting an empty or a full ring: 30 000 context switches per `paper` run, and
+  // 5.9 s against 3.4 s wall on a 2-core VM (2026-11-28, bench/analysis/bench_paper.sh; the
+  // same passport).
+  noise_ = std::make_unique<NoisePipe>(std::move(source), noise_block_periods(steps), kNoiseBlocksAhead);
   set_filter(p_.filter);
   set_table_angle_deg(p_.orientation.u10_angle_deg);
   temp_c_ = n.ambient_c;

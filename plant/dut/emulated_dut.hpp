@@ -1,6 +1,7 @@
 // The emulated quartz pendulum accelerometer: closed loop + noise + orientation,
 // stepped at the loop rate and polled by sample-and-hold at the output rate.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -15,8 +16,13 @@
 
 namespace rig::plant {
 
-// The noise worker's hand-over: blocks of this many output periods, this many drawn ahead.
-inline constexpr std::size_t kNoiseBlockPeriods = 1024, kNoiseBlocksAhead = 16;
+// The noise worker's hand-over: blocks of about this many loop steps (whole periods: 1024 at
+// the default 10 steps a period), this many drawn ahead; sized in steps, so the ring stays
+// about 14 MB whatever the loop and output rates.
+inline constexpr std::size_t kNoiseBlockSteps = 10240, kNoiseBlocksAhead = 16;
+inline std::size_t noise_block_periods(std::size_t steps_per_period) {
+  return std::max<std::size_t>(1, kNoiseBlockSteps / std::max<std::size_t>(steps_per_period, 1));
+}
 
 class EmulatedDut final : public DutSource {
  public:

@@ -1,5 +1,7 @@
 #include "plant/dut/period_noise.hpp"
 
+#include "rig/core/huge_pages.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -12,9 +14,31 @@ constexpr std::array<double, kBurstTones> kBurstHz = {265, 316, 470, 627, 697}; 
 }
 
 NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in)
-    : periods(periods_in), steps(steps_in), slow_g(periods), temp_c(periods), bursting(periods),
-      vib(periods * steps), input(periods * steps), burst(periods * steps * kBurstTones), intf(periods * steps),
-      poll_i(periods * steps), poll_q(periods * steps), sense(periods * steps) {}
+    : NoiseBlock(periods_in, steps_in, std::make_unique_for_overwrite<double[]>(doubles(periods_in, steps_in))) {}
+
+NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in, std::unique_ptr<double[]> own)
+    : NoiseBlock(periods_in, steps_in, own.get()) {
+  own_ = std::move(own);
+}
+
+NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in, double* storage)
+    : periods(periods_in), steps(steps_in), bursting(periods) {
+  const std::size_t n = periods * steps;
+  auto take = [&storage](std::size_t count) {
+    const std::span<double> s(storage, count);
+    storage += count;
+    return s;
+  };
+  slow_g = take(periods);
+  temp_c = take(periods);
+  vib = take(n);
+  input = take(n);
+  burst = take(n * kBurstTones);
+  intf = take(n);
+  poll_i = take(n);
+  poll_q = take(n);
+  sense = take(n);
+}
 
 PeriodNoise::PeriodNoise(const DutParams& p, uint64_t seed, std::size_t steps_per_period)
     : n_(p.noise), intrinsic_bias_g_(p.orientation.intrinsic_bias_g), loop_rate_hz_(p.loop.loop_rate_hz),
@@ -136,9 +160,18 @@ void PeriodNoise::period(NoiseBlock& b, std::size_t i) {
 }
 
 NoisePipe::NoisePipe(PeriodNoise source, std::size_t periods_per_block, std::size_t depth)
-    : source_(std::move(source)),
-      ring_(std::max<std::size_t>(depth, 1), NoiseBlock(periods_per_block, source_.steps_per_period())),
-      worker_([this] { run(); }) {}
+    : source_(std::move(source)) {
+  depth = std::max<std::size_t>(depth, 1);
+  const std::size_t steps = source_.steps_per_period(), each = NoiseBlock::doubles(periods_per_block, steps);
+  // Uninitialised: the worker writes every term before the reader reads it. Huge pages: the
+  // ring is written once per DUT (rig filter select makes one per candidate), about 14 MB, which
+  // on 4 KiB pages was 3 600 page faults.
+  arena_ = std::make_unique_for_overwrite<double[]>(depth * each);
+  advise_huge_pages(arena_.get(), depth * each * sizeof(double));
+  ring_.reserve(depth);
+  for (std::size_t i = 0; i < depth; ++i) ring_.emplace_back(periods_per_block, steps, arena_.get() + i * each);
+  worker_ = std::thread([this] { run(); });  // after everything it reads is built
+}
 
 NoisePipe::~NoisePipe() {
   {

@@ -11,7 +11,9 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <mutex>
+#include <span>
 #include <thread>
 #include <vector>
 
@@ -24,15 +26,28 @@ inline constexpr int kBurstTones = 5;
 
 // The noise of `periods` consecutive output periods of `steps` loop steps each. Per period:
 // the slow bias (g) and the temperature it implies, and whether a burst rings. Per loop step
-// (period-major): the terms in the order the loop adds them.
+// (period-major): the terms in the order the loop adds them. The terms are uninitialised until
+// drawn (`burst` is written only while a burst rings), in storage the block owns or, in the
+// pipe's ring, in one arena for all blocks.
 struct NoiseBlock {
-  NoiseBlock(std::size_t periods, std::size_t steps);
+  NoiseBlock(std::size_t periods, std::size_t steps);                    // owns its terms
+  NoiseBlock(std::size_t periods, std::size_t steps, double* storage);  // in storage, doubles() of them
+  NoiseBlock(const NoiseBlock&) = delete;
+  NoiseBlock& operator=(const NoiseBlock&) = delete;
+  NoiseBlock(NoiseBlock&&) = default;  // the spans stay valid: the storage does not move
+  static std::size_t doubles(std::size_t periods, std::size_t steps) {
+    return periods * (2 + steps * (7 + kBurstTones));
+  }
   std::size_t periods, steps;
-  std::vector<double> slow_g, temp_c;
   std::vector<char> bursting;
-  std::vector<double> vib, input;        // input acceleration (g): vibration, white
-  std::vector<double> burst;             // kBurstTones terms per step, written only while bursting
-  std::vector<double> intf, poll_i, poll_q, sense;  // added to x (g): lines, pick-up I and Q, white
+  std::span<double> slow_g, temp_c;
+  std::span<double> vib, input;                   // input acceleration (g): vibration, white
+  std::span<double> burst;                        // kBurstTones terms per step
+  std::span<double> intf, poll_i, poll_q, sense;  // added to x (g): lines, pick-up I and Q, white
+
+ private:
+  NoiseBlock(std::size_t periods, std::size_t steps, std::unique_ptr<double[]> own);
+  std::unique_ptr<double[]> own_;
 };
 
 // The DUT's noise sources, one random stream each (the streams and their seeds as the model
@@ -73,8 +88,9 @@ class PeriodNoise {
 };
 
 // PeriodNoise run on a worker thread, up to `depth` blocks ahead of the reader: a ring of
-// blocks handed over under one mutex (one hand-over per block, not per sample; a wake-up of
-// the sleeping worker per depth / 2 blocks). The worker
+// blocks (one arena, on huge pages where the kernel offers them) handed over under one mutex:
+// one hand-over per block, not per sample, and a sleeping side is woken once per depth / 2
+// blocks, not at every block. The worker
 // only computes; it stops and is joined when the pipe is destroyed, whatever the reader was
 // doing (an abort, a fault in a phase).
 class NoisePipe {
@@ -84,7 +100,7 @@ class NoisePipe {
   NoisePipe(const NoisePipe&) = delete;
   NoisePipe& operator=(const NoisePipe&) = delete;
 
-  // The oldest block not yet released; waits for the worker if it is not drawn yet.
+  // The oldest block not yet released; when none is drawn, waits until half the ring is.
   const NoiseBlock& front();
   // Gives the front block back to the worker.
   void pop();
@@ -93,6 +109,7 @@ class NoisePipe {
   void run();
 
   PeriodNoise source_;
+  std::unique_ptr<double[]> arena_;  // the ring's terms
   std::vector<NoiseBlock> ring_;
   std::mutex m_;  // guards the counts and flags below
   std::condition_variable worker_cv_, reader_cv_;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 
@@ -365,23 +366,30 @@ Loaded load(const std::string& path) {
   l.header = r.header();
   // Room for every sample the file can hold, reserved once: the vector's doubling had copied a
   // 60 min capture's 58 MB about twice over, into fresh pages each time (half of the `paper`
-  // procedure's page faults), and huge pages under it take 512 faults in one.
-  l.samples.reserve(static_cast<std::size_t>(r.max_samples()));
-  advise_huge_pages(l.samples.data(), l.samples.capacity() * sizeof(Sample));
+  // procedure's page faults), and huge pages under it take 512 faults in one. A file larger
+  // than memory can hold (mostly junk: only its valid blocks are read) grows as it is read.
+  bool reserved = true;
+  try {
+    l.samples.reserve(static_cast<std::size_t>(r.max_samples()));
+    advise_huge_pages(l.samples.data(), l.samples.capacity() * sizeof(Sample));
+  } catch (const std::bad_alloc&) {
+    reserved = false;
+  }
   // Straight into the result, in chunks growing from 256 samples to 64 Ki: no fixed 64 Ki
   // bounce buffer, whose zero-filling (1 MiB) cost more than reading a small file
-  // (tests/fuzz/fuzz_capture.cpp spent 57 % of its time there). No chunk goes past the
-  // reservation, so the vector never moves.
-  const std::size_t room = l.samples.capacity();
-  for (std::size_t chunk = 256; l.samples.size() < room; chunk = std::min<std::size_t>(chunk * 2, 1 << 16)) {
-    const std::size_t have = l.samples.size(), want = std::min(chunk, room - have);
+  // (tests/fuzz/fuzz_capture.cpp spent 57 % of its time there). A reserved vector never moves:
+  // no chunk goes past the reservation.
+  for (std::size_t chunk = 256;; chunk = std::min<std::size_t>(chunk * 2, 1 << 16)) {
+    const std::size_t have = l.samples.size();
+    const std::size_t want = reserved ? std::min(chunk, l.samples.capacity() - have) : chunk;
+    if (want == 0) break;
     l.samples.resize(have + want);
     const std::size_t n = r.read(std::span<Sample>(l.samples).subspan(have));
     l.samples.resize(have + n);
     if (n < want) break;
   }
-  // The reader's account (end marker, damage) is complete once a read returns 0; a file whose
-  // every byte after the header was samples has not said so yet.
+  // The reader's account (end marker, damage) is complete once a read returns 0: after a full
+  // reservation (a file of a header alone, whose room is 0) it has not said so yet.
   for (Sample s; r.read(std::span<Sample>(&s, 1)) == 1;) l.samples.push_back(s);
   l.recovery = r.recovery();
   return l;

@@ -90,6 +90,26 @@ TEST(Capture, LoadReadsIntoOneReservationBoundedByTheFile) {
   EXPECT_EQ(capture::channel_y(l.samples).back(), static_cast<double>(s.back().y_g));
 }
 
+// A closed capture of no sample, and the same without its 16-byte end marker (a writer killed
+// before its first block): the header alone leaves room for no sample, and load() still reads
+// the file to its end and says what it found.
+TEST(Capture, HeaderAloneLoadsNoSampleAndSaysWhy) {
+  const std::string p = tmpdir() + "/h.cap";
+  {
+    capture::Writer w(p, header(), 1000);
+    w.close();
+  }
+  const auto closed = capture::load(p);
+  EXPECT_TRUE(closed.samples.empty());
+  EXPECT_TRUE(closed.recovery.complete) << closed.recovery.summary(p);
+  fs::resize_file(p, fs::file_size(p) - 16);
+  EXPECT_EQ(capture::Reader(p).max_samples(), 0u);
+  const auto cut = capture::load(p);
+  EXPECT_TRUE(cut.samples.empty());
+  EXPECT_FALSE(cut.recovery.complete);
+  EXPECT_TRUE(cut.recovery.truncated) << cut.recovery.summary(p);
+}
+
 TEST(Capture, TruncatedFileRecoversCompleteBlocksAndSaysSo) {
   const std::string p = tmpdir() + "/t.cap";
   {

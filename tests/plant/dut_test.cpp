@@ -198,7 +198,12 @@ TEST(Dut, OutputIsPinnedBitForBit) {
 // asleep on a full ring). A destructor that failed to wake it would hang here.
 TEST(Dut, DestroyedAtAnyPointStopsItsNoiseWorker) {
   const DutParams p = load_dut_params(nullptr);
-  constexpr int kBlock = static_cast<int>(kNoiseBlockPeriods), kRing = kBlock * static_cast<int>(kNoiseBlocksAhead);
+  const int kBlock = static_cast<int>(noise_block_periods(10)), kRing = kBlock * static_cast<int>(kNoiseBlocksAhead);
+  ASSERT_EQ(EmulatedDut(p, 1).loop_steps_per_output(), 10);
+  // Blocks are sized in loop steps, so the ring stays the same size at other rates.
+  EXPECT_EQ(noise_block_periods(10), 1024u);
+  EXPECT_EQ(noise_block_periods(100), 102u);
+  EXPECT_EQ(noise_block_periods(1000000), 1u);
   for (int reads : {0, 1, kBlock - 1, kBlock, kBlock + 1, 3 * kBlock + 7, kRing + kBlock / 2}) {
     EmulatedDut d(p, static_cast<uint64_t>(reads));
     double x = 0, y = 0;
@@ -209,7 +214,8 @@ TEST(Dut, DestroyedAtAnyPointStopsItsNoiseWorker) {
 
 // The pipe hands the reader every block in the order drawn, the same terms as drawing them on
 // the reader's thread, at any depth: a ring of one (the reader and the worker take turns), of
-// two, an odd one, and the reader's and the worker's waits for half a ring.
+// two, an odd one, and the reader's and the worker's waits for half a ring. (That the terms are
+// the ones the single-threaded model drew is Dut.OutputIsPinnedBitForBit's.)
 TEST(Dut, NoisePipeHandsOverTheBlocksInOrderAtAnyDepth) {
   const DutParams p = params("[noise]\nburst_rate_per_h = 3600\nburst_decay_s = 0.05\n");  // bursts ring too
   for (std::size_t depth : {1, 2, 3, 8}) {
@@ -219,12 +225,15 @@ TEST(Dut, NoisePipeHandsOverTheBlocksInOrderAtAnyDepth) {
     for (int k = 0; k < 40; ++k) {
       direct.fill(want);
       const NoiseBlock& got = pipe.front();
-      ASSERT_EQ(got.slow_g, want.slow_g) << "depth " << depth << ", block " << k;
-      ASSERT_EQ(got.vib, want.vib) << "depth " << depth << ", block " << k;
-      ASSERT_EQ(got.input, want.input);
-      ASSERT_EQ(got.sense, want.sense);
-      ASSERT_EQ(got.intf, want.intf);
-      ASSERT_EQ(got.poll_i, want.poll_i);
+      const auto same = [](std::span<const double> a, std::span<const double> b) { return std::ranges::equal(a, b); };
+      ASSERT_TRUE(same(got.slow_g, want.slow_g)) << "depth " << depth << ", block " << k;
+      ASSERT_TRUE(same(got.temp_c, want.temp_c));
+      ASSERT_TRUE(same(got.vib, want.vib)) << "depth " << depth << ", block " << k;
+      ASSERT_TRUE(same(got.input, want.input));
+      ASSERT_TRUE(same(got.sense, want.sense));
+      ASSERT_TRUE(same(got.intf, want.intf));
+      ASSERT_TRUE(same(got.poll_i, want.poll_i));
+      ASSERT_TRUE(same(got.poll_q, want.poll_q));
       ASSERT_EQ(got.bursting, want.bursting);
       const std::size_t per = 10 * kBurstTones;  // burst terms are written only while one rings
       for (std::size_t i = 0; i < 4; ++i) {
