@@ -1,24 +1,16 @@
 #include "plant/dut/period_noise.hpp"
 
-#include "rig/core/huge_pages.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <span>
 
+#include "rig/core/huge_pages.hpp"
+
 namespace rig::plant {
 
 namespace {
 constexpr std::array<double, kBurstTones> kBurstHz = {265, 316, 470, 627, 697};  // docs/method.md, PSD bursts
-}
-
-NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in)
-    : NoiseBlock(periods_in, steps_in, std::make_unique_for_overwrite<double[]>(doubles(periods_in, steps_in))) {}
-
-NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in, std::unique_ptr<double[]> own)
-    : NoiseBlock(periods_in, steps_in, own.get()) {
-  own_ = std::move(own);
 }
 
 NoiseBlock::NoiseBlock(std::size_t periods_in, std::size_t steps_in, double* storage)
@@ -170,6 +162,8 @@ NoisePipe::NoisePipe(PeriodNoise source, std::size_t periods_per_block, std::siz
   advise_huge_pages(arena_.get(), depth * each * sizeof(double));
   ring_.reserve(depth);
   for (std::size_t i = 0; i < depth; ++i) ring_.emplace_back(periods_per_block, steps, arena_.get() + i * each);
+  low_ = depth / 2;
+  ready_ = std::max<std::size_t>(low_, 1);
   worker_ = std::thread([this] { run(); });  // after everything it reads is built
 }
 
@@ -186,12 +180,11 @@ void NoisePipe::run() {
   // Only arithmetic on memory allocated before the thread started: nothing here can throw.
   // When the ring is full the worker sleeps until half of it is free again, so the reader
   // wakes it once per ring_.size() / 2 blocks, not at every block.
-  const std::size_t low = ring_.size() / 2, ready = std::max<std::size_t>(low, 1);
   std::unique_lock lock(m_);
   for (;;) {
     if (drawn_ - released_ == ring_.size()) {
       worker_waiting_ = true;
-      worker_cv_.wait(lock, [&] { return stop_ || drawn_ - released_ <= low; });
+      worker_cv_.wait(lock, [this] { return stop_ || drawn_ - released_ <= low_; });
       worker_waiting_ = false;
     }
     if (stop_) return;
@@ -203,16 +196,15 @@ void NoisePipe::run() {
     // A waiting reader is woken once half the ring is drawn, not at every block: the two threads
     // run at about the same speed, and a hand-over per block cost a futex wake and a sleep each
     // way (30 000 context switches per `paper` run, a second of system time on a VM).
-    if (reader_waiting_ && drawn_ - released_ >= ready) reader_cv_.notify_one();
+    if (reader_waiting_ && drawn_ - released_ >= ready_) reader_cv_.notify_one();
   }
 }
 
 const NoiseBlock& NoisePipe::front() {
   std::unique_lock lock(m_);
   if (drawn_ == released_) {
-    const std::size_t ready = std::max<std::size_t>(ring_.size() / 2, 1);
     reader_waiting_ = true;
-    reader_cv_.wait(lock, [&] { return drawn_ - released_ >= ready; });
+    reader_cv_.wait(lock, [this] { return drawn_ - released_ >= ready_; });
     reader_waiting_ = false;
   }
   return ring_[released_ % ring_.size()];
@@ -223,7 +215,7 @@ void NoisePipe::pop() {
   {
     const std::lock_guard lock(m_);
     ++released_;
-    wake = worker_waiting_ && drawn_ - released_ <= ring_.size() / 2;
+    wake = worker_waiting_ && drawn_ - released_ <= low_;
   }
   if (wake) worker_cv_.notify_one();
 }

@@ -26,15 +26,14 @@ inline constexpr int kBurstTones = 5;
 
 // The noise of `periods` consecutive output periods of `steps` loop steps each. Per period:
 // the slow bias (g) and the temperature it implies, and whether a burst rings. Per loop step
-// (period-major): the terms in the order the loop adds them. The terms are uninitialised until
-// drawn (`burst` is written only while a burst rings), in storage the block owns or, in the
-// pipe's ring, in one arena for all blocks.
+// (period-major): the terms in the order the loop adds them. The terms live in storage the
+// block is given (in the pipe's ring, one arena for all blocks) and are uninitialised until
+// drawn; `burst` is written only while a burst rings.
 struct NoiseBlock {
-  NoiseBlock(std::size_t periods, std::size_t steps);                    // owns its terms
-  NoiseBlock(std::size_t periods, std::size_t steps, double* storage);  // in storage, doubles() of them
-  NoiseBlock(const NoiseBlock&) = delete;
+  NoiseBlock(std::size_t periods, std::size_t steps, double* storage);  // doubles() of them
+  NoiseBlock(const NoiseBlock&) = delete;  // a copy would share the terms
   NoiseBlock& operator=(const NoiseBlock&) = delete;
-  NoiseBlock(NoiseBlock&&) = default;  // the spans stay valid: the storage does not move
+  NoiseBlock(NoiseBlock&&) = default;
   static std::size_t doubles(std::size_t periods, std::size_t steps) {
     return periods * (2 + steps * (7 + kBurstTones));
   }
@@ -44,10 +43,6 @@ struct NoiseBlock {
   std::span<double> vib, input;                   // input acceleration (g): vibration, white
   std::span<double> burst;                        // kBurstTones terms per step
   std::span<double> intf, poll_i, poll_q, sense;  // added to x (g): lines, pick-up I and Q, white
-
- private:
-  NoiseBlock(std::size_t periods, std::size_t steps, std::unique_ptr<double[]> own);
-  std::unique_ptr<double[]> own_;
 };
 
 // The DUT's noise sources, one random stream each (the streams and their seeds as the model
@@ -111,6 +106,9 @@ class NoisePipe {
   PeriodNoise source_;
   std::unique_ptr<double[]> arena_;  // the ring's terms
   std::vector<NoiseBlock> ring_;
+  // A sleeping worker is woken when at most low_ blocks are left unread, a sleeping reader when
+  // ready_ are drawn: half a ring each way (a reader of a ring of one waits for its one block).
+  std::size_t low_ = 0, ready_ = 1;
   std::mutex m_;  // guards the counts and flags below
   std::condition_variable worker_cv_, reader_cv_;
   uint64_t drawn_ = 0, released_ = 0;  // blocks

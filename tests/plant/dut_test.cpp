@@ -221,7 +221,8 @@ TEST(Dut, NoisePipeHandsOverTheBlocksInOrderAtAnyDepth) {
   for (std::size_t depth : {1, 2, 3, 8}) {
     PeriodNoise direct(p, 11, 10);
     NoisePipe pipe(PeriodNoise(p, 11, 10), 4, depth);
-    NoiseBlock want(4, 10);
+    std::vector<double> storage(NoiseBlock::doubles(4, 10));
+    NoiseBlock want(4, 10, storage.data());
     for (int k = 0; k < 40; ++k) {
       direct.fill(want);
       const NoiseBlock& got = pipe.front();
