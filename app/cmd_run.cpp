@@ -57,6 +57,7 @@ struct RunArgs {
   std::string serial;
   std::string out;
   std::string resume;
+  std::string resume_serial;  // --serial given with --resume: the DUT the operator says is mounted
   std::string db;
   std::vector<std::string> inject;
   bool yes = false;
@@ -437,6 +438,13 @@ int do_run(RunArgs a) {
     a.out = a.resume;
     read_invocation(inv_path, invocation, a);
     a.profile = a.resume + "/profile.toml";
+    // --serial with --resume guards the resume: it must name the run's DUT.
+    if (!a.resume_serial.empty() && a.serial != a.resume_serial)
+      throw ConfigError(a.serial.empty()
+                            ? fmt::format("--serial {}: the run in {} was started without --serial; the serial its DUT "
+                                          "reported is checked again at bring-up",
+                                          a.resume_serial, a.resume)
+                            : fmt::format("--serial {}: the run in {} is of DUT '{}'", a.resume_serial, a.resume, a.serial));
   }
   std::string profile_source;
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
@@ -591,7 +599,21 @@ void add_run(CLI::App& app, int& rc) {
   sub->add_option("--inject", a->inject,
                   "Emulated plant only: inject a fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, "
                   "sigterm@end, drop@SEQ:COUNT; T in device seconds)");
-  sub->callback([a, &rc] {
+  auto* serial = sub->get_option("--serial");
+  auto* profile = sub->get_option("--profile");
+  auto* hardware = sub->get_option("--hardware");
+  auto* out = sub->get_option("--out");
+  auto* inject = sub->get_option("--inject");
+  sub->callback([a, &rc, plant, serial, profile, hardware, out, inject] {
+    if (!a->resume.empty()) {
+      // A resume continues with the run folder's profile, plant and options (run.json,
+      // profile.toml); one given again here would be ignored, so it is refused instead.
+      for (const CLI::Option* o : {profile, plant, hardware, out, inject})
+        if (o->count() > 0)
+          throw ConfigError(o->get_name() + " cannot be given with --resume: the run continues with the profile, plant "
+                                            "and options in " + a->resume + "/run.json and profile.toml");
+      if (serial->count() > 0) a->resume_serial = a->serial;
+    }
     if (!a->hardware.empty()) a->plant = "hardware";
     rc = do_run(*a);
   });

@@ -1,6 +1,10 @@
 #include "plant/emulated/world.hpp"
 
+#include <cmath>
+#include <string>
+
 #include "plant/firmware/firmware_config.hpp"
+#include "plant/firmware/firmware_emulator.hpp"
 #include "plant/firmware/inprocess_dut.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "rig/core/errors.hpp"
@@ -33,6 +37,17 @@ EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& se
   cfg::check_keys(plant_cfg, {"seed", "dut", "table", "firmware"}, "plant");
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   dut_ = std::make_unique<CountingSource>(make_dut_source(cfg::get_table(plant_cfg, "dut"), seed, serial), samples_);
+  // The firmware sends one sample per tick: a DUT model at another output rate would be
+  // streamed (and its captures labelled) at the tick's rate, not its own.
+  const double tick_hz = 1e9 / static_cast<double>(kFirmwareTickNs);
+  if (std::abs(dut_->output_rate_hz() - tick_hz) > 1e-9 * tick_hz) {
+    const toml::node* n = plant_cfg.at_path("dut.loop.output_rate_hz").node();
+    const std::string why = "the emulated firmware streams one sample per " + std::to_string(kFirmwareTickNs / 1000) +
+                            " us tick, so the emulated DUT's output rate must be " +
+                            std::to_string(std::llround(tick_hz)) + " Hz";
+    if (n) cfg::reject(*n, "output_rate_hz", why);
+    throw ConfigError("[plant.dut.loop] output_rate_hz = " + std::to_string(dut_->output_rate_hz()) + ": " + why);
+  }
   // Separate, fixed streams per component: the table's repeatability does not
   // shift when the DUT model draws more or fewer random numbers.
   table_emu_ = make_table_emulator(cfg::get_table(plant_cfg, "table"), seed ^ 0x7ab1e5eedULL);

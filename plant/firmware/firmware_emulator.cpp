@@ -13,7 +13,7 @@ using link::Op;
 using link::Result;
 
 namespace {
-constexpr int64_t kTickNs = 1'000'000;  // 1 kHz output period
+constexpr int64_t kTickNs = kFirmwareTickNs;  // 1 kHz output period
 constexpr double kRangeG = 10.0;        // docs/method.md: range +-10 g
 // A loop test's burst leaves at about the pace of a 1 Mbit/s bus: 8-byte frames of at most 135
 // bits (docs/can-protocol.md "Bus load") are 7.4 per ms.

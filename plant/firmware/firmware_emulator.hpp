@@ -24,6 +24,9 @@
 
 namespace rig::plant {
 
+// The firmware's tick: one output sample per tick, 1 ms (1 kHz), as the protocol's DUT streams.
+inline constexpr int64_t kFirmwareTickNs = 1'000'000;
+
 struct FirmwareOptions {
   int version_major = 1, version_minor = 4, version_patch = 0;
   double heartbeat_hz = 10.0;

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "analysis/loop_response.hpp"
+#include "design/filter.hpp"
 #include "design/loop_figures.hpp"
 #include "rig/core/toml_util.hpp"
 
@@ -149,7 +150,29 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
     dut.loop = {{"source", "loop test on the DUT"}, {"file", kLoopTestFile}, {"reason", why}};
     return;
   }
-  const nlohmann::json f = loop_test_figures(r);
+  nlohmann::json f = loop_test_figures(r);
+  // Settled within the record? The figures are read against each step's final level (the mean
+  // of its last fifth), which is the step's final value only if the response got there. A
+  // force-balance loop's DC gain is 1 (the feedback balances the test torque), and y's is that
+  // times the output filter's H(1); a step whose final level lies outside the settling band of
+  // it is, by the band's own definition, not settled when the record ends (a slow creep would
+  // otherwise read as settled against wherever it had got to, and pass).
+  const double expected = std::abs(design::response(p.filter, 0.0));
+  for (const auto& st : f["per_step"]) {
+    const double fin = st["final_value"].get<double>();
+    if (std::abs(fin - expected) <= analysis::kStepSettlingBand * expected) continue;
+    const std::string why =
+        fmt::format("loop test ({} steps of {:g} g): the step response had not settled when its {:g} s record ended: "
+                    "a step ends at {:.4g}, outside the {:g} % band of {:.4g}, the loop's DC gain through the output "
+                    "filter",
+                    r.steps.size(), r.amplitude_g, rq.record_s, fin, analysis::kStepSettlingBand * 100, expected);
+    ctx.log->warn("{}", why);
+    ctx.values.set("bandwidth_0p5", std::nullopt, why);
+    ctx.values.set("settling_time", std::nullopt, why);
+    f["reason"] = why;
+    dut.loop = f;
+    return;
+  }
   bool crossed = true;  // a step whose response never falls to 0.5 below Nyquist has no bandwidth to average
   for (const auto& st : f["per_step"]) crossed = crossed && st["bandwidth_0p5_hz"].get<double>() > 0;
   if (crossed)

@@ -64,11 +64,25 @@ void phase_bias(PhaseContext& ctx, const Profile& p, DutState& st) {
     (p.order[i] == Orientation::U10 ? x10 : x20).push_back(st.runs.at(i + 1).rec.mean_x);
   const BiasBaseError b = bias_and_base_error(x10, x20);
   st.bias = BiasState{b.bias, b.base_error, b.sign_u10};
-  ctx.values.set("bias", b.bias, "formula (3), GOST R 8.736 95 % interval", b.bias - b.bias_ci_half,
-                 b.bias + b.bias_ci_half);
-  ctx.values.set("base_error", b.base_error,
-                 fmt::format("formula (4); enters x10 with {}", b.sign_u10 > 0 ? "+" : "-"),
-                 b.base_error - b.base_ci_half, b.base_error + b.base_ci_half);
+  const std::string sign = fmt::format("formula (4); enters x10 with {}", b.sign_u10 > 0 ? "+" : "-");
+  if (b.bias_ci_half && b.base_ci_half) {
+    ctx.values.set("bias", b.bias, "formula (3), GOST R 8.736 95 % interval", b.bias - *b.bias_ci_half,
+                   b.bias + *b.bias_ci_half);
+    ctx.values.set("base_error", b.base_error, sign, b.base_error - *b.base_ci_half, b.base_error + *b.base_ci_half);
+  } else {  // one U10/U20 pair: the value without an interval, and said so
+    const char* one = "; one U10/U20 pair: no interval (GOST R 8.736 takes it from the scatter of two or more)";
+    ctx.values.set("bias", b.bias, std::string("formula (3)") + one);
+    ctx.values.set("base_error", b.base_error, sign + one);
+  }
+}
+
+// Values read from a capture that lost samples (within the profile's max_lost_samples) were
+// computed over the samples joined across the gaps: each says so, with the counts.
+void note_gaps(PhaseContext& ctx, const Recorded& r) {
+  if (r.lost == 0) return;
+  ctx.values.note_scope(fmt::format("{} lost {} samples in {} gap(s), joined across them ([procedure] "
+                                    "max_lost_samples)",
+                                    r.capture, r.lost, r.gaps));
 }
 
 void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
@@ -93,6 +107,7 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
   } else {
     ctx.values.set("accuracy_class", std::nullopt, fmt::format("B = {:.3g} g exceeds every class in the profile", *b));
   }
+  note_gaps(ctx, *st.in_run);
 }
 
 // Allan family + noise terms of one channel; writes the passport values.
@@ -175,6 +190,7 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
   a["allan"]["confidence"] = p.confidence;
   a["device_time_s"] = ctx.dev.clock.now_s();
   st.analysis = a;
+  note_gaps(ctx, *st.raw);
 }
 
 }  // namespace
@@ -257,6 +273,13 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
                   info.temperature_c, info.output_rate_hz);
     if (opt.expected_serial && *opt.expected_serial != info.serial)
       throw ConfigError(fmt::format("DUT reports serial '{}', expected '{}' (--serial)", info.serial, *opt.expected_serial));
+    // A resume restores the identity its checkpoint was made with: the completed phases measured
+    // that DUT, so another one mounted since must not finish its passport (a hardware run
+    // started without --serial has nothing else to check it by).
+    if (st.dut && !st.dut->serial.empty() && st.dut->serial != info.serial)
+      throw ConfigError(fmt::format("DUT reports serial '{}', but the run being resumed measured '{}' in its completed "
+                                    "phases: mount that DUT, or start a new run",
+                                    info.serial, st.dut->serial));
     if (std::abs(info.output_rate_hz - p.rate_hz) > 1e-6 * p.rate_hz)
       throw ConfigError(fmt::format("DUT streams at {} Hz, profile '{}' expects rate_hz = {}", info.output_rate_hz, p.name,
                                     p.rate_hz));

@@ -64,7 +64,8 @@ struct BiasBaseError {
   double bias = 0;        // g_sist, formula (3)
   double base_error = 0;  // g_dA, formula (4), >= 0 by the sign rule
   int sign_u10 = +1;      // the sign with which g_dA enters x10
-  double bias_ci_half = 0, base_ci_half = 0;  // GOST 95 % half-widths over the pairs
+  // GOST 95 % half-widths over the pairs; none from a single pair (no scatter to take them from)
+  std::optional<double> bias_ci_half, base_ci_half;
 };
 BiasBaseError bias_and_base_error(const std::vector<double>& x10, const std::vector<double>& x20);
 

@@ -103,6 +103,11 @@ Measurement& MeasurementSet::set(const std::string& name, std::optional<double> 
   return *m;
 }
 
+void MeasurementSet::note_scope(const std::string& note) {
+  for (const std::string& name : scope_)
+    if (Measurement* m = find_mut(name)) m->reason += (m->reason.empty() ? "" : "; ") + note;
+}
+
 void MeasurementSet::set_scope(std::string phase, std::vector<std::string> names) {
   scope_phase_ = std::move(phase);
   scope_ = std::move(names);

@@ -62,6 +62,9 @@ class MeasurementSet {
   // running phase did not declare.
   Measurement& set(const std::string& name, std::optional<double> value, const std::string& reason = {},
                    std::optional<double> lo = std::nullopt, std::optional<double> hi = std::nullopt);
+  // Appends "; note" to the reason of every value the running phase declared (what all of
+  // them share: a capture that lost samples, say).
+  void note_scope(const std::string& note);
   const Measurement* find(const std::string& name) const;
   const std::vector<Measurement>& all() const { return items_; }
   // Computes every outcome (see judge()).

@@ -218,6 +218,51 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   }
 }
 
+// A resume continues the run it finds: the options that would change it are refused rather
+// than ignored (before, --profile, --serial and --inject given with --resume were silently
+// overridden by the run folder's), and a DUT other than the one the completed phases measured
+// is refused at bring-up (before, the restored identity was overwritten, so a passport mixed
+// two DUTs). Each refusal is exit 2 and leaves the checkpoint as it was: the right resume then
+// completes the run.
+TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
+  const std::string d = tmp("campaign-resume-guard");
+  fs::create_directories(d);
+  const std::string r = d + "/k";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", "sigkill@100"}, r + "-io"),
+            128 + 9)
+      << slurp(r + "-io.stderr");
+  const std::string checkpoint = r + "/checkpoint.json", before = slurp(checkpoint);
+  ASSERT_FALSE(before.empty());
+  const std::vector<std::vector<std::string>> refused = {{"--profile", "paper"},
+                                                         {"--plant", "emulated"},
+                                                         {"--out", d + "/elsewhere"},
+                                                         {"--inject", "sigkill@200"},
+                                                         {"--serial", "QPA-OTHER"}};
+  for (const auto& extra : refused) {
+    std::vector<std::string> args = {"run", "--resume", r, "--yes", "--no-history"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    EXPECT_EQ(run(args, r + "-opt"), 2) << extra[0] << "\n" << slurp(r + "-opt.stderr");
+    EXPECT_NE(slurp(r + "-opt.stderr").find(extra[0]), std::string::npos) << slurp(r + "-opt.stderr");
+    EXPECT_EQ(slurp(checkpoint), before) << extra[0];
+  }
+  // Another DUT: the checkpoint's identity says the completed phases measured QPA-OTHER, the
+  // emulated DUT reports EMU-QPA-0001.
+  json c = read_json(checkpoint);
+  ASSERT_EQ(c["state"]["dut"]["serial"], "EMU-QPA-0001");
+  c["state"]["dut"]["serial"] = "QPA-OTHER";
+  std::ofstream(checkpoint) << c.dump();
+  EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-dut"), 2) << slurp(r + "-dut.stderr");
+  EXPECT_NE(slurp(r + "-dut.stderr").find("DUT reports serial 'EMU-QPA-0001', but the run being resumed measured "
+                                          "'QPA-OTHER'"),
+            std::string::npos)
+      << slurp(r + "-dut.stderr");
+  EXPECT_EQ(read_json(checkpoint)["completed"], json::parse(before)["completed"]) << "the completed phases are kept";
+  c["state"]["dut"]["serial"] = "EMU-QPA-0001";
+  std::ofstream(checkpoint) << c.dump();
+  EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-ok"), 0) << slurp(r + "-ok.stderr");
+  EXPECT_EQ(read_json(r + "/passport.json")["outcome"], "PASS");
+}
+
 // A SIGTERM from outside (a service manager stopping rig), not injected: taken like SIGINT.
 // (Wall-time points are not drawn at random here: whether a signal lands before or after the
 // passport is final would then depend on the machine's load; the late points are the

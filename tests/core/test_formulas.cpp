@@ -18,8 +18,19 @@ TEST(Formulas, BiasAndBaseErrorHandComputed) {
   // (4): mean of (x10-x20)/2 = (4e-4 + 3.8e-4 + 4.2e-4)/3 = 4e-4
   EXPECT_NEAR(r.base_error, 4.0e-4, 1e-15);
   EXPECT_EQ(r.sign_u10, +1);
-  EXPECT_NEAR(r.bias_ci_half, 0.0, 1e-15);  // every pair gives exactly -5e-4
-  EXPECT_GT(r.base_ci_half, 0.0);
+  ASSERT_TRUE(r.bias_ci_half && r.base_ci_half);
+  EXPECT_NEAR(*r.bias_ci_half, 0.0, 1e-15);  // every pair gives exactly -5e-4
+  EXPECT_GT(*r.base_ci_half, 0.0);
+}
+
+// One pair has no scatter to take a GOST interval from: none is given (the passport then
+// carries the value without lo/hi and says why), where a zero half-width was reported before.
+TEST(Formulas, OnePairHasNoInterval) {
+  const auto r = bias_and_base_error({-1.0e-4}, {-9.0e-4});
+  EXPECT_NEAR(r.bias, -5.0e-4, 1e-15);
+  EXPECT_NEAR(r.base_error, 4.0e-4, 1e-15);
+  EXPECT_FALSE(r.bias_ci_half);
+  EXPECT_FALSE(r.base_ci_half);
 }
 
 TEST(Formulas, SignRuleWhenU20ReadsHigher) {

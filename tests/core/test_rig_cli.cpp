@@ -681,6 +681,55 @@ TEST(RigCli, DryRunValidatesTheEmulatedPlantsSection) {
   EXPECT_NE(err.find("adc_bitz"), std::string::npos) << err;
 }
 
+// The emulated firmware sends one sample per 1 ms tick: a DUT model at another output rate was
+// accepted and streamed at 1 kHz regardless (the passport PASSed a configuration the plant did
+// not honour). Now it is refused with its place, before anything runs.
+TEST(RigCli, AnEmulatedOutputRateTheFirmwareCannotStreamIsRefused) {
+  const std::string d = tmp("rate500");
+  fs::create_directories(d);
+  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[plant.dut.loop]\noutput_rate_hz = 500.0\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", d + "/r.toml", "--yes", "--no-history", "--out", d + "/run"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2) << slurp(d + "/io.stderr");
+    const std::string err = slurp(d + "/io.stderr");
+    EXPECT_NE(err.find(d + "/r.toml:3:"), std::string::npos) << err;
+    EXPECT_NE(err.find("output rate must be 1000 Hz"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(d + "/run"));
+  }
+}
+
+// A profile may allow lost samples ([procedure] max_lost_samples); the values read from such a
+// capture are computed over the samples joined across the gaps, and each of them says so (before,
+// only analysis.json's raw.gaps did). The ci profile's raw capture holds samples from about
+// 131 000 on (the in-run capture before it), so drop@190000 falls in the raw capture and
+// drop@130000 in the in-run one.
+TEST(RigCli, ValuesFromACaptureWithJoinedGapsSaySo) {
+  const std::string d = tmp("gaps-noted");
+  fs::create_directories(d);
+  std::ofstream(d + "/lost.toml") << "base = \"ci\"\n[profile]\nname = \"t-lost\"\n[procedure]\nmax_lost_samples = 20000\n";
+  const std::string note = "lost 50 samples in 1 gap(s), joined across them";
+  struct Case {
+    const char* drop;
+    std::vector<std::string> noted, clean;
+  };
+  for (const Case& c : {Case{"drop@190000:50", {"q", "n", "in_run_b_allan", "rms_filtered"}, {"bias", "in_run_b_gost_2s"}},
+                        Case{"drop@130000:50", {"in_run_b_gost_2s", "in_run_b_gost_4s"}, {"bias", "q"}}}) {
+    const std::string r = d + "/" + c.drop;
+    EXPECT_EQ(run({"run", "--profile", d + "/lost.toml", "--yes", "--no-history", "--out", r, "--inject", c.drop},
+                  r + "-io"),
+              0)
+        << slurp(r + "-io.stderr");
+    const auto p = nlohmann::json::parse(slurp(r + "/passport.json"));
+    for (const std::string& n : c.noted)
+      EXPECT_NE(p["values"][n]["reason"].get<std::string>().find(note), std::string::npos)
+          << c.drop << " " << n << ": " << p["values"][n]["reason"];
+    for (const std::string& n : c.clean)
+      EXPECT_EQ(p["values"][n]["reason"].get<std::string>().find("lost"), std::string::npos)
+          << c.drop << " " << n << ": " << p["values"][n]["reason"];
+  }
+}
+
 TEST(RigCli, DryRunPrintsThePlanAndTouchesNothing) {
   const std::string d = tmp("dry");
   fs::create_directories(d);
@@ -792,6 +841,35 @@ TEST(RigCli, ResumeOfAFailingProfileStillFails) {
     if (ph["id"] == "in-run-b") {
       EXPECT_EQ(ph["status"], "skipped") << "judged from the checkpoint's values";
     }
+}
+
+// Criterion 2 is read against each step's final level, so a response still creeping when the
+// loop test's record ends must not read as settled. A custom output filter that passes 90 % of a
+// step at once and the rest with a 0.32 s time constant (DC gain 1) ends the 0.1 s record at
+// 0.92: before, the settling time read 1.2 ms against that level and passed [0, 0.005]. Now both
+// figures are null with the reason, and the run fails (exit 1). The ci profile's own filter
+// settles and passes (RigCli.CiProfileEndToEnd).
+TEST(RigCli, ALoopTestStepThatHasNotSettledGivesNoFigures) {
+  const std::string d = tmp("loop-creep");
+  fs::create_directories(d);
+  std::ofstream(d + "/creep.toml")
+      << "base = \"ci\"\n[profile]\nname = \"t-creep\"\n[filter]\npreset = \"custom\"\n"
+         "sections = [[0.9000314109922505, -0.8997173010697462, 0.0, -0.9996858900774958, 0.0]]\n"
+         "rate_hz = 10000.0\nenabled = true\n[limits]\nbandwidth_0p5 = [0.0, 5000.0]\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/creep.toml", "--yes", "--no-history", "--out", d + "/run"}, d + "/io"), 1)
+      << slurp(d + "/io.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "FAIL");
+  for (const char* name : {"settling_time", "bandwidth_0p5"}) {
+    const auto& v = p["values"][name];
+    EXPECT_TRUE(v["value"].is_null()) << name << " " << v;
+    EXPECT_EQ(v["outcome"], "FAIL") << name;
+    EXPECT_NE(v["reason"].get<std::string>().find("had not settled when its 0.1 s record ended: a step ends at 0.92"),
+              std::string::npos)
+        << v["reason"];
+  }
+  const std::string junit = slurp(d + "/run/junit.xml");
+  EXPECT_NE(junit.find("required value not measured: loop test"), std::string::npos) << junit;
 }
 
 // Issue 12, 5: a measurement with limits whose value is null fails the run, with the reason.
