@@ -13,7 +13,6 @@ using link::Op;
 using link::Result;
 
 namespace {
-constexpr int64_t kTickNs = kFirmwareTickNs;  // 1 kHz output period
 constexpr double kRangeG = 10.0;        // docs/method.md: range +-10 g
 // A loop test's burst leaves at about the pace of a 1 Mbit/s bus: 8-byte frames of at most 135
 // bits (docs/can-protocol.md "Bus load") are 7.4 per ms.
@@ -72,16 +71,16 @@ void FirmwareEmulator::flush_sends() {
 void FirmwareEmulator::step(double dt_s) {
   if (!(dt_s > 0)) return;
   time_acc_ += dt_s * 1e9;
-  if (time_acc_ < static_cast<double>(kTickNs) - 0.5) return;
+  if (time_acc_ < static_cast<double>(kFirmwareTickNs) - 0.5) return;
   // One lock for the slice's ticks (the world steps about 10 ms at a time), not one per tick,
   // and one batch of frames on the bus: in lockstep the simulated time stands still during the
   // slice, so its ticks' frames carry one timestamp whether they leave tick by tick or together,
   // and the rig reads none of them before the slice ends.
   std::lock_guard lk(mu_);
   try {
-    while (time_acc_ >= static_cast<double>(kTickNs) - 0.5) {  // tolerate rounding of many small dt
+    while (time_acc_ >= static_cast<double>(kFirmwareTickNs) - 0.5) {  // tolerate rounding of many small dt
       tick();
-      time_acc_ -= static_cast<double>(kTickNs);
+      time_acc_ -= static_cast<double>(kFirmwareTickNs);
     }
   } catch (...) {
     flush_sends();  // the frames of the ticks before the fault leave, as they did tick by tick
@@ -377,7 +376,7 @@ void FirmwareEmulator::start_realtime() {
     auto t0 = clk::now();
     uint64_t done = 0;
     while (!stop_) {
-      const auto due = static_cast<uint64_t>((clk::now() - t0) / std::chrono::nanoseconds(kTickNs));
+      const auto due = static_cast<uint64_t>((clk::now() - t0) / std::chrono::nanoseconds(kFirmwareTickNs));
       // A wake-up more than 1 s late (suspended process) restarts the schedule
       // rather than bursting a second of samples.
       if (due > done + 1000) {
@@ -395,7 +394,7 @@ void FirmwareEmulator::start_realtime() {
         // A transport error (interface went down): keep ticking, a real MCU does.
         ++done;
       }
-      std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(kTickNs) * (done + 1));
+      std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(kFirmwareTickNs) * (done + 1));
     }
   });
 }

@@ -113,6 +113,13 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   rq.steps = p.loop_steps;
   rq.record_s = p.loop_record_s;
   const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
+  // No figures, and why: both values null with the reason, analysis.json's loop with it too.
+  auto no_figures = [&](const std::string& why, nlohmann::json loop) {
+    ctx.values.set("bandwidth_0p5", std::nullopt, why);
+    ctx.values.set("settling_time", std::nullopt, why);
+    loop["reason"] = why;
+    dut.loop = std::move(loop);
+  };
   if (!r.supported && p.design_model) {
     // The DUT type's documented loop through the profile's filter: a figure of the design, not
     // of this DUT, and said so; no interval (the model has no scatter).
@@ -129,10 +136,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   }
   if (!r.supported) {
     ctx.log->warn("loop figures not measured: {}", r.reason);
-    const std::string why = r.reason;  // "required value not measured" comes with the verdict
-    ctx.values.set("bandwidth_0p5", std::nullopt, why);
-    ctx.values.set("settling_time", std::nullopt, why);
-    dut.loop = {{"source", "none"}, {"reason", r.reason}};
+    no_figures(r.reason, {{"source", "none"}});  // "required value not measured" comes with the verdict
     return;
   }
   write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, loop_test_csv(r));
@@ -145,9 +149,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
     const std::string why = fmt::format("the DUT's loop saturated in {} of {} loop-test steps of {:g} g",
                                         saturated, r.steps.size(), r.amplitude_g);
     ctx.log->warn("{}", why);
-    ctx.values.set("bandwidth_0p5", std::nullopt, why);
-    ctx.values.set("settling_time", std::nullopt, why);
-    dut.loop = {{"source", "loop test on the DUT"}, {"file", kLoopTestFile}, {"reason", why}};
+    no_figures(why, {{"source", "loop test on the DUT"}, {"file", kLoopTestFile}});
     return;
   }
   nlohmann::json f = loop_test_figures(r);
@@ -167,10 +169,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
                     "filter",
                     r.steps.size(), r.amplitude_g, rq.record_s, fin, analysis::kStepSettlingBand * 100, expected);
     ctx.log->warn("{}", why);
-    ctx.values.set("bandwidth_0p5", std::nullopt, why);
-    ctx.values.set("settling_time", std::nullopt, why);
-    f["reason"] = why;
-    dut.loop = f;
+    no_figures(why, std::move(f));
     return;
   }
   bool crossed = true;  // a step whose response never falls to 0.5 below Nyquist has no bandwidth to average
