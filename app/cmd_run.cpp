@@ -472,11 +472,30 @@ int do_run(RunArgs a) {
                              p.source, a.plant);
     plan_view.plan(phases);
     for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
+    // A resume's checkpoint is checked as the run would check it (its captures read, nothing
+    // opened), so the plan says what the resume keeps, computes again and still records.
+    std::vector<std::string> completed;
+    if (!a.resume.empty()) {
+      MeasurementSet values;
+      acceptance::declare_values(p, phases, values);
+      const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
+      spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
+      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet);
+      std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
+      for (std::size_t i = 0; i < completed.size(); ++i) {
+        std::string& list = phases[i].from_records ? again : kept;
+        list += (list.empty() ? "" : ", ") + completed[i];
+      }
+      std::cout << fmt::format("Resume: {} checked with the captures it names; {} of {} phases complete.\n",
+                               Executive::checkpoint_path(a.resume), completed.size(), phases.size());
+      if (!kept.empty()) std::cout << "  kept (not recorded again): " << kept << "\n";
+      if (!again.empty()) std::cout << "  computed again from the kept captures: " << again << "\n";
+    }
     double total = 0;
-    for (const auto& ph : phases) total += ph.planned_s;
-    std::cout << fmt::format("Estimated duration: {} of device time{}, plus bring-up (the DUT's power-up and the "
+    for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
+    std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
                              "table's homing, which depends on where the table stands) and any retries\n",
-                             TerminalView::hms(total),
+                             completed.empty() ? "" : " of what is left", TerminalView::hms(total),
                              a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
     return kExitPass;
   }
@@ -501,6 +520,14 @@ int do_run(RunArgs a) {
   auto log = make_logger(a.out, a.quiet);
   log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
 
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
+  // A resume's checkpoint, with the captures it names, is checked before any device opens.
+  const std::vector<std::string> completed =
+      a.resume.empty() ? std::vector<std::string>{}
+                       : Executive::read_checkpoint(a.out, phases, values, state, identity, *log);
+
   Backends b;
   try {
     b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg, a.serial);
@@ -515,9 +542,6 @@ int do_run(RunArgs a) {
   Devices dev = b.devices();
   dev.io.on_estop([&cancel] { cancel.request("e-stop line opened"); });
 
-  MeasurementSet values;
-  acceptance::declare_values(p, phases, values);
-  const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
   acceptance::RunOptions ro;
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
@@ -531,9 +555,9 @@ int do_run(RunArgs a) {
   RunResult res = exec.run(
       [&](PhaseContext& c) {
         acceptance::bring_up(c, p, ro, state.slot());
-        if (fast_forward) fast_forward_emulated(c, p, completed_phases(a.out), *log);
+        if (fast_forward) fast_forward_emulated(c, p, completed, *log);
       },
-      phases, values, state, cancel.token(), !a.resume.empty(), identity);
+      phases, values, state, cancel.token(), completed, identity);
   if (signal_at_end) {
     ::kill(::getpid(), signal_at_end);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));

@@ -38,14 +38,6 @@ std::string first_difference(const nlohmann::json& replay, const nlohmann::json&
 
 }  // namespace
 
-std::vector<std::string> completed_phases(const std::string& run_dir) {
-  const nlohmann::json cp = read_checkpoint(run_dir);
-  std::vector<std::string> done;
-  if (cp.is_object() && cp.contains("completed"))
-    for (const auto& id : cp["completed"]) done.push_back(id.get<std::string>());
-  return done;
-}
-
 void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, const std::vector<std::string>& completed,
                            spdlog::logger& log) {
   // The replay's own procedure state, values and captures: nothing of it reaches the run's.
@@ -63,7 +55,7 @@ void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, cons
     ctx.progress->log("  emulated plant: replaying the completed recordings to rebuild its state at the checkpoint");
   for (const Phase& ph : phases) {
     if (std::find(completed.begin(), completed.end(), ph.id) == completed.end()) continue;
-    if (ph.planned_s <= 0) continue;  // computes from captures: leaves the devices alone
+    if (ph.from_records) continue;  // computes from captures: leaves the devices alone
     log.info("fast-forward: replaying phase {} against the emulated plant (device time {:.3f} s)", ph.id,
              ctx.dev.clock.now_s());
     ph.run(replay);

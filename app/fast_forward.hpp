@@ -16,13 +16,8 @@
 
 namespace rig::cli {
 
-// The phase ids `checkpoint.json` in `run_dir` marks completed; empty when there is no
-// checkpoint (a run stopped before its first phase completed). Call after the executive has
-// checked the checkpoint (Executive::run does, before bring-up).
-std::vector<std::string> completed_phases(const std::string& run_dir);
-
-// Replays, against `ctx.dev`, every phase in `completed` that uses the devices (planned
-// device time > 0: the recordings; bias, in-run-b and allan only compute from files), then
+// Replays, against `ctx.dev`, every phase in `completed` (Executive::read_checkpoint's) that
+// uses the devices (the recordings; bias, in-run-b and allan only compute from files), then
 // checks that the replay reproduced what `checkpoint.json` recorded of them (sample counts,
 // losses, means bit for bit). A mismatch means this build's plant is not the one that wrote
 // the checkpoint: logged as a warning (the resumed passport will then differ from an

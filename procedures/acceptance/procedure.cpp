@@ -316,7 +316,8 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
   }
   ph.push_back({"bias", "bias and base error, formulas (3), (4)", 0, [&p, &st](PhaseContext& c) { phase_bias(c, p, st); },
                 {{"bias", "g", "Bias g_сист, formula (3)"},
-                 {"base_error", "g", "Base error g_δA, formula (4)"}}});
+                 {"base_error", "g", "Base error g_δA, formula (4)"}},
+                true});
   ph.push_back({"in-run", fmt::format("in-run test at {}: {} s (procedure B)", to_string(p.in_run_orientation), p.in_run_s),
                 recording_s(p.in_run_orientation, p.in_run_s), [&p, &st](PhaseContext& c) {
                   st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s,
@@ -329,7 +330,7 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
   gost.push_back({"accuracy_class", "-",
                   fmt::format("Accuracy class from B of {:g} s averages", p.in_run_blocks_s.empty() ? 0.0 : p.in_run_blocks_s[0])});
   ph.push_back({"in-run-b", "B by the Russian method, (max-min)/2 of block means", 0,
-                [&p, &st](PhaseContext& c) { phase_in_run_b(c, p, st); }, gost});
+                [&p, &st](PhaseContext& c) { phase_in_run_b(c, p, st); }, gost, true});
   ph.push_back({"raw", fmt::format("raw capture at {}: {} s at {} Hz (procedure C)", to_string(p.raw_orientation),
                                    p.raw_s, p.rate_hz),
                 recording_s(p.raw_orientation, p.raw_s), [&p, &st](PhaseContext& c) {
@@ -346,7 +347,8 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                  {"r", "g/h", "Rate ramp R"},
                  {"in_run_b_allan_filtered", "g", "In-run B from Allan deviation, filtered output y(t)"},
                  {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
-                 {"rms_filtered", "g", "RMS error x̂ of y(t)"}}});
+                 {"rms_filtered", "g", "RMS error x̂ of y(t)"}},
+                true});
   ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter, measured by the DUT's loop test",
                 // the steps at the loop's rate, the rate the output filter runs at in the DUT
                 p.loop_steps * loop_step_nominal_s(p.loop_record_s,

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -12,6 +13,8 @@
 namespace rig::acceptance {
 
 namespace {
+
+constexpr double kNotStated = std::numeric_limits<double>::quiet_NaN();
 
 // Reading a JSON object field by field; every error names the field's path.
 class Fields {
@@ -76,8 +79,10 @@ Recorded recorded_from(const Fields& f) {
   r.gaps = f.count("gaps");
   r.duplicates = f.has("duplicates") ? f.count("duplicates") : 0;  // older checkpoints lack it
   r.attempts = static_cast<int>(f.count("attempts"));
-  r.mean_x = f.has("mean_g") ? f.num("mean_g") : 0;
-  r.mean_y = f.has("mean_y_g") ? f.num("mean_y_g") : 0;
+  // null (a channel whose mean was not finite) or absent (older checkpoints): not stated, and
+  // taken from the capture when the state is restored (ProcedureState::check_capture).
+  r.mean_x = f.has("mean_g") ? f.num("mean_g") : kNotStated;
+  r.mean_y = f.has("mean_y_g") ? f.num("mean_y_g") : kNotStated;
   return r;
 }
 
@@ -204,14 +209,21 @@ DutState dut_state_from_json(const nlohmann::json& j) {
 
 nlohmann::json ProcedureState::save() const { return to_json(slots_.at(0)); }
 
-// A capture named by the state must be the one recorded: present, a rig capture of that
-// phase at the profile's rate, and at least as long as the samples counted when it was recorded.
-void ProcedureState::check_capture(const Recorded& r, const std::string& field, const std::string& run_dir) const {
+// A capture named by the state must be the one its record describes: present, a rig capture of
+// that phase at the profile's rate, of the state's DUT, undamaged, holding exactly the samples
+// counted, with the record's means (summed here as record.cpp sums them, so equal to the last
+// bit) and no gap in its sequence counter that the record does not count. The phases that
+// compute from records read these records: a checkpoint that contradicts its captures is refused,
+// never believed.
+void ProcedureState::check_capture(Recorded& r, const std::string& field, const std::string& run_dir,
+                                   const std::string& serial) const {
   const std::string path = run_dir + "/" + r.capture;
   if (r.capture.empty() || r.capture.find("..") != std::string::npos || r.capture.front() == '/')
     throw std::invalid_argument(field + ".capture: \"" + r.capture + "\" is not a capture in the run folder");
   if (!std::filesystem::is_regular_file(path))
     throw std::invalid_argument(field + ".capture: " + path + " is missing");
+  uint64_t n = 0, lost = 0, gaps = 0;
+  double sx = 0, sy = 0;
   try {
     capture::Reader rd(path);
     const std::string phase = std::filesystem::path(r.capture).stem().string();
@@ -222,12 +234,49 @@ void ProcedureState::check_capture(const Recorded& r, const std::string& field, 
       throw std::invalid_argument(field + ".capture: " + path + " was recorded at " +
                                   fmt::format("{:g}", rd.header().rate_hz) + " Hz, the profile says " +
                                   fmt::format("{:g}", profile_.rate_hz));
+    if (!serial.empty() && rd.header().serial != serial)
+      throw std::invalid_argument(field + ".capture: " + path + " was recorded from DUT '" + rd.header().serial +
+                                  "', the checkpoint's DUT is '" + serial + "' (state.dut.serial)");
+    if (rd.max_samples() < r.samples)
+      throw std::invalid_argument(field + ".n: " + std::to_string(r.samples) + " samples recorded, but " + path +
+                                  " is too short to hold them");
+    std::vector<Sample> buf(4096);
+    uint32_t prev = 0;
+    for (std::size_t got; (got = rd.read(buf)) > 0;)
+      for (std::size_t i = 0; i < got; ++i) {
+        const Sample& s = buf[i];
+        if (n > 0 && s.seq != prev + 1u) {  // the counter wraps modulo 2^32, as the link's does
+          ++gaps;
+          lost += s.seq - prev - 1u;
+        }
+        prev = s.seq;
+        sx += s.x_g;  // float into double, in order: record.cpp's sum
+        sy += s.y_g;
+        ++n;
+      }
+    if (rd.recovery().damaged_blocks > 0)
+      throw std::invalid_argument(field + ".capture: " + rd.recovery().summary(path));
   } catch (const ConfigError& e) {
     throw std::invalid_argument(field + ".capture: " + e.what());
   }
-  if (std::filesystem::file_size(path) < r.samples * capture::kRecordSize)
+  if (n != r.samples)
     throw std::invalid_argument(field + ".n: " + std::to_string(r.samples) + " samples recorded, but " + path +
-                                " is too short to hold them");
+                                " holds " + std::to_string(n));
+  const double mx = n ? sx / static_cast<double>(n) : 0, my = n ? sy / static_cast<double>(n) : 0;
+  // A mean the checkpoint does not state (null: not finite when recorded, or an older
+  // checkpoint without it) is the capture's; a stated one must be it to the last bit.
+  auto same_mean = [&](const char* key, double& recorded, double computed) {
+    if (std::isnan(recorded)) recorded = computed;
+    else if (recorded != computed)
+      throw std::invalid_argument(field + "." + key + ": " + fmt::format("{:.17g}", recorded) + " contradicts " +
+                                  path + ", whose samples' mean is " + fmt::format("{:.17g}", computed));
+  };
+  same_mean("mean_g", r.mean_x, mx);
+  same_mean("mean_y_g", r.mean_y, my);
+  if (lost > r.lost || gaps > r.gaps)
+    throw std::invalid_argument(field + ".lost: " + std::to_string(r.lost) + " samples lost in " +
+                                std::to_string(r.gaps) + " gap(s) recorded, but " + path + "'s sequence counter skips " +
+                                std::to_string(lost) + " in " + std::to_string(gaps));
 }
 
 void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::string>& completed,
@@ -242,21 +291,21 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
     if (id.rfind("run", 0) == 0 && id.find('-') != std::string::npos) {  // runNN-Uxx
       const std::size_t idx = std::stoul(id.substr(3, id.find('-') - 3));
       need(s.runs.count(idx) > 0, "state.runs." + std::to_string(idx), id);
-      const RunMean& r = s.runs.at(idx);
+      RunMean& r = s.runs.at(idx);
       if (idx > profile_.order.size() || r.orientation != profile_.order[idx - 1])
         throw std::invalid_argument("state.runs." + std::to_string(idx) + ".orientation: " +
                                     to_string(r.orientation) + " does not match the profile's order");
-      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir);
+      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir, s.serial());
     } else if (id == "bias") {
       need(s.bias.has_value(), "state.bias", id);
     } else if (id == "in-run") {
       need(s.in_run.has_value(), "state.in_run", id);
-      check_capture(*s.in_run, "state.in_run", run_dir);
+      check_capture(*s.in_run, "state.in_run", run_dir, s.serial());
     } else if (id == "in-run-b") {
       need(s.in_run_blocks.has_value(), "state.in_run.blocks", id);
     } else if (id == "raw") {
       need(s.raw.has_value(), "state.raw", id);
-      check_capture(*s.raw, "state.raw", run_dir);
+      check_capture(*s.raw, "state.raw", run_dir, s.serial());
     } else if (id == "allan") {
       need(s.analysis.has_value(), "state.analysis", id);
     } else if (id == "loop") {
@@ -264,30 +313,6 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
     }
   }
   slots_.at(0) = std::move(s);
-}
-
-void ProcedureState::check_values(const MeasurementSet& values) const {
-  const DutState& s = slots_.at(0);
-  auto same = [&](const std::string& name, std::optional<double> from_state, const std::string& field) {
-    const Measurement* m = values.find(name);
-    if (!m) return;
-    const bool equal = m->value.has_value() == from_state.has_value() && (!m->value || *m->value == *from_state);
-    if (!equal)
-      throw std::invalid_argument("values." + name + ".value: " + (m->value ? fmt::format("{:g}", *m->value) : "null") +
-                                  " contradicts " + field + " = " +
-                                  (from_state ? fmt::format("{:g}", *from_state) : "null"));
-  };
-  if (s.bias) {
-    same("bias", s.bias->bias, "state.bias.bias");
-    same("base_error", s.bias->base_error, "state.bias.base_error");
-  }
-  if (s.in_run_blocks)
-    for (std::size_t i = 0; i < s.in_run_blocks->size(); ++i) {
-      const GostBlock& b = (*s.in_run_blocks)[i];
-      // A NaN B is written as null: both sides say "no value".
-      const std::optional<double> bg = b.b_g && std::isfinite(*b.b_g) ? b.b_g : std::nullopt;
-      same(gost_value_name(b.block_s), bg, "state.in_run.blocks[" + std::to_string(i) + "].b_g");
-    }
 }
 
 }  // namespace rig::acceptance

@@ -72,8 +72,10 @@ DutState dut_state_from_json(const nlohmann::json& j);
 
 // The procedure's PhaseState. restore() also checks the state against the phases
 // marked completed (each must have left its part) and the captures it names
-// against the run folder (present, a rig capture of that phase at the profile's rate,
-// large enough for the samples recorded).
+// against the run folder (present, a rig capture of that phase at the profile's rate
+// from the state's DUT, undamaged, holding exactly the samples recorded with the record's
+// means and no gap it does not count). The values computed from these records are
+// computed again on a resume (Phase::from_records), so none is taken from the file.
 class ProcedureState final : public PhaseState {
  public:
   explicit ProcedureState(const Profile& p) : profile_(p) {}
@@ -83,11 +85,10 @@ class ProcedureState final : public PhaseState {
 
   nlohmann::json save() const override;
   void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
-  // bias, base_error and the GOST B values must be the ones the state holds.
-  void check_values(const MeasurementSet& values) const override;
 
  private:
-  void check_capture(const Recorded& r, const std::string& field, const std::string& run_dir) const;
+  void check_capture(Recorded& r, const std::string& field, const std::string& run_dir,
+                     const std::string& serial) const;
   const Profile& profile_;
   std::vector<DutState> slots_ = std::vector<DutState>(1);
 };

@@ -92,16 +92,17 @@ void Executive::write_checkpoint(const std::vector<std::string>& done, const Mea
 // completed phase present with the right types, and the procedure's state
 // (PhaseState::restore checks its parts and the captures it names). Any
 // damage is a ConfigError naming the file and the field: never a silent PASS.
-std::vector<std::string> Executive::load_checkpoint(const std::vector<Phase>& phases, MeasurementSet& values,
-                                                    PhaseState& state, const nlohmann::json& identity) const {
-  const std::string cp = checkpoint_path(out_dir_);
+std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
+                                                    MeasurementSet& values, PhaseState& state,
+                                                    const nlohmann::json& identity, spdlog::logger& log) {
+  const std::string cp = checkpoint_path(out_dir);
   auto bad = [&cp](const std::string& field, const std::string& what) {
     return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) + " (damaged checkpoint; start a new run)");
   };
   // No checkpoint: the run stopped before its first phase completed (run.json is written
   // before any device opens). Nothing was measured, so the resume starts over from bring-up.
   if (!std::filesystem::exists(cp)) {
-    log_->info("{}: no checkpoint (stopped before the first phase completed): starting from bring-up", cp);
+    log.info("{}: no checkpoint (stopped before the first phase completed): starting from bring-up", cp);
     return {};
   }
   std::ifstream in(cp);
@@ -143,30 +144,39 @@ std::vector<std::string> Executive::load_checkpoint(const std::vector<Phase>& ph
         throw bad("values." + m.name, "missing, but phase '" + done[i] + "' that measures it is marked completed");
   if (!j.contains("state")) throw bad("state", "missing");
   try {
-    state.restore(j["state"], done, out_dir_);
-    state.check_values(values);
+    state.restore(j["state"], done, out_dir);
   } catch (const std::invalid_argument& e) {
     throw bad(e.what(), "");
   } catch (const nlohmann::json::exception& e) {
     throw bad("state", e.what());
   }
+  // A finished run has nothing to resume: running it again would only re-power the DUT and
+  // rewrite a final passport with every phase "skipped". Refused before any device opens.
+  if (!phases.empty() && done.size() == phases.size())
+    throw ConfigError(out_dir + ": the run is complete (all " + std::to_string(phases.size()) +
+                      " phases are in checkpoint.json): nothing to resume; its passport stands");
+  // What a from_records phase computed is computed again from the records the checks above
+  // tied to the captures: its checkpointed values (checked for form only) are not kept.
+  for (std::size_t i = 0; i < done.size(); ++i)
+    if (phases[i].from_records)
+      for (const auto& m : phases[i].measures) values.forget(m.name);
+  log.info("resuming {}: {} phase(s) already complete", out_dir, done.size());
   return done;
 }
 
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
                          MeasurementSet& values, PhaseState& state, const CancelToken& cancel, bool resume,
                          const nlohmann::json& identity) {
+  const std::vector<std::string> done =
+      resume ? read_checkpoint(out_dir_, phases, values, state, identity, *log_) : std::vector<std::string>{};
+  return run(bring_up, phases, values, state, cancel, done, identity);
+}
+
+RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
+                         MeasurementSet& values, PhaseState& state, const CancelToken& cancel,
+                         const std::vector<std::string>& completed, const nlohmann::json& identity) {
   RunResult result;
-  std::vector<std::string> done;
-  if (resume) {
-    done = load_checkpoint(phases, values, state, identity);
-    // A finished run has nothing to resume: running it again would only re-power the DUT and
-    // rewrite a final passport with every phase "skipped". Refused before any device moves.
-    if (!phases.empty() && done.size() == phases.size())
-      throw ConfigError(out_dir_ + ": the run is complete (all " + std::to_string(phases.size()) +
-                        " phases are in checkpoint.json): nothing to resume; its passport stands");
-    log_->info("resuming {}: {} phase(s) already complete", out_dir_, done.size());
-  }
+  std::vector<std::string> done = completed;
   for (const auto& p : phases) result.phases.push_back({p.id, p.title, "pending", "", "", ""});
 
   PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_};
@@ -177,7 +187,8 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     for (std::size_t i = 0; i < phases.size(); ++i) {
       const Phase& p = phases[i];
       PhaseRecord& rec = result.phases[i];
-      if (std::find(done.begin(), done.end(), p.id) != done.end()) {
+      const bool was_done = std::find(done.begin(), done.end(), p.id) != done.end();
+      if (was_done && !p.from_records) {
         rec.status = "skipped";
         rec.message = "completed in an earlier attempt (checkpoint)";
         if (progress_) progress_->phase_finished(p.id, "skipped", rec.message);
@@ -197,9 +208,10 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       values.set_scope({}, {});
       rec.finished = iso8601_utc_now();
       rec.status = "done";
-      done.push_back(p.id);
+      if (was_done) rec.message = "computed again from the kept records (resume)";
+      else done.push_back(p.id);  // `done` stays a prefix of the phases, in their order
       write_checkpoint(done, values, state, identity);
-      log_->info("phase {} done (checkpointed)", p.id);
+      log_->info("phase {} done{} (checkpointed)", p.id, was_done ? ", computed again from the kept records" : "");
       if (progress_) progress_->phase_finished(p.id, "done", "");
       current = phases.size();
     }

@@ -60,6 +60,11 @@ struct Phase {
   double planned_s = 0;  // planned duration in device (simulated or real) time, for ETA
   std::function<void(PhaseContext&)> run;
   std::vector<MeasurementSpec> measures = {};  // what the phase sets in PhaseContext::values (declared before the run)
+  // Computes only from what earlier phases recorded (captures, run means) and touches no device.
+  // A resume runs it again rather than taking its values from the checkpoint: a value in the
+  // passport is then always computed from the kept captures, never read back from a file
+  // anyone could have edited.
+  bool from_records = false;
 };
 
 // What the phases hand on to each other (typed by the procedure), saved with
@@ -74,9 +79,6 @@ class PhaseState {
   // `run_dir` is the run folder the captures it names are in.
   virtual void restore(const nlohmann::json& j, const std::vector<std::string>& completed,
                        const std::string& run_dir) = 0;
-  // After both are restored: throws std::invalid_argument naming the field where a restored
-  // value contradicts the state it was computed from (e.g. "values.bias.value: ...").
-  virtual void check_values(const MeasurementSet&) const {}
 };
 
 // A state for procedures whose phases hand nothing on.
@@ -107,10 +109,11 @@ class Executive {
 
   // Bring-up runs on every start, resume included (power, homing: hardware
   // state is never taken from a checkpoint). Phases already in the checkpoint
-  // are skipped when `resume` is set; a run folder without a checkpoint (stopped
-  // before its first phase completed) resumes from bring-up. `identity` (profile digest, serial, plant)
-  // must match the checkpoint's, and the checkpoint must pass check_checkpoint()
-  // (else ConfigError naming the file and field: exit 2). `values` must hold the
+  // are skipped when `resume` is set, except those computed from records (Phase::from_records),
+  // which run again; a run folder without a checkpoint (stopped before its first phase
+  // completed) resumes from bring-up. `identity` (profile digest, serial, plant) must match the
+  // checkpoint's, and the checkpoint must pass read_checkpoint()'s checks (else ConfigError
+  // naming the file and field: exit 2). `values` must hold the
   // declarations of every phase's measures. Outcomes are judged once, at the end
   // (MeasurementSet::judge_all), whatever the path: a resumed run is judged
   // exactly as an uninterrupted one. A cancellation requested after the last
@@ -118,6 +121,21 @@ class Executive {
   RunResult run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
                 MeasurementSet& values, PhaseState& state, const CancelToken& cancel, bool resume,
                 const nlohmann::json& identity);
+  // The same, resuming after `completed` as read_checkpoint() returned it (empty: a fresh run).
+  RunResult run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
+                MeasurementSet& values, PhaseState& state, const CancelToken& cancel,
+                const std::vector<std::string>& completed, const nlohmann::json& identity);
+
+  // A resume's starting point, read before any device opens. The checkpoint in `out_dir` is
+  // checked (schema, `identity`, the completed phases a prefix of `phases`, every measure of a
+  // completed phase present with the right types, PhaseState::restore with the captures it
+  // names) and `values` and `state` restored; the values of completed from_records phases are
+  // then forgotten, as those phases run again. Returns the completed phase ids (none without a
+  // checkpoint). Throws ConfigError naming the file and the field on any damage, and when
+  // every phase is complete (nothing to resume).
+  static std::vector<std::string> read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
+                                                  MeasurementSet& values, PhaseState& state,
+                                                  const nlohmann::json& identity, spdlog::logger& log);
 
   // The safe-state sequence; public so signal paths and tests can call it.
   // `abnormal` (abort or fault) logs the steps as warnings, otherwise as info.
@@ -128,9 +146,6 @@ class Executive {
  private:
   void write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
                         const PhaseState& state, const nlohmann::json& identity) const;
-  // Reads and validates the checkpoint, restores `values` and `state`; returns the completed phase ids.
-  std::vector<std::string> load_checkpoint(const std::vector<Phase>& phases, MeasurementSet& values,
-                                           PhaseState& state, const nlohmann::json& identity) const;
   Devices& dev_;
   std::string out_dir_;
   std::shared_ptr<spdlog::logger> log_;

@@ -113,6 +113,17 @@ void MeasurementSet::set_scope(std::string phase, std::vector<std::string> names
   scope_ = std::move(names);
 }
 
+void MeasurementSet::forget(const std::string& name) {
+  Measurement* m = find_mut(name);
+  if (!m) throw std::logic_error("measurement '" + name + "' was never declared");
+  m->value.reset();
+  m->lo.reset();
+  m->hi.reset();
+  m->reason.clear();
+  m->verdict.clear();
+  m->outcome = Outcome::Unset;
+}
+
 const Measurement* MeasurementSet::find(const std::string& name) const {
   for (const auto& m : items_)
     if (m.name == name) return &m;

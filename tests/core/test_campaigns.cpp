@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "rig/capture/capture.hpp"
 #include "tests/core/rig_process.hpp"
 
 namespace fs = std::filesystem;
@@ -91,6 +93,25 @@ std::vector<double> random_points(unsigned seed, int n, double lo, double hi) {
   }
   std::sort(t.begin(), t.end());
   return t;
+}
+
+// Rewrites a capture in place through the rig's own writer, `edit` applied to its header and
+// samples: a capture as another build, or another DUT, would have written it.
+void rewrite_capture(const std::string& path,
+                     const std::function<void(rig::capture::Header&, std::vector<rig::Sample>&)>& edit) {
+  rig::capture::Loaded l = rig::capture::load(path);
+  edit(l.header, l.samples);
+  fs::remove(path);
+  rig::capture::Writer w(path, l.header);
+  w.append(l.samples);
+  w.close();
+}
+
+// The mean of channel x as the recorder sums it (float into double, in order).
+double mean_x(const std::vector<rig::Sample>& s) {
+  double sum = 0;
+  for (const rig::Sample& v : s) sum += v.x_g;
+  return sum / static_cast<double>(s.size());
 }
 
 std::string fmt_t(double t) {
@@ -233,6 +254,12 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
       << slurp(r + "-io.stderr");
   const std::string checkpoint = r + "/checkpoint.json", before = slurp(checkpoint);
   ASSERT_FALSE(before.empty());
+  // The plan of the resume says what it keeps, computes again and still records.
+  ASSERT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-plan"), 0) << slurp(r + "-plan.stderr");
+  const std::string plan = slurp(r + "-plan.stdout");
+  EXPECT_NE(plan.find("Resume: " + checkpoint + " checked with the captures it names; "), std::string::npos) << plan;
+  EXPECT_NE(plan.find("  kept (not recorded again): run01-U10, "), std::string::npos) << plan;
+  EXPECT_NE(plan.find("Estimated duration of what is left: "), std::string::npos) << plan;
   const std::vector<std::vector<std::string>> refused = {{"--profile", "paper"},
                                                          {"--plant", "emulated"},
                                                          {"--out", d + "/elsewhere"},
@@ -245,12 +272,27 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
     EXPECT_NE(slurp(r + "-opt.stderr").find(extra[0]), std::string::npos) << slurp(r + "-opt.stderr");
     EXPECT_EQ(slurp(checkpoint), before) << extra[0];
   }
-  // Another DUT: the checkpoint's identity says the completed phases measured QPA-OTHER, the
-  // emulated DUT reports EMU-QPA-0001.
+  // A checkpoint whose DUT is not the one its captures were recorded from is refused before
+  // any device opens, naming the first capture that says otherwise.
   json c = read_json(checkpoint);
   ASSERT_EQ(c["state"]["dut"]["serial"], "EMU-QPA-0001");
   c["state"]["dut"]["serial"] = "QPA-OTHER";
   std::ofstream(checkpoint) << c.dump();
+  EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-state"), 2) << slurp(r + "-state.stderr");
+  EXPECT_NE(slurp(r + "-state.stderr").find("state.runs.1.capture: " + r + "/captures/run01-U10.cap was recorded "
+                                            "from DUT 'EMU-QPA-0001', the checkpoint's DUT is 'QPA-OTHER'"),
+            std::string::npos)
+      << slurp(r + "-state.stderr");
+  EXPECT_EQ(slurp(r + "/run.log").find("bring-up", slurp(r + "/run.log").rfind("run: profile")), std::string::npos)
+      << "refused before bring-up";
+  // Another DUT: the checkpoint and its captures say the completed phases measured QPA-OTHER,
+  // the emulated DUT reports EMU-QPA-0001.
+  auto captures_of = [&](const std::string& serial) {
+    for (const auto& [i, run] : c["state"]["runs"].items())
+      rewrite_capture(r + "/" + run["capture"].get<std::string>(),
+                      [&](rig::capture::Header& h, std::vector<rig::Sample>&) { h.serial = serial; });
+  };
+  captures_of("QPA-OTHER");
   EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-dut"), 2) << slurp(r + "-dut.stderr");
   EXPECT_NE(slurp(r + "-dut.stderr").find("DUT reports serial 'EMU-QPA-0001', but the run being resumed measured "
                                           "'QPA-OTHER'"),
@@ -259,6 +301,7 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
   EXPECT_EQ(read_json(checkpoint)["completed"], json::parse(before)["completed"]) << "the completed phases are kept";
   c["state"]["dut"]["serial"] = "EMU-QPA-0001";
   std::ofstream(checkpoint) << c.dump();
+  captures_of("EMU-QPA-0001");
   EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-ok"), 0) << slurp(r + "-ok.stderr");
   EXPECT_EQ(read_json(r + "/passport.json")["outcome"], "PASS");
 }
@@ -318,6 +361,8 @@ TEST(Campaign, DamagedCheckpointSet) {
     return f;
   };
   auto refused = [&](const std::string& f, const std::string& says) {
+    EXPECT_EQ(run({"run", "--resume", f, "--dry-run"}, f + "-dry"), 2) << says << ": the plan did not check it";
+    EXPECT_NE(slurp(f + "-dry.stderr").find(says), std::string::npos) << slurp(f + "-dry.stderr");
     EXPECT_EQ(run({"run", "--resume", f, "--yes", "--no-history"}, f + "-io"), 2) << says;
     const std::string err = slurp(f + "-io.stderr");
     EXPECT_NE(err.find(f + "/checkpoint.json: "), std::string::npos) << err;
@@ -356,11 +401,33 @@ TEST(Campaign, DamagedCheckpointSet) {
     fs::resize_file(cap, fs::file_size(cap) / 2);
     refused(f, "state.in_run");
   }
-  {  // A checkpoint whose recordings this plant does not reproduce (here a run's mean edited;
-     // in practice one written by another build): the resume goes on, and says so.
+  {  // A run's mean that its capture does not give: refused, naming both.
     json j = cp;
     j["state"]["runs"]["3"]["mean_g"] = j["state"]["runs"]["3"]["mean_g"].get<double>() * (1 + 1e-15);
     const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.runs.3.mean_g: ");
+    refused(f, " contradicts " + f + "/captures/run03-U10.cap, whose samples' mean is ");
+  }
+  {  // A capture whose sequence counter skips samples the record does not count as lost.
+    json j = cp;
+    const std::string f = copy();
+    const std::string cap = f + "/" + j["state"]["in_run"]["capture"].get<std::string>();
+    rewrite_capture(cap, [](rig::capture::Header&, std::vector<rig::Sample>& s) {
+      for (std::size_t i = s.size() / 2; i < s.size(); ++i) s[i].seq += 5;
+    });
+    refused(f, "state.in_run.lost: 0 samples lost in 0 gap(s) recorded, but " + cap +
+                   "'s sequence counter skips 5 in 1");
+  }
+  {  // A checkpoint whose recordings this plant does not reproduce (here a run's capture and
+     // mean edited together; in practice one written by another build): the resume goes on,
+     // and says so.
+    json j = cp;
+    const std::string f = copy();
+    rewrite_capture(f + "/captures/run03-U10.cap", [&](rig::capture::Header&, std::vector<rig::Sample>& s) {
+      s[7].x_g += 1e-6f;
+      j["state"]["runs"]["3"]["mean_g"] = mean_x(s);
+    });
     std::ofstream(f + "/checkpoint.json") << j.dump();
     EXPECT_EQ(run({"run", "--resume", f, "--yes", "--no-history"}, f + "-io"), 0) << slurp(f + "-io.stderr");
     const std::string err = slurp(f + "-io.stderr");
@@ -374,4 +441,46 @@ TEST(Campaign, DamagedCheckpointSet) {
     std::ofstream(f + "/checkpoint.json.tmp") << good.substr(0, 100);
     resume_and_compare(f, ref, "stale checkpoint.json.tmp");
   }
+}
+
+// Every passport value is computed from the kept captures, never read back from checkpoint.json:
+// a checkpoint whose values and derived state were edited to pass (the filtered RMS below its
+// limit, the best accuracy class, a null bias, GOST B and the analysis replaced) and resumed
+// inside the loop phase gives the failing run's passport and analysis.json bit for bit, exit 1.
+// Before, the values of completed phases were taken as written: the edited checkpoint PASSed.
+TEST(Campaign, AResumeComputesEveryValueFromTheKeptCaptures) {
+  const std::string d = tmp("campaign-recompute");
+  fs::create_directories(d);
+  std::ofstream(d + "/strict.toml") << "base = \"ci\"\n[limits]\nrms_filtered = [0.0, 1.0e-9]\n"
+                                       "[[classes]]\nname = \"impossible\"\nmax_b_g = 1.0e-12\n";
+  std::vector<std::string> args = {"run", "--profile", d + "/strict.toml", "--yes", "--no-history", "--out", d + "/whole"};
+  ASSERT_EQ(run(args, d + "/whole-io"), 1) << slurp(d + "/whole-io.stderr");
+  const Reference ref{read_json(d + "/whole/passport.json"), read_json(d + "/whole/analysis.json")};
+  ASSERT_EQ(ref.passport["values"]["rms_filtered"]["outcome"], "FAIL");
+  ASSERT_EQ(ref.passport["values"]["accuracy_class"]["outcome"], "FAIL");
+
+  const std::string r = d + "/k", what = "sigkill@" + fmt_t(kCiLoopPhaseS);
+  args = {"run", "--profile", d + "/strict.toml", "--yes", "--no-history", "--out", r, "--inject", what};
+  ASSERT_EQ(run(args, r + "-io"), 128 + SIGKILL) << slurp(r + "-io.stderr");
+  json cp = read_json(r + "/checkpoint.json");
+  ASSERT_EQ(cp["completed"].back(), "allan") << "killed inside the loop phase";
+  cp["values"]["rms_filtered"]["value"] = 1e-12;
+  cp["values"]["rms_unfiltered"]["value"] = 1e-12;
+  cp["values"]["accuracy_class"]["value"] = 1;
+  cp["values"]["accuracy_class"]["reason"] = "precision";
+  cp["values"]["bias"]["value"] = nullptr;
+  cp["values"]["k"]["value"] = 1e-9;
+  cp["state"]["bias"]["bias"] = 0.0;
+  for (auto& b : cp["state"]["in_run"]["blocks"]) b["b_g"] = 1e-13;
+  cp["state"]["analysis"] = json::object({{"edited", true}});
+  std::ofstream(r + "/checkpoint.json") << cp.dump();
+  EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-resume"), 1) << slurp(r + "-resume.stderr");
+  const json p = read_json(r + "/passport.json");
+  EXPECT_EQ(without_session_fields(p), without_session_fields(ref.passport))
+      << "the resumed passport is not the one its captures give";
+  EXPECT_EQ(read_json(r + "/analysis.json"), ref.analysis);
+  for (const auto& ph : p["phases"])
+    if (ph["id"] == "bias" || ph["id"] == "in-run-b" || ph["id"] == "allan") {
+      EXPECT_EQ(ph["status"], "done") << ph.dump();
+    }
 }

@@ -186,6 +186,53 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   EXPECT_EQ(runs_b, 2);
 }
 
+// A phase that only computes from records (Phase::from_records) runs again on a resume: its
+// checkpointed value is forgotten (an edited one is never taken), the recording before it is not
+// repeated, and the checkpoint keeps its phases in order.
+TEST(Executive, AResumeRunsTheComputingPhasesAgain) {
+  Fixture f("recompute");
+  int records = 0, computes = 0;
+  JsonState st;
+  std::vector<Phase> phases{{"rec", "record", 1, [&](PhaseContext&) { ++records; }},
+                            {"calc", "compute", 0,
+                             [&](PhaseContext& c) {
+                               ++computes;
+                               c.values.set("v", 2.0);
+                             },
+                             {{"v", "g", ""}}, true},
+                            {"last", "record again", 1, [&](PhaseContext&) { throw HardwareError("link died"); }}};
+  {
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    declare(phases, v);
+    EXPECT_EQ(ex.run(power_on, phases, v, st, CancelToken{}, false, {}).outcome, RunOutcome::Error);
+  }
+  const std::string cp = Executive::checkpoint_path(f.out);
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(cp));
+  ASSERT_EQ(j["completed"], (nlohmann::json{"rec", "calc"}));
+  j["values"]["v"]["value"] = 99.0;  // edited
+  std::ofstream(cp) << j.dump();
+  phases[1].run = [&](PhaseContext& c) {
+    ++computes;
+    EXPECT_FALSE(c.values.find("v")->value.has_value()) << "the checkpoint's value reached the phase";
+    c.values.set("v", 2.0);
+  };
+  phases[2].run = [](PhaseContext&) { throw HardwareError("link died again"); };
+  Devices d = f.dev();
+  Executive ex(d, f.out, f.log, nullptr);
+  MeasurementSet v;
+  declare(phases, v);
+  const auto r = ex.run(power_on, phases, v, st, CancelToken{}, true, {});
+  EXPECT_EQ(records, 1) << "a recording is never repeated";
+  EXPECT_EQ(computes, 2);
+  EXPECT_EQ(r.phases[0].status, "skipped");
+  EXPECT_EQ(r.phases[1].status, "done");
+  EXPECT_EQ(*v.find("v")->value, 2.0);
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(cp))["completed"], (nlohmann::json{"rec", "calc"}));
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(cp))["values"]["v"]["value"], 2.0);
+}
+
 TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {
   Fixture f("estop");
   Devices d = f.dev();
