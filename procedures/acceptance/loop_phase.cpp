@@ -1,5 +1,6 @@
 #include "procedures/acceptance/loop_phase.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -120,6 +121,14 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
     loop["reason"] = why;
     dut.loop = std::move(loop);
   };
+  // A DUT that does not run the test: the passport's "skipped" says so, as bring-up's does
+  // for a DUT without a command channel (which already names the loop test).
+  if (!r.supported && dut.dut) {
+    std::vector<SkippedStep>& sk = dut.dut->skipped;
+    if (std::none_of(sk.begin(), sk.end(), [](const SkippedStep& k) { return k.step == "loop test"; }))
+      sk.push_back({"loop test", p.design_model ? r.reason + "; the figures are the DUT type's design model's"
+                                                : "bandwidth_0p5 and settling_time not measured (" + r.reason + ")"});
+  }
   if (!r.supported && p.design_model) {
     // The DUT type's documented loop through the profile's filter: a figure of the design, not
     // of this DUT, and said so; no interval (the model has no scatter).

@@ -269,7 +269,9 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
     for (const SkippedStep& k : st.dut->skipped) ctx.log->warn("skipped: {}: {}", k.step, k.reason);
   } else {
     const DutInfo info = ctx.dev.dut.info(ctx.cancel);
-    ctx.log->info("DUT serial {} firmware {} temperature {:.1f} C rate {} Hz", info.serial, info.firmware,
+    // The rate is the one the DUT (or its stream layout) declares, checked against the profile
+    // below; each capture's sample count over its device time is what the stream delivered.
+    ctx.log->info("DUT serial {} firmware {} temperature {:.1f} C declared rate {} Hz", info.serial, info.firmware,
                   info.temperature_c, info.output_rate_hz);
     if (opt.expected_serial && *opt.expected_serial != info.serial)
       throw ConfigError(fmt::format("DUT reports serial '{}', expected '{}' (--serial)", info.serial, *opt.expected_serial));

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "rig/capture/capture.hpp"
+#include "rig/core/dut_link.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::acceptance {
@@ -25,10 +26,15 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   h.orientation = to_string(o);
   h.started = iso8601_utc_now();
   h.rate_hz = p.rate_hz;
+  // The filter y(t) went through: the profile's, which bring-up loaded, unless the DUT has no
+  // command channel to load it with.
+  const DutCommandChannel commands = ctx.dev.dut.command_channel();
+  const std::string filter =
+      commands.available ? p.filter_name : "not set: the DUT's own (no command channel: " + commands.reason + ")";
   h.extra = {{"profile", p.name},
              {"plant", ctx.dev.plant},
              {"table_deg", table_angle(p, o)},
-             {"filter", p.filter_name},
+             {"filter", filter},
              {"software", std::string("rig ") + RIG_VERSION}};
   capture::Writer w(ctx.out_dir + "/" + rel, h);
 

@@ -130,5 +130,11 @@ TEST(LoopPhase, HardwareFileWithTheLoopTestOffGivesNullWithTheReason) {
   }
   EXPECT_FALSE(fs::exists(out + "/" + acceptance::kLoopTestFile));
   EXPECT_EQ(dut->firmware().stats().loop_tests, 0u);
+  // The passport's "skipped" names the step, as --dry-run's plan does.
+  ASSERT_TRUE(state.slot().dut.has_value());
+  ASSERT_EQ(state.slot().dut->skipped.size(), 1u);
+  EXPECT_EQ(state.slot().dut->skipped[0].step, "loop test");
+  EXPECT_NE(state.slot().dut->skipped[0].reason.find("[dut] loop_test = false"), std::string::npos)
+      << state.slot().dut->skipped[0].reason;
   fs::remove_all(out);
 }

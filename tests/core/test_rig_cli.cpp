@@ -1110,6 +1110,10 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
   for (const char* step : {"<tr><td>identify</td>", "<tr><td>set output filter</td>", "<tr><td>loop test</td>"})
     EXPECT_NE(html.find(step), std::string::npos) << step;
   EXPECT_NE(slurp(d + "/io.stdout").find("skipped: loop test: "), std::string::npos) << slurp(d + "/io.stdout");
+  // The captures do not claim the profile's filter, which was never loaded.
+  const rig::capture::Reader raw(d + "/run/captures/raw-U10.cap");
+  EXPECT_EQ(raw.header().extra["filter"].get<std::string>().rfind("not set: the DUT's own (no command channel", 0), 0u)
+      << raw.header().extra.dump();
 }
 
 // The profile's [plant] (the emulated plant's section) is checked on a hardware run too: a
