@@ -71,8 +71,9 @@ void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, cons
                                                                                  : nlohmann::json(),
                               std::string("state.") + part);
   if (!diff.empty()) {
-    log.warn("fast-forward: the replay does not reproduce {}: {}; this build's emulated plant is not the one that "
-             "wrote the checkpoint, so the resumed passport will differ from an uninterrupted run's",
+    log.warn("fast-forward: the replay does not reproduce {}: {}; the recordings were not made by this build's "
+             "emulated plant with this seed (another build, or captures edited since), so the resumed passport will "
+             "differ from an uninterrupted run's",
              Executive::checkpoint_path(ctx.out_dir), diff);
     return;
   }

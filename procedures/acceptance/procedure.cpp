@@ -33,7 +33,7 @@ std::optional<std::pair<double, double>> limit(const Profile& p, const std::stri
   return it->second;
 }
 
-std::string run_id(std::size_t i, Orientation o) { return fmt::format("run{:02d}-{}", i + 1, to_string(o)); }
+std::string run_id(std::size_t i, Orientation o) { return run_phase_id(i + 1, o); }
 
 capture::Loaded load_capture(PhaseContext& ctx, const std::string& rel) {
   capture::Loaded l = capture::load(ctx.out_dir + "/" + rel);
@@ -322,8 +322,8 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                 true});
   ph.push_back({"in-run", fmt::format("in-run test at {}: {} s (procedure B)", to_string(p.in_run_orientation), p.in_run_s),
                 recording_s(p.in_run_orientation, p.in_run_s), [&p, &st](PhaseContext& c) {
-                  st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s,
-                                                  std::string("in-run-") + to_string(p.in_run_orientation), st.serial());
+                  st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s, in_run_phase_id(p),
+                                                  st.serial());
                 }});
   std::vector<MeasurementSpec> gost;
   for (const double bs : p.in_run_blocks_s)
@@ -336,8 +336,7 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
   ph.push_back({"raw", fmt::format("raw capture at {}: {} s at {} Hz (procedure C)", to_string(p.raw_orientation),
                                    p.raw_s, p.rate_hz),
                 recording_s(p.raw_orientation, p.raw_s), [&p, &st](PhaseContext& c) {
-                  st.raw = position_and_record(c, p, p.raw_orientation, p.raw_s,
-                                               std::string("raw-") + to_string(p.raw_orientation), st.serial());
+                  st.raw = position_and_record(c, p, p.raw_orientation, p.raw_s, raw_phase_id(p), st.serial());
                 }});
   ph.push_back({"allan", "Allan deviation, noise terms, RMS error and PSD of x(t) and y(t)", 0,
                 [&p, &st](PhaseContext& c) { phase_raw_analysis(c, p, st); },

@@ -13,12 +13,18 @@ namespace rig::acceptance {
 
 double table_angle(const Profile& p, Orientation o) { return o == Orientation::U10 ? p.u10_deg : p.u20_deg; }
 
+std::string run_phase_id(std::size_t index, Orientation o) { return fmt::format("run{:02d}-{}", index, to_string(o)); }
+std::string in_run_phase_id(const Profile& p) { return std::string("in-run-") + to_string(p.in_run_orientation); }
+std::string raw_phase_id(const Profile& p) { return std::string("raw-") + to_string(p.raw_orientation); }
+std::string capture_rel(const std::string& phase_id) { return "captures/" + phase_id + ".cap"; }
+uint64_t planned_samples(const Profile& p, double seconds) { return static_cast<uint64_t>(seconds * p.rate_hz + 0.5); }
+
 namespace {
 
 Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name,
                      const std::string& serial) {
-  const auto n_total = static_cast<uint64_t>(seconds * p.rate_hz + 0.5);
-  const std::string rel = "captures/" + name + ".cap";
+  const uint64_t n_total = planned_samples(p, seconds);
+  const std::string rel = capture_rel(name);
   std::filesystem::create_directories(ctx.out_dir + "/captures");
   capture::Header h;
   h.serial = serial;

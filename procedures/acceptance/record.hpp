@@ -25,4 +25,14 @@ Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o,
 
 double table_angle(const Profile& p, Orientation o);
 
+// The names a recording goes by: its phase id (also the capture's header `phase`) and its
+// capture file, relative to the run folder. A resume ties each record to these.
+std::string run_phase_id(std::size_t index, Orientation o);  // index 1-based: "run03-U10"
+std::string in_run_phase_id(const Profile& p);                // "in-run-U10"
+std::string raw_phase_id(const Profile& p);                   // "raw-U10"
+std::string capture_rel(const std::string& phase_id);         // "captures/<phase_id>.cap"
+// The samples a recording of `seconds` holds when its phase completes (lost ones are replaced
+// by later ones: the recording runs until it has them all).
+uint64_t planned_samples(const Profile& p, double seconds);
+
 }  // namespace rig::acceptance

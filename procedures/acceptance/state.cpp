@@ -1,5 +1,6 @@
 #include "procedures/acceptance/state.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -209,34 +210,45 @@ DutState dut_state_from_json(const nlohmann::json& j) {
 
 nlohmann::json ProcedureState::save() const { return to_json(slots_.at(0)); }
 
-// A capture named by the state must be the one its record describes: present, a rig capture of
-// that phase at the profile's rate, of the state's DUT, undamaged, holding exactly the samples
-// counted, with the record's means (summed here as record.cpp sums them, so equal to the last
-// bit) and no gap in its sequence counter that the record does not count. The phases that
-// compute from records read these records: a checkpoint that contradicts its captures is refused,
-// never believed.
+// A record named by the state must be the recording its field says, as record.cpp left it:
+// its own capture (the field's phase id, orientation, the profile's rate, the state's DUT),
+// closed by the writer and undamaged, holding exactly the samples a recording of that length
+// holds, with the record's means (summed here as record.cpp sums them, so equal to the last bit),
+// a sequence counter that only goes forward, and its losses within the profile's
+// max_lost_samples and at least what the counter shows. The phases that compute from records
+// read these records: a checkpoint that contradicts its captures is refused, never believed.
 void ProcedureState::check_capture(Recorded& r, const std::string& field, const std::string& run_dir,
-                                   const std::string& serial) const {
-  const std::string path = run_dir + "/" + r.capture;
-  if (r.capture.empty() || r.capture.find("..") != std::string::npos || r.capture.front() == '/')
-    throw std::invalid_argument(field + ".capture: \"" + r.capture + "\" is not a capture in the run folder");
+                                   const Recording& want) const {
+  const std::string rel = capture_rel(want.phase_id), path = run_dir + "/" + rel;
+  if (r.capture != rel)
+    throw std::invalid_argument(field + ".capture: \"" + r.capture + "\" is not this recording's capture (" + rel + ")");
+  if (!std::filesystem::exists(path)) throw std::invalid_argument(field + ".capture: " + path + " is missing");
   if (!std::filesystem::is_regular_file(path))
-    throw std::invalid_argument(field + ".capture: " + path + " is missing");
+    throw std::invalid_argument(field + ".capture: " + path + " is not a regular file");
+  const uint64_t planned = planned_samples(profile_, want.seconds);
+  if (r.samples != planned)
+    throw std::invalid_argument(field + ".n: " + std::to_string(r.samples) + " samples, but a recording of " +
+                                fmt::format("{:g} s at {:g} Hz", want.seconds, profile_.rate_hz) + " holds " +
+                                std::to_string(planned));
+  if (r.lost > profile_.max_lost_samples)
+    throw std::invalid_argument(field + ".lost: " + std::to_string(r.lost) + " exceeds the profile's max_lost_samples (" +
+                                std::to_string(profile_.max_lost_samples) + "): such a recording is retried, not kept");
   uint64_t n = 0, lost = 0, gaps = 0;
   double sx = 0, sy = 0;
   try {
     capture::Reader rd(path);
-    const std::string phase = std::filesystem::path(r.capture).stem().string();
-    if (rd.header().phase != phase)
-      throw std::invalid_argument(field + ".capture: " + path + " holds phase '" + rd.header().phase + "', not '" +
-                                  phase + "'");
-    if (rd.header().rate_hz != profile_.rate_hz)
-      throw std::invalid_argument(field + ".capture: " + path + " was recorded at " +
-                                  fmt::format("{:g}", rd.header().rate_hz) + " Hz, the profile says " +
-                                  fmt::format("{:g}", profile_.rate_hz));
-    if (!serial.empty() && rd.header().serial != serial)
-      throw std::invalid_argument(field + ".capture: " + path + " was recorded from DUT '" + rd.header().serial +
-                                  "', the checkpoint's DUT is '" + serial + "' (state.dut.serial)");
+    const capture::Header& h = rd.header();
+    auto header = [&](const std::string& key, const std::string& found, const std::string& expected) {
+      if (found != expected)
+        throw std::invalid_argument(field + ".capture: " + path + "'s header says " + key + " '" + found + "', not '" +
+                                    expected + "'");
+    };
+    header("phase", h.phase, want.phase_id);
+    header("orientation", h.orientation, to_string(want.orientation));
+    header("serial", h.serial, want.serial);
+    if (h.rate_hz != profile_.rate_hz)
+      throw std::invalid_argument(field + ".capture: " + path + " was recorded at " + fmt::format("{:g}", h.rate_hz) +
+                                  " Hz, the profile says " + fmt::format("{:g}", profile_.rate_hz));
     if (rd.max_samples() < r.samples)
       throw std::invalid_argument(field + ".n: " + std::to_string(r.samples) + " samples recorded, but " + path +
                                   " is too short to hold them");
@@ -244,18 +256,24 @@ void ProcedureState::check_capture(Recorded& r, const std::string& field, const 
     uint32_t prev = 0;
     for (std::size_t got; (got = rd.read(buf)) > 0;)
       for (std::size_t i = 0; i < got; ++i) {
-        const Sample& s = buf[i];
-        if (n > 0 && s.seq != prev + 1u) {  // the counter wraps modulo 2^32, as the link's does
+        const Sample& v = buf[i];
+        if (n > 0 && v.seq != prev + 1u) {
+          const uint32_t step = v.seq - prev;  // modulo 2^32: the link's counter wraps
+          if (step == 0 || step >= (1u << 31))
+            throw std::invalid_argument(field + ".capture: " + path + "'s sequence counter goes back at sample " +
+                                        std::to_string(n) + " (" + std::to_string(prev) + " then " +
+                                        std::to_string(v.seq) + "): not a recording's order");
           ++gaps;
-          lost += s.seq - prev - 1u;
+          lost += step - 1u;
         }
-        prev = s.seq;
-        sx += s.x_g;  // float into double, in order: record.cpp's sum
-        sy += s.y_g;
+        prev = v.seq;
+        sx += v.x_g;  // float into double, in order: record.cpp's sum
+        sy += v.y_g;
         ++n;
       }
-    if (rd.recovery().damaged_blocks > 0)
-      throw std::invalid_argument(field + ".capture: " + rd.recovery().summary(path));
+    if (!rd.recovery().complete)
+      throw std::invalid_argument(field + ".capture: " + rd.recovery().summary(path) +
+                                  " (a completed recording's writer closed it)");
   } catch (const ConfigError& e) {
     throw std::invalid_argument(field + ".capture: " + e.what());
   }
@@ -282,11 +300,32 @@ void ProcedureState::check_capture(Recorded& r, const std::string& field, const 
 void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::string>& completed,
                              const std::string& run_dir) {
   DutState s = dut_state_from_json(j);
-  // Each completed phase must have left its part (a phase's id tells which).
+  auto is_done = [&](const std::string& id) { return std::find(completed.begin(), completed.end(), id) != completed.end(); };
+  // Each completed phase must have left its part (a phase's id tells which), and no part may
+  // be there that no completed phase wrote (it would reach the passport's list of captures).
   auto need = [](bool present, const std::string& field, const std::string& phase) {
     if (!present)
       throw std::invalid_argument(field + ": missing, but phase '" + phase + "' that writes it is marked completed");
   };
+  auto unwritten = [&](bool present, const std::string& field, const std::string& phase) {
+    if (present && !is_done(phase))
+      throw std::invalid_argument(field + ": present, but phase '" + phase + "' that writes it is not completed");
+  };
+  for (const auto& [idx, r] : s.runs)
+    if (idx < 1 || idx > profile_.order.size() || !is_done(run_phase_id(idx, profile_.order[idx - 1])))
+      throw std::invalid_argument("state.runs." + std::to_string(idx) + ": present, but no completed phase records it");
+  unwritten(s.bias.has_value(), "state.bias", "bias");
+  unwritten(s.in_run.has_value(), "state.in_run", "in-run");
+  unwritten(s.in_run_blocks.has_value(), "state.in_run.blocks", "in-run-b");
+  unwritten(s.raw.has_value(), "state.raw", "raw");
+  unwritten(s.analysis.has_value(), "state.analysis", "allan");
+  unwritten(s.loop.has_value(), "state.loop", "loop");
+  // The DUT the recordings were made from: bring-up's identity, which a resume's bring-up and
+  // every capture's header are checked against.
+  const bool recorded = !s.runs.empty() || s.in_run || s.raw;
+  if (recorded && s.serial().empty())
+    throw std::invalid_argument(std::string("state.dut") + (s.dut ? ".serial: empty" : ": missing") +
+                                ", but recordings are marked completed (the DUT they were made from)");
   for (const std::string& id : completed) {
     if (id.rfind("run", 0) == 0 && id.find('-') != std::string::npos) {  // runNN-Uxx
       const std::size_t idx = std::stoul(id.substr(3, id.find('-') - 3));
@@ -295,17 +334,20 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
       if (idx > profile_.order.size() || r.orientation != profile_.order[idx - 1])
         throw std::invalid_argument("state.runs." + std::to_string(idx) + ".orientation: " +
                                     to_string(r.orientation) + " does not match the profile's order");
-      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir, s.serial());
+      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir,
+                    {id, profile_.order[idx - 1], profile_.run_s, s.serial()});
     } else if (id == "bias") {
       need(s.bias.has_value(), "state.bias", id);
     } else if (id == "in-run") {
       need(s.in_run.has_value(), "state.in_run", id);
-      check_capture(*s.in_run, "state.in_run", run_dir, s.serial());
+      check_capture(*s.in_run, "state.in_run", run_dir,
+                    {in_run_phase_id(profile_), profile_.in_run_orientation, profile_.in_run_s, s.serial()});
     } else if (id == "in-run-b") {
       need(s.in_run_blocks.has_value(), "state.in_run.blocks", id);
     } else if (id == "raw") {
       need(s.raw.has_value(), "state.raw", id);
-      check_capture(*s.raw, "state.raw", run_dir, s.serial());
+      check_capture(*s.raw, "state.raw", run_dir,
+                    {raw_phase_id(profile_), profile_.raw_orientation, profile_.raw_s, s.serial()});
     } else if (id == "allan") {
       need(s.analysis.has_value(), "state.analysis", id);
     } else if (id == "loop") {

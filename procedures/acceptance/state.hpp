@@ -71,10 +71,11 @@ nlohmann::json to_json(const DutState& s);
 DutState dut_state_from_json(const nlohmann::json& j);
 
 // The procedure's PhaseState. restore() also checks the state against the phases
-// marked completed (each must have left its part) and the captures it names
-// against the run folder (present, a rig capture of that phase at the profile's rate
-// from the state's DUT, undamaged, holding exactly the samples recorded with the record's
-// means and no gap it does not count). The values computed from these records are
+// marked completed (each must have left its part, and no part is there that no completed
+// phase wrote) and each recording against its capture (the field's own capture, of that
+// phase, orientation, rate and DUT, closed and undamaged, the samples a recording of that
+// length holds with the record's means, a counter that only goes forward, losses within the
+// profile's limit and at least what the counter shows). The values computed from these records are
 // computed again on a resume (Phase::from_records), so none is taken from the file.
 class ProcedureState final : public PhaseState {
  public:
@@ -87,8 +88,14 @@ class ProcedureState final : public PhaseState {
   void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
 
  private:
-  void check_capture(Recorded& r, const std::string& field, const std::string& run_dir,
-                     const std::string& serial) const;
+  // What a completed recording must be: its phase id, orientation, length and DUT.
+  struct Recording {
+    std::string phase_id;
+    Orientation orientation;
+    double seconds;
+    std::string serial;
+  };
+  void check_capture(Recorded& r, const std::string& field, const std::string& run_dir, const Recording& want) const;
   const Profile& profile_;
   std::vector<DutState> slots_ = std::vector<DutState>(1);
 };

@@ -105,6 +105,7 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
     log.info("{}: no checkpoint (stopped before the first phase completed): starting from bring-up", cp);
     return {};
   }
+  if (!std::filesystem::is_regular_file(cp)) throw ConfigError(cp + ": not a regular file (damaged run folder)");
   std::ifstream in(cp);
   if (!in) throw ConfigError(cp + ": cannot read the checkpoint");
   nlohmann::json j;
@@ -116,9 +117,19 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
   if (!j.is_object()) throw bad("(top level)", std::string("expected an object, found ") + j.type_name());
   if (!j.contains("schema") || j["schema"] != "rig.checkpoint/1")
     throw bad("schema", "expected \"rig.checkpoint/1\", found " + (j.contains("schema") ? j["schema"].dump() : "nothing"));
-  if (j.value("identity", nlohmann::json()) != identity)
-    throw ConfigError(cp + ": checkpoint was made with a different profile, serial or plant (" +
-                      j.value("identity", nlohmann::json()).dump() + "); start a new run instead");
+  if (j.value("identity", nlohmann::json()) != identity) {
+    // Name the first field that differs, with both values.
+    const nlohmann::json mine = j.value("identity", nlohmann::json());
+    std::string which = "identity";
+    for (const auto& [k, v] : identity.items())
+      if (!mine.is_object() || !mine.contains(k) || mine[k] != v) {
+        which = "identity." + k + ": " + (mine.is_object() && mine.contains(k) ? mine[k].dump() : "missing") +
+                ", this run's is " + v.dump();
+        break;
+      }
+    throw ConfigError(cp + ": " + which + ": checkpoint was made with a different profile, serial or plant; start a "
+                      "new run instead");
+  }
   if (!j.contains("completed") || !j["completed"].is_array())
     throw bad("completed", "expected an array of phase ids");
   std::vector<std::string> done;

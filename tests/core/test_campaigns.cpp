@@ -279,8 +279,8 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
   c["state"]["dut"]["serial"] = "QPA-OTHER";
   std::ofstream(checkpoint) << c.dump();
   EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-state"), 2) << slurp(r + "-state.stderr");
-  EXPECT_NE(slurp(r + "-state.stderr").find("state.runs.1.capture: " + r + "/captures/run01-U10.cap was recorded "
-                                            "from DUT 'EMU-QPA-0001', the checkpoint's DUT is 'QPA-OTHER'"),
+  EXPECT_NE(slurp(r + "-state.stderr").find("state.runs.1.capture: " + r + "/captures/run01-U10.cap's header says "
+                                            "serial 'EMU-QPA-0001', not 'QPA-OTHER'"),
             std::string::npos)
       << slurp(r + "-state.stderr");
   EXPECT_EQ(slurp(r + "/run.log").find("bring-up", slurp(r + "/run.log").rfind("run: profile")), std::string::npos)
@@ -393,6 +393,7 @@ TEST(Campaign, DamagedCheckpointSet) {
     j["identity"]["profile_digest"] = "0000";
     const std::string f = copy();
     std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "identity.profile_digest: \"0000\", this run's is ");
     refused(f, "different profile, serial or plant");
   }
   {
@@ -408,6 +409,76 @@ TEST(Campaign, DamagedCheckpointSet) {
     std::ofstream(f + "/checkpoint.json") << j.dump();
     refused(f, "state.runs.3.mean_g: ");
     refused(f, " contradicts " + f + "/captures/run03-U10.cap, whose samples' mean is ");
+  }
+  // A checkpoint edited to point a record at another recording, or at a recording cut, emptied,
+  // reordered or of no DUT (session 15's review turned each into a PASS of a failing DUT before):
+  // each is refused naming the field, through --dry-run too.
+  {  // run 2 (U20) given run 1's (U10) record: the bias would come from U10 runs only
+    json j = cp;
+    j["state"]["runs"]["2"] = j["state"]["runs"]["1"];
+    j["state"]["runs"]["2"]["index"] = 2;
+    j["state"]["runs"]["2"]["orientation"] = "U20";
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.runs.2.capture: \"captures/run01-U10.cap\" is not this recording's capture "
+               "(captures/run02-U20.cap)");
+  }
+  {  // run 1's capture copied over run 3's file (same orientation and length), the mean with it
+    json j = cp;
+    j["state"]["runs"]["3"]["mean_g"] = j["state"]["runs"]["1"]["mean_g"];
+    j["state"]["runs"]["3"]["mean_y_g"] = j["state"]["runs"]["1"]["mean_y_g"];
+    const std::string f = copy();
+    fs::copy_file(f + "/captures/run01-U10.cap", f + "/captures/run03-U10.cap", fs::copy_options::overwrite_existing);
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.runs.3.capture: " + f + "/captures/run03-U10.cap's header says phase 'run01-U10', not "
+               "'run03-U10'");
+  }
+  {  // a run emptied to its header, n = 0 and the mean 0
+    json j = cp;
+    j["state"]["runs"]["2"]["n"] = 0;
+    j["state"]["runs"]["2"]["mean_g"] = 0.0;
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.runs.2.n: 0 samples, but a recording of 2 s at 1000 Hz holds 2000");
+  }
+  {  // the in-run capture without its end marker (its writer did not close it)
+    const std::string f = copy();
+    const std::string cap = f + "/" + cp["state"]["in_run"]["capture"].get<std::string>();
+    fs::resize_file(cap, fs::file_size(cap) - 4);
+    refused(f, "state.in_run.capture: ");
+    refused(f, "(a completed recording's writer closed it)");
+  }
+  {  // the in-run capture's halves swapped (every block intact), the loss raised to cover it
+    json j = cp;
+    const std::string f = copy();
+    const std::string cap = f + "/" + j["state"]["in_run"]["capture"].get<std::string>();
+    rewrite_capture(cap, [](rig::capture::Header&, std::vector<rig::Sample>& s) {
+      std::rotate(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2), s.end());
+    });
+    refused(f, "state.in_run.capture: " + cap + "'s sequence counter goes back at sample 20000");
+    j["state"]["in_run"]["lost"] = 4294967295LL;
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.in_run.lost: 4294967295 exceeds the profile's max_lost_samples (0)");
+  }
+  {  // the DUT's identity deleted: the captures' serial would go unchecked
+    json j = cp;
+    j["state"].erase("dut");
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.dut: missing, but recordings are marked completed");
+  }
+  {  // parts no completed phase wrote: a 13th run, a raw capture before the raw phase
+    json j = cp;
+    j["state"]["runs"]["13"] = j["state"]["runs"]["12"];
+    j["state"]["runs"]["13"]["index"] = 13;
+    std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.runs.13: present, but no completed phase records it");
+    j = cp;
+    j["state"]["raw"] = j["state"]["in_run"];
+    f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.raw: present, but phase 'raw' that writes it is not completed");
   }
   {  // A capture whose sequence counter skips samples the record does not count as lost.
     json j = cp;
