@@ -259,6 +259,8 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
   const std::string plan = slurp(r + "-plan.stdout");
   EXPECT_NE(plan.find("Resume: " + checkpoint + " checked with the captures it names; "), std::string::npos) << plan;
   EXPECT_NE(plan.find("  kept (not recorded again): run01-U10, "), std::string::npos) << plan;
+  EXPECT_NE(plan.find("  still to run: "), std::string::npos) << plan;
+  EXPECT_NE(plan.find(", loop (a capture the interruption left partial"), std::string::npos) << plan;
   EXPECT_NE(plan.find("Estimated duration of what is left: "), std::string::npos) << plan;
   const std::vector<std::vector<std::string>> refused = {{"--profile", "paper"},
                                                          {"--plant", "emulated"},
