@@ -222,8 +222,7 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
       const Sample& s = buf[i];
       if (c.values.empty()) c.lost_at_start = (s.status & sample_status::kGapBefore) != 0;
       else if ((s.status & sample_status::kGapBefore) || s.seq != prev + 1u) {
-        const std::uint32_t step = s.seq - prev;  // modulo 2^32, as the counter wraps
-        c.gaps.push_back({c.values.size(), prev, s.seq, step >= 1u && step < (1u << 31) ? step - 1u : 0u});
+        c.gaps.push_back({c.values.size(), prev, s.seq, capture::lost_between(prev, s.seq).value_or(0u)});
       }
       prev = s.seq;
       c.values.push_back(channel == "y" ? s.y_g : s.x_g);

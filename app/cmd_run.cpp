@@ -464,6 +464,9 @@ int do_run(RunArgs a) {
   if (a.plant == "hardware") apply_procedure_angles(hw, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
   TerminalView view(stderr, a.quiet);
   if (a.dry_run) {
     check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());
@@ -476,9 +479,6 @@ int do_run(RunArgs a) {
     // opened), so the plan says what the resume keeps, computes again and still records.
     std::vector<std::string> completed;
     if (!a.resume.empty()) {
-      MeasurementSet values;
-      acceptance::declare_values(p, phases, values);
-      const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet);
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
@@ -524,9 +524,6 @@ int do_run(RunArgs a) {
   auto log = make_logger(a.out, a.quiet);
   log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
 
-  MeasurementSet values;
-  acceptance::declare_values(p, phases, values);
-  const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
   // A resume's checkpoint, with the captures it names, is checked before any device opens.
   const std::vector<std::string> completed =
       a.resume.empty() ? std::vector<std::string>{}

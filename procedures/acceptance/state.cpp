@@ -258,13 +258,13 @@ void ProcedureState::check_capture(Recorded& r, const std::string& field, const 
       for (std::size_t i = 0; i < got; ++i) {
         const Sample& v = buf[i];
         if (n > 0 && v.seq != prev + 1u) {
-          const uint32_t step = v.seq - prev;  // modulo 2^32: the link's counter wraps
-          if (step == 0 || step >= (1u << 31))
+          const std::optional<uint32_t> skipped = capture::lost_between(prev, v.seq);
+          if (!skipped)
             throw std::invalid_argument(field + ".capture: " + path + "'s sequence counter goes back at sample " +
                                         std::to_string(n) + " (" + std::to_string(prev) + " then " +
                                         std::to_string(v.seq) + "): not a recording's order");
           ++gaps;
-          lost += step - 1u;
+          lost += *skipped;
         }
         prev = v.seq;
         sx += v.x_g;  // float into double, in order: record.cpp's sum

@@ -414,4 +414,10 @@ std::vector<double> channel_y(std::span<const Sample> s) {
   return channel(s, [](const Sample& x) { return double{x.y_g}; });
 }
 
+std::optional<uint32_t> lost_between(uint32_t prev, uint32_t seq) {
+  const uint32_t step = seq - prev;  // modulo 2^32
+  if (step == 0 || step >= (1u << 31)) return std::nullopt;
+  return step - 1u;
+}
+
 }  // namespace rig::capture

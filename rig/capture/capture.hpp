@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -127,5 +128,10 @@ Loaded load(const std::string& path);
 // Channel helpers for analysis.
 std::vector<double> channel_x(std::span<const Sample> s);
 std::vector<double> channel_y(std::span<const Sample> s);
+
+// Samples lost between two consecutive records, from their sequence counters (the link's
+// 32-bit counter wraps): 0 when `seq` follows `prev`, nullopt when it does not come after it
+// (equal, or more than half the counter's period back: not a recording's order).
+std::optional<uint32_t> lost_between(uint32_t prev, uint32_t seq);
 
 }  // namespace rig::capture

@@ -275,3 +275,12 @@ TEST(Capture, SigkillMidCaptureLeavesAReadableFile) {
   EXPECT_NE(l.recovery.problem.find("end marker"), std::string::npos) << l.recovery.problem;
   EXPECT_EQ(l.samples.back().seq, 4999u);
 }
+
+// The sequence counter's arithmetic, shared by a resume's check and `rig analyze`'s gap list.
+TEST(Capture, LostBetweenFollowsTheWrappingCounter) {
+  EXPECT_EQ(rig::capture::lost_between(7, 8), 0u);
+  EXPECT_EQ(rig::capture::lost_between(7, 13), 5u);
+  EXPECT_EQ(rig::capture::lost_between(0xFFFFFFFEu, 1), 2u) << "across the wrap";
+  EXPECT_FALSE(rig::capture::lost_between(7, 7)) << "a repeat is not a step forward";
+  EXPECT_FALSE(rig::capture::lost_between(20000, 1000)) << "backwards";
+}
