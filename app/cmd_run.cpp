@@ -382,6 +382,26 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   write_run_outputs(a, hw, info, res, values, state.slot(), log);
 }
 
+// A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
+// recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
+// none (killed before it was written), is finished by a resume that only computes.
+std::string verdict_of(const std::string& dir) {
+  try {
+    const std::string o = nlohmann::json::parse(slurp(dir + "/passport.json")).value("outcome", "");
+    return o == "PASS" || o == "FAIL" ? o : "";
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+// The device time a run had reached, as its last analysis read the rig clock (checkpointed with
+// it): a report field (analysis.json device_time_s), which a resume that only computes keeps.
+double reached_device_time(const acceptance::DutState& st) {
+  if (!st.analysis) return 0;
+  const auto t = st.analysis->find("device_time_s");
+  return t != st.analysis->end() && t->is_number() ? t->get<double>() : 0;
+}
+
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
   auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
   file->set_level(spdlog::level::debug);
@@ -480,7 +500,8 @@ int do_run(RunArgs a) {
     std::vector<std::string> completed;
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
-      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet);
+      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet,
+                                             verdict_of(a.resume).empty());
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
       for (std::size_t i = 0; i < completed.size(); ++i) {
         std::string& list = phases[i].from_records ? again : kept;
@@ -492,8 +513,12 @@ int do_run(RunArgs a) {
       if (!again.empty()) std::cout << "  computed again from the kept captures: " << again << "\n";
       std::string left;
       for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
-      std::cout << "  still to run: " << left
-                << " (a capture the interruption left partial is kept as <capture>.interrupted-N)\n";
+      if (left.empty())
+        std::cout << "  still to run: none. The run stopped after its last phase, without a verdict: the resume "
+                     "opens no device and writes the passport's verdict from the kept captures\n";
+      else
+        std::cout << "  still to run: " << left
+                  << " (a capture the interruption left partial is kept as <capture>.interrupted-N)\n";
     }
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
@@ -507,7 +532,18 @@ int do_run(RunArgs a) {
   if (a.out.empty())
     a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, folder_time_utc());
   prepare_run_folder(a.out);
-  operator_prompts(a, p);
+  // A resume's checkpoint, with the captures it names, is checked before the operator is asked
+  // anything and before any device opens. Where every phase is recorded and the run has no
+  // verdict, the resume only computes: it opens nothing and asks nothing.
+  std::shared_ptr<spdlog::logger> log;
+  std::vector<std::string> completed;
+  if (!a.resume.empty()) {
+    log = make_logger(a.out, a.quiet);
+    log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
+    completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, verdict_of(a.out).empty());
+  }
+  const bool only_computes = !a.resume.empty() && completed.size() == phases.size();
+  if (!only_computes) operator_prompts(a, p);
 
   if (a.resume.empty()) {
     if (fs::exists(Executive::checkpoint_path(a.out)))
@@ -520,18 +556,18 @@ int do_run(RunArgs a) {
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
+    log = make_logger(a.out, a.quiet);
+    log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
   }
-  auto log = make_logger(a.out, a.quiet);
-  log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
-
-  // A resume's checkpoint, with the captures it names, is checked before any device opens.
-  const std::vector<std::string> completed =
-      a.resume.empty() ? std::vector<std::string>{}
-                       : Executive::read_checkpoint(a.out, phases, values, state, identity, *log);
 
   Backends b;
   try {
-    b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg, a.serial);
+    if (only_computes)
+      log->info("every phase is recorded and the run has no verdict: no device is opened; the verdict is computed "
+                "from the kept captures");
+    b = only_computes             ? make_unopened(a.plant, reached_device_time(state.slot()))
+        : a.plant == "hardware" ? make_hardware(hw, p)
+                                : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),
@@ -555,6 +591,7 @@ int do_run(RunArgs a) {
   const bool fast_forward = b.emulated && !a.resume.empty();
   RunResult res = exec.run(
       [&](PhaseContext& c) {
+        if (only_computes) return;  // nothing to power, home or replay: no phase left touches a device
         acceptance::bring_up(c, p, ro, state.slot());
         if (fast_forward) fast_forward_emulated(c, p, completed, *log);
       },

@@ -94,7 +94,8 @@ void Executive::write_checkpoint(const std::vector<std::string>& done, const Mea
 // damage is a ConfigError naming the file and the field: never a silent PASS.
 std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
                                                     MeasurementSet& values, PhaseState& state,
-                                                    const nlohmann::json& identity, spdlog::logger& log) {
+                                                    const nlohmann::json& identity, spdlog::logger& log,
+                                                    bool allow_complete) {
   const std::string cp = checkpoint_path(out_dir);
   auto bad = [&cp](const std::string& field, const std::string& what) {
     return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) + " (damaged checkpoint; start a new run)");
@@ -163,7 +164,7 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
   }
   // A finished run has nothing to resume: running it again would only re-power the DUT and
   // rewrite a final passport with every phase "skipped". Refused before any device opens.
-  if (!phases.empty() && done.size() == phases.size())
+  if (!allow_complete && !phases.empty() && done.size() == phases.size())
     throw ConfigError(out_dir + ": the run is complete (all " + std::to_string(phases.size()) +
                       " phases are in checkpoint.json): nothing to resume; its passport stands");
   // What a from_records phase computed is computed again from the records the checks above

@@ -132,10 +132,12 @@ class Executive {
   // names) and `values` and `state` restored; the values of completed from_records phases are
   // then forgotten, as those phases run again. Returns the completed phase ids (none without a
   // checkpoint). Throws ConfigError naming the file and the field on any damage, and when
-  // every phase is complete (nothing to resume).
+  // every phase is complete unless `allow_complete`: the caller allows it where the run has
+  // no final verdict (an abort after the last phase), and the resume then only computes.
   static std::vector<std::string> read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
                                                   MeasurementSet& values, PhaseState& state,
-                                                  const nlohmann::json& identity, spdlog::logger& log);
+                                                  const nlohmann::json& identity, spdlog::logger& log,
+                                                  bool allow_complete = false);
 
   // The safe-state sequence; public so signal paths and tests can call it.
   // `abnormal` (abort or fault) logs the steps as warnings, otherwise as info.

@@ -214,8 +214,10 @@ TEST(Campaign, EstopAtRandomPointsAbortsSafely) {
 }
 
 // Late signals: SIGINT or SIGTERM after the last phase (before the passport is written) still
-// end the run ABORTED with exit 3, the measurements kept; such a run is complete (every phase
-// is in its checkpoint), so a resume is refused and its passport stands.
+// end the run ABORTED with exit 3, the measurements kept. Every phase is in its checkpoint but
+// the run has no verdict: a resume opens no device, computes again from the kept captures and
+// writes the uninterrupted run's passport; after that the run is complete and a further resume
+// is refused, its passport left as it is.
 TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   const std::string d = tmp("campaign-late");
   fs::create_directories(d);
@@ -233,10 +235,35 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
     const std::string log = slurp(r + "/run.log");
     expect_safe_state_in_order(log, what);
     EXPECT_NE(log.find("outcome ABORTED (exit 3)"), std::string::npos) << log;
-    const std::string before = slurp(r + "/passport.json");
-    EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-resume"), 2);
-    EXPECT_EQ(slurp(r + "/passport.json"), before) << "a final passport is left as it was";
+    // The plan says the resume only computes.
+    ASSERT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-plan"), 0) << slurp(r + "-plan.stderr");
+    const std::string plan = slurp(r + "-plan.stdout");
+    EXPECT_NE(plan.find("still to run: none. The run stopped after its last phase, without a verdict: the resume "
+                        "opens no device"),
+              std::string::npos)
+        << plan;
+    EXPECT_NE(plan.find("computed again from the kept captures: bias, in-run-b, allan"), std::string::npos) << plan;
+    resume_and_compare(r, ref, what);
+    const std::string resumed = slurp(r + "/run.log");
+    const std::string tail = resumed.substr(log.size());
+    EXPECT_NE(tail.find("no device is opened; the verdict is computed from the kept captures"), std::string::npos)
+        << tail;
+    EXPECT_EQ(tail.find("DUT power on"), std::string::npos) << "nothing is brought up\n" << tail;
+    const json q = read_json(r + "/passport.json");
+    for (const auto& ph : q["phases"]) {
+      const bool computes = ph["id"] == "bias" || ph["id"] == "in-run-b" || ph["id"] == "allan";
+      EXPECT_EQ(ph["status"], computes ? "done" : "skipped") << ph;
+    }
+    const std::string after = slurp(r + "/passport.json");
+    EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-again"), 2);
+    EXPECT_NE(slurp(r + "-again.stderr").find("the run is complete"), std::string::npos) << slurp(r + "-again.stderr");
+    EXPECT_EQ(slurp(r + "/passport.json"), after) << "a final passport is left as it was";
   }
+  // Killed after the last checkpoint, before the passport was written: the same.
+  const std::string k = d + "/no-passport";
+  fs::copy(d + "/whole", k, fs::copy_options::recursive);
+  fs::remove(k + "/passport.json");
+  resume_and_compare(k, ref, "no passport");
 }
 
 // A resume continues the run it finds: the options that would change it are refused rather

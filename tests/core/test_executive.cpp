@@ -184,6 +184,13 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   }
   EXPECT_EQ(runs_a, 1);
   EXPECT_EQ(runs_b, 2);
+  // Unless the caller allows it (a run with no verdict yet): every phase comes back completed.
+  MeasurementSet v4;
+  declare(phases, v4);
+  spdlog::logger quiet("quiet");
+  const auto all = Executive::read_checkpoint(f.out, phases, v4, st, id, quiet, true);
+  EXPECT_EQ(all.size(), phases.size());
+  EXPECT_EQ(*v4.find("va")->value, 1.5);
 }
 
 // A phase that only computes from records (Phase::from_records) runs again on a resume: its
