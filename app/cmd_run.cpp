@@ -32,6 +32,7 @@
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
+#include "app/run_seal.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
 #include "app/whole_number.hpp"
@@ -59,6 +60,7 @@ struct RunArgs {
   std::string resume;
   std::string resume_serial;  // --serial given with --resume: the DUT the operator says is mounted
   std::string db;
+  std::string seal_key;  // --seal-key / RIG_SEAL_KEY: the station's key (docs/seal.md)
   std::vector<std::string> inject;
   bool yes = false;
   bool dry_run = false;
@@ -343,7 +345,8 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
 // the history row (a report or history failure is logged, never the run's outcome).
 nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
                                          const RunResult& res, const MeasurementSet& values,
-                                         const acceptance::DutState& dut, spdlog::logger& log) {
+                                         const acceptance::DutState& dut, const std::optional<seal::Key>& key,
+                                         spdlog::logger& log) {
   auto passport = make_passport(info, res, values);
   write_passport(a.out + "/passport.json", passport);
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
@@ -352,6 +355,15 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     report::write_report(a.out);
   } catch (const std::exception& e) {
     log.error("report.html not written: {}", e.what());
+  }
+  if (key) {
+    try {
+      seal_run_folder(a.out, *key);
+      drop_previous_seal(a.out);
+      log.info("run folder sealed (seal.json, key {})", key->id);
+    } catch (const std::exception& e) {
+      log.error("seal.json not written: {}", e.what());
+    }
   }
   if (!a.no_history) {
     try {
@@ -369,7 +381,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
 // recorded in the history like any other run.
 void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
                                  const std::string& started, const std::string& reason, bool config_error,
-                                 spdlog::logger& log) {
+                                 const std::optional<seal::Key>& key, spdlog::logger& log) {
   acceptance::ProcedureState state(p);
   const std::vector<Phase> phases = acceptance::build_phases(p, state);
   MeasurementSet values;
@@ -379,7 +391,7 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   res.message = reason;
   res.config_error = config_error;
   const PassportInfo info = passport_info(a, p, hw, started, a.serial);
-  write_run_outputs(a, hw, info, res, values, state.slot(), log);
+  write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
 }
 
 // A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
@@ -478,6 +490,7 @@ int do_run(RunArgs a) {
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware, kRunSections);
   check_serial_source(a, hw, plant_cfg);
   const std::vector<Injection> injections = parse_injections(a.inject);
+  const std::optional<seal::Key> key = station_key(a.seal_key);
   if (!injections.empty() && a.plant != "emulated") throw ConfigError("--inject works with the emulated plant only");
 
   // The mount's angles before the phases are planned: each move's planned time follows them.
@@ -500,6 +513,7 @@ int do_run(RunArgs a) {
     std::vector<std::string> completed;
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
+      check_seal_before_resume(a.resume, key);
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet,
                                              verdict_of(a.resume).empty());
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
@@ -540,6 +554,7 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
+    check_seal_before_resume(a.out, key);
     completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, verdict_of(a.out).empty());
   }
   const bool only_computes = !a.resume.empty() && completed.size() == phases.size();
@@ -556,6 +571,7 @@ int do_run(RunArgs a) {
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
+    if (key) seal_run_folder(a.out, *key);  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
   }
@@ -571,7 +587,7 @@ int do_run(RunArgs a) {
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),
-                                dynamic_cast<const ConfigError*>(&e) != nullptr, *log);
+                                dynamic_cast<const ConfigError*>(&e) != nullptr, key, *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
@@ -584,6 +600,8 @@ int do_run(RunArgs a) {
 
   view.plan(phases);
   Executive exec(dev, a.out, log, &view);
+  if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
+    exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, text); });
   const std::string started = invocation.value("started", iso8601_utc_now());
   // In emulation a resume rebuilds the plant as the checkpoint left it (app/fast_forward.hpp):
   // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
@@ -615,7 +633,7 @@ int do_run(RunArgs a) {
     res.message = "aborted after the last phase: " + cancel.token().reason();
     log->error("{}", res.message);
   }
-  const auto passport = write_run_outputs(a, hw, info, res, values, state.slot(), *log);
+  const auto passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
   dev.io.set_lamp(Lamp::Running, false);
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
   std::cout << "\n" << passport_table(passport);
@@ -658,6 +676,10 @@ void add_run(CLI::App& app, int& rc) {
   sub->add_flag("--quiet,-q", a->quiet, "Only the final table on the terminal");
   sub->add_option("--db", a->db, "History database URL (default: rig config / ~/.local/share/rig/history.sqlite)");
   sub->add_flag("--no-history", a->no_history, "Do not record the run in the history database");
+  sub->add_option("--seal-key", a->seal_key,
+                  "Seal the run folder with this station key (HMAC-SHA256; docs/seal.md); a sealed run resumes only "
+                  "with it")
+      ->envname("RIG_SEAL_KEY");
   sub->add_option("--inject", a->inject,
                   "Emulated plant only: inject a fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, "
                   "sigterm@end, drop@SEQ:COUNT; T in device seconds)");

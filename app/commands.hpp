@@ -14,5 +14,6 @@ void add_filter(CLI::App& app, int& rc);    // cmd_filter.cpp   output-filter ev
 void add_report(CLI::App& app, int& rc);    // cmd_report.cpp   report.html from a run folder
 void add_history(CLI::App& app, int& rc);   // cmd_history.cpp  results database queries
 void add_capture(CLI::App& app, int& rc);   // cmd_capture.cpp  capture files from candump logs
+void add_verify(CLI::App& app, int& rc);    // cmd_verify.cpp   a run folder against the station's seal
 
 }  // namespace rig::cli

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   rig::cli::add_report(app, rc);
   rig::cli::add_history(app, rc);
   rig::cli::add_capture(app, rc);
+  rig::cli::add_verify(app, rc);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

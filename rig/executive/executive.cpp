@@ -84,7 +84,9 @@ void Executive::write_checkpoint(const std::vector<std::string>& done, const Mea
   j["completed"] = done;
   j["values"] = values.to_json();
   j["state"] = state.save();
-  write_file_atomic(checkpoint_path(out_dir_), j.dump(1));
+  const std::string text = j.dump(1);
+  if (on_checkpoint_) on_checkpoint_(text);
+  write_file_atomic(checkpoint_path(out_dir_), text);
 }
 
 // A checkpoint is trusted only after it is checked (issue 13): the schema, the

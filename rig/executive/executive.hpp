@@ -145,6 +145,11 @@ class Executive {
 
   static std::string checkpoint_path(const std::string& out_dir);
 
+  // Called with each checkpoint's text before the file is replaced: whoever seals the run
+  // folder (app, rig/seal) seals the new text first, so a stop between the two leaves a seal
+  // that still holds for one of the two checkpoints.
+  void on_checkpoint(std::function<void(const std::string& text)> f) { on_checkpoint_ = std::move(f); }
+
  private:
   void write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
                         const PhaseState& state, const nlohmann::json& identity) const;
@@ -152,6 +157,7 @@ class Executive {
   std::string out_dir_;
   std::shared_ptr<spdlog::logger> log_;
   ProgressSink* progress_;
+  std::function<void(const std::string&)> on_checkpoint_;
 };
 
 // Atomic file replace: write to a temp file, fsync, rename.

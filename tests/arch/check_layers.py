@@ -22,6 +22,7 @@ RULES = {
     "rig/modbus": ["rig/core/"],
     "rig/gpio": ["rig/core/"],
     "rig/report": ["rig/core/"],                                  # draws analysis.json; no math
+    "rig/seal": ["rig/core/"],
     "firmware_link": ["rig/core/", "design/filter_config.hpp"],
     "procedures": ["procedures/", "analysis/", "design/", "rig/core/", "rig/capture/", "rig/executive/"],
     # The emulated plant runs the rig's own clients on its models: Modbus, CAN, GPIO lines.

@@ -584,3 +584,120 @@ TEST(Campaign, AResumeComputesEveryValueFromTheKeptCaptures) {
       EXPECT_EQ(ph["status"], "done") << ph.dump();
     }
 }
+
+namespace {
+
+std::string write_key(const std::string& path, char fill, unsigned mode = 0600) {
+  std::ofstream(path, std::ios::binary) << std::string(32, fill);
+  fs::permissions(path, static_cast<fs::perms>(mode), fs::perm_options::replace);
+  return path;
+}
+
+}  // namespace
+
+// The station's seal (docs/seal.md): a sealed run verifies; an edited passport does not; a
+// sealed run resumes only with its key and only while the folder is as sealed, so the review's
+// F7 (profile.toml's limits loosened and its digest copied into the checkpoint) is refused; a
+// stop between a new seal and its checkpoint leaves seal.prev.json, which holds.
+TEST(Campaign, SealedRunFolders) {
+  const std::string d = tmp("campaign-seal");
+  fs::create_directories(d);
+  const std::string key = write_key(d + "/station.key", 'k'), other = write_key(d + "/other.key", 'o');
+  const Reference ref = uninterrupted(d, "ci");
+
+  // An uninterrupted sealed run: verified; the same passport as without a seal.
+  const std::string whole = d + "/sealed";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", whole, "--seal-key", key}, whole + "-io"), 0)
+      << slurp(whole + "-io.stderr");
+  EXPECT_EQ(without_session_fields(read_json(whole + "/passport.json")), without_session_fields(ref.passport));
+  EXPECT_FALSE(fs::exists(whole + "/seal.prev.json"));
+  ASSERT_EQ(run({"verify", whole, "--seal-key", key}, whole + "-verify"), 0) << slurp(whole + "-verify.stdout");
+  EXPECT_NE(slurp(whole + "-verify.stdout").find("ok       captures/raw-U10.cap"), std::string::npos);
+  EXPECT_NE(slurp(whole + "-verify.stdout").find("ok       passport.json"), std::string::npos);
+  EXPECT_EQ(run({"verify", whole, "--seal-key", other}, whole + "-other"), 1);
+  EXPECT_NE(slurp(whole + "-other.stdout").find("sealed with another key"), std::string::npos);
+  {
+    std::string p = slurp(whole + "/passport.json");
+    p.replace(p.find("\"outcome\": \"PASS\""), 17, "\"outcome\": \"FAIL\"");
+    std::ofstream(whole + "/passport.json") << p;
+  }
+  EXPECT_EQ(run({"verify", whole, "--seal-key", key}, whole + "-edited"), 1);
+  EXPECT_NE(slurp(whole + "-edited.stdout").find("CHANGED  passport.json"), std::string::npos)
+      << slurp(whole + "-edited.stdout");
+  EXPECT_EQ(run({"verify", ref.passport["out_dir"].get<std::string>(), "--seal-key", key}, d + "/unsealed"), 1);
+  EXPECT_NE(slurp(d + "/unsealed.stdout").find("the folder is not sealed"), std::string::npos);
+
+  // A key others may read is refused before anything is written.
+  const std::string loose = write_key(d + "/loose.key", 'l', 0644);
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/loose", "--seal-key", loose},
+                d + "/loose-io"),
+            2);
+  EXPECT_NE(slurp(d + "/loose-io.stderr").find(loose + ": station key may be read or written by others (mode 0644)"),
+            std::string::npos)
+      << slurp(d + "/loose-io.stderr");
+  EXPECT_FALSE(fs::exists(d + "/loose"));
+
+  // Interrupted, sealed: kept aside, then copies of it edited.
+  const std::string base = d + "/base";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", base, "--inject", "sigkill@180", "--seal-key",
+                 key},
+                d + "/base-io"),
+            128 + SIGKILL);
+  int k = 0;
+  auto copy = [&] {
+    const std::string f = d + "/f" + std::to_string(++k);
+    fs::copy(base, f, fs::copy_options::recursive);
+    return f;
+  };
+  auto refused = [&](const std::string& f, const std::vector<std::string>& extra, const std::string& says) {
+    std::vector<std::string> args = {"run", "--resume", f, "--yes", "--no-history"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<std::string> dry = {"run", "--resume", f, "--dry-run"};
+    dry.insert(dry.end(), extra.begin(), extra.end());
+    EXPECT_EQ(run(dry, f + "-dry"), 2) << says;
+    EXPECT_NE(slurp(f + "-dry.stderr").find(says), std::string::npos) << slurp(f + "-dry.stderr");
+    EXPECT_EQ(run(args, f + "-io"), 2) << says;
+    EXPECT_NE(slurp(f + "-io.stderr").find(says), std::string::npos) << slurp(f + "-io.stderr");
+    EXPECT_FALSE(fs::exists(f + "/passport.json")) << says;
+  };
+  refused(copy(), {}, "is sealed (seal.json): resume it with the station's key");
+  refused(copy(), {"--seal-key", other}, "sealed with another key");
+  {
+    // F7 edited profile.toml's limits and copied its digest into the checkpoint; with a seal any
+    // edit of it is refused, even one the digest does not see (a comment).
+    const std::string f = copy();
+    std::string prof = slurp(f + "/profile.toml");
+    prof += "\n# loosened\n";
+    std::ofstream(f + "/profile.toml") << prof;
+    refused(f, {"--seal-key", key}, "profile.toml: changed since it was sealed");
+  }
+  {
+    // A capture rewritten: named.
+    const std::string f = copy();
+    std::ofstream(f + "/captures/run01-U10.cap", std::ios::app) << "x";
+    refused(f, {"--seal-key", key}, "captures/run01-U10.cap: changed since it was sealed");
+  }
+  {
+    // The seal's list edited (an entry dropped) no longer holds as a whole.
+    const std::string f = copy();
+    json s = json::parse(slurp(f + "/seal.json"));
+    s["files"].erase("profile.toml");
+    std::ofstream(f + "/seal.json") << s.dump(1);
+    refused(f, {"--seal-key", key}, "its list of files was edited");
+  }
+  {
+    // Stopped after the new seal was written, before the checkpoint it covers: seal.json holds
+    // for a checkpoint that never came, seal.prev.json for the one there. Resumed with the key,
+    // the run ends as the uninterrupted one and verifies.
+    const std::string f = copy();
+    fs::rename(f + "/seal.json", f + "/seal.prev.json");
+    json s = json::parse(slurp(f + "/seal.prev.json"));
+    s["files"]["checkpoint.json"] = std::string(64, '0');  // not this key's MAC of anything here
+    std::ofstream(f + "/seal.json") << s.dump(1);
+    ASSERT_EQ(run({"run", "--resume", f, "--yes", "--no-history", "--seal-key", key}, f + "-io"), 0)
+        << slurp(f + "-io.stderr");
+    EXPECT_EQ(without_session_fields(read_json(f + "/passport.json")), without_session_fields(ref.passport));
+    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 0) << slurp(f + "-verify.stdout");
+    EXPECT_FALSE(fs::exists(f + "/seal.prev.json"));
+  }
+}

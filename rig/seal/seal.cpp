@@ -1,0 +1,216 @@
+#include "rig/seal/seal.hpp"
+
+#include <dlfcn.h>
+#include <openssl/evp.h>
+#include <openssl/params.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::seal {
+
+namespace {
+
+constexpr const char* kSchema = "rig.seal/1";
+
+// The six libcrypto calls a streaming HMAC needs (OpenSSL 3's EVP_MAC interface).
+struct Crypto {
+  decltype(&EVP_MAC_fetch) mac_fetch;
+  decltype(&EVP_MAC_CTX_new) ctx_new;
+  decltype(&EVP_MAC_CTX_free) ctx_free;
+  decltype(&EVP_MAC_init) init;
+  decltype(&EVP_MAC_update) update;
+  decltype(&EVP_MAC_final) final_;
+  decltype(&OSSL_PARAM_construct_utf8_string) param_string;
+  decltype(&OSSL_PARAM_construct_end) param_end;
+  EVP_MAC* hmac = nullptr;
+};
+
+const Crypto& crypto() {
+  static const std::optional<Crypto> api = []() -> std::optional<Crypto> {
+    void* h = ::dlopen("libcrypto.so.3", RTLD_NOW | RTLD_LOCAL);
+    if (!h) return std::nullopt;
+    Crypto c{};
+    bool ok = true;
+    auto get = [&](auto& fn, const char* name) {
+      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(::dlsym(h, name));
+      ok = ok && fn != nullptr;
+    };
+    get(c.mac_fetch, "EVP_MAC_fetch");
+    get(c.ctx_new, "EVP_MAC_CTX_new");
+    get(c.ctx_free, "EVP_MAC_CTX_free");
+    get(c.init, "EVP_MAC_init");
+    get(c.update, "EVP_MAC_update");
+    get(c.final_, "EVP_MAC_final");
+    get(c.param_string, "OSSL_PARAM_construct_utf8_string");
+    get(c.param_end, "OSSL_PARAM_construct_end");
+    if (!ok) return std::nullopt;
+    c.hmac = c.mac_fetch(nullptr, "HMAC", nullptr);
+    if (!c.hmac) return std::nullopt;
+    return c;
+  }();
+  if (!api) throw ConfigError("cannot load HMAC from libcrypto.so.3 for the run folder's seal (Debian package libssl3)");
+  return *api;
+}
+
+// One HMAC-SHA256 computation, fed in pieces.
+class Mac {
+ public:
+  explicit Mac(const std::string& key) : c_(crypto()), ctx_(c_.ctx_new(c_.hmac), c_.ctx_free) {
+    char digest[] = "SHA256";
+    OSSL_PARAM params[] = {c_.param_string("digest", digest, 0), c_.param_end()};
+    if (!ctx_ || !c_.init(ctx_.get(), reinterpret_cast<const unsigned char*>(key.data()), key.size(), params))
+      throw std::runtime_error("HMAC-SHA256 could not be started (libcrypto)");
+  }
+  void add(const char* p, std::size_t n) {
+    if (n && !c_.update(ctx_.get(), reinterpret_cast<const unsigned char*>(p), n))
+      throw std::runtime_error("HMAC-SHA256 update failed (libcrypto)");
+  }
+  std::string hex() {
+    unsigned char out[32];
+    std::size_t n = 0;
+    if (!c_.final_(ctx_.get(), out, &n, sizeof out) || n != sizeof out)
+      throw std::runtime_error("HMAC-SHA256 could not be finished (libcrypto)");
+    std::string s;
+    char b[3];
+    for (unsigned char v : out) {
+      std::snprintf(b, sizeof b, "%02x", v);
+      s += b;
+    }
+    return s;
+  }
+
+ private:
+  const Crypto& c_;
+  std::unique_ptr<EVP_MAC_CTX, decltype(&EVP_MAC_CTX_free)> ctx_;
+};
+
+// What the seal's own MAC covers: the schema, the key's id and every (path, MAC), sorted.
+std::string seal_body(const std::string& key_id, const std::vector<std::pair<std::string, std::string>>& files) {
+  std::string s = std::string(kSchema) + "\n" + key_id + "\n";
+  for (const auto& [rel, mac] : files) s += rel + "\t" + mac + "\n";
+  return s;
+}
+
+}  // namespace
+
+std::string text_mac(const Key& k, const std::string& text) {
+  Mac m(k.bytes);
+  m.add(text.data(), text.size());
+  return m.hex();
+}
+
+std::string file_mac(const Key& k, const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot be read to seal or check it");
+  Mac m(k.bytes);
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    m.add(buf.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) throw ConfigError(path + ": read error while sealing or checking it");
+  return m.hex();
+}
+
+Key load_key(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) throw ConfigError(path + ": station key not found");
+  if (!S_ISREG(st.st_mode)) throw ConfigError(path + ": station key is not a regular file");
+  if ((st.st_mode & 077) != 0)
+    throw ConfigError(path + ": station key may be read or written by others (mode " +
+                      [&] {
+                        char b[8];
+                        std::snprintf(b, sizeof b, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+                        return std::string(b);
+                      }() +
+                      "): chmod 600 it; a key others can read seals nothing");
+  std::ifstream in(path, std::ios::binary);
+  Key k;
+  k.path = path;
+  k.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (!in.eof() && in.fail()) throw ConfigError(path + ": station key cannot be read");
+  if (k.bytes.size() < 32)
+    throw ConfigError(path + ": station key has " + std::to_string(k.bytes.size()) +
+                      " bytes; at least 32 are needed (head -c 32 /dev/urandom > " + path + ")");
+  k.id = text_mac(k, "rig.seal key id").substr(0, 16);
+  return k;
+}
+
+std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries) {
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const Entry& e : entries)
+    files.emplace_back(e.rel, e.from_text ? text_mac(k, e.text) : file_mac(k, dir + "/" + e.rel));
+  std::sort(files.begin(), files.end());
+  nlohmann::ordered_json j;
+  j["schema"] = kSchema;
+  j["algorithm"] = "HMAC-SHA256";
+  j["key_id"] = k.id;
+  j["files"] = nlohmann::ordered_json::object();
+  for (const auto& [rel, mac] : files) j["files"][rel] = mac;
+  j["seal"] = text_mac(k, seal_body(k.id, files));
+  return j.dump(1);
+}
+
+Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
+                 const std::vector<std::string>& must_cover) {
+  Check c;
+  std::ifstream in(seal_path, std::ios::binary);
+  if (!in) {
+    c.problems.push_back(seal_path + ": missing: the folder is not sealed");
+    return c;
+  }
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    c.problems.push_back(seal_path + ": unreadable: " + e.what());
+    return c;
+  }
+  if (!j.is_object() || j.value("schema", "") != kSchema || !j.contains("files") || !j["files"].is_object() ||
+      !j.contains("seal") || !j["seal"].is_string() || !j.contains("key_id") || !j["key_id"].is_string()) {
+    c.problems.push_back(seal_path + ": not a rig.seal/1 seal");
+    return c;
+  }
+  if (j["key_id"] != k.id) {
+    c.problems.push_back(seal_path + ": sealed with another key (key_id " + j["key_id"].get<std::string>() +
+                         "; " + k.path + " is " + k.id + ")");
+    return c;
+  }
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& [rel, mac] : j["files"].items()) {
+    if (!mac.is_string()) {
+      c.problems.push_back(seal_path + ": files." + rel + ": not a MAC");
+      return c;
+    }
+    files.emplace_back(rel, mac.get<std::string>());
+  }
+  std::sort(files.begin(), files.end());
+  if (text_mac(k, seal_body(k.id, files)) != j["seal"].get<std::string>()) {
+    c.problems.push_back(seal_path + ": the seal's own MAC does not hold: its list of files was edited");
+    return c;
+  }
+  for (const auto& [rel, mac] : files) {
+    c.files.push_back(rel);
+    const std::string path = dir + "/" + rel;
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+      c.problems.push_back(rel + ": sealed, but missing");
+      continue;
+    }
+    if (file_mac(k, path) != mac) c.problems.push_back(rel + ": changed since it was sealed");
+  }
+  for (const std::string& rel : must_cover)
+    if (std::find(c.files.begin(), c.files.end(), rel) == c.files.end())
+      c.problems.push_back(rel + ": not sealed");
+  c.ok = c.problems.empty();
+  return c;
+}
+
+}  // namespace rig::seal

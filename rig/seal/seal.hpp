@@ -1,0 +1,49 @@
+// The station's seal on a run folder: HMAC-SHA256 (RFC 2104, FIPS 198-1) of each file the run
+// wrote, under a key only the station holds. A checkpoint is integrity-checked against its
+// captures; the seal adds who wrote them: without the key, an edited profile, checkpoint,
+// capture or passport cannot be given a matching seal (docs/seal.md).
+// libcrypto (OpenSSL 3) is loaded when a key is first used, not linked: every rig command's
+// start-up would otherwise map and relocate it.
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rig::seal {
+
+struct Key {
+  std::string path;
+  std::string bytes;
+  std::string id;  // the first 16 hex digits of HMAC(key, "rig.seal key id"): names the key, reveals nothing
+};
+
+// A station key: a regular file of at least 32 bytes that its owner alone may read or write
+// (mode 0600 or 0400). Anything else is ConfigError naming the file and what is wrong.
+Key load_key(const std::string& path);
+
+// HMAC-SHA256 of the file's bytes, lower-case hex; ConfigError naming an unreadable file.
+std::string file_mac(const Key& k, const std::string& path);
+std::string text_mac(const Key& k, const std::string& text);
+
+struct Entry {
+  std::string rel;   // path relative to the run folder, '/' separated
+  std::string text;  // the bytes to seal when the file is not written yet (empty: read the file)
+  bool from_text = false;
+};
+
+// seal.json's text (schema rig.seal/1) over `entries`: each file's MAC, and the seal's own MAC
+// over the sorted (path, MAC) list, so entries of different seals cannot be combined.
+std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries);
+
+struct Check {
+  bool ok = false;                   // the seal is this key's, its own MAC holds, every file matches
+  std::vector<std::string> files;    // the files it covers, in order
+  std::vector<std::string> problems; // one line each: "captures/raw-U10.cap: changed since it was sealed"
+};
+
+// Checks `seal_path` (a seal.json text) against the folder's files and the key; every file in
+// `must_cover` must be among those sealed.
+Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
+                 const std::vector<std::string>& must_cover = {});
+
+}  // namespace rig::seal
