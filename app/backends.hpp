@@ -46,11 +46,4 @@ Backends make_emulated(const toml::table& plant_cfg, const std::string& serial =
 // u10_deg/u20_deg replace the profile's table angles with the mount's calibration.
 Backends make_hardware(const toml::table& hw, acceptance::Profile& p);
 
-// The devices of a resume with nothing left to record: every phase is in the checkpoint but the
-// run has no verdict (stopped after its last phase). It only computes again from the kept
-// captures, so nothing is opened: a phase that asked a device for anything would fail naming
-// it ("no device is open"), and the safe-state calls (stop, stream off, power off) have nothing
-// to do. The clock stands still at `device_time_s`, the device time the run had reached.
-Backends make_unopened(const std::string& plant, double device_time_s);
-
 }  // namespace rig::cli

@@ -394,6 +394,11 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
 }
 
+// The phase a resume continues with: a stop may have left its capture partial.
+std::string next_phase(const std::vector<Phase>& phases, const std::vector<std::string>& completed) {
+  return completed.size() < phases.size() ? phases[completed.size()].id : std::string();
+}
+
 // A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
 // recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
 // none (killed before it was written), is finished by a resume that only computes.
@@ -404,14 +409,6 @@ std::string verdict_of(const std::string& dir) {
   } catch (const std::exception&) {
     return "";
   }
-}
-
-// The device time a run had reached, as its last analysis read the rig clock (checkpointed with
-// it): a report field (analysis.json device_time_s), which a resume that only computes keeps.
-double reached_device_time(const acceptance::DutState& st) {
-  if (!st.analysis) return 0;
-  const auto t = st.analysis->find("device_time_s");
-  return t != st.analysis->end() && t->is_number() ? t->get<double>() : 0;
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
@@ -455,6 +452,10 @@ int do_run(RunArgs a) {
   const auto wall_start = std::chrono::steady_clock::now();
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before any backend thread exists
+  // The station's key, and a resumed folder's seal, before anything in the folder is read.
+  const std::optional<seal::Key> key = station_key(a.seal_key);
+  const std::vector<std::string> sealed = a.resume.empty() ? std::vector<std::string>{}
+                                                            : check_seal_before_resume(a.resume, key);
 
   // A resumed run takes its profile and invocation from the run folder.
   nlohmann::json invocation;
@@ -490,7 +491,6 @@ int do_run(RunArgs a) {
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware, kRunSections);
   check_serial_source(a, hw, plant_cfg);
   const std::vector<Injection> injections = parse_injections(a.inject);
-  const std::optional<seal::Key> key = station_key(a.seal_key);
   if (!injections.empty() && a.plant != "emulated") throw ConfigError("--inject works with the emulated plant only");
 
   // The mount's angles before the phases are planned: each move's planned time follows them.
@@ -503,36 +503,37 @@ int do_run(RunArgs a) {
   TerminalView view(stderr, a.quiet);
   if (a.dry_run) {
     check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());
+    // A resume's checkpoint is checked as the run would check it (its captures read, nothing
+    // opened), before the plan is printed, so the plan says what the resume keeps, computes
+    // again and still records.
+    std::vector<std::string> completed;
+    if (!a.resume.empty()) {
+      spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
+      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet,
+                                             verdict_of(a.resume).empty());
+      if (key) refuse_added_files(a.resume, sealed, next_phase(phases, completed));
+    }
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              p.source, a.plant);
     plan_view.plan(phases);
     for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
-    // A resume's checkpoint is checked as the run would check it (its captures read, nothing
-    // opened), so the plan says what the resume keeps, computes again and still records.
-    std::vector<std::string> completed;
     if (!a.resume.empty()) {
-      spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
-      check_seal_before_resume(a.resume, key);
-      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet,
-                                             verdict_of(a.resume).empty());
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
       for (std::size_t i = 0; i < completed.size(); ++i) {
         std::string& list = phases[i].from_records ? again : kept;
         list += (list.empty() ? "" : ", ") + completed[i];
       }
-      std::cout << fmt::format("Resume: {} checked with the captures it names; {} of {} phases complete.\n",
-                               Executive::checkpoint_path(a.resume), completed.size(), phases.size());
+      std::cout << fmt::format("Resume: {} checked with the captures it names{}; {} of {} phases complete.\n",
+                               Executive::checkpoint_path(a.resume), key ? " and the station's seal" : "",
+                               completed.size(), phases.size());
       if (!kept.empty()) std::cout << "  kept (not recorded again): " << kept << "\n";
       if (!again.empty()) std::cout << "  computed again from the kept captures: " << again << "\n";
       std::string left;
       for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
-      if (left.empty())
-        std::cout << "  still to run: none. The run stopped after its last phase, without a verdict: the resume "
-                     "opens no device and writes the passport's verdict from the kept captures\n";
-      else
-        std::cout << "  still to run: " << left
-                  << " (a capture the interruption left partial is kept as <capture>.interrupted-N)\n";
+      std::cout << "  still to run: " << left
+                << " (a capture the interruption left partial is kept as <capture>.interrupted-N; a phase that "
+                   "measures on the device, the loop test, runs again even when completed)\n";
     }
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
@@ -547,18 +548,16 @@ int do_run(RunArgs a) {
     a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, folder_time_utc());
   prepare_run_folder(a.out);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
-  // anything and before any device opens. Where every phase is recorded and the run has no
-  // verdict, the resume only computes: it opens nothing and asks nothing.
+  // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
   std::vector<std::string> completed;
   if (!a.resume.empty()) {
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
-    check_seal_before_resume(a.out, key);
     completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, verdict_of(a.out).empty());
+    if (key) refuse_added_files(a.out, sealed, next_phase(phases, completed));
   }
-  const bool only_computes = !a.resume.empty() && completed.size() == phases.size();
-  if (!only_computes) operator_prompts(a, p);
+  operator_prompts(a, p);
 
   if (a.resume.empty()) {
     if (fs::exists(Executive::checkpoint_path(a.out)))
@@ -578,12 +577,7 @@ int do_run(RunArgs a) {
 
   Backends b;
   try {
-    if (only_computes)
-      log->info("every phase is recorded and the run has no verdict: no device is opened; the verdict is computed "
-                "from the kept captures");
-    b = only_computes             ? make_unopened(a.plant, reached_device_time(state.slot()))
-        : a.plant == "hardware" ? make_hardware(hw, p)
-                                : make_emulated(plant_cfg, a.serial);
+    b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),
@@ -609,7 +603,6 @@ int do_run(RunArgs a) {
   const bool fast_forward = b.emulated && !a.resume.empty();
   RunResult res = exec.run(
       [&](PhaseContext& c) {
-        if (only_computes) return;  // nothing to power, home or replay: no phase left touches a device
         acceptance::bring_up(c, p, ro, state.slot());
         if (fast_forward) fast_forward_emulated(c, p, completed, *log);
       },
@@ -688,7 +681,7 @@ void add_run(CLI::App& app, int& rc) {
   auto* hardware = sub->get_option("--hardware");
   auto* out = sub->get_option("--out");
   auto* inject = sub->get_option("--inject");
-  sub->callback([a, &rc, plant, serial, profile, hardware, out, inject] {
+  sub->callback([a, &rc, plant, serial, profile, hardware, out, inject, sub] {
     if (!a->resume.empty()) {
       // A resume continues with the run folder's profile, plant and options (run.json,
       // profile.toml); one given again here would be ignored, so it is refused instead.
@@ -698,6 +691,8 @@ void add_run(CLI::App& app, int& rc) {
                                             "and options in " + a->resume + "/run.json and profile.toml");
       if (serial->count() > 0) a->resume_serial = a->serial;
     }
+    if (a->seal_key.empty() && sub->get_option("--seal-key")->count() > 0)
+      throw ConfigError("--seal-key / RIG_SEAL_KEY: empty; name the station's key");
     if (!a->hardware.empty()) a->plant = "hardware";
     rc = do_run(*a);
   });

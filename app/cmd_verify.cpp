@@ -1,4 +1,5 @@
 // rig verify DIR --seal-key FILE: is the run folder as the station sealed it (docs/seal.md)?
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -18,15 +19,31 @@ int do_verify(const std::string& dir, const std::string& key_path) {
   const std::optional<seal::Key> key = station_key(key_path);
   if (!key) throw ConfigError("rig verify needs the station's key: --seal-key FILE or RIG_SEAL_KEY");
   // The passport is what a seal is for: a folder whose seal leaves it out is not verified.
-  const seal::Check c = seal::check_seal(dir, dir + "/seal.json", *key, {"passport.json"});
+  seal::Check c = seal::check_seal(dir, dir + "/seal.json", *key, {"passport.json"});
   std::cout << fmt::format("{}: seal.json, key {} ({})\n", dir, key->id, key->path);
-  for (const std::string& f : c.files) {
-    bool bad = false;
-    for (const std::string& p : c.problems) bad = bad || p.rfind(f + ":", 0) == 0;
-    std::cout << fmt::format("  {:<8} {}\n", bad ? "CHANGED" : "ok", f);
+  for (const auto& [f, state] : c.files)
+    std::cout << fmt::format("  {:<8} {}\n",
+                             state == seal::FileState::Ok        ? "ok"
+                             : state == seal::FileState::Changed ? "CHANGED"
+                             : state == seal::FileState::Missing ? "MISSING"
+                                                                 : "NOT-FILE",
+                             f);
+  if (!c.files.empty()) {  // the seal was read: a file it does not list was added after it
+    std::vector<std::string> here;
+    try {
+      here = sealable_files(dir);
+    } catch (const ConfigError& e) {
+      c.problems.push_back(e.what());
+    }
+    for (const std::string& f : here)
+      if (std::none_of(c.files.begin(), c.files.end(), [&](const auto& s) { return s.first == f; }))
+        c.problems.push_back(f + ": not sealed (added after the seal)");
+    c.ok = c.problems.empty();
   }
   for (const std::string& p : c.problems) std::cout << "  problem: " << p << "\n";
-  std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them\n", c.files.size())
+  std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them (the seal says who wrote them, not "
+                                   "whether the DUT passed: see passport.json)\n",
+                                   c.files.size())
                      : std::string("NOT verified: the folder is not as the station sealed it\n"));
   return c.ok ? kExitPass : kExitFail;
 }
@@ -38,8 +55,11 @@ void add_verify(CLI::App& app, int& rc) {
   auto dir = std::make_shared<std::string>();
   auto key = std::make_shared<std::string>();
   sub->add_option("DIR", *dir, "Run folder")->required();
-  sub->add_option("--seal-key", *key, "The station's key (HMAC-SHA256)")->envname("RIG_SEAL_KEY");
-  sub->callback([dir, key, &rc] { rc = do_verify(*dir, *key); });
+  auto* k = sub->add_option("--seal-key", *key, "The station's key (HMAC-SHA256)")->envname("RIG_SEAL_KEY");
+  sub->callback([dir, key, k, &rc] {
+    if (k->count() > 0 && key->empty()) throw ConfigError("--seal-key / RIG_SEAL_KEY: empty; name the station's key");
+    rc = do_verify(*dir, *key);
+  });
 }
 
 }  // namespace rig::cli

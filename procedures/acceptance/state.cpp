@@ -357,4 +357,15 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
   slots_.at(0) = std::move(s);
 }
 
+void ProcedureState::forget(const std::string& id) {
+  DutState& s = slots_.at(0);
+  if (id.rfind("run", 0) == 0 && id.find('-') != std::string::npos) s.runs.erase(std::stoul(id.substr(3, id.find('-') - 3)));
+  else if (id == "bias") s.bias.reset();
+  else if (id == "in-run") s.in_run.reset();
+  else if (id == "in-run-b") s.in_run_blocks.reset();
+  else if (id == "raw") s.raw.reset();
+  else if (id == "allan") s.analysis.reset();
+  else if (id == "loop") s.loop.reset();
+}
+
 }  // namespace rig::acceptance

@@ -86,6 +86,7 @@ class ProcedureState final : public PhaseState {
 
   nlohmann::json save() const override;
   void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
+  void forget(const std::string& phase_id) override;
 
  private:
   // What a completed recording must be: its phase id, orientation, length and DUT.

@@ -174,6 +174,19 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
   for (std::size_t i = 0; i < done.size(); ++i)
     if (phases[i].from_records)
       for (const auto& m : phases[i].measures) values.forget(m.name);
+  // What the device alone measured has no record to compute it again from: that phase, and every
+  // phase after it (the ones that may build on it), run again.
+  for (std::size_t i = 0; i < done.size(); ++i) {
+    if (phases[i].from_records || phases[i].measures.empty()) continue;
+    for (std::size_t k = i; k < done.size(); ++k) {
+      for (const auto& m : phases[k].measures) values.forget(m.name);
+      state.forget(phases[k].id);
+    }
+    log.info("phase {} measures on the device: it runs again (its values are never taken from a checkpoint)",
+             phases[i].id);
+    done.resize(i);
+    break;
+  }
   log.info("resuming {}: {} phase(s) already complete", out_dir, done.size());
   return done;
 }

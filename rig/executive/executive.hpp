@@ -79,6 +79,9 @@ class PhaseState {
   // `run_dir` is the run folder the captures it names are in.
   virtual void restore(const nlohmann::json& j, const std::vector<std::string>& completed,
                        const std::string& run_dir) = 0;
+  // Drops what phase `phase_id` handed on, as if it had not run (a resume runs it again). A state
+  // whose phases hand nothing on has nothing to drop.
+  virtual void forget(const std::string& /*phase_id*/) {}
 };
 
 // A state for procedures whose phases hand nothing on.
@@ -131,9 +134,12 @@ class Executive {
   // completed phase present with the right types, PhaseState::restore with the captures it
   // names) and `values` and `state` restored; the values of completed from_records phases are
   // then forgotten, as those phases run again. Returns the completed phase ids (none without a
-  // checkpoint). Throws ConfigError naming the file and the field on any damage, and when
-  // every phase is complete unless `allow_complete`: the caller allows it where the run has
-  // no final verdict (an abort after the last phase), and the resume then only computes.
+  // checkpoint). A completed phase that measures on the device (declares measures and is not
+  // from_records: the loop test) cannot have its values taken from a file either: it and every
+  // phase after it are returned as not completed, their values and state forgotten, and run
+  // again. Throws ConfigError naming the file and the field on any damage, and when every phase
+  // is complete unless `allow_complete`: the caller allows it where the run has no final verdict
+  // (an abort after the last phase).
   static std::vector<std::string> read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
                                                   MeasurementSet& values, PhaseState& state,
                                                   const nlohmann::json& identity, spdlog::logger& log,

@@ -158,14 +158,25 @@ std::string make_seal(const std::string& dir, const Key& k, const std::vector<En
   return j.dump(1);
 }
 
+namespace {
+
+bool regular_file(const std::string& path, bool& exists) {
+  struct stat st {};
+  exists = ::lstat(path.c_str(), &st) == 0;
+  return exists && S_ISREG(st.st_mode);
+}
+
+}  // namespace
+
 Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
                  const std::vector<std::string>& must_cover) {
   Check c;
-  std::ifstream in(seal_path, std::ios::binary);
-  if (!in) {
-    c.problems.push_back(seal_path + ": missing: the folder is not sealed");
+  bool exists = false;
+  if (!regular_file(seal_path, exists)) {
+    c.problems.push_back(seal_path + (exists ? ": not a regular file" : ": missing: the folder is not sealed"));
     return c;
   }
+  std::ifstream in(seal_path, std::ios::binary);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
@@ -197,17 +208,20 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
     return c;
   }
   for (const auto& [rel, mac] : files) {
-    c.files.push_back(rel);
-    const std::string path = dir + "/" + rel;
-    struct stat st {};
-    if (::stat(path.c_str(), &st) != 0) {
-      c.problems.push_back(rel + ": sealed, but missing");
-      continue;
+    FileState f = FileState::Ok;
+    if (!regular_file(dir + "/" + rel, exists)) f = exists ? FileState::NotRegular : FileState::Missing;
+    else {
+      try {
+        if (file_mac(k, dir + "/" + rel) != mac) f = FileState::Changed;
+      } catch (const ConfigError&) {
+        f = FileState::NotRegular;
+      }
     }
-    if (file_mac(k, path) != mac) c.problems.push_back(rel + ": changed since it was sealed");
+    c.files.emplace_back(rel, f);
+    if (f != FileState::Ok) c.problems.push_back(rel + ": " + to_string(f));
   }
   for (const std::string& rel : must_cover)
-    if (std::find(c.files.begin(), c.files.end(), rel) == c.files.end())
+    if (std::none_of(c.files.begin(), c.files.end(), [&](const auto& e) { return e.first == rel; }))
       c.problems.push_back(rel + ": not sealed");
   c.ok = c.problems.empty();
   return c;

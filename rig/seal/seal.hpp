@@ -35,14 +35,26 @@ struct Entry {
 // over the sorted (path, MAC) list, so entries of different seals cannot be combined.
 std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries);
 
+enum class FileState { Ok, Changed, Missing, NotRegular };
+inline const char* to_string(FileState f) {
+  switch (f) {
+    case FileState::Ok: return "ok";
+    case FileState::Changed: return "changed since it was sealed";
+    case FileState::Missing: return "sealed, but missing";
+    case FileState::NotRegular: return "sealed as a file, now not a regular file";
+  }
+  return "?";
+}
+
 struct Check {
-  bool ok = false;                   // the seal is this key's, its own MAC holds, every file matches
-  std::vector<std::string> files;    // the files it covers, in order
-  std::vector<std::string> problems; // one line each: "captures/raw-U10.cap: changed since it was sealed"
+  bool ok = false;  // the seal is this key's, its own MAC holds, every file matches, every must_cover is sealed
+  std::vector<std::pair<std::string, FileState>> files;  // what it covers, sorted by path, each as found
+  std::vector<std::string> problems;  // one line each: "captures/raw-U10.cap: changed since it was sealed"
 };
 
-// Checks `seal_path` (a seal.json text) against the folder's files and the key; every file in
-// `must_cover` must be among those sealed.
+// Checks `seal_path` (a seal.json) against the folder's files and the key; every file in
+// `must_cover` must be among those sealed. Neither the seal nor a sealed file is opened unless it
+// is a regular file (a FIFO put in its place cannot stall the check).
 Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
                  const std::vector<std::string>& must_cover = {});
 

@@ -5,6 +5,8 @@
 // run.log, the outcome, and that the resumed passport equals the uninterrupted run's with the
 // same seed bit for bit (minus kSessionFields). The damaged-checkpoint cases extend
 // RigCli.DamagedCheckpointsAreRefusedNamingFileAndField (test_rig_cli.cpp).
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -215,9 +217,10 @@ TEST(Campaign, EstopAtRandomPointsAbortsSafely) {
 
 // Late signals: SIGINT or SIGTERM after the last phase (before the passport is written) still
 // end the run ABORTED with exit 3, the measurements kept. Every phase is in its checkpoint but
-// the run has no verdict: a resume opens no device, computes again from the kept captures and
-// writes the uninterrupted run's passport; after that the run is complete and a further resume
-// is refused, its passport left as it is.
+// the run has no verdict: a resume runs the loop test again (its values are measured on the DUT,
+// never read back from the checkpoint), computes the rest again from the kept captures and writes
+// the uninterrupted run's passport; after that the run is complete and a further resume is
+// refused, its passport left as it is.
 TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   const std::string d = tmp("campaign-late");
   fs::create_directories(d);
@@ -235,34 +238,33 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
     const std::string log = slurp(r + "/run.log");
     expect_safe_state_in_order(log, what);
     EXPECT_NE(log.find("outcome ABORTED (exit 3)"), std::string::npos) << log;
-    // The plan says the resume only computes.
+    // The plan says what the resume does.
     ASSERT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-plan"), 0) << slurp(r + "-plan.stderr");
     const std::string plan = slurp(r + "-plan.stdout");
-    EXPECT_NE(plan.find("still to run: none. The run stopped after its last phase, without a verdict: the resume "
-                        "opens no device"),
-              std::string::npos)
-        << plan;
+    EXPECT_NE(plan.find("still to run: loop ("), std::string::npos) << plan;
     EXPECT_NE(plan.find("computed again from the kept captures: bias, in-run-b, allan"), std::string::npos) << plan;
     resume_and_compare(r, ref, what);
-    const std::string resumed = slurp(r + "/run.log");
-    const std::string tail = resumed.substr(log.size());
-    EXPECT_NE(tail.find("no device is opened; the verdict is computed from the kept captures"), std::string::npos)
-        << tail;
-    EXPECT_EQ(tail.find("DUT power on"), std::string::npos) << "nothing is brought up\n" << tail;
+    const std::string tail = slurp(r + "/run.log").substr(log.size());
+    EXPECT_NE(tail.find("phase loop measures on the device: it runs again"), std::string::npos) << tail;
     const json q = read_json(r + "/passport.json");
     for (const auto& ph : q["phases"]) {
-      const bool computes = ph["id"] == "bias" || ph["id"] == "in-run-b" || ph["id"] == "allan";
-      EXPECT_EQ(ph["status"], computes ? "done" : "skipped") << ph;
+      const bool again = ph["id"] == "bias" || ph["id"] == "in-run-b" || ph["id"] == "allan" || ph["id"] == "loop";
+      EXPECT_EQ(ph["status"], again ? "done" : "skipped") << ph;
     }
     const std::string after = slurp(r + "/passport.json");
     EXPECT_EQ(run({"run", "--resume", r, "--yes", "--no-history"}, r + "-again"), 2);
     EXPECT_NE(slurp(r + "-again.stderr").find("the run is complete"), std::string::npos) << slurp(r + "-again.stderr");
     EXPECT_EQ(slurp(r + "/passport.json"), after) << "a final passport is left as it was";
   }
-  // Killed after the last checkpoint, before the passport was written: the same.
+  // Killed after the last checkpoint, before the passport was written: the same; the loop's
+  // values edited in the checkpoint (the review's finding: a finished run's resume read them
+  // back) are measured again, so the edit reaches nothing.
   const std::string k = d + "/no-passport";
   fs::copy(d + "/whole", k, fs::copy_options::recursive);
   fs::remove(k + "/passport.json");
+  json cp = read_json(k + "/checkpoint.json");
+  for (const char* v : {"bandwidth_0p5", "settling_time"}) cp["values"][v]["value"] = 1.0;
+  std::ofstream(k + "/checkpoint.json") << cp.dump(1);
   resume_and_compare(k, ref, "no passport");
 }
 
@@ -614,6 +616,12 @@ TEST(Campaign, SealedRunFolders) {
   ASSERT_EQ(run({"verify", whole, "--seal-key", key}, whole + "-verify"), 0) << slurp(whole + "-verify.stdout");
   EXPECT_NE(slurp(whole + "-verify.stdout").find("ok       captures/raw-U10.cap"), std::string::npos);
   EXPECT_NE(slurp(whole + "-verify.stdout").find("ok       passport.json"), std::string::npos);
+  std::ofstream(whole + "/captures/extra.cap") << "x";
+  EXPECT_EQ(run({"verify", whole, "--seal-key", key}, whole + "-extra"), 1);
+  EXPECT_NE(slurp(whole + "-extra.stdout").find("captures/extra.cap: not sealed (added after the seal)"),
+            std::string::npos)
+      << slurp(whole + "-extra.stdout");
+  fs::remove(whole + "/captures/extra.cap");
   EXPECT_EQ(run({"verify", whole, "--seal-key", other}, whole + "-other"), 1);
   EXPECT_NE(slurp(whole + "-other.stdout").find("sealed with another key"), std::string::npos);
   {
@@ -661,6 +669,13 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_FALSE(fs::exists(f + "/passport.json")) << says;
   };
   refused(copy(), {}, "is sealed (seal.json): resume it with the station's key");
+  {
+    // An unsealed folder is not sealed by a resume with a key.
+    const std::string f = copy();
+    fs::remove(f + "/seal.json");
+    fs::remove(f + "/seal.prev.json");
+    refused(f, {"--seal-key", key}, "is not sealed (no seal.json): the key cannot vouch for files it never sealed");
+  }
   refused(copy(), {"--seal-key", other}, "sealed with another key");
   {
     // F7 edited profile.toml's limits and copied its digest into the checkpoint; with a seal any
@@ -686,6 +701,31 @@ TEST(Campaign, SealedRunFolders) {
     refused(f, {"--seal-key", key}, "its list of files was edited");
   }
   {
+    // A file the seal does not list, other than what a stop leaves or a resume writes again.
+    const std::string f = copy();
+    std::ofstream(f + "/qa-approval.txt") << "approved";
+    refused(f, {"--seal-key", key}, "qa-approval.txt: not sealed (added after the seal)");
+  }
+  {
+    // The captures moved out behind a symbolic link, which the seal would not see.
+    const std::string f = copy();
+    fs::rename(f + "/captures", f + "-caps");
+    fs::create_directory_symlink(f + "-caps", f + "/captures");
+    refused(f, {"--seal-key", key}, "captures: a symbolic link in a sealed run folder");
+  }
+  {
+    // A FIFO in place of a sealed capture: named, not waited on.
+    const std::string f = copy();
+    fs::remove(f + "/captures/run02-U20.cap");
+    ASSERT_EQ(::mkfifo((f + "/captures/run02-U20.cap").c_str(), 0600), 0);
+    refused(f, {"--seal-key", key}, "captures/run02-U20.cap: sealed as a file, now not a regular file");
+  }
+  // An empty key is not "no key".
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/empty", "--seal-key", ""},
+                d + "/empty-io"),
+            2);
+  EXPECT_NE(slurp(d + "/empty-io.stderr").find("--seal-key / RIG_SEAL_KEY: empty"), std::string::npos);
+  {
     // Stopped after the new seal was written, before the checkpoint it covers: seal.json holds
     // for a checkpoint that never came, seal.prev.json for the one there. Resumed with the key,
     // the run ends as the uninterrupted one and verifies.
@@ -699,5 +739,22 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_EQ(without_session_fields(read_json(f + "/passport.json")), without_session_fields(ref.passport));
     EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 0) << slurp(f + "-verify.stdout");
     EXPECT_FALSE(fs::exists(f + "/seal.prev.json"));
+    // The partial capture the stop left is kept aside, unsealed (its content was never checked).
+    EXPECT_TRUE(fs::exists(f + "/captures/raw-U10.cap.interrupted-1"));
+    EXPECT_EQ(read_json(f + "/seal.json")["files"].count("captures/raw-U10.cap.interrupted-1"), 0u);
+    // A sealed file replaced by a folder: not verified, named.
+    fs::remove(f + "/junit.xml");
+    fs::create_directory(f + "/junit.xml");
+    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-dir"), 1);
+    EXPECT_NE(slurp(f + "-dir.stdout").find("NOT-FILE junit.xml"), std::string::npos) << slurp(f + "-dir.stdout");
+  }
+  {
+    // What every ending writes again (the passport, junit.xml, ...) is not needed by a resume: a
+    // stray one does not stop it, and the resume writes its own.
+    const std::string f = copy();
+    std::ofstream(f + "/passport.json") << "{\"outcome\": \"PASS\"}";
+    ASSERT_EQ(run({"run", "--resume", f, "--yes", "--no-history", "--seal-key", key}, f + "-io"), 0)
+        << slurp(f + "-io.stderr");
+    EXPECT_EQ(without_session_fields(read_json(f + "/passport.json")), without_session_fields(ref.passport));
   }
 }
