@@ -7,6 +7,7 @@
 #include <cmath>
 #include <ctime>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -61,6 +62,7 @@ struct RunArgs {
   std::string resume_serial;  // --serial given with --resume: the DUT the operator says is mounted
   std::string db;
   std::string seal_key;  // --seal-key / RIG_SEAL_KEY: the station's key (docs/seal.md)
+  bool seal_key_given = false;
   std::vector<std::string> inject;
   bool yes = false;
   bool dry_run = false;
@@ -341,6 +343,17 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
   return info;
 }
 
+// What this run wrote so far that a seal may vouch for (docs/seal.md): its invocation and
+// profile, the captures its completed recordings name and the loop test's records; never
+// anything else that lies in the folder.
+std::vector<std::string> files_of_the_run(const acceptance::DutState& st) {
+  std::vector<std::string> f = {"run.json", "profile.toml"};
+  for (const std::string& c : st.captures()) f.push_back(c);
+  if (st.loop && st.loop->is_object() && st.loop->value("file", "") == acceptance::kLoopTestFile)
+    f.emplace_back(acceptance::kLoopTestFile);
+  return f;
+}
+
 // What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
 // the history row (a report or history failure is logged, never the run's outcome).
 nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
@@ -358,7 +371,10 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   }
   if (key) {
     try {
-      seal_run_folder(a.out, *key);
+      std::vector<std::string> files = files_of_the_run(dut);
+      for (const char* f : {"checkpoint.json", "passport.json", "junit.xml", "analysis.json", "report.html"})
+        if (fs::exists(a.out + "/" + f)) files.emplace_back(f);
+      seal_run_folder(a.out, *key, files, std::nullopt, to_string(res.outcome));
       drop_previous_seal(a.out);
       log.info("run folder sealed (seal.json, key {})", key->id);
     } catch (const std::exception& e) {
@@ -394,15 +410,23 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
 }
 
-// The phase a resume continues with: a stop may have left its capture partial.
-std::string next_phase(const std::vector<Phase>& phases, const std::vector<std::string>& completed) {
-  return completed.size() < phases.size() ? phases[completed.size()].id : std::string();
+// The files the rig replaces in a run folder must be files: a folder or a FIFO in their place
+// would stop the run after its devices opened (a rename that fails, an open that waits).
+void refuse_non_files(const std::string& dir) {
+  for (const char* f : {"checkpoint.json", "passport.json", "junit.xml", "analysis.json", "report.html",
+                        "loop-test.csv", "seal.json", "seal.prev.json", "run.log"}) {
+    struct stat st {};
+    if (::lstat((dir + "/" + f).c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes it: remove it");
+  }
 }
 
 // A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
 // recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
 // none (killed before it was written), is finished by a resume that only computes.
 std::string verdict_of(const std::string& dir) {
+  struct stat st {};
+  if (::lstat((dir + "/passport.json").c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return "";  // a FIFO is not waited on
   try {
     const std::string o = nlohmann::json::parse(slurp(dir + "/passport.json")).value("outcome", "");
     return o == "PASS" || o == "FAIL" ? o : "";
@@ -453,9 +477,11 @@ int do_run(RunArgs a) {
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before any backend thread exists
   // The station's key, and a resumed folder's seal, before anything in the folder is read.
-  const std::optional<seal::Key> key = station_key(a.seal_key);
-  const std::vector<std::string> sealed = a.resume.empty() ? std::vector<std::string>{}
-                                                            : check_seal_before_resume(a.resume, key);
+  const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
+  if (!a.resume.empty()) {
+    refuse_non_files(a.resume);
+    (void)check_seal_before_resume(a.resume, key);
+  }
 
   // A resumed run takes its profile and invocation from the run folder.
   nlohmann::json invocation;
@@ -511,7 +537,6 @@ int do_run(RunArgs a) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet,
                                              verdict_of(a.resume).empty());
-      if (key) refuse_added_files(a.resume, sealed, next_phase(phases, completed));
     }
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
@@ -547,6 +572,7 @@ int do_run(RunArgs a) {
   if (a.out.empty())
     a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, folder_time_utc());
   prepare_run_folder(a.out);
+  refuse_non_files(a.out);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
@@ -555,7 +581,6 @@ int do_run(RunArgs a) {
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
     completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, verdict_of(a.out).empty());
-    if (key) refuse_added_files(a.out, sealed, next_phase(phases, completed));
   }
   operator_prompts(a, p);
 
@@ -570,7 +595,7 @@ int do_run(RunArgs a) {
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
-    if (key) seal_run_folder(a.out, *key);  // a stop before the first phase resumes too
+    if (key) seal_run_folder(a.out, *key, {"run.json", "profile.toml"});  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
   }
@@ -595,7 +620,7 @@ int do_run(RunArgs a) {
   view.plan(phases);
   Executive exec(dev, a.out, log, &view);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
-    exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, text); });
+    exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, files_of_the_run(state.slot()), text); });
   const std::string started = invocation.value("started", iso8601_utc_now());
   // In emulation a resume rebuilds the plant as the checkpoint left it (app/fast_forward.hpp):
   // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
@@ -691,8 +716,7 @@ void add_run(CLI::App& app, int& rc) {
                                             "and options in " + a->resume + "/run.json and profile.toml");
       if (serial->count() > 0) a->resume_serial = a->serial;
     }
-    if (a->seal_key.empty() && sub->get_option("--seal-key")->count() > 0)
-      throw ConfigError("--seal-key / RIG_SEAL_KEY: empty; name the station's key");
+    a->seal_key_given = sub->get_option("--seal-key")->count() > 0;
     if (!a->hardware.empty()) a->plant = "hardware";
     rc = do_run(*a);
   });

@@ -14,13 +14,32 @@ namespace rig::cli {
 
 namespace {
 
-int do_verify(const std::string& dir, const std::string& key_path) {
+// Every entry of `dir` but what no seal is asked to cover (outside_the_seal), without following
+// links: a link, a FIFO or a file the seal does not list was put there after it.
+std::vector<std::string> entries_in(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> out;
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
+    const std::string rel = it->path().lexically_relative(dir).generic_string();
+    if (outside_the_seal(rel)) {
+      if (it->is_directory() && !it->is_symlink()) it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_directory() && !it->is_symlink()) continue;
+    out.push_back(rel);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   if (!std::filesystem::is_directory(dir)) throw ConfigError(dir + ": not a run folder");
-  const std::optional<seal::Key> key = station_key(key_path);
+  const std::optional<seal::Key> key = station_key(key_path, given);
   if (!key) throw ConfigError("rig verify needs the station's key: --seal-key FILE or RIG_SEAL_KEY");
   // The passport is what a seal is for: a folder whose seal leaves it out is not verified.
   seal::Check c = seal::check_seal(dir, dir + "/seal.json", *key, {"passport.json"});
-  std::cout << fmt::format("{}: seal.json, key {} ({})\n", dir, key->id, key->path);
+  std::cout << fmt::format("{}: seal.json, key {} ({}){}\n", dir, key->id, key->path,
+                           c.outcome.empty() ? std::string() : ", sealed outcome " + c.outcome);
   for (const auto& [f, state] : c.files)
     std::cout << fmt::format("  {:<8} {}\n",
                              state == seal::FileState::Ok        ? "ok"
@@ -28,22 +47,17 @@ int do_verify(const std::string& dir, const std::string& key_path) {
                              : state == seal::FileState::Missing ? "MISSING"
                                                                  : "NOT-FILE",
                              f);
-  if (!c.files.empty()) {  // the seal was read: a file it does not list was added after it
-    std::vector<std::string> here;
-    try {
-      here = sealable_files(dir);
-    } catch (const ConfigError& e) {
-      c.problems.push_back(e.what());
-    }
-    for (const std::string& f : here)
+  if (!c.files.empty()) {  // the seal was read: anything it does not list was added after it
+    for (const std::string& f : entries_in(dir))
       if (std::none_of(c.files.begin(), c.files.end(), [&](const auto& s) { return s.first == f; }))
         c.problems.push_back(f + ": not sealed (added after the seal)");
+    if (c.outcome.empty()) c.problems.push_back("seal.json: not a final seal (the run has not ended)");
     c.ok = c.problems.empty();
   }
   for (const std::string& p : c.problems) std::cout << "  problem: " << p << "\n";
-  std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them (the seal says who wrote them, not "
-                                   "whether the DUT passed: see passport.json)\n",
-                                   c.files.size())
+  std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
+                                   "them; the outcome is the passport's)\n",
+                                   c.files.size(), c.outcome)
                      : std::string("NOT verified: the folder is not as the station sealed it\n"));
   return c.ok ? kExitPass : kExitFail;
 }
@@ -56,10 +70,7 @@ void add_verify(CLI::App& app, int& rc) {
   auto key = std::make_shared<std::string>();
   sub->add_option("DIR", *dir, "Run folder")->required();
   auto* k = sub->add_option("--seal-key", *key, "The station's key (HMAC-SHA256)")->envname("RIG_SEAL_KEY");
-  sub->callback([dir, key, k, &rc] {
-    if (k->count() > 0 && key->empty()) throw ConfigError("--seal-key / RIG_SEAL_KEY: empty; name the station's key");
-    rc = do_verify(*dir, *key);
-  });
+  sub->callback([dir, key, k, &rc] { rc = do_verify(*dir, *key, k->count() > 0); });
 }
 
 }  // namespace rig::cli

@@ -1,7 +1,9 @@
 #include "app/run_seal.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
+#include <regex>
 
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
@@ -10,41 +12,22 @@ namespace rig::cli {
 
 namespace fs = std::filesystem;
 
-std::optional<seal::Key> station_key(const std::string& option) {
+std::optional<seal::Key> station_key(const std::string& option, bool given) {
+  const char* env = std::getenv("RIG_SEAL_KEY");
+  if ((given || env) && option.empty())
+    throw ConfigError("--seal-key / RIG_SEAL_KEY: empty; name the station's key (or unset RIG_SEAL_KEY)");
   if (option.empty()) return std::nullopt;
   return seal::load_key(option);
 }
 
-std::vector<std::string> sealable_files(const std::string& dir) {
-  std::vector<std::string> files;
-  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
-    const std::string name = it->path().filename().string();
-    const std::string rel = it->path().lexically_relative(dir).generic_string();
-    if (it->is_symlink())
-      throw ConfigError(dir + "/" + rel + ": a symbolic link in a sealed run folder (a sealed folder holds its own "
-                                          "files; what a link points at could change without the seal)");
-    if (name.rfind('.', 0) == 0) {
-      if (it->is_directory()) it.disable_recursion_pending();
-      continue;
-    }
-    if (!it->is_regular_file()) continue;
-    if (rel == "run.log" || rel == "seal.json" || rel == "seal.prev.json" ||
-        (name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0) ||
-        name.find(".interrupted-") != std::string::npos)
-      continue;
-    files.push_back(rel);
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
-void seal_run_folder(const std::string& dir, const seal::Key& k, const std::optional<std::string>& checkpoint_text) {
+void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vector<std::string>& files,
+                     const std::optional<std::string>& checkpoint_text, const std::string& outcome) {
   std::vector<seal::Entry> entries;
-  for (const std::string& rel : sealable_files(dir))
+  for (const std::string& rel : files)
     if (!checkpoint_text || rel != "checkpoint.json") entries.push_back({rel, "", false});
   if (checkpoint_text) entries.push_back({"checkpoint.json", *checkpoint_text, true});
-  const std::string text = seal::make_seal(dir, k, entries);
   try {
+    const std::string text = seal::make_seal(dir, k, entries, outcome);
     if (fs::exists(dir + "/seal.json")) fs::rename(dir + "/seal.json", dir + "/seal.prev.json");
     write_file_atomic(dir + "/seal.json", text);
   } catch (const std::exception& e) {
@@ -57,12 +40,13 @@ void drop_previous_seal(const std::string& dir) {
   fs::remove(dir + "/seal.prev.json", ec);
 }
 
+namespace {
+
+// What every ending writes again: a resume does not read them, so they need not match.
 bool rewritten_by_a_resume(const std::string& rel) {
   return rel == "passport.json" || rel == "junit.xml" || rel == "analysis.json" || rel == "report.html" ||
          rel == "loop-test.csv";
 }
-
-namespace {
 
 // A seal holds for a resume when it is this key's, its list is whole, it covers what a resume
 // reads, and every file it lists that a resume reads is as sealed.
@@ -80,7 +64,7 @@ bool holds_for_resume(const seal::Check& c, std::string& why) {
 
 }  // namespace
 
-std::vector<std::string> check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k) {
+SealedRun check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k) {
   const bool sealed = fs::exists(dir + "/seal.json") || fs::exists(dir + "/seal.prev.json");
   if (!k) {
     if (sealed)
@@ -91,6 +75,12 @@ std::vector<std::string> check_seal_before_resume(const std::string& dir, const 
   if (!sealed)
     throw ConfigError(dir + " is not sealed (no seal.json): the key cannot vouch for files it never sealed; resume "
                             "it without --seal-key (it stays unsealed) or start a new run");
+  // The rig makes no links: a link in a sealed folder could point the resume at what the seal
+  // never saw.
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it)
+    if (it->is_symlink())
+      throw ConfigError(it->path().string() + ": a symbolic link in a sealed run folder (the rig makes none; what "
+                                              "a link points at could change without the seal)");
   std::vector<std::string> must = {"run.json", "profile.toml"};
   if (fs::exists(Executive::checkpoint_path(dir))) must.push_back("checkpoint.json");
   std::string why;
@@ -100,9 +90,13 @@ std::vector<std::string> check_seal_before_resume(const std::string& dir, const 
     const seal::Check c = seal::check_seal(dir, path, *k, must);
     std::string w;
     if (holds_for_resume(c, w)) {
-      std::vector<std::string> files;
-      for (const auto& f : c.files) files.push_back(f.first);
-      return files;
+      if (c.outcome == "PASS" || c.outcome == "FAIL")
+        throw ConfigError(dir + ": the run is complete: its seal states the outcome " + c.outcome +
+                          " (whatever passport.json says now); nothing to resume");
+      SealedRun r;
+      r.outcome = c.outcome;
+      for (const auto& f : c.files) r.files.push_back(f.first);
+      return r;
     }
     why += (why.empty() ? "" : "; ") + std::string(name) + ": " + w;
   }
@@ -112,17 +106,12 @@ std::vector<std::string> check_seal_before_resume(const std::string& dir, const 
                                : "the folder was changed outside the rig; start a new run"));
 }
 
-void refuse_added_files(const std::string& dir, const std::vector<std::string>& sealed,
-                        const std::string& next_phase) {
-  // The recording of phase "raw" is captures/raw-U10.cap: its capture starts with the phase id.
-  const std::string partial = "captures/" + next_phase;
-  auto left_partial = [&](const std::string& f) {
-    return !next_phase.empty() && f.rfind(partial, 0) == 0 && f.size() > 4 && f.compare(f.size() - 4, 4, ".cap") == 0;
-  };
-  for (const std::string& f : sealable_files(dir))
-    if (std::find(sealed.begin(), sealed.end(), f) == sealed.end() && !left_partial(f) && !rewritten_by_a_resume(f))
-      throw ConfigError(dir + "/" + f + ": not sealed (added after the seal): the folder was changed outside the rig; "
-                                        "start a new run");
+bool outside_the_seal(const std::string& rel) {
+  static const std::regex set_aside(R"(captures/[^/]+\.cap\.interrupted-[0-9]+)");
+  const std::string name = fs::path(rel).filename().string();
+  return rel == "run.log" || rel == "seal.json" || rel == "seal.prev.json" || name.rfind('.', 0) == 0 ||
+         rel.find("/.") != std::string::npos ||
+         (name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0) || std::regex_match(rel, set_aside);
 }
 
 }  // namespace rig::cli

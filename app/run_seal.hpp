@@ -10,44 +10,41 @@
 
 namespace rig::cli {
 
-// --seal-key FILE (or RIG_SEAL_KEY), else none: the station names its key itself, never the run
-// folder (a run.json pointing at another hardware file must not bring its own key). Loaded and
-// checked before any device opens.
-std::optional<seal::Key> station_key(const std::string& option);
+// --seal-key FILE or RIG_SEAL_KEY, else none: the station names its key itself, never the run
+// folder. `given`: the option or the variable was set, so an empty value is an error, not "no
+// key". Loaded and checked before any device opens.
+std::optional<seal::Key> station_key(const std::string& option, bool given);
 
-// The files of `dir` a seal covers: every regular file, its subfolders' included, but run.log
-// (appended to after the last seal), the seals themselves, *.tmp and hidden files and folders
-// (the replay's scratch) and the partial recordings a resume set aside (*.interrupted-N: what
-// they hold was never checked, so the key does not vouch for it). A symbolic link anywhere is
-// ConfigError: a sealed folder holds its own files.
-std::vector<std::string> sealable_files(const std::string& dir);
-
-// Seals `dir` (sealable_files); with `checkpoint_text`, checkpoint.json is sealed as that text,
-// about to be written. The seal it replaces is kept as seal.prev.json until the next one, so a
-// stop between the seal and the checkpoint leaves one that holds. ConfigError when it cannot be
-// written (the run stops: exit 2).
-void seal_run_folder(const std::string& dir, const seal::Key& k,
-                     const std::optional<std::string>& checkpoint_text = std::nullopt);
+// Seals the files the rig wrote: `files` (relative to `dir`; only what the run itself wrote,
+// never what else lies in the folder), with `checkpoint_text` sealed as checkpoint.json (about to
+// be written) and `outcome` the passport's once final. The seal it replaces is kept as
+// seal.prev.json until the next one, so a stop between the seal and the checkpoint leaves one
+// that holds. ConfigError when it cannot be written (the run stops: exit 2).
+void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vector<std::string>& files,
+                     const std::optional<std::string>& checkpoint_text = std::nullopt,
+                     const std::string& outcome = "");
 // After the final seal: the previous one is no longer needed.
 void drop_previous_seal(const std::string& dir);
 
-// The outputs every ending writes again (passport.json, junit.xml, analysis.json, report.html)
-// and the loop test's records, which the loop phase writes again: a resume does not need them.
-bool rewritten_by_a_resume(const std::string& rel);
+// What a seal's list holds besides the files: whether it is final, and with which outcome.
+struct SealedRun {
+  std::vector<std::string> files;
+  std::string outcome;  // PASS, FAIL, ABORTED, ERROR; empty: sealed at the start or a checkpoint
+};
 
 // Before a resume trusts `dir`, first of all (before run.json is read): with a key, seal.json or
-// seal.prev.json must be this key's, hold as a list, and every file it lists that a resume reads
-// (run.json, profile.toml, checkpoint.json, the captures) must be as sealed; an unsealed folder
-// is refused (sealing it now would vouch for files the key never saw). Without a key a sealed
-// folder is refused (a resume would leave it unsealed). Returns the files the seal that held
-// lists (none without a key); ConfigError naming what does not hold.
-std::vector<std::string> check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k);
+// seal.prev.json must be this key's, its list and outcome whole, and every file it lists that a
+// resume reads (run.json, profile.toml, checkpoint.json, the captures) present, a regular file and
+// unchanged (what every ending writes again need not be); an unsealed folder is refused (sealing
+// it now would vouch for files the key never saw), and so is a sealed PASS or FAIL (the sealed
+// verdict stands, whatever passport.json says now). Without a key a sealed folder is refused (a
+// resume would leave it unsealed). ConfigError naming what does not hold.
+SealedRun check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k);
 
-// After the checkpoint is read: a file the seal does not list must be one a stop can leave
-// behind (the capture of `next_phase`, the phase the resume continues with, which the resume
-// sets aside, or a file a resume writes again); anything else was added after the seal:
-// ConfigError naming it.
-void refuse_added_files(const std::string& dir, const std::vector<std::string>& sealed,
-                        const std::string& next_phase);
+// The files of `dir` no seal is asked to cover: run.log (appended to after the last seal), the
+// seals, hidden and temporary files, and a capture a resume set aside
+// (captures/<name>.cap.interrupted-<N>: what it holds was never checked). `rig verify` names
+// every other file the seal does not list as added after it.
+bool outside_the_seal(const std::string& rel);
 
 }  // namespace rig::cli

@@ -162,6 +162,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
     return;
   }
   nlohmann::json f = loop_test_figures(r);
+  f["file"] = kLoopTestFile;  // the records the figures were read from (sealed with the run: docs/seal.md)
   // Settled within the record? The figures are read against each step's final level (the mean
   // of its last fifth), which is the step's final value only if the response got there. A
   // force-balance loop's DC gain is 1 (the feedback balances the test torque), and y's is that

@@ -36,7 +36,10 @@ int RunResult::exit_code() const {
 
 void write_file_atomic(const std::string& path, const std::string& content) {
   const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // A new file of our own: whatever lay at the temporary name (a FIFO would block the open, a
+  // link would redirect the write) is removed first, and the open refuses anything in its place.
+  ::unlink(tmp.c_str());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) throw std::runtime_error("cannot write " + tmp);
   const char* p = content.data();
   std::size_t n = content.size();

@@ -1,6 +1,5 @@
 #include "rig/report/db.hpp"
 
-#include <dlfcn.h>
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
@@ -11,6 +10,7 @@
 #include <type_traits>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/lazy_library.hpp"
 
 namespace rig::history {
 
@@ -183,27 +183,21 @@ struct Pq {
 
 const Pq& pq(const std::string& where) {
   static const std::optional<Pq> api = []() -> std::optional<Pq> {
-    void* h = ::dlopen("libpq.so.5", RTLD_NOW | RTLD_LOCAL);
-    if (!h) return std::nullopt;
+    LazyLibrary lib("libpq.so.5");
     Pq p{};
-    bool ok = true;
-    auto get = [&](auto& fn, const char* name) {
-      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(::dlsym(h, name));
-      ok = ok && fn != nullptr;
-    };
-    get(p.connectdb, "PQconnectdb");
-    get(p.status, "PQstatus");
-    get(p.errorMessage, "PQerrorMessage");
-    get(p.finish, "PQfinish");
-    get(p.execParams, "PQexecParams");
-    get(p.clear, "PQclear");
-    get(p.resultStatus, "PQresultStatus");
-    get(p.ntuples, "PQntuples");
-    get(p.nfields, "PQnfields");
-    get(p.getisnull, "PQgetisnull");
-    get(p.getvalue, "PQgetvalue");
-    get(p.ftype, "PQftype");
-    if (!ok) return std::nullopt;
+    lib.get(p.connectdb, "PQconnectdb");
+    lib.get(p.status, "PQstatus");
+    lib.get(p.errorMessage, "PQerrorMessage");
+    lib.get(p.finish, "PQfinish");
+    lib.get(p.execParams, "PQexecParams");
+    lib.get(p.clear, "PQclear");
+    lib.get(p.resultStatus, "PQresultStatus");
+    lib.get(p.ntuples, "PQntuples");
+    lib.get(p.nfields, "PQnfields");
+    lib.get(p.getisnull, "PQgetisnull");
+    lib.get(p.getvalue, "PQgetvalue");
+    lib.get(p.ftype, "PQftype");
+    if (!lib.ok()) return std::nullopt;
     return p;
   }();
   if (!api)

@@ -1,6 +1,5 @@
 #include "rig/seal/seal.hpp"
 
-#include <dlfcn.h>
 #include <openssl/evp.h>
 #include <openssl/params.h>
 #include <sys/stat.h>
@@ -12,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/lazy_library.hpp"
 
 namespace rig::seal {
 
@@ -34,23 +34,17 @@ struct Crypto {
 
 const Crypto& crypto() {
   static const std::optional<Crypto> api = []() -> std::optional<Crypto> {
-    void* h = ::dlopen("libcrypto.so.3", RTLD_NOW | RTLD_LOCAL);
-    if (!h) return std::nullopt;
+    LazyLibrary lib("libcrypto.so.3");
     Crypto c{};
-    bool ok = true;
-    auto get = [&](auto& fn, const char* name) {
-      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(::dlsym(h, name));
-      ok = ok && fn != nullptr;
-    };
-    get(c.mac_fetch, "EVP_MAC_fetch");
-    get(c.ctx_new, "EVP_MAC_CTX_new");
-    get(c.ctx_free, "EVP_MAC_CTX_free");
-    get(c.init, "EVP_MAC_init");
-    get(c.update, "EVP_MAC_update");
-    get(c.final_, "EVP_MAC_final");
-    get(c.param_string, "OSSL_PARAM_construct_utf8_string");
-    get(c.param_end, "OSSL_PARAM_construct_end");
-    if (!ok) return std::nullopt;
+    lib.get(c.mac_fetch, "EVP_MAC_fetch");
+    lib.get(c.ctx_new, "EVP_MAC_CTX_new");
+    lib.get(c.ctx_free, "EVP_MAC_CTX_free");
+    lib.get(c.init, "EVP_MAC_init");
+    lib.get(c.update, "EVP_MAC_update");
+    lib.get(c.final_, "EVP_MAC_final");
+    lib.get(c.param_string, "OSSL_PARAM_construct_utf8_string");
+    lib.get(c.param_end, "OSSL_PARAM_construct_end");
+    if (!lib.ok()) return std::nullopt;
     c.hmac = c.mac_fetch(nullptr, "HMAC", nullptr);
     if (!c.hmac) return std::nullopt;
     return c;
@@ -92,8 +86,9 @@ class Mac {
 };
 
 // What the seal's own MAC covers: the schema, the key's id and every (path, MAC), sorted.
-std::string seal_body(const std::string& key_id, const std::vector<std::pair<std::string, std::string>>& files) {
-  std::string s = std::string(kSchema) + "\n" + key_id + "\n";
+std::string seal_body(const std::string& key_id, const std::string& outcome,
+                      const std::vector<std::pair<std::string, std::string>>& files) {
+  std::string s = std::string(kSchema) + "\n" + key_id + "\n" + outcome + "\n";
   for (const auto& [rel, mac] : files) s += rel + "\t" + mac + "\n";
   return s;
 }
@@ -143,7 +138,8 @@ Key load_key(const std::string& path) {
   return k;
 }
 
-std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries) {
+std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries,
+                      const std::string& outcome) {
   std::vector<std::pair<std::string, std::string>> files;
   for (const Entry& e : entries)
     files.emplace_back(e.rel, e.from_text ? text_mac(k, e.text) : file_mac(k, dir + "/" + e.rel));
@@ -152,9 +148,10 @@ std::string make_seal(const std::string& dir, const Key& k, const std::vector<En
   j["schema"] = kSchema;
   j["algorithm"] = "HMAC-SHA256";
   j["key_id"] = k.id;
+  j["outcome"] = outcome;
   j["files"] = nlohmann::ordered_json::object();
   for (const auto& [rel, mac] : files) j["files"][rel] = mac;
-  j["seal"] = text_mac(k, seal_body(k.id, files));
+  j["seal"] = text_mac(k, seal_body(k.id, outcome, files));
   return j.dump(1);
 }
 
@@ -185,7 +182,8 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
     return c;
   }
   if (!j.is_object() || j.value("schema", "") != kSchema || !j.contains("files") || !j["files"].is_object() ||
-      !j.contains("seal") || !j["seal"].is_string() || !j.contains("key_id") || !j["key_id"].is_string()) {
+      !j.contains("seal") || !j["seal"].is_string() || !j.contains("key_id") || !j["key_id"].is_string() ||
+      !j.contains("outcome") || !j["outcome"].is_string()) {
     c.problems.push_back(seal_path + ": not a rig.seal/1 seal");
     return c;
   }
@@ -203,10 +201,11 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
     files.emplace_back(rel, mac.get<std::string>());
   }
   std::sort(files.begin(), files.end());
-  if (text_mac(k, seal_body(k.id, files)) != j["seal"].get<std::string>()) {
-    c.problems.push_back(seal_path + ": the seal's own MAC does not hold: its list of files was edited");
+  if (text_mac(k, seal_body(k.id, j["outcome"].get<std::string>(), files)) != j["seal"].get<std::string>()) {
+    c.problems.push_back(seal_path + ": the seal's own MAC does not hold: its list of files or its outcome was edited");
     return c;
   }
+  c.outcome = j["outcome"].get<std::string>();
   for (const auto& [rel, mac] : files) {
     FileState f = FileState::Ok;
     if (!regular_file(dir + "/" + rel, exists)) f = exists ? FileState::NotRegular : FileState::Missing;

@@ -31,9 +31,11 @@ struct Entry {
   bool from_text = false;
 };
 
-// seal.json's text (schema rig.seal/1) over `entries`: each file's MAC, and the seal's own MAC
-// over the sorted (path, MAC) list, so entries of different seals cannot be combined.
-std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries);
+// seal.json's text (schema rig.seal/1) over `entries`: each file's MAC, the run's `outcome` as
+// the passport states it (empty while the run goes on), and the seal's own MAC over both, so
+// entries of different seals cannot be combined and a sealed verdict cannot be edited.
+std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries,
+                      const std::string& outcome = "");
 
 enum class FileState { Ok, Changed, Missing, NotRegular };
 inline const char* to_string(FileState f) {
@@ -50,6 +52,7 @@ struct Check {
   bool ok = false;  // the seal is this key's, its own MAC holds, every file matches, every must_cover is sealed
   std::vector<std::pair<std::string, FileState>> files;  // what it covers, sorted by path, each as found
   std::vector<std::string> problems;  // one line each: "captures/raw-U10.cap: changed since it was sealed"
+  std::string outcome;                // the sealed outcome (PASS, FAIL, ABORTED, ERROR; empty: not final)
 };
 
 // Checks `seal_path` (a seal.json) against the folder's files and the key; every file in

@@ -698,20 +698,37 @@ TEST(Campaign, SealedRunFolders) {
     json s = json::parse(slurp(f + "/seal.json"));
     s["files"].erase("profile.toml");
     std::ofstream(f + "/seal.json") << s.dump(1);
-    refused(f, {"--seal-key", key}, "its list of files was edited");
+    refused(f, {"--seal-key", key}, "its list of files or its outcome was edited");
   }
   {
-    // A file the seal does not list, other than what a stop leaves or a resume writes again.
+    // A file put in the folder is never sealed: a seal lists only what the run wrote. The resume
+    // goes on (it reads only what the seal vouches for); verify names the file.
     const std::string f = copy();
     std::ofstream(f + "/qa-approval.txt") << "approved";
-    refused(f, {"--seal-key", key}, "qa-approval.txt: not sealed (added after the seal)");
+    std::ofstream(f + "/captures/loop-forged.cap") << "x";
+    ASSERT_EQ(run({"run", "--resume", f, "--yes", "--no-history", "--seal-key", key}, f + "-io"), 0)
+        << slurp(f + "-io.stderr");
+    const json s = read_json(f + "/seal.json");
+    EXPECT_EQ(s["outcome"], "PASS");
+    EXPECT_EQ(s["files"].count("qa-approval.txt"), 0u);
+    EXPECT_EQ(s["files"].count("captures/loop-forged.cap"), 0u);
+    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 1);
+    EXPECT_NE(slurp(f + "-verify.stdout").find("qa-approval.txt: not sealed (added after the seal)"), std::string::npos)
+        << slurp(f + "-verify.stdout");
+    EXPECT_NE(slurp(f + "-verify.stdout").find("captures/loop-forged.cap: not sealed"), std::string::npos);
+    // The sealed verdict stands, whatever passport.json says: no resume of a sealed PASS.
+    fs::remove(f + "/passport.json");
+    EXPECT_EQ(run({"run", "--resume", f, "--yes", "--no-history", "--seal-key", key}, f + "-again"), 2);
+    EXPECT_NE(slurp(f + "-again.stderr").find("the run is complete: its seal states the outcome PASS"),
+              std::string::npos)
+        << slurp(f + "-again.stderr");
   }
   {
     // The captures moved out behind a symbolic link, which the seal would not see.
     const std::string f = copy();
     fs::rename(f + "/captures", f + "-caps");
     fs::create_directory_symlink(f + "-caps", f + "/captures");
-    refused(f, {"--seal-key", key}, "captures: a symbolic link in a sealed run folder");
+    refused(f, {"--seal-key", key}, "/captures: a symbolic link in a sealed run folder");
   }
   {
     // A FIFO in place of a sealed capture: named, not waited on.
@@ -720,11 +737,34 @@ TEST(Campaign, SealedRunFolders) {
     ASSERT_EQ(::mkfifo((f + "/captures/run02-U20.cap").c_str(), 0600), 0);
     refused(f, {"--seal-key", key}, "captures/run02-U20.cap: sealed as a file, now not a regular file");
   }
+  {
+    // A forged passport put in the folder before a sealed run, and a FIFO where the rig writes a
+    // temporary file (it once stalled the run, so the stop fell between seals): the FIFO is
+    // replaced, the run is stopped, and its folder does not verify: no seal lists the forgery.
+    const std::string f = d + "/forged";
+    fs::create_directories(f);
+    std::ofstream(f + "/passport.json") << "{\"outcome\": \"PASS\"}";
+    ASSERT_EQ(::mkfifo((f + "/checkpoint.json.tmp").c_str(), 0600), 0);
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--inject", "sigkill@150",
+                   "--seal-key", key},
+                  f + "-io"),
+              128 + SIGKILL)
+        << slurp(f + "-io.stderr");
+    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 1);
+    const std::string v = slurp(f + "-verify.stdout");
+    EXPECT_NE(v.find("passport.json: not sealed"), std::string::npos) << v;
+    EXPECT_NE(v.find("not a final seal"), std::string::npos) << v;
+  }
   // An empty key is not "no key".
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/empty", "--seal-key", ""},
                 d + "/empty-io"),
             2);
   EXPECT_NE(slurp(d + "/empty-io.stderr").find("--seal-key / RIG_SEAL_KEY: empty"), std::string::npos);
+  ::setenv("RIG_SEAL_KEY", "", 1);  // inherited by the child
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/empty-env"}, d + "/empty-env-io"), 2);
+  ::unsetenv("RIG_SEAL_KEY");
+  EXPECT_NE(slurp(d + "/empty-env-io.stderr").find("--seal-key / RIG_SEAL_KEY: empty"), std::string::npos);
+  EXPECT_FALSE(fs::exists(d + "/empty-env"));
   {
     // Stopped after the new seal was written, before the checkpoint it covers: seal.json holds
     // for a checkpoint that never came, seal.prev.json for the one there. Resumed with the key,
