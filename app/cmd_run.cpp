@@ -588,7 +588,7 @@ int do_run(RunArgs a) {
     if (fs::exists(Executive::checkpoint_path(a.out)))
       throw ConfigError(a.out + " holds an earlier run (checkpoint.json): use --resume " + a.out + " or another --out");
     // The folder carries everything a resume needs.
-    std::ofstream(a.out + "/profile.toml") << (p.source.rfind("builtin:", 0) == 0
+    write_file_atomic(a.out + "/profile.toml", p.source.rfind("builtin:", 0) == 0
                                                    ? acceptance::builtin_profile_text(p.source.substr(8))
                                                    : slurp(p.source));
     invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},

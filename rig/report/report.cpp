@@ -63,6 +63,8 @@ std::string write_report(const std::string& run_dir) {
 
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
   {
+    std::error_code gone;
+    fs::remove(tmp, gone);  // whatever lay there (a FIFO would stall the open, a link redirect the write)
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     if (!f) throw ConfigError(tmp.string() + ": cannot write the report");
     f << html;

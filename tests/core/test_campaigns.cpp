@@ -755,6 +755,22 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_NE(v.find("passport.json: not sealed"), std::string::npos) << v;
     EXPECT_NE(v.find("not a final seal"), std::string::npos) << v;
   }
+  {
+    // FIFOs where the rig writes the report's temporary file and the profile (the third review:
+    // the run stalled after its passport, before its seal, with no signal ending it): replaced.
+    const std::string f = d + "/fifos";
+    fs::create_directories(f);
+    ASSERT_EQ(::mkfifo((f + "/report.html.tmp").c_str(), 0600), 0);
+    ASSERT_EQ(::mkfifo((f + "/profile.toml").c_str(), 0600), 0);
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--seal-key", key}, f + "-io"), 0)
+        << slurp(f + "-io.stderr");
+    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 0) << slurp(f + "-verify.stdout");
+    // A passport whose outcome is not the sealed one does not verify, even before its MAC is read.
+    std::string p = slurp(f + "/passport.json");
+    p.replace(p.find("\"outcome\": \"PASS\""), 17, "\"outcome\": \"FAIL\"");
+    std::ofstream(f + "/passport.json") << p;
+    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-edited"), 1);
+  }
   // An empty key is not "no key".
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/empty", "--seal-key", ""},
                 d + "/empty-io"),
