@@ -372,7 +372,8 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   if (key) {
     try {
       std::vector<std::string> files = files_of_the_run(dut);
-      for (const char* f : {"checkpoint.json", "passport.json", "junit.xml", "analysis.json", "report.html"})
+      if (fs::exists(Executive::checkpoint_path(a.out))) files.emplace_back("checkpoint.json");
+      for (const char* f : kRunOutputs)
         if (fs::exists(a.out + "/" + f)) files.emplace_back(f);
       seal_run_folder(a.out, *key, files, std::nullopt, to_string(res.outcome));
       drop_previous_seal(a.out);
@@ -413,8 +414,9 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
 // The files the rig replaces in a run folder must be files: a folder or a FIFO in their place
 // would stop the run after its devices opened (a rename that fails, an open that waits).
 void refuse_non_files(const std::string& dir) {
-  for (const char* f : {"checkpoint.json", "passport.json", "junit.xml", "analysis.json", "report.html",
-                        "loop-test.csv", "seal.json", "seal.prev.json", "run.log"}) {
+  std::vector<std::string> replaced(std::begin(kRunOutputs), std::end(kRunOutputs));
+  replaced.insert(replaced.end(), {"checkpoint.json", acceptance::kLoopTestFile, "seal.json", "seal.prev.json", "run.log"});
+  for (const std::string& f : replaced) {
     struct stat st {};
     if (::lstat((dir + "/" + f).c_str(), &st) == 0 && !S_ISREG(st.st_mode))
       throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes it: remove it");
@@ -425,14 +427,8 @@ void refuse_non_files(const std::string& dir) {
 // recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
 // none (killed before it was written), is finished by a resume that only computes.
 std::string verdict_of(const std::string& dir) {
-  struct stat st {};
-  if (::lstat((dir + "/passport.json").c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return "";  // a FIFO is not waited on
-  try {
-    const std::string o = nlohmann::json::parse(slurp(dir + "/passport.json")).value("outcome", "");
-    return o == "PASS" || o == "FAIL" ? o : "";
-  } catch (const std::exception&) {
-    return "";
-  }
+  const std::optional<std::string> o = passport_outcome(dir);
+  return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
@@ -480,7 +476,7 @@ int do_run(RunArgs a) {
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
   if (!a.resume.empty()) {
     refuse_non_files(a.resume);
-    (void)check_seal_before_resume(a.resume, key);
+    check_seal_before_resume(a.resume, key);
   }
 
   // A resumed run takes its profile and invocation from the run folder.
@@ -595,7 +591,7 @@ int do_run(RunArgs a) {
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
-    if (key) seal_run_folder(a.out, *key, {"run.json", "profile.toml"});  // a stop before the first phase resumes too
+    if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
   }

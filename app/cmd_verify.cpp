@@ -1,12 +1,10 @@
 // rig verify DIR --seal-key FILE: is the run folder as the station sealed it (docs/seal.md)?
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
 #include "app/run_seal.hpp"
@@ -57,13 +55,11 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
     const bool passport_ok = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
       return e.first == "passport.json" && e.second == seal::FileState::Ok;  // a regular file, as sealed
     });
-    if (passport_ok) try {  // the passport must state the outcome the seal states
-      std::ifstream in(dir + "/passport.json");
-      const std::string o = nlohmann::json::parse(in).value("outcome", "");
-      if (!c.outcome.empty() && o != c.outcome)
-        c.problems.push_back("passport.json: outcome " + o + ", the seal states " + c.outcome);
-    } catch (const std::exception&) {
-      c.problems.push_back("passport.json: unreadable");
+    if (passport_ok) {  // the passport must state the outcome the seal states
+      const std::optional<std::string> o = passport_outcome(dir);
+      if (!o) c.problems.push_back("passport.json: unreadable");
+      else if (!c.outcome.empty() && *o != c.outcome)
+        c.problems.push_back("passport.json: outcome " + *o + ", the seal states " + c.outcome);
     }
     c.ok = c.problems.empty();
   }

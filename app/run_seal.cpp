@@ -3,7 +3,14 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <regex>
+
+#include <sys/stat.h>
+
+#include <nlohmann/json.hpp>
+
+#include "procedures/acceptance/loop_phase.hpp"
 
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
@@ -42,10 +49,11 @@ void drop_previous_seal(const std::string& dir) {
 
 namespace {
 
-// What every ending writes again: a resume does not read them, so they need not match.
+// What a resume writes again (every ending's outputs, and the loop test's records): it does not
+// read them, so they need not match.
 bool rewritten_by_a_resume(const std::string& rel) {
-  return rel == "passport.json" || rel == "junit.xml" || rel == "analysis.json" || rel == "report.html" ||
-         rel == "loop-test.csv";
+  return rel == acceptance::kLoopTestFile ||
+         std::any_of(std::begin(kRunOutputs), std::end(kRunOutputs), [&](const char* o) { return rel == o; });
 }
 
 // A seal holds for a resume when it is this key's, its list is whole, it covers what a resume
@@ -64,13 +72,13 @@ bool holds_for_resume(const seal::Check& c, std::string& why) {
 
 }  // namespace
 
-SealedRun check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k) {
+void check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k) {
   const bool sealed = fs::exists(dir + "/seal.json") || fs::exists(dir + "/seal.prev.json");
   if (!k) {
     if (sealed)
       throw ConfigError(dir + " is sealed (seal.json): resume it with the station's key (--seal-key FILE or "
                               "RIG_SEAL_KEY); without it the resumed run could not be sealed");
-    return {};
+    return;
   }
   if (!sealed)
     throw ConfigError(dir + " is not sealed (no seal.json): the key cannot vouch for files it never sealed; resume "
@@ -86,17 +94,14 @@ SealedRun check_seal_before_resume(const std::string& dir, const std::optional<s
   std::string why;
   for (const char* name : {"seal.json", "seal.prev.json"}) {
     const std::string path = dir + "/" + name;
-    if (!fs::exists(path) && !fs::is_symlink(path)) continue;
+    if (!fs::exists(path)) continue;  // (a link was refused above)
     const seal::Check c = seal::check_seal(dir, path, *k, must);
     std::string w;
     if (holds_for_resume(c, w)) {
       if (c.outcome == "PASS" || c.outcome == "FAIL")
         throw ConfigError(dir + ": the run is complete: its seal states the outcome " + c.outcome +
                           " (whatever passport.json says now); nothing to resume");
-      SealedRun r;
-      r.outcome = c.outcome;
-      for (const auto& f : c.files) r.files.push_back(f.first);
-      return r;
+      return;
     }
     why += (why.empty() ? "" : "; ") + std::string(name) + ": " + w;
   }
@@ -104,6 +109,20 @@ SealedRun check_seal_before_resume(const std::string& dir, const std::optional<s
   throw ConfigError(dir + ": the station's seal does not hold (" + why + "): " +
                     (other_key ? "resume with the key it was sealed with"
                                : "the folder was changed outside the rig; start a new run"));
+}
+
+std::optional<std::string> passport_outcome(const std::string& dir) {
+  const std::string path = dir + "/passport.json";
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
+  try {
+    std::ifstream in(path);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    if (!j.is_object() || !j.contains("outcome") || !j["outcome"].is_string()) return std::nullopt;
+    return j["outcome"].get<std::string>();
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
 }
 
 bool outside_the_seal(const std::string& rel) {

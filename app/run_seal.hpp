@@ -26,11 +26,13 @@ void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vect
 // After the final seal: the previous one is no longer needed.
 void drop_previous_seal(const std::string& dir);
 
-// What a seal's list holds besides the files: whether it is final, and with which outcome.
-struct SealedRun {
-  std::vector<std::string> files;
-  std::string outcome;  // PASS, FAIL, ABORTED, ERROR; empty: sealed at the start or a checkpoint
-};
+// What every ending of a run writes (README, "The run folder"), and so what a resume writes
+// again: a resume reads none of them, and the rig replaces each, so each must be a file.
+inline constexpr const char* kRunOutputs[] = {"passport.json", "junit.xml", "analysis.json", "report.html"};
+
+// The outcome passport.json states; nullopt when it is missing, not a regular file (a FIFO is
+// never opened) or not a passport.
+std::optional<std::string> passport_outcome(const std::string& dir);
 
 // Before a resume trusts `dir`, first of all (before run.json is read): with a key, seal.json or
 // seal.prev.json must be this key's, its list and outcome whole, and every file it lists that a
@@ -39,7 +41,7 @@ struct SealedRun {
 // it now would vouch for files the key never saw), and so is a sealed PASS or FAIL (the sealed
 // verdict stands, whatever passport.json says now). Without a key a sealed folder is refused (a
 // resume would leave it unsealed). ConfigError naming what does not hold.
-SealedRun check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k);
+void check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k);
 
 // The files of `dir` no seal is asked to cover: run.log (appended to after the last seal), the
 // seals, hidden and temporary files, and a capture a resume set aside
