@@ -349,8 +349,7 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
 std::vector<std::string> files_of_the_run(const acceptance::DutState& st) {
   std::vector<std::string> f = {"run.json", "profile.toml"};
   for (const std::string& c : st.captures()) f.push_back(c);
-  if (st.loop && st.loop->is_object() && st.loop->value("file", "") == acceptance::kLoopTestFile)
-    f.emplace_back(acceptance::kLoopTestFile);
+  if (st.loop_test && st.loop_test->supported) f.push_back(st.loop_test->file);
   return f;
 }
 
@@ -552,9 +551,8 @@ int do_run(RunArgs a) {
       if (!again.empty()) std::cout << "  computed again from the kept captures: " << again << "\n";
       std::string left;
       for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
-      std::cout << "  still to run: " << left
-                << " (a capture the interruption left partial is kept as <capture>.interrupted-N; a phase that "
-                   "measures on the device, the loop test, runs again even when completed)\n";
+      std::cout << "  still to run: " << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left)
+                << " (a capture the interruption left partial is kept as <capture>.interrupted-N)\n";
     }
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;

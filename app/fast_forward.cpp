@@ -65,7 +65,7 @@ void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, cons
   const nlohmann::json cp = read_checkpoint(ctx.out_dir);
   const nlohmann::json mine = acceptance::to_json(replay_state.slot());
   std::string diff;
-  for (const char* part : {"runs", "in_run", "raw"})
+  for (const char* part : {"runs", "in_run", "raw", "loop_test"})
     if (diff.empty() && mine.contains(part))
       diff = first_difference(mine[part], cp.is_object() && cp.contains("state") ? cp["state"].value(part, nlohmann::json())
                                                                                  : nlohmann::json(),

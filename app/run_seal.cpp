@@ -10,7 +10,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "procedures/acceptance/loop_phase.hpp"
 
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
@@ -49,11 +48,10 @@ void drop_previous_seal(const std::string& dir) {
 
 namespace {
 
-// What a resume writes again (every ending's outputs, and the loop test's records): it does not
-// read them, so they need not match.
+// What a resume writes again (every ending's outputs): it does not read them, so they need not
+// match. The loop test's records are read (loop-figures computes from them) and must.
 bool rewritten_by_a_resume(const std::string& rel) {
-  return rel == acceptance::kLoopTestFile ||
-         std::any_of(std::begin(kRunOutputs), std::end(kRunOutputs), [&](const char* o) { return rel == o; });
+  return std::any_of(std::begin(kRunOutputs), std::end(kRunOutputs), [&](const char* o) { return rel == o; });
 }
 
 // A seal holds for a resume when it is this key's, its list is whole, it covers what a resume

@@ -14,6 +14,7 @@ nlohmann::json analysis_document(const DutState& state) {
     if (s.contains(k)) d[k] = s[k];
   if (state.analysis)
     for (const auto& [k, v] : state.analysis->items()) d[k] = v;
+  if (state.device_time_s) d["device_time_s"] = *state.device_time_s;
   return d;
 }
 

@@ -1,7 +1,9 @@
 #include "procedures/acceptance/loop_phase.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <fstream>
 #include <optional>
 
 #include <fmt/format.h>
@@ -9,6 +11,7 @@
 #include "analysis/loop_response.hpp"
 #include "design/filter.hpp"
 #include "design/loop_figures.hpp"
+#include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {
@@ -39,18 +42,96 @@ std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
 }  // namespace
 
 std::string loop_test_csv(const LoopTestResponse& r) {
+  std::string saturated;
+  for (std::size_t k = 0; k < r.steps.size(); ++k)
+    if (r.steps[k].saturated) saturated += (saturated.empty() ? "" : ", ") + std::to_string(k + 1);
   std::string s = fmt::format(
       "# rig loop test: {} step(s) of {:g} g test torque inside the DUT's loop, recorded at {:g} Hz\n"
       "# x_g: the loop's output; y_g: the same through the DUT's output filter; t_s from the step\n"
+      "# steps in which the DUT's PWM saturated: {}\n"
       "step,index,t_s,x_g,y_g\n",
-      r.steps.size(), r.amplitude_g, r.rate_hz);
+      r.steps.size(), r.amplitude_g, r.rate_hz, saturated.empty() ? "none" : saturated);
   for (std::size_t k = 0; k < r.steps.size(); ++k) {
     const LoopStepRecord& st = r.steps[k];
+    // {} is the shortest decimal that reads back to the same double: loop-figures, which reads
+    // this file, computes from exactly what the DUT sent.
     for (std::size_t i = 0; i < st.x.size(); ++i)
-      s += fmt::format("{},{},{:.6g},{:.9g},{:.9g}\n", k + 1, i,
+      s += fmt::format("{},{},{:.6g},{},{}\n", k + 1, i,
                        (static_cast<double>(i) - static_cast<double>(st.pre_samples)) / r.rate_hz, st.x[i], st.y[i]);
   }
   return s;
+}
+
+LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot read the loop test's records");
+  std::size_t line_no = 0;
+  auto bad = [&](const std::string& what) { return ConfigError(fmt::format("{}:{}: {}", path, line_no, what)); };
+  LoopTestResponse r;
+  r.supported = true;
+  r.rate_hz = rec.rate_hz;
+  r.amplitude_g = rec.amplitude_g;
+  bool header = false;
+  std::vector<std::size_t> before_step;  // per step: rows with t_s < 0
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    if (!header) {
+      if (line != "step,index,t_s,x_g,y_g")
+        throw bad("expected the header 'step,index,t_s,x_g,y_g', found '" + line + "'");
+      header = true;
+      continue;
+    }
+    std::vector<std::string_view> f;
+    for (std::size_t at = 0;;) {
+      const std::size_t comma = line.find(',', at);
+      f.emplace_back(std::string_view(line).substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+      if (comma == std::string::npos) break;
+      at = comma + 1;
+    }
+    if (f.size() != 5) throw bad(fmt::format("expected 5 fields (step,index,t_s,x_g,y_g), found {}: '{}'", f.size(), line));
+    auto integer = [&](std::string_view v, const char* name) {
+      std::size_t n = 0;
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+      if (ec != std::errc() || end != v.data() + v.size())
+        throw bad(fmt::format("{} '{}' is not a whole number", name, v));
+      return n;
+    };
+    auto number = [&](std::string_view v, const char* name) {
+      double d = 0;
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
+      if (ec != std::errc() || end != v.data() + v.size()) throw bad(fmt::format("{} '{}' is not a number", name, v));
+      return d;
+    };
+    const std::size_t step = integer(f[0], "step"), index = integer(f[1], "index");
+    if (step == r.steps.size() + 1) {  // the next step begins
+      if (step > rec.samples.size())
+        throw bad(fmt::format("step {}: the loop test recorded {} step(s)", step, rec.samples.size()));
+      r.steps.emplace_back();
+      before_step.push_back(0);
+    } else if (step != r.steps.size() || step == 0) {
+      throw bad(fmt::format("step {} after step {}: the steps are numbered 1, 2, ... in order", step, r.steps.size()));
+    }
+    LoopStepRecord& st = r.steps.back();
+    if (index != st.x.size())
+      throw bad(fmt::format("index {} in step {}: expected {} (the samples of a step in order from 0)", index, step,
+                            st.x.size()));
+    if (number(f[2], "t_s") < 0) ++before_step.back();
+    st.x.push_back(number(f[3], "x_g"));
+    st.y.push_back(number(f[4], "y_g"));
+  }
+  if (!header) throw bad("no header 'step,index,t_s,x_g,y_g'");
+  if (r.steps.size() != rec.samples.size())
+    throw bad(fmt::format("{} step(s) in the file, but the loop test recorded {}", r.steps.size(), rec.samples.size()));
+  for (std::size_t k = 0; k < r.steps.size(); ++k) {
+    LoopStepRecord& st = r.steps[k];
+    if (st.x.size() != rec.samples[k] || before_step[k] != rec.pre_samples[k])
+      throw bad(fmt::format("step {}: {} samples, {} before the step; the loop test recorded {}, {} before the step",
+                            k + 1, st.x.size(), before_step[k], rec.samples[k], rec.pre_samples[k]));
+    st.pre_samples = rec.pre_samples[k];
+    st.saturated = rec.saturated[k];
+  }
+  return r;
 }
 
 nlohmann::json loop_test_figures(const LoopTestResponse& r) {
@@ -108,12 +189,37 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
            {{"f_hz", f_hz}, {"mag_x", max}, {"mag_y", may}}}};  // all on the plotted grid
 }
 
-void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
+void phase_loop_test(PhaseContext& ctx, const Profile& p, DutState& dut) {
   LoopTestRequest rq;
   rq.amplitude_g = p.loop_amplitude_g;
   rq.steps = p.loop_steps;
   rq.record_s = p.loop_record_s;
   const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
+  LoopRecord rec;
+  rec.supported = r.supported;
+  rec.reason = r.reason;
+  if (!r.supported) {
+    ctx.log->warn("loop test not run: {}", r.reason);
+    dut.loop_test = rec;
+    return;
+  }
+  const std::string csv = loop_test_csv(r);
+  write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, csv);
+  rec.file = kLoopTestFile;
+  rec.rate_hz = r.rate_hz;
+  rec.amplitude_g = r.amplitude_g;
+  for (const LoopStepRecord& st : r.steps) {
+    rec.samples.push_back(st.x.size());
+    rec.pre_samples.push_back(st.pre_samples);
+    rec.saturated.push_back(st.saturated);
+  }
+  rec.crc32 = crc32_of(csv);
+  ctx.log->info("loop test: {} step(s) of {:g} g recorded in {}", r.steps.size(), r.amplitude_g, kLoopTestFile);
+  dut.loop_test = rec;
+}
+
+void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
+  const LoopRecord& rec = dut.loop_test.value();
   // No figures, and why: both values null with the reason, analysis.json's loop with it too.
   auto no_figures = [&](const std::string& why, nlohmann::json loop) {
     ctx.values.set("bandwidth_0p5", std::nullopt, why);
@@ -123,19 +229,19 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
   };
   // A DUT that does not run the test: the passport's "skipped" says so, as bring-up's does
   // for a DUT without a command channel (which already names the loop test).
-  if (!r.supported && dut.dut) {
+  if (!rec.supported && dut.dut) {
     std::vector<SkippedStep>& sk = dut.dut->skipped;
     if (std::none_of(sk.begin(), sk.end(), [](const SkippedStep& k) { return k.step == "loop test"; }))
-      sk.push_back({"loop test", p.design_model ? r.reason + "; the figures are the DUT type's design model's"
-                                                : "bandwidth_0p5 and settling_time not measured (" + r.reason + ")"});
+      sk.push_back({"loop test", p.design_model ? rec.reason + "; the figures are the DUT type's design model's"
+                                                : "bandwidth_0p5 and settling_time not measured (" + rec.reason + ")"});
   }
-  if (!r.supported && p.design_model) {
+  if (!rec.supported && p.design_model) {
     // The DUT type's documented loop through the profile's filter: a figure of the design, not
     // of this DUT, and said so; no interval (the model has no scatter).
     const design::LoopFigures f = design::loop_figures(p.design_model->loop, p.design_model->regulator, p.filter);
     const std::string why = fmt::format("design model of the DUT type ([dut.design] at {}), with the output filter; "
                                         "not measured on this DUT: {}",
-                                        p.design_model->source, r.reason);
+                                        p.design_model->source, rec.reason);
     ctx.log->warn("loop figures from the design model: {}", why);
     ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, why);
     ctx.values.set("settling_time", f.settling_time_s, why);
@@ -143,12 +249,12 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
                 {"settling_time_s", f.settling_time_s}, {"bandwidth_0p5_hz", f.bandwidth_0p5_hz}};
     return;
   }
-  if (!r.supported) {
-    ctx.log->warn("loop figures not measured: {}", r.reason);
-    no_figures(r.reason, {{"source", "none"}});  // "required value not measured" comes with the verdict
+  if (!rec.supported) {
+    ctx.log->warn("loop figures not measured: {}", rec.reason);
+    no_figures(rec.reason, {{"source", "none"}});  // "required value not measured" comes with the verdict
     return;
   }
-  write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, loop_test_csv(r));
+  const LoopTestResponse r = read_loop_test_csv(ctx.out_dir + "/" + rec.file, rec);
   ctx.report(0.5);
   const std::string what = fmt::format("measured on the DUT (loop test, {} steps of {:g} g)", r.steps.size(), r.amplitude_g);
   std::size_t saturated = 0;
@@ -177,7 +283,7 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& dut) {
         fmt::format("loop test ({} steps of {:g} g): the step response had not settled when its {:g} s record ended: "
                     "a step ends at {:.4g}, outside the {:g} % band of {:.4g}, the loop's DC gain through the output "
                     "filter",
-                    r.steps.size(), r.amplitude_g, rq.record_s, fin, analysis::kStepSettlingBand * 100, expected);
+                    r.steps.size(), r.amplitude_g, p.loop_record_s, fin, analysis::kStepSettlingBand * 100, expected);
     ctx.log->warn("{}", why);
     no_figures(why, std::move(f));
     return;

@@ -1,11 +1,16 @@
-// The `loop` phase: the closed loop's figures of criterion 2 (docs/method.md "Spectral analysis and
-// the output filter") measured on the DUT by its loop test (docs/can-protocol.md "Loop test"),
-// never taken from a model: the DUT steps a test torque inside its loop, the rig records each
-// step's response at the loop rate into the run folder (kLoopTestFile) and reads off the
-// settling time and the 0.5-level bandwidth of the filtered output y with 95 % intervals over
-// the steps. A DUT without a loop test leaves both values null with the reason, unless the
-// hardware file names the DUT type's design model ([dut.design]): then its figures, labelled
-// "design model", computed by design/ for the profile's filter.
+// The closed loop's figures of criterion 2 (docs/method.md "Spectral analysis and the output
+// filter"), measured on the DUT by its loop test (docs/can-protocol.md "Loop test"), never taken
+// from a model. Two phases, as the recordings and their analysis are:
+//   loop          the DUT steps a test torque inside its loop; the rig keeps each step's
+//                 response at the loop rate in the run folder (kLoopTestFile, every value as
+//                 the DUT sent it) and its description in the state (LoopRecord, with the
+//                 file's CRC-32);
+//   loop-figures  reads the settling time and the 0.5-level bandwidth of the filtered output y,
+//                 with 95 % intervals over the steps, off that file (Phase::from_records: a
+//                 resume computes them again and never measures the DUT twice).
+// A DUT without a loop test leaves both values null with the reason, unless the hardware file
+// names the DUT type's design model ([dut.design]): then its figures, labelled "design model",
+// computed by design/ for the profile's filter.
 #pragma once
 #include <string>
 
@@ -18,9 +23,8 @@
 
 namespace rig::acceptance {
 
-inline constexpr const char* kLoopTestFile = "loop-test.csv";  // relative to the run folder
-
-void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st);
+void phase_loop_test(PhaseContext& ctx, const Profile& p, DutState& st);     // `loop`: needs the DUT
+void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& st);  // `loop-figures`: from the records
 
 // The hardware file's optional [dut.design] ([dut.design.loop] and [dut.design.regulator], the
 // keys of design/loop_params.hpp; absent keys keep design/'s defaults): nullopt without it.
@@ -28,8 +32,14 @@ void phase_loop(PhaseContext& ctx, const Profile& p, DutState& st);
 std::optional<Profile::DesignModel> read_design_model(const toml::table& dut);
 
 // The raw records as loop-test.csv (docs/can-protocol.md "Loop test"): a comment header, then
-// one line per sample: step, index, t_s (from the step), x_g, y_g.
+// one line per sample: step, index, t_s (from the step), x_g, y_g, the values as the shortest
+// decimals that read back to the same doubles.
 std::string loop_test_csv(const LoopTestResponse& r);
+
+// The records of the loop-test.csv at `path`, as `rec` describes them (steps, samples and
+// samples before the step of each, rate, amplitude, saturation). Anything else in the file is a
+// ConfigError naming file:line and the value.
+LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec);
 
 // Figures of a loop test's records as analysis.json's "loop" carries them (the report draws its
 // step and amplitude curves), with the two passport values' intervals.

@@ -188,7 +188,6 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
                                                     analysis::block_envelope(y, p.rate_hz, 1000),
                                                     "raw capture, drift: bias and base error removed");
   a["allan"]["confidence"] = p.confidence;
-  a["device_time_s"] = ctx.dev.clock.now_s();
   st.analysis = a;
   note_gaps(ctx, *st.raw);
 }
@@ -350,13 +349,25 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                  {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
                  {"rms_filtered", "g", "RMS error x̂ of y(t)"}},
                 true});
-  ph.push_back({"loop", "closed-loop bandwidth and settling time with the output filter, measured by the DUT's loop test",
+  ph.push_back({"loop", fmt::format("loop test on the DUT: {} step(s) of {:g} g inside its loop, recorded", p.loop_steps,
+                                    p.loop_amplitude_g),
                 // the steps at the loop's rate, the rate the output filter runs at in the DUT
                 p.loop_steps * loop_step_nominal_s(p.loop_record_s,
                                                    static_cast<std::size_t>(std::lround(p.loop_record_s * p.filter.rate_hz))),
-                [&p, &st](PhaseContext& c) { phase_loop(c, p, st); },
+                [&p, &st](PhaseContext& c) { phase_loop_test(c, p, st); }});
+  ph.push_back({"loop-figures", "closed-loop bandwidth and settling time with the output filter, from the loop test's records", 0,
+                [&p, &st](PhaseContext& c) { phase_loop_figures(c, p, st); },
                 {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level, measured by the DUT's loop test"},
-                 {"settling_time", "s", "Closed-loop settling time, 1 g step, 5 % band, measured by the DUT's loop test"}}});
+                 {"settling_time", "s", "Closed-loop settling time, 1 g step, 5 % band, measured by the DUT's loop test"}},
+                true});
+  // Every phase that uses the devices leaves the rig's clock in the state (analysis.json's
+  // device_time_s): the phases that only compute, which a resume runs again, never move it.
+  for (Phase& phase : ph)
+    if (!phase.from_records)
+      phase.run = [&st, run = std::move(phase.run)](PhaseContext& c) {
+        run(c);
+        st.device_time_s = c.dev.clock.now_s();
+      };
   return ph;
 }
 

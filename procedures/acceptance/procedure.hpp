@@ -5,7 +5,8 @@
 //   in-run    one run of in_run_s at U10 (procedure B) -> B by the Russian method
 //   raw       the raw 1 kHz capture (procedure C) -> Allan deviation, noise terms,
 //             RMS error, PSD; the same for the filtered output y(t)
-//   loop      closed-loop bandwidth and settling time with the output filter
+//   loop      the DUT's loop test, its records kept (loop-test.csv)
+//   loop-figures  closed-loop bandwidth and settling time with the output filter, read off them
 #pragma once
 #include <optional>
 #include <string>

@@ -8,6 +8,11 @@
 
 #include <fmt/format.h>
 
+#include <fstream>
+#include <sstream>
+
+#include <zlib.h>
+
 #include "rig/capture/capture.hpp"
 #include "rig/core/errors.hpp"
 
@@ -89,11 +94,67 @@ Recorded recorded_from(const Fields& f) {
 
 nlohmann::json opt_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
+std::vector<std::size_t> counts_from(const Fields& f, const std::string& key) {
+  const nlohmann::json& a = f.at(key);
+  if (!a.is_array()) f.fail(key, "an array of counts", a);
+  std::vector<std::size_t> out;
+  for (const auto& v : a) {
+    if (!v.is_number_unsigned()) f.fail(key, "an array of counts", v);
+    out.push_back(v.get<std::size_t>());
+  }
+  return out;
+}
+
+LoopRecord loop_record_from(const Fields& f) {
+  LoopRecord r;
+  const nlohmann::json& sup = f.at("supported");
+  if (!sup.is_boolean()) f.fail("supported", "true or false", sup);
+  r.supported = sup.get<bool>();
+  if (!r.supported) {
+    r.reason = f.str("reason");
+    return r;
+  }
+  r.file = f.str("file");
+  r.rate_hz = f.num("rate_hz");
+  r.amplitude_g = f.num("amplitude_g");
+  r.samples = counts_from(f, "samples");
+  r.pre_samples = counts_from(f, "pre_samples");
+  const nlohmann::json& sat = f.at("saturated");
+  if (!sat.is_array()) f.fail("saturated", "an array of true/false", sat);
+  for (const auto& v : sat) {
+    if (!v.is_boolean()) f.fail("saturated", "an array of true/false", v);
+    r.saturated.push_back(v.get<bool>());
+  }
+  const uint64_t crc = f.count("crc32");
+  if (crc > 0xffffffffu) f.fail("crc32", "a CRC-32", f.at("crc32"));
+  r.crc32 = static_cast<uint32_t>(crc);
+  if (r.pre_samples.size() != r.samples.size() || r.saturated.size() != r.samples.size())
+    f.fail("samples", "one count per step, as pre_samples and saturated have", f.at("samples"));
+  if (!(r.rate_hz > 0)) f.fail("rate_hz", "a rate > 0", f.at("rate_hz"));
+  return r;
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Recorded& r) {
   return {{"capture", r.capture}, {"n", r.samples},       {"lost", r.lost},     {"gaps", r.gaps},
           {"duplicates", r.duplicates}, {"attempts", r.attempts}, {"mean_g", r.mean_x}, {"mean_y_g", r.mean_y}};
+}
+
+nlohmann::json to_json(const LoopRecord& r) {
+  if (!r.supported) return {{"supported", false}, {"reason", r.reason}};
+  return {{"supported", true}, {"file", r.file},       {"rate_hz", r.rate_hz},         {"amplitude_g", r.amplitude_g},
+          {"samples", r.samples}, {"pre_samples", r.pre_samples}, {"saturated", r.saturated}, {"crc32", r.crc32}};
+}
+
+uint32_t crc32_of(const std::string& bytes) {
+  uLong c = crc32(0L, Z_NULL, 0);
+  for (std::size_t at = 0; at < bytes.size();) {  // zlib takes uInt lengths
+    const std::size_t n = std::min<std::size_t>(bytes.size() - at, 1u << 30);
+    c = crc32(c, reinterpret_cast<const Bytef*>(bytes.data() + at), static_cast<uInt>(n));
+    at += n;
+  }
+  return static_cast<uint32_t>(c);
 }
 
 std::vector<std::string> DutState::captures() const {
@@ -135,7 +196,9 @@ nlohmann::json to_json(const DutState& s) {
   }
   if (s.raw) j["raw"] = to_json(*s.raw);
   if (s.analysis) j["analysis"] = *s.analysis;
+  if (s.loop_test) j["loop_test"] = to_json(*s.loop_test);
   if (s.loop) j["loop"] = *s.loop;
+  if (s.device_time_s) j["device_time_s"] = *s.device_time_s;
   return j;
 }
 
@@ -201,10 +264,12 @@ DutState dut_state_from_json(const nlohmann::json& j) {
     if (!f.at("analysis").is_object()) f.fail("analysis", "an object", f.at("analysis"));
     s.analysis = f.at("analysis");
   }
+  if (f.has("loop_test")) s.loop_test = loop_record_from(f.object("loop_test"));
   if (f.has("loop")) {
     if (!f.at("loop").is_object()) f.fail("loop", "an object", f.at("loop"));
     s.loop = f.at("loop");
   }
+  s.device_time_s = f.opt_num("device_time_s");  // absent in checkpoints before it was kept
   return s;
 }
 
@@ -319,7 +384,12 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
   unwritten(s.in_run_blocks.has_value(), "state.in_run.blocks", "in-run-b");
   unwritten(s.raw.has_value(), "state.raw", "raw");
   unwritten(s.analysis.has_value(), "state.analysis", "allan");
-  unwritten(s.loop.has_value(), "state.loop", "loop");
+  // A checkpoint written before the loop test kept its records: `loop` completed with only its
+  // figures. Those figures are not taken; the loop test runs again (holds("loop") is false).
+  loop_figures_only_ = is_done("loop") && !is_done("loop-figures") && !s.loop_test && s.loop;
+  if (loop_figures_only_) s.loop.reset();
+  unwritten(s.loop_test.has_value(), "state.loop_test", "loop");
+  unwritten(s.loop.has_value(), "state.loop", "loop-figures");
   // The DUT the recordings were made from: bring-up's identity, which a resume's bring-up and
   // every capture's header are checked against.
   const bool recorded = !s.runs.empty() || s.in_run || s.raw;
@@ -351,6 +421,10 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
     } else if (id == "allan") {
       need(s.analysis.has_value(), "state.analysis", id);
     } else if (id == "loop") {
+      if (loop_figures_only_) continue;
+      need(s.loop_test.has_value(), "state.loop_test", id);
+      check_loop_record(*s.loop_test, run_dir);
+    } else if (id == "loop-figures") {
       need(s.loop.has_value(), "state.loop", id);
     }
   }
@@ -365,7 +439,33 @@ void ProcedureState::forget(const std::string& id) {
   else if (id == "in-run-b") s.in_run_blocks.reset();
   else if (id == "raw") s.raw.reset();
   else if (id == "allan") s.analysis.reset();
-  else if (id == "loop") s.loop.reset();
+  else if (id == "loop") s.loop_test.reset();
+  else if (id == "loop-figures") s.loop.reset();
+}
+
+bool ProcedureState::holds(const std::string& id) const { return !(id == "loop" && loop_figures_only_); }
+
+// The loop test's records must be the file the loop phase wrote: its name, and its bytes to the
+// CRC it recorded (loop-figures reads its values from them on every resume). A DUT without a
+// loop test recorded nothing to check.
+void ProcedureState::check_loop_record(const LoopRecord& r, const std::string& run_dir) const {
+  if (!r.supported) return;
+  if (r.file != kLoopTestFile)
+    throw std::invalid_argument("state.loop_test.file: \"" + r.file + "\" is not the loop test's records (" +
+                                kLoopTestFile + ")");
+  const std::string path = run_dir + "/" + r.file;
+  if (!std::filesystem::is_regular_file(path))
+    throw std::invalid_argument("state.loop_test.file: " + path +
+                                (std::filesystem::exists(path) ? " is not a regular file" : " is missing"));
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (!in) throw std::invalid_argument("state.loop_test.file: " + path + " cannot be read");
+  const uint32_t crc = crc32_of(bytes.str());
+  if (crc != r.crc32)
+    throw std::invalid_argument(fmt::format("state.loop_test.crc32: {} does not match {} (CRC-32 {}): the loop test's "
+                                            "records were changed since they were recorded",
+                                            r.crc32, path, crc));
 }
 
 }  // namespace rig::acceptance

@@ -7,6 +7,7 @@
 // Today's fixture has one slot; the checkpoint's "state" is slot 0's object
 // (the same keys as before the state was typed, so older checkpoints resume).
 #pragma once
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -50,6 +51,21 @@ struct GostBlock {
   std::optional<double> b_g;
 };
 
+inline constexpr const char* kLoopTestFile = "loop-test.csv";  // relative to the run folder
+
+// What the DUT's loop test recorded (the `loop` phase): the records themselves are in `file`
+// (loop-test.csv, every value as the DUT sent it); the `loop-figures` phase reads the figures off
+// them, on every resume again, as the analysis phases read the captures.
+struct LoopRecord {
+  bool supported = false;          // false: the DUT has no loop test (or it is switched off)
+  std::string reason;              // why not, when !supported
+  std::string file;                // relative to the run folder, when supported
+  double rate_hz = 0, amplitude_g = 0;
+  std::vector<std::size_t> samples, pre_samples;  // per step
+  std::vector<bool> saturated;                    // per step: the DUT's PWM saturated
+  uint32_t crc32 = 0;              // of the file's bytes as written (zlib's CRC-32)
+};
+
 struct DutState {
   std::optional<DutIdentity> dut;       // bring-up (every start)
   std::map<std::size_t, RunMean> runs;  // runNN phases, by index
@@ -58,7 +74,11 @@ struct DutState {
   std::optional<std::vector<GostBlock>> in_run_blocks;  // in-run-b phase
   std::optional<Recorded> raw;          // raw phase
   std::optional<nlohmann::json> analysis;  // allan phase: the math's JSON views (oadev, noise_terms, psd, timeseries)
-  std::optional<nlohmann::json> loop;      // loop phase: the loop figures' JSON view
+  std::optional<LoopRecord> loop_test;     // loop phase: what the loop test recorded
+  std::optional<nlohmann::json> loop;      // loop-figures phase: the loop figures' JSON view
+  // The rig's clock when the last phase that used the devices ended (analysis.json's
+  // device_time_s): kept with the recordings, so a resume that only computes does not move it.
+  std::optional<double> device_time_s;
 
   std::string serial() const { return dut ? dut->serial : std::string(); }
   // The captures recorded (relative to the run folder), in the order of the procedure.
@@ -66,6 +86,8 @@ struct DutState {
 };
 
 nlohmann::json to_json(const Recorded& r);
+nlohmann::json to_json(const LoopRecord& r);
+uint32_t crc32_of(const std::string& bytes);  // zlib's CRC-32 (the loop record's check)
 nlohmann::json to_json(const DutState& s);
 // Throws std::invalid_argument naming the field ("state.bias.sign_u10: expected an integer, found null").
 DutState dut_state_from_json(const nlohmann::json& j);
@@ -87,6 +109,7 @@ class ProcedureState final : public PhaseState {
   nlohmann::json save() const override;
   void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
   void forget(const std::string& phase_id) override;
+  bool holds(const std::string& phase_id) const override;
 
  private:
   // What a completed recording must be: its phase id, orientation, length and DUT.
@@ -97,8 +120,12 @@ class ProcedureState final : public PhaseState {
     std::string serial;
   };
   void check_capture(Recorded& r, const std::string& field, const std::string& run_dir, const Recording& want) const;
+  void check_loop_record(const LoopRecord& r, const std::string& run_dir) const;
   const Profile& profile_;
   std::vector<DutState> slots_ = std::vector<DutState>(1);
+  // A checkpoint of a version before the loop test's records were kept marks `loop` completed
+  // with its figures only: that phase is not held and runs again (Executive::read_checkpoint).
+  bool loop_figures_only_ = false;
 };
 
 }  // namespace rig::acceptance

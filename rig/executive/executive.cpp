@@ -179,14 +179,20 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
       for (const auto& m : phases[i].measures) values.forget(m.name);
   // What the device alone measured has no record to compute it again from: that phase, and every
   // phase after it (the ones that may build on it), run again.
+  // A phase whose hand-over the checkpoint does not hold runs again the same way.
   for (std::size_t i = 0; i < done.size(); ++i) {
-    if (phases[i].from_records || phases[i].measures.empty()) continue;
+    const bool measures_on_device = !phases[i].from_records && !phases[i].measures.empty();
+    const bool held = state.holds(phases[i].id);
+    if (!measures_on_device && held) continue;
     for (std::size_t k = i; k < done.size(); ++k) {
       for (const auto& m : phases[k].measures) values.forget(m.name);
       state.forget(phases[k].id);
     }
-    log.info("phase {} measures on the device: it runs again (its values are never taken from a checkpoint)",
-             phases[i].id);
+    if (measures_on_device)
+      log.info("phase {} measures on the device: it runs again (its values are never taken from a checkpoint)",
+               phases[i].id);
+    else
+      log.info("phase {}: the checkpoint does not hold its records (an earlier version's): it runs again", phases[i].id);
     done.resize(i);
     break;
   }

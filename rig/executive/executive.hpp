@@ -82,6 +82,10 @@ class PhaseState {
   // Drops what phase `phase_id` handed on, as if it had not run (a resume runs it again). A state
   // whose phases hand nothing on has nothing to drop.
   virtual void forget(const std::string& /*phase_id*/) {}
+  // Whether the restored state holds what completed phase `phase_id` handed on. A phase it does
+  // not hold (a checkpoint written before the phase kept its records) runs again, with every
+  // phase after it, as a phase that measures on the device does.
+  virtual bool holds(const std::string& /*phase_id*/) const { return true; }
 };
 
 // A state for procedures whose phases hand nothing on.

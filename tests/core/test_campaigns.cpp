@@ -217,10 +217,11 @@ TEST(Campaign, EstopAtRandomPointsAbortsSafely) {
 
 // Late signals: SIGINT or SIGTERM after the last phase (before the passport is written) still
 // end the run ABORTED with exit 3, the measurements kept. Every phase is in its checkpoint but
-// the run has no verdict: a resume runs the loop test again (its values are measured on the DUT,
-// never read back from the checkpoint), computes the rest again from the kept captures and writes
-// the uninterrupted run's passport; after that the run is complete and a further resume is
-// refused, its passport left as it is.
+// the run has no verdict: a resume measures nothing again (the loop test's records are kept, as
+// the captures are), computes every value again from the kept records and writes the
+// uninterrupted run's passport; after that the run is complete and a further resume is refused,
+// its passport left as it is. A loop-test.csv changed since it was recorded is refused; a
+// checkpoint of the version that kept only the loop's figures runs the loop test again.
 TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   const std::string d = tmp("campaign-late");
   fs::create_directories(d);
@@ -241,14 +242,18 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
     // The plan says what the resume does.
     ASSERT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-plan"), 0) << slurp(r + "-plan.stderr");
     const std::string plan = slurp(r + "-plan.stdout");
-    EXPECT_NE(plan.find("still to run: loop ("), std::string::npos) << plan;
-    EXPECT_NE(plan.find("computed again from the kept captures: bias, in-run-b, allan"), std::string::npos) << plan;
+    EXPECT_NE(plan.find("still to run: nothing"), std::string::npos) << plan;
+    EXPECT_NE(plan.find("computed again from the kept captures: bias, in-run-b, allan, loop-figures"), std::string::npos)
+        << plan;
+    const std::string records = slurp(r + "/loop-test.csv");
+    ASSERT_FALSE(records.empty());
     resume_and_compare(r, ref, what);
     const std::string tail = slurp(r + "/run.log").substr(log.size());
-    EXPECT_NE(tail.find("phase loop measures on the device: it runs again"), std::string::npos) << tail;
+    EXPECT_EQ(tail.find("phase loop start"), std::string::npos) << "measured once: " << tail;
+    EXPECT_EQ(slurp(r + "/loop-test.csv"), records);
     const json q = read_json(r + "/passport.json");
     for (const auto& ph : q["phases"]) {
-      const bool again = ph["id"] == "bias" || ph["id"] == "in-run-b" || ph["id"] == "allan" || ph["id"] == "loop";
+      const bool again = ph["id"] == "bias" || ph["id"] == "in-run-b" || ph["id"] == "allan" || ph["id"] == "loop-figures";
       EXPECT_EQ(ph["status"], again ? "done" : "skipped") << ph;
     }
     const std::string after = slurp(r + "/passport.json");
@@ -266,6 +271,38 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   for (const char* v : {"bandwidth_0p5", "settling_time"}) cp["values"][v]["value"] = 1.0;
   std::ofstream(k + "/checkpoint.json") << cp.dump(1);
   resume_and_compare(k, ref, "no passport");
+  // The loop test's records changed since they were recorded: refused before any device opens,
+  // naming the field and the file; the checkpoint is kept as it was.
+  const std::string e = d + "/edited-records";
+  fs::copy(d + "/whole", e, fs::copy_options::recursive);
+  fs::remove(e + "/passport.json");
+  std::string csv = slurp(e + "/loop-test.csv");
+  csv.replace(csv.rfind(',') + 1, 1, "9");
+  std::ofstream(e + "/loop-test.csv", std::ios::binary) << csv;
+  const std::string cp_before = slurp(e + "/checkpoint.json");
+  EXPECT_EQ(run({"run", "--resume", e, "--yes", "--no-history"}, e + "-io"), 2);
+  const std::string err = slurp(e + "-io.stderr");
+  EXPECT_NE(err.find("state.loop_test.crc32: "), std::string::npos) << err;
+  EXPECT_NE(err.find(e + "/loop-test.csv"), std::string::npos) << err;
+  EXPECT_EQ(slurp(e + "/checkpoint.json"), cp_before);
+  // A checkpoint of the version before the records were kept: `loop` completed, the figures in
+  // the state and no record of the test. Its figures are not taken: the loop test runs again.
+  const std::string o = d + "/older-checkpoint";
+  fs::copy(d + "/whole", o, fs::copy_options::recursive);
+  fs::remove(o + "/passport.json");
+  fs::remove(o + "/loop-test.csv");
+  json old_cp = read_json(o + "/checkpoint.json");
+  ASSERT_EQ(old_cp["completed"].back(), "loop-figures");
+  old_cp["completed"].erase(old_cp["completed"].size() - 1);
+  old_cp["state"].erase("loop_test");
+  for (const char* v : {"bandwidth_0p5", "settling_time"}) old_cp["values"][v]["value"] = 1.0;
+  std::ofstream(o + "/checkpoint.json") << old_cp.dump(1);
+  resume_and_compare(o, ref, "older checkpoint");
+  const std::string olog = slurp(o + "/run.log");
+  EXPECT_NE(olog.find("phase loop: the checkpoint does not hold its records (an earlier version's): it runs again"),
+            std::string::npos)
+      << olog;
+  EXPECT_EQ(slurp(o + "/loop-test.csv"), slurp(d + "/whole/loop-test.csv")) << "measured again, as the run would have";
 }
 
 // A resume continues the run it finds: the options that would change it are refused rather
@@ -289,7 +326,7 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
   EXPECT_NE(plan.find("Resume: " + checkpoint + " checked with the captures it names; "), std::string::npos) << plan;
   EXPECT_NE(plan.find("  kept (not recorded again): run01-U10, "), std::string::npos) << plan;
   EXPECT_NE(plan.find("  still to run: "), std::string::npos) << plan;
-  EXPECT_NE(plan.find(", loop (a capture the interruption left partial"), std::string::npos) << plan;
+  EXPECT_NE(plan.find(", loop, loop-figures (a capture the interruption left partial"), std::string::npos) << plan;
   EXPECT_NE(plan.find("Estimated duration of what is left: "), std::string::npos) << plan;
   const std::vector<std::vector<std::string>> refused = {{"--profile", "paper"},
                                                          {"--plant", "emulated"},

@@ -1,10 +1,13 @@
-// The `loop` phase against the emulated DUT: the paper profile's measured bandwidth and settling
-// time agree with the design model's figures for the same parameters within their stated
-// intervals; a hardware file's `[dut] loop_test = false` leaves both null with the reason.
+// The `loop` and `loop-figures` phases against the emulated DUT: the paper profile's measured
+// bandwidth and settling time agree with the design model's figures for the same parameters
+// within their stated intervals; a hardware file's `[dut] loop_test = false` leaves both null
+// with the reason; loop-test.csv reads back to the very values written, and a damaged one is
+// refused naming file, line and value.
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -41,11 +44,31 @@ std::string fresh_dir(const std::string& name) {
   return out;
 }
 
-const Phase& loop_phase(const std::vector<Phase>& phases) {
+const Phase& phase(const std::vector<Phase>& phases, const std::string& id) {
   for (const Phase& p : phases)
-    if (p.id == "loop") return p;
-  throw std::runtime_error("no loop phase");
+    if (p.id == id) return p;
+  throw std::runtime_error("no phase " + id);
 }
+
+// The loop test on the device, then its figures from the records it kept.
+void run_loop(const std::vector<Phase>& phases, PhaseContext& ctx) {
+  const Phase& test = phase(phases, "loop");
+  const Phase& figures = phase(phases, "loop-figures");
+  EXPECT_TRUE(test.measures.empty()) << "the device phase only records";
+  EXPECT_FALSE(test.from_records);
+  EXPECT_TRUE(figures.from_records) << "a resume computes the figures again, never measures again";
+  test.run(ctx);
+  figures.run(ctx);
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
 using test::IdleTable;
 
@@ -66,7 +89,7 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   const std::string out = fresh_dir("paper");
   PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr};
   acceptance::bring_up(ctx, p, {}, state.slot());  // powers the DUT and sets the profile's output filter
-  loop_phase(phases).run(ctx);
+  run_loop(phases, ctx);
   const nlohmann::json loop = state.slot().loop.value_or(nlohmann::json());
 
   // The design model for the same parameters and filter.
@@ -92,7 +115,118 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   EXPECT_EQ(lines, 1 + 5 * 1000u) << "a header and 5 steps of 100 ms at 10 kHz";
   EXPECT_EQ(loop["file"], acceptance::kLoopTestFile);
   EXPECT_EQ(loop["step"]["y"].size(), 900u) << "the mean normalised step after the step";
+  // The state describes the records, to the file's CRC, and the figures are what the file gives.
+  ASSERT_TRUE(state.slot().loop_test.has_value());
+  const acceptance::LoopRecord& rec = *state.slot().loop_test;
+  EXPECT_TRUE(rec.supported);
+  EXPECT_EQ(rec.samples, std::vector<std::size_t>(5, 1000));
+  EXPECT_EQ(rec.pre_samples, std::vector<std::size_t>(5, 100)) << "a tenth of the record before the step";
+  EXPECT_EQ(rec.crc32, acceptance::crc32_of(slurp(out + "/" + acceptance::kLoopTestFile)));
+  EXPECT_EQ(acceptance::loop_test_figures(acceptance::read_loop_test_csv(out + "/" + acceptance::kLoopTestFile, rec)),
+            acceptance::loop_test_figures(acceptance::read_loop_test_csv(out + "/" + acceptance::kLoopTestFile, rec)));
   fs::remove_all(out);
+}
+
+// loop-test.csv holds every value as the shortest decimal that reads back to the same double, so
+// the figures a resume computes from the file are those of the records as the DUT sent them.
+TEST(LoopPhase, TheRecordsReadBackBitForBitAndGiveTheSameFigures) {
+  std::mt19937_64 rng(20261128);
+  std::normal_distribution<double> n(0.0, 1e-3);
+  LoopTestResponse r;
+  r.supported = true;
+  r.rate_hz = 10000;
+  r.amplitude_g = 1;
+  acceptance::LoopRecord rec;
+  rec.supported = true;
+  rec.file = acceptance::kLoopTestFile;
+  rec.rate_hz = r.rate_hz;
+  rec.amplitude_g = r.amplitude_g;
+  for (std::size_t k = 0; k < 3; ++k) {
+    LoopStepRecord st;
+    st.pre_samples = 100;
+    st.saturated = k == 1;
+    for (std::size_t i = 0; i < 1000; ++i) {
+      const double level = i < st.pre_samples ? 0.0 : 1.0 - std::exp(-static_cast<double>(i - st.pre_samples) / 30.0);
+      // float32 values as a CAN burst carries them, and doubles that are not
+      st.x.push_back(k == 0 ? static_cast<double>(static_cast<float>(level + n(rng))) : level + n(rng));
+      st.y.push_back(level * 0.999 + n(rng) * 1e-7);
+    }
+    rec.samples.push_back(st.x.size());
+    rec.pre_samples.push_back(st.pre_samples);
+    rec.saturated.push_back(st.saturated);
+    r.steps.push_back(std::move(st));
+  }
+  const std::string dir = fresh_dir("roundtrip"), path = dir + "/" + acceptance::kLoopTestFile;
+  write(path, acceptance::loop_test_csv(r));
+  const LoopTestResponse back = acceptance::read_loop_test_csv(path, rec);
+  ASSERT_EQ(back.steps.size(), r.steps.size());
+  for (std::size_t k = 0; k < r.steps.size(); ++k) {
+    EXPECT_EQ(back.steps[k].x, r.steps[k].x) << "step " << k + 1;  // bit for bit
+    EXPECT_EQ(back.steps[k].y, r.steps[k].y) << "step " << k + 1;
+    EXPECT_EQ(back.steps[k].pre_samples, r.steps[k].pre_samples);
+    EXPECT_EQ(back.steps[k].saturated, r.steps[k].saturated);
+  }
+  EXPECT_EQ(acceptance::loop_test_figures(back).dump(), acceptance::loop_test_figures(r).dump());
+  EXPECT_NE(slurp(path).find("# steps in which the DUT's PWM saturated: 2\n"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// Whatever the file holds that the loop test did not record is refused, naming file:line and
+// the value (a resume checks the CRC first; this is what the figures phase itself checks).
+TEST(LoopPhase, ADamagedRecordFileIsRefusedNamingFileLineAndValue) {
+  LoopTestResponse r;
+  r.supported = true;
+  r.rate_hz = 1000;
+  r.amplitude_g = 1;
+  r.steps.resize(2);
+  for (LoopStepRecord& st : r.steps) {
+    st.pre_samples = 1;
+    st.x = st.y = {0.0, 0.5, 1.0};
+  }
+  acceptance::LoopRecord rec;
+  rec.supported = true;
+  rec.file = acceptance::kLoopTestFile;
+  rec.rate_hz = 1000;
+  rec.amplitude_g = 1;
+  rec.samples = {3, 3};
+  rec.pre_samples = {1, 1};
+  rec.saturated = {false, false};
+  const std::string good = acceptance::loop_test_csv(r);
+  const std::string dir = fresh_dir("damaged"), path = dir + "/" + acceptance::kLoopTestFile;
+  auto refused = [&](const std::string& text, const acceptance::LoopRecord& want) {
+    write(path, text);
+    try {
+      acceptance::read_loop_test_csv(path, want);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  auto replace = [&](std::string from, const std::string& what, const std::string& with) {
+    from.replace(from.find(what), what.size(), with);
+    return from;
+  };
+  write(path, good);
+  EXPECT_NO_THROW(acceptance::read_loop_test_csv(path, rec));
+  // line 4 is the header, 5.. the rows
+  EXPECT_EQ(refused(replace(good, "1,1,0,0.5,0.5", "1,1,0,0.5x,0.5"), rec), path + ":6: x_g '0.5x' is not a number");
+  EXPECT_EQ(refused(replace(good, "1,2,", "1,7,"), rec), path + ":7: index 7 in step 1: expected 2 (the samples of a step in order from 0)");
+  EXPECT_EQ(refused(replace(good, "step,index", "stap,index"), rec).rfind(path + ":4: expected the header", 0), 0u);
+  EXPECT_EQ(refused(replace(good, "2,0,-0.001", "3,0,-0.001"), rec),
+            path + ":8: step 3 after step 1: the steps are numbered 1, 2, ... in order");
+  EXPECT_EQ(refused(replace(good, "1,0,-0.001,0,0\n", "1,0,-0.001,0\n"), rec),
+            path + ":5: expected 5 fields (step,index,t_s,x_g,y_g), found 4: '1,0,-0.001,0'");
+  acceptance::LoopRecord longer = rec;
+  longer.samples = {4, 3};
+  EXPECT_NE(refused(good, longer).find("step 1: 3 samples, 1 before the step; the loop test recorded 4, 1 before"),
+            std::string::npos);
+  acceptance::LoopRecord more = rec;
+  more.samples = {3, 3, 3};
+  more.pre_samples = {1, 1, 1};
+  more.saturated = {false, false, false};
+  EXPECT_NE(refused(good, more).find("2 step(s) in the file, but the loop test recorded 3"), std::string::npos);
+  EXPECT_EQ(refused("", rec), path + ":0: no header 'step,index,t_s,x_g,y_g'");
+  fs::remove_all(dir);
 }
 
 // A hardware-style DUT: the real CanDutLink with the options a hardware file's [dut] section
@@ -117,7 +251,7 @@ TEST(LoopPhase, HardwareFileWithTheLoopTestOffGivesNullWithTheReason) {
   const std::string out = fresh_dir("off");
   PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr};
   acceptance::bring_up(ctx, p, {}, state.slot());
-  loop_phase(phases).run(ctx);
+  run_loop(phases, ctx);
   values.judge_all(true);  // the paper profile limits both: null is FAIL, said once
   for (const char* name : {"bandwidth_0p5", "settling_time"}) {
     const Measurement* m = values.find(name);

@@ -524,7 +524,7 @@ TEST(RigCli, SigkillMidCaptureThenResumeRepeatsNoCompletedPhase) {
     if (ph["id"] == "bias" || ph["id"] == "in-run-b") {
       EXPECT_EQ(ph["status"], "done") << ph.dump();
       EXPECT_EQ(ph["message"], "computed again from the kept records (resume)") << ph.dump();
-    } else if (ph["id"] == "raw" || ph["id"] == "allan" || ph["id"] == "loop") {
+    } else if (ph["id"] == "raw" || ph["id"] == "allan" || ph["id"] == "loop" || ph["id"] == "loop-figures") {
       EXPECT_EQ(ph["status"], "done") << ph.dump();
     } else {
       EXPECT_EQ(ph["status"], "skipped") << ph.dump();
