@@ -1,9 +1,7 @@
 #include "procedures/acceptance/loop_phase.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
-#include <fstream>
 #include <optional>
 
 #include <fmt/format.h>
@@ -40,99 +38,6 @@ std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
 }
 
 }  // namespace
-
-std::string loop_test_csv(const LoopTestResponse& r) {
-  std::string saturated;
-  for (std::size_t k = 0; k < r.steps.size(); ++k)
-    if (r.steps[k].saturated) saturated += (saturated.empty() ? "" : ", ") + std::to_string(k + 1);
-  std::string s = fmt::format(
-      "# rig loop test: {} step(s) of {:g} g test torque inside the DUT's loop, recorded at {:g} Hz\n"
-      "# x_g: the loop's output; y_g: the same through the DUT's output filter; t_s from the step\n"
-      "# steps in which the DUT's PWM saturated: {}\n"
-      "step,index,t_s,x_g,y_g\n",
-      r.steps.size(), r.amplitude_g, r.rate_hz, saturated.empty() ? "none" : saturated);
-  for (std::size_t k = 0; k < r.steps.size(); ++k) {
-    const LoopStepRecord& st = r.steps[k];
-    // {} is the shortest decimal that reads back to the same double: loop-figures, which reads
-    // this file, computes from exactly what the DUT sent.
-    for (std::size_t i = 0; i < st.x.size(); ++i)
-      s += fmt::format("{},{},{:.6g},{},{}\n", k + 1, i,
-                       (static_cast<double>(i) - static_cast<double>(st.pre_samples)) / r.rate_hz, st.x[i], st.y[i]);
-  }
-  return s;
-}
-
-LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path + ": cannot read the loop test's records");
-  std::size_t line_no = 0;
-  auto bad = [&](const std::string& what) { return ConfigError(fmt::format("{}:{}: {}", path, line_no, what)); };
-  LoopTestResponse r;
-  r.supported = true;
-  r.rate_hz = rec.rate_hz;
-  r.amplitude_g = rec.amplitude_g;
-  bool header = false;
-  std::vector<std::size_t> before_step;  // per step: rows with t_s < 0
-  for (std::string line; std::getline(in, line);) {
-    ++line_no;
-    if (line.empty() || line[0] == '#') continue;
-    if (!header) {
-      if (line != "step,index,t_s,x_g,y_g")
-        throw bad("expected the header 'step,index,t_s,x_g,y_g', found '" + line + "'");
-      header = true;
-      continue;
-    }
-    std::vector<std::string_view> f;
-    for (std::size_t at = 0;;) {
-      const std::size_t comma = line.find(',', at);
-      f.emplace_back(std::string_view(line).substr(at, comma == std::string::npos ? std::string::npos : comma - at));
-      if (comma == std::string::npos) break;
-      at = comma + 1;
-    }
-    if (f.size() != 5) throw bad(fmt::format("expected 5 fields (step,index,t_s,x_g,y_g), found {}: '{}'", f.size(), line));
-    auto integer = [&](std::string_view v, const char* name) {
-      std::size_t n = 0;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-      if (ec != std::errc() || end != v.data() + v.size())
-        throw bad(fmt::format("{} '{}' is not a whole number", name, v));
-      return n;
-    };
-    auto number = [&](std::string_view v, const char* name) {
-      double d = 0;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
-      if (ec != std::errc() || end != v.data() + v.size()) throw bad(fmt::format("{} '{}' is not a number", name, v));
-      return d;
-    };
-    const std::size_t step = integer(f[0], "step"), index = integer(f[1], "index");
-    if (step == r.steps.size() + 1) {  // the next step begins
-      if (step > rec.samples.size())
-        throw bad(fmt::format("step {}: the loop test recorded {} step(s)", step, rec.samples.size()));
-      r.steps.emplace_back();
-      before_step.push_back(0);
-    } else if (step != r.steps.size() || step == 0) {
-      throw bad(fmt::format("step {} after step {}: the steps are numbered 1, 2, ... in order", step, r.steps.size()));
-    }
-    LoopStepRecord& st = r.steps.back();
-    if (index != st.x.size())
-      throw bad(fmt::format("index {} in step {}: expected {} (the samples of a step in order from 0)", index, step,
-                            st.x.size()));
-    if (number(f[2], "t_s") < 0) ++before_step.back();
-    st.x.push_back(number(f[3], "x_g"));
-    st.y.push_back(number(f[4], "y_g"));
-  }
-  if (!header) throw bad("no header 'step,index,t_s,x_g,y_g'");
-  if (r.steps.size() != rec.samples.size())
-    throw bad(fmt::format("{} step(s) in the file, but the loop test recorded {}", r.steps.size(), rec.samples.size()));
-  for (std::size_t k = 0; k < r.steps.size(); ++k) {
-    LoopStepRecord& st = r.steps[k];
-    if (st.x.size() != rec.samples[k] || before_step[k] != rec.pre_samples[k])
-      throw bad(fmt::format("step {}: {} samples, {} before the step; the loop test recorded {}, {} before the step",
-                            k + 1, st.x.size(), before_step[k], rec.samples[k], rec.pre_samples[k]));
-    st.pre_samples = rec.pre_samples[k];
-    st.saturated = rec.saturated[k];
-  }
-  return r;
-}
 
 nlohmann::json loop_test_figures(const LoopTestResponse& r) {
   using namespace rig::analysis;
@@ -205,15 +110,7 @@ void phase_loop_test(PhaseContext& ctx, const Profile& p, DutState& dut) {
   }
   const std::string csv = loop_test_csv(r);
   write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, csv);
-  rec.file = kLoopTestFile;
-  rec.rate_hz = r.rate_hz;
-  rec.amplitude_g = r.amplitude_g;
-  for (const LoopStepRecord& st : r.steps) {
-    rec.samples.push_back(st.x.size());
-    rec.pre_samples.push_back(st.pre_samples);
-    rec.saturated.push_back(st.saturated);
-  }
-  rec.crc32 = crc32_of(csv);
+  rec = loop_record_of(r, csv);
   ctx.log->info("loop test: {} step(s) of {:g} g recorded in {}", r.steps.size(), r.amplitude_g, kLoopTestFile);
   dut.loop_test = rec;
 }

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "procedures/acceptance/loop_record.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/dut_link.hpp"
@@ -30,16 +31,6 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& st);  // 
 // keys of design/loop_params.hpp; absent keys keep design/'s defaults): nullopt without it.
 // Unknown keys and values out of range => ConfigError naming file:line.
 std::optional<Profile::DesignModel> read_design_model(const toml::table& dut);
-
-// The raw records as loop-test.csv (docs/can-protocol.md "Loop test"): a comment header, then
-// one line per sample: step, index, t_s (from the step), x_g, y_g, the values as the shortest
-// decimals that read back to the same doubles.
-std::string loop_test_csv(const LoopTestResponse& r);
-
-// The records of the loop-test.csv at `path`, as `rec` describes them (steps, samples and
-// samples before the step of each, rate, amplitude, saturation). Anything else in the file is a
-// ConfigError naming file:line and the value.
-LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec);
 
 // Figures of a loop test's records as analysis.json's "loop" carries them (the report draws its
 // step and amplitude curves), with the two passport values' intervals.

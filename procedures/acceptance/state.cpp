@@ -8,11 +8,6 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
-#include <sstream>
-
-#include <zlib.h>
-
 #include "rig/capture/capture.hpp"
 #include "rig/core/errors.hpp"
 
@@ -139,22 +134,6 @@ LoopRecord loop_record_from(const Fields& f) {
 nlohmann::json to_json(const Recorded& r) {
   return {{"capture", r.capture}, {"n", r.samples},       {"lost", r.lost},     {"gaps", r.gaps},
           {"duplicates", r.duplicates}, {"attempts", r.attempts}, {"mean_g", r.mean_x}, {"mean_y_g", r.mean_y}};
-}
-
-nlohmann::json to_json(const LoopRecord& r) {
-  if (!r.supported) return {{"supported", false}, {"reason", r.reason}};
-  return {{"supported", true}, {"file", r.file},       {"rate_hz", r.rate_hz},         {"amplitude_g", r.amplitude_g},
-          {"samples", r.samples}, {"pre_samples", r.pre_samples}, {"saturated", r.saturated}, {"crc32", r.crc32}};
-}
-
-uint32_t crc32_of(const std::string& bytes) {
-  uLong c = crc32(0L, Z_NULL, 0);
-  for (std::size_t at = 0; at < bytes.size();) {  // zlib takes uInt lengths
-    const std::size_t n = std::min<std::size_t>(bytes.size() - at, 1u << 30);
-    c = crc32(c, reinterpret_cast<const Bytef*>(bytes.data() + at), static_cast<uInt>(n));
-    at += n;
-  }
-  return static_cast<uint32_t>(c);
 }
 
 std::vector<std::string> DutState::captures() const {
@@ -423,7 +402,7 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
     } else if (id == "loop") {
       if (loop_figures_only_) continue;
       need(s.loop_test.has_value(), "state.loop_test", id);
-      check_loop_record(*s.loop_test, run_dir);
+      check_loop_record(*s.loop_test, run_dir);  // before any device opens, as the captures
     } else if (id == "loop-figures") {
       need(s.loop.has_value(), "state.loop", id);
     }
@@ -444,28 +423,5 @@ void ProcedureState::forget(const std::string& id) {
 }
 
 bool ProcedureState::holds(const std::string& id) const { return !(id == "loop" && loop_figures_only_); }
-
-// The loop test's records must be the file the loop phase wrote: its name, and its bytes to the
-// CRC it recorded (loop-figures reads its values from them on every resume). A DUT without a
-// loop test recorded nothing to check.
-void ProcedureState::check_loop_record(const LoopRecord& r, const std::string& run_dir) const {
-  if (!r.supported) return;
-  if (r.file != kLoopTestFile)
-    throw std::invalid_argument("state.loop_test.file: \"" + r.file + "\" is not the loop test's records (" +
-                                kLoopTestFile + ")");
-  const std::string path = run_dir + "/" + r.file;
-  if (!std::filesystem::is_regular_file(path))
-    throw std::invalid_argument("state.loop_test.file: " + path +
-                                (std::filesystem::exists(path) ? " is not a regular file" : " is missing"));
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (!in) throw std::invalid_argument("state.loop_test.file: " + path + " cannot be read");
-  const uint32_t crc = crc32_of(bytes.str());
-  if (crc != r.crc32)
-    throw std::invalid_argument(fmt::format("state.loop_test.crc32: {} does not match {} (CRC-32 {}): the loop test's "
-                                            "records were changed since they were recorded",
-                                            r.crc32, path, crc));
-}
 
 }  // namespace rig::acceptance

@@ -7,7 +7,6 @@
 // Today's fixture has one slot; the checkpoint's "state" is slot 0's object
 // (the same keys as before the state was typed, so older checkpoints resume).
 #pragma once
-#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -16,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "procedures/acceptance/profile.hpp"
+#include "procedures/acceptance/loop_record.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "rig/executive/executive.hpp"
 
@@ -51,21 +51,6 @@ struct GostBlock {
   std::optional<double> b_g;
 };
 
-inline constexpr const char* kLoopTestFile = "loop-test.csv";  // relative to the run folder
-
-// What the DUT's loop test recorded (the `loop` phase): the records themselves are in `file`
-// (loop-test.csv, every value as the DUT sent it); the `loop-figures` phase reads the figures off
-// them, on every resume again, as the analysis phases read the captures.
-struct LoopRecord {
-  bool supported = false;          // false: the DUT has no loop test (or it is switched off)
-  std::string reason;              // why not, when !supported
-  std::string file;                // relative to the run folder, when supported
-  double rate_hz = 0, amplitude_g = 0;
-  std::vector<std::size_t> samples, pre_samples;  // per step
-  std::vector<bool> saturated;                    // per step: the DUT's PWM saturated
-  uint32_t crc32 = 0;              // of the file's bytes as written (zlib's CRC-32)
-};
-
 struct DutState {
   std::optional<DutIdentity> dut;       // bring-up (every start)
   std::map<std::size_t, RunMean> runs;  // runNN phases, by index
@@ -86,8 +71,6 @@ struct DutState {
 };
 
 nlohmann::json to_json(const Recorded& r);
-nlohmann::json to_json(const LoopRecord& r);
-uint32_t crc32_of(const std::string& bytes);  // zlib's CRC-32 (the loop record's check)
 nlohmann::json to_json(const DutState& s);
 // Throws std::invalid_argument naming the field ("state.bias.sign_u10: expected an integer, found null").
 DutState dut_state_from_json(const nlohmann::json& j);
@@ -120,7 +103,6 @@ class ProcedureState final : public PhaseState {
     std::string serial;
   };
   void check_capture(Recorded& r, const std::string& field, const std::string& run_dir, const Recording& want) const;
-  void check_loop_record(const LoopRecord& r, const std::string& run_dir) const;
   const Profile& profile_;
   std::vector<DutState> slots_ = std::vector<DutState>(1);
   // A checkpoint of a version before the loop test's records were kept marks `loop` completed

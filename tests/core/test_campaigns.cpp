@@ -285,6 +285,18 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   EXPECT_NE(err.find("state.loop_test.crc32: "), std::string::npos) << err;
   EXPECT_NE(err.find(e + "/loop-test.csv"), std::string::npos) << err;
   EXPECT_EQ(slurp(e + "/checkpoint.json"), cp_before);
+  // The checkpoint's description of the records must be what the file states: a saturated step
+  // (no figures, a FAIL) edited out of the checkpoint is refused too.
+  const std::string s = d + "/edited-state";
+  fs::copy(d + "/whole", s, fs::copy_options::recursive);
+  fs::remove(s + "/passport.json");
+  json scp = read_json(s + "/checkpoint.json");
+  scp["state"]["loop_test"]["saturated"][0] = true;
+  std::ofstream(s + "/checkpoint.json") << scp.dump(1);
+  EXPECT_EQ(run({"run", "--resume", s, "--yes", "--no-history"}, s + "-io"), 2);
+  EXPECT_NE(slurp(s + "-io.stderr").find("state.loop_test: " + s + "/loop-test.csv:3: the file states the PWM saturated in steps 'none'; the loop test recorded '1'"),
+            std::string::npos)
+      << slurp(s + "-io.stderr");
   // A checkpoint of the version before the records were kept: `loop` completed, the figures in
   // the state and no record of the test. Its figures are not taken: the loop test runs again.
   const std::string o = d + "/older-checkpoint";

@@ -224,8 +224,28 @@ TEST(LoopPhase, ADamagedRecordFileIsRefusedNamingFileLineAndValue) {
   more.samples = {3, 3, 3};
   more.pre_samples = {1, 1, 1};
   more.saturated = {false, false, false};
-  EXPECT_NE(refused(good, more).find("2 step(s) in the file, but the loop test recorded 3"), std::string::npos);
+  EXPECT_NE(refused(good, more).find(":1: the file states 2 step(s) of 1 g at 1000 Hz; the loop test recorded 3 of"),
+            std::string::npos);
+  EXPECT_NE(refused(good.substr(0, good.find("2,0,")), rec).find("1 step(s) in the file, but the loop test recorded 2"),
+            std::string::npos)
+      << "a file cut short";
   EXPECT_EQ(refused("", rec), path + ":0: no header 'step,index,t_s,x_g,y_g'");
+  // The file states what the figures depend on; a record that says otherwise is refused.
+  acceptance::LoopRecord stronger = rec;
+  stronger.amplitude_g = 1.05;
+  EXPECT_EQ(refused(good, stronger),
+            path + ":1: the file states 2 step(s) of 1 g at 1000 Hz; the loop test recorded 2 of 1.05 g at 1000 Hz");
+  acceptance::LoopRecord faster = rec;
+  faster.rate_hz = 2000;
+  EXPECT_NE(refused(good, faster).find(":1: the file states 2 step(s) of 1 g at 1000 Hz"), std::string::npos);
+  acceptance::LoopRecord unsaturated = rec;
+  r.steps[1].saturated = true;
+  EXPECT_EQ(refused(acceptance::loop_test_csv(r), unsaturated),
+            path + ":3: the file states the PWM saturated in steps '2'; the loop test recorded 'none'");
+  EXPECT_NE(refused(replace(good, "# steps in which", "# Steps in which"), rec)
+                .find("the comment lines '# rig loop test: ...' and '# steps in which the DUT's PWM saturated: ...' are missing"),
+            std::string::npos);
+  EXPECT_EQ(refused(replace(good, "1000 Hz", "1000 Hz!"), rec), path + ":1: unexpected '!' after the rate");
   fs::remove_all(dir);
 }
 
