@@ -551,8 +551,10 @@ int do_run(RunArgs a) {
       if (!again.empty()) std::cout << "  computed again from the kept captures: " << again << "\n";
       std::string left;
       for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
-      std::cout << "  still to run: " << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left)
-                << " (a capture the interruption left partial is kept as <capture>.interrupted-N)\n";
+      std::cout << "  still to run: "
+                << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)"
+                                 : left + " (a capture the interruption left partial is kept as <capture>.interrupted-N)")
+                << "\n";
     }
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;

@@ -186,7 +186,14 @@ LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& r
 }
 
 void check_loop_record(const LoopRecord& r, const std::string& run_dir) {
-  if (!r.supported) return;
+  if (!r.supported) {
+    // Not run, so nothing recorded: records in the folder contradict it (the design model's
+    // figures would stand in for a measured DUT's).
+    if (std::filesystem::exists(std::filesystem::symlink_status(run_dir + "/" + kLoopTestFile)))
+      throw std::invalid_argument(std::string("state.loop_test.supported: false, but ") + run_dir + "/" + kLoopTestFile +
+                                  " holds a loop test's records");
+    return;
+  }
   if (r.file != kLoopTestFile)
     throw std::invalid_argument("state.loop_test.file: \"" + r.file + "\" is not the loop test's records (" +
                                 kLoopTestFile + ")");

@@ -45,7 +45,8 @@ LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& r
 
 // The checkpoint's record against the run folder's file: its name, its bytes to the CRC-32 and
 // everything the file states (read_loop_test_csv). std::invalid_argument naming the field
-// ("state.loop_test.crc32: ...") otherwise. A DUT without a loop test recorded nothing to check.
+// ("state.loop_test.crc32: ...") otherwise. A DUT without a loop test recorded nothing: the
+// folder must hold no records then.
 void check_loop_record(const LoopRecord& r, const std::string& run_dir);
 
 }  // namespace rig::acceptance

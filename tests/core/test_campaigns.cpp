@@ -297,6 +297,18 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   EXPECT_NE(slurp(s + "-io.stderr").find("state.loop_test: " + s + "/loop-test.csv:3: the file states the PWM saturated in steps 'none'; the loop test recorded '1'"),
             std::string::npos)
       << slurp(s + "-io.stderr");
+  // A loop test marked "not supported" in a folder that holds its records (with a hardware
+  // file's [dut.design], the design model's figures would stand in for the measured ones).
+  const std::string n = d + "/edited-supported";
+  fs::copy(d + "/whole", n, fs::copy_options::recursive);
+  fs::remove(n + "/passport.json");
+  json ncp = read_json(n + "/checkpoint.json");
+  ncp["state"]["loop_test"] = {{"supported", false}, {"reason", "no loop test"}};
+  std::ofstream(n + "/checkpoint.json") << ncp.dump(1);
+  EXPECT_EQ(run({"run", "--resume", n, "--yes", "--no-history"}, n + "-io"), 2);
+  EXPECT_NE(slurp(n + "-io.stderr").find("state.loop_test.supported: false, but " + n + "/loop-test.csv holds"),
+            std::string::npos)
+      << slurp(n + "-io.stderr");
   // A checkpoint of the version before the records were kept: `loop` completed, the figures in
   // the state and no record of the test. Its figures are not taken: the loop test runs again.
   const std::string o = d + "/older-checkpoint";
