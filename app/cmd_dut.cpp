@@ -1,7 +1,11 @@
 // `rig dut`: a technician's manual control of a DUT over CAN
 // (docs/can-protocol.md): info, stream, output filter, the loop test, and
 // decoding a candump log with the protocol's DBC.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -234,11 +238,29 @@ int cmd_decode(const DutArgs& a) {
   }
   return skipped ? kExitUsage : kExitPass;
 }
+// `path` can be replaced by write_file_atomic: its folder exists and takes new files, and what
+// lies there now, if anything, is a regular file. ConfigError (exit 2) naming it otherwise.
+void check_writable_file(const std::string& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw ConfigError(what + " " + path + ": the folder " + dir.string() + " does not exist");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw ConfigError(what + " " + path + ": cannot create files in " + dir.string());
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    throw ConfigError(what + " " + path + ": not a regular file (the records replace it)");
+}
+
 // The loop test at the bench: the same request, analysis and record file as `rig run`'s loop phase.
 int cmd_loop_test(DutArgs a) {
   CancelSource cancel;
   SignalWatcher signals(cancel);
   a.loop.record_s = a.record_ms / 1e3;
+  // Where the records go is checked before the DUT is asked: a measurement is never made only to
+  // be lost to a path that cannot be written.
+  if (!a.out.empty()) check_writable_file(a.out, "rig dut loop-test --out");
   RealClock clock;
   auto link = link::connect_dut(command_dut_config(a, "loop-test"), clock);
   const LoopTestResponse r = link->loop_test(a.loop, cancel.token());
@@ -246,10 +268,7 @@ int cmd_loop_test(DutArgs a) {
     std::printf("loop test: not supported: %s\n", r.reason.c_str());
     return kExitHardware;
   }
-  if (!a.out.empty()) {
-    std::ofstream f(a.out);
-    if (!(f << acceptance::loop_test_csv(r))) throw ConfigError("rig dut loop-test: cannot write " + a.out);
-  }
+  if (!a.out.empty()) write_file_atomic(a.out, acceptance::loop_test_csv(r));  // replaced, never written through
   const nlohmann::json fig = acceptance::loop_test_figures(r);
   for (std::size_t k = 0; k < fig["per_step"].size(); ++k) {
     const auto& s = fig["per_step"][k];

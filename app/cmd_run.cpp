@@ -430,6 +430,16 @@ std::string verdict_of(const std::string& dir) {
   return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
 }
 
+// Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than
+// today's procedure has, and its run is complete all the same. For an unsealed folder (a sealed
+// one's final seal states the verdict, and a passport it does not vouch for is not read).
+void refuse_a_final_verdict(const std::string& dir) {
+  const std::string v = verdict_of(dir);
+  if (!v.empty())
+    throw ConfigError(dir + ": the run is complete (its passport says " + v +
+                      "): nothing to resume; its passport stands");
+}
+
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
   auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
   file->set_level(spdlog::level::debug);
@@ -530,8 +540,8 @@ int do_run(RunArgs a) {
     std::vector<std::string> completed;
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
-      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet,
-                                             verdict_of(a.resume).empty());
+      if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
+      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true);
     }
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
@@ -544,11 +554,12 @@ int do_run(RunArgs a) {
         std::string& list = phases[i].from_records ? again : kept;
         list += (list.empty() ? "" : ", ") + completed[i];
       }
-      std::cout << fmt::format("Resume: {} checked with the captures it names{}; {} of {} phases complete.\n",
+      std::cout << fmt::format("Resume: {} checked with the records it names (captures, loop-test.csv){}; {} of {} "
+                               "phases complete.\n",
                                Executive::checkpoint_path(a.resume), key ? " and the station's seal" : "",
                                completed.size(), phases.size());
       if (!kept.empty()) std::cout << "  kept (not recorded again): " << kept << "\n";
-      if (!again.empty()) std::cout << "  computed again from the kept captures: " << again << "\n";
+      if (!again.empty()) std::cout << "  computed again from the kept records: " << again << "\n";
       std::string left;
       for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
       std::cout << "  still to run: "
@@ -576,7 +587,8 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
-    completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, verdict_of(a.out).empty());
+    if (!key) refuse_a_final_verdict(a.out);  // a sealed folder's verdict is its seal's (checked above)
+    completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
   }
   operator_prompts(a, p);
 

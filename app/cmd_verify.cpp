@@ -1,13 +1,16 @@
 // rig verify DIR --seal-key FILE: is the run folder as the station sealed it (docs/seal.md)?
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
 #include "app/run_seal.hpp"
+#include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::cli {
@@ -30,6 +33,21 @@ std::vector<std::string> entries_in(const std::string& dir) {
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+// The loop test's records must be the ones the sealed checkpoint describes (their CRC-32 and
+// what the file states): the seal vouches for the bytes it read, and a file swapped after the
+// figures were read from it would otherwise verify. "" when they are, or when there are none.
+std::string loop_records_problem(const std::string& dir) {
+  try {
+    std::ifstream in(dir + "/checkpoint.json");
+    const nlohmann::json cp = nlohmann::json::parse(in);
+    const acceptance::DutState st = acceptance::dut_state_from_json(cp.at("state"));
+    if (st.loop_test) acceptance::check_loop_record(*st.loop_test, dir);
+  } catch (const std::exception& e) {
+    return std::string(acceptance::kLoopTestFile) + ": not the records the checkpoint describes (" + e.what() + ")";
+  }
+  return "";
 }
 
 int do_verify(const std::string& dir, const std::string& key_path, bool given) {
@@ -55,6 +73,11 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
     const bool passport_ok = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
       return e.first == "passport.json" && e.second == seal::FileState::Ok;  // a regular file, as sealed
     });
+    const bool checkpoint_ok = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
+      return e.first == "checkpoint.json" && e.second == seal::FileState::Ok;
+    });
+    if (checkpoint_ok)
+      if (const std::string p = loop_records_problem(dir); !p.empty()) c.problems.push_back(p);
     if (passport_ok) {  // the passport must state the outcome the seal states
       const std::optional<std::string> o = passport_outcome(dir);
       if (!o) c.problems.push_back("passport.json: unreadable");

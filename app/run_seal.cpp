@@ -10,7 +10,6 @@
 
 #include <nlohmann/json.hpp>
 
-
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
 

@@ -73,9 +73,25 @@ std::string loop_test_csv(const LoopTestResponse& r) {
   return s;
 }
 
-LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec) {
+std::string loop_test_bytes(const std::string& path, const LoopRecord& rec) {
   std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
   if (!in) throw ConfigError(path + ": cannot read the loop test's records");
+  const uint32_t crc = crc32_of(bytes.str());
+  if (crc != rec.crc32)
+    throw ConfigError(fmt::format("state.loop_test.crc32: {} does not match {} (CRC-32 {}): the loop test's records "
+                                  "were changed since they were recorded",
+                                  rec.crc32, path, crc));
+  return bytes.str();
+}
+
+LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec) {
+  return parse_loop_test_csv(loop_test_bytes(path, rec), path, rec);
+}
+
+LoopTestResponse parse_loop_test_csv(const std::string& text, const std::string& path, const LoopRecord& rec) {
+  std::istringstream in(text);
   std::size_t line_no = 0;
   auto bad = [&](const std::string& what) { return ConfigError(fmt::format("{}:{}: {}", path, line_no, what)); };
   LoopTestResponse r;
@@ -91,9 +107,9 @@ LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& r
     rest.remove_prefix(static_cast<std::size_t>(end - rest.data()));
     return d;
   };
-  auto expect_text = [&](std::string_view& rest, std::string_view text) {
-    if (rest.substr(0, text.size()) != text) throw bad(fmt::format("expected '{}' at '{}'", text, rest));
-    rest.remove_prefix(text.size());
+  auto expect_text = [&](std::string_view& rest, std::string_view want) {
+    if (rest.substr(0, want.size()) != want) throw bad(fmt::format("expected '{}' at '{}'", want, rest));
+    rest.remove_prefix(want.size());
   };
   for (std::string line; std::getline(in, line);) {
     ++line_no;
@@ -201,17 +217,14 @@ void check_loop_record(const LoopRecord& r, const std::string& run_dir) {
   if (!std::filesystem::is_regular_file(path))
     throw std::invalid_argument("state.loop_test.file: " + path +
                                 (std::filesystem::exists(path) ? " is not a regular file" : " is missing"));
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (!in) throw std::invalid_argument("state.loop_test.file: " + path + " cannot be read");
-  const uint32_t crc = crc32_of(bytes.str());
-  if (crc != r.crc32)
-    throw std::invalid_argument(fmt::format("state.loop_test.crc32: {} does not match {} (CRC-32 {}): the loop test's "
-                                            "records were changed since they were recorded",
-                                            r.crc32, path, crc));
+  std::string bytes;
   try {
-    read_loop_test_csv(path, r);
+    bytes = loop_test_bytes(path, r);
+  } catch (const ConfigError& e) {
+    throw std::invalid_argument(e.what());  // names state.loop_test.crc32
+  }
+  try {
+    parse_loop_test_csv(bytes, path, r);
   } catch (const ConfigError& e) {
     throw std::invalid_argument(std::string("state.loop_test: ") + e.what());
   }

@@ -38,10 +38,15 @@ std::string loop_test_csv(const LoopTestResponse& r);
 // What a LoopRecord says of the records `csv` holds (the loop phase's, with the file's CRC-32).
 LoopRecord loop_record_of(const LoopTestResponse& r, const std::string& csv);
 
-// The records of the loop-test.csv at `path`, which must state exactly what `rec` describes
-// (steps, samples and samples before the step of each, amplitude, rate, saturation). Anything
-// else is a ConfigError naming file:line and the value.
+// The records of the loop-test.csv at `path`: its bytes, read once, must have the CRC-32 `rec`
+// holds (ConfigError naming state.loop_test.crc32 otherwise), and are then parsed as they are,
+// so what the figures are computed from is what was checked (a file swapped in between is not
+// read). The file must state exactly what `rec` describes (steps, samples and samples before the
+// step of each, amplitude, rate, saturation): anything else is a ConfigError naming file:line
+// and the value.
 LoopTestResponse read_loop_test_csv(const std::string& path, const LoopRecord& rec);
+std::string loop_test_bytes(const std::string& path, const LoopRecord& rec);  // the CRC-checked bytes
+LoopTestResponse parse_loop_test_csv(const std::string& text, const std::string& path, const LoopRecord& rec);
 
 // The checkpoint's record against the run folder's file: its name, its bytes to the CRC-32 and
 // everything the file states (read_loop_test_csv). std::invalid_argument naming the field

@@ -249,6 +249,10 @@ DutState dut_state_from_json(const nlohmann::json& j) {
     s.loop = f.at("loop");
   }
   s.device_time_s = f.opt_num("device_time_s");  // absent in checkpoints before it was kept
+  if (s.device_time_s && !(std::isfinite(*s.device_time_s) && *s.device_time_s >= 0))
+    f.fail("device_time_s", "a device time >= 0 s", f.at("device_time_s"));
+  if (s.loop_test && !s.device_time_s)  // written with it by every version that writes loop_test
+    f.fail("device_time_s", "a device time (the state has loop_test)", nlohmann::json(nullptr));
   return s;
 }
 
@@ -367,6 +371,9 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
   // figures. Those figures are not taken; the loop test runs again (holds("loop") is false).
   loop_figures_only_ = is_done("loop") && !is_done("loop-figures") && !s.loop_test && s.loop;
   if (loop_figures_only_) s.loop.reset();
+  // A loop test the DUT did not run recorded nothing to keep: a resume asks the DUT again rather
+  // than taking "not supported" (and its reason) from the file (no DUT is measured twice so).
+  loop_not_run_ = is_done("loop") && s.loop_test && !s.loop_test->supported;
   unwritten(s.loop_test.has_value(), "state.loop_test", "loop");
   unwritten(s.loop.has_value(), "state.loop", "loop-figures");
   // The DUT the recordings were made from: bring-up's identity, which a resume's bring-up and
@@ -422,6 +429,8 @@ void ProcedureState::forget(const std::string& id) {
   else if (id == "loop-figures") s.loop.reset();
 }
 
-bool ProcedureState::holds(const std::string& id) const { return !(id == "loop" && loop_figures_only_); }
+bool ProcedureState::holds(const std::string& id) const {
+  return !(id == "loop" && (loop_figures_only_ || loop_not_run_));
+}
 
 }  // namespace rig::acceptance

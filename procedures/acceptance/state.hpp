@@ -14,8 +14,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/loop_record.hpp"
+#include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/record.hpp"
 #include "rig/executive/executive.hpp"
 
@@ -108,6 +108,7 @@ class ProcedureState final : public PhaseState {
   // A checkpoint of a version before the loop test's records were kept marks `loop` completed
   // with its figures only: that phase is not held and runs again (Executive::read_checkpoint).
   bool loop_figures_only_ = false;
+  bool loop_not_run_ = false;  // `loop` completed without a loop test: the DUT is asked again
 };
 
 }  // namespace rig::acceptance

@@ -192,7 +192,9 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
       log.info("phase {} measures on the device: it runs again (its values are never taken from a checkpoint)",
                phases[i].id);
     else
-      log.info("phase {}: the checkpoint does not hold its records (an earlier version's): it runs again", phases[i].id);
+      log.info("phase {}: the checkpoint keeps no record of it (an earlier version's checkpoint, or nothing recorded): "
+               "it runs again",
+               phases[i].id);
     done.resize(i);
     break;
   }

@@ -83,8 +83,8 @@ class PhaseState {
   // whose phases hand nothing on has nothing to drop.
   virtual void forget(const std::string& /*phase_id*/) {}
   // Whether the restored state holds what completed phase `phase_id` handed on. A phase it does
-  // not hold (a checkpoint written before the phase kept its records) runs again, with every
-  // phase after it, as a phase that measures on the device does.
+  // not hold (a checkpoint written before the phase kept its records, or a phase that recorded
+  // nothing) runs again, with every phase after it, as a phase that measures on the device does.
   virtual bool holds(const std::string& /*phase_id*/) const { return true; }
 };
 

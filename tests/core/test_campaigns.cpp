@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/capture/capture.hpp"
+#include "rig/seal/seal.hpp"
 #include "tests/core/rig_process.hpp"
 
 namespace fs = std::filesystem;
@@ -243,7 +244,7 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
     ASSERT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-plan"), 0) << slurp(r + "-plan.stderr");
     const std::string plan = slurp(r + "-plan.stdout");
     EXPECT_NE(plan.find("still to run: nothing"), std::string::npos) << plan;
-    EXPECT_NE(plan.find("computed again from the kept captures: bias, in-run-b, allan, loop-figures"), std::string::npos)
+    EXPECT_NE(plan.find("computed again from the kept records: bias, in-run-b, allan, loop-figures"), std::string::npos)
         << plan;
     const std::string records = slurp(r + "/loop-test.csv");
     ASSERT_FALSE(records.empty());
@@ -323,10 +324,43 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   std::ofstream(o + "/checkpoint.json") << old_cp.dump(1);
   resume_and_compare(o, ref, "older checkpoint");
   const std::string olog = slurp(o + "/run.log");
-  EXPECT_NE(olog.find("phase loop: the checkpoint does not hold its records (an earlier version's): it runs again"),
-            std::string::npos)
-      << olog;
+  EXPECT_NE(olog.find("phase loop: the checkpoint keeps no record of it"), std::string::npos) << olog;
   EXPECT_EQ(slurp(o + "/loop-test.csv"), slurp(d + "/whole/loop-test.csv")) << "measured again, as the run would have";
+  // The same older checkpoint beside a final passport: the run is complete, whatever its phase
+  // count says (a review's finding: it was measured again and its FAIL or PASS overwritten).
+  const std::string f = d + "/older-finished";
+  fs::copy(d + "/whole", f, fs::copy_options::recursive);
+  std::ofstream(f + "/checkpoint.json") << old_cp.dump(1);
+  const std::string final_passport = slurp(f + "/passport.json");
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--resume", f, "--yes", "--no-history"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, f + "-io"), 2) << dry;
+    EXPECT_NE(slurp(f + "-io.stderr").find("the run is complete (its passport says PASS)"), std::string::npos)
+        << slurp(f + "-io.stderr");
+  }
+  EXPECT_EQ(slurp(f + "/passport.json"), final_passport);
+  // A loop test recorded as not run (and no records): nothing is kept of it, the DUT is asked
+  // again (here it runs the test: the uninterrupted run's results), never the checkpoint's reason.
+  const std::string a = d + "/not-run";
+  fs::copy(d + "/whole", a, fs::copy_options::recursive);
+  fs::remove(a + "/passport.json");
+  fs::remove(a + "/loop-test.csv");
+  json acp = read_json(a + "/checkpoint.json");
+  acp["state"]["loop_test"] = {{"supported", false}, {"reason", "edited"}};
+  std::ofstream(a + "/checkpoint.json") << acp.dump(1);
+  resume_and_compare(a, ref, "loop test recorded as not run");
+  EXPECT_NE(slurp(a + "/run.log").find("phase loop start"), std::string::npos);
+  // The device time is a time: a negative one is refused, naming it.
+  const std::string t = d + "/device-time";
+  fs::copy(d + "/whole", t, fs::copy_options::recursive);
+  fs::remove(t + "/passport.json");
+  json tcp = read_json(t + "/checkpoint.json");
+  tcp["state"]["device_time_s"] = -5;
+  std::ofstream(t + "/checkpoint.json") << tcp.dump(1);
+  EXPECT_EQ(run({"run", "--resume", t, "--yes", "--no-history"}, t + "-io"), 2);
+  EXPECT_NE(slurp(t + "-io.stderr").find("state.device_time_s: expected a device time >= 0 s, found -5"), std::string::npos)
+      << slurp(t + "-io.stderr");
 }
 
 // A resume continues the run it finds: the options that would change it are refused rather
@@ -347,7 +381,9 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
   // The plan of the resume says what it keeps, computes again and still records.
   ASSERT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-plan"), 0) << slurp(r + "-plan.stderr");
   const std::string plan = slurp(r + "-plan.stdout");
-  EXPECT_NE(plan.find("Resume: " + checkpoint + " checked with the captures it names; "), std::string::npos) << plan;
+  EXPECT_NE(plan.find("Resume: " + checkpoint + " checked with the records it names (captures, loop-test.csv); "),
+            std::string::npos)
+      << plan;
   EXPECT_NE(plan.find("  kept (not recorded again): run01-U10, "), std::string::npos) << plan;
   EXPECT_NE(plan.find("  still to run: "), std::string::npos) << plan;
   EXPECT_NE(plan.find(", loop, loop-figures (a capture the interruption left partial"), std::string::npos) << plan;
@@ -683,6 +719,28 @@ TEST(Campaign, SealedRunFolders) {
             std::string::npos)
       << slurp(whole + "-extra.stdout");
   fs::remove(whole + "/captures/extra.cap");
+  {
+    // Loop-test records swapped in before the station sealed them (a review's finding: the
+    // station seals the bytes it reads back; before, a swapped file verified as PASS): verify
+    // holds them to the sealed checkpoint's CRC-32.
+    const std::string swapped = d + "/swapped";
+    fs::copy(whole, swapped, fs::copy_options::recursive);
+    std::string csv = slurp(swapped + "/loop-test.csv");
+    csv.replace(csv.rfind(',') + 1, 1, "9");
+    std::ofstream(swapped + "/loop-test.csv", std::ios::binary) << csv;
+    const json sealed = read_json(swapped + "/seal.json");
+    std::vector<rig::seal::Entry> entries;
+    for (const auto& [rel, mac] : sealed["files"].items()) entries.push_back({rel, "", false});
+    std::ofstream(swapped + "/seal.json")
+        << rig::seal::make_seal(swapped, rig::seal::load_key(key), entries, sealed["outcome"].get<std::string>());
+    EXPECT_EQ(run({"verify", swapped, "--seal-key", key}, swapped + "-verify"), 1);
+    EXPECT_NE(slurp(swapped + "-verify.stdout").find("ok       loop-test.csv"), std::string::npos)
+        << "sealed as swapped: " << slurp(swapped + "-verify.stdout");
+    EXPECT_NE(slurp(swapped + "-verify.stdout")
+                  .find("problem: loop-test.csv: not the records the checkpoint describes (state.loop_test.crc32: "),
+              std::string::npos)
+        << slurp(swapped + "-verify.stdout");
+  }
   EXPECT_EQ(run({"verify", whole, "--seal-key", other}, whole + "-other"), 1);
   EXPECT_NE(slurp(whole + "-other.stdout").find("sealed with another key"), std::string::npos);
   {

@@ -158,6 +158,7 @@ TEST(LoopPhase, TheRecordsReadBackBitForBitAndGiveTheSameFigures) {
   }
   const std::string dir = fresh_dir("roundtrip"), path = dir + "/" + acceptance::kLoopTestFile;
   write(path, acceptance::loop_test_csv(r));
+  rec.crc32 = acceptance::crc32_of(acceptance::loop_test_csv(r));
   const LoopTestResponse back = acceptance::read_loop_test_csv(path, rec);
   ASSERT_EQ(back.steps.size(), r.steps.size());
   for (std::size_t k = 0; k < r.steps.size(); ++k) {
@@ -194,9 +195,8 @@ TEST(LoopPhase, ADamagedRecordFileIsRefusedNamingFileLineAndValue) {
   const std::string good = acceptance::loop_test_csv(r);
   const std::string dir = fresh_dir("damaged"), path = dir + "/" + acceptance::kLoopTestFile;
   auto refused = [&](const std::string& text, const acceptance::LoopRecord& want) {
-    write(path, text);
     try {
-      acceptance::read_loop_test_csv(path, want);
+      acceptance::parse_loop_test_csv(text, path, want);
     } catch (const ConfigError& e) {
       return std::string(e.what());
     }
@@ -206,8 +206,19 @@ TEST(LoopPhase, ADamagedRecordFileIsRefusedNamingFileLineAndValue) {
     from.replace(from.find(what), what.size(), with);
     return from;
   };
+  EXPECT_NO_THROW(acceptance::parse_loop_test_csv(good, path, rec));
+  // From the file: its bytes must have the recorded CRC-32, and are parsed as checked.
   write(path, good);
+  rec.crc32 = acceptance::crc32_of(good);
   EXPECT_NO_THROW(acceptance::read_loop_test_csv(path, rec));
+  write(path, good + "\n");
+  try {
+    acceptance::read_loop_test_csv(path, rec);
+    ADD_FAILURE() << "a changed file was read";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("state.loop_test.crc32: " + std::to_string(rec.crc32) + " does not match " + path, 0), 0u)
+        << e.what();
+  }
   // line 4 is the header, 5.. the rows
   EXPECT_EQ(refused(replace(good, "1,1,0,0.5,0.5", "1,1,0,0.5x,0.5"), rec), path + ":6: x_g '0.5x' is not a number");
   EXPECT_EQ(refused(replace(good, "1,2,", "1,7,"), rec), path + ":7: index 7 in step 1: expected 2 (the samples of a step in order from 0)");

@@ -1059,6 +1059,14 @@ TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
     EXPECT_EQ(run({"dut", "--hardware", d + "/hw.toml", action}, d + "/dut"), 2) << action;
     EXPECT_NE(slurp(d + "/dut.stderr").find("no command channel"), std::string::npos) << slurp(d + "/dut.stderr");
   }
+  // The loop test's --out is checked before the DUT is asked (a review's finding: it was opened
+  // after the measurement, which an unwritable path then lost): exit 2, not the socket's 4.
+  EXPECT_EQ(run({"dut", "--can", "vcan-none", "loop-test", "--out", d + "/no-such-folder/l.csv"}, d + "/lt"), 2);
+  EXPECT_NE(slurp(d + "/lt.stderr").find("the folder " + d + "/no-such-folder does not exist"), std::string::npos)
+      << slurp(d + "/lt.stderr");
+  fs::create_directories(d + "/a-folder.csv");
+  EXPECT_EQ(run({"dut", "--can", "vcan-none", "loop-test", "--out", d + "/a-folder.csv"}, d + "/lt"), 2);
+  EXPECT_NE(slurp(d + "/lt.stderr").find("not a regular file"), std::string::npos) << slurp(d + "/lt.stderr");
   // With the serial the configuration is accepted and the run goes on to open the devices.
   EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "LBL-1", "--out",
                  d + "/run"},
