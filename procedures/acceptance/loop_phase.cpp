@@ -9,7 +9,6 @@
 #include "analysis/loop_response.hpp"
 #include "design/filter.hpp"
 #include "design/loop_figures.hpp"
-#include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {
@@ -100,19 +99,15 @@ void phase_loop_test(PhaseContext& ctx, const Profile& p, DutState& dut) {
   rq.steps = p.loop_steps;
   rq.record_s = p.loop_record_s;
   const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
-  LoopRecord rec;
-  rec.supported = r.supported;
-  rec.reason = r.reason;
   if (!r.supported) {
     ctx.log->warn("loop test not run: {}", r.reason);
-    dut.loop_test = rec;
+    dut.loop_test.emplace().reason = r.reason;  // supported: false
     return;
   }
   const std::string csv = loop_test_csv(r);
   write_file_atomic(ctx.out_dir + "/" + kLoopTestFile, csv);
-  rec = loop_record_of(r, csv);
+  dut.loop_test = loop_record_of(r, csv);
   ctx.log->info("loop test: {} step(s) of {:g} g recorded in {}", r.steps.size(), r.amplitude_g, kLoopTestFile);
-  dut.loop_test = rec;
 }
 
 void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {

@@ -19,6 +19,14 @@ namespace {
 constexpr const char* kFirstLine = "# rig loop test: ";
 constexpr const char* kSaturatedLine = "# steps in which the DUT's PWM saturated: ";
 
+// The saturation line's list: the 1-based steps flagged, "none" without any.
+std::string saturated_steps(const std::vector<bool>& flags) {
+  std::string s;
+  for (std::size_t k = 0; k < flags.size(); ++k)
+    if (flags[k]) s += (s.empty() ? "" : ", ") + std::to_string(k + 1);
+  return s.empty() ? "none" : s;
+}
+
 }  // namespace
 
 nlohmann::json to_json(const LoopRecord& r) {
@@ -53,15 +61,14 @@ LoopRecord loop_record_of(const LoopTestResponse& r, const std::string& csv) {
 }
 
 std::string loop_test_csv(const LoopTestResponse& r) {
-  std::string saturated;
-  for (std::size_t k = 0; k < r.steps.size(); ++k)
-    if (r.steps[k].saturated) saturated += (saturated.empty() ? "" : ", ") + std::to_string(k + 1);
+  std::vector<bool> saturated;
+  for (const LoopStepRecord& st : r.steps) saturated.push_back(st.saturated);
   std::string s = fmt::format(
       "{}{} step(s) of {} g test torque inside the DUT's loop, recorded at {} Hz\n"
       "# x_g: the loop's output; y_g: the same through the DUT's output filter; t_s from the step\n"
       "{}{}\n"
       "step,index,t_s,x_g,y_g\n",
-      kFirstLine, r.steps.size(), r.amplitude_g, r.rate_hz, kSaturatedLine, saturated.empty() ? "none" : saturated);
+      kFirstLine, r.steps.size(), r.amplitude_g, r.rate_hz, kSaturatedLine, saturated_steps(saturated));
   for (std::size_t k = 0; k < r.steps.size(); ++k) {
     const LoopStepRecord& st = r.steps[k];
     // {} is the shortest decimal that reads back to the same double: loop-figures, which reads
@@ -111,6 +118,19 @@ LoopTestResponse parse_loop_test_csv(const std::string& text, const std::string&
     if (rest.substr(0, want.size()) != want) throw bad(fmt::format("expected '{}' at '{}'", want, rest));
     rest.remove_prefix(want.size());
   };
+  auto integer = [&](std::string_view v, const char* name) {
+    std::size_t n = 0;
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+    if (ec != std::errc() || end != v.data() + v.size())
+      throw bad(fmt::format("{} '{}' is not a whole number", name, v));
+    return n;
+  };
+  auto number = [&](std::string_view v, const char* name) {
+    double d = 0;
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
+    if (ec != std::errc() || end != v.data() + v.size()) throw bad(fmt::format("{} '{}' is not a number", name, v));
+    return d;
+  };
   for (std::string line; std::getline(in, line);) {
     ++line_no;
     if (!header && line.rfind(kFirstLine, 0) == 0) {
@@ -131,12 +151,10 @@ LoopTestResponse parse_loop_test_csv(const std::string& text, const std::string&
       continue;
     }
     if (!header && line.rfind(kSaturatedLine, 0) == 0) {
-      std::string listed = line.substr(std::string_view(kSaturatedLine).size()), want;
-      for (std::size_t k = 0; k < rec.saturated.size(); ++k)
-        if (rec.saturated[k]) want += (want.empty() ? "" : ", ") + std::to_string(k + 1);
-      if (listed != (want.empty() ? "none" : want))
+      const std::string listed = line.substr(std::string_view(kSaturatedLine).size());
+      if (listed != saturated_steps(rec.saturated))
         throw bad(fmt::format("the file states the PWM saturated in steps '{}'; the loop test recorded '{}'", listed,
-                              want.empty() ? "none" : want));
+                              saturated_steps(rec.saturated)));
       saturation_stated = true;
       continue;
     }
@@ -155,19 +173,6 @@ LoopTestResponse parse_loop_test_csv(const std::string& text, const std::string&
       at = comma + 1;
     }
     if (f.size() != 5) throw bad(fmt::format("expected 5 fields (step,index,t_s,x_g,y_g), found {}: '{}'", f.size(), line));
-    auto integer = [&](std::string_view v, const char* name) {
-      std::size_t n = 0;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-      if (ec != std::errc() || end != v.data() + v.size())
-        throw bad(fmt::format("{} '{}' is not a whole number", name, v));
-      return n;
-    };
-    auto number = [&](std::string_view v, const char* name) {
-      double d = 0;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
-      if (ec != std::errc() || end != v.data() + v.size()) throw bad(fmt::format("{} '{}' is not a number", name, v));
-      return d;
-    };
     const std::size_t step = integer(f[0], "step"), index = integer(f[1], "index");
     if (step == r.steps.size() + 1) {  // the next step begins
       if (step > rec.samples.size())

@@ -262,21 +262,27 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
     EXPECT_NE(slurp(r + "-again.stderr").find("the run is complete"), std::string::npos) << slurp(r + "-again.stderr");
     EXPECT_EQ(slurp(r + "/passport.json"), after) << "a final passport is left as it was";
   }
+  // The whole run as a kill after its last checkpoint leaves it (no passport), named `name`;
+  // `edit` changes its checkpoint.
+  auto killed_at_the_end = [&](const std::string& name, const std::function<void(json&)>& edit) {
+    const std::string f = d + "/" + name;
+    fs::copy(d + "/whole", f, fs::copy_options::recursive);
+    fs::remove(f + "/passport.json");
+    json cp = read_json(f + "/checkpoint.json");
+    edit(cp);
+    std::ofstream(f + "/checkpoint.json") << cp.dump(1);
+    return f;
+  };
   // Killed after the last checkpoint, before the passport was written: the same; the loop's
   // values edited in the checkpoint (the review's finding: a finished run's resume read them
-  // back) are measured again, so the edit reaches nothing.
-  const std::string k = d + "/no-passport";
-  fs::copy(d + "/whole", k, fs::copy_options::recursive);
-  fs::remove(k + "/passport.json");
-  json cp = read_json(k + "/checkpoint.json");
-  for (const char* v : {"bandwidth_0p5", "settling_time"}) cp["values"][v]["value"] = 1.0;
-  std::ofstream(k + "/checkpoint.json") << cp.dump(1);
+  // back) are computed again, so the edit reaches nothing.
+  const std::string k = killed_at_the_end("no-passport", [](json& cp) {
+    for (const char* v : {"bandwidth_0p5", "settling_time"}) cp["values"][v]["value"] = 1.0;
+  });
   resume_and_compare(k, ref, "no passport");
   // The loop test's records changed since they were recorded: refused before any device opens,
   // naming the field and the file; the checkpoint is kept as it was.
-  const std::string e = d + "/edited-records";
-  fs::copy(d + "/whole", e, fs::copy_options::recursive);
-  fs::remove(e + "/passport.json");
+  const std::string e = killed_at_the_end("edited-records", [](json&) {});
   std::string csv = slurp(e + "/loop-test.csv");
   csv.replace(csv.rfind(',') + 1, 1, "9");
   std::ofstream(e + "/loop-test.csv", std::ios::binary) << csv;
@@ -288,40 +294,32 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   EXPECT_EQ(slurp(e + "/checkpoint.json"), cp_before);
   // The checkpoint's description of the records must be what the file states: a saturated step
   // (no figures, a FAIL) edited out of the checkpoint is refused too.
-  const std::string s = d + "/edited-state";
-  fs::copy(d + "/whole", s, fs::copy_options::recursive);
-  fs::remove(s + "/passport.json");
-  json scp = read_json(s + "/checkpoint.json");
-  scp["state"]["loop_test"]["saturated"][0] = true;
-  std::ofstream(s + "/checkpoint.json") << scp.dump(1);
+  const std::string s =
+      killed_at_the_end("edited-state", [](json& cp) { cp["state"]["loop_test"]["saturated"][0] = true; });
   EXPECT_EQ(run({"run", "--resume", s, "--yes", "--no-history"}, s + "-io"), 2);
   EXPECT_NE(slurp(s + "-io.stderr").find("state.loop_test: " + s + "/loop-test.csv:3: the file states the PWM saturated in steps 'none'; the loop test recorded '1'"),
             std::string::npos)
       << slurp(s + "-io.stderr");
   // A loop test marked "not supported" in a folder that holds its records (with a hardware
   // file's [dut.design], the design model's figures would stand in for the measured ones).
-  const std::string n = d + "/edited-supported";
-  fs::copy(d + "/whole", n, fs::copy_options::recursive);
-  fs::remove(n + "/passport.json");
-  json ncp = read_json(n + "/checkpoint.json");
-  ncp["state"]["loop_test"] = {{"supported", false}, {"reason", "no loop test"}};
-  std::ofstream(n + "/checkpoint.json") << ncp.dump(1);
+  const std::string n = killed_at_the_end("edited-supported", [](json& cp) {
+    cp["state"]["loop_test"] = {{"supported", false}, {"reason", "no loop test"}};
+  });
   EXPECT_EQ(run({"run", "--resume", n, "--yes", "--no-history"}, n + "-io"), 2);
   EXPECT_NE(slurp(n + "-io.stderr").find("state.loop_test.supported: false, but " + n + "/loop-test.csv holds"),
             std::string::npos)
       << slurp(n + "-io.stderr");
   // A checkpoint of the version before the records were kept: `loop` completed, the figures in
   // the state and no record of the test. Its figures are not taken: the loop test runs again.
-  const std::string o = d + "/older-checkpoint";
-  fs::copy(d + "/whole", o, fs::copy_options::recursive);
-  fs::remove(o + "/passport.json");
+  ASSERT_EQ(read_json(d + "/whole/checkpoint.json")["completed"].back(), "loop-figures");
+  json old_cp;
+  const std::string o = killed_at_the_end("older-checkpoint", [&old_cp](json& cp) {
+    cp["completed"].erase(cp["completed"].size() - 1);
+    cp["state"].erase("loop_test");
+    for (const char* v : {"bandwidth_0p5", "settling_time"}) cp["values"][v]["value"] = 1.0;
+    old_cp = cp;
+  });
   fs::remove(o + "/loop-test.csv");
-  json old_cp = read_json(o + "/checkpoint.json");
-  ASSERT_EQ(old_cp["completed"].back(), "loop-figures");
-  old_cp["completed"].erase(old_cp["completed"].size() - 1);
-  old_cp["state"].erase("loop_test");
-  for (const char* v : {"bandwidth_0p5", "settling_time"}) old_cp["values"][v]["value"] = 1.0;
-  std::ofstream(o + "/checkpoint.json") << old_cp.dump(1);
   resume_and_compare(o, ref, "older checkpoint");
   const std::string olog = slurp(o + "/run.log");
   EXPECT_NE(olog.find("phase loop: the checkpoint keeps no record of it"), std::string::npos) << olog;
@@ -342,22 +340,13 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   EXPECT_EQ(slurp(f + "/passport.json"), final_passport);
   // A loop test recorded as not run (and no records): nothing is kept of it, the DUT is asked
   // again (here it runs the test: the uninterrupted run's results), never the checkpoint's reason.
-  const std::string a = d + "/not-run";
-  fs::copy(d + "/whole", a, fs::copy_options::recursive);
-  fs::remove(a + "/passport.json");
+  const std::string a = killed_at_the_end(
+      "not-run", [](json& cp) { cp["state"]["loop_test"] = {{"supported", false}, {"reason", "edited"}}; });
   fs::remove(a + "/loop-test.csv");
-  json acp = read_json(a + "/checkpoint.json");
-  acp["state"]["loop_test"] = {{"supported", false}, {"reason", "edited"}};
-  std::ofstream(a + "/checkpoint.json") << acp.dump(1);
   resume_and_compare(a, ref, "loop test recorded as not run");
   EXPECT_NE(slurp(a + "/run.log").find("phase loop start"), std::string::npos);
   // The device time is a time: a negative one is refused, naming it.
-  const std::string t = d + "/device-time";
-  fs::copy(d + "/whole", t, fs::copy_options::recursive);
-  fs::remove(t + "/passport.json");
-  json tcp = read_json(t + "/checkpoint.json");
-  tcp["state"]["device_time_s"] = -5;
-  std::ofstream(t + "/checkpoint.json") << tcp.dump(1);
+  const std::string t = killed_at_the_end("device-time", [](json& cp) { cp["state"]["device_time_s"] = -5; });
   EXPECT_EQ(run({"run", "--resume", t, "--yes", "--no-history"}, t + "-io"), 2);
   EXPECT_NE(slurp(t + "-io.stderr").find("state.device_time_s: expected a device time >= 0 s, found -5"), std::string::npos)
       << slurp(t + "-io.stderr");
