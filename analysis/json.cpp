@@ -41,7 +41,8 @@ json long_tau_to_json(std::span<const an::LongTauPoint> pts) {
   for (const auto& p : pts)
     a.push_back({{"m", p.m},         {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev},
                  {"dev_raw", p.dev_raw}, {"lo", p.lo},   {"hi", p.hi},           {"edf", p.edf},
-                 {"alpha", p.alpha}, {"stride", p.stride}, {"estimator", p.estimator}});
+                 {"alpha", p.alpha}, {"stride", p.stride}, {"estimator", p.estimator},
+                 {"edf_alpha", p.alpha}});  // the contract's field: no EDF guard here, the EDF is alpha's
   return a;
 }
 

@@ -184,10 +184,25 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
 // and named LOG:LINE on stderr. Exit 0: every line decoded; 2: some line was skipped or the
 // log holds no frame at all (the decodable rest is still printed).
 int cmd_decode(const DutArgs& a) {
-  const std::shared_ptr<const link::Dbc> db =
-      a.dbc.empty() ? link::rig_protocol_dbc() : std::make_shared<const link::Dbc>(link::Dbc::parse_file(a.dbc));
+  // The DBC: --dbc FILE; else the hardware file's [dut], checked as `rig run` checks it (its
+  // dbc found beside the file); else the rig protocol's, built in.
+  std::shared_ptr<const link::Dbc> db;
+  std::string dbc_name;
+  if (!a.dbc.empty()) {
+    db = std::make_shared<const link::Dbc>(link::Dbc::parse_file(a.dbc));
+    dbc_name = a.dbc;
+  } else if (!a.hardware.empty()) {
+    const toml::table t = load_hardware_section(a.hardware, "dut");
+    if (const auto layout = link::link_options(t).stream) {
+      db = std::shared_ptr<const link::Dbc>(layout, &layout->dbc());  // kept alive by its layout
+      dbc_name = link::dut_dbc_path(t);
+    }
+  }
+  if (!db) {
+    db = link::rig_protocol_dbc();
+    dbc_name = "docs/rig-dut.dbc, built in";
+  }
   const link::Dbc& dbc = *db;
-  const std::string dbc_name = a.dbc.empty() ? "docs/rig-dut.dbc, built in" : a.dbc;
   std::ifstream in(a.log);
   if (!in) throw ConfigError(a.log + ": cannot open candump log");
   constexpr unsigned long kNamedSkips = 20;  // then only counted: a wrong file must not flood the terminal
@@ -338,7 +353,8 @@ void add_dut(CLI::App& app, int& rc) {
   auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -l / -L files or candump's screen output) with the protocol's DBC; "
                                      "exit 2 when a line had to be skipped");
   dec->add_option("LOG", a->log, "candump log file")->required();
-  dec->add_option("--dbc", a->dbc, "DBC file (default: the rig protocol's, docs/rig-dut.dbc, built into the program)");
+  dec->add_option("--dbc", a->dbc, "DBC file (default: --hardware FILE's [dut] dbc, else the rig protocol's, "
+                                   "docs/rig-dut.dbc, built into the program)");
   dec->add_flag("--summary", a->summary, "Only count the messages");
   dec->callback([a, &rc] { rc = cmd_decode(*a); });
   for (CLI::App* action : dut->get_subcommands({})) action->fallthrough();

@@ -477,6 +477,18 @@ acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table
   return t;
 }
 
+// The serial the run's DUT reported (checkpoint.json's state.dut.serial), empty when no DUT has
+// reported one or the checkpoint cannot be read (its own check, later, names what is wrong).
+std::string reported_serial(const std::string& run_dir) {
+  try {
+    const nlohmann::json j = nlohmann::json::parse(slurp(run_dir + "/checkpoint.json"));
+    const nlohmann::json& s = j.at("state").at("dut").at("serial");
+    return s.is_string() ? s.get<std::string>() : std::string();
+  } catch (const std::exception&) {
+    return {};
+  }
+}
+
 int do_run(RunArgs a) {
   const auto wall_start = std::chrono::steady_clock::now();
   CancelSource cancel;
@@ -502,13 +514,17 @@ int do_run(RunArgs a) {
     a.out = a.resume;
     read_invocation(inv_path, invocation, a);
     a.profile = a.resume + "/profile.toml";
-    // --serial with --resume guards the resume: it must name the run's DUT.
-    if (!a.resume_serial.empty() && a.serial != a.resume_serial)
-      throw ConfigError(a.serial.empty()
-                            ? fmt::format("--serial {}: the run in {} was started without --serial; the serial its DUT "
-                                          "reported is checked again at bring-up",
-                                          a.resume_serial, a.resume)
-                            : fmt::format("--serial {}: the run in {} is of DUT '{}'", a.resume_serial, a.resume, a.serial));
+    // --serial with --resume guards the resume: it must name the run's DUT, the one given when
+    // the run started or, without that, the one its DUT reported (the checkpoint's).
+    if (!a.resume_serial.empty()) {
+      const std::string runs_dut = a.serial.empty() ? reported_serial(a.resume) : a.serial;
+      if (runs_dut.empty())
+        throw ConfigError(fmt::format("--serial {}: the run in {} was started without --serial and no DUT has "
+                                      "reported its serial yet; the serial is checked at bring-up",
+                                      a.resume_serial, a.resume));
+      if (runs_dut != a.resume_serial)
+        throw ConfigError(fmt::format("--serial {}: the run in {} is of DUT '{}'", a.resume_serial, a.resume, runs_dut));
+    }
   }
   std::string profile_source;
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);

@@ -200,6 +200,16 @@ DbcStreamSpec rig_protocol_stream() {
   return s;
 }
 
+std::string dut_dbc_path(const toml::table& dut) {
+  const toml::node* dbc_node = dut.get("dbc");
+  if (!dbc_node) return {};
+  std::string path = cfg::get_string(dut, "dbc");
+  // Relative to the hardware file's folder, so a hardware file and its DBC travel together.
+  if (const auto& src = dbc_node->source().path; src && std::filesystem::path(path).is_relative())
+    path = (std::filesystem::path(*src).parent_path() / path).string();
+  return path;
+}
+
 std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut) {
   const toml::node* dbc_node = dut.get("dbc");
   const toml::table* st = cfg::get_table(dut, "stream");
@@ -207,10 +217,7 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
     if (st) throw ConfigError(cfg::where(*st) + ": [dut.stream] needs [dut] dbc = \"FILE\"");
     return std::make_shared<const DbcStreamDecoder>(rig_protocol_dbc(), rig_protocol_stream(), "rig protocol");
   }
-  std::string path = cfg::get_string(dut, "dbc");
-  // Relative to the hardware file's folder, so a hardware file and its DBC travel together.
-  if (const auto& src = dbc_node->source().path; src && std::filesystem::path(path).is_relative())
-    path = (std::filesystem::path(*src).parent_path() / path).string();
+  const std::string path = dut_dbc_path(dut);
   auto db = std::make_shared<const Dbc>(Dbc::parse_file(path));
   if (!st) throw ConfigError(cfg::where(*dbc_node) + ": [dut] dbc needs a [dut.stream] table naming its signals");
   cfg::check_keys(*st,

@@ -123,5 +123,8 @@ DbcStreamSpec rig_protocol_stream();
 // keys and bad values => ConfigError naming file:line. Without `dbc`: the rig protocol's
 // DBC and stream (then [dut.stream] may not be given).
 std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut);
+// [dut] dbc's path as stream_decoder_from_config() reads it (relative to the hardware file's
+// folder); empty without `dbc`.
+std::string dut_dbc_path(const toml::table& dut);
 
 }  // namespace rig::link

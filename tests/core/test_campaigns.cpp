@@ -389,6 +389,13 @@ TEST(Campaign, ResumeRefusesAnotherDutAndOptionsItWouldIgnore) {
     EXPECT_NE(slurp(r + "-opt.stderr").find(extra[0]), std::string::npos) << slurp(r + "-opt.stderr");
     EXPECT_EQ(slurp(checkpoint), before) << extra[0];
   }
+  // Started without --serial, the run's DUT is the one that reported its serial: --serial naming
+  // it guards the resume (a review found it refused), another is refused naming the run's.
+  EXPECT_NE(slurp(r + "-opt.stderr").find("--serial QPA-OTHER: the run in " + r + " is of DUT 'EMU-QPA-0001'"),
+            std::string::npos)
+      << slurp(r + "-opt.stderr");
+  EXPECT_EQ(run({"run", "--resume", r, "--dry-run", "--serial", "EMU-QPA-0001"}, r + "-guard"), 0)
+      << slurp(r + "-guard.stderr");
   // A checkpoint whose DUT is not the one its captures were recorded from is refused before
   // any device opens, naming the first capture that says otherwise.
   json c = read_json(checkpoint);

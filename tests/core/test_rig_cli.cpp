@@ -470,6 +470,11 @@ TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
       EXPECT_GT(j[key][i]["edf"].get<double>(), 0) << key;
     }
   }
+  // docs/contracts.md: every deviation point has the deviation point fields and edf_alpha.
+  for (const char* key : {"oadev", "mtot", "ttot", "htot", "theo1"})
+    for (const auto& pt : j[key])
+      for (const char* field : {"m", "tau_s", "n_terms", "dev", "lo", "hi", "edf", "alpha", "edf_alpha"})
+        EXPECT_TRUE(pt.contains(field)) << key << " point lacks " << field;
   ASSERT_TRUE(j.contains("theo1"));
   EXPECT_EQ(j["theo1"][0]["m"], 2);
   EXPECT_DOUBLE_EQ(j["theo1"][0]["tau_s"].get<double>(), 1.5);
@@ -667,6 +672,32 @@ TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
   std::ofstream(d + "/notes.txt") << "this is not a candump log\n";
   EXPECT_EQ(run({"dut", "decode", d + "/notes.txt"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stderr").find("notes.txt:1: skipped: not a candump frame line"), std::string::npos);
+}
+
+// `rig dut --hardware FILE decode LOG` decodes with the hardware file's [dut] dbc, found beside
+// FILE, as the README says (a review found it decoding with the built-in protocol, exit 0, the
+// DUT's frames counted as "other ids"); --dbc still wins; a [dut] naming a DBC that is not there
+// is exit 2 naming it.
+TEST(RigCli, DutDecodeUsesTheHardwareFilesDbc) {
+  const std::string d = tmp("decode-hw");
+  fs::create_directories(d);
+  std::ofstream(d + "/q.log") << "(1.000000) can0 18FF1000#0001000010000020\n";  // duts/qpa-counts.dbc's QPA_XY
+  const std::string hw = std::string(RIG_SOURCE_DIR) + "/duts/qpa-counts.dut.toml";
+  for (const auto& args : {std::vector<std::string>{"dut", "--hardware", hw, "decode", d + "/q.log"},
+                           std::vector<std::string>{"dut", "decode", "--hardware", hw, d + "/q.log"}}) {
+    EXPECT_EQ(run(args, d + "/io"), 0) << slurp(d + "/io.stderr");
+    EXPECT_NE(slurp(d + "/io.stdout").find("QPA_XY cnt=1 x_counts=0.02 mg y_counts=0.04 mg"), std::string::npos)
+        << slurp(d + "/io.stdout");
+  }
+  EXPECT_EQ(run({"dut", "decode", d + "/q.log"}, d + "/io"), 0);
+  EXPECT_NE(slurp(d + "/io.stdout").find("1 frames: error frames 0, other ids 1"), std::string::npos)
+      << "without the hardware file: the rig protocol's DBC, which does not describe the frame";
+  const std::string proto = std::string(RIG_SOURCE_DIR) + "/docs/rig-dut.dbc";
+  EXPECT_EQ(run({"dut", "--hardware", hw, "decode", "--dbc", proto, d + "/q.log"}, d + "/io"), 0);
+  EXPECT_NE(slurp(d + "/io.stdout").find("other ids 1"), std::string::npos) << "--dbc wins over [dut] dbc";
+  std::ofstream(d + "/gone.toml") << "[dut]\ncan = \"can0\"\ndbc = \"no-such.dbc\"\n[dut.stream]\ncounter = \"A.c\"\nx = \"A.x\"\n";
+  EXPECT_EQ(run({"dut", "--hardware", d + "/gone.toml", "decode", d + "/q.log"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find(d + "/no-such.dbc"), std::string::npos) << slurp(d + "/io.stderr");
 }
 
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {
