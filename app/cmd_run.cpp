@@ -3,6 +3,7 @@
 // report.html and run.log. Exit codes per docs/contracts.md.
 #include <cerrno>
 #include <charconv>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -477,6 +478,16 @@ acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table
   return t;
 }
 
+// A serial or profile name as one component of the default run folder's name: a '/' or a
+// leading '.' ('../../x') would put the run outside runs/; those and other characters a shell
+// or a file system treats specially become '_'.
+std::string folder_name_part(std::string s) {
+  for (char& c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
+  if (s.empty() || s[0] == '.') s.insert(s.begin(), '_');
+  return s;
+}
+
 // The serial the run's DUT reported (checkpoint.json's state.dut.serial), empty when no DUT has
 // reported one or the checkpoint cannot be read (its own check, later, names what is wrong).
 std::string reported_serial(const std::string& run_dir) {
@@ -593,7 +604,7 @@ int do_run(RunArgs a) {
   }
   // The folder first: an operator should not answer the prompts of a run that cannot start.
   if (a.out.empty())
-    a.out = fmt::format("runs/{}-{}", a.serial.empty() ? p.name : a.serial, folder_time_utc());
+    a.out = fmt::format("runs/{}-{}", folder_name_part(a.serial.empty() ? p.name : a.serial), folder_time_utc());
   prepare_run_folder(a.out);
   refuse_non_files(a.out);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked

@@ -1,5 +1,6 @@
 #include "procedures/acceptance/profile.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -87,14 +88,31 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   p.in_run_s = cfg::get_number(*pr, "in_run_s", std::nullopt, min_s, 1e7);
   p.in_run_orientation = parse_orientation(*pr, "in_run_orientation", Orientation::U10);
   p.in_run_blocks_s = cfg::get_numbers(*pr, "in_run_blocks_s", std::vector<double>{100, 200});
-  for (double b : p.in_run_blocks_s)
-    if (!(b > 0) || 2 * b > p.in_run_s) {
-      const toml::node* n = pr->get("in_run_blocks_s");
-      const std::string why =
-          "each in_run_blocks_s must be > 0 and give at least 2 blocks in in_run_s = " + fmt::format("{:g}", p.in_run_s);
-      if (n) cfg::reject(*n, "in_run_blocks_s", why);
-      throw ConfigError(cfg::where(*pr) + ": " + why);
-    }
+  // Each block length is a whole number of samples to 1 % (GOST R 8.736's blocks are means of
+  // samples: a length of 1.5 samples, or under one, has no such means), at least 2 blocks fit in the
+  // in-run record, and no two lengths share a value name (both would be in_run_b_gost_2s).
+  // Checked here, before any device opens: it used to surface after the in-run recording.
+  const auto bad_blocks = [&](const std::string& why) {
+    if (const toml::node* n = pr->get("in_run_blocks_s")) cfg::reject(*n, "in_run_blocks_s", why);
+    throw ConfigError(cfg::where(*pr) + ": " + why);
+  };
+  if (p.in_run_blocks_s.empty()) bad_blocks("give at least one block length (the first is B's, GOST R 8.736)");
+  for (std::size_t i = 0; i < p.in_run_blocks_s.size(); ++i) {
+    const double b = p.in_run_blocks_s[i], samples = b * p.rate_hz;
+    if (!(b > 0) || 2 * b > p.in_run_s)
+      bad_blocks(fmt::format("{} s: each block length must be > 0 and give at least 2 blocks in in_run_s = {:g}", b,
+                             p.in_run_s));
+    // The in-run phase rounds the length to samples; a rounding of more than 1 % (1.5 samples
+    // read as 2) would report a B of blocks other than the profile's.
+    if (!(std::round(samples) >= 1) || std::abs(samples - std::round(samples)) > 0.01 * samples)
+      bad_blocks(fmt::format("{} s: a block must be a whole number of samples (within 1 %) at rate_hz = {:g} "
+                             "({:.10g} samples)",
+                             b, p.rate_hz, samples));
+    for (std::size_t j = 0; j < i; ++j)
+      if (gost_value_name(p.in_run_blocks_s[j]) == gost_value_name(b))
+        bad_blocks(fmt::format("{} s and {} s: both would be measured as {}", p.in_run_blocks_s[j], b,
+                               gost_value_name(b)));
+  }
   p.raw_s = cfg::get_number(*pr, "raw_s", std::nullopt, min_s, 1e7);
   p.raw_orientation = parse_orientation(*pr, "raw_orientation", Orientation::U10);
   p.max_lost_samples = static_cast<uint64_t>(cfg::get_int(*pr, "max_lost_samples", 0, 0));

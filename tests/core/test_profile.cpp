@@ -104,8 +104,8 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
                                  "has 2e-05)");
   const std::string blocks = write_tmp("blk.toml", "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"
                                                    "run_s = 1\nin_run_s = 10\nraw_s = 10\nin_run_blocks_s = [1.0, 6.0]\n");
-  EXPECT_EQ(error_of(blocks), blocks + ":8:19: 'in_run_blocks_s' = [ 1.0, 6.0 ]: each in_run_blocks_s must be > 0 and "
-                                       "give at least 2 blocks in in_run_s = 10");
+  EXPECT_EQ(error_of(blocks), blocks + ":8:19: 'in_run_blocks_s' = [ 1.0, 6.0 ]: 6 s: each block length must be > 0 "
+                                       "and give at least 2 blocks in in_run_s = 10");
   const std::string based = write_tmp("base.toml", "base = \"cj\"\n");
   EXPECT_EQ(error_of(based), based + ":1:8: 'base' = 'cj': must name a built-in profile");
 }

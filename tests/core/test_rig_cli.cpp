@@ -700,6 +700,51 @@ TEST(RigCli, DutDecodeUsesTheHardwareFilesDbc) {
   EXPECT_NE(slurp(d + "/io.stderr").find(d + "/no-such.dbc"), std::string::npos) << slurp(d + "/io.stderr");
 }
 
+// GOST block lengths the in-run analysis cannot use are refused with the profile's place and the
+// value before anything runs (a review: 1e-300 s passed --dry-run, then the run powered the DUT,
+// recorded 12 runs and the in-run capture and stopped with exit 4; [2.0, 2.0] was exit 4 with no
+// place; [] was accepted and the run FAILed for a B never computed).
+TEST(RigCli, GostBlockLengthsAreCheckedBeforeAnythingRuns) {
+  const std::string d = tmp("gost-blocks");
+  fs::create_directories(d);
+  const std::pair<const char*, const char*> cases[] = {
+      {"[1e-300, 4.0]", "1e-300 s: a block must be a whole number of samples (within 1 %) at rate_hz = 1000"},
+      {"[0.0015, 4.0]", "0.0015 s: a block must be a whole number of samples (within 1 %) at rate_hz = 1000 (1.5 samples)"},
+      {"[2.0, 2.0]", "2 s and 2 s: both would be measured as in_run_b_gost_2s"},
+      {"[]", "give at least one block length"},
+      {"[0.0, 4.0]", "0 s: each block length must be > 0"}};
+  for (const auto& [value, why] : cases) {
+    std::ofstream(d + "/b.toml") << "base = \"ci\"\n[procedure]\nin_run_blocks_s = " << value << "\n";
+    for (const bool dry : {true, false}) {
+      std::vector<std::string> args = {"run", "--profile", d + "/b.toml", "--yes", "--no-history", "--out", d + "/run"};
+      if (dry) args.push_back("--dry-run");
+      EXPECT_EQ(run(args, d + "/io"), 2) << value << "\n" << slurp(d + "/io.stderr");
+      const std::string err = slurp(d + "/io.stderr");
+      EXPECT_NE(err.find(d + "/b.toml:3:19: 'in_run_blocks_s'"), std::string::npos) << err;
+      EXPECT_NE(err.find(why), std::string::npos) << err;
+      EXPECT_FALSE(fs::exists(d + "/run")) << value;
+    }
+  }
+}
+
+// The default run folder stays in runs/ whatever the serial or profile name holds (a review:
+// --serial '../../evil' wrote the run two folders up).
+TEST(RigCli, TheDefaultRunFolderStaysInRuns) {
+  const std::string d = tmp("default-out");
+  fs::create_directories(d);
+  const fs::path here = fs::current_path();
+  fs::current_path(d);
+  const int rc = run({"run", "--profile", "ci", "--serial", "../../evil", "--yes", "--no-history"}, d + "/io");
+  fs::current_path(here);
+  EXPECT_EQ(rc, 0) << slurp(d + "/io.stderr");
+  std::vector<std::string> made;
+  for (const auto& e : fs::directory_iterator(d + "/runs")) made.push_back(e.path().filename().string());
+  ASSERT_EQ(made.size(), 1u);
+  EXPECT_EQ(made[0].rfind("_.._.._evil-", 0), 0u) << made[0];
+  for (const auto& e : fs::directory_iterator(fs::path(d).parent_path()))
+    EXPECT_EQ(e.path().filename().string().rfind("evil-", 0), std::string::npos) << e.path();
+}
+
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {
   const std::string d = tmp("badprof");
   fs::create_directories(d);
