@@ -153,7 +153,10 @@ Biquad parse_biquad(const std::string& text) {
     }
   }
   if (v.size() != 5) throw ConfigError("--biquad '" + text + "': give 5 numbers b0,b1,b2,a1,a2 (a0 = 1)");
-  return {v[0], v[1], v[2], v[3], v[4]};
+  const Biquad b{v[0], v[1], v[2], v[3], v[4]};
+  if (!stable_section(b))  // before the DUT is asked: its firmware refuses it only at commit
+    throw ConfigError("--biquad '" + text + "': unstable: its poles (a1, a2) are not inside the unit circle");
+  return b;
 }
 
 int cmd_set_filter(const DutArgs& a) {

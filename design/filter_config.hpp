@@ -11,6 +11,9 @@ namespace rig {
 struct Biquad {
   double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
 };
+// Poles of 1 + a1 z^-1 + a2 z^-2 strictly inside the unit circle (the stability triangle): what
+// a DUT's firmware accepts as an output-filter section (docs/can-protocol.md, FILTER_COMMIT).
+inline bool stable_section(const Biquad& b) { return b.a2 > -1.0 && b.a2 < 1.0 && (b.a1 < 0 ? -b.a1 : b.a1) < 1.0 + b.a2; }
 struct FilterConfig {
   std::vector<Biquad> sections;  // cascaded, at the DUT's inner loop rate
   double rate_hz = 10000.0;      // the rate the filter runs at inside the DUT

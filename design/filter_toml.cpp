@@ -1,5 +1,8 @@
 #include "design/filter_toml.hpp"
 
+#include <charconv>
+#include <cmath>
+#include <limits>
 #include <optional>
 
 #include "design/filter.hpp"
@@ -8,6 +11,12 @@
 
 namespace rig::design {
 namespace {
+
+std::string num(double v) {  // the shortest decimal that reads back to v
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
 
 std::vector<Biquad> read_sections(const toml::node& n) {
   const toml::array* arr = n.as_array();
@@ -20,9 +29,18 @@ std::vector<Biquad> read_sections(const toml::node& n) {
     for (std::size_t i = 0; i < 5; ++i) {
       const std::optional<double> v = (*s)[i].value<double>();
       if (!v) throw ConfigError(cfg::where((*s)[i]) + ": filter coefficients must be numbers");
+      // Sent as IEEE binary32 (docs/can-protocol.md): beyond its range a coefficient would arrive as inf.
+      if (!(std::abs(*v) <= std::numeric_limits<float>::max()))
+        throw ConfigError(cfg::where((*s)[i]) + ": filter coefficient " + num(*v) +
+                          " is beyond the protocol's 32-bit float range");
       c[i] = *v;
     }
-    out.push_back(Biquad{c[0], c[1], c[2], c[3], c[4]});
+    const Biquad b{c[0], c[1], c[2], c[3], c[4]};
+    // Checked here, before any device opens: a DUT refuses an unstable section only after power-on.
+    if (!stable_section(b))
+      throw ConfigError(cfg::where(e) + ": filter section [" + num(c[0]) + ", " + num(c[1]) + ", " + num(c[2]) + ", " + num(c[3]) +
+                        ", " + num(c[4]) + "] is unstable: its poles (a1, a2) are not inside the unit circle");
+    out.push_back(b);
   }
   return out;
 }

@@ -18,10 +18,6 @@ constexpr double kRangeG = 10.0;        // docs/method.md: range +-10 g
 // bits (docs/can-protocol.md "Bus load") are 7.4 per ms.
 constexpr int kBurstFramesPerTick = 7;
 
-bool stable_section(const Biquad& b) {
-  // Poles of 1 + a1 z^-1 + a2 z^-2 strictly inside the unit circle (the stability triangle).
-  return std::abs(b.a2) < 1.0 && std::abs(b.a1) < 1.0 + b.a2;
-}
 }  // namespace
 
 FirmwareEmulator::FirmwareEmulator(DutSource& source, link::CanTransport& bus, FirmwareOptions opts)

@@ -645,6 +645,18 @@ TEST(RigCli, DutTakesItsLinkOptionsBeforeOrAfterTheAction) {
   }
 }
 
+// An unstable --biquad is refused before the CAN interface opens (exit 2, not the missing
+// interface's 4): the DUT's firmware would refuse it only at commit.
+TEST(RigCli, DutSetFilterRefusesAnUnstableSectionBeforeTheLinkOpens) {
+  const std::string d = tmp("dut-unstable");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", "1,0,0,-2.5,1.5"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("--biquad '1,0,0,-2.5,1.5': unstable"), std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", "0.2,0,0,-0.5,0.1"}, d + "/io"), 4)
+      << "a stable section gets as far as the missing interface";
+}
+
 TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
   const std::string d = tmp("decode");
   fs::create_directories(d);

@@ -71,6 +71,15 @@ TEST(FilterToml, ErrorsNameTheFileAndLine) {
   EXPECT_NE(error_of("preset = \"paper\"\nsections = [[1, 0, 0, 0, 0]]\n").find("f.toml:2"), std::string::npos);
   EXPECT_NE(error_of("preset = \"paper\"\nrate_hz = 1000\n", RateKey::absent).find("rate_hz"), std::string::npos);
   EXPECT_NE(error_of("presett = \"paper\"\n").find("presett"), std::string::npos);
+  // What a DUT would refuse only after power-on is refused here, with its place (a review: an
+  // unstable section and coefficients beyond binary32 passed --dry-run).
+  EXPECT_EQ(error_of("sections = [[1.0, 0.0, 0.0, -2.5, 1.5]]\n"),
+            "f.toml:1:13: filter section [1, 0, 0, -2.5, 1.5] is unstable: its poles (a1, a2) are not inside the unit circle");
+  EXPECT_EQ(error_of("sections = [[1e308, 0.0, 0.0, 0.0, 0.0]]\n"),
+            "f.toml:1:14: filter coefficient 1e+308 is beyond the protocol's 32-bit float range");
+  EXPECT_NE(error_of("sections = [[1.0, 0.0, 0.0, 0.0, 1.0]]\n").find("unstable"), std::string::npos)
+      << "a pole on the unit circle";
+  EXPECT_EQ(error_of("sections = [[0.2, 0.0, 0.0, -0.5, 0.1]]\n"), "") << "a stable section";
 }
 
 }  // namespace
