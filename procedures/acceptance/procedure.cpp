@@ -91,7 +91,7 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
   const std::vector<double> x = capture::channel_x(l.samples);
   std::vector<GostBlock> blocks;
   for (const double bs : p.in_run_blocks_s) {
-    const auto len = static_cast<std::size_t>(bs * p.rate_hz + 0.5);
+    const auto len = static_cast<std::size_t>(planned_samples(p, bs));
     const analysis::InRunB b = analysis::in_run_b(x, len);
     blocks.push_back({bs, analysis::block_means(x, len), b.value});
     ctx.values.set(gost_value_name(bs), b.value, fmt::format("(max-min)/2 of {} block means of {} s", b.blocks, bs));

@@ -43,6 +43,8 @@ double Profile::planned_total_s() const {
 
 std::string gost_value_name(double block_s) { return fmt::format("in_run_b_gost_{:g}s", block_s); }
 
+uint64_t planned_samples(const Profile& p, double seconds) { return static_cast<uint64_t>(seconds * p.rate_hz + 0.5); }
+
 std::vector<std::string> builtin_profile_names() {
   std::vector<std::string> n;
   for (const auto& [k, v] : builtin_profiles()) n.push_back(k);
@@ -104,7 +106,8 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
                              p.in_run_s));
     // The in-run phase rounds the length to samples; a rounding of more than 1 % (1.5 samples
     // read as 2) would report a B of blocks other than the profile's.
-    if (!(std::round(samples) >= 1) || std::abs(samples - std::round(samples)) > 0.01 * samples)
+    const double rounded = static_cast<double>(planned_samples(p, b));  // as the in-run phase reads it
+    if (!(rounded >= 1) || std::abs(samples - rounded) > 0.01 * samples)
       bad_blocks(fmt::format("{} s: a block must be a whole number of samples (within 1 %) at rate_hz = {:g} "
                              "({:.10g} samples)",
                              b, p.rate_hz, samples));

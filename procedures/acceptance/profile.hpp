@@ -3,6 +3,7 @@
 // Format: docs/profiles.md. The file's [plant] section belongs to the emulated plant, which
 // reads it from the same table (plant/emulated/plant_config.hpp); the procedure never does.
 #pragma once
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -92,6 +93,10 @@ std::vector<std::string> builtin_profile_names();
 // The passport name of GOST B for one block length: in_run_b_gost_<length>s, the length in
 // seconds as written in the profile (100 -> in_run_b_gost_100s, 2 -> in_run_b_gost_2s).
 std::string gost_value_name(double block_s);
+// The samples `seconds` hold at the profile's rate, rounded: a recording's when its phase
+// completes (lost ones are replaced by later ones: the recording runs until it has them all),
+// and a GOST block's.
+uint64_t planned_samples(const Profile& p, double seconds);
 const std::string& builtin_profile_text(const std::string& name);  // throws ConfigError
 
 }  // namespace rig::acceptance

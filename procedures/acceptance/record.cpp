@@ -17,7 +17,6 @@ std::string run_phase_id(std::size_t index, Orientation o) { return fmt::format(
 std::string in_run_phase_id(const Profile& p) { return std::string("in-run-") + to_string(p.in_run_orientation); }
 std::string raw_phase_id(const Profile& p) { return std::string("raw-") + to_string(p.raw_orientation); }
 std::string capture_rel(const std::string& phase_id) { return "captures/" + phase_id + ".cap"; }
-uint64_t planned_samples(const Profile& p, double seconds) { return static_cast<uint64_t>(seconds * p.rate_hz + 0.5); }
 
 namespace {
 

@@ -31,8 +31,5 @@ std::string run_phase_id(std::size_t index, Orientation o);  // index 1-based: "
 std::string in_run_phase_id(const Profile& p);                // "in-run-U10"
 std::string raw_phase_id(const Profile& p);                   // "raw-U10"
 std::string capture_rel(const std::string& phase_id);         // "captures/<phase_id>.cap"
-// The samples a recording of `seconds` holds when its phase completes (lost ones are replaced
-// by later ones: the recording runs until it has them all).
-uint64_t planned_samples(const Profile& p, double seconds);
 
 }  // namespace rig::acceptance
