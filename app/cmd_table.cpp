@@ -1,13 +1,9 @@
 // `rig table`: manual control of a real or emulated rotary table over Modbus,
 // for a technician at the rig (docs/table-registers.md).
-#include <signal.h>
-
-#include <atomic>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -16,6 +12,7 @@
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
+#include "rig/executive/signals.hpp"
 #include "rig/modbus/cia402_client.hpp"
 #include "rig/modbus/table_client.hpp"
 
@@ -59,37 +56,16 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
   return t;
 }
 
-// Ctrl-C / SIGTERM trip the cancel source from a normal thread (a handler
-// may not take locks), so a move in progress halts the table and exits 3.
+// Ctrl-C, SIGTERM or a closed terminal (SIGHUP) during a home or a move
+// halts the table and exits 3: the same watcher as `rig run`, so no signal
+// that ends the process can leave the table turning.
 class SignalCancel {
  public:
-  SignalCancel() {
-    sigemptyset(&set_);
-    sigaddset(&set_, SIGINT);
-    sigaddset(&set_, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &set_, &old_);
-    thread_ = std::thread([this] {
-      const timespec tick{0, 20'000'000};
-      while (!done_) {
-        const int sig = sigtimedwait(&set_, nullptr, &tick);
-        if (sig > 0) source_.request(sig == SIGINT ? "interrupted (Ctrl-C)" : "terminated (SIGTERM)");
-      }
-    });
-  }
-  ~SignalCancel() {
-    done_ = true;
-    thread_.join();
-    pthread_sigmask(SIG_SETMASK, &old_, nullptr);
-  }
-  SignalCancel(const SignalCancel&) = delete;
-  SignalCancel& operator=(const SignalCancel&) = delete;
   CancelToken token() const { return source_.token(); }
 
  private:
-  sigset_t set_{}, old_{};
   CancelSource source_;
-  std::atomic<bool> done_{false};
-  std::thread thread_;
+  SignalWatcher watcher_{source_};
 };
 
 std::string flags(const TableStatus& s) {

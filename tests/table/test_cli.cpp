@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <csignal>
+#include <cstring>
 #include <thread>
 
 #include "helpers.hpp"
@@ -70,7 +72,11 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   EXPECT_EQ(rig(where_ + " --rtu /dev/null status", out), 2) << out;  // --modbus and --rtu exclude each other
 }
 
-TEST_F(RigTable, CtrlCDuringAMoveHaltsTheTableAndExitsThree) {
+// Every signal that ends the process halts a move first: Ctrl-C, a service
+// manager's SIGTERM and the SIGHUP of a closed terminal or dropped ssh session.
+class RigTableSignal : public RigTable, public ::testing::WithParamInterface<int> {};
+
+TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
   std::string out;
   ASSERT_EQ(rig(where_ + " home", out), 0) << out;
   // Slow the profile so the move is still running when the signal lands.
@@ -84,15 +90,18 @@ TEST_F(RigTable, CtrlCDuringAMoveHaltsTheTableAndExitsThree) {
   Child child(argv, &fd);
   for (int i = 0; i < 2000 && !emu_->snapshot().moving; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
   ASSERT_TRUE(emu_->snapshot().moving);
-  ::kill(child.pid(), SIGINT);
+  ::kill(child.pid(), GetParam());
   const int st = child.wait_status();
   close(fd);
-  ASSERT_TRUE(WIFEXITED(st));
+  ASSERT_TRUE(WIFEXITED(st)) << "killed by signal " << (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
   EXPECT_EQ(WEXITSTATUS(st), 3);
   for (int i = 0; i < 500 && emu_->snapshot().moving; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   EXPECT_FALSE(emu_->snapshot().moving);
   EXPECT_LT(emu_->snapshot().position_deg, 100.0);
 }
+
+INSTANTIATE_TEST_SUITE_P(EndingSignals, RigTableSignal, ::testing::Values(SIGINT, SIGTERM, SIGHUP),
+                         [](const auto& p) { return std::string(sigabbrev_np(p.param)); });
 
 }  // namespace
 }  // namespace rig::table_test
