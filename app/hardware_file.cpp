@@ -28,6 +28,7 @@ void read_procedure(const toml::table& t, double& u10_deg, double& u20_deg) {
   cfg::check_keys(t, {"u10_deg", "u20_deg"}, "procedure");
   u10_deg = cfg::get_number(t, "u10_deg", u10_deg, -360.0, 360.0);
   u20_deg = cfg::get_number(t, "u20_deg", u20_deg, -360.0, 540.0);
+  acceptance::check_orientation_angles(t, u10_deg, u20_deg);
 }
 
 void check_procedure(const toml::table& t) {

@@ -43,6 +43,17 @@ double Profile::planned_total_s() const {
 
 std::string gost_value_name(double block_s) { return fmt::format("in_run_b_gost_{:g}s", block_s); }
 
+void check_orientation_angles(const toml::table& t, double u10_deg, double u20_deg) {
+  constexpr double kTolDeg = 10.0;
+  const double apart = std::fmod(std::fabs(u20_deg - u10_deg), 360.0);
+  if (std::fabs(apart - 180.0) <= kTolDeg) return;
+  const std::string why = fmt::format("U20 is {:g}° from u10_deg = {:g}°; the method turns the DUT 180° (± {:g}°) "
+                                      "between U10 and U20",
+                                      apart, u10_deg, kTolDeg);
+  if (const toml::node* n = t.get("u20_deg")) cfg::reject(*n, "u20_deg", why);
+  throw ConfigError(cfg::where(t) + ": u20_deg = " + fmt::format("{:g}", u20_deg) + ": " + why);
+}
+
 uint64_t planned_samples(const Profile& p, double seconds) { return static_cast<uint64_t>(seconds * p.rate_hz + 0.5); }
 
 std::vector<std::string> builtin_profile_names() {
@@ -125,6 +136,7 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
     cfg::check_keys(*tb, {"u10_deg", "u20_deg"}, "table");
     p.u10_deg = cfg::get_number(*tb, "u10_deg", 0.0, -360.0, 360.0);
     p.u20_deg = cfg::get_number(*tb, "u20_deg", p.u10_deg + 180.0, -360.0, 540.0);
+    check_orientation_angles(*tb, p.u10_deg, p.u20_deg);
   }
   p.filter = design::paper_wf();  // without a [filter] table
   std::string preset = "paper";

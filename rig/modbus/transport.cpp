@@ -50,12 +50,33 @@ std::vector<std::string> split(const std::string& s, char sep) {
 std::string Endpoint::str() const {
   std::ostringstream os;
   if (kind == Kind::kTcp) {
-    os << "tcp:" << host << ':' << port;
+    const bool v6 = host.find(':') != std::string::npos;
+    os << "tcp:" << (v6 ? "[" : "") << host << (v6 ? "]" : "") << ':' << port;
   } else {
     os << "rtu:" << device << ',' << baud << ',' << parity << ',' << data_bits << ',' << stop_bits;
   }
   return os.str();
 }
+
+namespace {
+// A host getaddrinfo can take: a name or IPv4 address (letters, digits, '.', '-', '_'), or an
+// IPv6 address in brackets. Anything else ("zz zz", "udp:host") is a typo to name now, not a
+// connect failure to report later as a hardware fault.
+bool plausible_host(const std::string& h) {
+  if (h.empty()) return false;
+  for (const char ch : h) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (!std::isalnum(c) && ch != '.' && ch != '-' && ch != '_') return false;
+  }
+  return true;
+}
+bool plausible_ipv6(const std::string& h) {
+  if (h.find(':') == std::string::npos) return false;
+  for (const char ch : h)
+    if (!std::isxdigit(static_cast<unsigned char>(ch)) && ch != ':' && ch != '.') return false;
+  return true;
+}
+}  // namespace
 
 Endpoint parse_tcp(const std::string& host_port) {
   const auto colon = host_port.rfind(':');
@@ -64,6 +85,12 @@ Endpoint parse_tcp(const std::string& host_port) {
   Endpoint ep;
   ep.kind = Endpoint::Kind::kTcp;
   ep.host = host_port.substr(0, colon);
+  const bool bracketed = ep.host.size() > 2 && ep.host.front() == '[' && ep.host.back() == ']';
+  if (bracketed) ep.host = ep.host.substr(1, ep.host.size() - 2);
+  if (bracketed ? !plausible_ipv6(ep.host) : !plausible_host(ep.host))
+    throw ConfigError("Modbus TCP address '" + host_port + "': '" + host_port.substr(0, colon) +
+                      "' is not a host name or address (HOST:PORT, tcp:HOST:PORT, tcp:[IPv6]:PORT or "
+                      "rtu:DEVICE[,BAUD...])");
   ep.port = parse_int(host_port.substr(colon + 1), "port", host_port);
   if (ep.port < 0 || ep.port > 65535) throw ConfigError("Modbus TCP address '" + host_port + "': port out of range");
   return ep;

@@ -909,7 +909,7 @@ TEST(RigCli, DryRunOnHardwarePlansWithTheTablesSettingsAndTheMountsAngles) {
   ASSERT_NE(e1, std::string::npos);
   EXPECT_GT(emuslow.substr(e1 + 20, 8), emu.substr(e0 + 20, 8)) << emuslow;
   const std::string fast = estimate("fast", "velocity_dps = 90.0\naccel_dps2 = 360.0\n", "");
-  const std::string near = estimate("near", "", "[procedure]\nu10_deg = 0.0\nu20_deg = 90.0\n");
+  const std::string near = estimate("near", "", "[procedure]\nu10_deg = 0.0\nu20_deg = 171.0\n");
   ASSERT_FALSE(base.empty());
   EXPECT_LT(fast, base) << fast << " vs " << base;  // h:mm:ss of equal width compare as text
   EXPECT_LT(near, base) << near << " vs " << base;
@@ -1331,6 +1331,38 @@ TEST(HardwareFileValidation, U20Deg1e7IsRefusedWithItsLine) {
   std::string err;
   EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 1e7"), err), 2) << err;
   EXPECT_NE(err.find("hw.toml:14:11: 'u20_deg' = 1e+07 is out of range [-360, 540]"), std::string::npos) << err;
+}
+
+// The method turns the DUT 180° between U10 and U20; a typo that puts both orientations at
+// one angle (or 90° apart) would run the whole procedure wrong and still write a passport.
+TEST(HardwareFileValidation, OrientationsNotHalfATurnApartAreRefused) {
+  const std::string d = tmp("hw-angles");
+  std::string err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 0.0"), err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:14:11: 'u20_deg' = 0.0: U20 is 0° from u10_deg = 0°"), std::string::npos) << err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 90.0"), err), 2) << err;
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 180.4"), err), 0) << err;   // a mount's calibration
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = -179.5"), err), 0) << err;  // the other way round
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[table]\nu10_deg = 10.0\nu20_deg = 10.0\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--dry-run"}, d + "/p"), 2);
+  EXPECT_NE(slurp(d + "/p.stderr").find("p.toml:4:11: 'u20_deg' = 10.0: U20 is 0° from u10_deg = 10°"),
+            std::string::npos)
+      << slurp(d + "/p.stderr");
+}
+
+// A Modbus address that cannot be one is refused when the file is read (exit 2 with its
+// place), not at connect time as a hardware fault (exit 4).
+TEST(HardwareFileValidation, MalformedModbusAddressIsRefusedWithItsLine) {
+  const std::string d = tmp("hw-address");
+  std::string err;
+  for (const char* bad : {"modbus = \"zz zz:5020\"", "modbus = \"udp:127.0.0.1:502\"", "modbus = \"tcp::502\"",
+                          "modbus = \"host:\"", "modbus = \"host:-1\""}) {
+    EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 2, bad), err), 2) << bad << "\n" << err;
+    EXPECT_NE(err.find("hw.toml:2:"), std::string::npos) << bad << "\n" << err;
+  }
+  for (const char* good : {"modbus = \"tcp:table-1.lab:502\"", "modbus = \"10.0.0.7:1502\"",
+                           "modbus = \"tcp:[::1]:502\"", "modbus = \"localhost:502\""})
+    EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 2, good), err), 0) << good << "\n" << err;
 }
 
 TEST(HardwareFileValidation, UnknownKeyInADeviceSectionIsRefused) {
