@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <bitset>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -228,6 +229,19 @@ bool dbc_signal_fits(const DbcSignal& s, int bytes) {
   bool ok = true;
   for_each_bit(s.start, s.length, s.big_endian, [&](int, int pos) { ok = ok && pos >= 0 && pos < bytes * 8; });
   return ok;
+}
+
+bool dbc_signals_overlap(const DbcSignal& a, const DbcSignal& b) {
+  if (a.mux_value && b.mux_value && *a.mux_value != *b.mux_value) return false;
+  std::bitset<512> bits;  // 64 bytes of CAN FD payload
+  for_each_bit(a.start, a.length, a.big_endian, [&](int, int pos) {
+    if (pos >= 0 && pos < 512) bits.set(static_cast<std::size_t>(pos));
+  });
+  bool shared = false;
+  for_each_bit(b.start, b.length, b.big_endian, [&](int, int pos) {
+    shared = shared || (pos >= 0 && pos < 512 && bits.test(static_cast<std::size_t>(pos)));
+  });
+  return shared;
 }
 
 // ---- the parser ----------------------------------------------------------------------

@@ -134,6 +134,9 @@ double dbc_physical(const DbcSignal& s, std::span<const uint8_t> payload);
 uint64_t dbc_raw_of(const DbcSignal& s, double physical);
 // Whether every bit of the signal lies inside `bytes` payload bytes.
 bool dbc_signal_fits(const DbcSignal& s, int bytes);
+// Whether two signals of one message can read a common bit of one frame: they share a bit and
+// are not in two different multiplexed branches (m1 and m2 never appear in the same frame).
+bool dbc_signals_overlap(const DbcSignal& a, const DbcSignal& b);
 
 // Reading candump logs (LoggedFrame, parse_candump_line) is firmware_link/candump_log.hpp.
 

@@ -26,6 +26,34 @@ double unit_to_g(const std::string& unit, const std::string& what, const std::st
 
 }  // namespace
 
+namespace {
+// The counter and each x and y read bits of their own, and no status or flag signal reads theirs:
+// a DBC may alias bits on purpose (a status word and its single-bit flags), but a sample that
+// shares a bit with the counter or a flag is a layout error that would decode plausible nonsense.
+template <class Roles, class Fail>
+void check_no_shared_bits(const Roles& r, const Fail& fail) {
+  std::vector<const DbcSignal*> data{r.counter}, control;
+  for (const auto& sl : r.samples) {
+    for (const DbcSignal* s : {sl.x, sl.y})
+      if (s) data.push_back(s);
+    for (const DbcSignal* s : {sl.status, sl.flag[0], sl.flag[1], sl.flag[2]})
+      if (s) control.push_back(s);
+  }
+  auto name = [&](const DbcSignal* s) {
+    return r.msg->name + "." + s->name + " (" + std::to_string(s->start) + "|" + std::to_string(s->length) + ", DBC line " +
+           std::to_string(s->line) + ")";
+  };
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    for (std::size_t j = i + 1; j < data.size(); ++j)
+      if (data[i] != data[j] && dbc_signals_overlap(*data[i], *data[j]))
+        fail("signals " + name(data[i]) + " and " + name(data[j]) + " share bits: the counter, x and y each need their own");
+    for (const DbcSignal* c : control)
+      if (c != data[i] && dbc_signals_overlap(*data[i], *c))
+        fail("signals " + name(data[i]) + " and " + name(c) + " share bits: a status or flag signal cannot read the counter's, x's or y's bits");
+  }
+}
+}  // namespace
+
 DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec spec, const std::string& where)
     : dbc_(std::move(dbc)), spec_(std::move(spec)) {
   auto fail = [&](const std::string& m) { throw ConfigError(where + ": " + m); };
@@ -114,6 +142,7 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
             fail(std::string(flag_keys[k]) + " = \"" + *flag_names[k] + "\": no such signal in " + m->name);
         }
     }
+    check_no_shared_bits(r, fail);
     by_frame_[key(m->id, m->extended)] = std::move(r);
   }
   if (status && !msgs.count(status->msg)) fail("status " + spec_.status + " is in a message carrying neither x nor y");

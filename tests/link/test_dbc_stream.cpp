@@ -284,6 +284,59 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: x = \"ACC_XY\" is not MESSAGE.SIGNAL");
 }
 
+// A layout whose sample shares bits with its counter or a flag would decode plausible numbers;
+// it is refused with both signals and their DBC lines. Aliases among status signals (a status
+// word and its one-bit flags) and signals of two different multiplexed pages stay allowed.
+TEST(DbcStream, SignalsSharingBitsWithTheSampleAreRefused) {
+  const std::string text =
+      "VERSION \"\"\nBS_:\nBU_: DUT RIG\n"
+      "BO_ 300 OVL: 8 DUT\n"
+      " SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" RIG\n"     // line 5
+      " SG_ x : 8|24@1- (1e-06,0) [-8|8] \"g\" RIG\n"       // line 6: bits 8..31, inside cnt's 8..15
+      " SG_ x_ok : 16|24@1- (1e-06,0) [-8|8] \"g\" RIG\n"   // line 7: bits 16..39
+      " SG_ st : 40|8@1+ (1,0) [0|255] \"\" RIG\n"          // line 8
+      " SG_ sat : 40|1@1+ (1,0) [0|1] \"\" RIG\n"           // line 9: st's bit 0, an alias
+      " SG_ bad_flag : 39|1@1+ (1,0) [0|1] \"\" RIG\n"      // line 10: x_ok's top bit
+      "BO_ 301 PAGES: 8 DUT\n"
+      " SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" RIG\n"
+      " SG_ page M : 16|8@1+ (1,0) [0|255] \"\" RIG\n"
+      " SG_ x m0 : 24|32@1- (1e-06,0) [-8|8] \"g\" RIG\n"
+      " SG_ y m1 : 24|32@1- (1e-06,0) [-8|8] \"g\" RIG\n";
+  const auto db = std::make_shared<const Dbc>(Dbc::parse(text, "ovl.dbc"));
+  auto error = [&](DbcStreamSpec s) {
+    try {
+      DbcStreamDecoder d(db, std::move(s), "hw.toml:9:1: [dut.stream]");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  DbcStreamSpec s;
+  s.counter = "OVL.cnt";
+  s.x = "OVL.x";
+  EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: signals OVL.cnt (0|16, DBC line 5) and OVL.x (8|24, DBC line 6) "
+                      "share bits: the counter, x and y each need their own");
+  s.x = "OVL.x_ok";
+  EXPECT_EQ(error(s), "no error");
+  s.status = "OVL.st";
+  s.saturated_bit = 0;
+  EXPECT_EQ(error(s), "no error");
+  DbcStreamSpec f;
+  f.counter = "OVL.cnt";
+  f.x = "OVL.x_ok";
+  f.saturated = "OVL.sat";
+  EXPECT_EQ(error(f), "no error");  // sat is st's bit 0 (an alias), not x's
+  f.saturated = "OVL.bad_flag";
+  EXPECT_NE(error(f).find("OVL.x_ok (16|24, DBC line 7) and OVL.bad_flag (39|1, DBC line 10) share bits"),
+            std::string::npos)
+      << error(f);
+  DbcStreamSpec pages;
+  pages.counter = "PAGES.cnt";
+  pages.x = "PAGES.x";
+  pages.y = "PAGES.y";
+  EXPECT_EQ(error(pages), "no error");  // one page per frame: x and y never meet
+}
+
 TEST(DbcStream, HardwareFileDbcAndStreamTables) {
   const std::string text = "[dut]\ncan = \"vcan0\"\ndbc = \"" + kLayouts +
                            "\"\n[dut.stream]\ncounter = \"ACC_X.cnt\"\nx = \"ACC_X.x_counts\"\ny = \"ACC_Y.y_counts\"\n"
