@@ -220,6 +220,16 @@ void check_serial_source(const RunArgs& a, const toml::table& hw, const toml::ta
                     " commands = false: the DUT cannot report its serial; give it with --serial");
 }
 
+// On hardware the DUT's rate is read at bring-up (after power-on); the emulated DUT's is known
+// from the profile's [plant], so a profile it cannot run is refused here, --dry-run included.
+void check_emulated_rate(const toml::table& profile_table, const std::string& source, const acceptance::Profile& p,
+                         double dut_rate_hz) {
+  if (std::abs(dut_rate_hz - p.rate_hz) <= 1e-6 * p.rate_hz) return;
+  const std::string why = fmt::format("the emulated DUT streams at {:g} Hz", dut_rate_hz);
+  if (const toml::node* n = profile_table.at_path("procedure.rate_hz").node()) cfg::reject(*n, "rate_hz", why);
+  throw ConfigError(fmt::format("{}: rate_hz = {:g}: {}", source, p.rate_hz, why));
+}
+
 // What the plan cannot do on this DUT, said before the run (the run says it again, with the
 // passport's `skipped`): the DUT's link options, or on the emulated plant its firmware's.
 std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg,
@@ -544,7 +554,8 @@ int do_run(RunArgs a) {
   // on every plant: a profile is shared by hardware and emulated runs, and a typo there must not
   // wait for the next emulated run to be found (before any device opens).
   const toml::table& plant_cfg = plant::plant_section(profile_table);
-  plant::validate_plant_section(plant_cfg);
+  const double emulated_rate_hz = plant::validate_plant_section(plant_cfg);
+  if (a.plant == "emulated") check_emulated_rate(profile_table, profile_source, p, emulated_rate_hz);
   toml::table hw;
   if (a.plant == "hardware") hw = load_hardware_file(a.hardware, kRunSections);
   check_serial_source(a, hw, plant_cfg);

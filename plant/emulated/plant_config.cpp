@@ -11,10 +11,11 @@ const toml::table& plant_section(const toml::table& profile) {
   return none;
 }
 
-void validate_plant_section(const toml::table& plant) {
+double validate_plant_section(const toml::table& plant) {
   // Building it is the check that cannot drift from what the plant reads (cheap: no thread,
   // no I/O, the DUT's loop locks in a fraction of a simulated second).
-  const EmulatedPlant probe(plant);
+  EmulatedPlant probe(plant);
+  return probe.dut_source().output_rate_hz();
 }
 
 }  // namespace rig::plant

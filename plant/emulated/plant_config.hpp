@@ -13,7 +13,8 @@ const toml::table& plant_section(const toml::table& profile);
 
 // Checks [plant] as the emulated plant reads it -- seed, link, [plant.dut] against the DUT's
 // parameters, [plant.table] against the table emulator's -- by building the plant from it, so
-// `rig run --dry-run` reports a bad value with file:line:col before anything runs.
-void validate_plant_section(const toml::table& plant);
+// `rig run --dry-run` reports a bad value with file:line:col before anything runs. Returns the
+// emulated DUT's output rate, Hz, which a profile's rate_hz must match.
+double validate_plant_section(const toml::table& plant);
 
 }  // namespace rig::plant

@@ -51,8 +51,8 @@ HARDWARE_KEYS = [
     ("gpio", "lamp_ready", "str", None, None, '"LAMP_READY"'),
     ("gpio", "power_active_low", "bool", None, None, "false"),
     ("gpio", "estop_active_low", "bool", None, None, "true"),
-    ("procedure", "u10_deg", "num", -360.0, 360.0, "0.0"),
-    ("procedure", "u20_deg", "num", -360.0, 540.0, "180.0"),
+    ("procedure", "u10_deg", "u10", -360.0, 360.0, "0.0"),
+    ("procedure", "u20_deg", "u20", -360.0, 540.0, "180.0"),
     ("rig", "name", "str", None, None, '"bench-1"'),
     ("history", "url", "str", None, None, '"sqlite:///tmp/rig-mutants.sqlite"'),
 ]
@@ -61,12 +61,12 @@ HARDWARE_REQUIRED = {("table", "modbus"), ("dut", "can"), ("gpio", "power"), ("g
 PROFILE_HEAD = 'base = "ci"\n'
 PROFILE_KEYS = [
     ("profile", "name", "str", None, None, '"mutant"'),
-    ("procedure", "rate_hz", "num", 1.0, 1e6, "1000.0"),
+    ("procedure", "rate_hz", "rate", 1.0, 1e6, "1000.0"),
     ("procedure", "settle_s", "num", 0.0, 1e5, "0.5"),
     ("procedure", "max_lost_samples", "int", 0, None, "0"),
     ("procedure", "retries", "int", 0, 10, "1"),
-    ("table", "u10_deg", "num", -360.0, 360.0, "0.0"),
-    ("table", "u20_deg", "num", -360.0, 540.0, "180.0"),
+    ("table", "u10_deg", "u10", -360.0, 360.0, "0.0"),
+    ("table", "u20_deg", "u20", -360.0, 540.0, "180.0"),
     ("loop", "amplitude_g", "num", -5.0, 5.0, "1.0"),
     ("loop", "steps", "int", 1, 100, "5"),
     ("loop", "record_ms", "int", 10, 200, "100"),
@@ -96,7 +96,21 @@ def fmt(x, kind):
     return str(int(x)) if kind == "int" else repr(float(x))
 
 
+# Kinds with a rule beyond their range: u10/u20 are the orientations' angles, which must stay
+# 180° ± 10° apart (the other keeps its base value, 0 or 180); rate is a profile's rate_hz,
+# which the emulated DUT (1000 Hz, docs/profiles.md) must stream -- another rate is refused on the
+# emulated plant only, so it is no mutant here (RigCli.AProfileRateTheEmulatedDut... covers it).
+# Out of range, each is a num.
+RANGED = {"u10": "num", "u20": "num", "rate": "num"}
+
+
 def valid_value(rng, kind, lo, hi):
+    if kind == "u10":
+        return fmt(rng.uniform(-9.9, 9.9), "num")
+    if kind == "u20":
+        return fmt(rng.choice([1, -1]) * rng.uniform(170.1, 189.9), "num")
+    if kind == "rate":
+        return rng.choice(["1000.0", "1e3", "1000"])
     if kind == "int":
         return str(rng.randint(lo, min(hi, lo + 1000)) if hi is not None else rng.randint(lo, lo + 1000))
     if kind == "num":
@@ -112,6 +126,9 @@ def valid_value(rng, kind, lo, hi):
 def invalid_values(rng, kind, lo, hi):
     """Values that must be refused for a key of this kind and range."""
     out = []
+    if kind in ("u10", "u20"):
+        out.append(fmt(rng.uniform(20.0, 160.0) * rng.choice([1, -1]) + (0 if kind == "u10" else 180), "num"))
+    kind = RANGED.get(kind, kind)
     if kind in ("int", "num"):
         if lo is not None:
             out.append(fmt(lo - (1 if kind == "int" else max(abs(lo), 1.0) * rng.uniform(0.01, 10)), kind))

@@ -739,6 +739,23 @@ TEST(RigCli, GostBlockLengthsAreCheckedBeforeAnythingRuns) {
   }
 }
 
+// A profile rate the emulated DUT cannot stream is refused when the profile is read (the
+// review: --dry-run passed, the run powered the DUT and stopped at bring-up without a place).
+TEST(RigCli, AProfileRateTheEmulatedDutCannotStreamIsRefusedBeforeAnythingRuns) {
+  const std::string d = tmp("emulated-rate");
+  fs::create_directories(d);
+  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[procedure]\nrate_hz = 500.0\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", d + "/r.toml", "--yes", "--no-history", "--out", d + "/run"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2) << slurp(d + "/io.stderr");
+    EXPECT_NE(slurp(d + "/io.stderr").find(d + "/r.toml:3:11: 'rate_hz' = 500.0: the emulated DUT streams at 1000 Hz"),
+              std::string::npos)
+        << slurp(d + "/io.stderr");
+    EXPECT_FALSE(fs::exists(d + "/run"));
+  }
+}
+
 // The default run folder stays in runs/ whatever the serial or profile name holds (a review:
 // --serial '../../evil' wrote the run two folders up).
 TEST(RigCli, TheDefaultRunFolderStaysInRuns) {
