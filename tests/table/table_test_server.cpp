@@ -2,6 +2,8 @@
 // it mid-move (SIGKILL). Usage: table_test_server SPEC [TOML-TEXT]
 // Prints "listening <endpoint>" once serving, then serves until killed.
 #include <csignal>
+#include <exception>
+#include <memory>
 #include <cstdio>
 #include <string>
 #include <thread>
@@ -10,15 +12,27 @@
 #include "rig/core/toml_util.hpp"
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s SPEC [TOML]\n", argv[0]);
+  const std::string first = argc > 1 ? argv[1] : "";
+  if (argc < 2 || argc > 3 || first == "--help" || first == "-h") {
+    std::fprintf(argc < 2 || argc > 3 ? stderr : stdout,
+                 "usage: %s SPEC [TOML]\n  SPEC  tcp:HOST:PORT (port 0: any free one) or rtu:DEVICE[,BAUD...]\n"
+                 "  TOML  [plant.table] keys as text, e.g. 'velocity_dps = 90.0'\n",
+                 argv[0]);
+    return argc < 2 || argc > 3 ? 2 : 0;
+  }
+  std::unique_ptr<rig::plant::TableEmulator> emu;
+  std::unique_ptr<rig::plant::TableServer> server;
+  try {
+    const toml::table cfg = rig::cfg::parse_string(argc > 2 ? argv[2] : "", "argv");
+    emu = rig::plant::make_table_emulator(&cfg, 1);
+    server = std::make_unique<rig::plant::TableServer>(*emu, first);
+    server->start();
+  } catch (const std::exception& e) {  // a bad SPEC or TOML, a port in use
+    std::fprintf(stderr, "table_test_server: %s\n", e.what());
     return 2;
   }
-  const toml::table cfg = rig::cfg::parse_string(argc > 2 ? argv[2] : "", "argv");
-  auto emu = rig::plant::make_table_emulator(&cfg, 1);
-  rig::plant::TableServer server(*emu, argv[1]);
-  server.start();
-  std::printf("listening %s\n", server.endpoint().c_str());
+  rig::plant::TableServer& srv = *server;
+  std::printf("listening %s\n", srv.endpoint().c_str());
   std::fflush(stdout);
   for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
 }
