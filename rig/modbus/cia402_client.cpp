@@ -266,9 +266,16 @@ void Cia402Table::home(const CancelToken& cancel) {
 // drive left Operation enabled (quick stop, an external disable), or stop() from another thread
 // (the executive's abort path) set halt.
 void Cia402Table::fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when) const {
-  if (r.mode_display != c4::kModeProfilePosition)
+  if (r.mode_display != c4::kModeProfilePosition) {
+    // A drive that powers up again mid-move comes back in Switch on disabled (or not ready) with
+    // its power-on mode: say so, rather than blame the mode's change on another master.
+    const bool restarted = r.state() == State::kSwitchOnDisabled || r.state() == State::kNotReadyToSwitchOn;
     throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " " + when +
-                        " (another Modbus master?)" + at(r));
+                        (restarted ? " and the drive is in " + c4::state_name(r.state()) +
+                                         " (the drive restarted or was power-cycled?)"
+                                   : " (another Modbus master?)") +
+                        at(r));
+  }
   if (r.state() != State::kOperationEnabled)
     throw HardwareError(doing + ": drive left Operation enabled " + when + at(r));
   if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));

@@ -266,6 +266,11 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         }
       }
       if (acked) {
+        // A drive that powers up again mid-move comes back unhomed with its power-on target:
+        // say so, rather than blame the target's change on another master.
+        if (!d.has(sts::kHomed) && !d.has(sts::kHoming))
+          throw HardwareError(doing + ": the drive reports not homed" + (d.has(sts::kServoOn) ? "" : " and servo off") +
+                              " mid-move (the drive restarted or was power-cycled?)" + at(d));
         if (std::lround(d.target_deg * kPosScale) != counts)
           throw HardwareError(doing + ": target register changed to " + deg_str(d.target_deg) +
                               " (another Modbus master?)" + at(d));

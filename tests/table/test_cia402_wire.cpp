@@ -144,6 +144,29 @@ void fault_paths_and_cancel(WireDrive& w, RotaryTable& table) {
       << e;
 }
 
+// A drive that restarts mid-move (a power blip) answers again on the same address in Switch on
+// disabled with its power-on mode: the client says so; it used to blame another master.
+TEST(Cia402Restart, ADriveRestartedMidMoveIsNamedAsSuch) {
+  auto w = std::make_unique<WireDrive>("generic-cia402.toml", "tcp:127.0.0.1:0");
+  const std::string ep = w->server.endpoint();
+  RealClock clock;
+  auto table = m::connect_table(client_cfg("modbus", ep, "generic-cia402.toml"), clock);
+  table->home({});
+  table->move_to(0.0, {});
+  std::unique_ptr<WireDrive> after_restart;
+  std::atomic<bool> moved{false};
+  std::thread restart([&] {
+    moved = wait_until_under_way(*w->axis, 0.0, &w->drive);
+    w.reset();                                                            // the drive goes down...
+    after_restart = std::make_unique<WireDrive>("generic-cia402.toml", ep);  // ...and powers up again
+  });
+  const std::string e = error_of([&] { table->move_to(300.0, {}); });
+  restart.join();
+  EXPECT_TRUE(moved);
+  EXPECT_TRUE(has(e, "and the drive is in Switch on disabled (the drive restarted or was power-cycled?)")) << e;
+  EXPECT_FALSE(has(e, "another Modbus master")) << e;
+}
+
 class Cia402Wire : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Cia402Wire, FaultPathsAndCancelOverTcp) {

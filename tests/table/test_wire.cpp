@@ -198,6 +198,34 @@ TEST(TableWire, ReconnectsAfterTheServerComesBack) {
   EXPECT_NEAR(table->status().actual_deg, 33.0, 0.01);
 }
 
+// A drive that restarts mid-move (a power blip): it answers again on the same address, unhomed,
+// servo off, with its power-on target. The client says so; it used to blame another master.
+TEST(TableWire, ADriveRestartedMidMoveIsNamedAsSuch) {
+  const char* const drive = "velocity_dps = 60.0\naccel_dps2 = 600.0\nstart_angle_deg = 1.0\nhome_velocity_dps = 100.0\n";
+  auto emu = emulator(drive);
+  auto after_restart = emulator(drive);
+  auto server = std::make_unique<plant::TableServer>(*emu, "tcp:127.0.0.1:0");
+  server->start();
+  const std::string ep = server->endpoint();
+  RealClock clock;
+  auto table = m::connect_table(client_cfg("modbus", ep), clock);
+  table->home({});
+  std::thread restart([&] {
+    for (int i = 0; i < 1000 && !(emu->snapshot().moving && emu->snapshot().position_deg > 30.0); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    server.reset();  // the drive goes down...
+    server = std::make_unique<plant::TableServer>(*after_restart, ep);  // ...and powers up again
+    server->start();
+  });
+  const std::string err = hardware_error([&] { table->move_to(180.0, {}); });
+  restart.join();
+  EXPECT_NE(err.find("move to 180.0000°: the drive reports not homed and servo off mid-move (the drive restarted or "
+                     "was power-cycled?)"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("another Modbus master"), std::string::npos) << err;
+}
+
 TEST(TableWire, EmulatorKilledMidMove) {
   int out = -1;
   Child server({TABLE_TEST_SERVER, "tcp:127.0.0.1:0",
