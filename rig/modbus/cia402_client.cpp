@@ -292,12 +292,24 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       throw HardwareError(doing + ": table not homed (run `rig table home` first)");
     set_mode(doing, c4::kModeProfilePosition, cancel);
     if (!profile_applied_) {
+      // A value the drive refuses (exception 0x03: above its maximum, say) is named by its key.
+      auto setting = [&](Obj o, int64_t units, const char* key, double value) {
+        try {
+          write_object(o, units, cancel);
+        } catch (const ModbusError& e) {
+          if (e.exception_code != 3) throw;
+          char shown[32];
+          std::snprintf(shown, sizeof shown, "%g", value);
+          throw HardwareError(std::string("[table] ") + key + " = " + shown + ": the drive refused the value: " + e.what());
+        }
+      };
       if (opt_.velocity_dps && map_.has(Obj::kProfileVelocity))
-        write_object(Obj::kProfileVelocity, std::llround(map_.dps_to_velocity_units(*opt_.velocity_dps)), cancel);
+        setting(Obj::kProfileVelocity, std::llround(map_.dps_to_velocity_units(*opt_.velocity_dps)), "velocity_dps",
+                *opt_.velocity_dps);
       if (opt_.accel_dps2) {
         const auto a = std::llround(map_.dps2_to_accel_units(*opt_.accel_dps2));
-        if (map_.has(Obj::kProfileAcceleration)) write_object(Obj::kProfileAcceleration, a, cancel);
-        if (map_.has(Obj::kProfileDeceleration)) write_object(Obj::kProfileDeceleration, a, cancel);
+        if (map_.has(Obj::kProfileAcceleration)) setting(Obj::kProfileAcceleration, a, "accel_dps2", *opt_.accel_dps2);
+        if (map_.has(Obj::kProfileDeceleration)) setting(Obj::kProfileDeceleration, a, "accel_dps2", *opt_.accel_dps2);
       }
       profile_applied_ = true;
     }

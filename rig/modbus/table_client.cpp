@@ -122,20 +122,33 @@ void TableClient::watch_heartbeat(const std::string& doing, const DriveState& d,
 
 void TableClient::apply_profile_once(const CancelToken& cancel) {
   if (profile_applied_) return;
+  // A value the drive refuses (exception 0x03, illegal data value: above its maximum, say) is
+  // named by the [table] key it came from, not only by its register.
+  auto write = [&](uint16_t addr, std::vector<uint16_t> regs, const char* key, double value) {
+    try {
+      transport_->write(addr, regs, cancel);
+    } catch (const ModbusError& e) {
+      if (e.exception_code != 3) throw;
+      char shown[32];
+      std::snprintf(shown, sizeof shown, "%g", value);
+      throw HardwareError(std::string("[table] ") + key + " = " + shown + ": the drive refused the value: " + e.what());
+    }
+  };
   uint16_t w[2];
   if (opt_.velocity_dps) {
     split_u32(static_cast<uint32_t>(std::lround(*opt_.velocity_dps * kVelScale)), w);
-    transport_->write(reg::kVelocity, {w[0], w[1]}, cancel);
+    write(reg::kVelocity, {w[0], w[1]}, "velocity_dps", *opt_.velocity_dps);
   }
   if (opt_.accel_dps2) {
     split_u32(static_cast<uint32_t>(std::lround(*opt_.accel_dps2 * kVelScale)), w);
-    transport_->write(reg::kAccel, {w[0], w[1]}, cancel);
+    write(reg::kAccel, {w[0], w[1]}, "accel_dps2", *opt_.accel_dps2);
   }
   if (opt_.in_position_window_deg)
-    transport_->write(reg::kInPosWindow, {static_cast<uint16_t>(std::lround(*opt_.in_position_window_deg * kPosScale))},
-                      cancel);
+    write(reg::kInPosWindow, {static_cast<uint16_t>(std::lround(*opt_.in_position_window_deg * kPosScale))},
+          "in_position_window_deg", *opt_.in_position_window_deg);
   if (opt_.drive_settle_s)
-    transport_->write(reg::kSettleTime, {static_cast<uint16_t>(std::lround(*opt_.drive_settle_s * 1000))}, cancel);
+    write(reg::kSettleTime, {static_cast<uint16_t>(std::lround(*opt_.drive_settle_s * 1000))}, "drive_settle_s",
+          *opt_.drive_settle_s);
   profile_applied_ = true;
 }
 

@@ -63,6 +63,23 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   EXPECT_NE(out.find("cannot connect"), std::string::npos) << out;
 }
 
+// A [table] setting beyond what the drive accepts is named by its key (the drive's maximum is
+// only the drive's to know: exit 4 at the first command, the key and value in the message).
+TEST_F(RigTable, ASettingTheDriveRefusesIsNamedByItsKey) {
+  const std::string hw = testing::TempDir() + "/too-fast.toml";
+  {
+    FILE* f = std::fopen(hw.c_str(), "w");
+    std::fprintf(f, "[table]\nmodbus = \"%s\"\nvelocity_dps = 3999.0\n", server_.endpoint().c_str());
+    std::fclose(f);
+  }
+  std::string out;
+  EXPECT_EQ(rig("--hardware " + hw + " home", out), 4) << out;
+  EXPECT_NE(out.find("[table] velocity_dps = 3999: the drive refused the value: write 2 registers at 10"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("exception 0x03 illegal data value"), std::string::npos) << out;
+}
+
 TEST_F(RigTable, UsageErrorsExitWithTwo) {
   std::string out;
   EXPECT_EQ(rig("status", out), 2) << out;
