@@ -178,6 +178,8 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'hardware': a hardware run must name its hardware file");
   if (a.plant == "hardware" && !fs::is_regular_file(a.hardware))
     throw ConfigError(path + ": field 'hardware': " + a.hardware + " does not exist");
+  if (a.plant == "emulated" && !a.hardware.empty())
+    throw ConfigError(path + ": field 'hardware': \"" + a.hardware + "\", but the run is on the emulated plant");
   if (inv.contains("started") && !inv["started"].is_string())
     throw ConfigError(path + ": field 'started': expected a string, found " + inv["started"].type_name());
 }
@@ -550,6 +552,9 @@ int do_run(RunArgs a) {
   std::string profile_source;
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
+  if (!a.resume.empty() && invocation.contains("profile") && invocation["profile"] != p.name)
+    throw ConfigError(fmt::format("{}/run.json: field 'profile': {}, but {} is profile \"{}\"", a.resume,
+                                  invocation["profile"].dump(), a.profile, p.name));
   // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included,
   // on every plant: a profile is shared by hardware and emulated runs, and a typo there must not
   // wait for the next emulated run to be found (before any device opens).

@@ -53,6 +53,14 @@ class Fields {
     return static_cast<uint64_t>(v);
   }
   Fields object(const std::string& key) const { return Fields(at(key), path_ + "." + key); }
+  // A key this version does not write is refused: a checkpoint is rig's own file, and a key it
+  // does not know is an edit or another version's, whose meaning this one would silently drop.
+  void only(std::initializer_list<std::string_view> keys) const {
+    for (const auto& [k, v] : j_.items())
+      if (std::find(keys.begin(), keys.end(), k) == keys.end())
+        throw std::invalid_argument(path_ + "." + k + ": not a key of a checkpoint (edited, or written by another "
+                                                      "version of rig?)");
+  }
   const std::string& path() const { return path_; }
   [[noreturn]] void fail(const std::string& key, const std::string& expected, const nlohmann::json& found) const {
     throw std::invalid_argument((key.empty() ? path_ : path_ + "." + key) + ": expected " + expected + ", found " +
@@ -183,9 +191,11 @@ nlohmann::json to_json(const DutState& s) {
 
 DutState dut_state_from_json(const nlohmann::json& j) {
   const Fields f(j, "state");
+  f.only({"serial", "dut", "runs", "bias", "in_run", "raw", "analysis", "loop_test", "loop", "device_time_s"});
   DutState s;
   if (f.has("dut")) {
     const Fields d = f.object("dut");
+    d.only({"serial", "firmware", "temperature_c", "skipped"});
     s.dut = DutIdentity{d.str("serial"), d.str("firmware"), d.opt_num("temperature_c"), {}};
     if (d.has("skipped")) {
       const nlohmann::json& sk = d.at("skipped");
@@ -200,6 +210,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
     const Fields rs = f.object("runs");
     for (const auto& [k, v] : f.at("runs").items()) {
       const Fields r(v, rs.path() + "." + k);
+      r.only({"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g", "index", "orientation"});
       RunMean m;
       m.index = static_cast<std::size_t>(r.count("index"));
       if (std::to_string(m.index) != k) r.fail("index", "the run's key " + k, r.at("index"));
@@ -217,6 +228,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
   }
   if (f.has("in_run")) {
     const Fields ir = f.object("in_run");
+    ir.only({"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g", "blocks"});
     if (ir.has("capture")) s.in_run = recorded_from(ir);
     if (ir.has("blocks")) {
       const auto& arr = ir.at("blocks");
@@ -238,7 +250,11 @@ DutState dut_state_from_json(const nlohmann::json& j) {
       s.in_run_blocks = std::move(blocks);
     }
   }
-  if (f.has("raw")) s.raw = recorded_from(f.object("raw"));
+  if (f.has("raw")) {
+    const Fields raw = f.object("raw");
+    raw.only({"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g"});
+    s.raw = recorded_from(raw);
+  }
   if (f.has("analysis")) {
     if (!f.at("analysis").is_object()) f.fail("analysis", "an object", f.at("analysis"));
     s.analysis = f.at("analysis");
@@ -249,8 +265,9 @@ DutState dut_state_from_json(const nlohmann::json& j) {
     s.loop = f.at("loop");
   }
   s.device_time_s = f.opt_num("device_time_s");  // absent in checkpoints before it was kept
-  if (s.device_time_s && !(std::isfinite(*s.device_time_s) && *s.device_time_s >= 0))
-    f.fail("device_time_s", "a device time >= 0 s", f.at("device_time_s"));
+  // Bounded far above any procedure (a 50-hour capture is 1.8e5 s): 1e300 s is no device time.
+  if (s.device_time_s && !(std::isfinite(*s.device_time_s) && *s.device_time_s >= 0 && *s.device_time_s <= 1e9))
+    f.fail("device_time_s", "a device time in [0, 1e9] s", f.at("device_time_s"));
   if (s.loop_test && !s.device_time_s)  // written with it by every version that writes loop_test
     f.fail("device_time_s", "a device time (the state has loop_test)", nlohmann::json(nullptr));
   return s;
@@ -278,6 +295,9 @@ void ProcedureState::check_capture(Recorded& r, const std::string& field, const 
     throw std::invalid_argument(field + ".n: " + std::to_string(r.samples) + " samples, but a recording of " +
                                 fmt::format("{:g} s at {:g} Hz", want.seconds, profile_.rate_hz) + " holds " +
                                 std::to_string(planned));
+  if (r.attempts < 1 || r.attempts > profile_.retries + 1)
+    throw std::invalid_argument(field + ".attempts: " + std::to_string(r.attempts) + ", but a kept recording took 1 to " +
+                                std::to_string(profile_.retries + 1) + " attempts (the profile's retries + 1)");
   if (r.lost > profile_.max_lost_samples)
     throw std::invalid_argument(field + ".lost: " + std::to_string(r.lost) + " exceeds the profile's max_lost_samples (" +
                                 std::to_string(profile_.max_lost_samples) + "): such a recording is retried, not kept");

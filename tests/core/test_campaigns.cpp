@@ -348,8 +348,14 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   // The device time is a time: a negative one is refused, naming it.
   const std::string t = killed_at_the_end("device-time", [](json& cp) { cp["state"]["device_time_s"] = -5; });
   EXPECT_EQ(run({"run", "--resume", t, "--yes", "--no-history"}, t + "-io"), 2);
-  EXPECT_NE(slurp(t + "-io.stderr").find("state.device_time_s: expected a device time >= 0 s, found -5"), std::string::npos)
+  EXPECT_NE(slurp(t + "-io.stderr").find("state.device_time_s: expected a device time in [0, 1e9] s, found -5"),
+            std::string::npos)
       << slurp(t + "-io.stderr");
+  const std::string big = killed_at_the_end("device-time-big", [](json& cp) { cp["state"]["device_time_s"] = 1e300; });
+  EXPECT_EQ(run({"run", "--resume", big, "--yes", "--no-history"}, big + "-io"), 2);
+  EXPECT_NE(slurp(big + "-io.stderr").find("state.device_time_s: expected a device time in [0, 1e9] s, found 1e+300"),
+            std::string::npos)
+      << slurp(big + "-io.stderr");
 }
 
 // A resume continues the run it finds: the options that would change it are refused rather
@@ -600,9 +606,25 @@ TEST(Campaign, DamagedCheckpointSet) {
     refused(f, "state.runs.13: present, but no completed phase records it");
     j = cp;
     j["state"]["raw"] = j["state"]["in_run"];
+    j["state"]["raw"].erase("blocks");
     f = copy();
     std::ofstream(f + "/checkpoint.json") << j.dump();
     refused(f, "state.raw: present, but phase 'raw' that writes it is not completed");
+  }
+  {  // Keys this version does not write, attempts no kept recording took (a review: both were
+     // accepted, and the attempts copied into analysis.json).
+    json j = cp;
+    j["state"]["bogus"] = 1;
+    std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.bogus: not a key of a checkpoint (edited, or written by another version of rig?)");
+    for (const int attempts : {0, 99}) {
+      j = cp;
+      j["state"]["runs"]["3"]["attempts"] = attempts;
+      f = copy();
+      std::ofstream(f + "/checkpoint.json") << j.dump();
+      refused(f, "state.runs.3.attempts: " + std::to_string(attempts) + ", but a kept recording took 1 to 2 attempts");
+    }
   }
   {  // A capture whose sequence counter skips samples the record does not count as lost.
     json j = cp;

@@ -1099,6 +1099,20 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
   EXPECT_NE(slurp(d + "/type-io.stderr").find("run.json: field 'plant': expected a string, found number"),
             std::string::npos)
       << slurp(d + "/type-io.stderr");
+  inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+  inv["hardware"] = "/etc/hostname";  // an emulated run naming a hardware file: edited
+  EXPECT_EQ(with_run_json("emuhw", inv), 2);
+  EXPECT_NE(slurp(d + "/emuhw-io.stderr").find("run.json: field 'hardware': \"/etc/hostname\", but the run is on the "
+                                              "emulated plant"),
+            std::string::npos)
+      << slurp(d + "/emuhw-io.stderr");
+  inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+  inv["profile"] = "paper";  // run.json and profile.toml disagree on the profile
+  EXPECT_EQ(with_run_json("prof", inv), 2);
+  EXPECT_NE(slurp(d + "/prof-io.stderr").find("run.json: field 'profile': \"paper\", but " + d +
+                                             "/prof/profile.toml is profile \"ci\""),
+            std::string::npos)
+      << slurp(d + "/prof-io.stderr");
 
   // Capture headers with a rate the analysis cannot use: named at the header, exit 2.
   auto write_capture = [&](const std::string& path, double rate) {
