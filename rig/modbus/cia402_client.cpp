@@ -292,16 +292,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       throw HardwareError(doing + ": table not homed (run `rig table home` first)");
     set_mode(doing, c4::kModeProfilePosition, cancel);
     if (!profile_applied_) {
-      // A value the drive refuses (exception 0x03: above its maximum, say) is named by its key.
       auto setting = [&](Obj o, int64_t units, const char* key, double value) {
-        try {
-          write_object(o, units, cancel);
-        } catch (const ModbusError& e) {
-          if (e.exception_code != 3) throw;
-          char shown[32];
-          std::snprintf(shown, sizeof shown, "%g", value);
-          throw HardwareError(std::string("[table] ") + key + " = " + shown + ": the drive refused the value: " + e.what());
-        }
+        detail::write_setting(key, value, [&] { write_object(o, units, cancel); });
       };
       if (opt_.velocity_dps && map_.has(Obj::kProfileVelocity))
         setting(Obj::kProfileVelocity, std::llround(map_.dps_to_velocity_units(*opt_.velocity_dps)), "velocity_dps",

@@ -31,6 +31,21 @@ inline std::string secs(double s) {
   return b;
 }
 
+// Writes one [table] setting (`write` sends it); a value the drive refuses (exception 0x03,
+// illegal data value: above its maximum, say) is named by the key it came from, not only by its
+// register: the drive's limits are the drive's to know, so this is found at the first command.
+template <class Write>
+void write_setting(const char* key, double value, Write write) {
+  try {
+    write();
+  } catch (const ModbusError& e) {
+    if (e.exception_code != 3) throw;
+    char shown[32];
+    std::snprintf(shown, sizeof shown, "%g", value);
+    throw HardwareError(std::string("[table] ") + key + " = " + shown + ": the drive refused the value: " + e.what());
+  }
+}
+
 // Duration of a trapezoidal move (rig/core/table.hpp: the procedure's plan uses it too).
 using rig::trapezoid_time;
 

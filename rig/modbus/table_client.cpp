@@ -122,17 +122,8 @@ void TableClient::watch_heartbeat(const std::string& doing, const DriveState& d,
 
 void TableClient::apply_profile_once(const CancelToken& cancel) {
   if (profile_applied_) return;
-  // A value the drive refuses (exception 0x03, illegal data value: above its maximum, say) is
-  // named by the [table] key it came from, not only by its register.
   auto write = [&](uint16_t addr, std::vector<uint16_t> regs, const char* key, double value) {
-    try {
-      transport_->write(addr, regs, cancel);
-    } catch (const ModbusError& e) {
-      if (e.exception_code != 3) throw;
-      char shown[32];
-      std::snprintf(shown, sizeof shown, "%g", value);
-      throw HardwareError(std::string("[table] ") + key + " = " + shown + ": the drive refused the value: " + e.what());
-    }
+    detail::write_setting(key, value, [&] { transport_->write(addr, regs, cancel); });
   };
   uint16_t w[2];
   if (opt_.velocity_dps) {
