@@ -202,10 +202,19 @@ Reader::Reader(const std::string& path) : path_(path) {
     header_.phase = j.value("phase", "");
     header_.orientation = j.value("orientation", "");
     header_.started = j.value("started", "");
+    // What the samples mean is stated, never guessed: a format this reader does not know, units
+    // other than the g every rig capture holds, or no rate are refused (a missing rate read as
+    // 1000 Hz would put every tau of an analysis off by the true rate's ratio).
+    if (j.contains("format") && j["format"] != "rig.capture/1")
+      throw ConfigError(path + ": capture header format is " + j["format"].dump() +
+                        ", not \"rig.capture/1\" (written by another program or version?)");
     header_.units = j.value("units", "g");
-    if (j.contains("rate_hz") && !j["rate_hz"].is_number())
+    if (header_.units != "g")
+      throw ConfigError(path + ": capture header units is \"" + header_.units + "\", not \"g\" (a rig capture's samples are in g)");
+    if (!j.contains("rate_hz")) throw ConfigError(path + ": capture header has no rate_hz (the samples' rate, Hz)");
+    if (!j["rate_hz"].is_number())
       throw ConfigError(path + ": capture header field rate_hz is " + j["rate_hz"].dump() + ", not a number");
-    header_.rate_hz = j.value("rate_hz", 1000.0);
+    header_.rate_hz = j["rate_hz"].get<double>();
     header_.extra = j.value("extra", nlohmann::json::object());
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError(path + ": capture header is not valid JSON: " + e.what());

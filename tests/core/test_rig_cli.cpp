@@ -5,15 +5,19 @@
 // fails), late signals, damaged checkpoints, run folders and capture headers.
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <random>
 #include <sstream>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <zlib.h>
 
 #include "rig/capture/capture.hpp"
 #include "tests/core/rig_process.hpp"
@@ -1136,6 +1140,44 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
     EXPECT_EQ(run({"analyze", cap, "--input", "capture"}, d + "/rate"), 2) << rate;
     EXPECT_NE(slurp(d + "/rate.stderr").find(cap + ": capture header " + shown), std::string::npos)
         << slurp(d + "/rate.stderr");
+  }
+  // A header that does not say what its samples are: no rate (it was read as 1000 Hz), another
+  // format, units other than g (read as g). The header JSON is edited in place, padded to its
+  // length, with its CRC redone, so the only damage is what the header says.
+  const std::string good_cap = d + "/good.cap";
+  write_capture(good_cap, 250);
+  auto with_header = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
+    std::string b = slurp(good_cap);
+    uint32_t len = 0;
+    std::memcpy(&len, b.data() + 8, 4);
+    nlohmann::json h = nlohmann::json::parse(b.substr(16, len));
+    edit(h);
+    std::string js = h.dump();
+    EXPECT_LE(js.size(), len);
+    js.resize(len, ' ');
+    const uint32_t c = static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(js.data()), len));
+    b.replace(16, len, js);
+    std::memcpy(b.data() + 12, &c, 4);
+    const std::string path = d + "/" + name + ".cap";
+    std::ofstream(path, std::ios::binary) << b;
+    return path;
+  };
+  EXPECT_EQ(run({"analyze", with_header("same", [](nlohmann::json&) {}), "--input", "capture"}, d + "/same"), 0)
+      << slurp(d + "/same.stderr");
+  for (const auto& [name, edit, says] :
+       std::vector<std::tuple<std::string, std::function<void(nlohmann::json&)>, std::string>>{
+           {"norate", [](nlohmann::json& h) { h.erase("rate_hz"); }, "capture header has no rate_hz"},
+           {"format", [](nlohmann::json& h) { h["format"] = "rig.capture/2"; },
+            "capture header format is \"rig.capture/2\", not \"rig.capture/1\""},
+           {"units",
+            [](nlohmann::json& h) {
+              h["units"] = "mg";
+              h.erase("record");  // room for the longer value
+            }, "capture header units is \"mg\", not \"g\""}}) {
+    const std::string cap = with_header(name, edit);
+    EXPECT_EQ(run({"analyze", cap, "--input", "capture"}, d + "/" + name), 2) << name;
+    EXPECT_NE(slurp(d + "/" + name + ".stderr").find(cap + ": " + says), std::string::npos)
+        << slurp(d + "/" + name + ".stderr");
   }
   // Data after the end marker, and a block written twice: analysed, but not called complete.
   const std::string ok = d + "/ok.cap";
