@@ -183,12 +183,38 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
   return want;
 }
 
+void check_input_path(const std::string& path, const std::string& input) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw ConfigError(path + ": is a folder, not a record (give one file)");
+  if (!S_ISREG(st.st_mode) && input != "text")
+    throw ConfigError(path + ": not a regular file: --input " + input +
+                      " is read by its size (a pipe or FIFO can carry --input text)");
+}
+
+std::string quoted_bytes(std::string_view s) {
+  std::string out;
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7F) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\x%02X", c);
+      out += b;
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
 std::vector<double> read_text(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
   std::vector<double> v;
   std::string line;
   for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
+    // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
+    if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     const auto hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
     const auto b = line.find_first_not_of(" \t\r,;");
@@ -202,10 +228,10 @@ std::vector<double> read_text(const std::string& path) {
     double x = 0;
     const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), x);
     if (ec == std::errc::result_out_of_range)
-      throw ConfigError(where() + "'" + std::string(tok) + "' is beyond the range of a double");
+      throw ConfigError(where() + "'" + quoted_bytes(tok) + "' is beyond the range of a double");
     if (ec != std::errc() || end != num.data() + num.size())
-      throw ConfigError(where() + "not a decimal number: '" + std::string(tok) + "'");
-    if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + "'" + std::string(tok) + "': " + refusal(x));
+      throw ConfigError(where() + "not a decimal number: '" + quoted_bytes(tok) + "'");
+    if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + "'" + quoted_bytes(tok) + "': " + refusal(x));
     v.push_back(x);
   }
   return v;

@@ -9,6 +9,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "analysis/allan.hpp"
@@ -55,6 +56,14 @@ class F64File final : public analysis::ChunkSource {
 
 // One value per line; '#' starts a comment; blank lines are skipped; ',' ';' and blanks around
 // a value are ignored. Errors name path:line.
+// What the input is, before it is read: a folder is refused (it used to read as "0 values"),
+// and --input f64 and capture need a regular file (they are read by their size); text may come
+// from a pipe or FIFO, read until its writer closes it (a FIFO waits for its writer, as any
+// reader of one does). ConfigError naming the path.
+void check_input_path(const std::string& path, const std::string& input);
+// A value from a file quoted in a message: bytes that do not print (control bytes, NUL, DEL)
+// as \xNN, so a stray byte is seen rather than sent to the terminal.
+std::string quoted_bytes(std::string_view s);
 std::vector<double> read_text(const std::string& path);
 
 // A break in a capture's sample sequence: values[at - 1] and values[at] were not consecutive

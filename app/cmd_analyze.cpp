@@ -228,6 +228,12 @@ int run(const Args& a) {
   std::string gap_note;
   std::size_t analysed_from = 0;  // the first capture sample analysed (--gaps longest)
   double rate = a.rate.value_or(1000.0);
+  if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz)) {
+    char b[96];
+    std::snprintf(b, sizeof b, "--rate %g: the sample rate must be in (0, %g] Hz", *a.rate, capture::kMaxRateHz);
+    throw ConfigError(std::string("rig analyze: ") + b);
+  }
+  check_input_path(a.file, input);
   if (input == "text") {
     mem = read_text(a.file);
   } else if (input == "f64") {
@@ -243,10 +249,6 @@ int run(const Args& a) {
     throw ConfigError("rig analyze: --input must be text, f64 or capture, got '" + input + "'");
   }
   if (!src) src = std::make_unique<an::SpanSource>(mem);
-  if (!(rate > 0 && std::isfinite(rate)))
-    throw ConfigError(cap && !a.rate ? a.file + ": capture header rate_hz " + std::to_string(rate) +
-                                           " is not a positive number of Hz (give --rate)"
-                                     : "rig analyze: --rate must be a positive number of Hz");
   timer.mark("read");
   const std::uint64_t n = src->size();
   if (n < 3) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 3 are needed");

@@ -3,6 +3,8 @@
 // SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run; the
 // outcome rules (a resume judges as an uninterrupted run, a null limited value
 // fails), late signals, damaged checkpoints, run folders and capture headers.
+#include <sys/stat.h>
+
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -238,7 +240,10 @@ TEST(RigCli, AnalyzeOptionErrorsNameTheOptionAndValue) {
       {{"--taus", "log:1"}, "--taus 'log:1'"},
       {{"--dev", "mdev,hdev"}, "--dev 'mdev,hdev': one Allan-family deviation, got two (mdev and hdev)"},
       {{"--dev", "bogus"}, "--dev 'bogus'"},
-      {{"--data", "volts"}, "--data"}};
+      {{"--data", "volts"}, "--data"},
+      {{"--rate", "0"}, "--rate 0: the sample rate must be in (0, 1e+06] Hz"},
+      {{"--rate", "nan"}, "--rate nan: the sample rate must be in (0, 1e+06] Hz"},
+      {{"--rate", "1e300"}, "--rate 1e+300: the sample rate must be in (0, 1e+06] Hz"}};
   int i = 0;
   for (const auto& [opt, expect] : cases) {
     std::vector<std::string> args = {"analyze", d + "/v.txt"};
@@ -249,6 +254,29 @@ TEST(RigCli, AnalyzeOptionErrorsNameTheOptionAndValue) {
     EXPECT_NE(err.find(expect), std::string::npos) << err;
     EXPECT_EQ(err.find("theo1") != std::string::npos, opt[0] == "--dev") << err;
   }
+}
+
+// What the input is, before it is read (a review): a folder said "0 values"; a FIFO with
+// --input f64 hung; a stray byte in a message reached the terminal raw; a leading UTF-8 BOM (a
+// Windows editor's) made line 1 "not a decimal number" with the BOM invisible.
+TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
+  const std::string d = tmp("analyze-input-kind");
+  fs::create_directories(d + "/folder");
+  EXPECT_EQ(run({"analyze", d + "/folder"}, d + "/dir"), 2);
+  EXPECT_NE(slurp(d + "/dir.stderr").find(d + "/folder: is a folder, not a record"), std::string::npos)
+      << slurp(d + "/dir.stderr");
+  ASSERT_EQ(::mkfifo((d + "/fifo").c_str(), 0600), 0);
+  EXPECT_EQ(run({"analyze", d + "/fifo", "--input", "f64"}, d + "/fifo"), 2);  // no writer: returns, not hangs
+  EXPECT_NE(slurp(d + "/fifo.stderr").find("fifo: not a regular file: --input f64 is read by its size"),
+            std::string::npos)
+      << slurp(d + "/fifo.stderr");
+  std::ofstream(d + "/ctl.txt") << "1.0\n2.0\n3\x01" << '\0' << "x\n";
+  EXPECT_EQ(run({"analyze", d + "/ctl.txt"}, d + "/ctl"), 2);
+  EXPECT_NE(slurp(d + "/ctl.stderr").find("ctl.txt:3: not a decimal number: '3\\x01\\x00x'"), std::string::npos)
+      << slurp(d + "/ctl.stderr");
+  std::ofstream(d + "/bom.txt") << "\xEF\xBB\xBF" << "1.0\n2.0\n3.0\n4.0\n";
+  EXPECT_EQ(run({"analyze", d + "/bom.txt", "--json", d + "/bom.json"}, d + "/bom"), 0) << slurp(d + "/bom.stderr");
+  EXPECT_NE(slurp(d + "/bom.stdout").find("4 values"), std::string::npos) << slurp(d + "/bom.stdout");
 }
 
 TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
