@@ -98,7 +98,7 @@ std::string gost_value_name(double block_s);
 // and a GOST block's.
 uint64_t planned_samples(const Profile& p, double seconds);
 const std::string& builtin_profile_text(const std::string& name);  // throws ConfigError
-// The method turns the DUT 180° between U10 and U20 (docs/method.md, "Orientations"); a
+// The method turns the DUT 180° between U10 and U20 (docs/method.md, "U10 and U20"); a
 // mount's calibration moves each angle by a fraction of a degree. Angles `t` gives (a profile's
 // [table], a hardware file's [procedure]) that are not 180° ± 10° apart are refused, naming
 // u20_deg's place: a typo such as u20_deg = u10_deg would otherwise run the whole procedure
