@@ -169,6 +169,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
       throw ConfigError(path + ": field '" + key + "': expected a string, found " + inv[key].type_name());
     return inv[key].get<std::string>();
   };
+  (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
   a.plant = str("plant", "emulated");
   a.hardware = str("hardware", "");
   a.serial = str("serial", "");

@@ -137,7 +137,7 @@ void add_table(CLI::App& app, int& rc) {
   auto a = std::make_shared<TableArgs>();
   auto* sub = app.add_subcommand("table", "Manual control of the rotary table over Modbus (status, home, move, stop)");
   sub->require_subcommand(1);
-  auto* where = sub->add_option("--modbus", a->modbus, "Modbus TCP drive, HOST:PORT");
+  auto* where = sub->add_option("--modbus", a->modbus, "Modbus TCP drive, HOST:PORT or [IPv6]:PORT");
   sub->add_option("--rtu", a->rtu, "Modbus RTU drive, DEVICE[,BAUD[,PARITY,DATABITS,STOPBITS]] (default 19200,E,8,1)")
       ->excludes(where);
   sub->add_option("--hardware", a->hardware, "Take the [table] section of this hardware file (flags override)");

@@ -26,6 +26,12 @@ void check_history(const toml::table& t) {
 // The one reader of [procedure]: the validation and apply_procedure_angles share it.
 void read_procedure(const toml::table& t, double& u10_deg, double& u20_deg) {
   cfg::check_keys(t, {"u10_deg", "u20_deg"}, "procedure");
+  // A mount's calibration is a pair: one angle alone would be checked against the other's
+  // profile default, which the file does not show.
+  if (t.contains("u10_deg") != t.contains("u20_deg"))
+    throw ConfigError(cfg::where(t) + ": [procedure] gives " + (t.contains("u10_deg") ? "u10_deg" : "u20_deg") +
+                      " without " + (t.contains("u10_deg") ? "u20_deg" : "u10_deg") +
+                      ": a mount's calibrated angles are given together");
   u10_deg = cfg::get_number(t, "u10_deg", u10_deg, -360.0, 360.0);
   u20_deg = cfg::get_number(t, "u20_deg", u20_deg, -360.0, 540.0);
   acceptance::check_orientation_angles(t, u10_deg, u20_deg);

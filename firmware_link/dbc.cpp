@@ -7,6 +7,7 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <bitset>
 #include <cctype>
@@ -231,17 +232,17 @@ bool dbc_signal_fits(const DbcSignal& s, int bytes) {
   return ok;
 }
 
-bool dbc_signals_overlap(const DbcSignal& a, const DbcSignal& b) {
-  if (a.mux_value && b.mux_value && *a.mux_value != *b.mux_value) return false;
-  std::bitset<512> bits;  // 64 bytes of CAN FD payload
-  for_each_bit(a.start, a.length, a.big_endian, [&](int, int pos) {
-    if (pos >= 0 && pos < 512) bits.set(static_cast<std::size_t>(pos));
-  });
-  bool shared = false;
-  for_each_bit(b.start, b.length, b.big_endian, [&](int, int pos) {
-    shared = shared || (pos >= 0 && pos < 512 && bits.test(static_cast<std::size_t>(pos)));
-  });
-  return shared;
+std::bitset<512> dbc_signal_bits(const DbcSignal& s, uint64_t raw_bits) {
+  std::array<uint8_t, 64> payload{};
+  dbc_insert_raw(payload, s.start, s.length, s.big_endian, raw_bits);  // the codec's own bit order
+  std::bitset<512> bits;
+  for (std::size_t i = 0; i < 512; ++i)
+    if ((payload[i / 8] >> (i % 8)) & 1u) bits.set(i);
+  return bits;
+}
+
+bool dbc_same_frame(const DbcSignal& a, const DbcSignal& b) {
+  return !(a.mux_value && b.mux_value && *a.mux_value != *b.mux_value);
 }
 
 // ---- the parser ----------------------------------------------------------------------

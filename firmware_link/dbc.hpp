@@ -10,6 +10,7 @@
 // decoded with this (tests/kernel, `rig dut decode`), and DBC-described DUT streams
 // (firmware_link/dbc_stream.hpp) are decoded through it.
 #pragma once
+#include <bitset>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -134,9 +135,16 @@ double dbc_physical(const DbcSignal& s, std::span<const uint8_t> payload);
 uint64_t dbc_raw_of(const DbcSignal& s, double physical);
 // Whether every bit of the signal lies inside `bytes` payload bytes.
 bool dbc_signal_fits(const DbcSignal& s, int bytes);
-// Whether two signals of one message can read a common bit of one frame: they share a bit and
-// are not in two different multiplexed branches (m1 and m2 never appear in the same frame).
-bool dbc_signals_overlap(const DbcSignal& a, const DbcSignal& b);
+// The payload bits (byte * 8 + bit in byte, up to 64 bytes) that hold the raw bits of `s` set in
+// `raw_bits` (all of them by default; bit 0 = the raw value's least significant bit).
+std::bitset<512> dbc_signal_bits(const DbcSignal& s, uint64_t raw_bits = ~uint64_t{0});
+// Whether two signals of one message can be in one frame: not in two different multiplexed
+// branches (m1 and m2 never appear in the same frame).
+bool dbc_same_frame(const DbcSignal& a, const DbcSignal& b);
+// Whether two signals of one message can read a common bit of one frame.
+inline bool dbc_signals_overlap(const DbcSignal& a, const DbcSignal& b) {
+  return dbc_same_frame(a, b) && (dbc_signal_bits(a) & dbc_signal_bits(b)).any();
+}
 
 // Reading candump logs (LoggedFrame, parse_candump_line) is firmware_link/candump_log.hpp.
 

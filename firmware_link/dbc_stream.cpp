@@ -27,29 +27,40 @@ double unit_to_g(const std::string& unit, const std::string& what, const std::st
 }  // namespace
 
 namespace {
-// The counter and each x and y read bits of their own, and no status or flag signal reads theirs:
-// a DBC may alias bits on purpose (a status word and its single-bit flags), but a sample that
-// shares a bit with the counter or a flag is a layout error that would decode plausible nonsense.
+// The counter and each x and y read bits of their own, and no status bit or flag the stream reads
+// lies in them: a DBC may alias bits on purpose (a status word and its one-bit flags, a status word
+// that also holds the counter), but a sample sharing a bit with the counter or with a flag it reads
+// (or one signal named in two roles) would decode plausible nonsense. Of a status signal only the
+// bits the *_bit keys name are read, so only those count.
 template <class Roles, class Fail>
-void check_no_shared_bits(const Roles& r, const Fail& fail) {
-  std::vector<const DbcSignal*> data{r.counter}, control;
-  for (const auto& sl : r.samples) {
-    for (const DbcSignal* s : {sl.x, sl.y})
-      if (s) data.push_back(s);
-    for (const DbcSignal* s : {sl.status, sl.flag[0], sl.flag[1], sl.flag[2]})
-      if (s) control.push_back(s);
-  }
-  auto name = [&](const DbcSignal* s) {
-    return r.msg->name + "." + s->name + " (" + std::to_string(s->start) + "|" + std::to_string(s->length) + ", DBC line " +
-           std::to_string(s->line) + ")";
+void check_no_shared_bits(const Roles& r, uint64_t status_bits, const Fail& fail) {
+  struct Role {
+    std::string name;
+    const DbcSignal* s;
+    std::bitset<512> bits;
   };
+  std::vector<Role> data{{"counter", r.counter, dbc_signal_bits(*r.counter)}}, control;
+  const char* const flag_names[3] = {"filter_on", "saturated", "loop_fault"};
+  for (const auto& sl : r.samples) {
+    if (sl.x) data.push_back({"x", sl.x, dbc_signal_bits(*sl.x)});
+    if (sl.y) data.push_back({"y", sl.y, dbc_signal_bits(*sl.y)});
+    if (sl.status) control.push_back({"status", sl.status, dbc_signal_bits(*sl.status, status_bits)});
+    for (int k = 0; k < 3; ++k)
+      if (sl.flag[k]) control.push_back({flag_names[k], sl.flag[k], dbc_signal_bits(*sl.flag[k])});
+  }
+  auto name = [&](const Role& o) {
+    return o.name + " " + r.msg->name + "." + o.s->name + " (" + std::to_string(o.s->start) + "|" +
+           std::to_string(o.s->length) + ", DBC line " + std::to_string(o.s->line) + ")";
+  };
+  auto shared = [](const Role& a, const Role& b) { return dbc_same_frame(*a.s, *b.s) && (a.bits & b.bits).any(); };
   for (std::size_t i = 0; i < data.size(); ++i) {
     for (std::size_t j = i + 1; j < data.size(); ++j)
-      if (data[i] != data[j] && dbc_signals_overlap(*data[i], *data[j]))
-        fail("signals " + name(data[i]) + " and " + name(data[j]) + " share bits: the counter, x and y each need their own");
-    for (const DbcSignal* c : control)
-      if (c != data[i] && dbc_signals_overlap(*data[i], *c))
-        fail("signals " + name(data[i]) + " and " + name(c) + " share bits: a status or flag signal cannot read the counter's, x's or y's bits");
+      if (shared(data[i], data[j]))
+        fail(name(data[i]) + " and " + name(data[j]) + " share bits: the counter, x and y each need their own");
+    for (const Role& c : control)
+      if (shared(data[i], c))
+        fail(name(data[i]) + " and " + name(c) + " share bits: no status bit or flag the stream reads may lie in the "
+                                                 "counter, x or y");
   }
 }
 }  // namespace
@@ -100,6 +111,10 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
   if (status && spec_.filter_on_bit < 0 && spec_.saturated_bit < 0 && spec_.loop_fault_bit < 0)
     fail("status = \"" + spec_.status + "\" names no bit (filter_on_bit, saturated_bit, loop_fault_bit)");
 
+  uint64_t status_bits = 0;  // the raw bits of `status` the stream reads
+  for (int k = 0; k < 3; ++k)
+    if (*flag_bits[k] >= 0) status_bits |= uint64_t{1} << *flag_bits[k];
+
   std::set<const DbcMessage*> msgs{x.msg};
   if (y) msgs.insert(y->msg);
   // The signal of sample i: "NAMEi" with several samples per frame, else "NAME"; a shared
@@ -142,7 +157,7 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
             fail(std::string(flag_keys[k]) + " = \"" + *flag_names[k] + "\": no such signal in " + m->name);
         }
     }
-    check_no_shared_bits(r, fail);
+    check_no_shared_bits(r, status_bits, fail);
     by_frame_[key(m->id, m->extended)] = std::move(r);
   }
   if (status && !msgs.count(status->msg)) fail("status " + spec_.status + " is in a message carrying neither x nor y");

@@ -50,7 +50,10 @@ void check_orientation_angles(const toml::table& t, double u10_deg, double u20_d
   const std::string why = fmt::format("U20 is {:g}° from u10_deg = {:g}°; the method turns the DUT 180° (± {:g}°) "
                                       "between U10 and U20",
                                       apart, u10_deg, kTolDeg);
-  if (const toml::node* n = t.get("u20_deg")) cfg::reject(*n, "u20_deg", why);
+  // Name the angle the user's file wrote: one merged in from a base profile has no place.
+  auto placed = [](const toml::node* n) { return n && n->source().path && n->source().begin.line > 0; };
+  if (const toml::node* n = t.get("u20_deg"); placed(n)) cfg::reject(*n, "u20_deg", why);
+  if (const toml::node* n = t.get("u10_deg"); placed(n)) cfg::reject(*n, "u10_deg", why);
   throw ConfigError(cfg::where(t) + ": u20_deg = " + fmt::format("{:g}", u20_deg) + ": " + why);
 }
 

@@ -87,7 +87,9 @@ Recorded recorded_from(const Fields& f) {
   r.lost = f.count("lost");
   r.gaps = f.count("gaps");
   r.duplicates = f.has("duplicates") ? f.count("duplicates") : 0;  // older checkpoints lack it
-  r.attempts = static_cast<int>(f.count("attempts"));
+  const uint64_t attempts = f.count("attempts");  // checked against the profile's retries with the capture
+  if (attempts > 1000) f.fail("attempts", "a number of attempts (1 to the profile's retries + 1)", f.at("attempts"));
+  r.attempts = static_cast<int>(attempts);
   // null (a channel whose mean was not finite) or absent (older checkpoints): not stated, and
   // taken from the capture when the state is restored (ProcedureState::check_capture).
   r.mean_x = f.has("mean_g") ? f.num("mean_g") : kNotStated;
@@ -110,6 +112,7 @@ std::vector<std::size_t> counts_from(const Fields& f, const std::string& key) {
 
 LoopRecord loop_record_from(const Fields& f) {
   LoopRecord r;
+  f.only({"supported", "reason", "file", "rate_hz", "amplitude_g", "samples", "pre_samples", "saturated", "crc32"});
   const nlohmann::json& sup = f.at("supported");
   if (!sup.is_boolean()) f.fail("supported", "true or false", sup);
   r.supported = sup.get<bool>();
@@ -202,6 +205,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
       if (!sk.is_array()) d.fail("skipped", "an array", sk);
       for (std::size_t i = 0; i < sk.size(); ++i) {
         const Fields k(sk[i], d.path() + ".skipped[" + std::to_string(i) + "]");
+        k.only({"step", "reason"});
         s.dut->skipped.push_back({k.str("step"), k.str("reason")});
       }
     }
@@ -222,6 +226,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
   }
   if (f.has("bias")) {
     const Fields b = f.object("bias");
+    b.only({"bias", "base_error", "sign_u10"});
     BiasState bs{b.num("bias"), b.num("base_error"), static_cast<int>(b.integer("sign_u10"))};
     if (bs.sign_u10 != 1 && bs.sign_u10 != -1) b.fail("sign_u10", "+1 or -1", b.at("sign_u10"));
     s.bias = bs;
@@ -236,6 +241,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
       std::vector<GostBlock> blocks;
       for (std::size_t i = 0; i < arr.size(); ++i) {
         const Fields b(arr[i], ir.path() + ".blocks[" + std::to_string(i) + "]");
+        b.only({"block_s", "means_g", "b_g"});
         GostBlock g;
         g.block_s = b.num("block_s");
         const auto& means = b.at("means_g");

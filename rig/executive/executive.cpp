@@ -121,6 +121,9 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
     throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
   }
   if (!j.is_object()) throw bad("(top level)", std::string("expected an object, found ") + j.type_name());
+  for (const auto& [k, v] : j.items())
+    if (k != "schema" && k != "identity" && k != "completed" && k != "values" && k != "state")
+      throw bad(k, "not a key of a checkpoint (edited, or written by another version of rig?)");
   if (!j.contains("schema") || j["schema"] != "rig.checkpoint/1")
     throw bad("schema", "expected \"rig.checkpoint/1\", found " + (j.contains("schema") ? j["schema"].dump() : "nothing"));
   if (j.value("identity", nlohmann::json()) != identity) {

@@ -9,12 +9,15 @@
 namespace rig {
 
 namespace {
+// SIGHUP is taken unless the process started with it ignored: `nohup rig ...` asks that a
+// closed terminal not end the run (or move), and the watcher would otherwise override that.
 sigset_t abort_signals() {
   sigset_t s;
   sigemptyset(&s);
   sigaddset(&s, SIGINT);
   sigaddset(&s, SIGTERM);
-  sigaddset(&s, SIGHUP);
+  struct sigaction hup {};
+  if (sigaction(SIGHUP, nullptr, &hup) != 0 || hup.sa_handler != SIG_IGN) sigaddset(&s, SIGHUP);
   return s;
 }
 }  // namespace

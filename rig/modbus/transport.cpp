@@ -70,11 +70,13 @@ bool plausible_host(const std::string& h) {
   }
   return true;
 }
+// An IPv6 address, optionally with a zone (fe80::1%eth0) as getaddrinfo takes it.
 bool plausible_ipv6(const std::string& h) {
-  if (h.find(':') == std::string::npos) return false;
-  for (const char ch : h)
+  const std::string addr = h.substr(0, h.find('%'));
+  if (addr.find(':') == std::string::npos) return false;
+  for (const char ch : addr)
     if (!std::isxdigit(static_cast<unsigned char>(ch)) && ch != ':' && ch != '.') return false;
-  return true;
+  return h.find('%') == std::string::npos || plausible_host(h.substr(h.find('%') + 1));
 }
 }  // namespace
 
@@ -87,7 +89,8 @@ Endpoint parse_tcp(const std::string& host_port) {
   ep.host = host_port.substr(0, colon);
   const bool bracketed = ep.host.size() > 2 && ep.host.front() == '[' && ep.host.back() == ']';
   if (bracketed) ep.host = ep.host.substr(1, ep.host.size() - 2);
-  if (bracketed ? !plausible_ipv6(ep.host) : !plausible_host(ep.host))
+  // An IPv6 address without brackets (fd00::10:502) splits at its last ':' as it always did.
+  if (!plausible_host(ep.host) && !plausible_ipv6(ep.host))
     throw ConfigError("Modbus TCP address '" + host_port + "': '" + host_port.substr(0, colon) +
                       "' is not a host name or address (HOST:PORT, tcp:HOST:PORT, tcp:[IPv6]:PORT or "
                       "rtu:DEVICE[,BAUD...])");

@@ -625,6 +625,22 @@ TEST(Campaign, DamagedCheckpointSet) {
       std::ofstream(f + "/checkpoint.json") << j.dump();
       refused(f, "state.runs.3.attempts: " + std::to_string(attempts) + ", but a kept recording took 1 to 2 attempts");
     }
+    j = cp;
+    j["state"]["runs"]["3"]["attempts"] = 4294967297ull;  // 2^32 + 1: it wrapped to 1 and was accepted
+    f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "state.runs.3.attempts: expected a number of attempts");
+    for (const char* where : {"top", "bias", "block", "skipped"}) {  // the review: unknown keys there were accepted
+      j = cp;
+      const std::string w = where;
+      if (w == "top") j["bogus"] = 1;
+      if (w == "bias") j["state"]["bias"]["bogus"] = 1;
+      if (w == "block") j["state"]["in_run"]["blocks"][0]["bogus"] = 1;
+      if (w == "skipped") j["state"]["dut"]["skipped"] = json::array({{{"step", "s"}, {"reason", "r"}, {"bogus", 1}}});
+      f = copy();
+      std::ofstream(f + "/checkpoint.json") << j.dump();
+      refused(f, "bogus: not a key of a checkpoint");
+    }
   }
   {  // A capture whose sequence counter skips samples the record does not count as lost.
     json j = cp;

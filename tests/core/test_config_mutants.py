@@ -56,7 +56,9 @@ HARDWARE_KEYS = [
     ("rig", "name", "str", None, None, '"bench-1"'),
     ("history", "url", "str", None, None, '"sqlite:///tmp/rig-mutants.sqlite"'),
 ]
-HARDWARE_REQUIRED = {("table", "modbus"), ("dut", "can"), ("gpio", "power"), ("gpio", "estop")}
+# [procedure]'s angles are a pair (one alone is refused): never removed one at a time.
+HARDWARE_REQUIRED = {("table", "modbus"), ("dut", "can"), ("gpio", "power"), ("gpio", "estop"),
+                     ("procedure", "u10_deg"), ("procedure", "u20_deg")}
 
 PROFILE_HEAD = 'base = "ci"\n'
 PROFILE_KEYS = [

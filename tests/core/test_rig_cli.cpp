@@ -1139,6 +1139,11 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
             std::string::npos)
       << slurp(d + "/emuhw-io.stderr");
   inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+  inv["profile"] = 5;
+  EXPECT_EQ(with_run_json("proftype", inv), 2);
+  EXPECT_NE(slurp(d + "/proftype-io.stderr").find("run.json: field 'profile': expected a string, found number"),
+            std::string::npos)
+      << slurp(d + "/proftype-io.stderr");
   inv["profile"] = "paper";  // run.json and profile.toml disagree on the profile
   EXPECT_EQ(with_run_json("prof", inv), 2);
   EXPECT_NE(slurp(d + "/prof-io.stderr").find("run.json: field 'profile': \"paper\", but " + d +
@@ -1444,6 +1449,8 @@ TEST(HardwareFileValidation, OrientationsNotHalfATurnApartAreRefused) {
   EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 90.0"), err), 2) << err;
   EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = 180.4"), err), 0) << err;   // a mount's calibration
   EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, "u20_deg = -179.5"), err), 0) << err;  // the other way round
+  EXPECT_EQ(hardware_dry_run(d, hardware_file(d, 14, ""), err), 2) << err;  // u10_deg alone: a pair or nothing
+  EXPECT_NE(err.find("hw.toml:12:1: [procedure] gives u10_deg without u20_deg"), std::string::npos) << err;
   std::ofstream(d + "/p.toml") << "base = \"ci\"\n[table]\nu10_deg = 10.0\nu20_deg = 10.0\n";
   EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--dry-run"}, d + "/p"), 2);
   EXPECT_NE(slurp(d + "/p.stderr").find("p.toml:4:11: 'u20_deg' = 10.0: U20 is 0° from u10_deg = 10°"),

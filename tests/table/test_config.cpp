@@ -34,6 +34,8 @@ TEST(TableConfig, EndpointsParse) {
             std::string::npos);
   EXPECT_EQ(m::parse_endpoint("tcp:[fe80::1]:502").host, "fe80::1");
   EXPECT_EQ(m::parse_endpoint("[::1]:502").str(), "tcp:[::1]:502");  // str() parses back
+  EXPECT_EQ(m::parse_endpoint("fd00::10:502").host, "fd00::10");       // unbracketed, as before
+  EXPECT_EQ(m::parse_endpoint("tcp:[fe80::1%lo]:502").host, "fe80::1%lo");  // a link-local zone
   EXPECT_NE(config_error([] { m::parse_endpoint("udp:10.0.0.5:502"); }).find("'udp:10.0.0.5' is not a host name"),
             std::string::npos);
   EXPECT_NE(config_error([] { m::parse_endpoint("zz zz:502"); }).find("'zz zz' is not a host name"),
