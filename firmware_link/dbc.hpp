@@ -141,10 +141,6 @@ std::bitset<512> dbc_signal_bits(const DbcSignal& s, uint64_t raw_bits = ~uint64
 // Whether two signals of one message can be in one frame: not in two different multiplexed
 // branches (m1 and m2 never appear in the same frame).
 bool dbc_same_frame(const DbcSignal& a, const DbcSignal& b);
-// Whether two signals of one message can read a common bit of one frame.
-inline bool dbc_signals_overlap(const DbcSignal& a, const DbcSignal& b) {
-  return dbc_same_frame(a, b) && (dbc_signal_bits(a) & dbc_signal_bits(b)).any();
-}
 
 // Reading candump logs (LoggedFrame, parse_candump_line) is firmware_link/candump_log.hpp.
 

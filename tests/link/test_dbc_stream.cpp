@@ -46,6 +46,16 @@ CanFdFrame make(const Dbc& db, const std::string& msg, const std::map<std::strin
   return f;
 }
 
+// The error a decoder built from `spec` gives, placed as a hardware file's [dut.stream]; "no error".
+std::string spec_error(std::shared_ptr<const Dbc> db, DbcStreamSpec spec) {
+  try {
+    DbcStreamDecoder d(std::move(db), std::move(spec), "hw.toml:9:1: [dut.stream]");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 DbcStreamSpec xy_spec() {
   DbcStreamSpec s;
   s.counter = "ACC_XY.cnt";
@@ -251,14 +261,7 @@ TEST(DbcStream, WithoutYASampleIsItsX) {
 }
 
 TEST(DbcStream, SpecErrorsNameTheProblem) {
-  auto error = [](DbcStreamSpec s) {
-    try {
-      DbcStreamDecoder d(layouts(), std::move(s), "hw.toml:9:1: [dut.stream]");
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
+  auto error = [](DbcStreamSpec s) { return spec_error(layouts(), std::move(s)); };
   DbcStreamSpec s = xy_spec();
   s.x = "ACC_XY.nope";
   EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: x = \"ACC_XY.nope\": no signal nope in ACC_XY");
@@ -310,14 +313,7 @@ TEST(DbcStream, SignalsSharingBitsWithTheSampleAreRefused) {
       " SG_ st : 32|16@1+ (1,0) [0|65535] \"\" RIG\n"       // line 19: flags in bits 0..2, the counter in 8..15
       " SG_ cnt : 40|8@1+ (1,0) [0|255] \"\" RIG\n";        // line 20
   const auto db = std::make_shared<const Dbc>(Dbc::parse(text, "ovl.dbc"));
-  auto error = [&](DbcStreamSpec s) {
-    try {
-      DbcStreamDecoder d(db, std::move(s), "hw.toml:9:1: [dut.stream]");
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
+  auto error = [&](DbcStreamSpec s) { return spec_error(db, std::move(s)); };
   DbcStreamSpec s;
   s.counter = "OVL.cnt";
   s.x = "OVL.x";

@@ -22,6 +22,25 @@ class RigTable : public ::testing::Test {
     where_ = "--modbus " + server_.endpoint().substr(4);
   }
   int rig(const std::string& args, std::string& out) { return run(std::string(RIG_BIN) + " table " + args, out); }
+  // Homes the table, slows its profile (so a move is still running when a signal lands) and
+  // starts `rig table move 300` as its own process (after `prefix`, e.g. nohup), returning once
+  // the table moves.
+  void start_slow_move(const std::vector<std::string>& prefix, std::unique_ptr<Child>& child, int& fd) {
+    std::string out;
+    ASSERT_EQ(rig(where_ + " home", out), 0) << out;
+    ASSERT_EQ(run("mbpoll -m tcp -p " + server_.endpoint().substr(server_.endpoint().rfind(':') + 1) +
+                      " -a 1 -0 -1 -t 4:int -B -r 10 127.0.0.1 20000",
+                  out),
+              0)
+        << out;
+    std::vector<std::string> argv = prefix;
+    for (const std::string& a : {std::string(RIG_BIN), std::string("table"), std::string("--modbus"),
+                                 server_.endpoint().substr(4), std::string("move"), std::string("300")})
+      argv.push_back(a);
+    child = std::make_unique<Child>(argv, &fd);
+    for (int i = 0; i < 2000 && !emu_->snapshot().moving; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    ASSERT_TRUE(emu_->snapshot().moving);
+  }
   std::unique_ptr<plant::TableEmulator> emu_ = emulator(kFastTable);
   plant::TableServer server_{*emu_, "tcp:127.0.0.1:0"};
   std::string where_;
@@ -94,21 +113,11 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
 class RigTableSignal : public RigTable, public ::testing::WithParamInterface<int> {};
 
 TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
-  std::string out;
-  ASSERT_EQ(rig(where_ + " home", out), 0) << out;
-  // Slow the profile so the move is still running when the signal lands.
-  ASSERT_EQ(run("mbpoll -m tcp -p " + server_.endpoint().substr(server_.endpoint().rfind(':') + 1) +
-                    " -a 1 -0 -1 -t 4:int -B -r 10 127.0.0.1 20000",
-                out),
-            0)
-      << out;
   int fd = -1;
-  std::vector<std::string> argv = {RIG_BIN, "table", "--modbus", server_.endpoint().substr(4), "move", "300"};
-  Child child(argv, &fd);
-  for (int i = 0; i < 2000 && !emu_->snapshot().moving; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  ASSERT_TRUE(emu_->snapshot().moving);
-  ::kill(child.pid(), GetParam());
-  const int st = child.wait_status();
+  std::unique_ptr<Child> child;
+  ASSERT_NO_FATAL_FAILURE(start_slow_move({}, child, fd));
+  ::kill(child->pid(), GetParam());
+  const int st = child->wait_status();
   close(fd);
   ASSERT_TRUE(WIFEXITED(st)) << "killed by signal " << (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
   EXPECT_EQ(WEXITSTATUS(st), 3);
@@ -120,19 +129,11 @@ TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when
 // the process starts, stays ignored (a review: the watcher used to take it and halt the table).
 TEST_F(RigTable, NohupKeepsAMoveGoingThroughSighup) {
-  std::string out;
-  ASSERT_EQ(rig(where_ + " home", out), 0) << out;
-  ASSERT_EQ(run("mbpoll -m tcp -p " + server_.endpoint().substr(server_.endpoint().rfind(':') + 1) +
-                    " -a 1 -0 -1 -t 4:int -B -r 10 127.0.0.1 20000",
-                out),
-            0)
-      << out;
   int fd = -1;
-  Child child({"/usr/bin/nohup", RIG_BIN, "table", "--modbus", server_.endpoint().substr(4), "move", "300"}, &fd);
-  for (int i = 0; i < 2000 && !emu_->snapshot().moving; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  ASSERT_TRUE(emu_->snapshot().moving);
-  ::kill(child.pid(), SIGHUP);
-  const int st = child.wait_status();
+  std::unique_ptr<Child> child;
+  ASSERT_NO_FATAL_FAILURE(start_slow_move({"/usr/bin/nohup"}, child, fd));
+  ::kill(child->pid(), SIGHUP);
+  const int st = child->wait_status();
   close(fd);
   ASSERT_TRUE(WIFEXITED(st));
   EXPECT_EQ(WEXITSTATUS(st), 0);
