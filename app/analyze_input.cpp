@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <optional>
 #include <system_error>
 #include <thread>
@@ -184,6 +185,12 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
 }
 
 void check_input_path(const std::string& path, const std::string& input) {
+  if (path == "-") {  // standard input: read as it comes, so text only
+    if (input != "text")
+      throw ConfigError("-: standard input carries --input text only (--input " + input +
+                        " is read by its size: give the file)");
+    return;
+  }
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) throw ConfigError(path + ": is a folder, not a record (give one file)");
@@ -208,8 +215,13 @@ std::string quoted_bytes(std::string_view s) {
 }
 
 std::vector<double> read_text(const std::string& path) {
+  if (path == "-") return read_text(std::cin, "stdin");
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  return read_text(in, path);
+}
+
+std::vector<double> read_text(std::istream& in, const std::string& path) {
   std::vector<double> v;
   std::string line;
   for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {

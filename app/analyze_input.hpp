@@ -6,6 +6,7 @@
 #pragma once
 #include <mutex>
 #include <cstdint>
+#include <istream>
 #include <memory>
 #include <span>
 #include <string>
@@ -59,12 +60,14 @@ class F64File final : public analysis::ChunkSource {
 // What the input is, before it is read: a folder is refused (it used to read as "0 values"),
 // and --input f64 and capture need a regular file (they are read by their size); text may come
 // from a pipe or FIFO, read until its writer closes it (a FIFO waits for its writer, as any
-// reader of one does). ConfigError naming the path.
+// reader of one does); "-" is standard input, text only. ConfigError naming the path.
 void check_input_path(const std::string& path, const std::string& input);
 // A value from a file quoted in a message: bytes that do not print (control bytes, NUL, DEL)
 // as \xNN, so a stray byte is seen rather than sent to the terminal.
 std::string quoted_bytes(std::string_view s);
+// path "-" reads standard input, its errors naming "stdin:LINE".
 std::vector<double> read_text(const std::string& path);
+std::vector<double> read_text(std::istream& in, const std::string& name);
 
 // A break in a capture's sample sequence: values[at - 1] and values[at] were not consecutive
 // samples (the link or the reader flagged samples lost before `at`, or the DUT's counter jumps).

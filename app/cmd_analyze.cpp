@@ -534,7 +534,7 @@ void add_analyze(CLI::App& app, int& rc) {
   auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand("analyze", "Allan deviation with bounds, noise terms and PSD of a recording");
   sub->add_option("file", args->file, "recording (text: one value per line, '#' comments; f64: raw LE float64; "
-                                      "capture: the rig's capture file)")
+                                      "capture: the rig's capture file; - = standard input, text)")
       ->required();
   sub->add_option("--input", args->input,
                   "text|f64|capture (default: by extension, .f64/.bin = f64, .cap/.rigcap = capture, else text)")

@@ -21,6 +21,37 @@ RECORD = np.dtype([("seq", "<u4"), ("x", "<f4"), ("y", "<f4"), ("status", "<u4")
 BLOCK, END = 0x314B4C42, 0x31444E45
 
 
+MAX_RATE_HZ = 1e6  # rig/capture/capture.cpp's kMaxRateHz
+
+
+def _check_header(path, h):
+    """What the samples mean is stated, never guessed, as rig's own reader does
+    (docs/capture-format.md): a format it does not know, units other than g, or no rate
+    (a rate guessed as 1000 Hz would put every tau off by the true rate's ratio) are refused."""
+    if not isinstance(h, dict):
+        raise ValueError(f"{path}: capture header is not a JSON object")
+    if "format" in h and h["format"] != "rig.capture/1":
+        raise ValueError(f"{path}: capture header format is {json.dumps(h['format'])}, not \"rig.capture/1\"")
+    if h.get("units", "g") != "g":
+        raise ValueError(f"{path}: capture header units is {json.dumps(h['units'])}, not \"g\"")
+    if "rate_hz" not in h:
+        raise ValueError(f"{path}: capture header has no rate_hz (the samples' rate, Hz)")
+    r = h["rate_hz"]
+    if isinstance(r, bool) or not isinstance(r, (int, float)):
+        raise ValueError(f"{path}: capture header field rate_hz is {json.dumps(r)}, not a number")
+    if not (0 < r <= MAX_RATE_HZ):  # also NaN
+        raise ValueError(f"{path}: capture header rate_hz = {r} is out of range (0, {MAX_RATE_HZ:g}] Hz")
+
+
+def _with_header(raw, header):
+    """The capture `raw` with its header replaced (tests: a damaged or foreign header)."""
+    hlen = struct.unpack_from("<I", raw, 8)[0]
+    data = raw[(16 + hlen + 15) & ~15:]
+    hjson = json.dumps(header).encode()
+    out = raw[:8] + struct.pack("<II", len(hjson), zlib.crc32(hjson)) + hjson
+    return out + b"\0" * (-len(out) % 16) + data
+
+
 def load(path):
     raw = open(path, "rb").read()
     if raw[:8] != b"RIGCAP1\n":
@@ -30,6 +61,7 @@ def load(path):
     if zlib.crc32(hjson) != hcrc:
         raise ValueError(f"{path}: header CRC mismatch")
     header = json.loads(hjson)
+    _check_header(path, header)
     pos = (16 + hlen + 15) & ~15
     parts, report = [], {"complete": False, "damaged": [], "samples": 0}
     while pos + 16 <= len(raw):
@@ -69,7 +101,31 @@ def _self_test(generator):
         assert np.array_equal(data["x"], (i * 0.5).astype(np.float32))
         assert np.array_equal(data["y"], (-i * 0.25).astype(np.float32))
         assert np.array_equal(data["status"], i & 1)
-    print("rigcap self-test: 1 passed, 0 failed")
+        passed = 1
+        raw = open(p, "rb").read()
+        bad = {"no rate": ({k: v for k, v in h.items() if k != "rate_hz"}, "has no rate_hz"),
+               "rate as text": (dict(h, rate_hz="1000"), 'rate_hz is "1000", not a number'),
+               "rate 0": (dict(h, rate_hz=0), "rate_hz = 0 is out of range"),
+               "format": (dict(h, format="other/2"), 'format is "other/2"'),
+               "units": (dict(h, units="m/s^2"), 'units is "m/s^2"')}
+        for name, (header, says) in bad.items():
+            q = os.path.join(d, "bad.cap")
+            open(q, "wb").write(_with_header(raw, header))
+            try:
+                load(q)
+                raise AssertionError(f"{name}: accepted")
+            except ValueError as e:
+                assert str(e).startswith(q + ": ") and says in str(e), (name, str(e))
+            passed += 1
+        h2, data2, rep2 = load(_write(os.path.join(d, "same.cap"), _with_header(raw, h)))
+        assert h2 == h and rep2 == rep and np.array_equal(data2, data), "rewriting the header moved the samples"
+        passed += 1
+    print(f"rigcap self-test: {passed} passed, 0 failed")
+
+
+def _write(path, raw):
+    open(path, "wb").write(raw)
+    return path
 
 
 if __name__ == "__main__":

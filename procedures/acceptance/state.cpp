@@ -1,9 +1,11 @@
 #include "procedures/acceptance/state.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <span>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -16,6 +18,10 @@ namespace rig::acceptance {
 namespace {
 
 constexpr double kNotStated = std::numeric_limits<double>::quiet_NaN();
+
+// The keys to_json(Recorded) writes: every recording's object (a run, the in-run, the raw) has them.
+constexpr std::array<std::string_view, 8> kRecordedKeys{"capture",    "n",        "lost",   "gaps",
+                                                        "duplicates", "attempts", "mean_g", "mean_y_g"};
 
 // Reading a JSON object field by field; every error names the field's path.
 class Fields {
@@ -55,9 +61,10 @@ class Fields {
   Fields object(const std::string& key) const { return Fields(at(key), path_ + "." + key); }
   // A key this version does not write is refused: a checkpoint is rig's own file, and a key it
   // does not know is an edit or another version's, whose meaning this one would silently drop.
-  void only(std::initializer_list<std::string_view> keys) const {
+  // `also`: a shared key list (a recording's, kRecordedKeys) the object holds besides `keys`.
+  void only(std::initializer_list<std::string_view> keys, std::span<const std::string_view> also = {}) const {
     for (const auto& [k, v] : j_.items())
-      if (std::find(keys.begin(), keys.end(), k) == keys.end())
+      if (std::find(keys.begin(), keys.end(), k) == keys.end() && std::find(also.begin(), also.end(), k) == also.end())
         throw std::invalid_argument(path_ + "." + k + ": not a key of a checkpoint (edited, or written by another "
                                                       "version of rig?)");
   }
@@ -214,7 +221,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
     const Fields rs = f.object("runs");
     for (const auto& [k, v] : f.at("runs").items()) {
       const Fields r(v, rs.path() + "." + k);
-      r.only({"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g", "index", "orientation"});
+      r.only({"index", "orientation"}, kRecordedKeys);
       RunMean m;
       m.index = static_cast<std::size_t>(r.count("index"));
       if (std::to_string(m.index) != k) r.fail("index", "the run's key " + k, r.at("index"));
@@ -233,7 +240,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
   }
   if (f.has("in_run")) {
     const Fields ir = f.object("in_run");
-    ir.only({"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g", "blocks"});
+    ir.only({"blocks"}, kRecordedKeys);
     if (ir.has("capture")) s.in_run = recorded_from(ir);
     if (ir.has("blocks")) {
       const auto& arr = ir.at("blocks");
@@ -258,7 +265,7 @@ DutState dut_state_from_json(const nlohmann::json& j) {
   }
   if (f.has("raw")) {
     const Fields raw = f.object("raw");
-    raw.only({"capture", "n", "lost", "gaps", "duplicates", "attempts", "mean_g", "mean_y_g"});
+    raw.only({}, kRecordedKeys);
     s.raw = recorded_from(raw);
   }
   if (f.has("analysis")) {

@@ -159,6 +159,13 @@ void MeasurementSet::restore(const nlohmann::json& values) {
     if (!cur) throw std::invalid_argument(where + ": not a measurement of this procedure");
     const nlohmann::json& j = it.value();
     if (!j.is_object()) throw std::invalid_argument(where + ": expected an object, found " + j.type_name());
+    // The keys to_json writes; unit, limits, outcome and description are not read back (they
+    // come from the current profile), but a key no version writes means the file was edited.
+    for (const auto& [k, v] : j.items())
+      if (k != "value" && k != "unit" && k != "lo" && k != "hi" && k != "limits" && k != "outcome" &&
+          k != "reason" && k != "description")
+        throw std::invalid_argument(where + "." + k + ": not a key of a checkpoint (edited, or written by another "
+                                    "version of rig?)");
     if (!j.contains("value")) throw std::invalid_argument(where + ".value: missing");
     cur->value = opt_number(j, where, "value");
     cur->lo = opt_number(j, where, "lo");

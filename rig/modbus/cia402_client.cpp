@@ -293,7 +293,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     set_mode(doing, c4::kModeProfilePosition, cancel);
     if (!profile_applied_) {
       auto setting = [&](Obj o, int64_t units, const char* key, double value) {
-        detail::write_setting(key, value, [&] { write_object(o, units, cancel); });
+        detail::write_setting(opt_.where(key), key, value, [&] { write_object(o, units, cancel); });
       };
       if (opt_.velocity_dps && map_.has(Obj::kProfileVelocity))
         setting(Obj::kProfileVelocity, std::llround(map_.dps_to_velocity_units(*opt_.velocity_dps)), "velocity_dps",

@@ -32,17 +32,18 @@ inline std::string secs(double s) {
 }
 
 // Writes one [table] setting (`write` sends it); a value the drive refuses (exception 0x03,
-// illegal data value: above its maximum, say) is named by the key it came from, not only by its
-// register: the drive's limits are the drive's to know, so this is found at the first command.
+// illegal data value: above its maximum, say) is named by the key it came from and where that
+// was written (`where`, "file:line:col", or empty), not only by its register: the drive's
+// limits are the drive's to know, so this is found at the first command.
 template <class Write>
-void write_setting(const char* key, double value, Write write) {
+void write_setting(const std::string& where, const char* key, double value, Write write) {
   try {
     write();
   } catch (const ModbusError& e) {
     if (e.exception_code != 3) throw;
     char shown[32];
     std::snprintf(shown, sizeof shown, "%g", value);
-    throw HardwareError(std::string("[table] ") + key + " = " + shown + ": the drive refused the value: " + e.what());
+    throw HardwareError((where.empty() ? std::string() : where + ": ") + "[table] " + key + " = " + shown + ": the drive refused the value: " + e.what());
   }
 }
 

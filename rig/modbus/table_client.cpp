@@ -123,7 +123,7 @@ void TableClient::watch_heartbeat(const std::string& doing, const DriveState& d,
 void TableClient::apply_profile_once(const CancelToken& cancel) {
   if (profile_applied_) return;
   auto write = [&](uint16_t addr, std::vector<uint16_t> regs, const char* key, double value) {
-    detail::write_setting(key, value, [&] { transport_->write(addr, regs, cancel); });
+    detail::write_setting(opt_.where(key), key, value, [&] { transport_->write(addr, regs, cancel); });
   };
   uint16_t w[2];
   if (opt_.velocity_dps) {
@@ -351,6 +351,8 @@ TableOptions table_options_from_toml(const toml::table& t) {
   if (t.contains("in_position_window_deg"))
     o.in_position_window_deg = cfg::get_number(t, "in_position_window_deg", {}, 0.0001, 6.5);
   if (t.contains("drive_settle_s")) o.drive_settle_s = cfg::get_number(t, "drive_settle_s", {}, 0.0, 65.0);
+  for (const char* k : {"velocity_dps", "accel_dps2", "in_position_window_deg", "drive_settle_s"})
+    if (const toml::node* n = t.get(k)) o.written_at[k] = cfg::where(*n);
   return o;
 }
 

@@ -4,10 +4,13 @@
 // exercised in both.
 #pragma once
 #include <atomic>
+#include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include <toml++/toml.h>
 
@@ -28,6 +31,12 @@ struct TableOptions {
   double heartbeat_timeout_s = 2.0;// drive heartbeat frozen this long = controller hung
   // Written to the drive before the first motion when set (else the drive's own).
   std::optional<double> velocity_dps, accel_dps2, in_position_window_deg, drive_settle_s;
+  // Where each of those four was written ("rig.toml:7:1"), for the message if the drive refuses it.
+  std::map<std::string, std::string, std::less<>> written_at;
+  std::string where(std::string_view key) const {
+    const auto it = written_at.find(key);
+    return it == written_at.end() ? std::string() : it->second;
+  }
 };
 
 // Decoded drive registers [0, reg::kBlockEnd).

@@ -42,8 +42,9 @@ inline std::string slurp(const std::string& p) {
 }
 
 // Starts RIG_BINARY with `args`; stdout and stderr go to io_prefix.stdout / .stderr, the
-// history to io_prefix.history.sqlite (tests never touch the user's database).
-inline Child spawn(const std::vector<std::string>& args, const std::string& io_prefix) {
+// history to io_prefix.history.sqlite (tests never touch the user's database); stdin reads `in`.
+inline Child spawn(const std::vector<std::string>& args, const std::string& io_prefix,
+                   const std::string& in = "/dev/null") {
   std::vector<char*> argv;
   std::string bin = RIG_BINARY;
   argv.push_back(bin.data());
@@ -55,7 +56,7 @@ inline Child spawn(const std::vector<std::string>& args, const std::string& io_p
   c.err = io_prefix + ".stderr";
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 0, in.c_str(), O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&fa, 1, c.out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_addopen(&fa, 2, c.err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   const std::string hist = "RIG_HISTORY=sqlite:" + io_prefix + ".history.sqlite";
@@ -77,8 +78,9 @@ inline int wait_exit(const Child& c) {
   return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
 }
 
-inline int run(const std::vector<std::string>& args, const std::string& io_prefix) {
-  return wait_exit(spawn(args, io_prefix));
+inline int run(const std::vector<std::string>& args, const std::string& io_prefix,
+               const std::string& in = "/dev/null") {
+  return wait_exit(spawn(args, io_prefix, in));
 }
 
 // Polls (bounded) until `path` exists; returns false if the child ended first.

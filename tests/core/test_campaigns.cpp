@@ -630,13 +630,14 @@ TEST(Campaign, DamagedCheckpointSet) {
     f = copy();
     std::ofstream(f + "/checkpoint.json") << j.dump();
     refused(f, "state.runs.3.attempts: expected a number of attempts");
-    for (const char* where : {"top", "bias", "block", "skipped"}) {  // the review: unknown keys there were accepted
+    for (const char* where : {"top", "bias", "block", "skipped", "value"}) {  // the review: unknown keys there were accepted
       j = cp;
       const std::string w = where;
       if (w == "top") j["bogus"] = 1;
       if (w == "bias") j["state"]["bias"]["bogus"] = 1;
       if (w == "block") j["state"]["in_run"]["blocks"][0]["bogus"] = 1;
       if (w == "skipped") j["state"]["dut"]["skipped"] = json::array({{{"step", "s"}, {"reason", "r"}, {"bogus", 1}}});
+      if (w == "value") j["values"]["bias"]["bogus"] = 1;
       f = copy();
       std::ofstream(f + "/checkpoint.json") << j.dump();
       refused(f, "bogus: not a key of a checkpoint");

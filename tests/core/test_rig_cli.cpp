@@ -277,6 +277,17 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   std::ofstream(d + "/bom.txt") << "\xEF\xBB\xBF" << "1.0\n2.0\n3.0\n4.0\n";
   EXPECT_EQ(run({"analyze", d + "/bom.txt", "--json", d + "/bom.json"}, d + "/bom"), 0) << slurp(d + "/bom.stderr");
   EXPECT_NE(slurp(d + "/bom.stdout").find("4 values"), std::string::npos) << slurp(d + "/bom.stdout");
+  // "-" is standard input (`... | rig analyze -`), text only; its errors name stdin:LINE.
+  EXPECT_EQ(run({"analyze", "-", "--json", d + "/stdin.json"}, d + "/stdin", d + "/bom.txt"), 0)
+      << slurp(d + "/stdin.stderr");
+  EXPECT_NE(slurp(d + "/stdin.stdout").find("4 values"), std::string::npos) << slurp(d + "/stdin.stdout");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/stdin.json"))["file"], "-");
+  EXPECT_EQ(run({"analyze", "-"}, d + "/stdin-ctl", d + "/ctl.txt"), 2);
+  EXPECT_NE(slurp(d + "/stdin-ctl.stderr").find("stdin:3: not a decimal number: '3\\x01\\x00x'"), std::string::npos)
+      << slurp(d + "/stdin-ctl.stderr");
+  EXPECT_EQ(run({"analyze", "-", "--input", "f64"}, d + "/stdin-f64", d + "/bom.txt"), 2);
+  EXPECT_NE(slurp(d + "/stdin-f64.stderr").find("-: standard input carries --input text only"), std::string::npos)
+      << slurp(d + "/stdin-f64.stderr");
 }
 
 TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {

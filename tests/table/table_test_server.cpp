@@ -13,7 +13,9 @@
 
 int main(int argc, char** argv) {
   const std::string first = argc > 1 ? argv[1] : "";
-  if (argc < 2 || argc > 3 || first == "--help" || first == "-h") {
+  bool help = false;  // --help in either place: as TOML it would be a parse error
+  for (int i = 1; i < argc; ++i) help = help || std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h";
+  if (argc < 2 || argc > 3 || help) {
     std::fprintf(argc < 2 || argc > 3 ? stderr : stdout,
                  "usage: %s SPEC [TOML]\n  SPEC  tcp:HOST:PORT (port 0: any free one) or rtu:DEVICE[,BAUD...]\n"
                  "  TOML  [plant.table] keys as text, e.g. 'velocity_dps = 90.0'\n",

@@ -82,8 +82,8 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   EXPECT_NE(out.find("cannot connect"), std::string::npos) << out;
 }
 
-// A [table] setting beyond what the drive accepts is named by its key (the drive's maximum is
-// only the drive's to know: exit 4 at the first command, the key and value in the message).
+// A [table] setting beyond what the drive accepts is named by its key and the line that wrote it
+// (the drive's maximum is only the drive's to know: exit 4 at the first command).
 TEST_F(RigTable, ASettingTheDriveRefusesIsNamedByItsKey) {
   const std::string hw = testing::TempDir() + "/too-fast.toml";
   {
@@ -93,7 +93,7 @@ TEST_F(RigTable, ASettingTheDriveRefusesIsNamedByItsKey) {
   }
   std::string out;
   EXPECT_EQ(rig("--hardware " + hw + " home", out), 4) << out;
-  EXPECT_NE(out.find("[table] velocity_dps = 3999: the drive refused the value: write 2 registers at 10"),
+  EXPECT_NE(out.find(hw + ":3:16: [table] velocity_dps = 3999: the drive refused the value: write 2 registers at 10"),
             std::string::npos)
       << out;
   EXPECT_NE(out.find("exception 0x03 illegal data value"), std::string::npos) << out;
