@@ -215,7 +215,13 @@ std::string quoted_bytes(std::string_view s) {
 }
 
 std::vector<double> read_text(const std::string& path) {
-  if (path == "-") return read_text(std::cin, "stdin");
+  if (path == "-") {
+    // An ifstream on the descriptor, not std::cin: cin, synced with C stdio, reads a third as fast.
+    if (::isatty(STDIN_FILENO)) std::cerr << "rig analyze: reading values from standard input (end with Ctrl-D)\n";
+    std::ifstream in("/dev/stdin");
+    if (!in) throw ConfigError(std::string("stdin: cannot open: ") + std::strerror(errno));
+    return read_text(in, "stdin");
+  }
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
   return read_text(in, path);

@@ -210,6 +210,12 @@ int run(const Args& a) {
   if (a.no_oadev && !a.svg_dir.empty())
     throw ConfigError("rig analyze: --svg plots OADEV and its noise terms: not with --no-oadev");
 
+  // Standard input ("-") is named "stdin" in messages, as its lines are ("stdin:12: ...").
+  const std::string input_name = a.file == "-" ? "stdin" : a.file;
+  for (const auto& [opt, out] : {std::pair{"--json", &a.json_out}, std::pair{"--svg", &a.svg_dir}})
+    if (*out == "-")
+      throw ConfigError(std::string("rig analyze: ") + opt + " -: give a file or folder (standard output carries the "
+                        "summary)");
   std::string input = a.input;
   if (input == "auto") {
     const auto ext = std::filesystem::path(a.file).extension().string();
@@ -217,9 +223,9 @@ int run(const Args& a) {
   }
   // Source: text and captures are held in memory; float64 files are streamed.
   if (a.channel && input != "capture")
-    throw ConfigError("rig analyze: --channel is for capture files (x or y); " + a.file + " is read as " + input);
+    throw ConfigError("rig analyze: --channel is for capture files (x or y); " + input_name + " is read as " + input);
   if (a.gaps && input != "capture")
-    throw ConfigError("rig analyze: --gaps is for capture files (their sample counter shows gaps); " + a.file +
+    throw ConfigError("rig analyze: --gaps is for capture files (their sample counter shows gaps); " + input_name +
                       " is read as " + input);
   const std::string gap_policy = a.gaps.value_or("join");
   std::vector<double> mem;
@@ -251,7 +257,7 @@ int run(const Args& a) {
   if (!src) src = std::make_unique<an::SpanSource>(mem);
   timer.mark("read");
   const std::uint64_t n = src->size();
-  if (n < 3) throw ConfigError(a.file + ": " + std::to_string(n) + " values; at least 3 are needed");
+  if (n < 3) throw ConfigError(input_name + ": " + std::to_string(n) + " values; at least 3 are needed");
   // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
   std::vector<std::string> notes;
   if (!gap_note.empty()) notes.push_back(gap_note);
@@ -273,7 +279,7 @@ int run(const Args& a) {
   bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
   if (want_psd && n < an::welch_segment(n, wo)) {
     if (a.segment)
-      throw ConfigError(a.file + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
+      throw ConfigError(input_name + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
                         std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
     notes.push_back("no PSD: " + std::to_string(n) + " values are fewer than one Welch segment of " +
                     std::to_string(an::welch_segment(n, wo)) + " (give --segment to have one)");
@@ -299,7 +305,7 @@ int run(const Args& a) {
         if (an::factor_in_range(o.type, n_phase, m)) o.factors.push_back(m);
         else dropped += (dropped.empty() ? "" : ", ") + std::to_string(m);
       if (o.factors.empty())
-        throw ConfigError(a.file + ": --taus " + a.taus + ": no factor with a complete term of " +
+        throw ConfigError(input_name + ": --taus " + a.taus + ": no factor with a complete term of " +
                           an::to_string(o.type) + " on " + std::to_string(n_phase) + " phase points");
       if (!dropped.empty())
         notes.push_back(std::string(an::to_string(o.type)) + ": factor(s) " + dropped + " of --taus " + a.taus +
@@ -318,7 +324,7 @@ int run(const Args& a) {
     try {
       devs = an::deviations_stream(*src, opts, so);
     } catch (const std::invalid_argument& e) {
-      throw ConfigError(a.file + ": " + e.what());
+      throw ConfigError(input_name + ": " + e.what());
     }
   };
   compute();
@@ -330,7 +336,7 @@ int run(const Args& a) {
   }
   for (std::size_t k = 0; k < devs.size(); ++k)
     if (devs[k].empty())
-      throw ConfigError(a.file + ": " + std::to_string(n) + " values are too few for any tau of " +
+      throw ConfigError(input_name + ": " + std::to_string(n) + " values are too few for any tau of " +
                         an::to_string(opts[k].type) + " (" + a.taus + ")");
   const double record_s = static_cast<double>(n) / rate;
   // The file is read again only by the PSD and the long-tau statistics. Without them its mapping
@@ -375,7 +381,7 @@ int run(const Args& a) {
       values = std::span<const double>(p, n);
     } else {
       held.resize(n);
-      if (src->read_at(0, held) != n) throw ConfigError(a.file + ": the file ended early");
+      if (src->read_at(0, held) != n) throw ConfigError(input_name + ": the file ended early");
       values = held;
     }
     for (an::LongTau t : long_taus) {
@@ -391,7 +397,7 @@ int run(const Args& a) {
       try {
         longs.push_back(an::long_tau(values, lo));
       } catch (const std::invalid_argument& e) {
-        throw ConfigError(a.file + ": " + e.what());
+        throw ConfigError(input_name + ": " + e.what());
       }
     }
     timer.mark("long tau");
@@ -433,7 +439,7 @@ int run(const Args& a) {
     try {
       psd = an::welch(*src, rate, wo);
     } catch (const std::invalid_argument& e) {
-      throw ConfigError(a.file + ": " + e.what());
+      throw ConfigError(input_name + ": " + e.what());
     }
     peaks = an::find_peaks(*psd, 10.0, 20);
     json pj = {{"method", "welch"}, {"window", a.window}, {"segment", psd->segment}, {"segments", psd->segments},
@@ -466,7 +472,7 @@ int run(const Args& a) {
     std::error_code ec;
     std::filesystem::create_directories(a.svg_dir, ec);
     if (ec) throw ConfigError(a.svg_dir + ": cannot create: " + ec.message());
-    const std::string name = std::filesystem::path(a.file).filename().string();
+    const std::string name = a.file == "-" ? input_name : std::filesystem::path(a.file).filename().string();
     // The report's plotter, fed the same JSON views as --json writes.
     write_file(std::filesystem::path(a.svg_dir) / "allan.svg",
                report::to_svg_file(report::allan_plot(j["oadev"], &j["noise_terms"], a.confidence, "allan",
@@ -483,9 +489,9 @@ int run(const Args& a) {
     o << cap->recovery.summary(a.file) << "\n";
     for (const auto& note : cap->recovery.notes) o << "  " << note << "\n";
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
-    if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << a.file << ": " << gap_note << "\n";
+    if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << input_name << ": " << gap_note << "\n";
   }
-  o << a.file << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
+  o << input_name << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) {

@@ -24,23 +24,38 @@ BLOCK, END = 0x314B4C42, 0x31444E45
 MAX_RATE_HZ = 1e6  # rig/capture/capture.cpp's kMaxRateHz
 
 
+def _no_constant(path):
+    def refuse(name):  # NaN, Infinity: not JSON, and rig's reader refuses them
+        raise ValueError(f"{path}: capture header is not valid JSON: {name}")
+    return refuse
+
+
 def _check_header(path, h):
     """What the samples mean is stated, never guessed, as rig's own reader does
     (docs/capture-format.md): a format it does not know, units other than g, or no rate
     (a rate guessed as 1000 Hz would put every tau off by the true rate's ratio) are refused."""
     if not isinstance(h, dict):
         raise ValueError(f"{path}: capture header is not a JSON object")
+    for k in ("serial", "phase", "orientation", "started", "units"):
+        if k in h and not isinstance(h[k], str):
+            raise ValueError(f"{path}: capture header field {k} is {json.dumps(h[k])}, not a string")
     if "format" in h and h["format"] != "rig.capture/1":
-        raise ValueError(f"{path}: capture header format is {json.dumps(h['format'])}, not \"rig.capture/1\"")
+        raise ValueError(f"{path}: capture header format is {json.dumps(h['format'], ensure_ascii=False)}, "
+                         "not \"rig.capture/1\" (written by another program or version?)")
     if h.get("units", "g") != "g":
-        raise ValueError(f"{path}: capture header units is {json.dumps(h['units'])}, not \"g\"")
+        raise ValueError(f"{path}: capture header units is {json.dumps(h['units'], ensure_ascii=False)}, not \"g\" "
+                         "(a rig capture's samples are in g)")
     if "rate_hz" not in h:
         raise ValueError(f"{path}: capture header has no rate_hz (the samples' rate, Hz)")
     r = h["rate_hz"]
     if isinstance(r, bool) or not isinstance(r, (int, float)):
         raise ValueError(f"{path}: capture header field rate_hz is {json.dumps(r)}, not a number")
-    if not (0 < r <= MAX_RATE_HZ):  # also NaN
-        raise ValueError(f"{path}: capture header rate_hz = {r} is out of range (0, {MAX_RATE_HZ:g}] Hz")
+    try:
+        r = float(r)
+    except OverflowError:  # an integer beyond any double: rig's JSON parser says "number overflow"
+        raise ValueError(f"{path}: capture header is not valid JSON: rate_hz beyond the range of a double") from None
+    if not (0 < r <= MAX_RATE_HZ):
+        raise ValueError(f"{path}: capture header rate_hz = {r:g} is out of range (0, {MAX_RATE_HZ:g}] Hz")
 
 
 def _with_header(raw, header):
@@ -60,7 +75,7 @@ def load(path):
     hjson = raw[16:16 + hlen]
     if zlib.crc32(hjson) != hcrc:
         raise ValueError(f"{path}: header CRC mismatch")
-    header = json.loads(hjson)
+    header = json.loads(hjson, parse_constant=_no_constant(path))
     _check_header(path, header)
     pos = (16 + hlen + 15) & ~15
     parts, report = [], {"complete": False, "damaged": [], "samples": 0}
@@ -107,7 +122,10 @@ def _self_test(generator):
                "rate as text": (dict(h, rate_hz="1000"), 'rate_hz is "1000", not a number'),
                "rate 0": (dict(h, rate_hz=0), "rate_hz = 0 is out of range"),
                "format": (dict(h, format="other/2"), 'format is "other/2"'),
-               "units": (dict(h, units="m/s^2"), 'units is "m/s^2"')}
+               "units": (dict(h, units="\u00b5g"), 'units is "\u00b5g", not "g"'),
+               "serial": (dict(h, serial=5), "field serial is 5, not a string"),
+               "NaN": (dict(h, extra={"t": float("nan")}), "not valid JSON: NaN"),
+               "huge rate": (dict(h, rate_hz=10**400), "rate_hz beyond the range of a double")}
         for name, (header, says) in bad.items():
             q = os.path.join(d, "bad.cap")
             open(q, "wb").write(_with_header(raw, header))

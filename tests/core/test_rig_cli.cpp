@@ -288,6 +288,16 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   EXPECT_EQ(run({"analyze", "-", "--input", "f64"}, d + "/stdin-f64", d + "/bom.txt"), 2);
   EXPECT_NE(slurp(d + "/stdin-f64.stderr").find("-: standard input carries --input text only"), std::string::npos)
       << slurp(d + "/stdin-f64.stderr");
+  std::ofstream(d + "/two.txt") << "1\n2\n";  // named "stdin" in every message, not "-"
+  EXPECT_EQ(run({"analyze", "-"}, d + "/stdin-two", d + "/two.txt"), 2);
+  EXPECT_NE(slurp(d + "/stdin-two.stderr").find("stdin: 2 values; at least 3 are needed"), std::string::npos)
+      << slurp(d + "/stdin-two.stderr");
+  for (const char* opt : {"--json", "--svg"}) {  // "-" is no output file: stdout carries the summary
+    EXPECT_EQ(run({"analyze", "-", opt, "-"}, d + "/stdin-out", d + "/bom.txt"), 2) << opt;
+    EXPECT_NE(slurp(d + "/stdin-out.stderr").find(std::string(opt) + " -: give a file or folder"), std::string::npos)
+        << slurp(d + "/stdin-out.stderr");
+    EXPECT_FALSE(fs::exists("-")) << opt;
+  }
 }
 
 TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
