@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "analysis/loop_response.hpp"
-#include "design/filter_config.hpp"
+#include "rig/core/filter_config.hpp"
 
 namespace rig::design {
 

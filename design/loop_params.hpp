@@ -7,7 +7,7 @@
 
 #include <toml++/toml.h>
 
-#include "design/filter_config.hpp"
+#include "rig/core/filter_config.hpp"
 
 namespace rig::design {
 

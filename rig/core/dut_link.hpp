@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "design/filter_config.hpp"  // Biquad, FilterConfig: the filter the link sets
+#include "rig/core/filter_config.hpp"  // Biquad, FilterConfig: the filter the link sets
 #include "rig/core/cancel.hpp"
 #include "rig/core/types.hpp"
 

@@ -1,7 +1,7 @@
 // The output filter W_f(z) as the DUT runs it: a cascade of second-order sections at the
-// DUT's loop rate. Plain data shared by the device seam (rig/core/dut_link.hpp, the CAN
-// link) and the design math (design/filter.hpp), so neither includes the other; kept in
-// namespace rig because the seam's interface speaks it.
+// DUT's loop rate. Plain data: the vocabulary of the device seam (dut_link.hpp, the CAN link),
+// which the design math (design/filter.hpp) builds on; here, with the seam, so that rig/core
+// includes nothing from a layer above it.
 #pragma once
 #include <vector>
 
