@@ -12,6 +12,7 @@
 
 #include "rig/capture/capture.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/executive/checkpoint_keys.hpp"
 
 namespace rig::acceptance {
 
@@ -59,14 +60,11 @@ class Fields {
     return static_cast<uint64_t>(v);
   }
   Fields object(const std::string& key) const { return Fields(at(key), path_ + "." + key); }
-  // A key this version does not write is refused: a checkpoint is rig's own file, and a key it
-  // does not know is an edit or another version's, whose meaning this one would silently drop.
+  // A key this version does not write is refused (checkpoint_keys.hpp says why).
   // `also`: a shared key list (a recording's, kRecordedKeys) the object holds besides `keys`.
   void only(std::initializer_list<std::string_view> keys, std::span<const std::string_view> also = {}) const {
-    for (const auto& [k, v] : j_.items())
-      if (std::find(keys.begin(), keys.end(), k) == keys.end() && std::find(also.begin(), also.end(), k) == also.end())
-        throw std::invalid_argument(path_ + "." + k + ": not a key of a checkpoint (edited, or written by another "
-                                                      "version of rig?)");
+    if (const auto k = first_unknown_key(j_, std::span(keys.begin(), keys.size()), also))
+      throw std::invalid_argument(path_ + "." + *k + ": " + std::string(kNotACheckpointKey));
   }
   const std::string& path() const { return path_; }
   [[noreturn]] void fail(const std::string& key, const std::string& expected, const nlohmann::json& found) const {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "rig/core/errors.hpp"
+#include "rig/executive/checkpoint_keys.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -121,9 +122,8 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
     throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
   }
   if (!j.is_object()) throw bad("(top level)", std::string("expected an object, found ") + j.type_name());
-  for (const auto& [k, v] : j.items())
-    if (k != "schema" && k != "identity" && k != "completed" && k != "values" && k != "state")
-      throw bad(k, "not a key of a checkpoint (edited, or written by another version of rig?)");
+  static constexpr std::string_view kKeys[] = {"schema", "identity", "completed", "values", "state"};
+  if (const auto k = first_unknown_key(j, kKeys)) throw bad(*k, std::string(kNotACheckpointKey));
   if (!j.contains("schema") || j["schema"] != "rig.checkpoint/1")
     throw bad("schema", "expected \"rig.checkpoint/1\", found " + (j.contains("schema") ? j["schema"].dump() : "nothing"));
   if (j.value("identity", nlohmann::json()) != identity) {

@@ -1,5 +1,7 @@
 #include "rig/executive/measurement.hpp"
 
+#include "rig/executive/checkpoint_keys.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -161,11 +163,10 @@ void MeasurementSet::restore(const nlohmann::json& values) {
     if (!j.is_object()) throw std::invalid_argument(where + ": expected an object, found " + j.type_name());
     // The keys to_json writes; unit, limits, outcome and description are not read back (they
     // come from the current profile), but a key no version writes means the file was edited.
-    for (const auto& [k, v] : j.items())
-      if (k != "value" && k != "unit" && k != "lo" && k != "hi" && k != "limits" && k != "outcome" &&
-          k != "reason" && k != "description")
-        throw std::invalid_argument(where + "." + k + ": not a key of a checkpoint (edited, or written by another "
-                                    "version of rig?)");
+    static constexpr std::string_view kKeys[] = {"value",   "unit",   "lo",     "hi",
+                                                 "limits",  "outcome", "reason", "description"};
+    if (const auto k = first_unknown_key(j, kKeys))
+      throw std::invalid_argument(where + "." + *k + ": " + std::string(kNotACheckpointKey));
     if (!j.contains("value")) throw std::invalid_argument(where + ".value: missing");
     cur->value = opt_number(j, where, "value");
     cur->lo = opt_number(j, where, "lo");
