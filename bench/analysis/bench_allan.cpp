@@ -13,6 +13,7 @@
 #include <string>
 
 #include "analysis/allan.hpp"
+#include "analysis/allan_kernels.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/psd.hpp"
 
@@ -83,8 +84,37 @@ void BM_Welch(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(an::welch(record(), 1000).psd.data());
 }
 
+// MDEV's kernel alone, one thread, 4e6 terms whose four windows are m apart in a 136 MB phase
+// array: how much of a term's cost is the running sum (m = 1, every window in L1) and how much
+// is reading three windows that no cache holds (m >= 1e6: the 50-h record's long taus). The
+// counters give terms per second and the bytes per second read from the three lagged windows.
+void BM_MdevKernelLag(benchmark::State& st) {
+  const std::size_t m = static_cast<std::size_t>(st.range(0)), len = 4'000'000;
+  static const std::vector<double> p = [] {
+    std::vector<double> v(17'000'000);
+    std::mt19937_64 rng(2);
+    std::normal_distribution<double> g(0, 1);
+    double x = 0;
+    for (auto& e : v) e = x += g(rng);
+    return v;
+  }();
+  std::size_t rep = 0;
+  for (auto _ : st) {
+    // Another base each round, so a round does not find the last one's windows in the caches.
+    const std::size_t base = (rep++ * 7'919'000) % (p.size() - 3 * m - len);
+    double inner = 0;
+    benchmark::DoNotOptimize(rig::analysis::detail::kernels::mdev_run(&p[base], &p[base + m], &p[base + 2 * m],
+                                                                       &p[base + 3 * m], len, inner));
+  }
+  const double rounds = static_cast<double>(st.iterations());
+  st.counters["terms_per_s"] = benchmark::Counter(static_cast<double>(len) * rounds, benchmark::Counter::kIsRate);
+  st.counters["lagged_bytes_per_s"] = benchmark::Counter(3.0 * 8 * static_cast<double>(len) * rounds,
+                                                         benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 
+BENCHMARK(BM_MdevKernelLag)->Arg(1)->Arg(4096)->Arg(262144)->Arg(1 << 20)->Arg(4 << 20)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OadevBounds2Threads)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OadevBounds1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OadevNoBounds2Threads)->Unit(benchmark::kMillisecond)->UseRealTime();

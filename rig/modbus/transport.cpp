@@ -1,6 +1,8 @@
 #include "rig/modbus/transport.hpp"
 
+#include <arpa/inet.h>
 #include <modbus/modbus.h>
+#include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -70,13 +72,13 @@ bool plausible_host(const std::string& h) {
   }
   return true;
 }
-// An IPv6 address, optionally with a zone (fe80::1%eth0) as getaddrinfo takes it.
+// An IPv6 address as inet_pton reads it ("fe80:::1" or "add:10.0.0.5" is a typo to name now),
+// optionally with a zone (fe80::1%eth0) as getaddrinfo takes it.
 bool plausible_ipv6(const std::string& h) {
-  const std::string addr = h.substr(0, h.find('%'));
-  if (addr.find(':') == std::string::npos) return false;
-  for (const char ch : addr)
-    if (!std::isxdigit(static_cast<unsigned char>(ch)) && ch != ':' && ch != '.') return false;
-  return h.find('%') == std::string::npos || plausible_host(h.substr(h.find('%') + 1));
+  const auto zone = h.find('%');
+  in6_addr a{};
+  if (::inet_pton(AF_INET6, h.substr(0, zone).c_str(), &a) != 1) return false;
+  return zone == std::string::npos || plausible_host(h.substr(zone + 1));
 }
 }  // namespace
 

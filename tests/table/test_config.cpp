@@ -40,6 +40,13 @@ TEST(TableConfig, EndpointsParse) {
             std::string::npos);
   EXPECT_NE(config_error([] { m::parse_endpoint("zz zz:502"); }).find("'zz zz' is not a host name"),
             std::string::npos);
+  // Hex digits and colons that are no IPv6 address are named too, not left to connect().
+  EXPECT_NE(config_error([] { m::parse_endpoint("add:10.0.0.5:502"); }).find("'add:10.0.0.5' is not a host name"),
+            std::string::npos);
+  EXPECT_NE(config_error([] { m::parse_endpoint("tcp:[fe80:::1]:502"); }).find("'[fe80:::1]' is not a host name"),
+            std::string::npos);
+  EXPECT_NE(config_error([] { m::parse_endpoint("tcp:[fe80::1%]:502"); }).find("is not a host name"), std::string::npos);
+  EXPECT_EQ(m::parse_endpoint("tcp:[::ffff:10.0.0.5]:502").host, "::ffff:10.0.0.5");  // IPv4-mapped
 }
 
 TEST(TableConfig, HardwareTableKeysAreChecked) {
