@@ -324,6 +324,21 @@ bool can_create_file_in(const fs::path& d) {
   return true;
 }
 
+std::string verdict_of(const std::string& dir);
+
+// A new run never lands on an earlier one, whatever state it stopped in: run.json is written
+// before any device opens, checkpoint.json after the first phase, passport.json at every ending
+// (a hardware run that could not open its devices has the first and the last, no checkpoint).
+// A finished run's folder is left alone; an unfinished one is resumed.
+void refuse_an_earlier_run(const std::string& dir) {
+  const std::string v = verdict_of(dir);
+  if (!v.empty()) throw ConfigError(dir + " holds a finished run (its passport says " + v + "): choose another --out");
+  std::error_code ec;
+  for (const char* f : {"checkpoint.json", "run.json", "passport.json"})
+    if (fs::exists(fs::path(dir) / f, ec))
+      throw ConfigError(dir + " holds an earlier run (" + f + "): use --resume " + dir + " or another --out");
+}
+
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
@@ -338,8 +353,7 @@ void check_run_folder(const std::string& dir, bool resuming) {
   // touched); a filesystem without it gets a named probe, removed at once.
   if (!can_create_file_in(p))
     throw ConfigError("--out " + dir + ": the run folder is not writable (" + p.string() + ")");
-  if (!resuming && fs::exists(Executive::checkpoint_path(dir), ec))
-    throw ConfigError(dir + " holds an earlier run (checkpoint.json): use --resume " + dir + " or another --out");
+  if (!resuming) refuse_an_earlier_run(dir);
 }
 
 // The passport's identity block, for every ending (finished at the time of the call).
@@ -501,6 +515,16 @@ std::string folder_name_part(std::string s) {
   return s;
 }
 
+// runs/<name>-<UTC time to the second>; a second run started in the same second (a script, a
+// line's next DUT with the same profile) gets -2, -3, ..., not the first run's folder.
+std::string default_run_folder(const std::string& name) {
+  const std::string base = fmt::format("runs/{}-{}", name, folder_time_utc());
+  std::error_code ec;
+  std::string dir = base;
+  for (int i = 2; fs::exists(dir, ec); ++i) dir = fmt::format("{}-{}", base, i);
+  return dir;
+}
+
 // The serial the run's DUT reported (checkpoint.json's state.dut.serial), empty when no DUT has
 // reported one or the checkpoint cannot be read (its own check, later, names what is wrong).
 std::string reported_serial(const std::string& run_dir) {
@@ -620,8 +644,7 @@ int do_run(RunArgs a) {
     return kExitPass;
   }
   // The folder first: an operator should not answer the prompts of a run that cannot start.
-  if (a.out.empty())
-    a.out = fmt::format("runs/{}-{}", folder_name_part(a.serial.empty() ? p.name : a.serial), folder_time_utc());
+  if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
   prepare_run_folder(a.out);
   refuse_non_files(a.out);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
@@ -637,8 +660,7 @@ int do_run(RunArgs a) {
   operator_prompts(a, p);
 
   if (a.resume.empty()) {
-    if (fs::exists(Executive::checkpoint_path(a.out)))
-      throw ConfigError(a.out + " holds an earlier run (checkpoint.json): use --resume " + a.out + " or another --out");
+    refuse_an_earlier_run(a.out);
     // The folder carries everything a resume needs.
     write_file_atomic(a.out + "/profile.toml", p.source.rfind("builtin:", 0) == 0
                                                    ? acceptance::builtin_profile_text(p.source.substr(8))

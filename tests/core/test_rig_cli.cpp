@@ -6,6 +6,8 @@
 #include <sys/stat.h>
 
 #include <array>
+#include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -670,6 +672,73 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
   EXPECT_NE(slurp(d + "/list.stdout").find(",HW-1,ci,hardware,ERROR,bench-without-gpio,"), std::string::npos)
       << slurp(d + "/list.stdout");
+}
+
+// A new run never lands on an earlier one: the folder above holds a hardware run that ended
+// before its devices opened (run.json and an ERROR passport, no checkpoint). Before, an emulated
+// run took it over and replaced its passport, JUnit and report. A finished run's folder is
+// refused with advice that works (not "--resume", which refuses a finished run); the dry run
+// says the same.
+TEST(RigCli, ANewRunNeverTakesOverAnEarlierRunsFolder) {
+  const std::string d = tmp("takeover");
+  fs::create_directories(d + "/stopped");
+  std::ofstream(d + "/stopped/run.json") << "{}";
+  std::ofstream(d + "/stopped/passport.json") << R"({"outcome": "ERROR"})";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--out", d + "/stopped"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2) << slurp(d + "/io.stderr");
+    EXPECT_NE(slurp(d + "/io.stderr").find(d + "/stopped holds an earlier run (run.json): use --resume " + d +
+                                           "/stopped or another --out"),
+              std::string::npos)
+        << slurp(d + "/io.stderr");
+  }
+  EXPECT_EQ(slurp(d + "/stopped/passport.json"), R"({"outcome": "ERROR"})");
+  EXPECT_FALSE(fs::exists(d + "/stopped/run.log")) << "nothing written into the earlier run's folder";
+
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/done"}, d + "/io1"), 0)
+      << slurp(d + "/io1.stderr");
+  const std::string passport = slurp(d + "/done/passport.json");
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--out", d + "/done"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io2"), 2) << slurp(d + "/io2.stderr");
+    EXPECT_NE(slurp(d + "/io2.stderr").find(d + "/done holds a finished run (its passport says PASS): choose another --out"),
+              std::string::npos)
+        << slurp(d + "/io2.stderr");
+  }
+  EXPECT_EQ(slurp(d + "/done/passport.json"), passport);
+}
+
+// Two runs started in the same second with the default folder: the second gets its own folder
+// (-2), not the first one's. The folders of the next seconds are made first, so the run's second
+// is taken whenever it starts.
+TEST(RigCli, TheDefaultRunFolderOfASecondRunInTheSameSecondIsItsOwn) {
+  const std::string d = tmp("samesecond");
+  fs::create_directories(d + "/runs");
+  const auto now = std::chrono::system_clock::now();
+  std::vector<std::string> taken;
+  for (int s = 0; s < 30; ++s) {
+    const std::time_t t = std::chrono::system_clock::to_time_t(now + std::chrono::seconds(s));
+    std::tm tm{};
+    ::gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H%M%SZ", &tm);
+    taken.push_back(std::string("runs/ci-") + buf);
+    fs::create_directories(d + "/" + taken.back());
+    std::ofstream(d + "/" + taken.back() + "/run.json") << "{}";
+  }
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d);
+  const int rc = run({"run", "--profile", "ci", "--yes", "--quiet"}, d + "/io");
+  fs::current_path(cwd);
+  ASSERT_EQ(rc, 0) << slurp(d + "/io.stderr");
+  int own = 0;
+  for (const auto& f : taken) {
+    EXPECT_FALSE(fs::exists(d + "/" + f + "/passport.json")) << f << ": an earlier run's folder was used";
+    if (fs::exists(d + "/" + f + "-2/passport.json")) ++own;
+  }
+  EXPECT_EQ(own, 1);
 }
 
 TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
