@@ -10,13 +10,16 @@
 #include <ctime>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
+#include "app/output_file.hpp"
 #include "firmware_link/candump_log.hpp"
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
@@ -31,7 +34,7 @@ namespace {
 
 struct ImportArgs {
   std::string log, hardware, out, serial, orientation = "U10", phase = "import", iface;
-  double rate_hz = 0;  // 0: the stream's (rate_hz of [dut.stream], 1000 for the rig protocol)
+  std::optional<double> rate_hz;  // none: the stream's (rate_hz of [dut.stream], 1000 for the rig protocol)
 };
 
 // A log's absolute time (seconds since the epoch) as ISO 8601 UTC; "" for relative times.
@@ -48,6 +51,11 @@ std::string iso8601(double t_s) {
 int cmd_import(const ImportArgs& a) {
   if (a.orientation != "U10" && a.orientation != "U20")
     throw ConfigError("rig capture import: --orientation must be U10 or U20, got '" + a.orientation + "'");
+  // The header's rate is checked as every reader of a capture checks it (capture.hpp).
+  if (a.rate_hz && !(*a.rate_hz > 0 && *a.rate_hz <= capture::kMaxRateHz))
+    throw ConfigError("rig capture import: --rate " + fmt::format("{}", *a.rate_hz) + ": must be in (0, " +
+                      fmt::format("{}", capture::kMaxRateHz) + "] Hz");
+  check_new_file(a.out, "rig capture import: --out");
   const toml::table hw = load_hardware_file(a.hardware, {"dut"});
   const toml::table& dut = *cfg::get_table(hw, "dut", true);
   const link::LinkOptions lo = link::link_options(dut);  // validates [dut], reads its stream
@@ -61,7 +69,7 @@ int cmd_import(const ImportArgs& a) {
   h.serial = a.serial;
   h.phase = a.phase;
   h.orientation = a.orientation;
-  h.rate_hz = a.rate_hz > 0 ? a.rate_hz : decoder->rate_hz();
+  h.rate_hz = a.rate_hz ? *a.rate_hz : decoder->rate_hz();
   // The header is written first; its start time comes from the log's first frame, so the
   // log is read once to find it (cheap next to decoding).
   {

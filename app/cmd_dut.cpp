@@ -21,6 +21,7 @@
 #include "firmware_link/dbc_stream.hpp"
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
+#include "app/output_file.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
@@ -256,21 +257,6 @@ int cmd_decode(const DutArgs& a) {
   }
   return skipped ? kExitUsage : kExitPass;
 }
-// `path` can be replaced by write_file_atomic: its folder exists and takes new files, and what
-// lies there now, if anything, is a regular file. ConfigError (exit 2) naming it otherwise.
-void check_writable_file(const std::string& path, const std::string& what) {
-  namespace fs = std::filesystem;
-  const fs::path p(path);
-  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw ConfigError(what + " " + path + ": the folder " + dir.string() + " does not exist");
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw ConfigError(what + " " + path + ": cannot create files in " + dir.string());
-  struct stat st {};
-  if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-    throw ConfigError(what + " " + path + ": not a regular file (the records replace it)");
-}
-
 // The loop test at the bench: the same request, analysis and record file as `rig run`'s loop phase.
 int cmd_loop_test(DutArgs a) {
   CancelSource cancel;

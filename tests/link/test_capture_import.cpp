@@ -106,6 +106,32 @@ TEST(CaptureImport, RigProtocolLogWithAGapAndADuplicate) {
   EXPECT_NE(slurp(dir() / "analysis.json").find("\"capture\""), std::string::npos);
 }
 
+// The options are checked before the log is read (helper review): a capture already at --out is
+// not replaced (it held 2000 samples; a second import of a shorter log replaced it silently), an
+// --out in a folder that does not exist is a usage error (exit 2, was 4: "hardware fault"), and
+// --rate outside the (0, 1 MHz] every reader accepts is refused (0 and -5 were ignored, 2e6
+// written into a header rig analyze then refused).
+TEST(CaptureImport, OptionsAreCheckedBeforeTheLogIsRead) {
+  std::ofstream(dir() / "opts.log") << log_line(1732255200.0, encode(StreamHalf{Channel::X, 1, 0, 0.5f}));
+  std::ofstream(dir() / "opts-hw.toml") << "[dut]\ncan = \"vcan0\"\n";
+  const std::string head = "capture import " + (dir() / "opts.log").string() + " --hardware " +
+                           (dir() / "opts-hw.toml").string() + " --out ";
+  std::ofstream(dir() / "kept.rigcap") << "an earlier capture";
+  EXPECT_EQ(run_rig(head + (dir() / "kept.rigcap").string(), "opts1"), 2);
+  EXPECT_NE(slurp(dir() / "opts1.err").find("kept.rigcap: the file exists"), std::string::npos) << slurp(dir() / "opts1.err");
+  EXPECT_EQ(slurp(dir() / "kept.rigcap"), "an earlier capture");
+
+  EXPECT_EQ(run_rig(head + (dir() / "no-such-folder" / "x.rigcap").string(), "opts2"), 2);
+  EXPECT_NE(slurp(dir() / "opts2.err").find("does not exist"), std::string::npos) << slurp(dir() / "opts2.err");
+
+  for (const char* rate : {"0", "-5", "2e6", "nan"}) {
+    EXPECT_EQ(run_rig(head + (dir() / "rate.rigcap").string() + " --rate " + rate, "opts3"), 2) << rate;
+    EXPECT_NE(slurp(dir() / "opts3.err").find("--rate "), std::string::npos) << slurp(dir() / "opts3.err");
+    EXPECT_NE(slurp(dir() / "opts3.err").find("must be in (0, 1000000] Hz"), std::string::npos) << slurp(dir() / "opts3.err");
+    EXPECT_FALSE(fs::exists(dir() / "rate.rigcap")) << rate;
+  }
+}
+
 TEST(CaptureImport, DbcLayoutWith16BitCounterAndAnUnreadableLine) {
   // The ACC_XY layout of tests/data/dbc/dut-layouts.dbc: x and y in one extended-id,
   // big-endian frame, 16-bit counter wrapping inside the log.
