@@ -1,10 +1,13 @@
 #include "procedures/acceptance/profile.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -42,6 +45,23 @@ double Profile::planned_total_s() const {
 }
 
 std::string gost_value_name(double block_s) { return fmt::format("in_run_b_gost_{:g}s", block_s); }
+
+// The base's GOST B limits are named by the base's block lengths. A file that sets its own
+// in_run_blocks_s keeps the base's limits only for the lengths it still has: a limit for a block
+// the file no longer measures is the base's, not the user's, and would otherwise be refused as
+// "unknown measurement", leaving no way to change the blocks but copying the whole profile.
+void drop_limits_of_other_blocks(const toml::table& file, toml::table& base) {
+  const toml::array* blocks = file["procedure"]["in_run_blocks_s"].as_array();
+  toml::table* limits = base["limits"].as_table();
+  if (!blocks || !limits) return;  // (a malformed list is named when the profile is read)
+  std::vector<std::string> kept, drop;
+  for (const auto& b : *blocks)
+    if (const auto v = b.value<double>()) kept.push_back(gost_value_name(*v));
+  for (auto&& [k, v] : *limits)
+    if (k.str().rfind("in_run_b_gost_", 0) == 0 && std::find(kept.begin(), kept.end(), k.str()) == kept.end())
+      drop.emplace_back(k.str());
+  for (const auto& k : drop) limits->erase(k);
+}
 
 void check_orientation_angles(const toml::table& t, double u10_deg, double u20_deg) {
   constexpr double kTolDeg = 10.0;
@@ -241,7 +261,8 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
       t.erase("base");
       // A file's own [[classes]] replace the base's rather than append.
       if (t.contains("classes")) base.erase("classes");
-      cfg::fill_defaults(t, base);
+      drop_limits_of_other_blocks(t, base);
+      cfg::fill_defaults(t, std::move(base));
     }
   }
   return t;

@@ -196,6 +196,17 @@ void fill_defaults(toml::table& t, const toml::table& defaults) {
   }
 }
 
+void fill_defaults(toml::table& t, toml::table&& defaults) {
+  for (auto&& [k, v] : defaults) {
+    toml::node* mine = t.get(k.str());
+    if (!mine) {
+      t.insert(k, std::move(v));  // moved, a node keeps its source (a copy has none: toml++ issue 49)
+    } else if (mine->is_table() && v.is_table()) {
+      fill_defaults(*mine->as_table(), std::move(*v.as_table()));
+    }
+  }
+}
+
 void merge_into(toml::table& base, const toml::table& over) {
   for (auto&& [k, v] : over) {
     toml::node* b = base.get(k.str());

@@ -52,5 +52,8 @@ void merge_into(toml::table& base, const toml::table& over);
 // Fills keys missing from `t` with `defaults`' (tables recursively). `t`'s own
 // nodes keep their source positions, so errors still name the user's file.
 void fill_defaults(toml::table& t, const toml::table& defaults);
+// The same, taking `defaults`' nodes: they keep their source positions too, so an error in a
+// value a file inherits names the place it came from (builtin:ci:15:1), not "command-line option".
+void fill_defaults(toml::table& t, toml::table&& defaults);
 
 }  // namespace rig::cfg

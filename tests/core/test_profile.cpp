@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -116,6 +117,34 @@ TEST(Profile, FileCanStartFromABuiltinAndOverride) {
   EXPECT_EQ(prof.name, "shorter");
   EXPECT_EQ(prof.raw_s, 20.0);
   EXPECT_EQ(prof.run_s, load_profile("ci").run_s);
+}
+
+// A file that changes the GOST blocks of its base (helper review): the base's limits for blocks
+// the file no longer has were refused as "unknown measurement", so a custom block length needed
+// a copy of the whole profile. They are dropped; a limit for a length the file keeps stays.
+TEST(Profile, AFileThatChangesTheGostBlocksKeepsTheBasesLimitsOnlyForBlocksItHas) {
+  const auto ci = load_profile("ci");
+  ASSERT_TRUE(ci.limits.count("in_run_b_gost_2s"));
+  const auto five = load_profile(write_tmp("b5.toml", "base = \"ci\"\n[procedure]\nin_run_blocks_s = [5.0]\n"));
+  EXPECT_EQ(five.in_run_blocks_s, std::vector<double>{5.0});
+  for (const auto& [name, lim] : five.limits) EXPECT_EQ(name.rfind("in_run_b_gost_", 0), std::string::npos) << name;
+  const auto two = load_profile(write_tmp("b25.toml", "base = \"ci\"\n[procedure]\nin_run_blocks_s = [2.0, 5.0]\n"
+                                                      "[limits]\nin_run_b_gost_5s = [0.0, 2.0e-4]\n"));
+  EXPECT_EQ(two.limits.at("in_run_b_gost_2s"), ci.limits.at("in_run_b_gost_2s"));
+  EXPECT_EQ(two.limits.at("in_run_b_gost_5s"), (std::pair<double, double>{0.0, 2.0e-4}));
+  EXPECT_FALSE(two.limits.count("in_run_b_gost_4s"));
+  // A file's own limit for a block it does not have is still its mistake, named.
+  const std::string own = write_tmp("b7.toml", "base = \"ci\"\n[procedure]\nin_run_blocks_s = [5.0]\n"
+                                               "[limits]\nin_run_b_gost_7s = [0.0, 1.0]\n");
+  EXPECT_NE(error_of(own).find("in_run_b_gost_7s"), std::string::npos) << error_of(own);
+}
+
+// A value the file inherits is named where it came from: the built-in base's line, not
+// "command-line option" (toml++ drops a copied node's position; the base's nodes are moved).
+TEST(Profile, AnInheritedValueIsNamedByTheBasesLine) {
+  const std::string p = write_tmp("short-in-run.toml", "base = \"ci\"\n[procedure]\nin_run_s = 3.0\n");
+  EXPECT_EQ(error_of(p), "builtin:ci:15:19: 'in_run_blocks_s' = [ 2.0, 4.0 ]: 2 s: each block length must be > 0 "
+                         "and give at least 2 blocks in in_run_s = 3");
 }
 
 TEST(Profile, BAllanSaysWhichBThePassportLimits) {
