@@ -199,17 +199,44 @@ void check_input_path(const std::string& path, const std::string& input) {
                       " is read by its size (a pipe or FIFO can carry --input text)");
 }
 
+namespace {
+// The length of the well-formed UTF-8 sequence at s[i] (RFC 3629: no overlong form, no
+// surrogate, nothing past U+10FFFF), or 0 when the byte there starts none.
+std::size_t utf8_sequence(std::string_view s, std::size_t i) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const auto cont = [&](std::size_t k) { return k < s.size() && (b(k) & 0xC0) == 0x80; };
+  const unsigned char c = b(i);
+  if (c >= 0xC2 && c <= 0xDF) return cont(i + 1) ? 2 : 0;
+  if (c >= 0xE0 && c <= 0xEF) {
+    if (!cont(i + 1) || !cont(i + 2)) return 0;
+    if ((c == 0xE0 && b(i + 1) < 0xA0) || (c == 0xED && b(i + 1) > 0x9F)) return 0;
+    return 3;
+  }
+  if (c >= 0xF0 && c <= 0xF4) {
+    if (!cont(i + 1) || !cont(i + 2) || !cont(i + 3)) return 0;
+    if ((c == 0xF0 && b(i + 1) < 0x90) || (c == 0xF4 && b(i + 1) > 0x8F)) return 0;
+    return 4;
+  }
+  return 0;
+}
+}  // namespace
+
+// Control bytes and bytes that are not well-formed UTF-8 (a binary file read as text, a Latin-1
+// file) as \xNN; printable ASCII and whole UTF-8 characters (a Cyrillic word) as they are.
 std::string quoted_bytes(std::string_view s) {
   std::string out;
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c < 0x20 || c == 0x7F) {
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t len = c >= 0x20 && c < 0x7F ? 1 : c >= 0x80 ? utf8_sequence(s, i) : 0;
+    if (len == 0) {
       char b[8];
       std::snprintf(b, sizeof b, "\\x%02X", c);
       out += b;
+      len = 1;
     } else {
-      out += ch;
+      out.append(s, i, len);
     }
+    i += len;
   }
   return out;
 }
@@ -231,6 +258,9 @@ std::vector<double> read_text(std::istream& in, const std::string& path) {
   std::vector<double> v;
   std::string line;
   for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
+    // A capture file given without --input capture: say so, not "not a decimal number: 'RIGCAP1'".
+    if (lineno == 1 && line == std::string_view(capture::kMagic, sizeof capture::kMagic - 1))
+      throw ConfigError(path + ": a capture file (rig.capture/1): read it with --input capture");
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
     if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     const auto hash = line.find('#');

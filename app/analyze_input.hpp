@@ -63,7 +63,8 @@ class F64File final : public analysis::ChunkSource {
 // reader of one does); "-" is standard input, text only. ConfigError naming the path.
 void check_input_path(const std::string& path, const std::string& input);
 // A value from a file quoted in a message: bytes that do not print (control bytes, NUL, DEL)
-// as \xNN, so a stray byte is seen rather than sent to the terminal.
+// and bytes that are not well-formed UTF-8 as \xNN, so a stray byte is seen rather than sent
+// to the terminal; whole UTF-8 characters as they are.
 std::string quoted_bytes(std::string_view s);
 // path "-" reads standard input, its errors naming "stdin:LINE".
 std::vector<double> read_text(const std::string& path);

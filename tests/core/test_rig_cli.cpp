@@ -276,6 +276,23 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   EXPECT_EQ(run({"analyze", d + "/ctl.txt"}, d + "/ctl"), 2);
   EXPECT_NE(slurp(d + "/ctl.stderr").find("ctl.txt:3: not a decimal number: '3\\x01\\x00x'"), std::string::npos)
       << slurp(d + "/ctl.stderr");
+  // Bytes that are not UTF-8 (a Latin-1 or binary file) are shown as \xNN too; whole UTF-8
+  // characters (a Cyrillic unit) as they are.
+  std::ofstream(d + "/latin1.txt") << "1.0\n2.0\n\xFF\xB5g\n";
+  EXPECT_EQ(run({"analyze", d + "/latin1.txt"}, d + "/latin1"), 2);
+  EXPECT_NE(slurp(d + "/latin1.stderr").find("latin1.txt:3: not a decimal number: '\\xFF\\xB5g'"), std::string::npos)
+      << slurp(d + "/latin1.stderr");
+  std::ofstream(d + "/utf8.txt") << "1.0\n2.0\n3 \xD0\xB3\n";
+  EXPECT_EQ(run({"analyze", d + "/utf8.txt"}, d + "/utf8"), 2);
+  EXPECT_NE(slurp(d + "/utf8.stderr").find("utf8.txt:3: not a decimal number: '3 \xD0\xB3'"), std::string::npos)
+      << slurp(d + "/utf8.stderr");
+  // A capture file read as text (a name without .cap: a set-aside *.cap.interrupted-1) says so.
+  std::ofstream(d + "/raw.cap.interrupted-1") << "RIGCAP1\n{}";
+  EXPECT_EQ(run({"analyze", d + "/raw.cap.interrupted-1"}, d + "/capt"), 2);
+  EXPECT_NE(slurp(d + "/capt.stderr").find("raw.cap.interrupted-1: a capture file (rig.capture/1): read it with "
+                                           "--input capture"),
+            std::string::npos)
+      << slurp(d + "/capt.stderr");
   std::ofstream(d + "/bom.txt") << "\xEF\xBB\xBF" << "1.0\n2.0\n3.0\n4.0\n";
   EXPECT_EQ(run({"analyze", d + "/bom.txt", "--json", d + "/bom.json"}, d + "/bom"), 0) << slurp(d + "/bom.stderr");
   EXPECT_NE(slurp(d + "/bom.stdout").find("4 values"), std::string::npos) << slurp(d + "/bom.stdout");
