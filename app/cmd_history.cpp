@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
@@ -192,7 +194,14 @@ void add_history(CLI::App& app, int& rc) {
       ->check(CLI::IsMember({"PASS", "FAIL", "ABORTED", "ERROR"}));
   sub->add_option("--profile", a->profile, "Only runs of this profile");
   sub->add_option("--value", a->value, "Trend this passport measurement (e.g. in_run_b_allan) instead of listing runs");
-  sub->add_option("--limit", a->limit, "Only the newest N runs")->check(CLI::NonNegativeNumber);
+  // 0 would mean "no limit" to the query: a user who types --limit 0 asked for none, so N >= 1.
+  sub->add_option("--limit", a->limit, "Only the newest N runs (N >= 1)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            return whole_number(v, 1, std::numeric_limits<int>::max()) ? std::string()
+                                                                       : v + ": must be a whole number in [1, 2147483647]";
+          },
+          "N >= 1"));
   sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit");
   sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
   sub->callback([&rc, a] {

@@ -44,6 +44,7 @@
 #include "rig/executive/signals.hpp"
 #include "rig/executive/terminal.hpp"
 #include "rig/modbus/table_client.hpp"
+#include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/report.hpp"
 
@@ -600,6 +601,9 @@ int do_run(RunArgs a) {
   acceptance::declare_values(p, phases, values);
   const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
   TerminalView view(stderr, a.quiet);
+  // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not
+  // an error in run.log after the DUT was measured and its result left out of the history.
+  if (!a.no_history) history::sqlite_path(history_url(a, hw));
   if (a.dry_run) {
     check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing

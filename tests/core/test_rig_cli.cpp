@@ -766,6 +766,23 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
   EXPECT_NE(slurp(d + "/io.stderr").find(typo + ": no such history database"), std::string::npos)
       << slurp(d + "/io.stderr");
   EXPECT_FALSE(fs::exists(typo));
+  // rig run checks its --db before anything runs: a scheme it cannot open was an error in
+  // run.log after the run, which exited 0 with nothing recorded.
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--db", "mysql://h/x", "--out", d + "/r"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/mysql"), 2);
+    EXPECT_NE(slurp(d + "/mysql.stderr").find("history database URL 'mysql://h/x': unknown scheme"), std::string::npos)
+        << slurp(d + "/mysql.stderr");
+    EXPECT_FALSE(fs::exists(d + "/r"));
+  }
+  // --limit N is the newest N runs, N >= 1: 0 listed every run, -1 printed a 300-digit bound.
+  for (const char* n : {"0", "-1", "2147483648"}) {
+    EXPECT_EQ(run({"history", "--db", "sqlite:" + typo, "--limit", n}, d + "/lim"), 2) << n;
+    EXPECT_NE(slurp(d + "/lim.stderr").find(std::string("--limit: ") + n + ": must be a whole number in [1, 2147483647]"),
+              std::string::npos)
+        << slurp(d + "/lim.stderr");
+  }
 }
 
 // `rig dut decode` on logs written by can-utils (tests/data/candump): both formats, a short
