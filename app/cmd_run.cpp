@@ -626,10 +626,15 @@ int do_run(RunArgs a) {
         std::string& list = phases[i].from_records ? again : kept;
         list += (list.empty() ? "" : ", ") + completed[i];
       }
-      std::cout << fmt::format("Resume: {} checked with the records it names (captures, loop-test.csv){}; {} of {} "
-                               "phases complete.\n",
-                               Executive::checkpoint_path(a.resume), key ? " and the station's seal" : "",
-                               completed.size(), phases.size());
+      if (fs::exists(Executive::checkpoint_path(a.resume)))
+        std::cout << fmt::format("Resume: {} checked with the records it names (captures, loop-test.csv){}; {} of {} "
+                                 "phases complete.\n",
+                                 Executive::checkpoint_path(a.resume), key ? " and the station's seal" : "",
+                                 completed.size(), phases.size());
+      else  // stopped before its first checkpoint (or the file is gone): nothing of it is trusted
+        std::cout << fmt::format("Resume: {} has no checkpoint (the run stopped before its first phase completed){}; "
+                                 "0 of {} phases complete: every phase runs again from bring-up.\n",
+                                 a.resume, key ? "; the station's seal checked" : "", phases.size());
       if (!kept.empty()) std::cout << "  kept (not recorded again): " << kept << "\n";
       if (!again.empty()) std::cout << "  computed again from the kept records: " << again << "\n";
       std::string left;

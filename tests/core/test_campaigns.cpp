@@ -157,6 +157,12 @@ TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
     EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", what}, r + "-io"),
               128 + SIGKILL);
     ASSERT_FALSE(fs::exists(r + "/checkpoint.json")) << what << ": a phase completed before the kill";
+    // The dry run says so (it said "checkpoint.json checked with the records it names").
+    EXPECT_EQ(run({"run", "--resume", r, "--dry-run"}, r + "-dry"), 0) << slurp(r + "-dry.stderr");
+    EXPECT_NE(slurp(r + "-dry.stdout").find("Resume: " + r + " has no checkpoint (the run stopped before its first "
+                                            "phase completed); 0 of "),
+              std::string::npos)
+        << slurp(r + "-dry.stdout");
     resume_and_compare(r, ref, what);
     EXPECT_NE(slurp(r + "/run.log").find("no checkpoint (stopped before the first phase completed)"),
               std::string::npos)
