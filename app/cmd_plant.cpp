@@ -1,10 +1,13 @@
 // `rig plant serve`: the emulated table and DUT in real time, as separate
 // endpoints reached through the real protocols (Modbus TCP/RTU, CAN), for
 // integration tests and technicians' training.
-#include <iostream>
+#include <charconv>
+#include <cmath>
 #include <functional>
+#include <iostream>
 #include <memory>
 #include <optional>
+#include <system_error>
 
 #include <fmt/format.h>
 
@@ -129,7 +132,16 @@ void add_plant(CLI::App& app, int& rc) {
   sub->add_option("--can", a->can, "CAN interface for the DUT firmware emulator (e.g. vcan0)");
   sub->add_option("--profile", a->profile, "Profile whose [plant] section configures the emulated DUT and table")
       ->capture_default_str();
-  sub->add_option("--duration", a->duration, "Stop after this many seconds (default: until SIGINT/SIGTERM)");
+  sub->add_option("--duration", a->duration, "Stop after this many seconds (default: until SIGINT/SIGTERM)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            double x = 0;
+            const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+            return ec == std::errc() && end == v.data() + v.size() && x > 0 && std::isfinite(x)
+                       ? std::string()
+                       : v + ": must be a number of seconds > 0 (leave it out to serve until SIGINT/SIGTERM)";
+          },
+          "SECONDS > 0"));
   sub->callback([a, &rc] { rc = serve(*a); });
 }
 

@@ -1,5 +1,7 @@
 // The `rig` command line: one subcommand per job (docs/contracts.md).
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -24,16 +26,29 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // `rig bogus`: CLI11 takes an unknown first word for a stray argument and reports only the
-    // missing subcommand; name the word instead, with the subcommands there are.
-    if (app.get_subcommands().empty() && !app.remaining().empty()) {
-      const std::string word = app.remaining().front();
-      if (word.rfind('-', 0) == 0) {
-        std::cerr << "rig: unknown option '" << word << "' (see rig --help)\n";
+    // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a
+    // stray argument and reports only the missing subcommand; name the word instead, with the
+    // subcommands there are. The deepest subcommand the line chose is the one missing its own.
+    CLI::App* at = &app;
+    std::string path = "rig";
+    while (!at->get_subcommands().empty()) {
+      at = at->get_subcommands().front();
+      path += " " + at->get_name();
+    }
+    std::vector<std::string> rest = at->remaining();
+    if (rest.empty() && at != &app) rest = app.remaining();
+    if (e.get_exit_code() != 0 && at->get_require_subcommand_min() > 0 && at->get_subcommands().empty()) {
+      const std::string word = rest.empty() ? std::string() : rest.front();
+      if (word.empty()) {
+        std::cerr << path << ": a subcommand is required (one of:";
+        for (const CLI::App* s : at->get_subcommands({})) std::cerr << ' ' << s->get_name();
+        std::cerr << "; see " << path << " --help)\n";
+      } else if (word.rfind('-', 0) == 0) {
+        std::cerr << path << ": unknown option '" << word << "' (see " << path << " --help)\n";
       } else {
-        std::cerr << "rig: unknown subcommand '" << word << "' (one of:";
-        for (const CLI::App* s : app.get_subcommands({})) std::cerr << ' ' << s->get_name();
-        std::cerr << "; see rig --help)\n";
+        std::cerr << path << ": unknown subcommand '" << word << "' (one of:";
+        for (const CLI::App* s : at->get_subcommands({})) std::cerr << ' ' << s->get_name();
+        std::cerr << "; see " << path << " --help)\n";
       }
       return rig::kExitUsage;
     }

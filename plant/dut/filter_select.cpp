@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "plant/dut/emulated_dut.hpp"
 #include "plant/dut/loop_figures.hpp"
 #include "analysis/rms.hpp"
@@ -69,7 +71,11 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
 
 std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt) {
   if (!(opt.f_req_hz > 0)) throw ConfigError("--f-req must be positive");
-  if (!(opt.fc_step_hz > 0) || opt.fc_max_hz < opt.fc_min_hz) throw ConfigError("bad cut-off range");
+  if (!(opt.fc_step_hz > 0))
+    throw ConfigError(fmt::format("--fc-step {:g}: the cut-off step must be > 0 Hz", opt.fc_step_hz));
+  if (!(opt.fc_min_hz > 0) || !(opt.fc_max_hz >= opt.fc_min_hz))
+    throw ConfigError(fmt::format("--fc-min {:g} --fc-max {:g}: the cut-off range must be 0 < min <= max Hz",
+                                  opt.fc_min_hz, opt.fc_max_hz));
   const DutParams p = load_dut_params(dut_cfg);
   const double rate = p.loop.loop_rate_hz;
 

@@ -52,8 +52,32 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_NE(err.find("unknown subcommand 'bogus'"), std::string::npos) << err;
   EXPECT_NE(err.find("run analyze plant table dut filter report history capture"), std::string::npos) << err;
   EXPECT_EQ(err.find("A subcommand is required"), std::string::npos) << err;
-  EXPECT_EQ(run({}, d + "/none"), 2);  // no word at all: CLI11's own message
-  EXPECT_NE(slurp(d + "/none.stderr").find("A subcommand is required"), std::string::npos);
+  EXPECT_EQ(run({}, d + "/none"), 2);  // no word at all: the subcommands there are
+  EXPECT_NE(slurp(d + "/none.stderr").find("rig: a subcommand is required (one of: run analyze plant table dut filter "
+                                           "report history capture verify; see rig --help)"),
+            std::string::npos)
+      << slurp(d + "/none.stderr");
+  // The same one level down (helper review: `rig table spin` said "A subcommand is required").
+  EXPECT_EQ(run({"table", "--modbus", "127.0.0.1:1", "spin"}, d + "/spin"), 2);
+  EXPECT_NE(slurp(d + "/spin.stderr").find("rig table: unknown subcommand 'spin' (one of: status home move stop "
+                                           "quick-stop reset; see rig table --help)"),
+            std::string::npos)
+      << slurp(d + "/spin.stderr");
+  EXPECT_EQ(run({"filter"}, d + "/filter"), 2);
+  EXPECT_NE(slurp(d + "/filter.stderr").find("rig filter: a subcommand is required (one of: select show"),
+            std::string::npos)
+      << slurp(d + "/filter.stderr");
+  EXPECT_EQ(run({"capture", "--bogus"}, d + "/capopt"), 2);
+  for (const char* s : {"/none", "/spin", "/filter", "/capopt"})
+    EXPECT_EQ(slurp(d + s + ".stderr").find("A subcommand is required"), std::string::npos) << s;
+  // Bad values named (helper review): a cut-off range, a serve duration.
+  EXPECT_EQ(run({"filter", "select", "--fc-min", "1000", "--fc-max", "300"}, d + "/fc"), 2);
+  EXPECT_NE(slurp(d + "/fc.stderr").find("--fc-min 1000 --fc-max 300: the cut-off range must be 0 < min <= max Hz"),
+            std::string::npos)
+      << slurp(d + "/fc.stderr");
+  EXPECT_EQ(run({"plant", "serve", "--modbus", "127.0.0.1:0", "--duration", "-1"}, d + "/dur"), 2);
+  EXPECT_NE(slurp(d + "/dur.stderr").find("--duration: -1: must be a number of seconds > 0"), std::string::npos)
+      << slurp(d + "/dur.stderr");
 }
 
 TEST(RigCli, CiProfileEndToEnd) {
