@@ -76,6 +76,7 @@ std::string flags(const TableStatus& s) {
   add(s.ready, "ready");
   add(s.servo_on, "servo-on");
   add(s.homed, "homed");
+  add(!s.homed_known, "homed-unknown");
   add(s.homing, "homing");
   add(s.moving, "moving");
   add(s.in_position, "in-position");
@@ -92,6 +93,7 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
                         {"homing", s.homing},     {"moving", s.moving},         {"in_position", s.in_position},
                         {"alarm", s.alarm},       {"estop", s.estop},           {"interlock_ok", s.interlock_ok},
                         {"alarm_code", s.alarm_code}, {"alarm_text", s.alarm_text}};
+    if (!s.homed_known) j["homed_known"] = false;  // "homed": false then means "cannot tell"
     if (s.has_heartbeat) j["heartbeat"] = s.heartbeat;
     if (!s.drive_state.empty()) j["drive_state"] = s.drive_state;
     std::cout << j.dump(2) << "\n";

@@ -16,6 +16,9 @@ struct TableStatus {
   bool ready = false;
   bool servo_on = false;
   bool homed = false;
+  // False when the drive cannot say whether it is homed (a CiA 402 map without homed_bit, read
+  // by a client that did not home it): `homed` is then false for "not known", not "lost".
+  bool homed_known = true;
   bool homing = false;
   bool moving = false;
   bool in_position = false;

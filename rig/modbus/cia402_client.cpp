@@ -114,6 +114,7 @@ TableStatus Cia402Table::status() {
   s.ready = st != State::kFault && st != State::kFaultReactionActive && st != State::kNotReadyToSwitchOn;
   s.servo_on = st == State::kOperationEnabled || st == State::kQuickStopActive;
   s.homed = map_.homed_bit ? r.has(static_cast<uint16_t>(1u << *map_.homed_bit)) : homed_;
+  s.homed_known = map_.homed_bit.has_value() || homed_;
   s.homing = r.mode_display == c4::kModeHoming && s.servo_on && !r.has(c4::sw::kTargetReached);
   // Velocity actual below 0.01 °/s is a servo holding position, not motion.
   s.moving = std::fabs(r.velocity_dps) > 0.01 || (s.servo_on && !r.has(c4::sw::kTargetReached));

@@ -188,6 +188,14 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   ASSERT_EQ(rig("move 180" + where), 0) << out;
   EXPECT_NE(out.find("actual     180.0000°"), std::string::npos) << out;
   EXPECT_NE(out.find("in-position"), std::string::npos) << out;
+  // Homing is another process's: a map with homed_bit reads it from the drive; one without
+  // cannot tell, and says so (helper review: it said "homed": false, as if the reference was lost).
+  const bool has_bit = GetParam() == "lowword-offset.toml";
+  ASSERT_EQ(rig("status --json" + where), 0) << out;
+  EXPECT_NE(out.find(has_bit ? "\"homed\": true" : "\"homed\": false"), std::string::npos) << out;
+  EXPECT_EQ(out.find("\"homed_known\": false") != std::string::npos, !has_bit) << out;
+  ASSERT_EQ(rig("status" + where), 0) << out;
+  EXPECT_EQ(out.find("homed-unknown") != std::string::npos, !has_bit) << out;
   ASSERT_EQ(rig("stop" + where), 0) << out;
   EXPECT_NE(out.find("stop sent"), std::string::npos) << out;
   ASSERT_EQ(rig("quick-stop" + where), 0) << out;
