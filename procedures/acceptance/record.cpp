@@ -42,6 +42,9 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
              {"filter", filter},
              {"software", std::string("rig ") + RIG_VERSION}};
   capture::Writer w(ctx.out_dir + "/" + rel, h);
+  if (!w.set_aside().empty())  // an earlier attempt's record: kept, and said where
+    ctx.log->warn("{}: {} already held a record (an interrupted attempt's): kept as {}", name, rel,
+                  std::filesystem::path(w.set_aside()).filename().string());
 
   Recorded r;
   r.capture = rel;

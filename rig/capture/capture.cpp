@@ -78,6 +78,7 @@ Writer::Writer(const std::string& path, const Header& header, uint32_t block_sam
       const std::string keep = path + ".interrupted-" + std::to_string(i);
       if (!fs::exists(keep)) {
         fs::rename(path, keep);
+        set_aside_ = keep;
         break;
       }
     }

@@ -68,11 +68,13 @@ class Writer {
   void close();
   uint64_t samples_written() const { return total_; }
   const std::string& path() const { return path_; }
+  // Where the file that was at `path` went (path + ".interrupted-N"), or "" when there was none.
+  const std::string& set_aside() const { return set_aside_; }
 
  private:
   void write_block(const Sample* s, uint32_t n);
   void write_all(const void* p, std::size_t n);
-  std::string path_;
+  std::string path_, set_aside_;
   int fd_ = -1;
   uint32_t block_samples_;
   std::vector<Sample> pending_;

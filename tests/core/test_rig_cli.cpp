@@ -632,6 +632,10 @@ TEST(RigCli, SigkillMidCaptureThenResumeRepeatsNoCompletedPhase) {
     }
   }
   EXPECT_TRUE(fs::exists(d + "/run/captures/raw-U10.cap.interrupted-1")) << "the killed capture is kept";
+  EXPECT_NE(log.find("raw-U10: captures/raw-U10.cap already held a record (an interrupted attempt's): kept as "
+                     "raw-U10.cap.interrupted-1"),
+            std::string::npos)
+      << "and the log says where:\n" << log;
 }
 
 TEST(RigCli, EstopEndsTheRunWithExit3) {
