@@ -5,9 +5,11 @@
 
 #include "firmware_link/connect.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
+#include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/gpio/gpiod_lines.hpp"
 #include "rig/modbus/table_client.hpp"
+#include "rig/report/db_url.hpp"
 
 namespace rig::cli {
 
@@ -20,7 +22,19 @@ void check_rig(const toml::table& t) {
 
 void check_history(const toml::table& t) {
   cfg::check_keys(t, {"url"}, "history");
-  cfg::get_string(t, "url", std::string());
+  const std::string url = cfg::get_string(t, "url", std::string());
+  // A URL this rig cannot open is the file's mistake, named at its line by every command that
+  // reads the file (rig table did not look, and rig run named no line).
+  if (const toml::node* n = t.get("url")) try {
+      history::sqlite_path(url);
+    } catch (const ConfigError& e) {
+      // "history database URL 'X': why" or "... 'X' why": the reject names the value already.
+      std::string why = e.what();
+      const std::string lead = "history database URL '";
+      if (const auto q = why.find('\'', lead.size()); why.rfind(lead, 0) == 0 && q != std::string::npos)
+        why = why.substr(why.compare(q, 3, "': ") == 0 ? q + 3 : q + 2);
+      cfg::reject(*n, "url", why);
+    }
 }
 
 // The one reader of [procedure]: the validation and apply_procedure_angles share it.

@@ -1,8 +1,10 @@
 #include "rig/gpio/gpiod_lines.hpp"
 
 #include <chrono>
+#include <iterator>
 #include <optional>
 #include <system_error>
+#include <utility>
 
 #include <gpiod.hpp>
 
@@ -119,7 +121,16 @@ GpioConfig parse_gpio_config(const toml::table& t) {
   c.consumer = cfg::get_string(t, "consumer", "rig");
   for (const char* key : {"power", "estop"})
     if (cfg::get_string(t, key).empty()) throw ConfigError(cfg::where(*t.get(key)) + ": [gpio] " + key + " is empty");
-  if (c.power == c.estop) throw ConfigError(cfg::where(*t.get("estop")) + ": [gpio] estop names the same line as power");
+  // One line, one job: a lamp on the e-stop input would drive the safety line, and a line named
+  // twice is refused by libgpiod only once the chip is open.
+  const std::pair<const char*, const std::string*> lines[] = {
+      {"power", &c.power},         {"estop", &c.estop},         {"lamp_ready", &c.lamp_ready},
+      {"lamp_running", &c.lamp_running}, {"lamp_pass", &c.lamp_pass}, {"lamp_fail", &c.lamp_fail}};
+  for (std::size_t j = 1; j < std::size(lines); ++j)
+    for (std::size_t i = 0; i < j; ++i)
+      if (!lines[j].second->empty() && *lines[j].second == *lines[i].second)
+        throw ConfigError(cfg::where(*t.get(lines[j].first)) + ": [gpio] " + lines[j].first +
+                          " names the same line as " + lines[i].first + " ('" + *lines[j].second + "')");
   return c;
 }
 

@@ -1,5 +1,7 @@
 #include "rig/report/db.hpp"
 
+#include "rig/report/db_url.hpp"
+
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
@@ -151,17 +153,6 @@ std::string pg_placeholders(const std::string& sql) {
   return out;
 }
 
-// postgresql://user:secret@host/db -> postgresql://user:***@host/db (for messages).
-std::string mask_password(const std::string& url) {
-  const std::size_t scheme = url.find("://");
-  if (scheme == std::string::npos) return url;
-  const std::size_t start = scheme + 3, end = url.find_first_of("/?", start);
-  const std::size_t at = url.rfind('@', end == std::string::npos ? std::string::npos : end);
-  if (at == std::string::npos || at < start) return url;
-  const std::size_t colon = url.find(':', start);
-  if (colon == std::string::npos || colon > at) return url;
-  return url.substr(0, colon + 1) + "***" + url.substr(at);
-}
 
 // libpq is loaded when a PostgreSQL history is first opened, not linked: its dependency tree
 // (Kerberos, LDAP, GnuTLS, OpenSSL: 22 shared libraries) made every rig command's start-up map
@@ -282,18 +273,6 @@ class PgDb final : public Db {
 
 }  // namespace
 
-std::optional<std::string> sqlite_path(const std::string& url) {
-  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::nullopt;
-  std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
-  if (path.rfind("//", 0) == 0) path = path.substr(2);  // sqlite:///abs/path
-  if (path.empty()) throw ConfigError("history database URL '" + url + "' names no file");
-  // "scheme:..." (a colon before any slash) other than sqlite: is a URL this rig cannot open.
-  const std::size_t colon = url.find(':');
-  if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
-    throw ConfigError("history database URL '" + mask_password(url) +
-                      "': unknown scheme (expected sqlite:PATH, a path, or postgresql://...)");
-  return path;
-}
 
 std::unique_ptr<Db> open_db(const std::string& url, Access access) {
   // PostgreSQL: the server's database exists or the connection fails; nothing is created by opening.

@@ -10,6 +10,8 @@
 #include <variant>
 #include <vector>
 
+#include "rig/report/db_url.hpp"
+
 namespace rig::history {
 
 // A bound parameter or a result cell.
@@ -60,8 +62,6 @@ enum class Access { ReadWrite, ReadOnly };
 // Throws rig::ConfigError.
 std::unique_ptr<Db> open_db(const std::string& url, Access access = Access::ReadWrite);
 
-// The file of an SQLite URL (nullopt for PostgreSQL); throws rig::ConfigError on a bad URL.
-std::optional<std::string> sqlite_path(const std::string& url);
 
 // Keeps a transaction open until commit(); rolls back if destroyed before.
 class Transaction {

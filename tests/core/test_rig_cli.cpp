@@ -1675,6 +1675,23 @@ TEST(HardwareFileValidation, RigTableAndRigDutNameTheFileAndLine) {
       << slurp(d + "/u.stderr");
 }
 
+// A [history] url rig cannot open is the file's mistake, named at its line by every command that
+// reads the file (a review: rig table connected and gave exit 4; rig run named no line).
+TEST(HardwareFileValidation, AHistoryUrlOfAnotherSchemeIsNamedAtItsLine) {
+  const std::string d = tmp("hw-history");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[history]\nurl = \"mysql://x\"\n";
+  const std::string want = d + "/hw.toml:4:7: 'url' = 'mysql://x': unknown scheme";
+  EXPECT_EQ(run({"table", "status", "--hardware", d + "/hw.toml"}, d + "/t"), 2) << slurp(d + "/t.stderr");
+  EXPECT_NE(slurp(d + "/t.stderr").find(want), std::string::npos) << slurp(d + "/t.stderr");
+  std::string err;
+  const std::string full = hardware_file(d + "/run", 0, "");
+  std::ofstream(full, std::ios::app) << "[history]\nurl = \"mysql://x\"\n";
+  EXPECT_EQ(hardware_dry_run(d + "/run", full, err), 2) << err;
+  EXPECT_NE(err.find("hw.toml:"), std::string::npos) << err;
+  EXPECT_NE(err.find("'url' = 'mysql://x': unknown scheme"), std::string::npos) << err;
+}
+
 TEST(ProfileValidation, BadTausIsRefusedByTheDryRun) {
   const std::string d = tmp("taus");
   fs::create_directories(d);

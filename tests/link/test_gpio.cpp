@@ -206,7 +206,12 @@ TEST(GpioConfig, MistakesNameFileAndLine) {
   };
   expect_config_error("power = \"p\"\n", "estop");
   expect_config_error("power = \"p\"\nestop = \"e\"\nlamp_redy = \"x\"\n", "lamp_redy");
-  expect_config_error("power = \"p\"\nestop = \"p\"\n", "same line");
+  expect_config_error("power = \"p\"\nestop = \"p\"\n", "hw.toml:2:9: [gpio] estop names the same line as power ('p')");
+  // Every line has one job (a review: a lamp on the e-stop input passed the dry run).
+  expect_config_error("power = \"p\"\nestop = \"e\"\nlamp_pass = \"e\"\n",
+                      "hw.toml:3:13: [gpio] lamp_pass names the same line as estop ('e')");
+  expect_config_error("power = \"p\"\nestop = \"e\"\nlamp_fail = \"f\"\nlamp_pass = \"f\"\n",
+                      "hw.toml:3:13: [gpio] lamp_fail names the same line as lamp_pass ('f')");
   expect_config_error("power = 3\nestop = \"e\"\n", "power");
 }
 
