@@ -199,17 +199,25 @@ Reader::Reader(const std::string& path) : path_(path) {
   if (crc(js.data(), len) != want_crc) throw ConfigError(path + ": capture header CRC mismatch (offset 16)");
   try {
     const auto j = nlohmann::json::parse(js);
-    header_.serial = j.value("serial", "");
-    header_.phase = j.value("phase", "");
-    header_.orientation = j.value("orientation", "");
-    header_.started = j.value("started", "");
+    if (!j.is_object()) throw ConfigError(path + ": capture header is " + j.type_name() + ", not a JSON object");
+    // The text fields, each named when it is not text (tools/rigcap.py says the same).
+    const auto text = [&](const char* key) -> std::string {
+      if (!j.contains(key)) return "";
+      if (!j[key].is_string())
+        throw ConfigError(path + ": capture header field " + key + " is " + j[key].dump() + ", not a string");
+      return j[key].get<std::string>();
+    };
+    header_.serial = text("serial");
+    header_.phase = text("phase");
+    header_.orientation = text("orientation");
+    header_.started = text("started");
     // What the samples mean is stated, never guessed: a format this reader does not know, units
     // other than the g every rig capture holds, or no rate are refused (a missing rate read as
     // 1000 Hz would put every tau of an analysis off by the true rate's ratio).
     if (j.contains("format") && j["format"] != "rig.capture/1")
       throw ConfigError(path + ": capture header format is " + j["format"].dump() +
                         ", not \"rig.capture/1\" (written by another program or version?)");
-    header_.units = j.value("units", "g");
+    header_.units = j.contains("units") ? text("units") : "g";
     if (header_.units != "g")
       throw ConfigError(path + ": capture header units is \"" + header_.units + "\", not \"g\" (a rig capture's samples are in g)");
     if (!j.contains("rate_hz")) throw ConfigError(path + ": capture header has no rate_hz (the samples' rate, Hz)");

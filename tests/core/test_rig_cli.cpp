@@ -1358,7 +1358,11 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
             [](nlohmann::json& h) {
               h["units"] = "mg";
               h.erase("record");  // room for the longer value
-            }, "capture header units is \"mg\", not \"g\""}}) {
+            }, "capture header units is \"mg\", not \"g\""},
+           // A text field that is not text is named (a review: "not valid JSON: type must be string").
+           {"serialnum", [](nlohmann::json& h) { h["serial"] = 5; }, "capture header field serial is 5, not a string"},
+           {"startednum", [](nlohmann::json& h) { h["started"] = 1; },
+            "capture header field started is 1, not a string"}}) {
     const std::string cap = with_header(name, edit);
     EXPECT_EQ(run({"analyze", cap, "--input", "capture"}, d + "/" + name), 2) << name;
     EXPECT_NE(slurp(d + "/" + name + ".stderr").find(cap + ": " + says), std::string::npos)
