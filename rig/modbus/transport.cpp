@@ -353,7 +353,18 @@ class LibmodbusTransport final : public RegisterTransport {
       connected_ = true;
       return true;
     }
-    err = modbus_strerror(errno);
+    // libmodbus connects without blocking and waits one response timeout; when nothing answers
+    // in that time it returns with errno still EINPROGRESS ("Operation now in progress"), which
+    // tells a technician nothing. A refused port gives ECONNREFUSED as it should.
+    const int e = errno;
+    if (e == EINPROGRESS) {
+      std::ostringstream os;
+      os << "no answer within " << std::max(0.01, opt_.response_timeout_s)
+         << " s (host unreachable, off, or a firewall drops the connection)";
+      err = os.str();
+    } else {
+      err = modbus_strerror(e);
+    }
     modbus_close(ctx_);
     return false;
   }

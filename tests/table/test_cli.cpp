@@ -79,7 +79,13 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   ASSERT_EQ(rig(where_ + " reset", out), 0) << out;
   EXPECT_NE(out.find("alarm      none"), std::string::npos) << out;
   EXPECT_EQ(rig("--modbus 127.0.0.1:1 --timeout 0.1 status", out), 4) << out;
-  EXPECT_NE(out.find("cannot connect"), std::string::npos) << out;
+  EXPECT_NE(out.find("cannot connect: Connection refused"), std::string::npos) << out;
+  // A host that does not answer (TEST-NET-1, RFC 5737: never routed) is said so, not as the
+  // non-blocking connect's "Operation now in progress" (a review); where the host's network
+  // refuses at once ("Network is unreachable"), that is said.
+  EXPECT_EQ(rig("--modbus 192.0.2.10:502 --timeout 0.2 status", out), 4) << out;
+  EXPECT_NE(out.find("cannot connect: "), std::string::npos) << out;
+  EXPECT_EQ(out.find("in progress"), std::string::npos) << out;
 }
 
 // A [table] setting beyond what the drive accepts is named by its key and the line that wrote it
