@@ -1515,6 +1515,13 @@ TEST(RigCli, DutHardwareFileDbcIsRelativeToTheFileNotTheWorkingDirectory) {
   EXPECT_EQ(rc, 4) << err;
   EXPECT_EQ(err.find("qpa-counts.dbc"), std::string::npos) << err;
   EXPECT_NE(err.find("rig-nocan0"), std::string::npos) << err;
+  // Without the DBC beside it: the hardware file's line, and the path it resolved to (a review:
+  // "nope.dbc: cannot open DBC file", with no line and no folder).
+  fs::remove(d + "/hw/qpa-counts.dbc");
+  EXPECT_EQ(run({"dut", "stream", "--hardware", d + "/hw/qpa-counts.dut.toml", "--can", "rig-nocan0"}, d + "/io2"), 2);
+  const std::string err2 = slurp(d + "/io2.stderr");
+  EXPECT_NE(err2.find("qpa-counts.dut.toml:"), std::string::npos) << err2;
+  EXPECT_NE(err2.find("'dbc' = 'qpa-counts.dbc': no such file: " + d + "/hw/qpa-counts.dbc"), std::string::npos) << err2;
 }
 
 // Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is
