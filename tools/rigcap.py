@@ -50,10 +50,7 @@ def _check_header(path, h):
     r = h["rate_hz"]
     if isinstance(r, bool) or not isinstance(r, (int, float)):
         raise ValueError(f"{path}: capture header field rate_hz is {json.dumps(r)}, not a number")
-    try:
-        r = float(r)
-    except OverflowError:  # an integer beyond any double: rig's JSON parser says "number overflow"
-        raise ValueError(f"{path}: capture header is not valid JSON: rate_hz beyond the range of a double") from None
+    r = float(r)  # (a number beyond a double was refused while parsing, as rig's parser does)
     if not (0 < r <= MAX_RATE_HZ):
         raise ValueError(f"{path}: capture header rate_hz = {r:g} is out of range (0, {MAX_RATE_HZ:g}] Hz")
 
@@ -67,7 +64,34 @@ def _with_header(raw, header):
     return out + b"\0" * (-len(out) % 16) + data
 
 
+GAP_BEFORE = 1 << 8  # status bit: samples were lost before this one (rig/core/types.hpp)
+MAX_BLOCK_SAMPLES = 1 << 20  # rig/capture/capture.hpp's kMaxBlockSamples
+MAX_DOUBLE = 1.7976931348623157e308
+
+
+def _number(path):
+    """JSON numbers as rig's parser (nlohmann::json) takes them: beyond a double is an error
+    ("number overflow"), not inf or a Python big integer."""
+    def as_float(text):
+        v = float(text)
+        if v in (float("inf"), float("-inf")):
+            raise ValueError(f"{path}: capture header is not valid JSON: number overflow parsing '{text}'")
+        return v
+
+    def as_int(text):
+        v = int(text)
+        if abs(v) > MAX_DOUBLE:
+            raise ValueError(f"{path}: capture header is not valid JSON: number overflow parsing '{text[:20]}...'")
+        return v
+    return as_float, as_int
+
+
 def load(path):
+    """(header, data, report) as rig's own reader (rig/capture/capture.cpp, Reader) reads the
+    file: report["samples"], report["complete"] and report["damaged"] (each damaged block's
+    offset) are what `rig analyze FILE --input capture` says of it, and the first sample after
+    a skipped block carries GAP_BEFORE in its status. report["notes"]: what else kept the file
+    from being complete (a repeated block, bytes after the end marker, a count mismatch)."""
     raw = open(path, "rb").read()
     if raw[:8] != b"RIGCAP1\n":
         raise ValueError(f"{path}: not a rig capture (bad magic)")
@@ -75,33 +99,67 @@ def load(path):
     hjson = raw[16:16 + hlen]
     if zlib.crc32(hjson) != hcrc:
         raise ValueError(f"{path}: header CRC mismatch")
-    header = json.loads(hjson, parse_constant=_no_constant(path))
+    as_float, as_int = _number(path)
+    header = json.loads(hjson, parse_constant=_no_constant(path), parse_float=as_float, parse_int=as_int)
     _check_header(path, header)
     pos = (16 + hlen + 15) & ~15
-    parts, report = [], {"complete": False, "damaged": [], "samples": 0}
-    while pos + 16 <= len(raw):
-        magic, count, pcrc, bcrc = struct.unpack_from("<IIII", raw, pos)
-        if zlib.crc32(raw[pos:pos + 12]) != bcrc:
-            report["damaged"].append(pos)
-            pos += 16  # resync: blocks start on 16-byte boundaries
-            continue
-        if magic == END:
-            report["complete"] = not report["damaged"]
+    parts = []
+    report = {"complete": False, "damaged": [], "samples": 0, "notes": [], "truncated": False}
+    gap_pending, prev = False, None  # prev: (count, payload CRC) of the last block read
+
+    def valid_header(p):
+        m, _, _, c = struct.unpack_from("<IIII", raw, p)
+        return m in (BLOCK, END) and zlib.crc32(raw[p:p + 12]) == c
+
+    while True:
+        if pos + 16 > len(raw):
+            report["truncated"] = True  # the writer did not close it (killed, disk full)
             break
-        payload = raw[pos + 16:pos + 16 + 16 * count]
-        if len(payload) < 16 * count:
-            break  # writer killed mid-block
-        if zlib.crc32(payload) == pcrc:
-            parts.append(np.frombuffer(payload, dtype=RECORD))
-        else:
-            report["damaged"].append(pos)
-        pos += 16 + 16 * count
+        magic, count, pcrc, bcrc = struct.unpack_from("<IIII", raw, pos)
+        hdr_ok = zlib.crc32(raw[pos:pos + 12]) == bcrc
+        if hdr_ok and magic == END:
+            after = len(raw) - (pos + 16)
+            if after:
+                report["notes"].append(f"offset {pos + 16}: {after} bytes after the end marker (ignored)")
+            n = count | (pcrc << 32)
+            read = sum(p.size for p in parts)
+            if n != read:
+                report["notes"].append(f"end marker counts {n} samples, {read} were readable")
+            report["complete"] = not report["damaged"] and not report["notes"]
+            break
+        if hdr_ok and magic == BLOCK and 0 < count <= MAX_BLOCK_SAMPLES:
+            payload = raw[pos + 16:pos + 16 + 16 * count]
+            if len(payload) < 16 * count:
+                report["truncated"] = True  # writer killed mid-block
+                break
+            if zlib.crc32(payload) != pcrc:
+                report["damaged"].append(pos)
+                gap_pending = True
+            elif prev == (count, pcrc):  # the same block twice: counted once
+                report["notes"].append(f"offset {pos}: block of {count} samples repeats the previous block (skipped)")
+            else:
+                prev = (count, pcrc)
+                block = np.frombuffer(payload, dtype=RECORD)
+                if gap_pending:
+                    block = block.copy()
+                    block["status"][0] |= GAP_BEFORE
+                    gap_pending = False
+                parts.append(block)
+            pos += 16 + 16 * count
+            continue
+        # A damaged block header (bad CRC, unknown magic, impossible count): one damaged block,
+        # then the next valid header, 16 bytes at a time (blocks start on 16-byte boundaries).
+        report["damaged"].append(pos)
+        gap_pending = True
+        pos += 16
+        while pos + 16 <= len(raw) and not valid_header(pos):
+            pos += 16
     data = np.concatenate(parts) if parts else np.zeros(0, dtype=RECORD)
     report["samples"] = int(data.size)
     return header, data, report
 
 
-def _self_test(generator):
+def _self_test(generator, rig=None):
     import os
     import subprocess
     import tempfile
@@ -125,7 +183,7 @@ def _self_test(generator):
                "units": (dict(h, units="\u00b5g"), 'units is "\u00b5g", not "g"'),
                "serial": (dict(h, serial=5), "field serial is 5, not a string"),
                "NaN": (dict(h, extra={"t": float("nan")}), "not valid JSON: NaN"),
-               "huge rate": (dict(h, rate_hz=10**400), "rate_hz beyond the range of a double")}
+               "huge rate": (dict(h, rate_hz=10**400), "not valid JSON: number overflow")}
         for name, (header, says) in bad.items():
             q = os.path.join(d, "bad.cap")
             open(q, "wb").write(_with_header(raw, header))
@@ -138,7 +196,82 @@ def _self_test(generator):
         h2, data2, rep2 = load(_write(os.path.join(d, "same.cap"), _with_header(raw, h)))
         assert h2 == h and rep2 == rep and np.array_equal(data2, data), "rewriting the header moved the samples"
         passed += 1
+        passed += _damaged_files_read_as_rig_reads_them(d, raw, rig)
     print(f"rigcap self-test: {passed} passed, 0 failed")
+
+
+def _damaged_files_read_as_rig_reads_them(d, raw, rig):
+    """The generator's file (blocks of 1000, 1000 and 500 samples) damaged the ways a disk or a
+    killed writer damages it: this loader gives the samples, completeness, damaged blocks and gap
+    flags that rig's reader gives (`rig analyze FILE --input capture`, when `rig` is given)."""
+    import os
+    import re
+    import subprocess
+    hlen = struct.unpack_from("<I", raw, 8)[0]
+    blocks, pos = [], (16 + hlen + 15) & ~15
+    while True:
+        magic, count = struct.unpack_from("<II", raw, pos)
+        if magic == END:
+            end = pos
+            break
+        blocks.append(pos)
+        pos += 16 + 16 * count
+    b0, b1, b2 = blocks
+
+    def edit(at, fn):
+        out = bytearray(raw)
+        fn(out, at)
+        return bytes(out)
+
+    def header(magic, count, pcrc):
+        h = struct.pack("<III", magic, count, pcrc)
+        return h + struct.pack("<I", zlib.crc32(h))
+
+    def flip(out, at):
+        out[at] ^= 0xFF
+
+    cases = {  # name: (bytes, samples, complete, damaged blocks, gap flags)
+        "payload CRC": (edit(b0 + 16 + 5, flip), 1500, False, 1, 1),
+        "header CRC": (edit(b1 + 4, flip), 1500, False, 1, 1),
+        "unknown block magic": (raw[:b1] + header(0x12345678, 1000, struct.unpack_from("<I", raw, b1 + 8)[0])
+                                + raw[b1 + 16:], 1500, False, 1, 1),
+        "block of 0 samples": (raw[:b1] + header(BLOCK, 0, 0) + raw[b1:], 2500, False, 1, 1),
+        "repeated block": (raw[:b1] + raw[b0:b1] + raw[b1:], 2500, False, 0, 0),
+        "bytes after the end": (raw + b"x" * 48, 2500, False, 0, 0),
+        "killed mid-block": (raw[:b2 + 16 + 100], 2000, False, 0, 0),
+        "no end marker": (raw[:end], 2500, False, 0, 0),
+    }
+    passed = 0
+    for name, (data, samples, complete, damaged, gaps) in cases.items():
+        q = _write(os.path.join(d, name.replace(" ", "-") + ".cap"), data)
+        _, got, rep = load(q)
+        flagged = int(np.count_nonzero(got["status"] & GAP_BEFORE))
+        assert (rep["samples"], rep["complete"], len(rep["damaged"]), flagged) == (samples, complete, damaged, gaps), \
+            (name, rep, flagged)
+        if rig:
+            out = subprocess.run([rig, "analyze", q, "--input", "capture", "--no-psd", "--taus", "octave"],
+                                 capture_output=True, text=True).stdout
+            m = re.search(r": (\d+) samples in \d+ blocks, (complete|INCOMPLETE)", out)
+            k = re.search(r"(\d+) damaged block", out)
+            assert m, (name, out)
+            rig_says = (int(m.group(1)), m.group(2) == "complete", int(k.group(1)) if k else 0)
+            assert rig_says == (rep["samples"], rep["complete"], len(rep["damaged"])), (name, rig_says, rep)
+        passed += 1
+    # A number beyond a double anywhere in the header, as rig's parser refuses it.
+    h = json.loads(raw[16:16 + hlen])
+    for name, value in (("1e400", "1e400"), ("a 340-digit integer", "1" * 340)):
+        text = json.dumps(dict(h, extra={"table_deg": 0})).replace('"table_deg": 0', '"table_deg": ' + value)
+        q = os.path.join(d, "huge.cap")
+        body = raw[(16 + hlen + 15) & ~15:]
+        head = raw[:8] + struct.pack("<II", len(text), zlib.crc32(text.encode())) + text.encode()
+        _write(q, head + b"\0" * (-len(head) % 16) + body)
+        try:
+            load(q)
+            raise AssertionError(f"{name} in the header: accepted")
+        except ValueError as e:
+            assert "number overflow" in str(e), (name, str(e))
+        passed += 1
+    return passed
 
 
 def _write(path, raw):
@@ -147,8 +280,8 @@ def _write(path, raw):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) == 3 and sys.argv[1] == "--self-test":
-        _self_test(sys.argv[2])
+    if len(sys.argv) in (3, 4) and sys.argv[1] == "--self-test":
+        _self_test(sys.argv[2], sys.argv[3] if len(sys.argv) == 4 else None)
     elif len(sys.argv) == 2:
         h, d, r = load(sys.argv[1])
         print(json.dumps(h, indent=1))
