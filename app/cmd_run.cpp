@@ -656,6 +656,7 @@ int do_run(RunArgs a) {
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
   prepare_run_folder(a.out);
   refuse_non_files(a.out);
+  if (a.resume.empty()) refuse_an_earlier_run(a.out);  // before the operator is asked anything
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
@@ -669,7 +670,6 @@ int do_run(RunArgs a) {
   operator_prompts(a, p);
 
   if (a.resume.empty()) {
-    refuse_an_earlier_run(a.out);
     // The folder carries everything a resume needs.
     write_file_atomic(a.out + "/profile.toml", p.source.rfind("builtin:", 0) == 0
                                                    ? acceptance::builtin_profile_text(p.source.substr(8))
