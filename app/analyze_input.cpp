@@ -219,20 +219,39 @@ std::size_t utf8_sequence(std::string_view s, std::size_t i) {
   }
   return 0;
 }
+
+// Characters a terminal acts on rather than shows, though well-formed: the C1 controls
+// (U+0080..U+009F: U+009B is CSI), the line and paragraph separators, and the bidirectional
+// embeddings, overrides and isolates (U+202A..U+202E, U+2066..U+2069).
+bool acts_on_terminal(std::string_view seq) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(seq[k]); };
+  if (seq.size() == 2) return b(0) == 0xC2 && b(1) <= 0x9F;
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80) return b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return b(2) >= 0xA6 && b(2) <= 0xA9;
+  return false;
+}
 }  // namespace
 
-// Control bytes and bytes that are not well-formed UTF-8 (a binary file read as text, a Latin-1
-// file) as \xNN; printable ASCII and whole UTF-8 characters (a Cyrillic word) as they are.
+// Control bytes, bytes that are not well-formed UTF-8 (a binary file read as text, a Latin-1
+// file) and characters a terminal acts on as \xNN, byte by byte; printable ASCII and other
+// whole UTF-8 characters (a Cyrillic word) as they are.
 std::string quoted_bytes(std::string_view s) {
   std::string out;
+  const auto escape = [&](std::size_t i, std::size_t len) {
+    for (std::size_t k = i; k < i + len; ++k) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\x%02X", static_cast<unsigned char>(s[k]));
+      out += b;
+    }
+  };
   for (std::size_t i = 0; i < s.size();) {
     const auto c = static_cast<unsigned char>(s[i]);
     std::size_t len = c >= 0x20 && c < 0x7F ? 1 : c >= 0x80 ? utf8_sequence(s, i) : 0;
     if (len == 0) {
-      char b[8];
-      std::snprintf(b, sizeof b, "\\x%02X", c);
-      out += b;
+      escape(i, 1);
       len = 1;
+    } else if (len > 1 && acts_on_terminal(s.substr(i, len))) {
+      escape(i, len);
     } else {
       out.append(s, i, len);
     }

@@ -335,15 +335,18 @@ void refuse_an_earlier_run(const std::string& dir) {
   const std::string v = verdict_of(dir);
   if (!v.empty()) throw ConfigError(dir + " holds a finished run (its passport says " + v + "): choose another --out");
   std::error_code ec;
+  // Only a folder with run.json can be resumed (it holds the invocation a resume repeats).
+  const bool resumable = fs::exists(fs::path(dir) / "run.json", ec);
   for (const char* f : {"checkpoint.json", "run.json", "passport.json"})
     if (fs::exists(fs::path(dir) / f, ec))
-      throw ConfigError(dir + " holds an earlier run (" + f + "): use --resume " + dir + " or another --out");
+      throw ConfigError(dir + " holds an earlier run (" + f + "): " +
+                        (resumable ? "use --resume " + dir + " or another --out" : "choose another --out"));
 }
 
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
-void check_run_folder(const std::string& dir, bool resuming) {
+void check_run_folder(const std::string& dir, bool new_run_here) {
   std::error_code ec;
   fs::path p = fs::absolute(dir, ec);
   while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
@@ -354,7 +357,7 @@ void check_run_folder(const std::string& dir, bool resuming) {
   // touched); a filesystem without it gets a named probe, removed at once.
   if (!can_create_file_in(p))
     throw ConfigError("--out " + dir + ": the run folder is not writable (" + p.string() + ")");
-  if (!resuming) refuse_an_earlier_run(dir);
+  if (new_run_here) refuse_an_earlier_run(dir);
 }
 
 // The passport's identity block, for every ending (finished at the time of the call).
@@ -517,13 +520,17 @@ std::string folder_name_part(std::string s) {
 }
 
 // runs/<name>-<UTC time to the second>; a second run started in the same second (a script, a
-// line's next DUT with the same profile) gets -2, -3, ..., not the first run's folder.
+// line's next DUT with the same profile, two started at once) gets -2, -3, ..., not the first
+// run's folder: each name is claimed by creating it (create_directory is atomic), not by looking.
 std::string default_run_folder(const std::string& name) {
   const std::string base = fmt::format("runs/{}-{}", name, folder_time_utc());
   std::error_code ec;
-  std::string dir = base;
-  for (int i = 2; fs::exists(dir, ec); ++i) dir = fmt::format("{}-{}", base, i);
-  return dir;
+  fs::create_directories("runs", ec);  // (a runs/ that cannot be made is named by prepare_run_folder)
+  for (int i = 1; i < 10000; ++i) {
+    const std::string dir = i == 1 ? base : fmt::format("{}-{}", base, i);
+    if (fs::create_directory(dir, ec) || ec) return dir;  // claimed, or a cause prepare_run_folder names
+  }
+  return base;  // 10000 runs in one second: the guard refuses the first one's folder
 }
 
 // The serial the run's DUT reported (checkpoint.json's state.dut.serial), empty when no DUT has
@@ -605,7 +612,8 @@ int do_run(RunArgs a) {
   // an error in run.log after the DUT was measured and its result left out of the history.
   if (!a.no_history) history::sqlite_path(history_url(a, hw));
   if (a.dry_run) {
-    check_run_folder(a.out.empty() ? "runs" : a.out, !a.resume.empty());
+    // Without --out the run makes its own new folder under runs/, which holds no earlier run.
+    check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty());
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
     // opened), before the plan is printed, so the plan says what the resume keeps, computes
     // again and still records.
@@ -654,9 +662,11 @@ int do_run(RunArgs a) {
   }
   // The folder first: an operator should not answer the prompts of a run that cannot start.
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
+  // Before the operator is asked anything, and before prepare_run_folder's write probe touches
+  // the earlier run's folder.
+  if (a.resume.empty()) refuse_an_earlier_run(a.out);
   prepare_run_folder(a.out);
   refuse_non_files(a.out);
-  if (a.resume.empty()) refuse_an_earlier_run(a.out);  // before the operator is asked anything
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;

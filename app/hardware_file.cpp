@@ -24,17 +24,10 @@ void check_history(const toml::table& t) {
   cfg::check_keys(t, {"url"}, "history");
   const std::string url = cfg::get_string(t, "url", std::string());
   // A URL this rig cannot open is the file's mistake, named at its line by every command that
-  // reads the file (rig table did not look, and rig run named no line).
-  if (const toml::node* n = t.get("url")) try {
-      history::sqlite_path(url);
-    } catch (const ConfigError& e) {
-      // "history database URL 'X': why" or "... 'X' why": the reject names the value already.
-      std::string why = e.what();
-      const std::string lead = "history database URL '";
-      if (const auto q = why.find('\'', lead.size()); why.rfind(lead, 0) == 0 && q != std::string::npos)
-        why = why.substr(why.compare(q, 3, "': ") == 0 ? q + 3 : q + 2);
-      cfg::reject(*n, "url", why);
-    }
+  // reads the file (rig table did not look, and rig run named no line); a password in it masked.
+  if (const toml::node* n = t.get("url"))
+    if (const std::string why = history::url_problem(url); !why.empty())
+      throw ConfigError(cfg::where(*n) + ": 'url' = '" + history::mask_password(url) + "': " + why);
 }
 
 // The one reader of [procedure]: the validation and apply_procedure_angles share it.

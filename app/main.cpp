@@ -35,9 +35,18 @@ int main(int argc, char** argv) {
       at = at->get_subcommands().front();
       path += " " + at->get_name();
     }
+    // Only the two errors CLI11 words that way; any other (a bad value, a missing one) is its own.
+    const bool missing_or_extra =
+        dynamic_cast<const CLI::RequiredError*>(&e) != nullptr || dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr;
     std::vector<std::string> rest = at->remaining();
-    if (rest.empty() && at != &app) rest = app.remaining();
-    if (e.get_exit_code() != 0 && at->get_require_subcommand_min() > 0 && at->get_subcommands().empty()) {
+    if (rest.empty() && at != &app && !app.remaining().empty()) {  // the stray word was given to rig itself
+      rest = app.remaining();
+      if (rest.front().rfind('-', 0) == 0) {
+        std::cerr << "rig: unknown option '" << rest.front() << "' (see rig --help)\n";
+        return rig::kExitUsage;
+      }
+    }
+    if (missing_or_extra && at->get_require_subcommand_min() > 0 && at->get_subcommands().empty()) {
       const std::string word = rest.empty() ? std::string() : rest.front();
       if (word.empty()) {
         std::cerr << path << ": a subcommand is required (one of:";

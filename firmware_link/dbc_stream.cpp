@@ -265,7 +265,8 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
   // A DBC that is not there is the hardware file's mistake: named at its line, with the path it
   // resolved to (relative to the hardware file, not the working directory).
   if (std::error_code ec; !std::filesystem::is_regular_file(path, ec))
-    cfg::reject(*dbc_node, "dbc", "no such file: " + path);
+    cfg::reject(*dbc_node, "dbc",
+                (std::filesystem::exists(path, ec) ? "not a regular file: " : "no such file: ") + path);
   auto db = std::make_shared<const Dbc>(Dbc::parse_file(path));
   if (!st) throw ConfigError(cfg::where(*dbc_node) + ": [dut] dbc needs a [dut.stream] table naming its signals");
   cfg::check_keys(*st,

@@ -93,9 +93,13 @@ def load(path):
     a skipped block carries GAP_BEFORE in its status. report["notes"]: what else kept the file
     from being complete (a repeated block, bytes after the end marker, a count mismatch)."""
     raw = open(path, "rb").read()
+    if len(raw) < 16:
+        raise ValueError(f"{path}: not a rig capture (shorter than its header)")
     if raw[:8] != b"RIGCAP1\n":
         raise ValueError(f"{path}: not a rig capture (bad magic)")
     hlen, hcrc = struct.unpack_from("<II", raw, 8)
+    if hlen > 1 << 20 or 16 + hlen > len(raw):
+        raise ValueError(f"{path}: capture header length {hlen} is invalid (offset 8)")
     hjson = raw[16:16 + hlen]
     if zlib.crc32(hjson) != hcrc:
         raise ValueError(f"{path}: header CRC mismatch")
@@ -256,6 +260,15 @@ def _damaged_files_read_as_rig_reads_them(d, raw, rig):
             assert m, (name, out)
             rig_says = (int(m.group(1)), m.group(2) == "complete", int(k.group(1)) if k else 0)
             assert rig_says == (rep["samples"], rep["complete"], len(rep["damaged"])), (name, rig_says, rep)
+        passed += 1
+    # Shorter than a header, or a header length past the file: refused as rig refuses them.
+    for name, data, says in (("short", raw[:11], "shorter than its header"),
+                             ("length", raw[:8] + struct.pack("<II", len(raw), 0) + raw[16:], "is invalid (offset 8)")):
+        try:
+            load(_write(os.path.join(d, name + ".cap"), data))
+            raise AssertionError(f"{name}: accepted")
+        except ValueError as e:
+            assert says in str(e), (name, str(e))
         passed += 1
     # A number beyond a double anywhere in the header, as rig's parser refuses it.
     h = json.loads(raw[16:16 + hlen])

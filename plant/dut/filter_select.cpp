@@ -71,11 +71,16 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
 
 std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt) {
   if (!(opt.f_req_hz > 0)) throw ConfigError("--f-req must be positive");
-  if (!(opt.fc_step_hz > 0))
-    throw ConfigError(fmt::format("--fc-step {:g}: the cut-off step must be > 0 Hz", opt.fc_step_hz));
-  if (!(opt.fc_min_hz > 0) || !(opt.fc_max_hz >= opt.fc_min_hz))
-    throw ConfigError(fmt::format("--fc-min {:g} --fc-max {:g}: the cut-off range must be 0 < min <= max Hz",
+  if (!(opt.fc_step_hz > 0) || !std::isfinite(opt.fc_step_hz))
+    throw ConfigError(fmt::format("--fc-step {:g}: the cut-off step must be a number of Hz > 0", opt.fc_step_hz));
+  if (!(opt.fc_min_hz > 0) || !(opt.fc_max_hz >= opt.fc_min_hz) || !std::isfinite(opt.fc_max_hz))
+    throw ConfigError(fmt::format("--fc-min {:g} --fc-max {:g}: the cut-off range must be 0 < min <= max Hz, finite",
                                   opt.fc_min_hz, opt.fc_max_hz));
+  // Each cut-off is an emulated run per order: a range of millions would run for days.
+  constexpr double kMaxCutoffs = 10000;
+  if ((opt.fc_max_hz - opt.fc_min_hz) / opt.fc_step_hz + 1 > kMaxCutoffs)
+    throw ConfigError(fmt::format("--fc-min {:g} --fc-max {:g} --fc-step {:g}: more than {:g} cut-offs to try", opt.fc_min_hz,
+                                  opt.fc_max_hz, opt.fc_step_hz, kMaxCutoffs));
   const DutParams p = load_dut_params(dut_cfg);
   const double rate = p.loop.loop_rate_hz;
 

@@ -235,7 +235,16 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
 Profile load_profile(const std::string& name_or_path) {
   std::string source;
   const toml::table t = load_profile_table(name_or_path, source);
-  return parse_profile(t, source);
+  try {
+    return parse_profile(t, source);
+  } catch (const ConfigError& e) {
+    // A value the file inherits is named at the base's line, which the user cannot edit: say
+    // which file inherited it, where a key of its own would change it.
+    const std::string what = e.what();
+    if (source.rfind("builtin:", 0) != 0 && what.rfind("builtin:", 0) == 0)
+      throw ConfigError(what + " (inherited by " + source + " from its base; set the key there to change it)");
+    throw;
+  }
 }
 
 toml::table load_profile_table(const std::string& name_or_path, std::string& source) {

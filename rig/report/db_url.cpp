@@ -15,16 +15,24 @@ std::string mask_password(const std::string& url) {
   return url.substr(0, colon + 1) + "***" + url.substr(at);
 }
 
-std::optional<std::string> sqlite_path(const std::string& url) {
-  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::nullopt;
+std::string url_problem(const std::string& url) {
+  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return "";
   std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
   if (path.rfind("//", 0) == 0) path = path.substr(2);  // sqlite:///abs/path
-  if (path.empty()) throw ConfigError("history database URL '" + url + "' names no file");
+  if (path.empty()) return "names no file";
   // "scheme:..." (a colon before any slash) other than sqlite: is a URL this rig cannot open.
   const std::size_t colon = url.find(':');
   if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
-    throw ConfigError("history database URL '" + mask_password(url) +
-                      "': unknown scheme (expected sqlite:PATH, a path, or postgresql://...)");
+    return "unknown scheme (expected sqlite:PATH, a path, or postgresql://...)";
+  return "";
+}
+
+std::optional<std::string> sqlite_path(const std::string& url) {
+  if (const std::string why = url_problem(url); !why.empty())
+    throw ConfigError("history database URL '" + mask_password(url) + "'" + (why == "names no file" ? " " : ": ") + why);
+  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::nullopt;
+  std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
+  if (path.rfind("//", 0) == 0) path = path.substr(2);
   return path;
 }
 

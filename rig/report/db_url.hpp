@@ -7,6 +7,9 @@
 
 namespace rig::history {
 
+// Why rig cannot open `url` ("names no file", "unknown scheme (...)"), or "" when it can try.
+std::string url_problem(const std::string& url);
+
 // The file of an SQLite URL (nullopt for PostgreSQL); throws rig::ConfigError on a bad URL
 // (another scheme, no file).
 std::optional<std::string> sqlite_path(const std::string& url);

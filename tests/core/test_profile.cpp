@@ -144,7 +144,8 @@ TEST(Profile, AFileThatChangesTheGostBlocksKeepsTheBasesLimitsOnlyForBlocksItHas
 TEST(Profile, AnInheritedValueIsNamedByTheBasesLine) {
   const std::string p = write_tmp("short-in-run.toml", "base = \"ci\"\n[procedure]\nin_run_s = 3.0\n");
   EXPECT_EQ(error_of(p), "builtin:ci:15:19: 'in_run_blocks_s' = [ 2.0, 4.0 ]: 2 s: each block length must be > 0 "
-                         "and give at least 2 blocks in in_run_s = 3");
+                         "and give at least 2 blocks in in_run_s = 3 (inherited by " + p +
+                         " from its base; set the key there to change it)");
 }
 
 TEST(Profile, BAllanSaysWhichBThePassportLimits) {

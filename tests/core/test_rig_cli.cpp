@@ -75,6 +75,13 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_NE(slurp(d + "/fc.stderr").find("--fc-min 1000 --fc-max 300: the cut-off range must be 0 < min <= max Hz"),
             std::string::npos)
       << slurp(d + "/fc.stderr");
+  // An infinite range ran until killed (a code review); so would one of millions of cut-offs.
+  EXPECT_EQ(run({"filter", "select", "--fc-max", "inf"}, d + "/fcinf"), 2);
+  EXPECT_NE(slurp(d + "/fcinf.stderr").find("the cut-off range must be 0 < min <= max Hz, finite"), std::string::npos)
+      << slurp(d + "/fcinf.stderr");
+  EXPECT_EQ(run({"filter", "select", "--fc-step", "1e-6"}, d + "/fcstep"), 2);
+  EXPECT_NE(slurp(d + "/fcstep.stderr").find("more than 10000 cut-offs to try"), std::string::npos)
+      << slurp(d + "/fcstep.stderr");
   EXPECT_EQ(run({"plant", "serve", "--modbus", "127.0.0.1:0", "--duration", "-1"}, d + "/dur"), 2);
   EXPECT_NE(slurp(d + "/dur.stderr").find("--duration: -1: must be a number of seconds > 0"), std::string::npos)
       << slurp(d + "/dur.stderr");
@@ -306,6 +313,12 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   EXPECT_EQ(run({"analyze", d + "/latin1.txt"}, d + "/latin1"), 2);
   EXPECT_NE(slurp(d + "/latin1.stderr").find("latin1.txt:3: not a decimal number: '\\xFF\\xB5g'"), std::string::npos)
       << slurp(d + "/latin1.stderr");
+  // Well-formed characters a terminal acts on (C1 CSI, a right-to-left override) are escaped too.
+  std::ofstream(d + "/c1.txt") << "1.0\n2.0\n3\xC2\x9B" << "2J\xE2\x80\xAE\n";
+  EXPECT_EQ(run({"analyze", d + "/c1.txt"}, d + "/c1"), 2);
+  EXPECT_NE(slurp(d + "/c1.stderr").find("c1.txt:3: not a decimal number: '3\\xC2\\x9B2J\\xE2\\x80\\xAE'"),
+            std::string::npos)
+      << slurp(d + "/c1.stderr");
   std::ofstream(d + "/utf8.txt") << "1.0\n2.0\n3 \xD0\xB3\n";
   EXPECT_EQ(run({"analyze", d + "/utf8.txt"}, d + "/utf8"), 2);
   EXPECT_NE(slurp(d + "/utf8.stderr").find("utf8.txt:3: not a decimal number: '3 \xD0\xB3'"), std::string::npos)
@@ -740,6 +753,23 @@ TEST(RigCli, ANewRunNeverTakesOverAnEarlierRunsFolder) {
   }
   EXPECT_EQ(slurp(d + "/stopped/passport.json"), R"({"outcome": "ERROR"})");
   EXPECT_FALSE(fs::exists(d + "/stopped/run.log")) << "nothing written into the earlier run's folder";
+  // No run.json: nothing to resume, so the advice is another folder (a code review).
+  fs::create_directories(d + "/orphan");
+  std::ofstream(d + "/orphan/passport.json") << R"({"outcome": "ABORTED"})";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/orphan"}, d + "/io-orphan"), 2);
+  EXPECT_NE(slurp(d + "/io-orphan.stderr").find(d + "/orphan holds an earlier run (passport.json): choose another --out"),
+            std::string::npos)
+      << slurp(d + "/io-orphan.stderr");
+  EXPECT_EQ(std::vector<fs::path>(fs::directory_iterator(d + "/orphan"), fs::directory_iterator()).size(), 1u)
+      << "not even the write probe: the folder is refused before it is touched";
+  // Without --out the dry run plans a new folder under runs/, whatever runs/ itself holds.
+  fs::create_directories(d + "/cwd/runs");
+  std::ofstream(d + "/cwd/runs/run.json") << "{}";
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d + "/cwd");
+  const int dry_rc = run({"run", "--profile", "ci", "--yes", "--dry-run"}, d + "/io-dry");
+  fs::current_path(cwd);
+  EXPECT_EQ(dry_rc, 0) << slurp(d + "/io-dry.stderr");
 
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/done"}, d + "/io1"), 0)
       << slurp(d + "/io1.stderr");
@@ -1522,6 +1552,10 @@ TEST(RigCli, DutHardwareFileDbcIsRelativeToTheFileNotTheWorkingDirectory) {
   const std::string err2 = slurp(d + "/io2.stderr");
   EXPECT_NE(err2.find("qpa-counts.dut.toml:"), std::string::npos) << err2;
   EXPECT_NE(err2.find("'dbc' = 'qpa-counts.dbc': no such file: " + d + "/hw/qpa-counts.dbc"), std::string::npos) << err2;
+  fs::create_directories(d + "/hw/qpa-counts.dbc");  // a folder by that name is not "no such file"
+  EXPECT_EQ(run({"dut", "stream", "--hardware", d + "/hw/qpa-counts.dut.toml", "--can", "rig-nocan0"}, d + "/io3"), 2);
+  EXPECT_NE(slurp(d + "/io3.stderr").find("'dbc' = 'qpa-counts.dbc': not a regular file: "), std::string::npos)
+      << slurp(d + "/io3.stderr");
 }
 
 // Issue 15, 5: [dut.design] is configuration, checked before any device opens: a mistyped key is
@@ -1695,6 +1729,12 @@ TEST(HardwareFileValidation, AHistoryUrlOfAnotherSchemeIsNamedAtItsLine) {
   const std::string want = d + "/hw.toml:4:7: 'url' = 'mysql://x': unknown scheme";
   EXPECT_EQ(run({"table", "status", "--hardware", d + "/hw.toml"}, d + "/t"), 2) << slurp(d + "/t.stderr");
   EXPECT_NE(slurp(d + "/t.stderr").find(want), std::string::npos) << slurp(d + "/t.stderr");
+  // A password in it is masked, as --db's is (a code review: it was printed in clear).
+  std::ofstream(d + "/pw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[history]\nurl = \"mysql://rig:hunter2@db/rig\"\n";
+  EXPECT_EQ(run({"table", "status", "--hardware", d + "/pw.toml"}, d + "/pw"), 2);
+  EXPECT_NE(slurp(d + "/pw.stderr").find("'url' = 'mysql://rig:***@db/rig': unknown scheme"), std::string::npos)
+      << slurp(d + "/pw.stderr");
+  EXPECT_EQ(slurp(d + "/pw.stderr").find("hunter2"), std::string::npos) << slurp(d + "/pw.stderr");
   std::string err;
   const std::string full = hardware_file(d + "/run", 0, "");
   std::ofstream(full, std::ios::app) << "[history]\nurl = \"mysql://x\"\n";

@@ -84,8 +84,9 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   // non-blocking connect's "Operation now in progress" (a review); where the host's network
   // refuses at once ("Network is unreachable"), that is said.
   EXPECT_EQ(rig("--modbus 192.0.2.10:502 --timeout 0.2 status", out), 4) << out;
-  EXPECT_NE(out.find("cannot connect: "), std::string::npos) << out;
-  EXPECT_EQ(out.find("in progress"), std::string::npos) << out;
+  EXPECT_TRUE(out.find("cannot connect: no answer within 0.2 s (host unreachable") != std::string::npos ||
+              out.find("cannot connect: Network is unreachable") != std::string::npos)
+      << out;
 }
 
 // A [table] setting beyond what the drive accepts is named by its key and the line that wrote it
