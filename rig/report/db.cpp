@@ -1,7 +1,5 @@
 #include "rig/report/db.hpp"
 
-#include "rig/report/db_url.hpp"
-
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
@@ -152,7 +150,6 @@ std::string pg_placeholders(const std::string& sql) {
   }
   return out;
 }
-
 
 // libpq is loaded when a PostgreSQL history is first opened, not linked: its dependency tree
 // (Kerberos, LDAP, GnuTLS, OpenSSL: 22 shared libraries) made every rig command's start-up map

@@ -15,11 +15,24 @@ std::string mask_password(const std::string& url) {
   return url.substr(0, colon + 1) + "***" + url.substr(at);
 }
 
-std::string url_problem(const std::string& url) {
-  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return "";
+namespace {
+
+bool is_postgres(const std::string& url) { return url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0; }
+
+// The file an SQLite URL names: "sqlite:PATH", "sqlite:///abs/path" or a plain path.
+std::string file_part(const std::string& url) {
   std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
-  if (path.rfind("//", 0) == 0) path = path.substr(2);  // sqlite:///abs/path
-  if (path.empty()) return "names no file";
+  if (path.rfind("//", 0) == 0) path = path.substr(2);
+  return path;
+}
+
+constexpr const char* kNamesNoFile = "names no file";
+
+}  // namespace
+
+std::string url_problem(const std::string& url) {
+  if (is_postgres(url)) return "";
+  if (file_part(url).empty()) return kNamesNoFile;
   // "scheme:..." (a colon before any slash) other than sqlite: is a URL this rig cannot open.
   const std::size_t colon = url.find(':');
   if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
@@ -29,11 +42,9 @@ std::string url_problem(const std::string& url) {
 
 std::optional<std::string> sqlite_path(const std::string& url) {
   if (const std::string why = url_problem(url); !why.empty())
-    throw ConfigError("history database URL '" + mask_password(url) + "'" + (why == "names no file" ? " " : ": ") + why);
-  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) return std::nullopt;
-  std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
-  if (path.rfind("//", 0) == 0) path = path.substr(2);
-  return path;
+    throw ConfigError("history database URL '" + mask_password(url) + "'" + (why == kNamesNoFile ? " " : ": ") + why);
+  if (is_postgres(url)) return std::nullopt;
+  return file_part(url);
 }
 
 }  // namespace rig::history
