@@ -35,6 +35,7 @@
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
 #include "app/run_seal.hpp"
+#include "app/folder_lock.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
 #include "app/whole_number.hpp"
@@ -551,7 +552,12 @@ int do_run(RunArgs a) {
   SignalWatcher signals(cancel);  // before any backend thread exists
   // The station's key, and a resumed folder's seal, before anything in the folder is read.
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
+  // One process per run folder (two runs or resumes of one folder would interleave their files):
+  // held from here to the end of the run; a new run's folder is taken once it exists (below).
+  std::optional<FolderLock> folder_lock;
   if (!a.resume.empty()) {
+    if (a.dry_run) FolderLock::check_free(a.resume, "--resume " + a.resume);
+    else if (fs::is_directory(a.resume)) folder_lock.emplace(a.resume, "--resume " + a.resume);
     refuse_non_files(a.resume);
     check_seal_before_resume(a.resume, key);
   }
@@ -614,6 +620,7 @@ int do_run(RunArgs a) {
   if (a.dry_run) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty());
+    if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
     // opened), before the plan is printed, so the plan says what the resume keeps, computes
     // again and still records.
@@ -666,6 +673,10 @@ int do_run(RunArgs a) {
   // the earlier run's folder.
   if (a.resume.empty()) refuse_an_earlier_run(a.out);
   prepare_run_folder(a.out);
+  if (a.resume.empty()) {
+    folder_lock.emplace(a.out, "--out " + a.out);
+    refuse_an_earlier_run(a.out);  // again, now that no other run can start here: one may have ended since
+  }
   refuse_non_files(a.out);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.

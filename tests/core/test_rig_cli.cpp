@@ -3,7 +3,10 @@
 // SIGKILL mid-capture then --resume, e-stop, bad profiles and --dry-run; the
 // outcome rules (a resume judges as an uninterrupted run, a null limited value
 // fails), late signals, damaged checkpoints, run folders and capture headers.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
@@ -783,6 +786,47 @@ TEST(RigCli, ANewRunNeverTakesOverAnEarlierRunsFolder) {
         << slurp(d + "/io2.stderr");
   }
   EXPECT_EQ(slurp(d + "/done/passport.json"), passport);
+}
+
+// One process per run folder: a folder another process holds (its flock, as a running `rig run`
+// holds its --out) is refused, for a new run, a resume and their dry runs, before anything is
+// written into it; the lock goes with the process, and no lock file is left in the folder.
+TEST(RigCli, ARunFolderInUseByAnotherRunIsRefused) {
+  const std::string d = tmp("inuse");
+  fs::create_directories(d + "/busy");
+  std::ofstream(d + "/busy/run.json") << "{}";  // resumable, as far as the lock is concerned
+  const int held = ::open((d + "/busy").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(held, 0);
+  ASSERT_EQ(::flock(held, LOCK_EX | LOCK_NB), 0);
+  fs::create_directories(d + "/new");
+  const int held_new = ::open((d + "/new").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_EQ(::flock(held_new, LOCK_EX | LOCK_NB), 0);
+  const std::string msg = ": another rig run is using this folder now (it holds the folder's lock); wait for it to "
+                          "end or choose another --out";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> fresh = {"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/new"};
+    std::vector<std::string> resume = {"run", "--resume", d + "/busy", "--yes", "--quiet"};
+    if (dry) fresh.push_back("--dry-run"), resume.push_back("--dry-run");
+    EXPECT_EQ(run(fresh, d + "/io-new"), 2) << slurp(d + "/io-new.stderr");
+    EXPECT_NE(slurp(d + "/io-new.stderr").find("--out " + d + "/new" + msg), std::string::npos)
+        << slurp(d + "/io-new.stderr");
+    EXPECT_EQ(run(resume, d + "/io-res"), 2) << slurp(d + "/io-res.stderr");
+    EXPECT_NE(slurp(d + "/io-res.stderr").find("--resume " + d + "/busy" + msg), std::string::npos)
+        << slurp(d + "/io-res.stderr");
+  }
+  EXPECT_TRUE(fs::is_empty(d + "/new")) << "nothing written into a folder in use";
+  EXPECT_EQ(std::vector<fs::path>(fs::directory_iterator(d + "/busy"), fs::directory_iterator()).size(), 1u);
+  // Released (as at the holder's exit): the new run goes ahead and leaves no lock file.
+  ::close(held_new);
+  ::close(held);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/new"}, d + "/io-ok"), 0)
+      << slurp(d + "/io-ok.stderr");
+  for (const auto& e : fs::directory_iterator(d + "/new"))
+    EXPECT_NE(e.path().filename().string().rfind(".rig", 0), 0u) << e.path();
+  // A finished run holds nothing: the folder's own guard answers (finished run), not the lock.
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/new"}, d + "/io-again"), 2);
+  EXPECT_NE(slurp(d + "/io-again.stderr").find("holds a finished run"), std::string::npos)
+      << slurp(d + "/io-again.stderr");
 }
 
 // Two runs started in the same second with the default folder: the second gets its own folder

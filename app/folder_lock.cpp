@@ -1,0 +1,48 @@
+#include "app/folder_lock.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::cli {
+
+namespace {
+int open_dir(const std::string& dir) { return ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); }
+ConfigError in_use(const std::string& what) {
+  return ConfigError(what + ": another rig run is using this folder now (it holds the folder's lock); wait for it to "
+                            "end or choose another --out");
+}
+}  // namespace
+
+FolderLock::FolderLock(const std::string& dir, const std::string& what) {
+  const int fd = open_dir(dir);
+  if (fd < 0) throw ConfigError(what + ": cannot open the run folder to lock it: " + std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+    fd_ = fd;
+    return;
+  }
+  const int err = errno;
+  ::close(fd);
+  if (err == EWOULDBLOCK) throw in_use(what);
+  // ENOLCK/EBADF/EOPNOTSUPP: a filesystem without flock on directories; nothing to hold.
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void FolderLock::check_free(const std::string& dir, const std::string& what) {
+  const int fd = open_dir(dir);
+  if (fd < 0) return;
+  // A shared lock is refused only while someone holds the exclusive one; released at close.
+  const bool busy = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  if (busy) throw in_use(what);
+}
+
+}  // namespace rig::cli

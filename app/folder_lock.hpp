@@ -1,0 +1,29 @@
+// A run folder held by one `rig run` at a time: an exclusive flock(2) on the folder itself,
+// held for the process's life (the kernel drops it when the process ends, however it ends).
+// No lock file is left behind, so a sealed folder still lists only what the run wrote.
+#pragma once
+#include <string>
+
+namespace rig::cli {
+
+class FolderLock {
+ public:
+  // Takes the lock on the existing folder `dir` without waiting. Throws ConfigError naming the
+  // folder when another process holds it; `what` says what the folder is for ("--out X", ...).
+  // Where the filesystem has no flock (some network mounts) the run goes on unlocked: the
+  // folder checks that run before it still apply, as they did before there was a lock.
+  FolderLock(const std::string& dir, const std::string& what);
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  bool held() const { return fd_ >= 0; }
+
+  // For --dry-run, which takes nothing: throws the same ConfigError when another process holds
+  // the lock of `dir` now (nothing when `dir` does not exist).
+  static void check_free(const std::string& dir, const std::string& what);
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace rig::cli
