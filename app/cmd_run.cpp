@@ -326,7 +326,13 @@ bool can_create_file_in(const fs::path& d) {
   return true;
 }
 
-std::string verdict_of(const std::string& dir);
+// A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
+// recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
+// none (killed before it was written), is finished by a resume that only computes.
+std::string verdict_of(const std::string& dir) {
+  const std::optional<std::string> o = passport_outcome(dir);
+  return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
+}
 
 // A new run never lands on an earlier one, whatever state it stopped in: run.json is written
 // before any device opens, checkpoint.json after the first phase, passport.json at every ending
@@ -453,14 +459,6 @@ void refuse_non_files(const std::string& dir) {
     if (::lstat((dir + "/" + f).c_str(), &st) == 0 && !S_ISREG(st.st_mode))
       throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes it: remove it");
   }
-}
-
-// A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
-// recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
-// none (killed before it was written), is finished by a resume that only computes.
-std::string verdict_of(const std::string& dir) {
-  const std::optional<std::string> o = passport_outcome(dir);
-  return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
 }
 
 // Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than

@@ -48,17 +48,12 @@ int main(int argc, char** argv) {
     }
     if (missing_or_extra && at->get_require_subcommand_min() > 0 && at->get_subcommands().empty()) {
       const std::string word = rest.empty() ? std::string() : rest.front();
-      if (word.empty()) {
-        std::cerr << path << ": a subcommand is required (one of:";
-        for (const CLI::App* s : at->get_subcommands({})) std::cerr << ' ' << s->get_name();
-        std::cerr << "; see " << path << " --help)\n";
-      } else if (word.rfind('-', 0) == 0) {
-        std::cerr << path << ": unknown option '" << word << "' (see " << path << " --help)\n";
-      } else {
-        std::cerr << path << ": unknown subcommand '" << word << "' (one of:";
-        for (const CLI::App* s : at->get_subcommands({})) std::cerr << ' ' << s->get_name();
-        std::cerr << "; see " << path << " --help)\n";
-      }
+      std::string choices = " (one of:";
+      for (const CLI::App* s : at->get_subcommands({})) choices += ' ' + s->get_name();
+      choices += "; see " + path + " --help)\n";
+      if (word.empty()) std::cerr << path << ": a subcommand is required" << choices;
+      else if (word.rfind('-', 0) == 0) std::cerr << path << ": unknown option '" << word << "' (see " << path << " --help)\n";
+      else std::cerr << path << ": unknown subcommand '" << word << "'" << choices;
       return rig::kExitUsage;
     }
     const int r = app.exit(e);
