@@ -55,6 +55,7 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   j["sigma_cp"] = num(t.sigma_cp);
   j["K"] = term(t.K, an::k_per_hour, "g/h^0.5");
   j["R"] = term(t.R, an::r_per_hour, "g/h");
+  j["confidence"] = t.confidence;  // of every lo/hi and upper limit here
   // R's reading from the record's drift (noise_terms.hpp DriftReading), SI units; absent when R
   // is the Allan model's (no record behind the points).
   if (t.drift)

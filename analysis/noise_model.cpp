@@ -608,6 +608,10 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   }
   Pts p = all.tail(from);
   const std::size_t n = p.tau.size();
+  // Which terms are reported, and the covariance the values are fitted on, are the method's
+  // (one sigma, as its coverage was measured: docs/analysis.md); only the bounds and the upper
+  // limits take the confidence asked for, so the values and the nulls do not depend on it.
+  const double z_method = boost::math::quantile(boost::math::normal(), (1 + kOneSigma) / 2);
   const double z = boost::math::quantile(boost::math::normal(), (1 + confidence) / 2);
   // The terms: the widest non-negative model on the tau range (not the AICc model, whose left-out
   // terms land in their neighbours: R on 6 h read 1.6x with K left out, covered 15 %).
@@ -627,7 +631,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     if (best.mask & (1 << k)) continue;
     const SubsetFit g = gls_subset(p, W, best.mask | (1 << k), best.theta, false);
     if (!g.ok) continue;
-    th_cov[static_cast<std::size_t>(k)] = std::max(0.0, g.theta[static_cast<std::size_t>(k)]) + z * sd_of(g, k);
+    th_cov[static_cast<std::size_t>(k)] = std::max(0.0, g.theta[static_cast<std::size_t>(k)]) + z_method * sd_of(g, k);
     widened = widened || th_cov[static_cast<std::size_t>(k)] > 0;
   }
   if (widened) {
@@ -637,14 +641,14 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     if (f.ok) best = f;
   }
   // Reported (in_model): a term of this model with theta > 0 that either AICc selects (the data
-  // support it over the model without it) or whose interval at `confidence` excludes zero
-  // (theta >= z sd). Collinear terms (K and R over tau <= T/4 of a short record) can each be
+  // support it over the model without it) or whose one-sigma interval excludes zero
+  // (theta >= sd). Collinear terms (K and R over tau <= T/4 of a short record) can each be
   // insignificant in the widest model while together they are not: AICc reports the one that
   // carries the rise. The others are null with the interval's upper end as their upper limit.
   int report = 0;
   for (int k = 0; k < 5; ++k) {
     const double th = best.theta[static_cast<std::size_t>(k)];
-    if ((best.mask & (1 << k)) && th > 0 && ((sel.best.mask & (1 << k)) || th >= z * sd_of(best, k))) report |= 1 << k;
+    if ((best.mask & (1 << k)) && th > 0 && ((sel.best.mask & (1 << k)) || th >= z_method * sd_of(best, k))) report |= 1 << k;
   }
   const std::vector<SubsetFit> plausible = plausible_models(p, sel, n_phase, team);
   out.aicc = sel.aicc;
@@ -655,7 +659,8 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   for (int k = 0; k < 5; ++k) {
     const auto kk = static_cast<std::size_t>(k);
     if (!(report & (1 << k)) && (best.mask & (1 << k))) {
-      out.upper[kk] = std::sqrt(std::max(0.0, best.theta[kk]) + z * sd_of(best, k));
+      for (const auto& [u, zz] : {std::pair{&out.upper, z}, {&out.upper_method, z_method}})
+        (*u)[kk] = std::sqrt(std::max(0.0, best.theta[kk]) + zz * sd_of(best, k));
     } else if (best.mask & (1 << k)) {
       const double th = best.theta[kk], sd = sd_of(best, k);
       out.in_model[kk] = true;
@@ -695,19 +700,23 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
       // theta_k^+ + z sd(theta_k).
       SubsetFit f;
       if (W.size() > 0) f = gls_subset(p, W, best.mask | (1 << k), best.theta, false);
-      if (f.ok) {
-        out.upper[kk] = std::sqrt(std::max(0.0, f.theta[kk]) + z * sd_of(f, k));
-      } else {
-        // No solution with the term: it cannot exceed what any one point allows alone.
-        double u = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < n; ++i) u = std::min(u, p.s[i] * (1 + z * std::sqrt(2 / p.nu[i])) / noise_basis(k, p.tau[i]));
-        out.upper[kk] = std::sqrt(u);
+      for (const auto& [up, zz] : {std::pair{&out.upper, z}, {&out.upper_method, z_method}}) {
+        if (f.ok) {
+          (*up)[kk] = std::sqrt(std::max(0.0, f.theta[kk]) + zz * sd_of(f, k));
+        } else {
+          // No solution with the term: it cannot exceed what any one point allows alone.
+          double u = std::numeric_limits<double>::infinity();
+          for (std::size_t i = 0; i < n; ++i)
+            u = std::min(u, p.s[i] * (1 + zz * std::sqrt(2 / p.nu[i])) / noise_basis(k, p.tau[i]));
+          (*up)[kk] = std::sqrt(u);
+        }
       }
     }
     if (!out.in_model[kk])  // a null's upper limit holds over the plausible models too
       for (const SubsetFit& f : plausible)
         if ((f.mask & (1 << k)) && f.theta[kk] > 0)
-          out.upper[kk] = std::max(out.upper[kk], std::sqrt(f.theta[kk] + z * sd_of(f, k)));
+          for (const auto& [up, zz] : {std::pair{&out.upper, z}, {&out.upper_method, z_method}})
+            (*up)[kk] = std::max((*up)[kk], std::sqrt(f.theta[kk] + zz * sd_of(f, k)));
   }
   out.ok = true;
   return out;

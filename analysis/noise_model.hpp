@@ -46,6 +46,8 @@ struct NoiseModelFit {
   std::array<double, 5> value{};       // sqrt(theta) of the widest model (0 when not reported)
   std::array<double, 5> lo{}, hi{};    // bounds at `confidence` (in the model)
   std::array<double, 5> upper{};       // every term: upper limit (the interval's upper end)
+  std::array<double, 5> upper_method{};  // a null's upper limit at one sigma, whatever `confidence`:
+                                         // what the drift's scatter takes it at (noise_terms.cpp)
   std::array<double, 5> share{};       // the term's largest share of the model sigma^2 over the fitted taus
   std::array<double, 5> z{};           // theta / sd(theta) of a term in the model
   std::vector<double> tau_s, avar, edf;  // the points fitted: tau, measured sigma^2, model EDF
@@ -62,7 +64,8 @@ inline constexpr double kGofAlpha = 1e-3;
 inline constexpr std::size_t kMinGofPoints = 6;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
-// is taken from it); record_s: its length; confidence: of the bounds (default one sigma);
+// is taken from it); record_s: its length; confidence: of the bounds and upper limits (default
+// one sigma; the values and which terms are reported do not depend on it);
 // threads: over which each selection round's 31 subset fits run (the result does not depend on
 // it, bit for bit).
 NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence = kOneSigma,

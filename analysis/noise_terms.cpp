@@ -218,11 +218,11 @@ void lower_to_the_models_flicker(Term& b, const WlsFit& model, double tau_cp) {
 // i.e. |slope| >= sqrt(2) t sd (at |slope| >= t sd, a third of records with a random walk and no
 // ramp reported one); else null with |slope| + t sd as the upper limit.
 constexpr double kDriftSupport = std::numbers::sqrt2;
-void read_r_from_drift(NoiseTerms& out, const Drift& d) {
+void read_r_from_drift(NoiseTerms& out, const Drift& d, double confidence) {
   const NoiseModelFit& m = out.model;
   if (!m.ok || !d.ok()) return;
   std::array<double, 4> q{};
-  for (std::size_t k = 0; k < 4; ++k) q[k] = m.in_model[k] ? m.value[k] : m.upper[k];
+  for (std::size_t k = 0; k < 4; ++k) q[k] = m.in_model[k] ? m.value[k] : m.upper_method[k];
   const std::array<double, 4> v = drift_variance_terms(q, d);
   double var = 0, denom = 0;
   for (std::size_t k = 0; k < 4; ++k) {
@@ -235,12 +235,17 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
   r.sd = std::sqrt(var);
   // (at least 1: Student's t has no quantile below; reached only by a term with z < 0.71)
   r.edf = denom > 0 ? std::max(1.0, var * var / denom) : std::numeric_limits<double>::infinity();
-  const double p = (1 + kOneSigma) / 2;
   const bool estimated = std::isfinite(r.edf) && r.edf < 1e6;  // beyond, t is the normal to 1e-6
-  r.quantile = estimated ? boost::math::quantile(boost::math::students_t(r.edf), p)
-                         : boost::math::quantile(boost::math::normal(), p);
+  const auto quantile = [&](double c) {
+    const double p = (1 + c) / 2;
+    return estimated ? boost::math::quantile(boost::math::students_t(r.edf), p)
+                     : boost::math::quantile(boost::math::normal(), p);
+  };
+  // Support is the method's rule at one sigma (below); the bounds are at the confidence asked for.
+  r.quantile = quantile(confidence);
   out.drift = r;
   const double b = std::abs(d.slope), half = r.quantile * r.sd;
+  const double support = kDriftSupport * quantile(kOneSigma) * r.sd;
   Term t;
   t.unit = kUnits[4];
   // No number in the term's unit here: the passport restates the reason per hour (the slope and
@@ -256,7 +261,7 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
   how << ", ";
   if (estimated) how << "Student's t at EDF " << fmt(r.edf) << ")";
   else how << "normal quantile)";
-  if (b >= kDriftSupport * half) {
+  if (b >= support) {
     t.value = b;
     t.lo = std::max(0.0, b - half);
     t.hi = b + half;
@@ -270,11 +275,12 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d) {
 }  // namespace
 
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s,
-                       const std::optional<Drift>& drift) {
+                       const std::optional<Drift>& drift, double confidence) {
   NoiseTerms out;
+  out.confidence = confidence;
   out.paper = paper_fit(oadev);
   // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
-  out.model = fit_noise_model(oadev, record_length_s);
+  out.model = fit_noise_model(oadev, record_length_s, confidence);
   out.wls = wls_from_model(out.model);
   const std::string too_short = "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";
   if (out.wls.R.value && record_length_s < r_min_record_s) out.wls.R.reason += too_short;
@@ -283,7 +289,7 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   out.K = out.wls.K;
   out.R = out.wls.R;
   if (drift) {
-    read_r_from_drift(out, *drift);
+    read_r_from_drift(out, *drift, confidence);
     if (out.drift && out.R.value && record_length_s < r_min_record_s) out.R.reason += too_short;
   }
   if (!out.wls.ok) {
@@ -334,7 +340,7 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
     out.B.value = *out.sigma_cp / kBiasFactor;
     out.b_edf = paper_b_edf(oadev, out.model, *out.tau_cp_s, record_length_s);
     if (out.b_edf) {  // the chi-square bounds of sigma(tau_cp) at that EDF, over 0.664
-      const auto [lo, hi] = chi2_bounds(*out.B.value, *out.b_edf, kOneSigma);
+      const auto [lo, hi] = chi2_bounds(*out.B.value, *out.b_edf, confidence);
       out.B.lo = lo;
       out.B.hi = hi;
       lower_to_the_models_flicker(out.B, out.wls, *out.tau_cp_s);

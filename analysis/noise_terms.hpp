@@ -102,7 +102,7 @@ struct DriftReading {
   double slope = 0;     // g/s, signed: the least-squares slope of the record
   double sd = 0;        // g/s: the noise's scatter of that slope, from the model's N, B, K (and Q)
   double edf = 0;       // of sd^2 (Welch-Satterthwaite over the model terms'; inf when none is estimated)
-  double quantile = 0;  // Student's t at `edf` for the bounds' confidence (one sigma)
+  double quantile = 0;  // Student's t at `edf` for the bounds' confidence (NoiseTerms::confidence)
 };
 
 struct NoiseTerms {
@@ -124,6 +124,7 @@ struct NoiseTerms {
   std::string b_method;
   std::optional<double> flat_tau_from_s, flat_tau_to_s, b_edf;
   FittedCurves curves;  // on the taus of the Allan points the terms were fitted to
+  double confidence = kOneSigma;  // of every bound and upper limit above
 };
 
 // The curves of `t` on `taus` (noise_terms() fills NoiseTerms::curves with this).
@@ -138,8 +139,11 @@ inline constexpr double kRMinRecordS = 50 * 3600.0;
 // drift: the record's least-squares drift (drift.hpp); with it R is read from the drift, its
 // scatter from the model's other terms (the model's own R stays in `wls`); without it (Allan
 // points alone) R is the model's.
+// confidence: of every bound and upper limit (default one sigma); the values, and which terms are
+// reported, are the method's and do not depend on it.
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
-                       double r_min_record_s = kRMinRecordS, const std::optional<Drift>& drift = std::nullopt);
+                       double r_min_record_s = kRMinRecordS, const std::optional<Drift>& drift = std::nullopt,
+                       double confidence = kOneSigma);
 
 // Passport units (docs/method.md quotes the terms per hour): 1 h = 3600 s, so a coefficient in
 // g*s^a is 3600^-a of itself in g*h^a. Written as products with the same factors the passport

@@ -355,7 +355,7 @@ int run(const Args& a) {
   std::exception_ptr fit_error;
   const auto fit_terms = [&] {
     try {
-      terms = an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift);
+      terms = an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift, a.confidence);
     } catch (...) {
       fit_error = std::current_exception();
     }

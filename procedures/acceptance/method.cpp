@@ -17,7 +17,8 @@ AllanChannel allan_channel_terms(const std::vector<double>& record, const AllanS
   c.oadev = analysis::deviation(record, opt);
   const double T = static_cast<double>(record.size()) / s.rate_hz;
   if (poll) poll();
-  c.terms = analysis::noise_terms(c.oadev, T, s.r_min_record_s, analysis::least_squares_drift(record, s.rate_hz));
+  c.terms = analysis::noise_terms(c.oadev, T, s.r_min_record_s, analysis::least_squares_drift(record, s.rate_hz),
+                                 s.confidence);
   return c;
 }
 

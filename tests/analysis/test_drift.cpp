@@ -166,5 +166,46 @@ TEST(Drift, RIsReadFromTheDrift) {
   EXPECT_EQ(alone.R.hi, alone.wls.R.hi);
 }
 
+// The confidence asked for reaches every bound and upper limit (a review: --confidence 0.95 gave
+// one-sigma noise-term bounds), while the values and which terms are reported stay the method's.
+TEST(Drift, TheConfidenceWidensEveryBoundAndChangesNoValue) {
+  const double rate = 10, T = 6 * 3600;
+  const auto n = static_cast<std::size_t>(T * rate);
+  const double N = 2.2306e-7 * 60, K = 5.1167e-6 / 60, R = 40 * K / std::sqrt(T);
+  const std::vector<double> y = injected::generate({0, N, 1e-6, K, R}, rate, n, 5150);
+  const Drift d = least_squares_drift(y, rate);
+  const auto pts = oadev_of(y, rate);
+  const NoiseTerms one = noise_terms(pts, T, kRMinRecordS, d);
+  const NoiseTerms wide = noise_terms(pts, T, kRMinRecordS, d, 0.95);
+  EXPECT_EQ(one.confidence, kOneSigma);
+  EXPECT_EQ(wide.confidence, 0.95);
+  int widened = 0;
+  for (const auto& [a, b] : {std::pair{&one.Q, &wide.Q}, {&one.N, &wide.N}, {&one.B, &wide.B}, {&one.K, &wide.K},
+                             {&one.R, &wide.R}}) {
+    EXPECT_EQ(a->value, b->value) << a->reason;  // same bits, same nulls
+    ASSERT_EQ(a->hi.has_value(), b->hi.has_value()) << a->reason;
+    if (a->hi) {
+      EXPECT_GE(*b->hi, *a->hi) << a->reason;
+    }
+    if (a->lo && b->lo) {
+      EXPECT_LE(*b->lo, *a->lo) << a->reason;
+    }
+    if (a->value && a->lo && a->hi && *b->hi - *b->lo > 1.5 * (*a->hi - *a->lo)) ++widened;
+  }
+  EXPECT_GE(widened, 2) << "N's and R's 95 % intervals are about twice the one-sigma ones";
+  // R from the drift: t at 97.5 % instead of 84.1 %, the support rule unchanged.
+  ASSERT_TRUE(one.drift && wide.drift && wide.R.value);
+  EXPECT_EQ(one.drift->sd, wide.drift->sd);
+  EXPECT_GT(wide.drift->quantile, 1.9 * one.drift->quantile / 1.05);
+  EXPECT_NEAR(*wide.R.hi - *wide.R.value, wide.drift->quantile * wide.drift->sd, 1e-20);
+  for (std::size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(one.model.in_model[k], wide.model.in_model[k]) << k;
+    EXPECT_EQ(one.model.value[k], wide.model.value[k]) << k;
+    if (!one.model.in_model[k] && one.model.upper[k] > 0) {
+      EXPECT_GT(wide.model.upper[k], one.model.upper[k]) << k;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rig::analysis
