@@ -28,11 +28,11 @@ Cia402Table::Cia402Table(std::unique_ptr<RegisterTransport> transport, DriveMap 
 std::string Cia402Table::describe() const { return transport_->describe() + " cia402 \"" + map_.name + "\""; }
 
 // One object, named with its register and the drive when the link fails.
-int64_t Cia402Table::read_object(Obj o, const CancelToken& cancel) {
+int64_t Cia402Table::read_object(Obj o, const CancelToken& cancel, bool urgent) {
   const ObjectSpec& s = map_.spec(o);
   try {
-    const auto w = s.input ? transport_->read_input(s.address, static_cast<uint16_t>(s.words()), cancel)
-                           : transport_->read(s.address, static_cast<uint16_t>(s.words()), cancel);
+    const auto w = s.input ? transport_->read_input(s.address, static_cast<uint16_t>(s.words()), cancel, urgent)
+                           : transport_->read(s.address, static_cast<uint16_t>(s.words()), cancel, urgent);
     return map_.decode(o, w.data());
   } catch (const ModbusError& e) {
     throw ModbusError("reading " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
@@ -417,17 +417,29 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
 }
 
 // Halt keeps the device control bits as they are (never enables or disables
-// anything) and drops new-set-point so no move is taken after it. Not knowing
-// them (nothing read or written yet), it sends nothing rather than a guess that
-// could drop the power stage mid-move: callers read status() first.
+// anything) and drops new-set-point so no move is taken after it. The bits are the
+// ones the drive holds now, read first: another master's quick stop or disable since
+// this client's last write must not be turned back into Enable operation (transition
+// 16) by a halt built from the word this client wrote (a review: a quick stop from a
+// second shell ended as 0x010F, and the table ran on 5 degrees). Where that read
+// fails, the last word this client wrote or read; knowing neither (nothing read or
+// written yet), it sends nothing rather than a guess that could drop the power stage
+// mid-move: callers read status() first.
 void Cia402Table::stop() noexcept {
-  if (!control_known_) {
+  uint16_t held = 0;
+  bool known = false;
+  try {
+    held = static_cast<uint16_t>(read_object(Obj::kControlword, CancelToken{}, true));
+    known = true;
+  } catch (...) {
+  }
+  if (!known && control_known_) held = control_.load(), known = true;
+  if (!known) {
     std::lock_guard lk(stop_mu_);
     last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";
     return;
   }
-  const auto w = static_cast<uint16_t>((control_.load() & 0x000F) | c4::cw::kHalt);
-  send_stop(w, "halt");
+  send_stop(static_cast<uint16_t>((held & 0x000F) | c4::cw::kHalt), "halt");
 }
 void Cia402Table::quick_stop() noexcept { send_stop(c4::cw::kCmdQuickStop, "quick stop"); }
 

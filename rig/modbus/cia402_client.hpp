@@ -52,7 +52,7 @@ class Cia402Table final : public RotaryTable {
   const DriveMap& map() const { return map_; }
 
  private:
-  int64_t read_object(Obj o, const CancelToken& cancel);
+  int64_t read_object(Obj o, const CancelToken& cancel, bool urgent = false);
   void write_object(Obj o, int64_t value, const CancelToken& cancel, bool urgent = false);
   void write_controlword(uint16_t w, const CancelToken& cancel);
   void enable_operation(const std::string& doing, const CancelToken& cancel);

@@ -332,8 +332,39 @@ TEST_P(Cia402Client, CancelMidMoveHaltsTheAxis) {
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
 }
 
+// Another master's quick stop mid-move (`rig table quick-stop` from a second shell): the mover
+// sees Quick stop active and halts, and that halt keeps the quick stop the drive holds now. It
+// was built from the word the mover last wrote (Enable operation) and took the drive back to
+// Operation enabled: the table ran on about 5 degrees (a review).
+TEST_P(Cia402Client, AHaltAfterAnotherMastersQuickStopKeepsTheQuickStop) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  const double t_qs = r.axis->time_s() + 0.3;
+  bool sent = false;
+  r.on_step = [&] {
+    if (!sent && r.axis->time_s() >= t_qs) sent = true, r.control(c4::cw::kCmdQuickStop);
+  };
+  const std::string e = error_of([&] { t->move_to(300.0, {}); });
+  r.on_step = nullptr;
+  ASSERT_TRUE(sent);
+  EXPECT_TRUE(has(e, "Quick stop active") && has(e, "halt delivered")) << e;
+  EXPECT_EQ(t->last_stop_error(), "");
+  std::vector<uint16_t> cw(static_cast<std::size_t>(r.map.spec(Obj::kControlword).words()));
+  ASSERT_EQ(r.drive.read_registers(r.map.spec(Obj::kControlword).address, static_cast<uint16_t>(cw.size()), cw.data()), 0);
+  const auto word = static_cast<uint16_t>(r.map.decode(Obj::kControlword, cw.data()));
+  EXPECT_EQ(word & 0x000F, c4::cw::kCmdQuickStop) << std::hex << word;
+  EXPECT_TRUE(word & c4::cw::kHalt) << std::hex << word;
+  r.run(2.0);
+  EXPECT_EQ(r.drive.state(), State::kQuickStopActive);  // not Operation enabled again
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);  // at rest on the quick-stop ramp
+  EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+}
+
 // `rig table stop` from a fresh process: the stop keeps the drive's device
 // control bits (halt, still Operation enabled), never drops the power stage.
+// (Where the controlword cannot be read and nothing was written, nothing is sent:
+// AHaltThatCannotReadTheControlwordSendsNothing below.)
 TEST_P(Cia402Client, AStopFromAFreshClientHaltsWithoutDisabling) {
   Rig r(GetParam());
   auto t = r.client();
@@ -344,16 +375,23 @@ TEST_P(Cia402Client, AStopFromAFreshClientHaltsWithoutDisabling) {
   r.run(0.2);
   ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0);
   auto fresh = r.client();
-  fresh->stop();  // nothing known yet: nothing sent, and it says so
-  EXPECT_TRUE(has(fresh->last_stop_error(), "halt not sent")) << fresh->last_stop_error();
-  fresh->status();
-  fresh->stop();
+  fresh->stop();  // nothing written yet: the bits are read from the drive first
   EXPECT_EQ(fresh->last_stop_error(), "");
   r.run(2.0);
   EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
   EXPECT_TRUE(r.axis->snapshot().servo_on);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+}
+
+// A drive that does not answer and a client that never wrote: no controlword to keep, so the
+// halt is not sent (a guessed word could drop the power stage mid-move), and it says so.
+TEST_P(Cia402Client, AHaltThatCannotReadTheControlwordSendsNothing) {
+  Rig r(GetParam());
+  auto fresh = r.client();
+  r.axis->inject(plant::SimFault::kNoAnswer, 0.0);
+  fresh->stop();
+  EXPECT_TRUE(has(fresh->last_stop_error(), "halt not sent: the controlword is unknown")) << fresh->last_stop_error();
 }
 
 TEST_P(Cia402Client, FaultsAreNamedWithTheirErrorCode) {
