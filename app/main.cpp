@@ -1,4 +1,6 @@
 // The `rig` command line: one subcommand per job (docs/contracts.md).
+#include <cctype>
+#include <csignal>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -8,7 +10,54 @@
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 
+namespace {
+
+// CLI11 reads a number as C's strtod/strtoll do: "" as 0, "0x10" as 16, " 5" with its blank, so
+// `rig table move ""` (an empty shell variable) turned the table to 0 degrees (a review). Every
+// numeric option and argument takes decimal text only; "inf" and "nan" pass on to the option's
+// own range check, which names them.
+bool decimal_text(const std::string& v, bool whole) {
+  std::size_t i = (!v.empty() && (v[0] == '+' || v[0] == '-')) ? 1 : 0;
+  std::string rest = v.substr(i);
+  for (char& c : rest) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (!whole && (rest == "inf" || rest == "infinity" || rest == "nan")) return true;
+  std::size_t digits = 0;
+  while (i < v.size() && std::isdigit(static_cast<unsigned char>(v[i]))) ++i, ++digits;
+  if (!whole && i < v.size() && v[i] == '.')
+    for (++i; i < v.size() && std::isdigit(static_cast<unsigned char>(v[i])); ++i) ++digits;
+  if (digits == 0) return false;
+  if (!whole && i < v.size() && (v[i] == 'e' || v[i] == 'E')) {
+    ++i;
+    if (i < v.size() && (v[i] == '+' || v[i] == '-')) ++i;
+    std::size_t exp = 0;
+    while (i < v.size() && std::isdigit(static_cast<unsigned char>(v[i]))) ++i, ++exp;
+    if (exp == 0) return false;
+  }
+  return i == v.size();
+}
+
+void decimal_numbers_only(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    const std::string shown = o->get_type_name();  // "FLOAT", or with a check's text: "FLOAT:FLOAT in [..]"
+    const std::string type = shown.substr(0, shown.find(':'));
+    const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
+    if (!whole && !real) continue;
+    o->check(CLI::Validator(
+        [whole](std::string& v) {
+          return decimal_text(v, whole) ? std::string()
+                                        : "'" + v + "' is not a decimal " + (whole ? "whole number" : "number");
+        },
+        ""));
+  }
+  for (CLI::App* sub : app.get_subcommands({})) decimal_numbers_only(*sub);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
+  // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
+  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);
@@ -23,6 +72,7 @@ int main(int argc, char** argv) {
   rig::cli::add_history(app, rc);
   rig::cli::add_capture(app, rc);
   rig::cli::add_verify(app, rc);
+  decimal_numbers_only(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -15,6 +15,14 @@ double wall_s() {
 }
 }  // namespace
 
+// fmt::print throws when the stream cannot be written (a reader that went away: EPIPE); the
+// view is for a person watching, so a write nobody can read is dropped and the run goes on.
+template <class... Args>
+void TerminalView::put(fmt::format_string<Args...> f, Args&&... args) {
+  const std::string text = fmt::format(f, std::forward<Args>(args)...);
+  (void)!std::fwrite(text.data(), 1, text.size(), out_);
+}
+
 TerminalView::TerminalView(std::FILE* out, bool quiet)
     : out_(out), tty_(::isatty(::fileno(out)) != 0), quiet_(quiet), wall_start_(wall_s()) {}
 
@@ -34,9 +42,9 @@ void TerminalView::plan(const std::vector<Phase>& phases) {
     total += p.planned_s;
   }
   if (quiet_) return;
-  fmt::print(out_, "Plan: {} phases, {} of device time\n", phases.size(), hms(total));
+  put("Plan: {} phases, {} of device time\n", phases.size(), hms(total));
   for (std::size_t i = 0; i < phases.size(); ++i)
-    fmt::print(out_, "  {:>2}. {:<14} {:>9}  {}\n", i + 1, phases[i].id, hms(phases[i].planned_s), phases[i].title);
+    put("  {:>2}. {:<14} {:>9}  {}\n", i + 1, phases[i].id, hms(phases[i].planned_s), phases[i].title);
   std::fflush(out_);
 }
 
@@ -49,8 +57,8 @@ void TerminalView::phase_started(std::size_t index, std::size_t count, const std
   done_planned_ = 0;
   for (std::size_t i = 0; i < index && i < planned_.size(); ++i) done_planned_ += planned_[i];
   if (!quiet_) {
-    if (tty_) std::fputs("\r\033[K", out_);
-    fmt::print(out_, "[{}/{}] {}: {}\n", index + 1, count, id, title);
+    if (tty_) put("\r\033[K");
+    put("[{}/{}] {}: {}\n", index + 1, count, id, title);
     std::fflush(out_);
   }
 }
@@ -66,7 +74,7 @@ void TerminalView::draw(bool final_line) {
   const int width = 30;
   const int fill = static_cast<int>(fraction_ * width + 0.5);
   const std::string bar = std::string(static_cast<std::size_t>(fill), '#') + std::string(static_cast<std::size_t>(width - fill), '.');
-  fmt::print(out_, "{}  [{}] {:3.0f}%  phase {}/{}  ETA device {}  wall {}{}", tty_ ? "\r\033[K" : "  ", bar,
+  put("{}  [{}] {:3.0f}%  phase {}/{}  ETA device {}  wall {}{}", tty_ ? "\r\033[K" : "  ", bar,
              fraction_ * 100, index_ + 1, count_, hms(left), speed > 0 ? hms(left / speed) : "--:--:--",
              final_line || !tty_ ? "\n" : "");
   std::fflush(out_);
@@ -92,16 +100,16 @@ void TerminalView::phase_progress(double fraction, double) {
 
 void TerminalView::phase_finished(const std::string& id, const std::string& status, const std::string& message) {
   if (quiet_) return;
-  if (tty_) std::fputs("\r\033[K", out_);
+  if (tty_) put("\r\033[K");
   if (status != "done")
-    fmt::print(out_, "  {} {}{}{}\n", id, status, message.empty() ? "" : ": ", message);
+    put("  {} {}{}{}\n", id, status, message.empty() ? "" : ": ", message);
   std::fflush(out_);
 }
 
 void TerminalView::log(const std::string& line) {
   if (quiet_) return;
-  if (tty_) std::fputs("\r\033[K", out_);
-  fmt::print(out_, "{}\n", line);
+  if (tty_) put("\r\033[K");
+  put("{}\n", line);
   std::fflush(out_);
 }
 

@@ -2,6 +2,7 @@
 // device time and wall time, and log lines. On a TTY the bar redraws in place;
 // otherwise (CI logs) it prints a line per phase and per quarter.
 #pragma once
+#include <fmt/format.h>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -23,6 +24,8 @@ class TerminalView final : public ProgressSink {
   static std::string hms(double s);
 
  private:
+  template <class... Args>
+  void put(fmt::format_string<Args...> f, Args&&... args);
   void draw(bool final_line);
   std::FILE* out_;
   bool tty_, quiet_;

@@ -43,8 +43,9 @@ inline std::string slurp(const std::string& p) {
 
 // Starts RIG_BINARY with `args`; stdout and stderr go to io_prefix.stdout / .stderr, the
 // history to io_prefix.history.sqlite (tests never touch the user's database); stdin reads `in`.
+// err_fd >= 0: stderr is that descriptor instead (a pipe, say).
 inline Child spawn(const std::vector<std::string>& args, const std::string& io_prefix,
-                   const std::string& in = "/dev/null") {
+                   const std::string& in = "/dev/null", int err_fd = -1) {
   std::vector<char*> argv;
   std::string bin = RIG_BINARY;
   argv.push_back(bin.data());
@@ -58,7 +59,8 @@ inline Child spawn(const std::vector<std::string>& args, const std::string& io_p
   posix_spawn_file_actions_init(&fa);
   posix_spawn_file_actions_addopen(&fa, 0, in.c_str(), O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&fa, 1, c.out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, c.err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (err_fd >= 0) posix_spawn_file_actions_adddup2(&fa, err_fd, 2);
+  else posix_spawn_file_actions_addopen(&fa, 2, c.err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   const std::string hist = "RIG_HISTORY=sqlite:" + io_prefix + ".history.sqlite";
   std::vector<char*> envp;
   for (char** e = environ; *e; ++e)

@@ -616,6 +616,32 @@ TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
   EXPECT_TRUE(fs::exists(d + "/run/junit.xml"));
 }
 
+// stderr into a pipe whose reader is gone (a line controller's tee that died, `| head -1`):
+// SIGPIPE used to end the process at its next message, with no safe state and no passport.
+// Now a run goes on, a signal still aborts it into the safe state (exit 3), and a clean run
+// ends with its passport (exit 0).
+TEST(RigCli, AClosedStderrPipeNeitherKillsTheRunNorSkipsTheSafeState) {
+  const std::string d = tmp("sigpipe");
+  fs::create_directories(d);
+  for (const bool signalled : {false, true}) {
+    int fds[2];
+    ASSERT_EQ(::pipe(fds), 0);
+    ::close(fds[0]);  // no reader: every write to stderr is EPIPE (or SIGPIPE)
+    const std::string out = d + (signalled ? "/term" : "/clean");
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--out", out};
+    if (signalled) args.insert(args.end(), {"--inject", "sigterm@20"});
+    Child c = spawn(args, out + "-io", "/dev/null", fds[1]);
+    ::close(fds[1]);
+    EXPECT_EQ(wait_exit(c), signalled ? 3 : 0) << out;
+    const auto p = nlohmann::json::parse(slurp(out + "/passport.json"));
+    EXPECT_EQ(p["outcome"], signalled ? "ABORTED" : "PASS");
+    if (signalled) {
+      const std::string log = slurp(out + "/run.log");
+      EXPECT_NE(log.find("safe state 3/3: DUT power off"), std::string::npos) << log;
+    }
+  }
+}
+
 TEST(RigCli, SigkillMidCaptureThenResumeRepeatsNoCompletedPhase) {
   const std::string d = tmp("resume");
   fs::create_directories(d);

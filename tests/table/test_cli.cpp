@@ -113,6 +113,19 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   EXPECT_EQ(rig("--modbus nowhere status", out), 2) << out;
   EXPECT_EQ(rig(where_ + " move", out), 2) << out;
   EXPECT_EQ(rig(where_ + " --rtu /dev/null status", out), 2) << out;  // --modbus and --rtu exclude each other
+  // An angle that is not a decimal number never moves the table: an empty shell variable read
+  // as 0 degrees, and "0x10" as 16 (a review). The table stays where it is.
+  ASSERT_EQ(rig(where_ + " home", out), 0) << out;
+  ASSERT_EQ(rig(where_ + " move 45", out), 0) << out;
+  for (const std::string bad : {"''", "0x10", "' 5'", "5deg", "1e", "--"}) {
+    EXPECT_EQ(rig(where_ + " move " + bad, out), 2) << bad << ": " << out;
+    if (bad != "--") {
+      EXPECT_NE(out.find("is not a decimal number"), std::string::npos) << out;
+    }
+  }
+  EXPECT_EQ(rig(where_ + " status", out), 0) << out;
+  EXPECT_NE(out.find("45.0000"), std::string::npos) << out;
+  EXPECT_EQ(rig(where_ + " --timeout 0x1 status", out), 2) << out;
 }
 
 // Every signal that ends the process halts a move first: Ctrl-C, a service
