@@ -287,6 +287,18 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
     throw ConfigError(doing + ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " +
                       deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path);
+  // An unhomed table is refused before anything is written: enabling operation first left the
+  // drive in Operation enabled after the refusal (a review).
+  if (map_.homed_bit) {
+    try {
+      const Cia402Reading r = read(cancel);
+      if (!r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
+        throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
+    } catch (const ModbusError& e) {
+      throw HardwareError(doing + (e.exception_code ? ": request refused: " : ": link failure: ") + e.what() +
+                          "; nothing sent");
+    }
+  }
   guarded(doing, [&] {
     enable_operation(doing, cancel);
     if (map_.homed_bit && !read(cancel).has(static_cast<uint16_t>(1u << *map_.homed_bit)))

@@ -235,6 +235,19 @@ void TableClient::home(const CancelToken& cancel) {
 void TableClient::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
   if (!std::isfinite(deg) || std::fabs(deg) > 200000.0) throw ConfigError(doing + ": not a valid angle");
+  // Refused before anything is written (no servo-on, no halt): a table that is not homed, a
+  // target outside the drive's limits. The drive was left powered with HALT set before (a review).
+  try {
+    const DriveState d = read_drive(cancel);
+    if (!d.has(sts::kHomed))
+      throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d) + "; nothing sent");
+    if (deg < d.limit_neg_deg || deg > d.limit_pos_deg)
+      throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d.limit_neg_deg) + ", " +
+                        deg_str(d.limit_pos_deg) + "]");
+  } catch (const ModbusError& e) {
+    throw HardwareError(doing + (e.exception_code ? ": request refused: " : ": link failure: ") + e.what() +
+                        "; nothing sent");
+  }
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);

@@ -384,6 +384,18 @@ TEST_P(Cia402Client, AStopFromAFreshClientHaltsWithoutDisabling) {
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
 }
 
+// A map with a homed bit: a move before homing is refused before anything is written, so the
+// drive stays where it was in its state machine (it was enabled first, then refused: a review).
+TEST(Cia402ClientHoming, AMoveBeforeHomingIsRefusedBeforeTheDriveIsEnabled) {
+  Rig r("lowword-offset.toml");
+  ASSERT_TRUE(r.map.homed_bit);
+  auto t = r.client();
+  const std::string e = error_of([&] { t->move_to(10.0, {}); });
+  EXPECT_TRUE(has(e, "table not homed") && has(e, "nothing sent")) << e;
+  r.run(0.5);  // past the drive's own initialisation (Not ready -> Switch on disabled)
+  EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);  // no command ever reached it
+}
+
 // A drive that does not answer and a client that never wrote: no controlword to keep, so the
 // halt is not sent (a guessed word could drop the power stage mid-move), and it says so.
 TEST_P(Cia402Client, AHaltThatCannotReadTheControlwordSendsNothing) {

@@ -62,7 +62,12 @@ TEST(TableInProcess, MoveBeforeHomingIsRefusedClearly) {
   SimRig r;
   const std::string err = hardware_error([&] { r.table->move_to(90.0, {}); });
   EXPECT_NE(err.find("move to 90.0000°: table not homed"), std::string::npos) << err;
+  EXPECT_NE(err.find("; nothing sent"), std::string::npos) << err;
   EXPECT_FALSE(r.emu->snapshot().moving);
+  // Refused before anything was written: the drive is not powered, no HALT was set (a review:
+  // the refusal came after servo-on and left CONTROL at servo on + HALT).
+  EXPECT_FALSE(r.emu->snapshot().servo_on);
+  EXPECT_FALSE(r.table->status().servo_on);
 }
 
 TEST(TableInProcess, AlarmMidMoveIsReportedByCodeMeaningAndAngle) {
