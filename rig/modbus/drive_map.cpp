@@ -1,6 +1,7 @@
 #include "rig/modbus/drive_map.hpp"
 
 #include <algorithm>
+#include <tuple>
 #include <cmath>
 #include <cstdio>
 
@@ -42,6 +43,11 @@ std::string hex4(unsigned v) {
 }
 
 [[noreturn]] void fail(const toml::node& n, const std::string& msg) { throw ConfigError(cfg::where(n) + ": " + msg); }
+std::string shown(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", x);
+  return b;
+}
 
 bool parse_word_order(const toml::table& t, std::string_view key, bool def) {
   const toml::node* n = t.get(key);
@@ -75,8 +81,30 @@ double DriveMap::accel_units_to_dps2(double a) const {
   return accel_unit == AccelUnit::kCountsPerS2 ? a / counts_per_deg() : a / 60.0 / gear_ratio * 360.0;
 }
 
+namespace {
+std::pair<int64_t, int64_t> register_range(const ObjectSpec& s) {
+  const int64_t span = int64_t{1} << s.width;
+  return s.is_signed ? std::pair{-span / 2, span / 2 - 1} : std::pair{int64_t{0}, span - 1};
+}
+}  // namespace
+
+bool DriveMap::fits(Obj ob, int64_t v) const {
+  const auto [lo, hi] = register_range(spec(ob));
+  return v >= lo && v <= hi;
+}
+
+std::string DriveMap::range_text(Obj ob) const {
+  const ObjectSpec& s = spec(ob);
+  const auto [lo, hi] = register_range(s);
+  return "a " + std::to_string(s.width) + "-bit " + (s.is_signed ? "signed" : "unsigned") + " register: " +
+         std::to_string(lo) + ".." + std::to_string(hi);
+}
+
 std::vector<uint16_t> DriveMap::encode(Obj ob, int64_t v) const {
   const ObjectSpec& s = spec(ob);
+  if (!fits(ob, v))
+    throw ConfigError("drive map " + path + ": " + std::to_string(v) + " does not fit " + describe(ob) + ", " +
+                      range_text(ob));
   const auto u = static_cast<uint32_t>(v);
   if (s.width == 16) return {static_cast<uint16_t>(u & 0xFFFFu)};
   const auto hi = static_cast<uint16_t>(u >> 16), lo = static_cast<uint16_t>(u & 0xFFFFu);
@@ -206,6 +234,19 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
     fail(*cfg::get_table(root, "homing"), "[homing] method is set but [objects] has no homing_method (0x6098)");
   if (m.home_offset_deg != 0 && !m.has(Obj::kHomeOffset))
     fail(*cfg::get_table(root, "homing"), "[homing] offset_deg is set but [objects] has no home_offset (0x607C)");
+  // Every angle the rig writes or reads lies within the travel limits (and the home offset):
+  // their counts must fit the position registers, or a target would wrap to another angle.
+  for (const auto& [key, deg, node] : {std::tuple{"neg_deg", m.limit_neg_deg, lim.get("neg_deg")},
+                                      {"pos_deg", m.limit_pos_deg, lim.get("pos_deg")}})
+    for (const Obj ob : {Obj::kTargetPosition, Obj::kPositionActual})
+      if (m.has(ob) && !m.fits(ob, m.deg_to_counts(deg)))
+        fail(*node, std::string("[limits] ") + key + " = " + shown(deg) + " is " +
+                        std::to_string(m.deg_to_counts(deg)) + " counts, which does not fit " + m.describe(ob) + ", " +
+                        m.range_text(ob) + " (counts_per_rev x gear_ratio too large for the register, or 'signed' "
+                        "left out)");
+  if (m.home_offset_deg != 0 && !m.fits(Obj::kHomeOffset, m.deg_to_counts(m.home_offset_deg)))
+    fail(*cfg::get_table(root, "homing")->get("offset_deg"),
+         "[homing] offset_deg does not fit " + m.describe(Obj::kHomeOffset) + ", " + m.range_text(Obj::kHomeOffset));
   return m;
 }
 

@@ -86,7 +86,13 @@ struct DriveMap {
   double dps2_to_accel_units(double dps2) const;
   double accel_units_to_dps2(double a) const;
 
-  // Register codec of an object: words in the order the drive puts them.
+  // Whether `value` fits the object's register (its width and signedness), and that range as
+  // text ("a 16-bit unsigned register: 0..65535") for messages.
+  bool fits(Obj o, int64_t value) const;
+  std::string range_text(Obj o) const;
+  // Register codec of an object: words in the order the drive puts them. A value that does not
+  // fit is a ConfigError naming the object (never its low bits: a velocity of 87381 counts/s in
+  // 16 bits was 21845, and the table crept at a tenth of its speed, a review).
   std::vector<uint16_t> encode(Obj o, int64_t value) const;
   int64_t decode(Obj o, const uint16_t* words) const;
   // "target_position (0x607A) at holding register 16" for messages.

@@ -417,6 +417,23 @@ struct TableConfig {
   std::optional<DriveMap> map;
 };
 
+// [table] velocity_dps / accel_dps2 in the drive map's units must fit the profile registers the
+// rig writes them to: checked with the file, before the drive is opened (they were cut to their
+// low 16 bits: 20 deg/s became a creep, 30 deg/s a 0 the drive refused, a review).
+void check_profile_fits(const toml::table& t, const DriveMap& map, const TableOptions& o) {
+  auto check = [&](const char* key, const std::optional<double>& v, Obj ob, double units) {
+    if (!v || !map.has(ob) || map.fits(ob, std::llround(units))) return;
+    char b[96];
+    std::snprintf(b, sizeof b, "[table] %s = %g is %.0f in the drive's units, which does not fit ", key, *v, units);
+    throw ConfigError(cfg::where(*t.get(key)) + ": " + b + map.describe(ob) + ", " + map.range_text(ob) +
+                      " (drive map " + map.path + ")");
+  };
+  if (o.velocity_dps) check("velocity_dps", o.velocity_dps, Obj::kProfileVelocity, map.dps_to_velocity_units(*o.velocity_dps));
+  if (o.accel_dps2)
+    for (const Obj ob : {Obj::kProfileAcceleration, Obj::kProfileDeceleration})
+      check("accel_dps2", o.accel_dps2, ob, map.dps2_to_accel_units(*o.accel_dps2));
+}
+
 // Everything [table] says, checked, without touching the drive.
 TableConfig read_table_config(const toml::table& t) {
   cfg::check_keys(t,
@@ -436,6 +453,7 @@ TableConfig read_table_config(const toml::table& t) {
   }
   c.opt = table_options_from_toml(t);
   c.link = link_options_from_toml(t);
+  if (c.map) check_profile_fits(t, *c.map, c.opt);
   // The procedure's angles, accepted here as in [procedure] and held to the same ranges.
   cfg::get_number(t, "u10_deg", 0.0, -360.0, 360.0);
   cfg::get_number(t, "u20_deg", 180.0, -360.0, 540.0);

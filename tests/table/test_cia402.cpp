@@ -102,6 +102,23 @@ TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
   // A homing method with nowhere to write it.
   e = map_error(ok + "[homing]\nmethod = 19\n");
   EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "homing_method")) << e;
+  // A travel limit whose counts do not fit the position registers: a target left unsigned, whose
+  // negative limit would wrap to another angle (a review: such maps were accepted).
+  for (const char* width : {"", ", width = 32"}) {
+    e = map_error(std::string(kHead) + "target_position = { index = 0x607A, address = 9" + width + " }\n");
+    EXPECT_TRUE(has(e, "bad-map.toml:6:") && has(e, "[limits] neg_deg = -10 is -278 counts, which does not fit") &&
+                has(e, "target_position (0x607A)") && has(e, std::string(*width ? "32" : "16") + "-bit unsigned register"))
+        << e;
+  }
+}
+
+// The codec never writes a value's low bits: a value beyond the register is an error.
+TEST(DriveMapFile, AValueThatDoesNotFitItsRegisterIsRefused) {
+  const m::DriveMap map = m::load_drive_map(kDrives + "generic-cia402.toml");
+  EXPECT_NO_THROW(map.encode(Obj::kControlword, 0xFFFF));
+  const std::string e = error_of([&] { map.encode(Obj::kControlword, 0x10000); });
+  EXPECT_TRUE(has(e, "65536 does not fit controlword (0x6040)") && has(e, "0..65535")) << e;
+  EXPECT_THROW(map.encode(Obj::kControlword, -1), ConfigError);
 }
 
 // ---------------------------------------------------------------- the emulated drive

@@ -279,6 +279,25 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
   EXPECT_EQ(run(std::string(RIG_BIN) + " run --hardware " + hw4 + " --profile ci --yes --out " + dir + "/run4", out), 2)
       << out;
   EXPECT_NE(out.find("badmap.toml:3:"), std::string::npos) << out;
+  // A [table] speed that does not fit the map's profile register is named at its line, before
+  // the drive is opened (it was cut to its low 16 bits: the table crept, a review).
+  write("map16.toml", "[drive]\nname = \"m16\"\n[scaling]\ncounts_per_rev = 131072\n[limits]\nneg_deg = -10.0\n"
+                      "pos_deg = 10.0\n[objects]\ncontrolword = { index = 0x6040, address = 0 }\n"
+                      "statusword = { index = 0x6041, address = 1 }\nerror_code = { index = 0x603F, address = 2 }\n"
+                      "modes_of_operation = { index = 0x6060, address = 3, signed = true }\n"
+                      "modes_of_operation_display = { index = 0x6061, address = 4, signed = true }\n"
+                      "position_actual = { index = 0x6064, address = 5, width = 32, signed = true }\n"
+                      "velocity_actual = { index = 0x606C, address = 7, width = 32, signed = true }\n"
+                      "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n"
+                      "profile_velocity = { index = 0x6081, address = 11 }\n");
+  const std::string hw5 = write("hw5.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                            "drive_map = \"map16.toml\"\nvelocity_dps = 200.0\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw5, out), 2) << out;
+  EXPECT_NE(out.find("hw5.toml:5:"), std::string::npos) << out;
+  EXPECT_NE(out.find("[table] velocity_dps = 200 is 72818 in the drive's units, which does not fit profile_velocity "
+                     "(0x6081) at holding register 11, a 16-bit unsigned register: 0..65535"),
+            std::string::npos)
+      << out;
 }
 
 }  // namespace
