@@ -225,6 +225,33 @@ void check_serial_source(const RunArgs& a, const toml::table& hw, const toml::ta
                     " commands = false: the DUT cannot report its serial; give it with --serial");
 }
 
+// The procedure's U10 and U20 angles within the table's travel, where the rig knows the travel
+// before the table opens: a CiA 402 drive map's [limits] on hardware, [plant.table]'s limits on
+// the emulated plant (a rig-v1 drive reports its limits once connected, and its move refuses
+// then). A run with an angle outside refused at its first U20 move, after devices opened and
+// run01 was recorded (a review).
+void check_procedure_angles_in_travel(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg,
+                                      const acceptance::Profile& p) {
+  double lo = 0, hi = 0;
+  std::string whose;
+  if (a.plant == "hardware") {
+    const toml::table* t = cfg::get_table(hw, "table");
+    if (!t || modbus::table_drive(*t) != "cia402") return;
+    const modbus::DriveMap map = modbus::table_drive_map(*t);
+    lo = map.limit_neg_deg, hi = map.limit_pos_deg;
+    whose = "drive map " + map.path + " [limits]";
+  } else {
+    const plant::TableParams tp = plant::table_params_from_toml(cfg::get_table(plant_cfg, "table"));
+    lo = tp.limit_neg_deg, hi = tp.limit_pos_deg;
+    whose = "the emulated table's [plant.table] limit_neg_deg / limit_pos_deg";
+  }
+  for (const auto& [key, deg] : {std::pair{"u10_deg", p.u10_deg}, {"u20_deg", p.u20_deg}})
+    if (deg < lo || deg > hi)
+      throw ConfigError(fmt::format("{} = {:g}°: outside the table's travel [{:g}°, {:g}°] ({}): the procedure could "
+                                    "not turn the DUT there; change [procedure] u10_deg / u20_deg or the limits",
+                                    key, deg, lo, hi, whose));
+}
+
 // On hardware the DUT's rate is read at bring-up (after power-on); the emulated DUT's is known
 // from the profile's [plant], so a profile it cannot run is refused here, --dry-run included.
 void check_emulated_rate(const toml::table& profile_table, const std::string& source, const acceptance::Profile& p,
@@ -606,6 +633,7 @@ int do_run(RunArgs a) {
 
   // The mount's angles before the phases are planned: each move's planned time follows them.
   if (a.plant == "hardware") apply_procedure_angles(hw, p);
+  check_procedure_angles_in_travel(a, hw, plant_cfg, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
   MeasurementSet values;

@@ -814,6 +814,22 @@ TEST(RigCli, ANewRunNeverTakesOverAnEarlierRunsFolder) {
   EXPECT_EQ(slurp(d + "/done/passport.json"), passport);
 }
 
+// The emulated table's travel from [plant.table] holds the procedure's angles too: a U20 beyond
+// it is exit 2 before anything is written (a review: the dry run passed, the run failed at U20).
+TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
+  const std::string d = tmp("travel");
+  fs::create_directories(d);
+  std::ofstream(d + "/lim.toml") << "base = \"ci\"\n[plant.table]\nlimit_pos_deg = 150.0\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", d + "/lim.toml", "--yes", "--out", d + "/run"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2) << slurp(d + "/io.stderr");
+    EXPECT_NE(slurp(d + "/io.stderr").find("u20_deg = 180°: outside the table's travel [-190°, 150°]"), std::string::npos)
+        << slurp(d + "/io.stderr");
+  }
+  EXPECT_FALSE(fs::exists(d + "/run"));
+}
+
 // One process per run folder: a folder another process holds (its flock, as a running `rig run`
 // holds its --out) is refused, for a new run, a resume and their dry runs, before anything is
 // written into it; the lock goes with the process, and no lock file is left in the folder.

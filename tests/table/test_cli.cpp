@@ -298,6 +298,20 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
                      "(0x6081) at holding register 11, a 16-bit unsigned register: 0..65535"),
             std::string::npos)
       << out;
+  // The procedure's U20 (180 degrees) outside the map's travel (+-10): refused by the dry run,
+  // before any device opens (it failed at the first U20 move, after run01 was recorded).
+  const std::string hw6 = write("hw6.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                            "drive_map = \"map16.toml\"\n[dut]\ncan = \"vcan9\"\n"
+                                            "[gpio]\nchip = \"nochip\"\npower = \"P\"\nestop = \"E\"\n");
+  for (const char* dry : {" --dry-run", ""}) {
+    EXPECT_EQ(run(std::string(RIG_BIN) + " run --hardware " + hw6 + " --profile ci --yes --no-history --out " + dir +
+                      "/run6" + dry,
+                  out),
+              2)
+        << out;
+    EXPECT_NE(out.find("u20_deg = 180°: outside the table's travel [-10°, 10°] (drive map"), std::string::npos) << out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/run6/run.json"));
 }
 
 }  // namespace
