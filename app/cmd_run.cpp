@@ -36,6 +36,7 @@
 #include "app/backends.hpp"
 #include "app/run_seal.hpp"
 #include "app/folder_lock.hpp"
+#include "app/serial_option.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
 #include "app/whole_number.hpp"
@@ -815,7 +816,8 @@ void add_run(CLI::App& app, int& rc) {
       ->excludes(plant);
   sub->add_option("--profile", a->profile, "Profile: paper, ci or a TOML file")->capture_default_str();
   sub->add_option("--serial", a->serial,
-                  "DUT serial number: on hardware the DUT must report it; the emulated DUT takes it");
+                  "DUT serial number: on hardware the DUT must report it; the emulated DUT takes it")
+      ->check(serial_validator());
   sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<YYYY-MM-DDTHHMMSSZ>, UTC)");
   sub->add_option("--resume", a->resume, "Continue the run in this folder after its last completed phase")
       ->check(CLI::ExistingDirectory);

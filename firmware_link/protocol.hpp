@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <variant>
 
 namespace rig::link {
@@ -71,6 +72,17 @@ const char* to_string(Result r);
 
 inline constexpr int kMaxSections = 8;
 inline constexpr int kMaxSerial = 32;
+// A serial the protocol can carry and every file can hold: 1..kMaxSerial printable ASCII
+// characters (blanks inside only). "" when `s` is one, else why not.
+inline std::string serial_problem(std::string_view s) {
+  if (s.empty()) return "empty";
+  if (s.size() > static_cast<std::size_t>(kMaxSerial))
+    return std::to_string(s.size()) + " characters; a DUT reports at most " + std::to_string(kMaxSerial);
+  for (const char c : s)
+    if (c < 0x20 || c > 0x7E) return "not printable ASCII (the DUT protocol's serial is)";
+  if (s.front() == ' ' || s.back() == ' ') return "starts or ends with a blank";
+  return "";
+}
 inline constexpr uint32_t kSeqMask = 0xFFFFFF;  // the stream's sequence counter is 24 bits on the wire
 
 // LOOP_TEST (docs/can-protocol.md "Loop test"): what the firmware accepts.

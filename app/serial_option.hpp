@@ -1,0 +1,34 @@
+// --serial (rig run, rig capture import): the serial goes into the passport, JUnit, the
+// history, the run folder's name and a capture's header, so it is held to what the DUT
+// protocol can report (firmware_link/protocol.hpp) before anything is opened or written.
+#pragma once
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "firmware_link/protocol.hpp"
+
+namespace rig::cli {
+
+inline CLI::Validator serial_validator() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        const std::string why = link::serial_problem(v);
+        if (why.empty()) return {};
+        std::string shown;  // the value as typed, its control bytes shown, not sent to the terminal
+        for (const char c : v) {
+          if (c >= 0x20 && c <= 0x7E) {
+            shown += c;
+          } else {
+            static constexpr char kHex[] = "0123456789ABCDEF";
+            shown += "\\x";
+            shown += kHex[static_cast<unsigned char>(c) >> 4];
+            shown += kHex[static_cast<unsigned char>(c) & 0xF];
+          }
+        }
+        return "'" + shown + "': " + why;
+      },
+      "");
+}
+
+}  // namespace rig::cli
