@@ -186,6 +186,21 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'hardware': \"" + a.hardware + "\", but the run is on the emulated plant");
   if (inv.contains("started") && !inv["started"].is_string())
     throw ConfigError(path + ": field 'started': expected a string, found " + inv["started"].type_name());
+  // The history the run was started with, unless the resume names its own (--db, --no-history):
+  // a resume without them recorded its PASS in the default database, the ABORTED row left in
+  // the station's (an integrator's review). Older run.json files have neither field.
+  if (inv.contains("no_history") && !inv["no_history"].is_boolean())
+    throw ConfigError(path + ": field 'no_history': expected true or false, found " + inv["no_history"].type_name());
+  const std::string db = str("db", "");
+  if (!a.db.empty() || a.no_history) return;
+  if (inv.value("no_history", false)) {
+    a.no_history = true;
+  } else if (!db.empty()) {
+    if (db.find(":***@") != std::string::npos)  // stored masked
+      throw ConfigError(path + ": the run was started with --db " + db + ", whose password run.json does not keep: "
+                        "give the same --db with --resume (or --no-history)");
+    a.db = db;
+  }
 }
 
 bool confirm(const std::string& question) {
@@ -725,6 +740,10 @@ int do_run(RunArgs a) {
     invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
+    // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
+    // carries a password, which run.json never holds; the resume must then give it again).
+    if (a.no_history) invocation["no_history"] = true;
+    else if (!a.db.empty()) invocation["db"] = history::mask_password(a.db);
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
     if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);

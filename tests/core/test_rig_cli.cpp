@@ -761,6 +761,42 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
       << slurp(d + "/list.stdout");
 }
 
+// A resume records where its run was started to record: the --db the run was given, or none
+// with --no-history. Before, a resume without them put the PASS in the default database and
+// left the station's ABORTED row (an integrator's review). A --db with a password is masked in
+// run.json, so its resume must give it again.
+TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
+  const std::string d = tmp("resumedb");
+  fs::create_directories(d);
+  const std::string station = d + "/station.sqlite";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/r",
+                 "--inject", "sigterm@20"},
+                d + "/io1"),
+            3);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/run.json"))["db"], "sqlite:" + station);
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  ASSERT_EQ(run({"history", "--db", station, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
+  EXPECT_NE(slurp(d + "/list.stdout").find(",PASS,"), std::string::npos) << slurp(d + "/list.stdout");
+  EXPECT_FALSE(fs::exists(d + "/io2.history.sqlite")) << "the resume's default database stays untouched";
+  // --no-history carries over too.
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/n", "--inject",
+                 "sigterm@20"},
+                d + "/io3"),
+            3);
+  ASSERT_EQ(run({"run", "--resume", d + "/n", "--yes", "--quiet"}, d + "/io4"), 0) << slurp(d + "/io4.stderr");
+  EXPECT_FALSE(fs::exists(d + "/io3.history.sqlite"));
+  EXPECT_FALSE(fs::exists(d + "/io4.history.sqlite"));
+  // A masked password: the resume must name the database again.
+  fs::create_directories(d + "/p");
+  std::ofstream(d + "/p/run.json") << R"({"plant": "emulated", "profile": "ci", "db": "postgresql://u:***@h/x"})";
+  std::ofstream(d + "/p/profile.toml") << "base = \"ci\"\n";
+  EXPECT_EQ(run({"run", "--resume", d + "/p", "--yes", "--dry-run"}, d + "/io5"), 2);
+  EXPECT_NE(slurp(d + "/io5.stderr").find("the run was started with --db postgresql://u:***@h/x, whose password "
+                                          "run.json does not keep: give the same --db with --resume"),
+            std::string::npos)
+      << slurp(d + "/io5.stderr");
+}
+
 // A new run never lands on an earlier one: the folder above holds a hardware run that ended
 // before its devices opened (run.json and an ERROR passport, no checkpoint). Before, an emulated
 // run took it over and replaced its passport, JUnit and report. A finished run's folder is
