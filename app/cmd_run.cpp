@@ -421,7 +421,11 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
   info.started = started;
   info.finished = iso8601_utc_now();
   info.software = std::string("rig ") + RIG_VERSION;
-  info.out_dir = fs::absolute(a.out).string();
+  // As the history records it (rig/report/history.cpp): "/x/./run/" was written as given.
+  std::error_code ec;
+  fs::path dir = fs::weakly_canonical(fs::absolute(a.out), ec);
+  if (ec) dir = fs::absolute(a.out).lexically_normal();
+  info.out_dir = dir.string();
   return info;
 }
 

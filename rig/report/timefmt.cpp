@@ -73,6 +73,11 @@ std::optional<long long> parse_iso8601(const std::string& text) {
   tm.tm_min = mi;
   tm.tm_sec = ss;
   if (mo < 1 || mo > 12 || d < 1 || d > 31 || hh > 23 || mi > 59 || ss > 60) return std::nullopt;
+  // A day the month does not have (2026-02-30, 2025-02-29): timegm would roll it into the next
+  // month (a review: --since 2026-02-30 was taken as 2026-03-02).
+  const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+  constexpr int kDays[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  if (d > kDays[mo - 1] + (mo == 2 && leap ? 1 : 0)) return std::nullopt;
   const std::time_t t = timegm(&tm) - offset;
   return static_cast<long long>(t);
 }
