@@ -525,7 +525,9 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
   auto log = std::make_shared<spdlog::logger>("rig", spdlog::sinks_init_list{file, err});
   log->set_level(spdlog::level::debug);
-  log->set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%-5l%$ %v");
+  // UTC, marked so, as every other time the run writes (passport, run.json, history): local
+  // time without its zone could not be put beside them (an integrator's review).
+  log->set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %^%-5l%$ %v", spdlog::pattern_time_type::utc);
   log->flush_on(spdlog::level::debug);
   return log;
 }
