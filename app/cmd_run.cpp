@@ -203,23 +203,24 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   }
 }
 
+// On stderr, as the plan and the progress: stdout carries only the passport table, for scripts.
 bool confirm(const std::string& question) {
-  std::cout << question << " [y/N] " << std::flush;
+  std::cerr << question << " [y/N] " << std::flush;
   std::string line;
   if (!std::getline(std::cin, line)) return false;
   return !line.empty() && (line[0] == 'y' || line[0] == 'Y');
 }
 
 // Operator prompts where a person must act; --yes skips them (automation).
-void operator_prompts(const RunArgs& a, const acceptance::Profile& p) {
+// planned_s: the plan's device time (the phases' own estimates, the table's timing included).
+void operator_prompts(const RunArgs& a, const acceptance::Profile& p, double planned_s) {
   if (a.yes) return;
   if (!::isatty(STDIN_FILENO)) {
     if (a.plant == "emulated") return;  // nothing to mount: unattended emulated runs need no confirmation
     throw ConfigError("operator confirmation needed (mount the DUT, confirm the table is clear): run with --yes "
                       "for unattended runs");
   }
-  std::cout << fmt::format("Profile '{}': {}\nDevice time {}.\n", p.name, p.description,
-                           TerminalView::hms(p.planned_total_s()));
+  std::cerr << fmt::format("Profile '{}': {}\nDevice time {}.\n", p.name, p.description, TerminalView::hms(planned_s));
   if (!confirm("Is the DUT mounted on the table with its connector fastened?"))
     throw AbortedError("operator did not confirm the DUT is mounted");
   if (!a.serial.empty() && !confirm("Is the serial number on the DUT's label " + a.serial + "?"))
@@ -736,7 +737,16 @@ int do_run(RunArgs a) {
     if (!key) refuse_a_final_verdict(a.out);  // a sealed folder's verdict is its seal's (checked above)
     completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
   }
-  operator_prompts(a, p);
+  double planned_s = 0;
+  for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
+  try {
+    operator_prompts(a, p, planned_s);
+  } catch (const AbortedError&) {
+    // Declined before the run started: nothing was written, and a new run's folder goes too.
+    std::error_code ec;
+    if (a.resume.empty()) fs::remove(a.out, ec);  // only while empty
+    throw;
+  }
 
   if (a.resume.empty()) {
     // The folder carries everything a resume needs.

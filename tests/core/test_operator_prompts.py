@@ -3,6 +3,7 @@
 starts (DUT mounted, serial, table clear); 'y' to each proceeds, 'n' aborts
 with exit 3 before anything moves. Usage: test_operator_prompts.py RIG_BINARY"""
 import os
+import re
 import pty
 import select
 import shutil
@@ -47,7 +48,11 @@ def main():
                                        answers, env)
             ok = rc == want_rc and want_text in out and out.count("[y/N]") == len(answers)
             if want_rc == 3:
-                ok = ok and not os.path.exists(os.path.join(out_dir, "passport.json"))  # nothing ran
+                ok = ok and not os.path.exists(out_dir)  # nothing ran: not even its empty folder is left
+            else:  # the prompt's device time is the plan's (it was the profile's own estimate)
+                asked = re.search(r"Device time (\d\d:\d\d:\d\d)\.", out)
+                plan = re.search(r"Plan: \d+ phases, (\d\d:\d\d:\d\d) of device time", out)
+                ok = ok and asked is not None and plan is not None and asked.group(1) == plan.group(1)
             print(f"{'ok' if ok else 'FAIL'}: answers {answers} -> exit {rc}")
             if ok:
                 passed += 1
