@@ -162,15 +162,23 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
   ctx.cancel.throw_if_requested();
   const std::vector<double> x = drift(capture::channel_x(l.samples), st, p.raw_orientation);
   const std::vector<double> y = drift(capture::channel_y(l.samples), st, p.raw_orientation);
+  // A DUT whose stream carries no y(t) ([dut.stream] without y: every y is NaN) has no filtered
+  // output: its y values are null with that reason (failing a profile that limits them), not an
+  // analysis error on NaN, exit 4, on every resume alike (an integrator's review).
+  const bool has_y = std::any_of(y.begin(), y.end(), [](double v) { return !std::isnan(v); });
+  const char* kNoY = "the DUT's stream carries no filtered output y(t) (its [dut.stream] names no y)";
   nlohmann::json a;
   a["allan"]["x"] = allan_channel(ctx, p, x, false);
   ctx.report(0.45);
-  a["allan"]["y"] = allan_channel(ctx, p, y, true);
+  if (has_y) a["allan"]["y"] = allan_channel(ctx, p, y, true);
+  else ctx.values.set("in_run_b_allan_filtered", std::nullopt, kNoY);
   ctx.report(0.9);
   // RMS error of the output (criterion 1), of the drift (bias and base error removed).
   ctx.values.set("rms_unfiltered", analysis::rms(x), "RMS of x(t) drift over the raw capture");
-  ctx.values.set("rms_filtered", analysis::rms(y), "RMS of y(t) drift over the raw capture");
+  if (has_y) ctx.values.set("rms_filtered", analysis::rms(y), "RMS of y(t) drift over the raw capture");
+  else ctx.values.set("rms_filtered", std::nullopt, kNoY);
   for (const auto& [ch, v] : {std::pair{"x", &x}, std::pair{"y", &y}}) {
+    if (v == &y && !has_y) continue;
     analysis::WelchOptions wo;
     wo.poll = [&ctx] { ctx.cancel.throw_if_requested(); };
     const analysis::Psd psd = analysis::welch(*v, p.rate_hz, wo);
@@ -180,12 +188,15 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
   a["timeseries"] = {{"rate_hz", p.rate_hz},
                      {"t0_s", 0.0},
                      {"x", std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n_ts))},
-                     {"y", std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(n_ts))},
+                     {"y", has_y ? nlohmann::json(std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(n_ts)))
+                                 : nlohmann::json(nullptr)},
                      {"note", "first 2 s of the raw capture (drift: bias and base error removed)"}};
   // For the report: the whole capture as block means with the raw min/max, the bounds' level,
   // and the device time the run took up to here.
   a["output_envelope"] = analysis::envelope_to_json(analysis::block_envelope(x, p.rate_hz, 1000),
-                                                    analysis::block_envelope(y, p.rate_hz, 1000),
+                                                    analysis::block_envelope(has_y ? std::span<const double>(y)
+                                                                                   : std::span<const double>(),
+                                                                             p.rate_hz, 1000),
                                                     "raw capture, drift: bias and base error removed");
   a["allan"]["confidence"] = p.confidence;
   st.analysis = a;

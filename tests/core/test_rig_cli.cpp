@@ -1603,6 +1603,32 @@ TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
       << slurp(d + "/io2.stderr");
 }
 
+// A DUT whose stream has no y(t) (its DBC layout without a y signal): the run completes, the y
+// values are null with that reason and fail where the profile limits them (exit 1). Before, the
+// Allan phase met NaN and the run ended ERROR, exit 4, on every resume alike (a review).
+TEST(RigCli, ADutStreamWithoutYFailsItsYValuesInsteadOfErroring) {
+  const std::string d = tmp("noy");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[plant.firmware]\ndbc = \"" << RIG_SOURCE_DIR
+                               << "/duts/qpa-counts.dbc\"\n[plant.firmware.stream]\ncounter = \"QPA_XY.cnt\"\n"
+                                  "x = \"QPA_XY.x_counts\"\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--quiet", "--out", d + "/run"}, d + "/io"), 1)
+      << slurp(d + "/io.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "FAIL");
+  for (const char* v : {"rms_filtered", "in_run_b_allan_filtered"}) {
+    EXPECT_TRUE(p["values"][v]["value"].is_null()) << v;
+    EXPECT_NE(p["values"][v]["reason"].get<std::string>().find("carries no filtered output y(t)"), std::string::npos)
+        << p["values"][v].dump();
+  }
+  EXPECT_EQ(p["values"]["rms_filtered"]["outcome"], "FAIL");
+  EXPECT_TRUE(p["values"]["rms_unfiltered"]["value"].is_number()) << "x is analysed as ever";
+  const auto a = nlohmann::json::parse(slurp(d + "/run/analysis.json"));
+  EXPECT_FALSE(a["allan"].contains("y"));
+  EXPECT_TRUE(a["allan"]["x"]["oadev"].is_array());
+  EXPECT_TRUE(fs::exists(d + "/run/report.html"));
+}
+
 // The same DUT emulated end to end: the firmware streams from power-on and ignores commands
 // ([plant.firmware] commands = false); the run completes, the passport names the skipped steps,
 // and the loop figures, which have limits in the ci profile, are null and fail the run.
