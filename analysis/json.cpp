@@ -28,11 +28,16 @@ json term(const an::Term& t, double (*to_hours)(double) = nullptr, const char* h
 }
 }  // namespace
 
-json dev_to_json(std::span<const an::DevPoint> dev) {
+json dev_to_json(std::span<const an::DevPoint> dev, bool bounds) {
   json a = json::array();
-  for (const auto& p : dev)
-    a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
-                 {"edf", p.edf}, {"alpha", p.alpha}, {"edf_alpha", p.edf_alpha}});
+  for (const auto& p : dev) {
+    if (bounds)
+      a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", p.lo}, {"hi", p.hi},
+                   {"edf", p.edf}, {"alpha", p.alpha}, {"edf_alpha", p.edf_alpha}});
+    else  // nothing identified, nothing bounded: null, not a 0 that reads as measured
+      a.push_back({{"m", p.m}, {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev}, {"lo", nullptr},
+                   {"hi", nullptr}, {"edf", nullptr}, {"alpha", nullptr}, {"edf_alpha", nullptr}});
+  }
   return a;
 }
 

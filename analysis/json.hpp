@@ -17,7 +17,8 @@
 
 namespace rig::analysis {
 
-nlohmann::json dev_to_json(std::span<const DevPoint> dev);
+// bounds = false (rig analyze --no-bounds): lo, hi, edf, alpha and edf_alpha are null.
+nlohmann::json dev_to_json(std::span<const DevPoint> dev, bool bounds = true);
 // A long-tau statistic (theo.hpp): dev_to_json's fields plus dev_raw, stride and estimator.
 nlohmann::json long_tau_to_json(std::span<const LongTauPoint> pts);
 nlohmann::json noise_terms_to_json(const NoiseTerms& nt);

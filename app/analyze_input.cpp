@@ -260,22 +260,23 @@ std::string quoted_bytes(std::string_view s) {
   return out;
 }
 
-std::vector<double> read_text(const std::string& path) {
+std::vector<double> read_text(const std::string& path, std::size_t* blank_between) {
   if (path == "-") {
     // An ifstream on the descriptor, not std::cin: cin, synced with C stdio, reads a third as fast.
     if (::isatty(STDIN_FILENO)) std::cerr << "rig analyze: reading values from standard input (end with Ctrl-D)\n";
     std::ifstream in("/dev/stdin");
     if (!in) throw ConfigError(std::string("stdin: cannot open: ") + std::strerror(errno));
-    return read_text(in, "stdin");
+    return read_text(in, "stdin", blank_between);
   }
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
-  return read_text(in, path);
+  return read_text(in, path, blank_between);
 }
 
-std::vector<double> read_text(std::istream& in, const std::string& path) {
+std::vector<double> read_text(std::istream& in, const std::string& path, std::size_t* blank_between) {
   std::vector<double> v;
   std::string line;
+  std::size_t blank = 0, blank_run = 0;  // blank lines since the last value (a comment line is not one)
   for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
     // A capture file given without --input capture: say so, not "not a decimal number: 'RIGCAP1'".
     if (lineno == 1 && line == std::string_view(capture::kMagic, sizeof capture::kMagic - 1))
@@ -283,9 +284,14 @@ std::vector<double> read_text(std::istream& in, const std::string& path) {
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
     if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
+    const bool comment = hash != std::string::npos;
+    if (comment) line.resize(hash);
     const auto b = line.find_first_not_of(" \t\r,;");
-    if (b == std::string::npos) continue;
+    if (b == std::string::npos) {
+      if (!comment && !v.empty()) ++blank_run;
+      continue;
+    }
+    blank += blank_run, blank_run = 0;  // only those with a value after them: not trailing ones
     const auto e = line.find_last_not_of(" \t\r,;");
     const std::string_view tok(line.data() + b, e - b + 1);
     const auto where = [&] { return path + ":" + std::to_string(lineno) + ": "; };
@@ -301,6 +307,7 @@ std::vector<double> read_text(std::istream& in, const std::string& path) {
     if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + "'" + quoted_bytes(tok) + "': " + refusal(x));
     v.push_back(x);
   }
+  if (blank_between) *blank_between = blank;
   return v;
 }
 

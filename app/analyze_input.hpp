@@ -66,9 +66,11 @@ void check_input_path(const std::string& path, const std::string& input);
 // and bytes that are not well-formed UTF-8 as \xNN, so a stray byte is seen rather than sent
 // to the terminal; whole UTF-8 characters as they are.
 std::string quoted_bytes(std::string_view s);
-// path "-" reads standard input, its errors naming "stdin:LINE".
-std::vector<double> read_text(const std::string& path);
-std::vector<double> read_text(std::istream& in, const std::string& name);
+// path "-" reads standard input, its errors naming "stdin:LINE". blank_between (optional): the
+// number of blank lines between two values (a row left empty, which may be a missing sample;
+// the values around it are joined), for the caller to note.
+std::vector<double> read_text(const std::string& path, std::size_t* blank_between = nullptr);
+std::vector<double> read_text(std::istream& in, const std::string& name, std::size_t* blank_between = nullptr);
 
 // A break in a capture's sample sequence: values[at - 1] and values[at] were not consecutive
 // samples (the link or the reader flagged samples lost before `at`, or the DUT's counter jumps).

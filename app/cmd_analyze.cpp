@@ -39,6 +39,14 @@ namespace rig::cli {
 
 namespace {
 
+// Whether every deviation computed is 0 (a constant record).
+bool oadev_pts_all_zero(const std::vector<std::vector<rig::analysis::DevPoint>>& devs) {
+  for (const auto& d : devs)
+    for (const auto& p : d)
+      if (p.dev != 0) return false;
+  return !devs.empty();
+}
+
 namespace an = rig::analysis;
 using nlohmann::json;
 
@@ -240,8 +248,9 @@ int run(const Args& a) {
     throw ConfigError(std::string("rig analyze: ") + b);
   }
   check_input_path(a.file, input);
+  std::size_t blank_lines = 0;  // noted below
   if (input == "text") {
-    mem = read_text(a.file);
+    mem = read_text(a.file, &blank_lines);
   } else if (input == "f64") {
     // A file that fits the memory budget is mapped and analysed in place (one ring holds it all),
     // its values checked by the deviations' pass (which runs first, below) as it integrates them.
@@ -260,6 +269,10 @@ int run(const Args& a) {
   if (n < 3) throw ConfigError(input_name + ": " + std::to_string(n) + " values; at least 3 are needed");
   // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
   std::vector<std::string> notes;
+  if (blank_lines)
+    notes.push_back(std::to_string(blank_lines) + " blank line" + (blank_lines > 1 ? "s" : "") + " between values "
+                    "skipped: the values around " + (blank_lines > 1 ? "them" : "it") + " are joined, not read as "
+                    "missing samples");
   if (!gap_note.empty()) notes.push_back(gap_note);
   if (cap && cap->lost_at_start)
     notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
@@ -277,6 +290,11 @@ int run(const Args& a) {
   wo.overlap = a.overlap;
   wo.threads = a.threads;
   bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
+  if (base.data == an::DataKind::Phase && !a.no_psd)  // said, not silently left out (a review)
+    notes.push_back("no PSD: phase data (the PSD is of the rate, frequency data: give --data freq for it)");
+  if (a.no_bounds)
+    notes.push_back("--no-bounds: no noise identification and no bounds (alpha, edf, lo and hi are null); the noise "
+                    "terms are fitted with every point weighted alike, and their bounds assume that");
   if (want_psd && n < an::welch_segment(n, wo)) {
     if (a.segment)
       throw ConfigError(input_name + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
@@ -338,7 +356,12 @@ int run(const Args& a) {
     if (devs[k].empty())
       throw ConfigError(input_name + ": " + std::to_string(n) + " values are too few for any tau of " +
                         an::to_string(opts[k].type) + " (" + a.taus + ")");
-  const double record_s = static_cast<double>(n) / rate;
+  // The record's span: n frequency values cover n tau0; n phase points, n - 1 (a review: ten
+  // phase points were said to be 10 s at 1 Hz).
+  const double record_s = static_cast<double>(base.data == an::DataKind::Phase ? n - 1 : n) / rate;
+  if (oadev_pts_all_zero(devs))
+    notes.push_back("the record is constant: every deviation is 0, so there is no noise to identify, no bounds and no "
+                    "noise terms");
   // The file is read again only by the PSD and the long-tau statistics. Without them its mapping
   // (one page-table entry per 4 KiB: 7000 for 3.6e6 values, about 0.5 ms to tear down) is
   // released on another thread, while this one fits the noise terms and writes the JSON, instead
@@ -411,8 +434,8 @@ int run(const Args& a) {
   j["input"] = input;
   j["record_s"] = record_s;
   j["confidence"] = a.confidence;
-  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts);
-  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts);
+  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, !a.no_bounds);
+  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, !a.no_bounds);
   for (std::size_t k = 0; k < longs.size(); ++k) j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k]);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
@@ -495,12 +518,18 @@ int run(const Args& a) {
     << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) {
-    o << an::to_string(opts[k].type) << " (bounds " << a.confidence << "):\n"
-      << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
+    o << an::to_string(opts[k].type);
+    if (a.no_bounds) o << " (no bounds):\n";
+    else o << " (bounds " << a.confidence << "):\n";
+    o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
     for (const auto& p : devs[k]) {
       char line[160];
-      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e\n", p.m, p.tau_s, p.n_terms, p.alpha,
-                    p.lo, p.dev, p.hi);
+      if (a.no_bounds)
+        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s\n", p.m, p.tau_s, p.n_terms, "-", "-",
+                      p.dev, "-");
+      else
+        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e\n", p.m, p.tau_s, p.n_terms,
+                      p.alpha, p.lo, p.dev, p.hi);
       o << line;
     }
   }

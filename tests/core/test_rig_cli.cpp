@@ -155,6 +155,32 @@ TEST(RigCli, AnalyzeTakesNbs14NinePoints) {
   EXPECT_EQ(run({"analyze", d + "/two.txt", "--rate", "1"}, d + "/w"), 2);
 }
 
+// What the output says about itself (a metrologist's review): --no-bounds writes null, not zeros
+// that read as measured; phase data says why it has no PSD and spans (n - 1) tau0; a constant
+// record is named as one; a blank line between values is noted (the values are joined).
+TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
+  const std::string d = tmp("analyze-honest");
+  fs::create_directories(d);
+  std::ofstream(d + "/nbs.txt") << "0.892\n0.809\n0.823\n\n0.798\n0.671\n0.644\n0.883\n0.903\n0.677\n\n";
+  ASSERT_EQ(run({"analyze", d + "/nbs.txt", "--rate", "1", "--no-bounds", "--json", d + "/nb.json"}, d + "/nb"), 0)
+      << slurp(d + "/nb.stderr");
+  const auto nb = nlohmann::json::parse(slurp(d + "/nb.json"));
+  EXPECT_NEAR(nb["oadev"][0]["dev"].get<double>(), 91.22945e-3, 1e-8);  // NBS14, blank lines skipped
+  for (const char* k : {"lo", "hi", "edf", "alpha", "edf_alpha"}) EXPECT_TRUE(nb["oadev"][0][k].is_null()) << k;
+  EXPECT_NE(nb["notes"].dump().find("--no-bounds: no noise identification and no bounds"), std::string::npos);
+  EXPECT_NE(nb["notes"].dump().find("1 blank line between values skipped"), std::string::npos) << nb["notes"].dump();
+  EXPECT_NE(slurp(d + "/nb.stdout").find("oadev (no bounds):"), std::string::npos) << slurp(d + "/nb.stdout");
+  // Ten phase points at 1 Hz span 9 s; no PSD, and why.
+  ASSERT_EQ(run({"analyze", d + "/nbs.txt", "--rate", "1", "--data", "phase", "--json", d + "/ph.json"}, d + "/ph"), 0);
+  const auto ph = nlohmann::json::parse(slurp(d + "/ph.json"));
+  EXPECT_EQ(ph["record_s"].get<double>(), 8.0);  // 9 values (a blank line is no value): 8 s
+  EXPECT_NE(ph["notes"].dump().find("no PSD: phase data"), std::string::npos) << ph["notes"].dump();
+  std::ofstream(d + "/c.txt") << "5\n5\n5\n5\n5\n5\n5\n5\n";
+  ASSERT_EQ(run({"analyze", d + "/c.txt", "--rate", "1", "--json", d + "/c.json"}, d + "/c"), 0);
+  EXPECT_NE(nlohmann::json::parse(slurp(d + "/c.json"))["notes"].dump().find("the record is constant"),
+            std::string::npos);
+}
+
 // Issue 12, 7: the JSON keys docs/analysis.md names under noise_terms and psd are the ones the
 // program writes (the docs once named `paper` and `wls` where the program wrote others).
 TEST(RigCli, AnalyzeJsonHasTheKeysTheDocsName) {
