@@ -305,11 +305,21 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
     if (record_length_s < 2 * 50 * 3600.0 && out.R.reason.find("longer record") == std::string::npos)
       add_note(out.R, "; needs a longer record");
   }
-  // B by the paper's method: the flat segment (slope nearest 0, |slope| < 0.25).
+  // B by the paper's method: the flat segment (slope nearest 0, |slope| < 0.25). Flat over the
+  // whole segment, not only at its middle: a convex segment from white FM's -1/2 to random walk's
+  // +1/2 has a middle slope near 0, and was labelled flat over three decades where sigma fell and
+  // rose fivefold (a metrologist's review); its bottom is the polynomial's minimum, read below.
+  const auto flat_throughout = [&](const Segment& s) {
+    const double a = std::log10(s.tau_lo_s), b = std::log10(s.tau_hi_s);
+    for (int i = 0; i <= 64; ++i)
+      if (std::abs(dpoly(out.paper.coef, a + (b - a) * i / 64.0)) >= 0.25) return false;
+    return true;
+  };
   const Segment* flat = nullptr;
   if (out.paper.ok)
     for (const auto& s : out.paper.segments)
-      if (std::abs(s.slope) < 0.25 && (!flat || std::abs(s.slope) < std::abs(flat->slope))) flat = &s;
+      if (std::abs(s.slope) < 0.25 && flat_throughout(s) && (!flat || std::abs(s.slope) < std::abs(flat->slope)))
+        flat = &s;
   if (flat) {
     out.tau_cp_s = flat->tau_mid_s;
     out.sigma_cp = flat->sigma_mid;

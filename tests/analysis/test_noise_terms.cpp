@@ -14,6 +14,8 @@
 #include "analysis/json.hpp"
 #include "analysis/noise_model.hpp"
 #include "analysis/noise_terms.hpp"
+#include "analysis/allan.hpp"
+#include "injected_noise.hpp"
 
 namespace rig::analysis {
 namespace {
@@ -123,6 +125,28 @@ TEST(NoiseTerms, ThePaperBOverAnNKCrossingIsBoundedFromAboveOnly) {
   EXPECT_LE(*t.B.lo, b);  // ... the reported one holds it
   EXPECT_EQ(*t.B.lo, t.wls.B.value ? t.wls.B.lo.value_or(0.0) : 0.0);
   EXPECT_NE(t.B.reason.find("bounds B from above"), std::string::npos) << t.B.reason;
+}
+
+// White FM into a random walk with no flicker (a record: the injected-noise generator, one
+// seed): the quartic's segment across the bottom has a middle slope near 0, but sigma falls and
+// rises along it. It is not a flat segment (a review: such records were labelled flat over three
+// decades); B is read at the polynomial's minimum and says so.
+TEST(NoiseTerms, AConvexSegmentIsNotCalledFlat) {
+  const double rate = 100, T = 3600;
+  const std::vector<double> y = injected::generate({0, 1e-4, 0, 1e-5, 0}, rate, static_cast<std::size_t>(T * rate), 7);
+  DevOptions o;
+  o.rate_hz = rate;
+  o.taus = parse_tau_grid("log:100");
+  const NoiseTerms t = noise_terms(deviation(y, o), T);
+  ASSERT_TRUE(t.paper.ok) << t.paper.reason;
+  bool middle_flat = false;
+  for (const auto& s : t.paper.segments) middle_flat |= std::abs(s.slope) < 0.25;
+  EXPECT_TRUE(middle_flat) << "the case this guards: a segment whose middle slope passes the paper's test";
+  EXPECT_NE(t.b_method, "flat_segment");
+  EXPECT_FALSE(t.flat_tau_from_s);
+  if (t.b_method == "polynomial_minimum") {
+    EXPECT_NE(t.B.reason.find("no flat segment"), std::string::npos) << t.B.reason;
+  }
 }
 
 // A curve the five-term model does not describe exactly: tones ripple the short-tau points
