@@ -17,7 +17,12 @@ constexpr uint8_t kFlagBits[3] = {stream_status::kFilterOn, stream_status::kSatu
 
 // The factor from a signal's unit to g (the Sample's unit).
 double unit_to_g(const std::string& unit, const std::string& what, const std::string& where) {
-  if (unit.empty() || unit == "g") return 1.0;
+  // A sample without a unit is not taken as g: a DBC often leaves the unit out, and a signal in
+  // counts or mg read as g is wrong by orders of magnitude with nothing to show it (a review).
+  if (unit.empty())
+    throw ConfigError(where + ": " + what + " has no unit in the DBC; give it the acceleration unit its factor "
+                      "yields (g, mg, ug or m/s^2)");
+  if (unit == "g") return 1.0;
   if (unit == "mg") return 1e-3;
   if (unit == "ug" || unit == "\xC2\xB5g" || unit == "µg") return 1e-6;
   if (unit == "m/s^2" || unit == "m/s2" || unit == "m/s\xC2\xB2") return 1.0 / 9.80665;
@@ -67,7 +72,12 @@ void check_no_shared_bits(const Roles& r, uint64_t status_bits, const Fail& fail
 
 DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec spec, const std::string& where)
     : dbc_(std::move(dbc)), spec_(std::move(spec)) {
-  auto fail = [&](const std::string& m) { throw ConfigError(where + ": " + m); };
+  // Every message starts with the key it is about ("y = ...", "filter_on_bit = ..."): named at
+  // that key's line where the spec knows it.
+  auto fail = [&](const std::string& m) {
+    const auto at = spec_.key_where.find(m.substr(0, m.find(' ')));
+    throw ConfigError((at != spec_.key_where.end() ? at->second : where) + ": " + m);
+  };
   struct Ref {
     const DbcMessage* msg = nullptr;
     std::string sig;
@@ -108,6 +118,11 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
     if (*flag_bits[k] >= 0 && !status) fail(std::string(flag_keys[k]) + "_bit needs `status`");
     if (*flag_bits[k] >= 0 && flag[k]) fail(std::string(flag_keys[k]) + " is given as a signal and as a status bit");
   }
+  for (int k = 0; k < 3; ++k)  // two flags on one bit would always read alike
+    for (int j = 0; j < k; ++j)
+      if (*flag_bits[k] >= 0 && *flag_bits[k] == *flag_bits[j])
+        fail(std::string(flag_keys[k]) + "_bit = " + std::to_string(*flag_bits[k]) + " is also " + flag_keys[j] +
+             "_bit: each flag needs its own bit");
   if (status && spec_.filter_on_bit < 0 && spec_.saturated_bit < 0 && spec_.loop_fault_bit < 0)
     fail("status = \"" + spec_.status + "\" names no bit (filter_on_bit, saturated_bit, loop_fault_bit)");
 
@@ -149,6 +164,13 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
         sl.status = lookup(m, status->sig, i, true);
         if (!sl.status && m == status->msg) fail("status = \"" + spec_.status + "\": no such signal in " + m->name);
         if (sl.status && sl.status->value_type != 0) fail("status " + m->name + "." + sl.status->name + " is a float");
+        // A flag bit the status signal does not have could never be set (a review: bit 12 of an
+        // 8-bit status passed).
+        for (int k = 0; k < 3 && sl.status; ++k)
+          if (*flag_bits[k] >= sl.status->length)
+            fail(std::string(flag_keys[k]) + "_bit = " + std::to_string(*flag_bits[k]) + " is beyond status " +
+                 m->name + "." + sl.status->name + ", which has " + std::to_string(sl.status->length) + " bits (0.." +
+                 std::to_string(sl.status->length - 1) + ")");
       }
       for (int k = 0; k < 3; ++k)
         if (flag[k]) {
@@ -286,6 +308,7 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
   s.loop_fault = cfg::get_string(*st, "loop_fault", "");
   s.samples_per_frame = static_cast<int>(cfg::get_int(*st, "samples_per_frame", 1, 1, 64));
   s.rate_hz = cfg::get_number(*st, "rate_hz", 1000.0, 1e-3, 1e6);
+  for (auto&& [k, v] : *st) s.key_where[std::string(k.str())] = cfg::where(v) + ": [dut.stream]";
   return std::make_shared<const DbcStreamDecoder>(std::move(db), std::move(s), cfg::where(*st) + ": [dut.stream]");
 }
 

@@ -37,6 +37,9 @@ struct DbcStreamSpec {
   std::string filter_on, saturated, loop_fault;
   int samples_per_frame = 1;
   double rate_hz = 1000;  // samples per second (the capture header's rate)
+  // Where each key was written ("hw.toml:19:5: [dut.stream]"), for the decoder's messages: an
+  // error about `y` names y's line, not the table's (a review). Keys absent here: `where`.
+  std::map<std::string, std::string> key_where;
 };
 
 class DbcStreamDecoder {

@@ -290,14 +290,15 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   // An unhomed table is refused before anything is written: enabling operation first left the
   // drive in Operation enabled after the refusal (a review).
   if (map_.homed_bit) {
+    Cia402Reading r;
     try {
-      const Cia402Reading r = read(cancel);
-      if (!r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
-        throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
-    } catch (const ModbusError& e) {
-      throw HardwareError(doing + (e.exception_code ? ": request refused: " : ": link failure: ") + e.what() +
-                          "; nothing sent");
+      r = read(cancel);
+    } catch (...) {  // a link failure, an abort: as anywhere in a move, the halt tried and its fate said
+      const std::exception_ptr failed = std::current_exception();
+      guarded(doing, [&] { std::rethrow_exception(failed); });
     }
+    if (!r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
+      throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
   }
   guarded(doing, [&] {
     enable_operation(doing, cancel);

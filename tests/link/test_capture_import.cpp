@@ -181,7 +181,7 @@ TEST(CaptureImport, DbcLayoutWith16BitCounterAndAnUnreadableLine) {
                     " --out " + (dir() / "bad.rigcap").string(),
                 "bad"),
             2);
-  EXPECT_NE(slurp(dir() / "bad.err").find("hw-bad.toml:4:1: [dut.stream]: x = \"ACC_XY.nope\": no signal nope in ACC_XY"),
+  EXPECT_NE(slurp(dir() / "bad.err").find("hw-bad.toml:6:5: [dut.stream]: x = \"ACC_XY.nope\": no signal nope in ACC_XY"),
             std::string::npos)
       << slurp(dir() / "bad.err");
 }

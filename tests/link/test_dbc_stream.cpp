@@ -285,6 +285,27 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   s = xy_spec();
   s.x = "ACC_XY";
   EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: x = \"ACC_XY\" is not MESSAGE.SIGNAL");
+  // A technician's review: a flag bit the status signal does not have, two flags on one bit and
+  // a sample signal without a unit (taken as g before) were accepted.
+  s = DbcStreamSpec{};
+  s.counter = "ACC_X.cnt", s.x = "ACC_X.x_counts", s.y = "ACC_Y.y_counts", s.status = "ACC_X.st";
+  s.loop_fault_bit = 12;
+  EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: loop_fault_bit = 12 is beyond status ACC_X.st, which has 8 bits (0..7)");
+  s.loop_fault_bit = 3, s.saturated_bit = 3;
+  EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: loop_fault_bit = 3 is also saturated_bit: each flag needs its own bit");
+  s.saturated_bit = 0;
+  s.key_where["loop_fault_bit"] = "hw.toml:14:18: [dut.stream]";  // where the key was written
+  EXPECT_EQ(error(s), "no error");
+  s.loop_fault_bit = 9;
+  EXPECT_EQ(error(s), "hw.toml:14:18: [dut.stream]: loop_fault_bit = 9 is beyond status ACC_X.st, which has 8 bits (0..7)");
+  const auto unitless = std::make_shared<const Dbc>(Dbc::parse(
+      "VERSION \"\"\nBU_: DUT\nBO_ 288 A: 8 DUT\n SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" DUT\n"
+      " SG_ x : 16|32@1- (1e-06,0) [0|0] \"\" DUT\n",
+      "unitless.dbc"));
+  DbcStreamSpec u;
+  u.counter = "A.cnt", u.x = "A.x";
+  EXPECT_EQ(spec_error(unitless, u), "hw.toml:9:1: [dut.stream]: x A.x has no unit in the DBC; give it the acceleration "
+                                     "unit its factor yields (g, mg, ug or m/s^2)");
 }
 
 // A layout whose sample shares bits with its counter or a flag would decode plausible numbers;
@@ -390,7 +411,8 @@ TEST(DbcStream, HardwareFileDbcAndStreamTables) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\ndbc = \"" + kLayouts + "\"\n[dut.stream]\ncounter = \"ACC_X.cnt\"\nx = \"ACC_X.x\"\n"),"hw.toml:4:1: [dut.stream]: x = \"ACC_X.x\": no signal x in ACC_X");
+  EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\ndbc = \"" + kLayouts + "\"\n[dut.stream]\ncounter = \"ACC_X.cnt\"\nx = \"ACC_X.x\"\n"),
+            "hw.toml:6:5: [dut.stream]: x = \"ACC_X.x\": no signal x in ACC_X");  // x's line, not the table's
   EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\ndbc = \"" + kLayouts + "\"\n[dut.stream]\ncounter = \"ACC_X.cnt\"\nz = 1\n"),
             "hw.toml:6:5: unknown key 'z' in [dut.stream] (expected one of: counter, x, y, status, filter_on_bit, "
             "saturated_bit, loop_fault_bit, filter_on, saturated, loop_fault, samples_per_frame, rate_hz)");
