@@ -99,12 +99,14 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel) {
 
 TableStatus Cia402Table::status() {
   Cia402Reading r;
+  double target = 0;  // the drive's target position object (0x607A, required in every map)
   try {
     r = read();
     // The controlword as the drive holds it: a stop from a fresh process
     // (`rig table stop`) then keeps its device control bits.
     control_ = static_cast<uint16_t>(read_object(Obj::kControlword, {}));
     control_known_ = true;
+    target = map_.counts_to_deg(read_object(Obj::kTargetPosition, {}));
   } catch (const ModbusError& e) {
     throw HardwareError(std::string("table status: ") + e.what());
   }
@@ -122,7 +124,7 @@ TableStatus Cia402Table::status() {
   s.alarm = st == State::kFault || st == State::kFaultReactionActive;
   s.alarm_code = r.error_code;
   s.alarm_text = r.error_code ? c4::error_code_text(r.error_code) : "";
-  s.target_deg = s.actual_deg;
+  s.target_deg = target;  // as the drive holds it (it was shown as the actual angle: a review)
   s.has_heartbeat = false;
   s.drive_state = c4::state_name(st);  // e.g. "Quick stop active", which the flags do not show
   return s;

@@ -1,6 +1,7 @@
 #include "rig/modbus/transport.hpp"
 
 #include <arpa/inet.h>
+#include <netdb.h>
 #include <modbus/modbus.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -362,10 +363,25 @@ class LibmodbusTransport final : public RegisterTransport {
       os << "no answer within " << std::max(0.01, opt_.response_timeout_s)
          << " s (host unreachable, off, or a firewall drops the connection)";
       err = os.str();
+    } else if (e == ECONNREFUSED && ep_.kind == Endpoint::Kind::kTcp && !resolves(ep_.host, err)) {
+      // libmodbus reports a name it cannot resolve as ECONNREFUSED, and no connection was tried:
+      // say which (a review: "nosuchhost.invalid" was "Connection refused").
     } else {
       err = modbus_strerror(e);
     }
     modbus_close(ctx_);
+    return false;
+  }
+
+  // Whether `host` resolves; if not, why, into `why`.
+  static bool resolves(const std::string& host, std::string& why) {
+    addrinfo hints{};
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* res = nullptr;
+    const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &res);
+    if (res) ::freeaddrinfo(res);
+    if (rc == 0) return true;
+    why = "cannot resolve host name '" + host + "': " + ::gai_strerror(rc);
     return false;
   }
 

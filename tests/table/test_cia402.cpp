@@ -317,9 +317,12 @@ TEST_P(Cia402Client, HomeMoveToU10U20StatusStop) {
   EXPECT_FALSE(s.moving);
   EXPECT_FALSE(s.alarm);
   EXPECT_NEAR(s.actual_deg, 180.0, 0.01);
+  EXPECT_NEAR(s.target_deg, 180.0, 1e-6);  // the drive's 0x607A, not the actual angle restated
   EXPECT_NEAR(r.axis->actual_angle_deg(), 180.0, 0.005);
   t->move_to(-90.0, {});
   EXPECT_NEAR(r.axis->actual_angle_deg(), -90.0, 0.005);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(12.5));  // another master's set-point, not taken
+  EXPECT_NEAR(t->status().target_deg, 12.5, 1e-6);
   t->stop();
   EXPECT_EQ(t->last_stop_error(), "");
   t->quick_stop();
