@@ -309,7 +309,24 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
   s.samples_per_frame = static_cast<int>(cfg::get_int(*st, "samples_per_frame", 1, 1, 64));
   s.rate_hz = cfg::get_number(*st, "rate_hz", 1000.0, 1e-3, 1e6);
   for (auto&& [k, v] : *st) s.key_where[std::string(k.str())] = cfg::where(v) + ": [dut.stream]";
-  return std::make_shared<const DbcStreamDecoder>(std::move(db), std::move(s), cfg::where(*st) + ": [dut.stream]");
+  auto dec = std::make_shared<const DbcStreamDecoder>(std::move(db), std::move(s), cfg::where(*st) + ": [dut.stream]");
+  // With a command channel the link reads the protocol's own frames too; the stream's decoder
+  // has the first claim on a frame, so a stream message on one of their ids would swallow the
+  // DUT's responses or heartbeat (a review: ids 0x011 and 0x700 were accepted).
+  if (cfg::get_bool(dut, "commands", true))
+    for (const CanFilter& f : dec->filters()) {
+      static constexpr std::pair<uint32_t, const char*> kProtocol[] = {
+          {can_id::kCommand, "commands"}, {can_id::kResponse, "responses"}, {can_id::kLoopData, "loop-test data"},
+          {can_id::kLoopEnd, "loop-test end markers"}, {can_id::kHeartbeat, "heartbeat"}};
+      for (const auto& [id, what] : kProtocol)
+        if (!f.extended && f.id == id) {
+          char b[160];
+          std::snprintf(b, sizeof b, ": a stream message on CAN id 0x%03X, which the DUT protocol uses for its %s "
+                        "([dut] commands = true): move the stream or set commands = false", id, what);
+          throw ConfigError(cfg::where(*st) + ": [dut.stream]" + b);
+        }
+    }
+  return dec;
 }
 
 }  // namespace rig::link

@@ -3,6 +3,8 @@
 // guarantees: a 16-bit counter widened across its wrap, reordering within the window,
 // gaps located, duplicates counted, silence declared; and the rig protocol itself,
 // described by the shipped DBC, decodes to exactly what the codec gives.
+#include <fstream>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -420,6 +422,20 @@ TEST(DbcStream, HardwareFileDbcAndStreamTables) {
             "hw.toml:3:1: [dut.stream] needs [dut] dbc = \"FILE\"");
   EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\ndbc = \"/nonexistent.dbc\"\n[dut.stream]\n"),
             "hw.toml:3:7: 'dbc' = '/nonexistent.dbc': no such file: /nonexistent.dbc");
+  // A stream on the protocol's response id (0x011) would swallow the DUT's answers while the
+  // link has a command channel (a review); without one the id is the stream's to use.
+  const std::string dbc = testing::TempDir() + "/on-0x011.dbc";
+  std::ofstream(dbc) << "VERSION \"\"\nBU_: DUT\nBO_ 17 S: 8 DUT\n SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" DUT\n"
+                        " SG_ x : 16|32@1- (1e-06,0) [0|0] \"g\" DUT\n";
+  const std::string on_rsp = "[dut]\ncan = \"vcan0\"\ndbc = \"" + dbc + "\"\n%s[dut.stream]\ncounter = \"S.cnt\"\nx = \"S.x\"\n";
+  auto with = [&](const std::string& commands) {
+    std::string t2 = on_rsp;
+    t2.replace(t2.find("%s"), 2, commands);
+    return t2;
+  };
+  EXPECT_EQ(error(with("")), "hw.toml:4:1: [dut.stream]: a stream message on CAN id 0x011, which the DUT protocol uses "
+                             "for its responses ([dut] commands = true): move the stream or set commands = false");
+  EXPECT_EQ(error(with("commands = false\n")), "no error");
 }
 
 // ---- through CanDutLink: the link's own guarantees (silence) for a DBC layout ---------
