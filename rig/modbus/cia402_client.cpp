@@ -292,13 +292,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   // An unhomed table is refused before anything is written: enabling operation first left the
   // drive in Operation enabled after the refusal (a review).
   if (map_.homed_bit) {
-    Cia402Reading r;
-    try {
-      r = read(cancel);
-    } catch (...) {  // a link failure, an abort: as anywhere in a move, the halt tried and its fate said
-      const std::exception_ptr failed = std::current_exception();
-      guarded(doing, [&] { std::rethrow_exception(failed); });
-    }
+    const Cia402Reading r = detail::read_before_motion([&] { return read(cancel); },
+                                                       [&](auto body) { guarded(doing, body); });
     if (!r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
       throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
   }

@@ -4,6 +4,7 @@
 #pragma once
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <string>
 
@@ -96,6 +97,20 @@ void guarded_call(const std::string& doing, Body body, Where where, Stop stop, S
   } catch (const HardwareError& e) {
     stop();
     throw HardwareError(e.what() + stop_fate());
+  }
+}
+
+// The reading a move takes before it writes anything (to refuse an unhomed table with nothing
+// sent): a failure of that read (the link, an abort) takes the usual path of a move's failure
+// through `guard` (a guarded call: the stop tried, its fate said) and is rethrown.
+template <class Read, class Guard>
+auto read_before_motion(Read read, Guard guard) -> decltype(read()) {
+  try {
+    return read();
+  } catch (...) {
+    const std::exception_ptr failed = std::current_exception();
+    guard([&] { std::rethrow_exception(failed); });
+    std::rethrow_exception(failed);  // (guard rethrows; never reached)
   }
 }
 

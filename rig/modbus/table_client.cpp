@@ -237,13 +237,8 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   if (!std::isfinite(deg) || std::fabs(deg) > 200000.0) throw ConfigError(doing + ": not a valid angle");
   // Refused before anything is written (no servo-on, no halt): a table that is not homed, a
   // target outside the drive's limits. The drive was left powered with HALT set before (a review).
-  DriveState d0;
-  try {
-    d0 = read_drive(cancel);
-  } catch (...) {  // a link failure, an abort: as anywhere in a move, the stop tried and its fate said
-    const std::exception_ptr failed = std::current_exception();
-    guarded(doing, [&] { std::rethrow_exception(failed); });
-  }
+  const DriveState d0 = detail::read_before_motion([&] { return read_drive(cancel); },
+                                                    [&](auto body) { guarded(doing, body); });
   if (!d0.has(sts::kHomed))
     throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
   if (deg < d0.limit_neg_deg || deg > d0.limit_pos_deg)
