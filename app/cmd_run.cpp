@@ -596,6 +596,10 @@ std::string reported_serial(const std::string& run_dir) {
 
 int do_run(RunArgs a) {
   const auto wall_start = std::chrono::steady_clock::now();
+  // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
+  // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
+  // (Only here: `rig dut stream | head` should still end when its reader does.)
+  ::signal(SIGPIPE, SIG_IGN);
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before any backend thread exists
   // The station's key, and a resumed folder's seal, before anything in the folder is read.

@@ -1,6 +1,5 @@
 // The `rig` command line: one subcommand per job (docs/contracts.md).
 #include <cctype>
-#include <csignal>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -12,12 +11,16 @@
 
 namespace {
 
-// CLI11 reads a number as C's strtod/strtoll do: "" as 0, "0x10" as 16, " 5" with its blank, so
-// `rig table move ""` (an empty shell variable) turned the table to 0 degrees (a review). Every
-// numeric option and argument takes decimal text only; "inf" and "nan" pass on to the option's
-// own range check, which names them.
-bool decimal_text(const std::string& v, bool whole) {
+// CLI11 reads a number as C's strtod/strtoll do: "" as 0, "0x10" as 16, " 5" with its blank, and
+// a whole number in base 0 ("010" as 8, "-1" as 2^64 - 1 for an unsigned option), so `rig table
+// move ""` (an empty shell variable) turned the table to 0 degrees and `--unit 010` addressed
+// drive 8 (reviews). Every numeric option and argument takes decimal text only: a whole number
+// without leading zeros (and without a sign where it is unsigned); "inf" and "nan" pass on to a
+// real option's own range check, which names them.
+bool decimal_text(const std::string& v, bool whole, bool is_unsigned) {
+  if (is_unsigned && !v.empty() && v[0] == '-') return false;
   std::size_t i = (!v.empty() && (v[0] == '+' || v[0] == '-')) ? 1 : 0;
+  if (whole && i + 1 < v.size() && v[i] == '0') return false;  // "010": octal to CLI11
   std::string rest = v.substr(i);
   for (char& c : rest) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (!whole && (rest == "inf" || rest == "infinity" || rest == "nan")) return true;
@@ -42,10 +45,14 @@ void decimal_numbers_only(CLI::App& app) {
     const std::string type = shown.substr(0, shown.find(':'));
     const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
     if (!whole && !real) continue;
+    const bool is_unsigned = type == "UINT";
     o->check(CLI::Validator(
-        [whole](std::string& v) {
-          return decimal_text(v, whole) ? std::string()
-                                        : "'" + v + "' is not a decimal " + (whole ? "whole number" : "number");
+        [whole, is_unsigned](std::string& v) {
+          return decimal_text(v, whole, is_unsigned)
+                     ? std::string()
+                     : "'" + v + "' is not a decimal " +
+                           (is_unsigned ? "whole number >= 0 (no sign, no leading zero)"
+                                        : whole ? "whole number (no leading zero)" : "number");
         },
         ""));
   }
@@ -55,9 +62,6 @@ void decimal_numbers_only(CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
-  // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
-  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);

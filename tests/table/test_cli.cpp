@@ -126,6 +126,14 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   EXPECT_EQ(rig(where_ + " status", out), 0) << out;
   EXPECT_NE(out.find("45.0000"), std::string::npos) << out;
   EXPECT_EQ(rig(where_ + " --timeout 0x1 status", out), 2) << out;
+  // Whole numbers: CLI11 reads "010" as octal 8 (another drive on a shared RTU bus) and "-1" as
+  // 2^64 - 1 for an unsigned option (a code review).
+  EXPECT_EQ(rig(where_ + " --unit 010 status", out), 2) << out;
+  EXPECT_NE(out.find("'010' is not a decimal whole number (no leading zero)"), std::string::npos) << out;
+  EXPECT_EQ(rig(where_ + " --unit 10 status", out), 0) << out;  // the emulator answers every unit: decimal 10
+  EXPECT_NE(out.find(" unit 10"), std::string::npos) << out;
+  EXPECT_EQ(run(std::string(RIG_BIN) + " analyze /dev/null --segment -1", out), 2) << out;
+  EXPECT_NE(out.find("'-1' is not a decimal whole number >= 0"), std::string::npos) << out;
 }
 
 // Every signal that ends the process halts a move first: Ctrl-C, a service
