@@ -426,30 +426,42 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
       stop_mu_, last_stop_error_);
 }
 
-// Halt keeps the device control bits as they are (never enables or disables
-// anything) and drops new-set-point so no move is taken after it. The bits are the
-// ones the drive holds now, read first: another master's quick stop or disable since
-// this client's last write must not be turned back into Enable operation (transition
-// 16) by a halt built from the word this client wrote (a review: a quick stop from a
-// second shell ended as 0x010F, and the table ran on 5 degrees). Where that read
-// fails, the last word this client wrote or read; knowing neither (nothing read or
-// written yet), it sends nothing rather than a guess that could drop the power stage
-// mid-move: callers read status() first.
+// Halt keeps the drive in the state it is in (never enables or disables anything) and drops
+// new-set-point so no move is taken after it. Its device control bits are the command that
+// holds the state the drive reports now (statusword, one urgent read): a quick stop or disable
+// another master made since this client's last write is kept (a review: the halt was built from
+// the word this client wrote, Enable operation, and took a quick-stopped drive back to Operation
+// enabled, 5 degrees further). Not the controlword read back: a gateway may read the write-only
+// 0x6040 as 0, and a halt with 0 is Disable voltage (a code review). Where the read fails, the
+// last word this client wrote or read; knowing neither, it sends nothing rather than a guess that
+// could drop the power stage mid-move: callers read status() first.
+namespace {
+uint16_t command_holding(State s) {
+  switch (s) {
+    case State::kOperationEnabled: return c4::cw::kCmdEnableOperation;
+    case State::kQuickStopActive: return c4::cw::kCmdQuickStop;
+    case State::kSwitchedOn: return c4::cw::kCmdSwitchOn;
+    case State::kReadyToSwitchOn: return c4::cw::kShutdown;
+    default: return c4::cw::kDisableVoltage;  // Switch on disabled, Not ready, Fault (none of them left by it)
+  }
+}
+}  // namespace
+
 void Cia402Table::stop() noexcept {
-  uint16_t held = 0;
+  uint16_t bits = 0;
   bool known = false;
   try {
-    held = static_cast<uint16_t>(read_object(Obj::kControlword, CancelToken{}, true));
+    bits = command_holding(c4::decode_state(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true))));
     known = true;
   } catch (...) {
   }
-  if (!known && control_known_) held = control_.load(), known = true;
+  if (!known && control_known_) bits = static_cast<uint16_t>(control_.load() & 0x000F), known = true;
   if (!known) {
     std::lock_guard lk(stop_mu_);
     last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";
     return;
   }
-  send_stop(static_cast<uint16_t>((held & 0x000F) | c4::cw::kHalt), "halt");
+  send_stop(static_cast<uint16_t>(bits | c4::cw::kHalt), "halt");
 }
 void Cia402Table::quick_stop() noexcept { send_stop(c4::cw::kCmdQuickStop, "quick stop"); }
 

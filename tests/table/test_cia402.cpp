@@ -404,6 +404,48 @@ TEST_P(Cia402Client, AStopFromAFreshClientHaltsWithoutDisabling) {
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
 }
 
+// A gateway that reads the write-only controlword as 0: a halt built from that read would be
+// Disable voltage (0x0100) and drop the power stage mid-move (a code review). The halt's bits
+// come from the state the statusword reports: the drive stays in Operation enabled and stops.
+namespace {
+struct ControlwordReadsZero : m::RegisterDevice {
+  m::RegisterDevice& inner;
+  uint16_t cw;
+  ControlwordReadsZero(m::RegisterDevice& d, uint16_t cw_addr) : inner(d), cw(cw_addr) {}
+  uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override {
+    const uint8_t e = inner.read_registers(addr, n, out);
+    if (e == 0 && addr <= cw && cw < addr + n) out[cw - addr] = 0;
+    return e;
+  }
+  uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override { return inner.write_registers(addr, v, n); }
+  uint8_t read_input_registers(uint16_t addr, uint16_t n, uint16_t* out) override {
+    return inner.read_input_registers(addr, n, out);
+  }
+  bool answering() const override { return inner.answering(); }
+};
+}  // namespace
+
+TEST_P(Cia402Client, AHaltThroughAGatewayThatReadsTheControlwordAsZeroKeepsThePower) {
+  Rig r(GetParam());
+  ControlwordReadsZero gw(r.drive, r.map.spec(Obj::kControlword).address);
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  auto t = std::make_unique<m::Cia402Table>(m::make_inprocess_transport(gw, r.clock), r.map, r.clock, opt);
+  t->home({});
+  CancelSource cancel;
+  const double t_cancel = r.axis->time_s() + 0.3;
+  r.on_step = [&] {
+    if (r.axis->time_s() >= t_cancel) cancel.request("test cancel");
+  };
+  EXPECT_THROW(t->move_to(300.0, cancel.token()), AbortedError);
+  r.on_step = nullptr;
+  EXPECT_EQ(t->last_stop_error(), "");
+  r.run(2.0);
+  EXPECT_EQ(r.drive.state(), State::kOperationEnabled);  // halted, powered: not Switch on disabled
+  EXPECT_TRUE(r.axis->snapshot().servo_on);
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+}
+
 // A map with a homed bit: a move before homing is refused before anything is written, so the
 // drive stays where it was in its state machine (it was enabled first, then refused: a review).
 TEST(Cia402ClientHoming, AMoveBeforeHomingIsRefusedBeforeTheDriveIsEnabled) {
