@@ -196,7 +196,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   if (inv.value("no_history", false)) {
     a.no_history = true;
   } else if (!db.empty()) {
-    if (db.find(":***@") != std::string::npos)  // stored masked
+    if (db.find(":***@") != std::string::npos || db.find("password=***") != std::string::npos)  // stored masked
       throw ConfigError(path + ": the run was started with --db " + db + ", whose password run.json does not keep: "
                         "give the same --db with --resume (or --no-history)");
     a.db = db;
@@ -762,8 +762,12 @@ int do_run(RunArgs a) {
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
     // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
     // carries a password, which run.json never holds; the resume must then give it again).
-    if (a.no_history) invocation["no_history"] = true;
-    else if (!a.db.empty()) invocation["db"] = history::mask_password(a.db);
+    if (a.no_history) {
+      invocation["no_history"] = true;
+    } else if (!a.db.empty()) {  // an SQLite file made absolute: a resume may start elsewhere
+      const std::optional<std::string> file = history::sqlite_path(a.db);
+      invocation["db"] = file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(a.db);
+    }
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
     if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);

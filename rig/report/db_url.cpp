@@ -7,12 +7,25 @@ namespace rig::history {
 std::string mask_password(const std::string& url) {
   const std::size_t scheme = url.find("://");
   if (scheme == std::string::npos) return url;
-  const std::size_t start = scheme + 3, end = url.find_first_of("/?", start);
-  const std::size_t at = url.rfind('@', end == std::string::npos ? std::string::npos : end);
-  if (at == std::string::npos || at < start) return url;
-  const std::size_t colon = url.find(':', start);
-  if (colon == std::string::npos || colon > at) return url;
-  return url.substr(0, colon + 1) + "***" + url.substr(at);
+  std::string out = url;
+  const std::size_t start = scheme + 3, end = out.find_first_of("/?", start);
+  const std::size_t at = out.rfind('@', end == std::string::npos ? std::string::npos : end);
+  if (at != std::string::npos && at >= start) {
+    const std::size_t colon = out.find(':', start);
+    if (colon != std::string::npos && colon < at) out = out.substr(0, colon + 1) + "***" + out.substr(at);
+  }
+  // libpq also takes the password as a query parameter (?password=...&...).
+  const std::size_t q = out.find('?');
+  for (std::size_t p = q; q != std::string::npos && (p = out.find("password=", p)) != std::string::npos;) {
+    if (out[p - 1] != '?' && out[p - 1] != '&') {
+      ++p;
+      continue;
+    }
+    const std::size_t v = p + 9, e = out.find('&', v);
+    out = out.substr(0, v) + "***" + (e == std::string::npos ? "" : out.substr(e));
+    p = v + 3;
+  }
+  return out;
 }
 
 namespace {

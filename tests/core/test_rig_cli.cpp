@@ -804,6 +804,15 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
   ASSERT_EQ(run({"history", "--db", station, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
   EXPECT_NE(slurp(d + "/list.stdout").find(",PASS,"), std::string::npos) << slurp(d + "/list.stdout");
   EXPECT_FALSE(fs::exists(d + "/io2.history.sqlite")) << "the resume's default database stays untouched";
+  // A relative SQLite path is kept absolute: a resume may start from another folder.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d);
+  const int rel_rc = run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:rel.sqlite", "--out", d + "/rel",
+                          "--inject", "sigterm@20"},
+                         d + "/io-rel");
+  fs::current_path(cwd);
+  EXPECT_EQ(rel_rc, 3);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/rel/run.json"))["db"], "sqlite:" + d + "/rel.sqlite");
   // --no-history carries over too.
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/n", "--inject",
                  "sigterm@20"},

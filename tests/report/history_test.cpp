@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "app/commands.hpp"
+#include "rig/report/db_url.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/timefmt.hpp"
 #include "tests/report/history_cases.hpp"
@@ -178,6 +179,19 @@ TEST(HistorySqlite, ConcurrentWritersAllLand) {
     });
   for (auto& t : ts) t.join();
   EXPECT_EQ(h::list_runs(url, {}).size(), 24u);
+}
+
+// A URL in a message or in run.json never carries its password: libpq's user:pass@ and its
+// ?password= parameter alike (a code review: the parameter went into run.json in clear).
+TEST(HistoryUrl, ThePasswordIsMaskedWhereverTheUrlCarriesIt) {
+  using h::mask_password;
+  EXPECT_EQ(mask_password("postgresql://u:secret@h/x"), "postgresql://u:***@h/x");
+  EXPECT_EQ(mask_password("postgresql://h/x?password=secret"), "postgresql://h/x?password=***");
+  EXPECT_EQ(mask_password("postgresql://u@h/x?sslmode=require&password=s3&connect_timeout=5"),
+            "postgresql://u@h/x?sslmode=require&password=***&connect_timeout=5");
+  EXPECT_EQ(mask_password("postgresql://h/x?application_password=k"), "postgresql://h/x?application_password=k");
+  EXPECT_EQ(mask_password("sqlite:/var/lib/rig/h.sqlite"), "sqlite:/var/lib/rig/h.sqlite");
+  EXPECT_EQ(mask_password(mask_password("postgresql://u:p@h/x?password=q")), "postgresql://u:***@h/x?password=***");
 }
 
 TEST(HistoryTime, Iso8601IsNormalisedToUtc) {
