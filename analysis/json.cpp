@@ -41,13 +41,17 @@ json dev_to_json(std::span<const an::DevPoint> dev, bool bounds) {
   return a;
 }
 
-json long_tau_to_json(std::span<const an::LongTauPoint> pts) {
+json long_tau_to_json(std::span<const an::LongTauPoint> pts, bool bounds) {
   json a = json::array();
-  for (const auto& p : pts)
-    a.push_back({{"m", p.m},         {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev},
-                 {"dev_raw", p.dev_raw}, {"lo", p.lo},   {"hi", p.hi},           {"edf", p.edf},
-                 {"alpha", p.alpha}, {"stride", p.stride}, {"estimator", p.estimator},
-                 {"edf_alpha", p.alpha}});  // the contract's field: no EDF guard here, the EDF is alpha's
+  for (const auto& p : pts) {
+    json j{{"m", p.m},         {"tau_s", p.tau_s}, {"n_terms", p.n_terms}, {"dev", p.dev},
+           {"dev_raw", p.dev_raw}, {"lo", p.lo},   {"hi", p.hi},           {"edf", p.edf},
+           {"alpha", p.alpha}, {"stride", p.stride}, {"estimator", p.estimator},
+           {"edf_alpha", p.alpha}};  // the contract's field: no EDF guard here, the EDF is alpha's
+    if (!bounds)  // as dev_to_json: nothing identified, nothing bounded
+      for (const char* k : {"lo", "hi", "edf", "alpha", "edf_alpha"}) j[k] = nullptr;
+    a.push_back(std::move(j));
+  }
   return a;
 }
 

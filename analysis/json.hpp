@@ -20,7 +20,7 @@ namespace rig::analysis {
 // bounds = false (rig analyze --no-bounds): lo, hi, edf, alpha and edf_alpha are null.
 nlohmann::json dev_to_json(std::span<const DevPoint> dev, bool bounds = true);
 // A long-tau statistic (theo.hpp): dev_to_json's fields plus dev_raw, stride and estimator.
-nlohmann::json long_tau_to_json(std::span<const LongTauPoint> pts);
+nlohmann::json long_tau_to_json(std::span<const LongTauPoint> pts, bool bounds = true);
 nlohmann::json noise_terms_to_json(const NoiseTerms& nt);
 nlohmann::json psd_to_json(const Psd& psd, const std::vector<Peak>& peaks);
 // Both channels' block envelopes (same record, same blocks) and what the record is.

@@ -360,8 +360,9 @@ int run(const Args& a) {
   // phase points were said to be 10 s at 1 Hz).
   const double record_s = static_cast<double>(base.data == an::DataKind::Phase ? n - 1 : n) / rate;
   if (oadev_pts_all_zero(devs))
-    notes.push_back("the record is constant: every deviation is 0, so there is no noise to identify, no bounds and no "
-                    "noise terms");
+    notes.push_back(std::string(base.data == an::DataKind::Phase ? "the phase is a straight line (a constant frequency)"
+                                                                  : "the record is constant") +
+                    ": every deviation is 0, so there is no noise to identify, no bounds and no noise terms");
   // The file is read again only by the PSD and the long-tau statistics. Without them its mapping
   // (one page-table entry per 4 KiB: 7000 for 3.6e6 values, about 0.5 ms to tear down) is
   // released on another thread, while this one fits the noise terms and writes the JSON, instead
@@ -436,7 +437,8 @@ int run(const Args& a) {
   j["confidence"] = a.confidence;
   if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, !a.no_bounds);
   if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, !a.no_bounds);
-  for (std::size_t k = 0; k < longs.size(); ++k) j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k]);
+  for (std::size_t k = 0; k < longs.size(); ++k)
+    j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k], !a.no_bounds);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", channel},
@@ -534,12 +536,18 @@ int run(const Args& a) {
     }
   }
   for (std::size_t k = 0; k < longs.size(); ++k) {
-    o << an::to_string(long_taus[k]) << " (bounds " << a.confidence << "; stride > 1: every stride-th start summed):\n"
-      << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
+    o << an::to_string(long_taus[k]);
+    if (a.no_bounds) o << " (no bounds; stride > 1: every stride-th start summed):\n";
+    else o << " (bounds " << a.confidence << "; stride > 1: every stride-th start summed):\n";
+    o << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
     for (const auto& p : longs[k]) {
       char line[200];
-      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e %8.1f %6zu %s\n", p.m, p.tau_s,
-                    p.n_terms, p.alpha, p.lo, p.dev, p.hi, p.edf, p.stride, p.estimator.c_str());
+      if (a.no_bounds)
+        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s %8s %6zu %s\n", p.m, p.tau_s,
+                      p.n_terms, "-", "-", p.dev, "-", "-", p.stride, p.estimator.c_str());
+      else
+        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e %8.1f %6zu %s\n", p.m, p.tau_s,
+                      p.n_terms, p.alpha, p.lo, p.dev, p.hi, p.edf, p.stride, p.estimator.c_str());
       o << line;
     }
   }

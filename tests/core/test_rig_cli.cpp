@@ -170,6 +170,14 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   EXPECT_NE(nb["notes"].dump().find("--no-bounds: no noise identification and no bounds"), std::string::npos);
   EXPECT_NE(nb["notes"].dump().find("1 blank line between values skipped"), std::string::npos) << nb["notes"].dump();
   EXPECT_NE(slurp(d + "/nb.stdout").find("oadev (no bounds):"), std::string::npos) << slurp(d + "/nb.stdout");
+  ASSERT_EQ(run({"analyze", d + "/nbs.txt", "--rate", "1", "--no-bounds", "--dev", "theo1", "--json", d + "/t1.json"},
+                d + "/t1"),
+            0)
+      << slurp(d + "/t1.stderr");
+  const auto t1 = nlohmann::json::parse(slurp(d + "/t1.json"));
+  ASSERT_FALSE(t1["theo1"].empty());
+  for (const char* k : {"lo", "hi", "edf", "alpha", "edf_alpha"}) EXPECT_TRUE(t1["theo1"][0][k].is_null()) << k;
+  EXPECT_NE(slurp(d + "/t1.stdout").find("theo1 (no bounds;"), std::string::npos) << slurp(d + "/t1.stdout");
   // Ten phase points at 1 Hz span 9 s; no PSD, and why.
   ASSERT_EQ(run({"analyze", d + "/nbs.txt", "--rate", "1", "--data", "phase", "--json", d + "/ph.json"}, d + "/ph"), 0);
   const auto ph = nlohmann::json::parse(slurp(d + "/ph.json"));
@@ -178,6 +186,10 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   std::ofstream(d + "/c.txt") << "5\n5\n5\n5\n5\n5\n5\n5\n";
   ASSERT_EQ(run({"analyze", d + "/c.txt", "--rate", "1", "--json", d + "/c.json"}, d + "/c"), 0);
   EXPECT_NE(nlohmann::json::parse(slurp(d + "/c.json"))["notes"].dump().find("the record is constant"),
+            std::string::npos);
+  std::ofstream(d + "/ramp.txt") << "1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n";  // phase: a constant frequency
+  ASSERT_EQ(run({"analyze", d + "/ramp.txt", "--rate", "1", "--data", "phase", "--json", d + "/r.json"}, d + "/r"), 0);
+  EXPECT_NE(nlohmann::json::parse(slurp(d + "/r.json"))["notes"].dump().find("the phase is a straight line"),
             std::string::npos);
 }
 
