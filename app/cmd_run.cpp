@@ -721,13 +721,21 @@ int do_run(RunArgs a) {
     return kExitPass;
   }
   // The folder first: an operator should not answer the prompts of a run that cannot start.
+  // made_here: the folder is this run's own (the default one it claimed, or one it creates), so
+  // a "no" at the prompts may remove it; a folder the user made stays.
+  bool made_here = a.out.empty();
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
   // Before the operator is asked anything, and before prepare_run_folder's write probe touches
-  // the earlier run's folder.
-  if (a.resume.empty()) refuse_an_earlier_run(a.out);
+  // the earlier run's folder (nor a folder another run holds: its lock is taken first).
+  if (a.resume.empty()) {
+    refuse_an_earlier_run(a.out);
+    std::error_code ec;
+    made_here = made_here || !fs::exists(a.out, ec);
+    if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
+  }
   prepare_run_folder(a.out);
   if (a.resume.empty()) {
-    folder_lock.emplace(a.out, "--out " + a.out);
+    if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
     refuse_an_earlier_run(a.out);  // again, now that no other run can start here: one may have ended since
   }
   refuse_non_files(a.out);
@@ -748,7 +756,7 @@ int do_run(RunArgs a) {
   } catch (const AbortedError&) {
     // Declined before the run started: nothing was written, and a new run's folder goes too.
     std::error_code ec;
-    if (a.resume.empty()) fs::remove(a.out, ec);  // only while empty
+    if (a.resume.empty() && made_here) fs::remove(a.out, ec);  // only while empty
     throw;
   }
 
@@ -773,6 +781,10 @@ int do_run(RunArgs a) {
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
   }
+  if (folder_lock && !folder_lock->held())
+    log->warn("the run folder could not be locked (its filesystem has no flock): a second run or resume of {} at the "
+              "same time is not prevented",
+              a.out);
 
   Backends b;
   try {

@@ -22,11 +22,18 @@ ConfigError in_use(const std::string& what) {
 FolderLock::FolderLock(const std::string& dir, const std::string& what) {
   const int fd = open_dir(dir);
   if (fd < 0) throw ConfigError(what + ": cannot open the run folder to lock it: " + std::strerror(errno));
-  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
-    fd_ = fd;
-    return;
+  // A dry run's check holds a shared lock for an instant: a few tries, 20 ms apart, before the
+  // folder is called in use.
+  int err = 0;
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+      fd_ = fd;
+      return;
+    }
+    err = errno;
+    if (err != EWOULDBLOCK) break;
+    ::usleep(20000);
   }
-  const int err = errno;
   ::close(fd);
   if (err == EWOULDBLOCK) throw in_use(what);
   // ENOLCK/EBADF/EOPNOTSUPP: a filesystem without flock on directories; nothing to hold.

@@ -41,14 +41,17 @@ def main():
     env = dict(os.environ, RIG_HISTORY="sqlite:" + os.path.join(d, "history.sqlite"))
     passed = failed = 0
     try:
-        for answers, want_rc, want_text in ((["y", "y", "y"], 0, "OUTCOME: PASS"),
-                                            (["y", "n"], 3, "did not confirm the serial")):
-            out_dir = os.path.join(d, f"run-exit{want_rc}")
+        for answers, want_rc, want_text, made in ((["y", "y", "y"], 0, "OUTCOME: PASS", False),
+                                                  (["y", "n"], 3, "did not confirm the serial", False),
+                                                  (["n"], 3, "did not confirm the DUT is mounted", True)):
+            out_dir = os.path.join(d, f"run-exit{want_rc}-{len(answers)}")
+            if made:  # a folder the operator made beforehand stays after a "no"
+                os.mkdir(out_dir)
             rc, out = run_with_answers(rig, ["run", "--profile", "ci", "--serial", "EMU-QPA-0001", "--out", out_dir],
                                        answers, env)
             ok = rc == want_rc and want_text in out and out.count("[y/N]") == len(answers)
-            if want_rc == 3:
-                ok = ok and not os.path.exists(out_dir)  # nothing ran: not even its empty folder is left
+            if want_rc == 3:  # nothing ran: not even its empty folder is left, unless the operator made it
+                ok = ok and (os.path.isdir(out_dir) and not os.listdir(out_dir) if made else not os.path.exists(out_dir))
             else:  # the prompt's device time is the plan's (it was the profile's own estimate)
                 asked = re.search(r"Device time (\d\d:\d\d:\d\d)\.", out)
                 plan = re.search(r"Plan: \d+ phases, (\d\d:\d\d:\d\d) of device time", out)
