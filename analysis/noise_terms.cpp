@@ -309,11 +309,11 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   // whole segment, not only at its middle: a convex segment from white FM's -1/2 to random walk's
   // +1/2 has a middle slope near 0, and was labelled flat over three decades where sigma fell and
   // rose fivefold (a metrologist's review); its bottom is the polynomial's minimum, read below.
+  // Between inflection points the second derivative keeps its sign, so the slope is monotonic
+  // along a segment: flat throughout when flat at both ends.
   const auto flat_throughout = [&](const Segment& s) {
-    const double a = std::log10(s.tau_lo_s), b = std::log10(s.tau_hi_s);
-    for (int i = 0; i <= 64; ++i)
-      if (std::abs(dpoly(out.paper.coef, a + (b - a) * i / 64.0)) >= 0.25) return false;
-    return true;
+    return std::abs(dpoly(out.paper.coef, std::log10(s.tau_lo_s))) < 0.25 &&
+           std::abs(dpoly(out.paper.coef, std::log10(s.tau_hi_s))) < 0.25;
   };
   const Segment* flat = nullptr;
   if (out.paper.ok)

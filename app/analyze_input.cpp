@@ -16,6 +16,7 @@
 #include <system_error>
 #include <thread>
 
+#include "rig/core/escape.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::cli {
@@ -238,11 +239,7 @@ bool acts_on_terminal(std::string_view seq) {
 std::string quoted_bytes(std::string_view s) {
   std::string out;
   const auto escape = [&](std::size_t i, std::size_t len) {
-    for (std::size_t k = i; k < i + len; ++k) {
-      char b[8];
-      std::snprintf(b, sizeof b, "\\x%02X", static_cast<unsigned char>(s[k]));
-      out += b;
-    }
+    for (std::size_t k = i; k < i + len; ++k) append_hex_escape(out, static_cast<unsigned char>(s[k]));
   };
   for (std::size_t i = 0; i < s.size();) {
     const auto c = static_cast<unsigned char>(s[i]);

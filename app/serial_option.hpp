@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "firmware_link/protocol.hpp"
+#include "rig/core/escape.hpp"
 
 namespace rig::cli {
 
@@ -20,10 +21,7 @@ inline CLI::Validator serial_validator() {
           if (c >= 0x20 && c <= 0x7E) {
             shown += c;
           } else {
-            static constexpr char kHex[] = "0123456789ABCDEF";
-            shown += "\\x";
-            shown += kHex[static_cast<unsigned char>(c) >> 4];
-            shown += kHex[static_cast<unsigned char>(c) & 0xF];
+            append_hex_escape(shown, static_cast<unsigned char>(c));
           }
         }
         return "'" + shown + "': " + why;

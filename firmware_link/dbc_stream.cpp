@@ -187,10 +187,14 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
     if (flag[k] && !msgs.count(flag[k]->msg))
       fail(std::string(flag_keys[k]) + " " + *flag_names[k] + " is in a message carrying neither x nor y");
   const DbcSignal* xs = by_frame_.at(key(x.msg->id, x.msg->extended)).samples[0].x;
-  x_scale_ = unit_to_g(xs->unit, "x " + x.msg->name + "." + xs->name, where);
+  const auto where_of = [&](const char* k) {
+    const auto at = spec_.key_where.find(k);
+    return at != spec_.key_where.end() ? at->second : where;
+  };
+  x_scale_ = unit_to_g(xs->unit, "x " + x.msg->name + "." + xs->name, where_of("x"));
   if (y) {
     const DbcSignal* ys = by_frame_.at(key(y->msg->id, y->msg->extended)).samples[0].y;
-    y_scale_ = unit_to_g(ys->unit, "y " + y->msg->name + "." + ys->name, where);
+    y_scale_ = unit_to_g(ys->unit, "y " + y->msg->name + "." + ys->name, where_of("y"));
   }
 }
 

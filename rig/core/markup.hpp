@@ -4,6 +4,8 @@
 #include <string>
 #include <string_view>
 
+#include "rig/core/escape.hpp"
+
 namespace rig {
 
 inline std::string markup_escape(std::string_view s) {
@@ -21,10 +23,7 @@ inline std::string markup_escape(std::string_view s) {
         // XML 1.0 has no way to carry the other C0 controls (not even as &#1;): a reader stops at
         // them as "not well-formed" (a serial with 0x01 broke junit.xml, a review). Shown as text.
         if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) {
-          static constexpr char kHex[] = "0123456789ABCDEF";
-          out += "\\x";
-          out += kHex[static_cast<unsigned char>(c) >> 4];
-          out += kHex[static_cast<unsigned char>(c) & 0xF];
+          append_hex_escape(out, static_cast<unsigned char>(c));
         } else {
           out += c;
         }

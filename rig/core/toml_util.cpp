@@ -65,7 +65,8 @@ void reject(const toml::node& n, std::string_view key, std::string_view why) {
 toml::table parse_file(const std::string& path) {
   // toml++ says "FILE:0:0: File could not be opened for reading" for a file that is not there.
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw ConfigError(path + ": no such file");
+  if (!std::filesystem::exists(path, ec))
+    throw ConfigError(path + (ec ? ": cannot be read: " + ec.message() : std::string(": no such file")));
   if (std::filesystem::is_directory(path, ec)) throw ConfigError(path + ": a folder, not a file");
   try {
     return toml::parse_file(path);

@@ -244,6 +244,10 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
                         std::to_string(m.deg_to_counts(deg)) + " counts, which does not fit " + m.describe(ob) + ", " +
                         m.range_text(ob) + " (counts_per_rev x gear_ratio too large for the register, or 'signed' "
                         "left out)");
+  if (m.homing_method != 0 && !m.fits(Obj::kHomingMethod, m.homing_method))  // e.g. -1 without signed = true
+    fail(*cfg::get_table(root, "homing")->get("method"), "[homing] method = " + std::to_string(m.homing_method) +
+                                                             " does not fit " + m.describe(Obj::kHomingMethod) + ", " +
+                                                             m.range_text(Obj::kHomingMethod));
   if (m.home_offset_deg != 0 && !m.fits(Obj::kHomeOffset, m.deg_to_counts(m.home_offset_deg)))
     fail(*cfg::get_table(root, "homing")->get("offset_deg"),
          "[homing] offset_deg does not fit " + m.describe(Obj::kHomeOffset) + ", " + m.range_text(Obj::kHomeOffset));

@@ -308,6 +308,8 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   u.counter = "A.cnt", u.x = "A.x";
   EXPECT_EQ(spec_error(unitless, u), "hw.toml:9:1: [dut.stream]: x A.x has no unit in the DBC; give it the acceleration "
                                      "unit its factor yields (g, mg, ug or m/s^2)");
+  u.key_where["x"] = "hw.toml:11:5: [dut.stream]";  // named at x's line where the file gave it
+  EXPECT_EQ(spec_error(unitless, u).rfind("hw.toml:11:5: [dut.stream]: x A.x has no unit", 0), 0u) << spec_error(unitless, u);
 }
 
 // A layout whose sample shares bits with its counter or a flag would decode plausible numbers;

@@ -112,6 +112,18 @@ TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
   }
 }
 
+// A manufacturer-specific (negative) homing method needs a signed register: refused with the
+// map, not by the codec inside home() after the drive was enabled (a code review).
+TEST(DriveMapFile, AHomingMethodThatDoesNotFitItsRegisterIsNamedAtItsLine) {
+  const std::string ok = std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n";
+  std::string e = map_error(ok + "homing_method = { index = 0x6098, address = 30 }\n[homing]\nmethod = -1\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:19:") && has(e, "[homing] method = -1 does not fit homing_method (0x6098)") &&
+              has(e, "16-bit unsigned register"))
+      << e;
+  EXPECT_EQ(map_error(ok + "homing_method = { index = 0x6098, address = 30, signed = true }\n[homing]\nmethod = -1\n"),
+            "(no error)");
+}
+
 // The codec never writes a value's low bits: a value beyond the register is an error.
 TEST(DriveMapFile, AValueThatDoesNotFitItsRegisterIsRefused) {
   const m::DriveMap map = m::load_drive_map(kDrives + "generic-cia402.toml");
