@@ -344,20 +344,27 @@ TEST_P(Cia402Client, HomeMoveToU10U20StatusStop) {
   EXPECT_THROW(t->move_to(400.0, {}), ConfigError);  // outside the map's travel limits
 }
 
-TEST_P(Cia402Client, CancelMidMoveHaltsTheAxis) {
-  Rig r(GetParam());
-  auto t = r.client();
-  t->home({});
+namespace {
+// Homes, starts a move to 300 degrees and cancels it on the drive's time line 0.3 s in: the
+// move ends AbortedError with its halt delivered; then 2 s of drive time pass.
+void cancel_a_move_mid_way(Rig& r, m::Cia402Table& t) {
+  t.home({});
   CancelSource cancel;
-  // Cancelled on the drive's time line, 0.3 s into the move.
   const double t_cancel = r.axis->time_s() + 0.3;
   r.on_step = [&] {
     if (r.axis->time_s() >= t_cancel) cancel.request("test cancel");
   };
-  EXPECT_THROW(t->move_to(300.0, cancel.token()), AbortedError);
+  EXPECT_THROW(t.move_to(300.0, cancel.token()), AbortedError);
   r.on_step = nullptr;
-  EXPECT_EQ(t->last_stop_error(), "");
+  EXPECT_EQ(t.last_stop_error(), "");
   r.run(2.0);
+}
+}  // namespace
+
+TEST_P(Cia402Client, CancelMidMoveHaltsTheAxis) {
+  Rig r(GetParam());
+  auto t = r.client();
+  cancel_a_move_mid_way(r, *t);
   EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
   EXPECT_TRUE(r.drive.statusword() & c4::sw::kTargetReached);  // at rest under halt
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
@@ -442,17 +449,8 @@ TEST_P(Cia402Client, AHaltThroughAGatewayThatReadsTheControlwordAsZeroKeepsThePo
   ControlwordReadsZero gw(r.drive, r.map.spec(Obj::kControlword).address);
   m::TableOptions opt;
   opt.settle_s = 0.05;
-  auto t = std::make_unique<m::Cia402Table>(m::make_inprocess_transport(gw, r.clock), r.map, r.clock, opt);
-  t->home({});
-  CancelSource cancel;
-  const double t_cancel = r.axis->time_s() + 0.3;
-  r.on_step = [&] {
-    if (r.axis->time_s() >= t_cancel) cancel.request("test cancel");
-  };
-  EXPECT_THROW(t->move_to(300.0, cancel.token()), AbortedError);
-  r.on_step = nullptr;
-  EXPECT_EQ(t->last_stop_error(), "");
-  r.run(2.0);
+  m::Cia402Table t(m::make_inprocess_transport(gw, r.clock), r.map, r.clock, opt);
+  cancel_a_move_mid_way(r, t);
   EXPECT_EQ(r.drive.state(), State::kOperationEnabled);  // halted, powered: not Switch on disabled
   EXPECT_TRUE(r.axis->snapshot().servo_on);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
