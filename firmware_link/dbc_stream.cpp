@@ -149,15 +149,27 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
       fail("counter " + m->name + "." + counter.sig + " has " + std::to_string(r.counter->length) + " bits, " +
            spec_.counter + " has " + std::to_string(counter_bits_));
     r.samples.resize(static_cast<std::size_t>(n));
+    // A counter on one multiplexer page only: a sample on any other page (or on every page) would
+    // arrive with no counter in its frame, every frame (a review: such a layout was accepted and
+    // `rig capture import` then kept 0 samples).
+    const auto same_page = [&](const char* role, const DbcSignal* s) {
+      if (s && r.counter->mux_value && s->mux_value != r.counter->mux_value)
+        fail(std::string(role) + " " + m->name + "." + s->name + " is " +
+             (s->mux_value ? "on multiplexer page " + std::to_string(*s->mux_value) : std::string("on every page")) +
+             ", but counter " + m->name + "." + r.counter->name + " only on page " +
+             std::to_string(*r.counter->mux_value) + ": those frames would carry no counter");
+    };
     for (int i = 0; i < n; ++i) {
       Slot& sl = r.samples[static_cast<std::size_t>(i)];
       if (m == x.msg) {
         sl.x = lookup(m, x.sig, i, false);
         if (!sl.x) fail("x = \"" + spec_.x + "\": no signal " + x.sig + (n > 1 ? std::to_string(i) : "") + " in " + m->name);
+        same_page("x", sl.x);
       }
       if (y && m == y->msg) {
         sl.y = lookup(m, y->sig, i, false);
         if (!sl.y) fail("y = \"" + spec_.y + "\": no signal " + y->sig + (n > 1 ? std::to_string(i) : "") + " in " + m->name);
+        same_page("y", sl.y);
       }
       // Status and flags: required in the message named, taken from the others where present.
       if (status) {
