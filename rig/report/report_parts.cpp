@@ -145,6 +145,13 @@ ValueCells value_cells(double value, double lo, double hi, int sig) {
   return {fmt_num(value, sig), bounds_text(fmt_num(lo), fmt_num(hi))};
 }
 
+// The level of the Allan fit's bounds as a table shows it: "68 %" at one sigma (the default, and
+// what an analysis.json without the field had), else the profile's [analysis] confidence.
+std::string allan_level(double confidence) {
+  if (!(confidence > 0 && confidence < 1) || std::abs(confidence - 0.6826894921370859) < 1e-9) return "68 %";
+  return fmt_num(100 * confidence, 3) + " %";
+}
+
 // The identified noise terms of one channel: the rig's values (the paper's method for B, the
 // least-squares model for the others) with their bounds, and the model's own value of each
 // (so both B values stand side by side; B's note says how the paper's B was read).
@@ -152,7 +159,8 @@ std::string terms_table(const json& nt, const std::string& ch) {
   const json* lsq = get(nt, {"lsq_fit", "terms"});
   std::ostringstream os;
   os << "<table class=\"terms\" id=\"terms-" << html_escape(ch) << "\"><thead><tr><th>Term (" << html_escape(ch)
-     << ")</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi), 68 %</th><th>Least-squares model (GLS)</th>"
+     << ")</th><th>Value</th><th>Unit</th><th>Bounds (lo … hi), " << allan_level(number(nt, "confidence"))
+     << "</th><th>Least-squares model (GLS)</th>"
         "<th>Note</th></tr></thead><tbody>\n";
   const char* names[][2] = {{"Q", "quantisation"}, {"N", "random walk"}, {"B", "bias instability"},
                             {"K", "rate random walk"}, {"R", "rate ramp"}};
@@ -179,11 +187,13 @@ std::string terms_table(const json& nt, const std::string& ch) {
 // carries one, else the level of the method that produced the bounds (docs/method.md): GOST R
 // 8.736's Student interval at 95 % for the U10/U20 statistics, one standard deviation of the
 // weighted Allan fit (68 %) for the noise terms.
-std::string interval_level(const std::string& name, const json& v) {
+std::string interval_level(const std::string& name, const json& v, double allan_confidence) {
   if (const double c = number(v, "confidence"); c > 0 && c < 1) return fmt_num(100 * c, 3) + " %";
   if (name == "bias" || name == "base_error") return "95 %, GOST R 8.736";
-  if (name == "q" || name == "n" || name == "k" || name == "r" || name.rfind("in_run_b_allan", 0) == 0)
-    return "68 %, ±1 σ of the Allan fit";
+  if (name == "q" || name == "n" || name == "k" || name == "r" || name.rfind("in_run_b_allan", 0) == 0) {
+    const std::string level = allan_level(allan_confidence);
+    return level == "68 %" ? "68 %, ±1 σ of the Allan fit" : level + " of the Allan fit";  // the profile's confidence
+  }
   if (name == "bandwidth_0p5" || name == "settling_time") return "95 %, Student over the loop test's steps";
   return "level not stated";
 }
@@ -365,7 +375,8 @@ std::string Page::passport_table() const {
        << "</td><td>" << html_escape(text(v, "unit")) << "</td>";
     os << "<td class=\"num bounds\">" << cells.bounds;
     if (std::isfinite(lo) || std::isfinite(hi))
-      os << "<div class=\"lvl\">" << html_escape(interval_level(name, v)) << "</div>";
+      os << "<div class=\"lvl\">" << html_escape(interval_level(name, v, number(get(a_, {"allan", "confidence"}))))
+         << "</div>";
     os << "</td>";
     const json* lim = get(v, {"limits"});
     std::string limits = "—";

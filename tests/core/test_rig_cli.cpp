@@ -1650,6 +1650,22 @@ TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
       << slurp(d + "/io2.stderr");
 }
 
+// A profile's [analysis] confidence reaches the noise terms and the report says so: the
+// report labelled their bounds "68 %, ±1 σ" whatever the profile asked (a docs review).
+TEST(RigCli, TheProfilesConfidenceIsTheNoiseTermsAndTheReportSaysIt) {
+  const std::string d = tmp("conf95");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[analysis]\nconfidence = 0.95\n";
+  ASSERT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--quiet", "--out", d + "/run"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr");
+  const auto a = nlohmann::json::parse(slurp(d + "/run/analysis.json"));
+  EXPECT_EQ(a["allan"]["x"]["noise_terms"]["confidence"], 0.95);
+  const std::string html = slurp(d + "/run/report.html");
+  EXPECT_NE(html.find("Bounds (lo … hi), 95 %"), std::string::npos);
+  EXPECT_NE(html.find("95 % of the Allan fit"), std::string::npos);
+  EXPECT_EQ(html.find("±1 σ of the Allan fit"), std::string::npos);
+}
+
 // A DUT whose stream has no y(t) (its DBC layout without a y signal): the run completes, the y
 // values are null with that reason and fail where the profile limits them (exit 1). Before, the
 // Allan phase met NaN and the run ended ERROR, exit 4, on every resume alike (a review).
