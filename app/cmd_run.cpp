@@ -326,7 +326,16 @@ std::string cfg_station(const toml::table& hw) {
 std::string history_url(const RunArgs& a, const toml::table& hw) {
   if (!a.db.empty()) return a.db;
   if (const toml::table* h = cfg::get_table(hw, "history"))
-    if (h->contains("url")) return cfg::get_string(*h, "url");
+    if (h->contains("url")) {
+      // A relative SQLite file is relative to the hardware file, as its dbc and drive map are
+      // (it was the working folder's: a resume started elsewhere wrote a new database; a review).
+      const std::string url = cfg::get_string(*h, "url");
+      const std::optional<std::string> file = history::sqlite_path(url);
+      const auto& src = h->get("url")->source().path;
+      if (file && fs::path(*file).is_relative() && src)
+        return "sqlite:" + (fs::path(*src).parent_path() / *file).lexically_normal().string();
+      return url;
+    }
   return history::default_db_url();
 }
 

@@ -53,6 +53,7 @@ void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
   write_object(Obj::kControlword, w, cancel);
   control_ = w;
   control_known_ = true;
+  control_written_ = true;
 }
 
 // Reads the objects of one poll, contiguous registers of one function in one request.
@@ -422,6 +423,7 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
       [&] {
         write_object(Obj::kControlword, word, CancelToken{}, true);
         control_ = word;
+        control_written_ = true;
       },
       stop_mu_, last_stop_error_);
 }
@@ -433,8 +435,8 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
 // the word this client wrote, Enable operation, and took a quick-stopped drive back to Operation
 // enabled, 5 degrees further). Not the controlword read back: a gateway may read the write-only
 // 0x6040 as 0, and a halt with 0 is Disable voltage (a code review). Where the read fails, the
-// last word this client wrote or read; knowing neither, it sends nothing rather than a guess that
-// could drop the power stage mid-move: callers read status() first.
+// last word this client wrote; without one, it sends nothing rather than a guess that could drop
+// the power stage mid-move.
 namespace {
 uint16_t command_holding(State s) {
   switch (s) {
@@ -455,7 +457,8 @@ void Cia402Table::stop() noexcept {
     known = true;
   } catch (...) {
   }
-  if (!known && control_known_) bits = static_cast<uint16_t>(control_.load() & 0x000F), known = true;
+  // Only a word this client wrote: one read back may be a gateway's 0 (Disable voltage).
+  if (!known && control_written_) bits = static_cast<uint16_t>(control_.load() & 0x000F), known = true;
   if (!known) {
     std::lock_guard lk(stop_mu_);
     last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";

@@ -844,6 +844,26 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
       << slurp(d + "/io5.stderr");
 }
 
+// A hardware file's [history] url with a relative SQLite file is relative to the hardware file,
+// as its dbc and drive map are, whatever the working folder (it was the working folder's).
+TEST(RigCli, AHardwareFilesRelativeHistoryFileIsBesideIt) {
+  const std::string d = tmp("hwhist");
+  fs::create_directories(d + "/station");
+  fs::create_directories(d + "/elsewhere");
+  std::ofstream(d + "/station/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                           "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"P\"\n"
+                                           "estop = \"E\"\n[history]\nurl = \"sqlite:hist.sqlite\"\n";
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d + "/elsewhere");
+  const int rc = run({"run", "--hardware", d + "/station/hw.toml", "--profile", "ci", "--yes", "--serial", "HW-2",
+                      "--out", d + "/run"},
+                     d + "/io");
+  fs::current_path(cwd);
+  EXPECT_EQ(rc, 4) << slurp(d + "/io.stderr");  // no GPIO here: an ERROR passport, recorded all the same
+  EXPECT_TRUE(fs::exists(d + "/station/hist.sqlite"));
+  EXPECT_FALSE(fs::exists(d + "/elsewhere/hist.sqlite"));
+}
+
 // A new run never lands on an earlier one: the folder above holds a hardware run that ended
 // before its devices opened (run.json and an ERROR passport, no checkpoint). Before, an emulated
 // run took it over and replaced its passport, JUnit and report. A finished run's folder is
