@@ -175,7 +175,7 @@ void add_capture(CLI::App& app, int& rc) {
   imp->add_option("--hardware", a->hardware, "hardware file whose [dut] describes the stream (dbc, [dut.stream])")
       ->required();
   imp->add_option("--out", a->out, "capture file to write")->required();
-  imp->add_option("--serial", a->serial, "the DUT's serial number (the header's)")->check(serial_validator());
+  imp->add_option("--serial", a->serial, "the DUT's serial number (the header's), 1-32 printable ASCII")->check(serial_validator());
   imp->add_option("--orientation", a->orientation, "U10 or U20 (the header's)")->capture_default_str();
   imp->add_option("--phase", a->phase, "phase name in the header")->capture_default_str();
   imp->add_option("--rate", a->rate_hz, "sample rate in Hz (default: the stream's rate_hz)");

@@ -262,11 +262,15 @@ void check_procedure_angles_in_travel(const RunArgs& a, const toml::table& hw, c
     lo = tp.limit_neg_deg, hi = tp.limit_pos_deg;
     whose = "the emulated table's [plant.table] limit_neg_deg / limit_pos_deg";
   }
+  // Where the angle was written: the hardware file's [procedure], else the profile's.
+  const toml::table* mount = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
   for (const auto& [key, deg] : {std::pair{"u10_deg", p.u10_deg}, {"u20_deg", p.u20_deg}})
-    if (deg < lo || deg > hi)
-      throw ConfigError(fmt::format("{} = {:g}°: outside the table's travel [{:g}°, {:g}°] ({}): the procedure could "
-                                    "not turn the DUT there; change [procedure] u10_deg / u20_deg or the limits",
-                                    key, deg, lo, hi, whose));
+    if (deg < lo || deg > hi) {
+      const toml::node* at = mount ? mount->get(key) : nullptr;
+      throw ConfigError(fmt::format("{}: {} = {:g}°: outside the table's travel [{:g}°, {:g}°] ({}): the procedure "
+                                    "could not turn the DUT there; change [procedure] u10_deg / u20_deg or the limits",
+                                    at ? cfg::where(*at) : p.source, key, deg, lo, hi, whose));
+    }
 }
 
 // On hardware the DUT's rate is read at bring-up (after power-on); the emulated DUT's is known
@@ -880,7 +884,8 @@ void add_run(CLI::App& app, int& rc) {
       ->excludes(plant);
   sub->add_option("--profile", a->profile, "Profile: paper, ci or a TOML file")->capture_default_str();
   sub->add_option("--serial", a->serial,
-                  "DUT serial number: on hardware the DUT must report it; the emulated DUT takes it")
+                  "DUT serial number, 1-32 printable ASCII: on hardware the DUT must report it; the emulated DUT "
+                  "takes it")
       ->check(serial_validator());
   sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<YYYY-MM-DDTHHMMSSZ>, UTC)");
   sub->add_option("--resume", a->resume, "Continue the run in this folder after its last completed phase")
@@ -888,7 +893,9 @@ void add_run(CLI::App& app, int& rc) {
   sub->add_flag("--yes,-y", a->yes, "Skip operator confirmations (automated runs)");
   sub->add_flag("--dry-run", a->dry_run, "Print the plan and its duration; touch nothing");
   sub->add_flag("--quiet,-q", a->quiet, "Only the final table on the terminal");
-  sub->add_option("--db", a->db, "History database URL (default: rig config / ~/.local/share/rig/history.sqlite)");
+  sub->add_option("--db", a->db,
+                  "History database URL (default: a resumed run's; else the hardware file's [history] url, "
+                  "RIG_HISTORY, the rig config, $XDG_DATA_HOME or ~/.local/share: docs/history.md)");
   sub->add_flag("--no-history", a->no_history, "Do not record the run in the history database");
   sub->add_option("--seal-key", a->seal_key,
                   "Seal the run folder with this station key (HMAC-SHA256; docs/seal.md); a sealed run resumes only "
