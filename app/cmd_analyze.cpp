@@ -40,7 +40,7 @@ namespace rig::cli {
 namespace {
 
 // Whether every deviation computed is 0 (a constant record).
-bool oadev_pts_all_zero(const std::vector<std::vector<rig::analysis::DevPoint>>& devs) {
+bool every_deviation_is_zero(const std::vector<std::vector<rig::analysis::DevPoint>>& devs) {
   for (const auto& d : devs)
     for (const auto& p : d)
       if (p.dev != 0) return false;
@@ -359,7 +359,7 @@ int run(const Args& a) {
   // The record's span: n frequency values cover n tau0; n phase points, n - 1 (a review: ten
   // phase points were said to be 10 s at 1 Hz).
   const double record_s = static_cast<double>(base.data == an::DataKind::Phase ? n - 1 : n) / rate;
-  if (oadev_pts_all_zero(devs))
+  if (every_deviation_is_zero(devs))
     notes.push_back(std::string(base.data == an::DataKind::Phase ? "the phase is a straight line (a constant frequency)"
                                                                   : "the record is constant") +
                     ": every deviation is 0, so there is no noise to identify, no bounds and no noise terms");

@@ -308,6 +308,8 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   u.counter = "A.cnt", u.x = "A.x";
   EXPECT_EQ(spec_error(unitless, u), "hw.toml:9:1: [dut.stream]: x A.x has no unit in the DBC; give it the acceleration "
                                      "unit its factor yields (g, mg, ug or m/s^2)");
+  u.key_where["x"] = "hw.toml:11:5: [dut.stream]";  // named at x's line where the file gave it
+  EXPECT_EQ(spec_error(unitless, u).rfind("hw.toml:11:5: [dut.stream]: x A.x has no unit", 0), 0u) << spec_error(unitless, u);
   // A counter on page 1 only and x on page 0: no frame with x would carry a counter.
   const auto paged = std::make_shared<const Dbc>(Dbc::parse(
       "VERSION \"\"\nBU_: DUT\nBO_ 289 P: 8 DUT\n SG_ page M : 0|8@1+ (1,0) [0|1] \"\" DUT\n"
@@ -317,8 +319,6 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   pg.counter = "P.cnt", pg.x = "P.x";
   EXPECT_EQ(spec_error(paged, pg), "hw.toml:9:1: [dut.stream]: x P.x is on multiplexer page 0, but counter P.cnt only "
                                    "on page 1: those frames would carry no counter");
-  u.key_where["x"] = "hw.toml:11:5: [dut.stream]";  // named at x's line where the file gave it
-  EXPECT_EQ(spec_error(unitless, u).rfind("hw.toml:11:5: [dut.stream]: x A.x has no unit", 0), 0u) << spec_error(unitless, u);
 }
 
 // A layout whose sample shares bits with its counter or a flag would decode plausible numbers;
