@@ -8,6 +8,7 @@
 
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 
 namespace {
 
@@ -50,7 +51,7 @@ void decimal_numbers_only(CLI::App& app) {
         [whole, is_unsigned](std::string& v) {
           return decimal_text(v, whole, is_unsigned)
                      ? std::string()
-                     : "'" + v + "' is not a decimal " +
+                     : "'" + rig::shown_ascii(v) + "' is not a decimal " +
                            (is_unsigned ? "whole number >= 0 (no sign, no leading zero)"
                                         : whole ? "whole number (no leading zero)" : "number");
         },

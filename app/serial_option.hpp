@@ -16,15 +16,7 @@ inline CLI::Validator serial_validator() {
       [](std::string& v) -> std::string {
         const std::string why = link::serial_problem(v);
         if (why.empty()) return {};
-        std::string shown;  // the value as typed, its control bytes shown, not sent to the terminal
-        for (const char c : v) {
-          if (c >= 0x20 && c <= 0x7E) {
-            shown += c;
-          } else {
-            append_hex_escape(shown, static_cast<unsigned char>(c));
-          }
-        }
-        return "'" + shown + "': " + why;
+        return "'" + shown_ascii(v) + "': " + why;  // its control bytes shown, not sent
       },
       "");
 }

@@ -64,7 +64,7 @@ void InProcessPort::push(std::span<const CanFrame> frames, double t_s) {
         ++stats_.rx_dropped;
         continue;
       }
-      queue_.push_back({f, t_s, std::nullopt});
+      queue_.emplace_back(f, t_s);
       queued = true;
     }
     queued_.store(queue_.size(), std::memory_order_release);
@@ -130,12 +130,26 @@ std::optional<RxFrame> InProcessPort::take_locked() {
 }
 
 std::size_t InProcessPort::take_all_locked(std::vector<RxFrame>& out, std::size_t max) {
+  // As take_locked() frame by frame, but each frame copied once, from the queue into `out`
+  // (an RxFrame is about 110 bytes and a paper run moves 13.7 million of them).
   std::size_t n = 0;
-  for (; n < max; ++n) {
-    std::optional<RxFrame> f = take_locked();
-    if (!f) break;
-    out.push_back(*f);
+  while (n < max && !queue_.empty()) {
+    const RxFrame& f = queue_.front();
+    if (f.frame.error) {
+      const CanFrame err = f.frame;
+      queue_.pop_front();
+      queued_.store(queue_.size(), std::memory_order_relaxed);
+      ++stats_.error_frames;
+      const ErrorFrameInfo e = classify_error_frame(err);
+      if (e.fatal) throw HardwareError(name() + ": CAN " + e.text);
+      continue;  // warnings are counted, not fatal
+    }
+    out.push_back(f);
+    queue_.pop_front();
+    ++stats_.rx;
+    ++n;
   }
+  queued_.store(queue_.size(), std::memory_order_relaxed);
   return n;
 }
 

@@ -217,6 +217,46 @@ TEST(InProcessBus, BatchesKeepOrderFiltersAndCountsOfSingleFrames) {
   EXPECT_FALSE(b->receive(0, never));
 }
 
+// A batch reads error frames as receive() does: a warning is counted and skipped, a bus-off
+// ends the batch with the link fault (the frames before it taken, the ones after it kept).
+TEST(InProcessBus, ABatchSkipsErrorWarningsAndStopsAtABusOff) {
+  SimClock clock;
+  InProcessBus::Options o;
+  o.lockstep = &clock;
+  auto bus = InProcessBus::create(o);
+  auto rx = bus->open("rig");
+  CanFrame warn;
+  warn.error = true;
+  warn.id = CAN_ERR_CRTL;
+  warn.len = 8;
+  warn.data[1] = CAN_ERR_CRTL_RX_WARNING;
+  CanFrame busoff;
+  busoff.error = true;
+  busoff.id = CAN_ERR_BUSOFF;
+  busoff.len = 8;
+  CanFrame f;
+  f.len = 1;
+  for (uint32_t id : {0x1u, 0x2u}) f.id = id, bus->inject(f);
+  bus->inject(warn);
+  f.id = 0x3;
+  bus->inject(f);
+  bus->inject(busoff);
+  f.id = 0x4;
+  bus->inject(f);
+  const CancelToken never;
+  std::vector<RxFrame> got;
+  EXPECT_EQ(rx->receive_batch(got, 2, 0, never), 2u);
+  EXPECT_THROW(rx->receive_batch(got, 100, 0, never), HardwareError);
+  ASSERT_EQ(got.size(), 3u);  // 0x3 was taken before the bus-off
+  EXPECT_EQ(got[2].frame.id, 0x3u);
+  EXPECT_EQ(rx->stats().error_frames, 2u);
+  EXPECT_EQ(rx->stats().rx, 3u);
+  got.clear();
+  EXPECT_EQ(rx->receive_batch(got, 100, 0, never), 1u);  // the frame after it is still queued
+  EXPECT_EQ(got[0].frame.id, 0x4u);
+  EXPECT_FALSE(rx->receive(0, never));
+}
+
 // ---- firmware + client, lockstep ----
 
 TEST(InProcessDut, InfoRoundTrips) {
