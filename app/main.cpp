@@ -1,5 +1,9 @@
 // The `rig` command line: one subcommand per job (docs/contracts.md).
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cctype>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -60,9 +64,22 @@ void decimal_numbers_only(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands({})) decimal_numbers_only(*sub);
 }
 
+// A process started with stdin, stdout or stderr closed (`rig run <&- >&- 2>&-`, a careless
+// service unit) gets its first open() on descriptor 0, 1 or 2: the raw capture became fd 2 and
+// the progress display was written into it (a review). Each closed one is opened on /dev/null
+// before anything else, as coreutils and daemons do; without /dev/null nothing is safe.
+void standard_descriptors_open() {
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) != -1) continue;
+    const int got = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    if (got != fd) std::_Exit(rig::kExitHardware);  // cannot even say so: stderr is closed
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  standard_descriptors_open();
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);

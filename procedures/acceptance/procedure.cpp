@@ -35,9 +35,16 @@ std::optional<std::pair<double, double>> limit(const Profile& p, const std::stri
 
 std::string run_id(std::size_t i, Orientation o) { return run_phase_id(i + 1, o); }
 
-capture::Loaded load_capture(PhaseContext& ctx, const std::string& rel) {
+// A recording's capture as it was written: a file that reads back incomplete or with another
+// number of samples was changed after its recording closed it (a review: with stderr closed, the
+// progress display was written into the raw capture, and a quarter of it was judged), so the
+// values are never computed from it.
+capture::Loaded load_capture(PhaseContext& ctx, const Recorded& r) {
+  const std::string& rel = r.capture;
   capture::Loaded l = capture::load(ctx.out_dir + "/" + rel);
-  if (!l.recovery.complete) ctx.log->warn("{}", l.recovery.summary(rel));
+  if (!l.recovery.complete || l.samples.size() != r.samples)
+    throw HardwareError(l.recovery.summary(rel) + "; its recording wrote " + std::to_string(r.samples) +
+                        " samples: the file was changed or damaged after it was written, nothing is computed from it");
   if (l.samples.empty()) throw HardwareError(rel + ": capture holds no samples");
   return l;
 }
@@ -86,8 +93,7 @@ void note_gaps(PhaseContext& ctx, const Recorded& r) {
 }
 
 void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
-  const std::string rel = st.in_run.value().capture;
-  const capture::Loaded l = load_capture(ctx, rel);
+  const capture::Loaded l = load_capture(ctx, st.in_run.value());
   const std::vector<double> x = capture::channel_x(l.samples);
   std::vector<GostBlock> blocks;
   for (const double bs : p.in_run_blocks_s) {
@@ -157,8 +163,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
 }
 
 void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
-  const std::string rel = st.raw.value().capture;
-  const capture::Loaded l = load_capture(ctx, rel);
+  const capture::Loaded l = load_capture(ctx, st.raw.value());
   ctx.cancel.throw_if_requested();
   const std::vector<double> x = drift(capture::channel_x(l.samples), st, p.raw_orientation);
   const std::vector<double> y = drift(capture::channel_y(l.samples), st, p.raw_orientation);

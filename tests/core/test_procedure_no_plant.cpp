@@ -18,6 +18,7 @@
 #include "procedures/acceptance/procedure.hpp"
 #include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
+#include "rig/capture/capture.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/gpio.hpp"
 #include "rig/core/toml_util.hpp"
@@ -298,4 +299,49 @@ TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopT
     EXPECT_FALSE(m->lo) << "a model has no measured interval";
   }
   EXPECT_EQ(st.slot().loop.value()["source"], "design model");
+}
+
+// A capture that no longer holds what its recording wrote (a review: with the process's stderr
+// closed, the progress display was written into the raw capture, and the values were computed
+// from a quarter of it, PASS) is never analysed: the phase fails, naming the file and both counts.
+TEST(ProcedureWithoutPlant, ACaptureChangedAfterItsRecordingIsNotAnalysed) {
+  const std::string out = fs::temp_directory_path() / ("rignoplant-" + std::to_string(::getpid()) + "-changed");
+  fs::create_directories(out + "/captures");
+  const acceptance::Profile p = acceptance::load_profile("ci");
+  acceptance::ProcedureState st(p);
+  const auto phases = acceptance::build_phases(p, st);
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  const uint64_t planned = 2000;
+  {
+    capture::Writer w(out + "/captures/in-run-U10.cap", capture::Header{"SN", "in-run-U10", "U10", "", "g", p.rate_hz, {}});
+    std::vector<Sample> s(planned / 4);
+    for (std::size_t i = 0; i < s.size(); ++i) s[i].seq = static_cast<uint32_t>(i);
+    w.append(s);
+    w.close();
+  }
+  acceptance::Recorded r;
+  r.capture = "captures/in-run-U10.cap";
+  r.samples = planned;
+  st.slot().in_run = r;
+  IdleTable table;
+  QuietIo io;
+  SimClock clock;
+  FirstOrderDut dut(0.5, true);
+  Devices dev{table, dut, io, clock, "hardware"};
+  std::ostringstream logtext;
+  auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+  PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr};
+  const auto b = std::find_if(phases.begin(), phases.end(), [](const Phase& ph) { return ph.id == "in-run-b"; });
+  ASSERT_NE(b, phases.end());
+  try {
+    b->run(ctx);
+    ADD_FAILURE() << "analysed a capture of 500 samples recorded as 2000";
+  } catch (const HardwareError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("captures/in-run-U10.cap: 500 samples"), std::string::npos) << m;
+    EXPECT_NE(m.find("its recording wrote 2000 samples"), std::string::npos) << m;
+  }
+  for (const Measurement& m : values.all()) EXPECT_FALSE(m.value) << m.name << ": no value from it";
+  fs::remove_all(out);
 }

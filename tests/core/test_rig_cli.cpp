@@ -2045,3 +2045,22 @@ TEST(HardwareFileValidation, TheDocumentedFilePasses) {
   std::string err;
   EXPECT_EQ(hardware_dry_run(d, d + "/hw.toml", err), 0) << err << "\n" << slurp(d + "/hw.toml");
 }
+
+// Started with stdin, stdout and stderr closed (a careless service unit), the run's first files
+// took descriptors 0-2 and the progress display went into the raw capture: a quarter of the
+// record was judged, PASS (a review). The three are opened on /dev/null first.
+TEST(RigCli, ARunStartedWithItsStandardDescriptorsClosedKeepsItsCapturesWhole) {
+  const std::string d = tmp("closed-fds");
+  fs::create_directories(d);
+  const std::string cmd = std::string(RIG_BINARY) + " run --profile ci --yes --no-history --out " + d + "/run <&- >&- 2>&-";
+  const int st = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 0);
+  for (const auto& e : fs::directory_iterator(d + "/run/captures")) {
+    const rig::capture::Loaded l = rig::capture::load(e.path().string());
+    EXPECT_TRUE(l.recovery.complete) << l.recovery.summary(e.path().string());
+  }
+  const rig::capture::Loaded raw = rig::capture::load(d + "/run/captures/raw-U10.cap");
+  EXPECT_EQ(raw.samples.size(), 60000u) << raw.recovery.summary("raw-U10.cap");
+  EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS"), std::string::npos);
+}
