@@ -18,6 +18,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
+#include "rig/report/passport_check.hpp"
 
 namespace rig::cli {
 
@@ -175,6 +176,7 @@ void record(const HistoryArgs& a) {
   } catch (const nlohmann::json::parse_error& e) {
     throw ConfigError(path + ": malformed JSON: " + e.what());
   }
+  report::require_consistent_verdicts(p, path);  // an edited passport is not history
   const long long id = history::record_run(a.db, p, a.record);
   std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";

@@ -11,7 +11,8 @@ void add_report(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("report", "Write report.html (passport, plots; prints on A4) from a run folder");
   auto dir = std::make_shared<std::string>();
   sub->add_option("DIR", *dir, "Run folder holding passport.json (and analysis.json)")->required();
-  sub->footer("Exit codes: 0 written; 2 passport.json missing or malformed (the file is named).");
+  sub->footer("Exit codes: 0 written; 2 passport.json missing, malformed, or with verdicts its own values and "
+              "limits contradict (the file and field are named).");
   sub->callback([&rc, dir] {
     std::cout << report::write_report(*dir) << "\n";
     rc = kExitPass;

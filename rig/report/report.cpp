@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "rig/core/errors.hpp"
+#include "rig/report/passport_check.hpp"
 #include "rig/report/report_parts.hpp"
 #include "rig/report/svg.hpp"
 
@@ -54,6 +55,7 @@ std::string write_report(const std::string& run_dir) {
   std::string ignored, analysis_problem;
   const json passport = read_json(dir / "passport.json", true, ignored);
   check_passport(passport, dir / "passport.json");
+  require_consistent_verdicts(passport, (dir / "passport.json").string());
   json analysis = read_json(dir / "analysis.json", false, analysis_problem);
   if (!analysis.is_null() && !analysis.is_object()) {
     analysis_problem = "analysis.json is not a JSON object";

@@ -333,6 +333,19 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
     EXPECT_NE(std::string(e.what()).find("recorded: "), std::string::npos) << e.what();
   }
   EXPECT_THROW(run_cli({"--db", db, "--record", (d.path / "none").string()}), rig::ConfigError);
+  // A passport edited after its run (the FAIL of a value outside its limits made PASS) is not history.
+  json edited = rig::test::fixture_passport("SN-3", "PASS", "2026-11-03T08:00:00Z");
+  edited["values"]["bias"]["value"] = -6.0e-3;
+  rig::test::write_run(d.path / "r3", edited, &a);
+  try {
+    run_cli({"--db", db, "--record", (d.path / "r3").string()});
+    ADD_FAILURE() << "recorded an edited passport";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("values.bias.outcome is PASS, but its value -0.006 is outside"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(lines(run_cli({"--db", db})).size(), 3u);  // still the two runs
 }
 
 TEST(HistoryCli, AMissingDbIsAnErrorAndTheDefaultOneIsNotCreated) {

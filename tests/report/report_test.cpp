@@ -12,6 +12,7 @@
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/bounded.hpp"
+#include "rig/report/passport_check.hpp"
 #include "rig/report/report.hpp"
 #include "rig/report/svg_plot.hpp"
 #include "rig/report/svg.hpp"
@@ -360,6 +361,7 @@ TEST(Report, EscapesEveryTextFromTheRunFolder) {
   json p = rig::test::fixture_passport("<script>alert('x')</script>&\"", "FAIL");
   p["values"]["bias"]["reason"] = "<b>bold</b> & \"quoted\"";
   p["values"]["bias"]["outcome"] = "FAIL";
+  p["values"]["bias"]["value"] = -2e-3;  // outside its limits, as a FAIL is
   p["values"]["<img src=x>"] = {{"value", 1}, {"unit", "<u>"}, {"outcome", "PASS"}};
   p["phases"][0]["message"] = "</td><script>";
   p["captures"].push_back("captures/<evil>.cap");
@@ -379,6 +381,51 @@ TEST(Report, EscapesEveryTextFromTheRunFolder) {
   EXPECT_NE(h.find("&lt;b&gt;bold&lt;/b&gt; &amp; &quot;quoted&quot;"), std::string::npos);
   EXPECT_NE(h.find("<tr class=\"fail\">"), std::string::npos);
   EXPECT_NE(h.find("badge fail\">FAIL"), std::string::npos);
+}
+
+// A passport whose verdicts its own values and limits contradict (a FAIL edited to PASS, a
+// value moved) gets no report: `rig report` printed "PASS" beside a value outside its limits
+// (a review). Exit 2 naming the field; nothing written.
+TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
+  using rig::report::verdict_contradiction;
+  json p = rig::test::fixture_passport();
+  EXPECT_EQ(verdict_contradiction(p), "");
+  json edited = p;  // FAIL turned into PASS, the value left outside
+  edited["values"]["bias"]["value"] = -2e-3;
+  EXPECT_EQ(verdict_contradiction(edited),
+            "values.bias.outcome is PASS, but its value -0.002 is outside its limits [-0.001,0.001]");
+  edited = p;  // an open lower end: the value is judged against the upper one only
+  edited["values"]["in_run_b_gost_100s"]["value"] = 2e-5;
+  EXPECT_NE(verdict_contradiction(edited).find("values.in_run_b_gost_100s.outcome is PASS, but its value 2e-05 is "
+                                               "outside its limits [null,1e-05]"),
+            std::string::npos);
+  edited["values"]["in_run_b_gost_100s"]["outcome"] = "FAIL";  // the row agrees, the run does not
+  EXPECT_EQ(verdict_contradiction(edited), "outcome is PASS, but values.in_run_b_gost_100s (limited) is FAIL");
+  edited["outcome"] = "FAIL";
+  EXPECT_EQ(verdict_contradiction(edited), "");
+  edited = p;  // a limited value not measured: FAIL in a completed run, UNSET in a stopped one
+  edited["values"]["bias"]["value"] = nullptr;
+  EXPECT_NE(verdict_contradiction(edited).find("values.bias.outcome is PASS, but it has limits and no value"),
+            std::string::npos);
+  edited["values"]["bias"]["outcome"] = "UNSET";
+  edited["outcome"] = "ABORTED";
+  EXPECT_EQ(verdict_contradiction(edited), "");
+  edited["outcome"] = "PASS";
+  EXPECT_NE(verdict_contradiction(edited), "");
+
+  TempDir d;
+  json bad = p;
+  bad["values"]["bias"]["value"] = -2e-3;
+  rig::test::write_run(d.path, bad, nullptr);
+  try {
+    rig::report::write_report(d.path.string());
+    ADD_FAILURE() << "a report of an edited passport";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("passport.json: values.bias.outcome is PASS, but its value -0.002 is outside"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(d.path / "report.html"));
 }
 
 TEST(Report, MissingAnalysisStillWritesAndSaysSo) {

@@ -1,0 +1,67 @@
+#include "rig/report/passport_check.hpp"
+
+#include <cmath>
+
+#include "rig/core/errors.hpp"
+
+namespace rig::report {
+
+namespace {
+
+using nlohmann::json;
+
+std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
+
+// What a value's outcome must be, from its value and limits; empty when the passport alone
+// cannot tell (no limits: a class table may require it; null in a run that stopped early).
+std::string expected_outcome(const json& m, bool run_complete, std::string& why) {
+  // [min, max], an open end written as null (JSON has no infinity).
+  const json limits = m.value("limits", json());
+  const auto end = [&](std::size_t i, double open) {
+    return limits[i].is_number() ? limits[i].get<double>() : limits[i].is_null() ? open : std::nan("");
+  };
+  if (!limits.is_array() || limits.size() != 2) return {};
+  const double lo = end(0, -HUGE_VAL), hi = end(1, HUGE_VAL);
+  if (std::isnan(lo) || std::isnan(hi)) return {};
+  const json v = m.value("value", json());
+  if (!v.is_number()) {
+    why = "it has limits and no value";
+    return run_complete ? "FAIL" : std::string();
+  }
+  const double x = v.get<double>();
+  const bool in = x >= lo && x <= hi;
+  // json's dump: the shortest text that reads back as the same double, so "outside" is never shown
+  // with digits that look inside.
+  why = "its value " + v.dump() + " is " + (in ? "within" : "outside") + " its limits " + limits.dump();
+  return in ? "PASS" : "FAIL";
+}
+
+}  // namespace
+
+std::string verdict_contradiction(const json& p) {
+  if (!p.is_object() || !p.contains("values") || !p["values"].is_object()) return {};
+  const std::string run = text(p.value("outcome", json("")));
+  const bool complete = run == "PASS" || run == "FAIL";  // ABORTED and ERROR judge what they measured
+  bool any_fail = false;
+  for (const auto& [name, m] : p["values"].items()) {
+    if (!m.is_object()) continue;
+    const std::string got = text(m.value("outcome", json("")));
+    any_fail = any_fail || got == "FAIL";
+    std::string why;
+    const std::string want = expected_outcome(m, complete, why);
+    if (!want.empty() && got != want) return "values." + name + ".outcome is " + got + ", but " + why;
+    if (run == "PASS" && got != "PASS" && m.value("limits", json()).is_array())
+      return "outcome is PASS, but values." + name + " (limited) is " + got;
+  }
+  if (run == "PASS" && any_fail) return "outcome is PASS, but a value failed";
+  return {};
+}
+
+void require_consistent_verdicts(const json& passport, const std::string& path) {
+  const std::string c = verdict_contradiction(passport);
+  if (c.empty()) return;
+  throw ConfigError(path + ": " + c +
+                    " (the passport was changed after its run wrote it; `rig verify` checks a sealed run)");
+}
+
+}  // namespace rig::report

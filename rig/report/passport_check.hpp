@@ -1,0 +1,20 @@
+// Whether a passport's outcomes are the ones its own values and limits give (README "How `rig
+// run` decides"). A passport edited after the run (FAIL changed to PASS, a value moved) made
+// `rig report` print a PASS report with a value outside its own limits (a review): the report and
+// the history read a passport only when its verdicts hold. This is a consistency check, not the
+// decision rule (rig/executive/measurement.hpp decides); `rig verify` checks a sealed run's bytes.
+#pragma once
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace rig::report {
+
+// Empty when every value's outcome follows from its value and limits and the run's outcome from
+// the values' outcomes; else the first contradiction, naming the field and the values.
+std::string verdict_contradiction(const nlohmann::json& passport);
+
+// Throws ConfigError "PATH: <the contradiction> (...)" when there is one.
+void require_consistent_verdicts(const nlohmann::json& passport, const std::string& path);
+
+}  // namespace rig::report
