@@ -21,6 +21,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -453,6 +454,20 @@ std::vector<std::string> files_of_the_run(const acceptance::DutState& st) {
   return f;
 }
 
+// The run's records that are no longer in its folder (removed while the run went on: a clean-up
+// script, a folder deleted by hand; a review ended such a run PASS with its captures and run.log
+// gone): the files a seal would vouch for and run.log, the account of the run.
+std::vector<std::string> records_gone(const std::string& out, const acceptance::DutState& st) {
+  std::vector<std::string> gone;
+  std::vector<std::string> files = files_of_the_run(st);
+  files.emplace_back("run.log");
+  for (const std::string& f : files) {
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::path(out) / f, ec)) gone.push_back(f);
+  }
+  return gone;
+}
+
 // What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
 // the history row (a report or history failure is logged, never the run's outcome).
 nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
@@ -849,6 +864,17 @@ int do_run(RunArgs a) {
     res.outcome = RunOutcome::Aborted;
     res.message = "aborted after the last phase: " + cancel.token().reason();
     log->error("{}", res.message);
+  }
+  // A verdict stands on its records: one whose captures or log were removed meanwhile is an
+  // ERROR (exit 4) naming them, never a PASS nobody can check.
+  if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
+    const std::vector<std::string> gone = records_gone(a.out, state.slot());
+    if (!gone.empty()) {
+      res.outcome = RunOutcome::Error;
+      res.message = fmt::format("the run's records are gone from {} (removed while it ran): {}; no verdict without them",
+                                a.out, fmt::join(gone, ", "));
+      log->error("{}", res.message);
+    }
   }
   const auto passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
   dev.io.set_lamp(Lamp::Running, false);

@@ -2064,3 +2064,21 @@ TEST(RigCli, ARunStartedWithItsStandardDescriptorsClosedKeepsItsCapturesWhole) {
   EXPECT_EQ(raw.samples.size(), 60000u) << raw.recovery.summary("raw-U10.cap");
   EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS"), std::string::npos);
 }
+
+// Records removed from the folder while the run goes on (a clean-up script, a folder emptied by
+// hand) leave no verdict: the run ends ERROR, exit 4, naming what is gone (a review: it ended
+// PASS with its captures and run.log deleted).
+TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
+  const std::string d = tmp("records-gone");
+  fs::create_directories(d);
+  const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io");
+  ASSERT_TRUE(wait_for_file(c, d + "/run/captures/in-run-U10.cap")) << slurp(d + "/io.stderr");
+  fs::remove(d + "/run/captures/run01-U10.cap");
+  EXPECT_EQ(wait_exit(c), 4) << slurp(d + "/io.stderr");
+  const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ERROR");
+  const std::string why = p["aborted_reason"].get<std::string>();
+  EXPECT_NE(why.find("records are gone"), std::string::npos) << why;
+  EXPECT_NE(why.find("captures/run01-U10.cap"), std::string::npos) << why;
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("captures/run01-U10.cap"), std::string::npos);
+}
