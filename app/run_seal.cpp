@@ -123,7 +123,7 @@ std::optional<std::string> passport_outcome(const std::string& dir) {
 }
 
 bool outside_the_seal(const std::string& rel) {
-  static const std::regex set_aside(R"(captures/[^/]+\.cap\.interrupted-[0-9]+)");
+  static const std::regex set_aside(R"((captures/[^/]+\.cap|loop-test\.csv)\.interrupted-[0-9]+)");
   const std::string name = fs::path(rel).filename().string();
   return rel == "run.log" || rel == "seal.json" || rel == "seal.prev.json" || name.rfind('.', 0) == 0 ||
          rel.find("/.") != std::string::npos ||

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 
 #include <fmt/format.h>
@@ -9,6 +10,7 @@
 #include "analysis/loop_response.hpp"
 #include "design/filter.hpp"
 #include "design/loop_figures.hpp"
+#include "rig/core/set_aside.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {
@@ -98,6 +100,11 @@ void phase_loop_test(PhaseContext& ctx, const Profile& p, DutState& dut) {
   rq.amplitude_g = p.loop_amplitude_g;
   rq.steps = p.loop_steps;
   rq.record_s = p.loop_record_s;
+  // Records of an attempt the checkpoint does not hold (a run stopped after the loop test, before
+  // its checkpoint) are kept, not overwritten: the DUT was loop-tested then too (a review).
+  if (const std::string kept = set_aside(ctx.out_dir + "/" + kLoopTestFile); !kept.empty())
+    ctx.log->warn("an earlier attempt's loop-test records are kept as {} (never read)",
+                  std::filesystem::path(kept).filename().string());
   const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
   if (!r.supported) {
     ctx.log->warn("loop test not run: {}", r.reason);

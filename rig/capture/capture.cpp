@@ -16,6 +16,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/core/huge_pages.hpp"
+#include "rig/core/set_aside.hpp"
 
 namespace rig::capture {
 
@@ -72,17 +73,7 @@ std::string Recovery::summary(const std::string& path) const {
 Writer::Writer(const std::string& path, const Header& header, uint32_t block_samples)
     : path_(path), block_samples_(block_samples) {
   if (block_samples_ == 0 || block_samples_ > kMaxBlockSamples) throw std::invalid_argument("capture: bad block size");
-  namespace fs = std::filesystem;
-  if (fs::exists(path)) {  // keep whatever an interrupted attempt left
-    for (int i = 1;; ++i) {
-      const std::string keep = path + ".interrupted-" + std::to_string(i);
-      if (!fs::exists(keep)) {
-        fs::rename(path, keep);
-        set_aside_ = keep;
-        break;
-      }
-    }
-  }
+  set_aside_ = rig::set_aside(path);  // keep whatever an interrupted attempt left
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd_ < 0) throw std::runtime_error("cannot create capture " + path + ": " + errno_text());
   const std::string js = header_json(header).dump();

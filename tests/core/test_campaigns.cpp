@@ -170,6 +170,27 @@ TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
   }
 }
 
+// The loop test's records of an attempt the checkpoint does not hold (the run stopped after
+// the loop test wrote them, before its checkpoint: a full disk in a review) are kept as
+// loop-test.csv.interrupted-1 when the resume tests the loop again, never overwritten; the
+// resumed passport is the uninterrupted run's, and a sealed folder still verifies.
+TEST(Campaign, AResumeKeepsAnEarlierAttemptsLoopTestRecords) {
+  const std::string d = tmp("campaign-loop-kept");
+  fs::create_directories(d);
+  const Reference ref = uninterrupted(d, "ci");
+  const std::string r = d + "/killed";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", "sigkill@150"}, r + "-io"),
+            128 + SIGKILL);
+  ASSERT_FALSE(fs::exists(r + "/loop-test.csv")) << "killed after the loop test: choose an earlier point";
+  std::ofstream(r + "/loop-test.csv") << "# an earlier attempt's records\n";
+  resume_and_compare(r, ref, "loop-test.csv of an earlier attempt");
+  EXPECT_EQ(slurp(r + "/loop-test.csv.interrupted-1"), "# an earlier attempt's records\n");
+  EXPECT_EQ(slurp(r + "/loop-test.csv"), slurp(d + "/whole/loop-test.csv"));
+  EXPECT_NE(slurp(r + "/run.log").find("an earlier attempt's loop-test records are kept as loop-test.csv.interrupted-1"),
+            std::string::npos)
+      << slurp(r + "/run.log");
+}
+
 // SIGINT and SIGTERM at random device times: exit 3, ABORTED naming the signal, the safe state
 // in order, the measurements of completed phases kept; then the resume equals the
 // uninterrupted run.
