@@ -213,12 +213,23 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   return run(bring_up, phases, values, state, cancel, done, identity);
 }
 
+namespace {
+constexpr const char* kKeptFromCheckpoint = "completed in an earlier attempt (checkpoint)";
+}  // namespace
+
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
                          MeasurementSet& values, PhaseState& state, const CancelToken& cancel,
                          const std::vector<std::string>& completed, const nlohmann::json& identity) {
   RunResult result;
   std::vector<std::string> done = completed;
   for (const auto& p : phases) result.phases.push_back({p.id, p.title, "pending", "", "", ""});
+  // A resume's kept phases are kept from the start: a stop during bring-up (or the emulation's
+  // fast-forward) wrote every phase "pending", though the checkpoint holds them (a review).
+  auto kept = [&](std::size_t i) {
+    return !phases[i].from_records && std::find(done.begin(), done.end(), phases[i].id) != done.end();
+  };
+  for (std::size_t i = 0; i < phases.size(); ++i)
+    if (kept(i)) result.phases[i].status = "skipped", result.phases[i].message = kKeptFromCheckpoint;
 
   PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_};
   std::size_t current = phases.size();
@@ -229,9 +240,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       const Phase& p = phases[i];
       PhaseRecord& rec = result.phases[i];
       const bool was_done = std::find(done.begin(), done.end(), p.id) != done.end();
-      if (was_done && !p.from_records) {
-        rec.status = "skipped";
-        rec.message = "completed in an earlier attempt (checkpoint)";
+      if (kept(i)) {
         if (progress_) progress_->phase_finished(p.id, "skipped", rec.message);
         continue;
       }

@@ -153,6 +153,19 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
     EXPECT_EQ(r.outcome, RunOutcome::Error);
     EXPECT_EQ(r.exit_code(), kExitHardware);
   }
+  {  // A resume stopped during its bring-up: the checkpoint's phase is still kept (the passport
+     // said every phase "pending": a review), the rest pending.
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    declare(phases, v);
+    const auto r = ex.run([](PhaseContext&) { throw AbortedError("SIGINT received"); }, phases, v, st, CancelToken{},
+                          true, id);
+    EXPECT_EQ(r.outcome, RunOutcome::Aborted);
+    EXPECT_EQ(r.phases[0].status, "skipped");
+    EXPECT_EQ(r.phases[0].message, "completed in an earlier attempt (checkpoint)");
+    EXPECT_EQ(r.phases[1].status, "pending");
+  }
   phases[1].run = [&](PhaseContext&) {
     ++runs_b;
     EXPECT_EQ(st.j["from_a"], 5);
