@@ -876,7 +876,16 @@ int do_run(RunArgs a) {
       log->error("{}", res.message);
     }
   }
-  const auto passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
+  nlohmann::ordered_json passport;
+  try {
+    passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
+  } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
+    log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
+               to_string(res.outcome), e.what());
+    dev.io.set_lamp(Lamp::Running, false);
+    dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
+    throw;
+  }
   dev.io.set_lamp(Lamp::Running, false);
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
   std::cout << "\n" << passport_table(passport);

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -41,20 +43,33 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   // link would redirect the write) is removed first, and the open refuses anything in its place.
   ::unlink(tmp.c_str());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("cannot write " + tmp);
+  if (fd < 0) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
+  // The OS's reason in every message (a full disk said only "write failed"), and no empty
+  // temporary file left behind (a review).
+  auto fail = [&](const char* what) {
+    const std::string why = std::strerror(errno);
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw std::runtime_error(std::string(what) + " " + tmp + ": " + why);
+  };
   const char* p = content.data();
   std::size_t n = content.size();
   while (n > 0) {
     const ssize_t w = ::write(fd, p, n);
     if (w < 0) {
-      ::close(fd);
-      throw std::runtime_error("write failed: " + tmp);
+      if (errno == EINTR) continue;
+      fail("write failed:");
     }
     p += w;
     n -= static_cast<std::size_t>(w);
   }
-  ::fsync(fd);
-  ::close(fd);
+  // A full disk may only say so when the data reach it (NFS, some FUSE filesystems).
+  if (::fsync(fd) != 0 && errno != EINVAL) fail("write failed (fsync):");
+  if (::close(fd) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    throw std::runtime_error("write failed (close): " + tmp + ": " + why);
+  }
   std::filesystem::rename(tmp, path);
 }
 

@@ -2082,3 +2082,17 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
   EXPECT_NE(why.find("captures/run01-U10.cap"), std::string::npos) << why;
   EXPECT_NE(slurp(d + "/run/junit.xml").find("captures/run01-U10.cap"), std::string::npos);
 }
+
+// A passport the folder cannot take (a full disk, a read-only folder; here a directory squats on
+// its temporary name) is exit 4 with the OS's reason, and run.log, the run's account, says
+// which outcome was not written (a review: it ended at "safe state reached").
+TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
+  const std::string d = tmp("passport-not-written");
+  fs::create_directories(d + "/run/passport.json.tmp");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 4);
+  EXPECT_NE(slurp(d + "/io.stderr").find("cannot write " + d + "/run/passport.json.tmp: File exists"), std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS not written: cannot write"), std::string::npos)
+      << slurp(d + "/run/run.log");
+  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+}
