@@ -18,6 +18,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <set>
 #include <thread>
 
 #include <fmt/format.h>
@@ -173,7 +174,21 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
       throw ConfigError(path + ": field '" + key + "': expected a string, found " + inv[key].type_name());
     return inv[key].get<std::string>();
   };
+  // Every field is one this rig writes: an unknown one is a hand edit or another program's.
+  static const std::set<std::string> kFields = {"plant",    "hardware", "serial",     "profile", "profile_source",
+                                                "software", "started",  "no_history", "db"};
+  for (const auto& [key, v] : inv.items())
+    if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
+  // The checkpoint's state is internal to the version that wrote it (docs/contracts.md): another
+  // version's resume refuses, before any device opens, rather than read it (a review).
+  const std::string software = str("software", "");
+  const std::string mine = std::string("rig ") + RIG_VERSION;
+  if (!software.empty() && software != mine)
+    throw ConfigError(path + ": field 'software': the run was started by \"" + software + "\", this is " + mine +
+                      ": only the same version resumes a run (its checkpoint is that version's); finish it with that "
+                      "version or start a new run");
   (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
+  (void)str("profile_source", "");
   a.plant = str("plant", "emulated");
   a.hardware = str("hardware", "");
   a.serial = str("serial", "");

@@ -1547,6 +1547,19 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
                                              "/prof/profile.toml is profile \"ci\""),
             std::string::npos)
       << slurp(d + "/prof-io.stderr");
+  // Another version's run (its checkpoint is internal to that version), a field rig never writes.
+  inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+  inv["software"] = "rig 0.0.9";
+  EXPECT_EQ(with_run_json("version", inv), 2);
+  EXPECT_NE(slurp(d + "/version-io.stderr").find("run.json: field 'software': the run was started by \"rig 0.0.9\", this "
+                                                 "is rig "),
+            std::string::npos)
+      << slurp(d + "/version-io.stderr");
+  inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+  inv["limits"] = "loose";
+  EXPECT_EQ(with_run_json("unknown", inv), 2);
+  EXPECT_NE(slurp(d + "/unknown-io.stderr").find("run.json: field 'limits': not a field rig writes"), std::string::npos)
+      << slurp(d + "/unknown-io.stderr");
 
   // Capture headers with a rate the analysis cannot use: named at the header, exit 2.
   auto write_capture = [&](const std::string& path, double rate) {
