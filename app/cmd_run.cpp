@@ -715,8 +715,9 @@ int do_run(RunArgs a) {
   if (!a.no_history) history::sqlite_path(history_url(a, hw));
   if (a.dry_run) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
-    check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty());
+    // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
+    check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty());
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
     // opened), before the plan is printed, so the plan says what the resume keeps, computes
     // again and still records.
@@ -771,10 +772,12 @@ int do_run(RunArgs a) {
   // Before the operator is asked anything, and before prepare_run_folder's write probe touches
   // the earlier run's folder (nor a folder another run holds: its lock is taken first).
   if (a.resume.empty()) {
-    refuse_an_earlier_run(a.out);
     std::error_code ec;
     made_here = made_here || !fs::exists(a.out, ec);
+    // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
+    // which then failed on the same lock: a review).
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
+    refuse_an_earlier_run(a.out);
   }
   prepare_run_folder(a.out);
   if (a.resume.empty()) {
@@ -789,15 +792,21 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
-    if (!key) refuse_a_final_verdict(a.out);  // a sealed folder's verdict is its seal's (checked above)
-    completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
+    try {
+      if (!key) refuse_a_final_verdict(a.out);  // a sealed folder's verdict is its seal's (checked above)
+      completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
+    } catch (const std::exception& e) {  // the log says why the resume did not happen (it said only "resuming")
+      log->error("resume refused: {}", e.what());
+      throw;
+    }
   }
   double planned_s = 0;
   for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
   try {
     operator_prompts(a, p, planned_s);
-  } catch (const AbortedError&) {
-    // Declined before the run started: nothing was written, and a new run's folder goes too.
+  } catch (const std::exception&) {
+    // Declined (or no terminal to ask on, and no --yes) before the run started: nothing was
+    // written, and a new run's folder goes too (a refusal for want of a terminal left it: a review).
     std::error_code ec;
     if (a.resume.empty() && made_here) fs::remove(a.out, ec);  // only while empty
     throw;

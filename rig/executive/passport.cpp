@@ -69,7 +69,8 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     const std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
     if (m.outcome == Outcome::Fail) {
       const std::string what = m.value ? fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)
-                                       : fmt::format("{} is required (limits {}) but has no value", m.name, lim);
+                                       : m.limits ? fmt::format("{} is required (limits {}) but has no value", m.name, lim)
+                                                  : fmt::format("{} is required but has no value", m.name);  // a class table
       o << "<failure message=\"" << xml_escape(what) << "\">" << xml_escape(m.shown_reason()) << "</failure>";
     } else if (m.outcome == Outcome::Unset) {
       o << "<skipped message=\"" << xml_escape(m.value ? "no limits: " + num(m.value) + " " + m.unit : m.reason)

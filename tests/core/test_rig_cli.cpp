@@ -984,6 +984,12 @@ TEST(RigCli, ARunFolderInUseByAnotherRunIsRefused) {
     EXPECT_EQ(run(resume, d + "/io-res"), 2) << slurp(d + "/io-res.stderr");
     EXPECT_NE(slurp(d + "/io-res.stderr").find("--resume " + d + "/busy" + msg), std::string::npos)
         << slurp(d + "/io-res.stderr");
+    // A new run into the live run's folder hears of the lock, not "use --resume" (a review).
+    std::vector<std::string> onto = {"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/busy"};
+    if (dry) onto.push_back("--dry-run");
+    EXPECT_EQ(run(onto, d + "/io-onto"), 2) << slurp(d + "/io-onto.stderr");
+    EXPECT_NE(slurp(d + "/io-onto.stderr").find("--out " + d + "/busy" + msg), std::string::npos)
+        << slurp(d + "/io-onto.stderr");
   }
   EXPECT_TRUE(fs::is_empty(d + "/new")) << "nothing written into a folder in use";
   EXPECT_EQ(std::vector<fs::path>(fs::directory_iterator(d + "/busy"), fs::directory_iterator()).size(), 1u);
@@ -1381,6 +1387,9 @@ TEST(RigCli, ResumeOfAFailingProfileStillFails) {
   EXPECT_EQ(p["outcome"], "FAIL");
   EXPECT_EQ(p["values"]["accuracy_class"]["outcome"], "FAIL");
   EXPECT_NE(p["values"]["accuracy_class"]["reason"].get<std::string>().find("exceeds every class"), std::string::npos);
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("<failure message=\"accuracy_class is required but has no value\">"),
+            std::string::npos)
+      << slurp(d + "/run/junit.xml");  // it said "(limits none)"
   for (const auto& ph : p["phases"])
     if (ph["id"] == "in-run-b") {
       EXPECT_EQ(ph["status"], "done") << "computed again from the in-run capture, not read from the checkpoint";
@@ -1470,6 +1479,9 @@ TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
     if (want == 0) return;
     const std::string err = slurp(f + "-io.stderr");
     EXPECT_NE(err.find(f + "/checkpoint.json: " + field), std::string::npos) << err;
+    // run.log says why the resume did not happen, not only that it began (a review).
+    EXPECT_NE(slurp(f + "/run.log").find("resume refused: " + f + "/checkpoint.json: " + field), std::string::npos)
+        << slurp(f + "/run.log");
     EXPECT_FALSE(fs::exists(f + "/passport.json") &&
                  nlohmann::json::parse(slurp(f + "/passport.json"))["outcome"] == "PASS")
         << field << ": a damaged checkpoint passed the DUT";
@@ -1681,6 +1693,13 @@ TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
                 d + "/io2"),
             4)
       << slurp(d + "/io2.stderr");
+  // Without a terminal to confirm on and without --yes, a hardware run is refused (exit 2) and
+  // leaves no folder behind (it left an empty one: a review).
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--serial", "LBL-1", "--out", d + "/unasked"},
+                d + "/io3"),
+            2);
+  EXPECT_NE(slurp(d + "/io3.stderr").find("operator confirmation needed"), std::string::npos) << slurp(d + "/io3.stderr");
+  EXPECT_FALSE(fs::exists(d + "/unasked"));
 }
 
 // A profile's [analysis] confidence reaches the noise terms and the report says so: the
