@@ -175,8 +175,8 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     return inv[key].get<std::string>();
   };
   // Every field is one this rig writes: an unknown one is a hand edit or another program's.
-  static const std::set<std::string> kFields = {"plant",    "hardware", "serial",     "profile", "profile_source",
-                                                "software", "started",  "no_history", "db"};
+  static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source", "software",
+                                                "started", "no_history", "db",     "faults"};
   for (const auto& [key, v] : inv.items())
     if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   // The checkpoint's state is internal to the version that wrote it (docs/contracts.md): another
@@ -200,6 +200,20 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'hardware': " + a.hardware + " does not exist");
   if (a.plant == "emulated" && !a.hardware.empty())
     throw ConfigError(path + ": field 'hardware': \"" + a.hardware + "\", but the run is on the emulated plant");
+  // The emulated plant's injected sample losses (--inject drop@SEQ:COUNT) are part of the
+  // device's history: the resume's replay and its remaining phases see them again, so the resumed
+  // passport is the uninterrupted run's (without them the replay differed and the warning blamed
+  // another build: a review). Signals and e-stops are never repeated.
+  if (inv.contains("faults")) {
+    const nlohmann::json& f = inv["faults"];
+    if (!f.is_array()) throw ConfigError(path + ": field 'faults': expected an array, found " + f.type_name());
+    for (const auto& x : f) {
+      if (!x.is_string() || x.get<std::string>().rfind("drop@", 0) != 0)
+        throw ConfigError(path + ": field 'faults': " + x.dump() + " is not a sample loss (drop@SEQ:COUNT)");
+      a.inject.push_back(x.get<std::string>());
+    }
+    if (a.plant != "emulated") throw ConfigError(path + ": field 'faults': only an emulated run has injected faults");
+  }
   if (inv.contains("started") && !inv["started"].is_string())
     throw ConfigError(path + ": field 'started': expected a string, found " + inv["started"].type_name());
   // The history the run was started with, unless the resume names its own (--db, --no-history):
@@ -828,6 +842,10 @@ int do_run(RunArgs a) {
       const std::optional<std::string> file = history::sqlite_path(a.db);
       invocation["db"] = file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(a.db);
     }
+    std::vector<std::string> drops;  // repeated by a resume (read_invocation)
+    for (const std::string& f : a.inject)
+      if (f.rfind("drop@", 0) == 0) drops.push_back(f);
+    if (!drops.empty()) invocation["faults"] = drops;
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
     if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);

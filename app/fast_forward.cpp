@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -26,9 +27,20 @@ nlohmann::json read_checkpoint(const std::string& run_dir) {
 // values compare equal exactly.
 std::string first_difference(const nlohmann::json& replay, const nlohmann::json& checkpoint, const std::string& path) {
   if (replay.is_object()) {
-    for (const auto& [k, v] : replay.items()) {
+    // In the record's order: "runs" is keyed "1".."12", which JSON sorts "1", "10", "11", "12",
+    // "2" (a review: a difference in run 3 was reported at run 10).
+    std::vector<std::string> keys;
+    for (const auto& [k, v] : replay.items()) keys.push_back(k);
+    const auto number = [](const std::string& k) {
+      return !k.empty() && k.size() < 10 && std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; })
+                 ? std::stol(k)
+                 : -1L;
+    };
+    if (std::all_of(keys.begin(), keys.end(), [&](const std::string& k) { return number(k) >= 0; }))
+      std::sort(keys.begin(), keys.end(), [&](const std::string& x, const std::string& y) { return number(x) < number(y); });
+    for (const std::string& k : keys) {
       if (!checkpoint.is_object() || !checkpoint.contains(k)) return path + "." + k + " (not in the checkpoint)";
-      const std::string d = first_difference(v, checkpoint[k], path + "." + k);
+      const std::string d = first_difference(replay[k], checkpoint[k], path + "." + k);
       if (!d.empty()) return d;
     }
     return "";
