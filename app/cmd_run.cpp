@@ -882,10 +882,16 @@ int do_run(RunArgs a) {
   // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
   // passport equals the uninterrupted run's bit for bit. Hardware is only brought up again.
   const bool fast_forward = b.emulated && !a.resume.empty();
+  double replayed_s = 0;  // of the plant's figures below, what rebuilt it (nothing measured)
+  std::uint64_t replayed_samples = 0;
   RunResult res = exec.run(
       [&](PhaseContext& c) {
         acceptance::bring_up(c, p, ro, state.slot());
-        if (fast_forward) fast_forward_emulated(c, p, completed, *log);
+        if (fast_forward) {
+          fast_forward_emulated(c, p, completed, *log);
+          replayed_s = b.emulated->clock().now_s();
+          replayed_samples = b.emulated->samples_generated();
+        }
       },
       phases, values, state, cancel.token(), completed, identity);
   if (signal_at_end) {
@@ -936,10 +942,14 @@ int do_run(RunArgs a) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     const double device = b.emulated->clock().now_s();
     const auto samples = b.emulated->samples_generated();
+    const std::string replay =
+        replayed_samples ? fmt::format(" ({:.1f} min and {} samples of them replayed the kept recordings)",
+                                       replayed_s / 60, replayed_samples)
+                         : std::string();
     const std::string line = fmt::format(
-        "emulated plant: {:.1f} min of device time, {} DUT samples, in {:.2f} s wall: {:.0f}x real time, {:.2f} M "
+        "emulated plant: {:.1f} min of device time, {} DUT samples{}, in {:.2f} s wall: {:.0f}x real time, {:.2f} M "
         "samples/s",
-        device / 60, samples, wall, device / wall, static_cast<double>(samples) / wall / 1e6);
+        device / 60, samples, replay, wall, device / wall, static_cast<double>(samples) / wall / 1e6);
     std::cout << line << "\n";
     log->info("{}", line);
   }

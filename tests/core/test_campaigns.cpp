@@ -205,6 +205,9 @@ TEST(Campaign, AnInjectedSampleLossIsRepeatedByTheResume) {
             128 + SIGKILL);
   EXPECT_EQ(read_json(r + "/run.json")["faults"], json::array({"drop@29000:10"}));
   resume_and_compare(r, ref, "drop@29000:10 then sigkill@150");
+  // The plant's figures say which part of its device time rebuilt it (a review: a resume that
+  // measured nothing new reported the replay's samples as its own).
+  EXPECT_NE(slurp(r + "/run.log").find("samples of them replayed the kept recordings"), std::string::npos);
 }
 
 // SIGINT and SIGTERM at random device times: exit 3, ABORTED naming the signal, the safe state
