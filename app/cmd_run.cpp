@@ -437,6 +437,30 @@ void refuse_an_earlier_run(const std::string& dir) {
                         (resumable ? "use --resume " + dir + " or another --out" : "choose another --out"));
 }
 
+// The history the run will record into, checked as far as it can be without writing: a URL of
+// the right form; an SQLite file that exists must be a database (junk bytes passed, and the run's
+// row was lost at its end, logged only: a review), one that does not must be creatable in a
+// writable folder. A PostgreSQL server is reached when the run records (it may be down now).
+void check_history_can_record(const std::string& url) {
+  const std::optional<std::string> file = history::sqlite_path(url);
+  if (!file) return;
+  const std::string shown = "history database " + *file;
+  std::error_code ec;
+  if (fs::exists(*file, ec)) {
+    if (!fs::is_regular_file(*file, ec)) throw ConfigError(shown + ": not a regular file");
+    try {
+      history::open_db(url, history::Access::ReadOnly)->has_table("runs");  // reads its header
+    } catch (const ConfigError& e) {
+      throw ConfigError(shown + ": not a database rig can open (" + e.what() + ")");
+    }
+    return;
+  }
+  fs::path p = fs::absolute(*file, ec).parent_path();
+  while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
+  if (!fs::is_directory(p, ec) || !can_create_file_in(p))
+    throw ConfigError(shown + ": cannot be created (" + p.string() + " is not a writable folder)");
+}
+
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
@@ -726,7 +750,7 @@ int do_run(RunArgs a) {
   TerminalView view(stderr, a.quiet);
   // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not
   // an error in run.log after the DUT was measured and its result left out of the history.
-  if (!a.no_history) history::sqlite_path(history_url(a, hw));
+  if (!a.no_history) check_history_can_record(history_url(a, hw));
   if (a.dry_run) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.

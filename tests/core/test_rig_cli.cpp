@@ -2128,3 +2128,28 @@ TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
       << slurp(d + "/run/run.log");
   EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
 }
+
+// The history a run will record into is checked before anything runs, --dry-run included: an
+// SQLite file that is not a database, or one that cannot be created, is exit 2 (junk bytes passed
+// and the run's row was lost at its end, only logged: a review); a new file in a writable folder
+// is fine and is not created by the check.
+TEST(RigCli, AHistoryTheRunCouldNotRecordIntoIsRefusedFirst) {
+  const std::string d = tmp("history-check");
+  fs::create_directories(d);
+  std::ofstream(d + "/junk.sqlite") << std::string(3000, '\x5a');
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--out", d + "/run", "--db", "sqlite:" + d + "/junk.sqlite"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io"), 2);
+    EXPECT_NE(slurp(d + "/io.stderr").find("history database " + d + "/junk.sqlite: not a database rig can open"),
+              std::string::npos)
+        << slurp(d + "/io.stderr");
+    EXPECT_FALSE(fs::exists(d + "/run"));
+  }
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "sqlite:/proc/rig-none/h.sqlite"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("cannot be created (/proc is not a writable folder)"), std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "sqlite:" + d + "/new/h.sqlite"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr");
+  EXPECT_FALSE(fs::exists(d + "/new"));
+}
