@@ -35,6 +35,7 @@ constexpr std::size_t kAcfMinPoints = 30;      // Stable32: ACF method from 30 a
 // tests/analysis/test_edf_guard.cpp), a PM reading on an FM
 // curve by 3x-30x (issue 12: 25x). Stable32's tables stay unchanged (every one < 2x).
 constexpr double kEdfGuardRatio = 2.0;
+constexpr std::size_t kAcfReliablePoints = 100;  // the ACF's type from fewer is guarded the same way
 
 int diff_order(Deviation d) { return (d == Deviation::HDEV || d == Deviation::OHDEV) ? 3 : 2; }
 
@@ -167,6 +168,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     std::vector<double> z;
     std::optional<NoiseId> id;
     bool bounded = false;  // alpha, EDF and bounds already set (they need no other tau's alpha)
+    std::size_t averages = 0;  // the averaged values its noise identification read
   };
   std::vector<Pending> pend;
   for (std::size_t k = 0; k < opts.size(); ++k)
@@ -202,6 +204,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     if (o.fixed_alpha) return finish(*o.fixed_alpha);
     const detail::Decimated& dec = er.decimated.at(s.m);
     const std::span<const double> z = averages(dec, s.m);
+    e.averages = z.size();
     if (z.size() < kAcfMinPoints) {  // kept for B1/R(n) below
       e.z.assign(z.begin(), z.end());
       return;
@@ -220,12 +223,14 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     finish(e.id->alpha);
   });
 
-  // The alpha of the longest tau below m (same deviation) that the lag-1 ACF identified.
-  auto acf_alpha_below = [](const std::vector<Pending>& all, const Pending& me, std::size_t m) -> std::optional<int> {
+  // The alpha of the longest tau below m (same deviation) that the lag-1 ACF identified from at
+  // least `min_averages` values.
+  auto acf_alpha_below = [](const std::vector<Pending>& all, const Pending& me, std::size_t m,
+                            std::size_t min_averages = 0) -> std::optional<int> {
     std::optional<int> a;
     std::size_t best = 0;
     for (const Pending& q : all)
-      if (q.k == me.k && q.id && q.p.m < m && q.p.m >= best) {
+      if (q.k == me.k && q.id && q.averages >= min_averages && q.p.m < m && q.p.m >= best) {
         best = q.p.m;
         a = q.id->alpha;
       }
@@ -239,6 +244,21 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     const DevOptions& o = opts[e.k];
     const detail::Sums& s = er.sums[index[e.k][e.q]];
     DevPoint p = e.p;
+    // The same guard where the lag-1 ACF read few values (30 to 99: r1's standard error 0.1-0.18,
+    // enough to read flicker PM on a white-FM curve, EDF 9x too large: a review), against the
+    // type it read from 100 or more.
+    if (o.bounds && e.bounded && e.id && o.edf_guard && e.averages < kAcfReliablePoints) {
+      const int d = diff_order(o.type);
+      if (const auto ref = acf_alpha_below(pend, e, s.m, kAcfReliablePoints)) {
+        const int ra = clamp_alpha(*ref, d);
+        const double cap = edf_for(o.type, ra, s.m, n);
+        if (p.edf > kEdfGuardRatio * cap) {
+          p.edf = cap;
+          p.edf_alpha = ra;
+          std::tie(p.lo, p.hi) = chi2_bounds(p.dev, p.edf, o.confidence);
+        }
+      }
+    }
     if (o.bounds && !e.bounded) {  // B1/R(n): fewer than 30 averages
       const int d = diff_order(o.type);
       std::optional<int> previous;
