@@ -288,18 +288,30 @@ void check_procedure_angles_in_travel(const RunArgs& a, const toml::table& hw, c
     lo = map.limit_neg_deg, hi = map.limit_pos_deg;
     whose = "drive map " + map.path + " [limits]";
   } else {
-    const plant::TableParams tp = plant::table_params_from_toml(cfg::get_table(plant_cfg, "table"));
+    const toml::table* pt = cfg::get_table(plant_cfg, "table");
+    const plant::TableParams tp = plant::table_params_from_toml(pt);
     lo = tp.limit_neg_deg, hi = tp.limit_pos_deg;
     whose = "the emulated table's [plant.table] limit_neg_deg / limit_pos_deg";
   }
-  // Where the angle was written: the hardware file's [procedure], else the profile's.
+  // Where the angle was written: the hardware file's [procedure], else the profile file's [table]
+  // (a review: the message named the profile without a line, and advised [procedure], which a
+  // profile does not have).
   const toml::table* mount = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
+  std::optional<toml::table> profile_file;
+  if (!mount && p.source.rfind("builtin:", 0) != 0) {
+    try {
+      profile_file = cfg::parse_file(p.source);
+    } catch (const std::exception&) {  // read once already; only the line is lost
+    }
+  }
+  const toml::table* written = mount ? mount : profile_file ? cfg::get_table(*profile_file, "table") : nullptr;
+  const char* section = mount ? "the hardware file's [procedure]" : "the profile's [table]";
   for (const auto& [key, deg] : {std::pair{"u10_deg", p.u10_deg}, {"u20_deg", p.u20_deg}})
     if (deg < lo || deg > hi) {
-      const toml::node* at = mount ? mount->get(key) : nullptr;
+      const toml::node* at = written ? written->get(key) : nullptr;
       throw ConfigError(fmt::format("{}: {} = {:g}°: outside the table's travel [{:g}°, {:g}°] ({}): the procedure "
-                                    "could not turn the DUT there; change [procedure] u10_deg / u20_deg or the limits",
-                                    at ? cfg::where(*at) : p.source, key, deg, lo, hi, whose));
+                                    "could not turn the DUT there; change {} u10_deg / u20_deg or the limits",
+                                    at ? cfg::where(*at) : p.source, key, deg, lo, hi, whose, section));
     }
 }
 

@@ -957,6 +957,12 @@ TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
         << slurp(d + "/io.stderr");
   }
   EXPECT_FALSE(fs::exists(d + "/run"));
+  // An angle the profile file sets is named at its line, with the section that holds it.
+  std::ofstream(d + "/lim2.toml") << "base = \"ci\"\n[table]\nu20_deg = 170.0\n[plant.table]\nlimit_pos_deg = 150.0\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/lim2.toml", "--yes", "--dry-run"}, d + "/io2"), 2);
+  EXPECT_NE(slurp(d + "/io2.stderr").find(d + "/lim2.toml:3:11: u20_deg = 170°: outside"), std::string::npos)
+      << slurp(d + "/io2.stderr");
+  EXPECT_NE(slurp(d + "/io2.stderr").find("change the profile's [table] u10_deg / u20_deg"), std::string::npos);
 }
 
 // One process per run folder: a folder another process holds (its flock, as a running `rig run`
