@@ -103,14 +103,32 @@ TEST(InProcessBus, FullQueueDropsAndCounts) {
   EXPECT_EQ(b->stats().rx_dropped, 2u);
 }
 
+namespace {
+
+// SocketCAN error frames (linux/can/error.h): a controller's warning, and a bus-off.
+CanFrame rx_warning_frame() {
+  CanFrame f;
+  f.error = true;
+  f.id = CAN_ERR_CRTL;
+  f.len = 8;
+  f.data[1] = CAN_ERR_CRTL_RX_WARNING;
+  return f;
+}
+
+CanFrame bus_off_frame() {
+  CanFrame f;
+  f.error = true;
+  f.id = CAN_ERR_BUSOFF;
+  f.len = 8;
+  return f;
+}
+
+}  // namespace
+
 TEST(InProcessBus, BusOffAndErrorPassiveAreLinkFaultsWarningsAreNot) {
   auto bus = InProcessBus::create();
   auto rx = bus->open("rig");
-  CanFrame warn;
-  warn.error = true;
-  warn.id = CAN_ERR_CRTL;
-  warn.len = 8;
-  warn.data[1] = CAN_ERR_CRTL_RX_WARNING;
+  const CanFrame warn = rx_warning_frame();
   bus->inject(warn);
   CanFrame ok;
   ok.id = 0x5;
@@ -128,10 +146,7 @@ TEST(InProcessBus, BusOffAndErrorPassiveAreLinkFaultsWarningsAreNot) {
     EXPECT_NE(std::string(e.what()).find("error passive (tx)"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("inprocess:bus0/rig"), std::string::npos) << e.what();
   }
-  CanFrame busoff;
-  busoff.error = true;
-  busoff.id = CAN_ERR_BUSOFF;
-  busoff.len = 8;
+  const CanFrame busoff = bus_off_frame();
   bus->inject(busoff);
   EXPECT_THROW(rx->receive(0, {}), HardwareError);
   EXPECT_TRUE(classify_error_frame(busoff).fatal);
@@ -225,15 +240,7 @@ TEST(InProcessBus, ABatchSkipsErrorWarningsAndStopsAtABusOff) {
   o.lockstep = &clock;
   auto bus = InProcessBus::create(o);
   auto rx = bus->open("rig");
-  CanFrame warn;
-  warn.error = true;
-  warn.id = CAN_ERR_CRTL;
-  warn.len = 8;
-  warn.data[1] = CAN_ERR_CRTL_RX_WARNING;
-  CanFrame busoff;
-  busoff.error = true;
-  busoff.id = CAN_ERR_BUSOFF;
-  busoff.len = 8;
+  const CanFrame warn = rx_warning_frame(), busoff = bus_off_frame();
   CanFrame f;
   f.len = 1;
   for (uint32_t id : {0x1u, 0x2u}) f.id = id, bus->inject(f);
