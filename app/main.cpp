@@ -51,7 +51,9 @@ void decimal_numbers_only(CLI::App& app) {
     const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
     if (!whole && !real) continue;
     const bool is_unsigned = type == "UINT";
-    o->check(CLI::Validator(
+    // First among the option's checks (transform() puts it in front): the text is a number
+    // before a range check reads it, whose own message would then say less.
+    o->transform(CLI::Validator(
         [whole, is_unsigned](std::string& v) {
           return decimal_text(v, whole, is_unsigned)
                      ? std::string()

@@ -2064,3 +2064,64 @@ TEST(RigCli, ARunStartedWithItsStandardDescriptorsClosedKeepsItsCapturesWhole) {
   EXPECT_EQ(raw.samples.size(), 60000u) << raw.recovery.summary("raw-U10.cap");
   EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS"), std::string::npos);
 }
+
+// `rig filter select|show --json` ignored a failed write: /dev/full or /proc/version gave exit 0
+// and no JSON (a review). Every step of the write is checked (exit 2 naming the file), and a
+// folder that is not there is named before the candidates are evaluated.
+TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
+  const std::string d = tmp("filter-json");
+  fs::create_directories(d);
+  const std::vector<std::string> quick = {"filter", "select", "--seconds", "0.05", "--orders", "2", "--fc-min", "500",
+                                          "--fc-max", "500"};
+  auto select_to = [&](const std::string& json) {
+    std::vector<std::string> args = quick;
+    args.insert(args.end(), {"--json", json});
+    return run(args, d + "/sel");
+  };
+  EXPECT_EQ(select_to("/dev/full"), 2);
+  EXPECT_NE(slurp(d + "/sel.stderr").find("rig filter select --json /dev/full: write failed: No space left on device"),
+            std::string::npos)
+      << slurp(d + "/sel.stderr");
+  EXPECT_EQ(select_to("/proc/version"), 2) << slurp(d + "/sel.stderr");
+  EXPECT_NE(slurp(d + "/sel.stderr").find("rig filter select --json /proc/version: "), std::string::npos)
+      << slurp(d + "/sel.stderr");
+  EXPECT_EQ(select_to(d + "/no-such-folder/c.json"), 2);
+  EXPECT_NE(slurp(d + "/sel.stderr").find("the folder " + d + "/no-such-folder does not exist"), std::string::npos)
+      << slurp(d + "/sel.stderr");
+  EXPECT_EQ(slurp(d + "/sel.stdout"), "") << "refused before the candidates were evaluated";
+  EXPECT_EQ(run({"filter", "show", "--json", "/dev/full"}, d + "/show"), 2);
+  EXPECT_NE(slurp(d + "/show.stderr").find("rig filter show --json /dev/full: write failed"), std::string::npos)
+      << slurp(d + "/show.stderr");
+  ASSERT_EQ(select_to(d + "/c.json"), 0) << slurp(d + "/sel.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c.json"))["candidates"].size(), 3u);  // paper, none, butter2@500
+}
+
+// Every number of `rig filter select` has a range, checked on the text before any work: a
+// negative, NaN or huge --seconds was exit 4 with a C++ allocator's message, 0 or inf ranked every
+// candidate on an RMS of 0, and --tolerance -1 was taken (a review). Exit 2 naming the option and
+// the value as typed.
+TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
+  const std::string d = tmp("filter-ranges");
+  fs::create_directories(d);
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"--seconds", "-1"}, "--seconds: '-1': must be a number of seconds in (0, 3600]"},
+      {{"--seconds", "nan"}, "--seconds: 'nan': must be a number of seconds in (0, 3600]"},
+      {{"--seconds", "1e12"}, "--seconds: '1e12': must be"},
+      {{"--seconds", "0"}, "--seconds: '0': must be"},
+      {{"--seconds", "inf"}, "--seconds: 'inf': must be"},
+      {{"--seconds", "1e400"}, "--seconds: '1e400': must be"},
+      {{"--tolerance", "-1"}, "--tolerance: '-1': must be a percentage in (0, 100]"},
+      {{"--f-req", "inf"}, "--f-req: 'inf': must be a bandwidth in Hz in (0, 1e+06]"},
+      {{"--orders", "5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
+      {{"--orders", "2", "2"}, "--orders: 2 is given twice"},
+      {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
+      {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number >= 0"},
+      {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};
+  for (const auto& [opts, why] : bad) {
+    std::vector<std::string> args = {"filter", "select"};
+    args.insert(args.end(), opts.begin(), opts.end());
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
+    EXPECT_EQ(slurp(d + "/io.stdout"), "") << why;
+  }
+}
