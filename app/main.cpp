@@ -66,6 +66,21 @@ void decimal_numbers_only(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands({})) decimal_numbers_only(*sub);
 }
 
+// An option that takes text (a path, a URL, a name) refuses an empty value: `--out "$DIR"` with
+// DIR unset wrote the run into ./runs/, `--db ""` recorded into the default database and
+// `rig history --serial ""` filtered nothing, each with exit 0 (a review). No text option of rig
+// gives "" a meaning of its own (each one's default is what leaving it out gives), so none is
+// exempt; one that did would be listed here with why.
+void no_empty_text(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    const std::string shown = o->get_type_name();  // "TEXT", or with a check's text: "TEXT:FILE"
+    if (shown.substr(0, shown.find(':')) != "TEXT") continue;
+    o->transform(CLI::Validator([](std::string& v) { return v.empty() ? std::string("empty value") : std::string(); },
+                                ""));
+  }
+  for (CLI::App* sub : app.get_subcommands({})) no_empty_text(*sub);
+}
+
 // A process started with stdin, stdout or stderr closed (`rig run <&- >&- 2>&-`, a careless
 // service unit) gets its first open() on descriptor 0, 1 or 2: the raw capture became fd 2 and
 // the progress display was written into it (a review). Each closed one is opened on /dev/null
@@ -97,6 +112,7 @@ int main(int argc, char** argv) {
   rig::cli::add_capture(app, rc);
   rig::cli::add_verify(app, rc);
   decimal_numbers_only(app);
+  no_empty_text(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

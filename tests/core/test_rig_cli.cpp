@@ -927,12 +927,12 @@ TEST(RigCli, ASerialTheDutCouldNotReportIsRefusedFirst) {
       {"A\tB\x01", "'A\\x09B\\x01': not printable ASCII"},
       {"A\nB", "'A\\x0AB': not printable ASCII"},
       {std::string(33, 'X'), "33 characters; a DUT reports at most 32"},
-      {"", "empty"},
+      {"", "--serial: empty value"},  // as every text option says it (main.cpp)
       {" SN1", "starts or ends with a blank"}};
   for (const auto& [serial, why] : bad) {
     EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--serial", serial, "--out", d + "/run"}, d + "/io"), 2) << why;
     EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
-    EXPECT_EQ(slurp(d + "/io.stderr").rfind("--serial: '", 0), 0u) << slurp(d + "/io.stderr");
+    EXPECT_EQ(slurp(d + "/io.stderr").rfind("--serial: ", 0), 0u) << slurp(d + "/io.stderr");
     EXPECT_EQ(run({"capture", "import", d + "/none.log", "--serial", serial, "--out", d + "/c.cap"}, d + "/io"), 2);
   }
   EXPECT_FALSE(fs::exists(d + "/run"));
@@ -2065,6 +2065,21 @@ TEST(RigCli, ARunStartedWithItsStandardDescriptorsClosedKeepsItsCapturesWhole) {
   EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS"), std::string::npos);
 }
 
+namespace {
+// `cmd` through /bin/sh (an environment of its own, a working folder); its exit code.
+int shell(const std::string& cmd) {
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+// RIG_BINARY with `args`, each quoted for /bin/sh (none holds a quote).
+std::string rig_line(const std::vector<std::string>& args) {
+  std::string line = RIG_BINARY;
+  for (const std::string& a : args) line += " '" + a + "'";
+  return line;
+}
+}  // namespace
+
 // `rig filter select|show --json` ignored a failed write: /dev/full or /proc/version gave exit 0
 // and no JSON (a review). Every step of the write is checked (exit 2 naming the file), and a
 // folder that is not there is named before the candidates are evaluated.
@@ -2124,4 +2139,31 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
     EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
     EXPECT_EQ(slurp(d + "/io.stdout"), "") << why;
   }
+}
+
+// An empty value was taken for the option's default: `--out "$DIR"` with DIR unset wrote the run
+// into ./runs/, `--db ""` recorded into the default database, `rig history --serial ""` filtered
+// nothing (a review). Every option that takes text (a path, a URL, a name) refuses it: exit 2,
+// "OPTION: empty value", before anything is written.
+TEST(RigCli, AnEmptyTextOptionIsRefusedNotTakenForItsDefault) {
+  const std::string d = tmp("empty-values");
+  fs::create_directories(d);
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", "--profile", "ci", "--yes", "--no-history", "--out", ""}, "--out: empty value"},
+      {{"run", "--profile", "ci", "--yes", "--out", d + "/r", "--db", ""}, "--db: empty value"},
+      {{"run", "--profile", "ci", "--yes", "--out", d + "/r", "--hardware", ""}, "--hardware: empty value"},
+      {{"history", "--db", ""}, "--db: empty value"},
+      {{"history", "--serial", ""}, "--serial: empty value"},
+      {{"history", "--profile", ""}, "--profile: empty value"},
+      {{"dut", "--can", "", "info"}, "--can: empty value"},
+      {{"table", "--modbus", "", "status"}, "--modbus: empty value"},
+      {{"capture", "import", d + "/none.log", "--hardware", d + "/hw.toml", "--out", ""}, "--out: empty value"},
+      {{"filter", "select", "--json", ""}, "--json: empty value"},
+      {{"report", ""}, "DIR: empty value"}};
+  for (const auto& [args, why] : cases) {
+    EXPECT_EQ(shell("cd " + d + " && " + rig_line(args) + " >io.stdout 2>io.stderr"), 2) << why;
+    EXPECT_EQ(slurp(d + "/io.stderr").rfind(why, 0), 0u) << slurp(d + "/io.stderr");
+  }
+  EXPECT_FALSE(fs::exists(d + "/runs")) << "no run folder made for an empty --out";
+  EXPECT_FALSE(fs::exists(d + "/r"));
 }
