@@ -2167,3 +2167,29 @@ TEST(RigCli, AnEmptyTextOptionIsRefusedNotTakenForItsDefault) {
   EXPECT_FALSE(fs::exists(d + "/runs")) << "no run folder made for an empty --out";
   EXPECT_FALSE(fs::exists(d + "/r"));
 }
+
+// `rig dut stream` checked its limits and --out only after the link opened (exit 4 where the
+// interface is missing), and a negative or NaN limit streamed forever (a review). Refused first,
+// whatever the interface: exit 2 naming the option and value, with a CAN name that is nowhere.
+TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
+  const std::string d = tmp("dut-stream");
+  fs::create_directories(d + "/a-folder");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"--count", "-1"}, "--count: '-1' is not a decimal whole number >= 0"},
+      {{"--count", "0"}, "--count: '0': must be a number of samples >= 1"},
+      {{"--seconds", "-5"}, "--seconds: '-5': must be a number of seconds in (0, 1e+06]"},
+      {{"--seconds", "nan"}, "--seconds: 'nan': must be"},
+      {{"--seconds", "0"}, "--seconds: '0': must be"},
+      {{"--out", d + "/a-folder"}, "rig dut stream --out " + d + "/a-folder: a folder, not a file"},
+      {{"--out", d + "/none/s.txt"}, "the folder " + d + "/none does not exist"}};
+  for (const auto& [opts, why] : bad) {
+    std::vector<std::string> args = {"dut", "--can", "rig-nocan0", "stream"};
+    args.insert(args.end(), opts.begin(), opts.end());
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
+  }
+  // The same options, valid, go on to the link, which is not there: the hardware's exit 4.
+  EXPECT_EQ(run({"dut", "--can", "rig-nocan0", "stream", "--count", "10", "--out", d + "/s.txt"}, d + "/io"), 4)
+      << slurp(d + "/io.stderr");
+  EXPECT_FALSE(fs::exists(d + "/s.txt")) << "the file is opened once the DUT answers";
+}
