@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "rig/core/escape.hpp"
+
 namespace rig::cfg {
 
 namespace {
@@ -13,7 +15,8 @@ std::string pos(const toml::source_region& s) {
   // overrides the file (rig table --unit, rig dut --can), not a line of any file.
   if (!s.path && s.begin.line == 0) return "command-line option";
   std::ostringstream os;
-  os << (s.path ? *s.path : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
+  // The path as typed (--profile, --hardware) with its control bytes as \xNN: not sent to the terminal.
+  os << (s.path ? shown_text(*s.path) : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
   return os.str();
 }
 
@@ -66,8 +69,8 @@ toml::table parse_file(const std::string& path) {
   // toml++ says "FILE:0:0: File could not be opened for reading" for a file that is not there.
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
-    throw ConfigError(path + (ec ? ": cannot be read: " + ec.message() : std::string(": no such file")));
-  if (std::filesystem::is_directory(path, ec)) throw ConfigError(path + ": a folder, not a file");
+    throw ConfigError(shown_text(path) + (ec ? ": cannot be read: " + ec.message() : std::string(": no such file")));
+  if (std::filesystem::is_directory(path, ec)) throw ConfigError(shown_text(path) + ": a folder, not a file");
   try {
     return toml::parse_file(path);
   } catch (const toml::parse_error& e) {
