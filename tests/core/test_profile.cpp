@@ -182,6 +182,18 @@ TEST(Profile, ANameIsRequiredAndHoldsNoControlCharacter) {
   EXPECT_EQ(load_profile(write_tmp("cyrillic.toml", "base = \"ci\"\n[profile]\nname = \"приёмка\"\n")).name, "приёмка");
 }
 
+// A whole number is shown as one, the range's bounds too: `retries = 1000000000` was
+// "'retries' = 1e+09" (a review).
+TEST(Profile, AWholeNumberOutOfRangeIsShownAsTyped) {
+  const std::string p = write_tmp("retries.toml", "base = \"ci\"\n[procedure]\nretries = 1000000000\n");
+  EXPECT_NE(error_of(p).find("retries.toml:3:11: 'retries' = 1000000000 is out of range [0, 10]"), std::string::npos)
+      << error_of(p);
+  // A NaN where no range applies is said to be one (it was "is out of range" with no range).
+  const std::string n = write_tmp("nan-limit.toml", "base = \"ci\"\n[limits]\nbias = [0.0, nan]\n");
+  EXPECT_NE(error_of(n).find("nan-limit.toml:3:14: 'bias' = nan: not a finite number"), std::string::npos)
+      << error_of(n);
+}
+
 // A --profile path is shown with its control bytes as \xNN wherever a message names it: the
 // file's own errors (FILE:LINE:COL) and a path that is no file.
 TEST(Profile, APathWithControlBytesIsShownEscaped) {
