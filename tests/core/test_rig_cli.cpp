@@ -2193,3 +2193,49 @@ TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
       << slurp(d + "/io.stderr");
   EXPECT_FALSE(fs::exists(d + "/s.txt")) << "the file is opened once the DUT answers";
 }
+
+// Settings from the environment are named as such: a RIG_HISTORY rig cannot open said nothing of
+// RIG_HISTORY, and a rig config (RIG_CONFIG) with a mistyped section ([histori]) was skipped, the
+// runs recorded into the default database (a review). Exit 2 saying "RIG_HISTORY: ..." or
+// naming the config's FILE:LINE:COL, for rig history and rig run alike.
+TEST(RigCli, HistorySettingsFromTheEnvironmentAreNamedAsSuch) {
+  const std::string d = tmp("history-env");
+  fs::create_directories(d + "/home");
+  const std::string rig = "env -u XDG_DATA_HOME -u RIG_HISTORY -u RIG_CONFIG HOME=" + d + "/home ";
+  auto io = [&](const std::string& name) { return " >" + d + "/" + name + ".stdout 2>" + d + "/" + name + ".stderr"; };
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=mysql://x " + RIG_BINARY + " history" + io("scheme")), 2);
+  EXPECT_EQ(slurp(d + "/scheme.stderr").find("rig: configuration error: RIG_HISTORY: history database URL 'mysql://x': "
+                                             "unknown scheme"),
+            0u)
+      << slurp(d + "/scheme.stderr");
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite: " + RIG_BINARY + " run --profile ci --dry-run" + io("nofile")), 2);
+  EXPECT_NE(slurp(d + "/nofile.stderr").find("RIG_HISTORY: history database URL 'sqlite:' names no file"),
+            std::string::npos)
+      << slurp(d + "/nofile.stderr");
+  std::ofstream(d + "/junk.sqlite") << "not a database";
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite:" + d + "/junk.sqlite " + RIG_BINARY + " history" + io("junk")), 2);
+  EXPECT_NE(slurp(d + "/junk.stderr").find("RIG_HISTORY: sqlite:" + d + "/junk.sqlite: "), std::string::npos)
+      << slurp(d + "/junk.stderr");
+
+  std::ofstream(d + "/typo.toml") << "# the line's database\n[histori]\nurl = \"sqlite:" << d << "/line.sqlite\"\n";
+  const std::string config = rig + "RIG_CONFIG=" + d + "/typo.toml ";
+  EXPECT_EQ(shell(config + RIG_BINARY + " history" + io("typo")), 2);
+  EXPECT_NE(slurp(d + "/typo.stderr").find(d + "/typo.toml:2:1: unknown section 'histori' in the rig config"),
+            std::string::npos)
+      << slurp(d + "/typo.stderr");
+  EXPECT_EQ(shell(config + RIG_BINARY + " run --profile ci --dry-run" + io("typo-run")), 2);
+  EXPECT_NE(slurp(d + "/typo-run.stderr").find("typo.toml:2:1: unknown section 'histori'"), std::string::npos)
+      << slurp(d + "/typo-run.stderr");
+  std::ofstream(d + "/scheme.toml") << "[history]\nurl = \"mysql://x\"\n";
+  EXPECT_EQ(shell(rig + "RIG_CONFIG=" + d + "/scheme.toml " + RIG_BINARY + " history" + io("cfg-url")), 2);
+  EXPECT_NE(slurp(d + "/cfg-url.stderr").find(d + "/scheme.toml:2:7: 'url' = 'mysql://x': unknown scheme"),
+            std::string::npos)
+      << slurp(d + "/cfg-url.stderr");
+  // The right section is read as before.
+  std::ofstream(d + "/good.toml") << "[history]\nurl = \"sqlite:" << d << "/line.sqlite\"\n";
+  EXPECT_EQ(shell(rig + "RIG_CONFIG=" + d + "/good.toml " + RIG_BINARY + " history" + io("good")), 0)
+      << slurp(d + "/good.stderr");
+  EXPECT_NE(slurp(d + "/good.stdout").find("no runs recorded yet (sqlite:" + d + "/line.sqlite does not exist)"),
+            std::string::npos)
+      << slurp(d + "/good.stdout");
+}
