@@ -4,10 +4,16 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -21,6 +27,7 @@
 #include "firmware_link/dbc_stream.hpp"
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
+#include "app/number_option.hpp"
 #include "app/output_file.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "rig/core/clock.hpp"
@@ -34,9 +41,9 @@ namespace {
 
 struct DutArgs {
   std::string can, hardware;
-  // stream
+  // stream: 0 = no limit (the option not given; a given one is checked to be > 0)
   double seconds = 0;
-  long count = 0;
+  std::uint64_t count = 0;
   std::string out;
   bool quiet = false;
   // set-filter
@@ -94,7 +101,20 @@ int cmd_info(const DutArgs& a) {
   return kExitPass;
 }
 
+// The samples to stream: --count, else --seconds at 1 kHz, else -1 (until Ctrl-C). Their
+// ranges are checked by the options (a count >= 1, seconds finite and > 0): a negative or NaN
+// limit here meant "stream forever" (a review).
+long stream_limit(const DutArgs& a) {
+  if (a.count > 0) return static_cast<long>(std::min<std::uint64_t>(a.count, std::numeric_limits<long>::max()));
+  if (a.seconds > 0) return std::max(1L, std::lround(a.seconds * 1000.0));
+  return -1;
+}
+
 int cmd_stream(const DutArgs& a) {
+  // Where the samples go is checked before the link opens (a folder, a missing folder: exit 2,
+  // not the socket's 4); the file is opened once the DUT answers, so a dead link leaves an
+  // earlier file as it was.
+  if (!a.out.empty()) check_output_path(a.out, "rig dut stream --out");
   CancelSource cancel;
   SignalWatcher signals(cancel);  // Ctrl-C ends the stream cleanly
   RealClock clock;
@@ -103,10 +123,10 @@ int cmd_stream(const DutArgs& a) {
   std::ostream* os = &std::cout;
   if (!a.out.empty()) {
     file.open(a.out);
-    if (!file) throw ConfigError("rig dut stream: cannot write " + a.out);
+    if (!file) throw ConfigError("rig dut stream --out " + a.out + ": cannot open for writing: " + std::strerror(errno));
     os = &file;
   }
-  const long want = a.count > 0 ? a.count : a.seconds > 0 ? static_cast<long>(a.seconds * 1000.0) : -1;
+  const long want = stream_limit(a);
   *os << "# seq x_g y_g status   (" << link->describe() << ")\n";
   link->start_stream(cancel.token());
   std::vector<Sample> buf(100);
@@ -310,9 +330,12 @@ void add_dut(CLI::App& app, int& rc) {
 
   auto* stream = dut->add_subcommand("stream", "Stream samples (seq x_g y_g status per line) until Ctrl-C or a limit");
   add_link_options(stream, *a);
-  stream->add_option("--seconds", a->seconds, "Stop after this many seconds of samples (1 kHz)");
-  stream->add_option("--count", a->count, "Stop after this many samples");
-  stream->add_option("--out", a->out, "Write the samples to this file instead of stdout");
+  // Checked before the link opens: a bad limit is exit 2 whether or not the interface exists.
+  stream->add_option("--seconds", a->seconds, "Stop after this many seconds of samples (1 kHz), in (0, 1e6]")
+      ->check(number_in(0, 1e6, true, "a number of seconds"));
+  stream->add_option("--count", a->count, "Stop after this many samples, >= 1")
+      ->check(whole_in("a number of samples", 1));
+  stream->add_option("--out", a->out, "Write the samples to this file instead of stdout (not a folder)");
   stream->add_flag("--quiet", a->quiet, "Only the summary (gaps, duplicates)");
   stream->callback([a, &rc] { rc = cmd_stream(*a); });
 

@@ -17,6 +17,8 @@
 #include "plant/dut/loop_figures.hpp"
 #include "plant/dut/params.hpp"
 #include "app/commands.hpp"
+#include "app/number_option.hpp"
+#include "app/output_file.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 
@@ -80,10 +82,18 @@ json candidate_json(const plant::FilterCandidate& c) {
           {"rate_hz", c.filter.rate_hz}};
 }
 
-void write_json(const std::string& path, const json& j) {
-  std::ofstream out(path);
-  if (!out) throw ConfigError(path + ": cannot write");
-  out << j.dump(2) << "\n";
+// Every step of the write checked: `--json /dev/full` ended in exit 0 with no JSON (a review).
+void write_json(const std::string& path, const json& j, const std::string& what) {
+  write_output_file(path, j.dump(2) + "\n", what);
+}
+
+// Orders are checked one by one by their option's range; the same order twice would be ranked
+// against itself, every cut-off evaluated twice.
+void check_orders(const std::vector<int>& orders) {
+  for (std::size_t i = 0; i < orders.size(); ++i)
+    for (std::size_t k = 0; k < i; ++k)
+      if (orders[k] == orders[i])
+        throw ConfigError("--orders: " + std::to_string(orders[i]) + " is given twice (each order is tried once)");
 }
 
 struct SelectArgs {
@@ -95,6 +105,8 @@ struct SelectArgs {
 };
 
 void run_select(const SelectArgs& a) {
+  check_orders(a.orders);
+  if (!a.json_out.empty()) check_output_path(a.json_out, "rig filter select --json");  // before the work
   DutConfig dc;
   load_dut(a.dut_file, dc);
   plant::FilterSelectOptions o;
@@ -130,7 +142,7 @@ void run_select(const SelectArgs& a) {
   if (!a.json_out.empty()) {
     json j = {{"f_req_hz", a.f_req}, {"band_tol_pct", a.tol}, {"candidates", json::array()}};
     for (const auto& k : c) j["candidates"].push_back(candidate_json(k));
-    write_json(a.json_out, j);
+    write_json(a.json_out, j, "rig filter select --json");
   }
 }
 
@@ -139,6 +151,7 @@ struct ShowArgs {
 };
 
 void run_show(const ShowArgs& a) {
+  if (!a.json_out.empty()) check_output_path(a.json_out, "rig filter show --json");
   DutConfig dc;
   load_dut(a.dut_file, dc);
   const plant::DutParams p = plant::load_dut_params(dc.dut);
@@ -161,7 +174,7 @@ void run_show(const ShowArgs& a) {
               {"dc_gain", lf.dc_gain},
               {"step", {{"t_s", lf.step_t_s}, {"x", lf.step_x}, {"y", lf.step_y}}},
               {"response", {{"f_hz", lf.freq_hz}, {"amp_x", lf.amp_x}, {"amp_y", lf.amp_y}}}};
-    write_json(a.json_out, j);
+    write_json(a.json_out, j, "rig filter show --json");
   }
 }
 
@@ -173,19 +186,31 @@ void add_filter(CLI::App& app, int& rc) {
 
   auto sa = std::make_shared<SelectArgs>();
   auto* sel = sub->add_subcommand("select", "Rank candidate filters by the paper's two criteria");
-  sel->add_option("--f-req", sa->f_req, "Required bandwidth at the 0.5 level, Hz")->capture_default_str();
-  sel->add_option("--tolerance", sa->tol, "Allowed bandwidth deviation, %")->capture_default_str();
-  sel->add_option("--orders", sa->orders, "Butterworth orders to try")->capture_default_str();
-  sel->add_option("--fc-min", sa->fc_min, "Lowest cut-off, Hz")->capture_default_str();
-  sel->add_option("--fc-max", sa->fc_max, "Highest cut-off, Hz")->capture_default_str();
-  sel->add_option("--fc-step", sa->fc_step, "Cut-off step, Hz")->capture_default_str();
-  sel->add_option("--seconds", sa->seconds, "Emulated output per candidate for the RMS, s")->capture_default_str();
-  sel->add_option("--seed", sa->seed, "Noise seed of the emulated DUT")->capture_default_str();
+  // Every number has its range, checked on the text before any work (README, `rig filter`): a
+  // negative or NaN --seconds was an allocation failure reported as exit 4, and 0 or inf ranked
+  // every candidate on an RMS of 0 (a review). The cut-offs' range is checked as a whole by
+  // select_filters (0 < min <= max, finite; at most 10000 cut-offs), before any work too.
+  sel->add_option("--f-req", sa->f_req, "Required bandwidth at the 0.5 level, Hz, in (0, 1e6]")
+      ->capture_default_str()
+      ->check(number_in(0, 1e6, true, "a bandwidth in Hz"));
+  sel->add_option("--tolerance", sa->tol, "Allowed bandwidth deviation, %, in (0, 100]")
+      ->capture_default_str()
+      ->check(number_in(0, 100, true, "a percentage"));
+  sel->add_option("--orders", sa->orders, "Butterworth orders to try, each 1 to 4, once")
+      ->capture_default_str()
+      ->check(whole_in("a Butterworth order", 1, 4));
+  sel->add_option("--fc-min", sa->fc_min, "Lowest cut-off, Hz (0 < min <= max)")->capture_default_str();
+  sel->add_option("--fc-max", sa->fc_max, "Highest cut-off, Hz (finite)")->capture_default_str();
+  sel->add_option("--fc-step", sa->fc_step, "Cut-off step, Hz (> 0; at most 10000 cut-offs)")->capture_default_str();
+  sel->add_option("--seconds", sa->seconds, "Emulated output per candidate for the RMS, s, in (0, 3600]")
+      ->capture_default_str()
+      ->check(number_in(0, 3600, true, "a number of seconds"));
+  sel->add_option("--seed", sa->seed, "Noise seed of the emulated DUT, a whole number >= 0")->capture_default_str();
   sel->add_option("--dut", sa->dut_file, "Profile or DUT TOML ([plant.dut] overrides)")->check(CLI::ExistingFile);
   sel->add_option("--recorded", sa->recorded,
                   "Criterion 1 on a recording of x at the DUT's loop rate (text, one value per line)")
       ->check(CLI::ExistingFile);
-  sel->add_option("--top", sa->top, "Rows to print")->capture_default_str();
+  sel->add_option("--top", sa->top, "Rows to print, >= 1")->capture_default_str()->check(whole_in("a number of rows", 1));
   sel->add_option("--json", sa->json_out, "Write every candidate as JSON");
   sel->callback([sa, &rc] {
     run_select(*sa);

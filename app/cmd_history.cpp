@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/history_source.hpp"
 #include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/db.hpp"
@@ -182,6 +183,23 @@ void record(const HistoryArgs& a) {
             << a.db << "\n";
 }
 
+int run_history(const HistoryArgs& a, bool db_given) {
+  if (!a.record.empty()) {
+    record(a);
+    return kExitPass;
+  }
+  // Reading never creates a database. A --db that names no file is a mistake (exit 2, from
+  // the reader); the default database merely does not exist until the first run records.
+  if (const auto path = history::sqlite_path(a.db); !db_given && path && !std::filesystem::exists(*path)) {
+    std::cout << "no runs recorded yet (" << a.db << " does not exist)\n";
+    return kExitPass;
+  }
+  history::Filter f{opt(a.serial), opt(a.since), opt(a.until), opt(a.outcome), opt(a.profile), a.limit};
+  if (a.value.empty()) list(a, f);
+  else trend(a, f);
+  return kExitPass;
+}
+
 }  // namespace
 
 void add_history(CLI::App& app, int& rc) {
@@ -207,24 +225,18 @@ void add_history(CLI::App& app, int& rc) {
   sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit");
   sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
   sub->callback([&rc, a] {
-    const bool db_given = !a->db.empty();
-    if (!db_given) a->db = history::default_db_url();
-    if (!a->record.empty()) {
-      record(*a);
-      rc = kExitPass;
-      return;
+    const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
+    HistorySource source{a->db};
+    if (!db_given) source = default_history();
+    a->db = source.url;
+    try {
+      rc = run_history(*a, db_given);
+    } catch (const ConfigError& e) {
+      // A database $RIG_HISTORY names is the environment's mistake: said so, or the user looks
+      // for a --db that was never given (a review).
+      if (!source.from_rig_history) throw;
+      throw ConfigError(std::string("RIG_HISTORY: ") + e.what());
     }
-    // Reading never creates a database. A --db that names no file is a mistake (exit 2, from
-    // the reader); the default database merely does not exist until the first run records.
-    if (const auto path = history::sqlite_path(a->db); !db_given && path && !std::filesystem::exists(*path)) {
-      std::cout << "no runs recorded yet (" << a->db << " does not exist)\n";
-      rc = kExitPass;
-      return;
-    }
-    history::Filter f{opt(a->serial), opt(a->since), opt(a->until), opt(a->outcome), opt(a->profile), a->limit};
-    if (a->value.empty()) list(*a, f);
-    else trend(*a, f);
-    rc = kExitPass;
   });
 }
 

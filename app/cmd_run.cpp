@@ -42,6 +42,7 @@
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
 #include "app/whole_number.hpp"
+#include "app/history_source.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/executive/passport.hpp"
@@ -382,7 +383,7 @@ std::string history_url(const RunArgs& a, const toml::table& hw) {
         return "sqlite:" + (fs::path(*src).parent_path() / *file).lexically_normal().string();
       return url;
     }
-  return history::default_db_url();
+  return default_history().url;  // RIG_HISTORY's and the rig config's mistakes named as theirs
 }
 
 // The default run folder's time stamp: ISO 8601 basic time, UTC, e.g. 2026-11-23T205900Z.

@@ -9,6 +9,7 @@
 
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
+#include "app/number_option.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -167,7 +168,12 @@ void add_table(CLI::App& app, int& rc) {
   });
 
   auto* mv = sub->add_subcommand("move", "Move to an angle and wait until in position and confirmed");
-  mv->add_option("DEG", a->deg, "Target angle, degrees")->required();
+  // A finite angle, checked on the text before the drive is asked: `move nan` was exit 4 with the
+  // drive unreachable and 2 with it reachable, and `move 1e400` was named "inf°" (a review). The
+  // travel limits are the drive's, checked when it answers.
+  mv->add_option("DEG", a->deg, "Target angle, degrees (a finite number)")
+      ->required()
+      ->check(finite("a finite number of degrees"));
   mv->callback([a, &rc] {
     with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;

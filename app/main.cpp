@@ -51,7 +51,9 @@ void decimal_numbers_only(CLI::App& app) {
     const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
     if (!whole && !real) continue;
     const bool is_unsigned = type == "UINT";
-    o->check(CLI::Validator(
+    // First among the option's checks (transform() puts it in front): the text is a number
+    // before a range check reads it, whose own message would then say less.
+    o->transform(CLI::Validator(
         [whole, is_unsigned](std::string& v) {
           return decimal_text(v, whole, is_unsigned)
                      ? std::string()
@@ -62,6 +64,21 @@ void decimal_numbers_only(CLI::App& app) {
         ""));
   }
   for (CLI::App* sub : app.get_subcommands({})) decimal_numbers_only(*sub);
+}
+
+// An option that takes text (a path, a URL, a name) refuses an empty value: `--out "$DIR"` with
+// DIR unset wrote the run into ./runs/, `--db ""` recorded into the default database and
+// `rig history --serial ""` filtered nothing, each with exit 0 (a review). No text option of rig
+// gives "" a meaning of its own (each one's default is what leaving it out gives), so none is
+// exempt; one that did would be listed here with why.
+void no_empty_text(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    const std::string shown = o->get_type_name();  // "TEXT", or with a check's text: "TEXT:FILE"
+    if (shown.substr(0, shown.find(':')) != "TEXT") continue;
+    o->transform(CLI::Validator([](std::string& v) { return v.empty() ? std::string("empty value") : std::string(); },
+                                ""));
+  }
+  for (CLI::App* sub : app.get_subcommands({})) no_empty_text(*sub);
 }
 
 // A process started with stdin, stdout or stderr closed (`rig run <&- >&- 2>&-`, a careless
@@ -95,6 +112,7 @@ int main(int argc, char** argv) {
   rig::cli::add_capture(app, rc);
   rig::cli::add_verify(app, rc);
   decimal_numbers_only(app);
+  no_empty_text(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

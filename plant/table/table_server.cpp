@@ -175,7 +175,14 @@ void TableServer::start() {
     impl->ctx = modbus_new_tcp_pi(ep_.host.c_str(), port.c_str());
     if (!impl->ctx) throw HardwareError("table server " + ep_.str() + ": " + modbus_strerror(errno));
     impl->listen_fd = modbus_tcp_pi_listen(impl->ctx, 8);
-    if (impl->listen_fd < 0) throw HardwareError("table server: cannot listen on " + ep_.str() + ": " + modbus_strerror(errno));
+    if (impl->listen_fd < 0) {
+      const int e = errno;
+      // libmodbus reports a host name it cannot resolve as ECONNREFUSED: `--modbus nohost:502`
+      // said "Connection refused" (a review). Said as the table client says it.
+      std::string why = e == ECONNREFUSED ? m::host_resolution_problem(ep_.host) : "";
+      if (why.empty()) why = modbus_strerror(e);
+      throw HardwareError("table server: cannot listen on " + ep_.str() + ": " + why);
+    }
     sockaddr_storage sa{};
     socklen_t sl = sizeof sa;
     if (getsockname(impl->listen_fd, reinterpret_cast<sockaddr*>(&sa), &sl) == 0) {

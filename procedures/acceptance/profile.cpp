@@ -14,6 +14,7 @@
 #include "analysis/allan.hpp"
 #include "design/filter.hpp"
 #include "design/filter_toml.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::acceptance {
@@ -21,6 +22,19 @@ namespace rig::acceptance {
 const std::map<std::string, std::string>& builtin_profiles();  // generated from profiles/*.toml
 
 namespace {
+
+// [profile] name: it names the passport, JUnit's suite, the history's rows and the default run
+// folder, and the terminal shows it. "" gave a run folder runs/_-<time> and a passport of no
+// profile; an escape sequence in it was sent to the terminal as it was (a review).
+std::string read_profile_name(const toml::table& prof) {
+  const std::string name = cfg::get_string(prof, "name");
+  const toml::node& n = *prof.get("name");
+  if (name.empty()) throw ConfigError(cfg::where(n) + ": 'name' = \"\": the profile's name is required, not empty");
+  if (has_unshowable(name))
+    throw ConfigError(cfg::where(n) + ": 'name' = \"" + shown_text(name) +
+                      "\": a control character (shown here as \\xNN) cannot be in the profile's name");
+  return name;
+}
 
 Orientation parse_orientation(const toml::table& t, std::string_view key, Orientation def) {
   const std::string s = cfg::get_string(t, key, std::string(to_string(def)));
@@ -100,7 +114,7 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   p.digest = digest(t);
   const toml::table* prof = cfg::get_table(t, "profile", true);
   cfg::check_keys(*prof, {"name", "description"}, "profile");
-  p.name = cfg::get_string(*prof, "name");
+  p.name = read_profile_name(*prof);
   p.description = cfg::get_string(*prof, "description", std::string());
 
   const toml::table* pr = cfg::get_table(t, "procedure", true);
@@ -242,7 +256,7 @@ Profile load_profile(const std::string& name_or_path) {
     // which file inherited it, where a key of its own would change it.
     const std::string what = e.what();
     if (source.rfind("builtin:", 0) != 0 && what.rfind("builtin:", 0) == 0)
-      throw ConfigError(what + " (inherited by " + source + " from its base; set the key there to change it)");
+      throw ConfigError(what + " (inherited by " + shown_text(source) + " from its base; set the key there to change it)");
     throw;
   }
 }
@@ -257,7 +271,8 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
     if (!std::filesystem::exists(name_or_path)) {
       std::string names;
       for (const auto& [k, v] : builtin) names += (names.empty() ? "" : ", ") + k;
-      throw ConfigError("profile '" + name_or_path + "': no such file and not a built-in profile (" + names + ")");
+      throw ConfigError("profile '" + shown_text(name_or_path) + "': no such file and not a built-in profile (" + names +
+                        ")");
     }
     t = cfg::parse_file(name_or_path);
     source = name_or_path;

@@ -1,6 +1,7 @@
 // One byte shown as text, "\xNN" (two upper-case hex digits): how every message, JUnit file
 // and report shows a byte that must not reach a terminal or an XML reader as it is.
 #pragma once
+#include <cstddef>
 #include <string>
 #include <string_view>
 
@@ -26,5 +27,58 @@ inline std::string shown_ascii(std::string_view v) {
   }
   return shown;
 }
+
+// The length of the well-formed UTF-8 sequence at s[i] (RFC 3629: no overlong form, no
+// surrogate, nothing past U+10FFFF), or 0 when the byte there starts none.
+inline std::size_t utf8_sequence_at(std::string_view s, std::size_t i) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const auto cont = [&](std::size_t k) { return k < s.size() && (b(k) & 0xC0) == 0x80; };
+  const unsigned char c = b(i);
+  if (c >= 0xC2 && c <= 0xDF) return cont(i + 1) ? 2 : 0;
+  if (c >= 0xE0 && c <= 0xEF) {
+    if (!cont(i + 1) || !cont(i + 2)) return 0;
+    if ((c == 0xE0 && b(i + 1) < 0xA0) || (c == 0xED && b(i + 1) > 0x9F)) return 0;
+    return 3;
+  }
+  if (c >= 0xF0 && c <= 0xF4) {
+    if (!cont(i + 1) || !cont(i + 2) || !cont(i + 3)) return 0;
+    if ((c == 0xF0 && b(i + 1) < 0x90) || (c == 0xF4 && b(i + 1) > 0x8F)) return 0;
+    return 4;
+  }
+  return 0;
+}
+
+// Well-formed characters a terminal acts on rather than shows: the C1 controls (U+0080..U+009F:
+// U+009B is CSI), the line and paragraph separators, and the bidirectional embeddings,
+// overrides and isolates (U+202A..U+202E, U+2066..U+2069).
+inline bool terminal_acts_on(std::string_view seq) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(seq[k]); };
+  if (seq.size() == 2) return b(0) == 0xC2 && b(1) <= 0x9F;
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80) return b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return b(2) >= 0xA6 && b(2) <= 0xA9;
+  return false;
+}
+
+// Text as rig analyze shows a bad line (its quoted_bytes): printable ASCII and whole UTF-8
+// characters (a Cyrillic name) as they are; control bytes, bytes that are not well-formed UTF-8
+// and characters a terminal acts on as \xNN, byte by byte. For a name or a path in a message.
+inline std::string shown_text(std::string_view s) {
+  std::string out;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t len = c >= 0x20 && c < 0x7F ? 1 : c >= 0x80 ? utf8_sequence_at(s, i) : 0;
+    const bool shown_as_is = len == 1 || (len > 1 && !terminal_acts_on(s.substr(i, len)));
+    if (len == 0) len = 1;
+    for (std::size_t k = i; k < i + len; ++k)
+      if (shown_as_is) out += s[k];
+      else append_hex_escape(out, static_cast<unsigned char>(s[k]));
+    i += len;
+  }
+  return out;
+}
+
+// Whether shown_text would escape anything: `s` holds a control byte, a byte that is not
+// well-formed UTF-8 or a character a terminal acts on.
+inline bool has_unshowable(std::string_view s) { return shown_text(s) != s; }
 
 }  // namespace rig

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "rig/core/escape.hpp"
+
 namespace rig::cfg {
 
 namespace {
@@ -13,7 +15,8 @@ std::string pos(const toml::source_region& s) {
   // overrides the file (rig table --unit, rig dut --can), not a line of any file.
   if (!s.path && s.begin.line == 0) return "command-line option";
   std::ostringstream os;
-  os << (s.path ? *s.path : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
+  // The path as typed (--profile, --hardware) with its control bytes as \xNN: not sent to the terminal.
+  os << (s.path ? shown_text(*s.path) : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
   return os.str();
 }
 
@@ -29,20 +32,34 @@ const toml::node& need(const toml::table& t, std::string_view key) {
   return *n;
 }
 
-void check_range(const toml::node& n, std::string_view key, double v, std::optional<double> lo,
-                 std::optional<double> hi) {
+// A value or a bound as text: a whole number as one (`retries = 1000000000` was "1e+09", a
+// review), any other as the stream writes a double.
+std::string number_text(double v) {
+  if (std::isfinite(v) && v == std::trunc(v) && std::fabs(v) < 9.007199254740992e15) return std::to_string(static_cast<int64_t>(v));
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+void check_range(const toml::node& n, std::string_view key, double v, const std::string& shown_v,
+                 std::optional<double> lo, std::optional<double> hi) {
   if (!std::isfinite(v) || (lo && v < *lo) || (hi && v > *hi)) {
     std::ostringstream os;
-    os << "'" << key << "' = " << v << " is out of range";
+    os << "'" << key << "' = " << shown_v;
     if (lo || hi) {
-      os << " [";
-      if (lo) os << *lo; else os << "-inf";
-      os << ", ";
-      if (hi) os << *hi; else os << "inf";
-      os << "]";
+      os << " is out of range [" << (lo ? number_text(*lo) : "-inf") << ", " << (hi ? number_text(*hi) : "inf") << "]";
+    } else {
+      os << ": not a finite number";
     }
     fail(n, os.str());
   }
+}
+
+// A double as every message of these readers has shown one (1e+07, 0.5, nan).
+std::string double_text(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
 }
 
 }  // namespace
@@ -66,8 +83,8 @@ toml::table parse_file(const std::string& path) {
   // toml++ says "FILE:0:0: File could not be opened for reading" for a file that is not there.
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
-    throw ConfigError(path + (ec ? ": cannot be read: " + ec.message() : std::string(": no such file")));
-  if (std::filesystem::is_directory(path, ec)) throw ConfigError(path + ": a folder, not a file");
+    throw ConfigError(shown_text(path) + (ec ? ": cannot be read: " + ec.message() : std::string(": no such file")));
+  if (std::filesystem::is_directory(path, ec)) throw ConfigError(shown_text(path) + ": a folder, not a file");
   try {
     return toml::parse_file(path);
   } catch (const toml::parse_error& e) {
@@ -96,7 +113,7 @@ double get_number(const toml::table& t, std::string_view key, std::optional<doub
   }
   std::optional<double> v = n->value<double>();  // integers convert too
   if (!v || !(n->is_floating_point() || n->is_integer())) wrong_type(*n, key, "a number");
-  check_range(*n, key, *v, lo, hi);
+  check_range(*n, key, *v, double_text(*v), lo, hi);
   return *v;
 }
 
@@ -109,7 +126,8 @@ int64_t get_int(const toml::table& t, std::string_view key, std::optional<int64_
   }
   if (!n->is_integer()) wrong_type(*n, key, "an integer");
   const int64_t v = *n->value<int64_t>();
-  check_range(*n, key, static_cast<double>(v), lo ? std::optional<double>(static_cast<double>(*lo)) : std::nullopt,
+  check_range(*n, key, static_cast<double>(v), std::to_string(v),
+              lo ? std::optional<double>(static_cast<double>(*lo)) : std::nullopt,
               hi ? std::optional<double>(static_cast<double>(*hi)) : std::nullopt);
   return v;
 }
@@ -146,7 +164,7 @@ std::vector<double> get_numbers(const toml::table& t, std::string_view key, std:
   for (const toml::node& e : *a) {
     std::optional<double> v = e.value<double>();
     if (!v || !(e.is_floating_point() || e.is_integer())) wrong_type(e, key, "an array of numbers");
-    check_range(e, key, *v, std::nullopt, std::nullopt);
+    check_range(e, key, *v, double_text(*v), std::nullopt, std::nullopt);
     out.push_back(*v);
   }
   return out;

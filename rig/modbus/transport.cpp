@@ -83,6 +83,16 @@ bool plausible_ipv6(const std::string& h) {
 }
 }  // namespace
 
+std::string host_resolution_problem(const std::string& host) {
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* res = nullptr;
+  const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &res);
+  if (res) ::freeaddrinfo(res);
+  if (rc == 0) return "";
+  return "cannot resolve host name '" + host + "': " + ::gai_strerror(rc);
+}
+
 Endpoint parse_tcp(const std::string& host_port) {
   const auto colon = host_port.rfind(':');
   if (colon == std::string::npos || colon == 0)
@@ -375,14 +385,8 @@ class LibmodbusTransport final : public RegisterTransport {
 
   // Whether `host` resolves; if not, why, into `why`.
   static bool resolves(const std::string& host, std::string& why) {
-    addrinfo hints{};
-    hints.ai_socktype = SOCK_STREAM;
-    addrinfo* res = nullptr;
-    const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &res);
-    if (res) ::freeaddrinfo(res);
-    if (rc == 0) return true;
-    why = "cannot resolve host name '" + host + "': " + ::gai_strerror(rc);
-    return false;
+    why = host_resolution_problem(host);
+    return why.empty();
   }
 
   // One request with the retry policy. Exception replies are final except

@@ -44,6 +44,10 @@ Endpoint parse_tcp(const std::string& host_port);    // "HOST:PORT"
 Endpoint parse_rtu(const std::string& dev_spec);     // "DEV[,BAUD[,P,D,S]]"
 Endpoint parse_endpoint(const std::string& spec);    // "tcp:..." | "rtu:..." | "HOST:PORT"
 
+// Why `host` does not resolve ("cannot resolve host name 'HOST': ..."), or "" when it does.
+// libmodbus reports a name it cannot resolve as ECONNREFUSED, client and server alike.
+std::string host_resolution_problem(const std::string& host);
+
 struct LinkOptions {
   int unit = 1;                    // Modbus unit (slave) id
   double response_timeout_s = 0.3; // per request

@@ -163,3 +163,46 @@ TEST(Profile, MissingFileSaysWhatExists) {
   EXPECT_NE(e.find("ci"), std::string::npos);
   EXPECT_NE(e.find("paper"), std::string::npos);
 }
+
+// [profile] name names the passport, the history and the default run folder: "" gave a folder
+// runs/_-<time>, and an escape sequence in it went to the terminal as it was (a review). Both
+// are refused at the name's line; the message shows the control byte as \xNN. A name in
+// another script is a name like any other.
+TEST(Profile, ANameIsRequiredAndHoldsNoControlCharacter) {
+  const std::string empty = write_tmp("empty-name.toml", "base = \"ci\"\n[profile]\nname = \"\"\n");
+  EXPECT_NE(error_of(empty).find("empty-name.toml:3:8: 'name' = \"\": the profile's name is required"),
+            std::string::npos)
+      << error_of(empty);
+  const std::string esc = write_tmp("esc-name.toml", "base = \"ci\"\n[profile]\nname = \"x\\u001b[31mRED\"\n");
+  const std::string e = error_of(esc);
+  EXPECT_NE(e.find("esc-name.toml:3:8: 'name' = \"x\\x1B[31mRED\": a control character"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\x1B'), std::string::npos) << e;
+  const std::string c1 = write_tmp("csi-name.toml", "base = \"ci\"\n[profile]\nname = \"x\\u009b2J\"\n");
+  EXPECT_NE(error_of(c1).find("'name' = \"x\\xC2\\x9B2J\""), std::string::npos) << error_of(c1);
+  EXPECT_EQ(load_profile(write_tmp("cyrillic.toml", "base = \"ci\"\n[profile]\nname = \"приёмка\"\n")).name, "приёмка");
+}
+
+// A whole number is shown as one, the range's bounds too: `retries = 1000000000` was
+// "'retries' = 1e+09" (a review).
+TEST(Profile, AWholeNumberOutOfRangeIsShownAsTyped) {
+  const std::string p = write_tmp("retries.toml", "base = \"ci\"\n[procedure]\nretries = 1000000000\n");
+  EXPECT_NE(error_of(p).find("retries.toml:3:11: 'retries' = 1000000000 is out of range [0, 10]"), std::string::npos)
+      << error_of(p);
+  // A NaN where no range applies is said to be one (it was "is out of range" with no range).
+  const std::string n = write_tmp("nan-limit.toml", "base = \"ci\"\n[limits]\nbias = [0.0, nan]\n");
+  EXPECT_NE(error_of(n).find("nan-limit.toml:3:14: 'bias' = nan: not a finite number"), std::string::npos)
+      << error_of(n);
+}
+
+// A --profile path is shown with its control bytes as \xNN wherever a message names it: the
+// file's own errors (FILE:LINE:COL) and a path that is no file.
+TEST(Profile, APathWithControlBytesIsShownEscaped) {
+  const std::string dir = fs::temp_directory_path() / ("rigprof-" + std::to_string(::getpid()));
+  const std::string p = write_tmp("r\x1B[2J.toml", "base = \"ci\"\n[procedure]\nretries = 11\n");
+  const std::string e = error_of(p);
+  EXPECT_NE(e.find("r\\x1B[2J.toml:3:11: 'retries' = 11"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\x1B'), std::string::npos) << e;
+  const std::string missing = error_of(dir + "/none\x07.toml");
+  EXPECT_NE(missing.find("none\\x07.toml': no such file"), std::string::npos) << missing;
+  EXPECT_EQ(missing.find('\x07'), std::string::npos) << missing;
+}

@@ -927,12 +927,12 @@ TEST(RigCli, ASerialTheDutCouldNotReportIsRefusedFirst) {
       {"A\tB\x01", "'A\\x09B\\x01': not printable ASCII"},
       {"A\nB", "'A\\x0AB': not printable ASCII"},
       {std::string(33, 'X'), "33 characters; a DUT reports at most 32"},
-      {"", "empty"},
+      {"", "--serial: empty value"},  // as every text option says it (main.cpp)
       {" SN1", "starts or ends with a blank"}};
   for (const auto& [serial, why] : bad) {
     EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--serial", serial, "--out", d + "/run"}, d + "/io"), 2) << why;
     EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
-    EXPECT_EQ(slurp(d + "/io.stderr").rfind("--serial: '", 0), 0u) << slurp(d + "/io.stderr");
+    EXPECT_EQ(slurp(d + "/io.stderr").rfind("--serial: ", 0), 0u) << slurp(d + "/io.stderr");
     EXPECT_EQ(run({"capture", "import", d + "/none.log", "--serial", serial, "--out", d + "/c.cap"}, d + "/io"), 2);
   }
   EXPECT_FALSE(fs::exists(d + "/run"));
@@ -2158,4 +2158,179 @@ TEST(RigCli, AHistoryTheRunCouldNotRecordIntoIsRefusedFirst) {
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "sqlite:" + d + "/new/h.sqlite"}, d + "/io"), 0)
       << slurp(d + "/io.stderr");
   EXPECT_FALSE(fs::exists(d + "/new"));
+}
+
+namespace {
+// `cmd` through /bin/sh (an environment of its own, a working folder); its exit code.
+int shell(const std::string& cmd) {
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+// RIG_BINARY with `args`, each quoted for /bin/sh (none holds a quote).
+std::string rig_line(const std::vector<std::string>& args) {
+  std::string line = RIG_BINARY;
+  for (const std::string& a : args) line += " '" + a + "'";
+  return line;
+}
+}  // namespace
+
+// `rig filter select|show --json` ignored a failed write: /dev/full or /proc/version gave exit 0
+// and no JSON (a review). Every step of the write is checked (exit 2 naming the file), and a
+// folder that is not there is named before the candidates are evaluated.
+TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
+  const std::string d = tmp("filter-json");
+  fs::create_directories(d);
+  const std::vector<std::string> quick = {"filter", "select", "--seconds", "0.05", "--orders", "2", "--fc-min", "500",
+                                          "--fc-max", "500"};
+  auto select_to = [&](const std::string& json) {
+    std::vector<std::string> args = quick;
+    args.insert(args.end(), {"--json", json});
+    return run(args, d + "/sel");
+  };
+  EXPECT_EQ(select_to("/dev/full"), 2);
+  EXPECT_NE(slurp(d + "/sel.stderr").find("rig filter select --json /dev/full: write failed: No space left on device"),
+            std::string::npos)
+      << slurp(d + "/sel.stderr");
+  EXPECT_EQ(select_to("/proc/version"), 2) << slurp(d + "/sel.stderr");
+  EXPECT_NE(slurp(d + "/sel.stderr").find("rig filter select --json /proc/version: "), std::string::npos)
+      << slurp(d + "/sel.stderr");
+  EXPECT_EQ(select_to(d + "/no-such-folder/c.json"), 2);
+  EXPECT_NE(slurp(d + "/sel.stderr").find("the folder " + d + "/no-such-folder does not exist"), std::string::npos)
+      << slurp(d + "/sel.stderr");
+  EXPECT_EQ(slurp(d + "/sel.stdout"), "") << "refused before the candidates were evaluated";
+  EXPECT_EQ(run({"filter", "show", "--json", "/dev/full"}, d + "/show"), 2);
+  EXPECT_NE(slurp(d + "/show.stderr").find("rig filter show --json /dev/full: write failed"), std::string::npos)
+      << slurp(d + "/show.stderr");
+  ASSERT_EQ(select_to(d + "/c.json"), 0) << slurp(d + "/sel.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c.json"))["candidates"].size(), 3u);  // paper, none, butter2@500
+}
+
+// Every number of `rig filter select` has a range, checked on the text before any work: a
+// negative, NaN or huge --seconds was exit 4 with a C++ allocator's message, 0 or inf ranked every
+// candidate on an RMS of 0, and --tolerance -1 was taken (a review). Exit 2 naming the option and
+// the value as typed.
+TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
+  const std::string d = tmp("filter-ranges");
+  fs::create_directories(d);
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"--seconds", "-1"}, "--seconds: '-1': must be a number of seconds in (0, 3600]"},
+      {{"--seconds", "nan"}, "--seconds: 'nan': must be a number of seconds in (0, 3600]"},
+      {{"--seconds", "1e12"}, "--seconds: '1e12': must be"},
+      {{"--seconds", "0"}, "--seconds: '0': must be"},
+      {{"--seconds", "inf"}, "--seconds: 'inf': must be"},
+      {{"--seconds", "1e400"}, "--seconds: '1e400': must be"},
+      {{"--tolerance", "-1"}, "--tolerance: '-1': must be a percentage in (0, 100]"},
+      {{"--f-req", "inf"}, "--f-req: 'inf': must be a bandwidth in Hz in (0, 1e+06]"},
+      {{"--orders", "5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
+      {{"--orders", "2", "2"}, "--orders: 2 is given twice"},
+      {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
+      {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number >= 0"},
+      {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};
+  for (const auto& [opts, why] : bad) {
+    std::vector<std::string> args = {"filter", "select"};
+    args.insert(args.end(), opts.begin(), opts.end());
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
+    EXPECT_EQ(slurp(d + "/io.stdout"), "") << why;
+  }
+}
+
+// An empty value was taken for the option's default: `--out "$DIR"` with DIR unset wrote the run
+// into ./runs/, `--db ""` recorded into the default database, `rig history --serial ""` filtered
+// nothing (a review). Every option that takes text (a path, a URL, a name) refuses it: exit 2,
+// "OPTION: empty value", before anything is written.
+TEST(RigCli, AnEmptyTextOptionIsRefusedNotTakenForItsDefault) {
+  const std::string d = tmp("empty-values");
+  fs::create_directories(d);
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", "--profile", "ci", "--yes", "--no-history", "--out", ""}, "--out: empty value"},
+      {{"run", "--profile", "ci", "--yes", "--out", d + "/r", "--db", ""}, "--db: empty value"},
+      {{"run", "--profile", "ci", "--yes", "--out", d + "/r", "--hardware", ""}, "--hardware: empty value"},
+      {{"history", "--db", ""}, "--db: empty value"},
+      {{"history", "--serial", ""}, "--serial: empty value"},
+      {{"history", "--profile", ""}, "--profile: empty value"},
+      {{"dut", "--can", "", "info"}, "--can: empty value"},
+      {{"table", "--modbus", "", "status"}, "--modbus: empty value"},
+      {{"capture", "import", d + "/none.log", "--hardware", d + "/hw.toml", "--out", ""}, "--out: empty value"},
+      {{"filter", "select", "--json", ""}, "--json: empty value"},
+      {{"report", ""}, "DIR: empty value"}};
+  for (const auto& [args, why] : cases) {
+    EXPECT_EQ(shell("cd " + d + " && " + rig_line(args) + " >io.stdout 2>io.stderr"), 2) << why;
+    EXPECT_EQ(slurp(d + "/io.stderr").rfind(why, 0), 0u) << slurp(d + "/io.stderr");
+  }
+  EXPECT_FALSE(fs::exists(d + "/runs")) << "no run folder made for an empty --out";
+  EXPECT_FALSE(fs::exists(d + "/r"));
+}
+
+// `rig dut stream` checked its limits and --out only after the link opened (exit 4 where the
+// interface is missing), and a negative or NaN limit streamed forever (a review). Refused first,
+// whatever the interface: exit 2 naming the option and value, with a CAN name that is nowhere.
+TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
+  const std::string d = tmp("dut-stream");
+  fs::create_directories(d + "/a-folder");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"--count", "-1"}, "--count: '-1' is not a decimal whole number >= 0"},
+      {{"--count", "0"}, "--count: '0': must be a number of samples >= 1"},
+      {{"--seconds", "-5"}, "--seconds: '-5': must be a number of seconds in (0, 1e+06]"},
+      {{"--seconds", "nan"}, "--seconds: 'nan': must be"},
+      {{"--seconds", "0"}, "--seconds: '0': must be"},
+      {{"--out", d + "/a-folder"}, "rig dut stream --out " + d + "/a-folder: a folder, not a file"},
+      {{"--out", d + "/none/s.txt"}, "the folder " + d + "/none does not exist"}};
+  for (const auto& [opts, why] : bad) {
+    std::vector<std::string> args = {"dut", "--can", "rig-nocan0", "stream"};
+    args.insert(args.end(), opts.begin(), opts.end());
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
+  }
+  // The same options, valid, go on to the link, which is not there: the hardware's exit 4.
+  EXPECT_EQ(run({"dut", "--can", "rig-nocan0", "stream", "--count", "10", "--out", d + "/s.txt"}, d + "/io"), 4)
+      << slurp(d + "/io.stderr");
+  EXPECT_FALSE(fs::exists(d + "/s.txt")) << "the file is opened once the DUT answers";
+}
+
+// Settings from the environment are named as such: a RIG_HISTORY rig cannot open said nothing of
+// RIG_HISTORY, and a rig config (RIG_CONFIG) with a mistyped section ([histori]) was skipped, the
+// runs recorded into the default database (a review). Exit 2 saying "RIG_HISTORY: ..." or
+// naming the config's FILE:LINE:COL, for rig history and rig run alike.
+TEST(RigCli, HistorySettingsFromTheEnvironmentAreNamedAsSuch) {
+  const std::string d = tmp("history-env");
+  fs::create_directories(d + "/home");
+  const std::string rig = "env -u XDG_DATA_HOME -u RIG_HISTORY -u RIG_CONFIG HOME=" + d + "/home ";
+  auto io = [&](const std::string& name) { return " >" + d + "/" + name + ".stdout 2>" + d + "/" + name + ".stderr"; };
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=mysql://x " + RIG_BINARY + " history" + io("scheme")), 2);
+  EXPECT_EQ(slurp(d + "/scheme.stderr").find("rig: configuration error: RIG_HISTORY: history database URL 'mysql://x': "
+                                             "unknown scheme"),
+            0u)
+      << slurp(d + "/scheme.stderr");
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite: " + RIG_BINARY + " run --profile ci --dry-run" + io("nofile")), 2);
+  EXPECT_NE(slurp(d + "/nofile.stderr").find("RIG_HISTORY: history database URL 'sqlite:' names no file"),
+            std::string::npos)
+      << slurp(d + "/nofile.stderr");
+  std::ofstream(d + "/junk.sqlite") << "not a database";
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite:" + d + "/junk.sqlite " + RIG_BINARY + " history" + io("junk")), 2);
+  EXPECT_NE(slurp(d + "/junk.stderr").find("RIG_HISTORY: sqlite:" + d + "/junk.sqlite: "), std::string::npos)
+      << slurp(d + "/junk.stderr");
+
+  std::ofstream(d + "/typo.toml") << "# the line's database\n[histori]\nurl = \"sqlite:" << d << "/line.sqlite\"\n";
+  const std::string config = rig + "RIG_CONFIG=" + d + "/typo.toml ";
+  EXPECT_EQ(shell(config + RIG_BINARY + " history" + io("typo")), 2);
+  EXPECT_NE(slurp(d + "/typo.stderr").find(d + "/typo.toml:2:1: unknown section 'histori' in the rig config"),
+            std::string::npos)
+      << slurp(d + "/typo.stderr");
+  EXPECT_EQ(shell(config + RIG_BINARY + " run --profile ci --dry-run" + io("typo-run")), 2);
+  EXPECT_NE(slurp(d + "/typo-run.stderr").find("typo.toml:2:1: unknown section 'histori'"), std::string::npos)
+      << slurp(d + "/typo-run.stderr");
+  std::ofstream(d + "/scheme.toml") << "[history]\nurl = \"mysql://x\"\n";
+  EXPECT_EQ(shell(rig + "RIG_CONFIG=" + d + "/scheme.toml " + RIG_BINARY + " history" + io("cfg-url")), 2);
+  EXPECT_NE(slurp(d + "/cfg-url.stderr").find(d + "/scheme.toml:2:7: 'url' = 'mysql://x': unknown scheme"),
+            std::string::npos)
+      << slurp(d + "/cfg-url.stderr");
+  // The right section is read as before.
+  std::ofstream(d + "/good.toml") << "[history]\nurl = \"sqlite:" << d << "/line.sqlite\"\n";
+  EXPECT_EQ(shell(rig + "RIG_CONFIG=" + d + "/good.toml " + RIG_BINARY + " history" + io("good")), 0)
+      << slurp(d + "/good.stderr");
+  EXPECT_NE(slurp(d + "/good.stdout").find("no runs recorded yet (sqlite:" + d + "/line.sqlite does not exist)"),
+            std::string::npos)
+      << slurp(d + "/good.stdout");
 }

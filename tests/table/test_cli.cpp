@@ -140,6 +140,23 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   EXPECT_EQ(out.find('\x1B'), std::string::npos) << out;
 }
 
+// An angle that is not finite is refused before the drive is asked: `move nan` was exit 4
+// ("cannot connect") with the drive unreachable and 2 with it reachable, and `move 1e400` was
+// named "inf°" (a review). Exit 2 either way, the value as typed, the table where it was.
+TEST_F(RigTable, AnAngleThatIsNotFiniteIsRefusedBeforeTheDriveIsAsked) {
+  std::string out;
+  ASSERT_EQ(rig(where_ + " home", out), 0) << out;
+  ASSERT_EQ(rig(where_ + " move 30", out), 0) << out;
+  for (const std::string& where : {std::string("--modbus 127.0.0.1:1 --timeout 0.1"), where_}) {
+    for (const std::string bad : {"nan", "inf", "1e400"}) {
+      EXPECT_EQ(rig(where + " move " + bad, out), 2) << where << " " << bad << ": " << out;
+      EXPECT_NE(out.find("DEG: '" + bad + "': must be a finite number of degrees"), std::string::npos) << out;
+      EXPECT_EQ(out.find("cannot connect"), std::string::npos) << out;
+    }
+  }
+  EXPECT_NEAR(emu_->actual_angle_deg(), 30.0, 0.005);
+}
+
 // Every signal that ends the process halts a move first: Ctrl-C, a service
 // manager's SIGTERM and the SIGHUP of a closed terminal or dropped ssh session.
 class RigTableSignal : public RigTable, public ::testing::WithParamInterface<int> {};
