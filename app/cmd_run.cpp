@@ -44,6 +44,7 @@
 #include "app/whole_number.hpp"
 #include "app/history_source.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/executive/passport.hpp"
 #include "rig/executive/signals.hpp"
@@ -312,7 +313,7 @@ void check_procedure_angles_in_travel(const RunArgs& a, const toml::table& hw, c
       const toml::node* at = written ? written->get(key) : nullptr;
       throw ConfigError(fmt::format("{}: {} = {:g}°: outside the table's travel [{:g}°, {:g}°] ({}): the procedure "
                                     "could not turn the DUT there; change {} u10_deg / u20_deg or the limits",
-                                    at ? cfg::where(*at) : p.source, key, deg, lo, hi, whose, section));
+                                    at ? cfg::where(*at) : shown_text(p.source), key, deg, lo, hi, whose, section));
     }
 }
 
@@ -780,7 +781,7 @@ int do_run(RunArgs a) {
     }
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
-                             p.source, a.plant);
+                             shown_text(p.source), a.plant);
     plan_view.plan(phases);
     for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {
@@ -842,7 +843,8 @@ int do_run(RunArgs a) {
   std::vector<std::string> completed;
   if (!a.resume.empty()) {
     log = make_logger(a.out, a.quiet);
-    log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, p.source, a.plant, a.out);
+    log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
+              shown_text(a.out));
     try {
       if (!key) refuse_a_final_verdict(a.out);  // a sealed folder's verdict is its seal's (checked above)
       completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
@@ -886,7 +888,8 @@ int do_run(RunArgs a) {
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
     if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
     log = make_logger(a.out, a.quiet);
-    log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, p.source, a.plant, a.out);
+    log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, shown_text(p.source), a.plant,
+              shown_text(a.out));
   }
   if (folder_lock && !folder_lock->held())
     log->warn("the run folder could not be locked (its filesystem has no flock): a second run or resume of {} at the "

@@ -2334,3 +2334,18 @@ TEST(RigCli, HistorySettingsFromTheEnvironmentAreNamedAsSuch) {
             std::string::npos)
       << slurp(d + "/good.stdout");
 }
+
+// A profile path with a control byte is shown as \xNN in the plan and run.log, as in errors: a
+// terminal never receives the byte (a review).
+TEST(RigCli, AProfilePathWithAControlByteIsShownEscapedInThePlanAndTheLog) {
+  const std::string d = tmp("esc-profile");
+  fs::create_directories(d);
+  const std::string path = d + "/p\x1b[31m.toml";
+  std::ofstream(path) << "base = \"ci\"\n";
+  ASSERT_EQ(run({"run", "--profile", path, "--yes", "--dry-run"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
+  EXPECT_NE(slurp(d + "/dry.stdout").find("/p\\x1B[31m.toml"), std::string::npos) << slurp(d + "/dry.stdout");
+  ASSERT_EQ(run({"run", "--profile", path, "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr");
+  for (const std::string& f : {d + "/dry.stdout", d + "/dry.stderr", d + "/run/run.log", d + "/io.stderr"})
+    EXPECT_EQ(slurp(f).find('\x1b'), std::string::npos) << f;
+}
