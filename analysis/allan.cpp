@@ -277,7 +277,10 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
       // the B1 rule reads a few values, and a type that contradicts the reliably identified
       // (lag-1 ACF) taus below may not claim more degrees of freedom than that type gives.
       if (o.edf_guard) {
-        if (const auto ref = acf_alpha_below(pend, e, s.m)) {
+        // Against a type read from 100 or more values where there is one (a reading from fewer may
+        // be the misreading the guard below corrects: a code review), else the ACF's last.
+        std::optional<int> reliable = acf_alpha_below(pend, e, s.m, kAcfReliablePoints);
+        if (const auto ref = reliable ? reliable : acf_alpha_below(pend, e, s.m)) {
           const int ra = clamp_alpha(*ref, d);
           const double cap = edf_for(o.type, ra, s.m, n);
           if (p.edf > kEdfGuardRatio * cap) {

@@ -25,6 +25,11 @@ namespace rig::cli {
 
 namespace {
 
+// A mistake of the passport or of an option, not of the database: never "RIG_HISTORY: ...".
+struct NotTheDatabase : ConfigError {
+  using ConfigError::ConfigError;
+};
+
 struct HistoryArgs {
   std::string db;
   std::string serial, since, until, outcome, profile, value, record;
@@ -123,7 +128,7 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
     if (std::find(names.begin(), names.end(), a.value) == names.end()) {
       std::string known;
       for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-      throw ConfigError("--value '" + a.value + "': no such measurement recorded in " + a.db +
+      throw NotTheDatabase("--value '" + a.value + "': no such measurement recorded in " + a.db +
                         (known.empty() ? std::string(" (the database holds no runs)") : " (recorded: " + known + ")"));
     }
   }
@@ -170,14 +175,18 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
 void record(const HistoryArgs& a) {
   const std::string path = a.record + "/passport.json";
   std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot read the file");
+  if (!in) throw NotTheDatabase(path + ": cannot read the file");
   nlohmann::json p;
   try {
     p = nlohmann::json::parse(in);
   } catch (const nlohmann::json::parse_error& e) {
-    throw ConfigError(path + ": malformed JSON: " + e.what());
+    throw NotTheDatabase(path + ": malformed JSON: " + e.what());
   }
-  report::require_consistent_verdicts(p, path);  // an edited passport is not history
+  try {
+    report::require_consistent_verdicts(p, path);  // an edited passport is not history
+  } catch (const ConfigError& e) {
+    throw NotTheDatabase(e.what());
+  }
   const long long id = history::record_run(a.db, p, a.record);
   std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
@@ -231,6 +240,8 @@ void add_history(CLI::App& app, int& rc) {
     a->db = source.url;
     try {
       rc = run_history(*a, db_given);
+    } catch (const NotTheDatabase&) {
+      throw;  // the passport's or the option's own mistake, whichever database (a code review)
     } catch (const ConfigError& e) {
       // A database $RIG_HISTORY names is the environment's mistake: said so, or the user looks
       // for a --db that was never given (a review).

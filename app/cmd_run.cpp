@@ -176,11 +176,6 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
       throw ConfigError(path + ": field '" + key + "': expected a string, found " + inv[key].type_name());
     return inv[key].get<std::string>();
   };
-  // Every field is one this rig writes: an unknown one is a hand edit or another program's.
-  static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source", "software",
-                                                "started", "no_history", "db",     "faults"};
-  for (const auto& [key, v] : inv.items())
-    if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   // The checkpoint's state is internal to the version that wrote it (docs/contracts.md): another
   // version's resume refuses, before any device opens, rather than read it (a review).
   const std::string software = str("software", "");
@@ -189,6 +184,12 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'software': the run was started by \"" + software + "\", this is " + mine +
                       ": only the same version resumes a run (its checkpoint is that version's); finish it with that "
                       "version or start a new run");
+  // Every field is one this rig writes (checked after the version: a newer rig may write more);
+  // an unknown one is a hand edit or another program's.
+  static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source", "software",
+                                                "started", "no_history", "db",     "faults"};
+  for (const auto& [key, v] : inv.items())
+    if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
   (void)str("profile_source", "");
   a.plant = str("plant", "emulated");
@@ -462,6 +463,13 @@ void check_history_can_record(const std::string& url) {
   std::error_code ec;
   if (fs::exists(*file, ec)) {
     if (!fs::is_regular_file(*file, ec)) throw ConfigError(shown + ": not a regular file");
+    // Read and written, its folder taking SQLite's journal beside it (one rig may read but not
+    // write, owned by another account: the row was lost at the run's end; a code review).
+    const fs::path folder = fs::absolute(*file, ec).parent_path();
+    if (::access(file->c_str(), R_OK | W_OK) != 0)
+      throw ConfigError(shown + ": cannot be written: " + std::strerror(errno));
+    if (!can_create_file_in(folder))
+      throw ConfigError(shown + ": its folder " + folder.string() + " takes no new file (SQLite's journal goes there)");
     try {
       history::open_db(url, history::Access::ReadOnly)->has_table("runs");  // reads its header
     } catch (const ConfigError& e) {
@@ -542,9 +550,11 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
                                          const acceptance::DutState& dut, const std::optional<seal::Key>& key,
                                          spdlog::logger& log) {
   auto passport = make_passport(info, res, values);
-  write_passport(a.out + "/passport.json", passport);
-  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
+  // The passport last of the three: a folder that cannot take the others (a full disk) is exit 4
+  // with no passport, never a passport saying PASS beside exit 4 (a code review).
   write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(dut).dump(1));
+  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
+  write_passport(a.out + "/passport.json", passport);
   try {
     report::write_report(a.out);
   } catch (const std::exception& e) {
@@ -764,7 +774,16 @@ int do_run(RunArgs a) {
   TerminalView view(stderr, a.quiet);
   // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not
   // an error in run.log after the DUT was measured and its result left out of the history.
-  if (!a.no_history) check_history_can_record(history_url(a, hw));
+  if (!a.no_history) {
+    const std::string url = history_url(a, hw);
+    try {
+      check_history_can_record(url);
+    } catch (const ConfigError& e) {  // $RIG_HISTORY's database is the environment's mistake: said so
+      const char* env = std::getenv("RIG_HISTORY");
+      if (a.db.empty() && env && url == env) throw ConfigError(std::string("RIG_HISTORY: ") + e.what());
+      throw;
+    }
+  }
   if (a.dry_run) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
@@ -927,10 +946,12 @@ int do_run(RunArgs a) {
   RunResult res = exec.run(
       [&](PhaseContext& c) {
         acceptance::bring_up(c, p, ro, state.slot());
-        if (fast_forward) {
+        if (fast_forward && !completed.empty()) {  // bring-up's own device time is not the replay's
+          const double t0 = b.emulated->clock().now_s();
+          const std::uint64_t n0 = b.emulated->samples_generated();
           fast_forward_emulated(c, p, completed, *log);
-          replayed_s = b.emulated->clock().now_s();
-          replayed_samples = b.emulated->samples_generated();
+          replayed_s = b.emulated->clock().now_s() - t0;
+          replayed_samples = b.emulated->samples_generated() - n0;
         }
       },
       phases, values, state, cancel.token(), completed, identity);

@@ -28,9 +28,17 @@ inline void check_output_folder(const std::string& path, const std::string& what
 // `path` can be opened for writing: its folder takes new files and it is not a folder itself (a
 // device or a pipe may be: such output is written through, not replaced).
 inline void check_output_path(const std::string& path, const std::string& what) {
-  check_output_folder(path, what);
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw ConfigError(what + " " + path + ": a folder, not a file");
+  // What exists is written through: its own permission decides (/dev/stdout, a writable file in a
+  // read-only folder), not its folder's (a code review: `--out /dev/stdout` was refused for a
+  // user other than root).
+  if (std::filesystem::exists(path, ec)) {
+    if (::access(path.c_str(), W_OK) != 0)
+      throw ConfigError(what + " " + path + ": cannot be written: " + std::strerror(errno));
+    return;
+  }
+  check_output_folder(path, what);
 }
 
 // `path` can be replaced by write_file_atomic: its folder takes new files, and what lies there

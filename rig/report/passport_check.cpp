@@ -61,7 +61,8 @@ void require_consistent_verdicts(const json& passport, const std::string& path) 
   const std::string c = verdict_contradiction(passport);
   if (c.empty()) return;
   throw ConfigError(path + ": " + c +
-                    " (the passport was changed after its run wrote it; `rig verify` checks a sealed run)");
+                    " (not the verdict rig's rule gives: the passport was changed after its run wrote it, or a rig "
+                    "before that rule wrote it; `rig verify` checks a sealed run)");
 }
 
 }  // namespace rig::report

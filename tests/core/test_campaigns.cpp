@@ -167,6 +167,8 @@ TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
     EXPECT_NE(slurp(r + "/run.log").find("no checkpoint (stopped before the first phase completed)"),
               std::string::npos)
         << what;
+    EXPECT_EQ(slurp(r + "/run.log").find("replayed the kept recordings"), std::string::npos)
+        << what << ": nothing was replayed (bring-up's device time is not a replay)";
   }
 }
 

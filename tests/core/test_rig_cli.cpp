@@ -1573,6 +1573,9 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
                                                  "is rig "),
             std::string::npos)
       << slurp(d + "/version-io.stderr");
+  inv["limits"] = "loose";  // a newer rig's run.json may hold fields this one does not know: its version speaks first
+  EXPECT_EQ(with_run_json("newer", inv), 2);
+  EXPECT_NE(slurp(d + "/newer-io.stderr").find("field 'software'"), std::string::npos) << slurp(d + "/newer-io.stderr");
   inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
   inv["limits"] = "loose";
   EXPECT_EQ(with_run_json("unknown", inv), 2);
@@ -2133,6 +2136,11 @@ TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
   EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS not written: cannot write"), std::string::npos)
       << slurp(d + "/run/run.log");
   EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  // An output before the passport that cannot be written leaves no passport either: never a
+  // PASS in passport.json beside exit 4 (a code review).
+  fs::create_directories(d + "/run2/junit.xml.tmp");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run2"}, d + "/io2"), 4);
+  EXPECT_FALSE(fs::exists(d + "/run2/passport.json"));
 }
 
 // The history a run will record into is checked before anything runs, --dry-run included: an
@@ -2311,6 +2319,22 @@ TEST(RigCli, HistorySettingsFromTheEnvironmentAreNamedAsSuch) {
   EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite:" + d + "/junk.sqlite " + RIG_BINARY + " history" + io("junk")), 2);
   EXPECT_NE(slurp(d + "/junk.stderr").find("RIG_HISTORY: sqlite:" + d + "/junk.sqlite: "), std::string::npos)
       << slurp(d + "/junk.stderr");
+
+  // rig run checks that database before anything runs, and names the variable too.
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite:" + d + "/junk.sqlite " + RIG_BINARY + " run --profile ci --dry-run" +
+                  io("junk-run")),
+            2);
+  EXPECT_NE(slurp(d + "/junk-run.stderr").find("RIG_HISTORY: history database " + d + "/junk.sqlite: not a database"),
+            std::string::npos)
+      << slurp(d + "/junk-run.stderr");
+  // A passport's own mistake is not the variable's (a code review: "RIG_HISTORY: .../passport.json: ...").
+  fs::create_directories(d + "/run");
+  std::ofstream(d + "/run/passport.json") << "{ not json";
+  EXPECT_EQ(shell(rig + "RIG_HISTORY=sqlite:" + d + "/h.sqlite " + RIG_BINARY + " history --record " + d + "/run" +
+                  io("record")),
+            2);
+  EXPECT_EQ(slurp(d + "/record.stderr").find("rig: configuration error: " + d + "/run/passport.json: malformed JSON"), 0u)
+      << slurp(d + "/record.stderr");
 
   std::ofstream(d + "/typo.toml") << "# the line's database\n[histori]\nurl = \"sqlite:" << d << "/line.sqlite\"\n";
   const std::string config = rig + "RIG_CONFIG=" + d + "/typo.toml ";
