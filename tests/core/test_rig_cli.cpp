@@ -631,6 +631,47 @@ TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--no-psd", "--dev", "theo2"}, d + "/bad"), 2);
 }
 
+// A review: 1e-400 was "beyond the range of a double" (it is too near 0); a byte-order mark inside
+// a file was printed raw, invisible ("not a decimal number: '4'"); a float64 file read as text
+// filled the terminal with ~250 escaped bytes. Now: the right reason, the mark as \xNN, and an
+// excerpt of a long line with the file said to look binary.
+TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
+  const std::string d = tmp("analyze-input-messages");
+  fs::create_directories(d);
+  std::ofstream(d + "/tiny.txt") << "1\n2\n1e-400\n3\n4\n";
+  EXPECT_EQ(run({"analyze", d + "/tiny.txt"}, d + "/tiny"), 2);
+  EXPECT_NE(slurp(d + "/tiny.stderr").find("tiny.txt:3: '1e-400' is nearer 0 than the smallest double"),
+            std::string::npos)
+      << slurp(d + "/tiny.stderr");
+  std::ofstream(d + "/small.txt") << "1\n2\n-0.00001e-320\n3\n4\n";
+  EXPECT_EQ(run({"analyze", d + "/small.txt"}, d + "/small"), 2);
+  EXPECT_NE(slurp(d + "/small.stderr").find("'-0.00001e-320' is nearer 0"), std::string::npos) << slurp(d + "/small.stderr");
+  std::ofstream(d + "/huge.txt") << "1\n2\n1e400\n3\n4\n";
+  EXPECT_EQ(run({"analyze", d + "/huge.txt"}, d + "/huge"), 2);
+  EXPECT_NE(slurp(d + "/huge.stderr").find("huge.txt:3: '1e400' is beyond the range of a double"), std::string::npos)
+      << slurp(d + "/huge.stderr");
+  std::ofstream(d + "/bom2.txt") << "1\n2\n3\n\xEF\xBB\xBF" << "4\n";
+  EXPECT_EQ(run({"analyze", d + "/bom2.txt"}, d + "/bom2"), 2);
+  EXPECT_NE(slurp(d + "/bom2.stderr").find("bom2.txt:4: not a decimal number: '\\xEF\\xBB\\xBF4' (\\xEF\\xBB\\xBF is a "
+                                           "byte-order mark"),
+            std::string::npos)
+      << slurp(d + "/bom2.stderr");
+  {  // float64 values, as a raw file holds them
+    std::vector<double> v(5000);
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> g(0.0, 1e-3);
+    for (double& x : v) x = g(rng);
+    std::ofstream(d + "/w.f64", std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+  }
+  EXPECT_EQ(run({"analyze", d + "/w.f64", "--input", "text"}, d + "/bin"), 2);
+  const std::string err = slurp(d + "/bin.stderr");
+  EXPECT_NE(err.find("w.f64:1: not a decimal number: '"), std::string::npos) << err;
+  EXPECT_NE(err.find("...' ("), std::string::npos) << err;
+  EXPECT_NE(err.find("the file looks binary (raw float64 is read with --input f64)"), std::string::npos) << err;
+  EXPECT_LT(err.size(), 400u) << err;
+}
+
 TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
   const std::string d = tmp("sigint");
   fs::create_directories(d);
