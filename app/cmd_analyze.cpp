@@ -1,6 +1,9 @@
 // `rig analyze FILE`: overlapping Allan deviation with confidence bounds, noise terms (the
 // paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per docs/contracts.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <exception>
@@ -24,6 +27,7 @@
 
 #include "analysis/json.hpp"
 #include "app/analyze_input.hpp"
+#include "app/output_file.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/options.hpp"
@@ -147,6 +151,61 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
                 "gap-free stretch, --gaps stop refuses)";
 }
 
+// The files --svg DIR writes.
+const char* const kSvgFiles[] = {"allan.svg", "psd.svg"};
+
+// --svg DIR: an existing folder that takes files, or one folder to be made in an existing one
+// (not a whole path: a mistyped path is not made into folders). Its plots may not be the input.
+void check_svg_folder(const std::string& dir, const std::string& input, const std::string& input_name) {
+  namespace fs = std::filesystem;
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) != 0) {
+    fs::path p(dir);
+    if (!p.has_filename()) p = p.parent_path();  // "plots/"
+    const fs::path parent = p.has_parent_path() ? p.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(parent, ec))
+      throw ConfigError("rig analyze: --svg " + dir + ": the folder " + parent.string() +
+                        " does not exist (--svg makes the plots' folder, not the path to it)");
+    if (::access(parent.c_str(), W_OK | X_OK) != 0)
+      throw ConfigError("rig analyze: --svg " + dir + ": cannot create a folder in " + parent.string());
+    return;
+  }
+  if (!S_ISDIR(st.st_mode))
+    throw ConfigError("rig analyze: --svg " + dir + ": not a folder (allan.svg and psd.svg are written into it)");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) throw ConfigError("rig analyze: --svg " + dir + ": cannot create files in it");
+  for (const char* name : kSvgFiles) {
+    const std::string file = (fs::path(dir) / name).string();
+    if (same_regular_file(file, input))
+      throw ConfigError("rig analyze: --svg " + dir + ": " + file + " is the input file " + input_name +
+                        " (it would be overwritten); give another folder");
+    check_output_file(file, "rig analyze: --svg " + dir + ":");
+  }
+}
+
+// Every output, before the input is read (a review: an unwritable --json was found after the
+// whole analysis, with the summary printed and --json written beside a bad --svg; --json naming
+// the input overwrote the record). Exit 2 naming the path.
+void check_outputs(const Args& a) {
+  namespace fs = std::filesystem;
+  const std::string input_name = a.file == "-" ? "that standard input reads" : a.file;
+  if (!a.json_out.empty()) {
+    if (same_regular_file(a.json_out, a.file))
+      throw ConfigError("rig analyze: --json " + a.json_out + ": is the input file " + input_name +
+                        " (it would be overwritten); give another name");
+    check_output_file(a.json_out, "rig analyze: --json");
+  }
+  if (a.svg_dir.empty()) return;
+  check_svg_folder(a.svg_dir, a.file, input_name);
+  if (a.json_out.empty()) return;
+  std::error_code ec;
+  const fs::path json_path = fs::weakly_canonical(a.json_out, ec);
+  for (const char* name : kSvgFiles)
+    if (!ec && json_path == fs::weakly_canonical(fs::path(a.svg_dir) / name, ec))
+      throw ConfigError("rig analyze: --json " + a.json_out + ": is --svg " + a.svg_dir + "'s " + name +
+                        "; give another name");
+}
+
 int run(const Args& a) {
   StageTimer timer;
   auto shown = [](double v) {  // as typed for any value a user would type (%g: 2, 0.96)
@@ -248,6 +307,7 @@ int run(const Args& a) {
     throw ConfigError(std::string("rig analyze: ") + b);
   }
   check_input_path(a.file, input);
+  check_outputs(a);  // before anything is read: a bad output leaves nothing written
   std::size_t blank_lines = 0;  // noted below
   if (input == "text") {
     mem = read_text(a.file, &blank_lines);
@@ -491,22 +551,26 @@ int run(const Args& a) {
   timer.mark("psd");
   join_fit();
   if (terms) j["noise_terms"] = analysis::noise_terms_to_json(*terms);
-  if (!a.json_out.empty()) write_file(a.json_out, j.dump(2) + "\n");
-  timer.mark("json write");
+  // Every output is made before the first is written (their paths were checked at the start).
+  std::vector<std::pair<std::filesystem::path, std::string>> outputs;
+  if (!a.json_out.empty()) outputs.emplace_back(a.json_out, j.dump(2) + "\n");
   if (!a.svg_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(a.svg_dir, ec);
-    if (ec) throw ConfigError(a.svg_dir + ": cannot create: " + ec.message());
     const std::string name = a.file == "-" ? input_name : std::filesystem::path(a.file).filename().string();
     // The report's plotter, fed the same JSON views as --json writes.
-    write_file(std::filesystem::path(a.svg_dir) / "allan.svg",
-               report::to_svg_file(report::allan_plot(j["oadev"], &j["noise_terms"], a.confidence, "allan",
-                                                      "OADEV of " + name, "#1f77b4")));
+    outputs.emplace_back(std::filesystem::path(a.svg_dir) / kSvgFiles[0],
+                         report::to_svg_file(report::allan_plot(j["oadev"], &j["noise_terms"], a.confidence, "allan",
+                                                                "OADEV of " + name, "#1f77b4")));
     if (psd)
-      write_file(std::filesystem::path(a.svg_dir) / "psd.svg",
-                 report::to_svg_file(report::psd_plot(analysis::psd_to_json(*psd, peaks), "psd", "PSD of " + name,
-                                                      "#1f77b4", psd->rate_hz)));
+      outputs.emplace_back(std::filesystem::path(a.svg_dir) / kSvgFiles[1],
+                           report::to_svg_file(report::psd_plot(analysis::psd_to_json(*psd, peaks), "psd",
+                                                                "PSD of " + name, "#1f77b4", psd->rate_hz)));
+    std::error_code ec;
+    std::filesystem::create_directory(a.svg_dir, ec);  // one folder, in a folder checked to exist
+    if (ec) throw ConfigError("rig analyze: --svg " + a.svg_dir + ": cannot create: " + ec.message());
   }
+  for (const auto& [path, text] : outputs) write_file(path, text);
+  timer.mark("outputs");
+
 
   // Console summary.
   std::ostream& o = std::cout;
@@ -601,7 +665,8 @@ void add_analyze(CLI::App& app, int& rc) {
                   "warning), longest (the longest gap-free stretch) or stop (exit 2)")
       ->check(CLI::IsMember({"join", "longest", "stop"}));
   sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");
-  sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");
+  sub->add_option("--svg", args->svg_dir,
+                  "write allan.svg and psd.svg into this folder (made if missing, in a folder that exists)");
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
   sub->add_option("--segment", args->segment, "PSD segment length (default: auto)");
   sub->add_option("--overlap", args->overlap, "PSD segment overlap, fraction in [0, 0.95] (default 0.5)");

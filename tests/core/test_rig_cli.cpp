@@ -631,6 +631,84 @@ TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--no-psd", "--dev", "theo2"}, d + "/bad"), 2);
 }
 
+// A review: --json naming the input file overwrote the record (exit 0). Any output that is the
+// input, by device and inode (a symlink, "./", standard input's file), is refused before
+// anything is read or written, exit 2 naming both; the input is left as it was.
+TEST(RigCli, AnalyzeRefusesAnOutputThatIsItsInput) {
+  const std::string d = tmp("analyze-output-is-input");
+  fs::create_directories(d + "/plots");
+  const std::string record = "0.892\n0.809\n0.823\n0.798\n0.671\n0.644\n0.883\n0.903\n0.677\n";
+  std::ofstream(d + "/s.txt") << record;
+  std::ofstream(d + "/plots/allan.svg") << record;  // an input named as a plot
+  fs::create_symlink(d + "/s.txt", d + "/link.json");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{d + "/s.txt", "--json", d + "/s.txt"}, "--json " + d + "/s.txt: is the input file " + d + "/s.txt"},
+      {{d + "/s.txt", "--json", d + "/./s.txt"}, "--json " + d + "/./s.txt: is the input file " + d + "/s.txt"},
+      {{d + "/s.txt", "--json", d + "/link.json"}, "--json " + d + "/link.json: is the input file " + d + "/s.txt"},
+      {{d + "/plots/allan.svg", "--input", "text", "--svg", d + "/plots"},
+       "--svg " + d + "/plots: " + d + "/plots/allan.svg is the input file " + d + "/plots/allan.svg"},
+      {{"-", "--json", d + "/s.txt"}, "--json " + d + "/s.txt: is the input file that standard input reads"}};
+  int i = 0;
+  for (const auto& [opts, expect] : cases) {
+    std::vector<std::string> args = {"analyze"};
+    args.insert(args.end(), opts.begin(), opts.end());
+    args.insert(args.end(), {"--rate", "1"});
+    const std::string io = d + "/io" + std::to_string(i++);
+    EXPECT_EQ(run(args, io, opts[0] == "-" ? d + "/s.txt" : "/dev/null"), 2) << expect;
+    EXPECT_NE(slurp(io + ".stderr").find(expect), std::string::npos) << slurp(io + ".stderr");
+    EXPECT_EQ(slurp(io + ".stdout"), "") << "refused before anything was read";
+    EXPECT_EQ(slurp(d + "/s.txt"), record);
+    EXPECT_EQ(slurp(d + "/plots/allan.svg"), record);
+  }
+}
+
+// A review: outputs were checked only after the whole analysis (the summary printed, then exit 2),
+// --json was written beside a --svg that was a plain file (exit 2), and --svg made a whole
+// missing path. Every output is checked before the input is read: a bad one leaves nothing
+// written. --svg makes one missing folder in a folder that exists.
+TEST(RigCli, AnalyzeChecksEveryOutputBeforeReadingItsInput) {
+  const std::string d = tmp("analyze-outputs-first");
+  fs::create_directories(d + "/folder");
+  std::ofstream(d + "/afile") << "x";
+  {
+    std::ofstream f(d + "/w.txt");
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> g(0.0, 1e-3);
+    for (int i = 0; i < 2000; ++i) f << g(rng) << "\n";
+  }
+  std::ofstream(d + "/bad.txt") << "1\n2\nabc\n";  // an input that would be refused, once read
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--json", d + "/nonexistent/a.json"}, "--json " + d + "/nonexistent/a.json: the folder " + d +
+                                                  "/nonexistent does not exist"},
+      {{"--json", d + "/ok.json", "--svg", d + "/afile"}, "--svg " + d + "/afile: not a folder"},
+      {{"--json", d + "/folder"}, "--json " + d + "/folder: is a folder"},
+      {{"--svg", d + "/new/deeper"}, "--svg " + d + "/new/deeper: the folder " + d + "/new does not exist"},
+      {{"--json", d + "/ok.json", "--svg", d + "/plots/"}, ""}};  // the one that is fine: made, written
+  int i = 0;
+  for (const auto& [opts, expect] : cases) {
+    for (const char* input : {"/w.txt", "/bad.txt"}) {
+      std::vector<std::string> args = {"analyze", d + input, "--rate", "100"};
+      args.insert(args.end(), opts.begin(), opts.end());
+      const std::string io = d + "/io" + std::to_string(i++);
+      const int rc = run(args, io);
+      if (expect.empty()) {  // a good output: the input decides
+        EXPECT_EQ(rc, input == std::string("/w.txt") ? 0 : 2) << slurp(io + ".stderr");
+        continue;
+      }
+      EXPECT_EQ(rc, 2) << expect;
+      const std::string err = slurp(io + ".stderr");
+      EXPECT_NE(err.find(expect), std::string::npos) << err;
+      EXPECT_EQ(err.find("not a decimal number"), std::string::npos) << "the input was read first: " << err;
+      EXPECT_EQ(slurp(io + ".stdout"), "") << expect;
+      EXPECT_FALSE(fs::exists(d + "/ok.json")) << expect;
+      EXPECT_FALSE(fs::exists(d + "/new")) << expect;
+    }
+  }
+  EXPECT_TRUE(fs::exists(d + "/ok.json"));
+  EXPECT_TRUE(fs::exists(d + "/plots/allan.svg"));
+  EXPECT_TRUE(fs::exists(d + "/plots/psd.svg"));
+}
+
 // A review: 1e-400 was "beyond the range of a double" (it is too near 0); a byte-order mark inside
 // a file was printed raw, invisible ("not a decimal number: '4'"); a float64 file read as text
 // filled the terminal with ~250 escaped bytes. Now: the right reason, the mark as \xNN, and an
