@@ -17,9 +17,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -43,16 +45,44 @@ namespace rig::cli {
 
 namespace {
 
-// Whether every deviation computed is 0 (a constant record).
-bool every_deviation_is_zero(const std::vector<std::vector<rig::analysis::DevPoint>>& devs) {
+namespace an = rig::analysis;
+using nlohmann::json;
+
+// A deviation no larger than this many units in the last place of the values is their rounding.
+constexpr double kRoundingUlps = 16;
+
+// Whether every deviation computed is 0 or the rounding of the values (a constant record, a
+// straight phase line): nothing there is noise. A review found a phase line (values up to 1e-4)
+// with OADEV 6e-21 given noise types, bounds, noise terms and PSD peaks. scale: the values'
+// largest magnitude (a constant's or a line's: its first or last value). Rounding moves each
+// value by about one unit in the last place, so a second difference by a few: in the values'
+// units, dev for frequency data and dev * tau (the phase's) for phase data.
+bool no_noise_above_rounding(const std::vector<std::vector<an::DevPoint>>& devs, double scale, an::DataKind data) {
+  const double rounding = kRoundingUlps * std::numeric_limits<double>::epsilon() * scale;
   for (const auto& d : devs)
     for (const auto& p : d)
-      if (p.dev != 0) return false;
+      if ((data == an::DataKind::Phase ? p.dev * p.tau_s : p.dev) > rounding) return false;
   return !devs.empty();
 }
 
-namespace an = rig::analysis;
-using nlohmann::json;
+// The largest magnitude of the record's first and last values: its scale where it is a
+// constant or a line, the only records no_noise_above_rounding can find noiseless.
+double end_value_scale(const an::ChunkSource& src) {
+  double first = 0, last = 0;
+  src.read_at(0, std::span<double>(&first, 1));
+  src.read_at(src.size() - 1, std::span<double>(&last, 1));
+  return std::max(std::fabs(first), std::fabs(last));
+}
+
+// OADEV as --no-bounds reports it and fits the noise terms to: no noise type, no EDF, no bounds
+// (the pass identified the noise for the total family's bias removal only).
+std::vector<an::DevPoint> without_identification(std::vector<an::DevPoint> pts) {
+  for (an::DevPoint& p : pts) p.lo = p.hi = p.edf = 0, p.alpha = p.edf_alpha = 0;
+  return pts;
+}
+
+// Whether a long-tau statistic divides by a noise-type bias (MTOT, TTOT, HTOT: theo.hpp tot_bias).
+bool has_noise_bias(an::LongTau t) { return t == an::LongTau::MTOT || t == an::LongTau::TTOT || t == an::LongTau::HTOT; }
 
 struct Args {
   std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev";
@@ -91,6 +121,59 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
   if (t.lo && t.hi) o << "  [" << fmt(*t.lo) << ", " << fmt(*t.hi) << "]";
   if (to_hours) o << "  = " << fmt(to_hours(*t.value)) << ' ' << hu;
   o << "\n";
+}
+
+// A deviation's table: with its noise type and bounds, or "-" where it has none.
+void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::DevPoint>& pts, bool bounded,
+                     double confidence) {
+  o << an::to_string(type);
+  if (bounded) o << " (bounds " << confidence << "):\n";
+  else o << " (no bounds):\n";
+  o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
+  for (const auto& p : pts) {
+    char line[160];
+    if (bounded)
+      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e\n", p.m, p.tau_s, p.n_terms, p.alpha,
+                    p.lo, p.dev, p.hi);
+    else
+      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s\n", p.m, p.tau_s, p.n_terms, "-", "-",
+                    p.dev, "-");
+    o << line;
+  }
+}
+
+// A long-tau statistic's table. typed_noise: its alpha is shown, also without bounds (MTOT,
+// TTOT and HTOT's bias removal's noise type).
+void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::LongTauPoint>& pts, bool bounded,
+                    bool typed_noise, double confidence) {
+  o << an::to_string(type);
+  if (bounded) o << " (bounds " << confidence;
+  else o << " (no bounds";
+  if (!bounded && typed_noise) o << "; alpha: the noise type of the bias removal";
+  o << "; stride > 1: every stride-th start summed):\n";
+  o << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
+  for (const auto& p : pts) {
+    char alpha[8] = "-", lo[16] = "-", hi[16] = "-", edf[16] = "-";
+    if (typed_noise) std::snprintf(alpha, sizeof alpha, "%d", p.alpha);
+    if (bounded) {
+      std::snprintf(lo, sizeof lo, "%.4e", p.lo);
+      std::snprintf(hi, sizeof hi, "%.4e", p.hi);
+      std::snprintf(edf, sizeof edf, "%.1f", p.edf);
+    }
+    char line[200];
+    std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s %8s %6zu %s\n", p.m, p.tau_s, p.n_terms,
+                  alpha, lo, p.dev, hi, edf, p.stride, p.estimator.c_str());
+    o << line;
+  }
+}
+
+// A long-tau statistic in the JSON: bounds as the run has them; MTOT, TTOT and HTOT's alpha (the
+// noise type of their bias removal) also without bounds, unless there is no noise (typed_noise).
+json long_tau_json(const std::vector<an::LongTauPoint>& pts, an::LongTau type, bool bounded, bool typed_noise) {
+  json a = analysis::long_tau_to_json(pts, bounded);
+  if (!bounded && typed_noise && has_noise_bias(type))
+    for (std::size_t i = 0; i < pts.size(); ++i) a[i]["alpha"] = pts[i].alpha;
+  return a;
 }
 
 // RIG_ANALYZE_TIMING=1 prints each stage's wall and CPU time (all threads) to stderr: where the
@@ -355,6 +438,14 @@ int run(const Args& a) {
   if (a.no_bounds)
     notes.push_back("--no-bounds: no noise identification and no bounds (alpha, edf, lo and hi are null); the noise "
                     "terms are fitted with every point weighted alike, and their bounds assume that");
+  // MTOT, TTOT and HTOT divide by their noise type's bias (theo.hpp tot_bias): --no-bounds once
+  // took white FM for it and changed their values (HTOT by 12 % on a random walk, a review).
+  // Their noise is identified on OADEV as with bounds, and their alpha says the type used.
+  const bool bias_types = std::any_of(long_taus.begin(), long_taus.end(), has_noise_bias);
+  const bool identify_oadev = !a.no_bounds || (bias_types && !a.no_oadev);
+  if (a.no_bounds && bias_types)
+    notes.push_back("--no-bounds with mtot, ttot, htot: the noise is still identified for their bias removal (on OADEV, "
+                    "as with bounds, so their values do not depend on --no-bounds); their alpha is the type it used");
   if (want_psd && n < an::welch_segment(n, wo)) {
     if (a.segment)
       throw ConfigError(input_name + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
@@ -373,6 +464,7 @@ int run(const Args& a) {
   base.threads = a.threads;
   an::DevOptions oadev = base;
   oadev.type = an::Deviation::OADEV;
+  oadev.bounds = identify_oadev;
   if (!a.no_oadev) opts.push_back(oadev);
   if (base.type != an::Deviation::OADEV) opts.push_back(base);
   if (!listed.empty()) {  // each deviation takes the listed factors it has a term at; the others are named
@@ -419,10 +511,27 @@ int run(const Args& a) {
   // The record's span: n frequency values cover n tau0; n phase points, n - 1 (a review: ten
   // phase points were said to be 10 s at 1 Hz).
   const double record_s = static_cast<double>(base.data == an::DataKind::Phase ? n - 1 : n) / rate;
-  if (every_deviation_is_zero(devs))
-    notes.push_back(std::string(base.data == an::DataKind::Phase ? "the phase is a straight line (a constant frequency)"
-                                                                  : "the record is constant") +
-                    ": every deviation is 0, so there is no noise to identify, no bounds and no noise terms");
+  // OADEV identified for the total family's bias alone (--no-bounds): kept for it, and reported
+  // and fitted as --no-bounds has it.
+  std::vector<an::DevPoint> oadev_identified;
+  if (a.no_bounds && identify_oadev) {
+    oadev_identified = devs[0];
+    devs[0] = without_identification(std::move(devs[0]));
+  }
+  // A constant record or a straight phase line: its deviations are rounding, not noise. Nothing
+  // is identified or bounded (null, as --no-bounds), the noise terms say why they are null, and
+  // there is no PSD (its "peaks" were rounding noise at 1e-60, a review).
+  const bool constant = no_noise_above_rounding(devs, end_value_scale(*src), base.data);
+  const std::string constant_what = base.data == an::DataKind::Phase
+                                        ? "the phase is a straight line (a constant frequency)"
+                                        : "the record is constant";
+  if (constant) {
+    notes.push_back(constant_what + ": every deviation is 0 or the rounding of the values, so there is no noise to "
+                    "identify, no bounds and no noise terms");
+    if (want_psd) notes.push_back("no PSD: the record is constant (its spectrum would be the rounding of the values)");
+    want_psd = false;
+  }
+  const bool bounded = !a.no_bounds && !constant;
   // The file is read again only by the PSD and the long-tau statistics. Without them its mapping
   // (one page-table entry per 4 KiB: 7000 for 3.6e6 values, about 0.5 ms to tear down) is
   // released on another thread, while this one fits the noise terms and writes the JSON, instead
@@ -439,7 +548,9 @@ int run(const Args& a) {
   std::exception_ptr fit_error;
   const auto fit_terms = [&] {
     try {
-      terms = an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift, a.confidence);
+      terms = constant ? an::no_noise_terms(constant_what + ": every deviation is 0 or the rounding of the values, "
+                                            "no noise to fit", a.confidence)
+                       : an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift, a.confidence);
     } catch (...) {
       fit_error = std::current_exception();
     }
@@ -477,7 +588,8 @@ int run(const Args& a) {
       lo.confidence = a.confidence;
       lo.bounds = !a.no_bounds;
       lo.threads = a.threads;
-      if (oadev_pts) lo.noise_ref = *oadev_pts;  // else long_tau computes an octave OADEV for the noise types
+      // Else long_tau computes an octave OADEV for the noise types.
+      if (oadev_pts) lo.noise_ref = oadev_identified.empty() ? *oadev_pts : oadev_identified;
       try {
         longs.push_back(an::long_tau(values, lo));
       } catch (const std::invalid_argument& e) {
@@ -495,10 +607,10 @@ int run(const Args& a) {
   j["input"] = input;
   j["record_s"] = record_s;
   j["confidence"] = a.confidence;
-  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, !a.no_bounds);
-  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, !a.no_bounds);
+  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, bounded);
+  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, bounded);
   for (std::size_t k = 0; k < longs.size(); ++k)
-    j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k], !a.no_bounds);
+    j[an::to_string(long_taus[k])] = long_tau_json(longs[k], long_taus[k], bounded, !constant);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", channel},
@@ -571,7 +683,6 @@ int run(const Args& a) {
   for (const auto& [path, text] : outputs) write_file(path, text);
   timer.mark("outputs");
 
-
   // Console summary.
   std::ostream& o = std::cout;
   if (cap) {  // what the capture reader recovered, damage included (docs/capture-format.md)
@@ -583,38 +694,10 @@ int run(const Args& a) {
   o << input_name << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
     << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
-  for (std::size_t k = 0; k < devs.size(); ++k) {
-    o << an::to_string(opts[k].type);
-    if (a.no_bounds) o << " (no bounds):\n";
-    else o << " (bounds " << a.confidence << "):\n";
-    o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
-    for (const auto& p : devs[k]) {
-      char line[160];
-      if (a.no_bounds)
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s\n", p.m, p.tau_s, p.n_terms, "-", "-",
-                      p.dev, "-");
-      else
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e\n", p.m, p.tau_s, p.n_terms,
-                      p.alpha, p.lo, p.dev, p.hi);
-      o << line;
-    }
-  }
-  for (std::size_t k = 0; k < longs.size(); ++k) {
-    o << an::to_string(long_taus[k]);
-    if (a.no_bounds) o << " (no bounds; stride > 1: every stride-th start summed):\n";
-    else o << " (bounds " << a.confidence << "; stride > 1: every stride-th start summed):\n";
-    o << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
-    for (const auto& p : longs[k]) {
-      char line[200];
-      if (a.no_bounds)
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s %8s %6zu %s\n", p.m, p.tau_s,
-                      p.n_terms, "-", "-", p.dev, "-", "-", p.stride, p.estimator.c_str());
-      else
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e %8.1f %6zu %s\n", p.m, p.tau_s,
-                      p.n_terms, p.alpha, p.lo, p.dev, p.hi, p.edf, p.stride, p.estimator.c_str());
-      o << line;
-    }
-  }
+  for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], bounded, a.confidence);
+  for (std::size_t k = 0; k < longs.size(); ++k)
+    print_long_tau(o, long_taus[k], longs[k], bounded, bounded || (has_noise_bias(long_taus[k]) && !constant),
+                   a.confidence);
   if (terms) {
     o << "noise terms (tau in s; passport units after '='):\n";
     print_term(o, "Q", terms->Q, an::q_per_hour, "g*h");
