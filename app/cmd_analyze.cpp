@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <exception>
 #include <chrono>
 #include <ctime>
@@ -84,6 +85,24 @@ std::vector<an::DevPoint> without_identification(std::vector<an::DevPoint> pts) 
 // Whether a long-tau statistic divides by a noise-type bias (MTOT, TTOT, HTOT: theo.hpp tot_bias).
 bool has_noise_bias(an::LongTau t) { return t == an::LongTau::MTOT || t == an::LongTau::TTOT || t == an::LongTau::HTOT; }
 
+// A number in a message as the user typed it, to the digit: the shortest text that reads back as
+// the same double (%g's six digits made --rate 1000001 "1e+06", inside the range it was refused
+// for, and --confidence 0.9999999 "1").
+std::string typed(double v) {
+  char b[32];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
+// The bounds' confidence in a table's header: the default one sigma as 0.682689, any other level
+// as typed.
+std::string confidence_shown(double c) {
+  if (c != an::kOneSigma) return typed(c);
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", c);
+  return b;
+}
+
 struct Args {
   std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev";
   std::optional<std::string> channel;  // captures only: x (default) or y
@@ -94,7 +113,7 @@ struct Args {
   bool no_bounds = false, no_psd = false, no_oadev = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
-  std::size_t segment = 0;
+  std::optional<std::size_t> segment;  // none: the automatic length
   double overlap = 0.5;
 };
 
@@ -126,9 +145,7 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
 // A deviation's table: with its noise type and bounds, or "-" where it has none.
 void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::DevPoint>& pts, bool bounded,
                      double confidence) {
-  o << an::to_string(type);
-  if (bounded) o << " (bounds " << confidence << "):\n";
-  else o << " (no bounds):\n";
+  o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) + "):\n" : " (no bounds):\n");
   o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
   for (const auto& p : pts) {
     char line[160];
@@ -143,14 +160,14 @@ void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::
 }
 
 // A long-tau statistic's table. typed_noise: its alpha is shown, also without bounds (MTOT,
-// TTOT and HTOT's bias removal's noise type).
+// TTOT and HTOT's bias removal's noise type). The stride is explained where one exceeds 1.
 void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::LongTauPoint>& pts, bool bounded,
                     bool typed_noise, double confidence) {
-  o << an::to_string(type);
-  if (bounded) o << " (bounds " << confidence;
-  else o << " (no bounds";
+  o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) : std::string(" (no bounds"));
   if (!bounded && typed_noise) o << "; alpha: the noise type of the bias removal";
-  o << "; stride > 1: every stride-th start summed):\n";
+  if (std::any_of(pts.begin(), pts.end(), [](const an::LongTauPoint& p) { return p.stride > 1; }))
+    o << "; stride > 1: every stride-th start summed";
+  o << "):\n";
   o << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
   for (const auto& p : pts) {
     char alpha[8] = "-", lo[16] = "-", hi[16] = "-", edf[16] = "-";
@@ -234,6 +251,26 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
                 "gap-free stretch, --gaps stop refuses)";
 }
 
+// The numeric options' ranges, each refused (exit 2) with the value as typed.
+void check_numeric_options(const Args& a) {
+  if (!(a.overlap >= 0 && a.overlap <= 0.95))
+    throw ConfigError("rig analyze: --overlap " + typed(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
+  if (!(a.confidence > 0 && a.confidence < 1))
+    throw ConfigError("rig analyze: --confidence " + typed(a.confidence) + ": must be in (0, 1)");
+  if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz))
+    throw ConfigError("rig analyze: --rate " + typed(*a.rate) + ": the sample rate must be in (0, " +
+                      typed(capture::kMaxRateHz) + "] Hz");
+  // 0 was taken silently (the automatic segment; the engine's smallest ring): a typed 0 is a slip.
+  constexpr std::size_t kMinSegment = 8;  // welch()'s smallest (analysis/psd.cpp)
+  if (a.segment && *a.segment < kMinSegment)
+    throw ConfigError("rig analyze: --segment " + std::to_string(*a.segment) + ": a PSD segment has at least " +
+                      std::to_string(kMinSegment) + " values (without --segment its length is chosen)");
+  constexpr std::size_t kMaxMemoryMib = std::size_t{1} << 20;  // 1 TiB: MiB << 20 stays in a size_t
+  if (a.memory_mib < 1 || a.memory_mib > kMaxMemoryMib)
+    throw ConfigError("rig analyze: --memory-mib " + std::to_string(a.memory_mib) + ": the memory budget must be in 1.." +
+                      std::to_string(kMaxMemoryMib) + " MiB");
+}
+
 // The files --svg DIR writes.
 const char* const kSvgFiles[] = {"allan.svg", "psd.svg"};
 
@@ -291,15 +328,7 @@ void check_outputs(const Args& a) {
 
 int run(const Args& a) {
   StageTimer timer;
-  auto shown = [](double v) {  // as typed for any value a user would type (%g: 2, 0.96)
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", v);
-    return std::string(b);
-  };
-  if (!(a.overlap >= 0 && a.overlap <= 0.95))
-    throw ConfigError("rig analyze: --overlap " + shown(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
-  if (!(a.confidence > 0 && a.confidence < 1))
-    throw ConfigError("rig analyze: --confidence " + shown(a.confidence) + ": must be in (0, 1)");
+  check_numeric_options(a);
   an::DevOptions base;
   // Each option's parse error names the option and its value (and, for --dev, the statistics
   // it also takes).
@@ -383,12 +412,8 @@ int run(const Args& a) {
   std::optional<CaptureData> cap;
   std::string gap_note;
   std::size_t analysed_from = 0;  // the first capture sample analysed (--gaps longest)
-  double rate = a.rate.value_or(1000.0);
-  if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz)) {
-    char b[96];
-    std::snprintf(b, sizeof b, "--rate %g: the sample rate must be in (0, %g] Hz", *a.rate, capture::kMaxRateHz);
-    throw ConfigError(std::string("rig analyze: ") + b);
-  }
+  constexpr double kDefaultRateHz = 1000;
+  double rate = a.rate.value_or(kDefaultRateHz);
   check_input_path(a.file, input);
   check_outputs(a);  // before anything is read: a bad output leaves nothing written
   std::size_t blank_lines = 0;  // noted below
@@ -417,6 +442,8 @@ int run(const Args& a) {
                     "skipped: the values around " + (blank_lines > 1 ? "them" : "it") + " are joined, not read as "
                     "missing samples");
   if (!gap_note.empty()) notes.push_back(gap_note);
+  if (!a.rate && !cap)  // every tau and noise term scales with it (a review: a 1 s file read at 1 kHz, silently)
+    notes.push_back("no --rate: " + typed(kDefaultRateHz) + " Hz assumed (every tau and noise term scales with it)");
   if (cap && cap->lost_at_start)
     notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
                     "notes name it); the record starts after them, nothing is joined");
@@ -429,7 +456,7 @@ int run(const Args& a) {
   // the record cannot fill is the caller's error.
   an::WelchOptions wo;
   wo.window = an::parse_window(a.window);
-  wo.segment = a.segment;
+  wo.segment = a.segment.value_or(0);  // 0: welch_segment chooses
   wo.overlap = a.overlap;
   wo.threads = a.threads;
   bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
@@ -447,7 +474,7 @@ int run(const Args& a) {
     notes.push_back("--no-bounds with mtot, ttot, htot: the noise is still identified for their bias removal (on OADEV, "
                     "as with bounds, so their values do not depend on --no-bounds); their alpha is the type it used");
   if (want_psd && n < an::welch_segment(n, wo)) {
-    if (a.segment)
+    if (a.segment.has_value())
       throw ConfigError(input_name + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
                         std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
     notes.push_back("no PSD: " + std::to_string(n) + " values are fewer than one Welch segment of " +
@@ -691,8 +718,8 @@ int run(const Args& a) {
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
     if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << input_name << ": " << gap_note << "\n";
   }
-  o << input_name << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
-    << "\n";
+  o << input_name << ": " << n << " values, " << typed(rate) << " Hz, " << record_s << " s, data "
+    << an::to_string(base.data) << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], bounded, a.confidence);
   for (std::size_t k = 0; k < longs.size(); ++k)
@@ -731,7 +758,7 @@ void add_analyze(CLI::App& app, int& rc) {
       ->check(CLI::IsMember({"auto", "text", "f64", "capture"}));
   sub->add_option("--data", args->data, "freq (accelerometer output, default) or phase (its integral)")
       ->check(CLI::IsMember({"freq", "frequency", "phase"}));
-  sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000)");
+  sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000, with a note)");
   sub->add_option("--taus", args->taus,
                   "tau grid: octave|decade|all|log:N (default log:100), or m:LIST, averaging factors (m:1,2,5)");
   sub->add_option("--dev", args->dev,
@@ -751,10 +778,10 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--svg", args->svg_dir,
                   "write allan.svg and psd.svg into this folder (made if missing, in a folder that exists)");
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
-  sub->add_option("--segment", args->segment, "PSD segment length (default: auto)");
+  sub->add_option("--segment", args->segment, "PSD segment length, at least 8 (default: chosen from the record)");
   sub->add_option("--overlap", args->overlap, "PSD segment overlap, fraction in [0, 0.95] (default 0.5)");
   sub->add_option("--threads", args->threads, "threads (default: all cores)");
-  sub->add_option("--memory-mib", args->memory_mib, "memory budget for streaming, MiB (default 384)");
+  sub->add_option("--memory-mib", args->memory_mib, "memory budget for streaming, 1..1048576 MiB (default 384)");
   sub->callback([args, &rc] { rc = run(*args); });
 }
 

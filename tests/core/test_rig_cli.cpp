@@ -177,7 +177,7 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   const auto t1 = nlohmann::json::parse(slurp(d + "/t1.json"));
   ASSERT_FALSE(t1["theo1"].empty());
   for (const char* k : {"lo", "hi", "edf", "alpha", "edf_alpha"}) EXPECT_TRUE(t1["theo1"][0][k].is_null()) << k;
-  EXPECT_NE(slurp(d + "/t1.stdout").find("theo1 (no bounds;"), std::string::npos) << slurp(d + "/t1.stdout");
+  EXPECT_NE(slurp(d + "/t1.stdout").find("theo1 (no bounds):"), std::string::npos) << slurp(d + "/t1.stdout");
   // Ten phase points at 1 Hz span 9 s; no PSD, and why.
   ASSERT_EQ(run({"analyze", d + "/nbs.txt", "--rate", "1", "--data", "phase", "--json", d + "/ph.json"}, d + "/ph"), 0);
   const auto ph = nlohmann::json::parse(slurp(d + "/ph.json"));
@@ -813,6 +813,79 @@ TEST(RigCli, AnalyzeChecksEveryOutputBeforeReadingItsInput) {
   EXPECT_TRUE(fs::exists(d + "/ok.json"));
   EXPECT_TRUE(fs::exists(d + "/plots/allan.svg"));
   EXPECT_TRUE(fs::exists(d + "/plots/psd.svg"));
+}
+
+// A review: a refused value was shown with six digits ("--rate 1e+06: the sample rate must be in
+// (0, 1e+06] Hz" for 1000001), and --confidence 0.9999999 headed its table "bounds 1". Every
+// value is shown as typed (the shortest text that reads back as it).
+TEST(RigCli, AnalyzeShowsEveryValueAsTyped) {
+  const std::string d = tmp("analyze-as-typed");
+  fs::create_directories(d);
+  std::ofstream(d + "/v.txt") << "0.892\n0.809\n0.823\n0.798\n0.671\n0.644\n0.883\n0.903\n0.677\n";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--rate", "1000001"}, "--rate 1000001: the sample rate must be in (0, 1e+06] Hz"},
+      {{"--rate", "1000000.4"}, "--rate 1000000.4: the sample rate must be in (0, 1e+06] Hz"},
+      {{"--overlap", "0.9500001"}, "--overlap 0.9500001: the PSD segment overlap must be in [0, 0.95]"},
+      {{"--confidence", "1.0000001"}, "--confidence 1.0000001: must be in (0, 1)"}};
+  int i = 0;
+  for (const auto& [opt, expect] : cases) {
+    std::vector<std::string> args = {"analyze", d + "/v.txt"};
+    args.insert(args.end(), opt.begin(), opt.end());
+    const std::string io = d + "/io" + std::to_string(i++);
+    EXPECT_EQ(run(args, io), 2) << expect;
+    EXPECT_NE(slurp(io + ".stderr").find(expect), std::string::npos) << slurp(io + ".stderr");
+  }
+  ASSERT_EQ(run({"analyze", d + "/v.txt", "--rate", "1", "--confidence", "0.9999999", "--dev", "mtot"}, d + "/c"), 0)
+      << slurp(d + "/c.stderr");
+  EXPECT_NE(slurp(d + "/c.stdout").find("oadev (bounds 0.9999999):"), std::string::npos) << slurp(d + "/c.stdout");
+  EXPECT_NE(slurp(d + "/c.stdout").find("mtot (bounds 0.9999999):"), std::string::npos) << slurp(d + "/c.stdout");
+  ASSERT_EQ(run({"analyze", d + "/v.txt", "--rate", "1"}, d + "/one"), 0) << slurp(d + "/one.stderr");
+  EXPECT_NE(slurp(d + "/one.stdout").find("oadev (bounds 0.682689):"), std::string::npos) << slurp(d + "/one.stdout");
+}
+
+// A review: every long-tau header said "stride > 1: every stride-th start summed" with every
+// stride 1; --segment 0 and --memory-mib 0 were taken silently; a file without --rate was read
+// at 1000 Hz without a word. The stride is explained where one exceeds 1, a 0 is refused, and
+// the assumed rate is noted.
+TEST(RigCli, AnalyzeSaysWhatItAssumedAndRefusesZeroSizes) {
+  const std::string d = tmp("analyze-assumed");
+  fs::create_directories(d);
+  std::ofstream(d + "/nbs10.txt") << "0.00000\n103.11111\n123.22222\n157.33333\n166.44444\n48.55555\n-96.33333\n"
+                                     "-2.22222\n111.88889\n0.00000\n";
+  ASSERT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--rate", "1", "--taus", "all", "--no-psd", "--dev",
+                 "mtot,ttot,htot", "--json", d + "/n.json"},
+                d + "/n"),
+            0)
+      << slurp(d + "/n.stderr");
+  const std::string out = slurp(d + "/n.stdout");
+  EXPECT_EQ(out.find("stride"), out.find("stride estimator")) << "only the column is named: " << out;
+  EXPECT_NE(out.find("mtot (bounds 0.682689):"), std::string::npos) << out;
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/n.json"))["notes"].dump().find("no --rate"), std::string::npos);
+  {  // 8000 values: MTOT's longest taus pass the work cap, every stride-th start summed
+    std::ofstream f(d + "/long.txt");
+    std::mt19937_64 rng(9);
+    std::normal_distribution<double> g(0.0, 1e-3);
+    for (int i = 0; i < 8000; ++i) f << g(rng) << "\n";
+  }
+  ASSERT_EQ(run({"analyze", d + "/long.txt", "--taus", "octave", "--no-psd", "--dev", "mtot", "--json", d + "/l.json"},
+                d + "/l"),
+            0)
+      << slurp(d + "/l.stderr");
+  const auto l = nlohmann::json::parse(slurp(d + "/l.json"));
+  ASSERT_TRUE(std::any_of(l["mtot"].begin(), l["mtot"].end(), [](const auto& p) { return p["stride"] > 1; }))
+      << l["mtot"].dump();
+  EXPECT_NE(slurp(d + "/l.stdout").find("mtot (bounds 0.682689; stride > 1: every stride-th start summed):"),
+            std::string::npos)
+      << slurp(d + "/l.stdout");
+  // No --rate on a text file: 1000 Hz, said.
+  EXPECT_NE(l["notes"].dump().find("no --rate: 1000 Hz assumed"), std::string::npos) << l["notes"].dump();
+  EXPECT_NE(slurp(d + "/l.stdout").find("note: no --rate: 1000 Hz assumed"), std::string::npos);
+  for (const auto& [opt, expect] :
+       {std::pair{"--segment", "--segment 0: a PSD segment has at least 8 values"},
+        std::pair{"--memory-mib", "--memory-mib 0: the memory budget must be in 1..1048576 MiB"}}) {
+    EXPECT_EQ(run({"analyze", d + "/long.txt", opt, "0"}, d + "/zero"), 2) << opt;
+    EXPECT_NE(slurp(d + "/zero.stderr").find(expect), std::string::npos) << slurp(d + "/zero.stderr");
+  }
 }
 
 // A review: 1e-400 was "beyond the range of a double" (it is too near 0); a byte-order mark inside
