@@ -34,9 +34,11 @@ TauGrid parse_tau_grid(const std::string& s);  // "octave|decade|all|log:N", thr
 // ADEV, HDEV (N-1)/5; OADEV, MDEV, TDEV, OHDEV (N-1)/4; TOTDEV (N-1)/2.
 std::size_t max_factor(Deviation d, std::size_t n_phase);
 // The averaging factors m of a grid (octave 1,2,4..; decade 1,2,4,10,20,40..; all 1..max;
-// log:N about N points log-spaced over [1, max]: below 64 rounded from 2^(k/q), above it
-// seeds in [64, 128) times powers of two, so that every m has 2m in the grid (which halves the
-// engine's memory traffic, see allan_stream.cpp); stopped at max_factor.
+// log:N q = max(1, ceil((N-1) / log2 max)) points per octave over [1, max]: below 64 rounded
+// from 2^(k/q), repeats dropped; from 64 on the q seeds 64 2^(j/q) in [64, 128), rounded, times
+// powers of two, so that every m has 2m in the grid (which halves the engine's memory traffic,
+// see allan_stream.cpp). About N points, but never fewer than one per octave (log:2 is the
+// octave grid) nor, from 64 on, more than 64 (docs/analysis.md); stopped at max_factor.
 std::vector<std::size_t> tau_factors(const TauGrid& g, Deviation d, std::size_t n_phase);
 
 // Number of terms Stable32 prints in its '#' column (see tests/data/allan-reference/README.md).

@@ -274,8 +274,25 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d, double confidence) {
 
 }  // namespace
 
+NoiseTerms no_noise_terms(const std::string& why, double confidence) {
+  NoiseTerms out;
+  out.confidence = confidence;
+  out.paper.reason = out.model.reason = out.wls.reason = why;
+  Term* const terms[5] = {&out.Q, &out.N, &out.B, &out.K, &out.R};
+  Term* const fitted[5] = {&out.wls.Q, &out.wls.N, &out.wls.B, &out.wls.K, &out.wls.R};
+  for (std::size_t k = 0; k < 5; ++k) {
+    terms[k]->unit = fitted[k]->unit = kUnits[k];
+    terms[k]->reason = fitted[k]->reason = why;
+  }
+  return out;
+}
+
 NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, double r_min_record_s,
                        const std::optional<Drift>& drift, double confidence) {
+  // Every point 0: the fits would fail on the points ("fewer than 3 Allan points" with 8 there, a
+  // review), where the record has no noise at all.
+  if (!oadev.empty() && std::all_of(oadev.begin(), oadev.end(), [](const DevPoint& p) { return p.dev == 0; }))
+    return no_noise_terms("every Allan deviation is 0 (a constant record): no noise to fit", confidence);
   NoiseTerms out;
   out.confidence = confidence;
   out.paper = paper_fit(oadev);

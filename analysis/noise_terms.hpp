@@ -145,6 +145,12 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s,
                        double r_min_record_s = kRMinRecordS, const std::optional<Drift>& drift = std::nullopt,
                        double confidence = kOneSigma);
 
+// The terms of a record with no noise to fit (a constant record, a straight phase line: every
+// Allan deviation 0, or the rounding of the values): every term null with `why` as its reason,
+// and the fits' reasons too. noise_terms() returns it when every OADEV point is 0; a caller that
+// knows the values' rounding (rig analyze) calls it for deviations at that level too.
+NoiseTerms no_noise_terms(const std::string& why, double confidence = kOneSigma);
+
 // Passport units (docs/method.md quotes the terms per hour): 1 h = 3600 s, so a coefficient in
 // g*s^a is 3600^-a of itself in g*h^a. Written as products with the same factors the passport
 // values are scaled by (procedures/acceptance), so both carry the same bits.

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -223,13 +224,66 @@ std::size_t utf8_sequence(std::string_view s, std::size_t i) {
 
 // Characters a terminal acts on rather than shows, though well-formed: the C1 controls
 // (U+0080..U+009F: U+009B is CSI), the line and paragraph separators, and the bidirectional
-// embeddings, overrides and isolates (U+202A..U+202E, U+2066..U+2069).
+// embeddings, overrides and isolates (U+202A..U+202E, U+2066..U+2069); and those it shows as
+// nothing, which hide in a quoted value (a byte-order mark inside a file made "not a decimal
+// number: '4'", a review): the soft hyphen U+00AD, the zero-width space, joiners and marks
+// U+200B..U+200F, the word joiner and invisible operators U+2060..U+2064, and U+FEFF.
 bool acts_on_terminal(std::string_view seq) {
   const auto b = [&](std::size_t k) { return static_cast<unsigned char>(seq[k]); };
-  if (seq.size() == 2) return b(0) == 0xC2 && b(1) <= 0x9F;
-  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80) return b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
-  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return b(2) >= 0xA6 && b(2) <= 0xA9;
+  if (seq.size() == 2) return b(0) == 0xC2 && (b(1) <= 0x9F || b(1) == 0xAD);
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80)
+    return (b(2) >= 0x8B && b(2) <= 0x8F) || b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return (b(2) >= 0xA0 && b(2) <= 0xA4) || (b(2) >= 0xA6 && b(2) <= 0xA9);
+  if (seq.size() == 3) return b(0) == 0xEF && b(1) == 0xBB && b(2) == 0xBF;
   return false;
+}
+
+// How many bytes of s are not text: neither printable ASCII, tab nor CR, nor in well-formed UTF-8.
+std::size_t binary_bytes(std::string_view s) {
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    const std::size_t len = (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\r' ? 1 : c >= 0x80 ? utf8_sequence(s, i) : 0;
+    if (len == 0) ++bad;
+    i += std::max<std::size_t>(len, 1);
+  }
+  return bad;
+}
+
+// A line of a binary file (a raw float64 file read as text): a NUL byte, or, in 16 bytes or
+// more (a Latin-1 unit is not binary), more than a quarter of its bytes not text.
+bool looks_binary(std::string_view line) {
+  return line.find('\0') != std::string_view::npos || (line.size() >= 16 && 4 * binary_bytes(line) > line.size());
+}
+
+// A refused value as quoted in a message: whole when short, else its first bytes and its length
+// (a binary file's "line" of hundreds of bytes filled the terminal with \xNN, a review).
+std::string excerpt(std::string_view tok) {
+  constexpr std::size_t kMaxQuoted = 40;
+  if (tok.size() <= kMaxQuoted) return "'" + quoted_bytes(tok) + "'";
+  std::size_t cut = kMaxQuoted;
+  while (cut > kMaxQuoted - 3 && (static_cast<unsigned char>(tok[cut]) & 0xC0) == 0x80) --cut;  // whole characters
+  return "'" + quoted_bytes(tok.substr(0, cut)) + "...' (" + std::to_string(tok.size()) + " bytes)";
+}
+
+// Whether a decimal number std::from_chars found out of a double's range is too near 0 (it
+// underflows) rather than too large: by the place of its first significant digit and its exponent.
+bool underflows(std::string_view num) {
+  const std::size_t e = num.find_first_of("eE");
+  const std::string_view mantissa = num.substr(0, e);
+  long long exponent = 0;
+  if (e != std::string_view::npos) {
+    std::string_view ex = num.substr(e + 1);
+    if (!ex.empty() && ex[0] == '+') ex.remove_prefix(1);
+    const auto [p, ec] = std::from_chars(ex.data(), ex.data() + ex.size(), exponent);
+    if (ec == std::errc::result_out_of_range) return ex[0] == '-';  // beyond any long long: its sign decides
+  }
+  const std::size_t point = std::min(mantissa.find('.'), mantissa.size());
+  const std::size_t first = mantissa.find_first_of("123456789");
+  if (first == std::string_view::npos) return true;  // all zeros: from_chars would not have refused it
+  // The decimal place of the first significant digit: 0 for units, -1 for tenths.
+  const long long place = first < point ? static_cast<long long>(point - first) - 1 : -static_cast<long long>(first - point);
+  return exponent + place < 0;
 }
 }  // namespace
 
@@ -270,38 +324,52 @@ std::vector<double> read_text(const std::string& path, std::size_t* blank_betwee
   return read_text(in, path, blank_between);
 }
 
+namespace {
+// Why a line that is not a decimal number is refused: the value quoted (an excerpt), and what
+// the line looks like where it says more than the value (a binary file, a byte-order mark).
+std::string not_a_number(std::string_view line, std::string_view tok) {
+  std::string why = "not a decimal number: " + excerpt(tok);
+  if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64)";
+  else if (tok.find("\xEF\xBB\xBF") != std::string_view::npos)
+    why += " (\\xEF\\xBB\\xBF is a byte-order mark, skipped only at the start of the file: two files joined?)";
+  return why;
+}
+}  // namespace
+
 std::vector<double> read_text(std::istream& in, const std::string& path, std::size_t* blank_between) {
   std::vector<double> v;
-  std::string line;
+  std::string buffer;
   std::size_t blank = 0, blank_run = 0;  // blank lines since the last value (a comment line is not one)
-  for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
+  for (std::size_t lineno = 1; std::getline(in, buffer); ++lineno) {
+    std::string_view line = buffer;  // the whole line stays in `buffer` for a message
     // A capture file given without --input capture: say so, not "not a decimal number: 'RIGCAP1'".
     if (lineno == 1 && line == std::string_view(capture::kMagic, sizeof capture::kMagic - 1))
       throw ConfigError(path + ": a capture file (rig.capture/1): read it with --input capture");
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
-    if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+    if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
     const auto hash = line.find('#');
-    const bool comment = hash != std::string::npos;
-    if (comment) line.resize(hash);
+    const bool comment = hash != std::string_view::npos;
+    if (comment) line = line.substr(0, hash);
     const auto b = line.find_first_not_of(" \t\r,;");
-    if (b == std::string::npos) {
+    if (b == std::string_view::npos) {
       if (!comment && !v.empty()) ++blank_run;
       continue;
     }
     blank += blank_run, blank_run = 0;  // only those with a value after them: not trailing ones
     const auto e = line.find_last_not_of(" \t\r,;");
-    const std::string_view tok(line.data() + b, e - b + 1);
+    const std::string_view tok = line.substr(b, e - b + 1);
     const auto where = [&] { return path + ":" + std::to_string(lineno) + ": "; };
     // from_chars reads decimal floating point only ("0x10" stops after the 0), has no leading
     // '+', and takes subnormals such as 1e-310 (strtod flags those ERANGE).
     const std::string_view num = tok.size() > 1 && tok[0] == '+' && tok[1] != '-' ? tok.substr(1) : tok;
     double x = 0;
     const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), x);
-    if (ec == std::errc::result_out_of_range)
-      throw ConfigError(where() + "'" + quoted_bytes(tok) + "' is beyond the range of a double");
-    if (ec != std::errc() || end != num.data() + num.size())
-      throw ConfigError(where() + "not a decimal number: '" + quoted_bytes(tok) + "'");
-    if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + "'" + quoted_bytes(tok) + "': " + refusal(x));
+    if (ec == std::errc::result_out_of_range && end == num.data() + num.size())
+      throw ConfigError(where() + excerpt(tok) +
+                        (underflows(num) ? " is nearer 0 than the smallest double, 4.9e-324 (not a measurement)"
+                                         : " is beyond the range of a double"));
+    if (ec != std::errc() || end != num.data() + num.size()) throw ConfigError(where() + not_a_number(buffer, tok));
+    if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + excerpt(tok) + ": " + refusal(x));
     v.push_back(x);
   }
   if (blank_between) *blank_between = blank;

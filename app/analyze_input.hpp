@@ -2,7 +2,8 @@
 // captures. Every value is checked before the analysis uses it: NaN, inf and values beyond
 // analysis::kMaxMagnitude (2^333) are a configuration error (exit 2) naming the file and the value's
 // position (value index and byte, line, or sample and capture offset). Text is decimal
-// floating point as std::from_chars reads it (subnormals accepted, hex and "inf" not).
+// floating point as std::from_chars reads it (subnormals accepted, hex and "inf" not; a value
+// beyond a double, or nearer 0 than its smallest subnormal, refused and said which).
 #pragma once
 #include <mutex>
 #include <cstdint>

@@ -1,8 +1,12 @@
 // `rig analyze FILE`: overlapping Allan deviation with confidence bounds, noise terms (the
 // paper's polynomial method and a weighted fit), Welch PSD with peaks; JSON per docs/contracts.md,
 // SVG plots on request. Large float64 files are streamed (bounded memory, both cores).
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <exception>
 #include <chrono>
 #include <ctime>
@@ -14,9 +18,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -24,6 +30,7 @@
 
 #include "analysis/json.hpp"
 #include "app/analyze_input.hpp"
+#include "app/output_file.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
 #include "analysis/options.hpp"
@@ -39,16 +46,62 @@ namespace rig::cli {
 
 namespace {
 
-// Whether every deviation computed is 0 (a constant record).
-bool every_deviation_is_zero(const std::vector<std::vector<rig::analysis::DevPoint>>& devs) {
+namespace an = rig::analysis;
+using nlohmann::json;
+
+// A deviation no larger than this many units in the last place of the values is their rounding.
+constexpr double kRoundingUlps = 16;
+
+// Whether every deviation computed is 0 or the rounding of the values (a constant record, a
+// straight phase line): nothing there is noise. A review found a phase line (values up to 1e-4)
+// with OADEV 6e-21 given noise types, bounds, noise terms and PSD peaks. scale: the values'
+// largest magnitude (a constant's or a line's: its first or last value). Rounding moves each
+// value by about one unit in the last place, so a second difference by a few: in the values'
+// units, dev for frequency data and dev * tau (the phase's) for phase data.
+bool no_noise_above_rounding(const std::vector<std::vector<an::DevPoint>>& devs, double scale, an::DataKind data) {
+  const double rounding = kRoundingUlps * std::numeric_limits<double>::epsilon() * scale;
   for (const auto& d : devs)
     for (const auto& p : d)
-      if (p.dev != 0) return false;
+      if ((data == an::DataKind::Phase ? p.dev * p.tau_s : p.dev) > rounding) return false;
   return !devs.empty();
 }
 
-namespace an = rig::analysis;
-using nlohmann::json;
+// The largest magnitude of the record's first and last values: its scale where it is a
+// constant or a line, the only records no_noise_above_rounding can find noiseless.
+double end_value_scale(const an::ChunkSource& src) {
+  double first = 0, last = 0;
+  src.read_at(0, std::span<double>(&first, 1));
+  src.read_at(src.size() - 1, std::span<double>(&last, 1));
+  return std::max(std::fabs(first), std::fabs(last));
+}
+
+// OADEV as --no-bounds reports it and fits the noise terms to: no noise type, no EDF, no bounds
+// (the pass identified the noise for the total family's bias removal only).
+std::vector<an::DevPoint> without_identification(std::vector<an::DevPoint> pts) {
+  for (an::DevPoint& p : pts) p.lo = p.hi = p.edf = 0, p.alpha = p.edf_alpha = 0;
+  return pts;
+}
+
+// Whether a long-tau statistic divides by a noise-type bias (MTOT, TTOT, HTOT: theo.hpp tot_bias).
+bool has_noise_bias(an::LongTau t) { return t == an::LongTau::MTOT || t == an::LongTau::TTOT || t == an::LongTau::HTOT; }
+
+// A number in a message as the user typed it, to the digit: the shortest text that reads back as
+// the same double (%g's six digits made --rate 1000001 "1e+06", inside the range it was refused
+// for, and --confidence 0.9999999 "1").
+std::string typed(double v) {
+  char b[32];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
+// The bounds' confidence in a table's header: the default one sigma as 0.682689, any other level
+// as typed.
+std::string confidence_shown(double c) {
+  if (c != an::kOneSigma) return typed(c);
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", c);
+  return b;
+}
 
 struct Args {
   std::string file, input = "auto", data = "freq", taus = an::AnalysisOptions{}.taus, dev = "oadev";
@@ -60,7 +113,7 @@ struct Args {
   bool no_bounds = false, no_psd = false, no_oadev = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
-  std::size_t segment = 0;
+  std::optional<std::size_t> segment;  // none: the automatic length
   double overlap = 0.5;
 };
 
@@ -87,6 +140,57 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
   if (t.lo && t.hi) o << "  [" << fmt(*t.lo) << ", " << fmt(*t.hi) << "]";
   if (to_hours) o << "  = " << fmt(to_hours(*t.value)) << ' ' << hu;
   o << "\n";
+}
+
+// A deviation's table: with its noise type and bounds, or "-" where it has none.
+void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::DevPoint>& pts, bool bounded,
+                     double confidence) {
+  o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) + "):\n" : " (no bounds):\n");
+  o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
+  for (const auto& p : pts) {
+    char line[160];
+    if (bounded)
+      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e\n", p.m, p.tau_s, p.n_terms, p.alpha,
+                    p.lo, p.dev, p.hi);
+    else
+      std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s\n", p.m, p.tau_s, p.n_terms, "-", "-",
+                    p.dev, "-");
+    o << line;
+  }
+}
+
+// A long-tau statistic's table. typed_noise: its alpha is shown, also without bounds (MTOT,
+// TTOT and HTOT's bias removal's noise type). The stride is explained where one exceeds 1.
+void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::LongTauPoint>& pts, bool bounded,
+                    bool typed_noise, double confidence) {
+  o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) : std::string(" (no bounds"));
+  if (!bounded && typed_noise) o << "; alpha: the noise type of the bias removal";
+  if (std::any_of(pts.begin(), pts.end(), [](const an::LongTauPoint& p) { return p.stride > 1; }))
+    o << "; stride > 1: every stride-th start summed";
+  o << "):\n";
+  o << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
+  for (const auto& p : pts) {
+    char alpha[8] = "-", lo[16] = "-", hi[16] = "-", edf[16] = "-";
+    if (typed_noise) std::snprintf(alpha, sizeof alpha, "%d", p.alpha);
+    if (bounded) {
+      std::snprintf(lo, sizeof lo, "%.4e", p.lo);
+      std::snprintf(hi, sizeof hi, "%.4e", p.hi);
+      std::snprintf(edf, sizeof edf, "%.1f", p.edf);
+    }
+    char line[200];
+    std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s %8s %6zu %s\n", p.m, p.tau_s, p.n_terms,
+                  alpha, lo, p.dev, hi, edf, p.stride, p.estimator.c_str());
+    o << line;
+  }
+}
+
+// A long-tau statistic in the JSON: bounds as the run has them; MTOT, TTOT and HTOT's alpha (the
+// noise type of their bias removal) also without bounds, unless there is no noise (typed_noise).
+json long_tau_json(const std::vector<an::LongTauPoint>& pts, an::LongTau type, bool bounded, bool typed_noise) {
+  json a = analysis::long_tau_to_json(pts, bounded);
+  if (!bounded && typed_noise && has_noise_bias(type))
+    for (std::size_t i = 0; i < pts.size(); ++i) a[i]["alpha"] = pts[i].alpha;
+  return a;
 }
 
 // RIG_ANALYZE_TIMING=1 prints each stage's wall and CPU time (all threads) to stderr: where the
@@ -147,17 +251,84 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
                 "gap-free stretch, --gaps stop refuses)";
 }
 
+// The numeric options' ranges, each refused (exit 2) with the value as typed.
+void check_numeric_options(const Args& a) {
+  if (!(a.overlap >= 0 && a.overlap <= 0.95))
+    throw ConfigError("rig analyze: --overlap " + typed(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
+  if (!(a.confidence > 0 && a.confidence < 1))
+    throw ConfigError("rig analyze: --confidence " + typed(a.confidence) + ": must be in (0, 1)");
+  if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz))
+    throw ConfigError("rig analyze: --rate " + typed(*a.rate) + ": the sample rate must be in (0, " +
+                      typed(capture::kMaxRateHz) + "] Hz");
+  // 0 was taken silently (the automatic segment; the engine's smallest ring): a typed 0 is a slip.
+  constexpr std::size_t kMinSegment = 8;  // welch()'s smallest (analysis/psd.cpp)
+  if (a.segment && *a.segment < kMinSegment)
+    throw ConfigError("rig analyze: --segment " + std::to_string(*a.segment) + ": a PSD segment has at least " +
+                      std::to_string(kMinSegment) + " values (without --segment its length is chosen)");
+  constexpr std::size_t kMaxMemoryMib = std::size_t{1} << 20;  // 1 TiB: MiB << 20 stays in a size_t
+  if (a.memory_mib < 1 || a.memory_mib > kMaxMemoryMib)
+    throw ConfigError("rig analyze: --memory-mib " + std::to_string(a.memory_mib) + ": the memory budget must be in 1.." +
+                      std::to_string(kMaxMemoryMib) + " MiB");
+}
+
+// The files --svg DIR writes.
+const char* const kSvgFiles[] = {"allan.svg", "psd.svg"};
+
+// --svg DIR: an existing folder that takes files, or one folder to be made in an existing one
+// (not a whole path: a mistyped path is not made into folders). Its plots may not be the input.
+void check_svg_folder(const std::string& dir, const std::string& input, const std::string& input_name) {
+  namespace fs = std::filesystem;
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) != 0) {
+    fs::path p(dir);
+    if (!p.has_filename()) p = p.parent_path();  // "plots/"
+    const fs::path parent = p.has_parent_path() ? p.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(parent, ec))
+      throw ConfigError("rig analyze: --svg " + dir + ": the folder " + parent.string() +
+                        " does not exist (--svg makes the plots' folder, not the path to it)");
+    if (::access(parent.c_str(), W_OK | X_OK) != 0)
+      throw ConfigError("rig analyze: --svg " + dir + ": cannot create a folder in " + parent.string());
+    return;
+  }
+  if (!S_ISDIR(st.st_mode))
+    throw ConfigError("rig analyze: --svg " + dir + ": not a folder (allan.svg and psd.svg are written into it)");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) throw ConfigError("rig analyze: --svg " + dir + ": cannot create files in it");
+  for (const char* name : kSvgFiles) {
+    const std::string file = (fs::path(dir) / name).string();
+    if (same_regular_file(file, input))
+      throw ConfigError("rig analyze: --svg " + dir + ": " + file + " is the input file " + input_name +
+                        " (it would be overwritten); give another folder");
+    check_output_file(file, "rig analyze: --svg " + dir + ":");
+  }
+}
+
+// Every output, before the input is read (a review: an unwritable --json was found after the
+// whole analysis, with the summary printed and --json written beside a bad --svg; --json naming
+// the input overwrote the record). Exit 2 naming the path.
+void check_outputs(const Args& a) {
+  namespace fs = std::filesystem;
+  const std::string input_name = a.file == "-" ? "that standard input reads" : a.file;
+  if (!a.json_out.empty()) {
+    if (same_regular_file(a.json_out, a.file))
+      throw ConfigError("rig analyze: --json " + a.json_out + ": is the input file " + input_name +
+                        " (it would be overwritten); give another name");
+    check_output_file(a.json_out, "rig analyze: --json");
+  }
+  if (a.svg_dir.empty()) return;
+  check_svg_folder(a.svg_dir, a.file, input_name);
+  if (a.json_out.empty()) return;
+  std::error_code ec;
+  const fs::path json_path = fs::weakly_canonical(a.json_out, ec);
+  for (const char* name : kSvgFiles)
+    if (!ec && json_path == fs::weakly_canonical(fs::path(a.svg_dir) / name, ec))
+      throw ConfigError("rig analyze: --json " + a.json_out + ": is --svg " + a.svg_dir + "'s " + name +
+                        "; give another name");
+}
+
 int run(const Args& a) {
   StageTimer timer;
-  auto shown = [](double v) {  // as typed for any value a user would type (%g: 2, 0.96)
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", v);
-    return std::string(b);
-  };
-  if (!(a.overlap >= 0 && a.overlap <= 0.95))
-    throw ConfigError("rig analyze: --overlap " + shown(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
-  if (!(a.confidence > 0 && a.confidence < 1))
-    throw ConfigError("rig analyze: --confidence " + shown(a.confidence) + ": must be in (0, 1)");
+  check_numeric_options(a);
   an::DevOptions base;
   // Each option's parse error names the option and its value (and, for --dev, the statistics
   // it also takes).
@@ -241,13 +412,10 @@ int run(const Args& a) {
   std::optional<CaptureData> cap;
   std::string gap_note;
   std::size_t analysed_from = 0;  // the first capture sample analysed (--gaps longest)
-  double rate = a.rate.value_or(1000.0);
-  if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz)) {
-    char b[96];
-    std::snprintf(b, sizeof b, "--rate %g: the sample rate must be in (0, %g] Hz", *a.rate, capture::kMaxRateHz);
-    throw ConfigError(std::string("rig analyze: ") + b);
-  }
+  constexpr double kDefaultRateHz = 1000;
+  double rate = a.rate.value_or(kDefaultRateHz);
   check_input_path(a.file, input);
+  check_outputs(a);  // before anything is read: a bad output leaves nothing written
   std::size_t blank_lines = 0;  // noted below
   if (input == "text") {
     mem = read_text(a.file, &blank_lines);
@@ -274,6 +442,8 @@ int run(const Args& a) {
                     "skipped: the values around " + (blank_lines > 1 ? "them" : "it") + " are joined, not read as "
                     "missing samples");
   if (!gap_note.empty()) notes.push_back(gap_note);
+  if (!a.rate && !cap)  // every tau and noise term scales with it (a review: a 1 s file read at 1 kHz, silently)
+    notes.push_back("no --rate: " + typed(kDefaultRateHz) + " Hz assumed (every tau and noise term scales with it)");
   if (cap && cap->lost_at_start)
     notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
                     "notes name it); the record starts after them, nothing is joined");
@@ -286,7 +456,7 @@ int run(const Args& a) {
   // the record cannot fill is the caller's error.
   an::WelchOptions wo;
   wo.window = an::parse_window(a.window);
-  wo.segment = a.segment;
+  wo.segment = a.segment.value_or(0);  // 0: welch_segment chooses
   wo.overlap = a.overlap;
   wo.threads = a.threads;
   bool want_psd = base.data == an::DataKind::Frequency && !a.no_psd;
@@ -295,8 +465,16 @@ int run(const Args& a) {
   if (a.no_bounds)
     notes.push_back("--no-bounds: no noise identification and no bounds (alpha, edf, lo and hi are null); the noise "
                     "terms are fitted with every point weighted alike, and their bounds assume that");
+  // MTOT, TTOT and HTOT divide by their noise type's bias (theo.hpp tot_bias): --no-bounds once
+  // took white FM for it and changed their values (HTOT by 12 % on a random walk, a review).
+  // Their noise is identified on OADEV as with bounds, and their alpha says the type used.
+  const bool bias_types = std::any_of(long_taus.begin(), long_taus.end(), has_noise_bias);
+  const bool identify_oadev = !a.no_bounds || (bias_types && !a.no_oadev);
+  if (a.no_bounds && bias_types)
+    notes.push_back("--no-bounds with mtot, ttot, htot: the noise is still identified for their bias removal (on OADEV, "
+                    "as with bounds, so their values do not depend on --no-bounds); their alpha is the type it used");
   if (want_psd && n < an::welch_segment(n, wo)) {
-    if (a.segment)
+    if (a.segment.has_value())
       throw ConfigError(input_name + ": " + std::to_string(n) + " values are fewer than one PSD segment of " +
                         std::to_string(an::welch_segment(n, wo)) + " (give a shorter --segment, or --no-psd)");
     notes.push_back("no PSD: " + std::to_string(n) + " values are fewer than one Welch segment of " +
@@ -313,6 +491,7 @@ int run(const Args& a) {
   base.threads = a.threads;
   an::DevOptions oadev = base;
   oadev.type = an::Deviation::OADEV;
+  oadev.bounds = identify_oadev;
   if (!a.no_oadev) opts.push_back(oadev);
   if (base.type != an::Deviation::OADEV) opts.push_back(base);
   if (!listed.empty()) {  // each deviation takes the listed factors it has a term at; the others are named
@@ -359,10 +538,27 @@ int run(const Args& a) {
   // The record's span: n frequency values cover n tau0; n phase points, n - 1 (a review: ten
   // phase points were said to be 10 s at 1 Hz).
   const double record_s = static_cast<double>(base.data == an::DataKind::Phase ? n - 1 : n) / rate;
-  if (every_deviation_is_zero(devs))
-    notes.push_back(std::string(base.data == an::DataKind::Phase ? "the phase is a straight line (a constant frequency)"
-                                                                  : "the record is constant") +
-                    ": every deviation is 0, so there is no noise to identify, no bounds and no noise terms");
+  // OADEV identified for the total family's bias alone (--no-bounds): kept for it, and reported
+  // and fitted as --no-bounds has it.
+  std::vector<an::DevPoint> oadev_identified;
+  if (a.no_bounds && identify_oadev) {
+    oadev_identified = devs[0];
+    devs[0] = without_identification(std::move(devs[0]));
+  }
+  // A constant record or a straight phase line: its deviations are rounding, not noise. Nothing
+  // is identified or bounded (null, as --no-bounds), the noise terms say why they are null, and
+  // there is no PSD (its "peaks" were rounding noise at 1e-60, a review).
+  const bool constant = no_noise_above_rounding(devs, end_value_scale(*src), base.data);
+  const std::string constant_what = base.data == an::DataKind::Phase
+                                        ? "the phase is a straight line (a constant frequency)"
+                                        : "the record is constant";
+  if (constant) {
+    notes.push_back(constant_what + ": every deviation is 0 or the rounding of the values, so there is no noise to "
+                    "identify, no bounds and no noise terms");
+    if (want_psd) notes.push_back("no PSD: the record is constant (its spectrum would be the rounding of the values)");
+    want_psd = false;
+  }
+  const bool bounded = !a.no_bounds && !constant;
   // The file is read again only by the PSD and the long-tau statistics. Without them its mapping
   // (one page-table entry per 4 KiB: 7000 for 3.6e6 values, about 0.5 ms to tear down) is
   // released on another thread, while this one fits the noise terms and writes the JSON, instead
@@ -379,7 +575,9 @@ int run(const Args& a) {
   std::exception_ptr fit_error;
   const auto fit_terms = [&] {
     try {
-      terms = an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift, a.confidence);
+      terms = constant ? an::no_noise_terms(constant_what + ": every deviation is 0 or the rounding of the values, "
+                                            "no noise to fit", a.confidence)
+                       : an::noise_terms(*oadev_pts, record_s, an::kRMinRecordS, drift, a.confidence);
     } catch (...) {
       fit_error = std::current_exception();
     }
@@ -417,7 +615,8 @@ int run(const Args& a) {
       lo.confidence = a.confidence;
       lo.bounds = !a.no_bounds;
       lo.threads = a.threads;
-      if (oadev_pts) lo.noise_ref = *oadev_pts;  // else long_tau computes an octave OADEV for the noise types
+      // Else long_tau computes an octave OADEV for the noise types.
+      if (oadev_pts) lo.noise_ref = oadev_identified.empty() ? *oadev_pts : oadev_identified;
       try {
         longs.push_back(an::long_tau(values, lo));
       } catch (const std::invalid_argument& e) {
@@ -435,10 +634,10 @@ int run(const Args& a) {
   j["input"] = input;
   j["record_s"] = record_s;
   j["confidence"] = a.confidence;
-  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, !a.no_bounds);
-  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, !a.no_bounds);
+  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, bounded);
+  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, bounded);
   for (std::size_t k = 0; k < longs.size(); ++k)
-    j[an::to_string(long_taus[k])] = analysis::long_tau_to_json(longs[k], !a.no_bounds);
+    j[an::to_string(long_taus[k])] = long_tau_json(longs[k], long_taus[k], bounded, !constant);
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", channel},
@@ -491,22 +690,25 @@ int run(const Args& a) {
   timer.mark("psd");
   join_fit();
   if (terms) j["noise_terms"] = analysis::noise_terms_to_json(*terms);
-  if (!a.json_out.empty()) write_file(a.json_out, j.dump(2) + "\n");
-  timer.mark("json write");
+  // Every output is made before the first is written (their paths were checked at the start).
+  std::vector<std::pair<std::filesystem::path, std::string>> outputs;
+  if (!a.json_out.empty()) outputs.emplace_back(a.json_out, j.dump(2) + "\n");
   if (!a.svg_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(a.svg_dir, ec);
-    if (ec) throw ConfigError(a.svg_dir + ": cannot create: " + ec.message());
     const std::string name = a.file == "-" ? input_name : std::filesystem::path(a.file).filename().string();
     // The report's plotter, fed the same JSON views as --json writes.
-    write_file(std::filesystem::path(a.svg_dir) / "allan.svg",
-               report::to_svg_file(report::allan_plot(j["oadev"], &j["noise_terms"], a.confidence, "allan",
-                                                      "OADEV of " + name, "#1f77b4")));
+    outputs.emplace_back(std::filesystem::path(a.svg_dir) / kSvgFiles[0],
+                         report::to_svg_file(report::allan_plot(j["oadev"], &j["noise_terms"], a.confidence, "allan",
+                                                                "OADEV of " + name, "#1f77b4")));
     if (psd)
-      write_file(std::filesystem::path(a.svg_dir) / "psd.svg",
-                 report::to_svg_file(report::psd_plot(analysis::psd_to_json(*psd, peaks), "psd", "PSD of " + name,
-                                                      "#1f77b4", psd->rate_hz)));
+      outputs.emplace_back(std::filesystem::path(a.svg_dir) / kSvgFiles[1],
+                           report::to_svg_file(report::psd_plot(analysis::psd_to_json(*psd, peaks), "psd",
+                                                                "PSD of " + name, "#1f77b4", psd->rate_hz)));
+    std::error_code ec;
+    std::filesystem::create_directory(a.svg_dir, ec);  // one folder, in a folder checked to exist
+    if (ec) throw ConfigError("rig analyze: --svg " + a.svg_dir + ": cannot create: " + ec.message());
   }
+  for (const auto& [path, text] : outputs) write_file(path, text);
+  timer.mark("outputs");
 
   // Console summary.
   std::ostream& o = std::cout;
@@ -516,41 +718,13 @@ int run(const Args& a) {
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
     if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << input_name << ": " << gap_note << "\n";
   }
-  o << input_name << ": " << n << " values, " << rate << " Hz, " << record_s << " s, data " << an::to_string(base.data)
-    << "\n";
+  o << input_name << ": " << n << " values, " << typed(rate) << " Hz, " << record_s << " s, data "
+    << an::to_string(base.data) << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
-  for (std::size_t k = 0; k < devs.size(); ++k) {
-    o << an::to_string(opts[k].type);
-    if (a.no_bounds) o << " (no bounds):\n";
-    else o << " (bounds " << a.confidence << "):\n";
-    o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
-    for (const auto& p : devs[k]) {
-      char line[160];
-      if (a.no_bounds)
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s\n", p.m, p.tau_s, p.n_terms, "-", "-",
-                      p.dev, "-");
-      else
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e\n", p.m, p.tau_s, p.n_terms,
-                      p.alpha, p.lo, p.dev, p.hi);
-      o << line;
-    }
-  }
-  for (std::size_t k = 0; k < longs.size(); ++k) {
-    o << an::to_string(long_taus[k]);
-    if (a.no_bounds) o << " (no bounds; stride > 1: every stride-th start summed):\n";
-    else o << " (bounds " << a.confidence << "; stride > 1: every stride-th start summed):\n";
-    o << "         m        tau_s     n_terms alpha         lo          dev           hi      edf stride estimator\n";
-    for (const auto& p : longs[k]) {
-      char line[200];
-      if (a.no_bounds)
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5s %12s %12.4e %12s %8s %6zu %s\n", p.m, p.tau_s,
-                      p.n_terms, "-", "-", p.dev, "-", "-", p.stride, p.estimator.c_str());
-      else
-        std::snprintf(line, sizeof line, "%10zu %12.5g %11zu %5d %12.4e %12.4e %12.4e %8.1f %6zu %s\n", p.m, p.tau_s,
-                      p.n_terms, p.alpha, p.lo, p.dev, p.hi, p.edf, p.stride, p.estimator.c_str());
-      o << line;
-    }
-  }
+  for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], bounded, a.confidence);
+  for (std::size_t k = 0; k < longs.size(); ++k)
+    print_long_tau(o, long_taus[k], longs[k], bounded, bounded || (has_noise_bias(long_taus[k]) && !constant),
+                   a.confidence);
   if (terms) {
     o << "noise terms (tau in s; passport units after '='):\n";
     print_term(o, "Q", terms->Q, an::q_per_hour, "g*h");
@@ -584,7 +758,7 @@ void add_analyze(CLI::App& app, int& rc) {
       ->check(CLI::IsMember({"auto", "text", "f64", "capture"}));
   sub->add_option("--data", args->data, "freq (accelerometer output, default) or phase (its integral)")
       ->check(CLI::IsMember({"freq", "frequency", "phase"}));
-  sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000)");
+  sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000, with a note)");
   sub->add_option("--taus", args->taus,
                   "tau grid: octave|decade|all|log:N (default log:100), or m:LIST, averaging factors (m:1,2,5)");
   sub->add_option("--dev", args->dev,
@@ -601,12 +775,13 @@ void add_analyze(CLI::App& app, int& rc) {
                   "warning), longest (the longest gap-free stretch) or stop (exit 2)")
       ->check(CLI::IsMember({"join", "longest", "stop"}));
   sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");
-  sub->add_option("--svg", args->svg_dir, "write allan.svg and psd.svg into this directory");
+  sub->add_option("--svg", args->svg_dir,
+                  "write allan.svg and psd.svg into this folder (made if missing, in a folder that exists)");
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
-  sub->add_option("--segment", args->segment, "PSD segment length (default: auto)");
+  sub->add_option("--segment", args->segment, "PSD segment length, at least 8 (default: chosen from the record)");
   sub->add_option("--overlap", args->overlap, "PSD segment overlap, fraction in [0, 0.95] (default 0.5)");
   sub->add_option("--threads", args->threads, "threads (default: all cores)");
-  sub->add_option("--memory-mib", args->memory_mib, "memory budget for streaming, MiB (default 384)");
+  sub->add_option("--memory-mib", args->memory_mib, "memory budget for streaming, 1..1048576 MiB (default 384)");
   sub->callback([args, &rc] { rc = run(*args); });
 }
 

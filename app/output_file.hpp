@@ -50,6 +50,34 @@ inline void check_writable_file(const std::string& path, const std::string& what
     throw ConfigError(what + " " + path + ": not a regular file (the records replace it)");
 }
 
+// A file written through (opened and truncated, as std::ofstream does), not replaced: its folder
+// exists and takes new files, and what lies at `path` now, if anything, is no folder and can be
+// written (a symlink is followed). ConfigError naming it otherwise.
+inline void check_output_file(const std::string& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) throw ConfigError(what + " " + path + ": is a folder (give a file name)");
+    if (::access(path.c_str(), W_OK) != 0) throw ConfigError(what + " " + path + ": cannot be written");
+    return;
+  }
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw ConfigError(what + " " + path + ": the folder " + dir.string() + " does not exist");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw ConfigError(what + " " + path + ": cannot create files in " + dir.string());
+}
+
+// Whether `path` is the regular file `input` names, by device and inode (through a symlink, "./"
+// or another spelling of it); `input` "-" is standard input, by the file it reads, if a file.
+inline bool same_regular_file(const std::string& path, const std::string& input) {
+  struct stat out {}, in {};
+  if (::stat(path.c_str(), &out) != 0) return false;
+  if ((input == "-" ? ::fstat(STDIN_FILENO, &in) : ::stat(input.c_str(), &in)) != 0) return false;
+  return S_ISREG(in.st_mode) && out.st_dev == in.st_dev && out.st_ino == in.st_ino;
+}
+
 // As check_writable_file, and nothing may lie at `path` yet: a file that holds data (a capture,
 // a record) is not replaced by a command run twice.
 inline void check_new_file(const std::string& path, const std::string& what) {

@@ -72,6 +72,24 @@ TEST(TauGrid, UsesStable32StopRatios) {
   }
 }
 
+// docs/analysis.md's rule for log:N, pinned by the review's counts on 1e5 values (OADEV's
+// largest factor 25000): q = max(1, ceil((N-1)/log2(top))) points per octave, never fewer than
+// one (log:2 is the octave grid), at most 64 from m = 64 on (its seeds are whole numbers in
+// [64, 128)).
+TEST(TauGrid, LogNFollowsTheDocumentedRule) {
+  const auto count = [](const char* grid) { return tau_factors(parse_tau_grid(grid), Deviation::OADEV, 100001).size(); };
+  EXPECT_EQ(tau_factors(parse_tau_grid("log:2"), Deviation::OADEV, 100001),
+            tau_factors(parse_tau_grid("octave"), Deviation::OADEV, 100001));
+  EXPECT_EQ(count("log:2"), 15u);
+  EXPECT_EQ(count("log:10"), 15u);
+  EXPECT_EQ(count("log:20"), 29u);
+  EXPECT_EQ(count("log:100"), 89u);
+  EXPECT_EQ(count("log:1000"), 585u);
+  // The most any N gives: every m below 64 and all 64 seeds 64..127 with their doublings up to
+  // 25000 (63 + 8 x 64 + 34).
+  EXPECT_EQ(count("log:100000"), 609u);
+}
+
 TEST(TermCount, FollowsTheReferenceReadme) {
   EXPECT_EQ(term_count(Deviation::ADEV, 1001, 2), 499u);
   EXPECT_EQ(term_count(Deviation::OADEV, 1001, 2), 997u);

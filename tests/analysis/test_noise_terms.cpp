@@ -64,6 +64,21 @@ TEST(NoiseTerms, WeightedFitRecoversTheModelTerms) {
   EXPECT_NEAR(k_per_hour(*t.K.value), 5.1167e-6, 5e-3 * 5.1167e-6);
 }
 
+// A constant record's OADEV is 0 at every tau: no noise to fit, and every term and fit says so
+// (a review: "fewer than 3 octave Allan points" with 8 there, as if the points were the fault).
+TEST(NoiseTerms, AConstantRecordHasNoNoiseToFit) {
+  std::vector<DevPoint> zero = curve(0, 1e-3, 0, 0, 0, 0.01, 100, 8);
+  for (DevPoint& p : zero) p.dev = 0;
+  const NoiseTerms t = noise_terms(zero, 3600, kRMinRecordS, Drift{0, 360000, 0.01});
+  for (const Term* term : {&t.Q, &t.N, &t.B, &t.K, &t.R}) {
+    EXPECT_FALSE(term->value);
+    EXPECT_NE(term->reason.find("every Allan deviation is 0 (a constant record)"), std::string::npos) << term->reason;
+    EXPECT_FALSE(term->unit.empty());
+  }
+  EXPECT_FALSE(t.paper.ok);
+  EXPECT_NE(t.model.reason.find("a constant record"), std::string::npos) << t.model.reason;
+}
+
 TEST(NoiseTerms, RateRampIsFoundOnAFiftyHourCurve) {
   const double R = 1e-9;  // g/s
   const auto pts = curve(0, kN, kB, kK, R, 0.001, 45000, 120);
