@@ -202,48 +202,12 @@ void check_input_path(const std::string& path, const std::string& input) {
 }
 
 namespace {
-// The length of the well-formed UTF-8 sequence at s[i] (RFC 3629: no overlong form, no
-// surrogate, nothing past U+10FFFF), or 0 when the byte there starts none.
-std::size_t utf8_sequence(std::string_view s, std::size_t i) {
-  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
-  const auto cont = [&](std::size_t k) { return k < s.size() && (b(k) & 0xC0) == 0x80; };
-  const unsigned char c = b(i);
-  if (c >= 0xC2 && c <= 0xDF) return cont(i + 1) ? 2 : 0;
-  if (c >= 0xE0 && c <= 0xEF) {
-    if (!cont(i + 1) || !cont(i + 2)) return 0;
-    if ((c == 0xE0 && b(i + 1) < 0xA0) || (c == 0xED && b(i + 1) > 0x9F)) return 0;
-    return 3;
-  }
-  if (c >= 0xF0 && c <= 0xF4) {
-    if (!cont(i + 1) || !cont(i + 2) || !cont(i + 3)) return 0;
-    if ((c == 0xF0 && b(i + 1) < 0x90) || (c == 0xF4 && b(i + 1) > 0x8F)) return 0;
-    return 4;
-  }
-  return 0;
-}
-
-// Characters a terminal acts on rather than shows, though well-formed: the C1 controls
-// (U+0080..U+009F: U+009B is CSI), the line and paragraph separators, and the bidirectional
-// embeddings, overrides and isolates (U+202A..U+202E, U+2066..U+2069); and those it shows as
-// nothing, which hide in a quoted value (a byte-order mark inside a file made "not a decimal
-// number: '4'", a review): the soft hyphen U+00AD, the zero-width space, joiners and marks
-// U+200B..U+200F, the word joiner and invisible operators U+2060..U+2064, and U+FEFF.
-bool acts_on_terminal(std::string_view seq) {
-  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(seq[k]); };
-  if (seq.size() == 2) return b(0) == 0xC2 && (b(1) <= 0x9F || b(1) == 0xAD);
-  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80)
-    return (b(2) >= 0x8B && b(2) <= 0x8F) || b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
-  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return (b(2) >= 0xA0 && b(2) <= 0xA4) || (b(2) >= 0xA6 && b(2) <= 0xA9);
-  if (seq.size() == 3) return b(0) == 0xEF && b(1) == 0xBB && b(2) == 0xBF;
-  return false;
-}
-
 // How many bytes of s are not text: neither printable ASCII, tab nor CR, nor in well-formed UTF-8.
 std::size_t binary_bytes(std::string_view s) {
   std::size_t bad = 0;
   for (std::size_t i = 0; i < s.size();) {
     const auto c = static_cast<unsigned char>(s[i]);
-    const std::size_t len = (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\r' ? 1 : c >= 0x80 ? utf8_sequence(s, i) : 0;
+    const std::size_t len = (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\r' ? 1 : c >= 0x80 ? utf8_sequence_at(s, i) : 0;
     if (len == 0) ++bad;
     i += std::max<std::size_t>(len, 1);
   }
@@ -287,29 +251,10 @@ bool underflows(std::string_view num) {
 }
 }  // namespace
 
-// Control bytes, bytes that are not well-formed UTF-8 (a binary file read as text, a Latin-1
-// file) and characters a terminal acts on as \xNN, byte by byte; printable ASCII and other
-// whole UTF-8 characters (a Cyrillic word) as they are.
-std::string quoted_bytes(std::string_view s) {
-  std::string out;
-  const auto escape = [&](std::size_t i, std::size_t len) {
-    for (std::size_t k = i; k < i + len; ++k) append_hex_escape(out, static_cast<unsigned char>(s[k]));
-  };
-  for (std::size_t i = 0; i < s.size();) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    std::size_t len = c >= 0x20 && c < 0x7F ? 1 : c >= 0x80 ? utf8_sequence(s, i) : 0;
-    if (len == 0) {
-      escape(i, 1);
-      len = 1;
-    } else if (len > 1 && acts_on_terminal(s.substr(i, len))) {
-      escape(i, len);
-    } else {
-      out.append(s, i, len);
-    }
-    i += len;
-  }
-  return out;
-}
+// As every message shows text (rig/core/escape.hpp, shown_text): printable ASCII and whole UTF-8
+// characters as they are, control bytes, malformed UTF-8 and characters a terminal acts on or
+// shows as nothing as \xNN.
+std::string quoted_bytes(std::string_view s) { return shown_text(s); }
 
 std::vector<double> read_text(const std::string& path, std::size_t* blank_between) {
   if (path == "-") {

@@ -48,14 +48,19 @@ inline std::size_t utf8_sequence_at(std::string_view s, std::size_t i) {
   return 0;
 }
 
-// Well-formed characters a terminal acts on rather than shows: the C1 controls (U+0080..U+009F:
-// U+009B is CSI), the line and paragraph separators, and the bidirectional embeddings,
-// overrides and isolates (U+202A..U+202E, U+2066..U+2069).
+// Characters a terminal acts on rather than shows, though well-formed: the C1 controls
+// (U+0080..U+009F: U+009B is CSI), the line and paragraph separators, and the bidirectional
+// embeddings, overrides and isolates (U+202A..U+202E, U+2066..U+2069); and those it shows as
+// nothing, which hide in a quoted value (a byte-order mark inside a file made "not a decimal
+// number: '4'", a review): the soft hyphen U+00AD, the zero-width space, joiners and marks
+// U+200B..U+200F, the word joiner and invisible operators U+2060..U+2064, and U+FEFF.
 inline bool terminal_acts_on(std::string_view seq) {
   const auto b = [&](std::size_t k) { return static_cast<unsigned char>(seq[k]); };
-  if (seq.size() == 2) return b(0) == 0xC2 && b(1) <= 0x9F;
-  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80) return b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
-  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return b(2) >= 0xA6 && b(2) <= 0xA9;
+  if (seq.size() == 2) return b(0) == 0xC2 && (b(1) <= 0x9F || b(1) == 0xAD);
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x80)
+    return (b(2) >= 0x8B && b(2) <= 0x8F) || b(2) == 0xA8 || b(2) == 0xA9 || (b(2) >= 0xAA && b(2) <= 0xAE);
+  if (seq.size() == 3 && b(0) == 0xE2 && b(1) == 0x81) return (b(2) >= 0xA0 && b(2) <= 0xA4) || (b(2) >= 0xA6 && b(2) <= 0xA9);
+  if (seq.size() == 3) return b(0) == 0xEF && b(1) == 0xBB && b(2) == 0xBF;
   return false;
 }
 
