@@ -682,7 +682,12 @@ int run(const Args& a) {
     const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
     pj["n_from_psd"] = n_psd;  // unit*s^0.5
     pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
-    pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K}};
+    // Only N is a cross-check; the other terms give the band's other slopes somewhere to go and
+    // are not measurements (a review read K 13x above the Allan model's upper limit on white FM).
+    pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K},
+                     {"note", "N is the cross-check of the Allan N; Q, B and K are the fit's terms for the band's other "
+                              "slopes, without bounds or a test that the data hold them: not measurements (the Allan "
+                              "noise terms are)"}};
     j["psd"] = pj;
   }
 
