@@ -114,7 +114,7 @@ int cmd_stream(const DutArgs& a) {
   // Where the samples go is checked before the link opens (a folder, a missing folder: exit 2,
   // not the socket's 4); the file is opened once the DUT answers, so a dead link leaves an
   // earlier file as it was.
-  if (!a.out.empty()) check_output_path(a.out, "rig dut stream --out");
+  if (!a.out.empty()) check_output_file(a.out, "rig dut stream --out");
   CancelSource cancel;
   SignalWatcher signals(cancel);  // Ctrl-C ends the stream cleanly
   RealClock clock;

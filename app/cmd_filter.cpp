@@ -106,7 +106,7 @@ struct SelectArgs {
 
 void run_select(const SelectArgs& a) {
   check_orders(a.orders);
-  if (!a.json_out.empty()) check_output_path(a.json_out, "rig filter select --json");  // before the work
+  if (!a.json_out.empty()) check_output_file(a.json_out, "rig filter select --json");  // before the work
   DutConfig dc;
   load_dut(a.dut_file, dc);
   plant::FilterSelectOptions o;
@@ -151,7 +151,7 @@ struct ShowArgs {
 };
 
 void run_show(const ShowArgs& a) {
-  if (!a.json_out.empty()) check_output_path(a.json_out, "rig filter show --json");
+  if (!a.json_out.empty()) check_output_file(a.json_out, "rig filter show --json");
   DutConfig dc;
   load_dut(a.dut_file, dc);
   const plant::DutParams p = plant::load_dut_params(dc.dut);

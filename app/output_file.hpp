@@ -25,22 +25,6 @@ inline void check_output_folder(const std::string& path, const std::string& what
     throw ConfigError(what + " " + path + ": cannot create files in " + dir.string());
 }
 
-// `path` can be opened for writing: its folder takes new files and it is not a folder itself (a
-// device or a pipe may be: such output is written through, not replaced).
-inline void check_output_path(const std::string& path, const std::string& what) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw ConfigError(what + " " + path + ": a folder, not a file");
-  // What exists is written through: its own permission decides (/dev/stdout, a writable file in a
-  // read-only folder), not its folder's (a code review: `--out /dev/stdout` was refused for a
-  // user other than root).
-  if (std::filesystem::exists(path, ec)) {
-    if (::access(path.c_str(), W_OK) != 0)
-      throw ConfigError(what + " " + path + ": cannot be written: " + std::strerror(errno));
-    return;
-  }
-  check_output_folder(path, what);
-}
-
 // `path` can be replaced by write_file_atomic: its folder takes new files, and what lies there
 // now, if anything, is a regular file. ConfigError (exit 2) naming it otherwise.
 inline void check_writable_file(const std::string& path, const std::string& what) {
@@ -50,23 +34,19 @@ inline void check_writable_file(const std::string& path, const std::string& what
     throw ConfigError(what + " " + path + ": not a regular file (the records replace it)");
 }
 
-// A file written through (opened and truncated, as std::ofstream does), not replaced: its folder
-// exists and takes new files, and what lies at `path` now, if anything, is no folder and can be
-// written (a symlink is followed). ConfigError naming it otherwise.
+// A file written through (opened and truncated, as std::ofstream does; a device or a pipe may
+// take it), not replaced: what lies at `path` now, if anything, is no folder and its own
+// permission decides (/dev/stdout, a writable file in a read-only folder; a code review), else
+// its folder exists and takes new files (a symlink is followed). ConfigError naming it otherwise.
 inline void check_output_file(const std::string& path, const std::string& what) {
-  namespace fs = std::filesystem;
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0) {
-    if (S_ISDIR(st.st_mode)) throw ConfigError(what + " " + path + ": is a folder (give a file name)");
-    if (::access(path.c_str(), W_OK) != 0) throw ConfigError(what + " " + path + ": cannot be written");
+    if (S_ISDIR(st.st_mode)) throw ConfigError(what + " " + path + ": a folder, not a file (give a file name)");
+    if (::access(path.c_str(), W_OK) != 0)
+      throw ConfigError(what + " " + path + ": cannot be written: " + std::strerror(errno));
     return;
   }
-  const fs::path p(path);
-  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw ConfigError(what + " " + path + ": the folder " + dir.string() + " does not exist");
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw ConfigError(what + " " + path + ": cannot create files in " + dir.string());
+  check_output_folder(path, what);
 }
 
 // Whether `path` is the regular file `input` names, by device and inode (through a symlink, "./"

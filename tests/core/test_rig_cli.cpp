@@ -788,7 +788,7 @@ TEST(RigCli, AnalyzeChecksEveryOutputBeforeReadingItsInput) {
       {{"--json", d + "/nonexistent/a.json"}, "--json " + d + "/nonexistent/a.json: the folder " + d +
                                                   "/nonexistent does not exist"},
       {{"--json", d + "/ok.json", "--svg", d + "/afile"}, "--svg " + d + "/afile: not a folder"},
-      {{"--json", d + "/folder"}, "--json " + d + "/folder: is a folder"},
+      {{"--json", d + "/folder"}, "--json " + d + "/folder: a folder, not a file"},
       {{"--svg", d + "/new/deeper"}, "--svg " + d + "/new/deeper: the folder " + d + "/new does not exist"},
       {{"--json", d + "/ok.json", "--svg", d + "/plots/"}, ""}};  // the one that is fine: made, written
   int i = 0;
