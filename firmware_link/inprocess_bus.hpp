@@ -31,7 +31,8 @@ class FrameFifo {
   std::size_t size() const { return v_.size() - head_; }
   bool empty() const { return head_ == v_.size(); }
   void push_back(const RxFrame& f) { v_.push_back(f); }
-  void emplace_back(const CanFrame& f, double t_s) { v_.emplace_back(f, t_s, std::nullopt); }  // built in place
+  // Aggregate-built (clang 14 has no parenthesised aggregate initialisation for emplace_back).
+  void emplace_back(const CanFrame& f, double t_s) { v_.push_back(RxFrame{f, t_s, std::nullopt}); }
   const RxFrame& front() const { return v_[head_]; }
   void pop_front() {
     if (++head_ == v_.size()) {  // drained: start over in the same storage
