@@ -452,6 +452,14 @@ void refuse_an_earlier_run(const std::string& dir) {
                         (resumable ? "use --resume " + dir + " or another --out" : "choose another --out"));
 }
 
+// `p` itself, or its nearest ancestor that exists: where a folder that is not there yet would be
+// created.
+fs::path nearest_existing(fs::path p) {
+  std::error_code ec;
+  while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
+  return p;
+}
+
 // The history the run will record into, checked as far as it can be without writing: a URL of
 // the right form; an SQLite file that exists must be a database (junk bytes passed, and the run's
 // row was lost at its end, logged only: a review), one that does not must be creatable in a
@@ -477,8 +485,7 @@ void check_history_can_record(const std::string& url) {
     }
     return;
   }
-  fs::path p = fs::absolute(*file, ec).parent_path();
-  while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
+  const fs::path p = nearest_existing(fs::absolute(*file, ec).parent_path());
   if (!fs::is_directory(p, ec) || !can_create_file_in(p))
     throw ConfigError(shown + ": cannot be created (" + p.string() + " is not a writable folder)");
 }
@@ -488,8 +495,7 @@ void check_history_can_record(const std::string& url) {
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
 void check_run_folder(const std::string& dir, bool new_run_here) {
   std::error_code ec;
-  fs::path p = fs::absolute(dir, ec);
-  while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
+  const fs::path p = nearest_existing(fs::absolute(dir, ec));
   if (!fs::is_directory(p, ec))
     throw ConfigError("--out " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
   // access() says yes to root on any directory of a writable mount, /proc's included; a file
