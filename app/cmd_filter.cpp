@@ -17,6 +17,7 @@
 #include "plant/dut/loop_figures.hpp"
 #include "plant/dut/params.hpp"
 #include "app/commands.hpp"
+#include "app/existing_path.hpp"
 #include "app/number_option.hpp"
 #include "app/output_file.hpp"
 #include "rig/core/errors.hpp"
@@ -206,10 +207,10 @@ void add_filter(CLI::App& app, int& rc) {
       ->capture_default_str()
       ->check(number_in(0, 3600, true, "a number of seconds"));
   sel->add_option("--seed", sa->seed, "Noise seed of the emulated DUT, a whole number >= 0")->capture_default_str();
-  sel->add_option("--dut", sa->dut_file, "Profile or DUT TOML ([plant.dut] overrides)")->check(CLI::ExistingFile);
+  sel->add_option("--dut", sa->dut_file, "Profile or DUT TOML ([plant.dut] overrides)")->check(existing_file());
   sel->add_option("--recorded", sa->recorded,
                   "Criterion 1 on a recording of x at the DUT's loop rate (text, one value per line)")
-      ->check(CLI::ExistingFile);
+      ->check(existing_file());
   sel->add_option("--top", sa->top, "Rows to print, >= 1")->capture_default_str()->check(whole_in("a number of rows", 1));
   sel->add_option("--json", sa->json_out, "Write every candidate as JSON");
   sel->callback([sa, &rc] {
@@ -220,7 +221,7 @@ void add_filter(CLI::App& app, int& rc) {
   auto sh = std::make_shared<ShowArgs>();
   auto* show = sub->add_subcommand("show", "Closed-loop figures and curves with one filter");
   show->add_option("--filter", sh->filter, "paper | none | butterN@FC (e.g. butter2@500)")->capture_default_str();
-  show->add_option("--dut", sh->dut_file, "Profile or DUT TOML ([plant.dut] overrides)")->check(CLI::ExistingFile);
+  show->add_option("--dut", sh->dut_file, "Profile or DUT TOML ([plant.dut] overrides)")->check(existing_file());
   show->add_option("--json", sh->json_out, "Write figures, step and frequency response as JSON");
   show->callback([sh, &rc] {
     run_show(*sh);

@@ -20,6 +20,7 @@
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/passport_check.hpp"
+#include "rig/core/path_kind.hpp"
 
 namespace rig::cli {
 
@@ -199,7 +200,7 @@ int run_history(const HistoryArgs& a, bool db_given) {
   }
   // Reading never creates a database. A --db that names no file is a mistake (exit 2, from
   // the reader); the default database merely does not exist until the first run records.
-  if (const auto path = history::sqlite_path(a.db); !db_given && path && !std::filesystem::exists(*path)) {
+  if (const auto path = history::sqlite_path(a.db); !db_given && path && path_kind(*path, "history database") == PathKind::missing) {
     std::cout << "no runs recorded yet (" << a.db << " does not exist)\n";
     return kExitPass;
   }

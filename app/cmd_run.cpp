@@ -41,6 +41,7 @@
 #include "app/serial_option.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
+#include "app/existing_path.hpp"
 #include "app/whole_number.hpp"
 #include "app/history_source.hpp"
 #include "rig/core/errors.hpp"
@@ -53,6 +54,7 @@
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/report.hpp"
+#include "rig/core/path_kind.hpp"
 
 namespace rig::cli {
 
@@ -199,7 +201,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'plant': \"" + a.plant + "\" is neither \"emulated\" nor \"hardware\"");
   if (a.plant == "hardware" && a.hardware.empty())
     throw ConfigError(path + ": field 'hardware': a hardware run must name its hardware file");
-  if (a.plant == "hardware" && !fs::is_regular_file(a.hardware))
+  if (a.plant == "hardware" && path_kind(a.hardware, path + ": field 'hardware':") != PathKind::file)
     throw ConfigError(path + ": field 'hardware': " + a.hardware + " does not exist");
   if (a.plant == "emulated" && !a.hardware.empty())
     throw ConfigError(path + ": field 'hardware': \"" + a.hardware + "\", but the run is on the emulated plant");
@@ -720,7 +722,7 @@ int do_run(RunArgs a) {
   std::optional<FolderLock> folder_lock;
   if (!a.resume.empty()) {
     if (a.dry_run) FolderLock::check_free(a.resume, "--resume " + a.resume);
-    else if (fs::is_directory(a.resume)) folder_lock.emplace(a.resume, "--resume " + a.resume);
+    else if (path_kind(a.resume, "--resume") == PathKind::directory) folder_lock.emplace(a.resume, "--resume " + a.resume);
     refuse_non_files(a.resume);
     check_seal_before_resume(a.resume, key);
   }
@@ -730,7 +732,7 @@ int do_run(RunArgs a) {
   std::string profile_text_path;
   if (!a.resume.empty()) {
     const std::string inv_path = a.resume + "/run.json";
-    if (!fs::exists(inv_path)) throw ConfigError(inv_path + ": not a run folder (no run.json)");
+    if (path_kind(inv_path, "--resume") == PathKind::missing) throw ConfigError(inv_path + ": not a run folder (no run.json)");
     try {
       invocation = nlohmann::json::parse(slurp(inv_path));
     } catch (const std::exception& e) {
@@ -1034,7 +1036,7 @@ void add_run(CLI::App& app, int& rc) {
   auto a = std::make_shared<RunArgs>();
   auto* plant = sub->add_option("--plant", a->plant, "Plant to run on (emulated)")->check(CLI::IsMember({"emulated"}));
   sub->add_option("--hardware", a->hardware, "Run on real hardware described by this TOML file")
-      ->check(CLI::ExistingFile)
+      ->check(existing_file())
       ->excludes(plant);
   sub->add_option("--profile", a->profile, "Profile: paper, ci or a TOML file")->capture_default_str();
   sub->add_option("--serial", a->serial,
@@ -1043,7 +1045,7 @@ void add_run(CLI::App& app, int& rc) {
       ->check(serial_validator());
   sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<YYYY-MM-DDTHHMMSSZ>, UTC)");
   sub->add_option("--resume", a->resume, "Continue the run in this folder after its last completed phase")
-      ->check(CLI::ExistingDirectory);
+      ->check(existing_folder());
   sub->add_flag("--yes,-y", a->yes, "Skip operator confirmations (automated runs)");
   sub->add_flag("--dry-run", a->dry_run, "Print the plan and its duration; touch nothing");
   sub->add_flag("--quiet,-q", a->quiet, "Only the final table on the terminal");

@@ -12,6 +12,7 @@
 #include "app/run_seal.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/path_kind.hpp"
 
 namespace rig::cli {
 
@@ -51,7 +52,7 @@ std::string loop_records_problem(const std::string& dir) {
 }
 
 int do_verify(const std::string& dir, const std::string& key_path, bool given) {
-  if (!std::filesystem::is_directory(dir)) throw ConfigError(dir + ": not a run folder");
+  if (path_kind(dir, "rig verify") != PathKind::directory) throw ConfigError(dir + ": not a run folder");
   const std::optional<seal::Key> key = station_key(key_path, given);
   if (!key) throw ConfigError("rig verify needs the station's key: --seal-key FILE or RIG_SEAL_KEY");
   // The passport is what a seal is for: a folder whose seal leaves it out is not verified.

@@ -16,25 +16,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The rig config history::default_db_url reads, by its rule: $RIG_CONFIG if set, else
-// ~/.config/rig/rig.toml if it exists.
-std::optional<std::string> rig_config_path() {
-  if (const char* c = std::getenv("RIG_CONFIG"); c && *c) return std::string(c);
-  if (const char* home = std::getenv("HOME"); home && *home) {
-    const fs::path p = fs::path(home) / ".config/rig/rig.toml";
-    std::error_code ec;
-    if (fs::exists(p, ec)) return p.string();
-  }
-  return std::nullopt;
-}
-
 // The rig config holds [history] only. A mistyped section ([histori]) was skipped without a
 // word, and the runs recorded into the default database (a review): refused as the hardware
 // file refuses one. The keys of [history] are default_db_url's to check; its url is checked
 // here, at its line (it was named later without one).
 void check_rig_config(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return;  // default_db_url names a $RIG_CONFIG that is not there
   const toml::table t = cfg::parse_file(path);
   for (auto&& [k, v] : t)
     if (k.str() != "history")
@@ -60,7 +46,7 @@ HistorySource default_history() {
     }
     return {url, true};
   }
-  if (const std::optional<std::string> config = rig_config_path()) check_rig_config(*config);
+  if (const std::optional<std::string> config = history::rig_config_path()) check_rig_config(*config);
   return {history::default_db_url(), false};
 }
 

@@ -16,6 +16,7 @@
 #include "design/filter_toml.hpp"
 #include "rig/core/escape.hpp"
 #include "rig/core/toml_util.hpp"
+#include "rig/core/path_kind.hpp"
 
 namespace rig::acceptance {
 
@@ -268,7 +269,7 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
     t = cfg::parse_string(it->second, "builtin:" + name_or_path);
     source = "builtin:" + name_or_path;
   } else {
-    if (!std::filesystem::exists(name_or_path)) {
+    if (path_kind(name_or_path, "profile") == PathKind::missing) {
       std::string names;
       for (const auto& [k, v] : builtin) names += (names.empty() ? "" : ", ") + k;
       throw ConfigError("profile '" + shown_text(name_or_path) + "': no such file and not a built-in profile (" + names +

@@ -12,6 +12,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/executive/checkpoint_keys.hpp"
+#include "rig/core/path_kind.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -123,7 +124,7 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
   };
   // No checkpoint: the run stopped before its first phase completed (run.json is written
   // before any device opens). Nothing was measured, so the resume starts over from bring-up.
-  if (!std::filesystem::exists(cp)) {
+  if (path_kind(cp, "checkpoint") == PathKind::missing) {
     log.info("{}: no checkpoint (stopped before the first phase completed): starting from bring-up", cp);
     return {};
   }

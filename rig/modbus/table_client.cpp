@@ -8,6 +8,7 @@
 #include "rig/core/toml_util.hpp"
 #include "rig/modbus/cia402_client.hpp"
 #include "rig/modbus/motion_text.hpp"
+#include "rig/core/path_kind.hpp"
 
 namespace rig::modbus {
 
@@ -397,9 +398,9 @@ DriveMap table_drive_map(const toml::table& t) {
   // Relative to the file that names it (a hardware file travels with its maps).
   if (p.is_relative() && n->source().path) {
     const std::filesystem::path beside = std::filesystem::path(*n->source().path).parent_path() / p;
-    if (std::filesystem::exists(beside)) p = beside;
+    if (path_kind(beside.string(), "drive map") != PathKind::missing) p = beside;
   }
-  if (!std::filesystem::exists(p))
+  if (path_kind(p.string(), cfg::where(*n) + ": drive map") == PathKind::missing)
     throw ConfigError(cfg::where(*n) + ": drive map '" + p.string() + "' not found");
   return load_drive_map(p.string());
 }

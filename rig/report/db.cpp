@@ -11,6 +11,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/core/lazy_library.hpp"
+#include "rig/core/path_kind.hpp"
 
 namespace rig::history {
 
@@ -63,7 +64,7 @@ class SqliteDb final : public Db {
     where_ = "sqlite:" + path;
     const std::filesystem::path p(path);
     if (access == Access::ReadOnly) {
-      if (!std::filesystem::exists(p))
+      if (path_kind(path, "history database") == PathKind::missing)
         throw ConfigError(where_ + ": no such history database (reading never creates one; check --db or "
                                    "$RIG_HISTORY)");
     } else if (p.has_parent_path()) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 
+#include "rig/core/path_kind.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/report/db.hpp"
@@ -298,16 +299,28 @@ std::vector<std::string> value_names(const std::string& db_url) {
 }
 
 // ------------------------------------------------------------------ default location
+std::optional<std::string> rig_config_path() {
+  if (const char* c = std::getenv("RIG_CONFIG"); c && *c) {
+    if (path_kind(c, "RIG_CONFIG names") == PathKind::missing)
+      throw ConfigError("RIG_CONFIG names '" + std::string(c) + "', which does not exist");
+    return std::string(c);
+  }
+  if (const char* home = std::getenv("HOME"); home && *home) {
+    const std::string p = (fs::path(home) / ".config/rig/rig.toml").string();
+    try {
+      if (path_kind(p, "rig config") != PathKind::missing) return p;
+    } catch (const ConfigError& e) {
+      throw ConfigError(std::string(e.what()) + "; set RIG_CONFIG or RIG_HISTORY to name another, or HOME to yours");
+    }
+  }
+  return std::nullopt;
+}
+
 std::string default_db_url() {
   if (const char* e = std::getenv("RIG_HISTORY"); e && *e) return e;
   const char* home = std::getenv("HOME");
   fs::path config;
-  if (const char* c = std::getenv("RIG_CONFIG"); c && *c) {
-    config = c;
-    if (!fs::exists(config)) throw ConfigError("RIG_CONFIG names '" + config.string() + "', which does not exist");
-  } else if (home && *home && fs::exists(fs::path(home) / ".config/rig/rig.toml")) {
-    config = fs::path(home) / ".config/rig/rig.toml";
-  }
+  if (const std::optional<std::string> c = rig_config_path()) config = *c;
   if (!config.empty()) {
     const toml::table t = cfg::parse_file(config.string());
     if (const toml::table* h = cfg::get_table(t, "history")) {

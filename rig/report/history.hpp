@@ -16,6 +16,12 @@ namespace rig::history {
 // else sqlite:$XDG_DATA_HOME/rig/history.sqlite (or ~/.local/share/rig/history.sqlite).
 std::string default_db_url();
 
+// The rig config default_db_url reads: $RIG_CONFIG if set (ConfigError if it is not there), else
+// ~/.config/rig/rig.toml if it exists, else none. A path that cannot be reached (a $HOME the user
+// may not enter) is a ConfigError naming it, not "no config": the runs would be recorded into
+// another database than the station's.
+std::optional<std::string> rig_config_path();
+
 // Records one run (also aborted ones). `db_url`: "sqlite:PATH", a plain path, or
 // "postgresql://..." / "postgres://...". Recording the same run (same run folder and
 // start time) again replaces the earlier record. Returns the run's id in the database.

@@ -2674,3 +2674,67 @@ TEST(RigCli, AProfilePathWithAControlByteIsShownEscapedInThePlanAndTheLog) {
   for (const std::string& f : {d + "/dry.stdout", d + "/dry.stderr", d + "/run/run.log", d + "/io.stderr"})
     EXPECT_EQ(slurp(f).find('\x1b'), std::string::npos) << f;
 }
+
+// As a user who is not root (CI runs as root, which passes every permission): a path the user
+// may not reach is exit 2 naming it and the system's reason (it was "filesystem error: status:
+// Permission denied" and exit 4 for a profile, the rig config under $HOME, --resume, rig verify
+// and history --db); folders and files the user may not write are refused before anything
+// runs; and where everything may be written, the whole run passes: no check refuses too much.
+TEST(RigCli, AsAUserWithoutRootPermissionsAreCheckedAndNamed) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to run rig as another user";
+  if (shell("command -v setpriv >/dev/null") != 0) GTEST_SKIP() << "needs setpriv (util-linux)";
+  const std::string d = tmp("not-root");
+  for (const char* sub : {"home", "secret/home", "ro", "rw"}) fs::create_directories(d + "/" + sub);
+  const std::string rig = d + "/rig";  // the build tree may sit under a folder nobody enters
+  fs::copy_file(RIG_BINARY, rig);
+  std::ofstream(d + "/secret/p.toml") << "base = \"ci\"\n";
+  std::ofstream(d + "/rw/root.json") << "{}\n";  // root's, 0644 below
+  std::ofstream(d + "/rw/y.txt") << [] {
+    std::string s;
+    for (int i = 0; i < 400; ++i) s += std::to_string(1e-6 * std::sin(0.37 * i)) + "\n";
+    return s;
+  }();
+  using P = fs::perms;
+  fs::permissions(d, P::owner_all | P::group_read | P::group_exec | P::others_read | P::others_exec);
+  fs::permissions(d + "/secret", P::owner_all);
+  fs::permissions(d + "/ro", P::owner_read | P::owner_exec | P::group_read | P::group_exec | P::others_read |
+                                 P::others_exec);
+  fs::permissions(d + "/home", P::all);
+  fs::permissions(d + "/rw", P::all);
+  fs::permissions(d + "/rw/root.json", P::owner_read | P::owner_write | P::group_read | P::others_read);
+  // `args` as uid/gid 65534 with HOME=`home`; its exit code, its stderr in d/NAME.stderr.
+  auto as_user = [&](const std::string& home, const std::string& args, const std::string& name) {
+    return shell("cd " + d + " && setpriv --reuid=65534 --regid=65534 --clear-groups env HOME=" + home + " " + rig +
+                 " " + args + " >" + d + "/" + name + ".stdout 2>" + d + "/" + name + ".stderr");
+  };
+  auto says = [&](const std::string& name, const std::string& text) {
+    EXPECT_NE(slurp(d + "/" + name + ".stderr").find(text), std::string::npos) << name << ": " << slurp(d + "/" + name + ".stderr");
+  };
+  const std::string home = d + "/home", denied = ": cannot be reached (Permission denied)";
+  EXPECT_EQ(as_user(d + "/secret/home", "run --profile ci --yes --dry-run", "config"), 2);
+  says("config", "rig config " + d + "/secret/home/.config/rig/rig.toml" + denied + "; set RIG_CONFIG or RIG_HISTORY");
+  EXPECT_EQ(as_user(home, "run --profile " + d + "/secret/p.toml --yes --dry-run", "profile"), 2);
+  says("profile", "profile " + d + "/secret/p.toml" + denied);
+  EXPECT_EQ(as_user(home, "run --resume " + d + "/secret/run", "resume"), 2);
+  says("resume", "--resume: " + d + "/secret/run" + denied);
+  EXPECT_EQ(as_user(home, "verify " + d + "/secret/run", "verify"), 2);
+  says("verify", "rig verify " + d + "/secret/run" + denied);
+  EXPECT_EQ(as_user(home, "history --db sqlite:" + d + "/secret/h.sqlite", "history"), 2);
+  says("history", "history database " + d + "/secret/h.sqlite" + denied);
+  // Writing: judged by the user's permissions, before anything runs.
+  EXPECT_EQ(as_user(home, "run --profile ci --yes --no-history --out " + d + "/ro/run", "out"), 2);
+  says("out", "--out " + d + "/ro/run: cannot create the run folder: Permission denied");
+  EXPECT_EQ(as_user(home, "run --profile ci --yes --dry-run --db sqlite:" + d + "/ro/h.sqlite", "db"), 2);
+  says("db", "history database " + d + "/ro/h.sqlite: cannot be created (" + d + "/ro is not a writable folder)");
+  EXPECT_EQ(as_user(home, "analyze " + d + "/rw/y.txt --rate 100 --json " + d + "/ro/a.json", "json-folder"), 2);
+  says("json-folder", "--json " + d + "/ro/a.json: cannot create files in " + d + "/ro");
+  EXPECT_EQ(as_user(home, "analyze " + d + "/rw/y.txt --rate 100 --json " + d + "/rw/root.json", "json-file"), 2);
+  says("json-file", "--json " + d + "/rw/root.json: cannot be written: Permission denied");
+  EXPECT_FALSE(fs::exists(d + "/ro/run"));
+  // Where the user may write, nothing is refused: a whole run, recorded in the user's history.
+  EXPECT_EQ(as_user(home, "run --profile ci --yes --quiet --out " + d + "/rw/run", "whole"), 0) << slurp(d + "/whole.stderr");
+  EXPECT_TRUE(fs::exists(d + "/rw/run/passport.json"));
+  EXPECT_TRUE(fs::exists(home + "/.local/share/rig/history.sqlite"));
+  EXPECT_EQ(as_user(home, "history", "listed"), 0) << slurp(d + "/listed.stderr");
+  EXPECT_NE(slurp(d + "/listed.stdout").find(d + "/rw/run"), std::string::npos) << slurp(d + "/listed.stdout");
+}
