@@ -19,7 +19,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
-#include "rig/report/passport_check.hpp"
+#include "rig/report/passport_read.hpp"
 #include "rig/core/path_kind.hpp"
 
 namespace rig::cli {
@@ -61,19 +61,27 @@ std::string brief(const std::optional<double>& v) {  // tables: people
   return buf;
 }
 
+// Characters a terminal shows for UTF-8 text: its code points (a serial "ДУТ-Ü7" is 6, not 11
+// bytes; padding by bytes shifted every column after it, a review). Wide CJK forms are not
+// measured.
+std::size_t shown_width(const std::string& s) {
+  return static_cast<std::size_t>(
+      std::count_if(s.begin(), s.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
 // Left-aligned text columns.
 void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows) {
   std::vector<std::size_t> w;
   for (const auto& r : rows)
     for (std::size_t i = 0; i < r.size(); ++i) {
       if (w.size() <= i) w.push_back(0);
-      w[i] = std::max(w[i], r[i].size());
+      w[i] = std::max(w[i], shown_width(r[i]));
     }
   for (const auto& r : rows) {
     std::string line;
     for (std::size_t i = 0; i < r.size(); ++i) {
       line += r[i];
-      if (i + 1 < r.size()) line += std::string(w[i] - r[i].size() + 2, ' ');
+      if (i + 1 < r.size()) line += std::string(w[i] - shown_width(r[i]) + 2, ' ');
     }
     line.erase(line.find_last_not_of(' ') + 1);
     os << line << "\n";
@@ -143,64 +151,77 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
     return;
   }
   std::vector<std::vector<std::string>> t;
-  t.push_back({"id", "started", "serial", "value", "unit", "lo", "hi", "limits", "outcome", "reason"});
-  std::map<std::string, Stats> per_serial;
-  Stats all;
+  t.push_back({"id", "started", "serial", "run", "value", "unit", "lo", "hi", "limits", "outcome", "reason"});
+  // The statistics per DUT and unit (a run that wrote the value in mg is not averaged with one in
+  // g, a review); `runs` counts every run of the DUT, `n` those with a value.
+  using Key = std::pair<std::string, std::string>;  // serial, unit
+  std::map<Key, Stats> per_serial;
+  std::map<Key, std::size_t> runs_of;
+  std::map<std::string, Stats> all;  // per unit
+  std::map<std::string, std::size_t> all_runs;
   for (const auto& r : rows) {
     const std::string limits =
         r.limit_min || r.limit_max ? "[" + brief(r.limit_min) + ", " + brief(r.limit_max) + "]" : "-";
-    t.push_back({std::to_string(r.run_id), r.started, r.serial, brief(r.value), r.unit, brief(r.lo), brief(r.hi), limits,
-                 r.value_outcome, r.reason});
+    t.push_back({std::to_string(r.run_id), r.started, r.serial, r.outcome, brief(r.value), r.unit, brief(r.lo),
+                 brief(r.hi), limits, r.value_outcome, r.reason});
+    ++runs_of[{r.serial, r.unit}];
+    ++all_runs[r.unit];
+    Stats& st = per_serial[{r.serial, r.unit}];
     if (r.value && std::isfinite(*r.value)) {
-      per_serial[r.serial].add(*r.value);
-      all.add(*r.value);
+      st.add(*r.value);
+      all[r.unit].add(*r.value);
     }
   }
   std::cout << a.value << " over " << rows.size() << " run(s)\n";
   print_table(std::cout, t);
   // The trend: per DUT (across its runs) and across all DUTs.
   std::vector<std::vector<std::string>> s;
-  s.push_back({"serial", "n", "mean", "sd", "min", "max", "last - first"});
-  auto row = [&](const std::string& name, const Stats& st, bool one_dut) {
-    s.push_back({name, std::to_string(st.n), brief(st.mean), brief(std::isnan(st.sd()) ? std::nullopt : std::optional(st.sd())),
-                 brief(st.min), brief(st.max), one_dut ? brief(st.last - st.first) : "-"});
+  s.push_back({"serial", "unit", "runs", "n", "mean", "sd", "min", "max", "last - first"});
+  auto row = [&](const std::string& name, const std::string& unit, std::size_t runs, const Stats& st, bool one_dut) {
+    const auto number = [&st](double v) { return st.n ? brief(v) : std::string("-"); };
+    s.push_back({name, unit, std::to_string(runs), std::to_string(st.n), number(st.mean),
+                 brief(std::isnan(st.sd()) ? std::nullopt : std::optional(st.sd())), number(st.min), number(st.max),
+                 one_dut ? number(st.last - st.first) : "-"});
   };
-  for (const auto& [serial, st] : per_serial) row(serial, st, true);
-  if (per_serial.size() > 1) row("all DUTs", all, false);  // drift only means something within one DUT
-  if (all.n) {
+  for (const auto& [key, st] : per_serial) row(key.first, key.second, runs_of[key], st, true);
+  for (const auto& [unit, st] : all) {  // drift only means something within one DUT
+    const auto duts = std::count_if(per_serial.begin(), per_serial.end(), [&](const auto& e) { return e.first.second == unit; });
+    if (duts > 1) row("all DUTs", unit, all_runs[unit], st, false);
+  }
+  if (all.size() > 1)
+    std::cout << "\nnote: " << a.value << " was recorded in " << all.size()
+              << " units; each unit has its own statistics\n";
+  if (!per_serial.empty()) {
     std::cout << "\n";
     print_table(std::cout, s);
   }
 }
 
 void record(const HistoryArgs& a) {
-  const std::string path = a.record + "/passport.json";
-  std::ifstream in(path);
-  if (!in) throw NotTheDatabase(path + ": cannot read the file");
   nlohmann::json p;
   try {
-    p = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw NotTheDatabase(path + ": malformed JSON: " + e.what());
-  }
-  try {
-    report::require_consistent_verdicts(p, path);  // an edited passport is not history
+    p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
   }
   const long long id = history::record_run(a.db, p, a.record);
+  for (const auto& [other, dir] : history::same_run_elsewhere(a.db, p, a.record))
+    std::cerr << "rig history: note: the same run (serial " << p.value("serial", "") << ", started "
+              << p.value("started", "") << ") is also recorded from " << dir << " (run " << other
+              << "): a copy of its folder? The listing and the statistics count it twice\n";
   std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
 }
 
-int run_history(const HistoryArgs& a, bool db_given) {
+int run_history(const HistoryArgs& a, bool named) {
   if (!a.record.empty()) {
     record(a);
     return kExitPass;
   }
-  // Reading never creates a database. A --db that names no file is a mistake (exit 2, from
-  // the reader); the default database merely does not exist until the first run records.
-  if (const auto path = history::sqlite_path(a.db); !db_given && path && path_kind(*path, "history database") == PathKind::missing) {
+  // Reading never creates a database. A database that --db, $RIG_HISTORY or the rig config
+  // names and is not there is a mistake (exit 2, from the reader: a typo there looked like an
+  // empty history, a review); the built-in default merely does not exist until the first run records.
+  if (const auto path = history::sqlite_path(a.db); !named && path && path_kind(*path, "history database") == PathKind::missing) {
     std::cout << "no runs recorded yet (" << a.db << " does not exist)\n";
     return kExitPass;
   }
@@ -240,7 +261,7 @@ void add_history(CLI::App& app, int& rc) {
     if (!db_given) source = default_history();
     a->db = source.url;
     try {
-      rc = run_history(*a, db_given);
+      rc = run_history(*a, db_given || a->db != history::builtin_db_url());
     } catch (const NotTheDatabase&) {
       throw;  // the passport's or the option's own mistake, whichever database (a code review)
     } catch (const ConfigError& e) {

@@ -65,8 +65,8 @@ class SqliteDb final : public Db {
     const std::filesystem::path p(path);
     if (access == Access::ReadOnly) {
       if (path_kind(path, "history database") == PathKind::missing)
-        throw ConfigError(where_ + ": no such history database (reading never creates one; check --db or "
-                                   "$RIG_HISTORY)");
+        throw ConfigError(where_ + ": no such history database (reading never creates one; check --db, "
+                                   "$RIG_HISTORY or the rig config's [history] url)");
     } else if (p.has_parent_path()) {
       std::error_code ec;
       std::filesystem::create_directories(p.parent_path(), ec);

@@ -227,6 +227,20 @@ long long record_run(const std::string& db_url, const json& passport, const std:
   return id;
 }
 
+std::vector<std::pair<long long, std::string>> same_run_elsewhere(const std::string& db_url, const json& passport,
+                                                                  const std::string& run_dir) {
+  std::error_code ec;
+  fs::path dir = fs::weakly_canonical(fs::absolute(run_dir), ec);
+  if (ec) dir = fs::absolute(run_dir);
+  auto db = open_for_reading(db_url);
+  std::vector<std::pair<long long, std::string>> out;
+  for (const Row& r : db->query("SELECT id, run_dir FROM runs WHERE serial = ? AND started IS NOT DISTINCT FROM ? AND "
+                                "run_dir <> ? ORDER BY id",
+                                {passport.value("serial", std::string()), opt_time(passport, "started"), dir.string()}))
+    out.emplace_back(as_int(r[0]).value_or(0), as_text(r[1]));
+  return out;
+}
+
 std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
   auto db = open_for_reading(db_url);
   std::vector<Value> params;
@@ -318,7 +332,6 @@ std::optional<std::string> rig_config_path() {
 
 std::string default_db_url() {
   if (const char* e = std::getenv("RIG_HISTORY"); e && *e) return e;
-  const char* home = std::getenv("HOME");
   fs::path config;
   if (const std::optional<std::string> c = rig_config_path()) config = *c;
   if (!config.empty()) {
@@ -334,6 +347,11 @@ std::string default_db_url() {
       return url;
     }
   }
+  return builtin_db_url();
+}
+
+std::string builtin_db_url() {
+  const char* home = std::getenv("HOME");
   fs::path data;
   if (const char* x = std::getenv("XDG_DATA_HOME"); x && *x) data = x;
   else if (home && *home) data = fs::path(home) / ".local/share";

@@ -15,6 +15,9 @@ namespace rig::history {
 // ~/.config/rig/rig.toml if present; a relative path is taken from the config's folder);
 // else sqlite:$XDG_DATA_HOME/rig/history.sqlite (or ~/.local/share/rig/history.sqlite).
 std::string default_db_url();
+// The database used when nothing names one: sqlite:$XDG_DATA_HOME/rig/history.sqlite (or
+// ~/.local/share/..., or the working folder without a HOME).
+std::string builtin_db_url();
 
 // The rig config default_db_url reads: $RIG_CONFIG if set (ConfigError if it is not there), else
 // ~/.config/rig/rig.toml if it exists, else none. A path that cannot be reached (a $HOME the user
@@ -58,6 +61,11 @@ struct ValueRow {
 std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f);
 // One measurement across the runs matching `f`, oldest first (the trend).
 std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_name, const Filter& f);
+// Runs recorded from another folder with the same serial and start time as `passport`: a copy of
+// a run folder recorded again (its id and folder), which the listing and statistics count twice.
+std::vector<std::pair<long long, std::string>> same_run_elsewhere(const std::string& db_url,
+                                                                  const nlohmann::json& passport,
+                                                                  const std::string& run_dir);
 // Names of all measurements recorded (for `rig history --value` help and errors).
 std::vector<std::string> value_names(const std::string& db_url);
 

@@ -20,7 +20,26 @@ std::string expected_outcome(const json& m, bool run_complete, std::string& why)
   const auto end = [&](std::size_t i, double open) {
     return limits[i].is_number() ? limits[i].get<double>() : limits[i].is_null() ? open : std::nan("");
   };
-  if (!limits.is_array() || limits.size() != 2) return {};
+  if (!limits.is_array() || limits.size() != 2) {
+    // Not judged (UNSET), except a value the profile requires without limits (accuracy_class
+    // with a class table; the passport does not say which): present, it passes; null, it fails a
+    // complete run. So a value without limits never fails, and a null one never passes.
+    const std::string got = text(m.value("outcome", json("")));
+    const bool has = m.value("value", json()).is_number();
+    if (has && got == "FAIL") {
+      why = "it has a value and no limits (not judged: UNSET)";
+      return "UNSET";
+    }
+    if (!has && got == "PASS") {
+      why = "it has no value";
+      return run_complete ? "FAIL" : "UNSET";
+    }
+    if (!has && got == "FAIL" && !run_complete) {
+      why = "the run stopped early (what was not measured stays UNSET)";
+      return "UNSET";
+    }
+    return {};
+  }
   const double lo = end(0, -HUGE_VAL), hi = end(1, HUGE_VAL);
   if (std::isnan(lo) || std::isnan(hi)) return {};
   const json v = m.value("value", json());
@@ -42,18 +61,18 @@ std::string verdict_contradiction(const json& p) {
   if (!p.is_object() || !p.contains("values") || !p["values"].is_object()) return {};
   const std::string run = text(p.value("outcome", json("")));
   const bool complete = run == "PASS" || run == "FAIL";  // ABORTED and ERROR judge what they measured
-  bool any_fail = false;
+  std::string failed;  // the first value that failed
   for (const auto& [name, m] : p["values"].items()) {
     if (!m.is_object()) continue;
     const std::string got = text(m.value("outcome", json("")));
-    any_fail = any_fail || got == "FAIL";
+    if (got == "FAIL" && failed.empty()) failed = name;
     std::string why;
     const std::string want = expected_outcome(m, complete, why);
     if (!want.empty() && got != want) return "values." + name + ".outcome is " + got + ", but " + why;
     if (run == "PASS" && got != "PASS" && m.value("limits", json()).is_array())
       return "outcome is PASS, but values." + name + " (limited) is " + got;
   }
-  if (run == "PASS" && any_fail) return "outcome is PASS, but a value failed";
+  if (run == "PASS" && !failed.empty()) return "outcome is PASS, but values." + failed + " is FAIL";
   return {};
 }
 

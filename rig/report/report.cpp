@@ -1,12 +1,13 @@
 #include "rig/report/report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "rig/core/errors.hpp"
-#include "rig/report/passport_check.hpp"
+#include "rig/report/passport_read.hpp"
 #include "rig/report/report_parts.hpp"
 #include "rig/report/svg.hpp"
 
@@ -17,51 +18,41 @@ using nlohmann::json;
 
 namespace {
 
-// Reads a JSON file; `required` decides whether a problem throws or is returned.
-json read_json(const fs::path& path, bool required, std::string& problem) {
+// analysis.json, which may be missing, partial or malformed after an abort: what is wrong with
+// it goes into `problem` and the page says so, rather than refusing the report.
+json read_analysis(const fs::path& path, std::string& problem) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     problem = path.filename().string() + " is missing";
-    if (required) throw ConfigError(path.string() + ": cannot read the file (does the run folder exist?)");
     return json();
   }
   std::ostringstream ss;
   ss << in.rdbuf();
+  const std::string name = path.filename().string();
   try {
-    return json::parse(ss.str());
-  } catch (const json::parse_error& e) {
-    // nlohmann's message already carries "at line L, column C".
-    problem = path.filename().string() + " is malformed: " + e.what();
-    if (required) throw ConfigError(path.string() + ": malformed JSON: " + e.what());
+    return parse_json_text(ss.str(), name);
+  } catch (const ConfigError& e) {
+    std::string why = e.what();  // "analysis.json: ..." or "analysis.json:LINE:COL: ..."
+    why.erase(0, std::min(why.size(), name.size() + 1));
+    problem = name + " is malformed: " + why.substr(why.find_first_not_of(' '));
     return json();
   }
-}
-
-void check_passport(const json& p, const fs::path& path) {
-  if (!p.is_object()) throw ConfigError(path.string() + ": the passport is not a JSON object");
-  if (p.contains("schema")) {
-    if (!p["schema"].is_string() || p["schema"].get<std::string>().rfind("rig.passport/1", 0) != 0)
-      throw ConfigError(path.string() + ": unsupported passport schema " + p["schema"].dump() +
-                        " (this rig reads rig.passport/1)");
-  }
-  if (p.contains("values") && !p["values"].is_object())
-    throw ConfigError(path.string() + ": 'values' must be an object of measurements");
 }
 
 }  // namespace
 
 std::string write_report(const std::string& run_dir) {
   const fs::path dir(run_dir);
-  std::string ignored, analysis_problem;
-  const json passport = read_json(dir / "passport.json", true, ignored);
-  check_passport(passport, dir / "passport.json");
-  require_consistent_verdicts(passport, (dir / "passport.json").string());
-  json analysis = read_json(dir / "analysis.json", false, analysis_problem);
+  std::string analysis_problem;
+  const json passport = read_passport(run_dir);
+  json analysis = read_analysis(dir / "analysis.json", analysis_problem);
   if (!analysis.is_null() && !analysis.is_object()) {
     analysis_problem = "analysis.json is not a JSON object";
     analysis = json();
   }
-  const std::string html = render_report(passport, analysis, analysis_problem);
+  fs::path read_from = fs::absolute(dir).lexically_normal();
+  if (!read_from.has_filename()) read_from = read_from.parent_path();  // "r1/"
+  const std::string html = render_report(passport, analysis, analysis_problem, read_from.string());
 
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
   {
@@ -79,8 +70,9 @@ std::string write_report(const std::string& run_dir) {
   return out.string();
 }
 
-std::string render_report(const json& passport, const json& analysis, const std::string& analysis_problem) {
-  Page page(passport, analysis, analysis_problem);
+std::string render_report(const json& passport, const json& analysis, const std::string& analysis_problem,
+                          const std::string& run_dir) {
+  Page page(passport, analysis, analysis_problem, run_dir);
   return page.html();
 }
 

@@ -15,8 +15,10 @@ namespace rig::report {
 std::string write_report(const std::string& run_dir);
 
 // The page itself, for callers that hold the documents in memory. `analysis` may be
-// null (absent); `analysis_problem` says why it is absent or partial ("" if fine).
+// null (absent); `analysis_problem` says why it is absent or partial ("" if fine); `run_dir` is
+// the folder the documents were read from (the page names it; the passport's `out_dir` is where
+// the run wrote them, which differs for a copied folder).
 std::string render_report(const nlohmann::json& passport, const nlohmann::json& analysis,
-                          const std::string& analysis_problem = "");
+                          const std::string& analysis_problem = "", const std::string& run_dir = "");
 
 }  // namespace rig::report

@@ -10,7 +10,8 @@ namespace rig::report {
 
 class Page {
  public:
-  Page(const nlohmann::json& passport, const nlohmann::json& analysis, std::string analysis_problem);
+  Page(const nlohmann::json& passport, const nlohmann::json& analysis, std::string analysis_problem,
+       std::string run_dir = "");
   std::string html();
 
  private:
@@ -36,6 +37,7 @@ class Page {
   const nlohmann::json& p_;
   const nlohmann::json& a_;
   std::string analysis_problem_;
+  std::string run_dir_;  // the folder read ("" when rendered from memory)
   std::vector<std::string> missing_;
 };
 

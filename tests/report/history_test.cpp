@@ -5,6 +5,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 #include <thread>
 
 #include "app/commands.hpp"
@@ -266,6 +268,30 @@ TEST(HistoryDefaultUrl, ConfigMistakesNameFileAndLine) {
 }
 
 // ---------------------------------------------------------------- `rig history`
+// Environment variables set (or, nullopt, unset) for a scope, restored after it.
+class Env {
+ public:
+  Env(std::initializer_list<std::pair<std::string, std::optional<std::string>>> vars) {
+    for (const auto& [name, value] : vars) {
+      const char* old = std::getenv(name.c_str());
+      saved_.emplace_back(name, old ? std::optional<std::string>(old) : std::nullopt);
+      if (value) ::setenv(name.c_str(), value->c_str(), 1);
+      else ::unsetenv(name.c_str());
+    }
+  }
+  ~Env() {
+    for (const auto& [name, value] : saved_) {
+      if (value) ::setenv(name.c_str(), value->c_str(), 1);
+      else ::unsetenv(name.c_str());
+    }
+  }
+  Env(const Env&) = delete;
+  Env& operator=(const Env&) = delete;
+
+ private:
+  std::vector<std::pair<std::string, std::optional<std::string>>> saved_;
+};
+
 std::string run_cli(std::vector<std::string> args) {
   CLI::App app;
   int rc = -1;
@@ -354,16 +380,136 @@ TEST(HistoryCli, AMissingDbIsAnErrorAndTheDefaultOneIsNotCreated) {
   EXPECT_THROW(run_cli({"--db", "sqlite:" + typo.string()}), rig::ConfigError);
   EXPECT_THROW(run_cli({"--db", typo.string(), "--value", "bias"}), rig::ConfigError);
   EXPECT_FALSE(fs::exists(typo));
-  // The default location (here $RIG_HISTORY) exists only once a run has been recorded.
-  const fs::path dflt = d.path / "default" / "history.sqlite";
-  const char* old = std::getenv("RIG_HISTORY");
-  const std::string saved = old ? old : "";
-  ::setenv("RIG_HISTORY", ("sqlite:" + dflt.string()).c_str(), 1);
-  const std::string out = run_cli({});
-  if (old) ::setenv("RIG_HISTORY", saved.c_str(), 1);
-  else ::unsetenv("RIG_HISTORY");
-  EXPECT_NE(out.find("no runs recorded yet"), std::string::npos) << out;
+  // The built-in default exists only once a run has been recorded: "no runs recorded yet". A
+  // database $RIG_HISTORY or the rig config names is a choice, and one that is not there is an
+  // error (a typo there looked like an empty history, a review).
+  const fs::path dflt = d.path / "data" / "rig" / "history.sqlite";
+  {
+    const Env env{{"XDG_DATA_HOME", (d.path / "data").string()}, {"HOME", d.path.string()},
+                  {"RIG_HISTORY", std::nullopt}, {"RIG_CONFIG", std::nullopt}};
+    const std::string out = run_cli({});
+    EXPECT_NE(out.find("no runs recorded yet (sqlite:" + dflt.string() + " does not exist)"), std::string::npos) << out;
+  }
   EXPECT_FALSE(fs::exists(dflt));
+  {
+    const Env env{{"RIG_HISTORY", "sqlite:" + typo.string()}};
+    try {
+      run_cli({});
+      ADD_FAILURE() << "a missing database $RIG_HISTORY names read as an empty history";
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("RIG_HISTORY: sqlite:" + typo.string() + ": no such history database"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  std::ofstream(d.path / "rig.toml") << "[history]\nurl = \"sqlite:histroy.sqlite\"\n";
+  {
+    const Env env{{"RIG_HISTORY", std::nullopt}, {"RIG_CONFIG", (d.path / "rig.toml").string()}};
+    try {
+      run_cli({"--value", "bias"});
+      ADD_FAILURE() << "a missing database the rig config names read as an empty history";
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(typo.string() + ": no such history database (reading never creates one; "
+                                                           "check --db, $RIG_HISTORY or the rig config's [history] url)"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_FALSE(fs::exists(typo));
+}
+
+// `--value` statistics: per DUT and unit (a run that wrote bias in mg was averaged with runs in g,
+// a review), `runs` beside `n` (a DUT whose values are all null was left out), the run's outcome
+// in the listing, and columns padded by characters (a Cyrillic serial shifted every column).
+TEST(HistoryCli, StatisticsArePerDutAndUnitAndCountEveryRun) {
+  TempDir d;
+  const std::string db = "sqlite:" + (d.path / "h.sqlite").string();
+  h::record_run(db, rig::test::fixture_passport("SN-A", "PASS", "2026-11-01T08:00:00Z"), (d.path / "a1").string());
+  json mg = rig::test::fixture_passport("SN-A", "PASS", "2026-11-02T08:00:00Z");
+  mg["values"]["bias"]["value"] = -0.5;
+  mg["values"]["bias"]["unit"] = "mg";
+  mg["values"]["bias"]["limits"] = {-1, 1};
+  h::record_run(db, mg, (d.path / "a2").string());
+  json aborted = rig::test::fixture_passport("ДУТ-Ü7", "ABORTED", "2026-11-03T08:00:00Z");
+  aborted["values"]["bias"]["value"] = nullptr;
+  aborted["values"]["bias"]["outcome"] = "UNSET";
+  h::record_run(db, aborted, (d.path / "u1").string());
+  const auto out = lines(run_cli({"--db", db, "--value", "bias"}));
+  const auto has = [&](const std::string& text) {
+    return std::any_of(out.begin(), out.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(has("note: bias was recorded in 2 units; each unit has its own statistics"));
+  EXPECT_TRUE(has("SN-A      g     1     1  -0.00050137  -   -0.00050137  -0.00050137  0"));
+  EXPECT_TRUE(has("SN-A      mg    1     1  -0.5         -   -0.5         -0.5         0"));
+  EXPECT_TRUE(has("ДУТ-Ü7    g     1     0  -            -   -            -            -"));
+  EXPECT_TRUE(has("all DUTs  g     2     1  -0.00050137"));
+  EXPECT_FALSE(has("all DUTs  mg"));  // one DUT in mg: nothing across DUTs
+  // The listing: the run's outcome in its own column, aligned after the Cyrillic serial (the
+  // column's position counted in characters).
+  const auto column = [](const std::string& line, const std::string& text) {
+    const std::size_t at = line.find(text);
+    if (at == std::string::npos) return std::string::npos;
+    return static_cast<std::size_t>(std::count_if(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(at),
+                                                   [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+  };
+  std::size_t header = std::string::npos, row = std::string::npos, latin = std::string::npos;
+  for (const std::string& l : out) {
+    if (l.rfind("id  started", 0) == 0) header = column(l, "run ");
+    if (l.find("ДУТ-Ü7") != std::string::npos && l.find("ABORTED") != std::string::npos) row = column(l, "ABORTED");
+    if (l.find("2026-11-01T08:00:00Z  SN-A") != std::string::npos) latin = column(l, "PASS");
+  }
+  EXPECT_NE(header, std::string::npos);
+  EXPECT_EQ(row, header) << "columns padded by characters, not bytes";
+  EXPECT_EQ(latin, header);
+}
+
+// `--record` reads a passport as `rig report` does (rig/report/passport_read.hpp): what the report
+// refuses is not recorded (a review recorded another schema, a 'values' list, an outcome "PASSED"
+// and a start time "yesterday" that sorted as the newest run), and a copy of a recorded folder is
+// noted.
+TEST(HistoryCli, RecordRefusesWhatTheReportRefusesAndNotesACopy) {
+  TempDir d;
+  const std::string db = "sqlite:" + (d.path / "h.sqlite").string();
+  const json good = rig::test::fixture_passport("SN-1", "PASS", "2026-11-01T08:00:00Z");
+  const std::vector<std::pair<std::function<void(json&)>, std::string>> cases = {
+      {[](json& p) { p["schema"] = "rig.passport/2"; }, "unsupported passport schema \"rig.passport/2\""},
+      {[](json& p) { p["values"] = json::array(); }, "values: an object of measurements, not []"},
+      {[](json& p) { p.erase("values"); }, "values: an object of measurements, not absent"},
+      {[](json& p) { p["outcome"] = "PASSED"; }, "outcome: PASS, FAIL, ABORTED or ERROR, not \"PASSED\""},
+      {[](json& p) { p["started"] = "yesterday"; }, "started: an ISO 8601 time (2026-11-29T17:11:50Z), not \"yesterday\""},
+      {[](json& p) { p["serial"] = "a\nb"; }, "serial: a non-empty string without control characters, not \"a\\nb\""},
+      {[](json& p) { p["values"]["bias"]["value"] = "-5e-4"; }, "values.bias.value: a number or null, not \"-5e-4\""},
+      {[](json& p) { p["values"]["q"]["outcome"] = "FAIL"; },
+       "values.q.outcome is FAIL, but it has a value and no limits (not judged: UNSET)"},
+      {[](json& p) {
+         p["values"]["k"]["value"] = nullptr;
+         p["values"]["k"]["outcome"] = "PASS";
+       },
+       "values.k.outcome is PASS, but it has no value"},
+  };
+  for (const auto& [edit, message] : cases) {
+    json p = good;
+    edit(p);
+    rig::test::write_run(d.path / "r", p, nullptr);
+    try {
+      run_cli({"--db", db, "--record", (d.path / "r").string()});
+      ADD_FAILURE() << "recorded: " << message;
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find((d.path / "r" / "passport.json").string() + ": " + message), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_FALSE(fs::exists(d.path / "h.sqlite")) << "nothing recorded, not even an empty database";
+  rig::test::write_run(d.path / "r", good, nullptr);
+  run_cli({"--db", db, "--record", (d.path / "r").string()});
+  fs::copy(d.path / "r", d.path / "copy", fs::copy_options::recursive);
+  testing::internal::CaptureStderr();
+  run_cli({"--db", db, "--record", (d.path / "copy").string()});
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("the same run (serial SN-1, started 2026-11-01T08:00:00Z) is also recorded from " +
+                     fs::weakly_canonical(d.path / "r").string() + " (run 1): a copy of its folder?"),
+            std::string::npos)
+      << err;
 }
 
 }  // namespace

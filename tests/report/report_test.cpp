@@ -465,6 +465,69 @@ TEST(Report, MalformedAnalysisIsReportedInThePage) {
   EXPECT_EQ(count(h, "data-plot="), 0u);
 }
 
+// A number beyond a double's range ended `rig report` with nlohmann's "number overflow" and exit 4,
+// naming no file (a review): in passport.json it is exit 2 at its line and column; in
+// analysis.json the page says so and draws what it can.
+TEST(Report, ANumberBeyondADoublesRangeIsNamedWhereItStands) {
+  TempDir d;
+  std::string text = rig::test::fixture_passport().dump(1);
+  const std::size_t at = text.find("-0.00050137");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, std::string("-0.00050137").size(), "1e400");
+  const std::size_t line = static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n')) + 1;
+  rig::test::write_file(d.path / "passport.json", text);
+  try {
+    rig::report::write_report(d.path.string());
+    ADD_FAILURE() << "a report of a passport with 1e400";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("passport.json:" + std::to_string(line) + ":"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(": the number 1e400 is beyond the range of a double"), std::string::npos)
+        << e.what();
+  }
+  rig::test::write_run(d.path, rig::test::fixture_passport(), nullptr);
+  rig::test::write_file(d.path / "analysis.json", "{\"schema\": \"rig.analysis/1\",\n \"device_time_s\": 1e999}");
+  const std::string h = slurp(rig::report::write_report(d.path.string()));
+  EXPECT_NE(h.find("analysis.json is malformed: 2:19: the number 1e999 is beyond the range of a double"), std::string::npos);
+}
+
+// A colleague's copy of a run folder: the page names the folder it was made from, and where the
+// run wrote it (the footer named the original folder, which the history did not, a review).
+TEST(Report, ACopiedFolderNamesTheFolderReadAndWhereTheRunWroteIt) {
+  TempDir d;
+  json p = rig::test::fixture_passport();
+  p["out_dir"] = "/line2/runs/QA-0042";
+  rig::test::write_run(d.path / "copy", p, nullptr);
+  const std::string h = slurp(rig::report::write_report((d.path / "copy/").string()));
+  const std::string read = std::filesystem::weakly_canonical(d.path / "copy").string();
+  EXPECT_NE(h.find("Run folder</dt><dd class=\"wrap\">" + read + "</dd>"), std::string::npos);
+  EXPECT_NE(h.find("Written at</dt><dd class=\"wrap\">/line2/runs/QA-0042</dd>"), std::string::npos);
+  EXPECT_NE(h.find("from passport.json in " + read + "."), std::string::npos);
+  // The run's own folder: one row, as before (a sealed folder's report stays byte for byte).
+  p["out_dir"] = read;
+  rig::test::write_run(d.path / "copy", p, nullptr);
+  const std::string own = slurp(rig::report::write_report((d.path / "copy").string()));
+  EXPECT_EQ(own.find("Written at"), std::string::npos);
+  EXPECT_NE(own.find("Run folder</dt><dd class=\"wrap\">" + read + "</dd>"), std::string::npos);
+}
+
+// The GOST B rows stand where the contract puts them (after base_error) whatever their block
+// lengths: the ci profile's in_run_b_gost_2s and _4s were printed last (a review).
+TEST(Report, GostRowsFollowTheBaseErrorWhateverTheirBlockLength) {
+  json p = rig::test::fixture_passport();
+  json values = json::object();
+  for (auto& [name, v] : p["values"].items())
+    if (name.rfind("in_run_b_gost_", 0) != 0) values[name] = v;
+  values["in_run_b_gost_2s"] = p["values"]["in_run_b_gost_100s"];
+  values["in_run_b_gost_4s"] = p["values"]["in_run_b_gost_200s"];
+  p["values"] = values;  // an object: its keys sorted, so the GOST rows come after accuracy_class here
+  const std::string h = rig::report::render_report(p, json());
+  const auto at = [&](const std::string& name) { return h.find("<code>" + name + "</code>"); };
+  EXPECT_LT(at("base_error"), at("in_run_b_gost_2s"));
+  EXPECT_LT(at("in_run_b_gost_2s"), at("in_run_b_gost_4s"));
+  EXPECT_LT(at("in_run_b_gost_4s"), at("in_run_b_allan"));
+  EXPECT_NE(h.find("In-run B, (max − min)/2 of 4 s averages (GOST)"), std::string::npos);
+}
+
 TEST(Report, AnalysisWithWrongTypesDoesNotCrash) {
   TempDir d;
   const json a = {{"runs", "oops"},

@@ -1,0 +1,137 @@
+#include "rig/report/passport_read.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
+#include "rig/core/path_kind.hpp"
+#include "rig/report/passport_check.hpp"
+#include "rig/report/timefmt.hpp"
+
+namespace rig::report {
+
+namespace {
+
+using nlohmann::json;
+
+// "LINE:COL" of byte `at` of `text`, both from 1.
+std::string position(const std::string& text, std::size_t at) {
+  std::size_t line = 1, col = 1;
+  for (std::size_t i = 0; i < at && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return std::to_string(line) + ":" + std::to_string(col);
+}
+
+bool one_of(const json& v, std::initializer_list<const char*> names) {
+  if (!v.is_string()) return false;
+  for (const char* n : names)
+    if (v.get<std::string>() == n) return true;
+  return false;
+}
+
+// A field's value as the message shows it: JSON text, control bytes as \xNN.
+std::string shown(const json& v) { return shown_text(v.dump()); }
+
+void check_value(const std::string& name, const json& m, const std::string& path) {
+  const std::string at = path + ": values." + name;
+  if (!m.is_object()) throw ConfigError(at + ": a measurement must be an object, not " + shown(m));
+  for (const char* key : {"value", "lo", "hi"})
+    if (m.contains(key) && !m[key].is_number() && !m[key].is_null())
+      throw ConfigError(at + "." + key + ": a number or null, not " + shown(m[key]));
+  if (!m.contains("outcome") || !one_of(m["outcome"], {"PASS", "FAIL", "UNSET"}))
+    throw ConfigError(at + ".outcome: PASS, FAIL or UNSET, not " + (m.contains("outcome") ? shown(m["outcome"]) : "absent"));
+  if (m.contains("limits") && !m["limits"].is_null()) {
+    const json& l = m["limits"];
+    const bool ok = l.is_array() && l.size() == 2 && (l[0].is_number() || l[0].is_null()) &&
+                    (l[1].is_number() || l[1].is_null());
+    if (!ok) throw ConfigError(at + ".limits: [min, max] (numbers, null for an open end) or null, not " + shown(l));
+  }
+  for (const char* key : {"unit", "reason", "description"})
+    if (m.contains(key) && !m[key].is_string() && !m[key].is_null())
+      throw ConfigError(at + "." + key + ": a string, not " + shown(m[key]));
+}
+
+}  // namespace
+
+json parse_json_text(const std::string& text, const std::string& path) {
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann's message carries "at line L, column C" already.
+    throw ConfigError(path + ": malformed JSON: " + e.what());
+  } catch (const json::out_of_range& e) {
+    // "number overflow parsing '1e400'": the first such token in the text is the one.
+    std::string what = e.what();
+    const std::size_t q = what.find('\''), q2 = what.rfind('\'');
+    std::string where;
+    if (q != std::string::npos && q2 > q) {
+      const std::size_t at = text.find(what.substr(q + 1, q2 - q - 1));
+      if (at != std::string::npos) where = position(text, at) + ": ";
+      what = "the number " + what.substr(q + 1, q2 - q - 1) + " is beyond the range of a double";
+    }
+    throw ConfigError(path + ":" + where + what);
+  } catch (const json::exception& e) {
+    throw ConfigError(path + ": malformed JSON: " + e.what());
+  }
+}
+
+void check_passport(const json& p, const std::string& path) {
+  if (!p.is_object()) throw ConfigError(path + ": the passport is not a JSON object");
+  if (p.contains("schema") &&
+      (!p["schema"].is_string() || p["schema"].get<std::string>().rfind("rig.passport/1", 0) != 0))
+    throw ConfigError(path + ": unsupported passport schema " + shown(p["schema"]) + " (this rig reads rig.passport/1)");
+  // The serial is what the history groups a DUT's runs by and the report heads its page with.
+  if (!p.contains("serial") || !p["serial"].is_string() || p["serial"].get<std::string>().empty() ||
+      has_unshowable(p["serial"].get<std::string>()))
+    throw ConfigError(path + ": serial: a non-empty string without control characters, not " +
+                      (p.contains("serial") ? shown(p["serial"]) : "absent"));
+  if (!p.contains("outcome") || !one_of(p["outcome"], {"PASS", "FAIL", "ABORTED", "ERROR"}))
+    throw ConfigError(path + ": outcome: PASS, FAIL, ABORTED or ERROR, not " +
+                      (p.contains("outcome") ? shown(p["outcome"]) : "absent"));
+  // Times order the history (text order is time order once normalised).
+  for (const char* key : {"started", "finished"}) {
+    const json v = p.value(key, json());
+    const bool required = std::string(key) == "started";
+    if (v.is_null() && !required) continue;
+    if (!v.is_string() || !history::normalize_iso8601(v.get<std::string>()))
+      throw ConfigError(path + ": " + key + ": an ISO 8601 time (2026-11-29T17:11:50Z), not " +
+                        (p.contains(key) ? shown(v) : "absent"));
+  }
+  if (!p.contains("values") || !p["values"].is_object())
+    throw ConfigError(path + ": values: an object of measurements, not " +
+                      (p.contains("values") ? shown(p["values"]).substr(0, 60) : "absent"));
+  for (const auto& [name, m] : p["values"].items()) check_value(name, m, path);
+  if (p.contains("captures") && !p["captures"].is_null()) {
+    bool ok = p["captures"].is_array();
+    for (const json& c : ok ? p["captures"] : json::array()) ok = ok && c.is_string();
+    if (!ok) throw ConfigError(path + ": captures: a list of file names, not " + shown(p["captures"]).substr(0, 60));
+  }
+  require_consistent_verdicts(p, path);
+}
+
+json read_passport(const std::string& run_dir) {
+  const std::string path = run_dir + "/passport.json";
+  switch (path_kind(path, "")) {
+    case PathKind::missing: throw ConfigError(path + ": cannot read the file (does the run folder exist?)");
+    case PathKind::directory: throw ConfigError(path + ": a folder, not the passport file");
+    default: break;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot read the file (" + std::strerror(errno) + ")");
+  std::ostringstream text;
+  text << in.rdbuf();
+  const json p = parse_json_text(text.str(), path);
+  check_passport(p, path);
+  return p;
+}
+
+}  // namespace rig::report
