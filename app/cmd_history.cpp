@@ -184,9 +184,10 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
                  one_dut ? number(st.last - st.first) : "-"});
   };
   for (const auto& [key, st] : per_serial) row(key.first, key.second, runs_of[key], st, true);
-  for (const auto& [unit, st] : all) {  // drift only means something within one DUT
+  for (const auto& entry : all) {  // drift only means something within one DUT
+    const std::string& unit = entry.first;  // not a structured binding: clang 14 cannot capture one
     const auto duts = std::count_if(per_serial.begin(), per_serial.end(), [&](const auto& e) { return e.first.second == unit; });
-    if (duts > 1) row("all DUTs", unit, all_runs[unit], st, false);
+    if (duts > 1) row("all DUTs", unit, all_runs[unit], entry.second, false);
   }
   if (all.size() > 1)
     std::cout << "\nnote: " << a.value << " was recorded in " << all.size()
