@@ -192,17 +192,36 @@ long long record_run(const std::string& db_url, const json& passport, const std:
   auto db = open_migrated(db_url);
   Transaction tx(*db);
   const Value started = opt_time(passport, "started");
-  db->exec("DELETE FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ?", {dir.string(), started});
   const Value software = passport.contains("software") && passport["software"].is_string()
                              ? Value(passport["software"].get<std::string>())
                              : Value(std::string("rig ") + RIG_VERSION);
-  const auto ins = db->query(
-      "INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, passport, station, "
-      "aborted_reason, recorded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
-      {passport["serial"].get<std::string>(), opt_text(passport, "profile"), opt_text(passport, "plant"), software,
-       started, opt_time(passport, "finished"), passport["outcome"].get<std::string>(), dir.string(), passport.dump(),
-       station_name(passport), opt_text(passport, "aborted_reason"), utc_now_iso8601()});
-  const int64_t id = as_int(ins.at(0).at(0)).value_or(0);
+  std::vector<Value> row = {passport["serial"].get<std::string>(), opt_text(passport, "profile"),
+                            opt_text(passport, "plant"), software, started, opt_time(passport, "finished"),
+                            passport["outcome"].get<std::string>(), dir.string(), passport.dump(),
+                            station_name(passport), opt_text(passport, "aborted_reason"), utc_now_iso8601()};
+  // A run recorded again (a resume, `--record` after a database outage) keeps its id, so that a
+  // reference to it (a quality record, a ticket) stays valid; it used to get a new one each time.
+  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? ORDER BY id",
+                             {dir.string(), started});
+  int64_t id = 0;
+  if (was.empty()) {
+    id = as_int(db->query("INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, "
+                          "passport, station, aborted_reason, recorded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
+                          "RETURNING id",
+                          row)
+                    .at(0)
+                    .at(0))
+             .value_or(0);
+  } else {
+    id = as_int(was[0][0]).value_or(0);
+    for (std::size_t i = 1; i < was.size(); ++i) db->exec("DELETE FROM runs WHERE id = ?", {was[i][0]});
+    db->exec("DELETE FROM run_values WHERE run_id = ?", {id});
+    db->exec("DELETE FROM run_captures WHERE run_id = ?", {id});
+    row.push_back(id);
+    db->exec("UPDATE runs SET serial = ?, profile = ?, plant = ?, software = ?, started = ?, finished = ?, outcome = ?, "
+             "run_dir = ?, passport = ?, station = ?, aborted_reason = ?, recorded = ? WHERE id = ?",
+             row);
+  }
 
   if (passport.contains("values") && passport["values"].is_object()) {
     for (const auto& [name, v] : passport["values"].items()) {

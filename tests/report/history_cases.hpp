@@ -33,11 +33,13 @@ inline void history_round_trip(const std::string& url, const std::string& run_ro
     }
     ids.push_back(h::record_run(url, p, run_root + "/run" + std::to_string(++i)));
   }
-  // Recording the same run again replaces it (same folder + start), keeps one row.
+  // Recording the same run again replaces it (same folder + start), keeps one row and its id (a
+  // reference to the run stays valid; it used to get a new id each time, a review).
   json again = fixture_passport("SN-1", "PASS", "2026-11-05T07:00:00Z");
   again["values"]["in_run_b_allan"]["value"] = 3.0e-6;
+  again["captures"] = json::array({"captures/run01-U10.cap"});
   const long long replaced = h::record_run(url, again, run_root + "/run5");
-  EXPECT_NE(replaced, ids.back());
+  EXPECT_EQ(replaced, ids.back());
 
   const auto all = h::list_runs(url, {});
   ASSERT_EQ(all.size(), 5u);
@@ -54,6 +56,8 @@ inline void history_round_trip(const std::string& url, const std::string& run_ro
   EXPECT_EQ(all[0].finished, "2026-11-20T09:52:31Z");
   EXPECT_TRUE(all[0].run_dir.size() > 5 && all[0].run_dir.substr(all[0].run_dir.size() - 5) == "/run1");
   EXPECT_FALSE(all[0].station.empty());
+  EXPECT_EQ(all[4].id, ids.back());
+  EXPECT_EQ(all[4].captures, std::vector<std::string>{"captures/run01-U10.cap"});  // the new record's, not both
 
   h::Filter f;
   f.serial = "SN-1";
