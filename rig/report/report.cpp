@@ -39,6 +39,21 @@ json read_analysis(const fs::path& path, std::string& problem) {
   }
 }
 
+// What interrupted attempts left in the folder (rig/core/set_aside.hpp): a reader of the report
+// sees why captures/in-run-U10.cap.interrupted-1 is there (a review found it listed nowhere).
+std::vector<std::string> set_aside_files(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const char* sub : {"", "captures"}) {
+    std::error_code ec;
+    for (fs::directory_iterator it(dir / sub, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (name.find(".interrupted-") != std::string::npos) out.push_back((fs::path(sub) / name).string());
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 }  // namespace
 
 std::string write_report(const std::string& run_dir) {
@@ -52,7 +67,7 @@ std::string write_report(const std::string& run_dir) {
   }
   fs::path read_from = fs::absolute(dir).lexically_normal();
   if (!read_from.has_filename()) read_from = read_from.parent_path();  // "r1/"
-  const std::string html = render_report(passport, analysis, analysis_problem, read_from.string());
+  const std::string html = render_report(passport, analysis, analysis_problem, read_from.string(), set_aside_files(dir));
 
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
   {
@@ -71,8 +86,8 @@ std::string write_report(const std::string& run_dir) {
 }
 
 std::string render_report(const json& passport, const json& analysis, const std::string& analysis_problem,
-                          const std::string& run_dir) {
-  Page page(passport, analysis, analysis_problem, run_dir);
+                          const std::string& run_dir, const std::vector<std::string>& set_aside) {
+  Page page(passport, analysis, analysis_problem, run_dir, set_aside);
   return page.html();
 }
 

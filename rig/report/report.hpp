@@ -3,6 +3,7 @@
 // One self-contained file: inline CSS and inline SVG plots, no scripts, no network.
 #pragma once
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -18,7 +19,10 @@ std::string write_report(const std::string& run_dir);
 // null (absent); `analysis_problem` says why it is absent or partial ("" if fine); `run_dir` is
 // the folder the documents were read from (the page names it; the passport's `out_dir` is where
 // the run wrote them, which differs for a copied folder).
+// `set_aside`: files in the folder an interrupted attempt left (*.interrupted-N, relative), which
+// the passport does not list (its captures are what the run recorded and judged).
 std::string render_report(const nlohmann::json& passport, const nlohmann::json& analysis,
-                          const std::string& analysis_problem = "", const std::string& run_dir = "");
+                          const std::string& analysis_problem = "", const std::string& run_dir = "",
+                          const std::vector<std::string>& set_aside = {});
 
 }  // namespace rig::report

@@ -278,8 +278,13 @@ footer { margin-top: 28px; color: var(--mute); font-size: 12px; border-top: 1px 
 
 }  // namespace
 
-Page::Page(const json& passport, const json& analysis, std::string analysis_problem, std::string run_dir)
-    : p_(passport), a_(analysis), analysis_problem_(std::move(analysis_problem)), run_dir_(std::move(run_dir)) {}
+Page::Page(const json& passport, const json& analysis, std::string analysis_problem, std::string run_dir,
+           std::vector<std::string> set_aside)
+    : p_(passport),
+      a_(analysis),
+      analysis_problem_(std::move(analysis_problem)),
+      run_dir_(std::move(run_dir)),
+      set_aside_(std::move(set_aside)) {}
 
 std::string Page::html() {
   const std::string figs = figures();  // first: fills missing_
@@ -477,12 +482,23 @@ std::string Page::phases() const {
 
 std::string Page::captures() const {
   const json* c = get(p_, {"captures"});
-  if (!c || !c->is_array() || c->empty()) return "";
+  const bool recorded = c && c->is_array() && !c->empty();
+  if (!recorded && set_aside_.empty()) return "";
   std::ostringstream os;
-  os << "<h2>Captures</h2>\n<p>Raw recordings in the run folder (rig capture format; <code>rig analyze FILE "
-        "--input capture</code> re-analyses one):</p><ul id=\"captures\">\n";
-  for (const json& x : *c) os << "<li><code>" << html_escape(text(&x)) << "</code></li>\n";
-  os << "</ul>\n";
+  os << "<h2>Captures</h2>\n";
+  if (recorded) {
+    os << "<p>Raw recordings in the run folder (rig capture format; <code>rig analyze FILE "
+          "--input capture</code> re-analyses one):</p><ul id=\"captures\">\n";
+    for (const json& x : *c) os << "<li><code>" << html_escape(text(&x)) << "</code></li>\n";
+    os << "</ul>\n";
+  }
+  if (!set_aside_.empty()) {
+    os << "<p>Set aside: what an interrupted attempt left (a recording the rig retried after a fault in it, or one "
+          "a resume repeated), kept as it was and never read; nothing in this passport comes from them:</p>"
+          "<ul id=\"set-aside\">\n";
+    for (const std::string& f : set_aside_) os << "<li><code>" << html_escape(f) << "</code></li>\n";
+    os << "</ul>\n";
+  }
   return os.str();
 }
 

@@ -11,7 +11,7 @@ namespace rig::report {
 class Page {
  public:
   Page(const nlohmann::json& passport, const nlohmann::json& analysis, std::string analysis_problem,
-       std::string run_dir = "");
+       std::string run_dir = "", std::vector<std::string> set_aside = {});
   std::string html();
 
  private:
@@ -38,6 +38,7 @@ class Page {
   const nlohmann::json& a_;
   std::string analysis_problem_;
   std::string run_dir_;  // the folder read ("" when rendered from memory)
+  std::vector<std::string> set_aside_;  // *.interrupted-N files in it
   std::vector<std::string> missing_;
 };
 

@@ -528,6 +528,26 @@ TEST(Report, GostRowsFollowTheBaseErrorWhateverTheirBlockLength) {
   EXPECT_NE(h.find("In-run B, (max − min)/2 of 4 s averages (GOST)"), std::string::npos);
 }
 
+// What an interrupted attempt left (*.interrupted-N) is listed as set aside: a reader found
+// captures/in-run-U10.cap.interrupted-1 in a resumed run's folder and nowhere in its report (a
+// review). The passport's captures stay what the run recorded.
+TEST(Report, FilesAnInterruptedAttemptLeftAreListedAsSetAside) {
+  TempDir d;
+  rig::test::write_run(d.path, rig::test::fixture_passport(), nullptr);
+  std::filesystem::create_directories(d.path / "captures");
+  rig::test::write_file(d.path / "captures" / "in-run-U10.cap.interrupted-1", "x");
+  rig::test::write_file(d.path / "loop-test.csv.interrupted-2", "x");
+  rig::test::write_file(d.path / "captures" / "in-run-U10.cap", "x");
+  const std::string h = slurp(rig::report::write_report(d.path.string()));
+  const std::size_t list = h.find("<ul id=\"set-aside\">");
+  ASSERT_NE(list, std::string::npos);
+  EXPECT_NE(h.find("<li><code>captures/in-run-U10.cap.interrupted-1</code></li>", list), std::string::npos);
+  EXPECT_NE(h.find("<li><code>loop-test.csv.interrupted-2</code></li>", list), std::string::npos);
+  EXPECT_EQ(h.find("<li><code>captures/in-run-U10.cap</code></li>", list), std::string::npos);
+  // Rendered from memory (no folder): nothing to list.
+  EXPECT_EQ(rig::report::render_report(rig::test::fixture_passport(), json()).find("set-aside"), std::string::npos);
+}
+
 TEST(Report, AnalysisWithWrongTypesDoesNotCrash) {
   TempDir d;
   const json a = {{"runs", "oops"},
