@@ -392,16 +392,30 @@ std::string table_drive(const toml::table& t) {
   return drive;
 }
 
+// A relative path is looked for beside the file that names it (a hardware file travels with its
+// maps), then in the working folder (as before that rule; kept so old set-ups still run, but said:
+// the travel limits then depend on where rig was started).
 DriveMap table_drive_map(const toml::table& t) {
   const toml::node* n = t.get("drive_map");
-  std::filesystem::path p = cfg::get_string(t, "drive_map");
-  // Relative to the file that names it (a hardware file travels with its maps).
+  const std::string given = cfg::get_string(t, "drive_map");
+  const std::filesystem::path p = given;
+  std::error_code ec;  // (a working folder removed under us: absolute() gives an empty path)
+  const std::filesystem::path cwd = std::filesystem::absolute(p, ec);
   if (p.is_relative() && n->source().path) {
-    const std::filesystem::path beside = std::filesystem::path(*n->source().path).parent_path() / p;
-    if (path_kind(beside.string(), "drive map") != PathKind::missing) p = beside;
+    const std::filesystem::path file(*n->source().path);
+    const std::string beside_text = (file.parent_path() / p).string();
+    if (path_kind(beside_text, "drive map") != PathKind::missing) return load_drive_map(beside_text);
+    if (path_kind(p.string(), cfg::where(*n) + ": drive map") == PathKind::missing)
+      throw ConfigError(cfg::where(*n) + ": drive map '" + given + "' not found: looked beside " + file.string() +
+                        " (" + beside_text + "), then in the working folder (" + cwd.string() + ")");
+    cfg::warn_once(cfg::where(*n) + ": drive map '" + given + "' is not beside " + file.string() +
+                   "; taken from the working folder (" + cwd.string() +
+                   "): its travel limits depend on where rig is started (put the map beside the hardware file)");
+    return load_drive_map(p.string());
   }
   if (path_kind(p.string(), cfg::where(*n) + ": drive map") == PathKind::missing)
-    throw ConfigError(cfg::where(*n) + ": drive map '" + p.string() + "' not found");
+    throw ConfigError(cfg::where(*n) + ": drive map '" + given + "' not found" +
+                      (p.is_relative() ? " in the working folder (" + cwd.string() + ")" : std::string()));
   return load_drive_map(p.string());
 }
 

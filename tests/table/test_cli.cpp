@@ -5,6 +5,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <thread>
 
 #include "helpers.hpp"
@@ -341,6 +342,52 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
     EXPECT_NE(out.find("u20_deg = 180°: outside the table's travel [-10°, 10°] (drive map"), std::string::npos) << out;
   }
   EXPECT_FALSE(std::filesystem::exists(dir + "/run6/run.json"));
+}
+
+// A drive map in motor rpm through 50:1 (the review's "Acme SD-9"), for the [table] checks below.
+const char* const kRpmMap =
+    "[drive]\nname = \"rpm 50:1\"\n[scaling]\ncounts_per_rev = 1048576\ngear_ratio = 50.0\nvelocity_unit = \"rpm\"\n"
+    "acceleration_unit = \"rpm_per_s\"\n[limits]\nneg_deg = -10.0\npos_deg = 200.0\n[objects]\n"
+    "controlword = { index = 0x6040, address = 0 }\nstatusword = { index = 0x6041, address = 1 }\n"
+    "error_code = { index = 0x603F, address = 2 }\nmodes_of_operation = { index = 0x6060, address = 3, signed = true }\n"
+    "modes_of_operation_display = { index = 0x6061, address = 4, signed = true }\n"
+    "position_actual = { index = 0x6064, address = 5, width = 32, signed = true }\n"
+    "velocity_actual = { index = 0x606C, address = 7, width = 32, signed = true }\n"
+    "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n"
+    "profile_velocity = { index = 0x6081, address = 11, width = 32 }\n"
+    "profile_acceleration = { index = 0x6083, address = 13, width = 32 }\n"
+    "profile_deceleration = { index = 0x6084, address = 15, width = 32 }\n";
+
+std::string write_file(const std::string& path, const std::string& text) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  FILE* f = std::fopen(path.c_str(), "w");
+  std::fputs(text.c_str(), f);
+  std::fclose(f);
+  return path;
+}
+
+// The drive map is looked for beside the hardware file, then in the working folder: a map not
+// found names both places; one found only in the working folder is said (its travel limits then
+// depend on where rig is started).
+TEST(RigTableHardwareFile, TheDriveMapsPlacesAreNamed) {
+  const std::string dir = (std::filesystem::path(testing::TempDir()) / "map-places").lexically_normal().string();
+  const std::string hw = write_file(dir + "/site/hw.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                                           "drive_map = \"rpm.toml\"\n");
+  std::filesystem::create_directories(dir + "/cwd");
+  std::string out;
+  const std::string cmd = "cd " + dir + "/cwd && " + RIG_BIN + " table status --hardware " + hw;
+  EXPECT_EQ(run(cmd, out), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:4:13: drive map 'rpm.toml' not found: looked beside " + hw + " (" + dir +
+                           "/site/rpm.toml), then in the working folder (" + dir + "/cwd/rpm.toml)"))
+      << out;
+  write_file(dir + "/cwd/rpm.toml", kRpmMap);
+  EXPECT_EQ(run(cmd, out), 4) << out;  // found; the drive (absent) is exit 4
+  EXPECT_TRUE(has(out, "rig: warning: " + hw + ":4:13: drive map 'rpm.toml' is not beside " + hw +
+                           "; taken from the working folder (" + dir + "/cwd/rpm.toml)"))
+      << out;
+  write_file(dir + "/site/rpm.toml", kRpmMap);  // beside the file: taken first, nothing to say
+  EXPECT_EQ(run(cmd, out), 4) << out;
+  EXPECT_FALSE(has(out, "warning")) << out;
 }
 
 }  // namespace
