@@ -366,6 +366,65 @@ std::string write_file(const std::string& path, const std::string& text) {
   return path;
 }
 
+// [table] values no drive can honour, refused when the file is read (exit 2 at the key's line,
+// before any device opens; each was accepted, then failed or misled at the drive, a review).
+TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
+  const std::string dir = testing::TempDir() + "/honour";
+  write_file(dir + "/rpm.toml", kRpmMap);
+  const std::string head = "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"rpm.toml\"\n";
+  std::string out;
+  auto status = [&](const std::string& table) {
+    return run(std::string(RIG_BIN) + " table status --hardware " + write_file(dir + "/hw.toml", table), out);
+  };
+  // A speed or acceleration that rounds to 0 in the drive's units: sent as 0, the move timed out
+  // blaming the drive ("drive frozen").
+  EXPECT_EQ(status(head + "velocity_dps = 0.05\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:16: [table] velocity_dps = 0.05 is 0.4167 rpm in the drive's units, which rounds to "
+                       "0: sent as 0, the drive would not move; the least it can be sent is 1 rpm = 0.12 °/s"))
+      << out;
+  EXPECT_EQ(status(head + "accel_dps2 = 0.05\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:14: [table] accel_dps2 = 0.05 is 0.4167 rpm/s in the drive's units, which rounds to 0"))
+      << out;
+  // Rounded by more than 1 %: said once (then the drive, absent here, is exit 4 as before).
+  EXPECT_EQ(status(head + "velocity_dps = 1.0\naccel_dps2 = 24.0\n"), 4) << out;
+  EXPECT_TRUE(has(out, "rig: warning: " + dir + "/hw.toml:5:16: [table] velocity_dps = 1 is 8.333 rpm in the drive's "
+                       "units, sent as 8 rpm = 0.96 °/s (4.0 % less)"))
+      << out;
+  EXPECT_EQ(out.find("warning"), out.rfind("warning")) << "said once: " << out;
+  EXPECT_FALSE(has(out, "accel_dps2")) << "200 rpm/s exactly: " << out;
+  // A tolerance below one position count: no move could ever be confirmed.
+  EXPECT_EQ(status(head + "tolerance_deg = 0\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:17: 'tolerance_deg' = 0: below one position count of the drive (6.87e-06°, drive map"))
+      << out;
+  EXPECT_EQ(status(head + "tolerance_deg = 0.00001\n"), 4) << out;  // above one count: accepted
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\ntolerance_deg = 0.00005\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:3:17:") && has(out, "(0.0001°, rig-v1 register map)")) << out;
+  // [table] u10_deg outside the map's travel (the run takes [procedure]'s, and would fail there).
+  EXPECT_EQ(status(head + "u10_deg = 300.0\nu20_deg = 120.0\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:11: 'u10_deg' = 300.0: outside the table's travel [-10°, 200°]")) << out;
+}
+
+// Link settings no drive answers on, refused with the file (exit 2 at the line), as port 70000
+// and -1 are: port 0 (a server's "any port"; it was exit 4, "cannot connect") and 7 data bits
+// (Modbus ASCII's; RTU is 8).
+TEST(RigTableHardwareFile, LinkSettingsNoDriveAnswersOnAreRefused) {
+  const std::string dir = testing::TempDir() + "/link";
+  std::string out;
+  auto status = [&](const std::string& table) {
+    return run(std::string(RIG_BIN) + " table status --hardware " + write_file(dir + "/hw.toml", table), out);
+  };
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:0\"\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:2:10: 'modbus' = 'tcp:127.0.0.1:0': port 0 is no drive's port (1..65535)")) << out;
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table --modbus 127.0.0.1:0 status", out), 2) << out;
+  EXPECT_TRUE(has(out, "port 0 is no drive's port")) << out;
+  EXPECT_EQ(status("[table]\nrtu = \"/dev/ttyS0,19200,N,7,2\"\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:2:7: Modbus RTU port '/dev/ttyS0,19200,N,7,2': 7 data bits: Modbus RTU needs 8")) << out;
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table --rtu /dev/ttyS0,19200,N,7,2 status", out), 2) << out;
+  // [gpio]'s unknown key is "in [gpio]" (it said "in [[gpio]]").
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[gpio]\npower = \"P\"\nestop = \"E\"\nbogus = 1\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:6:9: unknown key 'bogus' in [gpio] (expected")) << out;
+}
+
 // The drive map is looked for beside the hardware file, then in the working folder: a map not
 // found names both places; one found only in the working folder is said (its travel limits then
 // depend on where rig is started).
