@@ -133,6 +133,35 @@ TEST(DriveMapFile, AValueThatDoesNotFitItsRegisterIsRefused) {
   EXPECT_THROW(map.encode(Obj::kControlword, -1), ConfigError);
 }
 
+// Values a register could hold but the standard or the map's own travel rules out (a review): a
+// signed controlword, statusword or error code (UNSIGNED16), a fractional encoder count, a home
+// offset outside [limits] (the table read 250° after homing with limits [-10, 200]).
+TEST(DriveMapFile, ValuesTheStandardOrTheTravelRulesOutAreNamedAtTheirLine) {
+  const std::string ok = std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n";
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string s = ok;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  std::string e = map_error(with("address = 0 }", "address = 0, signed = true }"));
+  EXPECT_TRUE(has(e, "bad-map.toml:9:") && has(e, "'signed' = true: 'controlword' is unsigned")) << e;
+  e = map_error(with("address = 1 }", "address = 1, signed = true }"));
+  EXPECT_TRUE(has(e, "bad-map.toml:10:") && has(e, "'statusword' is unsigned")) << e;
+  e = map_error(with("address = 2 }", "address = 2, signed = true }"));
+  EXPECT_TRUE(has(e, "bad-map.toml:11:") && has(e, "'error_code' is unsigned")) << e;
+  e = map_error(with("counts_per_rev = 10000", "counts_per_rev = 10000.5"));
+  EXPECT_TRUE(has(e, "bad-map.toml:4:18: 'counts_per_rev' = 10000.5: encoder counts per revolution are a whole number"))
+      << e;
+  EXPECT_EQ(map_error(with("counts_per_rev = 10000", "counts_per_rev = 10000.0")), "(no error)");
+  const std::string offset = ok + "home_offset = { index = 0x607C, address = 30, width = 32, signed = true }\n[homing]\n";
+  e = map_error(offset + "offset_deg = 12.0\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:19:14: 'offset_deg' = 12.0: outside the travel [limits] -10..10")) << e;
+  e = map_error(offset + "offset_deg = -10.5\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:19:14: 'offset_deg' = -10.5: outside the travel")) << e;
+  EXPECT_EQ(map_error(offset + "offset_deg = 10.0\n"), "(no error)");
+  EXPECT_EQ(map_error(offset + "offset_deg = -10.0\n"), "(no error)");
+}
+
 // ---------------------------------------------------------------- the emulated drive
 
 const char* kFastAxis = R"(
