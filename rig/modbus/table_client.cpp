@@ -246,6 +246,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   if (deg < d0.limit_neg_deg || deg > d0.limit_pos_deg)
     throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d0.limit_neg_deg) + ", " +
                       deg_str(d0.limit_pos_deg) + "]");
+  stop_sent_ = false;
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);
@@ -286,9 +287,17 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         if (!d.has(sts::kHomed) && !d.has(sts::kHoming))
           throw HardwareError(doing + ": the drive reports not homed" + (d.has(sts::kServoOn) ? "" : " and servo off") +
                               " mid-move (the drive restarted or was power-cycled?)" + at(d));
+        // Another master's set-point or stop: the call ends at once, with no halt of ours over
+        // its motion (guarded_call); a stop reads back in CONTROL (ours: stop_sent_, as the read
+        // overwrote control_). Another master's stop waited out the move timeout (a review).
         if (std::lround(d.target_deg * kPosScale) != counts)
-          throw HardwareError(doing + ": target register changed to " + deg_str(d.target_deg) +
-                              " (another Modbus master?)" + at(d));
+          throw detail::TakenOverError(doing + ": target register changed to " + deg_str(d.target_deg) +
+                                       " (another Modbus master?)" + at(d));
+        if (d.control & (ctl::kHalt | ctl::kQuickStop)) {
+          if (stop_sent_) throw HardwareError(doing + ": halted by a stop request" + at(d));
+          throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
+                                       " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
+        }
         const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
                         std::fabs(d.actual_deg - deg) <= opt_.tolerance_deg;
         if (!ok) {
@@ -334,6 +343,7 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
   detail::deliver_stop(
       name,
       [&] {
+        stop_sent_ = true;  // before the write: a move polling meanwhile reads it back as ours
         const uint16_t now = control_.load();
         const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
         if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge

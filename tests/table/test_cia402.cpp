@@ -429,6 +429,77 @@ TEST_P(Cia402Client, AHaltAfterAnotherMastersQuickStopKeepsTheQuickStop) {
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
 }
 
+// Another master's set-point or halt mid-move (a second `rig table move`, `rig table stop` from
+// another shell): the move ends at once naming it and sends no halt over the other master's
+// command, as the rig-v1 client on its target register. Both went unnoticed: the move waited out
+// its timeout, then halted whatever the table did then (a review).
+namespace {
+uint16_t controlword_of(Rig& r) {
+  std::vector<uint16_t> cw(static_cast<std::size_t>(r.map.spec(Obj::kControlword).words()));
+  EXPECT_EQ(r.drive.read_registers(r.map.spec(Obj::kControlword).address, static_cast<uint16_t>(cw.size()), cw.data()), 0);
+  return static_cast<uint16_t>(r.map.decode(Obj::kControlword, cw.data()));
+}
+
+// Homes, starts a move to 300 degrees and, 0.3 s of drive time in, runs `other` (another master).
+std::string move_with_another_master(Rig& r, m::Cia402Table& t, const std::function<void()>& other) {
+  t.home({});
+  const double t_other = r.axis->time_s() + 0.3;
+  bool sent = false;
+  r.on_step = [&] {
+    if (!sent && r.axis->time_s() >= t_other) sent = true, other();
+  };
+  const std::string e = error_of([&] { t.move_to(300.0, {}); });
+  r.on_step = nullptr;
+  EXPECT_TRUE(sent);
+  return e;
+}
+}  // namespace
+
+TEST_P(Cia402Client, AnotherMastersSetPointEndsTheMoveWithoutAHaltOfOurs) {
+  Rig r(GetParam());
+  auto t = r.client();
+  const std::string e = move_with_another_master(r, *t, [&] {
+    r.write(Obj::kTargetPosition, r.map.deg_to_counts(20.0));
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  });
+  EXPECT_TRUE(has(e, "move to 300.0000°: target position (0x607A) changed to 20.0000° during the move (another "
+                     "Modbus master?)") &&
+              has(e, "; no halt sent by this client: another master commands the table"))
+      << e;
+  EXPECT_FALSE(controlword_of(r) & c4::cw::kHalt) << std::hex << controlword_of(r);
+  r.run(3.0);  // a set-point's end (the emulated drive finishes the move under way first), not a halt's
+  const double at = r.axis->actual_angle_deg();
+  EXPECT_TRUE(std::fabs(at - 300.0) < 0.01 || std::fabs(at - 20.0) < 0.01) << at;
+}
+
+TEST_P(Cia402Client, AnotherMastersHaltEndsTheMoveAtOnceNamingIt) {
+  Rig r(GetParam());
+  auto t = r.client();
+  const double t0 = r.axis->time_s();
+  const std::string e = move_with_another_master(r, *t, [&] { r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt); });
+  EXPECT_TRUE(has(e, "halted by another master (controlword reads 0x010F) during the move") &&
+              has(e, "; no halt sent by this client"))
+      << e;
+  EXPECT_LT(r.axis->time_s() - t0, 2.0) << "not after the move timeout";
+}
+
+// A move asked for while another master's move runs waits until the table is at rest (as the
+// rig-v1 client does), instead of writing its set-point under the other master's motion.
+TEST_P(Cia402Client, AMoveWaitsForAnotherMastersMoveToEnd) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(200.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0);
+  r.control(c4::cw::kCmdEnableOperation);
+  auto second = r.client();
+  second->move_to(10.0, {});
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 10.0, 0.005);
+}
+
 // `rig table stop` from a fresh process: the stop keeps the drive's device
 // control bits (halt, still Operation enabled), never drops the power stage.
 // (Where the controlword cannot be read and nothing was written, nothing is sent:

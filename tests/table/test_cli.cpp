@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <filesystem>
@@ -447,6 +448,67 @@ TEST(RigTableHardwareFile, TheDriveMapsPlacesAreNamed) {
   write_file(dir + "/site/rpm.toml", kRpmMap);  // beside the file: taken first, nothing to say
   EXPECT_EQ(run(cmd, out), 4) << out;
   EXPECT_FALSE(has(out, "warning")) << out;
+}
+
+// Two masters on one CiA 402 drive, as processes: `rig table stop` from another shell ends a
+// running `rig table move` at once as "halted by another master", and a second `rig table move`
+// waits for the first one's motion to end instead of writing its set-point under it; the first
+// then ends naming the other master and sends no halt over its move (it waited out its move
+// timeout, then halted whatever the table did, a review).
+TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
+  const std::string map = std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml";
+  const std::string prof = write_file(testing::TempDir() + "/masters/plant.toml",
+                                      "base = \"ci\"\n[plant.table]\nvelocity_dps = 90.0\naccel_dps2 = 900.0\n"
+                                      "home_velocity_dps = 200.0\nsettle_s = 0.05\nstart_angle_deg = 10.0\n");
+  int fd = -1;
+  Child serve({RIG_BIN, "plant", "serve", "--modbus", "127.0.0.1:0", "--drive", "cia402", "--drive-map", map,
+               "--profile", prof},
+              &fd);
+  const std::string line = read_line(fd);
+  ASSERT_NE(line.find("drive cia402"), std::string::npos) << line;
+  const std::string ep = line.substr(line.find("tcp:") + 4, line.find(" unit") - line.find("tcp:") - 4);
+  const std::string where = " --modbus " + ep + " --drive cia402 --drive-map " + map;
+  std::string out;
+  auto rig = [&](const std::string& args, std::string& o) { return run(std::string(RIG_BIN) + " table " + args + where, o); };
+  ASSERT_EQ(rig("home", out), 0) << out;
+  // Until the table has turned 2° from where it stood: the other process's move is under way.
+  auto actual = [&] {
+    if (rig("status --json", out) != 0 || !has(out, "\"actual_deg\": ")) return std::nan("");
+    return std::stod(out.substr(out.find("\"actual_deg\": ") + 14));
+  };
+  auto wait_moving = [&] {
+    const double from = actual();
+    for (int i = 0; i < 300; ++i) {
+      if (std::fabs(actual() - from) > 2.0) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return false;
+  };
+  // `rig table stop` from another process.
+  int rc1 = -1;
+  std::string out1;
+  std::thread first([&] { rc1 = rig("move 300", out1); });
+  ASSERT_TRUE(wait_moving()) << out;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(rig("stop", out), 0) << out;
+  first.join();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 3.0) << out1;
+  EXPECT_EQ(rc1, 4) << out1;
+  EXPECT_TRUE(has(out1, "move to 300.0000°: halted by another master (controlword reads 0x010F)") &&
+              has(out1, "; no halt sent by this client")) << out1;
+  // A second `rig table move` while the first runs: it waits, then both moves are the table's.
+  std::thread again([&] { rc1 = rig("move 250", out1); });
+  ASSERT_TRUE(wait_moving()) << out;
+  std::string out2;
+  EXPECT_EQ(rig("move 20", out2), 0) << out2;
+  again.join();
+  EXPECT_TRUE(has(out2, "actual     20.0000°")) << out2;
+  // The first reached 250° before the second's set-point; ended then as arrived, or in its settle
+  // time naming the other master, never a timeout nor a halt over the second's move.
+  if (rc1 != 0) {
+    EXPECT_TRUE(rc1 == 4 && has(out1, "(another Modbus master?)") && has(out1, "; no halt sent by this client")) << out1;
+  }
+  EXPECT_FALSE(has(out1, "timed out")) << out1;
 }
 
 }  // namespace
