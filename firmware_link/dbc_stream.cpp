@@ -1,6 +1,7 @@
 #include "firmware_link/dbc_stream.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 
@@ -101,6 +102,17 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
   if (cs->value_type != 0 || cs->length < 2 || cs->length > 32)
     fail("counter " + spec_.counter + " must be an integer signal of 2..32 bits (has " + std::to_string(cs->length) +
          (cs->value_type ? ", float" : "") + ")");
+  // The counter's raw value is the sample count: a factor or offset would make the DBC's physical
+  // value another number than the one the stream reads (it was accepted and its raw value used).
+  auto unscaled = [&](const std::string& name, const DbcSignal& c) {
+    if (c.factor != 1 || c.offset != 0) {
+      char b[64];
+      std::snprintf(b, sizeof b, "(%g,%g)", c.factor, c.offset);
+      fail("counter " + name + " is scaled in the DBC " + b + ", DBC line " + std::to_string(c.line) +
+           ": a sample counter is a whole number, factor 1 and offset 0");
+    }
+  };
+  unscaled(spec_.counter, *cs);
   counter_bits_ = cs->length;
 
   // The roles' references; the messages they name carry parts of samples.
@@ -148,6 +160,7 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
     if (r.counter->length != counter_bits_ || r.counter->value_type != 0)
       fail("counter " + m->name + "." + counter.sig + " has " + std::to_string(r.counter->length) + " bits, " +
            spec_.counter + " has " + std::to_string(counter_bits_));
+    unscaled(m->name + "." + counter.sig, *r.counter);
     r.samples.resize(static_cast<std::size_t>(n));
     // A counter on one multiplexer page only: a sample on any other page (or on every page) would
     // arrive with no counter in its frame, every frame (a review: such a layout was accepted and

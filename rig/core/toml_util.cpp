@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <set>
 #include <sstream>
 
 #include "rig/core/escape.hpp"
@@ -73,6 +76,13 @@ std::string shown(const toml::node& n) {
   std::string s = os.str();
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
+}
+
+void warn_once(const std::string& text) {
+  static std::mutex mu;
+  static std::set<std::string> said;
+  std::lock_guard lk(mu);
+  if (said.insert(text).second) std::cerr << "rig: warning: " << text << "\n" << std::flush;
 }
 
 void reject(const toml::node& n, std::string_view key, std::string_view why) {

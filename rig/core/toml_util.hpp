@@ -46,6 +46,10 @@ const toml::table* get_table(const toml::table& t, std::string_view key, bool re
 // Rejects keys not in `allowed` (catches typos such as "run_sec").
 void check_keys(const toml::table& t, std::initializer_list<std::string_view> allowed, std::string_view ctx);
 
+// Prints "rig: warning: TEXT" on stderr once per process: a hardware file is read by several
+// checks in one command, and a note about it is said once.
+void warn_once(const std::string& text);
+
 // Deep merge: values in `over` replace those in `base`; tables merge recursively.
 // Copied nodes lose their source positions.
 void merge_into(toml::table& base, const toml::table& over);

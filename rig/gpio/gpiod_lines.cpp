@@ -107,7 +107,7 @@ class GpiodLines final : public LineDriver {
 GpioConfig parse_gpio_config(const toml::table& t) {
   cfg::check_keys(t, {"chip", "power", "estop", "lamp_ready", "lamp_running", "lamp_pass", "lamp_fail",
                       "power_active_low", "estop_active_low", "consumer"},
-                  "[gpio]");
+                  "gpio");
   GpioConfig c;
   c.chip = cfg::get_string(t, "chip", "");
   c.power = cfg::get_string(t, "power");

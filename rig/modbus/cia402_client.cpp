@@ -15,6 +15,7 @@ namespace {
 using detail::deg_str;
 using detail::hex4;
 using detail::secs;
+using detail::TakenOverError;
 using detail::trapezoid_time;
 
 constexpr double kDefaultMoveTimeoutS = 120.0;  // when the profile velocity is unknown
@@ -57,13 +58,16 @@ void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
 }
 
 // Reads the objects of one poll, contiguous registers of one function in one request.
-Cia402Reading Cia402Table::read(const CancelToken& cancel) {
+Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
   const Obj want[] = {Obj::kStatusword, Obj::kErrorCode, Obj::kModesDisplay, Obj::kPositionActual,
                       Obj::kVelocityActual};
   std::vector<Obj> objs(std::begin(want), std::end(want));
+  if (commands) objs.insert(objs.end(), {Obj::kControlword, Obj::kTargetPosition});
+  // The statusword's register kind first: a silent drive is named by the statusword's read.
+  const bool first_kind = map_.spec(Obj::kStatusword).input;
   std::sort(objs.begin(), objs.end(), [&](Obj a, Obj b) {
     const auto &sa = map_.spec(a), &sb = map_.spec(b);
-    return sa.input != sb.input ? sa.input < sb.input : sa.address < sb.address;
+    return sa.input != sb.input ? sa.input == first_kind : sa.address < sb.address;
   });
   std::array<int64_t, kObjCount> val{};
   for (size_t i = 0; i < objs.size();) {
@@ -95,6 +99,10 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel) {
   r.mode_display = static_cast<int8_t>(val[static_cast<int>(Obj::kModesDisplay)]);
   r.actual_deg = map_.counts_to_deg(val[static_cast<int>(Obj::kPositionActual)]);
   r.velocity_dps = map_.velocity_units_to_dps(static_cast<double>(val[static_cast<int>(Obj::kVelocityActual)]));
+  if (commands) {
+    r.controlword = static_cast<uint16_t>(val[static_cast<int>(Obj::kControlword)]);
+    r.target_counts = val[static_cast<int>(Obj::kTargetPosition)];
+  }
   return r;
 }
 
@@ -211,6 +219,20 @@ void Cia402Table::enable_operation(const std::string& doing, const CancelToken& 
   throw HardwareError(doing + ": drive \"" + map_.name + "\" did not settle in Operation enabled" + at(r));
 }
 
+// A table still moving (another master's move, a halt's ramp) comes to rest before this client
+// writes a mode or set-point, as the rig-v1 client waits: a second `rig table move` took the
+// first one's axis mid-move. Bounded, so a runaway is reported.
+void Cia402Table::wait_at_rest(const std::string& doing, const CancelToken& cancel) {
+  const double t0 = clock_.now_s();
+  for (Cia402Reading r = read(cancel); std::fabs(r.velocity_dps) > 0.01; r = read(cancel)) {
+    fail_on_fault(doing, r);
+    if (clock_.now_s() - t0 > kRestTimeoutS)
+      throw HardwareError(doing + ": the table is still moving after " + secs(kRestTimeoutS) +
+                          " (another Modbus master?)" + at(r));
+    clock_.sleep_for(opt_.poll_s, cancel);
+  }
+}
+
 void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken& cancel) {
   write_object(Obj::kModesOfOperation, mode, cancel);
   const double t0 = clock_.now_s();
@@ -236,6 +258,7 @@ void Cia402Table::home(const CancelToken& cancel) {
   const std::string doing = "home";
   guarded(doing, [&] {
     enable_operation(doing, cancel);
+    wait_at_rest(doing, cancel);
     set_mode(doing, c4::kModeHoming, cancel);
     if (map_.homing_method != 0) write_object(Obj::kHomingMethod, map_.homing_method, cancel);
     if (map_.has(Obj::kHomeOffset)) write_object(Obj::kHomeOffset, map_.deg_to_counts(map_.home_offset_deg), cancel);
@@ -266,23 +289,43 @@ void Cia402Table::home(const CancelToken& cancel) {
   });
 }
 
-// What ends a profile-position move other than the drive's fault: the mode changed under us, the
-// drive left Operation enabled (quick stop, an external disable), or stop() from another thread
-// (the executive's abort path) set halt.
-void Cia402Table::fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when) const {
+// What ends a profile-position move other than the drive's fault: stop() from another thread (the
+// executive's abort path) set halt, another master's set-point, halt or mode (TakenOverError: no
+// halt of ours over its motion, as the rig-v1 client on its target register), the drive left
+// Operation enabled (quick stop, an external disable) or restarted. Another master's set-point or
+// halt went unnoticed: the move waited out its timeout, then halted whatever the table then did (a
+// review). `target_counts`: the set-point this client wrote.
+void Cia402Table::fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
+                                     int64_t target_counts) const {
+  if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
+  const State st = r.state();
+  // A drive that powers up again mid-move comes back in Switch on disabled (or not ready) with its
+  // power-on mode and target: say so, rather than blame another master.
+  const bool restarted = st == State::kSwitchOnDisabled || st == State::kNotReadyToSwitchOn;
+  if (!restarted && r.target_counts && *r.target_counts != target_counts)
+    throw TakenOverError(doing + ": target position (0x607A) changed to " +
+                         deg_str(map_.counts_to_deg(*r.target_counts)) + " " + when + " (another Modbus master?)" +
+                         at(r));
+  // The controlword as read back (a gateway may read it as 0, which shows no halt): its halt bit
+  // is another master's, as this client's own is in control_.
+  if (!restarted && r.controlword && (*r.controlword & c4::cw::kHalt))
+    throw TakenOverError(doing + ": halted by another master (controlword reads " + hex4(*r.controlword) + ") " +
+                         when + at(r));
   if (r.mode_display != c4::kModeProfilePosition) {
-    // A drive that powers up again mid-move comes back in Switch on disabled (or not ready) with
-    // its power-on mode: say so, rather than blame the mode's change on another master.
-    const bool restarted = r.state() == State::kSwitchOnDisabled || r.state() == State::kNotReadyToSwitchOn;
-    throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " " + when +
-                        (restarted ? " and the drive is in " + c4::state_name(r.state()) +
-                                         " (the drive restarted or was power-cycled?)"
-                                   : " (another Modbus master?)") +
+    if (restarted)
+      throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " " + when +
+                          " and the drive is in " + c4::state_name(st) + " (the drive restarted or was power-cycled?)" +
+                          at(r));
+    throw TakenOverError(doing + ": mode changed to " + std::to_string(r.mode_display) + " " + when +
+                         " (another Modbus master?)" + at(r));
+  }
+  if (st != State::kOperationEnabled) {
+    // Another master's command, where the read-back shows one that is not ours (0: a gateway's).
+    const bool other = r.controlword && *r.controlword != 0 && *r.controlword != control_.load();
+    throw HardwareError(doing + ": drive left Operation enabled " + when +
+                        (other ? " (controlword reads " + hex4(*r.controlword) + ": another Modbus master?)" : "") +
                         at(r));
   }
-  if (r.state() != State::kOperationEnabled)
-    throw HardwareError(doing + ": drive left Operation enabled " + when + at(r));
-  if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
 }
 
 void Cia402Table::move_to(double deg, const CancelToken& cancel) {
@@ -300,6 +343,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   }
   guarded(doing, [&] {
     enable_operation(doing, cancel);
+    wait_at_rest(doing, cancel);
     if (map_.homed_bit && !read(cancel).has(static_cast<uint16_t>(1u << *map_.homed_bit)))
       throw HardwareError(doing + ": table not homed (run `rig table home` first)");
     set_mode(doing, c4::kModeProfilePosition, cancel);
@@ -328,20 +372,27 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       r = read(cancel);
     }
     const double start_deg = r.actual_deg;
-    write_object(Obj::kTargetPosition, map_.deg_to_counts(deg), cancel);
+    const int64_t target_counts = map_.deg_to_counts(deg);
+    write_object(Obj::kTargetPosition, target_counts, cancel);
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint, cancel);
     double t0 = clock_.now_s();
     for (;;) {
-      r = read(cancel);
+      r = read(cancel, true);
       fail_on_fault(doing, r);
       // Before the timeout's "not acknowledged": a drive that left Operation enabled or a stop
       // request never acknowledges, and the reason is that, not the drive.
-      fail_unless_moving(doing, r, "waiting for the set-point acknowledge");
+      fail_unless_moving(doing, r, "waiting for the set-point acknowledge", target_counts);
       if (r.has(c4::sw::kSetPointAck)) break;
-      if (clock_.now_s() - t0 > opt_.ack_timeout_s)
-        throw HardwareError(doing + ": set-point not acknowledged (statusword bit 12) within " +
-                            secs(opt_.ack_timeout_s) + (r.has(c4::sw::kInternalLimit) ? " (internal limit active)" : "") +
-                            at(r));
+      if (clock_.now_s() - t0 > opt_.ack_timeout_s) {
+        const std::string what = doing + ": set-point not acknowledged (statusword bit 12) within " +
+                                 secs(opt_.ack_timeout_s);
+        // The table was at rest before the set-point and ours was not taken: a motion now is
+        // another master's, started as ours was written (a drive finishes a move before it
+        // acknowledges the next set-point), and not ours to halt.
+        if (std::fabs(r.velocity_dps) > 0.01)
+          throw TakenOverError(what + " while the table moves (another Modbus master's move?)" + at(r));
+        throw HardwareError(what + (r.has(c4::sw::kInternalLimit) ? " (internal limit active)" : "") + at(r));
+      }
       clock_.sleep_for(opt_.poll_s, cancel);
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge
@@ -360,10 +411,10 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     Cia402Reading last = r;
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
-      r = read(cancel);
+      r = read(cancel, true);
       fail_on_fault(doing, r);
       const double now = clock_.now_s();
-      fail_unless_moving(doing, r, "during the move");
+      fail_unless_moving(doing, r, "during the move", target_counts);
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (!ok) {
@@ -421,8 +472,10 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
   detail::deliver_stop(
       name,
       [&] {
-        write_object(Obj::kControlword, word, CancelToken{}, true);
+        // Before the write: a move polling meanwhile reads the halt back as this client's own,
+        // not another master's.
         control_ = word;
+        write_object(Obj::kControlword, word, CancelToken{}, true);
         control_written_ = true;
       },
       stop_mu_, last_stop_error_);

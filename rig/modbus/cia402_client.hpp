@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,9 @@ struct Cia402Reading {
   uint16_t statusword = 0, error_code = 0;
   int mode_display = 0;
   double actual_deg = 0, velocity_dps = 0;
+  // Read while a move waits (read(cancel, true)): what another master may have written.
+  std::optional<uint16_t> controlword;
+  std::optional<int64_t> target_counts;
   cia402::State state() const { return cia402::decode_state(statusword); }
   bool has(uint16_t bit) const { return (statusword & bit) != 0; }
 };
@@ -44,7 +48,8 @@ class Cia402Table final : public RotaryTable {
   // Technician's fault reset (`rig table reset`): returns the 0x603F code it
   // cleared (0: no fault); HardwareError naming the code when the drive stays in Fault.
   uint16_t reset_fault(const CancelToken& cancel);
-  Cia402Reading read(const CancelToken& cancel = {});
+  // `commands`: also the controlword and target position, as the drive holds them.
+  Cia402Reading read(const CancelToken& cancel = {}, bool commands = false);
   std::string last_stop_error() const {
     std::lock_guard lk(stop_mu_);
     return last_stop_error_;
@@ -57,11 +62,13 @@ class Cia402Table final : public RotaryTable {
   void write_controlword(uint16_t w, const CancelToken& cancel);
   void enable_operation(const std::string& doing, const CancelToken& cancel);
   void set_mode(const std::string& doing, int mode, const CancelToken& cancel);
+  void wait_at_rest(const std::string& doing, const CancelToken& cancel);
   Cia402Reading await_state(const std::string& doing, const char* command, cia402::State want,
                             const CancelToken& cancel);
   void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
   std::string at(const Cia402Reading& r) const;
-  void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when) const;
+  void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
+                          int64_t target_counts) const;
   void send_stop(uint16_t word, const char* name) noexcept;
   template <class Body>
   void guarded(const std::string& doing, Body body);

@@ -141,6 +141,9 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   const toml::table& sc = *cfg::get_table(root, "scaling", true);
   cfg::check_keys(sc, {"counts_per_rev", "gear_ratio", "direction", "velocity_unit", "acceleration_unit"}, "scaling");
   m.counts_per_rev = cfg::get_number(sc, "counts_per_rev", {}, 1.0, 1e12);
+  // An encoder counts whole counts: 1048576.5 is a typo, and would shift every angle.
+  if (m.counts_per_rev != std::floor(m.counts_per_rev))
+    cfg::reject(*sc.get("counts_per_rev"), "counts_per_rev", "encoder counts per revolution are a whole number");
   m.gear_ratio = cfg::get_number(sc, "gear_ratio", 1.0, 1e-6, 1e6);
   m.direction = static_cast<int>(cfg::get_int(sc, "direction", 1, -1, 1));
   if (m.direction == 0) fail(*sc.get("direction"), "'direction' must be 1 or -1");
@@ -217,6 +220,10 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
     s.width = static_cast<int>(cfg::get_int(*t, "width", 16, 16, 32));
     if (s.width != 16 && s.width != 32) fail(*t->get("width"), "'width' must be 16 or 32");
     s.is_signed = cfg::get_bool(*t, "signed", false);
+    // UNSIGNED16 in the standard (section 1.4 of docs/cia402-drive-maps.md): a signed statusword
+    // or controlword would misread bit 15 and refuse words above 0x7FFF.
+    if (s.is_signed && (ob == Obj::kControlword || ob == Obj::kStatusword || ob == Obj::kErrorCode))
+      cfg::reject(*t->get("signed"), "signed", "'" + std::string(info.key) + "' is unsigned (UNSIGNED16 in CiA 402)");
     s.low_word_first = parse_word_order(*t, "word_order", low_first);
     if (addr + s.words() > 65536) fail(*t->get("address"), "address " + std::to_string(addr) + " + width beyond 65535");
     s.address = static_cast<uint16_t>(addr);
@@ -244,6 +251,12 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
                         std::to_string(m.deg_to_counts(deg)) + " counts, which does not fit " + m.describe(ob) + ", " +
                         m.range_text(ob) + " (counts_per_rev x gear_ratio too large for the register, or 'signed' "
                         "left out)");
+  // After homing the table reads the offset: outside the travel, every move from home would be
+  // refused and the table would stand where the map says it cannot be (a review: 250° with [-10, 200]).
+  if (m.home_offset_deg < m.limit_neg_deg || m.home_offset_deg > m.limit_pos_deg)
+    cfg::reject(*cfg::get_table(root, "homing")->get("offset_deg"), "offset_deg",
+                "outside the travel [limits] " + shown(m.limit_neg_deg) + ".." + shown(m.limit_pos_deg) +
+                    ": the table would read it after homing");
   if (m.homing_method != 0 && !m.fits(Obj::kHomingMethod, m.homing_method))  // e.g. -1 without signed = true
     fail(*cfg::get_table(root, "homing")->get("method"), "[homing] method = " + std::to_string(m.homing_method) +
                                                              " does not fit " + m.describe(Obj::kHomingMethod) + ", " +

@@ -73,8 +73,15 @@ void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& la
   }
 }
 
-// Runs `body`; on an abort or a fault it stops the axis first (`stop`, which never throws) and
-// rethrows. A fault's message says what was being done, `where()` (read at the fault: e.g. the
+// Another master took the axis mid-call (its set-point, its halt, its mode): the call ends at once
+// and sends no halt of its own, which would stop the other master's motion (a review: the halt
+// ended the other master's move, which then timed out "off target").
+struct TakenOverError : HardwareError {
+  using HardwareError::HardwareError;
+};
+
+// Runs `body`; on an abort or a fault (but TakenOverError) it stops the axis first (`stop`, which
+// never throws) and rethrows. A fault's message says what was being done, `where()` (read at the fault: e.g. the
 // last angle seen) and
 // whether the halt reached the drive (`stop_error()` empty: delivered) — a technician must know
 // if the table may still be turning. An exception reply means the drive refused a request; no
@@ -90,6 +97,8 @@ void guarded_call(const std::string& doing, Body body, Where where, Stop stop, S
   } catch (const AbortedError&) {
     stop();
     throw;
+  } catch (const TakenOverError& e) {
+    throw HardwareError(e.what() + std::string("; no halt sent by this client: another master commands the table"));
   } catch (const ModbusError& e) {
     stop();
     throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") + where() + ": " +

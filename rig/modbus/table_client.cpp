@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include <filesystem>
+#include <tuple>
 
 #include "rig/core/toml_util.hpp"
 #include "rig/modbus/cia402_client.hpp"
@@ -245,6 +246,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   if (deg < d0.limit_neg_deg || deg > d0.limit_pos_deg)
     throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d0.limit_neg_deg) + ", " +
                       deg_str(d0.limit_pos_deg) + "]");
+  stop_sent_ = false;
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);
@@ -285,9 +287,17 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         if (!d.has(sts::kHomed) && !d.has(sts::kHoming))
           throw HardwareError(doing + ": the drive reports not homed" + (d.has(sts::kServoOn) ? "" : " and servo off") +
                               " mid-move (the drive restarted or was power-cycled?)" + at(d));
+        // Another master's set-point or stop: the call ends at once, with no halt of ours over
+        // its motion (guarded_call); a stop reads back in CONTROL (ours: stop_sent_, as the read
+        // overwrote control_). Another master's stop waited out the move timeout (a review).
         if (std::lround(d.target_deg * kPosScale) != counts)
-          throw HardwareError(doing + ": target register changed to " + deg_str(d.target_deg) +
-                              " (another Modbus master?)" + at(d));
+          throw detail::TakenOverError(doing + ": target register changed to " + deg_str(d.target_deg) +
+                                       " (another Modbus master?)" + at(d));
+        if (d.control & (ctl::kHalt | ctl::kQuickStop)) {
+          if (stop_sent_) throw HardwareError(doing + ": halted by a stop request" + at(d));
+          throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
+                                       " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
+        }
         const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
                         std::fabs(d.actual_deg - deg) <= opt_.tolerance_deg;
         if (!ok) {
@@ -333,6 +343,7 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
   detail::deliver_stop(
       name,
       [&] {
+        stop_sent_ = true;  // before the write: a move polling meanwhile reads it back as ours
         const uint16_t now = control_.load();
         const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
         if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge
@@ -392,16 +403,30 @@ std::string table_drive(const toml::table& t) {
   return drive;
 }
 
+// A relative path is looked for beside the file that names it (a hardware file travels with its
+// maps), then in the working folder (as before that rule; kept so old set-ups still run, but said:
+// the travel limits then depend on where rig was started).
 DriveMap table_drive_map(const toml::table& t) {
   const toml::node* n = t.get("drive_map");
-  std::filesystem::path p = cfg::get_string(t, "drive_map");
-  // Relative to the file that names it (a hardware file travels with its maps).
+  const std::string given = cfg::get_string(t, "drive_map");
+  const std::filesystem::path p = given;
+  std::error_code ec;  // (a working folder removed under us: absolute() gives an empty path)
+  const std::filesystem::path cwd = std::filesystem::absolute(p, ec);
   if (p.is_relative() && n->source().path) {
-    const std::filesystem::path beside = std::filesystem::path(*n->source().path).parent_path() / p;
-    if (path_kind(beside.string(), "drive map") != PathKind::missing) p = beside;
+    const std::filesystem::path file(*n->source().path);
+    const std::string beside_text = (file.parent_path() / p).string();
+    if (path_kind(beside_text, "drive map") != PathKind::missing) return load_drive_map(beside_text);
+    if (path_kind(p.string(), cfg::where(*n) + ": drive map") == PathKind::missing)
+      throw ConfigError(cfg::where(*n) + ": drive map '" + given + "' not found: looked beside " + file.string() +
+                        " (" + beside_text + "), then in the working folder (" + cwd.string() + ")");
+    cfg::warn_once(cfg::where(*n) + ": drive map '" + given + "' is not beside " + file.string() +
+                   "; taken from the working folder (" + cwd.string() +
+                   "): its travel limits depend on where rig is started (put the map beside the hardware file)");
+    return load_drive_map(p.string());
   }
   if (path_kind(p.string(), cfg::where(*n) + ": drive map") == PathKind::missing)
-    throw ConfigError(cfg::where(*n) + ": drive map '" + p.string() + "' not found");
+    throw ConfigError(cfg::where(*n) + ": drive map '" + given + "' not found" +
+                      (p.is_relative() ? " in the working folder (" + cwd.string() + ")" : std::string()));
   return load_drive_map(p.string());
 }
 
@@ -416,8 +441,12 @@ struct TableConfig {
 
 // [table] velocity_dps / accel_dps2 in the drive map's units must fit the profile registers the
 // rig writes them to: checked with the file, before the drive is opened (they were cut to their
-// low 16 bits: 20 deg/s became a creep, 30 deg/s a 0 the drive refused, a review).
-void check_profile_fits(const toml::table& t, const DriveMap& map, const TableOptions& o) {
+// low 16 bits: 20 deg/s became a creep, 30 deg/s a 0 the drive refused, a review). They are sent
+// as whole units: one that rounds to 0 is refused (the drive was told to stand still and the move
+// timed out blaming the drive, a review), one rounded by more than kRoundingNote is said once.
+constexpr double kRoundingNote = 0.01;
+
+void check_profile_values(const toml::table& t, const DriveMap& map, const TableOptions& o) {
   auto check = [&](const char* key, const std::optional<double>& v, Obj ob, double units) {
     if (!v || !map.has(ob) || map.fits(ob, std::llround(units))) return;
     char b[96];
@@ -425,10 +454,61 @@ void check_profile_fits(const toml::table& t, const DriveMap& map, const TableOp
     throw ConfigError(cfg::where(*t.get(key)) + ": " + b + map.describe(ob) + ", " + map.range_text(ob) +
                       " (drive map " + map.path + ")");
   };
-  if (o.velocity_dps) check("velocity_dps", o.velocity_dps, Obj::kProfileVelocity, map.dps_to_velocity_units(*o.velocity_dps));
-  if (o.accel_dps2)
+  // `back`: drive units to the key's unit (deg/s, deg/s^2).
+  auto rounding = [&](const char* key, double v, double units, const char* unit, const char* key_unit, auto back) {
+    const double sent = static_cast<double>(std::llround(units));
+    const std::string at = cfg::where(*t.get(key));
+    char b[320];
+    if (sent == 0) {
+      std::snprintf(b, sizeof b,
+                    "[table] %s = %g is %.4g %s in the drive's units, which rounds to 0: sent as 0, the drive "
+                    "would not move; the least it can be sent is 1 %s = %.4g %s (drive map %s)",
+                    key, v, units, unit, unit, back(1.0), key_unit, map.path.c_str());
+      throw ConfigError(at + ": " + b);
+    }
+    const double off = (sent - units) / units;
+    if (std::fabs(off) <= kRoundingNote) return;
+    std::snprintf(b, sizeof b, "[table] %s = %g is %.4g %s in the drive's units, sent as %.0f %s = %.4g %s (%.1f %% %s)",
+                  key, v, units, unit, sent, unit, back(sent), key_unit, std::fabs(off) * 100,
+                  off < 0 ? "less" : "more");
+    cfg::warn_once(at + ": " + b);
+  };
+  const bool rpm = map.velocity_unit == VelocityUnit::kRpm, rpm_s = map.accel_unit == AccelUnit::kRpmPerS;
+  if (o.velocity_dps) {
+    const double units = map.dps_to_velocity_units(*o.velocity_dps);
+    check("velocity_dps", o.velocity_dps, Obj::kProfileVelocity, units);
+    if (map.has(Obj::kProfileVelocity))
+      rounding("velocity_dps", *o.velocity_dps, units, rpm ? "rpm" : "counts/s", "°/s",
+               [&](double u) { return std::fabs(map.velocity_units_to_dps(u)); });
+  }
+  if (o.accel_dps2) {
+    const double units = map.dps2_to_accel_units(*o.accel_dps2);
     for (const Obj ob : {Obj::kProfileAcceleration, Obj::kProfileDeceleration})
-      check("accel_dps2", o.accel_dps2, ob, map.dps2_to_accel_units(*o.accel_dps2));
+      check("accel_dps2", o.accel_dps2, ob, units);
+    if (map.has(Obj::kProfileAcceleration) || map.has(Obj::kProfileDeceleration))
+      rounding("accel_dps2", *o.accel_dps2, units, rpm_s ? "rpm/s" : "counts/s²", "°/s²",
+               [&](double u) { return map.accel_units_to_dps2(u); });
+  }
+}
+
+std::string cfg_number(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+// A tolerance below one position count can never be met by a drive at rest on a count (`0` was
+// accepted, and no move ever completed: "stopped 0.0000° off target", a review).
+void check_tolerance(const toml::table& t, const DriveMap* map, double tolerance_deg) {
+  const double count_deg = map ? 1.0 / map->counts_per_deg() : 1.0 / kPosScale;
+  if (tolerance_deg >= count_deg * (1 - 1e-9)) return;
+  const double step = std::pow(10.0, std::floor(std::log10(count_deg)) - 2);  // 3 significant digits, up
+  char b[400];
+  std::snprintf(b, sizeof b, "below one position count of the drive (%.3g°, %s): no move could ever be confirmed in "
+                "position; give at least %.3g", count_deg, map ? ("drive map " + map->path).c_str() : "rig-v1 register map",
+                std::ceil(count_deg / step - 1e-6) * step);
+  if (const toml::node* n = t.get("tolerance_deg")) cfg::reject(*n, "tolerance_deg", b);
+  throw ConfigError(cfg::where(t) + ": [table] tolerance_deg (default " + cfg_number(tolerance_deg) + "°) is " + b);
 }
 
 // Everything [table] says, checked, without touching the drive.
@@ -448,12 +528,23 @@ TableConfig read_table_config(const toml::table& t) {
   } catch (const ConfigError& e) {
     throw ConfigError(cfg::where(*t.get(tcp ? "modbus" : "rtu")) + ": " + e.what());
   }
+  // A client needs the drive's port: 0 ("any", a server's) failed later as "cannot connect" (a review).
+  if (c.ep.kind == Endpoint::Kind::kTcp && c.ep.port == 0)
+    cfg::reject(*t.get("modbus"), "modbus", "port 0 is no drive's port (1..65535)");
   c.opt = table_options_from_toml(t);
   c.link = link_options_from_toml(t);
-  if (c.map) check_profile_fits(t, *c.map, c.opt);
-  // The procedure's angles, accepted here as in [procedure] and held to the same ranges.
-  cfg::get_number(t, "u10_deg", 0.0, -360.0, 360.0);
-  cfg::get_number(t, "u20_deg", 180.0, -360.0, 540.0);
+  if (c.map) check_profile_values(t, *c.map, c.opt);
+  check_tolerance(t, c.map ? &*c.map : nullptr, c.opt.tolerance_deg);
+  // The procedure's angles, accepted here as in [procedure] (older files) and held to the same
+  // rules, a CiA 402 map's travel included; the run's angles are [procedure]'s.
+  for (const auto& [key, lo, hi] : {std::tuple{"u10_deg", -360.0, 360.0}, {"u20_deg", -360.0, 540.0}}) {
+    const double deg = cfg::get_number(t, key, 0.0, lo, hi);
+    if (c.map && t.contains(key) && (deg < c.map->limit_neg_deg || deg > c.map->limit_pos_deg))
+      cfg::reject(*t.get(key), key,
+                  "outside the table's travel [" + cfg_number(c.map->limit_neg_deg) + "°, " +
+                      cfg_number(c.map->limit_pos_deg) + "°] (drive map " + c.map->path +
+                      " [limits]); the run takes its angles from [procedure] u10_deg / u20_deg");
+  }
   return c;
 }
 

@@ -91,6 +91,7 @@ class TableClient final : public RotaryTable {
   // Last control word read or written; stop() may run on another thread
   // (the executive's abort path) while a move polls.
   std::atomic<uint16_t> control_{0};
+  std::atomic<bool> stop_sent_{false};  // this client sent a stop since the move began
   bool profile_applied_ = false;
   double last_actual_deg_ = 0;     // for messages when the link is lost
   bool have_actual_ = false;

@@ -127,8 +127,12 @@ Endpoint parse_rtu(const std::string& dev_spec) {
     ep.parity = static_cast<char>(std::toupper(static_cast<unsigned char>(parts[2][0])));
     ep.data_bits = parse_int(parts[3], "data bits", dev_spec);
     ep.stop_bits = parse_int(parts[4], "stop bits", dev_spec);
-    if (ep.data_bits < 5 || ep.data_bits > 8 || ep.stop_bits < 1 || ep.stop_bits > 2)
-      throw ConfigError("Modbus RTU port '" + dev_spec + "': data bits 5..8, stop bits 1..2");
+    // Modbus RTU frames are 8-bit bytes (Modbus over serial line, 2.5.1): 7 data bits is ASCII mode's.
+    if (ep.data_bits != 8)
+      throw ConfigError("Modbus RTU port '" + dev_spec + "': " + std::to_string(ep.data_bits) +
+                        " data bits: Modbus RTU needs 8");
+    if (ep.stop_bits < 1 || ep.stop_bits > 2)
+      throw ConfigError("Modbus RTU port '" + dev_spec + "': stop bits 1..2");
   }
   if (ep.baud <= 0) throw ConfigError("Modbus RTU port '" + dev_spec + "': baud rate must be positive");
   return ep;

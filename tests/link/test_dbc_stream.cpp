@@ -310,6 +310,24 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
                                      "unit its factor yields (g, mg, ug or m/s^2)");
   u.key_where["x"] = "hw.toml:11:5: [dut.stream]";  // named at x's line where the file gave it
   EXPECT_EQ(spec_error(unitless, u).rfind("hw.toml:11:5: [dut.stream]: x A.x has no unit", 0), 0u) << spec_error(unitless, u);
+  // A scaled counter: its physical value is not the count the stream reads (its raw value was
+  // used silently, a review); refused naming its DBC line, in the message `counter` names and in
+  // another message carrying part of a sample.
+  const auto scaled = std::make_shared<const Dbc>(Dbc::parse(
+      "VERSION \"\"\nBU_: DUT\nBO_ 288 A: 8 DUT\n SG_ cnt : 0|16@1+ (0.5,0) [0|32767] \"\" DUT\n"
+      " SG_ x : 16|32@1- (1e-06,0) [0|0] \"g\" DUT\nBO_ 289 B: 8 DUT\n SG_ cnt : 0|16@1+ (1,1) [0|65535] \"\" DUT\n"
+      " SG_ y : 16|32@1- (1e-06,0) [0|0] \"g\" DUT\nBO_ 290 C: 8 DUT\n SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" DUT\n"
+      " SG_ x : 16|32@1- (1e-06,0) [0|0] \"g\" DUT\n",
+      "scaled.dbc"));
+  DbcStreamSpec sc;
+  sc.counter = "A.cnt", sc.x = "A.x";
+  EXPECT_EQ(spec_error(scaled, sc), "hw.toml:9:1: [dut.stream]: counter A.cnt is scaled in the DBC (0.5,0), DBC line 4: "
+                                    "a sample counter is a whole number, factor 1 and offset 0");
+  sc.counter = "C.cnt", sc.x = "C.x", sc.y = "B.y";
+  EXPECT_EQ(spec_error(scaled, sc), "hw.toml:9:1: [dut.stream]: counter B.cnt is scaled in the DBC (1,1), DBC line 7: "
+                                    "a sample counter is a whole number, factor 1 and offset 0");
+  sc.y = "";
+  EXPECT_EQ(spec_error(scaled, sc), "no error");
   // A counter on page 1 only and x on page 0: no frame with x would carry a counter.
   const auto paged = std::make_shared<const Dbc>(Dbc::parse(
       "VERSION \"\"\nBU_: DUT\nBO_ 289 P: 8 DUT\n SG_ page M : 0|8@1+ (1,0) [0|1] \"\" DUT\n"

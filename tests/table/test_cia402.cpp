@@ -133,6 +133,35 @@ TEST(DriveMapFile, AValueThatDoesNotFitItsRegisterIsRefused) {
   EXPECT_THROW(map.encode(Obj::kControlword, -1), ConfigError);
 }
 
+// Values a register could hold but the standard or the map's own travel rules out (a review): a
+// signed controlword, statusword or error code (UNSIGNED16), a fractional encoder count, a home
+// offset outside [limits] (the table read 250° after homing with limits [-10, 200]).
+TEST(DriveMapFile, ValuesTheStandardOrTheTravelRulesOutAreNamedAtTheirLine) {
+  const std::string ok = std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n";
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string s = ok;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  std::string e = map_error(with("address = 0 }", "address = 0, signed = true }"));
+  EXPECT_TRUE(has(e, "bad-map.toml:9:") && has(e, "'signed' = true: 'controlword' is unsigned")) << e;
+  e = map_error(with("address = 1 }", "address = 1, signed = true }"));
+  EXPECT_TRUE(has(e, "bad-map.toml:10:") && has(e, "'statusword' is unsigned")) << e;
+  e = map_error(with("address = 2 }", "address = 2, signed = true }"));
+  EXPECT_TRUE(has(e, "bad-map.toml:11:") && has(e, "'error_code' is unsigned")) << e;
+  e = map_error(with("counts_per_rev = 10000", "counts_per_rev = 10000.5"));
+  EXPECT_TRUE(has(e, "bad-map.toml:4:18: 'counts_per_rev' = 10000.5: encoder counts per revolution are a whole number"))
+      << e;
+  EXPECT_EQ(map_error(with("counts_per_rev = 10000", "counts_per_rev = 10000.0")), "(no error)");
+  const std::string offset = ok + "home_offset = { index = 0x607C, address = 30, width = 32, signed = true }\n[homing]\n";
+  e = map_error(offset + "offset_deg = 12.0\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:19:14: 'offset_deg' = 12.0: outside the travel [limits] -10..10")) << e;
+  e = map_error(offset + "offset_deg = -10.5\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:19:14: 'offset_deg' = -10.5: outside the travel")) << e;
+  EXPECT_EQ(map_error(offset + "offset_deg = 10.0\n"), "(no error)");
+  EXPECT_EQ(map_error(offset + "offset_deg = -10.0\n"), "(no error)");
+}
+
 // ---------------------------------------------------------------- the emulated drive
 
 const char* kFastAxis = R"(
@@ -398,6 +427,77 @@ TEST_P(Cia402Client, AHaltAfterAnotherMastersQuickStopKeepsTheQuickStop) {
   EXPECT_EQ(r.drive.state(), State::kQuickStopActive);  // not Operation enabled again
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);  // at rest on the quick-stop ramp
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+}
+
+// Another master's set-point or halt mid-move (a second `rig table move`, `rig table stop` from
+// another shell): the move ends at once naming it and sends no halt over the other master's
+// command, as the rig-v1 client on its target register. Both went unnoticed: the move waited out
+// its timeout, then halted whatever the table did then (a review).
+namespace {
+uint16_t controlword_of(Rig& r) {
+  std::vector<uint16_t> cw(static_cast<std::size_t>(r.map.spec(Obj::kControlword).words()));
+  EXPECT_EQ(r.drive.read_registers(r.map.spec(Obj::kControlword).address, static_cast<uint16_t>(cw.size()), cw.data()), 0);
+  return static_cast<uint16_t>(r.map.decode(Obj::kControlword, cw.data()));
+}
+
+// Homes, starts a move to 300 degrees and, 0.3 s of drive time in, runs `other` (another master).
+std::string move_with_another_master(Rig& r, m::Cia402Table& t, const std::function<void()>& other) {
+  t.home({});
+  const double t_other = r.axis->time_s() + 0.3;
+  bool sent = false;
+  r.on_step = [&] {
+    if (!sent && r.axis->time_s() >= t_other) sent = true, other();
+  };
+  const std::string e = error_of([&] { t.move_to(300.0, {}); });
+  r.on_step = nullptr;
+  EXPECT_TRUE(sent);
+  return e;
+}
+}  // namespace
+
+TEST_P(Cia402Client, AnotherMastersSetPointEndsTheMoveWithoutAHaltOfOurs) {
+  Rig r(GetParam());
+  auto t = r.client();
+  const std::string e = move_with_another_master(r, *t, [&] {
+    r.write(Obj::kTargetPosition, r.map.deg_to_counts(20.0));
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  });
+  EXPECT_TRUE(has(e, "move to 300.0000°: target position (0x607A) changed to 20.0000° during the move (another "
+                     "Modbus master?)") &&
+              has(e, "; no halt sent by this client: another master commands the table"))
+      << e;
+  EXPECT_FALSE(controlword_of(r) & c4::cw::kHalt) << std::hex << controlword_of(r);
+  r.run(3.0);  // a set-point's end (the emulated drive finishes the move under way first), not a halt's
+  const double at = r.axis->actual_angle_deg();
+  EXPECT_TRUE(std::fabs(at - 300.0) < 0.01 || std::fabs(at - 20.0) < 0.01) << at;
+}
+
+TEST_P(Cia402Client, AnotherMastersHaltEndsTheMoveAtOnceNamingIt) {
+  Rig r(GetParam());
+  auto t = r.client();
+  const double t0 = r.axis->time_s();
+  const std::string e = move_with_another_master(r, *t, [&] { r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt); });
+  EXPECT_TRUE(has(e, "halted by another master (controlword reads 0x010F) during the move") &&
+              has(e, "; no halt sent by this client"))
+      << e;
+  EXPECT_LT(r.axis->time_s() - t0, 2.0) << "not after the move timeout";
+}
+
+// A move asked for while another master's move runs waits until the table is at rest (as the
+// rig-v1 client does), instead of writing its set-point under the other master's motion.
+TEST_P(Cia402Client, AMoveWaitsForAnotherMastersMoveToEnd) {
+  Rig r(GetParam());
+  auto t = r.client();
+  t->home({});
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(200.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0);
+  r.control(c4::cw::kCmdEnableOperation);
+  auto second = r.client();
+  second->move_to(10.0, {});
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 10.0, 0.005);
 }
 
 // `rig table stop` from a fresh process: the stop keeps the drive's device

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <thread>
 
 #include "helpers.hpp"
@@ -341,6 +343,172 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
     EXPECT_NE(out.find("u20_deg = 180°: outside the table's travel [-10°, 10°] (drive map"), std::string::npos) << out;
   }
   EXPECT_FALSE(std::filesystem::exists(dir + "/run6/run.json"));
+}
+
+// A drive map in motor rpm through 50:1 (the review's "Acme SD-9"), for the [table] checks below.
+const char* const kRpmMap =
+    "[drive]\nname = \"rpm 50:1\"\n[scaling]\ncounts_per_rev = 1048576\ngear_ratio = 50.0\nvelocity_unit = \"rpm\"\n"
+    "acceleration_unit = \"rpm_per_s\"\n[limits]\nneg_deg = -10.0\npos_deg = 200.0\n[objects]\n"
+    "controlword = { index = 0x6040, address = 0 }\nstatusword = { index = 0x6041, address = 1 }\n"
+    "error_code = { index = 0x603F, address = 2 }\nmodes_of_operation = { index = 0x6060, address = 3, signed = true }\n"
+    "modes_of_operation_display = { index = 0x6061, address = 4, signed = true }\n"
+    "position_actual = { index = 0x6064, address = 5, width = 32, signed = true }\n"
+    "velocity_actual = { index = 0x606C, address = 7, width = 32, signed = true }\n"
+    "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n"
+    "profile_velocity = { index = 0x6081, address = 11, width = 32 }\n"
+    "profile_acceleration = { index = 0x6083, address = 13, width = 32 }\n"
+    "profile_deceleration = { index = 0x6084, address = 15, width = 32 }\n";
+
+std::string write_file(const std::string& path, const std::string& text) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  FILE* f = std::fopen(path.c_str(), "w");
+  std::fputs(text.c_str(), f);
+  std::fclose(f);
+  return path;
+}
+
+// [table] values no drive can honour, refused when the file is read (exit 2 at the key's line,
+// before any device opens; each was accepted, then failed or misled at the drive, a review).
+TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
+  const std::string dir = testing::TempDir() + "/honour";
+  write_file(dir + "/rpm.toml", kRpmMap);
+  const std::string head = "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"rpm.toml\"\n";
+  std::string out;
+  auto status = [&](const std::string& table) {
+    return run(std::string(RIG_BIN) + " table status --hardware " + write_file(dir + "/hw.toml", table), out);
+  };
+  // A speed or acceleration that rounds to 0 in the drive's units: sent as 0, the move timed out
+  // blaming the drive ("drive frozen").
+  EXPECT_EQ(status(head + "velocity_dps = 0.05\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:16: [table] velocity_dps = 0.05 is 0.4167 rpm in the drive's units, which rounds to "
+                       "0: sent as 0, the drive would not move; the least it can be sent is 1 rpm = 0.12 °/s"))
+      << out;
+  EXPECT_EQ(status(head + "accel_dps2 = 0.05\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:14: [table] accel_dps2 = 0.05 is 0.4167 rpm/s in the drive's units, which rounds to 0"))
+      << out;
+  // Rounded by more than 1 %: said once (then the drive, absent here, is exit 4 as before).
+  EXPECT_EQ(status(head + "velocity_dps = 1.0\naccel_dps2 = 24.0\n"), 4) << out;
+  EXPECT_TRUE(has(out, "rig: warning: " + dir + "/hw.toml:5:16: [table] velocity_dps = 1 is 8.333 rpm in the drive's "
+                       "units, sent as 8 rpm = 0.96 °/s (4.0 % less)"))
+      << out;
+  EXPECT_EQ(out.find("warning"), out.rfind("warning")) << "said once: " << out;
+  EXPECT_FALSE(has(out, "accel_dps2")) << "200 rpm/s exactly: " << out;
+  // A tolerance below one position count: no move could ever be confirmed.
+  EXPECT_EQ(status(head + "tolerance_deg = 0\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:17: 'tolerance_deg' = 0: below one position count of the drive (6.87e-06°, drive map"))
+      << out;
+  EXPECT_EQ(status(head + "tolerance_deg = 0.00001\n"), 4) << out;  // above one count: accepted
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\ntolerance_deg = 0.00005\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:3:17:") && has(out, "(0.0001°, rig-v1 register map)")) << out;
+  // [table] u10_deg outside the map's travel (the run takes [procedure]'s, and would fail there).
+  EXPECT_EQ(status(head + "u10_deg = 300.0\nu20_deg = 120.0\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:11: 'u10_deg' = 300.0: outside the table's travel [-10°, 200°]")) << out;
+}
+
+// Link settings no drive answers on, refused with the file (exit 2 at the line), as port 70000
+// and -1 are: port 0 (a server's "any port"; it was exit 4, "cannot connect") and 7 data bits
+// (Modbus ASCII's; RTU is 8).
+TEST(RigTableHardwareFile, LinkSettingsNoDriveAnswersOnAreRefused) {
+  const std::string dir = testing::TempDir() + "/link";
+  std::string out;
+  auto status = [&](const std::string& table) {
+    return run(std::string(RIG_BIN) + " table status --hardware " + write_file(dir + "/hw.toml", table), out);
+  };
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:0\"\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:2:10: 'modbus' = 'tcp:127.0.0.1:0': port 0 is no drive's port (1..65535)")) << out;
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table --modbus 127.0.0.1:0 status", out), 2) << out;
+  EXPECT_TRUE(has(out, "port 0 is no drive's port")) << out;
+  EXPECT_EQ(status("[table]\nrtu = \"/dev/ttyS0,19200,N,7,2\"\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:2:7: Modbus RTU port '/dev/ttyS0,19200,N,7,2': 7 data bits: Modbus RTU needs 8")) << out;
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table --rtu /dev/ttyS0,19200,N,7,2 status", out), 2) << out;
+  // [gpio]'s unknown key is "in [gpio]" (it said "in [[gpio]]").
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[gpio]\npower = \"P\"\nestop = \"E\"\nbogus = 1\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:6:9: unknown key 'bogus' in [gpio] (expected")) << out;
+}
+
+// The drive map is looked for beside the hardware file, then in the working folder: a map not
+// found names both places; one found only in the working folder is said (its travel limits then
+// depend on where rig is started).
+TEST(RigTableHardwareFile, TheDriveMapsPlacesAreNamed) {
+  const std::string dir = (std::filesystem::path(testing::TempDir()) / "map-places").lexically_normal().string();
+  const std::string hw = write_file(dir + "/site/hw.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                                           "drive_map = \"rpm.toml\"\n");
+  std::filesystem::create_directories(dir + "/cwd");
+  std::string out;
+  const std::string cmd = "cd " + dir + "/cwd && " + RIG_BIN + " table status --hardware " + hw;
+  EXPECT_EQ(run(cmd, out), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:4:13: drive map 'rpm.toml' not found: looked beside " + hw + " (" + dir +
+                           "/site/rpm.toml), then in the working folder (" + dir + "/cwd/rpm.toml)"))
+      << out;
+  write_file(dir + "/cwd/rpm.toml", kRpmMap);
+  EXPECT_EQ(run(cmd, out), 4) << out;  // found; the drive (absent) is exit 4
+  EXPECT_TRUE(has(out, "rig: warning: " + hw + ":4:13: drive map 'rpm.toml' is not beside " + hw +
+                           "; taken from the working folder (" + dir + "/cwd/rpm.toml)"))
+      << out;
+  write_file(dir + "/site/rpm.toml", kRpmMap);  // beside the file: taken first, nothing to say
+  EXPECT_EQ(run(cmd, out), 4) << out;
+  EXPECT_FALSE(has(out, "warning")) << out;
+}
+
+// Two masters on one CiA 402 drive, as processes: `rig table stop` from another shell ends a
+// running `rig table move` at once as "halted by another master", and a second `rig table move`
+// waits for the first one's motion to end instead of writing its set-point under it; the first
+// then ends naming the other master and sends no halt over its move (it waited out its move
+// timeout, then halted whatever the table did, a review).
+TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
+  const std::string map = std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml";
+  const std::string prof = write_file(testing::TempDir() + "/masters/plant.toml",
+                                      "base = \"ci\"\n[plant.table]\nvelocity_dps = 90.0\naccel_dps2 = 900.0\n"
+                                      "home_velocity_dps = 200.0\nsettle_s = 0.05\nstart_angle_deg = 10.0\n");
+  int fd = -1;
+  Child serve({RIG_BIN, "plant", "serve", "--modbus", "127.0.0.1:0", "--drive", "cia402", "--drive-map", map,
+               "--profile", prof},
+              &fd);
+  const std::string line = read_line(fd);
+  ASSERT_NE(line.find("drive cia402"), std::string::npos) << line;
+  const std::string ep = line.substr(line.find("tcp:") + 4, line.find(" unit") - line.find("tcp:") - 4);
+  const std::string where = " --modbus " + ep + " --drive cia402 --drive-map " + map;
+  std::string out;
+  auto rig = [&](const std::string& args, std::string& o) { return run(std::string(RIG_BIN) + " table " + args + where, o); };
+  ASSERT_EQ(rig("home", out), 0) << out;
+  // Until the table has turned 2° from where it stood: the other process's move is under way.
+  auto actual = [&] {
+    if (rig("status --json", out) != 0 || !has(out, "\"actual_deg\": ")) return std::nan("");
+    return std::stod(out.substr(out.find("\"actual_deg\": ") + 14));
+  };
+  auto wait_moving = [&] {
+    const double from = actual();
+    for (int i = 0; i < 300; ++i) {
+      if (std::fabs(actual() - from) > 2.0) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return false;
+  };
+  // `rig table stop` from another process.
+  int rc1 = -1;
+  std::string out1;
+  std::thread first([&] { rc1 = rig("move 300", out1); });
+  ASSERT_TRUE(wait_moving()) << out;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(rig("stop", out), 0) << out;
+  first.join();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 3.0) << out1;
+  EXPECT_EQ(rc1, 4) << out1;
+  EXPECT_TRUE(has(out1, "move to 300.0000°: halted by another master (controlword reads 0x010F)") &&
+              has(out1, "; no halt sent by this client")) << out1;
+  // A second `rig table move` while the first runs: it waits, then both moves are the table's.
+  std::thread again([&] { rc1 = rig("move 250", out1); });
+  ASSERT_TRUE(wait_moving()) << out;
+  std::string out2;
+  EXPECT_EQ(rig("move 20", out2), 0) << out2;
+  again.join();
+  EXPECT_TRUE(has(out2, "actual     20.0000°")) << out2;
+  // The first reached 250° before the second's set-point; ended then as arrived, or in its settle
+  // time naming the other master, never a timeout nor a halt over the second's move.
+  if (rc1 != 0) {
+    EXPECT_TRUE(rc1 == 4 && has(out1, "(another Modbus master?)") && has(out1, "; no halt sent by this client")) << out1;
+  }
+  EXPECT_FALSE(has(out1, "timed out")) << out1;
 }
 
 }  // namespace

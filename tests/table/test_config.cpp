@@ -47,6 +47,15 @@ TEST(TableConfig, EndpointsParse) {
             std::string::npos);
   EXPECT_NE(config_error([] { m::parse_endpoint("tcp:[fe80::1%]:502"); }).find("is not a host name"), std::string::npos);
   EXPECT_EQ(m::parse_endpoint("tcp:[::ffff:10.0.0.5]:502").host, "::ffff:10.0.0.5");  // IPv4-mapped
+  // Modbus RTU is 8 data bits (7 is Modbus ASCII's): refused, not left to a drive that never answers.
+  EXPECT_EQ(config_error([] { m::parse_rtu("/dev/ttyS1,9600,N,7,2"); }),
+            "Modbus RTU port '/dev/ttyS1,9600,N,7,2': 7 data bits: Modbus RTU needs 8");
+  EXPECT_EQ(m::parse_rtu("/dev/ttyS1,9600,N,8,2").str(), "rtu:/dev/ttyS1,9600,N,8,2");
+  // Port 0 stays a server's "any port" (rig plant serve, the tests' servers); a client's [table]
+  // refuses it at its line (it was exit 4, "cannot connect").
+  EXPECT_EQ(m::parse_endpoint("tcp:127.0.0.1:0").port, 0);
+  const std::string e = config_error([] { m::check_table_config(cfg::parse_string("modbus = \"127.0.0.1:0\"\n", "hw.toml")); });
+  EXPECT_EQ(e, "hw.toml:1:10: 'modbus' = '127.0.0.1:0': port 0 is no drive's port (1..65535)");
 }
 
 TEST(TableConfig, HardwareTableKeysAreChecked) {

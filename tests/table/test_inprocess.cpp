@@ -191,6 +191,51 @@ TEST(TableInProcess, ANewMoveRightAfterACancelWaitsForRest) {
   EXPECT_NEAR(r.table->status().actual_deg, 20.0, 0.01);
 }
 
+// Another master's stop or set-point mid-move ends the move at once naming it, and this client
+// sends no halt over the other master's command (a review: another master's stop waited out the
+// move timeout; a halt after "target register changed" ended the other master's move).
+TEST(TableInProcess, AnotherMastersStopOrTargetEndsTheMoveWithoutAHaltOfOurs) {
+  SimRig r("start_angle_deg = 0.0\n");
+  r.table->home({});
+  auto control = [&] {
+    uint16_t c = 0;
+    EXPECT_EQ(r.emu->read_registers(m::reg::kControl, 1, &c), 0);
+    return c;
+  };
+  // `rig table stop` from another shell, 1 s into the move: CONTROL = servo on + HALT.
+  double t_start = r.clock.now_s();
+  bool sent = false;
+  r.clock.set_advance([&](double dt) {
+    r.emu->step(dt);
+    if (!sent && r.clock.now_s() - t_start > 1.0) {
+      const uint16_t halt = m::ctl::kServoOn | m::ctl::kHalt;
+      sent = r.emu->write_registers(m::reg::kControl, &halt, 1) == 0;
+    }
+  });
+  std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+  EXPECT_NE(err.find("move to 180.0000°: halted by another master (CONTROL reads 0x0101)"), std::string::npos) << err;
+  EXPECT_NE(err.find("; no halt sent by this client: another master commands the table"), std::string::npos) << err;
+  EXPECT_LT(r.clock.now_s() - t_start, 2.0) << "not after the move timeout";
+  // Another master's target, written once the move has stopped and is settling: no halt of ours.
+  r.clock.set_advance([&](double dt) { r.emu->step(dt); });
+  t_start = r.clock.now_s();
+  sent = false;
+  r.clock.set_advance([&](double dt) {
+    r.emu->step(dt);
+    if (!sent && r.clock.now_s() - t_start > 1.0 && !r.emu->snapshot().moving) {
+      const auto counts = static_cast<int32_t>(5.0 * m::kPosScale);
+      uint16_t w[2];
+      m::split_i32(counts, w);
+      sent = r.emu->write_registers(m::reg::kTargetPos, w, 2) == 0;
+    }
+  });
+  err = hardware_error([&] { r.table->move_to(10.0, {}); });
+  EXPECT_TRUE(sent);
+  EXPECT_NE(err.find("target register changed to 5.0000° (another Modbus master?)"), std::string::npos) << err;
+  EXPECT_NE(err.find("; no halt sent by this client"), std::string::npos) << err;
+  EXPECT_FALSE(control() & m::ctl::kHalt) << control();
+}
+
 TEST(TableInProcess, EstopDuringMove) {
   SimRig r("start_angle_deg = 0.0\n");
   r.table->home({});
