@@ -89,14 +89,17 @@ void check_passport(const json& p, const std::string& path) {
   if (p.contains("schema") &&
       (!p["schema"].is_string() || p["schema"].get<std::string>().rfind("rig.passport/1", 0) != 0))
     throw ConfigError(path + ": unsupported passport schema " + shown(p["schema"]) + " (this rig reads rig.passport/1)");
-  // The serial is what the history groups a DUT's runs by and the report heads its page with.
-  if (!p.contains("serial") || !p["serial"].is_string() || p["serial"].get<std::string>().empty() ||
-      has_unshowable(p["serial"].get<std::string>()))
-    throw ConfigError(path + ": serial: a non-empty string without control characters, not " +
-                      (p.contains("serial") ? shown(p["serial"]) : "absent"));
   if (!p.contains("outcome") || !one_of(p["outcome"], {"PASS", "FAIL", "ABORTED", "ERROR"}))
     throw ConfigError(path + ": outcome: PASS, FAIL, ABORTED or ERROR, not " +
                       (p.contains("outcome") ? shown(p["outcome"]) : "absent"));
+  // The serial is what the history groups a DUT's runs by and the report heads its page with. It
+  // is empty only in a run that stopped before the DUT said who it is (an e-stop at bring-up, a
+  // GPIO chip that is not there): such a run still gets its report and its history row.
+  const bool judged = one_of(p["outcome"], {"PASS", "FAIL"});
+  if (!p.contains("serial") || !p["serial"].is_string() || (judged && p["serial"].get<std::string>().empty()) ||
+      has_unshowable(p["serial"].get<std::string>()))
+    throw ConfigError(path + ": serial: " + (judged ? "a non-empty string" : "a string") +
+                      " without control characters, not " + (p.contains("serial") ? shown(p["serial"]) : "absent"));
   // Times order the history (text order is time order once normalised).
   for (const char* key : {"started", "finished"}) {
     const json v = p.value(key, json());

@@ -1098,6 +1098,16 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
   EXPECT_NE(slurp(d + "/list.stdout").find(",HW-1,ci,hardware,ERROR,bench-without-gpio,"), std::string::npos)
       << slurp(d + "/list.stdout");
+  // Stopped before the DUT said who it is: the serial is empty, and the report and the history
+  // still take the passport (the passport reader refused it for a while, a technician's review).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--inject", "estop@0", "--out", d + "/estop"}, d + "/estop-io"), 3)
+      << slurp(d + "/estop-io.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/estop/passport.json"))["serial"], "");
+  EXPECT_TRUE(fs::exists(d + "/estop/report.html"));
+  EXPECT_EQ(slurp(d + "/estop/run.log").find("not written"), std::string::npos) << slurp(d + "/estop/run.log");
+  EXPECT_EQ(run({"report", d + "/estop"}, d + "/estop-report"), 0) << slurp(d + "/estop-report.stderr");
+  EXPECT_EQ(run({"history", "--record", d + "/estop", "--db", db}, d + "/estop-record"), 0)
+      << slurp(d + "/estop-record.stderr");
 }
 
 // A resume records where its run was started to record: the --db the run was given, or none
