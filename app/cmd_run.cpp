@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <signal.h>
+#include <poll.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -239,29 +240,50 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
 }
 
 // On stderr, as the plan and the progress: stdout carries only the passport table, for scripts.
-bool confirm(const std::string& question) {
+// The signals are taken by SignalWatcher's thread (blocked here), so a plain read of the answer
+// never returned on Ctrl-C: the prompt kept waiting, and a "y" typed after it powered the DUT
+// (a technician's review). stdin is polled, and a signal ends the prompt as it ends a run.
+bool confirm(const std::string& question, const CancelToken& cancel) {
   std::cerr << question << " [y/N] " << std::flush;
+  for (;;) {
+    cancel.throw_if_requested();
+    pollfd in{STDIN_FILENO, POLLIN, 0};
+    const int r = ::poll(&in, 1, 50);
+    if (r < 0 && errno != EINTR) return false;
+    if (r > 0) break;
+  }
+  cancel.throw_if_requested();
   std::string line;
   if (!std::getline(std::cin, line)) return false;
   return !line.empty() && (line[0] == 'y' || line[0] == 'Y');
 }
 
-// Operator prompts where a person must act; --yes skips them (automation).
-// planned_s: the plan's device time (the phases' own estimates, the table's timing included).
-void operator_prompts(const RunArgs& a, const acceptance::Profile& p, double planned_s) {
-  if (a.yes) return;
+// Operator prompts where a person must act; --yes skips them (automation). Returns what the
+// operator confirmed, for run.log. planned_s: the plan's device time (the phases' own
+// estimates, the table's timing included).
+std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Profile& p, double planned_s,
+                                          const CancelToken& cancel) {
+  if (a.yes) return {};
   if (!::isatty(STDIN_FILENO)) {
-    if (a.plant == "emulated") return;  // nothing to mount: unattended emulated runs need no confirmation
+    if (a.plant == "emulated") return {};  // nothing to mount: unattended emulated runs need no confirmation
     throw ConfigError("operator confirmation needed (mount the DUT, confirm the table is clear): run with --yes "
                       "for unattended runs");
   }
-  std::cerr << fmt::format("Profile '{}': {}\nDevice time {}.\n", p.name, p.description, TerminalView::hms(planned_s));
-  if (!confirm("Is the DUT mounted on the table with its connector fastened?"))
-    throw AbortedError("operator did not confirm the DUT is mounted");
-  if (!a.serial.empty() && !confirm("Is the serial number on the DUT's label " + a.serial + "?"))
-    throw AbortedError("operator did not confirm the serial number");
-  if (!confirm("Is the table clear of tools, cables and hands?"))
-    throw AbortedError("operator did not confirm the table is clear");
+  // What the answers start: the operator agrees to it, not to a question alone.
+  std::cerr << fmt::format(
+      "Profile '{}': {}\nDevice time {}. After your answers rig powers the DUT, homes the table and turns it between "
+      "U10 ({:g} deg) and U20 ({:g} deg); Ctrl-C at any point stops the table and powers the DUT off.\n",
+      p.name, p.description, TerminalView::hms(planned_s), p.u10_deg, p.u20_deg);
+  std::vector<std::string> confirmed;
+  auto ask = [&](const std::string& question, const char* declined) {
+    if (!confirm(question, cancel)) throw AbortedError(declined);
+    confirmed.push_back(question);
+  };
+  ask("Is the DUT mounted on the table with its connector fastened?", "operator did not confirm the DUT is mounted");
+  if (!a.serial.empty())
+    ask("Is the serial number on the DUT's label " + a.serial + "?", "operator did not confirm the serial number");
+  ask("Is the table clear of tools, cables and hands?", "operator did not confirm the table is clear");
+  return confirmed;
 }
 
 // A DUT without a command channel ([dut] commands = false; emulated: [plant.firmware] commands
@@ -708,7 +730,6 @@ std::string reported_serial(const std::string& run_dir) {
 }
 
 int do_run(RunArgs a) {
-  const auto wall_start = std::chrono::steady_clock::now();
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
   // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
   // (Only here: `rig dut stream | head` should still end when its reader does.)
@@ -869,11 +890,13 @@ int do_run(RunArgs a) {
   std::shared_ptr<spdlog::logger> log;
   std::vector<std::string> completed;
   if (!a.resume.empty()) {
+    // A finished run's folder is left as it is, its log included (a refused resume wrote into a
+    // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
+    if (!key) refuse_a_final_verdict(a.out);
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
     try {
-      if (!key) refuse_a_final_verdict(a.out);  // a sealed folder's verdict is its seal's (checked above)
       completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
     } catch (const std::exception& e) {  // the log says why the resume did not happen (it said only "resuming")
       log->error("resume refused: {}", e.what());
@@ -882,15 +905,21 @@ int do_run(RunArgs a) {
   }
   double planned_s = 0;
   for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
+  std::vector<std::string> confirmed;
   try {
-    operator_prompts(a, p, planned_s);
-  } catch (const std::exception&) {
+    confirmed = operator_prompts(a, p, planned_s, cancel.token());
+  } catch (const std::exception& e) {
     // Declined (or no terminal to ask on, and no --yes) before the run started: nothing was
     // written, and a new run's folder goes too (a refusal for want of a terminal left it: a review).
+    // A resume's log says the resume did not start (it ended at "resuming").
+    if (log) log->info("resume not started: {}; the folder is as it was", e.what());
     std::error_code ec;
     if (a.resume.empty() && made_here) fs::remove(a.out, ec);  // only while empty
     throw;
   }
+  // The run's own wall time, for the plant's speed line: the operator's time at the prompts is not
+  // the emulation's (a review read 105x real time where run.log spans 0.18 s of a 2.18 s figure).
+  const auto wall_start = std::chrono::steady_clock::now();
 
   if (a.resume.empty()) {
     // The folder carries everything a resume needs.
@@ -918,6 +947,7 @@ int do_run(RunArgs a) {
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
   }
+  for (const std::string& q : confirmed) log->info("operator confirmed: {} yes", q);
   if (folder_lock && !folder_lock->held())
     log->warn("the run folder could not be locked (its filesystem has no flock): a second run or resume of {} at the "
               "same time is not prevented",
@@ -1023,6 +1053,19 @@ int do_run(RunArgs a) {
     log->info("{}", line);
   }
   log->info("outcome {} (exit {})", to_string(res.outcome), res.exit_code());
+  // After a stop, what is kept and how to go on, where the technician looks (a review: only
+  // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
+  if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
+    const std::size_t kept = fs::exists(Executive::checkpoint_path(a.out)) ? res.phases.size() : 0;
+    std::size_t done = 0;
+    for (const PhaseRecord& r : res.phases) done += r.status == "done" || r.status == "skipped";
+    const std::string hint = fmt::format(
+        "to continue: rig run --resume {} ({} of {} phases kept; `rig run --dry-run --resume {}` shows what "
+        "a resume repeats)",
+        shown_text(a.out), kept ? done : 0, res.phases.size(), shown_text(a.out));
+    std::cerr << hint << "\n";
+    log->info("{}", hint);
+  }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),
               to_string(res.outcome), res.exit_code());

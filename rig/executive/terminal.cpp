@@ -24,7 +24,7 @@ void TerminalView::put(fmt::format_string<Args...> f, Args&&... args) {
 }
 
 TerminalView::TerminalView(std::FILE* out, bool quiet)
-    : out_(out), tty_(::isatty(::fileno(out)) != 0), quiet_(quiet), wall_start_(wall_s()) {}
+    : out_(out), tty_(::isatty(::fileno(out)) != 0), quiet_(quiet) {}
 
 std::string TerminalView::hms(double s) {
   if (!(s >= 0)) return "--:--:--";
@@ -56,6 +56,14 @@ void TerminalView::phase_started(std::size_t index, std::size_t count, const std
   last_quarter_ = -1;
   done_planned_ = 0;
   for (std::size_t i = 0; i < index && i < planned_.size(); ++i) done_planned_ += planned_[i];
+  // The wall ETA's speed is measured from the first phase this session runs: the operator's time
+  // at the prompts, and a resume's phases done in an earlier session, are not its pace (a review
+  // read "wall 173:15:01" after ten seconds at a prompt).
+  if (!running_) {
+    running_ = true;
+    wall_start_ = wall_s();
+    done_at_start_ = done_planned_;
+  }
   if (!quiet_) {
     if (tty_) put("\r\033[K");
     put("[{}/{}] {}: {}\n", index + 1, count, id, title);
@@ -69,7 +77,9 @@ void TerminalView::draw(bool final_line) {
   const double cur = index_ < planned_.size() ? planned_[index_] : 0;
   const double done = done_planned_ + fraction_ * cur;
   const double elapsed_wall = wall_s() - wall_start_;
-  const double speed = elapsed_wall > 0 ? done / elapsed_wall : 0;  // device seconds per wall second
+  // Device seconds per wall second, once a second of this session has gone by (the first draws
+  // come during bring-up, whose pace is not the procedure's).
+  const double speed = elapsed_wall >= 1.0 ? (done - done_at_start_) / elapsed_wall : 0;
   const double left = total - done;
   const int width = 30;
   const int fill = static_cast<int>(fraction_ * width + 0.5);
@@ -101,8 +111,13 @@ void TerminalView::phase_progress(double fraction, double) {
 void TerminalView::phase_finished(const std::string& id, const std::string& status, const std::string& message) {
   if (quiet_) return;
   if (tty_) put("\r\033[K");
-  if (status != "done")
-    put("  {} {}{}{}\n", id, status, message.empty() ? "" : ": ", message);
+  if (status != "done") {
+    // "run06-U20 aborted: SIGINT received", not "aborted: aborted: ..." (the message often
+    // starts with the status itself).
+    const std::string lead = status + ": ";
+    const std::string shown = message.rfind(lead, 0) == 0 ? message.substr(lead.size()) : message;
+    put("  {} {}{}{}\n", id, status, shown.empty() ? "" : ": ", shown);
+  }
   std::fflush(out_);
 }
 

@@ -32,7 +32,8 @@ class TerminalView final : public ProgressSink {
   std::vector<double> planned_;
   std::vector<std::string> ids_;
   std::size_t index_ = 0, count_ = 0;
-  double fraction_ = 0, last_draw_wall_ = -1, wall_start_ = 0, done_planned_ = 0;
+  double fraction_ = 0, last_draw_wall_ = -1, wall_start_ = 0, done_planned_ = 0, done_at_start_ = 0;
+  bool running_ = false;  // a phase of this session has started
   int last_quarter_ = -1;
 };
 

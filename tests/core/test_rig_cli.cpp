@@ -4,6 +4,9 @@
 // outcome rules (a resume judges as an uninterrupted run, a null limited value
 // fails), late signals, damaged checkpoints, run folders and capture headers.
 #include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/wait.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -1810,6 +1813,7 @@ TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
     EXPECT_EQ(run({"run", "--resume", f, "--yes"}, f + "-io"), 2);
     EXPECT_NE(slurp(f + "-io.stderr").find(f + ": the run is complete"), std::string::npos) << slurp(f + "-io.stderr");
     EXPECT_EQ(slurp(f + "/passport.json"), slurp(d + "/good/passport.json")) << "a final passport is left as it was";
+    EXPECT_EQ(slurp(f + "/run.log"), slurp(d + "/good/run.log")) << "and so is its log (README: left as it is)";
   }
   auto j = good;
   j["values"] = nlohmann::json::object();  // values emptied
@@ -2755,4 +2759,105 @@ TEST(RigCli, AsAUserWithoutRootPermissionsAreCheckedAndNamed) {
   EXPECT_TRUE(fs::exists(home + "/.local/share/rig/history.sqlite"));
   EXPECT_EQ(as_user(home, "history", "listed"), 0) << slurp(d + "/listed.stderr");
   EXPECT_NE(slurp(d + "/listed.stdout").find(d + "/rw/run"), std::string::npos) << slurp(d + "/listed.stdout");
+}
+
+namespace {
+// `rig ARGS` on a terminal of its own (a pty, as a technician's), driven by `script`: each step
+// waits for its text, then types its keys or sends its signal. Returns the exit code (-1 if it
+// had to be killed after 20 s) and the whole transcript in `seen`.
+struct Step {
+  std::string wait_for, type;
+  int signal = 0;
+};
+int on_a_terminal(const std::vector<std::string>& args, const std::vector<Step>& steps, std::string& seen) {
+  int fd = -1;
+  const pid_t pid = ::forkpty(&fd, nullptr, nullptr, nullptr);
+  if (pid == 0) {
+    std::vector<char*> argv{const_cast<char*>(RIG_BINARY)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(RIG_BINARY, argv.data());
+    ::_exit(127);
+  }
+  seen.clear();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  auto read_some = [&](int ms) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, ms) <= 0) return false;
+    char buf[4096];
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n <= 0) return false;
+    seen.append(buf, static_cast<std::size_t>(n));
+    return true;
+  };
+  std::size_t from = 0;
+  for (const Step& s : steps) {
+    while (seen.find(s.wait_for, from) == std::string::npos && std::chrono::steady_clock::now() < deadline)
+      read_some(50);
+    from = seen.find(s.wait_for, from);
+    if (from == std::string::npos) break;
+    from += s.wait_for.size();
+    if (!s.type.empty()) (void)!::write(fd, s.type.data(), s.type.size());
+    if (s.signal) ::kill(pid, s.signal);
+  }
+  int st = 0;
+  while (::waitpid(pid, &st, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &st, 0);
+      ::close(fd);
+      return -1;
+    }
+    read_some(50);
+  }
+  while (read_some(50)) {
+  }
+  ::close(fd);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+}  // namespace
+
+// A technician at the prompts: Ctrl-C or SIGTERM there ends the run at once (exit 3), before
+// anything is powered: the prompt used to keep waiting, and a "y" typed after the Ctrl-C powered
+// the DUT (a technician's review). The prompts say what the answers start, with the angles; the
+// answers are in run.log; and a run stopped later says how to continue.
+TEST(RigCli, AtTheOperatorsPromptsASignalEndsTheRunBeforeAnythingIsPowered) {
+  const std::string d = tmp("prompts");
+  fs::create_directories(d);
+  std::string seen;
+  EXPECT_EQ(on_a_terminal({"run", "--profile", "ci", "--no-history", "--out", d + "/ctrl-c"},
+                          {{"[y/N]", "\x03", 0}, {"SIGINT", "y\ny\n", 0}}, seen),
+            3)
+      << seen;
+  EXPECT_NE(seen.find("rig: aborted: SIGINT received"), std::string::npos) << seen;
+  EXPECT_EQ(seen.find("[1/"), std::string::npos) << "no phase may start:\n" << seen;
+  EXPECT_FALSE(fs::exists(d + "/ctrl-c")) << "nothing written, nothing powered";
+  EXPECT_EQ(on_a_terminal({"run", "--profile", "ci", "--no-history", "--out", d + "/term"}, {{"[y/N]", "", SIGTERM}},
+                          seen),
+            3)
+      << seen;
+  EXPECT_NE(seen.find("rig: aborted: SIGTERM received"), std::string::npos) << seen;
+  EXPECT_FALSE(fs::exists(d + "/term"));
+  // Answered: the prompts said what follows; the answers are kept; a Ctrl-C mid-run says how to go on.
+  EXPECT_EQ(on_a_terminal({"run", "--profile", "ci", "--no-history", "--out", d + "/run"},
+                          {{"[y/N]", "y\n", 0}, {"[y/N]", "y\n", 0}, {"[3/", "\x03", 0}}, seen),
+            3)
+      << seen;
+  EXPECT_NE(seen.find("After your answers rig powers the DUT, homes the table and turns it between U10 (0 deg) and "
+                      "U20 (180 deg); Ctrl-C at any point stops the table and powers the DUT off."),
+            std::string::npos)
+      << seen;
+  EXPECT_NE(seen.find("to continue: rig run --resume " + d + "/run ("), std::string::npos) << seen;
+  const std::string log = slurp(d + "/run/run.log");
+  EXPECT_NE(log.find("operator confirmed: Is the DUT mounted on the table with its connector fastened? yes"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("operator confirmed: Is the table clear of tools, cables and hands? yes"), std::string::npos) << log;
+  EXPECT_NE(log.find("to continue: rig run --resume " + d + "/run ("), std::string::npos) << log;
+  EXPECT_EQ(seen.find("aborted: aborted:"), std::string::npos) << seen;
+  // The resume's prompt declined: run.log says the resume did not start (it ended at "resuming").
+  EXPECT_EQ(on_a_terminal({"run", "--resume", d + "/run"}, {{"[y/N]", "n\n", 0}}, seen), 3) << seen;
+  EXPECT_NE(slurp(d + "/run/run.log").find("resume not started: operator did not confirm the DUT is mounted"),
+            std::string::npos)
+      << slurp(d + "/run/run.log");
 }
