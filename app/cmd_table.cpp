@@ -1,10 +1,13 @@
 // `rig table`: manual control of a real or emulated rotary table over Modbus,
 // for a technician at the rig (docs/table-registers.md).
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <thread>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
@@ -134,6 +137,28 @@ void reset(RotaryTable& t, const CancelToken& cancel) {
   }
 }
 
+// After Ctrl-C in a move or a homing (the client has sent its halt): where the table came to rest,
+// and whether it is still homed, on stderr before the abort's own line. "rig: aborted: SIGINT
+// received" alone left a technician guessing (a review: the homed flag was gone, which nothing
+// said). Waits up to 10 s for the axis to stop; says so when it cannot read it.
+void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
+  try {
+    TableStatus s = t.status();
+    for (int i = 0; i < 100 && s.moving; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      s = t.status();
+    }
+    std::cerr << "rig: the table " << (s.moving ? "was still moving" : "stopped") << " at "
+              << fmt::format("{:.4f}", s.actual_deg) << "°"
+              << (halt_error.empty() ? " (halt delivered to the drive)" : " (" + halt_error + ")")
+              << (s.homed_known && !s.homed ? "; it is not homed now: `rig table home` before the next move" : "")
+              << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "rig: the table's position could not be read after the halt (" << e.what()
+              << "): check it with `rig table status` before anything else\n";
+  }
+}
+
 }  // namespace
 
 void add_table(CLI::App& app, int& rc) {
@@ -161,7 +186,12 @@ void add_table(CLI::App& app, int& rc) {
   sub->add_subcommand("home", "Run the homing sequence and wait until homed")->callback([a, &rc] {
     with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
-      t.home(sig.token());
+      try {
+        t.home(sig.token());
+      } catch (const AbortedError&) {
+        say_where_it_stopped(t, last_stop_error(t));
+        throw;
+      }
       print_status(t.describe(), t.status(), false);
     });
     rc = kExitPass;
@@ -177,7 +207,12 @@ void add_table(CLI::App& app, int& rc) {
   mv->callback([a, &rc] {
     with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
-      t.move_to(a->deg, sig.token());
+      try {
+        t.move_to(a->deg, sig.token());
+      } catch (const AbortedError&) {
+        say_where_it_stopped(t, last_stop_error(t));
+        throw;
+      }
       print_status(t.describe(), t.status(), false);
     });
     rc = kExitPass;

@@ -166,15 +166,25 @@ class RigTableSignal : public RigTable, public ::testing::WithParamInterface<int
 TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
   int fd = -1;
   std::unique_ptr<Child> child;
-  ASSERT_NO_FATAL_FAILURE(start_slow_move({}, child, fd));
+  // stderr with stdout (sh execs rig: the signal reaches rig itself).
+  ASSERT_NO_FATAL_FAILURE(start_slow_move({"/bin/sh", "-c", "exec \"$0\" \"$@\" 2>&1"}, child, fd));
   ::kill(child->pid(), GetParam());
   const int st = child->wait_status();
+  std::string said;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) said.append(buf, static_cast<std::size_t>(n));
   close(fd);
   ASSERT_TRUE(WIFEXITED(st)) << "killed by signal " << (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
   EXPECT_EQ(WEXITSTATUS(st), 3);
   for (int i = 0; i < 500 && emu_->snapshot().moving; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   EXPECT_FALSE(emu_->snapshot().moving);
   EXPECT_LT(emu_->snapshot().position_deg, 100.0);
+  // Where the table came to rest, said before the abort (a technician's review: only "aborted").
+  const std::string lead = "rig: the table stopped at ";
+  const std::size_t at = said.find(lead);
+  ASSERT_NE(at, std::string::npos) << said;
+  EXPECT_NEAR(std::stod(said.substr(at + lead.size())), emu_->snapshot().position_deg, 0.01) << said;
+  EXPECT_NE(said.find("° (halt delivered to the drive)\nrig: aborted: "), std::string::npos) << said;
 }
 
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when
