@@ -8,6 +8,8 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -164,6 +166,23 @@ void run_show(const ShowArgs& a) {
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"
             << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << lf.settling_time_s * 1e3
             << " ms\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
+  // How to apply it: a technician could not use the filter `select` ranks first, as neither a
+  // profile nor `rig dut set-filter` takes the name butterN@FC (a review). Every digit, so the
+  // DUT gets the sections shown.
+  const auto num = [](double v) { return fmt::format("{:.17g}", v); };
+  std::string toml_sections, biquads;
+  nlohmann::json sections = nlohmann::json::array();
+  for (const Biquad& b : f.sections) {
+    const std::vector<std::string> v{num(b.b0), num(b.b1), num(b.b2), num(b.a1), num(b.a2)};
+    toml_sections += (toml_sections.empty() ? "" : ", ") + fmt::format("[{}]", fmt::join(v, ", "));
+    biquads += fmt::format(" --biquad {}", fmt::join(v, ","));
+    sections.push_back({b.b0, b.b1, b.b2, b.a1, b.a2});
+  }
+  if (!f.sections.empty())
+    std::cout << "\nto use it in a profile:\n[filter]\npreset = \"custom\"\nsections = [" << toml_sections
+              << "]\nrate_hz = " << num(f.rate_hz) << "\nenabled = " << (f.enabled ? "true" : "false")
+              << "\n\nto load it into a DUT by hand:\nrig dut set-filter" << biquads << " --rate " << num(f.rate_hz)
+              << (f.enabled ? "" : " --off") << "\n";
   if (!a.json_out.empty()) {
     json j = {{"filter", a.filter},
               {"source", "model"},
@@ -173,6 +192,9 @@ void run_show(const ShowArgs& a) {
               {"settling_band", lf.settling_band},
               {"overshoot", lf.overshoot},
               {"dc_gain", lf.dc_gain},
+              {"sections", sections},  // [b0, b1, b2, a1, a2] each, H = (b0 + b1/z + b2/z^2)/(1 + a1/z + a2/z^2)
+              {"rate_hz", f.rate_hz},
+              {"enabled", f.enabled},
               {"step", {{"t_s", lf.step_t_s}, {"x", lf.step_x}, {"y", lf.step_y}}},
               {"response", {{"f_hz", lf.freq_hz}, {"amp_x", lf.amp_x}, {"amp_y", lf.amp_y}}}};
     write_json(a.json_out, j, "rig filter show --json");

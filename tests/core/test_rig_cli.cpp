@@ -2861,3 +2861,31 @@ TEST(RigCli, AtTheOperatorsPromptsASignalEndsTheRunBeforeAnythingIsPowered) {
             std::string::npos)
       << slurp(d + "/run/run.log");
 }
+
+// `rig filter show` says how to apply the filter it shows: a technician could not use the
+// butterN@FC that `rig filter select` ranks, as neither a profile nor `rig dut set-filter` takes
+// the name (a review). Its [filter] block, pasted into a profile, runs with the same sections.
+TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
+  const std::string d = tmp("filter-apply");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"filter", "show", "--filter", "butter2@500", "--json", d + "/f.json"}, d + "/show"), 0)
+      << slurp(d + "/show.stderr");
+  const std::string out = slurp(d + "/show.stdout");
+  const std::size_t block = out.find("[filter]\npreset = \"custom\"\nsections = [[");
+  ASSERT_NE(block, std::string::npos) << out;
+  EXPECT_NE(out.find("rig dut set-filter --biquad "), std::string::npos) << out;
+  const auto j = nlohmann::json::parse(slurp(d + "/f.json"));
+  ASSERT_EQ(j["sections"].size(), 1u);
+  EXPECT_EQ(j["rate_hz"], 10000.0);
+  const std::string toml = out.substr(block, out.find("enabled = true\n", block) + 15 - block);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n" << toml;
+  ASSERT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr") << toml;
+  EXPECT_NE(slurp(d + "/run/run.log").find("output filter: custom (1 section(s) at 10000 Hz, on)"), std::string::npos);
+  // The sections the run set are the ones shown, to the last digit.
+  const auto prof = slurp(d + "/run/profile.toml");
+  const double b0 = j["sections"][0][0].get<double>();
+  char digits[40];
+  std::snprintf(digits, sizeof digits, "%.17g", b0);
+  EXPECT_NE(prof.find(digits), std::string::npos) << prof;
+}
