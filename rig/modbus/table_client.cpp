@@ -69,7 +69,18 @@ TableClient::TableClient(std::unique_ptr<RegisterTransport> transport, Clock& cl
 std::string TableClient::describe() const { return transport_->describe(); }
 
 DriveState TableClient::read_drive(const CancelToken& cancel) {
-  const std::vector<uint16_t> regs = transport_->read(0, reg::kBlockEnd, cancel);
+  std::vector<uint16_t> regs;
+  try {
+    regs = transport_->read(0, reg::kBlockEnd, cancel);
+  } catch (const ModbusError& e) {
+    // A drive without rig-v1's status block (a CiA 402 drive, another map) refuses the read
+    // itself; say what to try (a technician's review: "exception 0x02" alone).
+    if (e.exception_code != exc::kIllegalAddress) throw;
+    throw ModbusError(std::string(e.what()) +
+                          " (the drive has no rig-v1 status registers at 0..24: for a CiA 402 drive give --drive "
+                          "cia402 --drive-map FILE, or drive and drive_map in the hardware file's [table])",
+                      e.exception_code, e.timeout);
+  }
   // A drive speaking another map version would be misread register by register.
   if (regs[reg::kMapVersion] != reg::kMapVersionValue)
     throw HardwareError(describe() + ": MAP_VERSION (register " + std::to_string(reg::kMapVersion) + ") reads " +
@@ -158,8 +169,10 @@ void TableClient::prepare_motion(const std::string& doing, const CancelToken& ca
   }
   fail_on_alarm(doing, d);
   d = wait_at_rest(doing, d, cancel);
-  if (d.has(sts::kEstop)) throw HardwareError(doing + ": emergency stop pressed" + at(d));
-  if (!d.has(sts::kInterlockOk)) throw HardwareError(doing + ": interlock open" + at(d));
+  // With the remedy, as the alarms carry theirs (a technician's review: "interlock open" alone).
+  if (d.has(sts::kEstop)) throw HardwareError(doing + ": emergency stop pressed" + at(d) + " (release the e-stop, then try again)");
+  if (!d.has(sts::kInterlockOk))
+    throw HardwareError(doing + ": interlock open" + at(d) + " (close the table's guard or door, then try again)");
   // Clears HALT / QUICK_STOP / START / HOME so the next edge is seen.
   if (!d.has(sts::kServoOn)) {
     write_control(0, cancel);
@@ -324,8 +337,8 @@ void TableClient::reset_alarm(const CancelToken& cancel) {
   try {
     DriveState d = read_drive(cancel);
     if (!d.has(sts::kAlarm)) return;
-    if (d.has(sts::kEstop)) throw HardwareError(doing + ": refused, emergency stop pressed");
-    if (!d.has(sts::kInterlockOk)) throw HardwareError(doing + ": refused, interlock open");
+    if (d.has(sts::kEstop)) throw HardwareError(doing + ": refused, emergency stop pressed (release it first)");
+    if (!d.has(sts::kInterlockOk)) throw HardwareError(doing + ": refused, interlock open (close the table's guard or door first)");
     const auto servo = static_cast<uint16_t>(control_ & ctl::kServoOn);
     write_control(servo, cancel);
     write_control(servo | ctl::kAlarmReset, cancel);

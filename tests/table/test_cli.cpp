@@ -245,6 +245,13 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   auto rig = [&](const std::string& args) { return run(std::string(RIG_BIN) + " table " + args, out); };
   ASSERT_EQ(rig("status" + where), 0) << out;
   EXPECT_NE(out.find("cia402"), std::string::npos) << out;
+  // The default (rig-v1) client at a CiA 402 drive: refused, with what to give (a technician's
+  // review: "exception 0x02 illegal data address" alone).
+  EXPECT_EQ(rig("status --modbus " + ep), 4) << out;
+  EXPECT_NE(out.find("exception 0x02 illegal data address (the drive has no rig-v1 status registers at 0..24: for a "
+                     "CiA 402 drive give --drive cia402 --drive-map FILE"),
+            std::string::npos)
+      << out;
   ASSERT_EQ(rig("home" + where), 0) << out;
   ASSERT_EQ(rig("move 180" + where), 0) << out;
   EXPECT_NE(out.find("actual     180.0000°"), std::string::npos) << out;

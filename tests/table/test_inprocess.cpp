@@ -70,6 +70,18 @@ TEST(TableInProcess, MoveBeforeHomingIsRefusedClearly) {
   EXPECT_FALSE(r.table->status().servo_on);
 }
 
+// An open interlock or a pressed e-stop before a move: refused with the remedy, as the alarms
+// carry theirs (a technician's review: "interlock open at 0.0000°" alone).
+TEST(TableInProcess, AnOpenInterlockOrAPressedEstopSaysWhatToDo) {
+  SimRig r;
+  r.table->home({});
+  r.emu->set_interlock(false);
+  std::string err = hardware_error([&] { r.table->move_to(90.0, {}); });
+  EXPECT_NE(err.find("move to 90.0000°: interlock open at "), std::string::npos) << err;
+  EXPECT_NE(err.find("(close the table's guard or door, then try again)"), std::string::npos) << err;
+  EXPECT_FALSE(r.emu->snapshot().moving);
+}
+
 TEST(TableInProcess, AlarmMidMoveIsReportedByCodeMeaningAndAngle) {
   SimRig r("start_angle_deg = 0.0\nfault = \"following_error\"\nfault_on_move = 2\nfault_at = 0.5\n");
   r.table->home({});
