@@ -262,7 +262,7 @@ bool confirm(const std::string& question, const CancelToken& cancel) {
 // operator confirmed, for run.log. planned_s: the plan's device time (the phases' own
 // estimates, the table's timing included).
 std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Profile& p, double planned_s,
-                                          const CancelToken& cancel) {
+                                          std::size_t kept, const CancelToken& cancel) {
   if (a.yes) return {};
   if (!::isatty(STDIN_FILENO)) {
     if (a.plant == "emulated") return {};  // nothing to mount: unattended emulated runs need no confirmation
@@ -271,9 +271,10 @@ std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Pr
   }
   // What the answers start: the operator agrees to it, not to a question alone.
   std::cerr << fmt::format(
-      "Profile '{}': {}\nDevice time {}. After your answers rig powers the DUT, homes the table and turns it between "
+      "Profile '{}': {}\nDevice time {}{}. After your answers rig powers the DUT, homes the table and turns it between "
       "U10 ({:g} deg) and U20 ({:g} deg); Ctrl-C at any point stops the table and powers the DUT off.\n",
-      p.name, p.description, TerminalView::hms(planned_s), p.u10_deg, p.u20_deg);
+      p.name, p.description, TerminalView::hms(planned_s), kept ? fmt::format(" left ({} phases kept)", kept) : "",
+      p.u10_deg, p.u20_deg);
   std::vector<std::string> confirmed;
   auto ask = [&](const std::string& question, const char* declined) {
     if (!confirm(question, cancel)) throw AbortedError(declined);
@@ -830,7 +831,7 @@ int do_run(RunArgs a) {
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              shown_text(p.source), a.plant);
-    plan_view.plan(phases);
+    plan_view.plan(phases, completed.size());
     for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
@@ -907,7 +908,7 @@ int do_run(RunArgs a) {
   for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
   std::vector<std::string> confirmed;
   try {
-    confirmed = operator_prompts(a, p, planned_s, cancel.token());
+    confirmed = operator_prompts(a, p, planned_s, completed.size(), cancel.token());
   } catch (const std::exception& e) {
     // Declined (or no terminal to ask on, and no --yes) before the run started: nothing was
     // written, and a new run's folder goes too (a refusal for want of a terminal left it: a review).
@@ -970,7 +971,7 @@ int do_run(RunArgs a) {
   acceptance::RunOptions ro;
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
-  view.plan(phases);
+  view.plan(phases, completed.size());
   Executive exec(dev, a.out, log, &view);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
     exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, files_of_the_run(state.slot()), text); });

@@ -32,7 +32,7 @@ std::string TerminalView::hms(double s) {
   return fmt::format("{:02d}:{:02d}:{:02d}", t / 3600, (t / 60) % 60, t % 60);
 }
 
-void TerminalView::plan(const std::vector<Phase>& phases) {
+void TerminalView::plan(const std::vector<Phase>& phases, std::size_t kept) {
   planned_.clear();
   ids_.clear();
   double total = 0;
@@ -42,7 +42,14 @@ void TerminalView::plan(const std::vector<Phase>& phases) {
     total += p.planned_s;
   }
   if (quiet_) return;
-  put("Plan: {} phases, {} of device time\n", phases.size(), hms(total));
+  double left = 0;
+  for (std::size_t i = kept; i < phases.size(); ++i) left += phases[i].planned_s;
+  // A resume's prompt gives the time left; the plan says both, so the two do not seem to disagree
+  // (a technician's review: "Device time 01:44:10", then "Plan: 19 phases, 01:53:50").
+  if (kept > 0 && kept <= phases.size())
+    put("Plan: {} phases, {} of device time; {} kept, {} left\n", phases.size(), hms(total), kept, hms(left));
+  else
+    put("Plan: {} phases, {} of device time\n", phases.size(), hms(total));
   for (std::size_t i = 0; i < phases.size(); ++i)
     put("  {:>2}. {:<14} {:>9}  {}\n", i + 1, phases[i].id, hms(phases[i].planned_s), phases[i].title);
   std::fflush(out_);

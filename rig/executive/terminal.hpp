@@ -14,7 +14,8 @@ namespace rig {
 class TerminalView final : public ProgressSink {
  public:
   explicit TerminalView(std::FILE* out, bool quiet = false);
-  void plan(const std::vector<Phase>& phases);
+  // `kept`: the first phases a resume keeps from its checkpoint (the line says what is left).
+  void plan(const std::vector<Phase>& phases, std::size_t kept = 0);
   void phase_started(std::size_t index, std::size_t count, const std::string& id, const std::string& title,
                      double planned_s) override;
   void phase_progress(double fraction, double sim_now_s) override;

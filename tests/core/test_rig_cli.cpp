@@ -2856,7 +2856,13 @@ TEST(RigCli, AtTheOperatorsPromptsASignalEndsTheRunBeforeAnythingIsPowered) {
   EXPECT_NE(log.find("to continue: rig run --resume " + d + "/run ("), std::string::npos) << log;
   EXPECT_EQ(seen.find("aborted: aborted:"), std::string::npos) << seen;
   // The resume's prompt declined: run.log says the resume did not start (it ended at "resuming").
+  // The prompt gives the time left with the phases kept, as the dry run's plan does.
   EXPECT_EQ(on_a_terminal({"run", "--resume", d + "/run"}, {{"[y/N]", "n\n", 0}}, seen), 3) << seen;
+  EXPECT_NE(seen.find(" left ("), std::string::npos) << seen;
+  EXPECT_NE(seen.find(" phases kept). After your answers"), std::string::npos) << seen;
+  ASSERT_EQ(run({"run", "--dry-run", "--resume", d + "/run"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
+  EXPECT_NE(slurp(d + "/dry.stdout").find(" of device time; "), std::string::npos) << slurp(d + "/dry.stdout");
+  EXPECT_NE(slurp(d + "/dry.stdout").find(" kept, "), std::string::npos) << slurp(d + "/dry.stdout");
   EXPECT_NE(slurp(d + "/run/run.log").find("resume not started: operator did not confirm the DUT is mounted"),
             std::string::npos)
       << slurp(d + "/run/run.log");
