@@ -276,6 +276,7 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
   ctx.dev.io.set_lamp(Lamp::Running, true);
   if (ctx.dev.io.estop_active()) throw AbortedError("e-stop/interlock is open: close it before starting");
   ctx.log->info("DUT power on ({})", ctx.dev.io.describe());
+  if (ctx.progress) ctx.progress->log("  DUT power on");  // what the operator's answers started, said as it happens
   ctx.dev.io.set_dut_power(true);
   ctx.dev.clock.sleep_for(1.0, ctx.cancel);  // power-up: the loop captures the pendulum
   const DutCommandChannel commands = ctx.dev.dut.command_channel();
@@ -306,6 +307,7 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
     ctx.dev.dut.set_filter(p.filter, ctx.cancel);
   }
   ctx.log->info("homing table ({})", ctx.dev.table.describe());
+  if (ctx.progress) ctx.progress->log("  homing the table");
   ctx.dev.table.home(ctx.cancel);
 }
 

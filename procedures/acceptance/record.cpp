@@ -86,6 +86,9 @@ Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o,
                              const std::string& name, const std::string& serial) {
   for (int attempt = 1;; ++attempt) {
     ctx.log->info("{}: table to {} ({:.4f} deg)", name, to_string(o), table_angle(p, o));
+    // On the terminal too: the technician beside the table sees each turn announced (a review:
+    // the moves were in run.log only).
+    if (ctx.progress) ctx.progress->log(fmt::format("  table to {} ({:.4f}°)", to_string(o), table_angle(p, o)));
     ctx.dev.table.move_to(table_angle(p, o), ctx.cancel);
     ctx.dev.clock.sleep_for(p.settle_s, ctx.cancel);  // let the loop and the mount settle
     Recorded r = record_once(ctx, p, o, seconds, name, serial);

@@ -2848,6 +2848,10 @@ TEST(RigCli, AtTheOperatorsPromptsASignalEndsTheRunBeforeAnythingIsPowered) {
             std::string::npos)
       << seen;
   EXPECT_NE(seen.find("to continue: rig run --resume " + d + "/run ("), std::string::npos) << seen;
+  // What the answers started is said on the terminal as it happens, each turn of the table too.
+  EXPECT_LT(seen.find("Is the table clear"), seen.find("  DUT power on")) << seen;
+  EXPECT_NE(seen.find("  homing the table"), std::string::npos) << seen;
+  EXPECT_NE(seen.find("  table to U20 (180.0000°)"), std::string::npos) << seen;
   const std::string log = slurp(d + "/run/run.log");
   EXPECT_NE(log.find("operator confirmed: Is the DUT mounted on the table with its connector fastened? yes"),
             std::string::npos)
