@@ -221,6 +221,26 @@ TEST_F(RigTable, OptionsMayFollowTheAction) {
   EXPECT_NE(out.find("\"homed\": true"), std::string::npos) << out;
 }
 
+// `rig plant serve --drive cia402 --drive-map MAP --profile PROFILE` as its own process; the
+// " --modbus EP --drive cia402 --drive-map MAP" a `rig table` against it takes, and its endpoint.
+struct ServedCia402 {
+  ServedCia402(const std::string& map, const std::string& profile)
+      : serve({RIG_BIN, "plant", "serve", "--modbus", "127.0.0.1:0", "--drive", "cia402", "--drive-map", map,
+               "--profile", profile},
+              &fd) {
+    const std::string line = read_line(fd);
+    EXPECT_NE(line.find("drive cia402"), std::string::npos) << line;
+    ep = line.substr(line.find("tcp:") + 4, line.find(" unit") - line.find("tcp:") - 4);
+    where = " --modbus " + ep + " --drive cia402 --drive-map " + map;
+  }
+  ~ServedCia402() { close(fd); }
+  ServedCia402(const ServedCia402&) = delete;
+  ServedCia402& operator=(const ServedCia402&) = delete;
+  int fd = -1;
+  Child serve;
+  std::string ep, where;
+};
+
 // `rig plant serve --drive cia402` as its own process, `rig table --drive cia402` against it.
 class RigTableCia402 : public ::testing::TestWithParam<std::string> {};
 
@@ -233,14 +253,11 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
                     "home_velocity_dps = 200.0\nsettle_s = 0.05\nstart_angle_deg = 10.0\n");
     std::fclose(f);
   }
-  int fd = -1;
-  Child serve({RIG_BIN, "plant", "serve", "--modbus", "127.0.0.1:0", "--drive", "cia402", "--drive-map", map,
-               "--profile", prof},
-              &fd);
-  const std::string line = read_line(fd);
-  ASSERT_NE(line.find("drive cia402"), std::string::npos) << line;
-  const std::string ep = line.substr(line.find("tcp:") + 4, line.find(" unit") - line.find("tcp:") - 4);
-  const std::string where = " --modbus " + ep + " --drive cia402 --drive-map " + map;
+  ServedCia402 served(map, prof);
+  ASSERT_FALSE(served.ep.empty());
+  Child& serve = served.serve;
+  const std::string& ep = served.ep;
+  const std::string& where = served.where;
   std::string out;
   auto rig = [&](const std::string& args) { return run(std::string(RIG_BIN) + " table " + args, out); };
   ASSERT_EQ(rig("status" + where), 0) << out;
@@ -291,7 +308,6 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   EXPECT_LT(std::stod(out.substr(p + 14)), 290.0) << out;
   // The server gone: exit 4 naming the drive.
   serve.kill_now();
-  close(fd);
   EXPECT_EQ(rig("move 10 --timeout 0.1" + where), 4) << out;
 }
 
@@ -477,14 +493,9 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
   const std::string prof = write_file(testing::TempDir() + "/masters/plant.toml",
                                       "base = \"ci\"\n[plant.table]\nvelocity_dps = 90.0\naccel_dps2 = 900.0\n"
                                       "home_velocity_dps = 200.0\nsettle_s = 0.05\nstart_angle_deg = 10.0\n");
-  int fd = -1;
-  Child serve({RIG_BIN, "plant", "serve", "--modbus", "127.0.0.1:0", "--drive", "cia402", "--drive-map", map,
-               "--profile", prof},
-              &fd);
-  const std::string line = read_line(fd);
-  ASSERT_NE(line.find("drive cia402"), std::string::npos) << line;
-  const std::string ep = line.substr(line.find("tcp:") + 4, line.find(" unit") - line.find("tcp:") - 4);
-  const std::string where = " --modbus " + ep + " --drive cia402 --drive-map " + map;
+  ServedCia402 served(map, prof);
+  ASSERT_FALSE(served.ep.empty());
+  const std::string& where = served.where;
   std::string out;
   auto rig = [&](const std::string& args, std::string& o) { return run(std::string(RIG_BIN) + " table " + args + where, o); };
   ASSERT_EQ(rig("home", out), 0) << out;
