@@ -605,8 +605,15 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     }
   }
   if (!a.no_history) {
+    const std::string url = history_url(a, hw);
     try {
-      history::record_run(history_url(a, hw), nlohmann::json::parse(passport.dump()), info.out_dir);
+      const long long id = history::record_run(url, nlohmann::json::parse(passport.dump()), info.out_dir);
+      // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
+      // output had mentioned).
+      const std::string line = fmt::format("recorded in the history database {} as run {} (rig history --db {})",
+                                           history::mask_password(url), id, history::mask_password(url));
+      log.info("{}", line);
+      if (!a.quiet) std::cerr << line << "\n";
     } catch (const std::exception& e) {
       log.error("history database not updated: {}", e.what());
     }

@@ -210,8 +210,13 @@ std::string interval_level(const std::string& name, const json& v, double allan_
   if (const double c = number(v, "confidence"); c > 0 && c < 1) return fmt_num(100 * c, 3) + " %";
   if (name == "bias" || name == "base_error") return "95 %, GOST R 8.736";
   if (name == "q" || name == "n" || name == "k" || name == "r" || name.rfind("in_run_b_allan", 0) == 0) {
-    const std::string level = allan_level(allan_confidence);
-    return level == "68 %" ? "68 %, ±1 σ of the Allan fit" : level + " of the Allan fit";  // the profile's confidence
+    const std::string level = allan_level(allan_confidence);  // the profile's confidence
+    // R is read from the record's drift (its reason says so: analysis/noise_terms.cpp), its
+    // interval Student's t at the same confidence: not the Allan fit's (a newcomer's review).
+    if (name == "r" && text(v, "reason").find("drift of the record") != std::string::npos)
+      return level == "68 %" ? "68 %, ±1 σ of the record's drift (Student's t)"
+                             : level + " of the record's drift (Student's t)";
+    return level == "68 %" ? "68 %, ±1 σ of the Allan fit" : level + " of the Allan fit";
   }
   if (name == "bandwidth_0p5" || name == "settling_time") return "95 %, Student over the loop test's steps";
   return "level not stated";

@@ -130,6 +130,10 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_TRUE(fs::exists(d + "/run/captures/run12-U20.cap"));
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
   EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS"), std::string::npos);
+  // Where the run was recorded is said (spawn() points RIG_HISTORY at d/io.history.sqlite).
+  const std::string recorded = "recorded in the history database sqlite:" + d + "/io.history.sqlite as run 1";
+  EXPECT_NE(slurp(d + "/io.stderr").find(recorded), std::string::npos) << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/run/run.log").find(recorded), std::string::npos);
 }
 
 TEST(RigCli, AnalyzeTakesNbs14NinePoints) {

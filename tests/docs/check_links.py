@@ -10,6 +10,8 @@ Rules:
 2. No source or document names a place outside the repository: a path above it
    (`../shared/...`), a build machine's folders (`/work/...`, `build-C/...`), or a spec page
    that only existed outside it (the upper-case METHOD / CONTRACTS / ARCHITECTURE pages).
+3. A source file a document names in code quotes (`tests/design/test_filter.cpp`) exists: a
+   moved test was still cited by its old path (a newcomer's review).
 Exit 0 when clean, 1 with one line per fault (FILE:LINE: what).
 """
 import os
@@ -27,6 +29,9 @@ FOREIGN = [
     (re.compile(r"\b(?:" + "METHOD|CONTRACTS|ARCHITECTURE" + r")\.md"),
      "names a page that is not in the repository (docs/method.md, docs/contracts.md, docs/architecture.md)"),
 ]
+# A repository path in code quotes: a top folder of the tree, then a file with a source extension.
+CODE_PATH = re.compile(r"`((?:tests|app|rig|analysis|plant|procedures|firmware_link|design|bench|scripts|tools|drives|"
+                       r"duts|profiles)/[A-Za-z0-9_./-]+\.(?:cpp|hpp|py|sh|toml|dbc))`")
 SKIP_DIRS = {".git", "runs", "__pycache__", "node_modules"}
 TEXT_EXT = {".md", ".cpp", ".hpp", ".h", ".c", ".py", ".sh", ".toml", ".txt", ".cmake", ".dbc", ".json", ".html",
             ".in", ""}
@@ -65,6 +70,9 @@ def check_links(root, md, faults):
                 continue
             if fenced:
                 continue
+            for cited in CODE_PATH.findall(line):
+                if not os.path.exists(os.path.join(root, cited)):
+                    faults.append(f"{os.path.relpath(md, root)}:{n}: '{cited}': no such file in the repository")
             for target in LINK.findall(line):
                 if re.match(r"^[a-z][a-z0-9+.-]*:", target):  # https:, mailto: ...
                     continue
@@ -118,12 +126,13 @@ def self_test():
     planted = {
         "README.md": "# T\n[ok](docs/a.md) [ok](docs/a.md#part-one) [x](docs/missing.md)\n"
                      "[y](../shared/spec/M.md) [z](docs/a.md#nowhere)\n```\n[in code](nope.md)\n```\n",
-        "docs/a.md": "# A\n## Part one\n[back](../README.md)\n",
+        "docs/a.md": "# A\n## Part one\n[back](../README.md)\nchecked by `tests/x/gone.cpp`, `src/x.cpp` is not a top folder\n",
         "src/x.cpp": "// see " + "METHOD" + ".md\n// " + "build-" + "C/bin/tool\n",
         "docs/h.md": "# H\nfrom /" + "work/shared/reference\n",
     }
     expected = ["README.md:2: link 'docs/missing.md'", "README.md:3: link '../shared/spec/M.md' leaves",
-                "README.md:3: link 'docs/a.md#nowhere': no heading", "README.md:3: '../shared'", "src/x.cpp:1:", "src/x.cpp:2:", "docs/h.md:2:"]
+                "README.md:3: link 'docs/a.md#nowhere': no heading", "README.md:3: '../shared'", "src/x.cpp:1:", "src/x.cpp:2:", "docs/h.md:2:",
+                "docs/a.md:4: 'tests/x/gone.cpp': no such file"]
     with tempfile.TemporaryDirectory() as root:
         for rel, text in planted.items():
             os.makedirs(os.path.join(root, os.path.dirname(rel)), exist_ok=True)

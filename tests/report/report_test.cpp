@@ -186,7 +186,15 @@ TEST(Report, EveryBoundsCellStatesItsIntervalLevel) {
   p["values"]["n"]["lo"] = 2.0e-7;
   p["values"]["n"]["hi"] = 2.4e-7;
   p["values"]["extra"] = {{"value", 1}, {"lo", 0.5}, {"hi", 1.5}, {"confidence", 0.9}};
+  // R read from the record's drift: its interval is Student's t on the drift, not the Allan fit's.
+  p["values"]["r"]["value"] = 2e-5;
+  p["values"]["r"]["lo"] = 1.2e-5;
+  p["values"]["r"]["hi"] = 2.8e-5;
+  p["values"]["r"]["reason"] = "least-squares drift of the record (falling; ..., Student's t at EDF 12)";
   const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  EXPECT_NE(row_of(h, "r").find("<div class=\"lvl\">68 %, ±1 σ of the record&#39;s drift (Student&#39;s t)</div>"),
+            std::string::npos)
+      << row_of(h, "r");
   EXPECT_NE(row_of(h, "bias").find("<div class=\"lvl\">95 %, GOST R 8.736</div>"), std::string::npos);
   EXPECT_NE(row_of(h, "n").find("<div class=\"lvl\">68 %, ±1 σ of the Allan fit</div>"), std::string::npos);
   EXPECT_NE(row_of(h, "in_run_b_allan").find("68 %"), std::string::npos);

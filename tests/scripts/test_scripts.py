@@ -131,7 +131,15 @@ def demo_profile_ci(root, build):
             fail(f"a bad profile should exit 2, got {rc}:\n{se[-1000:]}")
         if "written:" in se or "wrote no files" not in se:
             fail("for a run that wrote nothing the demo must list no file:\n" + se[-1000:])
-    print("demo --profile ci: exit 0, lists only written files and the history database; bad profile: no file listed")
+        # The finished run's folder again: refused (exit 2), and its earlier files are not listed as
+        # this run's, nor is a history record claimed (a newcomer's review).
+        rc, so, se = run_demo(root, build, ["--profile", "ci", "--out", out, "--db", db])
+        if rc != 2:
+            fail(f"a finished run's folder should exit 2, got {rc}:\n{se[-1000:]}")
+        if "written:" in se or "history: recorded" in se or "wrote no files" not in se:
+            fail("a refused run listed files or a history record it did not write:\n" + se[-1000:])
+    print("demo --profile ci: exit 0, lists only written files and the history database; bad profile and a "
+          "finished folder: no file listed")
 
 
 def packages(root, *args):
