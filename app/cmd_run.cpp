@@ -243,18 +243,25 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
 // The signals are taken by SignalWatcher's thread (blocked here), so a plain read of the answer
 // never returned on Ctrl-C: the prompt kept waiting, and a "y" typed after it powered the DUT
 // (a technician's review). stdin is polled, and a signal ends the prompt as it ends a run.
+// The line is read from the descriptor byte by byte: a buffered reader could hold the next
+// answer where poll() does not see it.
 bool confirm(const std::string& question, const CancelToken& cancel) {
   std::cerr << question << " [y/N] " << std::flush;
+  std::string line;
   for (;;) {
     cancel.throw_if_requested();
     pollfd in{STDIN_FILENO, POLLIN, 0};
     const int r = ::poll(&in, 1, 50);
     if (r < 0 && errno != EINTR) return false;
-    if (r > 0) break;
+    if (r <= 0) continue;
+    cancel.throw_if_requested();
+    char c = 0;
+    const ssize_t n = ::read(STDIN_FILENO, &c, 1);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;  // end of input: no answer is a no
+    if (c == '\n') break;
+    line += c;
   }
-  cancel.throw_if_requested();
-  std::string line;
-  if (!std::getline(std::cin, line)) return false;
   return !line.empty() && (line[0] == 'y' || line[0] == 'Y');
 }
 
