@@ -18,6 +18,7 @@
 #include "rig/core/toml_util.hpp"
 #include "rig/executive/signals.hpp"
 #include "rig/modbus/cia402_client.hpp"
+#include "rig/modbus/motion_text.hpp"
 #include "rig/modbus/table_client.hpp"
 
 namespace rig::cli {
@@ -109,7 +110,7 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
   else
     std::snprintf(alarm, sizeof alarm, "none");
   std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°\nstate      %s\nalarm      %s\n", where.c_str(),
-              s.actual_deg, s.target_deg, flags(s).c_str(), alarm);
+              modbus::detail::shown_deg(s.actual_deg), modbus::detail::shown_deg(s.target_deg), flags(s).c_str(), alarm);
   if (!s.drive_state.empty()) std::printf("drive      %s (CiA 402)\n", s.drive_state.c_str());
   if (s.has_heartbeat) std::printf("heartbeat  %u\n", s.heartbeat);
 }
@@ -149,7 +150,7 @@ void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
       s = t.status();
     }
     std::cerr << "rig: the table " << (s.moving ? "was still moving" : "stopped") << " at "
-              << fmt::format("{:.4f}", s.actual_deg) << "°"
+              << modbus::detail::deg_str(s.actual_deg)
               << (halt_error.empty() ? " (halt delivered to the drive)" : " (" + halt_error + ")")
               << (s.homed_known && !s.homed ? "; it is not homed now: `rig table home` before the next move" : "")
               << "\n";

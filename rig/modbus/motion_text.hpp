@@ -14,9 +14,12 @@
 
 namespace rig::modbus::detail {
 
+// An angle as people read it: four decimals, and no "-0.0000°" for a value that rounds to zero
+// (a home read back as -0.00001° printed so, a review).
+inline double shown_deg(double d) { return std::fabs(d) < 0.00005 ? 0.0 : d; }
 inline std::string deg_str(double d) {
   char b[48];
-  std::snprintf(b, sizeof b, "%.4f°", d);
+  std::snprintf(b, sizeof b, "%.4f°", shown_deg(d));
   return b;
 }
 

@@ -9,7 +9,7 @@
 #include "helpers.hpp"
 #include "rig/core/clock.hpp"
 #include "plant/table/table_emulator.hpp"
-#include "rig/modbus/table_client.hpp"
+#include "rig/modbus/motion_text.hpp"
 #include "rig/modbus/table_client.hpp"
 
 namespace rig::table_test {
@@ -324,5 +324,18 @@ TEST(TableInProcess, StopAndQuickStopOnASilentDriveReturnAndSayWhy) {
   EXPECT_NEAR(r.clock.now_s() - t0, 0.6, 1e-9);
 }
 
+}  // namespace
+}  // namespace rig::table_test
+
+namespace rig::table_test {
+namespace {
+// An angle that rounds to zero is "0.0000°", not "-0.0000°" (a home read back as -0.00001°
+// printed so, a review); a real negative angle keeps its sign.
+TEST(MotionText, AnAngleThatRoundsToZeroHasNoSign) {
+  EXPECT_EQ(rig::modbus::detail::deg_str(-0.00001), "0.0000°");
+  EXPECT_EQ(rig::modbus::detail::deg_str(0.0), "0.0000°");
+  EXPECT_EQ(rig::modbus::detail::deg_str(-0.0001), "-0.0001°");
+  EXPECT_EQ(rig::modbus::detail::deg_str(179.99996), "180.0000°");
+}
 }  // namespace
 }  // namespace rig::table_test
