@@ -115,8 +115,12 @@ void list(const HistoryArgs& a, const history::Filter& f) {
 }
 
 struct Stats {
-  std::size_t n = 0;
+  std::size_t runs = 0, n = 0;  // runs seen; values among them (a null value is a run without one)
   double mean = 0, m2 = 0, min = INFINITY, max = -INFINITY, first = NAN, last = NAN;
+  void add(const std::optional<double>& value) {
+    ++runs;
+    if (value && std::isfinite(*value)) add(*value);
+  }
   void add(double v) {  // Welford's running mean and variance
     ++n;
     const double d = v - mean;
@@ -154,40 +158,32 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
   t.push_back({"id", "started", "serial", "run", "value", "unit", "lo", "hi", "limits", "outcome", "reason"});
   // The statistics per DUT and unit (a run that wrote the value in mg is not averaged with one in
   // g, a review); `runs` counts every run of the DUT, `n` those with a value.
-  using Key = std::pair<std::string, std::string>;  // serial, unit
-  std::map<Key, Stats> per_serial;
-  std::map<Key, std::size_t> runs_of;
-  std::map<std::string, Stats> all;  // per unit
-  std::map<std::string, std::size_t> all_runs;
+  std::map<std::pair<std::string, std::string>, Stats> per_serial;  // by serial, unit
+  std::map<std::string, Stats> all;                                 // by unit
   for (const auto& r : rows) {
     const std::string limits =
         r.limit_min || r.limit_max ? "[" + brief(r.limit_min) + ", " + brief(r.limit_max) + "]" : "-";
     t.push_back({std::to_string(r.run_id), r.started, r.serial, r.outcome, brief(r.value), r.unit, brief(r.lo),
                  brief(r.hi), limits, r.value_outcome, r.reason});
-    ++runs_of[{r.serial, r.unit}];
-    ++all_runs[r.unit];
-    Stats& st = per_serial[{r.serial, r.unit}];
-    if (r.value && std::isfinite(*r.value)) {
-      st.add(*r.value);
-      all[r.unit].add(*r.value);
-    }
+    per_serial[{r.serial, r.unit}].add(r.value);
+    all[r.unit].add(r.value);
   }
   std::cout << a.value << " over " << rows.size() << " run(s)\n";
   print_table(std::cout, t);
   // The trend: per DUT (across its runs) and across all DUTs.
   std::vector<std::vector<std::string>> s;
   s.push_back({"serial", "unit", "runs", "n", "mean", "sd", "min", "max", "last - first"});
-  auto row = [&](const std::string& name, const std::string& unit, std::size_t runs, const Stats& st, bool one_dut) {
+  auto row = [&](const std::string& name, const std::string& unit, const Stats& st, bool one_dut) {
     const auto number = [&st](double v) { return st.n ? brief(v) : std::string("-"); };
-    s.push_back({name, unit, std::to_string(runs), std::to_string(st.n), number(st.mean),
+    s.push_back({name, unit, std::to_string(st.runs), std::to_string(st.n), number(st.mean),
                  brief(std::isnan(st.sd()) ? std::nullopt : std::optional(st.sd())), number(st.min), number(st.max),
                  one_dut ? number(st.last - st.first) : "-"});
   };
-  for (const auto& [key, st] : per_serial) row(key.first, key.second, runs_of[key], st, true);
+  for (const auto& [key, st] : per_serial) row(key.first, key.second, st, true);
   for (const auto& entry : all) {  // drift only means something within one DUT
     const std::string& unit = entry.first;  // not a structured binding: clang 14 cannot capture one
     const auto duts = std::count_if(per_serial.begin(), per_serial.end(), [&](const auto& e) { return e.first.second == unit; });
-    if (duts > 1) row("all DUTs", unit, all_runs[unit], entry.second, false);
+    if (duts > 1) row("all DUTs", unit, entry.second, false);
   }
   if (all.size() > 1)
     std::cout << "\nnote: " << a.value << " was recorded in " << all.size()

@@ -617,8 +617,9 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       const long long id = history::record_run(url, nlohmann::json::parse(passport.dump()), info.out_dir);
       // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
       // output had mentioned).
-      const std::string line = fmt::format("recorded in the history database {} as run {} (rig history --db {})",
-                                           history::mask_password(url), id, history::mask_password(url));
+      const std::string shown = history::mask_password(url);
+      const std::string line =
+          fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, id, shown);
       log.info("{}", line);
       if (!a.quiet) std::cerr << line << "\n";
     } catch (const std::exception& e) {
@@ -1071,13 +1072,14 @@ int do_run(RunArgs a) {
   // After a stop, what is kept and how to go on, where the technician looks (a review: only
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
   if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
-    const std::size_t kept = fs::exists(Executive::checkpoint_path(a.out)) ? res.phases.size() : 0;
-    std::size_t done = 0;
-    for (const PhaseRecord& r : res.phases) done += r.status == "done" || r.status == "skipped";
+    // Kept: the phases the checkpoint holds (done here, or kept from it by this resume).
+    std::size_t kept = 0;
+    if (fs::exists(Executive::checkpoint_path(a.out)))
+      for (const PhaseRecord& r : res.phases) kept += r.status == "done" || r.status == "skipped";
     const std::string hint = fmt::format(
         "to continue: rig run --resume {} ({} of {} phases kept; `rig run --dry-run --resume {}` shows what "
         "a resume repeats)",
-        shown_text(a.out), kept ? done : 0, res.phases.size(), shown_text(a.out));
+        shown_text(a.out), kept, res.phases.size(), shown_text(a.out));
     std::cerr << hint << "\n";
     log->info("{}", hint);
   }

@@ -171,7 +171,16 @@ std::string ordered(const std::string& select, const Filter& f, std::vector<Valu
 
 std::optional<double> num(const Value& v) { return as_double(v); }
 
+// The run folder as the database keys it: absolute, its links resolved, so that "r1", "./r1/" and
+// a link to it are one run.
+std::string run_dir_key(const std::string& run_dir) {
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(fs::absolute(run_dir), ec);
+  return (ec ? fs::absolute(run_dir) : dir).string();
+}
+
 }  // namespace
+
 
 int current_schema_version() { return migrations().back().version; }
 
@@ -185,9 +194,7 @@ long long record_run(const std::string& db_url, const json& passport, const std:
   for (const char* key : {"serial", "outcome"})
     if (!passport.contains(key) || !passport[key].is_string())
       throw ConfigError(std::string("history: the passport has no '") + key + "' string");
-  std::error_code ec;
-  fs::path dir = fs::weakly_canonical(fs::absolute(run_dir), ec);
-  if (ec) dir = fs::absolute(run_dir);
+  const std::string dir = run_dir_key(run_dir);
 
   auto db = open_migrated(db_url);
   Transaction tx(*db);
@@ -197,12 +204,12 @@ long long record_run(const std::string& db_url, const json& passport, const std:
                              : Value(std::string("rig ") + RIG_VERSION);
   std::vector<Value> row = {passport["serial"].get<std::string>(), opt_text(passport, "profile"),
                             opt_text(passport, "plant"), software, started, opt_time(passport, "finished"),
-                            passport["outcome"].get<std::string>(), dir.string(), passport.dump(),
+                            passport["outcome"].get<std::string>(), dir, passport.dump(),
                             station_name(passport), opt_text(passport, "aborted_reason"), utc_now_iso8601()};
   // A run recorded again (a resume, `--record` after a database outage) keeps its id, so that a
   // reference to it (a quality record, a ticket) stays valid; it used to get a new one each time.
   const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? ORDER BY id",
-                             {dir.string(), started});
+                             {dir, started});
   int64_t id = 0;
   if (was.empty()) {
     id = as_int(db->query("INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, "
@@ -248,14 +255,12 @@ long long record_run(const std::string& db_url, const json& passport, const std:
 
 std::vector<std::pair<long long, std::string>> same_run_elsewhere(const std::string& db_url, const json& passport,
                                                                   const std::string& run_dir) {
-  std::error_code ec;
-  fs::path dir = fs::weakly_canonical(fs::absolute(run_dir), ec);
-  if (ec) dir = fs::absolute(run_dir);
+  const std::string dir = run_dir_key(run_dir);
   auto db = open_for_reading(db_url);
   std::vector<std::pair<long long, std::string>> out;
   for (const Row& r : db->query("SELECT id, run_dir FROM runs WHERE serial = ? AND started IS NOT DISTINCT FROM ? AND "
                                 "run_dir <> ? ORDER BY id",
-                                {passport.value("serial", std::string()), opt_time(passport, "started"), dir.string()}))
+                                {passport.value("serial", std::string()), opt_time(passport, "started"), dir}))
     out.emplace_back(as_int(r[0]).value_or(0), as_text(r[1]));
   return out;
 }

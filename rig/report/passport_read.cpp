@@ -1,5 +1,6 @@
 #include "rig/report/passport_read.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -113,11 +114,9 @@ void check_passport(const json& p, const std::string& path) {
     throw ConfigError(path + ": values: an object of measurements, not " +
                       (p.contains("values") ? shown(p["values"]).substr(0, 60) : "absent"));
   for (const auto& [name, m] : p["values"].items()) check_value(name, m, path);
-  if (p.contains("captures") && !p["captures"].is_null()) {
-    bool ok = p["captures"].is_array();
-    for (const json& c : ok ? p["captures"] : json::array()) ok = ok && c.is_string();
-    if (!ok) throw ConfigError(path + ": captures: a list of file names, not " + shown(p["captures"]).substr(0, 60));
-  }
+  if (const json c = p.value("captures", json());
+      !c.is_null() && !(c.is_array() && std::all_of(c.begin(), c.end(), [](const json& x) { return x.is_string(); })))
+    throw ConfigError(path + ": captures: a list of file names, not " + shown(c).substr(0, 60));
   require_consistent_verdicts(p, path);
 }
 

@@ -34,7 +34,8 @@ json read_analysis(const fs::path& path, std::string& problem) {
   } catch (const ConfigError& e) {
     std::string why = e.what();  // "analysis.json: ..." or "analysis.json:LINE:COL: ..."
     why.erase(0, std::min(why.size(), name.size() + 1));
-    problem = name + " is malformed: " + why.substr(why.find_first_not_of(' '));
+    why.erase(0, std::min(why.size(), why.find_first_not_of(' ')));
+    problem = name + " is malformed: " + why;
     return json();
   }
 }

@@ -37,7 +37,8 @@ class Page {
   const nlohmann::json& p_;
   const nlohmann::json& a_;
   std::string analysis_problem_;
-  std::string run_dir_;  // the folder read ("" when rendered from memory)
+  std::string folder_;      // the run folder the page names (the one read, or the passport's out_dir)
+  std::string written_at_;  // the passport's out_dir when the page was made from a copy elsewhere
   std::vector<std::string> set_aside_;  // *.interrupted-N files in it
   std::vector<std::string> missing_;
 };
