@@ -590,11 +590,12 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   auto passport = make_passport(info, res, values);
   // The passport last of the three: a folder that cannot take the others (a full disk) is exit 4
   // with no passport, never a passport saying PASS beside exit 4 (a code review).
-  write_file_atomic(a.out + "/analysis.json", acceptance::analysis_document(dut).dump(1));
+  const nlohmann::json analysis = acceptance::analysis_document(dut);
+  write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
   write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
   write_passport(a.out + "/passport.json", passport);
   try {
-    report::write_report(a.out);
+    report::write_report(a.out, analysis);  // the document just written, not parsed again
   } catch (const std::exception& e) {
     log.error("report.html not written: {}", e.what());
   }

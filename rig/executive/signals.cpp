@@ -1,10 +1,15 @@
 #include "rig/executive/signals.hpp"
 
+#include <poll.h>
 #include <pthread.h>
 #include <signal.h>
+#include <sys/eventfd.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
 
-#include <ctime>
+#include <cerrno>
 #include <string>
+#include <system_error>
 
 namespace rig {
 
@@ -20,24 +25,48 @@ sigset_t abort_signals() {
   if (sigaction(SIGHUP, nullptr, &hup) != 0 || hup.sa_handler != SIG_IGN) sigaddset(&s, SIGHUP);
   return s;
 }
+
+const char* signal_name(uint32_t sig) {
+  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP";
+}
 }  // namespace
 
 SignalWatcher::SignalWatcher(CancelSource& source) : source_(source) {
   const sigset_t s = abort_signals();
   pthread_sigmask(SIG_BLOCK, &s, nullptr);
-  thread_ = std::thread([this, s] {
-    const timespec slice{0, 100'000'000};
-    while (!stop_.load()) {
-      const int sig = sigtimedwait(&s, nullptr, &slice);
-      if (sig > 0) source_.request(std::string(sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
-                                   " received");
+  signal_fd_ = signalfd(-1, &s, SFD_CLOEXEC);
+  wake_fd_ = eventfd(0, EFD_CLOEXEC);
+  if (signal_fd_ < 0 || wake_fd_ < 0) {
+    const int err = errno;
+    if (signal_fd_ >= 0) close(signal_fd_);
+    if (wake_fd_ >= 0) close(wake_fd_);
+    pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
+    throw std::system_error(err, std::generic_category(), "signal watcher");
+  }
+  // The thread sleeps in poll until a signal or the destructor's wake: it used to wake every
+  // 100 ms to look at a stop flag, and every command's exit waited out the slice (a `paper`
+  // run's last 40-100 ms).
+  thread_ = std::thread([this] {
+    pollfd fds[2] = {{signal_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    for (;;) {
+      if (poll(fds, 2, -1) < 0) {
+        if (errno == EINTR) continue;
+        return;
+      }
+      if (fds[1].revents != 0) return;
+      signalfd_siginfo info{};
+      if ((fds[0].revents & POLLIN) != 0 && read(signal_fd_, &info, sizeof info) == sizeof info)
+        source_.request(std::string(signal_name(info.ssi_signo)) + " received");
     }
   });
 }
 
 SignalWatcher::~SignalWatcher() {
-  stop_ = true;
+  const uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);  // cannot fail: the counter is far from full
   thread_.join();
+  close(signal_fd_);
+  close(wake_fd_);
   const sigset_t s = abort_signals();
   pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
 }

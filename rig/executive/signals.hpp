@@ -1,8 +1,7 @@
 // SIGINT/SIGTERM -> cancellation. The signals are blocked in every thread and
-// taken by one watcher thread with sigtimedwait, so the handler side is plain
+// taken by one watcher thread through a signalfd, so the handler side is plain
 // code (no async-signal-safety limits) and blocking calls see the cancel token.
 #pragma once
-#include <atomic>
 #include <thread>
 
 #include "rig/core/cancel.hpp"
@@ -11,7 +10,8 @@ namespace rig {
 
 class SignalWatcher {
  public:
-  // Construct before any other thread starts (threads inherit the signal mask).
+  // Construct before any other thread starts (threads inherit the signal mask). Throws
+  // std::system_error when the kernel gives no signalfd or eventfd.
   explicit SignalWatcher(CancelSource& source);
   ~SignalWatcher();
   SignalWatcher(const SignalWatcher&) = delete;
@@ -19,7 +19,8 @@ class SignalWatcher {
 
  private:
   CancelSource& source_;
-  std::atomic<bool> stop_{false};
+  int signal_fd_ = -1;  // the abort signals, read by the thread
+  int wake_fd_ = -1;    // an eventfd the destructor writes: the thread leaves at once
   std::thread thread_;
 };
 

@@ -1,5 +1,10 @@
 #include "rig/gpio/gpiod_lines.hpp"
 
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <iterator>
 #include <optional>
@@ -56,8 +61,22 @@ class GpiodLines final : public LineDriver {
     }
   }
 
+  ~GpiodLines() override {
+    if (wake_fd_ >= 0) close(wake_fd_);
+  }
+  GpiodLines(const GpiodLines&) = delete;
+  GpiodLines& operator=(const GpiodLines&) = delete;
+
   std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) override {
-    if (!estop_.event_wait(timeout)) return std::nullopt;
+    // poll on the line's event descriptor and the wake eventfd (libgpiod's event_wait polls the
+    // line alone, so a leaving rig waited out the timeout).
+    pollfd fds[2] = {{estop_.event_get_fd(), POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    const int r = poll(fds, wake_fd_ >= 0 ? 2 : 1, static_cast<int>(timeout.count()));
+    if (r < 0) {
+      if (errno == EINTR) return std::nullopt;
+      throw HardwareError("GPIO e-stop line " + cfg_.estop + ": poll: " + std::system_category().message(errno));
+    }
+    if (r == 0 || (fds[0].revents & POLLIN) == 0) return std::nullopt;  // timeout, or woken
     // Edges are reported in logical (active-low corrected) terms.
     const gpiod::line_event ev = estop_.event_read();
     // The uAPI v1 stamps line events with CLOCK_MONOTONIC (Linux >= 5.7), the
@@ -68,6 +87,12 @@ class GpiodLines final : public LineDriver {
   }
 
   std::optional<std::chrono::steady_clock::time_point> last_edge_time() const override { return last_edge_; }
+
+  void wake() override {
+    if (wake_fd_ < 0) return;
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);  // the counter is far from full
+  }
 
   std::string describe() const override {
     std::string s = "libgpiod lines";
@@ -99,6 +124,7 @@ class GpiodLines final : public LineDriver {
   gpiod::chip chip_;
   gpiod::line out_[kOutputs];
   gpiod::line estop_;
+  int wake_fd_ = eventfd(0, EFD_CLOEXEC);  // written by wake(); -1 without one: waits end at the timeout
   std::optional<std::chrono::steady_clock::time_point> last_edge_;
 };
 

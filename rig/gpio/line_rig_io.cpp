@@ -30,6 +30,7 @@ LineRigIo::LineRigIo(std::unique_ptr<LineDriver> driver) : drv_(std::move(driver
 
 LineRigIo::~LineRigIo() {
   stop_ = true;
+  drv_->wake();  // the watcher would otherwise sleep out its 50 ms wait before it sees stop_
   if (thread_.joinable()) thread_.join();
   try {
     std::lock_guard lk(drv_mu_);
@@ -128,12 +129,20 @@ std::optional<bool> SimLines::wait_estop_edge(std::chrono::milliseconds timeout)
   std::unique_lock lk(mu_);
   ++waits_;  // the reader is back: whatever it took before is handled
   handled_cv_.notify_all();
-  if (!cv_.wait_for(lk, timeout, [this] { return !edges_.empty(); })) return std::nullopt;
+  if (!cv_.wait_for(lk, timeout, [this] { return !edges_.empty() || woken_; }) || edges_.empty()) return std::nullopt;
   const bool v = edges_.front();
   edges_.erase(edges_.begin());
   ++taken_;
   waits_at_take_ = waits_;
   return v;
+}
+
+void SimLines::wake() {
+  {
+    std::lock_guard lk(mu_);
+    woken_ = true;
+  }
+  cv_.notify_all();
 }
 
 bool SimLines::push_edge_locked(bool active) {

@@ -33,6 +33,10 @@ class LineDriver {
   // Waits up to `timeout` for an edge on the e-stop input; returns the new
   // logical level, or nullopt on timeout.
   virtual std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) = 0;
+  // Ends a wait_estop_edge in progress, and every later one, at once with nullopt: the rig is
+  // leaving and its watcher must not sleep out its timeout first. A driver without it leaves
+  // the watcher to notice at the timeout.
+  virtual void wake() {}
   // When the last edge happened, on std::chrono::steady_clock (CLOCK_MONOTONIC):
   // the kernel's event timestamp for libgpiod; nullopt when unknown.
   virtual std::optional<std::chrono::steady_clock::time_point> last_edge_time() const { return std::nullopt; }
@@ -82,6 +86,7 @@ class SimLines final : public LineDriver {
   void set(Output o, bool active) override;
   bool estop_active() override;
   std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) override;
+  void wake() override;
   std::string describe() const override { return "simulated lines"; }
 
   // The "hardware" side.
@@ -103,6 +108,7 @@ class SimLines final : public LineDriver {
   std::condition_variable cv_;
   bool out_[kOutputs]{};
   bool estop_ = false;
+  bool woken_ = false;       // wake(): waits return at once
   std::vector<bool> edges_;  // pending edges (new levels)
   std::condition_variable handled_cv_;
   uint64_t taken_ = 0;           // edges the reader has taken

@@ -122,6 +122,55 @@ TEST(GpioSafety, LampsDriveTheirLinesAndMissingLampsAreIgnored) {
   EXPECT_FALSE(bare.lines->level(Output::LampFail));
 }
 
+TEST(GpioSafety, LeavingWakesTheWatcherInsteadOfWaitingOutItsTimeout) {
+  // A driver whose wait ignores its timeout and ends only when woken (or after a minute). The
+  // test destroys the rig once the watcher sleeps in it: the destructor must wake it, or the
+  // wait ends by its minute and the test fails.
+  struct Shared {
+    std::mutex m;
+    std::condition_variable cv;
+    bool waiting = false, woken = false, timed_out = false;
+  };
+  struct Sleepy final : LineDriver {
+    Shared& sh;
+    explicit Sleepy(Shared& s) : sh(s) {}
+    bool has(Output o) const override { return o == Output::Power; }
+    void set(Output, bool) override {}
+    bool estop_active() override { return false; }
+    std::optional<bool> wait_estop_edge(std::chrono::milliseconds) override {
+      std::unique_lock lk(sh.m);
+      sh.waiting = true;
+      sh.cv.notify_all();
+      if (!sh.cv.wait_for(lk, std::chrono::minutes(1), [this] { return sh.woken; })) sh.timed_out = true;
+      return std::nullopt;
+    }
+    void wake() override {
+      {
+        std::lock_guard lk(sh.m);
+        sh.woken = true;
+      }
+      sh.cv.notify_all();
+    }
+    std::string describe() const override { return "sleepy lines"; }
+  };
+  Shared sh;
+  {
+    LineRigIo io(std::make_unique<Sleepy>(sh));
+    std::unique_lock lk(sh.m);
+    sh.cv.wait(lk, [&] { return sh.waiting; });
+  }
+  EXPECT_TRUE(sh.woken);
+  EXPECT_FALSE(sh.timed_out);
+}
+
+TEST(GpioSafety, SimulatedLinesWokenStillHandOverAPendingEdge) {
+  SimLines lines;
+  lines.drive_estop(true);
+  lines.wake();
+  EXPECT_EQ(lines.wait_estop_edge(std::chrono::milliseconds(0)), std::optional<bool>(true));
+  EXPECT_EQ(lines.wait_estop_edge(std::chrono::hours(1)), std::nullopt);  // woken: no wait
+}
+
 TEST(GpioSafety, DestructionLeavesTheDutUnpowered) {
   // The lines outlive the RigIo here (shared), so their last state can be checked.
   struct Shared final : LineDriver {

@@ -86,6 +86,13 @@ TEST(RunReport, CiRunCarriesWhatThePrintedPassportShows) {
   EXPECT_NE(h.find("2 s averages of the U10 and U20 runs"), std::string::npos);
   EXPECT_NE(h.find("<dt>Device time</dt>"), std::string::npos);
   EXPECT_EQ(h.find("id=\"missing\""), std::string::npos);  // every plot drawn
+
+  // `rig run` renders the page from the analysis document it holds, not from the file it wrote;
+  // `rig report` reads the file: the same page, byte for byte (doubles survive the JSON round trip).
+  const std::string rep = std::string(RIG_BINARY) + " report " + (d.path / "run").string() + " > " +
+                          (d.path / "report-out.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(rep.c_str()), 0) << slurp(d.path / "report-out.txt");
+  EXPECT_TRUE(slurp(d.path / "run" / "report.html") == h) << "rig report drew another page than rig run";
 }
 
 }  // namespace
