@@ -922,6 +922,9 @@ int do_run(RunArgs a) {
   }
   double planned_s = 0;
   for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
+  // The plan first: the operator answers knowing what the run will do (it came after the answers,
+  // once the devices were open: a technician's review).
+  view.plan(phases, completed.size());
   std::vector<std::string> confirmed;
   try {
     confirmed = operator_prompts(a, p, planned_s, completed.size(), cancel.token());
@@ -987,7 +990,6 @@ int do_run(RunArgs a) {
   acceptance::RunOptions ro;
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
-  view.plan(phases, completed.size());
   Executive exec(dev, a.out, log, &view);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
     exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, files_of_the_run(state.slot()), text); });

@@ -299,6 +299,7 @@ class DbcParser {
       i = e + 1;
     }
     if (db_.messages_.empty()) fail(src_, t_.empty() ? 1 : t_.back().line, "no messages (BO_) defined");
+    db_.source_ = src_;
     return std::move(db_);
   }
 

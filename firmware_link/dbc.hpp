@@ -98,6 +98,9 @@ class Dbc {
   std::optional<std::vector<DecodedSignal>> decode(const CanFrame& f, std::string* error = nullptr) const;
   std::optional<std::vector<DecodedSignal>> decode(const CanFdFrame& f, std::string* error = nullptr) const;
 
+  // The file it was read from, as given (or parse()'s source name): messages about a signal
+  // name it with the signal's line, "FILE:LINE".
+  const std::string& source() const { return source_; }
   const std::string& version() const { return version_; }
   const std::vector<std::string>& nodes() const { return nodes_; }
   const std::string& comment() const { return comment_; }
@@ -112,7 +115,7 @@ class Dbc {
  private:
   friend class DbcParser;
   std::vector<DbcMessage> messages_;
-  std::string version_, comment_;
+  std::string source_, version_, comment_;
   std::vector<std::string> nodes_;
   std::map<std::string, std::string> node_comments_;
   std::map<std::string, std::map<int64_t, std::string>> value_tables_;

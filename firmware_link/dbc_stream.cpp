@@ -39,7 +39,7 @@ namespace {
 // (or one signal named in two roles) would decode plausible nonsense. Of a status signal only the
 // bits the *_bit keys name are read, so only those count.
 template <class Roles, class Fail>
-void check_no_shared_bits(const Roles& r, uint64_t status_bits, const Fail& fail) {
+void check_no_shared_bits(const Roles& r, uint64_t status_bits, const std::string& dbc_source, const Fail& fail) {
   struct Role {
     std::string name;
     const DbcSignal* s;
@@ -56,7 +56,7 @@ void check_no_shared_bits(const Roles& r, uint64_t status_bits, const Fail& fail
   }
   auto name = [&](const Role& o) {
     return o.name + " " + r.msg->name + "." + o.s->name + " (" + std::to_string(o.s->start) + "|" +
-           std::to_string(o.s->length) + ", DBC line " + std::to_string(o.s->line) + ")";
+           std::to_string(o.s->length) + ", " + dbc_source + ":" + std::to_string(o.s->line) + ")";
   };
   auto shared = [](const Role& a, const Role& b) { return dbc_same_frame(*a.s, *b.s) && (a.bits & b.bits).any(); };
   for (std::size_t i = 0; i < data.size(); ++i) {
@@ -108,7 +108,7 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
     if (c.factor != 1 || c.offset != 0) {
       char b[64];
       std::snprintf(b, sizeof b, "(%g,%g)", c.factor, c.offset);
-      fail("counter " + name + " is scaled in the DBC " + b + ", DBC line " + std::to_string(c.line) +
+      fail("counter " + name + " is scaled in the DBC " + b + ", " + dbc_->source() + ":" + std::to_string(c.line) +
            ": a sample counter is a whole number, factor 1 and offset 0");
     }
   };
@@ -204,7 +204,7 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
             fail(std::string(flag_keys[k]) + " = \"" + *flag_names[k] + "\": no such signal in " + m->name);
         }
     }
-    check_no_shared_bits(r, status_bits, fail);
+    check_no_shared_bits(r, status_bits, dbc_->source(), fail);
     by_frame_[key(m->id, m->extended)] = std::move(r);
   }
   if (status && !msgs.count(status->msg)) fail("status " + spec_.status + " is in a message carrying neither x nor y");

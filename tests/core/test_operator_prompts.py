@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The technician's run on a real pseudo-terminal: `rig run` asks before it
-starts (DUT mounted, serial, table clear); 'y' to each proceeds, 'n' aborts
-with exit 3 before anything moves. Usage: test_operator_prompts.py RIG_BINARY"""
+starts (DUT mounted, serial, table clear), after printing the plan; 'y' to
+each proceeds, 'n' aborts with exit 3 before anything moves. Usage: test_operator_prompts.py RIG_BINARY"""
 import os
 import re
 import pty
@@ -50,6 +50,8 @@ def main():
             rc, out = run_with_answers(rig, ["run", "--profile", "ci", "--serial", "EMU-QPA-0001", "--out", out_dir],
                                        answers, env)
             ok = rc == want_rc and want_text in out and out.count("[y/N]") == len(answers)
+            # The plan comes before the first question, whatever the answers.
+            ok = ok and 0 <= out.find("Plan: ") < out.find("[y/N]")
             if want_rc == 3:  # nothing ran: not even its empty folder is left, unless the operator made it
                 ok = ok and (os.path.isdir(out_dir) and not os.listdir(out_dir) if made else not os.path.exists(out_dir))
             else:  # the prompt's device time is the plan's (it was the profile's own estimate)

@@ -311,7 +311,7 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   u.key_where["x"] = "hw.toml:11:5: [dut.stream]";  // named at x's line where the file gave it
   EXPECT_EQ(spec_error(unitless, u).rfind("hw.toml:11:5: [dut.stream]: x A.x has no unit", 0), 0u) << spec_error(unitless, u);
   // A scaled counter: its physical value is not the count the stream reads (its raw value was
-  // used silently, a review); refused naming its DBC line, in the message `counter` names and in
+  // used silently, a review); refused naming its DBC file and line, in the message `counter` names and in
   // another message carrying part of a sample.
   const auto scaled = std::make_shared<const Dbc>(Dbc::parse(
       "VERSION \"\"\nBU_: DUT\nBO_ 288 A: 8 DUT\n SG_ cnt : 0|16@1+ (0.5,0) [0|32767] \"\" DUT\n"
@@ -321,10 +321,10 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
       "scaled.dbc"));
   DbcStreamSpec sc;
   sc.counter = "A.cnt", sc.x = "A.x";
-  EXPECT_EQ(spec_error(scaled, sc), "hw.toml:9:1: [dut.stream]: counter A.cnt is scaled in the DBC (0.5,0), DBC line 4: "
+  EXPECT_EQ(spec_error(scaled, sc), "hw.toml:9:1: [dut.stream]: counter A.cnt is scaled in the DBC (0.5,0), scaled.dbc:4: "
                                     "a sample counter is a whole number, factor 1 and offset 0");
   sc.counter = "C.cnt", sc.x = "C.x", sc.y = "B.y";
-  EXPECT_EQ(spec_error(scaled, sc), "hw.toml:9:1: [dut.stream]: counter B.cnt is scaled in the DBC (1,1), DBC line 7: "
+  EXPECT_EQ(spec_error(scaled, sc), "hw.toml:9:1: [dut.stream]: counter B.cnt is scaled in the DBC (1,1), scaled.dbc:7: "
                                     "a sample counter is a whole number, factor 1 and offset 0");
   sc.y = "";
   EXPECT_EQ(spec_error(scaled, sc), "no error");
@@ -369,7 +369,7 @@ TEST(DbcStream, SignalsSharingBitsWithTheSampleAreRefused) {
   DbcStreamSpec s;
   s.counter = "OVL.cnt";
   s.x = "OVL.x";
-  EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: counter OVL.cnt (0|16, DBC line 5) and x OVL.x (8|24, DBC line 6) "
+  EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: counter OVL.cnt (0|16, ovl.dbc:5) and x OVL.x (8|24, ovl.dbc:6) "
                       "share bits: the counter, x and y each need their own");
   s.x = "OVL.x_ok";
   EXPECT_EQ(error(s), "no error");
@@ -382,23 +382,23 @@ TEST(DbcStream, SignalsSharingBitsWithTheSampleAreRefused) {
   f.saturated = "OVL.sat";
   EXPECT_EQ(error(f), "no error");  // sat is st's bit 0 (an alias), not x's
   f.saturated = "OVL.bad_flag";
-  EXPECT_NE(error(f).find("x OVL.x_ok (16|24, DBC line 7) and saturated OVL.bad_flag (39|1, DBC line 10) share bits"),
+  EXPECT_NE(error(f).find("x OVL.x_ok (16|24, ovl.dbc:7) and saturated OVL.bad_flag (39|1, ovl.dbc:10) share bits"),
             std::string::npos)
       << error(f);
   // One signal in two roles (a review: these passed, as the same signal was never compared with itself).
   f.saturated = "OVL.cnt";
-  EXPECT_NE(error(f).find("counter OVL.cnt (0|16, DBC line 5) and saturated OVL.cnt (0|16, DBC line 5) share bits"),
+  EXPECT_NE(error(f).find("counter OVL.cnt (0|16, ovl.dbc:5) and saturated OVL.cnt (0|16, ovl.dbc:5) share bits"),
             std::string::npos)
       << error(f);
   f.saturated.clear();
   f.y = "OVL.x_ok";
-  EXPECT_NE(error(f).find("x OVL.x_ok (16|24, DBC line 7) and y OVL.x_ok (16|24, DBC line 7) share bits"),
+  EXPECT_NE(error(f).find("x OVL.x_ok (16|24, ovl.dbc:7) and y OVL.x_ok (16|24, ovl.dbc:7) share bits"),
             std::string::npos)
       << error(f);
   f.y.clear();
   f.status = "OVL.cnt";
   f.saturated_bit = 0;
-  EXPECT_NE(error(f).find("counter OVL.cnt (0|16, DBC line 5) and status OVL.cnt"), std::string::npos) << error(f);
+  EXPECT_NE(error(f).find("counter OVL.cnt (0|16, ovl.dbc:5) and status OVL.cnt"), std::string::npos) << error(f);
   DbcStreamSpec pages;
   pages.counter = "PAGES.cnt";
   pages.x = "PAGES.x";
@@ -415,7 +415,7 @@ TEST(DbcStream, SignalsSharingBitsWithTheSampleAreRefused) {
   word.loop_fault_bit = 2;
   EXPECT_EQ(error(word), "no error");
   word.loop_fault_bit = 8;  // the counter's lowest bit
-  EXPECT_NE(error(word).find("counter WORD.cnt (40|8, DBC line 20) and status WORD.st (32|16, DBC line 19) share bits"),
+  EXPECT_NE(error(word).find("counter WORD.cnt (40|8, ovl.dbc:20) and status WORD.st (32|16, ovl.dbc:19) share bits"),
             std::string::npos)
       << error(word);
 }
