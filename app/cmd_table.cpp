@@ -1,5 +1,7 @@
 // `rig table`: manual control of a real or emulated rotary table over Modbus,
 // for a technician at the rig (docs/table-registers.md).
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -138,6 +140,43 @@ void reset(RotaryTable& t, const CancelToken& cancel) {
   }
 }
 
+// While a home or a move waits, the angle the drive reads, on one line of the terminal, at most
+// five times a second (a technician saw nothing for the seconds a half turn takes: a review). The
+// line is cleared before anything else is printed. Nothing when stderr is not a terminal: a
+// script's output stays as it was.
+class AngleLine {
+ public:
+  AngleLine(RotaryTable& t, std::string doing) : t_(t), doing_(std::move(doing)) {
+    if (::isatty(STDERR_FILENO)) t_.on_angle([this](double deg) { show(deg); });
+  }
+  ~AngleLine() {
+    t_.on_angle(nullptr);
+    clear();
+  }
+  AngleLine(const AngleLine&) = delete;
+  AngleLine& operator=(const AngleLine&) = delete;
+  void clear() {
+    if (!shown_) return;
+    std::fputs("\r\x1b[K", stderr);
+    std::fflush(stderr);
+    shown_ = false;
+  }
+
+ private:
+  void show(double deg) {
+    const auto now = std::chrono::steady_clock::now();
+    if (shown_ && now - last_ < std::chrono::milliseconds(200)) return;
+    last_ = now;
+    std::fprintf(stderr, "\r\x1b[K%s: table at %s", doing_.c_str(), modbus::detail::deg_str(deg).c_str());
+    std::fflush(stderr);
+    shown_ = true;
+  }
+  RotaryTable& t_;
+  std::string doing_;
+  bool shown_ = false;
+  std::chrono::steady_clock::time_point last_;
+};
+
 // After Ctrl-C in a move or a homing (the client has sent its halt): where the table came to rest,
 // and whether it is still homed, on stderr before the abort's own line. "rig: aborted: SIGINT
 // received" alone left a technician guessing (a review: the homed flag was gone, which nothing
@@ -188,6 +227,7 @@ void add_table(CLI::App& app, int& rc) {
     with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
       try {
+        AngleLine line(t, "homing");
         t.home(sig.token());
       } catch (const AbortedError&) {
         say_where_it_stopped(t, last_stop_error(t));
@@ -209,6 +249,7 @@ void add_table(CLI::App& app, int& rc) {
     with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
       try {
+        AngleLine line(t, "moving to " + modbus::detail::deg_str(a->deg));
         t.move_to(a->deg, sig.token());
       } catch (const AbortedError&) {
         say_where_it_stopped(t, last_stop_error(t));

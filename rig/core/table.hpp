@@ -4,6 +4,7 @@
 #pragma once
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "rig/core/cancel.hpp"
@@ -70,6 +71,19 @@ class RotaryTable {
   // Immediate stop (quick stop / e-stop ramp). Never throws.
   virtual void quick_stop() noexcept = 0;
   virtual std::string describe() const = 0;  // "modbus tcp 127.0.0.1:1502 unit 1"
+
+  // Called with the angle read, each time the client reads the drive (while home() and move_to()
+  // wait, every poll): `rig table` shows the turning table with it. On the caller's thread;
+  // it must not throw or block.
+  void on_angle(std::function<void(double actual_deg)> f) { on_angle_ = std::move(f); }
+
+ protected:
+  void angle_seen(double deg) const {
+    if (on_angle_) on_angle_(deg);
+  }
+
+ private:
+  std::function<void(double)> on_angle_;
 };
 
 }  // namespace rig

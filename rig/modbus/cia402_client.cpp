@@ -103,6 +103,7 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
     r.controlword = static_cast<uint16_t>(val[static_cast<int>(Obj::kControlword)]);
     r.target_counts = val[static_cast<int>(Obj::kTargetPosition)];
   }
+  angle_seen(r.actual_deg);
   return r;
 }
 

@@ -90,6 +90,7 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
   control_ = d.control;
   last_actual_deg_ = d.actual_deg;
   have_actual_ = true;
+  angle_seen(d.actual_deg);
   return d;
 }
 

@@ -1,6 +1,10 @@
 // `rig table status|home|move|stop|quick-stop|reset` against the emulator on a
 // real wire, checking output and the documented exit codes (docs/contracts.md).
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -64,6 +68,48 @@ TEST_F(RigTable, StatusHomeMove) {
   ASSERT_EQ(rig(where_ + " stop", out), 0) << out;
   ASSERT_EQ(rig(where_ + " quick-stop", out), 0) << out;
   EXPECT_NE(out.find("quick stop sent"), std::string::npos) << out;
+}
+
+// On a terminal a home or a move shows the angle the drive reads while the table turns, on one
+// line that is cleared before the status is printed; piped (as in every other test here), none of it.
+TEST_F(RigTable, OnATerminalTheTurningTableShowsItsAngle) {
+  std::string out;
+  ASSERT_EQ(rig(where_ + " home", out), 0) << out;
+  EXPECT_EQ(out.find("table at"), std::string::npos) << out;
+  const std::string ep = server_.endpoint().substr(4);
+  int fd = -1;
+  const pid_t pid = ::forkpty(&fd, nullptr, nullptr, nullptr);
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl(RIG_BIN, RIG_BIN, "table", "--modbus", ep.c_str(), "move", "300", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::string seen;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  for (;;) {
+    pollfd p{fd, POLLIN, 0};
+    if (std::chrono::steady_clock::now() > deadline || ::poll(&p, 1, 100) < 0) break;
+    if (!(p.revents & (POLLIN | POLLHUP))) continue;
+    char buf[4096];
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n <= 0) break;  // EIO once the child has closed the terminal
+    seen.append(buf, static_cast<std::size_t>(n));
+  }
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  ::close(fd);
+  ASSERT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << seen;
+  // 290 degrees at 360 deg/s: about a second, so several readings at five a second.
+  std::size_t lines = 0;
+  for (std::size_t at = seen.find("moving to 300.0000°: table at "); at != std::string::npos;
+       at = seen.find("moving to 300.0000°: table at ", at + 1))
+    ++lines;
+  EXPECT_GE(lines, 2u) << seen;
+  const std::size_t last = seen.rfind("table at "), cleared = seen.rfind("\r\x1b[K"),
+                    status = seen.find("actual     300.0000°");
+  ASSERT_NE(status, std::string::npos) << seen;
+  EXPECT_LT(last, cleared) << seen;
+  EXPECT_LT(cleared, status) << seen;
 }
 
 TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
