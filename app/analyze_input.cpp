@@ -275,6 +275,9 @@ namespace {
 std::string not_a_number(std::string_view line, std::string_view tok) {
   std::string why = "not a decimal number: " + excerpt(tok);
   if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64)";
+  // A table's row ("t,a", "0.1 0.2"): the record is one value per line (a metrologist's review).
+  else if (tok.find_first_of(",; \t") != std::string_view::npos)
+    why += "; a text record holds one value per line (take the column out first, e.g. cut -d, -f2)";
   else if (tok.find("\xEF\xBB\xBF") != std::string_view::npos)
     why += " (\\xEF\\xBB\\xBF is a byte-order mark, skipped only at the start of the file: two files joined?)";
   return why;

@@ -691,7 +691,7 @@ int run(const Args& a) {
     j["psd"] = pj;
   }
 
-  if (!notes.empty()) j["notes"] = notes;
+  j["notes"] = notes;  // always there (an empty list): the docs list the key, and a reader need not test for it
   timer.mark("psd");
   join_fit();
   if (terms) j["noise_terms"] = analysis::noise_terms_to_json(*terms);

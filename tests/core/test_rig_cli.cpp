@@ -235,6 +235,9 @@ TEST(RigCli, AnalyzeJsonHasTheKeysTheDocsName) {
   for (const char* k : {"peaks", "white_level", "psd_fit", "n_from_psd"}) EXPECT_TRUE(j.at("psd").contains(k)) << k;
   EXPECT_NE(j["psd"]["psd_fit"].value("note", "").find("not measurements"), std::string::npos);  // only N is read
   for (const char* k : {"paper", "wls"}) EXPECT_FALSE(nt.contains(k)) << k;
+  // `notes` is there with nothing to note, as an empty list (it was left out: a metrologist's review).
+  ASSERT_TRUE(j.contains("notes"));
+  EXPECT_TRUE(j["notes"].is_array());
 }
 
 TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
@@ -917,6 +920,13 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   EXPECT_EQ(run({"analyze", d + "/huge.txt"}, d + "/huge"), 2);
   EXPECT_NE(slurp(d + "/huge.stderr").find("huge.txt:3: '1e400' is beyond the range of a double"), std::string::npos)
       << slurp(d + "/huge.stderr");
+  // A table's row: the record is one value per line, and the message says so (a metrologist's review).
+  std::ofstream(d + "/table.csv") << "t,a\n0.01,1e-3\n0.02,2e-3\n";
+  EXPECT_EQ(run({"analyze", d + "/table.csv"}, d + "/table"), 2);
+  EXPECT_NE(slurp(d + "/table.stderr").find("table.csv:1: not a decimal number: 't,a'; a text record holds one value per "
+                                            "line"),
+            std::string::npos)
+      << slurp(d + "/table.stderr");
   std::ofstream(d + "/bom2.txt") << "1\n2\n3\n\xEF\xBB\xBF" << "4\n";
   EXPECT_EQ(run({"analyze", d + "/bom2.txt"}, d + "/bom2"), 2);
   EXPECT_NE(slurp(d + "/bom2.stderr").find("bom2.txt:4: not a decimal number: '\\xEF\\xBB\\xBF4' (\\xEF\\xBB\\xBF is a "
