@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <vector>
 
@@ -152,6 +153,34 @@ TEST(EdfGuard, AnAcfReadingFromFewAveragesIsGuardedToo) {
     }
   }
   EXPECT_GT(misread, 0) << "no ACF misreading in these records: the test shows nothing";
+}
+
+// TOTDEV's bounds at m = 1 and 2, where TOTDEV is OADEV or nearly so: with Table 7's EDF alone
+// (about twice OADEV's there) the 68.3 % bounds held the truth on 50 % and 60 % of white-FM
+// records (a metrologist's review). With the EDF capped at OADEV's times the share of terms
+// (edf.hpp), over 200 white-FM records of 1000 values, seeds 1..200 fixed before looking, the
+// pooled coverage is within 2.7 binomial sigmas (2.3 %) of 68.3 %.
+TEST(TotdevEdf, BoundsAtTheShortestTausHoldTheTruthAtTheirStatedRate) {
+  int held = 0, n = 0;
+  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+    Rng r{seed};
+    std::vector<double> y(1000);
+    for (double& v : y) v = r.gauss();  // white FM, sd 1: sigma_y(m) = 1 / sqrt(m)
+    DevOptions o;
+    o.type = Deviation::TOTDEV;
+    o.data = DataKind::Frequency;
+    o.rate_hz = 1;
+    o.factors = {1, 2};
+    o.fixed_alpha = 0;
+    for (const DevPoint& p : deviation(y, o)) {
+      const double truth = 1 / std::sqrt(static_cast<double>(p.m));
+      held += p.lo <= truth && truth <= p.hi;
+      ++n;
+    }
+  }
+  const double rate = static_cast<double>(held) / n;
+  EXPECT_NEAR(rate, kOneSigma, 0.062) << held << " of " << n;
+  std::printf("TOTDEV m = 1, 2: %d of %d bounds held the truth\n", held, n);
 }
 
 }  // namespace
