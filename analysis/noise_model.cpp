@@ -747,6 +747,15 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
         if ((f.mask & (1 << k)) && f.theta[kk] > 0)
           for (const auto& [up, zz] : {std::pair{&out.upper, z}, {&out.upper_method, z_method}})
             (*up)[kk] = std::max((*up)[kk], std::sqrt(f.theta[kk] + zz * sd_of(f, k)));
+    // Nor may a null's upper limit contradict a dropped short point (kDroppedContradiction): fitted
+    // from 10-20 s on, Q's limit reached 60x what the 0.01 s point allows alone (a metrologist's
+    // review, white + random walk FM records).
+    if (!out.in_model[kk])
+      for (std::size_t j = 0; j < from; ++j) {
+        const double cap = std::sqrt(kDroppedContradiction * all.s[j] / noise_basis(k, all.tau[j]));
+        out.upper[kk] = std::min(out.upper[kk], cap);
+        out.upper_method[kk] = std::min(out.upper_method[kk], cap);
+      }
   }
   out.ok = true;
   return out;

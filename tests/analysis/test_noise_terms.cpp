@@ -222,6 +222,20 @@ TEST(NoiseTerms, AModelThatContradictsTheDroppedShortPointsKeepsThemAll) {
   }
 }
 
+// A null term's upper limit may not contradict the dropped short points either: with the ripple
+// dropping everything below 1 s and no Q in the curve, Q's limit from the points left (where Q's
+// 3/tau^2 is small) was far above what the 1 ms point allows; it is held to kDroppedContradiction
+// times that point's variance.
+TEST(NoiseTerms, ANullTermsUpperLimitDoesNotContradictTheDroppedPoints) {
+  const std::vector<DevPoint> v = rippled(0, kN, kB, 2 * kK, 3600);
+  const NoiseTerms t = noise_terms(v, 3600);
+  ASSERT_GT(t.model.dropped_short, 0u);
+  ASSERT_FALSE(t.Q.value) << *t.Q.value;
+  ASSERT_TRUE(t.Q.hi) << t.Q.reason;
+  const double cap = std::sqrt(kDroppedContradiction * v[0].dev * v[0].dev * v[0].tau_s * v[0].tau_s / 3);
+  EXPECT_LE(*t.Q.hi, cap * (1 + 1e-12)) << t.Q.reason;
+}
+
 TEST(NoiseTerms, TheFitStartsWhereTheModelDescribesTheCurve) {
   // The rippled ms points (model EDF ~ 1e6: a 25 % ripple is hundreds of sigma) fail the
   // goodness-of-fit test, so the shortest taus are dropped until the model's chi-square is
