@@ -62,9 +62,10 @@ struct NoiseModelFit {
 // the points; the shortest tau is dropped until it does, keeping at least kMinGofPoints points.
 inline constexpr double kGofAlpha = 1e-3;
 inline constexpr std::size_t kMinGofPoints = 6;
-// Unless the model fitted past them puts this many times the variance a dropped point measured
-// there (a factor the short end's high-frequency content does not reach: 5-7 on the paper's DUT,
-// where the loop's bandwidth ends): then no point is dropped and the misfit is the model error.
+// Unless the widest model fitted past them puts this many times the variance a dropped point
+// measured there while the AICc-selected model does not (a term the selection left out that the
+// dropped points contradict; noise_model.cpp): then no point is dropped and the misfit is the model
+// error. A null term's upper limit is held to this factor too.
 inline constexpr double kDroppedContradiction = 30;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset

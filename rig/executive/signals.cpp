@@ -34,7 +34,9 @@ const char* signal_name(uint32_t sig) {
 SignalWatcher::SignalWatcher(CancelSource& source) : source_(source) {
   const sigset_t s = abort_signals();
   pthread_sigmask(SIG_BLOCK, &s, nullptr);
-  signal_fd_ = signalfd(-1, &s, SFD_CLOEXEC);
+  // Non-blocking: a read finds the signal or nothing (with two watchers alive, both polls see one
+  // signal and only one read takes it).
+  signal_fd_ = signalfd(-1, &s, SFD_CLOEXEC | SFD_NONBLOCK);
   wake_fd_ = eventfd(0, EFD_CLOEXEC);
   if (signal_fd_ < 0 || wake_fd_ < 0) {
     const int err = errno;
@@ -46,25 +48,36 @@ SignalWatcher::SignalWatcher(CancelSource& source) : source_(source) {
   // The thread sleeps in poll until a signal or the destructor's wake: it used to wake every
   // 100 ms to look at a stop flag, and every command's exit waited out the slice (a `paper`
   // run's last 40-100 ms).
-  thread_ = std::thread([this] {
-    pollfd fds[2] = {{signal_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
-    for (;;) {
-      if (poll(fds, 2, -1) < 0) {
-        if (errno == EINTR) continue;
-        return;
+  try {
+    thread_ = std::thread([this] {
+      pollfd fds[2] = {{signal_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+      for (;;) {
+        if (poll(fds, 2, -1) < 0 && errno != EINTR) return;
+        // Every signal pending is taken before the wake is looked at: one left pending would be
+        // delivered when the destructor unblocks the signals, and its default action would end a
+        // process that has finished (a code review: exit 130 after "outcome PASS").
+        take_pending();
+        if (fds[1].revents != 0) return;
       }
-      if (fds[1].revents != 0) return;
-      signalfd_siginfo info{};
-      if ((fds[0].revents & POLLIN) != 0 && read(signal_fd_, &info, sizeof info) == sizeof info)
-        source_.request(std::string(signal_name(info.ssi_signo)) + " received");
-    }
-  });
+    });
+  } catch (...) {
+    close(signal_fd_);
+    close(wake_fd_);
+    pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
+    throw;
+  }
+}
+
+void SignalWatcher::take_pending() {
+  for (signalfd_siginfo info{}; read(signal_fd_, &info, sizeof info) == sizeof info;)
+    source_.request(std::string(signal_name(info.ssi_signo)) + " received");
 }
 
 SignalWatcher::~SignalWatcher() {
   const uint64_t one = 1;
   [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);  // cannot fail: the counter is far from full
   thread_.join();
+  take_pending();  // one that came after the thread's last look
   close(signal_fd_);
   close(wake_fd_);
   const sigset_t s = abort_signals();

@@ -18,6 +18,8 @@ class SignalWatcher {
   SignalWatcher& operator=(const SignalWatcher&) = delete;
 
  private:
+  void take_pending();  // reads every signal queued on signal_fd_ into the cancel source
+
   CancelSource& source_;
   int signal_fd_ = -1;  // the abort signals, read by the thread
   int wake_fd_ = -1;    // an eventfd the destructor writes: the thread leaves at once

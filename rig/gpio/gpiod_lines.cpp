@@ -61,21 +61,23 @@ class GpiodLines final : public LineDriver {
     }
   }
 
-  ~GpiodLines() override {
-    if (wake_fd_ >= 0) close(wake_fd_);
-  }
   GpiodLines(const GpiodLines&) = delete;
   GpiodLines& operator=(const GpiodLines&) = delete;
 
   std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) override {
     // poll on the line's event descriptor and the wake eventfd (libgpiod's event_wait polls the
     // line alone, so a leaving rig waited out the timeout).
-    pollfd fds[2] = {{estop_.event_get_fd(), POLLIN, 0}, {wake_fd_, POLLIN, 0}};
-    const int r = poll(fds, wake_fd_ >= 0 ? 2 : 1, static_cast<int>(timeout.count()));
+    pollfd fds[2] = {{estop_.event_get_fd(), POLLIN, 0}, {wake_fd_.fd, POLLIN, 0}};
+    const int r = poll(fds, wake_fd_.fd >= 0 ? 2 : 1, static_cast<int>(timeout.count()));
     if (r < 0) {
       if (errno == EINTR) return std::nullopt;
       throw HardwareError("GPIO e-stop line " + cfg_.estop + ": poll: " + std::system_category().message(errno));
     }
+    // A chip that went away (an unplugged expander, a removed gpio-sim) reports an error or a
+    // hang-up without data, at once, on every poll: the line can no longer be read, which the
+    // watcher takes as a pressed e-stop (a code review: it spun here, the DUT still powered).
+    if ((fds[0].revents & (POLLERR | POLLHUP | POLLNVAL)) != 0 && (fds[0].revents & POLLIN) == 0)
+      throw HardwareError("GPIO e-stop line " + cfg_.estop + ": the line's chip reports an error or is gone");
     if (r == 0 || (fds[0].revents & POLLIN) == 0) return std::nullopt;  // timeout, or woken
     // Edges are reported in logical (active-low corrected) terms.
     const gpiod::line_event ev = estop_.event_read();
@@ -89,9 +91,9 @@ class GpiodLines final : public LineDriver {
   std::optional<std::chrono::steady_clock::time_point> last_edge_time() const override { return last_edge_; }
 
   void wake() override {
-    if (wake_fd_ < 0) return;
+    if (wake_fd_.fd < 0) return;
     const uint64_t one = 1;
-    [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);  // the counter is far from full
+    [[maybe_unused]] const ssize_t n = write(wake_fd_.fd, &one, sizeof one);  // the counter is far from full
   }
 
   std::string describe() const override {
@@ -124,7 +126,17 @@ class GpiodLines final : public LineDriver {
   gpiod::chip chip_;
   gpiod::line out_[kOutputs];
   gpiod::line estop_;
-  int wake_fd_ = eventfd(0, EFD_CLOEXEC);  // written by wake(); -1 without one: waits end at the timeout
+  // Written by wake(); -1 without one: waits end at their timeout. A member that closes itself, so
+  // a constructor that throws (a chip or line not found) does not leak it.
+  struct EventFd {
+    int fd = eventfd(0, EFD_CLOEXEC);
+    EventFd() = default;
+    EventFd(const EventFd&) = delete;
+    EventFd& operator=(const EventFd&) = delete;
+    ~EventFd() {
+      if (fd >= 0) close(fd);
+    }
+  } wake_fd_;
   std::optional<std::chrono::steady_clock::time_point> last_edge_;
 };
 

@@ -222,6 +222,24 @@ TEST(NoiseTerms, AModelThatContradictsTheDroppedShortPointsKeepsThemAll) {
   }
 }
 
+// Behind a low-pass filter the short-tau points fall far below the model the longer taus give
+// (here the deviation divided by sqrt(1 + (0.05 s / tau)^2): 2500x less variance at 1 ms than N
+// alone puts there). That is what dropping the short end is for: the AICc model (N, B, K) disagrees
+// with those points as much as the widest does, so the drop stands and N is read past the roll-off
+// (a code review: the first rule undid it on any 30x and read N at 0.5-0.7x behind 3-10 Hz filters).
+TEST(NoiseTerms, AFiltersRollOffKeepsTheDropOfTheShortPoints) {
+  std::vector<DevPoint> v = curve(0, kN, kB, 2 * kK, 0, 0.001, 900, 110);
+  for (DevPoint& p : v) {
+    p.edf = std::max(2.0, 1.5 * 3600 / p.tau_s);
+    p.dev /= std::sqrt(1 + std::pow(0.05 / p.tau_s, 2));
+  }
+  const NoiseTerms t = noise_terms(v, 3600);
+  EXPECT_GT(t.model.dropped_short, 0u);
+  EXPECT_EQ(t.wls.model_error, 0.0);
+  ASSERT_TRUE(t.N.value) << t.N.reason;
+  EXPECT_NEAR(*t.N.value / kN, 1.0, 0.05);
+}
+
 // A null term's upper limit may not contradict the dropped short points either: with the ripple
 // dropping everything below 1 s and no Q in the curve, Q's limit from the points left (where Q's
 // 3/tau^2 is small) was far above what the 1 ms point allows; it is held to kDroppedContradiction

@@ -139,3 +139,25 @@ TEST_F(KernelGpio, BusyAndUnknownLinesAreHardwareErrorsNamingThem) {
     EXPECT_NE(std::string(e.what()).find("rig-no-such"), std::string::npos) << e.what();
   }
 }
+
+// Last in this file (the chip is gone after it): a chip that goes away while the rig watches its
+// e-stop line (an unplugged USB expander; here gpio-sim taken down through configfs) is an open
+// e-stop: the line's descriptor reports a hang-up without data on every poll, and the watcher,
+// which had spun on that (a code review), now takes it as a line that can no longer be read: the
+// DUT is switched off and the rig's handler runs.
+TEST_F(KernelGpio, ZzAChipThatGoesAwayIsAnOpenEstop) {
+  auto io = connect_gpio(config());
+  io->set_dut_power(true);
+  std::atomic<bool> handled{false};
+  io->on_estop([&] { handled = true; });
+  {
+    std::ofstream live("/sys/kernel/config/gpio-sim/rig/live");
+    live << 0;
+    live.flush();
+    ASSERT_TRUE(live) << "cannot take the gpio-sim chip down";
+  }
+  for (int i = 0; i < 200 && !handled; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(handled);
+  EXPECT_TRUE(io->estop_active());
+  EXPECT_FALSE(io->dut_power());
+}
