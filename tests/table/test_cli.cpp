@@ -571,6 +571,12 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
   EXPECT_TRUE(has(out1, "move to 300.0000°: halted by another master (controlword reads 0x010F)") &&
               has(out1, "; no halt sent by this client")) << out1;
   // A second `rig table move` while the first runs: it waits, then both moves are the table's.
+  // The halted table first comes to rest: still coasting from the halt, it looked like the next
+  // move under way, and the two moves started together (the race showed once the first process
+  // exited without waiting out its watchers' polling slices).
+  for (int i = 0; i < 300 && (rig("status --json", out) != 0 || !has(out, "\"moving\": false")); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_TRUE(has(out, "\"moving\": false")) << out;
   std::thread again([&] { rc1 = rig("move 250", out1); });
   ASSERT_TRUE(wait_moving()) << out;
   std::string out2;
