@@ -155,14 +155,14 @@ class AngleLine {
   }
   AngleLine(const AngleLine&) = delete;
   AngleLine& operator=(const AngleLine&) = delete;
+
+ private:
   void clear() {
     if (!shown_) return;
     std::fputs("\r\x1b[K", stderr);
     std::fflush(stderr);
     shown_ = false;
   }
-
- private:
   void show(double deg) {
     const auto now = std::chrono::steady_clock::now();
     if (shown_ && now - last_ < std::chrono::milliseconds(200)) return;

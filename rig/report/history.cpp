@@ -181,7 +181,6 @@ std::string run_dir_key(const std::string& run_dir) {
 
 }  // namespace
 
-
 int current_schema_version() { return migrations().back().version; }
 
 int migrate(const std::string& db_url) {

@@ -56,11 +56,15 @@ std::vector<std::string> set_aside_files(const fs::path& dir) {
 }
 
 // The page from the documents read, written atomically: a temp file renamed into place.
-std::string write_page(const fs::path& dir, const json& passport, const json& analysis,
-                       const std::string& analysis_problem) {
+// analysis.json's document that is neither absent (null) nor an object is drawn as absent, saying so.
+std::string write_page(const fs::path& dir, const json& passport, const json& analysis, std::string analysis_problem) {
+  const bool usable = analysis.is_null() || analysis.is_object();
+  if (!usable) analysis_problem = "analysis.json is not a JSON object";
+  const json none;
   fs::path read_from = fs::absolute(dir).lexically_normal();
   if (!read_from.has_filename()) read_from = read_from.parent_path();  // "r1/"
-  const std::string html = render_report(passport, analysis, analysis_problem, read_from.string(), set_aside_files(dir));
+  const std::string html =
+      render_report(passport, usable ? analysis : none, analysis_problem, read_from.string(), set_aside_files(dir));
 
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
   {
@@ -83,17 +87,12 @@ std::string write_report(const std::string& run_dir) {
   const fs::path dir(run_dir);
   std::string analysis_problem;
   const json passport = read_passport(run_dir);
-  json analysis = read_analysis(dir / "analysis.json", analysis_problem);
-  if (!analysis.is_null() && !analysis.is_object()) {
-    analysis_problem = "analysis.json is not a JSON object";
-    analysis = json();
-  }
+  const json analysis = read_analysis(dir / "analysis.json", analysis_problem);  // sets the problem first
   return write_page(dir, passport, analysis, analysis_problem);
 }
 
 std::string write_report(const std::string& run_dir, const json& analysis) {
-  return write_page(fs::path(run_dir), read_passport(run_dir), analysis.is_object() ? analysis : json(),
-                    analysis.is_object() ? "" : "analysis.json is not a JSON object");
+  return write_page(fs::path(run_dir), read_passport(run_dir), analysis, "");
 }
 
 std::string render_report(const json& passport, const json& analysis, const std::string& analysis_problem,
