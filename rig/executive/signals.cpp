@@ -3,7 +3,6 @@
 #include <poll.h>
 #include <pthread.h>
 #include <signal.h>
-#include <sys/eventfd.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
 
@@ -31,26 +30,22 @@ const char* signal_name(uint32_t sig) {
 }
 }  // namespace
 
-SignalWatcher::SignalWatcher(CancelSource& source) : source_(source) {
+// The signalfd is non-blocking: a read finds the signal or nothing (with two watchers alive, both polls see one
+// signal and only one read takes it).
+SignalWatcher::SignalWatcher(CancelSource& source)
+    : source_(source), signal_fd_([] {
+        const sigset_t s = abort_signals();
+        return signalfd(-1, &s, SFD_CLOEXEC | SFD_NONBLOCK);
+      }()) {
+  if (signal_fd_.get() < 0 || wake_.get() < 0) throw std::system_error(errno, std::generic_category(), "signal watcher");
   const sigset_t s = abort_signals();
   pthread_sigmask(SIG_BLOCK, &s, nullptr);
-  // Non-blocking: a read finds the signal or nothing (with two watchers alive, both polls see one
-  // signal and only one read takes it).
-  signal_fd_ = signalfd(-1, &s, SFD_CLOEXEC | SFD_NONBLOCK);
-  wake_fd_ = eventfd(0, EFD_CLOEXEC);
-  if (signal_fd_ < 0 || wake_fd_ < 0) {
-    const int err = errno;
-    if (signal_fd_ >= 0) close(signal_fd_);
-    if (wake_fd_ >= 0) close(wake_fd_);
-    pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
-    throw std::system_error(err, std::generic_category(), "signal watcher");
-  }
   // The thread sleeps in poll until a signal or the destructor's wake: it used to wake every
   // 100 ms to look at a stop flag, and every command's exit waited out the slice (a `paper`
   // run's last 40-100 ms).
   try {
     thread_ = std::thread([this] {
-      pollfd fds[2] = {{signal_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+      pollfd fds[2] = {{signal_fd_.get(), POLLIN, 0}, {wake_.get(), POLLIN, 0}};
       for (;;) {
         if (poll(fds, 2, -1) < 0 && errno != EINTR) return;
         // Every signal pending is taken before the wake is looked at: one left pending would be
@@ -60,26 +55,21 @@ SignalWatcher::SignalWatcher(CancelSource& source) : source_(source) {
         if (fds[1].revents != 0) return;
       }
     });
-  } catch (...) {
-    close(signal_fd_);
-    close(wake_fd_);
+  } catch (...) {  // the descriptors close with their members
     pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
     throw;
   }
 }
 
 void SignalWatcher::take_pending() {
-  for (signalfd_siginfo info{}; read(signal_fd_, &info, sizeof info) == sizeof info;)
+  for (signalfd_siginfo info{}; read(signal_fd_.get(), &info, sizeof info) == sizeof info;)
     source_.request(std::string(signal_name(info.ssi_signo)) + " received");
 }
 
 SignalWatcher::~SignalWatcher() {
-  const uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);  // cannot fail: the counter is far from full
+  wake_.wake();
   thread_.join();
   take_pending();  // one that came after the thread's last look
-  close(signal_fd_);
-  close(wake_fd_);
   const sigset_t s = abort_signals();
   pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
 }

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "rig/core/cancel.hpp"
+#include "rig/core/wake_fd.hpp"
 
 namespace rig {
 
@@ -21,8 +22,8 @@ class SignalWatcher {
   void take_pending();  // reads every signal queued on signal_fd_ into the cancel source
 
   CancelSource& source_;
-  int signal_fd_ = -1;  // the abort signals, read by the thread
-  int wake_fd_ = -1;    // an eventfd the destructor writes: the thread leaves at once
+  UniqueFd signal_fd_;  // the abort signals, read by the thread
+  WakeFd wake_;         // the destructor wakes it: the thread leaves at once
   std::thread thread_;
 };
 

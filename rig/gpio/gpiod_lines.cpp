@@ -1,8 +1,6 @@
 #include "rig/gpio/gpiod_lines.hpp"
 
 #include <poll.h>
-#include <sys/eventfd.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
@@ -15,6 +13,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
+#include "rig/core/wake_fd.hpp"
 
 namespace rig::gpio {
 
@@ -67,8 +66,8 @@ class GpiodLines final : public LineDriver {
   std::optional<bool> wait_estop_edge(std::chrono::milliseconds timeout) override {
     // poll on the line's event descriptor and the wake eventfd (libgpiod's event_wait polls the
     // line alone, so a leaving rig waited out the timeout).
-    pollfd fds[2] = {{estop_.event_get_fd(), POLLIN, 0}, {wake_fd_.fd, POLLIN, 0}};
-    const int r = poll(fds, wake_fd_.fd >= 0 ? 2 : 1, static_cast<int>(timeout.count()));
+    pollfd fds[2] = {{estop_.event_get_fd(), POLLIN, 0}, {wake_.get(), POLLIN, 0}};
+    const int r = poll(fds, wake_.get() >= 0 ? 2 : 1, static_cast<int>(timeout.count()));
     if (r < 0) {
       if (errno == EINTR) return std::nullopt;
       throw HardwareError("GPIO e-stop line " + cfg_.estop + ": poll: " + std::system_category().message(errno));
@@ -90,11 +89,7 @@ class GpiodLines final : public LineDriver {
 
   std::optional<std::chrono::steady_clock::time_point> last_edge_time() const override { return last_edge_; }
 
-  void wake() override {
-    if (wake_fd_.fd < 0) return;
-    const uint64_t one = 1;
-    [[maybe_unused]] const ssize_t n = write(wake_fd_.fd, &one, sizeof one);  // the counter is far from full
-  }
+  void wake() override { wake_.wake(); }
 
   std::string describe() const override {
     std::string s = "libgpiod lines";
@@ -126,17 +121,7 @@ class GpiodLines final : public LineDriver {
   gpiod::chip chip_;
   gpiod::line out_[kOutputs];
   gpiod::line estop_;
-  // Written by wake(); -1 without one: waits end at their timeout. A member that closes itself, so
-  // a constructor that throws (a chip or line not found) does not leak it.
-  struct EventFd {
-    int fd = eventfd(0, EFD_CLOEXEC);
-    EventFd() = default;
-    EventFd(const EventFd&) = delete;
-    EventFd& operator=(const EventFd&) = delete;
-    ~EventFd() {
-      if (fd >= 0) close(fd);
-    }
-  } wake_fd_;
+  WakeFd wake_;  // written by wake(); a member, so a constructor that throws does not leak it
   std::optional<std::chrono::steady_clock::time_point> last_edge_;
 };
 
