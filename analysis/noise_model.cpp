@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/digamma.hpp>
@@ -620,13 +621,18 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   // metrologist's review found a white + random walk FM record with ten short points dropped and
   // Q at 263x the variance the 0.01 s point measured (16x its deviation; N 0.78x, its bounds
   // excluding the truth).
+  // The widest model past the dropped points, kept for the terms below while the selection it was
+  // fitted for stands (it is the same fit: the same points, model error and start).
+  std::optional<std::pair<SubsetFit, Eigen::MatrixXd>> widest_kept;
   if (from > 0 && sel.ok) {
     Pts kept = all.tail(from);
     Eigen::MatrixXd W_wide;
-    const SubsetFit wide = widest_model(kept, n_phase, sel.delta, sel.best.theta, W_wide, team);
+    SubsetFit wide = widest_model(kept, n_phase, sel.delta, sel.best.theta, W_wide, team);
     if (wide.ok && exceeds_dropped(all, from, wide.theta) && !exceeds_dropped(all, from, sel.best.theta)) {
       from = 0;
       sel = select_model(all, n_phase, false, team);
+    } else {
+      widest_kept.emplace(std::move(wide), std::move(W_wide));
     }
   }
   out.gof_p = sel.ok ? sel.p_value : 0;
@@ -634,6 +640,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   if (sel.ok && sel.p_value < kGofAlpha) {
     sel = select_model(all.tail(from), n_phase, true, team);
     out.model_error = sel.delta;
+    widest_kept.reset();
   }
   if (!sel.ok) {
     out.reason = sel.reason;
@@ -649,7 +656,13 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   // The terms: the widest non-negative model on the tau range (not the AICc model, whose left-out
   // terms land in their neighbours: R on 6 h read 1.6x with K left out, covered 15 %).
   Eigen::MatrixXd W;
-  SubsetFit best = widest_model(p, n_phase, sel.delta, sel.best.theta, W, team);
+  SubsetFit best;
+  if (widest_kept) {
+    best = std::move(widest_kept->first);
+    W = std::move(widest_kept->second);
+  } else {
+    best = widest_model(p, n_phase, sel.delta, sel.best.theta, W, team);
+  }
   if (!best.ok) {
     best = sel.best;
     W = sel.W;
