@@ -28,6 +28,18 @@ double noise_basis(int k, double tau) {
   }
 }
 
+std::array<double, 5> term_sigma2(const std::array<double, 5>& theta, double tau) {
+  std::array<double, 5> mu{};
+  for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, tau);
+  return mu;
+}
+
+double model_sigma2(const std::array<double, 5>& theta, double tau) {
+  double mu = 0;
+  for (int k = 0; k < 5; ++k) mu += theta[static_cast<std::size_t>(k)] * noise_basis(k, tau);
+  return mu;
+}
+
 std::array<double, 4> random_term_factors(std::size_t m, std::size_t n_phase) {
   static const int kAlpha[4] = {2, 0, -1, -2};
   std::array<double, 4> f{};
@@ -130,8 +142,7 @@ struct SubsetFit {
 double nll_of(const Pts& p, const std::array<double, 5>& th) {
   double l = 0;
   for (std::size_t i = 0; i < p.tau.size(); ++i) {
-    double mu = 0;
-    for (int k = 0; k < 5; ++k) mu += th[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    const double mu = model_sigma2(th, p.tau[i]);
     if (!(mu > 0)) return std::numeric_limits<double>::infinity();
     l += p.nu[i] / 2 * (p.s[i] / mu + std::log(mu));
   }
@@ -251,11 +262,11 @@ double octave_corr(int k, int lag) {
 // (mu_Q + mu_N) / mu at tau: the share of the white (high-frequency) terms in the model; 1 when
 // the model has none of the five terms.
 double white_share(const std::array<double, 5>& theta, double tau) {
+  const std::array<double, 5> mu = term_sigma2(theta, tau);
   double w = 0, all = 0;
-  for (int k = 0; k < 5; ++k) {
-    const double mu = theta[static_cast<std::size_t>(k)] * noise_basis(k, tau);
-    all += mu;
-    if (k < 2) w += mu;
+  for (std::size_t k = 0; k < 5; ++k) {
+    all += mu[k];
+    if (k < 2) w += mu[k];
   }
   return all > 0 && w > 0 ? w / all : 1;
 }
@@ -269,8 +280,7 @@ Eigen::MatrixXd model_cov(const Pts& p, const std::array<double, 5>& theta, std:
   const std::size_t n = p.tau.size();
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), 5);
   for (std::size_t i = 0; i < n; ++i) {
-    std::array<double, 5> mu{};
-    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    const std::array<double, 5> mu = term_sigma2(theta, p.tau[i]);
     const std::array<double, 5> sd = term_scatter(mu, p.factors[i], p.m[i], n_phase);
     for (int k = 0; k < 5; ++k) w(static_cast<Eigen::Index>(i), k) = sd[static_cast<std::size_t>(k)];
   }
@@ -410,8 +420,7 @@ double gls_chi2(const Pts& p, const std::array<double, 5>& theta, std::size_t n_
   const std::size_t n = p.tau.size();
   Eigen::VectorXd r(static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i) {
-    double mu = 0;
-    for (int k = 0; k < 5; ++k) mu += theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    const double mu = model_sigma2(theta, p.tau[i]);
     r(static_cast<Eigen::Index>(i)) = std::log(p.s[i] / mu) - log_bias(p.nu[i]);
   }
   const Eigen::MatrixXd S = model_cov(p, theta, n_phase, d);
@@ -420,8 +429,7 @@ double gls_chi2(const Pts& p, const std::array<double, 5>& theta, std::size_t n_
 
 void set_model_edf(Pts& p, const std::array<double, 5>& theta, std::size_t n_phase) {
   for (std::size_t i = 0; i < p.tau.size(); ++i) {
-    std::array<double, 5> mu{};
-    for (int k = 0; k < 5; ++k) mu[static_cast<std::size_t>(k)] = theta[static_cast<std::size_t>(k)] * noise_basis(k, p.tau[i]);
+    const std::array<double, 5> mu = term_sigma2(theta, p.tau[i]);
     p.nu[i] = model_edf(mu, p.factors[i], p.m[i], n_phase);
   }
 }
@@ -565,9 +573,7 @@ namespace {
 // times the variance the point measured.
 bool exceeds_dropped(const Pts& all, std::size_t from, const std::array<double, 5>& theta) {
   for (std::size_t i = 0; i < from; ++i) {
-    double mu = 0;
-    for (int k = 0; k < 5; ++k) mu += theta[static_cast<std::size_t>(k)] * noise_basis(k, all.tau[i]);
-    if (mu >= kDroppedContradiction * all.s[i]) return true;
+    if (model_sigma2(theta, all.tau[i]) >= kDroppedContradiction * all.s[i]) return true;
   }
   return false;
 }
@@ -737,9 +743,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
         out.hi[kk] = out.upper[kk] = std::max(out.hi[kk], std::sqrt(thf + z * sdf));
       }
       for (std::size_t i = 0; i < n; ++i) {
-        double mu = 0;
-        for (int j = 0; j < 5; ++j) mu += best.theta[static_cast<std::size_t>(j)] * noise_basis(j, p.tau[i]);
-        out.share[kk] = std::max(out.share[kk], th * noise_basis(k, p.tau[i]) / mu);
+        out.share[kk] = std::max(out.share[kk], th * noise_basis(k, p.tau[i]) / model_sigma2(best.theta, p.tau[i]));
       }
     } else {
       // Upper limit: the model plus this term, its sign free (GLS from the model, theta_k = 0);

@@ -95,6 +95,11 @@ LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std:
 // sigma^2 of term k (0..4 = Q, N, B, K, R) per unit of its squared coefficient at tau (IEEE 952).
 double noise_basis(int k, double tau);
 
+// Each term's sigma^2 at tau for coefficients squared theta (theta_k noise_basis(k, tau)), and
+// their sum, the model's sigma^2 (added in the order Q..R, so every caller gets the same bits).
+std::array<double, 5> term_sigma2(const std::array<double, 5>& theta, double tau);
+double model_sigma2(const std::array<double, 5>& theta, double tau);
+
 // The EDF of an overlapping Allan variance at factor m of n_phase points whose true variance is
 // the sum of the components mu[k] (independent processes): sd(s) <= sum_k mu_k sqrt(2/nu_k)
 // (nu_k: Greenhall & Riley for Q alpha 2, N 0, B -1, K -2; the bound of the cross-covariances by

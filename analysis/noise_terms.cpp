@@ -165,9 +165,9 @@ std::optional<double> paper_b_edf(std::span<const DevPoint> pts, const NoiseMode
   if (!near) return std::nullopt;
   if (m.ok) {
     const double tau0 = near->tau_s / static_cast<double>(near->m);
-    std::array<double, 5> mu{};
-    for (int k = 0; k < 5; ++k)
-      mu[static_cast<std::size_t>(k)] = m.value[static_cast<std::size_t>(k)] * m.value[static_cast<std::size_t>(k)] * noise_basis(k, near->tau_s);
+    std::array<double, 5> theta{};
+    for (std::size_t k = 0; k < 5; ++k) theta[k] = m.value[k] * m.value[k];
+    const std::array<double, 5> mu = term_sigma2(theta, near->tau_s);
     return model_edf(mu, near->m, static_cast<std::size_t>(std::llround(record_s / tau0)) + 1);
   }
   if (near->edf > 0) return near->edf;
