@@ -283,6 +283,8 @@ int64_t Cia402Drive::value_of(Obj o) const {
     case Obj::kHomingMethod: return homing_method_;
     case Obj::kHomeOffset: return home_offset_;
     case Obj::kFollowingErrorActual: return map_.deg_to_counts(a.reference_deg - a.position_deg);
+    // A servo drive of profile 402; a 16-bit mapping holds the profile number alone.
+    case Obj::kDeviceType: return map_.spec(o).width == 16 ? c4::kDeviceProfile : c4::kDeviceTypeServo;
     case Obj::kCount: break;
   }
   return 0;

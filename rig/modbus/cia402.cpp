@@ -17,6 +17,11 @@ State decode_state(uint16_t s) {
   return State::kNotReadyToSwitchOn;
 }
 
+bool is_state(uint16_t s) {
+  const uint16_t a = s & 0x4F, b = s & 0x6F;
+  return a == 0x00 || a == 0x40 || b == 0x21 || b == 0x23 || b == 0x27 || b == 0x07 || a == 0x0F || a == 0x08;
+}
+
 uint16_t state_bits(State s) {
   switch (s) {
     case State::kNotReadyToSwitchOn: return 0x00;

@@ -10,6 +10,7 @@ namespace rig::modbus::cia402 {
 
 // Object indices (IEC 61800-7-201, section 6 object dictionary).
 namespace obj {
+inline constexpr uint16_t kDeviceType = 0x1000;  // CiA 301: low word the device profile number
 inline constexpr uint16_t kErrorCode = 0x603F;
 inline constexpr uint16_t kControlword = 0x6040;
 inline constexpr uint16_t kStatusword = 0x6041;
@@ -27,6 +28,11 @@ inline constexpr uint16_t kQuickStopDeceleration = 0x6085;
 inline constexpr uint16_t kHomingMethod = 0x6098;
 inline constexpr uint16_t kFollowingErrorActual = 0x60F4;
 }  // namespace obj
+
+// Device type 0x1000 (CiA 301): bits 0-15 the device profile (402 for a drive), bits 16-23 the
+// profile's type (IEC 61800-7-201: 0x02 servo drive, 0x01 frequency converter, 0x03 stepper).
+inline constexpr uint16_t kDeviceProfile = 402;
+inline constexpr uint32_t kDeviceTypeServo = 0x00020000u | kDeviceProfile;
 
 // Modes of operation (0x6060 / 0x6061).
 inline constexpr int8_t kModeProfilePosition = 1;
@@ -85,6 +91,9 @@ enum class State {
 
 // Decodes the state from statusword bits 0-3, 5, 6 (the standard's masks 0x4F / 0x6F).
 State decode_state(uint16_t statusword);
+// Whether bits 0-3, 5, 6 form one of the standard's eight states (decode_state takes any other
+// pattern as Not ready to switch on; a register that is not a CiA 402 statusword reads like that).
+bool is_state(uint16_t statusword);
 // The statusword bits 0-3, 5, 6 that encode `s` (voltage-enabled bit 4 is set
 // from Ready to switch on up to Quick stop active).
 uint16_t state_bits(State s);

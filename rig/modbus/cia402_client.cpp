@@ -103,8 +103,35 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
     r.controlword = static_cast<uint16_t>(val[static_cast<int>(Obj::kControlword)]);
     r.target_counts = val[static_cast<int>(Obj::kTargetPosition)];
   }
+  if (!identified_) identify(r, cancel);
   angle_seen(r.actual_deg);
   return r;
+}
+
+std::string Cia402Table::no_state(uint16_t statusword) const {
+  return map_.describe(Obj::kStatusword) + " reads " + hex4(statusword) +
+         ", which is none of the CiA 402 states (IEC 61800-7-201): not a CiA 402 drive (a rig-v1 table reads like "
+         "this), or the map's statusword address is wrong";
+}
+
+// The first reading of a client, before it writes anything: a device whose statusword is no state
+// of the standard, or whose device type (0x1000, when the map has it) is another profile, is not
+// the drive the map describes. A review found a CiA 402 client at a rig-v1 table reading
+// "actual 300°, Not ready to switch on" without error; its quick stop (controlword 0x0002) or halt
+// (0x0100) wrote that table's START or HALT with SERVO_ON clear, which dropped its servo.
+void Cia402Table::identify(const Cia402Reading& r, const CancelToken& cancel) {
+  if (!c4::is_state(r.statusword)) throw detail::NotThisDriveError(describe() + ": " + no_state(r.statusword) + "; nothing sent");
+  if (map_.has(Obj::kDeviceType)) {
+    const int64_t type = read_object(Obj::kDeviceType, cancel);
+    if ((type & 0xFFFF) != c4::kDeviceProfile) {
+      char b[16];
+      std::snprintf(b, sizeof b, "0x%0*llX", map_.spec(Obj::kDeviceType).width / 4, static_cast<unsigned long long>(type));
+      throw detail::NotThisDriveError(describe() + ": " + map_.describe(Obj::kDeviceType) + " reads " + b +
+                              ", not device profile 402 (0x0192) in its low word: not a CiA 402 drive, or the map's "
+                              "address is wrong; nothing sent");
+    }
+  }
+  identified_ = true;
 }
 
 TableStatus Cia402Table::status() {
@@ -503,11 +530,25 @@ uint16_t command_holding(State s) {
 }
 }  // namespace
 
+// A stop read from a device not yet identified whose statusword is no CiA 402 state: what to send
+// it is a guess into another register map (identify), so nothing is sent and the fate says why.
+bool Cia402Table::refuse_stop_to(uint16_t statusword, const char* name) noexcept {
+  if (identified_ || c4::is_state(statusword)) return false;
+  try {
+    std::lock_guard lk(stop_mu_);
+    last_stop_error_ = std::string(name) + " not sent: " + no_state(statusword);
+  } catch (...) {
+  }
+  return true;
+}
+
 void Cia402Table::stop() noexcept {
   uint16_t bits = 0;
   bool known = false;
   try {
-    bits = command_holding(c4::decode_state(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true))));
+    const auto sw = static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true));
+    if (refuse_stop_to(sw, "halt")) return;
+    bits = command_holding(c4::decode_state(sw));
     known = true;
   } catch (...) {
   }
@@ -520,6 +561,16 @@ void Cia402Table::stop() noexcept {
   }
   send_stop(static_cast<uint16_t>(bits | c4::cw::kHalt), "halt");
 }
-void Cia402Table::quick_stop() noexcept { send_stop(c4::cw::kCmdQuickStop, "quick stop"); }
+// Sent at once by a client that has identified its drive; else after one urgent statusword read
+// (a failed read still sends: the link decides then, as before).
+void Cia402Table::quick_stop() noexcept {
+  if (!identified_) {
+    try {
+      if (refuse_stop_to(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
+    } catch (...) {
+    }
+  }
+  send_stop(c4::cw::kCmdQuickStop, "quick stop");
+}
 
 }  // namespace rig::modbus

@@ -67,9 +67,12 @@ class Cia402Table final : public RotaryTable {
                             const CancelToken& cancel);
   void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
   std::string at(const Cia402Reading& r) const;
+  void identify(const Cia402Reading& r, const CancelToken& cancel);
+  std::string no_state(uint16_t statusword) const;
   void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
                           int64_t target_counts) const;
   void send_stop(uint16_t word, const char* name) noexcept;
+  bool refuse_stop_to(uint16_t statusword, const char* name) noexcept;
   template <class Body>
   void guarded(const std::string& doing, Body body);
 
@@ -79,7 +82,8 @@ class Cia402Table final : public RotaryTable {
   TableOptions opt_;
   std::atomic<uint16_t> control_{0};
   std::atomic<bool> control_known_{false};  // control_ was read from or written to the drive
-  std::atomic<bool> control_written_{false};  // control_ is a word this client wrote (the halt's fallback)
+  std::atomic<bool> control_written_{false};
+  std::atomic<bool> identified_{false};  // a reading showed a CiA 402 drive (identify)  // control_ is a word this client wrote (the halt's fallback)
   bool homed_ = false;            // homed by this client (when the map names no homed bit)
   bool profile_applied_ = false;
   mutable std::mutex stop_mu_;

@@ -30,6 +30,7 @@ const ObjectInfo& object_info(Obj ob) {
       {"homing_method", o::kHomingMethod, true},
       {"home_offset", o::kHomeOffset, true},
       {"following_error_actual", o::kFollowingErrorActual, false},
+      {"device_type", o::kDeviceType, false},
   }};
   return kInfo[static_cast<int>(ob)];
 }

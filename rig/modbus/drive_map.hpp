@@ -34,6 +34,7 @@ enum class Obj : int {
   kHomingMethod,
   kHomeOffset,
   kFollowingErrorActual,
+  kDeviceType,  // 0x1000: when mapped, the client checks it reads profile 402 before any write
   kCount
 };
 inline constexpr int kObjCount = static_cast<int>(Obj::kCount);

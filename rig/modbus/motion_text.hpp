@@ -83,6 +83,14 @@ struct TakenOverError : HardwareError {
   using HardwareError::HardwareError;
 };
 
+// The device answering is not the drive the configuration names (its statusword is no state of
+// the standard, its device type another profile): refused before anything is written, and no halt
+// follows, since a halt written to another device's register map is a guess (a review: a CiA 402
+// quick stop, controlword 0x0002, is START with SERVO_ON clear on a rig-v1 table).
+struct NotThisDriveError : HardwareError {
+  using HardwareError::HardwareError;
+};
+
 // Runs `body`; on an abort or a fault (but TakenOverError) it stops the axis first (`stop`, which
 // never throws) and rethrows. A fault's message says what was being done, `where()` (read at the fault: e.g. the
 // last angle seen) and
@@ -99,6 +107,8 @@ void guarded_call(const std::string& doing, Body body, Where where, Stop stop, S
     body();
   } catch (const AbortedError&) {
     stop();
+    throw;
+  } catch (const NotThisDriveError&) {
     throw;
   } catch (const TakenOverError& e) {
     throw HardwareError(e.what() + std::string("; no halt sent by this client: another master commands the table"));

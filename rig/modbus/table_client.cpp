@@ -68,6 +68,16 @@ TableClient::TableClient(std::unique_ptr<RegisterTransport> transport, Clock& cl
 
 std::string TableClient::describe() const { return transport_->describe(); }
 
+namespace {
+std::string other_map_version(uint16_t v) {
+  return "MAP_VERSION (register " + std::to_string(reg::kMapVersion) + ") reads " + std::to_string(v) +
+         "; this rig speaks register map version " + std::to_string(reg::kMapVersionValue) + " (drive = \"rig-v1\")";
+}
+const char* const kNoStatusBlock =
+    "the drive has no rig-v1 status registers at 0..24: for a CiA 402 drive give --drive cia402 --drive-map FILE, "
+    "or drive and drive_map in the hardware file's [table]";
+}  // namespace
+
 DriveState TableClient::read_drive(const CancelToken& cancel) {
   std::vector<uint16_t> regs;
   try {
@@ -76,16 +86,12 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
     // A drive without rig-v1's status block (a CiA 402 drive, another map) refuses the read
     // itself; say what to try (a technician's review: "exception 0x02" alone).
     if (e.exception_code != exc::kIllegalAddress) throw;
-    throw ModbusError(std::string(e.what()) +
-                          " (the drive has no rig-v1 status registers at 0..24: for a CiA 402 drive give --drive "
-                          "cia402 --drive-map FILE, or drive and drive_map in the hardware file's [table])",
-                      e.exception_code, e.timeout);
+    throw ModbusError(std::string(e.what()) + " (" + kNoStatusBlock + ")", e.exception_code, e.timeout);
   }
   // A drive speaking another map version would be misread register by register.
   if (regs[reg::kMapVersion] != reg::kMapVersionValue)
-    throw HardwareError(describe() + ": MAP_VERSION (register " + std::to_string(reg::kMapVersion) + ") reads " +
-                        std::to_string(regs[reg::kMapVersion]) + "; this rig speaks register map version " +
-                        std::to_string(reg::kMapVersionValue) + " (drive = \"rig-v1\")");
+    throw HardwareError(describe() + ": " + other_map_version(regs[reg::kMapVersion]));
+  identified_ = true;
   DriveState d = decode_drive_state(regs);
   control_ = d.control;
   last_actual_deg_ = d.actual_deg;
@@ -367,8 +373,40 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
       stop_mu_, last_stop_error_);
 }
 
-void TableClient::stop() noexcept { send_stop(ctl::kHalt, "stop"); }
-void TableClient::quick_stop() noexcept { send_stop(ctl::kQuickStop, "quick stop"); }
+// A client that has not yet read a rig-v1 status block reads it (one urgent request) before its
+// first stop: a device without the block, or with another MAP_VERSION, is not a rig-v1 drive, and
+// a stop bit written into its registers is a guess (a review: HALT alone, 0x0100, is Disable
+// voltage on a CiA 402 drive). A read that fails otherwise still sends: the link decides then.
+bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
+  if (identified_) return false;
+  std::string why;
+  try {
+    const std::vector<uint16_t> regs = transport_->read(0, reg::kBlockEnd, CancelToken{}, true);
+    if (regs.size() > reg::kMapVersion && regs[reg::kMapVersion] != reg::kMapVersionValue) {
+      why = other_map_version(regs[reg::kMapVersion]);
+    } else {
+      identified_ = true;
+      control_ = decode_drive_state(regs).control;  // the stop keeps SERVO_ON as the drive holds it
+    }
+  } catch (const ModbusError& e) {
+    if (e.exception_code == exc::kIllegalAddress) why = std::string(e.what()) + " (" + kNoStatusBlock + ")";
+  } catch (...) {
+  }
+  if (why.empty()) return false;
+  try {
+    std::lock_guard lk(stop_mu_);
+    last_stop_error_ = std::string(name) + " not sent: " + why;
+  } catch (...) {
+  }
+  return true;
+}
+
+void TableClient::stop() noexcept {
+  if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
+}
+void TableClient::quick_stop() noexcept {
+  if (!refuse_stop_to_unknown("quick stop")) send_stop(ctl::kQuickStop, "quick stop");
+}
 
 // ---------------------------------------------------------------- config
 

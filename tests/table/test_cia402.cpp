@@ -14,6 +14,7 @@
 #include "plant/table/cia402_drive.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/modbus/cia402_client.hpp"
+#include "rig/modbus/table_client.hpp"
 
 namespace rig::table_test {
 namespace {
@@ -755,6 +756,123 @@ TEST(Cia402ClientRefusals, UnexpectedStatesAreReportedNotGuessed) {
   m::Cia402Table t2(m::make_inprocess_transport(ignores, r.clock), r.map, r.clock, {});
   e = error_of([&] { t2.home({}); });
   EXPECT_TRUE(has(e, "did not reach Ready to switch on") && has(e, "shutdown")) << e;
+}
+
+// Counts the writes that reach a device; reads can be overridden register by register.
+class Watched final : public m::RegisterDevice {
+ public:
+  explicit Watched(m::RegisterDevice& d) : d_(d) {}
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return patch(a, n, out, d_.read_registers(a, n, out)); }
+  uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+    return patch(a, n, out, d_.read_input_registers(a, n, out));
+  }
+  uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+    ++writes;
+    return d_.write_registers(a, v, n);
+  }
+  bool answering() const override { return d_.answering(); }
+  std::map<uint16_t, uint16_t> reads_as;  // address -> the value it reads
+  int writes = 0;
+
+ private:
+  uint8_t patch(uint16_t a, uint16_t n, uint16_t* out, uint8_t rc) {
+    if (rc == 0)
+      for (const auto& [addr, v] : reads_as)
+        if (addr >= a && addr < a + n) out[addr - a] = v;
+    return rc;
+  }
+  m::RegisterDevice& d_;
+};
+
+// A CiA 402 client pointed at a rig-v1 table (the wrong `drive`): it read "actual 300°, Not ready
+// to switch on" without error, and its quick stop (controlword 0x0002) is START with SERVO_ON clear there. Now
+// every call refuses the device before a write, and the stops send nothing into it.
+TEST(Cia402ClientRefusals, ARigV1TableIsNotTakenForACia402Drive) {
+  const m::DriveMap map = m::load_drive_map(kDrives + "generic-cia402.toml");
+  auto table = emulator(kFastAxis);
+  Watched dev(*table);
+  SimClock clock([&](double dt) { table->step(dt); });
+  m::Cia402Table t(m::make_inprocess_transport(dev, clock), map, clock, {});
+  for (const auto& call : std::vector<std::function<void()>>{[&] { t.status(); }, [&] { t.home({}); },
+                                                             [&] { t.move_to(90.0, {}); }, [&] { t.reset_fault({}); }}) {
+    const std::string e = error_of(call);
+    EXPECT_TRUE(has(e, "statusword (0x6041) at holding register 1 reads 0x0401, which is none of the CiA 402 states") &&
+                has(e, "not a CiA 402 drive (a rig-v1 table reads like this)") && has(e, "; nothing sent"))
+        << e;
+  }
+  t.quick_stop();
+  EXPECT_TRUE(has(t.last_stop_error(), "quick stop not sent: statusword (0x6041)")) << t.last_stop_error();
+  t.stop();
+  EXPECT_TRUE(has(t.last_stop_error(), "halt not sent: statusword (0x6041)")) << t.last_stop_error();
+  EXPECT_EQ(dev.writes, 0);
+  clock.sleep_for(1.0, {});
+  EXPECT_FALSE(table->snapshot().moving);
+  EXPECT_DOUBLE_EQ(table->actual_angle_deg(), 10.0);
+}
+
+// CiA 301's device type (0x1000), when the map has it: a drive of another profile is refused
+// before a write; the emulated drive reads 0x00020192 (a servo drive, profile 402).
+TEST(Cia402ClientRefusals, ADeviceTypeOfAnotherProfileIsRefused) {
+  Rig r("generic-cia402.toml");
+  ASSERT_TRUE(r.map.has(Obj::kDeviceType));
+  const uint16_t at = r.map.spec(Obj::kDeviceType).address;
+  uint16_t w[2] = {};
+  ASSERT_EQ(r.drive.read_registers(at, 2, w), 0);
+  EXPECT_EQ(w[0], 0x0002);
+  EXPECT_EQ(w[1], 0x0192);
+  Watched other(r.drive);
+  other.reads_as[static_cast<uint16_t>(at + 1)] = 401;  // CiA 401, generic I/O
+  m::Cia402Table t(m::make_inprocess_transport(other, r.clock), r.map, r.clock, {});
+  const std::string e = error_of([&] { t.home({}); });
+  EXPECT_TRUE(has(e, "device_type (0x1000) at holding register 32 reads 0x00020191, not device profile 402 (0x0192)") &&
+              has(e, "; nothing sent"))
+      << e;
+  EXPECT_EQ(other.writes, 0);
+  // The drive it describes is taken (and identified once: the shipped maps' tests run through it).
+  Watched same(r.drive);
+  m::Cia402Table ok(m::make_inprocess_transport(same, r.clock), r.map, r.clock, {});
+  EXPECT_NO_THROW(ok.status());
+  EXPECT_EQ(same.writes, 0);
+}
+
+// The rig-v1 client the other way round, at a CiA 402 drive: its first stop reads the rig-v1
+// status block and sends no stop bit into a device without it (HALT alone, 0x0100, is Disable
+// voltage there) or with another MAP_VERSION.
+TEST(Cia402ClientRefusals, ARigV1ClientSendsNoStopIntoACia402Drive) {
+  Rig r("generic-cia402.toml");
+  Watched dev(r.drive);
+  m::TableClient c(m::make_inprocess_transport(dev, r.clock), r.clock, {});
+  c.stop();
+  EXPECT_TRUE(has(c.last_stop_error(), "stop not sent: ") && has(c.last_stop_error(), "no rig-v1 status registers at 0..24"))
+      << c.last_stop_error();
+  c.quick_stop();
+  EXPECT_TRUE(has(c.last_stop_error(), "quick stop not sent: ")) << c.last_stop_error();
+  EXPECT_EQ(dev.writes, 0);
+  // Registers 0..24 all answer but MAP_VERSION (register 3) is the drive's modes of operation.
+  struct Zeros final : m::RegisterDevice {
+    uint8_t read_registers(uint16_t, uint16_t n, uint16_t* out) override {
+      std::fill(out, out + n, uint16_t{0});
+      return 0;
+    }
+    uint8_t write_registers(uint16_t, const uint16_t*, uint16_t) override {
+      ++writes;
+      return 0;
+    }
+    bool answering() const override { return true; }
+    int writes = 0;
+  } zeros;
+  m::TableClient z(m::make_inprocess_transport(zeros, r.clock), r.clock, {});
+  z.stop();
+  EXPECT_TRUE(has(z.last_stop_error(), "stop not sent: MAP_VERSION (register 3) reads 0")) << z.last_stop_error();
+  EXPECT_EQ(zeros.writes, 0);
+  // A rig-v1 table is read once and then stopped, its servo kept on.
+  auto table = emulator(kFastAxis);
+  Watched v1(*table);
+  SimClock clock([&](double dt) { table->step(dt); });
+  m::TableClient ok(m::make_inprocess_transport(v1, clock), clock, {});
+  ok.stop();
+  EXPECT_EQ(ok.last_stop_error(), "");
+  EXPECT_EQ(v1.writes, 1);
 }
 
 INSTANTIATE_TEST_SUITE_P(ShippedMaps, Cia402Client, ::testing::ValuesIn(kMaps),

@@ -70,6 +70,36 @@ TEST_F(RigTable, StatusHomeMove) {
   EXPECT_NE(out.find("quick stop sent"), std::string::npos) << out;
 }
 
+// `--drive cia402` at this rig-v1 table (the wrong drive in a hardware file): every command is
+// refused before a write, exit 4, naming the statusword that is no CiA 402 state; the quick stop
+// and the halt (0x0002 and 0x0100: START or HALT with SERVO_ON clear here, which dropped the servo
+// before) are not sent, and the table holds where it was, its servo on.
+TEST_F(RigTable, ACia402ClientAtThisTableIsRefusedAndSendsNothing) {
+  std::string out;
+  const std::string c4 = where_ + " --drive cia402 --drive-map " + RIG_SOURCE_DIR + "/drives/generic-cia402.toml ";
+  ASSERT_EQ(rig(where_ + " home", out), 0) << out;
+  ASSERT_EQ(run("mbpoll -m tcp -p " + server_.endpoint().substr(server_.endpoint().rfind(':') + 1) +
+                    " -a 1 -0 -1 -t 4:int -B -r 8 127.0.0.1 900000",
+                out),
+            0)
+      << out;  // TARGET_POS 90°: where a START would take it
+  for (const char* cmd : {"status", "home", "move 45", "reset"}) {
+    EXPECT_EQ(rig(c4 + cmd, out), 4) << cmd << ": " << out;
+    EXPECT_NE(out.find("statusword (0x6041) at holding register 1 reads 0x"), std::string::npos) << out;
+    EXPECT_NE(out.find("none of the CiA 402 states (IEC 61800-7-201): not a CiA 402 drive"), std::string::npos) << out;
+    EXPECT_NE(out.find("; nothing sent"), std::string::npos) << out;
+  }
+  EXPECT_EQ(rig(c4 + "quick-stop", out), 4) << out;
+  EXPECT_NE(out.find("quick stop not sent: statusword (0x6041)"), std::string::npos) << out;
+  EXPECT_EQ(rig(c4 + "stop", out), 4) << out;
+  EXPECT_NE(out.find("halt not sent: statusword (0x6041)"), std::string::npos) << out;
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_FALSE(emu_->snapshot().moving);
+  EXPECT_NEAR(emu_->actual_angle_deg(), 0.0, 0.005);
+  ASSERT_EQ(rig(where_ + " status", out), 0) << out;
+  EXPECT_NE(out.find("servo-on"), std::string::npos) << out;  // the halt that was not sent kept it
+}
+
 // On a terminal a home or a move shows the angle the drive reads while the table turns, on one
 // line that is cleared before the status is printed; piped (as in every other test here), none of it.
 TEST_F(RigTable, OnATerminalTheTurningTableShowsItsAngle) {
@@ -315,6 +345,12 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
                      "CiA 402 drive give --drive cia402 --drive-map FILE"),
             std::string::npos)
       << out;
+  // Nor does it send a stop bit into the CiA 402 drive (HALT alone is Disable voltage there).
+  for (const char* stop : {"stop", "quick-stop"}) {
+    EXPECT_EQ(rig(std::string(stop) + " --modbus " + ep), 4) << out;
+    EXPECT_NE(out.find("stop not sent: "), std::string::npos) << out;
+    EXPECT_NE(out.find("no rig-v1 status registers at 0..24"), std::string::npos) << out;
+  }
   ASSERT_EQ(rig("home" + where), 0) << out;
   ASSERT_EQ(rig("move 180" + where), 0) << out;
   EXPECT_NE(out.find("actual     180.0000°"), std::string::npos) << out;
