@@ -36,7 +36,12 @@ void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vect
     if (fs::exists(dir + "/seal.json")) fs::rename(dir + "/seal.json", dir + "/seal.prev.json");
     write_file_atomic(dir + "/seal.json", text);
   } catch (const std::exception& e) {
-    throw ConfigError(dir + "/seal.json: cannot be written: " + e.what());
+    const std::string why = dir + "/seal.json: cannot be written: " + e.what();
+    // At a checkpoint the folder stopped holding the run's records mid-run: exit 4, as for the
+    // checkpoint itself (README, exit codes). Before the first phase the folder is the
+    // configuration's --out, which could not be written: exit 2.
+    if (checkpoint_text) throw std::runtime_error(why);
+    throw ConfigError(why);
   }
 }
 

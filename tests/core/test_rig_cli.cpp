@@ -2472,6 +2472,39 @@ TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
   EXPECT_FALSE(fs::exists(d + "/run2/passport.json"));
 }
 
+// A seal the folder cannot take: before the first phase the run folder is the configuration's
+// --out (exit 2, nothing run); at a checkpoint the folder stopped holding the run's records
+// mid-run, exit 4 like a checkpoint or passport it cannot take (it was exit 2 there). A directory
+// squats on the seal's temporary name.
+TEST(RigCli, ASealTheFolderCannotTakeIsExitTwoAtTheStartAndFourAtACheckpoint) {
+  const std::string d = tmp("seal-not-written");
+  const std::string key = d + "/station.key";
+  fs::create_directories(d);
+  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
+  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  fs::create_directories(d + "/start/seal.json.tmp/x");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/start", "--seal-key", key},
+                d + "/io1"),
+            2)
+      << slurp(d + "/io1.stderr");
+  EXPECT_NE(slurp(d + "/io1.stderr").find(d + "/start/seal.json: cannot be written"), std::string::npos)
+      << slurp(d + "/io1.stderr");
+  EXPECT_FALSE(fs::exists(d + "/start/checkpoint.json"));
+  // Killed after some sealed checkpoints; a directory squats on the seal's temporary name before
+  // the resume, whose first checkpoint then cannot seal (a resume writes no start seal).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/checkpoint", "--seal-key",
+                 key, "--inject", "sigkill@60"},
+                d + "/io2"),
+            128 + SIGKILL);
+  ASSERT_TRUE(fs::exists(d + "/checkpoint/checkpoint.json"));
+  fs::create_directories(d + "/checkpoint/seal.json.tmp/x");
+  EXPECT_EQ(run({"run", "--resume", d + "/checkpoint", "--yes", "--quiet", "--seal-key", key}, d + "/io3"), 4)
+      << slurp(d + "/io3.stderr");
+  EXPECT_NE(slurp(d + "/checkpoint/run.log").find(d + "/checkpoint/seal.json: cannot be written"), std::string::npos)
+      << slurp(d + "/checkpoint/run.log");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/checkpoint/passport.json"))["outcome"], "ERROR");
+}
+
 // The history a run will record into is checked before anything runs, --dry-run included: an
 // SQLite file that is not a database, or one that cannot be created, is exit 2 (junk bytes passed
 // and the run's row was lost at its end, only logged: a review); a new file in a writable folder
