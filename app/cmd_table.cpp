@@ -273,6 +273,11 @@ void add_table(CLI::App& app, int& rc) {
       } else {
         t.stop();
       }
+      // A CiA 402 drive whose power stage is off needs no stop, and gets none (exit 0, said so).
+      if (auto* c = dynamic_cast<modbus::Cia402Table*>(&t); c && c->last_stop_needless()) {
+        std::cout << c->last_stop_error() << "\n";
+        return;
+      }
       if (!last_stop_error(t).empty()) throw HardwareError(last_stop_error(t));
       std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << "\n";
     });

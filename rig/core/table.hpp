@@ -71,6 +71,9 @@ class RotaryTable {
   // Immediate stop (quick stop / e-stop ramp). Never throws.
   virtual void quick_stop() noexcept = 0;
   virtual std::string describe() const = 0;  // "modbus tcp 127.0.0.1:1502 unit 1"
+  // What became of the last stop or quick stop: "" delivered, else why not (not delivered, not
+  // sent into a device that is not the configured drive, none needed). For the safe state's log.
+  virtual std::string stop_fate() const { return ""; }
 
   // Called with the angle read, each time the client reads the drive (while home() and move_to()
   // wait, every poll): `rig table` shows the turning table with it. On the caller's thread;

@@ -85,6 +85,7 @@ void Executive::safe_state(Devices& dev, spdlog::logger& log, bool abnormal) {
   const auto lvl = abnormal ? spdlog::level::warn : spdlog::level::info;
   log.log(lvl, "safe state 1/3: stopping table ({})", dev.table.describe());
   dev.table.stop();
+  if (const std::string fate = dev.table.stop_fate(); !fate.empty()) log.warn("safe state 1/3: {}", fate);
   log.log(lvl, "safe state 2/3: stopping DUT stream ({})", dev.dut.describe());
   dev.dut.stop_stream();
   log.log(lvl, "safe state 3/3: DUT power off ({})", dev.io.describe());

@@ -108,29 +108,44 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
   return r;
 }
 
-std::string Cia402Table::no_state(uint16_t statusword) const {
-  return map_.describe(Obj::kStatusword) + " reads " + hex4(statusword) +
-         ", which is none of the CiA 402 states (IEC 61800-7-201): not a CiA 402 drive (a rig-v1 table reads like "
-         "this), or the map's statusword address is wrong";
+namespace {
+const char* const kWhatToDo =
+    "if it is a rig-v1 table give --drive rig-v1 (drive = \"rig-v1\" in the hardware file's [table]); otherwise "
+    "check the drive map's addresses against the drive's manual";
+}  // namespace
+
+// Why this device is not the drive the map describes ("" when it is): a statusword that is none
+// of the standard's eight states, or (when the map has it) a device type (0x1000) that is not
+// profile 402 or that the device refuses (exception 02: no such register). Other read failures
+// (a timeout) are thrown: they say nothing about the device.
+std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent) {
+  if (!c4::is_state(statusword))
+    return map_.describe(Obj::kStatusword) + " reads " + hex4(statusword) +
+           ", which is none of the CiA 402 states (IEC 61800-7-201): not a CiA 402 drive (a rig-v1 table reads like "
+           "this), or the map's statusword address is wrong";
+  if (!map_.has(Obj::kDeviceType)) return "";
+  int64_t type = 0;
+  try {
+    type = read_object(Obj::kDeviceType, cancel, urgent);
+  } catch (const ModbusError& e) {
+    if (e.exception_code != exc::kIllegalAddress) throw;
+    return map_.describe(Obj::kDeviceType) + " does not exist on the device (exception 0x02): not a CiA 402 drive, "
+           "or the map's address is wrong";
+  }
+  if ((type & 0xFFFF) == c4::kDeviceProfile) return "";
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%0*llX", map_.spec(Obj::kDeviceType).width / 4, static_cast<unsigned long long>(type));
+  return map_.describe(Obj::kDeviceType) + " reads " + b +
+         ", not device profile 402 (0x0192) in its low word: not a CiA 402 drive, or the map's address is wrong";
 }
 
-// The first reading of a client, before it writes anything: a device whose statusword is no state
-// of the standard, or whose device type (0x1000, when the map has it) is another profile, is not
-// the drive the map describes. A review found a CiA 402 client at a rig-v1 table reading
-// "actual 300°, Not ready to switch on" without error; its quick stop (controlword 0x0002) or halt
-// (0x0100) wrote that table's START or HALT with SERVO_ON clear, which dropped its servo.
+// The first reading of a client, before it writes anything. A review found a CiA 402 client at a
+// rig-v1 table reading "actual 300°, Not ready to switch on" without error; its quick stop
+// (controlword 0x0002) or halt (0x0100) wrote that table's START or HALT with SERVO_ON clear, which
+// dropped its servo.
 void Cia402Table::identify(const Cia402Reading& r, const CancelToken& cancel) {
-  if (!c4::is_state(r.statusword)) throw detail::NotThisDriveError(describe() + ": " + no_state(r.statusword) + "; nothing sent");
-  if (map_.has(Obj::kDeviceType)) {
-    const int64_t type = read_object(Obj::kDeviceType, cancel);
-    if ((type & 0xFFFF) != c4::kDeviceProfile) {
-      char b[16];
-      std::snprintf(b, sizeof b, "0x%0*llX", map_.spec(Obj::kDeviceType).width / 4, static_cast<unsigned long long>(type));
-      throw detail::NotThisDriveError(describe() + ": " + map_.describe(Obj::kDeviceType) + " reads " + b +
-                              ", not device profile 402 (0x0192) in its low word: not a CiA 402 drive, or the map's "
-                              "address is wrong; nothing sent");
-    }
-  }
+  const std::string why = identity_problem(r.statusword, cancel, false);
+  if (!why.empty()) throw detail::NotThisDriveError(describe() + ": " + why + "; nothing sent (" + kWhatToDo + ")");
   identified_ = true;
 }
 
@@ -497,6 +512,10 @@ uint16_t Cia402Table::reset_fault(const CancelToken& cancel) {
 }
 
 void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
+  {
+    std::lock_guard lk(stop_mu_);
+    stop_needless_ = false;
+  }
   detail::deliver_stop(
       name,
       [&] {
@@ -530,16 +549,41 @@ uint16_t command_holding(State s) {
 }
 }  // namespace
 
-// A stop read from a device not yet identified whose statusword is no CiA 402 state: what to send
-// it is a guess into another register map (identify), so nothing is sent and the fate says why.
-bool Cia402Table::refuse_stop_to(uint16_t statusword, const char* name) noexcept {
-  if (identified_ || c4::is_state(statusword)) return false;
+// Whether a stop (`name`) goes out, given the statusword just read: not into a device this client
+// has not identified and that is not the drive (identity_problem: a second review found a rig-v1
+// table in motion, statusword-like 0x0417, taken for Quick stop active and halted with 0x0102),
+// and not where the power stage is off (Not ready to switch on, Switch on disabled, Fault: nothing
+// can move, and a halt there is Disable voltage written into whatever the statusword address
+// really is, e.g. a map with the statusword and error code swapped). Records why not.
+bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept {
+  std::string why;
+  bool needless = false;
+  try {
+    if (!identified_) {
+      try {
+        why = identity_problem(statusword, CancelToken{}, true);
+        if (why.empty()) identified_ = true;
+      } catch (...) {  // a device type that cannot be read now: the statusword decides
+      }
+      if (!why.empty()) why = std::string(name) + " not sent: " + why;
+    }
+    const State st = c4::decode_state(statusword);
+    if (why.empty() && (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled || st == State::kFault)) {
+      why = std::string("no ") + name + " needed: drive \"" + map_.name + "\" in " + c4::state_name(st) +
+            " (statusword " + hex4(statusword) + "): its power stage is off";
+      needless = true;
+    }
+  } catch (...) {
+    return true;
+  }
+  if (why.empty()) return true;
   try {
     std::lock_guard lk(stop_mu_);
-    last_stop_error_ = std::string(name) + " not sent: " + no_state(statusword);
+    last_stop_error_ = std::move(why);
+    stop_needless_ = needless;
   } catch (...) {
   }
-  return true;
+  return false;
 }
 
 void Cia402Table::stop() noexcept {
@@ -547,7 +591,7 @@ void Cia402Table::stop() noexcept {
   bool known = false;
   try {
     const auto sw = static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true));
-    if (refuse_stop_to(sw, "halt")) return;
+    if (!stop_goes_out(sw, "halt")) return;
     bits = command_holding(c4::decode_state(sw));
     known = true;
   } catch (...) {
@@ -557,16 +601,18 @@ void Cia402Table::stop() noexcept {
   if (!known) {
     std::lock_guard lk(stop_mu_);
     last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";
+    stop_needless_ = false;
     return;
   }
   send_stop(static_cast<uint16_t>(bits | c4::cw::kHalt), "halt");
 }
+
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
 // (a failed read still sends: the link decides then, as before).
 void Cia402Table::quick_stop() noexcept {
   if (!identified_) {
     try {
-      if (refuse_stop_to(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
+      if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
     } catch (...) {
     }
   }

@@ -44,6 +44,7 @@ class Cia402Table final : public RotaryTable {
   void stop() noexcept override;        // halt (controlword bit 8) on the profile deceleration
   void quick_stop() noexcept override;  // Quick stop command (transition 11)
   std::string describe() const override;
+  std::string stop_fate() const override { return last_stop_error(); }
 
   // Technician's fault reset (`rig table reset`): returns the 0x603F code it
   // cleared (0: no fault); HardwareError naming the code when the drive stays in Fault.
@@ -53,6 +54,12 @@ class Cia402Table final : public RotaryTable {
   std::string last_stop_error() const {
     std::lock_guard lk(stop_mu_);
     return last_stop_error_;
+  }
+  // The last stop was not sent because none was needed (the power stage off); last_stop_error
+  // says so ("no halt needed: ...").
+  bool last_stop_needless() const {
+    std::lock_guard lk(stop_mu_);
+    return stop_needless_;
   }
   const DriveMap& map() const { return map_; }
 
@@ -68,11 +75,11 @@ class Cia402Table final : public RotaryTable {
   void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
   std::string at(const Cia402Reading& r) const;
   void identify(const Cia402Reading& r, const CancelToken& cancel);
-  std::string no_state(uint16_t statusword) const;
+  std::string identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent);
   void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
                           int64_t target_counts) const;
   void send_stop(uint16_t word, const char* name) noexcept;
-  bool refuse_stop_to(uint16_t statusword, const char* name) noexcept;
+  bool stop_goes_out(uint16_t statusword, const char* name) noexcept;
   template <class Body>
   void guarded(const std::string& doing, Body body);
 
@@ -88,6 +95,7 @@ class Cia402Table final : public RotaryTable {
   bool profile_applied_ = false;
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
+  bool stop_needless_ = false;
 };
 
 }  // namespace rig::modbus

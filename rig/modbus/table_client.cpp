@@ -69,13 +69,32 @@ TableClient::TableClient(std::unique_ptr<RegisterTransport> transport, Clock& cl
 std::string TableClient::describe() const { return transport_->describe(); }
 
 namespace {
-std::string other_map_version(uint16_t v) {
-  return "MAP_VERSION (register " + std::to_string(reg::kMapVersion) + ") reads " + std::to_string(v) +
-         "; this rig speaks register map version " + std::to_string(reg::kMapVersionValue) + " (drive = \"rig-v1\")";
+const char* const kForCia402 =
+    "for a CiA 402 drive give --drive cia402 --drive-map FILE, or drive and drive_map in the hardware file's [table]";
+const char* const kNoStatusBlock = "the drive has no rig-v1 status registers at 0..24";
+
+// Why a status block is not a rig-v1 drive's ("" when it may be): MAP_VERSION, and what the map
+// itself rules out (docs/table-registers.md): a STATUS bit above 10, a CONTROL bit the drive
+// refuses to take, soft limits not in order, a zero profile velocity, acceleration or window, a
+// settle time above 10 s. MAP_VERSION alone let a CiA 402 drive through whose modes of operation
+// (1 after a profile move) sit at register 3 (a review).
+std::string rig_v1_block_problem(const std::vector<uint16_t>& r) {
+  auto at = [](uint16_t a) { return "register " + std::to_string(a); };
+  if (r[reg::kMapVersion] != reg::kMapVersionValue)
+    return "MAP_VERSION (" + at(reg::kMapVersion) + ") reads " + std::to_string(r[reg::kMapVersion]) +
+           "; this rig speaks register map version " + std::to_string(reg::kMapVersionValue) + " (drive = \"rig-v1\")";
+  std::string bad;
+  auto no = [&](const std::string& what) { bad += (bad.empty() ? "" : ", ") + what; };
+  if (r[reg::kStatus] >> 11) no("STATUS (" + at(reg::kStatus) + ") has bits above 10 (" + std::to_string(r[reg::kStatus]) + ")");
+  if (r[reg::kControl] & ~ctl::kAll) no("CONTROL (" + at(reg::kControl) + ") holds bits the map refuses (" + std::to_string(r[reg::kControl]) + ")");
+  if (join_i32(r[reg::kLimitNeg], r[reg::kLimitNeg + 1]) >= join_i32(r[reg::kLimitPos], r[reg::kLimitPos + 1]))
+    no("LIMIT_NEG (" + at(reg::kLimitNeg) + ") is not below LIMIT_POS");
+  if (join_u32(r[reg::kVelocity], r[reg::kVelocity + 1]) == 0) no("VELOCITY (" + at(reg::kVelocity) + ") is 0");
+  if (join_u32(r[reg::kAccel], r[reg::kAccel + 1]) == 0) no("ACCEL (" + at(reg::kAccel) + ") is 0");
+  if (r[reg::kInPosWindow] == 0) no("IN_POS_WINDOW (" + at(reg::kInPosWindow) + ") is 0");
+  if (r[reg::kSettleTime] > 10000) no("SETTLE_TIME (" + at(reg::kSettleTime) + ") is above 10000 ms");
+  return bad.empty() ? "" : "MAP_VERSION reads 1, but " + bad + ": not a rig-v1 drive";
 }
-const char* const kNoStatusBlock =
-    "the drive has no rig-v1 status registers at 0..24: for a CiA 402 drive give --drive cia402 --drive-map FILE, "
-    "or drive and drive_map in the hardware file's [table]";
 }  // namespace
 
 DriveState TableClient::read_drive(const CancelToken& cancel) {
@@ -86,11 +105,13 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
     // A drive without rig-v1's status block (a CiA 402 drive, another map) refuses the read
     // itself; say what to try (a technician's review: "exception 0x02" alone).
     if (e.exception_code != exc::kIllegalAddress) throw;
-    throw ModbusError(std::string(e.what()) + " (" + kNoStatusBlock + ")", e.exception_code, e.timeout);
+    const std::string why = std::string(e.what()) + " (" + kNoStatusBlock + ": " + kForCia402 + ")";
+    if (!identified_) throw detail::NotThisDriveError(describe() + ": " + why + "; nothing sent");
+    throw ModbusError(why, e.exception_code, e.timeout);
   }
-  // A drive speaking another map version would be misread register by register.
-  if (regs[reg::kMapVersion] != reg::kMapVersionValue)
-    throw HardwareError(describe() + ": " + other_map_version(regs[reg::kMapVersion]));
+  // A drive speaking another map version, or another map, would be misread register by register.
+  if (const std::string why = rig_v1_block_problem(regs); !why.empty())
+    throw detail::NotThisDriveError(describe() + ": " + why + (identified_ ? "" : "; nothing sent (" + std::string(kForCia402) + ")"));
   identified_ = true;
   DriveState d = decode_drive_state(regs);
   control_ = d.control;
@@ -382,14 +403,14 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
   std::string why;
   try {
     const std::vector<uint16_t> regs = transport_->read(0, reg::kBlockEnd, CancelToken{}, true);
-    if (regs.size() > reg::kMapVersion && regs[reg::kMapVersion] != reg::kMapVersionValue) {
-      why = other_map_version(regs[reg::kMapVersion]);
-    } else {
+    if (regs.size() < reg::kBlockEnd) return false;  // (never: the transport checks the count)
+    why = rig_v1_block_problem(regs);
+    if (why.empty()) {
       identified_ = true;
       control_ = decode_drive_state(regs).control;  // the stop keeps SERVO_ON as the drive holds it
     }
   } catch (const ModbusError& e) {
-    if (e.exception_code == exc::kIllegalAddress) why = std::string(e.what()) + " (" + kNoStatusBlock + ")";
+    if (e.exception_code == exc::kIllegalAddress) why = std::string(e.what()) + " (" + kNoStatusBlock + ": " + kForCia402 + ")";
   } catch (...) {
   }
   if (why.empty()) return false;

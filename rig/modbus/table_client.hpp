@@ -61,6 +61,7 @@ class TableClient final : public RotaryTable {
   void stop() noexcept override;
   void quick_stop() noexcept override;
   std::string describe() const override;
+  std::string stop_fate() const override { return last_stop_error(); }
 
   // Technician's alarm reset (`rig table reset`): refused while the e-stop is
   // pressed or the interlock is open; throws HardwareError when the alarm stays.

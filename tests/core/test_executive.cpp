@@ -129,6 +129,33 @@ TEST(Executive, AbortRunsSafeStateInOrderAndKeepsMeasurements) {
   EXPECT_FALSE(f.world->io().dut_power());
 }
 
+// A stop that did not go out (not delivered, or not sent into a device that is not the configured
+// drive) is said in run.log's safe state, not passed over before "safe state reached" (a review).
+TEST(Executive, TheSafeStateLogsAStopThatDidNotGoOut) {
+  Fixture f("stop-fate");
+  struct Unsent final : RotaryTable {
+    explicit Unsent(RotaryTable& t) : t_(t) {}
+    TableStatus status() override { return t_.status(); }
+    void home(const CancelToken& c) override { t_.home(c); }
+    void move_to(double deg, const CancelToken& c) override { t_.move_to(deg, c); }
+    void stop() noexcept override {}
+    void quick_stop() noexcept override {}
+    std::string describe() const override { return "unsent table"; }
+    std::string stop_fate() const override { return "halt not sent: statusword (0x6041) reads 0x0401"; }
+    RotaryTable& t_;
+  } table(f.world->table());
+  Devices d{table, f.world->dut(), f.world->io(), f.world->clock(), "emulated"};
+  Executive ex(d, f.out, f.log, nullptr);
+  std::vector<Phase> phases{{"only", "only", 1, [](PhaseContext&) { throw HardwareError("table fault"); }}};
+  MeasurementSet v;
+  JsonState state;
+  ex.run(power_on, phases, v, state, CancelSource().token(), false, {});
+  const std::string log = f.logtext.str();
+  const auto fate = log.find("safe state 1/3: halt not sent: statusword (0x6041) reads 0x0401");
+  ASSERT_NE(fate, std::string::npos) << log;
+  EXPECT_LT(fate, log.find("safe state 2/3"));
+}
+
 TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   Fixture f("resume");
   int runs_a = 0, runs_b = 0;

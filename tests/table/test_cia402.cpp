@@ -808,6 +808,59 @@ TEST(Cia402ClientRefusals, ARigV1TableIsNotTakenForACia402Drive) {
   clock.sleep_for(1.0, {});
   EXPECT_FALSE(table->snapshot().moving);
   EXPECT_DOUBLE_EQ(table->actual_angle_deg(), 10.0);
+
+  // Turning (a second review): STATUS 0x0417 reads like Quick stop active, a state, so the
+  // statusword alone let it through and the halt (0x0102) dropped the servo mid-move. The map's
+  // device type (register 32, which a rig-v1 table does not have) refuses it.
+  m::TableClient v1(m::make_inprocess_transport(*table, clock), clock, {});
+  v1.home({});
+  const std::vector<uint16_t> far = {static_cast<uint16_t>(1800000 >> 16), static_cast<uint16_t>(1800000 & 0xFFFF)};
+  ASSERT_EQ(table->write_registers(8, far.data(), 2), 0);  // TARGET_POS 180°
+  const uint16_t servo = 1, start = 3;
+  ASSERT_EQ(table->write_registers(0, &servo, 1), 0);
+  ASSERT_EQ(table->write_registers(0, &start, 1), 0);
+  clock.sleep_for(0.1, {});
+  ASSERT_TRUE(table->snapshot().moving);
+  m::Cia402Table moving(m::make_inprocess_transport(dev, clock), map, clock, {});
+  const std::string e = error_of([&] { moving.move_to(20.0, {}); });
+  EXPECT_TRUE(has(e, "device_type (0x1000) at holding register 32 does not exist on the device (exception 0x02)") &&
+              has(e, "; nothing sent (if it is a rig-v1 table give --drive rig-v1"))
+      << e;
+  m::Cia402Table fresh(m::make_inprocess_transport(dev, clock), map, clock, {});
+  fresh.stop();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "halt not sent: device_type (0x1000)")) << fresh.last_stop_error();
+  fresh.quick_stop();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "quick stop not sent: device_type (0x1000)")) << fresh.last_stop_error();
+  EXPECT_EQ(dev.writes, 0);
+  clock.sleep_for(5.0, {});
+  EXPECT_NEAR(table->actual_angle_deg(), 180.0, 0.01);  // its move went on to its target
+}
+
+// A drive whose power stage is off (Not ready to switch on, Switch on disabled, Fault) cannot
+// move: no halt is sent (it would be Disable voltage written to whatever the statusword address
+// is: a review's map with statusword and error code swapped dropped a drive in Operation enabled).
+TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
+  Rig r("generic-cia402.toml");
+  Watched dev(r.drive);
+  m::Cia402Table t(m::make_inprocess_transport(dev, r.clock), r.map, r.clock, {});
+  t.stop();
+  EXPECT_TRUE(t.last_stop_needless());
+  EXPECT_TRUE(has(t.last_stop_error(), "no halt needed: drive \"generic CiA 402\" in Not ready to switch on") &&
+              has(t.last_stop_error(), "its power stage is off"))
+      << t.last_stop_error();
+  r.run(0.5);
+  m::Cia402Table fresh(m::make_inprocess_transport(dev, r.clock), r.map, r.clock, {});
+  fresh.quick_stop();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "no quick stop needed: drive \"generic CiA 402\" in Switch on disabled"))
+      << fresh.last_stop_error();
+  EXPECT_EQ(dev.writes, 0);
+  // Enabled, the halt goes out as before.
+  t.home({});
+  const int before = dev.writes;
+  t.stop();
+  EXPECT_FALSE(t.last_stop_needless());
+  EXPECT_EQ(t.last_stop_error(), "");
+  EXPECT_EQ(dev.writes, before + 1);
 }
 
 // CiA 301's device type (0x1000), when the map has it: a drive of another profile is refused
@@ -873,6 +926,42 @@ TEST(Cia402ClientRefusals, ARigV1ClientSendsNoStopIntoACia402Drive) {
   ok.stop();
   EXPECT_EQ(ok.last_stop_error(), "");
   EXPECT_EQ(v1.writes, 1);
+}
+
+// A CiA 402 drive whose objects fill registers 0..24 (the generic layout with the device type at
+// 24, a review's map): after a profile move its modes of operation, at register 3, read 1, rig-v1's
+// MAP_VERSION; the rig-v1 client took it for a table, printed "homing moving" and its stop (0x0101)
+// was Disable voltage. What the rig-v1 map rules out (here LIMIT_NEG not below LIMIT_POS: home
+// offset and following error, both 0 at rest) refuses it before any write.
+TEST(Cia402ClientRefusals, ARigV1ClientRefusesACia402DriveWhoseRegister3ReadsOne) {
+  std::ifstream in(kDrives + "generic-cia402.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find("address = 32,");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 13, "address = 24,");
+  const m::DriveMap map = m::parse_drive_map(cfg::parse_string(text, "contiguous.toml"), "contiguous.toml");
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, map);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::Cia402Table c4client(m::make_inprocess_transport(drive, clock), map, clock, {});
+  c4client.home({});
+  c4client.move_to(90.0, {});
+  uint16_t mode = 0;
+  ASSERT_EQ(drive.read_registers(3, 1, &mode), 0);
+  ASSERT_EQ(mode, 1);
+  Watched dev(drive);
+  m::TableClient v1(m::make_inprocess_transport(dev, clock), clock, {});
+  const std::string e = error_of([&] { v1.status(); });
+  EXPECT_TRUE(has(e, "MAP_VERSION reads 1, but LIMIT_NEG (register 20) is not below LIMIT_POS") &&
+              has(e, "not a rig-v1 drive; nothing sent (for a CiA 402 drive give --drive cia402"))
+      << e;
+  const std::string e2 = error_of([&] { v1.move_to(10.0, {}); });
+  EXPECT_TRUE(has(e2, "not a rig-v1 drive; nothing sent")) << e2;
+  m::TableClient fresh(m::make_inprocess_transport(dev, clock), clock, {});
+  fresh.stop();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "stop not sent: MAP_VERSION reads 1, but")) << fresh.last_stop_error();
+  EXPECT_EQ(dev.writes, 0);
+  EXPECT_EQ(c4client.status().drive_state, "Operation enabled");
 }
 
 INSTANTIATE_TEST_SUITE_P(ShippedMaps, Cia402Client, ::testing::ValuesIn(kMaps),

@@ -338,6 +338,10 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   auto rig = [&](const std::string& args) { return run(std::string(RIG_BIN) + " table " + args, out); };
   ASSERT_EQ(rig("status" + where), 0) << out;
   EXPECT_NE(out.find("cia402"), std::string::npos) << out;
+  // Its power stage is off (Switch on disabled): nothing to halt, none sent, exit 0, said so.
+  ASSERT_EQ(rig("stop" + where), 0) << out;
+  EXPECT_NE(out.find("no halt needed: drive \""), std::string::npos) << out;
+  EXPECT_NE(out.find("its power stage is off"), std::string::npos) << out;
   // The default (rig-v1) client at a CiA 402 drive: refused, with what to give (a technician's
   // review: "exception 0x02 illegal data address" alone).
   EXPECT_EQ(rig("status --modbus " + ep), 4) << out;
