@@ -145,7 +145,7 @@ std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken
 // dropped its servo.
 void Cia402Table::identify(const Cia402Reading& r, const CancelToken& cancel) {
   const std::string why = identity_problem(r.statusword, cancel, false);
-  if (!why.empty()) throw detail::NotThisDriveError(describe() + ": " + why + "; nothing sent (" + kWhatToDo + ")");
+  if (!why.empty()) throw detail::NotThisDriveError(describe() + ": " + why + " (" + kWhatToDo + "); nothing sent");
   identified_ = true;
 }
 

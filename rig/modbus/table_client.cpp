@@ -110,8 +110,12 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
     throw ModbusError(why, e.exception_code, e.timeout);
   }
   // A drive speaking another map version, or another map, would be misread register by register.
-  if (const std::string why = rig_v1_block_problem(regs); !why.empty())
-    throw detail::NotThisDriveError(describe() + ": " + why + (identified_ ? "" : "; nothing sent (" + std::string(kForCia402) + ")"));
+  // Before this client's first write: not the drive, nothing sent, no stop. Later (a drive that
+  // changed under a running call): a fault, whose stop is tried as for any other.
+  if (const std::string why = rig_v1_block_problem(regs); !why.empty()) {
+    if (!identified_) throw detail::NotThisDriveError(describe() + ": " + why + " (" + kForCia402 + "); nothing sent");
+    throw HardwareError(describe() + ": " + why);
+  }
   identified_ = true;
   DriveState d = decode_drive_state(regs);
   control_ = d.control;
