@@ -565,13 +565,23 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
         if (why.empty()) identified_ = true;
       } catch (...) {  // a device type that cannot be read now: the statusword decides
       }
-      if (!why.empty()) why = std::string(name) + " not sent: " + why;
+      if (!why.empty()) why = std::string(name) + " not sent (the table may still be moving): " + why + " (" + kWhatToDo + ")";
     }
     const State st = c4::decode_state(statusword);
+    // The axis must read at rest too (one more urgent read): a statusword address that is wrong
+    // may read 0, Not ready, while the table turns (a review: "no halt needed", exit 0, and the
+    // move went on). Moving, or unread: the halt goes out as it always did.
     if (why.empty() && (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled || st == State::kFault)) {
-      why = std::string("no ") + name + " needed: drive \"" + map_.name + "\" in " + c4::state_name(st) +
-            " (statusword " + hex4(statusword) + "): its power stage is off";
-      needless = true;
+      bool at_rest = false;
+      try {
+        at_rest = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= 0.01;
+      } catch (...) {
+      }
+      if (at_rest) {
+        why = std::string("no ") + name + " needed: drive \"" + map_.name + "\" in " + c4::state_name(st) +
+              " (statusword " + hex4(statusword) + ") and at rest: its power stage is off";
+        needless = true;
+      }
     }
   } catch (...) {
     return true;

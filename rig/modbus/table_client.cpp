@@ -420,7 +420,7 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
   if (why.empty()) return false;
   try {
     std::lock_guard lk(stop_mu_);
-    last_stop_error_ = std::string(name) + " not sent: " + why;
+    last_stop_error_ = std::string(name) + " not sent (the table may still be moving): " + why;
   } catch (...) {
   }
   return true;

@@ -801,9 +801,9 @@ TEST(Cia402ClientRefusals, ARigV1TableIsNotTakenForACia402Drive) {
         << e;
   }
   t.quick_stop();
-  EXPECT_TRUE(has(t.last_stop_error(), "quick stop not sent: statusword (0x6041)")) << t.last_stop_error();
+  EXPECT_TRUE(has(t.last_stop_error(), "quick stop not sent (the table may still be moving): statusword (0x6041)")) << t.last_stop_error();
   t.stop();
-  EXPECT_TRUE(has(t.last_stop_error(), "halt not sent: statusword (0x6041)")) << t.last_stop_error();
+  EXPECT_TRUE(has(t.last_stop_error(), "halt not sent (the table may still be moving): statusword (0x6041)")) << t.last_stop_error();
   EXPECT_EQ(dev.writes, 0);
   clock.sleep_for(1.0, {});
   EXPECT_FALSE(table->snapshot().moving);
@@ -828,9 +828,9 @@ TEST(Cia402ClientRefusals, ARigV1TableIsNotTakenForACia402Drive) {
       << e;
   m::Cia402Table fresh(m::make_inprocess_transport(dev, clock), map, clock, {});
   fresh.stop();
-  EXPECT_TRUE(has(fresh.last_stop_error(), "halt not sent: device_type (0x1000)")) << fresh.last_stop_error();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "halt not sent (the table may still be moving): device_type (0x1000)")) << fresh.last_stop_error();
   fresh.quick_stop();
-  EXPECT_TRUE(has(fresh.last_stop_error(), "quick stop not sent: device_type (0x1000)")) << fresh.last_stop_error();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "quick stop not sent (the table may still be moving): device_type (0x1000)")) << fresh.last_stop_error();
   EXPECT_EQ(dev.writes, 0);
   clock.sleep_for(5.0, {});
   EXPECT_NEAR(table->actual_angle_deg(), 180.0, 0.01);  // its move went on to its target
@@ -854,6 +854,24 @@ TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
   EXPECT_TRUE(has(fresh.last_stop_error(), "no quick stop needed: drive \"generic CiA 402\" in Switch on disabled"))
       << fresh.last_stop_error();
   EXPECT_EQ(dev.writes, 0);
+  // A statusword address that reads 0 (Not ready) while the axis turns, e.g. statusword and error
+  // code swapped in the map (a review: "no halt needed", exit 0, and the move went on): the
+  // velocity says it moves, so the halt goes out as it always did.
+  t.home({});
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(300.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0);
+  Watched misread(r.drive);
+  misread.reads_as[r.map.spec(Obj::kStatusword).address] = 0x0000;
+  m::Cia402Table swapped(m::make_inprocess_transport(misread, r.clock), r.map, r.clock, {});
+  swapped.stop();
+  EXPECT_FALSE(swapped.last_stop_needless()) << swapped.last_stop_error();
+  EXPECT_EQ(misread.writes, 1);
+  r.run(2.0);
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+  EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
   // Enabled, the halt goes out as before.
   t.home({});
   const int before = dev.writes;
@@ -896,10 +914,10 @@ TEST(Cia402ClientRefusals, ARigV1ClientSendsNoStopIntoACia402Drive) {
   Watched dev(r.drive);
   m::TableClient c(m::make_inprocess_transport(dev, r.clock), r.clock, {});
   c.stop();
-  EXPECT_TRUE(has(c.last_stop_error(), "stop not sent: ") && has(c.last_stop_error(), "no rig-v1 status registers at 0..24"))
+  EXPECT_TRUE(has(c.last_stop_error(), "stop not sent (the table may still be moving): ") && has(c.last_stop_error(), "no rig-v1 status registers at 0..24"))
       << c.last_stop_error();
   c.quick_stop();
-  EXPECT_TRUE(has(c.last_stop_error(), "quick stop not sent: ")) << c.last_stop_error();
+  EXPECT_TRUE(has(c.last_stop_error(), "quick stop not sent (the table may still be moving): ")) << c.last_stop_error();
   EXPECT_EQ(dev.writes, 0);
   // Registers 0..24 all answer but MAP_VERSION (register 3) is the drive's modes of operation.
   struct Zeros final : m::RegisterDevice {
@@ -916,7 +934,7 @@ TEST(Cia402ClientRefusals, ARigV1ClientSendsNoStopIntoACia402Drive) {
   } zeros;
   m::TableClient z(m::make_inprocess_transport(zeros, r.clock), r.clock, {});
   z.stop();
-  EXPECT_TRUE(has(z.last_stop_error(), "stop not sent: MAP_VERSION (register 3) reads 0")) << z.last_stop_error();
+  EXPECT_TRUE(has(z.last_stop_error(), "stop not sent (the table may still be moving): MAP_VERSION (register 3) reads 0")) << z.last_stop_error();
   EXPECT_EQ(zeros.writes, 0);
   // A rig-v1 table is read once and then stopped, its servo kept on.
   auto table = emulator(kFastAxis);
@@ -959,7 +977,7 @@ TEST(Cia402ClientRefusals, ARigV1ClientRefusesACia402DriveWhoseRegister3ReadsOne
   EXPECT_TRUE(has(e2, "not a rig-v1 drive (for a CiA 402 drive") && e2.ends_with("; nothing sent")) << e2;
   m::TableClient fresh(m::make_inprocess_transport(dev, clock), clock, {});
   fresh.stop();
-  EXPECT_TRUE(has(fresh.last_stop_error(), "stop not sent: MAP_VERSION reads 1, but")) << fresh.last_stop_error();
+  EXPECT_TRUE(has(fresh.last_stop_error(), "stop not sent (the table may still be moving): MAP_VERSION reads 1, but")) << fresh.last_stop_error();
   EXPECT_EQ(dev.writes, 0);
   EXPECT_EQ(c4client.status().drive_state, "Operation enabled");
 }
