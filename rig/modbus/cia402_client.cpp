@@ -109,7 +109,7 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
 }
 
 namespace {
-const char* const kWhatToDo =
+const char* const kWhichDrive =
     "if it is a rig-v1 table give --drive rig-v1 (drive = \"rig-v1\" in the hardware file's [table]); otherwise "
     "check the drive map's addresses against the drive's manual";
 }  // namespace
@@ -145,7 +145,7 @@ std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken
 // dropped its servo.
 void Cia402Table::identify(const Cia402Reading& r, const CancelToken& cancel) {
   const std::string why = identity_problem(r.statusword, cancel, false);
-  if (!why.empty()) throw detail::NotThisDriveError(describe() + ": " + why + " (" + kWhatToDo + "); nothing sent");
+  if (!why.empty()) throw detail::NotThisDriveError(describe() + ": " + why + " (" + kWhichDrive + "); nothing sent");
   identified_ = true;
 }
 
@@ -565,7 +565,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
         if (why.empty()) identified_ = true;
       } catch (...) {  // a device type that cannot be read now: the statusword decides
       }
-      if (!why.empty()) why = std::string(name) + " not sent (the table may still be moving): " + why + " (" + kWhatToDo + ")";
+      if (!why.empty()) why = std::string(name) + " not sent (the table may still be moving): " + why + " (" + kWhichDrive + ")";
     }
     const State st = c4::decode_state(statusword);
     // The axis must read at rest too (one more urgent read): a statusword address that is wrong

@@ -89,8 +89,8 @@ class Cia402Table final : public RotaryTable {
   TableOptions opt_;
   std::atomic<uint16_t> control_{0};
   std::atomic<bool> control_known_{false};  // control_ was read from or written to the drive
-  std::atomic<bool> control_written_{false};
-  std::atomic<bool> identified_{false};  // a reading showed a CiA 402 drive (identify)  // control_ is a word this client wrote (the halt's fallback)
+  std::atomic<bool> control_written_{false};  // control_ is a word this client wrote (the halt's fallback)
+  std::atomic<bool> identified_{false};       // a reading showed a CiA 402 drive (identify)
   bool homed_ = false;            // homed by this client (when the map names no homed bit)
   bool profile_applied_ = false;
   mutable std::mutex stop_mu_;
