@@ -310,15 +310,30 @@ void Cia402Table::home(const CancelToken& cancel) {
     const double t0 = clock_.now_s();
     double changed_at = t0;
     Cia402Reading last = read(cancel);
+    bool seen_running = false;  // target reached clear once: the drive took the homing start
+    int interrupted_reads = 0;
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
-      const Cia402Reading r = read(cancel);
+      const Cia402Reading r = read(cancel, true);
       fail_on_fault(doing, r);
-      if (r.mode_display != c4::kModeHoming)
-        throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " during homing" + at(r));
+      // Another master's halt or mode, a quick stop: at once, by name; they read as a frozen
+      // drive after heartbeat_timeout_s before (a review, on the rig-v1 client's homing).
+      fail_on_halt(doing, r, "during homing");
+      fail_unless_mode(doing, r, "during homing", c4::kModeHoming);
       if (r.has(c4::sw::kHomingError)) throw HardwareError(doing + ": homing error (statusword bit 13)" + at(r));
       const bool done = r.has(c4::sw::kHomingAttained) && r.has(c4::sw::kTargetReached);
       if (done) break;
+      // Bits 13, 12, 10 = 0, 0, 1: "homing procedure is interrupted or not started" (CiA 402 /
+      // IEC 61800-7-201, homing mode statusword); after the run was seen, interrupted: by a halt
+      // released again, which leaves nothing to read back. On two readings in a row: a drive
+      // that sets bit 10 a cycle before bit 12 at the end of a good run is not interrupted.
+      interrupted_reads = r.has(c4::sw::kTargetReached) && seen_running ? interrupted_reads + 1 : 0;
+      if (!r.has(c4::sw::kTargetReached)) {
+        seen_running = true;
+      } else if (interrupted_reads >= 2) {
+        throw HardwareError(doing + ": homing interrupted before the home was attained (statusword bit 10 set, bit 12 "
+                                    "clear; stopped by another Modbus master?)" + at(r));
+      }
       const double now = clock_.now_s();
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9) changed_at = now;
       last = r;
@@ -340,21 +355,37 @@ void Cia402Table::home(const CancelToken& cancel) {
 // review). `target_counts`: the set-point this client wrote.
 void Cia402Table::fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
                                      int64_t target_counts) const {
-  if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
-  const State st = r.state();
-  // A drive that powers up again mid-move comes back in Switch on disabled (or not ready) with its
-  // power-on mode and target: say so, rather than blame another master.
-  const bool restarted = st == State::kSwitchOnDisabled || st == State::kNotReadyToSwitchOn;
+  fail_on_halt(doing, r, when);
+  const bool restarted = drive_restarted(r);
   if (!restarted && r.target_counts && *r.target_counts != target_counts)
     throw TakenOverError(doing + ": target position (0x607A) changed to " +
                          deg_str(map_.counts_to_deg(*r.target_counts)) + " " + when + " (another Modbus master?)" +
                          at(r));
-  // The controlword as read back (a gateway may read it as 0, which shows no halt): its halt bit
-  // is another master's, as this client's own is in control_.
-  if (!restarted && r.controlword && (*r.controlword & c4::cw::kHalt))
+  fail_unless_mode(doing, r, when, c4::kModeProfilePosition);
+}
+
+// A drive that powers up again mid-move comes back in Switch on disabled (or not ready) with its
+// power-on mode and target: say so, rather than blame another master.
+bool Cia402Table::drive_restarted(const Cia402Reading& r) {
+  const State st = r.state();
+  return st == State::kSwitchOnDisabled || st == State::kNotReadyToSwitchOn;
+}
+
+// Halt set: by stop() from another thread (control_), or by another master, whose halt bit the
+// controlword shows as read back (a gateway may read it as 0, which shows no halt).
+void Cia402Table::fail_on_halt(const std::string& doing, const Cia402Reading& r, const char* when) const {
+  if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
+  if (!drive_restarted(r) && r.controlword && (*r.controlword & c4::cw::kHalt))
     throw TakenOverError(doing + ": halted by another master (controlword reads " + hex4(*r.controlword) + ") " +
                          when + at(r));
-  if (r.mode_display != c4::kModeProfilePosition) {
+}
+
+// The mode this client set, in Operation enabled; what else it reads, with its likely cause.
+void Cia402Table::fail_unless_mode(const std::string& doing, const Cia402Reading& r, const char* when,
+                                   int8_t mode) const {
+  const State st = r.state();
+  const bool restarted = drive_restarted(r);
+  if (r.mode_display != mode) {
     if (restarted)
       throw HardwareError(doing + ": mode changed to " + std::to_string(r.mode_display) + " " + when +
                           " and the drive is in " + c4::state_name(st) + " (the drive restarted or was power-cycled?)" +

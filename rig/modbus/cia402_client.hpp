@@ -78,6 +78,9 @@ class Cia402Table final : public RotaryTable {
   std::string identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent);
   void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
                           int64_t target_counts) const;
+  void fail_on_halt(const std::string& doing, const Cia402Reading& r, const char* when) const;
+  void fail_unless_mode(const std::string& doing, const Cia402Reading& r, const char* when, int8_t mode) const;
+  static bool drive_restarted(const Cia402Reading& r);
   void send_stop(uint16_t word, const char* name) noexcept;
   bool stop_goes_out(uint16_t statusword, const char* name) noexcept;
   template <class Body>

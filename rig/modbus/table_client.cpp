@@ -247,9 +247,19 @@ void TableClient::guarded(const std::string& doing, Body body) {
       [this] { stop(); }, [this] { return last_stop_error(); });
 }
 
+// A stop read back in CONTROL: this client's own (stop_sent_: the read overwrote control_), or
+// another master's, over whose command no halt of ours is sent (TakenOverError).
+void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& d) const {
+  if (!(d.control & (ctl::kHalt | ctl::kQuickStop))) return;
+  if (stop_sent_) throw HardwareError(doing + ": halted by a stop request" + at(d));
+  throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
+                               " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
+}
+
 void TableClient::home(const CancelToken& cancel) {
   const std::string doing = "home";
   guarded(doing, [&] {
+    stop_sent_ = false;
     prepare_motion(doing, cancel);
     const uint16_t seq0 = read_drive(cancel).move_seq;
     write_control(ctl::kServoOn | ctl::kHome, cancel);
@@ -271,6 +281,15 @@ void TableClient::home(const CancelToken& cancel) {
         }
       }
       if (acked && d.has(sts::kHomed) && !d.has(sts::kHoming) && !d.has(sts::kMoving)) return;
+      if (acked) {
+        // Another master's stop ends the homing run as it ends a move; it waited out
+        // home_timeout_s before (a review). A run stopped and released again leaves no HALT to
+        // read back, only a drive at rest that is neither homed nor homing.
+        fail_on_stop_bits(doing, d);
+        if (!d.has(sts::kHomed) && !d.has(sts::kHoming) && !d.has(sts::kMoving))
+          throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set; stopped by "
+                                      "another Modbus master?)" + at(d));
+      }
       if (el > opt_.home_timeout_s)
         throw HardwareError(doing + ": not homed after " + secs(el) + (d.has(sts::kHoming) ? " (still homing)" : "") +
                             at(d));
@@ -338,11 +357,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         if (std::lround(d.target_deg * kPosScale) != counts)
           throw detail::TakenOverError(doing + ": target register changed to " + deg_str(d.target_deg) +
                                        " (another Modbus master?)" + at(d));
-        if (d.control & (ctl::kHalt | ctl::kQuickStop)) {
-          if (stop_sent_) throw HardwareError(doing + ": halted by a stop request" + at(d));
-          throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
-                                       " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
-        }
+        fail_on_stop_bits(doing, d);
         const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
                         std::fabs(d.actual_deg - deg) <= opt_.tolerance_deg;
         if (!ok) {

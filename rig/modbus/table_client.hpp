@@ -80,6 +80,7 @@ class TableClient final : public RotaryTable {
   DriveState wait_at_rest(const std::string& doing, DriveState d, const CancelToken& cancel);
   void apply_profile_once(const CancelToken& cancel);
   void fail_on_alarm(const std::string& doing, const DriveState& d);
+  void fail_on_stop_bits(const std::string& doing, const DriveState& d) const;
   void watch_heartbeat(const std::string& doing, const DriveState& d, double& last_change_s, uint32_t& last_hb);
   void send_stop(uint16_t bit, const char* name) noexcept;
   bool refuse_stop_to_unknown(const char* name) noexcept;
@@ -93,7 +94,7 @@ class TableClient final : public RotaryTable {
   // Last control word read or written; stop() may run on another thread
   // (the executive's abort path) while a move polls.
   std::atomic<uint16_t> control_{0};
-  std::atomic<bool> stop_sent_{false};  // this client sent a stop since the move began
+  std::atomic<bool> stop_sent_{false};  // this client sent a stop since the move or homing began
   std::atomic<bool> identified_{false};  // a status block read with MAP_VERSION 1
   bool profile_applied_ = false;
   double last_actual_deg_ = 0;     // for messages when the link is lost

@@ -484,6 +484,57 @@ TEST_P(Cia402Client, AnotherMastersHaltEndsTheMoveAtOnceNamingIt) {
   EXPECT_LT(r.axis->time_s() - t0, 2.0) << "not after the move timeout";
 }
 
+// Another master's halt during homing ends the home at once, named, with no halt of ours over it;
+// it read as "drive frozen" after heartbeat_timeout_s before (session 26's safety review, on rig-v1).
+TEST_P(Cia402Client, AnotherMastersHaltEndsHomingAtOnceNamingIt) {
+  std::string axis = kFastAxis;  // 1.5 s of homing at 200 °/s
+  axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
+  Rig r(GetParam(), axis);
+  auto t = r.client();
+  bool sent = false;
+  double t_other = -1;
+  r.on_step = [&] {
+    if (t_other < 0 && r.axis->snapshot().homing) t_other = r.axis->time_s() + 0.3;
+    if (!sent && t_other >= 0 && r.axis->time_s() >= t_other)
+      sent = true, r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+  };
+  const std::string e = error_of([&] { t->home({}); });
+  r.on_step = nullptr;
+  ASSERT_TRUE(sent);
+  EXPECT_TRUE(has(e, "home: halted by another master (controlword reads 0x010F) during homing") &&
+              has(e, "; no halt sent by this client"))
+      << e;
+  EXPECT_LT(r.axis->time_s() - t_other, 0.5) << "at once, not after a frozen-drive timeout";
+  EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation | c4::cw::kHalt) << "the other master's word, not ours";
+}
+
+// A halt set and released again between two polls leaves no halt to read back; the homing
+// statusword's "interrupted" (bit 10 set, bit 12 clear) names it.
+TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
+  std::string axis = kFastAxis;
+  axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
+  Rig r(GetParam(), axis);
+  auto t = r.client();
+  int step = 0;
+  double t_other = -1;
+  r.on_step = [&] {
+    if (t_other < 0 && r.axis->snapshot().homing) t_other = r.axis->time_s() + 0.3;
+    if (step == 0 && t_other >= 0 && r.axis->time_s() >= t_other) {
+      step = 1;
+      r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+    } else if (step == 1) {
+      step = 2;  // on the next step, between two polls: released, with no new homing start
+      r.control(c4::cw::kCmdEnableOperation);
+    }
+  };
+  const std::string e = error_of([&] { t->home({}); });
+  r.on_step = nullptr;
+  ASSERT_EQ(step, 2) << e;
+  EXPECT_TRUE(has(e, "home: homing interrupted before the home was attained (statusword bit 10 set, bit 12 clear"))
+      << e;
+  EXPECT_LT(r.axis->time_s() - t_other, 1.5) << "not after a frozen-drive timeout";
+}
+
 // A move asked for while another master's move runs waits until the table is at rest (as the
 // rig-v1 client does), instead of writing its set-point under the other master's motion.
 TEST_P(Cia402Client, AMoveWaitsForAnotherMastersMoveToEnd) {

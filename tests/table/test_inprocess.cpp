@@ -248,6 +248,47 @@ TEST(TableInProcess, AnotherMastersStopOrTargetEndsTheMoveWithoutAHaltOfOurs) {
   EXPECT_FALSE(control() & m::ctl::kHalt) << control();
 }
 
+// Homing is ended by another master's stop as a move is: at once, named, no halt of ours over
+// it; a homing run stopped and released again (HALT set, then cleared) is named too. Both
+// waited out home_timeout_s (180 s) before (session 26's safety review).
+TEST(TableInProcess, AnotherMastersStopEndsHomingAtOnceNamingIt) {
+  auto control = [](SimRig& r) {
+    uint16_t c = 0;
+    EXPECT_EQ(r.emu->read_registers(m::reg::kControl, 1, &c), 0);
+    return c;
+  };
+  for (const bool released : {false, true}) {
+    SCOPED_TRACE(released ? "halt set, then cleared" : "halt set");
+    SimRig r("start_angle_deg = 200.0\n");  // 10 s of homing at 20 °/s
+    const double t_start = r.clock.now_s();
+    int step = 0;
+    r.clock.set_advance([&](double dt) {
+      r.emu->step(dt);
+      const double el = r.clock.now_s() - t_start;
+      if (step == 0 && el > 1.0) {
+        const uint16_t halt = m::ctl::kServoOn | m::ctl::kHalt;
+        step = r.emu->write_registers(m::reg::kControl, &halt, 1) == 0 ? 1 : 0;
+      } else if (released && step == 1) {  // on the next step, between two of the client's polls
+        const uint16_t servo = m::ctl::kServoOn;
+        step = r.emu->write_registers(m::reg::kControl, &servo, 1) == 0 ? 2 : 1;
+      }
+    });
+    const std::string err = hardware_error([&] { r.table->home({}); });
+    EXPECT_EQ(step, released ? 2 : 1);
+    if (released) {
+      EXPECT_NE(err.find("home: homing ended without reaching the home switch (HOMED not set"), std::string::npos)
+          << err;
+    } else {
+      EXPECT_NE(err.find("home: halted by another master (CONTROL reads 0x0101)"), std::string::npos) << err;
+      EXPECT_NE(err.find("; no halt sent by this client: another master commands the table"), std::string::npos)
+          << err;
+      EXPECT_EQ(control(r), m::ctl::kServoOn | m::ctl::kHalt);  // the other master's word, not ours over it
+    }
+    EXPECT_LT(r.clock.now_s() - t_start, 5.0) << "not after the home timeout";
+    EXPECT_FALSE(r.table->status().homed);
+  }
+}
+
 TEST(TableInProcess, EstopDuringMove) {
   SimRig r("start_angle_deg = 0.0\n");
   r.table->home({});
