@@ -77,6 +77,28 @@ position_actual = { index = 0x6064, address = 5, width = 32, signed = true }
 velocity_actual = { index = 0x606C, address = 7, width = 32, signed = true }
 )";
 
+// A map without the device type loads, with a warning saying what the rig then cannot tell apart;
+// the shipped maps carry it and load silently.
+TEST(DriveMapFile, AMapWithoutTheDeviceTypeIsSaidOnce) {
+  const std::string path = testing::TempDir() + "/no-device-type.toml";
+  {
+    std::ifstream in(kDrives + "generic-cia402.toml");
+    std::ofstream out(path);
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("device_type", 0) != 0) out << line << "\n";
+  }
+  testing::internal::CaptureStderr();
+  const m::DriveMap map = m::load_drive_map(path);
+  m::load_drive_map(path);
+  for (const auto& f : kMaps) m::load_drive_map(kDrives + f);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_FALSE(map.has(Obj::kDeviceType));
+  const std::string said = "rig: warning: drive map " + path + ": no device_type (0x1000) in [objects]: the rig tells "
+                           "this drive from a rig-v1 table by its statusword alone";
+  EXPECT_EQ(err.find(said), 0u) << err;
+  EXPECT_EQ(err.find("rig: warning:", 1), std::string::npos) << "once, and not for the shipped maps: " << err;
+}
+
 TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
   const std::string ok = std::string(kHead) + "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n";
   EXPECT_EQ(map_error(ok), "(no error)");

@@ -476,7 +476,8 @@ const char* const kRpmMap =
     "target_position = { index = 0x607A, address = 9, width = 32, signed = true }\n"
     "profile_velocity = { index = 0x6081, address = 11, width = 32 }\n"
     "profile_acceleration = { index = 0x6083, address = 13, width = 32 }\n"
-    "profile_deceleration = { index = 0x6084, address = 15, width = 32 }\n";
+    "profile_deceleration = { index = 0x6084, address = 15, width = 32 }\n"
+    "device_type = { index = 0x1000, address = 32, width = 32 }\n";
 
 std::string write_file(const std::string& path, const std::string& text) {
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
