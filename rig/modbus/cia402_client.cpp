@@ -618,12 +618,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
     return true;
   }
   if (why.empty()) return true;
-  try {
-    std::lock_guard lk(stop_mu_);
-    last_stop_error_ = std::move(why);
-    stop_needless_ = needless;
-  } catch (...) {
-  }
+  detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = needless; });
   return false;
 }
 
@@ -640,9 +635,8 @@ void Cia402Table::stop() noexcept {
   // Only a word this client wrote: one read back may be a gateway's 0 (Disable voltage).
   if (!known && control_written_) bits = static_cast<uint16_t>(control_.load() & 0x000F), known = true;
   if (!known) {
-    std::lock_guard lk(stop_mu_);
-    last_stop_error_ = "halt not sent: the controlword is unknown (read the status first)";
-    stop_needless_ = false;
+    detail::record_stop(stop_mu_, last_stop_error_, "halt not sent: the controlword is unknown (read the status first)",
+                        [&] { stop_needless_ = false; });
     return;
   }
   send_stop(static_cast<uint16_t>(bits | c4::cw::kHalt), "halt");

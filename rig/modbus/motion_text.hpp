@@ -54,9 +54,24 @@ void write_setting(const std::string& where, const char* key, double value, Writ
 // Duration of a trapezoidal move (rig/core/table.hpp: the procedure's plan uses it too).
 using rig::trapezoid_time;
 
+// Records under `mu` in `last_error` what became of a stop: empty, it reached the drive; else why
+// not (read by the fault messages, guarded_call, and `rig table stop`). `also` runs under the same
+// lock (a client's other stop state). Never throws: it is on the safe-state path.
+template <class Also>
+void record_stop(std::mutex& mu, std::string& last_error, std::string&& why, Also also) noexcept {
+  try {
+    std::lock_guard lk(mu);
+    last_error = std::move(why);
+    also();
+  } catch (...) {
+  }
+}
+inline void record_stop(std::mutex& mu, std::string& last_error, std::string&& why) noexcept {
+  record_stop(mu, last_error, std::move(why), [] {});
+}
+
 // One attempt to deliver a stop (`write` sends it) on the safe-state path: never throws, and
-// records under `mu` in `last_error` whether it reached the drive (empty) or why not, for the
-// fault messages (guarded_call) and `rig table stop`.
+// records whether it reached the drive.
 template <class Write>
 void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& last_error) noexcept {
   std::string err;
@@ -69,11 +84,7 @@ void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& la
     }
   } catch (...) {
   }
-  try {
-    std::lock_guard lk(mu);
-    last_error = std::move(err);
-  } catch (...) {
-  }
+  record_stop(mu, last_error, std::move(err));
 }
 
 // Another master took the axis mid-call (its set-point, its halt, its mode): the call ends at once

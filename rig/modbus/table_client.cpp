@@ -434,10 +434,10 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
   }
   if (why.empty()) return false;
   try {
-    std::lock_guard lk(stop_mu_);
-    last_stop_error_ = std::string(name) + " not sent (the table may still be moving): " + why;
+    why = std::string(name) + " not sent (the table may still be moving): " + why;
   } catch (...) {
   }
+  detail::record_stop(stop_mu_, last_stop_error_, std::move(why));
   return true;
 }
 
