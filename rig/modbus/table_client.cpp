@@ -106,7 +106,7 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
     // itself; say what to try (a technician's review: "exception 0x02" alone).
     if (e.exception_code != exc::kIllegalAddress) throw;
     const std::string why = std::string(e.what()) + " (" + kNoStatusBlock + ": " + kForCia402 + ")";
-    if (!identified_) throw detail::NotThisDriveError(describe() + ": " + why + "; nothing sent");
+    if (!identified_) throw detail::NotThisDriveError(why + "; nothing sent");  // e.what() names the device
     throw ModbusError(why, e.exception_code, e.timeout);
   }
   // A drive speaking another map version, or another map, would be misread register by register.

@@ -349,6 +349,7 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
                      "CiA 402 drive give --drive cia402 --drive-map FILE"),
             std::string::npos)
       << out;
+  EXPECT_EQ(out.find(ep), out.rfind(ep)) << "the device named once: " << out;
   // Nor does it send a stop bit into the CiA 402 drive (HALT alone is Disable voltage there).
   for (const char* stop : {"stop", "quick-stop"}) {
     EXPECT_EQ(rig(std::string(stop) + " --modbus " + ep), 4) << out;
