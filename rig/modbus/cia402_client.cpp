@@ -1,5 +1,6 @@
 #include "rig/modbus/cia402_client.hpp"
 #include "rig/modbus/motion_text.hpp"
+#include "rig/core/toml_util.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -23,8 +24,19 @@ constexpr double kRestTimeoutS = 30.0;          // a stopping axis must be at re
 
 }  // namespace
 
+// A map without the device type is said once per file, by the client (the emulated drive that
+// serves a map has nothing to tell apart): the client then tells the drive from a rig-v1 table by
+// its statusword alone, and a rig-v1 table in motion reads like one of the standard's states
+// (session 26's reviews).
 Cia402Table::Cia402Table(std::unique_ptr<RegisterTransport> transport, DriveMap map, Clock& clock, TableOptions opt)
-    : transport_(std::move(transport)), map_(std::move(map)), clock_(clock), opt_(std::move(opt)) {}
+    : transport_(std::move(transport)), map_(std::move(map)), clock_(clock), opt_(std::move(opt)) {
+  if (!map_.has(Obj::kDeviceType))
+    cfg::warn_once("drive map " + map_.path +
+                   ": no device_type (0x1000) in [objects]: the rig tells this drive from a rig-v1 table by its "
+                   "statusword alone, which a rig-v1 table in motion can pass; if the drive serves 0x1000 on "
+                   "Modbus, map it (device_type = { index = 0x1000, address = N, width = 32 }; "
+                   "docs/cia402-drive-maps.md, \"Which device answers\")");
+}
 
 std::string Cia402Table::describe() const { return transport_->describe() + " cia402 \"" + map_.name + "\""; }
 
@@ -310,8 +322,8 @@ void Cia402Table::home(const CancelToken& cancel) {
     const double t0 = clock_.now_s();
     double changed_at = t0;
     Cia402Reading last = read(cancel);
-    bool seen_running = false;  // target reached clear once: the drive took the homing start
-    int interrupted_reads = 0;
+    bool seen_running = false;      // target reached clear once: the drive took the homing start
+    double interrupted_since = -1;  // since when bits 13, 12, 10 read 0, 0, 1 after that
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
       const Cia402Reading r = read(cancel, true);
@@ -325,16 +337,20 @@ void Cia402Table::home(const CancelToken& cancel) {
       if (done) break;
       // Bits 13, 12, 10 = 0, 0, 1: "homing procedure is interrupted or not started" (CiA 402 /
       // IEC 61800-7-201, homing mode statusword); after the run was seen, interrupted: by a halt
-      // released again, which leaves nothing to read back. On two readings in a row: a drive
-      // that sets bit 10 a cycle before bit 12 at the end of a good run is not interrupted.
-      interrupted_reads = r.has(c4::sw::kTargetReached) && seen_running ? interrupted_reads + 1 : 0;
+      // released again, which leaves nothing to read back. Held kHomingEndedHoldS first: a drive
+      // may set bit 10 some cycles before bit 12 at the end of a good run, or dwell at a switch
+      // (a review: 15 ms between them failed a good run when taken on two polls).
+      const double now = clock_.now_s();
       if (!r.has(c4::sw::kTargetReached)) {
         seen_running = true;
-      } else if (interrupted_reads >= 2) {
-        throw HardwareError(doing + ": homing interrupted before the home was attained (statusword bit 10 set, bit 12 "
-                                    "clear; stopped by another Modbus master?)" + at(r));
+        interrupted_since = -1;
+      } else if (seen_running && interrupted_since < 0) {
+        interrupted_since = now;
+      } else if (seen_running && now - interrupted_since >= detail::kHomingEndedHoldS) {
+        throw detail::EndedAtRestError(doing + ": homing interrupted before the home was attained (statusword bit 10 "
+                                               "set, bit 12 clear for " + secs(now - interrupted_since) +
+                                               "; stopped by another Modbus master?)" + at(r));
       }
-      const double now = clock_.now_s();
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9) changed_at = now;
       last = r;
       if (now - changed_at > opt_.heartbeat_timeout_s)
@@ -394,11 +410,14 @@ void Cia402Table::fail_unless_mode(const std::string& doing, const Cia402Reading
                          " (another Modbus master?)" + at(r));
   }
   if (st != State::kOperationEnabled) {
-    // Another master's command, where the read-back shows one that is not ours (0: a gateway's).
+    // Another master's command, where the read-back shows one that is not ours (0: a gateway's):
+    // no halt of ours over it (a review: a quick stop from another shell got 0x0102 written over
+    // its 0x0002), as on the rig-v1 map.
     const bool other = r.controlword && *r.controlword != 0 && *r.controlword != control_.load();
-    throw HardwareError(doing + ": drive left Operation enabled " + when +
-                        (other ? " (controlword reads " + hex4(*r.controlword) + ": another Modbus master?)" : "") +
-                        at(r));
+    if (other)
+      throw TakenOverError(doing + ": drive left Operation enabled " + when + " (controlword reads " +
+                           hex4(*r.controlword) + ": another Modbus master?)" + at(r));
+    throw HardwareError(doing + ": drive left Operation enabled " + when + at(r));
   }
 }
 

@@ -127,18 +127,7 @@ std::string DriveMap::describe(Obj ob) const {
          std::to_string(s.address);
 }
 
-// Said once per map file, when it is loaded to drive a table: without the device type the client
-// tells a CiA 402 drive from a rig-v1 table by its statusword alone, and a rig-v1 table in motion
-// reads like one of the standard's states (session 26's reviews).
-DriveMap load_drive_map(const std::string& path) {
-  DriveMap m = parse_drive_map(cfg::parse_file(path), path);
-  if (!m.has(Obj::kDeviceType))
-    cfg::warn_once("drive map " + path +
-                   ": no device_type (0x1000) in [objects]: the rig tells this drive from a rig-v1 table by its "
-                   "statusword alone, which a rig-v1 table in motion can pass; map the device type "
-                   "(docs/cia402-drive-maps.md, \"Which device answers\")");
-  return m;
-}
+DriveMap load_drive_map(const std::string& path) { return parse_drive_map(cfg::parse_file(path), path); }
 
 DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   DriveMap m;

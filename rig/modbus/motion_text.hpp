@@ -94,6 +94,19 @@ struct TakenOverError : HardwareError {
   using HardwareError::HardwareError;
 };
 
+// The call ended with the table at rest in a state this client did not command (a homing run
+// stopped short of its home, most likely by another master's halt set and released again): no
+// halt follows, since it would add nothing and would overwrite that master's next command (a
+// review: its halt stopped the homing run the other master had started again).
+struct EndedAtRestError : HardwareError {
+  using HardwareError::HardwareError;
+};
+
+// How long a homing run must read as ended short of its home (at rest, not homed, no longer
+// homing) before it is taken for one: a drive may set its end-of-run bits some cycles apart (a
+// review: 15 ms between CiA 402's bits 10 and 12, read at poll_s = 0.005, failed a good run).
+inline constexpr double kHomingEndedHoldS = 1.0;
+
 // The device answering is not the drive the configuration names (its statusword is no state of
 // the standard, its device type another profile): refused before anything is written, and no halt
 // follows, since a halt written to another device's register map is a guess (a review: a CiA 402
@@ -123,6 +136,8 @@ void guarded_call(const std::string& doing, Body body, Where where, Stop stop, S
     throw;
   } catch (const TakenOverError& e) {
     throw HardwareError(e.what() + std::string("; no halt sent by this client: another master commands the table"));
+  } catch (const EndedAtRestError& e) {
+    throw HardwareError(e.what() + std::string("; no halt sent by this client: the table is at rest"));
   } catch (const ModbusError& e) {
     stop();
     throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") + where() + ": " +

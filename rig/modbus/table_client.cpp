@@ -267,11 +267,14 @@ void TableClient::home(const CancelToken& cancel) {
     double hb_t = t0;
     uint32_t hb = 0;
     bool acked = false;
+    bool seen_running = false;  // HOMING or MOVING read once after the acknowledge
+    double ended_since = -1;    // since when the run reads ended short of its home
     for (;;) {
       const DriveState d = read_drive(cancel);
       fail_on_alarm(doing, d);
       watch_heartbeat(doing, d, hb_t, hb);
-      const double el = clock_.now_s() - t0;
+      const double now = clock_.now_s();
+      const double el = now - t0;
       if (!acked) {
         if (d.move_seq != seq0) {
           acked = true;
@@ -284,11 +287,21 @@ void TableClient::home(const CancelToken& cancel) {
       if (acked) {
         // Another master's stop ends the homing run as it ends a move; it waited out
         // home_timeout_s before (a review). A run stopped and released again leaves no HALT to
-        // read back, only a drive at rest that is neither homed nor homing.
+        // read back, only a drive at rest that is neither homed nor homing: taken for one once
+        // the run was seen under way and the state has held kHomingEndedHoldS (a drive may set
+        // HOMED a few cycles after it clears HOMING; a review).
         fail_on_stop_bits(doing, d);
-        if (!d.has(sts::kHomed) && !d.has(sts::kHoming) && !d.has(sts::kMoving))
-          throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set; stopped by "
-                                      "another Modbus master?)" + at(d));
+        const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
+        seen_running = seen_running || running;
+        if (!seen_running || running || d.has(sts::kHomed)) {
+          ended_since = -1;
+        } else if (ended_since < 0) {
+          ended_since = now;
+        } else if (now - ended_since >= detail::kHomingEndedHoldS) {
+          throw detail::EndedAtRestError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
+                                         secs(now - ended_since) + " after the run stopped; stopped by another Modbus "
+                                         "master?)" + at(d));
+        }
       }
       if (el > opt_.home_timeout_s)
         throw HardwareError(doing + ": not homed after " + secs(el) + (d.has(sts::kHoming) ? " (still homing)" : "") +
