@@ -520,23 +520,39 @@ TEST_P(Cia402Client, AnotherMastersHaltEndsTheMoveAtOnceNamingIt) {
   EXPECT_LT(r.axis->time_s() - t0, 2.0) << "not after the move timeout";
 }
 
-// Another master's halt during homing ends the home at once, named, with no halt of ours over it;
-// it read as "drive frozen" after heartbeat_timeout_s before (session 26's safety review, on rig-v1).
-TEST_P(Cia402Client, AnotherMastersHaltEndsHomingAtOnceNamingIt) {
-  std::string axis = kFastAxis;  // 1.5 s of homing at 200 °/s
+namespace {
+// The fast axis, 300 degrees from its home: 1.5 s of homing at 200 °/s.
+std::string far_axis() {
+  std::string axis = kFastAxis;
   axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
-  Rig r(GetParam(), axis);
-  auto t = r.client();
-  bool sent = false;
+  return axis;
+}
+
+// Homes; from 0.3 s of drive time into the homing run, calls `other` (another master) on every
+// step until it returns true. The error, and when `other` was first called.
+std::pair<std::string, double> home_with_another_master(Rig& r, m::Cia402Table& t, const std::function<bool()>& other) {
+  bool done = false;
   double t_other = -1;
   r.on_step = [&] {
     if (t_other < 0 && r.axis->snapshot().homing) t_other = r.axis->time_s() + 0.3;
-    if (!sent && t_other >= 0 && r.axis->time_s() >= t_other)
-      sent = true, r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+    if (!done && t_other >= 0 && r.axis->time_s() >= t_other) done = other();
   };
-  const std::string e = error_of([&] { t->home({}); });
+  const std::string e = error_of([&] { t.home({}); });
   r.on_step = nullptr;
-  ASSERT_TRUE(sent);
+  EXPECT_TRUE(done) << e;
+  return {e, t_other};
+}
+}  // namespace
+
+// Another master's halt during homing ends the home at once, named, with no halt of ours over it;
+// it read as "drive frozen" after heartbeat_timeout_s before (session 26's safety review, on rig-v1).
+TEST_P(Cia402Client, AnotherMastersHaltEndsHomingAtOnceNamingIt) {
+  Rig r(GetParam(), far_axis());
+  auto t = r.client();
+  const auto [e, t_other] = home_with_another_master(r, *t, [&] {
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+    return true;
+  });
   EXPECT_TRUE(has(e, "home: halted by another master (controlword reads 0x010F) during homing") &&
               has(e, "; no halt sent by this client"))
       << e;
@@ -547,25 +563,14 @@ TEST_P(Cia402Client, AnotherMastersHaltEndsHomingAtOnceNamingIt) {
 // A halt set and released again between two polls leaves no halt to read back; the homing
 // statusword's "interrupted" (bit 10 set, bit 12 clear) names it.
 TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
-  std::string axis = kFastAxis;
-  axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
-  Rig r(GetParam(), axis);
+  Rig r(GetParam(), far_axis());
   auto t = r.client();
   int step = 0;
-  double t_other = -1;
-  r.on_step = [&] {
-    if (t_other < 0 && r.axis->snapshot().homing) t_other = r.axis->time_s() + 0.3;
-    if (step == 0 && t_other >= 0 && r.axis->time_s() >= t_other) {
-      step = 1;
-      r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
-    } else if (step == 1) {
-      step = 2;  // on the next step, between two polls: released, with no new homing start
-      r.control(c4::cw::kCmdEnableOperation);
-    }
-  };
-  const std::string e = error_of([&] { t->home({}); });
-  r.on_step = nullptr;
-  ASSERT_EQ(step, 2) << e;
+  const auto [e, t_other] = home_with_another_master(r, *t, [&] {
+    // Halt, then on the next step (between two polls) released, with no new homing start.
+    r.control(step++ == 0 ? c4::cw::kCmdEnableOperation | c4::cw::kHalt : c4::cw::kCmdEnableOperation);
+    return step == 2;
+  });
   EXPECT_TRUE(has(e, "home: homing interrupted before the home was attained (statusword bit 10 set, bit 12 clear "
                      "for 1.0") &&
               has(e, "; no halt sent by this client: the table is at rest"))
@@ -577,19 +582,12 @@ TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
 // Another master's quick stop during homing: named, and no halt of ours written over its 0x0002
 // (a review: the client wrote 0x0102 over it).
 TEST_P(Cia402Client, AnotherMastersQuickStopDuringHomingGetsNoHaltOverIt) {
-  std::string axis = kFastAxis;
-  axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
-  Rig r(GetParam(), axis);
+  Rig r(GetParam(), far_axis());
   auto t = r.client();
-  bool sent = false;
-  double t_other = -1;
-  r.on_step = [&] {
-    if (t_other < 0 && r.axis->snapshot().homing) t_other = r.axis->time_s() + 0.3;
-    if (!sent && t_other >= 0 && r.axis->time_s() >= t_other) sent = true, r.control(c4::cw::kCmdQuickStop);
-  };
-  const std::string e = error_of([&] { t->home({}); });
-  r.on_step = nullptr;
-  ASSERT_TRUE(sent);
+  const std::string e = home_with_another_master(r, *t, [&] {
+    r.control(c4::cw::kCmdQuickStop);
+    return true;
+  }).first;
   EXPECT_TRUE(has(e, "home: drive left Operation enabled during homing (controlword reads 0x0002: another Modbus "
                      "master?)") &&
               has(e, "; no halt sent by this client: another master commands the table"))
@@ -634,9 +632,7 @@ TEST_P(Cia402Client, HomingAttainedSetLateIsNotTakenForAnInterruptedHome) {
   };
   for (const double lag : {0.015, 0.6}) {
     SCOPED_TRACE(lag);
-    std::string axis = kFastAxis;
-    axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
-    Rig r(GetParam(), axis);
+    Rig r(GetParam(), far_axis());
     LateAttained late(r.drive, *r.axis, r.map, lag);
     m::TableOptions opt;
     opt.poll_s = 0.005;
