@@ -339,7 +339,9 @@ void Cia402Table::home(const CancelToken& cancel) {
       // IEC 61800-7-201, homing mode statusword); after the run was seen, interrupted: by a halt
       // released again, which leaves nothing to read back. Held kHomingEndedHoldS first: a drive
       // may set bit 10 some cycles before bit 12 at the end of a good run, or dwell at a switch
-      // (a review: 15 ms between them failed a good run when taken on two polls).
+      // (a review: 15 ms between them failed a good run when taken on two polls). Meanwhile the
+      // table is at rest, not frozen. The halt follows as for any fault: a vendor's homing that
+      // dwells longer with bit 10 set moved on after the rig had given up on it (a review).
       const double now = clock_.now_s();
       if (!r.has(c4::sw::kTargetReached)) {
         seen_running = true;
@@ -347,10 +349,11 @@ void Cia402Table::home(const CancelToken& cancel) {
       } else if (seen_running && interrupted_since < 0) {
         interrupted_since = now;
       } else if (seen_running && now - interrupted_since >= detail::kHomingEndedHoldS) {
-        throw detail::EndedAtRestError(doing + ": homing interrupted before the home was attained (statusword bit 10 "
-                                               "set, bit 12 clear for " + secs(now - interrupted_since) +
-                                               "; stopped by another Modbus master?)" + at(r));
+        throw HardwareError(doing + ": homing interrupted before the home was attained (statusword bit 10 set, bit 12 "
+                                    "clear for " + secs(now - interrupted_since) + "; stopped by another Modbus master?)" +
+                            at(r));
       }
+      if (interrupted_since >= 0) changed_at = now;  // at rest by the drive's own account
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9) changed_at = now;
       last = r;
       if (now - changed_at > opt_.heartbeat_timeout_s)

@@ -94,14 +94,6 @@ struct TakenOverError : HardwareError {
   using HardwareError::HardwareError;
 };
 
-// The call ended with the table at rest in a state this client did not command (a homing run
-// stopped short of its home, most likely by another master's halt set and released again): no
-// halt follows, since it would add nothing and would overwrite that master's next command (a
-// review: its halt stopped the homing run the other master had started again).
-struct EndedAtRestError : HardwareError {
-  using HardwareError::HardwareError;
-};
-
 // How long a homing run must read as ended short of its home (at rest, not homed, no longer
 // homing) before it is taken for one: a drive may set its end-of-run bits some cycles apart (a
 // review: 15 ms between CiA 402's bits 10 and 12, read at poll_s = 0.005, failed a good run).
@@ -136,8 +128,6 @@ void guarded_call(const std::string& doing, Body body, Where where, Stop stop, S
     throw;
   } catch (const TakenOverError& e) {
     throw HardwareError(e.what() + std::string("; no halt sent by this client: another master commands the table"));
-  } catch (const EndedAtRestError& e) {
-    throw HardwareError(e.what() + std::string("; no halt sent by this client: the table is at rest"));
   } catch (const ModbusError& e) {
     stop();
     throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") + where() + ": " +

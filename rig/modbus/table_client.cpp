@@ -289,7 +289,8 @@ void TableClient::home(const CancelToken& cancel) {
         // home_timeout_s before (a review). A run stopped and released again leaves no HALT to
         // read back, only a drive at rest that is neither homed nor homing: taken for one once
         // the run was seen under way and the state has held kHomingEndedHoldS (a drive may set
-        // HOMED a few cycles after it clears HOMING; a review).
+        // HOMED a few cycles after it clears HOMING; a review). The halt follows as for any fault:
+        // a drive that only paused must not move on after the rig gave up on it (a review).
         fail_on_stop_bits(doing, d);
         const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
         seen_running = seen_running || running;
@@ -298,9 +299,9 @@ void TableClient::home(const CancelToken& cancel) {
         } else if (ended_since < 0) {
           ended_since = now;
         } else if (now - ended_since >= detail::kHomingEndedHoldS) {
-          throw detail::EndedAtRestError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
-                                         secs(now - ended_since) + " after the run stopped; stopped by another Modbus "
-                                         "master?)" + at(d));
+          throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
+                              secs(now - ended_since) + " after the run stopped; stopped by another Modbus master?)" +
+                              at(d));
         }
       }
       if (el > opt_.home_timeout_s)

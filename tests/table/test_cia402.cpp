@@ -573,10 +573,25 @@ TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
   });
   EXPECT_TRUE(has(e, "home: homing interrupted before the home was attained (statusword bit 10 set, bit 12 clear "
                      "for 1.0") &&
-              has(e, "; no halt sent by this client: the table is at rest"))
+              has(e, "; halt delivered to the drive"))  // as after any fault: a paused drive must not move on
       << e;
   EXPECT_LT(r.axis->time_s() - t_other, 1.9) << "not after a frozen-drive timeout";
-  EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation) << "the other master's word, not a halt of ours over it";
+  EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+}
+
+// The same with heartbeat_timeout_s below the 1 s hold: the table at rest with bit 10 set is
+// not a frozen drive (a review: "drive frozen" after 0.5 s, before the hold had run out).
+TEST_P(Cia402Client, AnInterruptedHomeIsNotAFrozenDriveUnderAShortHeartbeatTimeout) {
+  Rig r(GetParam(), far_axis());
+  m::TableOptions opt;
+  opt.heartbeat_timeout_s = 0.5;
+  auto t = r.client(opt);
+  int step = 0;
+  const std::string e = home_with_another_master(r, *t, [&] {
+    r.control(step++ == 0 ? c4::cw::kCmdEnableOperation | c4::cw::kHalt : c4::cw::kCmdEnableOperation);
+    return step == 2;
+  }).first;
+  EXPECT_TRUE(has(e, "home: homing interrupted before the home was attained")) << e;
 }
 
 // Another master's quick stop during homing: named, and no halt of ours written over its 0x0002
@@ -630,11 +645,13 @@ TEST_P(Cia402Client, HomingAttainedSetLateIsNotTakenForAnInterruptedHome) {
     }
     bool answering() const override { return drive.answering(); }
   };
-  for (const double lag : {0.015, 0.6}) {
+  // (lag, heartbeat_timeout_s): at rest with bit 10 set is not "frozen" either.
+  for (const auto& [lag, heartbeat] : {std::pair{0.015, 2.0}, {0.6, 2.0}, {0.6, 0.5}}) {
     SCOPED_TRACE(lag);
     Rig r(GetParam(), far_axis());
     LateAttained late(r.drive, *r.axis, r.map, lag);
     m::TableOptions opt;
+    opt.heartbeat_timeout_s = heartbeat;
     opt.poll_s = 0.005;
     opt.settle_s = 0.05;
     m::Cia402Table t(m::make_inprocess_transport(late, r.clock), r.map, r.clock, opt);
