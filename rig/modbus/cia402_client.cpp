@@ -318,6 +318,7 @@ void Cia402Table::home(const CancelToken& cancel) {
     if (map_.homing_method != 0) write_object(Obj::kHomingMethod, map_.homing_method, cancel);
     if (map_.has(Obj::kHomeOffset)) write_object(Obj::kHomeOffset, map_.deg_to_counts(map_.home_offset_deg), cancel);
     write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    homed_ = false;  // a homing run started loses the reference until it is attained
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart, cancel);
     const double t0 = clock_.now_s();
     double changed_at = t0;

@@ -560,6 +560,30 @@ TEST_P(Cia402Client, AnotherMastersHaltEndsHomingAtOnceNamingIt) {
   EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation | c4::cw::kHalt) << "the other master's word, not ours";
 }
 
+// A client that homed once, then had a second homing run stopped, no longer says the table is
+// homed (a map without homed_bit: the client's own record; it said homed after the failed run).
+TEST_P(Cia402Client, AHomeStoppedShortLosesTheHomeTheClientHadSeen) {
+  Rig r(GetParam(), far_axis());
+  auto t = r.client();
+  t->home({});
+  ASSERT_TRUE(t->status().homed);
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);  // away from home, by another master
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(150.0));
+  r.control(c4::cw::kCmdEnableOperation);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(3.0);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.run(0.5);
+  const std::string e = home_with_another_master(r, *t, [&] {
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+    return true;
+  }).first;
+  EXPECT_TRUE(has(e, "halted by another master")) << e;
+  const TableStatus s = t->status();
+  EXPECT_FALSE(s.homed);
+  EXPECT_EQ(s.homed_known, r.map.homed_bit.has_value());
+}
+
 // A halt set and released again between two polls leaves no halt to read back; the homing
 // statusword's "interrupted" (bit 10 set, bit 12 clear) names it.
 TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
