@@ -323,8 +323,8 @@ void Cia402Table::home(const CancelToken& cancel) {
     const double t0 = clock_.now_s();
     double changed_at = t0;
     Cia402Reading last = read(cancel);
-    bool seen_running = false;      // target reached clear once: the drive took the homing start
-    double interrupted_since = -1;  // since when bits 13, 12, 10 read 0, 0, 1 after that
+    bool seen_running = false;  // target reached clear once: the drive took the homing start
+    detail::HeldFor interrupted;  // bits 13, 12, 10 read 0, 0, 1 after that
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
       const Cia402Reading r = read(cancel, true);
@@ -344,17 +344,12 @@ void Cia402Table::home(const CancelToken& cancel) {
       // table is at rest, not frozen. The halt follows as for any fault: a vendor's homing that
       // dwells longer with bit 10 set moved on after the rig had given up on it (a review).
       const double now = clock_.now_s();
-      if (!r.has(c4::sw::kTargetReached)) {
-        seen_running = true;
-        interrupted_since = -1;
-      } else if (seen_running && interrupted_since < 0) {
-        interrupted_since = now;
-      } else if (seen_running && now - interrupted_since >= detail::kHomingEndedHoldS) {
+      seen_running = seen_running || !r.has(c4::sw::kTargetReached);
+      const double interrupted_s = interrupted(seen_running && r.has(c4::sw::kTargetReached), now);
+      if (interrupted_s >= detail::kHomingEndedHoldS)
         throw HardwareError(doing + ": homing interrupted before the home was attained (statusword bit 10 set, bit 12 "
-                                    "clear for " + secs(now - interrupted_since) + "; stopped by another Modbus master?)" +
-                            at(r));
-      }
-      if (interrupted_since >= 0) changed_at = now;  // at rest by the drive's own account
+                                    "clear for " + secs(interrupted_s) + "; stopped by another Modbus master?)" + at(r));
+      if (interrupted_s >= 0) changed_at = now;  // at rest by the drive's own account
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9) changed_at = now;
       last = r;
       if (now - changed_at > opt_.heartbeat_timeout_s)
@@ -504,7 +499,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       timeout = tt > 0 ? 2 * tt + opt_.settle_s + 10.0 : kDefaultMoveTimeoutS;
     }
     t0 = clock_.now_s();
-    double held_since = -1, changed_at = t0;
+    double changed_at = t0;
+    detail::HeldFor at_target;
     Cia402Reading last = r;
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
@@ -514,12 +510,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       fail_unless_moving(doing, r, "during the move", target_counts);
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
-      if (!ok) {
-        held_since = -1;
-      } else if (held_since < 0) {
-        held_since = now;
-      }
-      if (held_since >= 0 && now - held_since >= opt_.settle_s) return;
+      if (at_target(ok, now) >= opt_.settle_s) return;
       // No heartbeat object in CiA 402: a drive whose statusword and position
       // stop changing while the target is not reached is taken for frozen.
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9 ||

@@ -94,6 +94,21 @@ struct TakenOverError : HardwareError {
   using HardwareError::HardwareError;
 };
 
+// How long a condition read at each poll has held without a break, on the client's clock: the
+// settle of a move (in position for settle_s), a homing run ended short of its home (below).
+class HeldFor {
+ public:
+  // Seconds `holds` has been true up to `now` (0 at the poll it became true); -1 while it is not.
+  double operator()(bool holds, double now) {
+    if (!holds) return since_ = -1;
+    if (since_ < 0) since_ = now;
+    return now - since_;
+  }
+
+ private:
+  double since_ = -1;
+};
+
 // How long a homing run must read as ended short of its home (at rest, not homed, no longer
 // homing) before it is taken for one: a drive may set its end-of-run bits some cycles apart (a
 // review: 15 ms between CiA 402's bits 10 and 12, read at poll_s = 0.005, failed a good run).

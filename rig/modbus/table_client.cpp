@@ -268,7 +268,7 @@ void TableClient::home(const CancelToken& cancel) {
     uint32_t hb = 0;
     bool acked = false;
     bool seen_running = false;  // HOMING or MOVING read once after the acknowledge
-    double ended_since = -1;    // since when the run reads ended short of its home
+    detail::HeldFor ended;      // the run reads ended short of its home
     for (;;) {
       const DriveState d = read_drive(cancel);
       fail_on_alarm(doing, d);
@@ -294,15 +294,10 @@ void TableClient::home(const CancelToken& cancel) {
         fail_on_stop_bits(doing, d);
         const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
         seen_running = seen_running || running;
-        if (!seen_running || running || d.has(sts::kHomed)) {
-          ended_since = -1;
-        } else if (ended_since < 0) {
-          ended_since = now;
-        } else if (now - ended_since >= detail::kHomingEndedHoldS) {
+        const double ended_s = ended(seen_running && !running && !d.has(sts::kHomed), now);
+        if (ended_s >= detail::kHomingEndedHoldS)
           throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
-                              secs(now - ended_since) + " after the run stopped; stopped by another Modbus master?)" +
-                              at(d));
-        }
+                              secs(ended_s) + " after the run stopped; stopped by another Modbus master?)" + at(d));
       }
       if (el > opt_.home_timeout_s)
         throw HardwareError(doing + ": not homed after " + secs(el) + (d.has(sts::kHoming) ? " (still homing)" : "") +
@@ -343,7 +338,8 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
                                      opt_.settle_s + 10.0;
     write_control(ctl::kServoOn | ctl::kStart, cancel);
     const double t0 = clock_.now_s();
-    double hb_t = t0, held_since = -1;
+    double hb_t = t0;
+    detail::HeldFor in_position;
     uint32_t hb = d.heartbeat;
     bool acked = false;
     for (;;) {
@@ -374,12 +370,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         fail_on_stop_bits(doing, d);
         const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
                         std::fabs(d.actual_deg - deg) <= opt_.tolerance_deg;
-        if (!ok) {
-          held_since = -1;
-        } else if (held_since < 0) {
-          held_since = now;
-        }
-        if (held_since >= 0 && now - held_since >= opt_.settle_s) return;
+        if (in_position(ok, now) >= opt_.settle_s) return;
       }
       if (now - t0 > timeout) {
         std::string state = d.has(sts::kMoving) ? "still moving" : "not in position";
