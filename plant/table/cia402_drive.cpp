@@ -62,6 +62,11 @@ void Cia402Drive::step(double dt_s) {
   check_axis_fault();
   if (state_ == State::kFaultReactionActive && t_ >= fault_reaction_until_) enter(State::kFault);  // transition 14
   if (setpoint_pending_ && t_ >= setpoint_at_) start_setpoint();
+  if (resume_pending_ && !axis_.snapshot().moving) {  // the halt ramp has ended: on to the target
+    resume_pending_ = false;
+    axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kStart));
+    axis_control(ctl::kServoOn);
+  }
   if (homing_active_) {
     const auto s = axis_.snapshot();
     if (!s.homing && !s.moving) {
@@ -90,7 +95,7 @@ void Cia402Drive::check_axis_fault() {
   homing_active_ = false;
   if (s.alarm_code == alarm::kHomingFailed) homing_error_ = true;
   setpoint_pending_ = false;
-  moving_to_target_ = false;
+  moving_to_target_ = resume_pending_ = false;
   enter(State::kFaultReactionActive);
   fault_reaction_until_ = t_ + 0.01;
 }
@@ -101,7 +106,7 @@ void Cia402Drive::enter(State s) {
   if (was_enabled && !enabled && s != State::kFaultReactionActive) {
     axis_control(0);  // power stage off, brake on
     setpoint_pending_ = false;
-    moving_to_target_ = false;
+    moving_to_target_ = resume_pending_ = false;  // enabled again, the drive holds where it is
     homing_active_ = false;
   }
   state_ = s;
@@ -144,7 +149,7 @@ void Cia402Drive::apply_controlword(uint16_t w) {
       // Quick stop option code 6 (0x605A): stop on the quick-stop ramp and stay in Quick stop active.
       axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kQuickStop));
       setpoint_pending_ = false;
-      moving_to_target_ = false;
+      moving_to_target_ = resume_pending_ = false;
       homing_active_ = false;
       state_ = State::kQuickStopActive;
     }
@@ -174,9 +179,17 @@ void Cia402Drive::apply_controlword(uint16_t w) {
   if (halt && !(prev & c4::cw::kHalt)) {
     axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kHalt));
     homing_active_ = false;
-    setpoint_pending_ = false;
+    setpoint_pending_ = resume_pending_ = false;
   } else if (!halt && (prev & c4::cw::kHalt)) {
     axis_control(ctl::kServoOn);
+    // Profile position, halt = 0: "positioning shall be executed or continued" (IEC 61800-7-201):
+    // a positioning the halt interrupted goes on to its target, unless this very word brings a
+    // new set-point to be changed immediately. (Homing interrupted by a halt is not resumed: bits
+    // 13, 12, 10 say "interrupted", and a new homing start is needed.)
+    const bool replaced = (rising & c4::cw::kNewSetPoint) && (w & c4::cw::kChangeImmediately);
+    const bool short_of_target = std::fabs(axis_.snapshot().position_deg - target_inner_deg_) >
+                                 axis_.params().in_position_window_deg;
+    resume_pending_ = mode_ == c4::kModeProfilePosition && moving_to_target_ && short_of_target && !replaced;
   }
   if (!(w & c4::cw::kNewSetPoint)) setpoint_ack_ = false;  // handshake: the master took the acknowledge
   if (!(rising & c4::cw::kNewSetPoint) || halt) return;
@@ -202,8 +215,10 @@ void Cia402Drive::apply_controlword(uint16_t w) {
 // only with "change set immediately"; otherwise the set-point waits for it.
 void Cia402Drive::start_setpoint() {
   const auto s = axis_.snapshot();
-  if (s.moving && !(controlword_ & c4::cw::kChangeImmediately)) return;
-  setpoint_pending_ = false;
+  // Single set-point: a positioning under way, or one a released halt is about to continue, is
+  // completed first unless the set-point is to be changed immediately.
+  if ((s.moving || resume_pending_) && !(controlword_ & c4::cw::kChangeImmediately)) return;
+  setpoint_pending_ = resume_pending_ = false;
   double user = map_.counts_to_deg(target_);
   if (controlword_ & c4::cw::kRelative) user += inner_to_user_deg(target_inner_deg_);  // relative to the last target
   if (user < map_.limit_neg_deg || user > map_.limit_pos_deg || !s.homed) {
@@ -292,7 +307,11 @@ int64_t Cia402Drive::value_of(Obj o) const {
 
 void Cia402Drive::set_value(Obj o, int64_t v) {
   switch (o) {
-    case Obj::kModesOfOperation: mode_ = static_cast<int8_t>(v); break;
+    case Obj::kModesOfOperation:
+      // Another mode ends a positioning the halt had interrupted: nothing to continue.
+      if (static_cast<int8_t>(v) != mode_) moving_to_target_ = resume_pending_ = false;
+      mode_ = static_cast<int8_t>(v);
+      break;
     case Obj::kTargetPosition: target_ = v; break;
     case Obj::kProfileVelocity: profile_velocity_ = v; break;
     case Obj::kProfileAcceleration: profile_accel_ = v; break;

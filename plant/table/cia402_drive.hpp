@@ -76,6 +76,9 @@ class Cia402Drive final : public rig::modbus::RegisterDevice {
   int64_t target_ = 0, profile_velocity_ = 0, profile_accel_ = 0, profile_decel_ = 0, quick_stop_decel_ = 0;
   int64_t homing_method_ = 19, home_offset_ = 0;  // the drive's own homing method until one is written
   bool setpoint_ack_ = false, setpoint_pending_ = false, moving_to_target_ = false;
+  // A positioning interrupted by halt and to be continued once the halt ramp has ended (halt
+  // released: "positioning shall be executed or continued", IEC 61800-7-201 profile position).
+  bool resume_pending_ = false;
   bool homing_active_ = false, homing_attained_ = false, homing_error_ = false;
   bool limit_active_ = false, warning_ = false;
   double target_inner_deg_ = 0;

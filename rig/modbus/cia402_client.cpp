@@ -453,8 +453,14 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       }
       profile_applied_ = true;
     }
-    // Handshake (single set-point): new-set-point low and acknowledge clear first.
-    write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    // Handshake (single set-point): new-set-point low and acknowledge clear first, with halt
+    // (bit 8) set. Halt = 0 means "positioning shall be executed or continued" (IEC 61800-7-201,
+    // profile position): a drive whose last move a halt interrupted (the rig's own stop, another
+    // master's) goes on to that old target once halt clears. So halt clears only in the word
+    // that brings this set-point, with "change set immediately" (bit 5): the drive takes it in
+    // place of the old one, from rest (the table is at rest here). Clearing halt first sent a
+    // standard drive towards the old target, and the set-point then waited for that move's end.
+    write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kHalt, cancel);
     Cia402Reading r = read(cancel);
     for (const double t_ack = clock_.now_s(); r.has(c4::sw::kSetPointAck);) {
       if (clock_.now_s() - t_ack > opt_.ack_timeout_s)
@@ -466,7 +472,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     const double start_deg = r.actual_deg;
     const int64_t target_counts = map_.deg_to_counts(deg);
     write_object(Obj::kTargetPosition, target_counts, cancel);
-    write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint, cancel);
+    write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint | c4::cw::kChangeImmediately, cancel);
     double t0 = clock_.now_s();
     for (;;) {
       r = read(cancel, true);

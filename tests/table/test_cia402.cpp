@@ -348,16 +348,83 @@ TEST(Cia402Drive, SetPointHandshakeTimingAndHalt) {
   const double pos = r.axis->snapshot().position_deg;
   EXPECT_GT(std::fabs(pos - 180.0), 20.0);
   EXPECT_TRUE(r.drive.statusword() & c4::sw::kTargetReached);
-  // Halt released: not at the target, so not reached (the move does not resume by itself).
+  // Halt released: "positioning shall be executed or continued" (IEC 61800-7-201, profile
+  // position): the interrupted move goes on to its target.
   r.control(c4::cw::kCmdEnableOperation);
-  r.run(0.2);
+  r.run(0.01);
   EXPECT_FALSE(r.drive.statusword() & c4::sw::kTargetReached);
+  r.run(2.0);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 180.0, 0.005);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kTargetReached);
   // A set-point outside the travel limits is not taken: internal limit active, no acknowledge.
   r.write(Obj::kTargetPosition, r.map.deg_to_counts(1000.0));
   r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
   r.run(0.05);
   EXPECT_FALSE(r.drive.statusword() & c4::sw::kSetPointAck);
   EXPECT_TRUE(r.drive.statusword() & c4::sw::kInternalLimit);
+}
+
+// What ends a positioning that a halt interrupted, so that releasing the halt does not continue
+// it: a set-point to be changed immediately in the word that releases the halt, another mode, the
+// drive leaving Operation enabled. Else the release continues it (above).
+TEST(Cia402Drive, AHaltedPositioningEndsOnlyWhereTheStandardEndsIt) {
+  // Halts a move to 180 degrees 0.2 s in and returns where it came to rest.
+  auto halted_move = [](Rig& r) {
+    r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+    r.write(Obj::kTargetPosition, r.map.deg_to_counts(180.0));
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+    r.run(0.2);
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+    r.run(1.0);
+    const double at = r.axis->actual_angle_deg();
+    EXPECT_LT(at, 120.0);
+    return at;
+  };
+  // The most the table reaches over `s` seconds of drive time.
+  auto highest_over = [](Rig& r, double s) {
+    double hi = r.axis->actual_angle_deg();
+    r.on_step = [&] { hi = std::max(hi, r.axis->actual_angle_deg()); };
+    r.run(s);
+    r.on_step = nullptr;
+    return hi;
+  };
+  {  // a new set-point to be changed immediately, in the word that releases the halt: taken instead
+    Rig r("generic-cia402.toml");
+    enable_and_home(r);
+    const double at = halted_move(r);
+    r.write(Obj::kTargetPosition, r.map.deg_to_counts(5.0));
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint | c4::cw::kChangeImmediately);
+    EXPECT_LE(highest_over(r, 2.0), at + 1e-6);
+    EXPECT_NEAR(r.axis->actual_angle_deg(), 5.0, 0.005);
+  }
+  {  // the same set-point without "change set immediately": the halted move is finished first
+    Rig r("generic-cia402.toml");
+    enable_and_home(r);
+    halted_move(r);
+    r.write(Obj::kTargetPosition, r.map.deg_to_counts(5.0));
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+    EXPECT_NEAR(highest_over(r, 3.0), 180.0, 1.0);  // (with the servo's overshoot, 0.7)
+    EXPECT_NEAR(r.axis->actual_angle_deg(), 5.0, 0.005);
+  }
+  {  // another mode, then back: nothing to continue
+    Rig r("generic-cia402.toml");
+    enable_and_home(r);
+    const double at = halted_move(r);
+    r.write(Obj::kModesOfOperation, c4::kModeHoming);
+    r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+    r.control(c4::cw::kCmdEnableOperation);
+    EXPECT_NEAR(highest_over(r, 2.0), at, 0.01);
+  }
+  {  // out of Operation enabled (disable operation, transition 5) and back (4): nothing to continue
+    Rig r("generic-cia402.toml");
+    enable_and_home(r);
+    const double at = halted_move(r);
+    r.control(c4::cw::kCmdSwitchOn | c4::cw::kHalt);
+    EXPECT_EQ(r.drive.state(), State::kSwitchedOn);
+    r.control(c4::cw::kCmdEnableOperation);
+    EXPECT_EQ(r.drive.state(), State::kOperationEnabled);
+    EXPECT_NEAR(highest_over(r, 2.0), at, 0.01);
+  }
 }
 
 TEST(Cia402Drive, RefusesWritesOutsideTheMap) {
@@ -684,6 +751,40 @@ TEST_P(Cia402Client, HomingAttainedSetLateIsNotTakenForAnInterruptedHome) {
   }
 }
 
+// A move after a halted one never heads for the halted move's target. A standard drive continues
+// a positioning its halt interrupted once halt clears ("executed or continued", IEC 61800-7-201):
+// the client cleared halt before its set-point, so the table set off for the old target (300
+// degrees here) and the new set-point waited for that move's end, beyond the acknowledge's
+// timeout, read as another master's move, with no halt of ours over it.
+TEST_P(Cia402Client, AMoveAfterAHaltedMoveNeverHeadsForTheHaltedTarget) {
+  Rig r(GetParam());
+  auto t = r.client();
+  cancel_a_move_mid_way(r, *t);  // the rig's own halt, 0.3 s into a move to 300 degrees
+  const double at = r.axis->actual_angle_deg();
+  ASSERT_LT(at, 299.0);
+  double highest = at;
+  r.on_step = [&] { highest = std::max(highest, r.axis->actual_angle_deg()); };
+  t->move_to(5.0, {});
+  r.on_step = nullptr;
+  EXPECT_LE(highest, at + 1e-6) << "set off towards the halted move's target";
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 5.0, 0.005);
+  // And a second client (`rig table move` after `rig table stop` from another shell).
+  r.control(c4::cw::kCmdEnableOperation);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(250.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+  r.run(1.0);
+  const double at2 = r.axis->actual_angle_deg();
+  ASSERT_LT(at2, 200.0);
+  highest = at2;
+  r.on_step = [&] { highest = std::max(highest, r.axis->actual_angle_deg()); };
+  r.client()->move_to(100.0, {});
+  r.on_step = nullptr;
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 100.0, 0.005);
+  EXPECT_LT(highest, 102.0) << "set off towards the halted move's target (250 degrees)";  // (the servo's overshoot: 0.7)
+}
+
 // A move asked for while another master's move runs waits until the table is at rest (as the
 // rig-v1 client does), instead of writing its set-point under the other master's motion.
 TEST_P(Cia402Client, AMoveWaitsForAnotherMastersMoveToEnd) {
@@ -755,6 +856,27 @@ TEST_P(Cia402Client, AHaltThroughAGatewayThatReadsTheControlwordAsZeroKeepsThePo
   EXPECT_EQ(r.drive.state(), State::kOperationEnabled);  // halted, powered: not Switch on disabled
   EXPECT_TRUE(r.axis->snapshot().servo_on);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+}
+
+// Another master's halt that the client cannot see (a gateway reads the controlword as 0) and
+// that is released again: the standard drive continues the move, which arrives late but arrives.
+TEST_P(Cia402Client, AHaltReleasedUnseenDelaysTheMoveButItArrives) {
+  Rig r(GetParam());
+  ControlwordReadsZero gw(r.drive, r.map.spec(Obj::kControlword).address);
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  m::Cia402Table t(m::make_inprocess_transport(gw, r.clock), r.map, r.clock, opt);
+  t.home({});
+  const double t_halt = r.axis->time_s() + 0.3;
+  int phase = 0;
+  r.on_step = [&] {
+    if (phase == 0 && r.axis->time_s() >= t_halt) phase = 1, r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+    if (phase == 1 && r.axis->time_s() >= t_halt + 0.8) phase = 2, r.control(c4::cw::kCmdEnableOperation);
+  };
+  t.move_to(300.0, {});
+  r.on_step = nullptr;
+  EXPECT_EQ(phase, 2);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 300.0, 0.005);
 }
 
 // A map with a homed bit: a move before homing is refused before anything is written, so the
