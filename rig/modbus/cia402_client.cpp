@@ -338,7 +338,7 @@ void Cia402Table::home(const CancelToken& cancel) {
       if (done) break;
       // Bits 13, 12, 10 = 0, 0, 1: "homing procedure is interrupted or not started" (CiA 402 /
       // IEC 61800-7-201, homing mode statusword); after the run was seen, interrupted: by a halt
-      // released again, which leaves nothing to read back. Held kHomingEndedHoldS first: a drive
+      // released again, which leaves nothing to read back. Held kEndedShortHoldS first: a drive
       // may set bit 10 some cycles before bit 12 at the end of a good run, or dwell at a switch
       // (a review: 15 ms between them failed a good run when taken on two polls). Meanwhile the
       // table is at rest, not frozen. The halt follows as for any fault: a vendor's homing that
@@ -346,7 +346,7 @@ void Cia402Table::home(const CancelToken& cancel) {
       const double now = clock_.now_s();
       seen_running = seen_running || !r.has(c4::sw::kTargetReached);
       const double interrupted_s = interrupted(seen_running && r.has(c4::sw::kTargetReached), now);
-      if (interrupted_s >= detail::kHomingEndedHoldS)
+      if (interrupted_s >= detail::kEndedShortHoldS)
         throw HardwareError(doing + ": homing interrupted before the home was attained (statusword bit 10 set, bit 12 "
                                     "clear for " + secs(interrupted_s) + "; stopped by another Modbus master?)" + at(r));
       if (interrupted_s >= 0) changed_at = now;  // at rest by the drive's own account

@@ -1,5 +1,6 @@
 #include "rig/modbus/table_client.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -288,14 +289,14 @@ void TableClient::home(const CancelToken& cancel) {
         // Another master's stop ends the homing run as it ends a move; it waited out
         // home_timeout_s before (a review). A run stopped and released again leaves no HALT to
         // read back, only a drive at rest that is neither homed nor homing: taken for one once
-        // the run was seen under way and the state has held kHomingEndedHoldS (a drive may set
+        // the run was seen under way and the state has held kEndedShortHoldS (a drive may set
         // HOMED a few cycles after it clears HOMING; a review). The halt follows as for any fault:
         // a drive that only paused must not move on after the rig gave up on it (a review).
         fail_on_stop_bits(doing, d);
         const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
         seen_running = seen_running || running;
         const double ended_s = ended(seen_running && !running && !d.has(sts::kHomed), now);
-        if (ended_s >= detail::kHomingEndedHoldS)
+        if (ended_s >= detail::kEndedShortHoldS)
           throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
                               secs(ended_s) + " after the run stopped; stopped by another Modbus master?)" + at(d));
       }
@@ -340,6 +341,8 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
     const double t0 = clock_.now_s();
     double hb_t = t0;
     detail::HeldFor in_position;
+    detail::HeldFor stopped_short;  // in position at a stop point off the target
+    bool seen_moving = false;       // MOVING read once after the acknowledge
     uint32_t hb = d.heartbeat;
     bool acked = false;
     for (;;) {
@@ -368,9 +371,21 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
           throw detail::TakenOverError(doing + ": target register changed to " + deg_str(d.target_deg) +
                                        " (another Modbus master?)" + at(d));
         fail_on_stop_bits(doing, d);
-        const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
-                        std::fabs(d.actual_deg - deg) <= opt_.tolerance_deg;
+        const double off = std::fabs(d.actual_deg - deg);
+        const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) && off <= opt_.tolerance_deg;
         if (in_position(ok, now) >= opt_.settle_s) return;
+        // IN_POSITION is "at rest at the last commanded stop point" (table-registers.md): read off
+        // the target, beyond the client's tolerance and the drive's window, after the move was
+        // seen under way, the move was stopped short. A HALT or QUICK_STOP set and released again
+        // between two polls leaves nothing else to read (the move timeout, 31.6 s in a review,
+        // found it before). Held kEndedShortHoldS; the halt follows as for any fault.
+        seen_moving = seen_moving || d.has(sts::kMoving);
+        const bool short_stop = seen_moving && d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
+                                off > std::max(opt_.tolerance_deg, d.window_deg);
+        const double short_s = stopped_short(short_stop, now);
+        if (short_s >= detail::kEndedShortHoldS)
+          throw HardwareError(doing + ": stopped " + deg_str(off) + " off target, in position at that stop point for " +
+                              secs(short_s) + " (halted and released by another Modbus master?)" + at(d));
       }
       if (now - t0 > timeout) {
         std::string state = d.has(sts::kMoving) ? "still moving" : "not in position";

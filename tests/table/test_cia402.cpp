@@ -702,7 +702,7 @@ TEST_P(Cia402Client, AnotherMastersQuickStopDuringHomingGetsNoHaltOverIt) {
 }
 
 // A drive that sets bit 12 (homing attained) a while after bit 10 at the end of a good run, or
-// dwells with bit 10 set, completes its home: "interrupted" waits kHomingEndedHoldS (a review:
+// dwells with bit 10 set, completes its home: "interrupted" waits kEndedShortHoldS (a review:
 // 15 ms between them failed a good run when two polls in a row decided).
 TEST_P(Cia402Client, HomingAttainedSetLateIsNotTakenForAnInterruptedHome) {
   struct LateAttained : m::RegisterDevice {

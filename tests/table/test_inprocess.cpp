@@ -248,6 +248,45 @@ TEST(TableInProcess, AnotherMastersStopOrTargetEndsTheMoveWithoutAHaltOfOurs) {
   EXPECT_FALSE(control() & m::ctl::kHalt) << control();
 }
 
+// A HALT (or QUICK_STOP) set and released again by another master between two polls, mid-move:
+// the drive reads in position at its stop point, off the target. Named after kEndedShortHoldS and
+// halted, as a homing run ended short is; it waited out the move timeout (31.6 s) before (a review).
+// A drive whose in-position window is wider than the client's tolerance is not taken for one.
+TEST(TableInProcess, AMoveStoppedShortAndReleasedIsNamedSoon) {
+  for (const uint16_t stop : {m::ctl::kHalt, m::ctl::kQuickStop}) {
+    SCOPED_TRACE(stop == m::ctl::kHalt ? "halt" : "quick stop");
+    SimRig r("start_angle_deg = 0.0\n");
+    r.table->home({});
+    const double t_start = r.clock.now_s();
+    int step = 0;
+    r.clock.set_advance([&](double dt) {
+      r.emu->step(dt);
+      if (step == 0 && r.clock.now_s() - t_start > 1.0) {
+        const uint16_t w = m::ctl::kServoOn | stop;
+        step = r.emu->write_registers(m::reg::kControl, &w, 1) == 0 ? 1 : 0;
+      } else if (step == 1) {  // on the next step, between two of the client's polls
+        const uint16_t servo = m::ctl::kServoOn;
+        step = r.emu->write_registers(m::reg::kControl, &servo, 1) == 0 ? 2 : 1;
+      }
+    });
+    const std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+    EXPECT_EQ(step, 2);
+    EXPECT_NE(err.find("move to 180.0000°: stopped "), std::string::npos) << err;
+    EXPECT_NE(err.find(" off target, in position at that stop point for 1.0 s (halted and released by another "
+                       "Modbus master?)"),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
+    EXPECT_LT(r.clock.now_s() - t_start, 5.0) << "not after the move timeout";
+  }
+  // The drive's own window wider than the client's tolerance: a good arrival reads in position
+  // up to the window off the target; the client waits for its tolerance as before, not "stopped".
+  SimRig r("start_angle_deg = 0.0\nin_position_window_deg = 0.5\n");
+  r.table->home({});
+  r.table->move_to(90.0, {});
+  EXPECT_NEAR(r.table->status().actual_deg, 90.0, 0.01);
+}
+
 // Homing is ended by another master's stop as a move is: at once, named, no halt of ours over
 // it; a homing run stopped and released again (HALT set, then cleared) is named too. Both
 // waited out home_timeout_s (180 s) before (session 26's safety review).
@@ -295,7 +334,7 @@ TEST(TableInProcess, AnotherMastersStopEndsHomingAtOnceNamingIt) {
 
 // A drive that sets HOMED a while after it clears HOMING and MOVING (the map does not say they
 // change in one scan) completes its home: the "ended without reaching the home switch" check
-// waits kHomingEndedHoldS (a review: 80 ms between them failed a good run).
+// waits kEndedShortHoldS (a review: 80 ms between them failed a good run).
 TEST(TableInProcess, HomedSetLateAfterTheRunIsNotTakenForAnInterruptedHome) {
   struct LateHomed : m::RegisterDevice {
     plant::TableEmulator& emu;
