@@ -85,7 +85,12 @@ void Executive::safe_state(Devices& dev, spdlog::logger& log, bool abnormal) {
   const auto lvl = abnormal ? spdlog::level::warn : spdlog::level::info;
   log.log(lvl, "safe state 1/3: stopping table ({})", dev.table.describe());
   dev.table.stop();
-  if (const std::string fate = dev.table.stop_fate(); !fate.empty()) log.warn("safe state 1/3: {}", fate);
+  // Said either way: after another master's command a client's own message reads "no halt sent by
+  // this client"; the run's safe state still stops the table, and run.log says that it did.
+  if (const std::string fate = dev.table.stop_fate(); !fate.empty())
+    log.warn("safe state 1/3: {}", fate);
+  else
+    log.log(lvl, "safe state 1/3: stop delivered to the table (the run's safe state stops it whoever commanded it last)");
   log.log(lvl, "safe state 2/3: stopping DUT stream ({})", dev.dut.describe());
   dev.dut.stop_stream();
   log.log(lvl, "safe state 3/3: DUT power off ({})", dev.io.describe());

@@ -126,6 +126,11 @@ TEST(Executive, AbortRunsSafeStateInOrderAndKeepsMeasurements) {
   ASSERT_NE(t, std::string::npos) << log;
   EXPECT_LT(t, s);
   EXPECT_LT(s, p);
+  // The stop's fate, also when it went out (a client's "no halt sent by this client" after
+  // another master's command may precede it).
+  const auto delivered = log.find("safe state 1/3: stop delivered to the table");
+  EXPECT_LT(t, delivered);
+  EXPECT_LT(delivered, s);
   EXPECT_FALSE(f.world->io().dut_power());
 }
 
