@@ -352,9 +352,16 @@ void Cia402Table::home(const CancelToken& cancel) {
       if (interrupted_s >= 0) changed_at = now;  // at rest by the drive's own account
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9) changed_at = now;
       last = r;
-      if (now - changed_at > opt_.heartbeat_timeout_s)
+      if (now - changed_at > opt_.heartbeat_timeout_s) {
+        // Bits 13, 12, 10 = 0, 0, 1 since the start, the run never seen: "not started" in the
+        // standard's words (a halt set and released before the first poll leaves this too).
+        if (!seen_running && r.has(c4::sw::kTargetReached))
+          throw HardwareError(doing + ": homing not started: statusword bit 10 set, bit 12 clear (\"interrupted or not "
+                                      "started\") and nothing changed for " + secs(now - changed_at) +
+                              " after the homing start (stopped by another Modbus master?)" + at(r));
         throw HardwareError(doing + ": drive frozen: statusword and position actual unchanged for " +
                             secs(now - changed_at) + " while homing" + at(r));
+      }
       if (now - t0 > opt_.home_timeout_s) throw HardwareError(doing + ": not homed after " + secs(now - t0) + at(r));
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);

@@ -268,7 +268,7 @@ void TableClient::home(const CancelToken& cancel) {
     double hb_t = t0;
     uint32_t hb = 0;
     bool acked = false;
-    bool seen_running = false;  // HOMING or MOVING read once after the acknowledge
+    bool seen_running = false;  // HOMING or MOVING read once after the acknowledge (for the message)
     detail::HeldFor ended;      // the run reads ended short of its home
     for (;;) {
       const DriveState d = read_drive(cancel);
@@ -289,16 +289,21 @@ void TableClient::home(const CancelToken& cancel) {
         // Another master's stop ends the homing run as it ends a move; it waited out
         // home_timeout_s before (a review). A run stopped and released again leaves no HALT to
         // read back, only a drive at rest that is neither homed nor homing: taken for one once
-        // the run was seen under way and the state has held kEndedShortHoldS (a drive may set
-        // HOMED a few cycles after it clears HOMING; a review). The halt follows as for any fault:
-        // a drive that only paused must not move on after the rig gave up on it (a review).
+        // the state has held kEndedShortHoldS after the acknowledge (a drive may set HOMED a few
+        // cycles after it clears HOMING, or HOMING a few after MOVE_SEQ; a review). Also when the
+        // run was never seen under way (stopped and released before the first poll): it waited
+        // out home_timeout_s before. The halt follows as for any fault: a drive that only paused
+        // must not move on after the rig gave up on it (a review).
         fail_on_stop_bits(doing, d);
         const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
         seen_running = seen_running || running;
-        const double ended_s = ended(seen_running && !running && !d.has(sts::kHomed), now);
+        const double ended_s = ended(!running && !d.has(sts::kHomed), now);
         if (ended_s >= detail::kEndedShortHoldS)
           throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
-                              secs(ended_s) + " after the run stopped; stopped by another Modbus master?)" + at(d));
+                              secs(ended_s) +
+                              (seen_running ? " after the run stopped"
+                                            : " after the acknowledge, and the run was never seen under way") +
+                              "; stopped by another Modbus master?)" + at(d));
       }
       if (el > opt_.home_timeout_s)
         throw HardwareError(doing + ": not homed after " + secs(el) + (d.has(sts::kHoming) ? " (still homing)" : "") +

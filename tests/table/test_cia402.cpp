@@ -670,6 +670,47 @@ TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
   EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation | c4::cw::kHalt);
 }
 
+// The same before the client's first poll: halt set right after the homing start and released
+// once the axis is at rest. The run is never seen under way; the drive shows "interrupted or not
+// started" from the first poll on and is named so (it read "drive frozen" before).
+TEST_P(Cia402Client, HomingStoppedBeforeTheFirstPollIsNamedNotStarted) {
+  Rig r(GetParam(), far_axis());
+  struct StoppedAtOnce : m::RegisterDevice {
+    Rig& r;
+    bool done = false;
+    explicit StoppedAtOnce(Rig& rig) : r(rig) {}
+    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return r.drive.read_registers(a, n, out); }
+    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      return r.drive.read_input_registers(a, n, out);
+    }
+    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+      const uint8_t rc = r.drive.write_registers(a, v, n);
+      const auto& cw = r.map.spec(Obj::kControlword);
+      if (rc == 0 && !done && a == cw.address &&
+          (r.map.decode(Obj::kControlword, v) & c4::cw::kHomingStart) && r.drive.statusword() != 0) {
+        done = true;
+        r.drive.step(0.05);  // the run starts
+        r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart | c4::cw::kHalt);
+        for (int i = 0; i < 2000 && std::fabs(r.axis->snapshot().velocity_dps) > 1e-6; ++i) r.drive.step(0.001);
+        r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+      }
+      return rc;
+    }
+    bool answering() const override { return r.drive.answering(); }
+  } dev(r);
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  m::Cia402Table t(m::make_inprocess_transport(dev, r.clock), r.map, r.clock, opt);
+  const double t0 = r.axis->time_s();
+  const std::string e = error_of([&] { t.home({}); });
+  EXPECT_TRUE(dev.done);
+  EXPECT_TRUE(has(e, "home: homing not started: statusword bit 10 set, bit 12 clear (\"interrupted or not started\") "
+                     "and nothing changed for 2.") &&
+              has(e, "; halt delivered to the drive"))
+      << e;
+  EXPECT_LT(r.axis->time_s() - t0, 5.0);
+}
+
 // The same with heartbeat_timeout_s below the 1 s hold: the table at rest with bit 10 set is
 // not a frozen drive (a review: "drive frozen" after 0.5 s, before the hold had run out).
 TEST_P(Cia402Client, AnInterruptedHomeIsNotAFrozenDriveUnderAShortHeartbeatTimeout) {

@@ -366,6 +366,43 @@ TEST(TableInProcess, HomedSetLateAfterTheRunIsNotTakenForAnInterruptedHome) {
   }
 }
 
+// Another master's HALT set and released right after the drive took the HOME edge, before the
+// client's first poll: the run is never seen under way. Named after kEndedShortHoldS and halted;
+// it waited out home_timeout_s (180 s) before (session 27's note).
+TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
+  struct StoppedAtOnce : m::RegisterDevice {
+    plant::TableEmulator& emu;
+    bool done = false;
+    explicit StoppedAtOnce(plant::TableEmulator& e) : emu(e) {}
+    uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override { return emu.read_registers(addr, n, out); }
+    uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
+      const uint8_t rc = emu.write_registers(addr, v, n);
+      if (rc == 0 && !done && addr == m::reg::kControl && (v[0] & m::ctl::kHome)) {
+        const uint16_t halt = m::ctl::kServoOn | m::ctl::kHalt, servo = m::ctl::kServoOn;
+        emu.step(0.01);  // the run starts
+        done = emu.write_registers(m::reg::kControl, &halt, 1) == 0;
+        for (int i = 0; i < 1000 && emu.snapshot().moving; ++i) emu.step(0.001);  // at rest, still unpolled
+        done = done && !emu.snapshot().moving && emu.write_registers(m::reg::kControl, &servo, 1) == 0;
+      }
+      return rc;
+    }
+    bool answering() const override { return emu.answering(); }
+  };
+  auto emu = emulator("start_angle_deg = 200.0\n");
+  SimClock clock([&](double dt) { emu->step(dt); });
+  StoppedAtOnce dev(*emu);
+  auto table = m::make_inprocess_table(dev, clock);
+  const double t0 = clock.now_s();
+  const std::string err = hardware_error([&] { table->home({}); });
+  EXPECT_TRUE(dev.done);
+  EXPECT_NE(err.find("home: homing ended without reaching the home switch (HOMED not set for 1.0 s after the "
+                     "acknowledge, and the run was never seen under way; stopped by another Modbus master?)"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
+  EXPECT_LT(clock.now_s() - t0, 5.0) << "not after the home timeout";
+}
+
 TEST(TableInProcess, EstopDuringMove) {
   SimRig r("start_angle_deg = 0.0\n");
   r.table->home({});
