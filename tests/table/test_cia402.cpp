@@ -182,9 +182,11 @@ struct Rig {
           drive.step(dt);
           if (on_step) on_step();
         }) {}
-  std::unique_ptr<m::Cia402Table> client(m::TableOptions opt = {}) {
+  std::unique_ptr<m::Cia402Table> client(m::TableOptions opt = {}) { return client_via(drive, opt); }
+  // A client that reaches the drive through `dev` (a gateway, another master wrapped round it).
+  std::unique_ptr<m::Cia402Table> client_via(m::RegisterDevice& dev, m::TableOptions opt = {}) {
     opt.settle_s = 0.05;
-    return std::make_unique<m::Cia402Table>(m::make_inprocess_transport(drive, clock), map, clock, opt);
+    return std::make_unique<m::Cia402Table>(m::make_inprocess_transport(dev, clock), map, clock, opt);
   }
   void control(uint16_t w) {
     const auto v = map.encode(Obj::kControlword, w);
@@ -367,27 +369,38 @@ TEST(Cia402Drive, SetPointHandshakeTimingAndHalt) {
 // What ends a positioning that a halt interrupted, so that releasing the halt does not continue
 // it: a set-point to be changed immediately in the word that releases the halt, another mode, the
 // drive leaving Operation enabled. Else the release continues it (above).
+namespace {
+// Another master's move to `target_deg` (mode, set-point), halted 0.2 s in; where the table came
+// to rest 1 s later.
+double another_masters_halted_move(Rig& r, double target_deg) {
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(target_deg));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.2);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+  r.run(1.0);
+  return r.axis->actual_angle_deg();
+}
+
+// The highest angle the table reaches while `f` runs (it advances the drive's time).
+template <class F>
+double highest_during(Rig& r, F f) {
+  double hi = r.axis->actual_angle_deg();
+  r.on_step = [&] { hi = std::max(hi, r.axis->actual_angle_deg()); };
+  f();
+  r.on_step = nullptr;
+  return hi;
+}
+}  // namespace
+
 TEST(Cia402Drive, AHaltedPositioningEndsOnlyWhereTheStandardEndsIt) {
-  // Halts a move to 180 degrees 0.2 s in and returns where it came to rest.
   auto halted_move = [](Rig& r) {
-    r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
-    r.write(Obj::kTargetPosition, r.map.deg_to_counts(180.0));
-    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
-    r.run(0.2);
-    r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
-    r.run(1.0);
-    const double at = r.axis->actual_angle_deg();
+    const double at = another_masters_halted_move(r, 180.0);
     EXPECT_LT(at, 120.0);
     return at;
   };
-  // The most the table reaches over `s` seconds of drive time.
-  auto highest_over = [](Rig& r, double s) {
-    double hi = r.axis->actual_angle_deg();
-    r.on_step = [&] { hi = std::max(hi, r.axis->actual_angle_deg()); };
-    r.run(s);
-    r.on_step = nullptr;
-    return hi;
-  };
+  auto highest_over = [](Rig& r, double s) { return highest_during(r, [&] { r.run(s); }); };
   {  // a new set-point to be changed immediately, in the word that releases the halt: taken instead
     Rig r("generic-cia402.toml");
     enable_and_home(r);
@@ -698,9 +711,8 @@ TEST_P(Cia402Client, HomingStoppedBeforeTheFirstPollIsNamedNotStarted) {
     }
     bool answering() const override { return r.drive.answering(); }
   } dev(r);
-  m::TableOptions opt;
-  opt.settle_s = 0.05;
-  m::Cia402Table t(m::make_inprocess_transport(dev, r.clock), r.map, r.clock, opt);
+  auto client = r.client_via(dev);
+  m::Cia402Table& t = *client;
   const double t0 = r.axis->time_s();
   const std::string e = error_of([&] { t.home({}); });
   EXPECT_TRUE(dev.done);
@@ -803,25 +815,11 @@ TEST_P(Cia402Client, AMoveAfterAHaltedMoveNeverHeadsForTheHaltedTarget) {
   cancel_a_move_mid_way(r, *t);  // the rig's own halt, 0.3 s into a move to 300 degrees
   const double at = r.axis->actual_angle_deg();
   ASSERT_LT(at, 299.0);
-  double highest = at;
-  r.on_step = [&] { highest = std::max(highest, r.axis->actual_angle_deg()); };
-  t->move_to(5.0, {});
-  r.on_step = nullptr;
-  EXPECT_LE(highest, at + 1e-6) << "set off towards the halted move's target";
+  EXPECT_LE(highest_during(r, [&] { t->move_to(5.0, {}); }), at + 1e-6) << "set off towards the halted move's target";
   EXPECT_NEAR(r.axis->actual_angle_deg(), 5.0, 0.005);
   // And a second client (`rig table move` after `rig table stop` from another shell).
-  r.control(c4::cw::kCmdEnableOperation);
-  r.write(Obj::kTargetPosition, r.map.deg_to_counts(250.0));
-  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
-  r.run(0.2);
-  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHalt);
-  r.run(1.0);
-  const double at2 = r.axis->actual_angle_deg();
-  ASSERT_LT(at2, 200.0);
-  highest = at2;
-  r.on_step = [&] { highest = std::max(highest, r.axis->actual_angle_deg()); };
-  r.client()->move_to(100.0, {});
-  r.on_step = nullptr;
+  ASSERT_LT(another_masters_halted_move(r, 250.0), 200.0);
+  const double highest = highest_during(r, [&] { r.client()->move_to(100.0, {}); });
   EXPECT_NEAR(r.axis->actual_angle_deg(), 100.0, 0.005);
   EXPECT_LT(highest, 102.0) << "set off towards the halted move's target (250 degrees)";  // (the servo's overshoot: 0.7)
 }
@@ -890,9 +888,8 @@ struct ControlwordReadsZero : m::RegisterDevice {
 TEST_P(Cia402Client, AHaltThroughAGatewayThatReadsTheControlwordAsZeroKeepsThePower) {
   Rig r(GetParam());
   ControlwordReadsZero gw(r.drive, r.map.spec(Obj::kControlword).address);
-  m::TableOptions opt;
-  opt.settle_s = 0.05;
-  m::Cia402Table t(m::make_inprocess_transport(gw, r.clock), r.map, r.clock, opt);
+  auto client = r.client_via(gw);
+  m::Cia402Table& t = *client;
   cancel_a_move_mid_way(r, t);
   EXPECT_EQ(r.drive.state(), State::kOperationEnabled);  // halted, powered: not Switch on disabled
   EXPECT_TRUE(r.axis->snapshot().servo_on);
@@ -904,9 +901,8 @@ TEST_P(Cia402Client, AHaltThroughAGatewayThatReadsTheControlwordAsZeroKeepsThePo
 TEST_P(Cia402Client, AHaltReleasedUnseenDelaysTheMoveButItArrives) {
   Rig r(GetParam());
   ControlwordReadsZero gw(r.drive, r.map.spec(Obj::kControlword).address);
-  m::TableOptions opt;
-  opt.settle_s = 0.05;
-  m::Cia402Table t(m::make_inprocess_transport(gw, r.clock), r.map, r.clock, opt);
+  auto client = r.client_via(gw);
+  m::Cia402Table& t = *client;
   t.home({});
   const double t_halt = r.axis->time_s() + 0.3;
   int phase = 0;
