@@ -62,11 +62,7 @@ void Cia402Drive::step(double dt_s) {
   check_axis_fault();
   if (state_ == State::kFaultReactionActive && t_ >= fault_reaction_until_) enter(State::kFault);  // transition 14
   if (setpoint_pending_ && t_ >= setpoint_at_) start_setpoint();
-  if (resume_pending_ && !axis_.snapshot().moving) {  // the halt ramp has ended: on to the target
-    resume_pending_ = false;
-    axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kStart));
-    axis_control(ctl::kServoOn);
-  }
+  if (resume_pending_ && !setpoint_pending_ && !axis_.snapshot().moving) resume();
   if (homing_active_) {
     const auto s = axis_.snapshot();
     if (!s.homing && !s.moving) {
@@ -183,13 +179,13 @@ void Cia402Drive::apply_controlword(uint16_t w) {
   } else if (!halt && (prev & c4::cw::kHalt)) {
     axis_control(ctl::kServoOn);
     // Profile position, halt = 0: "positioning shall be executed or continued" (IEC 61800-7-201):
-    // a positioning the halt interrupted goes on to its target, unless this very word brings a
-    // new set-point to be changed immediately. (Homing interrupted by a halt is not resumed: bits
-    // 13, 12, 10 say "interrupted", and a new homing start is needed.)
-    const bool replaced = (rising & c4::cw::kNewSetPoint) && (w & c4::cw::kChangeImmediately);
+    // a positioning the halt interrupted goes on to its target, unless a new set-point to be
+    // changed immediately is taken in its place (one this very word brings; one refused, outside
+    // the limits, leaves the old one to continue). Homing interrupted by a halt is not resumed:
+    // bits 13, 12, 10 say "interrupted", and a new homing start is needed.
     const bool short_of_target = std::fabs(axis_.snapshot().position_deg - target_inner_deg_) >
                                  axis_.params().in_position_window_deg;
-    resume_pending_ = mode_ == c4::kModeProfilePosition && moving_to_target_ && short_of_target && !replaced;
+    resume_pending_ = mode_ == c4::kModeProfilePosition && moving_to_target_ && short_of_target;
   }
   if (!(w & c4::cw::kNewSetPoint)) setpoint_ack_ = false;  // handshake: the master took the acknowledge
   if (!(rising & c4::cw::kNewSetPoint) || halt) return;
@@ -211,14 +207,26 @@ void Cia402Drive::apply_controlword(uint16_t w) {
   }
 }
 
+// Continues the positioning a released halt interrupted, to the target it had.
+void Cia402Drive::resume() {
+  resume_pending_ = false;
+  axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kStart));
+  axis_control(ctl::kServoOn);
+}
+
 // Takes the set-point (single set-point mode): a move under way is replaced
 // only with "change set immediately"; otherwise the set-point waits for it.
 void Cia402Drive::start_setpoint() {
   const auto s = axis_.snapshot();
-  // Single set-point: a positioning under way, or one a released halt is about to continue, is
+  // Single set-point: a positioning under way, or one a released halt is to continue, is
   // completed first unless the set-point is to be changed immediately.
-  if ((s.moving || resume_pending_) && !(controlword_ & c4::cw::kChangeImmediately)) return;
-  setpoint_pending_ = resume_pending_ = false;
+  const bool immediately = controlword_ & c4::cw::kChangeImmediately;
+  if (resume_pending_ && !immediately) {
+    if (!s.moving) resume();
+    return;
+  }
+  if (s.moving && !immediately) return;
+  setpoint_pending_ = false;
   double user = map_.counts_to_deg(target_);
   if (controlword_ & c4::cw::kRelative) user += inner_to_user_deg(target_inner_deg_);  // relative to the last target
   if (user < map_.limit_neg_deg || user > map_.limit_pos_deg || !s.homed) {
@@ -227,6 +235,7 @@ void Cia402Drive::start_setpoint() {
     warning_ = true;
     return;
   }
+  resume_pending_ = false;  // taken in place of the positioning a halt interrupted
   warning_ = limit_active_ = false;
   target_inner_deg_ = user_to_inner_deg(user);
   uint16_t w[2];

@@ -57,6 +57,7 @@ class Cia402Drive final : public rig::modbus::RegisterDevice {
   void enter(State s);
   void start_setpoint();
   void check_axis_fault();
+  void resume();
   uint16_t statusword_locked() const;
   int64_t value_of(Obj o) const;
   void set_value(Obj o, int64_t v);

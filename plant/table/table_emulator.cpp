@@ -285,7 +285,11 @@ void TableEmulator::finish_homing() {
 }
 
 bool TableEmulator::in_position() const {
-  return servo_ && alarm_ == alarm::kNone && !traj_.active && in_pos_timer_ >= settle_ms_ / 1000.0;
+  // Inside the window for SETTLE_TIME (table-registers.md); with SETTLE_TIME 0 the timer is 0
+  // outside the window too, so the window is asked now (a review: a ringing servo read "in
+  // position" 1.26 degrees off its target).
+  return servo_ && alarm_ == alarm::kNone && !traj_.active && in_pos_timer_ >= settle_ms_ / 1000.0 &&
+         std::fabs(settle_target_ - pos_) <= window_counts_ / m::kPosScale;
 }
 bool TableEmulator::moving() const { return servo_ && (traj_.active || settling_); }
 

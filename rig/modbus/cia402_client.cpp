@@ -481,6 +481,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     write_object(Obj::kTargetPosition, target_counts, cancel);
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint | c4::cw::kChangeImmediately, cancel);
     double t0 = clock_.now_s();
+    int unacked_motion = 0;  // polls that saw the table move without the acknowledge
     for (;;) {
       r = read(cancel, true);
       fail_on_fault(doing, r);
@@ -488,16 +489,21 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // request never acknowledges, and the reason is that, not the drive.
       fail_unless_moving(doing, r, "waiting for the set-point acknowledge", target_counts);
       if (r.has(c4::sw::kSetPointAck)) break;
-      if (clock_.now_s() - t0 > opt_.ack_timeout_s) {
-        const std::string what = doing + ": set-point not acknowledged (statusword bit 12) within " +
-                                 secs(opt_.ack_timeout_s);
-        // The table was at rest before the set-point and ours was not taken: a motion now is
-        // another master's, started as ours was written (a drive finishes a move before it
-        // acknowledges the next set-point), and not ours to halt.
-        if (std::fabs(r.velocity_dps) > 0.01)
-          throw TakenOverError(what + " while the table moves (another Modbus master's move?)" + at(r));
-        throw HardwareError(what + (r.has(c4::sw::kInternalLimit) ? " (internal limit active)" : "") + at(r));
-      }
+      // The table was at rest, and this word released halt: motion without the acknowledge is
+      // the drive continuing a move a halt interrupted, to its old target (the set-point refused:
+      // outside the drive's own limits, "change set immediately" not supported), or another
+      // master's move started as ours was written. Halted either way, at the second such poll (the
+      // first may have read the statusword just before the drive took the set-point): as
+      // TakenOverError (no halt) after ack_timeout_s, the table ran on to the old target unwatched
+      // (a review).
+      if (std::fabs(r.velocity_dps) > 0.01 && ++unacked_motion >= 2)
+        throw HardwareError(doing + ": the table moves but the set-point is not acknowledged (statusword bit 12 clear): "
+                                    "the drive continuing a halted move to its old target, or another master's move?" +
+                            at(r));
+      if (clock_.now_s() - t0 > opt_.ack_timeout_s)
+        throw HardwareError(doing + ": set-point not acknowledged (statusword bit 12) within " +
+                            secs(opt_.ack_timeout_s) + (r.has(c4::sw::kInternalLimit) ? " (internal limit active)" : "") +
+                            at(r));
       clock_.sleep_for(opt_.poll_s, cancel);
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge

@@ -346,7 +346,8 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
     const double t0 = clock_.now_s();
     double hb_t = t0;
     detail::HeldFor in_position;
-    detail::HeldFor stopped_short;  // in position at a stop point off the target
+    detail::HeldFor stopped_short;  // in position at a stop point off the target, and staying there
+    double short_at = NAN;          // where that reading began
     bool seen_moving = false;       // MOVING read once after the acknowledge
     uint32_t hb = d.heartbeat;
     bool acked = false;
@@ -383,10 +384,19 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         // the target, beyond the client's tolerance and the drive's window, after the move was
         // seen under way, the move was stopped short. A HALT or QUICK_STOP set and released again
         // between two polls leaves nothing else to read (the move timeout, 31.6 s in a review,
-        // found it before). Held kEndedShortHoldS; the halt follows as for any fault.
+        // found it before). Held kEndedShortHoldS with the table staying within the band where
+        // the reading began, at least ten bands off the target: a servo still ringing or creeping
+        // towards it moves on by more (a review: with SETTLE_TIME 0 a 0.3 Hz servo read in
+        // position 1.26 degrees off its target for over 1 s, and a drive may keep IN_POSITION
+        // once set; at 0.014 degrees it crept by less than the band in 1 s). A stop nearer than
+        // that is left to the move timeout. The halt follows as for any fault.
         seen_moving = seen_moving || d.has(sts::kMoving);
-        const bool short_stop = seen_moving && d.has(sts::kInPosition) && !d.has(sts::kMoving) &&
-                                off > std::max(opt_.tolerance_deg, d.window_deg);
+        const double band = std::max(opt_.tolerance_deg, d.window_deg);
+        const bool short_stop = seen_moving && d.has(sts::kInPosition) && !d.has(sts::kMoving) && off > 10 * band;
+        if (!short_stop || !(std::fabs(d.actual_deg - short_at) <= band)) {
+          stopped_short(false, now);  // not so, or moved on: the hold starts again from here
+          short_at = short_stop ? d.actual_deg : NAN;
+        }
         const double short_s = stopped_short(short_stop, now);
         if (short_s >= detail::kEndedShortHoldS)
           throw HardwareError(doing + ": stopped " + deg_str(off) + " off target, in position at that stop point for " +

@@ -916,6 +916,48 @@ TEST_P(Cia402Client, AHaltReleasedUnseenDelaysTheMoveButItArrives) {
   EXPECT_NEAR(r.axis->actual_angle_deg(), 300.0, 0.005);
 }
 
+// A drive that does not take the set-point in the word that releases halt (it ignores bit 4
+// there, or "change set immediately"; one outside its own limits is refused the same way) goes on
+// with the halted move to its old target. The client halts it at once; it read that as another
+// master's move after ack_timeout_s and sent no halt, and the table ran on to 300 degrees (a review).
+TEST_P(Cia402Client, AHaltedMoveTheDriveContinuesInsteadOfTheSetPointIsHalted) {
+  Rig r(GetParam());
+  struct NoSetPointWithTheRelease : m::RegisterDevice {
+    Rig& r;
+    bool on = false;
+    explicit NoSetPointWithTheRelease(Rig& rig) : r(rig) {}
+    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return r.drive.read_registers(a, n, out); }
+    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      return r.drive.read_input_registers(a, n, out);
+    }
+    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+      const auto& cw = r.map.spec(Obj::kControlword);
+      const uint16_t w = a == cw.address ? static_cast<uint16_t>(r.map.decode(Obj::kControlword, v)) : 0;
+      if (on && a == cw.address && (w & c4::cw::kNewSetPoint) && (w & c4::cw::kChangeImmediately)) {
+        const auto stripped = r.map.encode(Obj::kControlword, w & ~(c4::cw::kNewSetPoint | c4::cw::kChangeImmediately));
+        return r.drive.write_registers(a, stripped.data(), n);
+      }
+      return r.drive.write_registers(a, v, n);
+    }
+    bool answering() const override { return r.drive.answering(); }
+  } dev(r);
+  auto t = r.client_via(dev);
+  cancel_a_move_mid_way(r, *t);  // the rig's own halt, 0.3 s into a move to 300 degrees
+  const double at = r.axis->actual_angle_deg();
+  ASSERT_GT(at, 20.0);
+  dev.on = true;
+  std::string e;
+  const double highest = highest_during(r, [&] { e = error_of([&] { t->move_to(5.0, {}); }); });
+  EXPECT_TRUE(has(e, "move to 5.0000°: the table moves but the set-point is not acknowledged (statusword bit 12 "
+                     "clear): the drive continuing a halted move to its old target, or another master's move?") &&
+              has(e, "; halt delivered to the drive"))
+      << e;
+  r.run(2.0);
+  EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
+  EXPECT_LT(highest, at + 30.0) << "ran on towards the halted move's target";
+  EXPECT_LT(r.axis->actual_angle_deg(), at + 30.0);
+}
+
 // A map with a homed bit: a move before homing is refused before anything is written, so the
 // drive stays where it was in its state machine (it was enabled first, then refused: a review).
 TEST(Cia402ClientHoming, AMoveBeforeHomingIsRefusedBeforeTheDriveIsEnabled) {
