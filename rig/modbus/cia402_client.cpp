@@ -427,6 +427,9 @@ void Cia402Table::fail_unless_mode(const std::string& doing, const Cia402Reading
   }
 }
 
+// How long the table may move without acknowledging the set-point that released its halt.
+constexpr double kUnackedMotionS = 0.1;
+
 void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
@@ -481,7 +484,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     write_object(Obj::kTargetPosition, target_counts, cancel);
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint | c4::cw::kChangeImmediately, cancel);
     double t0 = clock_.now_s();
-    int unacked_motion = 0;  // polls that saw the table move without the acknowledge
+    detail::HeldFor unacked_motion;  // the table moving without the acknowledge
     for (;;) {
       r = read(cancel, true);
       fail_on_fault(doing, r);
@@ -492,11 +495,11 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // The table was at rest, and this word released halt: motion without the acknowledge is
       // the drive continuing a move a halt interrupted, to its old target (the set-point refused:
       // outside the drive's own limits, "change set immediately" not supported), or another
-      // master's move started as ours was written. Halted either way, at the second such poll (the
-      // first may have read the statusword just before the drive took the set-point): as
-      // TakenOverError (no halt) after ack_timeout_s, the table ran on to the old target unwatched
-      // (a review).
-      if (std::fabs(r.velocity_dps) > 0.01 && ++unacked_motion >= 2)
+      // master's move started as ours was written. Halted either way once it has held 0.1 s (a
+      // poll may read the statusword just before the drive took the set-point, and a drive may set
+      // bit 12 some cycles after its motion starts): as TakenOverError (no halt) after
+      // ack_timeout_s, the table ran on to the old target unwatched (a review).
+      if (unacked_motion(std::fabs(r.velocity_dps) > 0.01, clock_.now_s()) >= kUnackedMotionS)
         throw HardwareError(doing + ": the table moves but the set-point is not acknowledged (statusword bit 12 clear): "
                                     "the drive continuing a halted move to its old target, or another master's move?" +
                             at(r));

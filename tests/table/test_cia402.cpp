@@ -954,8 +954,46 @@ TEST_P(Cia402Client, AHaltedMoveTheDriveContinuesInsteadOfTheSetPointIsHalted) {
       << e;
   r.run(2.0);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
-  EXPECT_LT(highest, at + 30.0) << "ran on towards the halted move's target";
-  EXPECT_LT(r.axis->actual_angle_deg(), at + 30.0);
+  // A poll to see it, 0.1 s held, then the halt ramp: on this fast axis (1800 °/s², 360 °/s)
+  // 32 degrees while the client watches and 33 more on the ramp; 192 degrees before the old target.
+  EXPECT_LT(highest, at + 40.0) << "moved on unwatched";
+  EXPECT_LT(r.axis->actual_angle_deg(), at + 80.0) << "ran on towards the halted move's target (300 degrees)";
+}
+
+// A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at
+// poll_s 0.05) completes its move: motion without the acknowledge must hold 0.1 s to be halted.
+TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {
+  Rig r(GetParam());
+  struct LateAck : m::RegisterDevice {
+    Rig& r;
+    double ack_seen = -1;
+    explicit LateAck(Rig& rig) : r(rig) {}
+    uint8_t hide(uint16_t a, uint16_t n, uint16_t* out) {
+      const auto& sw = r.map.spec(Obj::kStatusword);
+      if (a > sw.address || a + n <= sw.address) return 0;
+      uint16_t& w = out[sw.address - a];  // (a 16-bit object: one register)
+      if (!(w & c4::sw::kSetPointAck)) ack_seen = -1;
+      else if (ack_seen < 0) ack_seen = r.axis->time_s();
+      if (ack_seen >= 0 && r.axis->time_s() - ack_seen < 0.06) w = static_cast<uint16_t>(w & ~c4::sw::kSetPointAck);
+      return 0;
+    }
+    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      const uint8_t rc = r.drive.read_registers(a, n, out);
+      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? 0 : hide(a, n, out));
+    }
+    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      const uint8_t rc = r.drive.read_input_registers(a, n, out);
+      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? hide(a, n, out) : 0);
+    }
+    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override { return r.drive.write_registers(a, v, n); }
+    bool answering() const override { return r.drive.answering(); }
+  } dev(r);
+  auto t = r.client_via(dev);
+  t->home({});
+  for (const double deg : {200.0, 20.0}) {
+    EXPECT_NO_THROW(t->move_to(deg, {})) << deg;
+    EXPECT_NEAR(r.axis->actual_angle_deg(), deg, 0.005);
+  }
 }
 
 // A map with a homed bit: a move before homing is refused before anything is written, so the
