@@ -497,8 +497,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // outside the drive's own limits, "change set immediately" not supported), or another
       // master's move started as ours was written. Halted either way once it has held 0.1 s (a
       // poll may read the statusword just before the drive took the set-point, and a drive may set
-      // bit 12 some cycles after its motion starts): as TakenOverError (no halt) after
-      // ack_timeout_s, the table ran on to the old target unwatched (a review).
+      // bit 12 some cycles after its motion starts). Taken before for another master's move after
+      // ack_timeout_s, with no halt, it let the table run on to the old target unwatched (a review).
       if (unacked_motion(std::fabs(r.velocity_dps) > 0.01, clock_.now_s()) >= kUnackedMotionS)
         throw HardwareError(doing + ": the table moves but the set-point is not acknowledged (statusword bit 12 clear): "
                                     "the drive continuing a halted move to its old target, or another master's move?" +
