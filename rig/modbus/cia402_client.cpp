@@ -533,6 +533,15 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
+      // Heading away from the target, past the distance it started from by more than a servo
+      // overshoots: the drive runs to another target first (it took this set-point into its
+      // buffer without "change set immediately" and continues a halted move; a review could not
+      // rule such a drive out, and only the timeout ended it).
+      const double away = std::fabs(r.actual_deg - deg), from = std::fabs(start_deg - deg);
+      if (away > from + std::max(1.0, 10 * opt_.tolerance_deg))
+        throw HardwareError(doing + ": the table moves away from the target (" + deg_str(away) + " off, it started " +
+                            deg_str(from) + " off): the drive running to another target first (a halted move it "
+                            "continues?)" + at(r));
       // No heartbeat object in CiA 402: a drive whose statusword and position
       // stop changing while the target is not reached is taken for frozen.
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9 ||

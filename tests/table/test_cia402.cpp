@@ -960,6 +960,53 @@ TEST_P(Cia402Client, AHaltedMoveTheDriveContinuesInsteadOfTheSetPointIsHalted) {
   EXPECT_LT(r.axis->actual_angle_deg(), at + 80.0) << "ran on towards the halted move's target (300 degrees)";
 }
 
+// A drive that acknowledges the set-point into its buffer but ignores "change set immediately":
+// it finishes the halted move first, heading away from the new target. Halted once the table is
+// 1 degree further from the target than it started; only the move timeout ended it (a review).
+TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
+  Rig r(GetParam());
+  struct BufferedSetPoint : m::RegisterDevice {
+    Rig& r;
+    bool on = false, forcing = false;
+    explicit BufferedSetPoint(Rig& rig) : r(rig) {}
+    uint8_t force(uint16_t a, uint16_t n, uint16_t* out) {
+      const auto& sw = r.map.spec(Obj::kStatusword);
+      if (forcing && r.drive.setpoint_pending() && a <= sw.address && sw.address < a + n)
+        out[sw.address - a] = static_cast<uint16_t>(out[sw.address - a] | c4::sw::kSetPointAck);
+      return 0;
+    }
+    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      const uint8_t rc = r.drive.read_registers(a, n, out);
+      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? 0 : force(a, n, out));
+    }
+    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      const uint8_t rc = r.drive.read_input_registers(a, n, out);
+      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? force(a, n, out) : 0);
+    }
+    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+      const auto& cw = r.map.spec(Obj::kControlword);
+      if (!on || a != cw.address) return r.drive.write_registers(a, v, n);
+      const auto w = static_cast<uint16_t>(r.map.decode(Obj::kControlword, v));
+      forcing = (w & c4::cw::kNewSetPoint) != 0;  // acknowledged while the master holds bit 4
+      const auto kept = r.map.encode(Obj::kControlword, w & ~c4::cw::kChangeImmediately);
+      return r.drive.write_registers(a, kept.data(), n);
+    }
+    bool answering() const override { return r.drive.answering(); }
+  } dev(r);
+  auto t = r.client_via(dev);
+  cancel_a_move_mid_way(r, *t);  // the rig's own halt, 0.3 s into a move to 300 degrees
+  const double at = r.axis->actual_angle_deg();
+  ASSERT_GT(at, 20.0);
+  dev.on = true;
+  std::string e;
+  const double highest = highest_during(r, [&] { e = error_of([&] { t->move_to(5.0, {}); }); });
+  EXPECT_TRUE(has(e, "move to 5.0000°: the table moves away from the target (") &&
+              has(e, "the drive running to another target first (a halted move it continues?)") &&
+              has(e, "; halt delivered to the drive"))
+      << e;
+  EXPECT_LT(highest, at + 10.0) << "ran on towards the halted move's target (300 degrees)";
+}
+
 // A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at
 // poll_s 0.05) completes its move: motion without the acknowledge must hold 0.1 s to be halted.
 TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {
