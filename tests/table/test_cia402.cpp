@@ -204,6 +204,36 @@ struct Rig {
   SimClock clock;
 };
 
+// A party between the client and the emulated drive (a vendor's drive that behaves otherwise,
+// another master acting at a given moment): forwards every request; a test overrides `write`
+// (the words that reach the drive) and `statusword` (the word the client reads).
+struct Between : m::RegisterDevice {
+  Rig& r;
+  explicit Between(Rig& rig) : r(rig) {}
+  virtual uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) { return r.drive.write_registers(a, v, n); }
+  virtual void statusword(uint16_t&) {}
+  // The controlword in a write to its address, else 0.
+  uint16_t controlword_in(uint16_t a, const uint16_t* v) const {
+    return a == r.map.spec(Obj::kControlword).address ? static_cast<uint16_t>(r.map.decode(Obj::kControlword, v)) : 0;
+  }
+  uint8_t write_controlword(uint16_t a, uint16_t w, uint16_t n) {
+    const auto words = r.map.encode(Obj::kControlword, w);
+    return r.drive.write_registers(a, words.data(), n);
+  }
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return read(false, a, n, out); }
+  uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override { return read(true, a, n, out); }
+  uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override { return write(a, v, n); }
+  bool answering() const override { return r.drive.answering(); }
+
+ private:
+  uint8_t read(bool input, uint16_t a, uint16_t n, uint16_t* out) {
+    const uint8_t rc = input ? r.drive.read_input_registers(a, n, out) : r.drive.read_registers(a, n, out);
+    const auto& sw = r.map.spec(Obj::kStatusword);
+    if (rc == 0 && sw.input == input && a <= sw.address && sw.address < a + n) statusword(out[sw.address - a]);
+    return rc;  // (the statusword is a 16-bit object: one register)
+  }
+};
+
 // A map without the device type loads; a client driving a table with it says, once, what it then
 // cannot tell apart (the shipped maps carry it; the emulated drive serving such a map says
 // nothing: it has nothing to tell apart).
@@ -688,19 +718,12 @@ TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
 // started" from the first poll on and is named so (it read "drive frozen" before).
 TEST_P(Cia402Client, HomingStoppedBeforeTheFirstPollIsNamedNotStarted) {
   Rig r(GetParam(), far_axis());
-  struct StoppedAtOnce : m::RegisterDevice {
-    Rig& r;
+  struct StoppedAtOnce : Between {
     bool done = false;
-    explicit StoppedAtOnce(Rig& rig) : r(rig) {}
-    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return r.drive.read_registers(a, n, out); }
-    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
-      return r.drive.read_input_registers(a, n, out);
-    }
-    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
+    using Between::Between;
+    uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
       const uint8_t rc = r.drive.write_registers(a, v, n);
-      const auto& cw = r.map.spec(Obj::kControlword);
-      if (rc == 0 && !done && a == cw.address &&
-          (r.map.decode(Obj::kControlword, v) & c4::cw::kHomingStart) && r.drive.statusword() != 0) {
+      if (rc == 0 && !done && (controlword_in(a, v) & c4::cw::kHomingStart)) {
         done = true;
         r.drive.step(0.05);  // the run starts
         r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart | c4::cw::kHalt);
@@ -709,7 +732,6 @@ TEST_P(Cia402Client, HomingStoppedBeforeTheFirstPollIsNamedNotStarted) {
       }
       return rc;
     }
-    bool answering() const override { return r.drive.answering(); }
   } dev(r);
   auto client = r.client_via(dev);
   m::Cia402Table& t = *client;
@@ -916,38 +938,42 @@ TEST_P(Cia402Client, AHaltReleasedUnseenDelaysTheMoveButItArrives) {
   EXPECT_NEAR(r.axis->actual_angle_deg(), 300.0, 0.005);
 }
 
+namespace {
+struct AfterAHaltedMove {
+  std::string error;
+  double at, highest;  // where the halt left the table; the highest angle during the next move
+};
+// The rig's own halt 0.3 s into a move to 300 degrees; then, with `dev` switched on, a move to 5
+// degrees through it.
+template <class Dev>
+AfterAHaltedMove move_after_a_halted_move(Rig& r, Dev& dev) {
+  auto t = r.client_via(dev);
+  cancel_a_move_mid_way(r, *t);
+  AfterAHaltedMove o{"", r.axis->actual_angle_deg(), 0};
+  EXPECT_GT(o.at, 20.0);
+  dev.on = true;
+  o.highest = highest_during(r, [&] { o.error = error_of([&] { t->move_to(5.0, {}); }); });
+  return o;
+}
+}  // namespace
+
 // A drive that does not take the set-point in the word that releases halt (it ignores bit 4
 // there, or "change set immediately"; one outside its own limits is refused the same way) goes on
 // with the halted move to its old target. The client halts it at once; it read that as another
 // master's move after ack_timeout_s and sent no halt, and the table ran on to 300 degrees (a review).
 TEST_P(Cia402Client, AHaltedMoveTheDriveContinuesInsteadOfTheSetPointIsHalted) {
   Rig r(GetParam());
-  struct NoSetPointWithTheRelease : m::RegisterDevice {
-    Rig& r;
+  struct NoSetPointWithTheRelease : Between {
     bool on = false;
-    explicit NoSetPointWithTheRelease(Rig& rig) : r(rig) {}
-    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override { return r.drive.read_registers(a, n, out); }
-    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
-      return r.drive.read_input_registers(a, n, out);
-    }
-    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
-      const auto& cw = r.map.spec(Obj::kControlword);
-      const uint16_t w = a == cw.address ? static_cast<uint16_t>(r.map.decode(Obj::kControlword, v)) : 0;
-      if (on && a == cw.address && (w & c4::cw::kNewSetPoint) && (w & c4::cw::kChangeImmediately)) {
-        const auto stripped = r.map.encode(Obj::kControlword, w & ~(c4::cw::kNewSetPoint | c4::cw::kChangeImmediately));
-        return r.drive.write_registers(a, stripped.data(), n);
-      }
+    using Between::Between;
+    uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+      const uint16_t w = controlword_in(a, v);
+      if (on && (w & c4::cw::kNewSetPoint) && (w & c4::cw::kChangeImmediately))
+        return write_controlword(a, w & ~(c4::cw::kNewSetPoint | c4::cw::kChangeImmediately), n);
       return r.drive.write_registers(a, v, n);
     }
-    bool answering() const override { return r.drive.answering(); }
   } dev(r);
-  auto t = r.client_via(dev);
-  cancel_a_move_mid_way(r, *t);  // the rig's own halt, 0.3 s into a move to 300 degrees
-  const double at = r.axis->actual_angle_deg();
-  ASSERT_GT(at, 20.0);
-  dev.on = true;
-  std::string e;
-  const double highest = highest_during(r, [&] { e = error_of([&] { t->move_to(5.0, {}); }); });
+  const auto [e, at, highest] = move_after_a_halted_move(r, dev);
   EXPECT_TRUE(has(e, "move to 5.0000°: the table moves but the set-point is not acknowledged (statusword bit 12 "
                      "clear): the drive continuing a halted move to its old target, or another master's move?") &&
               has(e, "; halt delivered to the drive"))
@@ -965,41 +991,20 @@ TEST_P(Cia402Client, AHaltedMoveTheDriveContinuesInsteadOfTheSetPointIsHalted) {
 // 1 degree further from the target than it started; only the move timeout ended it (a review).
 TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
   Rig r(GetParam());
-  struct BufferedSetPoint : m::RegisterDevice {
-    Rig& r;
+  struct BufferedSetPoint : Between {
     bool on = false, forcing = false;
-    explicit BufferedSetPoint(Rig& rig) : r(rig) {}
-    uint8_t force(uint16_t a, uint16_t n, uint16_t* out) {
-      const auto& sw = r.map.spec(Obj::kStatusword);
-      if (forcing && r.drive.setpoint_pending() && a <= sw.address && sw.address < a + n)
-        out[sw.address - a] = static_cast<uint16_t>(out[sw.address - a] | c4::sw::kSetPointAck);
-      return 0;
+    using Between::Between;
+    void statusword(uint16_t& w) override {
+      if (forcing && r.drive.setpoint_pending()) w = static_cast<uint16_t>(w | c4::sw::kSetPointAck);
     }
-    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
-      const uint8_t rc = r.drive.read_registers(a, n, out);
-      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? 0 : force(a, n, out));
-    }
-    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
-      const uint8_t rc = r.drive.read_input_registers(a, n, out);
-      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? force(a, n, out) : 0);
-    }
-    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override {
-      const auto& cw = r.map.spec(Obj::kControlword);
-      if (!on || a != cw.address) return r.drive.write_registers(a, v, n);
-      const auto w = static_cast<uint16_t>(r.map.decode(Obj::kControlword, v));
+    uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+      if (!on || a != r.map.spec(Obj::kControlword).address) return r.drive.write_registers(a, v, n);
+      const uint16_t w = controlword_in(a, v);
       forcing = (w & c4::cw::kNewSetPoint) != 0;  // acknowledged while the master holds bit 4
-      const auto kept = r.map.encode(Obj::kControlword, w & ~c4::cw::kChangeImmediately);
-      return r.drive.write_registers(a, kept.data(), n);
+      return write_controlword(a, w & ~c4::cw::kChangeImmediately, n);
     }
-    bool answering() const override { return r.drive.answering(); }
   } dev(r);
-  auto t = r.client_via(dev);
-  cancel_a_move_mid_way(r, *t);  // the rig's own halt, 0.3 s into a move to 300 degrees
-  const double at = r.axis->actual_angle_deg();
-  ASSERT_GT(at, 20.0);
-  dev.on = true;
-  std::string e;
-  const double highest = highest_during(r, [&] { e = error_of([&] { t->move_to(5.0, {}); }); });
+  const auto [e, at, highest] = move_after_a_halted_move(r, dev);
   EXPECT_TRUE(has(e, "move to 5.0000°: the table moves away from the target (") &&
               has(e, "the drive running to another target first (a halted move it continues?)") &&
               has(e, "; halt delivered to the drive"))
@@ -1011,29 +1016,14 @@ TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
 // poll_s 0.05) completes its move: motion without the acknowledge must hold 0.1 s to be halted.
 TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {
   Rig r(GetParam());
-  struct LateAck : m::RegisterDevice {
-    Rig& r;
+  struct LateAck : Between {
     double ack_seen = -1;
-    explicit LateAck(Rig& rig) : r(rig) {}
-    uint8_t hide(uint16_t a, uint16_t n, uint16_t* out) {
-      const auto& sw = r.map.spec(Obj::kStatusword);
-      if (a > sw.address || a + n <= sw.address) return 0;
-      uint16_t& w = out[sw.address - a];  // (a 16-bit object: one register)
+    using Between::Between;
+    void statusword(uint16_t& w) override {
       if (!(w & c4::sw::kSetPointAck)) ack_seen = -1;
       else if (ack_seen < 0) ack_seen = r.axis->time_s();
       if (ack_seen >= 0 && r.axis->time_s() - ack_seen < 0.06) w = static_cast<uint16_t>(w & ~c4::sw::kSetPointAck);
-      return 0;
     }
-    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
-      const uint8_t rc = r.drive.read_registers(a, n, out);
-      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? 0 : hide(a, n, out));
-    }
-    uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
-      const uint8_t rc = r.drive.read_input_registers(a, n, out);
-      return rc ? rc : (r.map.spec(Obj::kStatusword).input ? hide(a, n, out) : 0);
-    }
-    uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override { return r.drive.write_registers(a, v, n); }
-    bool answering() const override { return r.drive.answering(); }
   } dev(r);
   auto t = r.client_via(dev);
   t->home({});
