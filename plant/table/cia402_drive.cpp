@@ -62,7 +62,10 @@ void Cia402Drive::step(double dt_s) {
   check_axis_fault();
   if (state_ == State::kFaultReactionActive && t_ >= fault_reaction_until_) enter(State::kFault);  // transition 14
   if (setpoint_pending_ && t_ >= setpoint_at_) start_setpoint();
-  if (resume_pending_ && !setpoint_pending_ && !axis_.snapshot().moving) resume();
+  // A halted positioning continues once its halt ramp has ended, unless a set-point to be
+  // changed immediately is about to be taken (or refused) in its place.
+  if (resume_pending_ && !axis_.snapshot().moving && !(setpoint_pending_ && (controlword_ & c4::cw::kChangeImmediately)))
+    resume();
   if (homing_active_) {
     const auto s = axis_.snapshot();
     if (!s.homing && !s.moving) {
@@ -220,12 +223,7 @@ void Cia402Drive::start_setpoint() {
   const auto s = axis_.snapshot();
   // Single set-point: a positioning under way, or one a released halt is to continue, is
   // completed first unless the set-point is to be changed immediately.
-  const bool immediately = controlword_ & c4::cw::kChangeImmediately;
-  if (resume_pending_ && !immediately) {
-    if (!s.moving) resume();
-    return;
-  }
-  if (s.moving && !immediately) return;
+  if ((s.moving || resume_pending_) && !(controlword_ & c4::cw::kChangeImmediately)) return;
   setpoint_pending_ = false;
   double user = map_.counts_to_deg(target_);
   if (controlword_ & c4::cw::kRelative) user += inner_to_user_deg(target_inner_deg_);  // relative to the last target

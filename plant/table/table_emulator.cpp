@@ -122,6 +122,11 @@ std::unique_ptr<TableEmulator> make_table_emulator(const toml::table* cfg, uint6
   return std::make_unique<TableEmulator>(table_params_from_toml(cfg), seed);
 }
 
+// Inside IN_POS_WINDOW of the commanded stop point (settling, and IN_POSITION with it).
+inline bool TableEmulator::in_window() const {
+  return std::fabs(settle_target_ - pos_) <= window_counts_ / m::kPosScale;
+}
+
 void TableEmulator::step(double dt_s) {
   std::lock_guard lk(mu_);
   while (dt_s > 1e-12) {
@@ -186,7 +191,7 @@ void TableEmulator::step(double dt_s) {
     raise(alarm::kFollowing);
     return;
   }
-  if (!traj_.active && std::fabs(settle_target_ - pos_) <= window_counts_ / m::kPosScale) {
+  if (!traj_.active && in_window()) {
     in_pos_timer_ += h;
     if (in_pos_timer_ >= settle_ms_ / 1000.0) settling_ = false;
   } else {
@@ -288,8 +293,7 @@ bool TableEmulator::in_position() const {
   // Inside the window for SETTLE_TIME (table-registers.md); with SETTLE_TIME 0 the timer is 0
   // outside the window too, so the window is asked now (a review: a ringing servo read "in
   // position" 1.26 degrees off its target).
-  return servo_ && alarm_ == alarm::kNone && !traj_.active && in_pos_timer_ >= settle_ms_ / 1000.0 &&
-         std::fabs(settle_target_ - pos_) <= window_counts_ / m::kPosScale;
+  return servo_ && alarm_ == alarm::kNone && !traj_.active && in_pos_timer_ >= settle_ms_ / 1000.0 && in_window();
 }
 bool TableEmulator::moving() const { return servo_ && (traj_.active || settling_); }
 

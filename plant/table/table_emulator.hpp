@@ -103,6 +103,7 @@ class TableEmulator final : public rig::modbus::RegisterDevice {
   uint8_t apply_control(uint16_t word);
   uint16_t status_word() const;
   bool in_position() const;
+  bool in_window() const;
   bool moving() const;
   void image(uint16_t* drive, uint16_t* sim) const;
 

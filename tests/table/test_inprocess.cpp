@@ -35,6 +35,22 @@ std::string hardware_error(F f) {
   return "(no HardwareError)";
 }
 
+// A party between the client and the emulated rig-v1 drive (a drive that behaves otherwise,
+// another master acting at a given moment): forwards every request; a test overrides `write`
+// (the words that reach the drive) and `status` (STATUS as the client reads it).
+struct Between : m::RegisterDevice {
+  plant::TableEmulator& emu;
+  explicit Between(plant::TableEmulator& e) : emu(e) {}
+  virtual void status(uint16_t&) {}
+  uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override { return emu.write_registers(addr, v, n); }
+  uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override {
+    const uint8_t rc = emu.read_registers(addr, n, out);
+    if (rc == 0 && addr <= m::reg::kStatus && m::reg::kStatus < addr + n) status(out[m::reg::kStatus - addr]);
+    return rc;
+  }
+  bool answering() const override { return emu.answering(); }
+};
+
 TEST(TableInProcess, HomeThenMove180TakesSimulatedSecondsNotWallTime) {
   SimRig r;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -294,23 +310,17 @@ TEST(TableInProcess, AMoveStoppedShortAndReleasedIsNamedSoon) {
 // fail them either: the table still moves, so it is not at a stop point.
 TEST(TableInProcess, ARingingServoIsNotAMoveStoppedShort) {
   // IN_POSITION held from the first reading that shows it until the next START or HOME.
-  struct LatchedInPosition : m::RegisterDevice {
-    plant::TableEmulator& emu;
+  struct LatchedInPosition : Between {
     bool latched = false;
-    explicit LatchedInPosition(plant::TableEmulator& e) : emu(e) {}
-    uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override {
-      const uint8_t rc = emu.read_registers(addr, n, out);
-      if (rc != 0 || addr > m::reg::kStatus || addr + n <= m::reg::kStatus) return rc;
-      uint16_t& st = out[m::reg::kStatus - addr];
+    using Between::Between;
+    void status(uint16_t& st) override {
       latched = latched || (st & m::sts::kInPosition);
       if (latched) st = static_cast<uint16_t>(st | m::sts::kInPosition);
-      return rc;
     }
     uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
       if (addr == m::reg::kControl && (v[0] & (m::ctl::kStart | m::ctl::kHome))) latched = false;
       return emu.write_registers(addr, v, n);
     }
-    bool answering() const override { return emu.answering(); }
   };
   const char* ringing =
       "start_angle_deg = 0.0\nhomed_at_start = true\nservo_bandwidth_hz = 0.3\ndamping = 0.3\n"
@@ -379,24 +389,15 @@ TEST(TableInProcess, AnotherMastersStopEndsHomingAtOnceNamingIt) {
 // change in one scan) completes its home: the "ended without reaching the home switch" check
 // waits kEndedShortHoldS (a review: 80 ms between them failed a good run).
 TEST(TableInProcess, HomedSetLateAfterTheRunIsNotTakenForAnInterruptedHome) {
-  struct LateHomed : m::RegisterDevice {
-    plant::TableEmulator& emu;
+  struct LateHomed : Between {
     double lag_s, ended_at = -1;
-    LateHomed(plant::TableEmulator& e, double lag) : emu(e), lag_s(lag) {}
-    uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override {
-      const uint8_t rc = emu.read_registers(addr, n, out);
-      if (rc != 0 || addr > m::reg::kStatus || addr + n <= m::reg::kStatus) return rc;
-      uint16_t& st = out[m::reg::kStatus - addr];
+    LateHomed(plant::TableEmulator& e, double lag) : Between(e), lag_s(lag) {}
+    void status(uint16_t& st) override {
       const bool done = (st & m::sts::kHomed) && !(st & (m::sts::kHoming | m::sts::kMoving));
       if (!done) ended_at = -1;
       if (done && ended_at < 0) ended_at = emu.time_s();
       if (done && emu.time_s() - ended_at < lag_s) st = static_cast<uint16_t>(st & ~m::sts::kHomed);
-      return rc;
     }
-    uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
-      return emu.write_registers(addr, v, n);
-    }
-    bool answering() const override { return emu.answering(); }
   };
   for (const double lag : {0.08, 0.6}) {
     SCOPED_TRACE(lag);
@@ -413,11 +414,9 @@ TEST(TableInProcess, HomedSetLateAfterTheRunIsNotTakenForAnInterruptedHome) {
 // client's first poll: the run is never seen under way. Named after kEndedShortHoldS and halted;
 // it waited out home_timeout_s (180 s) before (session 27's note).
 TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
-  struct StoppedAtOnce : m::RegisterDevice {
-    plant::TableEmulator& emu;
+  struct StoppedAtOnce : Between {
     bool done = false;
-    explicit StoppedAtOnce(plant::TableEmulator& e) : emu(e) {}
-    uint8_t read_registers(uint16_t addr, uint16_t n, uint16_t* out) override { return emu.read_registers(addr, n, out); }
+    using Between::Between;
     uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
       const uint8_t rc = emu.write_registers(addr, v, n);
       if (rc == 0 && !done && addr == m::reg::kControl && (v[0] & m::ctl::kHome)) {
@@ -429,7 +428,6 @@ TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
       }
       return rc;
     }
-    bool answering() const override { return emu.answering(); }
   };
   auto emu = emulator("start_angle_deg = 200.0\n");
   SimClock clock([&](double dt) { emu->step(dt); });
