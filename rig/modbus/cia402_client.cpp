@@ -62,11 +62,14 @@ void Cia402Table::write_object(Obj o, int64_t value, const CancelToken& cancel, 
   }
 }
 
+// Within a move or homing run, never over a stop sent meanwhile (StopLatch).
 void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
-  write_object(Obj::kControlword, w, cancel);
-  control_ = w;
-  control_known_ = true;
-  control_written_ = true;
+  stops_.write_command(w, cancel, [&] {
+    write_object(Obj::kControlword, w, cancel);
+    control_ = w;
+    control_known_ = true;
+    control_written_ = true;
+  });
 }
 
 // Reads the objects of one poll, contiguous registers of one function in one request.
@@ -305,6 +308,7 @@ void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken
 
 template <class Body>
 void Cia402Table::guarded(const std::string& doing, Body body) {
+  const detail::StopLatch::Scope running(stops_, doing);
   detail::guarded_call(
       doing, body, [] { return std::string(); }, [this] { stop(); }, [this] { return last_stop_error(); });
 }
@@ -596,7 +600,8 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
       name,
       [&] {
         // Before the write: a move polling meanwhile reads the halt back as this client's own,
-        // not another master's.
+        // not another master's, and writes no command word over it.
+        stops_.sent();
         control_ = word;
         write_object(Obj::kControlword, word, CancelToken{}, true);
         control_written_ = true;

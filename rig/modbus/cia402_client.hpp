@@ -17,6 +17,7 @@
 #include "rig/core/table.hpp"
 #include "rig/modbus/cia402.hpp"
 #include "rig/modbus/drive_map.hpp"
+#include "rig/modbus/stop_latch.hpp"
 #include "rig/modbus/table_client.hpp"
 #include "rig/modbus/transport.hpp"
 
@@ -99,6 +100,7 @@ class Cia402Table final : public RotaryTable {
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
   bool stop_needless_ = false;
+  detail::StopLatch stops_;  // a stop sent while a move or homing runs: none of its words over it
 };
 
 }  // namespace rig::modbus

@@ -134,9 +134,12 @@ TableStatus TableClient::status() {
   }
 }
 
+// Within a move or homing run, never over a stop sent meanwhile (StopLatch).
 void TableClient::write_control(uint16_t word, const CancelToken& cancel) {
-  transport_->write(reg::kControl, {word}, cancel);
-  control_ = word;
+  stops_.write_command(word, cancel, [&] {
+    transport_->write(reg::kControl, {word}, cancel);
+    control_ = word;
+  });
 }
 
 std::string TableClient::at(const DriveState& d) const { return " at " + deg_str(d.actual_deg); }
@@ -242,17 +245,18 @@ DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, con
 
 template <class Body>
 void TableClient::guarded(const std::string& doing, Body body) {
+  const detail::StopLatch::Scope running(stops_, doing);
   detail::guarded_call(
       doing, body,
       [this] { return have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : std::string(); },
       [this] { stop(); }, [this] { return last_stop_error(); });
 }
 
-// A stop read back in CONTROL: this client's own (stop_sent_: the read overwrote control_), or
+// A stop read back in CONTROL: this client's own (stops_: the read overwrote control_), or
 // another master's, over whose command no halt of ours is sent (TakenOverError).
 void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& d) const {
   if (!(d.control & (ctl::kHalt | ctl::kQuickStop))) return;
-  if (stop_sent_) throw HardwareError(doing + ": halted by a stop request" + at(d));
+  if (stops_.since_begin()) throw HardwareError(doing + ": halted by a stop request" + at(d));
   throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
                                " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
 }
@@ -260,7 +264,6 @@ void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& 
 void TableClient::home(const CancelToken& cancel) {
   const std::string doing = "home";
   guarded(doing, [&] {
-    stop_sent_ = false;
     prepare_motion(doing, cancel);
     const uint16_t seq0 = read_drive(cancel).move_seq;
     write_control(ctl::kServoOn | ctl::kHome, cancel);
@@ -325,7 +328,6 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   if (deg < d0.limit_neg_deg || deg > d0.limit_pos_deg)
     throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d0.limit_neg_deg) + ", " +
                       deg_str(d0.limit_pos_deg) + "]");
-  stop_sent_ = false;
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);
@@ -371,7 +373,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
           throw HardwareError(doing + ": the drive reports not homed" + (d.has(sts::kServoOn) ? "" : " and servo off") +
                               " mid-move (the drive restarted or was power-cycled?)" + at(d));
         // Another master's set-point or stop: the call ends at once, with no halt of ours over
-        // its motion (guarded_call); a stop reads back in CONTROL (ours: stop_sent_, as the read
+        // its motion (guarded_call); a stop reads back in CONTROL (ours: stops_, as the read
         // overwrote control_). Another master's stop waited out the move timeout (a review).
         if (std::lround(d.target_deg * kPosScale) != counts)
           throw detail::TakenOverError(doing + ": target register changed to " + deg_str(d.target_deg) +
@@ -438,7 +440,7 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
   detail::deliver_stop(
       name,
       [&] {
-        stop_sent_ = true;  // before the write: a move polling meanwhile reads it back as ours
+        stops_.sent();  // before the write: a move polling meanwhile reads it back as ours
         const uint16_t now = control_.load();
         const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
         if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge

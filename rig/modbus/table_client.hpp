@@ -17,6 +17,7 @@
 #include "rig/core/clock.hpp"
 #include "rig/core/table.hpp"
 #include "rig/modbus/drive_map.hpp"
+#include "rig/modbus/stop_latch.hpp"
 #include "rig/modbus/transport.hpp"
 
 namespace rig::modbus {
@@ -94,7 +95,7 @@ class TableClient final : public RotaryTable {
   // Last control word read or written; stop() may run on another thread
   // (the executive's abort path) while a move polls.
   std::atomic<uint16_t> control_{0};
-  std::atomic<bool> stop_sent_{false};  // this client sent a stop since the move or homing began
+  detail::StopLatch stops_;  // the stops this client sent since the move or homing began
   std::atomic<bool> identified_{false};  // a status block read with MAP_VERSION 1
   bool profile_applied_ = false;
   double last_actual_deg_ = 0;     // for messages when the link is lost

@@ -1012,6 +1012,44 @@ TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
   EXPECT_LT(highest, at + 10.0) << "ran on towards the halted move's target (300 degrees)";
 }
 
+// The executive's stop (another thread) that comes while a move writes its command words: the
+// set-point word written after it (0x003F, halt clear) released the halt, the drive took the
+// set-point and the move ran on to its target, the stop lost (session 28's note). Now no command
+// word goes out once a stop has, and one that went out as the stop did is followed by the stop
+// again. Both orders: the stop as the target position is written (before the set-point word),
+// and the stop reaching the drive just before the set-point word.
+TEST_P(Cia402Client, AStopThatComesAsTheSetPointIsWrittenIsNeverWrittenOver) {
+  for (const bool on_target : {true, false}) {
+    SCOPED_TRACE(on_target ? "stop as the target is written" : "stop as the set-point word is written");
+    Rig r(GetParam());
+    struct StopRaces : Between {
+      m::Cia402Table* client = nullptr;
+      bool on_target = false, done = false;
+      using Between::Between;
+      uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+        const bool target = a == r.map.spec(Obj::kTargetPosition).address;
+        const bool setpoint = (controlword_in(a, v) & c4::cw::kNewSetPoint) != 0;
+        if (!client || done || !(on_target ? target : setpoint)) return r.drive.write_registers(a, v, n);
+        done = true;
+        if (!on_target) client->stop();  // reaches the drive just before the set-point word
+        const uint8_t rc = r.drive.write_registers(a, v, n);
+        if (on_target) client->stop();
+        return rc;
+      }
+    } dev(r);
+    dev.on_target = on_target;
+    auto t = r.client_via(dev);
+    t->home({});
+    const double at = r.axis->actual_angle_deg();
+    dev.client = t.get();
+    const std::string e = error_of([&] { t->move_to(300.0, {}); });
+    r.run(2.0);
+    EXPECT_TRUE(dev.done);
+    EXPECT_TRUE(has(e, "move to 300.0000°: halted by a stop request") && has(e, "; halt delivered to the drive")) << e;
+    EXPECT_NEAR(r.axis->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
+  }
+}
+
 // A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at
 // poll_s 0.05) completes its move: motion without the acknowledge must hold 0.1 s to be halted.
 TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {

@@ -444,6 +444,49 @@ TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
   EXPECT_LT(clock.now_s() - t0, 5.0) << "not after the home timeout";
 }
 
+// The executive's stop (another thread) that comes while a move writes its command words: the
+// START word written after it cleared its HALT (CONTROL is one register), and the move ran on to
+// its target with nothing halting it, the stop lost. Now no command word goes out once a stop
+// has, and one that went out as the stop did is followed by the stop again.
+TEST(TableInProcess, AStopThatComesAsTheMoveIsStartedIsNeverWrittenOver) {
+  struct StopRaces : Between {
+    RotaryTable* client = nullptr;
+    bool on_target = false;  // the stop as the target is written (before START), else as START is
+    bool done = false;
+    using Between::Between;
+    uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
+      const bool start = addr == m::reg::kControl && (v[0] & m::ctl::kStart);
+      if (client && !done && (on_target ? addr == m::reg::kTargetPos : start)) {
+        done = true;
+        if (on_target) {
+          const uint8_t rc = emu.write_registers(addr, v, n);
+          client->stop();
+          return rc;
+        }
+        client->stop();  // reaches the drive just before the START word
+      }
+      return emu.write_registers(addr, v, n);
+    }
+  };
+  for (const bool on_target : {true, false}) {
+    SCOPED_TRACE(on_target ? "stop as the target is written" : "stop as START is written");
+    auto emu = emulator("start_angle_deg = 0.0\n");
+    SimClock clock([&](double dt) { emu->step(dt); });
+    StopRaces dev(*emu);
+    dev.on_target = on_target;
+    auto table = m::make_inprocess_table(dev, clock);
+    table->home({});
+    const double at = emu->actual_angle_deg();
+    dev.client = table.get();
+    const std::string err = hardware_error([&] { table->move_to(180.0, {}); });
+    clock.sleep_for(3.0, {});
+    EXPECT_TRUE(dev.done);
+    EXPECT_NE(err.find("move to 180.0000°: halted by a stop request"), std::string::npos) << err;
+    EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
+    EXPECT_NEAR(emu->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
+  }
+}
+
 TEST(TableInProcess, EstopDuringMove) {
   SimRig r("start_angle_deg = 0.0\n");
   r.table->home({});

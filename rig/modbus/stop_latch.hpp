@@ -1,0 +1,61 @@
+// A table client's record of the stops it sent while one of its operations runs (both clients,
+// rig-v1 map and CiA 402, keep one).
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "rig/core/cancel.hpp"
+#include "rig/core/errors.hpp"
+
+namespace rig::modbus::detail {
+
+// The stops (halt, quick stop) a client sent while one of its operations (a move, a homing run)
+// runs: stop() comes from another thread (the executive's safe state, a technician's Ctrl-C),
+// and a command word the operation writes after it would write over it (a whole controlword:
+// halt cleared, the move started). So the operation writes no command word once a stop has gone
+// out, and one written as a stop went out ends it too: the stop may have reached the drive just
+// before that word, which then cleared it, so the operation's fault path sends it again
+// (guarded_call). Only the operation's thread calls begin/end/since_begin; sent() is atomic.
+class StopLatch {
+ public:
+  void sent() noexcept { sent_.fetch_add(1); }  // by the stop, before its write
+  void begin(const std::string& doing) { doing_ = doing, at_begin_ = sent_.load(), active_ = true; }
+  void end() noexcept { active_ = false; }
+  bool since_begin() const noexcept { return active_ && sent_.load() != at_begin_; }
+  // Writes one command word of the running operation (`write` sends it), never over a stop. An
+  // abort (`cancel`, which the executive requests before its stop) is said as one, as it was.
+  template <class Write>
+  void write_command(uint16_t word, const CancelToken& cancel, Write write) const {
+    cancel.throw_if_requested();
+    if (since_begin())
+      throw HardwareError(doing_ + ": halted by a stop request (before command word " + word_hex(word) + " was written)");
+    write();
+    cancel.throw_if_requested();
+    if (since_begin())
+      throw HardwareError(doing_ + ": halted by a stop request that came as command word " + word_hex(word) +
+                          " was written (which may have cleared it: the stop is sent again)");
+  }
+  // While it lives, the operation `doing` runs.
+  struct Scope {
+    StopLatch& l;
+    Scope(StopLatch& latch, const std::string& doing) : l(latch) { l.begin(doing); }
+    ~Scope() { l.end(); }
+    Scope(const Scope&) = delete;
+    Scope& operator=(const Scope&) = delete;
+  };
+
+ private:
+  static std::string word_hex(uint16_t w) {
+    char b[16];
+    std::snprintf(b, sizeof b, "0x%04X", w);
+    return b;
+  }
+  std::atomic<uint32_t> sent_{0};
+  uint32_t at_begin_ = 0;
+  bool active_ = false;
+  std::string doing_;
+};
+
+}  // namespace rig::modbus::detail
