@@ -342,7 +342,7 @@ void Cia402Table::home(const CancelToken& cancel) {
       if (done) break;
       // Bits 13, 12, 10 = 0, 0, 1: "homing procedure is interrupted or not started" (CiA 402 /
       // IEC 61800-7-201, homing mode statusword); after the run was seen, interrupted: by a halt
-      // released again, which leaves nothing to read back. Held kEndedShortHoldS first: a drive
+      // released again, which leaves nothing to read back. Held ended_short_s first: a drive
       // may set bit 10 some cycles before bit 12 at the end of a good run, or dwell at a switch
       // (a review: 15 ms between them failed a good run when taken on two polls). Meanwhile the
       // table is at rest, not frozen. The halt follows as for any fault: a vendor's homing that
@@ -350,7 +350,7 @@ void Cia402Table::home(const CancelToken& cancel) {
       const double now = clock_.now_s();
       seen_running = seen_running || !r.has(c4::sw::kTargetReached);
       const double interrupted_s = interrupted(seen_running && r.has(c4::sw::kTargetReached), now);
-      if (interrupted_s >= detail::kEndedShortHoldS)
+      if (interrupted_s >= opt_.ended_short_s)
         throw HardwareError(doing + ": homing interrupted before the home was attained (statusword bit 10 set, bit 12 "
                                     "clear for " + secs(interrupted_s) + "; stopped by another Modbus master?)" + at(r));
       if (interrupted_s >= 0) changed_at = now;  // at rest by the drive's own account
@@ -431,9 +431,6 @@ void Cia402Table::fail_unless_mode(const std::string& doing, const Cia402Reading
   }
 }
 
-// How long the table may move without acknowledging the set-point that released its halt.
-constexpr double kUnackedMotionS = 0.1;
-
 void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
@@ -499,11 +496,12 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // The table was at rest, and this word released halt: motion without the acknowledge is
       // the drive continuing a move a halt interrupted, to its old target (the set-point refused:
       // outside the drive's own limits, "change set immediately" not supported), or another
-      // master's move started as ours was written. Halted either way once it has held 0.1 s (a
+      // master's move started as ours was written. Halted either way once it has held
+      // unacked_motion_s (0.1 s unless the hardware file says otherwise; a
       // poll may read the statusword just before the drive took the set-point, and a drive may set
       // bit 12 some cycles after its motion starts). Taken before for another master's move after
       // ack_timeout_s, with no halt, it let the table run on to the old target unwatched (a review).
-      if (unacked_motion(std::fabs(r.velocity_dps) > 0.01, clock_.now_s()) >= kUnackedMotionS)
+      if (unacked_motion(std::fabs(r.velocity_dps) > 0.01, clock_.now_s()) >= opt_.unacked_motion_s)
         throw HardwareError(doing + ": the table moves but the set-point is not acknowledged (statusword bit 12 clear): "
                                     "the drive continuing a halted move to its old target, or another master's move?" +
                             at(r));

@@ -109,12 +109,6 @@ class HeldFor {
   double since_ = -1;
 };
 
-// How long a run must read as ended short of its goal before it is taken for one: a homing run
-// at rest, not homed, no longer homing; a rig-v1 move in position at a stop point off its target.
-// A drive may set its end-of-run bits some cycles apart (a review: 15 ms between CiA 402's bits
-// 10 and 12, read at poll_s = 0.005, failed a good run).
-inline constexpr double kEndedShortHoldS = 1.0;
-
 // The device answering is not the drive the configuration names (its statusword is no state of
 // the standard, its device type another profile): refused before anything is written, and no halt
 // follows, since a halt written to another device's register map is a guess (a review: a CiA 402

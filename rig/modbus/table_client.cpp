@@ -292,7 +292,7 @@ void TableClient::home(const CancelToken& cancel) {
         // Another master's stop ends the homing run as it ends a move; it waited out
         // home_timeout_s before (a review). A run stopped and released again leaves no HALT to
         // read back, only a drive at rest that is neither homed nor homing: taken for one once
-        // the state has held kEndedShortHoldS after the acknowledge (a drive may set HOMED a few
+        // the state has held ended_short_s after the acknowledge (a drive may set HOMED a few
         // cycles after it clears HOMING, or HOMING a few after MOVE_SEQ; a review). Also when the
         // run was never seen under way (stopped and released before the first poll): it waited
         // out home_timeout_s before. The halt follows as for any fault: a drive that only paused
@@ -301,7 +301,7 @@ void TableClient::home(const CancelToken& cancel) {
         const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
         seen_running = seen_running || running;
         const double ended_s = ended(!running && !d.has(sts::kHomed), now);
-        if (ended_s >= detail::kEndedShortHoldS)
+        if (ended_s >= opt_.ended_short_s)
           throw HardwareError(doing + ": homing ended without reaching the home switch (HOMED not set for " +
                               secs(ended_s) +
                               (seen_running ? " after the run stopped"
@@ -386,7 +386,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
         // the target, beyond the client's tolerance and the drive's window, after the move was
         // seen under way, the move was stopped short. A HALT or QUICK_STOP set and released again
         // between two polls leaves nothing else to read (the move timeout, 31.6 s in a review,
-        // found it before). Held kEndedShortHoldS with the table staying within the band where
+        // found it before). Held ended_short_s with the table staying within the band where
         // the reading began, at least ten bands off the target: a servo still ringing or creeping
         // towards it moves on by more (a review: with SETTLE_TIME 0 a 0.3 Hz servo read in
         // position 1.26 degrees off its target for over 1 s, and a drive may keep IN_POSITION
@@ -400,7 +400,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
           short_at = short_stop ? d.actual_deg : NAN;
         }
         const double short_s = stopped_short(short_stop, now);
-        if (short_s >= detail::kEndedShortHoldS)
+        if (short_s >= opt_.ended_short_s)
           throw HardwareError(doing + ": stopped " + deg_str(off) + " off target, in position at that stop point for " +
                               secs(short_s) + " (halted and released by another Modbus master?)" + at(d));
       }
@@ -496,6 +496,8 @@ TableOptions table_options_from_toml(const toml::table& t) {
   o.home_timeout_s = cfg::get_number(t, "home_timeout_s", o.home_timeout_s, 0.1, 3600.0);
   o.ack_timeout_s = cfg::get_number(t, "ack_timeout_s", o.ack_timeout_s, 0.01, 60.0);
   o.heartbeat_timeout_s = cfg::get_number(t, "heartbeat_timeout_s", o.heartbeat_timeout_s, 0.05, 600.0);
+  o.ended_short_s = cfg::get_number(t, "ended_short_s", o.ended_short_s, 0.05, 600.0);
+  o.unacked_motion_s = cfg::get_number(t, "unacked_motion_s", o.unacked_motion_s, 0.01, 60.0);
   if (t.contains("velocity_dps")) o.velocity_dps = cfg::get_number(t, "velocity_dps", {}, 0.001, 4000.0);
   if (t.contains("accel_dps2")) o.accel_dps2 = cfg::get_number(t, "accel_dps2", {}, 0.001, 4000.0);
   if (t.contains("in_position_window_deg"))
@@ -525,6 +527,9 @@ std::string table_drive(const toml::table& t) {
     throw ConfigError(cfg::where(t) + ": [table] drive = \"cia402\" needs drive_map = \"FILE\" (see drives/)");
   if (drive == "rig-v1" && t.contains("drive_map"))
     throw ConfigError(cfg::where(*t.get("drive_map")) + ": drive_map is for drive = \"cia402\"");
+  if (const toml::node* n = t.get("unacked_motion_s"); n && drive == "rig-v1")
+    throw ConfigError(cfg::where(*n) + ": 'unacked_motion_s' is for drive = \"cia402\" (the set-point acknowledge, "
+                      "statusword bit 12); the rig-v1 map has none");
   if (drive == "cia402")
     for (const char* k : {"in_position_window_deg", "drive_settle_s"})
       if (const toml::node* n = t.get(k))
@@ -645,6 +650,7 @@ TableConfig read_table_config(const toml::table& t) {
   cfg::check_keys(t,
                   {"modbus", "rtu", "unit", "response_timeout_s", "retries", "backoff_s", "tolerance_deg", "settle_s",
                    "poll_s", "move_timeout_s", "home_timeout_s", "ack_timeout_s", "heartbeat_timeout_s",
+                   "ended_short_s", "unacked_motion_s",
                    "velocity_dps", "accel_dps2", "in_position_window_deg", "drive_settle_s", "u10_deg", "u20_deg",
                    "drive", "drive_map"},
                   "table");

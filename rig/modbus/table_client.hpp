@@ -30,6 +30,15 @@ struct TableOptions {
   double home_timeout_s = 180.0;
   double ack_timeout_s = 1.0;      // a start/home command must be acknowledged within this
   double heartbeat_timeout_s = 2.0;// drive heartbeat frozen this long = controller hung
+  // A run read as ended short of its goal this long is one: a homing run at rest, not homed, no
+  // longer homing; a rig-v1 move in position at a stop point off its target. A drive may set its
+  // end-of-run bits some cycles apart (a review: 15 ms between CiA 402's bits 10 and 12, read at
+  // poll_s = 0.005, failed a good run); a homing method that dwells at a switch longer needs more.
+  double ended_short_s = 1.0;
+  // CiA 402: the table moving this long without the set-point acknowledge after the word that
+  // released halt is halted (a drive continuing a halted move). A drive may set bit 12 some cycles
+  // after its motion starts; one that sets it later needs more.
+  double unacked_motion_s = 0.1;
   // Written to the drive before the first motion when set (else the drive's own).
   std::optional<double> velocity_dps, accel_dps2, in_position_window_deg, drive_settle_s;
   // Where each of those four was written ("rig.toml:7:1"), for the message if the drive refuses it.

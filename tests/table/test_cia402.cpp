@@ -777,7 +777,7 @@ TEST_P(Cia402Client, AnotherMastersQuickStopDuringHomingGetsNoHaltOverIt) {
 }
 
 // A drive that sets bit 12 (homing attained) a while after bit 10 at the end of a good run, or
-// dwells with bit 10 set, completes its home: "interrupted" waits kEndedShortHoldS (a review:
+// dwells with bit 10 set, completes its home: "interrupted" waits [table] ended_short_s (1 s) (a review:
 // 15 ms between them failed a good run when two polls in a row decided).
 TEST_P(Cia402Client, HomingAttainedSetLateIsNotTakenForAnInterruptedHome) {
   struct LateAttained : m::RegisterDevice {
@@ -823,6 +823,24 @@ TEST_P(Cia402Client, HomingAttainedSetLateIsNotTakenForAnInterruptedHome) {
     m::Cia402Table t(m::make_inprocess_transport(late, r.clock), r.map, r.clock, opt);
     EXPECT_NO_THROW(t.home({}));
     EXPECT_TRUE(t.status().homed);
+  }
+  // A homing method that dwells 1.5 s with bit 10 set fails its home at the default 1 s, and
+  // completes with [table] ended_short_s = 3 (a fixed 1 s left such a drive unusable).
+  for (const double hold : {1.0, 3.0}) {
+    SCOPED_TRACE(hold);
+    Rig r(GetParam(), far_axis());
+    LateAttained late(r.drive, *r.axis, r.map, 1.5);
+    m::TableOptions opt;
+    opt.poll_s = 0.005;
+    opt.settle_s = 0.05;
+    opt.ended_short_s = hold;
+    m::Cia402Table t(m::make_inprocess_transport(late, r.clock), r.map, r.clock, opt);
+    const std::string e = error_of([&] { t.home({}); });
+    if (hold < 1.5)
+      EXPECT_TRUE(has(e, "home: homing interrupted before the home was attained (statusword bit 10 set, bit 12 clear "
+                         "for 1.0 s")) << e;
+    else
+      EXPECT_EQ(e, "(no error)");
   }
 }
 
@@ -1055,12 +1073,12 @@ TEST_P(Cia402Client, AStopThatComesAsTheSetPointIsWrittenIsNeverWrittenOver) {
 TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {
   Rig r(GetParam());
   struct LateAck : Between {
-    double ack_seen = -1;
+    double ack_seen = -1, lag_s = 0.06;
     using Between::Between;
     void statusword(uint16_t& w) override {
       if (!(w & c4::sw::kSetPointAck)) ack_seen = -1;
       else if (ack_seen < 0) ack_seen = r.axis->time_s();
-      if (ack_seen >= 0 && r.axis->time_s() - ack_seen < 0.06) w = static_cast<uint16_t>(w & ~c4::sw::kSetPointAck);
+      if (ack_seen >= 0 && r.axis->time_s() - ack_seen < lag_s) w = static_cast<uint16_t>(w & ~c4::sw::kSetPointAck);
     }
   } dev(r);
   auto t = r.client_via(dev);
@@ -1069,6 +1087,15 @@ TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {
     EXPECT_NO_THROW(t->move_to(deg, {})) << deg;
     EXPECT_NEAR(r.axis->actual_angle_deg(), deg, 0.005);
   }
+  // 0.3 s late: halted at the default 0.1 s; completed with [table] unacked_motion_s = 0.5.
+  dev.lag_s = 0.3;
+  EXPECT_TRUE(has(error_of([&] { t->move_to(200.0, {}); }), "the table moves but the set-point is not acknowledged"));
+  m::TableOptions opt;
+  opt.unacked_motion_s = 0.5;
+  auto patient = r.client_via(dev, opt);
+  r.run(2.0);
+  EXPECT_NO_THROW(patient->move_to(200.0, {}));
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 200.0, 0.005);
 }
 
 // A map with a homed bit: a move before homing is refused before anything is written, so the

@@ -524,6 +524,16 @@ TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
   // [table] u10_deg outside the map's travel (the run takes [procedure]'s, and would fail there).
   EXPECT_EQ(status(head + "u10_deg = 300.0\nu20_deg = 120.0\n"), 2) << out;
   EXPECT_TRUE(has(out, "hw.toml:5:11: 'u10_deg' = 300.0: outside the table's travel [-10°, 200°]")) << out;
+  // The two holds a drive's timing may need raised: in range, and the set-point acknowledge's
+  // only where there is one (CiA 402).
+  EXPECT_EQ(status(head + "ended_short_s = 0\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:17:") && has(out, "ended_short_s")) << out;
+  EXPECT_EQ(status(head + "unacked_motion_s = 61\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:20:") && has(out, "unacked_motion_s")) << out;
+  EXPECT_EQ(status(head + "ended_short_s = 3.0\nunacked_motion_s = 0.5\n"), 4) << out;  // accepted; no drive here
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\nunacked_motion_s = 0.5\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:3:20: 'unacked_motion_s' is for drive = \"cia402\"")) << out;
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\nended_short_s = 3.0\n"), 4) << out;  // both maps
 }
 
 // Link settings no drive answers on, refused with the file (exit 2 at the line), as port 70000

@@ -265,7 +265,7 @@ TEST(TableInProcess, AnotherMastersStopOrTargetEndsTheMoveWithoutAHaltOfOurs) {
 }
 
 // A HALT (or QUICK_STOP) set and released again by another master between two polls, mid-move:
-// the drive reads in position at its stop point, off the target. Named after kEndedShortHoldS and
+// the drive reads in position at its stop point, off the target. Named after [table] ended_short_s (1 s) and
 // halted, as a homing run ended short is; it waited out the move timeout (31.6 s) before (a review).
 // A drive whose in-position window is wider than the client's tolerance is not taken for one.
 TEST(TableInProcess, AMoveStoppedShortAndReleasedIsNamedSoon) {
@@ -387,7 +387,7 @@ TEST(TableInProcess, AnotherMastersStopEndsHomingAtOnceNamingIt) {
 
 // A drive that sets HOMED a while after it clears HOMING and MOVING (the map does not say they
 // change in one scan) completes its home: the "ended without reaching the home switch" check
-// waits kEndedShortHoldS (a review: 80 ms between them failed a good run).
+// waits [table] ended_short_s (1 s) (a review: 80 ms between them failed a good run).
 TEST(TableInProcess, HomedSetLateAfterTheRunIsNotTakenForAnInterruptedHome) {
   struct LateHomed : Between {
     double lag_s, ended_at = -1;
@@ -411,7 +411,7 @@ TEST(TableInProcess, HomedSetLateAfterTheRunIsNotTakenForAnInterruptedHome) {
 }
 
 // Another master's HALT set and released right after the drive took the HOME edge, before the
-// client's first poll: the run is never seen under way. Named after kEndedShortHoldS and halted;
+// client's first poll: the run is never seen under way. Named after [table] ended_short_s (1 s) and halted;
 // it waited out home_timeout_s (180 s) before (session 27's note).
 TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
   struct StoppedAtOnce : Between {
