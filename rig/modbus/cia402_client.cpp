@@ -373,8 +373,8 @@ void Cia402Table::home(const CancelToken& cancel) {
   });
 }
 
-// What ends a profile-position move other than the drive's fault: stop() from another thread (the
-// executive's abort path) set halt, another master's set-point, halt or mode (TakenOverError: no
+// What ends a profile-position move other than the drive's fault: stop() from another thread set
+// halt, another master's set-point, halt or mode (TakenOverError: no
 // halt of ours over its motion, as the rig-v1 client on its target register), the drive left
 // Operation enabled (quick stop, an external disable) or restarted. Another master's set-point or
 // halt went unnoticed: the move waited out its timeout, then halted whatever the table then did (a

@@ -12,12 +12,14 @@
 namespace rig::modbus::detail {
 
 // The stops (halt, quick stop) a client sent while one of its operations (a move, a homing run)
-// runs: stop() comes from another thread (the executive's safe state, a technician's Ctrl-C),
-// and a command word the operation writes after it would write over it (a whole controlword:
-// halt cleared, the move started). So the operation writes no command word once a stop has gone
-// out, and one written as a stop went out ends it too: the stop may have reached the drive just
-// before that word, which then cleared it, so the operation's fault path sends it again
-// (guarded_call). Only the operation's thread calls begin/end/since_begin; sent() is atomic.
+// runs. The clients let stop() be called from another thread while an operation runs (the rig's
+// own abort paths do not: they cancel the operation, whose thread then sends the stop after its
+// last word), and a command word the operation writes after such a stop would write over it (a
+// whole controlword: halt cleared, the move started). So the operation writes no command word
+// once a stop has gone out, and one written as a stop went out ends it too: the stop may have
+// reached the drive just before that word, which then cleared it, so the operation's fault path
+// sends it again (guarded_call). Only the operation's thread calls begin/end/since_begin; sent()
+// is atomic.
 class StopLatch {
  public:
   void sent() noexcept { sent_.fetch_add(1); }  // by the stop, before its write
@@ -25,7 +27,7 @@ class StopLatch {
   void end() noexcept { active_ = false; }
   bool since_begin() const noexcept { return active_ && sent_.load() != at_begin_; }
   // Writes one command word of the running operation (`write` sends it), never over a stop. An
-  // abort (`cancel`, which the executive requests before its stop) is said as one, as it was.
+  // abort (`cancel`) is said as one, as it was.
   template <class Write>
   void write_command(uint16_t word, const CancelToken& cancel, Write write) const {
     cancel.throw_if_requested();

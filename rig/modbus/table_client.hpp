@@ -101,8 +101,7 @@ class TableClient final : public RotaryTable {
   std::unique_ptr<RegisterTransport> transport_;
   Clock& clock_;
   TableOptions opt_;
-  // Last control word read or written; stop() may run on another thread
-  // (the executive's abort path) while a move polls.
+  // Last control word read or written; stop() may run on another thread while a move polls.
   std::atomic<uint16_t> control_{0};
   detail::StopLatch stops_;  // the stops this client sent since the move or homing began
   std::atomic<bool> identified_{false};  // a status block read with MAP_VERSION 1

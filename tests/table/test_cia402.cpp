@@ -1030,7 +1030,8 @@ TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
   EXPECT_LT(highest, at + 10.0) << "ran on towards the halted move's target (300 degrees)";
 }
 
-// The executive's stop (another thread) that comes while a move writes its command words: the
+// A stop() from another thread (the clients allow it; the rig's own abort paths cancel the move
+// instead, whose thread then stops it) that comes while a move writes its command words: the
 // set-point word written after it (0x003F, halt clear) released the halt, the drive took the
 // set-point and the move ran on to its target, the stop lost (session 28's note). Now no command
 // word goes out once a stop has, and one that went out as the stop did is followed by the stop

@@ -444,7 +444,8 @@ TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
   EXPECT_LT(clock.now_s() - t0, 5.0) << "not after the home timeout";
 }
 
-// The executive's stop (another thread) that comes while a move writes its command words: the
+// A stop() from another thread (the clients allow it; the rig's own abort paths cancel the move
+// instead, whose thread then stops it) that comes while a move writes its command words: the
 // START word written after it cleared its HALT (CONTROL is one register), and the move ran on to
 // its target with nothing halting it, the stop lost. Now no command word goes out once a stop
 // has, and one that went out as the stop did is followed by the stop again.
