@@ -536,12 +536,17 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
       // Heading away from the target, past the distance it started from by more than a servo
-      // overshoots: the drive runs to another target first (it took this set-point into its
-      // buffer without "change set immediately" and continues a halted move; a review could not
-      // rule such a drive out, and only the timeout ended it).
+      // overshoots, or past the target by more than that on the far side: the drive runs to
+      // another target first (it took this set-point into its buffer without "change set
+      // immediately" and continues a halted move; a review could not rule such a drive out, and
+      // only the timeout ended it). An old target beyond the new one, in the same direction, was
+      // caught only once the table was as far past the new one as it had started from it.
       const double away = std::fabs(r.actual_deg - deg), from = std::fabs(start_deg - deg);
-      if (away > from + std::max(1.0, 10 * opt_.tolerance_deg))
-        throw HardwareError(doing + ": the table moves away from the target (" + deg_str(away) + " off, it started " +
+      const double overshoot = std::max(1.0, 10 * opt_.tolerance_deg);
+      const bool past = (r.actual_deg - deg) * (start_deg - deg) < 0;  // on the far side of the target
+      if (away > from + overshoot || (past && away > overshoot))
+        throw HardwareError(doing + ": the table " + (past ? "runs past" : "moves away from") + " the target (" +
+                            deg_str(away) + " off" + (past ? " on the far side" : "") + ", it started " +
                             deg_str(from) + " off): the drive running to another target first (a halted move it "
                             "continues?)" + at(r));
       // No heartbeat object in CiA 402: a drive whose statusword and position
@@ -598,8 +603,7 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
       name,
       [&] {
         // Before the write: a move polling meanwhile reads the halt back as this client's own,
-        // not another master's, and writes no command word over it.
-        stops_.sent();
+        // not another master's.
         control_ = word;
         write_object(Obj::kControlword, word, CancelToken{}, true);
         control_written_ = true;
@@ -670,7 +674,11 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
   return false;
 }
 
+// Each stop or quick stop asked for, sent or not (the power stage off: "no halt needed"), ends
+// a move or homing run under way before its next command word (StopLatch): one that is still
+// switching the drive on would otherwise enable it and move (a review).
 void Cia402Table::stop() noexcept {
+  stops_.sent();
   uint16_t bits = 0;
   bool known = false;
   try {
@@ -693,6 +701,7 @@ void Cia402Table::stop() noexcept {
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
 // (a failed read still sends: the link decides then, as before).
 void Cia402Table::quick_stop() noexcept {
+  stops_.sent();
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;

@@ -22,7 +22,7 @@ namespace rig::modbus::detail {
 // is atomic.
 class StopLatch {
  public:
-  void sent() noexcept { sent_.fetch_add(1); }  // by the stop, before its write
+  void sent() noexcept { sent_.fetch_add(1); }  // a stop asked for (before its write, if any)
   void begin(const std::string& doing) { doing_ = doing, at_begin_ = sent_.load(), active_ = true; }
   void end() noexcept { active_ = false; }
   bool since_begin() const noexcept { return active_ && sent_.load() != at_begin_; }

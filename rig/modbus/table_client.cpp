@@ -440,7 +440,6 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
   detail::deliver_stop(
       name,
       [&] {
-        stops_.sent();  // before the write: a move polling meanwhile reads it back as ours
         const uint16_t now = control_.load();
         const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
         if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge
@@ -478,10 +477,14 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
   return true;
 }
 
+// Each stop asked for, sent or not, ends a move or homing run under way before its next command
+// word (StopLatch), and a move polling meanwhile reads it back in CONTROL as this client's own.
 void TableClient::stop() noexcept {
+  stops_.sent();
   if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
 }
 void TableClient::quick_stop() noexcept {
+  stops_.sent();
   if (!refuse_stop_to_unknown("quick stop")) send_stop(ctl::kQuickStop, "quick stop");
 }
 

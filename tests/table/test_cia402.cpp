@@ -1004,30 +1004,63 @@ TEST_P(Cia402Client, AHaltedMoveTheDriveContinuesInsteadOfTheSetPointIsHalted) {
   EXPECT_LT(r.axis->actual_angle_deg(), at + 80.0) << "ran on towards the halted move's target (300 degrees)";
 }
 
+namespace {
+// A drive that takes a set-point into its buffer, acknowledges it, and ignores "change set
+// immediately": after a halt it finishes the halted move first.
+struct BufferedSetPoint : Between {
+  bool on = false, forcing = false;
+  using Between::Between;
+  void statusword(uint16_t& w) override {
+    if (forcing && r.drive.setpoint_pending()) w = static_cast<uint16_t>(w | c4::sw::kSetPointAck);
+  }
+  uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+    if (!on || a != r.map.spec(Obj::kControlword).address) return r.drive.write_registers(a, v, n);
+    const uint16_t w = controlword_in(a, v);
+    forcing = (w & c4::cw::kNewSetPoint) != 0;  // acknowledged while the master holds bit 4
+    return write_controlword(a, w & ~c4::cw::kChangeImmediately, n);
+  }
+};
+}  // namespace
+
 // A drive that acknowledges the set-point into its buffer but ignores "change set immediately":
 // it finishes the halted move first, heading away from the new target. Halted once the table is
 // 1 degree further from the target than it started; only the move timeout ended it (a review).
 TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
   Rig r(GetParam());
-  struct BufferedSetPoint : Between {
-    bool on = false, forcing = false;
-    using Between::Between;
-    void statusword(uint16_t& w) override {
-      if (forcing && r.drive.setpoint_pending()) w = static_cast<uint16_t>(w | c4::sw::kSetPointAck);
-    }
-    uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
-      if (!on || a != r.map.spec(Obj::kControlword).address) return r.drive.write_registers(a, v, n);
-      const uint16_t w = controlword_in(a, v);
-      forcing = (w & c4::cw::kNewSetPoint) != 0;  // acknowledged while the master holds bit 4
-      return write_controlword(a, w & ~c4::cw::kChangeImmediately, n);
-    }
-  } dev(r);
+  BufferedSetPoint dev(r);
   const auto [e, at, highest] = move_after_a_halted_move(r, dev);
   EXPECT_TRUE(has(e, "move to 5.0000°: the table moves away from the target (") &&
               has(e, "the drive running to another target first (a halted move it continues?)") &&
               has(e, "; halt delivered to the drive"))
       << e;
   EXPECT_LT(highest, at + 10.0) << "ran on towards the halted move's target (300 degrees)";
+}
+
+// The same drive, the halted move's target beyond the new one in the same direction: the table
+// passes the new target on its way to the old one. Halted once it is more than a servo's
+// overshoot past it; it was caught only as far past the new target as it had started from it
+// (here about 60 degrees past).
+TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
+  Rig r(GetParam());
+  BufferedSetPoint dev(r);
+  auto t = r.client_via(dev);
+  cancel_a_move_mid_way(r, *t);
+  const double at = r.axis->actual_angle_deg(), target = at + 60.0;
+  ASSERT_LT(target, 280.0);
+  dev.on = true;
+  std::string e;
+  const double highest = highest_during(r, [&] { e = error_of([&] { t->move_to(target, {}); }); });
+  EXPECT_TRUE(has(e, "the table runs past the target (") && has(e, " off on the far side, it started 60.") &&
+              has(e, "the drive running to another target first (a halted move it continues?)") &&
+              has(e, "; halt delivered to the drive"))
+      << e;
+  EXPECT_LT(highest, target + 25.0) << "ran on towards the halted move's target (300 degrees)";
+  // A good move the same way, overshoot and all, is not taken for one.
+  dev.on = false;
+  r.run(2.0);
+  auto fresh = r.client();
+  EXPECT_NO_THROW(fresh->move_to(target, {}));
+  EXPECT_NEAR(r.axis->actual_angle_deg(), target, 0.005);
 }
 
 // A stop() from another thread (the clients allow it; the rig's own abort paths cancel the move
@@ -1067,6 +1100,39 @@ TEST_P(Cia402Client, AStopThatComesAsTheSetPointIsWrittenIsNeverWrittenOver) {
     EXPECT_TRUE(has(e, "move to 300.0000°: halted by a stop request") && has(e, "; halt delivered to the drive")) << e;
     EXPECT_NEAR(r.axis->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
   }
+}
+
+// A stop asked for while a move still switches the drive on finds its power stage off and is not
+// sent ("no halt needed"); the move then enabled the drive and went on to its target (a review).
+// A stop asked for ends the move, sent or not.
+TEST_P(Cia402Client, AStopNotNeededYetStillEndsAMoveThatSwitchesTheDriveOn) {
+  Rig r(GetParam());
+  struct StopAtTheFirstCommand : Between {
+    m::Cia402Table* client = nullptr;
+    bool done = false;
+    std::string fate;  // what became of that stop
+    using Between::Between;
+    uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+      if (client && !done && a == r.map.spec(Obj::kControlword).address) {
+        done = true;
+        client->stop();  // the drive in Switch on disabled, at rest: no halt needed
+        fate = client->last_stop_error();
+      }
+      return r.drive.write_registers(a, v, n);
+    }
+  } dev(r);
+  auto t = r.client_via(dev);
+  t->home({});
+  r.control(c4::cw::kDisableVoltage);
+  r.run(0.5);
+  const double at = r.axis->actual_angle_deg();
+  dev.client = t.get();
+  const std::string e = error_of([&] { t->move_to(300.0, {}); });
+  r.run(2.0);
+  EXPECT_TRUE(dev.done);
+  EXPECT_TRUE(has(dev.fate, "no halt needed")) << dev.fate;
+  EXPECT_TRUE(has(e, "move to 300.0000°: halted by a stop request")) << e;
+  EXPECT_NEAR(r.axis->actual_angle_deg(), at, 1.0) << "the move went on after the stop";
 }
 
 // A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at
