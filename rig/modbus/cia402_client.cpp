@@ -536,15 +536,17 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
       // Heading away from the target, past the distance it started from by more than a servo
-      // overshoots, or past the target by more than that on the far side: the drive runs to
-      // another target first (it took this set-point into its buffer without "change set
-      // immediately" and continues a halted move; a review could not rule such a drive out, and
-      // only the timeout ended it). An old target beyond the new one, in the same direction, was
-      // caught only once the table was as far past the new one as it had started from it.
+      // overshoots, or past the target on its far side by more than a servo overshoots on a move
+      // this long: the drive runs to another target first (it took this set-point into its
+      // buffer without "change set immediately" and continues a halted move; a review could not
+      // rule such a drive out, and only the timeout ended it). An old target beyond the new one,
+      // in the same direction, was caught only once the table was as far past the new one as it
+      // had started from it. Half the move's length on the far side: a slow, ringing servo
+      // (0.3 Hz, damping 0.3) overshoots 1-2 degrees on 5-30 degree moves, up to 30 % of a short one.
       const double away = std::fabs(r.actual_deg - deg), from = std::fabs(start_deg - deg);
       const double overshoot = std::max(1.0, 10 * opt_.tolerance_deg);
       const bool past = (r.actual_deg - deg) * (start_deg - deg) < 0;  // on the far side of the target
-      if (away > from + overshoot || (past && away > overshoot))
+      if (away > from + overshoot || (past && away > std::max(overshoot, from / 2)))
         throw HardwareError(doing + ": the table " + (past ? "runs past" : "moves away from") + " the target (" +
                             deg_str(away) + " off" + (past ? " on the far side" : "") + ", it started " +
                             deg_str(from) + " off): the drive running to another target first (a halted move it "

@@ -1037,9 +1037,10 @@ TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
 }
 
 // The same drive, the halted move's target beyond the new one in the same direction: the table
-// passes the new target on its way to the old one. Halted once it is more than a servo's
-// overshoot past it; it was caught only as far past the new target as it had started from it
-// (here about 60 degrees past).
+// passes the new target on its way to the old one. Halted once it is half the move past it (a
+// servo's overshoot stays within that, ARingingServosOvershootIsNotARunPastTheTarget); it was
+// caught only as far past the new target as it had started from it (212.6 degrees at the
+// highest now, 230.6 before, on a move from 108 to 168 degrees).
 TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
   Rig r(GetParam());
   BufferedSetPoint dev(r);
@@ -1054,7 +1055,7 @@ TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
               has(e, "the drive running to another target first (a halted move it continues?)") &&
               has(e, "; halt delivered to the drive"))
       << e;
-  EXPECT_LT(highest, target + 25.0) << "ran on towards the halted move's target (300 degrees)";
+  EXPECT_LT(highest, target + 50.0) << "ran on towards the halted move's target (300 degrees)";
   // A good move the same way, overshoot and all, is not taken for one.
   dev.on = false;
   r.run(2.0);
@@ -1133,6 +1134,29 @@ TEST_P(Cia402Client, AStopNotNeededYetStillEndsAMoveThatSwitchesTheDriveOn) {
   EXPECT_TRUE(has(dev.fate, "no halt needed")) << dev.fate;
   EXPECT_TRUE(has(e, "move to 300.0000°: halted by a stop request")) << e;
   EXPECT_NEAR(r.axis->actual_angle_deg(), at, 1.0) << "the move went on after the stop";
+}
+
+// Good moves on a slow, ringing servo are not taken for a drive running to another target: its
+// overshoot (1-2 degrees, up to 30 % of a short move) stays under the far side's margin, the
+// larger of max(1 degree, 10 x tolerance_deg) and half the move (a fixed 1 degree failed them).
+TEST_P(Cia402Client, ARingingServosOvershootIsNotARunPastTheTarget) {
+  Rig r(GetParam(), std::string(kFastAxis) + "servo_bandwidth_hz = 0.3\ndamping = 0.3\nfollowing_error_limit_deg = 90.0\n");
+  m::TableOptions opt;
+  opt.move_timeout_s = 120.0;  // the servo takes its time: the timeout is not what is tested
+  auto t = r.client(opt);
+  t->home({});
+  for (const double deg : {10.0, 40.0, 35.0, 34.0, 80.0, 20.0}) {
+    double beyond = 0;  // the furthest past the target on the far side
+    const double from = r.axis->actual_angle_deg();
+    r.on_step = [&] {
+      const double a = r.axis->actual_angle_deg();
+      if ((a - deg) * (from - deg) < 0) beyond = std::max(beyond, std::fabs(a - deg));
+    };
+    EXPECT_NO_THROW(t->move_to(deg, {})) << deg;
+    r.on_step = nullptr;
+    EXPECT_NEAR(r.axis->actual_angle_deg(), deg, 0.01);
+    EXPECT_GT(beyond, std::fabs(deg - from) > 2 ? 0.9 : 0.0) << "the servo rings past the target";
+  }
 }
 
 // A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at
