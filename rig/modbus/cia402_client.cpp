@@ -400,7 +400,8 @@ bool Cia402Table::drive_restarted(const Cia402Reading& r) {
 // Halt set: by stop() from another thread (control_), or by another master, whose halt bit the
 // controlword shows as read back (a gateway may read it as 0, which shows no halt).
 void Cia402Table::fail_on_halt(const std::string& doing, const Cia402Reading& r, const char* when) const {
-  if (control_.load() & c4::cw::kHalt) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
+  if ((control_.load() & c4::cw::kHalt) || stops_.since_begin())
+    throw HardwareError(doing + ": halted by a stop request " + when + at(r));
   if (!drive_restarted(r) && r.controlword && (*r.controlword & c4::cw::kHalt))
     throw TakenOverError(doing + ": halted by another master (controlword reads " + hex4(*r.controlword) + ") " +
                          when + at(r));
@@ -433,6 +434,7 @@ void Cia402Table::fail_unless_mode(const std::string& doing, const Cia402Reading
 
 void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
+  const detail::StopLatch::Scope running(stops_, doing);  // a stop asked during the first read counts
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
     throw ConfigError(doing + ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " +
                       deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path);
@@ -536,19 +538,14 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
       // Heading away from the target, past the distance it started from by more than a servo
-      // overshoots, or past the target on its far side by more than a servo overshoots on a move
-      // this long: the drive runs to another target first (it took this set-point into its
+      // overshoots: the drive runs to another target first (it took this set-point into its
       // buffer without "change set immediately" and continues a halted move; a review could not
-      // rule such a drive out, and only the timeout ended it). An old target beyond the new one,
-      // in the same direction, was caught only once the table was as far past the new one as it
-      // had started from it. Half the move's length on the far side: a slow, ringing servo
-      // (0.3 Hz, damping 0.3) overshoots 1-2 degrees on 5-30 degree moves, up to 30 % of a short one.
+      // rule such a drive out, and only the timeout ended it). Not sooner on the far side of the
+      // target: a ringing servo overshoots a short move by about half its length (damping 0.2-0.3,
+      // a review; half the move as the margin failed its good moves).
       const double away = std::fabs(r.actual_deg - deg), from = std::fabs(start_deg - deg);
-      const double overshoot = std::max(1.0, 10 * opt_.tolerance_deg);
-      const bool past = (r.actual_deg - deg) * (start_deg - deg) < 0;  // on the far side of the target
-      if (away > from + overshoot || (past && away > std::max(overshoot, from / 2)))
-        throw HardwareError(doing + ": the table " + (past ? "runs past" : "moves away from") + " the target (" +
-                            deg_str(away) + " off" + (past ? " on the far side" : "") + ", it started " +
+      if (away > from + std::max(1.0, 10 * opt_.tolerance_deg))
+        throw HardwareError(doing + ": the table moves away from the target (" + deg_str(away) + " off, it started " +
                             deg_str(from) + " off): the drive running to another target first (a halted move it "
                             "continues?)" + at(r));
       // No heartbeat object in CiA 402: a drive whose statusword and position
@@ -680,7 +677,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // a move or homing run under way before its next command word (StopLatch): one that is still
 // switching the drive on would otherwise enable it and move (a review).
 void Cia402Table::stop() noexcept {
-  stops_.sent();
+  stops_.asked();
   uint16_t bits = 0;
   bool known = false;
   try {
@@ -703,7 +700,7 @@ void Cia402Table::stop() noexcept {
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
 // (a failed read still sends: the link decides then, as before).
 void Cia402Table::quick_stop() noexcept {
-  stops_.sent();
+  stops_.asked();
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;

@@ -1,5 +1,5 @@
-// A table client's record of the stops it sent while one of its operations runs (both clients,
-// rig-v1 map and CiA 402, keep one).
+// A table client's record of the stops asked of it while one of its operations runs (both
+// clients, rig-v1 map and CiA 402, keep one).
 #pragma once
 #include <atomic>
 #include <cstdint>
@@ -11,21 +11,24 @@
 
 namespace rig::modbus::detail {
 
-// The stops (halt, quick stop) a client sent while one of its operations (a move, a homing run)
-// runs. The clients let stop() be called from another thread while an operation runs (the rig's
-// own abort paths do not: they cancel the operation, whose thread then sends the stop after its
-// last word), and a command word the operation writes after such a stop would write over it (a
-// whole controlword: halt cleared, the move started). So the operation writes no command word
-// once a stop has gone out, and one written as a stop went out ends it too: the stop may have
-// reached the drive just before that word, which then cleared it, so the operation's fault path
-// sends it again (guarded_call). Only the operation's thread calls begin/end/since_begin; sent()
-// is atomic.
+// The stops (halt, quick stop) asked of a client while one of its operations (a move, a homing
+// run) runs, sent or not (a CiA 402 drive with its power stage off gets none). The clients let
+// stop() be called from another thread while an operation runs (the rig's own abort paths do
+// not: they cancel the operation, whose thread then sends the stop after its last word), and a
+// command word the operation writes after such a stop would write over it (a whole controlword:
+// halt cleared, the move started). So the operation writes no command word once a stop was asked
+// for, and one written as a stop was asked for ends it too: the stop may have reached the drive
+// just before that word, which then cleared it, so the operation's fault path sends it again
+// (guarded_call). Only the operation's thread calls begin/end/since_begin; asked() is atomic.
 class StopLatch {
  public:
-  void sent() noexcept { sent_.fetch_add(1); }  // a stop asked for (before its write, if any)
-  void begin(const std::string& doing) { doing_ = doing, at_begin_ = sent_.load(), active_ = true; }
-  void end() noexcept { active_ = false; }
-  bool since_begin() const noexcept { return active_ && sent_.load() != at_begin_; }
+  void asked() noexcept { asked_.fetch_add(1); }  // a stop asked for (before its write, if any)
+  // Nested (a move's first read, then its body): the outermost begin counts.
+  void begin(const std::string& doing) {
+    if (depth_++ == 0) doing_ = doing, at_begin_ = asked_.load();
+  }
+  void end() noexcept { --depth_; }
+  bool since_begin() const noexcept { return depth_ > 0 && asked_.load() != at_begin_; }
   // Writes one command word of the running operation (`write` sends it), never over a stop. An
   // abort (`cancel`) is said as one, as it was.
   template <class Write>
@@ -54,9 +57,9 @@ class StopLatch {
     std::snprintf(b, sizeof b, "0x%04X", w);
     return b;
   }
-  std::atomic<uint32_t> sent_{0};
+  std::atomic<uint32_t> asked_{0};
   uint32_t at_begin_ = 0;
-  bool active_ = false;
+  int depth_ = 0;
   std::string doing_;
 };
 

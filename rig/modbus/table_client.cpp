@@ -252,11 +252,13 @@ void TableClient::guarded(const std::string& doing, Body body) {
       [this] { stop(); }, [this] { return last_stop_error(); });
 }
 
-// A stop read back in CONTROL: this client's own (stops_: the read overwrote control_), or
-// another master's, over whose command no halt of ours is sent (TakenOverError).
+// A stop asked of this client since the operation began ends it at the next poll, whether or not
+// it reached the drive (one that did not leaves no HALT to read back: the move went on and
+// reported success, a review). Else a stop read back in CONTROL is another master's, over whose
+// command no halt of ours is sent (TakenOverError).
 void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& d) const {
-  if (!(d.control & (ctl::kHalt | ctl::kQuickStop))) return;
   if (stops_.since_begin()) throw HardwareError(doing + ": halted by a stop request" + at(d));
+  if (!(d.control & (ctl::kHalt | ctl::kQuickStop))) return;
   throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
                                " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
 }
@@ -318,6 +320,7 @@ void TableClient::home(const CancelToken& cancel) {
 
 void TableClient::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
+  const detail::StopLatch::Scope running(stops_, doing);  // a stop asked during the first read counts
   if (!std::isfinite(deg) || std::fabs(deg) > 200000.0) throw ConfigError(doing + ": not a valid angle");
   // Refused before anything is written (no servo-on, no halt): a table that is not homed, a
   // target outside the drive's limits. The drive was left powered with HALT set before (a review).
@@ -480,11 +483,11 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
 // Each stop asked for, sent or not, ends a move or homing run under way before its next command
 // word (StopLatch), and a move polling meanwhile reads it back in CONTROL as this client's own.
 void TableClient::stop() noexcept {
-  stops_.sent();
+  stops_.asked();
   if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
 }
 void TableClient::quick_stop() noexcept {
-  stops_.sent();
+  stops_.asked();
   if (!refuse_stop_to_unknown("quick stop")) send_stop(ctl::kQuickStop, "quick stop");
 }
 

@@ -1037,10 +1037,10 @@ TEST_P(Cia402Client, ADriveThatRunsToAnotherTargetFirstIsHalted) {
 }
 
 // The same drive, the halted move's target beyond the new one in the same direction: the table
-// passes the new target on its way to the old one. Halted once it is half the move past it (a
-// servo's overshoot stays within that, ARingingServosOvershootIsNotARunPastTheTarget); it was
-// caught only as far past the new target as it had started from it (212.6 degrees at the
-// highest now, 230.6 before, on a move from 108 to 168 degrees).
+// passes the new target on its way to the old one, and is halted only once it is as far past
+// the new target as it started from it (a ringing servo overshoots a short move by about half
+// its length, ARingingServosOvershootIsNotARunPastTheTarget, so a tighter margin on the far side
+// failed good moves: a review). What this test holds: it is halted there, not at 300 degrees.
 TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
   Rig r(GetParam());
   BufferedSetPoint dev(r);
@@ -1051,11 +1051,11 @@ TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
   dev.on = true;
   std::string e;
   const double highest = highest_during(r, [&] { e = error_of([&] { t->move_to(target, {}); }); });
-  EXPECT_TRUE(has(e, "the table runs past the target (") && has(e, " off on the far side, it started 60.") &&
+  EXPECT_TRUE(has(e, "the table moves away from the target (") && has(e, " off, it started 60.") &&
               has(e, "the drive running to another target first (a halted move it continues?)") &&
               has(e, "; halt delivered to the drive"))
       << e;
-  EXPECT_LT(highest, target + 50.0) << "ran on towards the halted move's target (300 degrees)";
+  EXPECT_LT(highest, target + 75.0) << "ran on towards the halted move's target (300 degrees)";
   // A good move the same way, overshoot and all, is not taken for one.
   dev.on = false;
   r.run(2.0);
@@ -1136,16 +1136,20 @@ TEST_P(Cia402Client, AStopNotNeededYetStillEndsAMoveThatSwitchesTheDriveOn) {
   EXPECT_NEAR(r.axis->actual_angle_deg(), at, 1.0) << "the move went on after the stop";
 }
 
-// Good moves on a slow, ringing servo are not taken for a drive running to another target: its
-// overshoot (1-2 degrees, up to 30 % of a short move) stays under the far side's margin, the
-// larger of max(1 degree, 10 x tolerance_deg) and half the move (a fixed 1 degree failed them).
+// Good moves on a slow, ringing servo are not taken for a drive running to another target: it
+// overshoots a short move by about half its length (damping 0.2-0.3), within the rule's margin
+// (as far past as the move started from the target, plus max(1 degree, 10 x tolerance_deg)). A
+// fixed 1 degree past the target, then half the move, failed them (a review).
 TEST_P(Cia402Client, ARingingServosOvershootIsNotARunPastTheTarget) {
-  Rig r(GetParam(), std::string(kFastAxis) + "servo_bandwidth_hz = 0.3\ndamping = 0.3\nfollowing_error_limit_deg = 90.0\n");
+ for (const char* damping : {"0.3", "0.2"}) {
+  SCOPED_TRACE(damping);
+  Rig r(GetParam(), std::string(kFastAxis) + "servo_bandwidth_hz = 0.3\ndamping = " + damping +
+                        "\nfollowing_error_limit_deg = 200.0\n");
   m::TableOptions opt;
   opt.move_timeout_s = 120.0;  // the servo takes its time: the timeout is not what is tested
   auto t = r.client(opt);
   t->home({});
-  for (const double deg : {10.0, 40.0, 35.0, 34.0, 80.0, 20.0}) {
+  for (const double deg : {10.0, 40.0, 35.0, 34.0, 80.0, 20.0, 18.0}) {
     double beyond = 0;  // the furthest past the target on the far side
     const double from = r.axis->actual_angle_deg();
     r.on_step = [&] {
@@ -1157,6 +1161,7 @@ TEST_P(Cia402Client, ARingingServosOvershootIsNotARunPastTheTarget) {
     EXPECT_NEAR(r.axis->actual_angle_deg(), deg, 0.01);
     EXPECT_GT(beyond, std::fabs(deg - from) > 2 ? 0.9 : 0.0) << "the servo rings past the target";
   }
+ }
 }
 
 // A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at

@@ -488,6 +488,49 @@ TEST(TableInProcess, AStopThatComesAsTheMoveIsStartedIsNeverWrittenOver) {
   }
 }
 
+// A stop asked of the client that never reaches the drive (the link refuses it) after START was
+// acknowledged and dropped: no command word follows, CONTROL reads no HALT, and the move went on
+// and reported success (a review). And a stop asked while the move makes its first read, before
+// its body began: forgotten, and the move started over it (a review). Both end the move now.
+TEST(TableInProcess, AStopAskedEndsTheMoveEvenWhenItNeverReachesTheDrive) {
+  struct RefusesHalt : Between {
+    RotaryTable* client = nullptr;
+    bool at_first_read = false;  // the stop during the move's first read, else once it moves
+    bool done = false;
+    using Between::Between;
+    uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
+      if (addr == m::reg::kControl && (v[0] & m::ctl::kHalt)) return 0x04;  // slave device failure
+      return emu.write_registers(addr, v, n);
+    }
+    void status(uint16_t& st) override {
+      // Once moving: 20 degrees on, well after START was acknowledged and dropped.
+      if (!client || done || (!at_first_read && !((st & m::sts::kMoving) && emu.actual_angle_deg() > 20.0))) return;
+      done = true;
+      client->stop();
+    }
+  };
+  for (const bool at_first_read : {false, true}) {
+    SCOPED_TRACE(at_first_read ? "stop during the first read" : "stop once moving, not delivered");
+    auto emu = emulator("start_angle_deg = 0.0\n");
+    SimClock clock([&](double dt) { emu->step(dt); });
+    RefusesHalt dev(*emu);
+    dev.at_first_read = at_first_read;
+    auto table = m::make_inprocess_table(dev, clock);
+    table->home({});
+    const double at = emu->actual_angle_deg();
+    dev.client = table.get();
+    const std::string err = hardware_error([&] { table->move_to(180.0, {}); });
+    EXPECT_TRUE(dev.done);
+    EXPECT_NE(err.find("move to 180.0000°: halted by a stop request"), std::string::npos) << err;
+    if (at_first_read) {
+      EXPECT_NEAR(emu->actual_angle_deg(), at, 0.5) << "the move started over the stop";
+    } else {
+      EXPECT_NE(err.find("stop not delivered"), std::string::npos) << err;
+      EXPECT_LT(emu->actual_angle_deg(), 170.0) << "ended at the poll after the stop, not at the target";
+    }
+  }
+}
+
 TEST(TableInProcess, EstopDuringMove) {
   SimRig r("start_angle_deg = 0.0\n");
   r.table->home({});
