@@ -444,6 +444,29 @@ TEST(TableInProcess, AHomeStoppedBeforeTheFirstPollIsNamedSoon) {
   EXPECT_LT(clock.now_s() - t0, 5.0) << "not after the home timeout";
 }
 
+// A homed table at 0 degrees reached through a device `Dev` (set up by `set`, then told the
+// client), and a move to 180 degrees through it; `after` seconds of drive time follow the move.
+struct MovedThrough {
+  std::unique_ptr<plant::TableEmulator> emu;
+  double at;        // where the move began
+  std::string err;  // its HardwareError
+};
+template <class Dev, class Set>
+MovedThrough move_through(Set set, double after) {
+  MovedThrough o{emulator("start_angle_deg = 0.0\n"), 0, ""};
+  SimClock clock([&](double dt) { o.emu->step(dt); });
+  Dev dev(*o.emu);
+  set(dev);
+  auto table = m::make_inprocess_table(dev, clock);
+  table->home({});
+  o.at = o.emu->actual_angle_deg();
+  dev.client = table.get();
+  o.err = hardware_error([&] { table->move_to(180.0, {}); });
+  clock.sleep_for(after, {});
+  EXPECT_TRUE(dev.done);
+  return o;
+}
+
 // A stop() from another thread (the clients allow it; the rig's own abort paths cancel the move
 // instead, whose thread then stops it) that comes while a move writes its command words: the
 // START word written after it cleared its HALT (CONTROL is one register), and the move ran on to
@@ -471,17 +494,7 @@ TEST(TableInProcess, AStopThatComesAsTheMoveIsStartedIsNeverWrittenOver) {
   };
   for (const bool on_target : {true, false}) {
     SCOPED_TRACE(on_target ? "stop as the target is written" : "stop as START is written");
-    auto emu = emulator("start_angle_deg = 0.0\n");
-    SimClock clock([&](double dt) { emu->step(dt); });
-    StopRaces dev(*emu);
-    dev.on_target = on_target;
-    auto table = m::make_inprocess_table(dev, clock);
-    table->home({});
-    const double at = emu->actual_angle_deg();
-    dev.client = table.get();
-    const std::string err = hardware_error([&] { table->move_to(180.0, {}); });
-    clock.sleep_for(3.0, {});
-    EXPECT_TRUE(dev.done);
+    const auto [emu, at, err] = move_through<StopRaces>([&](StopRaces& d) { d.on_target = on_target; }, 3.0);
     EXPECT_NE(err.find("move to 180.0000°: halted by a stop request"), std::string::npos) << err;
     EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
     EXPECT_NEAR(emu->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
@@ -511,16 +524,7 @@ TEST(TableInProcess, AStopAskedEndsTheMoveEvenWhenItNeverReachesTheDrive) {
   };
   for (const bool at_first_read : {false, true}) {
     SCOPED_TRACE(at_first_read ? "stop during the first read" : "stop once moving, not delivered");
-    auto emu = emulator("start_angle_deg = 0.0\n");
-    SimClock clock([&](double dt) { emu->step(dt); });
-    RefusesHalt dev(*emu);
-    dev.at_first_read = at_first_read;
-    auto table = m::make_inprocess_table(dev, clock);
-    table->home({});
-    const double at = emu->actual_angle_deg();
-    dev.client = table.get();
-    const std::string err = hardware_error([&] { table->move_to(180.0, {}); });
-    EXPECT_TRUE(dev.done);
+    const auto [emu, at, err] = move_through<RefusesHalt>([&](RefusesHalt& d) { d.at_first_read = at_first_read; }, 0.0);
     EXPECT_NE(err.find("move to 180.0000°: halted by a stop request"), std::string::npos) << err;
     if (at_first_read) {
       EXPECT_NEAR(emu->actual_angle_deg(), at, 0.5) << "the move started over the stop";
