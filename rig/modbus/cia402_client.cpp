@@ -62,7 +62,7 @@ void Cia402Table::write_object(Obj o, int64_t value, const CancelToken& cancel, 
   }
 }
 
-// Within a move or homing run, never over a stop sent meanwhile (StopLatch).
+// Within a move or homing run, never over a stop asked meanwhile (StopLatch).
 void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
   stops_.write_command(w, cancel, [&] {
     write_object(Obj::kControlword, w, cancel);
@@ -308,13 +308,13 @@ void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken
 
 template <class Body>
 void Cia402Table::guarded(const std::string& doing, Body body) {
-  const detail::StopLatch::Scope running(stops_, doing);
   detail::guarded_call(
       doing, body, [] { return std::string(); }, [this] { stop(); }, [this] { return last_stop_error(); });
 }
 
 void Cia402Table::home(const CancelToken& cancel) {
   const std::string doing = "home";
+  const detail::StopLatch::Scope operation(stops_, doing);
   guarded(doing, [&] {
     enable_operation(doing, cancel);
     wait_at_rest(doing, cancel);
@@ -397,11 +397,11 @@ bool Cia402Table::drive_restarted(const Cia402Reading& r) {
   return st == State::kSwitchOnDisabled || st == State::kNotReadyToSwitchOn;
 }
 
-// Halt set: by stop() from another thread (control_), or by another master, whose halt bit the
-// controlword shows as read back (a gateway may read it as 0, which shows no halt).
+// A stop asked of this client since the operation began (stop() or quick_stop() from another
+// thread, sent or not: StopLatch), or a halt by another master, whose halt bit the controlword
+// shows as read back (a gateway may read it as 0, which shows no halt).
 void Cia402Table::fail_on_halt(const std::string& doing, const Cia402Reading& r, const char* when) const {
-  if ((control_.load() & c4::cw::kHalt) || stops_.since_begin())
-    throw HardwareError(doing + ": halted by a stop request " + when + at(r));
+  if (stops_.since_begin()) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
   if (!drive_restarted(r) && r.controlword && (*r.controlword & c4::cw::kHalt))
     throw TakenOverError(doing + ": halted by another master (controlword reads " + hex4(*r.controlword) + ") " +
                          when + at(r));
@@ -434,7 +434,7 @@ void Cia402Table::fail_unless_mode(const std::string& doing, const Cia402Reading
 
 void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
-  const detail::StopLatch::Scope running(stops_, doing);  // a stop asked during the first read counts
+  const detail::StopLatch::Scope operation(stops_, doing);
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
     throw ConfigError(doing + ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " +
                       deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path);

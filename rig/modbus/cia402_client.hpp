@@ -100,7 +100,7 @@ class Cia402Table final : public RotaryTable {
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
   bool stop_needless_ = false;
-  detail::StopLatch stops_;  // a stop sent while a move or homing runs: none of its words over it
+  detail::StopLatch stops_;  // a stop asked while a move or homing runs: none of its words over it
 };
 
 }  // namespace rig::modbus

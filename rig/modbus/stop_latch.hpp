@@ -23,12 +23,9 @@ namespace rig::modbus::detail {
 class StopLatch {
  public:
   void asked() noexcept { asked_.fetch_add(1); }  // a stop asked for (before its write, if any)
-  // Nested (a move's first read, then its body): the outermost begin counts.
-  void begin(const std::string& doing) {
-    if (depth_++ == 0) doing_ = doing, at_begin_ = asked_.load();
-  }
-  void end() noexcept { --depth_; }
-  bool since_begin() const noexcept { return depth_ > 0 && asked_.load() != at_begin_; }
+  void begin(const std::string& doing) { doing_ = doing, at_begin_ = asked_.load(), active_ = true; }
+  void end() noexcept { active_ = false; }
+  bool since_begin() const noexcept { return active_ && asked_.load() != at_begin_; }
   // Writes one command word of the running operation (`write` sends it), never over a stop. An
   // abort (`cancel`) is said as one, as it was.
   template <class Write>
@@ -42,7 +39,8 @@ class StopLatch {
       throw HardwareError(doing_ + ": halted by a stop request that came as command word " + word_hex(word) +
                           " was written (which may have cleared it: the stop is sent again)");
   }
-  // While it lives, the operation `doing` runs.
+  // While it lives, the operation `doing` runs: from the top of a client's home() or move_to(),
+  // so a stop asked during a move's first read counts too.
   struct Scope {
     StopLatch& l;
     Scope(StopLatch& latch, const std::string& doing) : l(latch) { l.begin(doing); }
@@ -59,7 +57,7 @@ class StopLatch {
   }
   std::atomic<uint32_t> asked_{0};
   uint32_t at_begin_ = 0;
-  int depth_ = 0;
+  bool active_ = false;
   std::string doing_;
 };
 

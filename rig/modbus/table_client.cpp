@@ -134,7 +134,7 @@ TableStatus TableClient::status() {
   }
 }
 
-// Within a move or homing run, never over a stop sent meanwhile (StopLatch).
+// Within a move or homing run, never over a stop asked meanwhile (StopLatch).
 void TableClient::write_control(uint16_t word, const CancelToken& cancel) {
   stops_.write_command(word, cancel, [&] {
     transport_->write(reg::kControl, {word}, cancel);
@@ -245,7 +245,6 @@ DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, con
 
 template <class Body>
 void TableClient::guarded(const std::string& doing, Body body) {
-  const detail::StopLatch::Scope running(stops_, doing);
   detail::guarded_call(
       doing, body,
       [this] { return have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : std::string(); },
@@ -265,6 +264,7 @@ void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& 
 
 void TableClient::home(const CancelToken& cancel) {
   const std::string doing = "home";
+  const detail::StopLatch::Scope operation(stops_, doing);
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     const uint16_t seq0 = read_drive(cancel).move_seq;
@@ -320,7 +320,7 @@ void TableClient::home(const CancelToken& cancel) {
 
 void TableClient::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
-  const detail::StopLatch::Scope running(stops_, doing);  // a stop asked during the first read counts
+  const detail::StopLatch::Scope operation(stops_, doing);
   if (!std::isfinite(deg) || std::fabs(deg) > 200000.0) throw ConfigError(doing + ": not a valid angle");
   // Refused before anything is written (no servo-on, no halt): a table that is not homed, a
   // target outside the drive's limits. The drive was left powered with HALT set before (a review).

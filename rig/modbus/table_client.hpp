@@ -103,7 +103,7 @@ class TableClient final : public RotaryTable {
   TableOptions opt_;
   // Last control word read or written; stop() may run on another thread while a move polls.
   std::atomic<uint16_t> control_{0};
-  detail::StopLatch stops_;  // the stops this client sent since the move or homing began
+  detail::StopLatch stops_;  // the stops asked of this client since the move or homing began
   std::atomic<bool> identified_{false};  // a status block read with MAP_VERSION 1
   bool profile_applied_ = false;
   double last_actual_deg_ = 0;     // for messages when the link is lost
