@@ -401,7 +401,7 @@ bool Cia402Table::drive_restarted(const Cia402Reading& r) {
 // thread, sent or not: StopLatch), or a halt by another master, whose halt bit the controlword
 // shows as read back (a gateway may read it as 0, which shows no halt).
 void Cia402Table::fail_on_halt(const std::string& doing, const Cia402Reading& r, const char* when) const {
-  if (stops_.since_begin()) throw HardwareError(doing + ": halted by a stop request " + when + at(r));
+  if (stops_.since_begin()) throw HardwareError(doing + ": " + stops_.halted_by() + " " + when + at(r));
   if (!drive_restarted(r) && r.controlword && (*r.controlword & c4::cw::kHalt))
     throw TakenOverError(doing + ": halted by another master (controlword reads " + hex4(*r.controlword) + ") " +
                          when + at(r));
@@ -700,7 +700,7 @@ void Cia402Table::stop() noexcept {
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
 // (a failed read still sends: the link decides then, as before).
 void Cia402Table::quick_stop() noexcept {
-  stops_.asked();
+  stops_.asked(true);
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;

@@ -22,21 +22,31 @@ namespace rig::modbus::detail {
 // (guarded_call). Only the operation's thread calls begin/end/since_begin; asked() is atomic.
 class StopLatch {
  public:
-  void asked() noexcept { asked_.fetch_add(1); }  // a stop asked for (before its write, if any)
-  void begin(const std::string& doing) { doing_ = doing, at_begin_ = asked_.load(), active_ = true; }
+  // A stop asked for (before its write, if any); a quick stop is counted as one first, so that a
+  // stop seen since begin() is never named a halt when it was a quick stop.
+  void asked(bool quick = false) noexcept {
+    if (quick) quick_.fetch_add(1);
+    asked_.fetch_add(1);
+  }
+  void begin(const std::string& doing) {
+    doing_ = doing, at_begin_ = asked_.load(), quick_at_begin_ = quick_.load(), active_ = true;
+  }
   void end() noexcept { active_ = false; }
   bool since_begin() const noexcept { return active_ && asked_.load() != at_begin_; }
+  // What ended the operation, as its message names it: "halted by a stop request", or "… by a
+  // quick stop request" if one was among them (read once since_begin() is true).
+  std::string halted_by() const { return quick_.load() != quick_at_begin_ ? "halted by a quick stop request" : "halted by a stop request"; }
   // Writes one command word of the running operation (`write` sends it), never over a stop. An
   // abort (`cancel`) is said as one, as it was.
   template <class Write>
   void write_command(uint16_t word, const CancelToken& cancel, Write write) const {
     cancel.throw_if_requested();
     if (since_begin())
-      throw HardwareError(doing_ + ": halted by a stop request (before command word " + word_hex(word) + " was written)");
+      throw HardwareError(doing_ + ": " + halted_by() + " (before command word " + word_hex(word) + " was written)");
     write();
     cancel.throw_if_requested();
     if (since_begin())
-      throw HardwareError(doing_ + ": halted by a stop request that came as command word " + word_hex(word) +
+      throw HardwareError(doing_ + ": " + halted_by() + " that came as command word " + word_hex(word) +
                           " was written (which may have cleared it: the stop is sent again)");
   }
   // While it lives, the operation `doing` runs: from the top of a client's home() or move_to(),
@@ -55,8 +65,8 @@ class StopLatch {
     std::snprintf(b, sizeof b, "0x%04X", w);
     return b;
   }
-  std::atomic<uint32_t> asked_{0};
-  uint32_t at_begin_ = 0;
+  std::atomic<uint32_t> asked_{0}, quick_{0};
+  uint32_t at_begin_ = 0, quick_at_begin_ = 0;
   bool active_ = false;
   std::string doing_;
 };

@@ -256,7 +256,7 @@ void TableClient::guarded(const std::string& doing, Body body) {
 // reported success, a review). Else a stop read back in CONTROL is another master's, over whose
 // command no halt of ours is sent (TakenOverError).
 void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& d) const {
-  if (stops_.since_begin()) throw HardwareError(doing + ": halted by a stop request" + at(d));
+  if (stops_.since_begin()) throw HardwareError(doing + ": " + stops_.halted_by() + at(d));
   if (!(d.control & (ctl::kHalt | ctl::kQuickStop))) return;
   throw detail::TakenOverError(doing + ": " + ((d.control & ctl::kHalt) ? "halted" : "quick-stopped") +
                                " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
@@ -487,7 +487,7 @@ void TableClient::stop() noexcept {
   if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
 }
 void TableClient::quick_stop() noexcept {
-  stops_.asked();
+  stops_.asked(true);
   if (!refuse_stop_to_unknown("quick stop")) send_stop(ctl::kQuickStop, "quick stop");
 }
 

@@ -1070,27 +1070,33 @@ TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
 // set-point and the move ran on to its target, the stop lost (session 28's note). Now no command
 // word goes out once a stop has, and one that went out as the stop did is followed by the stop
 // again. Both orders: the stop as the target position is written (before the set-point word),
-// and the stop reaching the drive just before the set-point word.
+// and the stop reaching the drive just before the set-point word; a halt and a quick stop, each
+// named for what it was (a quick stop once read "halted by a stop request", and a wire test that
+// looked for the drive's "Quick stop active" found it only when the drive had acted first).
 TEST_P(Cia402Client, AStopThatComesAsTheSetPointIsWrittenIsNeverWrittenOver) {
+  for (const bool quick : {false, true})
   for (const bool on_target : {true, false}) {
-    SCOPED_TRACE(on_target ? "stop as the target is written" : "stop as the set-point word is written");
+    SCOPED_TRACE(std::string(quick ? "quick stop" : "halt") +
+                 (on_target ? " as the target is written" : " as the set-point word is written"));
     Rig r(GetParam());
     struct StopRaces : Between {
       m::Cia402Table* client = nullptr;
-      bool on_target = false, done = false;
+      bool on_target = false, quick = false, done = false;
       using Between::Between;
+      void stop() { quick ? client->quick_stop() : client->stop(); }
       uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
         const bool target = a == r.map.spec(Obj::kTargetPosition).address;
         const bool setpoint = (controlword_in(a, v) & c4::cw::kNewSetPoint) != 0;
         if (!client || done || !(on_target ? target : setpoint)) return r.drive.write_registers(a, v, n);
         done = true;
-        if (!on_target) client->stop();  // reaches the drive just before the set-point word
+        if (!on_target) stop();  // reaches the drive just before the set-point word
         const uint8_t rc = r.drive.write_registers(a, v, n);
-        if (on_target) client->stop();
+        if (on_target) stop();
         return rc;
       }
     } dev(r);
     dev.on_target = on_target;
+    dev.quick = quick;
     auto t = r.client_via(dev);
     t->home({});
     const double at = r.axis->actual_angle_deg();
@@ -1098,7 +1104,9 @@ TEST_P(Cia402Client, AStopThatComesAsTheSetPointIsWrittenIsNeverWrittenOver) {
     const std::string e = error_of([&] { t->move_to(300.0, {}); });
     r.run(2.0);
     EXPECT_TRUE(dev.done);
-    EXPECT_TRUE(has(e, "move to 300.0000°: halted by a stop request") && has(e, "; halt delivered to the drive")) << e;
+    EXPECT_TRUE(has(e, std::string("move to 300.0000°: halted by a ") + (quick ? "quick stop" : "stop") + " request") &&
+                has(e, "; halt delivered to the drive"))
+        << e;
     EXPECT_NEAR(r.axis->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
   }
 }

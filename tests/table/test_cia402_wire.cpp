@@ -249,11 +249,13 @@ TEST_P(Cia402Wire, StopBeforeTheAcknowledgeIsNamed) {
 
 TEST_P(Cia402Wire, QuickStopBeforeTheAcknowledgeIsNamed) {
   const std::string e = move_stopped_before_acknowledge(GetParam(), true);
-  // This client's own quick stop is a stop request it was asked (StopLatch), named so at the poll.
-  EXPECT_TRUE(has(e, "halted by a stop request waiting for the set-point acknowledge") ||
-              has(e, "halted by a stop request that came as command word 0x003F was written"))
+  // This client's own quick stop is a stop request it was asked (StopLatch), named as a quick stop
+  // whether the poll found the drive in Quick stop active or still in Operation enabled (the
+  // quick stop's write under way: a sanitized CI run read 0x8237, and the drive's state named
+  // nothing).
+  EXPECT_TRUE(has(e, "halted by a quick stop request waiting for the set-point acknowledge") ||
+              has(e, "halted by a quick stop request that came as command word 0x003F was written"))
       << e;
-  EXPECT_TRUE(has(e, "Quick stop active") || has(e, "0x003F")) << e;
   EXPECT_FALSE(has(e, "not acknowledged")) << e;
 }
 

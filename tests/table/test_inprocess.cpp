@@ -471,31 +471,37 @@ MovedThrough move_through(Set set, double after) {
 // instead, whose thread then stops it) that comes while a move writes its command words: the
 // START word written after it cleared its HALT (CONTROL is one register), and the move ran on to
 // its target with nothing halting it, the stop lost. Now no command word goes out once a stop
-// has, and one that went out as the stop did is followed by the stop again.
+// has, and one that went out as the stop did is followed by the stop again. A halt and a quick
+// stop, each named for what it was.
 TEST(TableInProcess, AStopThatComesAsTheMoveIsStartedIsNeverWrittenOver) {
   struct StopRaces : Between {
     RotaryTable* client = nullptr;
     bool on_target = false;  // the stop as the target is written (before START), else as START is
-    bool done = false;
+    bool quick = false, done = false;
     using Between::Between;
+    void stop() { quick ? client->quick_stop() : client->stop(); }
     uint8_t write_registers(uint16_t addr, const uint16_t* v, uint16_t n) override {
       const bool start = addr == m::reg::kControl && (v[0] & m::ctl::kStart);
       if (client && !done && (on_target ? addr == m::reg::kTargetPos : start)) {
         done = true;
         if (on_target) {
           const uint8_t rc = emu.write_registers(addr, v, n);
-          client->stop();
+          stop();
           return rc;
         }
-        client->stop();  // reaches the drive just before the START word
+        stop();  // reaches the drive just before the START word
       }
       return emu.write_registers(addr, v, n);
     }
   };
+  for (const bool quick : {false, true})
   for (const bool on_target : {true, false}) {
-    SCOPED_TRACE(on_target ? "stop as the target is written" : "stop as START is written");
-    const auto [emu, at, err] = move_through<StopRaces>([&](StopRaces& d) { d.on_target = on_target; }, 3.0);
-    EXPECT_NE(err.find("move to 180.0000°: halted by a stop request"), std::string::npos) << err;
+    SCOPED_TRACE(std::string(quick ? "quick stop" : "halt") + (on_target ? " as the target is written" : " as START is written"));
+    const auto [emu, at, err] =
+        move_through<StopRaces>([&](StopRaces& d) { d.on_target = on_target, d.quick = quick; }, 3.0);
+    EXPECT_NE(err.find(std::string("move to 180.0000°: halted by a ") + (quick ? "quick stop" : "stop") + " request"),
+              std::string::npos)
+        << err;
     EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
     EXPECT_NEAR(emu->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
   }
