@@ -524,6 +524,19 @@ LinkOptions link_options_from_toml(const toml::table& t) {
   return l;
 }
 
+namespace {
+// Where the drive protocol was said, for a key refused because of it: the file's line, or the
+// command line's --drive (which overrides the file's; the refused key's line alone then blamed a
+// file that says drive = "cia402"), or the default.
+std::string drive_said(const toml::table& t, const std::string& drive) {
+  const toml::node* n = t.get("drive");
+  const std::string said = "drive = \"" + drive + "\"";
+  if (!n) return said + " (the default)";
+  if (!n->source().path) return said + " (--drive " + drive + ")";
+  return said + " (" + cfg::where(*n) + ")";
+}
+}  // namespace
+
 std::string table_drive(const toml::table& t) {
   const std::string drive = cfg::get_string(t, "drive", std::string("rig-v1"));
   if (drive != "rig-v1" && drive != "cia402")
@@ -534,12 +547,13 @@ std::string table_drive(const toml::table& t) {
   if (drive == "rig-v1" && t.contains("drive_map"))
     throw ConfigError(cfg::where(*t.get("drive_map")) + ": drive_map is for drive = \"cia402\"");
   if (const toml::node* n = t.get("unacked_motion_s"); n && drive == "rig-v1")
-    throw ConfigError(cfg::where(*n) + ": 'unacked_motion_s' is for drive = \"cia402\" (the set-point acknowledge, "
-                      "statusword bit 12); the rig-v1 map has none");
+    cfg::reject(*n, "unacked_motion_s",
+                "is for drive = \"cia402\" (the set-point acknowledge, statusword bit 12); the rig-v1 map has none, "
+                "and this table is " + drive_said(t, drive));
   if (drive == "cia402")
     for (const char* k : {"in_position_window_deg", "drive_settle_s"})
       if (const toml::node* n = t.get(k))
-        throw ConfigError(cfg::where(*n) + ": '" + k + "' is a rig-v1 register; a CiA 402 drive keeps its own");
+        cfg::reject(*n, k, "is a rig-v1 register; a CiA 402 drive keeps its own, and this table is " + drive_said(t, drive));
   return drive;
 }
 

@@ -532,8 +532,26 @@ TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
   EXPECT_TRUE(has(out, "hw.toml:5:20:") && has(out, "unacked_motion_s")) << out;
   EXPECT_EQ(status(head + "ended_short_s = 3.0\nunacked_motion_s = 0.5\n"), 4) << out;  // accepted; no drive here
   EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\nunacked_motion_s = 0.5\n"), 2) << out;
-  EXPECT_TRUE(has(out, "hw.toml:3:20: 'unacked_motion_s' is for drive = \"cia402\"")) << out;
+  EXPECT_TRUE(has(out, "hw.toml:3:20: 'unacked_motion_s' = 0.5: is for drive = \"cia402\"") &&
+              has(out, "this table is drive = \"rig-v1\" (the default)"))
+      << out;
   EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\nended_short_s = 3.0\n"), 4) << out;  // both maps
+  // The protocol from the command line over the file's: the refusal names the flag, not only the
+  // key's line in a file that says drive = "cia402" (it blamed the file alone).
+  const std::string file = write_file(dir + "/hw.toml", head + "unacked_motion_s = 0.5\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --hardware " + file, out), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:20: 'unacked_motion_s' = 0.5: is for drive = \"cia402\"") &&
+              has(out, "this table is drive = \"rig-v1\" (--drive rig-v1)"))
+      << out;
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"rig-v1\"\nunacked_motion_s = 0.5\n"), 2) << out;
+  EXPECT_TRUE(has(out, "this table is drive = \"rig-v1\" (" + dir + "/hw.toml:3:9)")) << out;
+  const std::string v1 = write_file(dir + "/v1.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive_settle_s = 0.5\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive cia402 --drive-map " + dir + "/rpm.toml --hardware " + v1, out),
+            2)
+      << out;
+  EXPECT_TRUE(has(out, "v1.toml:3:18: 'drive_settle_s' = 0.5: is a rig-v1 register") &&
+              has(out, "this table is drive = \"cia402\" (--drive cia402)"))
+      << out;
 }
 
 // Link settings no drive answers on, refused with the file (exit 2 at the line), as port 70000
