@@ -3,11 +3,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <optional>
 #include <thread>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -93,7 +95,16 @@ std::string flags(const TableStatus& s) {
   return f.empty() ? "-" : f;
 }
 
-void print_status(const std::string& where, const TableStatus& s, bool json) {
+// Whether the table, at rest, stands where the drive's target says (within the move tolerance):
+// after an aborted move the target still holds the aborted goal while the drive reads in position
+// at its stop point, which read as "arrived" to an operator (a review). After a home it is the
+// last move's target, so the line says "last commanded", not "not reached".
+bool at_rest_off_target(const TableStatus& s, double tolerance_deg) {
+  return !s.moving && !s.homing && std::fabs(s.actual_deg - s.target_deg) > tolerance_deg;
+}
+
+void print_status(const std::string& where, const TableStatus& s, bool json, double tolerance_deg) {
+  const bool off = at_rest_off_target(s, tolerance_deg);
   if (json) {
     nlohmann::json j = {{"table", where},         {"actual_deg", s.actual_deg}, {"target_deg", s.target_deg},
                         {"ready", s.ready},       {"servo_on", s.servo_on},     {"homed", s.homed},
@@ -103,6 +114,7 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
     if (!s.homed_known) j["homed_known"] = false;  // "homed": false then means "cannot tell"
     if (s.has_heartbeat) j["heartbeat"] = s.heartbeat;
     if (!s.drive_state.empty()) j["drive_state"] = s.drive_state;
+    if (!s.moving && !s.homing) j["at_target"] = !off;  // within [table] tolerance_deg, at rest
     std::cout << j.dump(2) << "\n";
     return;
   }
@@ -111,19 +123,29 @@ void print_status(const std::string& where, const TableStatus& s, bool json) {
     std::snprintf(alarm, sizeof alarm, "0x%04X %s", s.alarm_code, s.alarm_text.c_str());
   else
     std::snprintf(alarm, sizeof alarm, "none");
-  std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°\nstate      %s\nalarm      %s\n", where.c_str(),
-              modbus::detail::shown_deg(s.actual_deg), modbus::detail::shown_deg(s.target_deg), flags(s).c_str(), alarm);
+  char reached[96] = "";
+  if (off)
+    std::snprintf(reached, sizeof reached, " (last commanded; the table is at rest %.4f° from it)",
+                  modbus::detail::shown_deg(std::fabs(s.actual_deg - s.target_deg)));
+  std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°%s\nstate      %s\nalarm      %s\n", where.c_str(),
+              modbus::detail::shown_deg(s.actual_deg), modbus::detail::shown_deg(s.target_deg), reached, flags(s).c_str(),
+              alarm);
   if (!s.drive_state.empty()) std::printf("drive      %s (CiA 402)\n", s.drive_state.c_str());
   if (s.has_heartbeat) std::printf("heartbeat  %u\n", s.heartbeat);
 }
 
+// Runs `body` with the table the arguments name and the move tolerance its settings give.
 template <class Body>
 void with_table(const TableArgs& a, Body body) {
   toml::table root;
   const toml::table& t = table_config(a, root);
   RealClock clock;
   std::unique_ptr<RotaryTable> table = modbus::connect_table(t, clock);
-  body(*table);
+  const double tolerance_deg = modbus::table_options_from_toml(t).tolerance_deg;
+  if constexpr (std::is_invocable_v<Body, RotaryTable&, double>)
+    body(*table, tolerance_deg);
+  else
+    body(*table);
 }
 
 // The two backends' technician-only calls.
@@ -219,12 +241,12 @@ void add_table(CLI::App& app, int& rc) {
   auto* st = sub->add_subcommand("status", "Read and print the drive's status");
   st->add_flag("--json", a->json, "Print JSON");
   st->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t) { print_status(t.describe(), t.status(), a->json); });
+    with_table(*a, [&](RotaryTable& t, double tol) { print_status(t.describe(), t.status(), a->json, tol); });
     rc = kExitPass;
   });
 
   sub->add_subcommand("home", "Run the homing sequence and wait until homed")->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t) {
+    with_table(*a, [&](RotaryTable& t, double tol) {
       SignalCancel sig;
       try {
         AngleLine line(t, "homing");
@@ -233,7 +255,7 @@ void add_table(CLI::App& app, int& rc) {
         say_where_it_stopped(t, last_stop_error(t));
         throw;
       }
-      print_status(t.describe(), t.status(), false);
+      print_status(t.describe(), t.status(), false, tol);
     });
     rc = kExitPass;
   });
@@ -246,7 +268,7 @@ void add_table(CLI::App& app, int& rc) {
       ->required()
       ->check(finite("a finite number of degrees"));
   mv->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t) {
+    with_table(*a, [&](RotaryTable& t, double tol) {
       SignalCancel sig;
       try {
         AngleLine line(t, "moving to " + modbus::detail::deg_str(a->deg));
@@ -255,7 +277,7 @@ void add_table(CLI::App& app, int& rc) {
         say_where_it_stopped(t, last_stop_error(t));
         throw;
       }
-      print_status(t.describe(), t.status(), false);
+      print_status(t.describe(), t.status(), false, tol);
     });
     rc = kExitPass;
   });
@@ -289,9 +311,9 @@ void add_table(CLI::App& app, int& rc) {
   });
   sub->add_subcommand("reset", "Reset the drive's alarm after inspection (refused while e-stop/interlock open)")
       ->callback([a, &rc] {
-        with_table(*a, [&](RotaryTable& t) {
+        with_table(*a, [&](RotaryTable& t, double tol) {
           reset(t, {});
-          print_status(t.describe(), t.status(), false);
+          print_status(t.describe(), t.status(), false, tol);
         });
         rc = kExitPass;
       });

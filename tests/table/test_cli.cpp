@@ -62,9 +62,11 @@ TEST_F(RigTable, StatusHomeMove) {
   ASSERT_EQ(rig(where_ + " move 123.25", out), 0) << out;
   EXPECT_NE(out.find("actual     123.2500°"), std::string::npos) << out;
   EXPECT_NE(out.find("in-position"), std::string::npos) << out;
+  EXPECT_NE(out.find("target     123.2500°\n"), std::string::npos) << "at its target, nothing said: " << out;
   EXPECT_NEAR(emu_->actual_angle_deg(), 123.25, 0.005);
   ASSERT_EQ(rig(where_ + " status --json", out), 0) << out;
   EXPECT_NE(out.find("\"homed\": true"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"at_target\": true"), std::string::npos) << out;
   ASSERT_EQ(rig(where_ + " stop", out), 0) << out;
   ASSERT_EQ(rig(where_ + " quick-stop", out), 0) << out;
   EXPECT_NE(out.find("quick stop sent"), std::string::npos) << out;
@@ -261,6 +263,18 @@ TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
   ASSERT_NE(at, std::string::npos) << said;
   EXPECT_NEAR(std::stod(said.substr(at + lead.size())), emu_->snapshot().position_deg, 0.01) << said;
   EXPECT_NE(said.find("° (halt delivered to the drive)\nrig: aborted: "), std::string::npos) << said;
+  // The drive's target still holds the aborted move's 300° while it reads in position at its stop
+  // point: the status says the table is not there (it showed "target 300.0000°" and
+  // "in-position" alone, which read as arrived).
+  std::string out;
+  ASSERT_EQ(rig(where_ + " status", out), 0) << out;
+  const std::string note = "target     300.0000° (last commanded; the table is at rest ";
+  const std::size_t n = out.find(note);
+  ASSERT_NE(n, std::string::npos) << out;
+  EXPECT_NEAR(std::stod(out.substr(n + note.size())), 300.0 - emu_->snapshot().position_deg, 0.001) << out;
+  EXPECT_NE(out.find("° from it)\n", n), std::string::npos) << out;
+  ASSERT_EQ(rig(where_ + " status --json", out), 0) << out;
+  EXPECT_NE(out.find("\"at_target\": false"), std::string::npos) << out;
 }
 
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when
@@ -393,6 +407,7 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   const auto p = out.find("\"actual_deg\": ");
   ASSERT_NE(p, std::string::npos) << out;
   EXPECT_LT(std::stod(out.substr(p + 14)), 290.0) << out;
+  EXPECT_NE(out.find("\"at_target\": false"), std::string::npos) << "the aborted 300° is not where it is: " << out;
   // The server gone: exit 4 naming the drive.
   serve.kill_now();
   EXPECT_EQ(rig("move 10 --timeout 0.1" + where), 4) << out;
