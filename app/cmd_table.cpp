@@ -39,17 +39,20 @@ struct TableArgs {
 
 // The [table] settings: from --hardware FILE, overridden by the flags. The
 // section is edited in place inside `root` (the parsed file) so the file's
-// own keys keep their line numbers in error messages.
+// own keys keep their line numbers in error messages. The file is checked with
+// the flags in: a key refused for the drive protocol then names the protocol the
+// command uses (--drive over the file's; an outside review found the file's named).
 toml::table& table_config(const TableArgs& a, toml::table& root) {
   if (!a.hardware.empty()) {
-    root = load_hardware_file(a.hardware, {"table"});
+    root = cfg::parse_file(a.hardware);
+    if (!root.get_as<toml::table>("table")) validate_hardware(root, {"table"});  // names what is missing
   } else {
     root.insert_or_assign("table", toml::table{});
   }
   toml::table& t = *root.get_as<toml::table>("table");
   if (!a.drive.empty()) t.insert_or_assign("drive", a.drive);
   if (!a.drive_map.empty()) t.insert_or_assign("drive_map", a.drive_map);
-  if (t.contains("drive") && t["drive"].value_or(std::string()) == "rig-v1") t.erase("drive_map");
+  if (a.drive == "rig-v1") t.erase("drive_map");  // the flag's protocol has no map; a file's own pair is checked
   if (!a.modbus.empty()) {
     t.erase("rtu");
     t.insert_or_assign("modbus", a.modbus);
@@ -60,6 +63,9 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
   }
   if (a.unit) t.insert_or_assign("unit", *a.unit);
   if (a.timeout_s) t.insert_or_assign("response_timeout_s", *a.timeout_s);
+  if (!t.contains("modbus") && !t.contains("rtu") && a.hardware.empty())
+    throw ConfigError("rig table: say where the table is: --modbus HOST:PORT, --rtu DEV[,BAUD] or --hardware FILE");
+  if (!a.hardware.empty()) validate_hardware(root, {"table"});
   if (!t.contains("modbus") && !t.contains("rtu"))
     throw ConfigError("rig table: say where the table is: --modbus HOST:PORT, --rtu DEV[,BAUD] or --hardware FILE");
   return t;

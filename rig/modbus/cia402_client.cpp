@@ -306,10 +306,21 @@ void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken
   }
 }
 
+// The stop a failed operation sends: a quick stop if one was asked of it (a halt after it slowed
+// the stop to the profile ramp: 22.8° of travel where the quick stop took 6.6°, an outside review).
+const char* Cia402Table::stop_as_asked() noexcept {
+  if (stops_.quick_since_begin()) {
+    quick_stop();
+    return "quick stop";
+  }
+  stop();
+  return "halt";
+}
+
 template <class Body>
 void Cia402Table::guarded(const std::string& doing, Body body) {
   detail::guarded_call(
-      doing, body, [] { return std::string(); }, [this] { stop(); }, [this] { return last_stop_error(); });
+      doing, body, [] { return std::string(); }, [this] { return stop_as_asked(); }, [this] { return last_stop_error(); });
 }
 
 void Cia402Table::home(const CancelToken& cancel) {
@@ -677,7 +688,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // a move or homing run under way before its next command word (StopLatch): one that is still
 // switching the drive on would otherwise enable it and move (a review).
 void Cia402Table::stop() noexcept {
-  stops_.asked();
+  const detail::StopLatch::Asking counted(stops_, false);
   uint16_t bits = 0;
   bool known = false;
   try {
@@ -700,7 +711,7 @@ void Cia402Table::stop() noexcept {
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
 // (a failed read still sends: the link decides then, as before).
 void Cia402Table::quick_stop() noexcept {
-  stops_.asked(true);
+  const detail::StopLatch::Asking counted(stops_, true);
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;

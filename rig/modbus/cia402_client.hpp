@@ -68,6 +68,7 @@ class Cia402Table final : public RotaryTable {
   int64_t read_object(Obj o, const CancelToken& cancel, bool urgent = false);
   void write_object(Obj o, int64_t value, const CancelToken& cancel, bool urgent = false);
   void write_controlword(uint16_t w, const CancelToken& cancel);
+  const char* stop_as_asked() noexcept;  // the fault path's stop: a quick stop if one was asked
   void enable_operation(const std::string& doing, const CancelToken& cancel);
   void set_mode(const std::string& doing, int mode, const CancelToken& cancel);
   void wait_at_rest(const std::string& doing, const CancelToken& cancel);

@@ -118,32 +118,33 @@ struct NotThisDriveError : HardwareError {
 };
 
 // Runs `body`; on an abort or a fault (but TakenOverError) it stops the axis first (`stop`, which
-// never throws) and rethrows. A fault's message says what was being done, `where()` (read at the fault: e.g. the
-// last angle seen) and
-// whether the halt reached the drive (`stop_error()` empty: delivered) — a technician must know
-// if the table may still be turning. An exception reply means the drive refused a request; no
+// never throws and returns the name of the stop it sent: "halt", or "quick stop" where one was
+// asked) and rethrows. A fault's message says what was being done, `where()` (read at the fault:
+// e.g. the last angle seen) and whether the stop reached the drive (`stop_error()` empty:
+// delivered) — a technician must know if the table may still be turning. An exception reply means the drive refused a request; no
 // code means the link failed.
 template <class Body, class Where, class Stop, class StopError>
 void guarded_call(const std::string& doing, Body body, Where where, Stop stop, StopError stop_error) {
+  const char* sent = "halt";  // what `stop` sent (it returns its name: a halt, or a quick stop asked)
   auto stop_fate = [&] {
     const std::string err = stop_error();
-    return err.empty() ? std::string("; halt delivered to the drive") : "; " + err;
+    return err.empty() ? "; " + std::string(sent) + " delivered to the drive" : "; " + err;
   };
   try {
     body();
   } catch (const AbortedError&) {
-    stop();
+    sent = stop();
     throw;
   } catch (const NotThisDriveError&) {
     throw;
   } catch (const TakenOverError& e) {
     throw HardwareError(e.what() + std::string("; no halt sent by this client: another master commands the table"));
   } catch (const ModbusError& e) {
-    stop();
+    sent = stop();
     throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") + where() + ": " +
                         e.what() + stop_fate());
   } catch (const HardwareError& e) {
-    stop();
+    sent = stop();
     throw HardwareError(e.what() + stop_fate());
   }
 }

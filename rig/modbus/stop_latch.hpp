@@ -19,30 +19,39 @@ namespace rig::modbus::detail {
 // halt cleared, the move started). So the operation writes no command word once a stop was asked
 // for, and one written as a stop was asked for ends it too: the stop may have reached the drive
 // just before that word, which then cleared it, so the operation's fault path sends it again
-// (guarded_call). Only the operation's thread calls begin/end/since_begin; asked() is atomic.
+// (guarded_call). Only the operation's thread calls begin/end/since_begin; Asking counts from any.
 class StopLatch {
  public:
-  // A stop asked for (before its write, if any); a quick stop is counted as one first, so that a
-  // stop seen since begin() is never named a halt when it was a quick stop.
-  void asked(bool quick = false) noexcept {
-    if (quick) quick_.fetch_add(1);
-    asked_.fetch_add(1);
-  }
-  void begin(const std::string& doing) {
-    doing_ = doing, at_begin_ = asked_.load(), quick_at_begin_ = quick_.load(), active_ = true;
-  }
+  // Counts one stop (a quick stop if `quick`) from the top of stop()/quick_stop(), before its
+  // write if any, to its return (sent, refused or failed). A stop still under way when an
+  // operation begins counts for it too: its write may land after the operation's first command
+  // word, which would then clear it, or be read back as another master's (an outside review).
+  class Asking {
+   public:
+    Asking(StopLatch& l, bool quick) noexcept : l_(l), one_(quick ? kOne | kOneQuick : kOne) { l_.asked_.fetch_add(one_); }
+    ~Asking() { l_.done_.fetch_add(one_); }
+    Asking(const Asking&) = delete;
+    Asking& operator=(const Asking&) = delete;
+
+   private:
+    StopLatch& l_;
+    uint64_t one_;
+  };
+  void begin(const std::string& doing) { doing_ = doing, at_begin_ = done_.load(), active_ = true; }
   void end() noexcept { active_ = false; }
-  bool since_begin() const noexcept { return active_ && asked_.load() != at_begin_; }
+  // Stops asked since the operation began, or under way when it did.
+  bool since_begin() const noexcept { return active_ && stops(asked_.load()) != stops(at_begin_); }
+  bool quick_since_begin() const noexcept { return active_ && quicks(asked_.load()) != quicks(at_begin_); }
   // What ended the operation, as its message names it: "halted by a stop request", or "… by a
-  // quick stop request" if one was among them (read once since_begin() is true).
-  std::string halted_by() const { return quick_.load() != quick_at_begin_ ? "halted by a quick stop request" : "halted by a stop request"; }
+  // quick stop request" if one was among them. Both counts move in one atomic step, so a quick
+  // stop is never read as a halt.
+  std::string halted_by() const { return quick_since_begin() ? "halted by a quick stop request" : "halted by a stop request"; }
   // Writes one command word of the running operation (`write` sends it), never over a stop. An
   // abort (`cancel`) is said as one, as it was.
   template <class Write>
   void write_command(uint16_t word, const CancelToken& cancel, Write write) const {
     cancel.throw_if_requested();
-    if (since_begin())
-      throw HardwareError(doing_ + ": " + halted_by() + " (before command word " + word_hex(word) + " was written)");
+    if (since_begin()) throw HardwareError(doing_ + ": " + halted_by() + " (before command word " + word_hex(word) + " was written)");
     write();
     cancel.throw_if_requested();
     if (since_begin())
@@ -65,8 +74,12 @@ class StopLatch {
     std::snprintf(b, sizeof b, "0x%04X", w);
     return b;
   }
-  std::atomic<uint32_t> asked_{0}, quick_{0};
-  uint32_t at_begin_ = 0, quick_at_begin_ = 0;
+  // Stops in the low 32 bits, quick stops among them in the high 32: one fetch_add counts both.
+  static constexpr uint64_t kOne = 1, kOneQuick = uint64_t{1} << 32;
+  static uint32_t stops(uint64_t v) noexcept { return static_cast<uint32_t>(v); }
+  static uint32_t quicks(uint64_t v) noexcept { return static_cast<uint32_t>(v >> 32); }
+  std::atomic<uint64_t> asked_{0}, done_{0};  // counted at a stop's top and at its return
+  uint64_t at_begin_ = 0;                     // done_ when the operation began
   bool active_ = false;
   std::string doing_;
 };

@@ -85,6 +85,7 @@ class TableClient final : public RotaryTable {
   RegisterTransport& transport() { return *transport_; }
 
  private:
+  const char* stop_as_asked() noexcept;  // the fault path's stop: a quick stop if one was asked
   void write_control(uint16_t word, const CancelToken& cancel);
   void prepare_motion(const std::string& doing, const CancelToken& cancel);
   DriveState wait_at_rest(const std::string& doing, DriveState d, const CancelToken& cancel);

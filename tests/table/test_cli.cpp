@@ -567,6 +567,21 @@ TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
   EXPECT_TRUE(has(out, "v1.toml:3:18: 'drive_settle_s' = 0.5: is a rig-v1 register") &&
               has(out, "this table is drive = \"cia402\" (--drive cia402)"))
       << out;
+  // The file is checked with the flags in (it was checked alone first, and a flag that makes it
+  // right was refused naming the file's protocol, an outside review): each accepted, and the
+  // drive, absent, is exit 4.
+  const std::string v1_unacked = write_file(dir + "/v1u.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\nunacked_motion_s = 0.25\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive cia402 --drive-map " + dir + "/rpm.toml --hardware " + v1_unacked,
+                out),
+            4)
+      << out;
+  const std::string c4_window = write_file(dir + "/c4w.toml", head + "in_position_window_deg = 0.002\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --hardware " + c4_window, out), 4) << out;
+  const std::string c4_nomap = write_file(dir + "/c4n.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --hardware " + c4_nomap, out), 4) << out;
+  // A file's own rig-v1 with a drive map is still its own mistake.
+  EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"rig-v1\"\ndrive_map = \"rpm.toml\"\n"), 2) << out;
+  EXPECT_TRUE(has(out, "hw.toml:4:13: drive_map is for drive = \"cia402\"")) << out;
 }
 
 // Link settings no drive answers on, refused with the file (exit 2 at the line), as port 70000

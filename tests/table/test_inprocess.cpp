@@ -10,6 +10,7 @@
 #include "rig/core/clock.hpp"
 #include "plant/table/table_emulator.hpp"
 #include "rig/modbus/motion_text.hpp"
+#include "rig/modbus/stop_latch.hpp"
 #include "rig/modbus/table_client.hpp"
 
 namespace rig::table_test {
@@ -502,8 +503,54 @@ TEST(TableInProcess, AStopThatComesAsTheMoveIsStartedIsNeverWrittenOver) {
     EXPECT_NE(err.find(std::string("move to 180.0000°: halted by a ") + (quick ? "quick stop" : "stop") + " request"),
               std::string::npos)
         << err;
-    EXPECT_NE(err.find("; halt delivered to the drive"), std::string::npos) << err;
+    // The stop sent again is the kind asked: a HALT over the QUICK_STOP made the emulated drive
+    // re-plan the rest of it on the slower profile ramp (22.8° of travel against 6.6°, a review).
+    EXPECT_NE(err.find(std::string("; ") + (quick ? "quick stop" : "halt") + " delivered to the drive"), std::string::npos)
+        << err;
+    uint16_t control = 0;
+    ASSERT_EQ(emu->read_registers(m::reg::kControl, 1, &control), 0);
+    EXPECT_EQ((control & m::ctl::kQuickStop) != 0, quick) << std::hex << control;
+    EXPECT_EQ((control & m::ctl::kHalt) != 0, !quick) << std::hex << control;
     EXPECT_NEAR(emu->actual_angle_deg(), at, 1.0) << "the move went on over the stop";
+  }
+}
+
+// The latch's rules, one by one (both clients keep one). A stop still under way when an operation
+// begins counts for it: its write may land after the operation's first command word (START
+// clears HALT) or be read back as another master's (an outside review). One that has returned
+// before does not: the operation is a later command. A quick stop is named as one.
+TEST(StopLatch, CountsStopsUnderWayAtTheStartAndNamesAQuickStop) {
+  using L = m::detail::StopLatch;
+  L latch;
+  {
+    const L::Asking stopping(latch, false);  // asked, its write not yet returned
+    const L::Scope op(latch, "move to 10.0000°");
+    EXPECT_TRUE(latch.since_begin());
+    EXPECT_EQ(latch.halted_by(), "halted by a stop request");
+  }
+  {
+    { const L::Asking returned(latch, true); }
+    const L::Scope op(latch, "move to 20.0000°");
+    EXPECT_FALSE(latch.since_begin()) << "a stop that returned before the move began is superseded by it";
+    EXPECT_FALSE(latch.quick_since_begin());
+    { const L::Asking quick(latch, true); }
+    EXPECT_TRUE(latch.since_begin());
+    EXPECT_TRUE(latch.quick_since_begin());
+    EXPECT_EQ(latch.halted_by(), "halted by a quick stop request");
+    { const L::Asking halt(latch, false); }
+    EXPECT_EQ(latch.halted_by(), "halted by a quick stop request") << "both asked: the quick stop is named";
+  }
+  EXPECT_FALSE(latch.since_begin()) << "no operation runs";
+  {
+    const L::Scope op(latch, "home");
+    std::string e;
+    try {
+      latch.write_command(0x0003, {}, [&] { const L::Asking during(latch, true); });
+    } catch (const HardwareError& x) {
+      e = x.what();
+    }
+    EXPECT_EQ(e, "home: halted by a quick stop request that came as command word 0x0003 was written (which may have "
+                 "cleared it: the stop is sent again)");
   }
 }
 
