@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -43,16 +44,23 @@ struct TableArgs {
 // the flags in: a key refused for the drive protocol then names the protocol the
 // command uses (--drive over the file's; an outside review found the file's named).
 toml::table& table_config(const TableArgs& a, toml::table& root) {
+  if (a.drive == "rig-v1" && !a.drive_map.empty()) throw ConfigError("rig table: --drive-map is for --drive cia402");
+  std::string alone;  // why the file as it stands is refused (`rig run --hardware` refuses it so)
   if (!a.hardware.empty()) {
     root = cfg::parse_file(a.hardware);
-    if (!root.get_as<toml::table>("table")) validate_hardware(root, {"table"});  // names what is missing
+    try {
+      validate_hardware(root, {"table"});
+    } catch (const ConfigError& e) {
+      if (!root.get_as<toml::table>("table")) throw;  // no [table] to apply the flags to
+      alone = e.what();
+    }
   } else {
     root.insert_or_assign("table", toml::table{});
   }
   toml::table& t = *root.get_as<toml::table>("table");
   if (!a.drive.empty()) t.insert_or_assign("drive", a.drive);
   if (!a.drive_map.empty()) t.insert_or_assign("drive_map", a.drive_map);
-  if (a.drive == "rig-v1") t.erase("drive_map");  // the flag's protocol has no map; a file's own pair is checked
+  if (a.drive == "rig-v1") t.erase("drive_map");  // the file's map, checked above, is not this protocol's
   if (!a.modbus.empty()) {
     t.erase("rtu");
     t.insert_or_assign("modbus", a.modbus);
@@ -65,7 +73,13 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
   if (a.timeout_s) t.insert_or_assign("response_timeout_s", *a.timeout_s);
   if (!t.contains("modbus") && !t.contains("rtu") && a.hardware.empty())
     throw ConfigError("rig table: say where the table is: --modbus HOST:PORT, --rtu DEV[,BAUD] or --hardware FILE");
-  if (!a.hardware.empty()) validate_hardware(root, {"table"});
+  if (!a.hardware.empty()) {
+    validate_hardware(root, {"table"});  // with the flags in: a refusal names what the command uses
+    // Right only with the flags: used, and said, since the file alone is refused elsewhere.
+    if (!alone.empty())
+      cfg::warn_once(alone + " (taken here with the command line's options over the file; `rig run --hardware " +
+                     a.hardware + "` refuses it)");
+  }
   if (!t.contains("modbus") && !t.contains("rtu"))
     throw ConfigError("rig table: say where the table is: --modbus HOST:PORT, --rtu DEV[,BAUD] or --hardware FILE");
   return t;
@@ -103,8 +117,9 @@ std::string flags(const TableStatus& s) {
 
 // Whether the table, at rest, stands where the drive's target says (within the move tolerance):
 // after an aborted move the target still holds the aborted goal while the drive reads in position
-// at its stop point, which read as "arrived" to an operator (a review). After a home it is the
-// last move's target, so the line says "last commanded", not "not reached".
+// at its stop point, which read as "arrived" to an operator (a review). The target is the drive's
+// register (rig-v1 TARGET_POS, CiA 402 0x607A): a drive may keep the last move's through a home,
+// so `home` prints no such note (a code review).
 bool at_rest_off_target(const TableStatus& s, double tolerance_deg) {
   return !s.moving && !s.homing && std::fabs(s.actual_deg - s.target_deg) > tolerance_deg;
 }
@@ -131,7 +146,7 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
     std::snprintf(alarm, sizeof alarm, "none");
   char reached[96] = "";
   if (off)
-    std::snprintf(reached, sizeof reached, " (last commanded; the table is at rest %.4f° from it)",
+    std::snprintf(reached, sizeof reached, " (the table is at rest %.4f° from it)",
                   modbus::detail::shown_deg(std::fabs(s.actual_deg - s.target_deg)));
   std::printf("table      %s\nactual     %.4f°\ntarget     %.4f°%s\nstate      %s\nalarm      %s\n", where.c_str(),
               modbus::detail::shown_deg(s.actual_deg), modbus::detail::shown_deg(s.target_deg), reached, flags(s).c_str(),
@@ -252,7 +267,7 @@ void add_table(CLI::App& app, int& rc) {
   });
 
   sub->add_subcommand("home", "Run the homing sequence and wait until homed")->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t, double tol) {
+    with_table(*a, [&](RotaryTable& t) {
       SignalCancel sig;
       try {
         AngleLine line(t, "homing");
@@ -261,7 +276,7 @@ void add_table(CLI::App& app, int& rc) {
         say_where_it_stopped(t, last_stop_error(t));
         throw;
       }
-      print_status(t.describe(), t.status(), false, tol);
+      print_status(t.describe(), t.status(), false, std::numeric_limits<double>::infinity());  // no target note
     });
     rc = kExitPass;
   });

@@ -101,6 +101,12 @@ class Cia402Table final : public RotaryTable {
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
   bool stop_needless_ = false;
+  // Stops are sent one at a time (a halt built from a statusword read beside a quick stop under
+  // way was 0x010F into Quick stop active: transition 16, back to Operation enabled on the profile
+  // ramp), and a quick stop of this client's stands until its next command word: a halt after it
+  // keeps the quick stop command (0x0102).
+  std::mutex send_mu_;
+  std::atomic<bool> quick_in_force_{false};
   detail::StopLatch stops_;  // a stop asked while a move or homing runs: none of its words over it
 };
 

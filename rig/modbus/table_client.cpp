@@ -139,6 +139,7 @@ void TableClient::write_control(uint16_t word, const CancelToken& cancel) {
   stops_.write_command(word, cancel, [&] {
     transport_->write(reg::kControl, {word}, cancel);
     control_ = word;
+    quick_in_force_ = false;
   });
 }
 
@@ -246,12 +247,11 @@ DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, con
 // The stop a failed operation sends: a quick stop if one was asked of it (a halt after it slowed
 // the stop to the profile ramp: 22.8° of travel where the quick stop took 6.6°, an outside review).
 const char* TableClient::stop_as_asked() noexcept {
-  if (stops_.quick_since_begin()) {
+  if (stops_.quick_since_begin())
     quick_stop();
-    return "quick stop";
-  }
-  stop();
-  return "halt";
+  else
+    stop();  // sends nothing over a quick stop asked meanwhile (stop())
+  return stops_.quick_since_begin() ? "quick stop" : "halt";
 }
 
 template <class Body>
@@ -493,13 +493,21 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
 
 // Each stop asked for, sent or not, ends a move or homing run under way before its next command
 // word (StopLatch), and a move polling meanwhile reads it back in CONTROL as this client's own.
+// A stop never weakens a quick stop of this client's that still stands: no HALT then (its edge
+// re-plans the rest on the profile ramp: 22.8° of travel where the quick stop alone took 6.6°, an
+// outside review); the quick stop's own fate stays the one said.
 void TableClient::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
+  const std::lock_guard one_at_a_time(send_mu_);
+  if (quick_in_force_) return;
   if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
 }
 void TableClient::quick_stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, true);
-  if (!refuse_stop_to_unknown("quick stop")) send_stop(ctl::kQuickStop, "quick stop");
+  const std::lock_guard one_at_a_time(send_mu_);
+  if (refuse_stop_to_unknown("quick stop")) return;
+  send_stop(ctl::kQuickStop, "quick stop");
+  quick_in_force_ = last_stop_error().empty();
 }
 
 // ---------------------------------------------------------------- config
@@ -543,7 +551,8 @@ std::string drive_said(const toml::table& t, const std::string& drive) {
   const toml::node* n = t.get("drive");
   const std::string said = "drive = \"" + drive + "\"";
   if (!n) return said + " (the default)";
-  if (!n->source().path) return said + " (--drive " + drive + ")";
+  const toml::source_region& s = n->source();
+  if (!s.path && s.begin.line == 0) return said + " (--drive " + drive + ")";  // put there by the option (cfg::where)
   return said + " (" + cfg::where(*n) + ")";
 }
 }  // namespace

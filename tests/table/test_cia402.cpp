@@ -1116,6 +1116,47 @@ TEST_P(Cia402Client, AStopThatComesAsTheSetPointIsWrittenIsNeverWrittenOver) {
   }
 }
 
+// A halt after this client's own quick stop keeps the quick stop, whatever the statusword shows:
+// read while the drive had not yet taken the quick stop (Operation enabled), the halt was built as
+// 0x010F, which in Quick stop active is transition 16, back to Operation enabled on the profile
+// ramp (an outside review). Mid-move, on a slow axis: the table comes to rest as the quick stop
+// brings it, in Quick stop active.
+TEST_P(Cia402Client, AHaltNeverWeakensThisClientsQuickStop) {
+  Rig r(GetParam());
+  struct Lags : Between {
+    bool lag = false;  // the statusword still shows Operation enabled, the quick stop not yet taken
+    std::vector<uint16_t> words;
+    using Between::Between;
+    uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+      if (a == r.map.spec(Obj::kControlword).address) words.push_back(controlword_in(a, v));
+      return r.drive.write_registers(a, v, n);
+    }
+    void statusword(uint16_t& sw) override {
+      if (lag) sw = static_cast<uint16_t>((sw & ~0x006Fu) | 0x0027u);  // Operation enabled
+    }
+  } dev(r);
+  auto t = r.client_via(dev);
+  t->home({});
+  bool started = false;
+  r.on_step = [&] {
+    if (started || std::fabs(r.axis->actual_angle_deg()) < 20.0) return;
+    started = true;
+    t->quick_stop();
+    dev.lag = true;
+    dev.words.clear();
+    t->stop();
+    dev.lag = false;
+  };
+  const std::string e = error_of([&] { t->move_to(300.0, {}); });
+  r.on_step = nullptr;
+  r.run(3.0);
+  ASSERT_TRUE(started);
+  EXPECT_EQ(r.drive.state(), c4::State::kQuickStopActive) << e;
+  ASSERT_FALSE(dev.words.empty());
+  EXPECT_EQ(dev.words.front(), c4::cw::kCmdQuickStop | c4::cw::kHalt) << std::hex << dev.words.front();
+  EXPECT_TRUE(has(e, "halted by a quick stop request") && has(e, "; quick stop delivered to the drive")) << e;
+}
+
 // A stop asked for while a move still switches the drive on finds its power stage off and is not
 // sent ("no halt needed"); the move then enabled the drive and went on to its target (a review).
 // A stop asked for ends the move, sent or not.

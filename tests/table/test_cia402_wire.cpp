@@ -221,7 +221,11 @@ TEST_P(Cia402Wire, SlowAnswersAreATimeoutNamingTheObject) {
 // the one the stop came as (StopLatch), and the move says so. The drive's
 // cycle is slowed to 5 s so that each comes while the client waits for bit 12 (ack timeout 2 s:
 // before the change both read "set-point not acknowledged (statusword bit 12) within 2 s").
-std::string move_stopped_before_acknowledge(const std::string& map_file, bool quick) {
+struct StoppedMove {
+  std::string error;
+  c4::State state;  // the drive's, once the client is done
+};
+StoppedMove move_stopped_before_acknowledge(const std::string& map_file, bool quick) {
   WireDrive w(map_file, "tcp:127.0.0.1:0");
   RealClock clock;
   auto table = m::connect_table(client_cfg("modbus", w.server.endpoint(), map_file, "ack_timeout_s = 2.0\n"), clock);
@@ -236,11 +240,11 @@ std::string move_stopped_before_acknowledge(const std::string& map_file, bool qu
   const std::string e = error_of([&] { table->move_to(10.0, {}); });
   stopper.join();
   EXPECT_TRUE(pending);
-  return e;
+  return {e, w.drive.state()};
 }
 
 TEST_P(Cia402Wire, StopBeforeTheAcknowledgeIsNamed) {
-  const std::string e = move_stopped_before_acknowledge(GetParam(), false);
+  const std::string e = move_stopped_before_acknowledge(GetParam(), false).error;
   EXPECT_TRUE(has(e, "halted by a stop request waiting for the set-point acknowledge") ||
               has(e, "halted by a stop request that came as command word 0x003F was written"))
       << e;
@@ -248,7 +252,7 @@ TEST_P(Cia402Wire, StopBeforeTheAcknowledgeIsNamed) {
 }
 
 TEST_P(Cia402Wire, QuickStopBeforeTheAcknowledgeIsNamed) {
-  const std::string e = move_stopped_before_acknowledge(GetParam(), true);
+  const auto [e, state] = move_stopped_before_acknowledge(GetParam(), true);
   // This client's own quick stop is a stop request it was asked (StopLatch), named as a quick stop
   // whether the poll found the drive in Quick stop active or still in Operation enabled (the
   // quick stop's write under way: a sanitized CI run read 0x8237, and the drive's state named
@@ -257,6 +261,10 @@ TEST_P(Cia402Wire, QuickStopBeforeTheAcknowledgeIsNamed) {
               has(e, "halted by a quick stop request that came as command word 0x003F was written"))
       << e;
   EXPECT_FALSE(has(e, "not acknowledged")) << e;
+  // The quick stop reached the drive (the name alone is the latch's: it names one not sent too),
+  // and the stop sent again after it is one as well.
+  EXPECT_TRUE(has(e, "; quick stop delivered to the drive")) << e;
+  EXPECT_EQ(state, c4::State::kQuickStopActive) << e;
 }
 
 // RTU has no transaction id: a reply that comes after the client gave up on it must not be read

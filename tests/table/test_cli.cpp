@@ -268,7 +268,7 @@ TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
   // "in-position" alone, which read as arrived).
   std::string out;
   ASSERT_EQ(rig(where_ + " status", out), 0) << out;
-  const std::string note = "target     300.0000° (last commanded; the table is at rest ";
+  const std::string note = "target     300.0000° (the table is at rest ";
   const std::size_t n = out.find(note);
   ASSERT_NE(n, std::string::npos) << out;
   EXPECT_NEAR(std::stod(out.substr(n + note.size())), 300.0 - emu_->snapshot().position_deg, 0.001) << out;
@@ -395,7 +395,15 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   // Ctrl-C mid-move: halted, exit 3.
   int cfd = -1;
   Child child({RIG_BIN, "table", "move", "300", "--modbus", ep, "--drive", "cia402", "--drive-map", map}, &cfd);
-  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  // Once the table turns (the drive has taken 300° as its target): a fixed wait let a loaded
+  // machine's signal come first, with the target still 0° and the table at it (a code review).
+  std::string turning;
+  for (int i = 0; i < 200 && !has(turning, "\"moving\": true"); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    rig("status --json" + where);
+    turning = out;
+  }
+  ASSERT_TRUE(has(turning, "\"moving\": true")) << turning;
   ::kill(child.pid(), SIGINT);
   const int st = child.wait_status();
   close(cfd);
@@ -567,18 +575,35 @@ TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
   EXPECT_TRUE(has(out, "v1.toml:3:18: 'drive_settle_s' = 0.5: is a rig-v1 register") &&
               has(out, "this table is drive = \"cia402\" (--drive cia402)"))
       << out;
-  // The file is checked with the flags in (it was checked alone first, and a flag that makes it
-  // right was refused naming the file's protocol, an outside review): each accepted, and the
-  // drive, absent, is exit 4.
+  // A file right only with the flags (it was refused naming the file's protocol, an outside
+  // review): used, with the file's own refusal said as a warning, since `rig run --hardware`
+  // refuses it; the drive, absent, is exit 4.
   const std::string v1_unacked = write_file(dir + "/v1u.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\nunacked_motion_s = 0.25\n");
   EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive cia402 --drive-map " + dir + "/rpm.toml --hardware " + v1_unacked,
                 out),
             4)
       << out;
+  EXPECT_TRUE(has(out, "rig: warning: " + v1_unacked + ":3:20: 'unacked_motion_s' = 0.25: is for drive = \"cia402\"") &&
+              has(out, "(taken here with the command line's options over the file; `rig run --hardware " + v1_unacked +
+                           "` refuses it)"))
+      << out;
   const std::string c4_window = write_file(dir + "/c4w.toml", head + "in_position_window_deg = 0.002\n");
   EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --hardware " + c4_window, out), 4) << out;
+  EXPECT_TRUE(has(out, "rig: warning: " + c4_window + ":5:26: 'in_position_window_deg' = 0.002")) << out;
   const std::string c4_nomap = write_file(dir + "/c4n.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n");
   EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --hardware " + c4_nomap, out), 4) << out;
+  EXPECT_TRUE(has(out, "rig: warning: ") && has(out, "needs drive_map")) << out;
+  // Checked alone too: the file's own broken map under --drive rig-v1 is still refused, and a
+  // map for a protocol that has none is a usage error, as `rig plant serve` has it.
+  const std::string c4_badmap = write_file(dir + "/c4b.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                                               "drive_map = \"missing.toml\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --hardware " + c4_badmap, out), 4) << out;
+  EXPECT_TRUE(has(out, "rig: warning: " + c4_badmap + ":4:13: drive map 'missing.toml' not found")) << out;
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --drive rig-v1 --drive-map " + dir + "/rpm.toml --hardware " + c4_window,
+                out),
+            2)
+      << out;
+  EXPECT_TRUE(has(out, "rig: configuration error: rig table: --drive-map is for --drive cia402")) << out;
   // A file's own rig-v1 with a drive map is still its own mistake.
   EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"rig-v1\"\ndrive_map = \"rpm.toml\"\n"), 2) << out;
   EXPECT_TRUE(has(out, "hw.toml:4:13: drive_map is for drive = \"cia402\"")) << out;

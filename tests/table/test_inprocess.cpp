@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <thread>
 
 #include "helpers.hpp"
@@ -20,7 +21,13 @@ namespace m = rig::modbus;
 
 struct SimRig {
   explicit SimRig(const std::string& cfg = "start_angle_deg = 30.0\n", uint64_t seed = 3)
-      : emu(emulator(cfg, seed)), clock([this](double dt) { emu->step(dt); }), table(m::make_inprocess_table(*emu, clock)) {}
+      : emu(emulator(cfg, seed)),
+        clock([this](double dt) {
+          emu->step(dt);
+          if (on_step) on_step();
+        }),
+        table(m::make_inprocess_table(*emu, clock)) {}
+  std::function<void()> on_step;  // runs after every step of drive time
   std::unique_ptr<plant::TableEmulator> emu;
   SimClock clock;
   std::unique_ptr<RotaryTable> table;
@@ -554,6 +561,35 @@ TEST(StopLatch, CountsStopsUnderWayAtTheStartAndNamesAQuickStop) {
   }
 }
 
+// A halt after this client's own quick stop sends nothing: a HALT edge re-plans the rest of the
+// stop on the slower profile ramp (an outside review: 22.8° of travel where the quick stop alone
+// took 6.6°). The next move's command words end the quick stop's standing.
+TEST(TableInProcess, AHaltNeverWeakensThisClientsQuickStop) {
+  SimRig r;
+  r.table->home({});
+  bool started = false;
+  uint16_t control = 0;
+  r.on_step = [&] {
+    if (started || r.emu->actual_angle_deg() < 60.0) return;
+    started = true;
+    r.table->quick_stop();
+    r.table->stop();
+    r.emu->read_registers(m::reg::kControl, 1, &control);
+  };
+  const std::string err = hardware_error([&] { r.table->move_to(180.0, {}); });
+  r.on_step = nullptr;
+  ASSERT_TRUE(started);
+  EXPECT_TRUE(control & m::ctl::kQuickStop) << std::hex << control;
+  EXPECT_FALSE(control & m::ctl::kHalt) << std::hex << control;
+  EXPECT_NE(err.find("halted by a quick stop request"), std::string::npos) << err;
+  r.clock.sleep_for(3.0, {});
+  r.table->move_to(90.0, {});  // a later move is not held by it
+  EXPECT_NEAR(r.emu->actual_angle_deg(), 90.0, 0.01);
+  r.table->stop();
+  r.emu->read_registers(m::reg::kControl, 1, &control);
+  EXPECT_TRUE(control & m::ctl::kHalt) << "after a move, a halt is sent again: " << std::hex << control;
+}
+
 // A stop asked of the client that never reaches the drive (the link refuses it) after START was
 // acknowledged and dropped: no command word follows, CONTROL reads no HALT, and the move went on
 // and reported success (a review). And a stop asked while the move makes its first read, before
@@ -651,15 +687,16 @@ TEST(TableInProcess, UnacknowledgedStartIsAFault) {
 TEST(TableInProcess, StopAndQuickStopOnASilentDriveReturnAndSayWhy) {
   SimRig r("start_angle_deg = 0.0\n");
   auto* client = dynamic_cast<m::TableClient*>(r.table.get());
-  r.table->quick_stop();
+  r.table->stop();
   EXPECT_EQ(client->last_stop_error(), "");
   r.emu->inject(SimFault::kNoAnswer);
   const double t0 = r.clock.now_s();
-  r.table->stop();  // noexcept: a throw would terminate the test
-  EXPECT_NE(client->last_stop_error().find("stop not delivered"), std::string::npos) << client->last_stop_error();
-  r.table->quick_stop();
+  r.table->quick_stop();  // noexcept: a throw would terminate the test
   EXPECT_NE(client->last_stop_error().find("quick stop not delivered"), std::string::npos);
   EXPECT_NE(client->last_stop_error().find("timeout"), std::string::npos);
+  // (A quick stop not delivered does not stand: the halt after it is sent, and fails too.)
+  r.table->stop();
+  EXPECT_NE(client->last_stop_error().find("stop not delivered"), std::string::npos) << client->last_stop_error();
   // Bounded: one response timeout per call (urgent calls never retry in-process).
   EXPECT_NEAR(r.clock.now_s() - t0, 0.6, 1e-9);
 }
