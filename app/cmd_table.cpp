@@ -71,8 +71,6 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
   }
   if (a.unit) t.insert_or_assign("unit", *a.unit);
   if (a.timeout_s) t.insert_or_assign("response_timeout_s", *a.timeout_s);
-  if (!t.contains("modbus") && !t.contains("rtu") && a.hardware.empty())
-    throw ConfigError("rig table: say where the table is: --modbus HOST:PORT, --rtu DEV[,BAUD] or --hardware FILE");
   if (!a.hardware.empty()) {
     validate_hardware(root, {"table"});  // with the flags in: a refusal names what the command uses
     // Right only with the flags: used, and said, since the file alone is refused elsewhere.

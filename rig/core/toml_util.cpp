@@ -13,10 +13,10 @@ namespace rig::cfg {
 
 namespace {
 
+bool no_position(const toml::source_region& s) { return !s.path && s.begin.line == 0; }
+
 std::string pos(const toml::source_region& s) {
-  // A node without a position was put there by the program: a command-line option that
-  // overrides the file (rig table --unit, rig dut --can), not a line of any file.
-  if (!s.path && s.begin.line == 0) return "command-line option";
+  if (no_position(s)) return "command-line option";  // (from_option)
   std::ostringstream os;
   // The path as typed (--profile, --hardware) with its control bytes as \xNN: not sent to the terminal.
   os << (s.path ? shown_text(*s.path) : std::string("<config>")) << ':' << s.begin.line << ':' << s.begin.column;
@@ -68,6 +68,8 @@ std::string double_text(double v) {
 }  // namespace
 
 std::string where(const toml::node& n) { return pos(n.source()); }
+
+bool from_option(const toml::node& n) { return no_position(n.source()); }
 
 std::string shown(const toml::node& n) {
   if (n.is_table()) return "a table";

@@ -16,8 +16,13 @@ namespace rig::cfg {
 toml::table parse_file(const std::string& path);
 toml::table parse_string(std::string_view text, const std::string& source_name);
 
-// "file:line:col" of a node (or of its parent table when the key is missing).
+// "file:line:col" of a node (or of its parent table when the key is missing); "command-line
+// option" for one the program put there (from_option).
 std::string where(const toml::node& n);
+
+// Whether a node has no position in any file: put there by the program, a command-line option
+// that overrides the file (rig table --unit, --drive; rig dut --can).
+bool from_option(const toml::node& n);
 
 // A value as the file writes it (arrays spelled out, a table as "a table", cut at 60
 // characters), for errors of the form "file:line:col: 'key' = VALUE: must be ...".

@@ -69,7 +69,6 @@ void Cia402Table::write_controlword(uint16_t w, const CancelToken& cancel) {
     control_ = w;
     control_known_ = true;
     control_written_ = true;
-    quick_in_force_ = false;
   });
 }
 
@@ -307,20 +306,12 @@ void Cia402Table::set_mode(const std::string& doing, int mode, const CancelToken
   }
 }
 
-// The stop a failed operation sends: a quick stop if one was asked of it (a halt after it slowed
-// the stop to the profile ramp: 22.8° of travel where the quick stop took 6.6°, an outside review).
-const char* Cia402Table::stop_as_asked() noexcept {
-  if (stops_.quick_since_begin())
-    quick_stop();
-  else
-    stop();  // keeps a quick stop asked meanwhile (stop())
-  return stops_.quick_since_begin() ? "quick stop" : "halt";
-}
-
 template <class Body>
 void Cia402Table::guarded(const std::string& doing, Body body) {
   detail::guarded_call(
-      doing, body, [] { return std::string(); }, [this] { return stop_as_asked(); }, [this] { return last_stop_error(); });
+      doing, body, [] { return std::string(); },
+      [this] { return stops_.send_again([this] { quick_stop(); }, [this] { stop(); }); },
+      [this] { return last_stop_error(); });
 }
 
 void Cia402Table::home(const CancelToken& cancel) {
@@ -689,7 +680,6 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // switching the drive on would otherwise enable it and move (a review).
 void Cia402Table::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
-  const std::lock_guard one_at_a_time(send_mu_);
   uint16_t bits = 0;
   bool known = false;
   try {
@@ -701,7 +691,7 @@ void Cia402Table::stop() noexcept {
   }
   // This client's quick stop stands whatever the statusword showed (the drive may not have taken
   // it yet): the halt keeps its command.
-  if (quick_in_force_) bits = c4::cw::kCmdQuickStop, known = true;
+  if (stops_.quick_stop_stands()) bits = c4::cw::kCmdQuickStop, known = true;
   // Only a word this client wrote: one read back may be a gateway's 0 (Disable voltage).
   if (!known && control_written_) bits = static_cast<uint16_t>(control_.load() & 0x000F), known = true;
   if (!known) {
@@ -716,7 +706,6 @@ void Cia402Table::stop() noexcept {
 // (a failed read still sends: the link decides then, as before).
 void Cia402Table::quick_stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, true);
-  const std::lock_guard one_at_a_time(send_mu_);
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
@@ -724,7 +713,7 @@ void Cia402Table::quick_stop() noexcept {
     }
   }
   send_stop(c4::cw::kCmdQuickStop, "quick stop");
-  quick_in_force_ = last_stop_error().empty();
+  stops_.quick_stop_sent(last_stop_error().empty());
 }
 
 }  // namespace rig::modbus

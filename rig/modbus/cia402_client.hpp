@@ -68,7 +68,6 @@ class Cia402Table final : public RotaryTable {
   int64_t read_object(Obj o, const CancelToken& cancel, bool urgent = false);
   void write_object(Obj o, int64_t value, const CancelToken& cancel, bool urgent = false);
   void write_controlword(uint16_t w, const CancelToken& cancel);
-  const char* stop_as_asked() noexcept;  // the fault path's stop: a quick stop if one was asked
   void enable_operation(const std::string& doing, const CancelToken& cancel);
   void set_mode(const std::string& doing, int mode, const CancelToken& cancel);
   void wait_at_rest(const std::string& doing, const CancelToken& cancel);
@@ -101,12 +100,6 @@ class Cia402Table final : public RotaryTable {
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
   bool stop_needless_ = false;
-  // Stops are sent one at a time (a halt built from a statusword read beside a quick stop under
-  // way was 0x010F into Quick stop active: transition 16, back to Operation enabled on the profile
-  // ramp), and a quick stop of this client's stands until its next command word: a halt after it
-  // keeps the quick stop command (0x0102).
-  std::mutex send_mu_;
-  std::atomic<bool> quick_in_force_{false};
   detail::StopLatch stops_;  // a stop asked while a move or homing runs: none of its words over it
 };
 

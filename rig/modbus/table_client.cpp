@@ -139,7 +139,6 @@ void TableClient::write_control(uint16_t word, const CancelToken& cancel) {
   stops_.write_command(word, cancel, [&] {
     transport_->write(reg::kControl, {word}, cancel);
     control_ = word;
-    quick_in_force_ = false;
   });
 }
 
@@ -244,22 +243,13 @@ DriveState TableClient::wait_at_rest(const std::string& doing, DriveState d, con
   return d;
 }
 
-// The stop a failed operation sends: a quick stop if one was asked of it (a halt after it slowed
-// the stop to the profile ramp: 22.8° of travel where the quick stop took 6.6°, an outside review).
-const char* TableClient::stop_as_asked() noexcept {
-  if (stops_.quick_since_begin())
-    quick_stop();
-  else
-    stop();  // sends nothing over a quick stop asked meanwhile (stop())
-  return stops_.quick_since_begin() ? "quick stop" : "halt";
-}
-
 template <class Body>
 void TableClient::guarded(const std::string& doing, Body body) {
   detail::guarded_call(
       doing, body,
       [this] { return have_actual_ ? " (last seen at " + deg_str(last_actual_deg_) + ")" : std::string(); },
-      [this] { return stop_as_asked(); }, [this] { return last_stop_error(); });
+      [this] { return stops_.send_again([this] { quick_stop(); }, [this] { stop(); }); },
+      [this] { return last_stop_error(); });
 }
 
 // A stop asked of this client since the operation began ends it at the next poll, whether or not
@@ -498,16 +488,14 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
 // outside review); the quick stop's own fate stays the one said.
 void TableClient::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
-  const std::lock_guard one_at_a_time(send_mu_);
-  if (quick_in_force_) return;
+  if (stops_.quick_stop_stands()) return;
   if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
 }
 void TableClient::quick_stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, true);
-  const std::lock_guard one_at_a_time(send_mu_);
   if (refuse_stop_to_unknown("quick stop")) return;
   send_stop(ctl::kQuickStop, "quick stop");
-  quick_in_force_ = last_stop_error().empty();
+  stops_.quick_stop_sent(last_stop_error().empty());
 }
 
 // ---------------------------------------------------------------- config
@@ -551,9 +539,7 @@ std::string drive_said(const toml::table& t, const std::string& drive) {
   const toml::node* n = t.get("drive");
   const std::string said = "drive = \"" + drive + "\"";
   if (!n) return said + " (the default)";
-  const toml::source_region& s = n->source();
-  if (!s.path && s.begin.line == 0) return said + " (--drive " + drive + ")";  // put there by the option (cfg::where)
-  return said + " (" + cfg::where(*n) + ")";
+  return said + " (" + (cfg::from_option(*n) ? "--drive " + drive : cfg::where(*n)) + ")";
 }
 }  // namespace
 

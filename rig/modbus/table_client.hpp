@@ -85,7 +85,6 @@ class TableClient final : public RotaryTable {
   RegisterTransport& transport() { return *transport_; }
 
  private:
-  const char* stop_as_asked() noexcept;  // the fault path's stop: a quick stop if one was asked
   void write_control(uint16_t word, const CancelToken& cancel);
   void prepare_motion(const std::string& doing, const CancelToken& cancel);
   DriveState wait_at_rest(const std::string& doing, DriveState d, const CancelToken& cancel);
@@ -111,11 +110,6 @@ class TableClient final : public RotaryTable {
   bool have_actual_ = false;
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
-  // Stops are sent one at a time (a halt decided beside a quick stop under way would weaken it),
-  // and a quick stop of this client's stands until its next command word: a HALT edge after it
-  // re-plans the rest on the slower profile ramp (docs/table-registers.md, CONTROL).
-  std::mutex send_mu_;
-  std::atomic<bool> quick_in_force_{false};
 };
 
 // Options from a [table] TOML table (hardware file); rejects unknown keys with
