@@ -226,8 +226,11 @@ void TableEmulator::plan_move(double target, double vmax, double amax, bool is_m
   in_pos_timer_ = 0;
 }
 
+// A stop edge never lengthens a stop under way: a HALT after a QUICK_STOP (another master's, or a
+// `rig table stop` after `rig table quick-stop`) keeps the quick stop's ramp, as CiA 402's Quick
+// stop active ignores halt; a steeper ramp asked later is taken (table-registers.md).
 void TableEmulator::plan_stop(double decel) {
-  if (!traj_.active) return;
+  if (!traj_.active || traj_.stop_decel >= decel) return;
   Trajectory tr;
   tr.t0 = t_;
   tr.r0 = ref_;
@@ -235,6 +238,7 @@ void TableEmulator::plan_stop(double decel) {
   const double s = ref_v_ >= 0 ? 1.0 : -1.0;
   tr.dur[0] = std::fabs(ref_v_) / decel;
   tr.acc[0] = -s * decel;
+  tr.stop_decel = decel;
   tr.total = tr.dur[0];
   tr.end = ref_ + ref_v_ * tr.total - 0.5 * s * decel * tr.total * tr.total;
   tr.active = tr.total > 0;

@@ -91,6 +91,7 @@ class TableEmulator final : public rig::modbus::RegisterDevice {
     double t0 = 0, r0 = 0, v0 = 0, end = 0, total = 0;
     double dur[3] = {0, 0, 0}, acc[3] = {0, 0, 0};
     bool is_move = false;  // a START move (fault injection counts these)
+    double stop_decel = 0;  // a stop's ramp (deg/s^2); 0 for a move or a homing run
     void eval(double tau, double& r, double& v) const;
   };
 

@@ -483,9 +483,10 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
 
 // Each stop asked for, sent or not, ends a move or homing run under way before its next command
 // word (StopLatch), and a move polling meanwhile reads it back in CONTROL as this client's own.
-// A stop never weakens a quick stop of this client's that still stands: no HALT then (its edge
-// re-plans the rest on the profile ramp: 22.8° of travel where the quick stop alone took 6.6°, an
-// outside review); the quick stop's own fate stays the one said.
+// A stop never weakens a quick stop of this client's that still stands: no HALT then (on a drive
+// whose HALT edge re-planned the rest on the profile ramp: 22.8° of travel where the quick stop
+// alone took 6.6°, an outside review; the register map now forbids it, table-registers.md, and
+// this keeps a drive that does it anyway safe); the quick stop's own fate stays the one said.
 void TableClient::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
   if (stops_.quick_stop_stands()) return;

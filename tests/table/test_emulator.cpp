@@ -239,5 +239,32 @@ TEST(TableEmulator, HaltDeceleratesOnTheProfileRamp) {
   EXPECT_EQ(e->snapshot().alarm_code, 0);
 }
 
+// A stop edge never lengthens a stop under way (table-registers.md): a HALT after a QUICK_STOP,
+// another master's or another `rig table` process's, keeps the quick-stop ramp (it re-planned the
+// rest on the profile ramp: 22.8° of travel where the quick stop alone took 6.6°), and a quick
+// stop after a halt still shortens it.
+TEST(TableEmulator, AStopNeverLengthensAStopUnderWay) {
+  auto stop_point = [](std::vector<uint16_t> words) {
+    auto e = emulator("start_angle_deg = 0.0\n");
+    servo_on_and_home(*e);
+    EXPECT_EQ(wr_target(*e, 180), m::exc::kNone);
+    EXPECT_EQ(wr(*e, m::reg::kControl, {m::ctl::kServoOn | m::ctl::kStart}), m::exc::kNone);
+    e->step(2.0);  // cruising at 30°/s
+    for (const uint16_t w : words) {
+      EXPECT_EQ(wr(*e, m::reg::kControl, {w}), m::exc::kNone);
+      e->step(0.01);  // the quick stop's ramp takes 0.05 s from 30°/s
+    }
+    run_until_in_position(*e);
+    EXPECT_EQ(e->snapshot().alarm_code, 0);
+    return e->snapshot().position_deg;
+  };
+  const uint16_t quick = m::ctl::kServoOn | m::ctl::kQuickStop, halt = m::ctl::kServoOn | m::ctl::kHalt;
+  const double quick_only = stop_point({quick}), halt_only = stop_point({halt});
+  ASSERT_LT(quick_only, halt_only - 1.0);  // the quick-stop ramp is the steeper here
+  EXPECT_NEAR(stop_point({quick, halt}), quick_only, 1e-9);
+  EXPECT_NEAR(stop_point({quick, m::ctl::kServoOn, halt}), quick_only, 1e-9);  // re-armed edge
+  EXPECT_LT(stop_point({halt, quick}), halt_only - 1.0);                      // steeper taken
+}
+
 }  // namespace
 }  // namespace rig::table_test
