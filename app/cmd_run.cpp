@@ -794,6 +794,7 @@ int do_run(RunArgs a) {
   std::string profile_source;
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
+  if (a.resume.empty()) acceptance::check_profile_names_itself(profile_table, profile_source);
   if (!a.resume.empty() && invocation.contains("profile") && invocation["profile"] != p.name)
     throw ConfigError(fmt::format("{}/run.json: field 'profile': {}, but {} is profile \"{}\"", a.resume,
                                   invocation["profile"].dump(), a.profile, p.name));

@@ -262,6 +262,39 @@ Profile load_profile(const std::string& name_or_path) {
   }
 }
 
+// A file's profile names itself: one built on a base without a [profile] name of its own took
+// the base's, and a run with the limits loosened 1000x was passported, JUnit-suited and recorded
+// in the history as the built-in "ci" (an outside review). A file may carry a built-in's name only
+// while it is that profile, key for key but its [plant].
+void check_profile_names_itself(const toml::table& resolved, const std::string& source) {
+  if (source.rfind("builtin:", 0) == 0) return;
+  const toml::table file = cfg::parse_file(source);
+  const toml::node* own = file.at_path("profile.name").node();
+  const toml::node* base = file.get("base");
+  const auto name = resolved.at_path("profile.name").value<std::string>();
+  if (!name) return;  // (a missing name is parse_profile's to say)
+  // [plant] is the emulated plant's (a seed, a table's speed), not the procedure's or its limits.
+  auto procedure = [](toml::table t) {
+    t.erase("plant");
+    return digest(t);
+  };
+  const auto it = builtin_profiles().find(*name);
+  if (it != builtin_profiles().end() && procedure(resolved) == procedure(cfg::parse_string(it->second, "builtin:" + *name)))
+    return;  // that built-in, key for key
+  if (!own) {
+    if (base)
+      throw ConfigError(cfg::where(*base) + ": 'base' = \"" + shown_text(base->value_or(std::string())) +
+                        "\": a profile built on another needs a name of its own: add [profile] name = \"...\" to " +
+                        shown_text(source) + " (without one its passport, JUnit suite and history rows would say \"" +
+                        shown_text(*name) + "\")");
+    return;
+  }
+  if (it == builtin_profiles().end()) return;
+  throw ConfigError(cfg::where(*own) + ": 'name' = \"" + shown_text(*name) +
+                    "\": the built-in profile's name, on a profile that differs from it: give it a name of its own "
+                    "(its passport, JUnit suite and history rows would say it is the built-in)");
+}
+
 toml::table load_profile_table(const std::string& name_or_path, std::string& source) {
   const auto& builtin = builtin_profiles();
   toml::table t;

@@ -88,6 +88,10 @@ Profile load_profile(const std::string& name_or_path);
 // path): what load_profile parses, and where the emulated plant finds its [plant] section.
 toml::table load_profile_table(const std::string& name_or_path, std::string& source);
 Profile parse_profile(const toml::table& t, const std::string& source);
+// A profile file (not a built-in) that a new run starts from names itself: one built on a base
+// sets [profile] name, and a built-in's name only on that profile unchanged. ConfigError naming
+// the line otherwise. (A resumed run's profile.toml is not asked: it was taken when it began.)
+void check_profile_names_itself(const toml::table& resolved, const std::string& source);
 std::vector<std::string> builtin_profile_names();
 
 // The passport name of GOST B for one block length: in_run_b_gost_<length>s, the length in

@@ -733,7 +733,7 @@ TEST(Campaign, DamagedCheckpointSet) {
 TEST(Campaign, AResumeComputesEveryValueFromTheKeptCaptures) {
   const std::string d = tmp("campaign-recompute");
   fs::create_directories(d);
-  std::ofstream(d + "/strict.toml") << "base = \"ci\"\n[limits]\nrms_filtered = [0.0, 1.0e-9]\n"
+  std::ofstream(d + "/strict.toml") << "base = \"ci\"\n[profile]\nname = \"t-strict\"\n[limits]\nrms_filtered = [0.0, 1.0e-9]\n"
                                        "[[classes]]\nname = \"impossible\"\nmax_b_g = 1.0e-12\n";
   std::vector<std::string> args = {"run", "--profile", d + "/strict.toml", "--yes", "--no-history", "--out", d + "/whole"};
   ASSERT_EQ(run(args, d + "/whole-io"), 1) << slurp(d + "/whole-io.stderr");

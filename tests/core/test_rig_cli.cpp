@@ -1273,6 +1273,41 @@ TEST(RigCli, ASerialTheDutCouldNotReportIsRefusedFirst) {
 
 // The emulated table's travel from [plant.table] holds the procedure's angles too: a U20 beyond
 // it is exit 2 before anything is written (a review: the dry run passed, the run failed at U20).
+// A profile file names itself (docs/profiles.md): one built on a base without its own name was
+// passported, JUnit-suited and recorded as the built-in "ci" with its limits loosened 1000x (an
+// outside review). A built-in's name stays on that profile unchanged ([plant], the emulated
+// plant's, aside); a resumed run's profile.toml is not asked again.
+TEST(RigCli, AProfileFileNamesItselfAndNeverPassesForABuiltIn) {
+  const std::string d = tmp("profile-name");
+  fs::create_directories(d);
+  const std::string loose = "[limits]\nbias = [-1.0, 1.0]\n";
+  std::ofstream(d + "/nameless.toml") << "base = \"ci\"\n[profile]\ndescription = \"loose\"\n" << loose;
+  std::ofstream(d + "/borrowed.toml") << "base = \"ci\"\n[profile]\nname = \"ci\"\n" << loose;
+  std::ofstream(d + "/own.toml") << "base = \"ci\"\n[profile]\nname = \"ci-loose\"\n" << loose;
+  std::ofstream(d + "/same.toml") << "base = \"ci\"\n";
+  std::ofstream(d + "/seeded.toml") << "base = \"ci\"\n[plant]\nseed = 7\n";
+  for (const bool dry : {true, false}) {
+    for (const auto& [file, where] : {std::pair{"nameless", ":1:8: 'base' = \"ci\": a profile built on another needs a name "
+                                                             "of its own: add [profile] name = \"...\""},
+                                      std::pair{"borrowed", ":3:8: 'name' = \"ci\": the built-in profile's name, on a "
+                                                             "profile that differs from it"}}) {
+      std::vector<std::string> args = {"run", "--profile", d + "/" + file + ".toml", "--yes", "--no-history", "--out",
+                                       d + "/run-" + file};
+      if (dry) args.push_back("--dry-run");
+      EXPECT_EQ(run(args, d + "/io"), 2) << file << slurp(d + "/io.stderr");
+      EXPECT_NE(slurp(d + "/io.stderr").find(d + "/" + file + ".toml" + where), std::string::npos)
+          << slurp(d + "/io.stderr");
+      EXPECT_FALSE(fs::exists(d + "/run-" + file));
+    }
+  }
+  for (const char* file : {"own", "same", "seeded"})
+    EXPECT_EQ(run({"run", "--profile", d + "/" + file + ".toml", "--yes", "--no-history", "--dry-run"}, d + "/io"), 0)
+        << file << slurp(d + "/io.stderr");
+  ASSERT_EQ(run({"run", "--profile", d + "/own.toml", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["profile"], "ci-loose");
+}
+
 TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
   const std::string d = tmp("travel");
   fs::create_directories(d);
@@ -1286,7 +1321,7 @@ TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
   }
   EXPECT_FALSE(fs::exists(d + "/run"));
   // An angle the profile file sets is named at its line, with the section that holds it.
-  std::ofstream(d + "/lim2.toml") << "base = \"ci\"\n[table]\nu20_deg = 170.0\n[plant.table]\nlimit_pos_deg = 150.0\n";
+  std::ofstream(d + "/lim2.toml") << "base = \"ci\"\n[table]\nu20_deg = 170.0\n[plant.table]\nlimit_pos_deg = 150.0\n[profile]\nname = \"t-travel\"\n";
   EXPECT_EQ(run({"run", "--profile", d + "/lim2.toml", "--yes", "--dry-run"}, d + "/io2"), 2);
   EXPECT_NE(slurp(d + "/io2.stderr").find(d + "/lim2.toml:3:11: u20_deg = 170°: outside"), std::string::npos)
       << slurp(d + "/io2.stderr");
@@ -1513,7 +1548,7 @@ TEST(RigCli, GostBlockLengthsAreCheckedBeforeAnythingRuns) {
 TEST(RigCli, AProfileRateTheEmulatedDutCannotStreamIsRefusedBeforeAnythingRuns) {
   const std::string d = tmp("emulated-rate");
   fs::create_directories(d);
-  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[procedure]\nrate_hz = 500.0\n";
+  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[procedure]\nrate_hz = 500.0\n[profile]\nname = \"t-rate\"\n";
   for (const bool dry : {true, false}) {
     std::vector<std::string> args = {"run", "--profile", d + "/r.toml", "--yes", "--no-history", "--out", d + "/run"};
     if (dry) args.push_back("--dry-run");
@@ -1706,7 +1741,7 @@ TEST(RigCli, DryRunOnHardwarePlansWithTheTablesSettingsAndTheMountsAngles) {
 TEST(RigCli, ResumeOfAFailingProfileStillFails) {
   const std::string d = tmp("resume-fail");
   fs::create_directories(d);
-  std::ofstream(d + "/strict.toml") << "base = \"ci\"\n[[classes]]\nname = \"impossible\"\nmax_b_g = 1.0e-12\n";
+  std::ofstream(d + "/strict.toml") << "base = \"ci\"\n[profile]\nname = \"t-strict\"\n[[classes]]\nname = \"impossible\"\nmax_b_g = 1.0e-12\n";
   EXPECT_EQ(run({"run", "--profile", d + "/strict.toml", "--yes", "--out", d + "/whole"}, d + "/w"), 1)
       << slurp(d + "/w.stderr");
   const auto whole = nlohmann::json::parse(slurp(d + "/whole/passport.json"));
@@ -1763,7 +1798,7 @@ TEST(RigCli, ALoopTestStepThatHasNotSettledGivesNoFigures) {
 TEST(RigCli, ALimitedValueThatIsNullFailsTheRun) {
   const std::string d = tmp("null-limited");
   fs::create_directories(d);
-  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[limits]\nr = [0.0, 1.0]\n";  // R is null on 60 s
+  std::ofstream(d + "/r.toml") << "base = \"ci\"\n[limits]\nr = [0.0, 1.0]\n[profile]\nname = \"t-r\"\n";  // R is null on 60 s
   EXPECT_EQ(run({"run", "--profile", d + "/r.toml", "--yes", "--out", d + "/run"}, d + "/io"), 1)
       << slurp(d + "/io.stderr");
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
@@ -2045,7 +2080,7 @@ TEST(RigCli, HardwareDutWithoutCommandsNeedsSerialBeforeAnyDeviceOpens) {
 TEST(RigCli, TheProfilesConfidenceIsTheNoiseTermsAndTheReportSaysIt) {
   const std::string d = tmp("conf95");
   fs::create_directories(d);
-  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[analysis]\nconfidence = 0.95\n";
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[analysis]\nconfidence = 0.95\n[profile]\nname = \"t-95\"\n";
   ASSERT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--quiet", "--out", d + "/run"}, d + "/io"), 0)
       << slurp(d + "/io.stderr");
   const auto a = nlohmann::json::parse(slurp(d + "/run/analysis.json"));
@@ -2935,7 +2970,7 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
   ASSERT_EQ(j["sections"].size(), 1u);
   EXPECT_EQ(j["rate_hz"], 10000.0);
   const std::string toml = out.substr(block, out.find("enabled = true\n", block) + 15 - block);
-  std::ofstream(d + "/p.toml") << "base = \"ci\"\n" << toml;
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[profile]\nname = \"t-filter\"\n" << toml;
   ASSERT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 0)
       << slurp(d + "/io.stderr") << toml;
   EXPECT_NE(slurp(d + "/run/run.log").find("output filter: custom (1 section(s) at 10000 Hz, on)"), std::string::npos);
