@@ -54,6 +54,7 @@
 #include "rig/modbus/table_client.hpp"
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
+#include "rig/report/timefmt.hpp"
 #include "rig/report/report.hpp"
 #include "rig/core/path_kind.hpp"
 
@@ -222,6 +223,19 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   }
   if (inv.contains("started") && !inv["started"].is_string())
     throw ConfigError(path + ": field 'started': expected a string, found " + inv["started"].type_name());
+  // The start the passport, JUnit and history give the run: the form rig writes, and not after
+  // this resume (a review: "garbage" and a start in 2030 went into a PASS passport and the
+  // history, and report.html was not written). A minute's slack for two stations' clocks.
+  if (inv.contains("started")) {
+    const std::string s = inv["started"].get<std::string>();
+    const auto t = history::parse_iso8601(s);
+    if (!t || history::normalize_iso8601(s) != s)
+      throw ConfigError(path + ": field 'started': \"" + shown_text(s) + "\" is not a UTC time as rig writes it (" +
+                        iso8601_utc_now() + ")");
+    if (*t > static_cast<long long>(std::time(nullptr)) + 60)
+      throw ConfigError(path + ": field 'started': " + s + " is later than this station's clock (" + iso8601_utc_now() +
+                        ")");
+  }
   // The history the run was started with, unless the resume names its own (--db, --no-history):
   // a resume without them recorded its PASS in the default database, the ABORTED row left in
   // the station's (an integrator's review). Older run.json files have neither field.

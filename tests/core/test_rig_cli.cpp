@@ -1945,6 +1945,18 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
   EXPECT_EQ(with_run_json("unknown", inv), 2);
   EXPECT_NE(slurp(d + "/unknown-io.stderr").find("run.json: field 'limits': not a field rig writes"), std::string::npos)
       << slurp(d + "/unknown-io.stderr");
+  // The start the passport, JUnit and history give the run: rig's form, not after the resume (a
+  // review: "garbage" and 2030 went into a PASS passport, and report.html was not written).
+  for (const auto& [name, started, said] :
+       {std::tuple{"garbage", "garbage", "field 'started': \"garbage\" is not a UTC time as rig writes it"},
+        std::tuple{"local", "2026-11-30T10:00:00+03:00", "field 'started': \"2026-11-30T10:00:00+03:00\" is not a UTC"},
+        std::tuple{"future", "2999-01-01T00:00:00Z", "field 'started': 2999-01-01T00:00:00Z is later than this station's"}}) {
+    inv = nlohmann::json::parse(slurp(d + "/good/run.json"));
+    inv["started"] = started;
+    EXPECT_EQ(with_run_json(name, inv), 2) << name;
+    EXPECT_NE(slurp(d + "/" + name + "-io.stderr").find(d + "/" + name + "/run.json: " + said), std::string::npos)
+        << slurp(d + "/" + name + "-io.stderr");
+  }
 
   // Capture headers with a rate the analysis cannot use: named at the header, exit 2.
   auto write_capture = [&](const std::string& path, double rate) {
