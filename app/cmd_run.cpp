@@ -760,6 +760,30 @@ std::string reported_serial(const std::string& run_dir) {
   }
 }
 
+// A run writes its checkpoint once its first phase completes, so a folder without one holds at
+// most the record that phase was writing. More records without it (a checkpoint removed or lost)
+// were re-measured from bring-up, each set aside as *.interrupted-N, and the dry run said the run
+// had stopped before its first phase (an outside review: 13 completed captures, two hours of
+// `paper` again). The folder cannot say which phases completed: refused, the records left as
+// they are.
+void refuse_records_without_checkpoint(const std::string& dir) {
+  if (path_kind(Executive::checkpoint_path(dir), "checkpoint") != PathKind::missing) return;
+  std::vector<std::string> records;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir + "/captures", ec))
+    if (e.path().extension() == ".cap") records.push_back("captures/" + e.path().filename().string());
+  if (fs::exists(dir + "/" + acceptance::kLoopTestFile)) records.emplace_back(acceptance::kLoopTestFile);
+  if (records.size() <= 1) return;
+  std::sort(records.begin(), records.end());
+  std::string listed;
+  for (std::size_t i = 0; i < records.size() && i < 3; ++i) listed += (i ? ", " : "") + shown_text(records[i]);
+  if (records.size() > 3) listed += ", ...";
+  throw ConfigError(fmt::format("{}: missing, but the folder holds {} records ({}): a run writes its checkpoint once "
+                                "its first phase completes, so it was removed or lost, and the folder cannot say which "
+                                "phases completed (damaged run folder; start a new run: the records stay as they are)",
+                                Executive::checkpoint_path(dir), records.size(), listed));
+}
+
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
   // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
@@ -777,6 +801,7 @@ int do_run(RunArgs a) {
     else if (path_kind(a.resume, "--resume") == PathKind::directory) folder_lock.emplace(a.resume, "--resume " + a.resume);
     refuse_non_files(a.resume);
     check_seal_before_resume(a.resume, key);
+    refuse_records_without_checkpoint(a.resume);
   }
 
   // A resumed run takes its profile and invocation from the run folder.

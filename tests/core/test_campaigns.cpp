@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -191,6 +192,41 @@ TEST(Campaign, AResumeKeepsAnEarlierAttemptsLoopTestRecords) {
   EXPECT_NE(slurp(r + "/run.log").find("an earlier attempt's loop-test records are kept as loop-test.csv.interrupted-1"),
             std::string::npos)
       << slurp(r + "/run.log");
+}
+
+// A checkpoint removed or lost with completed records beside it: the resume re-measured every
+// phase from bring-up (each capture set aside) and the dry run said the run had stopped before
+// its first phase (an outside review). Refused, exit 2, the records left as they are; a folder
+// that holds only the record its first phase was writing still resumes from bring-up.
+TEST(Campaign, RecordsWithoutTheirCheckpointAreADamagedFolder) {
+  const std::string d = tmp("campaign-no-checkpoint");
+  fs::create_directories(d);
+  const std::string r = d + "/killed";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", "sigkill@150"}, r + "-io"),
+            128 + SIGKILL);
+  ASSERT_TRUE(fs::remove(r + "/checkpoint.json"));
+  std::set<std::string> before;
+  for (const auto& e : fs::recursive_directory_iterator(r)) before.insert(e.path().string());
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--resume", r, "--yes"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, r + "-resume"), 2) << slurp(r + "-resume.stderr");
+    EXPECT_NE(slurp(r + "-resume.stderr").find(r + "/checkpoint.json: missing, but the folder holds 13 records "
+                                               "(captures/in-run-U10.cap, captures/run01-U10.cap, captures/run02-U20.cap, "
+                                               "...): a run writes its checkpoint once its first phase completes"),
+              std::string::npos)
+        << slurp(r + "-resume.stderr");
+  }
+  std::set<std::string> after;
+  for (const auto& e : fs::recursive_directory_iterator(r)) after.insert(e.path().string());
+  EXPECT_EQ(before, after);  // nothing set aside, nothing written
+  // Killed while the first phase recorded: one record, no checkpoint, resumed from bring-up.
+  const std::string early = d + "/early";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", early, "--inject", "sigkill@10"}, early + "-io"),
+            128 + SIGKILL);
+  ASSERT_FALSE(fs::exists(early + "/checkpoint.json"));
+  EXPECT_EQ(run({"run", "--resume", early, "--yes", "--quiet"}, early + "-resume"), 0) << slurp(early + "-resume.stderr");
+  EXPECT_TRUE(fs::exists(early + "/captures/run01-U10.cap.interrupted-1"));
 }
 
 // An injected sample loss (--inject drop@SEQ:COUNT) is part of the emulated device's history:
