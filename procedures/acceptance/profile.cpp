@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "analysis/allan.hpp"
+#include "analysis/psd.hpp"
 #include "design/filter.hpp"
 #include "design/filter_toml.hpp"
 #include "rig/core/escape.hpp"
@@ -166,6 +167,14 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
                                gost_value_name(b)));
   }
   p.raw_s = cfg::get_number(*pr, "raw_s", std::nullopt, min_s, 1e7);
+  // The raw capture's PSD (Welch) needs one segment: a shorter one was refused by the analysis
+  // after the whole procedure, as a hardware fault (exit 4) on every resume alike (a review).
+  if (const std::uint64_t n = planned_samples(p, p.raw_s); n < analysis::welch_segment(n, {}))
+    throw ConfigError(cfg::where(*pr->get("raw_s")) + fmt::format(": 'raw_s' = {:g}: the raw capture must hold at least "
+                                                                  "{} samples at rate_hz = {:g} (one segment of its "
+                                                                  "PSD), {:g} s; this gives {}",
+                                                                  p.raw_s, analysis::welch_segment(n, {}), p.rate_hz,
+                                                                  static_cast<double>(analysis::welch_segment(n, {})) / p.rate_hz, n));
   p.raw_orientation = parse_orientation(*pr, "raw_orientation", Orientation::U10);
   p.max_lost_samples = static_cast<uint64_t>(cfg::get_int(*pr, "max_lost_samples", 0, 0));
   p.retries = static_cast<int>(cfg::get_int(*pr, "retries", 0, 0, 10));

@@ -148,6 +148,16 @@ TEST(Profile, AnInheritedValueIsNamedByTheBasesLine) {
                          " from its base; set the key there to change it)");
 }
 
+// The raw capture holds one segment of its PSD at least: 0.25 s at 1 kHz passed every check and
+// the analysis refused it after the whole procedure, as a hardware fault (exit 4), on every
+// resume alike (a review).
+TEST(Profile, ARawCaptureShorterThanOnePsdSegmentIsRefusedAtItsLine) {
+  const std::string p = write_tmp("short-raw.toml", "base = \"ci\"\n[procedure]\nraw_s = 0.25\n");
+  EXPECT_EQ(error_of(p), p + ":3:9: 'raw_s' = 0.25: the raw capture must hold at least 256 samples at rate_hz = 1000 "
+                             "(one segment of its PSD), 0.256 s; this gives 250");
+  EXPECT_EQ(load_profile(write_tmp("raw-256.toml", "base = \"ci\"\n[procedure]\nraw_s = 0.256\n")).raw_s, 0.256);
+}
+
 TEST(Profile, BAllanSaysWhichBThePassportLimits) {
   EXPECT_EQ(load_profile("paper").b_allan, "paper");
   const auto prof = load_profile(write_tmp("lsq.toml", "base = \"ci\"\n[analysis]\nb_allan = \"lsq\"\n"));
