@@ -69,7 +69,7 @@ void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, cons
     }
   } remove_scratch{scratch};
   auto quiet = std::make_shared<spdlog::logger>("fast-forward");  // no sinks: the replay is not the run's log
-  PhaseContext replay{ctx.dev, ctx.cancel, replay_values, scratch, quiet, nullptr};
+  PhaseContext replay{ctx.dev, ctx.cancel, replay_values, scratch, quiet, nullptr, {}};
   std::size_t replayed = 0;
   if (ctx.progress && !completed.empty())
     ctx.progress->log("  emulated plant: replaying the completed recordings to rebuild its state at the checkpoint");

@@ -108,6 +108,7 @@ void phase_loop_test(PhaseContext& ctx, const Profile& p, DutState& dut) {
   const LoopTestResponse r = ctx.dev.dut.loop_test(rq, ctx.cancel);
   if (!r.supported) {
     ctx.log->warn("loop test not run: {}", r.reason);
+    ctx.not_run = "not run on this DUT: " + r.reason;
     dut.loop_test.emplace().reason = r.reason;  // supported: false
     return;
   }

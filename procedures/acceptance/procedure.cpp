@@ -117,7 +117,8 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
 }
 
 // Allan family + noise terms of one channel; writes the passport values.
-nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vector<double>& d, bool filtered) {
+nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vector<double>& d, bool filtered,
+                             const std::string& y_filter_note = "") {
   // One model fit (R a candidate on every record; its reason notes a record shorter than the
   // profile's [analysis] r_min_record_s): the passport and analysis.json carry the same fit. An
   // abort is taken within a chunk of work.
@@ -157,7 +158,7 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("k", "K", nt.K, analysis::kKToHour, "");
     term_value("r", "R", nt.R, analysis::kRToHour, "");
   } else {
-    term_value("in_run_b_allan_filtered", "B", nt.B, 1.0, "on the filtered output y(t)");
+    term_value("in_run_b_allan_filtered", "B", nt.B, 1.0, "on the filtered output y(t)" + y_filter_note);
   }
   return {{"oadev", analysis::dev_to_json(dev)}, {"noise_terms", analysis::noise_terms_to_json(nt)}};
 }
@@ -172,15 +173,23 @@ void phase_raw_analysis(PhaseContext& ctx, const Profile& p, DutState& st) {
   // analysis error on NaN, exit 4, on every resume alike (an integrator's review).
   const bool has_y = std::any_of(y.begin(), y.end(), [](double v) { return !std::isnan(v); });
   const char* kNoY = "the DUT's stream carries no filtered output y(t) (its [dut.stream] names no y)";
+  // The filter y(t) went through, as its capture says: the profile's unless the DUT had no command
+  // channel to load it with. Then its y values say so: rms_filtered was judged against the
+  // profile's limit as if the profile's filter had made it (a review).
+  const std::string filter = l.header.extra.value("filter", std::string());
+  const std::string y_filter_note =
+      filter.rfind("not set", 0) == 0
+          ? " (through the DUT's own filter: the profile's was not loaded, the passport's skipped steps say why)"
+          : "";
   nlohmann::json a;
   a["allan"]["x"] = allan_channel(ctx, p, x, false);
   ctx.report(0.45);
-  if (has_y) a["allan"]["y"] = allan_channel(ctx, p, y, true);
+  if (has_y) a["allan"]["y"] = allan_channel(ctx, p, y, true, y_filter_note);
   else ctx.values.set("in_run_b_allan_filtered", std::nullopt, kNoY);
   ctx.report(0.9);
   // RMS error of the output (criterion 1), of the drift (bias and base error removed).
   ctx.values.set("rms_unfiltered", analysis::rms(x), "RMS of x(t) drift over the raw capture");
-  if (has_y) ctx.values.set("rms_filtered", analysis::rms(y), "RMS of y(t) drift over the raw capture");
+  if (has_y) ctx.values.set("rms_filtered", analysis::rms(y), "RMS of y(t) drift over the raw capture" + y_filter_note);
   else ctx.values.set("rms_filtered", std::nullopt, kNoY);
   for (const auto& [ch, v] : {std::pair{"x", &x}, std::pair{"y", &y}}) {
     if (v == &y && !has_y) continue;

@@ -253,7 +253,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   for (std::size_t i = 0; i < phases.size(); ++i)
     if (kept(i)) result.phases[i].status = "skipped", result.phases[i].message = kKeptFromCheckpoint;
 
-  PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_};
+  PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_, {}};
   std::size_t current = phases.size();
   try {
     log_->info("bring-up");
@@ -276,15 +276,17 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
         for (const auto& m : p.measures) names.push_back(m.name);
         values.set_scope(p.id, std::move(names));  // a phase sets only what it declares
       }
+      ctx.not_run.clear();
       p.run(ctx);
       values.set_scope({}, {});
       rec.finished = iso8601_utc_now();
-      rec.status = "done";
+      rec.status = ctx.not_run.empty() ? "done" : "skipped";
+      rec.message = std::exchange(ctx.not_run, {});
       if (was_done) rec.message = "computed again from the kept records (resume)";
       else done.push_back(p.id);  // `done` stays a prefix of the phases, in their order
       write_checkpoint(done, values, state, identity);
       log_->info("phase {} done{} (checkpointed)", p.id, was_done ? ", computed again from the kept records" : "");
-      if (progress_) progress_->phase_finished(p.id, "done", "");
+      if (progress_) progress_->phase_finished(p.id, rec.status, rec.message);
       current = phases.size();
     }
     // A signal between the last phase and here is still an abort (issue 13: late signals).

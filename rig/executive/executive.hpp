@@ -49,6 +49,10 @@ struct PhaseContext {
   std::string out_dir;
   std::shared_ptr<spdlog::logger> log;
   ProgressSink* progress = nullptr;
+  // Set by a phase that found its step not possible on this device (a DUT that does not run the
+  // loop test): its record reads "skipped" with this reason, not "done" with none (a review).
+  // It still counts as completed: there is nothing to take again on a resume.
+  std::string not_run;
   void report(double fraction) const {
     if (progress) progress->phase_progress(fraction, dev.clock.now_s());
   }

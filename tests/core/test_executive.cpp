@@ -394,7 +394,7 @@ TEST(Executive, CaptureGapBeyondTheLimitIsRetriedThenFailsThePhase) {
     Fixture f("gap-retry");
     Devices d = f.dev();
     MeasurementSet v;
-    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr};
+    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr, {}};
     power_on(c);
     // Two seconds into the first attempt, five samples never arrive; the retry is clean.
     auto* w = f.world.get();
@@ -409,7 +409,7 @@ TEST(Executive, CaptureGapBeyondTheLimitIsRetriedThenFailsThePhase) {
     Devices d = f.dev();
     for (uint32_t s = 0; s < 100000; s += 1000) f.world->inject_drop(s + 500, 2);  // every attempt loses samples
     MeasurementSet v;
-    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr};
+    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr, {}};
     power_on(c);
     try {
       acceptance::position_and_record(c, prof, Orientation::U10, 5.0, "g", "SN");
@@ -425,7 +425,7 @@ TEST(Executive, SameSeedGivesBitIdenticalSamples) {
     Fixture f("seed");
     Devices d = f.dev();
     MeasurementSet v;
-    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr};
+    PhaseContext c{d, CancelToken{}, v, f.out, f.log, nullptr, {}};
     power_on(c);
     c.dev.dut.start_stream(c.cancel);
     std::vector<Sample> buf(2000);

@@ -87,7 +87,7 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   MeasurementSet values;
   acceptance::declare_values(p, phases, values);
   const std::string out = fresh_dir("paper");
-  PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr};
+  PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr, {}};
   acceptance::bring_up(ctx, p, {}, state.slot());  // powers the DUT and sets the profile's output filter
   run_loop(phases, ctx);
   const nlohmann::json loop = state.slot().loop.value_or(nlohmann::json());
@@ -280,7 +280,7 @@ TEST(LoopPhase, HardwareFileWithTheLoopTestOffGivesNullWithTheReason) {
   MeasurementSet values;
   acceptance::declare_values(p, phases, values);
   const std::string out = fresh_dir("off");
-  PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr};
+  PhaseContext ctx{dev, CancelToken{}, values, out, quiet_log(logtext), nullptr, {}};
   acceptance::bring_up(ctx, p, {}, state.slot());
   run_loop(phases, ctx);
   values.judge_all(true);  // the paper profile limits both: null is FAIL, said once

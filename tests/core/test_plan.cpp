@@ -59,7 +59,7 @@ TEST(Plan, EachDevicePhaseTakesItsPlannedDeviceTime) {
   const std::string out = fs::temp_directory_path() / ("rigplan-" + std::to_string(::getpid()));
   fs::remove_all(out);
   fs::create_directories(out);
-  PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr};
+  PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr, {}};
   acceptance::bring_up(ctx, p, {}, state.slot());
   double planned = 0, took = 0;
   for (const Phase& ph : phases) {

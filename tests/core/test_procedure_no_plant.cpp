@@ -100,7 +100,7 @@ struct LoopRun {
     SimClock clock;
     Devices dev{table, dut, io, clock, "hardware"};
     auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
-    PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr};
+    PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr, {}};
     for (const Phase& ph : phases)
       if (ph.id == "loop" || ph.id == "loop-figures") ph.run(ctx);
     state = acceptance::to_json(st.slot());
@@ -194,7 +194,7 @@ struct BringUp {
     Devices dev{table, dut, io, clock, "hardware"};
     MeasurementSet values;
     auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
-    PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr};
+    PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr, {}};
     acceptance::bring_up(ctx, p, ro, st);
   }
 };
@@ -284,7 +284,7 @@ TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopT
   Devices dev{table, dut, io, clock, "hardware"};
   std::ostringstream logtext;
   auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
-  PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr};
+  PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr, {}};
   for (const Phase& ph : phases)
     if (ph.id == "loop" || ph.id == "loop-figures") ph.run(ctx);
   const Measurement* bw = values.find("bandwidth_0p5");
@@ -331,7 +331,7 @@ TEST(ProcedureWithoutPlant, ACaptureChangedAfterItsRecordingIsNotAnalysed) {
   Devices dev{table, dut, io, clock, "hardware"};
   std::ostringstream logtext;
   auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
-  PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr};
+  PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr, {}};
   const auto b = std::find_if(phases.begin(), phases.end(), [](const Phase& ph) { return ph.id == "in-run-b"; });
   ASSERT_NE(b, phases.end());
   try {
