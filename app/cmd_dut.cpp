@@ -343,7 +343,11 @@ void add_dut(CLI::App& app, int& rc) {
   add_link_options(setf, *a);
   setf->add_option("--biquad", a->biquads, "One section b0,b1,b2,a1,a2 (repeat for a cascade)");
   setf->add_flag("--paper", a->paper, "The paper's MCU filter 0.148895 z^2/(z^2 - 1.228261 z + 0.377156)");
-  setf->add_option("--rate", a->rate_hz, "Rate the filter runs at inside the DUT, Hz")->capture_default_str();
+  // Checked on the text before the link opens (a review: --rate 0 and nan were exit 4, "CAN
+  // interface ..."); the range a profile's [filter] rate_hz takes.
+  setf->add_option("--rate", a->rate_hz, "Rate the filter runs at inside the DUT, Hz")
+      ->capture_default_str()
+      ->check(number_in(1.0, 1e7, false, "a rate in Hz"));
   setf->add_flag("--off", a->off, "Load it but leave the filter switched off");
   setf->callback([a, &rc] { rc = cmd_set_filter(*a); });
 
@@ -357,7 +361,12 @@ void add_dut(CLI::App& app, int& rc) {
   auto* lt = dut->add_subcommand("loop-test", "Run the DUT's loop test: settling time and 0.5-level bandwidth measured");
   add_link_options(lt, *a);
   lt->add_option("--steps", a->loop.steps, "Steps of test torque")->capture_default_str()->check(CLI::Range(1, 100));
-  lt->add_option("--amplitude", a->loop.amplitude_g, "Step amplitude, g of input acceleration")->capture_default_str()->check(CLI::Range(-5.0, 5.0));
+  // The protocol's |A| <= 5 g and not 0 (a profile's [loop] amplitude_g alike), checked on the
+  // text: CLI::Range let nan and 0 through to the link (exit 4; a review).
+  lt->add_option("--amplitude", a->loop.amplitude_g, "Step amplitude, g of input acceleration (not 0)")
+      ->capture_default_str()
+      ->check(number_in(-5.0, 5.0, false, "a number of g") &
+              CLI::Validator([](std::string& v) { return finite_number(v) == 0.0 ? "'" + shown_ascii(v) + "': must not be 0" : std::string(); }, ""));
   lt->add_option("--record-ms", a->record_ms, "Record per step at the loop rate, ms")->capture_default_str()->check(CLI::Range(10, 200));
   lt->add_option("--out", a->out, "Write the raw records (loop-test.csv format) to this file");
   lt->callback([a, &rc] { rc = cmd_loop_test(*a); });

@@ -2719,6 +2719,33 @@ TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
   EXPECT_FALSE(fs::exists(d + "/s.txt")) << "the file is opened once the DUT answers";
 }
 
+// A loop test's amplitude and a filter's rate are checked on the text before the link opens: nan
+// and 0 were exit 4, "CAN interface ..." (a review); the protocol's |A| <= 5 g, not 0, and a
+// profile's [filter] rate_hz range.
+TEST(RigCli, DutCommandValuesAreCheckedBeforeTheLinkOpens) {
+  const std::string d = tmp("dut-values");
+  fs::create_directories(d);
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"loop-test", "--amplitude", "nan"}, "--amplitude: 'nan': must be a number of g in [-5, 5]"},
+      {{"loop-test", "--amplitude", "0"}, "--amplitude: '0': must not be 0"},
+      {{"loop-test", "--amplitude", "-0.0"}, "--amplitude: '-0.0': must not be 0"},
+      {{"loop-test", "--amplitude", "5.5"}, "--amplitude: '5.5': must be a number of g in [-5, 5]"},
+      {{"set-filter", "--paper", "--rate", "0"}, "--rate: '0': must be a rate in Hz in [1, 1e+07]"},
+      {{"set-filter", "--paper", "--rate", "-5"}, "--rate: '-5': must be a rate in Hz"},
+      {{"set-filter", "--paper", "--rate", "nan"}, "--rate: 'nan': must be a rate in Hz"},
+      {{"set-filter", "--paper", "--rate", "1e9"}, "--rate: '1e9': must be a rate in Hz"}};
+  for (const auto& [opts, why] : bad) {
+    std::vector<std::string> args = {"dut", "--can", "rig-nocan0"};
+    args.insert(args.end(), opts.begin(), opts.end());
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
+  }
+  // Valid values go on to the link, which is not there: the hardware's exit 4.
+  EXPECT_EQ(run({"dut", "--can", "rig-nocan0", "loop-test", "--amplitude", "-5"}, d + "/io"), 4) << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"dut", "--can", "rig-nocan0", "set-filter", "--paper", "--rate", "1000"}, d + "/io"), 4)
+      << slurp(d + "/io.stderr");
+}
+
 // Settings from the environment are named as such: a RIG_HISTORY rig cannot open said nothing of
 // RIG_HISTORY, and a rig config (RIG_CONFIG) with a mistyped section ([histori]) was skipped, the
 // runs recorded into the default database (a review). Exit 2 saying "RIG_HISTORY: ..." or
