@@ -263,6 +263,19 @@ void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& 
                                " by another master (CONTROL reads " + hex4(d.control) + ")" + at(d));
 }
 
+// The servo read off mid-run with no alarm: another master's CONTROL without SERVO_ON (the drive
+// brakes and the table stays short of its goal; a move waited out its timeout, 27.6 s in a review)
+// ends the call at once with no halt of ours over it, as another master's stop does; the drive's
+// own (CONTROL still SERVO_ON) is a fault like any other.
+void TableClient::fail_on_servo_off(const std::string& doing, const DriveState& d) const {
+  if (d.has(sts::kServoOn)) return;
+  if (!(d.control & ctl::kServoOn))
+    throw detail::TakenOverError(doing + ": servo switched off by another master (CONTROL reads " + hex4(d.control) +
+                                 ")" + at(d));
+  throw HardwareError(doing + ": the drive switched its servo off (no alarm; CONTROL reads " + hex4(d.control) + ")" +
+                      at(d));
+}
+
 void TableClient::home(const CancelToken& cancel) {
   const std::string doing = "home";
   const detail::StopLatch::Scope operation(stops_, doing);
@@ -301,6 +314,7 @@ void TableClient::home(const CancelToken& cancel) {
         // out home_timeout_s before. The halt follows as for any fault: a drive that only paused
         // must not move on after the rig gave up on it (a review).
         fail_on_stop_bits(doing, d);
+        fail_on_servo_off(doing, d);
         const bool running = d.has(sts::kHoming) || d.has(sts::kMoving);
         seen_running = seen_running || running;
         const double ended_s = ended(!running && !d.has(sts::kHomed), now);
@@ -383,6 +397,7 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
           throw detail::TakenOverError(doing + ": target register changed to " + deg_str(d.target_deg) +
                                        " (another Modbus master?)" + at(d));
         fail_on_stop_bits(doing, d);
+        fail_on_servo_off(doing, d);
         const double off = std::fabs(d.actual_deg - deg);
         const bool ok = d.has(sts::kInPosition) && !d.has(sts::kMoving) && off <= opt_.tolerance_deg;
         if (in_position(ok, now) >= opt_.settle_s) return;

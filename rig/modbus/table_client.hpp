@@ -91,6 +91,7 @@ class TableClient final : public RotaryTable {
   void apply_profile_once(const CancelToken& cancel);
   void fail_on_alarm(const std::string& doing, const DriveState& d);
   void fail_on_stop_bits(const std::string& doing, const DriveState& d) const;
+  void fail_on_servo_off(const std::string& doing, const DriveState& d) const;
   void watch_heartbeat(const std::string& doing, const DriveState& d, double& last_change_s, uint32_t& last_hb);
   void send_stop(uint16_t bit, const char* name) noexcept;
   bool refuse_stop_to_unknown(const char* name) noexcept;

@@ -272,6 +272,40 @@ TEST(TableInProcess, AnotherMastersStopOrTargetEndsTheMoveWithoutAHaltOfOurs) {
   EXPECT_FALSE(control() & m::ctl::kHalt) << control();
 }
 
+// Another master's CONTROL without SERVO_ON mid-move or mid-homing: the drive brakes and the table
+// stays short of its goal. The call ends at once naming it, with no halt of ours (a review: the
+// move waited out its timeout, 27.6 s, and said "timed out ... off target").
+TEST(TableInProcess, AnotherMastersServoOffEndsTheMoveAtOnceNamingIt) {
+  for (const bool homing : {false, true}) {
+    SCOPED_TRACE(homing ? "home" : "move");
+    SimRig r("start_angle_deg = 100.0\n");
+    if (!homing) r.table->home({});
+    const double t_start = r.clock.now_s();
+    bool sent = false;
+    r.clock.set_advance([&](double dt) {
+      r.emu->step(dt);
+      if (!sent && r.clock.now_s() - t_start > 1.0 && r.emu->snapshot().moving) {
+        const uint16_t off = 0;
+        sent = r.emu->write_registers(m::reg::kControl, &off, 1) == 0;
+      }
+    });
+    const std::string err = hardware_error([&] {
+      if (homing) r.table->home({});
+      else r.table->move_to(300.0, {});
+    });
+    EXPECT_TRUE(sent);
+    EXPECT_NE(err.find(std::string(homing ? "home" : "move to 300.0000°") +
+                       ": servo switched off by another master (CONTROL reads 0x0000)"),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("; no halt sent by this client: another master commands the table"), std::string::npos) << err;
+    EXPECT_LT(r.clock.now_s() - t_start, 1.5) << "at once, not after the move timeout or ended_short_s";
+    uint16_t c = 0;
+    EXPECT_EQ(r.emu->read_registers(m::reg::kControl, 1, &c), 0);
+    EXPECT_EQ(c, 0) << std::hex << c;
+  }
+}
+
 // A HALT (or QUICK_STOP) set and released again by another master between two polls, mid-move:
 // the drive reads in position at its stop point, off the target. Named after [table] ended_short_s (1 s) and
 // halted, as a homing run ended short is; it waited out the move timeout (31.6 s) before (a review).
