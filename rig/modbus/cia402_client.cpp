@@ -678,15 +678,31 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // Each stop or quick stop asked for, sent or not (the power stage off: "no halt needed"), ends
 // a move or homing run under way before its next command word (StopLatch): one that is still
 // switching the drive on would otherwise enable it and move (a review).
+// A statusword that reads the power stage off (Not ready to switch on, Switch on disabled) while
+// the axis reads moving (stop_goes_out lets such a halt out) is an axis coasting, or a statusword
+// address that is wrong: the halt built from it was Disable voltage, 0x0100, which on a drive
+// really in Operation enabled switches the power stage off mid-move (a review: a map with the
+// statusword and error code swapped, "stop sent", exit 0). The quick stop command with halt,
+// 0x0102, enables nothing in any state and quick-stops a drive in Operation enabled; it is sent
+// instead and said as a fault (the table may still be moving).
 void Cia402Table::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
   uint16_t bits = 0;
   bool known = false;
+  std::string off_yet_moving;
   try {
     const auto sw = static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true));
     if (!stop_goes_out(sw, "halt")) return;
-    bits = command_holding(c4::decode_state(sw));
+    const State st = c4::decode_state(sw);
+    bits = command_holding(st);
     known = true;
+    if (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled) {
+      bits = c4::cw::kCmdQuickStop;
+      off_yet_moving = "halt sent as the quick stop command (controlword 0x0102): " + map_.describe(Obj::kStatusword) +
+                       " reads " + hex4(sw) + ", " + c4::state_name(st) +
+                       " (power stage off), while the axis reads moving: an axis coasting, or a statusword address "
+                       "that is wrong (check the drive map); the table may still be moving";
+    }
   } catch (...) {
   }
   // This client's quick stop stands whatever the statusword showed (the drive may not have taken
@@ -700,6 +716,8 @@ void Cia402Table::stop() noexcept {
     return;
   }
   send_stop(static_cast<uint16_t>(bits | c4::cw::kHalt), "halt");
+  if (!off_yet_moving.empty() && last_stop_error().empty())
+    detail::record_stop(stop_mu_, last_stop_error_, std::move(off_yet_moving), [&] { stop_needless_ = false; });
 }
 
 // Sent at once by a client that has identified its drive; else after one urgent statusword read

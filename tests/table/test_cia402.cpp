@@ -1548,7 +1548,9 @@ TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
   EXPECT_EQ(dev.writes, 0);
   // A statusword address that reads 0 (Not ready) while the axis turns, e.g. statusword and error
   // code swapped in the map (a review: "no halt needed", exit 0, and the move went on): the
-  // velocity says it moves, so the halt goes out as it always did.
+  // velocity says it moves, so a stop goes out: the quick stop command with halt (0x0102), which
+  // enables nothing anywhere, not Disable voltage (0x0100), which switched the real drive, in
+  // Operation enabled, off mid-move (a review: "stop sent", exit 0); and it is said as a fault.
   t.home({});
   r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
   r.write(Obj::kTargetPosition, r.map.deg_to_counts(300.0));
@@ -1561,6 +1563,12 @@ TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
   swapped.stop();
   EXPECT_FALSE(swapped.last_stop_needless()) << swapped.last_stop_error();
   EXPECT_EQ(misread.writes, 1);
+  EXPECT_EQ(controlword_of(r), c4::cw::kCmdQuickStop | c4::cw::kHalt);
+  EXPECT_EQ(r.drive.state(), c4::State::kQuickStopActive);  // not Switch on disabled
+  EXPECT_TRUE(has(swapped.last_stop_error(), "halt sent as the quick stop command (controlword 0x0102): ") &&
+              has(swapped.last_stop_error(), " reads 0x0000, Not ready to switch on (power stage off), while the axis "
+                                             "reads moving: an axis coasting, or a statusword address that is wrong"))
+      << swapped.last_stop_error();
   r.run(2.0);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
