@@ -15,6 +15,7 @@ namespace {
 
 using detail::deg_str;
 using detail::hex4;
+using detail::deg_str_past;
 using detail::secs;
 using detail::TakenOverError;
 using detail::trapezoid_time;
@@ -438,8 +439,9 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   const std::string doing = "move to " + deg_str(deg);
   const detail::StopLatch::Scope operation(stops_, doing);
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
-    throw ConfigError(doing + ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " +
-                      deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path);
+    throw ConfigError("move to " + deg_str_past(deg, deg < map_.limit_neg_deg ? map_.limit_neg_deg : map_.limit_pos_deg) +
+                      ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " + deg_str(map_.limit_pos_deg) +
+                      "] of drive map " + map_.path);
   // An unhomed table is refused before anything is written: enabling operation first left the
   // drive in Operation enabled after the refusal (a review).
   if (map_.homed_bit) {

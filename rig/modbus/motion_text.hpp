@@ -23,6 +23,15 @@ inline std::string deg_str(double d) {
   return b;
 }
 
+// A value refused at a limit it reads the same as at four decimals, with the digits that tell
+// them apart ("move to 370.00004°: outside [..., 370.0000°]" read as a contradiction; a review).
+inline std::string deg_str_past(double d, double limit) {
+  if (deg_str(d) != deg_str(limit)) return deg_str(d);
+  char b[48];
+  std::snprintf(b, sizeof b, "%.10g°", shown_deg(d));
+  return b;
+}
+
 inline std::string hex4(unsigned v) {
   char b[16];
   std::snprintf(b, sizeof b, "0x%04X", v);

@@ -17,6 +17,7 @@ namespace rig::modbus {
 namespace {
 
 using detail::deg_str;
+using detail::deg_str_past;
 using detail::hex4;
 using detail::secs;
 using detail::trapezoid_time;
@@ -343,17 +344,23 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
                                                     [&](auto body) { guarded(doing, body); });
   if (!d0.has(sts::kHomed))
     throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
-  if (deg < d0.limit_neg_deg || deg > d0.limit_pos_deg)
-    throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d0.limit_neg_deg) + ", " +
-                      deg_str(d0.limit_pos_deg) + "]");
+  // The drive takes counts (kPosScale per degree) and holds its limits in counts: the angle is
+  // judged as it will be written (369.99996° and 370.00004° are both 370.0000°; one was refused
+  // at a limit of 370.0000°, a review).
+  const auto counts = static_cast<int32_t>(std::lround(deg * kPosScale));
+  const double written = counts / kPosScale;
+  auto refuse_outside = [&](const DriveState& d) {
+    if (written < d.limit_neg_deg || written > d.limit_pos_deg)
+      throw ConfigError("move to " + deg_str_past(deg, written < d.limit_neg_deg ? d.limit_neg_deg : d.limit_pos_deg) +
+                        ": outside the drive's travel limits [" + deg_str(d.limit_neg_deg) + ", " +
+                        deg_str(d.limit_pos_deg) + "]");
+  };
+  refuse_outside(d0);
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);
     if (!d.has(sts::kHomed)) throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d));
-    if (deg < d.limit_neg_deg || deg > d.limit_pos_deg)
-      throw ConfigError(doing + ": outside the drive's travel limits [" + deg_str(d.limit_neg_deg) + ", " +
-                        deg_str(d.limit_pos_deg) + "]");
-    const auto counts = static_cast<int32_t>(std::lround(deg * kPosScale));
+    refuse_outside(d);
     uint16_t w[2];
     split_i32(counts, w);
     transport_->write(reg::kTargetPos, {w[0], w[1]}, cancel);

@@ -272,6 +272,29 @@ TEST(TableInProcess, AnotherMastersStopOrTargetEndsTheMoveWithoutAHaltOfOurs) {
   EXPECT_FALSE(control() & m::ctl::kHalt) << control();
 }
 
+// The travel limits are the drive's, in counts: an angle is judged as it will be written, and a
+// refusal names it with the digits that tell it from the limit (a review: 369.99996° went to
+// 370.0000° while 370.00004° was refused as "move to 370.0000°: outside [..., 370.0000°]").
+TEST(TableInProcess, AnAngleIsJudgedAtTheLimitsAsTheDriveWillTakeIt) {
+  SimRig r("start_angle_deg = 360.0\n");
+  r.table->home({});
+  for (const double deg : {369.99996, 370.00004}) {
+    r.table->move_to(deg, {});
+    EXPECT_NEAR(r.table->status().target_deg, 370.0, 1e-9) << deg;
+  }
+  for (const auto& [deg, said] : {std::pair{370.00005, "move to 370.00005°: outside the drive's travel limits "
+                                                       "[-190.0000°, 370.0000°]"},
+                                  std::pair{-190.00006, "move to -190.0001°: outside the drive's travel limits"},
+                                  std::pair{400.0, "move to 400.0000°: outside the drive's travel limits"}}) {
+    try {
+      r.table->move_to(deg, {});
+      ADD_FAILURE() << deg << " taken";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(said, 0), 0u) << e.what();
+    }
+  }
+}
+
 // Another master's CONTROL without SERVO_ON mid-move or mid-homing: the drive brakes and the table
 // stays short of its goal. The call ends at once naming it, with no halt of ours (a review: the
 // move waited out its timeout, 27.6 s, and said "timed out ... off target").
