@@ -784,6 +784,17 @@ void refuse_records_without_checkpoint(const std::string& dir) {
                                 Executive::checkpoint_path(dir), records.size(), listed));
 }
 
+// After a stop, what is kept and how to go on, where the technician looks: stderr and run.log.
+void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t phases, const std::string& why,
+                         spdlog::logger& log) {
+  const std::string hint = fmt::format(
+      "to continue: rig run --resume {} ({} of {} phases kept{}; `rig run --dry-run --resume {}` shows what a resume "
+      "repeats)",
+      shown_text(out), kept, phases, why, shown_text(out));
+  std::cerr << hint << "\n";
+  log.info("{}", hint);
+}
+
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
   // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
@@ -1018,8 +1029,13 @@ int do_run(RunArgs a) {
     b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
-    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(),
-                                dynamic_cast<const ConfigError*>(&e) != nullptr, key, *log);
+    const bool config_error = dynamic_cast<const ConfigError*>(&e) != nullptr;
+    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(), config_error, key,
+                                *log);
+    // The folder stays for a resume once the devices can be opened (a new run into it is refused
+    // "use --resume"), so it is said as after any stop (a review: no hint). A configuration
+    // error is fixed and started anew.
+    if (!config_error) say_how_to_continue(a.out, completed.size(), phases.size(), ": the devices did not open", *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
@@ -1119,12 +1135,7 @@ int do_run(RunArgs a) {
     std::size_t kept = 0;
     if (fs::exists(Executive::checkpoint_path(a.out)))
       for (const PhaseRecord& r : res.phases) kept += r.status == "done" || r.status == "skipped";
-    const std::string hint = fmt::format(
-        "to continue: rig run --resume {} ({} of {} phases kept; `rig run --dry-run --resume {}` shows what "
-        "a resume repeats)",
-        shown_text(a.out), kept, res.phases.size(), shown_text(a.out));
-    std::cerr << hint << "\n";
-    log->info("{}", hint);
+    say_how_to_continue(a.out, kept, res.phases.size(), "", *log);
   }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),

@@ -1110,6 +1110,11 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   EXPECT_NE(junit.find("<error message="), std::string::npos) << junit;
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
   EXPECT_NE(slurp(d + "/run/report.html").find("HW-1"), std::string::npos);
+  // The folder stays for a resume once the devices open, and the run says how, as after any stop
+  // (a review: a new run into it said "use --resume", the failed run nothing).
+  const std::string hint = "to continue: rig run --resume " + d + "/run (0 of 19 phases kept: the devices did not open;";
+  EXPECT_NE(slurp(d + "/io.stderr").find(hint), std::string::npos) << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/run/run.log").find(hint), std::string::npos) << slurp(d + "/run/run.log");
   // Recorded like any other run (spawn() points RIG_HISTORY at d/io.history.sqlite).
   const std::string db = d + "/io.history.sqlite";
   ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
