@@ -514,7 +514,12 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       if (clock_.now_s() - t0 > opt_.ack_timeout_s)
         throw HardwareError(doing + ": set-point not acknowledged (statusword bit 12) within " +
                             secs(opt_.ack_timeout_s) + (r.has(c4::sw::kInternalLimit) ? " (internal limit active)" : "") +
-                            at(r));
+                            at(r) +
+                            // A map without homed_bit cannot tell an unhomed drive, and most
+                            // refuse set-points until homed: the refusal read as cryptic (a review).
+                            (map_.homed_bit ? ""
+                                            : "; a drive that is not homed refuses set-points: run `rig table home` "
+                                              "first (drive map " + map_.path + " has no homed_bit to tell)"));
       clock_.sleep_for(opt_.poll_s, cancel);
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge

@@ -670,6 +670,28 @@ TEST_P(Cia402Client, AnotherMastersHaltEndsHomingAtOnceNamingIt) {
   EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation | c4::cw::kHalt) << "the other master's word, not ours";
 }
 
+// A move on a drive not yet homed: a map with homed_bit refuses it before a write; one without it
+// cannot tell, and the drive's refusal of the set-point says what is likely missing (a review: the
+// bare "set-point not acknowledged ... 0x06B7" read as cryptic).
+TEST_P(Cia402Client, AMoveBeforeHomingSaysHomingIsLikelyMissing) {
+  Rig r(GetParam());
+  auto t = r.client();
+  std::string e;
+  try {
+    t->move_to(90.0, {});
+  } catch (const HardwareError& x) {
+    e = x.what();
+  }
+  if (r.map.homed_bit) {
+    EXPECT_TRUE(has(e, "not homed")) << e;
+  } else {
+    EXPECT_TRUE(has(e, "set-point not acknowledged (statusword bit 12)") &&
+                has(e, "; a drive that is not homed refuses set-points: run `rig table home` first (drive map ") &&
+                has(e, " has no homed_bit to tell)"))
+        << e;
+  }
+}
+
 // A client that homed once, then had a second homing run stopped, no longer says the table is
 // homed (a map without homed_bit: the client's own record; it said homed after the failed run).
 TEST_P(Cia402Client, AHomeStoppedShortLosesTheHomeTheClientHadSeen) {
