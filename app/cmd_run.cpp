@@ -1089,8 +1089,10 @@ int do_run(RunArgs a) {
   }
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
   // ERROR (exit 4) naming them, never a PASS nobody can check.
+  bool records_lost = false;  // then no resume either: it would refuse the folder (exit 2)
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
+    records_lost = !gone.empty();
     if (!gone.empty()) {
       res.outcome = RunOutcome::Error;
       res.message = fmt::format("the run's records are gone from {} (removed while it ran): {}; no verdict without them",
@@ -1130,7 +1132,11 @@ int do_run(RunArgs a) {
   log->info("outcome {} (exit {})", to_string(res.outcome), res.exit_code());
   // After a stop, what is kept and how to go on, where the technician looks (a review: only
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
-  if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
+  if (records_lost) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
+    const std::string no = "no resume: the run's records are gone from " + shown_text(a.out) + "; start a new run";
+    std::cerr << no << "\n";
+    log->info("{}", no);
+  } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
     // Kept: the phases the checkpoint holds (done here, or kept from it by this resume).
     std::size_t kept = 0;
     if (fs::exists(Executive::checkpoint_path(a.out)))

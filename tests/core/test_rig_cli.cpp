@@ -2516,6 +2516,13 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
   EXPECT_NE(why.find("records are gone"), std::string::npos) << why;
   EXPECT_NE(why.find("captures/run01-U10.cap"), std::string::npos) << why;
   EXPECT_NE(slurp(d + "/run/junit.xml").find("captures/run01-U10.cap"), std::string::npos);
+  // No resume either (it refuses the folder, exit 2), so none is offered (a review: "to continue:
+  // rig run --resume DIR (19 of 19 phases kept ...)").
+  EXPECT_EQ(slurp(d + "/io.stderr").find("to continue"), std::string::npos) << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stderr").find("no resume: the run's records are gone from " + d + "/run; start a new run"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume"), 2) << slurp(d + "/resume.stderr");
 }
 
 // A passport the folder cannot take (a full disk, a read-only folder; here a directory squats on
