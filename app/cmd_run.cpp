@@ -225,14 +225,15 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'started': expected a string, found " + inv["started"].type_name());
   // The start the passport, JUnit and history give the run: the form rig writes, and not after
   // this resume (a review: "garbage" and a start in 2030 went into a PASS passport and the
-  // history, and report.html was not written). A minute's slack for two stations' clocks.
+  // history, and report.html was not written). A day's slack: a station's clock stepped back
+  // by NTP, or a run moved from a station whose clock ran fast, must still resume (a code review).
   if (inv.contains("started")) {
     const std::string s = inv["started"].get<std::string>();
     const auto t = history::parse_iso8601(s);
     if (!t || history::normalize_iso8601(s) != s)
       throw ConfigError(path + ": field 'started': \"" + shown_text(s) + "\" is not a UTC time as rig writes it (" +
                         iso8601_utc_now() + ")");
-    if (*t > static_cast<long long>(std::time(nullptr)) + 60)
+    if (*t > static_cast<long long>(std::time(nullptr)) + 86400)
       throw ConfigError(path + ": field 'started': " + s + " is later than this station's clock (" + iso8601_utc_now() +
                         ")");
   }

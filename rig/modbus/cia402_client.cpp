@@ -517,9 +517,10 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
                             at(r) +
                             // A map without homed_bit cannot tell an unhomed drive, and most
                             // refuse set-points until homed: the refusal read as cryptic (a review).
-                            (map_.homed_bit ? ""
-                                            : "; a drive that is not homed refuses set-points: run `rig table home` "
-                                              "first (drive map " + map_.path + " has no homed_bit to tell)"));
+                            (map_.homed_bit || homed_
+                                 ? ""
+                                 : "; a drive that is not homed refuses set-points: run `rig table home` "
+                                   "first (drive map " + map_.path + " has no homed_bit to tell)"));
       clock_.sleep_for(opt_.poll_s, cancel);
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge
@@ -703,12 +704,14 @@ void Cia402Table::stop() noexcept {
     const State st = c4::decode_state(sw);
     bits = command_holding(st);
     known = true;
-    if (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled) {
+    if (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled || st == State::kFault ||
+        st == State::kFaultReactionActive) {
       bits = c4::cw::kCmdQuickStop;
       off_yet_moving = "halt sent as the quick stop command (controlword 0x0102): " + map_.describe(Obj::kStatusword) +
                        " reads " + hex4(sw) + ", " + c4::state_name(st) +
-                       " (power stage off), while the axis reads moving: an axis coasting, or a statusword address "
-                       "that is wrong (check the drive map); the table may still be moving";
+                       " (power stage off or faulted), while the axis reads moving or its velocity could not be "
+                       "read: an axis coasting, or a statusword address that is wrong (check the drive map); the "
+                       "table may still be moving";
     }
   } catch (...) {
   }

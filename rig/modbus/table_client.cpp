@@ -270,6 +270,9 @@ void TableClient::fail_on_stop_bits(const std::string& doing, const DriveState& 
 // own (CONTROL still SERVO_ON) is a fault like any other.
 void TableClient::fail_on_servo_off(const std::string& doing, const DriveState& d) const {
   if (d.has(sts::kServoOn)) return;
+  // A drive may set E-STOP or clear INTERLOCK_OK a poll before ALARM (a code review).
+  if (d.has(sts::kEstop)) throw HardwareError(doing + ": emergency stop pressed (servo off)" + at(d));
+  if (!d.has(sts::kInterlockOk)) throw HardwareError(doing + ": interlock open (servo off)" + at(d));
   if (!(d.control & ctl::kServoOn))
     throw detail::TakenOverError(doing + ": servo switched off by another master (CONTROL reads " + hex4(d.control) +
                                  ")" + at(d));

@@ -1588,9 +1588,26 @@ TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
   EXPECT_EQ(controlword_of(r), c4::cw::kCmdQuickStop | c4::cw::kHalt);
   EXPECT_EQ(r.drive.state(), c4::State::kQuickStopActive);  // not Switch on disabled
   EXPECT_TRUE(has(swapped.last_stop_error(), "halt sent as the quick stop command (controlword 0x0102): ") &&
-              has(swapped.last_stop_error(), " reads 0x0000, Not ready to switch on (power stage off), while the axis "
-                                             "reads moving: an axis coasting, or a statusword address that is wrong"))
+              has(swapped.last_stop_error(), " reads 0x0000, Not ready to switch on (power stage off or faulted), while "
+                                             "the axis reads moving or its velocity could not be read: an axis "
+                                             "coasting, or a statusword address that is wrong"))
       << swapped.last_stop_error();
+  // A statusword read as Fault (0x0008: e.g. an error code through a swapped map) alike (a code review).
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(300.0));
+  r.control(c4::cw::kCmdEnableOperation);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(0.5);
+  if (std::fabs(r.axis->snapshot().velocity_dps) > 10.0) {
+    misread.reads_as[r.map.spec(Obj::kStatusword).address] = 0x0008;
+    m::Cia402Table faulted(m::make_inprocess_transport(misread, r.clock), r.map, r.clock, {});
+    faulted.stop();
+    EXPECT_EQ(controlword_of(r), c4::cw::kCmdQuickStop | c4::cw::kHalt);
+    EXPECT_EQ(r.drive.state(), c4::State::kQuickStopActive);
+    EXPECT_TRUE(has(faulted.last_stop_error(), " reads 0x0008, Fault (power stage off or faulted)"))
+        << faulted.last_stop_error();
+  } else {
+    ADD_FAILURE() << "the drive did not take the second set-point";
+  }
   r.run(2.0);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
