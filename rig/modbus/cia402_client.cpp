@@ -686,9 +686,10 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // Each stop or quick stop asked for, sent or not (the power stage off: "no halt needed"), ends
 // a move or homing run under way before its next command word (StopLatch): one that is still
 // switching the drive on would otherwise enable it and move (a review).
-// A statusword that reads the power stage off (Not ready to switch on, Switch on disabled) while
-// the axis reads moving (stop_goes_out lets such a halt out) is an axis coasting, or a statusword
-// address that is wrong: the halt built from it was Disable voltage, 0x0100, which on a drive
+// A statusword that reads the power stage off or faulted (Not ready to switch on, Switch on
+// disabled, Fault, Fault reaction active) while the axis reads moving or its velocity cannot be
+// read (stop_goes_out lets such a halt out) is an axis coasting, or a statusword address that is
+// wrong: the halt built from it was Disable voltage, 0x0100, which on a drive
 // really in Operation enabled switches the power stage off mid-move (a review: a map with the
 // statusword and error code swapped, "stop sent", exit 0). The quick stop command with halt,
 // 0x0102, enables nothing in any state and quick-stops a drive in Operation enabled; it is sent
