@@ -708,7 +708,7 @@ void Cia402Table::stop() noexcept {
     if (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled || st == State::kFault ||
         st == State::kFaultReactionActive) {
       bits = c4::cw::kCmdQuickStop;
-      off_yet_moving = "halt sent as the quick stop command (controlword 0x0102): " + map_.describe(Obj::kStatusword) +
+      off_yet_moving = "halt delivered to the drive as the quick stop command (controlword 0x0102): " + map_.describe(Obj::kStatusword) +
                        " reads " + hex4(sw) + ", " + c4::state_name(st) +
                        " (power stage off or faulted), while the axis reads moving or its velocity could not be "
                        "read: an axis coasting, or a statusword address that is wrong (check the drive map); the "

@@ -1587,7 +1587,7 @@ TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
   EXPECT_EQ(misread.writes, 1);
   EXPECT_EQ(controlword_of(r), c4::cw::kCmdQuickStop | c4::cw::kHalt);
   EXPECT_EQ(r.drive.state(), c4::State::kQuickStopActive);  // not Switch on disabled
-  EXPECT_TRUE(has(swapped.last_stop_error(), "halt sent as the quick stop command (controlword 0x0102): ") &&
+  EXPECT_TRUE(has(swapped.last_stop_error(), "halt delivered to the drive as the quick stop command (controlword 0x0102): ") &&
               has(swapped.last_stop_error(), " reads 0x0000, Not ready to switch on (power stage off or faulted), while "
                                              "the axis reads moving or its velocity could not be read: an axis "
                                              "coasting, or a statusword address that is wrong"))
