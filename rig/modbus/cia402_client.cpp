@@ -630,6 +630,13 @@ void Cia402Table::send_stop(uint16_t word, const char* name) noexcept {
 // last word this client wrote; without one, it sends nothing rather than a guess that could drop
 // the power stage mid-move.
 namespace {
+// The states whose power stage is off (none of them left by this client's own commands): a halt
+// there is Disable voltage, so stop_goes_out asks the axis whether it is at rest, and stop()
+// builds no halt from them.
+bool power_stage_off(State s) {
+  return s == State::kNotReadyToSwitchOn || s == State::kSwitchOnDisabled || s == State::kFault;
+}
+
 uint16_t command_holding(State s) {
   switch (s) {
     case State::kOperationEnabled: return c4::cw::kCmdEnableOperation;
@@ -663,7 +670,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
     // The axis must read at rest too (one more urgent read): a statusword address that is wrong
     // may read 0, Not ready, while the table turns (a review: "no halt needed", exit 0, and the
     // move went on). Moving, or unread: the halt goes out as it always did.
-    if (why.empty() && (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled || st == State::kFault)) {
+    if (why.empty() && power_stage_off(st)) {
       bool at_rest = false;
       try {
         at_rest = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= 0.01;
@@ -705,13 +712,16 @@ void Cia402Table::stop() noexcept {
     const State st = c4::decode_state(sw);
     bits = command_holding(st);
     known = true;
-    if (st == State::kNotReadyToSwitchOn || st == State::kSwitchOnDisabled || st == State::kFault ||
-        st == State::kFaultReactionActive) {
+    if (power_stage_off(st) || st == State::kFaultReactionActive) {
       bits = c4::cw::kCmdQuickStop;
-      off_yet_moving = "halt delivered to the drive as the quick stop command (controlword 0x0102): " + map_.describe(Obj::kStatusword) +
-                       " reads " + hex4(sw) + ", " + c4::state_name(st) +
-                       " (power stage off or faulted), while the axis reads moving or its velocity could not be "
-                       "read: an axis coasting, or a statusword address that is wrong (check the drive map); the "
+      // stop_goes_out asked the axis only in the power-off states: Fault reaction active is not
+      // claimed to read moving.
+      off_yet_moving = "halt delivered to the drive as the quick stop command (controlword 0x0102): " +
+                       map_.describe(Obj::kStatusword) + " reads " + hex4(sw) + ", " + c4::state_name(st) +
+                       (power_stage_off(st) ? " (power stage off or faulted), while the axis reads moving or its "
+                                              "velocity could not be read"
+                                            : " (a drive reacting to a fault)") +
+                       ": an axis coasting, or a statusword address that is wrong (check the drive map); the "
                        "table may still be moving";
     }
   } catch (...) {
