@@ -637,6 +637,11 @@ bool power_stage_off(State s) {
   return s == State::kNotReadyToSwitchOn || s == State::kSwitchOnDisabled || s == State::kFault;
 }
 
+// Ready to switch on and Switched on: the power stage may be on but the drive function is
+// disabled, so nothing turns under power there either; a halt built from them is Shutdown or
+// Switch on (0x0106, 0x0107), which takes a drive really in Operation enabled out of it mid-move.
+bool drive_function_disabled(State s) { return s == State::kReadyToSwitchOn || s == State::kSwitchedOn; }
+
 uint16_t command_holding(State s) {
   switch (s) {
     case State::kOperationEnabled: return c4::cw::kCmdEnableOperation;
@@ -671,12 +676,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
     // may read 0, Not ready, while the table turns (a review: "no halt needed", exit 0, and the
     // move went on). Moving, or unread: the halt goes out as it always did.
     if (why.empty() && power_stage_off(st)) {
-      bool at_rest = false;
-      try {
-        at_rest = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= 0.01;
-      } catch (...) {
-      }
-      if (at_rest) {
+      if (axis_reads_at_rest()) {
         why = std::string("no ") + name + " needed: drive \"" + map_.name + "\" in " + c4::state_name(st) +
               " (statusword " + hex4(statusword) + ") and at rest: its power stage is off";
         needless = true;
@@ -690,6 +690,15 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
   return false;
 }
 
+// One urgent read of velocity actual; false where it reads moving or cannot be read.
+bool Cia402Table::axis_reads_at_rest() noexcept {
+  try {
+    return std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= 0.01;
+  } catch (...) {
+    return false;
+  }
+}
+
 // Each stop or quick stop asked for, sent or not (the power stage off: "no halt needed"), ends
 // a move or homing run under way before its next command word (StopLatch): one that is still
 // switching the drive on would otherwise enable it and move (a review).
@@ -700,7 +709,10 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // really in Operation enabled switches the power stage off mid-move (a review: a map with the
 // statusword and error code swapped, "stop sent", exit 0). The quick stop command with halt,
 // 0x0102, enables nothing in any state and quick-stops a drive in Operation enabled; it is sent
-// instead and said as a fault (the table may still be moving).
+// instead and said as a fault (the table may still be moving). Ready to switch on and Switched on
+// alike where the axis reads moving or its velocity cannot be read (their halts, 0x0106 and 0x0107,
+// are Shutdown and Disable operation to a drive really in Operation enabled); at rest, their halt
+// holds the state as before.
 void Cia402Table::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
   uint16_t bits = 0;
@@ -712,15 +724,17 @@ void Cia402Table::stop() noexcept {
     const State st = c4::decode_state(sw);
     bits = command_holding(st);
     known = true;
-    if (power_stage_off(st) || st == State::kFaultReactionActive) {
+    const bool disabled_yet_moving = drive_function_disabled(st) && !axis_reads_at_rest();
+    if (power_stage_off(st) || st == State::kFaultReactionActive || disabled_yet_moving) {
       bits = c4::cw::kCmdQuickStop;
-      // stop_goes_out asked the axis only in the power-off states: Fault reaction active is not
-      // claimed to read moving.
+      // The axis was asked in the power-off states (stop_goes_out) and the drive-function-disabled
+      // ones (just above): Fault reaction active is not claimed to read moving.
       off_yet_moving = "halt delivered to the drive as the quick stop command (controlword 0x0102): " +
                        map_.describe(Obj::kStatusword) + " reads " + hex4(sw) + ", " + c4::state_name(st) +
-                       (power_stage_off(st) ? " (power stage off or faulted), while the axis reads moving or its "
-                                              "velocity could not be read"
-                                            : " (a drive reacting to a fault)") +
+                       (st == State::kFaultReactionActive
+                            ? " (a drive reacting to a fault)"
+                            : std::string(power_stage_off(st) ? " (power stage off or faulted)" : " (drive function disabled)") +
+                                  ", while the axis reads moving or its velocity could not be read") +
                        ": an axis coasting, or a statusword address that is wrong (check the drive map); the "
                        "table may still be moving";
     }

@@ -84,6 +84,7 @@ class Cia402Table final : public RotaryTable {
   static bool drive_restarted(const Cia402Reading& r);
   void send_stop(uint16_t word, const char* name) noexcept;
   bool stop_goes_out(uint16_t statusword, const char* name) noexcept;
+  bool axis_reads_at_rest() noexcept;
   template <class Body>
   void guarded(const std::string& doing, Body body);
 

@@ -1611,6 +1611,42 @@ TEST(Cia402ClientRefusals, NoHaltIsSentWhereThePowerStageIsOff) {
   r.run(2.0);
   EXPECT_NEAR(r.axis->snapshot().velocity_dps, 0.0, 1e-3);
   EXPECT_LT(r.axis->actual_angle_deg(), 299.0);
+  // Read as Ready to switch on (0x0021) or Switched on (0x0023) while the axis turns: their
+  // holding halts were Shutdown (0x0106) and Disable operation (0x0107), which took the drive, in
+  // Operation enabled, out of it mid-move; the quick stop command goes instead, said as a fault.
+  for (const uint16_t reading : {uint16_t{0x0021}, uint16_t{0x0023}}) {
+    misread.reads_as.clear();
+    r.control(c4::cw::kShutdown);
+    r.control(c4::cw::kCmdSwitchOn);
+    r.control(c4::cw::kCmdEnableOperation);
+    r.write(Obj::kTargetPosition, r.map.deg_to_counts(reading == 0x0021 ? 10.0 : 300.0));
+    r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+    r.run(0.5);
+    ASSERT_EQ(r.drive.state(), c4::State::kOperationEnabled);
+    ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 10.0) << reading;
+    misread.reads_as[r.map.spec(Obj::kStatusword).address] = reading;
+    m::Cia402Table disabled(m::make_inprocess_transport(misread, r.clock), r.map, r.clock, {});
+    disabled.stop();
+    EXPECT_EQ(controlword_of(r), c4::cw::kCmdQuickStop | c4::cw::kHalt) << reading;
+    EXPECT_EQ(r.drive.state(), c4::State::kQuickStopActive) << reading;
+    EXPECT_TRUE(has(disabled.last_stop_error(), "halt delivered to the drive as the quick stop command (controlword 0x0102): ") &&
+                has(disabled.last_stop_error(), reading == 0x0021 ? " reads 0x0021, Ready to switch on (drive function disabled), while the axis reads moving"
+                                                                  : " reads 0x0023, Switched on (drive function disabled), while the axis reads moving"))
+        << disabled.last_stop_error();
+    r.run(2.0);
+  }
+  // At rest in Switched on, the halt holds that state as before (0x0107), no fault.
+  misread.reads_as.clear();
+  r.control(c4::cw::kDisableVoltage);  // out of Quick stop active (transition 12)
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdSwitchOn);
+  r.run(0.1);
+  ASSERT_EQ(r.drive.state(), c4::State::kSwitchedOn);
+  m::Cia402Table resting(m::make_inprocess_transport(misread, r.clock), r.map, r.clock, {});
+  resting.stop();
+  EXPECT_EQ(resting.last_stop_error(), "");
+  EXPECT_EQ(controlword_of(r), c4::cw::kCmdSwitchOn | c4::cw::kHalt);
+  EXPECT_EQ(r.drive.state(), c4::State::kSwitchedOn);
   // Enabled, the halt goes out as before.
   t.home({});
   const int before = dev.writes;
