@@ -111,7 +111,12 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
   } else if (auto c = accuracy_class(p.classes, *b)) {
     ctx.values.set("accuracy_class", static_cast<double>(*c), p.classes[*c - 1].name);
   } else {
-    ctx.values.set("accuracy_class", std::nullopt, fmt::format("B = {:.3g} g exceeds every class in the profile", *b));
+    // B was measured: the class is missing because B is beyond the table, which the verdict says.
+    ctx.values
+        .set("accuracy_class", std::nullopt,
+             fmt::format("B = {:.3g} g exceeds every class in the profile (the loosest, '{}', takes B up to {:.3g} g)", *b,
+                         p.classes.back().name, p.classes.back().max_b_g))
+        .null_verdict = "B exceeds every accuracy class";
   }
   note_gaps(ctx, *st.in_run);
 }

@@ -25,7 +25,7 @@ void judge(Measurement& m, bool run_complete) {
     // Issue 12: an acceptance passport never passes a DUT whose limited value could not be measured.
     if (needed && run_complete) {
       m.outcome = Outcome::Fail;
-      m.verdict = "required value not measured";
+      m.verdict = m.null_verdict.empty() ? "required value not measured" : m.null_verdict;
     } else {
       m.outcome = Outcome::Unset;
     }
@@ -102,6 +102,7 @@ Measurement& MeasurementSet::set(const std::string& name, std::optional<double> 
   m->reason = reason;
   m->outcome = Outcome::Unset;  // judged once, by judge_all()
   m->verdict.clear();
+  m->null_verdict.clear();
   return *m;
 }
 
@@ -123,6 +124,7 @@ void MeasurementSet::forget(const std::string& name) {
   m->hi.reset();
   m->reason.clear();
   m->verdict.clear();
+  m->null_verdict.clear();
   m->outcome = Outcome::Unset;
 }
 
@@ -175,6 +177,7 @@ void MeasurementSet::restore(const nlohmann::json& values) {
       throw std::invalid_argument(where + ".reason: expected a string, found " + j["reason"].type_name());
     cur->reason = j.value("reason", "");
     cur->verdict.clear();
+    cur->null_verdict.clear();
     cur->outcome = Outcome::Unset;  // judged again from the value and the current profile
   }
 }

@@ -37,6 +37,10 @@ struct Measurement {
   Outcome outcome = Outcome::Unset;
   std::string reason;   // the phase's note: why null, how it was obtained, or the class name
   std::string verdict;  // set by judge() on a FAIL: why it failed (empty otherwise)
+  // The verdict of a required value that is null because what it is read from lies beyond its
+  // scale (accuracy_class: B measured, above every class), not because nothing was measured;
+  // empty: "required value not measured". Set by the phase after set(); set() clears it.
+  std::string null_verdict;
   // What the passport's "reason" shows: the verdict, with the phase's note after it.
   std::string shown_reason() const;
 };

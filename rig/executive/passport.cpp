@@ -69,6 +69,7 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     const std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
     if (m.outcome == Outcome::Fail) {
       const std::string what = m.value ? fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)
+                                       : !m.null_verdict.empty() ? fmt::format("{}: {}", m.name, m.null_verdict)
                                        : m.limits ? fmt::format("{} is required (limits {}) but has no value", m.name, lim)
                                                   : fmt::format("{} is required but has no value", m.name);  // a class table
       o << "<failure message=\"" << xml_escape(what) << "\">" << xml_escape(m.shown_reason()) << "</failure>";

@@ -464,6 +464,15 @@ TEST(Measurements, ANullLimitedValueFailsACompletedRunWithItsReason) {
   v.judge_all(true);  // judging is idempotent
   EXPECT_EQ(v.to_json()["k"]["reason"], j["k"]["reason"]);
   EXPECT_EQ(j["k"]["description"], "rate random walk");
+  // A phase that measured what the value is read from, beyond the value's scale, says so instead
+  // (the accuracy class of a B above every class); a new value clears it.
+  v.set("k", std::nullopt, "B = 3e-5 g").null_verdict = "B exceeds every accuracy class";
+  v.judge_all(true);
+  EXPECT_EQ(v.find("k")->outcome, Outcome::Fail);
+  EXPECT_EQ(v.to_json()["k"]["reason"], "B exceeds every accuracy class: B = 3e-5 g");
+  v.set("k", std::nullopt, "no capture");
+  v.judge_all(true);
+  EXPECT_EQ(v.to_json()["k"]["reason"], "required value not measured: no capture");
 }
 
 TEST(Executive, OutcomesAreJudgedOnceTheSameAfterAResume) {

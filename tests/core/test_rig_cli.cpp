@@ -1760,10 +1760,18 @@ TEST(RigCli, ResumeOfAFailingProfileStillFails) {
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "FAIL");
   EXPECT_EQ(p["values"]["accuracy_class"]["outcome"], "FAIL");
-  EXPECT_NE(p["values"]["accuracy_class"]["reason"].get<std::string>().find("exceeds every class"), std::string::npos);
-  EXPECT_NE(slurp(d + "/run/junit.xml").find("<failure message=\"accuracy_class is required but has no value\">"),
+  // B was measured: the class is missing because B is above every class, and the verdict says
+  // so (it said "required value not measured").
+  EXPECT_EQ(p["values"]["accuracy_class"]["reason"].get<std::string>().rfind("B exceeds every accuracy class: B = ", 0), 0u)
+      << p["values"]["accuracy_class"]["reason"];
+  EXPECT_NE(p["values"]["accuracy_class"]["reason"].get<std::string>().find(
+                " g exceeds every class in the profile (the loosest, 'impossible', takes B up to 1e-12 g)"),
             std::string::npos)
-      << slurp(d + "/run/junit.xml");  // it said "(limits none)"
+      << p["values"]["accuracy_class"]["reason"];
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("<failure message=\"accuracy_class: B exceeds every accuracy class\">B exceeds every accuracy class: B = "),
+            std::string::npos)
+      << slurp(d + "/run/junit.xml");  // it said "(limits none)", then "is required but has no value"
+  EXPECT_EQ(p["values"]["accuracy_class"]["reason"], whole["values"]["accuracy_class"]["reason"]);
   for (const auto& ph : p["phases"])
     if (ph["id"] == "in-run-b") {
       EXPECT_EQ(ph["status"], "done") << "computed again from the in-run capture, not read from the checkpoint";
