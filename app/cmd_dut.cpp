@@ -208,6 +208,9 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
 // and named LOG:LINE on stderr. Exit 0: every line decoded; 2: some line was skipped or the
 // log holds no frame at all (the decodable rest is still printed).
 int cmd_decode(const DutArgs& a) {
+  // A folder opens and reads as empty: it said "holds no CAN frame" (a review).
+  if (struct stat st{}; ::stat(a.log.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw ConfigError(a.log + ": is a folder, not a candump log (give one file)");
   // The DBC: --dbc FILE; else the hardware file's [dut], checked as `rig run` checks it (its
   // dbc found beside the file); else the rig protocol's, built in.
   std::shared_ptr<const link::Dbc> db;

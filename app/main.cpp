@@ -58,7 +58,9 @@ void decimal_numbers_only(CLI::App& app) {
           return decimal_text(v, whole, is_unsigned)
                      ? std::string()
                      : "'" + rig::shown_ascii(v) + "' is not a decimal " +
-                           (is_unsigned ? "whole number >= 0 (no sign, no leading zero)"
+                           // No bound here: the option's own check states its range (--count
+                           // >= 1 said ">= 0" for '01', a review).
+                           (is_unsigned ? "whole number (no sign, no leading zero)"
                                         : whole ? "whole number (no leading zero)" : "number");
         },
         ""));

@@ -1493,6 +1493,9 @@ TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
   std::ofstream(d + "/notes.txt") << "this is not a candump log\n";
   EXPECT_EQ(run({"dut", "decode", d + "/notes.txt"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stderr").find("notes.txt:1: skipped: not a candump frame line"), std::string::npos);
+  EXPECT_EQ(run({"dut", "decode", d}, d + "/io"), 2);  // it said "holds no CAN frame"
+  EXPECT_NE(slurp(d + "/io.stderr").find(d + ": is a folder, not a candump log (give one file)"), std::string::npos)
+      << slurp(d + "/io.stderr");
 }
 
 // `rig dut --hardware FILE decode LOG` decodes with the hardware file's [dut] dbc, found beside
@@ -2675,7 +2678,7 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--orders", "5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
       {{"--orders", "2", "2"}, "--orders: 2 is given twice"},
       {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
-      {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number >= 0"},
+      {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number (no sign, no leading zero)"},
       {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};
   for (const auto& [opts, why] : bad) {
     std::vector<std::string> args = {"filter", "select"};
@@ -2720,8 +2723,9 @@ TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
   const std::string d = tmp("dut-stream");
   fs::create_directories(d + "/a-folder");
   const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
-      {{"--count", "-1"}, "--count: '-1' is not a decimal whole number >= 0"},
+      {{"--count", "-1"}, "--count: '-1' is not a decimal whole number (no sign, no leading zero)"},
       {{"--count", "0"}, "--count: '0': must be a number of samples >= 1"},
+      {{"--count", "01"}, "--count: '01' is not a decimal whole number (no sign, no leading zero)"},
       {{"--seconds", "-5"}, "--seconds: '-5': must be a number of seconds in (0, 1e+06]"},
       {{"--seconds", "nan"}, "--seconds: 'nan': must be"},
       {{"--seconds", "0"}, "--seconds: '0': must be"},

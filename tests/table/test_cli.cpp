@@ -213,7 +213,7 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   EXPECT_EQ(rig(where_ + " --unit 10 status", out), 0) << out;  // the emulator answers every unit: decimal 10
   EXPECT_NE(out.find(" unit 10"), std::string::npos) << out;
   EXPECT_EQ(run(std::string(RIG_BIN) + " analyze /dev/null --segment -1", out), 2) << out;
-  EXPECT_NE(out.find("'-1' is not a decimal whole number >= 0"), std::string::npos) << out;
+  EXPECT_NE(out.find("'-1' is not a decimal whole number (no sign, no leading zero)"), std::string::npos) << out;
   // A refused value is shown with its control bytes as \xNN, never sent to the terminal.
   EXPECT_EQ(rig(where_ + " move \"$(printf '1\\033[2J')\"", out), 2) << out;
   EXPECT_NE(out.find("'1\\x1B[2J' is not a decimal number"), std::string::npos) << out;
