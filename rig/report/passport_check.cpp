@@ -55,12 +55,46 @@ std::string expected_outcome(const json& m, bool run_complete, std::string& why)
   return in ? "PASS" : "FAIL";
 }
 
+// The measurements every acceptance passport lists, null when not measured (docs/contracts.md,
+// "Measurement names"); the GOST block lengths are the profile's, at least one of them.
+constexpr const char* kEveryPassportLists[] = {"bias",  "base_error", "in_run_b_allan",          "tau_cp",
+                                               "q",     "n",          "k",                       "r",
+                                               "in_run_b_allan_filtered", "rms_unfiltered", "rms_filtered",
+                                               "bandwidth_0p5", "settling_time", "accuracy_class"};
+
+// A judged run (PASS or FAIL) went through every phase and lists every measurement: a phase left
+// pending, aborted or failed, or a value taken out, is a passport changed after its run (a review:
+// a hand-edited PASS with pending phases and its failing value deleted was reported and recorded).
+std::string incomplete_judged_run(const json& p, const std::string& run) {
+  if (const json ph = p.value("phases", json()); ph.is_array())
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+      if (!ph[i].is_object()) continue;
+      const std::string st = text(ph[i].value("status", json("")));
+      if (st != "done" && st != "skipped")
+        return "outcome is " + run + ", but phases[" + std::to_string(i) + "] (" + text(ph[i].value("id", json(""))) +
+               ") is " + st + " (a judged run has done or skipped every phase)";
+    }
+  const json& v = p["values"];
+  for (const char* name : kEveryPassportLists)
+    if (!v.contains(name))
+      return "outcome is " + run + ", but values has no " + name +
+             " (a passport lists every measurement of the procedure, null when not measured)";
+  bool gost = false;
+  for (const auto& [name, m] : v.items()) gost = gost || name.rfind("in_run_b_gost_", 0) == 0;
+  if (!gost)
+    return "outcome is " + run + ", but values has no in_run_b_gost_<N>s (a passport lists every measurement of "
+           "the procedure, null when not measured)";
+  return {};
+}
+
 }  // namespace
 
 std::string verdict_contradiction(const json& p) {
   if (!p.is_object() || !p.contains("values") || !p["values"].is_object()) return {};
   const std::string run = text(p.value("outcome", json("")));
   const bool complete = run == "PASS" || run == "FAIL";  // ABORTED and ERROR judge what they measured
+  if (complete)
+    if (std::string c = incomplete_judged_run(p, run); !c.empty()) return c;
   std::string failed;  // the first value that failed
   for (const auto& [name, m] : p["values"].items()) {
     if (!m.is_object()) continue;

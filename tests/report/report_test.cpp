@@ -420,6 +420,30 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
   EXPECT_EQ(verdict_contradiction(edited), "");
   edited["outcome"] = "PASS";
   EXPECT_NE(verdict_contradiction(edited), "");
+  // A judged run went through every phase and lists every measurement (a review: a PASS with
+  // pending phases and its failing value deleted was reported and recorded).
+  edited = p;
+  edited["phases"] = json::array({{{"id", "bring-up"}, {"status", "done"}}, {{"id", "loop"}, {"status", "skipped"}},
+                                  {{"id", "in-run"}, {"status", "pending"}}});
+  EXPECT_EQ(verdict_contradiction(edited),
+            "outcome is PASS, but phases[2] (in-run) is pending (a judged run has done or skipped every phase)");
+  edited["outcome"] = "FAIL";
+  EXPECT_NE(verdict_contradiction(edited).find("outcome is FAIL, but phases[2] (in-run) is pending"), std::string::npos);
+  edited["phases"][2]["status"] = "done";
+  EXPECT_EQ(verdict_contradiction(edited), "");
+  for (const std::string name : {"k", "accuracy_class"}) {
+    edited = p;
+    edited["values"].erase(name);
+    EXPECT_EQ(verdict_contradiction(edited), "outcome is PASS, but values has no " + name +
+                                                 " (a passport lists every measurement of the procedure, null when not "
+                                                 "measured)");
+    edited["outcome"] = "ABORTED";  // what a run that stopped early lists is not judged here
+    EXPECT_EQ(verdict_contradiction(edited), "");
+  }
+  edited = p;
+  for (auto it = p["values"].begin(); it != p["values"].end(); ++it)
+    if (it.key().rfind("in_run_b_gost_", 0) == 0) edited["values"].erase(it.key());
+  EXPECT_NE(verdict_contradiction(edited).find("values has no in_run_b_gost_<N>s"), std::string::npos);
 
   TempDir d;
   json bad = p;
