@@ -717,7 +717,7 @@ void Cia402Table::stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, false);
   uint16_t bits = 0;
   bool known = false;
-  std::string off_yet_moving;
+  std::string off_yet_moving, unread;
   try {
     const auto sw = static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true));
     if (!stop_goes_out(sw, "halt")) return;
@@ -738,6 +738,11 @@ void Cia402Table::stop() noexcept {
                        ": an axis coasting, or a statusword address that is wrong (check the drive map); the "
                        "table may still be moving";
     }
+  } catch (const std::exception& e) {
+    try {
+      unread = e.what();
+    } catch (...) {
+    }
   } catch (...) {
   }
   // This client's quick stop stands whatever the statusword showed (the drive may not have taken
@@ -746,8 +751,15 @@ void Cia402Table::stop() noexcept {
   // Only a word this client wrote: one read back may be a gateway's 0 (Disable voltage).
   if (!known && control_written_) bits = static_cast<uint16_t>(control_.load() & 0x000F), known = true;
   if (!known) {
-    detail::record_stop(stop_mu_, last_stop_error_, "halt not sent: the controlword is unknown (read the status first)",
-                        [&] { stop_needless_ = false; });
+    // Said with what failed and what still works: the quick stop command needs no word to keep
+    // (a technician at a silent link read "read the status first").
+    std::string why = "halt not sent: the controlword is unknown (the statusword could not be read";
+    try {
+      why += (unread.empty() ? std::string() : ": " + unread) +
+             ", and this client has written none); `rig table quick-stop` sends the quick stop command, which needs none";
+    } catch (...) {
+    }
+    detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
     return;
   }
   send_stop(static_cast<uint16_t>(bits | c4::cw::kHalt), "halt");

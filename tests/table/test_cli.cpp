@@ -1,7 +1,10 @@
 // `rig table status|home|move|stop|quick-stop|reset` against the emulator on a
 // real wire, checking output and the documented exit codes (docs/contracts.md).
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <poll.h>
+#include <sys/socket.h>
 #include <pty.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -10,6 +13,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <atomic>
 #include <filesystem>
 #include <thread>
 
@@ -67,7 +71,11 @@ TEST_F(RigTable, StatusHomeMove) {
   ASSERT_EQ(rig(where_ + " status --json", out), 0) << out;
   EXPECT_NE(out.find("\"homed\": true"), std::string::npos) << out;
   EXPECT_NE(out.find("\"at_target\": true"), std::string::npos) << out;
+  // A stop is one urgent read of the status block and the CONTROL write: a status read before it
+  // added a request to every stop and two timeouts to one on a silent link (a review).
+  const uint64_t before = server_.requests_served();
   ASSERT_EQ(rig(where_ + " stop", out), 0) << out;
+  EXPECT_EQ(server_.requests_served() - before, 2u);
   ASSERT_EQ(rig(where_ + " quick-stop", out), 0) << out;
   EXPECT_NE(out.find("quick stop sent"), std::string::npos) << out;
 }
@@ -293,6 +301,72 @@ TEST_F(RigTable, NohupKeepsAMoveGoingThroughSighup) {
 
 INSTANTIATE_TEST_SUITE_P(EndingSignals, RigTableSignal, ::testing::Values(SIGINT, SIGTERM, SIGHUP),
                          [](const auto& p) { return std::string(sigabbrev_np(p.param)); });
+
+// A drive that takes the connection and never answers (a hung gateway): `rig table stop` sends its
+// stop's own requests only, the read of what the stop keeps and the write, each with its one
+// reconnect; a status read before them added two more timeouts (a review: about seven in all).
+TEST(RigTableSilentLink, AStopAsksOnlyForWhatItNeeds) {
+  const int ls = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(ls, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(ls, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(::listen(ls, 16), 0);
+  socklen_t len = sizeof a;
+  ASSERT_EQ(::getsockname(ls, reinterpret_cast<sockaddr*>(&a), &len), 0);
+  std::atomic<int> requests{0};
+  std::atomic<bool> done{false};
+  std::thread silent([&] {  // counts Modbus TCP requests (MBAP length field), answers none
+    std::vector<int> conns;
+    std::vector<std::string> buf;
+    while (!done) {
+      std::vector<pollfd> fds{{ls, POLLIN, 0}};
+      for (int c : conns) fds.push_back({c, POLLIN, 0});
+      if (::poll(fds.data(), fds.size(), 20) <= 0) continue;
+      if (fds[0].revents & POLLIN) {
+        conns.push_back(::accept4(ls, nullptr, nullptr, SOCK_CLOEXEC));
+        buf.emplace_back();
+      }
+      for (std::size_t i = 1; i < fds.size(); ++i) {
+        if (!(fds[i].revents & (POLLIN | POLLHUP))) continue;
+        char b[512];
+        const ssize_t n = ::read(conns[i - 1], b, sizeof b);
+        if (n <= 0) continue;
+        std::string& s = buf[i - 1];
+        s.append(b, static_cast<std::size_t>(n));
+        while (s.size() >= 6) {
+          const std::size_t frame = 6u + ((static_cast<unsigned char>(s[4]) << 8) | static_cast<unsigned char>(s[5]));
+          if (s.size() < frame) break;
+          ++requests;
+          s.erase(0, frame);
+        }
+      }
+    }
+    for (int c : conns) ::close(c);
+  });
+  std::string out;
+  const std::string where = " --modbus 127.0.0.1:" + std::to_string(ntohs(a.sin_port)) + " --timeout 0.05 ";
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table" + where + "stop", out), 4) << out;
+  EXPECT_NE(out.find("stop not delivered (the table may still be moving)"), std::string::npos) << out;
+  const int v1 = requests.exchange(0);
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table" + where + "--drive cia402 --drive-map " + RIG_SOURCE_DIR +
+                    "/drives/generic-cia402.toml stop",
+                out),
+            4)
+      << out;
+  EXPECT_NE(out.find("halt not sent: the controlword is unknown (the statusword could not be read: "), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("`rig table quick-stop` sends the quick stop command"), std::string::npos) << out;
+  const int c4 = requests.load();
+  done = true;
+  silent.join();
+  ::close(ls);
+  EXPECT_LE(v1, 4) << "rig-v1: the status block read and the CONTROL write, each with one reconnect";
+  EXPECT_LE(c4, 2) << "CiA 402: the statusword read with one reconnect, then nothing to send";
+  EXPECT_GE(v1, 2);
+  EXPECT_GE(c4, 1);
+}
 
 }  // namespace
 }  // namespace rig::table_test
