@@ -172,6 +172,9 @@ Biquad parse_biquad(const std::string& text) {
     } catch (const std::exception&) {
       throw ConfigError("--biquad '" + text + "': '" + item + "' is not a number");
     }
+    // Sent as IEEE binary32 (docs/can-protocol.md); nan was called "unstable" (a review).
+    if (!(std::abs(v.back()) <= std::numeric_limits<float>::max()))
+      throw ConfigError("--biquad '" + text + "': '" + item + "' is not a finite number within the protocol's 32-bit float range");
   }
   if (v.size() != 5) throw ConfigError("--biquad '" + text + "': give 5 numbers b0,b1,b2,a1,a2 (a0 = 1)");
   const Biquad b{v[0], v[1], v[2], v[3], v[4]};

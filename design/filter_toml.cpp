@@ -32,7 +32,7 @@ std::vector<Biquad> read_sections(const toml::node& n) {
       // Sent as IEEE binary32 (docs/can-protocol.md): beyond its range a coefficient would arrive as inf.
       if (!(std::abs(*v) <= std::numeric_limits<float>::max()))
         throw ConfigError(cfg::where((*s)[i]) + ": filter coefficient " + num(*v) +
-                          " is beyond the protocol's 32-bit float range");
+                          (std::isnan(*v) ? " is not a number" : " is beyond the protocol's 32-bit float range"));
       c[i] = *v;
     }
     const Biquad b{c[0], c[1], c[2], c[3], c[4]};

@@ -1462,6 +1462,11 @@ TEST(RigCli, DutSetFilterRefusesAnUnstableSectionBeforeTheLinkOpens) {
   EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", "1,0,0,-2.5,1.5"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stderr").find("--biquad '1,0,0,-2.5,1.5': unstable"), std::string::npos)
       << slurp(d + "/io.stderr");
+  for (const char* bad : {"1,0,0,0,nan", "1,0,0,inf,0", "1e39,0,0,0,0"}) {  // nan was called "unstable"
+    EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", bad}, d + "/io"), 2) << bad;
+    EXPECT_NE(slurp(d + "/io.stderr").find("is not a finite number within the protocol's 32-bit float range"), std::string::npos)
+        << slurp(d + "/io.stderr");
+  }
   EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", "0.2,0,0,-0.5,0.1"}, d + "/io"), 4)
       << "a stable section gets as far as the missing interface";
 }

@@ -77,6 +77,9 @@ TEST(FilterToml, ErrorsNameTheFileAndLine) {
             "f.toml:1:13: filter section [1, 0, 0, -2.5, 1.5] is unstable: its poles (a1, a2) are not inside the unit circle");
   EXPECT_EQ(error_of("sections = [[1e308, 0.0, 0.0, 0.0, 0.0]]\n"),
             "f.toml:1:14: filter coefficient 1e+308 is beyond the protocol's 32-bit float range");
+  EXPECT_NE(error_of("sections = [[1.0, 0.0, 0.0, 0.0, nan]]\n").find("f.toml:1:34: filter coefficient nan is not a number"),
+            std::string::npos)
+      << error_of("sections = [[1.0, 0.0, 0.0, 0.0, nan]]\n");
   EXPECT_NE(error_of("sections = [[1.0, 0.0, 0.0, 0.0, 1.0]]\n").find("unstable"), std::string::npos)
       << "a pole on the unit circle";
   EXPECT_EQ(error_of("sections = [[0.2, 0.0, 0.0, -0.5, 0.1]]\n"), "") << "a stable section";
