@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/modbus/cia402.hpp"
 
@@ -136,6 +137,12 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   const toml::table& drive = *cfg::get_table(root, "drive", true);
   cfg::check_keys(drive, {"name", "address_base", "word_order"}, "drive");
   m.name = cfg::get_string(drive, "name");
+  // The name is how every message and `rig table status` tells which drive they mean: "" read
+  // 'drive ""' (a review), a control character reached the terminal as it was.
+  if (m.name.empty() || has_unshowable(m.name))
+    throw ConfigError(cfg::where(*drive.get("name")) + ": 'name' = \"" + shown_text(m.name) + "\": " +
+                      (m.name.empty() ? "the drive's name is required, not empty"
+                                      : "a control character (shown here as \\xNN) cannot be in the drive's name"));
   const auto base = cfg::get_int(drive, "address_base", 0, 0, 65535);
   const bool low_first = parse_word_order(drive, "word_order", false);
 

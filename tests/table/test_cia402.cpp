@@ -111,6 +111,16 @@ TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
                 has(e, "target_position (0x607A)") && has(e, std::string(*width ? "32" : "16") + "-bit unsigned register"))
         << e;
   }
+  // The drive's name, which every message uses to say which drive: not empty, no control
+  // character (a review: name = "" was accepted).
+  std::string unnamed = ok;
+  unnamed.replace(unnamed.find("name = \"t\""), 10, "name = \"\"");
+  e = map_error(unnamed);
+  EXPECT_TRUE(has(e, "bad-map.toml:2:") && has(e, "'name' = \"\": the drive's name is required, not empty")) << e;
+  unnamed = ok;
+  unnamed.replace(unnamed.find("name = \"t\""), 10, "name = \"t\\u001b[2J\"");
+  e = map_error(unnamed);
+  EXPECT_TRUE(has(e, "bad-map.toml:2:") && has(e, "'name' = \"t\\x1B[2J\": a control character")) << e;
 }
 
 // A manufacturer-specific (negative) homing method needs a signed register: refused with the
