@@ -9,7 +9,7 @@ namespace {
 void check_dut_keys(const toml::table& t) {
   cfg::check_keys(t, {"can", "silence_ms", "command_timeout_ms", "command_attempts", "reorder_window", "rcvbuf_kb",
                       "loop_test", "commands", "dbc", "stream", "design"},
-                  "[dut]");
+                  "dut");
 }
 }  // namespace
 

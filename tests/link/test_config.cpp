@@ -35,7 +35,7 @@ TEST(DutConfig, MistakesAreConfigErrorsWithPlace) {
     }
   };
   expect_err("silence_ms = 100\n", "can");
-  expect_err("can = \"vcan0\"\nsilense_ms = 100\n", "silense_ms");
+  expect_err("can = \"vcan0\"\nsilense_ms = 100\n", "unknown key 'silense_ms' in [dut] (");  // it said "[[dut]]"
   expect_err("can = \"vcan0\"\nsilence_ms = -1\n", "silence_ms");
   expect_err("can = \"an-interface-name-too-long\"\n", "network interface");
   expect_err("can = \"vcan0\"\nloop_test = \"no\"\n", "loop_test");
