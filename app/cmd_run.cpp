@@ -1170,10 +1170,12 @@ void add_run(CLI::App& app, int& rc) {
   sub->add_flag("--yes,-y", a->yes, "Skip operator confirmations (automated runs)");
   sub->add_flag("--dry-run", a->dry_run, "Print the plan and its duration; touch nothing");
   sub->add_flag("--quiet,-q", a->quiet, "Only the final table on the terminal");
-  sub->add_option("--db", a->db,
+  CLI::Option* db = sub->add_option("--db", a->db,
                   "History database URL (default: a resumed run's; else the hardware file's [history] url, "
                   "RIG_HISTORY, the rig config, $XDG_DATA_HOME or ~/.local/share: docs/history.md)");
-  sub->add_flag("--no-history", a->no_history, "Do not record the run in the history database");
+  // Both at once is a contradiction to name, not a choice to make silently (a review: `--db
+  // ftp://x --no-history` was accepted, the URL never read).
+  sub->add_flag("--no-history", a->no_history, "Do not record the run in the history database")->excludes(db);
   sub->add_option("--seal-key", a->seal_key,
                   "Seal the run folder with this station key (HMAC-SHA256; docs/seal.md); a sealed run resumes only "
                   "with it")

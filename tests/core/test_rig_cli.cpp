@@ -1166,6 +1166,10 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
   ASSERT_EQ(run({"run", "--resume", d + "/n", "--yes", "--quiet"}, d + "/io4"), 0) << slurp(d + "/io4.stderr");
   EXPECT_FALSE(fs::exists(d + "/io3.history.sqlite"));
   EXPECT_FALSE(fs::exists(d + "/io4.history.sqlite"));
+  // Both at once contradict: exit 2 (a review: `--db ftp://x --no-history` was accepted silently).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "ftp://x", "--no-history"}, d + "/io-both"), 2);
+  EXPECT_NE(slurp(d + "/io-both.stderr").find("--db excludes --no-history"), std::string::npos)
+      << slurp(d + "/io-both.stderr");
   // A masked password: the resume must name the database again.
   fs::create_directories(d + "/p");
   std::ofstream(d + "/p/run.json") << R"({"plant": "emulated", "profile": "ci", "db": "postgresql://u:***@h/x"})";
