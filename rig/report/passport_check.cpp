@@ -66,14 +66,18 @@ constexpr const char* kEveryPassportLists[] = {"bias",  "base_error", "in_run_b_
 // pending, aborted or failed, or a value taken out, is a passport changed after its run (a review:
 // a hand-edited PASS with pending phases and its failing value deleted was reported and recorded).
 std::string incomplete_judged_run(const json& p, const std::string& run) {
-  if (const json ph = p.value("phases", json()); ph.is_array())
-    for (std::size_t i = 0; i < ph.size(); ++i) {
-      if (!ph[i].is_object()) continue;
-      const std::string st = text(ph[i].value("status", json("")));
-      if (st != "done" && st != "skipped")
-        return "outcome is " + run + ", but phases[" + std::to_string(i) + "] (" + text(ph[i].value("id", json(""))) +
-               ") is " + st + " (a judged run has done or skipped every phase)";
-    }
+  // Its phases too: deleting them dodged the check (a review).
+  const json ph = p.value("phases", json());
+  if (!ph.is_array() || ph.empty())
+    return "outcome is " + run + ", but " + (p.contains("phases") ? "phases is " + ph.dump().substr(0, 40) : "phases is absent") +
+           " (a judged run lists the phases it went through)";
+  for (std::size_t i = 0; i < ph.size(); ++i) {
+    if (!ph[i].is_object()) continue;
+    const std::string st = text(ph[i].value("status", json("")));
+    if (st != "done" && st != "skipped")
+      return "outcome is " + run + ", but phases[" + std::to_string(i) + "] (" + text(ph[i].value("id", json(""))) +
+             ") is " + st + " (a judged run has done or skipped every phase)";
+  }
   const json& v = p["values"];
   for (const char* name : kEveryPassportLists)
     if (!v.contains(name))
@@ -95,6 +99,23 @@ std::string verdict_contradiction(const json& p) {
   const bool complete = run == "PASS" || run == "FAIL";  // ABORTED and ERROR judge what they measured
   if (complete)
     if (std::string c = incomplete_judged_run(p, run); !c.empty()) return c;
+  // The reason a run stopped comes with, and only with, a run that stopped (docs/contracts.md): a
+  // FAIL relabelled ABORTED left the first-pass yield as a retest, and a PASS carried an abort's
+  // reason onto its page (a review).
+  const bool has_reason = !p.value("aborted_reason", json()).is_null();
+  if (complete && has_reason)
+    return "outcome is " + run + ", but the passport has an aborted_reason (only an ABORTED or ERROR run has one)";
+  if (!complete && !has_reason)
+    return "outcome is " + run + ", but the passport has no aborted_reason (an ABORTED or ERROR run says why it stopped)";
+  if (const json c = p["values"].value("accuracy_class", json()); c.is_object() && c.value("value", json()).is_number()) {
+    const double k = c["value"].get<double>();
+    if (!(k >= 1 && k <= 1e6 && std::floor(k) == k))
+      return "values.accuracy_class.value is " + c["value"].dump() + ", which is no class (a 1-based class index)";
+  }
+  for (const auto& [name, m] : p["values"].items())
+    if (m.is_object() && m.value("lo", json()).is_number() && m.value("hi", json()).is_number() &&
+        m["lo"].get<double>() > m["hi"].get<double>())
+      return "values." + name + ".lo " + m["lo"].dump() + " is above its hi " + m["hi"].dump();
   std::string failed;  // the first value that failed
   for (const auto& [name, m] : p["values"].items()) {
     if (!m.is_object()) continue;

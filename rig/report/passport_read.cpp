@@ -120,6 +120,43 @@ void check_passport(const json& p, const std::string& path) {
   require_consistent_verdicts(p, path);
 }
 
+namespace {
+// The passport against the run's own invocation (run.json, which `rig run` writes first and a
+// resume keeps): the profile, the plant, the start and a serial asked for are the run's, so a
+// passport that names others was changed after the run (a review: an emulated run relabelled
+// "hardware" with a station, a ci run relabelled "paper", were reported and recorded). A folder
+// without a readable run.json (a passport copied alone) is not compared.
+void check_against_invocation(const json& p, const std::string& run_dir, const std::string& path) {
+  std::ifstream in(run_dir + "/run.json", std::ios::binary);
+  if (!in) return;
+  std::ostringstream text;
+  text << in.rdbuf();
+  const json r = json::parse(text.str(), nullptr, false);
+  if (!r.is_object()) return;
+  auto differs = [&](const char* key, const json& mine, const json& theirs) {
+    throw ConfigError(path + ": " + key + " is " + shown(mine) + ", but the run's run.json has " + shown(theirs) +
+                      " (the passport was changed after its run wrote it; `rig verify` checks a sealed run)");
+  };
+  for (const char* key : {"profile", "plant"})
+    if (r.value(key, json()).is_string() && p.value(key, json()) != r[key]) differs(key, p.value(key, json()), r[key]);
+  if (const json rs = r.value("started", json()); rs.is_string()) {
+    const json ps = p.value("started", json());
+    const auto a = history::normalize_iso8601(rs.get<std::string>());
+    const auto b = ps.is_string() ? history::normalize_iso8601(ps.get<std::string>()) : std::nullopt;
+    if (a && b && *a != *b) differs("started", ps, rs);
+  }
+  if (const json rs = r.value("serial", json()); rs.is_string() && !rs.get<std::string>().empty() &&
+                                                 p.value("serial", json()).is_string() &&
+                                                 !p["serial"].get<std::string>().empty() && p["serial"] != rs)
+    differs("serial", p["serial"], rs);
+  // The station of an emulated run is the emulated plant's, whatever the host.
+  if (r.value("plant", json()) == "emulated" && p.contains("station") && p["station"] != "emulated plant")
+    throw ConfigError(path + ": station is " + shown(p["station"]) +
+                      ", but the run's run.json has plant \"emulated\", whose station is \"emulated plant\" (the "
+                      "passport was changed after its run wrote it; `rig verify` checks a sealed run)");
+}
+}  // namespace
+
 json read_passport(const std::string& run_dir) {
   const std::string path = run_dir + "/passport.json";
   switch (path_kind(path, "")) {
@@ -133,6 +170,7 @@ json read_passport(const std::string& run_dir) {
   text << in.rdbuf();
   const json p = parse_json_text(text.str(), path);
   check_passport(p, path);
+  check_against_invocation(p, run_dir, path);
   return p;
 }
 

@@ -417,7 +417,9 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
             std::string::npos);
   edited["values"]["bias"]["outcome"] = "UNSET";
   edited["outcome"] = "ABORTED";
+  edited["aborted_reason"] = "SIGINT";
   EXPECT_EQ(verdict_contradiction(edited), "");
+  edited.erase("aborted_reason");
   edited["outcome"] = "PASS";
   EXPECT_NE(verdict_contradiction(edited), "");
   // A judged run went through every phase and lists every measurement (a review: a PASS with
@@ -438,12 +440,37 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
                                                  " (a passport lists every measurement of the procedure, null when not "
                                                  "measured)");
     edited["outcome"] = "ABORTED";  // what a run that stopped early lists is not judged here
+    edited["aborted_reason"] = "SIGINT";
     EXPECT_EQ(verdict_contradiction(edited), "");
   }
   edited = p;
   for (auto it = p["values"].begin(); it != p["values"].end(); ++it)
     if (it.key().rfind("in_run_b_gost_", 0) == 0) edited["values"].erase(it.key());
   EXPECT_NE(verdict_contradiction(edited).find("values has no in_run_b_gost_<N>s"), std::string::npos);
+  // Nor by deleting the phases (a second review), nor by relabelling the outcome: an abort's reason
+  // comes with, and only with, an ABORTED or ERROR run (a FAIL relabelled ABORTED left the yield).
+  edited = p;
+  edited.erase("phases");
+  EXPECT_EQ(verdict_contradiction(edited), "outcome is PASS, but phases is absent (a judged run lists the phases it went through)");
+  edited["phases"] = json::array();
+  EXPECT_EQ(verdict_contradiction(edited), "outcome is PASS, but phases is [] (a judged run lists the phases it went through)");
+  edited = p;
+  edited["aborted_reason"] = "aborted: e-stop";
+  EXPECT_EQ(verdict_contradiction(edited),
+            "outcome is PASS, but the passport has an aborted_reason (only an ABORTED or ERROR run has one)");
+  edited = p;
+  edited["outcome"] = "ABORTED";
+  EXPECT_EQ(verdict_contradiction(edited),
+            "outcome is ABORTED, but the passport has no aborted_reason (an ABORTED or ERROR run says why it stopped)");
+  // An accuracy class that is no class index, and bounds the wrong way round.
+  for (const double k : {0.0, -1.0, 1.5}) {
+    edited = p;
+    edited["values"]["accuracy_class"]["value"] = k;
+    EXPECT_NE(verdict_contradiction(edited).find("values.accuracy_class.value is "), std::string::npos) << k;
+  }
+  edited = p;
+  std::swap(edited["values"]["in_run_b_allan"]["lo"], edited["values"]["in_run_b_allan"]["hi"]);
+  EXPECT_EQ(verdict_contradiction(edited), "values.in_run_b_allan.lo 2.5e-06 is above its hi 1.8e-06");
 
   TempDir d;
   json bad = p;
@@ -458,6 +485,53 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
         << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(d.path / "report.html"));
+}
+
+// The passport against its run's run.json: a profile, plant, start or serial other than the run's,
+// or a station on an emulated run, is a passport changed after its run (a review: an emulated ci run
+// relabelled "hardware"/"paper" was reported and recorded). Without run.json nothing is compared.
+TEST(Report, APassportThatIsNotItsRunsInvocationGetsNoReport) {
+  const json p = rig::test::fixture_passport();
+  const json run = {{"plant", "emulated"}, {"profile", "paper"}, {"serial", p["serial"]}, {"started", p["started"]}};
+  auto refusal = [&](const json& passport, const json& invocation) {
+    TempDir d;
+    rig::test::write_run(d.path, passport, nullptr);
+    rig::test::write_file(d.path / "run.json", invocation.dump());
+    try {
+      rig::report::write_report(d.path.string());
+    } catch (const rig::ConfigError& e) {
+      EXPECT_FALSE(std::filesystem::exists(d.path / "report.html"));
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(refusal(p, run), "");
+  json edited = p;
+  edited["plant"] = "hardware";
+  EXPECT_NE(refusal(edited, run).find("passport.json: plant is \"hardware\", but the run's run.json has \"emulated\""),
+            std::string::npos)
+      << refusal(edited, run);
+  edited = p;
+  edited["profile"] = "ci";
+  EXPECT_NE(refusal(edited, run).find("profile is \"ci\", but the run's run.json has \"paper\""), std::string::npos);
+  edited = p;
+  edited["started"] = "2026-11-20T07:00:00Z";
+  EXPECT_NE(refusal(edited, run).find("started is \"2026-11-20T07:00:00Z\", but the run's run.json has"), std::string::npos);
+  edited["started"] = "2026-11-20T09:00:00+01:00";  // the same instant, written another way
+  EXPECT_EQ(refusal(edited, run), "");
+  edited = p;
+  edited["serial"] = "QA-OTHER";
+  EXPECT_NE(refusal(edited, run).find("serial is \"QA-OTHER\""), std::string::npos);
+  edited = p;
+  edited["station"] = "line-3";
+  EXPECT_NE(refusal(edited, run).find("station is \"line-3\", but the run's run.json has plant \"emulated\""),
+            std::string::npos);
+  json no_serial = run;  // a run given no --serial takes the DUT's: nothing to compare
+  no_serial["serial"] = "";
+  edited = p;
+  edited["serial"] = "QA-OTHER";
+  EXPECT_EQ(refusal(edited, no_serial), "");
+  EXPECT_EQ(refusal(edited, json::array()), "") << "a run.json that is not an object is not compared";
 }
 
 TEST(Report, MissingAnalysisStillWritesAndSaysSo) {
