@@ -235,23 +235,30 @@ void add_history(CLI::App& app, int& rc) {
   auto a = std::make_shared<HistoryArgs>();
   sub->add_option("--db", a->db, "Database URL: sqlite:PATH, PATH or postgresql://... (default: $RIG_HISTORY, "
                                   "[history] url in the rig config, ~/.local/share/rig/history.sqlite)");
-  sub->add_option("--serial", a->serial, "Only this DUT serial number");
-  sub->add_option("--since", a->since, "Only runs started at or after this ISO 8601 date/time (UTC if no zone)");
-  sub->add_option("--until", a->until, "Only runs started before this ISO 8601 date/time");
-  sub->add_option("--outcome", a->outcome, "Only runs with this outcome")
-      ->check(CLI::IsMember({"PASS", "FAIL", "ABORTED", "ERROR"}));
-  sub->add_option("--profile", a->profile, "Only runs of this profile");
-  sub->add_option("--value", a->value, "Trend this passport measurement (e.g. in_run_b_allan) instead of listing runs");
+  std::vector<CLI::Option*> query;
+  query.push_back(sub->add_option("--serial", a->serial, "Only this DUT serial number"));
+  query.push_back(sub->add_option("--since", a->since, "Only runs started at or after this ISO 8601 date/time (UTC if no zone)"));
+  query.push_back(sub->add_option("--until", a->until, "Only runs started before this ISO 8601 date/time"));
+  query.push_back(sub->add_option("--outcome", a->outcome, "Only runs with this outcome")
+                      ->check(CLI::IsMember({"PASS", "FAIL", "ABORTED", "ERROR"})));
+  query.push_back(sub->add_option("--profile", a->profile, "Only runs of this profile"));
+  query.push_back(
+      sub->add_option("--value", a->value, "Trend this passport measurement (e.g. in_run_b_allan) instead of listing runs"));
   // 0 would mean "no limit" to the query: a user who types --limit 0 asked for none, so N >= 1.
-  sub->add_option("--limit", a->limit, "Only the newest N runs (N >= 1)")
-      ->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            return whole_number(v, 1, std::numeric_limits<int>::max()) ? std::string()
-                                                                       : v + ": must be a whole number in [1, 2147483647]";
-          },
-          "N >= 1"));
-  sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit");
-  sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
+  query.push_back(sub->add_option("--limit", a->limit, "Only the newest N runs (N >= 1)")
+                      ->check(CLI::Validator(
+                          [](std::string& v) -> std::string {
+                            return whole_number(v, 1, std::numeric_limits<int>::max())
+                                       ? std::string()
+                                       : v + ": must be a whole number in [1, 2147483647]";
+                          },
+                          "N >= 1")));
+  query.push_back(sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit"));
+  CLI::Option* rec =
+      sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
+  // A query option beside --record was ignored: `--record DIR --serial OTHER` recorded the folder
+  // whatever its serial, exit 0 (a review). Refused as a usage error instead.
+  for (CLI::Option* q : query) rec->excludes(q);
   sub->callback([&rc, a] {
     const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};

@@ -15,7 +15,8 @@ std::string format_utc(std::time_t t) {
 }
 }  // namespace
 
-std::optional<long long> parse_iso8601(const std::string& text) {
+std::optional<long long> parse_iso8601(const std::string& text, bool* fraction) {
+  if (fraction) *fraction = false;
   // YYYY-MM-DD[(T| )HH:MM[:SS[(.|,)fraction]]][Z|±HH[:]MM], surrounding blanks allowed.
   // (Hand-written: std::regex trips GCC 12's -Wmaybe-uninitialized under the sanitizers.)
   std::size_t i = text.find_first_not_of(" \t");
@@ -48,8 +49,10 @@ std::optional<long long> parse_iso8601(const std::string& text) {
       if (!digits(2, ss)) return std::nullopt;
       if (lit('.') || lit(',')) {
         const std::size_t f = p;
-        while (p < s.size() && s[p] >= '0' && s[p] <= '9') ++p;
+        bool nonzero = false;
+        for (; p < s.size() && s[p] >= '0' && s[p] <= '9'; ++p) nonzero = nonzero || s[p] != '0';
         if (p == f) return std::nullopt;
+        if (fraction) *fraction = nonzero;
       }
     }
   }
@@ -86,6 +89,13 @@ std::optional<std::string> normalize_iso8601(const std::string& text) {
   const auto t = parse_iso8601(text);
   if (!t) return std::nullopt;
   return format_utc(static_cast<std::time_t>(*t));
+}
+
+std::optional<std::string> normalize_iso8601_up(const std::string& text) {
+  bool fraction = false;
+  const auto t = parse_iso8601(text, &fraction);
+  if (!t) return std::nullopt;
+  return format_utc(static_cast<std::time_t>(*t + (fraction ? 1 : 0)));
 }
 
 std::string utc_now_iso8601() { return format_utc(std::time(nullptr)); }

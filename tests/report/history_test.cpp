@@ -351,6 +351,12 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
 
   const auto one = lines(run_cli({"--db", db, "--serial", "SN-2", "--since", "2026-11-02", "--csv"}));
   EXPECT_EQ(one.size(), 2u);
+  // A bound with a fraction of a second compares with the whole-second times as the instant it is
+  // (a review: it was cut to the second, so --until ...:00.9 left out the run started at :00).
+  EXPECT_EQ(lines(run_cli({"--db", db, "--until", "2026-11-02T08:00:00.9Z", "--csv"})).size(), 3u);
+  EXPECT_EQ(lines(run_cli({"--db", db, "--until", "2026-11-02T08:00:00.000Z", "--csv"})).size(), 2u);
+  EXPECT_EQ(lines(run_cli({"--db", db, "--since", "2026-11-02T08:00:00.9Z", "--csv"})).size(), 1u);  // the header
+  EXPECT_EQ(lines(run_cli({"--db", db, "--since", "2026-11-02T08:00:00.0Z", "--csv"})).size(), 2u);
   EXPECT_NE(run_cli({"--db", db, "--serial", "nobody"}).find("no runs recorded match"), std::string::npos);
   try {
     run_cli({"--db", db, "--value", "biass"});
@@ -359,6 +365,14 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
     EXPECT_NE(std::string(e.what()).find("recorded: "), std::string::npos) << e.what();
   }
   EXPECT_THROW(run_cli({"--db", db, "--record", (d.path / "none").string()}), rig::ConfigError);
+  // A query option beside --record is a usage error, not ignored (a review: --serial OTHER recorded
+  // the folder whatever its serial).
+  for (const std::vector<std::string>& extra :
+       {std::vector<std::string>{"--serial", "OTHER"}, {"--csv"}, {"--value", "bias"}, {"--limit", "1"}}) {
+    std::vector<std::string> args = {"--db", db, "--record", (d.path / "r1").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    EXPECT_THROW(run_cli(args), CLI::ExcludesError) << extra[0];
+  }
   // A passport edited after its run (the FAIL of a value outside its limits made PASS) is not history.
   json edited = rig::test::fixture_passport("SN-3", "PASS", "2026-11-03T08:00:00Z");
   edited["values"]["bias"]["value"] = -6.0e-3;
