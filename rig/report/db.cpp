@@ -63,6 +63,10 @@ class SqliteDb final : public Db {
   SqliteDb(const std::string& path, Access access) {
     where_ = "sqlite:" + path;
     const std::filesystem::path p(path);
+    // A folder in its place: SQLite said "disk I/O error" or "unable to open database file" (a review).
+    if (path_kind(path, "history database") == PathKind::directory)
+      throw ConfigError(where_ + ": a folder, not a history database file (give the file's path, e.g. " +
+                        (p / "history.sqlite").string() + ")");
     if (access == Access::ReadOnly) {
       if (path_kind(path, "history database") == PathKind::missing)
         throw ConfigError(where_ + ": no such history database (reading never creates one; check --db, "

@@ -133,6 +133,18 @@ TEST(HistorySqlite, BadUrlsAndUnwritablePlacesNameTheDatabase) {
   }
   rig::test::write_file(d.path / "garbage.sqlite", std::string(4096, 'x'));
   EXPECT_THROW(h::migrate((d.path / "garbage.sqlite").string()), rig::ConfigError);
+  // A folder in the database's place, to read or to record into (SQLite said "disk I/O error").
+  for (const bool reading : {true, false}) {
+    try {
+      if (reading) h::list_runs("sqlite:" + d.path.string(), {});
+      else h::migrate("sqlite:" + d.path.string());
+      ADD_FAILURE() << "no exception";
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(": a folder, not a history database file (give the file's path"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // A mistyped --db must not leave an empty database behind: reading opens read-only.
