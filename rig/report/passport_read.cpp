@@ -158,6 +158,9 @@ void check_against_invocation(const json& p, const std::string& run_dir, const s
 }  // namespace
 
 json read_passport(const std::string& run_dir) {
+  // `rig report DIR/passport.json` read ".../passport.json/passport.json: does the run folder exist?"
+  if (path_kind(run_dir, "") == PathKind::file)
+    throw ConfigError(run_dir + ": a file, not a run folder (give the folder that holds passport.json)");
   const std::string path = run_dir + "/passport.json";
   switch (path_kind(path, "")) {
     case PathKind::missing: throw ConfigError(path + ": cannot read the file (does the run folder exist?)");

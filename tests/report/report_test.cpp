@@ -12,6 +12,7 @@
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/bounded.hpp"
+#include "rig/report/passport_read.hpp"
 #include "rig/report/passport_check.hpp"
 #include "rig/report/report.hpp"
 #include "rig/report/svg_plot.hpp"
@@ -720,6 +721,15 @@ TEST(ReportCli, WritesTheReportAndRejectsAFolderWithoutPassport) {
   rig::cli::add_report(app, rc);
   std::vector<std::string> args{(d.path / "empty").string(), "report"};
   EXPECT_THROW(app.parse(args), rig::ConfigError);  // main() maps this to exit 2
+  // The passport file itself given for the folder (it said ".../passport.json/passport.json:
+  // cannot read the file (does the run folder exist?)").
+  try {
+    rig::report::read_passport((d.path / "run" / "passport.json").string());
+    ADD_FAILURE() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (d.path / "run" / "passport.json").string() + ": a file, not a run folder (give the folder that holds passport.json)");
+  }
 }
 
 // ---------------------------------------------------------------- the SVG writer
