@@ -303,10 +303,17 @@ void add_table(CLI::App& app, int& rc) {
 
   auto stop_cmd = [a, &rc](bool quick) {
     with_table(*a, [&](RotaryTable& t) {
-      // Straight to the stop: each client reads what its stop keeps (rig-v1 its status block and
-      // CONTROL's SERVO_ON, CiA 402 the statusword) in one urgent request. A status read before it
-      // added a request to every stop and two timeouts to one on a silent link (a review: about
-      // seven response timeouts in all).
+      // rig-v1: learn CONTROL first (a read with the link's retries), so the stop keeps SERVO_ON
+      // as the drive holds it: the stop's own urgent read is one attempt and a reconnect, and a
+      // fresh client that learned nothing writes HALT with SERVO_ON clear, which brakes the servo
+      // off (a code review). A CiA 402 stop reads its statusword itself and builds nothing from a
+      // status read, so it goes straight out (two timeouts fewer on a silent link).
+      if (dynamic_cast<modbus::Cia402Table*>(&t) == nullptr) {
+        try {
+          t.status();
+        } catch (const HardwareError&) {
+        }
+      }
       if (quick) {
         t.quick_stop();
       } else {

@@ -110,12 +110,14 @@ void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
     ctx.values.set("accuracy_class", std::nullopt, "no B from the first block length");
   } else if (auto c = accuracy_class(p.classes, *b)) {
     ctx.values.set("accuracy_class", static_cast<double>(*c), p.classes[*c - 1].name);
+  } else if (p.classes.empty()) {  // `classes = []`: nothing to read a class from (not required then)
+    ctx.values.set("accuracy_class", std::nullopt, "the profile has no accuracy classes ([[classes]])");
   } else {
     // B was measured: the class is missing because B is beyond the table, which the verdict says.
     ctx.values
         .set("accuracy_class", std::nullopt,
-             fmt::format("B = {:.3g} g exceeds every class in the profile (the loosest, '{}', takes B up to {:.3g} g)", *b,
-                         p.classes.back().name, p.classes.back().max_b_g))
+             fmt::format("B = {:.3g} g; the loosest class, '{}', takes B up to {:.3g} g", *b, p.classes.back().name,
+                         p.classes.back().max_b_g))
         .null_verdict = "B exceeds every accuracy class";
   }
   note_gaps(ctx, *st.in_run);

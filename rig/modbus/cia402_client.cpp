@@ -724,7 +724,8 @@ void Cia402Table::stop() noexcept {
     const State st = c4::decode_state(sw);
     bits = command_holding(st);
     known = true;
-    const bool disabled_yet_moving = drive_function_disabled(st) && !axis_reads_at_rest();
+    // This client's standing quick stop makes the word 0x0102 anyway (below): no read, no blame.
+    const bool disabled_yet_moving = drive_function_disabled(st) && !stops_.quick_stop_stands() && !axis_reads_at_rest();
     if (power_stage_off(st) || st == State::kFaultReactionActive || disabled_yet_moving) {
       bits = c4::cw::kCmdQuickStop;
       // The axis was asked in the power-off states (stop_goes_out) and the drive-function-disabled
