@@ -472,6 +472,11 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
   edited = p;
   std::swap(edited["values"]["in_run_b_allan"]["lo"], edited["values"]["in_run_b_allan"]["hi"]);
   EXPECT_EQ(verdict_contradiction(edited), "values.in_run_b_allan.lo 2.5e-06 is above its hi 1.8e-06");
+  edited = p;  // a value moved inside its limits without its bounds
+  edited["values"]["in_run_b_allan"]["value"] = 3e-6;
+  EXPECT_EQ(verdict_contradiction(edited), "values.in_run_b_allan.value 3e-06 is outside its own bounds [1.8e-06, 2.5e-06]");
+  edited["values"]["in_run_b_allan"]["value"] = 2.5e-6 * (1 + 1e-12);  // rounding is not an edit
+  EXPECT_EQ(verdict_contradiction(edited), "");
 
   TempDir d;
   json bad = p;
