@@ -231,6 +231,18 @@ void TableEmulator::plan_move(double target, double vmax, double amax, bool is_m
 // stop active ignores halt; a steeper ramp asked later is taken (table-registers.md).
 void TableEmulator::plan_stop(double decel) {
   if (!traj_.active || traj_.stop_decel >= decel) return;
+  // Nor a move's own final ramp: a QUICK_STOP gentler than ACCEL during a move's deceleration
+  // stops on that ramp, at the move's target, instead of coasting past it (table-registers.md).
+  if (traj_.stop_decel == 0) {
+    double tau = t_ - traj_.t0;
+    for (int i = 0; i < 3; ++i) {
+      if (tau < traj_.dur[i]) {
+        if (traj_.acc[i] * ref_v_ < 0) decel = std::max(decel, std::fabs(traj_.acc[i]));
+        break;
+      }
+      tau -= traj_.dur[i];
+    }
+  }
   Trajectory tr;
   tr.t0 = t_;
   tr.r0 = ref_;

@@ -266,5 +266,24 @@ TEST(TableEmulator, AStopNeverLengthensAStopUnderWay) {
   EXPECT_LT(stop_point({halt, quick}), halt_only - 1.0);                      // steeper taken
 }
 
+// Nor a move's own final deceleration: a QUICK_STOP whose ramp is gentler than ACCEL, arriving
+// while a move decelerates onto its target, stops on the move's ramp (at the target), not on the
+// gentler quick-stop ramp past it (a review: the rule covered stops under way, not a move's ramp).
+TEST(TableEmulator, AQuickStopNeverLengthensAMovesOwnDeceleration) {
+  auto e = emulator("start_angle_deg = 0.0\naccel_dps2 = 60.0\nquick_stop_dps2 = 10.0\n");
+  servo_on_and_home(*e);
+  EXPECT_EQ(wr_target(*e, 90), m::exc::kNone);
+  EXPECT_EQ(wr(*e, m::reg::kControl, {m::ctl::kServoOn | m::ctl::kStart}), m::exc::kNone);
+  // 30 deg/s at 60 deg/s^2: 0.5 s up, 2.5 s flat, 0.5 s down from 3.0 s; the quick stop lands at
+  // 3.25 s, 15 deg/s and 1.875 deg short of 90. On its own 10 deg/s^2 it would take 11.25 deg.
+  e->step(3.25);
+  ASSERT_TRUE(e->snapshot().moving);
+  ASSERT_NEAR(e->snapshot().velocity_dps, 15.0, 1.0);
+  EXPECT_EQ(wr(*e, m::reg::kControl, {m::ctl::kServoOn | m::ctl::kQuickStop}), m::exc::kNone);
+  run_until_in_position(*e);
+  EXPECT_NEAR(e->snapshot().position_deg, 90.0, 0.05);
+  EXPECT_EQ(e->snapshot().alarm_code, 0);
+}
+
 }  // namespace
 }  // namespace rig::table_test
