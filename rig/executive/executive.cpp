@@ -312,8 +312,11 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     log_->error("{}", result.message);
   }
   values.set_scope({}, {});
+  // Stopped early: what was measured is judged, the rest stays UNSET. Stopped after every phase
+  // ran (a signal before the verdict): judged as a complete run, so a required value that could
+  // not be measured is FAIL, as when the signal comes after the verdict (app/cmd_run.cpp).
   if (result.outcome != RunOutcome::Pass && result.outcome != RunOutcome::Fail)
-    values.judge_all(false);  // stopped early: what was measured is judged, the rest stays UNSET
+    values.judge_all(current >= phases.size());
   if (current < phases.size()) {
     PhaseRecord& rec = result.phases[current];
     rec.status = result.outcome == RunOutcome::Aborted ? "aborted" : "failed";

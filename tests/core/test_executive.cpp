@@ -508,13 +508,17 @@ TEST(Executive, ACancelAfterTheLastPhaseStillAborts) {
   Devices d = f.dev();
   CancelSource cs;
   Executive ex(d, f.out, f.log, nullptr);
-  std::vector<Phase> phases{{"last", "last", 1, [&cs](PhaseContext&) { cs.request("SIGINT received"); }}};
+  std::vector<Phase> phases{{"last", "last", 1, [&cs](PhaseContext&) { cs.request("SIGINT received"); }, {{"klass", "-", ""}}}};
   MeasurementSet v;
+  v.declare(phases[0].measures[0], std::nullopt, /*required=*/true);
   NoPhaseState st;
   const auto r = ex.run(power_on, phases, v, st, cs.token(), false, {});
   EXPECT_EQ(r.outcome, RunOutcome::Aborted);
   EXPECT_EQ(r.exit_code(), kExitAborted);
   EXPECT_NE(r.message.find("SIGINT"), std::string::npos);
+  // Every phase ran: judged as a complete run (a required value not measured fails), as when the
+  // signal comes after the verdict; rig report checks the same rule.
+  EXPECT_EQ(v.find("klass")->outcome, Outcome::Fail);
   EXPECT_NE(f.logtext.str().find("safe state reached"), std::string::npos);
 }
 

@@ -1871,6 +1871,32 @@ TEST(RigCli, ASignalAfterTheLastPhaseStillAborts) {
   EXPECT_NE(log.find("outcome ABORTED (exit 3)"), std::string::npos) << log;
 }
 
+// A signal after the last phase of a run whose B exceeds every accuracy class: the class (null) stays
+// FAIL as in the complete run, and the run's own passport gets its report (a review: report.html was
+// not written and `rig report` refused rig's own passport, exit 2).
+TEST(RigCli, ALateSignalKeepsAFailedClassAndItsReport) {
+  const std::string d = tmp("late-signal-class");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/strict.toml");
+    f << "base = \"ci\"\n[profile]\nname = \"strictclass\"\n[[classes]]\nname = \"x\"\nmax_b_g = 1.0e-9\n";
+  }
+  for (const std::string sig : {"sigint", "sigterm"}) {
+    const std::string out = d + "/" + sig;
+    EXPECT_EQ(run({"run", "--profile", d + "/strict.toml", "--yes", "--no-history", "--out", out, "--inject", sig + "@end"},
+                  d + "/io"),
+              3)
+        << slurp(d + "/io.stderr");
+    const auto p = nlohmann::json::parse(slurp(out + "/passport.json"));
+    EXPECT_EQ(p["outcome"], "ABORTED");
+    EXPECT_TRUE(p["values"]["accuracy_class"]["value"].is_null());
+    EXPECT_EQ(p["values"]["accuracy_class"]["outcome"], "FAIL") << p["values"]["accuracy_class"].dump();
+    EXPECT_TRUE(fs::exists(out + "/report.html")) << slurp(d + "/io.stderr");
+    EXPECT_EQ(slurp(d + "/io.stderr").find("not written"), std::string::npos) << slurp(d + "/io.stderr");
+    EXPECT_EQ(run({"report", out}, d + "/rep"), 0) << slurp(d + "/rep.stderr");
+  }
+}
+
 // Issue 13, 2 and 6: a damaged checkpoint is refused (exit 2) naming the file and the field.
 TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
   const std::string d = tmp("damaged-cp");

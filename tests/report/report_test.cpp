@@ -423,6 +423,22 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
   edited.erase("aborted_reason");
   edited["outcome"] = "PASS";
   EXPECT_NE(verdict_contradiction(edited), "");
+  // A value required without limits (accuracy_class with a class table), not measured: FAIL once
+  // every phase ran, also when a signal after the last phase made the run ABORTED (a review: rig's
+  // own such passport got no report); UNSET in a run that stopped before a phase ended.
+  edited = p;
+  edited["values"]["accuracy_class"] = {{"value", nullptr}, {"limits", nullptr}, {"outcome", "FAIL"}};
+  edited["outcome"] = "FAIL";
+  EXPECT_EQ(verdict_contradiction(edited), "");
+  edited["outcome"] = "ABORTED";
+  edited["aborted_reason"] = "aborted after the last phase: SIGINT received";
+  EXPECT_EQ(verdict_contradiction(edited), "");
+  edited["values"]["accuracy_class"]["outcome"] = "UNSET";  // a signal before the verdict, by an older rig
+  EXPECT_EQ(verdict_contradiction(edited), "");
+  edited["values"]["accuracy_class"]["outcome"] = "FAIL";
+  edited["phases"].back()["status"] = "aborted";
+  EXPECT_EQ(verdict_contradiction(edited),
+            "values.accuracy_class.outcome is FAIL, but the run stopped early (what was not measured stays UNSET)");
   // A judged run went through every phase and lists every measurement (a review: a PASS with
   // pending phases and its failing value deleted was reported and recorded).
   edited = p;
