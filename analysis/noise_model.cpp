@@ -579,7 +579,9 @@ bool exceeds_dropped(const Pts& all, std::size_t from, const std::array<double, 
 }
 }  // namespace
 
-NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
+namespace {
+
+NoiseModelFit fit_in_units(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
   NoiseModelFit out;
   std::vector<double> tau, s;
   std::vector<std::size_t> m;
@@ -779,6 +781,36 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   }
   out.ok = true;
   return out;
+}
+
+}  // namespace
+
+// The fit works in the record's units: theta is a variance and its covariance a variance squared,
+// which under- or overflows a double for deviations beyond about 1e+-70 (a review: a record scaled
+// by 1e-80 or 1e90 got 'no non-negative model fits'). Far outside any accelerometer's units
+// (beyond 2^+-64 for the median deviation), the points are scaled by a power of two, which is
+// exact, and the terms scaled back; inside, nothing changes.
+NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
+  std::vector<double> devs;
+  for (const DevPoint& p : oadev)
+    if (std::isfinite(p.dev) && p.dev > 0) devs.push_back(p.dev);
+  int e = 0;
+  if (!devs.empty()) {
+    std::nth_element(devs.begin(), devs.begin() + static_cast<std::ptrdiff_t>(devs.size() / 2), devs.end());
+    std::frexp(devs[devs.size() / 2], &e);
+  }
+  if (e >= -64 && e <= 64) return fit_in_units(oadev, record_s, confidence, threads);
+  std::vector<DevPoint> scaled(oadev.begin(), oadev.end());
+  for (DevPoint& p : scaled) {
+    p.dev = std::ldexp(p.dev, -e);
+    p.lo = std::ldexp(p.lo, -e);
+    p.hi = std::ldexp(p.hi, -e);
+  }
+  NoiseModelFit f = fit_in_units(scaled, record_s, confidence, threads);
+  for (std::array<double, 5>* a : {&f.value, &f.lo, &f.hi, &f.upper, &f.upper_method})
+    for (double& x : *a) x = std::ldexp(x, e);
+  for (double& v : f.avar) v = std::ldexp(v, 2 * e);
+  return f;
 }
 
 }  // namespace rig::analysis

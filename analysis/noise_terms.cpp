@@ -225,16 +225,17 @@ void read_r_from_drift(NoiseTerms& out, const Drift& d, double confidence) {
   for (std::size_t k = 0; k < 4; ++k) q[k] = m.in_model[k] ? m.value[k] : m.upper_method[k];
   const std::array<double, 4> v = drift_variance_terms(q, d);
   double var = 0, denom = 0;
-  for (std::size_t k = 0; k < 4; ++k) {
-    var += v[k];
-    if (m.in_model[k] && m.z[k] > 0) denom += v[k] * v[k] / (2 * m.z[k] * m.z[k]);
-  }
+  for (std::size_t k = 0; k < 4; ++k) var += v[k];
   if (!(var > 0)) return;
+  // Welch-Satterthwaite on the shares v_k / var: var^2 itself underflows for records in units far
+  // from g (a review: 1e-80 g read the normal quantile, 1e90 g Student's t at EDF 1).
+  for (std::size_t k = 0; k < 4; ++k)
+    if (m.in_model[k] && m.z[k] > 0) denom += (v[k] / var) * (v[k] / var) / (2 * m.z[k] * m.z[k]);
   DriftReading r;
   r.slope = d.slope;
   r.sd = std::sqrt(var);
   // (at least 1: Student's t has no quantile below; reached only by a term with z < 0.71)
-  r.edf = denom > 0 ? std::max(1.0, var * var / denom) : std::numeric_limits<double>::infinity();
+  r.edf = denom > 0 ? std::max(1.0, 1 / denom) : std::numeric_limits<double>::infinity();
   const bool estimated = std::isfinite(r.edf) && r.edf < 1e6;  // beyond, t is the normal to 1e-6
   const auto quantile = [&](double c) {
     const double p = (1 + c) / 2;

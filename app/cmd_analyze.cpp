@@ -75,6 +75,20 @@ double end_value_scale(const an::ChunkSource& src) {
   return std::max(std::fabs(first), std::fabs(last));
 }
 
+// The largest magnitude among about 4096 values spread evenly over the record (its ends included):
+// enough to tell a record of tiny values from one of zeros, without another pass over 1.44 GB.
+double sampled_magnitude(const an::ChunkSource& src) {
+  const std::uint64_t n = src.size();
+  const std::uint64_t step = std::max<std::uint64_t>(1, n / 4096);
+  double big = 0, x = 0;
+  for (std::uint64_t i = 0; i < n; i += step) {
+    src.read_at(i, std::span<double>(&x, 1));
+    big = std::max(big, std::fabs(x));
+  }
+  src.read_at(n - 1, std::span<double>(&x, 1));
+  return std::max(big, std::fabs(x));
+}
+
 // OADEV as --no-bounds reports it and fits the noise terms to: no noise type, no EDF, no bounds
 // (the pass identified the noise for the total family's bias removal only).
 std::vector<an::DevPoint> without_identification(std::vector<an::DevPoint> pts) {
@@ -549,6 +563,24 @@ int run(const Args& a) {
   // is identified or bounded (null, as --no-bounds), the noise terms say why they are null, and
   // there is no PSD (its "peaks" were rounding noise at 1e-60, a review).
   const bool constant = no_noise_above_rounding(devs, end_value_scale(*src), base.data);
+  // The mirror of the readers' 2^333 limit: a record whose values all lie nearer 0 than 2^-333.
+  // From 1e-154 on their squared differences leave a double's normal range, so the deviations lose
+  // their digits or read 0 (a review: values of 1e-310 and 1e-200 were 'the record is constant').
+  // No unit the rig records comes near it. "All": the sampled values and every deviation are.
+  {
+    double dev_max = 0;
+    for (const auto& d : devs)
+      for (const auto& p : d) dev_max = std::max(dev_max, p.dev);
+    if (const double mag = dev_max < 1 / an::kMaxMagnitude ? sampled_magnitude(*src) : 0.0;
+        mag > 0 && mag < 1 / an::kMaxMagnitude) {
+      char shown[32];
+      std::snprintf(shown, sizeof shown, "%.3g", mag);
+      throw ConfigError(input_name + ": its values (up to " + shown +
+                        " in magnitude) are nearer 0 than 2^-333 = 5.7e-101, the mirror of the 2^333 limit (from "
+                        "1e-154 on their squared differences leave a double's normal range, the deviations lose "
+                        "their digits and then read 0; not a measurement in any unit: scale the record)");
+    }
+  }
   const std::string constant_what = base.data == an::DataKind::Phase
                                         ? "the phase is a straight line (a constant frequency)"
                                         : "the record is constant";

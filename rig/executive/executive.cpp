@@ -255,6 +255,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
 
   PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_, {}};
   std::size_t current = phases.size();
+  bool every_phase_ran = false;  // the loop below went through its last phase
   try {
     log_->info("bring-up");
     bring_up(ctx);
@@ -289,6 +290,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       if (progress_) progress_->phase_finished(p.id, rec.status, rec.message);
       current = phases.size();
     }
+    every_phase_ran = true;
     // A signal between the last phase and here is still an abort (issue 13: late signals).
     cancel.throw_if_requested();
     values.judge_all(true);
@@ -316,7 +318,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   // ran (a signal before the verdict): judged as a complete run, so a required value that could
   // not be measured is FAIL, as when the signal comes after the verdict (app/cmd_run.cpp).
   if (result.outcome != RunOutcome::Pass && result.outcome != RunOutcome::Fail)
-    values.judge_all(current >= phases.size());
+    values.judge_all(every_phase_ran);
   if (current < phases.size()) {
     PhaseRecord& rec = result.phases[current];
     rec.status = result.outcome == RunOutcome::Aborted ? "aborted" : "failed";

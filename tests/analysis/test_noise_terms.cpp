@@ -309,6 +309,39 @@ TEST(NoiseTerms, TheFitIsTheSameOnOneThreadAndOnTwo) {
   }
 }
 
+// The same curve in units 1e-80 and 1e90 times g gives the same terms times that factor, to the
+// fit's convergence (1e-6: it works on ln sigma^2, moved by the unit's logarithm): the fit's
+// variances squared under- and overflowed there (a review: 'no non-negative model fits' at both).
+TEST(NoiseTerms, TheTermsAreTheSameInAnyUnit) {
+  std::vector<DevPoint> g = curve(2e-6, kN, kB, kK, 1e-9, 0.001, 900, 100);
+  std::mt19937 rng(12);
+  std::normal_distribution<double> z(0, 0.05);
+  for (DevPoint& p : g) p.dev *= std::exp(z(rng) * std::sqrt(p.tau_s / 900));
+  const NoiseModelFit ref = fit_noise_model(g, 3600);
+  ASSERT_TRUE(ref.ok) << ref.reason;
+  for (const double unit : {1e-80, 1e90, 0x1p-300}) {
+    std::vector<DevPoint> u = g;
+    for (DevPoint& p : u) p.dev *= unit;
+    const NoiseModelFit f = fit_noise_model(u, 3600);
+    ASSERT_TRUE(f.ok) << unit << ": " << f.reason;
+    EXPECT_EQ(f.in_model, ref.in_model) << unit;
+    for (std::size_t k = 0; k < 5; ++k) {
+      EXPECT_NEAR(f.value[k] / unit, ref.value[k], 1e-6 * ref.value[k]) << unit << " term " << k;
+      EXPECT_NEAR(f.hi[k] / unit, ref.hi[k], 1e-6 * ref.hi[k]) << unit << " term " << k;
+      EXPECT_NEAR(f.upper[k] / unit, ref.upper[k], 1e-6 * ref.upper[k]) << unit << " term " << k;
+    }
+    // R from the drift: its EDF (Welch-Satterthwaite) took var^2, which underflowed at 1e-80.
+    const NoiseTerms t = noise_terms(u, 3600, 50 * 3600, Drift{1e-7 * unit, 360000, 0.01}),
+                     tr = noise_terms(g, 3600, 50 * 3600, Drift{1e-7, 360000, 0.01});
+    ASSERT_TRUE(t.drift && tr.drift) << unit;
+    EXPECT_NEAR(t.drift->edf, tr.drift->edf, 1e-6 * tr.drift->edf) << unit;
+    ASSERT_EQ(t.R.hi.has_value(), tr.R.hi.has_value());
+    if (tr.R.hi) {
+      EXPECT_NEAR(*t.R.hi / unit, *tr.R.hi, 1e-6 * *tr.R.hi) << unit;
+    }
+  }
+}
+
 TEST(NoiseTerms, RateRampIsACandidateOnAShortRecord) {
   // One hour, a rise at the long taus that is K: R is a candidate (no record-length rule) but the
   // data do not support it, so R is null with an upper limit and K takes the rise.

@@ -137,6 +137,16 @@ TEST(Welch, ModelFitGivesNWithQuantisationPresent) {
   const PsdTerms tw = psd_noise_fit(w, 4 * rate / static_cast<double>(w.segment), 0.45 * rate);
   ASSERT_TRUE(tw.ok);
   EXPECT_NEAR(tw.N / N, 1.0, 0.03);
+  // In units 1e-80 and 1e90 times g: the same terms times that factor (the weighted columns' norms
+  // under- and overflowed there, a review).
+  for (const double unit : {1e-80, 1e90}) {
+    Psd u = p;
+    for (double& v : u.psd) v *= unit * unit;
+    const PsdTerms tu = psd_noise_fit(u, 4 * rate / static_cast<double>(u.segment), 0.45 * rate);
+    ASSERT_TRUE(tu.ok) << unit;
+    EXPECT_NEAR(tu.N / unit, t.N, 1e-9 * t.N) << unit;
+    EXPECT_NEAR(tu.Q / unit, t.Q, 1e-9 * t.Q) << unit;
+  }
 }
 
 }  // namespace

@@ -207,6 +207,35 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   ASSERT_EQ(run({"analyze", d + "/ramp.txt", "--rate", "1", "--data", "phase", "--json", d + "/r.json"}, d + "/r"), 0);
   EXPECT_NE(nlohmann::json::parse(slurp(d + "/r.json"))["notes"].dump().find("the phase is a straight line"),
             std::string::npos);
+  // The same noisy record in 1e-200 and 1e-310 units is refused, not called constant (a review), as
+  // 1e200 is; zeros are still a constant record; 1e-80 units give 1e-80 times the terms in 1.
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<double> y(4000);
+  for (double& v : y) v = g(rng);
+  for (const auto& [name, unit] : {std::pair{"one", 1.0}, {"tiny", 1e-80}, {"under", 1e-200}, {"sub", 1e-310}}) {
+    std::ofstream f(d + "/" + name + ".txt");
+    f.precision(17);
+    for (const double v : y) f << v * unit << "\n";
+  }
+  for (const char* name : {"under", "sub"}) {
+    EXPECT_EQ(run({"analyze", d + "/" + name + ".txt", "--rate", "100", "--no-psd"}, d + "/" + name), 2) << name;
+    EXPECT_NE(slurp(d + "/" + name + ".stderr").find(std::string(name) + ".txt: its values (up to "), std::string::npos)
+        << slurp(d + "/" + name + ".stderr");
+    EXPECT_NE(slurp(d + "/" + name + ".stderr").find("in magnitude) are nearer 0 than 2^-333"), std::string::npos);
+  }
+  ASSERT_EQ(run({"analyze", d + "/one.txt", "--rate", "100", "--json", d + "/one.json"}, d + "/one"), 0);
+  ASSERT_EQ(run({"analyze", d + "/tiny.txt", "--rate", "100", "--json", d + "/tiny.json"}, d + "/tiny"), 0)
+      << slurp(d + "/tiny.stderr");
+  const auto one = nlohmann::json::parse(slurp(d + "/one.json")), tiny = nlohmann::json::parse(slurp(d + "/tiny.json"));
+  ASSERT_TRUE(one["noise_terms"]["N"]["value"].is_number()) << one["noise_terms"]["N"].dump();
+  ASSERT_TRUE(tiny["noise_terms"]["N"]["value"].is_number()) << tiny["noise_terms"]["N"].dump();
+  EXPECT_NEAR(tiny["noise_terms"]["N"]["value"].get<double>() / 1e-80, one["noise_terms"]["N"]["value"].get<double>(),
+              1e-6 * one["noise_terms"]["N"]["value"].get<double>());
+  ASSERT_TRUE(tiny["psd"]["psd_fit"]["ok"].get<bool>()) << tiny["psd"].dump().substr(0, 300);
+  std::ofstream(d + "/zeros.txt") << "0\n0\n0\n0\n0\n0\n0\n0\n";
+  ASSERT_EQ(run({"analyze", d + "/zeros.txt", "--rate", "1", "--json", d + "/z.json"}, d + "/z"), 0);
+  EXPECT_NE(nlohmann::json::parse(slurp(d + "/z.json"))["notes"].dump().find("the record is constant"), std::string::npos);
 }
 
 // Issue 12, 7: the JSON keys docs/analysis.md names under noise_terms and psd are the ones the
