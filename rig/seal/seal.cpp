@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -219,9 +220,13 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
     c.files.emplace_back(rel, f);
     if (f != FileState::Ok) c.problems.push_back(rel + ": " + to_string(f));
   }
+  // One the folder does not even hold is said so (a killed run has no passport yet; "not sealed"
+  // read as if one were there, a review).
   for (const std::string& rel : must_cover)
     if (std::none_of(c.files.begin(), c.files.end(), [&](const auto& e) { return e.first == rel; }))
-      c.problems.push_back(rel + ": not sealed");
+      c.problems.push_back(rel + (std::filesystem::symlink_status(dir + "/" + rel).type() == std::filesystem::file_type::not_found
+                                      ? ": not sealed (the folder has none)"
+                                      : ": not sealed"));
   c.ok = c.problems.empty();
   return c;
 }

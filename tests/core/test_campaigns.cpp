@@ -1003,6 +1003,7 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 1);
     const std::string v = slurp(f + "-verify.stdout");
     EXPECT_NE(v.find("not a final seal"), std::string::npos) << v;
+    EXPECT_NE(v.find("passport.json: not sealed (the folder has none)"), std::string::npos) << v;
   }
   {
     // FIFOs where the rig writes the report's temporary file and the profile (the third review:

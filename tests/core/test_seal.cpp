@@ -70,7 +70,10 @@ TEST(Seal, ACheckNamesWhatChangedWhatIsMissingAndWhatIsNotSealed) {
   EXPECT_TRUE(rig::seal::check_seal(d, d + "/seal.json", k, {"a.txt"}).ok);
   const auto unsealed = rig::seal::check_seal(d, d + "/seal.json", k, {"d.txt"});
   ASSERT_EQ(unsealed.problems.size(), 1u);
-  EXPECT_EQ(unsealed.problems[0], "d.txt: not sealed");
+  EXPECT_EQ(unsealed.problems[0], "d.txt: not sealed (the folder has none)");  // a killed run's passport
+  std::ofstream(d + "/d.txt") << "delta";
+  EXPECT_EQ(rig::seal::check_seal(d, d + "/seal.json", k, {"d.txt"}).problems.at(0), "d.txt: not sealed");
+  fs::remove(d + "/d.txt");
   std::ofstream(d + "/sub/b.bin") << "Beta";
   fs::remove(d + "/c.json");
   const auto c = rig::seal::check_seal(d, d + "/seal.json", k);
