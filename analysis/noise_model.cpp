@@ -83,11 +83,16 @@ std::array<double, 5> term_scatter(const std::array<double, 5>& mu, std::size_t 
 double model_edf(const std::array<double, 5>& mu, const std::array<double, 4>& factors, std::size_t m, std::size_t n_phase) {
   double total = 0, sd_random = 0;
   for (std::size_t k = 0; k < 5; ++k) total += mu[k];
-  const std::array<double, 5> sd = term_scatter(mu, factors, m, n_phase);
+  if (!(total > 0)) return edf_greenhall(0, 2, m, n_phase, true, false);  // no noise: white FM's
+  // On the terms' shares: the EDF has no unit, and total^2 of a variance in 1e90 g overflowed (a
+  // review: the paper B's EDF was null and its interval [0, 0] there).
+  std::array<double, 5> share{};
+  for (std::size_t k = 0; k < 5; ++k) share[k] = mu[k] / total;
+  const std::array<double, 5> sd = term_scatter(share, factors, m, n_phase);
   for (std::size_t k = 0; k < 4; ++k) sd_random += sd[k];
   const double var = sd_random * sd_random + sd[4] * sd[4];
   if (!(var > 0)) return edf_greenhall(0, 2, m, n_phase, true, false);  // nothing random: white FM's
-  return 2 * total * total / var;
+  return 2 / var;
 }
 
 double model_edf(const std::array<double, 5>& mu, std::size_t m, std::size_t n_phase) {
@@ -785,11 +790,13 @@ NoiseModelFit fit_in_units(std::span<const DevPoint> oadev, double record_s, dou
 
 }  // namespace
 
-// The fit works in the record's units: theta is a variance and its covariance a variance squared,
-// which under- or overflows a double for deviations beyond about 1e+-70 (a review: a record scaled
-// by 1e-80 or 1e90 got 'no non-negative model fits'). Far outside any accelerometer's units
-// (beyond 2^+-64 for the median deviation), the points are scaled by a power of two, which is
-// exact, and the terms scaled back; inside, nothing changes.
+// The fit works in units where the median deviation is in [0.5, 1): the points are scaled by a
+// power of two, which is exact, and the terms scaled back. In the record's own units theta is a
+// variance and its covariance a variance squared, which under- or overflowed a double beyond
+// about 1e+-70 (a review: 1e-80 and 1e90 g got 'no non-negative model fits'), and the likelihood's
+// ln mu moved with the unit, so on a short record which terms were reported changed when the
+// values were multiplied by 2^10 (a second review). Now a unit that is a power of two gives the
+// same fit bit for bit, and any other unit the same to rounding.
 NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, double confidence, unsigned threads) {
   std::vector<double> devs;
   for (const DevPoint& p : oadev)
@@ -799,7 +806,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
     std::nth_element(devs.begin(), devs.begin() + static_cast<std::ptrdiff_t>(devs.size() / 2), devs.end());
     std::frexp(devs[devs.size() / 2], &e);
   }
-  if (e >= -64 && e <= 64) return fit_in_units(oadev, record_s, confidence, threads);
+  if (e == 0) return fit_in_units(oadev, record_s, confidence, threads);
   std::vector<DevPoint> scaled(oadev.begin(), oadev.end());
   for (DevPoint& p : scaled) {
     p.dev = std::ldexp(p.dev, -e);

@@ -213,15 +213,15 @@ PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi) {
     if (p.f_hz[i] >= f_lo && p.f_hz[i] <= f_hi && p.f_hz[i] > 0 && p.psd[i] > 0) f.push_back(p.f_hz[i]), y.push_back(p.psd[i]);
   out.bins = f.size();
   if (f.size() < 5) return out;
-  // Far from any accelerometer's units (the median bin beyond 2^+-128, a deviation's 2^+-64 as in
-  // fit_noise_model), the weighted columns' norms under- or overflow (a review: records in 1e-80 g
-  // and 1e90 g got no fit): the bins are scaled by an even power of two, exact, and the terms back.
+  // In units where the median bin is near 1 (an even power of two, exact, and the terms scaled
+  // back): the weighted columns' norms under- or overflowed in 1e-80 g and 1e90 g (a review), and a
+  // unit that is a power of two now gives the same fit bit for bit.
   int e = 0;
   {
     std::vector<double> m = y;
     std::nth_element(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(m.size() / 2), m.end());
     std::frexp(m[m.size() / 2], &e);
-    e = e < -128 || e > 128 ? e - e % 2 : 0;
+    e -= e % 2;
     for (double& v : y) v = std::ldexp(v, -e);
   }
   auto basis = [&](int k, double fr) {

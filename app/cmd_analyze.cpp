@@ -463,7 +463,8 @@ int run(const Args& a) {
                     "notes name it); the record starts after them, nothing is joined");
   if (n < 30)
     notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
-                    "the bounds rest on a few degrees of freedom and the noise terms on a few points");
+                    "the bounds rest on a few degrees of freedom and the noise terms on a few points (which terms "
+                    "are reported can change with the values' last digits: a review found 4 ulps flip it)");
   // Sizes are checked where they are needed, before the long work: the deviation needs 3 phase
   // points (deviations_stream says so), the PSD one whole segment. A record shorter than the
   // default segment gets no PSD and a note (the deviations are still meaningful); a --segment
@@ -566,12 +567,15 @@ int run(const Args& a) {
   // The mirror of the readers' 2^333 limit: a record whose values all lie nearer 0 than 2^-333.
   // From 1e-154 on their squared differences leave a double's normal range, so the deviations lose
   // their digits or read 0 (a review: values of 1e-310 and 1e-200 were 'the record is constant').
-  // No unit the rig records comes near it. "All": the sampled values and every deviation are.
+  // No unit the rig records comes near it. "All": the values sampled over the record are, and the
+  // first statistic (OADEV unless --no-oadev) allows it: in the values' units (dev, or dev * tau
+  // for phase) OADEV is at most 2 sqrt 2 times the largest value (a second difference of four
+  // values, over sqrt 2), so the limit there is 3 * 2^-333 (at 2^-333 a record of values just
+  // below it was analysed, a review).
   {
     double dev_max = 0;
-    for (const auto& d : devs)
-      for (const auto& p : d) dev_max = std::max(dev_max, p.dev);
-    if (const double mag = dev_max < 1 / an::kMaxMagnitude ? sampled_magnitude(*src) : 0.0;
+    for (const auto& p : devs.front()) dev_max = std::max(dev_max, base.data == an::DataKind::Phase ? p.dev * p.tau_s : p.dev);
+    if (const double mag = dev_max < 3 / an::kMaxMagnitude ? sampled_magnitude(*src) : 0.0;
         mag > 0 && mag < 1 / an::kMaxMagnitude) {
       char shown[32];
       std::snprintf(shown, sizeof shown, "%.3g", mag);

@@ -297,7 +297,10 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     result.outcome = values.any_failed() ? RunOutcome::Fail : RunOutcome::Pass;
   } catch (const AbortedError& e) {
     result.outcome = RunOutcome::Aborted;
-    result.message = cancel.requested() ? "aborted: " + cancel.reason() : e.what();
+    // Every phase ran (a signal the last phase did not act on): said as a signal after the last
+    // phase is (app/cmd_run.cpp), since its values are judged as a complete run's.
+    result.message = cancel.requested() ? (every_phase_ran ? "aborted after the last phase: " : "aborted: ") + cancel.reason()
+                                        : e.what();
     log_->error("{}", result.message);
   } catch (const HardwareError& e) {
     result.outcome = RunOutcome::Error;

@@ -339,6 +339,35 @@ TEST(NoiseTerms, TheTermsAreTheSameInAnyUnit) {
     if (tr.R.hi) {
       EXPECT_NEAR(*t.R.hi / unit, *tr.R.hi, 1e-6 * *tr.R.hi) << unit;
     }
+    // The paper's B and its EDF (the model's, on the terms' shares: total^2 overflowed at 1e90,
+    // the EDF was null and the interval [0, 0], a second review).
+    ASSERT_EQ(t.B.value.has_value(), tr.B.value.has_value()) << unit;
+    ASSERT_TRUE(tr.b_edf && tr.B.hi) << tr.B.reason;
+    ASSERT_EQ(t.b_edf.has_value(), tr.b_edf.has_value()) << unit;
+    if (tr.b_edf) {
+      EXPECT_NEAR(*t.b_edf, *tr.b_edf, 1e-6 * *tr.b_edf) << unit;
+    }
+    if (tr.B.hi) {
+      ASSERT_TRUE(t.B.hi) << unit;
+      EXPECT_NEAR(*t.B.hi / unit, *tr.B.hi, 1e-6 * *tr.B.hi) << unit;
+    }
+  }
+  // A unit that is a power of two: the same fit bit for bit (the points are brought to a median
+  // deviation in [0.5, 1) by a power of two; a second review found the reported terms of a short
+  // record changed with 2^10).
+  for (const int e : {10, -300, 250}) {
+    std::vector<DevPoint> u = g;
+    for (DevPoint& p : u) p.dev = std::ldexp(p.dev, e);
+    const NoiseModelFit f = fit_noise_model(u, 3600);
+    ASSERT_TRUE(f.ok) << e;
+    EXPECT_EQ(f.in_model, ref.in_model) << e;
+    for (std::size_t k = 0; k < 5; ++k) {
+      EXPECT_EQ(f.value[k], std::ldexp(ref.value[k], e)) << e << " term " << k;
+      EXPECT_EQ(f.lo[k], std::ldexp(ref.lo[k], e)) << e << " term " << k;
+      EXPECT_EQ(f.upper[k], std::ldexp(ref.upper[k], e)) << e << " term " << k;
+    }
+    EXPECT_EQ(f.z, ref.z) << e;
+    EXPECT_EQ(f.edf, ref.edf) << e;
   }
 }
 

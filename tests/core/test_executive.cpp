@@ -519,6 +519,7 @@ TEST(Executive, ACancelAfterTheLastPhaseStillAborts) {
   // Every phase ran: judged as a complete run (a required value not measured fails), as when the
   // signal comes after the verdict; rig report checks the same rule.
   EXPECT_EQ(v.find("klass")->outcome, Outcome::Fail);
+  EXPECT_EQ(r.message, "aborted after the last phase: SIGINT received");
   EXPECT_NE(f.logtext.str().find("safe state reached"), std::string::npos);
 }
 

@@ -224,6 +224,12 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
         << slurp(d + "/" + name + ".stderr");
     EXPECT_NE(slurp(d + "/" + name + ".stderr").find("in magnitude) are nearer 0 than 2^-333"), std::string::npos);
   }
+  {  // values just below 2^-333 whose OADEV is above it (a second review: analysed, exit 0)
+    std::ofstream f(d + "/edge.txt");
+    f.precision(17);
+    for (int i = 0; i < 50; ++i) f << (i % 2 ? 0.9 : -0.9) * 0x1p-333 << "\n";
+  }
+  EXPECT_EQ(run({"analyze", d + "/edge.txt", "--rate", "100", "--no-psd"}, d + "/edge"), 2) << slurp(d + "/edge.stdout");
   ASSERT_EQ(run({"analyze", d + "/one.txt", "--rate", "100", "--json", d + "/one.json"}, d + "/one"), 0);
   ASSERT_EQ(run({"analyze", d + "/tiny.txt", "--rate", "100", "--json", d + "/tiny.json"}, d + "/tiny"), 0)
       << slurp(d + "/tiny.stderr");
