@@ -16,7 +16,9 @@ std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : 
 // What a value's outcome must be, from its value and limits; empty when the passport alone
 // cannot tell (no limits: a class table may require it; null in a run that stopped early).
 // `every_phase_ran`: an ABORTED or ERROR run whose phases are all done or skipped (a signal or a lost
-// record after the last phase): its values were judged as a complete run's.
+// record after the last phase): its values were judged as a complete run's. (A resume that kept
+// every phase and stopped in its bring-up lists them all skipped too, and judged as a stopped run:
+// so here a null required value may be FAIL or UNSET, never PASS.)
 std::string expected_outcome(const json& m, bool run_complete, bool every_phase_ran, std::string& why) {
   // [min, max], an open end written as null (JSON has no infinity).
   const json limits = m.value("limits", json());
