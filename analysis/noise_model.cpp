@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "analysis/edf.hpp"
+#include "analysis/median.hpp"
 #include "analysis/parallel.hpp"
 
 namespace rig::analysis {
@@ -801,11 +802,7 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
   std::vector<double> devs;
   for (const DevPoint& p : oadev)
     if (std::isfinite(p.dev) && p.dev > 0) devs.push_back(p.dev);
-  int e = 0;
-  if (!devs.empty()) {
-    std::nth_element(devs.begin(), devs.begin() + static_cast<std::ptrdiff_t>(devs.size() / 2), devs.end());
-    std::frexp(devs[devs.size() / 2], &e);
-  }
+  const int e = median_exponent(std::move(devs));
   if (e == 0) return fit_in_units(oadev, record_s, confidence, threads);
   std::vector<DevPoint> scaled(oadev.begin(), oadev.end());
   for (DevPoint& p : scaled) {

@@ -1,4 +1,5 @@
 #include "analysis/psd.hpp"
+#include "analysis/median.hpp"
 
 #include "analysis/parallel.hpp"
 
@@ -197,8 +198,7 @@ double white_level(const Psd& p, double f_lo, double f_hi) {
   for (std::size_t k = 1; k < p.psd.size(); ++k)
     if (p.f_hz[k] >= f_lo && p.f_hz[k] <= f_hi) v.push_back(p.psd[k]);
   if (v.empty()) throw std::invalid_argument("white_level: no PSD bins in the band");
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  const double med = v[v.size() / 2];
+  const double med = upper_median(std::move(v));
   // Each bin is ~ h0 chi2(k)/k with k = 2 * segments (overlap ignored): divide by its median.
   const double k = 2.0 * static_cast<double>(std::max<std::size_t>(p.segments, 1));
   const double med_ratio = boost::math::median(boost::math::chi_squared(k)) / k;
@@ -216,14 +216,9 @@ PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi) {
   // In units where the median bin is near 1 (an even power of two, exact, and the terms scaled
   // back): the weighted columns' norms under- or overflowed in 1e-80 g and 1e90 g (a review), and a
   // unit that is a power of two now gives the same fit bit for bit.
-  int e = 0;
-  {
-    std::vector<double> m = y;
-    std::nth_element(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(m.size() / 2), m.end());
-    std::frexp(m[m.size() / 2], &e);
-    e -= e % 2;
-    for (double& v : y) v = std::ldexp(v, -e);
-  }
+  int e = median_exponent(y);
+  e -= e % 2;  // even: the terms are square roots
+  for (double& v : y) v = std::ldexp(v, -e);
   auto basis = [&](int k, double fr) {
     switch (k) {
       case 0: return 8 * std::pow(std::sin(std::numbers::pi * fr * tau0), 2) / tau0;
