@@ -25,11 +25,17 @@ namespace rig::modbus {
 
 namespace {
 
+// The address's numbers read like every other number the rig takes (README, "Numbers"): decimal
+// digits, no sign, no leading zero, so "015610" or "+502" is a typo named here, not port 15610.
 int parse_int(const std::string& s, const std::string& what, const std::string& spec) {
   int v = 0;
+  const bool digits = !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits) throw ConfigError("'" + spec + "': " + what + " '" + s + "' is not a number");
+  if (s.size() > 1 && s[0] == '0')
+    throw ConfigError("'" + spec + "': " + what + " '" + s + "' is not a decimal whole number (no leading zero)");
   auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || p != s.data() + s.size() || s.empty())
-    throw ConfigError("'" + spec + "': " + what + " '" + s + "' is not a number");
+  if (ec != std::errc() || p != s.data() + s.size())
+    throw ConfigError("'" + spec + "': " + what + " '" + s + "' out of range");
   return v;
 }
 

@@ -30,6 +30,16 @@ TEST(TableConfig, EndpointsParse) {
   EXPECT_NE(config_error([] { m::parse_endpoint("tcp:host"); }).find("must be HOST:PORT"), std::string::npos);
   EXPECT_NE(config_error([] { m::parse_endpoint("tcp:host:http"); }).find("port 'http' is not a number"),
             std::string::npos);
+  // A port, baud rate or bit count is decimal digits without a sign or leading zero, like every
+  // number on the command line: "015610" is a typo, not port 15610.
+  EXPECT_EQ(config_error([] { m::parse_endpoint("host:015610"); }),
+            "'host:015610': port '015610' is not a decimal whole number (no leading zero)");
+  EXPECT_EQ(config_error([] { m::parse_endpoint("host:+502"); }), "'host:+502': port '+502' is not a number");
+  EXPECT_EQ(config_error([] { m::parse_endpoint("host:-1"); }), "'host:-1': port '-1' is not a number");
+  EXPECT_EQ(config_error([] { m::parse_endpoint("host:99999999999"); }), "'host:99999999999': port '99999999999' out of range");
+  EXPECT_EQ(config_error([] { m::parse_rtu("/dev/ttyS1,09600"); }),
+            "'/dev/ttyS1,09600': baud rate '09600' is not a decimal whole number (no leading zero)");
+  EXPECT_EQ(m::parse_endpoint("host:0").port, 0);
   EXPECT_NE(config_error([] { m::parse_rtu("/dev/ttyS1,9600,X,8,1"); }).find("parity must be N, E or O"),
             std::string::npos);
   EXPECT_EQ(m::parse_endpoint("tcp:[fe80::1]:502").host, "fe80::1");
