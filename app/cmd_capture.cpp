@@ -4,6 +4,7 @@
 // protocol), with the reassembly's report: gaps located, duplicates, lines that could not
 // be read. `rig analyze CAPTURE --input capture` and the report then work on logs
 // recorded by can-utils or any tool writing that format.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +20,7 @@
 
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
+#include "app/number_option.hpp"
 #include "app/output_file.hpp"
 #include "app/serial_option.hpp"
 #include "firmware_link/candump_log.hpp"
@@ -36,7 +38,26 @@ namespace {
 struct ImportArgs {
   std::string log, hardware, out, serial, orientation = "U10", phase = "import", iface;
   std::optional<double> rate_hz;  // none: the stream's (rate_hz of [dut.stream], 1000 for the rig protocol)
+  std::size_t from_line = 1;      // the log's first line to import (the rest after a DUT restart)
 };
+
+// A pause the counter cannot span: the log's clock says at least a second went by (host-side
+// buffering bunches frames by milliseconds, never a second) and at least half the counter's
+// period, so the widening cannot tell how many periods passed. "" when it can.
+std::string pause_too_long(const link::StreamReassembler& r, double dt_s, double rate_hz) {
+  if (!r.started()) return {};
+  const double half = std::ldexp(1.0, r.counter_bits() - 1);
+  if (dt_s < 1 || dt_s * rate_hz < half - r.window()) return {};
+  return fmt::format("{:.6g} s passed since the stream's last frame ({:.6g} samples at {} Hz), more than half the "
+                     "{}-bit counter's period: how many periods went by cannot be told",
+                     dt_s, dt_s * rate_hz, rate_hz, r.counter_bits());
+}
+
+// A frame further behind than any reordering (the reorder window): a stray late frame, or the
+// first of a counter that went back (the DUT restarted). The next stream frame tells which.
+bool far_behind(const link::StreamReassembler& r, uint32_t counter) {
+  return r.started() && r.widened(counter) + r.window() < r.next_seq();
+}
 
 // A log's absolute time (seconds since the epoch) as ISO 8601 UTC; "" for relative times.
 std::string iso8601(double t_s) {
@@ -61,7 +82,9 @@ int cmd_import(const ImportArgs& a) {
   const toml::table& dut = *cfg::get_table(hw, "dut", true);
   const link::LinkOptions lo = link::link_options(dut);  // validates [dut], reads its stream
   const auto decoder = lo.stream ? lo.stream : link::stream_decoder_from_config(dut);
-  link::StreamReassembler reasm = decoder->make_reassembler(lo.reorder_window);
+  // Nothing waits on a log's first sample: the start is held for the reorder window (a first
+  // sample logged a few frames late takes its place, not a duplicate's).
+  link::StreamReassembler reasm = decoder->make_reassembler(lo.reorder_window, true);
 
   std::ifstream in(a.log);
   if (!in) throw ConfigError(a.log + ": cannot open candump log");
@@ -75,8 +98,8 @@ int cmd_import(const ImportArgs& a) {
   // log is read once to find it (cheap next to decoding).
   {
     std::string line;
-    while (std::getline(in, line))
-      if (const auto lf = link::parse_candump_line(line); lf && (a.iface.empty() || lf->iface == a.iface)) {
+    for (std::size_t ln = 1; std::getline(in, line); ++ln)
+      if (const auto lf = link::parse_candump_line(line); ln >= a.from_line && lf && (a.iface.empty() || lf->iface == a.iface)) {
         h.started = iso8601(lf->t_s);
         break;
       }
@@ -101,8 +124,35 @@ int cmd_import(const ImportArgs& a) {
   auto drain = [&] {
     while (std::size_t n = reasm.pop(buf)) w.append(std::span<const Sample>(buf.data(), n));
   };
-  std::string line;
+  std::string line, cut;  // cut: LOG:LINE: why the import stopped there
+  std::size_t cut_line = 0;
+  std::optional<double> last_stream_t;  // the log's time of the last stream frame
+  // Frames far behind the stream (one sample's, its parts may be several frames), held until a
+  // frame shows whether the stream went on (stray late frames) or a later counter followed them
+  // (the counter went back: the DUT restarted).
+  struct Suspect {
+    std::size_t line = 0;  // the first's
+    uint32_t counter = 0;  // the first's
+    std::vector<std::vector<link::StreamPart>> frames;
+  };
+  std::optional<Suspect> suspect;
+  uint64_t late = 0, late_parts = 0;  // frames far behind the stream went on from: dropped, counted apart
+  auto push = [&](const std::vector<link::StreamPart>& ps) {
+    for (const auto& p : ps) reasm.push_part(p);
+    drain();
+  };
+  auto drop_suspect = [&] {  // the stream went on: stray late frames (the reassembly drops them)
+    if (!suspect) return;
+    late += suspect->frames.size();
+    const uint64_t d0 = reasm.stats().duplicates;
+    for (const auto& f : suspect->frames) push(f);
+    late_parts += reasm.stats().duplicates - d0;
+    suspect.reset();
+  };
+  const uint32_t counter_mask =
+      reasm.counter_bits() >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << reasm.counter_bits()) - 1;
   for (std::size_t ln = 1; std::getline(in, line); ++ln) {
+    if (ln < a.from_line) continue;
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
     const auto lf = link::parse_candump_line(line);
@@ -124,12 +174,46 @@ int cmd_import(const ImportArgs& a) {
       note(ln, err);
       continue;
     }
+    // A counter that cannot carry on ends this capture: what came before is kept and the rest
+    // is another capture (--from-line), never spliced on as if no time had passed.
+    // The latest time seen, so that one stamp out of line does not make a pause of the next.
+    const double dt = last_stream_t && lf->t_s >= *last_stream_t ? lf->t_s - *last_stream_t : 0;
+    last_stream_t = std::max(lf->t_s, last_stream_t.value_or(lf->t_s));
+    if (!parts.empty()) {
+      if (std::string why = pause_too_long(reasm, dt, h.rate_hz); !why.empty()) {
+        drop_suspect();
+        cut = a.log + ":" + std::to_string(ln) + ": " + why;
+        cut_line = ln;
+        --frames;  // read, but the rest's
+        break;
+      }
+      if (const uint32_t c = parts.front().counter & counter_mask; far_behind(reasm, c)) {
+        const uint32_t ahead = suspect ? (c - suspect->counter) & counter_mask : 0;
+        if (suspect && ahead > 0 && ahead <= counter_mask / 2) {  // a later counter followed: it went back
+          cut = fmt::format("{}:{}: the stream's counter went back from {} to {} (the DUT restarted?)", a.log,
+                            suspect->line, (reasm.next_seq() - 1) & counter_mask, suspect->counter);
+          cut_line = suspect->line;
+          frames -= suspect->frames.size() + 1;  // the rest's
+          stream_frames -= suspect->frames.size();
+          suspect.reset();
+          break;
+        }
+        if (suspect && ahead != 0) drop_suspect();  // further back still: the earlier ones were strays
+        if (!suspect) suspect = Suspect{ln, c, {}};
+        suspect->frames.push_back(parts);
+        ++stream_frames;
+        continue;
+      }
+      drop_suspect();
+    }
     ++stream_frames;
-    for (const auto& p : parts) reasm.push_part(p);
-    drain();
+    push(parts);
   }
+  drop_suspect();
+  const uint64_t orphans_before = reasm.orphan_halves();
   reasm.flush();
   drain();
+  const uint64_t tail = reasm.orphan_halves() - orphans_before;
   const LinkStats& st = reasm.stats();
   w.close();
 
@@ -138,7 +222,19 @@ int cmd_import(const ImportArgs& a) {
               static_cast<unsigned long long>(stream_frames), static_cast<unsigned long long>(frames),
               static_cast<unsigned long long>(other));
   std::printf("gaps %llu (%llu samples lost), duplicates %llu\n", static_cast<unsigned long long>(st.gaps),
-              static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.duplicates));
+              static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.duplicates - late_parts));
+  if (late > 0)
+    std::printf("%llu frame(s) logged more than the reorder window (%u samples) behind the stream: not in the capture "
+                "([dut] reorder_window)\n", static_cast<unsigned long long>(late), reasm.window());
+  // The rate is the header's, and every time the analysis gives rests on it: said, never guessed.
+  std::printf("rate %s Hz (%s)\n", fmt::format("{}", h.rate_hz).c_str(),
+              a.rate_hz                                    ? "--rate"
+              : sp.key_where.count("rate_hz")              ? sp.key_where.at("rate_hz").c_str()
+              : lo.stream || dut.contains("dbc")           ? "the default: [dut.stream] has no rate_hz"
+                                                           : "the rig protocol's");
+  if (tail > 0)
+    std::printf("the log ends with %llu incomplete sample(s) (a part without its partner): not in the capture\n",
+                static_cast<unsigned long long>(tail));
   for (std::size_t i = 0; i < st.gap_list.size() && i < 20; ++i)
     std::printf("  gap at seq %llu: %llu samples\n", static_cast<unsigned long long>(st.gap_list[i].first),
                 static_cast<unsigned long long>(st.gap_list[i].second));
@@ -152,6 +248,12 @@ int cmd_import(const ImportArgs& a) {
     std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
                  a.hardware.c_str(), static_cast<unsigned long long>(frames),
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
+    return kExitUsage;
+  }
+  if (!cut.empty()) {
+    std::fprintf(stderr, "%s\n%s holds the %llu sample(s) before it; import the rest into another capture with "
+                 "--from-line %zu\n", cut.c_str(), a.out.c_str(), static_cast<unsigned long long>(w.samples_written()),
+                 cut_line);
     return kExitUsage;
   }
   if (unreadable + malformed > 0) {
@@ -180,6 +282,8 @@ void add_capture(CLI::App& app, int& rc) {
   imp->add_option("--phase", a->phase, "phase name in the header")->capture_default_str();
   imp->add_option("--rate", a->rate_hz, "sample rate in Hz (default: the stream's rate_hz)");
   imp->add_option("--iface", a->iface, "only frames logged on this interface");
+  imp->add_option("--from-line", a->from_line, "the log's first line to import (after a DUT restart or a pause)")
+      ->check(whole_in("a line number", 1));
   imp->callback([a, &rc] { rc = cmd_import(*a); });
 }
 

@@ -235,8 +235,11 @@ void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
               << (s.homed_known && !s.homed ? "; it is not homed now: `rig table home` before the next move" : "")
               << "\n";
   } catch (const std::exception& e) {
-    std::cerr << "rig: the table's position could not be read after the halt (" << e.what()
-              << "): check it with `rig table status` before anything else\n";
+    // The halt's fate too: on a dead link it was not delivered, and "after the halt" alone read
+    // as if it had been (a review).
+    std::cerr << "rig: the table's position could not be read after the signal (" << e.what() << "); "
+              << (halt_error.empty() ? "halt delivered to the drive" : halt_error)
+              << ": check it with `rig table status` before anything else\n";
   }
 }
 
@@ -324,8 +327,14 @@ void add_table(CLI::App& app, int& rc) {
         std::cout << c->last_stop_error() << "\n";
         return;
       }
-      if (!last_stop_error(t).empty()) throw HardwareError(last_stop_error(t));
-      std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << "\n";
+      // A stop whose servo bit was a guess says so, delivered or not (a review: a slow link's
+      // stop switched the servo off and said only "not delivered").
+      const auto* v1 = dynamic_cast<modbus::TableClient*>(&t);
+      const std::string note = v1 ? v1->last_stop_note() : std::string();
+      if (!last_stop_error(t).empty())
+        throw HardwareError(last_stop_error(t) + (note.empty() ? "" : "; if it reached the drive: " + note));
+      std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << (note.empty() ? "" : "; " + note)
+                << "\n";
     });
     rc = kExitPass;
   };

@@ -232,7 +232,7 @@ std::vector<CanFilter> DbcStreamDecoder::filters() const {
 
 bool DbcStreamDecoder::decode(const CanFdFrame& f, std::vector<StreamPart>& out, std::string* error) const {
   if (error) error->clear();
-  if (f.error || f.rtr) return false;
+  if (f.error || f.rtr || (f.fd && spec_.classic_only)) return false;
   const auto it = by_frame_.find(key(f.id, f.extended));
   if (it == by_frame_.end()) return false;
   const Roles& r = it->second;
@@ -292,6 +292,7 @@ DbcStreamSpec rig_protocol_stream() {
   s.saturated = "DUT_STREAM_X.status_saturated";
   s.loop_fault = "DUT_STREAM_X.status_loop_fault";
   s.rate_hz = 1000;
+  s.classic_only = true;
   return s;
 }
 

@@ -37,6 +37,9 @@ struct DbcStreamSpec {
   std::string filter_on, saturated, loop_fault;
   int samples_per_frame = 1;
   double rate_hz = 1000;  // samples per second (the capture header's rate)
+  // The rig protocol is classic CAN (docs/can-protocol.md): an FD frame on its ids is another
+  // node's, in a log as on the link (can_dut_link.cpp). A DBC's stream takes both.
+  bool classic_only = false;
   // Where each key was written ("hw.toml:19:5: [dut.stream]"), for the decoder's messages: an
   // error about `y` names y's line, not the table's (a review). Keys absent here: `where`.
   std::map<std::string, std::string> key_where;
@@ -64,8 +67,9 @@ class DbcStreamDecoder {
   // Receive filters selecting the stream's frames (exact ids).
   std::vector<CanFilter> filters() const;
   // A reassembler sized for this stream (counter width, with or without y).
-  StreamReassembler make_reassembler(uint32_t window) const {
-    return StreamReassembler(window, counter_bits_, has_y());
+  // hold_start: for a log's import (StreamReassembler).
+  StreamReassembler make_reassembler(uint32_t window, bool hold_start = false) const {
+    return StreamReassembler(window, counter_bits_, has_y(), hold_start);
   }
 
  private:

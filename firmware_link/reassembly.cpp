@@ -7,11 +7,12 @@
 
 namespace rig::link {
 
-StreamReassembler::StreamReassembler(uint32_t window, int counter_bits, bool needs_y)
+StreamReassembler::StreamReassembler(uint32_t window, int counter_bits, bool needs_y, bool hold_start)
     : window_(window < 1 ? 1 : window),
       bits_(counter_bits),
       mask_(counter_bits >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << counter_bits) - 1),
-      needs_y_(needs_y) {
+      needs_y_(needs_y),
+      hold_start_(hold_start) {
   if (counter_bits < 2 || counter_bits > 32)
     throw ConfigError("stream counter of " + std::to_string(counter_bits) + " bits: the reassembly takes 2..32");
   // A counter that wraps within the reorder window could not tell late from new.
@@ -38,7 +39,9 @@ void StreamReassembler::push_part(const StreamPart& h) {
   } else {
     s = widen(h.counter & mask_);
   }
-  if (s < next_) {  // its sample was already delivered or given up
+  if (s < next_ && !settled_ && hold_start_ && s + window_ > highest_) {
+    next_ = s;  // the stream's first sample, logged late: nothing delivered yet, the start moves back
+  } else if (s < next_) {  // its sample was already delivered or given up
     ++stats_.duplicates;
     return;
   }
@@ -54,6 +57,10 @@ void StreamReassembler::push_part(const StreamPart& h) {
   highest_ = std::max(highest_, s);
   // Deliver what is complete; give up on samples the stream has left `window_` behind.
   const uint64_t limit = highest_ + 1 >= window_ ? highest_ + 1 - window_ : 0;
+  if (!settled_) {
+    settled_ = !hold_start_ || limit > next_;
+    if (!settled_) return;
+  }
   advance_to(std::max(limit, next_));
   while (!pending_.empty() && pending_.begin()->first == next_ && complete(pending_.begin()->second)) {
     emit(next_, pending_.begin()->second);
@@ -149,6 +156,7 @@ void StreamReassembler::flush() {
       last_complete = k;
       any = true;
     }
+  settled_ = true;
   if (any) advance_to(last_complete + 1);
   orphans_ += pending_.size();
   pending_.clear();
@@ -159,6 +167,7 @@ void StreamReassembler::restart() {
   ready_.clear();
   gap_open_ = false;
   started_ = false;
+  settled_ = false;
   next_ = highest_ = 0;
 }
 

@@ -34,7 +34,11 @@ class StreamReassembler {
   static constexpr std::size_t kMaxGapList = 1000;
   // counter_bits: width of the wire counter (2..32; the rig protocol's is 24).
   // needs_y = false: a stream without y; a sample is complete with x, y_g is NaN.
-  explicit StreamReassembler(uint32_t window = 8, int counter_bits = 24, bool needs_y = true);
+  // hold_start: deliver nothing until the stream has moved `window` samples past its first
+  // frame, so that a sample logged a few frames late at the very start (a log, not a live link,
+  // has no reader waiting) takes its place instead of counting as a duplicate.
+  explicit StreamReassembler(uint32_t window = 8, int counter_bits = 24, bool needs_y = true,
+                             bool hold_start = false);
 
   void push_part(const StreamPart& p);
   // The rig protocol's frames (a distinct name keeps brace-initialised calls unambiguous).
@@ -56,6 +60,12 @@ class StreamReassembler {
   bool started() const { return started_; }
   // Statistics beyond LinkStats: halves that arrived without their partner.
   uint64_t orphan_halves() const { return orphans_; }
+  // Where a frame's counter would land (widened next to the highest seen), before pushing it:
+  // more than `window` behind next_seq() is no reordering a controller does (a counter that
+  // went back: the DUT restarted), which a caller that can stop (a log's import) names.
+  uint64_t widened(uint32_t counter) const { return started_ ? widen(counter & mask_) : counter & mask_; }
+  uint32_t window() const { return window_; }
+  int counter_bits() const { return bits_; }
 
  private:
   struct Partial {
@@ -76,6 +86,8 @@ class StreamReassembler {
   int bits_;
   uint32_t mask_;
   bool needs_y_;
+  bool hold_start_;
+  bool settled_ = false;  // hold_start: the start may still move back
   bool started_ = false;
   uint64_t next_ = 0;     // next sample to deliver
   uint64_t highest_ = 0;  // highest widened seq seen

@@ -466,6 +466,17 @@ void TableClient::reset_alarm(const CancelToken& cancel) {
 }
 
 void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
+  // Unread, the servo bit is written cleared: a drive that takes the stop then also switches its
+  // servo off (the table stops on its brake), where a set bit could enable an idle servo.
+  const bool servo_known = identified_.load();
+  try {
+    std::lock_guard lk(stop_mu_);
+    last_stop_note_ = servo_known ? std::string()
+                                  : std::string(name) + " written with SERVO_ON cleared (CONTROL " +
+                                        hex4(bit) + "): the drive's state could not be read before it, so a drive "
+                                        "that takes it also switches its servo off";
+  } catch (...) {
+  }
   detail::deliver_stop(
       name,
       [&] {

@@ -82,6 +82,13 @@ class TableClient final : public RotaryTable {
     std::lock_guard lk(stop_mu_);
     return last_stop_error_;
   }
+  // The last stop's servo bit was a guess: the drive's state could not be read before it (a link
+  // that did not answer in time), so the stop went out with SERVO_ON cleared, which a drive that
+  // takes it also reads as "servo off" (a stop never enables the servo). "" when it was known.
+  std::string last_stop_note() const {
+    std::lock_guard lk(stop_mu_);
+    return last_stop_note_;
+  }
   RegisterTransport& transport() { return *transport_; }
 
  private:
@@ -110,6 +117,7 @@ class TableClient final : public RotaryTable {
   double last_actual_deg_ = 0;     // for messages when the link is lost
   bool have_actual_ = false;
   mutable std::mutex stop_mu_;
+  std::string last_stop_note_;  // under stop_mu_
   std::string last_stop_error_;
 };
 

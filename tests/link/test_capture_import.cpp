@@ -296,3 +296,124 @@ TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
   const std::string err = slurp(dir() / "nostream.err");
   EXPECT_NE(err.find("nostream.log: no sample of the [dut] stream"), std::string::npos) << err;
 }
+
+namespace {
+
+// A rig-protocol sample as two log lines (X, then Y 0.1 ms later).
+void log_sample(std::ostringstream& log, double t, uint64_t k, bool with_y = true) {
+  const auto seq = static_cast<uint32_t>(k & kSeqMask);
+  log << log_line(t, encode(StreamHalf{Channel::X, seq, 0, x_of(k)}));
+  if (with_y) log << log_line(t + 1e-4, encode(StreamHalf{Channel::Y, seq, 0, -x_of(k)}));
+}
+
+}  // namespace
+
+// A review's logs (helper-54): a DUT that restarted mid-log (its counter back at 0), or a pause
+// longer than half the counter's period, was spliced on as if no time had passed or silently
+// dropped as "duplicates" with exit 0. Now the capture ends at that line, exit 2 names it and
+// the line to import the rest from, and the rest imports with --from-line.
+TEST(CaptureImport, ARestartOrAPauseTheCounterCannotSpanEndsTheCaptureThere) {
+  std::ofstream(dir() / "hw-rs.toml") << "[dut]\ncan = \"vcan0\"\n";
+  const std::string hw = " --hardware " + (dir() / "hw-rs.toml").string();
+  std::ostringstream log;
+  double t = 1732255200.0;
+  for (uint64_t k = 5000000; k < 5000300; ++k, t += 1e-3) log_sample(log, t, k);  // lines 1..600
+  for (uint64_t k = 0; k < 200; ++k, t += 1e-3) log_sample(log, t, k);              // from line 601
+  std::ofstream(dir() / "restart.log") << log.str();
+  const std::string out = (dir() / "restart.rigcap").string();
+  EXPECT_EQ(run_rig("capture import " + (dir() / "restart.log").string() + hw + " --out " + out, "restart"), 2);
+  const std::string err = slurp(dir() / "restart.err");
+  EXPECT_NE(err.find("restart.log:601: the stream's counter went back from 5000299 to 0 (the DUT restarted?)"),
+            std::string::npos) << err;
+  EXPECT_NE(err.find("holds the 300 sample(s) before it; import the rest into another capture with --from-line 601"),
+            std::string::npos) << err;
+  EXPECT_NE(slurp(dir() / "restart.out").find("300 samples from 600 stream frames (600 frames read"), std::string::npos)
+      << slurp(dir() / "restart.out");
+  auto c = rig::capture::load(out);
+  ASSERT_EQ(c.samples.size(), 300u);
+  EXPECT_EQ(c.samples.back().seq, 5000299u);
+  const std::string rest = (dir() / "restart-rest.rigcap").string();
+  ASSERT_EQ(run_rig("capture import " + (dir() / "restart.log").string() + hw + " --out " + rest + " --from-line 601",
+                    "rest"),
+            0) << slurp(dir() / "rest.err");
+  c = rig::capture::load(rest);
+  ASSERT_EQ(c.samples.size(), 200u);
+  EXPECT_EQ(c.samples.front().seq, 0u);
+  EXPECT_EQ(c.header.started, "2024-11-22T06:00:00Z");  // the first imported line's second
+
+  // A 16-bit counter and a 40 s pause (more than its 32.8 s half period at 1 kHz): the widening
+  // cannot tell how many periods passed, the log's clock says so.
+  const Dbc db = Dbc::parse_file(std::string(RIG_SOURCE_DIR) + "/tests/data/dbc/dut-layouts.dbc");
+  const DbcMessage* m = db.find("ACC_XY");
+  ASSERT_NE(m, nullptr);
+  auto xy = [&](double tt, uint64_t k) {
+    CanFrame f;
+    f.id = m->id;
+    f.extended = true;
+    f.len = 8;
+    std::span<uint8_t> d(f.data.data(), 8);
+    dbc_insert_raw(d, 7, 16, true, k % 65536);
+    dbc_insert_raw(d, 23, 24, true, dbc_raw_of(*m->signal("x"), x_of(k)));
+    dbc_insert_raw(d, 47, 24, true, dbc_raw_of(*m->signal("y"), -x_of(k)));
+    return log_line(tt, f);
+  };
+  std::ostringstream p;
+  t = 1732255200.0;
+  for (uint64_t k = 0; k < 100; ++k, t += 1e-3) p << xy(t, k);
+  t += 40;
+  for (uint64_t k = 40100; k < 40200; ++k, t += 1e-3) p << xy(t, k);  // the DUT counted on: 40000 past
+  std::ofstream(dir() / "pause.log") << p.str();
+  std::ofstream(dir() / "hw-p.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << RIG_SOURCE_DIR
+                                     << "/tests/data/dbc/dut-layouts.dbc\"\n[dut.stream]\ncounter = \"ACC_XY.cnt\"\n"
+                                        "x = \"ACC_XY.x\"\ny = \"ACC_XY.y\"\nrate_hz = 1000\n";
+  EXPECT_EQ(run_rig("capture import " + (dir() / "pause.log").string() + " --hardware " + (dir() / "hw-p.toml").string() +
+                        " --out " + (dir() / "pause.rigcap").string(),
+                    "pause"),
+            2);
+  const std::string perr = slurp(dir() / "pause.err");
+  EXPECT_NE(perr.find("pause.log:101: 40.001 s passed since the stream's last frame (40001 samples at 1000 Hz), more "
+                      "than half the 16-bit counter's period"),
+            std::string::npos) << perr;
+  EXPECT_EQ(rig::capture::load((dir() / "pause.rigcap").string()).samples.size(), 100u);
+  EXPECT_NE(slurp(dir() / "pause.out").find("rate 1000 Hz (" + (dir() / "hw-p.toml").string() + ":8:11: [dut.stream])"),
+            std::string::npos) << slurp(dir() / "pause.out");
+}
+
+// Also from helper-54: one frame logged further behind than the reorder window, with the stream
+// going on after it, is a stray late frame (counted apart, not a restart, not a "duplicate"); the
+// first sample logged a little late takes its place at the start; a tail of samples with x but no
+// y is said; FD frames on the rig protocol's ids are another node's (the live link skips them too).
+TEST(CaptureImport, LateFramesTheTailAndFdFramesAreAccountedFor) {
+  std::ofstream(dir() / "hw-late.toml") << "[dut]\ncan = \"vcan0\"\n";
+  std::ostringstream log;
+  double t = 1732255200.0;
+  log_sample(log, t, 1001);
+  log_sample(log, t + 1e-3, 1002);
+  log_sample(log, t + 2e-3, 1000);  // the first sample, two samples late: within the window
+  for (uint64_t k = 1003; k < 1100; ++k) log_sample(log, t + static_cast<double>(k - 1000) * 1e-3, k);
+  log_sample(log, t + 0.1, 1050);  // 50 behind: a stray sample, its two frames
+  CanFdFrame fd;
+  fd.fd = true;
+  fd.id = 0x100;
+  fd.len = 12;
+  log << fd_log_line(t + 0.1, fd);  // on DUT_STREAM_X's id, but FD: not the rig protocol's
+  for (uint64_t k = 1100; k < 1200; ++k) log_sample(log, t + static_cast<double>(k - 1000) * 1e-3, k);
+  for (uint64_t k = 1200; k < 1203; ++k) log_sample(log, t + 0.2, k, false);  // the tail: x only
+  std::ofstream(dir() / "late.log") << log.str();
+  const fs::path cap = dir() / "late.rigcap";
+  ASSERT_EQ(run_rig("capture import " + (dir() / "late.log").string() + " --hardware " +
+                        (dir() / "hw-late.toml").string() + " --out " + cap.string(),
+                    "late"),
+            0) << slurp(dir() / "late.err");
+  const std::string out = slurp(dir() / "late.out");
+  EXPECT_NE(out.find("200 samples"), std::string::npos) << out;
+  EXPECT_NE(out.find("(406 frames read, 1 other ids)"), std::string::npos) << out;
+  EXPECT_NE(out.find("gaps 0 (0 samples lost), duplicates 0\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("2 frame(s) logged more than the reorder window (8 samples) behind the stream"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("rate 1000 Hz (the rig protocol's)"), std::string::npos) << out;
+  EXPECT_NE(out.find("the log ends with 3 incomplete sample(s)"), std::string::npos) << out;
+  const auto c = rig::capture::load(cap.string());
+  ASSERT_EQ(c.samples.size(), 200u);
+  for (std::size_t i = 0; i < c.samples.size(); ++i) EXPECT_EQ(c.samples[i].seq, 1000 + i);
+}

@@ -219,3 +219,29 @@ TEST(Reassembly, CounterWidthAndWindowAreChecked) {
   EXPECT_NO_THROW(StreamReassembler(128, 8));
   EXPECT_NO_THROW(StreamReassembler(8, 32));
 }
+
+// A log's import holds the start for the reorder window: the first sample logged a few frames
+// late takes its place (it counted as a duplicate). A live link does not hold (the default).
+TEST(Reassembly, AHeldStartTakesTheFirstSampleLoggedLate) {
+  for (const bool hold : {false, true}) {
+    StreamReassembler r(4, 24, true, hold);
+    push_sample(r, 11);
+    push_sample(r, 12);
+    EXPECT_EQ(r.ready(), hold ? 0u : 2u);
+    push_sample(r, 10);
+    for (uint32_t s = 13; s < 20; ++s) push_sample(r, s);
+    r.flush();
+    const auto out = drain(r);
+    ASSERT_EQ(out.size(), hold ? 10u : 9u);
+    EXPECT_EQ(out.front().seq, hold ? 10u : 11u);
+    EXPECT_EQ(r.stats().duplicates, hold ? 0u : 2u);
+    EXPECT_EQ(r.stats().gaps, 0u);
+  }
+  // Further back than the window: the start does not move.
+  StreamReassembler r(4, 24, true, true);
+  for (uint32_t s = 20; s < 24; ++s) push_sample(r, s);
+  push_sample(r, 15);
+  r.flush();
+  EXPECT_EQ(drain(r).front().seq, 20u);
+  EXPECT_EQ(r.stats().duplicates, 2u);
+}

@@ -285,6 +285,26 @@ TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
   EXPECT_NE(out.find("\"at_target\": false"), std::string::npos) << out;
 }
 
+// Ctrl-C with the link gone dead: the halt could not be delivered and the position not read, and
+// the message says both (it said "could not be read after the halt", which read as delivered).
+TEST_F(RigTable, ASignalOnADeadLinkSaysTheHaltWasNotDelivered) {
+  int fd = -1;
+  std::unique_ptr<Child> child;
+  ASSERT_NO_FATAL_FAILURE(start_slow_move({"/bin/sh", "-c", "exec \"$0\" \"$@\" 2>&1"}, child, fd));
+  emu_->inject(plant::SimFault::kNoAnswer, 0.0);
+  ::kill(child->pid(), SIGINT);
+  const int st = child->wait_status();
+  std::string said;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) said.append(buf, static_cast<std::size_t>(n));
+  close(fd);
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 3) << said;
+  EXPECT_NE(said.find("rig: the table's position could not be read after the signal ("), std::string::npos) << said;
+  EXPECT_NE(said.find("); stop not delivered (the table may still be moving): "), std::string::npos) << said;
+  EXPECT_EQ(said.find("halt delivered"), std::string::npos) << said;
+}
+
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when
 // the process starts, stays ignored (a review: the watcher used to take it and halt the table).
 TEST_F(RigTable, NohupKeepsAMoveGoingThroughSighup) {
@@ -350,6 +370,11 @@ TEST(RigTableSilentLink, ACia402StopAsksOnlyForWhatItNeeds) {
   const std::string where = " --modbus 127.0.0.1:" + std::to_string(ntohs(a.sin_port)) + " --timeout 0.05 ";
   EXPECT_EQ(run(std::string(RIG_BIN) + " table" + where + "stop", out), 4) << out;
   EXPECT_NE(out.find("stop not delivered (the table may still be moving)"), std::string::npos) << out;
+  // Its servo bit was a guess (the status unread): said, since a drive that took it late (a slow
+  // link, not this silent one) switched its servo off (a review).
+  EXPECT_NE(out.find("; if it reached the drive: stop written with SERVO_ON cleared (CONTROL 0x0100): the drive's "
+                     "state could not be read before it, so a drive that takes it also switches its servo off"),
+            std::string::npos) << out;
   const int v1 = requests.exchange(0);
   EXPECT_EQ(run(std::string(RIG_BIN) + " table" + where + "--drive cia402 --drive-map " + RIG_SOURCE_DIR +
                     "/drives/generic-cia402.toml stop",

@@ -40,6 +40,10 @@ TEST(TableConfig, EndpointsParse) {
   EXPECT_EQ(config_error([] { m::parse_rtu("/dev/ttyS1,09600"); }),
             "'/dev/ttyS1,09600': baud rate '09600' is not a decimal whole number (no leading zero)");
   EXPECT_EQ(m::parse_endpoint("host:0").port, 0);
+  // A speed the serial port has not: libmodbus would run it at 9600 without a word (a review).
+  EXPECT_NE(config_error([] { m::parse_rtu("/dev/ttyS1,11520"); }).find("baud rate 11520 is not a serial port speed"),
+            std::string::npos);
+  EXPECT_EQ(m::parse_rtu("/dev/ttyS1,921600").baud, 921600);
   EXPECT_NE(config_error([] { m::parse_rtu("/dev/ttyS1,9600,X,8,1"); }).find("parity must be N, E or O"),
             std::string::npos);
   EXPECT_EQ(m::parse_endpoint("tcp:[fe80::1]:502").host, "fe80::1");
@@ -100,6 +104,11 @@ TEST(TableConfig, PlantTableKeysAreChecked) {
   EXPECT_NE(e2.find("unknown table fault 'gremlins'"), std::string::npos) << e2;
   const std::string e3 = config_error([] { emulator("velocity_dps = 500.0\n"); });
   EXPECT_NE(e3.find("out of range"), std::string::npos) << e3;
+  // SETTLE_TIME is at most 10000 ms: a longer settle_s served a map the rig's client refused.
+  const std::string e4 = config_error([] { emulator("settle_s = 20\n"); });
+  EXPECT_NE(e4.find("test-table.toml:1:"), std::string::npos) << e4;
+  EXPECT_NE(e4.find("out of range"), std::string::npos) << e4;
+  EXPECT_NO_THROW(emulator("settle_s = 10\n"));
   const plant::TableParams p = plant::table_params_from_toml(nullptr);
   EXPECT_DOUBLE_EQ(p.velocity_dps, 30.0);
 }
