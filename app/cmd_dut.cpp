@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "design/filter.hpp"
 #include "firmware_link/candump_log.hpp"
 #include "firmware_link/connect.hpp"
@@ -206,6 +208,17 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
   return kExitPass;
 }
 
+// A decoded value as text that keeps its digits: an integer signal's value (raw * factor +
+// offset) to 15 significant digits, every one a double holds faithfully, and a whole number up
+// to 2^53 exactly; a float32 or float64 signal in the shortest text that reads back to it.
+// "%.9g" cut 12038801.95 to 12038802 and 1000000001 to 1e+09 (a review).
+std::string physical_text(double v, int value_type) {
+  if (value_type == 1) return fmt::format("{}", static_cast<float>(v));
+  if (value_type == 2 || !std::isfinite(v)) return fmt::format("{}", v);
+  if (v == std::trunc(v) && std::fabs(v) < 9007199254740992.0) return fmt::format("{:.0f}", v);
+  return fmt::format("{:.15g}", v);
+}
+
 // Decodes every frame it can; a line it cannot read (not a frame, CAN FD, truncated) or a
 // frame of a protocol message it cannot decode (too short for its DLC) is skipped, counted
 // and named LOG:LINE on stderr. Exit 0: every line decoded; 2: some line was skipped or the
@@ -256,6 +269,16 @@ int cmd_decode(const DutArgs& a) {
                                   link::classify_error_frame(lf.frame).text.c_str());
       continue;
     }
+    // A remote request carries no data: its message's name, no values (they read as zeros).
+    if (lf.any.rtr) {
+      if (const link::DbcMessage* m = dbc.find(lf.any.id, lf.any.extended)) {
+        ++per[m->name + " remote request"];
+        if (!a.summary) std::printf("%.6f %s %s remote request\n", lf.t_s, lf.iface.c_str(), m->name.c_str());
+      } else {
+        ++foreign;
+      }
+      continue;
+    }
     std::string err;
     const auto sig = dbc.decode(lf.any, &err);  // classic or CAN FD as logged
     if (!sig) {
@@ -263,13 +286,16 @@ int cmd_decode(const DutArgs& a) {
       else skip(e.line, err + " (" + dbc_name + ")");
       continue;
     }
-    const std::string& name = dbc.find(lf.any.id, lf.any.extended)->name;
+    const link::DbcMessage& msg = *dbc.find(lf.any.id, lf.any.extended);
+    const std::string& name = msg.name;
     ++per[name];
     if (a.summary) continue;
     std::printf("%.6f %s %s", lf.t_s, lf.iface.c_str(), name.c_str());
     for (const auto& s : *sig) {
-      if (s.value_name.empty()) std::printf(" %s=%.9g%s%s", s.name.c_str(), s.value, s.unit.empty() ? "" : " ", s.unit.c_str());
-      else std::printf(" %s=%s", s.name.c_str(), s.value_name.c_str());
+      const link::DbcSignal* sd = msg.signal(s.name);
+      const std::string v = physical_text(s.value, sd ? sd->value_type : 0);
+      if (s.value_name.empty()) std::printf(" %s=%s%s%s", s.name.c_str(), v.c_str(), s.unit.empty() ? "" : " ", s.unit.c_str());
+      else std::printf(" %s=\"%s\" (%s)", s.name.c_str(), s.value_name.c_str(), v.c_str());
     }
     std::printf("\n");
   }
@@ -279,6 +305,13 @@ int cmd_decode(const DutArgs& a) {
   std::printf("error frames %lu, other ids %lu, skipped lines %lu\n", errors, foreign, skipped);
   if (frames == 0 && skipped == 0) {
     std::fprintf(stderr, "rig: %s holds no CAN frame\n", a.log.c_str());
+    return kExitUsage;
+  }
+  // Frames, and not one of them a message of the DBC: the wrong DBC or the wrong log, not a
+  // decoded log (it was exit 0, a review).
+  if (per.empty() && foreign > 0) {
+    std::fprintf(stderr, "rig: none of the %lu frame(s) in %s is a message of %s\n", frames, a.log.c_str(),
+                 dbc_name.c_str());
     return kExitUsage;
   }
   return skipped ? kExitUsage : kExitPass;

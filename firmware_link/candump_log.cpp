@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <ctime>
 #include <cstdlib>
 #include <vector>
 
@@ -158,7 +160,30 @@ LogLine read_candump_line(std::string_view line) {
   std::size_t i = 0;
   LoggedFrame& lf = out.frame;
   CanFdFrame& any = lf.any;
-  if (t[0].front() == '(') {
+  if (t[0].front() == '(' && t[0].back() != ')' && t.size() > 1 && t[1].back() == ')') {
+    // candump -tA: "(2023-11-14 22:13:20.000700)", the local date and time as candump's host
+    // had them; read in this host's time zone (the same host, as a bench log usually is).
+    const std::string day(t[0].substr(1)), clock(t[1].substr(0, t[1].size() - 1));
+    int y = 0, mo = 0, d = 0, h = 0, mi = 0, n1 = 0, n2 = 0;
+    double sec = -1;
+    const bool read = std::sscanf(day.c_str(), "%4d-%2d-%2d%n", &y, &mo, &d, &n1) == 3 &&
+                      n1 == static_cast<int>(day.size()) &&
+                      std::sscanf(clock.c_str(), "%2d:%2d:%lf%n", &h, &mi, &sec, &n2) == 3 &&
+                      n2 == static_cast<int>(clock.size());
+    if (!read || mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 || !(sec >= 0 && sec < 61)) {
+      out.problem = "bad timestamp " + quoted(line.substr(0, static_cast<std::size_t>(t[1].data() + t[1].size() - line.data())));
+      return out;
+    }
+    std::tm tm{};
+    tm.tm_year = y - 1900;
+    tm.tm_mon = mo - 1;
+    tm.tm_mday = d;
+    tm.tm_hour = h;
+    tm.tm_min = mi;
+    tm.tm_isdst = -1;
+    lf.t_s = static_cast<double>(std::mktime(&tm)) + sec;
+    i = 2;
+  } else if (t[0].front() == '(') {
     if (t[0].back() != ')') {
       out.problem = "bad timestamp " + quoted(t[0]);
       return out;

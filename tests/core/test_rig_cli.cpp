@@ -1542,6 +1542,30 @@ TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
       << slurp(d + "/io.stderr");
 }
 
+// What a review (helper-54) found `rig dut decode` printing: a remote request's invented zeros,
+// values cut to 9 digits (12038801.95 as 12038802, 1000000001 as 1e+09), and candump -tA's
+// "(2023-11-14 22:13:20.000700)" refused as a bad timestamp.
+TEST(RigCli, DutDecodePrintsWhatTheFramesHold) {
+  const std::string d = tmp("decode-values");
+  fs::create_directories(d);
+  std::ofstream(d + "/rtr.log") << "(1700000000.000000) vcan0 101#R\n"
+                                   "  vcan0  101   [8]  remote request\n";
+  EXPECT_EQ(run({"dut", "decode", d + "/rtr.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
+  std::string out = slurp(d + "/io.stdout");
+  EXPECT_NE(out.find("1700000000.000000 vcan0 DUT_STREAM_Y remote request\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("2 frames: DUT_STREAM_Y remote request 2, error frames 0"), std::string::npos) << out;
+  EXPECT_EQ(out.find("y_g="), std::string::npos) << out;
+  // DUT_HEARTBEAT's last_seq (uint32) of 1000000001; a float32 y_g of -0.000501 g.
+  std::ofstream(d + "/digits.log") << "(1700000000.000000) vcan0 700#0305E80301CA9A3B\n"
+                                      " (2023-11-14 22:13:20.000700)  vcan0  101   [8]  67 12 00 01 8A 55 03 BA\n";
+  EXPECT_EQ(run({"dut", "decode", d + "/digits.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
+  out = slurp(d + "/io.stdout");
+  EXPECT_NE(out.find(" last_seq=1000000001"), std::string::npos) << out;
+  EXPECT_NE(out.find(" DUT_STREAM_Y seq=4711 "), std::string::npos) << out;
+  EXPECT_NE(out.find(" y_g=-0.000501 g"), std::string::npos) << out;
+  EXPECT_NE(out.find(".000700 vcan0 DUT_STREAM_Y"), std::string::npos) << out;  // -tA: the stamp's fraction kept
+}
+
 // `rig dut --hardware FILE decode LOG` decodes with the hardware file's [dut] dbc, found beside
 // FILE, as the README says (a review found it decoding with the built-in protocol, exit 0, the
 // DUT's frames counted as "other ids"); --dbc still wins; a [dut] naming a DBC that is not there
@@ -1557,11 +1581,16 @@ TEST(RigCli, DutDecodeUsesTheHardwareFilesDbc) {
     EXPECT_NE(slurp(d + "/io.stdout").find("QPA_XY cnt=1 x_counts=0.02 mg y_counts=0.04 mg"), std::string::npos)
         << slurp(d + "/io.stdout");
   }
-  EXPECT_EQ(run({"dut", "decode", d + "/q.log"}, d + "/io"), 0);
+  // Without the hardware file: the rig protocol's DBC, which describes none of the log's frames:
+  // exit 2 saying so (it was exit 0 with every frame an "other id", a review).
+  EXPECT_EQ(run({"dut", "decode", d + "/q.log"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stdout").find("1 frames: error frames 0, other ids 1"), std::string::npos)
-      << "without the hardware file: the rig protocol's DBC, which does not describe the frame";
+      << slurp(d + "/io.stdout");
+  EXPECT_NE(slurp(d + "/io.stderr").find("rig: none of the 1 frame(s) in " + d +
+                                         "/q.log is a message of docs/rig-dut.dbc, built in"),
+            std::string::npos) << slurp(d + "/io.stderr");
   const std::string proto = std::string(RIG_SOURCE_DIR) + "/docs/rig-dut.dbc";
-  EXPECT_EQ(run({"dut", "--hardware", hw, "decode", "--dbc", proto, d + "/q.log"}, d + "/io"), 0);
+  EXPECT_EQ(run({"dut", "--hardware", hw, "decode", "--dbc", proto, d + "/q.log"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stdout").find("other ids 1"), std::string::npos) << "--dbc wins over [dut] dbc";
   std::ofstream(d + "/gone.toml") << "[dut]\ncan = \"can0\"\ndbc = \"no-such.dbc\"\n[dut.stream]\ncounter = \"A.c\"\nx = \"A.x\"\n";
   EXPECT_EQ(run({"dut", "--hardware", d + "/gone.toml", "decode", d + "/q.log"}, d + "/io"), 2);
