@@ -98,8 +98,10 @@ int cmd_import(const ImportArgs& a) {
   // log is read once to find it (cheap next to decoding).
   {
     std::string line;
-    for (std::size_t ln = 1; std::getline(in, line); ++ln)
-      if (const auto lf = link::parse_candump_line(line); ln >= a.from_line && lf && (a.iface.empty() || lf->iface == a.iface)) {
+    bool too_long = false;
+    for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln)
+      if (const auto lf = link::parse_candump_line(line);
+          !too_long && ln >= a.from_line && lf && (a.iface.empty() || lf->iface == a.iface)) {
         h.started = iso8601(lf->t_s);
         break;
       }
@@ -151,8 +153,14 @@ int cmd_import(const ImportArgs& a) {
   };
   const uint32_t counter_mask =
       reasm.counter_bits() >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << reasm.counter_bits()) - 1;
-  for (std::size_t ln = 1; std::getline(in, line); ++ln) {
+  bool too_long = false;
+  for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln) {
     if (ln < a.from_line) continue;
+    if (too_long) {
+      ++unreadable;
+      note(ln, "a line longer than " + std::to_string(link::kMaxLogLine) + " characters: not a candump log line");
+      continue;
+    }
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
     const auto lf = link::parse_candump_line(line);

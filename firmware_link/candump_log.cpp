@@ -240,10 +240,37 @@ std::optional<LoggedFrame> parse_candump_line(const std::string& line) {
   return std::move(l.frame);
 }
 
+bool read_log_line(std::istream& in, std::string& line, bool& too_long) {
+  line.clear();
+  too_long = false;
+  std::streambuf* sb = in.rdbuf();
+  bool any = false;
+  for (;;) {
+    const int c = sb->sbumpc();
+    if (c == std::char_traits<char>::eof()) {
+      in.setstate(std::ios::eofbit);
+      if (!any) in.setstate(std::ios::failbit);
+      return any;
+    }
+    any = true;
+    if (c == '\n') return true;
+    if (line.size() < kMaxLogLine) line.push_back(static_cast<char>(c));
+    else too_long = true;
+  }
+}
+
 bool CandumpLogReader::next(Entry& e) {
   std::string text;
-  while (std::getline(in_, text)) {
+  bool too_long = false;
+  while (read_log_line(in_, text, too_long)) {
     ++line_;
+    if (too_long) {
+      e.line = line_;
+      e.parsed = LogLine{};
+      e.parsed.kind = LogLineKind::Unreadable;
+      e.parsed.problem = "a line longer than " + std::to_string(kMaxLogLine) + " characters: not a candump log line";
+      return true;
+    }
     LogLine l = read_candump_line(text);
     if (l.kind == LogLineKind::Empty) continue;
     e.line = line_;

@@ -41,6 +41,13 @@ LogLine read_candump_line(std::string_view line);
 // The frame of one line, or nullopt (empty or unreadable line).
 std::optional<LoggedFrame> parse_candump_line(const std::string& line);
 
+// One line of a log, at most kMaxLogLine characters kept: a longer one (no candump line is: a
+// 64-byte FD frame on screen with its ASCII column is under 400) is read to its end without
+// growing (`rig dut decode /dev/zero` grew by 140 MB a second, a review) and returned cut to
+// that length, `too_long` set. False at the end of the stream, as std::getline.
+inline constexpr std::size_t kMaxLogLine = 4096;
+bool read_log_line(std::istream& in, std::string& line, bool& too_long);
+
 // A stream of log lines with their line numbers; empty lines are skipped.
 class CandumpLogReader {
  public:

@@ -23,6 +23,17 @@ LinkOptions link_options(const toml::table& t) {
   o.loop_test = cfg::get_bool(t, "loop_test", true);
   o.commands = cfg::get_bool(t, "commands", true);
   if (t.get("dbc") || t.get("stream")) o.stream = stream_decoder_from_config(t);
+  // The reassembly tells late from new only if the window is at most half the counter's period:
+  // said here at the file's line, with the key to change (it was the reassembler's bare message,
+  // at the first frame, a review).
+  if (o.stream && uint64_t{o.reorder_window} * 2 > (uint64_t{1} << o.stream->counter_bits())) {
+    const toml::node* w = t.get("reorder_window");
+    const toml::node* st = t.get("stream");
+    const std::string at = w ? cfg::where(*w) + ": [dut] reorder_window" : st ? cfg::where(*st) + ": [dut.stream]" : "[dut]";
+    throw ConfigError(at + ": a reorder window of " + std::to_string(o.reorder_window) + " samples is more than half the " +
+                      std::to_string(o.stream->counter_bits()) + "-bit counter's period (" +
+                      std::to_string(uint64_t{1} << (o.stream->counter_bits() - 1)) + "): set [dut] reorder_window to at most that");
+  }
   return o;
 }
 

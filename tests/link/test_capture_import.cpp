@@ -417,3 +417,42 @@ TEST(CaptureImport, LateFramesTheTailAndFdFramesAreAccountedFor) {
   ASSERT_EQ(c.samples.size(), 200u);
   for (std::size_t i = 0; i < c.samples.size(); ++i) EXPECT_EQ(c.samples[i].seq, 1000 + i);
 }
+
+// Also from helper-54: a counter too small for the reorder window is refused at the hardware
+// file's line with the key to change (it was the reassembler's bare message), and a line no
+// candump writes (megabytes without a newline: `/dev/zero` grew the process without bound) is
+// named and read past in bounded memory.
+TEST(CaptureImport, ASmallCounterAndAnEndlessLineAreNamed) {
+  std::ofstream(dir() / "c3.dbc") << "VERSION \"\"\n\nBU_: DUT\n\nBO_ 291 ACC: 8 DUT\n"
+                                     " SG_ cnt : 0|3@1+ (1,0) [0|7] \"\" Vector__XXX\n"
+                                     " SG_ x : 8|32@1- (1e-06,0) [-2000|2000] \"g\" Vector__XXX\n";
+  std::ofstream(dir() / "hw-c3.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"c3.dbc\"\n[dut.stream]\ncounter = \"ACC.cnt\"\n"
+                                         "x = \"ACC.x\"\n";
+  std::ostringstream log;
+  for (int k = 0; k < 20; ++k) {
+    char line[80];
+    std::snprintf(line, sizeof line, "(1732255200.%06d) vcan0 123#%02X00000000000000\n", k * 1000, k % 8);
+    log << line;
+  }
+  std::ofstream(dir() / "c3.log") << log.str();
+  const std::string args = "capture import " + (dir() / "c3.log").string() + " --hardware ";
+  EXPECT_EQ(run_rig(args + (dir() / "hw-c3.toml").string() + " --out " + (dir() / "c3.rigcap").string(), "c3"), 2);
+  EXPECT_NE(slurp(dir() / "c3.err").find("hw-c3.toml:4:1: [dut.stream]: a reorder window of 8 samples is more than half "
+                                         "the 3-bit counter's period (4): set [dut] reorder_window to at most that"),
+            std::string::npos) << slurp(dir() / "c3.err");
+  std::ofstream(dir() / "hw-c3w.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"c3.dbc\"\nreorder_window = 4\n[dut.stream]\n"
+                                          "counter = \"ACC.cnt\"\nx = \"ACC.x\"\n";
+  ASSERT_EQ(run_rig(args + (dir() / "hw-c3w.toml").string() + " --out " + (dir() / "c3w.rigcap").string(), "c3w"), 0)
+      << slurp(dir() / "c3w.err");
+  EXPECT_EQ(rig::capture::load((dir() / "c3w.rigcap").string()).samples.size(), 20u);
+
+  std::ofstream(dir() / "long.log") << log.str().substr(0, log.str().find('\n') + 1) << std::string(1 << 20, 'A') << "\n"
+                                    << log.str().substr(log.str().find('\n') + 1);
+  EXPECT_EQ(run_rig("capture import " + (dir() / "long.log").string() + " --hardware " + (dir() / "hw-c3w.toml").string() +
+                        " --out " + (dir() / "long.rigcap").string(),
+                    "long"),
+            2);
+  EXPECT_NE(slurp(dir() / "long.err").find("long.log:2: a line longer than 4096 characters: not a candump log line"),
+            std::string::npos) << slurp(dir() / "long.err");
+  EXPECT_EQ(rig::capture::load((dir() / "long.rigcap").string()).samples.size(), 20u);
+}
