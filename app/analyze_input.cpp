@@ -341,13 +341,17 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
       c.values.push_back(channel == "y" ? s.y_g : s.x_g);
     }
   c.recovery = r.recovery();
+  if (channel == "y" && c.recovery.y_absent > 0 && c.recovery.y_absent == c.values.size())
+    throw ConfigError(path + ": channel y: the capture has no y (NaN on every sample: the DUT's stream carries none); "
+                      "analyse x");
   if (const auto bad = an::first_unusable(c.values)) {
     std::string where;
     for (const auto& note : c.recovery.notes)  // the reader located the first ones by file offset
       if (note.find(": sample " + std::to_string(*bad) + " ") != std::string::npos) where = " (" + note + ")";
     throw ConfigError(path + ": sample " + std::to_string(*bad) + " of channel " + channel + " " +
                       refusal(c.values[*bad]) + where + "; " + std::to_string(c.recovery.non_finite) +
-                      " sample(s) with a non-finite value in the capture");
+                      " sample(s) with a non-finite value in the capture" +
+                      (c.recovery.y_absent ? ", " + std::to_string(c.recovery.y_absent) + " without y" : ""));
   }
   return c;
 }

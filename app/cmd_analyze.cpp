@@ -680,7 +680,7 @@ int run(const Args& a) {
                     {"complete", cap->recovery.complete}, {"truncated", cap->recovery.truncated},
                     {"samples", cap->recovery.samples}, {"damaged_blocks", cap->recovery.damaged_blocks},
                     {"problem", cap->recovery.problem}, {"notes", cap->recovery.notes},
-                    {"non_finite", cap->recovery.non_finite}};
+                    {"non_finite", cap->recovery.non_finite}, {"y_absent", cap->recovery.y_absent}};
     std::uint64_t lost = 0;
     for (const CaptureGap& g : cap->gaps) lost += g.lost;
     j["capture"]["gaps"] = cap->gaps.size();

@@ -65,6 +65,8 @@ std::string Recovery::summary(const std::string& path) const {
   }
   if (damaged_blocks) os << "; " << damaged_blocks << " damaged block(s) skipped";
   if (non_finite) os << "; " << non_finite << " sample(s) with a non-finite value (NaN or inf)";
+  if (y_absent > 0 && y_absent == samples) os << "; no y on any sample (a stream without y)";
+  else if (y_absent > 0) os << "; " << y_absent << " sample(s) without y (NaN), the first at " << first_y_absent;
   return os.str();
 }
 
@@ -340,8 +342,13 @@ void Reader::flag_non_finite(uint64_t block_pos) {
   for (std::size_t i = 0; i < block_.size(); ++i) {
     const Sample& s = block_[i];
     if (std::isfinite(s.x_g) && std::isfinite(s.y_g)) continue;
+    const uint64_t offset = block_pos + kBlockHeaderSize + i * kRecordSize;
+    if (std::isfinite(s.x_g) && std::isnan(s.y_g)) {  // no y: a stream without it (not damage)
+      if (rec_.y_absent++ == 0)
+        rec_.first_y_absent = "offset " + std::to_string(offset) + ": sample " + std::to_string(rec_.samples + i);
+      continue;
+    }
     if (rec_.non_finite++ < Recovery::kMaxNonFiniteNotes) {
-      const uint64_t offset = block_pos + kBlockHeaderSize + i * kRecordSize;
       rec_.notes.push_back("offset " + std::to_string(offset) + ": sample " + std::to_string(rec_.samples + i) +
                            " has x = " + std::to_string(s.x_g) + ", y = " + std::to_string(s.y_g) +
                            " (not a finite number)");

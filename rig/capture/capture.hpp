@@ -48,6 +48,10 @@ struct Recovery {
   // NaN float): counted, the first kMaxNonFiniteNotes located in `notes`; `complete` still
   // describes the file, so a reader that analyses the values must check this count.
   uint64_t non_finite = 0;
+  // Samples with a finite x and a NaN y: how a stream without y is recorded (the reassembly's
+  // y_g for a stream that carries none), so not damage; counted apart, the first one located.
+  uint64_t y_absent = 0;
+  std::string first_y_absent;  // "offset N: sample K" of the first such sample
   static constexpr std::size_t kMaxNonFiniteNotes = 8;
   std::string summary(const std::string& path) const;
 };

@@ -182,6 +182,40 @@ TEST(Capture, NonFiniteValuesWithValidCrcsAreCountedAndLocated) {
       << l.recovery.summary(p);
 }
 
+// A stream without y records y as NaN: not damage, said as such (a review: "3000 sample(s) with a
+// non-finite value" and eight offsets, as if the file were broken); some samples without y are
+// counted and the first located.
+TEST(Capture, AStreamWithoutYIsNotANonFiniteValue) {
+  const std::string p = tmpdir() + "/noy.cap";
+  auto s = ramp(3000);
+  for (auto& x : s) x.y_g = std::numeric_limits<float>::quiet_NaN();
+  {
+    capture::Writer w(p, header(), 1000);
+    w.append(s);
+    w.close();
+  }
+  auto l = capture::load(p);
+  EXPECT_TRUE(l.recovery.complete);
+  EXPECT_EQ(l.recovery.non_finite, 0u);
+  EXPECT_EQ(l.recovery.y_absent, 3000u);
+  EXPECT_TRUE(l.recovery.notes.empty());
+  EXPECT_NE(l.recovery.summary(p).find("complete; no y on any sample (a stream without y)"), std::string::npos)
+      << l.recovery.summary(p);
+  const std::string q = tmpdir() + "/somey.cap";
+  s = ramp(3000);
+  s[1500].y_g = std::numeric_limits<float>::quiet_NaN();
+  {
+    capture::Writer w(q, header(), 1000);
+    w.append(s);
+    w.close();
+  }
+  l = capture::load(q);
+  EXPECT_EQ(l.recovery.y_absent, 1u);
+  EXPECT_NE(l.recovery.summary(q).find("; 1 sample(s) without y (NaN), the first at offset "), std::string::npos)
+      << l.recovery.summary(q);
+  EXPECT_NE(l.recovery.summary(q).find(": sample 1500"), std::string::npos) << l.recovery.summary(q);
+}
+
 TEST(Capture, DamagedBlockHeaderResyncsToTheNextBlock) {
   const std::string p = tmpdir() + "/h.cap";
   {

@@ -445,6 +445,14 @@ TEST(CaptureImport, ASmallCounterAndAnEndlessLineAreNamed) {
   ASSERT_EQ(run_rig(args + (dir() / "hw-c3w.toml").string() + " --out " + (dir() / "c3w.rigcap").string(), "c3w"), 0)
       << slurp(dir() / "c3w.err");
   EXPECT_EQ(rig::capture::load((dir() / "c3w.rigcap").string()).samples.size(), 20u);
+  // A stream without y: its capture says so, not "20 sample(s) with a non-finite value".
+  const std::string c3w = (dir() / "c3w.rigcap").string();
+  ASSERT_EQ(run_rig("analyze " + c3w + " --input capture", "c3w-an"), 0) << slurp(dir() / "c3w-an.err");
+  EXPECT_NE(slurp(dir() / "c3w-an.out").find("complete; no y on any sample (a stream without y)\n"), std::string::npos)
+      << slurp(dir() / "c3w-an.out");
+  EXPECT_EQ(run_rig("analyze " + c3w + " --input capture --channel y", "c3w-y"), 2);
+  EXPECT_NE(slurp(dir() / "c3w-y.err").find("channel y: the capture has no y (NaN on every sample"), std::string::npos)
+      << slurp(dir() / "c3w-y.err");
 
   std::ofstream(dir() / "long.log") << log.str().substr(0, log.str().find('\n') + 1) << std::string(1 << 20, 'A') << "\n"
                                     << log.str().substr(log.str().find('\n') + 1);
