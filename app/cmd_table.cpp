@@ -60,7 +60,11 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
   toml::table& t = *root.get_as<toml::table>("table");
   if (!a.drive.empty()) t.insert_or_assign("drive", a.drive);
   if (!a.drive_map.empty()) t.insert_or_assign("drive_map", a.drive_map);
-  if (a.drive == "rig-v1") t.erase("drive_map");  // the file's map, checked above, is not this protocol's
+  // The file's map, checked above, is not this protocol's: left out, and said (it was silent).
+  if (a.drive == "rig-v1" && t.contains("drive_map")) {
+    cfg::warn_once(cfg::where(*t.get("drive_map")) + ": drive_map is for a CiA 402 drive: not used with --drive rig-v1");
+    t.erase("drive_map");
+  }
   if (!a.modbus.empty()) {
     t.erase("rtu");
     t.insert_or_assign("modbus", a.modbus);

@@ -606,6 +606,8 @@ std::string table_drive(const toml::table& t) {
 DriveMap table_drive_map(const toml::table& t) {
   const toml::node* n = t.get("drive_map");
   const std::string given = cfg::get_string(t, "drive_map");
+  // "" is no file: named as what it is (it read "drive map '' not found: looked beside ...").
+  if (given.empty()) throw ConfigError(cfg::where(*n) + ": drive_map is empty: name a drive map file (drives/*.toml)");
   const std::filesystem::path p = given;
   std::error_code ec;  // (a working folder removed under us: absolute() gives an empty path)
   const std::filesystem::path cwd = std::filesystem::absolute(p, ec);

@@ -539,6 +539,16 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
   EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw2, out), 2) << out;
   EXPECT_NE(out.find("hw2.toml:4:"), std::string::npos) << out;
   EXPECT_NE(out.find("not found"), std::string::npos) << out;
+  // An empty drive_map is named as empty (it read "drive map '' not found: looked beside ..."),
+  // and a file's map left out with --drive rig-v1 is said, not dropped silently (a review).
+  const std::string hw2e = write("hw2e.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw2e, out), 2) << out;
+  EXPECT_NE(out.find("hw2e.toml:4:13: drive_map is empty: name a drive map file"), std::string::npos) << out;
+  const std::string hw2v = write("hw2v.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                              "drive_map = \"" + std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml\"\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table --timeout 0.05 status --hardware " + hw2v + " --drive rig-v1", out), 4) << out;
+  EXPECT_NE(out.find("hw2v.toml:4:13: drive_map is for a CiA 402 drive: not used with --drive rig-v1"), std::string::npos)
+      << out;
   // A map beside the hardware file, with an error in it: the map's file and line.
   write("badmap.toml", "[drive]\nname = \"x\"\nbogus = 1\n");
   const std::string hw3 = write("hw3.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"badmap.toml\"\n");
