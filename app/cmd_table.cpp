@@ -114,6 +114,8 @@ std::string flags(const TableStatus& s) {
   add(s.alarm, "ALARM");
   add(s.estop, "E-STOP");
   add(!s.interlock_ok, "INTERLOCK-OPEN");
+  add(s.limit_pos, "LIMIT-POS");  // on the positive over-travel switch (a review: the alarm alone
+  add(s.limit_neg, "LIMIT-NEG");  // did not say which way to move off it)
   return f.empty() ? "-" : f;
 }
 
@@ -137,6 +139,10 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
     if (!s.homed_known) j["homed_known"] = false;  // "homed": false then means "cannot tell"
     if (s.has_heartbeat) j["heartbeat"] = s.heartbeat;
     if (!s.drive_state.empty()) j["drive_state"] = s.drive_state;
+    if (s.has_limit_switches) {
+      j["limit_pos"] = s.limit_pos;
+      j["limit_neg"] = s.limit_neg;
+    }
     if (!s.moving && !s.homing) j["at_target"] = !off;  // within [table] tolerance_deg, at rest
     std::cout << j.dump(2) << "\n";
     return;

@@ -31,6 +31,10 @@ struct TableStatus {
   uint32_t heartbeat = 0;
   bool has_heartbeat = true;  // a CiA 402 drive has no heartbeat register (frozen = no change)
   std::string drive_state;    // the drive's own state name where it has one (CiA 402), else empty
+  // The over-travel switches where the drive reports them (rig-v1 STATUS bits 8, 9): which one
+  // an over-travel alarm stands on says which way to move off it. False where it cannot say.
+  bool limit_pos = false, limit_neg = false;
+  bool has_limit_switches = false;
 };
 
 // Duration of a trapezoidal move of `dist` degrees from rest to rest (peak velocity v, acceleration

@@ -59,6 +59,9 @@ TableStatus to_table_status(const DriveState& d) {
   s.alarm = d.has(sts::kAlarm);
   s.estop = d.has(sts::kEstop);
   s.interlock_ok = d.has(sts::kInterlockOk);
+  s.limit_pos = d.has(sts::kLimitPos);
+  s.limit_neg = d.has(sts::kLimitNeg);
+  s.has_limit_switches = true;
   s.alarm_code = d.alarm_code;
   s.alarm_text = alarm_text(d.alarm_code);
   s.heartbeat = d.heartbeat;

@@ -166,6 +166,18 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   EXPECT_NE(out.find("alarm      0x0040 drive fault"), std::string::npos) << out;
   ASSERT_EQ(rig(where_ + " reset", out), 0) << out;
   EXPECT_NE(out.find("alarm      none"), std::string::npos) << out;
+  ASSERT_EQ(rig(where_ + " status --json", out), 0) << out;
+  EXPECT_NE(out.find("\"limit_pos\": false"), std::string::npos) << out;
+  // On an over-travel switch the status says which one (a review: "homed ALARM" alone did not
+  // say which way to move off it).
+  emu_->inject(SimFault::kOverTravel, 0.5);
+  EXPECT_EQ(rig(where_ + " move 350", out), 4) << out;
+  ASSERT_EQ(rig(where_ + " status", out), 0) << out;
+  EXPECT_NE(out.find(" ALARM LIMIT-POS"), std::string::npos) << out;
+  ASSERT_EQ(rig(where_ + " status --json", out), 0) << out;
+  EXPECT_NE(out.find("\"limit_pos\": true"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"limit_neg\": false"), std::string::npos) << out;
+  ASSERT_EQ(rig(where_ + " reset", out), 0) << out;
   EXPECT_EQ(rig("--modbus 127.0.0.1:1 --timeout 0.1 status", out), 4) << out;
   EXPECT_NE(out.find("cannot connect: Connection refused"), std::string::npos) << out;
   // A host that does not answer (TEST-NET-1, RFC 5737: never routed) is said so, not as the
