@@ -348,8 +348,6 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   // target outside the drive's limits. The drive was left powered with HALT set before (a review).
   const DriveState d0 = detail::read_before_motion([&] { return read_drive(cancel); },
                                                     [&](auto body) { guarded(doing, body); });
-  if (!d0.has(sts::kHomed))
-    throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
   // The drive takes counts (kPosScale per degree) and holds its limits in counts: the angle is
   // judged as it will be written (369.99996° and 370.00004° are both 370.0000°; one was refused
   // at a limit of 370.0000°, a review).
@@ -361,7 +359,11 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
                         ": outside the drive's travel limits [" + deg_str(d.limit_neg_deg) + ", " +
                         deg_str(d.limit_pos_deg) + "]");
   };
+  // A target no drive state makes reachable is the command's mistake (exit 2) before the table's
+  // state (not homed: exit 4) is: the order gave exit 4 for `move 400` on an unhomed table (a review).
   refuse_outside(d0);
+  if (!d0.has(sts::kHomed))
+    throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);

@@ -156,6 +156,9 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   std::string out;
   EXPECT_EQ(rig(where_ + " move 90", out), 4) << out;
   EXPECT_NE(out.find("move to 90.0000°: table not homed"), std::string::npos) << out;
+  // Outside the travel limits is the command's mistake, homed or not (it was exit 4 unhomed).
+  EXPECT_EQ(rig(where_ + " move 1000", out), 2) << out;
+  EXPECT_NE(out.find("outside the drive's travel limits"), std::string::npos) << out;
   ASSERT_EQ(rig(where_ + " home", out), 0) << out;
   emu_->inject(SimFault::kDriveFault, 0.5);
   EXPECT_EQ(rig(where_ + " move 180", out), 4) << out;
