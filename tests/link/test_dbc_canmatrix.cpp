@@ -295,6 +295,14 @@ TEST(DbcHandWritten, MalformedFilesNameTheLine) {
   EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] \"\" X\n SG_ a : 8|8@1+ (1,0) [0|1] \"\" X\n"),
             "h.dbc:3: signal a defined twice in M");
   EXPECT_EQ(error_of("VERSION \"\"\n"), "h.dbc:1: no messages (BO_) defined");
+  // A review's DBCs: a multiplexed signal in a message without a multiplexor was never decoded,
+  // a float multiplexor was taken; a UTF-8 byte-order mark (Windows editors) was "0xEF".
+  EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a m1 : 0|8@1+ (1,0) [0|1] \"\" X\n"),
+            "h.dbc:2: signal a is multiplexed (m1) but message M has no multiplexor (M)");
+  EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a M : 0|32@1+ (1,0) [0|1] \"\" X\n SG_ b m1 : 32|8@1+ (1,0) [0|1] \"\" X\n"
+                     "SIG_VALTYPE_ 256 a : 1;\n"),
+            "h.dbc:2: multiplexor a of M is a float (SIG_VALTYPE_): it must be an integer");
+  EXPECT_EQ(error_of("\xEF\xBB\xBF" + bo), "no error");
 }
 
 TEST(DbcHandWritten, MotorolaBitNumberingMatchesTheSawtooth) {
