@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -27,6 +28,18 @@ inline std::optional<double> finite_number(const std::string& v) {
   return x;
 }
 
+// For a decimal number a double cannot hold, what it is, as the readers of records say it:
+// " is beyond the range of a double" (1e400) or " is nearer 0 than the smallest double"
+// (1e-400, which read "must be a finite number", a review); "" otherwise.
+inline std::string range_note(const std::string& v) {
+  double x = 0;
+  const char* const first = v.data() + (v.rfind('+', 0) == 0 ? 1 : 0);
+  const auto [end, ec] = std::from_chars(first, v.data() + v.size(), x);
+  if (ec != std::errc::result_out_of_range || end != v.data() + v.size()) return "";
+  const double y = std::strtod(std::string(first, end).c_str(), nullptr);  // inf or a tiny/zero value
+  return std::fabs(y) > 1 ? " is beyond the range of a double" : " is nearer 0 than the smallest double";
+}
+
 // A finite number in [lo, hi] ((lo, hi] when lo_open). `what` says what it is ("a number of
 // seconds"). The message: "'TEXT': must be WHAT in (LO, HI]"; CLI11 puts the option's name first.
 inline CLI::Validator number_in(double lo, double hi, bool lo_open, const std::string& what) {
@@ -37,7 +50,7 @@ inline CLI::Validator number_in(double lo, double hi, bool lo_open, const std::s
       [lo, hi, lo_open, rule](std::string& v) -> std::string {
         const std::optional<double> x = finite_number(v);
         if (x && (lo_open ? *x > lo : *x >= lo) && *x <= hi) return {};
-        return "'" + shown_ascii(v) + "': must be " + rule;
+        return "'" + shown_ascii(v) + "'" + range_note(v) + ": must be " + rule;
       },
       "");
 }
@@ -46,7 +59,7 @@ inline CLI::Validator number_in(double lo, double hi, bool lo_open, const std::s
 inline CLI::Validator finite(const std::string& what) {
   return CLI::Validator(
       [what](std::string& v) -> std::string {
-        return finite_number(v) ? std::string() : "'" + shown_ascii(v) + "': must be " + what;
+        return finite_number(v) ? std::string() : "'" + shown_ascii(v) + "'" + range_note(v) + ": must be " + what;
       },
       "");
 }

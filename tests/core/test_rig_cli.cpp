@@ -2787,7 +2787,7 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--seconds", "1e12"}, "--seconds: '1e12': must be"},
       {{"--seconds", "0"}, "--seconds: '0': must be"},
       {{"--seconds", "inf"}, "--seconds: 'inf': must be"},
-      {{"--seconds", "1e400"}, "--seconds: '1e400': must be"},
+      {{"--seconds", "1e400"}, "--seconds: '1e400' is beyond the range of a double: must be"},
       {{"--tolerance", "-1"}, "--tolerance: '-1': must be a percentage in (0, 100]"},
       {{"--f-req", "inf"}, "--f-req: 'inf': must be a bandwidth in Hz in (0, 1e+06]"},
       {{"--orders", "5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
