@@ -342,8 +342,7 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
     }
   c.recovery = r.recovery();
   if (channel == "y" && c.recovery.y_absent > 0 && c.recovery.y_absent == c.values.size())
-    throw ConfigError(path + ": channel y: the capture has no y (NaN on every sample: the DUT's stream carries none); "
-                      "analyse x");
+    throw ConfigError(path + ": channel y is NaN on every sample (a stream without y): nothing to analyse; analyse x");
   if (const auto bad = an::first_unusable(c.values)) {
     std::string where;
     for (const auto& note : c.recovery.notes)  // the reader located the first ones by file offset
@@ -351,7 +350,7 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
     throw ConfigError(path + ": sample " + std::to_string(*bad) + " of channel " + channel + " " +
                       refusal(c.values[*bad]) + where + "; " + std::to_string(c.recovery.non_finite) +
                       " sample(s) with a non-finite value in the capture" +
-                      (c.recovery.y_absent ? ", " + std::to_string(c.recovery.y_absent) + " without y" : ""));
+                      (c.recovery.y_absent ? ", " + std::to_string(c.recovery.y_absent) + " with y NaN" : ""));
   }
   return c;
 }

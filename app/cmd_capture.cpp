@@ -41,6 +41,11 @@ struct ImportArgs {
   std::size_t from_line = 1;      // the log's first line to import (the rest after a DUT restart)
 };
 
+// The log's clock, where its time stamps are one: absolute (candump -l, -L, -ta: seconds since
+// the epoch). Relative stamps (-td deltas, -tz) are not checked against (a -td log's deltas
+// read as a clock hid every pause after the first, a review).
+bool a_clock(double t_s) { return t_s > 1e8; }
+
 // A pause the counter cannot span: the log's clock says at least a second went by (host-side
 // buffering bunches frames by milliseconds, never a second) and at least half the counter's
 // period, so the widening cannot tell how many periods passed. "" when it can.
@@ -53,8 +58,23 @@ std::string pause_too_long(const link::StreamReassembler& r, double dt_s, double
                      dt_s, dt_s * rate_hz, rate_hz, r.counter_bits());
 }
 
+// A counter that leapt ahead further than the log's clock went (a DUT that restarted after its
+// counter had passed half its period widens to a leap forward, not back: it read as hours of
+// lost samples in seconds of log, a review). The leap is allowed four times the clock plus 2 s,
+// room for a rate_hz a little off; "" when it fits.
+std::string leap_beyond_clock(const link::StreamReassembler& r, uint32_t counter, double dt_s, double rate_hz) {
+  if (!r.started()) return {};
+  const uint64_t s = r.widened(counter), top = r.highest_seq();
+  if (s <= top + r.window()) return {};
+  const double leap_s = static_cast<double>(s - top) / rate_hz;
+  if (leap_s <= 4 * dt_s + 2) return {};
+  return fmt::format("the stream's counter leapt {} samples ({:.6g} s at {} Hz) where the log's clock moved {:.6g} s "
+                     "(the DUT restarted?)",
+                     s - top, leap_s, rate_hz, dt_s);
+}
+
 // A frame further behind than any reordering (the reorder window): a stray late frame, or the
-// first of a counter that went back (the DUT restarted). The next stream frame tells which.
+// first of a counter that went back (the DUT restarted). The frames after it tell which.
 bool far_behind(const link::StreamReassembler& r, uint32_t counter) {
   return r.started() && r.widened(counter) + r.window() < r.next_seq();
 }
@@ -128,13 +148,19 @@ int cmd_import(const ImportArgs& a) {
   };
   std::string line, cut;  // cut: LOG:LINE: why the import stopped there
   std::size_t cut_line = 0;
-  std::optional<double> last_stream_t;  // the log's time of the last stream frame
-  // Frames far behind the stream (one sample's, its parts may be several frames), held until a
-  // frame shows whether the stream went on (stray late frames) or a later counter followed them
-  // (the counter went back: the DUT restarted).
+  std::optional<double> last_t;  // the log's clock at the last stream frame (absolute stamps only)
+  // Frames far behind the stream, held until the stream shows what they are: it goes on from
+  // where it was (stray late frames), or the held counter carries on for more than the reorder
+  // window (the counter went back: the DUT restarted). Two strays in a row are not a restart.
+  struct Counts {  // what the lines from the first held frame on added, taken back at a cut there
+    uint64_t frames, other, unreadable, malformed;
+    std::size_t problems;
+  };
   struct Suspect {
     std::size_t line = 0;  // the first's
     uint32_t counter = 0;  // the first's
+    uint32_t span = 0;     // the last held counter's distance past the first's
+    Counts before{};
     std::vector<std::vector<link::StreamPart>> frames;
   };
   std::optional<Suspect> suspect;
@@ -153,6 +179,18 @@ int cmd_import(const ImportArgs& a) {
   };
   const uint32_t counter_mask =
       reasm.counter_bits() >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << reasm.counter_bits()) - 1;
+  auto cut_at_restart = [&] {  // the held frames start the rest: counts back to their first line
+    cut = fmt::format("{}:{}: the stream's counter went back from {} to {} (the DUT restarted?)", a.log, suspect->line,
+                      reasm.highest_seq() & counter_mask, suspect->counter);
+    cut_line = suspect->line;
+    frames = suspect->before.frames;
+    other = suspect->before.other;
+    unreadable = suspect->before.unreadable;
+    malformed = suspect->before.malformed;
+    problems.resize(suspect->before.problems);
+    stream_frames -= suspect->frames.size();
+    suspect.reset();
+  };
   bool too_long = false;
   for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln) {
     if (ln < a.from_line) continue;
@@ -170,6 +208,7 @@ int cmd_import(const ImportArgs& a) {
       continue;
     }
     if (!a.iface.empty() && lf->iface != a.iface) continue;
+    const Counts here{frames, other, unreadable, malformed, problems.size()};
     ++frames;
     parts.clear();
     std::string err;
@@ -182,46 +221,51 @@ int cmd_import(const ImportArgs& a) {
       note(ln, err);
       continue;
     }
+    if (parts.empty()) {
+      ++stream_frames;
+      continue;
+    }
     // A counter that cannot carry on ends this capture: what came before is kept and the rest
-    // is another capture (--from-line), never spliced on as if no time had passed.
-    // The latest time seen, so that one stamp out of line does not make a pause of the next.
-    const double dt = last_stream_t && lf->t_s >= *last_stream_t ? lf->t_s - *last_stream_t : 0;
-    last_stream_t = std::max(lf->t_s, last_stream_t.value_or(lf->t_s));
-    if (!parts.empty()) {
-      if (std::string why = pause_too_long(reasm, dt, h.rate_hz); !why.empty()) {
-        drop_suspect();
-        cut = a.log + ":" + std::to_string(ln) + ": " + why;
-        cut_line = ln;
-        --frames;  // read, but the rest's
+    // is another capture (--from-line), never spliced on as if no time had passed. The clock
+    // moves forward only: a stamp out of line backwards is no pause of the next frame.
+    double dt = 0;
+    const bool timed = a_clock(lf->t_s) && last_t.has_value();  // a clock to hold the counter to
+    if (a_clock(lf->t_s)) {
+      if (last_t && lf->t_s > *last_t) dt = lf->t_s - *last_t;
+      if (!last_t || lf->t_s > *last_t) last_t = lf->t_s;
+    }
+    const uint32_t c = parts.front().counter & counter_mask;
+    std::string why = pause_too_long(reasm, dt, h.rate_hz);
+    if (why.empty() && timed && !suspect) why = leap_beyond_clock(reasm, c, dt, h.rate_hz);
+    if (!why.empty()) {
+      drop_suspect();
+      cut = a.log + ":" + std::to_string(ln) + ": " + why;
+      cut_line = ln;
+      frames = here.frames;  // this line is the rest's
+      break;
+    }
+    if (far_behind(reasm, c)) {
+      const uint32_t ahead = suspect ? (c - suspect->counter) & counter_mask : 0;
+      if (suspect && ahead > counter_mask / 2) drop_suspect();  // further back still: those were strays
+      if (!suspect) suspect = Suspect{ln, c, 0, here, {}};
+      else suspect->span = std::max(suspect->span, ahead);
+      suspect->frames.push_back(parts);
+      ++stream_frames;
+      if (suspect->span >= reasm.window()) {  // it carried on past the window: it went back
+        cut_at_restart();
         break;
       }
-      if (const uint32_t c = parts.front().counter & counter_mask; far_behind(reasm, c)) {
-        const uint32_t ahead = suspect ? (c - suspect->counter) & counter_mask : 0;
-        if (suspect && ahead > 0 && ahead <= counter_mask / 2) {  // a later counter followed: it went back
-          cut = fmt::format("{}:{}: the stream's counter went back from {} to {} (the DUT restarted?)", a.log,
-                            suspect->line, (reasm.next_seq() - 1) & counter_mask, suspect->counter);
-          cut_line = suspect->line;
-          frames -= suspect->frames.size() + 1;  // the rest's
-          stream_frames -= suspect->frames.size();
-          suspect.reset();
-          break;
-        }
-        if (suspect && ahead != 0) drop_suspect();  // further back still: the earlier ones were strays
-        if (!suspect) suspect = Suspect{ln, c, {}};
-        suspect->frames.push_back(parts);
-        ++stream_frames;
-        continue;
-      }
-      drop_suspect();
+      continue;
     }
+    drop_suspect();
     ++stream_frames;
     push(parts);
   }
+  // The log ends on held frames: a restart if their counter carried on, else strays.
+  if (cut.empty() && suspect && suspect->span > 0) cut_at_restart();
   drop_suspect();
-  const uint64_t orphans_before = reasm.orphan_halves();
-  reasm.flush();
+  const uint64_t tail = reasm.flush();
   drain();
-  const uint64_t tail = reasm.orphan_halves() - orphans_before;
   const LinkStats& st = reasm.stats();
   w.close();
 
@@ -241,13 +285,25 @@ int cmd_import(const ImportArgs& a) {
               : lo.stream || dut.contains("dbc")           ? "the default: [dut.stream] has no rate_hz"
                                                            : "the rig protocol's");
   if (tail > 0)
-    std::printf("the log ends with %llu incomplete sample(s) (a part without its partner): not in the capture\n",
+    std::printf("%llu incomplete sample(s) at the end (a part without its partner): not in the capture\n",
                 static_cast<unsigned long long>(tail));
   for (std::size_t i = 0; i < st.gap_list.size() && i < 20; ++i)
     std::printf("  gap at seq %llu: %llu samples\n", static_cast<unsigned long long>(st.gap_list[i].first),
                 static_cast<unsigned long long>(st.gap_list[i].second));
   if (st.gap_list.size() > 20) std::printf("  ... %zu more gaps\n", st.gap_list.size() - 20);
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
+  if (!cut.empty()) {
+    if (w.samples_written() == 0) {  // nothing before it: no capture, the rest is all there is
+      std::error_code ec;
+      std::filesystem::remove(a.out, ec);
+    }
+    std::fprintf(stderr, "%s\n%s; import the rest into another capture with --from-line %zu\n", cut.c_str(),
+                 w.samples_written() == 0 ? (a.out + " not written: no sample before it").c_str()
+                                          : (a.out + " holds the " + std::to_string(w.samples_written()) +
+                                             " sample(s) before it").c_str(),
+                 cut_line);
+    return kExitUsage;
+  }
   if (w.samples_written() == 0) {
     // Nothing of the [dut] stream in the log (another DUT's layout, --iface naming no frame, an
     // empty file): an empty capture would only fail later in rig analyze, far from the cause.
@@ -256,12 +312,6 @@ int cmd_import(const ImportArgs& a) {
     std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
                  a.hardware.c_str(), static_cast<unsigned long long>(frames),
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
-    return kExitUsage;
-  }
-  if (!cut.empty()) {
-    std::fprintf(stderr, "%s\n%s holds the %llu sample(s) before it; import the rest into another capture with "
-                 "--from-line %zu\n", cut.c_str(), a.out.c_str(), static_cast<unsigned long long>(w.samples_written()),
-                 cut_line);
     return kExitUsage;
   }
   if (unreadable + malformed > 0) {

@@ -170,7 +170,8 @@ LogLine read_candump_line(std::string_view line) {
                       n1 == static_cast<int>(day.size()) &&
                       std::sscanf(clock.c_str(), "%2d:%2d:%lf%n", &h, &mi, &sec, &n2) == 3 &&
                       n2 == static_cast<int>(clock.size());
-    if (!read || mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 || !(sec >= 0 && sec < 61)) {
+    if (!read || y < 1970 || mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 || h > 23 || mi < 0 || mi > 59 ||
+        !(sec >= 0 && sec < 61) || day[0] == '-' || clock[0] == '-' || clock[3] == '-') {
       out.problem = "bad timestamp " + quoted(line.substr(0, static_cast<std::size_t>(t[1].data() + t[1].size() - line.data())));
       return out;
     }
@@ -181,7 +182,13 @@ LogLine read_candump_line(std::string_view line) {
     tm.tm_hour = h;
     tm.tm_min = mi;
     tm.tm_isdst = -1;
-    lf.t_s = static_cast<double>(std::mktime(&tm)) + sec;
+    const std::time_t base = std::mktime(&tm);
+    // mktime normalises 2023-02-31 to March 3rd: a date it had to move is no date.
+    if (base == static_cast<std::time_t>(-1) || tm.tm_mday != d || tm.tm_mon != mo - 1) {
+      out.problem = "bad timestamp " + quoted(line.substr(0, static_cast<std::size_t>(t[1].data() + t[1].size() - line.data())));
+      return out;
+    }
+    lf.t_s = static_cast<double>(base) + sec;
     i = 2;
   } else if (t[0].front() == '(') {
     if (t[0].back() != ')') {

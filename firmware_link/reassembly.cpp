@@ -21,12 +21,16 @@ StreamReassembler::StreamReassembler(uint32_t window, int counter_bits, bool nee
                       std::to_string(counter_bits) + "-bit counter's period");
 }
 
-uint64_t StreamReassembler::widen(uint32_t counter) const {
+int64_t StreamReassembler::widen_signed(uint32_t counter) const {
   // The widened value closest to the highest seen: deltas in [-2^(N-1), 2^(N-1)).
   const int64_t kHalf = int64_t{1} << (bits_ - 1), kFull = int64_t{1} << bits_;
   int64_t delta = static_cast<int64_t>((counter - static_cast<uint32_t>(highest_)) & mask_);
   if (delta >= kHalf) delta -= kFull;
-  const int64_t s = static_cast<int64_t>(highest_) + delta;
+  return static_cast<int64_t>(highest_) + delta;
+}
+
+uint64_t StreamReassembler::widen(uint32_t counter) const {
+  const int64_t s = widen_signed(counter);
   return s < 0 ? 0 : static_cast<uint64_t>(s);  // before the stream's start: late by definition
 }
 
@@ -37,7 +41,12 @@ void StreamReassembler::push_part(const StreamPart& h) {
     s = h.counter & mask_;
     next_ = highest_ = s;
   } else {
-    s = widen(h.counter & mask_);
+    const int64_t w = widen_signed(h.counter & mask_);
+    if (w < 0) {  // before the stream's start (across a wrap): late, never sample 0 (a review)
+      ++stats_.duplicates;
+      return;
+    }
+    s = static_cast<uint64_t>(w);
   }
   if (s < next_ && !settled_ && hold_start_ && s + window_ > highest_) {
     next_ = s;  // the stream's first sample, logged late: nothing delivered yet, the start moves back
@@ -60,6 +69,7 @@ void StreamReassembler::push_part(const StreamPart& h) {
   if (!settled_) {
     settled_ = !hold_start_ || limit > next_;
     if (!settled_) return;
+    if (hold_start_) drop_leading_partials();
   }
   advance_to(std::max(limit, next_));
   while (!pending_.empty() && pending_.begin()->first == next_ && complete(pending_.begin()->second)) {
@@ -146,7 +156,21 @@ std::size_t StreamReassembler::pop(std::span<Sample> out) {
   return n;
 }
 
-void StreamReassembler::flush() {
+// A held start settles at its first complete sample: a log that begins between a sample's parts
+// (or with a lone part logged late) holds the part of a sample it does not hold, which is no
+// loss within the log (it counted as a gap at the start, a review). Dropped as orphans.
+void StreamReassembler::drop_leading_partials() {
+  const auto first = std::find_if(pending_.begin(), pending_.end(), [&](const auto& kv) { return complete(kv.second); });
+  if (first == pending_.end()) return;
+  const uint64_t k = first->first;
+  while (pending_.begin()->first < k) {
+    ++orphans_;
+    release_first();
+  }
+  next_ = k;
+}
+
+std::size_t StreamReassembler::flush() {
   // Settle up to the last complete sample; partial samples after it are the
   // stream's cut-off tail and are dropped without counting a gap.
   uint64_t last_complete = 0;
@@ -156,10 +180,13 @@ void StreamReassembler::flush() {
       last_complete = k;
       any = true;
     }
+  if (!settled_ && hold_start_) drop_leading_partials();
   settled_ = true;
   if (any) advance_to(last_complete + 1);
-  orphans_ += pending_.size();
+  const std::size_t tail = pending_.size();
+  orphans_ += tail;
   pending_.clear();
+  return tail;
 }
 
 void StreamReassembler::restart() {

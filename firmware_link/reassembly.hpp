@@ -48,8 +48,8 @@ class StreamReassembler {
   std::size_t ready() const { return ready_.size(); }
   // The stream ended (stop or silence): settle everything pending, so that
   // incomplete samples in the middle count as lost; trailing partial samples
-  // are discarded (a stop cuts the stream at an arbitrary point).
-  void flush();
+  // are discarded (a stop cuts the stream at an arbitrary point). Returns how many.
+  std::size_t flush();
   // Forget the position (a new stream starts); statistics are kept.
   void restart();
 
@@ -65,6 +65,7 @@ class StreamReassembler {
   // went back: the DUT restarted), which a caller that can stop (a log's import) names.
   uint64_t widened(uint32_t counter) const { return started_ ? widen(counter & mask_) : counter & mask_; }
   uint32_t window() const { return window_; }
+  uint64_t highest_seq() const { return highest_; }  // the highest widened seq seen
   int counter_bits() const { return bits_; }
 
  private:
@@ -74,6 +75,8 @@ class StreamReassembler {
     uint8_t status = 0;
   };
   uint64_t widen(uint32_t counter) const;
+  int64_t widen_signed(uint32_t counter) const;  // below 0: before the stream's start
+  void drop_leading_partials();
   bool complete(const Partial& p) const { return p.has_x && (p.has_y || !needs_y_); }
   void advance_to(uint64_t limit);  // settles every sample below `limit`
   void emit(uint64_t seq, const Partial& p);

@@ -65,8 +65,8 @@ std::string Recovery::summary(const std::string& path) const {
   }
   if (damaged_blocks) os << "; " << damaged_blocks << " damaged block(s) skipped";
   if (non_finite) os << "; " << non_finite << " sample(s) with a non-finite value (NaN or inf)";
-  if (y_absent > 0 && y_absent == samples) os << "; no y on any sample (a stream without y)";
-  else if (y_absent > 0) os << "; " << y_absent << " sample(s) without y (NaN), the first at " << first_y_absent;
+  if (y_absent > 0 && y_absent == samples) os << "; y is NaN on every sample (a stream without y)";
+  else if (y_absent > 0) os << "; " << y_absent << " sample(s) with y NaN (x finite), the first at " << first_y_absent;
   return os.str();
 }
 
@@ -218,6 +218,11 @@ Reader::Reader(const std::string& path) : path_(path) {
       throw ConfigError(path + ": capture header field rate_hz is " + j["rate_hz"].dump() + ", not a number");
     header_.rate_hz = j["rate_hz"].get<double>();
     header_.extra = j.value("extra", nlohmann::json::object());
+    // A capture whose header names its stream's y (rig capture import of a stream with y): a
+    // NaN y there is a non-finite value like any other, not a stream without y (a review).
+    if (const auto sj = header_.extra.find("stream"); sj != header_.extra.end() && sj->is_object())
+      if (const auto y = sj->find("y"); y != sj->end() && y->is_string() && !y->get<std::string>().empty())
+        y_named_ = true;
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError(path + ": capture header is not valid JSON: " + e.what());
   }
@@ -343,7 +348,7 @@ void Reader::flag_non_finite(uint64_t block_pos) {
     const Sample& s = block_[i];
     if (std::isfinite(s.x_g) && std::isfinite(s.y_g)) continue;
     const uint64_t offset = block_pos + kBlockHeaderSize + i * kRecordSize;
-    if (std::isfinite(s.x_g) && std::isnan(s.y_g)) {  // no y: a stream without it (not damage)
+    if (!y_named_ && std::isfinite(s.x_g) && std::isnan(s.y_g)) {  // no y: a stream without it (not damage)
       if (rec_.y_absent++ == 0)
         rec_.first_y_absent = "offset " + std::to_string(offset) + ": sample " + std::to_string(rec_.samples + i);
       continue;

@@ -50,6 +50,7 @@ struct Recovery {
   uint64_t non_finite = 0;
   // Samples with a finite x and a NaN y: how a stream without y is recorded (the reassembly's
   // y_g for a stream that carries none), so not damage; counted apart, the first one located.
+  // Not for a capture whose header names its stream's y (extra.stream.y): non_finite there.
   uint64_t y_absent = 0;
   std::string first_y_absent;  // "offset N: sample K" of the first such sample
   static constexpr std::size_t kMaxNonFiniteNotes = 8;
@@ -120,6 +121,7 @@ class Reader {
   std::size_t block_pos_ = 0;
   bool gap_pending_ = false;
   bool done_ = false;
+  bool y_named_ = false;  // the header names the stream's y: a NaN y is then a non-finite value
   uint32_t prev_count_ = 0, prev_crc_ = 0;  // the last good block's, to notice a block written twice
 };
 

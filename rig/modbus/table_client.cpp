@@ -470,23 +470,29 @@ void TableClient::reset_alarm(const CancelToken& cancel) {
   }
 }
 
-void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
-  // Unread, the servo bit is written cleared: a drive that takes the stop then also switches its
-  // servo off (the table stops on its brake), where a set bit could enable an idle servo.
-  const bool servo_known = identified_.load();
+void TableClient::set_stop_note(std::string note) noexcept {
   try {
     std::lock_guard lk(stop_mu_);
-    last_stop_note_ = servo_known ? std::string()
-                                  : std::string(name) + " written with SERVO_ON cleared (CONTROL " +
-                                        hex4(bit) + "): the drive's state could not be read before it, so a drive "
-                                        "that takes it also switches its servo off";
+    last_stop_note_.swap(note);
   } catch (...) {
   }
+}
+
+void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
   detail::deliver_stop(
       name,
       [&] {
+        const bool known = identified_.load();  // read with the word it qualifies
         const uint16_t now = control_.load();
         const auto servo = static_cast<uint16_t>(now & ctl::kServoOn);
+        // Unread, the servo bit is written cleared: a drive that takes the stop then also switches
+        // its servo off (the table stops on its brake), where a set bit could enable an idle servo.
+        if (!known) try {  // (a note that cannot be built never keeps the stop from going out)
+            set_stop_note(std::string(name) + " written with SERVO_ON cleared (CONTROL " + hex4(bit) +
+                          "): the drive's state could not be read before it, so a drive that takes it also switches "
+                          "its servo off");
+          } catch (...) {
+          }
         if (now & bit) transport_->write(reg::kControl, {servo}, CancelToken{}, true);  // re-arm the edge
         transport_->write(reg::kControl, {static_cast<uint16_t>(servo | bit)}, CancelToken{}, true);
         control_ = static_cast<uint16_t>(servo | bit);
@@ -529,11 +535,13 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
 // alone took 6.6°, an outside review; the register map now forbids it, table-registers.md, and
 // this keeps a drive that does it anyway safe); the quick stop's own fate stays the one said.
 void TableClient::stop() noexcept {
+  set_stop_note({});  // this stop's, not an earlier one's
   const detail::StopLatch::Asking counted(stops_, false);
   if (stops_.quick_stop_stands()) return;
   if (!refuse_stop_to_unknown("stop")) send_stop(ctl::kHalt, "stop");
 }
 void TableClient::quick_stop() noexcept {
+  set_stop_note({});
   const detail::StopLatch::Asking counted(stops_, true);
   if (refuse_stop_to_unknown("quick stop")) return;
   send_stop(ctl::kQuickStop, "quick stop");

@@ -93,6 +93,7 @@ class TableClient final : public RotaryTable {
 
  private:
   void write_control(uint16_t word, const CancelToken& cancel);
+  void set_stop_note(std::string note) noexcept;
   void prepare_motion(const std::string& doing, const CancelToken& cancel);
   DriveState wait_at_rest(const std::string& doing, DriveState d, const CancelToken& cancel);
   void apply_profile_once(const CancelToken& cancel);

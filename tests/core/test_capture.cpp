@@ -199,7 +199,7 @@ TEST(Capture, AStreamWithoutYIsNotANonFiniteValue) {
   EXPECT_EQ(l.recovery.non_finite, 0u);
   EXPECT_EQ(l.recovery.y_absent, 3000u);
   EXPECT_TRUE(l.recovery.notes.empty());
-  EXPECT_NE(l.recovery.summary(p).find("complete; no y on any sample (a stream without y)"), std::string::npos)
+  EXPECT_NE(l.recovery.summary(p).find("complete; y is NaN on every sample (a stream without y)"), std::string::npos)
       << l.recovery.summary(p);
   const std::string q = tmpdir() + "/somey.cap";
   s = ramp(3000);
@@ -211,9 +211,22 @@ TEST(Capture, AStreamWithoutYIsNotANonFiniteValue) {
   }
   l = capture::load(q);
   EXPECT_EQ(l.recovery.y_absent, 1u);
-  EXPECT_NE(l.recovery.summary(q).find("; 1 sample(s) without y (NaN), the first at offset "), std::string::npos)
+  EXPECT_NE(l.recovery.summary(q).find("; 1 sample(s) with y NaN (x finite), the first at offset "), std::string::npos)
       << l.recovery.summary(q);
   EXPECT_NE(l.recovery.summary(q).find(": sample 1500"), std::string::npos) << l.recovery.summary(q);
+  // A header that names its stream's y (an import of a stream with y): a NaN y is non-finite.
+  const std::string r = tmpdir() + "/namedy.cap";
+  {
+    capture::Header h = header();
+    h.extra = {{"stream", {{"y", "ACC.y"}}}};
+    capture::Writer w(r, h, 1000);
+    w.append(s);
+    w.close();
+  }
+  l = capture::load(r);
+  EXPECT_EQ(l.recovery.y_absent, 0u);
+  EXPECT_EQ(l.recovery.non_finite, 1u);
+  EXPECT_NE(l.recovery.summary(r).find("1 sample(s) with a non-finite value"), std::string::npos) << l.recovery.summary(r);
 }
 
 TEST(Capture, DamagedBlockHeaderResyncsToTheNextBlock) {

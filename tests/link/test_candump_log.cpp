@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <ctime>
+
 #include "firmware_link/candump_log.hpp"
 #include "firmware_link/protocol.hpp"
 
@@ -79,6 +81,20 @@ TEST(CandumpLog, ScreenFormatVariants) {
   auto ef = read_candump_line("  can0  20000004   [8]  00 04 00 00 00 00 00 00   ERRORFRAME");
   ASSERT_EQ(ef.kind, LogLineKind::Frame) << ef.problem;
   EXPECT_TRUE(ef.frame.frame.error);
+  // -tA: the host's local date and time (it was refused as a bad timestamp, a review); a date
+  // that does not exist or a negative field is refused, not moved to another day (a code review).
+  auto abs = read_candump_line(" (2023-11-14 22:13:20.000700)  vcan0  101   [8]  56 34 12 05 00 00 80 3F");
+  ASSERT_EQ(abs.kind, LogLineKind::Frame) << abs.problem;
+  std::tm tm{};
+  tm.tm_year = 123, tm.tm_mon = 10, tm.tm_mday = 14, tm.tm_hour = 22, tm.tm_min = 13, tm.tm_sec = 20, tm.tm_isdst = -1;
+  EXPECT_DOUBLE_EQ(abs.frame.t_s, static_cast<double>(std::mktime(&tm)) + 0.0007);
+  for (const char* bad : {" (2023-02-31 22:13:20.000700)  vcan0  101   [8]  56 34 12 05 00 00 80 3F",
+                          " (2023-11-14 -1:13:20.000700)  vcan0  101   [8]  56 34 12 05 00 00 80 3F",
+                          " (2023-11-14 22:-3:20.000700)  vcan0  101   [8]  56 34 12 05 00 00 80 3F"}) {
+    const auto l = read_candump_line(bad);
+    EXPECT_EQ(l.kind, LogLineKind::Unreadable) << bad;
+    EXPECT_NE(l.problem.find("bad timestamp"), std::string::npos) << l.problem;
+  }
 }
 
 TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {

@@ -245,3 +245,21 @@ TEST(Reassembly, AHeldStartTakesTheFirstSampleLoggedLate) {
   EXPECT_EQ(drain(r).front().seq, 20u);
   EXPECT_EQ(r.stats().duplicates, 2u);
 }
+
+// Near the 24-bit wrap a late frame of the sample before the start widens below 0: it is late,
+// never sample 0 (it was clamped to 0 and, with the start held, took sample 0's place).
+TEST(Reassembly, AFrameBeforeTheStartAcrossTheWrapIsLateNotSampleZero) {
+  StreamReassembler r(8, 24, true, true);
+  push_sample(r, 1, 1.0f);
+  push_sample(r, 2, 2.0f);
+  push_sample(r, 0xFFFFFF, 99.0f);
+  push_sample(r, 0, 0.5f);
+  for (uint32_t s = 3; s < 20; ++s) push_sample(r, s, static_cast<float>(s));
+  r.flush();
+  const auto out = drain(r);
+  ASSERT_EQ(out.size(), 20u);
+  EXPECT_EQ(out.front().seq, 0u);
+  EXPECT_EQ(out.front().x_g, 0.5f);
+  EXPECT_EQ(r.stats().duplicates, 2u);
+  EXPECT_EQ(r.stats().gaps, 0u);
+}
