@@ -53,6 +53,20 @@ std::string log_line(double t, const CanFrame& f) {
 
 float x_of(uint64_t k) { return static_cast<float>(static_cast<double>(k % 1000) * 1e-4 - 0.05); }
 
+// Sample k in tests/data/dbc/dut-layouts.dbc's ACC_XY (`m`): x and y in one extended-id,
+// big-endian frame with a 16-bit counter.
+std::string acc_xy_line(const DbcMessage& m, double t, uint64_t k) {
+  CanFrame f;
+  f.id = m.id;
+  f.extended = true;
+  f.len = 8;
+  std::span<uint8_t> d(f.data.data(), 8);
+  dbc_insert_raw(d, 7, 16, true, k % 65536);
+  dbc_insert_raw(d, 23, 24, true, dbc_raw_of(*m.signal("x"), x_of(k)));
+  dbc_insert_raw(d, 47, 24, true, dbc_raw_of(*m.signal("y"), -x_of(k)));
+  return log_line(t, f);
+}
+
 }  // namespace
 
 TEST(CaptureImport, RigProtocolLogWithAGapAndADuplicate) {
@@ -141,15 +155,7 @@ TEST(CaptureImport, DbcLayoutWith16BitCounterAndAnUnreadableLine) {
   std::ostringstream log;
   double t = 100.0;  // relative time stamps: no start time in the header
   for (uint64_t k = 65000; k < 66500; ++k, t += 5e-4) {
-    CanFrame f;
-    f.id = m->id;
-    f.extended = true;
-    f.len = 8;
-    std::span<uint8_t> d(f.data.data(), 8);
-    dbc_insert_raw(d, 7, 16, true, k % 65536);
-    dbc_insert_raw(d, 23, 24, true, dbc_raw_of(*m->signal("x"), x_of(k)));
-    dbc_insert_raw(d, 47, 24, true, dbc_raw_of(*m->signal("y"), -x_of(k)));
-    log << log_line(t, f);
+    log << acc_xy_line(*m, t, k);
     if (k == 65100) log << "(100.05) vcan0 garbage\n";
   }
   std::ofstream(dir() / "xy.log") << log.str();
@@ -346,17 +352,7 @@ TEST(CaptureImport, ARestartOrAPauseTheCounterCannotSpanEndsTheCaptureThere) {
   const Dbc db = Dbc::parse_file(std::string(RIG_SOURCE_DIR) + "/tests/data/dbc/dut-layouts.dbc");
   const DbcMessage* m = db.find("ACC_XY");
   ASSERT_NE(m, nullptr);
-  auto xy = [&](double tt, uint64_t k) {
-    CanFrame f;
-    f.id = m->id;
-    f.extended = true;
-    f.len = 8;
-    std::span<uint8_t> d(f.data.data(), 8);
-    dbc_insert_raw(d, 7, 16, true, k % 65536);
-    dbc_insert_raw(d, 23, 24, true, dbc_raw_of(*m->signal("x"), x_of(k)));
-    dbc_insert_raw(d, 47, 24, true, dbc_raw_of(*m->signal("y"), -x_of(k)));
-    return log_line(tt, f);
-  };
+  auto xy = [&](double tt, uint64_t k) { return acc_xy_line(*m, tt, k); };
   std::ostringstream p;
   t = 1732255200.0;
   for (uint64_t k = 0; k < 100; ++k, t += 1e-3) p << xy(t, k);
