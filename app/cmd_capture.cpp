@@ -81,7 +81,7 @@ bool far_behind(const link::StreamReassembler& r, uint32_t counter) {
 
 // A log's absolute time (seconds since the epoch) as ISO 8601 UTC; "" for relative times.
 std::string iso8601(double t_s) {
-  if (!(t_s > 1e8)) return {};  // candump -td / -tz style relative stamps
+  if (!a_clock(t_s)) return {};  // candump -td / -tz style relative stamps
   const std::time_t t = static_cast<std::time_t>(std::floor(t_s));
   std::tm tm{};
   gmtime_r(&t, &tm);
@@ -177,8 +177,7 @@ int cmd_import(const ImportArgs& a) {
     late_parts += reasm.stats().duplicates - d0;
     suspect.reset();
   };
-  const uint32_t counter_mask =
-      reasm.counter_bits() >= 32 ? 0xFFFFFFFFu : (uint32_t{1} << reasm.counter_bits()) - 1;
+  const uint32_t counter_mask = reasm.counter_mask();
   auto cut_at_restart = [&] {  // the held frames start the rest: counts back to their first line
     cut = fmt::format("{}:{}: the stream's counter went back from {} to {} (the DUT restarted?)", a.log, suspect->line,
                       reasm.highest_seq() & counter_mask, suspect->counter);
@@ -196,7 +195,7 @@ int cmd_import(const ImportArgs& a) {
     if (ln < a.from_line) continue;
     if (too_long) {
       ++unreadable;
-      note(ln, "a line longer than " + std::to_string(link::kMaxLogLine) + " characters: not a candump log line");
+      note(ln, link::too_long_problem());
       continue;
     }
     const auto first = line.find_first_not_of(" \t\r");

@@ -164,6 +164,9 @@ LogLine read_candump_line(std::string_view line) {
     // candump -tA: "(2023-11-14 22:13:20.000700)", the local date and time as candump's host
     // had them; read in this host's time zone (the same host, as a bench log usually is).
     const std::string day(t[0].substr(1)), clock(t[1].substr(0, t[1].size() - 1));
+    auto refused = [&] {  // the stamp as written, both of its tokens
+      return "bad timestamp " + quoted(line.substr(0, static_cast<std::size_t>(t[1].data() + t[1].size() - line.data())));
+    };
     int y = 0, mo = 0, d = 0, h = 0, mi = 0, n1 = 0, n2 = 0;
     double sec = -1;
     const bool read = std::sscanf(day.c_str(), "%4d-%2d-%2d%n", &y, &mo, &d, &n1) == 3 &&
@@ -172,7 +175,7 @@ LogLine read_candump_line(std::string_view line) {
                       n2 == static_cast<int>(clock.size());
     if (!read || y < 1970 || mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 || h > 23 || mi < 0 || mi > 59 ||
         !(sec >= 0 && sec < 61) || day[0] == '-' || clock[0] == '-' || clock[3] == '-') {
-      out.problem = "bad timestamp " + quoted(line.substr(0, static_cast<std::size_t>(t[1].data() + t[1].size() - line.data())));
+      out.problem = refused();
       return out;
     }
     std::tm tm{};
@@ -185,7 +188,7 @@ LogLine read_candump_line(std::string_view line) {
     const std::time_t base = std::mktime(&tm);
     // mktime normalises 2023-02-31 to March 3rd: a date it had to move is no date.
     if (base == static_cast<std::time_t>(-1) || tm.tm_mday != d || tm.tm_mon != mo - 1) {
-      out.problem = "bad timestamp " + quoted(line.substr(0, static_cast<std::size_t>(t[1].data() + t[1].size() - line.data())));
+      out.problem = refused();
       return out;
     }
     lf.t_s = static_cast<double>(base) + sec;
@@ -247,6 +250,10 @@ std::optional<LoggedFrame> parse_candump_line(const std::string& line) {
   return std::move(l.frame);
 }
 
+std::string too_long_problem() {
+  return "a line longer than " + std::to_string(kMaxLogLine) + " characters: not a candump log line";
+}
+
 bool read_log_line(std::istream& in, std::string& line, bool& too_long) {
   line.clear();
   too_long = false;
@@ -275,7 +282,7 @@ bool CandumpLogReader::next(Entry& e) {
       e.line = line_;
       e.parsed = LogLine{};
       e.parsed.kind = LogLineKind::Unreadable;
-      e.parsed.problem = "a line longer than " + std::to_string(kMaxLogLine) + " characters: not a candump log line";
+      e.parsed.problem = too_long_problem();
       return true;
     }
     LogLine l = read_candump_line(text);

@@ -47,6 +47,8 @@ std::optional<LoggedFrame> parse_candump_line(const std::string& line);
 // that length, `too_long` set. False at the end of the stream, as std::getline.
 inline constexpr std::size_t kMaxLogLine = 4096;
 bool read_log_line(std::istream& in, std::string& line, bool& too_long);
+// What is said of such a line.
+std::string too_long_problem();
 
 // A stream of log lines with their line numbers; empty lines are skipped.
 class CandumpLogReader {

@@ -26,7 +26,7 @@ LinkOptions link_options(const toml::table& t) {
   // The reassembly tells late from new only if the window is at most half the counter's period:
   // said here at the file's line, with the key to change (it was the reassembler's bare message,
   // at the first frame, a review).
-  if (o.stream && uint64_t{o.reorder_window} * 2 > (uint64_t{1} << o.stream->counter_bits())) {
+  if (o.stream && !StreamReassembler::window_fits(o.reorder_window, o.stream->counter_bits())) {
     const toml::node* w = t.get("reorder_window");
     const toml::node* st = t.get("stream");
     const std::string at = w ? cfg::where(*w) + ": [dut] reorder_window" : st ? cfg::where(*st) + ": [dut.stream]" : "[dut]";

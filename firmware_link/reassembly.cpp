@@ -16,7 +16,7 @@ StreamReassembler::StreamReassembler(uint32_t window, int counter_bits, bool nee
   if (counter_bits < 2 || counter_bits > 32)
     throw ConfigError("stream counter of " + std::to_string(counter_bits) + " bits: the reassembly takes 2..32");
   // A counter that wraps within the reorder window could not tell late from new.
-  if (uint64_t{window_} * 2 > (uint64_t{1} << counter_bits))
+  if (!window_fits(window_, counter_bits))
     throw ConfigError("reorder window of " + std::to_string(window_) + " samples is more than half the " +
                       std::to_string(counter_bits) + "-bit counter's period");
 }

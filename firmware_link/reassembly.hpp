@@ -40,6 +40,12 @@ class StreamReassembler {
   explicit StreamReassembler(uint32_t window = 8, int counter_bits = 24, bool needs_y = true,
                              bool hold_start = false);
 
+  // Whether a reorder window tells late from new with a counter of `counter_bits`: at most half
+  // its period. The constructor's check; a hardware file's reader says it at the file's line.
+  static bool window_fits(uint32_t window, int counter_bits) {
+    return uint64_t{window} * 2 <= (uint64_t{1} << counter_bits);
+  }
+
   void push_part(const StreamPart& p);
   // The rig protocol's frames (a distinct name keeps brace-initialised calls unambiguous).
   void push(const StreamHalf& h) { push_part(StreamPart{h.channel, h.seq24, h.status, h.value_g}); }
@@ -65,6 +71,7 @@ class StreamReassembler {
   // went back: the DUT restarted), which a caller that can stop (a log's import) names.
   uint64_t widened(uint32_t counter) const { return started_ ? widen(counter & mask_) : counter & mask_; }
   uint32_t window() const { return window_; }
+  uint32_t counter_mask() const { return mask_; }  // the wire counter's bits
   uint64_t highest_seq() const { return highest_; }  // the highest widened seq seen
   int counter_bits() const { return bits_; }
 
