@@ -1,5 +1,6 @@
 #include "rig/core/toml_util.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -73,6 +74,19 @@ bool from_option(const toml::node& n) { return no_position(n.source()); }
 
 std::string shown(const toml::node& n) {
   if (n.is_table()) return "a table";
+  // A float as its shortest text that reads back to the same double (toml++ writes 17 digits
+  // where fewer do not: 'tolerance_deg' = 1.0000000000000001e-05 for 0.00001, a review), kept
+  // a TOML float (300.0).
+  if (const auto* f = n.as_floating_point()) {
+    const double v = f->get();
+    if (std::isfinite(v)) {
+      char b[64];
+      const auto r = std::to_chars(b, b + sizeof b, v);
+      std::string s(b, r.ptr);
+      if (s.find_first_of(".e") == std::string::npos) s += ".0";
+      return s;
+    }
+  }
   std::ostringstream os;
   n.visit([&](const auto& v) { os << v; });
   std::string s = os.str();

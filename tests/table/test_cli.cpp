@@ -674,7 +674,8 @@ TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
       << out;
   EXPECT_EQ(status(head + "tolerance_deg = 0.00001\n"), 4) << out;  // above one count: accepted
   EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\ntolerance_deg = 0.00005\n"), 2) << out;
-  EXPECT_TRUE(has(out, "hw.toml:3:17:") && has(out, "(0.0001°, rig-v1 register map)")) << out;
+  EXPECT_TRUE(has(out, "hw.toml:3:17: 'tolerance_deg' = 5e-05: below") && has(out, "(0.0001°, rig-v1 register map)"))
+      << "the value as written, not 5.0000000000000002e-05: " << out;
   // [table] u10_deg outside the map's travel (the run takes [procedure]'s, and would fail there).
   EXPECT_EQ(status(head + "u10_deg = 300.0\nu20_deg = 120.0\n"), 2) << out;
   EXPECT_TRUE(has(out, "hw.toml:5:11: 'u10_deg' = 300.0: outside the table's travel [-10°, 200°]")) << out;
