@@ -91,6 +91,7 @@ int serve(const ServeArgs& a) {
   if (!a.modbus.empty()) tables.push_back(server("tcp:" + a.modbus, true));
   if (!a.rtu.empty()) tables.push_back(server("rtu:" + a.rtu, tables.empty()));
   for (auto& t : tables) {
+    t->on_notice([](const std::string& text) { std::cerr << "table: " << text << std::endl; });
     t->start();
     std::cout << "table: modbus " << t->endpoint() << " unit " << a.unit
               << (map ? " drive cia402 \"" + map->name + "\" (" + map->path + ")" : std::string(" drive rig-v1"))

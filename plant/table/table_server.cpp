@@ -57,13 +57,18 @@ uint16_t crc16(const uint8_t* p, int n) {
 }
 
 // Reads `n` bytes, each within `gap_ms` of the previous (a frame arrives whole
-// on a wire; a longer silence ends it). False on silence or error.
-bool read_exact(int fd, uint8_t* p, int n, int gap_ms) {
+// on a wire; a longer silence ends it). False on silence or error; `failed` set
+// when the port itself failed, to the read's errno or -1 for an end of file (the
+// pty's other end closed, the USB adapter was pulled), not on a silence.
+bool read_exact(int fd, uint8_t* p, int n, int gap_ms, int& failed) {
   while (n > 0) {
     pollfd pf{fd, POLLIN, 0};
     if (poll(&pf, 1, gap_ms) <= 0) return false;
     const ssize_t r = ::read(fd, p, static_cast<size_t>(n));
-    if (r <= 0) return false;
+    if (r <= 0) {
+      if (r == 0 || (errno != EAGAIN && errno != EINTR)) failed = r == 0 ? -1 : errno;
+      return false;
+    }
     p += r;
     n -= static_cast<int>(r);
   }
@@ -76,24 +81,27 @@ bool read_exact(int fd, uint8_t* p, int n, int gap_ms) {
 // (issue 16 item 7): on a line where no other unit answers, our next request
 // was lost. Framing here keeps every frame independent: a frame for another
 // unit is skipped whole and the next one is read afresh.
-// Returns the frame length, 0 for a frame to ignore, -1 on a framing error.
-int read_rtu_request(int fd, uint8_t* q, int cap) {
+// Returns the frame length, 0 for a frame to ignore, -1 on a framing error, -2
+// when the port failed (`failed` as read_exact sets it).
+int read_rtu_request(int fd, uint8_t* q, int cap, int& failed) {
   constexpr int kGapMs = 50;  // generous for ptys and USB adapters; 3.5 characters on a real line
-  if (!read_exact(fd, q, 2, kGapMs)) return -1;
+  failed = 0;
+  const auto got = [&](uint8_t* p, int n) { return read_exact(fd, p, n, kGapMs, failed); };
+  if (!got(q, 2)) return failed ? -2 : -1;
   int len = 0;
   switch (q[1]) {
     case MODBUS_FC_READ_HOLDING_REGISTERS:
     case MODBUS_FC_READ_INPUT_REGISTERS:
     case MODBUS_FC_WRITE_SINGLE_REGISTER: len = 8; break;
     case MODBUS_FC_WRITE_MULTIPLE_REGISTERS:
-      if (!read_exact(fd, q + 2, 5, kGapMs)) return -1;
+      if (!got(q + 2, 5)) return failed ? -2 : -1;
       len = 9 + q[6];
       if (len > cap) return -1;
-      if (!read_exact(fd, q + 7, len - 7, kGapMs)) return -1;
+      if (!got(q + 7, len - 7)) return failed ? -2 : -1;
       break;
     default: return -1;  // a function this server does not serve (or noise): resynchronise
   }
-  if (len == 8 && !read_exact(fd, q + 2, 6, kGapMs)) return -1;
+  if (len == 8 && !got(q + 2, 6)) return failed ? -2 : -1;
   const uint16_t crc = crc16(q, len - 2);
   if (q[len - 2] != (crc & 0xFF) || q[len - 1] != (crc >> 8)) return -1;
   return len;
@@ -217,7 +225,21 @@ void TableServer::run() {
                                                                                     : MODBUS_RTU_MAX_ADU_LENGTH);
   using clk = std::chrono::steady_clock;
   auto last = clk::now();
+  auto reopen_at = clk::time_point{};
+  const auto notice = [&](const std::string& text) {
+    if (notice_) notice_("serial port " + ep_.device + ": " + text);
+  };
   while (!stop_) {
+    // A serial port that failed is reopened every second: a USB adapter plugged back in, a socat
+    // pty pair started again under the same link names (the old descriptor never reads again).
+    if (s.ctx && s.listen_fd < 0 && s.port_fd < 0 && clk::now() >= reopen_at) {
+      if (modbus_connect(s.ctx) == 0) {
+        s.port_fd = modbus_get_socket(s.ctx);
+        notice("open again, serving");
+      } else {
+        reopen_at = clk::now() + std::chrono::seconds(1);
+      }
+    }
     fd_set rd;
     FD_ZERO(&rd);
     int maxfd = -1;
@@ -241,13 +263,21 @@ void TableServer::run() {
       if (fd >= 0) s.clients.insert(fd);
     }
     if (s.port_fd >= 0 && FD_ISSET(s.port_fd, &rd)) {
-      const int rc = read_rtu_request(s.port_fd, query.data(), static_cast<int>(query.size()));
+      int failed = 0;
+      const int rc = read_rtu_request(s.port_fd, query.data(), static_cast<int>(query.size()), failed);
       if (rc > 0 && (query[0] == unit_ || query[0] == MODBUS_BROADCAST_ADDRESS)) {
         serve_request(s.ctx, s.map, emu_, query.data(), rc);
         ++served_;
+      } else if (rc == -2) {
+        // Said once, not retried every 10 ms in silence (a review: EIO forever after socat
+        // ended, the server looking alive).
+        const std::string why = failed > 0 ? std::strerror(failed) : "end of file";
+        modbus_close(s.ctx);
+        s.port_fd = -1;
+        reopen_at = clk::now() + std::chrono::seconds(1);
+        notice("cannot be read (" + why + "): its other end closed or the device went away; reopening it every second");
       } else if (rc < 0) {
         tcflush(s.port_fd, TCIFLUSH);  // bad CRC / partial frame: resynchronise on the next frame
-        if (errno == EIO || errno == EBADF) std::this_thread::sleep_for(std::chrono::milliseconds(10));
       }
     }
     std::vector<int> closed;

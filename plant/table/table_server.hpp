@@ -37,6 +37,8 @@ class TableServer {
   // The canonical endpoint, with the bound port: "tcp:127.0.0.1:40123".
   std::string endpoint() const;
   uint64_t requests_served() const { return served_.load(); }
+  // What the serving thread has to say (an RTU port that failed, reopened); set before start().
+  void on_notice(std::function<void(const std::string&)> fn) { notice_ = std::move(fn); }
 
  private:
   struct Impl;
@@ -44,6 +46,7 @@ class TableServer {
 
   rig::modbus::RegisterDevice& emu_;
   std::function<void(double)> step_;
+  std::function<void(const std::string&)> notice_;
   rig::modbus::Endpoint ep_;
   int unit_;
   std::unique_ptr<Impl> impl_;

@@ -112,16 +112,26 @@ class PtyPair {
     dir_ = tmpl;
     a_ = dir_ + "/a";
     b_ = dir_ + "/b";
-    socat_ = std::make_unique<Child>(std::vector<std::string>{
-        "/usr/bin/socat", "pty,raw,echo=0,link=" + a_, "pty,raw,echo=0,link=" + b_});
-    for (int i = 0; i < 500 && !(std::filesystem::exists(a_) && std::filesystem::exists(b_)); ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    if (!std::filesystem::exists(a_) || !std::filesystem::exists(b_)) throw std::runtime_error("socat pty pair did not appear");
+    plug();
   }
   ~PtyPair() {
     socat_.reset();
     std::error_code ec;
     std::filesystem::remove_all(dir_, ec);
+  }
+  // The cable pulled: socat killed, its links removed (a killed socat leaves them).
+  void unplug() {
+    socat_.reset();
+    std::filesystem::remove(a_);
+    std::filesystem::remove(b_);
+  }
+  // A new pair under the same link names (a USB adapter plugged back in).
+  void plug() {
+    socat_ = std::make_unique<Child>(std::vector<std::string>{
+        "/usr/bin/socat", "pty,raw,echo=0,link=" + a_, "pty,raw,echo=0,link=" + b_});
+    for (int i = 0; i < 500 && !(std::filesystem::exists(a_) && std::filesystem::exists(b_)); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (!std::filesystem::exists(a_) || !std::filesystem::exists(b_)) throw std::runtime_error("socat pty pair did not appear");
   }
   const std::string& a() const { return a_; }
   const std::string& b() const { return b_; }

@@ -1,6 +1,7 @@
 // Client and emulator on a real wire: libmodbus at both ends, over loopback
 // TCP and over an RTU pseudo-terminal pair made by socat; a server process
 // killed mid-move; answer timeouts; exception replies.
+#include <mutex>
 #include <gtest/gtest.h>
 
 #include <modbus/modbus.h>
@@ -95,6 +96,44 @@ TEST(TableWire, HomeAndMoveOverRtuPtyPair) {
   } catch (const m::ModbusError& e) {
     EXPECT_TRUE(e.timeout) << e.what();
   }
+}
+
+// The RTU cable pulled while the server runs: the server says so once (it retried every 10 ms in
+// silence, looking alive) and reopens the port when it comes back under its name.
+TEST(TableWire, AnRtuPortThatWentAwayIsSaidAndReopened) {
+  PtyPair pty;
+  auto emu = emulator(kFastTable);
+  plant::TableServer server(*emu, "rtu:" + pty.a() + ",115200,N,8,1", 5);
+  std::mutex mu;
+  std::vector<std::string> notices;
+  server.on_notice([&](const std::string& t) {
+    std::lock_guard lk(mu);
+    notices.push_back(t);
+  });
+  server.start();
+  const auto said = [&](const std::string& what) {
+    for (int i = 0; i < 500; ++i) {
+      {
+        std::lock_guard lk(mu);
+        for (const auto& n : notices)
+          if (n.find(what) != std::string::npos) return n;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return std::string("(not said)");
+  };
+  pty.unplug();
+  EXPECT_EQ(said("cannot be read"), "serial port " + pty.a() +
+                                        ": cannot be read (end of file): its other end closed or the device went "
+                                        "away; reopening it every second");
+  pty.plug();
+  EXPECT_EQ(said("open again"), "serial port " + pty.a() + ": open again, serving");
+  RealClock clock;
+  auto table = m::connect_table(client_cfg("rtu", pty.b() + ",115200,N,8,1", "unit = 5\n"), clock);
+  table->home({});
+  EXPECT_GT(server.requests_served(), 0u);
+  std::lock_guard lk(mu);
+  EXPECT_EQ(notices.size(), 2u) << "each said once";
 }
 
 TEST(TableWire, ExceptionRepliesAreNamed) {
