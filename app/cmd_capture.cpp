@@ -46,6 +46,10 @@ struct ImportArgs {
 // read as a clock hid every pause after the first, a review).
 bool a_clock(double t_s) { return t_s > 1e8; }
 
+// A stamp this far behind the latest is out of order: candump's stamps are the kernel's receive
+// times, in order on one socket; a log merged from several interfaces may swap neighbours by less.
+constexpr double kBackS = 1e-3;
+
 // A pause the counter cannot span: the log's clock says at least a second went by (host-side
 // buffering bunches frames by milliseconds, never a second) and at least half the counter's
 // period, so the widening cannot tell how many periods passed. "" when it can.
@@ -153,9 +157,15 @@ int cmd_import(const ImportArgs& a) {
   // where it was (stray late frames), or the held counter carries on for more than the reorder
   // window (the counter went back: the DUT restarted). Two strays in a row are not a restart.
   struct Counts {  // what the lines from the first held frame on added, taken back at a cut there
-    uint64_t frames, other, unreadable, malformed;
+    uint64_t frames, other, unreadable, malformed, back;
     std::size_t problems;
   };
+  // Stream frames stamped earlier than the log's clock had reached (absolute stamps): lines out of
+  // order, or a clock stepped back (an NTP step). Their samples go where their counter says; said,
+  // since every pause and leap is judged on that clock.
+  uint64_t back = 0;
+  std::size_t back_line = 0;
+  double back_s = 0;
   struct Suspect {
     std::size_t line = 0;  // the first's
     uint32_t counter = 0;  // the first's
@@ -186,6 +196,8 @@ int cmd_import(const ImportArgs& a) {
     other = suspect->before.other;
     unreadable = suspect->before.unreadable;
     malformed = suspect->before.malformed;
+    back = suspect->before.back;
+    if (back == 0) back_line = 0, back_s = 0;
     problems.resize(suspect->before.problems);
     stream_frames -= suspect->frames.size();
     suspect.reset();
@@ -207,7 +219,7 @@ int cmd_import(const ImportArgs& a) {
       continue;
     }
     if (!a.iface.empty() && lf->iface != a.iface) continue;
-    const Counts here{frames, other, unreadable, malformed, problems.size()};
+    const Counts here{frames, other, unreadable, malformed, back, problems.size()};
     ++frames;
     parts.clear();
     std::string err;
@@ -231,6 +243,7 @@ int cmd_import(const ImportArgs& a) {
     const bool timed = a_clock(lf->t_s) && last_t.has_value();  // a clock to hold the counter to
     if (a_clock(lf->t_s)) {
       if (last_t && lf->t_s > *last_t) dt = lf->t_s - *last_t;
+      if (last_t && lf->t_s < *last_t - kBackS && back++ == 0) back_line = ln, back_s = *last_t - lf->t_s;
       if (!last_t || lf->t_s > *last_t) last_t = lf->t_s;
     }
     const uint32_t c = parts.front().counter & counter_mask;
@@ -241,6 +254,8 @@ int cmd_import(const ImportArgs& a) {
       cut = a.log + ":" + std::to_string(ln) + ": " + why;
       cut_line = ln;
       frames = here.frames;  // this line is the rest's
+      back = here.back;
+      if (back == 0) back_line = 0, back_s = 0;
       break;
     }
     if (far_behind(reasm, c)) {
@@ -283,6 +298,10 @@ int cmd_import(const ImportArgs& a) {
               : sp.key_where.count("rate_hz")              ? sp.key_where.at("rate_hz").c_str()
               : lo.stream || dut.contains("dbc")           ? "the default: [dut.stream] has no rate_hz"
                                                            : "the rig protocol's");
+  if (back > 0)
+    std::printf("%llu stream frame(s) stamped earlier than a frame before them (the first at %s:%zu, %s s back): the "
+                "log's lines are out of order or its clock stepped back; samples are placed by their counter\n",
+                static_cast<unsigned long long>(back), a.log.c_str(), back_line, fmt::format("{:.6g}", back_s).c_str());
   if (tail > 0)
     std::printf("%llu incomplete sample(s) at the end (a part without its partner): not in the capture\n",
                 static_cast<unsigned long long>(tail));

@@ -414,6 +414,32 @@ TEST(CaptureImport, LateFramesTheTailAndFdFramesAreAccountedFor) {
   for (std::size_t i = 0; i < c.samples.size(); ++i) EXPECT_EQ(c.samples[i].seq, 1000 + i);
 }
 
+// A log whose clock stepped back (an NTP step of the station's clock during candump -l, or lines
+// merged out of order) was imported without a word, though every pause and leap is judged on
+// that clock (carried in session 34's note): the frames stamped earlier than the clock had
+// reached are counted and the first named; the samples stay where their counter puts them.
+TEST(CaptureImport, StampsThatGoBackAreSaid) {
+  std::ofstream(dir() / "hw-back.toml") << "[dut]\ncan = \"vcan0\"\n";
+  std::ostringstream log;
+  double t = 1732255200.0;
+  for (uint64_t k = 0; k < 100; ++k, t += 1e-3) log_sample(log, t, k);  // lines 1..200
+  t -= 2.5;                                                            // the clock steps back
+  for (uint64_t k = 100; k < 200; ++k, t += 1e-3) log_sample(log, t, k);
+  std::ofstream(dir() / "back.log") << log.str();
+  const fs::path cap = dir() / "back.rigcap";
+  ASSERT_EQ(run_rig("capture import " + (dir() / "back.log").string() + " --hardware " +
+                        (dir() / "hw-back.toml").string() + " --out " + cap.string(),
+                    "back"),
+            0) << slurp(dir() / "back.err");
+  const std::string out = slurp(dir() / "back.out");
+  EXPECT_NE(out.find("200 stream frame(s) stamped earlier than a frame before them (the first at " +
+                     (dir() / "back.log").string() + ":201, 2.4991 s back): the log's lines are out of order or its "
+                     "clock stepped back; samples are placed by their counter\n"),
+            std::string::npos) << out;
+  EXPECT_NE(out.find("gaps 0 (0 samples lost), duplicates 0\n"), std::string::npos) << out;
+  EXPECT_EQ(rig::capture::load(cap.string()).samples.size(), 200u);
+}
+
 // Also from helper-54: a counter too small for the reorder window is refused at the hardware
 // file's line with the key to change (it was the reassembler's bare message), and a line no
 // candump writes (megabytes without a newline: `/dev/zero` grew the process without bound) is
