@@ -202,8 +202,12 @@ LogLine read_candump_line(std::string_view line) {
     char* end = nullptr;
     lf.t_s = std::strtod(ts.c_str(), &end);
     // A time stamp that overflows to inf (or reads as nan) is no time: found by fuzz_candump,
-    // whose invariant is that every frame read has a finite time.
-    if (ts.empty() || *end != '\0' || !std::isfinite(lf.t_s)) {
+    // whose invariant is that every frame read has a finite time. candump writes digits and a
+    // point ("%lu.%06lu"; -td, -tz alike): a sign, a hex or exponent form is no stamp of its
+    // ("(-5.000000)" was read as a relative clock, carried in session 34's note).
+    const bool digits = !ts.empty() && std::isdigit(static_cast<unsigned char>(ts.front())) &&
+                        ts.find_first_not_of("0123456789.") == std::string::npos;
+    if (!digits || *end != '\0' || !std::isfinite(lf.t_s)) {
       out.problem = "bad timestamp " + quoted(t[0]);
       return out;
     }

@@ -113,6 +113,9 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
       {"(abc) can0 100#00", "bad timestamp"},
       {"(170.1E4456) can0 101#56341204", "bad timestamp"},  // overflows to inf (fuzz_candump)
       {"(nan) can0 101#56341204", "bad timestamp"},
+      {"(-5.000000) can0 101#56341204", "bad timestamp"},  // candump writes no sign, no exponent
+      {"(+5.000000) can0 101#56341204", "bad timestamp"},
+      {"(1e9) can0 101#56341204", "bad timestamp"},
       {"(1.0) can0 100#00 trailing words", "text after the frame"},
       {"hello world", "not a candump frame line"},
       {"(1.0) can0 800#00", "standard identifier out of range"},
