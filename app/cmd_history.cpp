@@ -36,6 +36,8 @@ struct HistoryArgs {
   std::string serial, since, until, outcome, profile, value, record;
   int limit = 0;
   bool csv = false;
+  bool no_serial = false;  // only runs that stopped before the DUT said its serial (the option
+                           // refuses an empty value, as every text option does)
 };
 
 std::optional<std::string> opt(const std::string& s) { return s.empty() ? std::nullopt : std::optional(s); }
@@ -222,7 +224,8 @@ int run_history(const HistoryArgs& a, bool named) {
     std::cout << "no runs recorded yet (" << a.db << " does not exist)\n";
     return kExitPass;
   }
-  history::Filter f{opt(a.serial), opt(a.since), opt(a.until), opt(a.outcome), opt(a.profile), a.limit};
+  history::Filter f{a.no_serial ? std::optional<std::string>("") : opt(a.serial), opt(a.since), opt(a.until),
+                    opt(a.outcome), opt(a.profile), a.limit};
   if (a.value.empty()) list(a, f);
   else trend(a, f);
   return kExitPass;
@@ -237,6 +240,9 @@ void add_history(CLI::App& app, int& rc) {
                                   "[history] url in the rig config, ~/.local/share/rig/history.sqlite)");
   std::vector<CLI::Option*> query;
   query.push_back(sub->add_option("--serial", a->serial, "Only this DUT serial number"));
+  query.push_back(sub->add_flag("--no-serial", a->no_serial,
+                                "Only runs without a serial (stopped before the DUT said who it is)")
+                      ->excludes(query.back()));
   query.push_back(sub->add_option("--since", a->since, "Only runs started at or after this ISO 8601 date/time (UTC if no zone)"));
   query.push_back(sub->add_option("--until", a->until, "Only runs started before this ISO 8601 date/time"));
   query.push_back(sub->add_option("--outcome", a->outcome, "Only runs with this outcome")

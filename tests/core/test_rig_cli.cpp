@@ -1165,6 +1165,11 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   EXPECT_EQ(run({"report", d + "/estop"}, d + "/estop-report"), 0) << slurp(d + "/estop-report.stderr");
   EXPECT_EQ(run({"history", "--record", d + "/estop", "--db", db}, d + "/estop-record"), 0)
       << slurp(d + "/estop-record.stderr");
+  // And selected as such: --serial refuses an empty value, --no-serial takes the runs without one.
+  ASSERT_EQ(run({"history", "--db", db, "--csv", "--no-serial"}, d + "/noserial"), 0) << slurp(d + "/noserial.stderr");
+  const std::string ns = slurp(d + "/noserial.stdout");
+  EXPECT_EQ(ns.find("HW-1"), std::string::npos) << ns;
+  EXPECT_NE(ns.find(",,ci,emulated,ABORTED,emulated plant,"), std::string::npos) << ns;
 }
 
 // A resume records where its run was started to record: the --db the run was given, or none
