@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 
 namespace rig::link {
 
@@ -629,7 +630,55 @@ Dbc Dbc::parse_file(const std::string& path) {
   return parse(ss.str(), path);
 }
 
-Dbc Dbc::parse(const std::string& text, const std::string& src) { return DbcParser(text, src).run(); }
+namespace {
+
+// Text that is not well-formed UTF-8 as Windows-1252, the code page Vector's CANdb++ writes DBC
+// files in (cantools and canmatrix read them so): a unit "\xB5g" is "µg", a comment's "\xB0C"
+// "°C". Bytes below 0x80 are the same in both, so names, numbers and line numbers do not move;
+// the five bytes 1252 leaves undefined become the C1 controls of Latin-1, shown escaped.
+std::string utf8_from_cp1252(const std::string& t) {
+  static constexpr char16_t k80[32] = {0x20AC, 0x81,   0x201A, 0x0192, 0x201E, 0x2026, 0x2020, 0x2021,
+                                       0x02C6, 0x2030, 0x0160, 0x2039, 0x0152, 0x8D,   0x017D, 0x8F,
+                                       0x90,   0x2018, 0x2019, 0x201C, 0x201D, 0x2022, 0x2013, 0x2014,
+                                       0x02DC, 0x2122, 0x0161, 0x203A, 0x0153, 0x9D,   0x017E, 0x0178};
+  std::string out;
+  out.reserve(t.size() + t.size() / 8);
+  for (const char ch : t) {
+    const auto b = static_cast<unsigned char>(ch);
+    const char32_t u = b < 0x80 ? b : b < 0xA0 ? k80[b - 0x80] : b;
+    if (u < 0x80) {
+      out += static_cast<char>(u);
+    } else if (u < 0x800) {
+      out += static_cast<char>(0xC0 | (u >> 6));
+      out += static_cast<char>(0x80 | (u & 0x3F));
+    } else {
+      out += static_cast<char>(0xE0 | (u >> 12));
+      out += static_cast<char>(0x80 | ((u >> 6) & 0x3F));
+      out += static_cast<char>(0x80 | (u & 0x3F));
+    }
+  }
+  return out;
+}
+
+bool well_formed_utf8(const std::string& t) {
+  for (std::size_t i = 0; i < t.size();) {
+    if (static_cast<unsigned char>(t[i]) < 0x80) {
+      ++i;
+      continue;
+    }
+    const std::size_t n = utf8_sequence_at(t, i);
+    if (n == 0) return false;
+    i += n;
+  }
+  return true;
+}
+
+}  // namespace
+
+Dbc Dbc::parse(const std::string& text, const std::string& src) {
+  if (!well_formed_utf8(text)) return DbcParser(utf8_from_cp1252(text), src).run();
+  return DbcParser(text, src).run();
+}
 
 const DbcMessage* Dbc::find(uint32_t id, bool extended) const {
   for (const auto& m : messages_)

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::link {
@@ -25,9 +26,11 @@ double unit_to_g(const std::string& unit, const std::string& what, const std::st
                       "yields (g, mg, ug or m/s^2)");
   if (unit == "g") return 1.0;
   if (unit == "mg") return 1e-3;
-  if (unit == "ug" || unit == "\xC2\xB5g" || unit == "µg") return 1e-6;
+  // The micro sign (a Windows-1252 file's byte 0xB5 is read as it, Dbc::parse) or the Greek small
+  // mu a keyboard gives for it.
+  if (unit == "ug" || unit == "\xC2\xB5g" || unit == "\xCE\xBCg") return 1e-6;
   if (unit == "m/s^2" || unit == "m/s2" || unit == "m/s\xC2\xB2") return 1.0 / 9.80665;
-  throw ConfigError(where + ": " + what + " has unit '" + unit + "', not an acceleration (g, mg, ug, m/s^2)");
+  throw ConfigError(where + ": " + what + " has unit '" + shown_text(unit) + "', not an acceleration (g, mg, ug, m/s^2)");
 }
 
 }  // namespace

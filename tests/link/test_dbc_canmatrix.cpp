@@ -305,6 +305,24 @@ TEST(DbcHandWritten, MalformedFilesNameTheLine) {
   EXPECT_EQ(error_of("\xEF\xBB\xBF" + bo), "no error");
 }
 
+// Vector's CANdb++ writes DBC files in Windows-1252: a file that is not UTF-8 is read so (as
+// cantools and canmatrix read it), its units and comments kept as UTF-8 text; lines do not move.
+TEST(DbcHandWritten, AWindows1252FileIsReadAsCandbWritesIt) {
+  const std::string text = "VERSION \"\"\nBO_ 256 M: 8 DUT\n SG_ t : 0|8@1+ (1,0) [0|1] \"\xB0" "C\" X\n"
+                           " SG_ a : 8|16@1- (1,0) [0|1] \"\xB5g\" X\nCM_ SG_ 256 a \"x \x80 \x93y\x94 \x81\";\n";
+  const Dbc db = Dbc::parse(text, "w.dbc");
+  const DbcMessage* m = db.find(256u, false);
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(m->signal("t")->unit, "\xC2\xB0" "C");
+  EXPECT_EQ(m->signal("a")->unit, "\xC2\xB5g");
+  EXPECT_EQ(m->signal("a")->comment, "x \xE2\x82\xAC \xE2\x80\x9Cy\xE2\x80\x9D \xC2\x81");  // euro, quotes; 0x81 undefined
+  EXPECT_EQ(error_of(text + "VAL_ 256 b 1 \"one\";\n"), "h.dbc:6: signal 'b' of message M is not defined");
+  // A UTF-8 file stays as it is.
+  EXPECT_EQ(Dbc::parse("BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] \"\xC2\xB5g\" X\n", "u.dbc")
+                .find(256u, false)->signal("a")->unit,
+            "\xC2\xB5g");
+}
+
 TEST(DbcHandWritten, MotorolaBitNumberingMatchesTheSawtooth) {
   // 12 bits from bit 3 (MSB) of byte 0 to bit 0 of... : bits 3..0 of byte 0, 7..0 of byte 1.
   std::vector<uint8_t> d(8);

@@ -310,6 +310,18 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
                                      "unit its factor yields (g, mg, ug or m/s^2)");
   u.key_where["x"] = "hw.toml:11:5: [dut.stream]";  // named at x's line where the file gave it
   EXPECT_EQ(spec_error(unitless, u).rfind("hw.toml:11:5: [dut.stream]: x A.x has no unit", 0), 0u) << spec_error(unitless, u);
+  // Micrograms as CANdb++ writes them (Windows-1252: the byte 0xB5), as UTF-8 and with the Greek
+  // mu a keyboard gives: all 1e-6 g (the 1252 byte was refused, shown raw). A unit that is no
+  // acceleration is shown escaped where it is not text.
+  const auto with_unit = [](const std::string& unit) {
+    return std::make_shared<const Dbc>(Dbc::parse("VERSION \"\"\nBU_: DUT\nBO_ 288 A: 8 DUT\n SG_ cnt : 0|16@1+ (1,0) "
+                                                  "[0|65535] \"\" DUT\n SG_ x : 16|32@1- (1,0) [0|0] \"" + unit + "\" DUT\n",
+                                                  "unit.dbc"));
+  };
+  u.key_where.clear();
+  for (const char* ug : {"\xB5g", "\xC2\xB5g", "\xCE\xBCg"}) EXPECT_EQ(spec_error(with_unit(ug), u), "no error") << ug;
+  EXPECT_EQ(spec_error(with_unit("\x1b[2Jg"), u),
+            "hw.toml:9:1: [dut.stream]: x A.x has unit '\\x1B[2Jg', not an acceleration (g, mg, ug, m/s^2)");
   // A scaled counter: its physical value is not the count the stream reads (its raw value was
   // used silently, a review); refused naming its DBC file and line, in the message `counter` names and in
   // another message carrying part of a sample.
