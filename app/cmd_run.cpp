@@ -598,34 +598,27 @@ std::vector<std::string> records_gone(const std::string& out, const acceptance::
 
 // What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
 // the history row (a report or history failure is logged, never the run's outcome).
+// The passport is put in place last, with junit.xml beside it: a PASS or FAIL passport is a
+// final verdict a resume does not touch, so everything else of the ending comes before it (a
+// kill between the passport and the report or the history row left a run without either for
+// good, its resume refused: a review's kill stress). A folder that cannot take the files (a full
+// disk) is exit 4 with no passport and no history row, never a PASS beside exit 4; a run killed
+// before its passport is in place is finished by its resume, which records the same history row.
 nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
                                          const RunResult& res, const MeasurementSet& values,
                                          const acceptance::DutState& dut, const std::optional<seal::Key>& key,
                                          spdlog::logger& log) {
   auto passport = make_passport(info, res, values);
-  // The passport last of the three: a folder that cannot take the others (a full disk) is exit 4
-  // with no passport, never a passport saying PASS beside exit 4 (a code review).
   const nlohmann::json analysis = acceptance::analysis_document(dut);
   write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
-  write_file_atomic(a.out + "/junit.xml", junit_xml(info, res, values));
-  write_passport(a.out + "/passport.json", passport);
+  // junit.xml is staged and put in place with the passport: a CI job reading it never sees a
+  // PASS the folder has no passport for.
+  write_file_staged(a.out + "/junit.xml", junit_xml(info, res, values));
+  write_file_staged(a.out + "/passport.json", passport_text(passport));
   try {
-    report::write_report(a.out, analysis);  // the document just written, not parsed again
+    report::write_report(a.out, passport, analysis);  // the documents in memory, not parsed again
   } catch (const std::exception& e) {
     log.error("report.html not written: {}", e.what());
-  }
-  if (key) {
-    try {
-      std::vector<std::string> files = files_of_the_run(dut);
-      if (fs::exists(Executive::checkpoint_path(a.out))) files.emplace_back("checkpoint.json");
-      for (const char* f : kRunOutputs)
-        if (fs::exists(a.out + "/" + f)) files.emplace_back(f);
-      seal_run_folder(a.out, *key, files, std::nullopt, to_string(res.outcome));
-      drop_previous_seal(a.out);
-      log.info("run folder sealed (seal.json, key {})", key->id);
-    } catch (const std::exception& e) {
-      log.error("seal.json not written: {}", e.what());
-    }
   }
   if (!a.no_history) {
     const std::string url = history_url(a, hw);
@@ -640,6 +633,21 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       if (!a.quiet) std::cerr << line << "\n";
     } catch (const std::exception& e) {
       log.error("history database not updated: {}", e.what());
+    }
+  }
+  commit_staged(a.out + "/passport.json");
+  commit_staged(a.out + "/junit.xml");
+  if (key) {
+    try {
+      std::vector<std::string> files = files_of_the_run(dut);
+      if (fs::exists(Executive::checkpoint_path(a.out))) files.emplace_back("checkpoint.json");
+      for (const char* f : kRunOutputs)
+        if (fs::exists(a.out + "/" + f)) files.emplace_back(f);
+      seal_run_folder(a.out, *key, files, std::nullopt, to_string(res.outcome));
+      drop_previous_seal(a.out);
+      log.info("run folder sealed (seal.json, key {})", key->id);
+    } catch (const std::exception& e) {
+      log.error("seal.json not written: {}", e.what());
     }
   }
   return passport;
@@ -679,11 +687,19 @@ void refuse_non_files(const std::string& dir) {
 // Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than
 // today's procedure has, and its run is complete all the same. For an unsealed folder (a sealed
 // one's final seal states the verdict, and a passport it does not vouch for is not read).
-void refuse_a_final_verdict(const std::string& dir) {
+// `finish`: a junit.xml the run staged but had not put in place when it was stopped (between two
+// renames, write_run_outputs) is put in place, the ending's last step; not on a dry run.
+void refuse_a_final_verdict(const std::string& dir, bool finish) {
   const std::string v = verdict_of(dir);
-  if (!v.empty())
-    throw ConfigError(dir + ": the run is complete (its passport says " + v +
-                      "): nothing to resume; its passport stands");
+  if (v.empty()) return;
+  std::string done;
+  std::error_code ec;
+  if (finish && !fs::exists(dir + "/junit.xml", ec) && fs::is_regular_file(dir + "/junit.xml.tmp", ec)) {
+    fs::rename(dir + "/junit.xml.tmp", dir + "/junit.xml", ec);
+    if (!ec) done = " (its junit.xml, staged when the run ended, is now in place)";
+  }
+  throw ConfigError(dir + ": the run is complete (its passport says " + v + "): nothing to resume; its passport stands" +
+                    done);
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
@@ -893,7 +909,7 @@ int do_run(RunArgs a) {
     std::vector<std::string> completed;
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
-      if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
+      if (!key) refuse_a_final_verdict(a.resume, false);  // a sealed folder's verdict is its seal's (checked above)
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true);
     }
     TerminalView plan_view(stdout);
@@ -961,7 +977,7 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     // A finished run's folder is left as it is, its log included (a refused resume wrote into a
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
-    if (!key) refuse_a_final_verdict(a.out);
+    if (!key) refuse_a_final_verdict(a.out, true);
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));

@@ -39,6 +39,13 @@ int RunResult::exit_code() const {
 }
 
 void write_file_atomic(const std::string& path, const std::string& content) {
+  write_file_staged(path, content);
+  commit_staged(path);
+}
+
+void commit_staged(const std::string& path) { std::filesystem::rename(path + ".tmp", path); }
+
+void write_file_staged(const std::string& path, const std::string& content) {
   const std::string tmp = path + ".tmp";
   // A new file of our own: whatever lay at the temporary name (a FIFO would block the open, a
   // link would redirect the write) is removed first, and the open refuses anything in its place.
@@ -71,7 +78,6 @@ void write_file_atomic(const std::string& path, const std::string& content) {
     ::unlink(tmp.c_str());
     throw std::runtime_error("write failed (close): " + tmp + ": " + why);
   }
-  std::filesystem::rename(tmp, path);
 }
 
 Executive::Executive(Devices& dev, std::string out_dir, std::shared_ptr<spdlog::logger> log, ProgressSink* progress)

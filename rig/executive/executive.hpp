@@ -176,5 +176,9 @@ class Executive {
 
 // Atomic file replace: write to a temp file, fsync, rename.
 void write_file_atomic(const std::string& path, const std::string& content);
+// The same in two steps: write_file_staged writes and fsyncs PATH.tmp (where a full disk fails),
+// commit_staged renames it into place (a run's ending puts several files in place at its end).
+void write_file_staged(const std::string& path, const std::string& content);
+void commit_staged(const std::string& path);
 
 }  // namespace rig

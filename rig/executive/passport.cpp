@@ -38,9 +38,7 @@ nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& 
   return p;
 }
 
-void write_passport(const std::string& path, const nlohmann::ordered_json& passport) {
-  write_file_atomic(path, passport.dump(2) + "\n");
-}
+std::string passport_text(const nlohmann::ordered_json& passport) { return passport.dump(2) + "\n"; }
 
 namespace {
 std::string xml_escape(const std::string& s) { return markup_escape(s); }

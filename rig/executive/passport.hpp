@@ -20,7 +20,8 @@ struct PassportInfo {
 };
 
 nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& result, const MeasurementSet& values);
-void write_passport(const std::string& path, const nlohmann::ordered_json& passport);
+// passport.json's text (two-space indent, a final newline).
+std::string passport_text(const nlohmann::ordered_json& passport);
 std::string junit_xml(const PassportInfo& info, const RunResult& result, const MeasurementSet& values);
 // A fixed-width pass/fail table for the terminal.
 std::string passport_table(const nlohmann::ordered_json& passport);

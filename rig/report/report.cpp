@@ -95,6 +95,10 @@ std::string write_report(const std::string& run_dir, const json& analysis) {
   return write_page(fs::path(run_dir), read_passport(run_dir), analysis, "");
 }
 
+std::string write_report(const std::string& run_dir, const json& passport, const json& analysis) {
+  return write_page(fs::path(run_dir), passport, analysis, "");
+}
+
 std::string render_report(const json& passport, const json& analysis, const std::string& analysis_problem,
                           const std::string& run_dir, const std::vector<std::string>& set_aside) {
   Page page(passport, analysis, analysis_problem, run_dir, set_aside);

@@ -18,6 +18,9 @@ std::string write_report(const std::string& run_dir);
 // it): the page is the one the folder gives, without parsing the file again (3.7 MB after a
 // `paper` run: about 40 ms of the run's end).
 std::string write_report(const std::string& run_dir, const nlohmann::json& analysis);
+// And with the passport in memory too: `rig run` draws the page before its passport.json is
+// in place (the passport is the last file of a run's ending, app/cmd_run.cpp write_run_outputs).
+std::string write_report(const std::string& run_dir, const nlohmann::json& passport, const nlohmann::json& analysis);
 
 // The page itself, for callers that hold the documents in memory. `analysis` may be
 // null (absent); `analysis_problem` says why it is absent or partial ("" if fine); `run_dir` is

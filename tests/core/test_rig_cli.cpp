@@ -1221,6 +1221,66 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
       << slurp(d + "/io5.stderr");
 }
 
+// A run's ending puts passport.json (with junit.xml) in place last, after report.html and the
+// history row: a kill between the passport and the report or the row left a PASS run without
+// them for good, its resume refused (a review's kill stress). Here the two states a kill can
+// leave: before the passport is in place (both staged) the resume finishes the run with the same
+// passport and the same history row; between the two renames the refused resume puts junit.xml in place.
+TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
+  const std::string d = tmp("ending");
+  fs::create_directories(d);
+  const std::string db = d + "/h.sqlite";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + db, "--out", d + "/r"}, d + "/io1"), 0)
+      << slurp(d + "/io1.stderr");
+  const auto whole = nlohmann::json::parse(slurp(d + "/r/passport.json"));
+  const std::string junit = slurp(d + "/r/junit.xml");
+  ASSERT_TRUE(fs::exists(d + "/r/report.html"));
+  // Killed after the history row, before the passport was put in place.
+  fs::rename(d + "/r/passport.json", d + "/r/passport.json.tmp");
+  fs::rename(d + "/r/junit.xml", d + "/r/junit.xml.tmp");
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  const auto resumed = nlohmann::json::parse(slurp(d + "/r/passport.json"));
+  EXPECT_EQ(resumed["outcome"], "PASS");
+  EXPECT_EQ(resumed["values"], whole["values"]);
+  EXPECT_EQ(slurp(d + "/r/junit.xml"), junit);
+  EXPECT_FALSE(fs::exists(d + "/r/passport.json.tmp"));
+  EXPECT_FALSE(fs::exists(d + "/r/junit.xml.tmp"));
+  ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
+  const std::string rows = slurp(d + "/list.stdout");
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2) << "the header and the one run, recorded once: " << rows;
+  EXPECT_EQ(rows.find("\n1,"), rows.find('\n')) << "the same row (id 1): " << rows;
+  // Killed between the passport's rename and junit.xml's: the run is complete, its resume
+  // refused (exit 2) and junit.xml put in place.
+  fs::rename(d + "/r/junit.xml", d + "/r/junit.xml.tmp");
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io3"), 2);
+  EXPECT_NE(slurp(d + "/io3.stderr").find("nothing to resume; its passport stands (its junit.xml, staged when the run "
+                                          "ended, is now in place)"),
+            std::string::npos)
+      << slurp(d + "/io3.stderr");
+  EXPECT_EQ(slurp(d + "/r/junit.xml"), junit);
+  // A dry run of it changes nothing.
+  fs::rename(d + "/r/junit.xml", d + "/r/junit.xml.tmp");
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--dry-run"}, d + "/io4"), 2);
+  EXPECT_FALSE(fs::exists(d + "/r/junit.xml"));
+  // The order itself, as the kernel saw it (strace, scripts/setup): report.html and the history
+  // database's commit before passport.json is put in place, junit.xml right after it.
+  const std::string trace = d + "/trace.txt";
+  const std::string cmd = "strace -f -qq -e trace=rename,renameat,renameat2,unlink,unlinkat -o " + trace + " " +
+                          RIG_BINARY + " run --profile ci --yes --quiet --db sqlite:" + d + "/h2.sqlite --out " + d +
+                          "/o > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::vector<std::string> seen;  // the run's renames into place and the journal's removal (the commit)
+  std::istringstream in(slurp(trace));
+  for (std::string line; std::getline(in, line);)
+    for (const char* what : {"report.html\")", "passport.json\")", "junit.xml\")", "h2.sqlite-journal\")"})
+      if (line.find(what) != std::string::npos && line.find(" = 0") != std::string::npos &&
+          (line.find("unlink") == std::string::npos) == (std::string(what).find("journal") == std::string::npos))
+        if (const std::string w = std::string(what).substr(0, std::string(what).size() - 2); seen.empty() || seen.back() != w)
+          seen.push_back(w);  // (the database commits twice: its schema check, then the row)
+  EXPECT_EQ(seen, (std::vector<std::string>{"report.html", "h2.sqlite-journal", "passport.json", "junit.xml"}))
+      << slurp(trace);
+}
+
 // A hardware file's [history] url with a relative SQLite file is relative to the hardware file,
 // as its dbc and drive map are, whatever the working folder (it was the working folder's).
 TEST(RigCli, AHardwareFilesRelativeHistoryFileIsBesideIt) {
