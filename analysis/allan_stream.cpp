@@ -609,8 +609,16 @@ struct Engine::Impl {
     }
   }
 
+  // MDEV/TDEV of a record of exactly 3m phase points: one term, the prologue's, and no base
+  // after it for a pass to prime it from (its sum was 0 over 0 terms: NaN, a review).
+  bool lone_mdev_term(const Acc& a) const { return a.modified() && !a.primed && a.bases == 0 && spec.n >= 3 * a.m; }
+
   void finish(Acc& a) {
     std::vector<double> sc;
+    if (lone_mdev_term(a)) {
+      mdev_prologue(a, reader(sc), chunk);
+      a.primed = true;
+    }
     if (a.far && a.bases > 0) {
       if (ring_holds_all) {
         if (a.modified())
@@ -681,7 +689,9 @@ EngineResult Engine::Impl::run(const std::vector<EngineRequest>& req) {
   // ---- far accumulators and TOTDEV edges: random access (ring or checkpoints) ----
   std::vector<std::size_t> post;
   for (std::size_t i = 0; i < accs.size(); ++i)
-    if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1)) post.push_back(i);
+    if ((accs[i].far && accs[i].bases > 0) || (accs[i].type == Deviation::TOTDEV && accs[i].m > 1) ||
+        lone_mdev_term(accs[i]))
+      post.push_back(i);
   // The costliest first (points read: a far pass reads every window, TOTDEV's edges about 4m),
   // so that the last task to finish is a short one: in request order the largest tau's edges
   // (a tenth of all edge terms on log:100) ran last, on one core.

@@ -107,6 +107,7 @@ struct Injection {
   double at_s = 0;  // Estop, Signal: device time
   int signal = 0;   // Signal, SignalAtEnd
   uint32_t seq = 0, count = 0;  // Drop
+  std::string text;             // as given
 };
 
 // Every --inject checked before anything is written or any device opens (--dry-run included):
@@ -133,6 +134,7 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
     if (at == std::string::npos) throw ConfigError("--inject '" + s + "': expected KIND@ARG");
     const std::string kind = s.substr(0, at), arg = s.substr(at + 1);
     Injection j;
+    j.text = s;
     if ((kind == "sigint" || kind == "sigterm") && arg == "end") {
       j.kind = Injection::Kind::SignalAtEnd;
       j.signal = injected_signal(kind);
@@ -448,15 +450,17 @@ std::string folder_time_utc() {
 
 // The run folder must be creatable and writable before any device opens: a bad --out is
 // the operator's configuration (exit 2), not a fault of the rig (exit 4).
-void prepare_run_folder(const std::string& dir) {
+// `option`: the option that named the folder (--out, or --resume: a read-only folder's resume
+// said "--out DIR", an option it was not given, a review).
+void prepare_run_folder(const std::string& dir, const std::string& option) {
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec) throw ConfigError("--out " + dir + ": cannot create the run folder: " + ec.message());
+  if (ec) throw ConfigError(option + " " + dir + ": cannot create the run folder: " + ec.message());
   const std::string probe = dir + "/.rig-write-check-" + std::to_string(::getpid());
   std::ofstream(probe) << "rig\n";
   const bool writable = fs::file_size(probe, ec) == 4 && !ec;
   fs::remove(probe, ec);
-  if (!writable) throw ConfigError("--out " + dir + ": the run folder is not writable");
+  if (!writable) throw ConfigError(option + " " + dir + ": the run folder is not writable");
 }
 
 // Whether this process can create a file in the existing directory `d`.
@@ -540,16 +544,16 @@ void check_history_can_record(const std::string& url) {
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
-void check_run_folder(const std::string& dir, bool new_run_here) {
+void check_run_folder(const std::string& dir, bool new_run_here, const std::string& option) {
   std::error_code ec;
   const fs::path p = nearest_existing(fs::absolute(dir, ec));
   if (!fs::is_directory(p, ec))
-    throw ConfigError("--out " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
+    throw ConfigError(option + " " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
   // access() says yes to root on any directory of a writable mount, /proc's included; a file
   // actually made there does not. O_TMPFILE makes one with no name, gone at close (nothing
   // touched); a filesystem without it gets a named probe, removed at once.
   if (!can_create_file_in(p))
-    throw ConfigError("--out " + dir + ": the run folder is not writable (" + p.string() + ")");
+    throw ConfigError(option + " " + dir + ": the run folder is not writable (" + p.string() + ")");
   if (new_run_here) refuse_an_earlier_run(dir);
 }
 
@@ -902,7 +906,8 @@ int do_run(RunArgs a) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
-    check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty());
+    check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
+                     a.resume.empty() ? "--out" : "--resume");
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
     // opened), before the plan is printed, so the plan says what the resume keeps, computes
     // again and still records.
@@ -964,7 +969,7 @@ int do_run(RunArgs a) {
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
     refuse_an_earlier_run(a.out);
   }
-  prepare_run_folder(a.out);
+  prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
   if (a.resume.empty()) {
     if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
     refuse_an_earlier_run(a.out);  // again, now that no other run can start here: one may have ended since
@@ -1085,6 +1090,12 @@ int do_run(RunArgs a) {
         }
       },
       phases, values, state, cancel.token(), completed, identity);
+  // A fault timed past the run's end never fired: said, or a test of it passes for nothing (a
+  // review: sigint@229 on a run of 228 s of device time, exit 0 without a word).
+  if (b.emulated && res.outcome != RunOutcome::Aborted)
+    for (const Injection& j : injections)
+      if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > b.emulated->clock().now_s())
+        log->warn("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, b.emulated->clock().now_s());
   if (signal_at_end) {
     ::kill(::getpid(), signal_at_end);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));

@@ -77,8 +77,9 @@ bool holds_for_resume(const seal::Check& c, std::string& why) {
 void check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k) {
   const bool sealed = fs::exists(dir + "/seal.json") || fs::exists(dir + "/seal.prev.json");
   if (!k) {
-    if (sealed)
-      throw ConfigError(dir + " is sealed (seal.json): resume it with the station's key (--seal-key FILE or "
+    if (sealed)  // the seal that is there named (a stop between two seals may leave only the previous one)
+      throw ConfigError(dir + " is sealed (" + (fs::exists(dir + "/seal.json") ? "seal.json" : "seal.prev.json") +
+                        "): resume it with the station's key (--seal-key FILE or "
                               "RIG_SEAL_KEY); without it the resumed run could not be sealed");
     return;
   }

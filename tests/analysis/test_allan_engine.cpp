@@ -379,6 +379,39 @@ TEST(Allan, ExplicitFactorsAndBoundsOff) {
   EXPECT_THROW(deviation(y, o), std::invalid_argument);
 }
 
+// MDEV and TDEV at m = N/3 of N phase points: one term, |x(2m) - 2x(m) + x(0)| over its window
+// sum (NIST SP 1065 eq. 14 with one j). It came out NaN (0 over 0 terms: no base after the first
+// term primed it, a review), in memory and streamed, with bounds and without.
+TEST(Allan, MdevAndTdevOfOneTermAreItsWindowSum) {
+  for (std::size_t n : {3u, 6u, 30u, 300u, 30000u}) {
+    std::vector<double> x(n);
+    for (std::size_t i = 0; i < n; ++i) x[i] = std::sin(0.37 * static_cast<double>(i * i % 101)) * 1e-3;
+    const std::size_t m = n / 3;
+    double w = 0;
+    for (std::size_t i = 0; i < m; ++i) w += x[i + 2 * m] - 2 * x[i + m] + x[i];
+    const double mm = static_cast<double>(m), mdev = std::sqrt(w * w / (2 * mm * mm * mm * mm));
+    for (Deviation d : {Deviation::MDEV, Deviation::TDEV})
+      for (bool bounds : {true, false}) {
+        DevOptions o;
+        o.type = d;
+        o.data = DataKind::Phase;
+        o.factors = {m};
+        o.bounds = bounds;
+        const auto p = deviation(x, o);
+        ASSERT_EQ(p.size(), 1u);
+        EXPECT_EQ(p[0].n_terms, 1u);
+        const double want = d == Deviation::MDEV ? mdev : mdev * mm / std::sqrt(3.0);
+        EXPECT_NEAR(p[0].dev, want, 1e-12 * want) << to_string(d) << " n " << n;
+        StreamOptions so;
+        so.memory_budget_bytes = 1u << 20;
+        so.chunk = 4096;
+        SpanSource src(x);
+        const auto str = deviation_stream(src, o, so);
+        EXPECT_NEAR(str[0].dev, p[0].dev, 1e-12 * want) << to_string(d) << " n " << n << " streamed";
+      }
+  }
+}
+
 TEST(Allan, RejectsBadInputNamingTheProblem) {
   DevOptions o;
   EXPECT_THROW(deviation(std::vector<double>{1.0}, o), std::invalid_argument);

@@ -908,6 +908,13 @@ TEST(Campaign, SealedRunFolders) {
   };
   refused(copy(), {}, "is sealed (seal.json): resume it with the station's key");
   {
+    // Stopped between two seals, only the previous one there: the refusal names it (it named seal.json).
+    const std::string f = copy();
+    fs::copy_file(f + "/seal.json", f + "/seal.prev.json", fs::copy_options::overwrite_existing);
+    fs::remove(f + "/seal.json");
+    refused(f, {}, "is sealed (seal.prev.json): resume it with the station's key");
+  }
+  {
     // An unsealed folder is not sealed by a resume with a key.
     const std::string f = copy();
     fs::remove(f + "/seal.json");

@@ -1828,6 +1828,21 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
                 d + "/ok"),
             0)
       << slurp(d + "/ok.stderr");
+  // One timed past the run's end never fires, and the run says so (it ended PASS without a word, a
+  // review: sigint@229 on a run of 228 s).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/late", "--inject", "sigint@5000",
+                 "--inject", "estop@12.5"},
+                d + "/late"),
+            3)
+      << slurp(d + "/late.stderr");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/late2", "--inject", "sigint@5000"},
+                d + "/late2"),
+            0)
+      << slurp(d + "/late2.stderr");
+  EXPECT_NE(slurp(d + "/late2/run.log").find("--inject sigint@5000 did not fire: the run ended at "), std::string::npos)
+      << slurp(d + "/late2/run.log");
+  EXPECT_NE(slurp(d + "/late2.stderr").find("--inject sigint@5000 did not fire"), std::string::npos);
+  EXPECT_EQ(slurp(d + "/late/run.log").find("did not fire"), std::string::npos) << "an aborted run ended before it";
   // The hardware plant takes none: refused before its (unreachable) devices are tried (exit 2, not 4).
   std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
                                    "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
