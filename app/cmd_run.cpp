@@ -55,6 +55,7 @@
 #include "rig/report/db.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/timefmt.hpp"
+#include "rig/report/passport_read.hpp"
 #include "rig/report/report.hpp"
 #include "rig/core/path_kind.hpp"
 
@@ -600,14 +601,40 @@ std::vector<std::string> records_gone(const std::string& out, const acceptance::
   return gone;
 }
 
+// The ending's steps after the passport is in place, until they are done: the final seal and
+// the history row (one per line). A dot file: outside the seal (run_seal.cpp outside_the_seal).
+constexpr const char* kEndingPending = ".ending-pending";
+
+// Records the run in its history database; false (logged) when the database is not reachable.
+bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::json& passport,
+                       const std::string& out_dir, spdlog::logger& log) {
+  try {
+    const std::string url = history_url(a, hw);
+    const long long id = history::record_run(url, passport, out_dir);
+    // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
+    // output had mentioned).
+    const std::string shown = history::mask_password(url);
+    const std::string line =
+        fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, id, shown);
+    log.info("{}", line);
+    if (!a.quiet) std::cerr << line << "\n";
+    return true;
+  } catch (const std::exception& e) {
+    log.error("history database not updated: {} (the run's resume, or rig history --record {}, records it)", e.what(),
+              shown_text(a.out));
+    return false;
+  }
+}
+
 // What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
 // the history row (a report or history failure is logged, never the run's outcome).
-// The passport is put in place last, with junit.xml beside it: a PASS or FAIL passport is a
-// final verdict a resume does not touch, so everything else of the ending comes before it (a
-// kill between the passport and the report or the history row left a run without either for
-// good, its resume refused: a review's kill stress). A folder that cannot take the files (a full
-// disk) is exit 4 with no passport and no history row, never a PASS beside exit 4; a run killed
-// before its passport is in place is finished by its resume, which records the same history row.
+// analysis.json and report.html come before the passport, and junit.xml is put in place with
+// it (staged, then renamed): a CI job reading junit.xml never sees a PASS the folder has no
+// passport for, and a folder that cannot take the files (a full disk) is exit 4 with no passport
+// and no staged file left. What comes after the passport (the final seal, the history row, which
+// may wait on a network) is listed in .ending-pending until done: a run killed there (a review's
+// kill stress left PASS runs without report.html or history row, their resume refused for good)
+// is finished by its resume (finish_pending_ending).
 nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
                                          const RunResult& res, const MeasurementSet& values,
                                          const acceptance::DutState& dut, const std::optional<seal::Key>& key,
@@ -615,32 +642,28 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   auto passport = make_passport(info, res, values);
   const nlohmann::json analysis = acceptance::analysis_document(dut);
   write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
-  // junit.xml is staged and put in place with the passport: a CI job reading it never sees a
-  // PASS the folder has no passport for.
-  write_file_staged(a.out + "/junit.xml", junit_xml(info, res, values));
-  write_file_staged(a.out + "/passport.json", passport_text(passport));
+  const std::string junit = a.out + "/junit.xml", pass = a.out + "/passport.json", pending = a.out + "/" + kEndingPending;
+  std::string steps;  // what follows the passport
+  if (key) steps += "seal\n";
+  if (!a.no_history) steps += "history\n";
   try {
-    report::write_report(a.out, passport, analysis);  // the documents in memory, not parsed again
-  } catch (const std::exception& e) {
-    log.error("report.html not written: {}", e.what());
-  }
-  if (!a.no_history) {
-    const std::string url = history_url(a, hw);
+    write_file_staged(junit, junit_xml(info, res, values));
+    write_file_staged(pass, passport_text(passport));
     try {
-      const long long id = history::record_run(url, nlohmann::json::parse(passport.dump()), info.out_dir);
-      // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
-      // output had mentioned).
-      const std::string shown = history::mask_password(url);
-      const std::string line =
-          fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, id, shown);
-      log.info("{}", line);
-      if (!a.quiet) std::cerr << line << "\n";
+      report::write_report(a.out, passport, analysis);  // the documents in memory, not parsed again
     } catch (const std::exception& e) {
-      log.error("history database not updated: {}", e.what());
+      log.error("report.html not written: {}", e.what());
     }
+    if (!steps.empty()) write_file_atomic(pending, steps);
+    commit_staged(pass);
+    commit_staged(junit);
+  } catch (...) {  // nothing staged is left behind, nor a list of steps after a passport not in place
+    std::error_code ec;
+    if (!fs::exists(pass, ec)) fs::remove(pending, ec);
+    for (const std::string& f : {junit, pass}) fs::remove(f + ".tmp", ec);
+    throw;
   }
-  commit_staged(a.out + "/passport.json");
-  commit_staged(a.out + "/junit.xml");
+  bool done = true;  // every step after the passport: the marker goes only then
   if (key) {
     try {
       std::vector<std::string> files = files_of_the_run(dut);
@@ -652,7 +675,13 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       log.info("run folder sealed (seal.json, key {})", key->id);
     } catch (const std::exception& e) {
       log.error("seal.json not written: {}", e.what());
+      done = false;
     }
+  }
+  if (!a.no_history) done = record_in_history(a, hw, nlohmann::json::parse(passport.dump()), info.out_dir, log) && done;
+  if (done) {
+    std::error_code ec;
+    fs::remove(pending, ec);
   }
   return passport;
 }
@@ -691,19 +720,62 @@ void refuse_non_files(const std::string& dir) {
 // Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than
 // today's procedure has, and its run is complete all the same. For an unsealed folder (a sealed
 // one's final seal states the verdict, and a passport it does not vouch for is not read).
-// `finish`: a junit.xml the run staged but had not put in place when it was stopped (between two
-// renames, write_run_outputs) is put in place, the ending's last step; not on a dry run.
-void refuse_a_final_verdict(const std::string& dir, bool finish) {
+void refuse_a_final_verdict(const std::string& dir) {
   const std::string v = verdict_of(dir);
-  if (v.empty()) return;
-  std::string done;
+  if (!v.empty())
+    throw ConfigError(dir + ": the run is complete (its passport says " + v +
+                      "): nothing to resume; its passport stands");
+}
+
+std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet);
+
+// A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
+// write_run_outputs): its verdict is final, so nothing is measured or computed again; what is
+// missing is done: a staged junit.xml put in place, report.html drawn if it is not there, the
+// history row recorded (the same row, under the same id). A sealed run finishes here only when
+// its final seal is written (`final_seal`); before it, its resume computes the ending again.
+// The verdict's exit code; nullopt when there is no such ending. A dry run says what it would do.
+std::optional<int> finish_pending_ending(RunArgs& a, const toml::table& hw, bool sealed, bool final_seal) {
+  const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
   std::error_code ec;
-  if (finish && !fs::exists(dir + "/junit.xml", ec) && fs::is_regular_file(dir + "/junit.xml.tmp", ec)) {
-    fs::rename(dir + "/junit.xml.tmp", dir + "/junit.xml", ec);
-    if (!ec) done = " (its junit.xml, staged when the run ended, is now in place)";
+  if (!fs::exists(pending, ec)) return std::nullopt;
+  const std::string v = verdict_of(dir);
+  if (v.empty() || (sealed && !final_seal)) return std::nullopt;
+  const int rc = v == "PASS" ? kExitPass : kExitFail;
+  std::vector<std::string> todo;
+  if (fs::is_regular_file(dir + "/junit.xml.tmp", ec)) todo.emplace_back("junit.xml put in place");
+  if (!fs::exists(dir + "/report.html", ec)) todo.emplace_back("report.html written");
+  if (!a.no_history) todo.emplace_back("the history row recorded");
+  const std::string what = todo.empty() ? std::string("nothing left") : fmt::format("{}", fmt::join(todo, ", "));
+  if (a.dry_run) {
+    std::cout << fmt::format("rig run --dry-run: {} is complete (its passport says {}); its ending stopped before it "
+                             "finished: a resume does what is left ({}); nothing is measured or computed again.\n",
+                             shown_text(dir), v, what);
+    return kExitPass;
   }
-  throw ConfigError(dir + ": the run is complete (its passport says " + v + "): nothing to resume; its passport stands" +
-                    done);
+  auto log = make_logger(dir, a.quiet);
+  log->info("rig {} run: out {}: the run is complete (its passport says {}); finishing its ending ({})", RIG_VERSION,
+            shown_text(dir), v, what);
+  bool done = true;
+  if (fs::is_regular_file(dir + "/junit.xml.tmp", ec)) {
+    fs::rename(dir + "/junit.xml.tmp", dir + "/junit.xml", ec);  // the ending that wrote the passport staged it
+    if (ec) log->error("junit.xml not put in place: {}", ec.message()), done = false;
+  }
+  if (!fs::exists(dir + "/report.html", ec)) try {
+      report::write_report(dir);
+    } catch (const std::exception& e) {
+      log->error("report.html not written: {}", e.what());
+    }
+  if (!a.no_history) {
+    const nlohmann::json passport = report::read_passport(dir);
+    done = record_in_history(a, hw, passport, passport.value("out_dir", dir), *log) && done;
+  }
+  if (done) fs::remove(pending, ec);
+  const std::string line = fmt::format("{}: the run was complete (its passport says {}); its ending is {}: {}",
+                                       shown_text(dir), v, done ? "finished" : "not finished yet", what);
+  log->info("{} (exit {})", line, rc);
+  std::cerr << line << "\n";
+  return rc;
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
@@ -828,11 +900,12 @@ int do_run(RunArgs a) {
   // One process per run folder (two runs or resumes of one folder would interleave their files):
   // held from here to the end of the run; a new run's folder is taken once it exists (below).
   std::optional<FolderLock> folder_lock;
+  bool final_seal = false;  // a sealed PASS/FAIL whose ending stopped after its seal
   if (!a.resume.empty()) {
     if (a.dry_run) FolderLock::check_free(a.resume, "--resume " + a.resume);
     else if (path_kind(a.resume, "--resume") == PathKind::directory) folder_lock.emplace(a.resume, "--resume " + a.resume);
     refuse_non_files(a.resume);
-    check_seal_before_resume(a.resume, key);
+    final_seal = check_seal_before_resume(a.resume, key, fs::exists(a.resume + "/" + kEndingPending));
     refuse_records_without_checkpoint(a.resume);
   }
 
@@ -902,6 +975,8 @@ int do_run(RunArgs a) {
       throw;
     }
   }
+  if (!a.resume.empty())
+    if (const auto rc = finish_pending_ending(a, hw, key.has_value(), final_seal)) return *rc;
   if (a.dry_run) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
@@ -914,7 +989,7 @@ int do_run(RunArgs a) {
     std::vector<std::string> completed;
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
-      if (!key) refuse_a_final_verdict(a.resume, false);  // a sealed folder's verdict is its seal's (checked above)
+      if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true);
     }
     TerminalView plan_view(stdout);
@@ -982,7 +1057,7 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     // A finished run's folder is left as it is, its log included (a refused resume wrote into a
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
-    if (!key) refuse_a_final_verdict(a.out, true);
+    if (!key) refuse_a_final_verdict(a.out);
     log = make_logger(a.out, a.quiet);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));

@@ -74,14 +74,14 @@ bool holds_for_resume(const seal::Check& c, std::string& why) {
 
 }  // namespace
 
-void check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k) {
+bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending) {
   const bool sealed = fs::exists(dir + "/seal.json") || fs::exists(dir + "/seal.prev.json");
   if (!k) {
     if (sealed)  // the seal that is there named (a stop between two seals may leave only the previous one)
       throw ConfigError(dir + " is sealed (" + (fs::exists(dir + "/seal.json") ? "seal.json" : "seal.prev.json") +
                         "): resume it with the station's key (--seal-key FILE or "
                               "RIG_SEAL_KEY); without it the resumed run could not be sealed");
-    return;
+    return false;
   }
   if (!sealed)
     throw ConfigError(dir + " is not sealed (no seal.json): the key cannot vouch for files it never sealed; resume "
@@ -101,10 +101,17 @@ void check_seal_before_resume(const std::string& dir, const std::optional<seal::
     const seal::Check c = seal::check_seal(dir, path, *k, must);
     std::string w;
     if (holds_for_resume(c, w)) {
-      if (c.outcome == "PASS" || c.outcome == "FAIL")
+      if (c.outcome == "PASS" || c.outcome == "FAIL") {
+        // Its ending stopped after the seal: the history row is what is left, recorded from the
+        // passport the seal vouches for.
+        const bool passport_sealed = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
+          return e.first == "passport.json" && e.second == seal::FileState::Ok;
+        });
+        if (pending_ending && name == std::string("seal.json") && passport_sealed) return true;
         throw ConfigError(dir + ": the run is complete: its seal states the outcome " + c.outcome +
                           " (whatever passport.json says now); nothing to resume");
-      return;
+      }
+      return false;
     }
     why += (why.empty() ? "" : "; ") + std::string(name) + ": " + w;
   }

@@ -40,8 +40,10 @@ std::optional<std::string> passport_outcome(const std::string& dir);
 // unchanged (what every ending writes again need not be); an unsealed folder is refused (sealing
 // it now would vouch for files the key never saw), and so is a sealed PASS or FAIL (the sealed
 // verdict stands, whatever passport.json says now). Without a key a sealed folder is refused (a
-// resume would leave it unsealed). ConfigError naming what does not hold.
-void check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k);
+// resume would leave it unsealed). ConfigError naming what does not hold. A sealed PASS or FAIL
+// whose ending was stopped after the seal (`pending_ending`: .ending-pending in the folder) is
+// not refused: true is returned, and the caller finishes that ending (its history row).
+bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending);
 
 // The files of `dir` no seal is asked to cover: run.log (appended to after the last seal), the
 // seals, hidden and temporary files, and a capture a resume set aside

@@ -632,10 +632,11 @@ Dbc Dbc::parse_file(const std::string& path) {
 
 namespace {
 
-// Text that is not well-formed UTF-8 as Windows-1252, the code page Vector's CANdb++ writes DBC
-// files in (cantools and canmatrix read them so): a unit "\xB5g" is "µg", a comment's "\xB0C"
-// "°C". Bytes below 0x80 are the same in both, so names, numbers and line numbers do not move;
-// the five bytes 1252 leaves undefined become the C1 controls of Latin-1, shown escaped.
+// The bytes of a text that are not well-formed UTF-8 as Windows-1252, the code page Vector's
+// CANdb++ writes DBC files in (cantools and canmatrix read them so): a unit "\xB5g" is "µg", a
+// comment's "\xB0C" "°C". Bytes below 0x80 are the same in both, so names, numbers and line
+// numbers do not move; the five bytes 1252 leaves undefined become the C1 controls of Latin-1,
+// shown escaped.
 std::string utf8_from_cp1252(const std::string& t) {
   static constexpr char16_t k80[32] = {0x20AC, 0x81,   0x201A, 0x0192, 0x201E, 0x2026, 0x2020, 0x2021,
                                        0x02C6, 0x2030, 0x0160, 0x2039, 0x0152, 0x8D,   0x017D, 0x8F,
@@ -643,12 +644,18 @@ std::string utf8_from_cp1252(const std::string& t) {
                                        0x02DC, 0x2122, 0x0161, 0x203A, 0x0153, 0x9D,   0x017E, 0x0178};
   std::string out;
   out.reserve(t.size() + t.size() / 8);
-  for (const char ch : t) {
-    const auto b = static_cast<unsigned char>(ch);
-    const char32_t u = b < 0x80 ? b : b < 0xA0 ? k80[b - 0x80] : b;
-    if (u < 0x80) {
-      out += static_cast<char>(u);
-    } else if (u < 0x800) {
+  for (std::size_t i = 0; i < t.size();) {
+    const auto b = static_cast<unsigned char>(t[i]);
+    // A well-formed UTF-8 sequence stays as it is: a CANdb++ file edited later in a UTF-8 editor
+    // holds both (its "µg" in UTF-8 beside a 1252 "°"; a code review), and a byte-order mark is kept
+    // for the tokenizer to skip.
+    if (const std::size_t n = b < 0x80 ? 1 : utf8_sequence_at(t, i); n > 0) {
+      out.append(t, i, n);
+      i += n;
+      continue;
+    }
+    const char32_t u = b < 0xA0 ? k80[b - 0x80] : b;
+    if (u < 0x800) {
       out += static_cast<char>(0xC0 | (u >> 6));
       out += static_cast<char>(0x80 | (u & 0x3F));
     } else {
@@ -656,6 +663,7 @@ std::string utf8_from_cp1252(const std::string& t) {
       out += static_cast<char>(0x80 | ((u >> 6) & 0x3F));
       out += static_cast<char>(0x80 | (u & 0x3F));
     }
+    ++i;
   }
   return out;
 }

@@ -226,6 +226,9 @@ void TableServer::run() {
   using clk = std::chrono::steady_clock;
   auto last = clk::now();
   auto reopen_at = clk::time_point{};
+  // Said once per outage: a device that opens and fails again at once (EOF on every open) would
+  // repeat both lines every second; they are said again only after a request was served.
+  bool said_down = false, said_open = false;
   const auto notice = [&](const std::string& text) {
     if (notice_) notice_("serial port " + ep_.device + ": " + text);
   };
@@ -235,7 +238,8 @@ void TableServer::run() {
     if (s.ctx && s.listen_fd < 0 && s.port_fd < 0 && clk::now() >= reopen_at) {
       if (modbus_connect(s.ctx) == 0) {
         s.port_fd = modbus_get_socket(s.ctx);
-        notice("open again, serving");
+        if (!said_open) notice("open again, serving");
+        said_open = true;
       } else {
         reopen_at = clk::now() + std::chrono::seconds(1);
       }
@@ -268,6 +272,7 @@ void TableServer::run() {
       if (rc > 0 && (query[0] == unit_ || query[0] == MODBUS_BROADCAST_ADDRESS)) {
         serve_request(s.ctx, s.map, emu_, query.data(), rc);
         ++served_;
+        said_down = said_open = false;
       } else if (rc == -2) {
         // Said once, not retried every 10 ms in silence (a review: EIO forever after socat
         // ended, the server looking alive).
@@ -275,7 +280,9 @@ void TableServer::run() {
         modbus_close(s.ctx);
         s.port_fd = -1;
         reopen_at = clk::now() + std::chrono::seconds(1);
-        notice("cannot be read (" + why + "): its other end closed or the device went away; reopening it every second");
+        if (!said_down)
+          notice("cannot be read (" + why + "): its other end closed or the device went away; reopening it every second");
+        said_down = true;
       } else if (rc < 0) {
         tcflush(s.port_fd, TCIFLUSH);  // bad CRC / partial frame: resynchronise on the next frame
       }

@@ -36,13 +36,25 @@ const toml::node& need(const toml::table& t, std::string_view key) {
   return *n;
 }
 
+// A double as its shortest text that reads back to it (toml++ writes 17 digits, the stream 6:
+// 'tolerance_deg' = 1.0000000000000001e-05 for 0.00001, and 'run_s' = 0.00199999999 read
+// '= 0.002 is out of range [0.002, ...]'; reviews); nan and inf as the stream writes them.
+std::string shortest_text(double v) {
+  if (!std::isfinite(v)) {
+    std::ostringstream os;
+    os << v;
+    return os.str();
+  }
+  char b[64];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
 // A value or a bound as text: a whole number as one (`retries = 1000000000` was "1e+09", a
-// review), any other as the stream writes a double.
+// review), any other as its shortest text.
 std::string number_text(double v) {
   if (std::isfinite(v) && v == std::trunc(v) && std::fabs(v) < 9.007199254740992e15) return std::to_string(static_cast<int64_t>(v));
-  std::ostringstream os;
-  os << v;
-  return os.str();
+  return shortest_text(v);
 }
 
 void check_range(const toml::node& n, std::string_view key, double v, const std::string& shown_v,
@@ -59,12 +71,8 @@ void check_range(const toml::node& n, std::string_view key, double v, const std:
   }
 }
 
-// A double as every message of these readers has shown one (1e+07, 0.5, nan).
-std::string double_text(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+// A double as every message of these readers shows one (1e+07, 0.5, nan).
+std::string double_text(double v) { return shortest_text(v); }
 
 }  // namespace
 
@@ -74,18 +82,18 @@ bool from_option(const toml::node& n) { return no_position(n.source()); }
 
 std::string shown(const toml::node& n) {
   if (n.is_table()) return "a table";
-  // A float as its shortest text that reads back to the same double (toml++ writes 17 digits
-  // where fewer do not: 'tolerance_deg' = 1.0000000000000001e-05 for 0.00001, a review), kept
-  // a TOML float (300.0).
-  if (const auto* f = n.as_floating_point()) {
-    const double v = f->get();
-    if (std::isfinite(v)) {
-      char b[64];
-      const auto r = std::to_chars(b, b + sizeof b, v);
-      std::string s(b, r.ptr);
-      if (s.find_first_of(".e") == std::string::npos) s += ".0";
-      return s;
-    }
+  // A float as its shortest text, kept a TOML float (300.0); an array element by element.
+  if (const auto* f = n.as_floating_point(); f && std::isfinite(f->get())) {
+    std::string s = shortest_text(f->get());
+    if (s.find_first_of(".e") == std::string::npos) s += ".0";
+    return s;
+  }
+  if (const auto* a = n.as_array()) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < a->size(); ++i) s += (i ? ", " : " ") + shown(*a->get(i));
+    s += a->empty() ? "]" : " ]";
+    if (s.size() > 60) s = s.substr(0, 57) + "...";
+    return s;
   }
   std::ostringstream os;
   n.visit([&](const auto& v) { os << v; });

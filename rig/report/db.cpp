@@ -204,7 +204,12 @@ class PgDb final : public Db {
   explicit PgDb(const std::string& url) {
     where_ = mask_password(url);
     pq_ = &pq(where_);
-    conn_ = pq_->connectdb(url.c_str());
+    // A server that accepts and never answers held a run's ending for ever (a code review): the
+    // connection is given 10 s unless the URL sets its own connect_timeout.
+    std::string conninfo = url;
+    if (conninfo.find("connect_timeout=") == std::string::npos)
+      conninfo += (conninfo.find('?') == std::string::npos ? "?" : "&") + std::string("connect_timeout=10");
+    conn_ = pq_->connectdb(conninfo.c_str());
     if (!conn_ || pq_->status(conn_) != CONNECTION_OK) {
       std::string msg = conn_ ? pq_->errorMessage(conn_) : "out of memory";
       while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();

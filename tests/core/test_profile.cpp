@@ -95,6 +95,14 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   // The error names file:line:column and the value as written (README: every bad-input error).
   const std::string swapped = write_tmp("lim3.toml", base + "[limits]\nbias = [1e-3, -1e-3]\n");
   EXPECT_EQ(error_of(swapped), swapped + ":10:8: 'bias' = [ 0.001, -0.001 ]: limits must be [min, max] with min <= max");
+  // Each element as its shortest text (toml++ wrote [ 0.29999999999999999, 0.10000000000000001 ]).
+  const std::string tenths = write_tmp("lim5.toml", base + "[limits]\nbias = [0.3, 0.1]\n");
+  EXPECT_EQ(error_of(tenths), tenths + ":10:8: 'bias' = [ 0.3, 0.1 ]: limits must be [min, max] with min <= max");
+  // The value's and the bound's digits where they differ (it read '= 0.002 is out of range [0.002, ...').
+  std::string near = base;
+  near.replace(near.find("run_s = 1\n"), 10, "run_s = 0.00199999999\n");
+  const std::string short_run = write_tmp("lim6.toml", near);
+  EXPECT_EQ(error_of(short_run), short_run + ":5:9: 'run_s' = 0.00199999999 is out of range [0.002, 1000000]");
   const std::string three = write_tmp("lim4.toml", base + "[limits]\nbias = [0, 1, 2]\n");
   EXPECT_EQ(error_of(three), three + ":10:8: 'bias' = [ 0, 1, 2 ]: limits are two numbers [min, max], got 3");
   EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais'"),

@@ -317,6 +317,13 @@ TEST(DbcHandWritten, AWindows1252FileIsReadAsCandbWritesIt) {
   EXPECT_EQ(m->signal("a")->unit, "\xC2\xB5g");
   EXPECT_EQ(m->signal("a")->comment, "x \xE2\x82\xAC \xE2\x80\x9Cy\xE2\x80\x9D \xC2\x81");  // euro, quotes; 0x81 undefined
   EXPECT_EQ(error_of(text + "VAL_ 256 b 1 \"one\";\n"), "h.dbc:6: signal 'b' of message M is not defined");
+  // A file of both (CANdb++'s, edited later in a UTF-8 editor): each byte that is not UTF-8 is
+  // read as 1252, the UTF-8 around it kept; a byte-order mark still skipped.
+  const Dbc mixed = Dbc::parse("\xEF\xBB\xBF" "BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] \"\xC2\xB5g\" X\n"
+                               " SG_ t : 8|8@1+ (1,0) [0|1] \"\xB0" "C\" X\n",
+                               "m.dbc");
+  EXPECT_EQ(mixed.find(256u, false)->signal("a")->unit, "\xC2\xB5g");
+  EXPECT_EQ(mixed.find(256u, false)->signal("t")->unit, "\xC2\xB0" "C");
   // A UTF-8 file stays as it is.
   EXPECT_EQ(Dbc::parse("BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] \"\xC2\xB5g\" X\n", "u.dbc")
                 .find(256u, false)->signal("a")->unit,
