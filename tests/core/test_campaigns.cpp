@@ -873,6 +873,40 @@ TEST(Campaign, SealedRunFolders) {
   EXPECT_EQ(run({"verify", ref.passport["out_dir"].get<std::string>(), "--seal-key", key}, d + "/unsealed"), 1);
   EXPECT_NE(slurp(d + "/unsealed.stdout").find("the folder is not sealed"), std::string::npos);
 
+  {
+    // Stopped after its final seal, before its history row (.ending-pending, app/cmd_run.cpp):
+    // the resume with the key records the row from the passport the seal vouches for, computing
+    // nothing again, and the folder still verifies (the list is outside the seal); a passport
+    // changed since is the sealed verdict's, refused as complete.
+    const std::string sealed_h = d + "/sealed-h", db = d + "/sealed-h.sqlite";
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--db", "sqlite:" + db, "--out", sealed_h, "--seal-key", key},
+                  sealed_h + "-io"),
+              0)
+        << slurp(sealed_h + "-io.stderr");
+    std::ofstream(sealed_h + "/.ending-pending") << "history\n";
+    fs::remove(db);
+    EXPECT_EQ(run({"verify", sealed_h, "--seal-key", key}, sealed_h + "-verify"), 0) << slurp(sealed_h + "-verify.stdout");
+    const std::string passport = slurp(sealed_h + "/passport.json");
+    ASSERT_EQ(run({"run", "--resume", sealed_h, "--yes", "--seal-key", key}, sealed_h + "-resume"), 0)
+        << slurp(sealed_h + "-resume.stderr");
+    EXPECT_NE(slurp(sealed_h + "-resume.stderr").find("its ending is finished: the history row recorded"),
+              std::string::npos)
+        << slurp(sealed_h + "-resume.stderr");
+    EXPECT_EQ(slurp(sealed_h + "/passport.json"), passport);
+    EXPECT_FALSE(fs::exists(sealed_h + "/.ending-pending"));
+    EXPECT_EQ(run({"verify", sealed_h, "--seal-key", key}, sealed_h + "-verify2"), 0);
+    EXPECT_EQ(run({"history", "--db", db, "--csv"}, sealed_h + "-list"), 0);
+    EXPECT_NE(slurp(sealed_h + "-list.stdout").find(",PASS,"), std::string::npos) << slurp(sealed_h + "-list.stdout");
+    std::ofstream(sealed_h + "/.ending-pending") << "history\n";
+    std::string edited = passport;
+    edited.replace(edited.find("\"outcome\": \"PASS\""), 17, "\"outcome\": \"FAIL\"");
+    std::ofstream(sealed_h + "/passport.json") << edited;
+    EXPECT_EQ(run({"run", "--resume", sealed_h, "--yes", "--seal-key", key}, sealed_h + "-edited"), 2);
+    EXPECT_NE(slurp(sealed_h + "-edited.stderr").find("the run is complete: its seal states the outcome PASS"),
+              std::string::npos)
+        << slurp(sealed_h + "-edited.stderr");
+  }
+
   // A key others may read is refused before anything is written.
   const std::string loose = write_key(d + "/loose.key", 'l', 0644);
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/loose", "--seal-key", loose},
