@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "analysis/json.hpp"
+#include "rig/core/number_text.hpp"
 #include "app/analyze_input.hpp"
 #include "app/output_file.hpp"
 #include "analysis/allan.hpp"
@@ -99,19 +100,10 @@ std::vector<an::DevPoint> without_identification(std::vector<an::DevPoint> pts) 
 // Whether a long-tau statistic divides by a noise-type bias (MTOT, TTOT, HTOT: theo.hpp tot_bias).
 bool has_noise_bias(an::LongTau t) { return t == an::LongTau::MTOT || t == an::LongTau::TTOT || t == an::LongTau::HTOT; }
 
-// A number in a message as the user typed it, to the digit: the shortest text that reads back as
-// the same double (%g's six digits made --rate 1000001 "1e+06", inside the range it was refused
-// for, and --confidence 0.9999999 "1").
-std::string typed(double v) {
-  char b[32];
-  const auto r = std::to_chars(b, b + sizeof b, v);
-  return std::string(b, r.ptr);
-}
-
 // The bounds' confidence in a table's header: the default one sigma as 0.682689, any other level
 // as typed.
 std::string confidence_shown(double c) {
-  if (c != an::kOneSigma) return typed(c);
+  if (c != an::kOneSigma) return shortest_text(c);
   char b[32];
   std::snprintf(b, sizeof b, "%g", c);
   return b;
@@ -268,12 +260,12 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
 // The numeric options' ranges, each refused (exit 2) with the value as typed.
 void check_numeric_options(const Args& a) {
   if (!(a.overlap >= 0 && a.overlap <= 0.95))
-    throw ConfigError("rig analyze: --overlap " + typed(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
+    throw ConfigError("rig analyze: --overlap " + shortest_text(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
   if (!(a.confidence > 0 && a.confidence < 1))
-    throw ConfigError("rig analyze: --confidence " + typed(a.confidence) + ": must be in (0, 1)");
+    throw ConfigError("rig analyze: --confidence " + shortest_text(a.confidence) + ": must be in (0, 1)");
   if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz))
-    throw ConfigError("rig analyze: --rate " + typed(*a.rate) + ": the sample rate must be in (0, " +
-                      typed(capture::kMaxRateHz) + "] Hz");
+    throw ConfigError("rig analyze: --rate " + shortest_text(*a.rate) + ": the sample rate must be in (0, " +
+                      shortest_text(capture::kMaxRateHz) + "] Hz");
   // 0 was taken silently (the automatic segment; the engine's smallest ring): a typed 0 is a slip.
   constexpr std::size_t kMinSegment = 8;  // welch()'s smallest (analysis/psd.cpp)
   if (a.segment && *a.segment < kMinSegment)
@@ -457,7 +449,7 @@ int run(const Args& a) {
                     "missing samples");
   if (!gap_note.empty()) notes.push_back(gap_note);
   if (!a.rate && !cap)  // every tau and noise term scales with it (a review: a 1 s file read at 1 kHz, silently)
-    notes.push_back("no --rate: " + typed(kDefaultRateHz) + " Hz assumed (every tau and noise term scales with it)");
+    notes.push_back("no --rate: " + shortest_text(kDefaultRateHz) + " Hz assumed (every tau and noise term scales with it)");
   if (cap && cap->lost_at_start)
     notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
                     "notes name it); the record starts after them, nothing is joined");
@@ -759,7 +751,7 @@ int run(const Args& a) {
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
     if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << input_name << ": " << gap_note << "\n";
   }
-  o << input_name << ": " << n << " values, " << typed(rate) << " Hz, " << record_s << " s, data "
+  o << input_name << ": " << n << " values, " << shortest_text(rate) << " Hz, " << record_s << " s, data "
     << an::to_string(base.data) << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], bounded, a.confidence);

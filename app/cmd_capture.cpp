@@ -166,6 +166,10 @@ int cmd_import(const ImportArgs& a) {
   uint64_t back = 0;
   std::size_t back_line = 0;
   double back_s = 0;
+  auto back_to = [&](const Counts& c) {  // at a cut: the count before it (the first named only if before it)
+    back = c.back;
+    if (back == 0) back_line = 0, back_s = 0;
+  };
   struct Suspect {
     std::size_t line = 0;  // the first's
     uint32_t counter = 0;  // the first's
@@ -196,8 +200,7 @@ int cmd_import(const ImportArgs& a) {
     other = suspect->before.other;
     unreadable = suspect->before.unreadable;
     malformed = suspect->before.malformed;
-    back = suspect->before.back;
-    if (back == 0) back_line = 0, back_s = 0;
+    back_to(suspect->before);
     problems.resize(suspect->before.problems);
     stream_frames -= suspect->frames.size();
     suspect.reset();
@@ -254,8 +257,7 @@ int cmd_import(const ImportArgs& a) {
       cut = a.log + ":" + std::to_string(ln) + ": " + why;
       cut_line = ln;
       frames = here.frames;  // this line is the rest's
-      back = here.back;
-      if (back == 0) back_line = 0, back_s = 0;
+      back_to(here);
       break;
     }
     if (far_behind(reasm, c)) {

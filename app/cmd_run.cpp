@@ -727,7 +727,19 @@ void refuse_a_final_verdict(const std::string& dir) {
                       "): nothing to resume; its passport stands");
 }
 
-std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet);
+std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
+  auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
+  file->set_level(spdlog::level::debug);
+  auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
+  auto log = std::make_shared<spdlog::logger>("rig", spdlog::sinks_init_list{file, err});
+  log->set_level(spdlog::level::debug);
+  // UTC, marked so, as every other time the run writes (passport, run.json, history): local
+  // time without its zone could not be put beside them (an integrator's review).
+  log->set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %^%-5l%$ %v", spdlog::pattern_time_type::utc);
+  log->flush_on(spdlog::level::debug);
+  return log;
+}
 
 // A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
 // write_run_outputs): its verdict is final, so nothing is measured or computed again; what is
@@ -735,18 +747,20 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 // history row recorded (the same row, under the same id). A sealed run finishes here only when
 // its final seal is written (`final_seal`); before it, its resume computes the ending again.
 // The verdict's exit code; nullopt when there is no such ending. A dry run says what it would do.
-std::optional<int> finish_pending_ending(RunArgs& a, const toml::table& hw, bool sealed, bool final_seal) {
+std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw, bool sealed, bool final_seal) {
   const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
   std::error_code ec;
   if (!fs::exists(pending, ec)) return std::nullopt;
   const std::string v = verdict_of(dir);
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
   const int rc = v == "PASS" ? kExitPass : kExitFail;
-  std::vector<std::string> todo;
-  if (fs::is_regular_file(dir + "/junit.xml.tmp", ec)) todo.emplace_back("junit.xml put in place");
-  if (!fs::exists(dir + "/report.html", ec)) todo.emplace_back("report.html written");
-  if (!a.no_history) todo.emplace_back("the history row recorded");
-  const std::string what = todo.empty() ? std::string("nothing left") : fmt::format("{}", fmt::join(todo, ", "));
+  const bool junit_staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
+  const bool no_report = !fs::exists(dir + "/report.html", ec);
+  std::vector<std::string> left;
+  if (junit_staged) left.emplace_back("junit.xml put in place");
+  if (no_report) left.emplace_back("report.html written");
+  if (!a.no_history) left.emplace_back("the history row recorded");
+  const std::string what = left.empty() ? std::string("nothing left") : fmt::format("{}", fmt::join(left, ", "));
   if (a.dry_run) {
     std::cout << fmt::format("rig run --dry-run: {} is complete (its passport says {}); its ending stopped before it "
                              "finished: a resume does what is left ({}); nothing is measured or computed again.\n",
@@ -757,11 +771,11 @@ std::optional<int> finish_pending_ending(RunArgs& a, const toml::table& hw, bool
   log->info("rig {} run: out {}: the run is complete (its passport says {}); finishing its ending ({})", RIG_VERSION,
             shown_text(dir), v, what);
   bool done = true;
-  if (fs::is_regular_file(dir + "/junit.xml.tmp", ec)) {
+  if (junit_staged) {
     fs::rename(dir + "/junit.xml.tmp", dir + "/junit.xml", ec);  // the ending that wrote the passport staged it
     if (ec) log->error("junit.xml not put in place: {}", ec.message()), done = false;
   }
-  if (!fs::exists(dir + "/report.html", ec)) try {
+  if (no_report) try {
       report::write_report(dir);
     } catch (const std::exception& e) {
       log->error("report.html not written: {}", e.what());
@@ -776,20 +790,6 @@ std::optional<int> finish_pending_ending(RunArgs& a, const toml::table& hw, bool
   log->info("{} (exit {})", line, rc);
   std::cerr << line << "\n";
   return rc;
-}
-
-std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
-  auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
-  file->set_level(spdlog::level::debug);
-  auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
-  err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
-  auto log = std::make_shared<spdlog::logger>("rig", spdlog::sinks_init_list{file, err});
-  log->set_level(spdlog::level::debug);
-  // UTC, marked so, as every other time the run writes (passport, run.json, history): local
-  // time without its zone could not be put beside them (an integrator's review).
-  log->set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %^%-5l%$ %v", spdlog::pattern_time_type::utc);
-  log->flush_on(spdlog::level::debug);
-  return log;
 }
 
 // The table timing the plan's moves are costed with: on hardware, the [table] section's client

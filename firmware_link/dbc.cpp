@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -636,55 +637,45 @@ namespace {
 // CANdb++ writes DBC files in (cantools and canmatrix read them so): a unit "\xB5g" is "µg", a
 // comment's "\xB0C" "°C". Bytes below 0x80 are the same in both, so names, numbers and line
 // numbers do not move; the five bytes 1252 leaves undefined become the C1 controls of Latin-1,
-// shown escaped.
-std::string utf8_from_cp1252(const std::string& t) {
+// shown escaped. nullopt when every byte is UTF-8 already: the text is read as it is, uncopied.
+std::optional<std::string> utf8_from_cp1252(const std::string& t) {
   static constexpr char16_t k80[32] = {0x20AC, 0x81,   0x201A, 0x0192, 0x201E, 0x2026, 0x2020, 0x2021,
                                        0x02C6, 0x2030, 0x0160, 0x2039, 0x0152, 0x8D,   0x017D, 0x8F,
                                        0x90,   0x2018, 0x2019, 0x201C, 0x201D, 0x2022, 0x2013, 0x2014,
                                        0x02DC, 0x2122, 0x0161, 0x203A, 0x0153, 0x9D,   0x017E, 0x0178};
-  std::string out;
-  out.reserve(t.size() + t.size() / 8);
+  std::optional<std::string> out;
   for (std::size_t i = 0; i < t.size();) {
     const auto b = static_cast<unsigned char>(t[i]);
     // A well-formed UTF-8 sequence stays as it is: a CANdb++ file edited later in a UTF-8 editor
     // holds both (its "µg" in UTF-8 beside a 1252 "°"; a code review), and a byte-order mark is kept
     // for the tokenizer to skip.
     if (const std::size_t n = b < 0x80 ? 1 : utf8_sequence_at(t, i); n > 0) {
-      out.append(t, i, n);
+      if (out) out->append(t, i, n);
       i += n;
       continue;
     }
+    if (!out) {  // the first byte that is not UTF-8: the text up to it, then as 1252
+      out.emplace(t, 0, i);
+      out->reserve(t.size() + t.size() / 8);
+    }
     const char32_t u = b < 0xA0 ? k80[b - 0x80] : b;
     if (u < 0x800) {
-      out += static_cast<char>(0xC0 | (u >> 6));
-      out += static_cast<char>(0x80 | (u & 0x3F));
+      *out += static_cast<char>(0xC0 | (u >> 6));
+      *out += static_cast<char>(0x80 | (u & 0x3F));
     } else {
-      out += static_cast<char>(0xE0 | (u >> 12));
-      out += static_cast<char>(0x80 | ((u >> 6) & 0x3F));
-      out += static_cast<char>(0x80 | (u & 0x3F));
+      *out += static_cast<char>(0xE0 | (u >> 12));
+      *out += static_cast<char>(0x80 | ((u >> 6) & 0x3F));
+      *out += static_cast<char>(0x80 | (u & 0x3F));
     }
     ++i;
   }
   return out;
 }
 
-bool well_formed_utf8(const std::string& t) {
-  for (std::size_t i = 0; i < t.size();) {
-    if (static_cast<unsigned char>(t[i]) < 0x80) {
-      ++i;
-      continue;
-    }
-    const std::size_t n = utf8_sequence_at(t, i);
-    if (n == 0) return false;
-    i += n;
-  }
-  return true;
-}
-
 }  // namespace
 
 Dbc Dbc::parse(const std::string& text, const std::string& src) {
-  if (!well_formed_utf8(text)) return DbcParser(utf8_from_cp1252(text), src).run();
+  if (const std::optional<std::string> u = utf8_from_cp1252(text)) return DbcParser(*u, src).run();
   return DbcParser(text, src).run();
 }
 

@@ -1,6 +1,5 @@
 #include "rig/core/toml_util.hpp"
 
-#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -9,6 +8,7 @@
 #include <sstream>
 
 #include "rig/core/escape.hpp"
+#include "rig/core/number_text.hpp"
 
 namespace rig::cfg {
 
@@ -36,22 +36,10 @@ const toml::node& need(const toml::table& t, std::string_view key) {
   return *n;
 }
 
-// A double as its shortest text that reads back to it (toml++ writes 17 digits, the stream 6:
-// 'tolerance_deg' = 1.0000000000000001e-05 for 0.00001, and 'run_s' = 0.00199999999 read
-// '= 0.002 is out of range [0.002, ...]'; reviews); nan and inf as the stream writes them.
-std::string shortest_text(double v) {
-  if (!std::isfinite(v)) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  }
-  char b[64];
-  const auto r = std::to_chars(b, b + sizeof b, v);
-  return std::string(b, r.ptr);
-}
-
 // A value or a bound as text: a whole number as one (`retries = 1000000000` was "1e+09", a
-// review), any other as its shortest text.
+// review), any other as its shortest text (toml++ wrote 'tolerance_deg' = 1.0000000000000001e-05
+// for 0.00001, and the stream's six digits read 'run_s' = 0.00199999999 as '0.002 is out of range
+// [0.002, ...]'; reviews).
 std::string number_text(double v) {
   if (std::isfinite(v) && v == std::trunc(v) && std::fabs(v) < 9.007199254740992e15) return std::to_string(static_cast<int64_t>(v));
   return shortest_text(v);
@@ -70,9 +58,6 @@ void check_range(const toml::node& n, std::string_view key, double v, const std:
     fail(n, os.str());
   }
 }
-
-// A double as every message of these readers shows one (1e+07, 0.5, nan).
-std::string double_text(double v) { return shortest_text(v); }
 
 }  // namespace
 
@@ -147,7 +132,7 @@ double get_number(const toml::table& t, std::string_view key, std::optional<doub
   }
   std::optional<double> v = n->value<double>();  // integers convert too
   if (!v || !(n->is_floating_point() || n->is_integer())) wrong_type(*n, key, "a number");
-  check_range(*n, key, *v, double_text(*v), lo, hi);
+  check_range(*n, key, *v, shortest_text(*v), lo, hi);
   return *v;
 }
 
@@ -198,7 +183,7 @@ std::vector<double> get_numbers(const toml::table& t, std::string_view key, std:
   for (const toml::node& e : *a) {
     std::optional<double> v = e.value<double>();
     if (!v || !(e.is_floating_point() || e.is_integer())) wrong_type(e, key, "an array of numbers");
-    check_range(e, key, *v, double_text(*v), std::nullopt, std::nullopt);
+    check_range(e, key, *v, shortest_text(*v), std::nullopt, std::nullopt);
     out.push_back(*v);
   }
   return out;

@@ -91,10 +91,6 @@ std::string write_report(const std::string& run_dir) {
   return write_page(dir, passport, analysis, analysis_problem);
 }
 
-std::string write_report(const std::string& run_dir, const json& analysis) {
-  return write_page(fs::path(run_dir), read_passport(run_dir), analysis, "");
-}
-
 std::string write_report(const std::string& run_dir, const json& passport, const json& analysis) {
   return write_page(fs::path(run_dir), passport, analysis, "");
 }

@@ -14,12 +14,10 @@ namespace rig::report {
 // Throws rig::ConfigError naming the file when passport.json is missing or malformed;
 // a missing or malformed analysis.json is reported inside the page, not thrown.
 std::string write_report(const std::string& run_dir);
-// The same, with analysis.json's document already in memory (`rig run`, which has just written
-// it): the page is the one the folder gives, without parsing the file again (3.7 MB after a
-// `paper` run: about 40 ms of the run's end).
-std::string write_report(const std::string& run_dir, const nlohmann::json& analysis);
-// And with the passport in memory too: `rig run` draws the page before its passport.json is
-// in place (the passport is the last file of a run's ending, app/cmd_run.cpp write_run_outputs).
+// The same from the documents in memory (`rig run`, which has just made them): the page is the
+// one the folder gives, without parsing analysis.json again (3.7 MB after a `paper` run: about
+// 40 ms of the run's end), drawn before passport.json is in place (app/cmd_run.cpp
+// write_run_outputs puts it there after the page).
 std::string write_report(const std::string& run_dir, const nlohmann::json& passport, const nlohmann::json& analysis);
 
 // The page itself, for callers that hold the documents in memory. `analysis` may be
