@@ -450,6 +450,11 @@ int run(const Args& a) {
   if (!gap_note.empty()) notes.push_back(gap_note);
   if (!a.rate && !cap)  // every tau and noise term scales with it (a review: a 1 s file read at 1 kHz, silently)
     notes.push_back("no --rate: " + shortest_text(kDefaultRateHz) + " Hz assumed (every tau and noise term scales with it)");
+  // A capture's header says its rate; another --rate is the user's to give (a recording whose
+  // header was written wrong), but never silently (a review: every tau and term scaled by 2).
+  if (cap && a.rate && *a.rate != cap->header.rate_hz)
+    notes.push_back("--rate " + shortest_text(*a.rate) + " Hz overrides the capture header's " +
+                    shortest_text(cap->header.rate_hz) + " Hz: every tau and noise term is computed at --rate's");
   if (cap && cap->lost_at_start)
     notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
                     "notes name it); the record starts after them, nothing is joined");

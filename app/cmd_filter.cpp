@@ -219,8 +219,11 @@ void add_filter(CLI::App& app, int& rc) {
   sel->add_option("--tolerance", sa->tol, "Allowed bandwidth deviation, %, in (0, 100]")
       ->capture_default_str()
       ->check(number_in(0, 100, true, "a percentage"));
-  sel->add_option("--orders", sa->orders, "Butterworth orders to try, each 1 to 4, once")
+  // "1,2" as the help shows the default ([1,2,3,4]), or "1 2" (it refused the comma form and
+  // blamed a leading zero, a review).
+  sel->add_option("--orders", sa->orders, "Butterworth orders to try, each 1 to 4, once (1,2 or 1 2)")
       ->capture_default_str()
+      ->delimiter(',')
       ->check(whole_in("a Butterworth order", 1, 4));
   sel->add_option("--fc-min", sa->fc_min, "Lowest cut-off, Hz (0 < min <= max)")->capture_default_str();
   sel->add_option("--fc-max", sa->fc_max, "Highest cut-off, Hz (finite)")->capture_default_str();

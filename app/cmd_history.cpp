@@ -14,7 +14,9 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/folder_lock.hpp"
 #include "app/history_source.hpp"
+#include "app/run_seal.hpp"
 #include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/db.hpp"
@@ -35,6 +37,7 @@ struct HistoryArgs {
   std::string db;
   std::string serial, since, until, outcome, profile, value, record;
   int limit = 0;
+  long long endings = 0;  // --endings ID
   bool csv = false;
   bool no_serial = false;  // only runs that stopped before the DUT said its serial (the option
                            // refuses an empty value, as every text option does)
@@ -93,13 +96,16 @@ void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& 
 void list(const HistoryArgs& a, const history::Filter& f) {
   const auto runs = history::list_runs(a.db, f);
   std::vector<std::vector<std::string>> rows;
-  rows.push_back({"id", "started", "serial", "profile", "plant", "outcome", "station", "software", "run_dir", "captures"});
-  for (const auto& r : runs) {
-    std::string caps;
-    for (const auto& c : r.captures) caps += (caps.empty() ? "" : ";") + c;
+  rows.push_back(
+      {"id", "started", "serial", "profile", "plant", "outcome", "station", "software", "run_dir", "captures", "earlier"});
+  const auto joined = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (const auto& x : v) out += (out.empty() ? "" : ";") + x;
+    return out;
+  };
+  for (const auto& r : runs)
     rows.push_back({std::to_string(r.id), r.started, r.serial, r.profile, r.plant, r.outcome, r.station, r.software,
-                    r.run_dir, a.csv ? caps : std::to_string(r.captures.size())});
-  }
+                    r.run_dir, a.csv ? joined(r.captures) : std::to_string(r.captures.size()), joined(r.earlier)});
   if (a.csv) {
     for (const auto& r : rows) {
       std::string line;
@@ -196,25 +202,75 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
   }
 }
 
+// The endings of one run, in the order recorded: a resume's, a folder put back and resumed.
+void endings(const HistoryArgs& a) {
+  const auto rows = history::endings_of(a.db, a.endings);
+  if (rows.empty()) throw NotTheDatabase("--endings " + std::to_string(a.endings) + ": no such run in " + a.db);
+  if (a.csv) {
+    std::cout << "run_id,seq,recorded,finished,outcome,aborted_reason\r\n";
+    for (const auto& e : rows)
+      std::cout << a.endings << ',' << e.seq << ',' << csv_field(e.recorded) << ',' << csv_field(e.finished) << ','
+                << csv_field(e.outcome) << ',' << csv_field(e.aborted_reason) << "\r\n";
+    return;
+  }
+  std::vector<std::vector<std::string>> t;
+  t.push_back({"seq", "recorded", "finished", "outcome", "aborted_reason"});
+  for (const auto& e : rows) t.push_back({std::to_string(e.seq), e.recorded, e.finished, e.outcome, e.aborted_reason});
+  std::cout << "run " << a.endings << ": " << rows.size() << " ending(s), oldest first\n";
+  print_table(std::cout, t);
+}
+
+// A run whose ending stopped before its history row (.ending-pending, written by rig run): this
+// record is that step. The list goes when it was the only one left and the rest of the ending is
+// in place (junit.xml not staged, report.html there); else it stays for the run's resume, which
+// finishes what is left (a review: --record left the list, and the resume's dry run said the
+// ending was unfinished).
+void finish_ending_list(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const fs::path list = fs::path(dir) / kEndingPending;
+  std::error_code ec;
+  if (!fs::is_regular_file(list, ec)) return;
+  std::ifstream in(list);
+  std::vector<std::string> steps;
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) steps.push_back(line);
+  const bool only_history = steps == std::vector<std::string>{"history"};
+  if (only_history && !fs::exists(fs::path(dir) / "junit.xml.tmp", ec) && fs::is_regular_file(fs::path(dir) / "report.html", ec) &&
+      fs::remove(list, ec))
+    return;
+  std::cerr << "rig history: note: " << dir << "'s ending is not finished yet (" << kEndingPending
+            << "): rig run --resume " << dir << " finishes it\n";
+}
+
 void record(const HistoryArgs& a) {
+  // Not while a run or resume holds the folder: its passport may be about to change.
+  FolderLock lock(a.record, "--record " + a.record);
   nlohmann::json p;
   try {
     p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
   }
-  const long long id = history::record_run(a.db, p, a.record);
+  const history::Recorded rec = history::record_run(a.db, p, a.record);
+  const long long id = rec.id;
+  if (rec.replaced_verdict)
+    std::cerr << "rig history: note: " << history::replaced_verdict_note(rec, p.value("outcome", "")) << "\n";
   for (const auto& [other, dir] : history::same_run_elsewhere(a.db, p, a.record))
     std::cerr << "rig history: note: the same run (serial " << p.value("serial", "") << ", started "
               << p.value("started", "") << ") is also recorded from " << dir << " (run " << other
               << "): a copy of its folder? The listing and the statistics count it twice\n";
   std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
+  finish_ending_list(a.record);
 }
 
 int run_history(const HistoryArgs& a, bool named) {
   if (!a.record.empty()) {
     record(a);
+    return kExitPass;
+  }
+  if (a.endings > 0) {
+    endings(a);
     return kExitPass;
   }
   // Reading never creates a database. A database that --db, $RIG_HISTORY or the rig config
@@ -265,6 +321,18 @@ void add_history(CLI::App& app, int& rc) {
   // A query option beside --record was ignored: `--record DIR --serial OTHER` recorded the folder
   // whatever its serial, exit 0 (a review). Refused as a usage error instead.
   for (CLI::Option* q : query) rec->excludes(q);
+  CLI::Option* ends =
+      sub->add_option("--endings", a->endings, "List every ending recorded for run ID (resumes, a folder put back)")
+          ->check(CLI::Validator(
+              [](std::string& v) -> std::string {
+                return whole_number(v, 1, std::numeric_limits<long long>::max())
+                           ? std::string()
+                           : v + ": must be a run id, a whole number >= 1";
+              },
+              "ID"));
+  ends->excludes(rec);
+  for (CLI::Option* q : query)
+    if (q->get_name() != "--csv") ends->excludes(q);
   sub->callback([&rc, a] {
     const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "app/commands.hpp"
+#include "app/folder_lock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/report.hpp"
 
@@ -12,8 +13,11 @@ void add_report(CLI::App& app, int& rc) {
   auto dir = std::make_shared<std::string>();
   sub->add_option("DIR", *dir, "Run folder holding passport.json (and analysis.json)")->required();
   sub->footer("Exit codes: 0 written; 2 passport.json missing, malformed, or with verdicts its own values and "
-              "limits contradict (the file and field are named).");
+              "limits contradict (the file and field are named), or a rig run using the folder now.");
   sub->callback([&rc, dir] {
+    // A run or resume holding the folder writes its own report at its end; its passport may be
+    // missing or about to change now (a review read "does the run folder exist?" there).
+    FolderLock::check_free(*dir, "rig report " + *dir);
     std::cout << report::write_report(*dir) << "\n";
     rc = kExitPass;
   });

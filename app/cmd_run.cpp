@@ -601,23 +601,22 @@ std::vector<std::string> records_gone(const std::string& out, const acceptance::
   return gone;
 }
 
-// The ending's steps after the passport is in place, until they are done: the final seal and
-// the history row (one per line). A dot file: outside the seal (run_seal.cpp outside_the_seal).
-constexpr const char* kEndingPending = ".ending-pending";
-
 // Records the run in its history database; false (logged) when the database is not reachable.
 bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::json& passport,
                        const std::string& out_dir, spdlog::logger& log) {
   try {
     const std::string url = history_url(a, hw);
-    const long long id = history::record_run(url, passport, out_dir);
+    const history::Recorded rec = history::record_run(url, passport, out_dir);
     // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
     // output had mentioned).
     const std::string shown = history::mask_password(url);
     const std::string line =
-        fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, id, shown);
+        fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, rec.id, shown);
     log.info("{}", line);
     if (!a.quiet) std::cerr << line << "\n";
+    // A verdict recorded before and another outcome now: a folder put back to an earlier state
+    // and resumed: the earlier verdict is no longer the listed one.
+    if (rec.replaced_verdict) log.warn("history: {}", history::replaced_verdict_note(rec, passport.value("outcome", "")));
     return true;
   } catch (const std::exception& e) {
     log.error("history database not updated: {} (the run's resume, or rig history --record {}, records it)", e.what(),

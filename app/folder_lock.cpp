@@ -13,9 +13,11 @@ namespace rig::cli {
 
 namespace {
 int open_dir(const std::string& dir) { return ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); }
+// The advice fits what the folder was for: only a new run can choose another folder (a resume
+// was told to "choose another --out", a review).
 ConfigError in_use(const std::string& what) {
   return ConfigError(what + ": another rig run is using this folder now (it holds the folder's lock); wait for it to "
-                            "end or choose another --out");
+                            "end" + (what.rfind("--out", 0) == 0 ? " or choose another --out" : ""));
 }
 }  // namespace
 

@@ -30,6 +30,10 @@ void drop_previous_seal(const std::string& dir);
 // again: a resume reads none of them, and the rig replaces each, so each must be a file.
 inline constexpr const char* kRunOutputs[] = {"passport.json", "junit.xml", "analysis.json", "report.html"};
 
+// The ending's steps after the passport is in place, until they are done: the final seal and
+// the history row (one per line). A dot file: outside the seal (outside_the_seal).
+inline constexpr const char* kEndingPending = ".ending-pending";
+
 // The outcome passport.json states; nullopt when it is missing, not a regular file (a FIFO is
 // never opened) or not a passport.
 std::optional<std::string> passport_outcome(const std::string& dir);

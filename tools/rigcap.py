@@ -98,8 +98,11 @@ def load(path):
     if raw[:8] != b"RIGCAP1\n":
         raise ValueError(f"{path}: not a rig capture (bad magic)")
     hlen, hcrc = struct.unpack_from("<II", raw, 8)
-    if hlen > 1 << 20 or 16 + hlen > len(raw):
+    if hlen > 1 << 20:
         raise ValueError(f"{path}: capture header length {hlen} is invalid (offset 8)")
+    if 16 + hlen > len(raw):
+        raise ValueError(f"{path}: capture header truncated: its length says {hlen} bytes from offset 16, "
+                         f"the file has {len(raw)} bytes (a file cut short?)")
     hjson = raw[16:16 + hlen]
     if zlib.crc32(hjson) != hcrc:
         raise ValueError(f"{path}: header CRC mismatch")
@@ -263,7 +266,9 @@ def _damaged_files_read_as_rig_reads_them(d, raw, rig):
         passed += 1
     # Shorter than a header, or a header length past the file: refused as rig refuses them.
     for name, data, says in (("short", raw[:11], "shorter than its header"),
-                             ("length", raw[:8] + struct.pack("<II", len(raw), 0) + raw[16:], "is invalid (offset 8)")):
+                             ("length", raw[:8] + struct.pack("<II", len(raw), 0) + raw[16:], "capture header truncated"),
+                             ("huge", raw[:8] + struct.pack("<II", (1 << 20) + 1, 0) + raw[16:], "is invalid (offset 8)"),
+                             ("cut", raw[:100], "capture header truncated: its length says")):
         try:
             load(_write(os.path.join(d, name + ".cap"), data))
             raise AssertionError(f"{name}: accepted")

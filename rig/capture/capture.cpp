@@ -185,8 +185,13 @@ Reader::Reader(const std::string& path) : path_(path) {
   if (std::memcmp(h, kMagic, 8) != 0) throw ConfigError(path + ": not a rig capture (bad magic at offset 0)");
   const uint32_t len = get_u32(h + 8);
   const uint32_t want_crc = get_u32(h + 12);
-  if (len > (1u << 20) || 16 + uint64_t{len} > file_size_)
+  if (len > (1u << 20))
     throw ConfigError(path + ": capture header length " + std::to_string(len) + " is invalid (offset 8)");
+  // A length the file is too short for: the file was cut, not its length field (a review read
+  // "length 328 is invalid" on a capture cut at 100 bytes).
+  if (16 + uint64_t{len} > file_size_)
+    throw ConfigError(path + ": capture header truncated: its length says " + std::to_string(len) + " bytes from offset 16, the file has " +
+                      std::to_string(file_size_) + " bytes (a file cut short?)");
   std::string js(len, '\0');
   if (std::fread(js.data(), 1, len, f_) != len) throw ConfigError(path + ": capture header truncated");
   if (crc(js.data(), len) != want_crc) throw ConfigError(path + ": capture header CRC mismatch (offset 16)");

@@ -435,10 +435,14 @@ class LibmodbusTransport final : public RegisterTransport {
         continue;
       }
       if (!tcp()) modbus_flush(ctx_);  // RTU: what arrived since the last request is no reply to this one
-      if (op() >= 0) return;
+      if (op() >= 0) {
+        answered_ = true;
+        return;
+      }
       const int e = errno;
       uint8_t code = 0;
       if (is_exception_errno(e, &code)) {
+        answered_ = true;
         last = "exception " + hex16(code) + " " + exception_text(code);
         last_exc = code;
         last_timeout = false;
@@ -462,6 +466,11 @@ class LibmodbusTransport final : public RegisterTransport {
         connected_ = false;
       }
     }
+    // Silence from the first request on is most often a wrong unit id or line setting, not a
+    // dead drive (a review: a wrong --unit said only "timeout").
+    if (last_timeout && !answered_)
+      last += tcp() ? "; nothing has answered on this link yet: check the drive's unit id"
+                    : "; nothing has answered on this line yet: check the drive's unit id, baud rate, parity and wiring";
     throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout);
   }
 
@@ -478,6 +487,7 @@ class LibmodbusTransport final : public RegisterTransport {
   modbus_t* ctx_ = nullptr;
   bool connected_ = false;
   std::atomic<double> quiet_after_s_{0.0};  // RTU: clock time before which a late reply may still come
+  std::atomic<bool> answered_{false};       // a request of this link has been answered (an exception too)
   uint16_t tid_ = 0;
   std::string violation_;
 };

@@ -65,6 +65,16 @@ const std::vector<Migration>& migrations() {
         "seq INTEGER NOT NULL, path TEXT NOT NULL, PRIMARY KEY (run_id, seq))",
         "CREATE INDEX run_values_name ON run_values (name)"},
        backfill_v2},
+      // v3: every ending of a run kept (a resume replaced the run's row, so a FAIL recorded
+      // before a folder was put back to an earlier state and resumed was gone, a review); the
+      // row in `runs` is the latest ending, run_endings each one in the order recorded.
+      {3,
+       {"CREATE TABLE run_endings (run_id BIGINT NOT NULL REFERENCES runs (id) ON DELETE CASCADE, "
+        "seq INTEGER NOT NULL, outcome TEXT NOT NULL, finished TEXT, recorded TEXT, aborted_reason TEXT, "
+        "passport TEXT NOT NULL, PRIMARY KEY (run_id, seq))",
+        "INSERT INTO run_endings (run_id, seq, outcome, finished, recorded, aborted_reason, passport) "
+        "SELECT id, 0, outcome, finished, recorded, aborted_reason, passport FROM runs"},
+       nullptr},
   };
   return m;
 }
@@ -190,7 +200,7 @@ int migrate(const std::string& db_url) {
   return migrate_db(*db);
 }
 
-long long record_run(const std::string& db_url, const json& passport, const std::string& run_dir) {
+Recorded record_run(const std::string& db_url, const json& passport, const std::string& run_dir) {
   if (!passport.is_object()) throw ConfigError("history: the passport is not a JSON object");
   for (const char* key : {"serial", "outcome"})
     if (!passport.contains(key) || !passport[key].is_string())
@@ -199,37 +209,60 @@ long long record_run(const std::string& db_url, const json& passport, const std:
 
   auto db = open_migrated(db_url);
   Transaction tx(*db);
-  const Value started = opt_time(passport, "started");
+  const Value started = opt_time(passport, "started"), finished = opt_time(passport, "finished");
+  const Value reason = opt_text(passport, "aborted_reason");
+  const std::string outcome = passport["outcome"].get<std::string>(), now = utc_now_iso8601(), text = passport.dump();
   const Value software = passport.contains("software") && passport["software"].is_string()
                              ? Value(passport["software"].get<std::string>())
                              : Value(std::string("rig ") + RIG_VERSION);
   std::vector<Value> row = {passport["serial"].get<std::string>(), opt_text(passport, "profile"),
-                            opt_text(passport, "plant"), software, started, opt_time(passport, "finished"),
-                            passport["outcome"].get<std::string>(), dir, passport.dump(),
-                            station_name(passport), opt_text(passport, "aborted_reason"), utc_now_iso8601()};
+                            opt_text(passport, "plant"), software, started, finished,
+                            outcome, dir, text, station_name(passport), reason, now};
   // A run recorded again (a resume, `--record` after a database outage) keeps its id, so that a
   // reference to it (a quality record, a ticket) stays valid; it used to get a new one each time.
-  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? ORDER BY id",
+  const auto was = db->query("SELECT id, outcome, finished FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? "
+                             "ORDER BY id",
                              {dir, started});
-  int64_t id = 0;
+  Recorded rec;
   if (was.empty()) {
-    id = as_int(db->query("INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, "
-                          "passport, station, aborted_reason, recorded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
-                          "RETURNING id",
-                          row)
-                    .at(0)
-                    .at(0))
-             .value_or(0);
+    rec.id = as_int(db->query("INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, "
+                              "passport, station, aborted_reason, recorded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
+                              "RETURNING id",
+                              row)
+                        .at(0)
+                        .at(0))
+                 .value_or(0);
   } else {
-    id = as_int(was[0][0]).value_or(0);
+    rec.id = as_int(was[0][0]).value_or(0);
+    const std::string before = as_text(was[0][1]);
+    if ((before == "PASS" || before == "FAIL") && before != outcome) {
+      rec.replaced_verdict = before;
+      rec.replaced_finished = as_text(was[0][2]);
+    }
     for (std::size_t i = 1; i < was.size(); ++i) db->exec("DELETE FROM runs WHERE id = ?", {was[i][0]});
-    db->exec("DELETE FROM run_values WHERE run_id = ?", {id});
-    db->exec("DELETE FROM run_captures WHERE run_id = ?", {id});
-    row.push_back(id);
+    db->exec("DELETE FROM run_values WHERE run_id = ?", {rec.id});
+    db->exec("DELETE FROM run_captures WHERE run_id = ?", {rec.id});
+    row.push_back(rec.id);
     db->exec("UPDATE runs SET serial = ?, profile = ?, plant = ?, software = ?, started = ?, finished = ?, outcome = ?, "
              "run_dir = ?, passport = ?, station = ?, aborted_reason = ?, recorded = ? WHERE id = ?",
              row);
   }
+  // The ending, unless it is the last one recorded again (an ending finished by its resume, a
+  // second --record): the same outcome, finish time and reason.
+  const auto last = db->query("SELECT seq, outcome, finished, aborted_reason FROM run_endings WHERE run_id = ? "
+                              "ORDER BY seq DESC LIMIT 1",
+                              {rec.id});
+  const auto same = [](const Value& a, const Value& b) {
+    return std::holds_alternative<std::monostate>(a) ? std::holds_alternative<std::monostate>(b)
+                                                     : !std::holds_alternative<std::monostate>(b) && as_text(a) == as_text(b);
+  };
+  const bool again = !last.empty() && as_text(last[0][1]) == outcome && same(last[0][2], finished) && same(last[0][3], reason);
+  if (!again)
+    db->exec("INSERT INTO run_endings (run_id, seq, outcome, finished, recorded, aborted_reason, passport) "
+             "VALUES (?, ?, ?, ?, ?, ?, ?)",
+             {rec.id, last.empty() ? int64_t{0} : as_int(last[0][0]).value_or(0) + 1, outcome, finished, now, reason, text});
+  rec.endings = static_cast<int>(
+      as_int(db->query("SELECT COUNT(*) FROM run_endings WHERE run_id = ?", {rec.id}).at(0).at(0)).value_or(0));
 
   if (passport.contains("values") && passport["values"].is_object()) {
     for (const auto& [name, v] : passport["values"].items()) {
@@ -241,17 +274,17 @@ long long record_run(const std::string& db_url, const json& passport, const std:
       db->exec(
           "INSERT INTO run_values (run_id, name, value, unit, lo, hi, limit_min, limit_max, outcome, reason) "
           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-          {id, name, opt_number(v, "value"), opt_text(v, "unit"), opt_number(v, "lo"), opt_number(v, "hi"), lmin, lmax,
+          {rec.id, name, opt_number(v, "value"), opt_text(v, "unit"), opt_number(v, "lo"), opt_number(v, "hi"), lmin, lmax,
            opt_text(v, "outcome"), opt_text(v, "reason")});
     }
   }
   if (passport.contains("captures") && passport["captures"].is_array()) {
     int64_t seq = 0;
     for (const json& c : passport["captures"])
-      if (c.is_string()) db->exec("INSERT INTO run_captures (run_id, seq, path) VALUES (?, ?, ?)", {id, seq++, c.get<std::string>()});
+      if (c.is_string()) db->exec("INSERT INTO run_captures (run_id, seq, path) VALUES (?, ?, ?)", {rec.id, seq++, c.get<std::string>()});
   }
   tx.commit();
-  return id;
+  return rec;
 }
 
 std::vector<std::pair<long long, std::string>> same_run_elsewhere(const std::string& db_url, const json& passport,
@@ -299,6 +332,33 @@ std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
     auto it = index.find(as_int(r[0]).value_or(-1));
     if (it != index.end()) out[it->second].captures.push_back(as_text(r[1]));
   }
+  std::vector<Value> eparams;
+  const std::string ew = where_clause(f, eparams);
+  for (const Row& r : db->query("SELECT e.run_id, e.outcome FROM run_endings e JOIN runs r ON r.id = e.run_id" + ew +
+                                    " ORDER BY e.run_id, e.seq",
+                                eparams)) {
+    auto it = index.find(as_int(r[0]).value_or(-1));
+    if (it != index.end()) out[it->second].earlier.push_back(as_text(r[1]));
+  }
+  for (RunRow& x : out)
+    if (!x.earlier.empty()) x.earlier.pop_back();  // the last ending is the row itself
+  return out;
+}
+
+std::string replaced_verdict_note(const Recorded& rec, const std::string& outcome) {
+  return "run " + std::to_string(rec.id) + " was recorded as " + rec.replaced_verdict.value_or("") +
+         (rec.replaced_finished.empty() ? std::string() : " (finished " + rec.replaced_finished + ")") +
+         "; this ending (" + outcome + ") is now its listed outcome, and the earlier one is kept: rig history --endings " +
+         std::to_string(rec.id);
+}
+
+std::vector<EndingRow> endings_of(const std::string& db_url, long long run_id) {
+  auto db = open_for_reading(db_url);
+  std::vector<EndingRow> out;
+  for (const Row& r : db->query("SELECT seq, outcome, finished, recorded, aborted_reason FROM run_endings "
+                                "WHERE run_id = ? ORDER BY seq",
+                                {int64_t{run_id}}))
+    out.push_back({as_int(r[0]).value_or(0), as_text(r[1]), as_text(r[2]), as_text(r[3]), as_text(r[4])});
   return out;
 }
 

@@ -25,12 +25,35 @@ std::string builtin_db_url();
 // another database than the station's.
 std::optional<std::string> rig_config_path();
 
+// What recording a run did.
+struct Recorded {
+  long long id = 0;  // the run's id in the database
+  int endings = 0;   // endings kept for the run, this one included
+  // Set when the run was recorded before with a verdict (PASS or FAIL) and this ending's outcome
+  // is another one (a folder put back to an earlier state and resumed): the listing now shows
+  // this ending; the earlier one is kept among the run's endings.
+  std::optional<std::string> replaced_verdict;
+  std::string replaced_finished;
+};
+
 // Records one run (also aborted ones). `db_url`: "sqlite:PATH", a plain path, or
 // "postgresql://..." / "postgres://...". Recording the same run (same run folder and
-// start time) again replaces the earlier record. Returns the run's id in the database.
+// start time) again replaces its row in `runs` (the same id) and adds the ending to the run's
+// endings, unless it is the last ending recorded again (same outcome, finish time and reason).
 // Throws rig::ConfigError for a bad URL or an unreachable/unwritable database and
 // for a passport without the fields the schema needs.
-long long record_run(const std::string& db_url, const nlohmann::json& passport, const std::string& run_dir);
+Recorded record_run(const std::string& db_url, const nlohmann::json& passport, const std::string& run_dir);
+
+// "run N was recorded as FAIL (finished T); this ending (ABORTED) is now its listed outcome ..."
+std::string replaced_verdict_note(const Recorded& rec, const std::string& outcome);
+
+// One ending of a run, in the order recorded (seq from 0).
+struct EndingRow {
+  long long seq = 0;
+  std::string outcome, finished, recorded, aborted_reason;
+};
+// The endings of run `run_id` (empty: no such run).
+std::vector<EndingRow> endings_of(const std::string& db_url, long long run_id);
 
 // Query filters shared by the listing and the trend.
 struct Filter {
@@ -46,6 +69,7 @@ struct RunRow {
   long long id = 0;
   std::string serial, profile, plant, software, station, started, finished, outcome, run_dir, aborted_reason;
   std::vector<std::string> captures;
+  std::vector<std::string> earlier;  // the outcomes of the run's earlier endings, oldest first
 };
 
 struct ValueRow {

@@ -274,6 +274,18 @@ TEST(Capture, ARejectedFileIsClosed) {
   const auto before = open_fds();
   for (int i = 0; i < 50; ++i) EXPECT_THROW(capture::Reader r(p), ConfigError);
   EXPECT_EQ(open_fds(), before);
+  // A header the file was cut inside is said truncated, not its length field invalid (a review).
+  std::ofstream(p, std::ios::binary | std::ios::trunc) << "RIGCAP1\n" << std::string("\x48\x01\0\0", 4)
+                                                       << std::string(4 + 84, 'x');
+  try {
+    capture::Reader r(p);
+    ADD_FAILURE() << "read";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(": capture header truncated: its length says 328 bytes from offset 16, the "
+                                         "file has 100 bytes (a file cut short?)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Capture, ExistingFileIsKeptAsInterrupted) {

@@ -285,6 +285,16 @@ TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
   EXPECT_EQ(j["capture"]["complete"], true);
   EXPECT_EQ(j["capture"]["samples"], 60000);
   EXPECT_FALSE(j["oadev"].empty());
+  EXPECT_EQ(j["notes"].dump().find("overrides the capture header"), std::string::npos) << j["notes"].dump();
+  // A --rate other than the header's is taken, and said (every tau scales with it).
+  ASSERT_EQ(run({"analyze", cap, "--rate", "500", "--no-psd", "--json", d + "/r.json"}, d + "/r"), 0)
+      << slurp(d + "/r.stderr");
+  const auto r = nlohmann::json::parse(slurp(d + "/r.json"));
+  EXPECT_EQ(r["rate_hz"], 500.0);
+  EXPECT_NE(r["notes"].dump().find("--rate 500 Hz overrides the capture header's 1000 Hz"), std::string::npos)
+      << r["notes"].dump();
+  ASSERT_EQ(run({"analyze", cap, "--rate", "1000", "--no-psd", "--json", d + "/r2.json"}, d + "/r2"), 0);
+  EXPECT_EQ(slurp(d + "/r2.json").find("overrides"), std::string::npos) << "the header's own rate: nothing to say";
   // Truncated (writer killed mid-block): analysed up to the last complete block, and said so.
   fs::copy_file(cap, d + "/cut.cap");
   fs::resize_file(d + "/cut.cap", fs::file_size(cap) - 16 - 8000);
@@ -1280,6 +1290,23 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   EXPECT_TRUE(fs::exists(d + "/r/report.html"));
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
   EXPECT_NE(rows().find(",PASS,"), std::string::npos);
+  // (b') Only the history row left (a database that was down): `rig history --record` is that
+  // step, so the list goes with it; with more left (junit.xml staged) it stays for the resume.
+  std::ofstream(d + "/r/.ending-pending") << "history\n";
+  ASSERT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/io4b"), 0) << slurp(d + "/io4b.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+  EXPECT_EQ(slurp(d + "/io4b.stderr"), "");
+  fs::copy_file(d + "/r/junit.xml", d + "/r/junit.xml.tmp");
+  std::ofstream(d + "/r/.ending-pending") << "history\n";
+  ASSERT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/io4c"), 0) << slurp(d + "/io4c.stderr");
+  EXPECT_NE(slurp(d + "/io4c.stderr").find("/r's ending is not finished yet (.ending-pending): rig run --resume "),
+            std::string::npos)
+      << slurp(d + "/io4c.stderr");
+  EXPECT_TRUE(fs::exists(d + "/r/.ending-pending"));
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io4d"), 0) << slurp(d + "/io4d.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+  EXPECT_FALSE(fs::exists(d + "/r/junit.xml.tmp"));
+  one_row("(b')");
   // (c) Nothing pending: a complete run's resume is refused as before.
   EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io5"), 2);
   EXPECT_NE(slurp(d + "/io5.stderr").find("nothing to resume; its passport stands"), std::string::npos);
@@ -1480,24 +1507,33 @@ TEST(RigCli, ARunFolderInUseByAnotherRunIsRefused) {
   const int held_new = ::open((d + "/new").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   ASSERT_EQ(::flock(held_new, LOCK_EX | LOCK_NB), 0);
   const std::string msg = ": another rig run is using this folder now (it holds the folder's lock); wait for it to "
-                          "end or choose another --out";
+                          "end";
+  const std::string new_folder = " or choose another --out";  // a new run's advice, not a resume's
   for (const bool dry : {true, false}) {
     std::vector<std::string> fresh = {"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/new"};
     std::vector<std::string> resume = {"run", "--resume", d + "/busy", "--yes", "--quiet"};
     if (dry) fresh.push_back("--dry-run"), resume.push_back("--dry-run");
     EXPECT_EQ(run(fresh, d + "/io-new"), 2) << slurp(d + "/io-new.stderr");
-    EXPECT_NE(slurp(d + "/io-new.stderr").find("--out " + d + "/new" + msg), std::string::npos)
+    EXPECT_NE(slurp(d + "/io-new.stderr").find("--out " + d + "/new" + msg + new_folder), std::string::npos)
         << slurp(d + "/io-new.stderr");
     EXPECT_EQ(run(resume, d + "/io-res"), 2) << slurp(d + "/io-res.stderr");
-    EXPECT_NE(slurp(d + "/io-res.stderr").find("--resume " + d + "/busy" + msg), std::string::npos)
+    EXPECT_NE(slurp(d + "/io-res.stderr").find("--resume " + d + "/busy" + msg + "\n"), std::string::npos)
         << slurp(d + "/io-res.stderr");
     // A new run into the live run's folder hears of the lock, not "use --resume" (a review).
     std::vector<std::string> onto = {"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/busy"};
     if (dry) onto.push_back("--dry-run");
     EXPECT_EQ(run(onto, d + "/io-onto"), 2) << slurp(d + "/io-onto.stderr");
-    EXPECT_NE(slurp(d + "/io-onto.stderr").find("--out " + d + "/busy" + msg), std::string::npos)
+    EXPECT_NE(slurp(d + "/io-onto.stderr").find("--out " + d + "/busy" + msg + new_folder), std::string::npos)
         << slurp(d + "/io-onto.stderr");
   }
+  // Nor is a folder in use recorded into the history (its passport may be about to change).
+  EXPECT_EQ(run({"history", "--db", d + "/h.sqlite", "--record", d + "/busy"}, d + "/io-rec"), 2);
+  EXPECT_NE(slurp(d + "/io-rec.stderr").find("--record " + d + "/busy" + msg + "\n"), std::string::npos)
+      << slurp(d + "/io-rec.stderr");
+  // Nor is its report drawn: the run writes it at its end (it read "does the run folder exist?").
+  EXPECT_EQ(run({"report", d + "/busy"}, d + "/io-rep"), 2);
+  EXPECT_NE(slurp(d + "/io-rep.stderr").find("rig report " + d + "/busy" + msg + "\n"), std::string::npos)
+      << slurp(d + "/io-rep.stderr");
   EXPECT_TRUE(fs::is_empty(d + "/new")) << "nothing written into a folder in use";
   EXPECT_EQ(std::vector<fs::path>(fs::directory_iterator(d + "/busy"), fs::directory_iterator()).size(), 1u);
   // Released (as at the holder's exit): the new run goes ahead and leaves no lock file.
@@ -2881,6 +2917,12 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
       << slurp(d + "/show.stderr");
   ASSERT_EQ(select_to(d + "/c.json"), 0) << slurp(d + "/sel.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c.json"))["candidates"].size(), 3u);  // paper, none, butter2@500
+  // The orders as the help shows their default, "1,2" (it was refused, blaming a leading zero).
+  std::vector<std::string> comma = quick;
+  comma[5] = "1,2";
+  comma.insert(comma.end(), {"--json", d + "/c2.json"});
+  ASSERT_EQ(run(comma, d + "/sel2"), 0) << slurp(d + "/sel2.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c2.json"))["candidates"].size(), 4u);  // and butter1@500
 }
 
 // Every number of `rig filter select` has a range, checked on the text before any work: a
@@ -2901,6 +2943,8 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--f-req", "inf"}, "--f-req: 'inf': must be a bandwidth in Hz in (0, 1e+06]"},
       {{"--orders", "5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
       {{"--orders", "2", "2"}, "--orders: 2 is given twice"},
+      {{"--orders", "1,2,2"}, "--orders: 2 is given twice"},
+      {{"--orders", "1,5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
       {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
       {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number (no sign, no leading zero)"},
       {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};

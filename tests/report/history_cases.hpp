@@ -31,14 +31,14 @@ inline void history_round_trip(const std::string& url, const std::string& run_ro
       p["aborted_reason"] = "e-stop line";
       p["captures"] = json::array({"captures/run01-U10.cap"});
     }
-    ids.push_back(h::record_run(url, p, run_root + "/run" + std::to_string(++i)));
+    ids.push_back(h::record_run(url, p, run_root + "/run" + std::to_string(++i)).id);
   }
   // Recording the same run again replaces it (same folder + start), keeps one row and its id (a
   // reference to the run stays valid; it used to get a new id each time, a review).
   json again = fixture_passport("SN-1", "PASS", "2026-11-05T07:00:00Z");
   again["values"]["in_run_b_allan"]["value"] = 3.0e-6;
   again["captures"] = json::array({"captures/run01-U10.cap"});
-  const long long replaced = h::record_run(url, again, run_root + "/run5");
+  const long long replaced = h::record_run(url, again, run_root + "/run5").id;
   EXPECT_EQ(replaced, ids.back());
 
   const auto all = h::list_runs(url, {});
@@ -101,6 +101,50 @@ inline void history_round_trip(const std::string& url, const std::string& run_ro
   // A passport without the fields the schema needs is refused.
   EXPECT_THROW(h::record_run(url, json{{"outcome", "PASS"}}, run_root), ConfigError);
   EXPECT_THROW(h::record_run(url, json::array(), run_root), ConfigError);
+}
+
+// Every ending of a run is kept (a review: a folder put back to its state before a FAIL and
+// resumed replaced the FAIL's row, and the FAIL was gone from the history).
+inline void history_keeps_every_ending(const std::string& url, const std::string& run_root) {
+  namespace h = rig::history;
+  const std::string dir = run_root + "/rolled-back";
+  auto ending = [&](const char* outcome, const char* finished) {
+    json p = fixture_passport("SN-9", outcome, "2026-11-07T08:00:00Z");
+    p["finished"] = finished;
+    if (std::string(outcome) == "ABORTED") p["aborted_reason"] = "SIGINT";
+    return h::record_run(url, p, dir);
+  };
+  const h::Recorded fail = ending("FAIL", "2026-11-07T10:00:00Z");
+  EXPECT_EQ(fail.endings, 1);
+  EXPECT_FALSE(fail.replaced_verdict);
+  EXPECT_EQ(ending("FAIL", "2026-11-07T10:00:00Z").endings, 1);  // the same ending recorded again
+  const h::Recorded aborted = ending("ABORTED", "2026-11-07T10:05:00Z");
+  EXPECT_EQ(aborted.id, fail.id);  // one run, one id
+  EXPECT_EQ(aborted.endings, 2);
+  ASSERT_TRUE(aborted.replaced_verdict);
+  EXPECT_EQ(*aborted.replaced_verdict, "FAIL");
+  EXPECT_EQ(aborted.replaced_finished, "2026-11-07T10:00:00Z");
+  EXPECT_NE(h::replaced_verdict_note(aborted, "ABORTED").find("rig history --endings " + std::to_string(fail.id)),
+            std::string::npos);
+  const h::Recorded pass = ending("PASS", "2026-11-07T10:30:00Z");
+  EXPECT_FALSE(pass.replaced_verdict);  // an ABORTED ending replaced: a resume's ordinary case
+  EXPECT_EQ(pass.endings, 3);
+
+  h::Filter f;
+  f.serial = "SN-9";
+  const auto runs = h::list_runs(url, f);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].outcome, "PASS");
+  EXPECT_EQ(runs[0].earlier, (std::vector<std::string>{"FAIL", "ABORTED"}));
+  const auto e = h::endings_of(url, fail.id);
+  ASSERT_EQ(e.size(), 3u);
+  EXPECT_EQ(e[0].outcome, "FAIL");
+  EXPECT_EQ(e[0].finished, "2026-11-07T10:00:00Z");
+  EXPECT_EQ(e[1].outcome, "ABORTED");
+  EXPECT_EQ(e[1].aborted_reason, "SIGINT");
+  EXPECT_EQ(e[2].seq, 2);
+  EXPECT_FALSE(e[2].recorded.empty());
+  EXPECT_TRUE(h::endings_of(url, 999999).empty());
 }
 
 }  // namespace rig::test

@@ -39,6 +39,11 @@ TEST_F(HistoryPg, RoundTripFiltersAndTrend) {
   rig::test::history_round_trip(fresh_db("roundtrip"), d.path.string());
 }
 
+TEST_F(HistoryPg, EveryEndingOfARunIsKept) {
+  TempDir d;
+  rig::test::history_keeps_every_ending(fresh_db("endings"), d.path.string());
+}
+
 // Version 1 as released, in PostgreSQL's dialect (frozen copy of its DDL).
 constexpr const char* kSchemaV1 =
     "CREATE TABLE schema_version (version INTEGER NOT NULL PRIMARY KEY, applied TEXT NOT NULL);"
@@ -63,6 +68,9 @@ TEST_F(HistoryPg, MigratesAVersion1Database) {
   ASSERT_EQ(runs.size(), 1u);
   EXPECT_EQ(runs[0].aborted_reason, "e-stop");
   EXPECT_EQ(runs[0].captures.size(), 3u);
+  const auto ends = h::endings_of(url, runs[0].id);  // v3's data step: the run's one ending
+  ASSERT_EQ(ends.size(), 1u);
+  EXPECT_EQ(ends[0].aborted_reason, "e-stop");
   EXPECT_EQ(h::migrate(url), h::current_schema_version());
 }
 

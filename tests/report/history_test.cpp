@@ -54,6 +54,11 @@ TEST(HistorySqlite, RoundTripFiltersAndTrend) {
   EXPECT_TRUE(std::filesystem::exists(d.path / "db" / "history.sqlite"));  // folder created
 }
 
+TEST(HistorySqlite, EveryEndingOfARunIsKept) {
+  TempDir d;
+  rig::test::history_keeps_every_ending("sqlite:" + (d.path / "h.sqlite").string(), d.path.string());
+}
+
 TEST(HistorySqlite, PlainPathIsAnSqliteFile) {
   TempDir d;
   const std::string path = (d.path / "h.db").string();
@@ -346,9 +351,34 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
 
   const auto csv = lines(run_cli({"--db", db, "--csv"}));
   ASSERT_EQ(csv.size(), 3u);
-  EXPECT_EQ(csv[0], "id,started,serial,profile,plant,outcome,station,software,run_dir,captures\r");
+  EXPECT_EQ(csv[0], "id,started,serial,profile,plant,outcome,station,software,run_dir,captures,earlier\r");
   EXPECT_NE(csv[1].find(",\"SN,1\",paper,"), std::string::npos) << csv[1];  // RFC 4180 quoting
-  EXPECT_NE(csv[1].find("captures/run01-U10.cap;captures/run02-U20.cap"), std::string::npos);
+  EXPECT_NE(csv[1].find("captures/run01-U10.cap;captures/run02-U20.cap;captures/in-run-U10.cap,\r"), std::string::npos)
+      << csv[1];  // no earlier ending
+
+  // r2 put back and resumed to an ABORTED ending: the FAIL stays among its endings, said so.
+  json back = p2;
+  back["outcome"] = "ABORTED";
+  back["aborted_reason"] = "SIGINT";
+  back["finished"] = "2026-11-02T09:00:00Z";
+  const h::Recorded again = h::record_run(db, back, (d.path / "r2").string());
+  ASSERT_TRUE(again.replaced_verdict);
+  const auto csv2 = lines(run_cli({"--db", db, "--csv", "--serial", "SN-2"}));
+  ASSERT_EQ(csv2.size(), 2u);
+  EXPECT_NE(csv2[1].find(",ABORTED,"), std::string::npos) << csv2[1];
+  EXPECT_EQ(csv2[1].substr(csv2[1].size() - 6), ",FAIL\r") << csv2[1];
+  const auto ends = lines(run_cli({"--db", db, "--endings", std::to_string(again.id)}));
+  ASSERT_EQ(ends.size(), 4u);
+  EXPECT_EQ(ends[0], "run " + std::to_string(again.id) + ": 2 ending(s), oldest first");
+  EXPECT_NE(ends[2].find("FAIL"), std::string::npos);
+  EXPECT_NE(ends[3].find("ABORTED  SIGINT"), std::string::npos) << ends[3];
+  const auto ends_csv = lines(run_cli({"--db", db, "--endings", std::to_string(again.id), "--csv"}));
+  ASSERT_EQ(ends_csv.size(), 3u);
+  EXPECT_EQ(ends_csv[0], "run_id,seq,recorded,finished,outcome,aborted_reason\r");
+  EXPECT_THROW(run_cli({"--db", db, "--endings", "99"}), rig::ConfigError);
+  EXPECT_THROW(run_cli({"--db", db, "--endings", "0"}), CLI::ValidationError);
+  EXPECT_THROW(run_cli({"--db", db, "--endings", "1", "--serial", "SN-2"}), CLI::ExcludesError);
+  h::record_run(db, p2, (d.path / "r2").string());  // its FAIL again, for the trend below
 
   const auto trend = lines(run_cli({"--db", db, "--value", "bias", "--csv"}));
   ASSERT_EQ(trend.size(), 3u);

@@ -192,6 +192,29 @@ TEST(TableWire, BusyRepliesAreRetriedWithBackoff) {
   EXPECT_EQ(m::join_i32(t->read(m::reg::kTargetPos, 2, {})[0], t->read(m::reg::kTargetPos, 2, {})[1]), 1000);
 }
 
+// A link on which nothing ever answered (a wrong unit id, baud rate or wiring) says what to
+// check; "timeout" alone sent a technician looking for a dead drive (a review).
+TEST(TableWire, ALinkThatNeverAnsweredSaysWhatToCheck) {
+  auto emu = emulator(kFastTable);
+  plant::TableServer server(*emu, "tcp:127.0.0.1:0");
+  server.start();
+  emu->inject(SimFault::kNoAnswer);
+  RealClock clock;
+  m::LinkOptions lo;
+  lo.response_timeout_s = 0.05;
+  lo.retries = 0;
+  auto t = m::make_libmodbus_transport(m::parse_endpoint(server.endpoint()), lo, clock);
+  try {
+    t->read(0, 2, {});
+    ADD_FAILURE() << "no error";
+  } catch (const m::ModbusError& e) {
+    EXPECT_NE(std::string(e.what()).find("no answer within 0.05 s (timeout); nothing has answered on this link yet: "
+                                         "check the drive's unit id"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(TableWire, AnswerTimeoutFailsBoundedWithAClearError) {
   auto emu = emulator(kFastTable);
   plant::TableServer server(*emu, "tcp:127.0.0.1:0");
@@ -208,6 +231,7 @@ TEST(TableWire, AnswerTimeoutFailsBoundedWithAClearError) {
   // emulator settles at is 0 ± a few 1e-4°, depending on how its steps fell).
   EXPECT_NEAR(last_seen_deg(err), 0.0, 0.01) << err;
   EXPECT_NE(err.find("no answer within 1 s (timeout)"), std::string::npos) << err;
+  EXPECT_EQ(err.find("nothing has answered"), std::string::npos) << "it answered before: " << err;
   // 2 attempts x 1 s + backoff, then a stop attempt of 2 x 1 s (about 4 s): at least the two
   // timed-out attempts were waited for, and the failure is bounded (generously: a loaded machine).
   EXPECT_GE(elapsed, 2 * kTimeoutS);
