@@ -116,6 +116,12 @@ struct Pts {
       : tau(std::move(tau_s)), s(std::move(sigma2)), m(std::move(factor_m)), factors(factors_at(m, n_phase)),
         nu(tau.size()) {}
 
+  // Points 0..count, each with its factors.
+  Pts head(std::size_t count) const {
+    const auto at = static_cast<std::ptrdiff_t>(count);
+    return Pts({tau.begin(), tau.begin() + at}, {s.begin(), s.begin() + at}, {m.begin(), m.begin() + at},
+               {factors.begin(), factors.begin() + at});
+  }
   // Points from..end, each with its factors.
   Pts tail(std::size_t from) const {
     const auto at = static_cast<std::ptrdiff_t>(from);
@@ -638,7 +644,27 @@ NoiseModelFit fit_in_units(std::span<const DevPoint> oadev, double record_s, dou
   // The widest model past the dropped points, kept for the terms below while the selection it was
   // fitted for stands (it is the same fit: the same points, model error and start).
   std::optional<std::pair<SubsetFit, Eigen::MatrixXd>> widest_kept;
-  if (from > 0 && sel.ok) {
+  // Nor is it at the short end when leaving out fewer of the longest points (at most
+  // kLongSagPoints, each of a few degrees of freedom) makes every short point fit: the misfit is
+  // then a chance realisation at long tau, a random walk that came out flat over the last octaves,
+  // whose deviations at small EDF fall further below the model than the log-normal approximation
+  // of the chi-square test allows (at EDF 2, 0.04x the model has a probability of 4 %, the
+  // approximation 0.07 %). A metrologist's review found a white FM + random walk FM record with the
+  // last two octaves at 0.09x and 0.04x their truth, thirteen short points dropped, and a Q
+  // (truth 0) at 4360x the variance the 1 ms point measured, N null. Every point is then kept,
+  // without a model error (below).
+  bool long_sag = false;
+  if (from > 1 && sel.ok) {
+    const std::size_t most = std::min({kLongSagPoints, from - 1, n_all - kMinGofPoints});
+    for (std::size_t cut = 1; cut <= most && !long_sag; ++cut) {
+      const Selection head = select_model(all.head(n_all - cut), n_phase, false, team);
+      long_sag = head.ok && head.p_value >= kGofAlpha;
+    }
+  }
+  if (long_sag) {
+    from = 0;
+    sel = select_model(all, n_phase, false, team);
+  } else if (from > 0 && sel.ok) {
     Pts kept = all.tail(from);
     Eigen::MatrixXd W_wide;
     SubsetFit wide = widest_model(kept, n_phase, sel.delta, sel.best.theta, W_wide, team);
@@ -651,7 +677,11 @@ NoiseModelFit fit_in_units(std::span<const DevPoint> oadev, double record_s, dou
   }
   out.gof_p = sel.ok ? sel.p_value : 0;
   out.dropped_short = from;
-  if (sel.ok && sel.p_value < kGofAlpha) {
+  // Not for a long-tau chance realisation: the model error is a share of the white terms (what
+  // a DUT's tones add at short tau), so it cannot absorb a misfit at long tau and would widen the
+  // short points instead (N's interval reached 0 on such a record): those points' own few degrees
+  // of freedom already carry their scatter.
+  if (sel.ok && sel.p_value < kGofAlpha && !long_sag) {
     sel = select_model(all.tail(from), n_phase, true, team);
     out.model_error = sel.delta;
     widest_kept.reset();

@@ -67,6 +67,10 @@ inline constexpr std::size_t kMinGofPoints = 6;
 // dropped points contradict; noise_model.cpp): then no point is dropped and the misfit is the model
 // error. A null term's upper limit is held to this factor too.
 inline constexpr double kDroppedContradiction = 30;
+// A misfit that leaving out at most this many of the longest points removes, with fewer points
+// left out than the short end would need, is a chance realisation at long tau: no short point is
+// dropped for it (noise_model.cpp).
+inline constexpr std::size_t kLongSagPoints = 3;
 
 // oadev: the overlapping Allan deviation points of one record (any grid; the octave subset
 // is taken from it); record_s: its length; confidence: of the bounds and upper limits (default

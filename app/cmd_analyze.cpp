@@ -60,7 +60,10 @@ constexpr double kRoundingUlps = 16;
 // value by about one unit in the last place, so a second difference by a few: in the values'
 // units, dev for frequency data and dev * tau (the phase's) for phase data.
 bool no_noise_above_rounding(const std::vector<std::vector<an::DevPoint>>& devs, double scale, an::DataKind data) {
-  const double rounding = kRoundingUlps * std::numeric_limits<double>::epsilon() * scale;
+  // The unit in the last place of `scale` itself (epsilon * scale was up to two of them: 1e6 g
+  // with white noise of 26 ulps read as constant, a review).
+  const double ulp = std::nextafter(scale, std::numeric_limits<double>::infinity()) - scale;
+  const double rounding = kRoundingUlps * ulp;
   for (const auto& d : devs)
     for (const auto& p : d)
       if ((data == an::DataKind::Phase ? p.dev * p.tau_s : p.dev) > rounding) return false;

@@ -242,6 +242,22 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   std::ofstream(d + "/zeros.txt") << "0\n0\n0\n0\n0\n0\n0\n0\n";
   ASSERT_EQ(run({"analyze", d + "/zeros.txt", "--rate", "1", "--json", d + "/z.json"}, d + "/z"), 0);
   EXPECT_NE(nlohmann::json::parse(slurp(d + "/z.json"))["notes"].dump().find("the record is constant"), std::string::npos);
+  // 1e6 g with a white noise of a few units in the last place (1.16e-10 g there) or of 26: the
+  // rounding threshold is 16 of them (it was 16 epsilon times the value, up to 32 ulps, and the
+  // 26-ulp noise read as constant: a review).
+  for (const auto& [ulps, constant] : {std::pair{2, true}, std::pair{26, false}}) {
+    std::ofstream f(d + "/off.txt");
+    f.precision(17);
+    std::mt19937_64 noise_rng(7);
+    std::normal_distribution<double> noise(0, ulps * 0x1p-33);
+    for (int i = 0; i < 4000; ++i) f << 1e6 + noise(noise_rng) << "\n";
+    f.close();
+    ASSERT_EQ(run({"analyze", d + "/off.txt", "--rate", "100", "--no-psd", "--json", d + "/off.json"}, d + "/off"), 0);
+    EXPECT_EQ(nlohmann::json::parse(slurp(d + "/off.json"))["notes"].dump().find("the record is constant") !=
+                  std::string::npos,
+              constant)
+        << ulps << " ulps";
+  }
 }
 
 // Issue 12, 7: the JSON keys docs/analysis.md names under noise_terms and psd are the ones the
