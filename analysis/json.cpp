@@ -97,7 +97,8 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
            {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance; values from the widest "
                       "non-negative model, terms reported where AICc selects them or their interval excludes 0"},
            {"aicc", t.model.aicc}, {"chi2_per_dof", t.model.chi2_per_dof}, {"gof_p", t.model.gof_p},
-           {"dropped_short", t.model.dropped_short}, {"model_error", t.model.model_error},
+           {"dropped_short", t.model.dropped_short}, {"long_tau_misfit", t.model.long_tau_misfit},
+           {"model_error", t.model.model_error},
            {"tau_s", t.model.tau_s}, {"avar", t.model.avar}, {"edf", t.model.edf}};
     if (!t.model.reason.empty()) m["reason"] = t.model.reason;
     const char* names[5] = {"Q", "N", "B", "K", "R"};

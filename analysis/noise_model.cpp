@@ -653,14 +653,16 @@ NoiseModelFit fit_in_units(std::span<const DevPoint> oadev, double record_s, dou
   // last two octaves at 0.09x and 0.04x their truth, thirteen short points dropped, and a Q
   // (truth 0) at 4360x the variance the 1 ms point measured, N null. Every point is then kept,
   // without a model error (below).
-  bool long_sag = false;
+  std::size_t long_cut = 0;  // the longest points whose leaving-out fits (0: none did)
   if (from > 1 && sel.ok) {
     const std::size_t most = std::min({kLongSagPoints, from - 1, n_all - kMinGofPoints});
-    for (std::size_t cut = 1; cut <= most && !long_sag; ++cut) {
+    for (std::size_t cut = 1; cut <= most && long_cut == 0; ++cut) {
       const Selection head = select_model(all.head(n_all - cut), n_phase, false, team);
-      long_sag = head.ok && head.p_value >= kGofAlpha;
+      if (head.ok && head.p_value >= kGofAlpha) long_cut = cut;
     }
   }
+  const bool long_sag = long_cut > 0;
+  out.long_tau_misfit = long_cut;
   if (long_sag) {
     from = 0;
     sel = select_model(all, n_phase, false, team);

@@ -55,7 +55,12 @@ struct NoiseModelFit {
   double chi2_per_dof = 0;  // GLS chi2 of the selected model on the covariance it implies, per dof
   double gof_p = 0;         // P(chi2 >= that): the goodness of fit over the points fitted
   std::size_t dropped_short = 0;  // octave points below tau_s.front() left out as not described by the model
-  double model_error = 0;   // relative model error delta (Birge), only when no tau range fitted (gof_p < kGofAlpha)
+  // When the fit on every point failed and leaving out this many of the longest points (at most
+  // kLongSagPoints, fewer than the short end needed) fitted: a chance realisation at long tau.
+  // Every point is fitted then (gof_p below kGofAlpha, dropped_short 0, no model error); else 0.
+  std::size_t long_tau_misfit = 0;
+  double model_error = 0;   // relative model error delta (Birge), only when no tau range fitted (gof_p < kGofAlpha,
+                            // long_tau_misfit 0)
 };
 
 // Goodness of fit: a model whose chi-square has a probability below kGofAlpha does not describe

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +21,7 @@
 #include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/report/db.hpp"
+#include "rig/report/db_url.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/passport_read.hpp"
 #include "rig/core/path_kind.hpp"
@@ -38,6 +40,7 @@ struct HistoryArgs {
   std::string serial, since, until, outcome, profile, value, record;
   int limit = 0;
   long long endings = 0;  // --endings ID
+  bool db_given = false;  // --db (else the default: $RIG_HISTORY, the rig config, the built-in one)
   bool csv = false;
   bool no_serial = false;  // only runs that stopped before the DUT said its serial (the option
                            // refuses an empty value, as every text option does)
@@ -220,12 +223,38 @@ void endings(const HistoryArgs& a) {
   print_table(std::cout, t);
 }
 
+// Whether `db` is the database the run in `dir` records into: the --db its run.json keeps (masked
+// alike), or, when it keeps none and the run had no hardware file (whose [history] url would
+// decide), the default that `rig history` without --db takes too.
+bool the_runs_own_database(const std::string& dir, const std::string& db, bool db_given) {
+  // One database, however its URL was written: an SQLite file by its resolved path (`h.sqlite`,
+  // `sqlite:h.sqlite`, `sqlite:///abs/h.sqlite`), a server's URL with its password masked.
+  const auto same = [](const std::string& x, const std::string& y) {
+    const auto px = history::sqlite_path(x), py = history::sqlite_path(y);
+    if (px && py) {
+      std::error_code e1, e2;
+      return std::filesystem::weakly_canonical(std::filesystem::absolute(*px), e1) ==
+             std::filesystem::weakly_canonical(std::filesystem::absolute(*py), e2);
+    }
+    return !px && !py && history::mask_password(x) == history::mask_password(y);
+  };
+  try {
+    const nlohmann::json inv = nlohmann::json::parse(std::ifstream(std::filesystem::path(dir) / "run.json"));
+    const std::string run_db = inv.value("db", std::string());
+    if (!run_db.empty()) return same(db, run_db);
+    return inv.value("hardware", std::string()).empty() && !db_given;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 // A run whose ending stopped before its history row (.ending-pending, written by rig run): this
-// record is that step. The list goes when it was the only one left and the rest of the ending is
-// in place (junit.xml not staged, report.html there); else it stays for the run's resume, which
-// finishes what is left (a review: --record left the list, and the resume's dry run said the
-// ending was unfinished).
-void finish_ending_list(const std::string& dir) {
+// record is that step when it goes into the run's own database. The list goes when it was the only
+// step left and the rest of the ending is in place (junit.xml not staged, report.html there); else
+// it stays for the run's resume, which finishes what is left (a review: --record left the list,
+// and the resume's dry run said the ending was unfinished; a code review: a --record into another
+// database removed it, and the station's never got the row).
+void finish_ending_list(const std::string& dir, const std::string& db, bool db_given) {
   namespace fs = std::filesystem;
   const fs::path list = fs::path(dir) / kEndingPending;
   std::error_code ec;
@@ -234,17 +263,25 @@ void finish_ending_list(const std::string& dir) {
   std::vector<std::string> steps;
   for (std::string line; std::getline(in, line);)
     if (!line.empty()) steps.push_back(line);
-  const bool only_history = steps == std::vector<std::string>{"history"};
-  if (only_history && !fs::exists(fs::path(dir) / "junit.xml.tmp", ec) && fs::is_regular_file(fs::path(dir) / "report.html", ec) &&
-      fs::remove(list, ec))
+  const bool only_history = steps == std::vector<std::string>{kStepHistory};
+  const bool own = the_runs_own_database(dir, db, db_given);
+  if (only_history && own && !fs::exists(fs::path(dir) / "junit.xml.tmp", ec) &&
+      fs::is_regular_file(fs::path(dir) / "report.html", ec) && fs::remove(list, ec))
     return;
   std::cerr << "rig history: note: " << dir << "'s ending is not finished yet (" << kEndingPending
-            << "): rig run --resume " << dir << " finishes it\n";
+            << (own ? "" : "; this is not the database its run records into") << "): rig run --resume " << dir
+            << " finishes it\n";
 }
 
 void record(const HistoryArgs& a) {
-  // Not while a run or resume holds the folder: its passport may be about to change.
-  FolderLock lock(a.record, "--record " + a.record);
+  // Not while a run or resume holds the folder: its passport may be about to change. The folder's
+  // mistake, never the database's (it read "RIG_HISTORY: --record ...", a code review).
+  std::optional<FolderLock> lock;
+  try {
+    lock.emplace(a.record, "--record " + a.record);
+  } catch (const ConfigError& e) {
+    throw NotTheDatabase(e.what());
+  }
   nlohmann::json p;
   try {
     p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
@@ -261,7 +298,7 @@ void record(const HistoryArgs& a) {
               << "): a copy of its folder? The listing and the statistics count it twice\n";
   std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
-  finish_ending_list(a.record);
+  finish_ending_list(a.record, a.db, a.db_given);
 }
 
 int run_history(const HistoryArgs& a, bool named) {
@@ -334,7 +371,7 @@ void add_history(CLI::App& app, int& rc) {
   for (CLI::Option* q : query)
     if (q->get_name() != "--csv") ends->excludes(q);
   sub->callback([&rc, a] {
-    const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
+    const bool db_given = a->db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};
     if (!db_given) source = default_history();
     a->db = source.url;

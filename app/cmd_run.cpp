@@ -643,8 +643,8 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
   const std::string junit = a.out + "/junit.xml", pass = a.out + "/passport.json", pending = a.out + "/" + kEndingPending;
   std::string steps;  // what follows the passport
-  if (key) steps += "seal\n";
-  if (!a.no_history) steps += "history\n";
+  if (key) steps += std::string(kStepSeal) + "\n";
+  if (!a.no_history) steps += std::string(kStepHistory) + "\n";
   try {
     write_file_staged(junit, junit_xml(info, res, values));
     write_file_staged(pass, passport_text(passport));

@@ -33,6 +33,8 @@ inline constexpr const char* kRunOutputs[] = {"passport.json", "junit.xml", "ana
 // The ending's steps after the passport is in place, until they are done: the final seal and
 // the history row (one per line). A dot file: outside the seal (outside_the_seal).
 inline constexpr const char* kEndingPending = ".ending-pending";
+inline constexpr const char* kStepSeal = "seal";        // its lines
+inline constexpr const char* kStepHistory = "history";
 
 // The outcome passport.json states; nullopt when it is missing, not a regular file (a FIFO is
 // never opened) or not a passport.

@@ -239,7 +239,16 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
       rec.replaced_verdict = before;
       rec.replaced_finished = as_text(was[0][2]);
     }
-    for (std::size_t i = 1; i < was.size(); ++i) db->exec("DELETE FROM runs WHERE id = ?", {was[i][0]});
+    // Rows of the same run beyond the first (runs without a start time: the unique index lets
+    // NULLs repeat) are folded into it, their endings kept after its own (a code review: the
+    // delete's cascade took them).
+    for (std::size_t i = 1; i < was.size(); ++i) {
+      const int64_t next =
+          as_int(db->query("SELECT COALESCE(MAX(seq), -1) + 1 FROM run_endings WHERE run_id = ?", {rec.id}).at(0).at(0))
+              .value_or(0);
+      db->exec("UPDATE run_endings SET run_id = ?, seq = seq + ? WHERE run_id = ?", {rec.id, next, was[i][0]});
+      db->exec("DELETE FROM runs WHERE id = ?", {was[i][0]});
+    }
     db->exec("DELETE FROM run_values WHERE run_id = ?", {rec.id});
     db->exec("DELETE FROM run_captures WHERE run_id = ?", {rec.id});
     row.push_back(rec.id);

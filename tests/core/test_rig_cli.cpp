@@ -1312,6 +1312,16 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   ASSERT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/io4b"), 0) << slurp(d + "/io4b.stderr");
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
   EXPECT_EQ(slurp(d + "/io4b.stderr"), "");
+  // Into another database than the run's own (its run.json keeps --db): the row is there, not
+  // the station's, so the list stays for the resume (a code review).
+  std::ofstream(d + "/r/.ending-pending") << "history\n";
+  ASSERT_EQ(run({"history", "--db", d + "/other.sqlite", "--record", d + "/r"}, d + "/io4o"), 0)
+      << slurp(d + "/io4o.stderr");
+  EXPECT_TRUE(fs::exists(d + "/r/.ending-pending"));
+  EXPECT_NE(slurp(d + "/io4o.stderr").find("this is not the database its run records into"), std::string::npos)
+      << slurp(d + "/io4o.stderr");
+  ASSERT_EQ(run({"history", "--db", "sqlite:" + db, "--record", d + "/r"}, d + "/io4s"), 0);  // its own, spelt so
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
   fs::copy_file(d + "/r/junit.xml", d + "/r/junit.xml.tmp");
   std::ofstream(d + "/r/.ending-pending") << "history\n";
   ASSERT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/io4c"), 0) << slurp(d + "/io4c.stderr");
@@ -1542,9 +1552,13 @@ TEST(RigCli, ARunFolderInUseByAnotherRunIsRefused) {
     EXPECT_NE(slurp(d + "/io-onto.stderr").find("--out " + d + "/busy" + msg + new_folder), std::string::npos)
         << slurp(d + "/io-onto.stderr");
   }
-  // Nor is a folder in use recorded into the history (its passport may be about to change).
-  EXPECT_EQ(run({"history", "--db", d + "/h.sqlite", "--record", d + "/busy"}, d + "/io-rec"), 2);
-  EXPECT_NE(slurp(d + "/io-rec.stderr").find("--record " + d + "/busy" + msg + "\n"), std::string::npos)
+  // Nor is a folder in use recorded into the history (its passport may be about to change); the
+  // folder's mistake, not the database's (it read "RIG_HISTORY: --record ...", a code review).
+  ::setenv("RIG_HISTORY", ("sqlite:" + d + "/h.sqlite").c_str(), 1);
+  EXPECT_EQ(run({"history", "--record", d + "/busy"}, d + "/io-rec"), 2);
+  ::unsetenv("RIG_HISTORY");
+  EXPECT_NE(slurp(d + "/io-rec.stderr").find("rig: configuration error: --record " + d + "/busy" + msg + "\n"),
+            std::string::npos)
       << slurp(d + "/io-rec.stderr");
   // Nor is its report drawn: the run writes it at its end (it read "does the run folder exist?").
   EXPECT_EQ(run({"report", d + "/busy"}, d + "/io-rep"), 2);

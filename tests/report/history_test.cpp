@@ -54,6 +54,31 @@ TEST(HistorySqlite, RoundTripFiltersAndTrend) {
   EXPECT_TRUE(std::filesystem::exists(d.path / "db" / "history.sqlite"));  // folder created
 }
 
+// Rows an older rig left for one run without a start time (NULL started repeats under the unique
+// index; it added a row per record) are folded into the first when the run is recorded again,
+// their endings kept after its own (a code review: the delete's cascade took them).
+TEST(HistorySqlite, RowsOfOneRunWithoutAStartTimeAreFoldedWithTheirEndings) {
+  TempDir d;
+  const std::string path = (d.path / "h.sqlite").string(), dir = (d.path / "ns").string();
+  json p = rig::test::fixture_passport("NS-1", "ABORTED", "2026-11-01T08:00:00Z");
+  p.erase("started");
+  ASSERT_EQ(h::record_run(path, p, dir).id, 1);
+  std::string pj = p.dump();
+  for (std::size_t i = 0; (i = pj.find('\'', i)) != std::string::npos; i += 2) pj.insert(i, "'");  // SQL quoting
+  raw_sql(path, "INSERT INTO runs (id, serial, outcome, run_dir, passport) SELECT 2, serial, 'FAIL', run_dir, passport "
+                "FROM runs WHERE id = 1; INSERT INTO run_endings (run_id, seq, outcome, passport) VALUES (2, 0, 'FAIL', '" +
+                    pj + "');");
+  const h::Recorded r = h::record_run(path, p, dir);
+  EXPECT_EQ(r.id, 1);
+  EXPECT_EQ(raw_scalar(path, "SELECT COUNT(*) FROM runs"), "1");
+  const auto e = h::endings_of(path, 1);
+  ASSERT_EQ(e.size(), 3u);  // its own, the folded row's, then this one (after a FAIL: another ending)
+  EXPECT_EQ(e[0].outcome, "ABORTED");
+  EXPECT_EQ(e[1].outcome, "FAIL");
+  EXPECT_EQ(e[2].outcome, "ABORTED");
+  EXPECT_EQ(r.endings, 3);
+}
+
 TEST(HistorySqlite, EveryEndingOfARunIsKept) {
   TempDir d;
   rig::test::history_keeps_every_ending("sqlite:" + (d.path / "h.sqlite").string(), d.path.string());

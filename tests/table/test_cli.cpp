@@ -344,11 +344,12 @@ TEST_F(RigTable, NohupKeepsAMoveGoingThroughSighup) {
 INSTANTIATE_TEST_SUITE_P(EndingSignals, RigTableSignal, ::testing::Values(SIGINT, SIGTERM, SIGHUP),
                          [](const auto& p) { return std::string(sigabbrev_np(p.param)); });
 
-// A drive that takes the connection and never answers (a hung gateway): `rig table stop` sends its
-// stop's own requests only, each with one reconnect: a CiA 402 stop its statusword read, a rig-v1
-// stop its status block read (which learns SERVO_ON for the HALT word) and the CONTROL write (a
-// status read with the link's retries before it took 2.25 s at the 0.3 s timeout, a review). With
-// nothing listening, the stop is said not delivered.
+// A drive that takes the connection and never answers (a hung gateway): a CiA 402 `rig table stop`
+// sends its stop's own request only, the statusword read with its one reconnect (a status read
+// before it added two more timeouts, a review); a rig-v1 one still reads the status block with the
+// link's retries first, to keep SERVO_ON in the HALT word (a code review; a lossy link's lost
+// answers are what the retries are for), then stops. With nothing listening, the stop is said not
+// delivered.
 TEST(RigTableSilentLink, ACia402StopAsksOnlyForWhatItNeeds) {
   const int ls = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   ASSERT_GE(ls, 0);
@@ -419,8 +420,7 @@ TEST(RigTableSilentLink, ACia402StopAsksOnlyForWhatItNeeds) {
         << out;
     EXPECT_NE(out.find("cannot connect"), std::string::npos) << out;
   }
-  EXPECT_GE(v1, 2) << "rig-v1: the stop's read and the CONTROL write";
-  EXPECT_LE(v1, 4) << "rig-v1: each with one reconnect, no retries";
+  EXPECT_GE(v1, 2) << "rig-v1: the status read, the stop's read and the CONTROL write";
   EXPECT_LE(c4, 2) << "CiA 402: the statusword read with one reconnect, then nothing to send";
   EXPECT_GE(c4, 1);
 }

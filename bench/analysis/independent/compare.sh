@@ -14,8 +14,8 @@ for S in S1_QN S2_B S3_K S4_mixed S5_R1h S6_Nonly S7_QK; do
   mkdir -p "$out/old/$S" "$out/new/$S"
   for ((i = first; i <= last; i++)); do
     $py "$here/gen.py" $S $i "$out/rec.f64"
-    "$old" analyze "$out/rec.f64" --input f64 --rate $fs $psd --json "$out/old/$S/$i.json" > /dev/null 2>&1 || true
-    "$new" analyze "$out/rec.f64" --input f64 --rate $fs $psd --json "$out/new/$S/$i.json" > /dev/null 2>&1 || true
+    "$old" analyze "$out/rec.f64" --input f64 --rate $fs $psd --json "$out/old/$S/$i.json" > /dev/null 2> "$out/err" || { echo "$S $i: OLD exit $?: $(tail -1 "$out/err")" >&2; }
+    "$new" analyze "$out/rec.f64" --input f64 --rate $fs $psd --json "$out/new/$S/$i.json" > /dev/null 2> "$out/err" || { echo "$S $i: NEW exit $?: $(tail -1 "$out/err")" >&2; }
   done
   echo "$S done"
 done
