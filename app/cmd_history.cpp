@@ -276,14 +276,11 @@ void finish_ending_list(const std::string& dir, const std::string& db, bool db_g
 void record(const HistoryArgs& a) {
   // Not while a run or resume holds the folder: its passport may be about to change. The folder's
   // mistake, never the database's (it read "RIG_HISTORY: --record ...", a code review).
+  // (A path that is no folder is named by the passport's reader, which says what it is.)
   std::optional<FolderLock> lock;
-  try {
-    lock.emplace(a.record, "--record " + a.record);
-  } catch (const ConfigError& e) {
-    throw NotTheDatabase(e.what());
-  }
   nlohmann::json p;
   try {
+    if (path_kind(a.record, "--record") == PathKind::directory) lock.emplace(a.record, "--record " + a.record);
     p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
