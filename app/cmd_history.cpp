@@ -40,7 +40,6 @@ struct HistoryArgs {
   std::string serial, since, until, outcome, profile, value, record;
   int limit = 0;
   long long endings = 0;  // --endings ID
-  bool db_given = false;  // --db (else the default: $RIG_HISTORY, the rig config, the built-in one)
   bool csv = false;
   bool no_serial = false;  // only runs that stopped before the DUT said its serial (the option
                            // refuses an empty value, as every text option does)
@@ -219,14 +218,16 @@ void endings(const HistoryArgs& a) {
   std::vector<std::vector<std::string>> t;
   t.push_back({"seq", "recorded", "finished", "outcome", "aborted_reason"});
   for (const auto& e : rows) t.push_back({std::to_string(e.seq), e.recorded, e.finished, e.outcome, e.aborted_reason});
-  std::cout << "run " << a.endings << ": " << rows.size() << " ending(s), oldest first\n";
+  std::cout << "run " << a.endings << ": " << rows.size() << " ending(s), in the order recorded\n";
   print_table(std::cout, t);
 }
 
-// Whether `db` is the database the run in `dir` records into: the --db its run.json keeps (masked
-// alike), or, when it keeps none and the run had no hardware file (whose [history] url would
-// decide), the default that `rig history` without --db takes too.
-bool the_runs_own_database(const std::string& dir, const std::string& db, bool db_given) {
+// Whether `db` is known to be the database the run in `dir` records into: the --db its run.json
+// keeps. Without one the run took $RIG_HISTORY, the rig config, a hardware file's [history] url or
+// the default, whichever applied where it ran, which run.json does not say (a review: a --record
+// under another RIG_HISTORY finished the ending, and the station's database never got the row).
+// `why_not`: what to say when it is not known to be.
+bool the_runs_own_database(const std::string& dir, const std::string& db, std::string& why_not) {
   // One database, however its URL was written: an SQLite file by its resolved path (`h.sqlite`,
   // `sqlite:h.sqlite`, `sqlite:///abs/h.sqlite`), a server's URL with its password masked.
   const auto same = [](const std::string& x, const std::string& y) {
@@ -241,9 +242,11 @@ bool the_runs_own_database(const std::string& dir, const std::string& db, bool d
   try {
     const nlohmann::json inv = nlohmann::json::parse(std::ifstream(std::filesystem::path(dir) / "run.json"));
     const std::string run_db = inv.value("db", std::string());
-    if (!run_db.empty()) return same(db, run_db);
-    return inv.value("hardware", std::string()).empty() && !db_given;
+    if (run_db.empty()) why_not = "its run.json does not say which database its run records into";
+    else if (!same(db, run_db)) why_not = "this is not the database its run records into (--db " + run_db + ")";
+    return why_not.empty();
   } catch (const std::exception&) {
+    why_not = "its run.json cannot be read";
     return false;
   }
 }
@@ -254,7 +257,7 @@ bool the_runs_own_database(const std::string& dir, const std::string& db, bool d
 // it stays for the run's resume, which finishes what is left (a review: --record left the list,
 // and the resume's dry run said the ending was unfinished; a code review: a --record into another
 // database removed it, and the station's never got the row).
-void finish_ending_list(const std::string& dir, const std::string& db, bool db_given) {
+void finish_ending_list(const std::string& dir, const std::string& db) {
   namespace fs = std::filesystem;
   const fs::path list = fs::path(dir) / kEndingPending;
   std::error_code ec;
@@ -264,13 +267,13 @@ void finish_ending_list(const std::string& dir, const std::string& db, bool db_g
   for (std::string line; std::getline(in, line);)
     if (!line.empty()) steps.push_back(line);
   const bool only_history = steps == std::vector<std::string>{kStepHistory};
-  const bool own = the_runs_own_database(dir, db, db_given);
+  std::string why_not;
+  const bool own = the_runs_own_database(dir, db, why_not);
   if (only_history && own && !fs::exists(fs::path(dir) / "junit.xml.tmp", ec) &&
       fs::is_regular_file(fs::path(dir) / "report.html", ec) && fs::remove(list, ec))
     return;
   std::cerr << "rig history: note: " << dir << "'s ending is not finished yet (" << kEndingPending
-            << (own ? "" : "; this is not the database its run records into") << "): rig run --resume " << dir
-            << " finishes it\n";
+            << (own ? "" : "; " + why_not) << "): rig run --resume " << dir << " finishes it in the run's own database\n";
 }
 
 void record(const HistoryArgs& a) {
@@ -295,7 +298,7 @@ void record(const HistoryArgs& a) {
               << "): a copy of its folder? The listing and the statistics count it twice\n";
   std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
-  finish_ending_list(a.record, a.db, a.db_given);
+  finish_ending_list(a.record, a.db);
 }
 
 int run_history(const HistoryArgs& a, bool named) {
@@ -335,7 +338,7 @@ void add_history(CLI::App& app, int& rc) {
                       ->excludes(query.back()));
   query.push_back(sub->add_option("--since", a->since, "Only runs started at or after this ISO 8601 date/time (UTC if no zone)"));
   query.push_back(sub->add_option("--until", a->until, "Only runs started before this ISO 8601 date/time"));
-  query.push_back(sub->add_option("--outcome", a->outcome, "Only runs with this outcome")
+  query.push_back(sub->add_option("--outcome", a->outcome, "Only runs whose latest ending has this outcome")
                       ->check(CLI::IsMember({"PASS", "FAIL", "ABORTED", "ERROR"})));
   query.push_back(sub->add_option("--profile", a->profile, "Only runs of this profile"));
   query.push_back(
@@ -368,7 +371,7 @@ void add_history(CLI::App& app, int& rc) {
   for (CLI::Option* q : query)
     if (q->get_name() != "--csv") ends->excludes(q);
   sub->callback([&rc, a] {
-    const bool db_given = a->db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
+    const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};
     if (!db_given) source = default_history();
     a->db = source.url;

@@ -126,24 +126,36 @@ inline void history_keeps_every_ending(const std::string& url, const std::string
   EXPECT_EQ(aborted.replaced_finished, "2026-11-07T10:00:00Z");
   EXPECT_NE(h::replaced_verdict_note(aborted, "ABORTED").find("rig history --endings " + std::to_string(fail.id)),
             std::string::npos);
+  // Another ABORTED ending in the same second (a resume stopped at once): its own ending, not the
+  // last one again (a review: same outcome and finish time were taken for the same ending).
+  json again = fixture_passport("SN-9", "ABORTED", "2026-11-07T08:00:00Z");
+  again["finished"] = "2026-11-07T10:05:00Z";
+  again["aborted_reason"] = "SIGINT";
+  again["values"]["bias"]["value"] = nullptr;
+  EXPECT_EQ(h::record_run(url, again, dir).endings, 3);
+  // A PASS after them: the FAIL recorded before is still the verdict this ending replaces, said
+  // with the ABORTED endings between (a review: only the ending just before was compared).
   const h::Recorded pass = ending("PASS", "2026-11-07T10:30:00Z");
-  EXPECT_FALSE(pass.replaced_verdict);  // an ABORTED ending replaced: a resume's ordinary case
-  EXPECT_EQ(pass.endings, 3);
+  ASSERT_TRUE(pass.replaced_verdict);
+  EXPECT_EQ(*pass.replaced_verdict, "FAIL");
+  EXPECT_EQ(pass.endings, 4);
+  EXPECT_FALSE(ending("PASS", "2026-11-07T10:30:00Z").replaced_verdict);  // the same ending again: nothing new
 
   h::Filter f;
   f.serial = "SN-9";
   const auto runs = h::list_runs(url, f);
   ASSERT_EQ(runs.size(), 1u);
   EXPECT_EQ(runs[0].outcome, "PASS");
-  EXPECT_EQ(runs[0].earlier, (std::vector<std::string>{"FAIL", "ABORTED"}));
+  EXPECT_EQ(runs[0].earlier, (std::vector<std::string>{"FAIL", "ABORTED", "ABORTED"}));
   const auto e = h::endings_of(url, fail.id);
-  ASSERT_EQ(e.size(), 3u);
+  ASSERT_EQ(e.size(), 4u);
   EXPECT_EQ(e[0].outcome, "FAIL");
   EXPECT_EQ(e[0].finished, "2026-11-07T10:00:00Z");
   EXPECT_EQ(e[1].outcome, "ABORTED");
   EXPECT_EQ(e[1].aborted_reason, "SIGINT");
-  EXPECT_EQ(e[2].seq, 2);
-  EXPECT_FALSE(e[2].recorded.empty());
+  EXPECT_EQ(e[3].seq, 3);
+  EXPECT_EQ(e[3].outcome, "PASS");
+  EXPECT_FALSE(e[3].recorded.empty());
   EXPECT_TRUE(h::endings_of(url, 999999).empty());
 }
 

@@ -63,7 +63,9 @@ TEST(HistorySqlite, RowsOfOneRunWithoutAStartTimeAreFoldedWithTheirEndings) {
   json p = rig::test::fixture_passport("NS-1", "ABORTED", "2026-11-01T08:00:00Z");
   p.erase("started");
   ASSERT_EQ(h::record_run(path, p, dir).id, 1);
-  std::string pj = p.dump();
+  json failed = p;
+  failed["outcome"] = "FAIL";
+  std::string pj = failed.dump();
   for (std::size_t i = 0; (i = pj.find('\'', i)) != std::string::npos; i += 2) pj.insert(i, "'");  // SQL quoting
   raw_sql(path, "INSERT INTO runs (id, serial, outcome, run_dir, passport) SELECT 2, serial, 'FAIL', run_dir, passport "
                 "FROM runs WHERE id = 1; INSERT INTO run_endings (run_id, seq, outcome, passport) VALUES (2, 0, 'FAIL', '" +
@@ -394,7 +396,7 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
   EXPECT_EQ(csv2[1].substr(csv2[1].size() - 6), ",FAIL\r") << csv2[1];
   const auto ends = lines(run_cli({"--db", db, "--endings", std::to_string(again.id)}));
   ASSERT_EQ(ends.size(), 4u);
-  EXPECT_EQ(ends[0], "run " + std::to_string(again.id) + ": 2 ending(s), oldest first");
+  EXPECT_EQ(ends[0], "run " + std::to_string(again.id) + ": 2 ending(s), in the order recorded");
   EXPECT_NE(ends[2].find("FAIL"), std::string::npos);
   EXPECT_NE(ends[3].find("ABORTED  SIGINT"), std::string::npos) << ends[3];
   const auto ends_csv = lines(run_cli({"--db", db, "--endings", std::to_string(again.id), "--csv"}));
