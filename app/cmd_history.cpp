@@ -289,14 +289,8 @@ void record(const HistoryArgs& a) {
     throw NotTheDatabase(e.what());
   }
   const history::Recorded rec = history::record_run(a.db, p, a.record);
-  const long long id = rec.id;
-  if (rec.replaced_verdict)
-    std::cerr << "rig history: note: " << history::replaced_verdict_note(rec, p.value("outcome", "")) << "\n";
-  for (const auto& [other, dir] : history::same_run_elsewhere(a.db, p, a.record))
-    std::cerr << "rig history: note: the same run (serial " << p.value("serial", "") << ", started "
-              << p.value("started", "") << ") is also recorded from " << dir << " (run " << other
-              << "): a copy of its folder? The listing and the statistics count it twice\n";
-  std::cout << "recorded run " << id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
+  for (const std::string& note : history::record_notes(rec, p)) std::cerr << "rig history: note: " << note << "\n";
+  std::cout << "recorded run " << rec.id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
   finish_ending_list(a.record, a.db);
 }

@@ -614,15 +614,10 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
         fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, rec.id, shown);
     log.info("{}", line);
     if (!a.quiet) std::cerr << line << "\n";
-    // A verdict recorded before and another outcome now: a folder put back to an earlier state
-    // and resumed: the earlier verdict is no longer the listed one.
-    if (rec.replaced_verdict) log.warn("history: {}", history::replaced_verdict_note(rec, passport.value("outcome", "")));
-    // A copy of a run folder resumed elsewhere is a run of its own in the history: said, as
-    // `rig history --record` says it (a review: a copy put back under another path was silent).
-    for (const auto& [other, dir] : history::same_run_elsewhere(url, passport, out_dir))
-      log.warn("history: the same run (serial {}, started {}) is also recorded from {} (run {}): a copy of its "
-               "folder? The listing and the statistics count it twice",
-               passport.value("serial", ""), passport.value("started", ""), dir, other);
+    // A verdict recorded before and another outcome now (a folder put back to an earlier state
+    // and resumed), a copy of the folder resumed elsewhere (it was silent, a review): as
+    // `rig history --record` says them.
+    for (const std::string& note : history::record_notes(rec, passport)) log.warn("history: {}", note);
     return true;
   } catch (const std::exception& e) {
     log.error("history database not updated: {} (the run's resume, or rig history --record {}, records it)", e.what(),

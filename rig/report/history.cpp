@@ -265,9 +265,9 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
   const auto last = db->query("SELECT seq, passport FROM run_endings WHERE run_id = ? ORDER BY seq DESC LIMIT 1",
                               {rec.id});
   const bool again = !last.empty() && as_text(last[0][1]) == text;
-  // A verdict recorded before that this new ending does not repeat (a folder put back and resumed),
-  // said even with other endings between them (FAIL, ABORTED, then PASS: a review).
   if (!again) {
+    // A verdict recorded before that this new ending does not repeat (a folder put back and
+    // resumed), said even with other endings between them (FAIL, ABORTED, then PASS: a review).
     const auto verdict = db->query("SELECT outcome, finished FROM run_endings WHERE run_id = ? AND outcome IN ('PASS', "
                                    "'FAIL') ORDER BY seq DESC LIMIT 1",
                                    {rec.id});
@@ -275,11 +275,16 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
       rec.replaced_verdict = as_text(verdict[0][0]);
       rec.replaced_finished = as_text(verdict[0][1]);
     }
-  }
-  if (!again)
     db->exec("INSERT INTO run_endings (run_id, seq, outcome, finished, recorded, aborted_reason, passport) "
              "VALUES (?, ?, ?, ?, ?, ?, ?)",
              {rec.id, last.empty() ? int64_t{0} : as_int(last[0][0]).value_or(0) + 1, outcome, finished, now, reason, text});
+  }
+  // The same run recorded from another folder (a copy), read in this transaction: it was a second
+  // opening of the database by each caller.
+  for (const Row& r : db->query("SELECT id, run_dir FROM runs WHERE serial = ? AND started IS NOT DISTINCT FROM ? AND "
+                                "run_dir <> ? ORDER BY id",
+                                {passport["serial"].get<std::string>(), started, dir}))
+    rec.elsewhere.emplace_back(as_int(r[0]).value_or(0), as_text(r[1]));
   rec.endings = static_cast<int>(
       as_int(db->query("SELECT COUNT(*) FROM run_endings WHERE run_id = ?", {rec.id}).at(0).at(0)).value_or(0));
 
@@ -306,15 +311,13 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
   return rec;
 }
 
-std::vector<std::pair<long long, std::string>> same_run_elsewhere(const std::string& db_url, const json& passport,
-                                                                  const std::string& run_dir) {
-  const std::string dir = run_dir_key(run_dir);
-  auto db = open_for_reading(db_url);
-  std::vector<std::pair<long long, std::string>> out;
-  for (const Row& r : db->query("SELECT id, run_dir FROM runs WHERE serial = ? AND started IS NOT DISTINCT FROM ? AND "
-                                "run_dir <> ? ORDER BY id",
-                                {passport.value("serial", std::string()), opt_time(passport, "started"), dir}))
-    out.emplace_back(as_int(r[0]).value_or(0), as_text(r[1]));
+std::vector<std::string> record_notes(const Recorded& rec, const json& passport) {
+  std::vector<std::string> out;
+  if (rec.replaced_verdict) out.push_back(replaced_verdict_note(rec, passport.value("outcome", "")));
+  for (const auto& [other, dir] : rec.elsewhere)
+    out.push_back("the same run (serial " + passport.value("serial", std::string()) + ", started " +
+                  passport.value("started", std::string()) + ") is also recorded from " + dir + " (run " +
+                  std::to_string(other) + "): a copy of its folder? The listing and the statistics count it twice");
   return out;
 }
 

@@ -34,6 +34,9 @@ struct Recorded {
   // this ending; the earlier one is kept among the run's endings.
   std::optional<std::string> replaced_verdict;
   std::string replaced_finished;
+  // Runs recorded from another folder with the same serial and start time: a copy of the run's
+  // folder recorded too (their id and folder), which the listing and statistics count twice.
+  std::vector<std::pair<long long, std::string>> elsewhere;
 };
 
 // Records one run (also aborted ones). `db_url`: "sqlite:PATH", a plain path, or
@@ -46,6 +49,9 @@ Recorded record_run(const std::string& db_url, const nlohmann::json& passport, c
 
 // "run N was recorded as FAIL (finished T); this ending (ABORTED) is now its listed outcome ..."
 std::string replaced_verdict_note(const Recorded& rec, const std::string& outcome);
+// What recording `passport` has to say (the replaced verdict, each copy recorded elsewhere), one
+// line each: `rig run` and `rig history --record` say the same.
+std::vector<std::string> record_notes(const Recorded& rec, const nlohmann::json& passport);
 
 // One ending of a run, in the order recorded (seq from 0).
 struct EndingRow {
@@ -85,11 +91,6 @@ struct ValueRow {
 std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f);
 // One measurement across the runs matching `f`, oldest first (the trend).
 std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_name, const Filter& f);
-// Runs recorded from another folder with the same serial and start time as `passport`: a copy of
-// a run folder recorded again (its id and folder), which the listing and statistics count twice.
-std::vector<std::pair<long long, std::string>> same_run_elsewhere(const std::string& db_url,
-                                                                  const nlohmann::json& passport,
-                                                                  const std::string& run_dir);
 // Names of all measurements recorded (for `rig history --value` help and errors).
 std::vector<std::string> value_names(const std::string& db_url);
 
