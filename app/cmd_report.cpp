@@ -1,9 +1,11 @@
 // `rig report DIR`: (re)writes DIR/report.html from a finished or aborted run's folder.
 #include <iostream>
+#include <optional>
 
 #include "app/commands.hpp"
 #include "app/folder_lock.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/path_kind.hpp"
 #include "rig/report/report.hpp"
 
 namespace rig::cli {
@@ -16,8 +18,11 @@ void add_report(CLI::App& app, int& rc) {
               "limits contradict (the file and field are named), or a rig run using the folder now.");
   sub->callback([&rc, dir] {
     // A run or resume holding the folder writes its own report at its end; its passport may be
-    // missing or about to change now (a review read "does the run folder exist?" there).
-    FolderLock::check_free(*dir, "rig report " + *dir);
+    // missing or about to change now (a review read "does the run folder exist?" there). The
+    // lock is held while the report is written, so no run takes the folder half-way (a check
+    // alone left that window, a code review). A path that is no folder is named by the reader.
+    std::optional<FolderLock> lock;
+    if (path_kind(*dir, "rig report") == PathKind::directory) lock.emplace(*dir, "rig report " + *dir);
     std::cout << report::write_report(*dir) << "\n";
     rc = kExitPass;
   });

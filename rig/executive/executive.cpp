@@ -335,6 +335,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     rec.message = result.message;
     if (progress_) progress_->phase_finished(rec.id, rec.status, rec.message);
   }
+  result.checkpointed = done.size();
   safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
   return result;
 }

@@ -111,6 +111,9 @@ struct RunResult {
   std::string message;  // abort reason or fault text
   bool config_error = false;  // an Error caused by bad configuration exits 2, not 4
   std::vector<PhaseRecord> phases;
+  // The phases the folder's checkpoint holds at the end: what a resume of it starts from
+  // (a from_records phase not yet computed again by this resume counts, as its records do).
+  std::size_t checkpointed = 0;
   int exit_code() const;
 };
 

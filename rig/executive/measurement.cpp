@@ -122,7 +122,7 @@ void MeasurementSet::forget(const std::string& name) {
   m->value.reset();
   m->lo.reset();
   m->hi.reset();
-  m->reason.clear();
+  m->reason = "not measured";  // as declared: a resume stopped before the phase ran again says so
   m->verdict.clear();
   m->null_verdict.clear();
   m->outcome = Outcome::Unset;

@@ -1,5 +1,7 @@
 #include "rig/report/db_url.hpp"
 
+#include <cstdlib>
+
 #include "rig/core/errors.hpp"
 
 namespace rig::history {
@@ -32,10 +34,17 @@ namespace {
 
 bool is_postgres(const std::string& url) { return url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0; }
 
-// The file an SQLite URL names: "sqlite:PATH", "sqlite:///abs/path" or a plain path.
+// The file an SQLite URL names: "sqlite:PATH", "sqlite:///abs/path" or a plain path. A leading
+// "~/" is the user's home as a shell would read it: inside a URL or a config file no shell
+// expands it, and "sqlite:~/h.sqlite" made a folder named "~" in the working folder (a review).
 std::string file_part(const std::string& url) {
   std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
   if (path.rfind("//", 0) == 0) path = path.substr(2);
+  if (path == "~" || path.rfind("~/", 0) == 0) {
+    const char* home = std::getenv("HOME");
+    if (!home || !*home) throw ConfigError("history database URL '" + url + "' starts with ~ and $HOME is not set");
+    path = std::string(home) + path.substr(1);
+  }
   return path;
 }
 

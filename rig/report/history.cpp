@@ -448,10 +448,11 @@ std::string default_db_url() {
       std::string url = cfg::get_string(*h, "url");
       if (url.empty()) throw ConfigError(cfg::where(*h->get("url")) + ": [history] url is empty");
       // A relative SQLite path is relative to the config file, not to the working folder.
-      const bool pg = url.rfind("postgres", 0) == 0;
-      std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
-      if (!pg && fs::path(path).is_relative()) url = "sqlite:" + (config.parent_path() / path).string();
-      return url;
+      if (const std::string why = url_problem(url); !why.empty())
+        throw ConfigError(cfg::where(*h->get("url")) + ": [history] url '" + mask_password(url) + "': " + why);
+      const std::optional<std::string> path = sqlite_path(url);  // nullopt: PostgreSQL
+      if (path && fs::path(*path).is_relative()) return "sqlite:" + (config.parent_path() / *path).string();
+      return path ? "sqlite:" + *path : url;
     }
   }
   return builtin_db_url();

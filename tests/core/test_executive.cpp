@@ -339,6 +339,41 @@ TEST(Executive, AResumeRunsTheComputingPhasesAgain) {
   EXPECT_EQ(nlohmann::json::parse(std::ifstream(cp))["values"]["v"]["value"], 2.0);
 }
 
+// A resume stopped in a computing phase it runs again: the checkpoint still holds that phase
+// (its records are kept), so the next resume starts from the same point and the hint's count
+// is the checkpoint's (a review: "13 of 19 phases kept" where the dry run said 15); the value
+// the stopped phase never set again reads "not measured", not an empty reason.
+TEST(Executive, AResumeStoppedWhileComputingAgainKeepsTheCheckpointsPhases) {
+  Fixture f("recompute-stop");
+  JsonState st;
+  std::vector<Phase> phases{{"rec", "record", 1, [&](PhaseContext&) {}},
+                            {"calc", "compute", 0, [&](PhaseContext& c) { c.values.set("v", 2.0); }, {{"v", "g", ""}},
+                             true},
+                            {"last", "record again", 1, [&](PhaseContext&) { throw HardwareError("link died"); }}};
+  {
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    declare(phases, v);
+    EXPECT_EQ(ex.run(power_on, phases, v, st, CancelToken{}, false, {}).checkpointed, 2u);
+  }
+  phases[1].run = [](PhaseContext&) { throw HardwareError("stopped while computing"); };
+  Devices d = f.dev();
+  Executive ex(d, f.out, f.log, nullptr);
+  MeasurementSet v;
+  declare(phases, v);
+  const auto r = ex.run(power_on, phases, v, st, CancelToken{}, true, {});
+  EXPECT_EQ(r.phases[1].status, "failed");
+  EXPECT_EQ(r.checkpointed, 2u);
+  MeasurementSet again;
+  declare(phases, again);
+  JsonState st2;
+  spdlog::logger quiet("quiet");
+  EXPECT_EQ(Executive::read_checkpoint(f.out, phases, again, st2, {}, quiet).size(), r.checkpointed)
+      << "what a dry run of the next resume counts";
+  EXPECT_EQ(v.to_json()["v"]["reason"], "not measured");
+}
+
 TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {
   Fixture f("estop");
   Devices d = f.dev();
@@ -445,6 +480,20 @@ TEST(Measurements, SettingAnUndeclaredNameIsAnError) {
   EXPECT_NO_THROW(v.set("bias", 1e-4));
   EXPECT_THROW(v.set("bais", 1e-4), std::logic_error) << "a typo must not become a new UNSET value";
   EXPECT_EQ(v.all().size(), 1u);
+}
+
+// A value a resume forgets (its phase runs again) and never reaches again reads as one never
+// measured, not with an empty reason (a review: a resume aborted during `bias`).
+TEST(Measurements, AForgottenValueIsNotMeasuredAgain) {
+  MeasurementSet v;
+  v.declare({"bias", "g", "formula (3)"}, std::make_pair(-1e-3, 1e-3));
+  EXPECT_EQ(v.to_json()["bias"]["reason"], "not measured");
+  v.set("bias", 2e-4, "");
+  v.forget("bias");
+  v.judge_all(false);
+  EXPECT_EQ(v.to_json()["bias"]["reason"], "not measured");
+  EXPECT_TRUE(v.to_json()["bias"]["value"].is_null());
+  EXPECT_EQ(v.find("bias")->outcome, Outcome::Unset);
 }
 
 TEST(Measurements, ANullLimitedValueFailsACompletedRunWithItsReason) {

@@ -286,6 +286,17 @@ TEST(HistoryDefaultUrl, EnvironmentThenConfigThenXdgThenHome) {
   // ~/.config/rig/rig.toml with a relative path: relative to the config's folder.
   rig::test::write_file(d.path / ".config/rig/rig.toml", "[history]\nurl = \"sqlite:results/h.sqlite\"\n");
   EXPECT_EQ(h::default_db_url(), "sqlite:" + (d.path / ".config/rig/results/h.sqlite").string());
+  // "~/" is the home folder, as a shell would read it (no shell expands it inside a file).
+  rig::test::write_file(d.path / ".config/rig/rig.toml", "[history]\nurl = \"sqlite:~/line/h.sqlite\"\n");
+  EXPECT_EQ(h::default_db_url(), "sqlite:" + (d.path / "line/h.sqlite").string());
+  rig::test::write_file(d.path / ".config/rig/rig.toml", "[history]\nurl = \"mysql://db/x\"\n");
+  try {
+    h::default_db_url();
+    ADD_FAILURE() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("rig.toml:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown scheme"), std::string::npos) << e.what();
+  }
   // $RIG_CONFIG wins over the home config; a PostgreSQL URL is kept as is.
   rig::test::write_file(d.path / "line.toml", "[other]\nx = 1\n[history]\nurl = \"postgresql://rig@db.line/results\"\n");
   env.set("RIG_CONFIG", (d.path / "line.toml").c_str());
@@ -293,6 +304,19 @@ TEST(HistoryDefaultUrl, EnvironmentThenConfigThenXdgThenHome) {
   // $RIG_HISTORY wins over everything.
   env.set("RIG_HISTORY", "sqlite:/tmp/x.sqlite");
   EXPECT_EQ(h::default_db_url(), "sqlite:/tmp/x.sqlite");
+}
+
+// "sqlite:~/x" in --db or $RIG_HISTORY made a folder named "~" in the working folder (a review).
+TEST(HistorySqlite, ATildeIsTheHomeFolder) {
+  TempDir d;
+  EnvGuard env;
+  env.set("HOME", (d.path / "home").c_str());
+  h::migrate("sqlite:~/results/h.sqlite");
+  EXPECT_TRUE(fs::exists(d.path / "home/results/h.sqlite"));
+  EXPECT_EQ(h::sqlite_path("~/h.sqlite"), (d.path / "home/h.sqlite").string());
+  EXPECT_EQ(h::sqlite_path("sqlite:~user/h.sqlite"), "~user/h.sqlite") << "only the user's own ~";
+  env.set("HOME", nullptr);
+  EXPECT_THROW(h::sqlite_path("sqlite:~/h.sqlite"), rig::ConfigError);
 }
 
 TEST(HistoryDefaultUrl, ConfigMistakesNameFileAndLine) {
