@@ -205,6 +205,10 @@ int cmd_import(const ImportArgs& a) {
     stream_frames -= suspect->frames.size();
     suspect.reset();
   };
+  // Without --iface, the interface of the stream's first frame and of the first on another one
+  // (with its line): a log of two stations (`candump -l any`) interleaves two DUTs' streams,
+  // which imported as one under one serial, exit 0 (a review).
+  std::optional<std::pair<std::string, std::size_t>> first_iface, second_iface;
   bool too_long = false;
   for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln) {
     if (ln < a.from_line) continue;
@@ -215,12 +219,13 @@ int cmd_import(const ImportArgs& a) {
     }
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    const auto lf = link::parse_candump_line(line);
-    if (!lf) {
+    const link::LogLine parsed = link::read_candump_line(line);
+    if (parsed.kind != link::LogLineKind::Frame) {
       ++unreadable;
-      note(ln, "not a candump frame line");
+      note(ln, parsed.problem.rfind("not a candump", 0) == 0 ? parsed.problem : "not a candump frame line: " + parsed.problem);
       continue;
     }
+    const link::LoggedFrame* lf = &parsed.frame;
     if (!a.iface.empty() && lf->iface != a.iface) continue;
     const Counts here{frames, other, unreadable, malformed, back, problems.size()};
     ++frames;
@@ -229,6 +234,13 @@ int cmd_import(const ImportArgs& a) {
     if (!decoder->decode(lf->any, parts, &err)) {  // classic or CAN FD frames as logged
       ++other;  // commands, heartbeats, other nodes' traffic
       continue;
+    }
+    if (a.iface.empty()) {  // one interface's stream: another's is another station's DUT
+      if (!first_iface) first_iface = std::make_pair(lf->iface, ln);
+      else if (lf->iface != first_iface->first) {
+        second_iface = std::make_pair(lf->iface, ln);
+        break;
+      }
     }
     if (!err.empty()) {
       ++malformed;
@@ -276,6 +288,28 @@ int cmd_import(const ImportArgs& a) {
     drop_suspect();
     ++stream_frames;
     push(parts);
+  }
+  if (second_iface) {
+    w.close();
+    std::error_code ec;
+    std::filesystem::remove(a.out, ec);
+    const std::string own = dut.contains("can") ? cfg::get_string(dut, "can") : "";
+    const std::string both = fmt::format("frames of the [dut] stream on {} (from {}:{}) and on {} (from {}:{})",
+                                         first_iface->first, a.log, first_iface->second, second_iface->first, a.log,
+                                         second_iface->second);
+    if (!own.empty() && (own == first_iface->first || own == second_iface->first)) {
+      std::fprintf(stderr, "%s: %s: importing %s's, the hardware file's [dut] can (--iface for another)\n",
+                   a.log.c_str(), both.c_str(), own.c_str());
+      ImportArgs on_own = a;
+      on_own.iface = own;
+      return cmd_import(on_own);
+    }
+    std::fprintf(stderr, "%s: %s: the log holds more than one station's stream (%s); give --iface %s or %s; %s not "
+                 "written\n", a.log.c_str(), both.c_str(),
+                 own.empty() ? (a.hardware + "'s [dut] has no can to choose by").c_str()
+                             : (a.hardware + "'s [dut] can is " + own).c_str(),
+                 first_iface->first.c_str(), second_iface->first.c_str(), a.out.c_str());
+    return kExitUsage;
   }
   // The log ends on held frames: a restart if their counter carried on, else strays.
   if (cut.empty() && suspect && suspect->span > 0) cut_at_restart();

@@ -232,7 +232,10 @@ LogLine read_candump_line(std::string_view line) {
     lf.iface = std::string(t[i]);
     ok = screen_frame(t, i + 1, any, out.problem);
   } else {
-    out.problem = "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES)";
+    // The line itself, cut at 60 characters: the message must show what was there (a review).
+    const std::string_view shown = line.substr(line.find_first_not_of(" \t"));
+    out.problem = "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES): " +
+                  quoted(shown.size() > 60 ? std::string(shown.substr(0, 57)) + "..." : std::string(shown));
   }
   if (ok) {
     out.kind = LogLineKind::Frame;

@@ -117,7 +117,7 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
       {"(+5.000000) can0 101#56341204", "bad timestamp"},
       {"(1e9) can0 101#56341204", "bad timestamp"},
       {"(1.0) can0 100#00 trailing words", "text after the frame"},
-      {"hello world", "not a candump frame line"},
+      {"hello world", "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES): 'hello world'"},
       {"(1.0) can0 800#00", "standard identifier out of range"},
       {"(1.0) can0 CFFFFFFF#00", "extended identifier out of range"},  // found by fuzz_candump
   };

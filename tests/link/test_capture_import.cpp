@@ -192,6 +192,54 @@ TEST(CaptureImport, DbcLayoutWith16BitCounterAndAnUnreadableLine) {
       << slurp(dir() / "bad.err");
 }
 
+// Two stations logged together (`candump -l any`): two DUTs' streams on can0 and can1 imported
+// as one under one serial, exit 0 (a review). Without --iface the hardware file's [dut] can
+// chooses, said; a file whose can is neither refuses, naming both, and writes nothing.
+TEST(CaptureImport, StreamsOfTwoInterfacesAreNeverMixed) {
+  const Dbc db = Dbc::parse_file(std::string(RIG_SOURCE_DIR) + "/tests/data/dbc/dut-layouts.dbc");
+  const DbcMessage* m = db.find("ACC_XY");
+  ASSERT_NE(m, nullptr);
+  std::ostringstream log;
+  double t = 1732255200.0;
+  for (uint64_t k = 0; k < 400; ++k, t += 5e-4) {
+    std::string a = acc_xy_line(*m, t, k), b = acc_xy_line(*m, t + 1e-5, 30000 + k);
+    log << a << b.replace(b.find("vcan0"), 5, "vcan1");
+  }
+  std::ofstream(dir() / "two.log") << log.str();
+  const std::string layout = std::string("dbc = \"") + RIG_SOURCE_DIR +
+                             "/tests/data/dbc/dut-layouts.dbc\"\n[dut.stream]\ncounter = \"ACC_XY.cnt\"\n"
+                             "x = \"ACC_XY.x\"\ny = \"ACC_XY.y\"\nrate_hz = 2000\n";
+  std::ofstream(dir() / "hw-two1.toml") << "[dut]\ncan = \"vcan1\"\n" << layout;
+  std::ofstream(dir() / "hw-two9.toml") << "[dut]\ncan = \"can9\"\n" << layout;
+  const std::string head = "capture import " + (dir() / "two.log").string() + " --hardware ";
+  const fs::path cap = dir() / "two.rigcap";
+  ASSERT_EQ(run_rig(head + (dir() / "hw-two1.toml").string() + " --out " + cap.string(), "two1"), 0)
+      << slurp(dir() / "two1.err");
+  EXPECT_NE(slurp(dir() / "two1.err").find("two.log: frames of the [dut] stream on vcan0 (from " +
+                                           (dir() / "two.log").string() + ":1) and on vcan1 (from " +
+                                           (dir() / "two.log").string() + ":2): importing vcan1's, the hardware "
+                                           "file's [dut] can (--iface for another)"),
+            std::string::npos)
+      << slurp(dir() / "two1.err");
+  const auto c = rig::capture::load(cap.string());
+  ASSERT_EQ(c.samples.size(), 400u);
+  EXPECT_EQ(c.samples.front().seq, 30000u) << "vcan1's DUT, not vcan0's";
+  EXPECT_EQ(run_rig(head + (dir() / "hw-two9.toml").string() + " --out " + (dir() / "two9.rigcap").string(), "two9"),
+            2);
+  EXPECT_NE(slurp(dir() / "two9.err").find("the log holds more than one station's stream ("), std::string::npos)
+      << slurp(dir() / "two9.err");
+  EXPECT_NE(slurp(dir() / "two9.err").find("[dut] can is can9); give --iface vcan0 or vcan1"), std::string::npos)
+      << slurp(dir() / "two9.err");
+  EXPECT_FALSE(fs::exists(dir() / "two9.rigcap"));
+  // --iface chooses either, whatever the file's can.
+  ASSERT_EQ(run_rig(head + (dir() / "hw-two9.toml").string() + " --iface vcan0 --out " +
+                        (dir() / "two0.rigcap").string(),
+                    "two0"),
+            0)
+      << slurp(dir() / "two0.err");
+  EXPECT_EQ(rig::capture::load((dir() / "two0.rigcap").string()).samples.front().seq, 0u);
+}
+
 namespace {
 
 // A CAN FD frame as candump -l / -L writes it: ID##F then the data, upper-case hex.
