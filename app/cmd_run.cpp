@@ -325,6 +325,26 @@ void check_serial_source(const RunArgs& a, const toml::table& hw, const toml::ta
                     " commands = false: the DUT cannot report its serial; give it with --serial");
 }
 
+// A DBC-described stream's rate is the hardware file's (given, or [dut.stream]'s default): a run
+// at the profile's rate over a stream at another labels every capture with the wrong rate and
+// scales every tau (a review: [dut.stream] rate_hz = 500 under a 1000 Hz profile, dry run exit 0;
+// with commands the DUT said so only after power-on, and without them never). The rig protocol's
+// DUT declares its rate at bring-up, checked there.
+void check_stream_rate(const RunArgs& a, const toml::table& hw, const acceptance::Profile& p) {
+  if (a.plant != "hardware") return;  // the emulated plant's [plant.firmware] is checked by the plant
+  const auto stream = link::link_options(*cfg::get_table(hw, "dut", true)).stream;
+  if (!stream || std::abs(stream->rate_hz() - p.rate_hz) <= 1e-6 * p.rate_hz) return;
+  const auto& kw = stream->spec().key_where;
+  const auto at = kw.find("rate_hz");
+  throw ConfigError(fmt::format("{}: the DUT streams at {} Hz, but profile '{}' ({}) records at rate_hz = {} Hz: every "
+                                "capture would be labelled with the profile's rate and every tau scaled by {:.6g}; "
+                                "make them agree",
+                                at != kw.end() ? at->second + ": rate_hz = " + fmt::format("{}", stream->rate_hz())
+                                               : a.hardware + ": [dut.stream] gives no rate_hz (the default)",
+                                stream->rate_hz(), p.name, shown_text(p.source), p.rate_hz,
+                                p.rate_hz / stream->rate_hz()));
+}
+
 // The procedure's U10 and U20 angles within the table's travel, where the rig knows the travel
 // before the table opens: a CiA 402 drive map's [limits] on hardware, [plant.table]'s limits on
 // the emulated plant (a rig-v1 drive reports its limits once connected, and its move refuses
@@ -957,6 +977,7 @@ int do_run(RunArgs a) {
   // The mount's angles before the phases are planned: each move's planned time follows them.
   if (a.plant == "hardware") apply_procedure_angles(hw, p);
   check_procedure_angles_in_travel(a, hw, plant_cfg, p);
+  check_stream_rate(a, hw, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
   MeasurementSet values;

@@ -309,11 +309,12 @@ std::string dut_dbc_path(const toml::table& dut) {
   return path;
 }
 
-std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut) {
+std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut, const std::string& section) {
+  const std::string st_name = "[" + section + ".stream]", dbc_name = "[" + section + "] dbc";
   const toml::node* dbc_node = dut.get("dbc");
   const toml::table* st = cfg::get_table(dut, "stream");
   if (!dbc_node) {
-    if (st) throw ConfigError(cfg::where(*st) + ": [dut.stream] needs [dut] dbc = \"FILE\"");
+    if (st) throw ConfigError(cfg::where(*st) + ": " + st_name + " needs " + dbc_name + " = \"FILE\"");
     return std::make_shared<const DbcStreamDecoder>(rig_protocol_dbc(), rig_protocol_stream(), "rig protocol");
   }
   const std::string path = dut_dbc_path(dut);
@@ -323,11 +324,11 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
     cfg::reject(*dbc_node, "dbc",
                 (std::filesystem::exists(path, ec) ? "not a regular file: " : "no such file: ") + path);
   auto db = std::make_shared<const Dbc>(Dbc::parse_file(path));
-  if (!st) throw ConfigError(cfg::where(*dbc_node) + ": [dut] dbc needs a [dut.stream] table naming its signals");
+  if (!st) throw ConfigError(cfg::where(*dbc_node) + ": " + dbc_name + " needs a " + st_name + " table naming its signals");
   cfg::check_keys(*st,
                   {"counter", "x", "y", "status", "filter_on_bit", "saturated_bit", "loop_fault_bit", "filter_on",
                    "saturated", "loop_fault", "samples_per_frame", "rate_hz"},
-                  "dut.stream");
+                  section + ".stream");
   DbcStreamSpec s;
   s.counter = cfg::get_string(*st, "counter");
   s.x = cfg::get_string(*st, "x");
@@ -341,8 +342,8 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
   s.loop_fault = cfg::get_string(*st, "loop_fault", "");
   s.samples_per_frame = static_cast<int>(cfg::get_int(*st, "samples_per_frame", 1, 1, 64));
   s.rate_hz = cfg::get_number(*st, "rate_hz", 1000.0, 1e-3, 1e6);
-  for (auto&& [k, v] : *st) s.key_where[std::string(k.str())] = cfg::where(v) + ": [dut.stream]";
-  auto dec = std::make_shared<const DbcStreamDecoder>(std::move(db), std::move(s), cfg::where(*st) + ": [dut.stream]");
+  for (auto&& [k, v] : *st) s.key_where[std::string(k.str())] = cfg::where(v) + ": " + st_name;
+  auto dec = std::make_shared<const DbcStreamDecoder>(std::move(db), std::move(s), cfg::where(*st) + ": " + st_name);
   // With a command channel the link reads the protocol's own frames too; the stream's decoder
   // has the first claim on a frame, so a stream message on one of their ids would swallow the
   // DUT's responses or heartbeat (a review: ids 0x011 and 0x700 were accepted).
@@ -353,10 +354,10 @@ std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::t
           {can_id::kLoopEnd, "loop-test end markers"}, {can_id::kHeartbeat, "heartbeat"}};
       for (const auto& [id, what] : kProtocol)
         if (!f.extended && f.id == id) {
-          char b[160];
+          char b[256];
           std::snprintf(b, sizeof b, ": a stream message on CAN id 0x%03X, which the DUT protocol uses for its %s "
-                        "([dut] commands = true): move the stream or set commands = false", id, what);
-          throw ConfigError(cfg::where(*st) + ": [dut.stream]" + b);
+                        "([%s] commands = true): move the stream or set commands = false", id, what, section.c_str());
+          throw ConfigError(cfg::where(*st) + ": " + st_name + b);
         }
     }
   return dec;

@@ -128,8 +128,10 @@ DbcStreamSpec rig_protocol_stream();
 
 // [dut] dbc = "FILE" (relative to the hardware file's folder) and [dut.stream]; unknown
 // keys and bad values => ConfigError naming file:line. Without `dbc`: the rig protocol's
-// DBC and stream (then [dut.stream] may not be given).
-std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut);
+// DBC and stream (then [dut.stream] may not be given). `section`: the table's name in messages
+// ("plant.firmware" for the emulated firmware's, spelled the same).
+std::shared_ptr<const DbcStreamDecoder> stream_decoder_from_config(const toml::table& dut,
+                                                                   const std::string& section = "dut");
 // [dut] dbc's path as stream_decoder_from_config() reads it (relative to the hardware file's
 // folder); empty without `dbc`.
 std::string dut_dbc_path(const toml::table& dut);

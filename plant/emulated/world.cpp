@@ -1,8 +1,10 @@
 #include "plant/emulated/world.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
+#include "firmware_link/dbc_stream.hpp"
 #include "plant/firmware/firmware_config.hpp"
 #include "plant/firmware/firmware_emulator.hpp"
 #include "plant/firmware/inprocess_dut.hpp"
@@ -61,6 +63,17 @@ EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& se
   lo.firmware = firmware_options(cfg::get_table(plant_cfg, "firmware"));
   lo.link.commands = lo.firmware.commands;
   if (lo.firmware.stream) lo.link.stream = lo.firmware.stream->layout();
+  // The same tick for a described stream: a rate_hz other than the tick's labelled the captures
+  // 1000 Hz while the layout said otherwise (a review).
+  if (lo.link.stream && std::abs(lo.link.stream->rate_hz() - tick_hz) > 1e-9 * tick_hz) {
+    const auto& kw = lo.link.stream->spec().key_where;
+    const auto at = kw.find("rate_hz");
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "%.9g", lo.link.stream->rate_hz());
+    throw ConfigError((at != kw.end() ? at->second : std::string("[plant.firmware.stream]")) + ": rate_hz = " + rate +
+                      ": the emulated firmware streams one sample per " + std::to_string(kFirmwareTickNs / 1000) +
+                      " us tick, so its stream's rate must be " + std::to_string(std::llround(tick_hz)) + " Hz");
+  }
   link_ = link::make_inprocess_dut(*dut_, clock_, lo);
 }
 

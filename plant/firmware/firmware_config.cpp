@@ -13,7 +13,7 @@ FirmwareOptions firmware_options(const toml::table* t) {
   o.loop_test = cfg::get_bool(*t, "loop_test", true);
   // The same reader as the hardware file's [dut] dbc + [dut.stream]: one spelling of a layout.
   if (t->get("dbc") || t->get("stream"))
-    o.stream = std::make_shared<const link::DbcStreamEncoder>(link::stream_decoder_from_config(*t));
+    o.stream = std::make_shared<const link::DbcStreamEncoder>(link::stream_decoder_from_config(*t, "plant.firmware"));
   return o;
 }
 

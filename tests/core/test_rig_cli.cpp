@@ -2461,6 +2461,42 @@ TEST(RigCli, ADutStreamWithoutYFailsItsYValuesInsteadOfErroring) {
   EXPECT_TRUE(fs::exists(d + "/run/report.html"));
 }
 
+// A described stream's rate is checked against the profile's before anything opens: a hardware
+// file's [dut.stream] rate_hz = 500 under the ci profile's 1000 Hz passed the dry run, and the
+// run would have labelled every capture 1000 Hz (a review); the emulated firmware, which streams
+// one sample per 1 ms tick, refuses any other rate at its line.
+TEST(RigCli, AStreamRateThatIsNotTheProfilesIsRefusedBeforeAnythingOpens) {
+  const std::string d = tmp("stream-rate");
+  fs::create_directories(d);
+  const std::string layout = std::string("dbc = \"") + RIG_SOURCE_DIR +
+                             "/duts/qpa-counts.dbc\"\n[dut.stream]\ncounter = \"QPA_XY.cnt\"\nx = \"QPA_XY.x_counts\"\n";
+  for (const bool commands : {false, true}) {
+    std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\ncommands = "
+                                  << (commands ? "true" : "false") << "\n" << layout << "rate_hz = 500\n"
+                                  << "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"P\"\nestop = \"E\"\n"
+                                     "lamp_ready = \"LR\"\nlamp_running = \"LN\"\nlamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+    for (const bool dry : {true, false}) {
+      std::vector<std::string> args{"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--serial", "X-1", "--yes",
+                                    "--out", d + "/run"};
+      if (dry) args.push_back("--dry-run");
+      EXPECT_EQ(run(args, d + "/io"), 2) << slurp(d + "/io.stderr");
+      EXPECT_NE(slurp(d + "/io.stderr").find("hw.toml:10:11: [dut.stream]: rate_hz = 500: the DUT streams at 500 Hz, but "
+                                             "profile 'ci' (builtin:ci) records at rate_hz = 1000 Hz"),
+                std::string::npos)
+          << slurp(d + "/io.stderr");
+      EXPECT_FALSE(fs::exists(d + "/run")) << "nothing written, nothing opened";
+    }
+  }
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[plant.firmware]\ndbc = \"" << RIG_SOURCE_DIR
+                               << "/duts/qpa-counts.dbc\"\n[plant.firmware.stream]\ncounter = \"QPA_XY.cnt\"\n"
+                                  "x = \"QPA_XY.x_counts\"\nrate_hz = 500\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--dry-run"}, d + "/emu"), 2) << slurp(d + "/emu.stderr");
+  EXPECT_NE(slurp(d + "/emu.stderr").find("p.toml:7:11: [plant.firmware.stream]: rate_hz = 500: the emulated firmware "
+                                          "streams one sample per 1000 us tick, so its stream's rate must be 1000 Hz"),
+            std::string::npos)
+      << slurp(d + "/emu.stderr");
+}
+
 // The same DUT emulated end to end: the firmware streams from power-on and ignores commands
 // ([plant.firmware] commands = false); the run completes, the passport names the skipped steps,
 // and the loop figures, which have limits in the ci profile, are null and fail the run.
