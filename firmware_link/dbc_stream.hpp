@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -103,22 +104,28 @@ struct StreamSample {
 };
 class DbcStreamEncoder {
  public:
-  // A layout whose messages cannot be sent (a message whose roles need two multiplexer values
-  // at once) => ConfigError.
+  // A layout whose messages cannot be sent (a multiplexed counter with a role under another
+  // multiplexer value) => ConfigError. Roles under several values are sent as one frame per
+  // value, in the value's order.
   explicit DbcStreamEncoder(std::shared_ptr<const DbcStreamDecoder> layout);
   int samples_per_frame() const { return layout_->spec().samples_per_frame; }
   // Whether any frame is longer than 8 bytes (a CAN FD layout).
   bool fd() const { return fd_; }
   // The frames of samples_per_frame() samples, the first with `counter` (its low counter_bits
   // are sent; sample i has counter + i), one frame per message of the layout in identifier
-  // order. Values beyond an integer signal's range are sent as its end value (a saturated
+  // order (per multiplexer value of a multiplexed one). Values beyond an integer signal's range are sent as its end value (a saturated
   // output stays saturated); a status or flag signal shared by the samples of a frame carries
   // the OR of their flags.
   void encode(uint32_t counter, std::span<const StreamSample> samples, std::vector<CanFdFrame>& out) const;
   const std::shared_ptr<const DbcStreamDecoder>& layout() const { return layout_; }
 
  private:
+  // One frame of message `r`: the roles under multiplexer value `page` (none: not multiplexed).
+  void encode_page(const DbcStreamDecoder::Roles& r, std::optional<int> page, uint32_t counter,
+                   std::span<const StreamSample> samples, uint8_t all, std::vector<CanFdFrame>& out) const;
+
   std::shared_ptr<const DbcStreamDecoder> layout_;
+  std::map<uint64_t, std::vector<int>> pages_;  // per message: the multiplexer values its frames carry
   bool fd_ = false;
 };
 
