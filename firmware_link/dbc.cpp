@@ -307,11 +307,19 @@ class DbcParser {
     // SIG_VALTYPE_ comes after both): a signal multiplexed in a message with no multiplexor was
     // never decoded, a float multiplexor selected pages by its bits (a review).
     for (const auto& m : db_.messages_) {
-      const bool has_mux = std::any_of(m.signals.begin(), m.signals.end(), [](const DbcSignal& s) { return s.multiplexor; });
+      const auto mux = std::find_if(m.signals.begin(), m.signals.end(), [](const DbcSignal& s) { return s.multiplexor; });
+      const bool has_mux = mux != m.signals.end();
       for (const auto& s : m.signals) {
         if (s.mux_value && !has_mux)
           fail(src_, s.line, "signal " + s.name + " is multiplexed (m" + std::to_string(*s.mux_value) + ") but message " +
                                  m.name + " has no multiplexor (M)");
+        // A page the multiplexor's bits cannot carry is never selected: its signals never arrive
+        // (a review: m9 under a 2-bit multiplexor was accepted, and a log read as nothing).
+        if (s.mux_value && has_mux && mux->length < 63 && *s.mux_value >= (int64_t{1} << mux->length))
+          fail(src_, s.line, "signal " + s.name + " is on multiplexer page " + std::to_string(*s.mux_value) +
+                                 ", which multiplexor " + mux->name + " of " + m.name + " (" +
+                                 std::to_string(mux->length) + " bits: pages 0.." +
+                                 std::to_string((int64_t{1} << mux->length) - 1) + ") cannot carry");
         if (s.multiplexor && s.value_type != 0)
           fail(src_, s.line, "multiplexor " + s.name + " of " + m.name + " is a float (SIG_VALTYPE_): it must be an integer");
       }

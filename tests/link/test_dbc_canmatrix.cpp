@@ -303,6 +303,11 @@ TEST(DbcHandWritten, MalformedFilesNameTheLine) {
                      "SIG_VALTYPE_ 256 a : 1;\n"),
             "h.dbc:2: multiplexor a of M is a float (SIG_VALTYPE_): it must be an integer");
   EXPECT_EQ(error_of("\xEF\xBB\xBF" + bo), "no error");
+  // A page the multiplexor's bits cannot carry (m9 under 2 bits) is never selected (a review).
+  const std::string two_bits = "BO_ 256 M: 8 DUT\n SG_ p M : 0|2@1+ (1,0) [0|3] \"\" X\n";
+  EXPECT_EQ(error_of(two_bits + " SG_ a m3 : 8|8@1+ (1,0) [0|1] \"\" X\n"), "no error");
+  EXPECT_EQ(error_of(two_bits + " SG_ a m4 : 8|8@1+ (1,0) [0|1] \"\" X\n"),
+            "h.dbc:3: signal a is on multiplexer page 4, which multiplexor p of M (2 bits: pages 0..3) cannot carry");
 }
 
 // Vector's CANdb++ writes DBC files in Windows-1252: a file that is not UTF-8 is read so (as
