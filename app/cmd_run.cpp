@@ -371,9 +371,11 @@ void check_procedure_angles_in_travel(const RunArgs& a, const toml::table& hw, c
   // profile does not have).
   const toml::table* mount = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
   std::optional<toml::table> profile_file;
-  if (!mount && p.source.rfind("builtin:", 0) != 0) {
-    try {
-      profile_file = cfg::parse_file(p.source);
+  if (!mount) {
+    try {  // a built-in profile's text has lines too (it said "builtin:ci:" with none, a review)
+      profile_file = p.source.rfind("builtin:", 0) == 0
+                         ? cfg::parse_string(acceptance::builtin_profile_text(p.source.substr(8)), p.source)
+                         : cfg::parse_file(p.source);
     } catch (const std::exception&) {  // read once already; only the line is lost
     }
   }

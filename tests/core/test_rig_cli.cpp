@@ -1543,6 +1543,22 @@ TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
   EXPECT_NE(slurp(d + "/io2.stderr").find(d + "/lim2.toml:3:11: u20_deg = 170°: outside"), std::string::npos)
       << slurp(d + "/io2.stderr");
   EXPECT_NE(slurp(d + "/io2.stderr").find("change the profile's [table] u10_deg / u20_deg"), std::string::npos);
+  // A built-in profile's angle is named at its line in the built-in text (it said "builtin:ci:"
+  // with no line, a review), here against a CiA 402 drive map's travel.
+  std::string map = slurp(std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml");
+  map.replace(map.find("pos_deg = 370.0"), 15, "pos_deg = 150.0");
+  std::ofstream(d + "/map.toml") << map;
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \"map.toml\"\n"
+                                   "[dut]\ncan = \"vcan-none\"\n[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"P\"\n"
+                                   "estop = \"E\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\nlamp_pass = \"LP\"\n"
+                                   "lamp_fail = \"LF\"\n";
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--serial", "X-1", "--dry-run"}, d + "/io3"), 2);
+  EXPECT_NE(slurp(d + "/io3.stderr").find("builtin:ci:"), std::string::npos) << slurp(d + "/io3.stderr");
+  EXPECT_NE(slurp(d + "/io3.stderr").find(": u20_deg = 180°: outside the table's travel [-190°, 150°]"),
+            std::string::npos)
+      << slurp(d + "/io3.stderr");
+  EXPECT_EQ(slurp(d + "/io3.stderr").find("builtin:ci: u20_deg"), std::string::npos)
+      << "with its line and column: " << slurp(d + "/io3.stderr");
 }
 
 // One process per run folder: a folder another process holds (its flock, as a running `rig run`
