@@ -95,6 +95,16 @@ bool DriveMap::fits(Obj ob, int64_t v) const {
   return v >= lo && v <= hi;
 }
 
+namespace {
+// A register address as maps write them: hex (0x200A) beside the decimal (a review: a map in hex
+// with an address_base read "registers 8202..8203").
+std::string reg_text(uint32_t a) {
+  char b[32];
+  std::snprintf(b, sizeof b, "0x%04X (%u)", a, a);
+  return b;
+}
+}  // namespace
+
 std::string DriveMap::range_text(Obj ob) const {
   const ObjectSpec& s = spec(ob);
   const auto [lo, hi] = register_range(s);
@@ -239,8 +249,8 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
     const auto lo = static_cast<uint32_t>(addr);
     for (const Span& o2 : spans) {
       if (o2.input == s.input && lo < o2.hi && o2.lo < lo + s.words())
-        fail(*t, "'" + std::string(info.key) + "' (registers " + std::to_string(lo) + ".." +
-                     std::to_string(lo + s.words() - 1) + ") overlaps '" + object_info(static_cast<Obj>(o2.obj)).key +
+        fail(*t, "'" + std::string(info.key) + "' (registers " + reg_text(lo) + ".." + reg_text(lo + s.words() - 1) +
+                     ") overlaps '" + object_info(static_cast<Obj>(o2.obj)).key +
                      "' at " + cfg::where(*o2.node));
     }
     spans.push_back({i, s.input, lo, lo + s.words(), t});

@@ -85,7 +85,9 @@ TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
   EXPECT_TRUE(has(e, "bad-map.toml:8:") && has(e, "target_position") && has(e, "0x607A")) << e;
   // Overlap: target at 8 overlaps velocity_actual (7..8).
   e = map_error(std::string(kHead) + "target_position = { index = 0x607A, address = 8, width = 32 }\n");
-  EXPECT_TRUE(has(e, "bad-map.toml:16:") && has(e, "overlaps 'velocity_actual'") && has(e, "bad-map.toml:15:")) << e;
+  EXPECT_TRUE(has(e, "bad-map.toml:16:") && has(e, "(registers 0x0008 (8)..0x0009 (9)) overlaps 'velocity_actual'") &&
+              has(e, "bad-map.toml:15:"))
+      << e;
   // Unknown object, unknown key inside an object, unknown section key.
   e = map_error(ok + "statuswrod = { index = 0x6041, address = 30 }\n");
   EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "unknown object 'statuswrod'")) << e;
