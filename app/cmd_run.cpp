@@ -402,18 +402,30 @@ void check_emulated_rate(const toml::table& profile_table, const std::string& so
 
 // What the plan cannot do on this DUT, said before the run (the run says it again, with the
 // passport's `skipped`): the DUT's link options, or on the emulated plant its firmware's.
-std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg,
-                                       const acceptance::Profile& p) {
+// What the DUT can be asked, from the hardware file's [dut] or the emulated plant's [plant.firmware].
+struct DutAbilities {
   bool commands = true, loop_test = true;
+};
+DutAbilities dut_abilities(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
   if (a.plant == "hardware") {
     const link::LinkOptions o = link::link_options(*cfg::get_table(hw, "dut", true));
-    commands = o.commands;
-    loop_test = o.loop_test;
-  } else {
-    const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
-    commands = o.commands;
-    loop_test = o.loop_test;
+    return {o.commands, o.loop_test};
   }
+  const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
+  return {o.commands, o.loop_test};
+}
+
+// A loop test this DUT cannot run takes no device time: the plan and the progress said 2 s
+// (more for a longer loop test) for a phase that only records it was skipped (a review).
+void plan_skipped_loop_test(const DutAbilities& can, std::vector<Phase>& phases) {
+  if (can.commands && can.loop_test) return;
+  for (Phase& ph : phases)
+    if (ph.id == "loop") ph.planned_s = 0;
+}
+
+std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg,
+                                       const acceptance::Profile& p) {
+  const auto [commands, loop_test] = dut_abilities(a, hw, plant_cfg);
   std::vector<std::string> out;
   if (!commands) {
     out.push_back("identify: the DUT has no command channel (commands = false); the serial is --serial's");
@@ -982,6 +994,7 @@ int do_run(RunArgs a) {
   check_stream_rate(a, hw, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
+  plan_skipped_loop_test(dut_abilities(a, hw, plant_cfg), phases);
   MeasurementSet values;
   acceptance::declare_values(p, phases, values);
   const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};

@@ -2529,6 +2529,8 @@ TEST(RigCli, EmulatedDutWithoutCommandsRunsAndThePassportSaysWhatWasSkipped) {
   for (const char* step : {"skipped: identify", "skipped: set output filter", "skipped: loop test (no command channel)"})
     EXPECT_NE(plan.find(step), std::string::npos) << step << "\n" << plan;
   EXPECT_NE(plan.find("limited: the run will FAIL"), std::string::npos) << plan;
+  EXPECT_NE(plan.find("18. loop            00:00:00"), std::string::npos) << "a skipped loop test takes no time\n" << plan;
+  EXPECT_NE(plan.find("Plan: 19 phases, 00:03:38"), std::string::npos) << plan;  // the ci profile's 3:41 less the loop test's
   EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--serial", "LBL-7", "--out", d + "/run"}, d + "/io"), 1)
       << slurp(d + "/io.stderr");
   const auto p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
