@@ -848,6 +848,17 @@ acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table
   t.velocity_dps = o.velocity_dps.value_or(t.velocity_dps);
   t.accel_dps2 = o.accel_dps2.value_or(t.accel_dps2);
   t.drive_settle_s = o.drive_settle_s.value_or(t.drive_settle_s);
+  // A CiA 402 drive is sent whole units: the plan moves at what the drive is sent (0.1 deg/s
+  // sent as 0.12 was planned at 0.1, a review). Zero is refused by the map's check before this.
+  if (modbus::table_drive(*table) == "cia402") {
+    const modbus::DriveMap map = modbus::table_drive_map(*table);
+    if (o.velocity_dps && map.has(modbus::Obj::kProfileVelocity))
+      if (const double u = std::llround(map.dps_to_velocity_units(*o.velocity_dps)); u != 0)
+        t.velocity_dps = std::fabs(map.velocity_units_to_dps(u));
+    if (o.accel_dps2 && map.has(modbus::Obj::kProfileAcceleration))
+      if (const double u = std::llround(map.dps2_to_accel_units(*o.accel_dps2)); u != 0)
+        t.accel_dps2 = std::fabs(map.accel_units_to_dps2(u));
+  }
   return t;
 }
 

@@ -1995,6 +1995,37 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
   }
 }
 
+// A CiA 402 drive is sent whole units: the plan moves at the velocity the drive is sent (0.1
+// deg/s sent as 0.12 was planned at 0.1, a review). Here 1.5 rpm of the motor is sent as 2 rpm,
+// so 0.1 deg/s plans as 2 rpm's 0.1333 deg/s does.
+TEST(RigCli, DryRunPlansTheVelocityADriveIsSent) {
+  const std::string d = tmp("dry-sent");
+  fs::create_directories(d);
+  std::string map = slurp(std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml");
+  map.replace(map.find("velocity_unit = \"counts_per_s\""), 30, "velocity_unit = \"rpm\"         ");
+  std::ofstream(d + "/map.toml") << map;
+  auto estimate = [&](const std::string& name, const std::string& velocity) {
+    std::ofstream(d + "/" + name + ".toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                               "drive_map = \"map.toml\"\nvelocity_dps = " << velocity << "\n"
+                                            << "[dut]\ncan = \"vcan-none\"\n[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\n"
+                                               "power = \"P\"\nestop = \"E\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                               "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+    EXPECT_EQ(run({"run", "--hardware", d + "/" + name + ".toml", "--profile", "ci", "--serial", "X-1", "--dry-run"},
+                  d + "/" + name),
+              0)
+        << slurp(d + "/" + name + ".stderr");
+    const std::string out = slurp(d + "/" + name + ".stdout");
+    const auto at = out.find("Estimated duration: ");
+    return at == std::string::npos ? std::string() : out.substr(at + 20, out.find(' ', at + 20) - at - 20);
+  };
+  const std::string asked = estimate("asked", "0.1"), sent = estimate("sent", "0.13333333333333333"),
+                    other = estimate("other", "0.2");
+  EXPECT_NE(slurp(d + "/asked.stderr").find("sent as 2 rpm"), std::string::npos) << slurp(d + "/asked.stderr");
+  EXPECT_FALSE(asked.empty());
+  EXPECT_EQ(asked, sent);
+  EXPECT_NE(asked, other) << "the estimate does follow the velocity";
+}
+
 // On hardware the plan costs each move with the hardware file's table settings and the mount's
 // angles ([procedure]): a faster drive, or U20 nearer U10, shortens the estimate; bring-up is
 // named as not estimated.
