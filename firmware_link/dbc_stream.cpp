@@ -207,6 +207,21 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
             fail(std::string(flag_keys[k]) + " = \"" + *flag_names[k] + "\": no such signal in " + m->name);
         }
     }
+    // A status or flag on a multiplexer page with no x or y of its sample: the decoder gives a
+    // frame's flags to that frame's x and y, so they would reach no sample (a code review: the
+    // emulator sent such a page, and 200 saturated samples decoded as 0).
+    for (const Slot& sl : r.samples) {
+      const auto on_a_sample_page = [&](const DbcSignal* s) {
+        const auto with = [&](const DbcSignal* v) { return v && (!v->mux_value || v->mux_value == s->mux_value); };
+        return !s || !s->mux_value || with(sl.x) || with(sl.y);
+      };
+      const DbcSignal* lone = !on_a_sample_page(sl.status) ? sl.status : nullptr;
+      for (int k = 0; k < 3 && !lone; ++k)
+        if (!on_a_sample_page(sl.flag[k])) lone = sl.flag[k];
+      if (lone)
+        fail(m->name + "." + lone->name + " is on multiplexer page " + std::to_string(*lone->mux_value) + ", where " +
+             m->name + " carries neither x nor y: its flags would reach no sample");
+    }
     check_no_shared_bits(r, status_bits, dbc_->source(), fail);
     by_frame_[key(m->id, m->extended)] = std::move(r);
   }

@@ -131,7 +131,8 @@ void FirmwareEmulator::send_layout_sample(uint64_t seq, float x, float y, uint8_
   const auto n = static_cast<std::size_t>(opts_.stream->samples_per_frame());
   if (block_.size() < n) return;
   // The faults act on what the bus carries: a dropped sample takes its frames with it (all the
-  // block's samples when they share a frame); channel c of drop_frames is the c-th message.
+  // block's samples when they share a frame); channel c of drop_frames is the c-th frame of a
+  // block (a message, or one multiplexer page of it).
   bool drop = false;
   for (std::size_t i = 0; i < n; ++i) drop = drop || dropped(block_seq_ + i);
   frames_.clear();

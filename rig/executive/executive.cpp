@@ -250,6 +250,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
                          const std::vector<std::string>& completed, const nlohmann::json& identity) {
   RunResult result;
   std::vector<std::string> done = completed;
+  std::size_t checkpointed = completed.size();  // what the folder's checkpoint holds (RunResult::checkpointed)
   for (const auto& p : phases) result.phases.push_back({p.id, p.title, "pending", "", "", ""});
   // A resume's kept phases are kept from the start: a stop during bring-up (or the emulation's
   // fast-forward) wrote every phase "pending", though the checkpoint holds them (a review).
@@ -292,6 +293,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       if (was_done) rec.message = "computed again from the kept records (resume)";
       else done.push_back(p.id);  // `done` stays a prefix of the phases, in their order
       write_checkpoint(done, values, state, identity);
+      checkpointed = done.size();  // only once written: a failed write keeps the count before it
       log_->info("phase {} done{} (checkpointed)", p.id, was_done ? ", computed again from the kept records" : "");
       if (progress_) progress_->phase_finished(p.id, rec.status, rec.message);
       current = phases.size();
@@ -335,7 +337,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     rec.message = result.message;
     if (progress_) progress_->phase_finished(rec.id, rec.status, rec.message);
   }
-  result.checkpointed = done.size();
+  result.checkpointed = checkpointed;
   safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
   return result;
 }

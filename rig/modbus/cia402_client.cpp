@@ -39,6 +39,12 @@ Cia402Table::Cia402Table(std::unique_ptr<RegisterTransport> transport, DriveMap 
                    "docs/cia402-drive-maps.md, \"Which device answers\")");
 }
 
+// A servo holding position reads a velocity of a unit or so either way: below 0.01 °/s, or one
+// unit of the drive's velocity object where that is coarser (a review: rpm through a 100:1 gear
+// is 0.06 °/s a unit, and a drive at rest jittering by one unit blocked every move for 30 s as
+// "still moving").
+double Cia402Table::at_rest_dps() const { return std::max(0.01, 1.5 * std::fabs(map_.velocity_units_to_dps(1.0))); }
+
 std::string Cia402Table::describe() const { return transport_->describe() + " cia402 \"" + map_.name + "\""; }
 
 // One object, named with its register and the drive when the link fails.
@@ -151,8 +157,26 @@ std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken
   if ((type & 0xFFFF) == c4::kDeviceProfile) return "";
   char b[16];
   std::snprintf(b, sizeof b, "0x%0*llX", map_.spec(Obj::kDeviceType).width / 4, static_cast<unsigned long long>(type));
-  return map_.describe(Obj::kDeviceType) + " reads " + b +
-         ", not device profile 402 (0x0192) in its low word: not a CiA 402 drive, or the map's address is wrong";
+  // 0x0192 in the high word of a 32-bit read: the drive's words in the other order (a review).
+  const bool swapped = map_.spec(Obj::kDeviceType).width == 32 && ((type >> 16) & 0xFFFF) == c4::kDeviceProfile;
+  return map_.describe(Obj::kDeviceType) + " reads " + b + ", not device profile 402 (0x0192) in its low word: " +
+         (swapped ? "0x0192 is in its high word, so the drive sends 32-bit values in the other word order than the "
+                    "map's word_order says (high_first / low_first)"
+                  : "not a CiA 402 drive, or the map's address is wrong");
+}
+
+// A homed table reads inside its travel. One that reads outside it is read wrong: a map whose
+// word order is the drive's reversed read 580.78° on a [-10°, 350°] table, and its move to 20°
+// went to 204.78° at the drive's top speed, reported done (a review). Refused before anything is
+// written; a table truly past a limit is moved off it with the drive's own tools.
+void Cia402Table::refuse_outside_travel(const std::string& doing, const Cia402Reading& r) const {
+  constexpr double kMarginDeg = 1.0;  // a table stopped just past a limit by its deceleration
+  if (r.actual_deg >= map_.limit_neg_deg - kMarginDeg && r.actual_deg <= map_.limit_pos_deg + kMarginDeg) return;
+  throw HardwareError(doing + ": position actual reads " + deg_str(r.actual_deg) + ", outside the travel [limits] [" +
+                      deg_str(map_.limit_neg_deg) + ", " + deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path +
+                      ": the map does not read this drive as it is (check word_order, counts_per_rev, gear_ratio, "
+                      "direction and the home offset against the drive's manual), or the table was not homed; "
+                      "nothing sent");
 }
 
 // The first reading of a client, before it writes anything. A review found a CiA 402 client at a
@@ -186,8 +210,8 @@ TableStatus Cia402Table::status() {
   s.homed = map_.homed_bit ? r.has(static_cast<uint16_t>(1u << *map_.homed_bit)) : homed_;
   s.homed_known = map_.homed_bit.has_value() || homed_;
   s.homing = r.mode_display == c4::kModeHoming && s.servo_on && !r.has(c4::sw::kTargetReached);
-  // Velocity actual below 0.01 °/s is a servo holding position, not motion.
-  s.moving = std::fabs(r.velocity_dps) > 0.01 || (s.servo_on && !r.has(c4::sw::kTargetReached));
+  // Velocity actual within at_rest_dps() is a servo holding position, not motion.
+  s.moving = std::fabs(r.velocity_dps) > at_rest_dps() || (s.servo_on && !r.has(c4::sw::kTargetReached));
   s.in_position = s.servo_on && r.has(c4::sw::kTargetReached) && !s.moving;
   s.alarm = st == State::kFault || st == State::kFaultReactionActive;
   s.alarm_code = r.error_code;
@@ -247,7 +271,7 @@ void Cia402Table::enable_operation(const std::string& doing, const CancelToken& 
       case State::kQuickStopActive: {  // after our quick stop: Disable voltage (transition 12), then up again
         // Not while the quick-stop ramp still runs: disabling would drop the axis on its brake.
         const double t_rest = clock_.now_s();
-        while (std::fabs(r.velocity_dps) > 0.01) {
+        while (std::fabs(r.velocity_dps) > at_rest_dps()) {
           if (clock_.now_s() - t_rest > kRestTimeoutS)
             throw HardwareError(doing + ": still moving " + secs(kRestTimeoutS) + " after a quick stop" + at(r));
           clock_.sleep_for(opt_.poll_s, cancel);
@@ -283,7 +307,7 @@ void Cia402Table::enable_operation(const std::string& doing, const CancelToken& 
 // first one's axis mid-move. Bounded, so a runaway is reported.
 void Cia402Table::wait_at_rest(const std::string& doing, const CancelToken& cancel) {
   const double t0 = clock_.now_s();
-  for (Cia402Reading r = read(cancel); std::fabs(r.velocity_dps) > 0.01; r = read(cancel)) {
+  for (Cia402Reading r = read(cancel); std::fabs(r.velocity_dps) > at_rest_dps(); r = read(cancel)) {
     fail_on_fault(doing, r);
     if (clock_.now_s() - t0 > kRestTimeoutS)
       throw HardwareError(doing + ": the table is still moving after " + secs(kRestTimeoutS) +
@@ -444,11 +468,12 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
                       "] of drive map " + map_.path);
   // An unhomed table is refused before anything is written: enabling operation first left the
   // drive in Operation enabled after the refusal (a review).
-  if (map_.homed_bit) {
+  {
     const Cia402Reading r = detail::read_before_motion([&] { return read(cancel); },
                                                        [&](auto body) { guarded(doing, body); });
-    if (!r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
+    if (map_.homed_bit && !r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
       throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
+    refuse_outside_travel(doing, r);
   }
   guarded(doing, [&] {
     enable_operation(doing, cancel);
@@ -487,6 +512,23 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       r = read(cancel);
     }
     const double start_deg = r.actual_deg;
+    // The profile velocity the drive holds: what the timeout is set from, and the fastest the
+    // position may change between two readings.
+    double v = opt_.velocity_dps.value_or(0);
+    if (v <= 0 && map_.has(Obj::kProfileVelocity))
+      v = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kProfileVelocity, cancel))));
+    // Faster than that lets the table turn, twice over plus a degree, from one reading to the
+    // next: the map reads the position wrong (a word order the drive's reversed reads 65536 counts
+    // per count; a review's table went to 204.78° for a move to 20°, reported done).
+    double paced_deg = start_deg, paced_at = clock_.now_s();
+    const auto check_pace = [&](const Cia402Reading& now_r, double now) {
+      if (const double jump = std::fabs(now_r.actual_deg - paced_deg); v > 0 && jump > 2 * v * (now - paced_at) + 1.0)
+        throw HardwareError(doing + ": position actual jumped " + deg_str(jump) + " in " + secs(now - paced_at) +
+                            ", faster than the profile velocity " + deg_str(v) + "/s lets the table turn: the map "
+                            "does not read this drive's position as it is (check word_order, counts_per_rev and "
+                            "gear_ratio against the drive's manual)" + at(now_r));
+      paced_deg = now_r.actual_deg, paced_at = now;
+    };
     const int64_t target_counts = map_.deg_to_counts(deg);
     write_object(Obj::kTargetPosition, target_counts, cancel);
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint | c4::cw::kChangeImmediately, cancel);
@@ -498,6 +540,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // Before the timeout's "not acknowledged": a drive that left Operation enabled or a stop
       // request never acknowledges, and the reason is that, not the drive.
       fail_unless_moving(doing, r, "waiting for the set-point acknowledge", target_counts);
+      check_pace(r, clock_.now_s());
       if (r.has(c4::sw::kSetPointAck)) break;
       // The table was at rest, and this word released halt: motion without the acknowledge is
       // the drive continuing a move a halt interrupted, to its old target (the set-point refused:
@@ -507,7 +550,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // poll may read the statusword just before the drive took the set-point, and a drive may set
       // bit 12 some cycles after its motion starts). Taken before for another master's move after
       // ack_timeout_s, with no halt, it let the table run on to the old target unwatched (a review).
-      if (unacked_motion(std::fabs(r.velocity_dps) > 0.01, clock_.now_s()) >= opt_.unacked_motion_s)
+      if (unacked_motion(std::fabs(r.velocity_dps) > at_rest_dps(), clock_.now_s()) >= opt_.unacked_motion_s)
         throw HardwareError(doing + ": the table moves but the set-point is not acknowledged (statusword bit 12 clear): "
                                     "the drive continuing a halted move to its old target, or another master's move?" +
                             at(r));
@@ -526,9 +569,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge
     double timeout = opt_.move_timeout_s;
     if (timeout <= 0) {
-      double v = opt_.velocity_dps.value_or(0), a = opt_.accel_dps2.value_or(0);
-      if (v <= 0 && map_.has(Obj::kProfileVelocity))
-        v = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kProfileVelocity, cancel))));
+      double a = opt_.accel_dps2.value_or(0);
       if (a <= 0 && map_.has(Obj::kProfileAcceleration))
         a = map_.accel_units_to_dps2(static_cast<double>(read_object(Obj::kProfileAcceleration, cancel)));
       const double tt = trapezoid_time(deg - start_deg, v, a);
@@ -544,6 +585,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       fail_on_fault(doing, r);
       const double now = clock_.now_s();
       fail_unless_moving(doing, r, "during the move", target_counts);
+      check_pace(r, now);
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
@@ -693,7 +735,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // One urgent read of velocity actual; false where it reads moving or cannot be read.
 bool Cia402Table::axis_reads_at_rest() noexcept {
   try {
-    return std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= 0.01;
+    return std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= at_rest_dps();
   } catch (...) {
     return false;
   }

@@ -85,6 +85,10 @@ class Cia402Table final : public RotaryTable {
   void send_stop(uint16_t word, const char* name) noexcept;
   bool stop_goes_out(uint16_t statusword, const char* name) noexcept;
   bool axis_reads_at_rest() noexcept;
+  // HardwareError when a homed table's position actual reads outside the map's travel.
+  void refuse_outside_travel(const std::string& doing, const Cia402Reading& r) const;
+  // The largest velocity actual (°/s) read as a servo holding position.
+  double at_rest_dps() const;
   template <class Body>
   void guarded(const std::string& doing, Body body);
 

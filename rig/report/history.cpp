@@ -181,6 +181,18 @@ std::string ordered(const std::string& select, const Filter& f, std::vector<Valu
   return "SELECT * FROM (" + select + " ORDER BY r.started DESC, r.id DESC LIMIT ?) AS newest ORDER BY newest.started, newest.id";
 }
 
+// The runs a listing shows, for its child tables (captures, endings): `where_clause`, and with a
+// limit only the newest `limit` runs' rows (their queries read every run's, filtered after, a
+// code review). The inner query's alias shadows the outer one's.
+std::string listed(const Filter& f, std::vector<Value>& params) {
+  std::string w = where_clause(f, params);
+  if (f.limit <= 0) return w;
+  const std::string inner = where_clause(f, params);
+  params.emplace_back(int64_t{f.limit});
+  return w + " AND r.id IN (SELECT newest.id FROM (SELECT r.id FROM runs r" + inner +
+         " ORDER BY r.started DESC, r.id DESC LIMIT ?) AS newest)";
+}
+
 std::optional<double> num(const Value& v) { return as_double(v); }
 
 // The run folder as the database keys it: absolute, its links resolved, so that "r1", "./r1/" and
@@ -347,7 +359,7 @@ std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
     out.push_back(std::move(x));
   }
   std::vector<Value> cparams;
-  const std::string cw = where_clause(f, cparams);
+  const std::string cw = listed(f, cparams);
   for (const Row& r : db->query("SELECT c.run_id, c.path FROM run_captures c JOIN runs r ON r.id = c.run_id" + cw +
                                     " ORDER BY c.run_id, c.seq",
                                 cparams)) {
@@ -355,7 +367,7 @@ std::vector<RunRow> list_runs(const std::string& db_url, const Filter& f) {
     if (it != index.end()) out[it->second].captures.push_back(as_text(r[1]));
   }
   std::vector<Value> eparams;
-  const std::string ew = where_clause(f, eparams);
+  const std::string ew = listed(f, eparams);
   for (const Row& r : db->query("SELECT e.run_id, e.outcome FROM run_endings e JOIN runs r ON r.id = e.run_id" + ew +
                                     " ORDER BY e.run_id, e.seq",
                                 eparams)) {

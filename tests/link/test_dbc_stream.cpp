@@ -349,6 +349,20 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   pg.counter = "P.cnt", pg.x = "P.x";
   EXPECT_EQ(spec_error(paged, pg), "hw.toml:9:1: [dut.stream]: x P.x is on multiplexer page 0, but counter P.cnt only "
                                    "on page 1: those frames would carry no counter");
+  // A status on a page of its own, where no x or y is: its flags would reach no sample (the
+  // decoder gives a frame's flags to that frame's samples; a code review).
+  const auto lone = std::make_shared<const Dbc>(Dbc::parse(
+      "VERSION \"\"\nBU_: DUT\nBO_ 289 P: 8 DUT\n SG_ page M : 0|8@1+ (1,0) [0|3] \"\" DUT\n"
+      " SG_ cnt : 8|16@1+ (1,0) [0|65535] \"\" DUT\n SG_ x m0 : 32|16@1- (1e-06,0) [0|0] \"g\" DUT\n"
+      " SG_ y m1 : 32|16@1- (1e-06,0) [0|0] \"g\" DUT\n SG_ st m1 : 48|8@1+ (1,0) [0|255] \"\" DUT\n"
+      " SG_ sat m3 : 56|1@1+ (1,0) [0|1] \"\" DUT\n",
+      "lone.dbc"));
+  DbcStreamSpec ls;
+  ls.counter = "P.cnt", ls.x = "P.x", ls.y = "P.y", ls.status = "P.st", ls.saturated_bit = 1;
+  EXPECT_EQ(spec_error(lone, ls), "no error") << "a status beside y on page 1";
+  ls.status = "", ls.saturated_bit = -1, ls.saturated = "P.sat";
+  EXPECT_EQ(spec_error(lone, ls), "hw.toml:9:1: [dut.stream]: P.sat is on multiplexer page 3, where P carries neither x "
+                                  "nor y: its flags would reach no sample");
 }
 
 // A layout whose sample shares bits with its counter or a flag would decode plausible numbers;

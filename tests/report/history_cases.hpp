@@ -73,6 +73,7 @@ inline void history_round_trip(const std::string& url, const std::string& run_ro
   ASSERT_EQ(newest.size(), 2u);
   EXPECT_EQ(newest[0].serial, "SN-3");  // the two newest, oldest first
   EXPECT_EQ(newest[1].started, "2026-11-05T07:00:00Z");
+  EXPECT_EQ(newest[1].captures, all[4].captures) << "the child rows of the listed runs (read for them alone)";
   h::Filter bad;
   bad.since = "last tuesday";
   EXPECT_THROW(h::list_runs(url, bad), ConfigError);

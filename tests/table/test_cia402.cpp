@@ -1390,6 +1390,110 @@ TEST(Cia402ClientHoming, HomeOffsetShiftsTheTableCoordinates) {
   EXPECT_NEAR(axis->actual_angle_deg(), 5.0, 0.005);
 }
 
+namespace {
+// The generic map with `from` replaced by `to` (each must be found), as a file of its own.
+m::DriveMap generic_map_with(const std::string& name, const std::vector<std::pair<std::string, std::string>>& edits) {
+  std::ifstream in(kDrives + "generic-cia402.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to] : edits) {
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  }
+  const std::string path = testing::TempDir() + "/" + name + ".toml";
+  std::ofstream(path) << text;
+  return m::load_drive_map(path);
+}
+}  // namespace
+
+// A map whose word order is the drive's reversed (a review: the table read 580.78° on a
+// [-10°, 350°] table, and a move to 20° went to 204.78° at the drive's top speed, reported
+// done). With a 32-bit device type mapped, the client says the order is reversed before it
+// writes anything; without one, a homed table read outside its travel is refused before
+// anything is written, and a position that changes faster than the profile velocity allows
+// halts the move.
+TEST(Cia402ClientWordOrder, AReversedWordOrderIsFoundBeforeOrDuringTheFirstMove) {
+  Rig r("generic-cia402.toml");  // the drive: high word first
+  auto right = r.client();
+  right->home({});
+  right->move_to(12.5, {});
+  const m::DriveMap typed = generic_map_with("reversed-typed", {{"word_order = \"high_first\"", "word_order = \"low_first\""}});
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  try {
+    m::Cia402Table(m::make_inprocess_transport(r.drive, r.clock), typed, r.clock, opt).move_to(20.0, {});
+    ADD_FAILURE() << "no exception";
+  } catch (const HardwareError& e) {
+    EXPECT_TRUE(has(e.what(), "0x0192 is in its high word, so the drive sends 32-bit values in the other word order "
+                              "than the map's word_order says")) << e.what();
+  }
+  testing::internal::CaptureStderr();  // the map without device_type is warned about
+  const m::DriveMap untyped = generic_map_with("reversed", {{"word_order = \"high_first\"", "word_order = \"low_first\""},
+                                                           {"device_type ", "# device_type "}});
+  m::Cia402Table wrong(m::make_inprocess_transport(r.drive, r.clock), untyped, r.clock, opt);
+  try {
+    wrong.move_to(20.0, {});  // 12.5° = 0x00064000 counts reads 0x40000006: 32768°
+    ADD_FAILURE() << "no exception";
+  } catch (const HardwareError& e) {
+    EXPECT_TRUE(has(e.what(), "move to 20.0000°: position actual reads 32768.")) << e.what();
+    EXPECT_TRUE(has(e.what(), "outside the travel [limits] [-190.0000°, 370.0000°]")) << e.what();
+    EXPECT_TRUE(has(e.what(), "check word_order, counts_per_rev, gear_ratio, direction and the home offset")) << e.what();
+    EXPECT_TRUE(has(e.what(), "; nothing sent")) << e.what();
+  }
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 12.5, 0.005) << "not moved";
+  // At 0° the reversed reading is 0° too. A move to 0x00010002 counts (2.00006°) is written as
+  // 0x00020001 (4.00003°), inside the drive's own limits: on the way the reading passes values
+  // such as 0x00010064 read as 0x00640001 (200°), and the move is halted at the first reading that
+  // outruns the profile. (A target beyond the drive's own limits it refuses itself.)
+  right->move_to(0.0, {});
+  try {
+    wrong.move_to(65538.0 / 32768.0, {});
+    ADD_FAILURE() << "no exception";
+  } catch (const HardwareError& e) {
+    EXPECT_TRUE(has(e.what(), "position actual jumped")) << e.what() << " at " << r.axis->actual_angle_deg();
+    EXPECT_TRUE(has(e.what(), "halt delivered")) << e.what();
+  }
+  testing::internal::GetCapturedStderr();
+  r.run(2.0);
+  EXPECT_LT(std::fabs(r.axis->actual_angle_deg()), 4.0) << "halted before the written target";
+}
+
+// A servo at rest reads a velocity of a unit either way. Where a unit is coarse (rpm through a
+// 90:1 gear: 0.067 °/s), that jitter read as "still moving" and blocked every move for 30 s,
+// blamed on another Modbus master (a review). It reads as rest; a real move still waits.
+TEST(Cia402ClientHoming, OneUnitOfVelocityJitterAtRestIsRest) {
+  const m::DriveMap rpm = generic_map_with("rpm", {{"velocity_unit = \"counts_per_s\"", "velocity_unit = \"rpm\""}});
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, rpm);
+  struct Jitter : m::RegisterDevice {
+    plant::Cia402Drive& d;
+    const m::DriveMap& map;
+    int flip = 1;
+    Jitter(plant::Cia402Drive& drive, const m::DriveMap& m) : d(drive), map(m) {}
+    uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+      const uint8_t rc = d.read_registers(a, n, out);
+      const auto& v = map.spec(Obj::kVelocityActual);
+      if (rc == 0 && a <= v.address && v.address + 1 < a + n && map.decode(Obj::kVelocityActual, out + (v.address - a)) == 0) {
+        const auto words = map.encode(Obj::kVelocityActual, flip = -flip);  // +-1 rpm at rest
+        std::copy(words.begin(), words.end(), out + (v.address - a));
+      }
+      return rc;
+    }
+    uint8_t write_registers(uint16_t a, const uint16_t* w, uint16_t n) override { return d.write_registers(a, w, n); }
+    bool answering() const override { return d.answering(); }
+  } jitter(drive, rpm);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  m::Cia402Table t(m::make_inprocess_transport(jitter, clock), rpm, clock, opt);
+  t.home({});
+  const double t0 = clock.now_s();
+  t.move_to(20.0, {});
+  EXPECT_NEAR(axis->actual_angle_deg(), 20.0, 0.005);
+  EXPECT_LT(clock.now_s() - t0, 5.0) << "no wait for a rest the jitter never reaches";
+  EXPECT_FALSE(t.status().moving);
+}
+
 // A homing method the drive does not implement: homing error (bit 13), exit 4.
 TEST(Cia402ClientHoming, HomingErrorIsReported) {
   std::ifstream in(kDrives + "generic-cia402.toml");
