@@ -205,10 +205,10 @@ int cmd_import(const ImportArgs& a) {
     stream_frames -= suspect->frames.size();
     suspect.reset();
   };
-  // Without --iface, the interface of the stream's first frame and of the first on another one
-  // (with its line): a log of two stations (`candump -l any`) interleaves two DUTs' streams,
-  // which imported as one under one serial, exit 0 (a review).
-  std::optional<std::pair<std::string, std::size_t>> first_iface, second_iface;
+  // Without --iface, each interface that carries stream frames with its first line: a log of two
+  // stations (`candump -l any`) interleaves two DUTs' streams, which imported as one under one
+  // serial, exit 0 (a review).
+  std::vector<std::pair<std::string, std::size_t>> ifaces;
   bool too_long = false;
   for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln) {
     if (ln < a.from_line) continue;
@@ -236,11 +236,9 @@ int cmd_import(const ImportArgs& a) {
       continue;
     }
     if (a.iface.empty()) {  // one interface's stream: another's is another station's DUT
-      if (!first_iface) first_iface = std::make_pair(lf->iface, ln);
-      else if (lf->iface != first_iface->first) {
-        second_iface = std::make_pair(lf->iface, ln);
-        break;
-      }
+      if (std::none_of(ifaces.begin(), ifaces.end(), [&](const auto& i) { return i.first == lf->iface; }))
+        ifaces.emplace_back(lf->iface, ln);
+      if (ifaces.size() > 1) continue;  // mixed: the rest of the log is only read for its interfaces
     }
     if (!err.empty()) {
       ++malformed;
@@ -289,26 +287,34 @@ int cmd_import(const ImportArgs& a) {
     ++stream_frames;
     push(parts);
   }
-  if (second_iface) {
+  if (ifaces.size() > 1) {
     w.close();
     std::error_code ec;
     std::filesystem::remove(a.out, ec);
     const std::string own = dut.contains("can") ? cfg::get_string(dut, "can") : "";
-    const std::string both = fmt::format("frames of the [dut] stream on {} (from {}:{}) and on {} (from {}:{})",
-                                         first_iface->first, a.log, first_iface->second, second_iface->first, a.log,
-                                         second_iface->second);
-    if (!own.empty() && (own == first_iface->first || own == second_iface->first)) {
+    std::string listed, names;
+    bool own_among = false, unnamed = false;
+    for (const auto& [name, first] : ifaces) {
+      listed += fmt::format("{}{} (from {}:{})", listed.empty() ? "" : ", ",
+                            name.empty() ? "lines without an interface column" : name, a.log, first);
+      if (!name.empty()) names += (names.empty() ? "" : ", ") + name;
+      own_among = own_among || (!own.empty() && name == own);
+      unnamed = unnamed || name.empty();
+    }
+    const std::string both = "frames of the [dut] stream on " + listed;
+    if (own_among) {
       std::fprintf(stderr, "%s: %s: importing %s's, the hardware file's [dut] can (--iface for another)\n",
                    a.log.c_str(), both.c_str(), own.c_str());
       ImportArgs on_own = a;
       on_own.iface = own;
       return cmd_import(on_own);
     }
-    std::fprintf(stderr, "%s: %s: the log holds more than one station's stream (%s); give --iface %s or %s; %s not "
-                 "written\n", a.log.c_str(), both.c_str(),
+    std::fprintf(stderr, "%s: %s: the log holds more than one station's stream (%s); give --iface with one of: %s%s; "
+                 "%s not written\n", a.log.c_str(), both.c_str(),
                  own.empty() ? (a.hardware + "'s [dut] has no can to choose by").c_str()
                              : (a.hardware + "'s [dut] can is " + own).c_str(),
-                 first_iface->first.c_str(), second_iface->first.c_str(), a.out.c_str());
+                 names.c_str(), unnamed ? " (lines without an interface cannot be chosen: split the log)" : "",
+                 a.out.c_str());
     return kExitUsage;
   }
   // The log ends on held frames: a restart if their counter carried on, else strays.

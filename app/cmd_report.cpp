@@ -22,7 +22,7 @@ void add_report(CLI::App& app, int& rc) {
     // lock is held while the report is written, so no run takes the folder half-way (a check
     // alone left that window, a code review). A path that is no folder is named by the reader.
     std::optional<FolderLock> lock;
-    if (path_kind(*dir, "rig report") == PathKind::directory) lock.emplace(*dir, "rig report " + *dir);
+    if (path_kind(*dir, "rig report") == PathKind::directory) lock.emplace(*dir, "rig report " + *dir, false);
     std::cout << report::write_report(*dir) << "\n";
     rc = kExitPass;
   });

@@ -338,7 +338,8 @@ void check_stream_rate(const RunArgs& a, const toml::table& hw, const acceptance
   const auto at = kw.find("rate_hz");
   throw ConfigError(fmt::format("{}: the DUT streams at {} Hz, but profile '{}' ({}) records at rate_hz = {} Hz: every "
                                 "capture would be labelled with the profile's rate and every tau scaled by {:.6g}; "
-                                "make them agree",
+                                "rate_hz must be the rate the DUT streams at: run it with a profile that records at "
+                                "that rate",
                                 at != kw.end() ? at->second + ": rate_hz = " + fmt::format("{}", stream->rate_hz())
                                                : a.hardware + ": [dut.stream] gives no rate_hz (the default)",
                                 stream->rate_hz(), p.name, shown_text(p.source), p.rate_hz,

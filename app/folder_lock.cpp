@@ -16,13 +16,15 @@ int open_dir(const std::string& dir) { return ::open(dir.c_str(), O_RDONLY | O_D
 // The advice fits what the folder was for: only a new run can choose another folder (a resume
 // was told to "choose another --out", a review).
 ConfigError in_use(const std::string& what) {
-  return ConfigError(what + ": another rig run is using this folder now (it holds the folder's lock); wait for it to "
-                            "end" + (what.rfind("--out", 0) == 0 ? " or choose another --out" : ""));
+  return ConfigError(what + ": another rig run is using this folder now (it holds the folder's lock; a run or resume, "
+                            "or a report or history record being written); wait for it to end" +
+                     (what.rfind("--out", 0) == 0 ? " or choose another --out" : ""));
 }
 }  // namespace
 
-FolderLock::FolderLock(const std::string& dir, const std::string& what) {
+FolderLock::FolderLock(const std::string& dir, const std::string& what, bool must_lock) {
   const int fd = open_dir(dir);
+  if (fd < 0 && !must_lock) return;  // a reader's lock, on a folder it may read without listing
   if (fd < 0) throw ConfigError(what + ": cannot open the run folder to lock it: " + std::strerror(errno));
   // A dry run's check holds a shared lock for an instant: a few tries, 20 ms apart, before the
   // folder is called in use.

@@ -12,7 +12,9 @@ class FolderLock {
   // folder when another process holds it; `what` says what the folder is for ("--out X", ...).
   // Where the filesystem has no flock (some network mounts) the run goes on unlocked: the
   // folder checks that run before it still apply, as they did before there was a lock.
-  FolderLock(const std::string& dir, const std::string& what);
+  // `must_lock` false (a command that only reads the folder and writes a file into it): a folder
+  // that cannot be opened to lock (no read permission) is left unlocked rather than refused.
+  FolderLock(const std::string& dir, const std::string& what, bool must_lock = true);
   ~FolderLock();
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;

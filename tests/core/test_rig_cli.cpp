@@ -1574,8 +1574,8 @@ TEST(RigCli, ARunFolderInUseByAnotherRunIsRefused) {
   fs::create_directories(d + "/new");
   const int held_new = ::open((d + "/new").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   ASSERT_EQ(::flock(held_new, LOCK_EX | LOCK_NB), 0);
-  const std::string msg = ": another rig run is using this folder now (it holds the folder's lock); wait for it to "
-                          "end";
+  const std::string msg = ": another rig run is using this folder now (it holds the folder's lock; a run or resume, "
+                          "or a report or history record being written); wait for it to end";
   const std::string new_folder = " or choose another --out";  // a new run's advice, not a resume's
   for (const bool dry : {true, false}) {
     std::vector<std::string> fresh = {"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/new"};

@@ -118,9 +118,13 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
       {"(1e9) can0 101#56341204", "bad timestamp"},
       {"(1.0) can0 100#00 trailing words", "text after the frame"},
       {"hello world", "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES): 'hello world'"},
+      // A CRLF log's \r and other bytes that are not printable are shown, not sent to the terminal.
+      {"hello\x01 w\xB5rld\r", "BYTES): 'hello\\x01 w\\xB5rld'"},
       {"(1.0) can0 800#00", "standard identifier out of range"},
       {"(1.0) can0 CFFFFFFF#00", "extended identifier out of range"},  // found by fuzz_candump
   };
+  const std::string zs(100, 'z');
+  EXPECT_NE(read_candump_line(zs).problem.find("BYTES): '" + std::string(57, 'z') + "...'"), std::string::npos);
   for (const auto& [line, why] : bad) {
     const LogLine l = read_candump_line(line);
     EXPECT_EQ(l.kind, LogLineKind::Unreadable) << line;

@@ -297,6 +297,18 @@ TEST(HistoryDefaultUrl, EnvironmentThenConfigThenXdgThenHome) {
     EXPECT_NE(std::string(e.what()).find("rig.toml:2"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("unknown scheme"), std::string::npos) << e.what();
   }
+  rig::test::write_file(d.path / "tilde.toml", "[history]\nurl = \"sqlite:~/h.sqlite\"\n");
+  env.set("RIG_CONFIG", (d.path / "tilde.toml").c_str());
+  env.set("HOME", nullptr);
+  try {
+    h::default_db_url();
+    ADD_FAILURE() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("tilde.toml:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("$HOME is not set"), std::string::npos) << e.what();
+  }
+  env.set("HOME", d.path.c_str());
+  env.set("RIG_CONFIG", nullptr);
   // $RIG_CONFIG wins over the home config; a PostgreSQL URL is kept as is.
   rig::test::write_file(d.path / "line.toml", "[other]\nx = 1\n[history]\nurl = \"postgresql://rig@db.line/results\"\n");
   env.set("RIG_CONFIG", (d.path / "line.toml").c_str());
