@@ -292,7 +292,14 @@ void TableServer::run() {
       if (!FD_ISSET(fd, &rd)) continue;
       modbus_set_socket(s.ctx, fd);
       const int rc = modbus_receive(s.ctx, query.data());
-      if (rc > 0) {
+      // A request for another unit id is answered as a gateway answers for a unit it has no
+      // device at (exception 0x0B): it answered any unit over TCP, so a hardware file with the
+      // wrong unit passed every check against the emulator and failed on the drive (a review).
+      // 255 is Modbus TCP's "no unit" id and 0 its other choice for a device reached directly
+      // (Modbus Messaging on TCP/IP, 4.4.1.2): both answered as before.
+      if (rc > 0 && query[6] != unit_ && query[6] != 0xFF && query[6] != 0) {
+        modbus_reply_exception(s.ctx, query.data(), 0x0B);
+      } else if (rc > 0) {
         serve_request(s.ctx, s.map, emu_, query.data(), rc);
         ++served_;
       } else if (rc < 0) {

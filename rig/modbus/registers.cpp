@@ -33,8 +33,9 @@ std::string exception_text(uint8_t code) {
     case 5: return "acknowledge";
     case exc::kBusy: return "server device busy";
     case 8: return "memory parity error";
-    case 10: return "gateway path unavailable";
-    case 11: return "gateway target failed to respond";
+    // A gateway (or a TCP server for one unit) answering for a unit id it has no device at.
+    case 10: return "gateway path unavailable (no device at this unit id behind the gateway? check the unit id: [table] unit, --unit)";
+    case 11: return "gateway target failed to respond (no device at this unit id? check the unit id: [table] unit, --unit)";
     default: return "exception " + std::to_string(code);
   }
 }
