@@ -223,7 +223,11 @@ TableStatus Cia402Table::status() {
 }
 
 std::string Cia402Table::at(const Cia402Reading& r) const {
-  return " at " + deg_str(r.actual_deg) + " (" + c4::state_name(r.state()) + ", statusword " + hex4(r.statusword) + ")";
+  // A word that is none of the states is not named as one (0xFFFF read "Not ready to switch on",
+  // the decoder's fallback, a review).
+  return " at " + deg_str(r.actual_deg) + " (" +
+         (c4::is_state(r.statusword) ? c4::state_name(r.state()) : std::string("none of the CiA 402 states")) +
+         ", statusword " + hex4(r.statusword) + ")";
 }
 
 void Cia402Table::fail_on_fault(const std::string& doing, const Cia402Reading& r) const {
@@ -773,8 +777,10 @@ void Cia402Table::stop() noexcept {
       // The axis was asked in the power-off states (stop_goes_out) and the drive-function-disabled
       // ones (just above): Fault reaction active is not claimed to read moving.
       off_yet_moving = "halt delivered to the drive as the quick stop command (controlword 0x0102): " +
-                       map_.describe(Obj::kStatusword) + " reads " + hex4(sw) + ", " + c4::state_name(st) +
-                       (st == State::kFaultReactionActive
+                       map_.describe(Obj::kStatusword) + " reads " + hex4(sw) + ", " +
+                       (c4::is_state(sw) ? c4::state_name(st) : std::string("none of the CiA 402 states")) +
+                       (!c4::is_state(sw) ? std::string(", while the axis reads moving or its velocity could not be read")
+                        : st == State::kFaultReactionActive
                             ? " (a drive reacting to a fault)"
                             : std::string(power_stage_off(st) ? " (power stage off or faulted)" : " (drive function disabled)") +
                                   ", while the axis reads moving or its velocity could not be read") +

@@ -1098,6 +1098,32 @@ TEST_P(Cia402Client, ADriveThatRunsPastTheTargetToAnotherIsHalted) {
   EXPECT_NEAR(r.axis->actual_angle_deg(), target, 0.005);
 }
 
+// A statusword that is none of the CiA 402 states mid-move (0xFFFF: a gateway's placeholder, a
+// register read wrong) is said so, not named after the decoder's fallback ("Not ready to switch
+// on", a review); the move ends with the table halted.
+TEST_P(Cia402Client, AStatuswordOfNoStateMidMoveIsSaidSo) {
+  Rig r(GetParam());
+  struct AllOnes : Between {
+    using Between::Between;
+    bool on = false;
+    void statusword(uint16_t& w) override {
+      if (on) w = 0xFFFF;
+    }
+  } dev(r);
+  auto t = r.client_via(dev);
+  t->home({});
+  r.on_step = [&] {
+    if (std::fabs(r.axis->actual_angle_deg()) > 20.0) dev.on = true;
+  };
+  const std::string e = error_of([&] { t->move_to(200.0, {}); });
+  EXPECT_TRUE(has(e, "(none of the CiA 402 states, statusword 0xFFFF)")) << e;
+  EXPECT_FALSE(has(e, "Not ready to switch on")) << e;
+  r.on_step = nullptr;
+  dev.on = false;
+  r.run(2.0);
+  EXPECT_LT(r.axis->actual_angle_deg(), 150.0) << "halted, not run on to the target";
+}
+
 // A stop() from another thread (the clients allow it; the rig's own abort paths cancel the move
 // instead, whose thread then stops it) that comes while a move writes its command words: the
 // set-point word written after it (0x003F, halt clear) released the halt, the drive took the
