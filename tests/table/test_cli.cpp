@@ -233,8 +233,9 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   // 2^64 - 1 for an unsigned option (a code review).
   EXPECT_EQ(rig(where_ + " --unit 010 status", out), 2) << out;
   EXPECT_NE(out.find("'010' is not a decimal whole number (no leading zero)"), std::string::npos) << out;
-  EXPECT_EQ(rig(where_ + " --unit 10 status", out), 0) << out;  // the emulator answers every unit: decimal 10
-  EXPECT_NE(out.find(" unit 10"), std::string::npos) << out;
+  // Decimal 10: the emulator (unit 1) answers unit 10 as a gateway with no device there would.
+  EXPECT_EQ(rig(where_ + " --unit 10 status", out), 4) << out;
+  EXPECT_NE(out.find(" unit 10: exception 0x0B gateway target failed to respond"), std::string::npos) << out;
   EXPECT_EQ(run(std::string(RIG_BIN) + " analyze /dev/null --segment -1", out), 2) << out;
   EXPECT_NE(out.find("'-1' is not a decimal whole number (no sign, no leading zero)"), std::string::npos) << out;
   // A refused value is shown with its control bytes as \xNN, never sent to the terminal.
