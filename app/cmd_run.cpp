@@ -1257,6 +1257,14 @@ int do_run(RunArgs a) {
   } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
     log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
                to_string(res.outcome), e.what());
+    // The history still has the run (it promises every run; a folder deleted mid-run left no row,
+    // a review): an ERROR ending saying which outcome could not be written, never that outcome.
+    if (!a.no_history) {
+      RunResult unwritten = res;
+      unwritten.outcome = RunOutcome::Error;
+      unwritten.message = fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
+      record_in_history(a, hw, make_passport(info, unwritten, values), a.out, *log);
+    }
     dev.io.set_lamp(Lamp::Running, false);
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
     throw;

@@ -207,7 +207,9 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
   // tied to the captures: its checkpointed values (checked for form only) are not kept.
   for (std::size_t i = 0; i < done.size(); ++i)
     if (phases[i].from_records)
-      for (const auto& m : phases[i].measures) values.forget(m.name);
+      for (const auto& m : phases[i].measures)
+        values.forget(m.name, "not computed again: the resume stopped before phase " + phases[i].id +
+                                  ", which computes it from the kept records");
   // What the device alone measured has no record to compute it again from: that phase, and every
   // phase after it (the ones that may build on it), run again.
   // A phase whose hand-over the checkpoint does not hold runs again the same way.

@@ -116,13 +116,13 @@ void MeasurementSet::set_scope(std::string phase, std::vector<std::string> names
   scope_ = std::move(names);
 }
 
-void MeasurementSet::forget(const std::string& name) {
+void MeasurementSet::forget(const std::string& name, const std::string& reason) {
   Measurement* m = find_mut(name);
   if (!m) throw std::logic_error("measurement '" + name + "' was never declared");
   m->value.reset();
   m->lo.reset();
   m->hi.reset();
-  m->reason = "not measured";  // as declared: a resume stopped before the phase ran again says so
+  m->reason = reason;  // what a resume stopped before the phase ran again says
   m->verdict.clear();
   m->null_verdict.clear();
   m->outcome = Outcome::Unset;

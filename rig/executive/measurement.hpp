@@ -69,8 +69,9 @@ class MeasurementSet {
   // Appends "; note" to the reason of every value the running phase declared (what all of
   // them share: a capture that lost samples, say).
   void note_scope(const std::string& note);
-  // Back to declared-but-not-measured: no value, bounds, reason or verdict.
-  void forget(const std::string& name);
+  // Back to declared-but-not-measured: no value, bounds or verdict, and `reason` (what a passport
+  // written before the value is set again says of it).
+  void forget(const std::string& name, const std::string& reason = "not measured");
   const Measurement* find(const std::string& name) const;
   const std::vector<Measurement>& all() const { return items_; }
   // Computes every outcome (see judge()).

@@ -22,6 +22,7 @@ using detail::trapezoid_time;
 
 constexpr double kDefaultMoveTimeoutS = 120.0;  // when the profile velocity is unknown
 constexpr double kRestTimeoutS = 30.0;          // a stopping axis must be at rest within this
+constexpr double kRestDps = 0.01;               // velocity actual read as a servo holding position
 
 }  // namespace
 
@@ -39,11 +40,17 @@ Cia402Table::Cia402Table(std::unique_ptr<RegisterTransport> transport, DriveMap 
                    "docs/cia402-drive-maps.md, \"Which device answers\")");
 }
 
-// A servo holding position reads a velocity of a unit or so either way: below 0.01 °/s, or one
-// unit of the drive's velocity object where that is coarser (a review: rpm through a 100:1 gear
-// is 0.06 °/s a unit, and a drive at rest jittering by one unit blocked every move for 30 s as
-// "still moving").
-double Cia402Table::at_rest_dps() const { return std::max(0.01, 1.5 * std::fabs(map_.velocity_units_to_dps(1.0))); }
+// At rest: velocity actual within 0.01 °/s. Where one unit of the velocity object is coarser, a
+// servo holding position jitters by a unit (a review: rpm through a 100:1 gear is 0.06 °/s a
+// unit, and such jitter blocked every move for 30 s as "still moving"): a reading within 1.5
+// units is rest too when position actual also held within 2 counts since the previous reading,
+// `prev`, taken at least a poll before. A single reading (a stop deciding whether to halt) has no
+// such evidence and keeps the 0.01 °/s: 1.5 units is 9 °/s on a direct drive in rpm (a code review).
+bool Cia402Table::reads_at_rest(const Cia402Reading& r, const Cia402Reading* prev) const {
+  if (std::fabs(r.velocity_dps) <= kRestDps) return true;
+  if (!prev || std::fabs(r.velocity_dps) > 1.5 * std::fabs(map_.velocity_units_to_dps(1.0))) return false;
+  return std::fabs(r.actual_deg - prev->actual_deg) <= std::fabs(map_.counts_to_deg(2) - map_.counts_to_deg(0));
+}
 
 std::string Cia402Table::describe() const { return transport_->describe() + " cia402 \"" + map_.name + "\""; }
 
@@ -175,8 +182,8 @@ void Cia402Table::refuse_outside_travel(const std::string& doing, const Cia402Re
   throw HardwareError(doing + ": position actual reads " + deg_str(r.actual_deg) + ", outside the travel [limits] [" +
                       deg_str(map_.limit_neg_deg) + ", " + deg_str(map_.limit_pos_deg) + "] of drive map " + map_.path +
                       ": the map does not read this drive as it is (check word_order, counts_per_rev, gear_ratio, "
-                      "direction and the home offset against the drive's manual), or the table was not homed; "
-                      "nothing sent");
+                      "direction and the home offset against the drive's manual), or the table was not homed "
+                      "(`rig table home` brings a table read right back into its travel); nothing sent");
 }
 
 // The first reading of a client, before it writes anything. A review found a CiA 402 client at a
@@ -210,8 +217,9 @@ TableStatus Cia402Table::status() {
   s.homed = map_.homed_bit ? r.has(static_cast<uint16_t>(1u << *map_.homed_bit)) : homed_;
   s.homed_known = map_.homed_bit.has_value() || homed_;
   s.homing = r.mode_display == c4::kModeHoming && s.servo_on && !r.has(c4::sw::kTargetReached);
-  // Velocity actual within at_rest_dps() is a servo holding position, not motion.
-  s.moving = std::fabs(r.velocity_dps) > at_rest_dps() || (s.servo_on && !r.has(c4::sw::kTargetReached));
+  // Velocity actual within 0.01 °/s is a servo holding position, not motion (one reading: no
+  // evidence from the position, so no allowance for a coarse unit's jitter).
+  s.moving = !reads_at_rest(r, nullptr) || (s.servo_on && !r.has(c4::sw::kTargetReached));
   s.in_position = s.servo_on && r.has(c4::sw::kTargetReached) && !s.moving;
   s.alarm = st == State::kFault || st == State::kFaultReactionActive;
   s.alarm_code = r.error_code;
@@ -275,10 +283,11 @@ void Cia402Table::enable_operation(const std::string& doing, const CancelToken& 
       case State::kQuickStopActive: {  // after our quick stop: Disable voltage (transition 12), then up again
         // Not while the quick-stop ramp still runs: disabling would drop the axis on its brake.
         const double t_rest = clock_.now_s();
-        while (std::fabs(r.velocity_dps) > at_rest_dps()) {
+        for (std::optional<Cia402Reading> prev; !reads_at_rest(r, prev ? &*prev : nullptr);) {
           if (clock_.now_s() - t_rest > kRestTimeoutS)
             throw HardwareError(doing + ": still moving " + secs(kRestTimeoutS) + " after a quick stop" + at(r));
           clock_.sleep_for(opt_.poll_s, cancel);
+          prev = r;
           r = read(cancel);
         }
         write_controlword(c4::cw::kDisableVoltage, cancel);
@@ -311,12 +320,14 @@ void Cia402Table::enable_operation(const std::string& doing, const CancelToken& 
 // first one's axis mid-move. Bounded, so a runaway is reported.
 void Cia402Table::wait_at_rest(const std::string& doing, const CancelToken& cancel) {
   const double t0 = clock_.now_s();
-  for (Cia402Reading r = read(cancel); std::fabs(r.velocity_dps) > at_rest_dps(); r = read(cancel)) {
+  std::optional<Cia402Reading> prev;
+  for (Cia402Reading r = read(cancel); !reads_at_rest(r, prev ? &*prev : nullptr); r = read(cancel)) {
     fail_on_fault(doing, r);
     if (clock_.now_s() - t0 > kRestTimeoutS)
       throw HardwareError(doing + ": the table is still moving after " + secs(kRestTimeoutS) +
                           " (another Modbus master?)" + at(r));
     clock_.sleep_for(opt_.poll_s, cancel);
+    prev = r;
   }
 }
 
@@ -516,35 +527,47 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       r = read(cancel);
     }
     const double start_deg = r.actual_deg;
-    // The profile velocity the drive holds: what the timeout is set from, and the fastest the
-    // position may change between two readings.
-    double v = opt_.velocity_dps.value_or(0);
-    if (v <= 0 && map_.has(Obj::kProfileVelocity))
-      v = std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kProfileVelocity, cancel))));
-    // Faster than that lets the table turn, twice over plus a degree, from one reading to the
-    // next: the map reads the position wrong (a word order the drive's reversed reads 65536 counts
-    // per count; a review's table went to 204.78° for a move to 20°, reported done).
-    double paced_deg = start_deg, paced_at = clock_.now_s();
-    const auto check_pace = [&](const Cia402Reading& now_r, double now) {
-      if (const double jump = std::fabs(now_r.actual_deg - paced_deg); v > 0 && jump > 2 * v * (now - paced_at) + 1.0)
-        throw HardwareError(doing + ": position actual jumped " + deg_str(jump) + " in " + secs(now - paced_at) +
-                            ", faster than the profile velocity " + deg_str(v) + "/s lets the table turn: the map "
-                            "does not read this drive's position as it is (check word_order, counts_per_rev and "
-                            "gear_ratio against the drive's manual)" + at(now_r));
-      paced_deg = now_r.actual_deg, paced_at = now;
+    // The profile velocity the drive holds, read back on every move (a vendor tool may have
+    // changed it; velocity_dps is not sent to a map without profile_velocity, a code review):
+    // the fastest the table can turn. Unknown (0) where the map cannot read it: no pace check.
+    const double v_drive =
+        map_.has(Obj::kProfileVelocity)
+            ? std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kProfileVelocity, cancel))))
+            : 0.0;
+    // A position that changes faster than that, twice over plus a degree, is read wrong (a word
+    // order the drive's reversed reads 65536 counts per count; a review's table went to 204.78°
+    // for a move to 20°, reported done). Each interval runs from before the earlier reading's
+    // request to after the later one's reply, so a late reply never shortens it (a code review:
+    // one reply 0.1 s late halted a good move); and the whole move is held to it from the set-point.
+    const double t_cmd = clock_.now_s();
+    double paced_deg = start_deg, paced_from = t_cmd;
+    const auto check_pace = [&](const Cia402Reading& now_r, double asked_at, double answered_at) {
+      const auto fast = [&](double moved, double in_s) { return v_drive > 0 && moved > 2 * v_drive * in_s + 1.0; };
+      const double jump = std::fabs(now_r.actual_deg - paced_deg), since = answered_at - paced_from;
+      const double all = std::fabs(now_r.actual_deg - start_deg), since_cmd = answered_at - t_cmd;
+      if (fast(jump, since) || fast(all, since_cmd))
+        throw HardwareError(doing + ": position actual " + (fast(jump, since) ? "jumped " + deg_str(jump) + " in " + secs(since)
+                                                                            : "moved " + deg_str(all) + " in " + secs(since_cmd)) +
+                            ", faster than the profile velocity " + deg_str(v_drive) + "/s (" +
+                            map_.describe(Obj::kProfileVelocity) + ") lets the table turn: the map does not read this "
+                            "drive's position as it is (check word_order, counts_per_rev, gear_ratio and velocity_unit "
+                            "against the drive's manual)" + at(now_r));
+      paced_deg = now_r.actual_deg, paced_from = asked_at;
     };
     const int64_t target_counts = map_.deg_to_counts(deg);
     write_object(Obj::kTargetPosition, target_counts, cancel);
     write_controlword(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint | c4::cw::kChangeImmediately, cancel);
     double t0 = clock_.now_s();
     detail::HeldFor unacked_motion;  // the table moving without the acknowledge
-    for (;;) {
+    Cia402Reading ack_prev = r;      // the reading a poll before (the one before the set-point first)
+    for (;; ack_prev = r) {
+      const double asked_at = clock_.now_s();
       r = read(cancel, true);
       fail_on_fault(doing, r);
       // Before the timeout's "not acknowledged": a drive that left Operation enabled or a stop
       // request never acknowledges, and the reason is that, not the drive.
       fail_unless_moving(doing, r, "waiting for the set-point acknowledge", target_counts);
-      check_pace(r, clock_.now_s());
+      check_pace(r, asked_at, clock_.now_s());
       if (r.has(c4::sw::kSetPointAck)) break;
       // The table was at rest, and this word released halt: motion without the acknowledge is
       // the drive continuing a move a halt interrupted, to its old target (the set-point refused:
@@ -554,7 +577,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       // poll may read the statusword just before the drive took the set-point, and a drive may set
       // bit 12 some cycles after its motion starts). Taken before for another master's move after
       // ack_timeout_s, with no halt, it let the table run on to the old target unwatched (a review).
-      if (unacked_motion(std::fabs(r.velocity_dps) > at_rest_dps(), clock_.now_s()) >= opt_.unacked_motion_s)
+      if (unacked_motion(!reads_at_rest(r, &ack_prev), clock_.now_s()) >= opt_.unacked_motion_s)
         throw HardwareError(doing + ": the table moves but the set-point is not acknowledged (statusword bit 12 clear): "
                                     "the drive continuing a halted move to its old target, or another master's move?" +
                             at(r));
@@ -573,6 +596,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     write_controlword(c4::cw::kCmdEnableOperation, cancel);  // the drive may now drop the acknowledge
     double timeout = opt_.move_timeout_s;
     if (timeout <= 0) {
+      const double v = opt_.velocity_dps.value_or(v_drive);
       double a = opt_.accel_dps2.value_or(0);
       if (a <= 0 && map_.has(Obj::kProfileAcceleration))
         a = map_.accel_units_to_dps2(static_cast<double>(read_object(Obj::kProfileAcceleration, cancel)));
@@ -585,11 +609,12 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     Cia402Reading last = r;
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
+      const double asked_at = clock_.now_s();
       r = read(cancel, true);
       fail_on_fault(doing, r);
       const double now = clock_.now_s();
       fail_unless_moving(doing, r, "during the move", target_counts);
-      check_pace(r, now);
+      check_pace(r, asked_at, now);
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
@@ -721,7 +746,9 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
     // The axis must read at rest too (one more urgent read): a statusword address that is wrong
     // may read 0, Not ready, while the table turns (a review: "no halt needed", exit 0, and the
     // move went on). Moving, or unread: the halt goes out as it always did.
-    if (why.empty() && power_stage_off(st)) {
+    // A word that is none of the states says nothing of the power stage (0xFFFF decodes to the
+    // fallback Not ready to switch on): the stop goes out (a code review).
+    if (why.empty() && c4::is_state(statusword) && power_stage_off(st)) {
       if (axis_reads_at_rest()) {
         why = std::string("no ") + name + " needed: drive \"" + map_.name + "\" in " + c4::state_name(st) +
               " (statusword " + hex4(statusword) + ") and at rest: its power stage is off";
@@ -739,7 +766,7 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
 // One urgent read of velocity actual; false where it reads moving or cannot be read.
 bool Cia402Table::axis_reads_at_rest() noexcept {
   try {
-    return std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= at_rest_dps();
+    return std::fabs(map_.velocity_units_to_dps(static_cast<double>(read_object(Obj::kVelocityActual, CancelToken{}, true)))) <= kRestDps;
   } catch (...) {
     return false;
   }

@@ -42,10 +42,16 @@ std::string file_part(const std::string& url) {
   if (path.rfind("//", 0) == 0) path = path.substr(2);
   if (path == "~" || path.rfind("~/", 0) == 0) {
     const char* home = std::getenv("HOME");
-    if (!home || !*home) throw ConfigError("history database URL '" + url + "' starts with ~ and $HOME is not set");
-    path = std::string(home) + path.substr(1);
+    if (home && *home) path = std::string(home) + path.substr(1);  // else url_problem says so
   }
   return path;
+}
+
+bool home_needed_but_unset(const std::string& url) {
+  std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
+  if (path.rfind("//", 0) == 0) path = path.substr(2);
+  const char* home = std::getenv("HOME");
+  return (path == "~" || path.rfind("~/", 0) == 0) && (!home || !*home);
 }
 
 constexpr const char* kNamesNoFile = "names no file";
@@ -55,6 +61,7 @@ constexpr const char* kNamesNoFile = "names no file";
 std::string url_problem(const std::string& url) {
   if (is_postgres(url)) return "";
   if (file_part(url).empty()) return kNamesNoFile;
+  if (home_needed_but_unset(url)) return "starts with ~ and $HOME is not set";
   // "scheme:..." (a colon before any slash) other than sqlite: is a URL this rig cannot open.
   const std::size_t colon = url.find(':');
   if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)

@@ -460,13 +460,9 @@ std::string default_db_url() {
       std::string url = cfg::get_string(*h, "url");
       if (url.empty()) throw ConfigError(cfg::where(*h->get("url")) + ": [history] url is empty");
       // A relative SQLite path is relative to the config file, not to the working folder.
-      std::optional<std::string> path;  // nullopt: PostgreSQL
-      try {
-        if (const std::string why = url_problem(url); !why.empty()) throw ConfigError(why);
-        path = sqlite_path(url);
-      } catch (const ConfigError& e) {  // at the config's line ("~/" with no $HOME too)
-        throw ConfigError(cfg::where(*h->get("url")) + ": [history] url '" + mask_password(url) + "': " + e.what());
-      }
+      if (const std::string why = url_problem(url); !why.empty())  // at the config's line ("~/" with no $HOME too)
+        throw ConfigError(cfg::where(*h->get("url")) + ": 'url' = '" + mask_password(url) + "': " + why);
+      const std::optional<std::string> path = sqlite_path(url);  // nullopt: PostgreSQL
       if (path && fs::path(*path).is_relative()) return "sqlite:" + (config.parent_path() / *path).string();
       return path ? "sqlite:" + *path : url;
     }

@@ -342,7 +342,7 @@ TEST(Executive, AResumeRunsTheComputingPhasesAgain) {
 // A resume stopped in a computing phase it runs again: the checkpoint still holds that phase
 // (its records are kept), so the next resume starts from the same point and the hint's count
 // is the checkpoint's (a review: "13 of 19 phases kept" where the dry run said 15); the value
-// the stopped phase never set again reads "not measured", not an empty reason.
+// the stopped phase never set again says why it is missing, not an empty reason.
 TEST(Executive, AResumeStoppedWhileComputingAgainKeepsTheCheckpointsPhases) {
   Fixture f("recompute-stop");
   JsonState st;
@@ -371,7 +371,10 @@ TEST(Executive, AResumeStoppedWhileComputingAgainKeepsTheCheckpointsPhases) {
   spdlog::logger quiet("quiet");
   EXPECT_EQ(Executive::read_checkpoint(f.out, phases, again, st2, {}, quiet).size(), r.checkpointed)
       << "what a dry run of the next resume counts";
-  EXPECT_EQ(v.to_json()["v"]["reason"], "not measured");
+  // Measured before, computed again from the kept records by a phase this resume did not finish:
+  // said so, not "not measured" (a QA review).
+  EXPECT_EQ(v.to_json()["v"]["reason"],
+            "not computed again: the resume stopped before phase calc, which computes it from the kept records");
 }
 
 TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {

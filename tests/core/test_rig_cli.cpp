@@ -2949,6 +2949,20 @@ TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
   EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS not written: cannot write"), std::string::npos)
       << slurp(d + "/run/run.log");
   EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  // The history has it as an ERROR saying which outcome was not written, never that outcome (a
+  // folder deleted mid-run left no row, a review).
+  fs::remove_all(d + "/run");
+  fs::create_directories(d + "/run/passport.json.tmp");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite", "--out", d + "/run"},
+                d + "/io-h"),
+            4);
+  ASSERT_EQ(run({"history", "--db", "sqlite:" + d + "/h.sqlite", "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
+  EXPECT_NE(slurp(d + "/list.stdout").find(",ERROR,"), std::string::npos) << slurp(d + "/list.stdout");
+  EXPECT_EQ(slurp(d + "/list.stdout").find(",PASS,"), std::string::npos) << slurp(d + "/list.stdout");
+  ASSERT_EQ(run({"history", "--db", "sqlite:" + d + "/h.sqlite", "--endings", "1"}, d + "/end"), 0);
+  EXPECT_NE(slurp(d + "/end.stdout").find("ERROR    outcome PASS not written to the run folder: cannot write"),
+            std::string::npos)
+      << slurp(d + "/end.stdout");
   // An output before the passport that cannot be written leaves no passport either: never a
   // PASS in passport.json beside exit 4 (a code review).
   fs::create_directories(d + "/run2/junit.xml.tmp");
