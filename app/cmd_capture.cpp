@@ -301,16 +301,16 @@ int cmd_import(const ImportArgs& a) {
       own_among = own_among || (!own.empty() && name == own);
       unnamed = unnamed || name.empty();
     }
-    const std::string both = "frames of the [dut] stream on " + listed;
+    const std::string found = "frames of the [dut] stream on " + listed;
     if (own_among) {
       std::fprintf(stderr, "%s: %s: importing %s's, the hardware file's [dut] can (--iface for another)\n",
-                   a.log.c_str(), both.c_str(), own.c_str());
+                   a.log.c_str(), found.c_str(), own.c_str());
       ImportArgs on_own = a;
       on_own.iface = own;
       return cmd_import(on_own);
     }
     std::fprintf(stderr, "%s: %s: the log holds more than one station's stream (%s); give --iface with one of: %s%s; "
-                 "%s not written\n", a.log.c_str(), both.c_str(),
+                 "%s not written\n", a.log.c_str(), found.c_str(),
                  own.empty() ? (a.hardware + "'s [dut] has no can to choose by").c_str()
                              : (a.hardware + "'s [dut] can is " + own).c_str(),
                  names.c_str(), unnamed ? " (lines without an interface cannot be chosen: split the log)" : "",

@@ -330,9 +330,10 @@ void check_serial_source(const RunArgs& a, const toml::table& hw, const toml::ta
 // scales every tau (a review: [dut.stream] rate_hz = 500 under a 1000 Hz profile, dry run exit 0;
 // with commands the DUT said so only after power-on, and without them never). The rig protocol's
 // DUT declares its rate at bring-up, checked there.
-void check_stream_rate(const RunArgs& a, const toml::table& hw, const acceptance::Profile& p) {
-  if (a.plant != "hardware") return;  // the emulated plant's [plant.firmware] is checked by the plant
-  const auto stream = link::link_options(*cfg::get_table(hw, "dut", true)).stream;
+// (`stream`: the hardware file's layout, null for the rig protocol and on the emulated plant, whose
+// [plant.firmware] the plant checks itself.)
+void check_stream_rate(const RunArgs& a, const std::shared_ptr<const link::DbcStreamDecoder>& stream,
+                       const acceptance::Profile& p) {
   if (!stream || std::abs(stream->rate_hz() - p.rate_hz) <= 1e-6 * p.rate_hz) return;
   const auto& kw = stream->spec().key_where;
   const auto at = kw.find("rate_hz");
@@ -401,19 +402,19 @@ void check_emulated_rate(const toml::table& profile_table, const std::string& so
   throw ConfigError(fmt::format("{}: rate_hz = {:g}: {}", source, p.rate_hz, why));
 }
 
-// What the plan cannot do on this DUT, said before the run (the run says it again, with the
-// passport's `skipped`): the DUT's link options, or on the emulated plant its firmware's.
-// What the DUT can be asked, from the hardware file's [dut] or the emulated plant's [plant.firmware].
+// What the DUT can be asked, from the hardware file's [dut] or the emulated plant's [plant.firmware],
+// read once per run (each reading parses the DBC): and on hardware the stream's layout.
 struct DutAbilities {
   bool commands = true, loop_test = true;
+  std::shared_ptr<const link::DbcStreamDecoder> stream;  // hardware with a DBC-described stream
 };
 DutAbilities dut_abilities(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
   if (a.plant == "hardware") {
     const link::LinkOptions o = link::link_options(*cfg::get_table(hw, "dut", true));
-    return {o.commands, o.loop_test};
+    return {o.commands, o.loop_test, o.stream};
   }
   const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
-  return {o.commands, o.loop_test};
+  return {o.commands, o.loop_test, nullptr};
 }
 
 // A loop test this DUT cannot run takes no device time: the plan and the progress said 2 s
@@ -424,9 +425,11 @@ void plan_skipped_loop_test(const DutAbilities& can, std::vector<Phase>& phases)
     if (ph.id == "loop") ph.planned_s = 0;
 }
 
-std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg,
+// What the plan cannot do on this DUT, said before the run (the run says it again, with the
+// passport's `skipped`): the DUT's link options, or on the emulated plant its firmware's.
+std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const DutAbilities& can,
                                        const acceptance::Profile& p) {
-  const auto [commands, loop_test] = dut_abilities(a, hw, plant_cfg);
+  const bool commands = can.commands, loop_test = can.loop_test;
   std::vector<std::string> out;
   if (!commands) {
     out.push_back("identify: the DUT has no command channel (commands = false); the serial is --serial's");
@@ -1003,10 +1006,11 @@ int do_run(RunArgs a) {
   // The mount's angles before the phases are planned: each move's planned time follows them.
   if (a.plant == "hardware") apply_procedure_angles(hw, p);
   check_procedure_angles_in_travel(a, hw, plant_cfg, p);
-  check_stream_rate(a, hw, p);
+  const DutAbilities dut_can = dut_abilities(a, hw, plant_cfg);
+  check_stream_rate(a, dut_can.stream, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
   std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
-  plan_skipped_loop_test(dut_abilities(a, hw, plant_cfg), phases);
+  plan_skipped_loop_test(dut_can, phases);
   MeasurementSet values;
   acceptance::declare_values(p, phases, values);
   const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
@@ -1044,7 +1048,7 @@ int do_run(RunArgs a) {
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              shown_text(p.source), a.plant);
     plan_view.plan(phases, completed.size());
-    for (const std::string& s : planned_skips(a, hw, plant_cfg, p)) std::cout << "  skipped: " << s << "\n";
+    for (const std::string& s : planned_skips(a, hw, dut_can, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
       for (std::size_t i = 0; i < completed.size(); ++i) {

@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <vector>
 
+#include "rig/core/escape.hpp"
+
 namespace rig::link {
 
 namespace {
@@ -232,25 +234,13 @@ LogLine read_candump_line(std::string_view line) {
     lf.iface = std::string(t[i]);
     ok = screen_frame(t, i + 1, any, out.problem);
   } else {
-    // The line itself, cut at 60 characters, a byte that is not printable ASCII as \xNN (a CRLF
-    // log's \r moved the cursor; binary bytes reached the terminal): the message must show what
-    // was there (a review).
-    std::string shown;
-    for (const char ch : line.substr(line.find_first_not_of(" \t"))) {
-      if (shown.size() >= 57) {
-        shown += "...";
-        break;
-      }
-      const auto u = static_cast<unsigned char>(ch);
-      if (u >= 0x20 && u < 0x7F) shown += ch;
-      else {
-        char b[8];
-        std::snprintf(b, sizeof b, "\\x%02X", u);
-        shown += b;
-      }
-    }
-    while (shown.size() >= 4 && shown.compare(shown.size() - 4, 4, "\\x0D") == 0) shown.resize(shown.size() - 4);
-    out.problem = "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES): " + quoted(shown);
+    // The line itself, cut at 57 bytes, as shown_text shows text (a byte a terminal acts on as
+    // \xNN: a CRLF log's \r moved the cursor, binary bytes reached the terminal): the message
+    // must show what was there (a review).
+    std::string_view text = line.substr(line.find_first_not_of(" \t"));
+    while (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+    out.problem = "not a candump frame line (expected IFACE ID#DATA or IFACE ID [N] BYTES): " +
+                  quoted(text.size() > 57 ? shown_text(text.substr(0, 57)) + "..." : shown_text(text));
   }
   if (ok) {
     out.kind = LogLineKind::Frame;

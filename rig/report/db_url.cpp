@@ -34,24 +34,26 @@ namespace {
 
 bool is_postgres(const std::string& url) { return url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0; }
 
-// The file an SQLite URL names: "sqlite:PATH", "sqlite:///abs/path" or a plain path. A leading
-// "~/" is the user's home as a shell would read it: inside a URL or a config file no shell
-// expands it, and "sqlite:~/h.sqlite" made a folder named "~" in the working folder (a review).
-std::string file_part(const std::string& url) {
+// The path an SQLite URL names as written: "sqlite:PATH", "sqlite:///abs/path" or a plain path.
+std::string written_path(const std::string& url) {
   std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
   if (path.rfind("//", 0) == 0) path = path.substr(2);
-  if (path == "~" || path.rfind("~/", 0) == 0) {
-    const char* home = std::getenv("HOME");
-    if (home && *home) path = std::string(home) + path.substr(1);  // else url_problem says so
-  }
   return path;
 }
 
-bool home_needed_but_unset(const std::string& url) {
-  std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
-  if (path.rfind("//", 0) == 0) path = path.substr(2);
-  const char* home = std::getenv("HOME");
-  return (path == "~" || path.rfind("~/", 0) == 0) && (!home || !*home);
+// A path in the user's home, "~" or "~/...": inside a URL or a config file no shell expands it,
+// and "sqlite:~/h.sqlite" made a folder named "~" in the working folder (a review).
+bool in_home(const std::string& path) { return path == "~" || path.rfind("~/", 0) == 0; }
+
+const char* home() {
+  const char* h = std::getenv("HOME");
+  return h && *h ? h : nullptr;
+}
+
+// The file an SQLite URL names, "~/" read as $HOME (without $HOME, url_problem says so).
+std::string file_part(const std::string& url) {
+  const std::string path = written_path(url);
+  return in_home(path) && home() ? std::string(home()) + path.substr(1) : path;
 }
 
 constexpr const char* kNamesNoFile = "names no file";
@@ -61,7 +63,7 @@ constexpr const char* kNamesNoFile = "names no file";
 std::string url_problem(const std::string& url) {
   if (is_postgres(url)) return "";
   if (file_part(url).empty()) return kNamesNoFile;
-  if (home_needed_but_unset(url)) return "starts with ~ and $HOME is not set";
+  if (in_home(written_path(url)) && !home()) return "starts with ~ and $HOME is not set";
   // "scheme:..." (a colon before any slash) other than sqlite: is a URL this rig cannot open.
   const std::size_t colon = url.find(':');
   if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
