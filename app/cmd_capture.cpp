@@ -118,17 +118,28 @@ int cmd_import(const ImportArgs& a) {
   h.phase = a.phase;
   h.orientation = a.orientation;
   h.rate_hz = a.rate_hz ? *a.rate_hz : decoder->rate_hz();
-  // The header is written first; its start time comes from the log's first frame, so the
-  // log is read once to find it (cheap next to decoding).
+  // The header is written first; its start time is the first frame's on the stream's interface
+  // (--iface, else the interface of the log's first stream frame: a log of several is refused
+  // below unless one is chosen), so the log is read up to there first (cheap next to decoding).
+  std::string stream_iface = a.iface;
   {
     std::string line;
     bool too_long = false;
-    for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln)
-      if (const auto lf = link::parse_candump_line(line);
-          !too_long && ln >= a.from_line && lf && (a.iface.empty() || lf->iface == a.iface)) {
-        h.started = iso8601(lf->t_s);
+    std::vector<std::pair<std::string, double>> first_t;  // each interface's first frame
+    std::vector<link::StreamPart> ps;
+    for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln) {
+      const auto lf = link::parse_candump_line(line);
+      if (too_long || ln < a.from_line || !lf || (!a.iface.empty() && lf->iface != a.iface)) continue;
+      auto seen = std::find_if(first_t.begin(), first_t.end(), [&](const auto& f) { return f.first == lf->iface; });
+      if (seen == first_t.end()) seen = first_t.insert(first_t.end(), {lf->iface, lf->t_s});
+      ps.clear();
+      if (!a.iface.empty() || (decoder->decode(lf->any, ps) && !ps.empty())) {
+        stream_iface = lf->iface;
+        h.started = iso8601(seen->second);
         break;
       }
+    }
+    if (h.started.empty() && !first_t.empty()) h.started = iso8601(first_t.front().second);  // no stream frame
     in.clear();
     in.seekg(0);
   }
@@ -138,9 +149,11 @@ int cmd_import(const ImportArgs& a) {
              {"hardware", a.hardware},
              {"stream", {{"counter", sp.counter}, {"counter_bits", decoder->counter_bits()}, {"x", sp.x}, {"y", sp.y},
                          {"samples_per_frame", sp.samples_per_frame}}}};
+  if (!stream_iface.empty()) h.extra["iface"] = stream_iface;  // lines without an interface column: none
   capture::Writer w(a.out, h);
 
-  uint64_t frames = 0, stream_frames = 0, other = 0, unreadable = 0, malformed = 0;
+  // frames: read on the stream's interface; elsewhere: on other interfaces, not read further
+  uint64_t frames = 0, stream_frames = 0, other = 0, unreadable = 0, malformed = 0, elsewhere = 0;
   std::vector<std::string> problems;  // LOG:LINE: why, the first 20
   auto note = [&](std::size_t ln, const std::string& why) {
     if (problems.size() < 20) problems.push_back(a.log + ":" + std::to_string(ln) + ": " + why);
@@ -157,7 +170,7 @@ int cmd_import(const ImportArgs& a) {
   // where it was (stray late frames), or the held counter carries on for more than the reorder
   // window (the counter went back: the DUT restarted). Two strays in a row are not a restart.
   struct Counts {  // what the lines from the first held frame on added, taken back at a cut there
-    uint64_t frames, other, unreadable, malformed, back;
+    uint64_t frames, other, unreadable, malformed, back, elsewhere;
     std::size_t problems;
   };
   // Stream frames stamped earlier than the log's clock had reached (absolute stamps): lines out of
@@ -200,6 +213,7 @@ int cmd_import(const ImportArgs& a) {
     other = suspect->before.other;
     unreadable = suspect->before.unreadable;
     malformed = suspect->before.malformed;
+    elsewhere = suspect->before.elsewhere;
     back_to(suspect->before);
     problems.resize(suspect->before.problems);
     stream_frames -= suspect->frames.size();
@@ -226,12 +240,20 @@ int cmd_import(const ImportArgs& a) {
       continue;
     }
     const link::LoggedFrame* lf = &parsed.frame;
-    if (!a.iface.empty() && lf->iface != a.iface) continue;
-    const Counts here{frames, other, unreadable, malformed, back, problems.size()};
-    ++frames;
+    if (!a.iface.empty() && lf->iface != a.iface) {
+      ++elsewhere;
+      continue;
+    }
+    const Counts here{frames, other, unreadable, malformed, back, problems.size(), elsewhere};
     parts.clear();
     std::string err;
-    if (!decoder->decode(lf->any, parts, &err)) {  // classic or CAN FD frames as logged
+    const bool stream = decoder->decode(lf->any, parts, &err);  // classic or CAN FD frames as logged
+    if (!stream && lf->iface != stream_iface) {  // another interface's traffic (its stream frames are checked below)
+      ++elsewhere;
+      continue;
+    }
+    ++frames;
+    if (!stream) {
       ++other;  // commands, heartbeats, other nodes' traffic
       continue;
     }
@@ -325,10 +347,13 @@ int cmd_import(const ImportArgs& a) {
   const LinkStats& st = reasm.stats();
   w.close();
 
-  std::printf("%s -> %s: %llu samples from %llu stream frames (%llu frames read, %llu other ids)\n", a.log.c_str(),
+  // The counts are the stream interface's, with --iface or without (they differed: a review).
+  std::printf("%s -> %s: %llu samples from %llu stream frames (%llu frames read%s, %llu other ids)\n", a.log.c_str(),
               a.out.c_str(), static_cast<unsigned long long>(w.samples_written()),
               static_cast<unsigned long long>(stream_frames), static_cast<unsigned long long>(frames),
-              static_cast<unsigned long long>(other));
+              stream_iface.empty() ? "" : (" on " + stream_iface).c_str(), static_cast<unsigned long long>(other));
+  if (elsewhere > 0)
+    std::printf("%llu frame(s) on other interfaces: not read\n", static_cast<unsigned long long>(elsewhere));
   std::printf("gaps %llu (%llu samples lost), duplicates %llu\n", static_cast<unsigned long long>(st.gaps),
               static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.duplicates - late_parts));
   if (late > 0)
@@ -370,7 +395,7 @@ int cmd_import(const ImportArgs& a) {
     std::error_code ec;
     std::filesystem::remove(a.out, ec);
     std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
-                 a.hardware.c_str(), static_cast<unsigned long long>(frames),
+                 a.hardware.c_str(), static_cast<unsigned long long>(frames + elsewhere),
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
     return kExitUsage;
   }

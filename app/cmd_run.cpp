@@ -404,30 +404,22 @@ void check_emulated_rate(const toml::table& profile_table, const std::string& so
 
 // What the DUT can be asked, from the hardware file's [dut] or the emulated plant's [plant.firmware],
 // read once per run (each reading parses the DBC): and on hardware the stream's layout.
-struct DutAbilities {
-  bool commands = true, loop_test = true;
+struct DutLinkOptions {
+  acceptance::DutAbilities can;
   std::shared_ptr<const link::DbcStreamDecoder> stream;  // hardware with a DBC-described stream
 };
-DutAbilities dut_abilities(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
+DutLinkOptions dut_link_options(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
   if (a.plant == "hardware") {
     const link::LinkOptions o = link::link_options(*cfg::get_table(hw, "dut", true));
-    return {o.commands, o.loop_test, o.stream};
+    return {{o.commands, o.loop_test}, o.stream};
   }
   const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
-  return {o.commands, o.loop_test, nullptr};
-}
-
-// A loop test this DUT cannot run takes no device time: the plan and the progress said 2 s
-// (more for a longer loop test) for a phase that only records it was skipped (a review).
-void plan_skipped_loop_test(const DutAbilities& can, std::vector<Phase>& phases) {
-  if (can.commands && can.loop_test) return;
-  for (Phase& ph : phases)
-    if (ph.id == "loop") ph.planned_s = 0;
+  return {{o.commands, o.loop_test}, nullptr};
 }
 
 // What the plan cannot do on this DUT, said before the run (the run says it again, with the
 // passport's `skipped`): the DUT's link options, or on the emulated plant its firmware's.
-std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const DutAbilities& can,
+std::vector<std::string> planned_skips(const RunArgs& a, const toml::table& hw, const acceptance::DutAbilities& can,
                                        const acceptance::Profile& p) {
   const bool commands = can.commands, loop_test = can.loop_test;
   std::vector<std::string> out;
@@ -1006,11 +998,10 @@ int do_run(RunArgs a) {
   // The mount's angles before the phases are planned: each move's planned time follows them.
   if (a.plant == "hardware") apply_procedure_angles(hw, p);
   check_procedure_angles_in_travel(a, hw, plant_cfg, p);
-  const DutAbilities dut_can = dut_abilities(a, hw, plant_cfg);
-  check_stream_rate(a, dut_can.stream, p);
+  const DutLinkOptions dut = dut_link_options(a, hw, plant_cfg);
+  check_stream_rate(a, dut.stream, p);
   acceptance::ProcedureState state(p);  // what the phases hand on; checkpointed with every phase
-  std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg));
-  plan_skipped_loop_test(dut_can, phases);
+  const std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg), dut.can);
   MeasurementSet values;
   acceptance::declare_values(p, phases, values);
   const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
@@ -1048,7 +1039,7 @@ int do_run(RunArgs a) {
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
                              shown_text(p.source), a.plant);
     plan_view.plan(phases, completed.size());
-    for (const std::string& s : planned_skips(a, hw, dut_can, p)) std::cout << "  skipped: " << s << "\n";
+    for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
       for (std::size_t i = 0; i < completed.size(); ++i) {

@@ -331,7 +331,8 @@ double TableTiming::move_s(double from_deg, double to_deg) const {
   return trapezoid_time(to_deg - from_deg, velocity_dps, accel_dps2) + drive_settle_s + settle_s + poll_s;
 }
 
-std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table) {
+std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table,
+                                const DutAbilities& dut) {
   DutState& st = state.slot(0);  // a multi-DUT fixture runs each phase over its slots
   std::vector<Phase> ph;
   // A recording's planned device time (position_and_record): the move from where the previous
@@ -385,8 +386,10 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                 true});
   ph.push_back({"loop", fmt::format("loop test on the DUT: {} step(s) of {:g} g inside its loop, recorded", p.loop_steps,
                                     p.loop_amplitude_g),
-                // the steps at the loop's rate, the rate the output filter runs at in the DUT
-                p.loop_steps * loop_step_nominal_s(p.loop_record_s,
+                // the steps at the loop's rate, the rate the output filter runs at in the DUT; a DUT
+                // that cannot run it takes no device time (the plan said 2 s or more: a review)
+                !dut.runs_loop_test() ? 0.0
+                : p.loop_steps * loop_step_nominal_s(p.loop_record_s,
                                                    static_cast<std::size_t>(std::lround(p.loop_record_s * p.filter.rate_hz))),
                 [&p, &st](PhaseContext& c) { phase_loop_test(c, p, st); }});
   ph.push_back({"loop-figures", "closed-loop bandwidth and settling time with the output filter, from the loop test's records", 0,

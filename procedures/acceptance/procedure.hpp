@@ -41,11 +41,21 @@ struct TableTiming {
   double move_s(double from_deg, double to_deg) const;
 };
 
+// What the DUT can be asked, as its link's configuration declares it (a hardware file's [dut],
+// the emulated firmware's options): a loop test it cannot run is planned at no device time (the
+// phase only records that it was skipped).
+struct DutAbilities {
+  bool commands = true;   // a command channel: identify, set output filter, loop test
+  bool loop_test = true;  // the firmware runs the loop test
+  bool runs_loop_test() const { return commands && loop_test; }
+};
+
 // The phases, each with the measures it declares (name, unit, description) and its planned
 // device time: each recording's move from where the previous one left the table, its settle
-// and record; the loop test's steps (no retries counted; bring-up, i.e. the DUT's power-up and
-// homing, is not a phase). The phases read and write `state` (kept alive by the caller, as `p`).
-std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table = {});
+// and record; the loop test's steps (none where `dut` cannot run it; no retries counted;
+// bring-up, i.e. the DUT's power-up and homing, is not a phase). The phases read and write `state` (kept alive by the caller, as `p`).
+std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table = {},
+                                const DutAbilities& dut = {});
 
 // Declares the phases' measures with the profile's limits, in passport order (phase
 // order, then accuracy_class, which is required when the profile has classes).

@@ -82,3 +82,49 @@ TEST(Plan, EachDevicePhaseTakesItsPlannedDeviceTime) {
   EXPECT_NEAR(took, planned, 1.5);
   fs::remove_all(out);
 }
+
+// A DUT that cannot run the loop test (its firmware says so, or it has no command channel) has
+// the loop phase planned at no device time, and the phase takes none: the plan said 2 s or more.
+TEST(Plan, ALoopTestTheDutCannotRunIsPlannedAtNoTime) {
+  std::string source;
+  const toml::table profile_table = acceptance::load_profile_table("ci", source);
+  const acceptance::Profile p = acceptance::parse_profile(profile_table, source);
+  acceptance::ProcedureState state(p);
+  auto loop_planned = [&](const acceptance::DutAbilities& can) {
+    for (const Phase& ph : acceptance::build_phases(p, state, {}, can))
+      if (ph.id == "loop") return ph.planned_s;
+    ADD_FAILURE() << "no loop phase";
+    return -1.0;
+  };
+  EXPECT_GT(loop_planned({}), 1.0);
+  EXPECT_EQ(loop_planned({.commands = true, .loop_test = false}), 0.0);
+  EXPECT_EQ(loop_planned({.commands = false, .loop_test = true}), 0.0);
+
+  // On the emulated plant whose firmware does not run it: the phase takes no device time (its
+  // "no", one reply).
+  toml::table plant_cfg = plant::plant_section(profile_table);
+  toml::table firmware;
+  firmware.insert("loop_test", false);
+  plant_cfg.insert_or_assign("firmware", firmware);
+  plant::EmulatedPlant world(plant_cfg);
+  Devices dev{world.table(), world.dut(), world.io(), world.clock(), "emulated"};
+  std::ostringstream logtext;
+  auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+  const auto phases = acceptance::build_phases(p, state, {}, {.commands = true, .loop_test = false});
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  const std::string out = fs::temp_directory_path() / ("rigplan-noloop-" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  fs::create_directories(out);
+  PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr, {}};
+  acceptance::bring_up(ctx, p, {}, state.slot());
+  for (const Phase& ph : phases)
+    if (ph.id == "loop") {
+      const double t0 = dev.clock.now_s();
+      ph.run(ctx);
+      EXPECT_NEAR(dev.clock.now_s() - t0, ph.planned_s, 0.01);  // the firmware's "no" is one reply
+      ASSERT_TRUE(state.slot().loop_test.has_value());
+      EXPECT_FALSE(state.slot().loop_test->supported);
+    }
+  fs::remove_all(out);
+}

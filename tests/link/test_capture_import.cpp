@@ -268,6 +268,48 @@ TEST(CaptureImport, StreamsOfTwoInterfacesAreNeverMixed) {
       << slurp(dir() / "bare.err");
 }
 
+// The capture says which interface its stream came from, and the counts are that interface's,
+// chosen by --iface or found: they were every interface's without --iface (a review).
+TEST(CaptureImport, TheStreamsInterfaceIsInTheHeaderAndCountedAlone) {
+  const Dbc db = Dbc::parse_file(std::string(RIG_SOURCE_DIR) + "/tests/data/dbc/dut-layouts.dbc");
+  const DbcMessage* m = db.find("ACC_XY");
+  ASSERT_NE(m, nullptr);
+  std::ostringstream log;
+  double t = 1732255200.0;
+  log << "(1732255198.000000) vcan0 18FF0001#00\n";  // another station's heartbeat, first in the log
+  log << "(1732255199.000000) vcan1 18FF0002#00\n";  // this station's, before its stream
+  for (uint64_t k = 0; k < 300; ++k, t += 5e-4) {
+    std::string a = acc_xy_line(*m, t, k);
+    log << a.replace(a.find("vcan0"), 5, "vcan1");
+    if (k % 100 == 0) {
+      char beats[96];
+      std::snprintf(beats, sizeof beats, "(%.6f) vcan0 18FF0001#00\n(%.6f) vcan1 18FF0002#00\n", t, t);
+      log << beats;
+    }
+  }
+  std::ofstream(dir() / "iface.log") << log.str();
+  std::ofstream(dir() / "hw-iface.toml") << "[dut]\ncan = \"can9\"\ndbc = \"" << RIG_SOURCE_DIR
+                                         << "/tests/data/dbc/dut-layouts.dbc\"\n[dut.stream]\ncounter = "
+                                            "\"ACC_XY.cnt\"\nx = \"ACC_XY.x\"\ny = \"ACC_XY.y\"\nrate_hz = 2000\n";
+  const std::string head =
+      "capture import " + (dir() / "iface.log").string() + " --hardware " + (dir() / "hw-iface.toml").string();
+  ASSERT_EQ(run_rig(head + " --out " + (dir() / "found.rigcap").string(), "found"), 0) << slurp(dir() / "found.err");
+  ASSERT_EQ(run_rig(head + " --iface vcan1 --out " + (dir() / "given.rigcap").string(), "given"), 0)
+      << slurp(dir() / "given.err");
+  const std::string found = slurp(dir() / "found.out"), given = slurp(dir() / "given.out");
+  EXPECT_NE(found.find("300 samples from 300 stream frames (304 frames read on vcan1, 4 other ids)\n"
+                       "4 frame(s) on other interfaces: not read\n"),
+            std::string::npos)
+      << found;
+  auto counts = [](const std::string& out) { return out.substr(out.find(": ")); };  // past the file names
+  EXPECT_EQ(counts(found), counts(given));
+  for (const char* name : {"found.rigcap", "given.rigcap"}) {
+    const auto c = rig::capture::load((dir() / name).string());
+    EXPECT_EQ(c.header.extra.value("iface", ""), "vcan1") << name;
+    EXPECT_EQ(c.header.started, "2024-11-22T05:59:59Z") << name << ": vcan1's first frame, not vcan0's";
+  }
+}
+
 namespace {
 
 // A CAN FD frame as candump -l / -L writes it: ID##F then the data, upper-case hex.
@@ -479,7 +521,7 @@ TEST(CaptureImport, LateFramesTheTailAndFdFramesAreAccountedFor) {
             0) << slurp(dir() / "late.err");
   const std::string out = slurp(dir() / "late.out");
   EXPECT_NE(out.find("200 samples"), std::string::npos) << out;
-  EXPECT_NE(out.find("(406 frames read, 1 other ids)"), std::string::npos) << out;
+  EXPECT_NE(out.find("(406 frames read on vcan0, 1 other ids)"), std::string::npos) << out;
   EXPECT_NE(out.find("gaps 0 (0 samples lost), duplicates 0\n"), std::string::npos) << out;
   EXPECT_NE(out.find("2 frame(s) logged more than the reorder window (8 samples) behind the stream"), std::string::npos)
       << out;
