@@ -190,6 +190,14 @@ void Cia402Drive::apply_controlword(uint16_t w) {
                                  axis_.params().in_position_window_deg;
     resume_pending_ = mode_ == c4::kModeProfilePosition && moving_to_target_ && short_of_target;
   }
+  // Homing mode, bit 4 from 1 to 0 while the homing runs: "interrupt homing mode" (IEC 61800-7-201,
+  // homing mode controlword): the axis stops on its ramp without the home, and bits 13, 12, 10 say
+  // "interrupted" once it is at rest. It homed on regardless (a review).
+  if (mode_ == c4::kModeHoming && homing_active_ && (prev & ~w & c4::cw::kHomingStart)) {
+    axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kHalt));
+    axis_control(ctl::kServoOn);
+    homing_active_ = false;
+  }
   if (!(w & c4::cw::kNewSetPoint)) setpoint_ack_ = false;  // handshake: the master took the acknowledge
   if (!(rising & c4::cw::kNewSetPoint) || halt) return;
   if (mode_ == c4::kModeHoming) {
@@ -252,7 +260,10 @@ void Cia402Drive::start_setpoint() {
   axis_control(ctl::kServoOn);
   axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kStart));
   axis_control(ctl::kServoOn);
-  setpoint_ack_ = true;
+  // Acknowledged while the master still holds bit 4; a master that cleared it before the drive
+  // took the set-point has ended the handshake: an acknowledge set then stayed set, and the next
+  // set-point was refused as not yet taken (a review).
+  setpoint_ack_ = (controlword_ & c4::cw::kNewSetPoint) != 0;
   moving_to_target_ = true;
 }
 

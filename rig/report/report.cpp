@@ -1,7 +1,9 @@
 #include "rig/report/report.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -71,10 +73,17 @@ std::string write_page(const fs::path& dir, const json& passport, const json& an
     std::error_code gone;
     fs::remove(tmp, gone);  // whatever lay there (a FIFO would stall the open, a link redirect the write)
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw ConfigError(tmp.string() + ": cannot write the report");
+    // errno after a failed open or write is the C library's (std::ofstream sets no error_code):
+    // "Permission denied", "No space left on device" tell the user what to mend (a review).
+    if (!f) throw ConfigError(tmp.string() + ": cannot write the report (" + std::strerror(errno) + ")");
     f << html;
     f.flush();
-    if (!f) throw ConfigError(tmp.string() + ": write failed");
+    if (!f) {
+      const std::string why = std::strerror(errno);
+      f.close();
+      fs::remove(tmp, gone);  // a half-written page is no report
+      throw ConfigError(tmp.string() + ": write failed (" + why + ")");
+    }
   }
   std::error_code ec;
   fs::rename(tmp, out, ec);

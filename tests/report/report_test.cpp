@@ -72,6 +72,25 @@ TEST(Report, FullRunHasIdentityTableAndEveryPlot) {
   EXPECT_FALSE(std::filesystem::exists(d.path / "report.html.tmp"));
 }
 
+// A page that cannot be written says why, as the system does (it said only "cannot write the
+// report": a review); a folder of that name stands where the page's temporary file goes (root
+// writes through any permission, this fails for every user).
+TEST(Report, APageThatCannotBeWrittenSaysWhy) {
+  TempDir d;
+  const json a = rig::test::fixture_analysis();
+  rig::test::write_run(d.path, rig::test::fixture_passport(), &a);
+  std::filesystem::create_directories(d.path / "report.html.tmp" / "kept");
+  try {
+    rig::report::write_report(d.path.string());
+    FAIL() << "written";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("report.html.tmp: cannot write the report (Is a directory)"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(d.path / "report.html"));
+  EXPECT_TRUE(std::filesystem::exists(d.path / "report.html.tmp" / "kept")) << "nothing of the user's removed";
+}
+
 // The <svg> element of one plot and the caption of its figure.
 std::string plot_svg(const std::string& h, const std::string& id) {
   const std::size_t at = h.find("data-plot=\"" + id + "\"");

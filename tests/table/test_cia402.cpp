@@ -185,6 +185,13 @@ settle_s = 0.05
 start_angle_deg = 10.0
 )";
 
+// The fast axis, 300 degrees from its home: 1.5 s of homing at 200 °/s.
+std::string far_axis() {
+  std::string axis = kFastAxis;
+  axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
+  return axis;
+}
+
 struct Rig {
   explicit Rig(const std::string& map_file, const std::string& axis_cfg = kFastAxis)
       : map(m::load_drive_map(kDrives + map_file)),
@@ -406,6 +413,56 @@ TEST(Cia402Drive, SetPointHandshakeTimingAndHalt) {
   r.run(0.05);
   EXPECT_FALSE(r.drive.statusword() & c4::sw::kSetPointAck);
   EXPECT_TRUE(r.drive.statusword() & c4::sw::kInternalLimit);
+}
+
+// Homing mode, bit 4 from 1 to 0 during the run: "interrupt homing mode" (IEC 61800-7-201). The
+// emulated drive homed on regardless (a review, with a third-party master).
+TEST(Cia402Drive, ClearingTheHomingStartMidRunInterruptsIt) {
+  Rig r("generic-cia402.toml", far_axis());
+  r.run(0.05);
+  r.control(c4::cw::kShutdown);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.write(Obj::kModesOfOperation, c4::kModeHoming);
+  r.write(Obj::kHomingMethod, 19);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+  r.run(0.3);
+  const uint16_t running = r.drive.statusword();
+  EXPECT_FALSE(running & (c4::sw::kTargetReached | c4::sw::kHomingAttained | c4::sw::kHomingError));  // 0, 0, 0
+  r.control(c4::cw::kCmdEnableOperation);
+  r.run(2.0);
+  const uint16_t after = r.drive.statusword();
+  EXPECT_TRUE(after & c4::sw::kTargetReached) << "bits 13, 12, 10 = 0, 0, 1: interrupted";
+  EXPECT_FALSE(after & (c4::sw::kHomingAttained | c4::sw::kHomingError));
+  EXPECT_FALSE(r.axis->snapshot().homed);
+  EXPECT_GT(r.axis->actual_angle_deg(), 100.0) << "stopped on its ramp, far from the home";
+  // A new homing start runs the homing to its end.
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+  r.run(3.0);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kHomingAttained);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 0.0, 0.005);
+}
+
+// A master that clears bit 4 before the drive has taken the set-point has ended the handshake:
+// the set-point is taken, nothing is left acknowledged, and the next set-point is taken (an
+// acknowledge set after bit 4 was cleared stayed set, and the next set-point was refused).
+TEST(Cia402Drive, ASetPointWhoseBit4WasClearedEarlyIsTakenAndLeavesNoAcknowledge) {
+  Rig r("generic-cia402.toml");
+  enable_and_home(r);
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(90.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.control(c4::cw::kCmdEnableOperation);  // in the next request, before the drive's cycle
+  r.run(plant::Cia402Drive::kSetPointLatencyS * 2);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kSetPointAck);
+  r.run(2.0);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 90.0, 0.005) << "the set-point was taken";
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(45.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(plant::Cia402Drive::kSetPointLatencyS * 2);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kSetPointAck);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.run(2.0);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 45.0, 0.005);
 }
 
 // What ends a positioning that a halt interrupted, so that releasing the halt does not continue
@@ -643,12 +700,6 @@ TEST_P(Cia402Client, AnotherMastersHaltEndsTheMoveAtOnceNamingIt) {
 }
 
 namespace {
-// The fast axis, 300 degrees from its home: 1.5 s of homing at 200 °/s.
-std::string far_axis() {
-  std::string axis = kFastAxis;
-  axis.replace(axis.find("start_angle_deg = 10.0"), 22, "start_angle_deg = 300.0");
-  return axis;
-}
 
 // Homes; from 0.3 s of drive time into the homing run, calls `other` (another master) on every
 // step until it returns true. The error, and when `other` was first called.
@@ -745,6 +796,20 @@ TEST_P(Cia402Client, HomingStoppedAndReleasedByAnotherMasterIsNamedAtOnce) {
       << e;
   EXPECT_LT(r.axis->time_s() - t_other, 1.9) << "not after a frozen-drive timeout";
   EXPECT_EQ(controlword_of(r), c4::cw::kCmdEnableOperation | c4::cw::kHalt);
+}
+
+// Another master that clears the homing start (bit 4) mid-run: the drive interrupts the homing
+// (IEC 61800-7-201) and the client says so, not "homed" nor a frozen drive.
+TEST_P(Cia402Client, AnotherMasterClearingTheHomingStartIsAnInterruptedHome) {
+  Rig r(GetParam(), far_axis());
+  auto t = r.client();
+  const auto [e, t_other] = home_with_another_master(r, *t, [&] {
+    r.control(c4::cw::kCmdEnableOperation);
+    return true;
+  });
+  EXPECT_TRUE(has(e, "home: homing interrupted before the home was attained")) << e;
+  EXPECT_FALSE(r.axis->snapshot().homed);
+  EXPECT_LT(r.axis->time_s() - t_other, 2.5) << "not after a frozen-drive timeout";
 }
 
 // The same before the client's first poll: halt set right after the homing start and released
