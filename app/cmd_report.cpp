@@ -14,16 +14,21 @@ void add_report(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("report", "Write report.html (passport, plots; prints on A4) from a run folder");
   auto dir = std::make_shared<std::string>();
   sub->add_option("DIR", *dir, "Run folder holding passport.json (and analysis.json)")->required();
+  auto force = std::make_shared<bool>(false);
+  sub->add_flag("--force", *force,
+                "Write a sealed folder's report.html even where it comes out other than the sealed page (rig verify "
+                "then names it changed)");
   sub->footer("Exit codes: 0 written; 2 passport.json missing, malformed, or with verdicts its own values and "
-              "limits contradict (the file and field are named), or a rig run using the folder now.");
-  sub->callback([&rc, dir] {
+              "limits contradict (the file and field are named), a rig run using the folder now, or a sealed "
+              "report.html the page would change (without --force).");
+  sub->callback([&rc, dir, force] {
     // A run or resume holding the folder writes its own report at its end; its passport may be
     // missing or about to change now (a review read "does the run folder exist?" there). The
     // lock is held while the report is written, so no run takes the folder half-way (a check
     // alone left that window, a code review). A path that is no folder is named by the reader.
     std::optional<FolderLock> lock;
     if (path_kind(*dir, "rig report") == PathKind::directory) lock.emplace(*dir, "rig report " + *dir, false);
-    std::cout << report::write_report(*dir) << "\n";
+    std::cout << report::write_report(*dir, *force) << "\n";
     rc = kExitPass;
   });
 }

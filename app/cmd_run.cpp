@@ -263,6 +263,8 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
 // (a technician's review). stdin is polled, and a signal ends the prompt as it ends a run.
 // The line is read from the descriptor byte by byte: a buffered reader could hold the next
 // answer where poll() does not see it.
+// An answer is y or yes, n or no (any case, blanks around), or Enter (the default, no); anything
+// else is asked again: "yet to fasten" confirmed a mount, and run.log said "yes" (a review).
 bool confirm(const std::string& question, const CancelToken& cancel) {
   std::cerr << question << " [y/N] " << std::flush;
   std::string line;
@@ -277,10 +279,18 @@ bool confirm(const std::string& question, const CancelToken& cancel) {
     const ssize_t n = ::read(STDIN_FILENO, &c, 1);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return false;  // end of input: no answer is a no
-    if (c == '\n') break;
-    line += c;
+    if (c != '\n') {
+      line += c;
+      continue;
+    }
+    const auto first = line.find_first_not_of(" \t\r"), last = line.find_last_not_of(" \t\r");
+    std::string word = first == std::string::npos ? "" : line.substr(first, last - first + 1);
+    for (char& ch : word) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (word == "y" || word == "yes") return true;
+    if (word.empty() || word == "n" || word == "no") return false;
+    std::cerr << "Answer y (yes) or n (no). " << question << " [y/N] " << std::flush;
+    line.clear();
   }
-  return !line.empty() && (line[0] == 'y' || line[0] == 'Y');
 }
 
 // Operator prompts where a person must act; --yes skips them (automation). Returns what the
@@ -294,7 +304,12 @@ std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Pr
     throw ConfigError("operator confirmation needed (mount the DUT, confirm the table is clear): run with --yes "
                       "for unattended runs");
   }
-  // What the answers start: the operator agrees to it, not to a question alone.
+  // What the answers start: the operator agrees to it, not to a question alone. A run typed
+  // without --hardware measures the emulated plant: said first, in capitals, since its passport
+  // passes under the serial typed (a technician's review).
+  if (a.plant == "emulated")
+    std::cerr << "EMULATED PLANT: no device on the bench is touched; the DUT, the table and the GPIO are simulated "
+                 "and the passport describes the simulation (give --hardware FILE to test a real DUT).\n";
   std::cerr << fmt::format(
       "Profile '{}': {}\nDevice time {}{}. After your answers rig powers the DUT, homes the table and turns it between "
       "U10 ({:g} deg) and U20 ({:g} deg); Ctrl-C at any point stops the table and powers the DUT off.\n",
@@ -806,7 +821,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     if (ec) log->error("junit.xml not put in place: {}", ec.message()), done = false;
   }
   if (no_report) try {
-      report::write_report(dir);
+      report::write_report(dir, true);  // the run's own page, before its final seal
     } catch (const std::exception& e) {
       log->error("report.html not written: {}", e.what());
     }
@@ -1036,8 +1051,16 @@ int do_run(RunArgs a) {
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true);
     }
     TerminalView plan_view(stdout);
-    std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on the {} plant; nothing is touched.\n", p.name,
-                             shown_text(p.source), a.plant);
+    std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
+                             shown_text(p.source),
+                             a.plant == "hardware" ? "the hardware of " + shown_text(a.hardware)
+                                                   : std::string("the emulated plant (a simulated DUT, table and GPIO)"));
+    // The angles the run turns to, and whose they are: a mount's calibration that never reached
+    // them was found only at the prompt, or not at all with --yes (a technician's review).
+    const toml::table* pr = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
+    std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
+                             pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
+                                                           : std::string("the profile's"));
     plan_view.plan(phases, completed.size());
     for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {

@@ -103,7 +103,20 @@ toml::table load_hardware_section(const std::string& path, std::string_view sect
 }
 
 void apply_procedure_angles(const toml::table& hw, acceptance::Profile& p) {
-  if (const toml::table* pr = cfg::get_table(hw, "procedure")) read_procedure(*pr, p.u10_deg, p.u20_deg);
+  const toml::table* pr = cfg::get_table(hw, "procedure");
+  if (pr) read_procedure(*pr, p.u10_deg, p.u20_deg);
+  // [table] u10_deg / u20_deg are accepted so older files load, but never used: a mount's
+  // calibration put there (where a profile keeps its angles) was measured at the profile's 0 and
+  // 180 deg, silently (a technician's review). One that is not the angle the run turns to is refused.
+  const toml::table* t = cfg::get_table(hw, "table");
+  if (!t) return;
+  for (const auto& [key, used] : {std::pair{"u10_deg", p.u10_deg}, {"u20_deg", p.u20_deg}})
+    if (const toml::node* n = t->get(key); n && cfg::get_number(*t, key, used) != used)
+      cfg::reject(*n, key,
+                  fmt::format("[table]'s angles are not used: the run turns to {} at {:g}° ({}); a mount's angles go in "
+                              "[procedure] u10_deg / u20_deg",
+                              key[1] == '1' ? "U10" : "U20", used,
+                              pr && pr->contains(key) ? "[procedure]'s" : "the profile's"));
 }
 
 }  // namespace rig::cli

@@ -107,7 +107,8 @@ const std::string& builtin_profile_text(const std::string& name) {
   return it->second;
 }
 
-Profile parse_profile(const toml::table& t, const std::string& source) {
+namespace {
+Profile parse_profile_table(const toml::table& t, const std::string& source) {
   // [plant] is the emulated plant's (it checks it itself): allowed here, never read.
   cfg::check_keys(t, {"base", "profile", "procedure", "table", "filter", "loop", "analysis", "limits", "classes", "plant"},
                   "top level");
@@ -256,11 +257,11 @@ Profile parse_profile(const toml::table& t, const std::string& source) {
   return p;
 }
 
-Profile load_profile(const std::string& name_or_path) {
-  std::string source;
-  const toml::table t = load_profile_table(name_or_path, source);
+}  // namespace
+
+Profile parse_profile(const toml::table& t, const std::string& source) {
   try {
-    return parse_profile(t, source);
+    return parse_profile_table(t, source);
   } catch (const ConfigError& e) {
     // A value the file inherits is named at the base's line, which the user cannot edit: say
     // which file inherited it, where a key of its own would change it.
@@ -269,6 +270,12 @@ Profile load_profile(const std::string& name_or_path) {
       throw ConfigError(what + " (inherited by " + shown_text(source) + " from its base; set the key there to change it)");
     throw;
   }
+}
+
+Profile load_profile(const std::string& name_or_path) {
+  std::string source;
+  const toml::table t = load_profile_table(name_or_path, source);
+  return parse_profile(t, source);
 }
 
 // A file's profile names itself: one built on a base without a [profile] name of its own took

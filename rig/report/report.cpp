@@ -59,7 +59,29 @@ std::vector<std::string> set_aside_files(const fs::path& dir) {
 
 // The page from the documents read, written atomically: a temp file renamed into place.
 // analysis.json's document that is neither absent (null) nor an object is drawn as absent, saying so.
-std::string write_page(const fs::path& dir, const json& passport, const json& analysis, std::string analysis_problem) {
+// report.html as the folder's seal.json covers it (rig/seal): a page that would come out other
+// than the sealed one (a copied folder names where it was read from; another rig's layout) is not
+// written over it unless asked, since `rig verify` then names it changed (a technician's review:
+// an archived run regenerated failed verification, silently).
+bool sealed_page(const fs::path& dir) {
+  std::ifstream in(dir / "seal.json", std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const json seal = json::parse(ss.str(), nullptr, false);
+  if (!seal.is_object() || !seal.contains("files") || !seal["files"].is_object()) return true;  // rig verify says why
+  return seal["files"].contains("report.html");
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string write_page(const fs::path& dir, const json& passport, const json& analysis, std::string analysis_problem,
+                       bool over_sealed = true) {
   const bool usable = analysis.is_null() || analysis.is_object();
   if (!usable) analysis_problem = "analysis.json is not a JSON object";
   const json none;
@@ -69,6 +91,11 @@ std::string write_page(const fs::path& dir, const json& passport, const json& an
       render_report(passport, usable ? analysis : none, analysis_problem, read_from.string(), set_aside_files(dir));
 
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
+  if (!over_sealed && sealed_page(dir) && fs::exists(out) && read_bytes(out) != html)
+    throw ConfigError((dir / "seal.json").string() + " seals " + out.string() +
+                      ", and the page written now differs from it (the folder was copied or moved, or another rig "
+                      "version wrote it): kept as sealed; `rig report --force` writes it again, and `rig verify` "
+                      "then names report.html as changed");
   {
     std::error_code gone;
     fs::remove(tmp, gone);  // whatever lay there (a FIFO would stall the open, a link redirect the write)
@@ -92,12 +119,12 @@ std::string write_page(const fs::path& dir, const json& passport, const json& an
 }
 }  // namespace
 
-std::string write_report(const std::string& run_dir) {
+std::string write_report(const std::string& run_dir, bool over_sealed) {
   const fs::path dir(run_dir);
   std::string analysis_problem;
   const json passport = read_passport(run_dir);
   const json analysis = read_analysis(dir / "analysis.json", analysis_problem);  // sets the problem first
-  return write_page(dir, passport, analysis, analysis_problem);
+  return write_page(dir, passport, analysis, analysis_problem, over_sealed);
 }
 
 std::string write_report(const std::string& run_dir, const json& passport, const json& analysis) {

@@ -12,8 +12,10 @@ namespace rig::report {
 // Reads run_dir/passport.json and run_dir/analysis.json, writes run_dir/report.html
 // (atomically: a temp file renamed into place) and returns its path.
 // Throws rig::ConfigError naming the file when passport.json is missing or malformed;
-// a missing or malformed analysis.json is reported inside the page, not thrown.
-std::string write_report(const std::string& run_dir);
+// a missing or malformed analysis.json is reported inside the page, not thrown. A sealed folder's
+// report.html (seal.json lists it) that the page now written would change is kept, ConfigError,
+// unless `over_sealed`.
+std::string write_report(const std::string& run_dir, bool over_sealed = false);
 // The same from the documents in memory (`rig run`, which has just made them): the page is the
 // one the folder gives, without parsing analysis.json again (3.7 MB after a `paper` run: about
 // 40 ms of the run's end), drawn before passport.json is in place (app/cmd_run.cpp

@@ -839,6 +839,27 @@ TEST(Campaign, SealedRunFolders) {
       << slurp(whole + "-extra.stdout");
   fs::remove(whole + "/captures/extra.cap");
   {
+    // rig report on the folder writes the same page, and it still verifies; on a copy (an
+    // archive) the page would name its new folder: the sealed page is kept, exit 2, unless
+    // --force (a technician's review: the copy's seal broke, silently).
+    ASSERT_EQ(run({"report", whole}, whole + "-report"), 0) << slurp(whole + "-report.stderr");
+    ASSERT_EQ(run({"verify", whole, "--seal-key", key}, whole + "-reverify"), 0) << slurp(whole + "-reverify.stdout");
+    const std::string copy = d + "/archived";
+    fs::copy(whole, copy, fs::copy_options::recursive);
+    const std::string page = slurp(copy + "/report.html");
+    EXPECT_EQ(run({"report", copy}, copy + "-report"), 2);
+    EXPECT_NE(slurp(copy + "-report.stderr").find("/archived/report.html, and the page written now differs from it"),
+              std::string::npos)
+        << slurp(copy + "-report.stderr");
+    EXPECT_EQ(slurp(copy + "/report.html"), page);
+    EXPECT_EQ(run({"verify", copy, "--seal-key", key}, copy + "-verify"), 0) << slurp(copy + "-verify.stdout");
+    EXPECT_EQ(run({"report", copy, "--force"}, copy + "-force"), 0) << slurp(copy + "-force.stderr");
+    EXPECT_NE(slurp(copy + "/report.html"), page);
+    EXPECT_EQ(run({"verify", copy, "--seal-key", key}, copy + "-forced"), 1);
+    EXPECT_NE(slurp(copy + "-forced.stdout").find("CHANGED  report.html"), std::string::npos)
+        << slurp(copy + "-forced.stdout");
+  }
+  {
     // Loop-test records swapped in before the station sealed them (a review's finding: the
     // station seals the bytes it reads back; before, a swapped file verified as PASS): verify
     // holds them to the sealed checkpoint's CRC-32.

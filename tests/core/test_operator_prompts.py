@@ -41,10 +41,14 @@ def main():
     env = dict(os.environ, RIG_HISTORY="sqlite:" + os.path.join(d, "history.sqlite"))
     passed = failed = 0
     try:
+        # An answer that is neither yes nor no is asked again ("yet to fasten" confirmed a mount).
         for answers, want_rc, want_text, made in ((["y", "y", "y"], 0, "OUTCOME: PASS", False),
                                                   (["y", "n"], 3, "did not confirm the serial", False),
-                                                  (["n"], 3, "did not confirm the DUT is mounted", True)):
-            out_dir = os.path.join(d, f"run-exit{want_rc}-{len(answers)}")
+                                                  (["n"], 3, "did not confirm the DUT is mounted", True),
+                                                  (["yet to fasten", "yess", " No "], 3,
+                                                   "Answer y (yes) or n (no). Is the DUT mounted", False),
+                                                  (["maybe", " YES", "Y", "yes"], 0, "OUTCOME: PASS", False)):
+            out_dir = os.path.join(d, f"run-exit{want_rc}-{len(answers)}-{answers[0].strip()}")
             if made:  # a folder the operator made beforehand stays after a "no"
                 os.mkdir(out_dir)
             rc, out = run_with_answers(rig, ["run", "--profile", "ci", "--serial", "EMU-QPA-0001", "--out", out_dir],
@@ -52,6 +56,8 @@ def main():
             ok = rc == want_rc and want_text in out and out.count("[y/N]") == len(answers)
             # The plan comes before the first question, whatever the answers.
             ok = ok and 0 <= out.find("Plan: ") < out.find("[y/N]")
+            # A run typed without --hardware says, before the first question, that it is the emulated plant.
+            ok = ok and 0 <= out.find("EMULATED PLANT: no device on the bench is touched") < out.find("[y/N]")
             if want_rc == 3:  # nothing ran: not even its empty folder is left, unless the operator made it
                 ok = ok and (os.path.isdir(out_dir) and not os.listdir(out_dir) if made else not os.path.exists(out_dir))
             else:  # the prompt's device time is the plan's (it was the profile's own estimate)

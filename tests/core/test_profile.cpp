@@ -154,6 +154,16 @@ TEST(Profile, AnInheritedValueIsNamedByTheBasesLine) {
   EXPECT_EQ(error_of(p), "builtin:ci:15:19: 'in_run_blocks_s' = [ 2.0, 4.0 ]: 2 s: each block length must be > 0 "
                          "and give at least 2 blocks in in_run_s = 3 (inherited by " + p +
                          " from its base; set the key there to change it)");
+  // As rig run and rig plant serve read it, the table apart from its parse (they said only the
+  // base's line: a technician's review).
+  std::string source;
+  const toml::table t = rig::acceptance::load_profile_table(p, source);
+  try {
+    rig::acceptance::parse_profile(t, source);
+    ADD_FAILURE() << "parsed";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), error_of(p));
+  }
 }
 
 // The raw capture holds one segment of its PSD at least: 0.25 s at 1 kHz passed every check and

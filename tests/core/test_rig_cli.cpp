@@ -129,7 +129,8 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_TRUE(fs::exists(d + "/run/captures/raw-U10.cap"));
   EXPECT_TRUE(fs::exists(d + "/run/captures/run12-U20.cap"));
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
-  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS"), std::string::npos);
+  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS  (emulated plant: a simulated DUT, not a device on the bench)\n"),
+            std::string::npos);
   // Where the run was recorded is said (spawn() points RIG_HISTORY at d/io.history.sqlite).
   const std::string recorded = "recorded in the history database sqlite:" + d + "/io.history.sqlite as run 1";
   EXPECT_NE(slurp(d + "/io.stderr").find(recorded), std::string::npos) << slurp(d + "/io.stderr");
@@ -2063,6 +2064,44 @@ TEST(RigCli, DryRunOnHardwarePlansWithTheTablesSettingsAndTheMountsAngles) {
   ASSERT_FALSE(base.empty());
   EXPECT_LT(fast, base) << fast << " vs " << base;  // h:mm:ss of equal width compare as text
   EXPECT_LT(near, base) << near << " vs " << base;
+}
+
+// A mount's angles put in [table] (accepted for older files, never used) that are not the angles
+// the run turns to are refused at their line; the dry run says the angles and whose they are, and
+// which plant it plans (a technician's review: [table] u10_deg = 2.5 planned and ran at 0°).
+TEST(RigCli, AnglesTheRunWouldNotUseAreRefusedAndTheDryRunSaysTheAnglesItUses) {
+  const std::string d = tmp("dry-angles");
+  fs::create_directories(d);
+  const std::string hw = "[dut]\ncan = \"vcan-none\"\n[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"P\"\n"
+                         "estop = \"E\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\nlamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  auto dry = [&](const std::string& name, const std::string& table, const std::string& procedure) {
+    std::ofstream(d + "/" + name + ".toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n" << table << hw << procedure;
+    return run({"run", "--hardware", d + "/" + name + ".toml", "--profile", "ci", "--serial", "X-1", "--dry-run"},
+               d + "/" + name);
+  };
+  EXPECT_EQ(dry("tang", "u10_deg = 2.5\nu20_deg = 182.5\n", ""), 2);
+  EXPECT_NE(slurp(d + "/tang.stderr")
+                .find("tang.toml:3:11: 'u10_deg' = 2.5: [table]'s angles are not used: the run turns to U10 at 0° "
+                      "(the profile's); a mount's angles go in [procedure] u10_deg / u20_deg"),
+            std::string::npos)
+      << slurp(d + "/tang.stderr");
+  EXPECT_EQ(dry("both", "u10_deg = 2.5\nu20_deg = 180.0\n", "[procedure]\nu10_deg = 2.5\nu20_deg = 182.5\n"), 2);
+  EXPECT_NE(slurp(d + "/both.stderr").find("'u20_deg' = 180.0: [table]'s angles are not used: the run turns to U20 at "
+                                           "182.5° ([procedure]'s)"),
+            std::string::npos)
+      << slurp(d + "/both.stderr");
+  ASSERT_EQ(dry("same", "u10_deg = 2.5\nu20_deg = 182.5\n", "[procedure]\nu10_deg = 2.5\nu20_deg = 182.5\n"), 0)
+      << slurp(d + "/same.stderr");
+  const std::string same = slurp(d + "/same.stdout");
+  EXPECT_NE(same.find("on the hardware of " + d + "/same.toml; nothing is touched.\nOrientations: U10 at 2.5°, U20 at "
+                      "182.5° ([procedure] of " + d + "/same.toml)\n"),
+            std::string::npos)
+      << same;
+  ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run"}, d + "/emu"), 0);
+  EXPECT_NE(slurp(d + "/emu.stdout").find("on the emulated plant (a simulated DUT, table and GPIO); nothing is touched.\n"
+                                          "Orientations: U10 at 0°, U20 at 180° (the profile's)\n"),
+            std::string::npos)
+      << slurp(d + "/emu.stdout");
 }
 
 // Issue 13, 1: a profile whose only accuracy class cannot be met fails, and still fails when
