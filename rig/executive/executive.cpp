@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -109,17 +110,36 @@ void Executive::safe_state(Devices& dev, spdlog::logger& log, bool abnormal) {
 }
 
 void Executive::write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
-                                 const PhaseState& state, const nlohmann::json& identity) const {
+                                 const PhaseState& state, const nlohmann::json& identity,
+                                 const std::vector<PhaseRecord>& records) const {
   nlohmann::ordered_json j;
   j["schema"] = "rig.checkpoint/1";
   j["identity"] = identity;
   j["completed"] = done;
   j["values"] = values.to_json();
   j["state"] = state.save();
+  // When each completed phase ran: a resume's passport gives its kept phases these times (they
+  // were blank, and the ABORTED passport that had them is overwritten: a technician's review).
+  nlohmann::ordered_json times = nlohmann::ordered_json::object();
+  for (const PhaseRecord& r : records)
+    if (std::find(done.begin(), done.end(), r.id) != done.end() && !r.started.empty())
+      times[r.id] = {{"started", r.started}, {"finished", r.finished}};
+  j["phase_times"] = times;
   const std::string text = j.dump(1);
   if (on_checkpoint_) on_checkpoint_(text);
   write_file_atomic(checkpoint_path(out_dir_), text);
 }
+
+namespace {
+// The shape iso8601_utc_now writes, 2026-11-22T05:30:12Z: what a checkpoint's phase times hold.
+bool looks_iso8601(const std::string& t) {
+  static constexpr std::string_view kShape = "dddd-dd-ddTdd:dd:ddZ";
+  if (t.size() != kShape.size()) return false;
+  for (std::size_t i = 0; i < t.size(); ++i)
+    if (kShape[i] == 'd' ? !std::isdigit(static_cast<unsigned char>(t[i])) : t[i] != kShape[i]) return false;
+  return true;
+}
+}  // namespace
 
 // A checkpoint is trusted only after it is checked (issue 13): the schema, the
 // completed phases (a prefix of this procedure's phases), every measure of a
@@ -150,7 +170,7 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
     throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
   }
   if (!j.is_object()) throw bad("(top level)", std::string("expected an object, found ") + j.type_name());
-  static constexpr std::string_view kKeys[] = {"schema", "identity", "completed", "values", "state"};
+  static constexpr std::string_view kKeys[] = {"schema", "identity", "completed", "values", "state", "phase_times"};
   if (const auto k = first_unknown_key(j, kKeys)) throw bad(*k, std::string(kNotACheckpointKey));
   if (!j.contains("schema") || j["schema"] != "rig.checkpoint/1")
     throw bad("schema", "expected \"rig.checkpoint/1\", found " + (j.contains("schema") ? j["schema"].dump() : "nothing"));
@@ -179,6 +199,18 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
       throw bad(field, "\"" + id.get<std::string>() + "\" is not phase " + std::to_string(i + 1) + " (" +
                            (i < phases.size() ? phases[i].id : std::string("none")) + ")");
     done.push_back(id.get<std::string>());
+  }
+  // phase_times (since 2026-12-02; older checkpoints have none): {id: {started, finished}}, ISO 8601.
+  if (j.contains("phase_times")) {
+    const auto& t = j["phase_times"];
+    if (!t.is_object()) throw bad("phase_times", std::string("expected an object, found ") + t.type_name());
+    for (const auto& [id, when] : t.items()) {
+      if (std::find(done.begin(), done.end(), id) == done.end())
+        throw bad("phase_times." + id, "not a completed phase");
+      for (const char* k : {"started", "finished"})
+        if (!when.is_object() || !when.contains(k) || !when[k].is_string() || !looks_iso8601(when[k].get<std::string>()))
+          throw bad("phase_times." + id + "." + k, "expected an ISO 8601 time");
+    }
   }
   if (!j.contains("values")) throw bad("values", "missing");
   try {
@@ -245,6 +277,13 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
 
 namespace {
 constexpr const char* kKeptFromCheckpoint = "completed in an earlier attempt (checkpoint)";
+
+// The checkpoint's phase_times, read_checkpoint having checked them (null: none, an older one's).
+nlohmann::json kept_phase_times(const std::string& out_dir) {
+  std::ifstream in(Executive::checkpoint_path(out_dir));
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_object() && j.contains("phase_times") && j["phase_times"].is_object() ? j["phase_times"] : nlohmann::json();
+}
 }  // namespace
 
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
@@ -259,8 +298,13 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   auto kept = [&](std::size_t i) {
     return !phases[i].from_records && std::find(done.begin(), done.end(), phases[i].id) != done.end();
   };
+  const nlohmann::json times = completed.empty() ? nlohmann::json() : kept_phase_times(out_dir_);
   for (std::size_t i = 0; i < phases.size(); ++i)
-    if (kept(i)) result.phases[i].status = "skipped", result.phases[i].message = kKeptFromCheckpoint;
+    if (kept(i)) {
+      PhaseRecord& r = result.phases[i];
+      r.status = "skipped", r.message = kKeptFromCheckpoint;
+      if (times.contains(r.id)) r.started = times[r.id]["started"], r.finished = times[r.id]["finished"];
+    }
 
   PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_, {}};
   std::size_t current = phases.size();
@@ -294,7 +338,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
       rec.message = std::exchange(ctx.not_run, {});
       if (was_done) rec.message = "computed again from the kept records (resume)";
       else done.push_back(p.id);  // `done` stays a prefix of the phases, in their order
-      write_checkpoint(done, values, state, identity);
+      write_checkpoint(done, values, state, identity, result.phases);
       checkpointed = done.size();  // only once written: a failed write keeps the count before it
       log_->info("phase {} done{} (checkpointed)", p.id, was_done ? ", computed again from the kept records" : "");
       if (progress_) progress_->phase_finished(p.id, rec.status, rec.message);

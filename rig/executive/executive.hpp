@@ -169,7 +169,8 @@ class Executive {
 
  private:
   void write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
-                        const PhaseState& state, const nlohmann::json& identity) const;
+                        const PhaseState& state, const nlohmann::json& identity,
+                        const std::vector<PhaseRecord>& records) const;
   Devices& dev_;
   std::string out_dir_;
   std::shared_ptr<spdlog::logger> log_;

@@ -176,6 +176,7 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
                                throw HardwareError("link died");
                              }}};
   const nlohmann::json id{{"profile", "x"}};
+  std::string first_started, first_finished;  // when phase a ran, in the first attempt
   {
     Devices d = f.dev();
     Executive ex(d, f.out, f.log, nullptr);
@@ -184,6 +185,9 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
     const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, id);
     EXPECT_EQ(r.outcome, RunOutcome::Error);
     EXPECT_EQ(r.exit_code(), kExitHardware);
+    first_started = r.phases[0].started;
+    first_finished = r.phases[0].finished;
+    ASSERT_FALSE(first_started.empty());
   }
   {  // A resume stopped during its bring-up: the checkpoint's phase is still kept (the passport
      // said every phase "pending": a review), the rest pending.
@@ -212,6 +216,9 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   EXPECT_EQ(runs_a, 1) << "a completed phase is never repeated";
   EXPECT_EQ(runs_b, 2);
   EXPECT_EQ(r.phases[0].status, "skipped");
+  // The kept phase keeps when it ran, from the checkpoint (its times were blank: a review).
+  EXPECT_EQ(r.phases[0].started, first_started);
+  EXPECT_EQ(r.phases[0].finished, first_finished);
   EXPECT_EQ(st.j["from_a"], 5);
   // A different identity refuses to resume.
   MeasurementSet v2;
@@ -625,6 +632,16 @@ TEST(Executive, DamagedCheckpointIsAConfigErrorNamingTheField) {
   j = good;
   j["values"]["vb"] = j["values"]["va"];
   expect_refused(j, "values.vb");
+  ASSERT_TRUE(good.contains("phase_times") && good["phase_times"].contains("a")) << good.dump();
+  j = good;
+  j["phase_times"]["a"]["started"] = "yesterday";
+  expect_refused(j, "phase_times.a.started");
+  j = good;
+  j["phase_times"]["b"] = good["phase_times"]["a"];  // b never completed
+  expect_refused(j, "phase_times.b");
+  j = good;
+  j["phase_times"] = 5;
+  expect_refused(j, "phase_times");
 }
 
 TEST(AnalysisCancel, ThePollHookStopsADeviationAndAWelchPromptly) {
