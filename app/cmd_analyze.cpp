@@ -524,6 +524,29 @@ int run(const Args& a) {
                         " left out (no complete term on " + std::to_string(n_phase) + " phase points)");
     }
   }
+  // --taus all asks for every factor up to T/4 (T/2 for TOTDEV), each a sum over the record:
+  // work grows as N^2, and 1e6 values ran past 10 min without a word (a review). Refused beyond
+  // kAllTermSums (about 5 s here), naming the grids that cover the same taus.
+  if (listed.empty() && base.taus.kind == an::TauGrid::All) {
+    constexpr double kAllTermSums = 4e9;
+    const std::uint64_t n_phase = base.data == an::DataKind::Frequency ? n + 1 : n;
+    double work = 0, per_value = 0;  // term sums, and their growth in n^2
+    std::vector<double> tops;  // each statistic's number of factors
+    for (const an::DevOptions& o : opts) tops.push_back(static_cast<double>(an::max_factor(o.type, n_phase)));
+    for (std::size_t i = 0; i < long_taus.size(); ++i) tops.push_back(static_cast<double>(n_phase) / 2);  // at least
+    for (const double f : tops) {
+      work += f * static_cast<double>(n_phase);
+      per_value += f / static_cast<double>(std::max<std::uint64_t>(n_phase, 1));
+    }
+    if (work > kAllTermSums) {
+      char sums[32], most[32];
+      std::snprintf(sums, sizeof sums, "%.2g", work);
+      std::snprintf(most, sizeof most, "%.0f", std::floor(std::sqrt(kAllTermSums / per_value)));
+      throw ConfigError(input_name + ": --taus all on " + std::to_string(n) + " values asks for every averaging factor (" +
+                        sums + " term sums): give --taus log:N (log:100 is the default, log:100000 the finest) or "
+                        "m:LIST, or --taus all on at most " + most + " values");
+    }
+  }
   an::StreamOptions so;
   so.memory_budget_bytes = a.memory_mib << 20;
   an::Drift drift;  // R is read from it (noise_terms.hpp); the pass keeps its sums

@@ -676,6 +676,30 @@ TEST(RigCli, AnalyzeNbs14TenPointsEveryDeviationAtTheListedFactors) {
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", "m:1,2", "--dev", "theo1"}, d + "/theo"), 2);
 }
 
+// --taus all asks for every factor, work in N^2: 1e6 values ran past 10 minutes without a word (a
+// review). Beyond about 4e9 term sums it is refused at once, with the grids that do the work.
+TEST(RigCli, AnalyzeRefusesAllTausWhereTheWorkGrowsBeyondMinutes) {
+  const std::string d = tmp("analyze-all");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/long.f64", std::ios::binary);
+    std::vector<double> y(200000);
+    for (std::size_t i = 0; i < y.size(); ++i) y[i] = std::sin(0.37 * static_cast<double>(i)) + 1e-3 * static_cast<double>(i % 7);
+    f.write(reinterpret_cast<const char*>(y.data()), static_cast<std::streamsize>(y.size() * sizeof(double)));
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(run({"analyze", d + "/long.f64", "--input", "f64", "--rate", "100", "--taus", "all", "--no-psd"}, d + "/all"), 2);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30)) << "refused before any work";
+  EXPECT_NE(slurp(d + "/all.stderr").find("long.f64: --taus all on 200000 values asks for every averaging factor (1e+10 "
+                                          "term sums): give --taus log:N (log:100 is the default, log:100000 the finest) "
+                                          "or m:LIST, or --taus all on at most 126491 values"),
+            std::string::npos)
+      << slurp(d + "/all.stderr");
+  EXPECT_EQ(run({"analyze", d + "/long.f64", "--input", "f64", "--rate", "100", "--taus", "log:1000", "--no-psd"}, d + "/log"),
+            0)
+      << slurp(d + "/log.stderr");
+}
+
 TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
   const std::string d = tmp("analyze-nbs10");
   fs::create_directories(d);
