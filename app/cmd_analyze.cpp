@@ -736,11 +736,35 @@ int run(const Args& a) {
     const double h0 = an::white_level(*psd, 0.05 * rate, 0.45 * rate);
     pj["white_level"] = h0;  // unit^2/Hz, the median over 5..45 % of the rate (biased by Q)
     // N from the PSD model (Q, N, B, K; analysis/psd.hpp psd_noise_fit) over 4 bins above DC
-    // (the window's leakage of the red terms) to 45 % of the rate; the median's N without one.
-    const an::PsdTerms pt = an::psd_noise_fit(*psd, 4 * rate / static_cast<double>(psd->segment), 0.45 * rate);
+    // (the window's leakage of the red terms) to 45 % of the rate, or to 1/(2 tau) of the
+    // shortest tau the Allan model fitted where it left shorter ones out as not described by it
+    // (tones, a band): the cross-check compares like with like. Over the whole band a review read
+    // 5x the Allan N on the rig's own capture, without a word. The median's N without a fit.
+    join_fit();
+    const double f_lo = 4 * rate / static_cast<double>(psd->segment);
+    double f_hi = 0.45 * rate;
+    if (terms && terms->model.ok && terms->model.dropped_short > 0 && !terms->model.tau_s.empty())
+      f_hi = std::min(f_hi, std::max(0.5 / terms->model.tau_s.front(), 8 * f_lo));
+    const an::PsdTerms pt = an::psd_noise_fit(*psd, f_lo, f_hi);
     const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
     pj["n_from_psd"] = n_psd;  // unit*s^0.5
     pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
+    pj["n_fit_band_hz"] = {f_lo, f_hi};
+    // Said where it does not confirm the Allan N: more than 1.5x apart (a PSD bin's scatter over
+    // hundreds of bins is a few %, the Allan N's bounds are tighter still).
+    if (terms && terms->N.value && *terms->N.value > 0 && n_psd > 0) {
+      const double ratio = n_psd / *terms->N.value;
+      if (ratio > 1.5 || ratio < 1 / 1.5) {
+        char what[512];
+        std::snprintf(what, sizeof what,
+                      "psd: N from the PSD model (%.3g) is %.2fx the Allan N (%.3g) over %.3g..%.3g Hz: the two "
+                      "disagree; one reads as N what neither model has a term for (a tone or a band of interference "
+                      "in that band or in the taus the Allan model fitted, or noise that is not white): see the PSD's "
+                      "peaks and the Allan curve's ripple",
+                      n_psd, ratio, *terms->N.value, f_lo, f_hi);
+        notes.push_back(what);
+      }
+    }
     // Only N is a cross-check; the other terms give the band's other slopes somewhere to go and
     // are not measurements (a review read K 13x above the Allan model's upper limit on white FM).
     pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K},
@@ -804,6 +828,9 @@ int run(const Args& a) {
     o << "psd: welch " << a.window << ", segment " << psd->segment << " x " << psd->segments << "; peaks:";
     for (std::size_t i = 0; i < peaks.size(); ++i) o << (i ? ", " : " ") << report::peak_label(peaks[i].f_hz, psd->rate_hz);
     o << "\n";
+    const json& pj = j["psd"];
+    o << "  N from the PSD model (the cross-check of the Allan N) = " << fmt(pj["n_from_psd"].get<double>())
+      << " over " << pj["n_fit_band_hz"][0].get<double>() << ".." << pj["n_fit_band_hz"][1].get<double>() << " Hz\n";
   }
   timer.mark("console");
   return kExitPass;
