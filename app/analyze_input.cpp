@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -160,6 +161,25 @@ void F64File::check(std::uint64_t pos, std::span<const double> v) const {
   if (const auto bad = an::first_unusable(v))
     throw ConfigError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
                       ") " + refusal(v[*bad]));
+}
+
+std::vector<double> read_f32(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<std::uint64_t>(in.tellg());
+  in.seekg(0);
+  if (size % 4 != 0)
+    throw ConfigError(path + ": size " + std::to_string(size) + " bytes is not a multiple of 4 (float32)");
+  std::vector<float> raw(size / 4);
+  if (!in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(size)))
+    throw ConfigError(path + ": cannot read: " + std::strerror(errno));
+  static_assert(std::endian::native == std::endian::little, "float32 files are little-endian, as this host");
+  std::vector<double> v(raw.begin(), raw.end());  // every float is a double exactly
+  if (const auto bad = an::first_unusable(v))
+    throw ConfigError(path + ": value " + std::to_string(*bad) + " (byte " + std::to_string(*bad * 4) + ") " +
+                      refusal(v[*bad]));
+  return v;
 }
 
 std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {

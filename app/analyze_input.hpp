@@ -71,6 +71,10 @@ std::string quoted_bytes(std::string_view s);
 // number of blank lines between two values (a row left empty, which may be a missing sample;
 // the values around it are joined), for the caller to note.
 std::vector<double> read_text(const std::string& path, std::size_t* blank_between = nullptr);
+// A raw little-endian float32 file (what many DAQ tools and numpy's astype('<f4') write), widened
+// to double exactly. A size that is not a multiple of 4, or a NaN or infinite value, is a
+// ConfigError naming the file, the value's index and its byte offset.
+std::vector<double> read_f32(const std::string& path);
 std::vector<double> read_text(std::istream& in, const std::string& name, std::size_t* blank_between = nullptr);
 
 // A break in a capture's sample sequence: values[at - 1] and values[at] were not consecutive

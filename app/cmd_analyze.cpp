@@ -407,7 +407,9 @@ int run(const Args& a) {
   std::string input = a.input;
   if (input == "auto") {
     const auto ext = std::filesystem::path(a.file).extension().string();
-    input = ext == ".f64" || ext == ".bin" ? "f64" : (ext == ".rigcap" || ext == ".cap" ? "capture" : "text");
+    input = ext == ".f64" || ext == ".bin" ? "f64"
+            : ext == ".f32"                 ? "f32"
+                                            : (ext == ".rigcap" || ext == ".cap" ? "capture" : "text");
   }
   // Source: text and captures are held in memory; float64 files are streamed.
   if (a.channel && input != "capture")
@@ -432,18 +434,20 @@ int run(const Args& a) {
     // A file that fits the memory budget is mapped and analysed in place (one ring holds it all),
     // its values checked by the deviations' pass (which runs first, below) as it integrates them.
     src = std::make_unique<F64File>(a.file, (a.memory_mib << 20) / 2, /*check_in_pass=*/true);
+  } else if (input == "f32") {
+    mem = read_f32(a.file);
   } else if (input == "capture") {
     cap = read_capture(a.file, channel);
     mem = std::move(cap->values);
     if (!a.rate) rate = cap->header.rate_hz;
     gap_note = apply_gap_policy(a.file, gap_policy, cap->gaps, mem, analysed_from);
   } else {
-    throw ConfigError("rig analyze: --input must be text, f64 or capture, got '" + input + "'");
+    throw ConfigError("rig analyze: --input must be text, f64, f32 or capture, got '" + input + "'");
   }
   if (!src) src = std::make_unique<an::SpanSource>(mem);
   timer.mark("read");
   const std::uint64_t n = src->size();
-  if (n < 3) throw ConfigError(input_name + ": " + std::to_string(n) + " values; at least 3 are needed");
+  if (n < 3) throw ConfigError(input_name + ": " + std::to_string(n) + (n == 1 ? " value" : " values") + "; at least 3 are needed");
   // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
   std::vector<std::string> notes;
   if (blank_lines)
@@ -841,12 +845,13 @@ int run(const Args& a) {
 void add_analyze(CLI::App& app, int& rc) {
   auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand("analyze", "Allan deviation with bounds, noise terms and PSD of a recording");
-  sub->add_option("file", args->file, "recording (text: one value per line, '#' comments; f64: raw LE float64; "
+  sub->add_option("file", args->file, "recording (text: one value per line, '#' comments; f64: raw LE float64; f32: raw LE float32; "
                                       "capture: the rig's capture file; - = standard input, text)")
       ->required();
   sub->add_option("--input", args->input,
-                  "text|f64|capture (default: by extension, .f64/.bin = f64, .cap/.rigcap = capture, else text)")
-      ->check(CLI::IsMember({"auto", "text", "f64", "capture"}));
+                  "text|f64|f32|capture (default: by extension, .f64/.bin = f64, .f32 = f32, .cap/.rigcap = capture, else "
+                  "text)")
+      ->check(CLI::IsMember({"auto", "text", "f64", "f32", "capture"}));
   sub->add_option("--data", args->data, "freq (accelerometer output, default) or phase (its integral)")
       ->check(CLI::IsMember({"freq", "frequency", "phase"}));
   sub->add_option("--rate", args->rate, "sample rate, Hz (default: capture header, else 1000, with a note)");
