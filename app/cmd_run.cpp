@@ -317,7 +317,9 @@ std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Pr
       p.u10_deg, p.u20_deg);
   std::vector<std::string> confirmed;
   auto ask = [&](const std::string& question, const char* declined) {
-    if (!confirm(question, cancel)) throw AbortedError(declined);
+    // What a "no" leaves, and what to do next (it said only who declined: a technician's review).
+    if (!confirm(question, cancel))
+      throw AbortedError(std::string(declined) + ": nothing was powered or moved; give the same command again when ready");
     confirmed.push_back(question);
   };
   ask("Is the DUT mounted on the table with its connector fastened?", "operator did not confirm the DUT is mounted");
@@ -651,12 +653,17 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
                        const std::string& out_dir, spdlog::logger& log) {
   try {
     const std::string url = history_url(a, hw);
+    const std::optional<std::string> file = history::sqlite_path(url);
+    std::error_code ec;
+    const bool fresh = file && !fs::exists(*file, ec);
     const history::Recorded rec = history::record_run(url, passport, out_dir);
     // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
-    // output had mentioned).
+    // output had mentioned); a database this run created too: a typo in --db or [history] url
+    // makes one, and the station's history never sees the run (a technician's review).
     const std::string shown = history::mask_password(url);
     const std::string line =
-        fmt::format("recorded in the history database {} as run {} (rig history --db {})", shown, rec.id, shown);
+        fmt::format("recorded in the history database {} as run {} (rig history --db {}){}", shown, rec.id, shown,
+                    fresh ? "; a new database, created by this run: if the station has one, check the URL" : "");
     log.info("{}", line);
     if (!a.quiet) std::cerr << line << "\n";
     // A verdict recorded before and another outcome now (a folder put back to an earlier state
@@ -1086,6 +1093,22 @@ int do_run(RunArgs a) {
                 << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)"
                                  : left + " (a capture the interruption left partial is kept as <capture>.interrupted-N)")
                 << "\n";
+    }
+    // Where the run will be recorded: a typo in --db or [history] url would create a database
+    // (and its folders) that the station's history never reads (a technician's review).
+    if (a.no_history) {
+      std::cout << "History: not recorded (--no-history)\n";
+    } else {
+      const std::string url = history_url(a, hw);
+      std::string fresh;
+      if (const std::optional<std::string> file = history::sqlite_path(url)) {
+        std::error_code ec;
+        const fs::path folder = fs::absolute(*file, ec).parent_path();
+        if (!fs::exists(*file, ec))
+          fresh = fs::exists(folder, ec) ? " (not there yet: the run creates it)"
+                                         : " (not there yet: the run creates it and the folder " + folder.string() + ")";
+      }
+      std::cout << "History: " << history::mask_password(url) << fresh << "\n";
     }
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;

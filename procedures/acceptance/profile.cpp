@@ -232,7 +232,12 @@ Profile parse_profile_table(const toml::table& t, const std::string& source) {
       if (!ok && k.str().rfind("in_run_b_gost_", 0) == 0)
         throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) +
                           "' in [limits]: GOST B is named by its block length, and in_run_blocks_s gives " + gost_names);
-      if (!ok) throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits]");
+      if (!ok) {  // the names, as the hardware file's unknown keys are listed (a technician's review)
+        std::string names;
+        for (const auto& n : known) names += (names.empty() ? "" : ", ") + n;
+        throw ConfigError(cfg::where(v) + ": unknown measurement '" + std::string(k.str()) + "' in [limits] (known: " +
+                          names + ")");
+      }
       const std::vector<double> mm = cfg::get_numbers(*l, k.str());
       if (mm.size() != 2) cfg::reject(v, k.str(), "limits are two numbers [min, max], got " + std::to_string(mm.size()));
       if (mm[0] > mm[1]) cfg::reject(v, k.str(), "limits must be [min, max] with min <= max");

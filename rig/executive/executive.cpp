@@ -184,8 +184,14 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
                 ", this run's is " + v.dump();
         break;
       }
-    throw ConfigError(cp + ": " + which + ": checkpoint was made with a different profile, serial or plant; start a "
-                      "new run instead");
+    // A resume reads the folder's own profile.toml: a digest that differs is that file edited
+    // since the run started (a review: the message named no file).
+    const bool profile = which.rfind("identity.profile_digest", 0) == 0;
+    throw ConfigError(cp + ": " + which + ": checkpoint was made with a different profile, serial or plant" +
+                      (profile ? " (" + out_dir + "/profile.toml, which a resume reads, is not the profile the run "
+                                 "started with: edited since?)"
+                               : std::string()) +
+                      "; start a new run instead");
   }
   if (!j.contains("completed") || !j["completed"].is_array())
     throw bad("completed", "expected an array of phase ids");

@@ -163,7 +163,12 @@ json read_passport(const std::string& run_dir) {
     throw ConfigError(run_dir + ": a file, not a run folder (give the folder that holds passport.json)");
   const std::string path = run_dir + "/passport.json";
   switch (path_kind(path, "")) {
-    case PathKind::missing: throw ConfigError(path + ": cannot read the file (does the run folder exist?)");
+    case PathKind::missing:
+      // A folder that is there but holds no run is named as such (a review read "does the run
+      // folder exist?" for a folder that exists).
+      if (path_kind(run_dir, "") == PathKind::directory)
+        throw ConfigError(path + ": not there: " + run_dir + " is a folder but not a run folder (no passport.json)");
+      throw ConfigError(path + ": cannot read the file (does the run folder exist?)");
     case PathKind::directory: throw ConfigError(path + ": a folder, not the passport file");
     default: break;
   }

@@ -608,7 +608,8 @@ TEST(Campaign, DamagedCheckpointSet) {
     const std::string f = copy();
     std::ofstream(f + "/checkpoint.json") << j.dump();
     refused(f, "identity.profile_digest: \"0000\", this run's is ");
-    refused(f, "different profile, serial or plant");
+    refused(f, "different profile, serial or plant (" + f + "/profile.toml, which a resume reads, is not the profile the "
+               "run started with: edited since?); start a new run instead");
   }
   {
     const std::string f = copy();

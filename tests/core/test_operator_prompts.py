@@ -44,7 +44,8 @@ def main():
         # An answer that is neither yes nor no is asked again ("yet to fasten" confirmed a mount).
         for answers, want_rc, want_text, made in ((["y", "y", "y"], 0, "OUTCOME: PASS", False),
                                                   (["y", "n"], 3, "did not confirm the serial", False),
-                                                  (["n"], 3, "did not confirm the DUT is mounted", True),
+                                                  (["n"], 3, "did not confirm the DUT is mounted: nothing was "
+                                                   "powered or moved; give the same command again when ready", True),
                                                   (["yet to fasten", "yess", " No "], 3,
                                                    "Answer y (yes) or n (no). Is the DUT mounted", False),
                                                   (["maybe", " YES", "Y", "yes"], 0, "OUTCOME: PASS", False)):

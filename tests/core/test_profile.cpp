@@ -105,7 +105,7 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   EXPECT_EQ(error_of(short_run), short_run + ":5:9: 'run_s' = 0.00199999999 is out of range [0.002, 1000000]");
   const std::string three = write_tmp("lim4.toml", base + "[limits]\nbias = [0, 1, 2]\n");
   EXPECT_EQ(error_of(three), three + ":10:8: 'bias' = [ 0, 1, 2 ]: limits are two numbers [min, max], got 3");
-  EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais'"),
+  EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais' in [limits] (known: bias, base_error, in_run_b_allan,"),
             std::string::npos);
   const std::string cls = write_tmp("cls.toml", base + "[[classes]]\nname = \"a\"\nmax_b_g = 2e-5\n[[classes]]\nname = "
                                                       "\"b\"\nmax_b_g = 1e-5\n");

@@ -135,6 +135,24 @@ TEST(RigCli, CiProfileEndToEnd) {
   const std::string recorded = "recorded in the history database sqlite:" + d + "/io.history.sqlite as run 1";
   EXPECT_NE(slurp(d + "/io.stderr").find(recorded), std::string::npos) << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/run/run.log").find(recorded), std::string::npos);
+  // The database was made by this run, and said so (a typo in --db made one, silently: a review).
+  EXPECT_NE(slurp(d + "/io.stderr").find("; a new database, created by this run: if the station has one, check the URL"),
+            std::string::npos);
+}
+
+// Where a run will be recorded, from its dry run: a database and folder that are not there yet
+// (a typo in --db or [history] url) are named before the run creates them.
+TEST(RigCli, DryRunSaysWhereTheRunWillBeRecorded) {
+  const std::string d = tmp("dry-history");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run", "--db", "sqlite:" + d + "/typo/dir/x.sqlite"}, d + "/typo"), 0);
+  EXPECT_NE(slurp(d + "/typo.stdout").find("History: sqlite:" + d + "/typo/dir/x.sqlite (not there yet: the run creates it "
+                                           "and the folder " + d + "/typo/dir)\n"),
+            std::string::npos)
+      << slurp(d + "/typo.stdout");
+  EXPECT_FALSE(fs::exists(d + "/typo")) << "a dry run creates nothing";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run", "--no-history"}, d + "/none"), 0);
+  EXPECT_NE(slurp(d + "/none.stdout").find("History: not recorded (--no-history)\n"), std::string::npos);
 }
 
 TEST(RigCli, AnalyzeTakesNbs14NinePoints) {

@@ -770,6 +770,15 @@ TEST(ReportCli, WritesTheReportAndRejectsAFolderWithoutPassport) {
     EXPECT_EQ(std::string(e.what()),
               (d.path / "run" / "passport.json").string() + ": a file, not a run folder (give the folder that holds passport.json)");
   }
+  // A folder that is there but holds no run is named so (it asked "does the run folder exist?").
+  std::filesystem::create_directories(d.path / "no-run");
+  try {
+    rig::report::read_passport((d.path / "no-run").string());
+    ADD_FAILURE() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), (d.path / "no-run" / "passport.json").string() + ": not there: " +
+                                         (d.path / "no-run").string() + " is a folder but not a run folder (no passport.json)");
+  }
 }
 
 // ---------------------------------------------------------------- the SVG writer
