@@ -8,6 +8,8 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <set>
+#include <tuple>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -166,38 +168,49 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
   }
   std::vector<std::vector<std::string>> t;
   t.push_back({"id", "started", "serial", "run", "value", "unit", "lo", "hi", "limits", "outcome", "reason"});
-  // The statistics per DUT and unit (a run that wrote the value in mg is not averaged with one in
-  // g, a review); `runs` counts every run of the DUT, `n` those with a value.
-  std::map<std::pair<std::string, std::string>, Stats> per_serial;  // by serial, unit
-  std::map<std::string, Stats> all;                                 // by unit
+  // The statistics per DUT, unit and profile (a run that wrote the value in mg is not averaged
+  // with one in g, a review; nor a ci run's with a paper run's: another procedure, other record
+  // lengths, a technician's review); `runs` counts every run of the DUT, `n` those with a value.
+  using Key = std::tuple<std::string, std::string, std::string>;  // serial, unit, profile
+  std::map<Key, Stats> per_serial;
+  std::map<std::pair<std::string, std::string>, Stats> all;  // by unit, profile
   for (const auto& r : rows) {
     const std::string limits =
         r.limit_min || r.limit_max ? "[" + brief(r.limit_min) + ", " + brief(r.limit_max) + "]" : "-";
     t.push_back({std::to_string(r.run_id), r.started, r.serial, r.outcome, brief(r.value), r.unit, brief(r.lo),
                  brief(r.hi), limits, r.value_outcome, r.reason});
-    per_serial[{r.serial, r.unit}].add(r.value);
-    all[r.unit].add(r.value);
+    per_serial[{r.serial, r.unit, r.profile}].add(r.value);
+    all[{r.unit, r.profile}].add(r.value);
   }
   std::cout << a.value << " over " << rows.size() << " run(s)\n";
   print_table(std::cout, t);
   // The trend: per DUT (across its runs) and across all DUTs.
   std::vector<std::vector<std::string>> s;
-  s.push_back({"serial", "unit", "runs", "n", "mean", "sd", "min", "max", "last - first"});
-  auto row = [&](const std::string& name, const std::string& unit, const Stats& st, bool one_dut) {
+  s.push_back({"serial", "unit", "profile", "runs", "n", "mean", "sd", "min", "max", "last - first"});
+  auto row = [&](const std::string& name, const std::string& unit, const std::string& profile, const Stats& st,
+                 bool one_dut) {
     const auto number = [&st](double v) { return st.n ? brief(v) : std::string("-"); };
-    s.push_back({name, unit, std::to_string(st.runs), std::to_string(st.n), number(st.mean),
+    s.push_back({name, unit, profile, std::to_string(st.runs), std::to_string(st.n), number(st.mean),
                  brief(std::isnan(st.sd()) ? std::nullopt : std::optional(st.sd())), number(st.min), number(st.max),
                  one_dut ? number(st.last - st.first) : "-"});
   };
-  for (const auto& [key, st] : per_serial) row(key.first, key.second, st, true);
+  for (const auto& [key, st] : per_serial) row(std::get<0>(key), std::get<1>(key), std::get<2>(key), st, true);
+  std::set<std::string> units, profiles;
   for (const auto& entry : all) {  // drift only means something within one DUT
-    const std::string& unit = entry.first;  // not a structured binding: clang 14 cannot capture one
-    const auto duts = std::count_if(per_serial.begin(), per_serial.end(), [&](const auto& e) { return e.first.second == unit; });
-    if (duts > 1) row("all DUTs", unit, entry.second, false);
+    const auto key = entry.first;  // not a structured binding: clang 14 cannot capture one
+    units.insert(key.first);
+    profiles.insert(key.second);
+    const auto duts = std::count_if(per_serial.begin(), per_serial.end(), [&](const auto& e) {
+      return std::get<1>(e.first) == key.first && std::get<2>(e.first) == key.second;
+    });
+    if (duts > 1) row("all DUTs", key.first, key.second, entry.second, false);
   }
-  if (all.size() > 1)
-    std::cout << "\nnote: " << a.value << " was recorded in " << all.size()
+  if (units.size() > 1)
+    std::cout << "\nnote: " << a.value << " was recorded in " << units.size()
               << " units; each unit has its own statistics\n";
+  if (profiles.size() > 1)
+    std::cout << (units.size() > 1 ? "" : "\n") << "note: " << a.value << " was measured under " << profiles.size()
+              << " profiles; each profile has its own statistics (--profile P for one)\n";
   if (!per_serial.empty()) {
     std::cout << "\n";
     print_table(std::cout, s);

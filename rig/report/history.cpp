@@ -403,7 +403,7 @@ std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_
   params.emplace_back(value_name);
   const std::string select =
       "SELECT r.id, r.serial, r.outcome, v.value, v.lo, v.hi, r.started, v.limit_min, v.limit_max, v.unit, "
-      "v.outcome, v.reason FROM run_values v JOIN runs r ON r.id = v.run_id" + w;
+      "v.outcome, v.reason, r.profile FROM run_values v JOIN runs r ON r.id = v.run_id" + w;
   std::vector<ValueRow> out;
   for (const Row& r : db->query(ordered(select, f, params), params)) {
     ValueRow x;
@@ -419,6 +419,7 @@ std::vector<ValueRow> trend(const std::string& db_url, const std::string& value_
     x.unit = as_text(r[9]);
     x.value_outcome = as_text(r[10]);
     x.reason = as_text(r[11]);
+    x.profile = as_text(r[12]);
     out.push_back(std::move(x));
   }
   return out;

@@ -80,7 +80,7 @@ struct RunRow {
 
 struct ValueRow {
   long long run_id = 0;
-  std::string serial, started, outcome;  // run's
+  std::string serial, started, outcome, profile;  // run's
   std::optional<double> value, lo, hi, limit_min, limit_max;
   std::string unit, value_outcome, reason;
 };

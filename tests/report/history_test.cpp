@@ -558,11 +558,25 @@ TEST(HistoryCli, StatisticsArePerDutAndUnitAndCountEveryRun) {
     return std::any_of(out.begin(), out.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
   };
   EXPECT_TRUE(has("note: bias was recorded in 2 units; each unit has its own statistics"));
-  EXPECT_TRUE(has("SN-A      g     1     1  -0.00050137  -   -0.00050137  -0.00050137  0"));
-  EXPECT_TRUE(has("SN-A      mg    1     1  -0.5         -   -0.5         -0.5         0"));
-  EXPECT_TRUE(has("ДУТ-Ü7    g     1     0  -            -   -            -            -"));
-  EXPECT_TRUE(has("all DUTs  g     2     1  -0.00050137"));
+  EXPECT_TRUE(has("SN-A      g     paper    1     1  -0.00050137  -   -0.00050137  -0.00050137  0"));
+  EXPECT_TRUE(has("SN-A      mg    paper    1     1  -0.5         -   -0.5         -0.5         0"));
+  EXPECT_TRUE(has("ДУТ-Ü7    g     paper    1     0  -            -   -            -            -"));
+  EXPECT_TRUE(has("all DUTs  g     paper    2     1  -0.00050137"));
   EXPECT_FALSE(has("all DUTs  mg"));  // one DUT in mg: nothing across DUTs
+  EXPECT_FALSE(has("profiles; each profile"));  // one profile
+  // A run of another profile (another procedure, other record lengths) has its own statistics,
+  // and a note says so: a ci run's bias was averaged with a paper run's (a technician's review).
+  json ci = rig::test::fixture_passport("SN-A", "PASS", "2026-11-04T08:00:00Z");
+  ci["profile"] = "ci";
+  ci["values"]["bias"]["value"] = -0.0006;
+  h::record_run(db, ci, (d.path / "a3").string());
+  const auto mixed = lines(run_cli({"--db", db, "--value", "bias"}));
+  const auto has_mixed = [&](const std::string& text) {
+    return std::any_of(mixed.begin(), mixed.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(has_mixed("note: bias was measured under 2 profiles; each profile has its own statistics (--profile P for one)"));
+  EXPECT_TRUE(has_mixed("SN-A      g     ci       1     1  -0.0006"));
+  EXPECT_TRUE(has_mixed("SN-A      g     paper    1     1  -0.00050137"));
   // The listing: the run's outcome in its own column, aligned after the Cyrillic serial (the
   // column's position counted in characters).
   const auto column = [](const std::string& line, const std::string& text) {
