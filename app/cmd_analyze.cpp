@@ -119,7 +119,7 @@ struct Args {
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
   double confidence = an::AnalysisOptions{}.confidence;
-  bool no_bounds = false, no_psd = false, no_oadev = false;
+  bool no_bounds = false, no_psd = false, no_oadev = false, no_work_limit = false;
   unsigned threads = 0;
   std::size_t memory_mib = 384;
   std::optional<std::size_t> segment;  // none: the automatic length
@@ -531,7 +531,7 @@ int run(const Args& a) {
   // --taus all asks for every factor up to T/4 (T/2 for TOTDEV), each a sum over the record:
   // work grows as N^2, and 1e6 values ran past 10 min without a word (a review). Refused beyond
   // kAllTermSums (about 5 s here), naming the grids that cover the same taus.
-  if (listed.empty() && base.taus.kind == an::TauGrid::All) {
+  if (listed.empty() && base.taus.kind == an::TauGrid::All && !a.no_work_limit) {
     constexpr double kAllTermSums = 4e9;
     const std::uint64_t n_phase = base.data == an::DataKind::Frequency ? n + 1 : n;
     double work = 0, per_value = 0;  // term sums, and their growth in n^2
@@ -548,7 +548,7 @@ int run(const Args& a) {
       std::snprintf(most, sizeof most, "%.0f", std::floor(std::sqrt(kAllTermSums / per_value)));
       throw ConfigError(input_name + ": --taus all on " + std::to_string(n) + " values asks for every averaging factor (" +
                         sums + " term sums): give --taus log:N (log:100 is the default, log:100000 the finest) or "
-                        "m:LIST, or --taus all on at most " + most + " values");
+                        "m:LIST, or --taus all on at most " + most + " values (--no-work-limit runs it regardless)");
     }
   }
   an::StreamOptions so;
@@ -632,8 +632,9 @@ int run(const Args& a) {
   const std::vector<an::DevPoint>* oadev_pts = a.no_oadev ? nullptr : &devs[0];
   const std::vector<an::DevPoint>* extra_pts = base.type != an::Deviation::OADEV ? &devs.back() : nullptr;
   // The noise-term fit (serial: about 8 ms for log:100's 108 taus) runs on a thread of its own
-  // while this one goes on to the long-tau statistics and the PSD, which then share the two cores
-  // with it; joined before the JSON takes the terms. Without either there is nothing to overlap.
+  // while this one goes on to the long-tau statistics and the Welch PSD, which then share the two
+  // cores with it; joined before the PSD's model fit (its band follows the fitted taus) and the
+  // JSON take the terms. Without either there is nothing to overlap.
   std::optional<an::NoiseTerms> terms;  // read from OADEV
   std::exception_ptr fit_error;
   const auto fit_terms = [&] {
@@ -753,7 +754,8 @@ int run(const Args& a) {
     const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
     pj["n_from_psd"] = n_psd;  // unit*s^0.5
     pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
-    pj["n_fit_band_hz"] = {f_lo, f_hi};
+    // The band the N above was read over: the model's, or the median's where the fit failed.
+    pj["n_fit_band_hz"] = pt.ok ? json{f_lo, f_hi} : json{0.05 * rate, 0.45 * rate};
     // Said where it does not confirm the Allan N: more than 1.5x apart (a PSD bin's scatter over
     // hundreds of bins is a few %, the Allan N's bounds are tighter still).
     if (terms && terms->N.value && *terms->N.value > 0 && n_psd > 0) {
@@ -765,7 +767,7 @@ int run(const Args& a) {
                       "disagree; one reads as N what neither model has a term for (a tone or a band of interference "
                       "in that band or in the taus the Allan model fitted, or noise that is not white): see the PSD's "
                       "peaks and the Allan curve's ripple",
-                      n_psd, ratio, *terms->N.value, f_lo, f_hi);
+                      n_psd, ratio, *terms->N.value, pt.ok ? f_lo : 0.05 * rate, pt.ok ? f_hi : 0.45 * rate);
         notes.push_back(what);
       }
     }
@@ -863,6 +865,9 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--confidence", args->confidence, "confidence of the bounds (default one sigma, erf(1/sqrt 2) = 0.682689, Stable32's \"0.683\")");
   sub->add_flag("--no-bounds", args->no_bounds, "skip noise identification and bounds");
   sub->add_flag("--no-psd", args->no_psd, "skip the PSD (Allan part only)");
+  sub->add_flag("--no-work-limit", args->no_work_limit,
+                "--taus all on a long record: compute every factor however long it takes (refused beyond about 4e9 "
+                "term sums without it)");
   sub->add_flag("--no-oadev", args->no_oadev,
                 "with --dev: that deviation only, no OADEV and no noise terms (they are read from OADEV)");
   sub->add_option("--channel", args->channel, "capture channel: x (unfiltered, default) or y (filtered)");

@@ -244,7 +244,14 @@ int cmd_import(const ImportArgs& a) {
       ++elsewhere;
       continue;
     }
-    const Counts here{frames, other, unreadable, malformed, back, problems.size(), elsewhere};
+    // Named: two counts of one type in another order compile silently (a code review caught it).
+    const Counts here{.frames = frames,
+                      .other = other,
+                      .unreadable = unreadable,
+                      .malformed = malformed,
+                      .back = back,
+                      .elsewhere = elsewhere,
+                      .problems = problems.size()};
     parts.clear();
     std::string err;
     const bool stream = decoder->decode(lf->any, parts, &err);  // classic or CAN FD frames as logged

@@ -158,16 +158,17 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
     }
   }
   if (a.csv) {
-    std::cout << "run_id,started,serial,run_outcome,name,value,unit,lo,hi,limit_min,limit_max,outcome,reason\r\n";
+    // `profile` last (added 2026-12-02): a reader of the columns before it reads them as before.
+    std::cout << "run_id,started,serial,run_outcome,name,value,unit,lo,hi,limit_min,limit_max,outcome,reason,profile\r\n";
     for (const auto& r : rows)
       std::cout << r.run_id << ',' << csv_field(r.started) << ',' << csv_field(r.serial) << ',' << csv_field(r.outcome)
                 << ',' << csv_field(a.value) << ',' << full(r.value) << ',' << csv_field(r.unit) << ',' << full(r.lo)
                 << ',' << full(r.hi) << ',' << full(r.limit_min) << ',' << full(r.limit_max) << ','
-                << csv_field(r.value_outcome) << ',' << csv_field(r.reason) << "\r\n";
+                << csv_field(r.value_outcome) << ',' << csv_field(r.reason) << ',' << csv_field(r.profile) << "\r\n";
     return;
   }
   std::vector<std::vector<std::string>> t;
-  t.push_back({"id", "started", "serial", "run", "value", "unit", "lo", "hi", "limits", "outcome", "reason"});
+  t.push_back({"id", "started", "serial", "run", "value", "unit", "lo", "hi", "limits", "outcome", "reason", "profile"});
   // The statistics per DUT, unit and profile (a run that wrote the value in mg is not averaged
   // with one in g, a review; nor a ci run's with a paper run's: another procedure, other record
   // lengths, a technician's review); `runs` counts every run of the DUT, `n` those with a value.
@@ -178,9 +179,10 @@ void trend(const HistoryArgs& a, const history::Filter& f) {
     const std::string limits =
         r.limit_min || r.limit_max ? "[" + brief(r.limit_min) + ", " + brief(r.limit_max) + "]" : "-";
     t.push_back({std::to_string(r.run_id), r.started, r.serial, r.outcome, brief(r.value), r.unit, brief(r.lo),
-                 brief(r.hi), limits, r.value_outcome, r.reason});
-    per_serial[{r.serial, r.unit, r.profile}].add(r.value);
-    all[{r.unit, r.profile}].add(r.value);
+                 brief(r.hi), limits, r.value_outcome, r.reason, r.profile.empty() ? "-" : r.profile});
+    const std::string profile = r.profile.empty() ? "-" : r.profile;  // a row from before profiles were kept
+    per_serial[{r.serial, r.unit, profile}].add(r.value);
+    all[{r.unit, profile}].add(r.value);
   }
   std::cout << a.value << " over " << rows.size() << " run(s)\n";
   print_table(std::cout, t);

@@ -66,7 +66,9 @@ void Cia402Drive::step(double dt_s) {
   // changed immediately is about to be taken (or refused) in its place.
   if (resume_pending_ && !axis_.snapshot().moving && !(setpoint_pending_ && (controlword_ & c4::cw::kChangeImmediately)))
     resume();
-  if (homing_active_) {
+  if (homing_active_ && homing_pending_) {
+    if (!axis_.snapshot().moving) start_axis_homing();
+  } else if (homing_active_) {
     const auto s = axis_.snapshot();
     if (!s.homing && !s.moving) {
       homing_active_ = false;
@@ -208,14 +210,20 @@ void Cia402Drive::apply_controlword(uint16_t w) {
     }
     homing_error_ = homing_attained_ = false;
     homing_active_ = true;
-    axis_control(ctl::kServoOn);
-    axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kHome));
-    axis_control(ctl::kServoOn);
+    homing_pending_ = axis_.snapshot().moving;
+    if (!homing_pending_) start_axis_homing();
   } else if (mode_ == c4::kModeProfilePosition) {
     if (setpoint_ack_ || setpoint_pending_) return;  // previous set-point not yet taken by the master
     setpoint_pending_ = true;
     setpoint_at_ = t_ + setpoint_latency_s_;
   }
+}
+
+void Cia402Drive::start_axis_homing() {
+  homing_pending_ = false;
+  axis_control(ctl::kServoOn);
+  axis_control(static_cast<uint16_t>(ctl::kServoOn | ctl::kHome));
+  axis_control(ctl::kServoOn);
 }
 
 // Continues the positioning a released halt interrupted, to the target it had.

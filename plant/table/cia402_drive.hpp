@@ -81,6 +81,10 @@ class Cia402Drive final : public rig::modbus::RegisterDevice {
   // released: "positioning shall be executed or continued", IEC 61800-7-201 profile position).
   bool resume_pending_ = false;
   bool homing_active_ = false, homing_attained_ = false, homing_error_ = false;
+  // A homing start taken while the axis still runs down a ramp (an interrupted homing, a halted
+  // move): the homing starts once it is at rest (the axis refuses a start mid-ramp as busy).
+  bool homing_pending_ = false;
+  void start_axis_homing();
   bool limit_active_ = false, warning_ = false;
   double target_inner_deg_ = 0;
   double answer_delay_s_ = 0;

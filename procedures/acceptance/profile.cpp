@@ -83,11 +83,14 @@ void check_orientation_angles(const toml::table& t, double u10_deg, double u20_d
   constexpr double kTolDeg = 10.0;
   const double apart = std::fmod(std::fabs(u20_deg - u10_deg), 360.0);
   if (std::fabs(apart - 180.0) <= kTolDeg) return;
-  const std::string why = fmt::format("U20 is {:g}° from u10_deg = {:g}°; the method turns the DUT 180° (± {:g}°) "
-                                      "between U10 and U20",
-                                      apart, u10_deg, kTolDeg);
-  // Name the angle the user's file wrote: one merged in from a base profile has no place.
+  // Name the angle the user's file wrote: one merged in from a base profile has no place. Either
+  // may be the wrong one: the other's place is said too (a mutated u10_deg was named only at u20's line).
   auto placed = [](const toml::node* n) { return n && n->source().path && n->source().begin.line > 0; };
+  const toml::node* u10 = t.get("u10_deg");
+  const std::string u10_at = placed(u10) && placed(t.get("u20_deg")) ? " (" + cfg::where(*u10) + ")" : "";
+  const std::string why = fmt::format("U20 is {:g}° from u10_deg = {:g}°{}; the method turns the DUT 180° (± {:g}°) "
+                                      "between U10 and U20",
+                                      apart, u10_deg, u10_at, kTolDeg);
   if (const toml::node* n = t.get("u20_deg"); placed(n)) cfg::reject(*n, "u20_deg", why);
   if (const toml::node* n = t.get("u10_deg"); placed(n)) cfg::reject(*n, "u10_deg", why);
   throw ConfigError(cfg::where(t) + ": u20_deg = " + fmt::format("{:g}", u20_deg) + ": " + why);

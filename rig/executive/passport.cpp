@@ -106,10 +106,10 @@ std::string passport_table(const nlohmann::ordered_json& p) {
   if (p.contains("skipped") && p["skipped"].is_array())
     for (const auto& k : p["skipped"])
       if (k.is_object()) o << "skipped: " << k.value("step", "") << ": " << k.value("reason", "") << "\n";
-  o << "OUTCOME: " << p.value("outcome", "");
-  // The emulated plant's passport passes under whatever serial was typed: never read as a DUT's.
-  if (p.value("plant", "") == "emulated") o << "  (emulated plant: a simulated DUT, not a device on the bench)";
-  o << "\n";
+  o << "OUTCOME: " << p.value("outcome", "") << "\n";
+  // The emulated plant's passport passes under whatever serial was typed: never read as a DUT's
+  // (on a line of its own: scripts match "OUTCOME: PASS" as the whole line).
+  if (p.value("plant", "") == "emulated") o << "(emulated plant: a simulated DUT, not a device on the bench)\n";
   if (p.contains("aborted_reason")) o << "reason: " << p["aborted_reason"].get<std::string>() << "\n";
   return o.str();
 }

@@ -93,9 +93,9 @@ std::string write_page(const fs::path& dir, const json& passport, const json& an
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
   if (!over_sealed && sealed_page(dir) && fs::exists(out) && read_bytes(out) != html)
     throw ConfigError((dir / "seal.json").string() + " seals " + out.string() +
-                      ", and the page written now differs from it (the folder was copied or moved, or another rig "
-                      "version wrote it): kept as sealed; `rig report --force` writes it again, and `rig verify` "
-                      "then names report.html as changed");
+                      " (or cannot be read: `rig verify` says which), and the page written now differs from it (the "
+                      "folder was copied or moved, or another rig version wrote it): kept as sealed; `rig report "
+                      "--force` writes it again, and `rig verify` then names report.html as changed");
   {
     std::error_code gone;
     fs::remove(tmp, gone);  // whatever lay there (a FIFO would stall the open, a link redirect the write)

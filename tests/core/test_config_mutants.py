@@ -36,8 +36,8 @@ HARDWARE_KEYS = [
     ("table", "accel_dps2", "num", 0.001, 4000.0, "40.0"),
     ("table", "in_position_window_deg", "num", 0.0001, 6.5, "0.01"),
     ("table", "drive_settle_s", "num", 0.0, 65.0, "0.2"),
-    ("table", "u10_deg", "num", -360.0, 360.0, "0.0"),
-    ("table", "u20_deg", "num", -360.0, 540.0, "180.0"),
+    # [table] u10_deg / u20_deg are left out: never used, they must equal the angles the run turns
+    # to ([procedure]'s, which these mutants move), RigCli.AnglesTheRunWouldNotUse... covers them.
     ("dut", "can", "str", None, None, '"vcan0"'),
     ("dut", "silence_ms", "num", 5.0, 60000.0, "100"),
     ("dut", "command_timeout_ms", "num", 1.0, 60000.0, "250"),

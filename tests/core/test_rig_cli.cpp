@@ -129,7 +129,7 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_TRUE(fs::exists(d + "/run/captures/raw-U10.cap"));
   EXPECT_TRUE(fs::exists(d + "/run/captures/run12-U20.cap"));
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
-  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS  (emulated plant: a simulated DUT, not a device on the bench)\n"),
+  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: PASS\n(emulated plant: a simulated DUT, not a device on the bench)\n"),
             std::string::npos);
   // Where the run was recorded is said (spawn() points RIG_HISTORY at d/io.history.sqlite).
   const std::string recorded = "recorded in the history database sqlite:" + d + "/io.history.sqlite as run 1";
@@ -786,7 +786,7 @@ TEST(RigCli, AnalyzeRefusesAllTausWhereTheWorkGrowsBeyondMinutes) {
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30)) << "refused before any work";
   EXPECT_NE(slurp(d + "/all.stderr").find("long.f64: --taus all on 200000 values asks for every averaging factor (1e+10 "
                                           "term sums): give --taus log:N (log:100 is the default, log:100000 the finest) "
-                                          "or m:LIST, or --taus all on at most 126491 values"),
+                                          "or m:LIST, or --taus all on at most 126491 values (--no-work-limit runs it regardless)"),
             std::string::npos)
       << slurp(d + "/all.stderr");
   EXPECT_EQ(run({"analyze", d + "/long.f64", "--input", "f64", "--rate", "100", "--taus", "log:1000", "--no-psd"}, d + "/log"),

@@ -464,6 +464,28 @@ TEST(CaptureImport, ARestartOrAPauseTheCounterCannotSpanEndsTheCaptureThere) {
   ASSERT_EQ(c.samples.size(), 200u);
   EXPECT_EQ(c.samples.front().seq, 0u);
   EXPECT_EQ(c.header.started, "2024-11-22T06:00:00Z");  // the first imported line's second
+  {
+    // The same with other interfaces' frames and an unreadable line before the restart: the counts
+    // taken back at the cut are each their own (two were swapped: 29 blank problem lines and one
+    // frame on other interfaces for 30; a code review).
+    std::ostringstream mixed;
+    double tm = 1732255200.0;
+    mixed << "garbage\n";
+    for (uint64_t k = 5000000; k < 5000300; ++k, tm += 1e-3) {
+      log_sample(mixed, tm, k);
+      if (k < 5000030) mixed << "(" << std::to_string(tm) << ") vcan1 123#00\n";
+    }
+    for (uint64_t k = 0; k < 200; ++k, tm += 1e-3) log_sample(mixed, tm, k);
+    std::ofstream(dir() / "restart-mixed.log") << mixed.str();
+    EXPECT_EQ(run_rig("capture import " + (dir() / "restart-mixed.log").string() + hw + " --iface vcan0 --out " +
+                          (dir() / "restart-mixed.rigcap").string(),
+                      "restart-mixed"),
+              2);
+    const std::string mout = slurp(dir() / "restart-mixed.out"), merr = slurp(dir() / "restart-mixed.err");
+    EXPECT_NE(mout.find("30 frame(s) on other interfaces: not read"), std::string::npos) << mout;
+    EXPECT_NE(merr.find("restart-mixed.log:1: "), std::string::npos) << merr;
+    EXPECT_EQ(merr.find("\n\n"), std::string::npos) << "no blank problem lines:\n" << merr;
+  }
 
   // A 16-bit counter and a 40 s pause (more than its 32.8 s half period at 1 kHz): the widening
   // cannot tell how many periods passed, the log's clock says so.

@@ -577,6 +577,10 @@ TEST(HistoryCli, StatisticsArePerDutAndUnitAndCountEveryRun) {
   EXPECT_TRUE(has_mixed("note: bias was measured under 2 profiles; each profile has its own statistics (--profile P for one)"));
   EXPECT_TRUE(has_mixed("SN-A      g     ci       1     1  -0.0006"));
   EXPECT_TRUE(has_mixed("SN-A      g     paper    1     1  -0.00050137"));
+  const auto csv = lines(run_cli({"--db", db, "--value", "bias", "--csv"}));
+  ASSERT_FALSE(csv.empty());
+  EXPECT_EQ(csv[0], "run_id,started,serial,run_outcome,name,value,unit,lo,hi,limit_min,limit_max,outcome,reason,profile\r");
+  EXPECT_NE(csv.back().find(",ci\r"), std::string::npos) << csv.back();
   // The listing: the run's outcome in its own column, aligned after the Cyrillic serial (the
   // column's position counted in characters).
   const auto column = [](const std::string& line, const std::string& text) {

@@ -440,6 +440,27 @@ TEST(Cia402Drive, ClearingTheHomingStartMidRunInterruptsIt) {
   r.run(3.0);
   EXPECT_TRUE(r.drive.statusword() & c4::sw::kHomingAttained);
   EXPECT_NEAR(r.axis->actual_angle_deg(), 0.0, 0.005);
+
+  // Interrupted and started again while the axis still runs down its ramp: a homing start, not a
+  // homing error (a code review: the axis refused the start as busy, and bit 13 came up).
+  r.control(c4::cw::kCmdEnableOperation);
+  r.write(Obj::kModesOfOperation, c4::kModeProfilePosition);
+  r.write(Obj::kTargetPosition, r.map.deg_to_counts(300.0));
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kNewSetPoint);
+  r.run(3.0);
+  r.control(c4::cw::kCmdEnableOperation);
+  ASSERT_NEAR(r.axis->actual_angle_deg(), 300.0, 0.005);
+  r.write(Obj::kModesOfOperation, c4::kModeHoming);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+  r.run(0.3);
+  r.control(c4::cw::kCmdEnableOperation);
+  r.run(0.02);  // still on the ramp
+  ASSERT_GT(std::fabs(r.axis->snapshot().velocity_dps), 1.0);
+  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+  r.run(4.0);
+  EXPECT_FALSE(r.drive.statusword() & c4::sw::kHomingError);
+  EXPECT_TRUE(r.drive.statusword() & c4::sw::kHomingAttained);
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 0.0, 0.005);
 }
 
 // A master that clears bit 4 before the drive has taken the set-point has ended the handshake:
