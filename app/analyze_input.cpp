@@ -294,7 +294,7 @@ namespace {
 // the line looks like where it says more than the value (a binary file, a byte-order mark).
 std::string not_a_number(std::string_view line, std::string_view tok) {
   std::string why = "not a decimal number: " + excerpt(tok);
-  if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64)";
+  if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)";
   // A table's row ("t,a", "0.1 0.2"): the record is one value per line (a metrologist's review).
   else if (tok.find_first_of(",; \t") != std::string_view::npos)
     why += "; a text record holds one value per line (take the column out first, e.g. cut -d, -f2)";

@@ -746,10 +746,10 @@ int run(const Args& a) {
     // (tones, a band): the cross-check compares like with like. Over the whole band a review read
     // 5x the Allan N on the rig's own capture, without a word. The median's N without a fit.
     join_fit();
-    const double f_lo = 4 * rate / static_cast<double>(psd->segment);
+    const double bin = rate / static_cast<double>(psd->segment), f_lo = 4 * bin;
     double f_hi = 0.45 * rate;
     if (terms && terms->model.ok && terms->model.dropped_short > 0 && !terms->model.tau_s.empty())
-      f_hi = std::min(f_hi, std::max(0.5 / terms->model.tau_s.front(), 8 * f_lo));
+      f_hi = std::min(f_hi, std::max(0.5 / terms->model.tau_s.front(), f_lo + 8 * bin));  // 8 bins at least
     const an::PsdTerms pt = an::psd_noise_fit(*psd, f_lo, f_hi);
     const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
     pj["n_from_psd"] = n_psd;  // unit*s^0.5

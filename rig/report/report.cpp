@@ -63,14 +63,15 @@ std::vector<std::string> set_aside_files(const fs::path& dir) {
 // than the sealed one (a copied folder names where it was read from; another rig's layout) is not
 // written over it unless asked, since `rig verify` then names it changed (a technician's review:
 // an archived run regenerated failed verification, silently).
-bool sealed_page(const fs::path& dir) {
+enum class PageSeal { none, sealed, unreadable };
+PageSeal page_seal(const fs::path& dir) {
   std::ifstream in(dir / "seal.json", std::ios::binary);
-  if (!in) return false;
+  if (!in) return PageSeal::none;
   std::ostringstream ss;
   ss << in.rdbuf();
   const json seal = json::parse(ss.str(), nullptr, false);
-  if (!seal.is_object() || !seal.contains("files") || !seal["files"].is_object()) return true;  // rig verify says why
-  return seal["files"].contains("report.html");
+  if (!seal.is_object() || !seal.contains("files") || !seal["files"].is_object()) return PageSeal::unreadable;
+  return seal["files"].contains("report.html") ? PageSeal::sealed : PageSeal::none;
 }
 
 std::string read_bytes(const fs::path& p) {
@@ -91,11 +92,16 @@ std::string write_page(const fs::path& dir, const json& passport, const json& an
       render_report(passport, usable ? analysis : none, analysis_problem, read_from.string(), set_aside_files(dir));
 
   const fs::path out = dir / "report.html", tmp = dir / "report.html.tmp";
-  if (!over_sealed && sealed_page(dir) && fs::exists(out) && read_bytes(out) != html)
+  if (const PageSeal seal = over_sealed ? PageSeal::none : page_seal(dir);
+      seal != PageSeal::none && fs::exists(out) && read_bytes(out) != html) {
+    if (seal == PageSeal::unreadable)
+      throw ConfigError((dir / "seal.json").string() + " cannot be read as a seal (`rig verify` says why), and the "
+                        "page written now differs from " + out.string() + ": kept; `rig report --force` writes it");
     throw ConfigError((dir / "seal.json").string() + " seals " + out.string() +
-                      " (or cannot be read: `rig verify` says which), and the page written now differs from it (the "
-                      "folder was copied or moved, or another rig version wrote it): kept as sealed; `rig report "
-                      "--force` writes it again, and `rig verify` then names report.html as changed");
+                      ", and the page written now differs from it (the folder was copied or moved, or another rig "
+                      "version wrote it): kept as sealed; `rig report --force` writes it again, and `rig verify` "
+                      "then names report.html as changed");
+  }
   {
     std::error_code gone;
     fs::remove(tmp, gone);  // whatever lay there (a FIFO would stall the open, a link redirect the write)

@@ -859,6 +859,14 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_EQ(run({"verify", copy, "--seal-key", key}, copy + "-forced"), 1);
     EXPECT_NE(slurp(copy + "-forced.stdout").find("CHANGED  report.html"), std::string::npos)
         << slurp(copy + "-forced.stdout");
+    // A seal.json that is no seal is named as such, not as sealing the page.
+    const std::string damaged = d + "/archived-damaged";
+    fs::copy(whole, damaged, fs::copy_options::recursive);
+    std::ofstream(damaged + "/seal.json") << "{";
+    EXPECT_EQ(run({"report", damaged}, damaged + "-report"), 2);
+    EXPECT_NE(slurp(damaged + "-report.stderr").find("seal.json cannot be read as a seal (`rig verify` says why)"),
+              std::string::npos)
+        << slurp(damaged + "-report.stderr");
   }
   {
     // Loop-test records swapped in before the station sealed them (a review's finding: the

@@ -1125,7 +1125,7 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   const std::string err = slurp(d + "/bin.stderr");
   EXPECT_NE(err.find("w.f64:1: not a decimal number: '"), std::string::npos) << err;
   EXPECT_NE(err.find("...' ("), std::string::npos) << err;
-  EXPECT_NE(err.find("the file looks binary (raw float64 is read with --input f64)"), std::string::npos) << err;
+  EXPECT_NE(err.find("the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)"), std::string::npos) << err;
   EXPECT_LT(err.size(), 400u) << err;
 }
 
