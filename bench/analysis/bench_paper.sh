@@ -38,7 +38,7 @@ import hashlib, json, sys
 p = json.load(open(sys.argv[1]))
 print(hashlib.sha256(json.dumps(p.get('values'), sort_keys=True).encode()).hexdigest()[:16])" "$out/run/passport.json")
   printf 'run %s: %s; passport values sha256 %s\n' "$i" "$(tail -n 1 "$out/time")" "$digest"
-  grep -h "emulated plant:" "$out/stdout" "$out/time" 2>/dev/null | head -n 1 || true
+  grep -h "emulated plant: [0-9]" "$out/stdout" "$out/time" 2>/dev/null | head -n 1 || true  # the speed line
 done
 if [ "$mode" = callgrind ]; then
   command -v valgrind > /dev/null || { echo "bench_paper.sh: callgrind needs valgrind (apt-get install valgrind)" >&2; exit 2; }
