@@ -366,13 +366,18 @@ TEST(Cia402Drive, FaultReactionFaultAndReset) {
   EXPECT_EQ(r.drive.state(), State::kSwitchOnDisabled);
 }
 
-void enable_and_home(Rig& r) {
+// Power-on to Operation enabled, homing mode, method 19, the homing start sent.
+void start_homing(Rig& r) {
   r.run(0.05);
   r.control(c4::cw::kShutdown);
   r.control(c4::cw::kCmdEnableOperation);
   r.write(Obj::kModesOfOperation, c4::kModeHoming);
   r.write(Obj::kHomingMethod, 19);
   r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+}
+
+void enable_and_home(Rig& r) {
+  start_homing(r);
   EXPECT_FALSE(r.drive.statusword() & c4::sw::kHomingAttained);
   r.run(1.0);
   EXPECT_TRUE(r.drive.statusword() & c4::sw::kHomingAttained);
@@ -419,12 +424,7 @@ TEST(Cia402Drive, SetPointHandshakeTimingAndHalt) {
 // emulated drive homed on regardless (a review, with a third-party master).
 TEST(Cia402Drive, ClearingTheHomingStartMidRunInterruptsIt) {
   Rig r("generic-cia402.toml", far_axis());
-  r.run(0.05);
-  r.control(c4::cw::kShutdown);
-  r.control(c4::cw::kCmdEnableOperation);
-  r.write(Obj::kModesOfOperation, c4::kModeHoming);
-  r.write(Obj::kHomingMethod, 19);
-  r.control(c4::cw::kCmdEnableOperation | c4::cw::kHomingStart);
+  start_homing(r);
   r.run(0.3);
   const uint16_t running = r.drive.statusword();
   EXPECT_FALSE(running & (c4::sw::kTargetReached | c4::sw::kHomingAttained | c4::sw::kHomingError));  // 0, 0, 0
