@@ -53,7 +53,8 @@ struct DutAbilities {
 // The phases, each with the measures it declares (name, unit, description) and its planned
 // device time: each recording's move from where the previous one left the table, its settle
 // and record; the loop test's steps (none where `dut` cannot run it; no retries counted;
-// bring-up, i.e. the DUT's power-up and homing, is not a phase). The phases read and write `state` (kept alive by the caller, as `p`).
+// bring-up, i.e. the DUT's power-up and homing, is not a phase). The phases read and write
+// `state` (kept alive by the caller, as `p`).
 std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const TableTiming& table = {},
                                 const DutAbilities& dut = {});
 

@@ -302,7 +302,7 @@ TEST(RigCli, AnalyzeJsonHasTheKeysTheDocsName) {
     EXPECT_TRUE(nt["model_fit"].contains(k)) << k;
   for (const char* k : {"in_model", "value", "lo", "hi", "upper", "share", "z"})
     EXPECT_TRUE(nt["model_fit"]["terms"]["K"].contains(k)) << k;
-  for (const char* k : {"peaks", "white_level", "psd_fit", "n_from_psd"}) EXPECT_TRUE(j.at("psd").contains(k)) << k;
+  for (const char* k : {"peaks", "white_level", "psd_fit", "n_from_psd", "n_fit_band_hz"}) EXPECT_TRUE(j.at("psd").contains(k)) << k;
   EXPECT_NE(j["psd"]["psd_fit"].value("note", "").find("not measurements"), std::string::npos);  // only N is read
   for (const char* k : {"paper", "wls"}) EXPECT_FALSE(nt.contains(k)) << k;
   // `notes` is there with nothing to note, as an empty list (it was left out: a metrologist's review).
