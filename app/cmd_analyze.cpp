@@ -534,14 +534,11 @@ int run(const Args& a) {
   if (listed.empty() && base.taus.kind == an::TauGrid::All && !a.no_work_limit) {
     constexpr double kAllTermSums = 4e9;
     const std::uint64_t n_phase = base.data == an::DataKind::Frequency ? n + 1 : n;
-    double work = 0, per_value = 0;  // term sums, and their growth in n^2
-    std::vector<double> tops;  // each statistic's number of factors
-    for (const an::DevOptions& o : opts) tops.push_back(static_cast<double>(an::max_factor(o.type, n_phase)));
-    for (std::size_t i = 0; i < long_taus.size(); ++i) tops.push_back(static_cast<double>(n_phase) / 2);  // at least
-    for (const double f : tops) {
-      work += f * static_cast<double>(n_phase);
-      per_value += f / static_cast<double>(std::max<std::uint64_t>(n_phase, 1));
-    }
+    // Every statistic's factor count (the long-tau ones at n/2, a floor) times the record.
+    double factors = static_cast<double>(long_taus.size()) * static_cast<double>(n_phase) / 2;
+    for (const an::DevOptions& o : opts) factors += static_cast<double>(an::max_factor(o.type, n_phase));
+    const double work = factors * static_cast<double>(n_phase);  // term sums
+    const double per_value = factors / static_cast<double>(std::max<std::uint64_t>(n_phase, 1));  // work / n^2
     if (work > kAllTermSums) {
       char sums[32], most[32];
       std::snprintf(sums, sizeof sums, "%.2g", work);

@@ -564,16 +564,17 @@ fs::path nearest_existing(fs::path p) {
 // row was lost at its end, logged only: a review), one that does not must be creatable in a
 // writable folder. A PostgreSQL server is reached when the run records (it may be down now).
 void check_history_can_record(const std::string& url) {
-  const std::optional<std::string> file = history::sqlite_path(url);
-  if (!file) return;
-  const std::string shown = "history database " + *file;
+  const std::optional<history::SqliteFile> f = history::sqlite_file(url);
+  if (!f) return;
+  const std::string& file = f->path;
+  const std::string shown = "history database " + file;
   std::error_code ec;
-  if (fs::exists(*file, ec)) {
-    if (!fs::is_regular_file(*file, ec)) throw ConfigError(shown + ": not a regular file");
+  if (f->exists) {
+    if (!fs::is_regular_file(file, ec)) throw ConfigError(shown + ": not a regular file");
     // Read and written, its folder taking SQLite's journal beside it (one rig may read but not
     // write, owned by another account: the row was lost at the run's end; a code review).
-    const fs::path folder = fs::absolute(*file, ec).parent_path();
-    if (::access(file->c_str(), R_OK | W_OK) != 0)
+    const fs::path folder = fs::absolute(file, ec).parent_path();
+    if (::access(file.c_str(), R_OK | W_OK) != 0)
       throw ConfigError(shown + ": cannot be written: " + std::strerror(errno));
     if (!can_create_file_in(folder))
       throw ConfigError(shown + ": its folder " + folder.string() + " takes no new file (SQLite's journal goes there)");
@@ -584,7 +585,7 @@ void check_history_can_record(const std::string& url) {
     }
     return;
   }
-  const fs::path p = nearest_existing(fs::absolute(*file, ec).parent_path());
+  const fs::path p = nearest_existing(fs::absolute(file, ec).parent_path());
   if (!fs::is_directory(p, ec) || !can_create_file_in(p))
     throw ConfigError(shown + ": cannot be created (" + p.string() + " is not a writable folder)");
 }
@@ -653,9 +654,8 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
                        const std::string& out_dir, spdlog::logger& log) {
   try {
     const std::string url = history_url(a, hw);
-    const std::optional<std::string> file = history::sqlite_path(url);
-    std::error_code ec;
-    const bool fresh = file && !fs::exists(*file, ec);
+    const std::optional<history::SqliteFile> file = history::sqlite_file(url);
+    const bool fresh = file && !file->exists;
     const history::Recorded rec = history::record_run(url, passport, out_dir);
     // Where it went, said (a newcomer found a row in ~/.local/share/rig/history.sqlite that no
     // output had mentioned); a database this run created too: a typo in --db or [history] url
@@ -1055,7 +1055,7 @@ int do_run(RunArgs a) {
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
       if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
-      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true);
+      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
     }
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
@@ -1101,13 +1101,10 @@ int do_run(RunArgs a) {
     } else {
       const std::string url = history_url(a, hw);
       std::string fresh;
-      if (const std::optional<std::string> file = history::sqlite_path(url)) {
-        std::error_code ec;
-        const fs::path folder = fs::absolute(*file, ec).parent_path();
-        if (!fs::exists(*file, ec))
-          fresh = fs::exists(folder, ec) ? " (not there yet: the run creates it)"
-                                         : " (not there yet: the run creates it and the folder " + folder.string() + ")";
-      }
+      if (const std::optional<history::SqliteFile> file = history::sqlite_file(url); file && !file->exists)
+        fresh = file->missing_folder.empty()
+                    ? " (not there yet: the run creates it)"
+                    : " (not there yet: the run creates it and the folder " + file->missing_folder + ")";
       std::cout << "History: " << history::mask_password(url) << fresh << "\n";
     }
     double total = 0;
@@ -1142,7 +1139,8 @@ int do_run(RunArgs a) {
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
-  std::vector<std::string> completed;
+  Resumption resumed;
+  const std::vector<std::string>& completed = resumed.completed;
   if (!a.resume.empty()) {
     // A finished run's folder is left as it is, its log included (a refused resume wrote into a
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
@@ -1151,7 +1149,7 @@ int do_run(RunArgs a) {
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
     try {
-      completed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
+      resumed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
     } catch (const std::exception& e) {  // the log says why the resume did not happen (it said only "resuming")
       log->error("resume refused: {}", e.what());
       throw;
@@ -1253,7 +1251,7 @@ int do_run(RunArgs a) {
           replayed_samples = b.emulated->samples_generated() - n0;
         }
       },
-      phases, values, state, cancel.token(), completed, identity);
+      phases, values, state, cancel.token(), resumed, identity);
   // A fault timed past the run's end never fired: said, or a test of it passes for nothing (a
   // review: sigint@229 on a run of 228 s of device time, exit 0 without a word).
   if (b.emulated && res.outcome != RunOutcome::Aborted)

@@ -146,10 +146,9 @@ bool looks_iso8601(const std::string& t) {
 // completed phase present with the right types, and the procedure's state
 // (PhaseState::restore checks its parts and the captures it names). Any
 // damage is a ConfigError naming the file and the field: never a silent PASS.
-std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
-                                                    MeasurementSet& values, PhaseState& state,
-                                                    const nlohmann::json& identity, spdlog::logger& log,
-                                                    bool allow_complete) {
+Resumption Executive::read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
+                                      MeasurementSet& values, PhaseState& state, const nlohmann::json& identity,
+                                      spdlog::logger& log, bool allow_complete) {
   const std::string cp = checkpoint_path(out_dir);
   auto bad = [&cp](const std::string& field, const std::string& what) {
     return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) + " (damaged checkpoint; start a new run)");
@@ -207,13 +206,15 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
     done.push_back(id.get<std::string>());
   }
   // phase_times (since 2026-12-02; older checkpoints have none): {id: {started, finished}}, ISO 8601.
+  std::map<std::string, Resumption::Times> times;
   if (j.contains("phase_times")) {
     const auto& t = j["phase_times"];
     if (!t.is_object()) throw bad("phase_times", std::string("expected an object, found ") + t.type_name());
-    for (const auto& [id, when] : t.items()) {  // a phase not (or no longer) completed: its times are not read
+    for (const auto& [id, when] : t.items()) {
       for (const char* k : {"started", "finished"})
         if (!when.is_object() || !when.contains(k) || !when[k].is_string() || !looks_iso8601(when[k].get<std::string>()))
           throw bad("phase_times." + id + "." + k, "expected an ISO 8601 time");
+      times[id] = {when["started"].get<std::string>(), when["finished"].get<std::string>()};
     }
   }
   if (!j.contains("values")) throw bad("values", "missing");
@@ -268,47 +269,40 @@ std::vector<std::string> Executive::read_checkpoint(const std::string& out_dir, 
     break;
   }
   log.info("resuming {}: {} phase(s) already complete", out_dir, done.size());
-  return done;
+  // A phase not (or no longer) completed: its times are not kept.
+  std::erase_if(times, [&](const auto& t) { return std::find(done.begin(), done.end(), t.first) == done.end(); });
+  return {std::move(done), std::move(times)};
 }
 
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
                          MeasurementSet& values, PhaseState& state, const CancelToken& cancel, bool resume,
                          const nlohmann::json& identity) {
-  const std::vector<std::string> done =
-      resume ? read_checkpoint(out_dir_, phases, values, state, identity, *log_) : std::vector<std::string>{};
-  return run(bring_up, phases, values, state, cancel, done, identity);
+  const Resumption resumed = resume ? read_checkpoint(out_dir_, phases, values, state, identity, *log_) : Resumption{};
+  return run(bring_up, phases, values, state, cancel, resumed, identity);
 }
 
 namespace {
 constexpr const char* kKeptFromCheckpoint = "completed in an earlier attempt (checkpoint)";
-
-// The checkpoint's phase_times, read_checkpoint having checked them (null: none, an older one's).
-nlohmann::json kept_phase_times(const std::string& out_dir) {
-  std::ifstream in(Executive::checkpoint_path(out_dir));
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  return j.is_object() && j.contains("phase_times") && j["phase_times"].is_object() ? j["phase_times"] : nlohmann::json();
-}
 }  // namespace
 
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
                          MeasurementSet& values, PhaseState& state, const CancelToken& cancel,
-                         const std::vector<std::string>& completed, const nlohmann::json& identity) {
+                         const Resumption& resumed, const nlohmann::json& identity) {
   RunResult result;
-  std::vector<std::string> done = completed;
-  std::size_t checkpointed = completed.size();  // what the folder's checkpoint holds (RunResult::checkpointed)
+  std::vector<std::string> done = resumed.completed;
+  std::size_t checkpointed = done.size();  // what the folder's checkpoint holds (RunResult::checkpointed)
   for (const auto& p : phases) result.phases.push_back({p.id, p.title, "pending", "", "", ""});
   // A resume's kept phases are kept from the start: a stop during bring-up (or the emulation's
   // fast-forward) wrote every phase "pending", though the checkpoint holds them (a review).
   auto kept = [&](std::size_t i) {
     return !phases[i].from_records && std::find(done.begin(), done.end(), phases[i].id) != done.end();
   };
-  const nlohmann::json times = completed.empty() ? nlohmann::json() : kept_phase_times(out_dir_);
   for (std::size_t i = 0; i < phases.size(); ++i)
     if (kept(i)) {
       PhaseRecord& r = result.phases[i];
       r.status = "skipped", r.message = kKeptFromCheckpoint;
-      if (times.contains(r.id) && times[r.id].is_object())
-        r.started = times[r.id].value("started", ""), r.finished = times[r.id].value("finished", "");
+      if (const auto t = resumed.times.find(r.id); t != resumed.times.end())
+        r.started = t->second.started, r.finished = t->second.finished;
     }
 
   PhaseContext ctx{dev_, cancel, values, out_dir_, log_, progress_, {}};

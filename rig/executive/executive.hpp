@@ -5,6 +5,7 @@
 // DUT powered off, in that order, each step logged.
 #pragma once
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -117,6 +118,17 @@ struct RunResult {
   int exit_code() const;
 };
 
+// Where a resume starts, as read_checkpoint() found it: the completed phases' ids in the
+// procedure's order, and the times the checkpoint gave them (none in a checkpoint written
+// before it kept phase_times).
+struct Resumption {
+  struct Times {
+    std::string started, finished;  // ISO 8601, checked
+  };
+  std::vector<std::string> completed;
+  std::map<std::string, Times> times;
+};
+
 class Executive {
  public:
   Executive(Devices& dev, std::string out_dir, std::shared_ptr<spdlog::logger> log, ProgressSink* progress);
@@ -135,23 +147,23 @@ class Executive {
   RunResult run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
                 MeasurementSet& values, PhaseState& state, const CancelToken& cancel, bool resume,
                 const nlohmann::json& identity);
-  // The same, resuming after `completed` as read_checkpoint() returned it (empty: a fresh run).
+  // The same, resuming where read_checkpoint() said (nothing completed: a fresh run).
   RunResult run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
-                MeasurementSet& values, PhaseState& state, const CancelToken& cancel,
-                const std::vector<std::string>& completed, const nlohmann::json& identity);
+                MeasurementSet& values, PhaseState& state, const CancelToken& cancel, const Resumption& resumed,
+                const nlohmann::json& identity);
 
   // A resume's starting point, read before any device opens. The checkpoint in `out_dir` is
   // checked (schema, `identity`, the completed phases a prefix of `phases`, every measure of a
   // completed phase present with the right types, PhaseState::restore with the captures it
   // names) and `values` and `state` restored; the values of completed from_records phases are
-  // then forgotten, as those phases run again. Returns the completed phase ids (none without a
-  // checkpoint). A completed phase that measures on the device (declares measures and is not
+  // then forgotten, as those phases run again. Returns the completed phase ids with their times
+  // (none without a checkpoint). A completed phase that measures on the device (declares measures and is not
   // from_records: the loop test) cannot have its values taken from a file either: it and every
   // phase after it are returned as not completed, their values and state forgotten, and run
   // again. Throws ConfigError naming the file and the field on any damage, and when every phase
   // is complete unless `allow_complete`: the caller allows it where the run has no final verdict
   // (an abort after the last phase).
-  static std::vector<std::string> read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
+  static Resumption read_checkpoint(const std::string& out_dir, const std::vector<Phase>& phases,
                                                   MeasurementSet& values, PhaseState& state,
                                                   const nlohmann::json& identity, spdlog::logger& log,
                                                   bool allow_complete = false);

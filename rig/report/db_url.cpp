@@ -1,6 +1,7 @@
 #include "rig/report/db_url.hpp"
 
 #include <cstdlib>
+#include <filesystem>
 
 #include "rig/core/errors.hpp"
 
@@ -76,6 +77,19 @@ std::optional<std::string> sqlite_path(const std::string& url) {
     throw ConfigError("history database URL '" + mask_password(url) + "'" + (why == kNamesNoFile ? " " : ": ") + why);
   if (is_postgres(url)) return std::nullopt;
   return file_part(url);
+}
+
+std::optional<SqliteFile> sqlite_file(const std::string& url) {
+  const std::optional<std::string> path = sqlite_path(url);
+  if (!path) return std::nullopt;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  SqliteFile f{*path, fs::exists(*path, ec), ""};
+  if (!f.exists) {
+    const fs::path folder = fs::absolute(*path, ec).parent_path();
+    if (!fs::exists(folder, ec)) f.missing_folder = folder.string();
+  }
+  return f;
 }
 
 }  // namespace rig::history

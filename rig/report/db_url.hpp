@@ -14,6 +14,16 @@ std::string url_problem(const std::string& url);
 // (another scheme, no file).
 std::optional<std::string> sqlite_path(const std::string& url);
 
+// An SQLite history's file as it is on disk now (nullopt for PostgreSQL; throws as sqlite_path):
+// whether it is there, and if not, whether its folder is (the run would make both). One answer
+// for the checks before a run, the dry run's plan and the run's "a new database" note.
+struct SqliteFile {
+  std::string path;            // as the URL names it
+  bool exists = false;         // something is at `path` (not checked to be a database)
+  std::string missing_folder;  // the file's folder, absolute, when that is not there either; else ""
+};
+std::optional<SqliteFile> sqlite_file(const std::string& url);
+
 // postgresql://user:secret@host/db -> postgresql://user:***@host/db (for messages).
 std::string mask_password(const std::string& url);
 

@@ -240,7 +240,7 @@ TEST(Executive, ResumeSkipsCompletedPhasesAndRestoresState) {
   declare(phases, v4);
   spdlog::logger quiet("quiet");
   const auto all = Executive::read_checkpoint(f.out, phases, v4, st, id, quiet, true);
-  EXPECT_EQ(all.size(), phases.size());
+  EXPECT_EQ(all.completed.size(), phases.size());
 }
 
 struct ForgettingState final : PhaseState {
@@ -287,7 +287,7 @@ TEST(Executive, AResumeMeasuresOnTheDeviceAgain) {
   declare(phases, v);
   spdlog::logger quiet("quiet");
   const auto done = Executive::read_checkpoint(f.out, phases, v, st, id, quiet, true);
-  EXPECT_EQ(done, std::vector<std::string>{"rec"});
+  EXPECT_EQ(done.completed, std::vector<std::string>{"rec"});
   EXPECT_FALSE(v.find("m")->value.has_value()) << "forgotten, not read back";
   EXPECT_EQ(st.forgotten, (std::vector<std::string>{"meas", "calc"}));
   const auto r = ex.run(power_on, phases, v, st, CancelToken{}, done, id);
@@ -376,7 +376,7 @@ TEST(Executive, AResumeStoppedWhileComputingAgainKeepsTheCheckpointsPhases) {
   declare(phases, again);
   JsonState st2;
   spdlog::logger quiet("quiet");
-  EXPECT_EQ(Executive::read_checkpoint(f.out, phases, again, st2, {}, quiet).size(), r.checkpointed)
+  EXPECT_EQ(Executive::read_checkpoint(f.out, phases, again, st2, {}, quiet).completed.size(), r.checkpointed)
       << "what a dry run of the next resume counts";
   // Measured before, computed again from the kept records by a phase this resume did not finish:
   // said so, not "not measured" (a QA review).

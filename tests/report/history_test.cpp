@@ -331,6 +331,24 @@ TEST(HistorySqlite, ATildeIsTheHomeFolder) {
   EXPECT_THROW(h::sqlite_path("sqlite:~/h.sqlite"), rig::ConfigError);
 }
 
+// One answer for the run's checks, its dry run and its "a new database" note.
+TEST(HistorySqlite, TheFileIsLookedAtAsItIsNow) {
+  TempDir d;
+  const std::string there = (d.path / "h.sqlite").string(), folder = (d.path / "new/deeper").string();
+  EXPECT_FALSE(h::sqlite_file("postgresql://rig@db.line/results").has_value());
+  auto f = h::sqlite_file("sqlite:" + there);
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->path, there);
+  EXPECT_FALSE(f->exists);
+  EXPECT_EQ(f->missing_folder, "") << "its folder is there";
+  rig::test::write_file(there, "");
+  EXPECT_TRUE(h::sqlite_file(there)->exists);
+  f = h::sqlite_file("sqlite:" + folder + "/h.sqlite");
+  EXPECT_FALSE(f->exists);
+  EXPECT_EQ(f->missing_folder, folder);
+  EXPECT_THROW(h::sqlite_file("mysql://x/y"), rig::ConfigError);
+}
+
 TEST(HistoryDefaultUrl, ConfigMistakesNameFileAndLine) {
   TempDir d;
   EnvGuard env;
