@@ -126,7 +126,7 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
     const auto v = whole_number(text, least, std::numeric_limits<std::uint32_t>::max());
     if (!v)
       throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number >= " + std::to_string(least) +
-                        " (drop@SEQ:COUNT)");
+                        " (decimal, no leading zero: drop@SEQ:COUNT)");
     return static_cast<std::uint32_t>(*v);
   };
   std::vector<Injection> out;
@@ -1258,6 +1258,17 @@ int do_run(RunArgs a) {
     for (const Injection& j : injections)
       if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > b.emulated->clock().now_s())
         log->warn("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, b.emulated->clock().now_s());
+  // A loss in samples the DUT never streamed (between recordings, or past the run's last) took
+  // nothing from any record: said, as a late signal is (a review: drop@1000:5 passed silently).
+  if (b.emulated && res.outcome != RunOutcome::Aborted) {
+    const std::vector<std::uint64_t> hits = b.emulated->drop_hits();
+    std::size_t k = 0;  // the plant's drops are the Drop injections, in order
+    for (const Injection& j : injections)
+      if (j.kind == Injection::Kind::Drop && k++ < hits.size() && hits[k - 1] == 0)
+        log->warn("--inject {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
+                  "a recording or the loop test runs; the run's records say which sequence numbers they hold)",
+                  j.text, j.seq, static_cast<std::uint64_t>(j.seq) + j.count - 1);
+  }
   if (signal_at_end) {
     ::kill(::getpid(), signal_at_end);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));

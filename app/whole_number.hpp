@@ -12,10 +12,11 @@ namespace rig::cli {
 
 // The whole text as a decimal whole number in [least, most], or nothing. std::from_chars on an
 // unsigned type takes digits only: no blank, no sign ('+' or '-'), no "0x"; a value past
-// uint64 is out of range, not wrapped; leading zeros are digits like any other.
+// uint64 is out of range, not wrapped. No leading zero, as every whole number on the command
+// line (README): "010" is a typo, and CLI11 reads it as octal 8 elsewhere.
 inline std::optional<std::uint64_t> whole_number(std::string_view text, std::uint64_t least,
                                                  std::uint64_t most = std::numeric_limits<std::uint64_t>::max()) {
-  if (text.empty()) return std::nullopt;
+  if (text.empty() || (text.size() > 1 && text[0] == '0')) return std::nullopt;
   std::uint64_t v = 0;
   const char* const end = text.data() + text.size();
   const auto [stop, ec] = std::from_chars(text.data(), end, v);

@@ -88,6 +88,8 @@ void EmulatedPlant::inject_drop(uint32_t from_seq, uint32_t count) {
   link_->firmware().set_faults(f);
 }
 
+std::vector<uint64_t> EmulatedPlant::drop_hits() const { return link_->firmware().stats().drop_hits; }
+
 EmulatedPlant::~EmulatedPlant() = default;
 
 void EmulatedPlant::advance(double dt) {

@@ -48,6 +48,8 @@ class EmulatedPlant {
   // Test hooks: an e-stop edge at simulated time t; samples [from, from+count) never arrive.
   void trip_estop_at(double t_s) { estop_at_ = t_s; }
   void inject_drop(uint32_t from_seq, uint32_t count);
+  // Per inject_drop, in order: how many of its samples fell while the DUT streamed (0: it never acted).
+  std::vector<uint64_t> drop_hits() const;
   // An action run once when simulated time passes t (fault injection in tests).
   void at(double t_s, std::function<void()> action) { actions_.push_back({t_s, std::move(action)}); }
   // The DUT's next sequence number (free-running while powered).

@@ -33,6 +33,7 @@ FirmwareEmulator::~FirmwareEmulator() { stop(); }
 void FirmwareEmulator::set_faults(FirmwareFaults f) {
   std::lock_guard lk(mu_);
   faults_ = std::move(f);
+  stats_.drop_hits.resize(faults_.drop_samples.size());
 }
 
 FirmwareStats FirmwareEmulator::stats() const {
@@ -119,10 +120,13 @@ void FirmwareEmulator::tick() {
   }
 }
 
-bool FirmwareEmulator::dropped(uint64_t seq) const {
-  for (const auto& [first, count] : faults_.drop_samples)
-    if (seq >= first && seq < first + count) return true;
-  return false;
+bool FirmwareEmulator::dropped(uint64_t seq) {
+  bool hit = false;
+  for (std::size_t i = 0; i < faults_.drop_samples.size(); ++i) {
+    const auto& [first, count] = faults_.drop_samples[i];
+    if (seq >= first && seq < first + count) hit = true, ++stats_.drop_hits[i];
+  }
+  return hit;
 }
 
 void FirmwareEmulator::send_layout_sample(uint64_t seq, float x, float y, uint8_t status) {

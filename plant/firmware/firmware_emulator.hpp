@@ -58,6 +58,9 @@ struct FirmwareStats {
   uint64_t samples = 0;         // output periods produced while streaming
   uint64_t frames_sent = 0;
   uint64_t samples_dropped = 0; // by fault injection
+  // Per FirmwareFaults::drop_samples entry: how many of its samples were due while streaming
+  // (0: the fault never acted; the stream was off over its whole range).
+  std::vector<uint64_t> drop_hits;
   uint64_t commands = 0;
   uint64_t bad_commands = 0;
   uint64_t loop_tests = 0;      // loop tests completed (their bursts queued)
@@ -94,7 +97,7 @@ class FirmwareEmulator {
   void send_sample(uint64_t seq, float x, float y, uint8_t status);
   // A DBC layout: collects samples and sends the frames of each full block.
   void send_layout_sample(uint64_t seq, float x, float y, uint8_t status);
-  bool dropped(uint64_t seq) const;
+  bool dropped(uint64_t seq);  // counts the hit (stats_.drop_hits)
   void send(const link::CanFrame& f);  // queues it for the end of the tick or slice (flush_sends)
   void flush_sends();                   // the frames queued, in order, in one batch
   bool silent() const;

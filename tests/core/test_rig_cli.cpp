@@ -2048,6 +2048,7 @@ TEST(RigCli, ValuesFromACaptureWithJoinedGapsSaySo) {
     for (const std::string& n : c.clean)
       EXPECT_EQ(p["values"][n]["reason"].get<std::string>().find("lost"), std::string::npos)
           << c.drop << " " << n << ": " << p["values"][n]["reason"];
+    EXPECT_EQ(slurp(r + "/run.log").find("did not fire"), std::string::npos) << c.drop << ": it fired";
   }
 }
 
@@ -2070,7 +2071,8 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
   int i = 0;
   for (const char* bad : {"foo@bar", "estop", "estop@10x", "estop@-1", "sigint@nan", "sigkill@end", "drop@5",
                           "drop@5:x", "drop@-1:2", "estop@ 5", "estop@0x10", "estop@+5", "drop@5:0", "drop@+5:1",
-                          "drop@0x5:1", "drop@4294967296:1", "drop@5:18446744073709551616"}) {
+                          "drop@0x5:1", "drop@4294967296:1", "drop@5:18446744073709551616", "drop@05:1",
+                          "drop@5:01"}) {
     const std::string io = d + "/io" + std::to_string(i++);
     EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", bad}, io), 2) << bad;
     EXPECT_NE(slurp(io + ".stderr").find(std::string("--inject '") + bad + "'"), std::string::npos)
@@ -2091,9 +2093,15 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
                 d + "/late"),
             3)
       << slurp(d + "/late.stderr");
-  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/late2", "--inject", "sigint@5000"},
+  // A loss in samples never streamed (sample 1000 falls before the first recording) too (a review).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/late2", "--inject", "sigint@5000",
+                 "--inject", "drop@1000:5"},
                 d + "/late2"),
             0)
+      << slurp(d + "/late2.stderr");
+  EXPECT_NE(slurp(d + "/late2.stderr").find("--inject drop@1000:5 did not fire: the DUT streamed none of samples "
+                                            "1000..1004"),
+            std::string::npos)
       << slurp(d + "/late2.stderr");
   EXPECT_NE(slurp(d + "/late2/run.log").find("--inject sigint@5000 did not fire: the run ended at "), std::string::npos)
       << slurp(d + "/late2/run.log");

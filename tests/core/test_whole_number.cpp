@@ -14,13 +14,17 @@ constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
 TEST(WholeNumber, TakesTheWholeTextAsDecimalDigits) {
   EXPECT_EQ(whole_number("0", 0), 0u);
   EXPECT_EQ(whole_number("7", 1), 7u);
-  EXPECT_EQ(whole_number("007", 1), 7u);  // leading zeros are digits
   EXPECT_EQ(whole_number("18446744073709551615", 0), kMax);
 }
 
 TEST(WholeNumber, RefusesEmptySignBlankHexAndTrailingText) {
   for (const char* bad : {"", "+5", "-5", "-0", " 5", "5 ", "\t5", "0x10", "1e3", "5.0", "5,", "x"})
     EXPECT_EQ(whole_number(bad, 0), std::nullopt) << "'" << bad << "'";
+}
+
+// As every whole number on the command line (README): "010" is a typo, not 10 (nor octal 8).
+TEST(WholeNumber, RefusesALeadingZero) {
+  for (const char* bad : {"00", "05", "007", "0170000"}) EXPECT_EQ(whole_number(bad, 0), std::nullopt) << "'" << bad << "'";
 }
 
 TEST(WholeNumber, RefusesOverflowRatherThanWrapping) {
