@@ -193,12 +193,13 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
                       "version or start a new run");
   // Every field is one this rig writes (checked after the version: a newer rig may write more);
   // an unknown one is a hand edit or another program's.
-  static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source", "software",
-                                                "started", "no_history", "db",     "faults"};
+  static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source",
+                                                "software", "started", "no_history", "db", "faults", "profile_digest"};
   for (const auto& [key, v] : inv.items())
     if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
   (void)str("profile_source", "");
+  (void)str("profile_digest", "");
   a.plant = str("plant", "emulated");
   a.hardware = str("hardware", "");
   a.serial = str("serial", "");
@@ -1005,6 +1006,13 @@ int do_run(RunArgs a) {
   if (!a.resume.empty() && invocation.contains("profile") && invocation["profile"] != p.name)
     throw ConfigError(fmt::format("{}/run.json: field 'profile': {}, but {} is profile \"{}\"", a.resume,
                                   invocation["profile"].dump(), a.profile, p.name));
+  // The checkpoint ties a resume to the profile it started with; a run stopped before its first
+  // checkpoint had only run.json, which did not (an automation review: limits loosened in the
+  // folder's profile.toml, then resumed: PASS). Since 2026-12-02 run.json holds the digest too.
+  if (!a.resume.empty() && invocation.contains("profile_digest") && invocation["profile_digest"] != p.digest)
+    throw ConfigError(fmt::format("{}/run.json: field 'profile_digest': {}, but {} (which a resume reads) digests to "
+                                  "\"{}\": not the profile the run started with (edited since?); start a new run",
+                                  a.resume, invocation["profile_digest"].dump(), a.profile, p.digest));
   // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included,
   // on every plant: a profile is shared by hardware and emulated runs, and a typo there must not
   // wait for the next emulated run to be found (before any device opens).
@@ -1182,7 +1190,7 @@ int do_run(RunArgs a) {
                                                    ? acceptance::builtin_profile_text(p.source.substr(8))
                                                    : slurp(p.source));
     invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
-                  {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source},
+                  {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source}, {"profile_digest", p.digest},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
     // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
     // carries a password, which run.json never holds; the resume must then give it again).

@@ -171,6 +171,26 @@ TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
     EXPECT_EQ(slurp(r + "/run.log").find("replayed the kept recordings"), std::string::npos)
         << what << ": nothing was replayed (bring-up's device time is not a replay)";
   }
+  // The folder's profile.toml edited before the first checkpoint (limits loosened): run.json's
+  // digest refuses the resume, as the checkpoint's would (it resumed to PASS: an automation review).
+  const std::string e = d + "/edited";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", e, "--inject", "sigint@1"}, e + "-io"), 3);
+  ASSERT_FALSE(fs::exists(e + "/checkpoint.json"));
+  EXPECT_TRUE(read_json(e + "/run.json").contains("profile_digest"));
+  std::ofstream(e + "/profile.toml", std::ios::app) << "\n# a comment changes nothing\n";
+  EXPECT_EQ(run({"run", "--resume", e, "--dry-run"}, e + "-dry0"), 0) << slurp(e + "-dry0.stderr");
+  std::string text = slurp(e + "/profile.toml");
+  const std::string tight = "bias = [-1.0e-3, 1.0e-3]";
+  ASSERT_NE(text.find(tight), std::string::npos) << text;
+  text.replace(text.find(tight), tight.size(), "bias = [-1.0, 1.0]");
+  std::ofstream(e + "/profile.toml") << text;
+  for (const char* how : {"--dry-run", "--yes"}) {
+    EXPECT_EQ(run({"run", "--resume", e, how}, e + "-r"), 2) << how << ": " << slurp(e + "-r.stderr");
+    EXPECT_NE(slurp(e + "-r.stderr").find(e + "/run.json: field 'profile_digest': "), std::string::npos)
+        << slurp(e + "-r.stderr");
+    EXPECT_NE(slurp(e + "-r.stderr").find("not the profile the run started with (edited since?)"), std::string::npos);
+  }
+  EXPECT_EQ(read_json(e + "/passport.json")["outcome"], "ABORTED") << "the interrupted run's, untouched";
 }
 
 // The loop test's records of an attempt the checkpoint does not hold (the run stopped after
