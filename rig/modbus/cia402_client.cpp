@@ -369,6 +369,7 @@ void Cia402Table::home(const CancelToken& cancel) {
     const double t0 = clock_.now_s();
     double changed_at = t0;
     Cia402Reading last = read(cancel);
+    Cia402Reading end;  // the reading that said attained
     bool seen_running = false;  // target reached clear once: the drive took the homing start
     detail::HeldFor interrupted;  // bits 13, 12, 10 read 0, 0, 1 after that
     for (;;) {
@@ -381,7 +382,10 @@ void Cia402Table::home(const CancelToken& cancel) {
       fail_unless_mode(doing, r, "during homing", c4::kModeHoming);
       if (r.has(c4::sw::kHomingError)) throw HardwareError(doing + ": homing error (statusword bit 13)" + at(r));
       const bool done = r.has(c4::sw::kHomingAttained) && r.has(c4::sw::kTargetReached);
-      if (done) break;
+      if (done) {
+        end = r;
+        break;
+      }
       // Bits 13, 12, 10 = 0, 0, 1: "homing procedure is interrupted or not started" (CiA 402 /
       // IEC 61800-7-201, homing mode statusword); after the run was seen, interrupted: by a halt
       // released again, which leaves nothing to read back. Held ended_short_s first: a drive
@@ -411,8 +415,28 @@ void Cia402Table::home(const CancelToken& cancel) {
       if (now - t0 > opt_.home_timeout_s) throw HardwareError(doing + ": not homed after " + secs(now - t0) + at(r));
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    refuse_misread_home(doing, end);
     homed_ = true;
   });
+}
+
+// Attained by the standard's bits, the home is then read as the map reads it. A map whose
+// homed_bit the drive never sets, or whose word order is the drive's reversed (actual 6553.80°
+// on a [-10°, 200°] table), ended "homed", exit 0, and every move after it was refused with
+// advice to home again (an integrator's review). The table is at rest at its home either way.
+void Cia402Table::refuse_misread_home(const std::string& doing, const Cia402Reading& r) const {
+  const std::string check = " of drive map " + map_.path + " against the drive's manual";
+  if (map_.homed_bit && !r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
+    throw HardwareError(doing + ": the drive reports the home attained (statusword bits 12 and 10), but the map's "
+                                "homed_bit " + std::to_string(*map_.homed_bit) + " reads 0" + at(r) +
+                        ": check homed_bit" + check + " (CiA 402 names no homed bit; vendors place it)");
+  constexpr double kMarginDeg = 1.0;  // as refuse_outside_travel
+  if (r.actual_deg < map_.limit_neg_deg - kMarginDeg || r.actual_deg > map_.limit_pos_deg + kMarginDeg)
+    throw HardwareError(doing + ": the drive reports the home attained, but position actual reads " +
+                        deg_str(r.actual_deg) + ", outside the travel [" + deg_str(map_.limit_neg_deg) + ", " +
+                        deg_str(map_.limit_pos_deg) + "] (home offset " + deg_str(map_.home_offset_deg) +
+                        "): the map does not read this drive as it is; check word_order, counts_per_rev, gear_ratio "
+                        "and direction" + check);
 }
 
 // What ends a profile-position move other than the drive's fault: stop() from another thread set

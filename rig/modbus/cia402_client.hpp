@@ -87,6 +87,8 @@ class Cia402Table final : public RotaryTable {
   bool axis_reads_at_rest() noexcept;
   // HardwareError when a homed table's position actual reads outside the map's travel.
   void refuse_outside_travel(const std::string& doing, const Cia402Reading& r) const;
+  // HardwareError when a home the drive reports attained does not read as one through the map.
+  void refuse_misread_home(const std::string& doing, const Cia402Reading& r) const;
   // Whether reading `r` is a servo holding position; `prev`: the reading a poll before, if any.
   bool reads_at_rest(const Cia402Reading& r, const Cia402Reading* prev) const;
   template <class Body>

@@ -1641,6 +1641,45 @@ TEST(Cia402ClientWordOrder, LateRepliesNeverHaltAGoodMove) {
 }
 
 // A homing method the drive does not implement: homing error (bit 13), exit 4.
+// A home the drive reports attained is read back through the map: a homed_bit the drive does
+// not set, or a position actual outside the travel, is an error naming the map, not a home (it
+// was exit 0, and every move after it was refused with advice to home again: an integrator's review).
+TEST(Cia402ClientHoming, AHomeTheMapMisreadsIsAnErrorNotAHome) {
+  {
+    const m::DriveMap drives = generic_map_with("homed15", {{"offset_deg = 0.0", "offset_deg = 0.0\nhomed_bit = 15"}});
+    const m::DriveMap mine = generic_map_with("homed14", {{"offset_deg = 0.0", "offset_deg = 0.0\nhomed_bit = 14"}});
+    auto axis = emulator(kFastAxis);
+    plant::Cia402Drive drive(*axis, drives);
+    SimClock clock([&](double dt) { drive.step(dt); });
+    m::TableOptions opt;
+    opt.settle_s = 0.05;
+    m::Cia402Table right(m::make_inprocess_transport(drive, clock), drives, clock, opt);
+    right.home({});  // the drive's own bit: a home
+    m::Cia402Table t(m::make_inprocess_transport(drive, clock), mine, clock, opt);
+    const std::string e = error_of([&] { t.home({}); });
+    EXPECT_TRUE(has(e, "home: the drive reports the home attained (statusword bits 12 and 10), but the map's homed_bit "
+                       "14 reads 0")) << e;
+    EXPECT_TRUE(has(e, "check homed_bit of drive map ")) << e;
+    EXPECT_TRUE(axis->snapshot().homed) << "the drive homed; the map cannot tell";
+  }
+  {
+    // The drive keeps a home offset the map never writes (its address wrong in the map, here
+    // not mapped at all): the home reads far outside the travel.
+    Rig r("generic-cia402.toml");
+    r.write(Obj::kHomeOffset, 0x10000000);  // 268435456 counts: 8192 degrees of table
+    const m::DriveMap no_offset = generic_map_with("no-offset", {{"home_offset                =", "# home_offset ="}});
+    m::TableOptions opt;
+    opt.settle_s = 0.05;
+    m::Cia402Table t(m::make_inprocess_transport(r.drive, r.clock), no_offset, r.clock, opt);
+    const std::string e = error_of([&] { t.home({}); });
+    EXPECT_TRUE(has(e, "home: the drive reports the home attained, but position actual reads 8192.")) << e;
+    EXPECT_TRUE(has(e, "outside the travel [-190.0000°, 370.0000°] (home offset 0.0000°)")) << e;
+    EXPECT_TRUE(has(e, "check word_order, counts_per_rev, gear_ratio and direction of drive map ")) << e;
+    const std::string m = error_of([&] { t.move_to(10.0, {}); });
+    EXPECT_TRUE(has(m, "outside the travel")) << "still refused: " << m;
+  }
+}
+
 TEST(Cia402ClientHoming, HomingErrorIsReported) {
   std::ifstream in(kDrives + "generic-cia402.toml");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
