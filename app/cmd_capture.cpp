@@ -166,6 +166,18 @@ int cmd_import(const ImportArgs& a) {
   std::string line, cut;  // cut: LOG:LINE: why the import stopped there
   std::size_t cut_line = 0;
   std::optional<double> last_t;  // the log's clock at the last stream frame (absolute stamps only)
+  // The log's clock over the samples taken (absolute stamps only), held to the header's rate:
+  // a 500 Hz log imported at 1000 Hz, or a counter read in the wrong byte order (764 506 samples
+  // lost in 3 s), imported with exit 0 (an integrator's review).
+  struct Stamp {
+    double t_s;
+    std::size_t line;
+  };
+  std::optional<Stamp> taken_first, taken_last;
+  // Values the layout decodes outside their signal's DBC range, or not finite (a wrong byte
+  // order read y as 1e17 g and NaN, exit 0: the same review).
+  uint64_t implausible = 0;
+  std::string first_implausible;  // LOG:LINE: signal = value
   // Frames far behind the stream, held until the stream shows what they are: it goes on from
   // where it was (stray late frames), or the held counter carries on for more than the reorder
   // window (the counter went back: the DUT restarted). Two strays in a row are not a restart.
@@ -314,6 +326,14 @@ int cmd_import(const ImportArgs& a) {
     }
     drop_suspect();
     ++stream_frames;
+    for (const link::StreamPart& p : parts)
+      if (p.implausible && implausible++ == 0)
+        first_implausible = fmt::format("{}:{}: {} = {:.9g} g", a.log, ln, p.channel == link::Channel::X ? sp.x : sp.y,
+                                        p.value_g);
+    if (a_clock(lf->t_s)) {
+      if (!taken_first) taken_first = Stamp{lf->t_s, ln};
+      if (!taken_last || lf->t_s >= taken_last->t_s) taken_last = Stamp{lf->t_s, ln};
+    }
     push(parts);
   }
   if (ifaces.size() > 1) {
@@ -384,6 +404,38 @@ int cmd_import(const ImportArgs& a) {
                 static_cast<unsigned long long>(st.gap_list[i].second));
   if (st.gap_list.size() > 20) std::printf("  ... %zu more gaps\n", st.gap_list.size() - 20);
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
+  // The rate against the log's clock: the samples taken (with those lost between them) over the
+  // time their frames span. Beyond a second and a hundred samples, 2 % apart is no clock's drift
+  // nor a logger's jitter: the header's rate, or the counter's reading, is wrong.
+  std::string rate_mismatch;
+  if (taken_first && taken_last && cut.empty()) {
+    const double span_s = taken_last->t_s - taken_first->t_s;
+    const double covered = static_cast<double>(w.samples_written() + st.lost);
+    if (span_s >= 1.0 && covered >= 100) {
+      const double log_rate = (covered - sp.samples_per_frame) / span_s;
+      std::printf("the log's clock: %.0f samples (%llu lost among them) in %.6g s, lines %zu to %zu: %.6g Hz\n", covered,
+                  static_cast<unsigned long long>(st.lost), span_s, taken_first->line, taken_last->line, log_rate);
+      if (std::fabs(log_rate / h.rate_hz - 1) > 0.02)
+        rate_mismatch = fmt::format(
+            "{}: the log's clock gives {:.6g} Hz (lines {} to {}), the capture's rate would be {} Hz ({}): every tau "
+            "would be off by a factor of {:.3g}. Give --rate with the DUT's rate, or check [dut.stream] rate_hz and the counter "
+            "signal's byte order and length (gaps {}, {} samples lost); {} not written",
+            a.log, log_rate, taken_first->line, taken_last->line, h.rate_hz,
+            a.rate_hz ? "--rate" : "the hardware file's or the protocol's", h.rate_hz / log_rate, st.gaps, st.lost,
+            a.out);
+    }
+  }
+  if (!rate_mismatch.empty()) {
+    std::error_code ec;
+    std::filesystem::remove(a.out, ec);
+    std::fprintf(stderr, "%s\n", rate_mismatch.c_str());
+    return kExitUsage;
+  }
+  if (implausible > 0)
+    std::fprintf(stderr, "%llu decoded value(s) outside their signal's DBC range or not finite (the first at %s): the "
+                 "DBC does not describe these frames (check the signal's byte order @0/@1, sign, factor and offset); "
+                 "the capture holds them as decoded\n",
+                 static_cast<unsigned long long>(implausible), first_implausible.c_str());
   if (!cut.empty()) {
     if (w.samples_written() == 0) {  // nothing before it: no capture, the rest is all there is
       std::error_code ec;
@@ -406,6 +458,7 @@ int cmd_import(const ImportArgs& a) {
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
     return kExitUsage;
   }
+  if (implausible > 0) return kExitUsage;
   if (unreadable + malformed > 0) {
     std::fprintf(stderr, "%llu line(s) could not be read, %llu stream frame(s) malformed; the capture holds the rest\n",
                  static_cast<unsigned long long>(unreadable), static_cast<unsigned long long>(malformed));

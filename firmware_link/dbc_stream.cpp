@@ -1,6 +1,7 @@
 #include "firmware_link/dbc_stream.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <set>
@@ -290,8 +291,14 @@ bool DbcStreamDecoder::decode(const CanFdFrame& f, std::vector<StreamPart>& out,
         if (dbc_physical(*sl.flag[k], p) != 0) v |= kFlagBits[k];
         st = v;
       }
-    if (present(sl.x)) out.push_back({Channel::X, seq, st, static_cast<float>(dbc_physical(*sl.x, p) * x_scale_)});
-    if (present(sl.y)) out.push_back({Channel::Y, seq, st, static_cast<float>(dbc_physical(*sl.y, p) * y_scale_)});
+    auto part = [&](Channel c, const DbcSignal& s, double scale) {
+      const double v = dbc_physical(s, p);
+      const float g = static_cast<float>(v * scale);
+      const bool outside = s.min < s.max && !(v >= s.min && v <= s.max);
+      out.push_back({c, seq, st, g, outside || !std::isfinite(g)});
+    };
+    if (present(sl.x)) part(Channel::X, *sl.x, x_scale_);
+    if (present(sl.y)) part(Channel::Y, *sl.y, y_scale_);
   }
   return true;
 }

@@ -27,6 +27,9 @@ struct StreamPart {
   uint32_t counter = 0;          // the wire counter (its low counter_bits bits are used)
   std::optional<uint8_t> status;  // stream_status bits, when this frame carries them
   float value_g = 0;
+  // Decoded outside its signal's DBC range [min|max] (where the DBC gives one), or not finite:
+  // a layout that does not fit the frames (byte order, sign, factor), for a log's import to say.
+  bool implausible = false;
 };
 
 class StreamReassembler {

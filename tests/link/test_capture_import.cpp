@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -688,4 +689,106 @@ TEST(CaptureImport, StraysLeapsAndPartsAreToldApart) {
   ASSERT_EQ(c.samples.size(), 100u);
   EXPECT_EQ(c.samples.front().seq, 1000u);
   EXPECT_EQ(c.samples.front().status & rig::sample_status::kGapBefore, 0u);
+}
+
+// The layout held to the frames (an integrator's review: each of these imported with exit 0).
+// The log's clock against the capture's rate: a 500 Hz log imported as the rig protocol's
+// 1000 Hz (every tau off by 2), and a counter written little-endian where the DBC says
+// big-endian (hundreds of thousands of samples "lost" in seconds), are refused and not written;
+// the right --rate imports the same log. A value its DBC range excludes, or not finite (a float
+// written big-endian where the DBC says little-endian), is counted, the first named, exit 2,
+// the capture kept as decoded.
+TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
+  std::ostringstream slow;
+  double t = 1732255200.0;
+  for (uint64_t k = 0; k < 2000; ++k, t += 2e-3) {
+    slow << log_line(t, encode(StreamHalf{Channel::X, static_cast<uint32_t>(k), 0, x_of(k)}));
+    slow << log_line(t + 1e-4, encode(StreamHalf{Channel::Y, static_cast<uint32_t>(k), 0, -x_of(k)}));
+  }
+  std::ofstream(dir() / "slow.log") << slow.str();
+  std::ofstream(dir() / "hw-slow.toml") << "[dut]\ncan = \"vcan0\"\n";
+  const std::string slow_args = "capture import " + (dir() / "slow.log").string() + " --hardware " +
+                                (dir() / "hw-slow.toml").string() + " --out " + (dir() / "slow.rigcap").string();
+  EXPECT_EQ(run_rig(slow_args, "slow"), 2) << slurp(dir() / "slow.out");
+  const std::string why = slurp(dir() / "slow.err");
+  EXPECT_NE(why.find("slow.log: the log's clock gives 499.96"), std::string::npos) << why;
+  EXPECT_NE(why.find(" Hz (lines 1 to 4000), the capture's rate would be 1000 Hz (the hardware file's or the protocol's)"),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("every tau would be off by a factor of 2."), std::string::npos) << why;
+  EXPECT_FALSE(fs::exists(dir() / "slow.rigcap")) << "not written";
+  ASSERT_EQ(run_rig(slow_args + " --rate 500", "slow500"), 0) << slurp(dir() / "slow500.err");
+  EXPECT_NE(slurp(dir() / "slow500.out").find("the log's clock: 2000 samples (0 lost among them) in 3.998"),
+            std::string::npos)
+      << slurp(dir() / "slow500.out");
+  EXPECT_EQ(rig::capture::load((dir() / "slow.rigcap").string()).header.rate_hz, 500.0);
+
+  // ACC_XY (tests/data/dbc/dut-layouts.dbc, 2000 Hz), its counter written in the other byte order.
+  const Dbc db = Dbc::parse_file(std::string(RIG_SOURCE_DIR) + "/tests/data/dbc/dut-layouts.dbc");
+  const DbcMessage* m = db.find("ACC_XY");
+  ASSERT_NE(m, nullptr);
+  std::ostringstream swapped;
+  t = 1732255200.0;
+  for (uint64_t k = 0; k < 4000; ++k, t += 5e-4) {
+    CanFrame f;
+    f.id = m->id;
+    f.extended = true;
+    f.len = 8;
+    std::span<uint8_t> d(f.data.data(), 8);
+    dbc_insert_raw(d, 0, 16, false, k % 65536);  // the DBC: 7|16@0+, big-endian
+    dbc_insert_raw(d, 23, 24, true, dbc_raw_of(*m->signal("x"), x_of(k)));
+    dbc_insert_raw(d, 47, 24, true, dbc_raw_of(*m->signal("y"), -x_of(k)));
+    swapped << log_line(t, f);
+  }
+  std::ofstream(dir() / "swapped.log") << swapped.str();
+  std::ofstream(dir() / "hw-swapped.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << RIG_SOURCE_DIR
+                                           << "/tests/data/dbc/dut-layouts.dbc\"\n[dut.stream]\ncounter = \"ACC_XY.cnt\"\n"
+                                              "x = \"ACC_XY.x\"\ny = \"ACC_XY.y\"\nrate_hz = 2000\n";
+  EXPECT_EQ(run_rig("capture import " + (dir() / "swapped.log").string() + " --hardware " +
+                        (dir() / "hw-swapped.toml").string() + " --out " + (dir() / "swapped.rigcap").string(),
+                    "swapped"),
+            2)
+      << slurp(dir() / "swapped.out");
+  EXPECT_FALSE(fs::exists(dir() / "swapped.rigcap")) << slurp(dir() / "swapped.err");
+  EXPECT_NE(slurp(dir() / "swapped.err").find("check [dut.stream] rate_hz and the counter signal's byte order"),
+            std::string::npos)
+      << slurp(dir() / "swapped.err");
+
+  // A float in mg with a range, written big-endian where the DBC says little-endian.
+  std::ofstream(dir() / "float.dbc") << "VERSION \"\"\n\nNS_ :\n\tSIG_VALTYPE_\n\nBS_:\n\nBU_: DUT RIG\n\n"
+                                        "BO_ 2566870300 ACC_F: 6 DUT\n"
+                                        " SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" RIG\n"
+                                        " SG_ x_mg : 16|32@1- (1,0) [-20000|20000] \"mg\" RIG\n\n"
+                                        "SIG_VALTYPE_ 2566870300 x_mg : 1;\n";
+  std::ostringstream fl;
+  t = 1732255200.0;
+  for (uint64_t k = 0; k < 1500; ++k, t += 1e-3) {
+    CanFrame f;
+    f.id = 2566870300u & 0x1FFFFFFFu;
+    f.extended = true;
+    f.len = 6;
+    std::span<uint8_t> d(f.data.data(), 6);
+    dbc_insert_raw(d, 0, 16, false, k);
+    const float mg = x_of(k) * 1000.0f;
+    uint32_t bits = 0;
+    std::memcpy(&bits, &mg, 4);
+    bits = __builtin_bswap32(bits);
+    dbc_insert_raw(d, 16, 32, false, bits);
+    fl << log_line(t, f);
+  }
+  std::ofstream(dir() / "float.log") << fl.str();
+  std::ofstream(dir() / "hw-float.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << (dir() / "float.dbc").string()
+                                         << "\"\n[dut.stream]\ncounter = \"ACC_F.cnt\"\nx = \"ACC_F.x_mg\"\n";
+  EXPECT_EQ(run_rig("capture import " + (dir() / "float.log").string() + " --hardware " + (dir() / "hw-float.toml").string() +
+                        " --out " + (dir() / "float.rigcap").string(),
+                    "float"),
+            2)
+      << slurp(dir() / "float.out") << slurp(dir() / "float.err");
+  const std::string err = slurp(dir() / "float.err");
+  EXPECT_NE(err.find(" decoded value(s) outside their signal's DBC range or not finite (the first at "), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("float.log:"), std::string::npos) << err;
+  EXPECT_NE(err.find("ACC_F.x_mg = "), std::string::npos) << err;
+  EXPECT_NE(err.find("the capture holds them as decoded"), std::string::npos) << err;
+  EXPECT_TRUE(fs::exists(dir() / "float.rigcap")) << "kept as decoded";
 }
