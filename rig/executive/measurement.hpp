@@ -90,4 +90,12 @@ class MeasurementSet {
   std::vector<std::string> scope_;
 };
 
+// A value outside its limits and the limits as a failure shows them: 6 significant digits,
+// unless that rounds the value onto or inside its limits ("0.00314 outside [0, 0.00314]", a
+// review), then every digit the doubles hold (the shortest text that reads back exactly).
+struct ShownOutside {
+  std::string value, lo, hi;
+};
+ShownOutside shown_outside(double value, double lo, double hi);
+
 }  // namespace rig

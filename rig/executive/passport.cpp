@@ -66,7 +66,12 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     o << "    <testcase classname=\"passport\" name=\"" << xml_escape(m.name) << "\">";
     const std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
     if (m.outcome == Outcome::Fail) {
-      const std::string what = m.value ? fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)
+      const auto shown = [&] {
+        const ShownOutside s = shown_outside(*m.value, m.limits->first, m.limits->second);
+        return fmt::format("{} = {} {} outside limits [{}, {}]", m.name, s.value, m.unit, s.lo, s.hi);
+      };
+      const std::string what = m.value && m.limits ? shown()
+                               : m.value ? fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)
                                        : !m.null_verdict.empty() ? fmt::format("{}: {}", m.name, m.null_verdict)
                                        : m.limits ? fmt::format("{} is required (limits {}) but has no value", m.name, lim)
                                                   : fmt::format("{} is required but has no value", m.name);  // a class table

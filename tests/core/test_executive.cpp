@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <mutex>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
+#include "rig/executive/passport.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig;
@@ -532,6 +534,24 @@ TEST(Measurements, ANullLimitedValueFailsACompletedRunWithItsReason) {
   v.set("k", std::nullopt, "no capture");
   v.judge_all(true);
   EXPECT_EQ(v.to_json()["k"]["reason"], "required value not measured: no capture");
+}
+
+// A value just outside its limits is shown with the digits that put it outside: it read
+// "settling_time = 0.00314 s outside limits [0, 0.00314]" (an automation review).
+TEST(Measurements, AFailureShowsTheDigitsThatPutTheValueOutside) {
+  MeasurementSet v;
+  v.declare({"settling_time", "s", "settling"}, std::make_pair(0.0, 0.00314));
+  v.declare({"bias", "g", "bias"}, std::make_pair(-1e-3, 1e-3));
+  v.set("settling_time", 0.0031400000000000004);
+  v.set("bias", 2.5e-3);
+  v.judge_all(true);
+  EXPECT_EQ(v.find("settling_time")->verdict, "value 0.0031400000000000004 outside limits [0, 0.00314]");
+  EXPECT_EQ(v.find("bias")->verdict, "value 0.0025 outside limits [-0.001, 0.001]") << "6 digits where they suffice";
+  const std::string x = junit_xml(PassportInfo{}, RunResult{}, v);
+  EXPECT_NE(x.find("settling_time = 0.0031400000000000004 s outside limits [0, 0.00314]"), std::string::npos) << x;
+  EXPECT_NE(x.find("bias = 0.0025 g outside limits [-0.001, 0.001]"), std::string::npos) << x;
+  const ShownOutside n = shown_outside(std::nan(""), 0, 1);
+  EXPECT_EQ(n.value, "nan");
 }
 
 TEST(Executive, OutcomesAreJudgedOnceTheSameAfterAResume) {
