@@ -1000,8 +1000,12 @@ int do_run(RunArgs a) {
     }
   }
   std::string profile_source;
-  const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source);
+  std::vector<std::string> dropped_limits;
+  const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source, &dropped_limits);
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
+  // Values a derived profile left without limits cannot fail the run: said before it starts
+  // (an automation review: a base's GOST limits gone with its blocks, PASS without a word).
+  const std::string unjudged = acceptance::unjudged_blocks_note(p, dropped_limits);
   if (a.resume.empty()) acceptance::check_profile_names_itself(profile_table, profile_source);
   if (!a.resume.empty() && invocation.contains("profile") && invocation["profile"] != p.name)
     throw ConfigError(fmt::format("{}/run.json: field 'profile': {}, but {} is profile \"{}\"", a.resume,
@@ -1073,6 +1077,7 @@ int do_run(RunArgs a) {
     // The angles the run turns to, and whose they are: a mount's calibration that never reached
     // them was found only at the prompt, or not at all with --yes (a technician's review).
     const toml::table* pr = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
+    if (!unjudged.empty()) std::cout << "Note: " << unjudged << "\n";
     std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
                              pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                            : std::string("the profile's"));
@@ -1239,6 +1244,7 @@ int do_run(RunArgs a) {
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
   Executive exec(dev, a.out, log, &view);
+  if (!unjudged.empty()) log->warn("{}", unjudged);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
     exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, files_of_the_run(state.slot()), text); });
   const std::string started = invocation.value("started", iso8601_utc_now());

@@ -66,10 +66,10 @@ std::string gost_value_name(double block_s) { return fmt::format("in_run_b_gost_
 // in_run_blocks_s keeps the base's limits only for the lengths it still has: a limit for a block
 // the file no longer measures is the base's, not the user's, and would otherwise be refused as
 // "unknown measurement", leaving no way to change the blocks but copying the whole profile.
-void drop_limits_of_other_blocks(const toml::table& file, toml::table& base) {
+std::vector<std::string> drop_limits_of_other_blocks(const toml::table& file, toml::table& base) {
   const toml::array* blocks = file["procedure"]["in_run_blocks_s"].as_array();
   toml::table* limits = base["limits"].as_table();
-  if (!blocks || !limits) return;  // (a malformed list is named when the profile is read)
+  if (!blocks || !limits) return {};  // (a malformed list is named when the profile is read)
   std::vector<std::string> kept, drop;
   for (const auto& b : *blocks)
     if (const auto v = b.value<double>()) kept.push_back(gost_value_name(*v));
@@ -77,6 +77,7 @@ void drop_limits_of_other_blocks(const toml::table& file, toml::table& base) {
     if (k.str().rfind("in_run_b_gost_", 0) == 0 && std::find(kept.begin(), kept.end(), k.str()) == kept.end())
       drop.emplace_back(k.str());
   for (const auto& k : drop) limits->erase(k);
+  return drop;
 }
 
 void check_orientation_angles(const toml::table& t, double u10_deg, double u20_deg) {
@@ -319,7 +320,8 @@ void check_profile_names_itself(const toml::table& resolved, const std::string& 
                     "(its passport, JUnit suite and history rows would say it is the built-in)");
 }
 
-toml::table load_profile_table(const std::string& name_or_path, std::string& source) {
+toml::table load_profile_table(const std::string& name_or_path, std::string& source,
+                               std::vector<std::string>* dropped_limits) {
   const auto& builtin = builtin_profiles();
   toml::table t;
   if (auto it = builtin.find(name_or_path); it != builtin.end()) {
@@ -343,11 +345,24 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
       t.erase("base");
       // A file's own [[classes]] replace the base's rather than append.
       if (t.contains("classes")) base.erase("classes");
-      drop_limits_of_other_blocks(t, base);
+      const std::vector<std::string> dropped = drop_limits_of_other_blocks(t, base);
+      if (dropped_limits) *dropped_limits = dropped;
       cfg::fill_defaults(t, std::move(base));
     }
   }
   return t;
+}
+
+std::string unjudged_blocks_note(const Profile& p, const std::vector<std::string>& dropped_limits) {
+  if (dropped_limits.empty()) return "";
+  std::string unjudged, dropped;
+  for (const double b : p.in_run_blocks_s)
+    if (!p.limits.count(gost_value_name(b))) unjudged += (unjudged.empty() ? "" : ", ") + gost_value_name(b);
+  if (unjudged.empty()) return "";
+  for (const auto& d : dropped_limits) dropped += (dropped.empty() ? "" : ", ") + d;
+  return fmt::format("{}: its own in_run_blocks_s leaves out its base's limits ({}); {} {} no limits: UNSET in the "
+                     "passport, never FAIL (give them in [limits] to judge them)",
+                     p.source, dropped, unjudged, unjudged.find(',') == std::string::npos ? "has" : "have");
 }
 
 }  // namespace rig::acceptance

@@ -13,6 +13,9 @@
 namespace fs = std::filesystem;
 using rig::ConfigError;
 using rig::acceptance::load_profile;
+using rig::acceptance::load_profile_table;
+using rig::acceptance::parse_profile;
+using rig::acceptance::unjudged_blocks_note;
 
 namespace {
 std::string write_tmp(const std::string& name, const std::string& text) {
@@ -145,6 +148,23 @@ TEST(Profile, AFileThatChangesTheGostBlocksKeepsTheBasesLimitsOnlyForBlocksItHas
   const std::string own = write_tmp("b7.toml", "base = \"ci\"\n[procedure]\nin_run_blocks_s = [5.0]\n"
                                                "[limits]\nin_run_b_gost_7s = [0.0, 1.0]\n");
   EXPECT_NE(error_of(own).find("in_run_b_gost_7s"), std::string::npos) << error_of(own);
+  // What is left unjudged is said (a run prints it: those values are UNSET, never FAIL; it
+  // passed without a word, an automation review); every block with limits leaves nothing to say.
+  std::string source;
+  std::vector<std::string> dropped;
+  const std::string b5 = write_tmp("b5.toml", "base = \"ci\"\n[procedure]\nin_run_blocks_s = [5.0]\n");
+  const auto t5 = load_profile_table(b5, source, &dropped);
+  EXPECT_EQ(dropped, (std::vector<std::string>{"in_run_b_gost_2s", "in_run_b_gost_4s"}));
+  EXPECT_EQ(unjudged_blocks_note(parse_profile(t5, source), dropped),
+            b5 + ": its own in_run_blocks_s leaves out its base's limits (in_run_b_gost_2s, in_run_b_gost_4s); "
+                 "in_run_b_gost_5s has no limits: UNSET in the passport, never FAIL (give them in [limits] to judge "
+                 "them)");
+  const std::string b25 = write_tmp("b25.toml", "base = \"ci\"\n[procedure]\nin_run_blocks_s = [2.0, 5.0]\n"
+                                                "[limits]\nin_run_b_gost_5s = [0.0, 2.0e-4]\n");
+  const auto t25 = load_profile_table(b25, source, &dropped);
+  EXPECT_EQ(dropped, std::vector<std::string>{"in_run_b_gost_4s"});
+  EXPECT_EQ(unjudged_blocks_note(parse_profile(t25, source), dropped), "");
+  EXPECT_EQ(unjudged_blocks_note(ci, {}), "") << "nothing dropped";
 }
 
 // A value the file inherits is named where it came from: the built-in base's line, not
