@@ -166,8 +166,13 @@ json read_passport(const std::string& run_dir) {
     case PathKind::missing:
       // A folder that is there but holds no run is named as such (a review read "does the run
       // folder exist?" for a folder that exists).
-      if (path_kind(run_dir, "") == PathKind::directory)
+      if (path_kind(run_dir, "") == PathKind::directory) {
+        // A run killed before it wrote its passport is a run to finish, not "not a run folder".
+        if (path_kind(run_dir + "/run.json", "") == PathKind::file)
+          throw ConfigError(path + ": not there: the run in " + run_dir + " has not finished (run.json, no passport: "
+                            "stopped before its end); `rig run --resume " + run_dir + "` finishes it");
         throw ConfigError(path + ": not there: " + run_dir + " is a folder but not a run folder (no passport.json)");
+      }
       throw ConfigError(path + ": cannot read the file (does the run folder exist?)");
     case PathKind::directory: throw ConfigError(path + ": a folder, not the passport file");
     default: break;

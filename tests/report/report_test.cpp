@@ -779,6 +779,17 @@ TEST(ReportCli, WritesTheReportAndRejectsAFolderWithoutPassport) {
     EXPECT_EQ(std::string(e.what()), (d.path / "no-run" / "passport.json").string() + ": not there: " +
                                          (d.path / "no-run").string() + " is a folder but not a run folder (no passport.json)");
   }
+  // One with run.json is a run stopped before its end (killed): to resume, not "not a run folder".
+  std::ofstream(d.path / "no-run" / "run.json") << "{}";
+  try {
+    rig::report::read_passport((d.path / "no-run").string());
+    ADD_FAILURE() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), (d.path / "no-run" / "passport.json").string() + ": not there: the run in " +
+                                         (d.path / "no-run").string() + " has not finished (run.json, no passport: "
+                                         "stopped before its end); `rig run --resume " + (d.path / "no-run").string() +
+                                         "` finishes it");
+  }
 }
 
 // ---------------------------------------------------------------- the SVG writer
