@@ -384,8 +384,13 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                  {"rms_unfiltered", "g", "RMS error x̂ of x(t)"},
                  {"rms_filtered", "g", "RMS error x̂ of y(t)"}},
                 true});
-  ph.push_back({"loop", fmt::format("loop test on the DUT: {} step(s) of {:g} g inside its loop, recorded", p.loop_steps,
-                                    p.loop_amplitude_g),
+  // Its title says what the plan holds: a DUT that cannot run it is not stepped (the plan read
+  // "5 step(s)" beside "skipped: loop test": an integrator's review).
+  ph.push_back({"loop", dut.runs_loop_test()
+                            ? fmt::format("loop test on the DUT: {} step(s) of {:g} g inside its loop, recorded",
+                                          p.loop_steps, p.loop_amplitude_g)
+                            : std::string(!dut.commands ? "loop test: not run (the DUT has no command channel)"
+                                                        : "loop test: not run (the DUT's firmware has none)"),
                 // the steps at the loop's rate, the rate the output filter runs at in the DUT; a DUT
                 // that cannot run it takes no device time (the plan said 2 s or more: a review)
                 !dut.runs_loop_test() ? 0.0

@@ -99,6 +99,15 @@ TEST(Plan, ALoopTestTheDutCannotRunIsPlannedAtNoTime) {
   EXPECT_GT(loop_planned({}), 1.0);
   EXPECT_EQ(loop_planned({.commands = true, .loop_test = false}), 0.0);
   EXPECT_EQ(loop_planned({.commands = false, .loop_test = true}), 0.0);
+  auto loop_title = [&](const acceptance::DutAbilities& can) {
+    for (const Phase& ph : acceptance::build_phases(p, state, {}, can))
+      if (ph.id == "loop") return ph.title;
+    return std::string();
+  };
+  EXPECT_EQ(loop_title({}), "loop test on the DUT: 5 step(s) of 1 g inside its loop, recorded");
+  EXPECT_EQ(loop_title({.commands = true, .loop_test = false}), "loop test: not run (the DUT's firmware has none)")
+      << "no steps where none are taken";
+  EXPECT_EQ(loop_title({.commands = false, .loop_test = true}), "loop test: not run (the DUT has no command channel)");
 
   // On the emulated plant whose firmware does not run it: the phase takes no device time (its
   // "no", one reply).
