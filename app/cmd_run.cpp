@@ -881,6 +881,43 @@ acceptance::TableTiming planned_table_timing(const RunArgs& a, const toml::table
   return t;
 }
 
+// The dry run's account of the hardware it would drive, read from the hardware file as the run
+// reads it (nothing opened): which drive and map, the speeds the moves are sent at, the DUT's
+// link and stream layout, the GPIO lines (it named only the file: an integrator's review).
+std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::TableTiming& timing,
+                                       const DutLinkOptions& dut) {
+  std::vector<std::string> out;
+  if (const toml::table* t = cfg::get_table(hw, "table")) {
+    const std::string where = t->contains("modbus") ? "Modbus " + cfg::get_string(*t, "modbus")
+                                                    : "Modbus RTU " + cfg::get_string(*t, "rtu");
+    const long long unit = t->contains("unit") ? cfg::get_int(*t, "unit", {}, 0, 247) : 1;
+    const std::string drive = modbus::table_drive(*t) == "cia402"
+                                  ? [&] {
+                                      const modbus::DriveMap m = modbus::table_drive_map(*t);
+                                      return "a CiA 402 drive, drive map " + m.path + " (\"" + m.name + "\")";
+                                    }()
+                                  : std::string("a rig-v1 table (docs/table-registers.md)");
+    out.push_back(fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s, {:g}°/s² (as sent)", drive, where, unit,
+                              timing.velocity_dps, timing.accel_dps2));
+  }
+  if (const toml::table* d = cfg::get_table(hw, "dut")) {
+    std::string stream = "the rig protocol (docs/can-protocol.md), 1000 Hz";
+    if (dut.stream) {
+      const link::DbcStreamSpec& sp = dut.stream->spec();
+      stream = fmt::format("{} of {}: counter {} ({} bits), x {}, y {}, {} sample(s) per frame, {:g} Hz",
+                           "[dut.stream]", cfg::get_string(*d, "dbc"), sp.counter, dut.stream->counter_bits(), sp.x,
+                           sp.y.empty() ? std::string("none") : sp.y, sp.samples_per_frame, sp.rate_hz);
+    }
+    out.push_back(fmt::format("DUT: CAN {}; stream {}; commands {}, loop test {}", cfg::get_string(*d, "can"), stream,
+                              dut.can.commands ? "yes" : "no (give --serial)",
+                              dut.can.runs_loop_test() ? "yes" : "not run"));
+  }
+  if (const toml::table* g = cfg::get_table(hw, "gpio"))
+    out.push_back(fmt::format("GPIO: {}: DUT power {}, e-stop {}", cfg::get_string(*g, "chip"), cfg::get_string(*g, "power"),
+                              cfg::get_string(*g, "estop")));
+  return out;
+}
+
 // A serial or profile name as one component of the default run folder's name: a '/' or a
 // leading '.' ('../../x') would put the run outside runs/; those and other characters a shell
 // or a file system treats specially become '_'.
@@ -1081,6 +1118,9 @@ int do_run(RunArgs a) {
     std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
                              pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                            : std::string("the profile's"));
+    if (a.plant == "hardware")
+      for (const std::string& line : hardware_plan(hw, planned_table_timing(a, hw, plant_cfg), dut))
+        std::cout << line << "\n";
     plan_view.plan(phases, completed.size());
     for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {

@@ -2223,6 +2223,32 @@ TEST(RigCli, AnglesTheRunWouldNotUseAreRefusedAndTheDryRunSaysTheAnglesItUses) {
                       "182.5° ([procedure] of " + d + "/same.toml)\n"),
             std::string::npos)
       << same;
+  // What it would drive, from the hardware file (it named only the file: an integrator's review).
+  EXPECT_NE(same.find("\nTable: a rig-v1 table (docs/table-registers.md) on Modbus tcp:127.0.0.1:1, unit 1; moves at "),
+            std::string::npos)
+      << same;
+  EXPECT_NE(same.find("\nDUT: CAN vcan-none; stream the rig protocol (docs/can-protocol.md), 1000 Hz; commands yes, "
+                      "loop test yes\nGPIO: /dev/rig-no-such-gpiochip: DUT power P, e-stop E\n"),
+            std::string::npos)
+      << same;
+  std::ofstream(d + "/dbc.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \""
+                                 << RIG_SOURCE_DIR << "/drives/generic-cia402.toml\"\n"
+                                 << "[dut]\ncan = \"vcan-none\"\ncommands = false\ndbc = \"" << RIG_SOURCE_DIR
+                                 << "/tests/data/dbc/dut-layouts.dbc\"\n[dut.stream]\ncounter = \"ACC_XY.cnt\"\n"
+                                    "x = \"ACC_XY.x\"\ny = \"ACC_XY.y\"\nrate_hz = 1000\n"
+                                 << hw.substr(hw.find("[gpio]"));
+  ASSERT_EQ(run({"run", "--hardware", d + "/dbc.toml", "--profile", "ci", "--serial", "X-1", "--dry-run"}, d + "/dbc"), 0)
+      << slurp(d + "/dbc.stderr");
+  const std::string dbc = slurp(d + "/dbc.stdout");
+  EXPECT_NE(dbc.find("\nTable: a CiA 402 drive, drive map " + std::string(RIG_SOURCE_DIR) +
+                     "/drives/generic-cia402.toml (\"generic CiA 402\") on Modbus tcp:127.0.0.1:1, unit 1; moves at "),
+            std::string::npos)
+      << dbc;
+  EXPECT_NE(dbc.find("\nDUT: CAN vcan-none; stream [dut.stream] of " + std::string(RIG_SOURCE_DIR) +
+                     "/tests/data/dbc/dut-layouts.dbc: counter ACC_XY.cnt (16 bits), x ACC_XY.x, y ACC_XY.y, 1 sample(s) "
+                     "per frame, 1000 Hz; commands no (give --serial), loop test not run\n"),
+            std::string::npos)
+      << dbc;
   ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run"}, d + "/emu"), 0);
   EXPECT_NE(slurp(d + "/emu.stdout").find("on the emulated plant (a simulated DUT, table and GPIO); nothing is touched.\n"
                                           "Orientations: U10 at 0°, U20 at 180° (the profile's)\n"),
