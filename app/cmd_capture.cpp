@@ -174,10 +174,18 @@ int cmd_import(const ImportArgs& a) {
     std::size_t line;
   };
   std::optional<Stamp> taken_first, taken_last;
+  double longest_quiet_s = 0;  // the longest time between two frames taken: a pause, a logger's burst
   // Values the layout decodes outside their signal's DBC range, or not finite (a wrong byte
-  // order read y as 1e17 g and NaN, exit 0: the same review).
-  uint64_t implausible = 0;
-  std::string first_implausible;  // LOG:LINE: signal = value
+  // order read y as 1e17 g and NaN, exit 0: the same review). Not finite: nothing can analyse
+  // it (exit 2); only outside the range: a wrong layout, or a DUT driven past its DBC's range.
+  uint64_t implausible = 0, not_finite = 0;
+  std::string first_implausible;  // LOG:LINE: signal = value unit (the DBC's range)
+  auto signal_of = [&](link::Channel c) -> const link::DbcSignal* {
+    const std::string& name = c == link::Channel::X ? sp.x : sp.y;
+    const auto dot = name.find('.');
+    const link::DbcMessage* m = dot == std::string::npos ? nullptr : decoder->dbc().find(name.substr(0, dot));
+    return m ? m->signal(name.substr(dot + 1)) : nullptr;
+  };
   // Frames far behind the stream, held until the stream shows what they are: it goes on from
   // where it was (stray late frames), or the held counter carries on for more than the reorder
   // window (the counter went back: the DUT restarted). Two strays in a row are not a restart.
@@ -326,12 +334,20 @@ int cmd_import(const ImportArgs& a) {
     }
     drop_suspect();
     ++stream_frames;
-    for (const link::StreamPart& p : parts)
-      if (p.implausible && implausible++ == 0)
-        first_implausible = fmt::format("{}:{}: {} = {:.9g} g", a.log, ln, p.channel == link::Channel::X ? sp.x : sp.y,
-                                        p.value_g);
+    for (const link::StreamPart& p : parts) {
+      if (!p.implausible) continue;
+      not_finite += !std::isfinite(p.value_g);
+      if (implausible++ > 0) continue;
+      const link::DbcSignal* sig = signal_of(p.channel);
+      const double shown = sig ? p.value_g / decoder->scale_to_g(p.channel) : p.value_g;  // as the DBC's range has it
+      first_implausible = fmt::format("{}:{}: {} = {:.9g} {}", a.log, ln, p.channel == link::Channel::X ? sp.x : sp.y,
+                                      shown, sig ? sig->unit : std::string("g"));
+      if (sig && sig->min < sig->max)
+        first_implausible += fmt::format(", its DBC range [{:g}|{:g}] {}", sig->min, sig->max, sig->unit);
+    }
     if (a_clock(lf->t_s)) {
       if (!taken_first) taken_first = Stamp{lf->t_s, ln};
+      if (taken_last && lf->t_s > taken_last->t_s) longest_quiet_s = std::max(longest_quiet_s, lf->t_s - taken_last->t_s);
       if (!taken_last || lf->t_s >= taken_last->t_s) taken_last = Stamp{lf->t_s, ln};
     }
     push(parts);
@@ -405,24 +421,29 @@ int cmd_import(const ImportArgs& a) {
   if (st.gap_list.size() > 20) std::printf("  ... %zu more gaps\n", st.gap_list.size() - 20);
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
   // The rate against the log's clock: the samples taken (with those lost between them) over the
-  // time their frames span. Beyond a second and a hundred samples, 2 % apart is no clock's drift
-  // nor a logger's jitter: the header's rate, or the counter's reading, is wrong.
+  // time their frames span. A clock's drift is ppm; a logger's stamps come late by up to the
+  // longest quiet time between frames (a burst, a pause the counter did not count), so the
+  // tolerance is 2 % plus that over the span: a rate off by half or double still stands out. A
+  // clock that stepped back (said above) gives no span to read.
   std::string rate_mismatch;
-  if (taken_first && taken_last && cut.empty()) {
+  if (taken_first && taken_last && back == 0) {
     const double span_s = taken_last->t_s - taken_first->t_s;
     const double covered = static_cast<double>(w.samples_written() + st.lost);
     if (span_s >= 1.0 && covered >= 100) {
       const double log_rate = (covered - sp.samples_per_frame) / span_s;
+      const double tolerance = 0.02 + longest_quiet_s / span_s;
       std::printf("the log's clock: %.0f samples (%llu lost among them) in %.6g s, lines %zu to %zu: %.6g Hz\n", covered,
                   static_cast<unsigned long long>(st.lost), span_s, taken_first->line, taken_last->line, log_rate);
-      if (std::fabs(log_rate / h.rate_hz - 1) > 0.02)
+      if (std::fabs(log_rate / h.rate_hz - 1) > tolerance)
         rate_mismatch = fmt::format(
-            "{}: the log's clock gives {:.6g} Hz (lines {} to {}), the capture's rate would be {} Hz ({}): every tau "
-            "would be off by a factor of {:.3g}. Give --rate with the DUT's rate, or check [dut.stream] rate_hz and the counter "
-            "signal's byte order and length (gaps {}, {} samples lost); {} not written",
+            "{}: the log's clock gives {:.6g} Hz (lines {} to {}), the capture's rate would be {} Hz ({}), more than "
+            "{:.3g} % apart: every tau would be off by a factor of {:.3g}. Check [dut.stream] rate_hz (or give --rate "
+            "with the DUT's rate) and the counter signal's byte order and length (gaps {}, {} samples lost); a "
+            "stream that paused without its counter, or a log of two streams, is imported in parts (--from-line); "
+            "{} not written",
             a.log, log_rate, taken_first->line, taken_last->line, h.rate_hz,
-            a.rate_hz ? "--rate" : "the hardware file's or the protocol's", h.rate_hz / log_rate, st.gaps, st.lost,
-            a.out);
+            a.rate_hz ? "--rate" : "the hardware file's or the protocol's", 100 * tolerance, h.rate_hz / log_rate,
+            st.gaps, st.lost, a.out);
     }
   }
   if (!rate_mismatch.empty()) {
@@ -432,10 +453,11 @@ int cmd_import(const ImportArgs& a) {
     return kExitUsage;
   }
   if (implausible > 0)
-    std::fprintf(stderr, "%llu decoded value(s) outside their signal's DBC range or not finite (the first at %s): the "
-                 "DBC does not describe these frames (check the signal's byte order @0/@1, sign, factor and offset); "
-                 "the capture holds them as decoded\n",
-                 static_cast<unsigned long long>(implausible), first_implausible.c_str());
+    std::fprintf(stderr, "%llu decoded value(s) outside their signal's DBC range, %llu of them not finite (the first "
+                 "at %s): the DBC may not describe these frames (check the signal's byte order @0/@1, sign, factor and "
+                 "offset), or the DUT went past its DBC's range; the capture holds them as decoded%s\n",
+                 static_cast<unsigned long long>(implausible), static_cast<unsigned long long>(not_finite),
+                 first_implausible.c_str(), not_finite > 0 ? " (a value not finite fails every analysis: exit 2)" : "");
   if (!cut.empty()) {
     if (w.samples_written() == 0) {  // nothing before it: no capture, the rest is all there is
       std::error_code ec;
@@ -458,7 +480,7 @@ int cmd_import(const ImportArgs& a) {
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
     return kExitUsage;
   }
-  if (implausible > 0) return kExitUsage;
+  if (not_finite > 0) return kExitUsage;
   if (unreadable + malformed > 0) {
     std::fprintf(stderr, "%llu line(s) could not be read, %llu stream frame(s) malformed; the capture holds the rest\n",
                  static_cast<unsigned long long>(unreadable), static_cast<unsigned long long>(malformed));

@@ -358,7 +358,7 @@ void add_history(CLI::App& app, int& rc) {
                           [](std::string& v) -> std::string {
                             return whole_number(v, 1, std::numeric_limits<int>::max())
                                        ? std::string()
-                                       : v + ": must be a whole number in [1, 2147483647]";
+                                       : v + ": must be a decimal whole number in [1, 2147483647] (no sign, no leading zero)";
                           },
                           "N >= 1")));
   query.push_back(sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit"));
@@ -373,7 +373,7 @@ void add_history(CLI::App& app, int& rc) {
               [](std::string& v) -> std::string {
                 return whole_number(v, 1, std::numeric_limits<long long>::max())
                            ? std::string()
-                           : v + ": must be a run id, a whole number >= 1";
+                           : v + ": must be a run id, a decimal whole number >= 1 (no leading zero)";
               },
               "ID"));
   ends->excludes(rec);

@@ -897,8 +897,14 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
                                       return "a CiA 402 drive, drive map " + m.path + " (\"" + m.name + "\")";
                                     }()
                                   : std::string("a rig-v1 table (docs/table-registers.md)");
-    out.push_back(fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s, {:g}°/s² (as sent)", drive, where, unit,
-                              timing.velocity_dps, timing.accel_dps2));
+    // Speeds the hardware file does not give are not sent: the drive keeps its own, and the plan
+    // assumes the defaults (a code review: "(as sent)" where nothing is sent).
+    const bool sent = t->contains("velocity_dps") || t->contains("accel_dps2");
+    out.push_back(fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s, {:g}°/s² ({})", drive, where, unit,
+                              timing.velocity_dps, timing.accel_dps2,
+                              sent ? "as sent"
+                                   : "planned: no [table] velocity_dps or accel_dps2, so none is sent; the drive "
+                                     "moves at its own"));
   }
   if (const toml::table* d = cfg::get_table(hw, "dut")) {
     std::string stream = "the rig protocol (docs/can-protocol.md), 1000 Hz";
@@ -909,7 +915,7 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
                            sp.y.empty() ? std::string("none") : sp.y, sp.samples_per_frame, sp.rate_hz);
     }
     out.push_back(fmt::format("DUT: CAN {}; stream {}; commands {}, loop test {}", cfg::get_string(*d, "can"), stream,
-                              dut.can.commands ? "yes" : "no (give --serial)",
+                              dut.can.commands ? "yes" : "no ([dut] commands = false: the serial is --serial's)",
                               dut.can.runs_loop_test() ? "yes" : "not run"));
   }
   if (const toml::table* g = cfg::get_table(hw, "gpio"))
@@ -1319,9 +1325,10 @@ int do_run(RunArgs a) {
     std::size_t k = 0;  // the plant's drops are the Drop injections, in order
     for (const Injection& j : injections)
       if (j.kind == Injection::Kind::Drop && k++ < hits.size() && hits[k - 1] == 0)
-        log->warn("--inject {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
+        log->warn("{} {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
                   "a recording or the loop test runs; the run's records say which sequence numbers they hold)",
-                  j.text, j.seq, static_cast<std::uint64_t>(j.seq) + j.count - 1);
+                  a.resume.empty() ? "--inject" : "run.json's fault", j.text, j.seq,
+                  static_cast<std::uint64_t>(j.seq) + j.count - 1);
   }
   if (signal_at_end) {
     ::kill(::getpid(), signal_at_end);

@@ -72,7 +72,8 @@ inline CLI::Validator whole_in(const std::string& what, std::uint64_t least,
                                : what + " in [" + std::to_string(least) + ", " + std::to_string(most) + "]";
   return CLI::Validator(
       [least, most, rule](std::string& v) -> std::string {
-        return whole_number(v, least, most) ? std::string() : "'" + shown_ascii(v) + "': must be " + rule;
+        return whole_number(v, least, most) ? std::string()
+                                            : "'" + shown_ascii(v) + "': must be " + rule + " (decimal, no sign, no leading zero)";
       },
       "");
 }

@@ -61,6 +61,8 @@ class DbcStreamDecoder {
   }
 
   int counter_bits() const { return counter_bits_; }
+  // The factor from a channel's signal unit to g (mg: 1e-3): value_g / it is the DBC's value.
+  double scale_to_g(Channel c) const { return c == Channel::X ? x_scale_ : y_scale_; }
   bool has_y() const { return !spec_.y.empty(); }
   double rate_hz() const { return spec_.rate_hz; }
   const DbcStreamSpec& spec() const { return spec_; }

@@ -138,7 +138,7 @@ void FirmwareEmulator::send_layout_sample(uint64_t seq, float x, float y, uint8_
   // block's samples when they share a frame); channel c of drop_frames is the c-th frame of a
   // block (a message, or one multiplexer page of it).
   bool drop = false;
-  for (std::size_t i = 0; i < n; ++i) drop = drop || dropped(block_seq_ + i);
+  for (std::size_t i = 0; i < n; ++i) drop = dropped(block_seq_ + i) || drop;  // every sample's hit counted
   frames_.clear();
   opts_.stream->encode(static_cast<uint32_t>(block_seq_), block_, frames_);
   block_.clear();

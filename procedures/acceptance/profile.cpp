@@ -354,15 +354,15 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
 }
 
 std::string unjudged_blocks_note(const Profile& p, const std::vector<std::string>& dropped_limits) {
-  if (dropped_limits.empty()) return "";
   std::string unjudged, dropped;
   for (const double b : p.in_run_blocks_s)
     if (!p.limits.count(gost_value_name(b))) unjudged += (unjudged.empty() ? "" : ", ") + gost_value_name(b);
   if (unjudged.empty()) return "";
   for (const auto& d : dropped_limits) dropped += (dropped.empty() ? "" : ", ") + d;
-  return fmt::format("{}: its own in_run_blocks_s leaves out its base's limits ({}); {} {} no limits: UNSET in the "
-                     "passport, never FAIL (give them in [limits] to judge them)",
-                     p.source, dropped, unjudged, unjudged.find(',') == std::string::npos ? "has" : "have");
+  return fmt::format("{}: {}{} {} no limits: UNSET in the passport, never FAIL (give them in [limits] to judge them)",
+                     p.source,
+                     dropped.empty() ? "" : "its own in_run_blocks_s leaves out its base's limits (" + dropped + "); ",
+                     unjudged, unjudged.find(',') == std::string::npos ? "has" : "have");
 }
 
 }  // namespace rig::acceptance

@@ -88,9 +88,9 @@ Profile load_profile(const std::string& name_or_path);
 // path): what load_profile parses, and where the emulated plant finds its [plant] section.
 toml::table load_profile_table(const std::string& name_or_path, std::string& source,
                                std::vector<std::string>* dropped_limits = nullptr);
-// What a file's own in_run_blocks_s left unjudged: the base's GOST B limits it dropped (from
-// load_profile_table's `dropped_limits`) where a block it measures has none of its own; "" when
-// nothing was dropped or every block has limits. A run prints it: the values are UNSET, never FAIL.
+// The GOST B blocks the profile measures without limits, with the base's limits its own
+// in_run_blocks_s dropped (load_profile_table's `dropped_limits`); "" when every block has
+// limits. A run prints it: those values are UNSET, never FAIL.
 std::string unjudged_blocks_note(const Profile& p, const std::vector<std::string>& dropped_limits);
 Profile parse_profile(const toml::table& t, const std::string& source);
 // A profile file (not a built-in) that a new run starts from names itself: one built on a base

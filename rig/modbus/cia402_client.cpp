@@ -415,6 +415,11 @@ void Cia402Table::home(const CancelToken& cancel) {
       if (now - t0 > opt_.home_timeout_s) throw HardwareError(doing + ": not homed after " + secs(now - t0) + at(r));
     }
     write_controlword(c4::cw::kCmdEnableOperation, cancel);
+    // A vendor's homed bit may follow bit 12 by a cycle: read once more before it is refused.
+    if (map_.homed_bit && !end.has(static_cast<uint16_t>(1u << *map_.homed_bit))) {
+      clock_.sleep_for(opt_.poll_s, cancel);
+      end = read(cancel, true);
+    }
     refuse_misread_home(doing, end);
     homed_ = true;
   });
@@ -430,11 +435,14 @@ void Cia402Table::refuse_misread_home(const std::string& doing, const Cia402Read
     throw HardwareError(doing + ": the drive reports the home attained (statusword bits 12 and 10), but the map's "
                                 "homed_bit " + std::to_string(*map_.homed_bit) + " reads 0" + at(r) +
                         ": check homed_bit" + check + " (CiA 402 names no homed bit; vendors place it)");
-  constexpr double kMarginDeg = 1.0;  // as refuse_outside_travel
-  if (r.actual_deg < map_.limit_neg_deg - kMarginDeg || r.actual_deg > map_.limit_pos_deg + kMarginDeg)
+  // A home at a travel end (a limit switch's method, 1/2/17/18) may stop past it by its braking:
+  // a tenth of the travel is room for that, and a misread map is off by far more (8192°, 6553.8°).
+  const double margin_deg = std::max(1.0, 0.1 * (map_.limit_pos_deg - map_.limit_neg_deg));
+  if (r.actual_deg < map_.limit_neg_deg - margin_deg || r.actual_deg > map_.limit_pos_deg + margin_deg)
     throw HardwareError(doing + ": the drive reports the home attained, but position actual reads " +
                         deg_str(r.actual_deg) + ", outside the travel [" + deg_str(map_.limit_neg_deg) + ", " +
-                        deg_str(map_.limit_pos_deg) + "] (home offset " + deg_str(map_.home_offset_deg) +
+                        deg_str(map_.limit_pos_deg) + "] by more than " + deg_str(margin_deg) + " (home offset " +
+                        deg_str(map_.home_offset_deg) +
                         "): the map does not read this drive as it is; check word_order, counts_per_rev, gear_ratio "
                         "and direction" + check);
 }

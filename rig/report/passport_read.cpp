@@ -170,7 +170,8 @@ json read_passport(const std::string& run_dir) {
         // A run killed before it wrote its passport is a run to finish, not "not a run folder".
         if (path_kind(run_dir + "/run.json", "") == PathKind::file)
           throw ConfigError(path + ": not there: the run in " + run_dir + " has not finished (run.json, no passport: "
-                            "stopped before its end); `rig run --resume " + run_dir + "` finishes it");
+                            "still running, or stopped before its end); `rig run --resume " + run_dir +
+                            "` finishes a stopped one");
         throw ConfigError(path + ": not there: " + run_dir + " is a folder but not a run folder (no passport.json)");
       }
       throw ConfigError(path + ": cannot read the file (does the run folder exist?)");

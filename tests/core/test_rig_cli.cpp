@@ -1792,7 +1792,8 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
   // --limit N is the newest N runs, N >= 1: 0 listed every run, -1 printed a 300-digit bound.
   for (const char* n : {"0", "-1", "2147483648"}) {
     EXPECT_EQ(run({"history", "--db", "sqlite:" + typo, "--limit", n}, d + "/lim"), 2) << n;
-    EXPECT_NE(slurp(d + "/lim.stderr").find(std::string("--limit: ") + n + ": must be a whole number in [1, 2147483647]"),
+    EXPECT_NE(slurp(d + "/lim.stderr").find(std::string("--limit: ") + n + ": must be a decimal whole number in [1, "
+                                                                             "2147483647] (no sign, no leading zero)"),
               std::string::npos)
         << slurp(d + "/lim.stderr");
   }
@@ -2227,11 +2228,14 @@ TEST(RigCli, AnglesTheRunWouldNotUseAreRefusedAndTheDryRunSaysTheAnglesItUses) {
   EXPECT_NE(same.find("\nTable: a rig-v1 table (docs/table-registers.md) on Modbus tcp:127.0.0.1:1, unit 1; moves at "),
             std::string::npos)
       << same;
+  EXPECT_NE(same.find("(planned: no [table] velocity_dps or accel_dps2, so none is sent; the drive moves at its own)"),
+            std::string::npos)
+      << same;
   EXPECT_NE(same.find("\nDUT: CAN vcan-none; stream the rig protocol (docs/can-protocol.md), 1000 Hz; commands yes, "
                       "loop test yes\nGPIO: /dev/rig-no-such-gpiochip: DUT power P, e-stop E\n"),
             std::string::npos)
       << same;
-  std::ofstream(d + "/dbc.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\ndrive_map = \""
+  std::ofstream(d + "/dbc.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\nvelocity_dps = 20.0\ndrive = \"cia402\"\ndrive_map = \""
                                  << RIG_SOURCE_DIR << "/drives/generic-cia402.toml\"\n"
                                  << "[dut]\ncan = \"vcan-none\"\ncommands = false\ndbc = \"" << RIG_SOURCE_DIR
                                  << "/tests/data/dbc/dut-layouts.dbc\"\n[dut.stream]\ncounter = \"ACC_XY.cnt\"\n"
@@ -2241,12 +2245,13 @@ TEST(RigCli, AnglesTheRunWouldNotUseAreRefusedAndTheDryRunSaysTheAnglesItUses) {
       << slurp(d + "/dbc.stderr");
   const std::string dbc = slurp(d + "/dbc.stdout");
   EXPECT_NE(dbc.find("\nTable: a CiA 402 drive, drive map " + std::string(RIG_SOURCE_DIR) +
-                     "/drives/generic-cia402.toml (\"generic CiA 402\") on Modbus tcp:127.0.0.1:1, unit 1; moves at "),
+                     "/drives/generic-cia402.toml (\"generic CiA 402\") on Modbus tcp:127.0.0.1:1, unit 1; moves at 20°/s, "),
             std::string::npos)
       << dbc;
   EXPECT_NE(dbc.find("\nDUT: CAN vcan-none; stream [dut.stream] of " + std::string(RIG_SOURCE_DIR) +
                      "/tests/data/dbc/dut-layouts.dbc: counter ACC_XY.cnt (16 bits), x ACC_XY.x, y ACC_XY.y, 1 sample(s) "
-                     "per frame, 1000 Hz; commands no (give --serial), loop test not run\n"),
+                     "per frame, 1000 Hz; commands no ([dut] commands = false: the serial is --serial's), loop test "
+                     "not run\n"),
             std::string::npos)
       << dbc;
   ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run"}, d + "/emu"), 0);

@@ -722,6 +722,25 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
             std::string::npos)
       << slurp(dir() / "slow500.out");
   EXPECT_EQ(rig::capture::load((dir() / "slow.rigcap").string()).header.rate_hz, 500.0);
+  // A logger that stamps in 50 ms bursts (1.2 s at 1 kHz: 4 % off end to end), and a clock that
+  // stepped back (said, samples placed by counter), are no wrong rate (a code review).
+  std::ostringstream bursts, stepped;
+  for (uint64_t k = 0; k < 1200; ++k) {
+    const double tb = 1732255200.0 + 0.05 * static_cast<double>(k / 50 + 1);
+    const double ts = 1732255200.0 + 1e-3 * static_cast<double>(k) - (k >= 600 ? 5.0 : 0.0);
+    for (const auto& [o, at] : {std::pair{&bursts, tb}, std::pair{&stepped, ts}}) {
+      *o << log_line(at, encode(StreamHalf{Channel::X, static_cast<uint32_t>(k), 0, x_of(k)}));
+      *o << log_line(at, encode(StreamHalf{Channel::Y, static_cast<uint32_t>(k), 0, -x_of(k)}));
+    }
+  }
+  for (const auto& [name, text] : {std::pair{"bursts", bursts.str()}, std::pair{"stepped", stepped.str()}}) {
+    std::ofstream(dir() / (std::string(name) + ".log")) << text;
+    EXPECT_EQ(run_rig("capture import " + (dir() / (std::string(name) + ".log")).string() + " --hardware " +
+                          (dir() / "hw-slow.toml").string() + " --out " + (dir() / (std::string(name) + ".rigcap")).string(),
+                      name),
+              0)
+        << name << ": " << slurp(dir() / (std::string(name) + ".err"));
+  }
 
   // ACC_XY (tests/data/dbc/dut-layouts.dbc, 2000 Hz), its counter written in the other byte order.
   const Dbc db = Dbc::parse_file(std::string(RIG_SOURCE_DIR) + "/tests/data/dbc/dut-layouts.dbc");
@@ -750,7 +769,8 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
             2)
       << slurp(dir() / "swapped.out");
   EXPECT_FALSE(fs::exists(dir() / "swapped.rigcap")) << slurp(dir() / "swapped.err");
-  EXPECT_NE(slurp(dir() / "swapped.err").find("check [dut.stream] rate_hz and the counter signal's byte order"),
+  EXPECT_NE(slurp(dir() / "swapped.err").find("Check [dut.stream] rate_hz (or give --rate with the DUT's rate) and the "
+                                              "counter signal's byte order"),
             std::string::npos)
       << slurp(dir() / "swapped.err");
 
@@ -773,6 +793,7 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
     uint32_t bits = 0;
     std::memcpy(&bits, &mg, 4);
     bits = __builtin_bswap32(bits);
+    if (k == 700) bits = 0x7FC00000u;  // one NaN, in the DBC's own byte order
     dbc_insert_raw(d, 16, 32, false, bits);
     fl << log_line(t, f);
   }
@@ -785,10 +806,41 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
             2)
       << slurp(dir() / "float.out") << slurp(dir() / "float.err");
   const std::string err = slurp(dir() / "float.err");
-  EXPECT_NE(err.find(" decoded value(s) outside their signal's DBC range or not finite (the first at "), std::string::npos)
+  EXPECT_NE(err.find(" decoded value(s) outside their signal's DBC range, 1 of them not finite (the first at "),
+            std::string::npos)
       << err;
-  EXPECT_NE(err.find("float.log:"), std::string::npos) << err;
-  EXPECT_NE(err.find("ACC_F.x_mg = "), std::string::npos) << err;
-  EXPECT_NE(err.find("the capture holds them as decoded"), std::string::npos) << err;
+  EXPECT_NE(err.find("float.log:4: ACC_F.x_mg = -428398656 mg, its DBC range [-20000|20000] mg)"), std::string::npos)
+      << "in the signal's unit, against its range: " << err;
+  EXPECT_NE(err.find("the capture holds them as decoded (a value not finite fails every analysis: exit 2)"),
+            std::string::npos)
+      << err;
   EXPECT_TRUE(fs::exists(dir() / "float.rigcap")) << "kept as decoded";
+  // Outside the range alone (a DUT past its DBC's declared range, or a wrong layout): said, exit 0.
+  std::ofstream(dir() / "tight.dbc") << "VERSION \"\"\n\nNS_ :\n\nBS_:\n\nBU_: DUT RIG\n\n"
+                                        "BO_ 2566870301 ACC_T: 4 DUT\n"
+                                        " SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" RIG\n"
+                                        " SG_ x_mg : 16|16@1- (1,0) [-40|40] \"mg\" RIG\n";
+  std::ostringstream tl;
+  t = 1732255200.0;
+  for (uint64_t k = 0; k < 1500; ++k, t += 1e-3) {
+    CanFrame f;
+    f.id = 2566870301u & 0x1FFFFFFFu;
+    f.extended = true;
+    f.len = 4;
+    std::span<uint8_t> d(f.data.data(), 4);
+    dbc_insert_raw(d, 0, 16, false, k);
+    dbc_insert_raw(d, 16, 16, false, static_cast<uint16_t>(static_cast<int16_t>(std::lround(x_of(k) * 1000.0f))));
+    tl << log_line(t, f);
+  }
+  std::ofstream(dir() / "tight.log") << tl.str();
+  std::ofstream(dir() / "hw-tight.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << (dir() / "tight.dbc").string()
+                                         << "\"\n[dut.stream]\ncounter = \"ACC_T.cnt\"\nx = \"ACC_T.x_mg\"\n";
+  EXPECT_EQ(run_rig("capture import " + (dir() / "tight.log").string() + " --hardware " + (dir() / "hw-tight.toml").string() +
+                        " --out " + (dir() / "tight.rigcap").string(),
+                    "tight"),
+            0)
+      << slurp(dir() / "tight.err");
+  EXPECT_NE(slurp(dir() / "tight.err").find("decoded value(s) outside their signal's DBC range, 0 of them not finite"),
+            std::string::npos)
+      << slurp(dir() / "tight.err");
 }

@@ -787,8 +787,8 @@ TEST(ReportCli, WritesTheReportAndRejectsAFolderWithoutPassport) {
   } catch (const rig::ConfigError& e) {
     EXPECT_EQ(std::string(e.what()), (d.path / "no-run" / "passport.json").string() + ": not there: the run in " +
                                          (d.path / "no-run").string() + " has not finished (run.json, no passport: "
-                                         "stopped before its end); `rig run --resume " + (d.path / "no-run").string() +
-                                         "` finishes it");
+                                         "still running, or stopped before its end); `rig run --resume " +
+                                         (d.path / "no-run").string() + "` finishes a stopped one");
   }
 }
 
