@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "firmware_link/dbc.hpp"
@@ -780,24 +781,31 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
                                         " SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" RIG\n"
                                         " SG_ x_mg : 16|32@1- (1,0) [-20000|20000] \"mg\" RIG\n\n"
                                         "SIG_VALTYPE_ 2566870300 x_mg : 1;\n";
-  std::ostringstream fl;
-  t = 1732255200.0;
-  for (uint64_t k = 0; k < 1500; ++k, t += 1e-3) {
-    CanFrame f;
-    f.id = 2566870300u & 0x1FFFFFFFu;
-    f.extended = true;
-    f.len = 6;
-    std::span<uint8_t> d(f.data.data(), 6);
-    dbc_insert_raw(d, 0, 16, false, k);
+  // 1500 samples at 1 kHz of a DBC id (extended) of `len` bytes: a 16-bit counter at bit 0, then
+  // `value(k)` (its raw bits) from bit 16, both little-endian.
+  auto write_log = [](const std::string& name, uint32_t dbc_id, uint8_t len, int bits,
+                      const std::function<uint64_t(uint64_t)>& value) {
+    std::ostringstream log;
+    double at = 1732255200.0;
+    for (uint64_t k = 0; k < 1500; ++k, at += 1e-3) {
+      CanFrame f;
+      f.id = dbc_id & 0x1FFFFFFFu;
+      f.extended = true;
+      f.len = len;
+      std::span<uint8_t> d(f.data.data(), len);
+      dbc_insert_raw(d, 0, 16, false, k);
+      dbc_insert_raw(d, 16, bits, false, value(k));
+      log << log_line(at, f);
+    }
+    std::ofstream(dir() / name) << log.str();
+  };
+  write_log("float.log", 2566870300u, 6, 32, [](uint64_t k) -> uint64_t {
+    if (k == 700) return 0x7FC00000u;  // one NaN, in the DBC's own byte order
     const float mg = x_of(k) * 1000.0f;
     uint32_t bits = 0;
     std::memcpy(&bits, &mg, 4);
-    bits = __builtin_bswap32(bits);
-    if (k == 700) bits = 0x7FC00000u;  // one NaN, in the DBC's own byte order
-    dbc_insert_raw(d, 16, 32, false, bits);
-    fl << log_line(t, f);
-  }
-  std::ofstream(dir() / "float.log") << fl.str();
+    return __builtin_bswap32(bits);
+  });
   std::ofstream(dir() / "hw-float.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << (dir() / "float.dbc").string()
                                          << "\"\n[dut.stream]\ncounter = \"ACC_F.cnt\"\nx = \"ACC_F.x_mg\"\n";
   EXPECT_EQ(run_rig("capture import " + (dir() / "float.log").string() + " --hardware " + (dir() / "hw-float.toml").string() +
@@ -820,19 +828,9 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
                                         "BO_ 2566870301 ACC_T: 4 DUT\n"
                                         " SG_ cnt : 0|16@1+ (1,0) [0|65535] \"\" RIG\n"
                                         " SG_ x_mg : 16|16@1- (1,0) [-40|40] \"mg\" RIG\n";
-  std::ostringstream tl;
-  t = 1732255200.0;
-  for (uint64_t k = 0; k < 1500; ++k, t += 1e-3) {
-    CanFrame f;
-    f.id = 2566870301u & 0x1FFFFFFFu;
-    f.extended = true;
-    f.len = 4;
-    std::span<uint8_t> d(f.data.data(), 4);
-    dbc_insert_raw(d, 0, 16, false, k);
-    dbc_insert_raw(d, 16, 16, false, static_cast<uint16_t>(static_cast<int16_t>(std::lround(x_of(k) * 1000.0f))));
-    tl << log_line(t, f);
-  }
-  std::ofstream(dir() / "tight.log") << tl.str();
+  write_log("tight.log", 2566870301u, 4, 16, [](uint64_t k) -> uint64_t {
+    return static_cast<uint16_t>(static_cast<int16_t>(std::lround(x_of(k) * 1000.0f)));
+  });
   std::ofstream(dir() / "hw-tight.toml") << "[dut]\ncan = \"vcan0\"\ndbc = \"" << (dir() / "tight.dbc").string()
                                          << "\"\n[dut.stream]\ncounter = \"ACC_T.cnt\"\nx = \"ACC_T.x_mg\"\n";
   EXPECT_EQ(run_rig("capture import " + (dir() / "tight.log").string() + " --hardware " + (dir() / "hw-tight.toml").string() +
