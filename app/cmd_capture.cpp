@@ -418,7 +418,8 @@ int cmd_import(const ImportArgs& a) {
   for (std::size_t i = 0; i < st.gap_list.size() && i < 20; ++i)
     std::printf("  gap at seq %llu: %llu samples\n", static_cast<unsigned long long>(st.gap_list[i].first),
                 static_cast<unsigned long long>(st.gap_list[i].second));
-  if (st.gap_list.size() > 20) std::printf("  ... %zu more gaps\n", st.gap_list.size() - 20);
+  // The list holds the first kMaxGapList; the count is every gap's.
+  if (st.gaps > 20) std::printf("  ... %llu more gaps\n", static_cast<unsigned long long>(st.gaps - 20));
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
   // The rate against the log's clock: the samples taken (with those lost between them) over the
   // time their frames span. A clock's drift is ppm; a logger's stamps come late by up to the

@@ -64,7 +64,12 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     << to_string(result.outcome) << "\"/></properties>\n";
   for (const auto& m : values.all()) {
     o << "    <testcase classname=\"passport\" name=\"" << xml_escape(m.name) << "\">";
-    const std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
+    std::string lim = m.limits ? fmt::format("[{:.6g}, {:.6g}]", m.limits->first, m.limits->second) : "none";
+    std::string value = num(m.value);
+    if (m.outcome == Outcome::Fail && m.value && m.limits) {  // the digits that put it outside
+      const ShownOutside so = shown_outside(*m.value, m.limits->first, m.limits->second);
+      value = so.value, lim = "[" + so.lo + ", " + so.hi + "]";
+    }
     if (m.outcome == Outcome::Fail) {
       const auto shown = [&] {
         const ShownOutside s = shown_outside(*m.value, m.limits->first, m.limits->second);
@@ -80,7 +85,7 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
       o << "<skipped message=\"" << xml_escape(m.value ? "no limits: " + num(m.value) + " " + m.unit : m.reason)
         << "\"/>";
     }
-    o << "<system-out>" << xml_escape(fmt::format("value={} unit={} limits={} {}", num(m.value), m.unit, lim, m.shown_reason()))
+    o << "<system-out>" << xml_escape(fmt::format("value={} unit={} limits={} {}", value, m.unit, lim, m.shown_reason()))
       << "</system-out></testcase>\n";
   }
   if (aborted)
@@ -99,12 +104,19 @@ std::string passport_table(const nlohmann::ordered_json& p) {
   auto f = [](const nlohmann::ordered_json& v) { return v.is_null() ? std::string("-") : fmt::format("{:.5g}", v.get<double>()); };
   for (auto it = p["values"].begin(); it != p["values"].end(); ++it) {
     const auto& m = it.value();
-    std::string lim = "-";
+    std::string lim = "-", value = f(m["value"]);
     if (m["limits"].is_array()) lim = fmt::format("[{:.3g}, {:.3g}]", m["limits"][0].get<double>(), m["limits"][1].get<double>());
     std::string out = m.value("outcome", "UNSET");
+    // A failed value and its limits with the digits that put it outside (the table's short
+    // forms read "0.00314 ... [0, 0.00314] FAIL": a review).
+    if (out == "FAIL" && m["value"].is_number() && m["limits"].is_array()) {
+      const ShownOutside so = shown_outside(m["value"].get<double>(), m["limits"][0].get<double>(),
+                                            m["limits"][1].get<double>());
+      value = so.value, lim = "[" + so.lo + ", " + so.hi + "]";
+    }
     const std::string reason = m.value("reason", "");
     if (!reason.empty() && (out != "PASS" || m["value"].is_null() || it.key() == "accuracy_class")) out += "  " + reason;
-    o << fmt::format("{:<26} {:>13} {:>13} {:>13} {:<10} {:<28} {}\n", it.key(), f(m["value"]), f(m["lo"]), f(m["hi"]),
+    o << fmt::format("{:<26} {:>13} {:>13} {:>13} {:<10} {:<28} {}\n", it.key(), value, f(m["lo"]), f(m["hi"]),
                      m.value("unit", ""), lim, out);
   }
   // The steps the DUT could not take (passport.json `skipped`), as report.html lists them.

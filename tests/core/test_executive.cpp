@@ -550,6 +550,10 @@ TEST(Measurements, AFailureShowsTheDigitsThatPutTheValueOutside) {
   const std::string x = junit_xml(PassportInfo{}, RunResult{}, v);
   EXPECT_NE(x.find("settling_time = 0.0031400000000000004 s outside limits [0, 0.00314]"), std::string::npos) << x;
   EXPECT_NE(x.find("bias = 0.0025 g outside limits [-0.001, 0.001]"), std::string::npos) << x;
+  EXPECT_NE(x.find("value=0.0031400000000000004 unit=s limits=[0, 0.00314]"), std::string::npos) << x;
+  const std::string table = passport_table(make_passport(PassportInfo{}, RunResult{}, v));
+  EXPECT_NE(table.find(" 0.0031400000000000004 "), std::string::npos) << table;
+  EXPECT_NE(table.find("[0, 0.00314]"), std::string::npos) << table;
   const ShownOutside n = shown_outside(std::nan(""), 0, 1);
   EXPECT_EQ(n.value, "nan");
 }

@@ -770,6 +770,8 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
             2)
       << slurp(dir() / "swapped.out");
   EXPECT_FALSE(fs::exists(dir() / "swapped.rigcap")) << slurp(dir() / "swapped.err");
+  EXPECT_NE(slurp(dir() / "swapped.out").find("  ... 3979 more gaps\n"), std::string::npos)
+      << "every gap counted, not the list's 1000: " << slurp(dir() / "swapped.out");
   EXPECT_NE(slurp(dir() / "swapped.err").find("Check [dut.stream] rate_hz (or give --rate with the DUT's rate) and the "
                                               "counter signal's byte order"),
             std::string::npos)
