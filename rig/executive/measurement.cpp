@@ -3,12 +3,10 @@
 #include "rig/executive/checkpoint_keys.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-#include <fmt/format.h>
 
 namespace rig {
 
@@ -181,19 +179,6 @@ void MeasurementSet::restore(const nlohmann::json& values) {
     cur->null_verdict.clear();
     cur->outcome = Outcome::Unset;  // judged again from the value and the current profile
   }
-}
-
-ShownOutside shown_outside(double value, double lo, double hi) {
-  const auto six = [](double x) { return fmt::format("{:.6g}", x); };
-  const auto back = [](const std::string& t) {  // as shown (locale-free); nan reads as nan
-    double x = std::nan("");
-    std::from_chars(t.data(), t.data() + t.size(), x);
-    return x;
-  };
-  ShownOutside s{six(value), six(lo), six(hi)};
-  const double v = back(s.value), l = back(s.lo), h = back(s.hi);
-  if (v >= l && v <= h) s = {fmt::format("{}", value), fmt::format("{}", lo), fmt::format("{}", hi)};
-  return s;
 }
 
 }  // namespace rig

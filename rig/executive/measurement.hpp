@@ -12,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rig/core/number_text.hpp"  // shown_outside, for the verdicts
+
 namespace rig {
 
 enum class Outcome { Pass, Fail, Unset };
@@ -89,13 +91,5 @@ class MeasurementSet {
   std::string scope_phase_;
   std::vector<std::string> scope_;
 };
-
-// A value outside its limits and the limits as a failure shows them: 6 significant digits,
-// unless that rounds the value onto or inside its limits ("0.00314 outside [0, 0.00314]", a
-// review), then every digit the doubles hold (the shortest text that reads back exactly).
-struct ShownOutside {
-  std::string value, lo, hi;
-};
-ShownOutside shown_outside(double value, double lo, double hi);
 
 }  // namespace rig

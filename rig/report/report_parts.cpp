@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "rig/core/number_text.hpp"
 #include "rig/report/bounded.hpp"
 #include "rig/report/json_read.hpp"
 #include "rig/report/svg.hpp"
@@ -419,7 +420,21 @@ std::string Page::passport_table() const {
        << "</code>" << (desc.empty() ? "" : "<div>" + html_escape(desc) + "</div>") << "</td>";
     const json* val = get(v, {"value"});
     const double lo = number(v, "lo"), hi = number(v, "hi");
-    const ValueCells cells = value_cells(number(val), lo, hi, 5);
+    ValueCells cells = value_cells(number(val), lo, hi, 5);
+    const json* lim = get(v, {"limits"});
+    const bool limited = lim && lim->is_array() && lim->size() == 2;
+    std::string limits = "—";
+    if (limited) {
+      const double a = number(&(*lim)[0]), b = number(&(*lim)[1]);
+      limits = "[" + (std::isfinite(a) ? fmt_num(a) : "−∞") + ", " + (std::isfinite(b) ? fmt_num(b) : "+∞") + "]";
+      // A failed value with the digits that put it outside its limits, not those its bounds
+      // support (the page read 0.00314 against [0, 0.00314]: a review), as the console and JUnit.
+      if (outcome == "FAIL" && val && val->is_number() && std::isfinite(a) && std::isfinite(b)) {
+        const ShownOutside so = shown_outside(val->get<double>(), a, b, 5);
+        cells.value = html_escape(so.value);
+        limits = "[" + so.lo + ", " + so.hi + "]";
+      }
+    }
     os << "<td class=\"num\">" << (val && val->is_number() ? cells.value : html_escape(text(val).empty() ? "—" : text(val)))
        << "</td><td>" << html_escape(text(v, "unit")) << "</td>";
     os << "<td class=\"num bounds\">" << cells.bounds;
@@ -427,12 +442,6 @@ std::string Page::passport_table() const {
       os << "<div class=\"lvl\">" << html_escape(interval_level(name, v, number(get(a_, {"allan", "confidence"}))))
          << "</div>";
     os << "</td>";
-    const json* lim = get(v, {"limits"});
-    std::string limits = "—";
-    if (lim && lim->is_array() && lim->size() == 2) {
-      const double a = number(&(*lim)[0]), b = number(&(*lim)[1]);
-      limits = "[" + (std::isfinite(a) ? fmt_num(a) : "−∞") + ", " + (std::isfinite(b) ? fmt_num(b) : "+∞") + "]";
-    }
     os << "<td class=\"num\">" << html_escape(limits) << "</td><td>" << badge(outcome) << "</td><td>"
        << html_escape(text(v, "reason")) << "</td></tr>\n";
   }

@@ -251,6 +251,23 @@ TEST(Report, SkippedStepsAreListedAndAbsentWithoutAny) {
   EXPECT_EQ(rig::report::render_report(p, rig::test::fixture_analysis()).find("Skipped steps"), std::string::npos);
 }
 
+// A failed value is quoted with the digits that put it outside its limits, whatever its
+// bounds support (the page read 0.00314 against [0, 0.00314]: an automation review).
+TEST(Report, AFailedValueShowsTheDigitsThatPutItOutside) {
+  json p = rig::test::fixture_passport();
+  p["values"]["settling_time"]["value"] = 0.0031400000000000004;
+  p["values"]["settling_time"]["lo"] = 0.0028928;
+  p["values"]["settling_time"]["hi"] = 0.0033872;
+  p["values"]["settling_time"]["limits"] = json::array({0.0, 0.00314});
+  p["values"]["settling_time"]["outcome"] = "FAIL";
+  const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  const std::size_t at = h.find("<code>settling_time</code>");
+  ASSERT_NE(at, std::string::npos);
+  const std::string row = h.substr(at, h.find("</tr>", at) - at);
+  EXPECT_NE(row.find(">0.0031400000000000004<"), std::string::npos) << row;
+  EXPECT_NE(row.find(">[0, 0.00314]<"), std::string::npos) << row;
+}
+
 // Page 1 quotes a value with bounds to the digits the bounds support (two significant digits
 // of the half-width, the value and both bounds to the same digit); a value without bounds keeps
 // its five significant digits; passport.json is not touched (the page reads it).
