@@ -397,7 +397,14 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                 : p.loop_steps * loop_step_nominal_s(p.loop_record_s,
                                                    static_cast<std::size_t>(std::lround(p.loop_record_s * p.filter.rate_hz))),
                 [&p, &st](PhaseContext& c) { phase_loop_test(c, p, st); }});
-  ph.push_back({"loop-figures", "closed-loop bandwidth and settling time with the output filter, from the loop test's records", 0,
+  ph.push_back({"loop-figures",
+                dut.runs_loop_test() ? "closed-loop bandwidth and settling time with the output filter, from the loop "
+                                       "test's records"
+                : p.design_model     ? "closed-loop bandwidth and settling time: the DUT type's design model (" +
+                                       p.design_model->source + "), not measured (no loop test)"
+                                     : std::string("closed-loop bandwidth and settling time: not measured (no loop "
+                                                   "test, no [dut.design]): null"),
+                0,
                 [&p, &st](PhaseContext& c) { phase_loop_figures(c, p, st); },
                 {{"bandwidth_0p5", "Hz", "Closed-loop bandwidth with the filter, 0.5 level, measured by the DUT's loop test"},
                  {"settling_time", "s", "Closed-loop settling time, 1 g step, 5 % band, measured by the DUT's loop test"}},

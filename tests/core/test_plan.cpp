@@ -108,6 +108,10 @@ TEST(Plan, ALoopTestTheDutCannotRunIsPlannedAtNoTime) {
   EXPECT_EQ(loop_title({.commands = true, .loop_test = false}), "loop test: not run (the DUT's firmware has none)")
       << "no steps where none are taken";
   EXPECT_EQ(loop_title({.commands = false, .loop_test = true}), "loop test: not run (the DUT has no command channel)");
+  for (const Phase& ph : acceptance::build_phases(p, state, {}, {.commands = false, .loop_test = true}))
+    if (ph.id == "loop-figures") {
+      EXPECT_EQ(ph.title, "closed-loop bandwidth and settling time: not measured (no loop test, no [dut.design]): null");
+    }
 
   // On the emulated plant whose firmware does not run it: the phase takes no device time (its
   // "no", one reply).
