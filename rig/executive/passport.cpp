@@ -71,12 +71,8 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
       value = so.value, lim = "[" + so.lo + ", " + so.hi + "]";
     }
     if (m.outcome == Outcome::Fail) {
-      const auto shown = [&] {
-        const ShownOutside s = shown_outside(*m.value, m.limits->first, m.limits->second);
-        return fmt::format("{} = {} {} outside limits [{}, {}]", m.name, s.value, m.unit, s.lo, s.hi);
-      };
-      const std::string what = m.value && m.limits ? shown()
-                               : m.value ? fmt::format("{} = {} {} outside limits {}", m.name, num(m.value), m.unit, lim)
+      // `value` and `lim` are already shown with the digits that put the value outside.
+      const std::string what = m.value ? fmt::format("{} = {} {} outside limits {}", m.name, value, m.unit, lim)
                                        : !m.null_verdict.empty() ? fmt::format("{}: {}", m.name, m.null_verdict)
                                        : m.limits ? fmt::format("{} is required (limits {}) but has no value", m.name, lim)
                                                   : fmt::format("{} is required but has no value", m.name);  // a class table
