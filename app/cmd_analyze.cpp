@@ -361,7 +361,8 @@ int run(const Args& a) {
     for (std::string m; std::getline(list, m, ',');) {
       const auto factor = whole_number(m, 1, largest_factor);
       if (!factor)
-        throw ConfigError("rig analyze: --taus '" + a.taus + "': '" + m + "' is not an averaging factor (m:1,2,5: decimal whole numbers >= 1, no leading zero)");
+        throw ConfigError("rig analyze: --taus '" + a.taus + "': '" + m + "' is not an averaging factor (m:1,2,5: decimal whole numbers in [1, " +
+                          std::to_string(largest_factor) + "], no leading zero)");
       listed.push_back(static_cast<std::size_t>(*factor));
     }
     if (listed.empty()) throw ConfigError("rig analyze: --taus '" + a.taus + "': no averaging factor (m:1,2,5)");

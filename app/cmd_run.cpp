@@ -125,8 +125,9 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
   auto count = [](const std::string& s, const std::string& text, std::uint32_t least) {
     const auto v = whole_number(text, least, std::numeric_limits<std::uint32_t>::max());
     if (!v)
-      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number >= " + std::to_string(least) +
-                        " (decimal, no leading zero: drop@SEQ:COUNT)");
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number in [" + std::to_string(least) +
+                        ", " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
+                        "] (decimal, no leading zero: drop@SEQ:COUNT)");
     return static_cast<std::uint32_t>(*v);
   };
   std::vector<Injection> out;

@@ -766,6 +766,8 @@ TEST(RigCli, AnalyzeNbs14TenPointsEveryDeviationAtTheListedFactors) {
     EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", bad}, d + "/bad"), 2) << bad;
     EXPECT_NE(slurp(d + "/bad.stderr").find(std::string("--taus '") + bad + "'"), std::string::npos) << slurp(d + "/bad.stderr");
   }
+  // The last, past uint64: named against the range the program takes.
+  EXPECT_NE(slurp(d + "/bad.stderr").find("in [1, 999999999999]"), std::string::npos) << slurp(d + "/bad.stderr");
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", "m:9", "--dev", "hdev"}, d + "/nine"), 2);
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--taus", "m:1,2", "--dev", "theo1"}, d + "/theo"), 2);
 }
@@ -2081,6 +2083,9 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
     EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/run", "--inject", bad}, io + "r"), 2) << bad;
     EXPECT_FALSE(fs::exists(d + "/run")) << bad << ": refused before the run folder is made";
   }
+  // A sample number past the range is named against the range, not called "not a whole number".
+  EXPECT_NE(slurp(d + "/io15.stderr").find("'4294967296' is not a whole number in [0, 4294967295]"), std::string::npos)
+      << slurp(d + "/io15.stderr");
   // Well-formed injections pass the dry run.
   EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", "estop@12.5", "--inject", "drop@100:3",
                  "--inject", "sigint@end", "--inject", "sigkill@7"},
