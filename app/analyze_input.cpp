@@ -355,7 +355,17 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
       const Sample& s = buf[i];
       if (c.values.empty()) c.lost_at_start = (s.status & sample_status::kGapBefore) != 0;
       else if ((s.status & sample_status::kGapBefore) || s.seq != prev + 1u) {
-        c.gaps.push_back({c.values.size(), prev, s.seq, capture::lost_between(prev, s.seq).value_or(0u)});
+        const std::optional<std::uint32_t> lost = capture::lost_between(prev, s.seq);
+        // A counter that goes back (or repeats) is no gap: the samples are out of a recording's
+        // order, and joining them would analyse a time series that never was (a review: two
+        // swapped blocks read as "2000 samples lost", exit 0). A resume refuses the same capture.
+        if (!lost)
+          throw ConfigError(path + ": sample " + std::to_string(c.values.size()) + ": the sequence counter " +
+                            (s.seq == prev ? "repeats" : "goes back") + " (" + std::to_string(prev) + " then " +
+                            std::to_string(s.seq) +
+                            "): the samples are not in a recording's order (blocks moved, or two recordings joined); "
+                            "nothing analysed");
+        c.gaps.push_back({c.values.size(), prev, s.seq, *lost});
       }
       prev = s.seq;
       c.values.push_back(channel == "y" ? s.y_g : s.x_g);

@@ -106,6 +106,7 @@ int cmd_import(const ImportArgs& a) {
   const toml::table& dut = *cfg::get_table(hw, "dut", true);
   const link::LinkOptions lo = link::link_options(dut);  // validates [dut], reads its stream
   const auto decoder = lo.stream ? lo.stream : link::stream_decoder_from_config(dut);
+  const std::string own_can = dut.contains("can") ? cfg::get_string(dut, "can") : "";  // the DUT's interface, if named
   // Nothing waits on a log's first sample: the start is held for the reorder window (a first
   // sample logged a few frames late takes its place, not a duplicate's).
   link::StreamReassembler reasm = decoder->make_reassembler(lo.reorder_window, true);
@@ -140,6 +141,17 @@ int cmd_import(const ImportArgs& a) {
       }
     }
     if (h.started.empty() && !first_t.empty()) h.started = iso8601(first_t.front().second);  // no stream frame
+    // No stream frame at all (another DUT's layout, only commands): the log's frames are still
+    // counted as read on the [dut] can, or on the log's one interface, so the counts say "other
+    // ids", not "other interfaces" (which sent a review after --iface instead of the DBC).
+    if (stream_iface.empty() && !first_t.empty()) {
+      const bool own_logged =
+          !own_can.empty() && std::any_of(first_t.begin(), first_t.end(), [&](const auto& f) { return f.first == own_can; });
+      if (own_logged)
+        stream_iface = own_can;
+      else if (first_t.size() == 1)
+        stream_iface = first_t.front().first;
+    }
     in.clear();
     in.seekg(0);
   }
@@ -356,7 +368,7 @@ int cmd_import(const ImportArgs& a) {
     w.close();
     std::error_code ec;
     std::filesystem::remove(a.out, ec);
-    const std::string own = dut.contains("can") ? cfg::get_string(dut, "can") : "";
+    const std::string& own = own_can;
     std::string listed, names;
     bool own_among = false, unnamed = false;
     for (const auto& [name, first] : ifaces) {

@@ -181,8 +181,9 @@ void run_show(const ShowArgs& a) {
   if (!f.sections.empty())
     std::cout << "\nto use it in a profile:\n[filter]\npreset = \"custom\"\nsections = [" << toml_sections
               << "]\nrate_hz = " << num(f.rate_hz) << "\nenabled = " << (f.enabled ? "true" : "false")
-              << "\n\nto load it into a DUT by hand:\nrig dut set-filter" << biquads << " --rate " << num(f.rate_hz)
-              << (f.enabled ? "" : " --off") << "\n";
+              << "\n\nto load it into a DUT by hand (IFACE: the DUT's CAN interface; or --hardware FILE):\n"
+              << "rig dut --can IFACE set-filter" << biquads << " --rate " << num(f.rate_hz) << (f.enabled ? "" : " --off")
+              << "\n";
   if (!a.json_out.empty()) {
     json j = {{"filter", a.filter},
               {"source", "model"},

@@ -15,6 +15,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -44,6 +45,7 @@
 #include "app/commands.hpp"
 #include "app/existing_path.hpp"
 #include "app/whole_number.hpp"
+#include "rig/core/file_stamp.hpp"
 #include "app/history_source.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
@@ -651,6 +653,32 @@ std::vector<std::string> records_gone(const std::string& out, const acceptance::
   return gone;
 }
 
+// The run's recordings that are no longer what their writer closed ("FILE (how)"): truncated,
+// written to or replaced while the run went on. A resume reads the same files and would refuse
+// them (ProcedureState::check_capture); the run that wrote them judges them the same way, as the
+// seal would otherwise vouch for them (a review: a capture truncated mid-run ended PASS).
+std::vector<std::string> records_changed(const std::string& out, const acceptance::DutState& st) {
+  std::vector<std::string> changed;
+  auto check = [&](const acceptance::Recorded& r) {
+    if (!r.written) return;
+    const std::optional<FileStamp> now = stamp_of((fs::path(out) / r.capture).string());
+    if (!now) return;  // gone: records_gone names it
+    if (const std::string how = stamp_change(*r.written, now); !how.empty()) changed.push_back(r.capture + " (" + how + ")");
+  };
+  for (const auto& [index, run] : st.runs) check(run.rec);
+  if (st.in_run) check(*st.in_run);
+  if (st.raw) check(*st.raw);
+  if (st.loop_test && st.loop_test->supported) {
+    std::ifstream in(fs::path(out) / st.loop_test->file, std::ios::binary);
+    if (in) {
+      const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (acceptance::crc32_of(bytes) != st.loop_test->crc32)
+        changed.push_back(st.loop_test->file + " (its CRC-32 is not the one written)");
+    }
+  }
+  return changed;
+}
+
 // Records the run in its history database; false (logged) when the database is not reachable.
 bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::json& passport,
                        const std::string& out_dir, spdlog::logger& log) {
@@ -700,13 +728,20 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   std::string steps;  // what follows the passport
   if (key) steps += std::string(kStepSeal) + "\n";
   if (!a.no_history) steps += std::string(kStepHistory) + "\n";
+  bool report_written = true;
   try {
     write_file_staged(junit, junit_xml(info, res, values));
     write_file_staged(pass, passport_text(passport));
     try {
       report::write_report(a.out, passport, analysis);  // the documents in memory, not parsed again
     } catch (const std::exception& e) {
-      log.error("report.html not written: {}", e.what());
+      // A step left for the resume (a review: a full disk ended PASS, exit 0, without the page,
+      // the resume said "nothing to resume", and a seal made without it failed `rig verify` for
+      // good once `rig report` drew it): the final seal waits for it.
+      report_written = false;
+      steps = std::string(kStepReport) + "\n" + steps;
+      log.error("report.html not written: {} (rig run --resume {} writes it{})", e.what(), shown_text(a.out),
+                key ? ", then the final seal" : "");
     }
     if (!steps.empty()) write_file_atomic(pending, steps);
     commit_staged(pass);
@@ -717,8 +752,10 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     for (const std::string& f : {junit, pass}) fs::remove(f + ".tmp", ec);
     throw;
   }
-  bool done = true;  // every step after the passport: the marker goes only then
-  if (key) {
+  bool done = report_written;  // every step after the passport: the marker goes only then
+  if (key && !report_written) {
+    log.error("seal.json not written: report.html is not there yet, and the final seal vouches for it");
+  } else if (key) {
     try {
       std::vector<std::string> files = files_of_the_run(dut);
       if (fs::exists(Executive::checkpoint_path(a.out))) files.emplace_back("checkpoint.json");
@@ -833,6 +870,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
       report::write_report(dir, true);  // the run's own page, before its final seal
     } catch (const std::exception& e) {
       log->error("report.html not written: {}", e.what());
+      done = false;  // still left: the list stays
     }
   if (!a.no_history) {
     const nlohmann::json passport = report::read_passport(dir);
@@ -1355,11 +1393,16 @@ int do_run(RunArgs a) {
   bool records_lost = false;  // then no resume either: it would refuse the folder (exit 2)
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
-    records_lost = !gone.empty();
-    if (!gone.empty()) {
+    const std::vector<std::string> changed = records_changed(a.out, state.slot());
+    records_lost = !gone.empty() || !changed.empty();
+    std::vector<std::string> why;
+    if (!gone.empty())
+      why.push_back(fmt::format("the run's records are gone from {} (removed while it ran): {}", a.out, fmt::join(gone, ", ")));
+    if (!changed.empty())
+      why.push_back(fmt::format("the run's records in {} changed after they were written: {}", a.out, fmt::join(changed, ", ")));
+    if (records_lost) {
       res.outcome = RunOutcome::Error;
-      res.message = fmt::format("the run's records are gone from {} (removed while it ran): {}; no verdict without them",
-                                a.out, fmt::join(gone, ", "));
+      res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));
       log->error("{}", res.message);
     }
   }
@@ -1379,6 +1422,13 @@ int do_run(RunArgs a) {
     }
     dev.io.set_lamp(Lamp::Running, false);
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
+    // What is kept goes on once the folder can take the files (a review: a full disk ended with
+    // only "write failed", though the folder resumed to the same passport).
+    if (!records_lost) {
+      std::error_code ec;
+      say_how_to_continue(a.out, fs::exists(Executive::checkpoint_path(a.out), ec) ? res.checkpointed : 0,
+                          res.phases.size(), "; once the folder can take the run's files", *log);
+    }
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);
@@ -1404,7 +1454,10 @@ int do_run(RunArgs a) {
   // After a stop, what is kept and how to go on, where the technician looks (a review: only
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
   if (records_lost) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
-    const std::string no = "no resume: the run's records are gone from " + shown_text(a.out) + "; start a new run";
+    const bool gone = res.message.find("records are gone") != std::string::npos;
+    const std::string no = "no resume: the run's records " +
+                           (gone ? "are gone from " + shown_text(a.out) : "in " + shown_text(a.out) + " changed after they were written") +
+                           "; start a new run";
     std::cerr << no << "\n";
     log->info("{}", no);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {

@@ -30,10 +30,11 @@ void drop_previous_seal(const std::string& dir);
 // again: a resume reads none of them, and the rig replaces each, so each must be a file.
 inline constexpr const char* kRunOutputs[] = {"passport.json", "junit.xml", "analysis.json", "report.html"};
 
-// The ending's steps after the passport is in place, until they are done: the final seal and
-// the history row (one per line). A dot file: outside the seal (outside_the_seal).
+// The ending's steps after the passport is in place, until they are done: report.html where it
+// could not be written, the final seal and the history row (one per line). A dot file: outside the seal (outside_the_seal).
 inline constexpr const char* kEndingPending = ".ending-pending";
-inline constexpr const char* kStepSeal = "seal";        // its lines
+inline constexpr const char* kStepReport = "report";    // its lines: report.html (a full disk)
+inline constexpr const char* kStepSeal = "seal";
 inline constexpr const char* kStepHistory = "history";
 
 // The outcome passport.json states; nullopt when it is missing, not a regular file (a FIFO is

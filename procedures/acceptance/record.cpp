@@ -71,6 +71,7 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   }
   ctx.dev.dut.stop_stream();
   w.close();
+  r.written = stamp_of(ctx.out_dir + "/" + rel);
   const LinkStats st = ctx.dev.dut.stats();
   r.lost = st.lost;
   r.gaps = st.gaps;

@@ -1,9 +1,11 @@
 // Recording a phase: stream the DUT for N seconds into a capture file while
 // keeping online sums, with the link's gap accounting checked against the profile.
 #pragma once
+#include <optional>
 #include <string>
 
 #include "procedures/acceptance/profile.hpp"
+#include "rig/core/file_stamp.hpp"
 #include "rig/executive/executive.hpp"
 
 namespace rig::acceptance {
@@ -14,6 +16,9 @@ struct Recorded {
   uint64_t lost = 0, gaps = 0, duplicates = 0;
   double mean_x = 0, mean_y = 0;
   int attempts = 1;
+  // The capture as its writer closed it (or as a resume checked it), held in memory only: the
+  // run's end compares the file with it (cmd_run's records check).
+  std::optional<FileStamp> written;
 };
 
 // Moves the table to `o`, settles, records `seconds` into captures/<name>.cap.

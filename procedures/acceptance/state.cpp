@@ -370,6 +370,7 @@ void ProcedureState::check_capture(Recorded& r, const std::string& field, const 
   };
   same_mean("mean_g", r.mean_x, mx);
   same_mean("mean_y_g", r.mean_y, my);
+  r.written = stamp_of(path);  // as checked: the run's end compares the file with it
   if (lost > r.lost || gaps > r.gaps)
     throw std::invalid_argument(field + ".lost: " + std::to_string(r.lost) + " samples lost in " +
                                 std::to_string(r.gaps) + " gap(s) recorded, but " + path + "'s sequence counter skips " +

@@ -1159,3 +1159,46 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_EQ(without_session_fields(read_json(f + "/passport.json")), without_session_fields(ref.passport));
   }
 }
+
+// report.html that cannot be written at the ending (a full disk; here its temporary name held
+// by a folder the rig cannot remove) is a step left for the resume, as the history row is: the
+// run's verdict stands (exit 0), the folder lists the step, the resume writes the page. With a
+// seal the final seal waits for the page, so the folder verifies once the resume is done (a
+// review: the run ended PASS without the page, its resume said "nothing to resume", and the
+// seal made without the page failed `rig verify` for good once `rig report` drew it).
+TEST(Campaign, AReportTheEndingCouldNotWriteIsWrittenByTheResume) {
+  const std::string d = tmp("campaign-report-left");
+  fs::create_directories(d);
+  const std::string key = write_key(d + "/station.key", 'k');
+  for (const bool sealed : {false, true}) {
+    const std::string r = d + (sealed ? "/sealed" : "/plain");
+    fs::create_directories(r + "/report.html.tmp/held");
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--no-history", "--out", r};
+    if (sealed) args.insert(args.end(), {"--seal-key", key});
+    ASSERT_EQ(run(args, r + "-io"), 0) << slurp(r + "-io.stderr");
+    EXPECT_EQ(read_json(r + "/passport.json")["outcome"], "PASS");
+    EXPECT_FALSE(fs::exists(r + "/report.html"));
+    const std::string err = slurp(r + "-io.stderr");
+    EXPECT_NE(err.find("report.html not written: "), std::string::npos) << err;
+    EXPECT_NE(err.find("(rig run --resume " + r + " writes it" + (sealed ? ", then the final seal)" : ")")),
+              std::string::npos)
+        << err;
+    EXPECT_NE(slurp(r + "/.ending-pending").find("report\n"), std::string::npos);
+    if (sealed) {
+      EXPECT_NE(err.find("seal.json not written: report.html is not there yet"), std::string::npos) << err;
+      EXPECT_EQ(run({"verify", r, "--seal-key", key}, r + "-early"), 1) << "no final seal yet";
+    }
+    fs::remove_all(r + "/report.html.tmp");
+    std::vector<std::string> resume = {"run", "--resume", r, "--yes", "--no-history"};
+    if (sealed) resume.insert(resume.end(), {"--seal-key", key});
+    ASSERT_EQ(run(resume, r + "-resume"), 0) << slurp(r + "-resume.stderr");
+    EXPECT_TRUE(fs::is_regular_file(r + "/report.html"));
+    EXPECT_FALSE(fs::exists(r + "/.ending-pending"));
+    EXPECT_EQ(read_json(r + "/passport.json")["outcome"], "PASS");
+    if (sealed) {
+      EXPECT_EQ(run({"verify", r, "--seal-key", key}, r + "-verify"), 0) << slurp(r + "-verify.stdout");
+      EXPECT_NE(slurp(r + "-verify.stdout").find("ok       report.html"), std::string::npos)
+          << slurp(r + "-verify.stdout");
+    }
+  }
+}

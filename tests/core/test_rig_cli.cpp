@@ -451,6 +451,24 @@ TEST(RigCli, AnalyzeReadsCapturesAndReportsDamage) {
   EXPECT_NE(slurp(d + "/s.stderr").find(d + "/bad.cap: 1 gap(s)"), std::string::npos) << slurp(d + "/s.stderr");
   EXPECT_EQ(run({"analyze", cap, "--gaps", "stop", "--no-psd", "--json", d + "/ok.json"}, d + "/ok"), 0);
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/ok.json"))["capture"]["gaps"], 0);
+  // Two whole blocks swapped (their CRCs intact): the counter goes back, which is no gap; exit 2
+  // naming the sample, not "2000 samples lost" analysed as joined (a review).
+  fs::copy_file(cap, d + "/swapped.cap");
+  {
+    const auto at = static_cast<std::streamoff>(fs::file_size(cap) - 16 - 30 * 16016);
+    std::fstream f(d + "/swapped.cap", std::ios::in | std::ios::out | std::ios::binary);
+    std::string a(16016, '\0'), b(16016, '\0');
+    f.seekg(at);
+    f.read(a.data(), 16016);
+    f.read(b.data(), 16016);
+    f.seekp(at);
+    f.write(b.data(), 16016);
+    f.write(a.data(), 16016);
+  }
+  EXPECT_EQ(run({"analyze", d + "/swapped.cap", "--no-psd"}, d + "/sw"), 2) << slurp(d + "/sw.stdout");
+  EXPECT_NE(slurp(d + "/sw.stderr").find(d + "/swapped.cap: sample 31000: the sequence counter goes back"),
+            std::string::npos)
+      << slurp(d + "/sw.stderr");
   // A damaged first block: samples lost before the first one read. Not a gap (nothing precedes
   // them to be joined), but said: lost_at_start and a note.
   fs::copy_file(cap, d + "/head.cap");
@@ -3122,12 +3140,24 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
   const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io");
   ASSERT_TRUE(wait_for_file(c, d + "/run/captures/in-run-U10.cap")) << slurp(d + "/io.stderr");
   fs::remove(d + "/run/captures/run01-U10.cap");
+  // Damaged where they lie, under their names (a review: a capture truncated mid-run, or with a
+  // byte changed, ended PASS, and a seal vouched for it): truncated, and a byte of the payload
+  // written over with the length kept.
+  fs::resize_file(d + "/run/captures/run02-U20.cap", 352);
+  {
+    std::fstream f(d + "/run/captures/run03-U10.cap", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(-100, std::ios::end);
+    f.put('\x5a');
+  }
   EXPECT_EQ(wait_exit(c), 4) << slurp(d + "/io.stderr");
   const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "ERROR");
   const std::string why = p["aborted_reason"].get<std::string>();
   EXPECT_NE(why.find("records are gone"), std::string::npos) << why;
   EXPECT_NE(why.find("captures/run01-U10.cap"), std::string::npos) << why;
+  EXPECT_NE(why.find("changed after they were written: captures/run02-U20.cap ("), std::string::npos) << why;
+  EXPECT_NE(why.find(" bytes when written, 352 now)"), std::string::npos) << why;
+  EXPECT_NE(why.find("captures/run03-U10.cap (written to after its writer closed it)"), std::string::npos) << why;
   EXPECT_NE(slurp(d + "/run/junit.xml").find("captures/run01-U10.cap"), std::string::npos);
   // No resume either (it refuses the folder, exit 2), so none is offered (a review: "to continue:
   // rig run --resume DIR (19 of 19 phases kept ...)").
@@ -3665,7 +3695,15 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
   const std::string out = slurp(d + "/show.stdout");
   const std::size_t block = out.find("[filter]\npreset = \"custom\"\nsections = [[");
   ASSERT_NE(block, std::string::npos) << out;
-  EXPECT_NE(out.find("rig dut set-filter --biquad "), std::string::npos) << out;
+  // The set-filter line runs as printed once IFACE is named: no interface here, so the CAN open
+  // fails (exit 4), not the command line (exit 2: it lacked --can, a review).
+  const std::size_t at = out.find("rig dut --can IFACE set-filter --biquad ");
+  ASSERT_NE(at, std::string::npos) << out;
+  std::vector<std::string> line;
+  std::istringstream words(out.substr(at + 4, out.find('\n', at) - at - 4));
+  for (std::string w; words >> w;) line.push_back(w == "IFACE" ? "rigtest0" : w);
+  EXPECT_EQ(run(line, d + "/set"), 4) << slurp(d + "/set.stderr");
+  EXPECT_NE(slurp(d + "/set.stderr").find("rigtest0"), std::string::npos) << slurp(d + "/set.stderr");
   const auto j = nlohmann::json::parse(slurp(d + "/f.json"));
   ASSERT_EQ(j["sections"].size(), 1u);
   EXPECT_EQ(j["rate_hz"], 10000.0);

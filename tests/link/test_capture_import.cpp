@@ -421,6 +421,19 @@ TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
   EXPECT_FALSE(fs::exists(cap));
   const std::string err = slurp(dir() / "nostream.err");
   EXPECT_NE(err.find("nostream.log: no sample of the [dut] stream"), std::string::npos) << err;
+  // Its frames are counted as read on the DUT's interface and of other ids: "on other interfaces"
+  // sent a review after --iface where the DBC was wrong. The same where the hardware file names
+  // an interface the log does not have (the log's one interface is then the DUT's).
+  const std::string out = slurp(dir() / "nostream.out");
+  EXPECT_NE(out.find("(6 frames read on vcan0, 6 other ids)"), std::string::npos) << out;
+  EXPECT_EQ(out.find("other interfaces"), std::string::npos) << out;
+  std::ofstream(dir() / "hw-ns1.toml") << "[dut]\ncan = \"can1\"\n";
+  EXPECT_EQ(run_rig("capture import " + (dir() / "nostream.log").string() + " --hardware " +
+                        (dir() / "hw-ns1.toml").string() + " --out " + cap.string(),
+                    "nostream1"),
+            2);
+  const std::string out1 = slurp(dir() / "nostream1.out");
+  EXPECT_NE(out1.find("(6 frames read on vcan0, 6 other ids)"), std::string::npos) << out1;
 }
 
 namespace {
