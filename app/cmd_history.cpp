@@ -339,7 +339,8 @@ void add_history(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("history", "List recorded runs or trend a measurement (results database)");
   auto a = std::make_shared<HistoryArgs>();
   sub->add_option("--db", a->db, "Database URL: sqlite:PATH, PATH or postgresql://... (default: $RIG_HISTORY, "
-                                  "[history] url in the rig config, ~/.local/share/rig/history.sqlite)");
+                                  "[history] url in the rig config, $XDG_DATA_HOME/rig/history.sqlite, "
+                                  "else ~/.local/share/rig/history.sqlite)");
   std::vector<CLI::Option*> query;
   query.push_back(sub->add_option("--serial", a->serial, "Only this DUT serial number"));
   query.push_back(sub->add_flag("--no-serial", a->no_serial,
