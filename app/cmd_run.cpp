@@ -806,6 +806,11 @@ void refuse_non_files(const std::string& dir) {
     if (::lstat((dir + "/" + f).c_str(), &st) == 0 && !S_ISREG(st.st_mode))
       throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes it: remove it");
   }
+  // And the captures' folder must be a folder (a file there ended the run ERROR after its devices
+  // had opened, a review).
+  struct stat st {};
+  if (::lstat((dir + "/captures").c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+    throw ConfigError(dir + "/captures: not a folder; the rig records its captures in it: remove it");
 }
 
 // Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than

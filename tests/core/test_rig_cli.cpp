@@ -3719,3 +3719,20 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
   std::snprintf(digits, sizeof digits, "%.17g", b0);
   EXPECT_NE(prof.find(digits), std::string::npos) << prof;
 }
+
+// What the rig writes into a folder must be what it writes there: a folder in place of a file it
+// replaces, or a file in place of the captures' folder, is exit 2 before any device opens (a
+// file named `captures` ended the run ERROR, exit 4, after its devices had opened: a review).
+TEST(RigCli, AFolderHoldingWhatTheRigWritesInTheWrongKindIsRefusedFirst) {
+  const std::string d = tmp("wrong-kind");
+  for (const char* what : {"captures", "report.html"}) {
+    const std::string out = d + "/" + what + "-case";
+    fs::create_directories(out);
+    if (std::string(what) == "captures") std::ofstream(out + "/captures") << "x";
+    else fs::create_directories(out + "/" + what);
+    EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", out}, out + "-io"), 2) << what;
+    const std::string err = slurp(out + "-io.stderr");
+    EXPECT_NE(err.find(out + "/" + what + ": not a "), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(out + "/run.json")) << what << ": refused before the run began";
+  }
+}
