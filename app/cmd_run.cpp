@@ -653,17 +653,28 @@ std::vector<std::string> records_gone(const std::string& out, const acceptance::
   return gone;
 }
 
-// The run's recordings that are no longer what their writer closed ("FILE (how)"): truncated,
-// written to or replaced while the run went on. A resume reads the same files and would refuse
-// them (ProcedureState::check_capture); the run that wrote them judges them the same way, as the
-// seal would otherwise vouch for them (a review: a capture truncated mid-run ended PASS).
-std::vector<std::string> records_changed(const std::string& out, const acceptance::DutState& st) {
+// The run's recordings that are no longer what their writer closed ("FILE (how): problem"):
+// truncated, written to or replaced while the run went on. A moved stamp (size, modification
+// time, inode) or the loop test's CRC only raises the question: the record is then read as a
+// resume reads it (ProcedureState::recording_problem), and only a problem there counts; one that
+// holds is `touched` (a touch, a network file system's own times or inodes). The run that wrote
+// them judges them as its resume would, as the seal would otherwise vouch for them (a review: a
+// capture truncated mid-run ended PASS).
+std::vector<std::string> records_changed(const std::string& out, const acceptance::ProcedureState& state,
+                                         std::vector<std::string>& touched) {
+  const acceptance::DutState& st = state.slot();
   std::vector<std::string> changed;
+  auto judge = [&](const std::string& rel, const std::string& how) {
+    if (const std::string problem = state.recording_problem(rel, out); !problem.empty())
+      changed.push_back(rel + " (" + how + "): " + problem);
+    else
+      touched.push_back(rel + " (" + how + ")");
+  };
   auto check = [&](const acceptance::Recorded& r) {
     if (!r.written) return;
     const std::optional<FileStamp> now = stamp_of((fs::path(out) / r.capture).string());
     if (!now) return;  // gone: records_gone names it
-    if (const std::string how = stamp_change(*r.written, now); !how.empty()) changed.push_back(r.capture + " (" + how + ")");
+    if (const std::string how = stamp_change(*r.written, now); !how.empty()) judge(r.capture, how);
   };
   for (const auto& [index, run] : st.runs) check(run.rec);
   if (st.in_run) check(*st.in_run);
@@ -672,8 +683,7 @@ std::vector<std::string> records_changed(const std::string& out, const acceptanc
     std::ifstream in(fs::path(out) / st.loop_test->file, std::ios::binary);
     if (in) {
       const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      if (acceptance::crc32_of(bytes) != st.loop_test->crc32)
-        changed.push_back(st.loop_test->file + " (its CRC-32 is not the one written)");
+      if (acceptance::crc32_of(bytes) != st.loop_test->crc32) judge(st.loop_test->file, "its CRC-32 is not the one written");
     }
   }
   return changed;
@@ -738,10 +748,13 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       // A step left for the resume (a review: a full disk ended PASS, exit 0, without the page,
       // the resume said "nothing to resume", and a seal made without it failed `rig verify` for
       // good once `rig report` drew it): the final seal waits for it.
+      // An earlier ending's page (an ABORTED one, resumed) must not stand beside this passport.
       report_written = false;
+      std::error_code gone;
+      fs::remove(a.out + "/report.html", gone);
       steps = std::string(kStepReport) + "\n" + steps;
-      log.error("report.html not written: {} (rig run --resume {} writes it{})", e.what(), shown_text(a.out),
-                key ? ", then the final seal" : "");
+      log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shown_text(a.out),
+                key ? " --seal-key FILE" : "", key ? " and seals it" : "");
     }
     if (!steps.empty()) write_file_atomic(pending, steps);
     commit_staged(pass);
@@ -753,9 +766,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     throw;
   }
   bool done = report_written;  // every step after the passport: the marker goes only then
-  if (key && !report_written) {
-    log.error("seal.json not written: report.html is not there yet, and the final seal vouches for it");
-  } else if (key) {
+  if (key) {  // without report.html when it could not be written: the resume draws it and seals again
     try {
       std::vector<std::string> files = files_of_the_run(dut);
       if (fs::exists(Executive::checkpoint_path(a.out))) files.emplace_back("checkpoint.json");
@@ -808,8 +819,8 @@ void refuse_non_files(const std::string& dir) {
   }
   // And the captures' folder must be a folder (a file there ended the run ERROR after its devices
   // had opened, a review).
-  struct stat st {};
-  if (::lstat((dir + "/captures").c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+  struct stat st {};  // followed: a captures folder on a data disk through a link is a folder
+  if (::stat((dir + "/captures").c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
     throw ConfigError(dir + "/captures: not a folder; the rig records its captures in it: remove it");
 }
 
@@ -843,15 +854,22 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 // history row recorded (the same row, under the same id). A sealed run finishes here only when
 // its final seal is written (`final_seal`); before it, its resume computes the ending again.
 // The verdict's exit code; nullopt when there is no such ending. A dry run says what it would do.
-std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw, bool sealed, bool final_seal) {
+std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw, const std::optional<seal::Key>& key,
+                                         bool final_seal) {
   const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
   std::error_code ec;
   if (!fs::exists(pending, ec)) return std::nullopt;
+  const bool sealed = key.has_value();
   const std::string v = verdict_of(dir);
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
   const int rc = v == "PASS" ? kExitPass : kExitFail;
   const bool junit_staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
-  const bool no_report = !fs::exists(dir + "/report.html", ec);
+  bool report_listed = false;  // the ending could not write report.html (a page there is another ending's)
+  {
+    std::ifstream in(pending);
+    for (std::string line; std::getline(in, line);) report_listed = report_listed || line == kStepReport;
+  }
+  const bool no_report = report_listed || !fs::exists(dir + "/report.html", ec);
   std::vector<std::string> left;
   if (junit_staged) left.emplace_back("junit.xml put in place");
   if (no_report) left.emplace_back("report.html written");
@@ -873,6 +891,15 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   }
   if (no_report) try {
       report::write_report(dir, true);  // the run's own page, before its final seal
+      // A final seal made without the page (the ending could not write it) takes it in now: the
+      // seal was checked before this resume trusted the folder.
+      if (sealed) {
+        std::vector<std::string> files = sealed_files(dir);
+        if (std::find(files.begin(), files.end(), "report.html") == files.end()) files.emplace_back("report.html");
+        seal_run_folder(dir, *key, files, std::nullopt, v);
+        drop_previous_seal(dir);
+        log->info("run folder sealed again with report.html (seal.json, key {})", key->id);
+      }
     } catch (const std::exception& e) {
       log->error("report.html not written: {}", e.what());
       done = false;  // still left: the list stays
@@ -1140,7 +1167,7 @@ int do_run(RunArgs a) {
     }
   }
   if (!a.resume.empty())
-    if (const auto rc = finish_pending_ending(a, hw, key.has_value(), final_seal)) return *rc;
+    if (const auto rc = finish_pending_ending(a, hw, key, final_seal)) return *rc;
   if (a.dry_run) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
@@ -1398,7 +1425,12 @@ int do_run(RunArgs a) {
   bool records_lost = false;  // then no resume either: it would refuse the folder (exit 2)
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
-    const std::vector<std::string> changed = records_changed(a.out, state.slot());
+    std::vector<std::string> touched;
+    const std::vector<std::string> changed = records_changed(a.out, state, touched);
+    if (!touched.empty())
+      log->warn("the run's records in {} were touched after they were written ({}), but hold what was recorded: "
+                "the verdict stands on them",
+                a.out, fmt::join(touched, ", "));
     records_lost = !gone.empty() || !changed.empty();
     std::vector<std::string> why;
     if (!gone.empty())
@@ -1429,7 +1461,7 @@ int do_run(RunArgs a) {
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
-    if (!records_lost) {
+    if (!records_lost && !res.config_error) {
       std::error_code ec;
       say_how_to_continue(a.out, fs::exists(Executive::checkpoint_path(a.out), ec) ? res.checkpointed : 0,
                           res.phases.size(), "; once the folder can take the run's files", *log);

@@ -50,6 +50,18 @@ void drop_previous_seal(const std::string& dir) {
   fs::remove(dir + "/seal.prev.json", ec);
 }
 
+std::vector<std::string> sealed_files(const std::string& dir) {
+  std::vector<std::string> out;
+  try {
+    std::ifstream in(dir + "/seal.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    for (const auto& [rel, mac] : j.at("files").items()) out.push_back(rel);
+  } catch (const std::exception&) {
+    out.clear();
+  }
+  return out;
+}
+
 namespace {
 
 // What a resume writes again (every ending's outputs): it does not read them, so they need not

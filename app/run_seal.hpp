@@ -25,6 +25,8 @@ void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vect
                      const std::string& outcome = "");
 // After the final seal: the previous one is no longer needed.
 void drop_previous_seal(const std::string& dir);
+// The files seal.json lists (relative to `dir`); empty when there is none or it is unreadable.
+std::vector<std::string> sealed_files(const std::string& dir);
 
 // What every ending of a run writes (README, "The run folder"), and so what a resume writes
 // again: a resume reads none of them, and the rig replaces each, so each must be a file.

@@ -377,6 +377,25 @@ void ProcedureState::check_capture(Recorded& r, const std::string& field, const 
                                 std::to_string(lost) + " in " + std::to_string(gaps));
 }
 
+std::string ProcedureState::recording_problem(const std::string& file, const std::string& run_dir) const {
+  DutState s = slots_.at(0);  // a copy: the checks fill in what they read
+  try {
+    for (auto& [idx, r] : s.runs)
+      if (r.rec.capture == file && idx >= 1 && idx <= profile_.order.size())
+        check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir,
+                      {run_phase_id(idx, profile_.order[idx - 1]), profile_.order[idx - 1], profile_.run_s, s.serial()});
+    if (s.in_run && s.in_run->capture == file)
+      check_capture(*s.in_run, "state.in_run", run_dir,
+                    {in_run_phase_id(profile_), profile_.in_run_orientation, profile_.in_run_s, s.serial()});
+    if (s.raw && s.raw->capture == file)
+      check_capture(*s.raw, "state.raw", run_dir, {raw_phase_id(profile_), profile_.raw_orientation, profile_.raw_s, s.serial()});
+    if (s.loop_test && s.loop_test->supported && s.loop_test->file == file) check_loop_record(*s.loop_test, run_dir);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return {};
+}
+
 void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::string>& completed,
                              const std::string& run_dir) {
   DutState s = dut_state_from_json(j);

@@ -93,6 +93,11 @@ class ProcedureState final : public PhaseState {
   void restore(const nlohmann::json& j, const std::vector<std::string>& completed, const std::string& run_dir) override;
   void forget(const std::string& phase_id) override;
   bool holds(const std::string& phase_id) const override;
+  // Slot 0's recording in `file` (a capture, or the loop test's records; relative to the run
+  // folder) checked against the file as restore() checks it: the problem, "" when it holds. The
+  // run's end asks it where a record's file stamp moved (a touch, a network file system's own
+  // times) before it takes the record for changed.
+  std::string recording_problem(const std::string& file, const std::string& run_dir) const;
 
  private:
   // What a completed recording must be: its phase id, orientation, length and DUT.
