@@ -819,8 +819,10 @@ void refuse_non_files(const std::string& dir) {
   }
   // And the captures' folder must be a folder (a file there ended the run ERROR after its devices
   // had opened, a review).
-  struct stat st {};  // followed: a captures folder on a data disk through a link is a folder
-  if (::stat((dir + "/captures").c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+  // Followed: a captures folder on a data disk through a link is a folder; a link to nothing is not.
+  struct stat st {};
+  if (::lstat((dir + "/captures").c_str(), &st) == 0 &&
+      (::stat((dir + "/captures").c_str(), &st) != 0 || !S_ISDIR(st.st_mode)))
     throw ConfigError(dir + "/captures: not a folder; the rig records its captures in it: remove it");
 }
 

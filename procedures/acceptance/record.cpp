@@ -71,6 +71,8 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   }
   ctx.dev.dut.stop_stream();
   w.close();
+  // The capture's name too: the checkpoint about to name it must not outlive it in a power cut.
+  fsync_folder(std::filesystem::path(ctx.out_dir + "/" + rel).parent_path().string());
   r.written = stamp_of(ctx.out_dir + "/" + rel);
   const LinkStats st = ctx.dev.dut.stats();
   r.lost = st.lost;

@@ -49,8 +49,11 @@ void write_file_atomic(const std::string& path, const std::string& content) {
 // exit status leaves the new file, not the old one or none (a review saw no fsync of the folder).
 void commit_staged(const std::string& path) {
   std::filesystem::rename(path + ".tmp", path);
-  std::string dir = std::filesystem::path(path).parent_path().string();
-  if (dir.empty()) dir = ".";
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  fsync_folder(dir.empty() ? "." : dir);
+}
+
+void fsync_folder(const std::string& dir) {
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) return;  // the file is in place; only its durability across a power cut is not forced
   ::fsync(fd);         // advisory here: some filesystems refuse a folder's fsync (EINVAL)

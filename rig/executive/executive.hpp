@@ -196,5 +196,8 @@ void write_file_atomic(const std::string& path, const std::string& content);
 // commit_staged renames it into place (a run's ending puts several files in place at its end).
 void write_file_staged(const std::string& path, const std::string& content);
 void commit_staged(const std::string& path);
+// fsync of a folder, so a name made or renamed in it survives a power cut (best effort: some
+// file systems refuse a folder's fsync).
+void fsync_folder(const std::string& dir);
 
 }  // namespace rig

@@ -1186,8 +1186,11 @@ TEST(Campaign, AReportTheEndingCouldNotWriteIsWrittenByTheResume) {
               std::string::npos)
         << err;
     EXPECT_NE(slurp(r + "/.ending-pending").find("report\n"), std::string::npos);
-    if (sealed) {  // sealed without the page: what is there verifies
+    if (sealed) {  // sealed without the page: what is there verifies, and the unfinished ending is said
       EXPECT_EQ(run({"verify", r, "--seal-key", key}, r + "-early"), 0) << slurp(r + "-early.stdout");
+      EXPECT_NE(slurp(r + "-early.stdout").find("note: the run's ending is not finished (.ending-pending: report, seal)"),
+                std::string::npos)
+          << slurp(r + "-early.stdout");
     }
     fs::remove_all(r + "/report.html.tmp");
     std::vector<std::string> resume = {"run", "--resume", r, "--yes", "--no-history"};

@@ -3734,11 +3734,13 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
 // file named `captures` ended the run ERROR, exit 4, after its devices had opened: a review).
 TEST(RigCli, AFolderHoldingWhatTheRigWritesInTheWrongKindIsRefusedFirst) {
   const std::string d = tmp("wrong-kind");
-  for (const char* what : {"captures", "report.html"}) {
+  for (const char* what : {"captures", "report.html", "captures-link"}) {
     const std::string out = d + "/" + what + "-case";
     fs::create_directories(out);
     if (std::string(what) == "captures") std::ofstream(out + "/captures") << "x";
+    else if (std::string(what) == "captures-link") fs::create_symlink(d + "/nothing-there", out + "/captures");
     else fs::create_directories(out + "/" + what);
+    if (std::string(what) == "captures-link") what = "captures";  // a link to nothing: no folder
     EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", out}, out + "-io"), 2) << what;
     const std::string err = slurp(out + "-io.stderr");
     EXPECT_NE(err.find(out + "/" + what + ": not a "), std::string::npos) << err;
