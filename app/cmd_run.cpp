@@ -45,10 +45,10 @@
 #include "app/commands.hpp"
 #include "app/existing_path.hpp"
 #include "app/whole_number.hpp"
-#include "rig/core/file_stamp.hpp"
 #include "app/history_source.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
+#include "rig/core/file_stamp.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/executive/passport.hpp"
 #include "rig/executive/signals.hpp"
@@ -747,8 +747,9 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     } catch (const std::exception& e) {
       // A step left for the resume (a review: a full disk ended PASS, exit 0, without the page,
       // the resume said "nothing to resume", and a seal made without it failed `rig verify` for
-      // good once `rig report` drew it): the final seal waits for it.
-      // An earlier ending's page (an ABORTED one, resumed) must not stand beside this passport.
+      // good once `rig report` drew it): the final seal goes on without it, and the resume draws
+      // the page and seals again. An earlier ending's page (an ABORTED one, resumed) must not
+      // stand beside this passport.
       report_written = false;
       std::error_code gone;
       fs::remove(a.out + "/report.html", gone);
