@@ -276,12 +276,9 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
   namespace fs = std::filesystem;
   const fs::path list = fs::path(dir) / kEndingPending;
   std::error_code ec;
-  if (!fs::is_regular_file(list, ec)) return;
-  std::ifstream in(list);
-  std::vector<std::string> steps;
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty()) steps.push_back(line);
-  const bool only_history = steps == std::vector<std::string>{kStepHistory};
+  const std::optional<std::vector<std::string>> steps = pending_steps(dir);
+  if (!steps) return;
+  const bool only_history = *steps == std::vector<std::string>{kStepHistory};
   std::string why_not;
   const bool own = the_runs_own_database(dir, db, why_not);
   if (only_history && own && !fs::exists(fs::path(dir) / "junit.xml.tmp", ec) &&

@@ -94,14 +94,10 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                      : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).
-  if (std::ifstream pending{dir + "/" + kEndingPending}) {
-    std::string left;
-    for (std::string line; std::getline(pending, line);)
-      if (!line.empty()) left += (left.empty() ? "" : ", ") + line;
+  if (const auto steps = pending_steps(dir))
     std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {} --seal-key FILE` "
                              "finishes it\n",
-                             kEndingPending, left, dir);
-  }
+                             kEndingPending, fmt::join(*steps, ", "), dir);
   return c.ok ? kExitPass : kExitFail;
 }
 

@@ -2,6 +2,8 @@
 // use it: where the key comes from, which files a run seals when, and the checks a resume makes
 // before it trusts the folder.
 #pragma once
+#include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,6 +40,17 @@ inline constexpr const char* kEndingPending = ".ending-pending";
 inline constexpr const char* kStepReport = "report";    // its lines: report.html (a full disk)
 inline constexpr const char* kStepSeal = "seal";
 inline constexpr const char* kStepHistory = "history";
+// The steps `dir`'s .ending-pending lists, in order; nothing when there is no such file. (Inline:
+// `rig history --record` reads it too, from a library without the seal's code.)
+inline std::optional<std::vector<std::string>> pending_steps(const std::string& dir) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(dir + "/" + kEndingPending, ec)) return std::nullopt;
+  std::ifstream in(dir + "/" + kEndingPending);
+  std::vector<std::string> steps;
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) steps.push_back(line);
+  return steps;
+}
 
 // The outcome passport.json states; nullopt when it is missing, not a regular file (a FIFO is
 // never opened) or not a passport.

@@ -29,11 +29,10 @@ inline std::optional<FileStamp> stamp_of(const std::string& path) {
 }
 
 // How `now` differs from `then`, for a message ("" when it does not).
-inline std::string stamp_change(const FileStamp& then, const std::optional<FileStamp>& now) {
-  if (!now) return "gone";
-  if (now->inode != then.inode || now->device != then.device) return "replaced by another file";
-  if (now->size != then.size) return fmt::format("{} bytes when written, {} now", then.size, now->size);
-  if (now->mtime_ns != then.mtime_ns) return "written to after its writer closed it";
+inline std::string stamp_change(const FileStamp& then, const FileStamp& now) {
+  if (now.inode != then.inode || now.device != then.device) return "replaced by another file";
+  if (now.size != then.size) return fmt::format("{} bytes when written, {} now", then.size, now.size);
+  if (now.mtime_ns != then.mtime_ns) return "written to after its writer closed it";
   return {};
 }
 
