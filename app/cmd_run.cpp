@@ -13,6 +13,7 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -541,8 +542,11 @@ std::string verdict_of(const std::string& dir) {
 // A new run never lands on an earlier one, whatever state it stopped in: run.json is written
 // before any device opens, checkpoint.json after the first phase, passport.json at every ending
 // (a hardware run that could not open its devices has the first and the last, no checkpoint).
-// A finished run's folder is left alone; an unfinished one is resumed.
-void refuse_an_earlier_run(const std::string& dir) {
+// A finished run's folder is left alone; an unfinished one is resumed. Nor does a new run replace
+// a file of the name it writes that something else left there (a review: a report.html was
+// replaced without a word, where a stray capture is kept aside): the run's outputs, its seals,
+// an ending's list, and a profile.toml that is not the profile the run copies there.
+void refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
   const std::string v = verdict_of(dir);
   if (!v.empty()) throw ConfigError(dir + " holds a finished run (its passport says " + v + "): choose another --out");
   std::error_code ec;
@@ -552,6 +556,23 @@ void refuse_an_earlier_run(const std::string& dir) {
     if (fs::exists(fs::path(dir) / f, ec))
       throw ConfigError(dir + " holds an earlier run (" + f + "): " +
                         (resumable ? "use --resume " + dir + " or another --out" : "choose another --out"));
+  // (A folder in such a place is refuse_non_files' to name.)
+  auto there = [&](const fs::path& f) {
+    const fs::file_status st = fs::symlink_status(f, ec);
+    return fs::exists(st) && !fs::is_directory(st);
+  };
+  std::vector<std::string> would_replace;
+  for (const std::string f : {"junit.xml", "analysis.json", "report.html", "seal.json", "seal.prev.json", kEndingPending})
+    if (there(fs::path(dir) / f)) would_replace.push_back(f);
+  const fs::path profile = fs::path(dir) / "profile.toml";
+  if (there(profile) &&
+      (profile_source.rfind("builtin:", 0) == 0 || !fs::equivalent(profile, profile_source, ec)))
+    would_replace.emplace_back("profile.toml");
+  if (!would_replace.empty())
+    throw ConfigError(fmt::format("{} holds {}, which a run writes, but no run (no run.json): a new run would replace "
+                                  "{}; move {} or choose another --out",
+                                  dir, fmt::join(would_replace, ", "), would_replace.size() == 1 ? "it" : "them",
+                                  would_replace.size() == 1 ? "it" : "them"));
 }
 
 // `p` itself, or its nearest ancestor that exists: where a folder that is not there yet would be
@@ -596,7 +617,8 @@ void check_history_can_record(const std::string& url) {
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
-void check_run_folder(const std::string& dir, bool new_run_here, const std::string& option) {
+void check_run_folder(const std::string& dir, bool new_run_here, const std::string& option,
+                      const std::string& profile_source) {
   std::error_code ec;
   const fs::path p = nearest_existing(fs::absolute(dir, ec));
   if (!fs::is_directory(p, ec))
@@ -606,7 +628,7 @@ void check_run_folder(const std::string& dir, bool new_run_here, const std::stri
   // touched); a filesystem without it gets a named probe, removed at once.
   if (!can_create_file_in(p))
     throw ConfigError(option + " " + dir + ": the run folder is not writable (" + p.string() + ")");
-  if (new_run_here) refuse_an_earlier_run(dir);
+  if (new_run_here) refuse_an_earlier_run(dir, profile_source);
 }
 
 // The passport's identity block, for every ending (finished at the time of the call).
@@ -658,9 +680,11 @@ std::vector<std::string> records_gone(const std::string& out, const acceptance::
 // resume reads it (ProcedureState::recording_problem), and only a problem there counts; one that
 // holds is `touched` (a touch, a network file system's own times or inodes). The run that wrote
 // them judges them as its resume would, as the seal would otherwise vouch for them (a review: a
-// capture truncated mid-run ended PASS).
+// capture truncated mid-run ended PASS). With the station's key each record is also held to the
+// MAC sealed when it closed: an edit that kept its size and put its modification time back passes
+// the stamps (a review).
 std::vector<std::string> records_changed(const std::string& out, const acceptance::ProcedureState& state,
-                                         std::vector<std::string>& touched) {
+                                         const std::optional<seal::Key>& key, std::vector<std::string>& touched) {
   const acceptance::DutState& st = state.slot();
   std::vector<std::string> changed;
   auto judge = [&](const std::string& rel, const std::string& how) {
@@ -682,6 +706,14 @@ std::vector<std::string> records_changed(const std::string& out, const acceptanc
   if (st.loop_test && st.loop_test->supported && fs::exists(fs::path(out) / st.loop_test->file))
     if (const std::string problem = state.recording_problem(st.loop_test->file, out); !problem.empty())
       changed.push_back(st.loop_test->file + ": " + problem);
+  if (key)
+    for (const std::string& u : records_unlike_their_seal(out, *key, files_of_the_run(st))) {
+      const std::string rel = u.substr(0, u.find(':'));
+      const bool said = std::any_of(changed.begin(), changed.end(), [&](const std::string& c) {
+        return c.compare(0, rel.size(), rel) == 0 && (c.size() == rel.size() || c[rel.size()] == ' ' || c[rel.size()] == ':');
+      });
+      if (!said) changed.push_back(u);
+    }
   return changed;
 }
 
@@ -1170,7 +1202,7 @@ int do_run(RunArgs a) {
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
     check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
-                     a.resume.empty() ? "--out" : "--resume");
+                     a.resume.empty() ? "--out" : "--resume", p.source);
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
     // opened), before the plan is printed, so the plan says what the resume keeps, computes
     // again and still records.
@@ -1255,12 +1287,12 @@ int do_run(RunArgs a) {
     // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
     // which then failed on the same lock: a review).
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
-    refuse_an_earlier_run(a.out);
+    refuse_an_earlier_run(a.out, p.source);
   }
   prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
   if (a.resume.empty()) {
     if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
-    refuse_an_earlier_run(a.out);  // again, now that no other run can start here: one may have ended since
+    refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since
   }
   refuse_non_files(a.out);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
@@ -1423,7 +1455,7 @@ int do_run(RunArgs a) {
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
     std::vector<std::string> touched;
-    const std::vector<std::string> changed = records_changed(a.out, state, touched);
+    const std::vector<std::string> changed = records_changed(a.out, state, key, touched);
     if (!touched.empty())
       log->warn("the run's records in {} were touched after they were written ({}), but hold what was recorded: "
                 "the verdict stands on them",

@@ -27,10 +27,20 @@ std::optional<seal::Key> station_key(const std::string& option, bool given) {
 
 void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vector<std::string>& files,
                      const std::optional<std::string>& checkpoint_text, const std::string& outcome) {
+  // A record (its invocation, profile, captures, the loop test's records) is written once: the
+  // MAC the first seal took of it, right after its writer closed it, is carried from seal to seal.
+  // Read again each time, a record edited between two seals with its size and modification time
+  // kept (which the run's stamps cannot see) was vouched for as written (a review).
+  const std::vector<std::pair<std::string, std::string>> before = seal::sealed_macs(dir + "/seal.json", k);
   std::vector<seal::Entry> entries;
-  for (const std::string& rel : files)
-    if (!checkpoint_text || rel != "checkpoint.json") entries.push_back({rel, "", false});
-  if (checkpoint_text) entries.push_back({"checkpoint.json", *checkpoint_text, true});
+  for (const std::string& rel : files) {
+    if (checkpoint_text && rel == "checkpoint.json") continue;
+    seal::Entry e{rel, "", false, ""};
+    const auto was = std::lower_bound(before.begin(), before.end(), std::make_pair(rel, std::string()));
+    if (is_record(rel) && was != before.end() && was->first == rel) e.mac = was->second;
+    entries.push_back(std::move(e));
+  }
+  if (checkpoint_text) entries.push_back({"checkpoint.json", *checkpoint_text, true, ""});
   try {
     const std::string text = seal::make_seal(dir, k, entries, outcome);
     if (fs::exists(dir + "/seal.json")) fs::rename(dir + "/seal.json", dir + "/seal.prev.json");
@@ -43,6 +53,18 @@ void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vect
     if (checkpoint_text) throw std::runtime_error(why);
     throw ConfigError(why);
   }
+}
+
+std::vector<std::string> records_unlike_their_seal(const std::string& dir, const seal::Key& k,
+                                                   const std::vector<std::string>& records) {
+  const seal::Check c = seal::check_seal(dir, dir + "/seal.json", k);
+  if (c.files.empty() && !c.problems.empty()) return {c.problems.front()};  // the seal itself no longer holds
+  std::vector<std::string> unlike;
+  for (const auto& [rel, state] : c.files)
+    if ((state == seal::FileState::Changed || state == seal::FileState::NotRegular) &&
+        std::find(records.begin(), records.end(), rel) != records.end())
+      unlike.push_back(rel + ": " + seal::to_string(state));
+  return unlike;
 }
 
 void drop_previous_seal(const std::string& dir) {
@@ -64,20 +86,15 @@ std::vector<std::string> sealed_files(const std::string& dir) {
 
 namespace {
 
-// What a resume writes again (every ending's outputs): it does not read them, so they need not
-// match. The loop test's records are read (loop-figures computes from them) and must.
-bool rewritten_by_a_resume(const std::string& rel) {
-  return std::any_of(std::begin(kRunOutputs), std::end(kRunOutputs), [&](const char* o) { return rel == o; });
-}
-
 // A seal holds for a resume when it is this key's, its list is whole, it covers what a resume
-// reads, and every file it lists that a resume reads is as sealed.
+// reads, and every file it lists that a resume reads is as sealed (the loop test's records too:
+// loop-figures computes from them).
 bool holds_for_resume(const seal::Check& c, std::string& why) {
   std::vector<std::string> bad;
   for (const std::string& p : c.problems) {
     const std::string rel = p.substr(0, p.find(':'));
     const bool output = std::any_of(c.files.begin(), c.files.end(), [&](const auto& f) { return f.first == rel; }) &&
-                        rewritten_by_a_resume(rel);
+                        written_by_every_ending(rel);  // a resume writes it again, never reads it
     if (!output) bad.push_back(p);
   }
   for (const std::string& p : bad) why += (why.empty() ? "" : "; ") + p;

@@ -25,6 +25,12 @@ std::optional<seal::Key> station_key(const std::string& option, bool given);
 void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vector<std::string>& files,
                      const std::optional<std::string>& checkpoint_text = std::nullopt,
                      const std::string& outcome = "");
+// The run's `records` (relative to `dir`) that seal.json vouches for and that are no longer as it
+// sealed them ("FILE: changed since it was sealed"), or the seal's own problem when it no longer
+// holds. The run's end asks it (with a key): an edit that kept a record's size and modification
+// time passes the stamps, never the MAC sealed when the record closed.
+std::vector<std::string> records_unlike_their_seal(const std::string& dir, const seal::Key& k,
+                                                   const std::vector<std::string>& records);
 // After the final seal: the previous one is no longer needed.
 void drop_previous_seal(const std::string& dir);
 // The files seal.json lists (relative to `dir`); empty when there is none or it is unreadable.
@@ -33,6 +39,16 @@ std::vector<std::string> sealed_files(const std::string& dir);
 // What every ending of a run writes (README, "The run folder"), and so what a resume writes
 // again: a resume reads none of them, and the rig replaces each, so each must be a file.
 inline constexpr const char* kRunOutputs[] = {"passport.json", "junit.xml", "analysis.json", "report.html"};
+
+// A file the run writes once (its invocation, profile, captures, the loop test's records), as
+// against checkpoint.json and what every ending writes again (kRunOutputs): a seal carries the
+// MAC it first took of a record (seal_run_folder).
+inline bool written_by_every_ending(const std::string& rel) {
+  for (const char* o : kRunOutputs)
+    if (rel == o) return true;
+  return false;
+}
+inline bool is_record(const std::string& rel) { return rel != "checkpoint.json" && !written_by_every_ending(rel); }
 
 // The ending's steps after the passport is in place, until they are done: report.html where it
 // could not be written, the final seal and the history row (one per line). A dot file: outside the seal (outside_the_seal).

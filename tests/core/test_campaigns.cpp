@@ -902,7 +902,7 @@ TEST(Campaign, SealedRunFolders) {
     std::ofstream(swapped + "/loop-test.csv", std::ios::binary) << csv;
     const json sealed = read_json(swapped + "/seal.json");
     std::vector<rig::seal::Entry> entries;
-    for (const auto& [rel, mac] : sealed["files"].items()) entries.push_back({rel, "", false});
+    for (const auto& [rel, mac] : sealed["files"].items()) entries.push_back({rel, "", false, ""});
     std::ofstream(swapped + "/seal.json")
         << rig::seal::make_seal(swapped, rig::seal::load_key(key), entries, sealed["outcome"].get<std::string>());
     EXPECT_EQ(run({"verify", swapped, "--seal-key", key}, swapped + "-verify"), 1);
@@ -1101,11 +1101,17 @@ TEST(Campaign, SealedRunFolders) {
   }
   {
     // FIFOs where the rig writes the report's temporary file and the profile (the third review:
-    // the run stalled after its passport, before its seal, with no signal ending it): replaced.
+    // the run stalled after its passport, before its seal, with no signal ending it): the
+    // temporary file is replaced, the profile refused.
     const std::string f = d + "/fifos";
     fs::create_directories(f);
     ASSERT_EQ(::mkfifo((f + "/report.html.tmp").c_str(), 0600), 0);
     ASSERT_EQ(::mkfifo((f + "/profile.toml").c_str(), 0600), 0);
+    // A profile.toml the run did not write is not replaced (nor opened): exit 2 before the run.
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--seal-key", key}, f + "-io0"), 2);
+    EXPECT_NE(slurp(f + "-io0.stderr").find("holds profile.toml, which a run writes, but no run"), std::string::npos)
+        << slurp(f + "-io0.stderr");
+    fs::remove(f + "/profile.toml");
     ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--seal-key", key}, f + "-io"), 0)
         << slurp(f + "-io.stderr");
     EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 0) << slurp(f + "-verify.stdout");
@@ -1173,11 +1179,23 @@ TEST(Campaign, AReportTheEndingCouldNotWriteIsWrittenByTheResume) {
   const std::string key = write_key(d + "/station.key", 'k');
   for (const bool sealed : {false, true}) {
     const std::string r = d + (sealed ? "/sealed" : "/plain");
+    // An earlier ending's page, which must not stand beside this passport: the run stopped by a
+    // signal (ABORTED, its page written), then resumed to its end.
+    std::vector<std::string> first = {"run", "--profile", "ci", "--yes", "--no-history", "--out", r, "--inject", "sigint@150"};
+    if (sealed) first.insert(first.end(), {"--seal-key", key});
+    ASSERT_EQ(run(first, r + "-first"), 3) << slurp(r + "-first.stderr");
+    ASSERT_TRUE(fs::is_regular_file(r + "/report.html"));
     fs::create_directories(r + "/report.html.tmp/held");
-    std::ofstream(r + "/report.html") << "an earlier ending's page";  // must not stand beside this passport
-    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--no-history", "--out", r};
+    std::vector<std::string> args = {"run", "--resume", r, "--yes", "--no-history"};
     if (sealed) args.insert(args.end(), {"--seal-key", key});
     ASSERT_EQ(run(args, r + "-io"), 0) << slurp(r + "-io.stderr");
+    auto bring_ups = [&] {
+      const std::string log = slurp(r + "/run.log");
+      std::size_t n = 0;
+      for (std::size_t at = log.find("bring-up"); at != std::string::npos; at = log.find("bring-up", at + 1)) ++n;
+      return n;
+    };
+    const std::size_t before = bring_ups();
     EXPECT_EQ(read_json(r + "/passport.json")["outcome"], "PASS");
     EXPECT_FALSE(fs::exists(r + "/report.html")) << "the earlier page went";
     const std::string err = slurp(r + "-io.stderr");
@@ -1196,9 +1214,8 @@ TEST(Campaign, AReportTheEndingCouldNotWriteIsWrittenByTheResume) {
     std::vector<std::string> resume = {"run", "--resume", r, "--yes", "--no-history"};
     if (sealed) resume.insert(resume.end(), {"--seal-key", key});
     ASSERT_EQ(run(resume, r + "-resume"), 0) << slurp(r + "-resume.stderr");
-    const std::string log = slurp(r + "/run.log");
-    ASSERT_NE(log.find("bring-up"), std::string::npos) << log;
-    EXPECT_EQ(log.find("bring-up"), log.rfind("bring-up")) << "the resume finished the ending without the devices";
+    ASSERT_GT(before, 0u);
+    EXPECT_EQ(bring_ups(), before) << "the resume finished the ending without the devices";
     EXPECT_TRUE(fs::is_regular_file(r + "/report.html"));
     EXPECT_NE(slurp(r + "/report.html").find("PASS"), std::string::npos) << "the run's own page";
     EXPECT_FALSE(fs::exists(r + "/.ending-pending"));

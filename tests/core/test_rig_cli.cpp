@@ -3177,6 +3177,65 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume"), 2) << slurp(d + "/resume.stderr");
 }
 
+// A capture rewritten where it lies with every CRC made good, its size kept and its modification
+// time put back, passes the run's stamps and a resume's reading; a sealed run holds it to the MAC
+// its seal took when the capture closed (a review: the seal, made from the files at the end,
+// vouched for it). The run ends ERROR, and the final seal still says the capture changed.
+TEST(RigCli, ASealedRunHoldsARecordEditedWithItsStampKeptToItsSeal) {
+  const std::string d = tmp("records-forged");
+  const std::string key = d + "/station.key";
+  fs::create_directories(d);
+  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
+  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/run", "--seal-key",
+                         key},
+                        d + "/io");
+  ASSERT_TRUE(wait_for_file(c, d + "/run/captures/in-run-U10.cap")) << slurp(d + "/io.stderr");
+  const std::string cap = d + "/run/captures/run03-U10.cap";
+  const auto mtime = fs::last_write_time(cap);
+  {
+    std::fstream f(cap, std::ios::in | std::ios::out | std::ios::binary);
+    auto u32 = [&](std::streamoff at) {
+      unsigned char b[4];
+      f.seekg(at);
+      f.read(reinterpret_cast<char*>(b), 4);
+      return uint32_t{b[0]} | uint32_t{b[1]} << 8 | uint32_t{b[2]} << 16 | uint32_t{b[3]} << 24;
+    };
+    auto put = [&](std::streamoff at, uint32_t v) {
+      const char b[4] = {char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+      f.seekp(at);
+      f.write(b, 4);
+    };
+    const std::streamoff block = (16 + u32(8) + 15) / 16 * 16;  // the first block, after the header
+    const uint32_t count = u32(block + 4);
+    std::vector<unsigned char> payload(std::size_t{count} * 16);
+    f.seekg(block + 16);
+    f.read(reinterpret_cast<char*>(payload.data()), static_cast<std::streamsize>(payload.size()));
+    payload[4] ^= 0x01;  // the first sample's x, its lowest mantissa bit
+    f.seekp(block + 16);
+    f.write(reinterpret_cast<const char*>(payload.data()), static_cast<std::streamsize>(payload.size()));
+    put(block + 8, static_cast<uint32_t>(crc32(0L, payload.data(), static_cast<uInt>(payload.size()))));
+    unsigned char h[12];
+    f.seekg(block);
+    f.read(reinterpret_cast<char*>(h), 12);
+    put(block + 12, static_cast<uint32_t>(crc32(0L, h, 12)));
+  }
+  fs::last_write_time(cap, mtime);
+  EXPECT_EQ(wait_exit(c), 4) << slurp(d + "/io.stderr");
+  const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ERROR");
+  const std::string why = p["aborted_reason"].get<std::string>();
+  EXPECT_NE(why.find("changed after they were written: captures/run03-U10.cap: changed since it was sealed"),
+            std::string::npos)
+      << why;
+  // What else the run recorded holds (only the edited capture is named).
+  EXPECT_EQ(why.find("run04-U20"), std::string::npos) << why;
+  EXPECT_EQ(run({"verify", d + "/run", "--seal-key", key}, d + "/verify"), 1) << slurp(d + "/verify.stderr");
+  EXPECT_NE((slurp(d + "/verify.stdout") + slurp(d + "/verify.stderr")).find("captures/run03-U10.cap: changed since it was sealed"),
+            std::string::npos)
+      << slurp(d + "/verify.stdout") << slurp(d + "/verify.stderr");
+}
+
 // A passport the folder cannot take (a full disk, a read-only folder; here a directory squats on
 // its temporary name) is exit 4 with the OS's reason, and run.log, the run's account, says
 // which outcome was not written (a review: it ended at "safe state reached").
@@ -3732,6 +3791,35 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
 // What the rig writes into a folder must be what it writes there: a folder in place of a file it
 // replaces, or a file in place of the captures' folder, is exit 2 before any device opens (a
 // file named `captures` ended the run ERROR, exit 4, after its devices had opened: a review).
+// A file of a name the run writes, left in a new run's --out by something else, is not replaced
+// without a word (a review: a stray report.html was; a stray capture is kept aside): exit 2 before
+// the run, the file as it was. The profile the run is given, kept in its --out as profile.toml,
+// is the run's own copy and goes on.
+TEST(RigCli, ANewRunDoesNotReplaceAFileOfItsNamesThatSomethingElseLeft) {
+  const std::string d = tmp("stray-outputs");
+  for (const char* name : {"report.html", "junit.xml", "analysis.json", "seal.json", "profile.toml"}) {
+    const std::string out = d + "/" + name;
+    fs::create_directories(out);
+    std::ofstream(out + "/" + name) << "someone's";
+    for (const bool dry : {true, false}) {
+      std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--no-history", "--out", out};
+      if (dry) args.emplace_back("--dry-run");
+      EXPECT_EQ(run(args, out + "-io"), 2) << name;
+      EXPECT_NE(slurp(out + "-io.stderr").find(out + " holds " + name + ", which a run writes, but no run (no run.json): "
+                                                                          "a new run would replace it; move it"),
+                std::string::npos)
+          << slurp(out + "-io.stderr");
+    }
+    EXPECT_EQ(slurp(out + "/" + name), "someone's");
+    EXPECT_FALSE(fs::exists(out + "/run.json"));
+  }
+  const std::string own = d + "/own";
+  fs::create_directories(own);
+  fs::copy_file(std::string(RIG_SOURCE_DIR) + "/profiles/ci.toml", own + "/profile.toml");
+  EXPECT_EQ(run({"run", "--profile", own + "/profile.toml", "--yes", "--no-history", "--out", own}, d + "/own-io"), 0)
+      << slurp(d + "/own-io.stderr");
+}
+
 TEST(RigCli, AFolderHoldingWhatTheRigWritesInTheWrongKindIsRefusedFirst) {
   const std::string d = tmp("wrong-kind");
   for (const char* what : {"captures", "report.html", "captures-link"}) {
