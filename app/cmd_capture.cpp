@@ -402,9 +402,37 @@ int cmd_import(const ImportArgs& a) {
   const LinkStats& st = reasm.stats();
   w.close();
 
+  // The rate against the log's clock: the samples taken (with those lost between them) over the
+  // time their frames span. A clock's drift is ppm; a logger's stamps come late by up to the
+  // longest quiet time between frames (a burst, a pause the counter did not count), so the
+  // tolerance is 2 % plus that over the span: a rate off by half or double still stands out. A
+  // clock that stepped back (said above) gives no span to read.
+  std::string rate_mismatch, clock_line;
+  if (taken_first && taken_last && back == 0) {
+    const double span_s = taken_last->t_s - taken_first->t_s;
+    const double covered = static_cast<double>(w.samples_written() + st.lost);
+    if (span_s >= 1.0 && covered >= 100) {
+      const double log_rate = (covered - sp.samples_per_frame) / span_s;
+      const double tolerance = 0.02 + longest_quiet_s / span_s;
+      clock_line = fmt::format("the log's clock: {:.0f} samples ({} lost among them) in {:.6g} s, lines {} to {}: {:.6g} Hz",
+                               covered, st.lost, span_s, taken_first->line, taken_last->line, log_rate);
+      if (std::fabs(log_rate / h.rate_hz - 1) > tolerance)
+        rate_mismatch = fmt::format(
+            "{}: the log's clock gives {:.6g} Hz (lines {} to {}), the capture's rate would be {} Hz ({}), more than "
+            "{:.3g} % apart: every tau would be off by a factor of {:.3g}. Check [dut.stream] rate_hz (or give --rate "
+            "with the DUT's rate) and the counter signal's byte order and length (gaps {}, {} samples lost); a "
+            "stream that paused without its counter, or a log of two streams, is imported in parts (--from-line); "
+            "{} not written",
+            a.log, log_rate, taken_first->line, taken_last->line, h.rate_hz,
+            a.rate_hz ? "--rate" : "the hardware file's or the protocol's", 100 * tolerance, h.rate_hz / log_rate,
+            st.gaps, st.lost, a.out);
+    }
+  }
   // The counts are the stream interface's, with --iface or without (they differed: a review).
-  std::printf("%s -> %s: %llu samples from %llu stream frames (%llu frames read%s, %llu other ids)\n", a.log.c_str(),
-              a.out.c_str(), static_cast<unsigned long long>(w.samples_written()),
+  // "LOG -> OUT" only where OUT is kept (it read so above a "not written", a review).
+  const bool kept = w.samples_written() > 0 && rate_mismatch.empty();
+  std::printf("%s%s%s: %llu samples from %llu stream frames (%llu frames read%s, %llu other ids)\n", a.log.c_str(),
+              kept ? " -> " : "", kept ? a.out.c_str() : "", static_cast<unsigned long long>(w.samples_written()),
               static_cast<unsigned long long>(stream_frames), static_cast<unsigned long long>(frames),
               stream_iface.empty() ? "" : (" on " + stream_iface).c_str(), static_cast<unsigned long long>(other));
   if (elsewhere > 0)
@@ -433,32 +461,7 @@ int cmd_import(const ImportArgs& a) {
   // The list holds the first kMaxGapList; the count is every gap's.
   if (st.gaps > 20) std::printf("  ... %llu more gaps\n", static_cast<unsigned long long>(st.gaps - 20));
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
-  // The rate against the log's clock: the samples taken (with those lost between them) over the
-  // time their frames span. A clock's drift is ppm; a logger's stamps come late by up to the
-  // longest quiet time between frames (a burst, a pause the counter did not count), so the
-  // tolerance is 2 % plus that over the span: a rate off by half or double still stands out. A
-  // clock that stepped back (said above) gives no span to read.
-  std::string rate_mismatch;
-  if (taken_first && taken_last && back == 0) {
-    const double span_s = taken_last->t_s - taken_first->t_s;
-    const double covered = static_cast<double>(w.samples_written() + st.lost);
-    if (span_s >= 1.0 && covered >= 100) {
-      const double log_rate = (covered - sp.samples_per_frame) / span_s;
-      const double tolerance = 0.02 + longest_quiet_s / span_s;
-      std::printf("the log's clock: %.0f samples (%llu lost among them) in %.6g s, lines %zu to %zu: %.6g Hz\n", covered,
-                  static_cast<unsigned long long>(st.lost), span_s, taken_first->line, taken_last->line, log_rate);
-      if (std::fabs(log_rate / h.rate_hz - 1) > tolerance)
-        rate_mismatch = fmt::format(
-            "{}: the log's clock gives {:.6g} Hz (lines {} to {}), the capture's rate would be {} Hz ({}), more than "
-            "{:.3g} % apart: every tau would be off by a factor of {:.3g}. Check [dut.stream] rate_hz (or give --rate "
-            "with the DUT's rate) and the counter signal's byte order and length (gaps {}, {} samples lost); a "
-            "stream that paused without its counter, or a log of two streams, is imported in parts (--from-line); "
-            "{} not written",
-            a.log, log_rate, taken_first->line, taken_last->line, h.rate_hz,
-            a.rate_hz ? "--rate" : "the hardware file's or the protocol's", 100 * tolerance, h.rate_hz / log_rate,
-            st.gaps, st.lost, a.out);
-    }
-  }
+  if (!clock_line.empty()) std::printf("%s\n", clock_line.c_str());
   if (!rate_mismatch.empty()) {
     std::error_code ec;
     std::filesystem::remove(a.out, ec);

@@ -731,7 +731,14 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
       << why;
   EXPECT_NE(why.find("every tau would be off by a factor of 2."), std::string::npos) << why;
   EXPECT_FALSE(fs::exists(dir() / "slow.rigcap")) << "not written";
+  // Its summary names no capture it did not write (it read "slow.log -> slow.rigcap: 2000 samples").
+  EXPECT_NE(slurp(dir() / "slow.out").find("slow.log: 2000 samples from 4000 stream frames"), std::string::npos)
+      << slurp(dir() / "slow.out");
+  EXPECT_EQ(slurp(dir() / "slow.out").find(" -> "), std::string::npos) << slurp(dir() / "slow.out");
   ASSERT_EQ(run_rig(slow_args + " --rate 500", "slow500"), 0) << slurp(dir() / "slow500.err");
+  EXPECT_NE(slurp(dir() / "slow500.out").find("slow.log -> " + (dir() / "slow.rigcap").string() + ": 2000 samples"),
+            std::string::npos)
+      << slurp(dir() / "slow500.out");
   EXPECT_NE(slurp(dir() / "slow500.out").find("the log's clock: 2000 samples (0 lost among them) in 3.998"),
             std::string::npos)
       << slurp(dir() / "slow500.out");
