@@ -901,7 +901,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   const bool no_report = report_listed || !fs::exists(dir + "/report.html", ec);
   std::vector<std::string> left;
   if (junit_staged) left.emplace_back("junit.xml put in place");
-  if (no_report) left.emplace_back("report.html written");
+  if (no_report) left.emplace_back(sealed ? "report.html written and sealed with the rest" : "report.html written");
   if (!a.no_history) left.emplace_back("the history row recorded");
   const std::string what = left.empty() ? std::string("nothing left") : fmt::format("{}", fmt::join(left, ", "));
   if (a.dry_run) {

@@ -1213,6 +1213,13 @@ TEST(Campaign, AReportTheEndingCouldNotWriteIsWrittenByTheResume) {
     fs::remove_all(r + "/report.html.tmp");
     std::vector<std::string> resume = {"run", "--resume", r, "--yes", "--no-history"};
     if (sealed) resume.insert(resume.end(), {"--seal-key", key});
+    std::vector<std::string> dry = resume;
+    dry.emplace_back("--dry-run");
+    ASSERT_EQ(run(dry, r + "-dry"), 0) << slurp(r + "-dry.stderr");
+    EXPECT_NE(slurp(r + "-dry.stdout").find(sealed ? "a resume does what is left (report.html written and sealed with the rest)"
+                                                   : "a resume does what is left (report.html written)"),
+              std::string::npos)
+        << slurp(r + "-dry.stdout");
     ASSERT_EQ(run(resume, r + "-resume"), 0) << slurp(r + "-resume.stderr");
     ASSERT_GT(before, 0u);
     EXPECT_EQ(bring_ups(), before) << "the resume finished the ending without the devices";
