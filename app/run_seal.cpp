@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 
 #include <sys/stat.h>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/file_stamp.hpp"
 #include "rig/executive/executive.hpp"
 
 namespace rig::cli {
@@ -25,19 +27,53 @@ std::optional<seal::Key> station_key(const std::string& option, bool given) {
   return seal::load_key(option);
 }
 
+namespace {
+
+// The MAC this process took of a record, and which file it took it of (rig/core/file_stamp.hpp).
+struct CarriedMac {
+  std::uint64_t inode = 0, device = 0;
+  std::string mac;
+  std::string key_id;
+};
+
+// A record (its invocation, profile, captures, the loop test's records) is written once, so the
+// MAC this process first took of it, at the checkpoint after its writer closed it, is carried to
+// every later seal while the name holds the same file: read again each time, a record edited in
+// place between two seals with its size and modification time kept (which the run's stamps
+// cannot see) was vouched for as edited (a review). A record written again (a resume re-records a
+// phase: its earlier file set aside, a new one created) is another file, read again. Kept in
+// this process only: a resume starts from the seal it checked, and reads every file once more.
+std::map<std::string, CarriedMac>& carried_macs() {
+  static std::map<std::string, CarriedMac> carried;
+  return carried;
+}
+
+}  // namespace
+
 void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vector<std::string>& files,
                      const std::optional<std::string>& checkpoint_text, const std::string& outcome) {
-  // A record (its invocation, profile, captures, the loop test's records) is written once: the
-  // MAC the first seal took of it, right after its writer closed it, is carried from seal to seal.
-  // Read again each time, a record edited between two seals with its size and modification time
-  // kept (which the run's stamps cannot see) was vouched for as written (a review).
-  const std::vector<std::pair<std::string, std::string>> before = seal::sealed_macs(dir + "/seal.json", k);
   std::vector<seal::Entry> entries;
+  std::vector<std::pair<std::string, CarriedMac>> taken;  // carried once this seal is written
   for (const std::string& rel : files) {
     if (checkpoint_text && rel == "checkpoint.json") continue;
     seal::Entry e{rel, "", false, ""};
-    const auto was = std::lower_bound(before.begin(), before.end(), std::make_pair(rel, std::string()));
-    if (is_record(rel) && was != before.end() && was->first == rel) e.mac = was->second;
+    if (is_record(rel)) {
+      const std::string path = fs::absolute(dir + "/" + rel).lexically_normal().string();
+      if (const std::optional<FileStamp> now = stamp_of(path)) {
+        const auto was = carried_macs().find(path);
+        if (was != carried_macs().end() && was->second.inode == now->inode && was->second.device == now->device &&
+            was->second.key_id == k.id) {
+          e.mac = was->second.mac;
+        } else {
+          try {
+            e.mac = seal::file_mac(k, path);
+            taken.emplace_back(path, CarriedMac{now->inode, now->device, e.mac, k.id});
+          } catch (const std::exception&) {  // make_seal reads it and says why
+            e.mac.clear();
+          }
+        }
+      }
+    }
     entries.push_back(std::move(e));
   }
   if (checkpoint_text) entries.push_back({"checkpoint.json", *checkpoint_text, true, ""});
@@ -45,6 +81,7 @@ void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vect
     const std::string text = seal::make_seal(dir, k, entries, outcome);
     if (fs::exists(dir + "/seal.json")) fs::rename(dir + "/seal.json", dir + "/seal.prev.json");
     write_file_atomic(dir + "/seal.json", text);
+    for (auto& [path, c] : taken) carried_macs()[path] = std::move(c);
   } catch (const std::exception& e) {
     const std::string why = dir + "/seal.json: cannot be written: " + e.what();
     // At a checkpoint the folder stopped holding the run's records mid-run: exit 4, as for the

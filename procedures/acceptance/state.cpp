@@ -382,13 +382,9 @@ std::string ProcedureState::recording_problem(const std::string& file, const std
   try {
     for (auto& [idx, r] : s.runs)
       if (r.rec.capture == file && idx >= 1 && idx <= profile_.order.size())
-        check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir,
-                      {run_phase_id(idx, profile_.order[idx - 1]), profile_.order[idx - 1], profile_.run_s, s.serial()});
-    if (s.in_run && s.in_run->capture == file)
-      check_capture(*s.in_run, "state.in_run", run_dir,
-                    {in_run_phase_id(profile_), profile_.in_run_orientation, profile_.in_run_s, s.serial()});
-    if (s.raw && s.raw->capture == file)
-      check_capture(*s.raw, "state.raw", run_dir, {raw_phase_id(profile_), profile_.raw_orientation, profile_.raw_s, s.serial()});
+        check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir, run_recording(idx, s.serial()));
+    if (s.in_run && s.in_run->capture == file) check_capture(*s.in_run, "state.in_run", run_dir, in_run_recording(s.serial()));
+    if (s.raw && s.raw->capture == file) check_capture(*s.raw, "state.raw", run_dir, raw_recording(s.serial()));
     if (s.loop_test && s.loop_test->supported && s.loop_test->file == file) check_loop_record(*s.loop_test, run_dir);
   } catch (const std::exception& e) {
     return e.what();
@@ -441,20 +437,17 @@ void ProcedureState::restore(const nlohmann::json& j, const std::vector<std::str
       if (idx > profile_.order.size() || r.orientation != profile_.order[idx - 1])
         throw std::invalid_argument("state.runs." + std::to_string(idx) + ".orientation: " +
                                     to_string(r.orientation) + " does not match the profile's order");
-      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir,
-                    {id, profile_.order[idx - 1], profile_.run_s, s.serial()});
+      check_capture(r.rec, "state.runs." + std::to_string(idx), run_dir, run_recording(idx, s.serial()));
     } else if (id == "bias") {
       need(s.bias.has_value(), "state.bias", id);
     } else if (id == "in-run") {
       need(s.in_run.has_value(), "state.in_run", id);
-      check_capture(*s.in_run, "state.in_run", run_dir,
-                    {in_run_phase_id(profile_), profile_.in_run_orientation, profile_.in_run_s, s.serial()});
+      check_capture(*s.in_run, "state.in_run", run_dir, in_run_recording(s.serial()));
     } else if (id == "in-run-b") {
       need(s.in_run_blocks.has_value(), "state.in_run.blocks", id);
     } else if (id == "raw") {
       need(s.raw.has_value(), "state.raw", id);
-      check_capture(*s.raw, "state.raw", run_dir,
-                    {raw_phase_id(profile_), profile_.raw_orientation, profile_.raw_s, s.serial()});
+      check_capture(*s.raw, "state.raw", run_dir, raw_recording(s.serial()));
     } else if (id == "allan") {
       need(s.analysis.has_value(), "state.analysis", id);
     } else if (id == "loop") {

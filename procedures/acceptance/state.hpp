@@ -107,6 +107,16 @@ class ProcedureState final : public PhaseState {
     double seconds;
     std::string serial;
   };
+  // The profile's recordings, as restore() and recording_problem() alike hold a capture to them.
+  Recording run_recording(std::size_t index, const std::string& serial) const {
+    return {run_phase_id(index, profile_.order[index - 1]), profile_.order[index - 1], profile_.run_s, serial};
+  }
+  Recording in_run_recording(const std::string& serial) const {
+    return {in_run_phase_id(profile_), profile_.in_run_orientation, profile_.in_run_s, serial};
+  }
+  Recording raw_recording(const std::string& serial) const {
+    return {raw_phase_id(profile_), profile_.raw_orientation, profile_.raw_s, serial};
+  }
   void check_capture(Recorded& r, const std::string& field, const std::string& run_dir, const Recording& want) const;
   const Profile& profile_;
   std::vector<DutState> slots_ = std::vector<DutState>(1);

@@ -213,12 +213,6 @@ std::optional<Read> read_seal(const std::string& seal_path, const Key& k, std::s
 
 }  // namespace
 
-std::vector<std::pair<std::string, std::string>> sealed_macs(const std::string& seal_path, const Key& k) {
-  std::string problem;
-  std::optional<Read> r = read_seal(seal_path, k, problem);
-  return r ? std::move(r->files) : std::vector<std::pair<std::string, std::string>>{};
-}
-
 Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
                  const std::vector<std::string>& must_cover) {
   Check c;

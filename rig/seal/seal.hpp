@@ -29,7 +29,7 @@ struct Entry {
   std::string rel;   // path relative to the run folder, '/' separated
   std::string text;  // the bytes to seal when the file is not written yet (empty: read the file)
   bool from_text = false;
-  std::string mac;   // its MAC as an earlier seal holds it (a record sealed once, carried): used as is
+  std::string mac;   // its MAC, already taken (a record sealed once, carried to later seals): used as is
 };
 
 // seal.json's text (schema rig.seal/1) over `entries`: each file's MAC, the run's `outcome` as
@@ -37,10 +37,6 @@ struct Entry {
 // entries of different seals cannot be combined and a sealed verdict cannot be edited.
 std::string make_seal(const std::string& dir, const Key& k, const std::vector<Entry>& entries,
                       const std::string& outcome = "");
-
-// The files and MACs of the seal at `seal_path` when it is this key's and its own MAC holds;
-// empty otherwise (no seal, another key's, edited). What a later seal carries for a record.
-std::vector<std::pair<std::string, std::string>> sealed_macs(const std::string& seal_path, const Key& k);
 
 enum class FileState { Ok, Changed, Missing, NotRegular };
 inline const char* to_string(FileState f) {
