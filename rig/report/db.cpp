@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <type_traits>
 
+#include <unistd.h>
+
 #include "rig/core/errors.hpp"
 #include "rig/core/lazy_library.hpp"
 #include "rig/core/path_kind.hpp"
@@ -76,7 +78,21 @@ class SqliteDb final : public Db {
       std::filesystem::create_directories(p.parent_path(), ec);
       if (ec) throw ConfigError(where_ + ": cannot create folder " + p.parent_path().string() + ": " + ec.message());
     }
-    const int mode = access == Access::ReadOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    // A reader that could write opens the file read-write, its statements held to reading
+    // (query_only): a journal a writer killed mid-commit left ("hot") is rolled back only by a
+    // connection that can write, and opened read-only every reader after such a kill failed with
+    // "attempt to write a readonly database", `rig run` included (its history check), until
+    // something else opened the file (a review).
+    const std::string journal = path + "-journal";
+    const bool writable = ::access(path.c_str(), R_OK | W_OK) == 0 &&
+                          ::access((p.has_parent_path() ? p.parent_path().string() : std::string(".")).c_str(), W_OK | X_OK) == 0;
+    const bool query_only = access == Access::ReadOnly && writable;
+    const int mode = access == Access::ReadOnly ? (writable ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY)
+                                                : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    if (access == Access::ReadOnly && !writable && path_kind(journal, "history journal") != PathKind::missing)
+      throw ConfigError(where_ + ": " + journal + " is left by a write that was interrupted, and only an account "
+                        "that may write " + path + " and its folder can roll it back (rig history --record DIR, or "
+                        "sqlite3 " + path + " 'PRAGMA integrity_check', run by that account)");
     if (sqlite3_open_v2(path.c_str(), &db_, mode | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
       std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
       sqlite3_close(db_);
@@ -86,6 +102,7 @@ class SqliteDb final : public Db {
     // Several rig processes may write one file: wait for a lock instead of failing.
     sqlite3_busy_timeout(db_, 10000);
     exec("PRAGMA foreign_keys = ON");
+    if (query_only) exec("PRAGMA query_only = ON");
   }
   ~SqliteDb() override { sqlite3_close(db_); }
 

@@ -58,7 +58,9 @@ enum class Access { ReadWrite, ReadOnly };
 
 // Opens `url` ("sqlite:PATH", a plain path, "postgresql://...", "postgres://...").
 // ReadWrite: SQLite files and their folder are created when missing. ReadOnly: a missing
-// SQLite file is an error and the file is opened read-only (SQLITE_OPEN_READONLY).
+// SQLite file is an error; one this account may write is opened read-write with its statements
+// held to reading (PRAGMA query_only), so that a journal an interrupted writer left is rolled
+// back; otherwise read-only (SQLITE_OPEN_READONLY), and such a journal is a ConfigError saying so.
 // Throws rig::ConfigError.
 std::unique_ptr<Db> open_db(const std::string& url, Access access = Access::ReadWrite);
 

@@ -2,6 +2,8 @@
 // the default location, concurrent writers and the `rig history` command's output.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -10,6 +12,7 @@
 #include <thread>
 
 #include "app/commands.hpp"
+#include "rig/report/db.hpp"
 #include "rig/report/db_url.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/timefmt.hpp"
@@ -208,6 +211,40 @@ TEST(HistorySqlite, ReadingNeverCreatesADatabase) {
   EXPECT_EQ(h::list_runs(good, {}).size(), 1u);
   EXPECT_EQ(fs::last_write_time(good), before);
   EXPECT_EQ(fs::file_size(good), size);
+}
+
+// A writer killed mid-commit (a run's ending, `rig history --record`) leaves a hot journal that
+// only a connection that can write rolls back: a reader that opened the file read-only failed
+// with "attempt to write a readonly database", and so did every `rig run` after it (its history
+// check), until something else opened the file (a review). Readers open it read-write, held to
+// reading: the journal is rolled back and nothing is lost.
+TEST(HistorySqlite, AJournalAWriterKilledMidCommitLeftIsRolledBackByTheNextReader) {
+  TempDir d;
+  const std::string file = (d.path / "h.sqlite").string();
+  for (int i = 0; i < 3; ++i)
+    h::record_run(file, rig::test::fixture_passport("HOT-" + std::to_string(i)), (d.path / std::to_string(i)).string());
+  const std::size_t values = h::trend(file, "bias", {}).size();
+  ASSERT_GT(values, 0u);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // a writer that dies with its transaction spilled to the file
+    sqlite3* db = nullptr;
+    if (sqlite3_open(file.c_str(), &db) != SQLITE_OK) ::_exit(1);
+    sqlite3_exec(db, "PRAGMA cache_size = 1; BEGIN IMMEDIATE; DELETE FROM run_values; DELETE FROM runs;", nullptr,
+                 nullptr, nullptr);
+    ::_exit(0);  // no commit, no rollback, no close
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  ASSERT_TRUE(fs::exists(file + "-journal")) << "the kill left its journal";
+  EXPECT_EQ(h::list_runs(file, {}).size(), 3u);
+  EXPECT_EQ(h::trend(file, "bias", {}).size(), values);
+  EXPECT_FALSE(fs::exists(file + "-journal")) << "rolled back by the reader";
+  // Read-write, yet held to reading: a reader's statement cannot change the file.
+  const auto db = rig::history::open_db("sqlite:" + file, rig::history::Access::ReadOnly);
+  EXPECT_THROW(db->query("DELETE FROM runs", {}), rig::ConfigError);
+  EXPECT_EQ(h::list_runs(file, {}).size(), 3u);
 }
 
 TEST(HistorySqlite, ConcurrentWritersAllLand) {
