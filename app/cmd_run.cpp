@@ -631,6 +631,28 @@ void check_run_folder(const std::string& dir, bool new_run_here, const std::stri
   if (new_run_here) refuse_an_earlier_run(dir, profile_source);
 }
 
+// The paths the run writes into its JSON files (run.json, passport.json, the history row) must be
+// UTF-8 text, as JSON is: a folder named in Latin-1 ran all its phases and then lost the run,
+// its passport, JUnit report and history row refused by the JSON writer, exit 4, and every
+// resume the same (a review). Refused before anything is written or opened, exit 2.
+void require_utf8_paths(const RunArgs& a) {
+  std::error_code ec;
+  auto check = [&](const std::string& option, const std::string& given, const std::string& path) {
+    const std::size_t at = first_non_utf8(path);
+    if (at == std::string::npos) return;
+    throw ConfigError(fmt::format("{} {}: {}not UTF-8 text (byte 0x{:02X} at offset {}); the run's passport and "
+                                  "run.json are JSON, which holds only UTF-8: rename it or give another path",
+                                  option, shown_text(given), path == given ? "" : shown_text(path) + " is ",
+                                  static_cast<unsigned char>(path[at]), at));
+  };
+  if (!a.resume.empty()) check("--resume", a.resume, fs::absolute(a.resume, ec).string());
+  else if (!a.out.empty()) check("--out", a.out, fs::absolute(a.out, ec).string());
+  else check("--out", "(default: runs/ here)", fs::current_path(ec).string());
+  if (!a.hardware.empty()) check("--hardware", a.hardware, fs::absolute(a.hardware, ec).string());
+  if (!a.profile.empty()) check("--profile", a.profile, a.profile);
+  if (!a.db.empty()) check("--db", a.db, a.db);
+}
+
 // The passport's identity block, for every ending (finished at the time of the call).
 PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const toml::table& hw,
                            const std::string& started, const std::string& serial) {
@@ -1104,6 +1126,7 @@ int do_run(RunArgs a) {
   SignalWatcher signals(cancel);  // before any backend thread exists
   // The station's key, and a resumed folder's seal, before anything in the folder is read.
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
+  require_utf8_paths(a);
   // One process per run folder (two runs or resumes of one folder would interleave their files):
   // held from here to the end of the run; a new run's folder is taken once it exists (below).
   std::optional<FolderLock> folder_lock;

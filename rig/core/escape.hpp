@@ -82,6 +82,17 @@ inline std::string shown_text(std::string_view s) {
   return out;
 }
 
+// The offset of the first byte of `s` that is not in well-formed UTF-8 (a Latin-1 file name),
+// or npos when `s` is UTF-8 throughout: JSON holds only UTF-8 text.
+inline std::size_t first_non_utf8(std::string_view s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const std::size_t len = static_cast<unsigned char>(s[i]) < 0x80 ? 1 : utf8_sequence_at(s, i);
+    if (len == 0) return i;
+    i += len;
+  }
+  return std::string_view::npos;
+}
+
 // Whether shown_text would escape anything: `s` holds a control byte, a byte that is not
 // well-formed UTF-8 or a character a terminal acts on.
 inline bool has_unshowable(std::string_view s) { return shown_text(s) != s; }

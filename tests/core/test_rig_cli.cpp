@@ -3820,6 +3820,31 @@ TEST(RigCli, ANewRunDoesNotReplaceAFileOfItsNamesThatSomethingElseLeft) {
       << slurp(d + "/own-io.stderr");
 }
 
+// A path the run writes into its JSON files that is not UTF-8 (a Latin-1 folder name) is exit 2
+// before anything is written (a review: all 19 phases ran, then the passport, JUnit report and
+// history row were refused by the JSON writer, exit 4, and every resume the same).
+TEST(RigCli, APathThatIsNotUtf8IsRefusedBeforeTheRun) {
+  const std::string d = tmp("not-utf8");
+  fs::create_directories(d);
+  const std::string latin1 = d + "/caf\xE9";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", latin1}, d + "/out"), 2);
+  EXPECT_NE(slurp(d + "/out.stderr").find("--out " + d + "/caf\\xE9: not UTF-8 text (byte 0xE9 at offset " +
+                                          std::to_string(latin1.size() - 1) + ")"),
+            std::string::npos)
+      << slurp(d + "/out.stderr");
+  EXPECT_FALSE(fs::exists(latin1));
+  std::ofstream(latin1 + ".toml") << "[dut]\n";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--hardware", latin1 + ".toml", "--out", d + "/run",
+                 "--dry-run"},
+                d + "/hw"),
+            2);
+  EXPECT_NE(slurp(d + "/hw.stderr").find("--hardware " + d + "/caf\\xE9.toml: not UTF-8 text"), std::string::npos)
+      << slurp(d + "/hw.stderr");
+  // UTF-8 beyond ASCII is text (a Cyrillic folder name).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/\xD0\x94\xD0\xA3\xD0\xA2"}, d + "/cyr"), 0)
+      << slurp(d + "/cyr.stderr");
+}
+
 TEST(RigCli, AFolderHoldingWhatTheRigWritesInTheWrongKindIsRefusedFirst) {
   const std::string d = tmp("wrong-kind");
   for (const char* what : {"captures", "report.html", "captures-link"}) {
