@@ -75,6 +75,12 @@ const std::vector<Migration>& migrations() {
         "INSERT INTO run_endings (run_id, seq, outcome, finished, recorded, aborted_reason, passport) "
         "SELECT id, 0, outcome, finished, recorded, aborted_reason, passport FROM runs"},
        nullptr},
+      // v4: a run is its folder, start time, DUT and station: two stations sharing a database,
+      // each writing a folder of the same path in the same second, or a line that moves a folder
+      // away and starts the next DUT in it within the second, had their runs merged into one row,
+      // the first DUT's record gone (a review).
+      {4, {"DROP INDEX runs_dir_started", "CREATE UNIQUE INDEX runs_identity ON runs (run_dir, started, serial, station)"},
+       nullptr},
   };
   return m;
 }
@@ -232,8 +238,10 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
                             outcome, dir, text, station_name(passport), reason, now};
   // A run recorded again (a resume, `--record` after a database outage) keeps its id, so that a
   // reference to it (a quality record, a ticket) stays valid; it used to get a new one each time.
-  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? ORDER BY id",
-                             {dir, started});
+  // A run is its folder, start time, DUT and station (v4); a row from before v2 has no station.
+  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? AND serial = ? "
+                             "AND (station IS NOT DISTINCT FROM ? OR station IS NULL) ORDER BY id",
+                             {dir, started, passport["serial"].get<std::string>(), station_name(passport)});
   Recorded rec;
   if (was.empty()) {
     rec.id = as_int(db->query("INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, "

@@ -160,4 +160,30 @@ inline void history_keeps_every_ending(const std::string& url, const std::string
   EXPECT_TRUE(h::endings_of(url, 999999).empty());
 }
 
+// A run is its folder, start time, DUT and station: two stations sharing a database that write a
+// folder of the same path in the same second, or a line that starts the next DUT in a folder of
+// the same path within the second, are two runs (a review: one row, DUT-A's record gone).
+inline void history_tells_runs_of_one_folder_and_second_apart(const std::string& url, const std::string& run_root) {
+  namespace h = rig::history;
+  const std::string dir = run_root + "/current";
+  auto record = [&](const char* serial, const char* station) {
+    json p = fixture_passport(serial, "PASS", "2026-11-08T08:00:00Z");
+    p["station"] = station;
+    return h::record_run(url, p, dir);
+  };
+  const h::Recorded a = record("DUT-A", "line-1 station 1");
+  const h::Recorded b = record("DUT-B", "line-1 station 2");
+  const h::Recorded c = record("DUT-C", "line-1 station 1");
+  const h::Recorded a2 = record("DUT-A", "line-1 station 2");
+  EXPECT_NE(a.id, b.id);
+  EXPECT_NE(a.id, c.id);
+  EXPECT_NE(a.id, a2.id);
+  EXPECT_EQ(record("DUT-A", "line-1 station 1").id, a.id);  // the same run recorded again
+  for (const char* serial : {"DUT-A", "DUT-B", "DUT-C"}) {
+    h::Filter f;
+    f.serial = serial;
+    EXPECT_EQ(h::list_runs(url, f).size(), std::string(serial) == "DUT-A" ? 2u : 1u) << serial;
+  }
+}
+
 }  // namespace rig::test

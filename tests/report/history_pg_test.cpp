@@ -44,6 +44,11 @@ TEST_F(HistoryPg, EveryEndingOfARunIsKept) {
   rig::test::history_keeps_every_ending(fresh_db("endings"), d.path.string());
 }
 
+TEST_F(HistoryPg, RunsOfOneFolderAndSecondOnTwoStationsOrDutsAreTwoRuns) {
+  TempDir d;
+  rig::test::history_tells_runs_of_one_folder_and_second_apart(fresh_db("identity"), d.path.string());
+}
+
 // Version 1 as released, in PostgreSQL's dialect (frozen copy of its DDL).
 constexpr const char* kSchemaV1 =
     "CREATE TABLE schema_version (version INTEGER NOT NULL PRIMARY KEY, applied TEXT NOT NULL);"

@@ -89,6 +89,12 @@ TEST(HistorySqlite, EveryEndingOfARunIsKept) {
   rig::test::history_keeps_every_ending("sqlite:" + (d.path / "h.sqlite").string(), d.path.string());
 }
 
+TEST(HistorySqlite, RunsOfOneFolderAndSecondOnTwoStationsOrDutsAreTwoRuns) {
+  TempDir d;
+  rig::test::history_tells_runs_of_one_folder_and_second_apart("sqlite:" + (d.path / "h.sqlite").string(),
+                                                               d.path.string());
+}
+
 TEST(HistorySqlite, PlainPathIsAnSqliteFile) {
   TempDir d;
   const std::string path = (d.path / "h.db").string();
