@@ -37,6 +37,7 @@ void check_rig_config(const std::string& path) {
 }  // namespace
 
 HistorySource default_history() {
+  if (const char* e = std::getenv("RIG_HISTORY"); e && !*e) return {history::default_db_url(), true};  // refused there
   if (const char* e = std::getenv("RIG_HISTORY"); e && *e) {
     const std::string url = e;
     try {

@@ -442,6 +442,10 @@ std::vector<std::string> value_names(const std::string& db_url) {
 
 // ------------------------------------------------------------------ default location
 std::optional<std::string> rig_config_path() {
+  // Set but empty is not "unset" (a script's RIG_CONFIG=$UNSET_VAR read the home config without a
+  // word; an empty RIG_SEAL_KEY was refused, a review): said, as every empty value is.
+  if (const char* c = std::getenv("RIG_CONFIG"); c && !*c)
+    throw ConfigError("RIG_CONFIG is set but empty: name the rig config file, or unset RIG_CONFIG");
   if (const char* c = std::getenv("RIG_CONFIG"); c && *c) {
     if (path_kind(c, "RIG_CONFIG names") == PathKind::missing)
       throw ConfigError("RIG_CONFIG names '" + std::string(c) + "', which does not exist");
@@ -459,6 +463,9 @@ std::optional<std::string> rig_config_path() {
 }
 
 std::string default_db_url() {
+  if (const char* e = std::getenv("RIG_HISTORY"); e && !*e)  // as RIG_CONFIG (rig_config_path)
+    throw ConfigError("RIG_HISTORY is set but empty: name the history database (sqlite:FILE or postgresql://...), "
+                      "or unset RIG_HISTORY");
   if (const char* e = std::getenv("RIG_HISTORY"); e && *e) return e;
   fs::path config;
   if (const std::optional<std::string> c = rig_config_path()) config = *c;

@@ -356,6 +356,22 @@ TEST(HistoryDefaultUrl, EnvironmentThenConfigThenXdgThenHome) {
   rig::test::write_file(d.path / "line.toml", "[other]\nx = 1\n[history]\nurl = \"postgresql://rig@db.line/results\"\n");
   env.set("RIG_CONFIG", (d.path / "line.toml").c_str());
   EXPECT_EQ(h::default_db_url(), "postgresql://rig@db.line/results");
+  // Set but empty is said, not read as unset (an empty RIG_SEAL_KEY is refused likewise).
+  env.set("RIG_HISTORY", "");
+  EXPECT_THROW(
+      {
+        try {
+          h::default_db_url();
+        } catch (const rig::ConfigError& e) {
+          EXPECT_NE(std::string(e.what()).find("RIG_HISTORY is set but empty"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      rig::ConfigError);
+  env.set("RIG_HISTORY", nullptr);
+  env.set("RIG_CONFIG", "");
+  EXPECT_THROW(h::default_db_url(), rig::ConfigError);
+  env.set("RIG_CONFIG", (d.path / "line.toml").c_str());
   // $RIG_HISTORY wins over everything.
   env.set("RIG_HISTORY", "sqlite:/tmp/x.sqlite");
   EXPECT_EQ(h::default_db_url(), "sqlite:/tmp/x.sqlite");
