@@ -1,5 +1,6 @@
 // The `rig` command line: one subcommand per job (docs/contracts.md).
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cctype>
@@ -95,10 +96,35 @@ void standard_descriptors_open() {
   }
 }
 
+// A signal that ends a subcommand without a watcher of its own (analyze, filter, report,
+// history, capture, verify) is exit 3 as every aborted subcommand's (docs/contracts.md): they
+// ended with the shell's 130, 143 or 129 (a review). `run`, `table`, `dut` and `plant` take
+// the signals on their SignalWatcher's thread (blocked there, so this handler never runs). A
+// signal the process started with ignored (`nohup`, a background job's SIGINT) stays ignored.
+extern "C" void abort_on_signal(int sig) {
+  const char* text = sig == SIGINT ? "rig: aborted: SIGINT\n" : sig == SIGTERM ? "rig: aborted: SIGTERM\n" : "rig: aborted: SIGHUP\n";
+  std::size_t n = 0;
+  while (text[n] != '\0') ++n;
+  [[maybe_unused]] const ssize_t w = ::write(STDERR_FILENO, text, n);
+  ::_exit(rig::kExitAborted);
+}
+
+void aborted_by_signals() {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction was {};
+    if (::sigaction(sig, nullptr, &was) != 0 || was.sa_handler == SIG_IGN) continue;
+    struct sigaction now {};
+    now.sa_handler = abort_on_signal;
+    sigemptyset(&now.sa_mask);
+    ::sigaction(sig, &now, nullptr);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   standard_descriptors_open();
+  aborted_by_signals();
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);

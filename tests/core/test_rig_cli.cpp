@@ -22,6 +22,7 @@
 #include <limits>
 #include <random>
 #include <sstream>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -3843,6 +3844,28 @@ TEST(RigCli, APathThatIsNotUtf8IsRefusedBeforeTheRun) {
   // UTF-8 beyond ASCII is text (a Cyrillic folder name).
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/\xD0\x94\xD0\xA3\xD0\xA2"}, d + "/cyr"), 0)
       << slurp(d + "/cyr.stderr");
+}
+
+// A subcommand without a signal watcher of its own, ended by a signal, exits 3 as every aborted
+// subcommand does (docs/contracts.md); it ended with the shell's 143 or 130 (a review). Here
+// `rig analyze` waits on a FIFO no one writes.
+TEST(RigCli, ASignalEndsEverySubcommandWithExitThree) {
+  const std::string d = tmp("signal-analyze");
+  fs::create_directories(d);
+  ASSERT_EQ(::mkfifo((d + "/fifo").c_str(), 0600), 0);
+  for (const int sig : {SIGTERM, SIGINT, SIGHUP}) {
+    // One this process ignores (a background job's SIGINT, nohup's SIGHUP), the child inherits
+    // ignored, and rig rightly leaves it so.
+    struct sigaction here {};
+    if (::sigaction(sig, nullptr, &here) == 0 && here.sa_handler == SIG_IGN) continue;
+    const std::string name = sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "SIGHUP";
+    const Child c = spawn({"analyze", d + "/fifo", "--input", "text", "--rate", "1"}, d + "/" + name);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ::kill(c.pid, sig);
+    EXPECT_EQ(wait_exit(c), 3) << name;
+    EXPECT_NE(slurp(d + "/" + name + ".stderr").find("rig: aborted: " + name), std::string::npos)
+        << slurp(d + "/" + name + ".stderr");
+  }
 }
 
 TEST(RigCli, AFolderHoldingWhatTheRigWritesInTheWrongKindIsRefusedFirst) {
