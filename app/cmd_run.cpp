@@ -772,8 +772,8 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
 // the history row (a report or history failure is logged, never the run's outcome).
 // analysis.json and report.html come before the passport, and junit.xml is put in place with
 // it (staged, then renamed): a CI job reading junit.xml never sees a PASS the folder has no
-// passport for, and a folder that cannot take the files (a full disk) is exit 4 with no passport
-// and no staged file left. What comes after the passport (the final seal, the history row, which
+// passport for, and a folder that cannot take the files (a full disk) is exit 4 with no staged
+// file left (the caller then writes the smaller ERROR ending where it fits). What comes after the passport (the final seal, the history row, which
 // may wait on a network) is listed in .ending-pending until done: a run killed there (a review's
 // kill stress left PASS runs without report.html or history row, their resume refused for good)
 // is finished by its resume (finish_pending_ending).
@@ -1501,14 +1501,27 @@ int do_run(RunArgs a) {
   } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
     log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
                to_string(res.outcome), e.what());
-    // The history still has the run (it promises every run; a folder deleted mid-run left no row,
-    // a review): an ERROR ending saying which outcome could not be written, never that outcome.
-    if (!a.no_history) {
-      RunResult unwritten = res;
-      unwritten.outcome = RunOutcome::Error;
-      unwritten.message = fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
-      record_in_history(a, hw, make_passport(info, unwritten, values), a.out, *log);
-    }
+    // An ERROR ending saying which outcome could not be written, never that outcome: in the
+    // history (it promises every run; a folder deleted mid-run left no row, a review), and in the
+    // folder where its passport and JUnit report still fit (a full disk refused the 600 kB
+    // analysis.json and then nothing was written, though 300 kB were free: a CI job read "no test
+    // reports", a review). A resume, once the folder can take the files, writes the ending again.
+    RunResult unwritten = res;
+    unwritten.outcome = RunOutcome::Error;
+    unwritten.message = fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
+    const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
+    if (std::error_code ec; !fs::exists(a.out + "/passport.json", ec)) try {
+        write_file_staged(a.out + "/junit.xml", junit_xml(info, unwritten, values));
+        write_file_staged(a.out + "/passport.json", passport_text(error_passport));
+        commit_staged(a.out + "/passport.json");
+        commit_staged(a.out + "/junit.xml");
+        log->error("passport.json and junit.xml written with outcome ERROR (the outcome {} could not be)",
+                   to_string(res.outcome));
+      } catch (const std::exception& also) {
+        for (const char* f : {"/junit.xml.tmp", "/passport.json.tmp"}) fs::remove(a.out + f, ec);
+        log->error("nor an ERROR passport: {}", also.what());
+      }
+    if (!a.no_history) record_in_history(a, hw, error_passport, a.out, *log);
     dev.io.set_lamp(Lamp::Running, false);
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
     // What is kept goes on once the folder can take the files (a review: a full disk ended with

@@ -3248,7 +3248,9 @@ TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
       << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/run/run.log").find("outcome PASS not written: cannot write"), std::string::npos)
       << slurp(d + "/run/run.log");
-  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  // The ERROR ending that says so is written once the squatter is cleared with the staged files
+  // (never that outcome).
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "ERROR");
   // The history has it as an ERROR saying which outcome was not written, never that outcome (a
   // folder deleted mid-run left no row, a review).
   fs::remove_all(d + "/run");
@@ -3267,7 +3269,31 @@ TEST(RigCli, APassportTheFolderCannotTakeIsExitFourAndTheLogSaysSo) {
   // PASS in passport.json beside exit 4 (a code review).
   fs::create_directories(d + "/run2/junit.xml.tmp");
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run2"}, d + "/io2"), 4);
-  EXPECT_FALSE(fs::exists(d + "/run2/passport.json"));
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run2/passport.json"))["outcome"], "ERROR");
+}
+
+// analysis.json the folder cannot take (a full disk refused its 600 kB with 300 kB free; here a
+// directory squats on its temporary name) left no passport and no JUnit report at all, and a CI
+// job read "no test reports" (a review): the ERROR ending saying which outcome was not written is
+// written where it fits, exit 4, and a resume once the folder can take the files writes the run's
+// own ending.
+TEST(RigCli, AnEndingTheFolderCannotTakeWholeLeavesAnErrorPassportWhereItFits) {
+  const std::string d = tmp("analysis-not-written");
+  fs::create_directories(d + "/run/analysis.json.tmp/x");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 4)
+      << slurp(d + "/io.stderr");
+  ASSERT_TRUE(fs::exists(d + "/run/passport.json")) << slurp(d + "/run/run.log");
+  const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ERROR");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("outcome PASS not written to the run folder: "), std::string::npos)
+      << p["aborted_reason"];
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("outcome PASS not written to the run folder"), std::string::npos);
+  EXPECT_FALSE(fs::exists(d + "/run/passport.json.tmp"));
+  fs::remove_all(d + "/run/analysis.json.tmp");
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--quiet", "--no-history"}, d + "/resume"), 0)
+      << slurp(d + "/resume.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "PASS");
+  EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
 }
 
 // A seal the folder cannot take: before the first phase the run folder is the configuration's
