@@ -773,10 +773,11 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
 // analysis.json and report.html come before the passport, and junit.xml is put in place with
 // it (staged, then renamed): a CI job reading junit.xml never sees a PASS the folder has no
 // passport for, and a folder that cannot take the files (a full disk) is exit 4 with no staged
-// file left (the caller then writes the smaller ERROR ending where it fits). What comes after the passport (the final seal, the history row, which
-// may wait on a network) is listed in .ending-pending until done: a run killed there (a review's
-// kill stress left PASS runs without report.html or history row, their resume refused for good)
-// is finished by its resume (finish_pending_ending).
+// file left (the caller then writes the smaller ERROR ending where it fits). What comes after the
+// passport (the final seal, the history row, which may wait on a network) is listed in
+// .ending-pending until done: a run killed there (a review's kill stress left PASS runs without
+// report.html or history row, their resume refused for good) is finished by its resume
+// (finish_pending_ending).
 nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw, const PassportInfo& info,
                                          const RunResult& res, const MeasurementSet& values,
                                          const acceptance::DutState& dut, const std::optional<seal::Key>& key,

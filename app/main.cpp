@@ -102,7 +102,9 @@ void standard_descriptors_open() {
 // the signals on their SignalWatcher's thread (blocked there, so this handler never runs). A
 // signal the process started with ignored (`nohup`, a background job's SIGINT) stays ignored.
 extern "C" void abort_on_signal(int sig) {
-  const char* text = sig == SIGINT ? "rig: aborted: SIGINT\n" : sig == SIGTERM ? "rig: aborted: SIGTERM\n" : "rig: aborted: SIGHUP\n";
+  const char* text = sig == SIGINT    ? "rig: aborted: SIGINT\n"
+                     : sig == SIGTERM ? "rig: aborted: SIGTERM\n"
+                                      : "rig: aborted: SIGHUP\n";
   std::size_t n = 0;
   while (text[n] != '\0') ++n;
   [[maybe_unused]] const ssize_t w = ::write(STDERR_FILENO, text, n);

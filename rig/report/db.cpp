@@ -84,8 +84,8 @@ class SqliteDb final : public Db {
     // "attempt to write a readonly database", `rig run` included (its history check), until
     // something else opened the file (a review).
     const std::string journal = path + "-journal";
-    const bool writable = ::access(path.c_str(), R_OK | W_OK) == 0 &&
-                          ::access((p.has_parent_path() ? p.parent_path().string() : std::string(".")).c_str(), W_OK | X_OK) == 0;
+    const std::string folder = p.has_parent_path() ? p.parent_path().string() : std::string(".");
+    const bool writable = ::access(path.c_str(), R_OK | W_OK) == 0 && ::access(folder.c_str(), W_OK | X_OK) == 0;
     const bool query_only = access == Access::ReadOnly && writable;
     const int mode = access == Access::ReadOnly ? (writable ? SQLITE_OPEN_READWRITE : SQLITE_OPEN_READONLY)
                                                 : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
