@@ -645,12 +645,21 @@ void require_utf8_paths(const RunArgs& a) {
                                   option, shown_text(given), path == given ? "" : shown_text(path) + " is ",
                                   static_cast<unsigned char>(path[at]), at));
   };
-  if (!a.resume.empty()) check("--resume", a.resume, fs::absolute(a.resume, ec).string());
-  else if (!a.out.empty()) check("--out", a.out, fs::absolute(a.out, ec).string());
-  else check("--out", "(default: runs/ here)", fs::current_path(ec).string());
-  if (!a.hardware.empty()) check("--hardware", a.hardware, fs::absolute(a.hardware, ec).string());
+  // As the passport and the history key them: absolute, links resolved (a link into a Latin-1
+  // folder and a relative --db in one were missed, a re-test).
+  auto real = [&](const std::string& p) {
+    const fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec);
+    return (ec ? fs::absolute(p, ec) : r).string();
+  };
+  if (!a.resume.empty()) check("--resume", a.resume, real(a.resume));
+  else if (!a.out.empty()) check("--out", a.out, real(a.out));
+  else check("--out", "(default: runs/ here)", real("."));
+  if (!a.hardware.empty()) check("--hardware", a.hardware, real(a.hardware));
   if (!a.profile.empty()) check("--profile", a.profile, a.profile);
-  if (!a.db.empty()) check("--db", a.db, a.db);
+  if (!a.db.empty()) {
+    check("--db", a.db, a.db);
+    if (const std::optional<std::string> file = history::sqlite_path(a.db)) check("--db", a.db, real(*file));
+  }
 }
 
 // The passport's identity block, for every ending (finished at the time of the call).

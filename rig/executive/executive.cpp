@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "rig/core/errors.hpp"
 #include "rig/executive/checkpoint_keys.hpp"
@@ -344,7 +345,16 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
         values.set_scope(p.id, std::move(names));  // a phase sets only what it declares
       }
       ctx.not_run.clear();
-      p.run(ctx);
+      try {
+        p.run(ctx);
+      } catch (const ConfigError& e) {
+        // A phase that computes from the run's own records finds them damaged only if they changed
+        // while the run went on (a resume checked them before any device opened): the folder, not
+        // the configuration (a review: loop-test.csv edited mid-run ended "configuration error",
+        // exit 2; contracts.md: records changed after their writer closed them are exit 4).
+        if (!p.from_records) throw;
+        throw std::runtime_error(std::string("the run's records changed while it went on: ") + e.what());
+      }
       values.set_scope({}, {});
       rec.finished = iso8601_utc_now();
       rec.status = ctx.not_run.empty() ? "done" : "skipped";

@@ -238,9 +238,12 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
                             outcome, dir, text, station_name(passport), reason, now};
   // A run recorded again (a resume, `--record` after a database outage) keeps its id, so that a
   // reference to it (a quality record, a ticket) stays valid; it used to get a new one each time.
-  // A run is its folder, start time, DUT and station (v4); a row from before v2 has no station.
-  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? AND serial = ? "
-                             "AND (station IS NOT DISTINCT FROM ? OR station IS NULL) ORDER BY id",
+  // A run is its folder, start time, DUT and station (v4); a row from before v2 has no station,
+  // and one recorded before the DUT gave its serial (a run stopped in bring-up, then resumed) has
+  // none either: the same run (a re-test: it became a second row).
+  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? AND "
+                             "(serial = ? OR serial = '') AND (station IS NOT DISTINCT FROM ? OR station IS NULL) "
+                             "ORDER BY id",
                              {dir, started, passport["serial"].get<std::string>(), station_name(passport)});
   Recorded rec;
   if (was.empty()) {

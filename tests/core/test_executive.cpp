@@ -301,6 +301,30 @@ TEST(Executive, AResumeMeasuresOnTheDeviceAgain) {
   EXPECT_EQ(r.phases[1].status, "done");
 }
 
+// A phase that computes from the run's records and finds them damaged (a ConfigError from the
+// reader) found them changed while the run went on: an ERROR of the folder, not a configuration
+// error (a review: loop-test.csv edited mid-run ended exit 2). A phase that is not from records
+// keeps its ConfigError.
+TEST(Executive, ARecordDamagedWhileTheRunWentOnIsNoConfigurationError) {
+  for (const bool from_records : {true, false}) {
+    Fixture f(from_records ? "records-changed" : "config-late");
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    std::vector<Phase> phases{{"calc", "compute", 0,
+                               [](PhaseContext&) { throw ConfigError("state.loop_test.crc32: 1 does not match"); },
+                               {{"v", "g", ""}}, from_records}};
+    MeasurementSet v;
+    declare(phases, v);
+    JsonState st;
+    const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
+    EXPECT_EQ(r.outcome, RunOutcome::Error);
+    EXPECT_EQ(r.config_error, !from_records);
+    if (from_records) {
+      EXPECT_EQ(r.message, "error: the run's records changed while it went on: state.loop_test.crc32: 1 does not match");
+    }
+  }
+}
+
 // A phase that only computes from records (Phase::from_records) runs again on a resume: its
 // checkpointed value is forgotten (an edited one is never taken), the recording before it is not
 // repeated, and the checkpoint keeps its phases in order.

@@ -3867,6 +3867,15 @@ TEST(RigCli, APathThatIsNotUtf8IsRefusedBeforeTheRun) {
             2);
   EXPECT_NE(slurp(d + "/hw.stderr").find("--hardware " + d + "/caf\\xE9.toml: not UTF-8 text"), std::string::npos)
       << slurp(d + "/hw.stderr");
+  // Through a link whose target is such a folder (a share mounted with a Latin-1 character set):
+  // the passport holds the folder as its links resolve (a re-test: the run was lost so).
+  fs::create_directories(latin1 + "-target");
+  fs::create_directory_symlink(latin1 + "-target", d + "/link");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/link/run"}, d + "/link"), 2);
+  EXPECT_NE(slurp(d + "/link.stderr").find("--out " + d + "/link/run: " + d + "/caf\\xE9-target/run is not UTF-8 text"),
+            std::string::npos)
+      << slurp(d + "/link.stderr");
+  EXPECT_FALSE(fs::exists(latin1 + "-target/run"));
   // UTF-8 beyond ASCII is text (a Cyrillic folder name).
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/\xD0\x94\xD0\xA3\xD0\xA2"}, d + "/cyr"), 0)
       << slurp(d + "/cyr.stderr");

@@ -179,6 +179,15 @@ inline void history_tells_runs_of_one_folder_and_second_apart(const std::string&
   EXPECT_NE(a.id, c.id);
   EXPECT_NE(a.id, a2.id);
   EXPECT_EQ(record("DUT-A", "line-1 station 1").id, a.id);  // the same run recorded again
+  // A run stopped before its DUT gave a serial, then resumed: one run (a re-test: two rows).
+  json early = fixture_passport("", "ABORTED", "2026-11-08T09:00:00Z");
+  early["station"] = "line-1 station 1";
+  const h::Recorded stopped = h::record_run(url, early, dir);
+  json resumed = fixture_passport("DUT-D", "PASS", "2026-11-08T09:00:00Z");
+  resumed["station"] = "line-1 station 1";
+  const h::Recorded finished = h::record_run(url, resumed, dir);
+  EXPECT_EQ(finished.id, stopped.id);
+  EXPECT_EQ(finished.endings, 2);
   for (const char* serial : {"DUT-A", "DUT-B", "DUT-C"}) {
     h::Filter f;
     f.serial = serial;
