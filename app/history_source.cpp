@@ -1,6 +1,5 @@
 #include "app/history_source.hpp"
 
-#include <cstdlib>
 #include <filesystem>
 #include <optional>
 
@@ -37,9 +36,8 @@ void check_rig_config(const std::string& path) {
 }  // namespace
 
 HistorySource default_history() {
-  if (const char* e = std::getenv("RIG_HISTORY"); e && !*e) return {history::default_db_url(), true};  // refused there
-  if (const char* e = std::getenv("RIG_HISTORY"); e && *e) {
-    const std::string url = e;
+  if (const std::optional<std::string> e = history::history_from_environment()) {
+    const std::string& url = *e;
     try {
       (void)history::sqlite_path(url);  // a URL rig cannot open: another scheme, no file
     } catch (const ConfigError& bad) {

@@ -465,11 +465,17 @@ std::optional<std::string> rig_config_path() {
   return std::nullopt;
 }
 
-std::string default_db_url() {
-  if (const char* e = std::getenv("RIG_HISTORY"); e && !*e)  // as RIG_CONFIG (rig_config_path)
+std::optional<std::string> history_from_environment() {
+  const char* e = std::getenv("RIG_HISTORY");
+  if (!e) return std::nullopt;
+  if (!*e)  // as RIG_CONFIG (rig_config_path)
     throw ConfigError("RIG_HISTORY is set but empty: name the history database (sqlite:FILE or postgresql://...), "
                       "or unset RIG_HISTORY");
-  if (const char* e = std::getenv("RIG_HISTORY"); e && *e) return e;
+  return std::string(e);
+}
+
+std::string default_db_url() {
+  if (std::optional<std::string> e = history_from_environment()) return *e;
   fs::path config;
   if (const std::optional<std::string> c = rig_config_path()) config = *c;
   if (!config.empty()) {

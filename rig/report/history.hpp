@@ -19,6 +19,10 @@ std::string default_db_url();
 // ~/.local/share/..., or the working folder without a HOME).
 std::string builtin_db_url();
 
+// $RIG_HISTORY when set; nullopt when unset; set but empty is a ConfigError saying so (not read
+// as unset, as an empty RIG_SEAL_KEY is refused).
+std::optional<std::string> history_from_environment();
+
 // The rig config default_db_url reads: $RIG_CONFIG if set (ConfigError if it is not there), else
 // ~/.config/rig/rig.toml if it exists, else none. A path that cannot be reached (a $HOME the user
 // may not enter) is a ConfigError naming it, not "no config": the runs would be recorded into

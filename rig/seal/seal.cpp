@@ -163,68 +163,50 @@ bool regular_file(const std::string& path, bool& exists) {
   return exists && S_ISREG(st.st_mode);
 }
 
-// A seal as it reads: its outcome and (path, MAC) sorted, once it is a regular file, a rig.seal/1
-// seal, this key's and its own MAC holds; otherwise nullopt and `problem` says which of these fails.
-struct Read {
-  std::string outcome;
-  std::vector<std::pair<std::string, std::string>> files;
-};
-std::optional<Read> read_seal(const std::string& seal_path, const Key& k, std::string& problem) {
+}  // namespace
+
+Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
+                 const std::vector<std::string>& must_cover) {
+  Check c;
   bool exists = false;
   if (!regular_file(seal_path, exists)) {
-    problem = seal_path + (exists ? ": not a regular file" : ": missing: the folder is not sealed");
-    return std::nullopt;
+    c.problems.push_back(seal_path + (exists ? ": not a regular file" : ": missing: the folder is not sealed"));
+    return c;
   }
   std::ifstream in(seal_path, std::ios::binary);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
   } catch (const std::exception& e) {
-    problem = seal_path + ": unreadable: " + e.what();
-    return std::nullopt;
+    c.problems.push_back(seal_path + ": unreadable: " + e.what());
+    return c;
   }
   if (!j.is_object() || j.value("schema", "") != kSchema || !j.contains("files") || !j["files"].is_object() ||
       !j.contains("seal") || !j["seal"].is_string() || !j.contains("key_id") || !j["key_id"].is_string() ||
       !j.contains("outcome") || !j["outcome"].is_string()) {
-    problem = seal_path + ": not a rig.seal/1 seal";
-    return std::nullopt;
-  }
-  if (j["key_id"] != k.id) {
-    problem = seal_path + ": sealed with another key (key_id " + j["key_id"].get<std::string>() + "; " + k.path +
-              " is " + k.id + ")";
-    return std::nullopt;
-  }
-  Read r;
-  for (const auto& [rel, mac] : j["files"].items()) {
-    if (!mac.is_string()) {
-      problem = seal_path + ": files." + rel + ": not a MAC";
-      return std::nullopt;
-    }
-    r.files.emplace_back(rel, mac.get<std::string>());
-  }
-  std::sort(r.files.begin(), r.files.end());
-  r.outcome = j["outcome"].get<std::string>();
-  if (text_mac(k, seal_body(k.id, r.outcome, r.files)) != j["seal"].get<std::string>()) {
-    problem = seal_path + ": the seal's own MAC does not hold: its list of files or its outcome was edited";
-    return std::nullopt;
-  }
-  return r;
-}
-
-}  // namespace
-
-Check check_seal(const std::string& dir, const std::string& seal_path, const Key& k,
-                 const std::vector<std::string>& must_cover) {
-  Check c;
-  std::string problem;
-  const std::optional<Read> r = read_seal(seal_path, k, problem);
-  if (!r) {
-    c.problems.push_back(problem);
+    c.problems.push_back(seal_path + ": not a rig.seal/1 seal");
     return c;
   }
-  bool exists = false;
-  c.outcome = r->outcome;
-  for (const auto& [rel, mac] : r->files) {
+  if (j["key_id"] != k.id) {
+    c.problems.push_back(seal_path + ": sealed with another key (key_id " + j["key_id"].get<std::string>() +
+                         "; " + k.path + " is " + k.id + ")");
+    return c;
+  }
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& [rel, mac] : j["files"].items()) {
+    if (!mac.is_string()) {
+      c.problems.push_back(seal_path + ": files." + rel + ": not a MAC");
+      return c;
+    }
+    files.emplace_back(rel, mac.get<std::string>());
+  }
+  std::sort(files.begin(), files.end());
+  if (text_mac(k, seal_body(k.id, j["outcome"].get<std::string>(), files)) != j["seal"].get<std::string>()) {
+    c.problems.push_back(seal_path + ": the seal's own MAC does not hold: its list of files or its outcome was edited");
+    return c;
+  }
+  c.outcome = j["outcome"].get<std::string>();
+  for (const auto& [rel, mac] : files) {
     FileState f = FileState::Ok;
     if (!regular_file(dir + "/" + rel, exists)) f = exists ? FileState::NotRegular : FileState::Missing;
     else {
