@@ -1484,7 +1484,7 @@ int do_run(RunArgs a) {
   }
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
   // ERROR (exit 4) naming them, never a PASS nobody can check.
-  bool records_lost = false;  // then no resume either: it would refuse the folder (exit 2)
+  bool records_lost = res.records_changed;  // then no resume either: it would refuse the folder (exit 2)
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
     std::vector<std::string> touched;
@@ -1506,6 +1506,10 @@ int do_run(RunArgs a) {
     }
   }
   nlohmann::ordered_json passport;
+  // An earlier ending's files (an ABORTED one, resumed) as they were before this ending: what it
+  // cannot replace must not stand beside its ERROR ending.
+  const std::optional<FileStamp> earlier_passport = stamp_of(a.out + "/passport.json"),
+                                 earlier_analysis = stamp_of(a.out + "/analysis.json");
   try {
     passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
   } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
@@ -1520,7 +1524,19 @@ int do_run(RunArgs a) {
     unwritten.outcome = RunOutcome::Error;
     unwritten.message = fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
     const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
-    if (std::error_code ec; !fs::exists(a.out + "/passport.json", ec)) try {
+    // Replaced too where it is an earlier ending's (a review: an ABORTED passport, resumed, stayed
+    // beside a history row saying ERROR); kept where it is this ending's own, put in place before
+    // what failed. Neither page nor an earlier analysis.json may stand beside the ERROR: the page
+    // is drawn from a passport that is not (or no longer) the folder's, and both come again with
+    // the resume's ending.
+    const auto earlier = [](const std::optional<FileStamp>& then, const std::string& path) {
+      const std::optional<FileStamp> now = stamp_of(path);
+      return !now || (then && now->inode == then->inode && now->device == then->device);
+    };
+    std::error_code ec;
+    fs::remove(a.out + "/report.html", ec);
+    if (earlier_analysis && earlier(earlier_analysis, a.out + "/analysis.json")) fs::remove(a.out + "/analysis.json", ec);
+    if (earlier(earlier_passport, a.out + "/passport.json")) try {
         write_file_staged(a.out + "/junit.xml", junit_xml(info, unwritten, values));
         write_file_staged(a.out + "/passport.json", passport_text(error_passport));
         commit_staged(a.out + "/passport.json");
@@ -1537,7 +1553,6 @@ int do_run(RunArgs a) {
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
     if (!records_lost && !res.config_error) {
-      std::error_code ec;
       say_how_to_continue(a.out, fs::exists(Executive::checkpoint_path(a.out), ec) ? res.checkpointed : 0,
                           res.phases.size(), "; once the folder can take the run's files", *log);
     }

@@ -111,6 +111,9 @@ struct RunResult {
   RunOutcome outcome = RunOutcome::Error;
   std::string message;  // abort reason or fault text
   bool config_error = false;  // an Error caused by bad configuration exits 2, not 4
+  // An Error because a phase computing from the run's records found them changed while the run
+  // went on: a resume refuses such a folder, so none is offered.
+  bool records_changed = false;
   std::vector<PhaseRecord> phases;
   // The phases the folder's checkpoint holds at the end: what a resume of it starts from
   // (a from_records phase not yet computed again by this resume counts, as its records do).

@@ -319,6 +319,7 @@ TEST(Executive, ARecordDamagedWhileTheRunWentOnIsNoConfigurationError) {
     const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
     EXPECT_EQ(r.outcome, RunOutcome::Error);
     EXPECT_EQ(r.config_error, !from_records);
+    EXPECT_EQ(r.records_changed, from_records);  // no resume is offered for it (app/cmd_run.cpp)
     if (from_records) {
       EXPECT_EQ(r.message, "error: the run's records changed while it went on: state.loop_test.crc32: 1 does not match");
     }

@@ -3296,6 +3296,50 @@ TEST(RigCli, AnEndingTheFolderCannotTakeWholeLeavesAnErrorPassportWhereItFits) {
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
 }
 
+// The same on a resume of an ABORTED run: the ERROR ending replaces the earlier ending's passport
+// (it stayed, ABORTED, beside a history row saying ERROR: a review), and the earlier page and
+// analysis.json go (drawn from that passport); sealed or not, the next resume ends the run.
+TEST(RigCli, AnEndingTheFolderCannotTakeReplacesAnEarlierEndingsPassport) {
+  const std::string d = tmp("earlier-ending-replaced");
+  const std::string key = d + "/station.key";
+  fs::create_directories(d);
+  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
+  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  for (const bool sealed : {false, true}) {
+    const std::string out = d + (sealed ? "/sealed" : "/run");
+    std::vector<std::string> seal;
+    if (sealed) seal = {"--seal-key", key};
+    auto args = [&](std::vector<std::string> v) {
+      v.insert(v.end(), seal.begin(), seal.end());
+      return v;
+    };
+    EXPECT_EQ(run(args({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out, "--inject", "sigint@60"}),
+                  d + "/io1"),
+              3)
+        << slurp(d + "/io1.stderr");
+    ASSERT_EQ(nlohmann::json::parse(slurp(out + "/passport.json"))["outcome"], "ABORTED");
+    ASSERT_TRUE(fs::exists(out + "/report.html"));
+    fs::create_directories(out + "/analysis.json.tmp/x");
+    EXPECT_EQ(run(args({"run", "--resume", out, "--yes", "--quiet", "--no-history"}), d + "/io2"), 4)
+        << slurp(d + "/io2.stderr");
+    const nlohmann::json p = nlohmann::json::parse(slurp(out + "/passport.json"));
+    EXPECT_EQ(p["outcome"], "ERROR") << sealed;
+    EXPECT_NE(p["aborted_reason"].get<std::string>().find("outcome PASS not written to the run folder"), std::string::npos)
+        << p["aborted_reason"];
+    EXPECT_NE(slurp(out + "/junit.xml").find("outcome PASS not written"), std::string::npos);
+    EXPECT_FALSE(fs::exists(out + "/report.html"));
+    EXPECT_FALSE(fs::exists(out + "/analysis.json"));
+    fs::remove_all(out + "/analysis.json.tmp");
+    EXPECT_EQ(run(args({"run", "--resume", out, "--yes", "--quiet", "--no-history"}), d + "/io3"), 0)
+        << slurp(d + "/io3.stderr");
+    EXPECT_EQ(nlohmann::json::parse(slurp(out + "/passport.json"))["outcome"], "PASS");
+    EXPECT_TRUE(fs::exists(out + "/report.html"));
+    if (sealed) {
+      EXPECT_EQ(run({"verify", out, "--seal-key", key}, d + "/io4"), 0) << slurp(d + "/io4.stdout");
+    }
+  }
+}
+
 // A seal the folder cannot take: before the first phase the run folder is the configuration's
 // --out (exit 2, nothing run); at a checkpoint the folder stopped holding the run's records
 // mid-run, exit 4 like a checkpoint or passport it cannot take (it was exit 2 there). A directory
