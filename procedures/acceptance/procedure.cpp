@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "analysis/json.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
@@ -67,15 +68,22 @@ void phase_run(PhaseContext& ctx, const Profile& p, DutState& st, std::size_t i)
 
 void phase_bias(PhaseContext& ctx, const Profile& p, DutState& st) {
   std::vector<double> x10, x20;
-  for (std::size_t i = 0; i < p.order.size(); ++i)
+  std::vector<std::size_t> runs10, runs20;  // the run numbers of each pair's summands
+  for (std::size_t i = 0; i < p.order.size(); ++i) {
     (p.order[i] == Orientation::U10 ? x10 : x20).push_back(st.runs.at(i + 1).rec.mean_x);
+    (p.order[i] == Orientation::U10 ? runs10 : runs20).push_back(i + 1);
+  }
   const BiasBaseError b = bias_and_base_error(x10, x20);
   st.bias = BiasState{b.bias, b.base_error, b.sign_u10};
   const std::string sign = fmt::format("formula (4); enters x10 with {}", b.sign_u10 > 0 ? "+" : "-");
   if (b.bias_ci_half && b.base_ci_half) {
-    ctx.values.set("bias", b.bias, "formula (3), GOST R 8.736 95 % interval", b.bias - *b.bias_ci_half,
-                   b.bias + *b.bias_ci_half);
-    ctx.values.set("base_error", b.base_error, sign, b.base_error - *b.base_ci_half, b.base_error + *b.base_ci_half);
+    std::vector<std::pair<std::size_t, std::size_t>> pairs;
+    for (std::size_t k = 0; k < runs10.size(); ++k) pairs.emplace_back(runs10[k], runs20[k]);
+    ctx.values.set("bias", b.bias,
+                   "formula (3), GOST R 8.736 95 % interval" + grubbs_note(*b.bias_gost, pairs, ctx.log.get(), "bias"),
+                   b.bias - *b.bias_ci_half, b.bias + *b.bias_ci_half);
+    ctx.values.set("base_error", b.base_error, sign + grubbs_note(*b.base_gost, pairs, ctx.log.get(), "base_error"),
+                   b.base_error - *b.base_ci_half, b.base_error + *b.base_ci_half);
   } else {  // one U10/U20 pair: the value without an interval, and said so
     const char* one = "; one U10/U20 pair: no interval (GOST R 8.736 takes it from the scatter of two or more)";
     ctx.values.set("bias", b.bias, std::string("formula (3)") + one);
@@ -246,10 +254,35 @@ BiasBaseError bias_and_base_error(const std::vector<double>& x10, const std::vec
   r.sign_u10 = d >= 0 ? +1 : -1;
   r.base_error = std::abs(d / n);
   if (sum.size() >= 2) {
-    r.bias_ci_half = analysis::gost_summary(sum).ci_half;
-    r.base_ci_half = analysis::gost_summary(diff).ci_half;
+    r.bias_gost = analysis::gost_summary(sum);
+    r.base_gost = analysis::gost_summary(diff);
+    r.bias_ci_half = r.bias_gost->ci_half;
+    r.base_ci_half = r.base_gost->ci_half;
   }
   return r;
+}
+
+// What GOST R 8.736's repeated Grubbs test found among the pairs' summands, for the value's
+// reason: an outlier is reported, not removed (the value is of every pair, as recorded), so a
+// technician can look at that pair's runs. pairs[k]: the k-th pair's run numbers (U10, U20).
+std::string grubbs_note(const analysis::GostSummary& g, const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
+                        spdlog::logger* log, const char* value) {
+  const double significance = 1 - g.confidence;
+  if (g.n < 3) return fmt::format("; {} pairs: no Grubbs test (it needs 3)", g.n);
+  if (g.outliers.empty())
+    return g.sd == 0 ? fmt::format("; Grubbs ({:g} %): no outlier among {} pairs (all alike)", 100 * significance, g.n)
+                     : fmt::format("; Grubbs ({:g} %): no outlier among {} pairs (G {:.3f} <= {:.3f})",
+                                   100 * significance, g.n, g.grubbs_stat, g.grubbs_crit);
+  std::vector<std::string> named;
+  for (std::size_t k : g.outliers)
+    named.push_back(fmt::format("pair {} (runs {} U10, {} U20)", k + 1, pairs[k].first, pairs[k].second));
+  const std::string note =
+      fmt::format("; Grubbs ({:g} %): outlier{} {} among {} pairs (first G {:.3f} > {:.3f}), kept in the value "
+                  "(GOST R 8.736: reported, not removed)",
+                  100 * significance, g.outliers.size() > 1 ? "s" : "", fmt::join(named, ", "), g.n, g.grubbs_stat,
+                  g.grubbs_crit);
+  if (log) log->warn("{}: {}", value, note.substr(2));
+  return note;
 }
 
 std::optional<std::size_t> accuracy_class(const std::vector<AccuracyClass>& classes, double b) {

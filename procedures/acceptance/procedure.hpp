@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/gost.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/table.hpp"
@@ -78,8 +79,17 @@ struct BiasBaseError {
   int sign_u10 = +1;      // the sign with which g_dA enters x10
   // GOST 95 % half-widths over the pairs; none from a single pair (no scatter to take them from)
   std::optional<double> bias_ci_half, base_ci_half;
+  // GOST R 8.736's processing of the pairs' summands of (3) and (4), two or more pairs: the
+  // interval above and the repeated Grubbs test (outliers indexed by pair, reported, not removed).
+  std::optional<analysis::GostSummary> bias_gost, base_gost;
 };
 BiasBaseError bias_and_base_error(const std::vector<double>& x10, const std::vector<double>& x20);
+
+// The reason's note on the Grubbs test of the pairs' summands (`g` of `value`, "bias" or
+// "base_error"); pairs[k] = the k-th pair's run numbers (U10, U20). An outlier is also warned of
+// in `log` (when given). Exposed for tests.
+std::string grubbs_note(const analysis::GostSummary& g, const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
+                        spdlog::logger* log, const char* value);
 
 // Accuracy class from B: 1-based index of the first class with max_b_g >= b.
 std::optional<std::size_t> accuracy_class(const std::vector<AccuracyClass>& classes, double b);

@@ -23,6 +23,30 @@ TEST(Formulas, BiasAndBaseErrorHandComputed) {
   EXPECT_GT(*r.base_ci_half, 0.0);
 }
 
+// GOST R 8.736's Grubbs test on the pairs' summands: an outlying pair is named with its runs in the
+// value's reason and kept in the value (reported, not removed); none is tested below 3 pairs.
+TEST(Formulas, AnOutlyingPairIsReportedNotRemoved) {
+  const std::vector<double> x10{-1.0e-4, -1.01e-4, -0.99e-4, -1.0e-4, -2.0e-4, -1.0e-4};
+  const std::vector<double> x20{-9.0e-4, -9.0e-4, -9.01e-4, -8.99e-4, -9.0e-4, -9.0e-4};
+  const auto r = bias_and_base_error(x10, x20);
+  ASSERT_TRUE(r.bias_gost && r.base_gost);
+  EXPECT_EQ(r.bias_gost->outliers, std::vector<std::size_t>{4});
+  EXPECT_EQ(r.base_gost->outliers, std::vector<std::size_t>{4});
+  double sum = 0;
+  for (std::size_t i = 0; i < x10.size(); ++i) sum += (x10[i] + x20[i]) / 2;
+  EXPECT_DOUBLE_EQ(r.bias, sum / 6);  // the outlier stays in the value
+  const std::vector<std::pair<std::size_t, std::size_t>> pairs{{1, 2}, {3, 4}, {5, 6}, {7, 8}, {9, 10}, {11, 12}};
+  const std::string note = rig::acceptance::grubbs_note(*r.bias_gost, pairs, nullptr, "bias");
+  EXPECT_NE(note.find("Grubbs (5 %): outlier pair 5 (runs 9 U10, 10 U20) among 6 pairs (first G "), std::string::npos)
+      << note;
+  EXPECT_NE(note.find("kept in the value (GOST R 8.736: reported, not removed)"), std::string::npos) << note;
+  const auto calm = bias_and_base_error({-1.0e-4, -1.01e-4, -0.99e-4}, {-9.0e-4, -9.02e-4, -8.98e-4});
+  EXPECT_NE(rig::acceptance::grubbs_note(*calm.bias_gost, pairs, nullptr, "bias").find("no outlier among 3 pairs (G "),
+            std::string::npos);
+  const auto two = bias_and_base_error({-1.0e-4, -1.1e-4}, {-9.0e-4, -9.1e-4});
+  EXPECT_EQ(rig::acceptance::grubbs_note(*two.bias_gost, pairs, nullptr, "bias"), "; 2 pairs: no Grubbs test (it needs 3)");
+}
+
 // One pair has no scatter to take a GOST interval from: none is given (the passport then
 // carries the value without lo/hi and says why), where a zero half-width was reported before.
 TEST(Formulas, OnePairHasNoInterval) {
