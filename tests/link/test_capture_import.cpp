@@ -676,6 +676,28 @@ TEST(CaptureImport, StraysLeapsAndPartsAreToldApart) {
                                            "1000 Hz) where the log's clock moved 3.0"),
             std::string::npos) << slurp(dir() / "leap.err");
   EXPECT_EQ(rig::capture::load((dir() / "leap.rigcap").string()).samples.size(), 100u);
+  // A restart 1.1 s short of the counter's period, the clock 1 ms on: it passed as a 1100-sample
+  // gap, every later sample 1.1 s late (a review). 0.2 s of lost frames with the clock stamping
+  // them 1 ms apart (a receiver's burst) is still a gap.
+  for (const uint64_t lost : {1100u, 200u}) {
+    std::ostringstream near;
+    t = t0;
+    const uint64_t top = (uint64_t{1} << 24) - lost;
+    for (uint64_t k = top - 100; k < top; ++k, t += 1e-3) log_sample(near, t, k);
+    for (uint64_t k = 0; k < 100; ++k, t += 1e-3) log_sample(near, t, k);
+    const std::string name = "near" + std::to_string(lost);
+    if (lost == 1100) {
+      EXPECT_EQ(import(name, near.str()), 2) << slurp(dir() / (name + ".out"));
+      EXPECT_NE(slurp(dir() / (name + ".err")).find(name + ".log:201: the stream's counter leapt 1101 samples (1.101 s at "
+                                                    "1000 Hz) where the log's clock moved 0.000"),
+                std::string::npos)
+          << slurp(dir() / (name + ".err"));
+      EXPECT_EQ(rig::capture::load((dir() / (name + ".rigcap")).string()).samples.size(), 100u);
+    } else {
+      EXPECT_EQ(import(name, near.str()), 0) << slurp(dir() / (name + ".err"));
+      EXPECT_EQ(rig::capture::load((dir() / (name + ".rigcap")).string()).samples.size(), 200u);
+    }
+  }
 
   std::ostringstream first;
   first << log_line(t0, encode(StreamHalf{Channel::X, 5000, 0, 0.5f}));  // one part, then a power cycle
