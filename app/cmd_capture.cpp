@@ -195,7 +195,9 @@ int cmd_import(const ImportArgs& a) {
   // order read y as 1e17 g and NaN, exit 0: the same review). Not finite: nothing can analyse
   // it (exit 2); only outside the range: a wrong layout, or a DUT driven past its DBC's range.
   uint64_t implausible = 0, not_finite = 0;
-  std::string first_implausible;  // LOG:LINE: signal = value unit (the DBC's range)
+  // LOG:LINE: signal = value unit (the DBC's range), of the first outside it and of the first not
+  // finite (a NaN at line 501 was not located: only a range overshoot at line 10 was, a review).
+  std::string first_implausible, first_not_finite;
   auto signal_of = [&](link::Channel c) -> const link::DbcSignal* {
     const std::string& name = c == link::Channel::X ? sp.x : sp.y;
     const auto dot = name.find('.');
@@ -352,14 +354,16 @@ int cmd_import(const ImportArgs& a) {
     ++stream_frames;
     for (const link::StreamPart& p : parts) {
       if (!p.implausible) continue;
-      not_finite += !std::isfinite(p.value_g);
-      if (implausible++ > 0) continue;
+      const bool finite = std::isfinite(p.value_g);
+      not_finite += !finite;
+      if (implausible++ > 0 && (finite || not_finite > 1)) continue;
       const link::DbcSignal* sig = signal_of(p.channel);
       const double shown = sig ? p.value_g / decoder->scale_to_g(p.channel) : p.value_g;  // as the DBC's range has it
-      first_implausible = fmt::format("{}:{}: {} = {:.9g} {}", a.log, ln, p.channel == link::Channel::X ? sp.x : sp.y,
+      std::string where = fmt::format("{}:{}: {} = {:.9g} {}", a.log, ln, p.channel == link::Channel::X ? sp.x : sp.y,
                                       shown, sig ? sig->unit : std::string("g"));
-      if (sig && sig->min < sig->max)
-        first_implausible += fmt::format(", its DBC range [{:g}|{:g}] {}", sig->min, sig->max, sig->unit);
+      if (sig && sig->min < sig->max) where += fmt::format(", its DBC range [{:g}|{:g}] {}", sig->min, sig->max, sig->unit);
+      if (implausible == 1) first_implausible = where;
+      if (!finite) first_not_finite = std::move(where);
     }
     if (a_clock(lf->t_s)) {
       if (!taken_first) taken_first = Stamp{lf->t_s, ln};
@@ -472,12 +476,18 @@ int cmd_import(const ImportArgs& a) {
     std::fprintf(stderr, "%s\n", rate_mismatch.c_str());
     return kExitUsage;
   }
-  if (implausible > 0)
+  if (implausible > 0) {
+    // The first not finite named too where it is not the first outside the range.
+    const std::string nf = not_finite > 0 && first_not_finite != first_implausible
+                               ? "; the first not finite at " + first_not_finite
+                               : std::string();
     std::fprintf(stderr, "%llu decoded value(s) outside their signal's DBC range, %llu of them not finite (the first "
-                 "at %s): the DBC may not describe these frames (check the signal's byte order @0/@1, sign, factor and "
-                 "offset), or the DUT went past its DBC's range; the capture holds them as decoded%s\n",
+                 "at %s%s): the DBC may not describe these frames (check the signal's byte order @0/@1, sign, factor "
+                 "and offset), or the DUT went past its DBC's range; the capture holds them as decoded%s\n",
                  static_cast<unsigned long long>(implausible), static_cast<unsigned long long>(not_finite),
-                 first_implausible.c_str(), not_finite > 0 ? " (a value not finite fails every analysis: exit 2)" : "");
+                 first_implausible.c_str(), nf.c_str(),
+                 not_finite > 0 ? " (a value not finite fails every analysis: exit 2)" : "");
+  }
   if (!cut.empty()) {
     if (w.samples_written() == 0) {  // nothing before it: no capture, the rest is all there is
       std::error_code ec;

@@ -861,8 +861,11 @@ TEST(CaptureImport, TheLogsClockAndTheDbcsRangesHoldTheLayoutToTheFrames) {
   EXPECT_NE(err.find(" decoded value(s) outside their signal's DBC range, 1 of them not finite (the first at "),
             std::string::npos)
       << err;
-  EXPECT_NE(err.find("float.log:4: ACC_F.x_mg = -428398656 mg, its DBC range [-20000|20000] mg)"), std::string::npos)
+  EXPECT_NE(err.find("float.log:4: ACC_F.x_mg = -428398656 mg, its DBC range [-20000|20000] mg; "), std::string::npos)
       << "in the signal's unit, against its range: " << err;
+  EXPECT_NE(err.find("; the first not finite at " + (dir() / "float.log").string() + ":701: ACC_F.x_mg = nan mg"),
+            std::string::npos)
+      << "the NaN located, not only the first value outside the range: " << err;
   EXPECT_NE(err.find("the capture holds them as decoded (a value not finite fails every analysis: exit 2)"),
             std::string::npos)
       << err;
