@@ -467,10 +467,13 @@ class LibmodbusTransport final : public RegisterTransport {
       }
     }
     // Silence from the first request on is most often a wrong unit id or line setting, not a
-    // dead drive (a review: a wrong --unit said only "timeout").
+    // dead drive (a review: a wrong --unit said only "timeout"), or a drive slower to answer than
+    // the timeout (a review: a drive answering in 0.5 s was sent to check its unit id only).
     if (last_timeout && !answered_)
-      last += tcp() ? "; nothing has answered on this link yet: check the drive's unit id"
-                    : "; nothing has answered on this line yet: check the drive's unit id, baud rate, parity and wiring";
+      last += (tcp() ? "; nothing has answered on this link yet: check the drive's unit id"
+                     : "; nothing has answered on this line yet: check the drive's unit id, baud rate, parity and wiring") +
+              std::string(", or whether it answers later than ") + fmt_s(opt_.response_timeout_s) +
+              " (the response timeout: `rig table --timeout S`, [table] response_timeout_s, at most 10 s)";
     throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout);
   }
 
