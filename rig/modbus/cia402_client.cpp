@@ -660,7 +660,9 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       if (away > from + std::max(1.0, 10 * opt_.tolerance_deg))
         throw HardwareError(doing + ": the table moves away from the target (" + deg_str(away) + " off, it started " +
                             deg_str(from) + " off): the drive running to another target first (a halted move it "
-                            "continues?)" + at(r));
+                            "continues?), or the map's word_order not the drive's, so that the drive took another "
+                            "target than the one written (check word_order against the drive's manual; a mapped "
+                            "device_type lets the rig check it before any move)" + at(r));
       // No heartbeat object in CiA 402: a drive whose statusword and position
       // stop changing while the target is not reached is taken for frozen.
       if (r.statusword != last.statusword || std::fabs(r.actual_deg - last.actual_deg) > 1e-9 ||
