@@ -159,8 +159,9 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
     Roles r;
     r.msg = m;
     r.counter = m->signal(counter.sig);
-    if (!r.counter)
-      fail("message " + m->name + " carries part of a sample but no counter signal '" + counter.sig + "'");
+    if (!r.counter)  // said at the key that put the message in the stream (a review: at the table's line)
+      fail((m == x.msg ? "x = \"" + spec_.x : "y = \"" + spec_.y) + "\": message " + m->name +
+           " carries part of a sample but no counter signal '" + counter.sig + "'");
     if (r.counter->length != counter_bits_ || r.counter->value_type != 0)
       fail("counter " + m->name + "." + counter.sig + " has " + std::to_string(r.counter->length) + " bits, " +
            spec_.counter + " has " + std::to_string(counter_bits_));

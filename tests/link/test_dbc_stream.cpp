@@ -274,9 +274,10 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   s.y = "ACC_Y.y";
   EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: y = \"ACC_Y.y\": no signal y in ACC_Y");
   s = xy_spec();
-  s.y = "FD_BLOCK.y0";  // a message whose counter has another name
-  EXPECT_EQ(error(s),
-            "hw.toml:9:1: [dut.stream]: message FD_BLOCK carries part of a sample but no counter signal 'cnt'");
+  s.y = "FD_BLOCK.y0";  // a message whose counter has another name: said at y's own line
+  s.key_where["y"] = "hw.toml:12:1: [dut.stream]";
+  EXPECT_EQ(error(s), "hw.toml:12:1: [dut.stream]: y = \"FD_BLOCK.y0\": message FD_BLOCK carries part of a sample but "
+                      "no counter signal 'cnt'");
   s = xy_spec();
   s.counter = "MUXED.x";
   EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: counter MUXED.x must be an integer signal of 2..32 bits (has 32, float)");
