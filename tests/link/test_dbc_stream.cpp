@@ -278,6 +278,14 @@ TEST(DbcStream, SpecErrorsNameTheProblem) {
   s.key_where["y"] = "hw.toml:12:1: [dut.stream]";
   EXPECT_EQ(error(s), "hw.toml:12:1: [dut.stream]: y = \"FD_BLOCK.y0\": message FD_BLOCK carries part of a sample but "
                       "no counter signal 'cnt'");
+  s = xy_spec();  // FD_BLOCK holds x0..x7: a frame of 8 samples read as 7 would drop one per frame
+  s.counter = "FD_BLOCK.counter";
+  s.x = "FD_BLOCK.x";
+  s.y = "FD_BLOCK.y";
+  s.samples_per_frame = 7;
+  s.key_where["samples_per_frame"] = "hw.toml:14:1: [dut.stream]";
+  EXPECT_EQ(error(s), "hw.toml:14:1: [dut.stream]: samples_per_frame = 7: message FD_BLOCK also has x7 (x of a sample "
+                      "8): a frame's samples are numbered 0..samples_per_frame-1, and this one would never be read");
   s = xy_spec();
   s.counter = "MUXED.x";
   EXPECT_EQ(error(s), "hw.toml:9:1: [dut.stream]: counter MUXED.x must be an integer signal of 2..32 bits (has 32, float)");
