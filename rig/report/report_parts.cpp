@@ -217,6 +217,15 @@ std::string interval_level(const std::string& name, const json& v, double allan_
     if (name == "r" && text(v, "reason").find("drift of the record") != std::string::npos)
       return level == "68 %" ? "68 %, ±1 σ of the record's drift (Student's t)"
                              : level + " of the record's drift (Student's t)";
+    // The paper's B (a flat segment or the polynomial's minimum) is one Allan point over 0.664:
+    // its interval is that point's chi-square interval at its EDF, the lower end moved to the
+    // noise model's where other terms add to the point (analysis/noise_terms.cpp). Not the fit's
+    // one sigma (a metrologist's review).
+    const std::string why = text(v, "reason");
+    if (name.rfind("in_run_b_allan", 0) == 0 && why.rfind("paper", 0) == 0)
+      return why.find("bounds B from above") != std::string::npos
+                 ? level + ": χ² upper end of σ(τ_ср)/0.664, lower end the noise model's B"
+                 : level + ", χ² interval of σ(τ_ср)/0.664 at its EDF";
     return level == "68 %" ? "68 %, ±1 σ of the Allan fit" : level + " of the Allan fit";
   }
   if (name == "bandwidth_0p5" || name == "settling_time") return "95 %, Student over the loop test's steps";

@@ -218,6 +218,18 @@ TEST(Report, EveryBoundsCellStatesItsIntervalLevel) {
   EXPECT_NE(row_of(h, "bias").find("<div class=\"lvl\">95 %, GOST R 8.736</div>"), std::string::npos);
   EXPECT_NE(row_of(h, "n").find("<div class=\"lvl\">68 %, ±1 σ of the Allan fit</div>"), std::string::npos);
   EXPECT_NE(row_of(h, "in_run_b_allan").find("68 %"), std::string::npos);
+  // The paper's B: one Allan point's chi-square interval, its lower end the model's where other
+  // terms add to the point (a metrologist's review: it was labelled the fit's one sigma).
+  p["values"]["in_run_b_allan"]["reason"] =
+      "paper polynomial: no flat segment between inflections; tau_cp at its minimum; flicker is 35 % of the model's "
+      "sigma^2 at tau_cp: sigma(tau_cp)/0.664 bounds B from above, the lower bound is the model's";
+  EXPECT_NE(rig::report::render_report(p, rig::test::fixture_analysis())
+                .find("<div class=\"lvl\">68 %: χ² upper end of σ(τ_ср)/0.664, lower end the noise model&#39;s B</div>"),
+            std::string::npos);
+  p["values"]["in_run_b_allan"]["reason"] = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment tau = 10..40 s";
+  EXPECT_NE(rig::report::render_report(p, rig::test::fixture_analysis())
+                .find("<div class=\"lvl\">68 %, χ² interval of σ(τ_ср)/0.664 at its EDF</div>"),
+            std::string::npos);
   EXPECT_NE(row_of(h, "extra").find("<div class=\"lvl\">90 %</div>"), std::string::npos);  // the passport's own
   EXPECT_EQ(row_of(h, "rms_filtered").find("class=\"lvl\""), std::string::npos);          // no bounds, no level
   // Every row with bounds has its level.
