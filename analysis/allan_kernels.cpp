@@ -300,6 +300,7 @@ namespace {
 // sums of the running sums and of their squares stay in registers. With c the part's local
 // running sum and off the window sum before the part, sum (off + c)^2 = S2 + 2 off S1 + n off^2.
 constexpr std::size_t kFusedParts = 4;
+constexpr std::size_t kDirectMdevM = 8;
 RIG_CLONES void mdev_tile(const double* w0, const double* w1, const double* w2, const double* w3,
                           std::size_t part_len, double* s1_out, double* s2_out, double* tot_out) {
   v8 carry[kFusedParts] = {}, s1[kFusedParts] = {}, s2[kFusedParts] = {};
@@ -321,20 +322,71 @@ RIG_CLONES void mdev_tile(const double* w0, const double* w1, const double* w2, 
 
 }  // namespace
 
-double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+// sum over t < len of (sum over i = 1..m of D(t + i))^2, D(j) = w2[j] - 2 w1[j] + w0[j]: MDEV's
+// window sums taken each on its own (reads w_k[1 .. len + m - 1]).
+RIG_CLONES double sum_window_sums_sq(const double* w0, const double* w1, const double* w2, std::size_t len,
+                                     std::size_t m) {
+  v8 a0{}, a1{};
+  std::size_t t = 0;
+  for (; t + 16 <= len; t += 16) {
+    v8 s0{}, s1{};
+    for (std::size_t i = 1; i <= m; ++i) {
+      s0 += load8(w2 + t + i) - 2 * load8(w1 + t + i) + load8(w0 + t + i);
+      s1 += load8(w2 + t + i + 8) - 2 * load8(w1 + t + i + 8) + load8(w0 + t + i + 8);
+    }
+    a0 += s0 * s0, a1 += s1 * s1;
+  }
+  double s = hsum(a0 + a1);
+  for (; t < len; ++t) {
+    double w = 0;
+    for (std::size_t i = 1; i <= m; ++i) w += w2[t + i] - 2 * w1[t + i] + w0[t + i];
+    s += w * w;
+  }
+  return s;
+}
+
+double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len, std::size_t m,
                 double& inner) {
+  // Up to m = kDirectMdevM each window sum is taken on its own, as OADEV's terms are: rounding
+  // then stays one term's, where sliding adds every slide's (below). Its last m terms need points
+  // past the windows' len, so they slide from the last one taken.
+  if (m >= 1 && m <= kDirectMdevM && len > m) {
+    const std::size_t direct = len - m;  // terms t < direct read w_k[t + m] with t + m < len
+    const double s = sum_window_sums_sq(w0, w1, w2, direct, m);
+    inner = sum_second_diff(w0 + direct, w1 + direct, w2 + direct, m);  // S at base `direct`
+    double tail = 0;
+    for (std::size_t t = direct; t < len; ++t) {
+      inner += w3[t] - 3 * w2[t] + 3 * w1[t] - w0[t];
+      tail += inner * inner;
+    }
+    return s + tail;
+  }
   constexpr std::size_t kPart = 256, kTile = kFusedParts * kPart;
+  // The window sum slides by third differences of the phase, each rounded at the phase's own
+  // magnitude: over a whole chunk those roundings added up (a rate ramp's phase, a quadratic,
+  // read MDEV 5e-6 high at m = 1, where OADEV's direct second differences were exact; a review).
+  // So `inner` is taken again directly (sum_second_diff, m terms) at a part's start every
+  // `every` parts: every part up to m = 16 (at most 5 % more loads), rarer beyond, so that no
+  // more than about 16 m slides run between two direct sums. Only where the m terms lie within
+  // the windows' len points (the windows need not be one array: allan_stream.cpp's cursors).
+  const std::size_t every = std::max<std::size_t>(1, (16 * m + kPart - 1) / kPart);
+  std::size_t part = 0;  // parts since the run's start
+  const auto anchor = [&](std::size_t t) {
+    if (m > 0 && t + m <= len) inner = sum_second_diff(w0 + t, w1 + t, w2 + t, m);
+  };
   double s = 0;
   std::size_t t0 = 0;
   for (; t0 + kTile <= len; t0 += kTile) {
     double s1[kFusedParts], s2[kFusedParts], tot[kFusedParts];
     mdev_tile(w0 + t0, w1 + t0, w2 + t0, w3 + t0, kPart, s1, s2, tot);
-    for (std::size_t j = 0; j < kFusedParts; ++j) {
+    for (std::size_t j = 0; j < kFusedParts; ++j, ++part) {
+      if (part % every == 0) anchor(t0 + j * kPart);
       s += s2[j] + 2 * inner * s1[j] + static_cast<double>(kPart) * inner * inner;
       inner += tot[j];
     }
   }
-  for (; t0 < len; ++t0) {  // the last partial tile, point by point
+  for (std::size_t k = 0; t0 < len; ++t0, ++k) {  // the last partial tile, point by point
+    if (k % kPart == 0 && part++ % every == 0) anchor(t0);
     inner += w3[t0] - 3 * w2[t0] + 3 * w1[t0] - w0[t0];
     s += inner * inner;
   }

@@ -36,8 +36,9 @@ void chain_d3(int k, const double* head, const double* const* lag2, const double
 
 // MDEV/TDEV (SP 1065 eq. 14): the m-window sum of second differences `inner` slides by one
 // base per point; its increment is the third difference w3 - 3 w2 + 3 w1 - w0. Returns the sum
-// of the squared window sums after each step and leaves `inner` at the last one.
-double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len,
+// of the squared window sums after each step and leaves `inner` at the last one. m: the
+// windows' spacing (w1 = w0 + m, ...), for the direct sums `inner` is taken again from.
+double mdev_run(const double* w0, const double* w1, const double* w2, const double* w3, std::size_t len, std::size_t m,
                 double& inner);
 
 // sum over t < len of (w2 - 2 w1 + w0): MDEV's window sum at one base, computed directly.

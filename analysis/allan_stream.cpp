@@ -82,7 +82,7 @@ struct Acc {
       terms += (len - t + m - 1) / m;
       return;
     }
-    if (modified()) sum += mdev_run(w[0], w[1], w[2], w[3], len, inner);
+    if (modified()) sum += mdev_run(w[0], w[1], w[2], w[3], len, m, inner);
     else if (nwin == 3) sum += sum_d2(w[0], w[1], w[2], len);
     else sum += sum_d3(w[0], w[1], w[2], w[3], len);
     terms += len;

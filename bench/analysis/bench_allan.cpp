@@ -104,7 +104,7 @@ void BM_MdevKernelLag(benchmark::State& st) {
     const std::size_t base = (rep++ * 7'919'000) % (p.size() - 3 * m - len);
     double inner = 0;
     benchmark::DoNotOptimize(rig::analysis::detail::kernels::mdev_run(&p[base], &p[base + m], &p[base + 2 * m],
-                                                                       &p[base + 3 * m], len, inner));
+                                                                       &p[base + 3 * m], len, m, inner));
   }
   const double rounds = static_cast<double>(st.iterations());
   st.counters["terms_per_s"] = benchmark::Counter(static_cast<double>(len) * rounds, benchmark::Counter::kIsRate);
