@@ -637,7 +637,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     }
     t0 = clock_.now_s();
     double changed_at = t0;
-    detail::HeldFor at_target;
+    detail::HeldFor at_target, reached_off;
+    double reached_off_at = NAN;  // where the table rests with target reached, off the target
     Cia402Reading last = r;
     for (;;) {
       clock_.sleep_for(opt_.poll_s, cancel);
@@ -650,6 +651,21 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
       if (r.has(c4::sw::kFollowingError)) throw HardwareError(doing + ": following error (statusword bit 13)" + at(r));
       const bool ok = r.has(c4::sw::kTargetReached) && std::fabs(r.actual_deg - deg) <= opt_.tolerance_deg;
       if (at_target(ok, now) >= opt_.settle_s) return;
+      // Target reached (bit 10) at rest far off the target written: the drive took another target
+      // (a map that converts it otherwise than the drive: word order, counts, gear, offset), and
+      // only the move timeout ended it (17.5 s in a review, where a rig-v1 table's stop short is
+      // said after ended_short_s). As there: held ended_short_s at one place, ten bands off.
+      const double band = opt_.tolerance_deg, off = std::fabs(r.actual_deg - deg);
+      const bool resting_off = r.has(c4::sw::kTargetReached) && off > 10 * band;
+      if (!resting_off || !(std::fabs(r.actual_deg - reached_off_at) <= band)) {
+        reached_off(false, now);  // not so, or moved on: the hold starts again from here
+        reached_off_at = resting_off ? r.actual_deg : NAN;
+      }
+      if (const double held = reached_off(resting_off, now); held >= opt_.ended_short_s)
+        throw HardwareError(doing + ": the drive reads target reached (statusword bit 10) " + deg_str(off) +
+                            " off the target written, at rest for " + secs(held) +
+                            ": it took another target (check the map's word_order, counts_per_rev, gear_ratio and "
+                            "home offset against the drive's manual)" + at(r));
       // Heading away from the target, past the distance it started from by more than a servo
       // overshoots: the drive runs to another target first (it took this set-point into its
       // buffer without "change set immediately" and continues a halted move; a review could not

@@ -1364,6 +1364,48 @@ TEST_P(Cia402Client, ARingingServosOvershootIsNotARunPastTheTarget) {
  }
 }
 
+namespace {
+// A drive that takes every target 3 degrees short of the one written, as a map converting it
+// otherwise than the drive would (a home offset, a gear ratio a little off).
+// Its target register reads back as written.
+struct ShortTarget : Between {
+  using Between::Between;
+  std::vector<uint16_t> written;  // the target's words as written
+  uint8_t write(uint16_t a, const uint16_t* v, uint16_t n) override {
+    const auto& tp = r.map.spec(Obj::kTargetPosition);
+    if (a != tp.address) return r.drive.write_registers(a, v, n);
+    written.assign(v, v + n);
+    const int64_t short_counts = r.map.decode(Obj::kTargetPosition, v) - (r.map.deg_to_counts(3.0) - r.map.deg_to_counts(0.0));
+    const auto words = r.map.encode(Obj::kTargetPosition, short_counts);
+    return r.drive.write_registers(a, words.data(), n);
+  }
+  uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+    const uint8_t rc = Between::read_registers(a, n, out);
+    const auto& tp = r.map.spec(Obj::kTargetPosition);
+    for (std::size_t k = 0; rc == 0 && !tp.input && k < written.size(); ++k)
+      if (a <= tp.address + k && tp.address + k < a + n) out[tp.address + k - a] = written[k];
+    return rc;
+  }
+};
+}  // namespace
+
+// Target reached (bit 10) at rest 3 degrees off the target written: said and halted after
+// ended_short_s (1 s), not at the end of the move timeout (17.5 s in a review).
+TEST_P(Cia402Client, TargetReachedOffTheTargetWrittenIsSaidAfterEndedShort) {
+  Rig r(GetParam());
+  ShortTarget dev(r);
+  auto t = r.client_via(dev);
+  t->home({});
+  const double t0 = r.clock.now_s();
+  const std::string e = error_of([&] { t->move_to(40.0, {}); });
+  EXPECT_TRUE(has(e, "move to 40.0000°: the drive reads target reached (statusword bit 10) 3.0000° off the target "
+                     "written, at rest for ") &&
+              has(e, "it took another target (check the map's word_order, counts_per_rev, gear_ratio and home offset"))
+      << e;
+  EXPECT_NEAR(r.axis->actual_angle_deg(), 37.0, 0.05);
+  EXPECT_LT(r.clock.now_s() - t0, 10.0) << "said before the move timeout";
+}
+
 // A drive that sets bit 12 some cycles after its motion has started (60 ms here, over a poll at
 // poll_s 0.05) completes its move: motion without the acknowledge must hold 0.1 s to be halted.
 TEST_P(Cia402Client, ASetPointAcknowledgedLateIsNotAHaltedMoveContinuing) {
