@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
+#include <cstdio>
 #include <bit>
 #include <limits>
 #include <memory>
@@ -203,6 +204,28 @@ double white_level(const Psd& p, double f_lo, double f_hi) {
   const double k = 2.0 * static_cast<double>(std::max<std::size_t>(p.segments, 1));
   const double med_ratio = boost::math::median(boost::math::chi_squared(k)) / k;
   return med / med_ratio;
+}
+
+std::string psd_n_note(double allan_n, double psd_n, bool psd_fit_ok, double f_lo, double f_hi) {
+  if (!(allan_n > 0)) return {};
+  char what[512];
+  if (psd_n > 0) {
+    const double ratio = psd_n / allan_n;
+    if (!(ratio > 1.5 || ratio < 1 / 1.5)) return {};
+    std::snprintf(what, sizeof what,
+                  "psd: N from the PSD model (%.3g) is %.2fx the Allan N (%.3g) over %.3g..%.3g Hz: the two "
+                  "disagree; one reads as N what neither model has a term for (a tone or a band of interference "
+                  "in that band or in the taus the Allan model fitted, or noise that is not white): see the PSD's "
+                  "peaks and the Allan curve's ripple",
+                  psd_n, ratio, allan_n, f_lo, f_hi);
+    return what;
+  }
+  if (!psd_fit_ok) return {};
+  std::snprintf(what, sizeof what,
+                "psd: the PSD model gives N no share over %.3g..%.3g Hz (its other terms fill that band): it "
+                "neither confirms nor contradicts the Allan N (%.3g)",
+                f_lo, f_hi, allan_n);
+  return what;
 }
 
 PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi) {

@@ -69,4 +69,11 @@ struct PsdTerms {
 };
 PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi);
 
+// The cross-check's note ("" when there is nothing to say): the PSD's N more than 1.5x from the
+// Allan N (a PSD bin's scatter over hundreds of bins is a few %, the Allan N's bounds tighter
+// still), or none of the band given to N by the PSD model while the Allan model has an N (it
+// neither confirms nor contradicts: printed as N = 0 without a word before, a review).
+// allan_n <= 0: the Allan model has no N. Over f_lo..f_hi Hz.
+std::string psd_n_note(double allan_n, double psd_n, bool psd_fit_ok, double f_lo, double f_hi);
+
 }  // namespace rig::analysis

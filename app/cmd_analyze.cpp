@@ -754,20 +754,11 @@ int run(const Args& a) {
     pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
     // The band the N above was read over: the model's, or the median's where the fit failed.
     pj["n_fit_band_hz"] = pt.ok ? json{f_lo, f_hi} : json{0.05 * rate, 0.45 * rate};
-    // Said where it does not confirm the Allan N: more than 1.5x apart (a PSD bin's scatter over
-    // hundreds of bins is a few %, the Allan N's bounds are tighter still).
-    if (terms && terms->N.value && *terms->N.value > 0 && n_psd > 0) {
-      const double ratio = n_psd / *terms->N.value;
-      if (ratio > 1.5 || ratio < 1 / 1.5) {
-        char what[512];
-        std::snprintf(what, sizeof what,
-                      "psd: N from the PSD model (%.3g) is %.2fx the Allan N (%.3g) over %.3g..%.3g Hz: the two "
-                      "disagree; one reads as N what neither model has a term for (a tone or a band of interference "
-                      "in that band or in the taus the Allan model fitted, or noise that is not white): see the PSD's "
-                      "peaks and the Allan curve's ripple",
-                      n_psd, ratio, *terms->N.value, pt.ok ? f_lo : 0.05 * rate, pt.ok ? f_hi : 0.45 * rate);
-        notes.push_back(what);
-      }
+    // Said where it does not confirm the Allan N, or gives it no share (analysis/psd.hpp).
+    if (terms) {
+      const std::string note = an::psd_n_note(terms->N.value.value_or(0.0), n_psd, pt.ok, pt.ok ? f_lo : 0.05 * rate,
+                                              pt.ok ? f_hi : 0.45 * rate);
+      if (!note.empty()) notes.push_back(note);
     }
     // Only N is a cross-check; the other terms give the band's other slopes somewhere to go and
     // are not measurements (a review read K 13x above the Allan model's upper limit on white FM).

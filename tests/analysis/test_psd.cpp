@@ -149,5 +149,21 @@ TEST(Welch, ModelFitGivesNWithQuantisationPresent) {
   }
 }
 
+// The cross-check's note: nothing within 1.5x; the ratio beyond it; a PSD model that gives N none
+// of its band while the Allan model has an N (printed N = 0 without a word before, a review);
+// nothing where the Allan model has no N.
+TEST(Welch, TheCrossCheckOfNSaysWhatItCanConfirm) {
+  EXPECT_EQ(psd_n_note(1e-7, 1.2e-7, true, 0.1, 45), "");
+  const std::string far = psd_n_note(1e-7, 2e-7, true, 0.1, 45);
+  EXPECT_NE(far.find("psd: N from the PSD model (2e-07) is 2.00x the Allan N (1e-07) over 0.1..45 Hz"), std::string::npos)
+      << far;
+  EXPECT_NE(psd_n_note(1e-7, 0.5e-7, false, 5, 45).find("is 0.50x the Allan N"), std::string::npos);
+  EXPECT_EQ(psd_n_note(1.49e-7, 0, true, 0.0122, 45),
+            "psd: the PSD model gives N no share over 0.0122..45 Hz (its other terms fill that band): it neither "
+            "confirms nor contradicts the Allan N (1.49e-07)");
+  EXPECT_EQ(psd_n_note(0, 0, true, 0.1, 45), "");
+  EXPECT_EQ(psd_n_note(0, 3e-7, true, 0.1, 45), "");
+}
+
 }  // namespace
 }  // namespace rig::analysis
