@@ -22,6 +22,7 @@
 #include "app/run_seal.hpp"
 #include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/report/db.hpp"
 #include "rig/report/db_url.hpp"
 #include "rig/report/history.hpp"
@@ -78,8 +79,11 @@ std::size_t shown_width(const std::string& s) {
       std::count_if(s.begin(), s.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
 }
 
-// Left-aligned text columns.
-void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows) {
+// Left-aligned text columns, each cell as a message shows a name (shown_text): a folder path's
+// control characters went to the terminal raw (a review; the CSV quotes them as they are).
+void print_table(std::ostream& os, std::vector<std::vector<std::string>> rows) {
+  for (auto& r : rows)
+    for (std::string& cell : r) cell = shown_text(cell);
   std::vector<std::size_t> w;
   for (const auto& r : rows)
     for (std::size_t i = 0; i < r.size(); ++i) {

@@ -32,6 +32,12 @@ std::string read_profile_name(const toml::table& prof) {
   const std::string name = cfg::get_string(prof, "name");
   const toml::node& n = *prof.get("name");
   if (name.empty()) throw ConfigError(cfg::where(n) + ": 'name' = \"\": the profile's name is required, not empty");
+  // Blanks only, or at an end: a name that reads as none on the passport and in the history's
+  // listing, and a run folder runs/ -<time> (a review: " " was taken).
+  if (name.find_first_not_of(" \t") == std::string::npos || name.front() == ' ' || name.back() == ' ' ||
+      name.front() == '\t' || name.back() == '\t')
+    throw ConfigError(cfg::where(n) + ": 'name' = \"" + shown_text(name) +
+                      "\": the profile's name cannot begin or end with a blank");
   if (has_unshowable(name))
     throw ConfigError(cfg::where(n) + ": 'name' = \"" + shown_text(name) +
                       "\": a control character (shown here as \\xNN) cannot be in the profile's name");

@@ -1,5 +1,6 @@
 #include "rig/report/db_url.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 
@@ -62,6 +63,12 @@ constexpr const char* kNamesNoFile = "names no file";
 }  // namespace
 
 std::string url_problem(const std::string& url) {
+  // Blanks at an end are a quoting slip, not a file name: RIG_HISTORY=' ' or --db ' ' opened a
+  // file named " " in the working folder, a history nobody reads (a review).
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
+  if (std::all_of(url.begin(), url.end(), blank)) return "is blank";
+  if (blank(url.front()) || blank(url.back()))
+    return "begins or ends with a blank (a quoting slip? no history database is named so)";
   if (is_postgres(url)) return "";
   if (file_part(url).empty()) return kNamesNoFile;
   if (in_home(written_path(url)) && !home()) return "starts with ~ and $HOME is not set";

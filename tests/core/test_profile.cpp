@@ -73,6 +73,16 @@ TEST(Profile, WrongTypeNamesFileLineAndKey) {
   EXPECT_NE(e.find("run_s"), std::string::npos) << e;
 }
 
+// A name of blanks reads as none on the passport and in the history (a review: " " was taken).
+TEST(Profile, ANameOfBlanksOrWithABlankAtAnEndIsRefused) {
+  for (const char* name : {" ", "   ", " line-2", "line-2 "}) {
+    const std::string p = write_tmp("blank.toml", std::string("[profile]\nname = \"") + name + "\"\n");
+    const std::string e = error_of(p);
+    EXPECT_NE(e.find(p + ":2:"), std::string::npos) << e;
+    EXPECT_NE(e.find("the profile's name cannot begin or end with a blank"), std::string::npos) << e;
+  }
+}
+
 TEST(Profile, UnknownKeyIsRejected) {
   const std::string p = write_tmp("typo.toml",
                                   "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"

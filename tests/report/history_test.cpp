@@ -375,6 +375,19 @@ TEST(HistoryDefaultUrl, EnvironmentThenConfigThenXdgThenHome) {
   // $RIG_HISTORY wins over everything.
   env.set("RIG_HISTORY", "sqlite:/tmp/x.sqlite");
   EXPECT_EQ(h::default_db_url(), "sqlite:/tmp/x.sqlite");
+  // Blanks at an end are a quoting slip: RIG_HISTORY=' ' or --db ' ' opened a file named " " in
+  // the working folder (a review).
+  for (const char* url : {" ", "\t", "sqlite: ", " /tmp/h.sqlite", "/tmp/h.sqlite "}) {
+    try {
+      h::sqlite_path(url);
+      ADD_FAILURE() << "taken: '" << url << "'";
+    } catch (const rig::ConfigError& e) {
+      const std::string w = e.what();
+      EXPECT_TRUE(w.find("is blank") != std::string::npos || w.find("begins or ends with a blank") != std::string::npos ||
+                  w.find("names no file") != std::string::npos)
+          << w;
+    }
+  }
 }
 
 // "sqlite:~/x" in --db or $RIG_HISTORY made a folder named "~" in the working folder (a review).
@@ -675,6 +688,19 @@ TEST(HistoryCli, StatisticsArePerDutAndUnitAndCountEveryRun) {
   EXPECT_NE(header, std::string::npos);
   EXPECT_EQ(row, header) << "columns padded by characters, not bytes";
   EXPECT_EQ(latin, header);
+}
+
+// The text listing shows a folder path's control characters as \xNN, as messages show names (an
+// escape sequence in a run folder's name reached the terminal raw: a review); the CSV keeps them.
+TEST(HistoryCli, TheListingShowsControlCharactersEscaped) {
+  TempDir d;
+  const std::string db = "sqlite:" + (d.path / "h.sqlite").string();
+  const std::string dir = (d.path / "run\x1b[2Jx").string();
+  h::record_run(db, rig::test::fixture_passport("SN-1", "PASS", "2026-11-01T08:00:00Z"), dir);
+  const std::string text = run_cli({"--db", db});
+  EXPECT_EQ(text.find('\x1b'), std::string::npos) << text;
+  EXPECT_NE(text.find("run\\x1B[2Jx"), std::string::npos) << text;
+  EXPECT_NE(run_cli({"--db", db, "--csv"}).find("run\x1b[2Jx"), std::string::npos);
 }
 
 // `--record` reads a passport as `rig report` does (rig/report/passport_read.hpp): what the report
