@@ -195,6 +195,12 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   cfg::check_keys(lim, {"neg_deg", "pos_deg"}, "limits");
   m.limit_neg_deg = cfg::get_number(lim, "neg_deg", {}, -200000.0, 0.0);
   m.limit_pos_deg = cfg::get_number(lim, "pos_deg", {}, 0.0, 200000.0);
+  // Both 0: a table that cannot move, which every angle of the procedure then "left" (a review:
+  // the refusal named the profile's u20_deg, not the map).
+  if (m.limit_neg_deg == m.limit_pos_deg)
+    cfg::reject(*lim.get("pos_deg"), "pos_deg",
+                "[limits] neg_deg = pos_deg = 0: no travel at all; give the drive's software limits (its manual, "
+                "objects 0x607D)");
 
   const toml::table& objs = *cfg::get_table(root, "objects", true);
   std::vector<std::string_view> names;

@@ -173,6 +173,9 @@ TEST(DriveMapFile, ValuesTheStandardOrTheTravelRulesOutAreNamedAtTheirLine) {
   EXPECT_TRUE(has(e, "bad-map.toml:19:14: 'offset_deg' = -10.5: outside the travel")) << e;
   EXPECT_EQ(map_error(offset + "offset_deg = 10.0\n"), "(no error)");
   EXPECT_EQ(map_error(offset + "offset_deg = -10.0\n"), "(no error)");
+  // No travel at all: said at the map's limits, not as the profile's angles outside them (a review).
+  e = map_error(with("neg_deg = -10.0\npos_deg = 10.0", "neg_deg = 0.0\npos_deg = 0.0"));
+  EXPECT_TRUE(has(e, "bad-map.toml:7:") && has(e, "[limits] neg_deg = pos_deg = 0: no travel at all")) << e;
 }
 
 // ---------------------------------------------------------------- the emulated drive
