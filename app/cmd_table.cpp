@@ -249,7 +249,10 @@ void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
     std::cerr << "rig: the table " << (s.moving ? "was still moving" : "stopped") << " at "
               << modbus::detail::deg_str(s.actual_deg)
               << (halt_error.empty() ? " (halt delivered to the drive)" : " (" + halt_error + ")")
-              << (s.homed_known && !s.homed ? "; it is not homed now: `rig table home` before the next move" : "")
+              << (!s.homed_known ? "; whether it is still homed the drive cannot say (its map has no homed_bit): "
+                                   "`rig table home` before the next move if the homing was interrupted"
+                  : s.homed    ? "; it is still homed"
+                               : "; it is not homed now: `rig table home` before the next move")
               << "\n";
   } catch (const std::exception& e) {
     // The halt's fate too: on a dead link it was not delivered, and "after the halt" alone read

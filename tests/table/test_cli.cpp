@@ -293,7 +293,7 @@ TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
   const std::size_t at = said.find(lead);
   ASSERT_NE(at, std::string::npos) << said;
   EXPECT_NEAR(std::stod(said.substr(at + lead.size())), emu_->snapshot().position_deg, 0.01) << said;
-  EXPECT_NE(said.find("° (halt delivered to the drive)\nrig: aborted: "), std::string::npos) << said;
+  EXPECT_NE(said.find("° (halt delivered to the drive); it is still homed\nrig: aborted: "), std::string::npos) << said;
   // The drive's target still holds the aborted move's 300° while it reads in position at its stop
   // point: the status says the table is not there (it showed "target 300.0000°" and
   // "in-position" alone, which read as arrived).
@@ -526,7 +526,9 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   EXPECT_NE(out.find("outside the travel limits"), std::string::npos) << out;
   // Ctrl-C mid-move: halted, exit 3.
   int cfd = -1;
-  Child child({RIG_BIN, "table", "move", "300", "--modbus", ep, "--drive", "cia402", "--drive-map", map}, &cfd);
+  Child child({"/bin/sh", "-c", "exec \"$0\" \"$@\" 2>&1", RIG_BIN, "table", "move", "300", "--modbus", ep, "--drive",
+               "cia402", "--drive-map", map},
+              &cfd);
   // Once the table turns (the drive has taken 300° as its target): a fixed wait let a loaded
   // machine's signal come first, with the target still 0° and the table at it (a code review).
   std::string turning;
@@ -538,9 +540,18 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   ASSERT_TRUE(has(turning, "\"moving\": true")) << turning;
   ::kill(child.pid(), SIGINT);
   const int st = child.wait_status();
+  std::string said;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(cfd, buf, sizeof buf)) > 0;) said.append(buf, static_cast<std::size_t>(n));
   close(cfd);
   ASSERT_TRUE(WIFEXITED(st));
   EXPECT_EQ(WEXITSTATUS(st), 3);
+  // Whether it is still homed, said either way (a map without homed_bit said nothing: a review).
+  EXPECT_NE(said.find(has_bit ? "(halt delivered to the drive); it is still homed\n"
+                              : "(halt delivered to the drive); whether it is still homed the drive cannot say (its map "
+                                "has no homed_bit)"),
+            std::string::npos)
+      << said;
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   ASSERT_EQ(rig("status --json" + where), 0) << out;
   EXPECT_NE(out.find("\"moving\": false"), std::string::npos) << out;
