@@ -34,6 +34,17 @@ inline std::string tmp(const std::string& name) {
   return d;
 }
 
+// A station key (32 bytes, owner-only, as `rig run --seal-key` takes one) at dir/station.key,
+// the folder made; its path.
+inline std::string station_key_in(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const std::string key = dir + "/station.key";
+  fs::create_directories(dir);
+  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
+  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  return key;
+}
+
 inline std::string slurp(const std::string& p) {
   std::ifstream in(p);
   std::stringstream ss;

@@ -3188,10 +3188,7 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
 // vouched for it). The run ends ERROR, and the final seal still says the capture changed.
 TEST(RigCli, ASealedRunHoldsARecordEditedWithItsStampKeptToItsSeal) {
   const std::string d = tmp("records-forged");
-  const std::string key = d + "/station.key";
-  fs::create_directories(d);
-  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
-  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  const std::string key = station_key_in(d);
   const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/run", "--seal-key",
                          key},
                         d + "/io");
@@ -3305,10 +3302,7 @@ TEST(RigCli, AnEndingTheFolderCannotTakeWholeLeavesAnErrorPassportWhereItFits) {
 // analysis.json go (drawn from that passport); sealed or not, the next resume ends the run.
 TEST(RigCli, AnEndingTheFolderCannotTakeReplacesAnEarlierEndingsPassport) {
   const std::string d = tmp("earlier-ending-replaced");
-  const std::string key = d + "/station.key";
-  fs::create_directories(d);
-  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
-  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  const std::string key = station_key_in(d);
   for (const bool sealed : {false, true}) {
     const std::string out = d + (sealed ? "/sealed" : "/run");
     std::vector<std::string> seal;
@@ -3350,10 +3344,7 @@ TEST(RigCli, AnEndingTheFolderCannotTakeReplacesAnEarlierEndingsPassport) {
 // squats on the seal's temporary name.
 TEST(RigCli, ASealTheFolderCannotTakeIsExitTwoAtTheStartAndFourAtACheckpoint) {
   const std::string d = tmp("seal-not-written");
-  const std::string key = d + "/station.key";
-  fs::create_directories(d);
-  std::ofstream(key, std::ios::binary) << std::string(32, 'k');
-  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  const std::string key = station_key_in(d);
   fs::create_directories(d + "/start/seal.json.tmp/x");
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/start", "--seal-key", key},
                 d + "/io1"),
