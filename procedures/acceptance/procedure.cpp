@@ -43,9 +43,10 @@ std::string run_id(std::size_t i, Orientation o) { return run_phase_id(i + 1, o)
 capture::Loaded load_capture(PhaseContext& ctx, const Recorded& r) {
   const std::string& rel = r.capture;
   capture::Loaded l = capture::load(ctx.out_dir + "/" + rel);
-  if (!l.recovery.complete || l.samples.size() != r.samples)
-    throw HardwareError(l.recovery.summary(rel) + "; its recording wrote " + std::to_string(r.samples) +
-                        " samples: the file was changed or damaged after it was written, nothing is computed from it");
+  if (!l.recovery.complete || l.samples.size() != r.samples)  // no resume either: it refuses such a folder
+    throw RecordsChangedError(l.recovery.summary(rel) + "; its recording wrote " + std::to_string(r.samples) +
+                              " samples: the file was changed or damaged after it was written, nothing is computed "
+                              "from it");
   if (l.samples.empty()) throw HardwareError(rel + ": capture holds no samples");
   return l;
 }
@@ -173,7 +174,11 @@ nlohmann::json allan_channel(PhaseContext& ctx, const Profile& p, const std::vec
     term_value("k", "K", nt.K, analysis::kKToHour, "");
     term_value("r", "R", nt.R, analysis::kRToHour, "");
   } else {
-    term_value("in_run_b_allan_filtered", "B", nt.B, 1.0, "on the filtered output y(t)" + y_filter_note);
+    // How B was read too (flat segment, polynomial minimum, least squares), as in_run_b_allan's
+    // reason says it: the report labels its interval by it (a review: "±1 σ of the Allan fit"
+    // stood on this one's chi-square interval).
+    term_value("in_run_b_allan_filtered", "B", nt.B, 1.0,
+               "on the filtered output y(t)" + y_filter_note + (nt.B.reason.empty() ? "" : "; " + nt.B.reason));
   }
   return {{"oadev", analysis::dev_to_json(dev)}, {"noise_terms", analysis::noise_terms_to_json(nt)}};
 }

@@ -21,6 +21,12 @@ struct ConfigError : std::runtime_error {
 struct HardwareError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+// The run's own records (a capture, the loop test's file) found changed after their writer closed
+// them, by a phase computing from them: exit 4 as any fault, and no resume is offered, since a
+// resume refuses such a folder (rig/executive: RunResult::records_changed).
+struct RecordsChangedError : HardwareError {
+  using HardwareError::HardwareError;
+};
 // The run was aborted on request (signal, e-stop); `what()` says by whom.
 struct AbortedError : std::runtime_error {
   using std::runtime_error::runtime_error;

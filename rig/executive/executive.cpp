@@ -298,10 +298,6 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
 
 namespace {
 constexpr const char* kKeptFromCheckpoint = "completed in an earlier attempt (checkpoint)";
-// The run's own records, found changed by a phase that computes from them (RunResult::records_changed).
-struct RecordsChanged : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 }  // namespace
 
 RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, const std::vector<Phase>& phases,
@@ -357,7 +353,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
         // the configuration (a review: loop-test.csv edited mid-run ended "configuration error",
         // exit 2; contracts.md: records changed after their writer closed them are exit 4).
         if (!p.from_records) throw;
-        throw RecordsChanged(std::string("the run's records changed while it went on: ") + e.what());
+        throw RecordsChangedError(std::string("the run's records changed while it went on: ") + e.what());
       }
       values.set_scope({}, {});
       rec.finished = iso8601_utc_now();
@@ -383,6 +379,11 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     result.message = cancel.requested() ? (every_phase_ran ? "aborted after the last phase: " : "aborted: ") + cancel.reason()
                                         : e.what();
     log_->error("{}", result.message);
+  } catch (const RecordsChangedError& e) {  // before HardwareError, its base
+    result.outcome = RunOutcome::Error;
+    result.message = std::string("error: ") + e.what();
+    result.records_changed = true;
+    log_->error("{}", result.message);
   } catch (const HardwareError& e) {
     result.outcome = RunOutcome::Error;
     result.message = std::string("hardware fault: ") + e.what();
@@ -391,11 +392,6 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     result.outcome = RunOutcome::Error;
     result.message = std::string("configuration error: ") + e.what();
     result.config_error = true;
-    log_->error("{}", result.message);
-  } catch (const RecordsChanged& e) {
-    result.outcome = RunOutcome::Error;
-    result.message = std::string("error: ") + e.what();
-    result.records_changed = true;
     log_->error("{}", result.message);
   } catch (const std::exception& e) {
     result.outcome = RunOutcome::Error;

@@ -222,7 +222,8 @@ std::string interval_level(const std::string& name, const json& v, double allan_
     // noise model's where other terms add to the point (analysis/noise_terms.cpp). Not the fit's
     // one sigma (a metrologist's review).
     const std::string why = text(v, "reason");
-    if (name.rfind("in_run_b_allan", 0) == 0 && why.rfind("paper", 0) == 0)
+    if (name.rfind("in_run_b_allan", 0) == 0 &&
+        (why.find("paper: ") != std::string::npos || why.find("paper polynomial") != std::string::npos))
       return why.find("bounds B from above") != std::string::npos
                  ? level + ": χ² upper end of σ(τ_ср)/0.664, lower end the noise model's B"
                  : level + ", χ² interval of σ(τ_ср)/0.664 at its EDF";

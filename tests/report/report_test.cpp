@@ -227,6 +227,12 @@ TEST(Report, EveryBoundsCellStatesItsIntervalLevel) {
                 .find("<div class=\"lvl\">68 %: χ² upper end of σ(τ_ср)/0.664, lower end the noise model&#39;s B</div>"),
             std::string::npos);
   p["values"]["in_run_b_allan"]["reason"] = "paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment tau = 10..40 s";
+  p["values"]["in_run_b_allan_filtered"] = p["values"]["in_run_b_allan"];
+  p["values"]["in_run_b_allan_filtered"]["reason"] =
+      "on the filtered output y(t); paper: sigma(tau_cp) / 0.664, tau_cp the middle of the flat segment tau = 10..40 s";
+  EXPECT_NE(row_of(rig::report::render_report(p, rig::test::fixture_analysis()), "in_run_b_allan_filtered")
+                .find("<div class=\"lvl\">68 %, χ² interval of σ(τ_ср)/0.664 at its EDF</div>"),
+            std::string::npos);
   EXPECT_NE(rig::report::render_report(p, rig::test::fixture_analysis())
                 .find("<div class=\"lvl\">68 %, χ² interval of σ(τ_ср)/0.664 at its EDF</div>"),
             std::string::npos);
