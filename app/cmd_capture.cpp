@@ -64,21 +64,22 @@ std::string pause_too_long(const link::StreamReassembler& r, double dt_s, double
 
 // A counter that leapt ahead further than the log's clock went (a DUT that restarted after its
 // counter had passed half its period widens to a leap forward, not back: it read as hours of
-// lost samples in seconds of log, a review). The leap is allowed four times the clock (room for
-// a rate_hz a little off, which the rate check names) plus 0.25 s, a receiver's burst of frames
-// stamped together; "" when it fits. It was plus 2 s: a 12-bit counter that restarted 1.1 s short
-// of its period imported as a 1096-sample gap 1 ms of log long, every later sample 1.1 s late (a
-// review); a restart within the last 0.25 s of the period is not told from a gap.
+// lost samples in seconds of log, a review). The leap is allowed the clock's interval plus 5 %
+// (a DUT's clock a little off; the rate check holds the whole log to 2 %) plus 0.25 s, a
+// receiver's burst of frames stamped together; "" when it fits. It was four times the interval
+// plus 2 s: a 12-bit counter that restarted 1.1 s short of its period imported as a 1096-sample
+// gap 1 ms of log long, or after a pause of 0.5-2 s, every later sample 1.1 s late (reviews). A
+// restart whose leap the clock's interval matches, within that, is not told from a gap.
 constexpr double kBurstS = 0.25;
 std::string leap_beyond_clock(const link::StreamReassembler& r, uint32_t counter, double dt_s, double rate_hz) {
   if (!r.started()) return {};
   const uint64_t s = r.widened(counter), top = r.highest_seq();
   if (s <= top + r.window()) return {};
   const double leap_s = static_cast<double>(s - top) / rate_hz;
-  if (leap_s <= 4 * dt_s + kBurstS) return {};
+  if (leap_s <= 1.05 * dt_s + kBurstS) return {};
   return fmt::format("the stream's counter leapt {} samples ({:.6g} s at {} Hz) where the log's clock moved {:.6g} s "
-                     "(the DUT restarted?)",
-                     s - top, leap_s, rate_hz, dt_s);
+                     "(the DUT restarted? or its rate is not {} Hz: --rate)",
+                     s - top, leap_s, rate_hz, dt_s, rate_hz);
 }
 
 // A frame further behind than any reordering (the reorder window): a stray late frame, or the

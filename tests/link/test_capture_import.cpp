@@ -698,6 +698,23 @@ TEST(CaptureImport, StraysLeapsAndPartsAreToldApart) {
       EXPECT_EQ(rig::capture::load((dir() / (name + ".rigcap")).string()).samples.size(), 200u);
     }
   }
+  // The same restart after the stream paused 0.5 s (the leap 1.1 s): it passed under "four times
+  // the clock plus 2 s" (a re-test); a 1.1 s gap the clock shows as 1.1 s is still a gap.
+  for (const double pause : {0.5, 1.1}) {
+    std::ostringstream paused;
+    t = t0;
+    const uint64_t top = (uint64_t{1} << 24) - 1100;
+    for (uint64_t k = top - 100; k < top; ++k, t += 1e-3) log_sample(paused, t, k);
+    t += pause - 1e-3;
+    for (uint64_t k = 0; k < 100; ++k, t += 1e-3) log_sample(paused, t, k);  // 1100 samples ahead (it wraps)
+    const std::string name = pause == 0.5 ? "paused-restart" : "paused-gap";
+    EXPECT_EQ(import(name, paused.str()), pause == 0.5 ? 2 : 0) << slurp(dir() / (name + ".err"));
+    if (pause == 0.5) {
+      EXPECT_NE(slurp(dir() / (name + ".err")).find("(the DUT restarted? or its rate is not 1000 Hz: --rate)"),
+                std::string::npos)
+          << slurp(dir() / (name + ".err"));
+    }
+  }
 
   std::ostringstream first;
   first << log_line(t0, encode(StreamHalf{Channel::X, 5000, 0, 0.5f}));  // one part, then a power cycle
