@@ -212,12 +212,19 @@ DbcStreamDecoder::DbcStreamDecoder(std::shared_ptr<const Dbc> dbc, DbcStreamSpec
     // The message holding one more sample than samples_per_frame says: every frame's last sample
     // would be left out, imported as one lost sample per frame (a review: x0..x3 with
     // samples_per_frame = 3 passed).
+    // Any numbered one past it too (x0..x2 with x7: a re-test).
     if (n > 1)
       for (const auto& [role, base, is_here] : {std::tuple{"x", x.sig, m == x.msg}, std::tuple{"y", y ? y->sig : std::string(), y && m == y->msg}})
-        if (is_here && m->signal(base + std::to_string(n)))
-          fail("samples_per_frame = " + std::to_string(n) + ": message " + m->name + " also has " + base +
-               std::to_string(n) + " (" + role + " of a sample " + std::to_string(n + 1) +
-               "): a frame's samples are numbered 0..samples_per_frame-1, and this one would never be read");
+        for (const DbcSignal& sig : m->signals) {
+          if (!is_here || sig.name.size() <= base.size() || sig.name.compare(0, base.size(), base) != 0) continue;
+          const std::string num = sig.name.substr(base.size());
+          if (num.size() > 3 || !std::all_of(num.begin(), num.end(), [](char c) { return c >= '0' && c <= '9'; }))
+            continue;
+          if (const int k = std::stoi(num); k >= n)
+            fail("samples_per_frame = " + std::to_string(n) + ": message " + m->name + " also has " + sig.name + " (" +
+                 role + " of a sample " + std::to_string(k + 1) +
+                 "): a frame's samples are numbered 0..samples_per_frame-1, and this one would never be read");
+        }
     // A status or flag on a multiplexer page with no x or y of its sample: the decoder gives a
     // frame's flags to that frame's x and y, so they would reach no sample (a code review: the
     // emulator sent such a page, and 200 saturated samples decoded as 0).
