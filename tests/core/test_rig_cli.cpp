@@ -3327,6 +3327,13 @@ TEST(RigCli, AnEndingTheFolderCannotTakeReplacesAnEarlierEndingsPassport) {
     EXPECT_NE(slurp(out + "/junit.xml").find("outcome PASS not written"), std::string::npos);
     EXPECT_FALSE(fs::exists(out + "/report.html"));
     EXPECT_FALSE(fs::exists(out + "/analysis.json"));
+    if (sealed) {  // the ERROR passport is not sealed, said once (it was listed twice: a re-test)
+      EXPECT_EQ(run({"verify", out, "--seal-key", key}, d + "/io-error"), 1);
+      const std::string said = slurp(d + "/io-error.stdout") + slurp(d + "/io-error.stderr");
+      const std::size_t first = said.find("passport.json: not sealed");
+      EXPECT_NE(first, std::string::npos) << said;
+      EXPECT_EQ(said.find("passport.json: not sealed", first + 1), std::string::npos) << said;
+    }
     fs::remove_all(out + "/analysis.json.tmp");
     EXPECT_EQ(run(args({"run", "--resume", out, "--yes", "--quiet", "--no-history"}), d + "/io3"), 0)
         << slurp(d + "/io3.stderr");
