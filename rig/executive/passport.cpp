@@ -1,9 +1,6 @@
 #include "rig/executive/passport.hpp"
 
 #include <cmath>
-#include <cstdio>
-#include <ctime>
-#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -46,30 +43,6 @@ std::string passport_text(const nlohmann::ordered_json& passport) { return passp
 namespace {
 std::string xml_escape(const std::string& s) { return markup_escape(s); }
 std::string num(const std::optional<double>& v) { return v ? fmt::format("{:.6g}", *v) : "null"; }
-
-// Seconds since the epoch of an ISO 8601 UTC stamp as the rig writes them (iso8601_utc_now).
-std::optional<long long> utc_seconds(const std::string& iso) {
-  std::tm tm{};
-  char z = 0;
-  if (std::sscanf(iso.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%c", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour,
-                  &tm.tm_min, &tm.tm_sec, &z) != 7 || z != 'Z')
-    return std::nullopt;
-  tm.tm_year -= 1900;
-  tm.tm_mon -= 1;
-  return static_cast<long long>(timegm(&tm));
-}
-
-// The suite's `time` (CI tools show and sum it; it was left out, a review): wall seconds from
-// the run's start to its last phase's end, as their stamps have them (whole seconds); "" when
-// no phase has ended.
-std::string suite_time(const PassportInfo& info, const RunResult& result) {
-  const std::optional<long long> from = utc_seconds(info.started);
-  std::optional<long long> to;
-  for (const auto& r : result.phases)
-    if (const auto t = utc_seconds(r.finished); t && (!to || *t > *to)) to = t;
-  if (!from || !to || *to < *from) return {};
-  return fmt::format(" time=\"{}\"", *to - *from);
-}
 }  // namespace
 
 std::string junit_xml(const PassportInfo& info, const RunResult& result, const MeasurementSet& values) {
@@ -85,8 +58,7 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     << "\" errors=\"" << (aborted ? 1 : 0) << "\">\n";
   o << "  <testsuite name=\"" << xml_escape("acceptance." + info.profile) << "\" tests=\""
     << values.all().size() + (aborted ? 1 : 0) << "\" failures=\"" << failures << "\" errors=\"" << (aborted ? 1 : 0)
-    << "\" skipped=\"" << skipped << "\" timestamp=\"" << xml_escape(info.started) << "\"" << suite_time(info, result)
-    << ">\n";
+    << "\" skipped=\"" << skipped << "\" timestamp=\"" << xml_escape(info.started) << "\">\n";
   o << "    <properties><property name=\"serial\" value=\"" << xml_escape(info.serial)
     << "\"/><property name=\"plant\" value=\"" << xml_escape(info.plant) << "\"/><property name=\"outcome\" value=\""
     << to_string(result.outcome) << "\"/></properties>\n";

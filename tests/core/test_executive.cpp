@@ -607,23 +607,6 @@ TEST(Measurements, AFailureShowsTheDigitsThatPutTheValueOutside) {
   EXPECT_EQ(n.value, "nan");
 }
 
-// The suite's time: wall seconds from the run's start to its last phase's end (CI tools show it;
-// it was left out, a review); none where no phase has ended or a stamp is not the rig's.
-TEST(Measurements, TheJUnitSuiteCarriesTheRunsTime) {
-  MeasurementSet v;
-  v.declare({"bias", "g", "bias"});
-  PassportInfo info;
-  info.started = "2026-12-02T16:00:00Z";
-  RunResult r;
-  r.phases = {{"a", "a", "done", "2026-12-02T16:00:01Z", "2026-12-02T16:01:40Z", ""},
-              {"b", "b", "done", "2026-12-02T16:01:40Z", "2026-12-02T16:02:05Z", ""},
-              {"c", "c", "pending", "", "", ""}};
-  EXPECT_NE(junit_xml(info, r, v).find("timestamp=\"2026-12-02T16:00:00Z\" time=\"125\">"), std::string::npos)
-      << junit_xml(info, r, v);
-  r.phases.resize(0);
-  EXPECT_EQ(junit_xml(info, r, v).find(" time=\""), std::string::npos);
-}
-
 TEST(Executive, OutcomesAreJudgedOnceTheSameAfterAResume) {
   // A required value without limits (the accuracy class with a class table): null fails.
   Fixture f("judge-resume");
