@@ -301,53 +301,51 @@ TEST(Executive, AResumeMeasuresOnTheDeviceAgain) {
   EXPECT_EQ(r.phases[1].status, "done");
 }
 
+namespace {
+// One phase whose body throws, run in a fresh folder: the result.
+RunResult one_throwing_phase(const std::string& name, const std::function<void(PhaseContext&)>& body, bool from_records) {
+  Fixture f(name);
+  Devices d = f.dev();
+  Executive ex(d, f.out, f.log, nullptr);
+  std::vector<Phase> phases{{"calc", "compute", 0, body, {{"v", "g", ""}}, from_records}};
+  MeasurementSet v;
+  declare(phases, v);
+  JsonState st;
+  return ex.run(power_on, phases, v, st, CancelToken{}, false, {});
+}
+}  // namespace
+
 // A phase that computes from the run's records and finds them damaged (a ConfigError from the
 // reader) found them changed while the run went on: an ERROR of the folder, not a configuration
 // error (a review: loop-test.csv edited mid-run ended exit 2). A phase that is not from records
 // keeps its ConfigError.
-// A capture a from-records phase finds damaged (RecordsChangedError, procedure.cpp's
-// load_capture) is the same: exit 4 and no resume offered (a review: the hint said "16 of 19
-// phases kept" and the resume was refused).
-TEST(Executive, ACaptureFoundDamagedByAPhaseOffersNoResume) {
-  Fixture f("capture-changed");
-  Devices d = f.dev();
-  Executive ex(d, f.out, f.log, nullptr);
-  std::vector<Phase> phases{{"allan", "compute", 0,
-                             [](PhaseContext&) { throw RecordsChangedError("captures/raw-U10.cap: 100 of 3600 samples"); },
-                             {{"v", "g", ""}}, true}};
-  MeasurementSet v;
-  declare(phases, v);
-  JsonState st;
-  const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
-  EXPECT_EQ(r.outcome, RunOutcome::Error);
-  EXPECT_TRUE(r.records_changed);
-  EXPECT_FALSE(r.config_error);
-  EXPECT_EQ(r.exit_code(), kExitHardware);
-  EXPECT_EQ(r.message, "error: captures/raw-U10.cap: 100 of 3600 samples");
-}
-
 TEST(Executive, ARecordDamagedWhileTheRunWentOnIsNoConfigurationError) {
   for (const bool from_records : {true, false}) {
-    Fixture f(from_records ? "records-changed" : "config-late");
-    Devices d = f.dev();
-    Executive ex(d, f.out, f.log, nullptr);
-    std::vector<Phase> phases{{"calc", "compute", 0,
-                               [](PhaseContext&) { throw ConfigError("state.loop_test.crc32: 1 does not match"); },
-                               {{"v", "g", ""}}, from_records}};
-    MeasurementSet v;
-    declare(phases, v);
-    JsonState st;
-    const auto r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
+    const auto r = one_throwing_phase(from_records ? "records-changed" : "config-late",
+                                      [](PhaseContext&) { throw ConfigError("state.loop_test.crc32: 1 does not match"); },
+                                      from_records);
     EXPECT_EQ(r.outcome, RunOutcome::Error);
     EXPECT_EQ(r.config_error, !from_records);
     EXPECT_EQ(r.records_changed, from_records);  // no resume is offered for it (app/cmd_run.cpp)
     if (from_records) {
       EXPECT_EQ(r.exit_code(), kExitHardware) << r.message;
-    }
-    if (from_records) {
       EXPECT_EQ(r.message, "error: the run's records changed while it went on: state.loop_test.crc32: 1 does not match");
     }
   }
+}
+
+// A capture a from-records phase finds damaged (RecordsChangedError, procedure.cpp's
+// load_capture) is the same: exit 4 and no resume offered (a review: the hint said "16 of 19
+// phases kept" and the resume was refused).
+TEST(Executive, ACaptureFoundDamagedByAPhaseOffersNoResume) {
+  const auto r = one_throwing_phase(
+      "capture-changed", [](PhaseContext&) { throw RecordsChangedError("captures/raw-U10.cap: 100 of 3600 samples"); },
+      true);
+  EXPECT_EQ(r.outcome, RunOutcome::Error);
+  EXPECT_TRUE(r.records_changed);
+  EXPECT_FALSE(r.config_error);
+  EXPECT_EQ(r.exit_code(), kExitHardware);
+  EXPECT_EQ(r.message, "error: captures/raw-U10.cap: 100 of 3600 samples");
 }
 
 // A phase that only computes from records (Phase::from_records) runs again on a resume: its
