@@ -61,11 +61,11 @@ void F64File::release() noexcept {
 void F64File::open_and_check(std::size_t map_limit_bytes, bool check_in_pass) {
   const std::string& path = path_;
   fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd_ < 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  if (fd_ < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
   struct stat st {};
-  if (::fstat(fd_, &st) != 0) throw ConfigError(path + ": cannot stat: " + std::strerror(errno));
+  if (::fstat(fd_, &st) != 0) throw InputError(path + ": cannot stat: " + std::strerror(errno));
   if (st.st_size % 8 != 0)
-    throw ConfigError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)");
+    throw InputError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)");
   n_ = static_cast<std::uint64_t>(st.st_size) / 8;
   const std::size_t bytes = static_cast<std::size_t>(st.st_size);
   if (bytes > 0 && bytes <= map_limit_bytes) {
@@ -159,26 +159,26 @@ void F64File::check_new(std::uint64_t pos, std::span<const double> v) const {
 
 void F64File::check(std::uint64_t pos, std::span<const double> v) const {
   if (const auto bad = an::first_unusable(v))
-    throw ConfigError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
-                      ") " + refusal(v[*bad]));
+    throw InputError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
+                     ") " + refusal(v[*bad]));
 }
 
 std::vector<double> read_f32(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
   in.seekg(0, std::ios::end);
   const auto size = static_cast<std::uint64_t>(in.tellg());
   in.seekg(0);
   if (size % 4 != 0)
-    throw ConfigError(path + ": size " + std::to_string(size) + " bytes is not a multiple of 4 (float32)");
+    throw InputError(path + ": size " + std::to_string(size) + " bytes is not a multiple of 4 (float32)");
   std::vector<float> raw(size / 4);
   if (!in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(size)))
-    throw ConfigError(path + ": cannot read: " + std::strerror(errno));
+    throw InputError(path + ": cannot read: " + std::strerror(errno));
   static_assert(std::endian::native == std::endian::little, "float32 files are little-endian, as this host");
   std::vector<double> v(raw.begin(), raw.end());  // every float is a double exactly
   if (const auto bad = an::first_unusable(v))
-    throw ConfigError(path + ": value " + std::to_string(*bad) + " (byte " + std::to_string(*bad * 4) + ") " +
-                      refusal(v[*bad]));
+    throw InputError(path + ": value " + std::to_string(*bad) + " (byte " + std::to_string(*bad * 4) + ") " +
+                     refusal(v[*bad]));
   return v;
 }
 
@@ -196,8 +196,8 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
     const ssize_t r = ::pread(fd_, p + got, want * 8 - got, static_cast<off_t>(pos * 8 + got));
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0)
-      throw ConfigError(path_ + ": read error at value " + std::to_string(pos + got / 8) + ": " +
-                        (r < 0 ? std::strerror(errno) : "unexpected end"));
+      throw InputError(path_ + ": read error at value " + std::to_string(pos + got / 8) + ": " +
+                       (r < 0 ? std::strerror(errno) : "unexpected end"));
     got += static_cast<std::size_t>(r);
   }
   // Only values not yet checked are checked: the engine's cursors and far taus re-read what its
@@ -209,16 +209,16 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
 void check_input_path(const std::string& path, const std::string& input) {
   if (path == "-") {  // standard input: read as it comes, so text only
     if (input != "text")
-      throw ConfigError("-: standard input carries --input text only (--input " + input +
-                        " is read by its size: give the file)");
+      throw InputError("-: standard input carries --input text only (--input " + input +
+                       " is read by its size: give the file)");
     return;
   }
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw ConfigError(path + ": is a folder, not a record (give one file)");
+  if (::stat(path.c_str(), &st) != 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a folder, not a record (give one file)");
   if (!S_ISREG(st.st_mode) && input != "text")
-    throw ConfigError(path + ": not a regular file: --input " + input +
-                      " is read by its size (a pipe or FIFO can carry --input text)");
+    throw InputError(path + ": not a regular file: --input " + input +
+                     " is read by its size (a pipe or FIFO can carry --input text)");
 }
 
 namespace {
@@ -281,11 +281,11 @@ std::vector<double> read_text(const std::string& path, std::size_t* blank_betwee
     // An ifstream on the descriptor, not std::cin: cin, synced with C stdio, reads a third as fast.
     if (::isatty(STDIN_FILENO)) std::cerr << "rig analyze: reading values from standard input (end with Ctrl-D)\n";
     std::ifstream in("/dev/stdin");
-    if (!in) throw ConfigError(std::string("stdin: cannot open: ") + std::strerror(errno));
+    if (!in) throw InputError(std::string("stdin: cannot open: ") + std::strerror(errno));
     return read_text(in, "stdin", blank_between);
   }
   std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open: " + std::strerror(errno));
+  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
   return read_text(in, path, blank_between);
 }
 
@@ -312,7 +312,7 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
     std::string_view line = buffer;  // the whole line stays in `buffer` for a message
     // A capture file given without --input capture: say so, not "not a decimal number: 'RIGCAP1'".
     if (lineno == 1 && line == std::string_view(capture::kMagic, sizeof capture::kMagic - 1))
-      throw ConfigError(path + ": a capture file (rig.capture/1): read it with --input capture");
+      throw InputError(path + ": a capture file (rig.capture/1): read it with --input capture");
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
     if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
     const auto hash = line.find('#');
@@ -333,11 +333,11 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
     double x = 0;
     const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), x);
     if (ec == std::errc::result_out_of_range && end == num.data() + num.size())
-      throw ConfigError(where() + excerpt(tok) +
-                        (underflows(num) ? " is nearer 0 than the smallest double, 4.9e-324 (not a measurement)"
+      throw InputError(where() + excerpt(tok) +
+                       (underflows(num) ? " is nearer 0 than the smallest double, 4.9e-324 (not a measurement)"
                                          : " is beyond the range of a double"));
-    if (ec != std::errc() || end != num.data() + num.size()) throw ConfigError(where() + not_a_number(buffer, tok));
-    if (!(std::fabs(x) < an::kMaxMagnitude)) throw ConfigError(where() + excerpt(tok) + ": " + refusal(x));
+    if (ec != std::errc() || end != num.data() + num.size()) throw InputError(where() + not_a_number(buffer, tok));
+    if (!(std::fabs(x) < an::kMaxMagnitude)) throw InputError(where() + excerpt(tok) + ": " + refusal(x));
     v.push_back(x);
   }
   if (blank_between) *blank_between = blank;
@@ -360,11 +360,11 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
         // order, and joining them would analyse a time series that never was (a review: two
         // swapped blocks read as "2000 samples lost", exit 0). A resume refuses the same capture.
         if (!lost)
-          throw ConfigError(path + ": sample " + std::to_string(c.values.size()) + ": the sequence counter " +
-                            (s.seq == prev ? "repeats" : "goes back") + " (" + std::to_string(prev) + " then " +
-                            std::to_string(s.seq) +
-                            "): the samples are not in a recording's order (blocks moved, or two recordings joined); "
-                            "nothing analysed");
+          throw InputError(path + ": sample " + std::to_string(c.values.size()) + ": the sequence counter " +
+                           (s.seq == prev ? "repeats" : "goes back") + " (" + std::to_string(prev) + " then " +
+                           std::to_string(s.seq) +
+                           "): the samples are not in a recording's order (blocks moved, or two recordings joined); "
+                           "nothing analysed");
         c.gaps.push_back({c.values.size(), prev, s.seq, *lost});
       }
       prev = s.seq;
@@ -372,15 +372,15 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
     }
   c.recovery = r.recovery();
   if (channel == "y" && c.recovery.y_absent > 0 && c.recovery.y_absent == c.values.size())
-    throw ConfigError(path + ": channel y is NaN on every sample (a stream without y): nothing to analyse; analyse x");
+    throw InputError(path + ": channel y is NaN on every sample (a stream without y): nothing to analyse; analyse x");
   if (const auto bad = an::first_unusable(c.values)) {
     std::string where;
     for (const auto& note : c.recovery.notes)  // the reader located the first ones by file offset
       if (note.find(": sample " + std::to_string(*bad) + " ") != std::string::npos) where = " (" + note + ")";
-    throw ConfigError(path + ": sample " + std::to_string(*bad) + " of channel " + channel + " " +
-                      refusal(c.values[*bad]) + where + "; " + std::to_string(c.recovery.non_finite) +
-                      " sample(s) with a non-finite value in the capture" +
-                      (c.recovery.y_absent ? ", " + std::to_string(c.recovery.y_absent) + " with y NaN" : ""));
+    throw InputError(path + ": sample " + std::to_string(*bad) + " of channel " + channel + " " +
+                     refusal(c.values[*bad]) + where + "; " + std::to_string(c.recovery.non_finite) +
+                     " sample(s) with a non-finite value in the capture" +
+                     (c.recovery.y_absent ? ", " + std::to_string(c.recovery.y_absent) + " with y NaN" : ""));
   }
   return c;
 }

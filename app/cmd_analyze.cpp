@@ -241,7 +241,7 @@ std::string apply_gap_policy(const std::string& file, const std::string& policy,
                            " sample(s) lost; the first before sample " + std::to_string(g0.at) + " (seq " +
                            std::to_string(g0.seq_before) + " -> " + std::to_string(g0.seq_after) + ")";
   if (policy == "stop")
-    throw ConfigError(file + ": " + what + "; --gaps join analyses across them, --gaps longest the longest gap-free stretch");
+    throw InputError(file + ": " + what + "; --gaps join analyses across them, --gaps longest the longest gap-free stretch");
   if (policy == "longest") {
     std::size_t best_from = 0, best_len = gaps.front().at, start = 0;
     for (std::size_t k = 0; k <= gaps.size(); ++k) {
@@ -448,7 +448,7 @@ int run(const Args& a) {
   if (!src) src = std::make_unique<an::SpanSource>(mem);
   timer.mark("read");
   const std::uint64_t n = src->size();
-  if (n < 3) throw ConfigError(input_name + ": " + std::to_string(n) + (n == 1 ? " value" : " values") + "; at least 3 are needed");
+  if (n < 3) throw InputError(input_name + ": " + std::to_string(n) + (n == 1 ? " value" : " values") + "; at least 3 are needed");
   // Short records (NBS14's 9/10-point sets) are analysed; what is not meaningful on them is said.
   std::vector<std::string> notes;
   if (blank_lines)
@@ -561,7 +561,7 @@ int run(const Args& a) {
     try {
       devs = an::deviations_stream(*src, opts, so);
     } catch (const std::invalid_argument& e) {
-      throw ConfigError(input_name + ": " + e.what());
+      throw InputError(input_name + ": " + e.what());
     }
   };
   compute();
@@ -573,8 +573,8 @@ int run(const Args& a) {
   }
   for (std::size_t k = 0; k < devs.size(); ++k)
     if (devs[k].empty())
-      throw ConfigError(input_name + ": " + std::to_string(n) + " values are too few for any tau of " +
-                        an::to_string(opts[k].type) + " (" + a.taus + ")");
+      throw InputError(input_name + ": " + std::to_string(n) + " values are too few for any tau of " +
+                       an::to_string(opts[k].type) + " (" + a.taus + ")");
   // The record's span: n frequency values cover n tau0; n phase points, n - 1 (a review: ten
   // phase points were said to be 10 s at 1 Hz).
   const double record_s = static_cast<double>(base.data == an::DataKind::Phase ? n - 1 : n) / rate;
@@ -604,10 +604,10 @@ int run(const Args& a) {
         mag > 0 && mag < 1 / an::kMaxMagnitude) {
       char shown[32];
       std::snprintf(shown, sizeof shown, "%.3g", mag);
-      throw ConfigError(input_name + ": its values (up to " + shown +
-                        " in magnitude) are nearer 0 than 2^-333 = 5.7e-101, the mirror of the 2^333 limit (from "
-                        "1e-154 on their squared differences leave a double's normal range, the deviations lose "
-                        "their digits and then read 0; not a measurement in any unit: scale the record)");
+      throw InputError(input_name + ": its values (up to " + shown +
+                       " in magnitude) are nearer 0 than 2^-333 = 5.7e-101, the mirror of the 2^333 limit (from "
+                       "1e-154 on their squared differences leave a double's normal range, the deviations lose "
+                       "their digits and then read 0; not a measurement in any unit: scale the record)");
     }
   }
   const std::string constant_what = base.data == an::DataKind::Phase
@@ -665,7 +665,7 @@ int run(const Args& a) {
       values = std::span<const double>(p, n);
     } else {
       held.resize(n);
-      if (src->read_at(0, held) != n) throw ConfigError(input_name + ": the file ended early");
+      if (src->read_at(0, held) != n) throw InputError(input_name + ": the file ended early");
       values = held;
     }
     for (an::LongTau t : long_taus) {
@@ -682,7 +682,7 @@ int run(const Args& a) {
       try {
         longs.push_back(an::long_tau(values, lo));
       } catch (const std::invalid_argument& e) {
-        throw ConfigError(input_name + ": " + e.what());
+        throw InputError(input_name + ": " + e.what());
       }
     }
     timer.mark("long tau");
@@ -725,7 +725,7 @@ int run(const Args& a) {
     try {
       psd = an::welch(*src, rate, wo);
     } catch (const std::invalid_argument& e) {
-      throw ConfigError(input_name + ": " + e.what());
+      throw InputError(input_name + ": " + e.what());
     }
     peaks = an::find_peaks(*psd, 10.0, 20);
     json pj = {{"method", "welch"}, {"window", a.window}, {"segment", psd->segment}, {"segments", psd->segments},

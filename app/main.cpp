@@ -178,6 +178,9 @@ int main(int argc, char** argv) {
     }
     const int r = app.exit(e);
     return r == 0 ? 0 : rig::kExitUsage;  // --help/--version exit 0; usage errors exit 2
+  } catch (const rig::InputError& e) {  // before ConfigError, its base
+    std::cerr << "rig: input error: " << e.what() << "\n";
+    return rig::kExitUsage;
   } catch (const rig::ConfigError& e) {
     std::cerr << "rig: configuration error: " << e.what() << "\n";
     return rig::kExitUsage;

@@ -17,6 +17,11 @@ enum ExitCode : int {
 struct ConfigError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+// A record given to be read (`rig analyze`'s input) that cannot be read as one: exit 2 as a
+// configuration error, said as what it is ("input error: y.txt:5: ...").
+struct InputError : ConfigError {
+  using ConfigError::ConfigError;
+};
 // A device or link failed (table alarm, dead link, CAN bus-off, capture gap limit).
 struct HardwareError : std::runtime_error {
   using std::runtime_error::runtime_error;

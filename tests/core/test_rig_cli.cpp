@@ -539,6 +539,13 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   EXPECT_EQ(run({"analyze", d + "/ctl.txt"}, d + "/ctl"), 2);
   EXPECT_NE(slurp(d + "/ctl.stderr").find("ctl.txt:3: not a decimal number: '3\\x01\\x00x'"), std::string::npos)
       << slurp(d + "/ctl.stderr");
+  // Said as what it is: a record that cannot be read, not a configuration (a review); a bad
+  // option stays a configuration error.
+  EXPECT_EQ(slurp(d + "/ctl.stderr").rfind("rig: input error: " + d + "/ctl.txt:3: ", 0), 0u) << slurp(d + "/ctl.stderr");
+  EXPECT_EQ(slurp(d + "/fifo.stderr").rfind("rig: input error: ", 0), 0u) << slurp(d + "/fifo.stderr");
+  EXPECT_EQ(run({"analyze", d + "/ctl.txt", "--rate", "0"}, d + "/rate0"), 2);
+  EXPECT_EQ(slurp(d + "/rate0.stderr").rfind("rig: configuration error: rig analyze: --rate 0", 0), 0u)
+      << slurp(d + "/rate0.stderr");
   // Bytes that are not UTF-8 (a Latin-1 or binary file) are shown as \xNN too; whole UTF-8
   // characters (a Cyrillic unit) as they are.
   std::ofstream(d + "/latin1.txt") << "1.0\n2.0\n\xFF\xB5g\n";
