@@ -14,6 +14,8 @@
 #include <optional>
 #include <sstream>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
@@ -41,6 +43,8 @@ struct NotTheDatabase : ConfigError {
 struct HistoryArgs {
   std::string db;
   std::string serial, since, until, outcome, profile, value, record;
+  std::string seal_key;  // --seal-key / RIG_SEAL_KEY: a sealed folder is checked before --record takes it
+  bool seal_key_given = false;
   int limit = 0;
   long long endings = 0;  // --endings ID
   bool csv = false;
@@ -292,6 +296,22 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
             << (own ? "" : "; " + why_not) << "): rig run --resume " << dir << " finishes it in the run's own database\n";
 }
 
+// A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL
+// whose passport was edited to PASS was recorded as PASS, `rig verify` alone saying otherwise).
+// `rig verify`'s whole check, with the station's key; a sealed folder without one is refused.
+// An unsealed folder is recorded as it lies (docs/seal.md: no seal, nothing vouched for).
+void check_seal_before_recording(const HistoryArgs& a) {
+  if (!std::filesystem::exists(std::filesystem::symlink_status(a.record + "/seal.json"))) return;
+  const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
+  if (!key)
+    throw NotTheDatabase(a.record + " is sealed (seal.json): --record checks it with the station's key first (--seal-key "
+                                    "FILE or RIG_SEAL_KEY); nothing recorded");
+  const seal::Check c = check_run_folder_seal(a.record, *key);
+  if (!c.ok)
+    throw NotTheDatabase(fmt::format("{} is not as the station sealed it ({}); nothing recorded (rig verify {} says more)",
+                                     a.record, fmt::join(c.problems, "; "), a.record));
+}
+
 void record(const HistoryArgs& a) {
   // Not while a run or resume holds the folder: its passport may be about to change. The folder's
   // mistake, never the database's (it read "RIG_HISTORY: --record ...", a code review).
@@ -300,6 +320,7 @@ void record(const HistoryArgs& a) {
   nlohmann::json p;
   try {
     if (path_kind(a.record, "--record") == PathKind::directory) lock.emplace(a.record, "--record " + a.record);
+    check_seal_before_recording(a);
     p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
@@ -366,6 +387,9 @@ void add_history(CLI::App& app, int& rc) {
   query.push_back(sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit"));
   CLI::Option* rec =
       sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
+  CLI::Option* key = sub->add_option("--seal-key", a->seal_key,
+                                     "With --record: the station's key, to check a sealed folder before recording it")
+                         ->envname("RIG_SEAL_KEY");
   // A query option beside --record was ignored: `--record DIR --serial OTHER` recorded the folder
   // whatever its serial, exit 0 (a review). Refused as a usage error instead.
   for (CLI::Option* q : query) rec->excludes(q);
@@ -381,7 +405,8 @@ void add_history(CLI::App& app, int& rc) {
   ends->excludes(rec);
   for (CLI::Option* q : query)
     if (q->get_name() != "--csv") ends->excludes(q);
-  sub->callback([&rc, a] {
+  sub->callback([&rc, a, key] {
+    a->seal_key_given = key->count() > 0;
     const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};
     if (!db_given) source = default_history();

@@ -1190,9 +1190,10 @@ int do_run(RunArgs a) {
   // checkpoint had only run.json, which did not (an automation review: limits loosened in the
   // folder's profile.toml, then resumed: PASS). Since 2026-12-02 run.json holds the digest too.
   if (!a.resume.empty() && invocation.contains("profile_digest") && invocation["profile_digest"] != p.digest)
-    throw ConfigError(fmt::format("{}/run.json: field 'profile_digest': {}, but {} (which a resume reads) digests to "
-                                  "\"{}\": not the profile the run started with (edited since?); start a new run",
-                                  a.resume, invocation["profile_digest"].dump(), a.profile, p.digest));
+    // Its own digest not printed: it made an edited profile's resume pass in an unsealed folder (a review).
+    throw ConfigError(fmt::format("{}/run.json: field 'profile_digest': {}, not the digest of {} (which a resume "
+                                  "reads): not the profile the run started with (edited since?); start a new run",
+                                  a.resume, invocation["profile_digest"].dump(), a.profile));
   // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included,
   // on every plant: a profile is shared by hardware and emulated runs, and a typo there must not
   // wait for the next emulated run to be found (before any device opens).

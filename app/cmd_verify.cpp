@@ -51,21 +51,11 @@ std::string loop_records_problem(const std::string& dir) {
   return "";
 }
 
-int do_verify(const std::string& dir, const std::string& key_path, bool given) {
-  if (path_kind(dir, "rig verify") != PathKind::directory) throw ConfigError(dir + ": not a run folder");
-  const std::optional<seal::Key> key = station_key(key_path, given);
-  if (!key) throw ConfigError("rig verify needs the station's key: --seal-key FILE or RIG_SEAL_KEY");
+}  // namespace
+
+seal::Check check_run_folder_seal(const std::string& dir, const seal::Key& key) {
   // The passport is what a seal is for: a folder whose seal leaves it out is not verified.
-  seal::Check c = seal::check_seal(dir, dir + "/seal.json", *key, {"passport.json"});
-  std::cout << fmt::format("{}: seal.json, key {} ({}){}\n", dir, key->id, key->path,
-                           c.outcome.empty() ? std::string() : ", sealed outcome " + c.outcome);
-  for (const auto& [f, state] : c.files)
-    std::cout << fmt::format("  {:<8} {}\n",
-                             state == seal::FileState::Ok        ? "ok"
-                             : state == seal::FileState::Changed ? "CHANGED"
-                             : state == seal::FileState::Missing ? "MISSING"
-                                                                 : "NOT-FILE",
-                             f);
+  seal::Check c = seal::check_seal(dir, dir + "/seal.json", key, {"passport.json"});
   if (!c.files.empty()) {  // the seal was read: anything it does not list was added after it
     // Once per file: the check names a passport the seal leaves out already (it was listed twice, a re-test).
     const auto named = [&](const std::string& f) {
@@ -91,6 +81,25 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
     }
     c.ok = c.problems.empty();
   }
+  return c;
+}
+
+namespace {
+
+int do_verify(const std::string& dir, const std::string& key_path, bool given) {
+  if (path_kind(dir, "rig verify") != PathKind::directory) throw ConfigError(dir + ": not a run folder");
+  const std::optional<seal::Key> key = station_key(key_path, given);
+  if (!key) throw ConfigError("rig verify needs the station's key: --seal-key FILE or RIG_SEAL_KEY");
+  const seal::Check c = check_run_folder_seal(dir, *key);
+  std::cout << fmt::format("{}: seal.json, key {} ({}){}\n", dir, key->id, key->path,
+                           c.outcome.empty() ? std::string() : ", sealed outcome " + c.outcome);
+  for (const auto& [f, state] : c.files)
+    std::cout << fmt::format("  {:<8} {}\n",
+                             state == seal::FileState::Ok        ? "ok"
+                             : state == seal::FileState::Changed ? "CHANGED"
+                             : state == seal::FileState::Missing ? "MISSING"
+                                                                 : "NOT-FILE",
+                             f);
   for (const std::string& p : c.problems) std::cout << "  problem: " << p << "\n";
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
@@ -98,10 +107,12 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                      : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).
+  // The key only where the folder is sealed: a resume of an unsealed folder refuses one (a review).
   if (const auto steps = pending_steps(dir))
-    std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {} --seal-key FILE` "
-                             "finishes it\n",
-                             kEndingPending, fmt::join(*steps, ", "), dir);
+    std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes it\n",
+                             kEndingPending, fmt::join(*steps, ", "), dir,
+                             std::filesystem::exists(std::filesystem::symlink_status(dir + "/seal.json")) ? " --seal-key FILE"
+                                                                                                          : "");
   return c.ok ? kExitPass : kExitFail;
 }
 

@@ -31,6 +31,10 @@ void seal_run_folder(const std::string& dir, const seal::Key& k, const std::vect
 // time passes the stamps, never the MAC sealed when the record closed.
 std::vector<std::string> records_unlike_their_seal(const std::string& dir, const seal::Key& k,
                                                    const std::vector<std::string>& records);
+// `rig verify`'s whole check of a run folder (cmd_verify.cpp): the seal with its files, nothing
+// added after it, a final seal whose outcome the passport states, the loop test's records as the
+// sealed checkpoint describes them. `ok` when all hold; `problems` one line each otherwise.
+seal::Check check_run_folder_seal(const std::string& dir, const seal::Key& key);
 // After the final seal: the previous one is no longer needed.
 void drop_previous_seal(const std::string& dir);
 // The files seal.json lists (relative to `dir`); empty when there is none or it is unreadable.

@@ -194,8 +194,10 @@ Resumption Executive::read_checkpoint(const std::string& out_dir, const std::vec
     std::string which = "identity";
     for (const auto& [k, v] : identity.items())
       if (!mine.is_object() || !mine.contains(k) || mine[k] != v) {
+        // A profile's digest is not printed (a review: the message handed over the digest that
+        // made an edited profile's resume pass, in a folder without a seal).
         which = "identity." + k + ": " + (mine.is_object() && mine.contains(k) ? mine[k].dump() : "missing") +
-                ", this run's is " + v.dump();
+                (k == "profile_digest" ? std::string(", not this profile's") : ", this run's is " + v.dump());
         break;
       }
     // A resume reads the folder's own profile.toml: a digest that differs is that file edited

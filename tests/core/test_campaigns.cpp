@@ -192,6 +192,7 @@ TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
     EXPECT_NE(slurp(e + "-r.stderr").find(e + "/run.json: field 'profile_digest': "), std::string::npos)
         << slurp(e + "-r.stderr");
     EXPECT_NE(slurp(e + "-r.stderr").find("not the profile the run started with (edited since?)"), std::string::npos);
+    EXPECT_EQ(slurp(e + "-r.stderr").find("digests to"), std::string::npos) << "the profile's own digest is not handed over";
   }
   EXPECT_FALSE(fs::exists(e + "/passport.json")) << "nothing written by the refused resumes";
 }
@@ -630,7 +631,8 @@ TEST(Campaign, DamagedCheckpointSet) {
     j["identity"]["profile_digest"] = "0000";
     const std::string f = copy();
     std::ofstream(f + "/checkpoint.json") << j.dump();
-    refused(f, "identity.profile_digest: \"0000\", this run's is ");
+    // The profile's own digest is not printed (a review: it made an edited profile's resume pass).
+    refused(f, "identity.profile_digest: \"0000\", not this profile's: ");
     refused(f, "different profile, serial or plant (" + f + "/profile.toml, which a resume reads, is not the profile the "
                "run started with: edited since?); start a new run instead");
   }

@@ -3189,6 +3189,38 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume"), 2) << slurp(d + "/resume.stderr");
 }
 
+// A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL
+// whose passport was edited to PASS was recorded as PASS by --record). Without the key it is
+// refused, with it an edit is named; as sealed, it is recorded (the key from RIG_SEAL_KEY too).
+TEST(RigCli, HistoryRecordTakesASealedFolderOnlyAsSealed) {
+  const std::string d = tmp("record-sealed");
+  const std::string key = station_key_in(d);
+  const std::string db = d + "/h.sqlite";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run", "--seal-key", key},
+                d + "/io"),
+            0)
+      << slurp(d + "/io.stderr");
+  const std::string passport = slurp(d + "/run/passport.json");
+  nlohmann::json p = nlohmann::json::parse(passport);
+  p["outcome"] = "FAIL";
+  std::ofstream(d + "/run/passport.json") << p.dump(2);
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/run"}, d + "/nokey"), 2);
+  EXPECT_NE(slurp(d + "/nokey.stderr").find("/run is sealed (seal.json): --record checks it with the station's key"),
+            std::string::npos)
+      << slurp(d + "/nokey.stderr");
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/run", "--seal-key", key}, d + "/edited"), 2);
+  EXPECT_NE(slurp(d + "/edited.stderr").find("/run is not as the station sealed it (passport.json: changed since it was sealed"),
+            std::string::npos)
+      << slurp(d + "/edited.stderr");
+  EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
+  std::ofstream(d + "/run/passport.json") << passport;
+  ::setenv("RIG_SEAL_KEY", key.c_str(), 1);
+  const int rc = run({"history", "--db", db, "--record", d + "/run"}, d + "/sealed");
+  ::unsetenv("RIG_SEAL_KEY");
+  EXPECT_EQ(rc, 0) << slurp(d + "/sealed.stderr");
+  EXPECT_NE(slurp(d + "/sealed.stdout").find(", PASS) in " + db), std::string::npos) << slurp(d + "/sealed.stdout");
+}
+
 // A capture rewritten where it lies with every CRC made good, its size kept and its modification
 // time put back, passes the run's stamps and a resume's reading; a sealed run holds it to the MAC
 // its seal took when the capture closed (a review: the seal, made from the files at the end,
