@@ -1,5 +1,6 @@
 #include "rig/executive/terminal.hpp"
 
+#include <algorithm>
 #include <unistd.h>
 
 #include <chrono>
@@ -91,9 +92,11 @@ void TerminalView::draw(bool final_line) {
   const int width = 30;
   const int fill = static_cast<int>(fraction_ * width + 0.5);
   const std::string bar = std::string(static_cast<std::size_t>(fill), '#') + std::string(static_cast<std::size_t>(width - fill), '.');
-  put("{}  [{}] {:3.0f}%  phase {}/{}  ETA device {}  wall {}{}", tty_ ? "\r\033[K" : "  ", bar,
-             fraction_ * 100, index_ + 1, count_, hms(left), speed > 0 ? hms(left / speed) : "--:--:--",
-             final_line || !tty_ ? "\n" : "");
+  // The bar and its percentage are the phase's, said so beside the whole run's share of its
+  // planned device time (a technician read "48%" of phase 7 as the run's: a review).
+  put("{}  [{}] phase {}/{} {:3.0f}%  run {:3.0f}%  ETA device {}  wall {}{}", tty_ ? "\r\033[K" : "  ", bar, index_ + 1,
+      count_, fraction_ * 100, total > 0 ? std::min(100.0, 100 * done / total) : 0.0, hms(left),
+      speed > 0 ? hms(left / speed) : "--:--:--", final_line || !tty_ ? "\n" : "");
   std::fflush(out_);
 }
 

@@ -24,6 +24,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/executive/executive.hpp"
 #include "rig/executive/passport.hpp"
+#include "rig/executive/terminal.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig;
@@ -806,4 +807,25 @@ TEST(Executive, APhaseSetsOnlyWhatItDeclares) {
   EXPECT_EQ(r.outcome, RunOutcome::Error);
   EXPECT_NE(r.message.find("phase 'b' sets 'va', which it does not declare"), std::string::npos) << r.message;
   EXPECT_EQ(*v.find("va")->value, 1.0);
+}
+
+// The progress line (not a terminal: a CI log's quarter marks) says whose its percentages are:
+// the bar the phase's, `run` the whole run's share of its planned device time (a review: 48 % of
+// phase 7 read as the run's).
+TEST(TerminalView, TheProgressLineSaysThePhasesShareAndTheRuns) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    rig::TerminalView v(f);
+    std::vector<rig::Phase> phases = {{"a", "first", 300, {}}, {"b", "second", 600, {}}, {"c", "third", 100, {}}};
+    v.plan(phases);
+    v.phase_started(1, 3, "b", "second", 600);
+    v.phase_progress(0.5, 0);
+  }
+  std::rewind(f);
+  std::string out;
+  for (int c; (c = std::fgetc(f)) != EOF;) out += static_cast<char>(c);
+  std::fclose(f);
+  // 300 s done and half of 600 of 1000 planned: the run 60 %, the phase 50 %, 400 s left.
+  EXPECT_NE(out.find("] phase 2/3  50%  run  60%  ETA device 00:06:40"), std::string::npos) << out;
 }
