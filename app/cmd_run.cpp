@@ -562,8 +562,15 @@ void refuse_an_earlier_run(const std::string& dir, const std::string& profile_so
     return fs::exists(st) && !fs::is_directory(st);
   };
   std::vector<std::string> would_replace;
-  for (const std::string f : {"junit.xml", "analysis.json", "report.html", "seal.json", "seal.prev.json", kEndingPending})
+  for (const std::string f : {"junit.xml", "analysis.json", "report.html", "seal.json", "seal.prev.json", kEndingPending,
+                              "run.log", acceptance::kLoopTestFile})
     if (there(fs::path(dir) / f)) would_replace.push_back(f);
+  // Nor a run's records left by something else: appended to (run.log) or set aside under the
+  // rig's own name for its interrupted attempts (a review: a planted run01-U10.cap became
+  // run01-U10.cap.interrupted-1, which the seal then vouched for as the run's own).
+  if (fs::is_directory(fs::path(dir) / "captures", ec))
+    for (const auto& e : fs::directory_iterator(fs::path(dir) / "captures", ec))
+      if (there(e.path())) would_replace.push_back("captures/" + e.path().filename().string());
   const fs::path profile = fs::path(dir) / "profile.toml";
   if (there(profile) &&
       (profile_source.rfind("builtin:", 0) == 0 || !fs::equivalent(profile, profile_source, ec)))

@@ -3909,9 +3909,12 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
 // is the run's own copy and goes on.
 TEST(RigCli, ANewRunDoesNotReplaceAFileOfItsNamesThatSomethingElseLeft) {
   const std::string d = tmp("stray-outputs");
-  for (const char* name : {"report.html", "junit.xml", "analysis.json", "seal.json", "profile.toml"}) {
-    const std::string out = d + "/" + name;
-    fs::create_directories(out);
+  // A run's records too (a review: a planted run.log was appended to, a planted capture set aside
+  // as the run's own interrupted attempt, which the seal then vouched for).
+  for (const std::string name : {"report.html", "junit.xml", "analysis.json", "seal.json", "profile.toml", "run.log",
+                                 "loop-test.csv", "captures/run01-U10.cap", "captures/zzz.cap"}) {
+    const std::string out = d + "/" + fs::path(name).filename().string();
+    fs::create_directories(fs::path(out + "/" + name).parent_path());
     std::ofstream(out + "/" + name) << "someone's";
     for (const bool dry : {true, false}) {
       std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--no-history", "--out", out};
