@@ -34,8 +34,8 @@ std::string exception_text(uint8_t code) {
     case exc::kBusy: return "server device busy";
     case 8: return "memory parity error";
     // A gateway (or a TCP server for one unit) answering for a unit id it has no device at.
-    case 10: return "gateway path unavailable (no device at this unit id behind the gateway? check the unit id: [table] unit, --unit)";
-    case 11: return "gateway target failed to respond (no device at this unit id? check the unit id: [table] unit, --unit)";
+    case exc::kGatewayPath: return "gateway path unavailable (no device at this unit id behind the gateway? check the unit id: [table] unit, --unit)";
+    case exc::kGatewayTarget: return "gateway target failed to respond (no device at this unit id? check the unit id: [table] unit, --unit)";
     default: return "exception " + std::to_string(code);
   }
 }

@@ -100,6 +100,8 @@ inline constexpr uint8_t kIllegalAddress = 2;
 inline constexpr uint8_t kIllegalValue = 3;
 inline constexpr uint8_t kDeviceFailure = 4;
 inline constexpr uint8_t kBusy = 6;
+inline constexpr uint8_t kGatewayPath = 10;    // gateway path unavailable
+inline constexpr uint8_t kGatewayTarget = 11;  // gateway target device failed to respond
 }  // namespace exc
 std::string exception_text(uint8_t code);  // "illegal data address"
 

@@ -517,6 +517,9 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
     }
   } catch (const ModbusError& e) {
     if (e.exception_code == exc::kIllegalAddress) why = std::string(e.what()) + " (" + kNoStatusBlock + ": " + kForCia402 + ")";
+    // A gateway answering that no device answers at this unit id: whatever is there (if anything)
+    // was not recognised as the drive, so nothing is written to it (a review: the stop went out).
+    else if (e.exception_code == exc::kGatewayPath || e.exception_code == exc::kGatewayTarget) why = e.what();
   } catch (...) {
   }
   if (why.empty()) return false;

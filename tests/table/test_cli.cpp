@@ -236,6 +236,11 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   // Decimal 10: the emulator (unit 1) answers unit 10 as a gateway with no device there would.
   EXPECT_EQ(rig(where_ + " --unit 10 status", out), 4) << out;
   EXPECT_NE(out.find(" unit 10: exception 0x0B gateway target failed to respond"), std::string::npos) << out;
+  // No device answers there: a stop is not written to it, as to any device not recognised as the
+  // drive (a review: CONTROL 0x0100 went out after the 0x0B).
+  EXPECT_EQ(rig(where_ + " --unit 10 stop", out), 4) << out;
+  EXPECT_NE(out.find("stop not sent (the table may still be moving): "), std::string::npos) << out;
+  EXPECT_EQ(out.find("written with SERVO_ON cleared"), std::string::npos) << out;
   EXPECT_EQ(run(std::string(RIG_BIN) + " analyze /dev/null --segment -1", out), 2) << out;
   EXPECT_NE(out.find("'-1' is not a decimal whole number (no sign, no leading zero)"), std::string::npos) << out;
   // A refused value is shown with its control bytes as \xNN, never sent to the terminal.
