@@ -29,6 +29,7 @@
 #include "rig/report/db_url.hpp"
 #include "rig/report/history.hpp"
 #include "rig/report/passport_read.hpp"
+#include "rig/report/timefmt.hpp"
 #include "rig/core/path_kind.hpp"
 
 namespace rig::cli {
@@ -371,7 +372,7 @@ void add_history(CLI::App& app, int& rc) {
   query.push_back(sub->add_option("--since", a->since, "Only runs started at or after this ISO 8601 date/time (UTC if no zone)"));
   query.push_back(sub->add_option("--until", a->until, "Only runs started before this ISO 8601 date/time"));
   query.push_back(sub->add_option("--outcome", a->outcome, "Only runs whose latest ending has this outcome")
-                      ->check(CLI::IsMember({"PASS", "FAIL", "ABORTED", "ERROR"})));
+                      ->transform(CLI::IsMember({"PASS", "FAIL", "ABORTED", "ERROR"}, CLI::ignore_case)));
   query.push_back(sub->add_option("--profile", a->profile, "Only runs of this profile"));
   query.push_back(
       sub->add_option("--value", a->value, "Trend this passport measurement (e.g. in_run_b_allan) instead of listing runs"));
@@ -407,6 +408,12 @@ void add_history(CLI::App& app, int& rc) {
     if (q->get_name() != "--csv") ends->excludes(q);
   sub->callback([&rc, a, key] {
     a->seal_key_given = key->count() > 0;
+    // The options' own mistakes before any database is named: the query's check of a date read
+    // as the database's ("RIG_HISTORY: --since '2026-13-01' ...", a review).
+    for (const auto& [opt_name, text] : {std::pair<const char*, const std::string&>{"--since", a->since}, {"--until", a->until}})
+      if (!text.empty() && !history::normalize_iso8601_up(text))
+        throw NotTheDatabase(std::string(opt_name) + " '" + text +
+                             "' is not an ISO 8601 date (YYYY-MM-DD[THH:MM[:SS[.FFF]]][Z|+HH:MM])");
     const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};
     if (!db_given) source = default_history();

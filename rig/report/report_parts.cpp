@@ -364,7 +364,9 @@ std::string Page::identity() const {
   if (const json* ac = get(p_, {"values", "accuracy_class"}); ac && std::isfinite(number(*ac, "value")))
     row("Accuracy class", text(*ac, "reason") + " (" + fmt_num(number(*ac, "value"), 3) + ")");
   if (!text(p_, "aborted_reason").empty())
-    row(text(p_, "outcome") == "ABORTED" ? "Aborted because" : "Stopped because", text(p_, "aborted_reason"), true);
+    // The reason as recorded, under one label: it often starts with its kind ("aborted: e-stop
+    // line opened"), which read "Aborted because aborted: ..." (a review).
+    row("Why it ended", text(p_, "aborted_reason"), true);
   os << "</dl>\n<div class=\"verdict\">" << badge(text(p_, "outcome")) << "</div></section>\n";
   return os.str();
 }

@@ -553,6 +553,17 @@ TEST(HistoryCli, ListsTrendsAndWritesCsv) {
   EXPECT_EQ(lines(run_cli({"--db", db, "--since", "2026-11-02T08:00:00.9Z", "--csv"})).size(), 1u);  // the header
   EXPECT_EQ(lines(run_cli({"--db", db, "--since", "2026-11-02T08:00:00.0Z", "--csv"})).size(), 2u);
   EXPECT_NE(run_cli({"--db", db, "--serial", "nobody"}).find("no runs recorded match"), std::string::npos);
+  // --outcome in any case (a review: `--outcome pass` was refused); a bad date is the option's
+  // mistake, not the database's, whichever names it (it read "RIG_HISTORY: --since ...").
+  EXPECT_EQ(lines(run_cli({"--db", db, "--outcome", "fail", "--csv"})).size(), 2u);
+  ::setenv("RIG_HISTORY", db.c_str(), 1);
+  try {
+    run_cli({"--since", "2026-13-01"});
+    ADD_FAILURE() << "no exception";
+  } catch (const rig::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--since '2026-13-01' is not an ISO 8601 date", 0), 0u) << e.what();
+  }
+  ::unsetenv("RIG_HISTORY");
   try {
     run_cli({"--db", db, "--value", "biass"});
     FAIL() << "no exception";

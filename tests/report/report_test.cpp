@@ -416,7 +416,7 @@ TEST(Report, DurationHonoursTimeZones) {
   p["aborted_reason"] = "DUT link lost";
   const std::string e = rig::report::render_report(p, json());
   EXPECT_EQ(e.find("<dt>Accuracy class</dt>"), std::string::npos);
-  EXPECT_NE(e.find("<dt>Stopped because</dt><dd class=\"wrap\">DUT link lost</dd>"), std::string::npos);
+  EXPECT_NE(e.find("<dt>Why it ended</dt><dd class=\"wrap\">DUT link lost</dd>"), std::string::npos);
 }
 
 TEST(Report, EscapesEveryTextFromTheRunFolder) {
