@@ -98,9 +98,10 @@ std::string write_page(const fs::path& dir, const json& passport, const json& an
       throw ConfigError((dir / "seal.json").string() + " cannot be read as a seal (`rig verify` says why), and the "
                         "page written now differs from " + out.string() + ": kept; `rig report --force` writes it");
     throw ConfigError((dir / "seal.json").string() + " seals " + out.string() +
-                      ", and the page written now differs from it (the folder was copied or moved, or another rig "
-                      "version wrote it): kept as sealed; `rig report --force` writes it again, and `rig verify` "
-                      "then names report.html as changed");
+                      ", and the page written now differs from it (passport.json or analysis.json changed since "
+                      "the seal, the folder copied or moved, or another rig version: `rig verify` tells which): kept "
+                      "as sealed; `rig report --force` writes it again, and `rig verify` then names report.html as "
+                      "changed");
   }
   {
     std::error_code gone;
