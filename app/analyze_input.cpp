@@ -344,8 +344,20 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
   return v;
 }
 
+// The capture reader's own refusals (not a capture, a header CRC mismatch) are the record's
+// (a re-test: they still read "configuration error").
+capture::Reader open_capture(const std::string& path) {
+  try {
+    return capture::Reader(path);
+  } catch (const InputError&) {
+    throw;
+  } catch (const ConfigError& e) {
+    throw InputError(e.what());
+  }
+}
+
 CaptureData read_capture(const std::string& path, const std::string& channel) {
-  capture::Reader r(path);
+  capture::Reader r = open_capture(path);
   CaptureData c;
   c.header = r.header();
   std::vector<Sample> buf(4096);  // 64 KiB: large enough to amortise the calls, small to zero-fill

@@ -302,7 +302,10 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
 // `rig verify`'s whole check, with the station's key; a sealed folder without one is refused.
 // An unsealed folder is recorded as it lies (docs/seal.md: no seal, nothing vouched for).
 void check_seal_before_recording(const HistoryArgs& a) {
-  if (!std::filesystem::exists(std::filesystem::symlink_status(a.record + "/seal.json"))) return;
+  // seal.prev.json alone (a seal.json renamed away) is a sealed folder too (a re-test).
+  if (!std::filesystem::exists(std::filesystem::symlink_status(a.record + "/seal.json")) &&
+      !std::filesystem::exists(std::filesystem::symlink_status(a.record + "/seal.prev.json")))
+    return;
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
   if (!key)
     throw NotTheDatabase(a.record + " is sealed (seal.json): --record checks it with the station's key first (--seal-key "

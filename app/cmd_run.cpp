@@ -1196,6 +1196,14 @@ int do_run(RunArgs a) {
   // The checkpoint ties a resume to the profile it started with; a run stopped before its first
   // checkpoint had only run.json, which did not (an automation review: limits loosened in the
   // folder's profile.toml, then resumed: PASS). Since 2026-12-02 run.json holds the digest too.
+  // Without the digest (run.json from a rig before it wrote one, or the field deleted) only a
+  // checkpoint ties the resume to its profile: none, and the resume is refused (a re-test: the
+  // field deleted, an edited profile ran under the built-in's name, PASS).
+  if (!a.resume.empty() && !invocation.contains("profile_digest") &&
+      path_kind(a.resume + "/checkpoint.json", "--resume") == PathKind::missing)
+    throw ConfigError(fmt::format("{}/run.json: no field 'profile_digest', and no checkpoint: nothing ties {} to the "
+                                  "profile the run started with; start a new run",
+                                  a.resume, a.profile));
   if (!a.resume.empty() && invocation.contains("profile_digest") && invocation["profile_digest"] != p.digest)
     // Its own digest not printed: it made an edited profile's resume pass in an unsealed folder (a review).
     throw ConfigError(fmt::format("{}/run.json: field 'profile_digest': {}, not the digest of {} (which a resume "

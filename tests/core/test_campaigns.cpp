@@ -195,6 +195,16 @@ TEST(Campaign, RunKilledBeforeTheFirstCheckpointResumesFromBringUp) {
     EXPECT_EQ(slurp(e + "-r.stderr").find("digests to"), std::string::npos) << "the profile's own digest is not handed over";
   }
   EXPECT_FALSE(fs::exists(e + "/passport.json")) << "nothing written by the refused resumes";
+  // Without the digest in run.json (deleted; a rig before it wrote one) and no checkpoint, nothing
+  // ties the folder's profile to the run's: refused (a re-test: an edited profile ran to PASS).
+  nlohmann::json inv = read_json(e + "/run.json");
+  inv.erase("profile_digest");
+  std::ofstream(e + "/run.json") << inv.dump(2);
+  EXPECT_EQ(run({"run", "--resume", e, "--yes"}, e + "-nodigest"), 2) << slurp(e + "-nodigest.stderr");
+  EXPECT_NE(slurp(e + "-nodigest.stderr").find(e + "/run.json: no field 'profile_digest', and no checkpoint"),
+            std::string::npos)
+      << slurp(e + "-nodigest.stderr");
+  EXPECT_FALSE(fs::exists(e + "/passport.json"));
 }
 
 // The loop test's records of an attempt the checkpoint does not hold (the run stopped after

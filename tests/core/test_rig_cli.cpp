@@ -543,6 +543,10 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   // option stays a configuration error.
   EXPECT_EQ(slurp(d + "/ctl.stderr").rfind("rig: input error: " + d + "/ctl.txt:3: ", 0), 0u) << slurp(d + "/ctl.stderr");
   EXPECT_EQ(slurp(d + "/fifo.stderr").rfind("rig: input error: ", 0), 0u) << slurp(d + "/fifo.stderr");
+  std::ofstream(d + "/g.cap") << "garbage\n";  // the capture reader's own refusal too (a re-test)
+  EXPECT_EQ(run({"analyze", d + "/g.cap", "--input", "capture"}, d + "/gcap"), 2);
+  EXPECT_EQ(slurp(d + "/gcap.stderr").rfind("rig: input error: " + d + "/g.cap: not a rig capture", 0), 0u)
+      << slurp(d + "/gcap.stderr");
   EXPECT_EQ(run({"analyze", d + "/ctl.txt", "--rate", "0"}, d + "/rate0"), 2);
   EXPECT_EQ(slurp(d + "/rate0.stderr").rfind("rig: configuration error: rig analyze: --rate 0", 0), 0u)
       << slurp(d + "/rate0.stderr");
@@ -3212,6 +3216,11 @@ TEST(RigCli, HistoryRecordTakesASealedFolderOnlyAsSealed) {
   EXPECT_NE(slurp(d + "/edited.stderr").find("/run is not as the station sealed it (passport.json: changed since it was sealed"),
             std::string::npos)
       << slurp(d + "/edited.stderr");
+  EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
+  // Its seal renamed to seal.prev.json (a re-test): still a sealed folder, refused without the key.
+  fs::rename(d + "/run/seal.json", d + "/run/seal.prev.json");
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/run"}, d + "/prev"), 2) << slurp(d + "/prev.stderr");
+  fs::rename(d + "/run/seal.prev.json", d + "/run/seal.json");
   EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
   std::ofstream(d + "/run/passport.json") << passport;
   ::setenv("RIG_SEAL_KEY", key.c_str(), 1);
