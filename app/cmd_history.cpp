@@ -303,13 +303,12 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
 // An unsealed folder is recorded as it lies (docs/seal.md: no seal, nothing vouched for).
 void check_seal_before_recording(const HistoryArgs& a) {
   // seal.prev.json alone (a seal.json renamed away) is a sealed folder too (a re-test).
-  if (!std::filesystem::exists(std::filesystem::symlink_status(a.record + "/seal.json")) &&
-      !std::filesystem::exists(std::filesystem::symlink_status(a.record + "/seal.prev.json")))
-    return;
+  const std::optional<std::string> seal_there = seal_in(a.record);
+  if (!seal_there) return;
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
   if (!key)
-    throw NotTheDatabase(a.record + " is sealed (seal.json): --record checks it with the station's key first (--seal-key "
-                                    "FILE or RIG_SEAL_KEY); nothing recorded");
+    throw NotTheDatabase(a.record + " is sealed (" + *seal_there + "): --record checks it with the station's key first "
+                                    "(--seal-key FILE or RIG_SEAL_KEY); nothing recorded");
   const seal::Check c = check_run_folder_seal(a.record, *key);
   if (!c.ok)
     throw NotTheDatabase(fmt::format("{} is not as the station sealed it ({}); nothing recorded (rig verify {} says more)",
@@ -413,10 +412,12 @@ void add_history(CLI::App& app, int& rc) {
     a->seal_key_given = key->count() > 0;
     // The options' own mistakes before any database is named: the query's check of a date read
     // as the database's ("RIG_HISTORY: --since '2026-13-01' ...", a review).
-    for (const auto& [opt_name, text] : {std::pair<const char*, const std::string&>{"--since", a->since}, {"--until", a->until}})
-      if (!text.empty() && !history::normalize_iso8601_up(text))
-        throw NotTheDatabase(std::string(opt_name) + " '" + text +
-                             "' is not an ISO 8601 date (YYYY-MM-DD[THH:MM[:SS[.FFF]]][Z|+HH:MM])");
+    try {
+      for (const auto& [opt_name, text] : {std::pair<const char*, const std::string&>{"--since", a->since}, {"--until", a->until}})
+        if (!text.empty()) history::iso8601_bound(text, opt_name);
+    } catch (const ConfigError& e) {
+      throw NotTheDatabase(e.what());
+    }
     const bool db_given = !a->db.empty();  // (an empty --db is refused as such by main.cpp)
     HistorySource source{a->db};
     if (!db_given) source = default_history();

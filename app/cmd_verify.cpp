@@ -110,9 +110,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // The key only where the folder is sealed: a resume of an unsealed folder refuses one (a review).
   if (const auto steps = pending_steps(dir))
     std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes it\n",
-                             kEndingPending, fmt::join(*steps, ", "), dir,
-                             std::filesystem::exists(std::filesystem::symlink_status(dir + "/seal.json")) ? " --seal-key FILE"
-                                                                                                          : "");
+                             kEndingPending, fmt::join(*steps, ", "), dir, seal_in(dir) ? " --seal-key FILE" : "");
   return c.ok ? kExitPass : kExitFail;
 }
 

@@ -140,12 +140,18 @@ bool holds_for_resume(const seal::Check& c, std::string& why) {
 
 }  // namespace
 
+std::optional<std::string> seal_in(const std::string& dir) {
+  for (const char* name : {"seal.json", "seal.prev.json"})
+    if (fs::exists(fs::symlink_status(dir + "/" + name))) return name;
+  return std::nullopt;
+}
+
 bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending) {
-  const bool sealed = fs::exists(dir + "/seal.json") || fs::exists(dir + "/seal.prev.json");
+  const std::optional<std::string> seal_there = seal_in(dir);
+  const bool sealed = seal_there.has_value();
   if (!k) {
-    if (sealed)  // the seal that is there named (a stop between two seals may leave only the previous one)
-      throw ConfigError(dir + " is sealed (" + (fs::exists(dir + "/seal.json") ? "seal.json" : "seal.prev.json") +
-                        "): resume it with the station's key (--seal-key FILE or "
+    if (sealed)  // the seal that is there named
+      throw ConfigError(dir + " is sealed (" + *seal_there + "): resume it with the station's key (--seal-key FILE or "
                               "RIG_SEAL_KEY); without it the resumed run could not be sealed");
     return false;
   }

@@ -76,6 +76,11 @@ inline std::optional<std::vector<std::string>> pending_steps(const std::string& 
 // never opened) or not a passport.
 std::optional<std::string> passport_outcome(const std::string& dir);
 
+// The seal `dir` holds: "seal.json", else "seal.prev.json" (a stop between two seals may leave
+// only the previous one), else none. A link or any other entry of that name counts: the rig makes
+// none, and the checks that follow refuse it.
+std::optional<std::string> seal_in(const std::string& dir);
+
 // Before a resume trusts `dir`, first of all (before run.json is read): with a key, seal.json or
 // seal.prev.json must be this key's, its list and outcome whole, and every file it lists that a
 // resume reads (run.json, profile.toml, checkpoint.json, the captures) present, a regular file and

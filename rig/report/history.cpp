@@ -166,11 +166,7 @@ std::string where_clause(const Filter& f, std::vector<Value>& params) {
   };
   auto time_bound = [](const std::optional<std::string>& t, const char* what) -> std::optional<std::string> {
     if (!t) return std::nullopt;
-    auto n = normalize_iso8601_up(*t);
-    if (!n)
-      throw ConfigError(std::string(what) + " '" + *t +
-                        "' is not an ISO 8601 date (YYYY-MM-DD[THH:MM[:SS[.FFF]]][Z|+HH:MM])");
-    return n;
+    return iso8601_bound(*t, what);
   };
   add(f.serial, " AND r.serial = ?");
   add(time_bound(f.since, "--since"), " AND r.started >= ?");

@@ -1,5 +1,7 @@
 #include "rig/report/timefmt.hpp"
 
+#include "rig/core/errors.hpp"
+
 #include <cstdio>
 #include <ctime>
 
@@ -99,5 +101,10 @@ std::optional<std::string> normalize_iso8601_up(const std::string& text) {
 }
 
 std::string utc_now_iso8601() { return format_utc(std::time(nullptr)); }
+
+std::string iso8601_bound(const std::string& text, const char* option) {
+  if (auto n = normalize_iso8601_up(text)) return *n;
+  throw ConfigError(std::string(option) + " '" + text + "' is not an ISO 8601 date (YYYY-MM-DD[THH:MM[:SS[.FFF]]][Z|+HH:MM])");
+}
 
 }  // namespace rig::history

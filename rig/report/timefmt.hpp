@@ -16,6 +16,9 @@ std::optional<long long> parse_iso8601(const std::string& text, bool* fraction =
 // second: the history's times are whole seconds, so a bound of 04.9 s compares with them as the
 // instant it is (a review: --since ...:04.9 took a run started at :04, --until ...:04.9 left it out).
 std::optional<std::string> normalize_iso8601_up(const std::string& text);
+// normalize_iso8601_up of an option's value (`option`: "--since"), or ConfigError naming the
+// option and the value: the history's query and the command line check bounds by it.
+std::string iso8601_bound(const std::string& text, const char* option);
 // The current time in that form.
 std::string utc_now_iso8601();
 
