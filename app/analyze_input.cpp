@@ -349,8 +349,6 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
 capture::Reader open_capture(const std::string& path) {
   try {
     return capture::Reader(path);
-  } catch (const InputError&) {
-    throw;
   } catch (const ConfigError& e) {
     throw InputError(e.what());
   }
