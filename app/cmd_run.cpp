@@ -40,6 +40,7 @@
 #include "app/backends.hpp"
 #include "app/run_seal.hpp"
 #include "app/folder_lock.hpp"
+#include "app/table_lock.hpp"
 #include "app/serial_option.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
@@ -504,8 +505,19 @@ std::string folder_time_utc() {
 // the operator's configuration (exit 2), not a fault of the rig (exit 4).
 // `option`: the option that named the folder (--out, or --resume: a read-only folder's resume
 // said "--out DIR", an option it was not given, a review).
+// A folder name longer than a file system takes (NAME_MAX, 255 bytes): said as such by the dry
+// run too, which passed it before (a review).
+void refuse_a_name_too_long(const std::string& dir, const std::string& option) {
+  for (const fs::path& part : fs::path(dir))
+    if (part.native().size() > 255)
+      throw ConfigError(fmt::format("{} {}: a folder name of {} bytes; a file system takes 255 at most", option,
+                                    shown_text(dir.substr(0, 80)) + (dir.size() > 80 ? "..." : ""),
+                                    part.native().size()));
+}
+
 void prepare_run_folder(const std::string& dir, const std::string& option) {
   std::error_code ec;
+  refuse_a_name_too_long(dir, option);
   fs::create_directories(dir, ec);
   if (ec) throw ConfigError(option + " " + dir + ": cannot create the run folder: " + ec.message());
   const std::string probe = dir + "/.rig-write-check-" + std::to_string(::getpid());
@@ -612,6 +624,12 @@ void check_history_can_record(const std::string& url) {
     try {
       history::open_db(url, history::Access::ReadOnly)->has_table("runs");  // reads its header
     } catch (const ConfigError& e) {
+      // A lock held past the busy timeout is not a damaged file (a review: it read "not a
+      // database rig can open").
+      if (std::string(e.what()).find("database is locked") != std::string::npos)
+        throw ConfigError(shown + ": locked by another process for more than 10 s (a write or a backup holding "
+                                  "it); try again once it is done, or run with --no-history and record the run "
+                                  "later with `rig history --record DIR`");
       throw ConfigError(shown + ": not a database rig can open (" + e.what() + ")");
     }
     return;
@@ -627,6 +645,7 @@ void check_history_can_record(const std::string& url) {
 void check_run_folder(const std::string& dir, bool new_run_here, const std::string& option,
                       const std::string& profile_source) {
   std::error_code ec;
+  refuse_a_name_too_long(dir, option);
   const fs::path p = nearest_existing(fs::absolute(dir, ec));
   if (!fs::is_directory(p, ec))
     throw ConfigError(option + " " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
@@ -1065,11 +1084,15 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
 
 // A serial or profile name as one component of the default run folder's name: a '/' or a
 // leading '.' ('../../x') would put the run outside runs/; those and other characters a shell
-// or a file system treats specially become '_'.
+// or a file system treats specially become '_'. At most kFolderNamePart bytes: a file name
+// holds 255 (NAME_MAX), and a long UTF-8 profile name passed the dry run, then the run ended
+// "File name too long" with an empty runs/ (a review); the time and a -N follow it.
+constexpr std::size_t kFolderNamePart = 128;
 std::string folder_name_part(std::string s) {
   for (char& c : s)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
   if (s.empty() || s[0] == '.') s.insert(s.begin(), '_');
+  if (s.size() > kFolderNamePart) s.resize(kFolderNamePart);
   return s;
 }
 
@@ -1323,6 +1346,14 @@ int do_run(RunArgs a) {
                              a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
     return kExitPass;
   }
+  // The table next, before a folder is made: one process at a time commands a station's table,
+  // held to the run's end (app/table_lock.hpp; a `rig table move` from another terminal turned
+  // the DUT during a recording).
+  std::optional<TableLock> table_lock;
+  if (a.plant == "hardware")
+    table_lock.emplace(modbus::table_identity(*cfg::get_table(hw, "table", true)),
+                       a.resume.empty() ? "rig run" + (a.out.empty() ? std::string() : " --out " + shown_text(a.out))
+                                        : "rig run --resume " + shown_text(a.resume));
   // The folder first: an operator should not answer the prompts of a run that cannot start.
   // made_here: the folder is this run's own (the default one it claimed, or one it creates), so
   // a "no" at the prompts may remove it; a folder the user made stays.

@@ -18,6 +18,7 @@
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
 #include "app/number_option.hpp"
+#include "app/table_lock.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -108,6 +109,8 @@ std::string flags(const TableStatus& s) {
   add(s.servo_on, "servo-on");
   add(s.homed, "homed");
   add(!s.homed_known, "homed-unknown");
+  // Moves are refused until it is homed: "ready" alone read as ready to move (a review).
+  add(s.homed_known && !s.homed, "NOT-HOMED");
   add(s.homing, "homing");
   add(s.moving, "moving");
   add(s.in_position, "in-position");
@@ -166,9 +169,14 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
 // Runs `body` with the table the arguments name and the move tolerance its settings give.
 // `unreachable`: what a failed connection means for the command (a stop: not delivered).
 template <class Body>
-void with_table(const TableArgs& a, Body body, const std::string& unreachable = "") {
+// `command` non-empty (a home, a move, a reset): the station's lock on the table is taken first
+// (app/table_lock.hpp), after the settings are checked and before the drive is opened; a status
+// or a stop takes none.
+void with_table(const TableArgs& a, Body body, const std::string& unreachable = "", const std::string& command = "") {
   toml::table root;
   const toml::table& t = table_config(a, root);
+  std::optional<TableLock> lock;
+  if (!command.empty()) lock.emplace(modbus::table_identity(t), "rig table " + command);
   RealClock clock;
   std::unique_ptr<RotaryTable> table;
   try {
@@ -298,7 +306,7 @@ void add_table(CLI::App& app, int& rc) {
         throw;
       }
       print_status(t.describe(), t.status(), false, std::numeric_limits<double>::infinity());  // no target note
-    });
+    }, "", "home");
     rc = kExitPass;
   });
 
@@ -320,7 +328,7 @@ void add_table(CLI::App& app, int& rc) {
         throw;
       }
       print_status(t.describe(), t.status(), false, tol);
-    });
+    }, "", "move " + modbus::detail::deg_str(a->deg));
     rc = kExitPass;
   });
 
@@ -366,10 +374,13 @@ void add_table(CLI::App& app, int& rc) {
   });
   sub->add_subcommand("reset", "Reset the drive's alarm after inspection (refused while e-stop/interlock open)")
       ->callback([a, &rc] {
-        with_table(*a, [&](RotaryTable& t, double tol) {
-          reset(t, {});
-          print_status(t.describe(), t.status(), false, tol);
-        });
+        with_table(
+            *a,
+            [&](RotaryTable& t, double tol) {
+              reset(t, {});
+              print_status(t.describe(), t.status(), false, tol);
+            },
+            "", "reset");
         rc = kExitPass;
       });
   // The connection options may come before or after the action:

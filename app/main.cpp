@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <iostream>
@@ -56,13 +57,25 @@ void decimal_numbers_only(CLI::App& app) {
     // before a range check reads it, whose own message would then say less.
     o->transform(CLI::Validator(
         [whole, is_unsigned](std::string& v) {
-          return decimal_text(v, whole, is_unsigned)
-                     ? std::string()
-                     : "'" + rig::shown_ascii(v) + "' is not a decimal " +
-                           // No bound here: the option's own check states its range (--count
-                           // >= 1 said ">= 0" for '01', a review).
-                           (is_unsigned ? "whole number (no sign, no leading zero)"
-                                        : whole ? "whole number (no leading zero)" : "number");
+          if (decimal_text(v, whole, is_unsigned)) return std::string();
+          // A number with a unit after it (`90°`, `100s`): said so, its number given (a review:
+          // "'90\xC2\xB0' is not a decimal number" alone).
+          std::size_t n = v.size();
+          while (n > 0 && !decimal_text(v.substr(0, n), whole, is_unsigned)) --n;
+          const std::string rest = v.substr(n);
+          const bool a_unit = n > 0 && rest != "e" && rest != "E" &&
+                              std::all_of(rest.begin(), rest.end(), [](char ch) {
+                                const auto u = static_cast<unsigned char>(ch);
+                                return std::isalpha(u) || u >= 0x80 || ch == '%' || ch == '/' || ch == ' ';
+                              });
+          const std::string unit =
+              a_unit ? "; give the number alone, without a unit: " + v.substr(0, n) : std::string();
+          return "'" + rig::shown_ascii(v) + "' is not a decimal " +
+                 // No bound here: the option's own check states its range (--count >= 1 said
+                 // ">= 0" for '01', a review).
+                 (is_unsigned ? "whole number (no sign, no leading zero)"
+                              : whole ? "whole number (no leading zero)" : "number") +
+                 unit;
         },
         ""));
   }

@@ -768,6 +768,11 @@ TableConfig read_table_config(const toml::table& t) {
 
 void check_table_config(const toml::table& t) { read_table_config(t); }
 
+std::string table_identity(const toml::table& t) {
+  const TableConfig c = read_table_config(t);
+  return c.ep.str() + " unit " + std::to_string(c.link.unit);
+}
+
 std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {
   TableConfig c = read_table_config(t);
   auto transport = make_libmodbus_transport(c.ep, c.link, clock);

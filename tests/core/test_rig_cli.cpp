@@ -1835,6 +1835,43 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
   }
 }
 
+// A history database another process holds locked past the busy timeout, at a run's start: exit
+// 2 before anything opens, named as locked (a review: "not a database rig can open").
+TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
+  const std::string d = tmp("histlock");
+  fs::create_directories(d);
+  const std::string db = d + "/h.sqlite";
+  const std::string flag = d + "/locked";
+  // Python's sqlite3 module, another process as a backup or a writer would be.
+  const std::string script = "import sqlite3,time,sys\n"
+                             "c=sqlite3.connect(sys.argv[1],isolation_level=None)\n"
+                             "c.execute('CREATE TABLE IF NOT EXISTS x(a)')\n"
+                             "c.execute('BEGIN EXCLUSIVE')\n"
+                             "open(sys.argv[2],'w').write('1')\n"
+                             "time.sleep(40)\n";
+  std::ofstream(d + "/lock.py") << script;
+  const pid_t locker = ::fork();
+  ASSERT_GE(locker, 0);
+  if (locker == 0) {
+    ::execl("/usr/bin/python3", "python3", (d + "/lock.py").c_str(), db.c_str(), flag.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int i = 0; i < 200 && !fs::exists(flag); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const bool locked = fs::exists(flag);
+  const int rc =
+      locked ? run({"run", "--profile", "ci", "--yes", "--db", "sqlite:" + db, "--out", d + "/r", "--dry-run"}, d + "/io")
+             : -1;
+  ::kill(locker, SIGKILL);
+  ::waitpid(locker, nullptr, 0);
+  ASSERT_TRUE(locked) << "the locking process did not start";
+  EXPECT_EQ(rc, 2);
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_NE(err.find("history database " + db + ": locked by another process for more than 10 s"), std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("not a database rig can open"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(d + "/r"));
+}
+
 // `rig dut decode` on logs written by can-utils (tests/data/candump): both formats, a short
 // frame skipped and named by line (exit 2), a clean log exit 0, a file of no frames exit 2.
 // The link options before the action, as the README's synopsis writes them (issue 16 review): the
@@ -2015,6 +2052,37 @@ TEST(RigCli, TheDefaultRunFolderStaysInRuns) {
   EXPECT_EQ(made[0].rfind("_.._.._evil-", 0), 0u) << made[0];
   for (const auto& e : fs::directory_iterator(fs::path(d).parent_path()))
     EXPECT_EQ(e.path().filename().string().rfind("evil-", 0), std::string::npos) << e.path();
+}
+
+// A long UTF-8 profile name passed the dry run; the run then failed "File name too long" and
+// left an empty runs/ (a review). The default folder takes at most 128 bytes of the name; an
+// --out whose folder name no file system takes is refused before anything opens.
+TEST(RigCli, ALongNameGivesARunFolderAFileSystemTakes) {
+  const std::string d = tmp("long-name");
+  fs::create_directories(d);
+  std::string name;
+  for (int i = 0; i < 120; ++i) name += "\u0416";  // 240 bytes of UTF-8
+  std::ofstream(d + "/long.toml") << "base = \"ci\"\n[profile]\nname = \"" << name << "\"\n";
+  const fs::path here = fs::current_path();
+  fs::current_path(d);
+  const int rc = run({"run", "--profile", d + "/long.toml", "--yes", "--quiet", "--no-history"}, d + "/io");
+  fs::current_path(here);
+  ASSERT_EQ(rc, 0) << slurp(d + "/io.stderr");
+  std::vector<std::string> made;
+  for (const auto& e : fs::directory_iterator(d + "/runs")) made.push_back(e.path().filename().string());
+  ASSERT_EQ(made.size(), 1u);
+  EXPECT_EQ(made[0].rfind(std::string(128, '_') + "-", 0), 0u) << made[0];
+  EXPECT_TRUE(fs::exists(d + "/runs/" + made[0] + "/passport.json"));
+
+  const std::string out = d + "/" + std::string(256, 'x') + "/run";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--out", out, "--yes", "--no-history"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io2"), 2) << dry;
+    EXPECT_NE(slurp(d + "/io2.stderr").find("a folder name of 256 bytes; a file system takes 255 at most"),
+              std::string::npos)
+        << slurp(d + "/io2.stderr");
+  }
 }
 
 TEST(RigCli, MalformedProfileIsRejectedWithFileAndLine) {

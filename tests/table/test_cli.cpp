@@ -15,6 +15,7 @@
 #include <cstring>
 #include <atomic>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include "helpers.hpp"
@@ -87,7 +88,11 @@ TEST_F(RigTable, StatusHomeMove) {
 TEST_F(RigTable, ACia402ClientAtThisTableIsRefusedAndSendsNothing) {
   std::string out;
   const std::string c4 = where_ + " --drive cia402 --drive-map " + RIG_SOURCE_DIR + "/drives/generic-cia402.toml ";
+  ASSERT_EQ(rig(where_ + " status", out), 0) << out;  // not homed yet, said so (a review: "ready" alone)
+  EXPECT_NE(out.find("NOT-HOMED"), std::string::npos) << out;
   ASSERT_EQ(rig(where_ + " home", out), 0) << out;
+  ASSERT_EQ(rig(where_ + " status", out), 0) << out;
+  EXPECT_EQ(out.find("NOT-HOMED"), std::string::npos) << out;
   ASSERT_EQ(run("mbpoll -m tcp -p " + server_.endpoint().substr(server_.endpoint().rfind(':') + 1) +
                     " -a 1 -0 -1 -t 4:int -B -r 8 127.0.0.1 900000",
                 out),
@@ -226,6 +231,15 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
       EXPECT_NE(out.find("is not a decimal number"), std::string::npos) << out;
     }
   }
+  // A number with a unit typed after it is told to give the number alone; a malformed number is not.
+  for (const auto& [bad, hint] : std::vector<std::pair<std::string, std::string>>{
+           {"90\u00B0", "'90\\xC2\\xB0' is not a decimal number; give the number alone, without a unit: 90"},
+           {"5deg", "'5deg' is not a decimal number; give the number alone, without a unit: 5"},
+           {"1e", "'1e' is not a decimal number\n"},
+           {"12.5.3", "'12.5.3' is not a decimal number\n"}}) {
+    EXPECT_EQ(rig(where_ + " move '" + bad + "'", out), 2) << bad << ": " << out;
+    EXPECT_NE(out.find(hint), std::string::npos) << out;
+  }
   EXPECT_EQ(rig(where_ + " status", out), 0) << out;
   EXPECT_NE(out.find("45.0000"), std::string::npos) << out;
   EXPECT_EQ(rig(where_ + " --timeout 0x1 status", out), 2) << out;
@@ -331,6 +345,48 @@ TEST_F(RigTable, ASignalOnADeadLinkSaysTheHaltWasNotDelivered) {
   EXPECT_NE(said.find("rig: the table's position could not be read after the signal ("), std::string::npos) << said;
   EXPECT_NE(said.find("); stop not delivered (the table may still be moving): "), std::string::npos) << said;
   EXPECT_EQ(said.find("halt delivered"), std::string::npos) << said;
+}
+
+// One process at a time commands the table from this station (app/table_lock.hpp): while a move
+// runs, another terminal's move, home or reset, and a hardware run on the same drive, are refused
+// (exit 2) naming the holder, before anything is sent; a status and a stop still reach the drive.
+TEST_F(RigTable, AMoveRunningHoldsTheTableAgainstASecondCommand) {
+  int fd = -1;
+  std::unique_ptr<Child> child;
+  ASSERT_NO_FATAL_FAILURE(start_slow_move({"/bin/sh", "-c", "exec \"$0\" \"$@\" 2>&1"}, child, fd));
+  const std::string holder = "in use by pid " + std::to_string(child->pid()) + ": rig table move 300";
+  std::string out;
+  for (const char* cmd : {" move 10", " home", " reset"}) {
+    EXPECT_EQ(rig(where_ + cmd, out), 2) << cmd << ": " << out;
+    EXPECT_NE(out.find(holder), std::string::npos) << out;
+    EXPECT_NE(out.find("`rig table stop` and `rig table quick-stop` still reach the drive"), std::string::npos) << out;
+  }
+  EXPECT_TRUE(emu_->snapshot().moving) << "the refused commands sent nothing";
+  // A hardware run on this drive: refused before any device opens and before its folder is made.
+  const std::string d = testing::TempDir() + "/table-lock-run";
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  {
+    std::ofstream hw(d + "/hw.toml");
+    hw << "[table]\nmodbus = \"" << server_.endpoint() << "\"\n[dut]\ncan = \"vcan-none\"\n"
+       << "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\nestop = \"ESTOP\"\n"
+       << "lamp_ready = \"LR\"\nlamp_running = \"LN\"\nlamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  }
+  EXPECT_EQ(run(std::string(RIG_BIN) + " run --hardware " + d + "/hw.toml --profile ci --yes --serial HW-1 --no-history --out " +
+                    d + "/run",
+                out),
+            2)
+      << out;
+  EXPECT_NE(out.find("table " + server_.endpoint() + " unit 1: " + holder), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(d + "/run"));
+  ASSERT_EQ(rig(where_ + " status", out), 0) << out;
+  ASSERT_EQ(rig(where_ + " stop", out), 0) << out;
+  const int st = child->wait_status();
+  close(fd);
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 4) << "the move ends on another master's halt";
+  // Released with the process: the next command takes the table.
+  ASSERT_EQ(rig(where_ + " move 10", out), 0) << out;
 }
 
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when
@@ -487,8 +543,11 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   const std::string& where = served.where;
   std::string out;
   auto rig = [&](const std::string& args) { return run(std::string(RIG_BIN) + " table " + args, out); };
+  const bool has_bit = GetParam() == "lowword-offset.toml";
   ASSERT_EQ(rig("status" + where), 0) << out;
   EXPECT_NE(out.find("cia402"), std::string::npos) << out;
+  // Not homed yet: said where the map can tell (a review: "ready" alone read as ready to move).
+  EXPECT_EQ(out.find("NOT-HOMED") != std::string::npos, has_bit) << out;
   // Its power stage is off (Switch on disabled): nothing to halt, none sent, exit 0, said so.
   ASSERT_EQ(rig("stop" + where), 0) << out;
   EXPECT_NE(out.find("no halt needed: drive \""), std::string::npos) << out;
@@ -513,12 +572,12 @@ TEST_P(RigTableCia402, ServeStatusHomeMoveStopResetAndCtrlC) {
   EXPECT_NE(out.find("in-position"), std::string::npos) << out;
   // Homing is another process's: a map with homed_bit reads it from the drive; one without
   // cannot tell, and says so (helper review: it said "homed": false, as if the reference was lost).
-  const bool has_bit = GetParam() == "lowword-offset.toml";
   ASSERT_EQ(rig("status --json" + where), 0) << out;
   EXPECT_NE(out.find(has_bit ? "\"homed\": true" : "\"homed\": false"), std::string::npos) << out;
   EXPECT_EQ(out.find("\"homed_known\": false") != std::string::npos, !has_bit) << out;
   ASSERT_EQ(rig("status" + where), 0) << out;
   EXPECT_EQ(out.find("homed-unknown") != std::string::npos, !has_bit) << out;
+  EXPECT_EQ(out.find("NOT-HOMED"), std::string::npos) << out;
   ASSERT_EQ(rig("stop" + where), 0) << out;
   EXPECT_NE(out.find("stop sent"), std::string::npos) << out;
   ASSERT_EQ(rig("quick-stop" + where), 0) << out;
@@ -864,7 +923,13 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
   std::thread again([&] { rc1 = rig("move 250", out1); });
   ASSERT_TRUE(wait_moving()) << out;
   std::string out2;
-  EXPECT_EQ(rig("move 20", out2), 0) << out2;
+  // From this station the second move is refused by the table lock (app/table_lock.hpp) before
+  // anything is sent; from another station (its own lock folder) the drive's checks hold it.
+  EXPECT_EQ(rig("move 20", out2), 2) << out2;
+  EXPECT_TRUE(has(out2, ": in use by pid ") && has(out2, ": rig table move 250.0000°")) << out2;
+  const std::string other_station = testing::TempDir() + "/masters/other-station";
+  std::filesystem::create_directories(other_station);
+  EXPECT_EQ(run("RIG_LOCK_DIR=" + other_station + " " + std::string(RIG_BIN) + " table move 20" + where, out2), 0) << out2;
   again.join();
   EXPECT_TRUE(has(out2, "actual     20.0000°")) << out2;
   // The first reached 250° before the second's set-point; ended then as arrived, or in its settle
