@@ -1651,7 +1651,19 @@ int do_run(RunArgs a) {
 void add_run(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("run", "Run the U10/U20 acceptance procedure and write the passport");
   auto a = std::make_shared<RunArgs>();
-  auto* plant = sub->add_option("--plant", a->plant, "Plant to run on (emulated)")->check(CLI::IsMember({"emulated"}));
+  // Real hardware is named by its file, not here: `--plant hardware` said only "not in
+  // {emulated}" (a review).
+  auto* plant = sub->add_option("--plant", a->plant, "Plant to run on (emulated; real hardware: --hardware FILE)")
+                    ->check(CLI::Validator(
+                        [](std::string& v) {
+                          if (v == "emulated") return std::string();
+                          return "'" + shown_ascii(v) + "' is not a plant: give emulated" +
+                                 (v == "hardware" ? std::string(", or --hardware FILE (the hardware file describes "
+                                                                "the table, the DUT link and the GPIO lines) for "
+                                                                "real hardware")
+                                                  : std::string());
+                        },
+                        "emulated"));
   sub->add_option("--hardware", a->hardware, "Run on real hardware described by this TOML file")
       ->check(existing_file())
       ->excludes(plant);

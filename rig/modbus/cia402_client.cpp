@@ -147,7 +147,7 @@ const char* const kWhichDrive =
 // of the standard's eight states, or (when the map has it) a device type (0x1000) that is not
 // profile 402 or that the device refuses (exception 02: no such register). Other read failures
 // (a timeout) are thrown: they say nothing about the device.
-std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent) {
+std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent, bool* is_402) {
   if (!c4::is_state(statusword))
     return map_.describe(Obj::kStatusword) + " reads " + hex4(statusword) +
            ", which is none of the CiA 402 states (IEC 61800-7-201): not a CiA 402 drive (a rig-v1 table reads like "
@@ -166,6 +166,7 @@ std::string Cia402Table::identity_problem(uint16_t statusword, const CancelToken
   std::snprintf(b, sizeof b, "0x%0*llX", map_.spec(Obj::kDeviceType).width / 4, static_cast<unsigned long long>(type));
   // 0x0192 in the high word of a 32-bit read: the drive's words in the other order (a review).
   const bool swapped = map_.spec(Obj::kDeviceType).width == 32 && ((type >> 16) & 0xFFFF) == c4::kDeviceProfile;
+  if (is_402) *is_402 = swapped;
   return map_.describe(Obj::kDeviceType) + " reads " + b + ", not device profile 402 (0x0192) in its low word: " +
          (swapped ? "0x0192 is in its high word, so the drive sends 32-bit values in the other word order than the "
                     "map's word_order says (high_first / low_first)"
@@ -786,8 +787,13 @@ bool Cia402Table::stop_goes_out(uint16_t statusword, const char* name) noexcept 
   try {
     if (!identified_) {
       try {
-        why = identity_problem(statusword, CancelToken{}, true);
+        bool is_402 = false;
+        why = identity_problem(statusword, CancelToken{}, true, &is_402);
         if (why.empty()) identified_ = true;
+        // A CiA 402 drive whose 32-bit words the map reads in the other order: its controlword
+        // and statusword are 16-bit, so the stop means what it says; it goes out (a review: the
+        // halt was refused and the table ran on to its target).
+        if (is_402) why.clear();
       } catch (...) {  // a device type that cannot be read now: the statusword decides
       }
       if (!why.empty()) why = std::string(name) + " not sent (the table may still be moving): " + why + " (" + kWhichDrive + ")";

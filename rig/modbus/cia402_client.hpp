@@ -76,7 +76,9 @@ class Cia402Table final : public RotaryTable {
   void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
   std::string at(const Cia402Reading& r) const;
   void identify(const Cia402Reading& r, const CancelToken& cancel);
-  std::string identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent);
+  // `is_402`, when given, is set where the device is a CiA 402 drive whatever the problem (its
+  // device type's 0x0192 in the other word: the map's word order reversed).
+  std::string identity_problem(uint16_t statusword, const CancelToken& cancel, bool urgent, bool* is_402 = nullptr);
   void fail_unless_moving(const std::string& doing, const Cia402Reading& r, const char* when,
                           int64_t target_counts) const;
   void fail_on_halt(const std::string& doing, const Cia402Reading& r, const char* when) const;

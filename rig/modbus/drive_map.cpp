@@ -193,6 +193,13 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   }
   const toml::table& lim = *cfg::get_table(root, "limits", true);
   cfg::check_keys(lim, {"neg_deg", "pos_deg"}, "limits");
+  // The travel holds 0° (the frame's zero; docs/cia402-drive-maps.md, 9): a positive neg_deg
+  // was refused "out of range [-200000, 0]" with no word of why (a review).
+  for (const auto& [key, sign] : {std::pair{"neg_deg", -1.0}, std::pair{"pos_deg", 1.0}})
+    if (const toml::node* n = lim.get(key); n && n->value<double>() && *n->value<double>() * sign < 0)
+      cfg::reject(*n, key,
+                  std::string("the travel must hold 0° (neg_deg <= 0 <= pos_deg): move the drive's zero into its travel "
+                              "with [homing] offset_deg (0x607C) and give the procedure's angles in that frame"));
   m.limit_neg_deg = cfg::get_number(lim, "neg_deg", {}, -200000.0, 0.0);
   m.limit_pos_deg = cfg::get_number(lim, "pos_deg", {}, 0.0, 200000.0);
   // Both 0: a table that cannot move, which every angle of the procedure then "left" (a review:
@@ -227,14 +234,17 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
     }
     const toml::table* t = n->as_table();
     if (!t) fail(*n, "'" + std::string(info.key) + "' must be a table { index = ..., address = ..., ... }");
-    cfg::check_keys(*t, {"index", "address", "function", "width", "signed", "word_order"}, info.key);
+    // "[objects.controlword]": it read "[controlword]", a section the file does not have (a review).
+    cfg::check_keys(*t, {"index", "address", "function", "width", "signed", "word_order"},
+                    "objects." + std::string(info.key));
     const auto index = cfg::get_int(*t, "index", {}, 0, 0xFFFF);
     if (index != info.index)
       fail(*t->get("index"), "'" + std::string(info.key) + "' is object " + hex4(info.index) + ", not " +
                                   hex4(static_cast<unsigned>(index)));
     ObjectSpec s;
     s.present = true;
-    const auto addr = base + cfg::get_int(*t, "address", {}, 0, 65535);
+    const auto offset = cfg::get_int(*t, "address", {}, 0, 65535);
+    const auto addr = base + offset;
     const std::string fn = cfg::get_string(*t, "function", std::string("holding"));
     if (fn != "holding" && fn != "input")
       fail(*t->get("function"), "'function' = \"" + fn + "\": expected \"holding\" or \"input\"");
@@ -249,7 +259,12 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
     if (s.is_signed && (ob == Obj::kControlword || ob == Obj::kStatusword || ob == Obj::kErrorCode))
       cfg::reject(*t->get("signed"), "signed", "'" + std::string(info.key) + "' is unsigned (UNSIGNED16 in CiA 402)");
     s.low_word_first = parse_word_order(*t, "word_order", low_first);
-    if (addr + s.words() > 65536) fail(*t->get("address"), "address " + std::to_string(addr) + " + width beyond 65535");
+    if (addr + s.words() > 65536)
+      fail(*t->get("address"), "'" + std::string(info.key) + "' at register " + std::to_string(addr) +
+                                   (base ? " ([drive] address_base " + std::to_string(base) + " + address " +
+                                               std::to_string(offset) + ")"
+                                         : std::string()) +
+                                   " with its " + std::to_string(s.words()) + " word(s) goes beyond register 65535");
     s.address = static_cast<uint16_t>(addr);
     m.objects[i] = s;
     const auto lo = static_cast<uint32_t>(addr);

@@ -2157,6 +2157,18 @@ TEST(RigCli, ValuesFromACaptureWithJoinedGapsSaySo) {
   }
 }
 
+// `--plant hardware` (the word a procedure sheet may use) points to --hardware FILE, which is how
+// real hardware is named (a review: "hardware not in {emulated}").
+TEST(RigCli, PlantHardwarePointsToTheHardwareFile) {
+  const std::string d = tmp("plant-word");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"run", "--plant", "hardware", "--profile", "ci", "--dry-run"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("--plant: 'hardware' is not a plant: give emulated, or --hardware FILE"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"run", "--plant", "emulated", "--profile", "ci", "--dry-run"}, d + "/io"), 0) << slurp(d + "/io.stderr");
+}
+
 TEST(RigCli, DryRunPrintsThePlanAndTouchesNothing) {
   const std::string d = tmp("dry");
   fs::create_directories(d);

@@ -92,7 +92,15 @@ TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
   e = map_error(ok + "statuswrod = { index = 0x6041, address = 30 }\n");
   EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "unknown object 'statuswrod'")) << e;
   e = map_error(ok + "home_offset = { index = 0x607C, address = 30, widht = 32 }\n");
-  EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "widht")) << e;
+  EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "widht") && has(e, "[objects.home_offset]")) << e;
+  // An address past the last register names the object and the base it was added to (a review:
+  // "address 65585 + width beyond 65535").
+  std::string based = ok;
+  based.replace(based.find("name = \"t\""), 10, "name = \"t\"\naddress_base = 0xFFF8");
+  e = map_error(based);
+  EXPECT_TRUE(has(e, "bad-map.toml:") && has(e, "([drive] address_base 65528 + address ") &&
+              has(e, ") with its 2 word(s) goes beyond register 65535"))
+      << e;
   e = map_error(ok + "[homing]\nmehtod = 19\n");
   EXPECT_TRUE(has(e, "bad-map.toml:18:") && has(e, "mehtod")) << e;
   // An index that is not the object's; a written object placed in input registers; a bad width.
@@ -176,6 +184,10 @@ TEST(DriveMapFile, ValuesTheStandardOrTheTravelRulesOutAreNamedAtTheirLine) {
   // No travel at all: said at the map's limits, not as the profile's angles outside them (a review).
   e = map_error(with("neg_deg = -10.0\npos_deg = 10.0", "neg_deg = 0.0\npos_deg = 0.0"));
   EXPECT_TRUE(has(e, "bad-map.toml:7:") && has(e, "[limits] neg_deg = pos_deg = 0: no travel at all")) << e;
+  // A travel without 0° says why it is refused (a review: "out of range [-200000, 0]" alone).
+  e = map_error(with("neg_deg = -10.0\npos_deg = 10.0", "neg_deg = 10.0\npos_deg = 350.0"));
+  EXPECT_TRUE(has(e, "bad-map.toml:6:") && has(e, "'neg_deg' = 10.0: the travel must hold 0° (neg_deg <= 0 <= pos_deg)"))
+      << e;
 }
 
 // ---------------------------------------------------------------- the emulated drive
@@ -1583,6 +1595,15 @@ TEST(Cia402ClientWordOrder, AReversedWordOrderIsFoundBeforeOrDuringTheFirstMove)
   } catch (const HardwareError& e) {
     EXPECT_TRUE(has(e.what(), "0x0192 is in its high word, so the drive sends 32-bit values in the other word order "
                               "than the map's word_order says")) << e.what();
+  }
+  // Its stops go out all the same: the device type says a CiA 402 drive, and the controlword and
+  // statusword are 16-bit (a review: the quick stop was refused and the table ran on).
+  {
+    m::Cia402Table reversed(m::make_inprocess_transport(r.drive, r.clock), typed, r.clock, opt);
+    reversed.quick_stop();
+    EXPECT_EQ(reversed.last_stop_error(), "");
+    EXPECT_EQ(r.drive.state(), m::cia402::State::kQuickStopActive);
+    right->move_to(12.5, {});  // out of Quick stop active, as after any quick stop
   }
   testing::internal::CaptureStderr();  // the map without device_type is warned about
   const m::DriveMap untyped = generic_map_with("reversed", {{"word_order = \"high_first\"", "word_order = \"low_first\""},
