@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cctype>
@@ -44,10 +45,22 @@ std::string TableLock::path_for(const std::string& identity) {
 
 TableLock::TableLock(const std::string& identity, const std::string& holder) {
   const std::string path = path_for(identity);
-  // Read-write to say who holds it; read-only (a file another account made) still locks.
-  int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-  if (fd < 0) fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Read-write to say who holds it; read-only (a file another account made) still locks. The lock
+  // folder is shared (/run/lock, /tmp): a symlink planted there is not followed (root would
+  // truncate its target), nor does a FIFO block the open; anything but a regular file is refused.
+  constexpr int kSafe = O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK;
+  int fd = ::open(path.c_str(), O_RDWR | O_CREAT | kSafe, 0644);
+  if (fd < 0 && errno != ELOOP) fd = ::open(path.c_str(), O_RDONLY | kSafe);
+  if (fd < 0 && errno == ELOOP)
+    throw ConfigError("table " + identity + ": the lock file " + path + " is a symbolic link, which rig does not follow; "
+                      "remove it (something other than rig put it there)");
   if (fd < 0) return;  // no lock folder this account may use: unlocked, as before
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw ConfigError("table " + identity + ": the lock file " + path +
+                      " is not a regular file; remove it (something other than rig put it there)");
+  }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     const std::string who = read_holder(fd);

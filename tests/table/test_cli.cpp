@@ -6,6 +6,7 @@
 #include <poll.h>
 #include <sys/socket.h>
 #include <pty.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -387,6 +388,34 @@ TEST_F(RigTable, AMoveRunningHoldsTheTableAgainstASecondCommand) {
   EXPECT_EQ(WEXITSTATUS(st), 4) << "the move ends on another master's halt";
   // Released with the process: the next command takes the table.
   ASSERT_EQ(rig(where_ + " move 10", out), 0) << out;
+}
+
+// The lock folder is shared: a symlink planted at the lock file's name is not followed (root
+// would have truncated its target) and a FIFO does not hang the command; both are exit 2 naming
+// the file, the drive untouched.
+TEST_F(RigTable, APlantedLockFileIsNotFollowed) {
+  const std::string dir = testing::TempDir() + "/planted-locks";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::string lock = server_.endpoint() + " unit 1";
+  for (char& c : lock)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.') c = '_';
+  lock = dir + "/rig-table-" + lock + ".lock";
+  const std::string target = dir + "/precious";
+  { std::ofstream(target) << "keep me\n"; }
+  std::filesystem::create_symlink(target, lock);
+  std::string out;
+  EXPECT_EQ(run("RIG_LOCK_DIR=" + dir + " " + std::string(RIG_BIN) + " table home " + where_, out), 2) << out;
+  EXPECT_NE(out.find("the lock file " + lock + " is a symbolic link, which rig does not follow"), std::string::npos) << out;
+  std::ifstream in(target);
+  std::string kept;
+  std::getline(in, kept);
+  EXPECT_EQ(kept, "keep me");
+  std::filesystem::remove(lock);
+  ASSERT_EQ(::mkfifo(lock.c_str(), 0600), 0);
+  EXPECT_EQ(run("RIG_LOCK_DIR=" + dir + " timeout 20 " + std::string(RIG_BIN) + " table home " + where_, out), 2) << out;
+  EXPECT_NE(out.find("the lock file " + lock + " is not a regular file"), std::string::npos) << out;
+  EXPECT_FALSE(emu_->snapshot().homed) << "nothing was sent";
 }
 
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when
