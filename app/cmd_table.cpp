@@ -168,10 +168,10 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
 
 // Runs `body` with the table the arguments name and the move tolerance its settings give.
 // `unreachable`: what a failed connection means for the command (a stop: not delivered).
-template <class Body>
 // `command` non-empty (a home, a move, a reset): the station's lock on the table is taken first
 // (app/table_lock.hpp), after the settings are checked and before the drive is opened; a status
 // or a stop takes none.
+template <class Body>
 void with_table(const TableArgs& a, Body body, const std::string& unreachable = "", const std::string& command = "") {
   toml::table root;
   const toml::table& t = table_config(a, root);
