@@ -242,9 +242,15 @@ std::string Cia402Table::at(const Cia402Reading& r) const {
 void Cia402Table::fail_on_fault(const std::string& doing, const Cia402Reading& r) const {
   const State st = r.state();
   if (st != State::kFault && st != State::kFaultReactionActive) return;
+  // A fault with no error code is what a statusword read from the wrong register looks like (a
+  // review: a map with statusword and controlword swapped read "Fault reaction active, alarm none").
   throw HardwareError(doing + ": drive \"" + map_.name + "\" in " + c4::state_name(st) + ", error code " +
                       hex4(r.error_code) + " (0x603F) " + c4::error_code_text(r.error_code) + at(r) +
-                      " (inspect the table, then `rig table reset`)");
+                      " (inspect the table, then `rig table reset`" +
+                      (r.error_code == 0 ? "; with no error code, check the map's statusword address too: " +
+                                               map_.describe(Obj::kStatusword)
+                                         : std::string()) +
+                      ")");
 }
 
 // Waits (bounded by the acknowledge timeout) for the state a command leads to;
@@ -519,6 +525,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   {
     const Cia402Reading r = detail::read_before_motion([&] { return read(cancel); },
                                                        [&](auto body) { guarded(doing, body); });
+    // A fault first: "not homed" sent a technician to homing, which then failed on the fault (a review).
+    fail_on_fault(doing, r);
     if (map_.homed_bit && !r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
       throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
     refuse_outside_travel(doing, r);

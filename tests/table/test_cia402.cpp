@@ -1812,10 +1812,17 @@ TEST_P(Cia402Client, FrozenDriveIsDetected) {
 // A drive whose statusword is no CiA 402 state: the client does not guess.
 class Odd final : public m::RegisterDevice {
  public:
-  Odd(m::RegisterDevice& d, uint16_t sw_addr, uint16_t sw) : d_(d), addr_(sw_addr), sw_(sw) {}
+  // `input`: the statusword is an input register (lowword-offset.toml's), else a holding one.
+  Odd(m::RegisterDevice& d, uint16_t sw_addr, uint16_t sw, bool input = false)
+      : d_(d), addr_(sw_addr), sw_(sw), input_(input) {}
   uint8_t read_registers(uint16_t a, uint16_t n, uint16_t* out) override {
     const uint8_t rc = d_.read_registers(a, n, out);
-    if (rc == 0 && addr_ >= a && addr_ < a + n) out[addr_ - a] = sw_;
+    if (!input_ && rc == 0 && addr_ >= a && addr_ < a + n) out[addr_ - a] = sw_;
+    return rc;
+  }
+  uint8_t read_input_registers(uint16_t a, uint16_t n, uint16_t* out) override {
+    const uint8_t rc = d_.read_input_registers(a, n, out);
+    if (input_ && rc == 0 && addr_ >= a && addr_ < a + n) out[addr_ - a] = sw_;
     return rc;
   }
   uint8_t write_registers(uint16_t a, const uint16_t* v, uint16_t n) override { return d_.write_registers(a, v, n); }
@@ -1824,6 +1831,7 @@ class Odd final : public m::RegisterDevice {
  private:
   m::RegisterDevice& d_;
   uint16_t addr_, sw_;
+  bool input_;
 };
 
 TEST(Cia402ClientRefusals, UnexpectedStatesAreReportedNotGuessed) {
@@ -1838,6 +1846,17 @@ TEST(Cia402ClientRefusals, UnexpectedStatesAreReportedNotGuessed) {
   m::Cia402Table t2(m::make_inprocess_transport(ignores, r.clock), r.map, r.clock, {});
   e = error_of([&] { t2.home({}); });
   EXPECT_TRUE(has(e, "did not reach Ready to switch on") && has(e, "shutdown")) << e;
+  // A statusword reading a fault (here Fault reaction active, with no error code: what a map with
+  // the statusword at the controlword's register reads) is said before "not homed", which sent a
+  // technician to homing (a review); nothing is written.
+  Rig h("lowword-offset.toml");
+  Odd faulted(h.drive, h.map.spec(Obj::kStatusword).address, 0x000F, h.map.spec(Obj::kStatusword).input);
+  m::Cia402Table t3(m::make_inprocess_transport(faulted, h.clock), h.map, h.clock, {});
+  e = error_of([&] { t3.move_to(20.0, {}); });
+  EXPECT_TRUE(has(e, "in Fault reaction active, error code 0x0000") &&
+              has(e, "with no error code, check the map's statusword address too: statusword (0x6041)"))
+      << e;
+  EXPECT_FALSE(has(e, "not homed")) << e;
 }
 
 // Counts the writes that reach a device; reads can be overridden register by register.
