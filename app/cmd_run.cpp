@@ -1066,8 +1066,8 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
     // What the dry run could not check (a review: it said nothing of it): a rig-v1 drive's travel
     // is in its own registers, read when it answers.
     if (modbus::table_drive(*t) != "cia402")
-      out.push_back("Travel: the rig-v1 drive's own LIMIT registers, not readable here; each move is checked "
-                    "against them before it is sent (a U10/U20 angle outside them ends the run at that move)");
+      out.push_back("Travel: the rig-v1 drive's own LIMIT registers, not readable here; the run checks U10/U20 "
+                    "against them after homing, before the first recording (exit 2 if outside)");
   }
   if (const toml::table* d = cfg::get_table(hw, "dut")) {
     std::string stream = "the rig protocol (docs/can-protocol.md), 1000 Hz";

@@ -363,6 +363,17 @@ void bring_up(PhaseContext& ctx, const Profile& p, const RunOptions& opt, DutSta
   ctx.log->info("homing table ({})", ctx.dev.table.describe());
   if (ctx.progress) ctx.progress->log("  homing the table");
   ctx.dev.table.home(ctx.cancel);
+  // Both angles against the travel the drive reports, before anything is recorded: a rig-v1
+  // drive's limits are known only now, and a U20 outside them ended the run at its first U20
+  // move, the U10 recordings spent (a review: the dry run could not say).
+  if (const auto travel = ctx.dev.table.travel_deg(ctx.cancel))
+    for (const Orientation o : {Orientation::U10, Orientation::U20}) {
+      const double deg = table_angle(p, o);
+      if (deg < travel->first || deg > travel->second)
+        throw ConfigError(fmt::format("{} at {:g}°: outside the table's travel [{:g}°, {:g}°] that {} reports; nothing "
+                                      "recorded (change the angle, [procedure] u10_deg / u20_deg, or the drive's limits)",
+                                      to_string(o), deg, travel->first, travel->second, ctx.dev.table.describe()));
+    }
 }
 
 double TableTiming::move_s(double from_deg, double to_deg) const {

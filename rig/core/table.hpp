@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "rig/core/cancel.hpp"
 
@@ -75,6 +77,10 @@ class RotaryTable {
   // Immediate stop (quick stop / e-stop ramp). Never throws.
   virtual void quick_stop() noexcept = 0;
   virtual std::string describe() const = 0;  // "modbus tcp 127.0.0.1:1502 unit 1"
+  // The travel [negative, positive] in degrees as the drive holds it, where the client can tell
+  // (a rig-v1 drive's limit registers, a CiA 402 map's [limits]); nullopt where it cannot. The
+  // procedure checks its U10/U20 angles against it after homing, before the first recording.
+  virtual std::optional<std::pair<double, double>> travel_deg(const CancelToken&) { return std::nullopt; }
   // What became of the last stop or quick stop: "" delivered, else why not (not delivered, not
   // sent into a device that is not the configured drive, none needed). For the safe state's log.
   virtual std::string stop_fate() const { return ""; }

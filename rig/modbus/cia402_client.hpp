@@ -45,6 +45,10 @@ class Cia402Table final : public RotaryTable {
   void stop() noexcept override;        // halt (controlword bit 8) on the profile deceleration
   void quick_stop() noexcept override;  // Quick stop command (transition 11)
   std::string describe() const override;
+  // The drive map's [limits] (the drive's own 0x607D should match them).
+  std::optional<std::pair<double, double>> travel_deg(const CancelToken&) override {
+    return std::pair{map_.limit_neg_deg, map_.limit_pos_deg};
+  }
   std::string stop_fate() const override { return last_stop_error(); }
 
   // Technician's fault reset (`rig table reset`): returns the 0x603F code it

@@ -102,6 +102,11 @@ std::string rig_v1_block_problem(const std::vector<uint16_t>& r) {
 }
 }  // namespace
 
+std::optional<std::pair<double, double>> TableClient::travel_deg(const CancelToken& cancel) {
+  const DriveState d = read_drive(cancel);
+  return std::pair{d.limit_neg_deg, d.limit_pos_deg};
+}
+
 DriveState TableClient::read_drive(const CancelToken& cancel) {
   std::vector<uint16_t> regs;
   try {

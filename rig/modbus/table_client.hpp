@@ -71,6 +71,8 @@ class TableClient final : public RotaryTable {
   void stop() noexcept override;
   void quick_stop() noexcept override;
   std::string describe() const override;
+  // The drive's LIMIT_NEG / LIMIT_POS registers (docs/table-registers.md).
+  std::optional<std::pair<double, double>> travel_deg(const CancelToken& cancel) override;
   std::string stop_fate() const override { return last_stop_error(); }
 
   // Technician's alarm reset (`rig table reset`): refused while the e-stop is

@@ -201,6 +201,31 @@ struct BringUp {
 
 }  // namespace
 
+// A U10/U20 angle outside the travel the drive reports (a rig-v1 drive's limit registers, known
+// only once it answers) ends bring-up after homing, before anything is recorded; it ended the
+// run at the first U20 move, the U10 recordings spent (a review).
+TEST(ProcedureWithoutPlant, BringUpRefusesAnAngleOutsideTheTravelTheDriveReports) {
+  NoCommandDut dut;
+  acceptance::RunOptions ro;
+  ro.expected_serial = "LABEL-0412";
+  BringUp inside;
+  inside.table.travel = std::pair{-190.0, 370.0};
+  EXPECT_NO_THROW(inside.run(dut, ro));
+  BringUp outside;
+  outside.table.travel = std::pair{-190.0, 100.0};
+  try {
+    outside.run(dut, ro);
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("U20 at 180°: outside the table's travel [-190°, 100°] that idle table "
+                                         "reports; nothing recorded"),
+              std::string::npos)
+        << e.what();
+  }
+  BringUp unknown;  // a client that cannot tell: nothing to check here (each move checks)
+  EXPECT_NO_THROW(unknown.run(dut, ro));
+}
+
 TEST(ProcedureWithoutPlant, BringUpOfADutWithoutCommandsSkipsIdentifyAndFilterAndSaysWhy) {
   NoCommandDut dut;
   BringUp b;

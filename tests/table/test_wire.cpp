@@ -63,6 +63,11 @@ TEST(TableWire, HomeAndMoveOverLoopbackTcp) {
   RealClock clock;
   auto table = m::connect_table(client_cfg("modbus", server.endpoint()), clock);
   EXPECT_EQ(table->describe(), "modbus " + server.endpoint() + " unit 1");
+  // The travel as the drive's LIMIT_NEG / LIMIT_POS registers hold it (the emulator's defaults).
+  const auto travel = table->travel_deg({});
+  ASSERT_TRUE(travel);
+  EXPECT_DOUBLE_EQ(travel->first, -190.0);
+  EXPECT_DOUBLE_EQ(travel->second, 370.0);
   table->home({});
   table->move_to(180.0, {});
   const TableStatus s = table->status();
