@@ -3,6 +3,7 @@
 // report.html and run.log. Exit codes per docs/contracts.md.
 #include <cerrno>
 #include <charconv>
+#include <climits>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -507,12 +508,24 @@ std::string folder_time_utc() {
 // said "--out DIR", an option it was not given, a review).
 // A folder name longer than a file system takes (NAME_MAX, 255 bytes): said as such by the dry
 // run too, which passed it before (a review).
+// The whole path too: with the run's own files in it (captures/in-run-U10.cap.interrupted-12 and
+// the like, up to kRunFileRoom bytes) it must stay under PATH_MAX (a re-test: a 4266-byte --out
+// passed the dry run; one of 4080 bytes was created, then called "not writable").
+constexpr std::size_t kRunFileRoom = 64;
 void refuse_a_name_too_long(const std::string& dir, const std::string& option) {
+  std::size_t cut = std::min<std::size_t>(dir.size(), 80);
+  while (cut > 0 && cut < dir.size() && (static_cast<unsigned char>(dir[cut]) & 0xC0) == 0x80) --cut;  // whole UTF-8
+  const std::string shown = shown_text(dir.substr(0, cut)) + (cut < dir.size() ? "..." : "");
   for (const fs::path& part : fs::path(dir))
     if (part.native().size() > 255)
-      throw ConfigError(fmt::format("{} {}: a folder name of {} bytes; a file system takes 255 at most", option,
-                                    shown_text(dir.substr(0, 80)) + (dir.size() > 80 ? "..." : ""),
+      throw ConfigError(fmt::format("{} {}: a folder name of {} bytes; a file system takes 255 at most", option, shown,
                                     part.native().size()));
+  std::error_code ec;
+  const std::size_t whole = fs::absolute(dir, ec).native().size();
+  if (whole + kRunFileRoom >= PATH_MAX)
+    throw ConfigError(fmt::format("{} {}: a path of {} bytes; with the run's own files in it ({} bytes more) it must "
+                                  "stay under {} (PATH_MAX)",
+                                  option, shown, whole, kRunFileRoom, PATH_MAX));
 }
 
 void prepare_run_folder(const std::string& dir, const std::string& option) {
@@ -1275,6 +1288,8 @@ int do_run(RunArgs a) {
   if (!a.resume.empty())
     if (const auto rc = finish_pending_ending(a, hw, key, final_seal)) return *rc;
   if (a.dry_run) {
+    // A table another rig process commands now is said, as the run would say it (a review).
+    if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
@@ -1447,6 +1462,8 @@ int do_run(RunArgs a) {
               shown_text(a.out));
   }
   for (const std::string& q : confirmed) log->info("operator confirmed: {} yes", q);
+  if (table_lock && !table_lock->held())
+    log->warn("the table is not locked against a second rig process on this station: {}", table_lock->unlocked_reason());
   if (folder_lock && !folder_lock->held())
     log->warn("the run folder could not be locked (its filesystem has no flock): a second run or resume of {} at the "
               "same time is not prevented",
@@ -1662,11 +1679,14 @@ void add_run(CLI::App& app, int& rc) {
                     ->check(CLI::Validator(
                         [](std::string& v) {
                           if (v == "emulated") return std::string();
+                          std::string lower = v;
+                          for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+                          const bool hardware = lower.rfind("hardware", 0) == 0 || lower.find(".toml") != std::string::npos;
                           return "'" + shown_ascii(v) + "' is not a plant: give emulated" +
-                                 (v == "hardware" ? std::string(", or --hardware FILE (the hardware file describes "
-                                                                "the table, the DUT link and the GPIO lines) for "
-                                                                "real hardware")
-                                                  : std::string());
+                                 (hardware ? std::string(", or, for real hardware, --hardware FILE alone, without "
+                                                         "--plant (the hardware file describes the table, the DUT link "
+                                                         "and the GPIO lines)")
+                                           : std::string());
                         },
                         "emulated"));
   sub->add_option("--hardware", a->hardware, "Run on real hardware described by this TOML file")

@@ -110,7 +110,7 @@ std::string flags(const TableStatus& s) {
   add(s.homed, "homed");
   add(!s.homed_known, "homed-unknown");
   // Moves are refused until it is homed: "ready" alone read as ready to move (a review).
-  add(s.homed_known && !s.homed, "NOT-HOMED");
+  add(s.homed_known && !s.homed && !s.homing, "NOT-HOMED");
   add(s.homing, "homing");
   add(s.moving, "moving");
   add(s.in_position, "in-position");
@@ -176,7 +176,12 @@ void with_table(const TableArgs& a, Body body, const std::string& unreachable = 
   toml::table root;
   const toml::table& t = table_config(a, root);
   std::optional<TableLock> lock;
-  if (!command.empty()) lock.emplace(modbus::table_identity(t), "rig table " + command);
+  if (!command.empty()) {
+    lock.emplace(modbus::table_identity(t), "rig table " + command);
+    if (!lock->held())  // said, not silent (a review: a missing lock folder turned it off unseen)
+      std::cerr << "rig: warning: the table is not locked against a second rig process on this station: "
+                << lock->unlocked_reason() << "\n";
+  }
   RealClock clock;
   std::unique_ptr<RotaryTable> table;
   try {

@@ -58,18 +58,21 @@ void decimal_numbers_only(CLI::App& app) {
     o->transform(CLI::Validator(
         [whole, is_unsigned](std::string& v) {
           if (decimal_text(v, whole, is_unsigned)) return std::string();
-          // A number with a unit after it (`90°`, `100s`): said so, its number given (a review:
-          // "'90\xC2\xB0' is not a decimal number" alone).
+          // A number with the unit rig's options are given in after it (`90°`, `100Hz`, `5s`):
+          // said so, its number given (a review: "'90\xC2\xB0' is not a decimal number" alone).
+          // Only those units: `1kHz` or `300ms` would be told a number off by a factor, and a
+          // letter typed for a digit (`9O`) a wrong number (a re-test).
           std::size_t n = v.size();
           while (n > 0 && !decimal_text(v.substr(0, n), whole, is_unsigned)) --n;
-          const std::string rest = v.substr(n);
-          const bool a_unit = n > 0 && rest != "e" && rest != "E" &&
-                              std::all_of(rest.begin(), rest.end(), [](char ch) {
-                                const auto u = static_cast<unsigned char>(ch);
-                                return std::isalpha(u) || u >= 0x80 || ch == '%' || ch == '/' || ch == ' ';
-                              });
+          std::string rest = v.substr(n);
+          if (!rest.empty() && rest.front() == ' ') rest.erase(0, 1);
+          static const char* const kUnits[] = {"\xC2\xB0", "deg", "degrees", "Hz", "hz", "s"};
+          const bool a_unit = n > 0 && std::any_of(std::begin(kUnits), std::end(kUnits),
+                                                   [&](const char* u) { return rest == u; });
           const std::string unit =
-              a_unit ? "; give the number alone, without a unit: " + v.substr(0, n) : std::string();
+              a_unit ? "; give the number alone, without " + std::string(rest == "\xC2\xB0" ? "the degree sign" : "its unit") +
+                           ": " + v.substr(0, n)
+                     : std::string();
           return "'" + rig::shown_ascii(v) + "' is not a decimal " +
                  // No bound here: the option's own check states its range (--count >= 1 said
                  // ">= 0" for '01', a review).
@@ -193,6 +196,9 @@ int main(int argc, char** argv) {
     return r == 0 ? 0 : rig::kExitUsage;  // --help/--version exit 0; usage errors exit 2
   } catch (const rig::InputError& e) {  // before ConfigError, its base
     std::cerr << "rig: input error: " << e.what() << "\n";
+    return rig::kExitUsage;
+  } catch (const rig::InUseError& e) {  // before ConfigError, its base
+    std::cerr << "rig: in use: " << e.what() << "\n";
     return rig::kExitUsage;
   } catch (const rig::ConfigError& e) {
     std::cerr << "rig: configuration error: " << e.what() << "\n";

@@ -1,6 +1,7 @@
 #include "app/table_lock.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -8,6 +9,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <string>
 
@@ -27,13 +29,65 @@ std::string lock_folder() {
   return ec ? std::string("/tmp") : t.string();
 }
 
-// The file's text: what the holder wrote ("pid 1234: rig run --out ..."), one line.
+// Who holds it, from the holder's line ("pid 1234: rig run --out ..."). A line whose process is
+// gone was left by a holder that could not write its own (a read-only file): not named.
 std::string read_holder(int fd) {
   std::string text(512, '\0');
   const ssize_t n = ::pread(fd, text.data(), text.size(), 0);
   text.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
   if (const auto nl = text.find('\n'); nl != std::string::npos) text.resize(nl);
-  return text.empty() ? std::string("another rig process") : shown_text(text);
+  const long pid = text.rfind("pid ", 0) == 0 ? std::strtol(text.c_str() + 4, nullptr, 10) : 0;
+  if (pid <= 0 || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) return "another rig process";
+  return shown_text(text);
+}
+
+ConfigError planted(const std::string& identity, const std::string& path, const char* what) {
+  return ConfigError("table " + identity + ": the lock file " + path + " is " + what +
+                     ", which rig does not use; remove it (something other than rig put it there)");
+}
+
+// Opens the lock file as a plain file of its own: a symlink is not followed (root would truncate
+// its target), a FIFO does not block the open, and a hard link (another file's contents) or
+// anything but a regular file is refused. -1 with `why` set where it cannot be opened at all.
+// `create` false (a dry run's check, which touches nothing): a missing file is -1 with no reason.
+int open_lock_file(const std::string& identity, const std::string& path, std::string& why, bool create = true) {
+  constexpr int kSafe = O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK;
+  int fd = ::open(path.c_str(), O_RDWR | (create ? O_CREAT : 0) | kSafe, 0644);
+  // Read-only still locks (a file another account made); it cannot say who holds it.
+  if (fd < 0 && errno == EACCES) fd = ::open(path.c_str(), O_RDONLY | kSafe);
+  if (fd < 0) {
+    const int err = errno;
+    struct stat st {};
+    if (err == ELOOP) throw planted(identity, path, "a symbolic link");
+    if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) throw planted(identity, path, "not a regular file");
+    if (!create && err == ENOENT) return -1;
+    why = "cannot open the lock file " + path + ": " + std::strerror(err);
+    return -1;
+  }
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
+    const bool linked = S_ISREG(st.st_mode) && st.st_nlink != 1;
+    ::close(fd);
+    throw planted(identity, path, linked ? "a hard link to another file" : "not a regular file");
+  }
+  return fd;
+}
+
+// flock with a few tries 20 ms apart; 0, or the errno of the last try.
+int lock_with_retries(int fd, int op) {
+  int err = 0;
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    if (::flock(fd, op | LOCK_NB) == 0) return 0;
+    err = errno;
+    if (err != EWOULDBLOCK) return err;
+    ::usleep(20000);
+  }
+  return err;
+}
+
+InUseError in_use(const std::string& identity, const std::string& path, int fd) {
+  return InUseError("table " + identity + ": in use by " + read_holder(fd) + " on this station (lock " + path +
+                    "); wait for it to end. `rig table stop` and `rig table quick-stop` still reach the drive");
 }
 }  // namespace
 
@@ -45,29 +99,17 @@ std::string TableLock::path_for(const std::string& identity) {
 
 TableLock::TableLock(const std::string& identity, const std::string& holder) {
   const std::string path = path_for(identity);
-  // Read-write to say who holds it; read-only (a file another account made) still locks. The lock
-  // folder is shared (/run/lock, /tmp): a symlink planted there is not followed (root would
-  // truncate its target), nor does a FIFO block the open; anything but a regular file is refused.
-  constexpr int kSafe = O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK;
-  int fd = ::open(path.c_str(), O_RDWR | O_CREAT | kSafe, 0644);
-  if (fd < 0 && errno != ELOOP) fd = ::open(path.c_str(), O_RDONLY | kSafe);
-  if (fd < 0 && errno == ELOOP)
-    throw ConfigError("table " + identity + ": the lock file " + path + " is a symbolic link, which rig does not follow; "
-                      "remove it (something other than rig put it there)");
-  if (fd < 0) return;  // no lock folder this account may use: unlocked, as before
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+  const int fd = open_lock_file(identity, path, unlocked_reason_);
+  if (fd < 0) return;
+  if (const int err = lock_with_retries(fd, LOCK_EX)) {
+    if (err != EWOULDBLOCK) {  // a file system without flock
+      ::close(fd);
+      unlocked_reason_ = "the lock file " + path + " cannot be locked: " + std::strerror(err);
+      return;
+    }
+    const InUseError e = in_use(identity, path, fd);
     ::close(fd);
-    throw ConfigError("table " + identity + ": the lock file " + path +
-                      " is not a regular file; remove it (something other than rig put it there)");
-  }
-  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    const int err = errno;
-    const std::string who = read_holder(fd);
-    ::close(fd);
-    if (err != EWOULDBLOCK) return;  // a file system without flock
-    throw ConfigError("table " + identity + ": in use by " + who + " on this station (lock " + path +
-                      "); wait for it to end. `rig table stop` and `rig table quick-stop` still reach the drive");
+    throw e;
   }
   fd_ = fd;
   const std::string line = "pid " + std::to_string(::getpid()) + ": " + holder + "\n";
@@ -79,6 +121,20 @@ TableLock::~TableLock() {
   // Emptied before it is released: a later reader never names a holder that has gone.
   (void)!::ftruncate(fd_, 0);
   ::close(fd_);
+}
+
+void TableLock::check_free(const std::string& identity) {
+  const std::string path = path_for(identity);
+  std::string why;
+  const int fd = open_lock_file(identity, path, why, false);
+  if (fd < 0) return;
+  const int err = lock_with_retries(fd, LOCK_SH);
+  if (err == EWOULDBLOCK) {
+    const InUseError e = in_use(identity, path, fd);
+    ::close(fd);
+    throw e;
+  }
+  ::close(fd);
 }
 
 }  // namespace rig::cli

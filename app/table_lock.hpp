@@ -1,8 +1,9 @@
 // One rig process at a time commands a table from this station: an exclusive flock(2) on a lock
-// file named after the drive's endpoint and unit, held for the command's or the run's life (the
-// kernel drops it however the process ends). Two terminals could home or move one table at once;
-// a `rig table move` during a run's recording turned the DUT under it (a review). The drive's own
-// "another master" checks still catch other stations and tools. Stops never take the lock.
+// file named after the drive (its TCP endpoint and unit, or its serial device), held for the
+// command's or the run's life (the kernel drops it however the process ends). Two terminals could
+// home or move one table at once; a `rig table move` during a run's recording turned the DUT
+// under it (a review). The drive's own "another master" checks still catch other stations and
+// tools. Stops never take the lock.
 #pragma once
 #include <string>
 
@@ -10,21 +11,30 @@ namespace rig::cli {
 
 class TableLock {
  public:
-  // Takes the lock of the drive `identity` names (modbus::table_identity) without waiting;
-  // `holder` says who holds it ("rig table move 90", "rig run --out DIR"), shown to a process
-  // refused. Throws ConfigError naming the holder's pid and words when another process has it.
-  // Where no lock folder can be written the command goes on unlocked, as before there was one.
+  // Takes the lock of the drive `identity` names (modbus::table_identity) without waiting (a few
+  // tries 20 ms apart, as a dry run's check holds it for an instant); `holder` says who holds it
+  // ("rig table move 90", "rig run --out DIR"), shown to a process refused. Throws InUseError
+  // naming the holder when another process has it, ConfigError when the lock file is not a plain
+  // file of its own (a symlink, FIFO, socket or hard link planted in the shared folder). Where
+  // the file cannot be opened (no lock folder, no permission) the command goes on unlocked and
+  // unlocked_reason() says why: the caller warns.
   TableLock(const std::string& identity, const std::string& holder);
   ~TableLock();
   TableLock(const TableLock&) = delete;
   TableLock& operator=(const TableLock&) = delete;
   bool held() const { return fd_ >= 0; }
+  const std::string& unlocked_reason() const { return unlocked_reason_; }
+
+  // For --dry-run, which takes nothing: throws as the constructor would when another process
+  // holds the lock now.
+  static void check_free(const std::string& identity);
 
   // The lock file for `identity`: in $RIG_LOCK_DIR, else /run/lock, else the temporary folder.
   static std::string path_for(const std::string& identity);
 
  private:
   int fd_ = -1;
+  std::string unlocked_reason_;
 };
 
 }  // namespace rig::cli

@@ -22,6 +22,11 @@ struct ConfigError : std::runtime_error {
 struct InputError : ConfigError {
   using ConfigError::ConfigError;
 };
+// A device another process holds (the station's table lock): exit 2 as a configuration error,
+// said as what it is ("rig: in use: table ...: in use by pid 4711: rig table move 90").
+struct InUseError : ConfigError {
+  using ConfigError::ConfigError;
+};
 // A device or link failed (table alarm, dead link, CAN bus-off, capture gap limit).
 struct HardwareError : std::runtime_error {
   using std::runtime_error::runtime_error;

@@ -192,8 +192,12 @@ void Cia402Table::refuse_outside_travel(const std::string& doing, const Cia402Re
 // (controlword 0x0002) or halt (0x0100) wrote that table's START or HALT with SERVO_ON clear, which
 // dropped its servo.
 void Cia402Table::identify(const Cia402Reading& r, const CancelToken& cancel) {
-  const std::string why = identity_problem(r.statusword, cancel, false);
-  if (!why.empty()) throw detail::NotThisDriveError(describe() + ": " + why + " (" + kWhichDrive + "); nothing sent");
+  bool is_402 = false;
+  const std::string why = identity_problem(r.statusword, cancel, false, &is_402);
+  // A reversed word order is this drive, misread: the advice to check `drive` would contradict it.
+  if (!why.empty())
+    throw detail::NotThisDriveError(describe() + ": " + why + (is_402 ? std::string() : " (" + std::string(kWhichDrive) + ")") +
+                                    "; nothing sent");
   identified_ = true;
 }
 

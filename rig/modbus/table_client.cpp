@@ -775,7 +775,12 @@ void check_table_config(const toml::table& t) { read_table_config(t); }
 
 std::string table_identity(const toml::table& t) {
   const TableConfig c = read_table_config(t);
-  return c.ep.str() + " unit " + std::to_string(c.link.unit);
+  if (c.ep.kind == Endpoint::Kind::kTcp) return c.ep.str() + " unit " + std::to_string(c.link.unit);
+  // A serial line is one bus whatever its settings or unit, and one device by any of its names
+  // (/dev/serial/by-id/... links to /dev/ttyUSB0): two keys let a second process drive it (a review).
+  std::error_code ec;
+  const std::filesystem::path dev = std::filesystem::canonical(c.ep.device, ec);
+  return "rtu:" + (ec ? c.ep.device : dev.string());
 }
 
 std::unique_ptr<RotaryTable> connect_table(const toml::table& t, Clock& clock) {

@@ -138,8 +138,9 @@ DriveMap table_drive_map(const toml::table& table_cfg);
 // (ConfigError naming file:line), so a hardware file is refused before any device opens.
 void check_table_config(const toml::table& table_cfg);
 
-// The drive a [table] section names, as one line: its endpoint and unit ("tcp:10.0.0.7:502 unit
-// 1"); what a station's table lock is keyed on (two names of one host are two keys).
+// The drive a [table] section names, as one line: a TCP endpoint and unit ("tcp:10.0.0.7:502 unit
+// 1"), or a serial device, resolved ("rtu:/dev/ttyUSB0", whatever the line settings and unit);
+// what a station's table lock is keyed on (two names of one TCP host are two keys).
 std::string table_identity(const toml::table& table_cfg);
 
 // Hardware: connects to the drive named by [table] `modbus = "tcp:HOST:PORT"` or

@@ -2074,6 +2074,19 @@ TEST(RigCli, ALongNameGivesARunFolderAFileSystemTakes) {
   EXPECT_EQ(made[0].rfind(std::string(128, '_') + "-", 0), 0u) << made[0];
   EXPECT_TRUE(fs::exists(d + "/runs/" + made[0] + "/passport.json"));
 
+  // A whole path that leaves no room for the run's own files under PATH_MAX (a re-test: 4266
+  // bytes passed the dry run), every name in it short.
+  std::string deep = d;
+  while (deep.size() < 4100) deep += "/" + std::string(200, 'd');
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--out", deep, "--yes", "--no-history"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/io3"), 2) << dry;
+    EXPECT_NE(slurp(d + "/io3.stderr").find("bytes more) it must stay under 4096 (PATH_MAX)"), std::string::npos)
+        << slurp(d + "/io3.stderr");
+  }
+  EXPECT_FALSE(fs::exists(d + "/" + std::string(200, 'd')));
+
   const std::string out = d + "/" + std::string(256, 'x') + "/run";
   for (const bool dry : {true, false}) {
     std::vector<std::string> args = {"run", "--profile", "ci", "--out", out, "--yes", "--no-history"};
@@ -2163,9 +2176,13 @@ TEST(RigCli, PlantHardwarePointsToTheHardwareFile) {
   const std::string d = tmp("plant-word");
   fs::create_directories(d);
   EXPECT_EQ(run({"run", "--plant", "hardware", "--profile", "ci", "--dry-run"}, d + "/io"), 2);
-  EXPECT_NE(slurp(d + "/io.stderr").find("--plant: 'hardware' is not a plant: give emulated, or --hardware FILE"),
-            std::string::npos)
-      << slurp(d + "/io.stderr");
+  for (const char* word : {"hardware", "Hardware", "hw.toml"}) {
+    EXPECT_EQ(run({"run", "--plant", word, "--profile", "ci", "--dry-run"}, d + "/io"), 2);
+    EXPECT_NE(slurp(d + "/io.stderr").find("is not a plant: give emulated, or, for real hardware, --hardware FILE alone, "
+                                           "without --plant"),
+              std::string::npos)
+        << slurp(d + "/io.stderr");
+  }
   EXPECT_EQ(run({"run", "--plant", "emulated", "--profile", "ci", "--dry-run"}, d + "/io"), 0) << slurp(d + "/io.stderr");
 }
 

@@ -27,6 +27,15 @@ namespace {
 
 namespace m = rig::modbus;
 
+// The station lock's folder for every rig this binary starts: its own, not /run/lock, which the
+// runs' ports (each a new one) filled with lock files (a re-test).
+const bool kPrivateLockDir = [] {
+  const std::string dir = std::filesystem::temp_directory_path() / ("rig-table-locks-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  ::setenv("RIG_LOCK_DIR", dir.c_str(), 1);
+  return true;
+}();
+
 class RigTable : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -234,9 +243,13 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   }
   // A number with a unit typed after it is told to give the number alone; a malformed number is not.
   for (const auto& [bad, hint] : std::vector<std::pair<std::string, std::string>>{
-           {"90\u00B0", "'90\\xC2\\xB0' is not a decimal number; give the number alone, without a unit: 90"},
-           {"5deg", "'5deg' is not a decimal number; give the number alone, without a unit: 5"},
+           {"90\u00B0", "'90\\xC2\\xB0' is not a decimal number; give the number alone, without the degree sign: 90"},
+           {"5deg", "'5deg' is not a decimal number; give the number alone, without its unit: 5"},
            {"1e", "'1e' is not a decimal number\n"},
+           // Another unit, a prefix or a letter typed for a digit: no number offered (it would be
+           // off by a factor, or wrong: a re-test).
+           {"1.5rad", "'1.5rad' is not a decimal number\n"},
+           {"9O", "'9O' is not a decimal number\n"},
            {"12.5.3", "'12.5.3' is not a decimal number\n"}}) {
     EXPECT_EQ(rig(where_ + " move '" + bad + "'", out), 2) << bad << ": " << out;
     EXPECT_NE(out.find(hint), std::string::npos) << out;
@@ -378,8 +391,12 @@ TEST_F(RigTable, AMoveRunningHoldsTheTableAgainstASecondCommand) {
                 out),
             2)
       << out;
-  EXPECT_NE(out.find("table " + server_.endpoint() + " unit 1: " + holder), std::string::npos) << out;
+  EXPECT_NE(out.find("rig: in use: table " + server_.endpoint() + " unit 1: " + holder), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(d + "/run"));
+  // Its dry run says so too (a re-test: it printed the plan).
+  EXPECT_EQ(run(std::string(RIG_BIN) + " run --hardware " + d + "/hw.toml --profile ci --serial HW-1 --dry-run", out), 2)
+      << out;
+  EXPECT_NE(out.find("rig: in use: table " + server_.endpoint() + " unit 1: " + holder), std::string::npos) << out;
   ASSERT_EQ(rig(where_ + " status", out), 0) << out;
   ASSERT_EQ(rig(where_ + " stop", out), 0) << out;
   const int st = child->wait_status();
@@ -406,7 +423,7 @@ TEST_F(RigTable, APlantedLockFileIsNotFollowed) {
   std::filesystem::create_symlink(target, lock);
   std::string out;
   EXPECT_EQ(run("RIG_LOCK_DIR=" + dir + " " + std::string(RIG_BIN) + " table home " + where_, out), 2) << out;
-  EXPECT_NE(out.find("the lock file " + lock + " is a symbolic link, which rig does not follow"), std::string::npos) << out;
+  EXPECT_NE(out.find("the lock file " + lock + " is a symbolic link, which rig does not use"), std::string::npos) << out;
   std::ifstream in(target);
   std::string kept;
   std::getline(in, kept);
@@ -415,7 +432,21 @@ TEST_F(RigTable, APlantedLockFileIsNotFollowed) {
   ASSERT_EQ(::mkfifo(lock.c_str(), 0600), 0);
   EXPECT_EQ(run("RIG_LOCK_DIR=" + dir + " timeout 20 " + std::string(RIG_BIN) + " table home " + where_, out), 2) << out;
   EXPECT_NE(out.find("the lock file " + lock + " is not a regular file"), std::string::npos) << out;
+  // A hard link to another file (its contents would be truncated by the holder's line, a re-test).
+  std::filesystem::remove(lock);
+  std::filesystem::create_hard_link(target, lock);
+  EXPECT_EQ(run("RIG_LOCK_DIR=" + dir + " " + std::string(RIG_BIN) + " table home " + where_, out), 2) << out;
+  EXPECT_NE(out.find("the lock file " + lock + " is a hard link to another file"), std::string::npos) << out;
+  std::ifstream again(target);
+  std::getline(again, kept);
+  EXPECT_EQ(kept, "keep me");
   EXPECT_FALSE(emu_->snapshot().homed) << "nothing was sent";
+  // No lock folder: the command goes on unlocked, and says so (a re-test: it was silent).
+  EXPECT_EQ(run("RIG_LOCK_DIR=" + dir + "/missing " + std::string(RIG_BIN) + " table home " + where_, out), 0) << out;
+  EXPECT_NE(out.find("rig: warning: the table is not locked against a second rig process on this station: cannot "
+                     "open the lock file " + dir + "/missing/"),
+            std::string::npos)
+      << out;
 }
 
 // `nohup rig table move ...` asks that a closed terminal not end the move: SIGHUP, ignored when

@@ -1,5 +1,8 @@
 // Configuration of the client ([table] of a hardware file) and of the emulator
 // ([plant.table] of a profile): every mistake names file:line.
+#include <filesystem>
+#include <fstream>
+
 #include <gtest/gtest.h>
 
 #include "helpers.hpp"
@@ -70,6 +73,24 @@ TEST(TableConfig, EndpointsParse) {
   EXPECT_EQ(m::parse_endpoint("tcp:127.0.0.1:0").port, 0);
   const std::string e = config_error([] { m::check_table_config(cfg::parse_string("modbus = \"127.0.0.1:0\"\n", "hw.toml")); });
   EXPECT_EQ(e, "hw.toml:1:10: 'modbus' = '127.0.0.1:0': port 0 is no drive's port (1..65535)");
+}
+
+// What the station's table lock is keyed on: a TCP endpoint with its unit; a serial device by its
+// resolved name, whatever its line settings and unit (a re-test: a by-id link, or another baud
+// rate, took a second lock on one port).
+TEST(TableConfig, TheTableIdentityNamesOneSerialDeviceOnce) {
+  EXPECT_EQ(m::table_identity(cfg::parse_string("modbus = \"127.0.0.1:1502\"\nunit = 3\n", "hw.toml")),
+            "tcp:127.0.0.1:1502 unit 3");
+  const std::string dir = testing::TempDir() + "/tty-identity";
+  std::filesystem::create_directories(dir);
+  const std::string dev = dir + "/ttyFAKE0", link = dir + "/by-id-link";
+  std::ofstream(dev) << "";
+  std::filesystem::remove(link);
+  std::filesystem::create_symlink(dev, link);
+  const std::string canonical = std::filesystem::canonical(dev).string();
+  EXPECT_EQ(m::table_identity(cfg::parse_string("rtu = \"" + dev + "\"\n", "hw.toml")), "rtu:" + canonical);
+  EXPECT_EQ(m::table_identity(cfg::parse_string("rtu = \"" + link + ",115200,N,8,1\"\nunit = 7\n", "hw.toml")),
+            "rtu:" + canonical);
 }
 
 TEST(TableConfig, HardwareTableKeysAreChecked) {
