@@ -245,8 +245,7 @@ bool looks_binary(std::string_view line) {
 std::string excerpt(std::string_view tok) {
   constexpr std::size_t kMaxQuoted = 40;
   if (tok.size() <= kMaxQuoted) return "'" + quoted_bytes(tok) + "'";
-  std::size_t cut = kMaxQuoted;
-  while (cut > kMaxQuoted - 3 && (static_cast<unsigned char>(tok[cut]) & 0xC0) == 0x80) --cut;  // whole characters
+  const std::size_t cut = utf8_cut(tok, kMaxQuoted, kMaxQuoted - 3);  // whole characters
   return "'" + quoted_bytes(tok.substr(0, cut)) + "...' (" + std::to_string(tok.size()) + " bytes)";
 }
 

@@ -513,8 +513,7 @@ std::string folder_time_utc() {
 // passed the dry run; one of 4080 bytes was created, then called "not writable").
 constexpr std::size_t kRunFileRoom = 64;
 void refuse_a_name_too_long(const std::string& dir, const std::string& option) {
-  std::size_t cut = std::min<std::size_t>(dir.size(), 80);
-  while (cut > 0 && cut < dir.size() && (static_cast<unsigned char>(dir[cut]) & 0xC0) == 0x80) --cut;  // whole UTF-8
+  const std::size_t cut = dir.size() <= 80 ? dir.size() : utf8_cut(dir, 80);
   const std::string shown = shown_text(dir.substr(0, cut)) + (cut < dir.size() ? "..." : "");
   for (const fs::path& part : fs::path(dir))
     if (part.native().size() > 255)
@@ -1463,7 +1462,7 @@ int do_run(RunArgs a) {
   }
   for (const std::string& q : confirmed) log->info("operator confirmed: {} yes", q);
   if (table_lock && !table_lock->held())
-    log->warn("the table is not locked against a second rig process on this station: {}", table_lock->unlocked_reason());
+    log->warn("{}", table_lock->unlocked_warning());
   if (folder_lock && !folder_lock->held())
     log->warn("the run folder could not be locked (its filesystem has no flock): a second run or resume of {} at the "
               "same time is not prevented",

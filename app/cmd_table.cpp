@@ -179,8 +179,7 @@ void with_table(const TableArgs& a, Body body, const std::string& unreachable = 
   if (!command.empty()) {
     lock.emplace(modbus::table_identity(t), "rig table " + command);
     if (!lock->held())  // said, not silent (a review: a missing lock folder turned it off unseen)
-      std::cerr << "rig: warning: the table is not locked against a second rig process on this station: "
-                << lock->unlocked_reason() << "\n";
+      std::cerr << "rig: warning: " << lock->unlocked_warning() << "\n";
   }
   RealClock clock;
   std::unique_ptr<RotaryTable> table;

@@ -22,21 +22,25 @@ ConfigError in_use(const std::string& what) {
 }
 }  // namespace
 
+int flock_with_retries(int fd, int op) {
+  int err = 0;
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    if (::flock(fd, op | LOCK_NB) == 0) return 0;
+    err = errno;
+    if (err != EWOULDBLOCK) return err;
+    ::usleep(20000);
+  }
+  return err;
+}
+
 FolderLock::FolderLock(const std::string& dir, const std::string& what, bool must_lock) {
   const int fd = open_dir(dir);
   if (fd < 0 && !must_lock) return;  // a reader's lock, on a folder it may read without listing
   if (fd < 0) throw ConfigError(what + ": cannot open the run folder to lock it: " + std::strerror(errno));
-  // A dry run's check holds a shared lock for an instant: a few tries, 20 ms apart, before the
-  // folder is called in use.
-  int err = 0;
-  for (int attempt = 0; attempt < 10; ++attempt) {
-    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
-      fd_ = fd;
-      return;
-    }
-    err = errno;
-    if (err != EWOULDBLOCK) break;
-    ::usleep(20000);
+  const int err = flock_with_retries(fd, LOCK_EX);
+  if (err == 0) {
+    fd_ = fd;
+    return;
   }
   ::close(fd);
   if (err == EWOULDBLOCK) throw in_use(what);

@@ -6,6 +6,11 @@
 
 namespace rig::cli {
 
+// flock(2) of `op` (LOCK_EX or LOCK_SH) on `fd` without waiting, tried up to 10 times 20 ms
+// apart: a dry run's check holds a shared lock for an instant, which is not "in use". 0 when
+// taken, else the errno of the last try (EWOULDBLOCK: another process holds it).
+int flock_with_retries(int fd, int op);
+
 class FolderLock {
  public:
   // Takes the lock on the existing folder `dir` without waiting. Throws ConfigError naming the

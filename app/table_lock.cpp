@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <string>
 
+#include "app/folder_lock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
 
@@ -73,18 +74,6 @@ int open_lock_file(const std::string& identity, const std::string& path, std::st
   return fd;
 }
 
-// flock with a few tries 20 ms apart; 0, or the errno of the last try.
-int lock_with_retries(int fd, int op) {
-  int err = 0;
-  for (int attempt = 0; attempt < 10; ++attempt) {
-    if (::flock(fd, op | LOCK_NB) == 0) return 0;
-    err = errno;
-    if (err != EWOULDBLOCK) return err;
-    ::usleep(20000);
-  }
-  return err;
-}
-
 InUseError in_use(const std::string& identity, const std::string& path, int fd) {
   return InUseError("table " + identity + ": in use by " + read_holder(fd) + " on this station (lock " + path +
                     "); wait for it to end. `rig table stop` and `rig table quick-stop` still reach the drive");
@@ -101,7 +90,7 @@ TableLock::TableLock(const std::string& identity, const std::string& holder) {
   const std::string path = path_for(identity);
   const int fd = open_lock_file(identity, path, unlocked_reason_);
   if (fd < 0) return;
-  if (const int err = lock_with_retries(fd, LOCK_EX)) {
+  if (const int err = flock_with_retries(fd, LOCK_EX)) {
     if (err != EWOULDBLOCK) {  // a file system without flock
       ::close(fd);
       unlocked_reason_ = "the lock file " + path + " cannot be locked: " + std::strerror(err);
@@ -128,7 +117,7 @@ void TableLock::check_free(const std::string& identity) {
   std::string why;
   const int fd = open_lock_file(identity, path, why, false);
   if (fd < 0) return;
-  const int err = lock_with_retries(fd, LOCK_SH);
+  const int err = flock_with_retries(fd, LOCK_SH);
   if (err == EWOULDBLOCK) {
     const InUseError e = in_use(identity, path, fd);
     ::close(fd);

@@ -17,13 +17,16 @@ class TableLock {
   // naming the holder when another process has it, ConfigError when the lock file is not a plain
   // file of its own (a symlink, FIFO, socket or hard link planted in the shared folder). Where
   // the file cannot be opened (no lock folder, no permission) the command goes on unlocked and
-  // unlocked_reason() says why: the caller warns.
+  // unlocked_warning() says why: the caller warns.
   TableLock(const std::string& identity, const std::string& holder);
   ~TableLock();
   TableLock(const TableLock&) = delete;
   TableLock& operator=(const TableLock&) = delete;
   bool held() const { return fd_ >= 0; }
-  const std::string& unlocked_reason() const { return unlocked_reason_; }
+  // What the caller warns where the lock could not be taken (held() false, no one else holding it).
+  std::string unlocked_warning() const {
+    return "the table is not locked against a second rig process on this station: " + unlocked_reason_;
+  }
 
   // For --dry-run, which takes nothing: throws as the constructor would when another process
   // holds the lock now.

@@ -48,6 +48,13 @@ inline std::size_t utf8_sequence_at(std::string_view s, std::size_t i) {
   return 0;
 }
 
+// Where to cut `s` at or before `n` (n < s.size()) so that no UTF-8 character is split: back
+// from n past continuation bytes, no further than `floor`. For quoting the start of a long value.
+inline std::size_t utf8_cut(std::string_view s, std::size_t n, std::size_t floor = 0) {
+  while (n > floor && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;
+  return n;
+}
+
 // Characters a terminal acts on rather than shows, though well-formed: the C1 controls
 // (U+0080..U+009F: U+009B is CSI), the line and paragraph separators, and the bidirectional
 // embeddings, overrides and isolates (U+202A..U+202E, U+2066..U+2069); and those it shows as
