@@ -85,6 +85,9 @@ struct RunArgs {
   bool dry_run = false;
   bool quiet = false;
   bool no_history = false;
+  // SHA-256 of the profile's text as the run copies it to profile.toml, taken when the run starts
+  // (the file named by --profile may change while the run goes on): passport.json's profile_sha256.
+  std::string profile_sha256;
 };
 
 std::string slurp(const std::string& path) {
@@ -706,6 +709,7 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
   PassportInfo info;
   info.serial = serial;
   info.profile = p.name;
+  info.profile_sha256 = a.profile_sha256;
   info.plant = a.plant;
   info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
   info.started = started;
@@ -1226,6 +1230,10 @@ int do_run(RunArgs a) {
   std::vector<std::string> dropped_limits;
   const toml::table profile_table = acceptance::load_profile_table(a.profile, profile_source, &dropped_limits);
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
+  const std::string profile_text = p.source.rfind("builtin:", 0) == 0
+                                       ? acceptance::builtin_profile_text(p.source.substr(8))
+                                       : slurp(p.source);
+  a.profile_sha256 = seal::sha256_hex(profile_text);
   // Values a derived profile left without limits cannot fail the run: said before it starts
   // (an automation review: a base's GOST limits gone with its blocks, PASS without a word).
   const std::string unjudged = acceptance::unjudged_blocks_note(p, dropped_limits);
@@ -1436,9 +1444,7 @@ int do_run(RunArgs a) {
 
   if (a.resume.empty()) {
     // The folder carries everything a resume needs.
-    write_file_atomic(a.out + "/profile.toml", p.source.rfind("builtin:", 0) == 0
-                                                   ? acceptance::builtin_profile_text(p.source.substr(8))
-                                                   : slurp(p.source));
+    write_file_atomic(a.out + "/profile.toml", profile_text);
     invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source}, {"profile_digest", p.digest},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};

@@ -14,6 +14,7 @@ nlohmann::ordered_json make_passport(const PassportInfo& info, const RunResult& 
   p["schema"] = "rig.passport/1";
   p["serial"] = info.serial;
   p["profile"] = info.profile;
+  if (!info.profile_sha256.empty()) p["profile_sha256"] = info.profile_sha256;
   p["plant"] = info.plant;
   p["station"] = info.station;
   p["started"] = info.started;
@@ -60,6 +61,9 @@ std::string junit_xml(const PassportInfo& info, const RunResult& result, const M
     << values.all().size() + (aborted ? 1 : 0) << "\" failures=\"" << failures << "\" errors=\"" << (aborted ? 1 : 0)
     << "\" skipped=\"" << skipped << "\" timestamp=\"" << xml_escape(info.started) << "\">\n";
   o << "    <properties><property name=\"serial\" value=\"" << xml_escape(info.serial)
+    << "\"/><property name=\"profile\" value=\"" << xml_escape(info.profile)
+    << (info.profile_sha256.empty() ? std::string()
+                                    : "\"/><property name=\"profile_sha256\" value=\"" + info.profile_sha256)
     << "\"/><property name=\"plant\" value=\"" << xml_escape(info.plant) << "\"/><property name=\"outcome\" value=\""
     << to_string(result.outcome) << "\"/></properties>\n";
   for (const auto& m : values.all()) {

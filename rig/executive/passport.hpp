@@ -14,6 +14,8 @@ namespace rig {
 
 struct PassportInfo {
   std::string serial, profile, plant, station, started, finished, software, out_dir;
+  // SHA-256 of profile.toml, the profile's text the run was judged by (empty: not written).
+  std::string profile_sha256;
   std::vector<std::string> captures;  // relative to out_dir
   // Procedure steps the DUT could not take (step, why): "skipped" in passport.json, only when any.
   std::vector<std::pair<std::string, std::string>> skipped;

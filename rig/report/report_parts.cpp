@@ -350,6 +350,8 @@ std::string Page::identity() const {
   std::snprintf(deg, sizeof deg, "%.1f", temp);
   row("DUT temperature", std::isfinite(temp) ? std::string(deg) + " °C (at bring-up)" : "");
   row("Profile", text(p_, "profile"));
+  // The limits judged by, as `sha256sum profile.toml` in the run folder prints them.
+  if (!text(p_, "profile_sha256").empty()) row("Profile SHA-256", text(p_, "profile_sha256"), true);
   row("Plant", text(p_, "plant"));
   if (!text(p_, "station").empty()) row("Station", text(p_, "station"));
   row("Software", text(p_, "software"));

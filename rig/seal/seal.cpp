@@ -29,6 +29,8 @@ struct Crypto {
   decltype(&EVP_MAC_final) final_;
   decltype(&OSSL_PARAM_construct_utf8_string) param_string;
   decltype(&OSSL_PARAM_construct_end) param_end;
+  decltype(&EVP_Digest) digest;
+  decltype(&EVP_sha256) sha256;
   EVP_MAC* hmac = nullptr;
 };
 
@@ -44,13 +46,22 @@ const Crypto& crypto() {
     lib.get(c.final_, "EVP_MAC_final");
     lib.get(c.param_string, "OSSL_PARAM_construct_utf8_string");
     lib.get(c.param_end, "OSSL_PARAM_construct_end");
+    lib.get(c.digest, "EVP_Digest");
+    lib.get(c.sha256, "EVP_sha256");
     if (!lib.ok()) return std::nullopt;
     c.hmac = c.mac_fetch(nullptr, "HMAC", nullptr);
     if (!c.hmac) return std::nullopt;
     return c;
   }();
-  if (!api) throw ConfigError("cannot load HMAC from libcrypto.so.3 for the run folder's seal (Debian package libssl3)");
+  if (!api) throw ConfigError("cannot load HMAC and SHA-256 from libcrypto.so.3 (Debian package libssl3): the run folder's seal and the passport's profile_sha256 need them");
   return *api;
+}
+
+std::string hex_of(const unsigned char* p, std::size_t n) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string s;
+  for (std::size_t i = 0; i < n; ++i) s += kHex[p[i] >> 4], s += kHex[p[i] & 15];
+  return s;
 }
 
 // One HMAC-SHA256 computation, fed in pieces.
@@ -71,13 +82,7 @@ class Mac {
     std::size_t n = 0;
     if (!c_.final_(ctx_.get(), out, &n, sizeof out) || n != sizeof out)
       throw std::runtime_error("HMAC-SHA256 could not be finished (libcrypto)");
-    std::string s;
-    char b[3];
-    for (unsigned char v : out) {
-      std::snprintf(b, sizeof b, "%02x", v);
-      s += b;
-    }
-    return s;
+    return hex_of(out, sizeof out);
   }
 
  private:
@@ -94,6 +99,15 @@ std::string seal_body(const std::string& key_id, const std::string& outcome,
 }
 
 }  // namespace
+
+std::string sha256_hex(std::string_view bytes) {
+  const Crypto& c = crypto();
+  unsigned char out[32];
+  unsigned int n = 0;
+  if (!c.digest(bytes.data(), bytes.size(), out, &n, c.sha256(), nullptr) || n != sizeof out)
+    throw std::runtime_error("SHA-256 failed (libcrypto)");
+  return hex_of(out, sizeof out);
+}
 
 std::string text_mac(const Key& k, const std::string& text) {
   Mac m(k.bytes);

@@ -7,6 +7,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace rig::seal {
@@ -24,6 +25,11 @@ Key load_key(const std::string& path);
 // HMAC-SHA256 of the file's bytes, lower-case hex; ConfigError naming an unreadable file.
 std::string file_mac(const Key& k, const std::string& path);
 std::string text_mac(const Key& k, const std::string& text);
+
+// SHA-256 (FIPS 180-4) of `bytes`, lower-case hex: a keyless digest anyone can recompute with
+// `sha256sum`, for naming a text (the passport's profile_sha256), not for vouching for it.
+// ConfigError when libcrypto cannot be loaded.
+std::string sha256_hex(std::string_view bytes);
 
 struct Entry {
   std::string rel;   // path relative to the run folder, '/' separated

@@ -114,6 +114,14 @@ TEST(RigCli, CiProfileEndToEnd) {
   EXPECT_EQ(p["serial"], "EMU-QPA-0001");
   EXPECT_EQ(p["profile"], "ci");
   EXPECT_EQ(p["plant"], "emulated");
+  // The limits judged by are named: profile_sha256 is what coreutils' sha256sum prints for the
+  // folder's profile.toml, and junit.xml carries it too.
+  ASSERT_EQ(std::system(("sha256sum " + d + "/run/profile.toml > " + d + "/sum").c_str()), 0);
+  const std::string sum = slurp(d + "/sum").substr(0, 64);
+  EXPECT_EQ(p["profile_sha256"], sum);
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("<property name=\"profile\" value=\"ci\"/><property name=\"profile_sha256\" value=\"" +
+                                            sum + "\"/>"),
+            std::string::npos);
   for (const char* name : kContractValues) {
     ASSERT_TRUE(p["values"].contains(name)) << name;
     const auto& m = p["values"][name];
@@ -2431,6 +2439,10 @@ TEST(RigCli, ResumeOfAFailingProfileStillFails) {
             std::string::npos)
       << slurp(d + "/run/junit.xml");  // it said "(limits none)", then "is required but has no value"
   EXPECT_EQ(p["values"]["accuracy_class"]["reason"], whole["values"]["accuracy_class"]["reason"]);
+  // The file the operator gave, byte for byte (the folder's copy of it): the resume names it too.
+  ASSERT_EQ(std::system(("sha256sum " + d + "/strict.toml > " + d + "/sum").c_str()), 0);
+  EXPECT_EQ(p["profile_sha256"], slurp(d + "/sum").substr(0, 64));
+  EXPECT_EQ(whole["profile_sha256"], p["profile_sha256"]);
   // rig's own FAIL and resumed passports pass the report's and the history's checks (a code review:
   // a run only logs a report it could not write, so a check that refused them would go unseen).
   for (const std::string& dir : {d + "/whole", d + "/run"}) {
