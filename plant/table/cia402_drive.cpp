@@ -312,8 +312,8 @@ int64_t Cia402Drive::value_of(Obj o) const {
     case Obj::kModesDisplay: return mode_;
     case Obj::kPositionActual: return map_.deg_to_counts(a.homed ? inner_to_user_deg(a.position_deg) : a.position_deg);
     case Obj::kVelocityActual: {
-      const double units = map_.velocity_unit == m::VelocityUnit::kCountsPerS ? a.velocity_dps * map_.counts_per_deg()
-                                                                                : a.velocity_dps / 360.0 * map_.gear_ratio * 60.0;
+      // The map's conversion (its units and resolution), signed as the axis turns.
+      const double units = std::copysign(map_.dps_to_velocity_units(a.velocity_dps), a.velocity_dps);
       return std::llround(units * map_.direction);
     }
     case Obj::kTargetPosition: return target_;

@@ -67,20 +67,41 @@ double DriveMap::counts_to_deg(int64_t counts) const {
   return static_cast<double>(counts) * direction / counts_per_deg() + 0.0;  // + 0.0: no "-0.0000°" for 0 counts
 }
 
+// In the drive's units: the value in velocity_unit (acceleration_unit) over the size of one unit.
 double DriveMap::dps_to_velocity_units(double dps) const {
   dps = std::fabs(dps);
-  return velocity_unit == VelocityUnit::kCountsPerS ? dps * counts_per_deg() : dps / 360.0 * gear_ratio * 60.0;
+  const double v = velocity_unit == VelocityUnit::kCountsPerS ? dps * counts_per_deg() : dps / 360.0 * gear_ratio * 60.0;
+  return v / velocity_resolution;
 }
-double DriveMap::velocity_units_to_dps(double v) const {
+double DriveMap::velocity_units_to_dps(double units) const {
+  const double v = units * velocity_resolution;
   const double dps = velocity_unit == VelocityUnit::kCountsPerS ? v / counts_per_deg() : v / 60.0 / gear_ratio * 360.0;
   return dps * direction;
 }
 double DriveMap::dps2_to_accel_units(double a) const {
   a = std::fabs(a);
-  return accel_unit == AccelUnit::kCountsPerS2 ? a * counts_per_deg() : a / 360.0 * gear_ratio * 60.0;
+  const double v = accel_unit == AccelUnit::kCountsPerS2 ? a * counts_per_deg() : a / 360.0 * gear_ratio * 60.0;
+  return v / accel_resolution;
 }
-double DriveMap::accel_units_to_dps2(double a) const {
+double DriveMap::accel_units_to_dps2(double units) const {
+  const double a = units * accel_resolution;
   return accel_unit == AccelUnit::kCountsPerS2 ? a / counts_per_deg() : a / 60.0 / gear_ratio * 360.0;
+}
+
+namespace {
+std::string unit_text(double resolution, const char* unit) {
+  if (resolution == 1) return unit;
+  char b[32];
+  std::snprintf(b, sizeof b, "× %.15g ", resolution);
+  return b + std::string(unit);
+}
+}  // namespace
+
+std::string DriveMap::velocity_unit_text() const {
+  return unit_text(velocity_resolution, velocity_unit == VelocityUnit::kRpm ? "rpm" : "counts/s");
+}
+std::string DriveMap::accel_unit_text() const {
+  return unit_text(accel_resolution, accel_unit == AccelUnit::kRpmPerS ? "rpm/s" : "counts/s²");
 }
 
 namespace {
@@ -157,7 +178,9 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   const bool low_first = parse_word_order(drive, "word_order", false);
 
   const toml::table& sc = *cfg::get_table(root, "scaling", true);
-  cfg::check_keys(sc, {"counts_per_rev", "gear_ratio", "direction", "velocity_unit", "acceleration_unit"}, "scaling");
+  cfg::check_keys(sc, {"counts_per_rev", "gear_ratio", "direction", "velocity_unit", "acceleration_unit",
+                       "velocity_resolution", "acceleration_resolution"},
+                  "scaling");
   m.counts_per_rev = cfg::get_number(sc, "counts_per_rev", {}, 1.0, 1e12);
   // An encoder counts whole counts: 1048576.5 is a typo, and would shift every angle.
   if (m.counts_per_rev != std::floor(m.counts_per_rev))
@@ -181,6 +204,10 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
   } else {
     fail(*sc.get("acceleration_unit"), "'acceleration_unit' = \"" + au + "\": expected \"counts_per_s2\" or \"rpm_per_s\"");
   }
+  // A drive that counts speed in 0.1 rpm (or acceleration in 0.01 rpm/s) says so here; without
+  // it such a drive turned at ten times the speed the rig meant (docs/cia402-drive-maps.md).
+  m.velocity_resolution = cfg::get_number(sc, "velocity_resolution", 1.0, 1e-9, 1e9);
+  m.accel_resolution = cfg::get_number(sc, "acceleration_resolution", 1.0, 1e-9, 1e9);
 
   if (const toml::table* h = cfg::get_table(root, "homing")) {
     cfg::check_keys(*h, {"method", "offset_deg", "homed_bit"}, "homing");
@@ -259,6 +286,12 @@ DriveMap parse_drive_map(const toml::table& root, const std::string& path) {
     if (s.is_signed && (ob == Obj::kControlword || ob == Obj::kStatusword || ob == Obj::kErrorCode))
       cfg::reject(*t->get("signed"), "signed", "'" + std::string(info.key) + "' is unsigned (UNSIGNED16 in CiA 402)");
     s.low_word_first = parse_word_order(*t, "word_order", low_first);
+    // A 16-bit object has one word, so no order: a word_order there says the map's author took
+    // the object for 32 bits, and the width is the likelier mistake (a review: accepted silently).
+    if (s.width == 16 && t->get("word_order"))
+      cfg::reject(*t->get("word_order"), "word_order",
+                  "'" + std::string(info.key) + "' is 16 bits wide (one register), so it has no word order; if "
+                  "the drive's manual gives it two registers, set width = 32");
     if (addr + s.words() > 65536)
       fail(*t->get("address"), "'" + std::string(info.key) + "' at register " + std::to_string(addr) +
                                    (base ? " ([drive] address_base " + std::to_string(base) + " + address " +

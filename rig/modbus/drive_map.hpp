@@ -69,6 +69,9 @@ struct DriveMap {
   int direction = 1;          // -1: positive counts turn the table negatively
   VelocityUnit velocity_unit = VelocityUnit::kCountsPerS;
   AccelUnit accel_unit = AccelUnit::kCountsPerS2;
+  // One unit of the drive's velocity (acceleration) objects in velocity_unit (acceleration_unit):
+  // 0.1 for a drive that counts speed in 0.1 rpm. 1 unless [scaling] says otherwise.
+  double velocity_resolution = 1, accel_resolution = 1;
   int homing_method = 0;      // 0 = leave the drive's own setting
   double home_offset_deg = 0;
   double limit_neg_deg = -190, limit_pos_deg = 370;
@@ -86,6 +89,10 @@ struct DriveMap {
   double velocity_units_to_dps(double v) const;   // signed, direction applied
   double dps2_to_accel_units(double dps2) const;
   double accel_units_to_dps2(double a) const;
+  // One drive unit in words, after a number of them: "rpm", "counts/s", "× 0.1 rpm" (velocity);
+  // "rpm/s", "counts/s²", "× 0.01 rpm/s" (acceleration).
+  std::string velocity_unit_text() const;
+  std::string accel_unit_text() const;
 
   // Whether `value` fits the object's register (its width and signedness), and that range as
   // text ("a 16-bit unsigned register: 0..65535") for messages.

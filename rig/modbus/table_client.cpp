@@ -693,12 +693,12 @@ void check_profile_values(const toml::table& t, const DriveMap& map, const Table
                   off < 0 ? "less" : "more");
     cfg::warn_once(at + ": " + b);
   };
-  const bool rpm = map.velocity_unit == VelocityUnit::kRpm, rpm_s = map.accel_unit == AccelUnit::kRpmPerS;
+  const std::string v_unit = map.velocity_unit_text(), a_unit = map.accel_unit_text();
   if (o.velocity_dps) {
     const double units = map.dps_to_velocity_units(*o.velocity_dps);
     check("velocity_dps", o.velocity_dps, Obj::kProfileVelocity, units);
     if (map.has(Obj::kProfileVelocity))
-      rounding("velocity_dps", *o.velocity_dps, units, rpm ? "rpm" : "counts/s", "°/s",
+      rounding("velocity_dps", *o.velocity_dps, units, v_unit.c_str(), "°/s",
                [&](double u) { return std::fabs(map.velocity_units_to_dps(u)); });
   }
   if (o.accel_dps2) {
@@ -706,7 +706,7 @@ void check_profile_values(const toml::table& t, const DriveMap& map, const Table
     for (const Obj ob : {Obj::kProfileAcceleration, Obj::kProfileDeceleration})
       check("accel_dps2", o.accel_dps2, ob, units);
     if (map.has(Obj::kProfileAcceleration) || map.has(Obj::kProfileDeceleration))
-      rounding("accel_dps2", *o.accel_dps2, units, rpm_s ? "rpm/s" : "counts/s²", "°/s²",
+      rounding("accel_dps2", *o.accel_dps2, units, a_unit.c_str(), "°/s²",
                [&](double u) { return map.accel_units_to_dps2(u); });
   }
 }

@@ -101,6 +101,11 @@ TEST(DriveMapFile, ErrorsNameFileLineAndColumn) {
   EXPECT_TRUE(has(e, "bad-map.toml:") && has(e, "([drive] address_base 65528 + address ") &&
               has(e, ") with its 2 word(s) goes beyond register 65535"))
       << e;
+  // A word order on a one-register object: the width is the likelier mistake.
+  e = map_error(ok + "home_offset = { index = 0x607C, address = 30, word_order = \"low_first\" }\n");
+  EXPECT_TRUE(has(e, "bad-map.toml:17:") && has(e, "'home_offset' is 16 bits wide (one register), so it has no word order") &&
+              has(e, "set width = 32"))
+      << e;
   e = map_error(ok + "[homing]\nmehtod = 19\n");
   EXPECT_TRUE(has(e, "bad-map.toml:18:") && has(e, "mehtod")) << e;
   // An index that is not the object's; a written object placed in input registers; a bad width.
@@ -1675,6 +1680,55 @@ TEST(Cia402ClientHoming, OneUnitOfVelocityJitterAtRestIsRest) {
   // One reading alone (status, a stop deciding whether to halt) has no position to judge by and
   // keeps 0.01 °/s: the jitter reads moving there, the safe side (a code review).
   EXPECT_TRUE(t.status().moving);
+}
+
+// A drive that counts speed in 0.1 rpm and acceleration in 0.01 rpm/s (many do) is sent its own
+// units: 30 °/s through 90:1 is 450 rpm of the motor, 4500 such units; 180 °/s² is 2700 rpm/s,
+// 270000 units. Without the resolution the map could not describe it, and the table would turn
+// at a tenth of the speed meant (docs/cia402-drive-maps.md, "Scaling").
+TEST(Cia402ClientHoming, AVelocityResolutionSendsTheDriveItsOwnUnits) {
+  const m::DriveMap fine = generic_map_with(
+      "rpm-tenths", {{"velocity_unit = \"counts_per_s\"", "velocity_unit = \"rpm\"\nvelocity_resolution = 0.1"},
+                     {"acceleration_unit = \"counts_per_s2\"",
+                      "acceleration_unit = \"rpm_per_s\"\nacceleration_resolution = 0.01"}});
+  EXPECT_NEAR(fine.dps_to_velocity_units(30.0), 4500.0, 1e-9);
+  EXPECT_NEAR(fine.velocity_units_to_dps(4500.0), 30.0, 1e-12);
+  EXPECT_NEAR(fine.dps2_to_accel_units(180.0), 270000.0, 1e-6);
+  EXPECT_NEAR(fine.accel_units_to_dps2(270000.0), 180.0, 1e-12);
+  EXPECT_EQ(fine.velocity_unit_text(), "× 0.1 rpm");
+  EXPECT_EQ(fine.accel_unit_text(), "× 0.01 rpm/s");
+  auto axis = emulator(kFastAxis);
+  plant::Cia402Drive drive(*axis, fine);
+  SimClock clock([&](double dt) { drive.step(dt); });
+  m::TableOptions opt;
+  opt.settle_s = 0.05;
+  opt.velocity_dps = 30.0;
+  opt.accel_dps2 = 180.0;
+  m::Cia402Table t(m::make_inprocess_transport(drive, clock), fine, clock, opt);
+  t.home({});
+  const double t0 = clock.now_s();
+  t.move_to(100.0, {});  // from home at 0°
+  EXPECT_NEAR(axis->actual_angle_deg(), 100.0, 0.005);
+  auto reg = [&](Obj o) {
+    std::vector<uint16_t> w(static_cast<std::size_t>(fine.spec(o).words()));
+    EXPECT_EQ(drive.read_registers(fine.spec(o).address, static_cast<uint16_t>(w.size()), w.data()), 0);
+    return fine.decode(o, w.data());
+  };
+  EXPECT_EQ(reg(Obj::kProfileVelocity), 4500);
+  EXPECT_EQ(reg(Obj::kProfileAcceleration), 270000);
+  EXPECT_EQ(reg(Obj::kProfileDeceleration), 270000);
+  // 100° at 30 °/s with 1/6 s ramps: 3.5 s of profile, then the settle; at a tenth of the speed
+  // it would take over 30 s.
+  EXPECT_GT(clock.now_s() - t0, 3.3);
+  EXPECT_LT(clock.now_s() - t0, 5.0);
+  // A resolution of 0 or below is refused at its line.
+  const std::string bad = testing::TempDir() + "/bad-resolution.toml";
+  std::ifstream in(kDrives + "generic-cia402.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("direction = 1"), 13, "direction = 1\nvelocity_resolution = 0");
+  std::ofstream(bad) << text;
+  const std::string e = error_of([&] { m::load_drive_map(bad); });
+  EXPECT_TRUE(has(e, "bad-resolution.toml:18:") && has(e, "velocity_resolution")) << e;
 }
 
 // A reply that comes late (a busy gateway, the client's thread off the CPU) carries a position

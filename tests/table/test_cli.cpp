@@ -814,6 +814,15 @@ TEST(RigTableHardwareFile, ValuesNoDriveCanHonourAreRefusedAtTheirLine) {
       << out;
   EXPECT_EQ(out.find("warning"), out.rfind("warning")) << "said once: " << out;
   EXPECT_FALSE(has(out, "accel_dps2")) << "200 rpm/s exactly: " << out;
+  // A drive counting 0.1 rpm: its units named in the message (4.167 of them, sent as 4).
+  std::string tenths = kRpmMap;
+  tenths.replace(tenths.find("velocity_unit = \"rpm\"\n"), 22, "velocity_unit = \"rpm\"\nvelocity_resolution = 0.1\n");
+  write_file(dir + "/rpm.toml", tenths);
+  EXPECT_EQ(status(head + "velocity_dps = 0.05\n"), 4) << out;
+  EXPECT_TRUE(has(out, "hw.toml:5:16: [table] velocity_dps = 0.05 is 4.167 × 0.1 rpm in the drive's units, sent as 4 "
+                       "× 0.1 rpm = 0.048 °/s (4.0 % less)"))
+      << out;
+  write_file(dir + "/rpm.toml", kRpmMap);
   // A tolerance below one position count: no move could ever be confirmed.
   EXPECT_EQ(status(head + "tolerance_deg = 0\n"), 2) << out;
   EXPECT_TRUE(has(out, "hw.toml:5:17: 'tolerance_deg' = 0: below one position count of the drive (6.87e-06°, drive map"))
