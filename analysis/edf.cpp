@@ -167,22 +167,25 @@ double edf_simple(std::size_t n_phase, std::size_t m_in, int alpha) {
 
 double edf_totdev(std::size_t n_phase, std::size_t m, int alpha) {
   static constexpr std::array<A01, 3> t7 = {{{1.50, 0.0}, {1.17, 0.22}, {0.93, 0.36}}};  // alpha 0, -1, -2
-  if (alpha <= 0 && alpha >= -2) {
-    const A01 bc = t7[static_cast<std::size_t>(-alpha)];
-    const double table = bc.a0 * (static_cast<double>(n_phase) / static_cast<double>(m)) - bc.a1;
-    // At m = 1 TOTDEV is OADEV (its N - 2 second differences never reach the reflected
-    // extension) and at small m nearly so, while Table 7's fit, made for the long taus TOTDEV is
-    // for, gives about twice OADEV's EDF there: its 68 % bounds held the truth on 50 % of white-FM
-    // records at m = 1 and 60 % at m = 2 (a metrologist's review, 200 seeds). So the EDF is at
-    // most OADEV's (Greenhall) times TOTDEV's share of terms, (N - 2) / (N - 2m): OADEV's at
-    // m = 1, Table 7's from about m = 16 on. Stable32 uses Table 7 alone (docs/analysis.md).
-    if (n_phase > 2 * m && n_phase > 2) {
-      const double n = static_cast<double>(n_phase), mm = static_cast<double>(m);
-      return std::min(table, edf_greenhall(alpha, 2, m, n_phase, true, false) * (n - 2) / (n - 2 * mm));
-    }
-    return table;
+  // Table 7 is for the FM noises; for white and flicker PM, SP 1065 gives TOTDEV no EDF of its own
+  // and Table 5's simple AVAR forms stand in.
+  const double table = alpha <= 0 && alpha >= -2
+                           ? t7[static_cast<std::size_t>(-alpha)].a0 * (static_cast<double>(n_phase) / static_cast<double>(m)) -
+                                 t7[static_cast<std::size_t>(-alpha)].a1
+                           : edf_simple(n_phase, m, alpha);
+  // At m = 1 TOTDEV is OADEV (its N - 2 second differences never reach the reflected extension)
+  // and at small m nearly so, while Table 7's fit, made for the long taus TOTDEV is for, gives
+  // about twice OADEV's EDF there: its 68 % bounds held the truth on 50 % of white-FM records at
+  // m = 1 and 60 % at m = 2 (a metrologist's review, 200 seeds). So the EDF is at most OADEV's
+  // (Greenhall) times TOTDEV's share of terms, (N - 2) / (N - 2m): OADEV's at m = 1, Table 7's
+  // from about m = 16 on. The cap holds for PM too: Table 5's flicker-PM form gave 1.6x it, bounds
+  // narrower than OADEV's at the same tau (a second review). Stable32 uses Table 7 alone
+  // (docs/analysis.md).
+  if (n_phase > 2 * m && n_phase > 2) {
+    const double n = static_cast<double>(n_phase), mm = static_cast<double>(m);
+    return std::min(table, edf_greenhall(alpha, 2, m, n_phase, true, false) * (n - 2) / (n - 2 * mm));
   }
-  return edf_simple(n_phase, m, alpha);
+  return table;
 }
 
 std::pair<double, double> chi2_bounds(double dev, double edf, double confidence) {

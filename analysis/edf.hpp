@@ -11,9 +11,9 @@ namespace rig::analysis {
 // overlapping: OADEV/OHDEV/MDEV; modified: MDEV/TDEV. N: phase points.
 double edf_greenhall(int alpha, int d, std::size_t m, std::size_t n_phase, bool overlapping, bool modified);
 
-// TOTDEV: NIST SP 1065 Table 7, edf = b (N/m) - c for alpha 0, -1, -2 (T = N tau0), at most
-// OADEV's EDF times (N - 2) / (N - 2m) (at m = 1 TOTDEV is OADEV; edf.cpp says why);
-// other alphas fall back to the simple approximations of Table 5.
+// TOTDEV: NIST SP 1065 Table 7, edf = b (N/m) - c for alpha 0, -1, -2 (T = N tau0), the
+// simple approximations of Table 5 for the PM alphas; either at most OADEV's EDF times
+// (N - 2) / (N - 2m) (at m = 1 TOTDEV is OADEV; edf.cpp says why).
 double edf_totdev(std::size_t n_phase, std::size_t m, int alpha);
 double edf_simple(std::size_t n_phase, std::size_t m, int alpha);
 

@@ -483,8 +483,11 @@ int run(const Args& a) {
   if (base.data == an::DataKind::Phase && !a.no_psd)  // said, not silently left out (a review)
     notes.push_back("no PSD: phase data (the PSD is of the rate, frequency data: give --data freq for it)");
   if (a.no_bounds)
-    notes.push_back("--no-bounds: no noise identification and no bounds (alpha, edf, lo and hi are null); the noise "
-                    "terms are fitted with every point weighted alike, and their bounds assume that");
+    // The noise terms' fit weighs each point by the model's own EDF, never by the point's
+    // identified noise (docs/analysis.md, "Noise terms" (b)): it said "weighted alike", wrongly (a review).
+    notes.push_back("--no-bounds: no noise identification and no bounds on the deviations (alpha, edf, lo and hi are "
+                    "null); the noise terms and their bounds are the same as with bounds (their fit weighs each point "
+                    "by the model's own EDF, not by the points' identified noise)");
   // MTOT, TTOT and HTOT divide by their noise type's bias (theo.hpp tot_bias): --no-bounds once
   // took white FM for it and changed their values (HTOT by 12 % on a random walk, a review).
   // Their noise is identified on OADEV as with bounds, and their alpha says the type used.

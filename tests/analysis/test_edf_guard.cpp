@@ -183,5 +183,23 @@ TEST(TotdevEdf, BoundsAtTheShortestTausHoldTheTruthAtTheirStatedRate) {
   std::printf("TOTDEV m = 1, 2: %d of %d bounds held the truth\n", held, n);
 }
 
+// The cap holds for the PM alphas too, where SP 1065 gives TOTDEV no EDF and Table 5's simple
+// AVAR forms stand in: the flicker-PM form read up to 1.6x OADEV's EDF times the share of terms
+// (3178 against 1952 at N = 10000 phase points, m = 16: a review), bounds narrower than OADEV's.
+TEST(TotdevEdf, PmNoiseNeverClaimsMoreThanOadevsShareOfTerms) {
+  const std::size_t n = 10000;
+  bool bound_somewhere = false;
+  for (const int alpha : {1, 2})
+    for (const std::size_t m : {1, 4, 16, 32, 512, 2500}) {
+      const double share = static_cast<double>(n - 2) / static_cast<double>(n - 2 * m);
+      const double cap = edf_greenhall(alpha, 2, m, n, true, false) * share;
+      EXPECT_LE(edf_totdev(n, m, alpha), cap * (1 + 1e-12)) << "alpha " << alpha << " m " << m;
+      bound_somewhere |= edf_simple(n, m, alpha) > cap;
+    }
+  EXPECT_NEAR(edf_simple(n, 16, 1), 3178, 1) << "the review's figure";
+  EXPECT_NEAR(edf_totdev(n, 16, 1), 1952, 1) << "the review's cap: the one that binds";
+  EXPECT_TRUE(bound_somewhere);
+}
+
 }  // namespace
 }  // namespace rig::analysis

@@ -915,6 +915,13 @@ TEST(RigCli, AnalyzeNoBoundsChangesNoValue) {
     }
   }
   EXPECT_TRUE(not_white_fm) << "the record must be identified as other than white FM somewhere to test the bias";
+  // The noise terms do not read the points' identified noise: the same to the last bit, as the
+  // note says (it said "fitted with every point weighted alike", a review).
+  ASSERT_TRUE(bounded["noise_terms"]["K"]["value"].is_number()) << bounded["noise_terms"].dump();
+  EXPECT_EQ(bounded["noise_terms"].dump(), unbounded["noise_terms"].dump());
+  EXPECT_NE(unbounded["notes"].dump().find("the noise terms and their bounds are the same as with bounds"),
+            std::string::npos)
+      << unbounded["notes"].dump();
   EXPECT_NE(unbounded["notes"].dump().find("--no-bounds with mtot, ttot, htot: the noise is still identified for their "
                                            "bias removal"),
             std::string::npos)
