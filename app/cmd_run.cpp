@@ -872,6 +872,12 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   if (key) {  // without report.html when it could not be written: the resume draws it and seals again
     try {
       std::vector<std::string> files = files_of_the_run(dut);
+      // A capture this attempt left partial at its stop is its own record too: sealed as written,
+      // so an aborted sealed run verifies (docs/seal.md); a resume sets it aside and records anew.
+      for (const std::string& c : dut.partial_captures)
+        if (fs::is_regular_file(fs::symlink_status(fs::path(a.out) / c)) &&
+            std::find(files.begin(), files.end(), c) == files.end())
+          files.push_back(c);
       if (fs::exists(Executive::checkpoint_path(a.out))) files.emplace_back("checkpoint.json");
       for (const char* f : kRunOutputs)
         if (fs::exists(a.out + "/" + f)) files.emplace_back(f);

@@ -64,7 +64,7 @@ std::vector<double> drift(std::vector<double> d, const DutState& st, Orientation
 
 void phase_run(PhaseContext& ctx, const Profile& p, DutState& st, std::size_t i) {
   const Orientation o = p.order[i];
-  st.runs[i + 1] = RunMean{i + 1, o, position_and_record(ctx, p, o, p.run_s, run_id(i, o), st.serial())};
+  st.runs[i + 1] = RunMean{i + 1, o, position_and_record(ctx, p, o, p.run_s, run_id(i, o), st.serial(), &st.partial_captures)};
 }
 
 void phase_bias(PhaseContext& ctx, const Profile& p, DutState& st) {
@@ -406,7 +406,7 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
   ph.push_back({"in-run", fmt::format("in-run test at {}: {} s (procedure B)", to_string(p.in_run_orientation), p.in_run_s),
                 recording_s(p.in_run_orientation, p.in_run_s), [&p, &st](PhaseContext& c) {
                   st.in_run = position_and_record(c, p, p.in_run_orientation, p.in_run_s, in_run_phase_id(p),
-                                                  st.serial());
+                                                  st.serial(), &st.partial_captures);
                 }});
   std::vector<MeasurementSpec> gost;
   for (const double bs : p.in_run_blocks_s)
@@ -419,7 +419,8 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
   ph.push_back({"raw", fmt::format("raw capture at {}: {} s at {} Hz (procedure C)", to_string(p.raw_orientation),
                                    p.raw_s, p.rate_hz),
                 recording_s(p.raw_orientation, p.raw_s), [&p, &st](PhaseContext& c) {
-                  st.raw = position_and_record(c, p, p.raw_orientation, p.raw_s, raw_phase_id(p), st.serial());
+                  st.raw = position_and_record(c, p, p.raw_orientation, p.raw_s, raw_phase_id(p), st.serial(),
+                                               &st.partial_captures);
                 }});
   ph.push_back({"allan", "Allan deviation, noise terms, RMS error and PSD of x(t) and y(t)", 0,
                 [&p, &st](PhaseContext& c) { phase_raw_analysis(c, p, st); },

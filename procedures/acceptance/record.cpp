@@ -21,7 +21,7 @@ std::string capture_rel(const std::string& phase_id) { return "captures/" + phas
 namespace {
 
 Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name,
-                     const std::string& serial) {
+                     const std::string& serial, std::vector<std::string>* partial) {
   const uint64_t n_total = planned_samples(p, seconds);
   const std::string rel = capture_rel(name);
   std::filesystem::create_directories(ctx.out_dir + "/captures");
@@ -67,6 +67,7 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   } catch (...) {
     ctx.dev.dut.stop_stream();
     w.close();  // keep what was recorded; the retry renames it aside
+    if (partial) partial->push_back(rel);
     throw;
   }
   ctx.dev.dut.stop_stream();
@@ -86,7 +87,7 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
 }  // namespace
 
 Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o, double seconds,
-                             const std::string& name, const std::string& serial) {
+                             const std::string& name, const std::string& serial, std::vector<std::string>* partial) {
   for (int attempt = 1;; ++attempt) {
     ctx.log->info("{}: table to {} ({:.4f} deg)", name, to_string(o), table_angle(p, o));
     // On the terminal too: the technician beside the table sees each turn announced (a review:
@@ -94,7 +95,7 @@ Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o,
     if (ctx.progress) ctx.progress->log(fmt::format("  table to {} ({:.4f}°)", to_string(o), table_angle(p, o)));
     ctx.dev.table.move_to(table_angle(p, o), ctx.cancel);
     ctx.dev.clock.sleep_for(p.settle_s, ctx.cancel);  // let the loop and the mount settle
-    Recorded r = record_once(ctx, p, o, seconds, name, serial);
+    Recorded r = record_once(ctx, p, o, seconds, name, serial, partial);
     r.attempts = attempt;
     if (r.lost <= p.max_lost_samples) {
       ctx.log->info("{}: {} samples, mean x {:.6e} g, {} lost in {} gap(s)", name, r.samples, r.mean_x, r.lost, r.gaps);
@@ -102,7 +103,10 @@ Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o,
     }
     const std::string what = fmt::format("capture {}: {} samples lost in {} gap(s) (limit {})", name, r.lost, r.gaps,
                                          p.max_lost_samples);
-    if (attempt > p.retries) throw HardwareError(what + "; no retries left");
+    if (attempt > p.retries) {
+      if (partial) partial->push_back(r.capture);  // kept as recorded, gaps and all
+      throw HardwareError(what + "; no retries left");
+    }
     ctx.log->warn("{}; retrying ({}/{})", what, attempt, p.retries);
     if (ctx.progress) ctx.progress->log("  " + what + ": retrying");
   }

@@ -3,6 +3,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "procedures/acceptance/profile.hpp"
 #include "rig/core/file_stamp.hpp"
@@ -24,9 +25,12 @@ struct Recorded {
 // Moves the table to `o`, settles, records `seconds` into captures/<name>.cap.
 // A capture losing more than the profile allows is retried (profile.retries)
 // and then fails the phase with a HardwareError naming the gaps.
-// `serial` goes into the capture header.
+// `serial` goes into the capture header. A stop mid-recording, or a last attempt with too many
+// losses, keeps what was recorded and names the capture in `partial` (a final seal vouches for
+// it as this attempt wrote it).
 Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o, double seconds,
-                             const std::string& name, const std::string& serial);
+                             const std::string& name, const std::string& serial,
+                             std::vector<std::string>* partial = nullptr);
 
 double table_angle(const Profile& p, Orientation o);
 

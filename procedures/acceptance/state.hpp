@@ -64,6 +64,10 @@ struct DutState {
   // The rig's clock when the last phase that used the devices ended (analysis.json's
   // device_time_s): kept with the recordings, so a resume that only computes does not move it.
   std::optional<double> device_time_s;
+  // This attempt's captures that a stop left incomplete (relative to the run folder). Not in the
+  // checkpoint: only the ending reads it, so that the final seal vouches for what this attempt
+  // wrote (an aborted sealed run failed `rig verify`, its partial capture "added after the seal").
+  std::vector<std::string> partial_captures;
 
   std::string serial() const { return dut ? dut->serial : std::string(); }
   // The captures recorded (relative to the run folder), in the order of the procedure.

@@ -982,6 +982,47 @@ TEST(Campaign, SealedRunFolders) {
       << slurp(d + "/loose-io.stderr");
   EXPECT_FALSE(fs::exists(d + "/loose"));
 
+  {
+    // Stopped mid-recording (ABORTED): the capture it was writing is its own record, sealed as
+    // written by the final seal, so the folder verifies and the history takes it with the key (a
+    // line integrator's review: "captures/in-run-U10.cap: not sealed (added after the seal)",
+    // verify 1, `history --record` exit 2). Its resume sets that capture aside and verifies too.
+    const std::string ab = d + "/aborted", db = d + "/aborted.sqlite";
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", ab, "--inject", "sigint@150", "--seal-key",
+                   key},
+                  ab + "-io"),
+              3)
+        << slurp(ab + "-io.stderr");
+    const json sealed = read_json(ab + "/seal.json");
+    EXPECT_EQ(sealed["outcome"], "ABORTED");
+    const json passport = read_json(ab + "/passport.json");
+    std::string partial;
+    for (const auto& [rel, mac] : sealed["files"].items())
+      if (rel.rfind("captures/", 0) == 0 &&
+          std::find(passport["captures"].begin(), passport["captures"].end(), rel) == passport["captures"].end())
+        partial = rel;
+    ASSERT_FALSE(partial.empty()) << "sigint@150 stops a recording: " << sealed.dump(1);
+    EXPECT_EQ(run({"verify", ab, "--seal-key", key}, ab + "-verify"), 0) << slurp(ab + "-verify.stdout");
+    EXPECT_NE(slurp(ab + "-verify.stdout").find("ok       " + partial), std::string::npos) << slurp(ab + "-verify.stdout");
+    EXPECT_EQ(run({"history", "--db", "sqlite:" + db, "--record", ab, "--seal-key", key}, ab + "-record"), 0)
+        << slurp(ab + "-record.stderr");
+    ASSERT_EQ(run({"run", "--resume", ab, "--yes", "--no-history", "--seal-key", key}, ab + "-resume"), 0)
+        << slurp(ab + "-resume.stderr");
+    EXPECT_TRUE(fs::exists(ab + "/" + partial + ".interrupted-1"));
+    EXPECT_EQ(run({"verify", ab, "--seal-key", key}, ab + "-reverify"), 0) << slurp(ab + "-reverify.stdout");
+    // Ended ERROR by a capture whose retry lost samples too: that last record is kept as written
+    // and sealed with it.
+    const std::string gap = d + "/gap";
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", gap, "--inject", "drop@29000:10",
+                   "--inject", "drop@32000:10", "--seal-key", key},
+                  gap + "-io"),
+              4)
+        << slurp(gap + "-io.stderr");
+    EXPECT_EQ(read_json(gap + "/seal.json")["outcome"], "ERROR");
+    EXPECT_EQ(read_json(gap + "/seal.json")["files"].count("captures/run03-U10.cap"), 1u);
+    EXPECT_EQ(run({"verify", gap, "--seal-key", key}, gap + "-verify"), 0) << slurp(gap + "-verify.stdout");
+  }
+
   // Interrupted, sealed: kept aside, then copies of it edited.
   const std::string base = d + "/base";
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", base, "--inject", "sigkill@180", "--seal-key",
