@@ -959,6 +959,34 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   return log;
 }
 
+// An unsealed passport's verdict stands on the limits it states: they must be the ones its
+// folder's profile.toml gives (the procedure declares them from it), its profile_sha256 that
+// file's, and a staged junit.xml must state its outcome (a line integrator's review: a passport
+// edited to PASS with loosened limits was finished by the resume, exit 0 and a PASS history row,
+// beside a junit.xml saying FAIL). These catch edits by hand; a seal vouches for the bytes.
+std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json& passport,
+                                    const MeasurementSet& declared, const std::string& profile_sha256) {
+  if (passport.contains("profile_sha256") && passport["profile_sha256"] != profile_sha256)
+    return fmt::format("profile_sha256 is {}, but the folder's profile.toml digests to \"{}\"",
+                       passport["profile_sha256"].dump(), profile_sha256);
+  const nlohmann::json& values = passport.at("values");
+  for (const Measurement& m : declared.all()) {
+    const nlohmann::json want = m.limits ? nlohmann::json::array({m.limits->first, m.limits->second}) : nlohmann::json();
+    const nlohmann::json has = values.contains(m.name) ? values[m.name].value("limits", nlohmann::json()) : nlohmann::json();
+    if (has != want)
+      return fmt::format("values.{}.limits are {}, but the folder's profile.toml gives {}", m.name, has.dump(),
+                         want.is_null() ? std::string("none") : want.dump());
+  }
+  std::error_code ec;
+  if (fs::is_regular_file(dir + "/junit.xml.tmp", ec)) {
+    const std::string junit = slurp(dir + "/junit.xml.tmp");
+    const std::string says = "<property name=\"outcome\" value=\"" + passport.value("outcome", "") + "\"/>";
+    if (junit.find(says) == std::string::npos)
+      return "its outcome is " + passport.value("outcome", "") + ", but the junit.xml staged with it states another";
+  }
+  return "";
+}
+
 // A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
 // write_run_outputs): its verdict is final, so nothing is measured or computed again; what is
 // missing is done: a staged junit.xml put in place, report.html drawn if it is not there, the
@@ -966,13 +994,18 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 // its final seal is written (`final_seal`); before it, its resume computes the ending again.
 // The verdict's exit code; nullopt when there is no such ending. A dry run says what it would do.
 std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw, const std::optional<seal::Key>& key,
-                                         bool final_seal) {
+                                         bool final_seal, const MeasurementSet& declared) {
   const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
   std::error_code ec;
   if (!fs::exists(pending, ec)) return std::nullopt;
   const bool sealed = key.has_value();
   const std::string v = verdict_of(dir);
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
+  if (!sealed)  // a sealed one's final seal, checked before, vouches for the passport
+    if (const std::string why = passport_unlike_its_run(dir, report::read_passport(dir), declared, a.profile_sha256);
+        !why.empty())
+      throw ConfigError(dir + "/passport.json: " + why + ": the passport was changed after its run wrote it; "
+                        "nothing done (the folder is as it was)");
   const int rc = v == "PASS" ? kExitPass : kExitFail;
   const bool junit_staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
   // The ending could not write report.html (a page there is another ending's).
@@ -1299,7 +1332,7 @@ int do_run(RunArgs a) {
     }
   }
   if (!a.resume.empty())
-    if (const auto rc = finish_pending_ending(a, hw, key, final_seal)) return *rc;
+    if (const auto rc = finish_pending_ending(a, hw, key, final_seal, values)) return *rc;
   if (a.dry_run) {
     // A table another rig process commands now is said, as the run would say it (a review).
     if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));

@@ -1417,6 +1417,60 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
       << slurp(d + "/io5.stderr");
 }
 
+// A resume that finishes an ending trusts the passport in place (it computes nothing again). An
+// unsealed one is held to its run first: its limits must be the folder's profile.toml's, its
+// profile_sha256 that file's, and the junit.xml staged with it must state its outcome (a line
+// integrator's review: a FAIL passport edited to PASS with its limit loosened was finished, exit
+// 0, a PASS history row beside a junit.xml saying FAIL). Nothing is done: exit 2.
+TEST(RigCli, AnEditedPassportIsNotFinishedByAResume) {
+  const std::string d = tmp("ending-edited");
+  fs::create_directories(d);
+  std::ofstream(d + "/tight.toml") << "base = \"ci\"\n[profile]\nname = \"tight\"\n[limits]\nbias = [-4.0e-4, 4.0e-4]\n";
+  ASSERT_EQ(run({"run", "--profile", d + "/tight.toml", "--yes", "--quiet", "--no-history", "--out", d + "/r"}, d + "/io1"),
+            1)
+      << slurp(d + "/io1.stderr");
+  const std::string passport = slurp(d + "/r/passport.json"), junit = slurp(d + "/r/junit.xml");
+  auto stop_before_junit = [&](const std::string& new_passport) {
+    std::ofstream(d + "/r/passport.json") << new_passport;
+    std::ofstream(d + "/r/junit.xml.tmp") << junit;
+    std::ofstream(d + "/r/.ending-pending") << "history\n";
+  };
+  auto refused = [&](const std::string& says) {
+    for (const char* dry : {"--dry-run", "--quiet"}) {
+      EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history", dry}, d + "/io2"), 2) << says;
+      EXPECT_NE(slurp(d + "/io2.stderr").find(says), std::string::npos) << slurp(d + "/io2.stderr");
+      EXPECT_NE(slurp(d + "/io2.stderr").find("the passport was changed after its run wrote it; nothing done"),
+                std::string::npos)
+          << slurp(d + "/io2.stderr");
+      EXPECT_TRUE(fs::exists(d + "/r/junit.xml.tmp")) << "nothing done";
+    }
+  };
+  // The verdict and the limit edited together (each value agrees with its limits).
+  auto p = nlohmann::json::parse(passport);
+  ASSERT_EQ(p["values"]["bias"]["outcome"], "FAIL") << p["values"]["bias"].dump();
+  p["outcome"] = "PASS";
+  p["values"]["bias"]["outcome"] = "PASS";
+  p["values"]["bias"]["limits"] = {-1e-3, 1e-3};
+  stop_before_junit(p.dump(2));
+  refused("passport.json: values.bias.limits are [-0.001,0.001], but the folder's profile.toml gives [-0.0004,0.0004]");
+  // The profile named by another digest.
+  p = nlohmann::json::parse(passport);
+  p["profile_sha256"] = std::string(64, '0');
+  stop_before_junit(p.dump(2));
+  refused("passport.json: profile_sha256 is \"" + std::string(64, '0') + "\", but the folder's profile.toml digests to");
+  // A junit.xml staged with another outcome than the passport's.
+  std::string other = junit;
+  other.replace(other.find("value=\"FAIL\""), 13, "value=\"PASS\"");
+  std::ofstream(d + "/r/passport.json") << passport;
+  std::ofstream(d + "/r/junit.xml.tmp") << other;
+  refused("its outcome is FAIL, but the junit.xml staged with it states another");
+  // As the run wrote them: finished, exit 1 (the verdict's).
+  stop_before_junit(passport);
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history", "--quiet"}, d + "/io3"), 1) << slurp(d + "/io3.stderr");
+  EXPECT_EQ(slurp(d + "/r/junit.xml"), junit);
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+}
+
 // A run's ending: analysis.json, junit.xml and passport.json staged, report.html, then the
 // passport and junit.xml renamed into place, then the final seal and the history row, listed in
 // .ending-pending until done. A kill between the passport and report.html or the history row
