@@ -300,12 +300,22 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
 // A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL
 // whose passport was edited to PASS was recorded as PASS, `rig verify` alone saying otherwise).
 // `rig verify`'s whole check, with the station's key; a sealed folder without one is refused.
-// An unsealed folder is recorded as it lies (docs/seal.md: no seal, nothing vouched for).
+// An unsealed folder is recorded as it lies (docs/seal.md: no seal, nothing vouched for), but
+// not with a key: a station that seals every run and gives its key has asked for a sealed
+// folder, and one whose seal was deleted was recorded PASS as it lay (a line integrator's
+// review), as a resume with a key already refuses it.
 void check_seal_before_recording(const HistoryArgs& a) {
   // seal.prev.json alone (a seal.json renamed away) is a sealed folder too (a re-test).
   const std::optional<std::string> seal_there = seal_in(a.record);
-  if (!seal_there) return;
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
+  if (!seal_there) {
+    if (key)
+      throw NotTheDatabase(a.record + " is not sealed (no seal.json): the station's key (" +
+                           (a.seal_key_given ? std::string("--seal-key") : std::string("RIG_SEAL_KEY")) +
+                           ") cannot vouch for a folder it never sealed; nothing recorded (record it without the key "
+                           "to take it as it lies)");
+    return;
+  }
   if (!key)
     throw NotTheDatabase(a.record + " is sealed (" + *seal_there + "): --record checks it with the station's key first "
                                     "(--seal-key FILE or RIG_SEAL_KEY); nothing recorded");

@@ -3401,6 +3401,17 @@ TEST(RigCli, HistoryRecordTakesASealedFolderOnlyAsSealed) {
   ::unsetenv("RIG_SEAL_KEY");
   EXPECT_EQ(rc, 0) << slurp(d + "/sealed.stderr");
   EXPECT_NE(slurp(d + "/sealed.stdout").find(", PASS) in " + db), std::string::npos) << slurp(d + "/sealed.stdout");
+  // Its seal deleted: with the key given it is refused (the key cannot vouch for it), without
+  // the key it is recorded as it lies (a line integrator's review: recorded with the key, PASS).
+  fs::copy(d + "/run", d + "/unsealed", fs::copy_options::recursive);
+  fs::remove(d + "/unsealed/seal.json");
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/unsealed", "--seal-key", key}, d + "/unsealed-key"), 2);
+  EXPECT_NE(slurp(d + "/unsealed-key.stderr").find("/unsealed is not sealed (no seal.json): the station's key "
+                                                   "(--seal-key) cannot vouch for a folder it never sealed; nothing recorded"),
+            std::string::npos)
+      << slurp(d + "/unsealed-key.stderr");
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/unsealed"}, d + "/unsealed-as-is"), 0)
+      << slurp(d + "/unsealed-as-is.stderr");
 }
 
 // A capture rewritten where it lies with every CRC made good, its size kept and its modification
