@@ -1058,6 +1058,37 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   return rc;
 }
 
+// An earlier attempt's ending that stopped the run (ABORTED, ERROR) and could not record its row
+// (.ending-pending lists `history`) is recorded when its resume starts, before this attempt's
+// own ending records the same row again: the row's `earlier` then names it (a line integrator's
+// review: the ABORTED ending was lost from the history once the resume ended FAIL). A database
+// still out of reach leaves it as it was; the resume goes on.
+void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlog::logger& log) {
+  const std::string list = a.out + "/" + kEndingPending;
+  std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
+  const auto at = std::find(steps.begin(), steps.end(), kStepHistory);
+  if (a.no_history || at == steps.end()) return;
+  nlohmann::json passport;
+  try {
+    passport = report::read_passport(a.out);
+  } catch (const std::exception& e) {
+    log.warn("the earlier attempt's ending is not recorded in the history: {}", e.what());
+    return;
+  }
+  const std::string outcome = passport.value("outcome", "");
+  if (outcome != "ABORTED" && outcome != "ERROR") return;
+  if (!record_in_history(a, hw, passport, passport.value("out_dir", a.out), log)) return;
+  steps.erase(at);
+  std::string rest;
+  for (const std::string& st : steps) rest += st + "\n";
+  std::error_code ec;
+  if (rest.empty())
+    fs::remove(list, ec);
+  else
+    write_file_atomic(list, rest);
+  log.info("the earlier attempt's ending ({}) recorded in the history", outcome);
+}
+
 // The table timing the plan's moves are costed with: on hardware, the [table] section's client
 // settle and poll and, where it sets them, the drive's velocity, acceleration and settle (else
 // the drive keeps its own, which the plan takes as the emulated drive's power-on values); on the
@@ -1477,6 +1508,7 @@ int do_run(RunArgs a) {
     if (a.resume.empty() && made_here) fs::remove(a.out, ec);  // only while empty
     throw;
   }
+  if (!a.resume.empty()) record_an_interrupted_ending(a, hw, *log);
   // The run's own wall time, for the plant's speed line: the operator's time at the prompts is not
   // the emulation's (a review read 105x real time where run.log spans 0.18 s of a 2.18 s figure).
   const auto wall_start = std::chrono::steady_clock::now();

@@ -1417,6 +1417,31 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
       << slurp(d + "/io5.stderr");
 }
 
+// An ABORTED ending whose history row was left to .ending-pending (a database out of reach) is
+// recorded when its resume starts, so the run's row lists it among its endings; it was lost
+// once the resume recorded its own ending (a line integrator's review).
+TEST(RigCli, AResumeRecordsTheInterruptedEndingItsDatabaseMissed) {
+  const std::string d = tmp("ending-missed");
+  fs::create_directories(d);
+  const std::string db = "sqlite:" + d + "/h.sqlite";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", db, "--out", d + "/r", "--inject", "sigint@150"},
+                d + "/io1"),
+            3)
+      << slurp(d + "/io1.stderr");
+  // As if the database had been out of reach at that ending: no row, the step still listed.
+  fs::remove(d + "/h.sqlite");
+  std::ofstream(d + "/r/.ending-pending") << "history\n";
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  EXPECT_NE(slurp(d + "/r/run.log").find("the earlier attempt's ending (ABORTED) recorded in the history"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+  ASSERT_EQ(run({"history", "--db", db, "--endings", "1"}, d + "/end"), 0) << slurp(d + "/end.stderr");
+  const std::string endings = slurp(d + "/end.stdout");
+  EXPECT_NE(endings.find("ABORTED"), std::string::npos) << endings;
+  EXPECT_NE(endings.find("PASS"), std::string::npos) << endings;
+  EXPECT_LT(endings.find("ABORTED"), endings.find("PASS")) << endings;
+}
+
 // A resume that finishes an ending trusts the passport in place (it computes nothing again). An
 // unsealed one is held to its run first: its limits must be the folder's profile.toml's, its
 // profile_sha256 that file's, and the junit.xml staged with it must state its outcome (a line
