@@ -816,6 +816,25 @@ int run(const Args& a) {
     print_term(o, "Q", terms->Q, an::q_per_hour, "g*h");
     print_term(o, "N", terms->N, an::n_per_hour, "g*h^0.5");
     print_term(o, "B", terms->B, nullptr, "");
+    // How that B was read, and the model's beside it: the paper's method reads B off the curve
+    // even where no flicker is in it (a metrologist's review read "B = 5.2e-05 g" on records with
+    // none as a measured flicker floor; the model's B was null there).
+    if (terms->B.value) {
+      const std::string how = terms->b_method == "flat_segment"         ? "the paper's method, on the flat segment"
+                              : terms->b_method == "polynomial_minimum" ? "the paper's method, at the polynomial's minimum "
+                                                                          "(no flat segment: a bound from above)"
+                                                                        : "the model's (least squares)";
+      o << "      read by " << how;
+      if (terms->b_method != "least_squares") {
+        const an::Term& m = terms->wls.B;
+        o << "; the model's B: ";
+        if (m.value)
+          o << fmt(*m.value) << ' ' << m.unit << (m.lo && m.hi ? "  [" + fmt(*m.lo) + ", " + fmt(*m.hi) + "]" : "");
+        else
+          o << "null" << (m.hi ? ", upper limit " + fmt(*m.hi) + " " + m.unit : std::string()) << " (no flicker in the model)";
+      }
+      o << "\n";
+    }
     if (terms->tau_cp_s) o << "  tau_cp = " << *terms->tau_cp_s << " s\n";
     print_term(o, "K", terms->K, an::k_per_hour, "g/h^0.5");
     print_term(o, "R", terms->R, an::r_per_hour, "g/h");

@@ -868,7 +868,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     for (const std::string& f : {junit, pass}) fs::remove(f + ".tmp", ec);
     throw;
   }
-  bool done = report_written;  // every step after the passport: the marker goes only then
+  bool sealed_now = !key, recorded_now = a.no_history;  // the steps after the passport, as they went
   if (key) {  // without report.html when it could not be written: the resume draws it and seals again
     try {
       std::vector<std::string> files = files_of_the_run(dut);
@@ -883,16 +883,28 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
         if (fs::exists(a.out + "/" + f)) files.emplace_back(f);
       seal_run_folder(a.out, *key, files, std::nullopt, to_string(res.outcome));
       drop_previous_seal(a.out);
+      sealed_now = true;
       log.info("run folder sealed (seal.json, key {})", key->id);
     } catch (const std::exception& e) {
       log.error("seal.json not written: {}", e.what());
-      done = false;
     }
   }
-  if (!a.no_history) done = record_in_history(a, hw, nlohmann::json::parse(passport.dump()), info.out_dir, log) && done;
-  if (done) {
-    std::error_code ec;
+  if (!a.no_history) recorded_now = record_in_history(a, hw, nlohmann::json::parse(passport.dump()), info.out_dir, log);
+  // The list keeps only what is still to do (it kept steps already done: a final seal written,
+  // a row recorded, and `rig verify` said the ending was not finished, a review).
+  std::string left;
+  if (!report_written) left += std::string(kStepReport) + "\n";
+  if (!sealed_now) left += std::string(kStepSeal) + "\n";
+  if (!recorded_now) left += std::string(kStepHistory) + "\n";
+  std::error_code ec;
+  if (left.empty()) {
     fs::remove(pending, ec);
+  } else if (left != steps) {
+    try {
+      write_file_atomic(pending, left);
+    } catch (const std::exception& e) {  // the longer list stays: a resume finds those steps done
+      log.warn("{} not updated: {}", kEndingPending, e.what());
+    }
   }
   return passport;
 }

@@ -159,6 +159,11 @@ int main(int argc, char** argv) {
   rig::cli::add_verify(app, rc);
   decimal_numbers_only(app);
   no_empty_text(app);
+  // A usage error is said with its kind, as every other exit-2 message is (it was CLI11's bare
+  // text, "--rate: '0x10' is not a decimal number", which a script keyed on "rig: " missed).
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("rig: usage error: ") + e.what() + "\nRun with --help for more information.\n";
+  });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

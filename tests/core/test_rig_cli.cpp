@@ -517,7 +517,8 @@ TEST(RigCli, AnalyzeOptionErrorsNameTheOptionAndValue) {
       {{"--taus", "log:1"}, "--taus 'log:1'"},
       {{"--dev", "mdev,hdev"}, "--dev 'mdev,hdev': one Allan-family deviation, got two (mdev and hdev)"},
       {{"--dev", "bogus"}, "--dev 'bogus'"},
-      {{"--data", "volts"}, "--data"},
+      {{"--data", "volts"}, "rig: usage error: --data: volts not in {"},  // with its kind, as the others
+      {{"--rate", "0x10"}, "rig: usage error: --rate: '0x10' is not a decimal number"},
       {{"--rate", "0"}, "--rate 0: the sample rate must be in (0, 1e+06] Hz"},
       {{"--rate", "nan"}, "--rate nan: the sample rate must be in (0, 1e+06] Hz"},
       {{"--rate", "1e300"}, "--rate 1e+300: the sample rate must be in (0, 1e+06] Hz"}};
@@ -867,6 +868,34 @@ TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--no-psd", "--dev", "theo2"}, d + "/bad"), 2);
 }
 
+// The paper's method reads a B off every curve; where no flicker is in the record it is a bound
+// from above, which a metrologist's review took for a measured flicker floor. The console says
+// under B how it was read and gives the model's B beside it (here: null, with its upper limit).
+TEST(RigCli, AnalyzeSaysHowBWasReadAndTheModelsB) {
+  const std::string d = tmp("analyze-b-how");
+  fs::create_directories(d);
+  {
+    std::ofstream f(d + "/nk.txt");
+    f.precision(17);
+    std::mt19937_64 rng(20261203);
+    std::normal_distribution<double> g(0.0, 1.0);
+    double walk = 0;
+    for (int i = 0; i < 36000; ++i) {  // 1 h at 10 Hz: white rate and a random walk, no flicker
+      walk += 2e-6 * g(rng);
+      f << 1e-4 * g(rng) + walk << "\n";
+    }
+  }
+  ASSERT_EQ(run({"analyze", d + "/nk.txt", "--rate", "10", "--no-psd", "--json", d + "/nk.json"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr");
+  const auto j = nlohmann::json::parse(slurp(d + "/nk.json"));
+  const std::string out = slurp(d + "/io.stdout");
+  ASSERT_NE(j["noise_terms"]["b_method"], "least_squares") << out;
+  ASSERT_TRUE(j["noise_terms"]["B_lsq"]["value"].is_null()) << j["noise_terms"]["B_lsq"].dump();
+  EXPECT_NE(out.find("      read by the paper's method, "), std::string::npos) << out;
+  EXPECT_NE(out.find("; the model's B: null, upper limit "), std::string::npos) << out;
+  EXPECT_NE(out.find(" g (no flicker in the model)\n"), std::string::npos) << out;
+}
+
 // A review: --no-bounds changed MTOT/TTOT/HTOT's values (HTOT by 12 % on a random walk): their
 // bias removal needs a noise type, and without identification it silently took white FM. The
 // identification their bias needs still runs; every value is the one the bounded run gives,
@@ -926,6 +955,11 @@ TEST(RigCli, AnalyzeNoBoundsChangesNoValue) {
                                            "bias removal"),
             std::string::npos)
       << unbounded["notes"].dump();
+  // Under B, how it was read: here the model's own, no curve reading to compare it with.
+  EXPECT_NE(slurp(d + "/b.stdout").find("  B = 7.9787e-06 g  [0.0000e+00, 9.9862e-06]\n      read by the model's (least "
+                                        "squares)\n"),
+            std::string::npos)
+      << slurp(d + "/b.stdout");
   // The text shows the alpha the bias used, and still no bounds.
   const std::string out = slurp(d + "/nb.stdout");
   EXPECT_NE(out.find("htot (no bounds; alpha: the noise type of the bias removal"), std::string::npos) << out;
