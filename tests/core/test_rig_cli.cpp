@@ -868,23 +868,27 @@ TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
   EXPECT_EQ(run({"analyze", d + "/nbs10.txt", "--data", "phase", "--no-psd", "--dev", "theo2"}, d + "/bad"), 2);
 }
 
+// A text record of `n` values: a random walk of steps `step` sd plus white noise of `white` sd
+// (none when 0), from std::mt19937_64(seed), each value with 17 digits.
+void write_walk(const std::string& path, int n, std::uint64_t seed, double step, double white) {
+  std::ofstream f(path);
+  f.precision(17);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  double walk = 0;
+  for (int i = 0; i < n; ++i) {
+    walk += step * g(rng);
+    f << (white != 0 ? white * g(rng) + walk : walk) << "\n";
+  }
+}
+
 // The paper's method reads a B off every curve; where no flicker is in the record it is a bound
 // from above, which a metrologist's review took for a measured flicker floor. The console says
 // under B how it was read and gives the model's B beside it (here: null, with its upper limit).
 TEST(RigCli, AnalyzeSaysHowBWasReadAndTheModelsB) {
   const std::string d = tmp("analyze-b-how");
   fs::create_directories(d);
-  {
-    std::ofstream f(d + "/nk.txt");
-    f.precision(17);
-    std::mt19937_64 rng(20261203);
-    std::normal_distribution<double> g(0.0, 1.0);
-    double walk = 0;
-    for (int i = 0; i < 36000; ++i) {  // 1 h at 10 Hz: white rate and a random walk, no flicker
-      walk += 2e-6 * g(rng);
-      f << 1e-4 * g(rng) + walk << "\n";
-    }
-  }
+  write_walk(d + "/nk.txt", 36000, 20261203, 2e-6, 1e-4);  // 1 h at 10 Hz: white rate and a random walk, no flicker
   ASSERT_EQ(run({"analyze", d + "/nk.txt", "--rate", "10", "--no-psd", "--json", d + "/nk.json"}, d + "/io"), 0)
       << slurp(d + "/io.stderr");
   const auto j = nlohmann::json::parse(slurp(d + "/nk.json"));
@@ -903,14 +907,7 @@ TEST(RigCli, AnalyzeSaysHowBWasReadAndTheModelsB) {
 TEST(RigCli, AnalyzeNoBoundsChangesNoValue) {
   const std::string d = tmp("analyze-no-bounds-values");
   fs::create_directories(d);
-  {
-    std::ofstream f(d + "/rw.txt");
-    f.precision(17);
-    std::mt19937_64 rng(12345);
-    std::normal_distribution<double> g(0.0, 1e-5);
-    double walk = 0;
-    for (int i = 0; i < 300; ++i) f << (walk += g(rng)) << "\n";  // random-walk FM
-  }
+  write_walk(d + "/rw.txt", 300, 12345, 1e-5, 0);  // random-walk FM
   const std::vector<std::string> common = {"analyze", d + "/rw.txt", "--rate", "1", "--taus", "octave", "--no-psd",
                                            "--dev", "mdev,mtot,ttot,htot,theo1,theoh"};
   auto with = [&](std::vector<std::string> extra, const std::string& name) {
