@@ -2,8 +2,8 @@
 // wrote, under a key only the station holds. A checkpoint is integrity-checked against its
 // captures; the seal adds who wrote them: without the key, an edited profile, checkpoint,
 // capture or passport cannot be given a matching seal (docs/seal.md).
-// libcrypto (OpenSSL 3) is loaded when a key is first used, not linked: every rig command's
-// start-up would otherwise map and relocate it.
+// libcrypto (OpenSSL 3) is loaded when first used (a key, a run's profile_sha256), not linked:
+// every rig command's start-up would otherwise map and relocate it.
 #pragma once
 #include <optional>
 #include <string>
