@@ -310,10 +310,9 @@ void check_seal_before_recording(const HistoryArgs& a) {
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
   if (!seal_there) {
     if (key)
-      throw NotTheDatabase(a.record + " is not sealed (no seal.json): the station's key (" +
-                           (a.seal_key_given ? std::string("--seal-key") : std::string("RIG_SEAL_KEY")) +
-                           ") cannot vouch for a folder it never sealed; nothing recorded (record it without the key "
-                           "to take it as it lies)");
+      throw NotTheDatabase(a.record + " is not sealed (no seal.json): the station's key (--seal-key or RIG_SEAL_KEY) "
+                           "cannot vouch for a folder it never sealed; nothing recorded (record it without the key, "
+                           "RIG_SEAL_KEY unset, to take it as it lies)");
     return;
   }
   if (!key)

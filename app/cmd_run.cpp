@@ -889,23 +889,30 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       log.error("seal.json not written: {}", e.what());
     }
   }
-  if (!a.no_history) recorded_now = record_in_history(a, hw, nlohmann::json::parse(passport.dump()), info.out_dir, log);
-  // The list keeps only what is still to do (it kept steps already done: a final seal written,
-  // a row recorded, and `rig verify` said the ending was not finished, a review).
-  std::string left;
-  if (!report_written) left += std::string(kStepReport) + "\n";
-  if (!sealed_now) left += std::string(kStepSeal) + "\n";
-  if (!recorded_now) left += std::string(kStepHistory) + "\n";
-  std::error_code ec;
-  if (left.empty()) {
-    fs::remove(pending, ec);
-  } else if (left != steps) {
+  // The list keeps only what is still to do, rewritten as each step is done (it kept steps
+  // already done: a final seal written, and a kill while the history waited on a locked database
+  // left "seal" listed; `rig verify` said the ending was not finished, a review).
+  std::string listed = steps;
+  const auto keep_only_what_is_left = [&] {
+    std::string left;
+    if (!report_written) left += std::string(kStepReport) + "\n";
+    if (!sealed_now) left += std::string(kStepSeal) + "\n";
+    if (!recorded_now) left += std::string(kStepHistory) + "\n";
+    if (left == listed) return;
+    std::error_code ec;
     try {
-      write_file_atomic(pending, left);
+      if (left.empty())
+        fs::remove(pending, ec);
+      else
+        write_file_atomic(pending, left);
+      listed = left;
     } catch (const std::exception& e) {  // the longer list stays: a resume finds those steps done
       log.warn("{} not updated: {}", kEndingPending, e.what());
     }
-  }
+  };
+  keep_only_what_is_left();
+  if (!a.no_history) recorded_now = record_in_history(a, hw, nlohmann::json::parse(passport.dump()), info.out_dir, log);
+  keep_only_what_is_left();
   return passport;
 }
 
@@ -978,24 +985,34 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 // beside a junit.xml saying FAIL). These catch edits by hand; a seal vouches for the bytes.
 std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json& passport,
                                     const MeasurementSet& declared, const std::string& profile_sha256) {
-  if (passport.contains("profile_sha256") && passport["profile_sha256"] != profile_sha256)
+  // This rig wrote it (a resume takes only its own version's folders): the digest is there.
+  if (passport.value("profile_sha256", nlohmann::json()) != profile_sha256)
     return fmt::format("profile_sha256 is {}, but the folder's profile.toml digests to \"{}\"",
-                       passport["profile_sha256"].dump(), profile_sha256);
+                       passport.value("profile_sha256", nlohmann::json()).dump(), profile_sha256);
   const nlohmann::json& values = passport.at("values");
+  std::size_t failed = 0;
   for (const Measurement& m : declared.all()) {
     const nlohmann::json want = m.limits ? nlohmann::json::array({m.limits->first, m.limits->second}) : nlohmann::json();
     const nlohmann::json has = values.contains(m.name) ? values[m.name].value("limits", nlohmann::json()) : nlohmann::json();
     if (has != want)
       return fmt::format("values.{}.limits are {}, but the folder's profile.toml gives {}", m.name, has.dump(),
                          want.is_null() ? std::string("none") : want.dump());
+    failed += values.contains(m.name) && values[m.name].value("outcome", "") == "FAIL";
   }
+  for (const auto& [name, v] : values.items())
+    if (!declared.find(name)) return "values." + name + " is no measurement of its procedure";
+  // junit.xml states the same verdict: staged beside the passport, or already in place.
   std::error_code ec;
-  if (fs::is_regular_file(dir + "/junit.xml.tmp", ec)) {
-    const std::string junit = slurp(dir + "/junit.xml.tmp");
-    const std::string says = "<property name=\"outcome\" value=\"" + passport.value("outcome", "") + "\"/>";
-    if (junit.find(says) == std::string::npos)
-      return "its outcome is " + passport.value("outcome", "") + ", but the junit.xml staged with it states another";
-  }
+  const bool staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
+  if (!staged && !fs::is_regular_file(dir + "/junit.xml", ec)) return "no junit.xml beside it, staged or in place";
+  const std::string junit = slurp(dir + (staged ? "/junit.xml.tmp" : "/junit.xml"));
+  const std::string outcome = passport.value("outcome", "");
+  const std::string which = staged ? "the junit.xml staged with it" : "junit.xml";
+  if (junit.find("<property name=\"outcome\" value=\"" + outcome + "\"/>") == std::string::npos)
+    return "its outcome is " + outcome + ", but " + which + " states another";
+  if (junit.find("<testsuite name=") == std::string::npos ||
+      junit.find("failures=\"" + std::to_string(failed) + "\"", junit.find("<testsuite name=")) == std::string::npos)
+    return fmt::format("{} values FAIL in it, but {} counts other failures", failed, which);
   return "";
 }
 
@@ -1068,6 +1085,26 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   log->info("{} (exit {})", line, rc);
   std::cerr << line << "\n";
   return rc;
+}
+
+// The interrupted ending a resume would record first (record_an_interrupted_ending) has no
+// database to go to under --no-history, and this attempt's ending replaces its passport: it would
+// be lost for good (a re-test: `--resume --no-history` removed the list, the ABORTED ending
+// nowhere). Refused before anything is done; --record it first, or resume into a database.
+void refuse_to_drop_an_interrupted_ending(const RunArgs& a) {
+  const std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
+  if (!a.no_history || std::find(steps.begin(), steps.end(), kStepHistory) == steps.end()) return;
+  std::string outcome;
+  try {
+    outcome = report::read_passport(a.out).value("outcome", "");
+  } catch (const std::exception&) {
+    return;  // no passport to record (the ending stopped before it): nothing to lose
+  }
+  if (outcome != "ABORTED" && outcome != "ERROR") return;
+  throw ConfigError(fmt::format("{}: its {} ending is still to be recorded in the history ({} lists `history`), "
+                                "and --no-history would lose it once this attempt's ending replaces the passport: "
+                                "record it first (rig history --record {}) or resume without --no-history",
+                                a.out, outcome, kEndingPending, a.out));
 }
 
 // An earlier attempt's ending that stopped the run (ABORTED, ERROR) and could not record its row
@@ -1374,8 +1411,10 @@ int do_run(RunArgs a) {
       throw;
     }
   }
-  if (!a.resume.empty())
+  if (!a.resume.empty()) {
     if (const auto rc = finish_pending_ending(a, hw, key, final_seal, values)) return *rc;
+    refuse_to_drop_an_interrupted_ending(a);
+  }
   if (a.dry_run) {
     // A table another rig process commands now is said, as the run would say it (a review).
     if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));

@@ -595,8 +595,8 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
                                                                             : "moved " + deg_str(all) + " in " + secs(since_cmd)) +
                             ", faster than the profile velocity " + deg_str(v_drive) + "/s (" +
                             map_.describe(Obj::kProfileVelocity) + ") lets the table turn: the map does not read this "
-                            "drive's position as it is (check word_order, counts_per_rev, gear_ratio and velocity_unit "
-                            "against the drive's manual)" + at(now_r));
+                            "drive's position or speed as it is (check word_order, counts_per_rev, gear_ratio, velocity_unit "
+                            "and velocity_resolution against the drive's manual)" + at(now_r));
       paced_deg = now_r.actual_deg, paced_from = asked_at;
     };
     const int64_t target_counts = map_.deg_to_counts(deg);

@@ -1462,6 +1462,13 @@ TEST(RigCli, AResumeRecordsTheInterruptedEndingItsDatabaseMissed) {
   // As if the database had been out of reach at that ending: no row, the step still listed.
   fs::remove(d + "/h.sqlite");
   std::ofstream(d + "/r/.ending-pending") << "history\n";
+  // A resume with --no-history would lose it for good (a re-test): refused, nothing done.
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--no-history"}, d + "/io-nh"), 2);
+  EXPECT_NE(slurp(d + "/io-nh.stderr").find("its ABORTED ending is still to be recorded in the history (.ending-pending "
+                                            "lists `history`), and --no-history would lose it"),
+            std::string::npos)
+      << slurp(d + "/io-nh.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/passport.json"))["outcome"], "ABORTED");
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
   EXPECT_NE(slurp(d + "/r/run.log").find("the earlier attempt's ending (ABORTED) recorded in the history"),
             std::string::npos);
@@ -1471,6 +1478,29 @@ TEST(RigCli, AResumeRecordsTheInterruptedEndingItsDatabaseMissed) {
   EXPECT_NE(endings.find("ABORTED"), std::string::npos) << endings;
   EXPECT_NE(endings.find("PASS"), std::string::npos) << endings;
   EXPECT_LT(endings.find("ABORTED"), endings.find("PASS")) << endings;
+}
+
+// The ending's list holds only the steps still to do, rewritten as each is done: a sealed run
+// whose history is out of reach (a PostgreSQL server the start does not contact) lists
+// `history` alone once its final seal is written (it listed `seal` too, and `rig verify` said
+// the ending was not finished for a seal that was: a review); the resume then finishes it.
+TEST(RigCli, TheEndingsListHoldsOnlyWhatIsLeft) {
+  const std::string d = tmp("ending-left");
+  const std::string key = station_key_in(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "postgresql://rig@127.0.0.1:1/none", "--out",
+                 d + "/r", "--seal-key", key},
+                d + "/io"),
+            0)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/seal.json"))["outcome"], "PASS");
+  EXPECT_EQ(run({"verify", d + "/r", "--seal-key", key}, d + "/verify"), 0) << slurp(d + "/verify.stdout");
+  EXPECT_NE(slurp(d + "/verify.stdout").find("(.ending-pending: history)"), std::string::npos) << slurp(d + "/verify.stdout");
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite", "--seal-key", key},
+                d + "/resume"),
+            0)
+      << slurp(d + "/resume.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
 }
 
 // A resume that finishes an ending trusts the passport in place (it computes nothing again). An
@@ -1514,12 +1544,32 @@ TEST(RigCli, AnEditedPassportIsNotFinishedByAResume) {
   p["profile_sha256"] = std::string(64, '0');
   stop_before_junit(p.dump(2));
   refused("passport.json: profile_sha256 is \"" + std::string(64, '0') + "\", but the folder's profile.toml digests to");
-  // A junit.xml staged with another outcome than the passport's.
+  // The digest taken out; a value the procedure does not measure put in.
+  p = nlohmann::json::parse(passport);
+  p.erase("profile_sha256");
+  stop_before_junit(p.dump(2));
+  refused("passport.json: profile_sha256 is null, but the folder's profile.toml digests to");
+  p = nlohmann::json::parse(passport);
+  p["values"]["approved_by_qa"] = p["values"]["bias"];
+  stop_before_junit(p.dump(2));
+  refused("passport.json: values.approved_by_qa is no measurement of its procedure");
+  // A junit.xml staged with another outcome than the passport's, or another count of failures.
   std::string other = junit;
   other.replace(other.find("value=\"FAIL\""), 13, "value=\"PASS\"");
   std::ofstream(d + "/r/passport.json") << passport;
   std::ofstream(d + "/r/junit.xml.tmp") << other;
   refused("its outcome is FAIL, but the junit.xml staged with it states another");
+  other = junit;
+  const auto suite = other.find("<testsuite name=");
+  other.replace(other.find("failures=\"1\"", suite), 12, "failures=\"0\"");
+  std::ofstream(d + "/r/junit.xml.tmp") << other;
+  refused("1 values FAIL in it, but the junit.xml staged with it counts other failures");
+  // No junit.xml at all: the ending would have been called finished without one.
+  fs::remove(d + "/r/junit.xml.tmp");
+  fs::remove(d + "/r/junit.xml");
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history"}, d + "/io2"), 2);
+  EXPECT_NE(slurp(d + "/io2.stderr").find("passport.json: no junit.xml beside it, staged or in place"), std::string::npos)
+      << slurp(d + "/io2.stderr");
   // As the run wrote them: finished, exit 1 (the verdict's).
   stop_before_junit(passport);
   EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history", "--quiet"}, d + "/io3"), 1) << slurp(d + "/io3.stderr");
@@ -3463,7 +3513,8 @@ TEST(RigCli, HistoryRecordTakesASealedFolderOnlyAsSealed) {
   fs::remove(d + "/unsealed/seal.json");
   EXPECT_EQ(run({"history", "--db", db, "--record", d + "/unsealed", "--seal-key", key}, d + "/unsealed-key"), 2);
   EXPECT_NE(slurp(d + "/unsealed-key.stderr").find("/unsealed is not sealed (no seal.json): the station's key "
-                                                   "(--seal-key) cannot vouch for a folder it never sealed; nothing recorded"),
+                                                   "(--seal-key or RIG_SEAL_KEY) cannot vouch for a folder it never "
+                                                   "sealed; nothing recorded"),
             std::string::npos)
       << slurp(d + "/unsealed-key.stderr");
   EXPECT_EQ(run({"history", "--db", db, "--record", d + "/unsealed"}, d + "/unsealed-as-is"), 0)
