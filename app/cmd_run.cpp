@@ -1078,6 +1078,14 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   if (!a.no_history) {
     const nlohmann::json passport = report::read_passport(dir);
     done = record_in_history(a, hw, passport, passport.value("out_dir", dir), *log) && done;
+  } else if (std::find(steps.begin(), steps.end(), kStepHistory) != steps.end()) {
+    // --no-history records nothing, but the row the run was meant to have is still owed: the
+    // list keeps it for a later resume or `rig history --record` (a re-test: it was removed, the
+    // run in no database and nothing saying so).
+    if (done) write_file_atomic(pending, std::string(kStepHistory) + "\n");
+    log->warn("its history row is still to be recorded (--no-history): rig history --record {} records it",
+              shown_text(dir));
+    done = false;
   }
   if (done) fs::remove(pending, ec);
   const std::string line = fmt::format("{}: the run was complete (its passport says {}); its ending is {}: {}",
@@ -1111,7 +1119,7 @@ void refuse_to_drop_an_interrupted_ending(const RunArgs& a) {
 // (.ending-pending lists `history`) is recorded when its resume starts, before this attempt's
 // own ending records the same row again: the row's `earlier` then names it (a line integrator's
 // review: the ABORTED ending was lost from the history once the resume ended FAIL). A database
-// still out of reach leaves it as it was; the resume goes on.
+// still out of reach stops the resume (exit 2), the ending kept.
 void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlog::logger& log) {
   const std::string list = a.out + "/" + kEndingPending;
   std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
@@ -1126,7 +1134,14 @@ void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlo
   }
   const std::string outcome = passport.value("outcome", "");
   if (outcome != "ABORTED" && outcome != "ERROR") return;
-  if (!record_in_history(a, hw, passport, passport.value("out_dir", a.out), log)) return;
+  // Not recorded now, it never would be: this attempt's ending replaces its passport (a re-test:
+  // a PostgreSQL server down at the resume, the ABORTED ending lost). So the resume stops here,
+  // the folder as it was but for run.log.
+  if (!record_in_history(a, hw, passport, passport.value("out_dir", a.out), log))
+    throw ConfigError(fmt::format("{}: its {} ending could not be recorded in the history (run.log says why), and this "
+                                  "resume's ending would replace it: resume once the database can be reached, or "
+                                  "record it first (rig history --record {} --db URL); nothing done",
+                                  a.out, outcome, a.out));
   steps.erase(at);
   std::string rest;
   for (const std::string& st : steps) rest += st + "\n";

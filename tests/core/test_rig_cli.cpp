@@ -1469,6 +1469,17 @@ TEST(RigCli, AResumeRecordsTheInterruptedEndingItsDatabaseMissed) {
             std::string::npos)
       << slurp(d + "/io-nh.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/passport.json"))["outcome"], "ABORTED");
+  // A database still out of reach at the resume (a server the start does not contact): the
+  // resume stops before anything, the ending kept to be recorded (a re-test: it was lost).
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--db", "postgresql://rig@127.0.0.1:1/none"},
+                d + "/io-pg"),
+            2);
+  EXPECT_NE(slurp(d + "/io-pg.stderr").find("its ABORTED ending could not be recorded in the history (run.log says "
+                                            "why), and this resume's ending would replace it"),
+            std::string::npos)
+      << slurp(d + "/io-pg.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/passport.json"))["outcome"], "ABORTED");
+  EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
   EXPECT_NE(slurp(d + "/r/run.log").find("the earlier attempt's ending (ABORTED) recorded in the history"),
             std::string::npos);
@@ -1496,6 +1507,13 @@ TEST(RigCli, TheEndingsListHoldsOnlyWhatIsLeft) {
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/seal.json"))["outcome"], "PASS");
   EXPECT_EQ(run({"verify", d + "/r", "--seal-key", key}, d + "/verify"), 0) << slurp(d + "/verify.stdout");
   EXPECT_NE(slurp(d + "/verify.stdout").find("(.ending-pending: history)"), std::string::npos) << slurp(d + "/verify.stdout");
+  // A resume with --no-history records nothing, and the row still owed stays listed (it was
+  // removed, the run in no database: a re-test).
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history", "--seal-key", key}, d + "/nohist"), 0)
+      << slurp(d + "/nohist.stderr");
+  EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
+  EXPECT_NE(slurp(d + "/nohist.stderr").find("its history row is still to be recorded (--no-history)"), std::string::npos)
+      << slurp(d + "/nohist.stderr");
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite", "--seal-key", key},
                 d + "/resume"),
             0)
@@ -1574,7 +1592,7 @@ TEST(RigCli, AnEditedPassportIsNotFinishedByAResume) {
   stop_before_junit(passport);
   EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history", "--quiet"}, d + "/io3"), 1) << slurp(d + "/io3.stderr");
   EXPECT_EQ(slurp(d + "/r/junit.xml"), junit);
-  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+  EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n") << "--no-history: the row it lists is still owed";
 }
 
 // A run's ending: analysis.json, junit.xml and passport.json staged, report.html, then the
