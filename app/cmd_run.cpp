@@ -566,6 +566,26 @@ std::string verdict_of(const std::string& dir) {
   return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
 }
 
+// `dir`'s .ending-pending as `steps` (one per line), removed when none is left.
+void write_pending_steps(const std::string& dir, const std::vector<std::string>& steps) {
+  std::string text;
+  for (const std::string& st : steps) text += st + "\n";
+  std::error_code ec;
+  if (text.empty())
+    fs::remove(dir + "/" + kEndingPending, ec);
+  else
+    write_file_atomic(dir + "/" + kEndingPending, text);
+}
+
+// The outcome (ABORTED or ERROR) of an earlier attempt's ending whose history row is still owed:
+// .ending-pending lists `history` beside a passport that stopped the run. "" otherwise.
+std::string owed_interrupted_ending(const std::string& dir) {
+  const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
+  if (std::find(steps.begin(), steps.end(), kStepHistory) == steps.end()) return "";
+  const std::string o = passport_outcome(dir).value_or("");
+  return o == "ABORTED" || o == "ERROR" ? o : "";
+}
+
 // A new run never lands on an earlier one, whatever state it stopped in: run.json is written
 // before any device opens, checkpoint.json after the first phase, passport.json at every ending
 // (a hardware run that could not open its devices has the first and the last, no checkpoint).
@@ -892,19 +912,15 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   // The list keeps only what is still to do, rewritten as each step is done (it kept steps
   // already done: a final seal written, and a kill while the history waited on a locked database
   // left "seal" listed; `rig verify` said the ending was not finished, a review).
-  std::string listed = steps;
+  std::vector<std::string> listed = pending_steps(a.out).value_or(std::vector<std::string>{});
   const auto keep_only_what_is_left = [&] {
-    std::string left;
-    if (!report_written) left += std::string(kStepReport) + "\n";
-    if (!sealed_now) left += std::string(kStepSeal) + "\n";
-    if (!recorded_now) left += std::string(kStepHistory) + "\n";
+    std::vector<std::string> left;
+    if (!report_written) left.emplace_back(kStepReport);
+    if (!sealed_now) left.emplace_back(kStepSeal);
+    if (!recorded_now) left.emplace_back(kStepHistory);
     if (left == listed) return;
-    std::error_code ec;
     try {
-      if (left.empty())
-        fs::remove(pending, ec);
-      else
-        write_file_atomic(pending, left);
+      write_pending_steps(a.out, left);
       listed = left;
     } catch (const std::exception& e) {  // the longer list stays: a resume finds those steps done
       log.warn("{} not updated: {}", kEndingPending, e.what());
@@ -1082,7 +1098,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     // --no-history records nothing, but the row the run was meant to have is still owed: the
     // list keeps it for a later resume or `rig history --record` (a re-test: it was removed, the
     // run in no database and nothing saying so).
-    if (done) write_file_atomic(pending, std::string(kStepHistory) + "\n");
+    if (done) write_pending_steps(dir, {kStepHistory});
     log->warn("its history row is still to be recorded (--no-history): rig history --record {} records it",
               shown_text(dir));
     done = false;
@@ -1100,19 +1116,12 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
 // be lost for good (a re-test: `--resume --no-history` removed the list, the ABORTED ending
 // nowhere). Refused before anything is done; --record it first, or resume into a database.
 void refuse_to_drop_an_interrupted_ending(const RunArgs& a) {
-  const std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
-  if (!a.no_history || std::find(steps.begin(), steps.end(), kStepHistory) == steps.end()) return;
-  std::string outcome;
-  try {
-    outcome = report::read_passport(a.out).value("outcome", "");
-  } catch (const std::exception&) {
-    return;  // no passport to record (the ending stopped before it): nothing to lose
-  }
-  if (outcome != "ABORTED" && outcome != "ERROR") return;
-  throw ConfigError(fmt::format("{}: its {} ending is still to be recorded in the history ({} lists `history`), "
-                                "and --no-history would lose it once this attempt's ending replaces the passport: "
-                                "record it first (rig history --record {}) or resume without --no-history",
-                                a.out, outcome, kEndingPending, a.out));
+  if (!a.no_history) return;
+  if (const std::string outcome = owed_interrupted_ending(a.out); !outcome.empty())
+    throw ConfigError(fmt::format("{}: its {} ending is still to be recorded in the history ({} lists `history`), "
+                                  "and --no-history would lose it once this attempt's ending replaces the passport: "
+                                  "record it first (rig history --record {}) or resume without --no-history",
+                                  a.out, outcome, kEndingPending, a.out));
 }
 
 // An earlier attempt's ending that stopped the run (ABORTED, ERROR) and could not record its row
@@ -1121,19 +1130,9 @@ void refuse_to_drop_an_interrupted_ending(const RunArgs& a) {
 // review: the ABORTED ending was lost from the history once the resume ended FAIL). A database
 // still out of reach stops the resume (exit 2), the ending kept.
 void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlog::logger& log) {
-  const std::string list = a.out + "/" + kEndingPending;
-  std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
-  const auto at = std::find(steps.begin(), steps.end(), kStepHistory);
-  if (a.no_history || at == steps.end()) return;
-  nlohmann::json passport;
-  try {
-    passport = report::read_passport(a.out);
-  } catch (const std::exception& e) {
-    log.warn("the earlier attempt's ending is not recorded in the history: {}", e.what());
-    return;
-  }
-  const std::string outcome = passport.value("outcome", "");
-  if (outcome != "ABORTED" && outcome != "ERROR") return;
+  const std::string outcome = a.no_history ? std::string() : owed_interrupted_ending(a.out);
+  if (outcome.empty()) return;
+  const nlohmann::json passport = report::read_passport(a.out);
   // Not recorded now, it never would be: this attempt's ending replaces its passport (a re-test:
   // a PostgreSQL server down at the resume, the ABORTED ending lost). So the resume stops here,
   // the folder as it was but for run.log.
@@ -1142,14 +1141,9 @@ void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlo
                                   "resume's ending would replace it: resume once the database can be reached, or "
                                   "record it first (rig history --record {} --db URL); nothing done",
                                   a.out, outcome, a.out));
-  steps.erase(at);
-  std::string rest;
-  for (const std::string& st : steps) rest += st + "\n";
-  std::error_code ec;
-  if (rest.empty())
-    fs::remove(list, ec);
-  else
-    write_file_atomic(list, rest);
+  std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
+  steps.erase(std::remove(steps.begin(), steps.end(), kStepHistory), steps.end());
+  write_pending_steps(a.out, steps);
   log.info("the earlier attempt's ending ({}) recorded in the history", outcome);
 }
 
