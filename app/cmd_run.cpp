@@ -1103,7 +1103,14 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
               shown_text(dir));
     done = false;
   }
-  if (done) fs::remove(pending, ec);
+  if (done) {
+    // What a stop inside an earlier ending can leave beside a finished one goes with the list: a
+    // half-written list (its staged copy) and the seal the final seal replaced (a re-test: a kill
+    // between the final seal's rename and the old one's removal left seal.prev.json for good).
+    fs::remove(pending, ec);
+    fs::remove(pending + ".tmp", ec);
+    if (sealed) drop_previous_seal(dir);
+  }
   const std::string line = fmt::format("{}: the run was complete (its passport says {}); its ending is {}: {}",
                                        shown_text(dir), v, done ? "finished" : "not finished yet", what);
   log->info("{} (exit {})", line, rc);

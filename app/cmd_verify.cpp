@@ -19,20 +19,25 @@ namespace rig::cli {
 namespace {
 
 // Every entry of `dir` but what no seal is asked to cover (outside_the_seal), without following
-// links: a link, a FIFO or a file the seal does not list was put there after it.
-std::vector<std::string> entries_in(const std::string& dir) {
+// links: a link, a FIFO or a file the seal does not list was put there after it. `outside` (if
+// given) gets what no seal covers, but the log, the seals and the ending's list: set-aside
+// records, temporary and hidden files, which `rig verify` names without judging them.
+std::vector<std::string> entries_in(const std::string& dir, std::vector<std::string>* outside = nullptr) {
   namespace fs = std::filesystem;
   std::vector<std::string> out;
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
     const std::string rel = it->path().lexically_relative(dir).generic_string();
     if (outside_the_seal(rel)) {
       if (it->is_directory() && !it->is_symlink()) it.disable_recursion_pending();
+      if (outside && rel != "run.log" && rel != "seal.json" && rel != "seal.prev.json" && rel != kEndingPending)
+        outside->push_back(rel + (it->is_directory() && !it->is_symlink() ? "/" : ""));
       continue;
     }
     if (it->is_directory() && !it->is_symlink()) continue;
     out.push_back(rel);
   }
   std::sort(out.begin(), out.end());
+  if (outside) std::sort(outside->begin(), outside->end());
   return out;
 }
 
@@ -108,6 +113,14 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).
   // The key only where the folder is sealed: a resume of an unsealed folder refuses one (a review).
+  // What no seal covers is named, not judged (a review: a file hidden by its name or a set-aside
+  // capture lay in a verified folder unmentioned): its contents are the station's word on nothing.
+  std::vector<std::string> outside;
+  entries_in(dir, &outside);
+  if (!outside.empty())
+    std::cout << fmt::format("note: not covered by the seal (set-aside records, temporary or hidden files; the "
+                             "verdict does not rest on them): {}\n",
+                             fmt::join(outside, ", "));
   if (const auto steps = pending_steps(dir))
     std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes it\n",
                              kEndingPending, fmt::join(*steps, ", "), dir, seal_in(dir) ? " --seal-key FILE" : "");

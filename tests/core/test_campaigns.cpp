@@ -874,6 +874,15 @@ TEST(Campaign, SealedRunFolders) {
             std::string::npos)
       << slurp(whole + "-extra.stdout");
   fs::remove(whole + "/captures/extra.cap");
+  // A hidden file is outside what a seal covers: the folder still verifies, and the file is named.
+  std::ofstream(whole + "/captures/.note") << "x";
+  EXPECT_EQ(run({"verify", whole, "--seal-key", key}, whole + "-hidden"), 0) << slurp(whole + "-hidden.stdout");
+  EXPECT_NE(slurp(whole + "-hidden.stdout").find("the verdict does not rest on them): captures/.note\n"),
+            std::string::npos)
+      << slurp(whole + "-hidden.stdout");
+  EXPECT_EQ(slurp(whole + "-verify.stdout").find("not covered by the seal"), std::string::npos)
+      << slurp(whole + "-verify.stdout");
+  fs::remove(whole + "/captures/.note");
   {
     // rig report on the folder writes the same page, and it still verifies; on a copy (an
     // archive) the page would name its new folder: the sealed page is kept, exit 2, unless
@@ -1010,6 +1019,11 @@ TEST(Campaign, SealedRunFolders) {
         << slurp(ab + "-resume.stderr");
     EXPECT_TRUE(fs::exists(ab + "/" + partial + ".interrupted-1"));
     EXPECT_EQ(run({"verify", ab, "--seal-key", key}, ab + "-reverify"), 0) << slurp(ab + "-reverify.stdout");
+    // The set-aside record is outside the seal: named, not judged (it was not mentioned).
+    EXPECT_NE(slurp(ab + "-reverify.stdout").find("note: not covered by the seal (set-aside records, temporary or hidden "
+                                                  "files; the verdict does not rest on them): " + partial + ".interrupted-1"),
+              std::string::npos)
+        << slurp(ab + "-reverify.stdout");
     // Ended ERROR by a capture whose retry lost samples too: that last record is kept as written
     // and sealed with it.
     const std::string gap = d + "/gap";

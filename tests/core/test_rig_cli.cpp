@@ -1514,11 +1514,19 @@ TEST(RigCli, TheEndingsListHoldsOnlyWhatIsLeft) {
   EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
   EXPECT_NE(slurp(d + "/nohist.stderr").find("its history row is still to be recorded (--no-history)"), std::string::npos)
       << slurp(d + "/nohist.stderr");
+  // What a kill inside the ending leaves: the seal the final seal replaced (a kill between its
+  // rename and the old one's removal) and a half-written list; the finished ending removes both
+  // (a re-test: seal.prev.json stayed for good).
+  fs::copy_file(d + "/r/seal.json", d + "/r/seal.prev.json");
+  std::ofstream(d + "/r/.ending-pending.tmp") << "hist";
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite", "--seal-key", key},
                 d + "/resume"),
             0)
       << slurp(d + "/resume.stderr");
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending.tmp"));
+  EXPECT_FALSE(fs::exists(d + "/r/seal.prev.json"));
+  EXPECT_EQ(run({"verify", d + "/r", "--seal-key", key}, d + "/verify2"), 0) << slurp(d + "/verify2.stdout");
 }
 
 // A resume that finishes an ending trusts the passport in place (it computes nothing again). An
