@@ -857,7 +857,10 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   const nlohmann::json analysis = acceptance::analysis_document(dut);
   write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
   const std::string junit = a.out + "/junit.xml", pass = a.out + "/passport.json", pending = a.out + "/" + kEndingPending;
-  std::string steps;  // what follows the passport
+  // What follows the passport, junit.xml's rename first: listed even where nothing else follows
+  // (no key, --no-history), so a stop between the two renames leaves a list its resume finishes
+  // (a re-test: an earlier ending's junit.xml stayed beside this passport, the run "complete").
+  std::string steps = std::string(kStepJunit) + "\n";
   if (key) steps += std::string(kStepSeal) + "\n";
   if (!a.no_history) steps += std::string(kStepHistory) + "\n";
   bool report_written = true;
@@ -875,11 +878,11 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       report_written = false;
       std::error_code gone;
       fs::remove(a.out + "/report.html", gone);
-      steps = std::string(kStepReport) + "\n" + steps;
+      steps.insert(steps.find('\n') + 1, std::string(kStepReport) + "\n");
       log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shown_text(a.out),
                 key ? " --seal-key FILE" : "", key ? " and seals it" : "");
     }
-    if (!steps.empty()) write_file_atomic(pending, steps);
+    write_file_atomic(pending, steps);
     commit_staged(pass);
     commit_staged(junit);
   } catch (...) {  // nothing staged is left behind, nor a list of steps after a passport not in place

@@ -54,9 +54,10 @@ inline bool written_by_every_ending(const std::string& rel) {
 }
 inline bool is_record(const std::string& rel) { return rel != "checkpoint.json" && !written_by_every_ending(rel); }
 
-// The ending's steps after the passport is in place, until they are done: report.html where it
-// could not be written, the final seal and the history row (one per line). A dot file: outside the seal (outside_the_seal).
+// The ending's steps after the passport is in place, until they are done: junit.xml put in place,
+// report.html where it could not be written, the final seal and the history row (one per line). A dot file: outside the seal (outside_the_seal).
 inline constexpr const char* kEndingPending = ".ending-pending";
+inline constexpr const char* kStepJunit = "junit";      // junit.xml put in place (listed until it is)
 inline constexpr const char* kStepReport = "report";    // its lines: report.html (a full disk)
 inline constexpr const char* kStepSeal = "seal";
 inline constexpr const char* kStepHistory = "history";

@@ -1703,6 +1703,31 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
   EXPECT_FALSE(fs::exists(d + "/r/junit.xml.tmp"));
   one_row("(b')");
+  // (b'') The same stop in a run with nothing after its junit.xml (no key, --no-history): the
+  // ending lists `junit` alone, so the resume puts it in place (a re-test: no list was written,
+  // an earlier ending's junit.xml stayed beside the passport and the resume said "complete"); a
+  // kill after the rename, before the list was rewritten, finds nothing to do but the list.
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/n"}, d + "/io-n"), 0)
+      << slurp(d + "/io-n.stderr");
+  EXPECT_FALSE(fs::exists(d + "/n/.ending-pending")) << "removed once junit.xml is in place";
+  const std::string n_junit = slurp(d + "/n/junit.xml");
+  fs::rename(d + "/n/junit.xml", d + "/n/junit.xml.tmp");
+  std::ofstream(d + "/n/junit.xml") << "an earlier ending's";
+  std::ofstream(d + "/n/.ending-pending") << "junit\n";
+  ASSERT_EQ(run({"run", "--resume", d + "/n", "--yes", "--quiet", "--no-history"}, d + "/io-n2"), 0)
+      << slurp(d + "/io-n2.stderr");
+  EXPECT_NE(slurp(d + "/io-n2.stderr").find("its ending is finished: junit.xml put in place"), std::string::npos)
+      << slurp(d + "/io-n2.stderr");
+  EXPECT_EQ(slurp(d + "/n/junit.xml"), n_junit);
+  EXPECT_FALSE(fs::exists(d + "/n/.ending-pending"));
+  std::ofstream(d + "/n/.ending-pending") << "junit\n";
+  ASSERT_EQ(run({"run", "--resume", d + "/n", "--yes", "--quiet", "--no-history"}, d + "/io-n3"), 0)
+      << slurp(d + "/io-n3.stderr");
+  EXPECT_FALSE(fs::exists(d + "/n/.ending-pending"));
+  // `rig history --record` takes a list whose junit step is done (no junit.xml.tmp) as its own.
+  std::ofstream(d + "/r/.ending-pending") << "junit\nhistory\n";
+  ASSERT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/io4j"), 0) << slurp(d + "/io4j.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending")) << slurp(d + "/io4j.stderr");
   // A copy of a stopped run's folder resumed under another path is a run of its own in the
   // history: said when it is recorded, as --record says it (a review: it was silent).
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + db, "--out", d + "/s", "--inject",
@@ -1720,7 +1745,8 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   EXPECT_NE(slurp(d + "/io5.stderr").find("nothing to resume; its passport stands"), std::string::npos);
   // The order itself, as the kernel saw it (strace, scripts/setup; '?': a syscall an
   // architecture lacks is no error): report.html and the list of what is left before passport.json
-  // is put in place, junit.xml right after it, then the history database's commit and the list removed.
+  // is put in place, junit.xml right after it, the list rewritten without `junit`, then the history
+  // database's commit and the list removed.
   if (std::system("strace -V > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace";
   const std::string trace = d + "/trace.txt";
   const std::string cmd = "strace -qq -e trace=?rename,?renameat,?renameat2,?unlink,?unlinkat -o " + trace + " " +
@@ -1741,7 +1767,7 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
       }
   }
   EXPECT_EQ(seen, (std::vector<std::string>{"report.html", ".ending-pending", "passport.json", "junit.xml",
-                                            "-h2.sqlite-journal", "-.ending-pending"}))
+                                            ".ending-pending", "-h2.sqlite-journal", "-.ending-pending"}))
       << slurp(trace);
 }
 
