@@ -364,8 +364,15 @@ class DbcParser {
     if (!msg.extended && msg.id > 0x7FFu)
       fail(src_, line, "message " + msg.name + ": standard id " + std::to_string(msg.id) +
                            " exceeds 11 bits (an extended id has bit 31 set in BO_)");
+    // A frame carries 0-8 bytes (classic CAN) or 12, 16, 20, 24, 32, 48 or 64 (CAN FD, ISO
+    // 11898-1:2015): any other size no frame on the bus can have, and every frame was skipped as
+    // "length 8, DBC says 9" (an integrator's review).
     if (msg.dlc < 0 || msg.dlc > 64)
       fail(src_, line, "message " + msg.name + " has DLC " + std::to_string(msg.dlc) + " (> 64)");
+    if (msg.dlc > 8 && msg.dlc != 12 && msg.dlc != 16 && msg.dlc != 20 && msg.dlc != 24 && msg.dlc != 32 &&
+        msg.dlc != 48 && msg.dlc != 64)
+      fail(src_, line, "message " + msg.name + ": length " + std::to_string(msg.dlc) +
+                           " is not a CAN frame length (0-8 bytes, or 12, 16, 20, 24, 32, 48, 64 for CAN FD)");
     if (db_.find(msg.id, msg.extended)) fail(src_, line, "message id " + std::to_string(raw) + " defined twice");
     if (db_.find(msg.name)) fail(src_, line, "message name " + msg.name + " defined twice");
     db_.messages_.push_back(std::move(msg));
@@ -422,6 +429,7 @@ class DbcParser {
     s.line = line;
     if (s.factor == 0) fail(src_, line, "signal " + s.name + ": factor 0");
     if (cur_ == &pseudo_) return;  // not part of any frame
+    if (s.length == 0) fail(src_, line, "signal " + s.name + ": bit length 0 (a signal has 1 to 64 bits)");
     if (!dbc_signal_fits(s, cur_->dlc))
       fail(src_, line, "signal " + s.name + " (" + std::to_string(s.start) + "|" + std::to_string(s.length) + "@" +
                            order + ") does not fit the message's " + std::to_string(cur_->dlc) + " bytes");

@@ -667,10 +667,11 @@ struct TableConfig {
 constexpr double kRoundingNote = 0.01;
 
 void check_profile_values(const toml::table& t, const DriveMap& map, const TableOptions& o) {
-  auto check = [&](const char* key, const std::optional<double>& v, Obj ob, double units) {
+  auto check = [&](const char* key, const std::optional<double>& v, Obj ob, double units, const std::string& unit) {
     if (!v || !map.has(ob) || map.fits(ob, std::llround(units))) return;
-    char b[96];
-    std::snprintf(b, sizeof b, "[table] %s = %g is %.0f in the drive's units, which does not fit ", key, *v, units);
+    char b[160];
+    std::snprintf(b, sizeof b, "[table] %s = %g is %.0f %s in the drive's units, which does not fit ", key, *v, units,
+                  unit.c_str());
     throw ConfigError(cfg::where(*t.get(key)) + ": " + b + map.describe(ob) + ", " + map.range_text(ob) +
                       " (drive map " + map.path + ")");
   };
@@ -693,10 +694,23 @@ void check_profile_values(const toml::table& t, const DriveMap& map, const Table
                   off < 0 ? "less" : "more");
     cfg::warn_once(at + ": " + b);
   };
+  // A speed the map has no object for is never sent: the drive moves at what it holds, and a
+  // dry run said "as sent" (an integrator's review). Refused at its line, as an unsendable value is.
+  auto unsendable = [&](const char* key, double v, const char* objects) {
+    char b[400];
+    std::snprintf(b, sizeof b,
+                  "[table] %s = %g cannot be sent: drive map %s has no %s object, so the drive would move at the "
+                  "value it holds; add the object to the map or leave %s out",
+                  key, v, map.path.c_str(), objects, key);
+    throw ConfigError(cfg::where(*t.get(key)) + ": " + b);
+  };
   const std::string v_unit = map.velocity_unit_text(), a_unit = map.accel_unit_text();
+  if (o.velocity_dps && !map.has(Obj::kProfileVelocity)) unsendable("velocity_dps", *o.velocity_dps, "profile_velocity (0x6081)");
+  if (o.accel_dps2 && !map.has(Obj::kProfileAcceleration) && !map.has(Obj::kProfileDeceleration))
+    unsendable("accel_dps2", *o.accel_dps2, "profile_acceleration (0x6083) or profile_deceleration (0x6084)");
   if (o.velocity_dps) {
     const double units = map.dps_to_velocity_units(*o.velocity_dps);
-    check("velocity_dps", o.velocity_dps, Obj::kProfileVelocity, units);
+    check("velocity_dps", o.velocity_dps, Obj::kProfileVelocity, units, v_unit);
     if (map.has(Obj::kProfileVelocity))
       rounding("velocity_dps", *o.velocity_dps, units, v_unit.c_str(), "°/s",
                [&](double u) { return std::fabs(map.velocity_units_to_dps(u)); });
@@ -704,7 +718,7 @@ void check_profile_values(const toml::table& t, const DriveMap& map, const Table
   if (o.accel_dps2) {
     const double units = map.dps2_to_accel_units(*o.accel_dps2);
     for (const Obj ob : {Obj::kProfileAcceleration, Obj::kProfileDeceleration})
-      check("accel_dps2", o.accel_dps2, ob, units);
+      check("accel_dps2", o.accel_dps2, ob, units, a_unit);
     if (map.has(Obj::kProfileAcceleration) || map.has(Obj::kProfileDeceleration))
       rounding("accel_dps2", *o.accel_dps2, units, a_unit.c_str(), "°/s²",
                [&](double u) { return map.accel_units_to_dps2(u); });

@@ -289,6 +289,13 @@ TEST(DbcHandWritten, MalformedFilesNameTheLine) {
   EXPECT_EQ(error_of("BO_ 256 M: 1 DUT\n SG_ a : 3|8@0+ (1,0) [0|1] \"\" X\n"),
             "h.dbc:2: signal a (3|8@0) does not fit the message's 1 bytes");
   EXPECT_EQ(error_of("BO_ 256 M: 65 DUT\n"), "h.dbc:1: message M has DLC 65 (> 64)");
+  // A size no frame can have (an integrator's review: taken, then every frame skipped as
+  // "length 8, DBC says 9"), and a signal of no bits ("does not fit the message's 8 bytes").
+  EXPECT_EQ(error_of("BO_ 256 M: 9 DUT\n"),
+            "h.dbc:1: message M: length 9 is not a CAN frame length (0-8 bytes, or 12, 16, 20, 24, 32, 48, 64 for CAN FD)");
+  EXPECT_EQ(error_of("BO_ 256 M: 12 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] \"\" X\n"), "no error");
+  EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a : 59|0@0+ (1,0) [0|1] \"\" X\n"),
+            "h.dbc:2: signal a: bit length 0 (a signal has 1 to 64 bits)");
   EXPECT_EQ(error_of("BO_ 4096 M: 8 DUT\n"),
             "h.dbc:1: message M: standard id 4096 exceeds 11 bits (an extended id has bit 31 set in BO_)");
   EXPECT_EQ(error_of(bo + "FOO_ 1;\n"), "h.dbc:3: expected a DBC keyword (BO_, SG_, CM_, ...), found 'FOO_'");

@@ -745,8 +745,19 @@ TEST(RigTableHardwareFile, DriveAndMapErrorsNameTheFile) {
                                             "drive_map = \"map16.toml\"\nvelocity_dps = 200.0\n");
   EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw5, out), 2) << out;
   EXPECT_NE(out.find("hw5.toml:5:"), std::string::npos) << out;
-  EXPECT_NE(out.find("[table] velocity_dps = 200 is 72818 in the drive's units, which does not fit profile_velocity "
-                     "(0x6081) at holding register 11, a 16-bit unsigned register: 0..65535"),
+  EXPECT_NE(out.find("[table] velocity_dps = 200 is 72818 counts/s in the drive's units, which does not fit "
+                     "profile_velocity (0x6081) at holding register 11, a 16-bit unsigned register: 0..65535"),
+            std::string::npos)
+      << out;
+  // A speed the map has no object for would never be sent (the drive moving at its own while the
+  // dry run said "as sent": an integrator's review): refused at its line too.
+  const std::string hw5a = write("hw5a.toml", "[table]\nmodbus = \"tcp:127.0.0.1:1\"\ndrive = \"cia402\"\n"
+                                              "drive_map = \"map16.toml\"\nvelocity_dps = 2.0\naccel_dps2 = 90.0\n");
+  EXPECT_EQ(run(std::string(RIG_BIN) + " table status --hardware " + hw5a, out), 2) << out;
+  EXPECT_NE(out.find("hw5a.toml:6:"), std::string::npos) << out;
+  EXPECT_NE(out.find("[table] accel_dps2 = 90 cannot be sent: drive map "), std::string::npos) << out;
+  EXPECT_NE(out.find(" has no profile_acceleration (0x6083) or profile_deceleration (0x6084) object, so the drive would "
+                     "move at the value it holds; add the object to the map or leave accel_dps2 out"),
             std::string::npos)
       << out;
   // The procedure's U20 (180 degrees) outside the map's travel (+-10): refused by the dry run,
