@@ -22,6 +22,7 @@
 #include "app/folder_lock.hpp"
 #include "app/history_source.hpp"
 #include "app/run_seal.hpp"
+#include "app/passport_held.hpp"
 #include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
@@ -338,9 +339,23 @@ void record(const HistoryArgs& a) {
     if (path_kind(a.record, "--record") == PathKind::directory) lock.emplace(a.record, "--record " + a.record);
     check_seal_before_recording(a);
     p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
+    // Nor one whose limits were loosened with its verdict (each value then agrees with its own
+    // limits): an unsealed passport is held to its folder's profile.toml and junit.xml, as a
+    // resume holds it (a technician's review: a FAIL edited to PASS was recorded PASS).
+    if (!seal_in(a.record))
+      if (const std::string why = passport_unlike_its_folder(a.record, p); !why.empty())
+        throw ConfigError(a.record + "/passport.json: " + why +
+                          ": the passport was changed after its run wrote it; nothing recorded");
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
   }
+  // As `rig run`: a new database only in a folder that is there, the built-in default excepted
+  // (a typo made folders and a database nobody reads, a technician's review).
+  if (const std::optional<history::SqliteFile> f = history::sqlite_file(a.db);
+      f && !f->exists && !f->missing_folder.empty() && a.db != history::builtin_db_url())
+    throw ConfigError("history database " + f->path + ": its folder " + f->missing_folder +
+                      " does not exist (a typo?); the rig creates a new database only in a folder that is there: "
+                      "create it first to start one there");
   const history::Recorded rec = history::record_run(a.db, p, a.record);
   for (const std::string& note : history::record_notes(rec, p)) std::cerr << "rig history: note: " << note << "\n";
   std::cout << "recorded run " << rec.id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "

@@ -40,6 +40,7 @@
 #include "procedures/acceptance/procedure.hpp"
 #include "app/backends.hpp"
 #include "app/run_seal.hpp"
+#include "app/passport_held.hpp"
 #include "app/folder_lock.hpp"
 #include "app/table_lock.hpp"
 #include "app/serial_option.hpp"
@@ -672,6 +673,12 @@ void check_history_can_record(const std::string& url) {
   const fs::path p = nearest_existing(fs::absolute(file, ec).parent_path());
   if (!fs::is_directory(p, ec) || !can_create_file_in(p))
     throw ConfigError(shown + ": cannot be created (" + p.string() + " is not a writable folder)");
+  // A new database goes into a folder that is there, but for the built-in default, whose folders
+  // are made with it: a typo in --db, $RIG_HISTORY or [history] url made its folders and a
+  // database the station's history never reads (a technician's review; as root, at /).
+  if (!f->missing_folder.empty() && url != history::builtin_db_url())
+    throw ConfigError(shown + ": its folder " + f->missing_folder + " does not exist (a typo?); the rig creates a new "
+                      "database only in a folder that is there: create it first to start one there");
 }
 
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
@@ -995,44 +1002,6 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   log->set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %^%-5l%$ %v", spdlog::pattern_time_type::utc);
   log->flush_on(spdlog::level::debug);
   return log;
-}
-
-// An unsealed passport's verdict stands on the limits it states: they must be the ones its
-// folder's profile.toml gives (the procedure declares them from it), its profile_sha256 that
-// file's, and a staged junit.xml must state its outcome (a line integrator's review: a passport
-// edited to PASS with loosened limits was finished by the resume, exit 0 and a PASS history row,
-// beside a junit.xml saying FAIL). These catch edits by hand; a seal vouches for the bytes.
-std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json& passport,
-                                    const MeasurementSet& declared, const std::string& profile_sha256) {
-  // This rig wrote it (a resume takes only its own version's folders): the digest is there.
-  if (passport.value("profile_sha256", nlohmann::json()) != profile_sha256)
-    return fmt::format("profile_sha256 is {}, but the folder's profile.toml digests to \"{}\"",
-                       passport.value("profile_sha256", nlohmann::json()).dump(), profile_sha256);
-  const nlohmann::json& values = passport.at("values");
-  std::size_t failed = 0;
-  for (const Measurement& m : declared.all()) {
-    const nlohmann::json want = m.limits ? nlohmann::json::array({m.limits->first, m.limits->second}) : nlohmann::json();
-    const nlohmann::json has = values.contains(m.name) ? values[m.name].value("limits", nlohmann::json()) : nlohmann::json();
-    if (has != want)
-      return fmt::format("values.{}.limits are {}, but the folder's profile.toml gives {}", m.name, has.dump(),
-                         want.is_null() ? std::string("none") : want.dump());
-    failed += values.contains(m.name) && values[m.name].value("outcome", "") == "FAIL";
-  }
-  for (const auto& [name, v] : values.items())
-    if (!declared.find(name)) return "values." + name + " is no measurement of its procedure";
-  // junit.xml states the same verdict: staged beside the passport, or already in place.
-  std::error_code ec;
-  const bool staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
-  if (!staged && !fs::is_regular_file(dir + "/junit.xml", ec)) return "no junit.xml beside it, staged or in place";
-  const std::string junit = slurp(dir + (staged ? "/junit.xml.tmp" : "/junit.xml"));
-  const std::string outcome = passport.value("outcome", "");
-  const std::string which = staged ? "the junit.xml staged with it" : "junit.xml";
-  if (junit.find("<property name=\"outcome\" value=\"" + outcome + "\"/>") == std::string::npos)
-    return "its outcome is " + outcome + ", but " + which + " states another";
-  if (junit.find("<testsuite name=") == std::string::npos ||
-      junit.find("failures=\"" + std::to_string(failed) + "\"", junit.find("<testsuite name=")) == std::string::npos)
-    return fmt::format("{} values FAIL in it, but {} counts other failures", failed, which);
-  return "";
 }
 
 // A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
@@ -1502,7 +1471,8 @@ int do_run(RunArgs a) {
       if (const std::optional<history::SqliteFile> file = history::sqlite_file(url); file && !file->exists)
         fresh = file->missing_folder.empty()
                     ? " (not there yet: the run creates it)"
-                    : " (not there yet: the run creates it and the folder " + file->missing_folder + ")";
+                    : " (not there yet: the run creates it and the folder " + file->missing_folder +
+                          ", the built-in default's)";
       std::cout << "History: " << history::mask_password(url) << fresh << "\n";
     }
     double total = 0;

@@ -154,12 +154,40 @@ TEST(RigCli, CiProfileEndToEnd) {
 TEST(RigCli, DryRunSaysWhereTheRunWillBeRecorded) {
   const std::string d = tmp("dry-history");
   fs::create_directories(d);
-  ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run", "--db", "sqlite:" + d + "/typo/dir/x.sqlite"}, d + "/typo"), 0);
-  EXPECT_NE(slurp(d + "/typo.stdout").find("History: sqlite:" + d + "/typo/dir/x.sqlite (not there yet: the run creates it "
-                                           "and the folder " + d + "/typo/dir)\n"),
+  ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run", "--db", "sqlite:" + d + "/x.sqlite"}, d + "/new"), 0);
+  EXPECT_NE(slurp(d + "/new.stdout").find("History: sqlite:" + d + "/x.sqlite (not there yet: the run creates it)\n"),
             std::string::npos)
-      << slurp(d + "/typo.stdout");
-  EXPECT_FALSE(fs::exists(d + "/typo")) << "a dry run creates nothing";
+      << slurp(d + "/new.stdout");
+  // A named database whose folder is not there is a typo, refused before anything (its folders
+  // were made, mkdir -p, as root at /: a technician's review); the built-in default makes its own.
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--db", "sqlite:" + d + "/typo/dir/x.sqlite"}, d + "/typo"), 2);
+  EXPECT_NE(slurp(d + "/typo.stderr").find("history database " + d + "/typo/dir/x.sqlite: its folder " + d +
+                                           "/typo/dir does not exist (a typo?); the rig creates a new database only in "
+                                           "a folder that is there"),
+            std::string::npos)
+      << slurp(d + "/typo.stderr");
+  EXPECT_EQ(std::system(("env RIG_HISTORY=sqlite:" + d + "/typo/dir/x.sqlite " + RIG_BINARY +
+                          " run --profile ci --yes --quiet --out " + d + "/r 2> " + d + "/typo-env.stderr")
+                             .c_str()),
+            2 << 8);
+  EXPECT_NE(slurp(d + "/typo-env.stderr").find("RIG_HISTORY: history database " + d + "/typo/dir/x.sqlite: its folder"),
+            std::string::npos)
+      << slurp(d + "/typo-env.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r"));
+  fs::create_directories(d + "/done");
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/done/r"}, d + "/done-io"), 0);
+  EXPECT_EQ(run({"history", "--db", "sqlite:" + d + "/typo/dir/x.sqlite", "--record", d + "/done/r"}, d + "/typo-rec"), 2);
+  EXPECT_NE(slurp(d + "/typo-rec.stderr").find("its folder " + d + "/typo/dir does not exist (a typo?)"), std::string::npos)
+      << slurp(d + "/typo-rec.stderr");
+  EXPECT_FALSE(fs::exists(d + "/typo")) << "nothing created";
+  // The built-in default ($XDG_DATA_HOME/rig/history.sqlite) is made with its folders.
+  std::ofstream(d + "/no-history.toml") << "# no [history]\n";
+  EXPECT_EQ(std::system(("env -u RIG_HISTORY XDG_DATA_HOME=" + d + "/xdg RIG_CONFIG=" + d + "/no-history.toml " +
+                         RIG_BINARY + " history --record " + d + "/done/r > /dev/null 2> " + d + "/builtin-rec.stderr")
+                            .c_str()),
+            0)
+      << slurp(d + "/builtin-rec.stderr");
+  EXPECT_TRUE(fs::exists(d + "/xdg/rig/history.sqlite"));
   ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run", "--no-history"}, d + "/none"), 0);
   EXPECT_NE(slurp(d + "/none.stdout").find("History: not recorded (--no-history)\n"), std::string::npos);
 }
@@ -1527,6 +1555,46 @@ TEST(RigCli, TheEndingsListHoldsOnlyWhatIsLeft) {
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending.tmp"));
   EXPECT_FALSE(fs::exists(d + "/r/seal.prev.json"));
   EXPECT_EQ(run({"verify", d + "/r", "--seal-key", key}, d + "/verify2"), 0) << slurp(d + "/verify2.stdout");
+}
+
+// `rig report` and `rig history --record` hold an unsealed passport to its folder as a resume does
+// (a technician's review: a FAIL edited to PASS with its limit loosened, each value agreeing with
+// its own limits, was drawn and recorded PASS beside the genuine FAIL row). Exit 2, nothing done.
+TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
+  const std::string d = tmp("edited-record");
+  fs::create_directories(d);
+  std::ofstream(d + "/tight.toml") << "base = \"ci\"\n[profile]\nname = \"tight\"\n[limits]\nbias = [-4.0e-4, 4.0e-4]\n";
+  ASSERT_EQ(run({"run", "--profile", d + "/tight.toml", "--yes", "--quiet", "--no-history", "--out", d + "/r"}, d + "/io1"),
+            1)
+      << slurp(d + "/io1.stderr");
+  const std::string db = d + "/h.sqlite";
+  // The genuine folder: drawn and recorded.
+  EXPECT_EQ(run({"report", d + "/r"}, d + "/rep0"), 0) << slurp(d + "/rep0.stderr");
+  const std::string page = slurp(d + "/r/report.html");
+  auto p = nlohmann::json::parse(slurp(d + "/r/passport.json"));
+  ASSERT_EQ(p["values"]["bias"]["outcome"], "FAIL");
+  p["outcome"] = "PASS";
+  p["values"]["bias"]["outcome"] = "PASS";
+  p["values"]["bias"]["limits"] = {-1e-3, 1e-3};
+  std::ofstream(d + "/r/passport.json") << p.dump(2);
+  const std::string says = "/r/passport.json: values.bias.limits are [-0.001,0.001], but the folder's profile.toml gives "
+                           "[-0.0004,0.0004]: the passport was changed after its run wrote it; ";
+  EXPECT_EQ(run({"report", d + "/r"}, d + "/rep1"), 2);
+  EXPECT_NE(slurp(d + "/rep1.stderr").find(says + "report.html not written"), std::string::npos) << slurp(d + "/rep1.stderr");
+  EXPECT_EQ(slurp(d + "/r/report.html"), page);
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/rec1"), 2);
+  EXPECT_NE(slurp(d + "/rec1.stderr").find(says + "nothing recorded"), std::string::npos) << slurp(d + "/rec1.stderr");
+  EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
+  // The profile edited to match (its digest then differs from the passport's): refused too.
+  std::string prof = slurp(d + "/r/profile.toml");
+  ASSERT_NE(prof.find("-4.0e-4, 4.0e-4"), std::string::npos) << prof;
+  prof.replace(prof.find("-4.0e-4, 4.0e-4"), 15, "-1.0e-3, 1.0e-3");
+  std::ofstream(d + "/r/profile.toml") << prof;
+  EXPECT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/rec2"), 2);
+  EXPECT_NE(slurp(d + "/rec2.stderr").find("passport.json: profile_sha256 is \"" + p["profile_sha256"].get<std::string>() +
+                                           "\", but the folder's profile.toml digests to"),
+            std::string::npos)
+      << slurp(d + "/rec2.stderr");
 }
 
 // A resume that finishes an ending trusts the passport in place (it computes nothing again). An
@@ -3786,9 +3854,9 @@ TEST(RigCli, AHistoryTheRunCouldNotRecordIntoIsRefusedFirst) {
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "sqlite:/proc/rig-none/h.sqlite"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stderr").find("cannot be created (/proc is not a writable folder)"), std::string::npos)
       << slurp(d + "/io.stderr");
-  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "sqlite:" + d + "/new/h.sqlite"}, d + "/io"), 0)
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--dry-run", "--db", "sqlite:" + d + "/new.sqlite"}, d + "/io"), 0)
       << slurp(d + "/io.stderr");
-  EXPECT_FALSE(fs::exists(d + "/new"));
+  EXPECT_FALSE(fs::exists(d + "/new.sqlite"));
 }
 
 namespace {
