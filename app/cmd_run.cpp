@@ -958,7 +958,10 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   res.message = reason;
   res.config_error = config_error;
   const PassportInfo info = passport_info(a, p, hw, started, a.serial);
-  write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
+  const nlohmann::ordered_json passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
+  // The same closing table and OUTCOME line as every other ending (a technician's review: an
+  // empty stdout beside an ERROR passport; scripts match "OUTCOME: ERROR").
+  std::cout << "\n" << passport_table(passport) << fmt::format("run folder: {}\n", info.out_dir);
 }
 
 // The files the rig replaces in a run folder must be files: a folder or a FIFO in their place

@@ -1400,6 +1400,9 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   EXPECT_NE(junit.find("<error message="), std::string::npos) << junit;
   EXPECT_TRUE(fs::exists(d + "/run/analysis.json"));
   EXPECT_NE(slurp(d + "/run/report.html").find("HW-1"), std::string::npos);
+  // The closing table and OUTCOME line every ending prints (stdout was empty: a technician's review).
+  EXPECT_NE(slurp(d + "/io.stdout").find("\nOUTCOME: ERROR\n"), std::string::npos) << slurp(d + "/io.stdout");
+  EXPECT_NE(slurp(d + "/io.stdout").find("run folder: " + d + "/run\n"), std::string::npos) << slurp(d + "/io.stdout");
   // The folder stays for a resume once the devices open, and the run says how, as after any stop
   // (a review: a new run into it said "use --resume", the failed run nothing).
   const std::string hint = "to continue: rig run --resume " + d + "/run (0 of 19 phases kept: the devices did not open;";
