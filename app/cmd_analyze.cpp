@@ -118,6 +118,7 @@ struct Args {
   std::optional<std::string> gaps;    // captures only: join (default) | longest | stop
   std::string json_out, svg_dir, window = "hann";
   std::optional<double> rate;
+  std::string rate_text;  // --rate as typed, for its messages (2000000 read "2e+06": a technician's review)
   double confidence = an::AnalysisOptions{}.confidence;
   bool no_bounds = false, no_psd = false, no_oadev = false, no_work_limit = false;
   unsigned threads = 0;
@@ -267,7 +268,8 @@ void check_numeric_options(const Args& a) {
   if (!(a.confidence > 0 && a.confidence < 1))
     throw ConfigError("rig analyze: --confidence " + shortest_text(a.confidence) + ": must be in (0, 1)");
   if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz))
-    throw ConfigError("rig analyze: --rate " + shortest_text(*a.rate) + ": the sample rate must be in (0, " +
+    throw ConfigError("rig analyze: --rate " + (a.rate_text.empty() ? shortest_text(*a.rate) : a.rate_text) +
+                      ": the sample rate must be in (0, " +
                       shortest_text(capture::kMaxRateHz) + "] Hz");
   // 0 was taken silently (the automatic segment; the engine's smallest ring): a typed 0 is a slip.
   constexpr std::size_t kMinSegment = 8;  // welch()'s smallest (analysis/psd.cpp)
@@ -892,9 +894,12 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
   sub->add_option("--segment", args->segment, "PSD segment length, at least 8 (default: chosen from the record)");
   sub->add_option("--overlap", args->overlap, "PSD segment overlap, fraction in [0, 0.95] (default 0.5)");
-  sub->add_option("--threads", args->threads, "threads (default: all cores)");
+  sub->add_option("--threads", args->threads, "threads (default and 0: all cores)");
   sub->add_option("--memory-mib", args->memory_mib, "memory budget for streaming, 1..1048576 MiB (default 384)");
-  sub->callback([args, &rc] { rc = run(*args); });
+  sub->callback([args, &rc, sub] {
+    if (const CLI::Option* r = sub->get_option("--rate"); r->count() > 0) args->rate_text = r->results().back();
+    rc = run(*args);
+  });
 }
 
 }  // namespace rig::cli

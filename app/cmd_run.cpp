@@ -1791,6 +1791,12 @@ int do_run(RunArgs a) {
 
 void add_run(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("run", "Run the U10/U20 acceptance procedure and write the passport");
+  // The codes a script branches on, in the help as in `rig report --help` (a technician's review).
+  sub->footer("Exit codes: 0 PASS; 1 FAIL (a value outside its limits, or a limited value not measured); 2 usage or "
+              "configuration error, found before any device opens (file, line and value named), or a table or run "
+              "folder another rig process holds; 3 aborted (a signal, the e-stop input, the operator); 4 hardware or "
+              "link fault, or a run folder that cannot hold the run's records. A verdict is final once the run "
+              "folder holds no .ending-pending (README, \"On a production line\").");
   auto a = std::make_shared<RunArgs>();
   // Real hardware is named by its file, not here: `--plant hardware` said only "not in
   // {emulated}" (a review).

@@ -131,6 +131,9 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
 
 void add_verify(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("verify", "Check a run folder against the station's seal (seal.json)");
+  sub->footer("Exit codes: 0 verified; 1 not verified (not sealed, another key, a file changed, missing or added "
+              "after the seal, a seal that is not final, the passport not covered); 2 no key, a key that fails its "
+              "checks, or DIR not a folder.");
   auto dir = std::make_shared<std::string>();
   auto key = std::make_shared<std::string>();
   sub->add_option("DIR", *dir, "Run folder")->required();

@@ -345,8 +345,11 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
     if (const toml::node* b = t.get("base")) {
       const auto base_name = b->value<std::string>();
       auto bit = base_name ? builtin.find(*base_name) : builtin.end();
-      if (bit == builtin.end())
-        cfg::reject(*b, "base", "must name a built-in profile");
+      if (bit == builtin.end()) {
+        std::string names;
+        for (const auto& [k, v] : builtin) names += (names.empty() ? "" : ", ") + k;
+        cfg::reject(*b, "base", "must name a built-in profile (" + names + ")");
+      }
       toml::table base = cfg::parse_string(bit->second, "builtin:" + *base_name);
       t.erase("base");
       // A file's own [[classes]] replace the base's rather than append.

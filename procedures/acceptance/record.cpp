@@ -21,7 +21,7 @@ std::string capture_rel(const std::string& phase_id) { return "captures/" + phas
 namespace {
 
 Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name,
-                     const std::string& serial, std::vector<std::string>* partial) {
+                     const std::string& serial, std::vector<std::string>* partial, int attempt) {
   const uint64_t n_total = planned_samples(p, seconds);
   const std::string rel = capture_rel(name);
   std::filesystem::create_directories(ctx.out_dir + "/captures");
@@ -42,8 +42,12 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
              {"filter", filter},
              {"software", std::string("rig ") + RIG_VERSION}};
   capture::Writer w(ctx.out_dir + "/" + rel, h);
-  if (!w.set_aside().empty())  // an earlier attempt's record: kept, and said where
-    ctx.log->warn("{}: {} already held a record (an interrupted attempt's): kept as {}", name, rel,
+  // An earlier attempt's record: kept, and said where, and which: this process's retry after lost
+  // samples, or an interrupted run's (a retry read "an interrupted attempt's": a technician's review).
+  if (!w.set_aside().empty())
+    ctx.log->warn("{}: {} already held a record ({}): kept as {}", name, rel,
+                  attempt > 1 ? fmt::format("attempt {}'s, which lost samples", attempt - 1)
+                              : std::string("an interrupted attempt's"),
                   std::filesystem::path(w.set_aside()).filename().string());
 
   Recorded r;
@@ -95,7 +99,7 @@ Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o,
     if (ctx.progress) ctx.progress->log(fmt::format("  table to {} ({:.4f}°)", to_string(o), table_angle(p, o)));
     ctx.dev.table.move_to(table_angle(p, o), ctx.cancel);
     ctx.dev.clock.sleep_for(p.settle_s, ctx.cancel);  // let the loop and the mount settle
-    Recorded r = record_once(ctx, p, o, seconds, name, serial, partial);
+    Recorded r = record_once(ctx, p, o, seconds, name, serial, partial, attempt);
     r.attempts = attempt;
     if (r.lost <= p.max_lost_samples) {
       ctx.log->info("{}: {} samples, mean x {:.6e} g, {} lost in {} gap(s)", name, r.samples, r.mean_x, r.lost, r.gaps);

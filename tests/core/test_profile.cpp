@@ -129,7 +129,7 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   EXPECT_EQ(error_of(blocks), blocks + ":8:19: 'in_run_blocks_s' = [ 1.0, 6.0 ]: 6 s: each block length must be > 0 "
                                        "and give at least 2 blocks in in_run_s = 10");
   const std::string based = write_tmp("base.toml", "base = \"cj\"\n");
-  EXPECT_EQ(error_of(based), based + ":1:8: 'base' = 'cj': must name a built-in profile");
+  EXPECT_EQ(error_of(based), based + ":1:8: 'base' = 'cj': must name a built-in profile (ci, paper)");
 }
 
 TEST(Profile, FileCanStartFromABuiltinAndOverride) {

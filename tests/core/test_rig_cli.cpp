@@ -549,7 +549,7 @@ TEST(RigCli, AnalyzeOptionErrorsNameTheOptionAndValue) {
       {{"--rate", "0x10"}, "rig: usage error: --rate: '0x10' is not a decimal number"},
       {{"--rate", "0"}, "--rate 0: the sample rate must be in (0, 1e+06] Hz"},
       {{"--rate", "nan"}, "--rate nan: the sample rate must be in (0, 1e+06] Hz"},
-      {{"--rate", "1e300"}, "--rate 1e+300: the sample rate must be in (0, 1e+06] Hz"}};
+      {{"--rate", "1e300"}, "--rate 1e300: the sample rate must be in (0, 1e+06] Hz"}};
   int i = 0;
   for (const auto& [opt, expect] : cases) {
     const std::string err = analyze_refused(d + "/v.txt", opt, d + "/io" + std::to_string(i++));
@@ -1127,6 +1127,7 @@ TEST(RigCli, AnalyzeShowsEveryValueAsTyped) {
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"--rate", "1000001"}, "--rate 1000001: the sample rate must be in (0, 1e+06] Hz"},
       {{"--rate", "1000000.4"}, "--rate 1000000.4: the sample rate must be in (0, 1e+06] Hz"},
+      {{"--rate", "2000000"}, "--rate 2000000: the sample rate must be in (0, 1e+06] Hz"},
       {{"--overlap", "0.9500001"}, "--overlap 0.9500001: the PSD segment overlap must be in [0, 0.95]"},
       {{"--confidence", "1.0000001"}, "--confidence 1.0000001: must be in (0, 1)"}};
   int i = 0;
@@ -2466,6 +2467,25 @@ TEST(RigCli, ValuesFromACaptureWithJoinedGapsSaySo) {
           << c.drop << " " << n << ": " << p["values"][n]["reason"];
     EXPECT_EQ(slurp(r + "/run.log").find("did not fire"), std::string::npos) << c.drop << ": it fired";
   }
+}
+
+// A capture retried after lost samples sets the first attempt's record aside, and the log says it
+// was that attempt's, not an interrupted run's (a technician's review: "an interrupted attempt's"
+// where nothing was interrupted). drop@170000 falls in the raw capture (above).
+TEST(RigCli, ARetriedCaptureSaysWhichAttemptItSetAside) {
+  const std::string d = tmp("retry-aside");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/r", "--inject", "drop@170000:10"},
+                d + "/io"),
+            0)
+      << slurp(d + "/io.stderr");
+  const std::string log = slurp(d + "/r/run.log");
+  EXPECT_NE(log.find("; retrying (1/"), std::string::npos) << log;
+  EXPECT_NE(log.find("captures/raw-U10.cap already held a record (attempt 1's, which lost samples): kept as "
+                     "raw-U10.cap.interrupted-1"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("an interrupted attempt's"), std::string::npos) << log;
 }
 
 // `--plant hardware` (the word a procedure sheet may use) points to --hardware FILE, which is how
