@@ -1561,16 +1561,25 @@ TEST(RigCli, TheEndingsListHoldsOnlyWhatIsLeft) {
   EXPECT_EQ(run({"verify", d + "/r", "--seal-key", key}, d + "/verify2"), 0) << slurp(d + "/verify2.stdout");
 }
 
-// `rig report` and `rig history --record` hold an unsealed passport to its folder as a resume does
-// (a technician's review: a FAIL edited to PASS with its limit loosened, each value agreeing with
-// its own limits, was drawn and recorded PASS beside the genuine FAIL row). Exit 2, nothing done.
-TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
-  const std::string d = tmp("edited-record");
+namespace {
+// A run of the ci profile with a bias limit it fails (-5e-4 against +-4e-4), unsealed and
+// without history, into d/r: a FAIL passport to edit.
+void run_failing_bias(const std::string& d) {
   fs::create_directories(d);
   std::ofstream(d + "/tight.toml") << "base = \"ci\"\n[profile]\nname = \"tight\"\n[limits]\nbias = [-4.0e-4, 4.0e-4]\n";
   ASSERT_EQ(run({"run", "--profile", d + "/tight.toml", "--yes", "--quiet", "--no-history", "--out", d + "/r"}, d + "/io1"),
             1)
       << slurp(d + "/io1.stderr");
+}
+}  // namespace
+
+// `rig report` and `rig history --record` hold an unsealed passport to its folder as a resume does
+// (a technician's review: a FAIL edited to PASS with its limit loosened, each value agreeing with
+// its own limits, was drawn and recorded PASS beside the genuine FAIL row). Exit 2, nothing done.
+TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
+  const std::string d = tmp("edited-record");
+  run_failing_bias(d);
+  if (HasFatalFailure()) return;
   const std::string db = d + "/h.sqlite";
   // The genuine folder: drawn and recorded.
   EXPECT_EQ(run({"report", d + "/r"}, d + "/rep0"), 0) << slurp(d + "/rep0.stderr");
@@ -1608,11 +1617,8 @@ TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
 // 0, a PASS history row beside a junit.xml saying FAIL). Nothing is done: exit 2.
 TEST(RigCli, AnEditedPassportIsNotFinishedByAResume) {
   const std::string d = tmp("ending-edited");
-  fs::create_directories(d);
-  std::ofstream(d + "/tight.toml") << "base = \"ci\"\n[profile]\nname = \"tight\"\n[limits]\nbias = [-4.0e-4, 4.0e-4]\n";
-  ASSERT_EQ(run({"run", "--profile", d + "/tight.toml", "--yes", "--quiet", "--no-history", "--out", d + "/r"}, d + "/io1"),
-            1)
-      << slurp(d + "/io1.stderr");
+  run_failing_bias(d);
+  if (HasFatalFailure()) return;
   const std::string passport = slurp(d + "/r/passport.json"), junit = slurp(d + "/r/junit.xml");
   auto stop_before_junit = [&](const std::string& new_passport) {
     std::ofstream(d + "/r/passport.json") << new_passport;
