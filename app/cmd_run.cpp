@@ -1388,6 +1388,13 @@ int do_run(RunArgs a) {
   const std::vector<Phase> phases = acceptance::build_phases(p, state, planned_table_timing(a, hw, plant_cfg), dut.can);
   MeasurementSet values;
   acceptance::declare_values(p, phases, values);
+  // A profile that judges nothing (no limits, no class table: a truncated file, a [limits]
+  // renamed) would PASS every DUT with every value UNSET (a review): refused before anything.
+  if (std::none_of(values.all().begin(), values.all().end(),
+                   [](const Measurement& m) { return m.limits.has_value() || m.required; }))
+    throw ConfigError(fmt::format("profile {}: no value has limits (no [limits] table, no [[classes]]): a run would "
+                                  "PASS with nothing judged; give the limits it is to judge by",
+                                  shown_text(p.source)));
   const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
   TerminalView view(stderr, a.quiet);
   // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not

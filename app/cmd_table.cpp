@@ -1,6 +1,5 @@
 // `rig table`: manual control of a real or emulated rotary table over Modbus,
 // for a technician at the rig (docs/table-registers.md).
-#include <charconv>
 #include <unistd.h>
 
 #include <chrono>
@@ -287,19 +286,10 @@ void add_table(CLI::App& app, int& rc) {
       ->excludes(where);
   sub->add_option("--hardware", a->hardware, "Take the [table] section of this hardware file (flags override)");
   sub->add_option("--unit", a->unit, "Modbus unit id (default 1)")->check(CLI::Range(1, 247));
-  // NaN passes CLI11's Range (every comparison false) and was named by its internal key,
-  // 'response_timeout_s' (a technician's review): refused here as the option typed.
+  // NaN passed CLI11's Range (every comparison false) and was named by its internal key,
+  // 'response_timeout_s' (a technician's review): one check, the value named as typed.
   sub->add_option("--timeout", a->timeout_s, "Response timeout per request, seconds (default 0.3)")
-      ->check(CLI::Validator(
-          [](std::string& v) {
-            double x = 0;
-            const auto r = std::from_chars(v.data(), v.data() + v.size(), x);
-            return r.ec == std::errc() && r.ptr == v.data() + v.size() && !std::isfinite(x)
-                       ? "Value " + v + " not in range [0.01 - 10]"
-                       : std::string();
-          },
-          "", "finite"))
-      ->check(CLI::Range(0.01, 10.0));
+      ->check(number_in(0.01, 10.0, false, "a number of seconds"));
   sub->add_option("--drive", a->drive, "Drive protocol: rig-v1 (default) or cia402")
       ->check(CLI::IsMember({"rig-v1", "cia402"}));
   sub->add_option("--drive-map", a->drive_map, "CiA 402 drive map file (drives/*.toml), with --drive cia402");
@@ -332,7 +322,7 @@ void add_table(CLI::App& app, int& rc) {
   // travel limits are the drive's, checked when it answers.
   mv->add_option("DEG", a->deg, "Target angle, degrees (a finite number)")
       ->required()
-      ->check(finite("a finite number of degrees"));
+      ->check(number_in(-200000.0, 200000.0, false, "a number of degrees"));  // the client's bound, before the drive is asked
   mv->callback([a, &rc] {
     with_table(*a, [&](RotaryTable& t, double tol) {
       SignalCancel sig;

@@ -1,6 +1,9 @@
 #include "rig/core/toml_util.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <filesystem>
 #include <iostream>
 #include <mutex>
@@ -104,8 +107,18 @@ toml::table parse_file(const std::string& path) {
   if (!std::filesystem::exists(path, ec))
     throw ConfigError(shown_text(path) + (ec ? ": cannot be read: " + ec.message() : std::string(": no such file")));
   if (std::filesystem::is_directory(path, ec)) throw ConfigError(shown_text(path) + ": a folder, not a file");
+  // A FIFO's open waits for a writer that may never come, with every signal the watcher takes
+  // lost on the blocked main thread (a review: `--profile FIFO` ended only by SIGKILL); a device
+  // reads as whatever it yields (/dev/zero as an empty file). Only a regular file is read.
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw ConfigError(shown_text(path) + ": not a regular file (a pipe, a device or a socket): give the file itself");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (in) text << in.rdbuf();
+  if (!in || in.bad())  // toml++ said "FILE:0:0: File could not be opened for reading", with no reason
+    throw ConfigError(shown_text(path) + ": cannot be read: " + std::strerror(errno));
   try {
-    return toml::parse_file(path);
+    return toml::parse(text.str(), path);
   } catch (const toml::parse_error& e) {
     std::ostringstream os;
     os << pos(e.source()) << ": " << e.description();

@@ -2494,6 +2494,63 @@ TEST(RigCli, ARetriedCaptureSaysWhichAttemptItSetAside) {
   EXPECT_EQ(log.find("an interrupted attempt's"), std::string::npos) << log;
 }
 
+// A profile that judges nothing (no [limits], no [[classes]]: a file cut short) is refused before
+// anything, dry run included; it ran PASS with every value UNSET (a review).
+TEST(RigCli, AProfileThatJudgesNothingIsRefused) {
+  const std::string d = tmp("judges-nothing");
+  fs::create_directories(d);
+  std::string text = slurp(std::string(RIG_SOURCE_DIR) + "/profiles/ci.toml");
+  text = text.substr(0, text.find("[limits]")) + text.substr(text.find("[plant]"));
+  text.replace(text.find("name = \"ci\""), 11, "name = \"cut\"");
+  std::ofstream(d + "/cut.toml") << text;
+  for (const char* dry : {"--dry-run", "--quiet"}) {
+    EXPECT_EQ(run({"run", "--profile", d + "/cut.toml", "--yes", "--no-history", dry, "--out", d + "/r"}, d + "/io"), 2)
+        << slurp(d + "/io.stderr");
+    EXPECT_NE(slurp(d + "/io.stderr").find("cut.toml: no value has limits (no [limits] table, no [[classes]]): a run "
+                                           "would PASS with nothing judged"),
+              std::string::npos)
+        << slurp(d + "/io.stderr");
+    EXPECT_FALSE(fs::exists(d + "/r"));
+  }
+}
+
+// A TOML file that is not a regular file is refused before it is opened: a FIFO's open waited for a
+// writer, with SIGINT, SIGTERM and SIGHUP lost on the blocked main thread (a review: only SIGKILL
+// ended it); a device read as whatever it yields. (`timeout` ends a hang as a failure.)
+TEST(RigCli, AProfileThatIsNoRegularFileIsRefusedNotOpened) {
+  const std::string d = tmp("profile-fifo");
+  fs::create_directories(d);
+  ASSERT_EQ(::mkfifo((d + "/p.fifo").c_str(), 0644), 0);
+  for (const std::string& args : {"run --profile " + d + "/p.fifo --dry-run --no-history",
+                                  std::string("run --profile ci --dry-run --no-history --hardware /dev/zero"),
+                                  "table --hardware " + d + "/p.fifo status"}) {
+    const int st = std::system(("timeout 20 " + std::string(RIG_BINARY) + " " + args + " > /dev/null 2> " + d + "/err")
+                                   .c_str());
+    EXPECT_EQ(WEXITSTATUS(st), 2) << args << ": " << slurp(d + "/err");
+    const std::string err = slurp(d + "/err");
+    EXPECT_TRUE(err.find("not a regular file") != std::string::npos || err.find("Not a regular file") != std::string::npos)
+        << args << ": " << err;
+  }
+}
+
+// The emulated DUT's serial ([plant.dut] serial) is held to --serial's rule at its line: a bell and
+// a newline in it ran PASS into a passport its own `rig report` refused, 60 characters were cut to
+// 32 (a review).
+TEST(RigCli, TheEmulatedDutsSerialIsHeldToTheSerialRule) {
+  const std::string d = tmp("plant-serial");
+  fs::create_directories(d);
+  struct Case {
+    std::string value, says;
+  };
+  for (const Case& c : {Case{"\"A\\u0007B\"", "'serial' = \"A\\u0007B\": not printable ASCII"}, Case{"\"\"", "'serial' = '': empty"},
+                        Case{"\"" + std::string(60, 'S') + "\"", "60 characters; a DUT reports at most 32"}}) {
+    std::ofstream(d + "/p.toml") << "base = \"ci\"\n[profile]\nname = \"s\"\n[plant.dut]\nserial = " << c.value << "\n";
+    EXPECT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--no-history", "--dry-run"}, d + "/io"), 2) << c.value;
+    EXPECT_NE(slurp(d + "/io.stderr").find("p.toml:5:10: 'serial' = "), std::string::npos) << slurp(d + "/io.stderr");
+    EXPECT_NE(slurp(d + "/io.stderr").find(c.says), std::string::npos) << slurp(d + "/io.stderr");
+  }
+}
+
 // `--plant hardware` (the word a procedure sheet may use) points to --hardware FILE, which is how
 // real hardware is named (a review: "hardware not in {emulated}").
 TEST(RigCli, PlantHardwarePointsToTheHardwareFile) {

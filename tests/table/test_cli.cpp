@@ -201,7 +201,8 @@ TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   // NaN passed CLI11's range and was named by its internal key (a technician's review).
   for (const char* bad : {"nan", "inf"}) {
     EXPECT_EQ(rig(std::string("--modbus 127.0.0.1:1 --timeout ") + bad + " status", out), 2) << out;
-    EXPECT_NE(out.find(std::string("--timeout: Value ") + bad + " not in range [0.01 - 10]"), std::string::npos) << out;
+    EXPECT_NE(out.find(std::string("--timeout: '") + bad + "': must be a number of seconds in [0.01, 10]"), std::string::npos)
+        << out;
     EXPECT_EQ(out.find("response_timeout_s"), std::string::npos) << out;
   }
   // A host that does not answer (TEST-NET-1, RFC 5737: never routed) is said so, not as the
@@ -293,15 +294,22 @@ TEST_F(RigTable, AnAngleThatIsNotFiniteIsRefusedBeforeTheDriveIsAsked) {
   for (const std::string& where : {std::string("--modbus 127.0.0.1:1 --timeout 0.1"), where_}) {
     for (const std::string bad : {"nan", "inf"}) {
       EXPECT_EQ(rig(where + " move " + bad, out), 2) << where << " " << bad << ": " << out;
-      EXPECT_NE(out.find("DEG: '" + bad + "': must be a finite number of degrees"), std::string::npos) << out;
+      EXPECT_NE(out.find("DEG: '" + bad + "': must be a number of degrees in [-200000, 200000]"), std::string::npos)
+          << out;
       EXPECT_EQ(out.find("cannot connect"), std::string::npos) << out;
     }
     // A number no double holds says which way (1e-400 read "must be a finite number", a review).
     EXPECT_EQ(rig(where + " move 1e400", out), 2) << out;
-    EXPECT_NE(out.find("DEG: '1e400' is beyond the range of a double: must be a finite number of degrees"),
+    EXPECT_NE(out.find("DEG: '1e400' is beyond the range of a double: must be a number of degrees in [-200000, 200000]"),
               std::string::npos) << out;
+    // Beyond any table's travel (the client's bound): refused as typed before the drive is asked
+    // too (it was connected to first, the angle then shown as 10000000000.0000°: a review).
+    EXPECT_EQ(rig(where + " move 1e10", out), 2) << out;
+    EXPECT_NE(out.find("DEG: '1e10': must be a number of degrees in [-200000, 200000]"), std::string::npos) << out;
+    EXPECT_EQ(out.find("cannot connect"), std::string::npos) << out;
     EXPECT_EQ(rig(where + " move 1e-400", out), 2) << out;
-    EXPECT_NE(out.find("DEG: '1e-400' is nearer 0 than the smallest double: must be a finite number of degrees"),
+    EXPECT_NE(out.find("DEG: '1e-400' is nearer 0 than the smallest double: must be a number of degrees in [-200000, "
+                       "200000]"),
               std::string::npos) << out;
   }
   EXPECT_NEAR(emu_->actual_angle_deg(), 30.0, 0.005);
