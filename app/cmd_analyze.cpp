@@ -267,9 +267,9 @@ void check_numeric_options(const Args& a) {
     throw ConfigError("rig analyze: --overlap " + shortest_text(a.overlap) + ": the PSD segment overlap must be in [0, 0.95]");
   if (!(a.confidence > 0 && a.confidence < 1))
     throw ConfigError("rig analyze: --confidence " + shortest_text(a.confidence) + ": must be in (0, 1)");
-  if (a.rate && !(std::isfinite(*a.rate) && *a.rate > 0 && *a.rate <= capture::kMaxRateHz))
+  if (a.rate && !(std::isfinite(*a.rate) && *a.rate >= capture::kMinRateHz && *a.rate <= capture::kMaxRateHz))
     throw ConfigError("rig analyze: --rate " + (a.rate_text.empty() ? shortest_text(*a.rate) : a.rate_text) +
-                      ": the sample rate must be in (0, " +
+                      ": the sample rate must be in [" + shortest_text(capture::kMinRateHz) + ", " +
                       shortest_text(capture::kMaxRateHz) + "] Hz");
   // 0 was taken silently (the automatic segment; the engine's smallest ring): a typed 0 is a slip.
   constexpr std::size_t kMinSegment = 8;  // welch()'s smallest (analysis/psd.cpp)

@@ -103,8 +103,9 @@ int cmd_import(const ImportArgs& a) {
   if (a.orientation != "U10" && a.orientation != "U20")
     throw ConfigError("rig capture import: --orientation must be U10 or U20, got '" + a.orientation + "'");
   // The header's rate is checked as every reader of a capture checks it (capture.hpp).
-  if (a.rate_hz && !(*a.rate_hz > 0 && *a.rate_hz <= capture::kMaxRateHz))
-    throw ConfigError("rig capture import: --rate " + fmt::format("{}", *a.rate_hz) + ": must be in (0, " +
+  if (a.rate_hz && !(*a.rate_hz >= capture::kMinRateHz && *a.rate_hz <= capture::kMaxRateHz))
+    throw ConfigError("rig capture import: --rate " + fmt::format("{}", *a.rate_hz) + ": must be in [" +
+                      fmt::format("{}", capture::kMinRateHz) + ", " +
                       fmt::format("{}", capture::kMaxRateHz) + "] Hz");
   check_new_file(a.out, "rig capture import: --out");
   const toml::table hw = load_hardware_file(a.hardware, {"dut"});

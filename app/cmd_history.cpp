@@ -340,10 +340,9 @@ void record(const HistoryArgs& a) {
     check_seal_before_recording(a);
     p = report::read_passport(a.record);  // the checks `rig report` makes: an edited passport is not history
     // Nor one whose limits were loosened with its verdict (each value then agrees with its own
-    // limits): an unsealed passport is held to its folder's profile.toml and junit.xml, as a
-    // resume holds it (a technician's review: a FAIL edited to PASS was recorded PASS).
-    if (!seal_in(a.record))
-      if (const std::string why = passport_unlike_its_folder(a.record, p); !why.empty())
+    // limits): the passport is held to its folder's profile.toml and junit.xml, as a resume holds
+    // an unsealed one (a technician's review: a FAIL edited to PASS was recorded PASS).
+    if (const std::string why = passport_unlike_its_folder(a.record, p); !why.empty())
         throw ConfigError(a.record + "/passport.json: " + why +
                           ": the passport was changed after its run wrote it; nothing recorded");
   } catch (const ConfigError& e) {

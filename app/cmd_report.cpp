@@ -5,7 +5,6 @@
 #include "app/commands.hpp"
 #include "app/folder_lock.hpp"
 #include "app/passport_held.hpp"
-#include "app/run_seal.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/path_kind.hpp"
 #include "rig/report/passport_read.hpp"
@@ -31,10 +30,11 @@ void add_report(CLI::App& app, int& rc) {
     // alone left that window, a code review). A path that is no folder is named by the reader.
     std::optional<FolderLock> lock;
     if (path_kind(*dir, "rig report") == PathKind::directory) lock.emplace(*dir, "rig report " + *dir, false);
-    // An unsealed passport is drawn only as its run wrote it: its limits its folder's
-    // profile.toml's, its junit.xml agreeing (a technician's review: a FAIL edited to PASS, its
-    // limit loosened with it, was drawn PASS). A sealed one: `rig verify` says whether it is.
-    if (lock && !seal_in(*dir))
+    // A passport is drawn only as its run wrote it: its limits its folder's profile.toml's, its
+    // junit.xml agreeing (a technician's review: a FAIL edited to PASS, its limit loosened with
+    // it, was drawn PASS). Sealed or not: a seal file is not checked here (no key), and an empty
+    // one in the folder let the edit by (a re-test); `rig verify` says who wrote the bytes.
+    if (lock)
       if (const std::string why = passport_unlike_its_folder(*dir, report::read_passport(*dir)); !why.empty())
         throw ConfigError(*dir + "/passport.json: " + why + ": the passport was changed after its run wrote it; "
                           "report.html not written");

@@ -1183,12 +1183,19 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
                                   : std::string("a rig-v1 table (docs/table-registers.md)");
     // Speeds the hardware file does not give are not sent: the drive keeps its own, and the plan
     // assumes the defaults (a code review: "(as sent)" where nothing is sent).
-    const bool sent = t->contains("velocity_dps") || t->contains("accel_dps2");
-    out.push_back(fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s, {:g}°/s² ({})", drive, where, unit,
-                              timing.velocity_dps, timing.accel_dps2,
-                              sent ? "as sent"
-                                   : "planned: no [table] velocity_dps or accel_dps2, so none is sent; the drive "
-                                     "moves at its own"));
+    // Each value said for itself: one given and one not read "(as sent)" for both (a re-test).
+    const bool v_sent = t->contains("velocity_dps"), a_sent = t->contains("accel_dps2");
+    out.push_back(v_sent == a_sent
+                      ? fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s, {:g}°/s² ({})", drive, where, unit,
+                                    timing.velocity_dps, timing.accel_dps2,
+                                    v_sent ? "as sent"
+                                           : "planned: no [table] velocity_dps or accel_dps2, so none is sent; the "
+                                             "drive moves at its own")
+                      : fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s ({}), {:g}°/s² ({})", drive, where,
+                                    unit, timing.velocity_dps,
+                                    v_sent ? "as sent" : "planned: no velocity_dps, none sent; the drive's own",
+                                    timing.accel_dps2,
+                                    a_sent ? "as sent" : "planned: no accel_dps2, none sent; the drive's own"));
     // What the dry run could not check (a review: it said nothing of it): a rig-v1 drive's travel
     // is in its own registers, read when it answers.
     if (modbus::table_drive(*t) != "cia402")

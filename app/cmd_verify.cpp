@@ -12,6 +12,7 @@
 #include "app/run_seal.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/path_kind.hpp"
 
 namespace rig::cli {
@@ -30,7 +31,7 @@ std::vector<std::string> entries_in(const std::string& dir, std::vector<std::str
     if (outside_the_seal(rel)) {
       if (it->is_directory() && !it->is_symlink()) it.disable_recursion_pending();
       if (outside && rel != "run.log" && rel != "seal.json" && rel != "seal.prev.json" && rel != kEndingPending)
-        outside->push_back(rel + (it->is_directory() && !it->is_symlink() ? "/" : ""));
+        outside->push_back(shown_text(rel) + (it->is_directory() && !it->is_symlink() ? "/" : ""));  // \xNN: a newline in a name made a line of its own (a re-test)
       continue;
     }
     if (it->is_directory() && !it->is_symlink()) continue;

@@ -6,9 +6,11 @@
 
 #include <fmt/format.h>
 
+#include "app/run_seal.hpp"
 #include "procedures/acceptance/procedure.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/state.hpp"
+#include "rig/core/markup.hpp"
 #include "rig/seal/seal.hpp"
 
 namespace rig::cli {
@@ -22,6 +24,45 @@ std::string file_text(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
+std::size_t occurrences(const std::string& hay, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + needle.size())) ++n;
+  return n;
+}
+
+// What junit.xml (as the rig writes it: one testsuite, its properties, a <failure> per failed
+// value) says against the passport; "" when it agrees. Read as elements, not as text anywhere in
+// the file: a comment holding `value="PASS"` and `failures="0"` passed a search (a re-test).
+std::string junit_unlike_passport(std::string junit, const nlohmann::json& passport, std::size_t failed,
+                                  const std::string& which) {
+  for (auto c = junit.find("<!--"); c != std::string::npos; c = junit.find("<!--", c)) {
+    const auto e = junit.find("-->", c);
+    junit.erase(c, e == std::string::npos ? std::string::npos : e + 3 - c);
+  }
+  const auto suite = junit.find("<testsuite ");
+  const auto suite_end = suite == std::string::npos ? std::string::npos : junit.find('>', suite);
+  if (suite_end == std::string::npos || occurrences(junit, "<testsuite ") != 1)
+    return which + " is not the one testsuite the rig writes";
+  const std::string tag = junit.substr(suite, suite_end - suite);
+  const auto property = [&](const std::string& name, const std::string& value) {
+    return occurrences(junit, "<property name=\"" + name + "\" ") == 1 &&
+           junit.find("<property name=\"" + name + "\" value=\"" + markup_escape(value) + "\"/>") != std::string::npos;
+  };
+  const std::string outcome = passport.value("outcome", "");
+  if (!property("outcome", outcome)) return "its outcome is " + outcome + ", but " + which + " states another";
+  if (tag.find(" failures=\"" + std::to_string(failed) + "\"") == std::string::npos ||
+      occurrences(junit, "<failure ") != failed)
+    return fmt::format("{} values FAIL in it, but {} counts other failures", failed, which);
+  // Whose run it is: a serial relabelled in the passport alone passed (a re-test).
+  if (passport.contains("serial") && passport["serial"].is_string() &&
+      !property("serial", passport["serial"].get<std::string>()))
+    return "its serial is " + passport["serial"].dump() + ", but " + which + " names another DUT";
+  if (passport.contains("profile_sha256") && passport["profile_sha256"].is_string() &&
+      !property("profile_sha256", passport["profile_sha256"].get<std::string>()))
+    return "its profile_sha256 is not the one " + which + " states";
+  return "";
+}
+
 }  // namespace
 
 std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json& passport,
@@ -44,25 +85,29 @@ std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json
   }
   for (const auto& [name, v] : values.items())
     if (!declared.find(name)) return "values." + name + " is no measurement of its procedure";
-  // junit.xml states the same verdict: staged beside the passport, or already in place.
+  // junit.xml states the same verdict: the one staged with this passport (its ending stopped
+  // between the two renames: .ending-pending there, the passport itself in place), else the one
+  // in place. A junit.xml.tmp beside no list, or beside a passport still staged, is not this
+  // passport's (a re-test: a stray one, written by hand, stood in for junit.xml's FAIL).
   std::error_code ec;
-  const bool staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
+  const bool staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec) && pending_steps(dir).has_value() &&
+                      !fs::exists(dir + "/passport.json.tmp", ec);
   if (!staged && !fs::is_regular_file(dir + "/junit.xml", ec)) return "no junit.xml beside it, staged or in place";
-  const std::string junit = file_text(dir + (staged ? "/junit.xml.tmp" : "/junit.xml"));
-  const std::string outcome = passport.value("outcome", "");
   const std::string which = staged ? "the junit.xml staged with it" : "junit.xml";
-  if (junit.find("<property name=\"outcome\" value=\"" + outcome + "\"/>") == std::string::npos)
-    return "its outcome is " + outcome + ", but " + which + " states another";
-  if (junit.find("<testsuite name=") == std::string::npos ||
-      junit.find("failures=\"" + std::to_string(failed) + "\"", junit.find("<testsuite name=")) == std::string::npos)
-    return fmt::format("{} values FAIL in it, but {} counts other failures", failed, which);
+  return junit_unlike_passport(file_text(dir + (staged ? "/junit.xml.tmp" : "/junit.xml")), passport, failed, which);
   return "";
 }
 
 std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::json& passport) {
   const std::string path = dir + "/profile.toml";
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return "";
+  if (!fs::is_regular_file(path, ec)) {
+    // A folder of a rig before it kept one has nothing to hold the passport to; a passport that
+    // names its profile's digest was written beside one (a re-test: deleting it let any edit by).
+    if (passport.contains("profile_sha256") || fs::exists(dir + "/run.json", ec))
+      return "the folder's profile.toml, which its run judged it by, is missing";
+    return "";
+  }
   std::string source;
   const toml::table t = acceptance::load_profile_table(path, source);
   const acceptance::Profile p = acceptance::parse_profile(t, source);

@@ -232,9 +232,10 @@ Reader::Reader(const std::string& path) : path_(path) {
     throw ConfigError(path + ": capture header is not valid JSON: " + e.what());
   }
   // A rate the analysis cannot use is named here, not later as an option error or a PSD failure.
-  if (!std::isfinite(header_.rate_hz) || header_.rate_hz <= 0 || header_.rate_hz > kMaxRateHz) {
+  if (!std::isfinite(header_.rate_hz) || header_.rate_hz < kMinRateHz || header_.rate_hz > kMaxRateHz) {
     std::ostringstream os;
-    os << path << ": capture header rate_hz = " << header_.rate_hz << " is out of range (0, " << kMaxRateHz << "] Hz";
+    os << path << ": capture header rate_hz = " << header_.rate_hz << " is out of range [" << kMinRateHz << ", "
+       << kMaxRateHz << "] Hz";
     throw ConfigError(os.str());
   }
   data_start_ = align16(16 + len);

@@ -22,7 +22,10 @@ inline constexpr uint32_t kEndMagic = 0x31444E45;    // "END1"
 inline constexpr std::size_t kRecordSize = 16;       // u32 seq, f32 x, f32 y, u32 status
 inline constexpr std::size_t kBlockHeaderSize = 16;  // u32 magic, u32 count, u32 payload crc, u32 header crc
 inline constexpr uint32_t kMaxBlockSamples = 1u << 20;
-inline constexpr double kMaxRateHz = 1e6;  // a header rate outside (0, 1 MHz] is damage (the DUTs stream at 1 kHz)
+inline constexpr double kMaxRateHz = 1e6;  // a header rate outside [1 uHz, 1 MHz] is damage (the DUTs stream at 1 kHz)
+// One sample in 11.6 days: below it nothing this rig records, and 5e-324 Hz gave infinite taus,
+// exit 0 (a review).
+inline constexpr double kMinRateHz = 1e-6;
 
 struct Header {
   std::string serial;
