@@ -21,7 +21,19 @@ RECORD = np.dtype([("seq", "<u4"), ("x", "<f4"), ("y", "<f4"), ("status", "<u4")
 BLOCK, END = 0x314B4C42, 0x31444E45
 
 
-MAX_RATE_HZ = 1e6  # rig/capture/capture.cpp's kMaxRateHz
+MAX_RATE_HZ = 1e6  # rig/capture/capture.hpp's kMaxRateHz
+MIN_RATE_HZ = 1e-6  # and kMinRateHz
+
+
+def _unique_keys(path):
+    def pairs(kv):  # a key twice: json keeps the last, as nlohmann does; rig's reader refuses it
+        seen = set()
+        for k, _ in kv:
+            if k in seen:
+                raise ValueError(f"{path}: capture header: key '{k}' appears twice in one object")
+            seen.add(k)
+        return dict(kv)
+    return pairs
 
 
 def _no_constant(path):
@@ -51,8 +63,8 @@ def _check_header(path, h):
     if isinstance(r, bool) or not isinstance(r, (int, float)):
         raise ValueError(f"{path}: capture header field rate_hz is {json.dumps(r)}, not a number")
     r = float(r)  # (a number beyond a double was refused while parsing, as rig's parser does)
-    if not (0 < r <= MAX_RATE_HZ):
-        raise ValueError(f"{path}: capture header rate_hz = {r:g} is out of range (0, {MAX_RATE_HZ:g}] Hz")
+    if not (MIN_RATE_HZ <= r <= MAX_RATE_HZ):
+        raise ValueError(f"{path}: capture header rate_hz = {r:g} is out of range [{MIN_RATE_HZ:g}, {MAX_RATE_HZ:g}] Hz")
 
 
 def _with_header(raw, header):
@@ -107,7 +119,8 @@ def load(path):
     if zlib.crc32(hjson) != hcrc:
         raise ValueError(f"{path}: header CRC mismatch")
     as_float, as_int = _number(path)
-    header = json.loads(hjson, parse_constant=_no_constant(path), parse_float=as_float, parse_int=as_int)
+    header = json.loads(hjson, parse_constant=_no_constant(path), parse_float=as_float, parse_int=as_int,
+                        object_pairs_hook=_unique_keys(path))
     _check_header(path, header)
     pos = (16 + hlen + 15) & ~15
     parts = []

@@ -16,6 +16,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/core/huge_pages.hpp"
+#include "rig/core/json_unique.hpp"
 #include "rig/core/set_aside.hpp"
 
 namespace rig::capture {
@@ -196,7 +197,7 @@ Reader::Reader(const std::string& path) : path_(path) {
   if (std::fread(js.data(), 1, len, f_) != len) throw ConfigError(path + ": capture header truncated");
   if (crc(js.data(), len) != want_crc) throw ConfigError(path + ": capture header CRC mismatch (offset 16)");
   try {
-    const auto j = nlohmann::json::parse(js);
+    const auto j = parse_json_unique_keys(js);  // rate_hz twice was read at its second rate (a review)
     if (!j.is_object()) throw ConfigError(path + ": capture header is " + j.type_name() + ", not a JSON object");
     // The text fields, each named when it is not text (tools/rigcap.py says the same).
     const auto text = [&](const char* key) -> std::string {
@@ -228,6 +229,8 @@ Reader::Reader(const std::string& path) : path_(path) {
     if (const auto sj = header_.extra.find("stream"); sj != header_.extra.end() && sj->is_object())
       if (const auto y = sj->find("y"); y != sj->end() && y->is_string() && !y->get<std::string>().empty())
         y_named_ = true;
+  } catch (const RepeatedJsonKey& e) {
+    throw ConfigError(path + ": capture header: " + e.what());
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError(path + ": capture header is not valid JSON: " + e.what());
   }

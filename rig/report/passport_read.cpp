@@ -8,6 +8,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
+#include "rig/core/json_unique.hpp"
 #include "rig/core/path_kind.hpp"
 #include "rig/report/passport_check.hpp"
 #include "rig/report/timefmt.hpp"
@@ -65,7 +66,9 @@ void check_value(const std::string& name, const json& m, const std::string& path
 
 json parse_json_text(const std::string& text, const std::string& path) {
   try {
-    return json::parse(text);
+    return parse_json_unique_keys<json>(text);  // a repeated "outcome" drew its last (a review)
+  } catch (const RepeatedJsonKey& e) {
+    throw ConfigError(path + ": " + e.what());
   } catch (const json::parse_error& e) {
     // nlohmann's message carries "at line L, column C" already.
     throw ConfigError(path + ": malformed JSON: " + e.what());

@@ -1669,6 +1669,13 @@ TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
   std::ofstream(c + "/passport.json") << q.dump(2);
   refused(c, "its serial is \"QPA-0412\", but junit.xml names another DUT");
   EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
+  // A key twice (nlohmann kept the last: a FAIL passport with "outcome": "PASS" after it was drawn PASS).
+  c = d + "/twice";
+  fs::copy(genuine + "/r", c, fs::copy_options::recursive);
+  std::string twice = slurp(c + "/passport.json");
+  twice.insert(twice.rfind('}'), ",\n  \"outcome\": \"PASS\"\n");
+  std::ofstream(c + "/passport.json") << twice;
+  refused(c, "/twice/passport.json: key 'outcome' appears twice in one object");
   // Genuine: an ending stopped before its passport's rename (both staged, the list there) is the
   // earlier passport beside the earlier junit.xml, drawn as such (a re-test: it was refused as
   // changed, the staged junit.xml compared with the passport not yet replaced).
@@ -3159,13 +3166,15 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
   // length, with its CRC redone, so the only damage is what the header says.
   const std::string good_cap = d + "/good.cap";
   write_capture(good_cap, 250);
-  auto with_header = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
+  auto with_header = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit,
+                         const std::function<void(std::string&)>& text_edit = nullptr) {
     std::string b = slurp(good_cap);
     uint32_t len = 0;
     std::memcpy(&len, b.data() + 8, 4);
     nlohmann::json h = nlohmann::json::parse(b.substr(16, len));
     edit(h);
     std::string js = h.dump();
+    if (text_edit) text_edit(js);
     EXPECT_LE(js.size(), len);
     js.resize(len, ' ');
     const uint32_t c = static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(js.data()), len));
@@ -3177,6 +3186,13 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
   };
   EXPECT_EQ(run({"analyze", with_header("same", [](nlohmann::json&) {}), "--input", "capture"}, d + "/same"), 0)
       << slurp(d + "/same.stderr");
+  // A key twice: nlohmann kept the last, and the record was analysed at 2.5 Hz without a word (a review).
+  const std::string twice = with_header("twice", [](nlohmann::json& h) { h.erase("record"); },
+                                        [](std::string& js) { js.insert(js.find("\"rate_hz\":"), "\"rate_hz\":2.5,"); });
+  EXPECT_EQ(run({"analyze", twice, "--input", "capture"}, d + "/twice"), 2);
+  EXPECT_NE(slurp(d + "/twice.stderr").find("twice.cap: capture header: key 'rate_hz' appears twice in one object"),
+            std::string::npos)
+      << slurp(d + "/twice.stderr");
   for (const auto& [name, edit, says] :
        std::vector<std::tuple<std::string, std::function<void(nlohmann::json&)>, std::string>>{
            {"norate", [](nlohmann::json& h) { h.erase("rate_hz"); }, "capture header has no rate_hz"},
@@ -4491,8 +4507,10 @@ TEST(RigCli, ANewRunDoesNotReplaceAFileOfItsNamesThatSomethingElseLeft) {
   const std::string d = tmp("stray-outputs");
   // A run's records too (a review: a planted run.log was appended to, a planted capture set aside
   // as the run's own interrupted attempt, which the seal then vouched for).
+  // And their staging names (a review: a passport.json.tmp went without a word).
   for (const std::string name : {"report.html", "junit.xml", "analysis.json", "seal.json", "profile.toml", "run.log",
-                                 "loop-test.csv", "captures/run01-U10.cap", "captures/zzz.cap"}) {
+                                 "loop-test.csv", "captures/run01-U10.cap", "captures/zzz.cap", "passport.json.tmp",
+                                 "run.json.tmp"}) {
     const std::string out = d + "/" + fs::path(name).filename().string();
     fs::create_directories(fs::path(out + "/" + name).parent_path());
     std::ofstream(out + "/" + name) << "someone's";
