@@ -614,10 +614,11 @@ void refuse_an_earlier_run(const std::string& dir, const std::string& profile_so
                               "run.log", acceptance::kLoopTestFile})
     if (there(fs::path(dir) / f)) would_replace.push_back(f);
   // And the staging names the rig writes them through: a file there is removed by the first write
-  // (a review: a passport.json.tmp of the user's went without a word).
+  // (a review: a passport.json.tmp of the user's went without a word). Its contents only: a FIFO
+  // or a link there holds none, and is replaced unopened as before.
   for (const std::string f : {"passport.json", "junit.xml", "analysis.json", "report.html", "checkpoint.json", "run.json",
                               "seal.json", kEndingPending})
-    if (there(fs::path(dir) / (f + ".tmp"))) would_replace.push_back(f + ".tmp");
+    if (fs::is_regular_file(fs::symlink_status(fs::path(dir) / (f + ".tmp"), ec))) would_replace.push_back(f + ".tmp");
   // Nor a run's records left by something else: appended to (run.log) or set aside under the
   // rig's own name for its interrupted attempts (a review: a planted run01-U10.cap became
   // run01-U10.cap.interrupted-1, which the seal then vouched for as the run's own).

@@ -21,6 +21,10 @@ std::string num(double v) {  // the shortest decimal that reads back to v
 std::vector<Biquad> read_sections(const toml::node& n) {
   const toml::array* arr = n.as_array();
   if (!arr) throw ConfigError(cfg::where(n) + ": sections = [[b0, b1, b2, a1, a2], ...]");
+  // No section is no filter: sections = [] ran as "0 section(s)" (a review); enabled = false says it.
+  if (arr->empty())
+    throw ConfigError(cfg::where(n) + ": sections = [] has no section; a filter has at least one (enabled = false "
+                      "leaves the filter out)");
   std::vector<Biquad> out;
   for (const toml::node& e : *arr) {
     const toml::array* s = e.as_array();
@@ -36,6 +40,12 @@ std::vector<Biquad> read_sections(const toml::node& n) {
       c[i] = *v;
     }
     const Biquad b{c[0], c[1], c[2], c[3], c[4]};
+    // A section whose numerator is all zero passes nothing: y(t) = 0, and rms_filtered passed on
+    // it (a review). "enabled = false" is how a filter is left out.
+    if (c[0] == 0 && c[1] == 0 && c[2] == 0)
+      throw ConfigError(cfg::where(e) + ": filter section [" + num(c[0]) + ", " + num(c[1]) + ", " + num(c[2]) + ", " +
+                        num(c[3]) + ", " + num(c[4]) + "] passes nothing (b0 = b1 = b2 = 0): y(t) would be 0; "
+                        "enabled = false leaves the filter out");
     // Checked here, before any device opens: a DUT refuses an unstable section only after power-on.
     if (!stable_section(b))
       throw ConfigError(cfg::where(e) + ": filter section [" + num(c[0]) + ", " + num(c[1]) + ", " + num(c[2]) + ", " + num(c[3]) +

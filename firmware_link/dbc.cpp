@@ -23,6 +23,7 @@
 
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
+#include "rig/core/number_text.hpp"
 
 namespace rig::link {
 
@@ -428,6 +429,11 @@ class DbcParser {
     }
     s.line = line;
     if (s.factor == 0) fail(src_, line, "signal " + s.name + ": factor 0");
+    // [0|0] is "no range" as CAN tools write it; a minimum above the maximum is a slip, and the
+    // import's range check was silently off for it (a review).
+    if (s.min > s.max)
+      fail(src_, line, "signal " + s.name + ": range [" + shortest_text(s.min) + "|" + shortest_text(s.max) +
+                           "] has its minimum above its maximum");
     if (cur_ == &pseudo_) return;  // not part of any frame
     if (s.length == 0) fail(src_, line, "signal " + s.name + ": bit length 0 (a signal has 1 to 64 bits)");
     if (!dbc_signal_fits(s, cur_->dlc))

@@ -262,6 +262,13 @@ Profile parse_profile_table(const toml::table& t, const std::string& source) {
       if (!ct) throw ConfigError(cfg::where(c) + ": each [[classes]] entry must be a table");
       cfg::check_keys(*ct, {"name", "max_b_g"}, "classes");
       AccuracyClass ac{cfg::get_string(*ct, "name"), cfg::get_number(*ct, "max_b_g", std::nullopt, 0.0)};
+      // The passport names the class: an empty name, or one two classes share, says nothing of
+      // which it is (a review: accuracy_class 2, "precision", with "precision" twice).
+      const bool blank = ac.name.find_first_not_of(" \t") == std::string::npos;
+      const bool taken = std::any_of(p.classes.begin(), p.classes.end(),
+                                     [&](const AccuracyClass& o) { return o.name == ac.name; });
+      if (blank || taken)
+        cfg::reject(*ct->get("name"), "name", blank ? "a class needs a name" : "another [[classes]] entry has that name");
       if (!p.classes.empty() && ac.max_b_g <= p.classes.back().max_b_g)
         throw ConfigError(cfg::where(*ct->get("max_b_g")) + ": 'max_b_g' = " + fmt::format("{:g}", ac.max_b_g) +
                           ": [[classes]] must be in ascending max_b_g (the class before has " +

@@ -124,6 +124,12 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
                                                       "\"b\"\nmax_b_g = 1e-5\n");
   EXPECT_EQ(error_of(cls), cls + ":14:11: 'max_b_g' = 1e-05: [[classes]] must be in ascending max_b_g (the class before "
                                  "has 2e-05)");
+  // A class the passport cannot name (a review: "precision" twice, and "" accepted).
+  const std::string twice = write_tmp("cls2.toml", base + "[[classes]]\nname = \"a\"\nmax_b_g = 1e-5\n[[classes]]\nname = "
+                                                          "\"a\"\nmax_b_g = 2e-5\n");
+  EXPECT_EQ(error_of(twice), twice + ":13:8: 'name' = 'a': another [[classes]] entry has that name");
+  const std::string blank = write_tmp("cls3.toml", base + "[[classes]]\nname = \" \"\nmax_b_g = 1e-5\n");
+  EXPECT_EQ(error_of(blank), blank + ":10:8: 'name' = ' ': a class needs a name");
   const std::string blocks = write_tmp("blk.toml", "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"
                                                    "run_s = 1\nin_run_s = 10\nraw_s = 10\nin_run_blocks_s = [1.0, 6.0]\n");
   EXPECT_EQ(error_of(blocks), blocks + ":8:19: 'in_run_blocks_s' = [ 1.0, 6.0 ]: 6 s: each block length must be > 0 "

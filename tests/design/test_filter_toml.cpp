@@ -83,6 +83,12 @@ TEST(FilterToml, ErrorsNameTheFileAndLine) {
   EXPECT_NE(error_of("sections = [[1.0, 0.0, 0.0, 0.0, 1.0]]\n").find("unstable"), std::string::npos)
       << "a pole on the unit circle";
   EXPECT_EQ(error_of("sections = [[0.2, 0.0, 0.0, -0.5, 0.1]]\n"), "") << "a stable section";
+  // No section, or one that passes nothing (y(t) = 0, rms_filtered passed on it: a review).
+  EXPECT_EQ(error_of("preset = \"custom\"\nsections = []\n"),
+            "f.toml:2:12: sections = [] has no section; a filter has at least one (enabled = false leaves the filter out)");
+  EXPECT_EQ(error_of("sections = [[0.0, 0.0, 0.0, 0.0, 0.0]]\n"),
+            "f.toml:1:13: filter section [0, 0, 0, 0, 0] passes nothing (b0 = b1 = b2 = 0): y(t) would be 0; enabled = "
+            "false leaves the filter out");
 }
 
 }  // namespace

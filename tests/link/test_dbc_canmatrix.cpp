@@ -296,6 +296,9 @@ TEST(DbcHandWritten, MalformedFilesNameTheLine) {
   EXPECT_EQ(error_of("BO_ 256 M: 12 DUT\n SG_ a : 0|8@1+ (1,0) [0|1] \"\" X\n"), "no error");
   EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a : 59|0@0+ (1,0) [0|1] \"\" X\n"),
             "h.dbc:2: signal a: bit length 0 (a signal has 1 to 64 bits)");
+  EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [10.5|-10.5] \"\" X\n"),
+            "h.dbc:2: signal a: range [10.5|-10.5] has its minimum above its maximum");
+  EXPECT_EQ(error_of("BO_ 256 M: 8 DUT\n SG_ a : 0|8@1+ (1,0) [0|0] \"\" X\n"), "no error");
   EXPECT_EQ(error_of("BO_ 4096 M: 8 DUT\n"),
             "h.dbc:1: message M: standard id 4096 exceeds 11 bits (an extended id has bit 31 set in BO_)");
   EXPECT_EQ(error_of(bo + "FOO_ 1;\n"), "h.dbc:3: expected a DBC keyword (BO_, SG_, CM_, ...), found 'FOO_'");
