@@ -79,6 +79,7 @@ struct RunArgs {
   std::string resume;
   std::string resume_serial;  // --serial given with --resume: the DUT the operator says is mounted
   std::string db;
+  bool db_from_run_json = false;  // a resume's --db taken from its run.json (messages say so)
   std::string seal_key;  // --seal-key / RIG_SEAL_KEY: the station's key (docs/seal.md)
   bool seal_key_given = false;
   std::vector<std::string> inject;
@@ -264,6 +265,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
       throw ConfigError(path + ": the run was started with --db " + db + ", whose password run.json does not keep: "
                         "give the same --db with --resume (or --no-history)");
     a.db = db;
+    a.db_from_run_json = true;
   }
 }
 
@@ -1419,6 +1421,11 @@ int do_run(RunArgs a) {
     } catch (const ConfigError& e) {  // $RIG_HISTORY's database is the environment's mistake: said so
       const char* env = std::getenv("RIG_HISTORY");
       if (a.db.empty() && env && url == env) throw ConfigError(std::string("RIG_HISTORY: ") + e.what());
+      // A resume's database is the one its run started with (a re-test: "a typo?" for a folder
+      // removed since, with no word of where the name came from or what overrides it).
+      if (a.db_from_run_json)
+        throw ConfigError(std::string(e.what()) + " (the database the run started with, from " + a.resume +
+                          "/run.json; --db URL with --resume records into another, --no-history into none)");
       throw;
     }
   }

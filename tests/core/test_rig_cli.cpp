@@ -188,6 +188,20 @@ TEST(RigCli, DryRunSaysWhereTheRunWillBeRecorded) {
             0)
       << slurp(d + "/builtin-rec.stderr");
   EXPECT_TRUE(fs::exists(d + "/xdg/rig/history.sqlite"));
+  // A resume's database is its run.json's: said so where its folder has gone since (a re-test).
+  fs::create_directories(d + "/dbf");
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + d + "/dbf/h.sqlite", "--out",
+                 d + "/stopped", "--inject", "sigint@100"},
+                d + "/stopped-io"),
+            3);
+  fs::remove_all(d + "/dbf");
+  EXPECT_EQ(run({"run", "--resume", d + "/stopped", "--yes", "--quiet"}, d + "/resume-io"), 2);
+  EXPECT_NE(slurp(d + "/resume-io.stderr").find("does not exist (a typo?)"), std::string::npos)
+      << slurp(d + "/resume-io.stderr");
+  EXPECT_NE(slurp(d + "/resume-io.stderr").find("(the database the run started with, from " + d + "/stopped/run.json; "
+                                                "--db URL with --resume records into another, --no-history into none)"),
+            std::string::npos)
+      << slurp(d + "/resume-io.stderr");
   ASSERT_EQ(run({"run", "--profile", "ci", "--dry-run", "--no-history"}, d + "/none"), 0);
   EXPECT_NE(slurp(d + "/none.stdout").find("History: not recorded (--no-history)\n"), std::string::npos);
 }
