@@ -21,8 +21,8 @@
 #include "app/commands.hpp"
 #include "app/folder_lock.hpp"
 #include "app/history_source.hpp"
-#include "app/run_seal.hpp"
 #include "app/passport_held.hpp"
+#include "app/run_seal.hpp"
 #include "app/whole_number.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
@@ -343,8 +343,8 @@ void record(const HistoryArgs& a) {
     // limits): the passport is held to its folder's profile.toml and junit.xml, as a resume holds
     // an unsealed one (a technician's review: a FAIL edited to PASS was recorded PASS).
     if (const std::string why = passport_unlike_its_folder(a.record, p); !why.empty())
-        throw ConfigError(a.record + "/passport.json: " + why +
-                          ": the passport was changed after its run wrote it; nothing recorded");
+      throw ConfigError(a.record + "/passport.json: " + why +
+                        ": the passport was changed after its run wrote it; nothing recorded");
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
   }

@@ -24,6 +24,7 @@ std::string file_text(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
+
 std::size_t occurrences(const std::string& hay, const std::string& needle) {
   std::size_t n = 0;
   for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + needle.size())) ++n;
@@ -95,7 +96,6 @@ std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json
   if (!staged && !fs::is_regular_file(dir + "/junit.xml", ec)) return "no junit.xml beside it, staged or in place";
   const std::string which = staged ? "the junit.xml staged with it" : "junit.xml";
   return junit_unlike_passport(file_text(dir + (staged ? "/junit.xml.tmp" : "/junit.xml")), passport, failed, which);
-  return "";
 }
 
 std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::json& passport) {
