@@ -211,6 +211,9 @@ int main(int argc, char** argv) {
   } catch (const rig::AbortedError& e) {
     std::cerr << "rig: " << e.what() << "\n";
     return rig::kExitAborted;
+  } catch (const rig::NotReadyError& e) {  // before HardwareError, its base
+    std::cerr << "rig: not ready: " << e.what() << "\n";
+    return rig::kExitHardware;
   } catch (const rig::HardwareError& e) {
     std::cerr << "rig: hardware fault: " << e.what() << "\n";
     return rig::kExitHardware;

@@ -31,6 +31,11 @@ struct InUseError : ConfigError {
 struct HardwareError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+// The device is sound but in a state the command cannot start from (a table not homed): exit 4
+// as a fault, named "not ready" (a technician's review: "hardware fault" read as a broken drive).
+struct NotReadyError : HardwareError {
+  using HardwareError::HardwareError;
+};
 // The run's own records (a capture, the loop test's file) found changed after their writer closed
 // them, by a phase computing from them: exit 4 as any fault, and no resume is offered, since a
 // resume refuses such a folder (rig/executive: RunResult::records_changed).

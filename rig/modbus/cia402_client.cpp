@@ -532,14 +532,14 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
     // A fault first: "not homed" sent a technician to homing, which then failed on the fault (a review).
     fail_on_fault(doing, r);
     if (map_.homed_bit && !r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
-      throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
+      throw NotReadyError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
     refuse_outside_travel(doing, r);
   }
   guarded(doing, [&] {
     enable_operation(doing, cancel);
     wait_at_rest(doing, cancel);
     if (map_.homed_bit && !read(cancel).has(static_cast<uint16_t>(1u << *map_.homed_bit)))
-      throw HardwareError(doing + ": table not homed (run `rig table home` first)");
+      throw NotReadyError(doing + ": table not homed (run `rig table home` first)");
     set_mode(doing, c4::kModeProfilePosition, cancel);
     if (!profile_applied_) {
       auto setting = [&](Obj o, int64_t units, const char* key, double value) {

@@ -368,11 +368,11 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   // state (not homed: exit 4) is: the order gave exit 4 for `move 400` on an unhomed table (a review).
   refuse_outside(d0);
   if (!d0.has(sts::kHomed))
-    throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
+    throw NotReadyError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);
-    if (!d.has(sts::kHomed)) throw HardwareError(doing + ": table not homed (run `rig table home` first)" + at(d));
+    if (!d.has(sts::kHomed)) throw NotReadyError(doing + ": table not homed (run `rig table home` first)" + at(d));
     refuse_outside(d);
     uint16_t w[2];
     split_i32(counts, w);
