@@ -348,13 +348,7 @@ void record(const HistoryArgs& a) {
   } catch (const ConfigError& e) {
     throw NotTheDatabase(e.what());
   }
-  // As `rig run`: a new database only in a folder that is there, the built-in default excepted
-  // (a typo made folders and a database nobody reads, a technician's review).
-  if (const std::optional<history::SqliteFile> f = history::sqlite_file(a.db);
-      f && !f->exists && !f->missing_folder.empty() && a.db != history::builtin_db_url())
-    throw ConfigError("history database " + f->path + ": its folder " + f->missing_folder +
-                      " does not exist (a typo?); the rig creates a new database only in a folder that is there: "
-                      "create it first to start one there");
+  history::refuse_a_new_database_without_its_folder(a.db);  // as `rig run`
   const history::Recorded rec = history::record_run(a.db, p, a.record);
   for (const std::string& note : history::record_notes(rec, p)) std::cerr << "rig history: note: " << note << "\n";
   std::cout << "recorded run " << rec.id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "

@@ -681,12 +681,7 @@ void check_history_can_record(const std::string& url) {
   const fs::path p = nearest_existing(fs::absolute(file, ec).parent_path());
   if (!fs::is_directory(p, ec) || !can_create_file_in(p))
     throw ConfigError(shown + ": cannot be created (" + p.string() + " is not a writable folder)");
-  // A new database goes into a folder that is there, but for the built-in default, whose folders
-  // are made with it: a typo in --db, $RIG_HISTORY or [history] url made its folders and a
-  // database the station's history never reads (a technician's review; as root, at /).
-  if (!f->missing_folder.empty() && url != history::builtin_db_url())
-    throw ConfigError(shown + ": its folder " + f->missing_folder + " does not exist (a typo?); the rig creates a new "
-                      "database only in a folder that is there: create it first to start one there");
+  history::refuse_a_new_database_without_its_folder(url);
 }
 
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
@@ -1193,17 +1188,18 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
     // assumes the defaults (a code review: "(as sent)" where nothing is sent).
     // Each value said for itself: one given and one not read "(as sent)" for both (a re-test).
     const bool v_sent = t->contains("velocity_dps"), a_sent = t->contains("accel_dps2");
-    out.push_back(v_sent == a_sent
-                      ? fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s, {:g}°/s² ({})", drive, where, unit,
-                                    timing.velocity_dps, timing.accel_dps2,
-                                    v_sent ? "as sent"
-                                           : "planned: no [table] velocity_dps or accel_dps2, so none is sent; the "
-                                             "drive moves at its own")
-                      : fmt::format("Table: {} on {}, unit {}; moves at {:g}°/s ({}), {:g}°/s² ({})", drive, where,
-                                    unit, timing.velocity_dps,
-                                    v_sent ? "as sent" : "planned: no velocity_dps, none sent; the drive's own",
-                                    timing.accel_dps2,
-                                    a_sent ? "as sent" : "planned: no accel_dps2, none sent; the drive's own"));
+    const auto said = [](bool sent, const char* key) {
+      return sent ? std::string("as sent") : fmt::format("planned: no {}, none sent; the drive's own", key);
+    };
+    const std::string speeds =
+        v_sent == a_sent
+            ? fmt::format("{:g}°/s, {:g}°/s² ({})", timing.velocity_dps, timing.accel_dps2,
+                          v_sent ? "as sent"
+                                 : "planned: no [table] velocity_dps or accel_dps2, so none is sent; the drive moves "
+                                   "at its own")
+            : fmt::format("{:g}°/s ({}), {:g}°/s² ({})", timing.velocity_dps, said(v_sent, "velocity_dps"),
+                          timing.accel_dps2, said(a_sent, "accel_dps2"));
+    out.push_back(fmt::format("Table: {} on {}, unit {}; moves at {}", drive, where, unit, speeds));
     // What the dry run could not check (a review: it said nothing of it): a rig-v1 drive's travel
     // is in its own registers, read when it answers.
     if (modbus::table_drive(*t) != "cia402")

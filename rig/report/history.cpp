@@ -11,6 +11,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
 #include "rig/report/db.hpp"
+#include "rig/report/db_url.hpp"
 #include "rig/report/timefmt.hpp"
 
 namespace rig::history {
@@ -489,6 +490,14 @@ std::string default_db_url() {
     }
   }
   return builtin_db_url();
+}
+
+void refuse_a_new_database_without_its_folder(const std::string& url) {
+  const std::optional<SqliteFile> f = sqlite_file(url);
+  if (f && !f->exists && !f->missing_folder.empty() && url != builtin_db_url())
+    throw ConfigError("history database " + f->path + ": its folder " + f->missing_folder +
+                      " does not exist (a typo?); the rig creates a new database only in a folder that is there: "
+                      "create it first to start one there");
 }
 
 std::string builtin_db_url() {

@@ -18,6 +18,12 @@ std::string default_db_url();
 // The database used when nothing names one: sqlite:$XDG_DATA_HOME/rig/history.sqlite (or
 // ~/.local/share/..., or the working folder without a HOME).
 std::string builtin_db_url();
+// A new SQLite database goes into a folder that is there, but for the built-in default, whose
+// folders are made with it: a typo in --db, $RIG_HISTORY or [history] url made its folders and a
+// database the station's history never reads (a technician's review; as root, at /). ConfigError
+// for `url` naming a file that is not there in a folder that is not there either; `rig run` and
+// `rig history --record` ask before they write.
+void refuse_a_new_database_without_its_folder(const std::string& url);
 
 // $RIG_HISTORY when set; nullopt when unset; set but empty is a ConfigError saying so (not read
 // as unset, as an empty RIG_SEAL_KEY is refused).
