@@ -43,15 +43,13 @@ TauGrid parse_tau_grid(const std::string& s) {
   else if (s.rfind("log:", 0) == 0) {
     g.kind = TauGrid::Log;
     const std::string num = s.substr(4);
-    std::size_t used = 0;
-    int n = 0;
-    try {
-      n = std::stoi(num, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != num.size() || n < 2 || n > 100000)
-      throw std::invalid_argument("tau grid '" + s + "': log:N needs an integer N in 2..100000");
+    // Decimal digits only, no sign and no leading zero, as every whole number the rig reads (stoi
+    // took "log:+5" and "log:010", which m:LIST refuses: a review).
+    const bool digits = !num.empty() && num.size() <= 6 && num[0] != '0' &&
+                        num.find_first_not_of("0123456789") == std::string::npos;
+    const int n = digits ? std::stoi(num) : 0;
+    if (!digits || n < 2 || n > 100000)
+      throw std::invalid_argument("tau grid '" + s + "': log:N needs a whole number N in 2..100000 (decimal digits, no sign or leading zero)");
     g.log_n = n;
   } else {
     throw std::invalid_argument("unknown tau grid '" + s + "' (octave|decade|all|log:N)");

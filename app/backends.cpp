@@ -1,4 +1,5 @@
 #include "app/backends.hpp"
+#include "app/station_stop.hpp"
 
 #include "firmware_link/connect.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
@@ -42,7 +43,9 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
   // GPIO first: the e-stop watch must be live before anything moves.
   b.io = gpio::connect_gpio(*cfg::get_table(hw, "gpio", true));
   b.io_ptr = b.io.get();
-  b.table = modbus::connect_table(*cfg::get_table(hw, "table", true), *b.clock);
+  // A `rig table stop` from this station during a move ends the run as the operator's abort.
+  const toml::table& table = *cfg::get_table(hw, "table", true);
+  b.table = std::make_unique<StationStoppableTable>(modbus::connect_table(table, *b.clock), modbus::table_identity(table));
   b.table_ptr = b.table.get();
   b.dut = link::connect_dut(*cfg::get_table(hw, "dut", true), *b.clock);
   b.dut_ptr = b.dut.get();

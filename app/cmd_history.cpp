@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "rig/core/json_unique.hpp"
 #include "app/folder_lock.hpp"
 #include "app/history_source.hpp"
 #include "app/passport_held.hpp"
@@ -265,7 +266,8 @@ bool the_runs_own_database(const std::string& dir, const std::string& db, std::s
     return !px && !py && history::mask_password(x) == history::mask_password(y);
   };
   try {
-    const nlohmann::json inv = nlohmann::json::parse(std::ifstream(std::filesystem::path(dir) / "run.json"));
+    std::ifstream run_json(std::filesystem::path(dir) / "run.json");
+    const nlohmann::json inv = parse_json_unique_keys(run_json);
     const std::string run_db = inv.value("db", std::string());
     if (run_db.empty()) why_not = "its run.json does not say which database its run records into";
     else if (!same(db, run_db)) why_not = "this is not the database its run records into (--db " + run_db + ")";

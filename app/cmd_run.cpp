@@ -31,6 +31,8 @@
 #include <spdlog/spdlog.h>
 
 #include "firmware_link/connect.hpp"
+#include "rig/core/file_text.hpp"
+#include "rig/core/json_unique.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "plant/emulated/plant_config.hpp"
 #include "plant/emulated/world.hpp"
@@ -92,12 +94,6 @@ struct RunArgs {
   std::string profile_sha256;
 };
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // A signal --inject can send this process, by name.
 int injected_signal(const std::string& kind) {
@@ -1256,7 +1252,7 @@ std::string default_run_folder(const std::string& name) {
 // reported one or the checkpoint cannot be read (its own check, later, names what is wrong).
 std::string reported_serial(const std::string& run_dir) {
   try {
-    const nlohmann::json j = nlohmann::json::parse(slurp(run_dir + "/checkpoint.json"));
+    const nlohmann::json j = parse_json_unique_keys(file_text(run_dir + "/checkpoint.json"));
     const nlohmann::json& s = j.at("state").at("dut").at("serial");
     return s.is_string() ? s.get<std::string>() : std::string();
   } catch (const std::exception&) {
@@ -1328,7 +1324,7 @@ int do_run(RunArgs a) {
     const std::string inv_path = a.resume + "/run.json";
     if (path_kind(inv_path, "--resume") == PathKind::missing) throw ConfigError(inv_path + ": not a run folder (no run.json)");
     try {
-      invocation = nlohmann::json::parse(slurp(inv_path));
+      invocation = parse_json_unique_keys(file_text(inv_path));  // a key twice is refused
     } catch (const std::exception& e) {
       throw ConfigError(inv_path + ": unreadable: " + e.what());
     }
@@ -1353,7 +1349,7 @@ int do_run(RunArgs a) {
   acceptance::Profile p = acceptance::parse_profile(profile_table, profile_source);
   const std::string profile_text = p.source.rfind("builtin:", 0) == 0
                                        ? acceptance::builtin_profile_text(p.source.substr(8))
-                                       : slurp(p.source);
+                                       : file_text(p.source);
   a.profile_sha256 = seal::sha256_hex(profile_text);
   // Values a derived profile left without limits cannot fail the run: said before it starts
   // (an automation review: a base's GOST limits gone with its blocks, PASS without a word).

@@ -10,7 +10,6 @@
 #include <memory>
 #include <optional>
 #include <thread>
-#include <type_traits>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -18,6 +17,7 @@
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
 #include "app/number_option.hpp"
+#include "app/station_stop.hpp"
 #include "app/table_lock.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
@@ -171,13 +171,19 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
 // `command` non-empty (a home, a move, a reset): the station's lock on the table is taken first
 // (app/table_lock.hpp), after the settings are checked and before the drive is opened; a status
 // or a stop takes none.
+// The body is called with the table and the table's settings as `TableUse`.
+struct TableUse {
+  double tolerance_deg;  // the move tolerance
+  std::string identity;  // modbus::table_identity: the station lock's and the stop note's name
+};
 template <class Body>
 void with_table(const TableArgs& a, Body body, const std::string& unreachable = "", const std::string& command = "") {
   toml::table root;
   const toml::table& t = table_config(a, root);
+  const std::string identity = modbus::table_identity(t);
   std::optional<TableLock> lock;
   if (!command.empty()) {
-    lock.emplace(modbus::table_identity(t), "rig table " + command);
+    lock.emplace(identity, "rig table " + command);
     if (!lock->held())  // said, not silent (a review: a missing lock folder turned it off unseen)
       std::cerr << "rig: warning: " << lock->unlocked_warning() << "\n";
   }
@@ -189,11 +195,7 @@ void with_table(const TableArgs& a, Body body, const std::string& unreachable = 
     if (unreachable.empty()) throw;
     throw HardwareError(unreachable + e.what());
   }
-  const double tolerance_deg = modbus::table_options_from_toml(t).tolerance_deg;
-  if constexpr (std::is_invocable_v<Body, RotaryTable&, double>)
-    body(*table, tolerance_deg);
-  else
-    body(*table);
+  body(*table, TableUse{modbus::table_options_from_toml(t).tolerance_deg, identity});
 }
 
 // The two backends' technician-only calls.
@@ -251,7 +253,7 @@ class AngleLine {
 // and whether it is still homed, on stderr before the abort's own line. "rig: aborted: SIGINT
 // received" alone left a technician guessing (a review: the homed flag was gone, which nothing
 // said). Waits up to 10 s for the axis to stop; says so when it cannot read it.
-void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
+void say_where_it_stopped(RotaryTable& t, const std::string& halt_error, const std::string& halted_by = "") {
   try {
     TableStatus s = t.status();
     for (int i = 0; i < 100 && s.moving; ++i) {
@@ -260,7 +262,9 @@ void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
     }
     std::cerr << "rig: the table " << (s.moving ? "was still moving" : "stopped") << " at "
               << modbus::detail::deg_str(s.actual_deg)
-              << (halt_error.empty() ? " (halt delivered to the drive)" : " (" + halt_error + ")")
+              << (!halted_by.empty()     ? " (halted by " + halted_by + ")"
+                  : halt_error.empty() ? " (halt delivered to the drive)"
+                                       : " (" + halt_error + ")")
               << (!s.homed_known ? "; whether it is still homed the drive cannot say (its map has no homed_bit): "
                                    "`rig table home` before the next move if the homing was interrupted"
                   : s.homed    ? "; it is still homed"
@@ -269,9 +273,28 @@ void say_where_it_stopped(RotaryTable& t, const std::string& halt_error) {
   } catch (const std::exception& e) {
     // The halt's fate too: on a dead link it was not delivered, and "after the halt" alone read
     // as if it had been (a review).
-    std::cerr << "rig: the table's position could not be read after the signal (" << e.what() << "); "
-              << (halt_error.empty() ? "halt delivered to the drive" : halt_error)
+    std::cerr << "rig: the table's position could not be read after the " << (halted_by.empty() ? "signal" : "stop")
+              << " (" << e.what() << "); "
+              << (!halted_by.empty()     ? "halted by " + halted_by
+                  : halt_error.empty() ? "halt delivered to the drive"
+                                       : halt_error)
               << ": check it with `rig table status` before anything else\n";
+  }
+}
+
+// Runs a home or a move (`motion`, `doing` naming it). Ctrl-C: the client has sent its halt;
+// where the table came to rest is said and the abort goes on (exit 3). A halt by `rig table stop`
+// from this station's other terminal: said so, where it came to rest, and exit 3 too
+// (app/station_stop.hpp).
+template <class Motion>
+void run_motion(RotaryTable& t, const TableUse& use, const std::string& doing, Motion motion) {
+  std::string by;  // who halted it, where a stop from this station did
+  try {
+    AngleLine line(t, doing);
+    motion_stoppable_from_this_station(use.identity, doing, motion, [&](const std::string& who) { by = who; });
+  } catch (const AbortedError&) {  // the angle line cleared first
+    say_where_it_stopped(t, by.empty() ? last_stop_error(t) : "", by.empty() ? "" : by + " on this station");
+    throw;
   }
 }
 
@@ -297,20 +320,16 @@ void add_table(CLI::App& app, int& rc) {
   auto* st = sub->add_subcommand("status", "Read and print the drive's status");
   st->add_flag("--json", a->json, "Print JSON");
   st->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t, double tol) { print_status(t.describe(), t.status(), a->json, tol); });
+    with_table(*a, [&](RotaryTable& t, const TableUse& use) {
+      print_status(t.describe(), t.status(), a->json, use.tolerance_deg);
+    });
     rc = kExitPass;
   });
 
   sub->add_subcommand("home", "Run the homing sequence and wait until homed")->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t) {
+    with_table(*a, [&](RotaryTable& t, const TableUse& use) {
       SignalCancel sig;
-      try {
-        AngleLine line(t, "homing");
-        t.home(sig.token());
-      } catch (const AbortedError&) {
-        say_where_it_stopped(t, last_stop_error(t));
-        throw;
-      }
+      run_motion(t, use, "homing", [&] { t.home(sig.token()); });
       print_status(t.describe(), t.status(), false, std::numeric_limits<double>::infinity());  // no target note
     }, "", "home");
     rc = kExitPass;
@@ -324,22 +343,16 @@ void add_table(CLI::App& app, int& rc) {
       ->required()
       ->check(number_in(-200000.0, 200000.0, false, "a number of degrees"));  // the client's bound, before the drive is asked
   mv->callback([a, &rc] {
-    with_table(*a, [&](RotaryTable& t, double tol) {
+    with_table(*a, [&](RotaryTable& t, const TableUse& use) {
       SignalCancel sig;
-      try {
-        AngleLine line(t, "moving to " + modbus::detail::deg_str(a->deg));
-        t.move_to(a->deg, sig.token());
-      } catch (const AbortedError&) {
-        say_where_it_stopped(t, last_stop_error(t));
-        throw;
-      }
-      print_status(t.describe(), t.status(), false, tol);
+      run_motion(t, use, "moving to " + modbus::detail::deg_str(a->deg), [&] { t.move_to(a->deg, sig.token()); });
+      print_status(t.describe(), t.status(), false, use.tolerance_deg);
     }, "", "move " + modbus::detail::deg_str(a->deg));
     rc = kExitPass;
   });
 
   auto stop_cmd = [a, &rc](bool quick) {
-    with_table(*a, [&](RotaryTable& t) {
+    with_table(*a, [&](RotaryTable& t, const TableUse& use) {
       // rig-v1: learn CONTROL first (a read with the link's retries), so the stop keeps SERVO_ON
       // as the drive holds it: the stop's own urgent read is one attempt and a reconnect, and a
       // fresh client that learned nothing writes HALT with SERVO_ON clear, which brakes the servo
@@ -369,6 +382,8 @@ void add_table(CLI::App& app, int& rc) {
       const std::string note = v1 ? v1->last_stop_note() : std::string();
       if (!last_stop_error(t).empty())
         throw HardwareError(last_stop_error(t) + (note.empty() ? "" : "; if it reached the drive: " + note));
+      // Delivered: a move this halts in another terminal of this station names this command.
+      TableLock::note_stop(use.identity, quick ? "rig table quick-stop" : "rig table stop");
       std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << (note.empty() ? "" : "; " + note)
                 << "\n";
     }, std::string(quick ? "quick stop" : "stop") + " not delivered (the table may still be moving): ");
@@ -382,9 +397,9 @@ void add_table(CLI::App& app, int& rc) {
       ->callback([a, &rc] {
         with_table(
             *a,
-            [&](RotaryTable& t, double tol) {
+            [&](RotaryTable& t, const TableUse& use) {
               reset(t, {});
-              print_status(t.describe(), t.status(), false, tol);
+              print_status(t.describe(), t.status(), false, use.tolerance_deg);
             },
             "", "reset");
         rc = kExitPass;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "rig/core/json_unique.hpp"
 #include "app/run_seal.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/core/errors.hpp"
@@ -48,7 +49,7 @@ std::vector<std::string> entries_in(const std::string& dir, std::vector<std::str
 std::string loop_records_problem(const std::string& dir) {
   try {
     std::ifstream in(dir + "/checkpoint.json");
-    const nlohmann::json cp = nlohmann::json::parse(in);
+    const nlohmann::json cp = parse_json_unique_keys(in);
     const acceptance::DutState st = acceptance::dut_state_from_json(cp.at("state"));
     if (st.loop_test) acceptance::check_loop_record(*st.loop_test, dir);
   } catch (const std::exception& e) {

@@ -1,4 +1,5 @@
 #include "app/fast_forward.hpp"
+#include "rig/core/json_unique.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -19,7 +20,7 @@ namespace {
 nlohmann::json read_checkpoint(const std::string& run_dir) {
   std::ifstream in(Executive::checkpoint_path(run_dir));
   if (!in) return nlohmann::json();
-  return nlohmann::json::parse(in);
+  return parse_json_unique_keys(in);
 }
 
 // The first field where the replay's record of a phase differs from the checkpoint's, or "".

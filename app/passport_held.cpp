@@ -1,8 +1,6 @@
 #include "app/passport_held.hpp"
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <fmt/format.h>
 
@@ -10,6 +8,8 @@
 #include "procedures/acceptance/procedure.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "procedures/acceptance/state.hpp"
+#include "rig/core/file_text.hpp"
+#include "rig/core/json_unique.hpp"
 #include "rig/core/markup.hpp"
 #include "rig/seal/seal.hpp"
 
@@ -18,13 +18,6 @@ namespace rig::cli {
 namespace fs = std::filesystem;
 
 namespace {
-std::string file_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::size_t occurrences(const std::string& hay, const std::string& needle) {
   std::size_t n = 0;
   for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + needle.size())) ++n;
@@ -117,7 +110,22 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
   acceptance::declare_values(p, acceptance::build_phases(p, state), declared);
   std::optional<std::string> digest;
   if (passport.contains("profile_sha256")) digest = seal::sha256_hex(file_text(path));
-  return passport_unlike_its_run(dir, passport, declared, digest);
+  if (std::string unlike = passport_unlike_its_run(dir, passport, declared, digest); !unlike.empty()) return unlike;
+  // run.json names the profile its run started with (a resume holds the folder to it): a
+  // profile.toml changed since is not the one the passport was judged by (helper-97's re-test:
+  // the passport, profile.toml and junit.xml edited together passed; run.json did not agree).
+  if (fs::exists(dir + "/run.json", ec)) {
+    nlohmann::json inv;
+    try {
+      inv = parse_json_unique_keys(file_text(dir + "/run.json"));
+    } catch (const std::exception& e) {
+      return std::string("its run.json cannot be read (") + e.what() + ")";
+    }
+    if (inv.is_object() && inv.contains("profile_digest") && inv["profile_digest"] != p.digest)
+      return fmt::format("run.json's profile_digest is {}, but the folder's profile.toml is \"{}\"",
+                         inv["profile_digest"].dump(), p.digest);
+  }
+  return "";
 }
 
 }  // namespace rig::cli

@@ -1,4 +1,5 @@
 #include "app/run_seal.hpp"
+#include "rig/core/json_unique.hpp"
 
 #include <algorithm>
 #include <cstdlib>
@@ -113,7 +114,7 @@ std::vector<std::string> sealed_files(const std::string& dir) {
   std::vector<std::string> out;
   try {
     std::ifstream in(dir + "/seal.json");
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j = parse_json_unique_keys(in);
     for (const auto& [rel, mac] : j.at("files").items()) out.push_back(rel);
   } catch (const std::exception&) {
     out.clear();
@@ -199,7 +200,7 @@ std::optional<std::string> passport_outcome(const std::string& dir) {
   if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
   try {
     std::ifstream in(path);
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j = parse_json_unique_keys(in);
     if (!j.is_object() || !j.contains("outcome") || !j["outcome"].is_string()) return std::nullopt;
     return j["outcome"].get<std::string>();
   } catch (const std::exception&) {

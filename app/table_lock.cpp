@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <thread>
 
 #include "app/folder_lock.hpp"
 #include "rig/core/errors.hpp"
@@ -74,6 +75,29 @@ int open_lock_file(const std::string& identity, const std::string& path, std::st
   return fd;
 }
 
+// The stop note's file: the lock's name with `.stop` for `.lock`.
+std::string stop_note_path(const std::string& identity) {
+  const std::string lock = TableLock::path_for(identity);
+  return lock.substr(0, lock.size() - 5) + ".stop";
+}
+
+// Opens the stop note as a plain file of its own, as the lock file is (no symlink followed, no FIFO
+// waited on, no hard link); -1 otherwise, said by nobody: a note is a courtesy, never a fault.
+int open_note(const std::string& path, int flags) {
+  const int fd = ::open(path.c_str(), flags | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
+  if (fd < 0) return -1;
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+long long epoch_ns(std::chrono::system_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+
 InUseError in_use(const std::string& identity, const std::string& path, int fd) {
   return InUseError("table " + identity + ": in use by " + read_holder(fd) + " on this station (lock " + path +
                     "); wait for it to end. `rig table stop` and `rig table quick-stop` still reach the drive");
@@ -110,6 +134,45 @@ TableLock::~TableLock() {
   // Emptied before it is released: a later reader never names a holder that has gone.
   (void)!::ftruncate(fd_, 0);
   ::close(fd_);
+}
+
+void TableLock::note_stop(const std::string& identity, const std::string& what) {
+  const int fd = open_note(stop_note_path(identity), O_WRONLY | O_CREAT);
+  if (fd < 0) return;
+  // "<ns since the epoch> pid <pid>: <what>": written over the old line, then cut to its length, so
+  // a reader meanwhile finds one whole line (the old or the new), never an empty file.
+  const std::string line = std::to_string(epoch_ns(std::chrono::system_clock::now())) + " pid " +
+                           std::to_string(::getpid()) + ": " + what + "\n";
+  if (::pwrite(fd, line.data(), line.size(), 0) == static_cast<ssize_t>(line.size()))
+    (void)!::ftruncate(fd, static_cast<off_t>(line.size()));
+  ::close(fd);
+}
+
+std::optional<std::string> TableLock::stop_noted_since(const std::string& identity,
+                                                       std::chrono::system_clock::time_point since,
+                                                       std::chrono::milliseconds wait) {
+  const std::string path = stop_note_path(identity);
+  const auto deadline = std::chrono::steady_clock::now() + wait;
+  for (;;) {
+    if (const int fd = open_note(path, O_RDONLY); fd >= 0) {
+      std::string text(512, '\0');
+      const ssize_t n = ::pread(fd, text.data(), text.size(), 0);
+      ::close(fd);
+      text.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+      const auto nl = text.find('\n');
+      char* end = nullptr;
+      const long long ns = std::strtoll(text.c_str(), &end, 10);
+      const std::size_t at = static_cast<std::size_t>(end - text.c_str());
+      // "<ns> pid <pid>: <what>": said as "`<what>` (pid <pid>)".
+      if (nl != std::string::npos && ns >= epoch_ns(since) && text.compare(at, 5, " pid ") == 0) {
+        const std::string line = text.substr(at + 5, nl - at - 5);
+        if (const auto colon = line.find(": "); colon != std::string::npos)
+          return "`" + shown_text(line.substr(colon + 2)) + "` (pid " + shown_text(line.substr(0, colon)) + ")";
+      }
+    }
+    if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
 }
 
 void TableLock::check_free(const std::string& identity) {

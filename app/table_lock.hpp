@@ -5,6 +5,8 @@
 // under it (a review). The drive's own "another master" checks still catch other stations and
 // tools. Stops never take the lock.
 #pragma once
+#include <chrono>
+#include <optional>
 #include <string>
 
 namespace rig::cli {
@@ -34,6 +36,18 @@ class TableLock {
 
   // The lock file for `identity`: in $RIG_LOCK_DIR, else /run/lock, else the temporary folder.
   static std::string path_for(const std::string& identity);
+
+  // A stop sent from this station leaves a note beside the lock ("pid 4711: rig table stop"), so a
+  // move or homing it halts in another terminal ends as the operator's abort (exit 3) naming it,
+  // not as "halted by another master" (exit 4: a technician's review). Written after the stop is
+  // sent, never before it; never throws (a note that cannot be written leaves the old wording).
+  static void note_stop(const std::string& identity, const std::string& what);
+  // The note of a stop written at or after `since` (this command's start), waiting up to `wait`
+  // for it: the stopping process writes it once its stop has been answered, which the halted one
+  // may see first. None where no such note comes (another station's or another tool's halt).
+  static std::optional<std::string> stop_noted_since(const std::string& identity,
+                                                     std::chrono::system_clock::time_point since,
+                                                     std::chrono::milliseconds wait);
 
  private:
   int fd_ = -1;

@@ -112,7 +112,11 @@ Recorded position_and_record(PhaseContext& ctx, const Profile& p, Orientation o,
       throw HardwareError(what + "; no retries left");
     }
     ctx.log->warn("{}; retrying ({}/{})", what, attempt, p.retries);
-    if (ctx.progress) ctx.progress->log("  " + what + ": retrying");
+    // Which attempt comes, said where the bar starts over (a technician's review: the bar went
+    // back with nothing naming the attempt).
+    if (ctx.progress)
+      ctx.progress->log(fmt::format("  {}: retrying, attempt {} of {}", what, attempt + 1,
+                                    p.retries + 1));
   }
 }
 

@@ -3,6 +3,8 @@
 // passport with "outcome" twice drawn with its last (a review); RFC 8259 leaves such a text's
 // meaning open, and the rig never writes one.
 #pragma once
+#include <istream>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -35,6 +37,14 @@ Json parse_json_unique_keys(std::string_view text) {
   Json j = Json::parse(text, seen);
   if (!repeated.empty()) throw RepeatedJsonKey("key '" + repeated + "' appears twice in one object");
   return j;
+}
+
+// The same from a stream, read whole (a checkpoint, run.json, a seal: a key twice in one is refused,
+// not read at its last).
+template <class Json = nlohmann::json>
+Json parse_json_unique_keys(std::istream& in) {
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  return parse_json_unique_keys<Json>(text);
 }
 
 }  // namespace rig

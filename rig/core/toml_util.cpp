@@ -62,6 +62,50 @@ void check_range(const toml::node& n, std::string_view key, double v, const std:
   }
 }
 
+// The token a value was written as, from its line and column in `text` (toml++ counts columns in
+// code points; a line may hold UTF-8 before the value).
+std::string_view token_at(std::string_view text, const toml::source_position& at) {
+  std::size_t i = 0;
+  for (uint32_t line = 1; line < at.line && i < text.size(); ++line) {
+    const std::size_t nl = text.find('\n', i);
+    if (nl == std::string_view::npos) return {};
+    i = nl + 1;
+  }
+  for (uint32_t col = 1; col < at.column && i < text.size() && text[i] != '\n'; ++col) {
+    ++i;
+    while (i < text.size() && (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80) ++i;  // continuation bytes
+  }
+  const std::size_t end = text.find_first_of(" \t\r\n,]}#", i);
+  return text.substr(i, end == std::string_view::npos ? std::string_view::npos : end - i);
+}
+
+// A float written non-zero that toml++ read as 0 (nearer 0 than the smallest double: 1e-400) is
+// refused at its place: a limit `[0, 1e-400]` became [0, 0] without a word (a review).
+void refuse_underflow(const toml::node& n, std::string_view text) {
+  if (const auto* a = n.as_array()) {
+    for (const toml::node& e : *a) refuse_underflow(e, text);
+  } else if (const auto* t = n.as_table()) {
+    for (const auto& [k, v] : *t) refuse_underflow(v, text);
+  } else if (const auto* f = n.as_floating_point(); f && f->get() == 0.0) {
+    const std::string_view tok = token_at(text, n.source().begin);
+    const std::string_view mantissa = tok.substr(0, tok.find_first_of("eE"));
+    if (mantissa.find_first_of("123456789") != std::string_view::npos)
+      fail(n, std::string(tok) + " is nearer 0 than the smallest double (about 4.9e-324): write 0, or a value a double holds");
+  }
+}
+
+toml::table parsed(std::string_view text, const std::string& source_name) {
+  try {
+    toml::table t = toml::parse(text, source_name);
+    refuse_underflow(t, text);
+    return t;
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << pos(e.source()) << ": " << e.description();
+    throw ConfigError(os.str());
+  }
+}
+
 }  // namespace
 
 std::string where(const toml::node& n) { return pos(n.source()); }
@@ -117,24 +161,10 @@ toml::table parse_file(const std::string& path) {
   if (in) text << in.rdbuf();
   if (!in || in.bad())  // toml++ said "FILE:0:0: File could not be opened for reading", with no reason
     throw ConfigError(shown_text(path) + ": cannot be read: " + std::strerror(errno));
-  try {
-    return toml::parse(text.str(), path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << pos(e.source()) << ": " << e.description();
-    throw ConfigError(os.str());
-  }
+  return parsed(text.str(), path);
 }
 
-toml::table parse_string(std::string_view text, const std::string& source_name) {
-  try {
-    return toml::parse(text, source_name);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << pos(e.source()) << ": " << e.description();
-    throw ConfigError(os.str());
-  }
-}
+toml::table parse_string(std::string_view text, const std::string& source_name) { return parsed(text, source_name); }
 
 double get_number(const toml::table& t, std::string_view key, std::optional<double> def, std::optional<double> lo,
                   std::optional<double> hi) {

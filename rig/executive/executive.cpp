@@ -1,4 +1,5 @@
 #include "rig/executive/executive.hpp"
+#include "rig/core/json_unique.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -179,7 +180,7 @@ Resumption Executive::read_checkpoint(const std::string& out_dir, const std::vec
   if (!in) throw ConfigError(cp + ": cannot read the checkpoint");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = parse_json_unique_keys(in);  // a key twice is refused, not read at its last
   } catch (const std::exception& e) {
     throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
   }

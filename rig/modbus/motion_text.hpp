@@ -147,7 +147,8 @@ void guarded_call(const std::string& doing, Body body, Where where, Stop stop, S
   } catch (const NotThisDriveError&) {
     throw;
   } catch (const TakenOverError& e) {
-    throw HardwareError(e.what() + std::string("; no halt sent by this client: another master commands the table"));
+    // Its type kept: `rig table` tells a stop from this station (app/table_lock.hpp) by it.
+    throw TakenOverError(e.what() + std::string("; no halt sent by this client: another master commands the table"));
   } catch (const ModbusError& e) {
     sent = stop();
     throw HardwareError(doing + (e.exception_code ? ": request refused" : ": link failure") + where() + ": " +

@@ -42,7 +42,8 @@ TEST(TauGrid, ParsesTheFourKindsAndRejectsOthers) {
   const TauGrid g = parse_tau_grid("log:37");
   EXPECT_EQ(g.kind, TauGrid::Log);
   EXPECT_EQ(g.log_n, 37);
-  for (const char* bad : {"", "octaves", "log:", "log:x", "log:1", "log:12x", "log:-5"})
+  for (const char* bad : {"", "octaves", "log:", "log:x", "log:1", "log:12x", "log:-5", "log:+5", "log:010", "log: 5",
+                          "log:100001", "log:99999999999"})
     EXPECT_THROW(parse_tau_grid(bad), std::invalid_argument) << bad;
 }
 

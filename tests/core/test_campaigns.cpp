@@ -623,6 +623,24 @@ TEST(Campaign, DamagedCheckpointSet) {
     refused(f, "unreadable checkpoint");
   }
   {
+    // A key twice in one object: refused, not read at its last (a review: values of the second
+    // "completed" or "values" would have been the resumed run's).
+    const std::string f = copy();
+    std::ofstream(f + "/checkpoint.json") << "{\"completed\": []," << good.substr(good.find('{') + 1);
+    refused(f, "unreadable checkpoint: key 'completed' appears twice in one object");
+  }
+  {
+    // run.json the same: its second "plant" or "serial" was the resume's.
+    const std::string f = copy();
+    const std::string inv = slurp(f + "/run.json");
+    std::ofstream(f + "/run.json") << "{\"plant\": \"hardware\"," << inv.substr(inv.find('{') + 1);
+    EXPECT_EQ(run({"run", "--resume", f, "--yes", "--no-history"}, f + "-io"), 2);
+    EXPECT_NE(slurp(f + "-io.stderr").find(f + "/run.json: unreadable: key 'plant' appears twice in one object"),
+              std::string::npos)
+        << slurp(f + "-io.stderr");
+    EXPECT_FALSE(fs::exists(f + "/passport.json"));
+  }
+  {
     json j = cp;
     j["schema"] = "rig.checkpoint/9";
     const std::string f = copy();

@@ -116,6 +116,17 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   near.replace(near.find("run_s = 1\n"), 10, "run_s = 0.00199999999\n");
   const std::string short_run = write_tmp("lim6.toml", near);
   EXPECT_EQ(error_of(short_run), short_run + ":5:9: 'run_s' = 0.00199999999 is out of range [0.002, 1000000]");
+  // A limit nearer 0 than a double holds: toml++ reads it as 0; refused at its place, as written
+  // (it became [0, 0], failing every DUT without a word: a review). 0.0, -0.0 and 0e5 are zero.
+  const std::string tiny = write_tmp("lim7.toml", base + "[limits]\nbias = [0.0, 1e-400]\n");
+  EXPECT_EQ(error_of(tiny), tiny + ":10:14: 1e-400 is nearer 0 than the smallest double (about 4.9e-324): write 0, or a "
+                                   "value a double holds");
+  const std::string spaced = write_tmp("lim8.toml", base + "[limits]\nbias = [ -0.0, 2.5E-999 ] # g\n");
+  EXPECT_NE(error_of(spaced).find(":10:16: 2.5E-999 is nearer 0"), std::string::npos) << error_of(spaced);
+  // Columns are code points: UTF-8 before the value on its line (a key "µµ", 4 bytes in 2).
+  const std::string utf8 = write_tmp("lim10.toml", base + "[limits]\n\"\xc2\xb5\xc2\xb5\" = 1e-400\n");
+  EXPECT_NE(error_of(utf8).find(":10:8: 1e-400 is nearer 0"), std::string::npos) << error_of(utf8);
+  EXPECT_EQ(error_of(write_tmp("lim9.toml", base + "[limits]\nbias = [-0.0, 0e5]\n")).find("nearer 0"), std::string::npos);
   const std::string three = write_tmp("lim4.toml", base + "[limits]\nbias = [0, 1, 2]\n");
   EXPECT_EQ(error_of(three), three + ":10:8: 'bias' = [ 0, 1, 2 ]: limits are two numbers [min, max], got 3");
   EXPECT_NE(error_of(write_tmp("lim2.toml", base + "[limits]\nbais = [0, 1]\n")).find("unknown measurement 'bais' in [limits] (known: bias, base_error, in_run_b_allan,"),

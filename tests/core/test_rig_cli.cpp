@@ -1644,7 +1644,7 @@ TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
   };
   const std::string junit = slurp(genuine + "/r/junit.xml");
   auto passed = [](std::string j) {  // the junit.xml a PASS would have: outcome and counts
-    j.replace(j.find("name=\"outcome\" value=\"FAIL\""), 29, "name=\"outcome\" value=\"PASS\"");
+    j.replace(j.find("name=\"outcome\" value=\"FAIL\""), 27, "name=\"outcome\" value=\"PASS\"");
     for (auto at = j.find("failures=\"1\""); at != std::string::npos; at = j.find("failures=\"1\""))
       j.replace(at, 12, "failures=\"0\"");
     return j;
@@ -1683,6 +1683,28 @@ TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
   std::ofstream(c + "/passport.json") << q.dump(2);
   refused(c, "its serial is \"QPA-0412\", but junit.xml names another DUT");
   EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
+  // Passport, profile.toml (the passport's and junit.xml's digest of it recomputed) and junit.xml
+  // edited together: run.json still names the profile its run started with (helper-97's re-test).
+  c = edited_copy("all-three");
+  {
+    std::string prof3 = slurp(c + "/profile.toml");
+    prof3.replace(prof3.find("-4.0e-4, 4.0e-4"), 15, "-1.0e-3, 1.0e-3");
+    std::ofstream(c + "/profile.toml") << prof3;
+    ASSERT_EQ(std::system(("sha256sum " + c + "/profile.toml > " + c + "-sum").c_str()), 0);
+    const std::string sum = slurp(c + "-sum").substr(0, 64);
+    auto q3 = nlohmann::json::parse(slurp(c + "/passport.json"));
+    const std::string old_sum = q3["profile_sha256"];
+    q3["profile_sha256"] = sum;
+    q3["values"]["bias"]["limits"] = {-1e-3, 1e-3};
+    std::ofstream(c + "/passport.json") << q3.dump(2);
+    std::string j3 = passed(junit);  // and no <failure> element: a junit.xml a PASS has
+    j3.replace(j3.find(old_sum), 64, sum);
+    const auto f3 = j3.find("<failure ");
+    ASSERT_NE(f3, std::string::npos) << j3;
+    j3.erase(f3, j3.find("</failure>", f3) + 10 - f3);
+    std::ofstream(c + "/junit.xml") << j3;
+    refused(c, "/all-three/passport.json: run.json's profile_digest is \"");
+  }
   // A key twice (nlohmann kept the last: a FAIL passport with "outcome": "PASS" after it was drawn PASS).
   c = d + "/twice";
   fs::copy(genuine + "/r", c, fs::copy_options::recursive);
@@ -2583,6 +2605,8 @@ TEST(RigCli, ARetriedCaptureSaysWhichAttemptItSetAside) {
             std::string::npos)
       << log;
   EXPECT_EQ(log.find("an interrupted attempt's"), std::string::npos) << log;
+  // The terminal names the attempt that starts over (its bar went back with nothing said).
+  EXPECT_NE(slurp(d + "/io.stderr").find("(limit 0): retrying, attempt 2 of 2\n"), std::string::npos) << slurp(d + "/io.stderr");
 }
 
 // A profile that judges nothing (no [limits], no [[classes]]: a file cut short) is refused before

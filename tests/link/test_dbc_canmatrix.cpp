@@ -288,7 +288,10 @@ TEST(DbcHandWritten, MalformedFilesNameTheLine) {
             "no error");
   EXPECT_EQ(error_of("BO_ 256 M: 1 DUT\n SG_ a : 3|8@0+ (1,0) [0|1] \"\" X\n"),
             "h.dbc:2: signal a (3|8@0) does not fit the message's 1 bytes");
-  EXPECT_EQ(error_of("BO_ 256 M: 65 DUT\n"), "h.dbc:1: message M has DLC 65 (> 64)");
+  EXPECT_EQ(error_of("BO_ 256 M: 65 DUT\n"),
+            "h.dbc:1: message M: length 65 is not a CAN frame length (0-8 bytes, or 12, 16, 20, 24, 32, 48, 64 for CAN FD)");
+  EXPECT_EQ(error_of("BO_ 256 M: -1 DUT\n").find("h.dbc:1: message M: length -1 is not a CAN frame length"), 0u)
+      << error_of("BO_ 256 M: -1 DUT\n");
   // A size no frame can have (an integrator's review: taken, then every frame skipped as
   // "length 8, DBC says 9"), and a signal of no bits ("does not fit the message's 8 bytes").
   EXPECT_EQ(error_of("BO_ 256 M: 9 DUT\n"),

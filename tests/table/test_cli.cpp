@@ -415,11 +415,25 @@ TEST_F(RigTable, AMoveRunningHoldsTheTableAgainstASecondCommand) {
       << out;
   EXPECT_NE(out.find("rig: in use: table " + server_.endpoint() + " unit 1: " + holder), std::string::npos) << out;
   ASSERT_EQ(rig(where_ + " status", out), 0) << out;
+  // `rig table stop` from this station's other terminal: the operator's abort (exit 3) naming the
+  // stop and where the table came to rest, not "halted by another master" (exit 4: a review).
   ASSERT_EQ(rig(where_ + " stop", out), 0) << out;
   const int st = child->wait_status();
+  std::string said;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) said.append(buf, static_cast<std::size_t>(n));
   close(fd);
   ASSERT_TRUE(WIFEXITED(st));
-  EXPECT_EQ(WEXITSTATUS(st), 4) << "the move ends on another master's halt";
+  EXPECT_EQ(WEXITSTATUS(st), 3) << said;
+  const std::string lead = "rig: the table stopped at ";
+  const std::size_t at = said.find(lead);
+  ASSERT_NE(at, std::string::npos) << said;
+  EXPECT_NEAR(std::stod(said.substr(at + lead.size())), emu_->snapshot().position_deg, 0.01) << said;
+  EXPECT_NE(said.find("° (halted by `rig table stop` (pid "), std::string::npos) << said;
+  EXPECT_NE(said.find(") on this station); it is still homed\nrig: aborted: moving to 300.0000° halted by `rig table stop` (pid "),
+            std::string::npos)
+      << said;
+  EXPECT_EQ(said.find("another master"), std::string::npos) << said;
   // Released with the process: the next command takes the table.
   ASSERT_EQ(rig(where_ + " move 10", out), 0) << out;
 }
@@ -1007,8 +1021,21 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
   EXPECT_EQ(rig("stop", out), 0) << out;
   first.join();
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 3.0) << out1;
+  EXPECT_EQ(rc1, 3) << out1;
+  EXPECT_TRUE(has(out1, "rig: aborted: moving to 300.0000° halted by `rig table stop` (pid ") &&
+              has(out1, ") on this station") && !has(out1, "another master")) << out1;
+  // The same stop from another station (its own lock folder: no note here) is another master's
+  // halt, exit 4 as the drive says it; a stop noted before a move began is not taken for it.
+  for (int i = 0; i < 300 && (rig("status --json", out) != 0 || !has(out, "\"moving\": false")); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const std::string elsewhere = testing::TempDir() + "/masters/stop-station";
+  std::filesystem::create_directories(elsewhere);
+  std::thread halted_elsewhere([&] { rc1 = rig("move 200", out1); });
+  ASSERT_TRUE(wait_moving()) << out;
+  EXPECT_EQ(run("RIG_LOCK_DIR=" + elsewhere + " " + std::string(RIG_BIN) + " table stop" + where, out), 0) << out;
+  halted_elsewhere.join();
   EXPECT_EQ(rc1, 4) << out1;
-  EXPECT_TRUE(has(out1, "move to 300.0000°: halted by another master (controlword reads 0x010F)") &&
+  EXPECT_TRUE(has(out1, "move to 200.0000°: halted by another master (controlword reads 0x010F)") &&
               has(out1, "; no halt sent by this client")) << out1;
   // A second `rig table move` while the first runs: it waits, then both moves are the table's.
   // The halted table first comes to rest: still coasting from the halt, it looked like the next
