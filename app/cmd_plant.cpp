@@ -20,6 +20,7 @@
 #include "plant/table/table_server.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "app/commands.hpp"
+#include "app/endpoint_option.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/toml_util.hpp"
@@ -123,8 +124,10 @@ void add_plant(CLI::App& app, int& rc) {
   plant->require_subcommand(1);
   auto* sub = plant->add_subcommand("serve", "Serve the emulated table (Modbus) and DUT (CAN) in real time");
   auto a = std::make_shared<ServeArgs>();
-  sub->add_option("--modbus", a->modbus, "Modbus TCP endpoint HOST:PORT or [IPv6]:PORT (PORT 0 picks a free port)");
-  sub->add_option("--rtu", a->rtu, "Modbus RTU serial device DEVICE[,BAUD[,P,D,S]] (e.g. one end of a socat pty pair)");
+  sub->add_option("--modbus", a->modbus, "Modbus TCP endpoint HOST:PORT or [IPv6]:PORT (PORT 0 picks a free port)")
+      ->check(modbus_endpoint_option(EndpointOption::kServe));
+  sub->add_option("--rtu", a->rtu, "Modbus RTU serial device DEVICE[,BAUD[,P,D,S]] (e.g. one end of a socat pty pair)")
+      ->check(modbus_endpoint_option(EndpointOption::kSerial));
   sub->add_option("--unit", a->unit, "Modbus unit (slave) id")->capture_default_str()->check(CLI::Range(1, 247));
   sub->add_option("--drive", a->drive, "The emulated drive's protocol: rig-v1 (docs/table-registers.md) or cia402")
       ->check(CLI::IsMember({"rig-v1", "cia402"}))

@@ -200,12 +200,14 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   // Every field is one this rig writes (checked after the version: a newer rig may write more);
   // an unknown one is a hand edit or another program's.
   static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source",
-                                                "software", "started", "no_history", "db", "faults", "profile_digest"};
+                                                "software", "started", "no_history", "db", "faults", "profile_digest",
+                                                "profile_folder"};
   for (const auto& [key, v] : inv.items())
     if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
   (void)str("profile_source", "");
   (void)str("profile_digest", "");
+  (void)str("profile_folder", "");
   a.plant = str("plant", "emulated");
   a.hardware = str("hardware", "");
   a.serial = str("serial", "");
@@ -1295,6 +1297,45 @@ void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t p
   log.info("{}", hint);
 }
 
+// Why a resume of `dir` would be refused now, as the resume itself reads the folder (nothing
+// opened): its run.json gone, or its checkpoint naming records that are not there (the folder
+// removed, moved or emptied while the run went on). "" when it would start. An ABORTED or ERROR
+// ending said "to continue: rig run --resume DIR" and that resume was exit 2 (an integrator's
+// review).
+std::string resume_refusal(const std::string& dir, const acceptance::Profile& p, const nlohmann::json& identity) {
+  std::error_code ec;
+  if (!fs::is_regular_file(fs::path(dir) / "run.json", ec))
+    return "its run.json is gone from " + shown_text(dir) + " (the folder removed or moved while the run went on)";
+  acceptance::ProcedureState state(p);
+  const std::vector<Phase> phases = acceptance::build_phases(p, state);
+  MeasurementSet values;
+  acceptance::declare_values(p, phases, values);
+  spdlog::logger quiet("resume-check");  // no sinks
+  try {
+    (void)Executive::read_checkpoint(dir, phases, values, state, identity, quiet, true);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// After an ABORTED or ERROR ending: how to go on (say_how_to_continue), or, where the folder would
+// refuse its resume now (resume_refusal), "no resume: why; start a new run".
+void offer_a_resume(const std::string& out, const acceptance::Profile& p, const nlohmann::json& identity,
+                    std::size_t checkpointed, std::size_t phases, const std::string& why, spdlog::logger& log) {
+  if (const std::string refused = resume_refusal(out, p, identity); !refused.empty()) {
+    const std::string no =
+        "no resume: " + refused + (refused.find("start a new run") == std::string::npos ? "; start a new run" : "");
+    std::cerr << no << "\n";
+    log.info("{}", no);
+    return;
+  }
+  // Kept: the phases the checkpoint holds, as `--dry-run --resume` counts them (a review: a
+  // resume stopped before computing its kept records again said 13 of 19, its dry run 15).
+  std::error_code ec;
+  say_how_to_continue(out, fs::exists(Executive::checkpoint_path(out), ec) ? checkpointed : 0, phases, why, log);
+}
+
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
   // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
@@ -1331,6 +1372,10 @@ int do_run(RunArgs a) {
     a.out = a.resume;
     read_invocation(inv_path, invocation, a);
     a.profile = a.resume + "/profile.toml";
+    // Paths the profile writes relative ([plant.firmware] dbc) resolve where the profile was, not
+    // beside its copy (run.json's profile_folder; a run started before it kept one: beside the copy).
+    if (const std::string folder = invocation.value("profile_folder", std::string()); !folder.empty())
+      cfg::set_relative_folder(a.profile, folder);
     // --serial with --resume guards the resume: it must name the run's DUT, the one given when
     // the run started or, without that, the one its DUT reported (the checkpoint's).
     if (!a.resume_serial.empty()) {
@@ -1581,6 +1626,12 @@ int do_run(RunArgs a) {
     invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source}, {"profile_digest", p.digest},
                   {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
+    // Where the profile's relative paths resolve, for its resume (it reads the folder's copy).
+    if (p.source.rfind("builtin:", 0) != 0) {
+      std::error_code ec;
+      const fs::path folder = fs::absolute(p.source, ec).parent_path();
+      if (!ec) invocation["profile_folder"] = folder.lexically_normal().string();
+    }
     // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
     // carries a password, which run.json never holds; the resume must then give it again).
     if (a.no_history) {
@@ -1759,10 +1810,9 @@ int do_run(RunArgs a) {
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
-    if (!records_lost && !res.config_error) {
-      say_how_to_continue(a.out, fs::exists(Executive::checkpoint_path(a.out), ec) ? res.checkpointed : 0,
-                          res.phases.size(), "; once the folder can take the run's files", *log);
-    }
+    if (!records_lost && !res.config_error)
+      offer_a_resume(a.out, p, identity, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
+                     *log);
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);
@@ -1795,10 +1845,7 @@ int do_run(RunArgs a) {
     std::cerr << no << "\n";
     log->info("{}", no);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
-    // Kept: the phases the checkpoint holds, as `--dry-run --resume` counts them (a review: a
-    // resume stopped before computing its kept records again said 13 of 19, its dry run 15).
-    const std::size_t kept = fs::exists(Executive::checkpoint_path(a.out)) ? res.checkpointed : 0;
-    say_how_to_continue(a.out, kept, res.phases.size(), "", *log);
+    offer_a_resume(a.out, p, identity, res.checkpointed, res.phases.size(), "", *log);
   }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/endpoint_option.hpp"
 #include "app/hardware_file.hpp"
 #include "app/number_option.hpp"
 #include "app/station_stop.hpp"
@@ -59,6 +60,14 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
     root.insert_or_assign("table", toml::table{});
   }
   toml::table& t = *root.get_as<toml::table>("table");
+  // The options' own combinations, named as options: they read "command-line option: drive_map
+  // is for drive = "cia402"" (a technician's review). A file's keys are named at their lines below.
+  const std::string file_drive = t.contains("drive") && t["drive"].is_string() ? t["drive"].value_or(std::string()) : "";
+  if (!a.drive_map.empty() && a.drive.empty() && file_drive != "cia402")
+    throw ConfigError("rig table: --drive-map is for --drive cia402 (the drive is rig-v1 unless --drive or the hardware "
+                      "file's [table] drive says cia402)");
+  if (a.drive == "cia402" && a.drive_map.empty() && !t.contains("drive_map"))
+    throw ConfigError("rig table: --drive cia402 needs --drive-map FILE (a CiA 402 drive map: drives/*.toml)");
   if (!a.drive.empty()) t.insert_or_assign("drive", a.drive);
   if (!a.drive_map.empty()) t.insert_or_assign("drive_map", a.drive_map);
   // The file's map, checked above, is not this protocol's: left out, and said (it was silent).
@@ -304,8 +313,10 @@ void add_table(CLI::App& app, int& rc) {
   auto a = std::make_shared<TableArgs>();
   auto* sub = app.add_subcommand("table", "Manual control of the rotary table over Modbus (status, home, move, stop)");
   sub->require_subcommand(1);
-  auto* where = sub->add_option("--modbus", a->modbus, "Modbus TCP drive, HOST:PORT or [IPv6]:PORT");
+  auto* where = sub->add_option("--modbus", a->modbus, "Modbus TCP drive, HOST:PORT or [IPv6]:PORT")
+                     ->check(modbus_endpoint_option(EndpointOption::kDrive));
   sub->add_option("--rtu", a->rtu, "Modbus RTU drive, DEVICE[,BAUD[,PARITY,DATABITS,STOPBITS]] (default 19200,E,8,1)")
+      ->check(modbus_endpoint_option(EndpointOption::kSerial))
       ->excludes(where);
   sub->add_option("--hardware", a->hardware, "Take the [table] section of this hardware file (flags override)");
   sub->add_option("--unit", a->unit, "Modbus unit id (default 1)")->check(CLI::Range(1, 247));

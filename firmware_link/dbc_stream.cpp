@@ -342,9 +342,9 @@ std::string dut_dbc_path(const toml::table& dut) {
   const toml::node* dbc_node = dut.get("dbc");
   if (!dbc_node) return {};
   std::string path = cfg::get_string(dut, "dbc");
-  // Relative to the hardware file's folder, so a hardware file and its DBC travel together.
-  if (const auto& src = dbc_node->source().path; src && std::filesystem::path(path).is_relative())
-    path = (std::filesystem::path(*src).parent_path() / path).string();
+  // Relative to the hardware file's (or the profile's) folder, so a file and its DBC travel together.
+  if (std::filesystem::path(path).is_relative() && dbc_node->source().path)
+    path = (std::filesystem::path(cfg::relative_folder(*dbc_node)) / path).string();
   return path;
 }
 

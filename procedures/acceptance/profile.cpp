@@ -57,6 +57,27 @@ std::string digest(const toml::table& t) {
   return std::to_string(std::hash<std::string>{}(os.str()));
 }
 
+// Every whole number as a float, for comparing two profiles by what they say: `run_s = 100` is the
+// built-in's `run_s = 100.0` (a review: refused as a profile that differs from it).
+void whole_numbers_as_floats(toml::table& t);
+void whole_numbers_as_floats(toml::array& a) {
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    toml::node& e = *a.get(i);
+    if (const auto* v = e.as_integer()) a.replace(a.cbegin() + static_cast<std::ptrdiff_t>(i), static_cast<double>(v->get()));
+    else if (auto* sub = e.as_table()) whole_numbers_as_floats(*sub);
+    else if (auto* arr = e.as_array()) whole_numbers_as_floats(*arr);
+  }
+}
+void whole_numbers_as_floats(toml::table& t) {
+  std::vector<std::pair<std::string, double>> whole;
+  for (auto&& [k, v] : t) {
+    if (const auto* i = v.as_integer()) whole.emplace_back(std::string(k.str()), static_cast<double>(i->get()));
+    else if (auto* sub = v.as_table()) whole_numbers_as_floats(*sub);
+    else if (auto* arr = v.as_array()) whole_numbers_as_floats(*arr);
+  }
+  for (const auto& [k, x] : whole) t.insert_or_assign(k, x);
+}
+
 // The name the log and the passport give the profile's filter.
 std::string filter_name(const std::string& preset) { return preset == "paper" ? "paper W_f(z)" : preset; }
 
@@ -314,6 +335,7 @@ void check_profile_names_itself(const toml::table& resolved, const std::string& 
   // [plant] is the emulated plant's (a seed, a table's speed), not the procedure's or its limits.
   auto procedure = [](toml::table t) {
     t.erase("plant");
+    whole_numbers_as_floats(t);
     return digest(t);
   };
   const auto it = builtin_profiles().find(*name);

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -107,6 +108,27 @@ toml::table parsed(std::string_view text, const std::string& source_name) {
 }
 
 }  // namespace
+
+namespace {
+std::mutex folders_mu;
+std::map<std::string, std::string>& relative_folders() {
+  static std::map<std::string, std::string> m;
+  return m;
+}
+}  // namespace
+
+void set_relative_folder(const std::string& file, const std::string& folder) {
+  std::lock_guard lk(folders_mu);
+  relative_folders()[file] = folder;
+}
+
+std::string relative_folder(const toml::node& n) {
+  const auto& src = n.source().path;
+  if (!src) return "";
+  std::lock_guard lk(folders_mu);
+  if (const auto it = relative_folders().find(*src); it != relative_folders().end()) return it->second;
+  return std::filesystem::path(*src).parent_path().string();
+}
 
 std::string where(const toml::node& n) { return pos(n.source()); }
 

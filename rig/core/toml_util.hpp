@@ -16,6 +16,13 @@ namespace rig::cfg {
 toml::table parse_file(const std::string& path);
 toml::table parse_string(std::string_view text, const std::string& source_name);
 
+// The folder a path written relative in `n`'s file resolves from: that file's own folder, or the
+// one set_relative_folder gave its file (a run folder's copy of a profile resolves its paths where
+// the profile was: run.json's profile_folder; a resume read `dbc = "x.dbc"` beside the copy, and
+// every resume of such a run was exit 2: an integrator's review). Empty for a node in no file.
+std::string relative_folder(const toml::node& n);
+void set_relative_folder(const std::string& file, const std::string& folder);
+
 // "file:line:col" of a node (or of its parent table when the key is missing); "command-line
 // option" for one the program put there (from_option).
 std::string where(const toml::node& n);

@@ -76,6 +76,15 @@ std::string url_problem(const std::string& url) {
   const std::size_t colon = url.find(':');
   if (colon != std::string::npos && colon < url.find('/') && url.rfind("sqlite:", 0) != 0)
     return "unknown scheme (expected sqlite:PATH, a path, or postgresql://...)";
+  // SQLite's own names for no file: ":memory:" took the run's row into a database gone when the
+  // process ended, said "recorded" and exit 0 (an integrator's review); "file:" URIs and "?"
+  // options are not read from the URL (a file named "h.sqlite?x=1" was made).
+  const std::string file = file_part(url);
+  if (file == ":memory:")
+    return "names SQLite's in-memory database, which nothing outlives the process in: give a file";
+  if (file.rfind("file:", 0) == 0) return "is an SQLite URI (file:...): give the file's path, sqlite:PATH";
+  if (file.find('?') != std::string::npos)
+    return "holds '?': options are not read from the URL (a file of that name would be made): give the file's path";
   return "";
 }
 

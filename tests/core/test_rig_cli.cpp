@@ -2076,6 +2076,8 @@ TEST(RigCli, AProfileFileNamesItselfAndNeverPassesForABuiltIn) {
   std::ofstream(d + "/own.toml") << "base = \"ci\"\n[profile]\nname = \"ci-loose\"\n" << loose;
   std::ofstream(d + "/same.toml") << "base = \"ci\"\n";
   std::ofstream(d + "/seeded.toml") << "base = \"ci\"\n[plant]\nseed = 7\n";
+  // The built-in's own values with a whole number for its 2.0 and 40.0 (a review: refused as differing).
+  std::ofstream(d + "/whole.toml") << "base = \"ci\"\n[profile]\nname = \"ci\"\n[procedure]\nrun_s = 2\nin_run_s = 40\n";
   for (const bool dry : {true, false}) {
     for (const auto& [file, where] : {std::pair{"nameless", ":1:8: 'base' = \"ci\": a profile built on another needs a name "
                                                              "of its own: add [profile] name = \"...\""},
@@ -2090,7 +2092,7 @@ TEST(RigCli, AProfileFileNamesItselfAndNeverPassesForABuiltIn) {
       EXPECT_FALSE(fs::exists(d + "/run-" + file));
     }
   }
-  for (const char* file : {"own", "same", "seeded"})
+  for (const char* file : {"own", "same", "seeded", "whole"})
     EXPECT_EQ(run({"run", "--profile", d + "/" + file + ".toml", "--yes", "--no-history", "--dry-run"}, d + "/io"), 0)
         << file << slurp(d + "/io.stderr");
   ASSERT_EQ(run({"run", "--profile", d + "/own.toml", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 0)
@@ -2242,6 +2244,18 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
     EXPECT_NE(slurp(d + "/mysql.stderr").find("history database URL 'mysql://h/x': unknown scheme"), std::string::npos)
         << slurp(d + "/mysql.stderr");
     EXPECT_FALSE(fs::exists(d + "/r"));
+    // SQLite's names for no file, and its URI forms: a run "recorded" into :memory: exited 0 with
+    // nothing kept (an integrator's review).
+    for (const auto& [url, says] : std::vector<std::pair<std::string, std::string>>{
+             {"sqlite::memory:", "names SQLite's in-memory database"},
+             {"sqlite:file:" + d + "/h.sqlite", "is an SQLite URI (file:...)"},
+             {"sqlite:" + d + "/h.sqlite?mode=ro", "holds '?': options are not read from the URL"}}) {
+      args[5] = url;
+      EXPECT_EQ(run(args, d + "/mem"), 2) << url;
+      EXPECT_NE(slurp(d + "/mem.stderr").find("history database URL '" + url + "': " + says), std::string::npos)
+          << slurp(d + "/mem.stderr");
+      EXPECT_FALSE(fs::exists(d + "/r"));
+    }
   }
   // --limit N is the newest N runs, N >= 1: 0 listed every run, -1 printed a 300-digit bound.
   for (const char* n : {"0", "-1", "2147483648"}) {
@@ -3804,6 +3818,73 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
             std::string::npos)
       << slurp(d + "/io.stderr");
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume"), 2) << slurp(d + "/resume.stderr");
+}
+
+// A profile's relative path ([plant.firmware] dbc = "qpa-counts.dbc", relative to the profile, as
+// docs/profiles.md has it) resolves where the profile was when a resume reads the folder's copy
+// (an integrator's review: it resolved beside the copy, and every resume was exit 2).
+TEST(RigCli, AResumeFindsTheFilesItsProfileNamesRelative) {
+  const std::string d = tmp("profile-relative");
+  fs::create_directories(d + "/prof");
+  fs::copy_file(std::string(RIG_SOURCE_DIR) + "/duts/qpa-counts.dbc", d + "/prof/qpa-counts.dbc");
+  std::ofstream(d + "/prof/pdbc.toml") << "base = \"ci\"\n[plant.firmware]\ndbc = \"qpa-counts.dbc\"\n"
+                                           "[plant.firmware.stream]\ncounter = \"QPA_XY.cnt\"\nx = \"QPA_XY.x_counts\"\n"
+                                           "y = \"QPA_XY.y_counts\"\n";
+  ASSERT_EQ(run({"run", "--profile", d + "/prof/pdbc.toml", "--yes", "--quiet", "--serial", "QPA-1", "--no-history", "--out",
+                 d + "/whole"},
+                d + "/whole"),
+            0)
+      << slurp(d + "/whole.stderr");
+  EXPECT_EQ(run({"run", "--profile", d + "/prof/pdbc.toml", "--yes", "--quiet", "--serial", "QPA-1", "--no-history", "--out",
+                 d + "/k", "--inject", "sigkill@150"},
+                d + "/k"),
+            128 + SIGKILL);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/k/run.json"))["profile_folder"], d + "/prof");
+  EXPECT_EQ(run({"run", "--resume", d + "/k", "--dry-run"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
+  ASSERT_EQ(run({"run", "--resume", d + "/k", "--yes", "--quiet"}, d + "/resume"), 0) << slurp(d + "/resume.stderr");
+  auto values = [](const std::string& f) { return nlohmann::json::parse(slurp(f))["values"]; };
+  EXPECT_EQ(values(d + "/k/passport.json"), values(d + "/whole/passport.json"));
+}
+
+// An ABORTED or ERROR ending offers a resume only where one would start: a capture the checkpoint
+// names removed, or the folder moved away, while the run went on, is "no resume: ..." naming why
+// (an integrator's review: "to continue: rig run --resume DIR", then exit 2).
+TEST(RigCli, AStopOffersAResumeOnlyWhereOneWouldStart) {
+  const std::string d = tmp("no-resume-offered");
+  fs::create_directories(d);
+  {
+    const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/rm"}, d + "/rm-io");
+    ASSERT_TRUE(wait_for_file(c, d + "/rm/captures/in-run-U10.cap")) << slurp(d + "/rm-io.stderr");
+    fs::remove(d + "/rm/captures/run01-U10.cap");
+    ::kill(c.pid, SIGINT);
+    EXPECT_EQ(wait_exit(c), 3) << slurp(d + "/rm-io.stderr");
+    const std::string err = slurp(d + "/rm-io.stderr");
+    EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
+    EXPECT_NE(err.find("no resume: " + d + "/rm/checkpoint.json: state.runs."), std::string::npos) << err;
+    EXPECT_NE(err.find("(damaged checkpoint; start a new run)\n"), std::string::npos) << err;
+    EXPECT_EQ(run({"run", "--resume", d + "/rm", "--yes", "--dry-run"}, d + "/rm-resume"), 2);
+  }
+  {
+    const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/mv"}, d + "/mv-io");
+    ASSERT_TRUE(wait_for_file(c, d + "/mv/captures/in-run-U10.cap")) << slurp(d + "/mv-io.stderr");
+    fs::rename(d + "/mv", d + "/mv.moved");
+    ::kill(c.pid, SIGINT);
+    const int rc = wait_exit(c);
+    EXPECT_TRUE(rc == 3 || rc == 4) << rc << slurp(d + "/mv-io.stderr");
+    const std::string err = slurp(d + "/mv-io.stderr");
+    EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
+    EXPECT_NE(err.find("no resume: its run.json is gone from " + d + "/mv (the folder removed or moved while the run went "
+                       "on); start a new run"),
+              std::string::npos)
+        << err;
+  }
+  // A stop that keeps its records still offers the resume.
+  const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/ok"}, d + "/ok-io");
+  ASSERT_TRUE(wait_for_file(c, d + "/ok/captures/in-run-U10.cap")) << slurp(d + "/ok-io.stderr");
+  ::kill(c.pid, SIGINT);
+  EXPECT_EQ(wait_exit(c), 3);
+  EXPECT_NE(slurp(d + "/ok-io.stderr").find("to continue: rig run --resume " + d + "/ok ("), std::string::npos)
+      << slurp(d + "/ok-io.stderr");
 }
 
 // A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL

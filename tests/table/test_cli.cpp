@@ -239,6 +239,19 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   EXPECT_EQ(rig("status", out), 2) << out;
   EXPECT_NE(out.find("say where the table is"), std::string::npos) << out;
   EXPECT_EQ(rig("--modbus nowhere status", out), 2) << out;
+  // Each option named as typed, not as "command-line option" or its internal key (a review).
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"--modbus localhost:99999 status", "--modbus: Modbus TCP address 'localhost:99999': port out of range"},
+           {"--modbus localhost:0 status", "--modbus: Modbus TCP address 'localhost:0': port 0 is no drive's port"},
+           {"--modbus localhost status", "--modbus: Modbus TCP address 'localhost' must be HOST:PORT"},
+           {"--rtu /dev/ttyUSB0,9600,X,8,1 status", "--rtu: Modbus RTU port '/dev/ttyUSB0,9600,X,8,1': parity must be N, E or O"},
+           {"--modbus localhost:502 --drive-map " + std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml status",
+            "rig table: --drive-map is for --drive cia402 (the drive is rig-v1 unless"},
+           {"--modbus localhost:502 --drive cia402 status", "rig table: --drive cia402 needs --drive-map FILE"}}) {
+    EXPECT_EQ(rig(args, out), 2) << args << ": " << out;
+    EXPECT_NE(out.find(says), std::string::npos) << args << ": " << out;
+    EXPECT_EQ(out.find("command-line option"), std::string::npos) << args << ": " << out;
+  }
   EXPECT_EQ(rig(where_ + " move", out), 2) << out;
   EXPECT_EQ(rig(where_ + " --rtu /dev/null status", out), 2) << out;  // --modbus and --rtu exclude each other
   // An angle that is not a decimal number never moves the table: an empty shell variable read
