@@ -94,6 +94,14 @@ void validate(const DevOptions& o) {
 }
 
 std::vector<std::size_t> factors_for(const DevOptions& o, std::uint64_t n) {
+  // A record too short for any factor is said as such (it read "averaging factor 1 is out of
+  // range for 3 phase points": a review).
+  if (!factor_in_range(o.type, n, 1)) {
+    std::uint64_t need = n + 1;
+    while (need < 64 && !factor_in_range(o.type, need, 1)) ++need;
+    throw std::invalid_argument(std::string(to_string(o.type)) + ": needs at least " + std::to_string(need) +
+                                " phase points, got " + std::to_string(n));
+  }
   if (o.factors.empty()) return tau_factors(o.taus, o.type, n);
   for (std::size_t m : o.factors)
     if (!factor_in_range(o.type, n, m))

@@ -50,6 +50,8 @@ json long_tau_to_json(std::span<const an::LongTauPoint> pts, bool bounds) {
            {"edf_alpha", p.alpha}};  // the contract's field: no EDF guard here, the EDF is alpha's
     if (!bounds)  // as dev_to_json: nothing identified, nothing bounded
       for (const char* k : {"lo", "hi", "edf", "alpha", "edf_alpha"}) j[k] = nullptr;
+    else if (!p.bounds_note.empty())  // no interval at this EDF: null, and why
+      j["lo"] = j["hi"] = j["edf"] = nullptr, j["bounds_note"] = p.bounds_note;
     a.push_back(std::move(j));
   }
   return a;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -263,10 +264,24 @@ std::vector<std::size_t> grid(const LongTauOptions& o, std::size_t top, bool eve
   return m;
 }
 
+// The chi-square interval at the point's EDF, where it is one: a positive EDF whose interval holds
+// the value (lo <= dev <= hi). Else none (NaN), with why: the table formulas (SP 1065 Tables 9-11)
+// are fits that leave their range at the longest factors.
 void set_bounds(LongTauPoint& p, double confidence) {
   const auto [lo, hi] = chi2_bounds(p.dev, p.edf, confidence);
-  p.lo = lo;
-  p.hi = hi;
+  if (p.edf > 0 && std::isfinite(p.edf) && lo <= p.dev && p.dev <= hi) {
+    p.lo = lo;
+    p.hi = hi;
+    return;
+  }
+  char why[160];
+  if (p.edf > 0)
+    std::snprintf(why, sizeof why, "EDF %.3g (alpha %d) is too small for a chi-square interval that holds the value",
+                  p.edf, p.alpha);
+  else
+    std::snprintf(why, sizeof why, "the table EDF for alpha %d is not positive here (%.3g)", p.alpha, p.edf);
+  p.bounds_note = why;
+  p.lo = p.hi = p.edf = std::numeric_limits<double>::quiet_NaN();
 }
 
 unsigned thread_count(unsigned t) { return t ? t : std::max(1u, std::thread::hardware_concurrency()); }
@@ -426,7 +441,7 @@ std::vector<LongTauPoint> theoh_points(const std::vector<double>& x, const LongT
   for (LongTauPoint p : theo1_points(x, ms, o, ref)) {
     p.dev = p.dev_raw * std::sqrt(br);
     p.estimator = "theobr";
-    if (o.bounds) set_bounds(p, o.confidence);
+    if (o.bounds && p.bounds_note.empty()) set_bounds(p, o.confidence);  // (a note: none at this EDF)
     out.push_back(p);
   }
   return out;

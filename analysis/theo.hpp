@@ -37,6 +37,10 @@ struct LongTauPoint {
   int alpha = 0;            // noise type used for the EDF and the bias removal
   std::size_t stride = 1;   // 1: every subsequence summed; k: every k-th (work cap, see LongTauOptions)
   std::string estimator;    // TheoH: "avar" (OADEV) or "theobr" (bias-removed Theo1); else the statistic
+  // Non-empty where the table EDF gives no interval to state (lo, hi, edf NaN): why. SP 1065's
+  // Theo1 EDF for random-walk FM is negative for m above about 0.84 N, and an EDF far below 1 gave
+  // lo > dev (a review: EDF -0.21 with [0, 0], EDF 0.02 with lo 1700x the value).
+  std::string bounds_note;
 };
 
 struct LongTauOptions {

@@ -182,7 +182,7 @@ void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::Lon
   for (const auto& p : pts) {
     char alpha[8] = "-", lo[16] = "-", hi[16] = "-", edf[16] = "-";
     if (typed_noise) std::snprintf(alpha, sizeof alpha, "%d", p.alpha);
-    if (bounded) {
+    if (bounded && p.bounds_note.empty()) {  // else "-": no interval at this EDF (noted below)
       std::snprintf(lo, sizeof lo, "%.4e", p.lo);
       std::snprintf(hi, sizeof hi, "%.4e", p.hi);
       std::snprintf(edf, sizeof edf, "%.1f", p.edf);
@@ -192,6 +192,8 @@ void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::Lon
                   alpha, lo, p.dev, hi, edf, p.stride, p.estimator.c_str());
     o << line;
   }
+  for (const auto& p : pts)
+    if (bounded && !p.bounds_note.empty()) o << "  m " << p.m << ": no bounds: " << p.bounds_note << "\n";
 }
 
 // A long-tau statistic in the JSON: bounds as the run has them; MTOT, TTOT and HTOT's alpha (the

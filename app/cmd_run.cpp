@@ -962,7 +962,8 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   const nlohmann::ordered_json passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
   // The same closing table and OUTCOME line as every other ending (a technician's review: an
   // empty stdout beside an ERROR passport; scripts match "OUTCOME: ERROR").
-  std::cout << "\n" << passport_table(passport) << fmt::format("run folder: {}\n", info.out_dir);
+  std::cout << (::isatty(STDOUT_FILENO) ? "\n" : "") << passport_table(passport)
+            << fmt::format("run folder: {}\n", info.out_dir);
 }
 
 // The files the rig replaces in a run folder must be files: a folder or a FIFO in their place
@@ -1817,7 +1818,9 @@ int do_run(RunArgs a) {
   }
   dev.io.set_lamp(Lamp::Running, false);
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
-  std::cout << "\n" << passport_table(passport);
+  // A blank line before the table on a terminal, where the progress lines precede it; none into a
+  // pipe or a file, whose first line is the table's (`| head -1` read "": a review).
+  std::cout << (::isatty(STDOUT_FILENO) ? "\n" : "") << passport_table(passport);
   std::cout << fmt::format("run folder: {}\n", info.out_dir);
   if (b.emulated) {  // the emulation's own speed, as measured on this run
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

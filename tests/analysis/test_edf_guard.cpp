@@ -109,7 +109,12 @@ TEST(EdfGuard, LongTauStatisticsTakeTheGuardedType) {
   for (const LongTauPoint& p : pts)
     if (p.tau_s >= 512) {
       EXPECT_EQ(p.alpha, -2) << "m " << p.m;
-      EXPECT_DOUBLE_EQ(p.edf, edf_theo1(-2, y.size() + 1, p.m)) << "m " << p.m;
+      // The table's EDF, where it gives an interval (it is negative at m = 4096 here: none then,
+      // and said: LongTauBounds.NoIntervalWhereTheTableEdfGivesNone).
+      if (p.bounds_note.empty())
+        EXPECT_DOUBLE_EQ(p.edf, edf_theo1(-2, y.size() + 1, p.m)) << "m " << p.m;
+      else
+        EXPECT_TRUE(std::isnan(p.edf) && !(edf_theo1(-2, y.size() + 1, p.m) > 1)) << "m " << p.m << " " << p.bounds_note;
     }
 }
 

@@ -180,6 +180,47 @@ namespace {
 // The work cap (LongTauOptions::max_terms_per_tau) sums every k-th subsequence start: on a
 // record where the exact sums are still affordable, the capped values stay near them, the
 // stride is reported and the EDF is held to the starts summed.
+// SP 1065's Theo1 EDF for random-walk FM is negative for m above about 0.84 N, and far below 1 near
+// it, where the chi-square "interval" no longer holds the value (a metrologist's review: EDF -0.21
+// with [0, 0]; EDF 0.02 with lo 1700x the value). There no bounds are stated, and the point says
+// why; every interval stated holds its value. Theo1 and TheoH alike, on every even m.
+TEST(LongTauBounds, NoIntervalWhereTheTableEdfGivesNone) {
+  EXPECT_LT(edf_theo1(-2, 4097, 3520), 0);  // the formula itself, as the review computed it (-0.0354)
+  EXPECT_NEAR(edf_theo1(-2, 4097, 3520), -0.0354, 5e-4);
+  std::vector<double> y(400);
+  std::uint64_t s = 99;
+  double walk = 0;
+  for (double& v : y) {  // a random walk: alpha -2 at the longest taus
+    s = (6364136223846793005ULL * s + 1442695040888963407ULL);
+    const double u1 = static_cast<double>((s >> 11) + 1) * 0x1p-53;
+    s = (6364136223846793005ULL * s + 1442695040888963407ULL);
+    const double u2 = static_cast<double>(s >> 11) * 0x1p-53;
+    walk += std::sqrt(-2 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+    v = walk;
+  }
+  for (LongTau t : {LongTau::Theo1, LongTau::TheoH}) {
+    LongTauOptions o;
+    o.type = t;
+    o.taus = parse_tau_grid("all");
+    o.fixed_alpha = -2;
+    int withheld = 0;
+    for (const LongTauPoint& p : long_tau(y, o)) {
+      if (!p.bounds_note.empty()) {
+        ++withheld;
+        EXPECT_TRUE(std::isnan(p.lo) && std::isnan(p.hi) && std::isnan(p.edf)) << to_string(t) << " m " << p.m;
+        EXPECT_TRUE(p.bounds_note.find("is not positive here") != std::string::npos ||
+                    p.bounds_note.find("too small for a chi-square interval") != std::string::npos)
+            << p.bounds_note;
+        continue;
+      }
+      EXPECT_GT(p.edf, 0) << to_string(t) << " m " << p.m;
+      EXPECT_LE(p.lo, p.dev) << to_string(t) << " m " << p.m << " edf " << p.edf;
+      EXPECT_GE(p.hi, p.dev) << to_string(t) << " m " << p.m << " edf " << p.edf;
+    }
+    EXPECT_GT(withheld, 0) << to_string(t) << ": the longest factors (m > 0.84 N) have no interval";
+  }
+}
+
 TEST(LongTauCap, StridedSumsStayNearTheExactOnes) {
   std::vector<double> y(20000);
   std::uint64_t s = 12345;
