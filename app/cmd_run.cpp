@@ -1705,11 +1705,12 @@ int do_run(RunArgs a) {
       },
       phases, values, state, cancel.token(), resumed, identity);
   // A fault timed past the run's end never fired: said, or a test of it passes for nothing (a
-  // review: sigint@229 on a run of 228 s of device time, exit 0 without a word).
+  // review: sigint@229 on a run of 228 s of device time, exit 0 without a word). As an error line:
+  // a test harness running with --quiet sees it too (a warning went to run.log alone: a review).
   if (b.emulated && res.outcome != RunOutcome::Aborted)
     for (const Injection& j : injections)
       if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > b.emulated->clock().now_s())
-        log->warn("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, b.emulated->clock().now_s());
+        log->error("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, b.emulated->clock().now_s());
   // A loss in samples the DUT never streamed (between recordings, or past the run's last) took
   // nothing from any record: said, as a late signal is (a review: drop@1000:5 passed silently).
   if (b.emulated && res.outcome != RunOutcome::Aborted) {
@@ -1717,7 +1718,7 @@ int do_run(RunArgs a) {
     std::size_t k = 0;  // the plant's drops are the Drop injections, in order
     for (const Injection& j : injections)
       if (j.kind == Injection::Kind::Drop && k++ < hits.size() && hits[k - 1] == 0)
-        log->warn("{} {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
+        log->error("{} {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
                   "a recording or the loop test runs; the run's records say which sequence numbers they hold)",
                   a.resume.empty() ? "--inject" : "run.json's fault", j.text, j.seq,
                   static_cast<std::uint64_t>(j.seq) + j.count - 1);

@@ -387,6 +387,15 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
       if (dropped_limits) *dropped_limits = dropped;
       cfg::fill_defaults(t, std::move(base));
     }
+    // `bias = []` in [limits]: that value reported, not judged. A file built on a base could
+    // loosen an inherited limit but never remove one (an integrator's review: a whole profile of
+    // its own was the only way).
+    if (toml::table* lim = t.get_as<toml::table>("limits")) {
+      std::vector<std::string> unlimited;
+      for (auto&& [k, v] : *lim)
+        if (const toml::array* a = v.as_array(); a && a->empty()) unlimited.emplace_back(k.str());
+      for (const std::string& k : unlimited) lim->erase(k);
+    }
   }
   return t;
 }

@@ -149,6 +149,17 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   EXPECT_EQ(error_of(based), based + ":1:8: 'base' = 'cj': must name a built-in profile (ci, paper)");
 }
 
+// `NAME = []` in [limits] removes the base's limit: that value reported, not judged (a file could
+// loosen an inherited limit but not remove one: an integrator's review).
+TEST(Profile, AnEmptyLimitRemovesTheBasesLimit) {
+  const auto p = load_profile(write_tmp("unlimit.toml", "base = \"ci\"\n[profile]\nname = \"ci-unlimited\"\n[limits]\n"
+                                                        "bandwidth_0p5 = []\nsettling_time = []\n"));
+  EXPECT_EQ(p.limits.count("bandwidth_0p5"), 0u);
+  EXPECT_EQ(p.limits.count("settling_time"), 0u);
+  EXPECT_EQ(p.limits.count("bias"), 1u) << "the others stay the base's";
+  EXPECT_EQ(load_profile("ci").limits.count("bandwidth_0p5"), 1u);
+}
+
 TEST(Profile, FileCanStartFromABuiltinAndOverride) {
   const std::string p = write_tmp("short.toml", "base = \"ci\"\n[profile]\nname = \"shorter\"\n[procedure]\nraw_s = 20.0\n");
   const auto prof = load_profile(p);

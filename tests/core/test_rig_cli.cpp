@@ -2753,6 +2753,13 @@ TEST(RigCli, BadInjectionsAreRefusedBeforeAnythingIsWrittenOrOpened) {
   EXPECT_NE(slurp(d + "/late2/run.log").find("--inject sigint@5000 did not fire: the run ended at "), std::string::npos)
       << slurp(d + "/late2/run.log");
   EXPECT_NE(slurp(d + "/late2.stderr").find("--inject sigint@5000 did not fire"), std::string::npos);
+  // Under --quiet too: a harness that runs quietly is told its fault never fired (a review).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/late3", "--inject",
+                 "sigkill@5000"},
+                d + "/late3"),
+            0);
+  EXPECT_NE(slurp(d + "/late3.stderr").find("--inject sigkill@5000 did not fire: the run ended at "), std::string::npos)
+      << slurp(d + "/late3.stderr");
   EXPECT_EQ(slurp(d + "/late/run.log").find("did not fire"), std::string::npos) << "an aborted run ended before it";
   // The hardware plant takes none: refused before its (unreachable) devices are tried (exit 2, not 4).
   std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
