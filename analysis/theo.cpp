@@ -276,7 +276,8 @@ void set_bounds(LongTauPoint& p, double confidence) {
   }
   char why[160];
   if (p.edf > 0)
-    std::snprintf(why, sizeof why, "EDF %.3g (alpha %d) is too small for a chi-square interval that holds the value",
+    std::snprintf(why, sizeof why,
+                  "no equal-tail chi-square interval at EDF %.3g (alpha %d) and this confidence holds the value",
                   p.edf, p.alpha);
   else
     std::snprintf(why, sizeof why, "the table EDF for alpha %d is not positive here (%.3g)", p.alpha, p.edf);

@@ -1305,8 +1305,31 @@ void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t p
 // review).
 std::string resume_refusal(const std::string& dir, const acceptance::Profile& p, const nlohmann::json& identity) {
   std::error_code ec;
-  if (!fs::is_regular_file(fs::path(dir) / "run.json", ec))
-    return "its run.json is gone from " + shown_text(dir) + " (the folder removed or moved while the run went on)";
+  const std::string inv_path = dir + "/run.json";
+  if (!fs::is_regular_file(inv_path, ec))
+    return "its run.json is gone from " + shown_text(dir) + " (the folder removed or moved while the run went on: a folder moved whole resumes where it is now)";
+  // What the resume checks before its checkpoint, in its order (a re-test: the checkpoint, the
+  // profile's copy, run.json's fields or a profile's relative DBC changed, and the hint stood).
+  try {
+    refuse_records_without_checkpoint(dir);
+    const nlohmann::json inv = parse_json_unique_keys(file_text(inv_path));
+    RunArgs again;
+    again.db = "(the resume's own)";  // a masked --db is given again, not a refusal
+    read_invocation(inv_path, inv, again);
+    const std::string copy = dir + "/profile.toml";
+    if (const std::string folder = inv.value("profile_folder", std::string()); !folder.empty())
+      cfg::set_relative_folder(copy, folder);
+    std::string source;
+    const toml::table t = acceptance::load_profile_table(copy, source);
+    const acceptance::Profile q = acceptance::parse_profile(t, source);
+    if (q.digest != p.digest || (inv.contains("profile_digest") && inv["profile_digest"] != q.digest))
+      return copy + ": not the profile the run started with (changed while the run went on)";
+    (void)plant::validate_plant_section(plant::plant_section(t));
+  } catch (const ConfigError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    return inv_path + ": unreadable: " + e.what();
+  }
   acceptance::ProcedureState state(p);
   const std::vector<Phase> phases = acceptance::build_phases(p, state);
   MeasurementSet values;
@@ -1630,8 +1653,9 @@ int do_run(RunArgs a) {
     // Where the profile's relative paths resolve, for its resume (it reads the folder's copy).
     if (p.source.rfind("builtin:", 0) != 0) {
       std::error_code ec;
-      const fs::path folder = fs::absolute(p.source, ec).parent_path();
-      if (!ec) invocation["profile_folder"] = folder.lexically_normal().string();
+      // (lexically normal, and without the trailing '/' "./x.toml" left)
+      const fs::path folder = fs::absolute(p.source, ec).lexically_normal().parent_path();
+      if (!ec) invocation["profile_folder"] = folder.string();
     }
     // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
     // carries a password, which run.json never holds; the resume must then give it again).

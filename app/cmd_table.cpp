@@ -394,7 +394,10 @@ void add_table(CLI::App& app, int& rc) {
       if (!last_stop_error(t).empty())
         throw HardwareError(last_stop_error(t) + (note.empty() ? "" : "; if it reached the drive: " + note));
       // Delivered: a move this halts in another terminal of this station names this command.
-      TableLock::note_stop(use.identity, quick ? "rig table quick-stop" : "rig table stop");
+      if (const std::string unnoted = TableLock::note_stop(use.identity, quick ? "rig table quick-stop" : "rig table stop");
+          !unnoted.empty())
+        std::cerr << "rig: warning: the stop's note beside the table lock was not left (" << unnoted
+                  << "): a move it halted in another terminal says \"halted by another master\" (exit 4)\n";
       std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << (note.empty() ? "" : "; " + note)
                 << "\n";
     }, std::string(quick ? "quick stop" : "stop") + " not delivered (the table may still be moving): ");

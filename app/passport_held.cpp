@@ -111,19 +111,36 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
   std::optional<std::string> digest;
   if (passport.contains("profile_sha256")) digest = seal::sha256_hex(file_text(path));
   if (std::string unlike = passport_unlike_its_run(dir, passport, declared, digest); !unlike.empty()) return unlike;
-  // run.json names the profile its run started with (a resume holds the folder to it): a
-  // profile.toml changed since is not the one the passport was judged by (helper-97's re-test:
-  // the passport, profile.toml and junit.xml edited together passed; run.json did not agree).
-  if (fs::exists(dir + "/run.json", ec)) {
-    nlohmann::json inv;
-    try {
-      inv = parse_json_unique_keys(file_text(dir + "/run.json"));
-    } catch (const std::exception& e) {
-      return std::string("its run.json cannot be read (") + e.what() + ")";
+  // run.json and the checkpoint name the profile its run started with (a resume holds the folder
+  // to them): a profile.toml changed since is not the one the passport was judged by (helper-97's
+  // re-test: the passport, profile.toml and junit.xml edited together passed). A passport that
+  // names its profile's digest (written since 2026-12-03) was written beside a run.json that names
+  // the profile's (since 2026-12-02): either gone is an edit too (a re-test deleted them). The
+  // folder's own digest is not printed: it made such an edit pass (as a resume's refusal).
+  const bool recent = passport.contains("profile_sha256");
+  for (const std::string file : {"run.json", "checkpoint.json"}) {
+    const std::string at = dir + "/" + file;
+    const bool of_run = file == "run.json";
+    if (!fs::exists(at, ec)) {
+      if (recent && of_run) return "its run.json, which names the run's profile, is missing";
+      continue;
     }
-    if (inv.is_object() && inv.contains("profile_digest") && inv["profile_digest"] != p.digest)
-      return fmt::format("run.json's profile_digest is {}, but the folder's profile.toml is \"{}\"",
-                         inv["profile_digest"].dump(), p.digest);
+    nlohmann::json j;
+    try {
+      j = parse_json_unique_keys(file_text(at));
+    } catch (const std::exception& e) {
+      return "its " + file + " cannot be read (" + e.what() + ")";
+    }
+    const nlohmann::json* named = nullptr;
+    if (j.is_object() && of_run && j.contains("profile_digest")) named = &j["profile_digest"];
+    if (j.is_object() && !of_run && j.contains("identity") && j["identity"].is_object() &&
+        j["identity"].contains("profile_digest"))
+      named = &j["identity"]["profile_digest"];
+    if (!named) {
+      if (recent && of_run) return "its run.json names no profile_digest";
+      continue;
+    }
+    if (*named != p.digest) return file + "'s profile_digest is " + named->dump() + ", not the folder's profile.toml's";
   }
   return "";
 }

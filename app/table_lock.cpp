@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
@@ -55,10 +56,14 @@ ConfigError planted(const std::string& identity, const std::string& path, const 
 int open_lock_file(const std::string& identity, const std::string& path, std::string& why, bool create = true) {
   constexpr int kSafe = O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK;
   int fd = ::open(path.c_str(), O_RDWR | (create ? O_CREAT : 0) | kSafe, 0644);
-  // Read-only still locks (a file another account made); it cannot say who holds it.
-  if (fd < 0 && errno == EACCES) fd = ::open(path.c_str(), O_RDONLY | kSafe);
+  int err = errno;
+  // Read-only still locks (a file another account made); it cannot say who holds it. Where that
+  // fails too, the first refusal is the reason (a read-only folder read "No such file": a re-test).
+  if (fd < 0 && err == EACCES) {
+    fd = ::open(path.c_str(), O_RDONLY | kSafe);
+    if (fd < 0 && errno != ENOENT) err = errno;
+  }
   if (fd < 0) {
-    const int err = errno;
     struct stat st {};
     if (err == ELOOP) throw planted(identity, path, "a symbolic link");
     if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) throw planted(identity, path, "not a regular file");
@@ -89,6 +94,7 @@ int open_note(const std::string& path, int flags) {
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
     ::close(fd);
+    errno = 0;  // not a file of its own (planted): said as such by the caller
     return -1;
   }
   return fd;
@@ -136,16 +142,21 @@ TableLock::~TableLock() {
   ::close(fd_);
 }
 
-void TableLock::note_stop(const std::string& identity, const std::string& what) {
-  const int fd = open_note(stop_note_path(identity), O_WRONLY | O_CREAT);
-  if (fd < 0) return;
+std::string TableLock::note_stop(const std::string& identity, const std::string& what) {
+  const std::string path = stop_note_path(identity);
+  const int fd = open_note(path, O_WRONLY | O_CREAT);
+  if (fd < 0) return "cannot write " + path + (errno ? std::string(": ") + std::strerror(errno) : std::string());
   // "<ns since the epoch> pid <pid>: <what>": written over the old line, then cut to its length, so
   // a reader meanwhile finds one whole line (the old or the new), never an empty file.
   const std::string line = std::to_string(epoch_ns(std::chrono::system_clock::now())) + " pid " +
                            std::to_string(::getpid()) + ": " + what + "\n";
+  std::string problem;
   if (::pwrite(fd, line.data(), line.size(), 0) == static_cast<ssize_t>(line.size()))
     (void)!::ftruncate(fd, static_cast<off_t>(line.size()));
+  else
+    problem = "cannot write " + path + ": " + std::strerror(errno);
   ::close(fd);
+  return problem;
 }
 
 std::optional<std::string> TableLock::stop_noted_since(const std::string& identity,
@@ -153,6 +164,13 @@ std::optional<std::string> TableLock::stop_noted_since(const std::string& identi
                                                        std::chrono::milliseconds wait) {
   const std::string path = stop_note_path(identity);
   const auto deadline = std::chrono::steady_clock::now() + wait;
+  // A stop that halted this motion was answered at most a poll or two before the halt was seen
+  // here, and its note follows within `wait`: one older than 1.5 s was another motion's stop (a
+  // re-test: a stop of this station halting another station's move, then taken for the halt of
+  // this one), and one from the future is no stop's (a clock stepped back, a planted file).
+  const auto now = std::chrono::system_clock::now();
+  const long long from = std::max(epoch_ns(since), epoch_ns(now - std::chrono::milliseconds(1500)));
+  const long long to = epoch_ns(now + wait + std::chrono::milliseconds(500));
   for (;;) {
     if (const int fd = open_note(path, O_RDONLY); fd >= 0) {
       std::string text(512, '\0');
@@ -164,7 +182,7 @@ std::optional<std::string> TableLock::stop_noted_since(const std::string& identi
       const long long ns = std::strtoll(text.c_str(), &end, 10);
       const std::size_t at = static_cast<std::size_t>(end - text.c_str());
       // "<ns> pid <pid>: <what>": said as "`<what>` (pid <pid>)".
-      if (nl != std::string::npos && ns >= epoch_ns(since) && text.compare(at, 5, " pid ") == 0) {
+      if (nl != std::string::npos && ns >= from && ns <= to && text.compare(at, 5, " pid ") == 0) {
         const std::string line = text.substr(at + 5, nl - at - 5);
         if (const auto colon = line.find(": "); colon != std::string::npos)
           return "`" + shown_text(line.substr(colon + 2)) + "` (pid " + shown_text(line.substr(0, colon)) + ")";

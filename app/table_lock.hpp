@@ -40,10 +40,11 @@ class TableLock {
   // A stop sent from this station leaves a note beside the lock ("pid 4711: rig table stop"), so a
   // move or homing it halts in another terminal ends as the operator's abort (exit 3) naming it,
   // not as "halted by another master" (exit 4: a technician's review). Written after the stop is
-  // sent, never before it; never throws (a note that cannot be written leaves the old wording).
-  static void note_stop(const std::string& identity, const std::string& what);
-  // The note of a stop written at or after `since` (this command's start), waiting up to `wait`
-  // for it: the stopping process writes it once its stop has been answered, which the halted one
+  // sent, never before it; never throws: "" when written, else why not (the caller warns: the
+  // halted move then says "another master").
+  static std::string note_stop(const std::string& identity, const std::string& what);
+  // The note of a stop written at or after `since` (this command's start) and within the last
+  // 1.5 s (the halt it made was just seen), waiting up to `wait` for it: the stopping process writes it once its stop has been answered, which the halted one
   // may see first. None where no such note comes (another station's or another tool's halt).
   static std::optional<std::string> stop_noted_since(const std::string& identity,
                                                      std::chrono::system_clock::time_point since,

@@ -1704,6 +1704,18 @@ TEST(RigCli, AnEditedPassportIsNeitherDrawnNorRecorded) {
     j3.erase(f3, j3.find("</failure>", f3) + 10 - f3);
     std::ofstream(c + "/junit.xml") << j3;
     refused(c, "/all-three/passport.json: run.json's profile_digest is \"");
+    EXPECT_EQ(slurp(c + "-rep.stderr").find("but the folder's profile.toml is \""), std::string::npos)
+        << "the folder's own digest is not printed (copied into run.json, it made the edit pass: a re-test)";
+    // The re-test's ways round it: run.json's profile_digest deleted, run.json deleted (given the
+    // folder's digest, the checkpoint's identity still names the run's).
+    auto inv = nlohmann::json::parse(slurp(c + "/run.json"));
+    const std::string profile_json = slurp(c + "/run.json");
+    inv.erase("profile_digest");
+    std::ofstream(c + "/run.json") << inv.dump(2);
+    refused(c, "/all-three/passport.json: its run.json names no profile_digest");
+    fs::remove(c + "/run.json");
+    refused(c, "/all-three/passport.json: its run.json, which names the run's profile, is missing");
+    std::ofstream(c + "/run.json") << profile_json;
   }
   // A key twice (nlohmann kept the last: a FAIL passport with "outcome": "PASS" after it was drawn PASS).
   c = d + "/twice";
@@ -3889,9 +3901,24 @@ TEST(RigCli, AStopOffersAResumeOnlyWhereOneWouldStart) {
     const std::string err = slurp(d + "/mv-io.stderr");
     EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
     EXPECT_NE(err.find("no resume: its run.json is gone from " + d + "/mv (the folder removed or moved while the run went "
-                       "on); start a new run"),
+                       "on: a folder moved whole resumes where it is now); start a new run"),
               std::string::npos)
         << err;
+  }
+  // The checkpoint removed (records without it), the profile's copy changed: what the resume
+  // checks before its checkpoint (a re-test: the hint stood for these).
+  for (const std::string what : {"checkpoint", "profile"}) {
+    const std::string r = d + "/" + what;
+    const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", r}, r + "-io");
+    ASSERT_TRUE(wait_for_file(c, r + "/captures/in-run-U10.cap")) << slurp(r + "-io.stderr");
+    if (what == "checkpoint") fs::remove(r + "/checkpoint.json");
+    else std::ofstream(r + "/profile.toml", std::ios::app) << "\n[plant.dut]\n";
+    ::kill(c.pid, SIGINT);
+    wait_exit(c);
+    const std::string err = slurp(r + "-io.stderr");
+    EXPECT_EQ(err.find("to continue"), std::string::npos) << what << ": " << err;
+    EXPECT_NE(err.find("no resume: "), std::string::npos) << what << ": " << err;
+    EXPECT_EQ(run({"run", "--resume", r, "--yes", "--dry-run"}, r + "-resume"), 2) << what;
   }
   // A stop that keeps its records still offers the resume.
   const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/ok"}, d + "/ok-io");

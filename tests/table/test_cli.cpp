@@ -1043,6 +1043,10 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   const std::string elsewhere = testing::TempDir() + "/masters/stop-station";
   std::filesystem::create_directories(elsewhere);
+  // This station's note made to say it comes from the future (a clock stepped back, a file planted
+  // in a shared lock folder): no stop's, so the halt below stays another master's (a re-test).
+  for (const auto& e : std::filesystem::directory_iterator(std::getenv("RIG_LOCK_DIR")))
+    if (e.path().extension() == ".stop") std::ofstream(e.path()) << "9999999999999999999 pid 1: rig table stop\n";
   std::thread halted_elsewhere([&] { rc1 = rig("move 200", out1); });
   ASSERT_TRUE(wait_moving()) << out;
   EXPECT_EQ(run("RIG_LOCK_DIR=" + elsewhere + " " + std::string(RIG_BIN) + " table stop" + where, out), 0) << out;
