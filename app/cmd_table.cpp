@@ -175,16 +175,18 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
   if (s.has_heartbeat) std::printf("heartbeat  %u\n", s.heartbeat);
 }
 
-// Runs `body` with the table the arguments name and the move tolerance its settings give.
-// `unreachable`: what a failed connection means for the command (a stop: not delivered).
-// `command` non-empty (a home, a move, a reset): the station's lock on the table is taken first
-// (app/table_lock.hpp), after the settings are checked and before the drive is opened; a status
-// or a stop takes none.
-// The body is called with the table and the table's settings as `TableUse`.
+// What a command's body gets besides the table.
 struct TableUse {
   double tolerance_deg;  // the move tolerance
   std::string identity;  // modbus::table_identity: the station lock's and the stop note's name
 };
+
+// Runs `body` with the table the arguments name and its TableUse (the move tolerance its settings
+// give, its identity).
+// `unreachable`: what a failed connection means for the command (a stop: not delivered).
+// `command` non-empty (a home, a move, a reset): the station's lock on the table is taken first
+// (app/table_lock.hpp), after the settings are checked and before the drive is opened; a status
+// or a stop takes none.
 template <class Body>
 void with_table(const TableArgs& a, Body body, const std::string& unreachable = "", const std::string& command = "") {
   toml::table root;

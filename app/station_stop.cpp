@@ -16,8 +16,8 @@ void motion_stoppable_from_this_station(const std::string& identity, const std::
     motion();
   } catch (const modbus::detail::TakenOverError&) {
     // The stopping process writes its note once the drive has answered its stop, which this
-    // client may read first: half a second for it, on this error path only.
-    const auto by = TableLock::stop_noted_since(identity, began, std::chrono::milliseconds(500));
+    // client may read first: up to 1.5 s for it (a loaded machine), on this error path only.
+    const auto by = TableLock::stop_noted_since(identity, began, std::chrono::milliseconds(1500));
     if (!by) throw;
     if (halted) halted(*by);
     throw AbortedError("aborted: " + doing + " halted by " + *by + " on this station");

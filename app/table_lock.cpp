@@ -164,12 +164,13 @@ std::optional<std::string> TableLock::stop_noted_since(const std::string& identi
                                                        std::chrono::milliseconds wait) {
   const std::string path = stop_note_path(identity);
   const auto deadline = std::chrono::steady_clock::now() + wait;
-  // A stop that halted this motion was answered at most a poll or two before the halt was seen
-  // here, and its note follows within `wait`: one older than 1.5 s was another motion's stop (a
-  // re-test: a stop of this station halting another station's move, then taken for the halt of
-  // this one), and one from the future is no stop's (a clock stepped back, a planted file).
+  // A stop that halted this motion was answered a poll or two before the halt was seen here (on a
+  // loaded machine, seconds), and its note follows within `wait`: one older than 5 s was another
+  // motion's stop (a re-test: a stop of this station halting another station's move, then taken
+  // for the halt of this one), and one from the future is no stop's (a clock stepped back, a
+  // planted file).
   const auto now = std::chrono::system_clock::now();
-  const long long from = std::max(epoch_ns(since), epoch_ns(now - std::chrono::milliseconds(1500)));
+  const long long from = std::max(epoch_ns(since), epoch_ns(now - std::chrono::seconds(5)));
   const long long to = epoch_ns(now + wait + std::chrono::milliseconds(500));
   for (;;) {
     if (const int fd = open_note(path, O_RDONLY); fd >= 0) {

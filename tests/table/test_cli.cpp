@@ -1047,12 +1047,16 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
   // in a shared lock folder): no stop's, so the halt below stays another master's (a re-test).
   for (const auto& e : std::filesystem::directory_iterator(std::getenv("RIG_LOCK_DIR")))
     if (e.path().extension() == ".stop") std::ofstream(e.path()) << "9999999999999999999 pid 1: rig table stop\n";
-  std::thread halted_elsewhere([&] { rc1 = rig("move 200", out1); });
+  // The farther end of the travel from where the first halt left it: a long move, still under
+  // way when the other station's stop comes on a loaded machine.
+  const double rest = actual();
+  const std::string far = rest > 90.0 ? "-150" : "350";
+  std::thread halted_elsewhere([&] { rc1 = rig("move " + far, out1); });
   ASSERT_TRUE(wait_moving()) << out;
   EXPECT_EQ(run("RIG_LOCK_DIR=" + elsewhere + " " + std::string(RIG_BIN) + " table stop" + where, out), 0) << out;
   halted_elsewhere.join();
   EXPECT_EQ(rc1, 4) << out1;
-  EXPECT_TRUE(has(out1, "move to 200.0000°: halted by another master (controlword reads 0x010F)") &&
+  EXPECT_TRUE(has(out1, "move to " + far + ".0000°: halted by another master (controlword reads 0x010F)") &&
               has(out1, "; no halt sent by this client")) << out1;
   // A second `rig table move` while the first runs: it waits, then both moves are the table's.
   // The halted table first comes to rest: still coasting from the halt, it looked like the next
