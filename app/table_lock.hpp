@@ -44,8 +44,9 @@ class TableLock {
   // halted move then says "another master").
   static std::string note_stop(const std::string& identity, const std::string& what);
   // The note of a stop written at or after `since` (this command's start) and within the last
-  // 5 s (the halt it made was just seen), waiting up to `wait` for it: the stopping process writes it once its stop has been answered, which the halted one
-  // may see first. None where no such note comes (another station's or another tool's halt).
+  // 5 s (the halt it made was just seen), never one dated ahead, waiting up to `wait` for it: the
+  // stopping process writes it once its stop has been answered, which the halted one may see
+  // first. None where no such note comes (another station's or another tool's halt).
   static std::optional<std::string> stop_noted_since(const std::string& identity,
                                                      std::chrono::system_clock::time_point since,
                                                      std::chrono::milliseconds wait);
