@@ -49,7 +49,8 @@ TauGrid parse_tau_grid(const std::string& s) {
                         num.find_first_not_of("0123456789") == std::string::npos;
     const int n = digits ? std::stoi(num) : 0;
     if (!digits || n < 2 || n > 100000)
-      throw std::invalid_argument("tau grid '" + s + "': log:N needs a whole number N in 2..100000 (decimal digits, no sign or leading zero)");
+      throw std::invalid_argument("tau grid '" + s +
+                                  "': log:N needs a whole number N in 2..100000 (decimal digits, no sign or leading zero)");
     g.log_n = n;
   } else {
     throw std::invalid_argument("unknown tau grid '" + s + "' (octave|decade|all|log:N)");

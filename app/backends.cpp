@@ -45,7 +45,8 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
   b.io_ptr = b.io.get();
   // A `rig table stop` from this station during a move ends the run as the operator's abort.
   const toml::table& table = *cfg::get_table(hw, "table", true);
-  b.table = std::make_unique<StationStoppableTable>(modbus::connect_table(table, *b.clock), modbus::table_identity(table));
+  b.table =
+      std::make_unique<StationStoppableTable>(modbus::connect_table(table, *b.clock), modbus::table_identity(table));
   b.table_ptr = b.table.get();
   b.dut = link::connect_dut(*cfg::get_table(hw, "dut", true), *b.clock);
   b.dut_ptr = b.dut.get();

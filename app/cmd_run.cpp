@@ -94,7 +94,6 @@ struct RunArgs {
   std::string profile_sha256;
 };
 
-
 // A signal --inject can send this process, by name.
 int injected_signal(const std::string& kind) {
   if (kind == "sigint") return SIGINT;
@@ -943,6 +942,13 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   return passport;
 }
 
+// The closing table and the run folder on stdout: a blank line before them on a terminal, where
+// the progress lines precede them; none into a pipe or a file, whose first line is then the
+// table's (`| head -1` read "": a review).
+void say_the_passport(const nlohmann::ordered_json& passport, const std::string& out_dir) {
+  std::cout << (::isatty(STDOUT_FILENO) ? "\n" : "") << passport_table(passport) << fmt::format("run folder: {}\n", out_dir);
+}
+
 // A run that ends before its devices open (GPIO, table or DUT unreachable, a bad device
 // section) still leaves passport.json, junit.xml, analysis.json and report.html, as every
 // ending does: outcome ERROR, every measurement UNSET, the reason in aborted_reason. It is
@@ -962,8 +968,7 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
   const nlohmann::ordered_json passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, log);
   // The same closing table and OUTCOME line as every other ending (a technician's review: an
   // empty stdout beside an ERROR passport; scripts match "OUTCOME: ERROR").
-  std::cout << (::isatty(STDOUT_FILENO) ? "\n" : "") << passport_table(passport)
-            << fmt::format("run folder: {}\n", info.out_dir);
+  say_the_passport(passport, info.out_dir);
 }
 
 // The files the rig replaces in a run folder must be files: a folder or a FIFO in their place
@@ -1298,60 +1303,101 @@ void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t p
   log.info("{}", hint);
 }
 
-// Why a resume of `dir` would be refused now, as the resume itself reads the folder (nothing
-// opened): its run.json gone, or its checkpoint naming records that are not there (the folder
-// removed, moved or emptied while the run went on). "" when it would start. An ABORTED or ERROR
-// ending said "to continue: rig run --resume DIR" and that resume was exit 2 (an integrator's
-// review).
-std::string resume_refusal(const std::string& dir, const acceptance::Profile& p, const nlohmann::json& identity) {
-  std::error_code ec;
+// run.json of the run folder `dir`, read as a resume reads it: a key twice refused, its fields
+// into `a` (read_invocation), and the folder's profile.toml told where its relative paths resolve
+// ([plant.firmware] dbc: where the profile was, run.json's profile_folder; a run started before
+// it kept one: beside the copy).
+nlohmann::json read_run_json(const std::string& dir, RunArgs& a) {
   const std::string inv_path = dir + "/run.json";
-  if (!fs::is_regular_file(inv_path, ec))
-    return "its run.json is gone from " + shown_text(dir) + " (the folder removed or moved while the run went on: a folder moved whole resumes where it is now)";
-  // What the resume checks before its checkpoint, in its order (a re-test: the checkpoint, the
-  // profile's copy, run.json's fields or a profile's relative DBC changed, and the hint stood).
+  nlohmann::json inv;
+  try {
+    inv = parse_json_unique_keys(file_text(inv_path));
+  } catch (const std::exception& e) {
+    throw ConfigError(inv_path + ": unreadable: " + e.what());
+  }
+  read_invocation(inv_path, inv, a);
+  if (const std::string folder = inv.value("profile_folder", std::string()); !folder.empty())
+    cfg::set_relative_folder(dir + "/profile.toml", folder);
+  return inv;
+}
+
+// The folder's profile.toml (read as `q`) against what run.json says the run started with: its
+// name and its digest. The checkpoint ties a resume to the profile it started with; a run stopped
+// before its first checkpoint had only run.json, which did not (an automation review: limits
+// loosened in the folder's profile.toml, then resumed: PASS). Since 2026-12-02 run.json holds the
+// digest too. Without the digest (run.json from a rig before it wrote one, or the field deleted)
+// only a checkpoint ties the resume to its profile: none, and the resume is refused (a re-test:
+// the field deleted, an edited profile ran under the built-in's name, PASS).
+void check_the_folders_profile(const std::string& dir, const nlohmann::json& inv, const acceptance::Profile& q) {
+  const std::string copy = dir + "/profile.toml";
+  if (inv.contains("profile") && inv["profile"] != q.name)
+    throw ConfigError(
+        fmt::format("{}/run.json: field 'profile': {}, but {} is profile \"{}\"", dir, inv["profile"].dump(), copy, q.name));
+  if (!inv.contains("profile_digest") && path_kind(dir + "/checkpoint.json", "--resume") == PathKind::missing)
+    throw ConfigError(fmt::format("{}/run.json: no field 'profile_digest', and no checkpoint: nothing ties {} to the "
+                                  "profile the run started with; start a new run",
+                                  dir, copy));
+  if (inv.contains("profile_digest") && inv["profile_digest"] != q.digest)
+    // Its own digest not printed: it made an edited profile's resume pass in an unsealed folder (a review).
+    throw ConfigError(fmt::format("{}/run.json: field 'profile_digest': {}, not the digest of {} (which a resume "
+                                  "reads): not the profile the run started with (edited since?); start a new run",
+                                  dir, inv["profile_digest"].dump(), copy));
+}
+
+// What a run's checkpoint is tied to: its profile, plant and DUT.
+nlohmann::json run_identity(const acceptance::Profile& p, const RunArgs& a) {
+  return {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
+}
+
+// Why a resume of `dir` would be refused now, as the resume itself reads the folder (nothing
+// opened; its own checks before the devices, in its order, on what the folder holds): run.json
+// gone (the folder removed or moved while the run went on), records without a checkpoint,
+// run.json's fields, the profile's copy against run.json, its [plant], the checkpoint and the
+// records it names. "" when it would start. An ABORTED or ERROR ending said "to continue: rig run
+// --resume DIR" and that resume was exit 2 (an integrator's review, and a re-test of the first
+// version, which checked only run.json and the checkpoint).
+std::string resume_refusal(const std::string& dir) {
+  std::error_code ec;
+  if (!fs::is_regular_file(dir + "/run.json", ec))
+    return "its run.json is gone from " + shown_text(dir) +
+           " (the folder removed or moved while the run went on: a folder moved whole resumes where it is now)";
   try {
     refuse_records_without_checkpoint(dir);
-    const nlohmann::json inv = parse_json_unique_keys(file_text(inv_path));
     RunArgs again;
     again.db = "(the resume's own)";  // a masked --db is given again, not a refusal
-    read_invocation(inv_path, inv, again);
-    const std::string copy = dir + "/profile.toml";
-    if (const std::string folder = inv.value("profile_folder", std::string()); !folder.empty())
-      cfg::set_relative_folder(copy, folder);
+    const nlohmann::json inv = read_run_json(dir, again);
     std::string source;
-    const toml::table t = acceptance::load_profile_table(copy, source);
+    const toml::table t = acceptance::load_profile_table(dir + "/profile.toml", source);
     const acceptance::Profile q = acceptance::parse_profile(t, source);
-    if (q.digest != p.digest || (inv.contains("profile_digest") && inv["profile_digest"] != q.digest))
-      return copy + ": not the profile the run started with (changed while the run went on)";
+    check_the_folders_profile(dir, inv, q);
     (void)plant::validate_plant_section(plant::plant_section(t));
+    acceptance::ProcedureState state(q);
+    const std::vector<Phase> phases = acceptance::build_phases(q, state);
+    MeasurementSet values;
+    acceptance::declare_values(q, phases, values);
+    spdlog::logger quiet("resume-check");  // no sinks
+    (void)Executive::read_checkpoint(dir, phases, values, state, run_identity(q, again), quiet, true);
   } catch (const ConfigError& e) {
     return e.what();
   } catch (const std::exception& e) {
-    return inv_path + ": unreadable: " + e.what();
-  }
-  acceptance::ProcedureState state(p);
-  const std::vector<Phase> phases = acceptance::build_phases(p, state);
-  MeasurementSet values;
-  acceptance::declare_values(p, phases, values);
-  spdlog::logger quiet("resume-check");  // no sinks
-  try {
-    (void)Executive::read_checkpoint(dir, phases, values, state, identity, quiet, true);
-  } catch (const ConfigError& e) {
-    return e.what();
+    return dir + ": " + e.what();
   }
   return "";
 }
 
+// "no resume: why; start a new run" on stderr and in run.log.
+void say_no_resume(const std::string& why, spdlog::logger& log) {
+  const std::string no = "no resume: " + why + (why.find("start a new run") == std::string::npos ? "; start a new run" : "");
+  std::cerr << no << "\n";
+  log.info("{}", no);
+}
+
 // After an ABORTED or ERROR ending: how to go on (say_how_to_continue), or, where the folder would
 // refuse its resume now (resume_refusal), "no resume: why; start a new run".
-void offer_a_resume(const std::string& out, const acceptance::Profile& p, const nlohmann::json& identity,
-                    std::size_t checkpointed, std::size_t phases, const std::string& why, spdlog::logger& log) {
-  if (const std::string refused = resume_refusal(out, p, identity); !refused.empty()) {
-    const std::string no =
-        "no resume: " + refused + (refused.find("start a new run") == std::string::npos ? "; start a new run" : "");
-    std::cerr << no << "\n";
-    log.info("{}", no);
+void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_t phases, const std::string& why,
+                    spdlog::logger& log) {
+  if (const std::string refused = resume_refusal(out); !refused.empty()) {
+    say_no_resume(refused, log);
     return;
   }
   // Kept: the phases the checkpoint holds, as `--dry-run --resume` counts them (a review: a
@@ -1388,18 +1434,9 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     const std::string inv_path = a.resume + "/run.json";
     if (path_kind(inv_path, "--resume") == PathKind::missing) throw ConfigError(inv_path + ": not a run folder (no run.json)");
-    try {
-      invocation = parse_json_unique_keys(file_text(inv_path));  // a key twice is refused
-    } catch (const std::exception& e) {
-      throw ConfigError(inv_path + ": unreadable: " + e.what());
-    }
     a.out = a.resume;
-    read_invocation(inv_path, invocation, a);
+    invocation = read_run_json(a.resume, a);
     a.profile = a.resume + "/profile.toml";
-    // Paths the profile writes relative ([plant.firmware] dbc) resolve where the profile was, not
-    // beside its copy (run.json's profile_folder; a run started before it kept one: beside the copy).
-    if (const std::string folder = invocation.value("profile_folder", std::string()); !folder.empty())
-      cfg::set_relative_folder(a.profile, folder);
     // --serial with --resume guards the resume: it must name the run's DUT, the one given when
     // the run started or, without that, the one its DUT reported (the checkpoint's).
     if (!a.resume_serial.empty()) {
@@ -1424,25 +1461,7 @@ int do_run(RunArgs a) {
   // (an automation review: a base's GOST limits gone with its blocks, PASS without a word).
   const std::string unjudged = acceptance::unjudged_blocks_note(p, dropped_limits);
   if (a.resume.empty()) acceptance::check_profile_names_itself(profile_table, profile_source);
-  if (!a.resume.empty() && invocation.contains("profile") && invocation["profile"] != p.name)
-    throw ConfigError(fmt::format("{}/run.json: field 'profile': {}, but {} is profile \"{}\"", a.resume,
-                                  invocation["profile"].dump(), a.profile, p.name));
-  // The checkpoint ties a resume to the profile it started with; a run stopped before its first
-  // checkpoint had only run.json, which did not (an automation review: limits loosened in the
-  // folder's profile.toml, then resumed: PASS). Since 2026-12-02 run.json holds the digest too.
-  // Without the digest (run.json from a rig before it wrote one, or the field deleted) only a
-  // checkpoint ties the resume to its profile: none, and the resume is refused (a re-test: the
-  // field deleted, an edited profile ran under the built-in's name, PASS).
-  if (!a.resume.empty() && !invocation.contains("profile_digest") &&
-      path_kind(a.resume + "/checkpoint.json", "--resume") == PathKind::missing)
-    throw ConfigError(fmt::format("{}/run.json: no field 'profile_digest', and no checkpoint: nothing ties {} to the "
-                                  "profile the run started with; start a new run",
-                                  a.resume, a.profile));
-  if (!a.resume.empty() && invocation.contains("profile_digest") && invocation["profile_digest"] != p.digest)
-    // Its own digest not printed: it made an edited profile's resume pass in an unsealed folder (a review).
-    throw ConfigError(fmt::format("{}/run.json: field 'profile_digest': {}, not the digest of {} (which a resume "
-                                  "reads): not the profile the run started with (edited since?); start a new run",
-                                  a.resume, invocation["profile_digest"].dump(), a.profile));
+  if (!a.resume.empty()) check_the_folders_profile(a.resume, invocation, p);
   // The profile's [plant] is the emulated plant's own section: checked here, --dry-run included,
   // on every plant: a profile is shared by hardware and emulated runs, and a typo there must not
   // wait for the next emulated run to be found (before any device opens).
@@ -1471,7 +1490,7 @@ int do_run(RunArgs a) {
     throw ConfigError(fmt::format("profile {}: no value has limits (no [limits] table, no [[classes]]): a run would "
                                   "PASS with nothing judged; give the limits it is to judge by",
                                   shown_text(p.source)));
-  const nlohmann::json identity = {{"profile_digest", p.digest}, {"plant", a.plant}, {"serial", a.serial}};
+  const nlohmann::json identity = run_identity(p, a);
   TerminalView view(stderr, a.quiet);
   // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not
   // an error in run.log after the DUT was measured and its result left out of the history.
@@ -1837,16 +1856,12 @@ int do_run(RunArgs a) {
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
     if (!records_lost && !res.config_error)
-      offer_a_resume(a.out, p, identity, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
-                     *log);
+      offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files", *log);
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
-  // A blank line before the table on a terminal, where the progress lines precede it; none into a
-  // pipe or a file, whose first line is the table's (`| head -1` read "": a review).
-  std::cout << (::isatty(STDOUT_FILENO) ? "\n" : "") << passport_table(passport);
-  std::cout << fmt::format("run folder: {}\n", info.out_dir);
+  say_the_passport(passport, info.out_dir);
   if (b.emulated) {  // the emulation's own speed, as measured on this run
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     const double device = b.emulated->clock().now_s();
@@ -1867,13 +1882,11 @@ int do_run(RunArgs a) {
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
   if (records_lost) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
     const bool gone = res.message.find("records are gone") != std::string::npos;
-    const std::string no = "no resume: the run's records " +
-                           (gone ? "are gone from " + shown_text(a.out) : "in " + shown_text(a.out) + " changed after they were written") +
-                           "; start a new run";
-    std::cerr << no << "\n";
-    log->info("{}", no);
+    say_no_resume("the run's records " + (gone ? "are gone from " + shown_text(a.out)
+                                               : "in " + shown_text(a.out) + " changed after they were written"),
+                  *log);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
-    offer_a_resume(a.out, p, identity, res.checkpointed, res.phases.size(), "", *log);
+    offer_a_resume(a.out, res.checkpointed, res.phases.size(), "", *log);
   }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),

@@ -62,7 +62,7 @@ toml::table& table_config(const TableArgs& a, toml::table& root) {
   toml::table& t = *root.get_as<toml::table>("table");
   // The options' own combinations, named as options: they read "command-line option: drive_map
   // is for drive = "cia402"" (a technician's review). A file's keys are named at their lines below.
-  const std::string file_drive = t.contains("drive") && t["drive"].is_string() ? t["drive"].value_or(std::string()) : "";
+  const std::string file_drive = t["drive"].value_or(std::string());
   if (!a.drive_map.empty() && a.drive.empty() && file_drive != "cia402")
     throw ConfigError("rig table: --drive-map is for --drive cia402 (the drive is rig-v1 unless --drive or the hardware "
                       "file's [table] drive says cia402)");
@@ -396,8 +396,8 @@ void add_table(CLI::App& app, int& rc) {
       if (!last_stop_error(t).empty())
         throw HardwareError(last_stop_error(t) + (note.empty() ? "" : "; if it reached the drive: " + note));
       // Delivered: a move this halts in another terminal of this station names this command.
-      if (const std::string unnoted = TableLock::note_stop(use.identity, quick ? "rig table quick-stop" : "rig table stop");
-          !unnoted.empty())
+      const std::string unnoted = TableLock::note_stop(use.identity, quick ? "rig table quick-stop" : "rig table stop");
+      if (!unnoted.empty())
         std::cerr << "rig: warning: the stop's note beside the table lock was not left (" << unnoted
                   << "): a move it halted in another terminal says \"halted by another master\" (exit 4)\n";
       std::cout << (quick ? "quick stop" : "stop") << " sent to " << t.describe() << (note.empty() ? "" : "; " + note)

@@ -53,8 +53,19 @@ ConfigError planted(const std::string& identity, const std::string& path, const 
 // its target), a FIFO does not block the open, and a hard link (another file's contents) or
 // anything but a regular file is refused. -1 with `why` set where it cannot be opened at all.
 // `create` false (a dry run's check, which touches nothing): a missing file is -1 with no reason.
+// Open flags of the station's own files (the lock, the stop note): no symlink followed, no FIFO
+// waited on.
+constexpr int kSafe = O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK;
+
+// nullptr when `fd` is a regular file of its own; else what it is ("a hard link to another file",
+// "not a regular file"): a file planted in the shared folder.
+const char* not_its_own(int fd) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return "not a regular file";
+  return st.st_nlink != 1 ? "a hard link to another file" : nullptr;
+}
+
 int open_lock_file(const std::string& identity, const std::string& path, std::string& why, bool create = true) {
-  constexpr int kSafe = O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK;
   int fd = ::open(path.c_str(), O_RDWR | (create ? O_CREAT : 0) | kSafe, 0644);
   int err = errno;
   // Read-only still locks (a file another account made); it cannot say who holds it. Where that
@@ -71,11 +82,9 @@ int open_lock_file(const std::string& identity, const std::string& path, std::st
     why = "cannot open the lock file " + path + ": " + std::strerror(err);
     return -1;
   }
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
-    const bool linked = S_ISREG(st.st_mode) && st.st_nlink != 1;
+  if (const char* what = not_its_own(fd)) {
     ::close(fd);
-    throw planted(identity, path, linked ? "a hard link to another file" : "not a regular file");
+    throw planted(identity, path, what);
   }
   return fd;
 }
@@ -89,10 +98,9 @@ std::string stop_note_path(const std::string& identity) {
 // Opens the stop note as a plain file of its own, as the lock file is (no symlink followed, no FIFO
 // waited on, no hard link); -1 otherwise, said by nobody: a note is a courtesy, never a fault.
 int open_note(const std::string& path, int flags) {
-  const int fd = ::open(path.c_str(), flags | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
+  const int fd = ::open(path.c_str(), flags | kSafe, 0644);
   if (fd < 0) return -1;
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
+  if (not_its_own(fd)) {
     ::close(fd);
     errno = 0;  // not a file of its own (planted): said as such by the caller
     return -1;

@@ -369,8 +369,7 @@ class DbcParser {
     // 11898-1:2015): any other size no frame on the bus can have, and every frame was skipped as
     // "length 8, DBC says 9" (an integrator's review).
     // One message for every size outside them: "DLC -1 (> 64)" read wrong (a review).
-    if (msg.dlc < 0 || msg.dlc > 64 || (msg.dlc > 8 && msg.dlc != 12 && msg.dlc != 16 && msg.dlc != 20 && msg.dlc != 24 && msg.dlc != 32 &&
-        msg.dlc != 48 && msg.dlc != 64))
+    if (msg.dlc < 0 || canfd_round_up(msg.dlc) != msg.dlc)  // the frame lengths, as the candump reader checks them
       fail(src_, line, "message " + msg.name + ": length " + std::to_string(msg.dlc) +
                            " is not a CAN frame length (0-8 bytes, or 12, 16, 20, 24, 32, 48, 64 for CAN FD)");
     if (db_.find(msg.id, msg.extended)) fail(src_, line, "message id " + std::to_string(raw) + " defined twice");
