@@ -100,7 +100,8 @@ inline void score(Cell& c, const Term& t, double truth) {
 // per_record (bench): one line per record and term, "set<TAB>seed<TAB>term<TAB>truth<TAB>value<TAB>
 // lo<TAB>hi" (a null's value and lo "-", its hi the upper limit or "-"), to take a cell apart.
 inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, std::uint64_t base,
-                                      bool progress = false, std::FILE* per_record = nullptr) {
+                                      bool progress = false, std::FILE* per_record = nullptr,
+                                      double confidence = kOneSigma) {
   std::vector<Cell> cells;
   for (std::size_t si = 0; si < sets.size(); ++si) {
     const Set& s = sets[si];
@@ -112,7 +113,7 @@ inline std::vector<Cell> run_coverage(const std::vector<Set>& sets, int seeds, s
       opt.rate_hz = s.rate_hz;
       opt.taus = parse_tau_grid("log:100");
       const std::vector<DevPoint> dev = deviation(y, opt);
-      const NoiseTerms nt = noise_terms(dev, static_cast<double>(n) / s.rate_hz, kRMinRecordS, least_squares_drift(y, s.rate_hz));
+      const NoiseTerms nt = noise_terms(dev, static_cast<double>(n) / s.rate_hz, kRMinRecordS, least_squares_drift(y, s.rate_hz), confidence);
       const auto rep = reported_terms(nt);
       if (sc.empty())
         for (const auto& r : rep) {
