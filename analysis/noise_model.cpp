@@ -602,21 +602,34 @@ double inverted_upper(const Pts& p, const std::array<double, 5>& th_cov, const S
   if (!(wald > 0) || !std::isfinite(wald)) return wald;
   const double z2 = z * z;
   auto rise = [&](double u) { return chi2_rise_at(p, th_cov, best, k, u, n_phase, delta); };
-  double lo = wald, hi = wald, r = rise(wald);
+  double lo = wald, hi = wald, r = rise(wald), r_lo = r;
   if (!(r < z2)) return wald;
   for (int i = 0; i < 40 && r < z2; ++i) {
-    lo = hi;
+    lo = hi, r_lo = r;
     hi *= 2;
     r = rise(hi);
   }
   if (r < z2) return hi;  // not rejected even at 2^40 times the linearised limit: as far as it goes
-  // Halving the factor between the last accepted and the first rejected value, 12 times: within
-  // 2^(1/4096) (0.02 %), and on the rejected side.
-  for (int i = 0; i < 12; ++i) {
-    const double mid = std::sqrt(lo * hi);
-    (rise(mid) < z2 ? lo : hi) = mid;
+  // Between the last accepted and the first rejected value, on ln theta_k: regula falsi with the
+  // Illinois modification (the rise is smooth in theta_k; a few evaluations where halving the
+  // factor took twelve) until the two are within 0.01 %; the rejected side is returned.
+  double a = std::log(lo), b = std::log(hi), fa = r_lo - z2, fb = r - z2;
+  int side = 0;
+  for (int i = 0; i < 40 && b - a > 1e-4; ++i) {
+    double c = (a * fb - b * fa) / (fb - fa);
+    if (!(c > a && c < b)) c = (a + b) / 2;
+    const double fc = rise(std::exp(c)) - z2;
+    if (fc < 0) {
+      a = c, fa = fc;
+      if (side == -1) fb /= 2;
+      side = -1;
+    } else {
+      b = c, fb = fc;
+      if (side == 1) fa /= 2;
+      side = 1;
+    }
   }
-  return hi;
+  return std::exp(b);
 }
 
 }  // namespace
