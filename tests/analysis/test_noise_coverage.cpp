@@ -135,9 +135,9 @@ TEST(NoiseCoverage, CiSized) {
 // before it looked): K's interval (a null's [0, upper limit]) held the truth at 95 % in 348/400
 // before and 363/400 (90.8 %) after, the nulls' limits in 39/71 before and 54/71 after; N
 // 386/400; at the default K 280 then 282/400, N 310/400. Asserted: K and N within 10 points of
-// the stated confidence, and at 95 % the nulls' limits holding in at least 47 of them (a regression guard between the
-// two methods' counts; 97.5 % is what the one-sided limit states, so both fall short of it:
-// docs/analysis.md, "Coverage over injected noise").
+// the stated confidence, and at 95 % the nulls' limits holding in at least 47 of them (a
+// regression guard between the two methods' counts; the one-sided limit states 97.5 %, and both
+// fall short of it: docs/analysis.md, "Coverage over injected noise").
 TEST(NoiseCoverage, ARandomWalkOnTheLastOctavesHeldAtTheStatedConfidence) {
   const Set set{"N + K over the last octaves", {0, 1e-3, 0, 5.2e-5, 0}, 100, 1000.0 / 3600};
   constexpr int kSeeds = 200;
