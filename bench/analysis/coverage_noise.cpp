@@ -11,7 +11,8 @@
 // cell apart (which records miss, on which side, nulls' upper limits). --confidence C: the bounds'
 // and upper limits' confidence (default one sigma), each cell judged against C. --custom: one set
 // of your own instead of the suite's (terms in seconds units as injected_noise.hpp's Terms), e.g.
-// an outside check's record, seeds BASE + i.
+// an outside check's record, seeds BASE + i (not with --ci or --set). Each dominant cell's line
+// also counts the nulls whose upper limit holds ("with the nulls' limits"), as an outside check does.
 #include <algorithm>
 #include <boost/math/distributions/binomial.hpp>
 #include <cmath>
@@ -67,22 +68,42 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--confidence") && i + 1 < argc) {
       char* end = nullptr;
       confidence = std::strtod(argv[++i], &end);
-      if (*end || !(confidence > 0 && confidence < 1)) {
-        std::fprintf(stderr, "coverage_noise: --confidence '%s' is not in (0, 1)\n", argv[i]);
+      if (end == argv[i] || *end || !(confidence > 0 && confidence < 1)) {
+        std::fprintf(stderr, "coverage_noise: --confidence '%s' is not a number in (0, 1)\n", argv[i]);
         return 2;
       }
     } else if (!std::strcmp(argv[i], "--custom") && i + 1 < argc) {
       double v[7];
       int used = 0;
       if (std::sscanf(argv[++i], "%lg,%lg,%lg,%lg,%lg,%lg,%lg%n", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &used) != 7 ||
-          argv[i][used] || !(v[5] > 0 && v[6] > 0)) {
-        std::fprintf(stderr, "coverage_noise: --custom '%s' is not Q,N,B,K,R,RATE_HZ,HOURS\n", argv[i]);
+          argv[i][used] || !(v[5] > 0 && v[6] > 0) || v[0] < 0 || v[1] < 0 || v[2] < 0 || v[3] < 0 || v[4] < 0) {
+        std::fprintf(stderr, "coverage_noise: --custom '%s' is not Q,N,B,K,R,RATE_HZ,HOURS (terms >= 0, rate and hours > 0)\n",
+                     argv[i]);
         return 2;
       }
       custom = Set{"custom", {v[0], v[1], v[2], v[3], v[4]}, v[5], v[6]};
     }
-    else if (pos++ == 0) seeds = std::atoi(argv[i]);
-    else base = std::strtoull(argv[i], nullptr, 10);
+    else {
+      // SEEDS then BASE, whole numbers; anything else (an unknown option, an option without its
+      // value) is refused rather than read as a number.
+      const char* a = argv[i];
+      const bool digits = *a && std::strspn(a, "0123456789") == std::strlen(a);
+      if (!digits || pos >= 2) {
+        std::fprintf(stderr, "coverage_noise: unexpected argument '%s' (usage: coverage_noise [SEEDS] [BASE] [--ci] "
+                             "[--set NAME] [--covariance] [--records FILE] [--confidence C] [--custom Q,N,B,K,R,RATE_HZ,HOURS])\n", a);
+        return 2;
+      }
+      if (pos++ == 0) seeds = std::atoi(a);
+      else base = std::strtoull(a, nullptr, 10);
+    }
+  }
+  if (custom && (ci || !only.empty())) {
+    std::fprintf(stderr, "coverage_noise: --custom is a set of its own, at its own rate: not with --ci or --set\n");
+    return 2;
+  }
+  if (seeds < 1) {
+    std::fprintf(stderr, "coverage_noise: SEEDS must be at least 1\n");
+    return 2;
   }
   std::vector<Set> chosen = custom ? std::vector<Set>{*custom} : sets(ci);
   // A set run alone keeps its seeds (base + 1000 * its index + i).
@@ -134,18 +155,22 @@ int main(int argc, char** argv) {
       const double upper = c.covered > 0 ? boost::math::cdf(boost::math::complement(bin, c.covered - 1)) : 1.0;
       const bool inside = std::abs(f - confidence) <= 0.10;
       within += inside;
-      char line[160];
-      std::snprintf(line, sizeof line, "  %s %s: %d/%d = %.1f %% (binomial p = %.3g)%s\n", c.set.c_str(),
-                    c.term.c_str(), c.covered, c.runs, 100 * f, std::min(1.0, 2 * std::min(lower, upper)),
-                    inside ? "" : "  outside");
+      char line[256];
+      // The cell's verdict counts a null as a miss; with the nulls whose upper limit holds (a
+      // null's interval is [0, limit]) the count an outside check makes is beside it.
+      std::snprintf(line, sizeof line, "  %s %s: %d/%d = %.1f %% (binomial p = %.3g)%s; with the nulls' limits %d/%d\n",
+                    c.set.c_str(), c.term.c_str(), c.covered, c.runs, 100 * f, std::min(1.0, 2 * std::min(lower, upper)),
+                    inside ? "" : "  outside", c.covered + c.null_held, c.runs);
       lines += line;
     } else if (!c.dominant && c.injected) {
       nd += c.runs, nd_up += c.upper_holds;
     }
   }
+  char nd_text[64] = "none injected";
+  if (nd > 0) std::snprintf(nd_text, sizeof nd_text, "%d/%d = %.0f %%", nd_up, nd, 100.0 * nd_up / nd);
   std::printf("\npooled (Q, N, B(model), K, R): dominant bounds hold %d/%d = %.1f %%; non-dominant upper limit holds "
-              "%d/%d = %.0f %%; > 3x off with bounds excluding: %d\n",
-              dom_cov, dom, 100.0 * dom_cov / std::max(1, dom), nd_up, nd, 100.0 * nd_up / std::max(1, nd), off3);
+              "%s; > 3x off with bounds excluding: %d\n",
+              dom_cov, dom, 100.0 * dom_cov / std::max(1, dom), nd_text, off3);
   std::printf("dominant cells within %.1f +- 10 points: %d of %d\n%s", 100 * confidence, within, cells_dom, lines.c_str());
   return 0;
 }

@@ -51,6 +51,7 @@ struct Cell {
   std::string set, term;
   bool dominant = false, injected = false;
   int runs = 0, reported = 0, covered = 0, null_ = 0, upper = 0, upper_holds = 0, false_pos = 0;
+  int null_held = 0;  // nulls whose upper limit holds the truth (a null's interval is [0, limit])
   int excluded_3x = 0;
   std::vector<double> ratios;  // value/truth where reported
   double worst_excluded = 1;   // value/truth farthest from 1 (in log) with bounds excluding the truth
@@ -73,7 +74,7 @@ inline void score(Cell& c, const Term& t, double truth) {
     ++c.null_;
     if (t.hi) {
       ++c.upper;
-      if (*t.hi >= truth) ++c.upper_holds;
+      if (*t.hi >= truth) ++c.upper_holds, ++c.null_held;
     }
     return;
   }
