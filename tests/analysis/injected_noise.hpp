@@ -17,8 +17,9 @@
 //      sample, as the Allan estimators take it), drawn jointly with the process's next value
 //      (flicker_into), and the bank reaches far above the Nyquist frequency: the point-sampled
 //      bank stopping at rate/4 it replaces (2026-12-04) read 3.8 % high at tau0 (aliasing) and
-//      5 % low at 2-4 tau0 (the missing top decade). Now within 0.1 % at tau0-16 tau0 (100
-//      records at 50 Hz, 20 at 1 kHz) and within the records' scatter beyond.
+//      5 % low at 2-4 tau0 (the missing top decade). Its expected Allan variance is now the
+//      nominal to 1e-5 from tau0 to 256 tau0 and 5e-4 below at T/4 (flicker_bank_avar), and
+//      simulated records agree within their sampling error (0.05-0.2 % over 100 records).
 //   K  rate random walk: y_n += u_n, u_n = u_{n-1} + K sqrt(tau0) w_n (K^2 tau/3).
 //   R  rate ramp: y_n += R n tau0 (deterministic; R^2 tau^2/2).
 #pragma once
@@ -54,33 +55,69 @@ inline double model_avar(const Terms& t, double tau) {
   return s;
 }
 
-// Adds flicker of coefficient B to y (n samples at rate_hz, record length T): the bank of
-// Ornstein-Uhlenbeck processes above, each sample the exact mean of each process over its
-// interval. For a process of rate lambda = 2 pi f_j, stationary variance v and step h = tau0,
-// x = lambda h, a = exp(-x), the next value and the integral over the step given the value u:
+// The flicker bank for coefficient B at rate_hz over a record of T s: each process's corner
+// frequency, the processes' common stationary variance v (one-sided level 2 v/(pi f_j), summing to
+// h_{-1}/f with h_{-1} = v/ln r), and the summed variance of the per-sample means of the
+// processes above 30 rate (run as one white draw: flicker_into).
+struct FlickerBank {
+  std::vector<double> fc;
+  double v = 0, tail = 0;
+};
+inline FlickerBank flicker_bank(double B, double rate_hz, double T) {
+  FlickerBank b;
+  const double h = 1.0 / rate_hz, r = std::pow(10.0, 1.0 / 3.0), f_top = 30 * rate_hz;
+  b.v = B * B / std::numbers::pi * std::log(r);
+  for (double fc = f_top * r; 2 * std::numbers::pi * fc * h < 1e12; fc *= r) {
+    const double x = 2 * std::numbers::pi * fc * h;
+    b.tail += 2 * b.v * (x + std::expm1(-x)) / (x * x);  // x - 1 + a
+  }
+  for (double fc = f_top; fc >= 1 / (1000 * T); fc /= r) b.fc.push_back(fc);
+  return b;
+}
+
+// The bank's expected Allan variance at tau = m tau0, as flicker_into realises it: per process
+// (4 V(tau) - V(2 tau))/(2 tau^2) with V(t) = 2 v (lambda t - 1 + exp(-lambda t))/lambda^2 the
+// variance of its integral over t, plus the white tail's tail/m. A check of the bank's design
+// (its extent and tail) against (2 ln2/pi) B^2 that needs no simulation.
+inline double flicker_bank_avar(const FlickerBank& b, double rate_hz, std::size_t m) {
+  const double tau = static_cast<double>(m) / rate_hz;
+  double avar = b.tail / static_cast<double>(m);
+  for (const double fc : b.fc) {
+    const double lam = 2 * std::numbers::pi * fc;
+    const auto V = [&](double t) {
+      const double x = lam * t;  // (x - 1 + e^-x) by its series where it cancels
+      const double g = x < 1e-3 ? x * x * (0.5 - x / 6 + x * x / 24) : x + std::expm1(-x);
+      return 2 * b.v * g / (lam * lam);
+    };
+    avar += (4 * V(tau) - V(2 * tau)) / (2 * tau * tau);
+  }
+  return avar;
+}
+
+// Adds flicker of coefficient B to y (samples at rate_hz; the record is y.size() samples long):
+// the bank above, each sample the exact mean of each process over its interval. For a process of
+// rate lambda = 2 pi f_j, stationary variance v and step h = tau0, x = lambda h, a = exp(-x), the
+// next value and the integral over the step given the value u:
 //   u' = a u + e,  I = u (1 - a)/lambda + eta,  with (e, eta) normal, zero mean,
 //   var e = v (1 - a^2),  cov(e, eta) = v (1 - a)^2/lambda,
 //   var eta = (2 v/lambda) [h - 2 (1 - a)/lambda + (1 - a^2)/(2 lambda)]
 // (the Ito integrals of exp(-lambda (h - s)) and (1 - exp(-lambda (h - s)))/lambda against the
 // drive sqrt(2 lambda v) dW). The processes above 30 rate are not run: the mean of each over a
 // step is white to within 1/(2 x) < 0.3 % (its stationary variance 2 v (x - 1 + a)/x^2), and
-// their sum is one white draw of that summed variance; without it the bank reads about 0.6 %
-// low at tau0 (it acts as a missing white FM). Draws from Boost's ziggurat normal: the bank
-// takes two per process and sample, and the ziggurat is several times cheaper than
-// std::normal_distribution's polar method.
+// their sum is one white draw of that summed variance; without it the bank reads 0.5 % low at
+// tau0 (it acts as a missing white FM). Being means over tau0, the samples' spectrum falls below
+// h_{-1}/f near the Nyquist frequency (to 0.8 of it in the top octave), as any averaged record's
+// does: a B read from a PSD there reads low. Draws from Boost's ziggurat normal: the bank takes
+// two per process and sample, and the ziggurat is cheaper per draw than std::normal_distribution's
+// polar method (2.3x, a review's measurement).
 template <class Rng>
-void flicker_into(std::vector<double>& y, double B, double rate_hz, double T, Rng& rng) {
+void flicker_into(std::vector<double>& y, double B, double rate_hz, Rng& rng) {
   boost::random::normal_distribution<double> g(0.0, 1.0);
-  const double h = 1.0 / rate_hz, hm1 = B * B / std::numbers::pi, r = std::pow(10.0, 1.0 / 3.0);
-  const double v = hm1 * std::log(r), f_top = 30 * rate_hz;
-  double tail = 0;  // the summed variance of the means of the processes above f_top
-  for (double fc = f_top * r; 2 * std::numbers::pi * fc * h < 1e12; fc *= r) {
-    const double x = 2 * std::numbers::pi * fc * h;
-    tail += 2 * v * (x + std::expm1(-x)) / (x * x);  // x - 1 + a
-  }
-  const double s_tail = std::sqrt(tail);
+  const double h = 1.0 / rate_hz;
+  const FlickerBank bank = flicker_bank(B, rate_hz, static_cast<double>(y.size()) * h);
+  const double v = bank.v, s_tail = std::sqrt(bank.tail);
   for (double& yi : y) yi += s_tail * g(rng);
-  for (double fc = f_top; fc >= 1 / (1000 * T); fc /= r) {
+  for (const double fc : bank.fc) {
     const double lam = 2 * std::numbers::pi * fc, x = lam * h, a = std::exp(-x);
     const double one_a = -std::expm1(-x);  // 1 - a without cancellation
     // [h - 2 (1 - a)/lambda + (1 - a^2)/(2 lambda)]/h = x^2/3 - x^3/4 + 7 x^4/60 - ... (series
@@ -102,7 +139,7 @@ void flicker_into(std::vector<double>& y, double B, double rate_hz, double T, Rn
 inline std::vector<double> generate(const Terms& t, double rate_hz, std::size_t n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
-  const double tau0 = 1.0 / rate_hz, T = static_cast<double>(n) * tau0;
+  const double tau0 = 1.0 / rate_hz;
   std::vector<double> y(n, 0.0);
   if (t.Q > 0) {
     double prev = t.Q * g(rng);
@@ -116,7 +153,7 @@ inline std::vector<double> generate(const Terms& t, double rate_hz, std::size_t 
     const double s = t.N / std::sqrt(tau0);
     for (std::size_t i = 0; i < n; ++i) y[i] += s * g(rng);
   }
-  if (t.B > 0) flicker_into(y, t.B, rate_hz, T, rng);
+  if (t.B > 0) flicker_into(y, t.B, rate_hz, rng);
   if (t.K > 0) {
     const double s = t.K * std::sqrt(tau0);
     double u = 0;

@@ -32,8 +32,8 @@ TEST(InjectedNoise, EachTermGivesItsAllanVariance) {
   EXPECT_NEAR(mean_avar_ratio({1e-6, 0, 0, 0, 0}, 0.1), 1, 0.03);
   EXPECT_NEAR(mean_avar_ratio({0, 1e-5, 0, 0, 0}, 1), 1, 0.03);
   // Flicker at the first taus too (the bank's means over each sample and the processes above the
-  // Nyquist frequency; the point-sampled bank stopping at rate/4 read +3.7 % at tau0 and -5 % at
-  // 2-4 tau0, 7-10 times the scatter of 8 records there)
+  // Nyquist frequency; the point-sampled bank stopping at rate/4 read +3.8 % at tau0 and -5 % at
+  // 2-4 tau0, 20-30 times the standard error of 8 records' mean there)
   for (const double tau : {0.01, 0.02, 0.04})
     EXPECT_NEAR(mean_avar_ratio({0, 0, 1e-6, 0, 0}, tau), 1, 0.01) << "tau " << tau;
   EXPECT_NEAR(mean_avar_ratio({0, 0, 1e-6, 0, 0}, 0.1), 1, 0.02);
@@ -42,6 +42,22 @@ TEST(InjectedNoise, EachTermGivesItsAllanVariance) {
   EXPECT_NEAR(mean_avar_ratio({0, 0, 0, 0, 1e-8}, 10, 1), 1, 1e-6);  // deterministic
   // and at T/4 (the longest tau the fit uses, where R dominates on the 6 h and 60 h sets)
   EXPECT_NEAR(mean_avar_ratio({0, 0, 0, 0, 1e-8}, 249.9, 1), 1, 1e-6);
+}
+
+// The flicker bank's own expected Allan variance (no simulation: each process's, plus the white
+// tail's) is the nominal (2 ln2/pi) B^2 from tau0 to 256 tau0 and near it at T/4, at three rates:
+// the bank's extent (30 rate down to 1/(1000 T)) and its tail are enough. Stopping the bank at
+// rate/4 gives 0.41 at tau0 and 0.93 at 16 tau0 (means, not point samples); leaving out the tail
+// 0.995 at tau0.
+TEST(InjectedNoise, TheFlickerBanksExpectedAllanVarianceIsTheNominal) {
+  for (const double rate : {10.0, 100.0, 1000.0}) {
+    const double T = 3600, nominal = term_avar({0, 0, 1e-6, 0, 0}, 2, 1.0);
+    const FlickerBank bank = flicker_bank(1e-6, rate, T);
+    for (std::size_t m = 1; m <= 256; m *= 2)
+      EXPECT_NEAR(flicker_bank_avar(bank, rate, m) / nominal, 1, 1e-4) << rate << " Hz, m " << m;
+    const auto quarter = static_cast<std::size_t>(T * rate / 4);
+    EXPECT_NEAR(flicker_bank_avar(bank, rate, quarter) / nominal, 1, 1e-3) << rate << " Hz, T/4";
+  }
 }
 
 // The ramp's scatter (noise_model.hpp term_scatter): a deterministic ramp over a random walk
