@@ -178,7 +178,11 @@ void print_status(const std::string& where, const TableStatus& s, bool json, dou
 // What a command's body gets besides the table.
 struct TableUse {
   double tolerance_deg;  // the move tolerance
-  std::string identity;  // modbus::table_identity: the station lock's and the stop note's name
+  // modbus::table_identity: the station lock's and the stop note's name. A command holding the lock
+  // has it; a stop computes it once sent (a host name's lookup never delays the stop).
+  std::optional<std::string> identity;
+  const toml::table* cfg;
+  std::string id() const { return identity ? *identity : modbus::table_identity(*cfg); }
 };
 
 // Runs `body` with the table the arguments name and its TableUse (the move tolerance its settings
@@ -191,10 +195,11 @@ template <class Body>
 void with_table(const TableArgs& a, Body body, const std::string& unreachable = "", const std::string& command = "") {
   toml::table root;
   const toml::table& t = table_config(a, root);
-  const std::string identity = modbus::table_identity(t);
+  std::optional<std::string> identity;
   std::optional<TableLock> lock;
   if (!command.empty()) {
-    lock.emplace(identity, "rig table " + command);
+    identity = modbus::table_identity(t);
+    lock.emplace(*identity, "rig table " + command);
     if (!lock->held())  // said, not silent (a review: a missing lock folder turned it off unseen)
       std::cerr << "rig: warning: " << lock->unlocked_warning() << "\n";
   }
@@ -206,7 +211,7 @@ void with_table(const TableArgs& a, Body body, const std::string& unreachable = 
     if (unreachable.empty()) throw;
     throw HardwareError(unreachable + e.what());
   }
-  body(*table, TableUse{modbus::table_options_from_toml(t).tolerance_deg, identity});
+  body(*table, TableUse{modbus::table_options_from_toml(t).tolerance_deg, identity, &t});
 }
 
 // The two backends' technician-only calls.
@@ -302,7 +307,7 @@ void run_motion(RotaryTable& t, const TableUse& use, const std::string& doing, M
   std::string by;  // who halted it, where a stop from this station did
   try {
     AngleLine line(t, doing);
-    motion_stoppable_from_this_station(use.identity, doing, motion, [&](const std::string& who) { by = who; });
+    motion_stoppable_from_this_station(use.id(), doing, motion, [&](const std::string& who) { by = who; });
   } catch (const AbortedError&) {  // the angle line cleared first
     say_where_it_stopped(t, by.empty() ? last_stop_error(t) : "", by.empty() ? "" : by + " on this station");
     throw;
@@ -396,7 +401,7 @@ void add_table(CLI::App& app, int& rc) {
       if (!last_stop_error(t).empty())
         throw HardwareError(last_stop_error(t) + (note.empty() ? "" : "; if it reached the drive: " + note));
       // Delivered: a move this halts in another terminal of this station names this command.
-      const std::string unnoted = TableLock::note_stop(use.identity, quick ? "rig table quick-stop" : "rig table stop");
+      const std::string unnoted = TableLock::note_stop(use.id(), quick ? "rig table quick-stop" : "rig table stop");
       if (!unnoted.empty())
         std::cerr << "rig: warning: the stop's note beside the table lock was not left (" << unnoted
                   << "): a move it halted in another terminal says \"halted by another master\" (exit 4)\n";

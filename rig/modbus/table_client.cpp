@@ -1,6 +1,10 @@
 #include "rig/modbus/table_client.hpp"
 
+#include <netdb.h>
+#include <sys/socket.h>
+
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 
@@ -787,9 +791,41 @@ TableConfig read_table_config(const toml::table& t) {
 
 void check_table_config(const toml::table& t) { read_table_config(t); }
 
+namespace {
+// One key for every spelling of a TCP host: the least IPv4 address it resolves to (else the least
+// IPv6 one; an IPv4-mapped one as IPv4), numeric; the name in lower case where it does not resolve.
+// "localhost", "LOCALHOST" and "127.0.0.1" were three keys, so two terminals could command one
+// drive at once. A literal address resolves without a lookup.
+std::string host_key(const std::string& host) {
+  std::string lower = host;
+  for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* res = nullptr;
+  if (::getaddrinfo(host.c_str(), nullptr, &hints, &res) != 0 || res == nullptr) return lower;
+  std::optional<std::string> v4, v6;
+  for (const addrinfo* a = res; a != nullptr; a = a->ai_next) {
+    char buf[NI_MAXHOST];
+    if (::getnameinfo(a->ai_addr, a->ai_addrlen, buf, sizeof buf, nullptr, 0, NI_NUMERICHOST) != 0) continue;
+    std::string addr = buf;
+    const bool mapped = addr.rfind("::ffff:", 0) == 0 && addr.find('.') != std::string::npos;
+    if (mapped) addr.erase(0, 7);
+    std::optional<std::string>& least = a->ai_family == AF_INET || mapped ? v4 : v6;
+    if (!least || addr < *least) least = addr;
+  }
+  ::freeaddrinfo(res);
+  return v4 ? *v4 : v6 ? *v6 : lower;
+}
+}  // namespace
+
 std::string table_identity(const toml::table& t) {
   const TableConfig c = read_table_config(t);
-  if (c.ep.kind == Endpoint::Kind::kTcp) return c.ep.str() + " unit " + std::to_string(c.link.unit);
+  if (c.ep.kind == Endpoint::Kind::kTcp) {
+    Endpoint ep = c.ep;
+    ep.host = host_key(ep.host);
+    return ep.str() + " unit " + std::to_string(c.link.unit);
+  }
   // A serial line is one bus whatever its settings or unit, and one device by any of its names
   // (/dev/serial/by-id/... links to /dev/ttyUSB0): two keys let a second process drive it (a review).
   std::error_code ec;

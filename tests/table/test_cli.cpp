@@ -405,6 +405,10 @@ TEST_F(RigTable, AMoveRunningHoldsTheTableAgainstASecondCommand) {
     EXPECT_NE(out.find(holder), std::string::npos) << out;
     EXPECT_NE(out.find("`rig table stop` and `rig table quick-stop` still reach the drive"), std::string::npos) << out;
   }
+  // The same drive by another name of its host (a review: "localhost" took a second lock).
+  const std::string port = server_.endpoint().substr(server_.endpoint().rfind(':') + 1);
+  EXPECT_EQ(rig("--modbus localhost:" + port + " move 10", out), 2) << out;
+  EXPECT_NE(out.find("table " + server_.endpoint() + " unit 1: " + holder), std::string::npos) << out;
   EXPECT_TRUE(emu_->snapshot().moving) << "the refused commands sent nothing";
   // A hardware run on this drive: refused before any device opens and before its folder is made.
   const std::string d = testing::TempDir() + "/table-lock-run";
