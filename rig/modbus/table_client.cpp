@@ -793,7 +793,8 @@ void check_table_config(const toml::table& t) { read_table_config(t); }
 
 namespace {
 // One key for every spelling of a TCP host: the least IPv4 address it resolves to (else the least
-// IPv6 one; an IPv4-mapped one as IPv4), numeric; the name in lower case where it does not resolve.
+// IPv6 one; an IPv4-mapped one as IPv4, the unspecified ones as the loopback), numeric; the name in
+// lower case where it does not resolve.
 // "localhost", "LOCALHOST" and "127.0.0.1" were three keys, so two terminals could command one
 // drive at once. A literal address resolves without a lookup.
 std::string host_key(const std::string& host) {
@@ -811,6 +812,10 @@ std::string host_key(const std::string& host) {
     std::string addr = buf;
     const bool mapped = addr.rfind("::ffff:", 0) == 0 && addr.find('.') != std::string::npos;
     if (mapped) addr.erase(0, 7);
+    // The unspecified address is this host to connect(2) ("0.0.0.0" and "0" reached a drive held
+    // under 127.0.0.1: a review), so it is keyed as the loopback.
+    if (addr == "0.0.0.0") addr = "127.0.0.1";
+    if (addr == "::") addr = "::1";
     std::optional<std::string>& least = a->ai_family == AF_INET || mapped ? v4 : v6;
     if (!least || addr < *least) least = addr;
   }

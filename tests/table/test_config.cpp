@@ -83,11 +83,12 @@ TEST(TableConfig, TheTableIdentityNamesOneSerialDeviceOnce) {
             "tcp:127.0.0.1:1502 unit 3");
   // One TCP host by any of its names: a name is keyed by the least IPv4 address it resolves to
   // ("localhost" and "127.0.0.1" were two keys: two terminals could command one drive at once).
-  for (const char* host : {"localhost", "LOCALHOST", "LocalHost"})
+  for (const char* host : {"localhost", "LOCALHOST", "LocalHost", "127.1", "0.0.0.0", "0"})
     EXPECT_EQ(m::table_identity(cfg::parse_string("modbus = \"" + std::string(host) + ":1502\"\nunit = 3\n", "hw.toml")),
               "tcp:127.0.0.1:1502 unit 3")
         << host;
   EXPECT_EQ(m::table_identity(cfg::parse_string("modbus = \"[::1]:1502\"\n", "hw.toml")), "tcp:[::1]:1502 unit 1");
+  EXPECT_EQ(m::table_identity(cfg::parse_string("modbus = \"[::]:1502\"\n", "hw.toml")), "tcp:[::1]:1502 unit 1");
   EXPECT_EQ(m::table_identity(cfg::parse_string("modbus = \"[::ffff:10.0.0.7]:502\"\n", "hw.toml")),
             "tcp:10.0.0.7:502 unit 1");
   const std::string dir = testing::TempDir() + "/tty-identity";
