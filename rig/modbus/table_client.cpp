@@ -792,9 +792,9 @@ TableConfig read_table_config(const toml::table& t) {
 void check_table_config(const toml::table& t) { read_table_config(t); }
 
 namespace {
-// One key for every spelling of a TCP host: the least IPv4 address it resolves to (else the least
-// IPv6 one; an IPv4-mapped one as IPv4, the unspecified ones as the loopback), numeric; the name in
-// lower case where it does not resolve.
+// One key for every spelling of a TCP host: of the addresses it resolves to, numeric, the least
+// IPv4 one as text (else the least IPv6 one; an IPv4-mapped one as IPv4, the unspecified ones as
+// the loopback): the same pick from the same set. The name in lower case where it does not resolve.
 // "localhost", "LOCALHOST" and "127.0.0.1" were three keys, so two terminals could command one
 // drive at once. A literal address resolves without a lookup.
 std::string host_key(const std::string& host) {

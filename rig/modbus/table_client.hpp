@@ -139,7 +139,7 @@ DriveMap table_drive_map(const toml::table& table_cfg);
 void check_table_config(const toml::table& table_cfg);
 
 // The drive a [table] section names, as one line: a TCP endpoint and unit ("tcp:10.0.0.7:502 unit
-// 1", the host as the least IPv4 address it resolves to, so "localhost" and "127.0.0.1" are one
+// 1", the host as the least IPv4 address as text it resolves to, so "localhost" and "127.0.0.1" are one
 // key; a name that does not resolve as written, in lower case), or a serial device, resolved
 // ("rtu:/dev/ttyUSB0", whatever the line settings and unit); what a station's table lock is keyed
 // on. A host name is looked up (getaddrinfo) each call: a stop computes it after it is sent.
