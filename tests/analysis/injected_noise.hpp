@@ -18,7 +18,7 @@
 //      (flicker_into), and the bank reaches far above the Nyquist frequency: the point-sampled
 //      bank stopping at rate/4 it replaces (2026-12-04) read 3.8 % high at tau0 (aliasing) and
 //      5 % low at 2-4 tau0 (the missing top decade). Its expected Allan variance is now the
-//      nominal to 1e-5 from tau0 to 256 tau0 and 5e-4 below at T/4 (flicker_bank_avar), and
+//      nominal to 2e-5 from tau0 to 256 tau0 and 5.4e-4 below at T/4 (flicker_bank_avar), and
 //      simulated records agree within their sampling error (0.05-0.2 % over 100 records).
 //   K  rate random walk: y_n += u_n, u_n = u_{n-1} + K sqrt(tau0) w_n (K^2 tau/3).
 //   R  rate ramp: y_n += R n tau0 (deterministic; R^2 tau^2/2).
