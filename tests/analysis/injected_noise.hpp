@@ -63,13 +63,21 @@ struct FlickerBank {
   std::vector<double> fc;
   double v = 0, tail = 0;
 };
+
+// x - 1 + exp(-x), by its series where the closed form cancels: an Ornstein-Uhlenbeck process of
+// rate lambda and stationary variance v integrates over t to a variance 2 v g(lambda t)/lambda^2.
+inline double ou_integral_g(double x) {
+  return x < 1e-3 ? x * x * (0.5 - x / 6 + x * x / 24) : x + std::expm1(-x);
+}
+
 inline FlickerBank flicker_bank(double B, double rate_hz, double T) {
   FlickerBank b;
   const double h = 1.0 / rate_hz, r = std::pow(10.0, 1.0 / 3.0), f_top = 30 * rate_hz;
   b.v = B * B / std::numbers::pi * std::log(r);
-  for (double fc = f_top * r; 2 * std::numbers::pi * fc * h < 1e12; fc *= r) {
+  for (double fc = f_top * r;; fc *= r) {
     const double x = 2 * std::numbers::pi * fc * h;
-    b.tail += 2 * b.v * (x + std::expm1(-x)) / (x * x);  // x - 1 + a
+    if (x >= 1e12) break;
+    b.tail += 2 * b.v * ou_integral_g(x) / (x * x);  // the variance of its mean over h
   }
   for (double fc = f_top; fc >= 1 / (1000 * T); fc /= r) b.fc.push_back(fc);
   return b;
@@ -84,11 +92,7 @@ inline double flicker_bank_avar(const FlickerBank& b, double rate_hz, std::size_
   double avar = b.tail / static_cast<double>(m);
   for (const double fc : b.fc) {
     const double lam = 2 * std::numbers::pi * fc;
-    const auto V = [&](double t) {
-      const double x = lam * t;  // (x - 1 + e^-x) by its series where it cancels
-      const double g = x < 1e-3 ? x * x * (0.5 - x / 6 + x * x / 24) : x + std::expm1(-x);
-      return 2 * b.v * g / (lam * lam);
-    };
+    const auto V = [&](double t) { return 2 * b.v * ou_integral_g(lam * t) / (lam * lam); };
     avar += (4 * V(tau) - V(2 * tau)) / (2 * tau * tau);
   }
   return avar;
