@@ -28,7 +28,7 @@ Backends make_emulated(const toml::table& plant_cfg, const std::string& serial) 
   return b;
 }
 
-Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
+Backends make_hardware(const toml::table& hw, acceptance::Profile& p, const std::string& table_id) {
   // Configuration before devices: a mistake in any section (drive map included) is exit 2
   // naming the file, not hidden behind a device that cannot be opened.
   validate_hardware(hw, kRunSections);
@@ -45,8 +45,7 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p) {
   b.io_ptr = b.io.get();
   // A `rig table stop` from this station during a move ends the run as the operator's abort.
   const toml::table& table = *cfg::get_table(hw, "table", true);
-  b.table =
-      std::make_unique<StationStoppableTable>(modbus::connect_table(table, *b.clock), modbus::table_identity(table));
+  b.table = std::make_unique<StationStoppableTable>(modbus::connect_table(table, *b.clock), table_id);
   b.table_ptr = b.table.get();
   b.dut = link::connect_dut(*cfg::get_table(hw, "dut", true), *b.clock);
   b.dut_ptr = b.dut.get();

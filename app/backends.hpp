@@ -43,7 +43,8 @@ Backends make_emulated(const toml::table& plant_cfg, const std::string& serial =
 
 // The devices of a hardware file (app/hardware_file.hpp, validated again here before the first
 // device opens): [gpio] first (the e-stop watch), then [table] and [dut]; [procedure]
-// u10_deg/u20_deg replace the profile's table angles with the mount's calibration.
-Backends make_hardware(const toml::table& hw, acceptance::Profile& p);
+// u10_deg/u20_deg replace the profile's table angles with the mount's calibration. `table_id`:
+// modbus::table_identity of [table], as the run's table lock took it.
+Backends make_hardware(const toml::table& hw, acceptance::Profile& p, const std::string& table_id);
 
 }  // namespace rig::cli

@@ -1596,9 +1596,12 @@ int do_run(RunArgs a) {
   // The table next, before a folder is made: one process at a time commands a station's table,
   // held to the run's end (app/table_lock.hpp; a `rig table move` from another terminal turned
   // the DUT during a recording).
+  // The drive's identity is looked up once (a host name resolves): the lock and the backends'
+  // stop watch use the same key.
+  std::string table_id;
   std::optional<TableLock> table_lock;
   if (a.plant == "hardware")
-    table_lock.emplace(modbus::table_identity(*cfg::get_table(hw, "table", true)),
+    table_lock.emplace(table_id = modbus::table_identity(*cfg::get_table(hw, "table", true)),
                        a.resume.empty() ? "rig run" + (a.out.empty() ? std::string() : " --out " + shown_text(a.out))
                                         : "rig run --resume " + shown_text(a.resume));
   // The folder first: an operator should not answer the prompts of a run that cannot start.
@@ -1704,7 +1707,7 @@ int do_run(RunArgs a) {
 
   Backends b;
   try {
-    b = a.plant == "hardware" ? make_hardware(hw, p) : make_emulated(plant_cfg, a.serial);
+    b = a.plant == "hardware" ? make_hardware(hw, p, table_id) : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     const bool config_error = dynamic_cast<const ConfigError*>(&e) != nullptr;
