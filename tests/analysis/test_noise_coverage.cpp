@@ -152,13 +152,16 @@ TEST(NoiseCoverage, CiSized) {
 // null on about one record in five there, and a null's upper limit, linearised at the fit without
 // the walk, was below the truth on nearly half of those. The limit now inverts the test of the
 // term at each value with the scatter and EDF that value implies (noise_model.cpp,
-// inverted_upper). Seeds 71000..71199 (fixed before looking) and 90417..90616 (a review's, fixed
-// before it looked): K's interval (a null's [0, upper limit]) held the truth at 95 % in 348/400
-// before and 363/400 (90.8 %) after, the nulls' limits in 39/71 before and 54/71 after; N
-// 386/400; at the default K 280 then 282/400, N 310/400. Asserted: K and N within 10 points of
-// the stated confidence, and at 95 % the nulls' limits holding in at least 47 of them (a
-// regression guard between the two methods' counts; the one-sided limit states 97.5 %, and both
-// fall short of it: docs/analysis.md, "Coverage over injected noise").
+// inverted_upper), each point's departure measured by the cube root of s/mu (Wilson-Hilferty),
+// whose tails are the chi-square's where ln s has a heavy lower one. Seeds 71000..71199 (fixed
+// before looking) and 90417..90616 (a review's, fixed before it looked): K's interval (a null's
+// [0, upper limit]) held the truth at 95 % in 348/400 with the linearised limit, 363/400 with the
+// test on ln s (session 48) and 373/400 (93.3 %) on the cube root (session 50); the nulls' limits
+// in 39, 54 and 64 of 71; N 386/400; at the default K 280, 282 then 292/400, N 310/400.
+// Asserted: K and N within 10 points of the stated confidence, and at 95 % the nulls' limits
+// holding in at least 60 of them (a regression guard between the last two methods' counts; the
+// one-sided limit states 97.5 %, and over 1500 records the nulls' limits held 87.8 %:
+// docs/analysis.md, "Coverage over injected noise").
 TEST(NoiseCoverage, ARandomWalkOnTheLastOctavesHeldAtTheStatedConfidence) {
   const Set set{"N + K over the last octaves", {0, 1e-3, 0, 5.2e-5, 0}, 100, 1000.0 / 3600};
   constexpr int kSeeds = 200;
@@ -177,7 +180,7 @@ TEST(NoiseCoverage, ARandomWalkOnTheLastOctavesHeldAtTheStatedConfidence) {
     EXPECT_NEAR(static_cast<double>(held_n) / runs, confidence, 0.10) << confidence;
     EXPECT_NEAR(static_cast<double>(held_k) / runs, confidence, 0.10) << confidence;
     if (confidence > 0.9) {
-      EXPECT_GE(null_held_k, 47) << "of " << nulls_k;
+      EXPECT_GE(null_held_k, 60) << "of " << nulls_k;
     }
   }
 }
