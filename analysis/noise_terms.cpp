@@ -174,6 +174,81 @@ std::optional<double> paper_b_edf(std::span<const DevPoint> pts, const NoiseMode
   return std::nullopt;
 }
 
+// The EDF of sigma^2(tau_cp) as the paper's polynomial reads it. Its value at x* = log10 tau_cp is
+// a weighted sum of every point's log10 sigma, with the least-squares hat row a = A (A^T A)^-1
+// e(x*) (A the polynomial's design matrix, e(x*) = (1, x*, .., x*^d)), so ln sigma^2(tau_cp) =
+// sum_i a_i ln s_i and its variance is a^T Sigma a over the covariance of ln s_i (Sigma). The
+// model's covariance (model_log_scatter: its EDF and octave correlations) is for octave-spaced
+// points, and the polynomial reads a denser grid; each point is taken as the octave point nearest
+// it in log tau, fully correlated with it (points within half an octave are strongly correlated;
+// sub-octave correlations are not in the model). Returned as the chi-square EDF with that variance
+// of ln sigma^2 (2/nu to first order). Without a model, nullopt. A single Allan point's interval
+// (its EDF at tau_cp) was narrower than the polynomial's scatter: 49/100 on flicker alone, where
+// the polynomial carried the long taus' scatter into its middle (docs/analysis.md).
+std::optional<double> paper_poly_edf(std::span<const DevPoint> pts, const PaperFit& f, double tau_cp,
+                                     const NoiseModelFit& m, double record_s) {
+  if (!m.ok || !f.ok || f.degree < 1 || !(tau_cp > 0)) return std::nullopt;
+  const std::vector<std::size_t> oct = octave_points(pts);
+  if (oct.empty()) return std::nullopt;
+  std::vector<double> oct_tau;
+  std::vector<std::size_t> oct_m;
+  for (const std::size_t i : oct) {
+    if (!(pts[i].tau_s > 0) || pts[i].m == 0) return std::nullopt;
+    oct_tau.push_back(pts[i].tau_s), oct_m.push_back(pts[i].m);
+  }
+  std::vector<double> xs;
+  std::vector<std::size_t> bin;  // each polynomial point's octave point
+  for (const DevPoint& p : pts) {
+    if (!(p.dev > 0 && p.tau_s > 0)) continue;  // the points paper_fit reads
+    xs.push_back(std::log10(p.tau_s));
+    std::size_t best = 0;
+    for (std::size_t j = 1; j < oct_tau.size(); ++j)
+      if (std::abs(std::log(p.tau_s / oct_tau[j])) < std::abs(std::log(p.tau_s / oct_tau[best]))) best = j;
+    bin.push_back(best);
+  }
+  const auto n = static_cast<Eigen::Index>(xs.size()), d = static_cast<Eigen::Index>(f.degree);
+  if (n <= d) return std::nullopt;
+  Eigen::MatrixXd A(n, d + 1);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double pw = 1;
+    for (Eigen::Index k = 0; k <= d; ++k, pw *= xs[static_cast<std::size_t>(i)]) A(i, k) = pw;
+  }
+  Eigen::VectorXd e(d + 1);
+  const double xstar = std::log10(tau_cp);
+  double pw = 1;
+  for (Eigen::Index k = 0; k <= d; ++k, pw *= xstar) e(k) = pw;
+  // a = A (A^T A)^-1 e by the QR of A (A = QR: a = Q R^-T e), as paper_fit solves it.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  const Eigen::MatrixXd R = qr.matrixQR().topRows(d + 1).triangularView<Eigen::Upper>();
+  const Eigen::VectorXd u = R.transpose().triangularView<Eigen::Lower>().solve(e);
+  Eigen::VectorXd qu = Eigen::VectorXd::Zero(n);
+  qu.head(d + 1) = u;
+  const Eigen::VectorXd a = qr.householderQ() * qu;
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(oct_tau.size()));
+  for (Eigen::Index i = 0; i < n; ++i) w(static_cast<Eigen::Index>(bin[static_cast<std::size_t>(i)])) += a(i);
+  // The covariance depends on the terms' shares alone: theta brought to a largest term in
+  // [0.5, 1) by a power of two (exact), or its squares under- and overflow in a record's own
+  // units (1e-80 g, 1e90 g: NoiseTerms.TheTermsAreTheSameInAnyUnit).
+  std::array<double, 5> theta{};
+  double largest = 0;
+  for (std::size_t k = 0; k < 5; ++k) largest = std::max(largest, m.value[k]);
+  if (!(largest > 0) || !std::isfinite(largest)) return std::nullopt;
+  int exponent = 0;
+  std::frexp(largest, &exponent);
+  for (std::size_t k = 0; k < 5; ++k) {
+    const double v = std::ldexp(m.value[k], -exponent);
+    theta[k] = v * v;
+  }
+  const double tau0 = oct_tau.front() / static_cast<double>(oct_m.front());
+  const std::size_t n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+  const LogScatter sc = model_log_scatter(oct_tau, oct_m, theta, n_phase);
+  const auto k = static_cast<Eigen::Index>(oct_tau.size());
+  const Eigen::Map<const Eigen::MatrixXd> S(sc.cov.data(), k, k);
+  const double var = w.dot(S * w);
+  if (!(var > 0) || !std::isfinite(var)) return std::nullopt;
+  return 2 / var;
+}
+
 // The model's sigma^2 at tau: the sum of its reported terms' Allan variances (IEEE 952 Annex C).
 double model_variance(const WlsFit& model, double tau) {
   double var = 0;
@@ -379,7 +454,8 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   }
   if (out.sigma_cp) {
     out.B.value = *out.sigma_cp / kBiasFactor;
-    out.b_edf = paper_b_edf(oadev, out.model, *out.tau_cp_s, record_length_s);
+    out.b_edf = paper_poly_edf(oadev, out.paper, *out.tau_cp_s, out.model, record_length_s);
+    if (!out.b_edf) out.b_edf = paper_b_edf(oadev, out.model, *out.tau_cp_s, record_length_s);
     if (out.b_edf) {  // the chi-square bounds of sigma(tau_cp) at that EDF, over 0.664
       const auto [lo, hi] = chi2_bounds(*out.B.value, *out.b_edf, confidence);
       out.B.lo = lo;

@@ -117,8 +117,9 @@ struct NoiseTerms {
   // How B was read (B above): "flat_segment" (the paper's, tau_cp the middle of the segment
   // flat_tau_from_s..flat_tau_to_s), "polynomial_minimum" (no flat segment: the quartic's
   // interior minimum), "least_squares" (neither: the model's B), or "" (no B). The paper
-  // method's bounds are the chi-square bounds of sigma(tau_cp) at the EDF the model implies at
-  // the Allan point nearest tau_cp (b_edf), over 0.664: its scatter, not its bias. Every term
+  // method's bounds are the chi-square bounds of sigma(tau_cp) at the EDF of the polynomial's
+  // value there (b_edf: from every point it reads, under the model's covariance; without a model
+  // the nearest Allan point's EDF), over 0.664: its scatter, not its bias. Every term
   // adds to sigma^2(tau_cp), so that interval bounds B from above only; its lower end is
   // lowered to the model's B lower bound (0 when the model has no B) where that is lower.
   std::string b_method;
