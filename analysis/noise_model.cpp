@@ -350,7 +350,7 @@ SubsetFit gls_subset(const Pts& p, const Eigen::MatrixXd& W, int mask, std::arra
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto si = static_cast<std::size_t>(i);
     for (Eigen::Index j = 0; j < c; ++j) X(i, j) = noise_basis(cols[static_cast<std::size_t>(j)], p.tau[si]);
-    ly(i) = std::log(p.s[si]) - log_bias(p.nu[si]);
+    if (kind == Residual::log) ly(i) = std::log(p.s[si]) - log_bias(p.nu[si]);  // the cube root needs none
   }
   Eigen::VectorXd th(c);
   for (Eigen::Index j = 0; j < c; ++j) th(j) = start[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])];

@@ -62,6 +62,16 @@ double dpoly(const std::array<double, 5>& c, double x) {
   return c[1] + 2 * c[2] * x + 3 * c[3] * x * x + 4 * c[4] * x * x * x;
 }
 
+// The paper polynomial's design matrix of `degree` at the log10 taus xs: row i is 1, x_i, .., x_i^d.
+Eigen::MatrixXd poly_design(std::span<const double> xs, int degree) {
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(xs.size()), degree + 1);
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    double p = 1;
+    for (int k = 0; k <= degree; ++k, p *= xs[i]) A(static_cast<Eigen::Index>(i), k) = p;
+  }
+  return A;
+}
+
 PaperFit paper_fit(std::span<const DevPoint> pts) {
   PaperFit f;
   std::vector<double> xs, ys;
@@ -72,14 +82,8 @@ PaperFit paper_fit(std::span<const DevPoint> pts) {
     return f;
   }
   f.degree = static_cast<int>(std::min<std::size_t>(4, xs.size() - 1));
-  const auto n = static_cast<Eigen::Index>(xs.size());
-  Eigen::MatrixXd A(n, f.degree + 1);
-  Eigen::VectorXd b(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    double p = 1;
-    for (int k = 0; k <= f.degree; ++k, p *= xs[static_cast<std::size_t>(i)]) A(i, k) = p;
-    b(i) = ys[static_cast<std::size_t>(i)];
-  }
+  const Eigen::MatrixXd A = poly_design(xs, f.degree);
+  const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(ys.data(), static_cast<Eigen::Index>(ys.size()));
   const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
   for (int k = 0; k <= f.degree; ++k) f.coef[static_cast<std::size_t>(k)] = c(k);
 
@@ -208,16 +212,10 @@ std::optional<double> paper_poly_edf(std::span<const DevPoint> pts, const PaperF
   }
   const auto n = static_cast<Eigen::Index>(xs.size()), d = static_cast<Eigen::Index>(f.degree);
   if (n <= d) return std::nullopt;
-  Eigen::MatrixXd A(n, d + 1);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    double pw = 1;
-    for (Eigen::Index k = 0; k <= d; ++k, pw *= xs[static_cast<std::size_t>(i)]) A(i, k) = pw;
-  }
-  Eigen::VectorXd e(d + 1);
+  const Eigen::MatrixXd A = poly_design(xs, f.degree);
   const double xstar = std::log10(tau_cp);
-  double pw = 1;
-  for (Eigen::Index k = 0; k <= d; ++k, pw *= xstar) e(k) = pw;
-  // a = A (A^T A)^-1 e by the QR of A (A = QR: a = Q R^-T e), as paper_fit solves it.
+  const Eigen::VectorXd e = poly_design(std::span<const double>(&xstar, 1), f.degree).row(0).transpose();
+  // a = A (A^T A)^-1 e by the QR of A (A = QR: a = Q R^-T e; no pivoting needed for the hat row).
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
   const Eigen::MatrixXd R = qr.matrixQR().topRows(d + 1).triangularView<Eigen::Upper>();
   const Eigen::VectorXd u = R.transpose().triangularView<Eigen::Lower>().solve(e);
