@@ -693,8 +693,19 @@ std::vector<std::size_t> octave_points(std::span<const DevPoint> oadev) {
   return idx;
 }
 
+std::size_t phase_points(double record_s, double tau0) {
+  return static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+}
+
 LogScatter model_log_scatter(std::span<const double> tau_s, std::span<const std::size_t> m,
-                             const std::array<double, 5>& theta, std::size_t n_phase) {
+                             const std::array<double, 5>& theta_in, std::size_t n_phase) {
+  std::array<double, 5> theta = theta_in;
+  const double largest = *std::max_element(theta.begin(), theta.end());
+  if (largest > 0 && std::isfinite(largest)) {
+    int exponent = 0;
+    std::frexp(largest, &exponent);
+    for (double& t : theta) t = std::ldexp(t, -exponent);
+  }
   Pts p({tau_s.begin(), tau_s.end()}, std::vector<double>(tau_s.size(), 1), {m.begin(), m.end()}, n_phase);
   set_model_edf(p, theta, n_phase);
   LogScatter out;
@@ -732,7 +743,7 @@ NoiseModelFit fit_in_units(std::span<const DevPoint> oadev, double record_s, dou
     return out;
   }
   const double tau0 = tau.front() / static_cast<double>(m.front());
-  const auto n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+  const std::size_t n_phase = phase_points(record_s, tau0);
   const Pts all(std::move(tau), std::move(s), std::move(m), n_phase);
 
   // The tau range where the IEEE 952 model is adequate (docs/analysis.md "Goodness of fit"): the

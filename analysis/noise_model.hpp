@@ -90,11 +90,17 @@ NoiseModelFit fit_noise_model(std::span<const DevPoint> oadev, double record_s, 
 // the last of them.
 std::vector<std::size_t> octave_points(std::span<const DevPoint> oadev);
 
+// The phase points of a record of record_s seconds sampled every tau0 (its frequency values + 1).
+std::size_t phase_points(double record_s, double tau0);
+
 // What the fit assumes of ln s_i at the points (tau_s[i], factor m[i]) of a record of n_phase
 // points whose true terms are theta: bias[i] = E[ln(s_i / mu_i)] (the log-chi-square bias at the
 // model's EDF) and cov (n x n, row-major) the covariance of ln s_i (2/nu_i and the octave
-// correlations, no model error). For checking the fit's assumptions against simulation
-// (bench/analysis/coverage_noise --covariance).
+// correlations, no model error). theta may be in any unit: only the terms' shares matter, and the
+// squares are brought to a largest of [0.5, 1) by a power of two (exact) before the covariance
+// multiplies them, whose products under- or overflow in a record's own units (1e-80 g, 1e90 g:
+// NoiseTerms.TheTermsAreTheSameInAnyUnit). For checking the fit's assumptions against simulation
+// (bench/analysis/coverage_noise --covariance) and for the paper method's B bounds.
 struct LogScatter {
   std::vector<double> bias, cov;
 };

@@ -172,7 +172,7 @@ std::optional<double> paper_b_edf(std::span<const DevPoint> pts, const NoiseMode
     std::array<double, 5> theta{};
     for (std::size_t k = 0; k < 5; ++k) theta[k] = m.value[k] * m.value[k];
     const std::array<double, 5> mu = term_sigma2(theta, near->tau_s);
-    return model_edf(mu, near->m, static_cast<std::size_t>(std::llround(record_s / tau0)) + 1);
+    return model_edf(mu, near->m, phase_points(record_s, tau0));
   }
   if (near->edf > 0) return near->edf;
   return std::nullopt;
@@ -224,21 +224,10 @@ std::optional<double> paper_poly_edf(std::span<const DevPoint> pts, const PaperF
   const Eigen::VectorXd a = qr.householderQ() * qu;
   Eigen::VectorXd w = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(oct_tau.size()));
   for (Eigen::Index i = 0; i < n; ++i) w(static_cast<Eigen::Index>(bin[static_cast<std::size_t>(i)])) += a(i);
-  // The covariance depends on the terms' shares alone: theta brought to a largest term in
-  // [0.5, 1) by a power of two (exact), or its squares under- and overflow in a record's own
-  // units (1e-80 g, 1e90 g: NoiseTerms.TheTermsAreTheSameInAnyUnit).
   std::array<double, 5> theta{};
-  double largest = 0;
-  for (std::size_t k = 0; k < 5; ++k) largest = std::max(largest, m.value[k]);
-  if (!(largest > 0) || !std::isfinite(largest)) return std::nullopt;
-  int exponent = 0;
-  std::frexp(largest, &exponent);
-  for (std::size_t k = 0; k < 5; ++k) {
-    const double v = std::ldexp(m.value[k], -exponent);
-    theta[k] = v * v;
-  }
+  for (std::size_t k = 0; k < 5; ++k) theta[k] = m.value[k] * m.value[k];
   const double tau0 = oct_tau.front() / static_cast<double>(oct_m.front());
-  const std::size_t n_phase = static_cast<std::size_t>(std::llround(record_s / tau0)) + 1;
+  const std::size_t n_phase = phase_points(record_s, tau0);
   const LogScatter sc = model_log_scatter(oct_tau, oct_m, theta, n_phase);
   const auto k = static_cast<Eigen::Index>(oct_tau.size());
   const Eigen::Map<const Eigen::MatrixXd> S(sc.cov.data(), k, k);
