@@ -63,7 +63,7 @@ int64_t Cia402Table::read_object(Obj o, const CancelToken& cancel, bool urgent) 
     return map_.decode(o, w.data());
   } catch (const ModbusError& e) {
     throw ModbusError("reading " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
-                      e.timeout);
+                      e.timeout, e.foreign_reply);
   }
 }
 
@@ -72,7 +72,7 @@ void Cia402Table::write_object(Obj o, int64_t value, const CancelToken& cancel, 
     transport_->write(map_.spec(o).address, map_.encode(o, value), cancel, urgent);
   } catch (const ModbusError& e) {
     throw ModbusError("writing " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
-                      e.timeout);
+                      e.timeout, e.foreign_reply);
   }
 }
 
@@ -116,7 +116,7 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
       std::string names;
       for (size_t k = i; k < j; ++k) names += (k > i ? ", " : "") + map_.describe(objs[k]);
       throw ModbusError("reading " + names + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
-                        e.timeout);
+                        e.timeout, e.foreign_reply);
     }
     for (size_t k = i; k < j; ++k)
       val[static_cast<int>(objs[k])] = map_.decode(objs[k], w.data() + (map_.spec(objs[k]).address - first.address));
@@ -912,12 +912,23 @@ void Cia402Table::stop() noexcept {
 }
 
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
-// (a failed read still sends: the link decides then, as before).
+// (a read met by silence or a broken link still sends: the link decides then, as before; one
+// answered by bytes that are no Modbus reply does not: that peer is not the drive).
 void Cia402Table::quick_stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, true);
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
+    } catch (const ModbusError& e) {
+      if (e.foreign_reply) {
+        std::string why;
+        try {
+          why = std::string("quick stop not sent (the table may still be moving): ") + e.what() + " (" + kForeignPeer + ")";
+        } catch (...) {
+        }
+        detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+        return;
+      }
     } catch (...) {
     }
   }

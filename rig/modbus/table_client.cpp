@@ -121,7 +121,7 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
     if (e.exception_code != exc::kIllegalAddress) throw;
     const std::string why = std::string(e.what()) + " (" + kNoStatusBlock + ": " + kForCia402 + ")";
     if (!identified_) throw detail::NotThisDriveError(why + "; nothing sent");  // e.what() names the device
-    throw ModbusError(why, e.exception_code, e.timeout);
+    throw ModbusError(why, e.exception_code, e.timeout, e.foreign_reply);
   }
   // A drive speaking another map version, or another map, would be misread register by register.
   // Before this client's first write: not the drive, nothing sent, no stop. Later (a drive that
@@ -512,7 +512,8 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
 // A client that has not yet read a rig-v1 status block reads it (one urgent request) before its
 // first stop: a device without the block, or with another MAP_VERSION, is not a rig-v1 drive, and
 // a stop bit written into its registers is a guess (a review: HALT alone, 0x0100, is Disable
-// voltage on a CiA 402 drive). A read that fails otherwise still sends: the link decides then.
+// voltage on a CiA 402 drive), nor is one whose reply was no Modbus reply. A read that fails
+// otherwise (silence, a broken connection) still sends: the link decides then.
 bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
   if (identified_) return false;
   std::string why;
@@ -529,6 +530,9 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
     // A gateway answering that no device answers at this unit id: whatever is there (if anything)
     // was not recognised as the drive, so nothing is written to it (a review: the stop went out).
     else if (e.exception_code == exc::kGatewayPath || e.exception_code == exc::kGatewayTarget) why = e.what();
+    // What answered sent bytes that are no Modbus reply (an HTTP server, another protocol): not
+    // the drive, so no stop bit goes into it (a review: an HTTP server got the stop's writes).
+    else if (e.foreign_reply) why = std::string(e.what()) + " (" + kForeignPeer + ")";
   } catch (...) {
   }
   if (why.empty()) return false;

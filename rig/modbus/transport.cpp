@@ -414,7 +414,7 @@ class LibmodbusTransport final : public RegisterTransport {
   void call(const std::string& what, const CancelToken& cancel, bool urgent, Op op) {
     const int attempts = urgent ? 2 : 1 + std::max(0, opt_.retries);
     std::string last;
-    bool last_timeout = false;
+    bool last_timeout = false, foreign = false;
     uint8_t last_exc = 0;
     for (int attempt = 0; attempt < attempts; ++attempt) {
       if (!urgent) cancel.throw_if_requested();
@@ -454,6 +454,7 @@ class LibmodbusTransport final : public RegisterTransport {
       if (!tcp() && (last_timeout || e == EMBBADDATA)) quiet_after_s_ = clock_.now_s() + opt_.response_timeout_s;
       if (e == EMBBADDATA && !violation_.empty()) {
         last = "protocol violation: " + violation_;
+        foreign = true;
       } else {
         last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
       }
@@ -474,7 +475,7 @@ class LibmodbusTransport final : public RegisterTransport {
                      : "; nothing has answered on this line yet: check the drive's unit id, baud rate, parity and wiring") +
               std::string(", or whether it answers later than ") + fmt_s(opt_.response_timeout_s) +
               " (the response timeout: `rig table --timeout S`, [table] response_timeout_s, at most 10 s)";
-    throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout);
+    throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout, foreign);
   }
 
   static std::string fmt_s(double s) {

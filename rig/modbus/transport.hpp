@@ -17,12 +17,19 @@
 namespace rig::modbus {
 
 // A failed register call. `exception_code` is the Modbus exception (0 when the
-// failure was the link: timeout, connection, CRC).
+// failure was the link: timeout, connection, CRC). `foreign_reply`: something answered with
+// bytes that are no Modbus reply to the request (a protocol violation on TCP: an HTTP server,
+// another protocol, a device that does not echo the request), on any attempt of the call.
+// Said where a call's reply was foreign: a stop is not sent into such a peer.
+inline constexpr const char* kForeignPeer =
+    "what answers there is no Modbus drive: check the host, port and unit id of the table";
+
 struct ModbusError : HardwareError {
-  ModbusError(const std::string& what, uint8_t exception_reply, bool timed_out)
-      : HardwareError(what), exception_code(exception_reply), timeout(timed_out) {}
+  ModbusError(const std::string& what, uint8_t exception_reply, bool timed_out, bool foreign = false)
+      : HardwareError(what), exception_code(exception_reply), timeout(timed_out), foreign_reply(foreign) {}
   uint8_t exception_code;
   bool timeout;
+  bool foreign_reply;
 };
 
 // Where a drive is: "tcp:HOST:PORT" (also plain "HOST:PORT") or

@@ -14,6 +14,9 @@
 #include <thread>
 
 #include "rig/core/clock.hpp"
+#include "rig/modbus/cia402_client.hpp"
+#include "rig/modbus/drive_map.hpp"
+#include "rig/modbus/table_client.hpp"
 #include "rig/modbus/transport.hpp"
 
 namespace rig::table_test {
@@ -157,6 +160,59 @@ TEST(StrictModbusTcp, EveryResponseFieldIsChecked) {
   EXPECT_TRUE(has(e, "protocol violation: reply to a read of 2 registers carries byte count 2")) << e;
   e = read_error([](Bytes& r) { r[11] ^= 1; }, true);  // write echo (quantity)
   EXPECT_TRUE(has(e, "protocol violation: reply does not echo the write")) << e;
+}
+
+// A peer that answers in another protocol (an HTTP server at the table's address, a reviewer's
+// `python3 -m http.server`): whatever it is, it is not the drive, so neither client's first stop
+// writes into it, and each says why. Every reply is an HTTP 400; the peer counts the requests
+// that were writes (function 0x06 or 0x10).
+TEST(StrictModbusTcp, NoStopGoesIntoAPeerThatAnswersInAnotherProtocol) {
+  std::atomic<int> writes{0};
+  BadPeer peer([&](Bytes& r) {
+    if (r[7] == 0x06 || r[7] == 0x10) ++writes;
+    const std::string http = "HTTP/1.0 400 Bad request\r\nContent-Length: 0\r\n\r\n";
+    r.assign(http.begin(), http.end());
+  });
+  RealClock clock;
+  m::LinkOptions lo;
+  lo.retries = 0;
+  lo.response_timeout_s = 0.2;
+  const m::Endpoint ep = m::parse_endpoint("127.0.0.1:" + std::to_string(peer.port()));
+  m::TableClient v1(m::make_libmodbus_transport(ep, lo, clock), clock, {});
+  v1.stop();
+  EXPECT_TRUE(has(v1.last_stop_error(), "stop not sent (the table may still be moving): ") &&
+              has(v1.last_stop_error(), "protocol violation") && has(v1.last_stop_error(), m::kForeignPeer))
+      << v1.last_stop_error();
+  v1.quick_stop();
+  EXPECT_TRUE(has(v1.last_stop_error(), "quick stop not sent (the table may still be moving): ")) << v1.last_stop_error();
+  const m::DriveMap map = m::load_drive_map(std::string(RIG_SOURCE_DIR) + "/drives/generic-cia402.toml");
+  m::Cia402Table c4(m::make_libmodbus_transport(ep, lo, clock), map, clock, {});
+  c4.quick_stop();
+  EXPECT_TRUE(has(c4.last_stop_error(), "quick stop not sent (the table may still be moving): ") &&
+              has(c4.last_stop_error(), m::kForeignPeer))
+      << c4.last_stop_error();
+  c4.stop();
+  EXPECT_TRUE(has(c4.last_stop_error(), "halt not sent")) << c4.last_stop_error();
+  EXPECT_EQ(writes.load(), 0);
+}
+
+// Silence is not a foreign reply: a read that times out still lets the stop go out (the link
+// decides), as the README's safety section says.
+TEST(StrictModbusTcp, ASilentPeerStillGetsTheStop) {
+  std::atomic<int> writes{0};
+  BadPeer peer([&](Bytes& r) {
+    if (r[7] == 0x06 || r[7] == 0x10) ++writes;
+    if (r[7] == 0x03 || r[7] == 0x04) r.clear();  // reads unanswered; writes echoed
+  });
+  RealClock clock;
+  m::LinkOptions lo;
+  lo.retries = 0;
+  lo.response_timeout_s = 0.1;
+  m::TableClient v1(m::make_libmodbus_transport(m::parse_endpoint("127.0.0.1:" + std::to_string(peer.port())), lo, clock),
+                    clock, {});
+  v1.stop();
+  EXPECT_EQ(v1.last_stop_error(), "");
+  EXPECT_GE(writes.load(), 1);
 }
 
 }  // namespace
