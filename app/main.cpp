@@ -138,6 +138,34 @@ void aborted_by_signals() {
   }
 }
 
+// Edits (insertions, deletions, substitutions, adjacent swaps) that turn a into b: the optimal
+// string alignment distance, enough to catch a typed option's slip ("--moddbus", "--porfile").
+std::size_t edits(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i)
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+// The long option of the chosen commands nearest `word` ("--moddbus" -> "--modbus"), "" when
+// none is within two edits (one for a name of up to four letters).
+std::string nearest_option(const std::vector<const CLI::App*>& chain, std::string word) {
+  if (const auto eq = word.find('='); eq != std::string::npos) word.resize(eq);
+  while (!word.empty() && word.front() == '-') word.erase(0, 1);
+  std::string best;
+  std::size_t best_d = word.size() <= 4 ? 2 : 3;
+  for (const CLI::App* a : chain)
+    for (const CLI::Option* o : a->get_options())
+      for (const std::string& name : o->get_lnames())
+        if (const std::size_t d = edits(word, name); d < best_d) best_d = d, best = "--" + name;
+  return best;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -196,6 +224,22 @@ int main(int argc, char** argv) {
       else if (word.rfind('-', 0) == 0) std::cerr << path << ": unknown option '" << word << "' (see " << path << " --help)\n";
       else std::cerr << path << ": unknown subcommand '" << word << "'" << choices;
       return rig::kExitUsage;
+    }
+    // An option no chosen command has (`rig table status --jsn`): CLI11 lists every word it did not
+    // take, backwards ("The following arguments were not expected: 127.0.0.1:502 --moddbus");
+    // name the option as typed instead, with the nearest one there is (a review).
+    if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
+      std::vector<const CLI::App*> chain{&app};
+      while (!chain.back()->get_subcommands().empty()) chain.push_back(chain.back()->get_subcommands().front());
+      for (const CLI::App* a : chain)
+        for (const std::string& w : a->remaining())
+          if (w.size() > 1 && w.front() == '-' && !std::isdigit(static_cast<unsigned char>(w[1])) && w[1] != '.') {
+            const std::string near = nearest_option(chain, w);
+            std::cerr << "rig: usage error: " << path << ": unknown option '" << rig::shown_ascii(w) << "'"
+                      << (near.empty() ? std::string() : "; did you mean " + near + "?") << " (see " << path
+                      << " --help)\n";
+            return rig::kExitUsage;
+          }
     }
     const int r = app.exit(e);
     return r == 0 ? 0 : rig::kExitUsage;  // --help/--version exit 0; usage errors exit 2

@@ -84,6 +84,21 @@ TEST(RigCli, HelpOnEverySubcommand) {
             std::string::npos)
       << slurp(d + "/filter.stderr");
   EXPECT_EQ(run({"capture", "--bogus"}, d + "/capopt"), 2);
+  // A mistyped option is named as typed, with the nearest one the chosen commands have (a review:
+  // CLI11 said "The following arguments were not expected: 127.0.0.1:1 --moddbus", backwards).
+  EXPECT_EQ(run({"table", "--moddbus", "127.0.0.1:1", "status"}, d + "/typo"), 2);
+  EXPECT_NE(slurp(d + "/typo.stderr").find("rig: usage error: rig table status: unknown option '--moddbus'; did you mean "
+                                           "--modbus? (see rig table status --help)"),
+            std::string::npos)
+      << slurp(d + "/typo.stderr");
+  EXPECT_EQ(run({"run", "--porfile", "ci"}, d + "/typo2"), 2);
+  EXPECT_NE(slurp(d + "/typo2.stderr").find("rig run: unknown option '--porfile'; did you mean --profile?"), std::string::npos)
+      << slurp(d + "/typo2.stderr");
+  EXPECT_EQ(run({"table", "status", "--zzzzzz"}, d + "/typo3"), 2);  // nothing near: no guess
+  EXPECT_NE(slurp(d + "/typo3.stderr").find("unknown option '--zzzzzz' (see rig table status --help)"), std::string::npos)
+      << slurp(d + "/typo3.stderr");
+  for (const char* s : {"/typo", "/typo2", "/typo3"})
+    EXPECT_EQ(slurp(d + s + ".stderr").find("not expected"), std::string::npos) << s;
   for (const char* s : {"/none", "/spin", "/filter", "/capopt"})
     EXPECT_EQ(slurp(d + s + ".stderr").find("A subcommand is required"), std::string::npos) << s;
   // Bad values named (helper review): a cut-off range, a serve duration.
