@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -53,10 +54,15 @@ void decimal_numbers_only(CLI::App& app) {
     const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
     if (!whole && !real) continue;
     const bool is_unsigned = type == "UINT";
+    // The option's own unit where its name or help says it: `--record-ms 5s` is 5000, not 5, and
+    // `--tolerance` is in per cent where `--confidence 68%` means 0.68.
+    const std::string& name = o->get_name();
+    const bool in_ms = name.size() > 3 && name.ends_with("-ms");
+    const bool in_percent = o->get_description().find('%') != std::string::npos;
     // First among the option's checks (transform() puts it in front): the text is a number
     // before a range check reads it, whose own message would then say less.
     o->transform(CLI::Validator(
-        [whole, is_unsigned](std::string& v) {
+        [whole, is_unsigned, in_ms, in_percent](std::string& v) {
           if (decimal_text(v, whole, is_unsigned)) return std::string();
           // A number with the unit rig's options are given in after it (`90°`, `100Hz`, `5s`):
           // said so, its number given (a review: "'90\xC2\xB0' is not a decimal number" alone).
@@ -66,13 +72,21 @@ void decimal_numbers_only(CLI::App& app) {
           while (n > 0 && !decimal_text(v.substr(0, n), whole, is_unsigned)) --n;
           std::string rest = v.substr(n);
           if (!rest.empty() && rest.front() == ' ') rest.erase(0, 1);
-          static const char* const kUnits[] = {"\xC2\xB0", "deg", "degrees", "Hz", "hz", "s"};
-          const bool a_unit = n > 0 && std::any_of(std::begin(kUnits), std::end(kUnits),
-                                                   [&](const char* u) { return rest == u; });
-          const std::string unit =
+          static const char* const kUnits[] = {"\xC2\xB0", "deg", "degrees", "Hz", "hz"};
+          const bool a_unit = n > 0 && (std::any_of(std::begin(kUnits), std::end(kUnits), [&](const char* u) { return rest == u; }) ||
+                                        rest == (in_ms ? "ms" : "s") || (in_percent && rest == "%"));
+          std::string unit =
               a_unit ? "; give the number alone, without " + std::string(rest == "\xC2\xB0" ? "the degree sign" : "its unit") +
                            ": " + v.substr(0, n)
                      : std::string();
+          // A per cent where the option takes a fraction (`--confidence 68%`): the fraction, which
+          // is the same number, not off by a factor.
+          if (n > 0 && !whole && !in_percent && rest == "%")
+          {
+            char f[32];
+            std::snprintf(f, sizeof f, "%.12g", std::strtod(v.substr(0, n).c_str(), nullptr) / 100);
+            unit = "; give a fraction, not a per cent: " + v.substr(0, n) + "% is " + f;
+          }
           return "'" + rig::shown_ascii(v) + "' is not a decimal " +
                  // No bound here: the option's own check states its range (--count >= 1 said
                  // ">= 0" for '01', a review).

@@ -2331,6 +2331,26 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
   EXPECT_FALSE(fs::exists(d + "/r"));
 }
 
+// A number typed with a unit is told in the option's own unit (a review: `--confidence 68%` was
+// only "not a decimal number"): a per cent where the option takes a fraction gives the fraction;
+// where the option is in per cent (`--tolerance`) or in ms (`--record-ms`), that unit alone; a
+// seconds value for a millisecond option offers no number (it would be 1000x off).
+TEST(RigCli, ANumberWithAUnitIsToldInTheOptionsOwnUnit) {
+  const std::string d = tmp("units");
+  fs::create_directories(d);
+  for (const auto& [args, hint] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"analyze", "/dev/null", "--confidence", "68.3%"}, "'68.3%' is not a decimal number; give a fraction, not a per cent: 68.3% is 0.683\n"},
+           {{"analyze", "/dev/null", "--overlap", "50%"}, "give a fraction, not a per cent: 50% is 0.5\n"},
+           {{"filter", "select", "--tolerance", "5%"}, "'5%' is not a decimal number; give the number alone, without its unit: 5\n"},
+           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5ms"}, "give the number alone, without its unit: 5\n"},
+           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5s"}, "'5s' is not a decimal whole number (no leading zero)\n"},
+           {{"analyze", "/dev/null", "--rate", "100Hz"}, "give the number alone, without its unit: 100\n"},
+           {{"analyze", "/dev/null", "--rate", "1kHz"}, "'1kHz' is not a decimal number\n"}}) {
+    EXPECT_EQ(run(args, d + "/io"), 2) << hint;
+    EXPECT_NE(slurp(d + "/io.stderr").find(hint), std::string::npos) << slurp(d + "/io.stderr");
+  }
+}
+
 // `rig dut decode` on logs written by can-utils (tests/data/candump): both formats, a short
 // frame skipped and named by line (exit 2), a clean log exit 0, a file of no frames exit 2.
 // The link options before the action, as the README's synopsis writes them (issue 16 review): the
