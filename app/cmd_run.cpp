@@ -1932,9 +1932,19 @@ void add_run(CLI::App& app, int& rc) {
                   "DUT serial number, 1-32 printable ASCII: on hardware the DUT must report it; the emulated DUT "
                   "takes it")
       ->check(serial_validator());
-  sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<YYYY-MM-DDTHHMMSSZ>, UTC)");
+  // A folder typed with a trailing slash (`--resume c5/`, a shell's completion) is the folder:
+  // its files are named c5/checkpoint.json in messages, not c5//checkpoint.json (a review).
+  const auto no_trailing_slash = CLI::Validator(
+      [](std::string& v) {
+        while (v.size() > 1 && v.back() == '/') v.pop_back();
+        return std::string();
+      },
+      "");
+  sub->add_option("--out", a->out, "Run folder (default runs/<serial|profile>-<YYYY-MM-DDTHHMMSSZ>, UTC)")
+      ->transform(no_trailing_slash);
   sub->add_option("--resume", a->resume, "Continue the run in this folder after its last completed phase")
-      ->check(existing_folder());
+      ->check(existing_folder())
+      ->transform(no_trailing_slash);
   sub->add_flag("--yes,-y", a->yes, "Skip operator confirmations (automated runs)");
   sub->add_flag("--dry-run", a->dry_run, "Print the plan and its duration; touch nothing");
   sub->add_flag("--quiet,-q", a->quiet, "Only the final table on the terminal");

@@ -3923,8 +3923,15 @@ TEST(RigCli, AStopOffersAResumeOnlyWhereOneWouldStart) {
     const std::string err = slurp(d + "/rm-io.stderr");
     EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
     EXPECT_NE(err.find("no resume: " + d + "/rm/checkpoint.json: state.runs."), std::string::npos) << err;
-    EXPECT_NE(err.find("(damaged checkpoint; start a new run)\n"), std::string::npos) << err;
-    EXPECT_EQ(run({"run", "--resume", d + "/rm", "--yes", "--dry-run"}, d + "/rm-resume"), 2);
+    EXPECT_NE(err.find("/rm/captures/run01-U10.cap is missing (a recording the checkpoint keeps is gone: put it back to "
+                       "resume, or start a new run)\n"),
+              std::string::npos)
+        << err;
+    EXPECT_EQ(run({"run", "--resume", d + "/rm/", "--yes", "--dry-run"}, d + "/rm-resume"), 2);
+    // Named as the folder is, whether or not it was typed with a trailing slash.
+    EXPECT_NE(slurp(d + "/rm-resume.stderr").find(d + "/rm/checkpoint.json: state.runs."), std::string::npos)
+        << slurp(d + "/rm-resume.stderr");
+    EXPECT_EQ(slurp(d + "/rm-resume.stderr").find("//"), std::string::npos) << slurp(d + "/rm-resume.stderr");
   }
   {
     const Child c = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/mv"}, d + "/mv-io");
