@@ -298,6 +298,7 @@ class LibmodbusTransport final : public RegisterTransport {
   // One request PDU out, its response PDU back, MBAP checked. -1 with errno on failure.
   int exchange(const std::vector<uint8_t>& pdu, std::vector<uint8_t>& rsp) {
     violation_.clear();
+    foreign_frame_ = false;
     const int fd = modbus_get_socket(ctx_);
     const uint16_t tid = ++tid_;
     const auto len = static_cast<uint16_t>(pdu.size() + 1);
@@ -320,6 +321,11 @@ class LibmodbusTransport final : public RegisterTransport {
     const uint16_t r_tid = static_cast<uint16_t>((h[0] << 8) | h[1]);
     const uint16_t r_proto = static_cast<uint16_t>((h[2] << 8) | h[3]);
     const uint16_t r_len = static_cast<uint16_t>((h[4] << 8) | h[5]);
+    // Modbus TCP's protocol id is 0 in every frame: another one is another protocol (an HTTP
+    // server's "HTTP/1.0" reads as transaction id 0x4854, protocol id 0x5450). A wrong
+    // transaction or unit id, or a reply cut short, is a Modbus device misbehaving or slow:
+    // devices in the field answer with unit id 0 or 255, and a gateway may split a late reply.
+    foreign_frame_ = r_proto != 0;
     if (r_tid != tid) return violation("transaction id " + std::to_string(r_tid) + " in reply to " + std::to_string(tid));
     if (r_proto != 0) return violation("protocol id " + std::to_string(r_proto) + " (Modbus is 0)");
     if (r_len < 3 || r_len > 254) return violation("MBAP length " + std::to_string(r_len) + " out of range 3..254");
@@ -414,7 +420,7 @@ class LibmodbusTransport final : public RegisterTransport {
   void call(const std::string& what, const CancelToken& cancel, bool urgent, Op op) {
     const int attempts = urgent ? 2 : 1 + std::max(0, opt_.retries);
     std::string last;
-    bool last_timeout = false, foreign = false;
+    bool last_timeout = false, foreign = false;  // of the last attempt: its failure is the one said
     uint8_t last_exc = 0;
     for (int attempt = 0; attempt < attempts; ++attempt) {
       if (!urgent) cancel.throw_if_requested();
@@ -432,6 +438,7 @@ class LibmodbusTransport final : public RegisterTransport {
         last = "cannot connect: " + err;
         last_timeout = false;
         last_exc = 0;
+        foreign = false;
         continue;
       }
       if (!tcp()) modbus_flush(ctx_);  // RTU: what arrived since the last request is no reply to this one
@@ -446,15 +453,17 @@ class LibmodbusTransport final : public RegisterTransport {
         last = "exception " + hex16(code) + " " + exception_text(code);
         last_exc = code;
         last_timeout = false;
+        foreign = false;
         if (code != exc::kBusy) break;
         continue;
       }
       last_exc = 0;
       last_timeout = e == ETIMEDOUT;
+      foreign = false;
       if (!tcp() && (last_timeout || e == EMBBADDATA)) quiet_after_s_ = clock_.now_s() + opt_.response_timeout_s;
       if (e == EMBBADDATA && !violation_.empty()) {
         last = "protocol violation: " + violation_;
-        foreign = true;
+        foreign = foreign_frame_;
       } else {
         last = last_timeout ? "no answer within " + fmt_s(opt_.response_timeout_s) + " (timeout)" : modbus_strerror(e);
       }
@@ -494,6 +503,7 @@ class LibmodbusTransport final : public RegisterTransport {
   std::atomic<bool> answered_{false};       // a request of this link has been answered (an exception too)
   uint16_t tid_ = 0;
   std::string violation_;
+  bool foreign_frame_ = false;  // the last reply's MBAP header was not Modbus TCP's (protocol id != 0)
 };
 
 // ---------------------------------------------------------------- in-process
