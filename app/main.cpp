@@ -47,6 +47,22 @@ bool decimal_text(const std::string& v, bool whole, bool is_unsigned) {
   return i == v.size();
 }
 
+// The unit an option's number is in, as its name or help says it: "ms" (a name ending -ms),
+// "fraction" (--confidence, or help saying "fraction"), "%", "Hz", "deg", "s", or "" (g, counts:
+// no unit a number is typed with).
+std::string option_unit(const CLI::Option& o) {
+  const std::string& name = o.get_name();
+  const std::string& d = o.get_description();
+  const auto says = [&d](const char* w) { return d.find(w) != std::string::npos; };
+  if (name.ends_with("-ms")) return "ms";
+  if (name.ends_with("confidence") || says("fraction")) return "fraction";
+  if (says("%")) return "%";
+  if (says("Hz")) return "Hz";
+  if (says("degree")) return "deg";
+  if (says("second") || says(", s,") || says(", s ")) return "s";
+  return "";
+}
+
 void decimal_numbers_only(CLI::App& app) {
   for (CLI::Option* o : app.get_options()) {
     const std::string shown = o->get_type_name();  // "FLOAT", or with a check's text: "FLOAT:FLOAT in [..]"
@@ -54,45 +70,39 @@ void decimal_numbers_only(CLI::App& app) {
     const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
     if (!whole && !real) continue;
     const bool is_unsigned = type == "UINT";
-    // The option's own unit where its name or help says it: `--record-ms 5s` is 5000, not 5, and
-    // `--tolerance` is in per cent where `--confidence 68%` means 0.68.
-    const std::string& name = o->get_name();
-    const bool in_ms = name.size() > 3 && name.ends_with("-ms");
-    const bool in_percent = o->get_description().find('%') != std::string::npos;
+    const std::string unit = option_unit(*o);
     // First among the option's checks (transform() puts it in front): the text is a number
     // before a range check reads it, whose own message would then say less.
     o->transform(CLI::Validator(
-        [whole, is_unsigned, in_ms, in_percent](std::string& v) {
+        [whole, is_unsigned, unit](std::string& v) {
           if (decimal_text(v, whole, is_unsigned)) return std::string();
-          // A number with the unit rig's options are given in after it (`90°`, `100Hz`, `5s`):
-          // said so, its number given (a review: "'90\xC2\xB0' is not a decimal number" alone).
-          // Only those units: `1kHz` or `300ms` would be told a number off by a factor, and a
-          // letter typed for a digit (`9O`) a wrong number (a re-test).
+          // A number with the option's own unit after it (`90°`, `100Hz`, `5s`): said so, its
+          // number given (a review: "'90\xC2\xB0' is not a decimal number" alone). Any other unit
+          // gets no number: `1kHz`, `--record-ms 5s` or `--rate 100s` would be told one off by a
+          // factor or in the wrong unit, and a letter typed for a digit (`9O`) a wrong one (re-tests).
           std::size_t n = v.size();
           while (n > 0 && !decimal_text(v.substr(0, n), whole, is_unsigned)) --n;
           std::string rest = v.substr(n);
           if (!rest.empty() && rest.front() == ' ') rest.erase(0, 1);
-          static const char* const kUnits[] = {"\xC2\xB0", "deg", "degrees", "Hz", "hz"};
-          const bool a_unit = n > 0 && (std::any_of(std::begin(kUnits), std::end(kUnits), [&](const char* u) { return rest == u; }) ||
-                                        rest == (in_ms ? "ms" : "s") || (in_percent && rest == "%"));
-          std::string unit =
-              a_unit ? "; give the number alone, without " + std::string(rest == "\xC2\xB0" ? "the degree sign" : "its unit") +
-                           ": " + v.substr(0, n)
-                     : std::string();
-          // A per cent where the option takes a fraction (`--confidence 68%`): the fraction, which
-          // is the same number, not off by a factor.
-          if (n > 0 && !whole && !in_percent && rest == "%")
-          {
+          const std::string typed = rest == "\xC2\xB0" || rest == "deg" || rest == "degrees" ? "deg"
+                                    : rest == "Hz" || rest == "hz"                        ? "Hz"
+                                                                                          : rest;
+          std::string hint;
+          if (n > 0 && !rest.empty() && typed == unit) {
+            hint = "; give the number alone, without " + std::string(rest == "\xC2\xB0" ? "the degree sign" : "its unit") +
+                   ": " + v.substr(0, n);
+          } else if (n > 0 && unit == "fraction" && rest == "%") {
+            // A per cent where the option takes a fraction (`--confidence 68%`): the fraction.
             char f[32];
             std::snprintf(f, sizeof f, "%.12g", std::strtod(v.substr(0, n).c_str(), nullptr) / 100);
-            unit = "; give a fraction, not a per cent: " + v.substr(0, n) + "% is " + f;
+            hint = "; give a fraction, not a per cent: " + v.substr(0, n) + "% is " + f;
           }
           return "'" + rig::shown_ascii(v) + "' is not a decimal " +
                  // No bound here: the option's own check states its range (--count >= 1 said
                  // ">= 0" for '01', a review).
                  (is_unsigned ? "whole number (no sign, no leading zero)"
                               : whole ? "whole number (no leading zero)" : "number") +
-                 unit;
+                 hint;
         },
         ""));
   }
@@ -173,10 +183,12 @@ std::string nearest_option(const std::vector<const CLI::App*>& chain, std::strin
   while (!word.empty() && word.front() == '-') word.erase(0, 1);
   std::string best;
   std::size_t best_d = word.size() <= 4 ? 2 : 3;
-  for (const CLI::App* a : chain)
-    for (const CLI::Option* o : a->get_options())
+  // rig's own options (--version) are taken only before a subcommand, so a subcommand's line is
+  // offered its commands' options alone; and never the word typed (it exists, but not there).
+  for (std::size_t i = chain.size() > 1 ? 1 : 0; i < chain.size(); ++i)
+    for (const CLI::Option* o : chain[i]->get_options())
       for (const std::string& name : o->get_lnames())
-        if (const std::size_t d = edits(word, name); d < best_d) best_d = d, best = "--" + name;
+        if (const std::size_t d = edits(word, name); d > 0 && d < best_d) best_d = d, best = "--" + name;
   return best;
 }
 
@@ -245,15 +257,23 @@ int main(int argc, char** argv) {
     if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
       std::vector<const CLI::App*> chain{&app};
       while (!chain.back()->get_subcommands().empty()) chain.push_back(chain.back()->get_subcommands().front());
+      std::vector<std::string> extra;
       for (const CLI::App* a : chain)
-        for (const std::string& w : a->remaining())
-          if (w.size() > 1 && w.front() == '-' && !std::isdigit(static_cast<unsigned char>(w[1])) && w[1] != '.') {
-            const std::string near = nearest_option(chain, w);
-            std::cerr << "rig: usage error: " << path << ": unknown option '" << rig::shown_ascii(w) << "'"
-                      << (near.empty() ? std::string() : "; did you mean " + near + "?") << " (see " << path
-                      << " --help)\n";
-            return rig::kExitUsage;
-          }
+        for (const std::string& w : a->remaining()) extra.push_back(w);
+      const auto is_option = [](const std::string& w) {
+        return w.size() > 1 && w.front() == '-' && !std::isdigit(static_cast<unsigned char>(w[1])) && w[1] != '.';
+      };
+      if (const auto opt = std::find_if(extra.begin(), extra.end(), is_option); opt != extra.end()) {
+        const std::string near = nearest_option(chain, *opt);
+        std::string others;  // the other words not taken (an extra file name), as CLI11 listed them
+        for (const std::string& w : extra)
+          if (&w != &*opt) others += (others.empty() ? "" : " ") + ("'" + rig::shown_ascii(w) + "'");
+        std::cerr << "rig: usage error: " << path << ": unknown option '" << rig::shown_ascii(*opt) << "'"
+                  << (others.empty() ? std::string() : " (and not taken: " + others + ")")
+                  << (near.empty() ? std::string() : "; did you mean " + near + "?") << " (see " << path
+                  << " --help)\n";
+        return rig::kExitUsage;
+      }
     }
     const int r = app.exit(e);
     return r == 0 ? 0 : rig::kExitUsage;  // --help/--version exit 0; usage errors exit 2

@@ -167,11 +167,12 @@ Resumption Executive::read_checkpoint(const std::string& out_dir, const std::vec
                                       spdlog::logger& log, bool allow_complete) {
   const std::string cp = checkpoint_path(out_dir);
   auto bad = [&cp](const std::string& field, const std::string& what) {
-    // A recording the checkpoint names that is gone is no damage to the checkpoint: said so, with
-    // what brings the resume back (a review: "damaged checkpoint" for one removed capture).
-    const bool gone = what.empty() && field.find(".capture: ") != std::string::npos && field.ends_with(" is missing");
+    // A record the checkpoint names (a capture, the loop test's file) that is gone is no damage to
+    // the checkpoint: said so, with what brings the resume back (a review: "damaged checkpoint"
+    // for one removed capture). The state's checks say "FIELD: PATH is missing" for exactly that.
+    const bool gone = what.empty() && field.ends_with(" is missing");
     return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) +
-                       (gone ? " (a recording the checkpoint keeps is gone: put it back to resume, or start a new run)"
+                       (gone ? " (a record the checkpoint keeps is gone: put it back to resume, or start a new run)"
                              : " (damaged checkpoint; start a new run)"));
   };
   // No checkpoint: the run stopped before its first phase completed (run.json is written

@@ -87,17 +87,22 @@ TEST(RigCli, HelpOnEverySubcommand) {
   // A mistyped option is named as typed, with the nearest one the chosen commands have (a review:
   // CLI11 said "The following arguments were not expected: 127.0.0.1:1 --moddbus", backwards).
   EXPECT_EQ(run({"table", "--moddbus", "127.0.0.1:1", "status"}, d + "/typo"), 2);
-  EXPECT_NE(slurp(d + "/typo.stderr").find("rig: usage error: rig table status: unknown option '--moddbus'; did you mean "
-                                           "--modbus? (see rig table status --help)"),
+  EXPECT_NE(slurp(d + "/typo.stderr").find("rig: usage error: rig table status: unknown option '--moddbus' (and not taken: "
+                                           "'127.0.0.1:1'); did you mean --modbus? (see rig table status --help)"),
             std::string::npos)
       << slurp(d + "/typo.stderr");
   EXPECT_EQ(run({"run", "--porfile", "ci"}, d + "/typo2"), 2);
-  EXPECT_NE(slurp(d + "/typo2.stderr").find("rig run: unknown option '--porfile'; did you mean --profile?"), std::string::npos)
+  EXPECT_NE(slurp(d + "/typo2.stderr").find("rig run: unknown option '--porfile' (and not taken: 'ci'); did you mean --profile?"), std::string::npos)
       << slurp(d + "/typo2.stderr");
   EXPECT_EQ(run({"table", "status", "--zzzzzz"}, d + "/typo3"), 2);  // nothing near: no guess
   EXPECT_NE(slurp(d + "/typo3.stderr").find("unknown option '--zzzzzz' (see rig table status --help)"), std::string::npos)
       << slurp(d + "/typo3.stderr");
-  for (const char* s : {"/typo", "/typo2", "/typo3"})
+  // rig's own --version is no option of a subcommand: not offered there (a review: `rig run --version`
+  // was told "did you mean --version?").
+  EXPECT_EQ(run({"run", "--versio"}, d + "/typo4"), 2);
+  EXPECT_NE(slurp(d + "/typo4.stderr").find("rig run: unknown option '--versio' (see rig run --help)"), std::string::npos)
+      << slurp(d + "/typo4.stderr");
+  for (const char* s : {"/typo", "/typo2", "/typo3", "/typo4"})
     EXPECT_EQ(slurp(d + s + ".stderr").find("not expected"), std::string::npos) << s;
   for (const char* s : {"/none", "/spin", "/filter", "/capopt"})
     EXPECT_EQ(slurp(d + s + ".stderr").find("A subcommand is required"), std::string::npos) << s;
@@ -2345,7 +2350,14 @@ TEST(RigCli, ANumberWithAUnitIsToldInTheOptionsOwnUnit) {
            {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5ms"}, "give the number alone, without its unit: 5\n"},
            {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5s"}, "'5s' is not a decimal whole number (no leading zero)\n"},
            {{"analyze", "/dev/null", "--rate", "100Hz"}, "give the number alone, without its unit: 100\n"},
-           {{"analyze", "/dev/null", "--rate", "1kHz"}, "'1kHz' is not a decimal number\n"}}) {
+           {{"analyze", "/dev/null", "--rate", "1kHz"}, "'1kHz' is not a decimal number\n"},
+           // A unit that is not the option's gets no number (a review: `--rate 50%` was told 0.5).
+           {{"analyze", "/dev/null", "--rate", "50%"}, "'50%' is not a decimal number\n"},
+           {{"analyze", "/dev/null", "--rate", "100s"}, "'100s' is not a decimal number\n"},
+           {{"table", "--modbus", "127.0.0.1:1", "--timeout", "300ms", "status"}, "'300ms' is not a decimal number\n"},
+           {{"table", "--modbus", "127.0.0.1:1", "--timeout", "3s", "status"}, "give the number alone, without its unit: 3\n"},
+           {{"table", "--modbus", "127.0.0.1:1", "move", "90%"}, "'90%' is not a decimal number\n"},
+           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--amplitude", "50%"}, "'50%' is not a decimal number\n"}}) {
     EXPECT_EQ(run(args, d + "/io"), 2) << hint;
     EXPECT_NE(slurp(d + "/io.stderr").find(hint), std::string::npos) << slurp(d + "/io.stderr");
   }
@@ -3908,6 +3920,25 @@ TEST(RigCli, AResumeFindsTheFilesItsProfileNamesRelative) {
   EXPECT_EQ(slurp(d + "/resume.stdout").rfind("Passport  serial QPA-1", 0), 0u) << slurp(d + "/resume.stdout");
 }
 
+// The loop test's record gone from a folder whose run stopped at its end: said as a record gone,
+// not as a damaged checkpoint (a review), and nothing resumed.
+TEST(RigCli, AResumeMissingTheLoopTestRecordSaysItIsGone) {
+  const std::string d = tmp("loop-gone");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run", "--inject", "sigint@end"},
+                d + "/io"),
+            3)
+      << slurp(d + "/io.stderr");
+  ASSERT_TRUE(fs::exists(d + "/run/loop-test.csv"));
+  fs::rename(d + "/run/loop-test.csv", d + "/loop-test.csv");
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume"), 2);
+  const std::string err = slurp(d + "/resume.stderr");
+  EXPECT_NE(err.find("state.loop_test.file: " + d + "/run/loop-test.csv is missing (a record the checkpoint keeps is gone: "
+                     "put it back to resume, or start a new run)"),
+            std::string::npos)
+      << err;
+}
+
 // An ABORTED or ERROR ending offers a resume only where one would start: a capture the checkpoint
 // names removed, or the folder moved away, while the run went on, is "no resume: ..." naming why
 // (an integrator's review: "to continue: rig run --resume DIR", then exit 2).
@@ -3923,7 +3954,7 @@ TEST(RigCli, AStopOffersAResumeOnlyWhereOneWouldStart) {
     const std::string err = slurp(d + "/rm-io.stderr");
     EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
     EXPECT_NE(err.find("no resume: " + d + "/rm/checkpoint.json: state.runs."), std::string::npos) << err;
-    EXPECT_NE(err.find("/rm/captures/run01-U10.cap is missing (a recording the checkpoint keeps is gone: put it back to "
+    EXPECT_NE(err.find("/rm/captures/run01-U10.cap is missing (a record the checkpoint keeps is gone: put it back to "
                        "resume, or start a new run)\n"),
               std::string::npos)
         << err;
