@@ -207,7 +207,9 @@ TEST(StrictModbusTcp, AModbusDeviceThatMisbehavesStillGetsTheStop) {
       {"unit id 0", [](Bytes& r) { r[6] = 0; }},
       {"unit id 255", [](Bytes& r) { r[6] = 255; }},
       {"transaction id", [](Bytes& r) { r[1] ^= 0x55; }}};
-  for (const auto& [name, spoil] : reads) {
+  for (const auto& read : reads) {
+    const char* const name = read.first;
+    const std::function<void(Bytes&)>& spoil = read.second;  // (clang 14 captures no structured binding)
     std::atomic<int> writes{0};
     BadPeer peer([&](Bytes& r) {
       if (r[7] == 0x06 || r[7] == 0x10) ++writes;  // writes echoed as they are
