@@ -226,9 +226,11 @@ int main(int argc, char** argv) {
     // subcommands there are. The deepest subcommand the line chose is the one missing its own.
     CLI::App* at = &app;
     std::string path = "rig";
+    std::vector<const CLI::App*> chain{&app};  // rig and each subcommand the line chose
     while (!at->get_subcommands().empty()) {
       at = at->get_subcommands().front();
       path += " " + at->get_name();
+      chain.push_back(at);
     }
     // Only the two errors CLI11 words that way; any other (a bad value, a missing one) is its own.
     const bool missing_or_extra =
@@ -255,8 +257,6 @@ int main(int argc, char** argv) {
     // take, backwards ("The following arguments were not expected: 127.0.0.1:502 --moddbus");
     // name the option as typed instead, with the nearest one there is (a review).
     if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
-      std::vector<const CLI::App*> chain{&app};
-      while (!chain.back()->get_subcommands().empty()) chain.push_back(chain.back()->get_subcommands().front());
       std::vector<std::string> extra;
       for (const CLI::App* a : chain)
         for (const std::string& w : a->remaining()) extra.push_back(w);

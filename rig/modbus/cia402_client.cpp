@@ -912,8 +912,9 @@ void Cia402Table::stop() noexcept {
 }
 
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
-// (a read met by silence or a broken link still sends: the link decides then, as before; one
-// answered by bytes that are no Modbus reply does not: that peer is not the drive).
+// (a read met by silence, a Modbus reply that breaks the protocol or a broken link still sends:
+// the link decides then, as before; one answered in another protocol does not: that peer is not
+// the drive).
 void Cia402Table::quick_stop() noexcept {
   const detail::StopLatch::Asking counted(stops_, true);
   if (!identified_) {

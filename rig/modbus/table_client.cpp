@@ -512,8 +512,9 @@ void TableClient::send_stop(uint16_t bit, const char* name) noexcept {
 // A client that has not yet read a rig-v1 status block reads it (one urgent request) before its
 // first stop: a device without the block, or with another MAP_VERSION, is not a rig-v1 drive, and
 // a stop bit written into its registers is a guess (a review: HALT alone, 0x0100, is Disable
-// voltage on a CiA 402 drive), nor is one whose reply was no Modbus reply. A read that fails
-// otherwise (silence, a broken connection) still sends: the link decides then.
+// voltage on a CiA 402 drive), nor is one that answered in another protocol. A read that fails
+// otherwise (silence, a Modbus reply that breaks the protocol, a broken connection) still sends:
+// the link decides then.
 bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
   if (identified_) return false;
   std::string why;
@@ -530,8 +531,8 @@ bool TableClient::refuse_stop_to_unknown(const char* name) noexcept {
     // A gateway answering that no device answers at this unit id: whatever is there (if anything)
     // was not recognised as the drive, so nothing is written to it (a review: the stop went out).
     else if (e.exception_code == exc::kGatewayPath || e.exception_code == exc::kGatewayTarget) why = e.what();
-    // What answered sent bytes that are no Modbus reply (an HTTP server, another protocol): not
-    // the drive, so no stop bit goes into it (a review: an HTTP server got the stop's writes).
+    // What answered speaks another protocol (an HTTP server's error page): not the drive, so no
+    // stop bit goes into it (a review: an HTTP server got the stop's writes).
     else if (e.foreign_reply) why = std::string(e.what()) + " (" + kForeignPeer + ")";
   } catch (...) {
   }

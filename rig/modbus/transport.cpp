@@ -433,12 +433,12 @@ class LibmodbusTransport final : public RegisterTransport {
       if (!urgent)
         if (const double wait = quiet_after_s_.load() - clock_.now_s(); wait > 0) clock_.sleep_for(wait, cancel);
       std::lock_guard lk(mu_);
+      foreign = false;  // set below only by this attempt's reply in another protocol
       std::string err;
       if (!connect_locked(err)) {
         last = "cannot connect: " + err;
         last_timeout = false;
         last_exc = 0;
-        foreign = false;
         continue;
       }
       if (!tcp()) modbus_flush(ctx_);  // RTU: what arrived since the last request is no reply to this one
@@ -453,13 +453,11 @@ class LibmodbusTransport final : public RegisterTransport {
         last = "exception " + hex16(code) + " " + exception_text(code);
         last_exc = code;
         last_timeout = false;
-        foreign = false;
         if (code != exc::kBusy) break;
         continue;
       }
       last_exc = 0;
       last_timeout = e == ETIMEDOUT;
-      foreign = false;
       if (!tcp() && (last_timeout || e == EMBBADDATA)) quiet_after_s_ = clock_.now_s() + opt_.response_timeout_s;
       if (e == EMBBADDATA && !violation_.empty()) {
         last = "protocol violation: " + violation_;

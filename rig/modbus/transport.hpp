@@ -16,15 +16,15 @@
 
 namespace rig::modbus {
 
+// Said where a call's reply was foreign: a stop is not sent into such a peer.
+inline constexpr const char* kForeignPeer =
+    "what answers there is no Modbus drive: check the host, port and unit id of the table";
+
 // A failed register call. `exception_code` is the Modbus exception (0 when the
 // failure was the link: timeout, connection, CRC). `foreign_reply`: the call's last attempt was
 // answered in another protocol (on TCP, a frame whose protocol id is not Modbus's 0: an HTTP
 // server, another service at the port). A Modbus frame with a wrong transaction or unit id, or a
 // reply cut short by the timeout, is not foreign: a Modbus device sent it.
-// Said where a call's reply was foreign: a stop is not sent into such a peer.
-inline constexpr const char* kForeignPeer =
-    "what answers there is no Modbus drive: check the host, port and unit id of the table";
-
 struct ModbusError : HardwareError {
   ModbusError(const std::string& what, uint8_t exception_reply, bool timed_out, bool foreign = false)
       : HardwareError(what), exception_code(exception_reply), timeout(timed_out), foreign_reply(foreign) {}
