@@ -176,21 +176,32 @@ std::size_t edits(const std::string& a, const std::string& b) {
   return d[a.size()][b.size()];
 }
 
-// The long option of the chosen commands nearest `word` ("--moddbus" -> "--modbus"), "" when
-// none is within two edits (one for a name of up to four letters).
+// The candidate nearest `word`, "" when none is within two edits (one for a word of up to four
+// letters) or the word is itself one of them.
+std::string nearest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = word.size() <= 4 ? 2 : 3;
+  for (const std::string& c : candidates)
+    if (const std::size_t d = edits(word, c); d > 0 && d < best_d) best_d = d, best = c;
+  return best;
+}
+
+// The long option of the chosen commands nearest `word` ("--moddbus" -> "--modbus").
 std::string nearest_option(const std::vector<const CLI::App*>& chain, std::string word) {
   if (const auto eq = word.find('='); eq != std::string::npos) word.resize(eq);
   while (!word.empty() && word.front() == '-') word.erase(0, 1);
-  std::string best;
-  std::size_t best_d = word.size() <= 4 ? 2 : 3;
   // rig's own options (--version) are taken only before a subcommand, so a subcommand's line is
   // offered its commands' options alone; and never the word typed (it exists, but not there).
+  std::vector<std::string> names;
   for (std::size_t i = chain.size() > 1 ? 1 : 0; i < chain.size(); ++i)
     for (const CLI::Option* o : chain[i]->get_options())
-      for (const std::string& name : o->get_lnames())
-        if (const std::size_t d = edits(word, name); d > 0 && d < best_d) best_d = d, best = "--" + name;
-  return best;
+      for (const std::string& name : o->get_lnames()) names.push_back(name);
+  const std::string best = nearest(word, names);
+  return best.empty() ? best : "--" + best;
 }
+
+// "; did you mean X?" or nothing.
+std::string did_you_mean(const std::string& near) { return near.empty() ? near : "; did you mean " + near + "?"; }
 
 }  // namespace
 
@@ -239,18 +250,24 @@ int main(int argc, char** argv) {
     if (rest.empty() && at != &app && !app.remaining().empty()) {  // the stray word was given to rig itself
       rest = app.remaining();
       if (rest.front().rfind('-', 0) == 0) {
-        std::cerr << "rig: unknown option '" << rest.front() << "' (see rig --help)\n";
+        std::cerr << "rig: usage error: unknown option '" << rig::shown_ascii(rest.front()) << "'"
+                  << did_you_mean(nearest_option({&app}, rest.front())) << " (see rig --help)\n";
         return rig::kExitUsage;
       }
     }
     if (missing_or_extra && at->get_require_subcommand_min() > 0 && at->get_subcommands().empty()) {
       const std::string word = rest.empty() ? std::string() : rest.front();
       std::string choices = " (one of:";
-      for (const CLI::App* s : at->get_subcommands({})) choices += ' ' + s->get_name();
+      std::vector<std::string> names;
+      for (const CLI::App* s : at->get_subcommands({})) names.push_back(s->get_name()), choices += ' ' + s->get_name();
       choices += "; see " + path + " --help)\n";
-      if (word.empty()) std::cerr << path << ": a subcommand is required" << choices;
-      else if (word.rfind('-', 0) == 0) std::cerr << path << ": unknown option '" << word << "' (see " << path << " --help)\n";
-      else std::cerr << path << ": unknown subcommand '" << word << "'" << choices;
+      // "rig: usage error: " first, as every other exit-2 message of the command line (a script keys on it).
+      std::cerr << "rig: usage error: " << (at == &app ? std::string() : path + ": ");
+      if (word.empty()) std::cerr << "a subcommand is required" << choices;
+      else if (word.rfind('-', 0) == 0)
+        std::cerr << "unknown option '" << rig::shown_ascii(word) << "'" << did_you_mean(nearest_option(chain, word))
+                  << " (see " << path << " --help)\n";
+      else std::cerr << "unknown subcommand '" << rig::shown_ascii(word) << "'" << did_you_mean(nearest(word, names)) << choices;
       return rig::kExitUsage;
     }
     // An option no chosen command has (`rig table status --jsn`): CLI11 lists every word it did not
@@ -270,7 +287,7 @@ int main(int argc, char** argv) {
           if (&w != &*opt) others += (others.empty() ? "" : " ") + ("'" + rig::shown_ascii(w) + "'");
         std::cerr << "rig: usage error: " << path << ": unknown option '" << rig::shown_ascii(*opt) << "'"
                   << (others.empty() ? std::string() : " (and not taken: " + others + ")")
-                  << (near.empty() ? std::string() : "; did you mean " + near + "?") << " (see " << path
+                  << did_you_mean(near) << " (see " << path
                   << " --help)\n";
         return rig::kExitUsage;
       }
