@@ -979,7 +979,10 @@ void refuse_non_files(const std::string& dir) {
   for (const std::string& f : replaced) {
     struct stat st {};
     if (::lstat((dir + "/" + f).c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-      throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes it: remove it");
+      throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes its own file there: move this one away" +
+                        (f == "checkpoint.json" || f == acceptance::kLoopTestFile
+                             ? " (to resume, the run's own file must be back in its place)"
+                             : ""));
   }
   // And the captures' folder must be a folder (a file there ended the run ERROR after its devices
   // had opened, a review).

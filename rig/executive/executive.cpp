@@ -169,11 +169,15 @@ Resumption Executive::read_checkpoint(const std::string& out_dir, const std::vec
   auto bad = [&cp](const std::string& field, const std::string& what) {
     // A record the checkpoint names (a capture, the loop test's file) that is gone is no damage to
     // the checkpoint: said so, with what brings the resume back (a review: "damaged checkpoint"
-    // for one removed capture). The state's checks say "FIELD: PATH is missing" for exactly that.
+    // for one removed capture). The state's checks say "FIELD: PATH is missing" for exactly that,
+    // and "... is not a regular file" for a folder or link in the record's place.
     const bool gone = what.empty() && field.ends_with(" is missing");
+    const bool displaced = what.empty() && field.ends_with(" is not a regular file");
     return ConfigError(cp + ": " + field + (what.empty() ? "" : ": " + what) +
-                       (gone ? " (a record the checkpoint keeps is gone: put it back to resume, or start a new run)"
-                             : " (damaged checkpoint; start a new run)"));
+                       (gone        ? " (a record the checkpoint keeps is gone: put it back to resume, or start a new run)"
+                        : displaced ? " (something else stands where a record the checkpoint keeps belongs: put the "
+                                      "record back to resume, or start a new run)"
+                                    : " (damaged checkpoint; start a new run)"));
   };
   // No checkpoint: the run stopped before its first phase completed (run.json is written
   // before any device opens). Nothing was measured, so the resume starts over from bring-up.

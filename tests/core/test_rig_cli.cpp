@@ -3949,6 +3949,25 @@ TEST(RigCli, AResumeMissingTheLoopTestRecordSaysItIsGone) {
                      "put it back to resume, or start a new run)"),
             std::string::npos)
       << err;
+  // A folder in the record's place is refused before anything opens, and is no damaged checkpoint.
+  fs::create_directories(d + "/run/loop-test.csv");
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume-dir"), 2);
+  EXPECT_NE(slurp(d + "/resume-dir.stderr")
+                .find(d + "/run/loop-test.csv: not a regular file; the rig writes its own file there: move this one "
+                          "away (to resume, the run's own file must be back in its place)"),
+            std::string::npos)
+      << slurp(d + "/resume-dir.stderr");
+  fs::remove(d + "/run/loop-test.csv");
+  fs::rename(d + "/loop-test.csv", d + "/run/loop-test.csv");
+  fs::rename(d + "/run/captures/run01-U10.cap", d + "/run01-U10.cap");
+  fs::create_directories(d + "/run/captures/run01-U10.cap");
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume-cap"), 2);
+  const std::string cap = slurp(d + "/resume-cap.stderr");
+  EXPECT_NE(cap.find("/run/captures/run01-U10.cap is not a regular file (something else stands where a record the "
+                     "checkpoint keeps belongs: put the record back to resume, or start a new run)"),
+            std::string::npos)
+      << cap;
+  EXPECT_EQ(cap.find("damaged"), std::string::npos) << cap;
 }
 
 // An ABORTED or ERROR ending offers a resume only where one would start: a capture the checkpoint
