@@ -331,6 +331,27 @@ void check_seal_before_recording(const HistoryArgs& a) {
                                      a.record, fmt::join(c.problems, "; "), a.record));
 }
 
+// The captures the passport names that are not in the folder, said once ("" when all are there):
+// the record keeps what the passport names, so a folder whose captures were deleted is recorded
+// with them listed (a review: the listing said "captures 10" of a folder holding none).
+std::string captures_not_there(const std::string& dir, const nlohmann::json& passport) {
+  if (!passport.contains("captures") || !passport["captures"].is_array()) return {};
+  std::size_t named = 0;
+  std::vector<std::string> gone;
+  for (const nlohmann::json& c : passport["captures"]) {
+    if (!c.is_string()) continue;
+    ++named;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(std::filesystem::path(dir) / c.get<std::string>(), ec))
+      gone.push_back(c.get<std::string>());
+  }
+  if (gone.empty()) return {};
+  return fmt::format("{} of the {} captures the passport names {} not in {} ({}{}): recorded as the passport names "
+                     "them; the run's raw records are incomplete",
+                     gone.size(), named, gone.size() == 1 ? "is" : "are", dir, shown_ascii(gone.front()),
+                     gone.size() > 1 ? ", ..." : "");
+}
+
 void record(const HistoryArgs& a) {
   // Not while a run or resume holds the folder: its passport may be about to change. The folder's
   // mistake, never the database's (it read "RIG_HISTORY: --record ...", a code review).
@@ -353,6 +374,7 @@ void record(const HistoryArgs& a) {
   history::refuse_a_new_database_without_its_folder(a.db);  // as `rig run`
   const history::Recorded rec = history::record_run(a.db, p, a.record);
   for (const std::string& note : history::record_notes(rec, p)) std::cerr << "rig history: note: " << note << "\n";
+  if (const std::string gone = captures_not_there(a.record, p); !gone.empty()) std::cerr << "rig history: note: " << gone << "\n";
   std::cout << "recorded run " << rec.id << " (" << p.value("serial", "") << ", " << p.value("outcome", "") << ") in "
             << a.db << "\n";
   finish_ending_list(a.record, a.db);

@@ -220,6 +220,20 @@ TEST(RigCli, DryRunSaysWhereTheRunWillBeRecorded) {
             0)
       << slurp(d + "/builtin-rec.stderr");
   EXPECT_TRUE(fs::exists(d + "/xdg/rig/history.sqlite"));
+  EXPECT_EQ(slurp(d + "/builtin-rec.stderr").find("captures the passport names"), std::string::npos)
+      << slurp(d + "/builtin-rec.stderr");
+  // A folder whose captures were deleted is recorded as its passport lies, and said to be short of
+  // them (a review: the listing said "captures 10" of a folder that held none).
+  fs::remove(d + "/done/r/captures/run01-U10.cap");
+  fs::remove(d + "/done/r/captures/run02-U20.cap");
+  EXPECT_EQ(run({"history", "--db", "sqlite:" + d + "/xdg/rig/history.sqlite", "--record", d + "/done/r"}, d + "/gone-rec"), 0)
+      << slurp(d + "/gone-rec.stderr");
+  EXPECT_NE(slurp(d + "/gone-rec.stderr")
+                .find("rig history: note: 2 of the 14 captures the passport names are not in " + d +
+                      "/done/r (captures/run01-U10.cap, ...): recorded as the passport names them; the run's raw "
+                      "records are incomplete\n"),
+            std::string::npos)
+      << slurp(d + "/gone-rec.stderr");
   // A resume's database is its run.json's: said so where its folder has gone since (a re-test).
   fs::create_directories(d + "/dbf");
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + d + "/dbf/h.sqlite", "--out",
