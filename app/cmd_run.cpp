@@ -89,6 +89,12 @@ struct RunArgs {
   bool dry_run = false;
   bool quiet = false;
   bool no_history = false;
+  // A resume told --no-history or another --db than its run records into (run.json): the run's own
+  // database keeps the earlier ending's row. Said when the run starts; under --no-history the
+  // ending lists `history` in .ending-pending, owed to that database (an automation review: the
+  // row stayed ABORTED for a DUT whose resume FAILed, nothing saying a row was owed).
+  std::string history_left_behind;  // the warning, "" when the resume records where its run does
+  bool history_owed = false;        // --no-history over a run that records: the row is owed
   // SHA-256 of the profile's text as the run copies it to profile.toml, taken when the run starts
   // (the file named by --profile may change while the run goes on): passport.json's profile_sha256.
   std::string profile_sha256;
@@ -180,6 +186,13 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj)
 
 // run.json of a run folder, checked before it is trusted: each field has its type, the
 // plant is one rig knows, and a hardware run names its hardware file.
+// A --db URL as run.json keeps it: an SQLite file absolute and lexically normal (a resume may start
+// elsewhere), any other URL with its password masked (run.json never holds one).
+std::string db_as_run_json_keeps_it(const std::string& url) {
+  const std::optional<std::string> file = history::sqlite_path(url);
+  return file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(url);
+}
+
 void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs& a) {
   if (!inv.is_object()) throw ConfigError(path + ": expected a JSON object, found " + inv.type_name());
   auto str = [&](const char* key, const std::string& dflt) {
@@ -254,6 +267,21 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   if (inv.contains("no_history") && !inv["no_history"].is_boolean())
     throw ConfigError(path + ": field 'no_history': expected true or false, found " + inv["no_history"].type_name());
   const std::string db = str("db", "");
+  const bool run_records = !inv.value("no_history", false);
+  const std::string runs_db = db.empty() ? std::string("the default history database") : db;
+  if (run_records && a.no_history) {
+    a.history_owed = true;
+    a.history_left_behind = fmt::format(
+        "the run records into {} (run.json), whose row keeps the earlier ending: with --no-history this resume's "
+        "ending is not recorded there; {} lists `history` until rig run --resume {} (or rig history --record {}) "
+        "records it",
+        runs_db, kEndingPending, shown_text(a.resume), shown_text(a.resume));
+  } else if (run_records && !a.db.empty() && db_as_run_json_keeps_it(a.db) != (db.empty() ? "" : db)) {
+    a.history_left_behind = fmt::format(
+        "the run records into {} (run.json); this resume records its ending into --db {}: {} keeps the earlier "
+        "ending (rig history --db URL --record {} brings it up to date)",
+        runs_db, history::mask_password(a.db), runs_db, shown_text(a.resume));
+  }
   if (!a.db.empty() || a.no_history) return;
   if (inv.value("no_history", false)) {
     a.no_history = true;
@@ -869,7 +897,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   // (a re-test: an earlier ending's junit.xml stayed beside this passport, the run "complete").
   std::string steps = std::string(kStepJunit) + "\n";
   if (key) steps += std::string(kStepSeal) + "\n";
-  if (!a.no_history) steps += std::string(kStepHistory) + "\n";
+  if (!a.no_history || a.history_owed) steps += std::string(kStepHistory) + "\n";
   bool report_written = true;
   try {
     write_file_staged(junit, junit_xml(info, res, values));
@@ -898,7 +926,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     for (const std::string& f : {junit, pass}) fs::remove(f + ".tmp", ec);
     throw;
   }
-  bool sealed_now = !key, recorded_now = a.no_history;  // the steps after the passport, as they went
+  bool sealed_now = !key, recorded_now = a.no_history && !a.history_owed;  // the steps after the passport, as they went
   if (key) {  // without report.html when it could not be written: the resume draws it and seals again
     try {
       std::vector<std::string> files = files_of_the_run(dut);
@@ -1687,8 +1715,7 @@ int do_run(RunArgs a) {
     if (a.no_history) {
       invocation["no_history"] = true;
     } else if (!a.db.empty()) {  // an SQLite file made absolute: a resume may start elsewhere
-      const std::optional<std::string> file = history::sqlite_path(a.db);
-      invocation["db"] = file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(a.db);
+      invocation["db"] = db_as_run_json_keeps_it(a.db);
     }
     std::vector<std::string> drops;  // repeated by a resume (read_invocation)
     for (const std::string& f : a.inject)
@@ -1732,6 +1759,7 @@ int do_run(RunArgs a) {
 
   Executive exec(dev, a.out, log, &view);
   if (!unjudged.empty()) log->warn("{}", unjudged);
+  if (!a.history_left_behind.empty()) log->warn("{}", a.history_left_behind);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
     exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, files_of_the_run(state.slot()), text); });
   const std::string started = invocation.value("started", iso8601_utc_now());

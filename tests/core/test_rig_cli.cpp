@@ -1542,6 +1542,57 @@ TEST(RigCli, AResumeRecordsInTheHistoryItsRunWasGiven) {
       << slurp(d + "/io5.stderr");
 }
 
+// A resume told --no-history or another --db than the run records into leaves the run's own row at
+// its earlier ending: said at the start, and under --no-history the row is owed (.ending-pending
+// lists `history`) until a resume records it (an automation review: the row stayed ABORTED for a
+// DUT whose resume ended with its verdict, nothing saying so).
+TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
+  const std::string d = tmp("resume-elsewhere");
+  fs::create_directories(d);
+  const std::string station = d + "/station.sqlite";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/r", "--inject",
+                 "sigint@100"},
+                d + "/io1"),
+            3);
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  const std::string warned = "the run records into sqlite:" + station +
+                             " (run.json), whose row keeps the earlier ending: with --no-history this resume's ending "
+                             "is not recorded there; .ending-pending lists `history` until rig run --resume " + d +
+                             "/r (or rig history --record " + d + "/r) records it";
+  EXPECT_NE(slurp(d + "/io2.stderr").find(warned), std::string::npos) << slurp(d + "/io2.stderr");
+  EXPECT_NE(slurp(d + "/r/run.log").find(warned), std::string::npos);
+  EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
+  ASSERT_EQ(run({"history", "--db", station, "--csv"}, d + "/list1"), 0);
+  EXPECT_NE(slurp(d + "/list1.stdout").find(",ABORTED,"), std::string::npos) << slurp(d + "/list1.stdout");
+  // The owed row goes where the run records, with the ending it has now.
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io3"), 0) << slurp(d + "/io3.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
+  ASSERT_EQ(run({"history", "--db", station, "--csv"}, d + "/list2"), 0);
+  EXPECT_NE(slurp(d + "/list2.stdout").find(",PASS,"), std::string::npos) << slurp(d + "/list2.stdout");
+  EXPECT_NE(slurp(d + "/list2.stdout").find("ABORTED"), std::string::npos) << "the earlier ending kept";
+  // Another --db: recorded there, the run's own database said to keep the earlier ending.
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/o", "--inject",
+                 "sigint@100"},
+                d + "/io4"),
+            3);
+  ASSERT_EQ(run({"run", "--resume", d + "/o", "--yes", "--db", "sqlite:" + d + "/other.sqlite"}, d + "/io5"), 0)
+      << slurp(d + "/io5.stderr");
+  EXPECT_NE(slurp(d + "/io5.stderr")
+                .find("the run records into sqlite:" + station + " (run.json); this resume records its ending into --db "
+                      "sqlite:" + d + "/other.sqlite: sqlite:" + station + " keeps the earlier ending"),
+            std::string::npos)
+      << slurp(d + "/io5.stderr");
+  EXPECT_FALSE(fs::exists(d + "/o/.ending-pending"));
+  // The same database named another way is no other database: nothing said.
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/s", "--inject",
+                 "sigint@100"},
+                d + "/io6"),
+            3);
+  ASSERT_EQ(run({"run", "--resume", d + "/s", "--yes", "--db", d + "/./station.sqlite"}, d + "/io7"), 0)
+      << slurp(d + "/io7.stderr");
+  EXPECT_EQ(slurp(d + "/io7.stderr").find("keeps the earlier ending"), std::string::npos) << slurp(d + "/io7.stderr");
+}
+
 // An ABORTED ending whose history row was left to .ending-pending (a database out of reach) is
 // recorded when its resume starts, so the run's row lists it among its endings; it was lost
 // once the resume recorded its own ending (a line integrator's review).
