@@ -67,6 +67,15 @@ void phase_run(PhaseContext& ctx, const Profile& p, DutState& st, std::size_t i)
   st.runs[i + 1] = RunMean{i + 1, o, position_and_record(ctx, p, o, p.run_s, run_id(i, o), st.serial(), &st.partial_captures)};
 }
 
+// Values read from a capture that lost samples (within the profile's max_lost_samples) were
+// computed over the samples joined across the gaps: each says so, with the counts.
+void note_gaps(PhaseContext& ctx, const Recorded& r) {
+  if (r.lost == 0) return;
+  ctx.values.note_scope(fmt::format("{} lost {} samples in {} gap(s), joined across them ([procedure] "
+                                    "max_lost_samples)",
+                                    r.capture, r.lost, r.gaps));
+}
+
 void phase_bias(PhaseContext& ctx, const Profile& p, DutState& st) {
   std::vector<double> x10, x20;
   std::vector<std::size_t> runs10, runs20;  // the run numbers of each pair's summands
@@ -90,15 +99,9 @@ void phase_bias(PhaseContext& ctx, const Profile& p, DutState& st) {
     ctx.values.set("bias", b.bias, std::string("formula (3)") + one);
     ctx.values.set("base_error", b.base_error, sign + one);
   }
-}
-
-// Values read from a capture that lost samples (within the profile's max_lost_samples) were
-// computed over the samples joined across the gaps: each says so, with the counts.
-void note_gaps(PhaseContext& ctx, const Recorded& r) {
-  if (r.lost == 0) return;
-  ctx.values.note_scope(fmt::format("{} lost {} samples in {} gap(s), joined across them ([procedure] "
-                                    "max_lost_samples)",
-                                    r.capture, r.lost, r.gaps));
+  // Each run's mean was taken over its capture's samples joined across its gaps: said on both values,
+  // as on every value read from a capture (an automation review: only the in-run and raw records said it).
+  for (std::size_t i = 0; i < p.order.size(); ++i) note_gaps(ctx, st.runs.at(i + 1).rec);
 }
 
 void phase_in_run_b(PhaseContext& ctx, const Profile& p, DutState& st) {
