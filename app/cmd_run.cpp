@@ -1850,8 +1850,11 @@ int do_run(RunArgs a) {
   try {
     passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
   } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
-    log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
-               to_string(res.outcome), e.what());
+    if (res.outcome == RunOutcome::Error)
+      log->error("the ERROR ending not written in full: {} (exit 4: the run folder cannot hold the run's records)", e.what());
+    else
+      log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
+                 to_string(res.outcome), e.what());
     // An ERROR ending saying which outcome could not be written, never that outcome: in the
     // history (it promises every run; a folder deleted mid-run left no row, a review), and in the
     // folder where its passport and JUnit report still fit (a full disk refused the 600 kB
@@ -1859,7 +1862,11 @@ int do_run(RunArgs a) {
     // reports", a review). A resume, once the folder can take the files, writes the ending again.
     RunResult unwritten = res;
     unwritten.outcome = RunOutcome::Error;
-    unwritten.message = fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
+    // An ERROR ending is that ending still, short of files: said so, not as an outcome that "could
+    // not be" written beside the ERROR that was (a review read the two as contradicting).
+    const bool was_error = res.outcome == RunOutcome::Error;
+    unwritten.message = was_error ? fmt::format("{}; its ending not written in full to the run folder: {}", res.message, e.what())
+                                  : fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
     const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
     // Replaced too where it is an earlier ending's (a review: an ABORTED passport, resumed, stayed
     // beside a history row saying ERROR); kept where it is this ending's own, put in place before
@@ -1878,8 +1885,9 @@ int do_run(RunArgs a) {
         write_file_staged(a.out + "/passport.json", passport_text(error_passport));
         commit_staged(a.out + "/passport.json");
         commit_staged(a.out + "/junit.xml");
-        log->error("passport.json and junit.xml written with outcome ERROR (the outcome {} could not be)",
-                   to_string(res.outcome));
+        if (was_error) log->error("passport.json and junit.xml written with outcome ERROR (without analysis.json and report.html)");
+        else log->error("passport.json and junit.xml written with outcome ERROR (the outcome {} could not be)",
+                        to_string(res.outcome));
       } catch (const std::exception& also) {
         for (const char* f : {"/junit.xml.tmp", "/passport.json.tmp"}) fs::remove(a.out + f, ec);
         log->error("nor an ERROR passport: {}", also.what());
@@ -1887,6 +1895,9 @@ int do_run(RunArgs a) {
     if (!a.no_history) record_in_history(a, hw, error_passport, a.out, *log);
     dev.io.set_lamp(Lamp::Running, false);
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
+    // The closing table and OUTCOME line of the ending that stands, as every other ending prints
+    // them (a review: an empty stdout beside the ERROR passport a full disk left).
+    say_the_passport(error_passport, info.out_dir);
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
     if (!records_lost && !res.config_error)

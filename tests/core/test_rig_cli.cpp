@@ -4258,6 +4258,26 @@ TEST(RigCli, AnEndingTheFolderCannotTakeWholeLeavesAnErrorPassportWhereItFits) {
       << p["aborted_reason"];
   EXPECT_NE(slurp(d + "/run/junit.xml").find("outcome PASS not written to the run folder"), std::string::npos);
   EXPECT_FALSE(fs::exists(d + "/run/passport.json.tmp"));
+  // The ending that stands is said on stdout as every ending is (a review: stdout was empty).
+  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: ERROR\n"), std::string::npos) << slurp(d + "/io.stdout");
+  // A run that ended ERROR on its own is that ERROR, short of files: not "outcome ERROR not written"
+  // beside the ERROR passport that was (a review read the two as contradicting).
+  std::ofstream(d + "/err.toml") << "base = \"ci\"\n[profile]\nname = \"t-err\"\n[procedure]\nretries = 0\n";
+  fs::create_directories(d + "/e/analysis.json.tmp/x");
+  EXPECT_EQ(run({"run", "--profile", d + "/err.toml", "--yes", "--quiet", "--no-history", "--out", d + "/e", "--inject",
+                 "drop@9000:10"},
+                d + "/e-io"),
+            4);
+  const nlohmann::json pe = nlohmann::json::parse(slurp(d + "/e/passport.json"));
+  EXPECT_EQ(pe["outcome"], "ERROR");
+  EXPECT_NE(pe["aborted_reason"].get<std::string>().find("no retries left; its ending not written in full to the run folder: "),
+            std::string::npos)
+      << pe["aborted_reason"];
+  EXPECT_NE(slurp(d + "/e/run.log").find("passport.json and junit.xml written with outcome ERROR (without analysis.json and "
+                                         "report.html)"),
+            std::string::npos);
+  EXPECT_EQ(slurp(d + "/e/run.log").find("outcome ERROR not written"), std::string::npos);
+  EXPECT_NE(slurp(d + "/e-io.stdout").find("OUTCOME: ERROR\n"), std::string::npos) << slurp(d + "/e-io.stdout");
   fs::remove_all(d + "/run/analysis.json.tmp");
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--quiet", "--no-history"}, d + "/resume"), 0)
       << slurp(d + "/resume.stderr");
