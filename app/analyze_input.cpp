@@ -206,7 +206,7 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
   return want;
 }
 
-void check_input_path(const std::string& path, const std::string& input) {
+void check_input_path(const std::string& path, const std::string& input, const std::string& how) {
   if (path == "-") {  // standard input: read as it comes, so text only
     if (input != "text")
       throw InputError("-: standard input carries --input text only (--input " + input +
@@ -219,6 +219,26 @@ void check_input_path(const std::string& path, const std::string& input) {
   if (!S_ISREG(st.st_mode) && input != "text")
     throw InputError(path + ": not a regular file: --input " + input +
                      " is read by its size (a pipe or FIFO can carry --input text)");
+  if (input == "f64" || input == "f32") {
+    // Raw floats' bytes are all text by chance with a probability of about (100/256)^bytes; a text
+    // record read as them gave nonsense values without a word (a review: OADEV 8.5e-34 of a text
+    // file named .bin).
+    std::ifstream in(path, std::ios::binary);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    const bool text = head.size() >= 16 && std::all_of(head.begin(), head.end(), [](char ch) {
+      const auto c = static_cast<unsigned char>(ch);
+      return (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\n' || c == '\r';
+    });
+    if (text) {
+      const std::size_t eol = head.find_first_of("\r\n");
+      throw InputError(path + ": read as raw " + (input == "f64" ? "float64" : "float32") + " (" +
+                       (how.empty() ? "--input " + input : how) + "), but its first " + std::to_string(head.size()) +
+                       " bytes are text (\"" + quoted_bytes(head.substr(0, std::min<std::size_t>(eol, 40))) +
+                       "\"): a text record, one value per line, is read with --input text");
+    }
+  }
 }
 
 namespace {

@@ -61,8 +61,10 @@ class F64File final : public analysis::ChunkSource {
 // What the input is, before it is read: a folder is refused (it used to read as "0 values"),
 // and --input f64 and capture need a regular file (they are read by their size); text may come
 // from a pipe or FIFO, read until its writer closes it (a FIFO waits for its writer, as any
-// reader of one does); "-" is standard input, text only. ConfigError naming the path.
-void check_input_path(const std::string& path, const std::string& input);
+// reader of one does); "-" is standard input, text only. A raw float file (f64, f32) whose first
+// bytes are all text is a text record read as raw floats (its values would be nonsense): refused,
+// `how` saying how the kind was chosen ("--input f64", "its .bin name"). ConfigError naming the path.
+void check_input_path(const std::string& path, const std::string& input, const std::string& how = {});
 // A value from a file quoted in a message: bytes that do not print (control bytes, NUL, DEL)
 // and bytes that are not well-formed UTF-8 as \xNN, so a stray byte is seen rather than sent
 // to the terminal; whole UTF-8 characters as they are.

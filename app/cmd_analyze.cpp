@@ -31,6 +31,7 @@
 #include "analysis/json.hpp"
 #include "rig/core/number_text.hpp"
 #include "app/analyze_input.hpp"
+#include "rig/core/escape.hpp"
 #include "app/output_file.hpp"
 #include "analysis/allan.hpp"
 #include "analysis/noise_terms.hpp"
@@ -410,11 +411,13 @@ int run(const Args& a) {
       throw ConfigError(std::string("rig analyze: ") + opt + " -: give a file or folder (standard output carries the "
                         "summary)");
   std::string input = a.input;
+  std::string chosen_by = "--input " + input;  // how the kind was chosen, for the messages
   if (input == "auto") {
     const auto ext = std::filesystem::path(a.file).extension().string();
     input = ext == ".f64" || ext == ".bin" ? "f64"
             : ext == ".f32"                 ? "f32"
                                             : (ext == ".rigcap" || ext == ".cap" ? "capture" : "text");
+    chosen_by = ext.empty() ? std::string("no extension: text") : "its " + shown_ascii(ext) + " name";
   }
   // Source: text and captures are held in memory; float64 files are streamed.
   if (a.channel && input != "capture")
@@ -430,7 +433,7 @@ int run(const Args& a) {
   std::size_t analysed_from = 0;  // the first capture sample analysed (--gaps longest)
   constexpr double kDefaultRateHz = 1000;
   double rate = a.rate.value_or(kDefaultRateHz);
-  check_input_path(a.file, input);
+  check_input_path(a.file, input, chosen_by);
   check_outputs(a);  // before anything is read: a bad output leaves nothing written
   std::size_t blank_lines = 0;  // noted below
   if (input == "text") {
@@ -808,8 +811,10 @@ int run(const Args& a) {
     if (!cap->recovery.complete) std::cerr << "rig analyze: warning: " << cap->recovery.summary(a.file) << "\n";
     if (!cap->gaps.empty() && gap_policy == "join") std::cerr << "rig analyze: warning: " << input_name << ": " << gap_note << "\n";
   }
+  // A raw file's kind is said (a review: a float32 file named .bin read as float64 without a word).
+  const std::string raw = input == "f64" ? "raw float64" : input == "f32" ? "raw float32" : "";
   o << input_name << ": " << n << " values, " << shortest_text(rate) << " Hz, " << record_s << " s, data "
-    << an::to_string(base.data) << "\n";
+    << an::to_string(base.data) << (raw.empty() ? std::string() : "; read as " + raw + " (" + chosen_by + ")") << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
   for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], bounded, a.confidence);
   for (std::size_t k = 0; k < longs.size(); ++k)

@@ -626,6 +626,35 @@ TEST(RigCli, AnalyzeOptionErrorsNameTheOptionAndValue) {
 TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
   const std::string d = tmp("analyze-input-kind");
   fs::create_directories(d + "/folder");
+  // A text record named .bin (or given --input f64) was read as raw float64: 1200 nonsense values,
+  // OADEV 8.5e-34, exit 0 (a review). Refused, saying how the kind was chosen; a raw file's
+  // summary says which it was read as.
+  {
+    std::ofstream t(d + "/t.bin");
+    for (int k = 0; k < 600; ++k) t << "1.00034558419" << k % 10 << "\n";
+  }
+  EXPECT_EQ(run({"analyze", d + "/t.bin", "--rate", "1"}, d + "/tbin"), 2);
+  EXPECT_NE(slurp(d + "/tbin.stderr").find("rig: input error: " + d + "/t.bin: read as raw float64 (its .bin name), but its "
+                                           "first 4096 bytes are text (\"1.000345584190\"): a text record, one value per "
+                                           "line, is read with --input text"),
+            std::string::npos)
+      << slurp(d + "/tbin.stderr");
+  EXPECT_EQ(run({"analyze", d + "/t.bin", "--rate", "1", "--input", "f32"}, d + "/tf32"), 2);
+  EXPECT_NE(slurp(d + "/tf32.stderr").find("read as raw float32 (--input f32), but its first"), std::string::npos)
+      << slurp(d + "/tf32.stderr");
+  EXPECT_EQ(run({"analyze", d + "/t.bin", "--rate", "1", "--input", "text", "--no-psd"}, d + "/ttext"), 0)
+      << slurp(d + "/ttext.stderr");
+  {
+    std::ofstream b(d + "/v.bin", std::ios::binary);
+    for (int k = 0; k < 64; ++k) {
+      const double v = 1.0 + 1e-3 * std::sin(k * 0.7);
+      b.write(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+  }
+  EXPECT_EQ(run({"analyze", d + "/v.bin", "--rate", "1", "--no-psd"}, d + "/vbin"), 0) << slurp(d + "/vbin.stderr");
+  EXPECT_NE(slurp(d + "/vbin.stdout").find("v.bin: 64 values, 1 Hz, 64 s, data freq; read as raw float64 (its .bin name)\n"),
+            std::string::npos)
+      << slurp(d + "/vbin.stdout");
   EXPECT_EQ(run({"analyze", d + "/folder"}, d + "/dir"), 2);
   EXPECT_NE(slurp(d + "/dir.stderr").find(d + "/folder: is a folder, not a record"), std::string::npos)
       << slurp(d + "/dir.stderr");
