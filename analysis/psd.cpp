@@ -174,11 +174,15 @@ std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db, std::size_t
   std::vector<double> db(n);
   for (std::size_t i = 0; i < n; ++i) db[i] = 10 * std::log10(std::max(p.psd[i], 1e-300));
   std::vector<Peak> peaks;
-  for (std::size_t i = 1; i + 1 < n; ++i) {
+  // Bin 0 is the segments' removed mean, no spectrum: bin 1 rising above it is no maximum, and a
+  // falling spectrum (a drift, a random walk) read as a peak at the first bin (a review: 21 dB "at
+  // 0.12 Hz" for a ramp). A peak rises above a real bin on its left; the walks stop short of bin 0.
+  constexpr std::size_t first = 1;
+  for (std::size_t i = first + 1; i + 1 < n; ++i) {
     if (!(db[i] > db[i - 1] && db[i] >= db[i + 1])) continue;
     // Walk out to higher ground on each side, tracking the lowest point on the way.
     double left_min = db[i], right_min = db[i];
-    for (std::size_t j = i; j-- > 0;) {
+    for (std::size_t j = i; j-- > first;) {
       if (db[j] > db[i]) break;
       left_min = std::min(left_min, db[j]);
     }

@@ -68,6 +68,20 @@ TEST(Peaks, FindsTheBuildingVibrationToneWithItsProminence) {
   // Pure noise: nothing 10 dB above its surroundings.
   const Psd q = welch(tone_in_noise(1 << 19, rate, 0, 0, 0.05, 5), rate, o);
   EXPECT_TRUE(find_peaks(q, 10.0).empty());
+  // A drift's falling spectrum has no peak at its first bin (bin 0, the removed mean, is no
+  // neighbour: a review saw 21 dB "at 0.12 Hz" for a ramp), nor has a random walk's.
+  std::vector<double> ramp(1 << 17), walk(1 << 17);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0, 1);
+  double w = 0;
+  for (std::size_t i = 0; i < ramp.size(); ++i) ramp[i] = 1e-4 * g(rng) + 1e-8 * static_cast<double>(i), walk[i] = w += g(rng);
+  EXPECT_TRUE(find_peaks(welch(ramp, rate, o), 10.0).empty());
+  EXPECT_TRUE(find_peaks(welch(walk, rate, o), 10.0).empty());
+  // A low tone is still found where the bins on its left are spectrum (bin 4 of 8192 at 1 kHz).
+  auto low = tone_in_noise(1 << 19, rate, 4 * rate / 8192.0, 0.05, 0.001, 6);
+  const auto lp = find_peaks(welch(low, rate, o), 10.0, 3);
+  ASSERT_FALSE(lp.empty());
+  EXPECT_NEAR(lp[0].f_hz, 4 * rate / 8192.0, rate / 8192.0);
 }
 
 TEST(Welch, ThreadCountDoesNotChangeTheResult) {
