@@ -630,6 +630,20 @@ int run(const Args& a) {
     want_psd = false;
   }
   const bool bounded = !a.no_bounds && !constant;
+  // A deviation that is 0 or the rounding of the values where OADEV is not: HDEV and OHDEV remove a
+  // linear frequency drift, so an exact ramp's are 0. No noise type and no bounds there, said (an
+  // analysis review: HDEV 0 with alpha -2 and bounds [0, 0]).
+  std::vector<bool> dev_bounded(devs.size(), bounded);
+  if (bounded) {
+    const double scale = end_value_scale(*src);
+    for (std::size_t k = 0; k < devs.size(); ++k)
+      if (no_noise_above_rounding({devs[k]}, scale, base.data)) {
+        dev_bounded[k] = false;
+        devs[k] = without_identification(std::move(devs[k]));
+        notes.push_back(std::string(an::to_string(opts[k].type)) + ": every point is 0 or the rounding of the values (it removes a "
+                        "linear frequency drift, and there is no noise beside it): no noise type and no bounds");
+      }
+  }
   // The file is read again only by the PSD and the long-tau statistics. Without them its mapping
   // (one page-table entry per 4 KiB: 7000 for 3.6e6 values, about 0.5 ms to tear down) is
   // released on another thread, while this one fits the noise terms and writes the JSON, instead
@@ -706,8 +720,8 @@ int run(const Args& a) {
   j["input"] = input;
   j["record_s"] = record_s;
   j["confidence"] = a.confidence;
-  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, bounded);
-  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, bounded);
+  if (oadev_pts) j["oadev"] = analysis::dev_to_json(*oadev_pts, dev_bounded.front());
+  if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, dev_bounded.back());
   for (std::size_t k = 0; k < longs.size(); ++k)
     j[an::to_string(long_taus[k])] = long_tau_json(longs[k], long_taus[k], bounded, !constant);
   if (cap) {
@@ -816,7 +830,7 @@ int run(const Args& a) {
   o << input_name << ": " << n << " values, " << shortest_text(rate) << " Hz, " << record_s << " s, data "
     << an::to_string(base.data) << (raw.empty() ? std::string() : "; read as " + raw + " (" + chosen_by + ")") << "\n";
   for (const auto& note : notes) o << "note: " << note << "\n";
-  for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], bounded, a.confidence);
+  for (std::size_t k = 0; k < devs.size(); ++k) print_deviation(o, opts[k].type, devs[k], dev_bounded[k], a.confidence);
   for (std::size_t k = 0; k < longs.size(); ++k)
     print_long_tau(o, long_taus[k], longs[k], bounded, bounded || (has_noise_bias(long_taus[k]) && !constant),
                    a.confidence);

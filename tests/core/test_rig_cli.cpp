@@ -323,6 +323,27 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   ASSERT_EQ(run({"analyze", d + "/ramp.txt", "--rate", "1", "--data", "phase", "--json", d + "/r.json"}, d + "/r"), 0);
   EXPECT_NE(nlohmann::json::parse(slurp(d + "/r.json"))["notes"].dump().find("the phase is a straight line"),
             std::string::npos);
+  // A frequency ramp: OADEV sees the drift, HDEV removes it and is 0: no noise type nor bounds
+  // there, said (an analysis review: HDEV 0 with alpha -2 and bounds [0, 0]).
+  {
+    std::ofstream fr(d + "/fr.txt");
+    for (int k = 0; k < 400; ++k) fr << 0.25 * k << "\n";
+  }
+  for (const char* dev : {"hdev", "ohdev"}) {
+    ASSERT_EQ(run({"analyze", d + "/fr.txt", "--rate", "1", "--dev", dev, "--no-psd", "--json", d + "/fr.json"}, d + "/fr"), 0)
+        << slurp(d + "/fr.stderr");
+    const auto fr = nlohmann::json::parse(slurp(d + "/fr.json"));
+    EXPECT_NE(fr["notes"].dump().find(std::string(dev) + ": every point is 0 or the rounding of the values (it removes a "
+                                      "linear frequency drift, and there is no noise beside it): no noise type and no bounds"),
+              std::string::npos)
+        << fr["notes"].dump();
+    for (const auto& pt : fr[dev]) {
+      EXPECT_EQ(pt["dev"].get<double>(), 0.0);
+      for (const char* k : {"lo", "hi", "edf", "alpha"}) EXPECT_TRUE(pt[k].is_null()) << dev << " " << k;
+    }
+    EXPECT_FALSE(fr["oadev"][0]["lo"].is_null()) << "OADEV keeps its bounds";
+    EXPECT_NE(slurp(d + "/fr.stdout").find(std::string(dev) + " (no bounds):"), std::string::npos) << slurp(d + "/fr.stdout");
+  }
   // The same noisy record in 1e-200 and 1e-310 units is refused, not called constant (a review), as
   // 1e200 is; zeros are still a constant record; 1e-80 units give 1e-80 times the terms in 1.
   std::mt19937 rng(3);
