@@ -344,6 +344,25 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
     EXPECT_FALSE(fr["oadev"][0]["lo"].is_null()) << "OADEV keeps its bounds";
     EXPECT_NE(slurp(d + "/fr.stdout").find(std::string(dev) + " (no bounds):"), std::string::npos) << slurp(d + "/fr.stdout");
   }
+  // At a low confidence on few degrees of freedom the interval may lie above the estimate (a
+  // chi-square's median is below its mean): said (an analysis review: lo > dev without a word).
+  {
+    std::mt19937 wn(5);
+    std::normal_distribution<double> gw(0, 1);
+    std::ofstream w(d + "/w.txt");
+    for (int k = 0; k < 1000; ++k) w << gw(wn) << "\n";
+  }
+  for (const char* conf : {"0.3", "0.682689"}) {
+    ASSERT_EQ(run({"analyze", d + "/w.txt", "--rate", "1", "--taus", "m:1,500", "--no-psd", "--confidence", conf, "--json",
+                   d + "/w.json"},
+                  d + "/w"),
+              0);
+    const auto w = nlohmann::json::parse(slurp(d + "/w.json"));
+    const bool above = w["oadev"][1]["lo"].get<double>() > w["oadev"][1]["dev"].get<double>();
+    EXPECT_EQ(above, std::string(conf) == "0.3") << w["oadev"].dump();
+    EXPECT_EQ(w["notes"].dump().find("interval lies wholly above the deviation") != std::string::npos, above)
+        << conf << ": " << w["notes"].dump();
+  }
   // The same noisy record in 1e-200 and 1e-310 units is refused, not called constant (a review), as
   // 1e200 is; zeros are still a constant record; 1e-80 units give 1e-80 times the terms in 1.
   std::mt19937 rng(3);
