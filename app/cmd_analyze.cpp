@@ -157,7 +157,9 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
 // A deviation's table: with its noise type and bounds, or "-" where it has none.
 void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::DevPoint>& pts, bool bounded,
                      double confidence) {
-  o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) + "):\n" : " (no bounds):\n");
+  // TDEV is a time deviation (tau x MDEV / sqrt 3): its unit said where it is not the values' own.
+  const std::string in = type == an::Deviation::TDEV ? "; in g*s" : "";
+  o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) + in + "):\n" : " (no bounds" + in + "):\n");
   o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
   for (const auto& p : pts) {
     char line[160];
@@ -176,6 +178,7 @@ void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::
 void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::LongTauPoint>& pts, bool bounded,
                     bool typed_noise, double confidence) {
   o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) : std::string(" (no bounds"));
+  if (type == an::LongTau::TTOT) o << "; in g*s";
   if (!bounded && typed_noise) o << "; alpha: the noise type of the bias removal";
   if (std::any_of(pts.begin(), pts.end(), [](const an::LongTauPoint& p) { return p.stride > 1; }))
     o << "; stride > 1: every stride-th start summed";
@@ -741,6 +744,16 @@ int run(const Args& a) {
   if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, dev_bounded.back());
   for (std::size_t k = 0; k < longs.size(); ++k)
     j[an::to_string(long_taus[k])] = long_tau_json(longs[k], long_taus[k], bounded, !constant);
+  // Each deviation's unit, an accelerometer's (its output in g; phase data in g*s gives the same):
+  // TDEV and TTOT are time deviations, tau x MDEV / sqrt 3, in g*s (an analysis review: nothing said so).
+  {
+    json units = json::object();
+    const auto unit = [](std::string_view key) { return key == "tdev" || key == "ttot" ? "g*s" : "g"; };
+    if (oadev_pts) units["oadev"] = "g";
+    if (extra_pts) units[an::to_string(base.type)] = unit(an::to_string(base.type));
+    for (const an::LongTau t : long_taus) units[an::to_string(t)] = unit(an::to_string(t));
+    j["units"] = units;
+  }
   if (cap) {
     j["capture"] = {{"serial", cap->header.serial}, {"phase", cap->header.phase},
                     {"orientation", cap->header.orientation}, {"channel", channel},

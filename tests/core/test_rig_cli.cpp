@@ -363,6 +363,13 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
     EXPECT_EQ(w["notes"].dump().find("interval lies wholly above the deviation") != std::string::npos, above)
         << conf << ": " << w["notes"].dump();
   }
+  // Each deviation's unit: TDEV and TTOT, time deviations, in g*s (an analysis review: not said).
+  ASSERT_EQ(run({"analyze", d + "/w.txt", "--rate", "1", "--no-psd", "--dev", "tdev,ttot", "--json", d + "/u.json"}, d + "/u"), 0)
+      << slurp(d + "/u.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/u.json"))["units"],
+            nlohmann::json::parse(R"({"oadev": "g", "tdev": "g*s", "ttot": "g*s"})"));
+  EXPECT_NE(slurp(d + "/u.stdout").find("\ntdev (bounds 0.682689; in g*s):\n"), std::string::npos) << slurp(d + "/u.stdout");
+  EXPECT_NE(slurp(d + "/u.stdout").find("\nttot (bounds 0.682689; in g*s"), std::string::npos) << slurp(d + "/u.stdout");
   // The same noisy record in 1e-200 and 1e-310 units is refused, not called constant (a review), as
   // 1e200 is; zeros are still a constant record; 1e-80 units give 1e-80 times the terms in 1.
   std::mt19937 rng(3);
