@@ -4,6 +4,7 @@
 #include "analysis/drift.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -139,9 +140,24 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     req.push_back({t, m});
     return req.size() - 1;
   };
+  const auto engine_type = [](Deviation t) { return t == Deviation::TDEV ? Deviation::MDEV : t; };
   for (std::size_t k = 0; k < opts.size(); ++k)
-    for (std::size_t m : factors_for(opts[k], n))
-      index[k].push_back(find_or_add(opts[k].type == Deviation::TDEV ? Deviation::MDEV : opts[k].type, m));
+    for (std::size_t m : factors_for(opts[k], n)) index[k].push_back(find_or_add(engine_type(opts[k].type), m));
+  // A reference tau for the EDF guard (below): where no requested tau of a deviation has a lag-1
+  // ACF reading from kAcfReliablePoints averages or more, the longest power-of-two factor that has
+  // one is identified too, for the guard alone (never reported). Without it a point's EDF hung on
+  // which other taus were asked for (an analysis review: white FM, m:251 alone read flicker PM with
+  // EDF 23; m:250,251 gave 4). Where a requested tau has such a reading nothing changes: it is
+  // longer than the reference, so the guard reads it as before.
+  std::vector<std::optional<std::size_t>> reference(opts.size());
+  for (std::size_t k = 0; k < opts.size(); ++k) {
+    const DevOptions& o = opts[k];
+    if (!o.bounds || !o.edf_guard || o.fixed_alpha || n - 1 < kAcfReliablePoints) continue;
+    const auto reliable = [&](std::size_t i) { return (n - 1) / req[i].m >= kAcfReliablePoints; };
+    if (std::any_of(index[k].begin(), index[k].end(), reliable)) continue;
+    const std::size_t m_ref = std::bit_floor(static_cast<std::size_t>((n - 1) / kAcfReliablePoints));
+    if (factor_in_range(o.type, n, m_ref)) reference[k] = find_or_add(engine_type(o.type), m_ref);
+  }
   StreamOptions so_polled = so;
   if (!so_polled.poll) so_polled.poll = opts[0].poll;
   const auto poll = [&so_polled] {
@@ -177,10 +193,16 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     std::optional<NoiseId> id;
     bool bounded = false;  // alpha, EDF and bounds already set (they need no other tau's alpha)
     std::size_t averages = 0;  // the averaged values its noise identification read
+    std::optional<std::size_t> reference;  // the guard's reference tau (its request), not reported
   };
   std::vector<Pending> pend;
-  for (std::size_t k = 0; k < opts.size(); ++k)
-    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}, false});
+  for (std::size_t k = 0; k < opts.size(); ++k) {
+    for (std::size_t q = 0; q < index[k].size(); ++q) pend.push_back({k, q, {}, {}, {}, false, 0, std::nullopt});
+    if (reference[k]) pend.push_back({k, 0, {}, {}, {}, false, 0, reference[k]});
+  }
+  const auto sums_of = [&](const Pending& e) -> const detail::Sums& {
+    return er.sums[e.reference ? *e.reference : index[e.k][e.q]];
+  };
   // A tau's alpha, EDF and chi-square bounds, where its alpha is its own: fixed, or identified
   // by the lag-1 ACF (no EDF guard then). Computed in the parallel loop below; the B1 taus, whose
   // rules read the previous tau's alpha, follow in order (the same calls either way).
@@ -196,7 +218,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
     poll();
     Pending& e = pend[i];
     const DevOptions& o = opts[e.k];
-    const detail::Sums& s = er.sums[index[e.k][e.q]];
+    const detail::Sums& s = sums_of(e);
     DevPoint& p = e.p;
     p.m = s.m;
     p.tau_s = static_cast<double>(s.m) * tau0;
@@ -249,8 +271,9 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
   // of the previous tau past half the largest factor), and the bounds.
   std::vector<std::vector<DevPoint>> out(opts.size());
   for (Pending& e : pend) {
+    if (e.reference) continue;  // the guard's reference: read below, never reported
     const DevOptions& o = opts[e.k];
-    const detail::Sums& s = er.sums[index[e.k][e.q]];
+    const detail::Sums& s = sums_of(e);
     DevPoint p = e.p;
     // The same guard where the lag-1 ACF read few values (30 to 99: r1's standard error 0.1-0.18,
     // enough to read flicker PM on a white-FM curve, EDF 9x too large: a review), against the
