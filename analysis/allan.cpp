@@ -168,6 +168,7 @@ std::vector<std::vector<DevPoint>> deviations_stream(const ChunkSource& src, std
   const detail::EngineResult er = engine.run(req);
   // The phase's frequency values are one fewer than its points (phase data: their differences).
   if (so.drift) *so.drift = drift_from_phase_sums(n - 1, er.phase_last, er.phase_sum, 1 / opts[0].rate_hz);
+  if (so.phase_abs_max) *so.phase_abs_max = er.phase_abs_max;
 
   // Mod AVAR at m for R(n), only where B1 cannot tell white from flicker PM.
   std::map<std::size_t, double> mvar_cache;

@@ -150,6 +150,9 @@ struct StreamOptions {
   // When set, deviations_stream also writes the record's least-squares drift there (drift.hpp),
   // from sums its pass keeps (no pass of its own).
   Drift* drift = nullptr;
+  // When set, the largest |P| of the pass's phase (allan_engine.hpp EngineResult::phase_abs_max),
+  // in the engine's units (frequency sums; phase data as phase x rate): its rounding floor.
+  double* phase_abs_max = nullptr;
 };
 
 // Streams the source once sequentially (plus random-access cursors for the few factors

@@ -82,6 +82,9 @@ struct EngineResult {
   // The sum of P[0 .. n-1] over the pass and P[n-1]: the record's drift (drift.hpp) at no pass of
   // its own; the same bits on one thread or two (summed per block, allan_stream.cpp PhaseSums).
   double phase_sum = 0, phase_last = 0;
+  // The largest |P| at the checkpoints and the end: the scale of the phase's rounding (a frequency
+  // drift makes P grow as j^2, and every difference of P carries its units in the last place).
+  double phase_abs_max = 0;
 };
 
 // One analysis of one source: run() makes the pass; extra() afterwards computes one more

@@ -1023,6 +1023,8 @@ void Engine::Impl::collect(EngineResult& res) {
   }
   res.phase_sum = phase_sums.total();
   res.phase_last = phase_last;
+  res.phase_abs_max = std::fabs(phase_last);
+  for (const double c : checkpoints) res.phase_abs_max = std::max(res.phase_abs_max, std::fabs(c));
   res.decimated.clear();
   for (const Acc& a : accs) {
     if (res.decimated.count(a.m)) continue;
