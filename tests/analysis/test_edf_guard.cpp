@@ -43,6 +43,14 @@ std::vector<double> random_walk_record() {
   return y;
 }
 
+// White FM: n values of unit variance from the seed's stream.
+std::vector<double> white_fm(std::size_t n, std::uint64_t seed) {
+  Rng r{seed};
+  std::vector<double> y(n);
+  for (double& v : y) v = r.gauss();
+  return y;
+}
+
 std::vector<DevPoint> oadev(const std::vector<double>& y, bool guard) {
   DevOptions o;
   o.type = Deviation::OADEV;
@@ -137,9 +145,7 @@ TEST(EdfGuard, AFixedNoiseTypeIsNeverOverridden) {
 TEST(EdfGuard, AnAcfReadingFromFewAveragesIsGuardedToo) {
   int misread = 0;
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
-    Rng r{1000 + seed};
-    std::vector<double> y(16384);
-    for (double& v : y) v = r.gauss();  // white FM
+    const std::vector<double> y = white_fm(16384, 1000 + seed);
     const std::size_t n = y.size() + 1;
     const auto raw = oadev(y, false), guarded = oadev(y, true);
     for (std::size_t i = 0; i < raw.size(); ++i) {
@@ -168,9 +174,7 @@ TEST(EdfGuard, AnAcfReadingFromFewAveragesIsGuardedToo) {
 TEST(EdfGuard, ATauAskedForAloneIsGuardedAsAmongItsNeighbours) {
   int misread = 0;
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
-    Rng r{5000 + seed};
-    std::vector<double> y(1000);
-    for (double& v : y) v = r.gauss();  // white FM
+    const std::vector<double> y = white_fm(1000, 5000 + seed);
     const std::size_t n = y.size() + 1;
     const auto at = [&](std::vector<std::size_t> factors, bool guard) {
       DevOptions o;
