@@ -232,10 +232,13 @@ void check_input_path(const std::string& path, const std::string& input, const s
       return (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\n' || c == '\r';
     });
     if (text) {
-      const std::size_t eol = head.find_first_of("\r\n");
+      // Its first line that holds anything, as the file's start shows it.
+      const std::size_t from = std::min(head.find_first_not_of(" \t\r\n"), head.size());
+      const std::size_t eol = std::min(head.find_first_of("\r\n", from), head.size());
       throw InputError(path + ": read as raw " + (input == "f64" ? "float64" : "float32") + " (" +
-                       (how.empty() ? "--input " + input : how) + "), but its first " + std::to_string(head.size()) +
-                       " bytes are text (\"" + quoted_bytes(head.substr(0, std::min<std::size_t>(eol, 40))) +
+                       (how.empty() ? "--input " + input : how) + "), but " +
+                       (head.size() < 4096 ? "all its " : "its first ") + std::to_string(head.size()) +
+                       " bytes are text (\"" + quoted_bytes(head.substr(from, std::min<std::size_t>(eol - from, 40))) +
                        "\"): a text record, one value per line, is read with --input text");
     }
   }

@@ -95,6 +95,7 @@ struct RunArgs {
   // row stayed ABORTED for a DUT whose resume FAILed, nothing saying a row was owed).
   std::string history_left_behind;  // the warning, "" when the resume records where its run does
   bool history_owed = false;        // --no-history over a run that records: the row is owed
+  std::string record_command;       // how to record the folder into the run's database, where it records
   // SHA-256 of the profile's text as the run copies it to profile.toml, taken when the run starts
   // (the file named by --profile may change while the run goes on): passport.json's profile_sha256.
   std::string profile_sha256;
@@ -193,6 +194,17 @@ std::string db_as_run_json_keeps_it(const std::string& url) {
   return file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(url);
 }
 
+// Whether two database URLs name one database: SQLite files by their resolved paths (links and
+// "." followed, as `rig history` compares them), other URLs as run.json keeps them.
+bool same_history(const std::string& a, const std::string& b) {
+  const std::optional<std::string> fa = history::sqlite_path(a), fb = history::sqlite_path(b);
+  if (fa && fb) {
+    std::error_code e1, e2;
+    return fs::weakly_canonical(fs::absolute(*fa), e1) == fs::weakly_canonical(fs::absolute(*fb), e2);
+  }
+  return db_as_run_json_keeps_it(a) == db_as_run_json_keeps_it(b);
+}
+
 void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs& a) {
   if (!inv.is_object()) throw ConfigError(path + ": expected a JSON object, found " + inv.type_name());
   auto str = [&](const char* key, const std::string& dflt) {
@@ -268,19 +280,28 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     throw ConfigError(path + ": field 'no_history': expected true or false, found " + inv["no_history"].type_name());
   const std::string db = str("db", "");
   const bool run_records = !inv.value("no_history", false);
-  const std::string runs_db = db.empty() ? std::string("the default history database") : db;
+  // Where the run records: run.json's --db, or (none there) whichever database applied where it
+  // ran (the built-in default, RIG_HISTORY, the rig config), which run.json does not say.
+  const std::string runs_db =
+      db.empty() ? std::string("the database it started with (run.json names none: the default, $RIG_HISTORY or the "
+                               "rig config's)")
+                 : db;
+  const std::string record_it =
+      db.empty() ? "rig history --record " + shown_text(a.resume)
+                 : "rig history --db " + db + " --record " + shown_text(a.resume);
+  if (run_records) a.record_command = record_it;
   if (run_records && a.no_history) {
     a.history_owed = true;
     a.history_left_behind = fmt::format(
-        "the run records into {} (run.json), whose row keeps the earlier ending: with --no-history this resume's "
-        "ending is not recorded there; {} lists `history` until rig run --resume {} (or rig history --record {}) "
-        "records it",
-        runs_db, kEndingPending, shown_text(a.resume), shown_text(a.resume));
-  } else if (run_records && !a.db.empty() && db_as_run_json_keeps_it(a.db) != (db.empty() ? "" : db)) {
+        "the run records into {} (run.json): with --no-history this resume's ending is not recorded there (a row "
+        "the run has there keeps its earlier ending); a verdict (PASS, FAIL) is owed: {} lists `history` until rig "
+        "run --resume {} or {} records it",
+        runs_db, kEndingPending, shown_text(a.resume), record_it);
+  } else if (run_records && !a.db.empty() && !db.empty() && !same_history(a.db, db)) {
     a.history_left_behind = fmt::format(
         "the run records into {} (run.json); this resume records its ending into --db {}: {} keeps the earlier "
-        "ending (rig history --db URL --record {} brings it up to date)",
-        runs_db, history::mask_password(a.db), runs_db, shown_text(a.resume));
+        "ending ({} brings it up to date)",
+        db, history::mask_password(a.db), db, record_it);
   }
   if (!a.db.empty() || a.no_history) return;
   if (inv.value("no_history", false)) {
@@ -897,7 +918,11 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   // (a re-test: an earlier ending's junit.xml stayed beside this passport, the run "complete").
   std::string steps = std::string(kStepJunit) + "\n";
   if (key) steps += std::string(kStepSeal) + "\n";
-  if (!a.no_history || a.history_owed) steps += std::string(kStepHistory) + "\n";
+  // A verdict a --no-history resume reached is owed to the run's database; an ABORTED or ERROR
+  // ending is not (the run goes on, and owing it would refuse the next --no-history resume for good:
+  // a re-test), the row there keeping its earlier ending as before.
+  const bool owed = a.history_owed && (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail);
+  if (!a.no_history || owed) steps += std::string(kStepHistory) + "\n";
   bool report_written = true;
   try {
     write_file_staged(junit, junit_xml(info, res, values));
@@ -926,7 +951,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     for (const std::string& f : {junit, pass}) fs::remove(f + ".tmp", ec);
     throw;
   }
-  bool sealed_now = !key, recorded_now = a.no_history && !a.history_owed;  // the steps after the passport, as they went
+  bool sealed_now = !key, recorded_now = a.no_history && !owed;  // the steps after the passport, as they went
   if (key) {  // without report.html when it could not be written: the resume draws it and seals again
     try {
       std::vector<std::string> files = files_of_the_run(dut);
@@ -1001,15 +1026,15 @@ void write_files_of_unopened_run(const RunArgs& a, const acceptance::Profile& p,
 
 // The files the rig replaces in a run folder must be files: a folder or a FIFO in their place
 // would stop the run after its devices opened (a rename that fails, an open that waits).
-void refuse_non_files(const std::string& dir) {
+void refuse_non_files(const std::string& dir, bool resuming) {
   std::vector<std::string> replaced(std::begin(kRunOutputs), std::end(kRunOutputs));
   replaced.insert(replaced.end(), {"checkpoint.json", acceptance::kLoopTestFile, "seal.json", "seal.prev.json", "run.log"});
   for (const std::string& f : replaced) {
     struct stat st {};
     if (::lstat((dir + "/" + f).c_str(), &st) == 0 && !S_ISREG(st.st_mode))
       throw ConfigError(dir + "/" + f + ": not a regular file; the rig writes its own file there: move this one away" +
-                        (f == "checkpoint.json" || f == acceptance::kLoopTestFile
-                             ? " (to resume, the run's own file must be back in its place)"
+                        (resuming && (f == "checkpoint.json" || f == acceptance::kLoopTestFile)
+                             ? " (where the run wrote its own there, a resume needs that file back in its place)"
                              : ""));
   }
   // And the captures' folder must be a folder (a file there ended the run ERROR after its devices
@@ -1018,7 +1043,7 @@ void refuse_non_files(const std::string& dir) {
   struct stat st {};
   if (::lstat((dir + "/captures").c_str(), &st) == 0 &&
       (::stat((dir + "/captures").c_str(), &st) != 0 || !S_ISDIR(st.st_mode)))
-    throw ConfigError(dir + "/captures: not a folder; the rig records its captures in it: remove it");
+    throw ConfigError(dir + "/captures: not a folder; the rig records its captures in it: move this one away");
 }
 
 // Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than
@@ -1029,6 +1054,14 @@ void refuse_a_final_verdict(const std::string& dir) {
   if (!v.empty())
     throw ConfigError(dir + ": the run is complete (its passport says " + v +
                       "): nothing to resume; its passport stands");
+}
+
+// The resume's history elsewhere (RunArgs::history_left_behind) is said also under --quiet, which
+// keeps only errors on stderr: a line's harness runs quiet and must see it (a re-test).
+void say_history_left_behind(const RunArgs& a, spdlog::logger& log) {
+  if (a.history_left_behind.empty()) return;
+  log.warn("{}", a.history_left_behind);
+  if (a.quiet) std::cerr << "rig: warning: " << a.history_left_behind << "\n";
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
@@ -1084,6 +1117,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   auto log = make_logger(dir, a.quiet);
   log->info("rig {} run: out {}: the run is complete (its passport says {}); finishing its ending ({})", RIG_VERSION,
             shown_text(dir), v, what);
+  if (!a.no_history) say_history_left_behind(a, *log);  // another --db: the run's own database never gets this row
   bool done = true;
   if (junit_staged) {
     fs::rename(dir + "/junit.xml.tmp", dir + "/junit.xml", ec);  // the ending that wrote the passport staged it
@@ -1112,8 +1146,8 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     // list keeps it for a later resume or `rig history --record` (a re-test: it was removed, the
     // run in no database and nothing saying so).
     if (done) write_pending_steps(dir, {kStepHistory});
-    log->warn("its history row is still to be recorded (--no-history): rig history --record {} records it",
-              shown_text(dir));
+    log->warn("its history row is still to be recorded (--no-history): {} records it",
+              a.record_command.empty() ? "rig history --record " + shown_text(dir) : a.record_command);
     done = false;
   }
   if (done) {
@@ -1140,8 +1174,9 @@ void refuse_to_drop_an_interrupted_ending(const RunArgs& a) {
   if (const std::string outcome = owed_interrupted_ending(a.out); !outcome.empty())
     throw ConfigError(fmt::format("{}: its {} ending is still to be recorded in the history ({} lists `history`), "
                                   "and --no-history would lose it once this attempt's ending replaces the passport: "
-                                  "record it first (rig history --record {}) or resume without --no-history",
-                                  a.out, outcome, kEndingPending, a.out));
+                                  "record it first ({}) or resume without --no-history",
+                                  a.out, outcome, kEndingPending,
+                                  a.record_command.empty() ? "rig history --record " + a.out : a.record_command));
 }
 
 // An earlier attempt's ending that stopped the run (ABORTED, ERROR) and could not record its row
@@ -1454,7 +1489,7 @@ int do_run(RunArgs a) {
   if (!a.resume.empty()) {
     if (a.dry_run) FolderLock::check_free(a.resume, "--resume " + a.resume);
     else if (path_kind(a.resume, "--resume") == PathKind::directory) folder_lock.emplace(a.resume, "--resume " + a.resume);
-    refuse_non_files(a.resume);
+    refuse_non_files(a.resume, true);
     final_seal = check_seal_before_resume(a.resume, key, fs::exists(a.resume + "/" + kEndingPending));
     refuse_records_without_checkpoint(a.resume);
   }
@@ -1655,7 +1690,7 @@ int do_run(RunArgs a) {
     if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
     refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since
   }
-  refuse_non_files(a.out);
+  refuse_non_files(a.out, !a.resume.empty());
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
@@ -1759,7 +1794,7 @@ int do_run(RunArgs a) {
 
   Executive exec(dev, a.out, log, &view);
   if (!unjudged.empty()) log->warn("{}", unjudged);
-  if (!a.history_left_behind.empty()) log->warn("{}", a.history_left_behind);
+  say_history_left_behind(a, *log);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
     exec.on_checkpoint([&](const std::string& text) { seal_run_folder(a.out, *key, files_of_the_run(state.slot()), text); });
   const std::string started = invocation.value("started", iso8601_utc_now());
@@ -1880,12 +1915,14 @@ int do_run(RunArgs a) {
     std::error_code ec;
     fs::remove(a.out + "/report.html", ec);
     if (earlier_analysis && earlier(earlier_analysis, a.out + "/analysis.json")) fs::remove(a.out + "/analysis.json", ec);
+    bool error_passport_written = false;
     if (earlier(earlier_passport, a.out + "/passport.json")) try {
         write_file_staged(a.out + "/junit.xml", junit_xml(info, unwritten, values));
         write_file_staged(a.out + "/passport.json", passport_text(error_passport));
         commit_staged(a.out + "/passport.json");
         commit_staged(a.out + "/junit.xml");
-        if (was_error) log->error("passport.json and junit.xml written with outcome ERROR (without analysis.json and report.html)");
+        error_passport_written = true;
+        if (was_error) log->error("passport.json and junit.xml written with outcome ERROR (its ending not written in full)");
         else log->error("passport.json and junit.xml written with outcome ERROR (the outcome {} could not be)",
                         to_string(res.outcome));
       } catch (const std::exception& also) {
@@ -1897,7 +1934,9 @@ int do_run(RunArgs a) {
     dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
     // The closing table and OUTCOME line of the ending that stands, as every other ending prints
     // them (a review: an empty stdout beside the ERROR passport a full disk left).
-    say_the_passport(error_passport, info.out_dir);
+    // Only where that passport is in place: a table for a passport the folder does not hold misled
+    // (a re-test: "OUTCOME: ERROR" beside an ABORTED passport.json).
+    if (error_passport_written) say_the_passport(error_passport, info.out_dir);
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
     if (!records_lost && !res.config_error)

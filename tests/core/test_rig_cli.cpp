@@ -1655,9 +1655,10 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
             3);
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
   const std::string warned = "the run records into sqlite:" + station +
-                             " (run.json), whose row keeps the earlier ending: with --no-history this resume's ending "
-                             "is not recorded there; .ending-pending lists `history` until rig run --resume " + d +
-                             "/r (or rig history --record " + d + "/r) records it";
+                             " (run.json): with --no-history this resume's ending is not recorded there (a row the run "
+                             "has there keeps its earlier ending); a verdict (PASS, FAIL) is owed: .ending-pending lists "
+                             "`history` until rig run --resume " + d + "/r or rig history --db sqlite:" + station +
+                             " --record " + d + "/r records it";
   EXPECT_NE(slurp(d + "/io2.stderr").find(warned), std::string::npos) << slurp(d + "/io2.stderr");
   EXPECT_NE(slurp(d + "/r/run.log").find(warned), std::string::npos);
   EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
@@ -1678,7 +1679,8 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
       << slurp(d + "/io5.stderr");
   EXPECT_NE(slurp(d + "/io5.stderr")
                 .find("the run records into sqlite:" + station + " (run.json); this resume records its ending into --db "
-                      "sqlite:" + d + "/other.sqlite: sqlite:" + station + " keeps the earlier ending"),
+                      "sqlite:" + d + "/other.sqlite: sqlite:" + station + " keeps the earlier ending (rig history --db "
+                      "sqlite:" + station + " --record " + d + "/o brings it up to date)"),
             std::string::npos)
       << slurp(d + "/io5.stderr");
   EXPECT_FALSE(fs::exists(d + "/o/.ending-pending"));
@@ -1690,6 +1692,34 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
   ASSERT_EQ(run({"run", "--resume", d + "/s", "--yes", "--db", d + "/./station.sqlite"}, d + "/io7"), 0)
       << slurp(d + "/io7.stderr");
   EXPECT_EQ(slurp(d + "/io7.stderr").find("keeps the earlier ending"), std::string::npos) << slurp(d + "/io7.stderr");
+  // Through a link it is the same database too (a re-test: a false warning).
+  fs::create_directory_symlink(d, d + "/lnk");
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/l", "--inject",
+                 "sigint@100"},
+                d + "/io8"),
+            3);
+  ASSERT_EQ(run({"run", "--resume", d + "/l", "--yes", "--db", "sqlite:" + d + "/lnk/station.sqlite"}, d + "/io9"), 0)
+      << slurp(d + "/io9.stderr");
+  EXPECT_EQ(slurp(d + "/io9.stderr").find("keeps the earlier ending"), std::string::npos) << slurp(d + "/io9.stderr");
+  // --quiet still says it (a line's harness runs quiet), and a --no-history resume that is itself
+  // stopped owes nothing (an ABORTED ending owed would refuse every later --no-history resume, a
+  // re-test): the next --no-history resume goes on.
+  std::ofstream(d + "/long.toml") << "base = \"ci\"\n[profile]\nname = \"t-long\"\n[procedure]\nraw_s = 3000.0\n";
+  ASSERT_EQ(run({"run", "--profile", d + "/long.toml", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/q",
+                 "--inject", "sigint@100"},
+                d + "/io10"),
+            3);
+  {
+    const Child c = spawn({"run", "--resume", d + "/q", "--yes", "--quiet", "--no-history"}, d + "/io11");
+    ASSERT_TRUE(wait_for_file(c, d + "/q/captures/raw-U10.cap")) << slurp(d + "/io11.stderr");
+    ::kill(c.pid, SIGINT);
+    EXPECT_EQ(wait_exit(c), 3) << slurp(d + "/io11.stderr");
+  }
+  EXPECT_NE(slurp(d + "/io11.stderr").find("rig: warning: the run records into sqlite:" + station), std::string::npos)
+      << slurp(d + "/io11.stderr");
+  EXPECT_FALSE(fs::exists(d + "/q/.ending-pending")) << slurp(d + "/q/.ending-pending");
+  EXPECT_EQ(run({"run", "--resume", d + "/q", "--yes", "--quiet", "--no-history"}, d + "/io12"), 0) << slurp(d + "/io12.stderr");
+  EXPECT_EQ(slurp(d + "/q/.ending-pending"), "history\n");
 }
 
 // An ABORTED ending whose history row was left to .ending-pending (a database out of reach) is
@@ -4121,7 +4151,7 @@ TEST(RigCli, AResumeMissingTheLoopTestRecordSaysItIsGone) {
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume-dir"), 2);
   EXPECT_NE(slurp(d + "/resume-dir.stderr")
                 .find(d + "/run/loop-test.csv: not a regular file; the rig writes its own file there: move this one "
-                          "away (to resume, the run's own file must be back in its place)"),
+                          "away (where the run wrote its own there, a resume needs that file back in its place)"),
             std::string::npos)
       << slurp(d + "/resume-dir.stderr");
   fs::remove(d + "/run/loop-test.csv");
@@ -4372,11 +4402,20 @@ TEST(RigCli, AnEndingTheFolderCannotTakeWholeLeavesAnErrorPassportWhereItFits) {
   EXPECT_NE(pe["aborted_reason"].get<std::string>().find("no retries left; its ending not written in full to the run folder: "),
             std::string::npos)
       << pe["aborted_reason"];
-  EXPECT_NE(slurp(d + "/e/run.log").find("passport.json and junit.xml written with outcome ERROR (without analysis.json and "
-                                         "report.html)"),
+  EXPECT_NE(slurp(d + "/e/run.log").find("passport.json and junit.xml written with outcome ERROR (its ending not written in "
+                                         "full)"),
             std::string::npos);
   EXPECT_EQ(slurp(d + "/e/run.log").find("outcome ERROR not written"), std::string::npos);
   EXPECT_NE(slurp(d + "/e-io.stdout").find("OUTCOME: ERROR\n"), std::string::npos) << slurp(d + "/e-io.stdout");
+  // Where not even the ERROR passport could be put in place, no table says it was (a re-test:
+  // "OUTCOME: ERROR" beside an ABORTED passport.json).
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/j", "--inject", "sigint@100"},
+                d + "/j-io1"),
+            3);
+  fs::create_directories(d + "/j/junit.xml.tmp/x");
+  EXPECT_EQ(run({"run", "--resume", d + "/j", "--yes", "--quiet"}, d + "/j-io2"), 4);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/j/passport.json"))["outcome"], "ABORTED");
+  EXPECT_EQ(slurp(d + "/j-io2.stdout").find("OUTCOME:"), std::string::npos) << slurp(d + "/j-io2.stdout");
   fs::remove_all(d + "/run/analysis.json.tmp");
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--quiet", "--no-history"}, d + "/resume"), 0)
       << slurp(d + "/resume.stderr");
