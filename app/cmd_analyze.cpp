@@ -640,14 +640,29 @@ int run(const Args& a) {
   // linear frequency drift, so an exact ramp's are 0. No noise type and no bounds there, said (an
   // analysis review: HDEV 0 with alpha -2 and bounds [0, 0]).
   std::vector<bool> dev_bounded(devs.size(), bounded);
+  // The phase's rounding floor per point (0.5 ulp of its largest value over m, in the deviation's
+  // own units before TDEV's tau scaling; docs/analysis.md): a ramp whose values are not exact
+  // (1 + k 1e-6) left HDEV at that floor, 41 ulps of the values, with noise types (a re-test).
+  const double phase_ulp =
+      phase_abs_max > 0 ? std::nextafter(phase_abs_max, std::numeric_limits<double>::infinity()) - phase_abs_max : 0;
+  const auto phase_floor = [&](const an::DevPoint& pt) { return 0.5 * phase_ulp / static_cast<double>(pt.m); };
+  const auto unscaled = [&](std::size_t k, const an::DevPoint& pt) {
+    return opts[k].type == an::Deviation::TDEV ? pt.dev * std::sqrt(3.0) / pt.tau_s : pt.dev;
+  };
+  const auto at_phase_floor = [&](std::size_t k) {
+    return !devs[k].empty() && std::all_of(devs[k].begin(), devs[k].end(), [&](const an::DevPoint& pt) {
+      return unscaled(k, pt) <= 2 * phase_floor(pt);
+    });
+  };
   if (bounded) {
     const double scale = end_value_scale(*src);
     for (std::size_t k = 0; k < devs.size(); ++k)
-      if (no_noise_above_rounding({devs[k]}, scale, base.data)) {
+      if (no_noise_above_rounding({devs[k]}, scale, base.data) || at_phase_floor(k)) {
         dev_bounded[k] = false;
         devs[k] = without_identification(std::move(devs[k]));
-        notes.push_back(std::string(an::to_string(opts[k].type)) + ": every point is 0 or the rounding of the values (it removes a "
-                        "linear frequency drift, and there is no noise beside it): no noise type and no bounds");
+        notes.push_back(std::string(an::to_string(opts[k].type)) + ": every point is 0 or the rounding of the values or of their "
+                        "phase (it removes a linear frequency drift, and there is no noise beside it): no noise type "
+                        "and no bounds");
       }
   }
   // The phase's own rounding: every difference of P carries units in the last place of its largest
@@ -657,14 +672,14 @@ int run(const Args& a) {
   // about (0.3 ulp(max |P|) / m)^2 to the variance; 0.5 ulp is taken, and a relative error of the
   // deviation above 1e-8 is said (no realistic record comes near: 1e-11 for 1 h at 1 kHz, 1 g).
   if (!constant && phase_abs_max > 0) {
-    const double ulp = std::nextafter(phase_abs_max, std::numeric_limits<double>::infinity()) - phase_abs_max;
     for (std::size_t k = 0; k < devs.size(); ++k) {
+      if (bounded && !dev_bounded[k]) continue;  // already said to be rounding
       std::size_t count = 0, m_worst = 0;
       double worst = 0;
       for (const an::DevPoint& pt : devs[k]) {
-        const double dev = opts[k].type == an::Deviation::TDEV ? pt.dev * std::sqrt(3.0) / pt.tau_s : pt.dev;
+        const double dev = unscaled(k, pt);
         if (!(dev > 0)) continue;
-        const double floor = 0.5 * ulp / static_cast<double>(pt.m), rel = 0.5 * (floor / dev) * (floor / dev);
+        const double floor = phase_floor(pt), rel = 0.5 * (floor / dev) * (floor / dev);
         if (rel > 1e-8) {
           ++count;
           if (rel > worst) worst = rel, m_worst = pt.m;

@@ -333,8 +333,9 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
     ASSERT_EQ(run({"analyze", d + "/fr.txt", "--rate", "1", "--dev", dev, "--no-psd", "--json", d + "/fr.json"}, d + "/fr"), 0)
         << slurp(d + "/fr.stderr");
     const auto fr = nlohmann::json::parse(slurp(d + "/fr.json"));
-    EXPECT_NE(fr["notes"].dump().find(std::string(dev) + ": every point is 0 or the rounding of the values (it removes a "
-                                      "linear frequency drift, and there is no noise beside it): no noise type and no bounds"),
+    EXPECT_NE(fr["notes"].dump().find(std::string(dev) + ": every point is 0 or the rounding of the values or of their phase "
+                                      "(it removes a linear frequency drift, and there is no noise beside it): no noise "
+                                      "type and no bounds"),
               std::string::npos)
         << fr["notes"].dump();
     for (const auto& pt : fr[dev]) {
@@ -344,6 +345,18 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
     EXPECT_FALSE(fr["oadev"][0]["lo"].is_null()) << "OADEV keeps its bounds";
     EXPECT_NE(slurp(d + "/fr.stdout").find(std::string(dev) + " (no bounds):"), std::string::npos) << slurp(d + "/fr.stdout");
   }
+  // The same where the ramp's values are not exact (1 + k 1e-6): HDEV sits at its phase's rounding
+  // (a re-test: 41 ulps of the values, with noise types and bounds).
+  {
+    std::ofstream fr(d + "/fr2.f64", std::ios::binary);
+    for (int k = 0; k < 100000; ++k) {
+      const double v = 1.0 + k * 1e-6;
+      fr.write(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+  }
+  ASSERT_EQ(run({"analyze", d + "/fr2.f64", "--rate", "100", "--dev", "ohdev", "--no-psd", "--json", d + "/fr2.json"}, d + "/fr2"),
+            0);
+  EXPECT_TRUE(nlohmann::json::parse(slurp(d + "/fr2.json"))["ohdev"][0]["alpha"].is_null()) << slurp(d + "/fr2.stdout");
   // At a low confidence on few degrees of freedom the interval may lie above the estimate (a
   // chi-square's median is below its mean): said (an analysis review: lo > dev without a word).
   {
