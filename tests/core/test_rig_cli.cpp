@@ -1662,10 +1662,14 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
   const std::string d = tmp("resume-elsewhere");
   fs::create_directories(d);
   const std::string station = d + "/station.sqlite";
-  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/r", "--inject",
-                 "sigint@100"},
-                d + "/io1"),
-            3);
+  // A ci run recording into the station's database, stopped at 100 s of device time (exit 3).
+  const auto stopped = [&](const std::string& out, const std::string& io) {
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/" + out,
+                   "--inject", "sigint@100"},
+                  d + "/" + io),
+              3);
+  };
+  stopped("r", "io1");
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
   const std::string warned = "the run records into sqlite:" + station +
                              " (run.json): with --no-history this resume's ending is not recorded there (a row the run "
@@ -1684,10 +1688,7 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
   EXPECT_NE(slurp(d + "/list2.stdout").find(",PASS,"), std::string::npos) << slurp(d + "/list2.stdout");
   EXPECT_NE(slurp(d + "/list2.stdout").find("ABORTED"), std::string::npos) << "the earlier ending kept";
   // Another --db: recorded there, the run's own database said to keep the earlier ending.
-  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/o", "--inject",
-                 "sigint@100"},
-                d + "/io4"),
-            3);
+  stopped("o", "io4");
   ASSERT_EQ(run({"run", "--resume", d + "/o", "--yes", "--db", "sqlite:" + d + "/other.sqlite"}, d + "/io5"), 0)
       << slurp(d + "/io5.stderr");
   EXPECT_NE(slurp(d + "/io5.stderr")
@@ -1698,19 +1699,13 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
       << slurp(d + "/io5.stderr");
   EXPECT_FALSE(fs::exists(d + "/o/.ending-pending"));
   // The same database named another way is no other database: nothing said.
-  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/s", "--inject",
-                 "sigint@100"},
-                d + "/io6"),
-            3);
+  stopped("s", "io6");
   ASSERT_EQ(run({"run", "--resume", d + "/s", "--yes", "--db", d + "/./station.sqlite"}, d + "/io7"), 0)
       << slurp(d + "/io7.stderr");
   EXPECT_EQ(slurp(d + "/io7.stderr").find("keeps the earlier ending"), std::string::npos) << slurp(d + "/io7.stderr");
   // Through a link it is the same database too (a re-test: a false warning).
   fs::create_directory_symlink(d, d + "/lnk");
-  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + station, "--out", d + "/l", "--inject",
-                 "sigint@100"},
-                d + "/io8"),
-            3);
+  stopped("l", "io8");
   ASSERT_EQ(run({"run", "--resume", d + "/l", "--yes", "--db", "sqlite:" + d + "/lnk/station.sqlite"}, d + "/io9"), 0)
       << slurp(d + "/io9.stderr");
   EXPECT_EQ(slurp(d + "/io9.stderr").find("keeps the earlier ending"), std::string::npos) << slurp(d + "/io9.stderr");
