@@ -90,9 +90,9 @@ struct RunArgs {
   bool quiet = false;
   bool no_history = false;
   // A resume told --no-history or another --db than its run records into (run.json): the run's own
-  // database keeps the earlier ending's row. Said when the run starts; under --no-history the
-  // ending lists `history` in .ending-pending, owed to that database (an automation review: the
-  // row stayed ABORTED for a DUT whose resume FAILed, nothing saying a row was owed).
+  // database keeps the earlier ending's row. Said when the run starts; under --no-history a
+  // verdict's ending lists `history` in .ending-pending, owed to that database (an automation
+  // review: the row stayed ABORTED for a DUT whose resume FAILed, nothing saying a row was owed).
   std::string history_left_behind;  // the warning, "" when the resume records where its run does
   bool history_owed = false;        // --no-history over a run that records: the row is owed
   std::string record_command;       // how to record the folder into the run's database, where it records
@@ -185,8 +185,6 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj)
   return signal_at_end;
 }
 
-// run.json of a run folder, checked before it is trusted: each field has its type, the
-// plant is one rig knows, and a hardware run names its hardware file.
 // A --db URL as run.json keeps it: an SQLite file absolute and lexically normal (a resume may start
 // elsewhere), any other URL with its password masked (run.json never holds one).
 std::string db_as_run_json_keeps_it(const std::string& url) {
@@ -205,6 +203,8 @@ bool same_history(const std::string& a, const std::string& b) {
   return db_as_run_json_keeps_it(a) == db_as_run_json_keeps_it(b);
 }
 
+// run.json of a run folder, checked before it is trusted: each field has its type, the
+// plant is one rig knows, and a hardware run names its hardware file.
 void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs& a) {
   if (!inv.is_object()) throw ConfigError(path + ": expected a JSON object, found " + inv.type_name());
   auto str = [&](const char* key, const std::string& dflt) {
