@@ -206,6 +206,20 @@ std::size_t F64File::read_at(std::uint64_t pos, std::span<double> out) const {
   return want;
 }
 
+namespace {
+// How many bytes of s are not text: neither printable ASCII, tab nor CR, nor in well-formed UTF-8.
+std::size_t binary_bytes(std::string_view s) {
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    const std::size_t len = (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\r' ? 1 : c >= 0x80 ? utf8_sequence_at(s, i) : 0;
+    if (len == 0) ++bad;
+    i += std::max<std::size_t>(len, 1);
+  }
+  return bad;
+}
+}  // namespace
+
 void check_input_path(const std::string& path, const std::string& input, const std::string& how) {
   if (path == "-") {  // standard input: read as it comes, so text only
     if (input != "text")
@@ -227,10 +241,9 @@ void check_input_path(const std::string& path, const std::string& input, const s
     std::string head(4096, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
-    const bool text = head.size() >= 16 && std::all_of(head.begin(), head.end(), [](char ch) {
-      const auto c = static_cast<unsigned char>(ch);
-      return (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\n' || c == '\r';
-    });
+    // Text as the text reader reads it (ASCII, tab, CR, well-formed UTF-8) and the line ends.
+    const bool text = head.size() >= 16 &&
+                      binary_bytes(head) == static_cast<std::size_t>(std::count(head.begin(), head.end(), '\n'));
     if (text) {
       // Its first line that holds anything, as the file's start shows it.
       const std::size_t from = std::min(head.find_first_not_of(" \t\r\n"), head.size());
@@ -245,18 +258,6 @@ void check_input_path(const std::string& path, const std::string& input, const s
 }
 
 namespace {
-// How many bytes of s are not text: neither printable ASCII, tab nor CR, nor in well-formed UTF-8.
-std::size_t binary_bytes(std::string_view s) {
-  std::size_t bad = 0;
-  for (std::size_t i = 0; i < s.size();) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    const std::size_t len = (c >= 0x20 && c < 0x7F) || c == '\t' || c == '\r' ? 1 : c >= 0x80 ? utf8_sequence_at(s, i) : 0;
-    if (len == 0) ++bad;
-    i += std::max<std::size_t>(len, 1);
-  }
-  return bad;
-}
-
 // A line of a binary file (a raw float64 file read as text): a NUL byte, or, in 16 bytes or
 // more (a Latin-1 unit is not binary), more than a quarter of its bytes not text.
 bool looks_binary(std::string_view line) {

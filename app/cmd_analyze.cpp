@@ -154,11 +154,19 @@ void print_term(std::ostream& o, const char* name, const an::Term& t, double (*t
   o << "\n";
 }
 
+// A deviation's unit by its key, an accelerometer's (its output in g; phase data in g*s gives the
+// same): TDEV and TTOT are time deviations, tau x MDEV / sqrt 3, in g*s, the rest in g.
+const char* unit_of(std::string_view key) { return key == "tdev" || key == "ttot" ? "g*s" : "g"; }
+
+// Where a table's unit is not the values' own (TDEV, TTOT), its header says it.
+std::string unit_in_header(std::string_view key) {
+  return std::string_view(unit_of(key)) == "g" ? std::string() : std::string("; in ") + unit_of(key);
+}
+
 // A deviation's table: with its noise type and bounds, or "-" where it has none.
 void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::DevPoint>& pts, bool bounded,
                      double confidence) {
-  // TDEV is a time deviation (tau x MDEV / sqrt 3): its unit said where it is not the values' own.
-  const std::string in = type == an::Deviation::TDEV ? "; in g*s" : "";
+  const std::string in = unit_in_header(an::to_string(type));
   o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) + in + "):\n" : " (no bounds" + in + "):\n");
   o << "         m        tau_s     n_terms alpha         lo          dev           hi\n";
   for (const auto& p : pts) {
@@ -178,7 +186,7 @@ void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::
 void print_long_tau(std::ostream& o, an::LongTau type, const std::vector<an::LongTauPoint>& pts, bool bounded,
                     bool typed_noise, double confidence) {
   o << an::to_string(type) << (bounded ? " (bounds " + confidence_shown(confidence) : std::string(" (no bounds"));
-  if (type == an::LongTau::TTOT) o << "; in g*s";
+  o << unit_in_header(an::to_string(type));
   if (!bounded && typed_noise) o << "; alpha: the noise type of the bias removal";
   if (std::any_of(pts.begin(), pts.end(), [](const an::LongTauPoint& p) { return p.stride > 1; }))
     o << "; stride > 1: every stride-th start summed";
@@ -790,14 +798,12 @@ int run(const Args& a) {
   if (extra_pts) j[an::to_string(base.type)] = analysis::dev_to_json(*extra_pts, dev_bounded.back());
   for (std::size_t k = 0; k < longs.size(); ++k)
     j[an::to_string(long_taus[k])] = long_tau_json(longs[k], long_taus[k], bounded, !constant);
-  // Each deviation's unit, an accelerometer's (its output in g; phase data in g*s gives the same):
-  // TDEV and TTOT are time deviations, tau x MDEV / sqrt 3, in g*s (an analysis review: nothing said so).
+  // Each deviation's unit (an analysis review: TDEV's g*s said nowhere).
   {
     json units = json::object();
-    const auto unit = [](std::string_view key) { return key == "tdev" || key == "ttot" ? "g*s" : "g"; };
-    if (oadev_pts) units["oadev"] = "g";
-    if (extra_pts) units[an::to_string(base.type)] = unit(an::to_string(base.type));
-    for (const an::LongTau t : long_taus) units[an::to_string(t)] = unit(an::to_string(t));
+    if (oadev_pts) units["oadev"] = unit_of("oadev");
+    if (extra_pts) units[an::to_string(base.type)] = unit_of(an::to_string(base.type));
+    for (const an::LongTau t : long_taus) units[an::to_string(t)] = unit_of(an::to_string(t));
     j["units"] = units;
   }
   if (cap) {
