@@ -95,7 +95,7 @@ struct RunArgs {
   // review: the row stayed ABORTED for a DUT whose resume FAILed, nothing saying a row was owed).
   std::string history_left_behind;  // the warning, "" when the resume records where its run does
   bool history_owed = false;        // --no-history over a run that records: the row is owed
-  std::string record_command;       // how to record the folder into the run's database, where it records
+  std::string record_command;       // how to record the folder into the run's database (a resume's, from run.json)
   // SHA-256 of the profile's text as the run copies it to profile.toml, taken when the run starts
   // (the file named by --profile may change while the run goes on): passport.json's profile_sha256.
   std::string profile_sha256;
@@ -286,22 +286,20 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
       db.empty() ? std::string("the database it started with (run.json names none: the default, $RIG_HISTORY or the "
                                "rig config's)")
                  : db;
-  const std::string record_it =
-      db.empty() ? "rig history --record " + shown_text(a.resume)
-                 : "rig history --db " + db + " --record " + shown_text(a.resume);
-  if (run_records) a.record_command = record_it;
+  a.record_command = db.empty() ? "rig history --record " + shown_text(a.resume)
+                                : "rig history --db " + db + " --record " + shown_text(a.resume);
   if (run_records && a.no_history) {
     a.history_owed = true;
     a.history_left_behind = fmt::format(
         "the run records into {} (run.json): with --no-history this resume's ending is not recorded there (a row "
         "the run has there keeps its earlier ending); a verdict (PASS, FAIL) is owed: {} lists `history` until rig "
         "run --resume {} or {} records it",
-        runs_db, kEndingPending, shown_text(a.resume), record_it);
+        runs_db, kEndingPending, shown_text(a.resume), a.record_command);
   } else if (run_records && !a.db.empty() && !db.empty() && !same_history(a.db, db)) {
     a.history_left_behind = fmt::format(
         "the run records into {} (run.json); this resume records its ending into --db {}: {} keeps the earlier "
         "ending ({} brings it up to date)",
-        db, history::mask_password(a.db), db, record_it);
+        db, history::mask_password(a.db), db, a.record_command);
   }
   if (!a.db.empty() || a.no_history) return;
   if (inv.value("no_history", false)) {
@@ -1146,8 +1144,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     // list keeps it for a later resume or `rig history --record` (a re-test: it was removed, the
     // run in no database and nothing saying so).
     if (done) write_pending_steps(dir, {kStepHistory});
-    log->warn("its history row is still to be recorded (--no-history): {} records it",
-              a.record_command.empty() ? "rig history --record " + shown_text(dir) : a.record_command);
+    log->warn("its history row is still to be recorded (--no-history): {} records it", a.record_command);
     done = false;
   }
   if (done) {
@@ -1175,8 +1172,7 @@ void refuse_to_drop_an_interrupted_ending(const RunArgs& a) {
     throw ConfigError(fmt::format("{}: its {} ending is still to be recorded in the history ({} lists `history`), "
                                   "and --no-history would lose it once this attempt's ending replaces the passport: "
                                   "record it first ({}) or resume without --no-history",
-                                  a.out, outcome, kEndingPending,
-                                  a.record_command.empty() ? "rig history --record " + a.out : a.record_command));
+                                  a.out, outcome, kEndingPending, a.record_command));
 }
 
 // An earlier attempt's ending that stopped the run (ABORTED, ERROR) and could not record its row
@@ -1885,7 +1881,10 @@ int do_run(RunArgs a) {
   try {
     passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
   } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
-    if (res.outcome == RunOutcome::Error)
+    // An ERROR ending is that ending still, short of files: said so, not as an outcome that "could
+    // not be" written beside the ERROR that was (a review read the two as contradicting).
+    const bool was_error = res.outcome == RunOutcome::Error;
+    if (was_error)
       log->error("the ERROR ending not written in full: {} (exit 4: the run folder cannot hold the run's records)", e.what());
     else
       log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
@@ -1897,9 +1896,6 @@ int do_run(RunArgs a) {
     // reports", a review). A resume, once the folder can take the files, writes the ending again.
     RunResult unwritten = res;
     unwritten.outcome = RunOutcome::Error;
-    // An ERROR ending is that ending still, short of files: said so, not as an outcome that "could
-    // not be" written beside the ERROR that was (a review read the two as contradicting).
-    const bool was_error = res.outcome == RunOutcome::Error;
     unwritten.message = was_error ? fmt::format("{}; its ending not written in full to the run folder: {}", res.message, e.what())
                                   : fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
     const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
