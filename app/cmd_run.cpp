@@ -1110,6 +1110,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     std::cout << fmt::format("rig run --dry-run: {} is complete (its passport says {}); its ending stopped before it "
                              "finished: a resume does what is left ({}); nothing is measured or computed again.\n",
                              shown_text(dir), v, what);
+    if (!a.no_history && !a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
     return kExitPass;
   }
   auto log = make_logger(dir, a.quiet);
@@ -1647,6 +1648,8 @@ int do_run(RunArgs a) {
                           ", the built-in default's)";
       std::cout << "History: " << history::mask_password(url) << fresh << "\n";
     }
+    // What a resume leaves in the run's own database, said before it runs as the resume will say it.
+    if (!a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
     std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "

@@ -1698,6 +1698,12 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
               3);
   };
   stopped("r", "io1");
+  // The dry run says it first, as the resume will (helper-110: it said nothing).
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--dry-run", "--no-history"}, d + "/dry1"), 0) << slurp(d + "/dry1.stderr");
+  EXPECT_NE(slurp(d + "/dry1.stdout").find("History: not recorded (--no-history)\n  warning: the run records into sqlite:" +
+                                           station + " (run.json): with --no-history"),
+            std::string::npos)
+      << slurp(d + "/dry1.stdout");
   ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--no-history"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
   const std::string warned = "the run records into sqlite:" + station +
                              " (run.json): with --no-history this resume's ending is not recorded there (a row the run "
@@ -1717,6 +1723,13 @@ TEST(RigCli, AResumeThatRecordsElsewhereSaysTheRunsRowIsLeftBehind) {
   EXPECT_NE(slurp(d + "/list2.stdout").find("ABORTED"), std::string::npos) << "the earlier ending kept";
   // Another --db: recorded there, the run's own database said to keep the earlier ending.
   stopped("o", "io4");
+  ASSERT_EQ(run({"run", "--resume", d + "/o", "--dry-run", "--db", "sqlite:" + d + "/other.sqlite"}, d + "/dry2"), 0)
+      << slurp(d + "/dry2.stderr");
+  EXPECT_NE(slurp(d + "/dry2.stdout").find("  warning: the run records into sqlite:" + station +
+                                           " (run.json); this resume records its ending into --db sqlite:" + d +
+                                           "/other.sqlite"),
+            std::string::npos)
+      << slurp(d + "/dry2.stdout");
   ASSERT_EQ(run({"run", "--resume", d + "/o", "--yes", "--db", "sqlite:" + d + "/other.sqlite"}, d + "/io5"), 0)
       << slurp(d + "/io5.stderr");
   EXPECT_NE(slurp(d + "/io5.stderr")
