@@ -86,6 +86,17 @@ void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& la
   std::string err;
   try {
     write();
+  } catch (const ModbusError& e) {
+    // A timeout is a request sent and not answered: a drive that hangs takes it when it runs again
+    // (a bring-up review: "not delivered", and the drive read Quick stop active once resumed).
+    try {
+      err = std::string(name) +
+            (e.timeout ? " not confirmed (sent, unanswered: the drive may still take it when it answers again; the "
+                         "table may still be moving): "
+                       : " not delivered (the table may still be moving): ") +
+            e.what();
+    } catch (...) {
+    }
   } catch (const std::exception& e) {
     try {
       err = std::string(name) + " not delivered (the table may still be moving): " + e.what();

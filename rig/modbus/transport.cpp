@@ -478,9 +478,12 @@ class LibmodbusTransport final : public RegisterTransport {
     // dead drive (a review: a wrong --unit said only "timeout"), or a drive slower to answer than
     // the timeout (a review: a drive answering in 0.5 s was sent to check its unit id only).
     if (last_timeout && !answered_)
+      // Nor is it always that: a drive that hangs is silent from this command's first request too
+      // (a bring-up review: a drive that had just answered `status` was sent to check its unit id).
       last += (tcp() ? "; nothing has answered on this link yet: check the drive's unit id"
                      : "; nothing has answered on this line yet: check the drive's unit id, baud rate, parity and wiring") +
-              std::string(", or whether it answers later than ") + fmt_s(opt_.response_timeout_s) +
+              std::string(", whether the drive is running (one that hangs is silent too)") +
+              ", or whether it answers later than " + fmt_s(opt_.response_timeout_s) +
               " (the response timeout: `rig table --timeout S`, [table] response_timeout_s, at most 10 s)";
     throw ModbusError(what + " on " + describe() + ": " + last, last_exc, last_timeout, foreign);
   }

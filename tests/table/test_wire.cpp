@@ -214,7 +214,8 @@ TEST(TableWire, ALinkThatNeverAnsweredSaysWhatToCheck) {
     ADD_FAILURE() << "no error";
   } catch (const m::ModbusError& e) {
     EXPECT_NE(std::string(e.what()).find("no answer within 0.05 s (timeout); nothing has answered on this link yet: "
-                                         "check the drive's unit id, or whether it answers later than 0.05 s (the "
+                                         "check the drive's unit id, whether the drive is running (one that hangs is silent too), or "
+                                         "whether it answers later than 0.05 s (the "
                                          "response timeout: `rig table --timeout S`, [table] response_timeout_s"),
               std::string::npos)
         << e.what();
