@@ -455,13 +455,26 @@ void check_procedure_angles_in_travel(const RunArgs& a, const toml::table& hw, c
     }
   }
   const toml::table* written = mount ? mount : profile_file ? cfg::get_table(*profile_file, "table") : nullptr;
-  const char* section = mount ? "the hardware file's [procedure]" : "the profile's [table]";
+  // What to change: on hardware a mount's angles go in the hardware file's [procedure] (a built-in
+  // profile cannot be edited, and the advice named only it: a bring-up review); a built-in
+  // profile's angles are changed by a profile file based on it.
+  const bool builtin = p.source.rfind("builtin:", 0) == 0;
+  const std::string change =
+      mount ? std::string("change the hardware file's [procedure] u10_deg / u20_deg or the limits")
+      : a.plant == "hardware"
+          ? std::string("set the mount's angles in the hardware file's [procedure] u10_deg / u20_deg (used over the "
+                        "profile's), or change ") +
+                (builtin ? "the limits" : "the profile's [table] u10_deg / u20_deg or the limits")
+          : builtin ? fmt::format("change the limits, or the angles in a profile file (base = \"{}\", [table] u10_deg / "
+                                  "u20_deg)",
+                                  p.source.substr(8))
+                    : std::string("change the profile's [table] u10_deg / u20_deg or the limits");
   for (const auto& [key, deg] : {std::pair{"u10_deg", p.u10_deg}, {"u20_deg", p.u20_deg}})
     if (deg < lo || deg > hi) {
       const toml::node* at = written ? written->get(key) : nullptr;
       throw ConfigError(fmt::format("{}: {} = {:g}°: outside the table's travel [{:g}°, {:g}°] ({}): the procedure "
-                                    "could not turn the DUT there; change {} u10_deg / u20_deg or the limits",
-                                    at ? cfg::where(*at) : shown_text(p.source), key, deg, lo, hi, whose, section));
+                                    "could not turn the DUT there; {}",
+                                    at ? cfg::where(*at) : shown_text(p.source), key, deg, lo, hi, whose, change));
     }
 }
 

@@ -2421,6 +2421,29 @@ TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
       << slurp(d + "/io3.stderr");
   EXPECT_EQ(slurp(d + "/io3.stderr").find("builtin:ci: u20_deg"), std::string::npos)
       << "with its line and column: " << slurp(d + "/io3.stderr");
+  // A built-in profile cannot be edited: the advice is the mount's [procedure] angles or the
+  // limits (a bring-up review: it named only the profile's [table]); and with [procedure] there,
+  // that.
+  EXPECT_NE(slurp(d + "/io3.stderr").find("the procedure could not turn the DUT there; set the mount's angles in the "
+                                          "hardware file's [procedure] u10_deg / u20_deg (used over the profile's), or "
+                                          "change the limits"),
+            std::string::npos)
+      << slurp(d + "/io3.stderr");
+  std::ofstream(d + "/hw.toml", std::ios::app) << "[procedure]\nu10_deg = 0.0\nu20_deg = 175.0\n";
+  EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--serial", "X-1", "--dry-run"}, d + "/io4"), 2);
+  EXPECT_NE(slurp(d + "/io4.stderr").find("hw.toml:17:11: u20_deg = 175°: outside the table's travel [-190°, 150°] (drive "
+                                          "map"),
+            std::string::npos)
+      << slurp(d + "/io4.stderr");
+  EXPECT_NE(slurp(d + "/io4.stderr").find("change the hardware file's [procedure] u10_deg / u20_deg or the limits"),
+            std::string::npos)
+      << slurp(d + "/io4.stderr");
+  // Emulated, a built-in profile's angles are changed in a profile file based on it.
+  std::ofstream(d + "/lim3.toml") << "base = \"ci\"\n[plant.table]\nlimit_pos_deg = 150.0\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/lim3.toml", "--yes", "--dry-run"}, d + "/io5"), 2);
+  EXPECT_NE(slurp(d + "/io5.stderr").find("; change the profile's [table] u10_deg / u20_deg or the limits"),
+            std::string::npos)
+      << slurp(d + "/io5.stderr");
 }
 
 // One process per run folder: a folder another process holds (its flock, as a running `rig run`
