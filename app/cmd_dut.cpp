@@ -219,6 +219,10 @@ std::string physical_text(double v, int value_type) {
   return fmt::format("{:.15g}", v);
 }
 
+// A frame's time as decoded lines show it: "-" for a line that had none (candump's screen output
+// without -t), where 0.000000 read as a real time (a bring-up review).
+std::string time_text(const link::LoggedFrame& lf) { return lf.timed ? fmt::format("{:.6f}", lf.t_s) : "-"; }
+
 // Decodes every frame it can; a line it cannot read (not a frame, CAN FD, truncated) or a
 // frame of a protocol message it cannot decode (too short for its DLC) is skipped, counted
 // and named LOG:LINE on stderr. Exit 0: every line decoded; 2: some line was skipped or the
@@ -265,7 +269,7 @@ int cmd_decode(const DutArgs& a) {
     ++frames;
     if (lf.frame.error) {
       ++errors;
-      if (!a.summary) std::printf("%.6f %s error frame: %s\n", lf.t_s, lf.iface.c_str(),
+      if (!a.summary) std::printf("%s %s error frame: %s\n", time_text(lf).c_str(), lf.iface.c_str(),
                                   link::classify_error_frame(lf.frame).text.c_str());
       continue;
     }
@@ -273,7 +277,7 @@ int cmd_decode(const DutArgs& a) {
     if (lf.any.rtr) {
       if (const link::DbcMessage* m = dbc.find(lf.any.id, lf.any.extended)) {
         ++per[m->name + " remote request"];
-        if (!a.summary) std::printf("%.6f %s %s remote request\n", lf.t_s, lf.iface.c_str(), m->name.c_str());
+        if (!a.summary) std::printf("%s %s %s remote request\n", time_text(lf).c_str(), lf.iface.c_str(), m->name.c_str());
       } else {
         ++foreign;
       }
@@ -290,7 +294,7 @@ int cmd_decode(const DutArgs& a) {
     const std::string& name = msg.name;
     ++per[name];
     if (a.summary) continue;
-    std::printf("%.6f %s %s", lf.t_s, lf.iface.c_str(), name.c_str());
+    std::printf("%s %s %s", time_text(lf).c_str(), lf.iface.c_str(), name.c_str());
     for (const auto& s : *sig) {
       const link::DbcSignal* sd = msg.signal(s.name);
       const std::string v = physical_text(s.value, sd ? sd->value_type : 0);

@@ -194,6 +194,7 @@ LogLine read_candump_line(std::string_view line) {
       return out;
     }
     lf.t_s = static_cast<double>(base) + sec;
+    lf.timed = true;
     i = 2;
   } else if (t[0].front() == '(') {
     if (t[0].back() != ')') {
@@ -213,6 +214,7 @@ LogLine read_candump_line(std::string_view line) {
       out.problem = "bad timestamp " + quoted(t[0]);
       return out;
     }
+    lf.timed = true;
     i = 1;
   }
   const std::size_t rest = t.size() - i;

@@ -25,6 +25,7 @@ namespace rig::link {
 // none), interface ("" when the line has none), the frame.
 struct LoggedFrame {
   double t_s = 0;
+  bool timed = false;  // the line had a time stamp (candump's screen output without -t has none: t_s 0)
   std::string iface;
   CanFdFrame any;  // the frame as logged, classic or CAN FD (any.fd): what DBC decoding takes
   CanFrame frame;  // the same frame in classic form, when !any.fd (else empty): the rig codec's

@@ -2719,6 +2719,9 @@ TEST(RigCli, DutDecodePrintsWhatTheFramesHold) {
   EXPECT_NE(out.find("1700000000.000000 vcan0 DUT_STREAM_Y remote request\n"), std::string::npos) << out;
   EXPECT_NE(out.find("2 frames: DUT_STREAM_Y remote request 2, error frames 0"), std::string::npos) << out;
   EXPECT_EQ(out.find("y_g="), std::string::npos) << out;
+  // The screen line has no time: "-", not 0.000000, which read as a real time (a bring-up review).
+  EXPECT_NE(out.find("\n- vcan0 DUT_STREAM_Y remote request\n"), std::string::npos) << out;
+  EXPECT_EQ(out.find("\n0.000000 vcan0"), std::string::npos) << out;
   // DUT_HEARTBEAT's last_seq (uint32) of 1000000001; a float32 y_g of -0.000501 g.
   std::ofstream(d + "/digits.log") << "(1700000000.000000) vcan0 700#0305E80301CA9A3B\n"
                                       " (2023-11-14 22:13:20.000700)  vcan0  101   [8]  67 12 00 01 8A 55 03 BA\n";
