@@ -269,9 +269,23 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
     if (!t || history::normalize_iso8601(s) != s)
       throw ConfigError(path + ": field 'started': \"" + shown_text(s) + "\" is not a UTC time as rig writes it (" +
                         iso8601_utc_now() + ")");
-    if (*t > static_cast<long long>(std::time(nullptr)) + 86400)
-      throw ConfigError(path + ": field 'started': " + s + " is later than this station's clock (" + iso8601_utc_now() +
-                        ")");
+    if (*t > static_cast<long long>(std::time(nullptr)) + 86400) {
+      // A station whose clock ran more than a day fast when the run began (then corrected by NTP)
+      // wrote run.json at that start by the same clock, so its file time agrees with 'started':
+      // that run resumes, said so (a technician's review: the abort advised the resume, which was
+      // refused, and every recording was lost). A field changed afterwards has no such witness.
+      struct stat st {};
+      const bool ec = ::stat(path.c_str(), &st) != 0;
+      const long long file_s = ec ? 0 : static_cast<long long>(st.st_mtime);
+      if (ec || std::llabs(file_s - *t) > 600)
+        throw ConfigError(path + ": field 'started': " + s + " is later than this station's clock (" + iso8601_utc_now() +
+                          ") by more than a day, and run.json's own file time (" +
+                          (ec ? std::string("unreadable") : iso8601_utc(static_cast<std::time_t>(file_s))) +
+                          ") is not that start's: the field was changed after the run wrote it; nothing done");
+      std::cerr << "rig: warning: " << path << ": the run started at " << s << " by this station's clock, later than "
+                << "its clock now (" << iso8601_utc_now() << "): the clock was wrong then or is now; the passport and "
+                << "the history keep that start time\n";
+    }
   }
   // The history the run was started with, unless the resume names its own (--db, --no-history):
   // a resume without them recorded its PASS in the default database, the ABORTED row left in

@@ -44,8 +44,9 @@ void SimClock::sleep_for(double dt_s, const CancelToken& cancel) {
   }
 }
 
-std::string iso8601_utc_now() {
-  const std::time_t t = std::time(nullptr);
+std::string iso8601_utc_now() { return iso8601_utc(std::time(nullptr)); }
+
+std::string iso8601_utc(std::time_t t) {
   std::tm tm{};
   gmtime_r(&t, &tm);
   char buf[32];

@@ -2,6 +2,7 @@
 // consumer sleeps or reads samples, and advancing it steps the emulated plant
 // (lockstep, like PX4 SIH), so a 110-minute procedure runs in seconds.
 #pragma once
+#include <ctime>
 #include <functional>
 #include <string>
 
@@ -47,5 +48,7 @@ class SimClock final : public Clock {
 
 // ISO 8601 UTC wall time, e.g. "2026-11-22T05:30:12Z" (for passports and headers).
 std::string iso8601_utc_now();
+// The same form of a time in seconds since the epoch.
+std::string iso8601_utc(std::time_t t);
 
 }  // namespace rig

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/time.h>
 #include <unistd.h>
 
 #include <array>
@@ -3537,6 +3538,33 @@ TEST(RigCli, DamagedRunFoldersAndCaptureHeadersGiveClearMessages) {
     EXPECT_EQ(with_run_json(name, inv), 2) << name;
     EXPECT_NE(slurp(d + "/" + name + "-io.stderr").find(d + "/" + name + "/run.json: " + said), std::string::npos)
         << slurp(d + "/" + name + "-io.stderr");
+  }
+  EXPECT_NE(slurp(d + "/future-io.stderr").find("by more than a day, and run.json's own file time ("), std::string::npos)
+      << slurp(d + "/future-io.stderr");
+  // A station whose clock ran two days fast when the run began wrote run.json by that clock: its
+  // file time witnesses the start, and the run resumes, said so (a technician's review: the abort
+  // advised the resume, which was refused, and the recordings were lost).
+  {
+    const std::time_t fast = std::time(nullptr) + 2 * 86400;
+    std::tm tm{};
+    gmtime_r(&fast, &tm);
+    char started[32];
+    std::strftime(started, sizeof started, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/fast", "--inject",
+                   "sigint@100"},
+                  d + "/fast-start"),
+              3);
+    inv = nlohmann::json::parse(slurp(d + "/fast/run.json"));
+    inv["started"] = started;
+    std::ofstream(d + "/fast/run.json") << inv.dump();
+    const struct timeval tv[2] = {{fast, 0}, {fast, 0}};
+    ASSERT_EQ(::utimes((d + "/fast/run.json").c_str(), tv), 0);
+    EXPECT_EQ(run({"run", "--resume", d + "/fast", "--yes", "--quiet"}, d + "/fast-io"), 0) << slurp(d + "/fast-io.stderr");
+    EXPECT_EQ(nlohmann::json::parse(slurp(d + "/fast/passport.json"))["started"], started);
+    EXPECT_NE(slurp(d + "/fast-io.stderr").find("rig: warning: " + d + "/fast/run.json: the run started at " +
+                                                 started + " by this station's clock, later than its clock now"),
+              std::string::npos)
+        << slurp(d + "/fast-io.stderr");
   }
 
   // Capture headers with a rate the analysis cannot use: named at the header, exit 2.
