@@ -1450,7 +1450,8 @@ std::string resume_refusal(const std::string& dir) {
   std::error_code ec;
   if (!fs::is_regular_file(dir + "/run.json", ec))
     return "its run.json is gone from " + shown_text(dir) +
-           " (the folder removed or moved while the run went on: a folder moved whole resumes where it is now)";
+           " (the folder removed or moved while the run went on): a folder moved whole resumes where it is now "
+           "(rig run --resume NEW-PLACE); else start a new run";
   try {
     refuse_records_without_checkpoint(dir);
     RunArgs again;

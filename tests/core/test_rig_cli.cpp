@@ -4304,8 +4304,11 @@ TEST(RigCli, AStopOffersAResumeOnlyWhereOneWouldStart) {
     EXPECT_TRUE(rc == 3 || rc == 4) << rc << slurp(d + "/mv-io.stderr");
     const std::string err = slurp(d + "/mv-io.stderr");
     EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
+    // The way on for a folder moved whole, not "start a new run" after it (a technician's review:
+    // the message contradicted itself, and the resume where it is now worked).
     EXPECT_NE(err.find("no resume: its run.json is gone from " + d + "/mv (the folder removed or moved while the run went "
-                       "on: a folder moved whole resumes where it is now); start a new run"),
+                       "on): a folder moved whole resumes where it is now (rig run --resume NEW-PLACE); else start a new "
+                       "run\n"),
               std::string::npos)
         << err;
   }
