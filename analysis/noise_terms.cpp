@@ -362,7 +362,11 @@ NoiseTerms noise_terms(std::span<const DevPoint> oadev, double record_length_s, 
   // One model, every term the data supports (noise_model.hpp): no record-length rule in the fit.
   out.model = fit_noise_model(oadev, record_length_s, confidence);
   out.wls = wls_from_model(out.model);
-  const std::string too_short = "; the record is shorter than the " + fmt(r_min_record_s / 3600) + " h the profile requires for R";
+  // Said as what it means for the value, not as a missing requirement ("requires" read as a
+  // mandatory value missing on a passport that passed: a technician's review).
+  const std::string too_short = "; the record is shorter than the " + fmt(r_min_record_s / 3600) +
+                                " h the profile asks for R (r_min_record_s): over it a random walk's trend reads as a ramp "
+                                "too, so this is not yet the DUT's R";
   if (out.wls.R.value && record_length_s < r_min_record_s) out.wls.R.reason += too_short;
   out.Q = out.wls.Q;
   out.N = out.wls.N;
