@@ -10,6 +10,7 @@
 #include <ctime>
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <signal.h>
 #include <poll.h>
 #include <unistd.h>
@@ -771,6 +772,40 @@ void check_run_folder(const std::string& dir, bool new_run_here, const std::stri
   if (!can_create_file_in(p))
     throw ConfigError(option + " " + dir + ": the run folder is not writable (" + p.string() + ")");
   if (new_run_here) refuse_an_earlier_run(dir, profile_source);
+}
+
+// What the run's recordings take on disk: every sample is a 16-byte record of its capture
+// (docs/capture-format.md), and analysis.json, checkpoint.json and report.html add about a tenth
+// (the `paper` profile: 103 MB of captures, 109 MB in all). Retries of a capture are not counted.
+std::uint64_t recordings_bytes(const acceptance::Profile& p) {
+  const double seconds = static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s;
+  return static_cast<std::uint64_t>(16 * p.rate_hz * seconds * 1.1) + (std::uint64_t{1} << 20);
+}
+
+// The room the run folder has: free bytes for this process on the file system of `dir` (its
+// nearest existing ancestor), compared with the profile's recordings. A new run that cannot fit
+// is refused before anything opens (a technician's review: a `paper` run into a folder with
+// 100 MB free stopped at its 30-minute capture, 50 minutes of bench time lost); a resume (which
+// records less) is warned. Returns the line the dry run prints.
+std::string check_room(const std::string& dir, const std::string& option, const acceptance::Profile& p, bool resume) {
+  std::error_code ec;
+  const fs::path at = nearest_existing(fs::absolute(dir, ec));
+  struct statvfs v {};
+  if (::statvfs(at.c_str(), &v) != 0) return "";
+  const std::uint64_t free = static_cast<std::uint64_t>(v.f_bavail) * v.f_frsize, need = recordings_bytes(p);
+  auto mb = [](std::uint64_t b) { return fmt::format("{:.0f} MB", std::ceil(static_cast<double>(b) / 1e6)); };
+  const std::string line = fmt::format("Disk: the recordings take about {}{}; {} free on the file system of {}", mb(need),
+                                       resume ? " for a whole run (a resume records only what is left)" : "", mb(free),
+                                       at.string());
+  if (free >= need) return line;
+  const std::string why = fmt::format(
+      "{} {}: {} free on its file system ({}), and the profile's recordings take about {} ({:.0f} s of samples at {:g} "
+      "Hz, 16 bytes each, and the analysis): the run would stop when the disk is full",
+      option, shown_text(dir), mb(free), at.string(), mb(need),
+      static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s, p.rate_hz);
+  if (!resume) throw ConfigError(why + "; free space, or give --out on another file system");
+  std::cerr << "rig: warning: " << why << " if it records all of it\n";
+  return line;
 }
 
 // The paths the run writes into its JSON files (run.json, passport.json, the history row) must be
@@ -1612,6 +1647,8 @@ int do_run(RunArgs a) {
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
     check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
                      a.resume.empty() ? "--out" : "--resume", p.source);
+    const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
+                                        a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
     // opened), before the plan is printed, so the plan says what the resume keeps, computes
     // again and still records.
@@ -1678,6 +1715,7 @@ int do_run(RunArgs a) {
     }
     // What a resume leaves in the run's own database, said before it runs as the resume will say it.
     if (!a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
+    if (!room.empty()) std::cout << room << "\n";
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
     std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
@@ -1702,6 +1740,7 @@ int do_run(RunArgs a) {
   // a "no" at the prompts may remove it; a folder the user made stays.
   bool made_here = a.out.empty();
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
+  (void)check_room(a.out, a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
   // Before the operator is asked anything, and before prepare_run_folder's write probe touches
   // the earlier run's folder (nor a folder another run holds: its lock is taken first).
   if (a.resume.empty()) {

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <sys/time.h>
 #include <unistd.h>
 
@@ -2445,6 +2446,35 @@ TEST(RigCli, AProcedureAngleOutsideTheTablesTravelIsRefusedBeforeTheRun) {
   EXPECT_NE(slurp(d + "/io5.stderr").find("; change the profile's [table] u10_deg / u20_deg or the limits"),
             std::string::npos)
       << slurp(d + "/io5.stderr");
+}
+
+// A new run whose recordings cannot fit the run folder's file system is refused before anything
+// opens or is made, its dry run too, and the dry run says the room it has (a technician's review:
+// a `paper` run into 100 MB stopped at its 30-minute capture).
+TEST(RigCli, ARunThatCannotFitItsRecordingsIsRefusedBeforeItStarts) {
+  const std::string d = tmp("room");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--out", d + "/ok", "--dry-run"}, d + "/dry"), 0);
+  EXPECT_NE(slurp(d + "/dry.stdout").find("Disk: the recordings take about 4 MB; "), std::string::npos)
+      << slurp(d + "/dry.stdout");
+  // 3.2e7 s of samples at 1 kHz: about 563 GB.
+  std::ofstream(d + "/huge.toml") << "base = \"ci\"\n[profile]\nname = \"t-huge\"\n[procedure]\nraw_s = 1e7\n"
+                                     "in_run_s = 1e7\nrun_s = 1e6\n";
+  struct statvfs v {};
+  ASSERT_EQ(::statvfs(d.c_str(), &v), 0);
+  if (static_cast<double>(v.f_bavail) * static_cast<double>(v.f_frsize) > 5e11) GTEST_SKIP() << "more than 500 GB free here";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", d + "/huge.toml", "--yes", "--no-history", "--out", d + "/big"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/big-io"), 2) << slurp(d + "/big-io.stderr");
+    EXPECT_NE(slurp(d + "/big-io.stderr").find("--out " + d + "/big: "), std::string::npos) << slurp(d + "/big-io.stderr");
+    EXPECT_NE(slurp(d + "/big-io.stderr").find("and the profile's recordings take about 563202 MB (32000000 s of samples at "
+                                               "1000 Hz, 16 bytes each, and the analysis): the run would stop when the disk "
+                                               "is full; free space, or give --out on another file system"),
+              std::string::npos)
+        << slurp(d + "/big-io.stderr");
+    EXPECT_FALSE(fs::exists(d + "/big"));
+  }
 }
 
 // One process per run folder: a folder another process holds (its flock, as a running `rig run`
