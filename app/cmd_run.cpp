@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -1129,7 +1130,15 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   file->set_level(spdlog::level::debug);
   auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
   err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
-  auto log = std::make_shared<spdlog::logger>("rig", spdlog::sinks_init_list{file, err});
+  // The console first: a sink that throws (run.log on a full disk) ends the logger's loop over
+  // its sinks, and the console then lost the line too. The failure said once, as rig says
+  // warnings, not spdlog's "[*** LOG ERROR #0001 ***]" (a technician's review).
+  auto log = std::make_shared<spdlog::logger>("rig", spdlog::sinks_init_list{err, file});
+  log->set_error_handler([out_dir, said = std::make_shared<std::atomic<bool>>(false)](const std::string& msg) {
+    if (!said->exchange(true))
+      std::cerr << "rig: warning: " << out_dir << "/run.log: a line could not be written (" << msg
+                << "); the run's log is short of what follows while that lasts\n";
+  });
   log->set_level(spdlog::level::debug);
   // UTC, marked so, as every other time the run writes (passport, run.json, history): local
   // time without its zone could not be put beside them (an integrator's review).
