@@ -358,7 +358,8 @@ std::vector<std::string> record_notes(const Recorded& rec, const json& passport)
   for (const auto& [other, dir] : rec.elsewhere)
     out.push_back("the same run (serial " + passport.value("serial", std::string()) + ", started " +
                   passport.value("started", std::string()) + ") is also recorded from " + dir + " (run " +
-                  std::to_string(other) + "): a copy of its folder? The listing and the statistics count it twice");
+                  std::to_string(other) + "): a copy of its folder, or another run of this DUT started in the same second "
+                  "(two stations, the emulated plant's one serial)? The listing and the statistics count it twice");
   return out;
 }
 

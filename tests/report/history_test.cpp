@@ -758,7 +758,7 @@ TEST(HistoryCli, RecordRefusesWhatTheReportRefusesAndNotesACopy) {
   run_cli({"--db", db, "--record", (d.path / "copy").string()});
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_NE(err.find("the same run (serial SN-1, started 2026-11-01T08:00:00Z) is also recorded from " +
-                     fs::weakly_canonical(d.path / "r").string() + " (run 1): a copy of its folder?"),
+                     fs::weakly_canonical(d.path / "r").string() + " (run 1): a copy of its folder, or another run of this DUT started in the same second"),
             std::string::npos)
       << err;
   // A folder moved whole (the run went on there, then was resumed where it is now): the same row
