@@ -286,23 +286,23 @@ void check_input_path(const std::string& path, const std::string& input, const s
                        "\"): a text record, one value per line, is read with --input text");
     }
     // The other width: nonsense values of a plausible size (a float32 record of 0.98 g read as
-    // float64 gave 0.0039 g with deviations of 6e-7, exit 0; a review). Refused only where the
-    // bits leave no doubt (9 in 10 groups as the other width's, fewer than 1 in 4 as this one's; a float64 record's groups
-    // read as float32 pairs about 1 in 8).
+    // float64 gave 0.0039 g with deviations of 6e-7, exit 0; a review). Warned, not refused: the
+    // bits are evidence, not proof (9 in 10 groups as the other width's, fewer than 1 in 4 as this
+    // one's; a float64 record's groups read as float32 pairs about 1 in 8, but a constant's low
+    // halves are one value, and a float32 record with every other sample 0 reads as float64 of
+    // like size: a review found both refused).
     const RawWidth w = raw_width(head);
-    const std::string start = path + ": read as raw " + (input == "f64" ? "float64" : "float32") + " (" +
-                              (how.empty() ? "--input " + input : how) + "), but " +
+    const std::string start = "rig: warning: " + path + ": read as raw " + (input == "f64" ? "float64" : "float32") +
+                              " (" + (how.empty() ? "--input " + input : how) + "), but " +
                               (head.size() < 4096 ? "all its " : "its first ") + std::to_string(head.size()) + " bytes ";
     if (w.groups >= 16 && input == "f64" && 10 * w.f32_pairs >= 9 * w.groups)
-      throw InputError(start + "look like float32 values: " + std::to_string(w.f32_pairs) + " of their " +
-                       std::to_string(w.groups) +
-                       " 8-byte values are two float32 of like size (a float64's low half is mantissa bits); "
-                       "a raw float32 record is read with --input f32");
+      std::cerr << start << "look like float32 values: " << w.f32_pairs << " of their " << w.groups
+                << " 8-byte values are two float32 of like size (a float64's low half is mantissa bits); if the record "
+                   "is float32, read it with --input f32\n";
     if (w.groups >= 16 && input == "f32" && 4 * w.f32_pairs < w.groups && 10 * w.f64_like >= 9 * w.groups)
-      throw InputError(start + "look like float64 values: " + std::to_string(w.f64_like) + " of their " +
-                       std::to_string(w.groups) + " 8-byte values are float64 of like size, and only " +
-                       std::to_string(w.f32_pairs) +
-                       " read as two float32 of like size; a raw float64 record is read with --input f64");
+      std::cerr << start << "look like float64 values: " << w.f64_like << " of their " << w.groups
+                << " 8-byte values are float64 of like size, and only " << w.f32_pairs
+                << " read as two float32 of like size; if the record is float64, read it with --input f64\n";
   }
 }
 

@@ -742,32 +742,41 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
       << slurp(d + "/vbin.stdout");
   // The other width: float32 samples read as float64 gave values of a plausible size (0.98 g
   // read as 0.0039 g, exit 0; a review); a float64 record read as float32 was refused at its first
-  // NaN, saying nothing of why. Both are refused by their bits, naming the right --input.
+  // NaN, saying nothing of why. Both are warned by their bits, naming the right --input (warned,
+  // not refused: a constant float64 record and a float32 one with every other sample 0 look like
+  // the other width too, a re-test); the right width is not warned.
   {
-    std::ofstream f(d + "/s.bin", std::ios::binary), g(d + "/s.f32", std::ios::binary);
+    std::ofstream f(d + "/s.bin", std::ios::binary), g(d + "/s.f32", std::ios::binary), c(d + "/g.f64", std::ios::binary);
     for (int k = 0; k < 512; ++k) {
       const float v = 0.98f + 1e-5f * static_cast<float>(std::sin(k * 0.7));
       f.write(reinterpret_cast<const char*>(&v), sizeof v);
       const double w = 0.98 + 1e-5 * std::sin(k * 0.7);
       g.write(reinterpret_cast<const char*>(&w), sizeof w);
+      const double g0 = 9.80665;  // a constant whose low halves read as a float32 of like size
+      c.write(reinterpret_cast<const char*>(&g0), sizeof g0);
     }
   }
-  EXPECT_EQ(run({"analyze", d + "/s.bin", "--rate", "1"}, d + "/sbin"), 2);
-  EXPECT_NE(slurp(d + "/sbin.stderr").find(d + "/s.bin: read as raw float64 (its .bin name), but all its 2048 bytes look like "
-                                           "float32 values: 256 of their 256 8-byte values are two float32 of like size"),
+  EXPECT_EQ(run({"analyze", d + "/s.bin", "--rate", "1", "--no-psd"}, d + "/sbin"), 0) << slurp(d + "/sbin.stderr");
+  EXPECT_NE(slurp(d + "/sbin.stderr").find("rig: warning: " + d + "/s.bin: read as raw float64 (its .bin name), but all its "
+                                           "2048 bytes look like float32 values: 256 of their 256 8-byte values are two "
+                                           "float32 of like size"),
             std::string::npos)
       << slurp(d + "/sbin.stderr");
-  EXPECT_NE(slurp(d + "/sbin.stderr").find("a raw float32 record is read with --input f32"), std::string::npos);
+  EXPECT_NE(slurp(d + "/sbin.stderr").find("if the record is float32, read it with --input f32"), std::string::npos);
   EXPECT_EQ(run({"analyze", d + "/s.bin", "--rate", "1", "--input", "f32", "--no-psd"}, d + "/sbinf32"), 0)
       << slurp(d + "/sbinf32.stderr");
+  EXPECT_EQ(slurp(d + "/sbinf32.stderr").find("warning"), std::string::npos) << slurp(d + "/sbinf32.stderr");
   EXPECT_EQ(run({"analyze", d + "/s.f32", "--rate", "1"}, d + "/sf32"), 2);
-  EXPECT_NE(slurp(d + "/sf32.stderr").find(d + "/s.f32: read as raw float32 (its .f32 name), but its first 4096 bytes look "
-                                           "like float64 values: 512 of their 512 8-byte values are float64 of like size"),
+  EXPECT_NE(slurp(d + "/sf32.stderr").find("rig: warning: " + d + "/s.f32: read as raw float32 (its .f32 name), but its "
+                                           "first 4096 bytes look like float64 values: 512 of their 512 8-byte values are "
+                                           "float64 of like size"),
             std::string::npos)
       << slurp(d + "/sf32.stderr");
-  EXPECT_NE(slurp(d + "/sf32.stderr").find("a raw float64 record is read with --input f64"), std::string::npos);
+  EXPECT_NE(slurp(d + "/sf32.stderr").find("if the record is float64, read it with --input f64"), std::string::npos);
   EXPECT_EQ(run({"analyze", d + "/s.f32", "--rate", "1", "--input", "f64", "--no-psd"}, d + "/sf32f64"), 0)
       << slurp(d + "/sf32f64.stderr");
+  EXPECT_EQ(slurp(d + "/sf32f64.stderr").find("warning"), std::string::npos) << slurp(d + "/sf32f64.stderr");
+  EXPECT_EQ(run({"analyze", d + "/g.f64", "--rate", "1", "--no-psd"}, d + "/gf64"), 0) << slurp(d + "/gf64.stderr");
   EXPECT_EQ(run({"analyze", d + "/folder"}, d + "/dir"), 2);
   EXPECT_NE(slurp(d + "/dir.stderr").find(d + "/folder: is a folder, not a record"), std::string::npos)
       << slurp(d + "/dir.stderr");
