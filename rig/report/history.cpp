@@ -238,28 +238,11 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
   // A run is its folder, start time, DUT and station (v4); a row from before v2 has no station,
   // and one recorded before the DUT gave its serial (a run stopped in bring-up, then resumed) has
   // none either: the same run (a re-test: it became a second row).
-  auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? AND "
-                       "(serial = ? OR serial = '') AND (station IS NOT DISTINCT FROM ? OR station IS NULL) "
-                       "ORDER BY id",
-                       {dir, started, passport["serial"].get<std::string>(), station_name(passport)});
+  const auto was = db->query("SELECT id FROM runs WHERE run_dir = ? AND started IS NOT DISTINCT FROM ? AND "
+                             "(serial = ? OR serial = '') AND (station IS NOT DISTINCT FROM ? OR station IS NULL) "
+                             "ORDER BY id",
+                             {dir, started, passport["serial"].get<std::string>(), station_name(passport)});
   Recorded rec;
-  // A folder moved while its run went on (the run ended ERROR there, and was resumed where it is
-  // now): the same run, the same DUT, start and station, recorded from a folder that no longer
-  // holds it. Its row follows the run (a technician's review: an ERROR row for the old folder and a
-  // PASS row for the new one, the ERROR not among the PASS's earlier endings). A folder that is
-  // still there is a copy's original, kept apart (`elsewhere` below).
-  if (was.empty() && !std::holds_alternative<std::monostate>(started)) {
-    for (const Row& r : db->query("SELECT id, run_dir FROM runs WHERE serial = ? AND serial <> '' AND started = ? AND "
-                                  "(station IS NOT DISTINCT FROM ?) AND run_dir <> ? ORDER BY id",
-                                  {passport["serial"].get<std::string>(), started, station_name(passport), dir})) {
-      std::error_code ec;
-      const std::string old_dir = as_text(r[1]);
-      if (old_dir.empty() || fs::exists(fs::path(old_dir), ec) || ec) continue;
-      was.push_back(r);
-      rec.moved_from = old_dir;
-      break;
-    }
-  }
   if (was.empty()) {
     rec.id = as_int(db->query("INSERT INTO runs (serial, profile, plant, software, started, finished, outcome, run_dir, "
                               "passport, station, aborted_reason, recorded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
@@ -351,10 +334,6 @@ Recorded record_run(const std::string& db_url, const json& passport, const std::
 std::vector<std::string> record_notes(const Recorded& rec, const json& passport) {
   std::vector<std::string> out;
   if (rec.replaced_verdict) out.push_back(replaced_verdict_note(rec, passport.value("outcome", "")));
-  if (rec.moved_from)
-    out.push_back("the run's row (run " + std::to_string(rec.id) + ") was recorded from " + *rec.moved_from +
-                  ", which is no longer there (moved while the run went on?): it follows the run here, its "
-                  "earlier endings kept");
   for (const auto& [other, dir] : rec.elsewhere)
     out.push_back("the same run (serial " + passport.value("serial", std::string()) + ", started " +
                   passport.value("started", std::string()) + ") is also recorded from " + dir + " (run " +

@@ -47,10 +47,6 @@ struct Recorded {
   // Runs recorded from another folder with the same serial and start time: a copy of the run's
   // folder recorded too (their id and folder), which the listing and statistics count twice.
   std::vector<std::pair<long long, std::string>> elsewhere;
-  // Set when the run's row was recorded from another folder that is no longer there (the folder
-  // moved while the run went on, then resumed where it is now): that folder; the row
-  // follows the run to its new folder, its earlier endings kept.
-  std::optional<std::string> moved_from;
 };
 
 // Records one run (also aborted ones). `db_url`: "sqlite:PATH", a plain path, or

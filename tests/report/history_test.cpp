@@ -761,33 +761,6 @@ TEST(HistoryCli, RecordRefusesWhatTheReportRefusesAndNotesACopy) {
                      fs::weakly_canonical(d.path / "r").string() + " (run 1): a copy of its folder, or another run of this DUT started in the same second"),
             std::string::npos)
       << err;
-  // A folder moved whole (the run went on there, then was resumed where it is now): the same row
-  // follows it, its earlier ending kept, not a second row (a technician's review: an ERROR row for
-  // the old folder, a PASS row for the new one).
-  json ended = good;
-  ended["outcome"] = "ERROR";
-  ended["aborted_reason"] = "the folder was moved while the run went on";
-  ended["started"] = "2026-11-02T08:00:00Z";
-  rig::test::write_run(d.path / "m", ended, nullptr);
-  run_cli({"--db", db, "--record", (d.path / "m").string()});
-  const std::string m_dir = fs::weakly_canonical(d.path / "m").string();
-  fs::rename(d.path / "m", d.path / "m.moved");
-  json resumed = good;
-  resumed["started"] = ended["started"];
-  rig::test::write_run(d.path / "m.moved", resumed, nullptr);
-  testing::internal::CaptureStderr();
-  run_cli({"--db", db, "--record", (d.path / "m.moved").string()});
-  const std::string moved = testing::internal::GetCapturedStderr();
-  EXPECT_NE(moved.find("the run's row (run 3) was recorded from " + m_dir + ", which is no longer there"), std::string::npos)
-      << moved;
-  const auto rows = rig::history::list_runs(db, {});
-  EXPECT_EQ(rows.size(), 3u);
-  for (const auto& r : rows)
-    if (r.id == 3) {
-      EXPECT_EQ(r.run_dir, fs::weakly_canonical(d.path / "m.moved").string());
-      EXPECT_EQ(r.outcome, good["outcome"].get<std::string>());
-      EXPECT_EQ(r.earlier, std::vector<std::string>{"ERROR"});
-    }
 }
 
 }  // namespace
