@@ -283,7 +283,9 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
         throw ConfigError(path + ": field 'started': " + s + " is later than this station's clock (" + iso8601_utc_now() +
                           ") by more than a day, and run.json's own file time (" +
                           (ec ? std::string("unreadable") : iso8601_utc(static_cast<std::time_t>(file_s))) +
-                          ") is not that start's: the field was changed after the run wrote it; nothing done");
+                          ") does not witness that start (a copy that did not keep file times, or the field changed "
+                          "after the run wrote it); nothing done. If this station's clock was that far ahead when the "
+                          "run began, give run.json that time (touch -d " + s + " run.json) and resume");
       std::cerr << "rig: warning: " << path << ": the run started at " << s << " by this station's clock, later than "
                 << "its clock now (" << iso8601_utc_now() << "): the clock was wrong then or is now; the passport and "
                 << "the history keep that start time\n";
@@ -776,11 +778,13 @@ void check_run_folder(const std::string& dir, bool new_run_here, const std::stri
 }
 
 // What the run's recordings take on disk: every sample is a 16-byte record of its capture
-// (docs/capture-format.md), and analysis.json, checkpoint.json and report.html add about a tenth
-// (the `paper` profile: 103 MB of captures, 109 MB in all). Retries of a capture are not counted.
+// (docs/capture-format.md); analysis.json and checkpoint.json grow with them (a tenth), and they,
+// report.html and loop-test.csv take about 2 MB on the shortest profile (the `paper` profile: 103
+// MB of captures, 109-114 MB in all; ci 2 MB, 3.8 MB: a re-test found 1.1x + 1 MB short there).
+// Retries of a capture are not counted.
 std::uint64_t recordings_bytes(const acceptance::Profile& p) {
   const double seconds = static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s;
-  return static_cast<std::uint64_t>(16 * p.rate_hz * seconds * 1.1) + (std::uint64_t{1} << 20);
+  return static_cast<std::uint64_t>(16 * p.rate_hz * seconds * 1.1) + 3'000'000;
 }
 
 // The room the run folder has: free bytes for this process on the file system of `dir` (its
@@ -793,16 +797,21 @@ std::string check_room(const std::string& dir, const std::string& option, const 
   const fs::path at = nearest_existing(fs::absolute(dir, ec));
   struct statvfs v {};
   if (::statvfs(at.c_str(), &v) != 0) return "";
-  const std::uint64_t free = static_cast<std::uint64_t>(v.f_bavail) * v.f_frsize, need = recordings_bytes(p);
-  auto mb = [](std::uint64_t b) { return fmt::format("{:.0f} MB", std::ceil(static_cast<double>(b) / 1e6)); };
-  const std::string line = fmt::format("Disk: the recordings take about {}{}; {} free on the file system of {}", mb(need),
-                                       resume ? " for a whole run (a resume records only what is left)" : "", mb(free),
-                                       at.string());
+  // Root writes into the blocks a file system reserves for it (the run would fit there).
+  const std::uint64_t free = static_cast<std::uint64_t>(::geteuid() == 0 ? v.f_bfree : v.f_bavail) * v.f_frsize,
+                      need = recordings_bytes(p);
+  // The need rounded up, the room down: "4 MB free ... take about 4 MB ... would stop" read as a
+  // contradiction (a re-test).
+  auto mb_up = [](std::uint64_t b) { return fmt::format("{:.0f} MB", std::ceil(static_cast<double>(b) / 1e6)); };
+  auto mb_down = [](std::uint64_t b) { return fmt::format("{:.0f} MB", std::floor(static_cast<double>(b) / 1e6)); };
+  const std::string line = fmt::format("Disk: the recordings take about {}{}; {} free on the file system of {}",
+                                       mb_up(need), resume ? " for a whole run (a resume records only what is left)" : "",
+                                       mb_down(free), at.string());
   if (free >= need) return line;
   const std::string why = fmt::format(
       "{} {}: {} free on its file system ({}), and the profile's recordings take about {} ({:.0f} s of samples at {:g} "
       "Hz, 16 bytes each, and the analysis): the run would stop when the disk is full",
-      option, shown_text(dir), mb(free), at.string(), mb(need),
+      option, shown_text(dir), mb_down(free), at.string(), mb_up(need),
       static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s, p.rate_hz);
   if (!resume) throw ConfigError(why + "; free space, or give --out on another file system");
   std::cerr << "rig: warning: " << why << " if it records all of it\n";
