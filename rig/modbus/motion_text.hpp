@@ -87,11 +87,13 @@ void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& la
   try {
     write();
   } catch (const ModbusError& e) {
-    // A timeout is a request sent and not answered: a drive that hangs takes it when it runs again
-    // (a bring-up review: "not delivered", and the drive read Quick stop active once resumed).
+    // A timeout is most often a request sent and not answered: a drive that hangs takes it when it
+    // runs again (a bring-up review: "not delivered", and the drive read Quick stop active once
+    // resumed). Not always (a send that timed out sent nothing), and an earlier attempt may have
+    // gone out before a reconnect failed: so "not confirmed", never "sent".
     try {
       err = std::string(name) +
-            (e.timeout ? " not confirmed (sent, unanswered: the drive may still take it when it answers again; the "
+            (e.timeout ? " not confirmed (unanswered in time: the drive may still take it when it answers again; the "
                          "table may still be moving): "
                        : " not delivered (the table may still be moving): ") +
             e.what();

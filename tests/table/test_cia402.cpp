@@ -1536,7 +1536,7 @@ TEST_P(Cia402Client, SilentDriveIsALinkFailureNamingObjectRegisterDriveAndTheSto
   const std::string e = error_of([&] { t->move_to(180.0, {}); });
   EXPECT_TRUE(has(e, "link failure") && has(e, "statusword (0x6041)") && has(e, "register " +
               std::to_string(r.map.spec(Obj::kStatusword).address)) && has(e, "\"" + r.map.name + "\"") &&
-              has(e, "timeout") && has(e, "halt not confirmed (sent, unanswered: the drive may still take it when it answers again; the table may still be moving)"))
+              has(e, "timeout") && has(e, "halt not confirmed (unanswered in time: the drive may still take it when it answers again; the table may still be moving)"))
       << e;
 }
 

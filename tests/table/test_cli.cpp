@@ -387,7 +387,7 @@ TEST_F(RigTable, ASignalOnADeadLinkSaysTheHaltWasNotDelivered) {
   ASSERT_TRUE(WIFEXITED(st));
   EXPECT_EQ(WEXITSTATUS(st), 3) << said;
   EXPECT_NE(said.find("rig: the table's position could not be read after the signal ("), std::string::npos) << said;
-  EXPECT_NE(said.find("); stop not confirmed (sent, unanswered: the drive may still take it when it answers again; the table may still be moving): "), std::string::npos) << said;
+  EXPECT_NE(said.find("); stop not confirmed (unanswered in time: the drive may still take it when it answers again; the table may still be moving): "), std::string::npos) << said;
   EXPECT_EQ(said.find("halt delivered"), std::string::npos) << said;
 }
 
@@ -563,7 +563,7 @@ TEST(RigTableSilentLink, ACia402StopAsksOnlyForWhatItNeeds) {
   std::string out;
   const std::string where = " --modbus 127.0.0.1:" + std::to_string(ntohs(a.sin_port)) + " --timeout 0.05 ";
   EXPECT_EQ(run(std::string(RIG_BIN) + " table" + where + "stop", out), 4) << out;
-  EXPECT_NE(out.find("stop not confirmed (sent, unanswered: the drive may still take it when it answers again; the table may still be moving)"), std::string::npos) << out;
+  EXPECT_NE(out.find("stop not confirmed (unanswered in time: the drive may still take it when it answers again; the table may still be moving)"), std::string::npos) << out;
   // Its servo bit was a guess (the status unread): said, since a drive that took it late (a slow
   // link, not this silent one) switched its servo off (a review).
   EXPECT_NE(out.find("; if it reached the drive: stop written with SERVO_ON cleared (CONTROL 0x0100): the drive's "

@@ -152,10 +152,10 @@ TEST(TableInProcess, NoAnswerMidMoveIsALinkFailureAndBounded) {
   // Failed after the profile's half way point plus the response timeouts, not the move timeout.
   EXPECT_LT(r.clock.now_s() - t0, 5.0);
   auto* client = dynamic_cast<m::TableClient*>(r.table.get());
-  EXPECT_NE(client->last_stop_error().find("stop not confirmed (sent, unanswered"), std::string::npos);
+  EXPECT_NE(client->last_stop_error().find("stop not confirmed (unanswered in time"), std::string::npos);
   // The exit-4 message itself says the halt went out unanswered (issue 13 item 8): a drive that
   // hangs takes it when it runs again (a bring-up review).
-  EXPECT_NE(err.find("; stop not confirmed (sent, unanswered: the drive may still take it when it answers again; the table may still be moving)"), std::string::npos) << err;
+  EXPECT_NE(err.find("; stop not confirmed (unanswered in time: the drive may still take it when it answers again; the table may still be moving)"), std::string::npos) << err;
 }
 
 TEST(TableInProcess, FaultMessageSaysTheHaltWasDelivered) {
@@ -750,11 +750,11 @@ TEST(TableInProcess, StopAndQuickStopOnASilentDriveReturnAndSayWhy) {
   r.emu->inject(SimFault::kNoAnswer);
   const double t0 = r.clock.now_s();
   r.table->quick_stop();  // noexcept: a throw would terminate the test
-  EXPECT_NE(client->last_stop_error().find("quick stop not confirmed (sent, unanswered"), std::string::npos);
+  EXPECT_NE(client->last_stop_error().find("quick stop not confirmed (unanswered in time"), std::string::npos);
   EXPECT_NE(client->last_stop_error().find("timeout"), std::string::npos);
   // (A quick stop not confirmed does not stand: the halt after it is sent, and fails too.)
   r.table->stop();
-  EXPECT_NE(client->last_stop_error().find("stop not confirmed (sent, unanswered"), std::string::npos) << client->last_stop_error();
+  EXPECT_NE(client->last_stop_error().find("stop not confirmed (unanswered in time"), std::string::npos) << client->last_stop_error();
   // Bounded: one response timeout per call (urgent calls never retry in-process).
   EXPECT_NEAR(r.clock.now_s() - t0, 0.6, 1e-9);
 }
