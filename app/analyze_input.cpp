@@ -275,14 +275,15 @@ void check_input_path(const std::string& path, const std::string& input, const s
     // Text as the text reader reads it (ASCII, tab, CR, well-formed UTF-8) and the line ends.
     const bool text = head.size() >= 16 &&
                       binary_bytes(head) == static_cast<std::size_t>(std::count(head.begin(), head.end(), '\n'));
+    // What the file was read as and the bytes looked at, as the refusal and the warnings say it.
+    const std::string read_as = path + ": read as raw " + (input == "f64" ? "float64" : "float32") + " (" +
+                                (how.empty() ? "--input " + input : how) + "), but " +
+                                (head.size() < 4096 ? "all its " : "its first ") + std::to_string(head.size()) + " bytes ";
     if (text) {
       // Its first line that holds anything, as the file's start shows it.
       const std::size_t from = std::min(head.find_first_not_of(" \t\r\n"), head.size());
       const std::size_t eol = std::min(head.find_first_of("\r\n", from), head.size());
-      throw InputError(path + ": read as raw " + (input == "f64" ? "float64" : "float32") + " (" +
-                       (how.empty() ? "--input " + input : how) + "), but " +
-                       (head.size() < 4096 ? "all its " : "its first ") + std::to_string(head.size()) +
-                       " bytes are text (\"" + quoted_bytes(head.substr(from, std::min<std::size_t>(eol - from, 40))) +
+      throw InputError(read_as + "are text (\"" + quoted_bytes(head.substr(from, std::min<std::size_t>(eol - from, 40))) +
                        "\"): a text record, one value per line, is read with --input text");
     }
     // The other width: nonsense values of a plausible size (a float32 record of 0.98 g read as
@@ -292,9 +293,7 @@ void check_input_path(const std::string& path, const std::string& input, const s
     // halves are one value, and a float32 record with every other sample 0 reads as float64 of
     // like size: a review found both refused).
     const RawWidth w = raw_width(head);
-    const std::string start = "rig: warning: " + path + ": read as raw " + (input == "f64" ? "float64" : "float32") +
-                              " (" + (how.empty() ? "--input " + input : how) + "), but " +
-                              (head.size() < 4096 ? "all its " : "its first ") + std::to_string(head.size()) + " bytes ";
+    const std::string start = "rig: warning: " + read_as;
     if (w.groups >= 16 && input == "f64" && 10 * w.f32_pairs >= 9 * w.groups)
       std::cerr << start << "look like float32 values: " << w.f32_pairs << " of their " << w.groups
                 << " 8-byte values are two float32 of like size (a float64's low half is mantissa bits); if the record "

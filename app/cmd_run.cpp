@@ -782,9 +782,11 @@ void check_run_folder(const std::string& dir, bool new_run_here, const std::stri
 // report.html and loop-test.csv take about 2 MB on the shortest profile (the `paper` profile: 103
 // MB of captures, 109-114 MB in all; ci 2 MB, 3.8 MB: a re-test found 1.1x + 1 MB short there).
 // Retries of a capture are not counted.
+double recorded_seconds(const acceptance::Profile& p) {
+  return static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s;
+}
 std::uint64_t recordings_bytes(const acceptance::Profile& p) {
-  const double seconds = static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s;
-  return static_cast<std::uint64_t>(16 * p.rate_hz * seconds * 1.1) + 3'000'000;
+  return static_cast<std::uint64_t>(16 * p.rate_hz * recorded_seconds(p) * 1.1) + 3'000'000;
 }
 
 // The room the run folder has: free bytes for this process on the file system of `dir` (its
@@ -811,8 +813,7 @@ std::string check_room(const std::string& dir, const std::string& option, const 
   const std::string why = fmt::format(
       "{} {}: {} free on its file system ({}), and the profile's recordings take about {} ({:.0f} s of samples at {:g} "
       "Hz, 16 bytes each, and the analysis): the run would stop when the disk is full",
-      option, shown_text(dir), mb_down(free), at.string(), mb_up(need),
-      static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s, p.rate_hz);
+      option, shown_text(dir), mb_down(free), at.string(), mb_up(need), recorded_seconds(p), p.rate_hz);
   if (!resume) throw ConfigError(why + "; free space, or give --out on another file system");
   std::cerr << "rig: warning: " << why << " if it records all of it\n";
   return line;

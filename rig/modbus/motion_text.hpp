@@ -86,22 +86,18 @@ void deliver_stop(const char* name, Write write, std::mutex& mu, std::string& la
   std::string err;
   try {
     write();
-  } catch (const ModbusError& e) {
+  } catch (const std::exception& e) {
     // A timeout is most often a request sent and not answered: a drive that hangs takes it when it
     // runs again (a bring-up review: "not delivered", and the drive read Quick stop active once
     // resumed). Not always (a send that timed out sent nothing), and an earlier attempt may have
     // gone out before a reconnect failed: so "not confirmed", never "sent".
+    const auto* m = dynamic_cast<const ModbusError*>(&e);
     try {
       err = std::string(name) +
-            (e.timeout ? " not confirmed (unanswered in time: the drive may still take it when it answers again; the "
-                         "table may still be moving): "
-                       : " not delivered (the table may still be moving): ") +
+            (m && m->timeout ? " not confirmed (unanswered in time: the drive may still take it when it answers again; "
+                               "the table may still be moving): "
+                             : " not delivered (the table may still be moving): ") +
             e.what();
-    } catch (...) {
-    }
-  } catch (const std::exception& e) {
-    try {
-      err = std::string(name) + " not delivered (the table may still be moving): " + e.what();
     } catch (...) {
     }
   } catch (...) {
