@@ -155,6 +155,17 @@ Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
   detail::parallel_for(kBlocks, threads, run_block);
   for (const auto& a : part)
     for (std::size_t q = 0; q < nb; ++q) p.psd[q] += a[q];
+  {  // the bins' degrees of freedom (Psd::dof): the window's overlap correlation at j steps
+    double v = 1;
+    const double k_seg = static_cast<double>(p.segments);
+    for (std::uint64_t j = 1; j < n_seg && j * step < seg; ++j) {
+      double r = 0;
+      for (std::size_t i = 0; i + j * step < seg; ++i) r += w[i] * w[i + j * step];
+      r /= s2;
+      v += 2 * (1 - static_cast<double>(j) / k_seg) * r * r;
+    }
+    p.dof = 2 * k_seg / v;
+  }
   const double scale = 1.0 / (rate_hz * s2 * static_cast<double>(p.segments));
   p.f_hz.resize(nb);
   p.asd.resize(nb);
@@ -169,7 +180,7 @@ Psd welch(const ChunkSource& src, double rate_hz, const WelchOptions& opt) {
   return p;
 }
 
-std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db, std::size_t max_peaks) {
+std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db, std::size_t max_peaks, double false_alarm) {
   const std::size_t n = p.psd.size();
   std::vector<double> db(n);
   for (std::size_t i = 0; i < n; ++i) db[i] = 10 * std::log10(std::max(p.psd[i], 1e-300));
@@ -178,6 +189,24 @@ std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db, std::size_t
   // falling spectrum (a drift, a random walk) read as a peak at the first bin (a review: 21 dB "at
   // 0.12 Hz" for a ramp). A peak rises above a real bin on its left; the walks stop short of bin 0.
   constexpr std::size_t first = 1;
+  // The ratio to the local median that noise alone exceeds in one of the spectrum's bins with
+  // probability false_alarm (a Bonferroni split over the bins): chi2(dof) quantile over its median.
+  double ratio = 0;
+  if (false_alarm > 0 && p.dof > 0 && p.dof < kPeakNoiseRuleDof && n > first + 2) {
+    const boost::math::chi_squared c(p.dof);
+    ratio = boost::math::quantile(boost::math::complement(c, false_alarm / static_cast<double>(n - first))) /
+            boost::math::median(c);
+  }
+  std::vector<double> near;
+  auto above_noise = [&](std::size_t i) {
+    if (ratio <= 0) return true;
+    constexpr std::size_t kHalf = 64, kOwn = 3;  // the window's main lobe is at most +-3 bins
+    near.clear();
+    for (std::size_t j = std::max(first, i > kHalf ? i - kHalf : first); j < std::min(n, i + kHalf + 1); ++j)
+      if (j + kOwn < i || j > i + kOwn) near.push_back(p.psd[j]);
+    if (near.size() < 8) return true;  // too few bins around it to say: the prominence decides
+    return p.psd[i] >= ratio * upper_median(std::move(near));
+  };
   for (std::size_t i = first + 1; i + 1 < n; ++i) {
     if (!(db[i] > db[i - 1] && db[i] >= db[i + 1])) continue;
     // Walk out to higher ground on each side, tracking the lowest point on the way.
@@ -191,7 +220,7 @@ std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db, std::size_t
       right_min = std::min(right_min, db[j]);
     }
     const double prom = db[i] - std::max(left_min, right_min);
-    if (prom >= min_prominence_db) peaks.push_back({p.f_hz[i], p.psd[i], prom});
+    if (prom >= min_prominence_db && above_noise(i)) peaks.push_back({p.f_hz[i], p.psd[i], prom});
   }
   std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) { return a.prominence_db > b.prominence_db; });
   if (peaks.size() > max_peaks) peaks.resize(max_peaks);
@@ -232,12 +261,23 @@ std::string psd_n_note(double allan_n, double psd_n, bool psd_fit_ok, double f_l
   return what;
 }
 
-PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi) {
+PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi, std::span<const Peak> leave_out) {
   PsdTerms out;
   const double tau0 = 1 / p.rate_hz;
+  const double bin = p.segment ? p.rate_hz / static_cast<double>(p.segment) : 0;
+  const auto near_a_peak = [&](double fr) {
+    return std::any_of(leave_out.begin(), leave_out.end(),
+                       [&](const Peak& k) { return std::fabs(fr - k.f_hz) <= 3.5 * bin; });
+  };
   std::vector<double> f, y;
   for (std::size_t i = 0; i < p.f_hz.size(); ++i)
-    if (p.f_hz[i] >= f_lo && p.f_hz[i] <= f_hi && p.f_hz[i] > 0 && p.psd[i] > 0) f.push_back(p.f_hz[i]), y.push_back(p.psd[i]);
+    if (p.f_hz[i] >= f_lo && p.f_hz[i] <= f_hi && p.f_hz[i] > 0 && p.psd[i] > 0) {
+      if (near_a_peak(p.f_hz[i])) {
+        ++out.left_out;
+        continue;
+      }
+      f.push_back(p.f_hz[i]), y.push_back(p.psd[i]);
+    }
   out.bins = f.size();
   if (f.size() < 5) return out;
   // In units where the median bin is near 1 (an even power of two, exact, and the terms scaled

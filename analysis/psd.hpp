@@ -30,6 +30,10 @@ struct Psd {
   std::vector<double> asd;        // sqrt(psd), unit/sqrt(Hz)
   std::size_t segment = 0, segments = 0;
   double rate_hz = 0, enbw_hz = 0;  // equivalent noise bandwidth of one bin
+  // A bin's equivalent degrees of freedom: noise gives S chi2(dof)/dof. 2 per segment, less where
+  // the segments overlap (Welch 1967: var/S^2 = (1/K)[1 + 2 sum_j (1 - j/K) rho(j)^2], rho(j)
+  // the window's overlap correlation at j steps; dof = 2 S^2/var).
+  double dof = 0;
 };
 
 // The segment length welch() uses on n values: opt.segment, or the automatic choice. A caller
@@ -46,8 +50,18 @@ struct Peak {
   double f_hz = 0, psd = 0, prominence_db = 0;
 };
 // Local maxima whose prominence (height above the higher of the two lowest points separating
-// them from higher ground, as scipy.signal.find_peaks) is at least min_prominence_db, strongest first.
-std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db = 10.0, std::size_t max_peaks = 20);
+// them from higher ground, as scipy.signal.find_peaks) is at least min_prominence_db, strongest
+// first, and, where the bins have fewer than kPeakNoiseRuleDof degrees of freedom, that noise
+// alone would not give: the bin stands above the median of the bins around it (+-64, its own +-3
+// left out) by the chi2(dof) quantile that white noise exceeds anywhere in the spectrum with
+// probability `false_alarm`. With one segment each bin is chi2(2): a 10 dB prominence over the
+// dips around it came by chance, a dozen "peaks" in 300 white values (a review). With more
+// degrees of freedom the dips are shallow and the prominence alone holds; the neighbourhood's
+// median would there hide a resonance wider than it (a code review: Q = 10 at 20 Hz, 24 dB, on
+// 2^20 values at 1 kHz).
+inline constexpr double kPeakNoiseRuleDof = 30;
+std::vector<Peak> find_peaks(const Psd& p, double min_prominence_db = 10.0, std::size_t max_peaks = 20,
+                             double false_alarm = 0.01);
 
 // White level h0 over [f_lo, f_hi] (median of the bins, corrected to the mean of the chi-square
 // spread so that tones barely move it); unit^2/Hz.
@@ -65,9 +79,11 @@ double white_level(const Psd& p, double f_lo, double f_hi);
 struct PsdTerms {
   bool ok = false;
   double Q = 0, N = 0, B = 0, K = 0;  // g*s, g*s^0.5, g, g/s^0.5
-  std::size_t bins = 0;
+  std::size_t bins = 0, left_out = 0;  // bins fitted; bins of the band left out around peaks
 };
-PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi);
+// Bins within +-3 of a peak in `leave_out` (the window's main lobe) are not fitted: a tone is no
+// noise term, and a review's 72 Hz line in white noise read 2.4x the N (`left_out` counts them).
+PsdTerms psd_noise_fit(const Psd& p, double f_lo, double f_hi, std::span<const Peak> leave_out = {});
 
 // The cross-check's note ("" when there is nothing to say): the PSD's N more than 1.5x from the
 // Allan N (a PSD bin's scatter over hundreds of bins is a few %, the Allan N's bounds tighter

@@ -366,9 +366,30 @@ namespace {
 std::string not_a_number(std::string_view line, std::string_view tok) {
   std::string why = "not a decimal number: " + excerpt(tok);
   if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)";
-  // A table's row ("t,a", "0.1 0.2"): the record is one value per line (a metrologist's review).
-  else if (tok.find_first_of(",; \t") != std::string_view::npos)
-    why += "; a text record holds one value per line (take the column out first, e.g. cut -d, -f2)";
+  // The column separator: ';' or a blank before ',', which may be a decimal comma in the same
+  // row ("0,5;1,2": a code review saw the cut on ',' recommended there).
+  else if (const auto at = tok.find(';') != std::string_view::npos     ? tok.find(';')
+                           : tok.find_first_of(" \t") != std::string_view::npos ? tok.find_first_of(" \t")
+                                                                              : tok.find(',');
+           at != std::string_view::npos) {
+    // "1,5": digits, one comma, digits is a decimal comma as often as two columns; neither is
+    // read, and the hint must not be a cut that turns 1,5 into 5 (an instrument engineer's review).
+    const bool digits_comma_digits =
+        tok[at] == ',' && at > 0 && at + 1 < tok.size() &&
+        tok.find_first_not_of("+-0123456789", 0) == at && tok.find_first_not_of("0123456789", at + 1) == std::string_view::npos;
+    if (digits_comma_digits) {
+      std::string pointed(tok);
+      pointed[at] = '.';
+      why += "; a decimal comma? the record's numbers take a decimal point (" + pointed +
+             "); two columns? a text record holds one value per line";
+    }
+    else  // A table's row ("t,a", "0.1 0.2"): the record is one value per line (a metrologist's review).
+      why += std::string("; a text record holds one value per line (take the column out first, e.g. ") +
+             (tok[at] == ',' ? "cut -d, -f2" : tok[at] == ';' ? "cut -d';' -f2" : "awk '{print $2}'") + ")" +
+             (tok[at] != ',' && tok.find(',') != std::string_view::npos
+                  ? "; its ',' may be a decimal comma: the record's numbers take a decimal point"
+                  : "");
+  }
   else if (tok.find("\xEF\xBB\xBF") != std::string_view::npos)
     why += " (\\xEF\\xBB\\xBF is a byte-order mark, skipped only at the start of the file: two files joined?)";
   return why;
@@ -398,6 +419,18 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
     const auto e = line.find_last_not_of(" \t\r,;");
     const std::string_view tok = line.substr(b, e - b + 1);
     const auto where = [&] { return path + ":" + std::to_string(lineno) + ": "; };
+    // Around the value only blanks, and after it one ',' or ';' (a CSV's single column): ",5" is
+    // a row whose first column is empty, "1,," one with empty columns after it; both were read as
+    // a value (an instrument engineer's review).
+    const auto separators = [](std::string_view s) {
+      return static_cast<std::size_t>(std::count_if(s.begin(), s.end(), [](char c) { return c == ',' || c == ';'; }));
+    };
+    if (separators(line.substr(0, b)) > 0)
+      throw InputError(where() + excerpt(buffer) + ": an empty column before the value (a text record holds one value "
+                                                   "per line, a CSV's single column)");
+    if (separators(line.substr(e + 1)) > 1)
+      throw InputError(where() + excerpt(buffer) + ": empty columns after the value (a text record holds one value per "
+                                                   "line, followed by at most one ',' or ';')");
     // from_chars reads decimal floating point only ("0x10" stops after the 0), has no leading
     // '+', and takes subnormals such as 1e-310 (strtod flags those ERANGE).
     const std::string_view num = tok.size() > 1 && tok[0] == '+' && tok[1] != '-' ? tok.substr(1) : tok;

@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstdint>
 #include <cmath>
+#include <numbers>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -485,8 +486,9 @@ int run(const Args& a) {
   if (cap && cap->lost_at_start)
     notes.push_back("samples were lost before the first one read (the capture's first block is damaged: the reader's "
                     "notes name it); the record starts after them, nothing is joined");
+  std::optional<std::size_t> few_values_note;  // dropped for a constant record, which has neither (below)
   if (n < 30)
-    notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
+    few_values_note = notes.size(), notes.push_back(std::to_string(n) + " values: every tau has fewer than 30 averages (B1 noise identification); "
                     "the bounds rest on a few degrees of freedom and the noise terms on a few points (which terms "
                     "are reported can change with the values' last digits: a review found 4 ulps flip it)");
   // Sizes are checked where they are needed, before the long work: the deviation needs 3 phase
@@ -638,6 +640,9 @@ int run(const Args& a) {
                                         ? "the phase is a straight line (a constant frequency)"
                                         : "the record is constant";
   if (constant) {
+    // Its bounds and noise terms are none, not few (a review: "the bounds rest on a few degrees of
+    // freedom and the noise terms on a few points", then "no bounds and no noise terms").
+    if (few_values_note) notes.erase(notes.begin() + static_cast<std::ptrdiff_t>(*few_values_note));
     notes.push_back(constant_what + ": every deviation is 0 or the rounding of the values, so there is no noise to "
                     "identify, no bounds and no noise terms");
     if (want_psd) notes.push_back("no PSD: the record is constant (its spectrum would be the rounding of the values)");
@@ -854,7 +859,7 @@ int run(const Args& a) {
     double f_hi = 0.45 * rate;
     if (terms && terms->model.ok && terms->model.dropped_short > 0 && !terms->model.tau_s.empty())
       f_hi = std::min(f_hi, std::max(0.5 / terms->model.tau_s.front(), f_lo + 8 * bin));  // 8 bins at least
-    const an::PsdTerms pt = an::psd_noise_fit(*psd, f_lo, f_hi);
+    const an::PsdTerms pt = an::psd_noise_fit(*psd, f_lo, f_hi, peaks);
     const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
     pj["n_from_psd"] = n_psd;  // unit*s^0.5
     pj["n_from_psd_per_hour"] = an::n_per_hour(n_psd);
@@ -866,9 +871,27 @@ int run(const Args& a) {
                                               pt.ok ? f_hi : 0.45 * rate);
       if (!note.empty()) notes.push_back(note);
     }
+    // A line in the record: past a few of its periods its Allan variance falls as 1/tau^2, the
+    // white-phase slope, as a Q of a / (2 pi f) would (a the line's RMS, from its PSD peak times
+    // the bin's ENBW; docs/plant.md), and the fit trades N and B with that Q. Said where it is a
+    // good part of the Q reported (an instrument engineer's review: a 72 Hz line in white noise
+    // read Q 1.0e-7 and B 1.5e-7, neither injected, and N 34 % low, without a word).
+    if (terms && terms->Q.value && *terms->Q.value > 0)
+      for (const auto& pk : peaks) {
+        const double rms = std::sqrt(pk.psd * psd->enbw_hz), q_line = rms / (2 * std::numbers::pi * pk.f_hz);
+        if (!(q_line >= 0.3 * *terms->Q.value)) continue;
+        char what[640];
+        std::snprintf(what, sizeof what,
+                      "psd: the line at %.4g Hz (RMS about %.3g) gives the Allan curve past a few of its periods the "
+                      "white-phase slope of a Q of %.3g (a/(2 pi f)), %.2fx the Q reported (%.3g): Q, and the N and B "
+                      "its fit trades with it, may be that line's and not the record's noise",
+                      pk.f_hz, rms, q_line, q_line / *terms->Q.value, *terms->Q.value);
+        notes.push_back(what);
+        break;  // the strongest such line (peaks are strongest first)
+      }
     // Only N is a cross-check; the other terms give the band's other slopes somewhere to go and
     // are not measurements (a review read K 13x above the Allan model's upper limit on white FM).
-    pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K},
+    pj["psd_fit"] = {{"ok", pt.ok}, {"bins", pt.bins}, {"bins_left_out_at_peaks", pt.left_out}, {"Q", pt.Q}, {"N", pt.N}, {"B", pt.B}, {"K", pt.K},
                      {"note", "N is the cross-check of the Allan N; Q, B and K are the fit's terms for the band's other "
                               "slopes, without bounds or a test that the data hold them: not measurements (the Allan "
                               "noise terms are)"}};

@@ -1198,10 +1198,13 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   log->info("rig {} run: out {}: the run is complete (its passport says {}); finishing its ending ({})", RIG_VERSION,
             shown_text(dir), v, what);
   if (!a.no_history) say_history_left_behind(a, *log);  // another --db: the run's own database never gets this row
-  bool done = true;
+  // What this resume did and what is still owed, each said as it came out (a line integrator's
+  // review: a history row the database refused was said "recorded").
+  std::vector<std::string> did, owed;
   if (junit_staged) {
     fs::rename(dir + "/junit.xml.tmp", dir + "/junit.xml", ec);  // the ending that wrote the passport staged it
-    if (ec) log->error("junit.xml not put in place: {}", ec.message()), done = false;
+    if (ec) log->error("junit.xml not put in place: {}", ec.message()), owed.emplace_back("junit.xml put in place");
+    else did.emplace_back("junit.xml put in place");
   }
   if (no_report) try {
       report::write_report(dir, true);  // the run's own page, before its final seal
@@ -1214,21 +1217,24 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
         drop_previous_seal(dir);
         log->info("run folder sealed again with report.html (seal.json, key {})", key->id);
       }
+      did.emplace_back(sealed ? "report.html written and sealed with the rest" : "report.html written");
     } catch (const std::exception& e) {
       log->error("report.html not written: {}", e.what());
-      done = false;  // still left: the list stays
+      owed.emplace_back("report.html written");  // still left: the list stays
     }
   if (!a.no_history) {
     const nlohmann::json passport = report::read_passport(dir);
-    done = record_in_history(a, hw, passport, passport.value("out_dir", dir), *log) && done;
+    if (record_in_history(a, hw, passport, passport.value("out_dir", dir), *log)) did.emplace_back("the history row recorded");
+    else owed.emplace_back("the history row (the database did not take it)");
   } else if (std::find(steps.begin(), steps.end(), kStepHistory) != steps.end()) {
     // --no-history records nothing, but the row the run was meant to have is still owed: the
     // list keeps it for a later resume or `rig history --record` (a re-test: it was removed, the
     // run in no database and nothing saying so).
-    if (done) write_pending_steps(dir, {kStepHistory});
+    if (owed.empty()) write_pending_steps(dir, {kStepHistory});
     log->warn("its history row is still to be recorded (--no-history): {} records it", a.record_command);
-    done = false;
+    owed.emplace_back("the history row (--no-history)");
   }
+  const bool done = owed.empty();
   if (done) {
     // What a stop inside an earlier ending can leave beside a finished one goes with the list: a
     // half-written list (its staged copy) and the seal the final seal replaced (a re-test: a kill
@@ -1237,8 +1243,14 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     fs::remove(pending + ".tmp", ec);
     if (sealed) drop_previous_seal(dir);
   }
-  const std::string line = fmt::format("{}: the run was complete (its passport says {}); its ending is {}: {}",
-                                       shown_text(dir), v, done ? "finished" : "not finished yet", what);
+  const std::string line =
+      done ? fmt::format("{}: the run was complete (its passport says {}); its ending is finished: {}", shown_text(dir),
+                         v, did.empty() ? std::string("nothing was left") : fmt::format("{}", fmt::join(did, ", ")))
+           : fmt::format("{}: the run was complete (its passport says {}); its ending is not finished yet: {}still "
+                         "to do: {} (a later rig run --resume {} does it{})",
+                         shown_text(dir), v, did.empty() ? std::string() : fmt::format("{} done; ", fmt::join(did, ", ")),
+                         fmt::join(owed, ", "), shown_text(dir),
+                         a.no_history ? ", without --no-history; or " + a.record_command : std::string());
   log->info("{} (exit {})", line, rc);
   std::cerr << line << "\n";
   return rc;
@@ -1886,7 +1898,13 @@ int do_run(RunArgs a) {
   // In emulation a resume rebuilds the plant as the checkpoint left it (app/fast_forward.hpp):
   // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
   // passport equals the uninterrupted run's bit for bit. Hardware is only brought up again.
-  const bool fast_forward = b.emulated && !a.resume.empty();
+  // Not where no phase left uses the devices (a run stopped at its ending: only phases computed
+  // from records, or none): nothing would meet the rebuilt plant, and the replay needs room for
+  // its captures beside the run's (a line integrator's review: a run stopped after its last
+  // phase, on a disk with less than that free, failed every resume with ERROR).
+  const bool devices_left = std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed.size()), phases.end(),
+                                        [](const Phase& ph) { return !ph.from_records; });
+  const bool fast_forward = b.emulated && !a.resume.empty() && devices_left;
   double replayed_s = 0;  // of the plant's figures below, what rebuilt it (nothing measured)
   std::uint64_t replayed_samples = 0;
   RunResult res = exec.run(
@@ -1904,13 +1922,17 @@ int do_run(RunArgs a) {
   // A fault timed past the run's end never fired: said, or a test of it passes for nothing (a
   // review: sigint@229 on a run of 228 s of device time, exit 0 without a word). As an error line:
   // a test harness running with --quiet sees it too (a warning went to run.log alone: a review).
-  if (b.emulated && res.outcome != RunOutcome::Aborted)
+  // Not where the resume replayed nothing (no phase left used the devices): its device time and
+  // its drops are then only bring-up's, and the faults fired in the run that recorded them (a
+  // code review: "run.json's fault drop@1000:5 did not fire" on such a resume).
+  const bool device_time_whole = a.resume.empty() || fast_forward;
+  if (b.emulated && res.outcome != RunOutcome::Aborted && device_time_whole)
     for (const Injection& j : injections)
       if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > b.emulated->clock().now_s())
         log->error("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, b.emulated->clock().now_s());
   // A loss in samples the DUT never streamed (between recordings, or past the run's last) took
   // nothing from any record: said, as a late signal is (a review: drop@1000:5 passed silently).
-  if (b.emulated && res.outcome != RunOutcome::Aborted) {
+  if (b.emulated && res.outcome != RunOutcome::Aborted && device_time_whole) {
     const std::vector<std::uint64_t> hits = b.emulated->drop_hits();
     std::size_t k = 0;  // the plant's drops are the Drop injections, in order
     for (const Injection& j : injections)
@@ -1939,6 +1961,10 @@ int do_run(RunArgs a) {
     res.message = "aborted after the last phase: " + cancel.token().reason();
     log->error("{}", res.message);
   }
+  // Stopped (a signal, the e-stop): the ending waits 2 s, not 10, for a history database another
+  // process holds locked (rig/report/db.hpp set_lock_wait_ms); a row it cannot record is owed to
+  // the resume (a line integrator's review: a SIGTERM'd run held its exit 10 s).
+  if (res.outcome == RunOutcome::Aborted || cancel.requested()) history::set_lock_wait_ms(2000);
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
   // ERROR (exit 4) naming them, never a PASS nobody can check.
   bool records_lost = res.records_changed;  // then no resume either: it would refuse the folder (exit 2)

@@ -81,6 +81,13 @@ void fast_forward_emulated(PhaseContext& ctx, const acceptance::Profile& p, cons
              ctx.dev.clock.now_s());
     ph.run(replay);
     ++replayed;
+    // Its captures are read no more (the check below compares the state, which holds what they
+    // recorded): removed at once, so the replay needs room for one phase's, not the run's.
+    std::error_code ec;
+    std::vector<fs::path> used;
+    for (fs::recursive_directory_iterator it(scratch, ec), end; !ec && it != end; it.increment(ec))
+      if (it->is_regular_file(ec)) used.push_back(it->path());
+    for (const fs::path& f : used) fs::remove(f, ec);
   }
   fs::remove_all(scratch);
   const nlohmann::json cp = read_checkpoint(ctx.out_dir);

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -231,6 +233,23 @@ int main(int argc, char** argv) {
   });
   try {
     app.parse(argc, argv);
+    // What a subcommand printed is its output (the summary of `rig analyze`, a history listing):
+    // one that could not be written (`> /dev/full`) ended in exit 0 with nothing said (an
+    // instrument engineer's review). Exit 2, as a --json file that cannot be written is. Not
+    // `rig run`, whose records are its files (it ignores SIGPIPE: its console may go away), nor
+    // a closed pipe (SIGPIPE ends the others as it ends any filter).
+    if (app.get_subcommands().empty() || app.get_subcommands().front()->get_name() != "run") {
+      errno = 0;
+      std::cout.flush();
+      const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
+      const int e = errno;
+      // A reader that went away (SIGPIPE ignored by the parent, so it is EPIPE here) is no failure.
+      if (failed && e != EPIPE) {
+        std::cerr << "rig: output error: standard output: write failed" << (e ? std::string(": ") + std::strerror(e) : "")
+                  << " (what the command printed is incomplete)\n";
+        if (rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code (an abort) says more
+      }
+    }
   } catch (const CLI::ParseError& e) {
     // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a
     // stray argument and reports only the missing subcommand; name the word instead, with the

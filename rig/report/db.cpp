@@ -3,6 +3,8 @@
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
+#include <atomic>
+
 #include <charconv>
 #include <optional>
 #include <cstdio>
@@ -59,6 +61,8 @@ void Db::rollback() noexcept {
 
 namespace {
 
+std::atomic<int> lock_wait_ms{10000};  // set_lock_wait_ms
+
 // ---------------------------------------------------------------- SQLite
 class SqliteDb final : public Db {
  public:
@@ -100,7 +104,7 @@ class SqliteDb final : public Db {
       throw ConfigError(where_ + ": cannot open the history database: " + msg);
     }
     // Several rig processes may write one file: wait for a lock instead of failing.
-    sqlite3_busy_timeout(db_, 10000);
+    sqlite3_busy_timeout(db_, lock_wait_ms.load());
     exec("PRAGMA foreign_keys = ON");
     if (query_only) exec("PRAGMA query_only = ON");
   }
@@ -297,6 +301,8 @@ class PgDb final : public Db {
 
 }  // namespace
 
+
+void set_lock_wait_ms(int ms) { lock_wait_ms = ms; }
 
 std::unique_ptr<Db> open_db(const std::string& url, Access access) {
   // PostgreSQL: the server's database exists or the connection fails; nothing is created by opening.

@@ -64,6 +64,12 @@ enum class Access { ReadWrite, ReadOnly };
 // Throws rig::ConfigError.
 std::unique_ptr<Db> open_db(const std::string& url, Access access = Access::ReadWrite);
 
+// How long a SQLite connection opened from now on waits for another writer's lock: 10 s, enough
+// for several rig processes writing one file. A run being stopped shortens it (`rig run` on a
+// signal: a stop's grace is often 10 s, docker's, and a locked database held the exit that long,
+// a line integrator's review); the row then waits in .ending-pending for the resume.
+void set_lock_wait_ms(int ms);
+
 
 // Keeps a transaction open until commit(); rolls back if destroyed before.
 class Transaction {

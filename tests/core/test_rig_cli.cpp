@@ -321,6 +321,9 @@ TEST(RigCli, AnalyzeSaysWhatItDidNotMeasure) {
   ASSERT_EQ(run({"analyze", d + "/c.txt", "--rate", "1", "--json", d + "/c.json"}, d + "/c"), 0);
   EXPECT_NE(nlohmann::json::parse(slurp(d + "/c.json"))["notes"].dump().find("the record is constant"),
             std::string::npos);
+  // Its bounds and noise terms are none, not "a few" (a review found both notes side by side).
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c.json"))["notes"].dump().find("a few degrees of freedom"),
+            std::string::npos);
   std::ofstream(d + "/ramp.txt") << "1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n";  // phase: a constant frequency
   ASSERT_EQ(run({"analyze", d + "/ramp.txt", "--rate", "1", "--data", "phase", "--json", d + "/r.json"}, d + "/r"), 0);
   EXPECT_NE(nlohmann::json::parse(slurp(d + "/r.json"))["notes"].dump().find("the phase is a straight line"),
@@ -1427,6 +1430,30 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
                                             "line"),
             std::string::npos)
       << slurp(d + "/table.stderr");
+  // The hint follows the separator found, and a decimal comma is not called two columns whose
+  // second a cut would keep (an instrument engineer's review: `cut -d, -f2` made 1,5 into 5).
+  const auto refused = [&](const std::string& name, const std::string& text, const std::string& says) {
+    std::ofstream(d + "/" + name) << text;
+    EXPECT_EQ(run({"analyze", d + "/" + name, "--rate", "1"}, d + "/" + name + ".run"), 2) << text;
+    EXPECT_NE(slurp(d + "/" + name + ".run.stderr").find(says), std::string::npos) << slurp(d + "/" + name + ".run.stderr");
+  };
+  refused("comma.txt", "1\n2\n1,5\n3\n", "comma.txt:3: not a decimal number: '1,5'; a decimal comma? the record's numbers "
+                                           "take a decimal point (1.5); two columns?");
+  refused("semi.txt", "1\n2;3\n", "semi.txt:2: not a decimal number: '2;3'; a text record holds one value per line (take "
+                                  "the column out first, e.g. cut -d';' -f2)");
+  refused("blank.txt", "1\n2 3\n", "e.g. awk '{print $2}')");
+  // A German spreadsheet's row: ';' separates, ',' is the decimal comma (a code review: the cut on
+  // ',' was recommended, which keeps "5;1").
+  refused("excel.csv", "1\n0,5;1,2\n", "e.g. cut -d';' -f2); its ',' may be a decimal comma");
+  refused("tab.txt", "1\n2\t3\n", "e.g. awk '{print $2}')");
+  // Around a value only blanks and one ',' or ';' after it (docs/analysis.md): ",5" is a row whose
+  // first column is empty, "1,," one with empty columns after it; both were read as values.
+  refused("lead.txt", "1\n,5\n2\n3\n", "lead.txt:2: ',5': an empty column before the value");
+  refused("trail.txt", "1,,\n2\n3\n4\n", "trail.txt:1: '1,,': empty columns after the value");
+  refused("mixed.txt", "1\n2,;\n3\n4\n", "mixed.txt:2: '2,;': empty columns after the value");
+  refused("spaced.txt", "1\n2\n3, ,\n4\n", "spaced.txt:3: '3, ,': empty columns after the value");
+  std::ofstream(d + "/single.csv") << "1,\n2;\n 3 , \n4,\r\n";
+  EXPECT_EQ(run({"analyze", d + "/single.csv", "--rate", "1", "--no-psd"}, d + "/single"), 0) << slurp(d + "/single.stderr");
   std::ofstream(d + "/bom2.txt") << "1\n2\n3\n\xEF\xBB\xBF" << "4\n";
   EXPECT_EQ(run({"analyze", d + "/bom2.txt"}, d + "/bom2"), 2);
   EXPECT_NE(slurp(d + "/bom2.stderr").find("bom2.txt:4: not a decimal number: '\\xEF\\xBB\\xBF4' (\\xEF\\xBB\\xBF is a "
@@ -2151,6 +2178,20 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   EXPECT_TRUE(fs::exists(d + "/r/report.html"));
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
   EXPECT_NE(rows().find(",PASS,"), std::string::npos);
+  // (b-) The database still down at the resume: the row is said owed, not "recorded", and the
+  // list stays (a line integrator's review: "its ending is not finished yet: the history row
+  // recorded").
+  std::ofstream(d + "/r/.ending-pending") << "history\n";
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--db", "postgresql://rig@127.0.0.1:1/results"},
+                d + "/io4x"),
+            0)
+      << slurp(d + "/io4x.stderr");
+  EXPECT_NE(slurp(d + "/io4x.stderr").find("its ending is not finished yet: still to do: the history row (the database did not take "
+                                           "it) (a later rig run --resume "),
+            std::string::npos)
+      << slurp(d + "/io4x.stderr");
+  EXPECT_EQ(slurp(d + "/io4x.stderr").find("the history row recorded"), std::string::npos) << slurp(d + "/io4x.stderr");
+  EXPECT_TRUE(fs::exists(d + "/r/.ending-pending"));
   // (b') Only the history row left (a database that was down): `rig history --record` is that
   // step, so the list goes with it; with more left (junit.xml staged) it stays for the resume.
   std::ofstream(d + "/r/.ending-pending") << "history\n";
@@ -4692,6 +4733,25 @@ std::string rig_line(const std::vector<std::string>& args) {
   return line;
 }
 }  // namespace
+
+// A subcommand's printed output that could not be written (`rig analyze ... > /dev/full`) ended in
+// exit 0 with nothing said (an instrument engineer's review): a script piping the summary to a
+// full disk took it for done. Exit 2 with the reason, as a --json file that cannot be written.
+TEST(RigCli, PrintedOutputThatCannotBeWrittenIsExitTwo) {
+  const std::string d = tmp("stdout-full");
+  fs::create_directories(d);
+  std::ofstream(d + "/v.txt") << "1\n2\n3\n4\n5\n6\n7\n8\n";
+  const auto to_full = [&](const std::vector<std::string>& args) {
+    const int st = std::system((rig_line(args) + " >/dev/full 2>'" + d + "/full.stderr'").c_str());
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  EXPECT_EQ(to_full({"analyze", d + "/v.txt", "--rate", "1", "--no-psd"}), 2);
+  EXPECT_NE(slurp(d + "/full.stderr").find("rig: output error: standard output: write failed: No space left on device"),
+            std::string::npos)
+      << slurp(d + "/full.stderr");
+  EXPECT_EQ(run({"analyze", d + "/v.txt", "--rate", "1", "--no-psd"}, d + "/ok"), 0) << slurp(d + "/ok.stderr");
+  EXPECT_EQ(slurp(d + "/ok.stderr"), "");
+}
 
 // `rig filter select|show --json` ignored a failed write: /dev/full or /proc/version gave exit 0
 // and no JSON (a review). Every step of the write is checked (exit 2 naming the file), and a

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -93,6 +94,33 @@ TEST(HistorySqlite, RunsOfOneFolderAndSecondOnTwoStationsOrDutsAreTwoRuns) {
   TempDir d;
   rig::test::history_tells_runs_of_one_folder_and_second_apart("sqlite:" + (d.path / "h.sqlite").string(),
                                                                d.path.string());
+}
+
+// The wait for another writer's lock: 10 s by default, shorter once set (a stopped run's
+// ending: a locked database held a SIGTERM'd run 10 s, a line integrator's review).
+TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
+  TempDir d;
+  const std::string path = (d.path / "h.sqlite").string();
+  h::record_run(path, rig::test::fixture_passport(), d.path.string());
+  sqlite3* holder = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &holder), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(holder, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK);
+  const auto attempt = [&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_THROW(h::record_run(path, rig::test::fixture_passport("LOCKED-1"), d.path.string()), std::exception);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  h::set_lock_wait_ms(300);
+  const double short_wait = attempt();
+  h::set_lock_wait_ms(1500);
+  const double longer_wait = attempt();
+  h::set_lock_wait_ms(10000);
+  sqlite3_exec(holder, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(holder);
+  EXPECT_GE(short_wait, 0.25);
+  EXPECT_LT(short_wait, 1.4);
+  EXPECT_GE(longer_wait, 1.4);
+  EXPECT_LT(longer_wait, 8.0);
 }
 
 TEST(HistorySqlite, PlainPathIsAnSqliteFile) {
