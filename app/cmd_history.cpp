@@ -268,9 +268,14 @@ bool the_runs_own_database(const std::string& dir, const std::string& db, std::s
   try {
     std::ifstream run_json(std::filesystem::path(dir) / "run.json");
     const nlohmann::json inv = parse_json_unique_keys(run_json);
-    const std::string run_db = inv.value("db", std::string());
+    // --db as given, or (a run without it) the database as it resolved at the run's start
+    std::string run_db = inv.value("db", std::string());
+    const bool given = !run_db.empty();
+    if (!given) run_db = inv.value("history_db", std::string());
     if (run_db.empty()) why_not = "its run.json does not say which database its run records into";
-    else if (!same(db, run_db)) why_not = "this is not the database its run records into (--db " + run_db + ")";
+    else if (!same(db, run_db))
+      why_not = "this is not the database its run records into (" + std::string(given ? "--db " : "") + run_db +
+                (given ? ")" : ", as it resolved when the run started)");
     return why_not.empty();
   } catch (const std::exception&) {
     why_not = "its run.json cannot be read";

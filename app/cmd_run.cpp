@@ -84,6 +84,9 @@ struct RunArgs {
   std::string resume_serial;  // --serial given with --resume: the DUT the operator says is mounted
   std::string db;
   bool db_from_run_json = false;  // a resume's --db taken from its run.json (messages say so)
+  // run.json's history_db where the resume cannot take it (its password masked): compared with the
+  // database the resume resolves once the hardware file is read (say_where_the_run_records).
+  std::string run_history_db;
   std::string seal_key;  // --seal-key / RIG_SEAL_KEY: the station's key (docs/seal.md)
   bool seal_key_given = false;
   std::vector<std::string> inject;
@@ -227,7 +230,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   // an unknown one is a hand edit or another program's.
   static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source",
                                                 "software", "started", "no_history", "db", "faults", "profile_digest",
-                                                "profile_folder"};
+                                                "profile_folder", "history_db"};
   for (const auto& [key, v] : inv.items())
     if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
@@ -296,16 +299,27 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   // the station's (an integrator's review). Older run.json files have neither field.
   if (inv.contains("no_history") && !inv["no_history"].is_boolean())
     throw ConfigError(path + ": field 'no_history': expected true or false, found " + inv["no_history"].type_name());
-  const std::string db = str("db", "");
+  const std::string given_db = str("db", "");
+  // Where a run without --db recorded, as it resolved at its start (the hardware file's [history],
+  // $RIG_HISTORY, the rig config, the default): a resume from a shell without the station's
+  // RIG_HISTORY recorded its PASS elsewhere, the ABORTED row kept for good, without a word (a line
+  // integrator's review). Older run.json files have neither field.
+  const std::string resolved_db = given_db.empty() ? str("history_db", "") : std::string();
+  const bool masked = [](const std::string& u) {
+    return u.find(":***@") != std::string::npos || u.find("password=***") != std::string::npos;
+  }(resolved_db);
+  const std::string db = given_db.empty() ? resolved_db : given_db;
   const bool run_records = !inv.value("no_history", false);
-  // Where the run records: run.json's --db, or (none there) whichever database applied where it
-  // ran (the built-in default, RIG_HISTORY, the rig config), which run.json does not say.
+  // Where the run records: run.json's --db or history_db, or (neither there, an older run.json)
+  // whichever database applied where it ran, which run.json does not say.
   const std::string runs_db =
       db.empty() ? std::string("the database it started with (run.json names none: the default, $RIG_HISTORY or the "
                                "rig config's)")
                  : db;
   a.record_command = db.empty() ? "rig history --record " + shown_text(a.resume)
                                 : "rig history --db " + db + " --record " + shown_text(a.resume);
+  if (db.find(":***@") != std::string::npos || db.find("password=***") != std::string::npos)
+    a.record_command += " (the password as *** is yours to give, or keep it in ~/.pgpass)";  // a review copied it
   if (run_records && a.no_history) {
     a.history_owed = true;
     a.history_left_behind = fmt::format(
@@ -322,6 +336,8 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   if (!a.db.empty() || a.no_history) return;
   if (inv.value("no_history", false)) {
     a.no_history = true;
+  } else if (!resolved_db.empty() && masked) {
+    a.run_history_db = resolved_db;  // the resume's own resolution may carry the password: compared later
   } else if (!db.empty()) {
     if (db.find(":***@") != std::string::npos || db.find("password=***") != std::string::npos)  // stored masked
       throw ConfigError(path + ": the run was started with --db " + db + ", whose password run.json does not keep: "
@@ -960,8 +976,13 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
     for (const std::string& note : history::record_notes(rec, passport)) log.warn("history: {}", note);
     return true;
   } catch (const std::exception& e) {
-    log.error("history database not updated: {} (the run's resume, or rig history --record {}, records it)", e.what(),
-              shown_text(a.out));
+    // The --record hint names the database (a line integrator's review: as printed it wrote into
+    // $RIG_HISTORY's or the default, not the run's); a password is never printed, so a URL that
+    // carries one is given again by the user (or kept in ~/.pgpass, which libpq reads).
+    const std::string url = history_url(a, hw), shown = history::mask_password(url);
+    const std::string record = "rig history --db " + shown + " --record " + shown_text(a.out);
+    log.error("history database not updated: {} (the run's resume, or {}, records it{})", e.what(), record,
+              shown != url ? "; the password as *** is yours to give, or keep it in ~/.pgpass" : "");
     return false;
   }
 }
@@ -1651,6 +1672,12 @@ int do_run(RunArgs a) {
   TerminalView view(stderr, a.quiet);
   // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not
   // an error in run.log after the DUT was measured and its result left out of the history.
+  if (!a.no_history && !a.run_history_db.empty() && a.db.empty() && !same_history(history_url(a, hw), a.run_history_db))
+    a.history_left_behind = fmt::format(
+        "the run records into {} (run.json's history_db, as it resolved when the run started); this resume's is {} "
+        "($RIG_HISTORY, the rig config or the default here): {} keeps the earlier ending; give --db with that URL "
+        "(its password too) to record there",
+        a.run_history_db, history::mask_password(history_url(a, hw)), a.run_history_db);
   if (!a.no_history) {
     const std::string url = history_url(a, hw);
     try {
@@ -1803,7 +1830,13 @@ int do_run(RunArgs a) {
     try {
       resumed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
     } catch (const std::exception& e) {  // the log says why the resume did not happen (it said only "resuming")
+      // In run.log only: the console gets it as the command's own error line (it came twice: a
+      // line integrator's review).
+      const auto console = log->sinks().front();  // make_logger's order: the console, then run.log
+      const auto level = console->level();
+      console->set_level(spdlog::level::off);
       log->error("resume refused: {}", e.what());
+      console->set_level(level);
       throw;
     }
   }
@@ -1848,6 +1881,8 @@ int do_run(RunArgs a) {
       invocation["no_history"] = true;
     } else if (!a.db.empty()) {  // an SQLite file made absolute: a resume may start elsewhere
       invocation["db"] = db_as_run_json_keeps_it(a.db);
+    } else {  // as it resolved now: the resume records there too (read_invocation)
+      invocation["history_db"] = db_as_run_json_keeps_it(history_url(a, hw));
     }
     std::vector<std::string> drops;  // repeated by a resume (read_invocation)
     for (const std::string& f : a.inject)
@@ -2047,7 +2082,16 @@ int do_run(RunArgs a) {
     // them (a review: an empty stdout beside the ERROR passport a full disk left).
     // Only where that passport is in place: a table for a passport the folder does not hold misled
     // (a re-test: "OUTCOME: ERROR" beside an ABORTED passport.json).
-    if (error_passport_written) say_the_passport(error_passport, info.out_dir);
+    if (error_passport_written) {
+      say_the_passport(error_passport, info.out_dir);
+    } else if (std::error_code pe; !fs::exists(a.out + "/passport.json", pe)) {
+      // No passport at all (the folder gone, or a full disk before any ending): the outcome line
+      // still, which a station reads from stdout (a line integrator's review: stdout was empty),
+      // and no table for a passport nobody can read. Beside an earlier ending's passport nothing.
+      std::cout << "passport.json not written: the run folder could not take it (stderr says why)\n"
+                << "OUTCOME: ERROR\n"
+                << std::flush;
+    }
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
     if (!records_lost && !res.config_error)

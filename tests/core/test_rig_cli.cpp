@@ -2209,19 +2209,34 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
       << slurp(d + "/io4o.stderr");
   ASSERT_EQ(run({"history", "--db", "sqlite:" + db, "--record", d + "/r"}, d + "/io4s"), 0);  // its own, spelt so
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
-  // A run that took its database from RIG_HISTORY (run.json keeps no --db): which database is its
-  // own is not known here, so the list stays (a review: a --record under another RIG_HISTORY
-  // finished it, and the station's database never got the row).
-  ::setenv("RIG_HISTORY", ("sqlite:" + d + "/env.sqlite").c_str(), 1);
+  // A run that took its database from RIG_HISTORY (no --db; the test's runs each have their own,
+  // io_prefix.history.sqlite): run.json keeps it as it resolved (history_db), so a --record under
+  // another RIG_HISTORY leaves the list (a review: it finished it, and the station's database
+  // never got the row), and one into it finishes the list.
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/e"}, d + "/io-e"), 0);
+  const std::string e_db = "sqlite:" + d + "/io-e.history.sqlite";
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/e/run.json"))["history_db"], e_db);
   std::ofstream(d + "/e/.ending-pending") << "history\n";
-  ::setenv("RIG_HISTORY", ("sqlite:" + d + "/elsewhere.sqlite").c_str(), 1);
   ASSERT_EQ(run({"history", "--record", d + "/e"}, d + "/io-e2"), 0) << slurp(d + "/io-e2.stderr");
-  ::unsetenv("RIG_HISTORY");
   EXPECT_TRUE(fs::exists(d + "/e/.ending-pending"));
-  EXPECT_NE(slurp(d + "/io-e2.stderr").find("its run.json does not say which database its run records into"),
+  EXPECT_NE(slurp(d + "/io-e2.stderr").find("this is not the database its run records into (" + e_db +
+                                            ", as it resolved when the run started)"),
             std::string::npos)
       << slurp(d + "/io-e2.stderr");
+  ASSERT_EQ(run({"history", "--db", e_db, "--record", d + "/e"}, d + "/io-e3"), 0) << slurp(d + "/io-e3.stderr");
+  EXPECT_FALSE(fs::exists(d + "/e/.ending-pending"));
+  // A resume from a shell with another RIG_HISTORY records where its run does (a line integrator's
+  // review: the PASS went to the shell's database, the station's kept ABORTED, without a word).
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--out", d + "/sh", "--serial", "ENV-S", "--inject",
+                 "sigterm@100"},
+                d + "/io-sh1"),
+            3);
+  ASSERT_EQ(run({"run", "--resume", d + "/sh", "--yes", "--quiet"}, d + "/io-sh2"), 0) << slurp(d + "/io-sh2.stderr");
+  EXPECT_FALSE(fs::exists(d + "/io-sh2.history.sqlite")) << "the resume recorded into its shell's database";
+  ASSERT_EQ(run({"history", "--db", "sqlite:" + d + "/io-sh1.history.sqlite", "--serial", "ENV-S", "--csv"}, d + "/io-sh3"),
+            0);
+  EXPECT_NE(slurp(d + "/io-sh3.stdout").find(",PASS,"), std::string::npos) << slurp(d + "/io-sh3.stdout");
+  EXPECT_EQ(slurp(d + "/io-sh3.stdout").find(",ABORTED,"), std::string::npos) << slurp(d + "/io-sh3.stdout");
   fs::copy_file(d + "/r/junit.xml", d + "/r/junit.xml.tmp");
   std::ofstream(d + "/r/.ending-pending") << "history\n";
   ASSERT_EQ(run({"history", "--db", db, "--record", d + "/r"}, d + "/io4c"), 0) << slurp(d + "/io4c.stderr");
@@ -3511,6 +3526,7 @@ TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
     if (want == 0) return;
     const std::string err = slurp(f + "-io.stderr");
     EXPECT_NE(err.find(f + "/checkpoint.json: " + field), std::string::npos) << err;
+    EXPECT_EQ(count(err, f + "/checkpoint.json: " + field), 1u) << "said once on the console (a review: twice)\n" << err;
     // run.log says why the resume did not happen, not only that it began (a review).
     EXPECT_NE(slurp(f + "/run.log").find("resume refused: " + f + "/checkpoint.json: " + field), std::string::npos)
         << slurp(f + "/run.log");
@@ -4288,6 +4304,14 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
             std::string::npos)
       << slurp(d + "/io.stderr");
   EXPECT_EQ(run({"run", "--resume", d + "/run", "--yes", "--dry-run"}, d + "/resume"), 2) << slurp(d + "/resume.stderr");
+  // The whole folder removed: no passport anywhere, and still the outcome line a station reads from
+  // stdout (a line integrator's review: stdout was empty), no table for a passport nobody can read.
+  const Child g = spawn({"run", "--profile", "paper", "--yes", "--quiet", "--no-history", "--out", d + "/gone"}, d + "/gone");
+  ASSERT_TRUE(wait_for_file(g, d + "/gone/captures/run01-U10.cap")) << slurp(d + "/gone.stderr");
+  fs::remove_all(d + "/gone");
+  EXPECT_EQ(wait_exit(g), 4) << slurp(d + "/gone.stderr");
+  EXPECT_EQ(slurp(d + "/gone.stdout"),
+            "passport.json not written: the run folder could not take it (stderr says why)\nOUTCOME: ERROR\n");
 }
 
 // A profile's relative path ([plant.firmware] dbc = "qpa-counts.dbc", relative to the profile, as
