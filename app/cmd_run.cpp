@@ -85,7 +85,7 @@ struct RunArgs {
   std::string db;
   bool db_from_run_json = false;  // a resume's --db taken from its run.json (messages say so)
   // run.json's history_db where the resume cannot take it (its password masked): compared with the
-  // database the resume resolves once the hardware file is read (say_where_the_run_records).
+  // database the resume resolves once the hardware file is read (do_run, before the history check).
   std::string run_history_db;
   std::string seal_key;  // --seal-key / RIG_SEAL_KEY: the station's key (docs/seal.md)
   bool seal_key_given = false;
@@ -197,6 +197,11 @@ std::string db_as_run_json_keeps_it(const std::string& url) {
   return file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(url);
 }
 
+// A URL as run.json keeps it, its password masked (history::mask_password's forms).
+bool password_masked(const std::string& url) {
+  return url.find(":***@") != std::string::npos || url.find("password=***") != std::string::npos;
+}
+
 // Whether two database URLs name one database: SQLite files by their resolved paths (links and
 // "." followed, as `rig history` compares them), other URLs as run.json keeps them.
 bool same_history(const std::string& a, const std::string& b) {
@@ -305,9 +310,6 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   // RIG_HISTORY recorded its PASS elsewhere, the ABORTED row kept for good, without a word (a line
   // integrator's review). Older run.json files have neither field.
   const std::string resolved_db = given_db.empty() ? str("history_db", "") : std::string();
-  const bool masked = [](const std::string& u) {
-    return u.find(":***@") != std::string::npos || u.find("password=***") != std::string::npos;
-  }(resolved_db);
   const std::string db = given_db.empty() ? resolved_db : given_db;
   const bool run_records = !inv.value("no_history", false);
   // Where the run records: run.json's --db or history_db, or (neither there, an older run.json)
@@ -318,7 +320,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
                  : db;
   a.record_command = db.empty() ? "rig history --record " + shown_text(a.resume)
                                 : "rig history --db " + db + " --record " + shown_text(a.resume);
-  if (db.find(":***@") != std::string::npos || db.find("password=***") != std::string::npos)
+  if (password_masked(db))
     a.record_command += " (the password as *** is yours to give, or keep it in ~/.pgpass)";  // a review copied it
   if (run_records && a.no_history) {
     a.history_owed = true;
@@ -336,10 +338,10 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   if (!a.db.empty() || a.no_history) return;
   if (inv.value("no_history", false)) {
     a.no_history = true;
-  } else if (!resolved_db.empty() && masked) {
+  } else if (!resolved_db.empty() && password_masked(resolved_db)) {
     a.run_history_db = resolved_db;  // the resume's own resolution may carry the password: compared later
   } else if (!db.empty()) {
-    if (db.find(":***@") != std::string::npos || db.find("password=***") != std::string::npos)  // stored masked
+    if (password_masked(db))  // stored masked
       throw ConfigError(path + ": the run was started with --db " + db + ", whose password run.json does not keep: "
                         "give the same --db with --resume (or --no-history)");
     a.db = db;
@@ -2125,7 +2127,18 @@ int do_run(RunArgs a) {
                                                : "in " + shown_text(a.out) + " changed after they were written"),
                   *log);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
-    offer_a_resume(a.out, res.checkpointed, res.phases.size(), "", *log);
+    // An emulated run's injected sample losses are repeated by its resume (run.json's faults):
+    // one that ended the run in ERROR ends the resume the same way (a line integrator's review:
+    // each resume offered "to continue" and added another ERROR ending).
+    std::string drops;
+    for (const std::string& f : a.inject)
+      if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
+    offer_a_resume(a.out, res.checkpointed, res.phases.size(),
+                   res.outcome == RunOutcome::Error && b.emulated && !drops.empty()
+                       ? "; its resume repeats run.json's faults (" + drops + "), so a loss that ended this run in "
+                         "ERROR ends it so again"
+                       : std::string(),
+                   *log);
   }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),

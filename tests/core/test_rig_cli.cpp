@@ -4758,6 +4758,28 @@ std::string rig_line(const std::vector<std::string>& args) {
 }
 }  // namespace
 
+// An emulated run's injected losses are repeated by its resume (run.json's faults): a loss that
+// ended the run in ERROR is said to end the resume so too (a line integrator's review: "to
+// continue" was offered, and each resume added another ERROR ending).
+TEST(RigCli, AResumeOfARunEndedByItsInjectedLossesSaysTheyRepeat) {
+  const std::string d = tmp("drops-repeat");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/r", "--inject",
+                 "drop@9000:10", "--inject", "drop@12500:10"},
+                d + "/io"),
+            4)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stderr").find("to continue: rig run --resume " + d + "/r (0 of 19 phases kept; its resume "
+                                         "repeats run.json's faults (drop@9000:10, drop@12500:10), so a loss that ended "
+                                         "this run in ERROR ends it so again"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--no-history"}, d + "/resume"), 4);
+  EXPECT_NE(slurp(d + "/resume.stderr").find("its resume repeats run.json's faults (drop@9000:10, drop@12500:10)"),
+            std::string::npos)
+      << slurp(d + "/resume.stderr");
+}
+
 // A subcommand's printed output that could not be written (`rig analyze ... > /dev/full`) ended in
 // exit 0 with nothing said (an instrument engineer's review): a script piping the summary to a
 // full disk took it for done. Exit 2 with the reason, as a --json file that cannot be written.
