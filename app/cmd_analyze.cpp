@@ -858,7 +858,10 @@ int run(const Args& a) {
     const double bin = rate / static_cast<double>(psd->segment), f_lo = 4 * bin;
     double f_hi = 0.45 * rate;
     if (terms && terms->model.ok && terms->model.dropped_short > 0 && !terms->model.tau_s.empty())
-      f_hi = std::min(f_hi, std::max(0.5 / terms->model.tau_s.front(), f_lo + 8 * bin));  // 8 bins at least
+      // A decade at least (and 8 bins): over less the model's N, B and K are near one shape, and a
+      // 72 Hz line's record (the fit from 0.512 s: 0.24..0.98 Hz, 12 bins) read N anywhere from 0
+      // to the truth by seed (an outside re-test).
+      f_hi = std::min(f_hi, std::max({0.5 / terms->model.tau_s.front(), f_lo + 8 * bin, 10 * f_lo}));
     const an::PsdTerms pt = an::psd_noise_fit(*psd, f_lo, f_hi, peaks);
     const double n_psd = pt.ok ? pt.N : std::sqrt(h0 / 2);
     pj["n_from_psd"] = n_psd;  // unit*s^0.5
@@ -873,19 +876,24 @@ int run(const Args& a) {
     }
     // A line in the record: past a few of its periods its Allan variance falls as 1/tau^2, the
     // white-phase slope, as a Q of a / (2 pi f) would (a the line's RMS, from its PSD peak times
-    // the bin's ENBW; docs/plant.md), and the fit trades N and B with that Q. Said where it is a
-    // good part of the Q reported (an instrument engineer's review: a 72 Hz line in white noise
-    // read Q 1.0e-7 and B 1.5e-7, neither injected, and N 34 % low, without a word).
-    if (terms && terms->Q.value && *terms->Q.value > 0)
+    // the bin's ENBW; docs/plant.md): on average 3 a^2 / (4 pi^2 f^2 tau^2) (sin^4 averages 3/8).
+    // Said where that is a tenth or more of the Allan variance at the shortest tau the noise model
+    // fitted, whichever terms it reported (an instrument engineer's review: a 72 Hz line in white
+    // noise read Q 1.0e-7 and B 1.5e-7, neither injected, and N 34 % low, without a word; a
+    // re-test: a note keyed to Q missed a B the line made).
+    if (terms && terms->model.ok && !terms->model.tau_s.empty() && terms->model.avar.front() > 0)
       for (const auto& pk : peaks) {
-        const double rms = std::sqrt(pk.psd * psd->enbw_hz), q_line = rms / (2 * std::numbers::pi * pk.f_hz);
-        if (!(q_line >= 0.3 * *terms->Q.value)) continue;
-        char what[640];
+        const double rms = std::sqrt(pk.psd * psd->enbw_hz), tau = terms->model.tau_s.front();
+        const double w = 2 * std::numbers::pi * pk.f_hz * tau;
+        const double share = 3 * rms * rms / (w * w) / terms->model.avar.front();
+        if (!(share >= 0.1)) continue;
+        char what[700];
         std::snprintf(what, sizeof what,
-                      "psd: the line at %.4g Hz (RMS about %.3g) gives the Allan curve past a few of its periods the "
-                      "white-phase slope of a Q of %.3g (a/(2 pi f)), %.2fx the Q reported (%.3g): Q, and the N and B "
-                      "its fit trades with it, may be that line's and not the record's noise",
-                      pk.f_hz, rms, q_line, q_line / *terms->Q.value, *terms->Q.value);
+                      "psd: the line at %.4g Hz (RMS about %.3g) is about %.0f %% of the Allan variance at tau = %.3g "
+                      "s, the shortest tau the noise model fitted: past a few of its periods a line falls as 1/tau^2, "
+                      "as a Q of %.3g (a/(2 pi f)) would, so the Q, N and B read there may be partly that line's and not "
+                      "the record's noise",
+                      pk.f_hz, rms, 100 * std::min(share, 1.0), tau, rms / (2 * std::numbers::pi * pk.f_hz));
         notes.push_back(what);
         break;  // the strongest such line (peaks are strongest first)
       }
@@ -972,7 +980,7 @@ int run(const Args& a) {
     // and aliases"): the record cannot tell f from fs - f.
     o << "psd: welch " << a.window << ", segment " << psd->segment << " x " << psd->segments << "; peaks:";
     for (std::size_t i = 0; i < peaks.size(); ++i) o << (i ? ", " : " ") << report::peak_label(peaks[i].f_hz, psd->rate_hz);
-    o << "\n";
+    o << (peaks.empty() ? " none\n" : "\n");  // a bare "peaks:" read as cut off (a re-test)
     const json& pj = j["psd"];
     o << "  N from the PSD model (the cross-check of the Allan N) = " << fmt(pj["n_from_psd"].get<double>())
       << " over " << pj["n_fit_band_hz"][0].get<double>() << ".." << pj["n_fit_band_hz"][1].get<double>() << " Hz\n";

@@ -525,6 +525,14 @@ TEST(RigCli, AnalyzeSaysWhereThePsdDoesNotConfirmTheAllanN) {
   EXPECT_NE(j["notes"].dump().find("psd: N from the PSD model ("), std::string::npos) << j["notes"].dump();
   EXPECT_NE(j["notes"].dump().find("the Allan N ("), std::string::npos) << j["notes"].dump();
   EXPECT_NE(slurp(d + "/t.stdout").find("note: psd: N from the PSD model"), std::string::npos);
+  // The PSD model reads a decade at least: the noise's N (an outside re-test read 0 to 1.0x by
+  // seed over the 12 bins the short taus' drop had left on a 72 Hz line's record).
+  EXPECT_NEAR(j["psd"]["n_from_psd"].get<double>(), std::sqrt(1e-3), 0.1 * std::sqrt(1e-3));
+  EXPECT_GE(j["psd"]["n_fit_band_hz"][1].get<double>(), 10 * j["psd"]["n_fit_band_hz"][0].get<double>() * 0.999);
+  // And the line is said where it is a good part of the variance the noise model starts from (an
+  // instrument engineer's review: Q and B the record did not have, without a word).
+  EXPECT_NE(j["notes"].dump().find("psd: the line at 20"), std::string::npos) << j["notes"].dump();
+  EXPECT_NE(j["notes"].dump().find("the shortest tau the noise model fitted"), std::string::npos) << j["notes"].dump();
 }
 
 // Raw float32 (what many DAQ tools and numpy's astype('<f4') write): read by --input f32 or the
