@@ -1082,9 +1082,13 @@ TEST(RigTableCia402Masters, AnotherProcesssStopOrMoveIsNamedAndNotHaltedOver) {
   again.join();
   EXPECT_TRUE(has(out2, "actual     20.0000°")) << out2;
   // The first reached 250° before the second's set-point; ended then as arrived, or in its settle
-  // time naming the other master, never a timeout nor a halt over the second's move.
+  // time naming the other master, never a timeout nor a halt over the second's move. The second
+  // begins with halt set (its handshake, cia402_client.cpp): read in the first's settle time, that
+  // is "halted by another master" (CI's sanitizer pass saw it once), else its new target or mode.
   if (rc1 != 0) {
-    EXPECT_TRUE(rc1 == 4 && has(out1, "(another Modbus master?)") && has(out1, "; no halt sent by this client")) << out1;
+    EXPECT_TRUE(rc1 == 4 &&
+                (has(out1, "(another Modbus master?)") || has(out1, ": halted by another master (controlword reads 0x010F)")) &&
+                has(out1, "; no halt sent by this client")) << out1;
   }
   EXPECT_FALSE(has(out1, "timed out")) << out1;
 }
