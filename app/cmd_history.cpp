@@ -254,17 +254,6 @@ void endings(const HistoryArgs& a) {
 // under another RIG_HISTORY finished the ending, and the station's database never got the row).
 // `why_not`: what to say when it is not known to be.
 bool the_runs_own_database(const std::string& dir, const std::string& db, std::string& why_not) {
-  // One database, however its URL was written: an SQLite file by its resolved path (`h.sqlite`,
-  // `sqlite:h.sqlite`, `sqlite:///abs/h.sqlite`), a server's URL with its password masked.
-  const auto same = [](const std::string& x, const std::string& y) {
-    const auto px = history::sqlite_path(x), py = history::sqlite_path(y);
-    if (px && py) {
-      std::error_code e1, e2;
-      return std::filesystem::weakly_canonical(std::filesystem::absolute(*px), e1) ==
-             std::filesystem::weakly_canonical(std::filesystem::absolute(*py), e2);
-    }
-    return !px && !py && history::mask_password(x) == history::mask_password(y);
-  };
   try {
     std::ifstream run_json(std::filesystem::path(dir) / "run.json");
     const nlohmann::json inv = parse_json_unique_keys(run_json);
@@ -273,7 +262,7 @@ bool the_runs_own_database(const std::string& dir, const std::string& db, std::s
     const bool given = !run_db.empty();
     if (!given) run_db = inv.value("history_db", std::string());
     if (run_db.empty()) why_not = "its run.json does not say which database its run records into";
-    else if (!same(db, run_db))
+    else if (!history::same_database(db, run_db))
       why_not = "this is not the database its run records into (" + std::string(given ? "--db " : "") + run_db +
                 (given ? ")" : ", as it resolved when the run started)");
     return why_not.empty();

@@ -190,29 +190,6 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj)
   return signal_at_end;
 }
 
-// A --db URL as run.json keeps it: an SQLite file absolute and lexically normal (a resume may start
-// elsewhere), any other URL with its password masked (run.json never holds one).
-std::string db_as_run_json_keeps_it(const std::string& url) {
-  const std::optional<std::string> file = history::sqlite_path(url);
-  return file ? "sqlite:" + fs::absolute(*file).lexically_normal().string() : history::mask_password(url);
-}
-
-// A URL as run.json keeps it, its password masked (history::mask_password's forms).
-bool password_masked(const std::string& url) {
-  return url.find(":***@") != std::string::npos || url.find("password=***") != std::string::npos;
-}
-
-// Whether two database URLs name one database: SQLite files by their resolved paths (links and
-// "." followed, as `rig history` compares them), other URLs as run.json keeps them.
-bool same_history(const std::string& a, const std::string& b) {
-  const std::optional<std::string> fa = history::sqlite_path(a), fb = history::sqlite_path(b);
-  if (fa && fb) {
-    std::error_code e1, e2;
-    return fs::weakly_canonical(fs::absolute(*fa), e1) == fs::weakly_canonical(fs::absolute(*fb), e2);
-  }
-  return db_as_run_json_keeps_it(a) == db_as_run_json_keeps_it(b);
-}
-
 // run.json of a run folder, checked before it is trusted: each field has its type, the
 // plant is one rig knows, and a hardware run names its hardware file.
 void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs& a) {
@@ -320,7 +297,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
                  : db;
   a.record_command = db.empty() ? "rig history --record " + shown_text(a.resume)
                                 : "rig history --db " + db + " --record " + shown_text(a.resume);
-  if (password_masked(db))
+  if (history::password_masked(db))
     a.record_command += " (the password as *** is yours to give, or keep it in ~/.pgpass)";  // a review copied it
   if (run_records && a.no_history) {
     a.history_owed = true;
@@ -329,7 +306,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
         "the run has there keeps its earlier ending); a verdict (PASS, FAIL) is owed: {} lists `history` until rig "
         "run --resume {} or {} records it",
         runs_db, kEndingPending, shown_text(a.resume), a.record_command);
-  } else if (run_records && !a.db.empty() && !db.empty() && !same_history(a.db, db)) {
+  } else if (run_records && !a.db.empty() && !db.empty() && !history::same_database(a.db, db)) {
     a.history_left_behind = fmt::format(
         "the run records into {} (run.json); this resume records its ending into --db {}: {} keeps the earlier "
         "ending ({} brings it up to date)",
@@ -338,10 +315,10 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   if (!a.db.empty() || a.no_history) return;
   if (inv.value("no_history", false)) {
     a.no_history = true;
-  } else if (!resolved_db.empty() && password_masked(resolved_db)) {
+  } else if (!resolved_db.empty() && history::password_masked(resolved_db)) {
     a.run_history_db = resolved_db;  // the resume's own resolution may carry the password: compared later
   } else if (!db.empty()) {
-    if (password_masked(db))  // stored masked
+    if (history::password_masked(db))  // stored masked
       throw ConfigError(path + ": the run was started with --db " + db + ", whose password run.json does not keep: "
                         "give the same --db with --resume (or --no-history)");
     a.db = db;
@@ -1674,7 +1651,8 @@ int do_run(RunArgs a) {
   TerminalView view(stderr, a.quiet);
   // A history URL this rig cannot open (an unknown scheme, no file) is a typo to name now, not
   // an error in run.log after the DUT was measured and its result left out of the history.
-  if (!a.no_history && !a.run_history_db.empty() && a.db.empty() && !same_history(history_url(a, hw), a.run_history_db))
+  if (!a.no_history && !a.run_history_db.empty() && a.db.empty() &&
+      !history::same_database(history_url(a, hw), a.run_history_db))
     a.history_left_behind = fmt::format(
         "the run records into {} (run.json's history_db, as it resolved when the run started); this resume's is {} "
         "($RIG_HISTORY, the rig config or the default here): {} keeps the earlier ending; give --db with that URL "
@@ -1882,9 +1860,9 @@ int do_run(RunArgs a) {
     if (a.no_history) {
       invocation["no_history"] = true;
     } else if (!a.db.empty()) {  // an SQLite file made absolute: a resume may start elsewhere
-      invocation["db"] = db_as_run_json_keeps_it(a.db);
+      invocation["db"] = history::kept_form(a.db);
     } else {  // as it resolved now: the resume records there too (read_invocation)
-      invocation["history_db"] = db_as_run_json_keeps_it(history_url(a, hw));
+      invocation["history_db"] = history::kept_form(history_url(a, hw));
     }
     std::vector<std::string> drops;  // repeated by a resume (read_invocation)
     for (const std::string& f : a.inject)

@@ -108,4 +108,23 @@ std::optional<SqliteFile> sqlite_file(const std::string& url) {
   return f;
 }
 
+bool password_masked(const std::string& url) {
+  return url.find(":***@") != std::string::npos || url.find("password=***") != std::string::npos;
+}
+
+std::string kept_form(const std::string& url) {
+  const std::optional<std::string> file = sqlite_path(url);
+  return file ? "sqlite:" + std::filesystem::absolute(*file).lexically_normal().string() : mask_password(url);
+}
+
+bool same_database(const std::string& a, const std::string& b) {
+  const std::optional<std::string> fa = sqlite_path(a), fb = sqlite_path(b);
+  if (fa && fb) {
+    std::error_code e1, e2;
+    return std::filesystem::weakly_canonical(std::filesystem::absolute(*fa), e1) ==
+           std::filesystem::weakly_canonical(std::filesystem::absolute(*fb), e2);
+  }
+  return kept_form(a) == kept_form(b);
+}
+
 }  // namespace rig::history

@@ -27,4 +27,17 @@ std::optional<SqliteFile> sqlite_file(const std::string& url);
 // postgresql://user:secret@host/db -> postgresql://user:***@host/db (for messages).
 std::string mask_password(const std::string& url);
 
+// Whether `url` is one mask_password made (its password read as ***): run.json keeps URLs so,
+// and such a URL cannot be opened as it is.
+bool password_masked(const std::string& url);
+
+// A URL as a run folder keeps it (run.json's `history_db`): an SQLite file by its absolute path,
+// a server's URL with its password masked. Throws as sqlite_path on a bad URL.
+std::string kept_form(const std::string& url);
+
+// Whether two URLs name one database however they were written: SQLite files by their resolved
+// paths (`h.sqlite`, `sqlite:h.sqlite`, `sqlite:///abs/h.sqlite`, links and "." followed), a
+// server's URLs as kept_form gives them (their passwords masked). Throws as sqlite_path.
+bool same_database(const std::string& a, const std::string& b);
+
 }  // namespace rig::history

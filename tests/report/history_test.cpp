@@ -311,6 +311,33 @@ TEST(HistoryUrl, ThePasswordIsMaskedWhereverTheUrlCarriesIt) {
   EXPECT_EQ(mask_password(mask_password("postgresql://u:p@h/x?password=q")), "postgresql://u:***@h/x?password=***");
 }
 
+// One database however its URL was written (run.json's, a resume's, `rig history --record`'s):
+// run.json keeps the SQLite file absolute and a server's password masked, and a masked URL is
+// known as one (it cannot be opened as it is).
+TEST(HistoryUrl, OneDatabaseIsKnownHoweverItsUrlIsWritten) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "same-database";
+  fs::create_directories(dir / "sub");
+  const std::string file = (dir / "h.sqlite").string();
+  EXPECT_EQ(h::kept_form("sqlite:" + (dir / "sub" / ".." / "h.sqlite").string()), "sqlite:" + file);
+  EXPECT_EQ(h::kept_form("postgresql://u:secret@h/x"), "postgresql://u:***@h/x");
+  EXPECT_TRUE(h::same_database(file, "sqlite:" + file));
+  EXPECT_TRUE(h::same_database("sqlite://" + file, "sqlite:" + (dir / "sub" / ".." / "h.sqlite").string()));
+  std::error_code ec;
+  fs::create_symlink(dir, dir / "link", ec);
+  if (!ec) {
+    EXPECT_TRUE(h::same_database(file, (dir / "link" / "h.sqlite").string()));
+  }
+  EXPECT_FALSE(h::same_database(file, (dir / "sub" / "h.sqlite").string()));
+  EXPECT_TRUE(h::same_database("postgresql://u:secret@h/x", "postgresql://u:***@h/x"));
+  EXPECT_FALSE(h::same_database("postgresql://u:secret@h/x", "postgresql://u:secret@h/y"));
+  EXPECT_FALSE(h::same_database("postgresql://u@h/x", "sqlite:" + file));
+  EXPECT_TRUE(h::password_masked("postgresql://u:***@h/x"));
+  EXPECT_TRUE(h::password_masked("postgresql://h/x?password=***"));
+  EXPECT_FALSE(h::password_masked("postgresql://u:secret@h/x"));
+  EXPECT_FALSE(h::password_masked("sqlite:" + file));
+}
+
 TEST(HistoryTime, Iso8601IsNormalisedToUtc) {
   using h::normalize_iso8601;
   EXPECT_EQ(normalize_iso8601("2026-11-22"), "2026-11-22T00:00:00Z");
