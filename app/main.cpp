@@ -205,6 +205,20 @@ std::string nearest_option(const std::vector<const CLI::App*>& chain, std::strin
 // "; did you mean X?" or nothing.
 std::string did_you_mean(const std::string& near) { return near.empty() ? near : "; did you mean " + near + "?"; }
 
+// Whether what was printed on standard output could not all be written (`> /dev/full`), said on
+// stderr. A reader that went away (SIGPIPE ignored by the parent, so it is EPIPE here) is no
+// failure.
+bool standard_output_failed() {
+  errno = 0;
+  std::cout.flush();
+  const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
+  const int e = errno;
+  if (!failed || e == EPIPE) return false;
+  std::cerr << "rig: output error: standard output: write failed" << (e ? std::string(": ") + std::strerror(e) : "")
+            << " (what the command printed is incomplete)\n";
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -238,18 +252,8 @@ int main(int argc, char** argv) {
     // instrument engineer's review). Exit 2, as a --json file that cannot be written is. Not
     // `rig run`, whose records are its files (it ignores SIGPIPE: its console may go away), nor
     // a closed pipe (SIGPIPE ends the others as it ends any filter).
-    if (app.get_subcommands().empty() || app.get_subcommands().front()->get_name() != "run") {
-      errno = 0;
-      std::cout.flush();
-      const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
-      const int e = errno;
-      // A reader that went away (SIGPIPE ignored by the parent, so it is EPIPE here) is no failure.
-      if (failed && e != EPIPE) {
-        std::cerr << "rig: output error: standard output: write failed" << (e ? std::string(": ") + std::strerror(e) : "")
-                  << " (what the command printed is incomplete)\n";
-        if (rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code (an abort) says more
-      }
-    }
+    if (app.get_subcommands().empty() || app.get_subcommands().front()->get_name() != "run")
+      if (standard_output_failed() && rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code says more
   } catch (const CLI::ParseError& e) {
     // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a
     // stray argument and reports only the missing subcommand; name the word instead, with the
@@ -311,8 +315,9 @@ int main(int argc, char** argv) {
         return rig::kExitUsage;
       }
     }
+    // --help/--version exit 0 (2 when what they print cannot be written); usage errors exit 2
     const int r = app.exit(e);
-    return r == 0 ? 0 : rig::kExitUsage;  // --help/--version exit 0; usage errors exit 2
+    return r == 0 && !standard_output_failed() ? 0 : rig::kExitUsage;
   } catch (const rig::InputError& e) {  // before ConfigError, its base
     std::cerr << "rig: input error: " << e.what() << "\n";
     return rig::kExitUsage;

@@ -4805,6 +4805,13 @@ TEST(RigCli, PrintedOutputThatCannotBeWrittenIsExitTwo) {
       << slurp(d + "/full.stderr");
   EXPECT_EQ(run({"analyze", d + "/v.txt", "--rate", "1", "--no-psd"}, d + "/ok"), 0) << slurp(d + "/ok.stderr");
   EXPECT_EQ(slurp(d + "/ok.stderr"), "");
+  // The help and the version too (`rig --help > /dev/full` was exit 0): `rig run --help` included.
+  for (const std::vector<std::string>& help : {std::vector<std::string>{"--help"}, {"run", "--help"}, {"--version"}}) {
+    EXPECT_EQ(to_full(help), 2) << help.front();
+    EXPECT_NE(slurp(d + "/full.stderr").find("rig: output error: standard output: write failed"), std::string::npos)
+        << slurp(d + "/full.stderr");
+  }
+  EXPECT_EQ(run({"run", "--help"}, d + "/help"), 0);
 }
 
 // `rig filter select|show --json` ignored a failed write: /dev/full or /proc/version gave exit 0
