@@ -383,12 +383,22 @@ std::string not_a_number(std::string_view line, std::string_view tok) {
       why += "; a decimal comma? the record's numbers take a decimal point (" + pointed +
              "); two columns? a text record holds one value per line";
     }
-    else  // A table's row ("t,a", "0.1 0.2"): the record is one value per line (a metrologist's review).
+    else {  // A table's row ("t,a", "0.1 0.2"): the record is one value per line (a metrologist's review).
+      // Blanks around a ',' ("1 ,5", "1 , 5") pad it: the column separator is the ',' (awk's
+      // second field of "1 ,5" is ",5", itself refused: a re-read).
+      const std::size_t before = tok.find_last_not_of(" \t", at), after = tok.find_first_not_of(" \t", at);
+      const char sep = tok[at] == ' ' || tok[at] == '\t'
+                           ? ((before != std::string_view::npos && tok[before] == ',') ||
+                                      (after != std::string_view::npos && tok[after] == ',')
+                                  ? ','
+                                  : ' ')
+                           : tok[at];
       why += std::string("; a text record holds one value per line (take the column out first, e.g. ") +
-             (tok[at] == ',' ? "cut -d, -f2" : tok[at] == ';' ? "cut -d';' -f2" : "awk '{print $2}'") + ")" +
-             (tok[at] != ',' && tok.find(',') != std::string_view::npos
+             (sep == ',' ? "cut -d, -f2" : sep == ';' ? "cut -d';' -f2" : "awk '{print $2}'") + ")" +
+             (sep != ',' && tok.find(',') != std::string_view::npos
                   ? "; its ',' may be a decimal comma: the record's numbers take a decimal point"
                   : "");
+    }
   }
   else if (tok.find("\xEF\xBB\xBF") != std::string_view::npos)
     why += " (\\xEF\\xBB\\xBF is a byte-order mark, skipped only at the start of the file: two files joined?)";

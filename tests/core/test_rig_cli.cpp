@@ -1454,6 +1454,10 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   // ',' was recommended, which keeps "5;1").
   refused("excel.csv", "1\n0,5;1,2\n", "e.g. cut -d';' -f2); its ',' may be a decimal comma");
   refused("tab.txt", "1\n2\t3\n", "e.g. awk '{print $2}')");
+  // Blanks that pad a ',' leave it the separator: awk's "$2" of "1 ,5" is ",5", refused in turn.
+  refused("padded.txt", "1\n2 ,5\n", "'2 ,5'; a text record holds one value per line (take the column out first, e.g. "
+                                      "cut -d, -f2)");
+  refused("padded2.txt", "1\n2 , 5\n", "e.g. cut -d, -f2)");
   // Around a value only blanks and one ',' or ';' after it (docs/analysis.md): ",5" is a row whose
   // first column is empty, "1,," one with empty columns after it; both were read as values.
   refused("lead.txt", "1\n,5\n2\n3\n", "lead.txt:2: ',5': an empty column before the value");
