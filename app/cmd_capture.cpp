@@ -4,7 +4,12 @@
 // protocol), with the reassembly's report: gaps located, duplicates, lines that could not
 // be read. `rig analyze CAPTURE --input capture` and the report then work on logs
 // recorded by can-utils or any tool writing that format.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -18,6 +23,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "app/abort_cleanup.hpp"
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
 #include "app/number_option.hpp"
@@ -99,6 +105,58 @@ std::string iso8601(double t_s) {
   return buf;
 }
 
+// The capture is written under a staged name beside --out (OUT.part) and takes --out's name only
+// where the import keeps it: a stop (SIGTERM), a full disk or a refusal left a partial file under
+// the name asked for, which rig analyze read as a shorter record and a retry was refused over (a
+// technician's review). Unwound by an error, the staged file goes and stderr says --out was not
+// written; so does a signal (SIGINT, SIGTERM, SIGHUP). A SIGKILL leaves OUT.part, never OUT.
+class StagedCapture {
+ public:
+  explicit StagedCapture(std::string out)
+      : out_(std::move(out)), staged_(out_ + ".part"),
+        on_signal_(staged_, "rig capture import: " + out_ + " not written (the import did not finish)\n") {}
+  StagedCapture(const StagedCapture&) = delete;
+  StagedCapture& operator=(const StagedCapture&) = delete;
+  ~StagedCapture() {
+    if (settled_) return;
+    std::error_code ec;
+    std::filesystem::remove(staged_, ec);
+    if (std::uncaught_exceptions() > unwinding_)
+      std::fprintf(stderr, "rig capture import: %s not written (the import did not finish)\n", out_.c_str());
+  }
+  const std::string& path() const { return staged_; }
+  // The staged file goes: nothing under --out.
+  void drop() {
+    std::error_code ec;
+    std::filesystem::remove(staged_, ec);
+    settled_ = true;
+    on_signal_.release();
+  }
+  // The staged file takes --out's name, never over a file that appeared there meanwhile.
+  void keep() {
+    settled_ = true;
+    on_signal_.release();
+    if (::renameat2(AT_FDCWD, staged_.c_str(), AT_FDCWD, out_.c_str(), RENAME_NOREPLACE) == 0) return;
+    const int e = errno;
+    if (e == EEXIST)
+      throw ConfigError("rig capture import: --out " + out_ + ": a file appeared there during the import; the capture "
+                        "is kept as " + staged_);
+    // A file system without RENAME_NOREPLACE: a hard link does not replace either.
+    if ((e == EINVAL || e == ENOSYS) && ::link(staged_.c_str(), out_.c_str()) == 0) {
+      ::unlink(staged_.c_str());
+      return;
+    }
+    throw ConfigError("rig capture import: --out " + out_ + ": cannot put the capture in place (" + std::strerror(e) +
+                      "); it is kept as " + staged_);
+  }
+
+ private:
+  std::string out_, staged_;
+  RemoveOnAbort on_signal_;  // a signal's exit (main.cpp) unlinks the staged file too
+  bool settled_ = false;
+  int unwinding_ = std::uncaught_exceptions();
+};
+
 int cmd_import(const ImportArgs& a) {
   if (a.orientation != "U10" && a.orientation != "U20")
     throw ConfigError("rig capture import: --orientation must be U10 or U20, got '" + a.orientation + "'");
@@ -168,7 +226,8 @@ int cmd_import(const ImportArgs& a) {
              {"stream", {{"counter", sp.counter}, {"counter_bits", decoder->counter_bits()}, {"x", sp.x}, {"y", sp.y},
                          {"samples_per_frame", sp.samples_per_frame}}}};
   if (!stream_iface.empty()) h.extra["iface"] = stream_iface;  // lines without an interface column: none
-  capture::Writer w(a.out, h);
+  StagedCapture staged(a.out);
+  capture::Writer w(staged.path(), h);
 
   // frames: read on the stream's interface; elsewhere: on other interfaces, not read further
   uint64_t frames = 0, stream_frames = 0, other = 0, unreadable = 0, malformed = 0, elsewhere = 0;
@@ -376,8 +435,7 @@ int cmd_import(const ImportArgs& a) {
   }
   if (ifaces.size() > 1) {
     w.close();
-    std::error_code ec;
-    std::filesystem::remove(a.out, ec);
+    staged.drop();
     const std::string& own = own_can;
     std::string listed, names;
     bool own_among = false, unnamed = false;
@@ -473,8 +531,7 @@ int cmd_import(const ImportArgs& a) {
   for (const auto& p : problems) std::fprintf(stderr, "%s\n", p.c_str());
   if (!clock_line.empty()) std::printf("%s\n", clock_line.c_str());
   if (!rate_mismatch.empty()) {
-    std::error_code ec;
-    std::filesystem::remove(a.out, ec);
+    staged.drop();
     std::fprintf(stderr, "%s\n", rate_mismatch.c_str());
     return kExitUsage;
   }
@@ -491,10 +548,10 @@ int cmd_import(const ImportArgs& a) {
                  not_finite > 0 ? " (a value not finite fails every analysis: exit 2)" : "");
   }
   if (!cut.empty()) {
-    if (w.samples_written() == 0) {  // nothing before it: no capture, the rest is all there is
-      std::error_code ec;
-      std::filesystem::remove(a.out, ec);
-    }
+    if (w.samples_written() == 0)  // nothing before it: no capture, the rest is all there is
+      staged.drop();
+    else
+      staged.keep();
     std::fprintf(stderr, "%s\n%s; import the rest into another capture with --from-line %zu\n", cut.c_str(),
                  w.samples_written() == 0 ? (a.out + " not written: no sample before it").c_str()
                                           : (a.out + " holds the " + std::to_string(w.samples_written()) +
@@ -505,13 +562,13 @@ int cmd_import(const ImportArgs& a) {
   if (w.samples_written() == 0) {
     // Nothing of the [dut] stream in the log (another DUT's layout, --iface naming no frame, an
     // empty file): an empty capture would only fail later in rig analyze, far from the cause.
-    std::error_code ec;
-    std::filesystem::remove(a.out, ec);
+    staged.drop();
     std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
                  a.hardware.c_str(), static_cast<unsigned long long>(frames + elsewhere),
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
     return kExitUsage;
   }
+  staged.keep();
   if (not_finite > 0) return kExitUsage;
   if (unreadable + malformed > 0) {
     std::fprintf(stderr, "%llu line(s) could not be read, %llu stream frame(s) malformed; the capture holds the rest\n",

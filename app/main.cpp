@@ -15,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/abort_cleanup.hpp"
 #include "app/commands.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
@@ -149,7 +150,14 @@ extern "C" void abort_on_signal(int sig) {
                                       : "rig: aborted: SIGHUP\n";
   std::size_t n = 0;
   while (text[n] != '\0') ++n;
-  [[maybe_unused]] const ssize_t w = ::write(STDERR_FILENO, text, n);
+  [[maybe_unused]] ssize_t w = ::write(STDERR_FILENO, text, n);
+  // A staged output half written (app/abort_cleanup.hpp) goes, and its note is said.
+  if (const rig::cli::AbortCleanup* c = rig::cli::g_abort_cleanup.load()) {
+    ::unlink(c->path);
+    for (n = 0; c->note[n] != '\0'; ++n) {
+    }
+    w = ::write(STDERR_FILENO, c->note, n);
+  }
   ::_exit(rig::kExitAborted);
 }
 

@@ -2,6 +2,9 @@
 // it) through the hardware file's [dut] stream into a capture file, whose samples,
 // header and gap report are checked, and which `rig analyze --input capture` then reads.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -11,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <thread>
 
 #include "firmware_link/dbc.hpp"
 #include "firmware_link/dbc_stream.hpp"
@@ -434,6 +438,73 @@ TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
             2);
   const std::string out1 = slurp(dir() / "nostream1.out");
   EXPECT_NE(out1.find("(6 frames read on vcan0, 6 other ids)"), std::string::npos) << out1;
+}
+
+// An import that does not finish (a full disk here: the file size limit, as `ulimit -f`) leaves
+// nothing under --out: a partial capture was left there, which rig analyze read as a shorter
+// record and a retry was refused over (a technician's review). The capture is written as OUT.part
+// and takes its name only when kept; the retry then imports the whole log.
+TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
+  std::ostringstream log;
+  double t = 1732255200.0;
+  for (uint64_t k = 0; k < 20000; ++k, t += 1e-3) {
+    log << log_line(t, encode(StreamHalf{Channel::X, static_cast<uint32_t>(k), 0, x_of(k)}));
+    log << log_line(t + 1e-4, encode(StreamHalf{Channel::Y, static_cast<uint32_t>(k), 0, -x_of(k)}));
+  }
+  std::ofstream(dir() / "cut.log") << log.str();
+  std::ofstream(dir() / "hw-cut.toml") << "[dut]\ncan = \"vcan0\"\n";
+  const fs::path cap = dir() / "cut.rigcap";
+  const std::string import =
+      "capture import " + (dir() / "cut.log").string() + " --hardware " + (dir() / "hw-cut.toml").string() + " --out " + cap.string();
+  // 64 KiB at most per file (ulimit -f counts 1 KiB blocks; SIGXFSZ ignored: the write fails, EFBIG).
+  const std::string limited = "ulimit -f 64; trap '' XFSZ; " + std::string(RIG_BINARY) + " " + import + " >'" +
+                              (dir() / "cut.out").string() + "' 2>'" + (dir() / "cut.err").string() + "'";
+  const int st = std::system(limited.c_str());
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_NE(WEXITSTATUS(st), 0);
+  const std::string err = slurp(dir() / "cut.err");
+  EXPECT_NE(err.find("File too large"), std::string::npos) << err;
+  EXPECT_NE(err.find("rig capture import: " + cap.string() + " not written (the import did not finish)"), std::string::npos)
+      << err;
+  EXPECT_FALSE(fs::exists(cap));
+  EXPECT_FALSE(fs::exists(cap.string() + ".part"));
+  // Stopped by SIGTERM while it writes (the signal's exit in main.cpp): exit 3, nothing under
+  // --out, the staged file gone too. The log is long enough (600 000 lines) to be stopped in.
+  {
+    std::ofstream big(dir() / "long.log");
+    double tl = 1732255200.0;
+    for (uint64_t k = 0; k < 300000; ++k, tl += 1e-3) {
+      big << log_line(tl, encode(StreamHalf{Channel::X, static_cast<uint32_t>(k & kSeqMask), 0, x_of(k)}));
+      big << log_line(tl + 1e-4, encode(StreamHalf{Channel::Y, static_cast<uint32_t>(k & kSeqMask), 0, -x_of(k)}));
+    }
+  }
+  const fs::path stopped = dir() / "stopped.rigcap";
+  const std::string line = "exec " + std::string(RIG_BINARY) + " capture import " + (dir() / "long.log").string() +
+                           " --hardware " + (dir() / "hw-cut.toml").string() + " --out " + stopped.string() + " 2>'" +
+                           (dir() / "stopped.err").string() + "' >/dev/null";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int i = 0; i < 20000 && !fs::exists(stopped.string() + ".part"); ++i)
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3) << slurp(dir() / "stopped.err");
+  EXPECT_NE(slurp(dir() / "stopped.err").find("rig: aborted: SIGTERM\nrig capture import: " + stopped.string() +
+                                              " not written (the import did not finish)"),
+            std::string::npos)
+      << slurp(dir() / "stopped.err");
+  EXPECT_FALSE(fs::exists(stopped));
+  EXPECT_FALSE(fs::exists(stopped.string() + ".part"));
+  ASSERT_EQ(run_rig(import, "cut-again"), 0) << slurp(dir() / "cut-again.err");
+  EXPECT_NE(slurp(dir() / "cut-again.out").find("20000 samples"), std::string::npos) << slurp(dir() / "cut-again.out");
+  EXPECT_TRUE(fs::exists(cap));
+  EXPECT_FALSE(fs::exists(cap.string() + ".part"));
 }
 
 namespace {
