@@ -130,12 +130,6 @@ struct Args {
   double overlap = 0.5;
 };
 
-void write_file(const std::filesystem::path& p, const std::string& text) {
-  std::ofstream o(p);
-  if (!o) throw ConfigError(p.string() + ": cannot write: " + std::strerror(errno));
-  o << text;
-  if (!o.flush()) throw ConfigError(p.string() + ": write failed: " + std::strerror(errno));
-}
 
 std::string fmt(double v) {
   char b[32];
@@ -911,7 +905,7 @@ int run(const Args& a) {
   join_fit();
   if (terms) j["noise_terms"] = analysis::noise_terms_to_json(*terms);
   // Every output is made before the first is written (their paths were checked at the start).
-  std::vector<std::pair<std::filesystem::path, std::string>> outputs;
+  std::vector<std::pair<std::filesystem::path, std::string>> outputs;  // --json's first
   if (!a.json_out.empty()) outputs.emplace_back(a.json_out, j.dump(2) + "\n");
   if (!a.svg_dir.empty()) {
     const std::string name = a.file == "-" ? input_name : std::filesystem::path(a.file).filename().string();
@@ -927,7 +921,8 @@ int run(const Args& a) {
     std::filesystem::create_directory(a.svg_dir, ec);  // one folder, in a folder checked to exist
     if (ec) throw ConfigError("rig analyze: --svg " + a.svg_dir + ": cannot create: " + ec.message());
   }
-  for (const auto& [path, text] : outputs) write_file(path, text);
+  for (const auto& [path, text] : outputs)
+    write_output_file(path.string(), text, !a.json_out.empty() && path == a.json_out ? "rig analyze: --json" : "rig analyze: --svg");
   timer.mark("outputs");
 
   // Console summary.

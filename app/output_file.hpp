@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include "app/abort_cleanup.hpp"
 #include "rig/core/errors.hpp"
 
 namespace rig::cli {
@@ -67,23 +68,55 @@ inline void check_new_file(const std::string& path, const std::string& what) {
     throw ConfigError(what + " " + path + ": the file exists (remove it or choose another name; nothing was read)");
 }
 
-// Writes `text` to `path` through (a device or a pipe included), every step checked: a JSON
-// nobody gets must not end in exit 0 (`--json /dev/full` did; a review). ConfigError (exit 2)
-// naming the file and the step that failed.
+// Writes `text` to `path`, every step checked: a JSON nobody gets must not end in exit 0
+// (`--json /dev/full` did; a review). ConfigError (exit 2) naming the file and the step that
+// failed. A regular file (or none yet) is written beside itself and renamed into place, so a
+// write that fails (a full disk) leaves the file as it was, not a cut-off JSON (a technician's
+// review); a symlink's file is what is replaced. A device or a pipe is written through
+// (/dev/stdout), and so is a writable file in a folder that takes no new files.
 inline void write_output_file(const std::string& path, const std::string& text, const std::string& what) {
+  const auto write_all = [&](int fd) {
+    for (std::size_t done = 0; done < text.size();) {
+      const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        const int e = n < 0 ? errno : EIO;
+        ::close(fd);
+        return std::string(std::strerror(e));
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    return ::close(fd) != 0 ? std::string(std::strerror(errno)) + " (at close)" : std::string();
+  };
+  struct stat st {};
+  const bool exists = ::stat(path.c_str(), &st) == 0;
+  if (!exists || S_ISREG(st.st_mode)) {
+    std::error_code ec;
+    const std::filesystem::path target = exists ? std::filesystem::canonical(path, ec) : std::filesystem::path(path);
+    const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+    const std::string staged =
+        (folder / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
+    const int fd = ec ? -1 : ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? st.st_mode & 0777 : 0644);
+    if (fd >= 0) {
+      const RemoveOnAbort on_signal(staged, "");
+      if (const std::string failed = write_all(fd); !failed.empty()) {
+        ::unlink(staged.c_str());
+        throw ConfigError(what + " " + path + ": write failed: " + failed +
+                          (exists ? " (the file is as it was)" : " (nothing written)"));
+      }
+      if (::rename(staged.c_str(), target.c_str()) != 0) {
+        const int e = errno;
+        ::unlink(staged.c_str());
+        throw ConfigError(what + " " + path + ": cannot put in place: " + std::strerror(e));
+      }
+      return;
+    }
+    if (!exists) throw ConfigError(what + " " + path + ": cannot open for writing: " + std::strerror(errno));
+  }
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw ConfigError(what + " " + path + ": cannot open for writing: " + std::strerror(errno));
-  for (std::size_t done = 0; done < text.size();) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int e = n < 0 ? errno : EIO;
-      ::close(fd);
-      throw ConfigError(what + " " + path + ": write failed: " + std::strerror(e));
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::close(fd) != 0) throw ConfigError(what + " " + path + ": write failed at close: " + std::strerror(errno));
+  if (const std::string failed = write_all(fd); !failed.empty())
+    throw ConfigError(what + " " + path + ": write failed: " + failed);
 }
 
 }  // namespace rig::cli

@@ -4853,6 +4853,38 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
   comma.insert(comma.end(), {"--json", d + "/c2.json"});
   ASSERT_EQ(run(comma, d + "/sel2"), 0) << slurp(d + "/sel2.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c2.json"))["candidates"].size(), 4u);  // and butter1@500
+  // A file whose write fails part way (a full disk; here the file size limit, `ulimit -f`, SIGXFSZ
+  // ignored) is as it was, or not there: a cut-off JSON was left (a technician's review). So is
+  // `rig analyze --json`'s. Written beside itself and renamed in place; nothing staged is left.
+  const auto limited = [&](const std::vector<std::string>& args) {
+    const int st = std::system(("ulimit -f 16; trap '' XFSZ; " + rig_line(args) + " >/dev/null 2>'" + d + "/lim.stderr'").c_str());
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  std::ofstream(d + "/old.json") << "{\"old\": 1}\n";
+  EXPECT_EQ(limited({"filter", "show", "--json", d + "/old.json"}), 2);
+  EXPECT_NE(slurp(d + "/lim.stderr").find("--json " + d + "/old.json: write failed: File too large (the file is as it was)"),
+            std::string::npos)
+      << slurp(d + "/lim.stderr");
+  EXPECT_EQ(slurp(d + "/old.json"), "{\"old\": 1}\n");
+  EXPECT_EQ(limited({"filter", "show", "--json", d + "/new.json"}), 2);
+  EXPECT_NE(slurp(d + "/lim.stderr").find("(nothing written)"), std::string::npos) << slurp(d + "/lim.stderr");
+  EXPECT_FALSE(fs::exists(d + "/new.json"));
+  {
+    std::ofstream v(d + "/v.txt");
+    for (int i = 0; i < 20000; ++i) v << (i % 7) * 1e-3 << "\n";
+  }
+  EXPECT_EQ(limited({"analyze", d + "/v.txt", "--rate", "100", "--no-psd", "--json", d + "/old.json"}), 2);
+  EXPECT_NE(slurp(d + "/lim.stderr").find("rig analyze: --json " + d + "/old.json: write failed: File too large"),
+            std::string::npos)
+      << slurp(d + "/lim.stderr");
+  EXPECT_EQ(slurp(d + "/old.json"), "{\"old\": 1}\n");
+  // Through a symlink the file is replaced, the link kept.
+  fs::create_symlink(d + "/old.json", d + "/link.json");
+  ASSERT_EQ(run({"filter", "show", "--json", d + "/link.json"}, d + "/link"), 0) << slurp(d + "/link.stderr");
+  EXPECT_TRUE(fs::is_symlink(d + "/link.json"));
+  EXPECT_TRUE(nlohmann::json::parse(slurp(d + "/old.json")).contains("sections")) << slurp(d + "/old.json");
+  for (const auto& e : fs::directory_iterator(d))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
 }
 
 // Every number of `rig filter select` has a range, checked on the text before any work: a
