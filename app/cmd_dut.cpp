@@ -185,10 +185,21 @@ Biquad parse_biquad(const std::string& text) {
   return b;
 }
 
+// The paper's W_f(z) as one --biquad value, each coefficient in the shortest text that reads back to it.
+std::string paper_section_text() {
+  const Biquad b = design::paper_wf().sections.front();
+  return fmt::format("{},{},{},{},{}", b.b0, b.b1, b.b2, b.a1, b.a2);
+}
+
 int cmd_set_filter(const DutArgs& a) {
   FilterConfig f;
   f.rate_hz = a.rate_hz;
   f.enabled = !a.off;
+  // One or the other (the synopsis's `--paper | --biquad`): both loaded the paper's section with
+  // the given ones chained after it, a filter that is neither (a technician's review).
+  if (a.paper && !a.biquads.empty())
+    throw ConfigError("rig dut set-filter: give --paper or --biquad, not both (--paper loads the paper's filter alone; "
+                      "its section is b0,b1,b2,a1,a2 = " + paper_section_text() + " for a --biquad cascade)");
   if (a.paper) f.sections = design::paper_wf().sections;  // docs/method.md, W_f(z)
   for (const auto& b : a.biquads) f.sections.push_back(parse_biquad(b));
   if (f.sections.empty()) throw ConfigError("rig dut set-filter: give --paper or at least one --biquad b0,b1,b2,a1,a2");

@@ -168,8 +168,9 @@ void run_show(const ShowArgs& a) {
             << " ms\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
   // How to apply it: a technician could not use the filter `select` ranks first, as neither a
   // profile nor `rig dut set-filter` takes the name butterN@FC (a review). Every digit, so the
-  // DUT gets the sections shown.
-  const auto num = [](double v) { return fmt::format("{:.17g}", v); };
+  // DUT gets the sections shown: the shortest text that reads back to each (17 digits printed the
+  // paper's 0.377156 as 0.37715599999999999, a review).
+  const auto num = [](double v) { return fmt::format("{}", v); };
   std::string toml_sections, biquads;
   nlohmann::json sections = nlohmann::json::array();
   for (const Biquad& b : f.sections) {

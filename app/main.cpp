@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -66,6 +67,16 @@ std::string option_unit(const CLI::Option& o) {
   return "";
 }
 
+// Whether a whole number's decimal text (decimal_text checked it) fits the 64 bits CLI11 reads it
+// into.
+bool fits_64_bits(const std::string& v, bool is_unsigned) {
+  const char* b = v.data() + (!v.empty() && v[0] == '+' ? 1 : 0);
+  const char* const e = v.data() + v.size();
+  std::uint64_t u = 0;
+  std::int64_t i = 0;
+  return is_unsigned ? std::from_chars(b, e, u).ec == std::errc() : std::from_chars(b, e, i).ec == std::errc();
+}
+
 void decimal_numbers_only(CLI::App& app) {
   for (CLI::Option* o : app.get_options()) {
     const std::string shown = o->get_type_name();  // "FLOAT", or with a check's text: "FLOAT:FLOAT in [..]"
@@ -78,7 +89,17 @@ void decimal_numbers_only(CLI::App& app) {
     // before a range check reads it, whose own message would then say less.
     o->transform(CLI::Validator(
         [whole, is_unsigned, unit](std::string& v) {
-          if (decimal_text(v, whole, is_unsigned)) return std::string();
+          if (decimal_text(v, whole, is_unsigned)) {
+            // Past 64 bits CLI11 took the largest value there is (`--seed 99999999999999999999999`
+            // ran seed 18446744073709551615, a technician's review); each option's own range
+            // check says its bound, this only that the text is a number at all.
+            if (whole && !fits_64_bits(v, is_unsigned))
+              return "'" + rig::shown_ascii(v) + "' is past the largest whole number this option takes (" +
+                     (is_unsigned ? std::to_string(std::numeric_limits<std::uint64_t>::max())
+                                  : std::to_string(std::numeric_limits<std::int64_t>::max())) +
+                     ")";
+            return std::string();
+          }
           // A number with the option's own unit after it (`90°`, `100Hz`, `5s`): said so, its
           // number given (a review: "'90\xC2\xB0' is not a decimal number" alone). Any other unit
           // gets no number: `1kHz`, `--record-ms 5s` or `--rate 100s` would be told one off by a

@@ -2781,6 +2781,12 @@ TEST(RigCli, DutSetFilterRefusesAnUnstableSectionBeforeTheLinkOpens) {
   }
   EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", "0.2,0,0,-0.5,0.1"}, d + "/io"), 4)
       << "a stable section gets as far as the missing interface";
+  // --paper or --biquad, not both: both chained the paper's section and the given one (a review).
+  EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--paper", "--biquad", "1,0,0,0,0"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("give --paper or --biquad, not both (--paper loads the paper's filter alone; its "
+                                         "section is b0,b1,b2,a1,a2 = 0.148895,0,0,-1.228261,0.377156"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
 }
 
 TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
@@ -4909,6 +4915,10 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--orders", "1,5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
       {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
       {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number (no sign, no leading zero)"},
+      // Past 64 bits it ran the largest seed there is (a technician's review): not the seed typed.
+      {{"--seed", "18446744073709551616"},
+       "--seed: '18446744073709551616' is past the largest whole number this option takes (18446744073709551615)"},
+      {{"--seed", "99999999999999999999999"}, "--seed: '99999999999999999999999' is past the largest whole number"},
       {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};
   for (const auto& [opts, why] : bad) {
     std::vector<std::string> args = {"filter", "select"};
@@ -5294,6 +5304,13 @@ TEST(RigCli, FilterShowPrintsTheSectionsAProfileAndSetFilterTake) {
   char digits[40];
   std::snprintf(digits, sizeof digits, "%.17g", b0);
   EXPECT_NE(prof.find(digits), std::string::npos) << prof;
+  // Each coefficient in its shortest exact text: the paper's a2 is 0.377156, not 0.37715599999999999.
+  ASSERT_EQ(run({"filter", "show"}, d + "/paper"), 0) << slurp(d + "/paper.stderr");
+  EXPECT_NE(slurp(d + "/paper.stdout").find("sections = [[0.148895, 0, 0, -1.228261, 0.377156]]"), std::string::npos)
+      << slurp(d + "/paper.stdout");
+  EXPECT_NE(slurp(d + "/paper.stdout").find("set-filter --biquad 0.148895,0,0,-1.228261,0.377156 --rate 10000"),
+            std::string::npos)
+      << slurp(d + "/paper.stdout");
 }
 
 // What the rig writes into a folder must be what it writes there: a folder in place of a file it
