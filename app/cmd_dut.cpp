@@ -226,7 +226,7 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
 std::string physical_text(double v, int value_type) {
   if (value_type == 1) return fmt::format("{}", static_cast<float>(v));
   if (value_type == 2 || !std::isfinite(v)) return fmt::format("{}", v);
-  if (v == std::trunc(v) && std::fabs(v) < 9007199254740992.0) return fmt::format("{:.0f}", v);
+  if (v == std::trunc(v) && std::fabs(v) <= 9007199254740992.0) return fmt::format("{:.0f}", v);  // 2^53 itself too
   return fmt::format("{:.15g}", v);
 }
 

@@ -2846,6 +2846,16 @@ TEST(RigCli, DutDecodePrintsWhatTheFramesHold) {
   EXPECT_NE(out.find(" DUT_STREAM_Y seq=4711 "), std::string::npos) << out;
   EXPECT_NE(out.find(" y_g=-0.000501 g"), std::string::npos) << out;
   EXPECT_NE(out.find(".000700 vcan0 DUT_STREAM_Y"), std::string::npos) << out;  // -tA: the stamp's fraction kept
+  // A whole number up to 2^53 exactly, 2^53 itself included (it printed 9.00719925474099e+15, a
+  // review); past it 15 significant digits, all a double holds of a 64-bit raw value.
+  std::ofstream(d + "/u64.dbc") << "VERSION \"\"\nBU_: D\nBO_ 291 BIG: 8 D\n SG_ u64 : 0|64@1+ (1,0) [0|0] \"\" D\n";
+  std::ofstream(d + "/u64.log") << "(0.000000) can0 123#FFFFFFFFFFFF1F00\n(0.000000) can0 123#0000000000002000\n"
+                                   "(0.000000) can0 123#0200000000002000\n";
+  EXPECT_EQ(run({"dut", "decode", "--dbc", d + "/u64.dbc", d + "/u64.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
+  out = slurp(d + "/io.stdout");
+  EXPECT_NE(out.find("BIG u64=9007199254740991\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("BIG u64=9007199254740992\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("BIG u64=9.00719925474099e+15\n"), std::string::npos) << out;  // 2^53 + 2
 }
 
 // `rig dut --hardware FILE decode LOG` decodes with the hardware file's [dut] dbc, found beside
