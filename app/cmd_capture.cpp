@@ -594,7 +594,16 @@ void add_capture(CLI::App& app, int& rc) {
   imp->add_option("--serial", a->serial, "the DUT's serial number (the header's), 1-32 printable ASCII")->check(serial_validator());
   imp->add_option("--orientation", a->orientation, "U10 or U20 (the header's)")->capture_default_str();
   imp->add_option("--phase", a->phase, "phase name in the header")->capture_default_str();
-  imp->add_option("--rate", a->rate_hz, "sample rate in Hz (default: the stream's rate_hz)");
+  // Checked as typed (1e-7 was named 1e-07); the same range as cmd_import's check below.
+  imp->add_option("--rate", a->rate_hz, "sample rate in Hz (default: the stream's rate_hz)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            const std::optional<double> x = finite_number(v);
+            if (x && *x >= capture::kMinRateHz && *x <= capture::kMaxRateHz) return {};
+            return "'" + shown_ascii(v) + "'" + range_note(v) + ": must be in [" +
+                   fmt::format("{}", capture::kMinRateHz) + ", " + fmt::format("{}", capture::kMaxRateHz) + "] Hz";
+          },
+          ""));
   imp->add_option("--iface", a->iface, "only frames logged on this interface");
   imp->add_option("--from-line", a->from_line, "the log's first line to import (after a DUT restart or a pause)")
       ->check(whole_in("a line number", 1));

@@ -102,12 +102,22 @@ void check_orders(const std::vector<int>& orders) {
 struct SelectArgs {
   double f_req = 500, tol = 5, fc_min = 300, fc_max = 1500, fc_step = 50, seconds = 60;
   std::vector<int> orders{1, 2, 3, 4};
+  std::vector<std::string> orders_text;  // --orders as given (checked by its option): replaces `orders`
   uint64_t seed = 1;
   std::string dut_file, recorded, json_out;
   std::size_t top = 15;
 };
 
-void run_select(const SelectArgs& a) {
+void run_select(SelectArgs a) {
+  if (!a.orders_text.empty()) {
+    a.orders.clear();
+    for (const std::string& text : a.orders_text)
+      for (std::size_t from = 0; from <= text.size();) {
+        const std::size_t comma = std::min(text.find(',', from), text.size());
+        a.orders.push_back(static_cast<int>(*whole_number(text.substr(from, comma - from), 1, 4)));
+        from = comma + 1;
+      }
+  }
   check_orders(a.orders);
   if (!a.json_out.empty()) check_output_file(a.json_out, "rig filter select --json");  // before the work
   DutConfig dc;
@@ -221,15 +231,33 @@ void add_filter(CLI::App& app, int& rc) {
   sel->add_option("--tolerance", sa->tol, "Allowed bandwidth deviation, %, in (0, 100]")
       ->capture_default_str()
       ->check(number_in(0, 100, true, "a percentage"));
-  // "1,2" as the help shows the default ([1,2,3,4]), or "1 2" (it refused the comma form and
-  // blamed a leading zero, a review).
-  sel->add_option("--orders", sa->orders, "Butterworth orders to try, each 1 to 4, once (1,2 or 1 2)")
+  // "1,2" as the help shows the default, or "1 2" (it refused the comma form and blamed a leading
+  // zero, a review). Split here, not by CLI11's delimiter, which dropped an empty item ("1,,2",
+  // "1,") without a word (a review).
+  sel->add_option("--orders", sa->orders_text, "Butterworth orders to try, each 1 to 4, once (1,2 or 1 2; default 1,2,3,4)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            std::size_t from = 0;
+            for (std::size_t comma;; from = comma + 1) {
+              comma = v.find(',', from);
+              const std::string item = v.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+              if (item.empty()) return "'" + shown_ascii(v) + "': an empty item in the list of orders (1,2 or 1 2)";
+              if (!whole_number(item, 1, 4))
+                return "'" + shown_ascii(item) + "': must be a Butterworth order in [1, 4] (decimal, no sign, no leading zero)";
+              if (comma == std::string::npos) return {};
+            }
+          },
+          ""));
+  // Finite as typed: 1e309 was named "inf" by the range check below (a review).
+  sel->add_option("--fc-min", sa->fc_min, "Lowest cut-off, Hz (0 < min <= max)")
       ->capture_default_str()
-      ->delimiter(',')
-      ->check(whole_in("a Butterworth order", 1, 4));
-  sel->add_option("--fc-min", sa->fc_min, "Lowest cut-off, Hz (0 < min <= max)")->capture_default_str();
-  sel->add_option("--fc-max", sa->fc_max, "Highest cut-off, Hz (finite)")->capture_default_str();
-  sel->add_option("--fc-step", sa->fc_step, "Cut-off step, Hz (> 0; at most 10000 cut-offs)")->capture_default_str();
+      ->check(finite("a finite number of Hz"));
+  sel->add_option("--fc-max", sa->fc_max, "Highest cut-off, Hz (finite)")
+      ->capture_default_str()
+      ->check(finite("a finite number of Hz"));
+  sel->add_option("--fc-step", sa->fc_step, "Cut-off step, Hz (> 0; at most 10000 cut-offs)")
+      ->capture_default_str()
+      ->check(finite("a finite number of Hz"));
   sel->add_option("--seconds", sa->seconds, "Emulated output per candidate for the RMS, s, in (0, 3600]")
       ->capture_default_str()
       ->check(number_in(0, 3600, true, "a number of seconds"));

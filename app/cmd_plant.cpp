@@ -20,6 +20,7 @@
 #include "plant/table/table_server.hpp"
 #include "procedures/acceptance/profile.hpp"
 #include "app/commands.hpp"
+#include "app/number_option.hpp"
 #include "app/endpoint_option.hpp"
 #include "rig/core/clock.hpp"
 #include "rig/core/errors.hpp"
@@ -143,7 +144,8 @@ void add_plant(CLI::App& app, int& rc) {
             const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
             return ec == std::errc() && end == v.data() + v.size() && x > 0 && std::isfinite(x)
                        ? std::string()
-                       : v + ": must be a number of seconds > 0 (leave it out to serve until SIGINT/SIGTERM)";
+                       : "'" + shown_ascii(v) + "'" + range_note(v) +
+                             ": must be a number of seconds > 0 (leave it out to serve until SIGINT/SIGTERM)";
           },
           "SECONDS > 0"));
   sub->callback([a, &rc] { rc = serve(*a); });

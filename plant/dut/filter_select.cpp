@@ -1,6 +1,7 @@
 #include "plant/dut/filter_select.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -56,12 +57,18 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
     f.rate_hz = rate_hz;
     return f;
   }
-  int order = 0;
+  // "butter", one digit N, "@", a decimal number FC and nothing else: a stream read took
+  // butter02@500 for order 2 and " 500" for FC (a review).
+  const std::string_view rest = name.rfind("butter", 0) == 0 ? std::string_view(name).substr(6) : std::string_view();
   double fc = 0;
-  char at = 0;
-  std::istringstream is(name.substr(name.rfind("butter", 0) == 0 ? 6 : name.size()));
-  if (name.rfind("butter", 0) != 0 || !(is >> order >> at >> fc) || at != '@' || !is.eof())
+  const char* const fc_end = rest.data() + rest.size();
+  if (rest.size() < 3 || rest[0] < '1' || rest[0] > '9' || rest[1] != '@' ||
+      std::from_chars(rest.data() + 2, fc_end, fc).ptr != fc_end || std::from_chars(rest.data() + 2, fc_end, fc).ec != std::errc())
     throw ConfigError("filter '" + name + "': expected paper, none or butterN@FC (e.g. butter2@500)");
+  const int order = rest[0] - '0';
+  if (!(fc > 0) || !(fc < rate_hz / 2))
+    throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz must be in (0, {}) Hz, below half the loop rate {} Hz",
+                                  name, std::string(rest.substr(2)), rate_hz / 2, rate_hz));
   try {
     return design::butterworth_lowpass(order, fc, rate_hz);
   } catch (const std::invalid_argument& e) {

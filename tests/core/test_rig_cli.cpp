@@ -127,14 +127,29 @@ TEST(RigCli, HelpOnEverySubcommand) {
       << slurp(d + "/fc.stderr");
   // An infinite range ran until killed (a code review); so would one of millions of cut-offs.
   EXPECT_EQ(run({"filter", "select", "--fc-max", "inf"}, d + "/fcinf"), 2);
-  EXPECT_NE(slurp(d + "/fcinf.stderr").find("the cut-off range must be 0 < min <= max Hz, finite"), std::string::npos)
+  EXPECT_NE(slurp(d + "/fcinf.stderr").find("--fc-max: 'inf': must be a finite number of Hz"), std::string::npos)
       << slurp(d + "/fcinf.stderr");
   EXPECT_EQ(run({"filter", "select", "--fc-step", "1e-6"}, d + "/fcstep"), 2);
   EXPECT_NE(slurp(d + "/fcstep.stderr").find("more than 10000 cut-offs to try"), std::string::npos)
       << slurp(d + "/fcstep.stderr");
   EXPECT_EQ(run({"plant", "serve", "--modbus", "127.0.0.1:0", "--duration", "-1"}, d + "/dur"), 2);
-  EXPECT_NE(slurp(d + "/dur.stderr").find("--duration: -1: must be a number of seconds > 0"), std::string::npos)
+  EXPECT_NE(slurp(d + "/dur.stderr").find("--duration: '-1': must be a number of seconds > 0"), std::string::npos)
       << slurp(d + "/dur.stderr");
+  // Too large, not too small: said so (a technician's review).
+  EXPECT_EQ(run({"plant", "serve", "--modbus", "127.0.0.1:0", "--duration", "1e400"}, d + "/dur"), 2);
+  EXPECT_NE(slurp(d + "/dur.stderr").find("--duration: '1e400' is beyond the range of a double: must be"), std::string::npos)
+      << slurp(d + "/dur.stderr");
+  // A filter's name is butterN@FC exactly: butter02@500 was order 2, a cut-off of 0 was printed
+  // "fc 0.000000 Hz" (a technician's review).
+  for (const char* name : {"butter02@500", "butter2@500x", "butter2@ 500", "butter@500"}) {
+    EXPECT_EQ(run({"filter", "show", "--filter", name}, d + "/fname"), 2) << name;
+    EXPECT_NE(slurp(d + "/fname.stderr").find("filter '" + std::string(name) + "': expected paper, none or butterN@FC"),
+              std::string::npos)
+        << slurp(d + "/fname.stderr");
+  }
+  EXPECT_EQ(run({"filter", "show", "--filter", "butter2@0"}, d + "/fname"), 2);
+  EXPECT_NE(slurp(d + "/fname.stderr").find("filter 'butter2@0': the cut-off 0 Hz must be in (0, 5000) Hz"), std::string::npos)
+      << slurp(d + "/fname.stderr");
 }
 
 TEST(RigCli, CiProfileEndToEnd) {
@@ -4923,6 +4938,11 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--orders", "2", "2"}, "--orders: 2 is given twice"},
       {{"--orders", "1,2,2"}, "--orders: 2 is given twice"},
       {{"--orders", "1,5"}, "--orders: '5': must be a Butterworth order in [1, 4]"},
+      // An empty item was dropped without a word (a technician's review).
+      {{"--orders", "1,,2"}, "--orders: '1,,2': an empty item in the list of orders"},
+      {{"--orders", "1,"}, "--orders: '1,': an empty item in the list of orders"},
+      // Named as typed: 1e309 was "inf" (a technician's review).
+      {{"--fc-max", "1e309"}, "--fc-max: '1e309' is beyond the range of a double: must be a finite number of Hz"},
       {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
       {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number (no sign, no leading zero)"},
       // Past 64 bits it ran the largest seed there is (a technician's review): not the seed typed.
