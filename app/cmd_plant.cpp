@@ -105,7 +105,10 @@ int serve(const ServeArgs& a) {
     can->start();
     std::cout << "dut: " << can->describe() << " serial " << dut.serial() << std::endl;
   }
-  std::cout << "plant: serving (profile " << p.name << ", seed " << seed << "); Ctrl-C to stop" << std::endl;
+  // A profile file is named as given, its profile name beside it (a file with base = "ci" read
+  // "profile ci", the file nowhere: a review).
+  const std::string shown = a.profile == p.name ? p.name : a.profile + ", named " + p.name;
+  std::cout << "plant: serving (profile " << shown << ", seed " << seed << "); Ctrl-C to stop" << std::endl;
   RealClock clock;
   int rc = kExitPass;
   try {

@@ -1,11 +1,13 @@
 #include "rig/report/db.hpp"
 
+#include <cstring>
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
 #include <atomic>
 
 #include <charconv>
+#include <cstring>
 #include <optional>
 #include <cstdio>
 #include <filesystem>
@@ -139,8 +141,16 @@ class SqliteDb final : public Db {
   }
 
  private:
+  // The statement by its kind (a SELECT, an INSERT), not its text cut at 60 characters mid-quote
+  // (a review); a file that is no SQLite database said as such.
   [[noreturn]] void fail(const char* what, const std::string& sql) {
-    throw ConfigError(where_ + ": cannot " + what + " '" + sql.substr(0, 60) + "': " + sqlite3_errmsg(db_));
+    if (sqlite3_errcode(db_) == SQLITE_NOTADB)
+      throw ConfigError(where_ + ": not an SQLite database (" + sqlite3_errmsg(db_) +
+                        "): give the history's file, or a new file's name for a new history");
+    const std::size_t b = sql.find_first_not_of(" \t\n"), e = sql.find_first_of(" \t\n(", b);
+    const std::string word = b == std::string::npos ? std::string() : sql.substr(b, e - b);
+    const std::string kind = word.empty() ? std::string("a") : (std::strchr("AEIOUaeiou", word[0]) ? "an " : "a ") + word;
+    throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite3_errmsg(db_));
   }
   static void bind(sqlite3_stmt* st, int i, const Value& v) {
     if (const auto* x = std::get_if<int64_t>(&v)) sqlite3_bind_int64(st, i, *x);

@@ -139,6 +139,13 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_EQ(run({"plant", "serve", "--modbus", "127.0.0.1:0", "--duration", "1e400"}, d + "/dur"), 2);
   EXPECT_NE(slurp(d + "/dur.stderr").find("--duration: '1e400' is beyond the range of a double: must be"), std::string::npos)
       << slurp(d + "/dur.stderr");
+  // A profile file is named as given, with the profile's name (it read "profile ci": a review).
+  std::ofstream(d + "/pok.toml") << "base = \"ci\"\n";
+  EXPECT_EQ(run({"plant", "serve", "--modbus", "127.0.0.1:0", "--profile", d + "/pok.toml", "--duration", "0.2"}, d + "/pok"),
+            0)
+      << slurp(d + "/pok.stderr");
+  EXPECT_NE(slurp(d + "/pok.stdout").find("plant: serving (profile " + d + "/pok.toml, named ci, seed 1)"), std::string::npos)
+      << slurp(d + "/pok.stdout");
   // A filter's name is butterN@FC exactly: butter02@500 was order 2, a cut-off of 0 was printed
   // "fc 0.000000 Hz" (a technician's review).
   for (const char* name : {"butter02@500", "butter2@500x", "butter2@ 500", "butter@500"}) {

@@ -117,6 +117,25 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
   h::set_lock_wait_ms(10000);
   sqlite3_exec(holder, "ROLLBACK", nullptr, nullptr, nullptr);
   sqlite3_close(holder);
+  try {  // the statement by its kind, the database's reason after it
+    h::set_lock_wait_ms(100);
+    sqlite3* again = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &again), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(again, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK);
+    try {
+      h::record_run(path, rig::test::fixture_passport("LOCKED-2"), d.path.string());
+      ADD_FAILURE() << "no exception";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(" statement: database is locked"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\''), std::string::npos) << e.what();
+    }
+    sqlite3_exec(again, "ROLLBACK", nullptr, nullptr, nullptr);
+    sqlite3_close(again);
+    h::set_lock_wait_ms(10000);
+  } catch (...) {
+    h::set_lock_wait_ms(10000);
+    throw;
+  }
   EXPECT_GE(short_wait, 0.25);
   EXPECT_LT(short_wait, 1.4);
   EXPECT_GE(longer_wait, 1.4);
@@ -202,6 +221,19 @@ TEST(HistorySqlite, BadUrlsAndUnwritablePlacesNameTheDatabase) {
   }
   rig::test::write_file(d.path / "garbage.sqlite", std::string(4096, 'x'));
   EXPECT_THROW(h::migrate((d.path / "garbage.sqlite").string()), rig::ConfigError);
+  // Said as what it is, to read or to record into: no SQL cut off mid-quote (a technician's review).
+  for (const bool reading : {true, false}) {
+    try {
+      if (reading) h::list_runs((d.path / "garbage.sqlite").string(), {});
+      else h::migrate((d.path / "garbage.sqlite").string());
+      ADD_FAILURE() << "no exception";
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("garbage.sqlite: not an SQLite database (file is not a database)"),
+                std::string::npos)
+          << e.what();
+      EXPECT_EQ(std::string(e.what()).find("SELECT"), std::string::npos) << e.what();
+    }
+  }
   // A folder in the database's place, to read or to record into (SQLite said "disk I/O error").
   for (const bool reading : {true, false}) {
     try {
