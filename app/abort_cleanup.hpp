@@ -17,27 +17,35 @@ struct AbortCleanup {
 // The slot the handler reads; null when nothing is staged.
 inline std::atomic<const AbortCleanup*> g_abort_cleanup{nullptr};
 
-// Names `path` (and what to say on stderr when it goes) until the returned guard ends. One at a
-// time: the outputs are written one after another. A path too long for the slot is not named.
+// Names `path` (and what to say on stderr when it goes) until release() or the guard's end. One
+// at a time: the outputs are written one after another, and a second guard while one holds the
+// slot names nothing. The text lives in two static slots used in turn, never on a stack: the
+// handler may run on another thread (a worker of rig analyze) while a guard ends and the next
+// begins (a code review).
 class RemoveOnAbort {
  public:
   RemoveOnAbort(const std::string& path, const std::string& note) {
-    if (path.size() >= sizeof(slot_.path) || note.size() >= sizeof(slot_.note)) return;
-    std::memcpy(slot_.path, path.c_str(), path.size() + 1);
-    std::memcpy(slot_.note, note.c_str(), note.size() + 1);
-    g_abort_cleanup.store(&slot_);
+    static AbortCleanup slots[2];
+    static std::atomic<unsigned> turn{0};
+    if (path.size() >= sizeof(AbortCleanup::path) || note.size() >= sizeof(AbortCleanup::note) || g_abort_cleanup.load())
+      return;
+    AbortCleanup& slot = slots[turn.fetch_add(1) % 2];
+    std::memcpy(slot.path, path.c_str(), path.size() + 1);
+    std::memcpy(slot.note, note.c_str(), note.size() + 1);
+    const AbortCleanup* none = nullptr;
+    if (g_abort_cleanup.compare_exchange_strong(none, &slot)) mine_ = &slot;
   }
   ~RemoveOnAbort() { release(); }
   RemoveOnAbort(const RemoveOnAbort&) = delete;
   RemoveOnAbort& operator=(const RemoveOnAbort&) = delete;
   // The file is settled (renamed into place or removed): a signal now leaves it.
   void release() {
-    const AbortCleanup* mine = &slot_;
-    g_abort_cleanup.compare_exchange_strong(mine, nullptr);
+    if (const AbortCleanup* m = mine_) g_abort_cleanup.compare_exchange_strong(m, nullptr);
+    mine_ = nullptr;
   }
 
  private:
-  AbortCleanup slot_{};
+  const AbortCleanup* mine_ = nullptr;
 };
 
 }  // namespace rig::cli

@@ -105,15 +105,16 @@ std::string iso8601(double t_s) {
   return buf;
 }
 
-// The capture is written under a staged name beside --out (OUT.part) and takes --out's name only
+// The capture is written under a staged name beside --out (OUT.part-PID, this process's own: two
+// imports to one name set each other's file aside, a code review) and takes --out's name only
 // where the import keeps it: a stop (SIGTERM), a full disk or a refusal left a partial file under
 // the name asked for, which rig analyze read as a shorter record and a retry was refused over (a
 // technician's review). Unwound by an error, the staged file goes and stderr says --out was not
-// written; so does a signal (SIGINT, SIGTERM, SIGHUP). A SIGKILL leaves OUT.part, never OUT.
+// written; so does a signal (SIGINT, SIGTERM, SIGHUP). A SIGKILL leaves OUT.part-PID, never OUT.
 class StagedCapture {
  public:
   explicit StagedCapture(std::string out)
-      : out_(std::move(out)), staged_(out_ + ".part"),
+      : out_(std::move(out)), staged_(out_ + ".part-" + std::to_string(::getpid())),
         on_signal_(staged_, "rig capture import: " + out_ + " not written (the import did not finish)\n") {}
   StagedCapture(const StagedCapture&) = delete;
   StagedCapture& operator=(const StagedCapture&) = delete;
@@ -127,25 +128,28 @@ class StagedCapture {
   const std::string& path() const { return staged_; }
   // The staged file goes: nothing under --out.
   void drop() {
+    if (settled_) return;
     std::error_code ec;
     std::filesystem::remove(staged_, ec);
     settled_ = true;
     on_signal_.release();
   }
   // The staged file takes --out's name, never over a file that appeared there meanwhile.
+  // Again (settled): nothing.
   void keep() {
+    if (settled_) return;
     settled_ = true;
-    on_signal_.release();
-    if (::renameat2(AT_FDCWD, staged_.c_str(), AT_FDCWD, out_.c_str(), RENAME_NOREPLACE) == 0) return;
-    const int e = errno;
+    int e = ::renameat2(AT_FDCWD, staged_.c_str(), AT_FDCWD, out_.c_str(), RENAME_NOREPLACE) == 0 ? 0 : errno;
+    // A file system without RENAME_NOREPLACE: a hard link does not replace either.
+    if (e == EINVAL || e == ENOSYS) {
+      e = ::link(staged_.c_str(), out_.c_str()) == 0 ? 0 : errno;
+      if (e == 0) ::unlink(staged_.c_str());
+    }
+    on_signal_.release();  // after the rename: a signal before it still takes the staged file
+    if (e == 0) return;
     if (e == EEXIST)
       throw ConfigError("rig capture import: --out " + out_ + ": a file appeared there during the import; the capture "
                         "is kept as " + staged_);
-    // A file system without RENAME_NOREPLACE: a hard link does not replace either.
-    if ((e == EINVAL || e == ENOSYS) && ::link(staged_.c_str(), out_.c_str()) == 0) {
-      ::unlink(staged_.c_str());
-      return;
-    }
     throw ConfigError("rig capture import: --out " + out_ + ": cannot put the capture in place (" + std::strerror(e) +
                       "); it is kept as " + staged_);
   }
@@ -499,6 +503,7 @@ int cmd_import(const ImportArgs& a) {
   // The counts are the stream interface's, with --iface or without (they differed: a review).
   // "LOG -> OUT" only where OUT is kept (it read so above a "not written", a review).
   const bool kept = w.samples_written() > 0 && rate_mismatch.empty();
+  if (kept) staged.keep();  // before "LOG -> OUT" is said: the rename may be refused
   std::printf("%s%s%s: %llu samples from %llu stream frames (%llu frames read%s, %llu other ids)\n", a.log.c_str(),
               kept ? " -> " : "", kept ? a.out.c_str() : "", static_cast<unsigned long long>(w.samples_written()),
               static_cast<unsigned long long>(stream_frames), static_cast<unsigned long long>(frames),

@@ -220,13 +220,14 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
 }
 
 // A decoded value as text that keeps its digits: an integer signal's value (raw * factor +
-// offset) to 15 significant digits, every one a double holds faithfully, and a whole number up
-// to 2^53 exactly; a float32 or float64 signal in the shortest text that reads back to it.
+// offset) to 15 significant digits, every one a double holds faithfully, and a whole number below
+// 2^53 exactly (2^53 itself is also what 2^53 + 1 reads as: 15 digits say it may be rounded, a
+// code review); a float32 or float64 signal in the shortest text that reads back to it.
 // "%.9g" cut 12038801.95 to 12038802 and 1000000001 to 1e+09 (a review).
 std::string physical_text(double v, int value_type) {
   if (value_type == 1) return fmt::format("{}", static_cast<float>(v));
   if (value_type == 2 || !std::isfinite(v)) return fmt::format("{}", v);
-  if (v == std::trunc(v) && std::fabs(v) <= 9007199254740992.0) return fmt::format("{:.0f}", v);  // 2^53 itself too
+  if (v == std::trunc(v) && std::fabs(v) < 9007199254740992.0) return fmt::format("{:.0f}", v);
   return fmt::format("{:.15g}", v);
 }
 

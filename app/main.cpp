@@ -89,17 +89,7 @@ void decimal_numbers_only(CLI::App& app) {
     // before a range check reads it, whose own message would then say less.
     o->transform(CLI::Validator(
         [whole, is_unsigned, unit](std::string& v) {
-          if (decimal_text(v, whole, is_unsigned)) {
-            // Past 64 bits CLI11 took the largest value there is (`--seed 99999999999999999999999`
-            // ran seed 18446744073709551615, a technician's review); each option's own range
-            // check says its bound, this only that the text is a number at all.
-            if (whole && !fits_64_bits(v, is_unsigned))
-              return "'" + rig::shown_ascii(v) + "' is past the largest whole number this option takes (" +
-                     (is_unsigned ? std::to_string(std::numeric_limits<std::uint64_t>::max())
-                                  : std::to_string(std::numeric_limits<std::int64_t>::max())) +
-                     ")";
-            return std::string();
-          }
+          if (decimal_text(v, whole, is_unsigned)) return std::string();
           // A number with the option's own unit after it (`90°`, `100Hz`, `5s`): said so, its
           // number given (a review: "'90\xC2\xB0' is not a decimal number" alone). Any other unit
           // gets no number: `1kHz`, `--record-ms 5s` or `--rate 100s` would be told one off by a
@@ -129,6 +119,22 @@ void decimal_numbers_only(CLI::App& app) {
                  hint;
         },
         ""));
+    // Past 64 bits CLI11 took the largest value there is (`--seed 99999999999999999999999` ran
+    // seed 18446744073709551615, a technician's review). Last among the checks: an option with a
+    // range of its own says it first (`--unit 99999999999999999999`: "not in range 1 to 247").
+    if (whole)
+      o->check(CLI::Validator(
+          [is_unsigned](std::string& v) -> std::string {
+            if (fits_64_bits(v, is_unsigned)) return std::string();
+            const bool negative = !v.empty() && v[0] == '-';
+            return "'" + rig::shown_ascii(v) + "' is too " + (negative ? "small" : "large") + " (a whole number from " +
+                   (is_unsigned ? std::string("0") : std::to_string(std::numeric_limits<std::int64_t>::min())) +
+                   " to " +
+                   (is_unsigned ? std::to_string(std::numeric_limits<std::uint64_t>::max())
+                                : std::to_string(std::numeric_limits<std::int64_t>::max())) +
+                   ")";
+          },
+          ""));
   }
   for (CLI::App* sub : app.get_subcommands({})) decimal_numbers_only(*sub);
 }
@@ -238,10 +244,13 @@ std::string did_you_mean(const std::string& near) { return near.empty() ? near :
 // stderr. A reader that went away (SIGPIPE ignored by the parent, so it is EPIPE here) is no
 // failure.
 bool standard_output_failed() {
+  // A stream already failed (a line flushed by std::endl) keeps the errno its write left, as
+  // nothing else ran since (`--version > /dev/full` said no reason, a code review).
+  const int earlier = !std::cout ? errno : 0;
   errno = 0;
   std::cout.flush();
   const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
-  const int e = errno;
+  const int e = errno != 0 ? errno : earlier;
   if (!failed || e == EPIPE) return false;
   std::cerr << "rig: output error: standard output: write failed" << (e ? std::string(": ") + std::strerror(e) : "")
             << " (what the command printed is incomplete)\n";

@@ -6,8 +6,10 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <string>
 
 #include "app/abort_cleanup.hpp"
@@ -68,12 +70,34 @@ inline void check_new_file(const std::string& path, const std::string& what) {
     throw ConfigError(what + " " + path + ": the file exists (remove it or choose another name; nothing was read)");
 }
 
+// Whether `path` is best replaced by a file written beside it and renamed into place: a regular
+// file of one name (or nothing yet), reached by a plain path. Anything else is written through:
+// a device or a pipe; the file behind the process's own stdin, stdout or stderr (`--json
+// /dev/stdout > out.txt`: a rename lost the table printed after it, `>>` lost the file's earlier
+// lines, a code review); a /proc or /dev name; a file with other hard links (they would keep the
+// old text); a dangling symlink (its target is made, as before).
+inline bool replace_by_rename(const std::string& path, const struct stat& st, bool exists) {
+  if (!exists) {
+    struct stat l {};
+    return ::lstat(path.c_str(), &l) != 0;  // nothing there; a dangling link is written through
+  }
+  if (!S_ISREG(st.st_mode) || st.st_nlink > 1) return false;
+  for (const int fd : {0, 1, 2}) {
+    struct stat s {};
+    if (::fstat(fd, &s) == 0 && s.st_dev == st.st_dev && s.st_ino == st.st_ino) return false;
+  }
+  std::error_code ec;
+  const std::string real = std::filesystem::canonical(path, ec).string();
+  return !ec && real.rfind("/proc/", 0) != 0 && real.rfind("/dev/", 0) != 0;
+}
+
 // Writes `text` to `path`, every step checked: a JSON nobody gets must not end in exit 0
 // (`--json /dev/full` did; a review). ConfigError (exit 2) naming the file and the step that
-// failed. A regular file (or none yet) is written beside itself and renamed into place, so a
-// write that fails (a full disk) leaves the file as it was, not a cut-off JSON (a technician's
-// review); a symlink's file is what is replaced. A device or a pipe is written through
-// (/dev/stdout), and so is a writable file in a folder that takes no new files.
+// failed. A regular file (replace_by_rename) is written beside itself and renamed into place, its
+// mode kept, so a write that fails (a full disk) leaves the file as it was, not a cut-off JSON (a
+// technician's review); a symlink's file is what is replaced. Where no file can be made beside
+// it (a folder that takes no new files, a name too long for a suffix) or the rename is refused (a
+// sticky folder), and for everything else, the file is written through as before.
 inline void write_output_file(const std::string& path, const std::string& text, const std::string& what) {
   const auto write_all = [&](int fd) {
     for (std::size_t done = 0; done < text.size();) {
@@ -90,28 +114,40 @@ inline void write_output_file(const std::string& path, const std::string& text, 
   };
   struct stat st {};
   const bool exists = ::stat(path.c_str(), &st) == 0;
-  if (!exists || S_ISREG(st.st_mode)) {
+  // The command's own stdout or stderr (`--json /dev/stdout`, to a terminal, a pipe or a file):
+  // written on that descriptor after what was printed before it, not opened again, which
+  // truncated a file the shell appends to (`>>` lost its earlier lines, a code review).
+  for (const int out : {1, 2}) {
+    struct stat s {};
+    if (!exists || ::fstat(out, &s) != 0 || s.st_dev != st.st_dev || s.st_ino != st.st_ino) continue;
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    const int fd = ::dup(out);
+    const std::string failed = fd < 0 ? std::string(std::strerror(errno)) : write_all(fd);
+    if (!failed.empty()) throw ConfigError(what + " " + path + ": write failed: " + failed);
+    return;
+  }
+  if (replace_by_rename(path, st, exists)) {
     std::error_code ec;
     const std::filesystem::path target = exists ? std::filesystem::canonical(path, ec) : std::filesystem::path(path);
     const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
     const std::string staged =
         (folder / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
-    const int fd = ec ? -1 : ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? st.st_mode & 0777 : 0644);
+    // A new file's mode as the umask makes it; a file's own kept (the umask cut a 664 file to 644,
+    // a code review).
+    const int fd = ec ? -1 : ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? 0600 : 0666);
     if (fd >= 0) {
-      const RemoveOnAbort on_signal(staged, "");
+      RemoveOnAbort on_signal(staged, "");
+      if (exists) ::fchmod(fd, st.st_mode & 07777);
       if (const std::string failed = write_all(fd); !failed.empty()) {
         ::unlink(staged.c_str());
         throw ConfigError(what + " " + path + ": write failed: " + failed +
                           (exists ? " (the file is as it was)" : " (nothing written)"));
       }
-      if (::rename(staged.c_str(), target.c_str()) != 0) {
-        const int e = errno;
-        ::unlink(staged.c_str());
-        throw ConfigError(what + " " + path + ": cannot put in place: " + std::strerror(e));
-      }
-      return;
+      if (::rename(staged.c_str(), target.c_str()) == 0) return;
+      ::unlink(staged.c_str());  // refused (a sticky folder's file of another user): written through below
     }
-    if (!exists) throw ConfigError(what + " " + path + ": cannot open for writing: " + std::strerror(errno));
   }
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw ConfigError(what + " " + path + ": cannot open for writing: " + std::strerror(errno));

@@ -2868,16 +2868,18 @@ TEST(RigCli, DutDecodePrintsWhatTheFramesHold) {
   EXPECT_NE(out.find(" DUT_STREAM_Y seq=4711 "), std::string::npos) << out;
   EXPECT_NE(out.find(" y_g=-0.000501 g"), std::string::npos) << out;
   EXPECT_NE(out.find(".000700 vcan0 DUT_STREAM_Y"), std::string::npos) << out;  // -tA: the stamp's fraction kept
-  // A whole number up to 2^53 exactly, 2^53 itself included (it printed 9.00719925474099e+15, a
-  // review); past it 15 significant digits, all a double holds of a 64-bit raw value.
+  // A whole number below 2^53 exactly; from 2^53 on 15 significant digits, all a double holds of a
+  // 64-bit raw value (2^53 + 1 reads as 2^53: printed whole, it would show a wrong value as exact).
   std::ofstream(d + "/u64.dbc") << "VERSION \"\"\nBU_: D\nBO_ 291 BIG: 8 D\n SG_ u64 : 0|64@1+ (1,0) [0|0] \"\" D\n";
   std::ofstream(d + "/u64.log") << "(0.000000) can0 123#FFFFFFFFFFFF1F00\n(0.000000) can0 123#0000000000002000\n"
-                                   "(0.000000) can0 123#0200000000002000\n";
+                                   "(0.000000) can0 123#0100000000002000\n";
   EXPECT_EQ(run({"dut", "decode", "--dbc", d + "/u64.dbc", d + "/u64.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
   out = slurp(d + "/io.stdout");
   EXPECT_NE(out.find("BIG u64=9007199254740991\n"), std::string::npos) << out;
-  EXPECT_NE(out.find("BIG u64=9007199254740992\n"), std::string::npos) << out;
-  EXPECT_NE(out.find("BIG u64=9.00719925474099e+15\n"), std::string::npos) << out;  // 2^53 + 2
+  EXPECT_EQ(out.find("BIG u64=9007199254740992"), std::string::npos) << out;
+  const std::size_t first = out.find("BIG u64=9.00719925474099e+15\n");  // 2^53 and 2^53 + 1 alike
+  EXPECT_NE(first, std::string::npos) << out;
+  EXPECT_NE(out.find("BIG u64=9.00719925474099e+15\n", first + 1), std::string::npos) << out;
 }
 
 // `rig dut --hardware FILE decode LOG` decodes with the hardware file's [dut] dbc, found beside
@@ -4923,6 +4925,19 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
   EXPECT_TRUE(nlohmann::json::parse(slurp(d + "/old.json")).contains("sections")) << slurp(d + "/old.json");
   for (const auto& e : fs::directory_iterator(d))
     EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  // The file behind the command's own stdout is written through, not replaced: `--json /dev/stdout
+  // > both.txt` lost the table printed after the JSON, and `>>` the file's earlier lines (a code
+  // review). Both are in the file, the earlier line first.
+  std::ofstream(d + "/both.txt") << "an earlier line\n";
+  std::vector<std::string> to_stdout = quick;
+  to_stdout.insert(to_stdout.end(), {"--json", "/dev/stdout"});
+  ASSERT_EQ(std::system((rig_line(to_stdout) + " >>'" + d + "/both.txt' 2>'" + d + "/both.stderr'").c_str()), 0)
+      << slurp(d + "/both.stderr");
+  const std::string both = slurp(d + "/both.txt");
+  EXPECT_EQ(both.rfind("an earlier line\n", 0), 0u) << both;
+  EXPECT_NE(both.find("\"candidates\""), std::string::npos) << both;
+  EXPECT_NE(both.find("butter2@500"), std::string::npos) << both;
+  EXPECT_EQ(both.find("\"candidates\""), both.rfind("\"candidates\"")) << both;
 }
 
 // Every number of `rig filter select` has a range, checked on the text before any work: a
@@ -4954,8 +4969,8 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--seed", "-1"}, "--seed: '-1' is not a decimal whole number (no sign, no leading zero)"},
       // Past 64 bits it ran the largest seed there is (a technician's review): not the seed typed.
       {{"--seed", "18446744073709551616"},
-       "--seed: '18446744073709551616' is past the largest whole number this option takes (18446744073709551615)"},
-      {{"--seed", "99999999999999999999999"}, "--seed: '99999999999999999999999' is past the largest whole number"},
+       "--seed: '18446744073709551616' is too large (a whole number from 0 to 18446744073709551615)"},
+      {{"--seed", "99999999999999999999999"}, "--seed: '99999999999999999999999' is too large"},
       {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};
   for (const auto& [opts, why] : bad) {
     std::vector<std::string> args = {"filter", "select"};

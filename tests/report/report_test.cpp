@@ -561,6 +561,27 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
         << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(d.path / "report.html"));
+  // A unit other than the contract's (docs/contracts.md) changes what the value means: a bias edited
+  // to read "mg" was reported and recorded (a technician's review). Names the contract does not
+  // list keep their own.
+  for (const auto& [name, unit] : std::vector<std::pair<std::string, std::string>>{
+           {"bias", "mg"}, {"k", "g/s^0.5"}, {"in_run_b_gost_100s", "mg"}, {"accuracy_class", ""}}) {
+    bad = p;
+    bad["values"][name]["unit"] = unit;
+    rig::test::write_run(d.path, bad, nullptr);
+    try {
+      rig::report::write_report(d.path.string());
+      ADD_FAILURE() << name << " in " << unit << " reported";
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("passport.json: values." + name + ".unit: \"" + unit + "\", but " + name + " is in "),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  bad = p;
+  bad["values"]["a_value_of_its_own"] = {{"value", 1.0}, {"unit", "mg"}, {"outcome", "UNSET"}};
+  rig::test::write_run(d.path, bad, nullptr);
+  EXPECT_NO_THROW(rig::report::write_report(d.path.string()));
 }
 
 // The passport against its run's run.json: a profile, plant, start or serial other than the run's,
