@@ -127,12 +127,9 @@ void decimal_numbers_only(CLI::App& app) {
           [is_unsigned](std::string& v) -> std::string {
             if (fits_64_bits(v, is_unsigned)) return std::string();
             const bool negative = !v.empty() && v[0] == '-';
-            return "'" + rig::shown_ascii(v) + "' is too " + (negative ? "small" : "large") + " (a whole number from " +
-                   (is_unsigned ? std::string("0") : std::to_string(std::numeric_limits<std::int64_t>::min())) +
-                   " to " +
-                   (is_unsigned ? std::to_string(std::numeric_limits<std::uint64_t>::max())
-                                : std::to_string(std::numeric_limits<std::int64_t>::max())) +
-                   ")";
+            // No range claimed: an option may check its own later, in its command (a re-test:
+            // --memory-mib said "0 to 18446744073709551615" and takes 1 to 1048576).
+            return "'" + rig::shown_ascii(v) + "' is too " + (negative ? "small" : "large") + " (past 64 bits)";
           },
           ""));
   }
@@ -189,6 +186,9 @@ extern "C" void abort_on_signal(int sig) {
 }
 
 void aborted_by_signals() {
+  // A file size limit (`ulimit -f`) is a write that fails (EFBIG), said and handled as a full disk
+  // is, not a kill that leaves staged files and says nothing (a re-test: exit 153).
+  ::signal(SIGXFSZ, SIG_IGN);
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction was {};
     if (::sigaction(sig, nullptr, &was) != 0 || was.sa_handler == SIG_IGN) continue;

@@ -70,7 +70,15 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
     throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz must be in (0, {}) Hz, below half the loop rate {} Hz",
                                   name, std::string(rest.substr(2)), rate_hz / 2, rate_hz));
   try {
-    return design::butterworth_lowpass(order, fc, rate_hz);
+    // A cut-off so low that the sections round to a pole on the unit circle (butter2@1e-300 printed
+    // a filter with DC gain nan that set-filter then refused as unstable: a re-test).
+    const FilterConfig f = design::butterworth_lowpass(order, fc, rate_hz);
+    for (const Biquad& b : f.sections)
+      if (!stable_section(b) || !std::isfinite(b.b0 + b.b1 + b.b2))
+        throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too low for a stable filter in double precision "
+                                      "at {} Hz (its poles round onto the unit circle)",
+                                      name, std::string(rest.substr(2)), rate_hz));
+    return f;
   } catch (const std::invalid_argument& e) {
     throw ConfigError("filter '" + name + "': " + e.what());
   }
@@ -79,14 +87,14 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
 std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt) {
   if (!(opt.f_req_hz > 0)) throw ConfigError("--f-req must be positive");
   if (!(opt.fc_step_hz > 0) || !std::isfinite(opt.fc_step_hz))
-    throw ConfigError(fmt::format("--fc-step {:g}: the cut-off step must be a number of Hz > 0", opt.fc_step_hz));
+    throw ConfigError(fmt::format("--fc-step {}: the cut-off step must be a number of Hz > 0", opt.fc_step_hz));
   if (!(opt.fc_min_hz > 0) || !(opt.fc_max_hz >= opt.fc_min_hz) || !std::isfinite(opt.fc_max_hz))
-    throw ConfigError(fmt::format("--fc-min {:g} --fc-max {:g}: the cut-off range must be 0 < min <= max Hz, finite",
+    throw ConfigError(fmt::format("--fc-min {} --fc-max {}: the cut-off range must be 0 < min <= max Hz, finite",
                                   opt.fc_min_hz, opt.fc_max_hz));
   // Each cut-off is an emulated run per order: a range of millions would run for days.
   constexpr double kMaxCutoffs = 10000;
   if ((opt.fc_max_hz - opt.fc_min_hz) / opt.fc_step_hz + 1 > kMaxCutoffs)
-    throw ConfigError(fmt::format("--fc-min {:g} --fc-max {:g} --fc-step {:g}: more than {:g} cut-offs to try", opt.fc_min_hz,
+    throw ConfigError(fmt::format("--fc-min {} --fc-max {} --fc-step {}: more than {:g} cut-offs to try", opt.fc_min_hz,
                                   opt.fc_max_hz, opt.fc_step_hz, kMaxCutoffs));
   const DutParams p = load_dut_params(dut_cfg);
   const double rate = p.loop.loop_rate_hz;

@@ -578,6 +578,21 @@ TEST(Report, APassportWhoseVerdictsContradictItsValuesGetsNoReport) {
           << e.what();
     }
   }
+  for (const bool null_unit : {true, false}) {  // absent or null: recorded as a blank unit (a re-test)
+    bad = p;
+    if (null_unit) bad["values"]["bias"]["unit"] = nullptr;
+    else bad["values"]["bias"].erase("unit");
+    rig::test::write_run(d.path, bad, nullptr);
+    try {
+      rig::report::write_report(d.path.string());
+      ADD_FAILURE() << "a bias without its unit reported";
+    } catch (const rig::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("values.bias.unit: ") + (null_unit ? "null" : "absent") +
+                                           ", but bias is in g"),
+                std::string::npos)
+          << e.what();
+    }
+  }
   bad = p;
   bad["values"]["a_value_of_its_own"] = {{"value", 1.0}, {"unit", "mg"}, {"outcome", "UNSET"}};
   rig::test::write_run(d.path, bad, nullptr);
