@@ -426,7 +426,7 @@ int cmd_import(const ImportArgs& a) {
       const double shown = sig ? p.value_g / decoder->scale_to_g(p.channel) : p.value_g;  // as the DBC's range has it
       std::string where = fmt::format("{}:{}: {} = {:.9g} {}", a.log, ln, p.channel == link::Channel::X ? sp.x : sp.y,
                                       shown, sig ? sig->unit : std::string("g"));
-      if (sig && sig->min < sig->max) where += fmt::format(", its DBC range [{:g}|{:g}] {}", sig->min, sig->max, sig->unit);
+      if (sig && sig->min < sig->max) where += fmt::format(", its DBC range [{}|{}] {}", sig->min, sig->max, sig->unit);
       if (implausible == 1) first_implausible = where;
       if (!finite) first_not_finite = std::move(where);
     }

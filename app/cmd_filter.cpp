@@ -242,6 +242,11 @@ void add_filter(CLI::App& app, int& rc) {
               comma = v.find(',', from);
               const std::string item = v.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
               if (item.empty()) return "'" + shown_ascii(v) + "': an empty item in the list of orders (1,2 or 1 2)";
+              // "1 2" quoted as one word: the blank is no separator here (a re-test: the message
+              // offered "1 2" and refused it).
+              if (item.find_first_of(" \t") != std::string::npos)
+                return "'" + shown_ascii(v) + "': the orders as 1,2 or as separate words (--orders 1 2), not one word "
+                       "with a blank";
               if (!whole_number(item, 1, 4))
                 return "'" + shown_ascii(item) + "': must be a Butterworth order in [1, 4] (decimal, no sign, no leading zero)";
               if (comma == std::string::npos) return {};

@@ -4975,6 +4975,7 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       // An empty item was dropped without a word (a technician's review).
       {{"--orders", "1,,2"}, "--orders: '1,,2': an empty item in the list of orders"},
       {{"--orders", "1,"}, "--orders: '1,': an empty item in the list of orders"},
+      {{"--orders", "1 2"}, "--orders: '1 2': the orders as 1,2 or as separate words (--orders 1 2)"},
       // Named as typed: 1e309 was "inf" (a technician's review).
       {{"--fc-max", "1e309"}, "--fc-max: '1e309' is beyond the range of a double: must be a finite number of Hz"},
       {{"--top", "0"}, "--top: '0': must be a number of rows >= 1"},
