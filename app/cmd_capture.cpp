@@ -115,7 +115,8 @@ class StagedCapture {
  public:
   explicit StagedCapture(std::string out)
       : out_(std::move(out)), staged_(out_ + ".part-" + std::to_string(::getpid())),
-        on_signal_(staged_, "rig capture import: " + out_ + " not written (the import did not finish)\n") {}
+        not_written_("rig capture import: " + out_ + " not written (the import did not finish)\n"),
+        on_signal_(staged_, not_written_) {}
   StagedCapture(const StagedCapture&) = delete;
   StagedCapture& operator=(const StagedCapture&) = delete;
   ~StagedCapture() {
@@ -123,7 +124,7 @@ class StagedCapture {
     std::error_code ec;
     std::filesystem::remove(staged_, ec);
     if (std::uncaught_exceptions() > unwinding_)
-      std::fprintf(stderr, "rig capture import: %s not written (the import did not finish)\n", out_.c_str());
+      std::fputs(not_written_.c_str(), stderr);
   }
   const std::string& path() const { return staged_; }
   // The staged file goes: nothing under --out.
@@ -156,6 +157,7 @@ class StagedCapture {
 
  private:
   std::string out_, staged_;
+  std::string not_written_;  // said on an error's unwinding and by a signal's exit alike
   RemoveOnAbort on_signal_;  // a signal's exit (main.cpp) unlinks the staged file too
   bool settled_ = false;
   int unwinding_ = std::uncaught_exceptions();

@@ -62,8 +62,11 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
   const std::string_view rest = name.rfind("butter", 0) == 0 ? std::string_view(name).substr(6) : std::string_view();
   double fc = 0;
   const char* const fc_end = rest.data() + rest.size();
-  if (rest.size() < 3 || rest[0] < '1' || rest[0] > '9' || rest[1] != '@' ||
-      std::from_chars(rest.data() + 2, fc_end, fc).ptr != fc_end || std::from_chars(rest.data() + 2, fc_end, fc).ec != std::errc())
+  const auto read_fc = [&] {
+    const auto [stop, ec] = std::from_chars(rest.data() + 2, fc_end, fc);
+    return ec == std::errc() && stop == fc_end;
+  };
+  if (rest.size() < 3 || rest[0] < '1' || rest[0] > '9' || rest[1] != '@' || !read_fc())
     throw ConfigError("filter '" + name + "': expected paper, none or butterN@FC (e.g. butter2@500)");
   const int order = rest[0] - '0';
   if (!(fc > 0) || !(fc < rate_hz / 2))

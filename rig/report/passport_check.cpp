@@ -60,12 +60,18 @@ std::string expected_outcome(const json& m, bool run_complete, bool every_phase_
   return in ? "PASS" : "FAIL";
 }
 
-// The measurements every acceptance passport lists, null when not measured (docs/contracts.md,
-// "Measurement names"); the GOST block lengths are the profile's, at least one of them.
-constexpr const char* kEveryPassportLists[] = {"bias",  "base_error", "in_run_b_allan",          "tau_cp",
-                                               "q",     "n",          "k",                       "r",
-                                               "in_run_b_allan_filtered", "rms_unfiltered", "rms_filtered",
-                                               "bandwidth_0p5", "settling_time", "accuracy_class"};
+// The measurements every acceptance passport lists, null when not measured, each with its unit
+// (docs/contracts.md, "Measurement names"); the GOST block lengths are the profile's, at least one
+// of them, each in g.
+struct ListedMeasurement {
+  const char* name;
+  const char* unit;
+};
+constexpr ListedMeasurement kEveryPassportLists[] = {
+    {"bias", "g"},           {"base_error", "g"},   {"in_run_b_allan", "g"}, {"tau_cp", "s"},
+    {"q", "g*h"},            {"n", "g*h^0.5"},      {"k", "g/h^0.5"},        {"r", "g/h"},
+    {"in_run_b_allan_filtered", "g"}, {"rms_unfiltered", "g"}, {"rms_filtered", "g"},
+    {"bandwidth_0p5", "Hz"}, {"settling_time", "s"}, {"accuracy_class", "-"}};
 
 // A judged run (PASS or FAIL) went through every phase and lists every measurement: a phase left
 // pending, aborted or failed, or a value taken out, is a passport changed after its run (a review:
@@ -91,9 +97,9 @@ std::string incomplete_judged_run(const json& p, const std::string& run) {
     return "outcome is " + run + ", but phases[" + std::to_string(i) + "] (" + text(ph[i].value("id", json(""))) + ") is " +
            text(ph[i].value("status", json(""))) + " (a judged run has done or skipped every phase)";
   const json& v = p["values"];
-  for (const char* name : kEveryPassportLists)
-    if (!v.contains(name))
-      return "outcome is " + run + ", but values has no " + name +
+  for (const ListedMeasurement& listed : kEveryPassportLists)
+    if (!v.contains(listed.name))
+      return "outcome is " + run + ", but values has no " + listed.name +
              " (a passport lists every measurement of the procedure, null when not measured)";
   bool gost = false;
   for (const auto& [name, m] : v.items()) gost = gost || name.rfind("in_run_b_gost_", 0) == 0;
@@ -110,6 +116,16 @@ bool every_phase_ran(const json& p) {
 }
 
 }  // namespace
+
+std::string contract_unit(const std::string& name) {
+  for (const auto& [listed, unit] : kEveryPassportLists)
+    if (name == listed) return unit;
+  // in_run_b_gost_<N>s: the GOST B of N-second block means
+  if (name.rfind("in_run_b_gost_", 0) == 0 && name.size() > 15 && name.back() == 's' &&
+      name.find_first_not_of("0123456789", 14) == name.size() - 1)
+    return "g";
+  return "";
+}
 
 std::string verdict_contradiction(const json& p) {
   if (!p.is_object() || !p.contains("values") || !p["values"].is_object()) return {};

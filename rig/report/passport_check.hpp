@@ -14,6 +14,11 @@ namespace rig::report {
 // the values' outcomes; else the first contradiction, naming the field and the values.
 std::string verdict_contradiction(const nlohmann::json& passport);
 
+// The unit docs/contracts.md gives a measurement of every passport ("" for a name it does not
+// list): a passport whose bias was edited to read "mg" was reported and recorded as a bias in mg
+// (a technician's review).
+std::string contract_unit(const std::string& name);
+
 // Throws ConfigError "PATH: <the contradiction> (...)" when there is one.
 void require_consistent_verdicts(const nlohmann::json& passport, const std::string& path);
 

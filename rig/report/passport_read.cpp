@@ -43,24 +43,6 @@ bool one_of(const json& v, std::initializer_list<const char*> names) {
 // A field's value as the message shows it: JSON text, control bytes as \xNN.
 std::string shown(const json& v) { return shown_text(v.dump()); }
 
-// The unit docs/contracts.md gives a measurement ("" for a name it does not list): a passport
-// whose bias was edited to read "mg" was reported and recorded as a bias in mg (a technician's
-// review). A run's own passports are held to it in every test that reads one.
-std::string contract_unit(const std::string& name) {
-  static const std::pair<const char*, const char*> kUnits[] = {
-      {"bias", "g"},           {"base_error", "g"},   {"in_run_b_allan", "g"}, {"tau_cp", "s"},
-      {"q", "g*h"},            {"n", "g*h^0.5"},      {"k", "g/h^0.5"},        {"r", "g/h"},
-      {"in_run_b_allan_filtered", "g"}, {"rms_unfiltered", "g"}, {"rms_filtered", "g"},
-      {"bandwidth_0p5", "Hz"}, {"settling_time", "s"}, {"accuracy_class", "-"}};
-  for (const auto& [n, u] : kUnits)
-    if (name == n) return u;
-  // in_run_b_gost_<N>s: the GOST B of N-second block means
-  if (name.rfind("in_run_b_gost_", 0) == 0 && name.size() > 15 && name.back() == 's' &&
-      name.find_first_not_of("0123456789", 14) == name.size() - 1)
-    return "g";
-  return "";
-}
-
 void check_value(const std::string& name, const json& m, const std::string& path) {
   const std::string at = path + ": values." + name;
   if (!m.is_object()) throw ConfigError(at + ": a measurement must be an object, not " + shown(m));
