@@ -99,6 +99,18 @@ void check_orders(const std::vector<int>& orders) {
         throw ConfigError("--orders: " + std::to_string(orders[i]) + " is given twice (each order is tried once)");
 }
 
+// --orders' items as typed: "1,2" is two; an empty item ("1,,2", "1,") is kept as "" for the
+// option's check to name.
+std::vector<std::string> order_items(const std::string& text) {
+  std::vector<std::string> items;
+  for (std::size_t from = 0; from <= text.size();) {
+    const std::size_t comma = std::min(text.find(',', from), text.size());
+    items.push_back(text.substr(from, comma - from));
+    from = comma + 1;
+  }
+  return items;
+}
+
 struct SelectArgs {
   double f_req = 500, tol = 5, fc_min = 300, fc_max = 1500, fc_step = 50, seconds = 60;
   std::vector<int> orders{1, 2, 3, 4};
@@ -112,11 +124,7 @@ void run_select(SelectArgs a) {
   if (!a.orders_text.empty()) {
     a.orders.clear();
     for (const std::string& text : a.orders_text)
-      for (std::size_t from = 0; from <= text.size();) {
-        const std::size_t comma = std::min(text.find(',', from), text.size());
-        a.orders.push_back(static_cast<int>(*whole_number(text.substr(from, comma - from), 1, 4)));
-        from = comma + 1;
-      }
+      for (const std::string& item : order_items(text)) a.orders.push_back(static_cast<int>(*whole_number(item, 1, 4)));
   }
   check_orders(a.orders);
   if (!a.json_out.empty()) check_output_file(a.json_out, "rig filter select --json");  // before the work
@@ -237,10 +245,7 @@ void add_filter(CLI::App& app, int& rc) {
   sel->add_option("--orders", sa->orders_text, "Butterworth orders to try, each 1 to 4, once (1,2 or 1 2; default 1,2,3,4)")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
-            std::size_t from = 0;
-            for (std::size_t comma;; from = comma + 1) {
-              comma = v.find(',', from);
-              const std::string item = v.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+            for (const std::string& item : order_items(v)) {
               if (item.empty()) return "'" + shown_ascii(v) + "': an empty item in the list of orders (1,2 or 1 2)";
               // "1 2" quoted as one word: the blank is no separator here (a re-test: the message
               // offered "1 2" and refused it).
@@ -249,8 +254,8 @@ void add_filter(CLI::App& app, int& rc) {
                        "with a blank";
               if (!whole_number(item, 1, 4))
                 return "'" + shown_ascii(item) + "': must be a Butterworth order in [1, 4] (decimal, no sign, no leading zero)";
-              if (comma == std::string::npos) return {};
             }
+            return {};
           },
           ""));
   // Finite as typed: 1e309 was named "inf" by the range check below (a review).

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "app/abort_cleanup.hpp"
@@ -70,25 +71,30 @@ inline void check_new_file(const std::string& path, const std::string& what) {
     throw ConfigError(what + " " + path + ": the file exists (remove it or choose another name; nothing was read)");
 }
 
-// Whether `path` is best replaced by a file written beside it and renamed into place: a regular
-// file of one name (or nothing yet), reached by a plain path. Anything else is written through:
+// `st` is the file open on descriptor `fd`.
+inline bool open_on(const struct stat& st, int fd) {
+  struct stat s {};
+  return ::fstat(fd, &s) == 0 && s.st_dev == st.st_dev && s.st_ino == st.st_ino;
+}
+
+// The file `path` names, where it is best replaced by a file written beside it and renamed into
+// place (its symlinks followed; `path` itself when nothing is there yet): a regular file of one
+// name, reached by a plain path. Anything else is written through:
 // a device or a pipe; the file behind the process's own stdin, stdout or stderr (`--json
 // /dev/stdout > out.txt`: a rename lost the table printed after it, `>>` lost the file's earlier
 // lines, a code review); a /proc or /dev name; a file with other hard links (they would keep the
 // old text); a dangling symlink (its target is made, as before).
-inline bool replace_by_rename(const std::string& path, const struct stat& st, bool exists) {
+inline std::optional<std::filesystem::path> replace_by_rename(const std::string& path, const struct stat& st, bool exists) {
   if (!exists) {
     struct stat l {};
-    return ::lstat(path.c_str(), &l) != 0;  // nothing there; a dangling link is written through
+    if (::lstat(path.c_str(), &l) == 0) return std::nullopt;  // a dangling link is written through
+    return std::filesystem::path(path);
   }
-  if (!S_ISREG(st.st_mode) || st.st_nlink > 1) return false;
-  for (const int fd : {0, 1, 2}) {
-    struct stat s {};
-    if (::fstat(fd, &s) == 0 && s.st_dev == st.st_dev && s.st_ino == st.st_ino) return false;
-  }
+  if (!S_ISREG(st.st_mode) || st.st_nlink > 1 || open_on(st, 0) || open_on(st, 1) || open_on(st, 2)) return std::nullopt;
   std::error_code ec;
-  const std::string real = std::filesystem::canonical(path, ec).string();
-  return !ec && real.rfind("/proc/", 0) != 0 && real.rfind("/dev/", 0) != 0;
+  std::filesystem::path real = std::filesystem::canonical(path, ec);
+  if (ec || real.string().rfind("/proc/", 0) == 0 || real.string().rfind("/dev/", 0) == 0) return std::nullopt;
+  return real;
 }
 
 // Writes `text` to `path`, every step checked: a JSON nobody gets must not end in exit 0
@@ -118,8 +124,7 @@ inline void write_output_file(const std::string& path, const std::string& text, 
   // written on that descriptor after what was printed before it, not opened again, which
   // truncated a file the shell appends to (`>>` lost its earlier lines, a code review).
   for (const int out : {1, 2}) {
-    struct stat s {};
-    if (!exists || ::fstat(out, &s) != 0 || s.st_dev != st.st_dev || s.st_ino != st.st_ino) continue;
+    if (!exists || !open_on(st, out)) continue;
     std::cout.flush();
     std::cerr.flush();
     std::fflush(nullptr);
@@ -128,15 +133,14 @@ inline void write_output_file(const std::string& path, const std::string& text, 
     if (!failed.empty()) throw ConfigError(what + " " + path + ": write failed: " + failed);
     return;
   }
-  if (replace_by_rename(path, st, exists)) {
-    std::error_code ec;
-    const std::filesystem::path target = exists ? std::filesystem::canonical(path, ec) : std::filesystem::path(path);
+  if (const std::optional<std::filesystem::path> replaced = replace_by_rename(path, st, exists)) {
+    const std::filesystem::path& target = *replaced;
     const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
     const std::string staged =
         (folder / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
     // A new file's mode as the umask makes it; a file's own kept (the umask cut a 664 file to 644,
     // a code review).
-    const int fd = ec ? -1 : ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? 0600 : 0666);
+    const int fd = ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? 0600 : 0666);
     if (fd >= 0) {
       RemoveOnAbort on_signal(staged, "");
       if (exists) ::fchmod(fd, st.st_mode & 07777);
