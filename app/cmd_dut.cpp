@@ -219,13 +219,16 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
   return kExitPass;
 }
 
-// A decoded value as text that keeps its digits: an integer signal's value (raw * factor +
-// offset) to 15 significant digits, every one a double holds faithfully, and a whole number below
-// 2^53 exactly (2^53 itself is also what 2^53 + 1 reads as: 15 digits say it may be rounded, a
-// code review); a float32 or float64 signal in the shortest text that reads back to it.
+// A decoded value as text that keeps its digits: an integer signal with whole-number factor and
+// offset exactly, from its raw integer (dbc_physical_exact: a double read 2^53 + 1 as 2^53, and a
+// raw 2^53 + 1 with offset -2 as ...990, a review); another integer signal (raw * factor + offset)
+// to 15 significant digits, every one a double holds faithfully, a whole number below 2^53
+// exactly; a float32 or float64 signal in the shortest text that reads back to it.
 // "%.9g" cut 12038801.95 to 12038802 and 1000000001 to 1e+09 (a review).
-std::string physical_text(double v, int value_type) {
+std::string physical_text(const link::DecodedSignal& s, int value_type) {
+  const double v = s.value;
   if (value_type == 1) return fmt::format("{}", static_cast<float>(v));
+  if (!s.exact.empty()) return s.exact;
   if (value_type == 2 || !std::isfinite(v)) return fmt::format("{}", v);
   if (v == std::trunc(v) && std::fabs(v) < 9007199254740992.0) return fmt::format("{:.0f}", v);
   return fmt::format("{:.15g}", v);
@@ -309,7 +312,7 @@ int cmd_decode(const DutArgs& a) {
     std::printf("%s %s %s", time_text(lf).c_str(), lf.iface.c_str(), name.c_str());
     for (const auto& s : *sig) {
       const link::DbcSignal* sd = msg.signal(s.name);
-      const std::string v = physical_text(s.value, sd ? sd->value_type : 0);
+      const std::string v = physical_text(s, sd ? sd->value_type : 0);
       if (s.value_name.empty()) std::printf(" %s=%s%s%s", s.name.c_str(), v.c_str(), s.unit.empty() ? "" : " ", s.unit.c_str());
       else std::printf(" %s=\"%s\" (%s)", s.name.c_str(), s.value_name.c_str(), v.c_str());
     }

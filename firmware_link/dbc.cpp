@@ -776,6 +776,28 @@ double dbc_physical(const DbcSignal& s, std::span<const uint8_t> p) {
   return v * s.factor + s.offset;
 }
 
+namespace {
+__extension__ typedef __int128 Int128;  // GCC's and clang's; -Wpedantic asks for the marker
+__extension__ typedef unsigned __int128 Uint128;
+}  // namespace
+
+std::string dbc_physical_exact(const DbcSignal& s, std::span<const uint8_t> p) {
+  constexpr double k63 = 9223372036854775808.0;
+  const auto whole = [&](double v) { return v == std::trunc(v) && std::fabs(v) < k63; };
+  if (s.value_type != 0 || !whole(s.factor) || !whole(s.offset)) return {};
+  const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
+  // |raw| < 2^64 and |factor|, |offset| < 2^63: the sum stays below 2^127.
+  const Int128 r = s.is_signed ? static_cast<Int128>(sign_extend(raw, s.length)) : static_cast<Int128>(raw);
+  const Int128 v = r * static_cast<int64_t>(s.factor) + static_cast<int64_t>(s.offset);
+  Uint128 mag = static_cast<Uint128>(v < 0 ? -v : v);
+  std::string digits;
+  do {
+    digits.insert(digits.begin(), static_cast<char>('0' + static_cast<int>(mag % 10)));
+    mag /= 10;
+  } while (mag != 0);
+  return v < 0 ? "-" + digits : digits;
+}
+
 uint64_t dbc_raw_of(const DbcSignal& s, double physical) {
   if (s.value_type == 1) return std::bit_cast<uint32_t>(static_cast<float>((physical - s.offset) / s.factor));
   if (s.value_type == 2) return std::bit_cast<uint64_t>((physical - s.offset) / s.factor);
@@ -805,7 +827,7 @@ std::optional<std::vector<DecodedSignal>> decode_payload(const DbcMessage& m, st
   std::vector<DecodedSignal> out;
   for (const auto& s : m.signals) {
     if (s.mux_value && (!mux || *mux != *s.mux_value)) continue;
-    DecodedSignal d{s.name, dbc_physical(s, p), s.unit, {}};
+    DecodedSignal d{s.name, dbc_physical(s, p), s.unit, {}, dbc_physical_exact(s, p)};
     if (!s.value_names.empty() && s.value_type == 0) {
       const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
       const int64_t key = s.is_signed ? sign_extend(raw, s.length) : static_cast<int64_t>(raw);

@@ -2872,18 +2872,26 @@ TEST(RigCli, DutDecodePrintsWhatTheFramesHold) {
   EXPECT_NE(out.find(" DUT_STREAM_Y seq=4711 "), std::string::npos) << out;
   EXPECT_NE(out.find(" y_g=-0.000501 g"), std::string::npos) << out;
   EXPECT_NE(out.find(".000700 vcan0 DUT_STREAM_Y"), std::string::npos) << out;  // -tA: the stamp's fraction kept
-  // A whole number below 2^53 exactly; from 2^53 on 15 significant digits, all a double holds of a
-  // 64-bit raw value (2^53 + 1 reads as 2^53: printed whole, it would show a wrong value as exact).
-  std::ofstream(d + "/u64.dbc") << "VERSION \"\"\nBU_: D\nBO_ 291 BIG: 8 D\n SG_ u64 : 0|64@1+ (1,0) [0|0] \"\" D\n";
+  // An integer signal with whole-number factor and offset exactly, from its raw integer: 2^53 + 1
+  // read as 2^53 through a double (and was printed to 15 digits for that reason), and a raw
+  // 2^53 + 1 with offset -2 as 9007199254740990 (helper-120). Another factor: 15 digits from 2^53.
+  std::ofstream(d + "/u64.dbc") << "VERSION \"\"\nBU_: D\nBO_ 291 BIG: 8 D\n SG_ u64 : 0|64@1+ (1,0) [0|0] \"\" D\n"
+                                   "BO_ 292 OFF: 8 D\n SG_ o64 : 0|64@1+ (1,-2) [0|0] \"\" D\n"
+                                   "BO_ 293 NEG: 8 D\n SG_ s64 : 0|64@1- (3,5) [0|0] \"\" D\n"
+                                   "BO_ 294 HALF: 8 D\n SG_ h64 : 0|64@1+ (0.5,0) [0|0] \"\" D\n";
   std::ofstream(d + "/u64.log") << "(0.000000) can0 123#FFFFFFFFFFFF1F00\n(0.000000) can0 123#0000000000002000\n"
-                                   "(0.000000) can0 123#0100000000002000\n";
+                                   "(0.000000) can0 123#0100000000002000\n(0.000000) can0 123#FFFFFFFFFFFFFFFF\n"
+                                   "(0.000000) can0 124#0100000000002000\n(0.000000) can0 125#0000000000000080\n"
+                                   "(0.000000) can0 126#0100000000004000\n";
   EXPECT_EQ(run({"dut", "decode", "--dbc", d + "/u64.dbc", d + "/u64.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
   out = slurp(d + "/io.stdout");
   EXPECT_NE(out.find("BIG u64=9007199254740991\n"), std::string::npos) << out;
-  EXPECT_EQ(out.find("BIG u64=9007199254740992"), std::string::npos) << out;
-  const std::size_t first = out.find("BIG u64=9.00719925474099e+15\n");  // 2^53 and 2^53 + 1 alike
-  EXPECT_NE(first, std::string::npos) << out;
-  EXPECT_NE(out.find("BIG u64=9.00719925474099e+15\n", first + 1), std::string::npos) << out;
+  EXPECT_NE(out.find("BIG u64=9007199254740992\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("BIG u64=9007199254740993\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("BIG u64=18446744073709551615\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("OFF o64=9007199254740991\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("NEG s64=-27670116110564327419\n"), std::string::npos) << out;  // 3 * -2^63 + 5
+  EXPECT_NE(out.find("HALF h64=9.00719925474099e+15\n"), std::string::npos) << out;  // (2^54 + 1) / 2
 }
 
 // `rig dut --hardware FILE decode LOG` decodes with the hardware file's [dut] dbc, found beside
