@@ -933,8 +933,10 @@ std::vector<std::string> records_changed(const std::string& out, const acceptanc
 }
 
 // Records the run in its history database; false (logged) when the database is not reachable.
+// `earlier`: the outcome of an earlier attempt's ending recorded before this attempt's own (the
+// line names it; both said "recorded ... as run N", one run's two endings read as two records).
 bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::json& passport,
-                       const std::string& out_dir, spdlog::logger& log) {
+                       const std::string& out_dir, spdlog::logger& log, const std::string& earlier = {}) {
   try {
     const std::string url = history_url(a, hw);
     const std::optional<history::SqliteFile> file = history::sqlite_file(url);
@@ -944,9 +946,11 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
     // output had mentioned); a database this run created too: a typo in --db or [history] url
     // makes one, and the station's history never sees the run (a technician's review).
     const std::string shown = history::mask_password(url);
-    const std::string line =
-        fmt::format("recorded in the history database {} as run {} (rig history --db {}){}", shown, rec.id, shown,
-                    fresh ? "; a new database, created by this run: if the station has one, check the URL" : "");
+    const std::string line = fmt::format(
+        "{}recorded in the history database {} as run {} (rig history --db {}){}{}",
+        earlier.empty() ? "" : "the earlier attempt's " + earlier + " ending ", shown, rec.id, shown,
+        earlier.empty() ? "" : "; this attempt's ending goes to the same run's endings",
+        fresh ? "; a new database, created by this run: if the station has one, check the URL" : "");
     log.info("{}", line);
     if (!a.quiet) std::cerr << line << "\n";
     // A verdict recorded before and another outcome now (a folder put back to an earlier state
@@ -1281,7 +1285,7 @@ void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlo
   // Not recorded now, it never would be: this attempt's ending replaces its passport (a re-test:
   // a PostgreSQL server down at the resume, the ABORTED ending lost). So the resume stops here,
   // the folder as it was but for run.log.
-  if (!record_in_history(a, hw, passport, passport.value("out_dir", a.out), log))
+  if (!record_in_history(a, hw, passport, passport.value("out_dir", a.out), log, outcome))
     throw ConfigError(fmt::format("{}: its {} ending could not be recorded in the history (run.log says why), and this "
                                   "resume's ending would replace it: resume once the database can be reached, or "
                                   "record it first (rig history --record {} --db URL); nothing done",
@@ -1289,7 +1293,6 @@ void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlo
   std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
   steps.erase(std::remove(steps.begin(), steps.end(), kStepHistory), steps.end());
   write_pending_steps(a.out, steps);
-  log.info("the earlier attempt's ending ({}) recorded in the history", outcome);
 }
 
 // The table timing the plan's moves are costed with: on hardware, the [table] section's client

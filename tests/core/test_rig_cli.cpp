@@ -1879,9 +1879,15 @@ TEST(RigCli, AResumeRecordsTheInterruptedEndingItsDatabaseMissed) {
       << slurp(d + "/io-pg.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/r/passport.json"))["outcome"], "ABORTED");
   EXPECT_EQ(slurp(d + "/r/.ending-pending"), "history\n");
-  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
-  EXPECT_NE(slurp(d + "/r/run.log").find("the earlier attempt's ending (ABORTED) recorded in the history"),
-            std::string::npos);
+  ASSERT_EQ(run({"run", "--resume", d + "/r", "--yes"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  // Each of the two endings said once, the earlier one as such (both read "recorded ... as run 1").
+  const std::string said = slurp(d + "/io2.stderr"), earlier = "the earlier attempt's ABORTED ending recorded in the "
+                                                               "history database " + db + " as run 1";
+  EXPECT_NE(slurp(d + "/r/run.log").find(earlier), std::string::npos);
+  EXPECT_NE(said.find(earlier), std::string::npos) << said;
+  const std::string own = "\nrecorded in the history database " + db + " as run 1";
+  EXPECT_NE(said.find(own), std::string::npos) << said;
+  EXPECT_EQ(said.find(own, said.find(own) + 1), std::string::npos) << said;
   EXPECT_FALSE(fs::exists(d + "/r/.ending-pending"));
   ASSERT_EQ(run({"history", "--db", db, "--endings", "1"}, d + "/end"), 0) << slurp(d + "/end.stderr");
   const std::string endings = slurp(d + "/end.stdout");
