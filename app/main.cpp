@@ -136,6 +136,20 @@ void decimal_numbers_only(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands({})) decimal_numbers_only(*sub);
 }
 
+// CLI11's "Could not convert: --threads = 4294967297": a whole number the checks above passed
+// (decimal, within 64 bits) that the option's narrower type cannot hold. Said as the 64-bit case
+// is (a review: the raw "Could not convert" for --threads past 2^32); any other error as CLI11 words it.
+std::string conversion_said(const CLI::Error& e) {
+  const std::string what = e.what();
+  const std::string head = "Could not convert: ";
+  const std::size_t eq = what.find(" = ");
+  if (dynamic_cast<const CLI::ConversionError*>(&e) == nullptr || what.rfind(head, 0) != 0 || eq == std::string::npos)
+    return what;
+  const std::string name = what.substr(head.size(), eq - head.size()), v = what.substr(eq + 3);
+  if (!decimal_text(v, true, false)) return what;
+  return name + ": '" + v + "' is too " + (v[0] == '-' ? "small" : "large") + " for this option";
+}
+
 // An option that takes text (a path, a URL, a name) refuses an empty value: `--out "$DIR"` with
 // DIR unset wrote the run into ./runs/, `--db ""` recorded into the default database and
 // `rig history --serial ""` filtered nothing, each with exit 0 (a review). No text option of rig
@@ -281,7 +295,7 @@ int main(int argc, char** argv) {
   // A usage error is said with its kind, as every other exit-2 message is (it was CLI11's bare
   // text, "--rate: '0x10' is not a decimal number", which a script keyed on "rig: " missed).
   app.failure_message([](const CLI::App*, const CLI::Error& e) {
-    return std::string("rig: usage error: ") + e.what() + "\nRun with --help for more information.\n";
+    return std::string("rig: usage error: ") + conversion_said(e) + "\nRun with --help for more information.\n";
   });
   try {
     app.parse(argc, argv);

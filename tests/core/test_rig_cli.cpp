@@ -5006,6 +5006,10 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
     EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
     EXPECT_EQ(slurp(d + "/io.stdout"), "") << why;
   }
+  // Within 64 bits but past the option's own 32: CLI11's bare "Could not convert" (a review).
+  EXPECT_EQ(run({"analyze", d + "/none.f64", "--input", "f64", "--rate", "1", "--threads", "4294967297"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("--threads: '4294967297' is too large for this option"), std::string::npos)
+      << slurp(d + "/io.stderr");
 }
 
 // An empty value was taken for the option's default: `--out "$DIR"` with DIR unset wrote the run
