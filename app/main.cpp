@@ -168,12 +168,23 @@ void no_empty_text(CLI::App& app) {
 // A process started with stdin, stdout or stderr closed (`rig run <&- >&- 2>&-`, a careless
 // service unit) gets its first open() on descriptor 0, 1 or 2: the raw capture became fd 2 and
 // the progress display was written into it (a review). Each closed one is opened on /dev/null
-// before anything else, as coreutils and daemons do; without /dev/null nothing is safe.
-void standard_descriptors_open() {
+// before anything else, as coreutils and daemons do; without /dev/null nothing is safe. A closed
+// stdout of any subcommand but `run` is opened on /dev/full instead: what the command prints
+// fails to be written, and standard_output_failed() says so (exit 2) where /dev/null dropped it
+// with exit 0 (a review: `rig analyze ... >&-`); one that prints nothing there is not troubled.
+// `run`'s records are its files and its console may go away: /dev/null, as before.
+bool g_stdout_closed = false;
+void standard_descriptors_open(bool run) {
   for (int fd = 0; fd <= 2; ++fd) {
     if (::fcntl(fd, F_GETFD) != -1) continue;
-    const int got = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    const bool full = fd == 1 && !run;
+    const int got = ::open(full ? "/dev/full" : "/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    if (got != fd && full) {  // no /dev/full: as before
+      if (got >= 0) ::close(got);
+      if (::open("/dev/null", O_WRONLY) == fd) continue;
+    }
     if (got != fd) std::_Exit(rig::kExitHardware);  // cannot even say so: stderr is closed
+    if (fd == 1) g_stdout_closed = full;
   }
 }
 
@@ -266,15 +277,19 @@ bool standard_output_failed() {
   const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
   const int e = errno != 0 ? errno : earlier;
   if (!failed || e == EPIPE) return false;
-  std::cerr << "rig: output error: standard output: write failed" << (e ? std::string(": ") + std::strerror(e) : "")
-            << " (what the command printed is incomplete)\n";
+  if (g_stdout_closed)
+    std::cerr << "rig: output error: standard output is closed (the command was started with it closed, >&-): what "
+                 "the command printed was not written\n";
+  else
+    std::cerr << "rig: output error: standard output: write failed" << (e ? std::string(": ") + std::strerror(e) : "")
+              << " (what the command printed is incomplete)\n";
   return true;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  standard_descriptors_open();
+  standard_descriptors_open(argc > 1 && std::string_view(argv[1]) == "run");
   aborted_by_signals();
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
