@@ -735,15 +735,17 @@ void check_history_can_record(const std::string& url) {
       throw ConfigError(shown + ": cannot be written: " + std::strerror(errno));
     if (!can_create_file_in(folder))
       throw ConfigError(shown + ": its folder " + folder.string() + " takes no new file (SQLite's journal goes there)");
+    const auto t0 = std::chrono::steady_clock::now();
     try {
       history::open_db(url, history::Access::ReadOnly)->has_table("runs");  // reads its header
     } catch (const ConfigError& e) {
       // A lock held past the busy timeout is not a damaged file (a review: it read "not a
-      // database rig can open").
+      // database rig can open"). The time it waited, as waited (a stop ends the wait at 2 s).
+      const auto waited = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - t0);
       if (std::string(e.what()).find("database is locked") != std::string::npos)
-        throw ConfigError(shown + ": locked by another process for more than 10 s (a write or a backup holding "
-                                  "it); try again once it is done, or run with --no-history and record the run "
-                                  "later with `rig history --record DIR`");
+        throw ConfigError(shown + ": locked by another process for more than " + std::to_string(waited.count()) +
+                          " s (a write or a backup holding it); try again once it is done, or run with --no-history "
+                          "and record the run later with `rig history --record DIR`");
       throw ConfigError(shown + ": not a database rig can open (" + e.what() + ")");
     }
     return;
@@ -1573,6 +1575,9 @@ int do_run(RunArgs a) {
   ::signal(SIGPIPE, SIG_IGN);
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before any backend thread exists
+  // A stop that comes while the history database waits for another writer's lock ends that wait
+  // 2 s after it began (a review: a SIGTERM in the ending's wait held the exit 10 s).
+  history::set_lock_wait_stop([stop = cancel.token()] { return stop.requested(); });
   // The station's key, and a resumed folder's seal, before anything in the folder is read.
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
   require_utf8_paths(a);
@@ -1666,6 +1671,9 @@ int do_run(RunArgs a) {
     try {
       check_history_can_record(url);
     } catch (const ConfigError& e) {  // $RIG_HISTORY's database is the environment's mistake: said so
+      // A stop while it waited for a lock ended the wait (set_lock_wait_stop): the run was stopped.
+      if (cancel.requested())
+        throw AbortedError("aborted before anything was powered or moved: " + cancel.token().reason() + " (" + e.what() + ")");
       const char* env = std::getenv("RIG_HISTORY");
       if (a.db.empty() && env && url == env) throw ConfigError(std::string("RIG_HISTORY: ") + e.what());
       // A resume's database is the one its run started with (a re-test: "a typo?" for a folder
@@ -1982,7 +1990,7 @@ int do_run(RunArgs a) {
   // Stopped (a signal, the e-stop): the ending waits 2 s, not 10, for a history database another
   // process holds locked (rig/report/db.hpp set_lock_wait_ms); a row it cannot record is owed to
   // the resume (a line integrator's review: a SIGTERM'd run held its exit 10 s).
-  if (res.outcome == RunOutcome::Aborted || cancel.requested()) history::set_lock_wait_ms(2000);
+  if (res.outcome == RunOutcome::Aborted || cancel.requested()) history::set_lock_wait_ms(history::kStoppedLockWaitMs);
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
   // ERROR (exit 4) naming them, never a PASS nobody can check.
   bool records_lost = res.records_changed;  // then no resume either: it would refuse the folder (exit 2)

@@ -4,7 +4,12 @@
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <functional>
+#include <iterator>
+#include <thread>
 
 #include <charconv>
 #include <cstring>
@@ -64,6 +69,25 @@ void Db::rollback() noexcept {
 namespace {
 
 std::atomic<int> lock_wait_ms{10000};  // set_lock_wait_ms
+std::function<bool()> lock_wait_stopped;  // set_lock_wait_stop
+
+// SQLite's busy handler (in place of sqlite3_busy_timeout, whose limit is fixed when the
+// connection opens): retries with SQLite's own back-off, 1 ms growing to 100 ms, until the limit,
+// which is read on every retry. `since` is the connection's: when its current wait began.
+int wait_for_lock(void* since_ptr, int count) {
+  using Clock = std::chrono::steady_clock;
+  auto& since = *static_cast<Clock::time_point*>(since_ptr);
+  const Clock::time_point now = Clock::now();
+  if (count == 0) since = now;
+  int limit = lock_wait_ms.load();
+  if (lock_wait_stopped && lock_wait_stopped()) limit = std::min(limit, kStoppedLockWaitMs);
+  const auto left = std::chrono::milliseconds(limit) - (now - since);
+  if (left <= Clock::duration::zero()) return 0;
+  static constexpr int kDelays[] = {1, 2, 5, 10, 15, 20, 25, 25, 25, 50, 50, 100};
+  const auto delay = std::chrono::milliseconds(kDelays[std::min<std::size_t>(static_cast<std::size_t>(count), std::size(kDelays) - 1)]);
+  std::this_thread::sleep_for(std::min<Clock::duration>(delay, left));
+  return 1;
+}
 
 // ---------------------------------------------------------------- SQLite
 class SqliteDb final : public Db {
@@ -106,7 +130,7 @@ class SqliteDb final : public Db {
       throw ConfigError(where_ + ": cannot open the history database: " + msg);
     }
     // Several rig processes may write one file: wait for a lock instead of failing.
-    sqlite3_busy_timeout(db_, lock_wait_ms.load());
+    sqlite3_busy_handler(db_, wait_for_lock, &busy_since_);
     exec("PRAGMA foreign_keys = ON");
     if (query_only) exec("PRAGMA query_only = ON");
   }
@@ -171,6 +195,7 @@ class SqliteDb final : public Db {
     }
   }
   sqlite3* db_ = nullptr;
+  std::chrono::steady_clock::time_point busy_since_{};  // wait_for_lock's: when the current wait began
 };
 
 // ---------------------------------------------------------------- PostgreSQL
@@ -313,6 +338,7 @@ class PgDb final : public Db {
 
 
 void set_lock_wait_ms(int ms) { lock_wait_ms = ms; }
+void set_lock_wait_stop(std::function<bool()> stopped) { lock_wait_stopped = std::move(stopped); }
 
 std::unique_ptr<Db> open_db(const std::string& url, Access access) {
   // PostgreSQL: the server's database exists or the connection fails; nothing is created by opening.

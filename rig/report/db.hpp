@@ -4,6 +4,7 @@
 // Db::dialect_type().
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -64,11 +65,17 @@ enum class Access { ReadWrite, ReadOnly };
 // Throws rig::ConfigError.
 std::unique_ptr<Db> open_db(const std::string& url, Access access = Access::ReadWrite);
 
-// How long a SQLite connection opened from now on waits for another writer's lock: 10 s, enough
+// How long a SQLite connection waits for another writer's lock (read on every retry): 10 s, enough
 // for several rig processes writing one file. A run being stopped shortens it (`rig run` on a
 // signal: a stop's grace is often 10 s, docker's, and a locked database held the exit that long,
 // a line integrator's review); the row then waits in .ending-pending for the resume.
 void set_lock_wait_ms(int ms);
+// Asked on every retry of a wait for another writer's lock, one already under way included: once
+// it says stopped, the wait ends 2 s after it began (or at set_lock_wait_ms's limit, if shorter).
+// A signal that came while the ending waited held the exit the whole 10 s (a review). Set once,
+// before any connection waits (`rig run`: its cancel token).
+void set_lock_wait_stop(std::function<bool()> stopped);
+inline constexpr int kStoppedLockWaitMs = 2000;
 
 
 // Keeps a transaction open until commit(); rolls back if destroyed before.

@@ -2744,6 +2744,17 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
   const int rc =
       locked ? run({"run", "--profile", "ci", "--yes", "--db", "sqlite:" + db, "--out", d + "/r", "--dry-run"}, d + "/io")
              : -1;
+  // A stop while it waits ends the wait 2 s after it began, exit 3 (it held the exit 10 s, a review).
+  int stopped_rc = -1;
+  double stopped_after = 0;
+  if (locked) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Child c = spawn({"run", "--profile", "ci", "--yes", "--db", "sqlite:" + db, "--out", d + "/r2"}, d + "/io2");
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    ::kill(c.pid, SIGTERM);
+    stopped_rc = wait_exit(c);
+    stopped_after = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
   ::kill(locker, SIGKILL);
   ::waitpid(locker, nullptr, 0);
   ASSERT_TRUE(locked) << "the locking process did not start";
@@ -2753,6 +2764,13 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
       << err;
   EXPECT_EQ(err.find("not a database rig can open"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d + "/r"));
+  EXPECT_EQ(stopped_rc, 3) << slurp(d + "/io2.stderr");
+  EXPECT_LT(stopped_after, 6.0);
+  EXPECT_NE(slurp(d + "/io2.stderr").find("aborted before anything was powered or moved: SIGTERM received (history "
+                                          "database " + db + ": locked by another process for more than 2 s"),
+            std::string::npos)
+      << slurp(d + "/io2.stderr");
+  EXPECT_FALSE(fs::exists(d + "/r2/passport.json"));
 }
 
 // A number typed with a unit is told in the option's own unit (a review: `--confidence 68%` was

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -140,6 +141,41 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
   EXPECT_LT(short_wait, 1.4);
   EXPECT_GE(longer_wait, 1.4);
   EXPECT_LT(longer_wait, 8.0);
+}
+
+// A stop that comes while a wait for the lock is under way ends it 2 s after it began: the limit
+// was fixed when the connection opened, and a SIGTERM in a run's ending waited the whole 10 s (a
+// review). Without the stop the same wait runs past 2 s.
+TEST(HistorySqlite, AStopEndsAWaitForTheLockUnderWay) {
+  TempDir d;
+  const std::string path = (d.path / "h.sqlite").string();
+  h::record_run(path, rig::test::fixture_passport(), d.path.string());
+  sqlite3* holder = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &holder), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(holder, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK);
+  std::atomic<bool> stopped{false};
+  h::set_lock_wait_stop([&stopped] { return stopped.load(); });
+  const auto t0 = std::chrono::steady_clock::now();
+  std::thread stop([&stopped] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2600));  // past the 2 s: it ends at once then
+    stopped = true;
+  });
+  EXPECT_THROW(h::record_run(path, rig::test::fixture_passport("LOCKED-3"), d.path.string()), std::exception);
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stop.join();
+  stopped = false;
+  // Stopped from the start: 2 s.
+  const auto t1 = std::chrono::steady_clock::now();
+  stopped = true;
+  EXPECT_THROW(h::record_run(path, rig::test::fixture_passport("LOCKED-4"), d.path.string()), std::exception);
+  const double waited_stopped = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  h::set_lock_wait_stop(nullptr);
+  sqlite3_exec(holder, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(holder);
+  EXPECT_GE(waited, 2.5);
+  EXPECT_LT(waited, 6.0);  // 10 s before
+  EXPECT_GE(waited_stopped, 1.9);
+  EXPECT_LT(waited_stopped, 4.0);
 }
 
 TEST(HistorySqlite, PlainPathIsAnSqliteFile) {
