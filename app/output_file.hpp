@@ -102,8 +102,9 @@ inline std::optional<std::filesystem::path> replace_by_rename(const std::string&
 // failed. A regular file (replace_by_rename) is written beside itself and renamed into place, its
 // mode kept, so a write that fails (a full disk) leaves the file as it was, not a cut-off JSON (a
 // technician's review); a symlink's file is what is replaced. Where no file can be made beside
-// it (a folder that takes no new files, a name too long for a suffix) or the rename is refused (a
-// sticky folder), and for everything else, the file is written through as before.
+// it (a folder that takes no new files, a name too long for a suffix), the file's owner cannot be
+// kept (another user's file) or the rename is refused (a sticky folder), and for everything else,
+// the file is written through as before.
 inline void write_output_file(const std::string& path, const std::string& text, const std::string& what) {
   const auto write_all = [&](int fd) {
     for (std::size_t done = 0; done < text.size();) {
@@ -140,7 +141,15 @@ inline void write_output_file(const std::string& path, const std::string& text, 
         (folder / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
     // A new file's mode as the umask makes it; a file's own kept (the umask cut a 664 file to 644,
     // a code review).
-    const int fd = ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? 0600 : 0666);
+    int fd = ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? 0600 : 0666);
+    // Its owner and group kept too (root's --json over a technician's file made it root's, a
+    // review); where this account may not give them, the file is written through, as before.
+    if (fd >= 0 && exists && (st.st_uid != ::geteuid() || st.st_gid != ::getegid()) &&
+        ::fchown(fd, st.st_uid, st.st_gid) != 0) {
+      ::close(fd);
+      ::unlink(staged.c_str());
+      fd = -1;
+    }
     if (fd >= 0) {
       RemoveOnAbort on_signal(staged, "");
       if (exists) ::fchmod(fd, st.st_mode & 07777);
