@@ -81,6 +81,16 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
         throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too low for a stable filter in double precision "
                                       "at {} Hz (its poles round onto the unit circle)",
                                       name, std::string(rest.substr(2)), rate_hz));
+    // Stable but imprecise: a little above that the poles sit within 1e-8 of z = 1 and 1 + a1 + a2
+    // keeps few digits, so the DC gain of a low-pass, 1 by design, comes out wrong (butter2@0.0001:
+    // 1.046, printed as a usable filter; a review). Refused past 0.1 %.
+    double dc = 1;
+    for (const Biquad& b : f.sections) dc *= (b.b0 + b.b1 + b.b2) / (1 + b.a1 + b.a2);
+    if (!(std::fabs(dc - 1) <= 1e-3))
+      throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too low for double precision at {} Hz: its "
+                                    "sections' DC gain comes out {:.6g}, not 1 (its poles round to within a few digits "
+                                    "of z = 1)",
+                                    name, std::string(rest.substr(2)), rate_hz, dc));
     return f;
   } catch (const std::invalid_argument& e) {
     throw ConfigError("filter '" + name + "': " + e.what());

@@ -161,6 +161,13 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_EQ(run({"filter", "show", "--filter", "butter2@0"}, d + "/fname"), 2);
   EXPECT_NE(slurp(d + "/fname.stderr").find("filter 'butter2@0': the cut-off 0 Hz must be in (0, 5000) Hz"), std::string::npos)
       << slurp(d + "/fname.stderr");
+  // Stable but imprecise: butter2@0.0001 printed DC gain 1.04585 as a usable filter (a review).
+  EXPECT_EQ(run({"filter", "show", "--filter", "butter2@0.0001"}, d + "/fname"), 2);
+  EXPECT_NE(slurp(d + "/fname.stderr").find("the cut-off 0.0001 Hz is too low for double precision at 10000 Hz: its "
+                                            "sections' DC gain comes out 1.04585, not 1"),
+            std::string::npos)
+      << slurp(d + "/fname.stderr");
+  EXPECT_EQ(run({"filter", "show", "--filter", "butter2@0.001"}, d + "/fname"), 0) << slurp(d + "/fname.stderr");
 }
 
 TEST(RigCli, CiProfileEndToEnd) {
