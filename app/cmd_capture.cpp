@@ -5,6 +5,7 @@
 // be read. `rig analyze CAPTURE --input capture` and the report then work on logs
 // recorded by can-utils or any tool writing that format.
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -148,6 +149,12 @@ class StagedCapture {
     }
     on_signal_.release();  // after the rename: a signal before it still takes the staged file
     if (e == 0) return;
+    // The staged file went with its folder (removed or renamed during the import): "kept as" named
+    // a path that was gone (a review).
+    if (struct stat st{}; ::lstat(staged_.c_str(), &st) != 0)
+      throw ConfigError("rig capture import: --out " + out_ + ": its folder was removed or renamed during the import, "
+                        "and the capture written there with it (" + std::strerror(e) + "): nothing kept; the log is "
+                        "as it was, import it again");
     if (e == EEXIST)
       throw ConfigError("rig capture import: --out " + out_ + ": a file appeared there during the import; the capture "
                         "is kept as " + staged_);

@@ -446,6 +446,26 @@ TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
 // nothing under --out: a partial capture was left there, which rig analyze read as a shorter
 // record and a retry was refused over (a technician's review). The capture is written as OUT.part
 // and takes its name only when kept; the retry then imports the whole log.
+namespace {
+
+// `rig ARGS` started through sh (its stderr to ERR, stdout dropped); the pid is rig's own (exec).
+pid_t spawn_rig(const std::string& args, const fs::path& err) {
+  const std::string line = "exec " + std::string(RIG_BINARY) + " " + args + " 2>'" + err.string() + "' >/dev/null";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Waits up to 10 s for `path` to exist.
+void wait_for(const std::string& path) {
+  for (int i = 0; i < 20000 && !fs::exists(path); ++i) std::this_thread::sleep_for(std::chrono::microseconds(500));
+}
+
+}  // namespace
+
 TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
   std::ostringstream log;
   double t = 1732255200.0;
@@ -486,18 +506,11 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
     }
   }
   const fs::path stopped = dir() / "stopped.rigcap";
-  const std::string line = "exec " + std::string(RIG_BINARY) + " capture import " + (dir() / "long.log").string() +
-                           " --hardware " + (dir() / "hw-cut.toml").string() + " --out " + stopped.string() + " 2>'" +
-                           (dir() / "stopped.err").string() + "' >/dev/null";
-  const pid_t pid = ::fork();
+  const std::string import_long = "capture import " + (dir() / "long.log").string() + " --hardware " +
+                                  (dir() / "hw-cut.toml").string() + " --out ";
+  const pid_t pid = spawn_rig(import_long + stopped.string(), dir() / "stopped.err");
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  const std::string staged = stopped.string() + ".part-" + std::to_string(pid);  // this process's own
-  for (int i = 0; i < 20000 && !fs::exists(staged); ++i)
-    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  wait_for(stopped.string() + ".part-" + std::to_string(pid));  // this process's own
   ::kill(pid, SIGTERM);
   int status = 0;
   ::waitpid(pid, &status, 0);
@@ -517,17 +530,10 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
   // writes its own staged file: they shared OUT.part, and one set the other's aside or unlinked it,
   // a code review) is never replaced: this capture stays staged, named, exit 2.
   const fs::path twice = dir() / "twice.rigcap";
-  const pid_t second = ::fork();
+  const pid_t second = spawn_rig(import_long + twice.string(), dir() / "twice.err");
   ASSERT_GE(second, 0);
-  if (second == 0) {
-    const std::string l2 = "exec " + std::string(RIG_BINARY) + " capture import " + (dir() / "long.log").string() +
-                           " --hardware " + (dir() / "hw-cut.toml").string() + " --out " + twice.string() + " 2>'" +
-                           (dir() / "twice.err").string() + "' >/dev/null";
-    ::execl("/bin/sh", "sh", "-c", l2.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   const std::string staged2 = twice.string() + ".part-" + std::to_string(second);
-  for (int i = 0; i < 20000 && !fs::exists(staged2); ++i) std::this_thread::sleep_for(std::chrono::microseconds(500));
+  wait_for(staged2);
   std::ofstream(twice) << "another import's capture";
   ::waitpid(second, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
@@ -538,6 +544,23 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
       << slurp(dir() / "twice.err");
   EXPECT_EQ(slurp(twice), "another import's capture");
   EXPECT_GT(fs::file_size(staged2), 1000000u);
+  // --out's folder removed during the import, the staged capture with it: said so, exit 2 ("kept
+  // as" named a path that was gone, a review).
+  fs::create_directories(dir() / "gone");
+  const fs::path in_gone = dir() / "gone" / "g.rigcap";
+  const pid_t third = spawn_rig(import_long + in_gone.string(), dir() / "gone.err");
+  ASSERT_GE(third, 0);
+  wait_for(in_gone.string() + ".part-" + std::to_string(third));
+  fs::remove_all(dir() / "gone");
+  ::waitpid(third, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << slurp(dir() / "gone.err");
+  EXPECT_NE(slurp(dir() / "gone.err").find("--out " + in_gone.string() + ": its folder was removed or renamed during the "
+                                           "import, and the capture written there with it (No such file or directory): "
+                                           "nothing kept"),
+            std::string::npos)
+      << slurp(dir() / "gone.err");
+  EXPECT_EQ(slurp(dir() / "gone.err").find("kept as"), std::string::npos) << slurp(dir() / "gone.err");
 }
 
 namespace {
