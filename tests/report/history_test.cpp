@@ -97,20 +97,34 @@ TEST(HistorySqlite, RunsOfOneFolderAndSecondOnTwoStationsOrDutsAreTwoRuns) {
                                                                d.path.string());
 }
 
+namespace {
+
+// Seconds `record_run` of a fresh passport took to give up on `path` (another writer holds it).
+double seconds_to_give_up(const std::string& path, const std::string& serial, const TempDir& d) {
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(h::record_run(path, rig::test::fixture_passport(serial), d.path.string()), std::exception);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// A history file with one run, and another connection holding it in an exclusive transaction.
+sqlite3* recorded_and_held(const std::string& path, const TempDir& d) {
+  h::record_run(path, rig::test::fixture_passport(), d.path.string());
+  sqlite3* holder = nullptr;
+  if (sqlite3_open(path.c_str(), &holder) != SQLITE_OK ||
+      sqlite3_exec(holder, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr) != SQLITE_OK)
+    ADD_FAILURE() << "could not hold " << path;
+  return holder;
+}
+
+}  // namespace
+
 // The wait for another writer's lock: 10 s by default, shorter once set (a stopped run's
 // ending: a locked database held a SIGTERM'd run 10 s, a line integrator's review).
 TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
   TempDir d;
   const std::string path = (d.path / "h.sqlite").string();
-  h::record_run(path, rig::test::fixture_passport(), d.path.string());
-  sqlite3* holder = nullptr;
-  ASSERT_EQ(sqlite3_open(path.c_str(), &holder), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(holder, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK);
-  const auto attempt = [&] {
-    const auto t0 = std::chrono::steady_clock::now();
-    EXPECT_THROW(h::record_run(path, rig::test::fixture_passport("LOCKED-1"), d.path.string()), std::exception);
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  };
+  sqlite3* holder = recorded_and_held(path, d);
+  const auto attempt = [&] { return seconds_to_give_up(path, "LOCKED-1", d); };
   h::set_lock_wait_ms(300);
   const double short_wait = attempt();
   h::set_lock_wait_ms(1500);
@@ -149,26 +163,16 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
 TEST(HistorySqlite, AStopEndsAWaitForTheLockUnderWay) {
   TempDir d;
   const std::string path = (d.path / "h.sqlite").string();
-  h::record_run(path, rig::test::fixture_passport(), d.path.string());
-  sqlite3* holder = nullptr;
-  ASSERT_EQ(sqlite3_open(path.c_str(), &holder), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(holder, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3* holder = recorded_and_held(path, d);
   std::atomic<bool> stopped{false};
   h::set_lock_wait_stop([&stopped] { return stopped.load(); });
-  const auto t0 = std::chrono::steady_clock::now();
   std::thread stop([&stopped] {
     std::this_thread::sleep_for(std::chrono::milliseconds(2600));  // past the 2 s: it ends at once then
     stopped = true;
   });
-  EXPECT_THROW(h::record_run(path, rig::test::fixture_passport("LOCKED-3"), d.path.string()), std::exception);
-  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double waited = seconds_to_give_up(path, "LOCKED-3", d);
   stop.join();
-  stopped = false;
-  // Stopped from the start: 2 s.
-  const auto t1 = std::chrono::steady_clock::now();
-  stopped = true;
-  EXPECT_THROW(h::record_run(path, rig::test::fixture_passport("LOCKED-4"), d.path.string()), std::exception);
-  const double waited_stopped = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  const double waited_stopped = seconds_to_give_up(path, "LOCKED-4", d);  // stopped from the start: 2 s
   h::set_lock_wait_stop(nullptr);
   sqlite3_exec(holder, "ROLLBACK", nullptr, nullptr, nullptr);
   sqlite3_close(holder);
