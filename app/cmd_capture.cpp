@@ -116,31 +116,44 @@ class StagedCapture {
  public:
   explicit StagedCapture(std::string out)
       : out_(std::move(out)), staged_(out_ + ".part-" + std::to_string(::getpid())),
+        staged_name_(std::filesystem::path(staged_).filename().string()),
         not_written_("rig capture import: " + out_ + " not written (the import did not finish)\n"),
-        on_signal_(staged_, not_written_) {}
+        on_signal_(staged_, not_written_) {
+    // The folder held open: the staged file is removed from it even where it was renamed meanwhile
+    // (a code review: "nothing kept" while OUT.part-PID stayed in the folder's new place).
+    const std::filesystem::path p(out_);
+    folder_ = p.has_parent_path() ? p.parent_path().string() : std::string(".");
+    folder_fd_ = ::open(folder_.c_str(), O_PATH | O_DIRECTORY | O_CLOEXEC);
+  }
   StagedCapture(const StagedCapture&) = delete;
   StagedCapture& operator=(const StagedCapture&) = delete;
   ~StagedCapture() {
-    if (settled_) return;
-    std::error_code ec;
-    std::filesystem::remove(staged_, ec);
-    if (std::uncaught_exceptions() > unwinding_)
-      std::fputs(not_written_.c_str(), stderr);
+    if (!settled_) {
+      remove_staged();
+      if (std::uncaught_exceptions() > unwinding_) std::fputs(not_written_.c_str(), stderr);
+    }
+    if (folder_fd_ >= 0) ::close(folder_fd_);
   }
   const std::string& path() const { return staged_; }
   // The staged file goes: nothing under --out.
   void drop() {
     if (settled_) return;
-    std::error_code ec;
-    std::filesystem::remove(staged_, ec);
+    remove_staged();
     settled_ = true;
     on_signal_.release();
   }
-  // The staged file takes --out's name, never over a file that appeared there meanwhile.
-  // Again (settled): nothing.
+  // The staged file takes --out's name, never over a file that appeared there meanwhile, nor in a
+  // folder that is no longer where --out says. Again (settled): nothing.
   void keep() {
     if (settled_) return;
     settled_ = true;
+    if (!folder_in_place()) {
+      remove_staged();
+      on_signal_.release();
+      throw ConfigError("rig capture import: --out " + out_ + ": its folder " + folder_ + " was removed or renamed "
+                        "during the import: the capture written there is removed, nothing kept (the log is as it "
+                        "was: import it again)");
+    }
     int e = ::renameat2(AT_FDCWD, staged_.c_str(), AT_FDCWD, out_.c_str(), RENAME_NOREPLACE) == 0 ? 0 : errno;
     // A file system without RENAME_NOREPLACE: a hard link does not replace either.
     if (e == EINVAL || e == ENOSYS) {
@@ -149,23 +162,33 @@ class StagedCapture {
     }
     on_signal_.release();  // after the rename: a signal before it still takes the staged file
     if (e == 0) return;
-    // The staged file went with its folder (removed or renamed during the import): "kept as" named
-    // a path that was gone (a review).
-    if (struct stat st{}; ::lstat(staged_.c_str(), &st) != 0)
-      throw ConfigError("rig capture import: --out " + out_ + ": its folder was removed or renamed during the import, "
-                        "and the capture written there with it (" + std::strerror(e) + "): nothing kept; the log is "
-                        "as it was, import it again");
     if (e == EEXIST)
       throw ConfigError("rig capture import: --out " + out_ + ": a file appeared there during the import; the capture "
                         "is kept as " + staged_);
+    // "Kept as" only where it is (a review: it named a path that was gone).
+    struct stat st {};
+    const bool there = ::lstat(staged_.c_str(), &st) == 0;
     throw ConfigError("rig capture import: --out " + out_ + ": cannot put the capture in place (" + std::strerror(e) +
-                      "); it is kept as " + staged_);
+                      ")" + (there ? "; it is kept as " + staged_ : std::string("; the staged capture is gone too, nothing kept")));
   }
 
  private:
-  std::string out_, staged_;
+  // The folder --out names is still the one the import opened (not removed, not renamed away).
+  bool folder_in_place() const {
+    struct stat now {}, opened {};
+    if (folder_fd_ < 0) return true;  // not opened: nothing to compare, the rename says
+    return ::stat(folder_.c_str(), &now) == 0 && ::fstat(folder_fd_, &opened) == 0 && now.st_dev == opened.st_dev &&
+           now.st_ino == opened.st_ino;
+  }
+  void remove_staged() {
+    if (folder_fd_ >= 0) ::unlinkat(folder_fd_, staged_name_.c_str(), 0);
+    else ::unlink(staged_.c_str());
+  }
+
+  std::string out_, staged_, staged_name_, folder_;
   std::string not_written_;  // said on an error's unwinding and by a signal's exit alike
   RemoveOnAbort on_signal_;  // a signal's exit (main.cpp) unlinks the staged file too
+  int folder_fd_ = -1;
   bool settled_ = false;
   int unwinding_ = std::uncaught_exceptions();
 };

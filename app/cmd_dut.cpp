@@ -225,9 +225,13 @@ int cmd_filter_enable(const DutArgs& a, bool on) {
 // to 15 significant digits, every one a double holds faithfully, a whole number below 2^53
 // exactly; a float32 or float64 signal in the shortest text that reads back to it.
 // "%.9g" cut 12038801.95 to 12038802 and 1000000001 to 1e+09 (a review).
-std::string physical_text(const link::DecodedSignal& s, int value_type) {
+std::string physical_text(const link::DecodedSignal& s, const link::DbcSignal* sd) {
   const double v = s.value;
-  if (value_type == 1) return fmt::format("{}", static_cast<float>(v));
+  const int value_type = sd ? sd->value_type : 0;
+  // A float32 as it came (factor 1, offset 0) in a float's shortest text; scaled, the double the
+  // scaling made (1.0f with offset 1e-10 printed 1, 3e38f times 1e10 inf: a re-test).
+  if (value_type == 1 && sd->factor == 1 && sd->offset == 0) return fmt::format("{}", static_cast<float>(v));
+  if (value_type == 1) return fmt::format("{}", v);
   if (!s.exact.empty()) return s.exact;
   if (value_type == 2 || !std::isfinite(v)) return fmt::format("{}", v);
   if (v == std::trunc(v) && std::fabs(v) < 9007199254740992.0) return fmt::format("{:.0f}", v);
@@ -312,7 +316,7 @@ int cmd_decode(const DutArgs& a) {
     std::printf("%s %s %s", time_text(lf).c_str(), lf.iface.c_str(), name.c_str());
     for (const auto& s : *sig) {
       const link::DbcSignal* sd = msg.signal(s.name);
-      const std::string v = physical_text(s, sd ? sd->value_type : 0);
+      const std::string v = physical_text(s, sd);
       if (s.value_name.empty()) std::printf(" %s=%s%s%s", s.name.c_str(), v.c_str(), s.unit.empty() ? "" : " ", s.unit.c_str());
       else std::printf(" %s=\"%s\" (%s)", s.name.c_str(), s.value_name.c_str(), v.c_str());
     }

@@ -743,9 +743,10 @@ void check_history_can_record(const std::string& url) {
       // database rig can open"). The time it waited, as waited (a stop ends the wait at 2 s).
       const auto waited = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - t0);
       if (std::string(e.what()).find("database is locked") != std::string::npos)
-        throw ConfigError(shown + ": locked by another process for more than " + std::to_string(waited.count()) +
-                          " s (a write or a backup holding it); try again once it is done, or run with --no-history "
-                          "and record the run later with `rig history --record DIR`");
+        throw ConfigError(shown + ": locked by another process" +
+                          (waited.count() > 0 ? " for more than " + std::to_string(waited.count()) + " s" : std::string()) +
+                          " (a write or a backup holding it); try again once it is done (a new run may also run "
+                          "with --no-history and be recorded later with `rig history --record DIR`)");
       throw ConfigError(shown + ": not a database rig can open (" + e.what() + ")");
     }
     return;

@@ -18,6 +18,7 @@
 
 #include "app/abort_cleanup.hpp"
 #include "app/commands.hpp"
+#include "app/output_file.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
 
@@ -30,7 +31,8 @@ namespace {
 // without leading zeros (and without a sign where it is unsigned); "inf" and "nan" pass on to a
 // real option's own range check, which names them.
 bool decimal_text(const std::string& v, bool whole, bool is_unsigned) {
-  if (is_unsigned && !v.empty() && v[0] == '-') return false;
+  // "No sign": '+' neither (`--threads +5` ran, while the message said no sign: a re-test).
+  if (is_unsigned && !v.empty() && (v[0] == '-' || v[0] == '+')) return false;
   std::size_t i = (!v.empty() && (v[0] == '+' || v[0] == '-')) ? 1 : 0;
   if (whole && i + 1 < v.size() && v[i] == '0') return false;  // "010": octal to CLI11
   std::string rest = v.substr(i);
@@ -169,22 +171,32 @@ void no_empty_text(CLI::App& app) {
 // service unit) gets its first open() on descriptor 0, 1 or 2: the raw capture became fd 2 and
 // the progress display was written into it (a review). Each closed one is opened on /dev/null
 // before anything else, as coreutils and daemons do; without /dev/null nothing is safe. A closed
-// stdout of any subcommand but `run` is opened on /dev/full instead: what the command prints
+// stdout of a subcommand that ends by itself is opened on /dev/full instead: what the command prints
 // fails to be written, and standard_output_failed() says so (exit 2) where /dev/null dropped it
 // with exit 0 (a review: `rig analyze ... >&-`); one that prints nothing there is not troubled.
-// `run`'s records are its files and its console may go away: /dev/null, as before.
-bool g_stdout_closed = false;
-void standard_descriptors_open(bool run) {
+// `run`'s records are its files and its console may go away; `plant serve` and `dut stream` run
+// until stopped, as services may with stdout closed (a stop of a server then read exit 2, hours
+// on, a code review): /dev/null, as before.
+bool console_may_go(int argc, char** argv) {
+  if (argc < 2) return false;
+  const std::string_view first = argv[1];
+  if (first == "run" || first == "capture") return true;  // their records are their files
+  if (first != "plant" && first != "dut") return false;
+  for (int i = 2; i < argc; ++i)
+    if (std::string_view(argv[i]) == (first == "plant" ? "serve" : "stream")) return true;
+  return false;
+}
+void standard_descriptors_open(bool console_may_go) {
   for (int fd = 0; fd <= 2; ++fd) {
     if (::fcntl(fd, F_GETFD) != -1) continue;
-    const bool full = fd == 1 && !run;
+    const bool full = fd == 1 && !console_may_go;
     const int got = ::open(full ? "/dev/full" : "/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
     if (got != fd && full) {  // no /dev/full: as before
       if (got >= 0) ::close(got);
       if (::open("/dev/null", O_WRONLY) == fd) continue;
     }
     if (got != fd) std::_Exit(rig::kExitHardware);  // cannot even say so: stderr is closed
-    if (fd == 1) g_stdout_closed = full;
+    if (fd == 1) rig::cli::stdout_closed() = full;
   }
 }
 
@@ -277,7 +289,7 @@ bool standard_output_failed() {
   const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
   const int e = errno != 0 ? errno : earlier;
   if (!failed || e == EPIPE) return false;
-  if (g_stdout_closed)
+  if (rig::cli::stdout_closed())
     std::cerr << "rig: output error: standard output is closed (the command was started with it closed, >&-): what "
                  "the command printed was not written\n";
   else
@@ -289,7 +301,7 @@ bool standard_output_failed() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  standard_descriptors_open(argc > 1 && std::string_view(argv[1]) == "run");
+  standard_descriptors_open(console_may_go(argc, argv));
   aborted_by_signals();
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
@@ -318,8 +330,11 @@ int main(int argc, char** argv) {
     // one that could not be written (`> /dev/full`) ended in exit 0 with nothing said (an
     // instrument engineer's review). Exit 2, as a --json file that cannot be written is. Not
     // `rig run`, whose records are its files (it ignores SIGPIPE: its console may go away), nor
-    // a closed pipe (SIGPIPE ends the others as it ends any filter).
-    if (app.get_subcommands().empty() || app.get_subcommands().front()->get_name() != "run")
+    // `rig capture import`, whose capture is its record (exit 2 with the capture written, and
+    // the retry refused for the file that exists: a re-test), nor a closed pipe (SIGPIPE ends
+    // the others as it ends any filter).
+    if (app.get_subcommands().empty() || (app.get_subcommands().front()->get_name() != "run" &&
+                                          app.get_subcommands().front()->get_name() != "capture"))
       if (standard_output_failed() && rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code says more
   } catch (const CLI::ParseError& e) {
     // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a

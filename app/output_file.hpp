@@ -18,6 +18,13 @@
 
 namespace rig::cli {
 
+// Set at start-up (main.cpp) when the process began with stdout closed and it was opened on
+// /dev/full: a write there is said as "standard output is closed", not "No space left on device".
+inline bool& stdout_closed() {
+  static bool closed = false;
+  return closed;
+}
+
 // The folder `path` goes into exists and takes new files. ConfigError (exit 2) naming it otherwise.
 inline void check_output_folder(const std::string& path, const std::string& what) {
   namespace fs = std::filesystem;
@@ -131,6 +138,8 @@ inline void write_output_file(const std::string& path, const std::string& text, 
     std::fflush(nullptr);
     const int fd = ::dup(out);
     const std::string failed = fd < 0 ? std::string(std::strerror(errno)) : write_all(fd);
+    if (!failed.empty() && out == 1 && stdout_closed())
+      throw ConfigError(what + " " + path + ": standard output is closed (the command was started with it closed, >&-)");
     if (!failed.empty()) throw ConfigError(what + " " + path + ": write failed: " + failed);
     return;
   }
@@ -143,8 +152,10 @@ inline void write_output_file(const std::string& path, const std::string& text, 
     // a code review).
     int fd = ::open(staged.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, exists ? 0600 : 0666);
     // Its owner and group kept too (root's --json over a technician's file made it root's, a
+    // review), as the new file came out (a setgid folder gives it the folder's group, a code
     // review); where this account may not give them, the file is written through, as before.
-    if (fd >= 0 && exists && (st.st_uid != ::geteuid() || st.st_gid != ::getegid()) &&
+    struct stat made {};
+    if (fd >= 0 && exists && ::fstat(fd, &made) == 0 && (made.st_uid != st.st_uid || made.st_gid != st.st_gid) &&
         ::fchown(fd, st.st_uid, st.st_gid) != 0) {
       ::close(fd);
       ::unlink(staged.c_str());
@@ -164,8 +175,13 @@ inline void write_output_file(const std::string& path, const std::string& text, 
   }
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw ConfigError(what + " " + path + ": cannot open for writing: " + std::strerror(errno));
+  // Written in place, a failed write leaves the file cut off: said (a re-test: a hard-linked file
+  // was left a cut-off JSON with no word, where a replaced one says "the file is as it was").
+  struct stat now {};
+  const bool regular = ::stat(path.c_str(), &now) == 0 && S_ISREG(now.st_mode);
   if (const std::string failed = write_all(fd); !failed.empty())
-    throw ConfigError(what + " " + path + ": write failed: " + failed);
+    throw ConfigError(what + " " + path + ": write failed: " + failed +
+                      (regular ? " (written in place, as this file could not be replaced: it is now incomplete)" : ""));
 }
 
 }  // namespace rig::cli

@@ -782,11 +782,13 @@ __extension__ typedef unsigned __int128 Uint128;
 }  // namespace
 
 std::string dbc_physical_exact(const DbcSignal& s, std::span<const uint8_t> p) {
-  constexpr double k63 = 9223372036854775808.0;
-  const auto whole = [&](double v) { return v == std::trunc(v) && std::fabs(v) < k63; };
+  // Below 2^53 a whole factor or offset is exactly what the DBC says; above it the double the
+  // parser made may not be (9007199254740993 reads as ...992, a re-test), so no exact text.
+  constexpr double k53 = 9007199254740992.0;
+  const auto whole = [&](double v) { return v == std::trunc(v) && std::fabs(v) < k53; };
   if (s.value_type != 0 || !whole(s.factor) || !whole(s.offset)) return {};
   const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
-  // |raw| < 2^64 and |factor|, |offset| < 2^63: the sum stays below 2^127.
+  // |raw| < 2^64 and |factor|, |offset| < 2^53: the sum stays below 2^118.
   const Int128 r = s.is_signed ? static_cast<Int128>(sign_extend(raw, s.length)) : static_cast<Int128>(raw);
   const Int128 v = r * static_cast<int64_t>(s.factor) + static_cast<int64_t>(s.offset);
   Uint128 mag = static_cast<Uint128>(v < 0 ? -v : v);

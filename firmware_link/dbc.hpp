@@ -78,7 +78,7 @@ struct DecodedSignal {
   std::string unit;
   std::string value_name;  // from VAL_, if any
   // The physical value in decimal, exactly, where `value` may not hold it: an integer signal whose
-  // factor and offset are whole numbers below 2^63 (raw * factor + offset in 128-bit integers; a
+  // factor and offset are whole numbers below 2^53 (raw * factor + offset in 128-bit integers; a
   // 64-bit raw of 2^53 + 1 is a double's 2^53). Empty otherwise.
   std::string exact;
 };
@@ -138,7 +138,7 @@ void dbc_insert_raw(std::span<uint8_t> payload, int start, int length, bool big_
 double dbc_physical(const DbcSignal& s, const CanFrame& f);
 double dbc_physical(const DbcSignal& s, std::span<const uint8_t> payload);
 // The same value exactly in decimal where the signal is an integer one with whole-number factor
-// and offset (below 2^63 in magnitude); empty otherwise (DecodedSignal::exact).
+// and offset (below 2^53 in magnitude); empty otherwise (DecodedSignal::exact).
 std::string dbc_physical_exact(const DbcSignal& s, std::span<const uint8_t> payload);
 // The raw value that stands for `physical` (rounded to the nearest step; IEEE bits for a
 // float signal): the encoder of tests and emulators.
