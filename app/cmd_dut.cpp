@@ -232,7 +232,8 @@ std::string physical_text(const link::DecodedSignal& s, const link::DbcSignal* s
   // scaling made (1.0f with offset 1e-10 printed 1, 3e38f times 1e10 inf: a re-test).
   if (value_type == 1 && sd->factor == 1 && sd->offset == 0) return fmt::format("{}", static_cast<float>(v));
   if (value_type == 1) return fmt::format("{}", v);
-  if (!s.exact.empty()) return s.exact;
+  if (sd)
+    if (std::string exact = link::dbc_physical_exact(*sd, s.raw); !exact.empty()) return exact;
   if (value_type == 2 || !std::isfinite(v)) return fmt::format("{}", v);
   if (v == std::trunc(v) && std::fabs(v) < 9007199254740992.0) return fmt::format("{:.0f}", v);
   return fmt::format("{:.15g}", v);

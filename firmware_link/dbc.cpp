@@ -761,8 +761,9 @@ uint64_t dbc_extract_raw(const CanFrame& f, int start, int length) {
   return dbc_extract_raw(std::span<const uint8_t>(f.data.data(), f.data.size()), start, length, false);
 }
 
-double dbc_physical(const DbcSignal& s, std::span<const uint8_t> p) {
-  const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
+namespace {
+// raw as integer (signed or not) or IEEE float, then factor and offset.
+double physical_of_raw(const DbcSignal& s, uint64_t raw) {
   double v;
   if (s.value_type == 1) {
     v = std::bit_cast<float>(static_cast<uint32_t>(raw));
@@ -775,19 +776,23 @@ double dbc_physical(const DbcSignal& s, std::span<const uint8_t> p) {
   }
   return v * s.factor + s.offset;
 }
+}  // namespace
+
+double dbc_physical(const DbcSignal& s, std::span<const uint8_t> p) {
+  return physical_of_raw(s, dbc_extract_raw(p, s.start, s.length, s.big_endian));
+}
 
 namespace {
 __extension__ typedef __int128 Int128;  // GCC's and clang's; -Wpedantic asks for the marker
 __extension__ typedef unsigned __int128 Uint128;
 }  // namespace
 
-std::string dbc_physical_exact(const DbcSignal& s, std::span<const uint8_t> p) {
+std::string dbc_physical_exact(const DbcSignal& s, uint64_t raw) {
   // Below 2^53 a whole factor or offset is exactly what the DBC says; above it the double the
   // parser made may not be (9007199254740993 reads as ...992, a re-test), so no exact text.
   constexpr double k53 = 9007199254740992.0;
   const auto whole = [&](double v) { return v == std::trunc(v) && std::fabs(v) < k53; };
   if (s.value_type != 0 || !whole(s.factor) || !whole(s.offset)) return {};
-  const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
   // |raw| < 2^64 and |factor|, |offset| < 2^53: the sum stays below 2^118.
   const Int128 r = s.is_signed ? static_cast<Int128>(sign_extend(raw, s.length)) : static_cast<Int128>(raw);
   const Int128 v = r * static_cast<int64_t>(s.factor) + static_cast<int64_t>(s.offset);
@@ -829,9 +834,9 @@ std::optional<std::vector<DecodedSignal>> decode_payload(const DbcMessage& m, st
   std::vector<DecodedSignal> out;
   for (const auto& s : m.signals) {
     if (s.mux_value && (!mux || *mux != *s.mux_value)) continue;
-    DecodedSignal d{s.name, dbc_physical(s, p), s.unit, {}, dbc_physical_exact(s, p)};
+    const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
+    DecodedSignal d{s.name, physical_of_raw(s, raw), s.unit, {}, raw};
     if (!s.value_names.empty() && s.value_type == 0) {
-      const uint64_t raw = dbc_extract_raw(p, s.start, s.length, s.big_endian);
       const int64_t key = s.is_signed ? sign_extend(raw, s.length) : static_cast<int64_t>(raw);
       if (auto it = s.value_names.find(key); it != s.value_names.end()) d.value_name = it->second;
     }

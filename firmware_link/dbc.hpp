@@ -77,10 +77,7 @@ struct DecodedSignal {
   double value = 0;
   std::string unit;
   std::string value_name;  // from VAL_, if any
-  // The physical value in decimal, exactly, where `value` may not hold it: an integer signal whose
-  // factor and offset are whole numbers below 2^53 (raw * factor + offset in 128-bit integers; a
-  // 64-bit raw of 2^53 + 1 is a double's 2^53). Empty otherwise.
-  std::string exact;
+  uint64_t raw = 0;        // the signal's bits before factor and offset (dbc_physical_exact reads them)
 };
 
 class Dbc {
@@ -137,9 +134,10 @@ void dbc_insert_raw(std::span<uint8_t> payload, int start, int length, bool big_
 // Physical value: raw as integer (signed or not) or IEEE float, then factor and offset.
 double dbc_physical(const DbcSignal& s, const CanFrame& f);
 double dbc_physical(const DbcSignal& s, std::span<const uint8_t> payload);
-// The same value exactly in decimal where the signal is an integer one with whole-number factor
-// and offset (below 2^53 in magnitude); empty otherwise (DecodedSignal::exact).
-std::string dbc_physical_exact(const DbcSignal& s, std::span<const uint8_t> payload);
+// The physical value of the raw bits `raw` in decimal, exactly, where a double may not hold it: an
+// integer signal whose factor and offset are whole numbers below 2^53 (raw * factor + offset in
+// 128-bit integers; a 64-bit raw of 2^53 + 1 is a double's 2^53). Empty otherwise.
+std::string dbc_physical_exact(const DbcSignal& s, uint64_t raw);
 // The raw value that stands for `physical` (rounded to the nearest step; IEEE bits for a
 // float signal): the encoder of tests and emulators.
 uint64_t dbc_raw_of(const DbcSignal& s, double physical);
