@@ -117,14 +117,16 @@ bool every_phase_ran(const json& p) {
 
 }  // namespace
 
+bool is_gost_b(const std::string& name) {
+  const std::string pre = "in_run_b_gost_";
+  return name.size() > pre.size() + 1 && name.compare(0, pre.size(), pre) == 0 && name.back() == 's' &&
+         name.find_first_not_of("0123456789", pre.size()) == name.size() - 1;
+}
+
 std::string contract_unit(const std::string& name) {
   for (const auto& [listed, unit] : kEveryPassportLists)
     if (name == listed) return unit;
-  // in_run_b_gost_<N>s: the GOST B of N-second block means
-  if (name.rfind("in_run_b_gost_", 0) == 0 && name.size() > 15 && name.back() == 's' &&
-      name.find_first_not_of("0123456789", 14) == name.size() - 1)
-    return "g";
-  return "";
+  return is_gost_b(name) ? "g" : "";  // the GOST B of N-second block means
 }
 
 std::string verdict_contradiction(const json& p) {

@@ -19,6 +19,9 @@ std::string verdict_contradiction(const nlohmann::json& passport);
 // (a technician's review).
 std::string contract_unit(const std::string& name);
 
+// Whether `name` is a GOST in-run B value, in_run_b_gost_<N>s (N digits: its block length in s).
+bool is_gost_b(const std::string& name);
+
 // Throws ConfigError "PATH: <the contradiction> (...)" when there is one.
 void require_consistent_verdicts(const nlohmann::json& passport, const std::string& path);
 

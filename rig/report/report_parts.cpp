@@ -10,6 +10,7 @@
 #include "rig/core/number_text.hpp"
 #include "rig/report/bounded.hpp"
 #include "rig/report/json_read.hpp"
+#include "rig/report/passport_check.hpp"
 #include "rig/report/svg.hpp"
 #include "rig/report/svg_plot.hpp"
 #include "rig/report/timefmt.hpp"
@@ -38,13 +39,6 @@ const char* const kGrey = "#7f7f7f";
 // The GOST B values are named by their block length (in_run_b_gost_<N>s: 100 s and 200 s in the
 // paper's profile, 2 s and 4 s in ci's); in the contract's order they stand together here.
 const char* const kGostB = "in_run_b_gost_<N>s";
-
-bool is_gost_b(const std::string& name) {
-  const std::string pre = "in_run_b_gost_";
-  return name.size() > pre.size() + 1 && name.compare(0, pre.size(), pre) == 0 && name.back() == 's' &&
-         std::all_of(name.begin() + static_cast<std::ptrdiff_t>(pre.size()), name.end() - 1,
-                     [](char c) { return c >= '0' && c <= '9'; });
-}
 
 // What each passport measurement is (docs/contracts.md, docs/method.md), in the contract's order.
 const std::vector<std::pair<std::string, std::string>>& descriptions() {
