@@ -177,10 +177,14 @@ void no_empty_text(CLI::App& app) {
 // `run`'s records are its files and its console may go away; `plant serve` and `dut stream` run
 // until stopped, as services may with stdout closed (a stop of a server then read exit 2, hours
 // on, a code review): /dev/null, as before.
+// `rig run` and `rig capture import`: their records are their files, what they print is not their
+// result (the stdout checks below and at start-up ask the same).
+bool records_are_files(std::string_view subcommand) { return subcommand == "run" || subcommand == "capture"; }
+
 bool console_may_go(int argc, char** argv) {
   if (argc < 2) return false;
   const std::string_view first = argv[1];
-  if (first == "run" || first == "capture") return true;  // their records are their files
+  if (records_are_files(first)) return true;
   if (first != "plant" && first != "dut") return false;
   for (int i = 2; i < argc; ++i)
     if (std::string_view(argv[i]) == (first == "plant" ? "serve" : "stream")) return true;
@@ -333,8 +337,7 @@ int main(int argc, char** argv) {
     // `rig capture import`, whose capture is its record (exit 2 with the capture written, and
     // the retry refused for the file that exists: a re-test), nor a closed pipe (SIGPIPE ends
     // the others as it ends any filter).
-    if (app.get_subcommands().empty() || (app.get_subcommands().front()->get_name() != "run" &&
-                                          app.get_subcommands().front()->get_name() != "capture"))
+    if (app.get_subcommands().empty() || !records_are_files(app.get_subcommands().front()->get_name()))
       if (standard_output_failed() && rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code says more
   } catch (const CLI::ParseError& e) {
     // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a

@@ -178,7 +178,7 @@ inline void write_output_file(const std::string& path, const std::string& text, 
   // Written in place, a failed write leaves the file cut off: said (a re-test: a hard-linked file
   // was left a cut-off JSON with no word, where a replaced one says "the file is as it was").
   struct stat now {};
-  const bool regular = ::stat(path.c_str(), &now) == 0 && S_ISREG(now.st_mode);
+  const bool regular = ::fstat(fd, &now) == 0 && S_ISREG(now.st_mode);
   if (const std::string failed = write_all(fd); !failed.empty())
     throw ConfigError(what + " " + path + ": write failed: " + failed +
                       (regular ? " (written in place, as this file could not be replaced: it is now incomplete)" : ""));
