@@ -20,6 +20,7 @@
 #include "firmware_link/dbc_stream.hpp"
 #include "firmware_link/protocol.hpp"
 #include "rig/capture/capture.hpp"
+#include "tests/core/rig_process.hpp"
 
 namespace fs = std::filesystem;
 using namespace rig::link;
@@ -446,26 +447,6 @@ TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
 // nothing under --out: a partial capture was left there, which rig analyze read as a shorter
 // record and a retry was refused over (a technician's review). The capture is written as OUT.part
 // and takes its name only when kept; the retry then imports the whole log.
-namespace {
-
-// `rig ARGS` started through sh (its stderr to ERR, stdout dropped); the pid is rig's own (exec).
-pid_t spawn_rig(const std::string& args, const fs::path& err) {
-  const std::string line = "exec " + std::string(RIG_BINARY) + " " + args + " 2>'" + err.string() + "' >/dev/null";
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  return pid;
-}
-
-// Waits up to 10 s for `path` to exist.
-void wait_for(const std::string& path) {
-  for (int i = 0; i < 20000 && !fs::exists(path); ++i) std::this_thread::sleep_for(std::chrono::microseconds(500));
-}
-
-}  // namespace
-
 TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
   std::ostringstream log;
   double t = 1732255200.0;
@@ -506,20 +487,20 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
     }
   }
   const fs::path stopped = dir() / "stopped.rigcap";
-  const std::string import_long = "capture import " + (dir() / "long.log").string() + " --hardware " +
-                                  (dir() / "hw-cut.toml").string() + " --out ";
-  const pid_t pid = spawn_rig(import_long + stopped.string(), dir() / "stopped.err");
-  ASSERT_GE(pid, 0);
-  wait_for(stopped.string() + ".part-" + std::to_string(pid));  // this process's own
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 3) << slurp(dir() / "stopped.err");
-  EXPECT_NE(slurp(dir() / "stopped.err").find("rig: aborted: SIGTERM\nrig capture import: " + stopped.string() +
-                                              " not written (the import did not finish)"),
+  // The long log's import into `out`, started (rig_process.hpp: stderr to dir()/NAME.stderr).
+  const auto import_long = [&](const fs::path& out, const std::string& name) {
+    return rig::test::spawn({"capture", "import", (dir() / "long.log").string(), "--hardware",
+                             (dir() / "hw-cut.toml").string(), "--out", out.string()},
+                            (dir() / name).string());
+  };
+  const rig::test::Child first = import_long(stopped, "stopped");
+  ASSERT_TRUE(rig::test::wait_for_file(first, stopped.string() + ".part-" + std::to_string(first.pid)));  // its own
+  ::kill(first.pid, SIGTERM);
+  EXPECT_EQ(rig::test::wait_exit(first), 3) << slurp(dir() / "stopped.stderr");
+  EXPECT_NE(slurp(dir() / "stopped.stderr").find("rig: aborted: SIGTERM\nrig capture import: " + stopped.string() +
+                                                  " not written (the import did not finish)"),
             std::string::npos)
-      << slurp(dir() / "stopped.err");
+      << slurp(dir() / "stopped.stderr");
   EXPECT_FALSE(fs::exists(stopped));
   EXPECT_FALSE(staged_left(stopped));
   // Its record is the capture: a summary that cannot be printed (> /dev/full) is not exit 2 with
@@ -537,18 +518,15 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
   // writes its own staged file: they shared OUT.part, and one set the other's aside or unlinked it,
   // a code review) is never replaced: this capture stays staged, named, exit 2.
   const fs::path twice = dir() / "twice.rigcap";
-  const pid_t second = spawn_rig(import_long + twice.string(), dir() / "twice.err");
-  ASSERT_GE(second, 0);
-  const std::string staged2 = twice.string() + ".part-" + std::to_string(second);
-  wait_for(staged2);
+  const rig::test::Child second = import_long(twice, "twice");
+  const std::string staged2 = twice.string() + ".part-" + std::to_string(second.pid);
+  ASSERT_TRUE(rig::test::wait_for_file(second, staged2));
   std::ofstream(twice) << "another import's capture";
-  ::waitpid(second, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 2) << slurp(dir() / "twice.err");
-  EXPECT_NE(slurp(dir() / "twice.err").find("--out " + twice.string() + ": a file appeared there during the import; the "
-                                            "capture is kept as " + staged2),
+  EXPECT_EQ(rig::test::wait_exit(second), 2) << slurp(dir() / "twice.stderr");
+  EXPECT_NE(slurp(dir() / "twice.stderr").find("--out " + twice.string() + ": a file appeared there during the import; "
+                                               "the capture is kept as " + staged2),
             std::string::npos)
-      << slurp(dir() / "twice.err");
+      << slurp(dir() / "twice.stderr");
   EXPECT_EQ(slurp(twice), "another import's capture");
   EXPECT_GT(fs::file_size(staged2), 1000000u);
   // --out's folder removed, or renamed, during the import: said so, exit 2, and nothing left in
@@ -558,15 +536,13 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
     const std::string tag = renamed ? "moved" : "gone";
     fs::create_directories(dir() / tag);
     const fs::path out = dir() / tag / "g.rigcap";
-    const pid_t third = spawn_rig(import_long + out.string(), dir() / (tag + ".err"));
-    ASSERT_GE(third, 0);
-    wait_for(out.string() + ".part-" + std::to_string(third));
+    const rig::test::Child third = import_long(out, tag);
+    ASSERT_TRUE(rig::test::wait_for_file(third, out.string() + ".part-" + std::to_string(third.pid)));
     if (renamed) fs::rename(dir() / tag, dir() / (tag + "-away"));
     else fs::remove_all(dir() / tag);
-    ::waitpid(third, &status, 0);
-    ASSERT_TRUE(WIFEXITED(status));
-    const std::string said = slurp(dir() / (tag + ".err"));
-    EXPECT_EQ(WEXITSTATUS(status), 2) << said;
+    const int exit_code = rig::test::wait_exit(third);
+    const std::string said = slurp(dir() / (tag + ".stderr"));
+    EXPECT_EQ(exit_code, 2) << said;
     EXPECT_NE(said.find("--out " + out.string() + ": its folder " + (dir() / tag).string() + " was removed or renamed "
                        "during the import: the capture written there is removed, nothing kept"),
               std::string::npos)
