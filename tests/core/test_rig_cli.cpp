@@ -4915,8 +4915,7 @@ TEST(RigCli, PrintedOutputThatCannotBeWrittenIsExitTwo) {
   fs::create_directories(d);
   std::ofstream(d + "/v.txt") << "1\n2\n3\n4\n5\n6\n7\n8\n";
   const auto to_full = [&](const std::vector<std::string>& args) {
-    const int st = std::system((rig_line(args) + " >/dev/full 2>'" + d + "/full.stderr'").c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return shell(rig_line(args) + " >/dev/full 2>'" + d + "/full.stderr'");
   };
   EXPECT_EQ(to_full({"analyze", d + "/v.txt", "--rate", "1", "--no-psd"}), 2);
   EXPECT_NE(slurp(d + "/full.stderr").find("rig: output error: standard output: write failed: No space left on device"),
@@ -4934,8 +4933,7 @@ TEST(RigCli, PrintedOutputThatCannotBeWrittenIsExitTwo) {
   // Started with stdout closed: it was opened on /dev/null, the summary dropped with exit 0 (a
   // review). Said, exit 2. `rig run`'s console may go away (its records are its files): as before.
   const auto closed = [&](const std::vector<std::string>& args) {
-    const int st = std::system((rig_line(args) + " >&- 2>'" + d + "/closed.stderr'").c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return shell(rig_line(args) + " >&- 2>'" + d + "/closed.stderr'");
   };
   EXPECT_EQ(closed({"analyze", d + "/v.txt", "--rate", "1", "--no-psd"}), 2);
   EXPECT_NE(slurp(d + "/closed.stderr").find("rig: output error: standard output is closed"), std::string::npos)
@@ -4947,10 +4945,10 @@ TEST(RigCli, PrintedOutputThatCannotBeWrittenIsExitTwo) {
       << slurp(d + "/closed.stderr");
   // A server runs until stopped, as a service may with stdout closed: its stop is exit 0, as
   // before (a code review: exit 2 for "standard output is closed", hours on).
-  const int served = std::system((rig_line({"plant", "serve", "--modbus", "127.0.0.1:0"}) + " >&- 2>'" + d +
-                                  "/serve.stderr' & sleep 1; kill -TERM $!; wait $!")
-                                     .c_str());
-  EXPECT_TRUE(WIFEXITED(served) && WEXITSTATUS(served) == 0) << served << slurp(d + "/serve.stderr");
+  EXPECT_EQ(shell(rig_line({"plant", "serve", "--modbus", "127.0.0.1:0"}) + " >&- 2>'" + d +
+                  "/serve.stderr' & sleep 1; kill -TERM $!; wait $!"),
+            0)
+      << slurp(d + "/serve.stderr");
 }
 
 // `rig filter select|show --json` ignored a failed write: /dev/full or /proc/version gave exit 0
@@ -4991,9 +4989,12 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
   // A file whose write fails part way (a full disk; here the file size limit, `ulimit -f`, SIGXFSZ
   // ignored) is as it was, or not there: a cut-off JSON was left (a technician's review). So is
   // `rig analyze --json`'s. Written beside itself and renamed in place; nothing staged is left.
+  // 16 KiB at most per file; `trap` as the shell gives it, or none (rig ignores SIGXFSZ itself).
+  const auto limited_trap = [&](const std::vector<std::string>& args, const std::string& trap, const std::string& err) {
+    return shell("ulimit -f 16; " + trap + rig_line(args) + " >/dev/null 2>'" + d + "/" + err + "'");
+  };
   const auto limited = [&](const std::vector<std::string>& args) {
-    const int st = std::system(("ulimit -f 16; trap '' XFSZ; " + rig_line(args) + " >/dev/null 2>'" + d + "/lim.stderr'").c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return limited_trap(args, "trap '' XFSZ; ", "lim.stderr");
   };
   std::ofstream(d + "/old.json") << "{\"old\": 1}\n";
   EXPECT_EQ(limited({"filter", "show", "--json", d + "/old.json"}), 2);
@@ -5010,13 +5011,10 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
   }
   // Without the shell's `trap '' XFSZ`: rig ignores SIGXFSZ itself (it was killed, exit 153, its
   // staged file left: a re-test).
-  {
-    const int st = std::system(("ulimit -f 16; " + rig_line({"analyze", d + "/v.txt", "--rate", "100", "--no-psd", "--json",
-                                                            d + "/old.json"}) +
-                                " >/dev/null 2>'" + d + "/lim.stderr'")
-                                   .c_str());
-    EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 2) << st << slurp(d + "/lim.stderr");
-  }
+  EXPECT_EQ(limited_trap({"analyze", d + "/v.txt", "--rate", "100", "--no-psd", "--json", d + "/old.json"}, "",
+                         "lim.stderr"),
+            2)
+      << slurp(d + "/lim.stderr");
   EXPECT_NE(slurp(d + "/lim.stderr").find("rig analyze: --json " + d + "/old.json: write failed: File too large"),
             std::string::npos)
       << slurp(d + "/lim.stderr");
@@ -5024,13 +5022,10 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
   // A hard-linked file is written in place: a failed write leaves it cut off, and says so (a re-test).
   std::ofstream(d + "/hl1.json") << "{\"old\": 1}\n";
   fs::create_hard_link(d + "/hl1.json", d + "/hl2.json");
-  {
-    const int st = std::system(("ulimit -f 16; " + rig_line({"analyze", d + "/v.txt", "--rate", "100", "--no-psd", "--json",
-                                                            d + "/hl2.json"}) +
-                                " >/dev/null 2>'" + d + "/hl.stderr'")
-                                   .c_str());
-    EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 2) << st << slurp(d + "/hl.stderr");
-  }
+  EXPECT_EQ(limited_trap({"analyze", d + "/v.txt", "--rate", "100", "--no-psd", "--json", d + "/hl2.json"}, "",
+                         "hl.stderr"),
+            2)
+      << slurp(d + "/hl.stderr");
   EXPECT_NE(slurp(d + "/hl.stderr").find("hl2.json: write failed: File too large (written in place, as this file could "
                                          "not be replaced: it is now incomplete)"),
             std::string::npos)
