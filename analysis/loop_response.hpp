@@ -49,7 +49,8 @@ double step_crossing_frequency(std::span<const double> h, double rate_hz, double
 // First frequency where the amplitude curve `amp` (at ascending `f_hz`) falls through `level`
 // (0.5 for criterion 2, 1/sqrt(2) for -3 dB), interpolated in log-frequency between the two
 // points around the crossing; 0 if it never does. The design model reads its figures with the
-// same two functions (design/filter.hpp bandwidth_at, settling_time).
+// same two functions (design/filter.hpp bandwidth_at; design/loop_figures.cpp, settling_time
+// with the model's DC gain as the final value).
 double crossing_frequency(std::span<const double> f_hz, std::span<const double> amp, double level);
 
 // The figures of one recorded step (normalised, see unit_step), at rate_hz.

@@ -359,7 +359,9 @@ int cmd_import(const ImportArgs& a) {
   // serial, exit 0 (a review).
   std::vector<std::pair<std::string, std::size_t>> ifaces;
   bool too_long = false;
+  std::size_t lines = 0;  // the log's, for a --from-line past its end
   for (std::size_t ln = 1; link::read_log_line(in, line, too_long); ++ln) {
+    lines = ln;
     if (ln < a.from_line) continue;
     if (too_long) {
       ++unreadable;
@@ -600,6 +602,11 @@ int cmd_import(const ImportArgs& a) {
     // Nothing of the [dut] stream in the log (another DUT's layout, --iface naming no frame, an
     // empty file): an empty capture would only fail later in rig analyze, far from the cause.
     staged.drop();
+    if (a.from_line > lines) {  // it read "no sample ... in 0 frame(s)" (a review)
+      std::fprintf(stderr, "%s: --from-line %zu is past the log's end: it has %zu line(s); %s not written\n",
+                   a.log.c_str(), a.from_line, lines, a.out.c_str());
+      return kExitUsage;
+    }
     std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
                  a.hardware.c_str(), static_cast<unsigned long long>(frames + elsewhere),
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());

@@ -78,11 +78,29 @@ json candidate_json(const plant::FilterCandidate& c) {
   return {{"rank", c.rank},
           {"name", c.name},
           {"bandwidth_0p5_hz", c.bandwidth_0p5_hz},
-          {"settling_time_s", c.settling_time_s},
+          {"settling_time_s", c.settled ? json(c.settling_time_s) : json(nullptr)},
+          {"settled", c.settled},
           {"rms_g", c.rms_g},
           {"meets_band", c.meets_band},
           {"sections", c.filter.enabled ? s : json::array()},
           {"rate_hz", c.filter.rate_hz}};
+}
+
+// A settling time in ms below a second, else in s; one the model's longest step did not reach
+// is given as what it is, a lower bound.
+std::string settling_text(const design::LoopFigures& lf) {
+  if (!lf.settled)
+    return fmt::format("more than {:g} s (not settled in the first half of the model's longest step, {:g} s)",
+                       lf.settling_time_s, lf.step_window_s);
+  return lf.settling_time_s < 1 ? fmt::format("{:g} ms", lf.settling_time_s * 1e3)
+                                : fmt::format("{:g} s", lf.settling_time_s);
+}
+// The select table's bandwidth, Hz: one decimal from 10 Hz, four digits below (a cut-off under
+// 0.05 Hz printed 0.0).
+std::string bandwidth_cell(double hz) { return hz >= 10 ? fmt::format("{:.1f}", hz) : fmt::format("{:.4g}", hz); }
+// The select table's settling time, ms: '>' before a lower bound.
+std::string settling_cell(const plant::FilterCandidate& c) {
+  return fmt::format("{}{:.3f}", c.settled ? "" : ">", c.settling_time_s * 1e3);
 }
 
 // Every step of the write checked: `--json /dev/full` ended in exit 0 with no JSON (a review).
@@ -153,8 +171,8 @@ void run_select(SelectArgs a) {
             << "f_0.5, Hz" << std::setw(14) << "t_settle, ms" << std::setw(14) << "RMS, g" << "  band\n";
   for (std::size_t i = 0; i < c.size() && i < a.top; ++i)
     std::cout << std::left << std::setw(5) << c[i].rank << std::setw(16) << c[i].name << std::right << std::fixed
-              << std::setprecision(1) << std::setw(12) << c[i].bandwidth_0p5_hz << std::setprecision(3)
-              << std::setw(14) << c[i].settling_time_s * 1e3 << std::scientific << std::setprecision(4)
+              << std::setw(12) << bandwidth_cell(c[i].bandwidth_0p5_hz) << std::setprecision(3)
+              << std::setw(14) << settling_cell(c[i]) << std::scientific << std::setprecision(4)
               << std::setw(14) << c[i].rms_g << "  " << (c[i].meets_band ? "yes" : "no") << std::defaultfloat
               << "\n";
   for (const auto& k : c)
@@ -182,8 +200,8 @@ void run_show(const ShowArgs& a) {
   std::cout << "filter " << a.filter << " at " << p.loop.loop_rate_hz << " Hz (model: the DUT's design loop, not a measurement)\n"
             << "closed-loop bandwidth (0.5 level): " << lf.bandwidth_0p5_hz << " Hz\n"
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"
-            << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << lf.settling_time_s * 1e3
-            << " ms\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
+            << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << settling_text(lf)
+            << "\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
   // How to apply it: a technician could not use the filter `select` ranks first, as neither a
   // profile nor `rig dut set-filter` takes the name butterN@FC (a review). Every digit, so the
   // DUT gets the sections shown: the shortest text that reads back to each (17 digits printed the
@@ -208,7 +226,9 @@ void run_show(const ShowArgs& a) {
               {"source", "model"},
               {"bandwidth_0p5_hz", lf.bandwidth_0p5_hz},
               {"bandwidth_3db_hz", lf.bandwidth_3db_hz},
-              {"settling_time_s", lf.settling_time_s},
+              {"settling_time_s", lf.settled ? json(lf.settling_time_s) : json(nullptr)},
+              {"settled", lf.settled},
+              {"step_window_s", lf.step_window_s},
               {"settling_band", lf.settling_band},
               {"overshoot", lf.overshoot},
               {"dc_gain", lf.dc_gain},

@@ -439,9 +439,10 @@ void add_history(CLI::App& app, int& rc) {
       sub->add_option("--endings", a->endings, "List every ending recorded for run ID (resumes, a folder put back)")
           ->check(CLI::Validator(
               [](std::string& v) -> std::string {
-                return whole_number(v, 1, std::numeric_limits<long long>::max())
-                           ? std::string()
-                           : v + ": must be a run id, a decimal whole number >= 1 (no leading zero)";
+                constexpr auto kMost = static_cast<std::uint64_t>(std::numeric_limits<long long>::max());
+                if (whole_number(v, 1, kMost)) return std::string();
+                if (whole_number_above(v, kMost)) return v + " is too large: a run id is at most " + std::to_string(kMost);
+                return v + ": must be a run id, a decimal whole number >= 1 (no leading zero)";
               },
               "ID"));
   ends->excludes(rec);

@@ -742,7 +742,7 @@ void check_history_can_record(const std::string& url) {
       // A lock held past the busy timeout is not a damaged file (a review: it read "not a
       // database rig can open"). The time it waited, as waited (a stop ends the wait at 2 s).
       const auto waited = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - t0);
-      if (std::string(e.what()).find("database is locked") != std::string::npos)
+      if (std::string(e.what()).find(history::kLockedByAnother) != std::string::npos)
         throw ConfigError(shown + ": locked by another process" +
                           (waited.count() > 0 ? " for more than " + std::to_string(waited.count()) + " s" : std::string()) +
                           " (a write or a backup holding it); try again once it is done (a new run may also run "

@@ -71,9 +71,11 @@ inline CLI::Validator whole_in(const std::string& what, std::uint64_t least,
                                ? what + " >= " + std::to_string(least)
                                : what + " in [" + std::to_string(least) + ", " + std::to_string(most) + "]";
   return CLI::Validator(
-      [least, most, rule](std::string& v) -> std::string {
-        return whole_number(v, least, most) ? std::string()
-                                            : "'" + shown_ascii(v) + "': must be " + rule + " (decimal, no sign, no leading zero)";
+      [least, most, rule, what](std::string& v) -> std::string {
+        if (whole_number(v, least, most)) return std::string();
+        if (whole_number_above(v, most))  // "must be >= 1" said of 1e23's digits (a review)
+          return "'" + shown_ascii(v) + "' is too large: " + what + " is at most " + std::to_string(most);
+        return "'" + shown_ascii(v) + "': must be " + rule + " (decimal, no sign, no leading zero)";
       },
       "");
 }

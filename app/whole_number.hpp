@@ -24,4 +24,15 @@ inline std::optional<std::uint64_t> whole_number(std::string_view text, std::uin
   return v;
 }
 
+// Whether `text` is a decimal whole number (digits, no leading zero) above `most`, uint64's
+// range included: such a value is refused as too large, not as not being a number >= 1.
+inline bool whole_number_above(std::string_view text, std::uint64_t most) {
+  if (text.empty() || (text.size() > 1 && text[0] == '0')) return false;
+  for (char c : text)
+    if (c < '0' || c > '9') return false;
+  std::uint64_t v = 0;
+  const auto [stop, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  return ec == std::errc::result_out_of_range || v > most;
+}
+
 }  // namespace rig::cli

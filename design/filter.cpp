@@ -64,11 +64,6 @@ FilterConfig paper_wf() {
   return f;
 }
 
-double settling_time(std::span<const double> step, double dt, double band) {
-  // t_рег is when |h(t) - h(inf)| stays within the band (Besekersky & Popov); the model's step
-  // is long enough for its last sample to stand for h(inf).
-  return step.empty() ? 0 : analysis::settling_time(step, dt, step.back(), band);
-}
 double bandwidth_at(std::span<const double> freq, std::span<const double> amp, double level) {
   return analysis::crossing_frequency(freq, amp, level);
 }

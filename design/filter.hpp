@@ -47,10 +47,6 @@ FilterConfig paper_wf();
 // but to 2 % only after 10.0 and 9.7 ms, because its 5 % overshoot decays with the slow
 // integrator pole; a 2 % band would measure that tail, not the speed of the loop and filter.
 inline constexpr double kSettlingBand = analysis::kStepSettlingBand;  // 0.05, one constant for model and measurement
-// Settling time of a step response sampled every `dt`: the time after which it stays within
-// band * |final value| of its final value (the last sample), i.e. the last sample outside the
-// band plus one period; 0 when it never leaves the band.
-double settling_time(std::span<const double> step, double dt, double band = kSettlingBand);
 // First frequency where the amplitude curve `amp` (at ascending `freq`) falls through `level`
 // (0.5 for criterion 2, 1/sqrt(2) for -3 dB), interpolated in log-frequency; 0 if it never does.
 double bandwidth_at(std::span<const double> freq, std::span<const double> amp, double level);

@@ -64,7 +64,10 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
   const char* const fc_end = rest.data() + rest.size();
   const auto read_fc = [&] {
     const auto [stop, ec] = std::from_chars(rest.data() + 2, fc_end, fc);
-    return ec == std::errc() && stop == fc_end;
+    // A number past a double's range (1e309, 1e-400) is a cut-off out of range, named as typed by
+    // the range check, not a syntax error (a review).
+    if (ec == std::errc::result_out_of_range) fc = 0;
+    return (ec == std::errc() || ec == std::errc::result_out_of_range) && stop == fc_end;
   };
   if (rest.size() < 3 || rest[0] < '1' || rest[0] > '9' || rest[1] != '@' || !read_fc())
     throw ConfigError("filter '" + name + "': expected paper, none or butterN@FC (e.g. butter2@500)");
@@ -133,6 +136,7 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
     const design::LoopFigures f = loop_figures(dut_cfg, k.filter);  // criterion 2, from the model
     k.bandwidth_0p5_hz = f.bandwidth_0p5_hz;
     k.settling_time_s = f.settling_time_s;
+    k.settled = f.settled;
     k.meets_band = std::abs(k.bandwidth_0p5_hz - opt.f_req_hz) <= opt.band_tol * opt.f_req_hz;
     if (opt.recorded_x) {  // criterion 1 on a recording at the loop rate
       if (opt.recorded_x->empty()) throw ConfigError("the recording is empty");
@@ -145,6 +149,7 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
     if (a.meets_band != b.meets_band) return a.meets_band;
     if (a.meets_band) {
       if (a.rms_g != b.rms_g) return a.rms_g < b.rms_g;
+      if (a.settled != b.settled) return a.settled;
       return a.settling_time_s < b.settling_time_s;
     }
     return std::abs(a.bandwidth_0p5_hz - opt.f_req_hz) < std::abs(b.bandwidth_0p5_hz - opt.f_req_hz);

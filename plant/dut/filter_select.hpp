@@ -17,7 +17,8 @@ struct FilterCandidate {
   std::string name;          // "paper", "none", "butter2@500" ...
   FilterConfig filter;
   double bandwidth_0p5_hz = 0;
-  double settling_time_s = 0;
+  double settling_time_s = 0;  // with settled false: a lower bound (not settled in the model's longest step)
+  bool settled = true;
   double rms_g = 0;          // criterion 1: RMS of y about its mean
   bool meets_band = false;   // |bandwidth - f_req| <= band_tol * f_req
   int rank = 0;              // 1 = best
@@ -36,7 +37,7 @@ struct FilterSelectOptions {
 };
 
 // Evaluates every candidate; returned best first (meeting the band: lowest RMS, then
-// shortest settling; the rest by distance of their bandwidth from f_req).
+// settled before not, then shortest settling; the rest by distance of their bandwidth from f_req).
 std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt);
 
 // Parses "paper", "none" or "butterN@FC" (e.g. butter2@500) at `rate_hz`; throws ConfigError.

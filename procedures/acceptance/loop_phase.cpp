@@ -143,10 +143,20 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
                                         "not measured on this DUT: {}",
                                         p.design_model->source, rec.reason);
     ctx.log->warn("loop figures from the design model: {}", why);
-    ctx.values.set("bandwidth_0p5", f.bandwidth_0p5_hz, why);
-    ctx.values.set("settling_time", f.settling_time_s, why);
+    // A figure the model could not give is null with its reason, not a window's length or 0 Hz.
+    const bool band_found = f.bandwidth_0p5_hz > 0;
+    const std::string no_band = why + fmt::format("; the model's response does not fall to 0.5 below half the "
+                                                  "loop rate ({:g} Hz)", p.design_model->loop.loop_rate_hz / 2);
+    const std::string no_settling = why + fmt::format("; the model's step had not settled in the first half of its "
+                                                      "longest window ({:g} s): more than {:g} s",
+                                                      f.step_window_s, f.settling_time_s);
+    ctx.values.set("bandwidth_0p5", band_found ? std::optional(f.bandwidth_0p5_hz) : std::nullopt,
+                   band_found ? why : no_band);
+    ctx.values.set("settling_time", f.settled ? std::optional(f.settling_time_s) : std::nullopt,
+                   f.settled ? why : no_settling);
     dut.loop = {{"source", "design model"}, {"reason", why}, {"settling_band", f.settling_band},
-                {"settling_time_s", f.settling_time_s}, {"bandwidth_0p5_hz", f.bandwidth_0p5_hz}};
+                {"settling_time_s", f.settled ? nlohmann::json(f.settling_time_s) : nlohmann::json(nullptr)},
+                {"bandwidth_0p5_hz", band_found ? nlohmann::json(f.bandwidth_0p5_hz) : nlohmann::json(nullptr)}};
     return;
   }
   if (!rec.supported) {

@@ -73,16 +73,23 @@ std::function<bool()> lock_wait_stopped;  // set_lock_wait_stop
 
 // SQLite's busy handler (in place of sqlite3_busy_timeout, whose limit is fixed when the
 // connection opens): retries with SQLite's own back-off, 1 ms growing to 100 ms, until the limit,
-// which is read on every retry. `since` is the connection's: when its current wait began.
-int wait_for_lock(void* since_ptr, int count) {
+// which is read on every retry. `wait` is the connection's.
+struct LockWait {
+  std::chrono::steady_clock::time_point since;  // when the current wait began
+  std::chrono::steady_clock::duration gave_up_after{-1};  // the last wait given up, for its message
+};
+int wait_for_lock(void* wait_ptr, int count) {
   using Clock = std::chrono::steady_clock;
-  auto& since = *static_cast<Clock::time_point*>(since_ptr);
+  auto& wait = *static_cast<LockWait*>(wait_ptr);
   const Clock::time_point now = Clock::now();
-  if (count == 0) since = now;
+  if (count == 0) wait.since = now;
   int limit = lock_wait_ms.load();
   if (lock_wait_stopped && lock_wait_stopped()) limit = std::min(limit, kStoppedLockWaitMs);
-  const auto left = std::chrono::milliseconds(limit) - (now - since);
-  if (left <= Clock::duration::zero()) return 0;
+  const auto left = std::chrono::milliseconds(limit) - (now - wait.since);
+  if (left <= Clock::duration::zero()) {
+    wait.gave_up_after = now - wait.since;
+    return 0;
+  }
   static constexpr int kDelays[] = {1, 2, 5, 10, 15, 20, 25, 25, 25, 50, 50, 100};
   const auto delay = std::chrono::milliseconds(kDelays[std::min<std::size_t>(static_cast<std::size_t>(count), std::size(kDelays) - 1)]);
   std::this_thread::sleep_for(std::min<Clock::duration>(delay, left));
@@ -130,7 +137,7 @@ class SqliteDb final : public Db {
       throw ConfigError(where_ + ": cannot open the history database: " + msg);
     }
     // Several rig processes may write one file: wait for a lock instead of failing.
-    sqlite3_busy_handler(db_, wait_for_lock, &busy_since_);
+    sqlite3_busy_handler(db_, wait_for_lock, &lock_wait_);
     exec("PRAGMA foreign_keys = ON");
     if (query_only) exec("PRAGMA query_only = ON");
   }
@@ -174,6 +181,16 @@ class SqliteDb final : public Db {
     const std::size_t b = sql.find_first_not_of(" \t\n"), e = sql.find_first_of(" \t\n(", b);
     const std::string word = b == std::string::npos ? std::string() : sql.substr(b, e - b);
     const std::string kind = word.empty() ? std::string("a") : (std::strchr("AEIOUaeiou", word[0]) ? "an " : "a ") + word;
+    // A lock held past the wait, wherever it comes (a run's end, `rig history`, --record): who and
+    // how long, not SQLite's bare "database is locked" (a review).
+    if (sqlite3_errcode(db_) == SQLITE_BUSY) {
+      const auto waited = std::chrono::duration_cast<std::chrono::seconds>(lock_wait_.gave_up_after).count();
+      lock_wait_.gave_up_after = std::chrono::steady_clock::duration(-1);
+      throw ConfigError(where_ + ": " + kLockedByAnother +
+                        (waited > 0 ? " for more than " + std::to_string(waited) + " s" : std::string()) +
+                        " (a write or a backup holding it): gave up waiting to " + what + " " + kind +
+                        " statement; try again once it is done");
+    }
     throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite3_errmsg(db_));
   }
   static void bind(sqlite3_stmt* st, int i, const Value& v) {
@@ -195,7 +212,7 @@ class SqliteDb final : public Db {
     }
   }
   sqlite3* db_ = nullptr;
-  std::chrono::steady_clock::time_point busy_since_{};  // wait_for_lock's: when the current wait began
+  LockWait lock_wait_;  // wait_for_lock's
 };
 
 // ---------------------------------------------------------------- PostgreSQL

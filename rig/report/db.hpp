@@ -76,6 +76,8 @@ void set_lock_wait_ms(int ms);
 // before any connection waits (`rig run`: its cancel token).
 void set_lock_wait_stop(std::function<bool()> stopped);
 inline constexpr int kStoppedLockWaitMs = 2000;
+// The words a lock held past the wait is reported with (Db's errors begin "<where>: " then these).
+inline constexpr const char* kLockedByAnother = "locked by another process";
 
 
 // Keeps a transaction open until commit(); rolls back if destroyed before.

@@ -299,19 +299,23 @@ TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopT
   acceptance::Profile p = acceptance::load_profile("ci");
   p.design_model = model;
   const design::LoopFigures want = design::loop_figures(model->loop, model->regulator, p.filter);
-  acceptance::ProcedureState st(p);
-  const auto phases = acceptance::build_phases(p, st);
-  MeasurementSet values;
-  acceptance::declare_values(p, phases, values);
   IdleTable table;
   QuietIo io;
   SimClock clock;
   Devices dev{table, dut, io, clock, "hardware"};
   std::ostringstream logtext;
   auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
-  PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr, {}};
-  for (const Phase& ph : phases)
-    if (ph.id == "loop" || ph.id == "loop-figures") ph.run(ctx);
+  // The loop test and the figures' phase of profile `pr` into `values`.
+  const auto run_loop_phases = [&](const acceptance::Profile& pr, acceptance::ProcedureState& st, MeasurementSet& values) {
+    const auto phases = acceptance::build_phases(pr, st);
+    acceptance::declare_values(pr, phases, values);
+    PhaseContext ctx{dev, CancelToken{}, values, "/nonexistent", log, nullptr, {}};
+    for (const Phase& ph : phases)
+      if (ph.id == "loop" || ph.id == "loop-figures") ph.run(ctx);
+  };
+  acceptance::ProcedureState st(p);
+  MeasurementSet values;
+  run_loop_phases(p, st, values);
   const Measurement* bw = values.find("bandwidth_0p5");
   const Measurement* ts = values.find("settling_time");
   ASSERT_TRUE(bw && bw->value && ts && ts->value);
@@ -324,6 +328,25 @@ TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopT
     EXPECT_FALSE(m->lo) << "a model has no measured interval";
   }
   EXPECT_EQ(st.slot().loop.value()["source"], "design model");
+
+  // A filter slower than the model's longest step: the settling time is null with why, not the
+  // window's length as a figure (the step window grew for slow filters, a review).
+  acceptance::Profile slow = p;
+  slow.filter = design::butterworth_lowpass(1, 1e-6, model->loop.loop_rate_hz);
+  acceptance::ProcedureState slow_st(slow);
+  MeasurementSet slow_values;
+  run_loop_phases(slow, slow_st, slow_values);
+  const Measurement* slow_ts = slow_values.find("settling_time");
+  ASSERT_TRUE(slow_ts);
+  EXPECT_FALSE(slow_ts->value);
+  EXPECT_NE(slow_ts->reason.find("; the model's step had not settled in the first half of its longest window "
+                                 "(409.6 s): more than "),
+            std::string::npos)
+      << slow_ts->reason;
+  EXPECT_TRUE(slow_st.slot().loop.value()["settling_time_s"].is_null());
+  const Measurement* slow_bw = slow_values.find("bandwidth_0p5");
+  ASSERT_TRUE(slow_bw && slow_bw->value);
+  EXPECT_NEAR(*slow_bw->value, std::sqrt(3.0) * 1e-6, 1e-8);  // the grid follows the cut-off down
 }
 
 // A capture that no longer holds what its recording wrote (a review: with the process's stderr

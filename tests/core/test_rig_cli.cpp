@@ -158,6 +158,13 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_EQ(run({"filter", "show", "--filter", "butter2@1e-300"}, d + "/fname"), 2);
   EXPECT_NE(slurp(d + "/fname.stderr").find("the cut-off 1e-300 Hz is too low for a stable filter"), std::string::npos)
       << slurp(d + "/fname.stderr");
+  for (const char* far : {"butter2@1e309", "butter2@1e-400"}) {  // past a double: its range, not its syntax
+    EXPECT_EQ(run({"filter", "show", "--filter", far}, d + "/fname"), 2);
+    EXPECT_NE(slurp(d + "/fname.stderr").find("filter '" + std::string(far) + "': the cut-off " + std::string(far + 8) +
+                                              " Hz must be in (0, 5000) Hz"),
+              std::string::npos)
+        << slurp(d + "/fname.stderr");
+  }
   EXPECT_EQ(run({"filter", "show", "--filter", "butter2@0"}, d + "/fname"), 2);
   EXPECT_NE(slurp(d + "/fname.stderr").find("filter 'butter2@0': the cut-off 0 Hz must be in (0, 5000) Hz"), std::string::npos)
       << slurp(d + "/fname.stderr");
@@ -172,8 +179,30 @@ TEST(RigCli, HelpOnEverySubcommand) {
   // refused and 0.00031 taken, a code review): everything below about 1e-3 Hz, nothing above.
   for (const char* low : {"butter2@0.0003", "butter2@0.00031", "butter2@0.00045", "butter2@0.0009"})
     EXPECT_EQ(run({"filter", "show", "--filter", low}, d + "/fname"), 2) << low;
-  for (const char* ok : {"butter2@0.001", "butter2@0.0011", "butter1@1e-6", "butter3@0.001"})
+  for (const char* ok : {"butter2@0.001", "butter2@0.0011", "butter3@0.001"})
     EXPECT_EQ(run({"filter", "show", "--filter", ok}, d + "/fname"), 0) << ok << slurp(d + "/fname.stderr");
+  // A low cut-off is measured, not cut off by the model's window and grid: butter1@0.2 read
+  // "bandwidth 0 Hz" and a 47 ms settling time (a technician's review); its closed forms are
+  // sqrt(3) fc, fc and tau ln 20 = 2.384 s. One slower than the model's longest step says so.
+  ASSERT_EQ(run({"filter", "show", "--filter", "butter1@0.2", "--json", d + "/slow.json"}, d + "/slow"), 0)
+      << slurp(d + "/slow.stderr");
+  EXPECT_NE(slurp(d + "/slow.stdout").find("closed-loop bandwidth (0.5 level): 0.3464"), std::string::npos)
+      << slurp(d + "/slow.stdout");
+  EXPECT_NE(slurp(d + "/slow.stdout").find("closed-loop bandwidth (-3 dB):     0.2000"), std::string::npos);
+  EXPECT_NE(slurp(d + "/slow.stdout").find("settling time (1 g step, 5 %): 2.38"), std::string::npos);
+  const auto slow = nlohmann::json::parse(slurp(d + "/slow.json"));
+  EXPECT_EQ(slow["settled"], true);
+  EXPECT_NEAR(slow["settling_time_s"].get<double>(), 2.384, 0.002);
+  EXPECT_LE(slow["step"]["t_s"].size(), 5000u);
+  ASSERT_EQ(run({"filter", "show", "--filter", "butter1@1e-6", "--json", d + "/slower.json"}, d + "/slower"), 0);
+  EXPECT_NE(slurp(d + "/slower.stdout").find("settling time (1 g step, 5 %): more than 409.6 s (not settled in the "
+                                             "first half of the model's longest step, 409.6 s)"),
+            std::string::npos)
+      << slurp(d + "/slower.stdout");
+  const auto slower = nlohmann::json::parse(slurp(d + "/slower.json"));
+  EXPECT_EQ(slower["settled"], false);
+  EXPECT_TRUE(slower["settling_time_s"].is_null());
+  EXPECT_EQ(slower["step_window_s"], 409.6);
   // Near half the loop rate the poles round onto the unit circle too: not "too low"; order 5 is
   // named, not an internal function (a re-test).
   EXPECT_EQ(run({"filter", "show", "--filter", "butter2@4999.999999"}, d + "/fname"), 2);
@@ -5153,6 +5182,27 @@ TEST(RigCli, AnEmptyTextOptionIsRefusedNotTakenForItsDefault) {
 // `rig dut stream` checked its limits and --out only after the link opened (exit 4 where the
 // interface is missing), and a negative or NaN limit streamed forever (a review). Refused first,
 // whatever the interface: exit 2 naming the option and value, with a CAN name that is nowhere.
+// A whole number past its option's range is too large, said with the most it takes; every digit
+// of 1e23 read "must be >= 1" (a review).
+TEST(RigCli, AWholeNumberPastItsRangeIsTooLarge) {
+  const std::string d = tmp("too-large");
+  fs::create_directories(d);
+  const std::string huge = "99999999999999999999999";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"history", "--db", d + "/h.sqlite", "--endings", huge},
+       "--endings: " + huge + " is too large: a run id is at most 9223372036854775807"},
+      {{"history", "--db", d + "/h.sqlite", "--endings", "9223372036854775808"},
+       "--endings: 9223372036854775808 is too large: a run id is at most 9223372036854775807"},
+      {{"capture", "import", d + "/none.log", "--from-line", huge},
+       "--from-line: '" + huge + "' is too large: a line number is at most 18446744073709551615"},
+      {{"filter", "select", "--top", huge}, "--top: '" + huge + "' is too large: a number of rows is at most"}};
+  for (const auto& [args, why] : cases) {
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
+  }
+  EXPECT_FALSE(fs::exists(d + "/h.sqlite"));
+}
+
 TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
   const std::string d = tmp("dut-stream");
   fs::create_directories(d + "/a-folder");
@@ -5160,6 +5210,9 @@ TEST(RigCli, DutStreamLimitsAndOutAreCheckedBeforeTheLinkOpens) {
       {{"--count", "-1"}, "--count: '-1' is not a decimal whole number (no sign, no leading zero)"},
       {{"--count", "0"}, "--count: '0': must be a number of samples >= 1"},
       {{"--count", "01"}, "--count: '01' is not a decimal whole number (no sign, no leading zero)"},
+      // Past 64 bits it is too large, not "must be >= 1" (a review).
+      {{"--count", "99999999999999999999999"},
+       "--count: '99999999999999999999999' is too large: a number of samples is at most 18446744073709551615"},
       {{"--seconds", "-5"}, "--seconds: '-5': must be a number of seconds in (0, 1e+06]"},
       {{"--seconds", "nan"}, "--seconds: 'nan': must be"},
       {{"--seconds", "0"}, "--seconds: '0': must be"},

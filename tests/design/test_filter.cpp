@@ -49,8 +49,8 @@ TEST(PaperFilter, ReproducesTheDerivedFigures) {
   for (double v : h) EXPECT_LE(v, 1.0 + 1e-6);
   const double dt = 1 / f.rate_hz;
   // The filter alone settles well inside the paper's "about 3 ms" of the loop with it.
-  EXPECT_NEAR(settling_time(h, dt), 0.9e-3, 0.5 * dt);  // the convention: 5 %
-  EXPECT_NEAR(settling_time(h, dt, 0.02), 1.1e-3, 0.5 * dt);
+  EXPECT_NEAR(analysis::settling_time(h, dt, 1.0), 0.9e-3, 0.5 * dt);  // the convention: 5 %
+  EXPECT_NEAR(analysis::settling_time(h, dt, 1.0, 0.02), 1.1e-3, 0.5 * dt);
   EXPECT_EQ(kSettlingBand, 0.05);
 }
 
@@ -95,13 +95,13 @@ TEST(Settling, FirstOrderFilterMatchesTheClosedForm) {
   f.sections.push_back({1 - a, 0, 0, -a, 0});
   for (double band : {0.02, 0.05}) {
     const int n = static_cast<int>(std::ceil(std::log(band) / std::log(a))) - 1;  // first index inside
-    EXPECT_NEAR(settling_time(step(f, 2.0), 1e-3, band), n / 1000.0, 1e-12) << band;
+    EXPECT_NEAR(analysis::settling_time(step(f, 2.0), 1e-3, 1.0, band), n / 1000.0, 1e-12) << band;
   }
   FilterConfig off = f;
   off.enabled = false;
-  EXPECT_EQ(settling_time(step(off), 1e-3), 0.0);
+  EXPECT_EQ(analysis::settling_time(step(off), 1e-3, 1.0), 0.0);
   EXPECT_EQ(std::abs(response(off, 123)), 1.0);
-  EXPECT_EQ(settling_time(std::vector<double>(), 1e-3), 0.0);
+  EXPECT_EQ(analysis::settling_time(std::vector<double>(), 1e-3, 1.0), 0.0);
 }
 
 TEST(Settling, ContinuousLagEntersTheBandAtTauLnTwenty) {
@@ -109,7 +109,7 @@ TEST(Settling, ContinuousLagEntersTheBandAtTauLnTwenty) {
   std::vector<double> h;
   const double dt = 1e-4, tau = 1e-3;
   for (int k = 0; k < 1000; ++k) h.push_back(1 - std::exp(-k * dt / tau));
-  EXPECT_NEAR(settling_time(h, dt, 0.05), tau * std::log(20.0), dt);
+  EXPECT_NEAR(analysis::settling_time(h, dt, 1.0, 0.05), tau * std::log(20.0), dt);
 }
 
 TEST(Bandwidth, FirstOrderLagFallsToHalfAtRootThreeCutOff) {

@@ -62,7 +62,9 @@ TEST(LoopFigures, AreReadOffTheirOwnCurvesWithTheOneBand) {
   const LoopFigures f = loop_figures(lp, rp, paper_wf());
   const double dt = 1 / lp.loop_rate_hz;
   EXPECT_EQ(f.settling_band, kSettlingBand);
-  EXPECT_EQ(f.settling_time_s, settling_time(f.step_y, dt, kSettlingBand));
+  EXPECT_EQ(f.settling_time_s, analysis::settling_time(f.step_y, dt, 1.0, kSettlingBand));  // h(inf) = DC gain 1
+  EXPECT_TRUE(f.settled);
+  EXPECT_EQ(f.step_window_s, 0.05);  // the paper's filter settles in the first 50 ms
   EXPECT_GT(f.settling_time_s, 0.0);
   EXPECT_EQ(f.bandwidth_0p5_hz, bandwidth_at(f.freq_hz, f.amp_y, 0.5));
   EXPECT_LT(f.bandwidth_3db_hz, f.bandwidth_0p5_hz);
@@ -74,6 +76,42 @@ TEST(LoopFigures, AreReadOffTheirOwnCurvesWithTheOneBand) {
   FilterConfig at_1k = paper_wf();
   at_1k.rate_hz = 1000;
   EXPECT_EQ(loop_figures(lp, rp, at_1k).bandwidth_0p5_hz, f.bandwidth_0p5_hz);
+}
+
+// A filter far slower than the loop: the loop is flat there, so the figures are the filter's
+// own closed forms. With a 50 ms step and a grid from 1 Hz, butter1@0.2 read "0 Hz" and a
+// settling time of 47 ms (a review); the window now grows and the grid reaches below the cut-off.
+TEST(LoopFigures, FollowALowCutOffInTimeAndFrequency) {
+  const LoopParams lp;
+  const RegulatorParams rp;
+  const double fc = 0.2, tau = 1 / (2 * std::numbers::pi * fc), dt = 1 / lp.loop_rate_hz;
+  const LoopFigures f = loop_figures(lp, rp, butterworth_lowpass(1, fc, lp.loop_rate_hz));
+  EXPECT_TRUE(f.settled);
+  EXPECT_NEAR(f.settling_time_s, tau * std::log(20.0), 0.002 * tau);  // 1 - exp(-t/tau) enters 5 % at tau ln 20
+  EXPECT_LE(2 * f.settling_time_s, f.step_window_s);
+  EXPECT_NEAR(f.bandwidth_3db_hz, fc, 1e-3 * fc);
+  EXPECT_NEAR(f.bandwidth_0p5_hz, std::sqrt(3.0) * fc, 1e-3 * fc);  // 1/sqrt(1 + (f/fc)^2) = 0.5
+  EXPECT_LT(f.freq_hz.front(), fc / 10);
+  EXPECT_EQ(f.overshoot, 0.0);
+  // The curves are every k-th sample of the window, at most 5000 points, t and y in step.
+  ASSERT_EQ(f.step_t_s.size(), f.step_y.size());
+  ASSERT_EQ(f.step_x.size(), f.step_y.size());
+  EXPECT_LE(f.step_y.size(), 5000u);
+  EXPECT_GT(f.step_t_s.back(), f.step_window_s - 2 * f.step_window_s / 5000);
+
+  // butter2@5: a step simulated well past its settling gives the same figure (47.9 ms before).
+  const FilterConfig b2 = butterworth_lowpass(2, 5, lp.loop_rate_hz);
+  const std::vector<double> long_y = apply_filter(b2, loop_step(LoopModel(lp, rp).linear(), 20000));
+  const LoopFigures g = loop_figures(lp, rp, b2);
+  EXPECT_EQ(g.settling_time_s, analysis::settling_time(long_y, dt, 1.0, kSettlingBand));
+  EXPECT_GT(g.settling_time_s, 0.08);
+
+  // Slower than the longest step can show: not settled, the figure a lower bound.
+  const LoopFigures s = loop_figures(lp, rp, butterworth_lowpass(1, 1e-4, lp.loop_rate_hz));
+  EXPECT_FALSE(s.settled);
+  EXPECT_GT(s.settling_time_s, s.step_window_s / 2);
+  EXPECT_EQ(s.step_window_s, 409.6);
+  EXPECT_NEAR(s.bandwidth_3db_hz, 1e-4, 1e-7);
 }
 
 TEST(LoopParams, TablesAreReadWithClearErrors) {

@@ -597,6 +597,16 @@ TEST(CaptureImport, ARestartOrAPauseTheCounterCannotSpanEndsTheCaptureThere) {
   ASSERT_EQ(c.samples.size(), 200u);
   EXPECT_EQ(c.samples.front().seq, 0u);
   EXPECT_EQ(c.header.started, "2024-11-22T06:00:00Z");  // the first imported line's second
+  // Past the log's end: said so, with the log's length (it read "no sample ... in 0 frame(s)").
+  const std::string past = (dir() / "restart-past.rigcap").string();
+  EXPECT_EQ(run_rig("capture import " + (dir() / "restart.log").string() + hw + " --out " + past + " --from-line 1001",
+                    "past"),
+            2);
+  EXPECT_NE(slurp(dir() / "past.err").find("restart.log: --from-line 1001 is past the log's end: it has 1000 line(s); " +
+                                           past + " not written"),
+            std::string::npos)
+      << slurp(dir() / "past.err");
+  EXPECT_FALSE(fs::exists(past));
   {
     // The same with other interfaces' frames and an unreadable line before the restart: the counts
     // taken back at the cut are each their own (two were swapped: 29 blank problem lines and one

@@ -140,9 +140,20 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
     try {
       h::record_run(path, rig::test::fixture_passport("LOCKED-2"), d.path.string());
       ADD_FAILURE() << "no exception";
-    } catch (const std::exception& e) {
-      EXPECT_NE(std::string(e.what()).find(" statement: database is locked"), std::string::npos) << e.what();
+    } catch (const std::exception& e) {  // who holds it, not SQLite's bare "database is locked" (a review)
+      EXPECT_NE(std::string(e.what()).find(": locked by another process (a write or a backup holding it): gave up "
+                                           "waiting to prepare a SELECT statement; try again once it is done"),
+                std::string::npos)
+          << e.what();
       EXPECT_EQ(std::string(e.what()).find('\''), std::string::npos) << e.what();
+    }
+    h::set_lock_wait_ms(1200);  // a wait past a second says how long
+    try {
+      h::record_run(path, rig::test::fixture_passport("LOCKED-2"), d.path.string());
+      ADD_FAILURE() << "no exception";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(": locked by another process for more than 1 s (a write"), std::string::npos)
+          << e.what();
     }
     sqlite3_exec(again, "ROLLBACK", nullptr, nullptr, nullptr);
     sqlite3_close(again);
