@@ -31,7 +31,7 @@ double final_value(std::span<const double> h, double tail_fraction) {
 double settling_time(std::span<const double> h, double dt, double final, double band) {
   const double tol = band * std::abs(final);
   for (std::size_t k = h.size(); k-- > 0;)
-    if (std::abs(h[k] - final) > tol) return static_cast<double>(k + 1) * dt;
+    if (!(std::abs(h[k] - final) <= tol)) return static_cast<double>(k + 1) * dt;  // a NaN is outside
   return 0;
 }
 

@@ -25,7 +25,7 @@ double final_value(std::span<const double> h, double tail_fraction = 0.2);
 
 // Settling time of a step response sampled every dt: the time after which it stays within
 // band * |final| of `final`, i.e. the last sample outside the band plus one period (0 when no
-// sample is outside). Its resolution is dt.
+// sample is outside; a sample that is not a number is outside). Its resolution is dt.
 double settling_time(std::span<const double> h, double dt, double final, double band = kStepSettlingBand);
 
 // The amplitude response |H(f)| / |H(0)| of the system behind a step response: for a step

@@ -534,6 +534,13 @@ int cmd_import(const ImportArgs& a) {
             st.gaps, st.lost, a.out);
     }
   }
+  // A --from-line past the end (not the default 1 on an empty log, which is the case below).
+  if (a.from_line > 1 && a.from_line > lines) {  // it read "no sample ... in 0 frame(s)" after a summary of nothing
+    staged.drop();
+    std::fprintf(stderr, "%s: --from-line %zu is past the log's end: it has %zu line(s); %s not written\n",
+                 a.log.c_str(), a.from_line, lines, a.out.c_str());
+    return kExitUsage;
+  }
   // The counts are the stream interface's, with --iface or without (they differed: a review).
   // "LOG -> OUT" only where OUT is kept (it read so above a "not written", a review).
   const bool kept = w.samples_written() > 0 && rate_mismatch.empty();
@@ -602,11 +609,6 @@ int cmd_import(const ImportArgs& a) {
     // Nothing of the [dut] stream in the log (another DUT's layout, --iface naming no frame, an
     // empty file): an empty capture would only fail later in rig analyze, far from the cause.
     staged.drop();
-    if (a.from_line > lines) {  // it read "no sample ... in 0 frame(s)" (a review)
-      std::fprintf(stderr, "%s: --from-line %zu is past the log's end: it has %zu line(s); %s not written\n",
-                   a.log.c_str(), a.from_line, lines, a.out.c_str());
-      return kExitUsage;
-    }
     std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
                  a.hardware.c_str(), static_cast<unsigned long long>(frames + elsewhere),
                  a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());

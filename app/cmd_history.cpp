@@ -421,9 +421,11 @@ void add_history(CLI::App& app, int& rc) {
   query.push_back(sub->add_option("--limit", a->limit, "Only the newest N runs (N >= 1)")
                       ->check(CLI::Validator(
                           [](std::string& v) -> std::string {
-                            return whole_number(v, 1, std::numeric_limits<int>::max())
-                                       ? std::string()
-                                       : v + ": must be a decimal whole number in [1, 2147483647] (no sign, no leading zero)";
+                            constexpr auto kMost = static_cast<std::uint64_t>(std::numeric_limits<int>::max());
+                            if (whole_number(v, 1, kMost)) return std::string();
+                            if (whole_number_above(v, kMost))
+                              return v + " is too large: a number of runs is at most " + std::to_string(kMost);
+                            return v + ": must be a decimal whole number in [1, 2147483647] (no sign, no leading zero)";
                           },
                           "N >= 1")));
   query.push_back(sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit"));

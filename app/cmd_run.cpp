@@ -720,7 +720,8 @@ fs::path nearest_existing(fs::path p) {
 // the right form; an SQLite file that exists must be a database (junk bytes passed, and the run's
 // row was lost at its end, logged only: a review), one that does not must be creatable in a
 // writable folder. A PostgreSQL server is reached when the run records (it may be down now).
-void check_history_can_record(const std::string& url) {
+// `resume`: the advice for a lock leaves out a new run's --no-history (a resume's own follows).
+void check_history_can_record(const std::string& url, bool resume) {
   const std::optional<history::SqliteFile> f = history::sqlite_file(url);
   if (!f) return;
   const std::string& file = f->path;
@@ -743,10 +744,12 @@ void check_history_can_record(const std::string& url) {
       // database rig can open"). The time it waited, as waited (a stop ends the wait at 2 s).
       const auto waited = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - t0);
       if (std::string(e.what()).find(history::kLockedByAnother) != std::string::npos)
-        throw ConfigError(shown + ": locked by another process" +
+        throw ConfigError(shown + ": " + history::kLockedByAnother +
                           (waited.count() > 0 ? " for more than " + std::to_string(waited.count()) + " s" : std::string()) +
-                          " (a write or a backup holding it); try again once it is done (a new run may also run "
-                          "with --no-history and be recorded later with `rig history --record DIR`)");
+                          " (a write or a backup holding it); try again once it is done" +
+                          (resume ? std::string()
+                                  : " (a new run may also run with --no-history and be recorded later with `rig "
+                                    "history --record DIR`)"));
       throw ConfigError(shown + ": not a database rig can open (" + e.what() + ")");
     }
     return;
@@ -1670,7 +1673,7 @@ int do_run(RunArgs a) {
   if (!a.no_history) {
     const std::string url = history_url(a, hw);
     try {
-      check_history_can_record(url);
+      check_history_can_record(url, !a.resume.empty());
     } catch (const ConfigError& e) {  // $RIG_HISTORY's database is the environment's mistake: said so
       // A stop while it waited for a lock ended the wait (set_lock_wait_stop): the run was stopped.
       if (cancel.requested())

@@ -1,5 +1,6 @@
 #include "design/loop_figures.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -9,26 +10,31 @@ namespace rig::design {
 
 namespace {
 
-// The step is simulated over a window that starts at 50 ms (the paper's Fig. 6 span) and doubles
-// until the response has settled in its first half: a filter with a low cut-off settles in
-// seconds, and a fixed 50 ms window cut its settling time short (butter2@5 read 47.9 ms, about
-// 93 ms simulated). The longest window is 409.6 s (the last doubling within 600 s), 4.1e6 steps
-// of a 10 kHz loop, well under a second.
+// The step is simulated from 50 ms (the paper's Fig. 6 span), its window doubled until the
+// response has settled in its first half: a filter with a low cut-off settles in seconds, and a
+// fixed 50 ms window cut its settling time short (butter2@5 read 47.9 ms, about 93 ms simulated).
+// One run, continued across the doublings. Capped by samples, not seconds, so its cost does not
+// grow with the loop rate (a 1 MHz loop took 65 s and 8 GB with a 600 s cap, a code review):
+// 4 096 000 steps, 409.6 s of a 10 kHz loop, a few tenths of a second.
 constexpr double kFirstWindowS = 0.05;
-constexpr double kLongestWindowS = 600;
-// The curves for plots and JSON keep at most this many points of a long window (every k-th).
+constexpr std::size_t kMostSteps = 4'096'000;
+// The curves for plots and JSON keep at most this many points, every s-th sample (s a power of 2).
 constexpr std::size_t kCurvePoints = 5000;
 // The amplitude grid: 500 points a decade from 1 Hz to Nyquist, extended a decade at a time
 // below 1 Hz while the filtered response there is more than 1 % off its DC gain, so a cut-off
-// below 1 Hz is on the grid (its 0.5 level read "0 Hz" when the grid began at 1 Hz).
+// below 1 Hz is on the grid (its 0.5 level read "0 Hz" when the grid began at 1 Hz). The floor
+// is below the lowest cut-off a filter may have (filter_select refuses a butter1 under about
+// 2e-10 Hz at 10 kHz, whose DC gain its rounding no longer holds; 1e-9 Hz read "0 Hz" at -9).
 constexpr double kGridStep = 0.002;
-constexpr int kLowestDecade = -9;
+constexpr int kLowestDecade = -15;
 
-std::vector<double> every_kth(const std::vector<double>& v, std::size_t k) {
-  if (k <= 1) return v;
-  std::vector<double> out;
-  for (std::size_t i = 0; i < v.size(); i += k) out.push_back(v[i]);
-  return out;
+// The largest |pole| of the linear loop: at or above 1 it does not settle, and a step that runs
+// into inf and NaN has no figures (its NaN samples read as inside the band, a code review).
+double largest_pole(const LinearLoop& l) {
+  const Eigen::VectorXcd ev = Eigen::EigenSolver<Eigen::MatrixXd>(l.A, false).eigenvalues();
+  double r = 0;
+  for (Eigen::Index i = 0; i < ev.size(); ++i) r = std::max(r, std::abs(ev(i)));
+  return r;
 }
 
 }  // namespace
@@ -40,27 +46,54 @@ LoopFigures loop_figures(const LoopParams& lp, const RegulatorParams& rp, const 
   filter.rate_hz = lp.loop_rate_hz;
 
   LoopFigures f;
+  f.largest_pole = largest_pole(lin);
   const std::complex<double> h0 = loop_response(lin, 0.0) * response(filter, 0.0);
   f.dc_gain = std::abs(h0);
-  const double dt = 1.0 / lp.loop_rate_hz;
-  std::vector<double> x, y;
-  for (auto n = static_cast<std::size_t>(kFirstWindowS * lp.loop_rate_hz);; n *= 2) {
-    x = loop_step(lin, n);
-    y = apply_filter(filter, x);
-    // h(inf) is the DC gain, not the window's last sample, which a slow filter has not reached.
-    f.settling_time_s = analysis::settling_time(y, dt, h0.real(), f.settling_band);
+  const double dt = 1.0 / lp.loop_rate_hz, final = h0.real(), tol = f.settling_band * std::abs(final);
+
+  // The loop's state z and the filter's sections, stepped as loop_step and apply_filter do (the
+  // same operations in the same order, so the same values), keeping what the figures need: the
+  // last sample outside the band, the largest y / final, and the curves' every s-th sample.
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(lin.A.rows()), next(lin.A.rows());
+  std::vector<Section> sections;
+  if (filter.enabled)
+    for (const Biquad& b : filter.sections) sections.push_back({b});
+  std::size_t last_out = 0, stride = 1;  // last_out: one past the last sample outside the band
+  double peak = -HUGE_VAL;
+  std::size_t n = 0, window = std::max<std::size_t>(1, static_cast<std::size_t>(kFirstWindowS * lp.loop_rate_hz));
+  for (;;) {
+    for (; n < window; ++n) {
+      const double x = lin.C * z;
+      next.noalias() = lin.A * z;
+      z = next + lin.B;
+      double y = x;
+      for (Section& s : sections) y = s.step(y);
+      if (!(std::abs(y - final) <= tol)) last_out = n + 1;  // a NaN is outside
+      if (final != 0) peak = std::max(peak, y / final);
+      if (n % stride == 0) {
+        f.step_t_s.push_back(static_cast<double>(n) * dt);
+        f.step_x.push_back(x);
+        f.step_y.push_back(y);
+        if (f.step_t_s.size() > kCurvePoints) {  // every other point kept, the stride doubled
+          stride *= 2;
+          for (std::vector<double>* v : {&f.step_t_s, &f.step_x, &f.step_y}) {
+            for (std::size_t i = 0; 2 * i < v->size(); ++i) (*v)[i] = (*v)[2 * i];
+            v->resize((v->size() + 1) / 2);
+          }
+        }
+      }
+    }
+    f.settling_time_s = static_cast<double>(last_out) * dt;
     f.step_window_s = static_cast<double>(n) * dt;
-    if (f.settling_time_s <= f.step_window_s / 2) break;
-    if (f.step_window_s * 2 > kLongestWindowS) {
-      f.settled = false;  // still outside the band in the window's second half
+    if (2 * last_out <= n) break;
+    if (2 * n > kMostSteps) {
+      f.settled = false;  // still outside the band in the window's second half: a lower bound
       break;
     }
+    window = 2 * n;
   }
-  if (h0.real() != 0) f.overshoot = std::max(0.0, *std::max_element(y.begin(), y.end()) / h0.real() - 1);
-  const std::size_t k = (y.size() + kCurvePoints - 1) / kCurvePoints;
-  f.step_x = every_kth(x, k);
-  f.step_y = every_kth(y, k);
-  for (std::size_t i = 0; i < y.size(); i += std::max<std::size_t>(k, 1)) f.step_t_s.push_back(static_cast<double>(i) * dt);
+  if (f.largest_pole >= 1) f.settled = false;
+  if (final != 0 && std::isfinite(peak)) f.overshoot = std::max(0.0, peak - 1);
 
   const auto amp_y_at = [&](double fr) { return std::abs(loop_response(lin, fr) * response(filter, fr)); };
   int lowest = 0;

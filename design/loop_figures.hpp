@@ -13,12 +13,14 @@ struct LoopFigures {
   double bandwidth_3db_hz = 0;   // ... to 1/sqrt(2)
   double settling_time_s = 0;    // 1 g step: last entry into the +-band around the final value (the DC gain)
   bool settled = true;           // false: still outside the band in the second half of the longest window
+                                 // (settling_time_s then a lower bound), or the loop is unstable
   double step_window_s = 0;      // the simulated step's length (from 50 ms, doubled until it settles)
+  double largest_pole = 0;       // the linear loop's largest |z| pole: >= 1, unstable, no figures
   double settling_band = kSettlingBand;  // the band used (fraction of the final value)
   double overshoot = 0;          // peak over the final value, fraction
   double dc_gain = 0;
   // Curves for plots: step response of y (with filter) and x (without), at most 5000 points
-  // of the window (every k-th sample of a long one), and the amplitude response |H| of each at
+  // of the window (every 2^k-th sample of a long one), and the amplitude response |H| of each at
   // the frequencies in freq_hz (500 a decade, from 1 Hz or lower, below the cut-off, to Nyquist).
   std::vector<double> step_t_s, step_y, step_x;
   std::vector<double> freq_hz, amp_y, amp_x;

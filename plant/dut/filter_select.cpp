@@ -124,8 +124,10 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
   std::vector<FilterCandidate> c;
   if (opt.include_paper) c.push_back({"paper", filter_by_name("paper", rate)});
   if (opt.include_none) c.push_back({"none", filter_by_name("none", rate)});
+  // Each cut-off min + i step, up to max and a millionth of a step past it for the rounding (an
+  // absolute 1e-9 Hz took ten cut-offs past a max of 1e-9 Hz, a review).
   for (int order : opt.orders)
-    for (double fc = opt.fc_min_hz; fc <= opt.fc_max_hz + 1e-9; fc += opt.fc_step_hz)
+    for (double i = 0, fc = opt.fc_min_hz; fc <= opt.fc_max_hz + 1e-6 * opt.fc_step_hz; fc = opt.fc_min_hz + ++i * opt.fc_step_hz)
       if (fc < rate / 2) try {
           c.push_back({butter_name(order, fc), filter_by_name(butter_name(order, fc), rate)});
         } catch (const ConfigError& e) {  // a cut-off the user did not type: named by the option that made it
@@ -149,7 +151,6 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
     if (a.meets_band != b.meets_band) return a.meets_band;
     if (a.meets_band) {
       if (a.rms_g != b.rms_g) return a.rms_g < b.rms_g;
-      if (a.settled != b.settled) return a.settled;
       return a.settling_time_s < b.settling_time_s;
     }
     return std::abs(a.bandwidth_0p5_hz - opt.f_req_hz) < std::abs(b.bandwidth_0p5_hz - opt.f_req_hz);

@@ -37,7 +37,7 @@ struct FilterSelectOptions {
 };
 
 // Evaluates every candidate; returned best first (meeting the band: lowest RMS, then
-// settled before not, then shortest settling; the rest by distance of their bandwidth from f_req).
+// shortest settling, a lower bound after every settled time; the rest by distance of their bandwidth from f_req).
 std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt);
 
 // Parses "paper", "none" or "butterN@FC" (e.g. butter2@500) at `rate_hz`; throws ConfigError.

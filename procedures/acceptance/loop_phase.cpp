@@ -144,19 +144,29 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
                                         p.design_model->source, rec.reason);
     ctx.log->warn("loop figures from the design model: {}", why);
     // A figure the model could not give is null with its reason, not a window's length or 0 Hz.
-    const bool band_found = f.bandwidth_0p5_hz > 0;
-    const std::string no_band = why + fmt::format("; the model's response does not fall to 0.5 below half the "
-                                                  "loop rate ({:g} Hz)", p.design_model->loop.loop_rate_hz / 2);
-    const std::string no_settling = why + fmt::format("; the model's step had not settled in the first half of its "
-                                                      "longest window ({:g} s): more than {:g} s",
-                                                      f.step_window_s, f.settling_time_s);
-    ctx.values.set("bandwidth_0p5", band_found ? std::optional(f.bandwidth_0p5_hz) : std::nullopt,
-                   band_found ? why : no_band);
-    ctx.values.set("settling_time", f.settled ? std::optional(f.settling_time_s) : std::nullopt,
-                   f.settled ? why : no_settling);
+    const bool stable = f.largest_pole < 1;
+    const std::string unstable = why + fmt::format("; the design model's closed loop is unstable (a pole at |z| = "
+                                                   "{:.6g}): it has no figures", f.largest_pole);
+    const bool band_found = stable && f.bandwidth_0p5_hz > 0;
+    const std::string band_why = band_found ? why
+                                 : !stable ? unstable
+                                           : why + fmt::format("; the model's response does not fall to 0.5 below "
+                                                               "half the loop rate ({:g} Hz)",
+                                                               p.design_model->loop.loop_rate_hz / 2);
+    const std::string settling_why = f.settled ? why
+                                     : !stable ? unstable
+                                               : why + fmt::format("; the model's step had not settled in the first "
+                                                                   "half of its longest window ({:g} s): at least {:g} s",
+                                                                   f.step_window_s, f.settling_time_s);
+    const auto known = [](bool k, double v) { return k ? std::optional(v) : std::nullopt; };
+    ctx.values.set("bandwidth_0p5", known(band_found, f.bandwidth_0p5_hz), band_why);
+    ctx.values.set("settling_time", known(f.settled, f.settling_time_s), settling_why);
+    const auto json_of = [](std::optional<double> v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
     dut.loop = {{"source", "design model"}, {"reason", why}, {"settling_band", f.settling_band},
-                {"settling_time_s", f.settled ? nlohmann::json(f.settling_time_s) : nlohmann::json(nullptr)},
-                {"bandwidth_0p5_hz", band_found ? nlohmann::json(f.bandwidth_0p5_hz) : nlohmann::json(nullptr)}};
+                {"settling_time_s", json_of(known(f.settled, f.settling_time_s))},
+                {"bandwidth_0p5_hz", json_of(known(band_found, f.bandwidth_0p5_hz))}};
+    if (!f.settled) (*dut.loop)["settling_time_reason"] = settling_why;
+    if (!band_found) (*dut.loop)["bandwidth_0p5_reason"] = band_why;
     return;
   }
   if (!rec.supported) {

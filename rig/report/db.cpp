@@ -184,12 +184,14 @@ class SqliteDb final : public Db {
     // A lock held past the wait, wherever it comes (a run's end, `rig history`, --record): who and
     // how long, not SQLite's bare "database is locked" (a review).
     if (sqlite3_errcode(db_) == SQLITE_BUSY) {
+      // The handler gave up (it waited), or SQLite refused without waiting (its deadlock case).
+      const bool gave_up = lock_wait_.gave_up_after >= std::chrono::steady_clock::duration::zero();
       const auto waited = std::chrono::duration_cast<std::chrono::seconds>(lock_wait_.gave_up_after).count();
       lock_wait_.gave_up_after = std::chrono::steady_clock::duration(-1);
       throw ConfigError(where_ + ": " + kLockedByAnother +
                         (waited > 0 ? " for more than " + std::to_string(waited) + " s" : std::string()) +
-                        " (a write or a backup holding it): gave up waiting to " + what + " " + kind +
-                        " statement; try again once it is done");
+                        " (a write or a backup holding it): " + (gave_up ? "gave up waiting to " : "could not ") +
+                        (word == "SELECT" ? "read it" : "write it") + "; try again once it is done");
     }
     throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite3_errmsg(db_));
   }

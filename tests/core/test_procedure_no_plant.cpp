@@ -340,13 +340,28 @@ TEST(ProcedureWithoutPlant, ADesignModelGivesLabelledFiguresWhenTheDutHasNoLoopT
   ASSERT_TRUE(slow_ts);
   EXPECT_FALSE(slow_ts->value);
   EXPECT_NE(slow_ts->reason.find("; the model's step had not settled in the first half of its longest window "
-                                 "(409.6 s): more than "),
+                                 "(409.6 s): at least "),
             std::string::npos)
       << slow_ts->reason;
   EXPECT_TRUE(slow_st.slot().loop.value()["settling_time_s"].is_null());
   const Measurement* slow_bw = slow_values.find("bandwidth_0p5");
   ASSERT_TRUE(slow_bw && slow_bw->value);
   EXPECT_NEAR(*slow_bw->value, std::sqrt(3.0) * 1e-6, 1e-8);  // the grid follows the cut-off down
+  EXPECT_EQ(slow_st.slot().loop.value()["settling_time_reason"], slow_ts->reason);
+
+  // An unstable design model gives no figures, and says why (its NaN step read as settled).
+  acceptance::Profile hot = p;
+  hot.design_model->regulator.gain_a_per_v = 1000;
+  acceptance::ProcedureState hot_st(hot);
+  MeasurementSet hot_values;
+  run_loop_phases(hot, hot_st, hot_values);
+  for (const char* name : {"bandwidth_0p5", "settling_time"}) {
+    const Measurement* m = hot_values.find(name);
+    ASSERT_TRUE(m) << name;
+    EXPECT_FALSE(m->value) << name;
+    EXPECT_NE(m->reason.find("; the design model's closed loop is unstable (a pole at |z| = "), std::string::npos)
+        << m->reason;
+  }
 }
 
 // A capture that no longer holds what its recording wrote (a review: with the process's stderr

@@ -110,6 +110,9 @@ TEST(Settling, ContinuousLagEntersTheBandAtTauLnTwenty) {
   const double dt = 1e-4, tau = 1e-3;
   for (int k = 0; k < 1000; ++k) h.push_back(1 - std::exp(-k * dt / tau));
   EXPECT_NEAR(analysis::settling_time(h, dt, 1.0, 0.05), tau * std::log(20.0), dt);
+  // A response that ran into NaN has not settled: a NaN is outside the band (it read as inside).
+  h.back() = std::nan("");
+  EXPECT_EQ(analysis::settling_time(h, dt, 1.0, 0.05), static_cast<double>(h.size()) * dt);
 }
 
 TEST(Bandwidth, FirstOrderLagFallsToHalfAtRootThreeCutOff) {

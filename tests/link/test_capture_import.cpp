@@ -607,6 +607,12 @@ TEST(CaptureImport, ARestartOrAPauseTheCounterCannotSpanEndsTheCaptureThere) {
             std::string::npos)
       << slurp(dir() / "past.err");
   EXPECT_FALSE(fs::exists(past));
+  EXPECT_EQ(slurp(dir() / "past.out"), "") << "no summary of nothing";
+  // An empty log without --from-line is a log with no sample, not one --from-line 1 is past.
+  std::ofstream(dir() / "empty.log").flush();
+  EXPECT_EQ(run_rig("capture import " + (dir() / "empty.log").string() + hw + " --out " + past, "empty"), 2);
+  EXPECT_NE(slurp(dir() / "empty.err").find("empty.log: no sample of the [dut] stream"), std::string::npos)
+      << slurp(dir() / "empty.err");
   {
     // The same with other interfaces' frames and an unreadable line before the restart: the counts
     // taken back at the cut are each their own (two were swapped: 29 blank problem lines and one

@@ -142,7 +142,7 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
       ADD_FAILURE() << "no exception";
     } catch (const std::exception& e) {  // who holds it, not SQLite's bare "database is locked" (a review)
       EXPECT_NE(std::string(e.what()).find(": locked by another process (a write or a backup holding it): gave up "
-                                           "waiting to prepare a SELECT statement; try again once it is done"),
+                                           "waiting to read it; try again once it is done"),
                 std::string::npos)
           << e.what();
       EXPECT_EQ(std::string(e.what()).find('\''), std::string::npos) << e.what();
