@@ -21,6 +21,7 @@
 #include "app/output_file.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
+#include "rig/report/db.hpp"
 
 namespace {
 
@@ -307,6 +308,12 @@ bool standard_output_failed() {
 int main(int argc, char** argv) {
   standard_descriptors_open(console_may_go(argc, argv));
   aborted_by_signals();
+  // A wait for another process's lock on the history is said while it lasts, not only when it
+  // ends 10 s later (a `rig history` sat silent: a review).
+  rig::history::set_lock_wait_notice([](const std::string& where, int limit_ms) {
+    std::fprintf(stderr, "rig: %s is locked by another process (a write or a backup holding it): waiting up to %g s\n",
+                 where.c_str(), limit_ms / 1000.0);
+  });
   CLI::App app{"rig: acceptance test rig for quartz pendulum accelerometers (U10/U20 method)"};
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);

@@ -5,6 +5,7 @@
 
 #include "plant/dut/params.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/toml_util.hpp"
 
 namespace rig::plant {
 
@@ -12,12 +13,18 @@ design::LoopFigures loop_figures(const toml::table* dut_cfg, const FilterConfig&
   const DutParams p = load_dut_params(dut_cfg);
   design::LoopFigures f = design::loop_figures(p.loop, p.regulator, filter);
   // An unstable loop's step runs into inf and NaN: no figure of it means anything (one printed a
-  // settling time of 17 ms and overshoot inf %, a code review).
+  // settling time of 17 ms and overshoot inf %, a code review). Said with where the model comes
+  // from and the values that set its gain (a re-test: it named neither).
   if (f.largest_pole >= 1) {
-    char pole[32];
-    std::snprintf(pole, sizeof pole, "%.6g", f.largest_pole);
-    throw ConfigError(std::string("the DUT model's closed loop is unstable (a pole at |z| = ") + pole +
-                      ", >= 1): it has no bandwidth or settling time; check its [plant.dut] loop and regulator");
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "the DUT model's closed loop is unstable (a pole at |z| = %.6g, >= 1): it has no bandwidth or "
+                  "settling time; its regulator: gain_a_per_v = %g, integral_corner_hz = %g, lead_zero_hz = %g, "
+                  "lead_pole_hz = %g at loop_rate_hz = %g",
+                  f.largest_pole, p.regulator.gain_a_per_v, p.regulator.integral_corner_hz, p.regulator.lead_zero_hz,
+                  p.regulator.lead_pole_hz, p.loop.loop_rate_hz);
+    throw ConfigError((dut_cfg ? cfg::where(*dut_cfg) + ": [plant.dut]: " : std::string("the built-in DUT model: ")) +
+                      text);
   }
   return f;
 }

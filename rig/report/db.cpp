@@ -70,22 +70,33 @@ namespace {
 
 std::atomic<int> lock_wait_ms{10000};  // set_lock_wait_ms
 std::function<bool()> lock_wait_stopped;  // set_lock_wait_stop
+std::function<void(const std::string&, int)> lock_wait_notice;  // set_lock_wait_notice
 
 // SQLite's busy handler (in place of sqlite3_busy_timeout, whose limit is fixed when the
 // connection opens): retries with SQLite's own back-off, 1 ms growing to 100 ms, until the limit,
 // which is read on every retry. `wait` is the connection's.
 struct LockWait {
+  std::string where;  // the database, for the notice
   std::chrono::steady_clock::time_point since;  // when the current wait began
+  bool noticed = false;  // the current wait told (set_lock_wait_notice)
   std::chrono::steady_clock::duration gave_up_after{-1};  // the last wait given up, for its message
 };
 int wait_for_lock(void* wait_ptr, int count) {
   using Clock = std::chrono::steady_clock;
   auto& wait = *static_cast<LockWait*>(wait_ptr);
   const Clock::time_point now = Clock::now();
-  if (count == 0) wait.since = now;
+  if (count == 0) {
+    wait.since = now;
+    wait.noticed = false;
+  }
   int limit = lock_wait_ms.load();
   if (lock_wait_stopped && lock_wait_stopped()) limit = std::min(limit, kStoppedLockWaitMs);
   const auto left = std::chrono::milliseconds(limit) - (now - wait.since);
+  if (!wait.noticed && lock_wait_notice && now - wait.since >= std::chrono::milliseconds(kLockWaitNoticeMs) &&
+      left > Clock::duration::zero()) {
+    wait.noticed = true;
+    lock_wait_notice(wait.where, limit);
+  }
   if (left <= Clock::duration::zero()) {
     wait.gave_up_after = now - wait.since;
     return 0;
@@ -137,6 +148,7 @@ class SqliteDb final : public Db {
       throw ConfigError(where_ + ": cannot open the history database: " + msg);
     }
     // Several rig processes may write one file: wait for a lock instead of failing.
+    lock_wait_.where = where_;
     sqlite3_busy_handler(db_, wait_for_lock, &lock_wait_);
     exec("PRAGMA foreign_keys = ON");
     if (query_only) exec("PRAGMA query_only = ON");
@@ -358,6 +370,7 @@ class PgDb final : public Db {
 
 void set_lock_wait_ms(int ms) { lock_wait_ms = ms; }
 void set_lock_wait_stop(std::function<bool()> stopped) { lock_wait_stopped = std::move(stopped); }
+void set_lock_wait_notice(std::function<void(const std::string&, int)> notice) { lock_wait_notice = std::move(notice); }
 
 std::unique_ptr<Db> open_db(const std::string& url, Access access) {
   // PostgreSQL: the server's database exists or the connection fails; nothing is created by opening.

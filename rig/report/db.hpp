@@ -76,6 +76,11 @@ void set_lock_wait_ms(int ms);
 // before any connection waits (`rig run`: its cancel token).
 void set_lock_wait_stop(std::function<bool()> stopped);
 inline constexpr int kStoppedLockWaitMs = 2000;
+// Told once a wait for another writer's lock has lasted kLockWaitNoticeMs, with the database
+// ("sqlite:PATH") and the wait's limit: a `rig history` waited 10 s saying nothing (a review).
+// Set once, before any connection waits (main: a line on stderr).
+void set_lock_wait_notice(std::function<void(const std::string& where, int limit_ms)> notice);
+inline constexpr int kLockWaitNoticeMs = 1000;
 // The words a lock held past the wait is reported with (Db's errors begin "<where>: " then these).
 inline constexpr const char* kLockedByAnother = "locked by another process";
 

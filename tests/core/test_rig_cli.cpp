@@ -212,10 +212,23 @@ TEST(RigCli, HelpOnEverySubcommand) {
                 d + "/sel-slow"),
             0)
       << slurp(d + "/sel-slow.stderr");
-  EXPECT_NE(slurp(d + "/sel-slow.stdout").find("in the band settle in more than a tenth of the RMS window (1 s of "
-                                               "emulated output)"),
+  EXPECT_NE(slurp(d + "/sel-slow.stdout").find("2 candidate(s), 1 of them in the band, settle in more than a tenth of the "
+                                               "RMS window (1 s of emulated output)"),
             std::string::npos)
       << slurp(d + "/sel-slow.stdout");
+  EXPECT_NE(slurp(d + "/sel-slow.stdout").find("(the slowest, butter4@0.03: 36.3525 s); give --seconds 364 or more (ten times the slowest's)"), std::string::npos)
+      << slurp(d + "/sel-slow.stdout");
+  // Advice that can be followed: past --seconds' 3600 it names a recording (it said 4096, which
+  // --seconds refuses: a re-test).
+  ASSERT_EQ(run({"filter", "select", "--f-req", "1.7e-5", "--fc-min", "1e-5", "--fc-max", "1e-5", "--fc-step", "1e-5",
+                 "--orders", "1", "--seconds", "1"},
+                d + "/sel-hour"),
+            0);
+  EXPECT_NE(slurp(d + "/sel-hour.stdout").find("(the slowest, butter1@1e-05: at least 409.6 s); ten times the slowest's "
+                                               "is past --seconds' 3600 s: a recording that long (--recorded) would "
+                                               "rank them"),
+            std::string::npos)
+      << slurp(d + "/sel-hour.stdout");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/sel-slow.json"))["candidates"].size(), 4u);  // paper, none, 2 cut-offs
   ASSERT_EQ(run({"filter", "select", "--f-req", "1.7e-9", "--fc-min", "1e-9", "--fc-max", "1e-9", "--fc-step", "1e-10",
                  "--orders", "1", "--seconds", "0.1", "--json", d + "/sel-tiny.json"},
@@ -230,8 +243,11 @@ TEST(RigCli, HelpOnEverySubcommand) {
   std::ofstream(d + "/unstable.toml") << "[plant.dut.regulator]\ngain_a_per_v = 1000.0\n";
   for (const std::string sub : {"show", "select"}) {
     EXPECT_EQ(run({"filter", sub, "--dut", d + "/unstable.toml"}, d + "/unst"), 2) << sub;
-    EXPECT_NE(slurp(d + "/unst.stderr").find("the DUT model's closed loop is unstable (a pole at |z| = "), std::string::npos)
+    EXPECT_NE(slurp(d + "/unst.stderr").find(d + "/unstable.toml:1:1: [plant.dut]: the DUT model's closed loop is "
+                                                 "unstable (a pole at |z| = "),
+              std::string::npos)
         << slurp(d + "/unst.stderr");
+    EXPECT_NE(slurp(d + "/unst.stderr").find("its regulator: gain_a_per_v = 1000, "), std::string::npos);
   }
   // Near half the loop rate the poles round onto the unit circle too: not "too low"; order 5 is
   // named, not an internal function (a re-test).
@@ -2853,6 +2869,11 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
       << err;
   EXPECT_EQ(err.find("not a database rig can open"), std::string::npos) << err;
   EXPECT_NE(err.find("try again once it is done (a new run may also run with --no-history"), std::string::npos) << err;
+  // Said while it waits, not only at the end (a `rig history` sat silent 10 s: a re-test).
+  EXPECT_NE(err.find("rig: sqlite:" + db + " is locked by another process (a write or a backup holding it): waiting up "
+                     "to 10 s\n"),
+            std::string::npos)
+      << err;
   EXPECT_FALSE(fs::exists(d + "/r"));
   EXPECT_EQ(stopped_rc, 3) << slurp(d + "/io2.stderr");
   EXPECT_LT(stopped_after, 6.0);

@@ -147,6 +147,9 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
           << e.what();
       EXPECT_EQ(std::string(e.what()).find('\''), std::string::npos) << e.what();
     }
+    // A wait told once it has lasted a second, with the database and its limit.
+    std::vector<std::pair<std::string, int>> told;
+    h::set_lock_wait_notice([&told](const std::string& where, int limit_ms) { told.emplace_back(where, limit_ms); });
     h::set_lock_wait_ms(1200);  // a wait past a second says how long
     try {
       h::record_run(path, rig::test::fixture_passport("LOCKED-2"), d.path.string());
@@ -155,6 +158,10 @@ TEST(HistorySqlite, TheLockWaitIsWhatWasSet) {
       EXPECT_NE(std::string(e.what()).find(": locked by another process for more than 1 s (a write"), std::string::npos)
           << e.what();
     }
+    h::set_lock_wait_notice(nullptr);
+    ASSERT_EQ(told.size(), 1u);
+    EXPECT_EQ(told[0].first, "sqlite:" + path);
+    EXPECT_EQ(told[0].second, 1200);
     sqlite3_exec(again, "ROLLBACK", nullptr, nullptr, nullptr);
     sqlite3_close(again);
     h::set_lock_wait_ms(10000);
