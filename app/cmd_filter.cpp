@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "plant/dut/filter_select.hpp"
+#include "procedures/acceptance/profile.hpp"
 #include "plant/dut/loop_figures.hpp"
 #include "plant/dut/params.hpp"
 #include "app/commands.hpp"
@@ -36,12 +37,22 @@ struct DutConfig {
   toml::table file;
   const toml::table* dut = nullptr;
 };
+// --dut: a profile (its [profile], [procedure], [plant] or `base`) gives its [plant.dut], its
+// base's merged in, or none (the built-in DUT); a DUT TOML is the DUT's table itself. A profile
+// without [plant.dut] was read whole as a DUT table: profiles/paper.toml was "unknown key
+// 'analysis' in [plant.dut]" (a code review).
 void load_dut(const std::string& path, DutConfig& c) {
   if (path.empty()) return;
   c.file = cfg::parse_file(path);
-  const toml::table* plant = cfg::get_table(c.file, "plant");
-  const toml::table* dut = plant ? cfg::get_table(*plant, "dut") : nullptr;
-  c.dut = dut ? dut : &c.file;
+  for (const char* key : {"profile", "procedure", "plant", "base"})
+    if (c.file.contains(key)) {
+      std::string source;
+      c.file = acceptance::load_profile_table(path, source);
+      const toml::table* plant = cfg::get_table(c.file, "plant");
+      c.dut = plant ? cfg::get_table(*plant, "dut") : nullptr;
+      return;
+    }
+  c.dut = &c.file;
 }
 
 // One value per line, '#' comments (the `rig analyze --input text` format).

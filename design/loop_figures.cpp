@@ -10,6 +10,9 @@ namespace rig::design {
 
 namespace {
 
+// The step is simulated here, not by loop_step and apply_filter (design/loop_model.hpp,
+// filter.hpp), as one run continued across its windows; it takes their operations in their
+// order, so their values (LoopFigures.TheStepIsLoopStepThroughTheFilter checks it bit for bit).
 // The step is simulated from 50 ms (the paper's Fig. 6 span), its window doubled until the
 // response has settled in its first half: a filter with a low cut-off settles in seconds, and a
 // fixed 50 ms window cut its settling time short (butter2@5 read 47.9 ms, about 93 ms simulated).
@@ -28,8 +31,8 @@ constexpr std::size_t kCurvePoints = 5000;
 constexpr double kGridStep = 0.002;
 constexpr int kLowestDecade = -15;
 
-// The largest |pole| of the linear loop: at or above 1 it does not settle, and a step that runs
-// into inf and NaN has no figures (its NaN samples read as inside the band, a code review).
+// The largest |pole| of the linear loop: past 1 it does not settle, and a step that runs into inf
+// and NaN has no figures (its NaN samples read as inside the band, a code review).
 double largest_pole(const LinearLoop& l) {
   const Eigen::VectorXcd ev = Eigen::EigenSolver<Eigen::MatrixXd>(l.A, false).eigenvalues();
   double r = 0;
@@ -47,6 +50,10 @@ LoopFigures loop_figures(const LoopParams& lp, const RegulatorParams& rp, const 
 
   LoopFigures f;
   f.largest_pole = largest_pole(lin);
+  if (!f.stable()) {  // no step to simulate: it would run into inf and NaN to the cap
+    f.settled = false;
+    return f;
+  }
   const std::complex<double> h0 = loop_response(lin, 0.0) * response(filter, 0.0);
   f.dc_gain = std::abs(h0);
   const double dt = 1.0 / lp.loop_rate_hz, final = h0.real(), tol = f.settling_band * std::abs(final);
@@ -86,13 +93,12 @@ LoopFigures loop_figures(const LoopParams& lp, const RegulatorParams& rp, const 
     f.settling_time_s = static_cast<double>(last_out) * dt;
     f.step_window_s = static_cast<double>(n) * dt;
     if (2 * last_out <= n) break;
-    if (2 * n > kMostSteps) {
+    if (n >= kMostSteps) {
       f.settled = false;  // still outside the band in the window's second half: a lower bound
       break;
     }
-    window = 2 * n;
+    window = std::min(2 * n, kMostSteps);  // the last window the cap itself, whatever the rate
   }
-  if (f.largest_pole >= 1) f.settled = false;
   if (final != 0 && std::isfinite(peak)) f.overshoot = std::max(0.0, peak - 1);
 
   const auto amp_y_at = [&](double fr) { return std::abs(loop_response(lin, fr) * response(filter, fr)); };

@@ -15,7 +15,10 @@ struct LoopFigures {
   bool settled = true;           // false: still outside the band in the second half of the longest window
                                  // (settling_time_s then a lower bound), or the loop is unstable
   double step_window_s = 0;      // the simulated step's length (from 50 ms, doubled until it settles)
-  double largest_pole = 0;       // the linear loop's largest |z| pole: >= 1, unstable, no figures
+  double largest_pole = 0;       // the linear loop's largest |z| pole
+  // Past |z| = 1 by more than rounding (an integrator and its zero cancelling came out at
+  // 1 + 2e-14 and was called unstable, a code review): no figures, settled false, no curves.
+  bool stable() const { return largest_pole <= 1 + 1e-9; }
   double settling_band = kSettlingBand;  // the band used (fraction of the final value)
   double overshoot = 0;          // peak over the final value, fraction
   double dc_gain = 0;

@@ -124,11 +124,13 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
   std::vector<FilterCandidate> c;
   if (opt.include_paper) c.push_back({"paper", filter_by_name("paper", rate)});
   if (opt.include_none) c.push_back({"none", filter_by_name("none", rate)});
-  // Each cut-off min + i step, up to max and a millionth of a step past it for the rounding (an
-  // absolute 1e-9 Hz took ten cut-offs past a max of 1e-9 Hz, a review).
+  // Each cut-off min + i step, as many as fit up to max with a millionth of a step for the rounding
+  // (an absolute 1e-9 Hz took ten cut-offs past a max of 1e-9 Hz, a review), counted once: a bound
+  // of max + step/1e6 overflowed to inf for a max near 1.8e308, and the loop never ended.
+  const auto cutoffs = static_cast<std::size_t>(std::floor((opt.fc_max_hz - opt.fc_min_hz) / opt.fc_step_hz + 1e-6)) + 1;
   for (int order : opt.orders)
-    for (double i = 0, fc = opt.fc_min_hz; fc <= opt.fc_max_hz + 1e-6 * opt.fc_step_hz; fc = opt.fc_min_hz + ++i * opt.fc_step_hz)
-      if (fc < rate / 2) try {
+    for (std::size_t i = 0; i < cutoffs; ++i)
+      if (const double fc = opt.fc_min_hz + static_cast<double>(i) * opt.fc_step_hz; fc < rate / 2) try {
           c.push_back({butter_name(order, fc), filter_by_name(butter_name(order, fc), rate)});
         } catch (const ConfigError& e) {  // a cut-off the user did not type: named by the option that made it
           throw ConfigError(fmt::format("--fc-min {}: a candidate of the range: {}", opt.fc_min_hz, e.what()));

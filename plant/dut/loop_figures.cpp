@@ -15,10 +15,10 @@ design::LoopFigures loop_figures(const toml::table* dut_cfg, const FilterConfig&
   // An unstable loop's step runs into inf and NaN: no figure of it means anything (one printed a
   // settling time of 17 ms and overshoot inf %, a code review). Said with where the model comes
   // from and the values that set its gain (a re-test: it named neither).
-  if (f.largest_pole >= 1) {
+  if (!f.stable()) {
     char text[320];
     std::snprintf(text, sizeof text,
-                  "the DUT model's closed loop is unstable (a pole at |z| = %.6g, >= 1): it has no bandwidth or "
+                  "the DUT model's closed loop is unstable (a pole at |z| = %.10g, > 1): it has no bandwidth or "
                   "settling time; its regulator: gain_a_per_v = %g, integral_corner_hz = %g, lead_zero_hz = %g, "
                   "lead_pole_hz = %g at loop_rate_hz = %g",
                   f.largest_pole, p.regulator.gain_a_per_v, p.regulator.integral_corner_hz, p.regulator.lead_zero_hz,

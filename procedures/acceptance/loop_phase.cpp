@@ -144,9 +144,9 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
                                         p.design_model->source, rec.reason);
     ctx.log->warn("loop figures from the design model: {}", why);
     // A figure the model could not give is null with its reason, not a window's length or 0 Hz.
-    const bool stable = f.largest_pole < 1;
+    const bool stable = f.stable();
     const std::string unstable = why + fmt::format("; the design model's closed loop is unstable (a pole at |z| = "
-                                                   "{:.6g}): it has no figures", f.largest_pole);
+                                                   "{:.10g}): it has no figures", f.largest_pole);
     const bool band_found = stable && f.bandwidth_0p5_hz > 0;
     const std::string band_why = band_found ? why
                                  : !stable ? unstable

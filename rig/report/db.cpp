@@ -203,7 +203,7 @@ class SqliteDb final : public Db {
       throw ConfigError(where_ + ": " + kLockedByAnother +
                         (waited > 0 ? " for more than " + std::to_string(waited) + " s" : std::string()) +
                         " (a write or a backup holding it): " + (gave_up ? "gave up waiting to " : "could not ") +
-                        (word == "SELECT" ? "read it" : "write it") + "; try again once it is done");
+                        (word == "SELECT" || word == "PRAGMA" ? "read it" : "write it") + "; try again once it is done");
     }
     throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite3_errmsg(db_));
   }

@@ -249,6 +249,21 @@ TEST(RigCli, HelpOnEverySubcommand) {
         << slurp(d + "/unst.stderr");
     EXPECT_NE(slurp(d + "/unst.stderr").find("its regulator: gain_a_per_v = 1000, "), std::string::npos);
   }
+  // --dut takes a profile: its [plant.dut] with its base's, or the built-in DUT (profiles/paper.toml
+  // was read whole as a DUT table: "unknown key 'analysis'", a code review).
+  EXPECT_EQ(run({"filter", "show", "--dut", std::string(RIG_SOURCE_DIR) + "/profiles/paper.toml"}, d + "/dutprof"), 0)
+      << slurp(d + "/dutprof.stderr");
+  std::ofstream(d + "/derived.toml") << "base = \"ci\"\n[plant.dut.regulator]\ngain_a_per_v = 1000.0\n";
+  EXPECT_EQ(run({"filter", "show", "--dut", d + "/derived.toml"}, d + "/dutprof"), 2);
+  EXPECT_NE(slurp(d + "/dutprof.stderr").find(d + "/derived.toml:2:1: [plant.dut]: the DUT model's closed loop is unstable"),
+            std::string::npos)
+      << slurp(d + "/dutprof.stderr");
+  // A range whose end is near the largest double ends (max + step/1e6 overflowed and it never did).
+  EXPECT_EQ(run({"filter", "select", "--fc-min", "300", "--fc-max", "1.7976931348623157e308", "--fc-step", "1e308",
+                 "--orders", "1", "--seconds", "0.01"},
+                d + "/fcbig"),
+            0)
+      << slurp(d + "/fcbig.stderr");
   // Near half the loop rate the poles round onto the unit circle too: not "too low"; order 5 is
   // named, not an internal function (a re-test).
   EXPECT_EQ(run({"filter", "show", "--filter", "butter2@4999.999999"}, d + "/fname"), 2);

@@ -93,7 +93,7 @@ TEST(LoopFigures, FollowALowCutOffInTimeAndFrequency) {
   EXPECT_NEAR(f.bandwidth_0p5_hz, std::sqrt(3.0) * fc, 1e-3 * fc);  // 1/sqrt(1 + (f/fc)^2) = 0.5
   EXPECT_LT(f.freq_hz.front(), fc / 10);
   EXPECT_EQ(f.overshoot, 0.0);
-  // The curves are every k-th sample of the window, at most 5000 points, t and y in step.
+  // The curves are every 2^k-th sample of the window, at most 5000 points, t and y in step.
   ASSERT_EQ(f.step_t_s.size(), f.step_y.size());
   ASSERT_EQ(f.step_x.size(), f.step_y.size());
   EXPECT_LE(f.step_y.size(), 5000u);
@@ -123,6 +123,42 @@ TEST(LoopFigures, FollowALowCutOffInTimeAndFrequency) {
   EXPECT_LT(f.largest_pole, 1.0);
   // The grid reaches the lowest cut-off a filter may have (1e-9 Hz read "0 Hz" with a grid to 1e-9).
   EXPECT_NEAR(loop_figures(lp, rp, butterworth_lowpass(1, 1e-9, lp.loop_rate_hz)).bandwidth_3db_hz, 1e-9, 1e-12);
+}
+
+// The figures' step is loop_step through apply_filter, bit for bit, at the points it keeps (every
+// 2^k-th sample from 0): it is simulated as one run of its own, so a test holds the two together.
+TEST(LoopFigures, TheStepIsLoopStepThroughTheFilter) {
+  const LoopParams lp;
+  const RegulatorParams rp;
+  for (const FilterConfig& w : {paper_wf(), butterworth_lowpass(1, 0.2, lp.loop_rate_hz)}) {
+    const LoopFigures f = loop_figures(lp, rp, w);
+    const auto n = static_cast<std::size_t>(std::lround(f.step_window_s * lp.loop_rate_hz));
+    const std::vector<double> x = loop_step(LoopModel(lp, rp).linear(), n), y = apply_filter(w, x);
+    const auto stride = f.step_t_s.size() > 1
+                            ? static_cast<std::size_t>(std::lround((f.step_t_s[1] - f.step_t_s[0]) * lp.loop_rate_hz))
+                            : 1;
+    ASSERT_EQ(f.step_y.size(), (n + stride - 1) / stride);
+    for (std::size_t i = 0; i < f.step_y.size(); ++i) {
+      ASSERT_EQ(f.step_x[i], x[i * stride]) << i;
+      ASSERT_EQ(f.step_y[i], y[i * stride]) << i;
+      ASSERT_EQ(f.step_t_s[i], static_cast<double>(i * stride) * (1.0 / lp.loop_rate_hz)) << i;
+    }
+    EXPECT_EQ(f.settling_time_s, analysis::settling_time(y, 1 / lp.loop_rate_hz, f.dc_gain, kSettlingBand));
+  }
+}
+
+// The longest step is 4 096 000 loop periods at any loop rate (a 1 MHz loop's doublings stopped at
+// 3.2e6), and an integrator cancelled by its zero is not an unstable pole (1 + 2e-14 was).
+TEST(LoopFigures, TheCapIsInLoopPeriodsAndRoundingIsNotInstability) {
+  LoopParams fast;
+  fast.loop_rate_hz = 1e6;
+  const LoopFigures f = loop_figures(fast, RegulatorParams{}, butterworth_lowpass(1, 1e-3, fast.loop_rate_hz));
+  EXPECT_FALSE(f.settled);
+  EXPECT_EQ(f.step_window_s, 4.096);
+  RegulatorParams cancelled;
+  cancelled.integral_corner_hz = 1e-12;
+  const LoopFigures g = loop_figures(LoopParams{}, cancelled, paper_wf());
+  EXPECT_TRUE(g.stable()) << g.largest_pole;  // (its integrator's mode is slower than any window)
 }
 
 TEST(LoopParams, TablesAreReadWithClearErrors) {
