@@ -213,7 +213,7 @@ void run_select(SelectArgs a) {
   if (slowest) {
     const double need_s = 10 * slowest->settling_time_s;
     const std::string advice =
-        !a.recorded.empty() ? "a recording at least ten times their settling time long would"
+        !a.recorded.empty() ? "a recording at least ten times their settling time long would rank them"
         : slowest->settled && need_s <= kMaxSelectSeconds
             ? fmt::format("give --seconds {:g} or more (ten times the slowest's)", std::ceil(need_s))
             : fmt::format("ten times the slowest's is past --seconds' {:g} s: a recording that long (--recorded) "

@@ -216,8 +216,26 @@ TEST(RigCli, HelpOnEverySubcommand) {
                                                "RMS window (1 s of emulated output)"),
             std::string::npos)
       << slurp(d + "/sel-slow.stdout");
-  EXPECT_NE(slurp(d + "/sel-slow.stdout").find("(the slowest, butter4@0.03: 36.3525 s); give --seconds 364 or more (ten times the slowest's)"), std::string::npos)
+  EXPECT_NE(slurp(d + "/sel-slow.stdout")
+                .find("(the slowest, butter4@0.03: 36.3525 s); give --seconds 364 or more (ten times the slowest's)"),
+            std::string::npos)
       << slurp(d + "/sel-slow.stdout");
+  // On a recording, the advice is a longer recording (it read "... long would" and stopped).
+  {
+    std::ofstream rec(d + "/rec.txt");
+    for (int i = 0; i < 20000; ++i) rec << (i % 7) * 1e-4 << "\n";
+  }
+  ASSERT_EQ(run({"filter", "select", "--f-req", "0.05", "--fc-min", "0.03", "--fc-max", "0.045", "--fc-step", "0.015",
+                 "--orders", "4", "--recorded", d + "/rec.txt"},
+                d + "/sel-rec"),
+            0)
+      << slurp(d + "/sel-rec.stderr");
+  EXPECT_NE(slurp(d + "/sel-rec.stdout").find("RMS window (2 s of the recording)"), std::string::npos)
+      << slurp(d + "/sel-rec.stdout");
+  EXPECT_NE(slurp(d + "/sel-rec.stdout").find("; a recording at least ten times their settling time long would rank "
+                                              "them\n"),
+            std::string::npos)
+      << slurp(d + "/sel-rec.stdout");
   // Advice that can be followed: past --seconds' 3600 it names a recording (it said 4096, which
   // --seconds refuses: a re-test).
   ASSERT_EQ(run({"filter", "select", "--f-req", "1.7e-5", "--fc-min", "1e-5", "--fc-max", "1e-5", "--fc-step", "1e-5",
