@@ -46,8 +46,7 @@ void load_dut(const std::string& path, DutConfig& c) {
   c.file = cfg::parse_file(path);
   for (const char* key : {"profile", "procedure", "plant", "base"})
     if (c.file.contains(key)) {
-      std::string source;
-      c.file = acceptance::load_profile_table(path, source);
+      c.file = acceptance::resolve_profile_file(std::move(c.file));
       const toml::table* plant = cfg::get_table(c.file, "plant");
       c.dut = plant ? cfg::get_table(*plant, "dut") : nullptr;
       return;
@@ -98,6 +97,7 @@ json candidate_json(const plant::FilterCandidate& c) {
           {"settling_time_s", number_if(c.settled, c.settling_time_s)},
           {"settled", c.settled},
           {"settling_time_at_least_s", number_if(!c.settled, c.settling_time_s)},
+          {"step_window_s", c.step_window_s},
           {"rms_g", c.rms_g},
           {"meets_band", c.meets_band},
           {"sections", c.filter.enabled ? s : json::array()},
@@ -268,6 +268,9 @@ void run_show(const ShowArgs& a) {
               << "\n\nto load it into a DUT by hand (IFACE: the DUT's CAN interface; or --hardware FILE):\n"
               << "rig dut --can IFACE set-filter" << biquads << " --rate " << num(f.rate_hz) << (f.enabled ? "" : " --off")
               << "\n";
+  else  // "none": the filter off, which is a preset and a command of its own (a re-test found no block)
+    std::cout << "\nto use it in a profile:\n[filter]\npreset = \"none\"\n\nto switch a DUT's filter off by hand (IFACE: the "
+                 "DUT's CAN interface; or --hardware FILE):\nrig dut --can IFACE filter-off\n";
   if (!a.json_out.empty()) {
     json j = {{"filter", a.filter},
               {"source", "model"},

@@ -24,7 +24,7 @@
 #include "app/history_source.hpp"
 #include "app/passport_held.hpp"
 #include "app/run_seal.hpp"
-#include "app/whole_number.hpp"
+#include "app/number_option.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
 #include "rig/report/db.hpp"
@@ -419,15 +419,7 @@ void add_history(CLI::App& app, int& rc) {
       sub->add_option("--value", a->value, "Trend this passport measurement (e.g. in_run_b_allan) instead of listing runs"));
   // 0 would mean "no limit" to the query: a user who types --limit 0 asked for none, so N >= 1.
   query.push_back(sub->add_option("--limit", a->limit, "Only the newest N runs (N >= 1)")
-                      ->check(CLI::Validator(
-                          [](std::string& v) -> std::string {
-                            constexpr auto kMost = static_cast<std::uint64_t>(std::numeric_limits<int>::max());
-                            if (whole_number(v, 1, kMost)) return std::string();
-                            if (whole_number_above(v, kMost))
-                              return v + " is too large: a number of runs is at most " + std::to_string(kMost);
-                            return v + ": must be a decimal whole number in [1, 2147483647] (no sign, no leading zero)";
-                          },
-                          "N >= 1")));
+                      ->check(whole_in("a number of runs", 1, std::numeric_limits<int>::max()).description("N >= 1")));
   query.push_back(sub->add_flag("--csv", a->csv, "Comma-separated output (RFC 4180) with every digit"));
   CLI::Option* rec =
       sub->add_option("--record", a->record, "Record the run folder DIR (its passport.json) into the database, then exit");
@@ -439,14 +431,7 @@ void add_history(CLI::App& app, int& rc) {
   for (CLI::Option* q : query) rec->excludes(q);
   CLI::Option* ends =
       sub->add_option("--endings", a->endings, "List every ending recorded for run ID (resumes, a folder put back)")
-          ->check(CLI::Validator(
-              [](std::string& v) -> std::string {
-                constexpr auto kMost = static_cast<std::uint64_t>(std::numeric_limits<long long>::max());
-                if (whole_number(v, 1, kMost)) return std::string();
-                if (whole_number_above(v, kMost)) return v + " is too large: a run id is at most " + std::to_string(kMost);
-                return v + ": must be a run id, a decimal whole number >= 1 (no leading zero)";
-              },
-              "ID"));
+          ->check(whole_in("a run id", 1, std::numeric_limits<long long>::max()).description("ID"));
   ends->excludes(rec);
   for (CLI::Option* q : query)
     if (q->get_name() != "--csv") ends->excludes(q);

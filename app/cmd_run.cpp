@@ -736,17 +736,14 @@ void check_history_can_record(const std::string& url, bool resume) {
       throw ConfigError(shown + ": cannot be written: " + std::strerror(errno));
     if (!can_create_file_in(folder))
       throw ConfigError(shown + ": its folder " + folder.string() + " takes no new file (SQLite's journal goes there)");
-    const auto t0 = std::chrono::steady_clock::now();
     try {
       history::open_db(url, history::Access::ReadOnly)->has_table("runs");  // reads its header
     } catch (const ConfigError& e) {
       // A lock held past the busy timeout is not a damaged file (a review: it read "not a
-      // database rig can open"). The time it waited, as waited (a stop ends the wait at 2 s).
-      const auto waited = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - t0);
-      if (std::string(e.what()).find(history::kLockedByAnother) != std::string::npos)
-        throw ConfigError(shown + ": " + history::kLockedByAnother +
-                          (waited.count() > 0 ? " for more than " + std::to_string(waited.count()) + " s" : std::string()) +
-                          " (a write or a backup holding it); try again once it is done" +
+      // database rig can open"): db.cpp's words for it (how long, read or write), named as here.
+      const std::string what = e.what();
+      if (const auto at = what.find(history::kLockedByAnother); at != std::string::npos)
+        throw ConfigError(shown + ": " + what.substr(at) +
                           (resume ? std::string()
                                   : " (a new run may also run with --no-history and be recorded later with `rig "
                                     "history --record DIR`)"));
@@ -1670,6 +1667,9 @@ int do_run(RunArgs a) {
         "($RIG_HISTORY, the rig config or the default here): {} keeps the earlier ending; give --db with that URL "
         "(its password too) to record there",
         a.run_history_db, history::mask_password(history_url(a, hw)), a.run_history_db);
+  // A dry run's history held locked by another process now: said after the plan, not in its
+  // place (a technician's re-test: a resume's dry run waited 10 s and printed only the lock).
+  std::string history_locked;
   if (!a.no_history) {
     const std::string url = history_url(a, hw);
     try {
@@ -1678,14 +1678,16 @@ int do_run(RunArgs a) {
       // A stop while it waited for a lock ended the wait (set_lock_wait_stop): the run was stopped.
       if (cancel.requested())
         throw AbortedError("aborted before anything was powered or moved: " + cancel.token().reason() + " (" + e.what() + ")");
+      std::string why = e.what();
       const char* env = std::getenv("RIG_HISTORY");
-      if (a.db.empty() && env && url == env) throw ConfigError(std::string("RIG_HISTORY: ") + e.what());
+      if (a.db.empty() && env && url == env) why = "RIG_HISTORY: " + why;
       // A resume's database is the one its run started with (a re-test: "a typo?" for a folder
       // removed since, with no word of where the name came from or what overrides it).
-      if (a.db_from_run_json)
-        throw ConfigError(std::string(e.what()) + " (the database the run started with, from " + a.resume +
-                          "/run.json; --db URL with --resume records into another, --no-history into none)");
-      throw;
+      else if (a.db_from_run_json)
+        why += " (the database the run started with, from " + a.resume +
+               "/run.json; --db URL with --resume records into another, --no-history into none)";
+      if (!a.dry_run || why.find(history::kLockedByAnother) == std::string::npos) throw ConfigError(why);
+      history_locked = why;
     }
   }
   if (!a.resume.empty()) {
@@ -1764,7 +1766,8 @@ int do_run(RunArgs a) {
                     ? " (not there yet: the run creates it)"
                     : " (not there yet: the run creates it and the folder " + file->missing_folder +
                           ", the built-in default's)";
-      std::cout << "History: " << history::mask_password(url) << fresh << "\n";
+      std::cout << "History: " << history::mask_password(url) << fresh
+                << (history_locked.empty() ? "" : " (locked by another process now: below)") << "\n";
     }
     // What a resume leaves in the run's own database, said before it runs as the resume will say it.
     if (!a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
@@ -1775,6 +1778,10 @@ int do_run(RunArgs a) {
                              "table's homing, which depends on where the table stands) and any retries\n",
                              completed.empty() ? "" : " of what is left", TerminalView::hms(total),
                              a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
+    std::cout.flush();
+    // The plan is what a run would do; a run started now would stop at the lock before anything opens.
+    if (!history_locked.empty())
+      throw ConfigError(history_locked + " (a run started now would stop here, before anything opens)");
     return kExitPass;
   }
   // The table next, before a folder is made: one process at a time commands a station's table,

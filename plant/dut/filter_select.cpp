@@ -113,21 +113,22 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
   if (!(opt.fc_min_hz > 0) || !(opt.fc_max_hz >= opt.fc_min_hz) || !std::isfinite(opt.fc_max_hz))
     throw ConfigError(fmt::format("--fc-min {} --fc-max {}: the cut-off range must be 0 < min <= max Hz, finite",
                                   opt.fc_min_hz, opt.fc_max_hz));
-  // Each cut-off is an emulated run per order: a range of millions would run for days.
+  // Each cut-off min + i step, as many as fit up to max with a millionth of a step for the rounding
+  // (an absolute 1e-9 Hz took ten cut-offs past a max of 1e-9 Hz, a review), counted once here: a
+  // bound of max + step/1e6 overflowed to inf for a max near 1.8e308, and the loop never ended.
+  // Each is an emulated run per order: a range of millions would run for days.
   constexpr double kMaxCutoffs = 10000;
-  if ((opt.fc_max_hz - opt.fc_min_hz) / opt.fc_step_hz + 1 > kMaxCutoffs)
+  const double count = std::floor((opt.fc_max_hz - opt.fc_min_hz) / opt.fc_step_hz + 1e-6) + 1;
+  if (count > kMaxCutoffs)
     throw ConfigError(fmt::format("--fc-min {} --fc-max {} --fc-step {}: more than {:g} cut-offs to try", opt.fc_min_hz,
                                   opt.fc_max_hz, opt.fc_step_hz, kMaxCutoffs));
+  const auto cutoffs = static_cast<std::size_t>(count);
   const DutParams p = load_dut_params(dut_cfg);
   const double rate = p.loop.loop_rate_hz;
 
   std::vector<FilterCandidate> c;
   if (opt.include_paper) c.push_back({"paper", filter_by_name("paper", rate)});
   if (opt.include_none) c.push_back({"none", filter_by_name("none", rate)});
-  // Each cut-off min + i step, as many as fit up to max with a millionth of a step for the rounding
-  // (an absolute 1e-9 Hz took ten cut-offs past a max of 1e-9 Hz, a review), counted once: a bound
-  // of max + step/1e6 overflowed to inf for a max near 1.8e308, and the loop never ended.
-  const auto cutoffs = static_cast<std::size_t>(std::floor((opt.fc_max_hz - opt.fc_min_hz) / opt.fc_step_hz + 1e-6)) + 1;
   for (int order : opt.orders)
     for (std::size_t i = 0; i < cutoffs; ++i)
       if (const double fc = opt.fc_min_hz + static_cast<double>(i) * opt.fc_step_hz; fc < rate / 2) try {
@@ -141,6 +142,7 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
     k.bandwidth_0p5_hz = f.bandwidth_0p5_hz;
     k.settling_time_s = f.settling_time_s;
     k.settled = f.settled;
+    k.step_window_s = f.step_window_s;
     k.meets_band = std::abs(k.bandwidth_0p5_hz - opt.f_req_hz) <= opt.band_tol * opt.f_req_hz;
     if (opt.recorded_x) {  // criterion 1 on a recording at the loop rate
       if (opt.recorded_x->empty()) throw ConfigError("the recording is empty");

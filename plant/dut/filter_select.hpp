@@ -19,6 +19,7 @@ struct FilterCandidate {
   double bandwidth_0p5_hz = 0;
   double settling_time_s = 0;  // with settled false: a lower bound (not settled in the model's longest step)
   bool settled = true;
+  double step_window_s = 0;  // the model's step it was read from (LoopFigures::step_window_s)
   double rms_g = 0;          // criterion 1: RMS of y about its mean
   bool meets_band = false;   // |bandwidth - f_req| <= band_tol * f_req
   int rank = 0;              // 1 = best

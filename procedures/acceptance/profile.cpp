@@ -369,33 +369,38 @@ toml::table load_profile_table(const std::string& name_or_path, std::string& sou
       throw ConfigError("profile '" + shown_text(name_or_path) + "': no such file and not a built-in profile (" + names +
                         ")");
     }
-    t = cfg::parse_file(name_or_path);
     source = name_or_path;
-    if (const toml::node* b = t.get("base")) {
-      const auto base_name = b->value<std::string>();
-      auto bit = base_name ? builtin.find(*base_name) : builtin.end();
-      if (bit == builtin.end()) {
-        std::string names;
-        for (const auto& [k, v] : builtin) names += (names.empty() ? "" : ", ") + k;
-        cfg::reject(*b, "base", "must name a built-in profile (" + names + ")");
-      }
-      toml::table base = cfg::parse_string(bit->second, "builtin:" + *base_name);
-      t.erase("base");
-      // A file's own [[classes]] replace the base's rather than append.
-      if (t.contains("classes")) base.erase("classes");
-      const std::vector<std::string> dropped = drop_limits_of_other_blocks(t, base);
-      if (dropped_limits) *dropped_limits = dropped;
-      cfg::fill_defaults(t, std::move(base));
+    t = resolve_profile_file(cfg::parse_file(name_or_path), dropped_limits);
+  }
+  return t;
+}
+
+toml::table resolve_profile_file(toml::table t, std::vector<std::string>* dropped_limits) {
+  const auto& builtin = builtin_profiles();
+  if (const toml::node* b = t.get("base")) {
+    const auto base_name = b->value<std::string>();
+    auto bit = base_name ? builtin.find(*base_name) : builtin.end();
+    if (bit == builtin.end()) {
+      std::string names;
+      for (const auto& [k, v] : builtin) names += (names.empty() ? "" : ", ") + k;
+      cfg::reject(*b, "base", "must name a built-in profile (" + names + ")");
     }
-    // `bias = []` in [limits]: that value reported, not judged. A file built on a base could
-    // loosen an inherited limit but never remove one (an integrator's review: a whole profile of
-    // its own was the only way).
-    if (toml::table* lim = t.get_as<toml::table>("limits")) {
-      std::vector<std::string> unlimited;
-      for (auto&& [k, v] : *lim)
-        if (const toml::array* a = v.as_array(); a && a->empty()) unlimited.emplace_back(k.str());
-      for (const std::string& k : unlimited) lim->erase(k);
-    }
+    toml::table base = cfg::parse_string(bit->second, "builtin:" + *base_name);
+    t.erase("base");
+    // A file's own [[classes]] replace the base's rather than append.
+    if (t.contains("classes")) base.erase("classes");
+    const std::vector<std::string> dropped = drop_limits_of_other_blocks(t, base);
+    if (dropped_limits) *dropped_limits = dropped;
+    cfg::fill_defaults(t, std::move(base));
+  }
+  // `bias = []` in [limits]: that value reported, not judged. A file built on a base could
+  // loosen an inherited limit but never remove one (an integrator's review: a whole profile of
+  // its own was the only way).
+  if (toml::table* lim = t.get_as<toml::table>("limits")) {
+    std::vector<std::string> unlimited;
+    for (auto&& [k, v] : *lim)
+      if (const toml::array* a = v.as_array(); a && a->empty()) unlimited.emplace_back(k.str());
+    for (const std::string& k : unlimited) lim->erase(k);
   }
   return t;
 }

@@ -88,6 +88,9 @@ Profile load_profile(const std::string& name_or_path);
 // path): what load_profile parses, and where the emulated plant finds its [plant] section.
 toml::table load_profile_table(const std::string& name_or_path, std::string& source,
                                std::vector<std::string>* dropped_limits = nullptr);
+// A profile file's table as parsed, its base merged in and its empty limits dropped (the file
+// half of load_profile_table, for a caller that has parsed the file already).
+toml::table resolve_profile_file(toml::table t, std::vector<std::string>* dropped_limits = nullptr);
 // The GOST B blocks the profile measures without limits, with the base's limits its own
 // in_run_blocks_s dropped (load_profile_table's `dropped_limits`); "" when every block has
 // limits. A run prints it: those values are UNSET, never FAIL.

@@ -204,6 +204,11 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_TRUE(slower["settling_time_s"].is_null());
   EXPECT_EQ(slower["step_window_s"], 409.6);
   EXPECT_GT(slower["settling_time_at_least_s"].get<double>(), 204.8);  // the bound kept (a re-test)
+  // No filter is applied by its preset and `filter-off`, said as the others' sections are.
+  ASSERT_EQ(run({"filter", "show", "--filter", "none"}, d + "/none"), 0) << slurp(d + "/none.stderr");
+  EXPECT_NE(slurp(d + "/none.stdout").find("to use it in a profile:\n[filter]\npreset = \"none\"\n"), std::string::npos)
+      << slurp(d + "/none.stdout");
+  EXPECT_NE(slurp(d + "/none.stdout").find("\nrig dut --can IFACE filter-off\n"), std::string::npos);
   // `filter select` over sub-Hz cut-offs: its RMS window (1 s) is shorter than their settling, and
   // the table says so (a 24 s filter ranked first on an RMS of 0, a re-test); the range stops at
   // --fc-max (ten cut-offs past a max of 1e-9 Hz were tried).
@@ -220,6 +225,8 @@ TEST(RigCli, HelpOnEverySubcommand) {
                 .find("(the slowest, butter4@0.03: 36.3525 s); give --seconds 364 or more (ten times the slowest's)"),
             std::string::npos)
       << slurp(d + "/sel-slow.stdout");
+  for (const auto& k : nlohmann::json::parse(slurp(d + "/sel-slow.json"))["candidates"])  // the step each was read from
+    EXPECT_GE(k["step_window_s"].get<double>(), 0.05) << k;
   // On a recording, the advice is a longer recording (it read "... long would" and stopped).
   {
     std::ofstream rec(d + "/rec.txt");
@@ -2849,8 +2856,8 @@ TEST(RigCli, HistoryWithAMistypedDbIsAnErrorAndCreatesNothing) {
   // --limit N is the newest N runs, N >= 1: 0 listed every run, -1 printed a 300-digit bound.
   for (const char* n : {"0", "-1"}) {  // (2147483648: "too large", AWholeNumberPastItsRangeIsTooLarge)
     EXPECT_EQ(run({"history", "--db", "sqlite:" + typo, "--limit", n}, d + "/lim"), 2) << n;
-    EXPECT_NE(slurp(d + "/lim.stderr").find(std::string("--limit: ") + n + ": must be a decimal whole number in [1, "
-                                                                             "2147483647] (no sign, no leading zero)"),
+    EXPECT_NE(slurp(d + "/lim.stderr").find(std::string("--limit: '") + n + "': must be a number of runs in [1, "
+                                                                             "2147483647] (decimal, no sign, no leading zero)"),
               std::string::npos)
         << slurp(d + "/lim.stderr");
   }
@@ -2902,6 +2909,12 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
       << err;
   EXPECT_EQ(err.find("not a database rig can open"), std::string::npos) << err;
   EXPECT_NE(err.find("try again once it is done (a new run may also run with --no-history"), std::string::npos) << err;
+  // The dry run's plan is printed all the same, the lock noted on its history line and said after it.
+  const std::string plan = slurp(d + "/io.stdout");
+  EXPECT_NE(plan.find("rig run --dry-run: profile 'ci'"), std::string::npos) << plan;
+  EXPECT_NE(plan.find("History: sqlite:" + db + " (locked by another process now: below)\n"), std::string::npos) << plan;
+  EXPECT_NE(plan.find("Estimated duration"), std::string::npos) << plan;
+  EXPECT_NE(err.find("(a run started now would stop here, before anything opens)"), std::string::npos) << err;
   // Said while it waits, not only at the end (a `rig history` sat silent 10 s: a re-test).
   EXPECT_NE(err.find("rig: sqlite:" + db + " is locked by another process (a write or a backup holding it): waiting up "
                      "to 10 s\n"),
@@ -5272,11 +5285,11 @@ TEST(RigCli, AWholeNumberPastItsRangeIsTooLarge) {
   const std::string huge = "99999999999999999999999";
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"history", "--db", d + "/h.sqlite", "--endings", huge},
-       "--endings: " + huge + " is too large: a run id is at most 9223372036854775807"},
+       "--endings: '" + huge + "' is too large: a run id is at most 9223372036854775807"},
       {{"history", "--db", d + "/h.sqlite", "--limit", "2147483648"},
-       "--limit: 2147483648 is too large: a number of runs is at most 2147483647"},
+       "--limit: '2147483648' is too large: a number of runs is at most 2147483647"},
       {{"history", "--db", d + "/h.sqlite", "--endings", "9223372036854775808"},
-       "--endings: 9223372036854775808 is too large: a run id is at most 9223372036854775807"},
+       "--endings: '9223372036854775808' is too large: a run id is at most 9223372036854775807"},
       {{"capture", "import", d + "/none.log", "--from-line", huge},
        "--from-line: '" + huge + "' is too large: a line number is at most 18446744073709551615"},
       {{"filter", "select", "--top", huge}, "--top: '" + huge + "' is too large: a number of rows is at most"}};
