@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
+#include <csignal>
 #include <cerrno>
 #include <cstring>
 #include <cmath>
@@ -104,6 +106,30 @@ std::string iso8601(double t_s) {
   char buf[40];
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
+}
+
+// What an import killed outright (SIGKILL, a power cut) left beside --out: OUT.part-PID whose
+// process is no longer running. Not a capture (it stops mid-record); said, so that a technician
+// removes it, and not removed here: the name is all that says whose it is.
+void note_left_partials(const std::string& out) {
+  namespace fs = std::filesystem;
+  const fs::path p(out);
+  const std::string prefix = p.filename().string() + ".part-";
+  std::error_code ec;
+  for (fs::directory_iterator it(p.has_parent_path() ? p.parent_path() : fs::path("."), ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    pid_t pid = 0;
+    const char* const last = name.data() + name.size();
+    const auto [at, err] = std::from_chars(name.data() + prefix.size(), last, pid);
+    if (err != std::errc() || at != last || pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;  // running (EPERM: another account's process)
+    std::fprintf(stderr,
+                 "rig capture import: %s is left from an import that did not finish (its process %d is not "
+                 "running): a partial file, not a capture; remove it\n",
+                 it->path().c_str(), static_cast<int>(pid));
+  }
 }
 
 // The capture is written under a staged name beside --out (OUT.part-PID, this process's own: two
@@ -262,6 +288,7 @@ int cmd_import(const ImportArgs& a) {
              {"stream", {{"counter", sp.counter}, {"counter_bits", decoder->counter_bits()}, {"x", sp.x}, {"y", sp.y},
                          {"samples_per_frame", sp.samples_per_frame}}}};
   if (!stream_iface.empty()) h.extra["iface"] = stream_iface;  // lines without an interface column: none
+  note_left_partials(a.out);
   StagedCapture staged(a.out);
   capture::Writer w(staged.path(), h);
 

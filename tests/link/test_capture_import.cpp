@@ -514,6 +514,32 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
   EXPECT_NE(slurp(dir() / "cut-again.out").find("20000 samples"), std::string::npos) << slurp(dir() / "cut-again.out");
   EXPECT_TRUE(fs::exists(cap));
   EXPECT_FALSE(staged_left(cap));
+  // Killed outright (SIGKILL), an import leaves OUT.part-PID; the next import to that name says
+  // it is a partial file and leaves it (a re-test: it sat there unnamed), and one running is not named.
+  const fs::path killed = dir() / "killed.rigcap";
+  const rig::test::Child fourth = import_long(killed, "killed");
+  const std::string staged4 = killed.string() + ".part-" + std::to_string(fourth.pid);
+  ASSERT_TRUE(rig::test::wait_for_file(fourth, staged4));
+  ::kill(fourth.pid, SIGKILL);
+  rig::test::wait_exit(fourth);
+  const rig::test::Child running = import_long(killed, "running");
+  ASSERT_TRUE(rig::test::wait_for_file(running, killed.string() + ".part-" + std::to_string(running.pid)));
+  ASSERT_EQ(run_rig("capture import " + (dir() / "cut.log").string() + " --hardware " + (dir() / "hw-cut.toml").string() +
+                        " --out " + killed.string(),
+                    "after-kill"),
+            0)
+      << slurp(dir() / "after-kill.err");
+  ::kill(running.pid, SIGTERM);
+  rig::test::wait_exit(running);
+  const std::string after_kill = slurp(dir() / "after-kill.err");
+  EXPECT_NE(after_kill.find("rig capture import: " + staged4 + " is left from an import that did not finish (its "
+                            "process " + std::to_string(fourth.pid) + " is not running): a partial file, not a capture; "
+                            "remove it\n"),
+            std::string::npos)
+      << after_kill;
+  EXPECT_EQ(after_kill.find(".part-" + std::to_string(running.pid)), std::string::npos) << after_kill;
+  EXPECT_TRUE(fs::exists(staged4));
+  EXPECT_TRUE(fs::exists(killed));
   // A file that appears under --out during the import (another import to the same name, which
   // writes its own staged file: they shared OUT.part, and one set the other's aside or unlinked it,
   // a code review) is never replaced: this capture stays staged, named, exit 2.
