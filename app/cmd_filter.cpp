@@ -147,6 +147,16 @@ std::vector<std::string> order_items(const std::string& text) {
   return items;
 }
 
+// The paper's W_f(z) is its MCU's at 10 kHz: at another loop rate the same coefficients are
+// another filter (its poles, in Hz, move with the rate), which "paper" would otherwise stand for.
+std::string paper_rate_note(double loop_rate_hz) {
+  const double paper_hz = design::paper_wf().rate_hz;
+  if (loop_rate_hz == paper_hz) return "";
+  return fmt::format("note: the paper's W_f(z) coefficients are its {:g} Hz loop's; this DUT's loop runs at {:g} Hz, "
+                     "where they are another filter (its corner moves with the rate): the figures are of that filter\n",
+                     paper_hz, loop_rate_hz);
+}
+
 struct SelectArgs {
   double f_req = 500, tol = 5, fc_min = 300, fc_max = 1500, fc_step = 50, seconds = 60;
   std::vector<int> orders{1, 2, 3, 4};
@@ -196,7 +206,7 @@ void run_select(SelectArgs a) {
               << "\n";
   for (const auto& k : c)
     if (k.name == "paper")
-      std::cout << "\nthe paper's W_f(z): rank " << k.rank << " of " << c.size() << "\n";
+      std::cout << "\nthe paper's W_f(z): rank " << k.rank << " of " << c.size() << "\n" << paper_rate_note(rate_hz);
   // The RMS column is over a window: a candidate whose own step takes a good part of it reads its
   // start-up (a sub-Hz filter over 1 s read RMS 0 and ranked first, a review). A lower bound
   // counts only where it already passes a tenth of the window; the advice only where it can be
@@ -248,7 +258,8 @@ void run_show(const ShowArgs& a) {
             << "closed-loop bandwidth (0.5 level): " << lf.bandwidth_0p5_hz << " Hz\n"
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"
             << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << settling_text(lf)
-            << "\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
+            << "\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n"
+            << (a.filter == "paper" ? paper_rate_note(p.loop.loop_rate_hz) : std::string());
   // How to apply it: a technician could not use the filter `select` ranks first, as neither a
   // profile nor `rig dut set-filter` takes the name butterN@FC (a review). Every digit, so the
   // DUT gets the sections shown: the shortest text that reads back to each (17 digits printed the

@@ -204,6 +204,15 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_TRUE(slower["settling_time_s"].is_null());
   EXPECT_EQ(slower["step_window_s"], 409.6);
   EXPECT_GT(slower["settling_time_at_least_s"].get<double>(), 204.8);  // the bound kept (a re-test)
+  // The paper's coefficients at another loop rate are another filter, and "paper" says so.
+  std::ofstream(d + "/fast.toml") << "[loop]\nloop_rate_hz = 20000\n";
+  ASSERT_EQ(run({"filter", "show", "--dut", d + "/fast.toml"}, d + "/fast"), 0) << slurp(d + "/fast.stderr");
+  EXPECT_NE(slurp(d + "/fast.stdout").find("note: the paper's W_f(z) coefficients are its 10000 Hz loop's; this DUT's "
+                                           "loop runs at 20000 Hz, where they are another filter"),
+            std::string::npos)
+      << slurp(d + "/fast.stdout");
+  ASSERT_EQ(run({"filter", "show"}, d + "/ten"), 0);
+  EXPECT_EQ(slurp(d + "/ten.stdout").find("note:"), std::string::npos) << slurp(d + "/ten.stdout");
   // No filter is applied by its preset and `filter-off`, said as the others' sections are.
   ASSERT_EQ(run({"filter", "show", "--filter", "none"}, d + "/none"), 0) << slurp(d + "/none.stderr");
   EXPECT_NE(slurp(d + "/none.stdout").find("to use it in a profile:\n[filter]\npreset = \"none\"\n"), std::string::npos)
