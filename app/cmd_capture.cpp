@@ -108,14 +108,17 @@ std::string iso8601(double t_s) {
   return buf;
 }
 
-// What an import killed outright (SIGKILL, a power cut) left beside --out: OUT.part-PID whose
-// process is no longer running. Not a capture (it stops mid-record); said, so that a technician
-// removes it, and not removed here: the name is all that says whose it is.
-void note_left_partials(const std::string& out) {
+// What an earlier import left beside --out: OUT.part-PID whose process no longer runs here. A
+// capture it kept there (--out taken meanwhile, or the rename refused: "kept as") is whole; one
+// killed outright (SIGKILL, a power cut) is a partial file: each said as what it is, neither
+// removed (the name is all that says whose it is).
+void note_left_staged(const std::string& out) {
   namespace fs = std::filesystem;
   const fs::path p(out);
   const std::string prefix = p.filename().string() + ".part-";
   std::error_code ec;
+  std::string self(4096, '\0');
+  self.resize(static_cast<std::size_t>(std::max<ssize_t>(::readlink("/proc/self/exe", self.data(), self.size()), 0)));
   for (fs::directory_iterator it(p.has_parent_path() ? p.parent_path() : fs::path("."), ec), end; !ec && it != end;
        it.increment(ec)) {
     const std::string name = it->path().filename().string();
@@ -124,11 +127,22 @@ void note_left_partials(const std::string& out) {
     const char* const last = name.data() + name.size();
     const auto [at, err] = std::from_chars(name.data() + prefix.size(), last, pid);
     if (err != std::errc() || at != last || pid <= 0 || pid == ::getpid()) continue;
-    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;  // running (EPERM: another account's process)
-    std::fprintf(stderr,
-                 "rig capture import: %s is left from an import that did not finish (its process %d is not "
-                 "running): a partial file, not a capture; remove it\n",
-                 it->path().c_str(), static_cast<int>(pid));
+    if (::kill(pid, 0) == 0 || errno == EPERM) {  // a process of that number runs: this program, or one reusing it
+      std::string exe(4096, '\0');
+      const ssize_t len = ::readlink(("/proc/" + std::to_string(pid) + "/exe").c_str(), exe.data(), exe.size());
+      if (len < 0 || self.empty() || exe.substr(0, static_cast<std::size_t>(len)) == self) continue;
+    }
+    const std::string staged = out + ".part-" + std::to_string(pid);  // as StagedCapture names it
+    if (capture::ends_closed(staged))
+      std::fprintf(stderr,
+                   "rig capture import: %s is a whole capture an earlier import kept under its staged name (its "
+                   "process %d no longer runs): rename it to use it\n",
+                   staged.c_str(), static_cast<int>(pid));
+    else
+      std::fprintf(stderr,
+                   "rig capture import: %s is left from an import that did not finish (its process %d no longer "
+                   "runs): a partial file, not a capture; remove it unless an import on another machine writes it\n",
+                   staged.c_str(), static_cast<int>(pid));
   }
 }
 
@@ -288,7 +302,7 @@ int cmd_import(const ImportArgs& a) {
              {"stream", {{"counter", sp.counter}, {"counter_bits", decoder->counter_bits()}, {"x", sp.x}, {"y", sp.y},
                          {"samples_per_frame", sp.samples_per_frame}}}};
   if (!stream_iface.empty()) h.extra["iface"] = stream_iface;  // lines without an interface column: none
-  note_left_partials(a.out);
+  note_left_staged(a.out);
   StagedCapture staged(a.out);
   capture::Writer w(staged.path(), h);
 

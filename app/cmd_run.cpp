@@ -738,15 +738,13 @@ void check_history_can_record(const std::string& url, bool resume) {
       throw ConfigError(shown + ": its folder " + folder.string() + " takes no new file (SQLite's journal goes there)");
     try {
       history::open_db(url, history::Access::ReadOnly)->has_table("runs");  // reads its header
-    } catch (const ConfigError& e) {
+    } catch (const history::LockedError& e) {
       // A lock held past the busy timeout is not a damaged file (a review: it read "not a
       // database rig can open"): db.cpp's words for it (how long, read or write), named as here.
-      const std::string what = e.what();
-      if (const auto at = what.find(history::kLockedByAnother); at != std::string::npos)
-        throw ConfigError(shown + ": " + what.substr(at) +
-                          (resume ? std::string()
-                                  : " (a new run may also run with --no-history and be recorded later with `rig "
-                                    "history --record DIR`)"));
+      throw history::LockedError(shown, e.reason + (resume ? std::string()
+                                                           : " (a new run may also run with --no-history and be "
+                                                             "recorded later with `rig history --record DIR`)"));
+    } catch (const ConfigError& e) {
       throw ConfigError(shown + ": not a database rig can open (" + e.what() + ")");
     }
     return;
@@ -1127,11 +1125,23 @@ void refuse_non_files(const std::string& dir, bool resuming) {
 // Whatever its checkpoint holds: a checkpoint of an earlier version can list fewer phases than
 // today's procedure has, and its run is complete all the same. For an unsealed folder (a sealed
 // one's final seal states the verdict, and a passport it does not vouch for is not read).
+// The passport is held to its run first, as `rig report` and `history --record` hold it: another
+// run's PASS copied in, or an ABORTED one edited to PASS, was said to "stand" (an integrator's
+// review), while report and history refused it.
 void refuse_a_final_verdict(const std::string& dir) {
   const std::string v = verdict_of(dir);
-  if (!v.empty())
-    throw ConfigError(dir + ": the run is complete (its passport says " + v +
-                      "): nothing to resume; its passport stands");
+  if (v.empty()) return;
+  const std::string refused = "; its " + v + " is not this run's verdict: nothing resumed past it, nothing done (the "
+                              "folder is as it was; a new run measures the DUT again)";
+  std::string why;
+  try {
+    why = passport_unlike_its_folder(dir, report::read_passport(dir));
+  } catch (const ConfigError& e) {  // the reader's own checks, which name the file
+    throw ConfigError(e.what() + refused);
+  }
+  if (!why.empty())
+    throw ConfigError(dir + "/passport.json: " + why + ": the passport was changed after its run wrote it" + refused);
+  throw ConfigError(dir + ": the run is complete (its passport says " + v + "): nothing to resume; its passport stands");
 }
 
 // The resume's history elsewhere (RunArgs::history_left_behind) is said also under --quiet, which
@@ -1667,9 +1677,11 @@ int do_run(RunArgs a) {
         "($RIG_HISTORY, the rig config or the default here): {} keeps the earlier ending; give --db with that URL "
         "(its password too) to record there",
         a.run_history_db, history::mask_password(history_url(a, hw)), a.run_history_db);
-  // A dry run's history held locked by another process now: said after the plan, not in its
-  // place (a technician's re-test: a resume's dry run waited 10 s and printed only the lock).
-  std::string history_locked;
+  // A dry run's history held locked by another process now: said, and the dry run goes on to its
+  // plan (a technician's re-test: a resume's dry run waited 10 s and printed only the lock); it
+  // exits 2 as the run would, whatever else it finds (a code review: a later error replaced the
+  // lock, and a resume's unfinished ending exited 0).
+  bool history_locked = false;
   if (!a.no_history) {
     const std::string url = history_url(a, hw);
     try {
@@ -1686,12 +1698,15 @@ int do_run(RunArgs a) {
       else if (a.db_from_run_json)
         why += " (the database the run started with, from " + a.resume +
                "/run.json; --db URL with --resume records into another, --no-history into none)";
-      if (!a.dry_run || why.find(history::kLockedByAnother) == std::string::npos) throw ConfigError(why);
-      history_locked = why;
+      if (!a.dry_run || !dynamic_cast<const history::LockedError*>(&e)) throw ConfigError(why);
+      history_locked = true;
+      std::cerr << "rig: configuration error: " << why << " (the dry run's plan follows; a "
+                << (a.resume.empty() ? "run" : "resume") << " started now would stop here, before anything opens)\n";
     }
   }
   if (!a.resume.empty()) {
-    if (const auto rc = finish_pending_ending(a, hw, key, final_seal, values)) return *rc;
+    if (const auto rc = finish_pending_ending(a, hw, key, final_seal, values))
+      return a.dry_run && history_locked ? kExitUsage : *rc;
     refuse_to_drop_an_interrupted_ending(a);
   }
   if (a.dry_run) {
@@ -1767,7 +1782,7 @@ int do_run(RunArgs a) {
                     : " (not there yet: the run creates it and the folder " + file->missing_folder +
                           ", the built-in default's)";
       std::cout << "History: " << history::mask_password(url) << fresh
-                << (history_locked.empty() ? "" : " (locked by another process now: below)") << "\n";
+                << (history_locked ? " (locked by another process now: said above)" : "") << "\n";
     }
     // What a resume leaves in the run's own database, said before it runs as the resume will say it.
     if (!a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
@@ -1778,11 +1793,7 @@ int do_run(RunArgs a) {
                              "table's homing, which depends on where the table stands) and any retries\n",
                              completed.empty() ? "" : " of what is left", TerminalView::hms(total),
                              a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
-    std::cout.flush();
-    // The plan is what a run would do; a run started now would stop at the lock before anything opens.
-    if (!history_locked.empty())
-      throw ConfigError(history_locked + " (a run started now would stop here, before anything opens)");
-    return kExitPass;
+    return history_locked ? kExitUsage : kExitPass;
   }
   // The table next, before a folder is made: one process at a time commands a station's table,
   // held to the run's end (app/table_lock.hpp; a `rig table move` from another terminal turned

@@ -149,6 +149,15 @@ void Writer::flush() {
   pending_.clear();
 }
 
+bool ends_closed(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  unsigned char end[16];
+  const bool read = std::fseek(f, -16, SEEK_END) == 0 && std::fread(end, 1, sizeof end, f) == sizeof end;
+  std::fclose(f);
+  return read && get_u32(end) == kEndMagic && crc(end, 12) == get_u32(end + 12);
+}
+
 void Writer::close() {
   if (fd_ < 0) return;
   flush();

@@ -128,6 +128,10 @@ class Reader {
   uint32_t prev_count_ = 0, prev_crc_ = 0;  // the last good block's, to notice a block written twice
 };
 
+// The file ends with a valid end marker (its writer closed it); no block is read. False for a
+// file that cannot be read.
+bool ends_closed(const std::string& path);
+
 // Whole file into memory.
 struct Loaded {
   Header header;

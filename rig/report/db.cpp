@@ -200,10 +200,11 @@ class SqliteDb final : public Db {
       const bool gave_up = lock_wait_.gave_up_after >= std::chrono::steady_clock::duration::zero();
       const auto waited = std::chrono::duration_cast<std::chrono::seconds>(lock_wait_.gave_up_after).count();
       lock_wait_.gave_up_after = std::chrono::steady_clock::duration(-1);
-      throw ConfigError(where_ + ": " + kLockedByAnother +
-                        (waited > 0 ? " for more than " + std::to_string(waited) + " s" : std::string()) +
-                        " (a write or a backup holding it): " + (gave_up ? "gave up waiting to " : "could not ") +
-                        (word == "SELECT" || word == "PRAGMA" ? "read it" : "write it") + "; try again once it is done");
+      throw LockedError(where_, std::string(kLockedByAnother) +
+                                    (waited > 0 ? " for more than " + std::to_string(waited) + " s" : std::string()) +
+                                    " (a write or a backup holding it): " + (gave_up ? "gave up waiting to " : "could not ") +
+                                    (word == "SELECT" || word == "PRAGMA" ? "read it" : "write it") +
+                                    "; try again once it is done");
     }
     throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite3_errmsg(db_));
   }

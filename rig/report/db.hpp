@@ -11,6 +11,7 @@
 #include <variant>
 #include <vector>
 
+#include "rig/core/errors.hpp"
 #include "rig/report/db_url.hpp"
 
 namespace rig::history {
@@ -83,6 +84,13 @@ void set_lock_wait_notice(std::function<void(const std::string& where, int limit
 inline constexpr int kLockWaitNoticeMs = 1000;
 // The words a lock held past the wait is reported with (Db's errors begin "<where>: " then these).
 inline constexpr const char* kLockedByAnother = "locked by another process";
+// A lock held past the wait: what() is "<where>: <reason>", `reason` beginning with
+// kLockedByAnother, so a caller names the database its own way and keeps the words (a path that
+// holds those words is not taken for a lock: a code review).
+struct LockedError : ConfigError {
+  LockedError(const std::string& where, std::string why) : ConfigError(where + ": " + why), reason(std::move(why)) {}
+  std::string reason;
+};
 
 
 // Keeps a transaction open until commit(); rolls back if destroyed before.

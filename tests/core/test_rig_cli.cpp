@@ -2486,6 +2486,16 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   // (c) Nothing pending: a complete run's resume is refused as before.
   EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet"}, d + "/io5"), 2);
   EXPECT_NE(slurp(d + "/io5.stderr").find("nothing to resume; its passport stands"), std::string::npos);
+  // (d) Another run's passport put into a stopped run's folder is not said to stand: held to its
+  // run as `rig report` holds it, refused, the folder as it was (an integrator's review).
+  fs::copy(d + "/s", d + "/s-foreign", fs::copy_options::recursive);
+  fs::copy_file(d + "/r/passport.json", d + "/s-foreign/passport.json", fs::copy_options::overwrite_existing);
+  EXPECT_EQ(run({"run", "--resume", d + "/s-foreign", "--yes", "--quiet"}, d + "/io6"), 2);
+  const std::string foreign = slurp(d + "/io6.stderr");
+  EXPECT_NE(foreign.find(d + "/s-foreign/passport.json: "), std::string::npos) << foreign;
+  EXPECT_NE(foreign.find("is not this run's verdict: nothing resumed past it, nothing done"), std::string::npos) << foreign;
+  EXPECT_EQ(foreign.find("its passport stands"), std::string::npos) << foreign;
+  EXPECT_EQ(slurp(d + "/s-foreign/passport.json"), slurp(d + "/r/passport.json"));
   // The order itself, as the kernel saw it (strace, scripts/setup; '?': a syscall an
   // architecture lacks is no error): report.html and the list of what is left before passport.json
   // is put in place, junit.xml right after it, the list rewritten without `junit`, then the history
@@ -2887,6 +2897,15 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
                              "open(sys.argv[2],'w').write('1')\n"
                              "time.sleep(40)\n";
   std::ofstream(d + "/lock.py") << script;
+  // A run stopped half-way, and one complete whose ending's history row is still owed.
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/int", "--inject", "sigterm@100"},
+                d + "/int-io"),
+            3)
+      << slurp(d + "/int-io.stderr");
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/done"}, d + "/done-io"), 0)
+      << slurp(d + "/done-io.stderr");
+  std::ofstream(d + "/done/.ending-pending") << "history\n";
+  std::ofstream(d + "/afile") << "a file where --out's folder would be";
   const pid_t locker = ::fork();
   ASSERT_GE(locker, 0);
   if (locker == 0) {
@@ -2895,9 +2914,20 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
   }
   for (int i = 0; i < 200 && !fs::exists(flag); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   const bool locked = fs::exists(flag);
+  // Beside it, at the same time: the dry runs of a resume, of a complete run's unfinished ending,
+  // and of a new run into a folder under a file.
+  std::map<std::string, int> dry;
+  std::vector<std::pair<std::string, Child>> beside;
+  if (locked)
+    for (const auto& [name, args] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+             {"res", {"run", "--resume", d + "/int", "--yes", "--dry-run", "--db", "sqlite:" + db}},
+             {"pend", {"run", "--resume", d + "/done", "--yes", "--dry-run", "--db", "sqlite:" + db}},
+             {"file", {"run", "--profile", "ci", "--yes", "--db", "sqlite:" + db, "--out", d + "/afile/x", "--dry-run"}}})
+      beside.emplace_back(name, spawn(args, d + "/" + name));
   const int rc =
       locked ? run({"run", "--profile", "ci", "--yes", "--db", "sqlite:" + db, "--out", d + "/r", "--dry-run"}, d + "/io")
              : -1;
+  for (auto& [name, child] : beside) dry[name] = wait_exit(child);
   // A stop while it waits ends the wait 2 s after it began, exit 3 (it held the exit 10 s, a review).
   int stopped_rc = -1;
   double stopped_after = 0;
@@ -2918,12 +2948,32 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
       << err;
   EXPECT_EQ(err.find("not a database rig can open"), std::string::npos) << err;
   EXPECT_NE(err.find("try again once it is done (a new run may also run with --no-history"), std::string::npos) << err;
-  // The dry run's plan is printed all the same, the lock noted on its history line and said after it.
+  // The dry run's plan is printed all the same, the lock said before it and noted on its history line.
   const std::string plan = slurp(d + "/io.stdout");
   EXPECT_NE(plan.find("rig run --dry-run: profile 'ci'"), std::string::npos) << plan;
-  EXPECT_NE(plan.find("History: sqlite:" + db + " (locked by another process now: below)\n"), std::string::npos) << plan;
+  EXPECT_NE(plan.find("History: sqlite:" + db + " (locked by another process now: said above)\n"), std::string::npos)
+      << plan;
   EXPECT_NE(plan.find("Estimated duration"), std::string::npos) << plan;
-  EXPECT_NE(err.find("(a run started now would stop here, before anything opens)"), std::string::npos) << err;
+  EXPECT_NE(err.find("(the dry run's plan follows; a run started now would stop here, before anything opens)"),
+            std::string::npos)
+      << err;
+  // A resume's dry run likewise, and one whose run is complete with its ending unfinished (it
+  // exited 0 with the lock, a code review); a later finding beside the lock does not hide it
+  // (an --out under a file: both said, exit 2).
+  for (const auto& [name, says] : std::vector<std::pair<std::string, std::string>>{
+           {"res", "Resume: "}, {"pend", "its ending stopped before it finished"}, {"file", ""}}) {
+    const std::string o = slurp(d + "/" + name + ".stdout"), e = slurp(d + "/" + name + ".stderr");
+    EXPECT_EQ(dry[name], 2) << name << e;
+    EXPECT_NE(e.find("history database " + db + ": locked by another process for more than 10 s"), std::string::npos)
+        << name << e;
+    EXPECT_NE(o.find(says), std::string::npos) << name << o;
+    if (name == "res") {
+      EXPECT_NE(e.find("a resume started now would stop here"), std::string::npos) << e;
+    }
+    if (name == "file") {
+      EXPECT_NE(e.find("not a directory"), std::string::npos) << e;
+    }
+  }
   // Said while it waits, not only at the end (a `rig history` sat silent 10 s: a re-test).
   EXPECT_NE(err.find("rig: sqlite:" + db + " is locked by another process (a write or a backup holding it): waiting up "
                      "to 10 s\n"),

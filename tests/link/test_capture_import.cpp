@@ -533,8 +533,8 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
   rig::test::wait_exit(running);
   const std::string after_kill = slurp(dir() / "after-kill.err");
   EXPECT_NE(after_kill.find("rig capture import: " + staged4 + " is left from an import that did not finish (its "
-                            "process " + std::to_string(fourth.pid) + " is not running): a partial file, not a capture; "
-                            "remove it\n"),
+                            "process " + std::to_string(fourth.pid) + " no longer runs): a partial file, not a capture; "
+                            "remove it unless an import on another machine writes it\n"),
             std::string::npos)
       << after_kill;
   EXPECT_EQ(after_kill.find(".part-" + std::to_string(running.pid)), std::string::npos) << after_kill;
@@ -555,6 +555,20 @@ TEST(CaptureImport, AnImportThatDoesNotFinishLeavesNoCapture) {
       << slurp(dir() / "twice.stderr");
   EXPECT_EQ(slurp(twice), "another import's capture");
   EXPECT_GT(fs::file_size(staged2), 1000000u);
+  // That kept capture is whole: the next import to that name says so, not "partial" (a code
+  // review: a technician told to remove it would have lost the capture).
+  fs::remove(twice);
+  ASSERT_EQ(run_rig("capture import " + (dir() / "cut.log").string() + " --hardware " + (dir() / "hw-cut.toml").string() +
+                        " --out " + twice.string(),
+                    "after-kept"),
+            0)
+      << slurp(dir() / "after-kept.err");
+  EXPECT_NE(slurp(dir() / "after-kept.err")
+                .find("rig capture import: " + staged2 + " is a whole capture an earlier import kept under its staged "
+                      "name (its process " + std::to_string(second.pid) + " no longer runs): rename it to use it\n"),
+            std::string::npos)
+      << slurp(dir() / "after-kept.err");
+  EXPECT_EQ(slurp(dir() / "after-kept.err").find("partial"), std::string::npos) << slurp(dir() / "after-kept.err");
   // --out's folder removed, or renamed, during the import: said so, exit 2, and nothing left in
   // the folder's new place ("kept as" named a path that was gone, and a renamed folder kept the
   // staged file while the message said "nothing kept": reviews).
