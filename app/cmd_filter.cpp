@@ -4,6 +4,7 @@
 //                                   settling time -> min from the DUT's closed-loop model,
 //                                   RMS -> min on emulated output (or a recording of x).
 //   rig filter show --filter NAME   closed-loop figures and curves with one filter.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -152,8 +153,8 @@ std::vector<std::string> order_items(const std::string& text) {
 std::string paper_rate_note(double loop_rate_hz) {
   const double paper_hz = design::paper_wf().rate_hz;
   if (loop_rate_hz == paper_hz) return "";
-  return fmt::format("note: the paper's W_f(z) coefficients are its {:g} Hz loop's; this DUT's loop runs at {:g} Hz, "
-                     "where they are another filter (its corner moves with the rate): the figures are of that filter\n",
+  return fmt::format("the paper's W_f(z) coefficients are its {} Hz loop's; this DUT's loop runs at {} Hz, where they "
+                     "are another filter (its corner moves with the rate): the figures are of that filter",
                      paper_hz, loop_rate_hz);
 }
 
@@ -204,9 +205,22 @@ void run_select(SelectArgs a) {
               << std::scientific << std::setprecision(4)
               << std::setw(14) << c[i].rms_g << "  " << (c[i].meets_band ? "yes" : "no") << std::defaultfloat
               << "\n";
+  // What the table cannot say, in the text and in the JSON alike (a re-test: a script saw none).
+  std::vector<std::string> notes;
+  const auto note = [&](const std::string& text) {
+    std::cout << "\nnote: " << text << "\n";
+    notes.push_back(text);
+  };
+  // Rank 1 of a table with no candidate in the band read as a choice (a re-test).
+  if (std::none_of(c.begin(), c.end(), [](const plant::FilterCandidate& k) { return k.meets_band; }))
+    note(fmt::format("no candidate is in the band (|f_0.5 - {} Hz| <= {} %): the ranks are by the distance from it, "
+                     "none is a choice; try other cut-offs (--fc-min, --fc-max, --fc-step), --orders or --tolerance",
+                     a.f_req, a.tol));
   for (const auto& k : c)
-    if (k.name == "paper")
-      std::cout << "\nthe paper's W_f(z): rank " << k.rank << " of " << c.size() << "\n" << paper_rate_note(rate_hz);
+    if (k.name == "paper") {
+      std::cout << "\nthe paper's W_f(z): rank " << k.rank << " of " << c.size() << "\n";
+      if (const std::string n = paper_rate_note(rate_hz); !n.empty()) note(n);
+    }
   // The RMS column is over a window: a candidate whose own step takes a good part of it reads its
   // start-up (a sub-Hz filter over 1 s read RMS 0 and ranked first, a review). A lower bound
   // counts only where it already passes a tenth of the window; the advice only where it can be
@@ -229,14 +243,14 @@ void run_select(SelectArgs a) {
             : fmt::format("ten times the slowest's is past --seconds' {:g} s: a recording that long (--recorded) "
                           "would rank them",
                           kMaxSelectSeconds);
-    std::cout << fmt::format("\nnote: {} candidate(s), {} of them in the band, settle in more than a tenth of the RMS "
-                             "window ({:g} s of {}): their RMS is of the filter's start-up as much as of the noise "
-                             "(the slowest, {}: {}{:g} s); {}\n",
-                             slow, in_band, window_s, a.recorded.empty() ? "emulated output" : "the recording",
-                             slowest->name, slowest->settled ? "" : "at least ", slowest->settling_time_s, advice);
+    note(fmt::format("{} candidate(s), {} of them in the band, settle in more than a tenth of the RMS window ({:g} s "
+                     "of {}): their RMS is of the filter's start-up as much as of the noise (the slowest, {}: {}{:g} "
+                     "s); {}",
+                     slow, in_band, window_s, a.recorded.empty() ? "emulated output" : "the recording", slowest->name,
+                     slowest->settled ? "" : "at least ", slowest->settling_time_s, advice));
   }
   if (!a.json_out.empty()) {
-    json j = {{"f_req_hz", a.f_req}, {"band_tol_pct", a.tol}, {"candidates", json::array()}};
+    json j = {{"f_req_hz", a.f_req}, {"band_tol_pct", a.tol}, {"candidates", json::array()}, {"notes", notes}};
     for (const auto& k : c) j["candidates"].push_back(candidate_json(k));
     write_json(a.json_out, j, "rig filter select --json");
   }
@@ -259,7 +273,12 @@ void run_show(const ShowArgs& a) {
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"
             << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << settling_text(lf)
             << "\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n"
-            << (a.filter == "paper" ? paper_rate_note(p.loop.loop_rate_hz) : std::string());
+;
+  std::vector<std::string> notes;
+  if (const std::string n = a.filter == "paper" ? paper_rate_note(p.loop.loop_rate_hz) : ""; !n.empty()) {
+    std::cout << "note: " << n << "\n";
+    notes.push_back(n);
+  }
   // How to apply it: a technician could not use the filter `select` ranks first, as neither a
   // profile nor `rig dut set-filter` takes the name butterN@FC (a review). Every digit, so the
   // DUT gets the sections shown: the shortest text that reads back to each (17 digits printed the
@@ -297,6 +316,7 @@ void run_show(const ShowArgs& a) {
               {"sections", sections},  // [b0, b1, b2, a1, a2] each, H = (b0 + b1/z + b2/z^2)/(1 + a1/z + a2/z^2)
               {"rate_hz", f.rate_hz},
               {"enabled", f.enabled},
+              {"notes", notes},
               {"step", {{"t_s", lf.step_t_s}, {"x", lf.step_x}, {"y", lf.step_y}}},
               {"response", {{"f_hz", lf.freq_hz}, {"amp_x", lf.amp_x}, {"amp_y", lf.amp_y}}}};
     write_json(a.json_out, j, "rig filter show --json");

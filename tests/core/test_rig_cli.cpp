@@ -211,8 +211,24 @@ TEST(RigCli, HelpOnEverySubcommand) {
                                            "loop runs at 20000 Hz, where they are another filter"),
             std::string::npos)
       << slurp(d + "/fast.stdout");
-  ASSERT_EQ(run({"filter", "show"}, d + "/ten"), 0);
+  ASSERT_EQ(run({"filter", "show", "--dut", d + "/fast.toml", "--json", d + "/fast.json"}, d + "/fast"), 0);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/fast.json"))["notes"].size(), 1u);
+  ASSERT_EQ(run({"filter", "show", "--json", d + "/ten.json"}, d + "/ten"), 0);
   EXPECT_EQ(slurp(d + "/ten.stdout").find("note:"), std::string::npos) << slurp(d + "/ten.stdout");
+  EXPECT_TRUE(nlohmann::json::parse(slurp(d + "/ten.json"))["notes"].empty());
+  // select says it too, and, with no candidate in the band, that rank 1 is no choice (JSON: `notes`).
+  ASSERT_EQ(run({"filter", "select", "--dut", d + "/fast.toml", "--seconds", "1", "--orders", "2", "--fc-min", "400",
+                 "--fc-max", "600", "--fc-step", "100", "--json", d + "/fast-sel.json"},
+                d + "/fast-sel"),
+            0)
+      << slurp(d + "/fast-sel.stderr");
+  EXPECT_NE(slurp(d + "/fast-sel.stdout").find("\nnote: no candidate is in the band (|f_0.5 - 500 Hz| <= 5 %): the ranks "
+                                               "are by the distance from it, none is a choice"),
+            std::string::npos)
+      << slurp(d + "/fast-sel.stdout");
+  EXPECT_NE(slurp(d + "/fast-sel.stdout").find("\nnote: the paper's W_f(z) coefficients are its 10000 Hz loop's"),
+            std::string::npos);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/fast-sel.json"))["notes"].size(), 2u);
   // No filter is applied by its preset and `filter-off`, said as the others' sections are.
   ASSERT_EQ(run({"filter", "show", "--filter", "none"}, d + "/none"), 0) << slurp(d + "/none.stderr");
   EXPECT_NE(slurp(d + "/none.stdout").find("to use it in a profile:\n[filter]\npreset = \"none\"\n"), std::string::npos)
@@ -234,8 +250,14 @@ TEST(RigCli, HelpOnEverySubcommand) {
                 .find("(the slowest, butter4@0.03: 36.3525 s); give --seconds 364 or more (ten times the slowest's)"),
             std::string::npos)
       << slurp(d + "/sel-slow.stdout");
-  for (const auto& k : nlohmann::json::parse(slurp(d + "/sel-slow.json"))["candidates"])  // the step each was read from
+  // The step each was read from: one that settled did so in its first half, at 50 ms or longer.
+  for (const auto& k : nlohmann::json::parse(slurp(d + "/sel-slow.json"))["candidates"]) {
     EXPECT_GE(k["step_window_s"].get<double>(), 0.05) << k;
+    if (k["settled"] == true) {
+      EXPECT_GE(k["step_window_s"].get<double>(), 2 * k["settling_time_s"].get<double>()) << k;
+    }
+  }
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/sel-slow.json"))["notes"].size(), 1u);  // the slow ones'
   // On a recording, the advice is a longer recording (it read "... long would" and stopped).
   {
     std::ofstream rec(d + "/rec.txt");
