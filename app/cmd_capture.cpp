@@ -5,6 +5,7 @@
 // be read. `rig analyze CAPTURE --input capture` and the report then work on logs
 // recorded by can-utils or any tool writing that format.
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -108,17 +109,31 @@ std::string iso8601(double t_s) {
   return buf;
 }
 
-// What an earlier import left beside --out: OUT.part-PID whose process no longer runs here. A
-// capture it kept there (--out taken meanwhile, or the rename refused: "kept as") is whole; one
-// killed outright (SIGKILL, a power cut) is a partial file: each said as what it is, neither
-// removed (the name is all that says whose it is).
+// What an earlier import left beside --out: an OUT.part-PID no import writes now. A capture it
+// kept there (--out taken meanwhile, or the rename refused: "kept as") is whole; one killed
+// outright (SIGKILL, a power cut) is a partial file: each said as what it is, neither removed
+// (the name is all that says whose it is). An import holds its staged file locked (flock) while
+// it writes; a file is left over when no process of its number runs, or when one does that holds
+// no lock on it and is not a rig (its number reused). A rig of that number is taken as writing
+// it, whatever its executable's path says now (a reinstall renames it "... (deleted)": a code
+// review found a live import's file called partial).
+bool staged_is_written(const std::string& path, pid_t pid) {
+  if (::kill(pid, 0) != 0 && errno == ESRCH) return false;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return true;  // cannot tell: taken as written
+  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  if (held) return true;
+  std::ifstream comm("/proc/" + std::to_string(pid) + "/comm");
+  std::string name;
+  return !comm || !std::getline(comm, name) || name == "rig";
+}
+
 void note_left_staged(const std::string& out) {
   namespace fs = std::filesystem;
   const fs::path p(out);
   const std::string prefix = p.filename().string() + ".part-";
   std::error_code ec;
-  std::string self(4096, '\0');
-  self.resize(static_cast<std::size_t>(std::max<ssize_t>(::readlink("/proc/self/exe", self.data(), self.size()), 0)));
   for (fs::directory_iterator it(p.has_parent_path() ? p.parent_path() : fs::path("."), ec), end; !ec && it != end;
        it.increment(ec)) {
     const std::string name = it->path().filename().string();
@@ -127,22 +142,18 @@ void note_left_staged(const std::string& out) {
     const char* const last = name.data() + name.size();
     const auto [at, err] = std::from_chars(name.data() + prefix.size(), last, pid);
     if (err != std::errc() || at != last || pid <= 0 || pid == ::getpid()) continue;
-    if (::kill(pid, 0) == 0 || errno == EPERM) {  // a process of that number runs: this program, or one reusing it
-      std::string exe(4096, '\0');
-      const ssize_t len = ::readlink(("/proc/" + std::to_string(pid) + "/exe").c_str(), exe.data(), exe.size());
-      if (len < 0 || self.empty() || exe.substr(0, static_cast<std::size_t>(len)) == self) continue;
-    }
-    const std::string staged = out + ".part-" + std::to_string(pid);  // as StagedCapture names it
+    const std::string staged = (p.parent_path() / name).string();  // as --out names its folder
+    if (staged_is_written(staged, pid)) continue;
     if (capture::ends_closed(staged))
       std::fprintf(stderr,
-                   "rig capture import: %s is a whole capture an earlier import kept under its staged name (its "
-                   "process %d no longer runs): rename it to use it\n",
-                   staged.c_str(), static_cast<int>(pid));
+                   "rig capture import: %s is a whole capture an earlier import kept under its staged name (no "
+                   "import writes it now): rename it to use it, to a name other than %s, which this import writes\n",
+                   staged.c_str(), out.c_str());
     else
       std::fprintf(stderr,
-                   "rig capture import: %s is left from an import that did not finish (its process %d no longer "
-                   "runs): a partial file, not a capture; remove it unless an import on another machine writes it\n",
-                   staged.c_str(), static_cast<int>(pid));
+                   "rig capture import: %s is left from an import that did not finish (no import writes it now): a "
+                   "partial file, not a capture; remove it\n",
+                   staged.c_str());
   }
 }
 
@@ -173,8 +184,15 @@ class StagedCapture {
       if (std::uncaught_exceptions() > unwinding_) std::fputs(not_written_.c_str(), stderr);
     }
     if (folder_fd_ >= 0) ::close(folder_fd_);
+    if (lock_fd_ >= 0) ::close(lock_fd_);
   }
   const std::string& path() const { return staged_; }
+  // Held while this import writes, once its file exists: another import to --out sees it written
+  // (note_left_staged), whatever this process's executable is called by then.
+  void hold() {
+    lock_fd_ = ::open(staged_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (lock_fd_ >= 0) ::flock(lock_fd_, LOCK_EX | LOCK_NB);
+  }
   // The staged file goes: nothing under --out.
   void drop() {
     if (settled_) return;
@@ -229,6 +247,7 @@ class StagedCapture {
   std::string not_written_;  // said on an error's unwinding and by a signal's exit alike
   RemoveOnAbort on_signal_;  // a signal's exit (main.cpp) unlinks the staged file too
   int folder_fd_ = -1;
+  int lock_fd_ = -1;
   bool settled_ = false;
   int unwinding_ = std::uncaught_exceptions();
 };
@@ -305,6 +324,7 @@ int cmd_import(const ImportArgs& a) {
   note_left_staged(a.out);
   StagedCapture staged(a.out);
   capture::Writer w(staged.path(), h);
+  staged.hold();
 
   // frames: read on the stream's interface; elsewhere: on other interfaces, not read further
   uint64_t frames = 0, stream_frames = 0, other = 0, unreadable = 0, malformed = 0, elsewhere = 0;

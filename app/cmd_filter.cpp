@@ -214,7 +214,7 @@ void run_select(SelectArgs a) {
   // Rank 1 of a table with no candidate in the band read as a choice (a re-test).
   if (std::none_of(c.begin(), c.end(), [](const plant::FilterCandidate& k) { return k.meets_band; }))
     note(fmt::format("no candidate is in the band (|f_0.5 - {} Hz| <= {} %): the ranks are by the distance from it, "
-                     "none is a choice; try other cut-offs (--fc-min, --fc-max, --fc-step), --orders or --tolerance",
+                     "no candidate is a choice; try other cut-offs (--fc-min, --fc-max, --fc-step), --orders or --tolerance",
                      a.f_req, a.tol));
   for (const auto& k : c)
     if (k.name == "paper") {

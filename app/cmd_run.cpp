@@ -1131,16 +1131,18 @@ void refuse_non_files(const std::string& dir, bool resuming) {
 void refuse_a_final_verdict(const std::string& dir) {
   const std::string v = verdict_of(dir);
   if (v.empty()) return;
-  const std::string refused = "; its " + v + " is not this run's verdict: nothing resumed past it, nothing done (the "
-                              "folder is as it was; a new run measures the DUT again)";
+  // What does not hold may be an edit, another run's file, or a file moved away or unreadable
+  // (junit.xml gone, a newer schema): said as found, with no verdict on the DUT (a code review:
+  // "a new run measures the DUT again" was said of a PASS whose junit.xml had been moved).
+  const std::string refused = "; so its " + v + " is not taken as this run's: nothing resumed past it, nothing done "
+                              "(the folder is as it was; `rig report " + dir + "` holds it to its run the same way)";
   std::string why;
   try {
     why = passport_unlike_its_folder(dir, report::read_passport(dir));
   } catch (const ConfigError& e) {  // the reader's own checks, which name the file
     throw ConfigError(e.what() + refused);
   }
-  if (!why.empty())
-    throw ConfigError(dir + "/passport.json: " + why + ": the passport was changed after its run wrote it" + refused);
+  if (!why.empty()) throw ConfigError(dir + "/passport.json: " + why + refused);
   throw ConfigError(dir + ": the run is complete (its passport says " + v + "): nothing to resume; its passport stands");
 }
 
@@ -1700,8 +1702,9 @@ int do_run(RunArgs a) {
                "/run.json; --db URL with --resume records into another, --no-history into none)";
       if (!a.dry_run || !dynamic_cast<const history::LockedError*>(&e)) throw ConfigError(why);
       history_locked = true;
-      std::cerr << "rig: configuration error: " << why << " (the dry run's plan follows; a "
-                << (a.resume.empty() ? "run" : "resume") << " started now would stop here, before anything opens)\n";
+      std::cerr << "rig: configuration error: " << why << " (the dry run goes on with its other checks and its plan, "
+                << "and exits 2: a " << (a.resume.empty() ? "run" : "resume")
+                << " started now would stop here, before anything opens)\n";
     }
   }
   if (!a.resume.empty()) {

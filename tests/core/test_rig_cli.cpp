@@ -223,7 +223,7 @@ TEST(RigCli, HelpOnEverySubcommand) {
             0)
       << slurp(d + "/fast-sel.stderr");
   EXPECT_NE(slurp(d + "/fast-sel.stdout").find("\nnote: no candidate is in the band (|f_0.5 - 500 Hz| <= 5 %): the ranks "
-                                               "are by the distance from it, none is a choice"),
+                                               "are by the distance from it, no candidate is a choice"),
             std::string::npos)
       << slurp(d + "/fast-sel.stdout");
   EXPECT_NE(slurp(d + "/fast-sel.stdout").find("\nnote: the paper's W_f(z) coefficients are its 10000 Hz loop's"),
@@ -2515,7 +2515,9 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
   EXPECT_EQ(run({"run", "--resume", d + "/s-foreign", "--yes", "--quiet"}, d + "/io6"), 2);
   const std::string foreign = slurp(d + "/io6.stderr");
   EXPECT_NE(foreign.find(d + "/s-foreign/passport.json: "), std::string::npos) << foreign;
-  EXPECT_NE(foreign.find("is not this run's verdict: nothing resumed past it, nothing done"), std::string::npos) << foreign;
+  EXPECT_NE(foreign.find("so its PASS is not taken as this run's: nothing resumed past it, nothing done"),
+            std::string::npos)
+      << foreign;
   EXPECT_EQ(foreign.find("its passport stands"), std::string::npos) << foreign;
   EXPECT_EQ(slurp(d + "/s-foreign/passport.json"), slurp(d + "/r/passport.json"));
   // The order itself, as the kernel saw it (strace, scripts/setup; '?': a syscall an
@@ -2976,7 +2978,8 @@ TEST(RigCli, AHistoryLockedAtTheStartIsSaidToBeLocked) {
   EXPECT_NE(plan.find("History: sqlite:" + db + " (locked by another process now: said above)\n"), std::string::npos)
       << plan;
   EXPECT_NE(plan.find("Estimated duration"), std::string::npos) << plan;
-  EXPECT_NE(err.find("(the dry run's plan follows; a run started now would stop here, before anything opens)"),
+  EXPECT_NE(err.find("(the dry run goes on with its other checks and its plan, and exits 2: a run started now would "
+                     "stop here, before anything opens)"),
             std::string::npos)
       << err;
   // A resume's dry run likewise, and one whose run is complete with its ending unfinished (it
