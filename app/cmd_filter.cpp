@@ -272,8 +272,7 @@ void run_show(const ShowArgs& a) {
             << "closed-loop bandwidth (0.5 level): " << lf.bandwidth_0p5_hz << " Hz\n"
             << "closed-loop bandwidth (-3 dB):     " << lf.bandwidth_3db_hz << " Hz\n"
             << "settling time (1 g step, " << lf.settling_band * 100 << " %): " << settling_text(lf)
-            << "\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n"
-;
+            << "\novershoot: " << lf.overshoot * 100 << " %\nDC gain: " << lf.dc_gain << "\n";
   std::vector<std::string> notes;
   if (const std::string n = a.filter == "paper" ? paper_rate_note(p.loop.loop_rate_hz) : ""; !n.empty()) {
     std::cout << "note: " << n << "\n";
