@@ -251,13 +251,14 @@ TEST(RigCli, HelpOnEverySubcommand) {
             std::string::npos)
       << slurp(d + "/sel-slow.stdout");
   // The step each was read from: one that settled did so in its first half, at 50 ms or longer.
-  for (const auto& k : nlohmann::json::parse(slurp(d + "/sel-slow.json"))["candidates"]) {
+  const auto sel_slow = nlohmann::json::parse(slurp(d + "/sel-slow.json"));  // kept: the loop reads into it
+  for (const auto& k : sel_slow["candidates"]) {
     EXPECT_GE(k["step_window_s"].get<double>(), 0.05) << k;
     if (k["settled"] == true) {
       EXPECT_GE(k["step_window_s"].get<double>(), 2 * k["settling_time_s"].get<double>()) << k;
     }
   }
-  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/sel-slow.json"))["notes"].size(), 1u);  // the slow ones'
+  EXPECT_EQ(sel_slow["notes"].size(), 1u);  // the slow ones'
   // On a recording, the advice is a longer recording (it read "... long would" and stopped).
   {
     std::ofstream rec(d + "/rec.txt");
