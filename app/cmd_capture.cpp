@@ -129,20 +129,26 @@ bool staged_is_written(const std::string& path, pid_t pid) {
   return !comm || !std::getline(comm, name) || name == "rig";
 }
 
+// --out's folder as --out names it ("." for a bare name), and the staged name's prefix there: one
+// spelling for the import that writes OUT.part-PID and the one that looks for those left.
+std::string folder_of(const std::string& out) {
+  const std::filesystem::path p(out);
+  return p.has_parent_path() ? p.parent_path().string() : std::string(".");
+}
+std::string staged_prefix(const std::string& out) { return out + ".part-"; }
+
 void note_left_staged(const std::string& out) {
   namespace fs = std::filesystem;
-  const fs::path p(out);
-  const std::string prefix = p.filename().string() + ".part-";
+  const std::string prefix = fs::path(staged_prefix(out)).filename().string();
   std::error_code ec;
-  for (fs::directory_iterator it(p.has_parent_path() ? p.parent_path() : fs::path("."), ec), end; !ec && it != end;
-       it.increment(ec)) {
+  for (fs::directory_iterator it(folder_of(out), ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
     pid_t pid = 0;
     const char* const last = name.data() + name.size();
     const auto [at, err] = std::from_chars(name.data() + prefix.size(), last, pid);
     if (err != std::errc() || at != last || pid <= 0 || pid == ::getpid()) continue;
-    const std::string staged = (p.parent_path() / name).string();  // as --out names its folder
+    const std::string staged = staged_prefix(out) + name.substr(prefix.size());  // as the import named it
     if (staged_is_written(staged, pid)) continue;
     if (capture::ends_closed(staged))
       std::fprintf(stderr,
@@ -166,14 +172,13 @@ void note_left_staged(const std::string& out) {
 class StagedCapture {
  public:
   explicit StagedCapture(std::string out)
-      : out_(std::move(out)), staged_(out_ + ".part-" + std::to_string(::getpid())),
+      : out_(std::move(out)), staged_(staged_prefix(out_) + std::to_string(::getpid())),
         staged_name_(std::filesystem::path(staged_).filename().string()),
         not_written_("rig capture import: " + out_ + " not written (the import did not finish)\n"),
         on_signal_(staged_, not_written_) {
     // The folder held open: the staged file is removed from it even where it was renamed meanwhile
     // (a code review: "nothing kept" while OUT.part-PID stayed in the folder's new place).
-    const std::filesystem::path p(out_);
-    folder_ = p.has_parent_path() ? p.parent_path().string() : std::string(".");
+    folder_ = folder_of(out_);
     folder_fd_ = ::open(folder_.c_str(), O_PATH | O_DIRECTORY | O_CLOEXEC);
   }
   StagedCapture(const StagedCapture&) = delete;

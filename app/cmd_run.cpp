@@ -50,6 +50,7 @@
 #include "app/serial_option.hpp"
 #include "app/fast_forward.hpp"
 #include "app/commands.hpp"
+#include "app/error_words.hpp"
 #include "app/existing_path.hpp"
 #include "app/whole_number.hpp"
 #include "app/history_source.hpp"
@@ -1702,7 +1703,7 @@ int do_run(RunArgs a) {
                "/run.json; --db URL with --resume records into another, --no-history into none)";
       if (!a.dry_run || !dynamic_cast<const history::LockedError*>(&e)) throw ConfigError(why);
       history_locked = true;
-      std::cerr << "rig: configuration error: " << why << " (the dry run goes on with its other checks and its plan, "
+      std::cerr << error_prefix(e) << why << " (the dry run goes on with its other checks and its plan, "
                 << "and exits 2: a " << (a.resume.empty() ? "run" : "resume")
                 << " started now would stop here, before anything opens)\n";
     }

@@ -18,6 +18,7 @@
 
 #include "app/abort_cleanup.hpp"
 #include "app/commands.hpp"
+#include "app/error_words.hpp"
 #include "app/output_file.hpp"
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
@@ -410,26 +411,14 @@ int main(int argc, char** argv) {
     // --help/--version exit 0 (2 when what they print cannot be written); usage errors exit 2
     const int r = app.exit(e);
     return r == 0 && !standard_output_failed() ? 0 : rig::kExitUsage;
-  } catch (const rig::InputError& e) {  // before ConfigError, its base
-    std::cerr << "rig: input error: " << e.what() << "\n";
-    return rig::kExitUsage;
-  } catch (const rig::InUseError& e) {  // before ConfigError, its base
-    std::cerr << "rig: in use: " << e.what() << "\n";
-    return rig::kExitUsage;
-  } catch (const rig::ConfigError& e) {
-    std::cerr << "rig: configuration error: " << e.what() << "\n";
+  } catch (const rig::ConfigError& e) {  // InputError, InUseError too: a usage-class error
+    std::cerr << rig::cli::error_prefix(e) << e.what() << "\n";
     return rig::kExitUsage;
   } catch (const rig::AbortedError& e) {
-    std::cerr << "rig: " << e.what() << "\n";
+    std::cerr << rig::cli::error_prefix(e) << e.what() << "\n";
     return rig::kExitAborted;
-  } catch (const rig::NotReadyError& e) {  // before HardwareError, its base
-    std::cerr << "rig: not ready: " << e.what() << "\n";
-    return rig::kExitHardware;
-  } catch (const rig::HardwareError& e) {
-    std::cerr << "rig: hardware fault: " << e.what() << "\n";
-    return rig::kExitHardware;
-  } catch (const std::exception& e) {
-    std::cerr << "rig: error: " << e.what() << "\n";
+  } catch (const std::exception& e) {  // HardwareError, NotReadyError and the unforeseen
+    std::cerr << rig::cli::error_prefix(e) << e.what() << "\n";
     return rig::kExitHardware;
   }
   return rc;
