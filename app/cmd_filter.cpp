@@ -37,6 +37,7 @@ using nlohmann::json;
 struct DutConfig {
   toml::table file;
   const toml::table* dut = nullptr;
+  std::string section = "plant.dut";  // what errors call `dut`: "" for a DUT file, whose [loop] is [loop]
 };
 // --dut: a profile (its [profile], [procedure], [plant] or `base`) gives its [plant.dut], its
 // base's merged in, or none (the built-in DUT); a DUT TOML is the DUT's table itself. A profile
@@ -53,6 +54,7 @@ void load_dut(const std::string& path, DutConfig& c) {
       return;
     }
   c.dut = &c.file;
+  c.section.clear();
 }
 
 // One value per line, '#' comments (the `rig analyze --input text` format).
@@ -191,8 +193,9 @@ void run_select(SelectArgs a) {
     rec = read_text(a.recorded);
     o.recorded_x = &rec;
   }
+  o.dut_section = dc.section;
   const std::vector<plant::FilterCandidate> c = plant::select_filters(dc.dut, o);
-  const double rate_hz = plant::load_dut_params(dc.dut).loop.loop_rate_hz;
+  const double rate_hz = plant::load_dut_params(dc.dut, dc.section).loop.loop_rate_hz;
   std::cout << "criterion 2 from the closed-loop model; criterion 1 (RMS) on "
             << (a.recorded.empty() ? "emulated output, " + fmt_g(a.seconds) + " s, seed " + std::to_string(a.seed)
                                    : a.recorded)
@@ -264,9 +267,9 @@ void run_show(const ShowArgs& a) {
   if (!a.json_out.empty()) check_output_file(a.json_out, "rig filter show --json");
   DutConfig dc;
   load_dut(a.dut_file, dc);
-  const plant::DutParams p = plant::load_dut_params(dc.dut);
+  const plant::DutParams p = plant::load_dut_params(dc.dut, dc.section);
   const FilterConfig f = plant::filter_by_name(a.filter, p.loop.loop_rate_hz);
-  const design::LoopFigures lf = plant::loop_figures(dc.dut, f);
+  const design::LoopFigures lf = plant::loop_figures(dc.dut, f, dc.section);
   // The design model's figures, labelled so: a DUT's own are measured by `rig run`'s loop test.
   std::cout << "filter " << a.filter << " at " << p.loop.loop_rate_hz << " Hz (model: the DUT's design loop, not a measurement)\n"
             << "closed-loop bandwidth (0.5 level): " << lf.bandwidth_0p5_hz << " Hz\n"

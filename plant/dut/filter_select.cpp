@@ -123,7 +123,7 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
     throw ConfigError(fmt::format("--fc-min {} --fc-max {} --fc-step {}: more than {:g} cut-offs to try", opt.fc_min_hz,
                                   opt.fc_max_hz, opt.fc_step_hz, kMaxCutoffs));
   const auto cutoffs = static_cast<std::size_t>(count);
-  const DutParams p = load_dut_params(dut_cfg);
+  const DutParams p = load_dut_params(dut_cfg, opt.dut_section);
   const double rate = p.loop.loop_rate_hz;
 
   std::vector<FilterCandidate> c;
@@ -138,7 +138,7 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
         }
 
   for (FilterCandidate& k : c) {
-    const design::LoopFigures f = loop_figures(dut_cfg, k.filter);  // criterion 2, from the model
+    const design::LoopFigures f = loop_figures(dut_cfg, k.filter, opt.dut_section);  // criterion 2, from the model
     k.bandwidth_0p5_hz = f.bandwidth_0p5_hz;
     k.settling_time_s = f.settling_time_s;
     k.settled = f.settled;

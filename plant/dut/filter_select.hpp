@@ -35,6 +35,8 @@ struct FilterSelectOptions {
   uint64_t seed = 1;
   // Criterion 1 on a recording of x at the DUT's loop rate instead of emulated output.
   const std::vector<double>* recorded_x = nullptr;
+  // What errors call the DUT overrides' table (load_dut_params): "" for a DUT file read whole.
+  std::string dut_section = "plant.dut";
 };
 
 // Evaluates every candidate; returned best first (meeting the band: lowest RMS, then

@@ -23,11 +23,11 @@ void integer(const toml::table& t, std::string_view key, int& v, int64_t lo, int
   v = static_cast<int>(get_int(t, key, v, lo, hi));
 }
 
-void read_orientation(const toml::table& t, OrientationParams& p) {
+void read_orientation(const toml::table& t, OrientationParams& p, const std::string& ctx) {
   cfg::check_keys(t,
                   {"intrinsic_bias_g", "misalignment_rad", "cross_misalignment_rad", "table_tilt_rad",
                    "u10_angle_deg"},
-                  "plant.dut.orientation");
+                  ctx);
   num(t, "intrinsic_bias_g", p.intrinsic_bias_g, -1, 1);
   num(t, "misalignment_rad", p.misalignment_rad, -0.1, 0.1);
   num(t, "cross_misalignment_rad", p.cross_misalignment_rad, -0.1, 0.1);
@@ -35,7 +35,7 @@ void read_orientation(const toml::table& t, OrientationParams& p) {
   num(t, "u10_angle_deg", p.u10_angle_deg, -360, 360);
 }
 
-void read_noise(const toml::table& t, NoiseParams& p) {
+void read_noise(const toml::table& t, NoiseParams& p, const std::string& ctx) {
   cfg::check_keys(
       t,
       {"enabled", "sense_white_g_rthz", "sense_adc_bits", "range_g", "output_lsb_g", "input_white_g_rthz",
@@ -45,7 +45,7 @@ void read_noise(const toml::table& t, NoiseParams& p) {
        "burst_decay_s", "interference_rms_g", "interference_f_lo_hz", "interference_f_hi_hz", "interference_lines",
        "interference_coherence_s", "polling_b_g", "polling_offset_hz", "polling_k_g_per_rts",
        "polling_drift_tau_s"},
-      "plant.dut.noise");
+      ctx);
   p.enabled = get_bool(t, "enabled", p.enabled);
   num(t, "sense_white_g_rthz", p.sense_white_g_rthz, 0, 1);
   integer(t, "sense_adc_bits", p.sense_adc_bits, 4, 40);
@@ -82,26 +82,32 @@ void read_noise(const toml::table& t, NoiseParams& p) {
 
 // Applies one layer (the compiled-in default, then the profile's overrides) onto `p`.
 // Layers are read one by one, not merged, so errors keep the file:line of their layer.
-void apply_layer(const toml::table& root, DutParams& p) {
-  cfg::check_keys(root, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"}, "plant.dut");
+void apply_layer(const toml::table& root, DutParams& p, std::string_view section) {
+  const auto in = [section](std::string_view name) { return dut_table_name(section, name); };
+  cfg::check_keys(root, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"},
+                  section.empty() ? "DUT file" : section);
   p.serial = cfg::get_string(root, "serial", p.serial);
   if (root.contains("seed")) p.seed = static_cast<uint64_t>(get_int(root, "seed", std::nullopt, 0));
-  if (const toml::table* t = cfg::get_table(root, "loop")) design::read_loop_params(*t, "plant.dut.loop", p.loop);
+  if (const toml::table* t = cfg::get_table(root, "loop")) design::read_loop_params(*t, in("loop"), p.loop);
   if (const toml::table* t = cfg::get_table(root, "regulator"))
-    design::read_regulator_params(*t, "plant.dut.regulator", p.regulator);
-  if (const toml::table* t = cfg::get_table(root, "orientation")) read_orientation(*t, p.orientation);
-  if (const toml::table* t = cfg::get_table(root, "noise")) read_noise(*t, p.noise);
+    design::read_regulator_params(*t, in("regulator"), p.regulator);
+  if (const toml::table* t = cfg::get_table(root, "orientation")) read_orientation(*t, p.orientation, in("orientation"));
+  if (const toml::table* t = cfg::get_table(root, "noise")) read_noise(*t, p.noise, in("noise"));
   if (const toml::table* t = cfg::get_table(root, "filter"))
-    design::read_filter_table(*t, "plant.dut.filter", design::RateKey::absent, p.filter);
+    design::read_filter_table(*t, in("filter"), design::RateKey::absent, p.filter);
 }
 
 }  // namespace
 
-DutParams load_dut_params(const toml::table* overrides) {
+std::string dut_table_name(std::string_view section, std::string_view name) {
+  return section.empty() ? std::string(name) : std::string(section) + "." + std::string(name);
+}
+
+DutParams load_dut_params(const toml::table* overrides, std::string_view section) {
   DutParams p;
   p.filter = design::paper_wf();
-  apply_layer(cfg::parse_string(default_dut_toml(), "plant/dut/default.toml"), p);
-  if (overrides) apply_layer(*overrides, p);
+  apply_layer(cfg::parse_string(default_dut_toml(), "plant/dut/default.toml"), p, "plant.dut");
+  if (overrides) apply_layer(*overrides, p, section);
   p.filter.rate_hz = p.loop.loop_rate_hz;
   return p;
 }

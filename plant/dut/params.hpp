@@ -83,7 +83,11 @@ struct DutParams {
 std::string_view default_dut_toml();
 
 // Defaults merged with `overrides` (the profile's [plant.dut] table, may be null).
-// Unknown keys and bad values throw ConfigError with file:line:col.
-DutParams load_dut_params(const toml::table* overrides);
+// Unknown keys and bad values throw ConfigError with file:line:col and the table as `section`
+// names it: "plant.dut" in a profile; "" for a DUT file read whole, whose [loop] is [loop].
+DutParams load_dut_params(const toml::table* overrides, std::string_view section = "plant.dut");
+
+// What errors call `section`'s sub-table `name` ("plant.dut.loop"; "loop" for a DUT file).
+std::string dut_table_name(std::string_view section, std::string_view name);
 
 }  // namespace rig::plant

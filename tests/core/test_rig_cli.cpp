@@ -315,6 +315,29 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_NE(slurp(d + "/dutprof.stderr").find(d + "/derived.toml:2:1: [plant.dut]: the DUT model's closed loop is unstable"),
             std::string::npos)
       << slurp(d + "/dutprof.stderr");
+  // A DUT file (the DUT's table itself) is named by its own tables: its [loop] was "[plant.dut.loop]".
+  std::ofstream(d + "/dutfile.toml") << "seed = 3\n[loop]\nbogus = 1\n";
+  std::ofstream(d + "/dutfile-top.toml") << "wat = 1\n";
+  std::ofstream(d + "/dutfile-unst.toml") << "[regulator]\ngain_a_per_v = 1000.0\n";
+  const auto with_dut = [](const std::string& sub, const std::string& file) {
+    std::vector<std::string> args{"filter", sub, "--dut", file};
+    if (sub == "select") args.insert(args.end(), {"--seconds", "0.01"});
+    return args;
+  };
+  for (const std::string sub : {"show", "select"}) {
+    EXPECT_EQ(run(with_dut(sub, d + "/dutfile.toml"), d + "/dutfile"), 2) << sub;
+    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile.toml:3:9: unknown key 'bogus' in [loop] (expected"),
+              std::string::npos)
+        << slurp(d + "/dutfile.stderr");
+    EXPECT_EQ(run(with_dut(sub, d + "/dutfile-top.toml"), d + "/dutfile"), 2) << sub;
+    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile-top.toml:1:7: unknown key 'wat' in [DUT file] (expected"),
+              std::string::npos)
+        << slurp(d + "/dutfile.stderr");
+    EXPECT_EQ(run(with_dut(sub, d + "/dutfile-unst.toml"), d + "/dutfile"), 2) << sub;
+    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile-unst.toml:1:1: the DUT model's closed loop is unstable"),
+              std::string::npos)
+        << slurp(d + "/dutfile.stderr");
+  }
   // A range whose end is near the largest double ends (max + step/1e6 overflowed and it never did).
   EXPECT_EQ(run({"filter", "select", "--fc-min", "300", "--fc-max", "1.7976931348623157e308", "--fc-step", "1e308",
                  "--orders", "1", "--seconds", "0.01"},
