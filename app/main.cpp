@@ -183,8 +183,12 @@ void no_empty_text(CLI::App& app) {
 // result (the stdout checks below and at start-up ask the same).
 bool records_are_files(std::string_view subcommand) { return subcommand == "run" || subcommand == "capture"; }
 
+// A line asking for the help or the version has them as its output, whatever its subcommand
+// (`rig run --help >&-` was exit 0 with nothing written, `rig --help run >&-` exit 2).
 bool console_may_go(int argc, char** argv) {
   if (argc < 2) return false;
+  for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i)
+    if (const std::string_view w = argv[i]; w == "--help" || w == "-h" || w == "--version") return false;
   const std::string_view first = argv[1];
   if (records_are_files(first)) return true;
   if (first != "plant" && first != "dut") return false;
