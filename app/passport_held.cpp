@@ -11,6 +11,7 @@
 #include "rig/core/file_text.hpp"
 #include "rig/core/json_unique.hpp"
 #include "rig/core/markup.hpp"
+#include "rig/executive/executive.hpp"
 #include "rig/seal/seal.hpp"
 
 namespace rig::cli {
@@ -57,10 +58,48 @@ std::string junit_unlike_passport(std::string junit, const nlohmann::json& passp
   return "";
 }
 
-}  // namespace
+// A PASS or FAIL passport gives what its run measured. Such a run ran every phase and wrote its
+// checkpoint after each (a checkpoint that cannot be written ends the run ERROR), so
+// checkpoint.json holds every value the passport gives a number to, with the same value, bounds
+// and unit (only the outcome is judged after it). "" when it does, else what does not. Another
+// run's passport and junit.xml copied into a stopped run's folder whose run started in the same
+// second passed every other check (a technician's re-test). Missing or unreadable: said, for a
+// passport written beside one (its profile_sha256, since 2026-12-03); an older folder's is not held.
+std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::json& passport) {
+  const std::string outcome = passport.value("outcome", "");
+  if (outcome != "PASS" && outcome != "FAIL") return "";
+  const std::string at = Executive::checkpoint_path(dir);
+  std::error_code ec;
+  if (!fs::exists(at, ec))
+    return passport.contains("profile_sha256") ? "its run's checkpoint.json, which holds what the run measured, is missing"
+                                               : "";
+  nlohmann::json measured;
+  try {
+    measured = parse_json_unique_keys(file_text(at)).at("values");
+  } catch (const std::exception& e) {
+    return std::string("its run's checkpoint.json cannot be read (") + e.what() + ")";
+  }
+  if (!measured.is_object()) return "its run's checkpoint.json holds no values";
+  for (const auto& [name, v] : passport["values"].items()) {
+    if (!v.is_object()) continue;  // the shape is the reader's to refuse
+    const nlohmann::json value = v.value("value", nlohmann::json());
+    if (!measured.contains(name) || !measured[name].is_object() ||
+        (measured[name].value("value", nlohmann::json()).is_null() && !value.is_null())) {
+      if (value.is_null()) continue;  // not measured, and not said to be
+      return "values." + name + ".value is " + value.dump() + ", but its run's checkpoint.json holds no measurement of it";
+    }
+    for (const char* key : {"value", "lo", "hi", "unit"})  // as far as the checkpoint states them
+      if (const nlohmann::json ran = measured[name].value(key, nlohmann::json()), has = v.value(key, nlohmann::json());
+          measured[name].contains(key) && ran != has)
+        return fmt::format("values.{}.{} is {}, but its run measured {} (checkpoint.json)", name, key, has.dump(),
+                           ran.dump());
+  }
+  return "";
+}
 
-std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json& passport,
-                                    const MeasurementSet& declared, const std::optional<std::string>& profile_sha256) {
+// passport_unlike_its_run but its values against the checkpoint (each caller holds them last).
+std::string unlike_its_limits_and_junit(const std::string& dir, const nlohmann::json& passport,
+                                        const MeasurementSet& declared, const std::optional<std::string>& profile_sha256) {
   if (profile_sha256 && passport.value("profile_sha256", nlohmann::json()) != *profile_sha256)
     return fmt::format("profile_sha256 is {}, but the folder's profile.toml digests to \"{}\"",
                        passport.value("profile_sha256", nlohmann::json()).dump(), *profile_sha256);
@@ -91,6 +130,15 @@ std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json
   return junit_unlike_passport(file_text(dir + (staged ? "/junit.xml.tmp" : "/junit.xml")), passport, failed, which);
 }
 
+}  // namespace
+
+std::string passport_unlike_its_run(const std::string& dir, const nlohmann::json& passport,
+                                    const MeasurementSet& declared, const std::optional<std::string>& profile_sha256) {
+  if (std::string unlike = unlike_its_limits_and_junit(dir, passport, declared, profile_sha256); !unlike.empty())
+    return unlike;
+  return values_unlike_checkpoint(dir, passport);
+}
+
 std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::json& passport) {
   const std::string path = dir + "/profile.toml";
   std::error_code ec;
@@ -110,7 +158,7 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
   acceptance::declare_values(p, acceptance::build_phases(p, state), declared);
   std::optional<std::string> digest;
   if (passport.contains("profile_sha256")) digest = seal::sha256_hex(file_text(path));
-  if (std::string unlike = passport_unlike_its_run(dir, passport, declared, digest); !unlike.empty()) return unlike;
+  if (std::string unlike = unlike_its_limits_and_junit(dir, passport, declared, digest); !unlike.empty()) return unlike;
   // run.json and the checkpoint name the profile its run started with (a resume holds the folder
   // to them): a profile.toml changed since is not the one the passport was judged by (helper-97's
   // re-test: the passport, profile.toml and junit.xml edited together passed). A passport that
@@ -142,7 +190,7 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
     }
     if (*named != p.digest) return file + "'s profile_digest is " + named->dump() + ", not the folder's profile.toml's";
   }
-  return "";
+  return values_unlike_checkpoint(dir, passport);
 }
 
 }  // namespace rig::cli

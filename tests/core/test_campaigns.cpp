@@ -446,6 +446,9 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   // count says (a review's finding: it was measured again and its FAIL or PASS overwritten).
   const std::string f = d + "/older-finished";
   fs::copy(d + "/whole", f, fs::copy_options::recursive);
+  // Its values are what that run measured, as its passport gives them (a passport whose values
+  // its checkpoint does not hold is another run's: RigCli.AnotherRunsPassportInAStoppedRunsFolder...).
+  old_cp["values"] = read_json(d + "/whole/checkpoint.json")["values"];
   std::ofstream(f + "/checkpoint.json") << old_cp.dump(1);
   const std::string final_passport = slurp(f + "/passport.json");
   for (const bool dry : {true, false}) {

@@ -2544,6 +2544,50 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
       << foreign;
   EXPECT_EQ(foreign.find("its passport stands"), std::string::npos) << foreign;
   EXPECT_EQ(slurp(d + "/s-foreign/passport.json"), slurp(d + "/r/passport.json"));
+  // (e) ... with its junit.xml, into the folder of a run started in the same second (run.json's
+  // `started` as the passport's): the values it gives are not what the stopped run measured
+  // (its checkpoint), with a phase checkpointed or none (a technician's re-test: they passed).
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/t", "--inject", "sigint@30"},
+                d + "/io-t"),
+            3)
+      << slurp(d + "/io-t.stderr");
+  ASSERT_TRUE(fs::exists(d + "/t/checkpoint.json"));
+  for (const std::string stopped : {"s", "t"}) {
+    const std::string f = d + "/" + stopped + "-same-second";
+    fs::copy(d + "/" + stopped, f, fs::copy_options::recursive);
+    for (const char* file : {"passport.json", "junit.xml"})
+      fs::copy_file(d + "/r/" + file, f + "/" + file, fs::copy_options::overwrite_existing);
+    auto rj = nlohmann::json::parse(slurp(f + "/run.json"));
+    rj["started"] = whole["started"];
+    std::ofstream(f + "/run.json") << rj.dump(1);
+    const std::string why = fs::exists(f + "/checkpoint.json")
+                                ? "values.accuracy_class.value is 2.0, but its run's checkpoint.json holds no measurement"
+                                : "its run's checkpoint.json, which holds what the run measured, is missing";
+    EXPECT_EQ(run({"run", "--resume", f, "--yes", "--quiet"}, f + "-io"), 2) << stopped;
+    EXPECT_NE(slurp(f + "-io.stderr").find(f + "/passport.json: " + why), std::string::npos) << slurp(f + "-io.stderr");
+    EXPECT_NE(slurp(f + "-io.stderr").find("so its PASS is not taken as this run's"), std::string::npos);
+    for (const std::vector<std::string>& args : {std::vector<std::string>{"report", f},
+                                                 {"history", "--db", "sqlite:" + d + "/h3.sqlite", "--record", f}}) {
+      EXPECT_EQ(run(args, f + "-io2"), 2) << args.front();
+      EXPECT_NE(slurp(f + "-io2.stderr").find(f + "/passport.json: " + why), std::string::npos)
+          << slurp(f + "-io2.stderr");
+    }
+    EXPECT_EQ(slurp(f + "/passport.json"), slurp(d + "/r/passport.json"));
+  }
+  // A PASS whose value is edited within its limits (its outcome and junit.xml as they were) is
+  // not what its run measured either: it was drawn and recorded.
+  fs::copy(d + "/r", d + "/r-edited", fs::copy_options::recursive);
+  auto edited = whole;
+  for (const char* key : {"value", "lo", "hi"})  // its bounds with it (the passport's own checks)
+    edited["values"]["bias"][key] = edited["values"]["bias"][key].get<double>() * 0.5;
+  std::ofstream(d + "/r-edited/passport.json") << edited.dump(2);
+  EXPECT_EQ(run({"report", d + "/r-edited"}, d + "/io-ed"), 2);
+  EXPECT_NE(slurp(d + "/io-ed.stderr").find("/r-edited/passport.json: values.bias.value is "), std::string::npos)
+      << slurp(d + "/io-ed.stderr");
+  EXPECT_NE(slurp(d + "/io-ed.stderr").find(", but its run measured " + whole["values"]["bias"]["value"].dump() +
+                                            " (checkpoint.json): the passport was changed after its run wrote it"),
+            std::string::npos)
+      << slurp(d + "/io-ed.stderr");
   // The order itself, as the kernel saw it (strace, scripts/setup; '?': a syscall an
   // architecture lacks is no error): report.html and the list of what is left before passport.json
   // is put in place, junit.xml right after it, the list rewritten without `junit`, then the history
