@@ -218,6 +218,7 @@ void standard_descriptors_open(bool console_may_go) {
 extern "C" void abort_on_signal(int sig) {
   const char* text = sig == SIGINT    ? "rig: aborted: SIGINT\n"
                      : sig == SIGTERM ? "rig: aborted: SIGTERM\n"
+                     : sig == SIGQUIT ? "rig: aborted: SIGQUIT\n"
                                       : "rig: aborted: SIGHUP\n";
   std::size_t n = 0;
   while (text[n] != '\0') ++n;
@@ -236,7 +237,7 @@ void aborted_by_signals() {
   // A file size limit (`ulimit -f`) is a write that fails (EFBIG), said and handled as a full disk
   // is, not a kill that leaves staged files and says nothing (a re-test: exit 153).
   ::signal(SIGXFSZ, SIG_IGN);
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
     struct sigaction was {};
     if (::sigaction(sig, nullptr, &was) != 0 || was.sa_handler == SIG_IGN) continue;
     struct sigaction now {};

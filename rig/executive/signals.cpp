@@ -15,18 +15,22 @@ namespace rig {
 namespace {
 // SIGHUP is taken unless the process started with it ignored: `nohup rig ...` asks that a
 // closed terminal not end the run (or move), and the watcher would otherwise override that.
+// SIGQUIT (Ctrl-\) too: its default action ended the process with no halt, and the table drove on
+// to its target (a technician's re-test); a process started with it ignored keeps it ignored.
 sigset_t abort_signals() {
   sigset_t s;
   sigemptyset(&s);
   sigaddset(&s, SIGINT);
   sigaddset(&s, SIGTERM);
-  struct sigaction hup {};
-  if (sigaction(SIGHUP, nullptr, &hup) != 0 || hup.sa_handler != SIG_IGN) sigaddset(&s, SIGHUP);
+  for (const int sig : {SIGHUP, SIGQUIT}) {
+    struct sigaction was {};
+    if (sigaction(sig, nullptr, &was) != 0 || was.sa_handler != SIG_IGN) sigaddset(&s, sig);
+  }
   return s;
 }
 
 const char* signal_name(uint32_t sig) {
-  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP";
+  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGQUIT ? "SIGQUIT" : "SIGHUP";
 }
 }  // namespace
 

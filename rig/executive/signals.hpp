@@ -1,4 +1,4 @@
-// SIGINT/SIGTERM -> cancellation. The signals are blocked in every thread and
+// SIGINT/SIGTERM/SIGHUP/SIGQUIT -> cancellation. The signals are blocked in every thread and
 // taken by one watcher thread through a signalfd, so the handler side is plain
 // code (no async-signal-safety limits) and blocking calls see the cancel token.
 #pragma once

@@ -1,4 +1,4 @@
-// SignalWatcher (rig/executive/signals.hpp): SIGINT, SIGTERM and SIGHUP become a cancellation, and
+// SignalWatcher (rig/executive/signals.hpp): SIGINT, SIGTERM, SIGHUP and SIGQUIT become a cancellation, and
 // none is left pending when the watcher goes (its destructor unblocks them: a pending one would
 // then end the process by its default action, after the run had finished).
 #include <gtest/gtest.h>
@@ -32,6 +32,18 @@ TEST(SignalWatcher, ASignalStillPendingAtTheEndIsTakenNotLeftToEndTheProcess) {
   sigset_t pending;
   sigpending(&pending);
   EXPECT_FALSE(sigismember(&pending, SIGINT));
+}
+
+// Ctrl-\ (SIGQUIT) is an abort like the others: its default action (a core dump) ended a move
+// with no halt.
+TEST(SignalWatcher, SigquitIsTakenAsAnAbort) {
+  CancelSource source;
+  {
+    SignalWatcher w(source);
+    ASSERT_EQ(::raise(SIGQUIT), 0);
+  }
+  EXPECT_TRUE(source.token().requested());
+  EXPECT_EQ(source.token().reason(), "SIGQUIT received");
 }
 
 // A signal to the process while two watchers live (one command's, one of a helper it runs): one

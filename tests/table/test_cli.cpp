@@ -332,7 +332,7 @@ TEST_F(RigTable, AnAngleThatIsNotFiniteIsRefusedBeforeTheDriveIsAsked) {
 }
 
 // Every signal that ends the process halts a move first: Ctrl-C, a service
-// manager's SIGTERM and the SIGHUP of a closed terminal or dropped ssh session.
+// manager's SIGTERM, the SIGHUP of a closed terminal or dropped ssh session, and Ctrl-\.
 class RigTableSignal : public RigTable, public ::testing::WithParamInterface<int> {};
 
 TEST_P(RigTableSignal, DuringAMoveHaltsTheTableAndExitsThree) {
@@ -511,7 +511,9 @@ TEST_F(RigTable, NohupKeepsAMoveGoingThroughSighup) {
   EXPECT_NEAR(emu_->actual_angle_deg(), 300.0, 0.005);
 }
 
-INSTANTIATE_TEST_SUITE_P(EndingSignals, RigTableSignal, ::testing::Values(SIGINT, SIGTERM, SIGHUP),
+// SIGQUIT (Ctrl-\) too: its default action ended rig with no halt, the table driving on to its
+// target (a technician's re-test).
+INSTANTIATE_TEST_SUITE_P(EndingSignals, RigTableSignal, ::testing::Values(SIGINT, SIGTERM, SIGHUP, SIGQUIT),
                          [](const auto& p) { return std::string(sigabbrev_np(p.param)); });
 
 // A drive that takes the connection and never answers (a hung gateway): a CiA 402 `rig table stop`
