@@ -222,6 +222,29 @@ std::size_t binary_bytes(std::string_view s) {
   return bad;
 }
 
+// A UTF-16 text file (Windows' "Unicode" text): its byte-order mark, then characters of two bytes
+// whose one byte is 0 for ASCII. Its NULs got it past the text test of a raw read, and --input f32
+// read it as float32 (OADEV 1.7e-39, exit 0: a metrologist's review); as text it was "not a decimal
+// number" with a hint to read it raw. The mark's name ("\xFF\xFE") when head is one, else "".
+std::string utf16_mark(std::string_view head) {
+  if (head.size() < 4) return "";
+  const bool le = head.starts_with("\xFF\xFE"), be = head.starts_with("\xFE\xFF");
+  if (!le && !be) return "";
+  std::size_t ascii = 0, chars = 0;
+  for (std::size_t i = 2; i + 1 < head.size(); i += 2, ++chars) {
+    const auto lo = static_cast<unsigned char>(head[le ? i : i + 1]), hi = static_cast<unsigned char>(head[le ? i + 1 : i]);
+    ascii += hi == 0 && lo != 0 && lo < 0x80;
+  }
+  return 10 * ascii >= 9 * chars ? (le ? "\\xFF\\xFE" : "\\xFE\\xFF") : "";
+}
+
+// The refusal of a UTF-16 text file, with the conversion that makes it a record.
+std::string utf16_refusal(const std::string& path, const std::string& mark) {
+  return path + ": a UTF-16 text file (its first bytes " + mark +
+         " are UTF-16's byte-order mark: Windows' \"Unicode\" text); a text record is read as UTF-8 or ASCII: convert it "
+         "first, e.g. iconv -f UTF-16 -t UTF-8 '" + path + "' > record.txt";
+}
+
 // The raw floats' width, read off their bits. Float32 samples taken two at a time as one 8-byte
 // value have two halves that are both normal float32 of like size; a float64's low half is
 // mantissa bits, whose float32 exponent field is about uniform, so it is one by chance about one
@@ -272,6 +295,7 @@ void check_input_path(const std::string& path, const std::string& input, const s
     std::string head(4096, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
+    if (const std::string mark = utf16_mark(head); !mark.empty()) throw InputError(utf16_refusal(path, mark));
     // Text as the text reader reads it (ASCII, tab, CR, well-formed UTF-8) and the line ends.
     const bool text = head.size() >= 16 &&
                       binary_bytes(head) == static_cast<std::size_t>(std::count(head.begin(), head.end(), '\n'));
@@ -361,11 +385,53 @@ std::vector<double> read_text(const std::string& path, std::size_t* blank_betwee
 }
 
 namespace {
+// Characters a spreadsheet or word processor writes in numbers that look like ASCII ones but are
+// not: quoted as they are, '1\xC2\xA0' read as '1 ' and '\u2212 1' as '-1' (a metrologist's review).
+constexpr std::pair<std::string_view, std::string_view> kLookalikes[] = {
+    {"\xC2\xA0", "a no-break space (U+00A0, bytes \\xC2\\xA0)"},
+    {"\xE2\x80\xAF", "a narrow no-break space (U+202F, bytes \\xE2\\x80\\xAF)"},
+    {"\xE2\x80\x89", "a thin space (U+2009, bytes \\xE2\\x80\\x89)"},
+    {"\xE2\x88\x92", "a minus sign (U+2212, bytes \\xE2\\x88\\x92), not the ASCII '-'"},
+};
+
+// Digits grouped by blanks as the SI writes them ("0.981 234", "12 345.678"): the first group
+// any digits, each after it three, one decimal point in all. Two columns' cut would keep a
+// number's last digits only (awk's $2 of "0.981 234" is 234: a metrologist's review).
+bool si_grouped(std::string_view tok) {
+  if (!tok.empty() && (tok[0] == '-' || tok[0] == '+')) tok.remove_prefix(1);
+  std::size_t points = 0, groups = 0;
+  for (std::size_t at = 0; at <= tok.size(); ++groups) {
+    const std::size_t end = std::min(tok.find(' ', at), tok.size());
+    const std::string_view g = tok.substr(at, end - at);
+    const std::size_t point = g.find('.');
+    points += point != std::string_view::npos;
+    const std::string_view whole = g.substr(0, std::min(point, g.size()));
+    if (g.empty() || g.find_first_not_of("0123456789.") != std::string_view::npos ||
+        (groups > 0 && point == std::string_view::npos && g.size() != 3) ||
+        (groups > 0 && point != std::string_view::npos && whole.size() != 3 && whole.size() != 0))
+      return false;
+    at = end + 1;
+  }
+  return groups > 1 && points <= 1;
+}
+
 // Why a line that is not a decimal number is refused: the value quoted (an excerpt), and what
 // the line looks like where it says more than the value (a binary file, a byte-order mark).
 std::string not_a_number(std::string_view line, std::string_view tok) {
   std::string why = "not a decimal number: " + excerpt(tok);
+  const auto lookalike = std::find_if(std::begin(kLookalikes), std::end(kLookalikes),
+                                      [tok](const auto& l) { return tok.find(l.first) != std::string_view::npos; });
   if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)";
+  else if (lookalike != std::end(kLookalikes))
+    why += std::string("; it holds ") + std::string(lookalike->second) +
+           ", which spreadsheets and word processors write in numbers: the record's numbers take ASCII digits, "
+           "'-', '.' and 'e' only";
+  else if (si_grouped(tok)) {
+    std::string joined(tok);
+    std::erase(joined, ' ');
+    why += "; digits grouped with blanks? the record's numbers are written without grouping (" + joined +
+           "); two columns? a text record holds one value per line";
+  }
   // The column separator: ';' or a blank before ',', which may be a decimal comma in the same
   // row ("0,5;1,2": a code review saw the cut on ',' recommended there).
   else if (const auto at = tok.find(';') != std::string_view::npos     ? tok.find(';')
@@ -417,6 +483,10 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
       throw InputError(path + ": a capture file (rig.capture/1): read it with --input capture");
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
     if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
+    if (lineno == 1) {
+      if (const std::string mark = utf16_mark(line.substr(0, 4096)); !mark.empty())
+        throw InputError(utf16_refusal(path, mark));
+    }
     const auto hash = line.find('#');
     const bool comment = hash != std::string_view::npos;
     if (comment) line = line.substr(0, hash);

@@ -1690,6 +1690,35 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   refused("trail.txt", "1,,\n2\n3\n4\n", "trail.txt:1: '1,,': empty columns after the value");
   refused("mixed.txt", "1\n2,;\n3\n4\n", "mixed.txt:2: '2,;': empty columns after the value");
   refused("spaced.txt", "1\n2\n3, ,\n4\n", "spaced.txt:3: '3, ,': empty columns after the value");
+  // Digits grouped with blanks as the SI writes them: no cut offered (awk's $2 of "0.981 234" is
+  // 234, a metrologist's review); a row of two numbers keeps its cut.
+  for (const std::string grouped : {"0.981 234", "12 345.678", "-1 234 567"})
+    refused("grouped.txt", "1\n" + grouped + "\n2\n", "grouped.txt:2: not a decimal number: '" + grouped +
+                                                           "'; digits grouped with blanks? the record's numbers are "
+                                                           "written without grouping (");
+  refused("grouped.txt", "1\n0.981 234\n2\n", "(0.981234); two columns? a text record holds one value per line\n");
+  refused("two.txt", "1\n0.5 0.6\n2\n", "'0.5 0.6'; a text record holds one value per line (take the column out first");
+  // Characters that look like ASCII ones are named (they were quoted as they are: '1 ', '-1').
+  refused("nbsp.txt", "1\xC2\xA0\n2\n3\n", "nbsp.txt:1: not a decimal number: '1\xC2\xA0'; it holds a no-break space "
+                                            "(U+00A0, bytes \\xC2\\xA0)");
+  refused("minus.txt", "\xE2\x88\x92" "1\n2\n3\n", "it holds a minus sign (U+2212, bytes \\xE2\\x88\\x92), not the ASCII '-'");
+  refused("nnbsp.txt", "1\xE2\x80\xAF" "234\n2\n3\n", "it holds a narrow no-break space (U+202F");
+  // A UTF-16 text file (Windows' "Unicode" text) is said to be one, read as text or raw: --input
+  // f32 read its NULs as float32 (OADEV 1.7e-39, exit 0: a metrologist's review).
+  {
+    std::string u16 = "\xFF\xFE";
+    for (const char c : std::string("0.98012\r\n0.98007\r\n0.98011\r\n0.98003\r\n0.98010\r\n")) u16 += c, u16 += '\0';
+    std::ofstream(d + "/u16.txt", std::ios::binary) << u16;
+    for (const std::string input : {"text", "f32", "f64"}) {
+      EXPECT_EQ(run({"analyze", d + "/u16.txt", "--input", input, "--rate", "1"}, d + "/u16"), 2) << input;
+      EXPECT_NE(slurp(d + "/u16.stderr").find(d + "/u16.txt: a UTF-16 text file (its first bytes \\xFF\\xFE are UTF-16's "
+                                              "byte-order mark"),
+                std::string::npos)
+          << input << ": " << slurp(d + "/u16.stderr");
+      EXPECT_NE(slurp(d + "/u16.stderr").find("iconv -f UTF-16 -t UTF-8 '" + d + "/u16.txt' > record.txt"),
+                std::string::npos);
+    }
+  }
   std::ofstream(d + "/single.csv") << "1,\n2;\n 3 , \n4,\r\n";
   EXPECT_EQ(run({"analyze", d + "/single.csv", "--rate", "1", "--no-psd"}, d + "/single"), 0) << slurp(d + "/single.stderr");
   std::ofstream(d + "/bom2.txt") << "1\n2\n3\n\xEF\xBB\xBF" << "4\n";
