@@ -523,7 +523,7 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   if (!std::isfinite(deg) || deg < map_.limit_neg_deg || deg > map_.limit_pos_deg)
     throw ConfigError("move to " + deg_str_past(deg, deg < map_.limit_neg_deg ? map_.limit_neg_deg : map_.limit_pos_deg) +
                       ": outside the travel limits [" + deg_str(map_.limit_neg_deg) + ", " + deg_str(map_.limit_pos_deg) +
-                      "] of drive map " + map_.path);
+                      "] of drive map " + map_.path + "; nothing sent");
   // An unhomed table is refused before anything is written: enabling operation first left the
   // drive in Operation enabled after the refusal (a review).
   {

@@ -362,22 +362,23 @@ void TableClient::move_to(double deg, const CancelToken& cancel) {
   // at a limit of 370.0000°, a review).
   const auto counts = static_cast<int32_t>(std::lround(deg * kPosScale));
   const double written = counts / kPosScale;
-  auto refuse_outside = [&](const DriveState& d) {
+  // Before anything is written it says so, as every refusal there does (docs/table-registers.md).
+  auto refuse_outside = [&](const DriveState& d, bool nothing_sent) {
     if (written < d.limit_neg_deg || written > d.limit_pos_deg)
       throw ConfigError("move to " + deg_str_past(deg, written < d.limit_neg_deg ? d.limit_neg_deg : d.limit_pos_deg) +
                         ": outside the drive's travel limits [" + deg_str(d.limit_neg_deg) + ", " +
-                        deg_str(d.limit_pos_deg) + "]");
+                        deg_str(d.limit_pos_deg) + "]" + (nothing_sent ? "; nothing sent" : ""));
   };
   // A target no drive state makes reachable is the command's mistake (exit 2) before the table's
   // state (not homed: exit 4) is: the order gave exit 4 for `move 400` on an unhomed table (a review).
-  refuse_outside(d0);
+  refuse_outside(d0, true);
   if (!d0.has(sts::kHomed))
     throw NotReadyError(doing + ": table not homed (run `rig table home` first)" + at(d0) + "; nothing sent");
   guarded(doing, [&] {
     prepare_motion(doing, cancel);
     DriveState d = read_drive(cancel);
     if (!d.has(sts::kHomed)) throw NotReadyError(doing + ": table not homed (run `rig table home` first)" + at(d));
-    refuse_outside(d);
+    refuse_outside(d, false);
     uint16_t w[2];
     split_i32(counts, w);
     transport_->write(reg::kTargetPos, {w[0], w[1]}, cancel);
