@@ -62,6 +62,11 @@ int64_t Cia402Table::read_object(Obj o, const CancelToken& cancel, bool urgent) 
                            : transport_->read(s.address, static_cast<uint16_t>(s.words()), cancel, urgent);
     return map_.decode(o, w.data());
   } catch (const ModbusError& e) {
+    // Another protocol answering before the drive was known (an HTTP server at the port): no drive,
+    // nothing sent (as TableClient::read_drive says it).
+    if (e.foreign_reply && !identified_)
+      throw detail::NotThisDriveError("reading " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what() +
+                                      " (" + kForeignPeer + "); nothing sent");
     throw ModbusError("reading " + map_.describe(o) + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
                       e.timeout, e.foreign_reply);
   }
@@ -115,6 +120,9 @@ Cia402Reading Cia402Table::read(const CancelToken& cancel, bool commands) {
     } catch (const ModbusError& e) {
       std::string names;
       for (size_t k = i; k < j; ++k) names += (k > i ? ", " : "") + map_.describe(objs[k]);
+      if (e.foreign_reply && !identified_)  // as read_object says it
+        throw detail::NotThisDriveError("reading " + names + " of drive \"" + map_.name + "\": " + e.what() + " (" +
+                                        kForeignPeer + "); nothing sent");
       throw ModbusError("reading " + names + " of drive \"" + map_.name + "\": " + e.what(), e.exception_code,
                         e.timeout, e.foreign_reply);
     }
@@ -920,6 +928,14 @@ void Cia402Table::quick_stop() noexcept {
   if (!identified_) {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
+    } catch (const detail::NotThisDriveError& e) {  // read_object: another protocol answered, no drive
+      std::string why;
+      try {
+        why = std::string("quick stop not sent (the table may still be moving): ") + e.what();
+      } catch (...) {
+      }
+      detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+      return;
     } catch (const ModbusError& e) {
       if (e.foreign_reply) {
         std::string why;

@@ -116,6 +116,11 @@ DriveState TableClient::read_drive(const CancelToken& cancel) {
   try {
     regs = transport_->read(0, reg::kBlockEnd, cancel);
   } catch (const ModbusError& e) {
+    // What answers in another protocol before this client knew the drive (an HTTP server at the
+    // port) is no drive: said so, nothing sent (a technician's re-test: `status` said only
+    // "protocol violation", `move` "stop not sent (the table may still be moving)").
+    if (e.foreign_reply && !identified_)
+      throw detail::NotThisDriveError(std::string(e.what()) + " (" + kForeignPeer + "); nothing sent");
     // A drive without rig-v1's status block (a CiA 402 drive, another map) refuses the read
     // itself; say what to try (a technician's review: "exception 0x02" alone).
     if (e.exception_code != exc::kIllegalAddress) throw;

@@ -325,9 +325,11 @@ class LibmodbusTransport final : public RegisterTransport {
     // server's "HTTP/1.0" reads as transaction id 0x4854, protocol id 0x5450). A wrong
     // transaction or unit id, or a reply cut short, is a Modbus device misbehaving or slow:
     // devices in the field answer with unit id 0 or 255, and a gateway may split a late reply.
+    // The protocol id first: another protocol's bytes make a transaction id too, and "transaction
+    // id 18516 in reply to 3" hid that an HTTP server answered (a technician's re-test).
     foreign_frame_ = r_proto != 0;
-    if (r_tid != tid) return violation("transaction id " + std::to_string(r_tid) + " in reply to " + std::to_string(tid));
     if (r_proto != 0) return violation("protocol id " + std::to_string(r_proto) + " (Modbus is 0)");
+    if (r_tid != tid) return violation("transaction id " + std::to_string(r_tid) + " in reply to " + std::to_string(tid));
     if (r_len < 3 || r_len > 254) return violation("MBAP length " + std::to_string(r_len) + " out of range 3..254");
     if (h[6] != opt_.unit)
       return violation("unit id " + std::to_string(h[6]) + " in reply to unit " + std::to_string(opt_.unit));

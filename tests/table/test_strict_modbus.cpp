@@ -193,6 +193,26 @@ TEST(StrictModbusTcp, NoStopGoesIntoAPeerThatAnswersInAnotherProtocol) {
       << c4.last_stop_error();
   c4.stop();
   EXPECT_TRUE(has(c4.last_stop_error(), "halt not sent")) << c4.last_stop_error();
+  // A status or a move says so too, and that nothing was sent: the protocol id named, not the
+  // transaction id the peer's "HT" makes (a technician's re-test: no hint, and "stop not sent (the
+  // table may still be moving)" after a move that sent nothing).
+  const auto says_no_drive = [&](const std::function<void()>& call, const char* what) {
+    try {
+      call();
+      ADD_FAILURE() << what << ": no error";
+    } catch (const std::exception& e) {
+      EXPECT_TRUE(has(e.what(), "protocol violation: protocol id 21584 (Modbus is 0) (") && has(e.what(), m::kForeignPeer) &&
+                  has(e.what(), "); nothing sent"))
+          << what << ": " << e.what();
+      EXPECT_FALSE(has(e.what(), "may still be moving")) << what << ": " << e.what();
+    }
+  };
+  m::TableClient v1b(m::make_libmodbus_transport(ep, lo, clock), clock, {});
+  says_no_drive([&] { v1b.status(); }, "rig-v1 status");
+  says_no_drive([&] { v1b.move_to(10, CancelToken{}); }, "rig-v1 move");
+  m::Cia402Table c4b(m::make_libmodbus_transport(ep, lo, clock), map, clock, {});
+  says_no_drive([&] { c4b.status(); }, "CiA 402 status");
+  says_no_drive([&] { c4b.move_to(10, CancelToken{}); }, "CiA 402 move");
   EXPECT_EQ(writes.load(), 0);
 }
 
