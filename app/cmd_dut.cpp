@@ -274,14 +274,18 @@ int cmd_decode(const DutArgs& a) {
   if (!in) throw ConfigError(a.log + ": cannot open candump log");
   constexpr unsigned long kNamedSkips = 20;  // then only counted: a wrong file must not flood the terminal
   std::map<std::string, unsigned long> per;
-  unsigned long frames = 0, foreign = 0, errors = 0, skipped = 0;
+  // Every frame is counted once in the summary (its messages, error frames, other ids, or not
+  // decoded); a skipped line is one that holds no frame (a short frame was counted as a frame and
+  // a skipped line, and the parts did not add up: a technician's re-test).
+  unsigned long frames = 0, foreign = 0, errors = 0, undecoded = 0, skipped = 0, named = 0;
   auto skip = [&](std::size_t line, const std::string& why) {
-    if (++skipped <= kNamedSkips) std::fprintf(stderr, "%s:%zu: skipped: %s\n", a.log.c_str(), line, why.c_str());
+    if (++named <= kNamedSkips) std::fprintf(stderr, "%s:%zu: skipped: %s\n", a.log.c_str(), line, why.c_str());
   };
   link::CandumpLogReader reader(in);
   link::CandumpLogReader::Entry e;
   while (reader.next(e)) {
     if (e.parsed.kind != link::LogLineKind::Frame) {
+      ++skipped;
       skip(e.line, e.parsed.problem);
       continue;
     }
@@ -307,7 +311,7 @@ int cmd_decode(const DutArgs& a) {
     const auto sig = dbc.decode(lf.any, &err);  // classic or CAN FD as logged
     if (!sig) {
       if (err.empty()) ++foreign;  // an id the DBC does not describe: counted, not an error
-      else skip(e.line, err + " (" + dbc_name + ")");
+      else ++undecoded, skip(e.line, err + " (" + dbc_name + ")");
       continue;
     }
     const link::DbcMessage& msg = *dbc.find(lf.any.id, lf.any.extended);
@@ -323,10 +327,10 @@ int cmd_decode(const DutArgs& a) {
     }
     std::printf("\n");
   }
-  if (skipped > kNamedSkips) std::fprintf(stderr, "%s: ... and %lu more skipped line(s)\n", a.log.c_str(), skipped - kNamedSkips);
+  if (named > kNamedSkips) std::fprintf(stderr, "%s: ... and %lu more skipped line(s)\n", a.log.c_str(), named - kNamedSkips);
   std::printf("%s: %lu frames: ", a.log.c_str(), frames);
   for (const auto& [k, n] : per) std::printf("%s %lu, ", k.c_str(), n);
-  std::printf("error frames %lu, other ids %lu, skipped lines %lu\n", errors, foreign, skipped);
+  std::printf("error frames %lu, other ids %lu, not decoded %lu; skipped lines %lu\n", errors, foreign, undecoded, skipped);
   if (frames == 0 && skipped == 0) {
     std::fprintf(stderr, "rig: %s holds no CAN frame\n", a.log.c_str());
     return kExitUsage;
@@ -338,7 +342,7 @@ int cmd_decode(const DutArgs& a) {
                  dbc_name.c_str());
     return kExitUsage;
   }
-  return skipped ? kExitUsage : kExitPass;
+  return skipped || undecoded ? kExitUsage : kExitPass;
 }
 // The loop test at the bench: the same request, analysis and record file as `rig run`'s loop phase.
 int cmd_loop_test(DutArgs a) {
