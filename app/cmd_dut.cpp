@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
@@ -27,6 +29,7 @@
 #include "firmware_link/connect.hpp"
 #include "firmware_link/dbc.hpp"
 #include "firmware_link/dbc_stream.hpp"
+#include "firmware_link/protocol.hpp"
 #include "app/commands.hpp"
 #include "app/hardware_file.hpp"
 #include "app/number_option.hpp"
@@ -162,24 +165,31 @@ int cmd_stream(const DutArgs& a) {
   return rc;
 }
 
+// Each coefficient decimal text, as every number on the command line (from_chars: "0x1" and
+// "0x1p3", which std::stod read as hexadecimal, are not; a technician's re-test), blanks around it
+// and a leading '+' allowed.
 Biquad parse_biquad(const std::string& text) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw ConfigError("--biquad '" + text + "': '" + item + "' is not a number");
-    }
+    std::string_view num = item;
+    num.remove_prefix(std::min(num.find_first_not_of(" \t"), num.size()));
+    num.remove_suffix(num.size() - std::min(num.find_last_not_of(" \t") + 1, num.size()));
+    if (num.size() > 1 && num[0] == '+' && num[1] != '-') num.remove_prefix(1);
+    double x = 0;
+    const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), x);
+    if (num.empty() || ec == std::errc::invalid_argument || end != num.data() + num.size())
+      throw ConfigError("--biquad '" + text + "': '" + item + "' is not a decimal number");
+    v.push_back(ec == std::errc::result_out_of_range ? std::numeric_limits<double>::infinity() : x);
     // Sent as IEEE binary32 (docs/can-protocol.md); nan was called "unstable" (a review).
     if (!(std::abs(v.back()) <= std::numeric_limits<float>::max()))
       throw ConfigError("--biquad '" + text + "': '" + item + "' is not a finite number within the protocol's 32-bit float range");
   }
   if (v.size() != 5) throw ConfigError("--biquad '" + text + "': give 5 numbers b0,b1,b2,a1,a2 (a0 = 1)");
   const Biquad b{v[0], v[1], v[2], v[3], v[4]};
+  if (b.b0 == 0 && b.b1 == 0 && b.b2 == 0)  // its output is 0 whatever the input
+    throw ConfigError("--biquad '" + text + "': b0, b1 and b2 are all 0: the section passes nothing");
   if (!stable_section(b))  // before the DUT is asked: its firmware refuses it only at commit
     throw ConfigError("--biquad '" + text + "': unstable: its poles (a1, a2) are not inside the unit circle");
   return b;
@@ -201,6 +211,11 @@ int cmd_set_filter(const DutArgs& a) {
     throw ConfigError("rig dut set-filter: give --paper or --biquad, not both (--paper loads the paper's filter alone; "
                       "its section is b0,b1,b2,a1,a2 = " + paper_section_text() + " for a --biquad cascade)");
   if (a.paper) f.sections = design::paper_wf().sections;  // docs/method.md, W_f(z)
+  // As many as the protocol carries, said before the link opens (it was said by the link, or hidden
+  // behind a link that could not open: a technician's re-test).
+  if (a.biquads.size() > static_cast<std::size_t>(link::kMaxSections))
+    throw ConfigError(fmt::format("rig dut set-filter: {} --biquad sections; the DUT takes at most {}", a.biquads.size(),
+                                  link::kMaxSections));
   for (const auto& b : a.biquads) f.sections.push_back(parse_biquad(b));
   if (f.sections.empty()) throw ConfigError("rig dut set-filter: give --paper or at least one --biquad b0,b1,b2,a1,a2");
   RealClock clock;

@@ -3169,6 +3169,24 @@ TEST(RigCli, DutSetFilterRefusesAnUnstableSectionBeforeTheLinkOpens) {
   }
   EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", "0.2,0,0,-0.5,0.1"}, d + "/io"), 4)
       << "a stable section gets as far as the missing interface";
+  EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", " +0.2, 0, 0, -0.5, 0.1"}, d + "/io"), 4)
+      << "blanks around a coefficient and a leading '+' are taken";
+  // Decimal text only (std::stod read 0x1 and 0x1p3 as hexadecimal), a section that passes
+  // something, and at most the protocol's 8 sections, each said before the link opens (a
+  // technician's re-test: nine sections were refused by the link, after it opened).
+  for (const auto& [bad, says] : std::vector<std::pair<std::string, std::string>>{
+           {"0x1,0,0,0,0", "'0x1' is not a decimal number"},
+           {"0x1p3,0,0,0,0", "'0x1p3' is not a decimal number"},
+           {"1,,0,0,0", "'' is not a decimal number"},
+           {"0,0,0,-0.5,0.1", "b0, b1 and b2 are all 0: the section passes nothing"}}) {
+    EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", bad}, d + "/io"), 2) << bad;
+    EXPECT_NE(slurp(d + "/io.stderr").find("--biquad '" + bad + "': " + says), std::string::npos) << slurp(d + "/io.stderr");
+  }
+  std::vector<std::string> nine = {"dut", "set-filter", "--can", "rigtest-nocan0"};
+  for (int i = 0; i < 9; ++i) nine.insert(nine.end(), {"--biquad", "1,0,0,0,0"});
+  EXPECT_EQ(run(nine, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stderr").find("9 --biquad sections; the DUT takes at most 8"), std::string::npos)
+      << slurp(d + "/io.stderr");
   // --paper or --biquad, not both: both chained the paper's section and the given one (a review).
   EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--paper", "--biquad", "1,0,0,0,0"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stderr").find("give --paper or --biquad, not both (--paper loads the paper's filter alone; its "
