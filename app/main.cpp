@@ -87,7 +87,12 @@ void decimal_numbers_only(CLI::App& app) {
     const std::string type = shown.substr(0, shown.find(':'));
     const bool whole = type == "INT" || type == "UINT", real = type == "FLOAT" || type == "NUMBER";
     if (!whole && !real) continue;
-    const bool is_unsigned = type == "UINT";
+    // A whole number whose range starts at 0 or above takes no sign either, whatever its C++ type
+    // (`--unit +1` and `--steps +5` ran while `--count +5` was refused: a technician's re-test).
+    const auto range = shown.find(" in [");
+    const bool is_unsigned =
+        type == "UINT" || (whole && range != std::string::npos && range + 5 < shown.size() &&
+                           std::isdigit(static_cast<unsigned char>(shown[range + 5])));
     const std::string unit = option_unit(*o);
     // First among the option's checks (transform() puts it in front): the text is a number
     // before a range check reads it, whose own message would then say less.

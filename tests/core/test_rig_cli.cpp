@@ -3123,7 +3123,7 @@ TEST(RigCli, ANumberWithAUnitIsToldInTheOptionsOwnUnit) {
            {{"analyze", "/dev/null", "--overlap", "50%"}, "give a fraction, not a per cent: 50% is 0.5\n"},
            {{"filter", "select", "--tolerance", "5%"}, "'5%' is not a decimal number; give the number alone, without its unit: 5\n"},
            {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5ms"}, "give the number alone, without its unit: 5\n"},
-           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5s"}, "'5s' is not a decimal whole number (no leading zero)\n"},
+           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "5s"}, "'5s' is not a decimal whole number (no sign, no leading zero)\n"},
            {{"analyze", "/dev/null", "--rate", "100Hz"}, "give the number alone, without its unit: 100\n"},
            {{"analyze", "/dev/null", "--rate", "1kHz"}, "'1kHz' is not a decimal number\n"},
            // A unit that is not the option's gets no number (a review: `--rate 50%` was told 0.5).
@@ -5448,6 +5448,16 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
     EXPECT_EQ(run(args, d + "/io"), 2) << why;
     EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
     EXPECT_EQ(slurp(d + "/io.stdout"), "") << why;
+  }
+  // A whole number of a signed type whose range starts at 0 or above takes no '+' either
+  // (`--unit +1`, `--steps +5` ran: a technician's re-test).
+  for (const auto& [args, why] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"table", "--modbus", "127.0.0.1:1", "--unit", "+1", "status"}, "--unit: '+1' is not a decimal whole number (no sign"},
+           {{"plant", "serve", "--unit", "+1", "--duration", "0.1"}, "--unit: '+1' is not a decimal whole number (no sign"},
+           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--steps", "+5"}, "--steps: '+5' is not a decimal whole number"},
+           {{"dut", "--can", "rigtest-nocan0", "loop-test", "--record-ms", "+50"}, "--record-ms: '+50' is not a decimal"}}) {
+    EXPECT_EQ(run(args, d + "/io"), 2) << why;
+    EXPECT_NE(slurp(d + "/io.stderr").find(why), std::string::npos) << slurp(d + "/io.stderr");
   }
   // Within 64 bits but past the option's own 32: CLI11's bare "Could not convert" (a review).
   EXPECT_EQ(run({"analyze", d + "/none.f64", "--input", "f64", "--rate", "1", "--threads", "4294967297"}, d + "/io"), 2);
