@@ -174,6 +174,16 @@ void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::
                     p.dev, "-");
     o << line;
   }
+  // Where the bounds' EDF takes another noise type than the one identified (the guard at few
+  // averages, docs/analysis.md "EDF guard at long tau"), said under the table: the alpha column
+  // alone read as the bounds' noise type (a metrologist's review).
+  std::string guarded;
+  for (const auto& p : pts)
+    if (bounded && p.edf_alpha != p.alpha)
+      guarded += (guarded.empty() ? "" : ", ") + std::to_string(p.m) + " (alpha " + std::to_string(p.edf_alpha) + ")";
+  if (!guarded.empty())
+    o << "  note: the bounds' EDF takes another alpha than the one identified at m = " << guarded
+      << ": the EDF guard at few averages (JSON edf_alpha; docs/analysis.md)\n";
 }
 
 // A long-tau statistic's table. typed_noise: its alpha is shown, also without bounds (MTOT,
@@ -943,7 +953,7 @@ int run(const Args& a) {
     print_long_tau(o, long_taus[k], longs[k], bounded, bounded || (has_noise_bias(long_taus[k]) && !constant),
                    a.confidence);
   if (terms) {
-    o << "noise terms (tau in s; passport units after '='):\n";
+    o << "noise terms (tau in s; passport units after '='; bounds " << confidence_shown(a.confidence) << "):\n";
     print_term(o, "Q", terms->Q, an::q_per_hour, "g*h");
     print_term(o, "N", terms->N, an::n_per_hour, "g*h^0.5");
     print_term(o, "B", terms->B, nullptr, "");

@@ -18,6 +18,7 @@
 #include "app/endpoint_option.hpp"
 #include "app/hardware_file.hpp"
 #include "app/number_option.hpp"
+#include "app/output_file.hpp"
 #include "app/station_stop.hpp"
 #include "app/table_lock.hpp"
 #include "rig/core/clock.hpp"
@@ -195,6 +196,12 @@ template <class Body>
 void with_table(const TableArgs& a, Body body, const std::string& unreachable = "", const std::string& command = "") {
   toml::table root;
   const toml::table& t = table_config(a, root);
+  // A home, a move or a reset prints where the table ended; started with stdout closed it would
+  // turn the table and then exit 2, which a script reads as nothing done (a technician's re-test).
+  // Known before anything is sent: refused then. A stop still goes out (it is never refused).
+  if (!command.empty() && stdout_closed())
+    throw ConfigError("rig table " + command + ": standard output is closed (the command was started with it closed, "
+                      ">&-): it prints where the table ended; nothing sent");
   std::optional<std::string> identity;
   std::optional<TableLock> lock;
   if (!command.empty()) {

@@ -187,6 +187,12 @@ void no_empty_text(CLI::App& app) {
 // `rig run` and `rig capture import`: their records are their files, what they print is not their
 // result (the stdout checks below and at start-up ask the same).
 bool records_are_files(std::string_view subcommand) { return subcommand == "run" || subcommand == "capture"; }
+// `rig table stop` and `quick-stop`: the stop is the result (its exit code says whether it was
+// delivered), the line printed only its confirmation; a stop sent from a script with stdout
+// closed exited 2 ("usage error") after it went out (a technician's re-test).
+bool a_stop(std::string_view subcommand, std::string_view action) {
+  return subcommand == "table" && (action == "stop" || action == "quick-stop");
+}
 
 // A line asking for the help or the version has them as its output, whatever its subcommand
 // (`rig run --help >&-` was exit 0 with nothing written, `rig --help run >&-` exit 2).
@@ -196,6 +202,8 @@ bool console_may_go(int argc, char** argv) {
     if (const std::string_view w = argv[i]; w == "--help" || w == "-h" || w == "--version") return false;
   const std::string_view first = argv[1];
   if (records_are_files(first)) return true;
+  for (int i = 2; i < argc; ++i)
+    if (a_stop(first, argv[i])) return true;
   if (first != "plant" && first != "dut") return false;
   for (int i = 2; i < argc; ++i)
     if (std::string_view(argv[i]) == (first == "plant" ? "serve" : "stream")) return true;
@@ -355,7 +363,9 @@ int main(int argc, char** argv) {
     // `rig capture import`, whose capture is its record (exit 2 with the capture written, and
     // the retry refused for the file that exists: a re-test), nor a closed pipe (SIGPIPE ends
     // the others as it ends any filter).
-    if (app.get_subcommands().empty() || !records_are_files(app.get_subcommands().front()->get_name()))
+    const CLI::App* chosen = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();
+    const CLI::App* action = chosen && !chosen->get_subcommands().empty() ? chosen->get_subcommands().front() : nullptr;
+    if (!chosen || !(records_are_files(chosen->get_name()) || (action && a_stop(chosen->get_name(), action->get_name()))))
       if (standard_output_failed() && rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code says more
   } catch (const CLI::ParseError& e) {
     // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a

@@ -1642,6 +1642,44 @@ TEST(RigCli, AnalyzeSaysWhatItAssumedAndRefusesZeroSizes) {
 // a file was printed raw, invisible ("not a decimal number: '4'"); a float64 file read as text
 // filled the terminal with ~250 escaped bytes. Now: the right reason, the mark as \xNN, and an
 // excerpt of a long line with the file said to look binary.
+// The text output says what its JSON says about the bounds: the noise terms' confidence, and
+// where the bounds' EDF took another alpha than the one the table shows (a metrologist's review:
+// the alpha column alone read as the bounds' noise type). White FM records, seeds fixed here,
+// until one where the EDF guard acts; each checked both ways.
+TEST(RigCli, AnalyzeTextSaysTheBoundsConfidenceAndTheGuardedAlpha) {
+  const std::string d = tmp("analyze-guard-note");
+  fs::create_directories(d);
+  int guarded = 0, plain = 0;
+  for (std::uint64_t seed = 1; seed <= 30 && (guarded == 0 || plain == 0); ++seed) {
+    std::vector<double> v(10000);
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    for (double& x : v) x = g(rng);
+    std::ofstream(d + "/w.f64", std::ios::binary)
+        .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
+    ASSERT_EQ(run({"analyze", d + "/w.f64", "--rate", "1", "--taus", "octave", "--no-psd", "--json", d + "/w.json"}, d + "/io"),
+              0)
+        << slurp(d + "/io.stderr");
+    const std::string text = slurp(d + "/io.stdout");
+    EXPECT_NE(text.find("noise terms (tau in s; passport units after '='; bounds 0.682689):"), std::string::npos) << text;
+    const auto j = nlohmann::json::parse(slurp(d + "/w.json"));
+    std::string want;
+    for (const auto& p : j["oadev"])
+      if (p["edf_alpha"] != p["alpha"])
+        want += (want.empty() ? "" : ", ") + p["m"].dump() + " (alpha " + p["edf_alpha"].dump() + ")";
+    const std::string note = "  note: the bounds' EDF takes another alpha than the one identified at m = ";
+    if (want.empty()) {
+      ++plain;
+      EXPECT_EQ(text.find(note), std::string::npos) << seed << "\n" << text;
+    } else {
+      ++guarded;
+      EXPECT_NE(text.find(note + want + ": the EDF guard at few averages"), std::string::npos) << seed << "\n" << text;
+    }
+  }
+  EXPECT_GT(guarded, 0) << "no record of 30 where the guard acts: the test checks nothing";
+  EXPECT_GT(plain, 0);
+}
+
 TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   const std::string d = tmp("analyze-input-messages");
   fs::create_directories(d);

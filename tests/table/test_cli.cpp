@@ -167,6 +167,33 @@ TEST_F(RigTable, OnATerminalTheTurningTableShowsItsAngle) {
   EXPECT_LT(cleared, status) << seen;
 }
 
+// A home, a move or a reset prints where the table ended: started with stdout closed it turned
+// the table and then exited 2, read as nothing done (a technician's re-test). Refused before
+// anything is sent; a stop still goes out.
+TEST_F(RigTable, AMotionWithStdoutClosedIsRefusedBeforeAnythingIsSent) {
+  const std::string err = std::filesystem::temp_directory_path() / ("rig-closed-" + std::to_string(::getpid()));
+  std::string out;
+  for (const char* command : {"home", "move 10", "reset"}) {
+    EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " " + command + " >&- 2>" + err + ")", out), 2)
+        << command;
+    std::ifstream in(err);
+    const std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(said.find(std::string("rig table ") + (std::string(command) == "move 10" ? "move 10.0000°" : command) +
+                        ": standard output is closed (the command was started with it closed, >&-): it prints where "
+                        "the table ended; nothing sent"),
+              std::string::npos)
+        << said;
+    EXPECT_FALSE(emu_->snapshot().homed) << command;
+    EXPECT_FALSE(emu_->snapshot().moving) << command;
+    EXPECT_FALSE(emu_->snapshot().servo_on) << command;
+  }
+  EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " stop >&- 2>" + err + ")", out), 0)
+      << "a stop is never refused";
+  EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " quick-stop > /dev/full 2>" + err + ")", out), 0)
+      << "the stop is its result, exit 0 when delivered; its printed line only confirms it";
+  std::filesystem::remove(err);
+}
+
 TEST_F(RigTable, FaultsExitWithFourAndSayWhat) {
   std::string out;
   EXPECT_EQ(rig(where_ + " move 90", out), 4) << out;
@@ -284,7 +311,7 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   // Whole numbers: CLI11 reads "010" as octal 8 (another drive on a shared RTU bus) and "-1" as
   // 2^64 - 1 for an unsigned option (a code review).
   EXPECT_EQ(rig(where_ + " --unit 010 status", out), 2) << out;
-  EXPECT_NE(out.find("'010' is not a decimal whole number (no leading zero)"), std::string::npos) << out;
+  EXPECT_NE(out.find("'010' is not a decimal whole number (no sign, no leading zero)"), std::string::npos) << out;
   // Decimal 10: the emulator (unit 1) answers unit 10 as a gateway with no device there would.
   EXPECT_EQ(rig(where_ + " --unit 10 status", out), 4) << out;
   EXPECT_NE(out.find(" unit 10: exception 0x0B gateway target failed to respond"), std::string::npos) << out;
