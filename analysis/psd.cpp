@@ -233,8 +233,11 @@ double white_level(const Psd& p, double f_lo, double f_hi) {
     if (p.f_hz[k] >= f_lo && p.f_hz[k] <= f_hi) v.push_back(p.psd[k]);
   if (v.empty()) throw std::invalid_argument("white_level: no PSD bins in the band");
   const double med = upper_median(std::move(v));
-  // Each bin is ~ h0 chi2(k)/k with k = 2 * segments (overlap ignored): divide by its median.
-  const double k = 2.0 * static_cast<double>(std::max<std::size_t>(p.segments, 1));
+  // Each bin is ~ h0 chi2(k)/k with k its equivalent degrees of freedom (Psd::dof: 2 per segment,
+  // fewer where overlapping segments are correlated; Welch 1967): divide by the median of that.
+  // With 2 * segments, overlap ignored, the level read 2 % low at 90 % overlap (a metrologist's
+  // review: 0.978 of 2 sigma^2/fs on white noise).
+  const double k = p.dof > 0 ? p.dof : 2.0 * static_cast<double>(std::max<std::size_t>(p.segments, 1));
   const double med_ratio = boost::math::median(boost::math::chi_squared(k)) / k;
   return med / med_ratio;
 }

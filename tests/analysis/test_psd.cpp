@@ -37,6 +37,25 @@ TEST(Welch, WhiteNoiseHasDensityTwoSigmaSquaredOverRate) {
   EXPECT_NEAR(p.asd[10], std::sqrt(p.psd[10]), 1e-15);
 }
 
+// The median of bins that overlapping segments average is that of chi2 with their equivalent
+// degrees of freedom (Psd::dof), not 2 per segment: the level read 0.978 of the truth at 90 %
+// overlap with a rectangular window (a metrologist's review). Seeds 11..14, fixed here.
+TEST(Welch, WhiteLevelHoldsAtEveryOverlap) {
+  const double rate = 100, sigma = 1;
+  for (const double overlap : {0.0, 0.5, 0.9, 0.95})
+    for (const Window w : {Window::Rectangular, Window::Hann}) {
+      double sum = 0;
+      for (std::uint64_t seed = 11; seed <= 14; ++seed) {
+        const auto x = tone_in_noise(1 << 18, rate, 0, 0, sigma, seed);
+        WelchOptions o;
+        o.overlap = overlap;
+        o.window = w;
+        sum += white_level(welch(x, rate, o), 0.05 * rate, 0.45 * rate) / (2 * sigma * sigma / rate);
+      }
+      EXPECT_NEAR(sum / 4, 1.0, 0.006) << "overlap " << overlap << ", window " << static_cast<int>(w);
+    }
+}
+
 TEST(Welch, WhiteLevelGivesTheAllanN) {
   // White FM: sigma^2(tau) = h0 / (2 tau), so N^2 = h0 / 2 (N in unit*s^0.5).
   const double rate = 1000, sigma = 0.02;
