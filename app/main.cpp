@@ -120,7 +120,7 @@ void decimal_numbers_only(CLI::App& app) {
             std::snprintf(f, sizeof f, "%.12g", std::strtod(v.substr(0, n).c_str(), nullptr) / 100);
             hint = "; give a fraction, not a per cent: " + v.substr(0, n) + "% is " + f;
           }
-          return "'" + rig::shown_ascii(v) + "' is not a decimal " +
+          return "'" + rig::shown_text(v) + "' is not a decimal " +
                  // No bound here: the option's own check states its range (--count >= 1 said
                  // ">= 0" for '01', a review).
                  (is_unsigned ? "whole number (no sign, no leading zero)"

@@ -294,7 +294,8 @@ TEST_F(RigTable, UsageErrorsExitWithTwo) {
   }
   // A number with a unit typed after it is told to give the number alone; a malformed number is not.
   for (const auto& [bad, hint] : std::vector<std::pair<std::string, std::string>>{
-           {"90\u00B0", "'90\\xC2\\xB0' is not a decimal number; give the number alone, without the degree sign: 90"},
+           // The degree sign as typed (valid UTF-8 is not escaped: a technician's re-test read '90\xC2\xB0').
+           {"90\u00B0", "'90\u00B0' is not a decimal number; give the number alone, without the degree sign: 90"},
            {"5deg", "'5deg' is not a decimal number; give the number alone, without its unit: 5"},
            {"1e", "'1e' is not a decimal number\n"},
            // Another unit, a prefix or a letter typed for a digit: no number offered (it would be
