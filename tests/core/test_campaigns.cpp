@@ -1045,6 +1045,12 @@ TEST(Campaign, SealedRunFolders) {
                                                   "files; the verdict does not rest on them): " + partial + ".interrupted-1"),
               std::string::npos)
         << slurp(ab + "-reverify.stdout");
+    // An empty folder added after the seal holds no record: named there too (it went unmentioned).
+    fs::create_directories(ab + "/added-empty");
+    EXPECT_EQ(run({"verify", ab, "--seal-key", key}, ab + "-reverify2"), 0) << slurp(ab + "-reverify2.stdout");
+    EXPECT_NE(slurp(ab + "-reverify2.stdout").find("added-empty/ (empty)"), std::string::npos)
+        << slurp(ab + "-reverify2.stdout");
+    fs::remove(ab + "/added-empty");
     // Ended ERROR by a capture whose retry lost samples too: that last record is kept as written
     // and sealed with it.
     const std::string gap = d + "/gap";
