@@ -39,7 +39,9 @@ std::vector<std::string> entries_in(const std::string& dir, std::vector<std::str
       // A folder with nothing in it holds no record: named beside what no seal covers, not judged
       // (an added empty folder went unmentioned: a technician's re-test).
       std::error_code ec;
-      if (outside && fs::is_empty(it->path(), ec) && !ec) outside->push_back(shown_text(rel) + "/ (empty)");
+      // The rig's own captures/ is empty until its first record.
+      if (outside && rel != "captures" && fs::is_empty(it->path(), ec) && !ec)
+        outside->push_back(shown_text(rel) + "/ (empty)");
       continue;
     }
     out.push_back(rel);
