@@ -242,7 +242,9 @@ std::string utf16_mark(std::string_view head) {
 std::string utf16_refusal(const std::string& path, const std::string& mark) {
   return path + ": a UTF-16 text file (its first bytes " + mark +
          " are UTF-16's byte-order mark: Windows' \"Unicode\" text); a text record is read as UTF-8 or ASCII: convert it "
-         "first, e.g. iconv -f UTF-16 -t UTF-8 '" + path + "' > record.txt";
+         "first, e.g. " +
+         (path == "stdin" ? std::string("... | iconv -f UTF-16 -t UTF-8 | rig analyze - ...")
+                          : "iconv -f UTF-16 -t UTF-8 '" + path + "' > record.txt");
 }
 
 // The raw floats' width, read off their bits. Float32 samples taken two at a time as one 8-byte
@@ -394,25 +396,38 @@ constexpr std::pair<std::string_view, std::string_view> kLookalikes[] = {
     {"\xE2\x88\x92", "a minus sign (U+2212, bytes \\xE2\\x88\\x92), not the ASCII '-'"},
 };
 
-// Digits grouped by blanks as the SI writes them ("0.981 234", "12 345.678"): the first group
-// any digits, each after it three, one decimal point in all. Two columns' cut would keep a
-// number's last digits only (awk's $2 of "0.981 234" is 234: a metrologist's review).
+// Digits grouped by blanks as the SI Brochure writes them (5.4.4: threes counted from the decimal
+// marker both ways, "43 279.168 29", "0.981 234", "12 345.678"): the first integer group 1 to 3
+// digits, the others 3; the fraction's groups 3, its last 1 to 3. Two columns' cut would keep a
+// number's last digits only (awk's $2 of "0.981 234" is 234: a metrologist's review); "1 .5" and
+// "0.5 700" are not such groups (a code review, a re-test).
 bool si_grouped(std::string_view tok) {
   if (!tok.empty() && (tok[0] == '-' || tok[0] == '+')) tok.remove_prefix(1);
-  std::size_t points = 0, groups = 0;
-  for (std::size_t at = 0; at <= tok.size(); ++groups) {
+  std::vector<std::string_view> g;
+  for (std::size_t at = 0; at <= tok.size();) {
     const std::size_t end = std::min(tok.find(' ', at), tok.size());
-    const std::string_view g = tok.substr(at, end - at);
-    const std::size_t point = g.find('.');
-    points += point != std::string_view::npos;
-    const std::string_view whole = g.substr(0, std::min(point, g.size()));
-    if (g.empty() || g.find_first_not_of("0123456789.") != std::string_view::npos ||
-        (groups > 0 && point == std::string_view::npos && g.size() != 3) ||
-        (groups > 0 && point != std::string_view::npos && whole.size() != 3 && whole.size() != 0))
-      return false;
+    g.push_back(tok.substr(at, end - at));
     at = end + 1;
   }
-  return groups > 1 && points <= 1;
+  if (g.size() < 2) return false;
+  const auto digits = [](std::string_view s, std::size_t lo, std::size_t hi) {
+    return s.size() >= lo && s.size() <= hi && s.find_first_not_of("0123456789") == std::string_view::npos;
+  };
+  std::size_t point_at = g.size();  // the group holding the decimal point, if any
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if (const std::size_t p = g[i].find('.'); p != std::string_view::npos) {
+      if (point_at != g.size() || g[i].find('.', p + 1) != std::string_view::npos) return false;
+      point_at = i;
+    }
+  const std::size_t last = g.size() - 1;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const std::size_t p = i == point_at ? g[i].find('.') : std::string_view::npos;
+    const std::string_view whole = i <= point_at ? g[i].substr(0, p) : std::string_view();
+    const std::string_view frac = i == point_at ? g[i].substr(p + 1) : i > point_at ? g[i] : std::string_view();
+    if (i <= point_at && !(i == 0 ? digits(whole, 1, 3) : digits(whole, 3, 3))) return false;
+    if (i >= point_at && i < g.size() && !(i < last ? digits(frac, 3, 3) : digits(frac, 1, 3))) return false;
+  }
+  return true;
 }
 
 // Why a line that is not a decimal number is refused: the value quoted (an excerpt), and what
@@ -483,10 +498,10 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
       throw InputError(path + ": a capture file (rig.capture/1): read it with --input capture");
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
     if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
-    if (lineno == 1) {
-      if (const std::string mark = utf16_mark(line.substr(0, 4096)); !mark.empty())
-        throw InputError(utf16_refusal(path, mark));
-    }
+    // UTF-16's byte-order mark: bytes no UTF-8 text starts with, so the mark alone says it (a file
+    // whose first line is blank has nothing after the mark on this line to look at: a code review).
+    if (lineno == 1 && (line.starts_with("\xFF\xFE") || line.starts_with("\xFE\xFF")))
+      throw InputError(utf16_refusal(path, line[0] == '\xFF' ? "\\xFF\\xFE" : "\\xFE\\xFF"));
     const auto hash = line.find('#');
     const bool comment = hash != std::string_view::npos;
     if (comment) line = line.substr(0, hash);

@@ -180,7 +180,8 @@ void print_deviation(std::ostream& o, an::Deviation type, const std::vector<an::
   std::string guarded;
   for (const auto& p : pts)
     if (bounded && p.edf_alpha != p.alpha)
-      guarded += (guarded.empty() ? "" : ", ") + std::to_string(p.m) + " (alpha " + std::to_string(p.edf_alpha) + ")";
+      guarded += (guarded.empty() ? "" : ", ") + std::to_string(p.m) + " (identified " + std::to_string(p.alpha) +
+                 ", bounds " + std::to_string(p.edf_alpha) + ")";
   if (!guarded.empty())
     o << "  note: the bounds' EDF takes another alpha than the one identified at m = " << guarded
       << ": the EDF guard at few averages (JSON edf_alpha; docs/analysis.md)\n";

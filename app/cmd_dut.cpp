@@ -168,11 +168,13 @@ int cmd_stream(const DutArgs& a) {
 // Each coefficient decimal text, as every number on the command line (from_chars: "0x1" and
 // "0x1p3", which std::stod read as hexadecimal, are not; a technician's re-test), blanks around it
 // and a leading '+' allowed.
+// The checks hold the section as sent, in IEEE binary32 (docs/can-protocol.md): 1e-50 is 0
+// there and 0.99999999 is 1 (a pole on the unit circle), both passed as doubles (reviews).
 Biquad parse_biquad(const std::string& text) {
   std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  for (std::size_t from = 0;;) {  // every item, an empty last one included ("1,0,0,0,0,")
+    const std::size_t comma = std::min(text.find(',', from), text.size());
+    const std::string item = text.substr(from, comma - from);
     std::string_view num = item;
     num.remove_prefix(std::min(num.find_first_not_of(" \t"), num.size()));
     num.remove_suffix(num.size() - std::min(num.find_last_not_of(" \t") + 1, num.size()));
@@ -181,17 +183,25 @@ Biquad parse_biquad(const std::string& text) {
     const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), x);
     if (num.empty() || ec == std::errc::invalid_argument || end != num.data() + num.size())
       throw ConfigError("--biquad '" + text + "': '" + item + "' is not a decimal number");
-    v.push_back(ec == std::errc::result_out_of_range ? std::numeric_limits<double>::infinity() : x);
-    // Sent as IEEE binary32 (docs/can-protocol.md); nan was called "unstable" (a review).
-    if (!(std::abs(v.back()) <= std::numeric_limits<float>::max()))
+    // Nan was called "unstable" (a review); 1e-400 (out of a double's range toward 0) was "not finite".
+    const bool toward_zero = ec == std::errc::result_out_of_range && num.find_first_of("123456789") != std::string_view::npos &&
+                             (num.find("e-") != std::string_view::npos || num.find("E-") != std::string_view::npos);
+    if (ec == std::errc::result_out_of_range && !toward_zero) x = std::numeric_limits<double>::infinity();
+    if (!(std::abs(x) <= std::numeric_limits<float>::max()))
       throw ConfigError("--biquad '" + text + "': '" + item + "' is not a finite number within the protocol's 32-bit float range");
+    if (toward_zero || (x != 0 && static_cast<float>(x) == 0))
+      throw ConfigError("--biquad '" + text + "': '" + item +
+                        "' is 0 in the protocol's 32-bit float (nearer 0 than 1.4e-45): give 0, or a coefficient it holds");
+    v.push_back(static_cast<float>(x));
+    if (comma == text.size()) break;
+    from = comma + 1;
   }
   if (v.size() != 5) throw ConfigError("--biquad '" + text + "': give 5 numbers b0,b1,b2,a1,a2 (a0 = 1)");
   const Biquad b{v[0], v[1], v[2], v[3], v[4]};
   if (b.b0 == 0 && b.b1 == 0 && b.b2 == 0)  // its output is 0 whatever the input
     throw ConfigError("--biquad '" + text + "': b0, b1 and b2 are all 0: the section passes nothing");
   if (!stable_section(b))  // before the DUT is asked: its firmware refuses it only at commit
-    throw ConfigError("--biquad '" + text + "': unstable: its poles (a1, a2) are not inside the unit circle");
+    throw ConfigError("--biquad '" + text + "': unstable: its poles (a1, a2), as the protocol's 32-bit float holds them, are not inside the unit circle");
   return b;
 }
 
@@ -293,8 +303,8 @@ int cmd_decode(const DutArgs& a) {
   // decoded); a skipped line is one that holds no frame (a short frame was counted as a frame and
   // a skipped line, and the parts did not add up: a technician's re-test).
   unsigned long frames = 0, foreign = 0, errors = 0, undecoded = 0, skipped = 0, named = 0;
-  auto skip = [&](std::size_t line, const std::string& why) {
-    if (++named <= kNamedSkips) std::fprintf(stderr, "%s:%zu: skipped: %s\n", a.log.c_str(), line, why.c_str());
+  auto skip = [&](std::size_t line, const std::string& why, const char* what = "skipped") {
+    if (++named <= kNamedSkips) std::fprintf(stderr, "%s:%zu: %s: %s\n", a.log.c_str(), line, what, why.c_str());
   };
   link::CandumpLogReader reader(in);
   link::CandumpLogReader::Entry e;
@@ -326,7 +336,7 @@ int cmd_decode(const DutArgs& a) {
     const auto sig = dbc.decode(lf.any, &err);  // classic or CAN FD as logged
     if (!sig) {
       if (err.empty()) ++foreign;  // an id the DBC does not describe: counted, not an error
-      else ++undecoded, skip(e.line, err + " (" + dbc_name + ")");
+      else ++undecoded, skip(e.line, err + " (" + dbc_name + ")", "not decoded");
       continue;
     }
     const link::DbcMessage& msg = *dbc.find(lf.any.id, lf.any.extended);
@@ -342,7 +352,8 @@ int cmd_decode(const DutArgs& a) {
     }
     std::printf("\n");
   }
-  if (named > kNamedSkips) std::fprintf(stderr, "%s: ... and %lu more skipped line(s)\n", a.log.c_str(), named - kNamedSkips);
+  if (named > kNamedSkips)
+    std::fprintf(stderr, "%s: ... and %lu more line(s) skipped or not decoded\n", a.log.c_str(), named - kNamedSkips);
   std::printf("%s: %lu frames: ", a.log.c_str(), frames);
   for (const auto& [k, n] : per) std::printf("%s %lu, ", k.c_str(), n);
   std::printf("error frames %lu, other ids %lu, not decoded %lu; skipped lines %lu\n", errors, foreign, undecoded, skipped);
@@ -352,7 +363,7 @@ int cmd_decode(const DutArgs& a) {
   }
   // Frames, and not one of them a message of the DBC: the wrong DBC or the wrong log, not a
   // decoded log (it was exit 0, a review).
-  if (per.empty() && foreign > 0) {
+  if (per.empty() && foreign > 0 && undecoded == 0) {
     std::fprintf(stderr, "rig: none of the %lu frame(s) in %s is a message of %s\n", frames, a.log.c_str(),
                  dbc_name.c_str());
     return kExitUsage;

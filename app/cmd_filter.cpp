@@ -20,6 +20,7 @@
 #include "procedures/acceptance/profile.hpp"
 #include "plant/dut/loop_figures.hpp"
 #include "plant/dut/params.hpp"
+#include "plant/emulated/world.hpp"
 #include "app/commands.hpp"
 #include "app/existing_path.hpp"
 #include "app/number_option.hpp"
@@ -49,7 +50,12 @@ void load_dut(const std::string& path, DutConfig& c) {
   for (const char* key : {"profile", "procedure", "plant", "base"})
     if (c.file.contains(key)) {
       c.file = acceptance::resolve_profile_file(std::move(c.file));
+      // A whole profile (its own or its base's [profile]) held to its rules, as `rig run` holds it:
+      // a typo outside [plant.dut] ([plant.dutt], a top-level key) left the built-in DUT in use
+      // without a word (a re-test). A file of [plant.dut] overrides alone is no profile to parse.
+      if (c.file.contains("profile")) acceptance::parse_profile(c.file, path);
       const toml::table* plant = cfg::get_table(c.file, "plant");
+      if (plant) plant::check_plant_keys(*plant);
       c.dut = plant ? cfg::get_table(*plant, "dut") : nullptr;
       return;
     }

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -377,6 +378,9 @@ void add_table(CLI::App& app, int& rc) {
   });
 
   auto stop_cmd = [a, &rc](bool quick) {
+    // The stop is the result, its line a confirmation: a reader gone (`rig table stop | head -0`)
+    // ended it with SIGPIPE's 141 after the stop went out (a code review). Its exit code is the stop's.
+    ::signal(SIGPIPE, SIG_IGN);
     with_table(*a, [&](RotaryTable& t, const TableUse& use) {
       // rig-v1: learn CONTROL first (a read with the link's retries), so the stop keeps SERVO_ON
       // as the drive holds it: the stop's own urgent read is one attempt and a reconnect, and a

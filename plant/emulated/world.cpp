@@ -30,13 +30,17 @@ class EmulatedPlant::CountingSource final : public DutSourceWrapper {
   std::uint64_t& count_;
 };
 
-EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& serial) {
+void check_plant_keys(const toml::table& plant_cfg) {
   // `link` selected a second, direct DUT path that bypassed the CAN client; it is gone, and a
   // profile that still names it fails here rather than silently running another path.
   if (const toml::node* l = plant_cfg.get("link"))
     throw ConfigError(cfg::where(*l) + ": [plant] link was removed: the emulated DUT is always reached through the "
                                        "CAN link (the in-process bus and the firmware emulator); delete this key");
   cfg::check_keys(plant_cfg, {"seed", "dut", "table", "firmware"}, "plant");
+}
+
+EmulatedPlant::EmulatedPlant(const toml::table& plant_cfg, const std::string& serial) {
+  check_plant_keys(plant_cfg);
   const auto seed = static_cast<uint64_t>(cfg::get_int(plant_cfg, "seed", 1, 0));
   dut_ = std::make_unique<CountingSource>(make_dut_source(cfg::get_table(plant_cfg, "dut"), seed, serial), samples_);
   // The firmware sends one sample per tick: a DUT model at another output rate would be

@@ -29,6 +29,11 @@ namespace rig::plant {
 
 class TableEmulator;
 
+// The profile's [plant] table's own keys (seed, dut, table, firmware; the removed `link` named),
+// as EmulatedPlant checks them: for a command that reads a part of it without building the plant
+// (`rig filter --dut PROFILE`, whose typo in [plant] went unsaid: a re-test). Throws ConfigError.
+void check_plant_keys(const toml::table& plant_cfg);
+
 class EmulatedPlant {
  public:
   // `plant_cfg` is the profile's [plant] table: seed, [plant.dut], [plant.table].

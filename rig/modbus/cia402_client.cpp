@@ -890,6 +890,15 @@ void Cia402Table::stop() noexcept {
                        ": an axis coasting, or a statusword address that is wrong (check the drive map); the "
                        "table may still be moving";
     }
+  } catch (const detail::NotThisDriveError& e) {  // another protocol answers: no drive, no halt, and no
+    // quick stop either (quick_stop refuses that peer too): the "quick-stop needs no word" advice was wrong there
+    std::string why;
+    try {
+      why = std::string("halt not sent: ") + e.what();
+    } catch (...) {
+    }
+    detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+    return;
   } catch (const std::exception& e) {
     try {
       unread = e.what();

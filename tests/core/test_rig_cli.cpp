@@ -315,6 +315,16 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_NE(slurp(d + "/dutprof.stderr").find(d + "/derived.toml:2:1: [plant.dut]: the DUT model's closed loop is unstable"),
             std::string::npos)
       << slurp(d + "/dutprof.stderr");
+  // A profile is held to its rules as `rig run` holds it: a typo outside [plant.dut] left the
+  // built-in DUT in use without a word (a re-test).
+  std::ofstream(d + "/typo-plant.toml") << "base = \"ci\"\n[plant.dutt.loop]\ndelay_steps = 1\n";
+  std::ofstream(d + "/typo-top.toml") << "base = \"ci\"\nbogus = 1\n[plant.dut.loop]\ndelay_steps = 1\n";
+  for (const auto& [file, says] : std::vector<std::pair<std::string, std::string>>{
+           {"typo-plant.toml", "typo-plant.toml:2:1: unknown key 'dutt' in [plant]"},
+           {"typo-top.toml", "typo-top.toml:2:9: unknown key 'bogus' in [top level]"}}) {
+    EXPECT_EQ(run({"filter", "show", "--dut", d + "/" + file}, d + "/typo"), 2) << file;
+    EXPECT_NE(slurp(d + "/typo.stderr").find(says), std::string::npos) << slurp(d + "/typo.stderr");
+  }
   // A DUT file (the DUT's table itself) is named by its own tables: its [loop] was "[plant.dut.loop]".
   std::ofstream(d + "/dutfile.toml") << "seed = 3\n[loop]\nbogus = 1\n";
   std::ofstream(d + "/dutfile-top.toml") << "wat = 1\n";
@@ -1666,7 +1676,8 @@ TEST(RigCli, AnalyzeTextSaysTheBoundsConfidenceAndTheGuardedAlpha) {
     std::string want;
     for (const auto& p : j["oadev"])
       if (p["edf_alpha"] != p["alpha"])
-        want += (want.empty() ? "" : ", ") + p["m"].dump() + " (alpha " + p["edf_alpha"].dump() + ")";
+        want += (want.empty() ? "" : ", ") + p["m"].dump() + " (identified " + p["alpha"].dump() + ", bounds " +
+                p["edf_alpha"].dump() + ")";
     const std::string note = "  note: the bounds' EDF takes another alpha than the one identified at m = ";
     if (want.empty()) {
       ++plain;
@@ -1730,12 +1741,13 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   refused("spaced.txt", "1\n2\n3, ,\n4\n", "spaced.txt:3: '3, ,': empty columns after the value");
   // Digits grouped with blanks as the SI writes them: no cut offered (awk's $2 of "0.981 234" is
   // 234, a metrologist's review); a row of two numbers keeps its cut.
-  for (const std::string grouped : {"0.981 234", "12 345.678", "-1 234 567"})
+  for (const std::string grouped : {"0.981 234", "12 345.678", "-1 234 567", "43 279.168 29", "0.000 12", "12 345.678 9"})
     refused("grouped.txt", "1\n" + grouped + "\n2\n", "grouped.txt:2: not a decimal number: '" + grouped +
                                                            "'; digits grouped with blanks? the record's numbers are "
                                                            "written without grouping (");
   refused("grouped.txt", "1\n0.981 234\n2\n", "(0.981234); two columns? a text record holds one value per line\n");
-  refused("two.txt", "1\n0.5 0.6\n2\n", "'0.5 0.6'; a text record holds one value per line (take the column out first");
+  for (const std::string two : {"0.5 0.6", "1 .5", "0.5 700", "1 2", "1234 567"})  // not SI groups: the cut stands
+    refused("two.txt", "1\n" + two + "\n2\n", "'" + two + "'; a text record holds one value per line (take the column out first");
   // Characters that look like ASCII ones are named (they were quoted as they are: '1 ', '-1').
   refused("nbsp.txt", "1\xC2\xA0\n2\n3\n", "nbsp.txt:1: not a decimal number: '1\xC2\xA0'; it holds a no-break space "
                                             "(U+00A0, bytes \\xC2\\xA0)");
@@ -1747,6 +1759,10 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
     std::string u16 = "\xFF\xFE";
     for (const char c : std::string("0.98012\r\n0.98007\r\n0.98011\r\n0.98003\r\n0.98010\r\n")) u16 += c, u16 += '\0';
     std::ofstream(d + "/u16.txt", std::ios::binary) << u16;
+    // A first line that is blank holds the mark alone: still said (a code review).
+    std::ofstream(d + "/u16-blank.txt", std::ios::binary) << std::string("\xFF\xFE\n\0" "1\0\n\0", 8);
+    EXPECT_EQ(run({"analyze", d + "/u16-blank.txt"}, d + "/u16"), 2);
+    EXPECT_NE(slurp(d + "/u16.stderr").find("u16-blank.txt: a UTF-16 text file"), std::string::npos) << slurp(d + "/u16.stderr");
     for (const std::string input : {"text", "f32", "f64"}) {
       EXPECT_EQ(run({"analyze", d + "/u16.txt", "--input", input, "--rate", "1"}, d + "/u16"), 2) << input;
       EXPECT_NE(slurp(d + "/u16.stderr").find(d + "/u16.txt: a UTF-16 text file (its first bytes \\xFF\\xFE are UTF-16's "
@@ -3216,7 +3232,13 @@ TEST(RigCli, DutSetFilterRefusesAnUnstableSectionBeforeTheLinkOpens) {
            {"0x1,0,0,0,0", "'0x1' is not a decimal number"},
            {"0x1p3,0,0,0,0", "'0x1p3' is not a decimal number"},
            {"1,,0,0,0", "'' is not a decimal number"},
-           {"0,0,0,-0.5,0.1", "b0, b1 and b2 are all 0: the section passes nothing"}}) {
+           {"0,0,0,-0.5,0.1", "b0, b1 and b2 are all 0: the section passes nothing"},
+           // As sent, in 32-bit float (reviews): 1e-50 is 0 there, 0.99999999 is 1 (a pole on the
+           // unit circle); 1e-400 is no "not finite"; a trailing comma is an empty item.
+           {"1e-50,0,0,0,0", "'1e-50' is 0 in the protocol's 32-bit float"},
+           {"1e-400,0,0,0,0", "'1e-400' is 0 in the protocol's 32-bit float"},
+           {"0.2,0,0,0,0.99999999", "unstable: its poles (a1, a2), as the protocol's 32-bit float holds them"},
+           {"1,0,0,0,0,", "'' is not a decimal number"}}) {
     EXPECT_EQ(run({"dut", "set-filter", "--can", "rigtest-nocan0", "--biquad", bad}, d + "/io"), 2) << bad;
     EXPECT_NE(slurp(d + "/io.stderr").find("--biquad '" + bad + "': " + says), std::string::npos) << slurp(d + "/io.stderr");
   }
@@ -3245,7 +3267,7 @@ TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
               std::string::npos)
         << name << "\n" << out;
     EXPECT_NE(out.find("DUT_STREAM_Y seq=1193048"), std::string::npos) << "decoding goes on after the short frame";
-    EXPECT_NE(err.find(std::string(name) + ":8: skipped: DUT_STREAM_X: length 4, DBC says 8"), std::string::npos)
+    EXPECT_NE(err.find(std::string(name) + ":8: not decoded: DUT_STREAM_X: length 4, DBC says 8"), std::string::npos)
         << err;
   }
   // The same session without the short frame decodes cleanly.
@@ -3257,6 +3279,14 @@ TEST(RigCli, DutDecodeReadsBothCandumpFormatsAndNamesSkippedLines) {
   clean.close();
   EXPECT_EQ(run({"dut", "decode", d + "/clean.log"}, d + "/io"), 0) << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/io.stdout").find("9 frames"), std::string::npos);
+  // An unknown id beside a frame not decoded is not "none of the frames is a message of the DBC"
+  // (the summary had just said one was not decoded: a code review).
+  std::ofstream(d + "/mix.log") << "(1.0) can0 7FF#0102\n(1.1) can0 101#56341205\n";
+  EXPECT_EQ(run({"dut", "decode", d + "/mix.log"}, d + "/io"), 2);
+  EXPECT_NE(slurp(d + "/io.stdout").find("2 frames: error frames 0, other ids 1, not decoded 1; skipped lines 0"),
+            std::string::npos)
+      << slurp(d + "/io.stdout");
+  EXPECT_EQ(slurp(d + "/io.stderr").find("none of the"), std::string::npos) << slurp(d + "/io.stderr");
   std::ofstream(d + "/notes.txt") << "this is not a candump log\n";
   EXPECT_EQ(run({"dut", "decode", d + "/notes.txt"}, d + "/io"), 2);
   EXPECT_NE(slurp(d + "/io.stderr").find("notes.txt:1: skipped: not a candump frame line"), std::string::npos);

@@ -191,6 +191,21 @@ TEST_F(RigTable, AMotionWithStdoutClosedIsRefusedBeforeAnythingIsSent) {
       << "a stop is never refused";
   EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " quick-stop > /dev/full 2>" + err + ")", out), 0)
       << "the stop is its result, exit 0 when delivered; its printed line only confirms it";
+  // A reader gone is no SIGPIPE's 141 after the stop went out (a code review).
+  EXPECT_EQ(run("bash -c 'set -o pipefail; sleep 0.2 | true; " + std::string(RIG_BIN) + " table " + where_ + " stop 2>" +
+                    err + " | true'",
+                out),
+            0)
+      << out;
+  // A hardware file named `stop` is no stop: the move is refused as any move (a word scan took it
+  // for one, and the table turned with nothing printed: a code review).
+  const std::string folder = std::filesystem::temp_directory_path() / ("rig-stopfile-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder + "/stop") << "[table]\nmodbus = \"" << server_.endpoint() << "\"\n";
+  EXPECT_EQ(run("(cd " + folder + " && " + std::string(RIG_BIN) + " table --hardware stop move 10 >&- 2>" + err + ")", out),
+            2);
+  EXPECT_FALSE(emu_->snapshot().servo_on);
+  std::filesystem::remove_all(folder);
   std::filesystem::remove(err);
 }
 

@@ -193,6 +193,9 @@ TEST(StrictModbusTcp, NoStopGoesIntoAPeerThatAnswersInAnotherProtocol) {
       << c4.last_stop_error();
   c4.stop();
   EXPECT_TRUE(has(c4.last_stop_error(), "halt not sent")) << c4.last_stop_error();
+  // ... naming the peer, and not offering the quick stop, which that peer is refused too (a code review).
+  EXPECT_TRUE(has(c4.last_stop_error(), m::kForeignPeer)) << c4.last_stop_error();
+  EXPECT_FALSE(has(c4.last_stop_error(), "quick-stop")) << c4.last_stop_error();
   // A status or a move says so too, and that nothing was sent: the protocol id named, not the
   // transaction id the peer's "HT" makes (a technician's re-test: no hint, and "stop not sent (the
   // table may still be moving)" after a move that sent nothing).
