@@ -892,12 +892,7 @@ void Cia402Table::stop() noexcept {
     }
   } catch (const detail::NotThisDriveError& e) {  // another protocol answers: no drive, no halt, and no
     // quick stop either (quick_stop refuses that peer too): the "quick-stop needs no word" advice was wrong there
-    std::string why;
-    try {
-      why = std::string("halt not sent: ") + e.what();
-    } catch (...) {
-    }
-    detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+    stop_not_sent({"halt not sent: ", e.what()});
     return;
   } catch (const std::exception& e) {
     try {
@@ -928,6 +923,15 @@ void Cia402Table::stop() noexcept {
     detail::record_stop(stop_mu_, last_stop_error_, std::move(off_yet_moving), [&] { stop_needless_ = false; });
 }
 
+void Cia402Table::stop_not_sent(std::initializer_list<std::string_view> said) noexcept {
+  std::string why;
+  try {
+    for (const std::string_view part : said) why += part;
+  } catch (...) {
+  }
+  detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+}
+
 // Sent at once by a client that has identified its drive; else after one urgent statusword read
 // (a read met by silence, a Modbus reply that breaks the protocol or a broken link still sends:
 // the link decides then, as before; one answered in another protocol does not: that peer is not
@@ -938,21 +942,11 @@ void Cia402Table::quick_stop() noexcept {
     try {
       if (!stop_goes_out(static_cast<uint16_t>(read_object(Obj::kStatusword, CancelToken{}, true)), "quick stop")) return;
     } catch (const detail::NotThisDriveError& e) {  // read_object: another protocol answered, no drive
-      std::string why;
-      try {
-        why = std::string("quick stop not sent (the table may still be moving): ") + e.what();
-      } catch (...) {
-      }
-      detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+      stop_not_sent({"quick stop not sent (the table may still be moving): ", e.what()});
       return;
-    } catch (const ModbusError& e) {
+    } catch (const ModbusError& e) {  // identified meanwhile by another thread's reading: said here
       if (e.foreign_reply) {
-        std::string why;
-        try {
-          why = std::string("quick stop not sent (the table may still be moving): ") + e.what() + " (" + kForeignPeer + ")";
-        } catch (...) {
-        }
-        detail::record_stop(stop_mu_, last_stop_error_, std::move(why), [&] { stop_needless_ = false; });
+        stop_not_sent({"quick stop not sent (the table may still be moving): ", e.what(), " (", kForeignPeer, ")"});
         return;
       }
     } catch (...) {

@@ -7,10 +7,12 @@
 #pragma once
 #include <atomic>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rig/core/clock.hpp"
@@ -110,6 +112,8 @@ class Cia402Table final : public RotaryTable {
   std::atomic<bool> identified_{false};       // a reading showed a CiA 402 drive (identify)
   bool homed_ = false;            // homed by this client (when the map names no homed bit)
   bool profile_applied_ = false;
+  // A stop that did not go out, said as its parts joined (noexcept: the safe-state path).
+  void stop_not_sent(std::initializer_list<std::string_view> said) noexcept;
   mutable std::mutex stop_mu_;
   std::string last_stop_error_;
   bool stop_needless_ = false;
