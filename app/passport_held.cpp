@@ -65,17 +65,24 @@ std::string junit_unlike_passport(std::string junit, const nlohmann::json& passp
 // run's passport and junit.xml copied into a stopped run's folder whose run started in the same
 // second passed every other check (a technician's re-test). Missing or unreadable: said, for a
 // passport written beside one (its profile_sha256, since 2026-12-03); an older folder's is not held.
-std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::json& passport) {
+// `read`: the checkpoint as a caller has parsed it already (passport_unlike_its_folder), else read here.
+std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::json& passport,
+                                     const nlohmann::json* read = nullptr) {
   const std::string outcome = passport.value("outcome", "");
   if (outcome != "PASS" && outcome != "FAIL") return "";
-  const std::string at = Executive::checkpoint_path(dir);
-  std::error_code ec;
-  if (!fs::exists(at, ec))
-    return passport.contains("profile_sha256") ? "its run's checkpoint.json, which holds what the run measured, is missing"
-                                               : "";
   nlohmann::json measured;
   try {
-    measured = parse_json_unique_keys(file_text(at)).at("values");
+    if (read) {
+      measured = read->at("values");
+    } else {
+      const std::string at = Executive::checkpoint_path(dir);
+      std::error_code ec;
+      if (!fs::exists(at, ec))
+        return passport.contains("profile_sha256")
+                   ? "its run's checkpoint.json, which holds what the run measured, is missing"
+                   : "";
+      measured = parse_json_unique_keys(file_text(at)).at("values");
+    }
   } catch (const std::exception& e) {
     return std::string("its run's checkpoint.json cannot be read (") + e.what() + ")";
   }
@@ -166,6 +173,8 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
   // the profile's (since 2026-12-02): either gone is an edit too (a re-test deleted them). The
   // folder's own digest is not printed: it made such an edit pass (as a resume's refusal).
   const bool recent = passport.contains("profile_sha256");
+  nlohmann::json run_json, checkpoint;  // as read here; the checkpoint for the values' check after the loop
+  bool checkpoint_read = false;
   for (const std::string file : {"run.json", "checkpoint.json"}) {
     const std::string at = dir + "/" + file;
     const bool of_run = file == "run.json";
@@ -173,12 +182,13 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
       if (recent && of_run) return "its run.json, which names the run's profile, is missing";
       continue;
     }
-    nlohmann::json j;
+    nlohmann::json& j = of_run ? run_json : checkpoint;
     try {
       j = parse_json_unique_keys(file_text(at));
     } catch (const std::exception& e) {
       return "its " + file + " cannot be read (" + e.what() + ")";
     }
+    checkpoint_read = checkpoint_read || !of_run;
     const nlohmann::json* named = nullptr;
     if (j.is_object() && of_run && j.contains("profile_digest")) named = &j["profile_digest"];
     if (j.is_object() && !of_run && j.contains("identity") && j["identity"].is_object() &&
@@ -190,7 +200,7 @@ std::string passport_unlike_its_folder(const std::string& dir, const nlohmann::j
     }
     if (*named != p.digest) return file + "'s profile_digest is " + named->dump() + ", not the folder's profile.toml's";
   }
-  return values_unlike_checkpoint(dir, passport);
+  return values_unlike_checkpoint(dir, passport, checkpoint_read ? &checkpoint : nullptr);
 }
 
 }  // namespace rig::cli
