@@ -425,7 +425,7 @@ bool si_grouped(std::string_view tok) {
     const std::string_view whole = i <= point_at ? g[i].substr(0, p) : std::string_view();
     const std::string_view frac = i == point_at ? g[i].substr(p + 1) : i > point_at ? g[i] : std::string_view();
     if (i <= point_at && !(i == 0 ? digits(whole, 1, 3) : digits(whole, 3, 3))) return false;
-    if (i >= point_at && i < g.size() && !(i < last ? digits(frac, 3, 3) : digits(frac, 1, 3))) return false;
+    if (i >= point_at && !(i < last ? digits(frac, 3, 3) : digits(frac, 1, 3))) return false;
   }
   return true;
 }

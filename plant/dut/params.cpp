@@ -83,7 +83,10 @@ void read_noise(const toml::table& t, NoiseParams& p, const std::string& ctx) {
 // Applies one layer (the compiled-in default, then the profile's overrides) onto `p`.
 // Layers are read one by one, not merged, so errors keep the file:line of their layer.
 void apply_layer(const toml::table& root, DutParams& p, std::string_view section) {
-  const auto in = [section](std::string_view name) { return dut_table_name(section, name); };
+  // What errors call a sub-table: "plant.dut.loop" in a profile, "loop" in a DUT file.
+  const auto in = [section](std::string_view name) {
+    return section.empty() ? std::string(name) : std::string(section) + "." + std::string(name);
+  };
   cfg::check_keys(root, {"serial", "seed", "loop", "regulator", "orientation", "noise", "filter"},
                   section.empty() ? "DUT file" : section);
   p.serial = cfg::get_string(root, "serial", p.serial);
@@ -98,10 +101,6 @@ void apply_layer(const toml::table& root, DutParams& p, std::string_view section
 }
 
 }  // namespace
-
-std::string dut_table_name(std::string_view section, std::string_view name) {
-  return section.empty() ? std::string(name) : std::string(section) + "." + std::string(name);
-}
 
 DutParams load_dut_params(const toml::table* overrides, std::string_view section) {
   DutParams p;

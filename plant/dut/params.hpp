@@ -87,7 +87,4 @@ std::string_view default_dut_toml();
 // names it: "plant.dut" in a profile; "" for a DUT file read whole, whose [loop] is [loop].
 DutParams load_dut_params(const toml::table* overrides, std::string_view section = "plant.dut");
 
-// What errors call `section`'s sub-table `name` ("plant.dut.loop"; "loop" for a DUT file).
-std::string dut_table_name(std::string_view section, std::string_view name);
-
 }  // namespace rig::plant
