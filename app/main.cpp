@@ -185,8 +185,11 @@ void no_empty_text(CLI::App& app) {
 // until stopped, as services may with stdout closed (a stop of a server then read exit 2, hours
 // on, a code review): /dev/null, as before.
 // `rig run` and `rig capture import`: their records are their files, what they print is not their
-// result (the stdout checks below and at start-up ask the same).
-bool records_are_files(std::string_view subcommand) { return subcommand == "run" || subcommand == "capture"; }
+// result (the stdout checks below and at start-up ask the same). A dry run's plan is its only
+// result (`rig run --dry-run > /dev/full` was exit 0 with no plan seen: a review).
+bool records_are_files(std::string_view subcommand, bool dry_run) {
+  return (subcommand == "run" && !dry_run) || subcommand == "capture";
+}
 // `rig table stop` and `quick-stop`: the stop is the result (its exit code says whether it was
 // delivered), the line printed only its confirmation; a stop sent from a script with stdout
 // closed exited 2 ("usage error") after it went out (a technician's re-test). Known once parsed
@@ -199,10 +202,13 @@ bool a_stop(std::string_view subcommand, std::string_view action) {
 // (`rig run --help >&-` was exit 0 with nothing written, `rig --help run >&-` exit 2).
 bool console_may_go(int argc, char** argv) {
   if (argc < 2) return false;
-  for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i)
+  bool dry_run = false;
+  for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
     if (const std::string_view w = argv[i]; w == "--help" || w == "-h" || w == "--version") return false;
+    dry_run = dry_run || std::string_view(argv[i]) == "--dry-run";
+  }
   const std::string_view first = argv[1];
-  if (records_are_files(first)) return true;
+  if (records_are_files(first, dry_run)) return true;
   if (first != "plant" && first != "dut") return false;
   for (int i = 2; i < argc; ++i)
     if (std::string_view(argv[i]) == (first == "plant" ? "serve" : "stream")) return true;
@@ -364,7 +370,9 @@ int main(int argc, char** argv) {
     // the others as it ends any filter).
     const CLI::App* chosen = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();
     const CLI::App* action = chosen && !chosen->get_subcommands().empty() ? chosen->get_subcommands().front() : nullptr;
-    if (!chosen || !(records_are_files(chosen->get_name()) || (action && a_stop(chosen->get_name(), action->get_name()))))
+    const bool dry_run = chosen && chosen->get_name() == "run" && chosen->count("--dry-run") > 0;
+    if (!chosen || !(records_are_files(chosen->get_name(), dry_run) ||
+                     (action && a_stop(chosen->get_name(), action->get_name()))))
       if (standard_output_failed() && rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code says more
   } catch (const CLI::ParseError& e) {
     // `rig bogus`, `rig table spin`: CLI11 takes an unknown word where a subcommand belongs for a

@@ -5339,6 +5339,16 @@ TEST(RigCli, PrintedOutputThatCannotBeWrittenIsExitTwo) {
     EXPECT_NE(slurp(d + "/closed.stderr").find("rig: output error: standard output is closed"), std::string::npos)
         << slurp(d + "/closed.stderr");
   }
+  // A dry run's plan is its result (`rig run --dry-run > /dev/full` and `>&-` were exit 0 with no
+  // plan seen); the run itself keeps its console's freedom.
+  const std::vector<std::string> dry{"run", "--plant", "emulated", "--profile", "ci", "--no-history", "--dry-run"};
+  EXPECT_EQ(to_full(dry), 2);
+  EXPECT_NE(slurp(d + "/full.stderr").find("rig: output error: standard output: write failed"), std::string::npos)
+      << slurp(d + "/full.stderr");
+  EXPECT_EQ(closed(dry), 2);
+  EXPECT_NE(slurp(d + "/closed.stderr").find("rig: output error: standard output is closed"), std::string::npos)
+      << slurp(d + "/closed.stderr");
+  EXPECT_EQ(run(dry, d + "/dry"), 0) << slurp(d + "/dry.stderr");
   // --json on that stdout says the same, not "No space left on device" (a code review).
   EXPECT_EQ(closed({"filter", "show", "--json", "/dev/stdout"}), 2);
   EXPECT_NE(slurp(d + "/closed.stderr").find("--json /dev/stdout: standard output is closed"), std::string::npos)
