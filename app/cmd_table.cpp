@@ -1,5 +1,7 @@
 // `rig table`: manual control of a real or emulated rotary table over Modbus,
 // for a technician at the rig (docs/table-registers.md).
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -203,6 +205,12 @@ void with_table(const TableArgs& a, Body body, const std::string& unreachable = 
   if (!command.empty() && stdout_closed())
     throw ConfigError("rig table " + command + ": standard output is closed (the command was started with it closed, "
                       ">&-): it prints where the table ended; nothing sent");
+  // /dev/full is the one full file known before the first write (`> /dev/full` homed the table,
+  // then exit 2: a review); any other full disk is found after the motion, as before.
+  if (struct stat st{}; !command.empty() && ::fstat(STDOUT_FILENO, &st) == 0 && S_ISCHR(st.st_mode) &&
+                        st.st_rdev == makedev(1, 7))
+    throw ConfigError("rig table " + command + ": standard output is /dev/full: it prints where the table ended; "
+                      "nothing sent");
   std::optional<std::string> identity;
   std::optional<TableLock> lock;
   if (!command.empty()) {

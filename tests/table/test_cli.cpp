@@ -187,6 +187,19 @@ TEST_F(RigTable, AMotionWithStdoutClosedIsRefusedBeforeAnythingIsSent) {
     EXPECT_FALSE(emu_->snapshot().moving) << command;
     EXPECT_FALSE(emu_->snapshot().servo_on) << command;
   }
+  // /dev/full likewise (`> /dev/full` homed the table, then exit 2: a review).
+  for (const char* command : {"home", "move 10"}) {
+    EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " " + command + " > /dev/full 2>" + err + ")", out),
+              2)
+        << command;
+    std::ifstream in(err);
+    const std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(said.find(": standard output is /dev/full: it prints where the table ended; nothing sent"),
+              std::string::npos)
+        << said;
+    EXPECT_FALSE(emu_->snapshot().homed) << command;
+    EXPECT_FALSE(emu_->snapshot().servo_on) << command;
+  }
   EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " stop >&- 2>" + err + ")", out), 0)
       << "a stop is never refused";
   EXPECT_EQ(run("(" + std::string(RIG_BIN) + " table " + where_ + " quick-stop > /dev/full 2>" + err + ")", out), 0)
