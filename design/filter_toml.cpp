@@ -37,6 +37,11 @@ std::vector<Biquad> read_sections(const toml::node& n) {
       if (!(std::abs(*v) <= std::numeric_limits<float>::max()))
         throw ConfigError(cfg::where((*s)[i]) + ": filter coefficient " + num(*v) +
                           (std::isnan(*v) ? " is not a number" : " is beyond the protocol's 32-bit float range"));
+      // Nearer 0 than binary32 holds (1.4e-45) it would arrive as 0, as `rig dut set-filter
+      // --biquad` refuses it (a review: the profile's sections were held to the double only).
+      if (*v != 0 && static_cast<float>(*v) == 0)
+        throw ConfigError(cfg::where((*s)[i]) + ": filter coefficient " + num(*v) +
+                          " is 0 in the protocol's 32-bit float (nearer 0 than 1.4e-45): give 0, or a coefficient it holds");
       c[i] = *v;
     }
     const Biquad b{c[0], c[1], c[2], c[3], c[4]};
@@ -47,9 +52,14 @@ std::vector<Biquad> read_sections(const toml::node& n) {
                         num(c[3]) + ", " + num(c[4]) + "] passes nothing (b0 = b1 = b2 = 0): y(t) would be 0; "
                         "enabled = false leaves the filter out");
     // Checked here, before any device opens: a DUT refuses an unstable section only after power-on.
-    if (!stable_section(b))
+    // And as the DUT holds it: a1 = 0.99999999 is stable as a double and on the unit circle in binary32.
+    const Biquad sent{static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]),
+                      static_cast<float>(c[3]), static_cast<float>(c[4])};
+    if (!stable_section(b) || !stable_section(sent))
       throw ConfigError(cfg::where(e) + ": filter section [" + num(c[0]) + ", " + num(c[1]) + ", " + num(c[2]) + ", " + num(c[3]) +
-                        ", " + num(c[4]) + "] is unstable: its poles (a1, a2) are not inside the unit circle");
+                        ", " + num(c[4]) + "] is unstable: its poles (a1, a2)" +
+                        (stable_section(b) ? ", as the protocol's 32-bit float holds them," : "") +
+                        " are not inside the unit circle");
     out.push_back(b);
   }
   return out;

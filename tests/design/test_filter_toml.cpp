@@ -83,6 +83,14 @@ TEST(FilterToml, ErrorsNameTheFileAndLine) {
   EXPECT_NE(error_of("sections = [[1.0, 0.0, 0.0, 0.0, 1.0]]\n").find("unstable"), std::string::npos)
       << "a pole on the unit circle";
   EXPECT_EQ(error_of("sections = [[0.2, 0.0, 0.0, -0.5, 0.1]]\n"), "") << "a stable section";
+  // Held as the DUT holds them, in binary32 (as `rig dut set-filter --biquad` is): a coefficient
+  // that arrives as 0, a pole the rounding puts on the unit circle.
+  EXPECT_EQ(error_of("sections = [[1.0, 1e-50, 0.0, 0.0, 0.0]]\n"),
+            "f.toml:1:19: filter coefficient 1e-50 is 0 in the protocol's 32-bit float (nearer 0 than 1.4e-45): give 0, "
+            "or a coefficient it holds");
+  EXPECT_EQ(error_of("sections = [[1.0, 0.0, 0.0, 0.0, 0.99999999]]\n"),
+            "f.toml:1:13: filter section [1, 0, 0, 0, 0.99999999] is unstable: its poles (a1, a2), as the protocol's "
+            "32-bit float holds them, are not inside the unit circle");
   // No section, or one that passes nothing (y(t) = 0, rms_filtered passed on it: a review).
   EXPECT_EQ(error_of("preset = \"custom\"\nsections = []\n"),
             "f.toml:2:12: sections = [] has no section; a filter has at least one (enabled = false leaves the filter out)");
