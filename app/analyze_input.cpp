@@ -298,8 +298,11 @@ void check_input_path(const std::string& path, const std::string& input, const s
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
     if (const std::string mark = utf16_mark(head); !mark.empty()) throw InputError(utf16_refusal(path, mark));
-    // Text as the text reader reads it (ASCII, tab, CR, well-formed UTF-8) and the line ends.
-    const bool text = head.size() >= 16 &&
+    // Text as the text reader reads it (ASCII, tab, CR, well-formed UTF-8) and the line ends;
+    // judged on 16 bytes or more, or on a file too short for 3 raw values, refused anyway (an
+    // 8-byte "1\n2\n3\n4\n" read as float64 was "1 value; at least 3 are needed": a review).
+    const bool too_short = head.size() < (input == "f64" ? 24u : 12u);
+    const bool text = (head.size() >= 16 || (too_short && !head.empty())) &&
                       binary_bytes(head) == static_cast<std::size_t>(std::count(head.begin(), head.end(), '\n'));
     // What the file was read as and the bytes looked at, as the refusal and the warnings say it.
     const std::string read_as = path + ": read as raw " + (input == "f64" ? "float64" : "float32") + " (" +

@@ -976,6 +976,13 @@ TEST(RigCli, AnalyzeSaysWhatItsInputIsBeforeReadingIt) {
       << slurp(d + "/tf32.stderr");
   EXPECT_EQ(run({"analyze", d + "/t.bin", "--rate", "1", "--input", "text", "--no-psd"}, d + "/ttext"), 0)
       << slurp(d + "/ttext.stderr");
+  // A text file too short for 3 raw values is named as text too (it was "1 value; at least 3").
+  std::ofstream(d + "/t8.bin") << "1\n2\n3\n4\n";
+  EXPECT_EQ(run({"analyze", d + "/t8.bin", "--rate", "1"}, d + "/t8"), 2);
+  EXPECT_NE(slurp(d + "/t8.stderr").find("t8.bin: read as raw float64 (its .bin name), but all its 8 bytes are text "
+                                         "(\"1\"): a text record"),
+            std::string::npos)
+      << slurp(d + "/t8.stderr");
   {
     std::ofstream b(d + "/v.bin", std::ios::binary);
     for (int k = 0; k < 64; ++k) {
