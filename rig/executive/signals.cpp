@@ -15,17 +15,18 @@ namespace rig {
 namespace {
 // SIGHUP is taken unless the process started with it ignored: `nohup rig ...` asks that a
 // closed terminal not end the run (or move), and the watcher would otherwise override that.
-// SIGQUIT (Ctrl-\) too: its default action ended the process with no halt, and the table drove on
-// to its target (a technician's re-test); a process started with it ignored keeps it ignored.
+// SIGQUIT (Ctrl-\) is taken as SIGINT is: its default action ended the process with no halt, and
+// the table drove on to its target (a technician's re-test). Like SIGINT it is taken even when the
+// process started with it ignored: a shell without job control ignores both in its background
+// jobs, which is no request of the user's (a review: `kill -QUIT` left `rig plant serve &` running).
 sigset_t abort_signals() {
   sigset_t s;
   sigemptyset(&s);
   sigaddset(&s, SIGINT);
   sigaddset(&s, SIGTERM);
-  for (const int sig : {SIGHUP, SIGQUIT}) {
-    struct sigaction was {};
-    if (sigaction(sig, nullptr, &was) != 0 || was.sa_handler != SIG_IGN) sigaddset(&s, sig);
-  }
+  sigaddset(&s, SIGQUIT);
+  struct sigaction was {};
+  if (sigaction(SIGHUP, nullptr, &was) != 0 || was.sa_handler != SIG_IGN) sigaddset(&s, SIGHUP);
   return s;
 }
 

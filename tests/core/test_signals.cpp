@@ -44,6 +44,19 @@ TEST(SignalWatcher, SigquitIsTakenAsAnAbort) {
   }
   EXPECT_TRUE(source.token().requested());
   EXPECT_EQ(source.token().reason(), "SIGQUIT received");
+  // Started with it ignored, as a shell without job control starts its background jobs (SIGINT
+  // and SIGQUIT both): taken as SIGINT is (`kill -QUIT` left `rig plant serve &` running: a review).
+  struct sigaction ignore {}, was {};
+  ignore.sa_handler = SIG_IGN;
+  ASSERT_EQ(::sigaction(SIGQUIT, &ignore, &was), 0);
+  CancelSource again;
+  {
+    SignalWatcher w(again);
+    ASSERT_EQ(::raise(SIGQUIT), 0);
+  }
+  ::sigaction(SIGQUIT, &was, nullptr);
+  EXPECT_TRUE(again.token().requested());
+  EXPECT_EQ(again.token().reason(), "SIGQUIT received");
 }
 
 // A signal to the process while two watchers live (one command's, one of a helper it runs): one
