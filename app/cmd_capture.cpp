@@ -675,9 +675,17 @@ int cmd_import(const ImportArgs& a) {
     // Nothing of the [dut] stream in the log (another DUT's layout, --iface naming no frame, an
     // empty file): an empty capture would only fail later in rig analyze, far from the cause.
     staged.drop();
-    std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in %llu frame(s)%s; %s not written\n", a.log.c_str(),
-                 a.hardware.c_str(), static_cast<unsigned long long>(frames + elsewhere),
-                 a.iface.empty() ? "" : (" on " + a.iface).c_str(), a.out.c_str());
+    // Counted as the summary counts them: the frames read, on the interface read, and those
+    // elsewhere apart (all of a log's frames on can0 were "in 5991 frame(s) on can1" under
+    // --iface can1, the summary saying 0 read there: a review).
+    const std::string on = !a.iface.empty() ? a.iface : stream_iface;
+    const std::string rest =
+        elsewhere == 0 ? std::string()
+                       : " (" + std::to_string(elsewhere) + " on other interfaces, not read" +
+                             (a.iface.empty() ? std::string(")") : std::string(": is --iface " + a.iface + " the DUT's?)"));
+    std::fprintf(stderr, "%s: no sample of the [dut] stream (%s) in the %llu frame(s) read%s%s; %s not written\n",
+                 a.log.c_str(), a.hardware.c_str(), static_cast<unsigned long long>(frames),
+                 on.empty() ? "" : (" on " + on).c_str(), rest.c_str(), a.out.c_str());
     return kExitUsage;
   }
   staged.keep();

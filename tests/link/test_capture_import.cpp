@@ -441,6 +441,18 @@ TEST(CaptureImport, ALogWithoutTheStreamWritesNoCaptureAndExits2) {
             2);
   const std::string out1 = slurp(dir() / "nostream1.out");
   EXPECT_NE(out1.find("(6 frames read on vcan0, 6 other ids)"), std::string::npos) << out1;
+  EXPECT_NE(slurp(dir() / "nostream.err").find("in the 6 frame(s) read on vcan0; "), std::string::npos)
+      << slurp(dir() / "nostream.err");
+  // --iface naming an interface without frames: the line says what the summary says, 0 read
+  // there and the rest elsewhere (it said "in 6 frame(s) on can1": a review).
+  EXPECT_EQ(run_rig("capture import " + (dir() / "nostream.log").string() + " --hardware " +
+                        (dir() / "hw-ns.toml").string() + " --out " + cap.string() + " --iface can1",
+                    "nostream2"),
+            2);
+  const std::string err2 = slurp(dir() / "nostream2.err");
+  EXPECT_NE(err2.find("in the 0 frame(s) read on can1 (6 on other interfaces, not read: is --iface can1 the DUT's?); "),
+            std::string::npos)
+      << err2;
 }
 
 // An import that does not finish (a full disk here: the file size limit, as `ulimit -f`) leaves
