@@ -1031,7 +1031,7 @@ void add_analyze(CLI::App& app, int& rc) {
   sub->add_option("--json", args->json_out, "write the analysis as JSON (docs/contracts.md shape)");
   sub->add_option("--svg", args->svg_dir,
                   "write allan.svg and psd.svg into this folder (made if missing, in a folder that exists)");
-  sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect");
+  sub->add_option("--window", args->window, "PSD window: hann|hamming|blackman|rect")->capture_default_str();
   sub->add_option("--segment", args->segment, "PSD segment length, at least 8 (default: chosen from the record)");
   sub->add_option("--overlap", args->overlap, "PSD segment overlap, fraction in [0, 0.95] (default 0.5)");
   sub->add_option("--threads", args->threads, "threads (default and 0: all cores)");

@@ -465,7 +465,7 @@ void add_dut(CLI::App& app, int& rc) {
   lt->callback([a, &rc] { rc = cmd_loop_test(*a); });
 
   auto* dec = dut->add_subcommand("decode", "Decode a candump log (candump -l / -L files or candump's screen output) with the protocol's DBC; "
-                                     "exit 2 when a line had to be skipped");
+                                     "exit 2 when a line had to be skipped or a frame of the DBC could not be decoded");
   dec->add_option("LOG", a->log, "candump log file")->required();
   dec->add_option("--dbc", a->dbc, "DBC file (default: --hardware FILE's [dut] dbc, else the rig protocol's, "
                                    "docs/rig-dut.dbc, built into the program)");

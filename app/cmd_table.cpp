@@ -373,7 +373,7 @@ void add_table(CLI::App& app, int& rc) {
   // A finite angle, checked on the text before the drive is asked: `move nan` was exit 4 with the
   // drive unreachable and 2 with it reachable, and `move 1e400` was named "inf°" (a review). The
   // travel limits are the drive's, checked when it answers.
-  mv->add_option("DEG", a->deg, "Target angle, degrees (a finite number)")
+  mv->add_option("DEG", a->deg, "Target angle, degrees, in [-200000, 200000] (the drive's travel limits checked when it answers)")
       ->required()
       ->check(number_in(-200000.0, 200000.0, false, "a number of degrees"));  // the client's bound, before the drive is asked
   mv->callback([a, &rc] {
