@@ -288,7 +288,10 @@ void check_keys(const toml::table& t, std::initializer_list<std::string_view> al
     if (!ok) {
       std::string list;
       for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      fail(v, "unknown key '" + std::string(k.str()) + "' in [" + std::string(ctx) + "] (expected one of: " + list + ")");
+      // At the key as typed, not at its value (`rn_s = 2.0` was named at column 8: a review).
+      const toml::source_region& at = no_position(k.source()) ? v.source() : k.source();
+      throw ConfigError(pos(at) + ": unknown key '" + std::string(k.str()) + "' in [" + std::string(ctx) +
+                        "] (expected one of: " + list + ")");
     }
   }
 }

@@ -320,8 +320,8 @@ TEST(RigCli, HelpOnEverySubcommand) {
   std::ofstream(d + "/typo-plant.toml") << "base = \"ci\"\n[plant.dutt.loop]\ndelay_steps = 1\n";
   std::ofstream(d + "/typo-top.toml") << "base = \"ci\"\nbogus = 1\n[plant.dut.loop]\ndelay_steps = 1\n";
   for (const auto& [file, says] : std::vector<std::pair<std::string, std::string>>{
-           {"typo-plant.toml", "typo-plant.toml:2:1: unknown key 'dutt' in [plant]"},
-           {"typo-top.toml", "typo-top.toml:2:9: unknown key 'bogus' in [top level]"}}) {
+           {"typo-plant.toml", "typo-plant.toml:2:8: unknown key 'dutt' in [plant]"},
+           {"typo-top.toml", "typo-top.toml:2:1: unknown key 'bogus' in [top level]"}}) {
     EXPECT_EQ(run({"filter", "show", "--dut", d + "/" + file}, d + "/typo"), 2) << file;
     EXPECT_NE(slurp(d + "/typo.stderr").find(says), std::string::npos) << slurp(d + "/typo.stderr");
   }
@@ -336,11 +336,11 @@ TEST(RigCli, HelpOnEverySubcommand) {
   };
   for (const std::string sub : {"show", "select"}) {
     EXPECT_EQ(run(with_dut(sub, d + "/dutfile.toml"), d + "/dutfile"), 2) << sub;
-    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile.toml:3:9: unknown key 'bogus' in [loop] (expected"),
+    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile.toml:3:1: unknown key 'bogus' in [loop] (expected"),
               std::string::npos)
         << slurp(d + "/dutfile.stderr");
     EXPECT_EQ(run(with_dut(sub, d + "/dutfile-top.toml"), d + "/dutfile"), 2) << sub;
-    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile-top.toml:1:7: unknown key 'wat' in [DUT file] (expected"),
+    EXPECT_NE(slurp(d + "/dutfile.stderr").find(d + "/dutfile-top.toml:1:1: unknown key 'wat' in [DUT file] (expected"),
               std::string::npos)
         << slurp(d + "/dutfile.stderr");
     EXPECT_EQ(run(with_dut(sub, d + "/dutfile-unst.toml"), d + "/dutfile"), 2) << sub;

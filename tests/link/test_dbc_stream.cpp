@@ -480,7 +480,7 @@ TEST(DbcStream, HardwareFileDbcAndStreamTables) {
   EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\ndbc = \"" + kLayouts + "\"\n[dut.stream]\ncounter = \"ACC_X.cnt\"\nx = \"ACC_X.x\"\n"),
             "hw.toml:6:5: [dut.stream]: x = \"ACC_X.x\": no signal x in ACC_X");  // x's line, not the table's
   EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\ndbc = \"" + kLayouts + "\"\n[dut.stream]\ncounter = \"ACC_X.cnt\"\nz = 1\n"),
-            "hw.toml:6:5: unknown key 'z' in [dut.stream] (expected one of: counter, x, y, status, filter_on_bit, "
+            "hw.toml:6:1: unknown key 'z' in [dut.stream] (expected one of: counter, x, y, status, filter_on_bit, "
             "saturated_bit, loop_fault_bit, filter_on, saturated, loop_fault, samples_per_frame, rate_hz)");
   EXPECT_EQ(error("[dut]\ncan = \"vcan0\"\n[dut.stream]\nx = \"A.b\"\n"),
             "hw.toml:3:1: [dut.stream] needs [dut] dbc = \"FILE\"");

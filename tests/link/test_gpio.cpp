@@ -255,7 +255,7 @@ TEST(GpioConfig, MistakesNameFileAndLine) {
   };
   expect_config_error("power = \"p\"\n", "estop");
   expect_config_error("power = \"p\"\nestop = \"e\"\nlamp_redy = \"x\"\n",
-                      "hw.toml:3:13: unknown key 'lamp_redy' in [gpio] (expected");  // not "[[gpio]]"
+                      "hw.toml:3:1: unknown key 'lamp_redy' in [gpio] (expected");  // not "[[gpio]]"
   expect_config_error("power = \"p\"\nestop = \"p\"\n", "hw.toml:2:9: [gpio] estop names the same line as power ('p')");
   // Every line has one job (a review: a lamp on the e-stop input passed the dry run).
   expect_config_error("power = \"p\"\nestop = \"e\"\nlamp_pass = \"e\"\n",

@@ -1033,7 +1033,7 @@ TEST(RigTableHardwareFile, LinkSettingsNoDriveAnswersOnAreRefused) {
   EXPECT_EQ(run(std::string(RIG_BIN) + " table --rtu /dev/ttyS0,19200,N,7,2 status", out), 2) << out;
   // [gpio]'s unknown key is "in [gpio]" (it said "in [[gpio]]").
   EXPECT_EQ(status("[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[gpio]\npower = \"P\"\nestop = \"E\"\nbogus = 1\n"), 2) << out;
-  EXPECT_TRUE(has(out, "hw.toml:6:9: unknown key 'bogus' in [gpio] (expected")) << out;
+  EXPECT_TRUE(has(out, "hw.toml:6:1: unknown key 'bogus' in [gpio] (expected")) << out;
 }
 
 // The drive map is looked for beside the hardware file, then in the working folder: a map not
