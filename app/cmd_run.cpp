@@ -974,7 +974,8 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
 
 // What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
 // the history row (a report or history failure is logged, never the run's outcome).
-// analysis.json and report.html come before the passport, and junit.xml is put in place with
+// The list of what is left (.ending-pending) comes first, then analysis.json and report.html,
+// then the passport, and junit.xml is put in place with
 // it (staged, then renamed): a CI job reading junit.xml never sees a PASS the folder has no
 // passport for, and a folder that cannot take the files (a full disk) is exit 4 with no staged
 // file left (the caller then writes the smaller ERROR ending where it fits). What comes after the
@@ -988,7 +989,6 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
                                          spdlog::logger& log) {
   auto passport = make_passport(info, res, values);
   const nlohmann::json analysis = acceptance::analysis_document(dut);
-  write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
   const std::string junit = a.out + "/junit.xml", pass = a.out + "/passport.json", pending = a.out + "/" + kEndingPending;
   // What follows the passport, junit.xml's rename first: listed even where nothing else follows
   // (no key, --no-history), so a stop between the two renames leaves a list its resume finishes
@@ -1000,8 +1000,17 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
   // a re-test), the row there keeping its earlier ending as before.
   const bool owed = a.history_owed && (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail);
   if (!a.no_history || owed) steps += std::string(kStepHistory) + "\n";
-  bool report_written = true;
+  bool report_written = true, passport_in_place = false;
+  // An earlier ending's list (its history row owed), put back if this ending fails before its
+  // passport is in place: the folder is then that ending's still.
+  const std::optional<std::vector<std::string>> earlier_list = pending_steps(a.out);
   try {
+    // The list first: from analysis.json on, this ending's files stand beside the passport in
+    // place until this one replaces it (an earlier ending's, resumed), and a folder without the
+    // list reads as final (a kill there left report.html saying PASS beside an ABORTED passport, no
+    // list: a review). With the list, a resume finds the ending unfinished and computes it again.
+    write_file_atomic(pending, steps);
+    write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
     write_file_staged(junit, junit_xml(info, res, values));
     write_file_staged(pass, passport_text(passport));
     try {
@@ -1018,13 +1027,18 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       steps.insert(steps.find('\n') + 1, std::string(kStepReport) + "\n");
       log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shown_text(a.out),
                 key ? " --seal-key FILE" : "", key ? " and seals it" : "");
+      write_file_atomic(pending, steps);
     }
-    write_file_atomic(pending, steps);
     commit_staged(pass);
+    passport_in_place = true;
     commit_staged(junit);
-  } catch (...) {  // nothing staged is left behind, nor a list of steps after a passport not in place
+  } catch (...) {  // nothing staged is left behind, nor this ending's list beside a passport not its own
     std::error_code ec;
-    if (!fs::exists(pass, ec)) fs::remove(pending, ec);
+    if (!passport_in_place) try {
+        write_pending_steps(a.out, earlier_list.value_or(std::vector<std::string>{}));
+      } catch (const std::exception& e) {
+        log.error("{} not restored: {}", kEndingPending, e.what());
+      }
     for (const std::string& f : {junit, pass}) fs::remove(f + ".tmp", ec);
     throw;
   }
