@@ -17,6 +17,10 @@ struct AbortCleanup {
 // The slot the handler reads; null when nothing is staged.
 inline std::atomic<const AbortCleanup*> g_abort_cleanup{nullptr};
 
+// `rig run`'s exit code once its verdict is decided (its passport written), -1 before: a signal
+// after that ends the process with this code, never with the abort's (docs/contracts.md).
+inline std::atomic<int> g_verdict_exit{-1};
+
 // Names `path` (and what to say on stderr when it goes) until release() or the guard's end. One
 // at a time: the outputs are written one after another, and a second guard while one holds the
 // slot names nothing. The text lives in two static slots used in turn, never on a stack: the

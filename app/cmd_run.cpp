@@ -42,6 +42,7 @@
 #include "plant/table/table_emulator.hpp"
 #include "procedures/acceptance/analysis_doc.hpp"
 #include "procedures/acceptance/procedure.hpp"
+#include "app/abort_cleanup.hpp"
 #include "app/backends.hpp"
 #include "app/run_seal.hpp"
 #include "app/passport_held.hpp"
@@ -1596,13 +1597,27 @@ void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_
   say_how_to_continue(out, fs::exists(Executive::checkpoint_path(out), ec) ? checkpointed : 0, phases, why, log);
 }
 
+int do_run_watched(RunArgs a, CancelSource& cancel);
+
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
   // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
   // (Only here: `rig dut stream | head` should still end when its reader does.)
   ::signal(SIGPIPE, SIG_IGN);
   CancelSource cancel;
-  SignalWatcher signals(cancel);  // before any backend thread exists
+  int rc = 0;
+  {
+    SignalWatcher signals(cancel);  // before any backend thread exists
+    rc = do_run_watched(std::move(a), cancel);
+    // Set while the watcher still holds the signals: one that comes once it is gone (the closing
+    // table still in stdout's buffer, written at exit) ends the process with the passport's code,
+    // not the abort's 3 (a review: PASS in passport.json and junit.xml, exit 3).
+    cli::g_verdict_exit.store(rc);
+  }
+  return rc;
+}
+
+int do_run_watched(RunArgs a, CancelSource& cancel) {
   // A stop that comes while the history database waits for another writer's lock ends that wait
   // 2 s after it began (a review: a SIGTERM in the ending's wait held the exit 10 s).
   history::set_lock_wait_stop([stop = cancel.token()] { return stop.requested(); });

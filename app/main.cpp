@@ -234,6 +234,12 @@ void standard_descriptors_open(bool console_may_go) {
 // the signals on their SignalWatcher's thread (blocked there, so this handler never runs). A
 // signal the process started with ignored (`nohup`, a background job's SIGINT) stays ignored.
 extern "C" void abort_on_signal(int sig) {
+  // `rig run` past its verdict: its exit code stands (what is left is its closing table's write).
+  if (const int verdict = rig::cli::g_verdict_exit.load(); verdict >= 0) {
+    constexpr char late[] = "rig: a signal after the passport was final: its exit code stands\n";
+    [[maybe_unused]] ssize_t w = ::write(STDERR_FILENO, late, sizeof late - 1);
+    ::_exit(verdict);
+  }
   const char* text = sig == SIGINT    ? "rig: aborted: SIGINT\n"
                      : sig == SIGTERM ? "rig: aborted: SIGTERM\n"
                      : sig == SIGQUIT ? "rig: aborted: SIGQUIT\n"

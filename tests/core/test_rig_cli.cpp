@@ -4038,6 +4038,29 @@ TEST(RigCli, ALateSignalKeepsAFailedClassAndItsReport) {
   }
 }
 
+// A signal once the watcher is gone (the closing table still being written at exit) ended the
+// process in main's handler with the abort's 3, beside a PASS passport and junit.xml (a review,
+// by strace delaying that write). The passport's code stands. strace holds the write open here.
+TEST(RigCli, ASignalWhileTheClosingTableIsWrittenKeepsThePassportsExitCode) {
+  if (std::system("strace -V > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace";
+  const std::string d = tmp("closing-table-signal");
+  fs::create_directories(d);
+  const std::string rig = std::string(RIG_BINARY) + " run --profile ci --yes --no-history -q --out " + d + "/X";
+  const std::string script =
+      "(strace -f -o /dev/null -P " + d + "/x.out -e trace=write -e inject=write:delay_enter=3000000 " + rig + " > " +
+      d + "/x.out 2> " + d + "/x.err; echo $? > " + d + "/rc) & "
+      "for i in $(seq 1 600); do [ -f " + d + "/X/passport.json ] && [ ! -e " + d + "/X/.ending-pending ] && break; "
+      "sleep 0.05; done; sleep 0.5; pkill -TERM -f '^" + rig + "$'; wait";
+  std::ofstream(d + "/go.sh") << script << "\n";
+  ASSERT_EQ(std::system(("bash " + d + "/go.sh").c_str()), 0);
+  if (!fs::exists(d + "/X/passport.json")) GTEST_SKIP() << "strace cannot trace here: " << slurp(d + "/x.err");
+  EXPECT_EQ(slurp(d + "/rc"), "0\n") << slurp(d + "/x.err");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/X/passport.json"))["outcome"], "PASS");
+  EXPECT_NE(slurp(d + "/x.err").find("rig: a signal after the passport was final: its exit code stands"),
+            std::string::npos)
+      << slurp(d + "/x.err");
+}
+
 // Issue 13, 2 and 6: a damaged checkpoint is refused (exit 2) naming the file and the field.
 TEST(RigCli, DamagedCheckpointsAreRefusedNamingFileAndField) {
   const std::string d = tmp("damaged-cp");
