@@ -297,6 +297,12 @@ Profile parse_profile_table(const toml::table& t, const std::string& source) {
       p.classes.push_back(ac);
     }
   }
+  // A limited class with no class to read is never measured, so every run would end FAIL after
+  // the whole procedure (a review: a 2-hour run failing every DUT; the dry run said nothing).
+  if (p.classes.empty() && p.limits.count("accuracy_class"))
+    throw ConfigError(cfg::where(*cfg::get_table(t, "limits")->get("accuracy_class")) +
+                      ": [limits] accuracy_class is limited, but the profile has no accuracy classes ([[classes]]): "
+                      "it could never be measured and every run would FAIL; give [[classes]] or remove the limit");
   return p;
 }
 

@@ -141,6 +141,15 @@ TEST(Profile, BadLimitsAndClassesAreRejected) {
   EXPECT_EQ(error_of(twice), twice + ":13:8: 'name' = 'a': another [[classes]] entry has that name");
   const std::string blank = write_tmp("cls3.toml", base + "[[classes]]\nname = \" \"\nmax_b_g = 1e-5\n");
   EXPECT_EQ(error_of(blank), blank + ":10:8: 'name' = ' ': a class needs a name");
+  // A class limited with no class to read could never be measured: every run would FAIL after the
+  // whole procedure (a review: the dry run said nothing). With [[classes]], as before.
+  const std::string unclassed = write_tmp("cls4.toml", base + "[limits]\naccuracy_class = [1.0, 2.0]\n");
+  EXPECT_EQ(error_of(unclassed), unclassed + ":10:18: [limits] accuracy_class is limited, but the profile has no "
+                                             "accuracy classes ([[classes]]): it could never be measured and every run "
+                                             "would FAIL; give [[classes]] or remove the limit");
+  EXPECT_EQ(error_of(write_tmp("cls5.toml", base + "[limits]\naccuracy_class = [1.0, 2.0]\n[[classes]]\nname = "
+                                                   "\"a\"\nmax_b_g = 1e-5\n")),
+            "");
   const std::string blocks = write_tmp("blk.toml", "[profile]\nname = \"x\"\n[procedure]\norder = [\"U10\", \"U20\"]\n"
                                                    "run_s = 1\nin_run_s = 10\nraw_s = 10\nin_run_blocks_s = [1.0, 6.0]\n");
   EXPECT_EQ(error_of(blocks), blocks + ":8:19: 'in_run_blocks_s' = [ 1.0, 6.0 ]: 6 s: each block length must be > 0 "
