@@ -413,6 +413,10 @@ toml::table resolve_profile_file(toml::table t, std::vector<std::string>* droppe
 
 std::string unjudged_blocks_note(const Profile& p, const std::vector<std::string>& dropped_limits) {
   std::string unjudged, dropped;
+  // The values every built-in profile judges, and the profile's own GOST blocks: one left without
+  // limits (`bandwidth_0p5 = []`, or its line deleted from a copy) passed unseen (a review).
+  for (const char* v : {"bias", "base_error", "rms_filtered", "bandwidth_0p5", "settling_time"})
+    if (!p.limits.count(v)) unjudged += (unjudged.empty() ? "" : ", ") + std::string(v);
   for (const double b : p.in_run_blocks_s)
     if (!p.limits.count(gost_value_name(b))) unjudged += (unjudged.empty() ? "" : ", ") + gost_value_name(b);
   if (unjudged.empty()) return "";

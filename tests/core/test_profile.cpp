@@ -167,6 +167,12 @@ TEST(Profile, AnEmptyLimitRemovesTheBasesLimit) {
   EXPECT_EQ(p.limits.count("settling_time"), 0u);
   EXPECT_EQ(p.limits.count("bias"), 1u) << "the others stay the base's";
   EXPECT_EQ(load_profile("ci").limits.count("bandwidth_0p5"), 1u);
+  // Said before the run, as a dropped block's limits are (a review: no Note, the value UNSET and
+  // the run PASS); the built-ins judge every value named here.
+  EXPECT_EQ(unjudged_blocks_note(p, {}),
+            p.source + ": bandwidth_0p5, settling_time have no limits: UNSET in the passport, never FAIL (give them "
+                       "in [limits] to judge them)");
+  EXPECT_EQ(unjudged_blocks_note(load_profile("paper"), {}), "");
 }
 
 TEST(Profile, FileCanStartFromABuiltinAndOverride) {
