@@ -297,8 +297,8 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
       db.empty() ? std::string("the database it started with (run.json names none: the default, $RIG_HISTORY or the "
                                "rig config's)")
                  : db;
-  a.record_command = db.empty() ? "rig history --record " + shown_text(a.resume)
-                                : "rig history --db " + db + " --record " + shown_text(a.resume);
+  a.record_command = db.empty() ? "rig history --record " + shell_word(a.resume)
+                                : "rig history --db " + db + " --record " + shell_word(a.resume);
   if (history::password_masked(db))
     a.record_command += " (the password as *** is yours to give, or keep it in ~/.pgpass)";  // a review copied it
   if (run_records && a.no_history) {
@@ -1026,7 +1026,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       std::error_code gone;
       fs::remove(a.out + "/report.html", gone);
       steps.insert(steps.find('\n') + 1, std::string(kStepReport) + "\n");
-      log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shown_text(a.out),
+      log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shell_word(a.out),
                 key ? " --seal-key FILE" : "", key ? " and seals it" : "");
       write_file_atomic(pending, steps);
     }
@@ -1284,7 +1284,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
            : fmt::format("{}: the run was complete (its passport says {}); its ending is not finished yet: {}still "
                          "to do: {} (a later rig run --resume {} does it{})",
                          shown_text(dir), v, did.empty() ? std::string() : fmt::format("{} done; ", fmt::join(did, ", ")),
-                         fmt::join(owed, ", "), shown_text(dir),
+                         fmt::join(owed, ", "), shell_word(dir),
                          a.no_history ? ", without --no-history; or " + a.record_command : std::string());
   log->info("{} (exit {})", line, rc);
   std::cerr << line << "\n";
@@ -1488,7 +1488,7 @@ void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t p
   const std::string hint = fmt::format(
       "to continue: rig run --resume {} ({} of {} phases kept{}; `rig run --dry-run --resume {}` shows what a resume "
       "repeats)",
-      shown_text(out), kept, phases, why, shown_text(out));
+      shell_word(out), kept, phases, why, shell_word(out));
   std::cerr << hint << "\n";
   log.info("{}", hint);
 }

@@ -133,7 +133,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                              fmt::join(outside, ", "));
   if (const auto steps = pending_steps(dir))
     std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes it\n",
-                             kEndingPending, fmt::join(*steps, ", "), dir, seal_in(dir) ? " --seal-key FILE" : "");
+                             kEndingPending, fmt::join(*steps, ", "), shell_word(dir), seal_in(dir) ? " --seal-key FILE" : "");
   return c.ok ? kExitPass : kExitFail;
 }
 

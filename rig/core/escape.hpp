@@ -1,6 +1,7 @@
 // One byte shown as text, "\xNN" (two upper-case hex digits): how every message, JUnit file
 // and report shows a byte that must not reach a terminal or an XML reader as it is.
 #pragma once
+#include <cctype>
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -87,6 +88,40 @@ inline std::string shown_text(std::string_view s) {
     i += len;
   }
   return out;
+}
+
+// `s` as one word a POSIX shell reads back to it, for a command a message offers to paste: as it
+// is where it holds only characters no shell treats specially; else in single quotes; else, where
+// shown_text would escape a byte (a newline in a folder name), in bash's $'...' with \xNN (the
+// hint said `--resume /tmp/we ird\x0Aname`, which no shell reads as that folder: a review).
+inline std::string shell_word(std::string_view s) {
+  constexpr std::string_view plain = "_./:@%+=,-";
+  bool bare = !s.empty(), hex = false;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t len = c >= 0x20 && c < 0x7F ? 1 : c >= 0x80 ? utf8_sequence_at(s, i) : 0;
+    const bool as_is = len == 1 || (len > 1 && !terminal_acts_on(s.substr(i, len)));
+    hex = hex || !as_is;
+    bare = bare && as_is && (len > 1 || std::isalnum(c) || plain.find(static_cast<char>(c)) != std::string_view::npos);
+    i += len == 0 ? 1 : len;
+  }
+  if (bare) return std::string(s);
+  std::string out = hex ? "$'" : "'";
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t len = c >= 0x20 && c < 0x7F ? 1 : c >= 0x80 ? utf8_sequence_at(s, i) : 0;
+    const bool as_is = len == 1 || (len > 1 && !terminal_acts_on(s.substr(i, len)));
+    if (len == 0) len = 1;
+    for (std::size_t k = i; k < i + len; ++k) {
+      const char b = s[k];
+      if (!as_is) append_hex_escape(out, static_cast<unsigned char>(b));
+      else if (b == '\'') out += hex ? "\\'" : "'\\''";
+      else if (b == '\\' && hex) out += "\\\\";
+      else out += b;
+    }
+    i += len;
+  }
+  return out + "'";
 }
 
 // The offset of the first byte of `s` that is not in well-formed UTF-8 (a Latin-1 file name),

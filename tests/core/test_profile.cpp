@@ -1,6 +1,7 @@
 // Profiles: the built-ins load; malformed files are rejected with file and line.
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <vector>
@@ -9,6 +10,7 @@
 
 #include "procedures/acceptance/profile.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 
 namespace fs = std::filesystem;
 using rig::ConfigError;
@@ -304,6 +306,29 @@ TEST(Profile, AWholeNumberOutOfRangeIsShownAsTyped) {
 
 // A --profile path is shown with its control bytes as \xNN wherever a message names it: the
 // file's own errors (FILE:LINE:COL) and a path that is no file.
+// A path in a command a message offers is one shell word that reads back to it (the resume hint
+// printed `--resume /tmp/we ird\x0Aname`: a review). Checked by a shell.
+TEST(ShellWord, APathIsOneWordAShellReadsBackToIt) {
+  EXPECT_EQ(rig::shell_word("/data/run-1_a.b"), "/data/run-1_a.b");
+  EXPECT_EQ(rig::shell_word("/tmp/we ird"), "'/tmp/we ird'");
+  EXPECT_EQ(rig::shell_word("it's"), "'it'\\''s'");
+  EXPECT_EQ(rig::shell_word("a\nb'c\\"), "$'a\\x0Ab\\'c\\\\'");
+  EXPECT_EQ(rig::shell_word(""), "''");
+  EXPECT_EQ(rig::shell_word("/данные/прогон"), "/данные/прогон");
+  for (const std::string path : {"/tmp/we ird\nname", "x'y z", "a\\b\tc$d`e", "*?[~#!&;|<>(){}\""}) {
+    const std::string got = rig::shell_word(path);
+    const std::string file = fs::temp_directory_path() / ("rig-shell-word-" + std::to_string(::getpid()));
+    std::ofstream(file) << "printf '%s' " << got << "\n";
+    FILE* p = ::popen(("bash " + file).c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::string back;
+    for (int c; (c = std::fgetc(p)) != EOF;) back += static_cast<char>(c);
+    ::pclose(p);
+    fs::remove(file);
+    EXPECT_EQ(back, path) << got;
+  }
+}
+
 TEST(Profile, APathWithControlBytesIsShownEscaped) {
   const std::string dir = fs::temp_directory_path() / ("rigprof-" + std::to_string(::getpid()));
   const std::string p = write_tmp("r\x1B[2J.toml", "base = \"ci\"\n[procedure]\nretries = 11\n");
