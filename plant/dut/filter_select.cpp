@@ -79,27 +79,42 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
   try {
     // A cut-off so low that the sections round to a pole on the unit circle (butter2@1e-300 printed
     // a filter with DC gain nan that set-filter then refused as unstable: a re-test).
-    const FilterConfig f = design::butterworth_lowpass(order, fc, rate_hz);
+    FilterConfig f = design::butterworth_lowpass(order, fc, rate_hz);
     for (const Biquad& b : f.sections)
       if (!stable_section(b) || !std::isfinite(b.b0 + b.b1 + b.b2))
         throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too {} for a stable filter in double "
                                       "precision at {} Hz (its poles round onto the unit circle)",
                                       name, std::string(rest.substr(2)),
                                       fc > rate_hz / 4 ? "near half the loop rate" : "low", rate_hz));
-    // Stable but imprecise: a little above that the poles sit within 1e-7 of z = 1 and 1 + a1 + a2
-    // keeps few digits, so the DC gain of a low-pass, 1 by design, comes out wrong (butter2@0.0001:
-    // 1.046, printed as a usable filter; a review). The bound, not the gain as it happened to
-    // round (butter2@0.0003 was refused and @0.00031 taken, a code review): a1 and a2 each carry up
-    // to half an ulp, so 1 + a1 + a2 is uncertain by about 2^-53 (|a1| + |a2|) of itself over its
-    // size; refused past 0.1 % over the sections.
-    double dc_uncertainty = 0;
-    for (const Biquad& b : f.sections)
-      dc_uncertainty += 0x1p-53 * (std::fabs(b.a1) + std::fabs(b.a2)) / std::fabs(1 + b.a1 + b.a2);
-    if (!(dc_uncertainty <= 1e-3))
-      throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too low for double precision at {} Hz: its "
-                                    "poles round so near z = 1 that its DC gain, 1 by design, is held only to about "
-                                    "{:.2g} % (0.1 % allowed)",
-                                    name, std::string(rest.substr(2)), rate_hz, 100 * dc_uncertainty));
+    // The filter as the DUT holds it: binary32 coefficients (docs/can-protocol.md). Rounding a1
+    // and a2 to 24 bits moves the poles, and near z = 1 changes 1 + a1 + a2, which sets both the
+    // DC gain and the cut-off: butter2@1 read DC gain 1 while the DUT's filter has 0.946 (a
+    // metrologist's review). A bound, falling as the cut-off rises (not the error as it happened
+    // to round, which came and went: a code review): a1 and a2 each move by up to half a binary32
+    // ulp, 2^-24 of themselves, so 1 + a1 + a2 by about 2^-24 (|a1| + |a2|) of itself over its
+    // size; refused past 10 % over the sections (the cut-off then moves by about half that at
+    // most; the figures are the rounded filter's either way).
+    double moved = 0;
+    for (const Biquad& b : f.sections) moved += 0x1p-24 * (std::fabs(b.a1) + std::fabs(b.a2)) / std::fabs(1 + b.a1 + b.a2);
+    if (!(moved <= 1e-1))
+      throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too low for the DUT's 32-bit float coefficients "
+                                    "at {} Hz: its poles sit so near z = 1 that their rounding can move its DC gain "
+                                    "and cut-off by {} (10 % allowed)",
+                                    name, std::string(rest.substr(2)), rate_hz,
+                                    moved >= 1 ? std::string("more than 100 %") : fmt::format("about {:.2g} %", 100 * moved)));
+    // Each section's numerator scaled after its poles are rounded, so its DC gain stays the
+    // design's; every figure is then the filter the DUT runs.
+    for (Biquad& b : f.sections) {
+      const double dc = (b.b0 + b.b1 + b.b2) / (1 + b.a1 + b.a2);
+      const double a1 = static_cast<float>(b.a1), a2 = static_cast<float>(b.a2);
+      const double scale = dc * (1 + a1 + a2) / (b.b0 + b.b1 + b.b2);
+      b = Biquad{static_cast<float>(b.b0 * scale), static_cast<float>(b.b1 * scale), static_cast<float>(b.b2 * scale),
+                 a1, a2};
+      if (!stable_section(b))
+        throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too near half the loop rate for a stable "
+                                      "filter in the DUT's 32-bit float coefficients at {} Hz",
+                                      name, std::string(rest.substr(2)), rate_hz));
+    }
     return f;
   } catch (const std::invalid_argument& e) {
     throw ConfigError("filter '" + name + "': " + e.what());
