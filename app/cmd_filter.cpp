@@ -287,6 +287,14 @@ void run_show(const ShowArgs& a) {
     std::cout << "note: " << n << "\n";
     notes.push_back(n);
   }
+  // A --dut file's own [filter] is not the one shown (its custom sections printed "filter paper"
+  // without a word: a metrologist's review); --filter names the filter shown.
+  if (!a.dut_file.empty() && cfg::parse_file(a.dut_file).contains("filter")) {  // its own, not its base's
+    const std::string n = shown_text(a.dut_file) + "'s [filter] is not the filter shown: --filter names it (" +
+                          a.filter + " here)";
+    std::cout << "note: " << n << "\n";
+    notes.push_back(n);
+  }
   // How to apply it: a technician could not use the filter `select` ranks first, as neither a
   // profile nor `rig dut set-filter` takes the name butterN@FC (a review). Every digit, so the
   // DUT gets the sections shown: the shortest text that reads back to each (17 digits printed the

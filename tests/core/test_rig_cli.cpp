@@ -216,6 +216,18 @@ TEST(RigCli, HelpOnEverySubcommand) {
   EXPECT_TRUE(slower["settling_time_s"].is_null());
   EXPECT_EQ(slower["step_window_s"], 409.6);
   EXPECT_GT(slower["settling_time_at_least_s"].get<double>(), 204.8);  // the bound kept (a re-test)
+  // A --dut file's own [filter] is said not to be the one shown (its custom sections printed
+  // "filter paper" without a word); its base's [filter] is not its own.
+  std::ofstream(d + "/cf.toml") << "base = \"ci\"\n[profile]\nname = \"cf\"\n[filter]\npreset = \"custom\"\n"
+                                   "sections = [[0.2, 0.0, 0.0, -0.5, 0.1]]\n";
+  std::ofstream(d + "/nf.toml") << "base = \"ci\"\n[profile]\nname = \"nf\"\n";
+  ASSERT_EQ(run({"filter", "show", "--dut", d + "/cf.toml"}, d + "/cf"), 0) << slurp(d + "/cf.stderr");
+  EXPECT_NE(slurp(d + "/cf.stdout").find("note: " + d + "/cf.toml's [filter] is not the filter shown: --filter names it "
+                                         "(paper here)"),
+            std::string::npos)
+      << slurp(d + "/cf.stdout");
+  ASSERT_EQ(run({"filter", "show", "--dut", d + "/nf.toml"}, d + "/nf"), 0) << slurp(d + "/nf.stderr");
+  EXPECT_EQ(slurp(d + "/nf.stdout").find("note:"), std::string::npos) << slurp(d + "/nf.stdout");
   // The paper's coefficients at another loop rate are another filter, and "paper" says so.
   std::ofstream(d + "/fast.toml") << "[loop]\nloop_rate_hz = 20000\n";
   ASSERT_EQ(run({"filter", "show", "--dut", d + "/fast.toml"}, d + "/fast"), 0) << slurp(d + "/fast.stderr");
