@@ -295,7 +295,7 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
       fs::is_regular_file(fs::path(dir) / "report.html", ec) && fs::remove(list, ec))
     return;
   std::cerr << "rig history: note: " << dir << "'s ending is not finished yet (" << kEndingPending
-            << (own ? "" : "; " + why_not) << "): rig run --resume " << dir << " finishes it in the run's own database\n";
+            << (own ? "" : "; " + why_not) << "): rig run --resume " << shell_word(dir) << " finishes it in the run's own database\n";
 }
 
 // A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL

@@ -298,7 +298,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
                                "rig config's)")
                  : db;
   a.record_command = db.empty() ? "rig history --record " + shell_word(a.resume)
-                                : "rig history --db " + db + " --record " + shell_word(a.resume);
+                                : "rig history --db " + shell_word(db) + " --record " + shell_word(a.resume);
   if (history::password_masked(db))
     a.record_command += " (the password as *** is yours to give, or keep it in ~/.pgpass)";  // a review copied it
   if (run_records && a.no_history) {
@@ -307,7 +307,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
         "the run records into {} (run.json): with --no-history this resume's ending is not recorded there (a row "
         "the run has there keeps its earlier ending); a verdict (PASS, FAIL) is owed: {} lists `history` until rig "
         "run --resume {} or {} records it",
-        runs_db, kEndingPending, shown_text(a.resume), a.record_command);
+        runs_db, kEndingPending, shell_word(a.resume), a.record_command);
   } else if (run_records && !a.db.empty() && !db.empty() && !history::same_database(a.db, db)) {
     a.history_left_behind = fmt::format(
         "the run records into {} (run.json); this resume records its ending into --db {}: {} keeps the earlier "
@@ -657,6 +657,8 @@ void write_pending_steps(const std::string& dir, const std::vector<std::string>&
 std::string owed_interrupted_ending(const std::string& dir) {
   const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
   if (std::find(steps.begin(), steps.end(), kStepHistory) == steps.end()) return "";
+  // A later ending stopped while writing its files: its list, not the earlier ending's.
+  if (std::find(steps.begin(), steps.end(), kStepEnding) != steps.end()) return "";
   const std::string o = passport_outcome(dir).value_or("");
   return o == "ABORTED" || o == "ERROR" ? o : "";
 }
@@ -966,7 +968,7 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
     // $RIG_HISTORY's or the default, not the run's); a password is never printed, so a URL that
     // carries one is given again by the user (or kept in ~/.pgpass, which libpq reads).
     const std::string url = history_url(a, hw), shown = history::mask_password(url);
-    const std::string record = "rig history --db " + shown + " --record " + shown_text(a.out);
+    const std::string record = "rig history --db " + shell_word(shown) + " --record " + shell_word(a.out);
     log.error("history database not updated: {} (the run's resume, or {}, records it{})", e.what(), record,
               shown != url ? "; the password as *** is yours to give, or keep it in ~/.pgpass" : "");
     return false;
@@ -1010,7 +1012,9 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
     // place until this one replaces it (an earlier ending's, resumed), and a folder without the
     // list reads as final (a kill there left report.html saying PASS beside an ABORTED passport, no
     // list: a review). With the list, a resume finds the ending unfinished and computes it again.
-    write_file_atomic(pending, steps);
+    // Marked as this ending's (`ending`): a resume does not take the list for the earlier ending's
+    // (its history row owed) while that ending's passport is still in place (a code review).
+    write_file_atomic(pending, std::string(kStepEnding) + "\n" + steps);
     write_file_atomic(a.out + "/analysis.json", analysis.dump(1));
     write_file_staged(junit, junit_xml(info, res, values));
     write_file_staged(pass, passport_text(passport));
@@ -1028,8 +1032,8 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       steps.insert(steps.find('\n') + 1, std::string(kStepReport) + "\n");
       log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shell_word(a.out),
                 key ? " --seal-key FILE" : "", key ? " and seals it" : "");
-      write_file_atomic(pending, steps);
     }
+    write_file_atomic(pending, steps);  // what follows this passport, the mark gone
     commit_staged(pass);
     passport_in_place = true;
     commit_staged(junit);
@@ -1203,6 +1207,10 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
   std::error_code ec;
   if (!fs::exists(pending, ec)) return std::nullopt;
+  // An ending stopped before its passport's rename: the passport in place is not its verdict,
+  // so the ending is computed again.
+  if (const auto listed = pending_steps(dir); listed && std::find(listed->begin(), listed->end(), kStepEnding) != listed->end())
+    return std::nullopt;
   const bool sealed = key.has_value();
   const std::string v = verdict_of(dir);
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
@@ -1320,7 +1328,7 @@ void record_an_interrupted_ending(const RunArgs& a, const toml::table& hw, spdlo
     throw ConfigError(fmt::format("{}: its {} ending could not be recorded in the history (run.log says why), and this "
                                   "resume's ending would replace it: resume once the database can be reached, or "
                                   "record it first (rig history --record {} --db URL); nothing done",
-                                  a.out, outcome, a.out));
+                                  shown_text(a.out), outcome, shell_word(a.out)));
   std::vector<std::string> steps = pending_steps(a.out).value_or(std::vector<std::string>{});
   steps.erase(std::remove(steps.begin(), steps.end(), kStepHistory), steps.end());
   write_pending_steps(a.out, steps);
@@ -1605,15 +1613,16 @@ int do_run(RunArgs a) {
   // (Only here: `rig dut stream | head` should still end when its reader does.)
   ::signal(SIGPIPE, SIG_IGN);
   CancelSource cancel;
-  int rc = 0;
-  {
-    SignalWatcher signals(cancel);  // before any backend thread exists
-    rc = do_run_watched(std::move(a), cancel);
-    // Set while the watcher still holds the signals: one that comes once it is gone (the closing
-    // table still in stdout's buffer, written at exit) ends the process with the passport's code,
-    // not the abort's 3 (a review: PASS in passport.json and junit.xml, exit 3).
-    cli::g_verdict_exit.store(rc);
-  }
+  SignalWatcher signals(cancel);  // before any backend thread exists
+  return do_run_watched(std::move(a), cancel);
+}
+
+// The passport's exit code, kept for main's handler: set while the watcher still holds the
+// signals, so one that comes once it is gone (the closing table still in stdout's buffer, written
+// at exit) ends the process with it, not the abort's 3 (a review: PASS in passport.json and
+// junit.xml, exit 3). Only where a passport stands (not a dry run, not a refusal).
+int the_passports_exit(int rc) {
+  cli::g_verdict_exit.store(rc);
   return rc;
 }
 
@@ -1739,7 +1748,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   }
   if (!a.resume.empty()) {
     if (const auto rc = finish_pending_ending(a, hw, key, final_seal, values))
-      return a.dry_run && history_locked ? kExitUsage : *rc;
+      return a.dry_run ? (history_locked ? kExitUsage : *rc) : the_passports_exit(*rc);
     refuse_to_drop_an_interrupted_ending(a);
   }
   if (a.dry_run) {
@@ -2187,7 +2196,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),
               to_string(res.outcome), res.exit_code());
-  return res.exit_code();
+  return the_passports_exit(res.exit_code());
 }
 
 }  // namespace

@@ -205,7 +205,14 @@ bool console_may_go(int argc, char** argv) {
   bool dry_run = false;
   for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
     if (const std::string_view w = argv[i]; w == "--help" || w == "-h" || w == "--version") return false;
-    dry_run = dry_run || std::string_view(argv[i]) == "--dry-run";
+    // As CLI11 reads the flag: `--dry-run`, or `--dry-run=VALUE` with VALUE not false (a review:
+    // `--dry-run=true >&-` had its plan dropped, exit 0).
+    const std::string_view w = argv[i];
+    if (w == "--dry-run") dry_run = true;
+    else if (w.rfind("--dry-run=", 0) == 0) {
+      const std::string_view v = w.substr(10);
+      dry_run = !(v == "false" || v == "0" || v == "no" || v == "off" || v == "-1");
+    }
   }
   const std::string_view first = argv[1];
   if (records_are_files(first, dry_run)) return true;
@@ -376,7 +383,8 @@ int main(int argc, char** argv) {
     // the others as it ends any filter).
     const CLI::App* chosen = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();
     const CLI::App* action = chosen && !chosen->get_subcommands().empty() ? chosen->get_subcommands().front() : nullptr;
-    const bool dry_run = chosen && chosen->get_name() == "run" && chosen->count("--dry-run") > 0;
+    const bool dry_run =
+        chosen && chosen->get_name() == "run" && chosen->get_option("--dry-run")->as<bool>();  // its value, not its count
     if (!chosen || !(records_are_files(chosen->get_name(), dry_run) ||
                      (action && a_stop(chosen->get_name(), action->get_name()))))
       if (standard_output_failed() && rc == rig::kExitPass) rc = rig::kExitUsage;  // another exit code says more

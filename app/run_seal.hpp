@@ -57,6 +57,9 @@ inline bool is_record(const std::string& rel) { return rel != "checkpoint.json" 
 // The ending's steps after the passport is in place, until they are done: junit.xml put in place,
 // report.html where it could not be written, the final seal and the history row (one per line). A dot file: outside the seal (outside_the_seal).
 inline constexpr const char* kEndingPending = ".ending-pending";
+// The ending's files are being written: the passport in place, if any, is an earlier ending's,
+// and nothing listed with it is that ending's (first in the list until the passport's rename).
+inline constexpr const char* kStepEnding = "ending";
 inline constexpr const char* kStepJunit = "junit";      // junit.xml put in place (listed until it is)
 inline constexpr const char* kStepReport = "report";    // its lines: report.html (a full disk)
 inline constexpr const char* kStepSeal = "seal";

@@ -98,10 +98,10 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
     for (const Biquad& b : f.sections) moved += 0x1p-24 * (std::fabs(b.a1) + std::fabs(b.a2)) / std::fabs(1 + b.a1 + b.a2);
     if (!(moved <= 1e-1))
       throw ConfigError(fmt::format("filter '{}': the cut-off {} Hz is too low for the DUT's 32-bit float coefficients "
-                                    "at {} Hz: its poles sit so near z = 1 that their rounding can move its DC gain "
-                                    "and cut-off by {} (10 % allowed)",
+                                    "at {} Hz: its poles sit so near z = 1 that their rounding can move its cut-off "
+                                    "by {} (more than the 10 % allowed)",
                                     name, std::string(rest.substr(2)), rate_hz,
-                                    moved >= 1 ? std::string("more than 100 %") : fmt::format("about {:.2g} %", 100 * moved)));
+                                    moved >= 1 ? std::string("more than 100 %") : fmt::format("about {:.3g} %", 100 * moved)));
     // Each section's numerator scaled after its poles are rounded, so its DC gain stays the
     // design's; every figure is then the filter the DUT runs.
     for (Biquad& b : f.sections) {
