@@ -39,6 +39,7 @@ struct DutConfig {
   toml::table file;
   const toml::table* dut = nullptr;
   std::string section = "plant.dut";  // what errors call `dut`: "" for a DUT file, whose [loop] is [loop]
+  bool own_filter = false;             // the file itself has a [filter] (not only its base's)
 };
 // --dut: a profile (its [profile], [procedure], [plant] or `base`) gives its [plant.dut], its
 // base's merged in, or none (the built-in DUT); a DUT TOML is the DUT's table itself. A profile
@@ -47,6 +48,7 @@ struct DutConfig {
 void load_dut(const std::string& path, DutConfig& c) {
   if (path.empty()) return;
   c.file = cfg::parse_file(path);
+  c.own_filter = c.file.contains("filter");  // before a profile's base is merged in
   for (const char* key : {"profile", "procedure", "plant", "base"})
     if (c.file.contains(key)) {
       c.file = acceptance::resolve_profile_file(std::move(c.file));
@@ -289,7 +291,7 @@ void run_show(const ShowArgs& a) {
   }
   // A --dut file's own [filter] is not the one shown (its custom sections printed "filter paper"
   // without a word: a metrologist's review); --filter names the filter shown.
-  if (!a.dut_file.empty() && cfg::parse_file(a.dut_file).contains("filter")) {  // its own, not its base's
+  if (dc.own_filter) {
     const std::string n = shown_text(a.dut_file) + "'s [filter] is not the filter shown: --filter names it (" +
                           a.filter + " here)";
     std::cout << "note: " << n << "\n";

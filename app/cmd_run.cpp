@@ -1207,10 +1207,10 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
   std::error_code ec;
   if (!fs::exists(pending, ec)) return std::nullopt;
+  const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
   // An ending stopped before its passport's rename: the passport in place is not its verdict,
   // so the ending is computed again.
-  if (const auto listed = pending_steps(dir); listed && std::find(listed->begin(), listed->end(), kStepEnding) != listed->end())
-    return std::nullopt;
+  if (std::find(steps.begin(), steps.end(), kStepEnding) != steps.end()) return std::nullopt;
   const bool sealed = key.has_value();
   const std::string v = verdict_of(dir);
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
@@ -1222,7 +1222,6 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   const int rc = v == "PASS" ? kExitPass : kExitFail;
   const bool junit_staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
   // The ending could not write report.html (a page there is another ending's).
-  const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
   const bool report_listed = std::find(steps.begin(), steps.end(), kStepReport) != steps.end();
   const bool no_report = report_listed || !fs::exists(dir + "/report.html", ec);
   std::vector<std::string> left;

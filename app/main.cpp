@@ -204,10 +204,10 @@ bool console_may_go(int argc, char** argv) {
   if (argc < 2) return false;
   bool dry_run = false;
   for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
-    if (const std::string_view w = argv[i]; w == "--help" || w == "-h" || w == "--version") return false;
+    const std::string_view w = argv[i];
+    if (w == "--help" || w == "-h" || w == "--version") return false;
     // As CLI11 reads the flag: `--dry-run`, or `--dry-run=VALUE` with VALUE not false (a review:
     // `--dry-run=true >&-` had its plan dropped, exit 0).
-    const std::string_view w = argv[i];
     if (w == "--dry-run") dry_run = true;
     else if (w.rfind("--dry-run=", 0) == 0) {
       const std::string_view v = w.substr(10);
