@@ -29,12 +29,20 @@ namespace m = rig::modbus;
 
 // The station lock's folder for every rig this binary starts: its own, not /run/lock, which the
 // runs' ports (each a new one) filled with lock files (a re-test).
-const bool kPrivateLockDir = [] {
-  const std::string dir = std::filesystem::temp_directory_path() / ("rig-table-locks-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  ::setenv("RIG_LOCK_DIR", dir.c_str(), 1);
-  return true;
-}();
+// Made before main (so before the private TMPDIR of tests/support/private_tmp.cpp), hence removed
+// at exit: ctest starts this binary once per test and once to list them, and each left a folder.
+struct PrivateLockDir {
+  std::string dir = std::filesystem::temp_directory_path() / ("rig-table-locks-" + std::to_string(::getpid()));
+  PrivateLockDir() {
+    std::filesystem::create_directories(dir);
+    ::setenv("RIG_LOCK_DIR", dir.c_str(), 1);
+  }
+  ~PrivateLockDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+  }
+};
+const PrivateLockDir kPrivateLockDir;
 
 class RigTable : public ::testing::Test {
  protected:

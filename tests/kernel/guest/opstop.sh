@@ -12,7 +12,7 @@ rc=0
 "$RIG_BIN/rig" run --hardware $HW --profile "$PROFILE" --out /tmp/run --yes > /tmp/run.out 2>&1 &
 RUN=$!
 # A turn under way, after the homing (a stop during the homing ends it the same way: "homing
-# halted by ..."; the turn is what the run repeats twelve times).
+# halted by ..."; the turn is what the run repeats at every run of procedure A).
 moving_homed() {
   s=$("$RIG_BIN/rig" table --modbus 127.0.0.1:$PORT status --json 2>/dev/null) || return 1
   echo "$s" | grep -q '"moving": true' && echo "$s" | grep -q '"homed": true'
