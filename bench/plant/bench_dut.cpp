@@ -3,7 +3,10 @@
 // 110 min (6.6e6 samples) in well under 10 s, i.e. >= 660x real time for the whole rig.
 #include <benchmark/benchmark.h>
 
+#include <memory>
+
 #include "plant/dut/emulated_dut.hpp"
+#include "plant/dut/period_noise.hpp"
 
 namespace {
 
@@ -41,8 +44,25 @@ void BM_PaperProcedureDutTime(benchmark::State& state) {
   }
 }
 
+// The noise worker alone (PeriodNoise::fill on one thread, the default DUT): in the `paper`
+// procedure it runs beside the loop model and is half the process's CPU (perf, 2026-12-06).
+void BM_PeriodNoise(benchmark::State& state) {
+  const rig::plant::DutParams p = rig::plant::load_dut_params(nullptr);
+  const std::size_t steps = 10, periods = 100;
+  rig::plant::PeriodNoise noise(p, 1, steps);
+  auto storage = std::make_unique<double[]>(rig::plant::NoiseBlock::doubles(periods, steps));
+  rig::plant::NoiseBlock b(periods, steps, storage.get());
+  for (auto _ : state) {
+    noise.fill(b);
+    benchmark::DoNotOptimize(b.intf[0]);
+  }
+  state.counters["ns/period"] = benchmark::Counter(static_cast<double>(state.iterations() * periods),
+                                                   benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 }  // namespace
 
+BENCHMARK(BM_PeriodNoise)->MinTime(1.0);
 BENCHMARK(BM_DutDefault)->MinTime(1.0);
 BENCHMARK(BM_DutQuiet)->MinTime(1.0);
 BENCHMARK(BM_DutNoFilter)->MinTime(1.0);

@@ -3,6 +3,7 @@
 // leaves a file readable up to its last complete block; the reader reports
 // what it recovered and where any damage lies. Format: docs/capture-format.md.
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <optional>
@@ -82,6 +83,7 @@ class Writer {
  private:
   void write_block(const Sample* s, uint32_t n);
   void write_all(const void* p, std::size_t n);
+  void sync(const char* what);  // "fsync" or "fdatasync"; throws on failure
   std::string path_, set_aside_;
   int fd_ = -1;
   uint32_t block_samples_;
@@ -89,6 +91,8 @@ class Writer {
   std::vector<unsigned char> buf_;
   uint64_t total_ = 0;
   uint32_t blocks_since_sync_ = 0;
+  uint64_t bytes_ = 0, started_ = 0;  // written; handed to the disk (sync_file_range)
+  std::chrono::steady_clock::time_point last_sync_ = std::chrono::steady_clock::now();
 };
 
 class Reader {

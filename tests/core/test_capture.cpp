@@ -1,5 +1,6 @@
 // Capture files on real disk: round trip, truncation, corruption, SIGKILL mid-write.
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -67,6 +68,82 @@ TEST(Capture, RoundTripKeepsHeaderAndEverySample) {
     EXPECT_EQ(l.samples[i].status, s[i].status);
   }
   EXPECT_EQ(l.recovery.blocks, 3u);
+}
+
+// A minute of samples and more in one go, as the emulated plant writes them (faster than the
+// wall clock): the writer hands whole pages to the disk as it goes (sync_file_range) and syncs
+// at most once a second; every block still reads back, in order, and the file ends closed.
+TEST(Capture, ALongFastCaptureReadsBackWhole) {
+  const std::string p = tmpdir() + "/long.cap";
+  const auto s = ramp(150'000);
+  {
+    capture::Writer w(p, header(), 1000);
+    for (std::size_t at = 0; at < s.size(); at += 7'000)
+      w.append(std::span(s).subspan(at, std::min<std::size_t>(7'000, s.size() - at)));
+    w.close();
+  }
+  EXPECT_TRUE(capture::ends_closed(p));
+  const auto l = capture::load(p);
+  EXPECT_TRUE(l.recovery.complete) << l.recovery.summary(p);
+  ASSERT_EQ(l.samples.size(), s.size());
+  for (std::size_t i = 0; i < s.size(); i += 997) EXPECT_EQ(l.samples[i].seq, s[i].seq);
+  EXPECT_EQ(l.samples.back().x_g, s.back().x_g);
+}
+
+// A disk that refuses the capture part way (here the file size limit, SIGXFSZ ignored: EFBIG,
+// as a full disk gives ENOSPC): append() says so naming the file, close() says so too and still
+// closes it, once: the destructor's second close() wrote a second end marker into the same
+// failure and kept the descriptor open for the rest of the run. In a child, for the limit.
+TEST(Capture, AFailedWriteIsAnErrorAndTheFileIsClosedOnce) {
+  const std::string p = tmpdir() + "/full.cap";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    const rlimit lim{64 * 1024, 64 * 1024};
+    if (::setrlimit(RLIMIT_FSIZE, &lim) != 0) ::_exit(10);
+    auto open_fds = [] {
+      int n = 0;
+      for ([[maybe_unused]] const auto& e : fs::directory_iterator("/proc/self/fd")) ++n;
+      return n;
+    };
+    const int before = open_fds();
+    {
+      capture::Writer w(p, header(), 1000);
+      const auto s = ramp(10'000);  // 160 KB of records
+      bool append_threw = false;
+      try {
+        w.append(s);
+      } catch (const std::runtime_error& e) {
+        append_threw = std::string(e.what()).find(p) != std::string::npos;
+      }
+      if (!append_threw) ::_exit(11);
+      w.append(std::span(s).subspan(0, 10));  // a partial block, pending
+      bool close_threw = false;
+      try {
+        w.close();
+      } catch (const std::runtime_error& e) {
+        close_threw = std::string(e.what()).find(p) != std::string::npos;
+      }
+      if (!close_threw) ::_exit(12);
+      try {
+        w.close();  // closed already: nothing to do
+      } catch (...) {
+        ::_exit(13);
+      }
+    }
+    ::_exit(open_fds() == before ? 0 : 14);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "10 setrlimit, 11 append did not throw naming the file, 12 close did not, "
+                                       "13 a second close threw, 14 the descriptor stayed open";
+  EXPECT_LE(fs::file_size(p), 64u * 1024);
+  EXPECT_FALSE(capture::ends_closed(p));  // no end marker claims a capture the disk refused
+  const auto l = capture::load(p);
+  EXPECT_FALSE(l.recovery.complete);
+  EXPECT_GT(l.samples.size(), 0u);  // what fitted reads back
 }
 
 // load() reserves what the file can hold (16 bytes a sample) once and reads into it: the vector
