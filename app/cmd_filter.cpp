@@ -222,6 +222,14 @@ void run_select(SelectArgs a) {
     std::cout << "\nnote: " << text << "\n";
     notes.push_back(text);
   };
+  // Cut-offs the range gave that no low-pass filter has (at or above half the loop rate): left
+  // out of the table, said (they were dropped silently, a review).
+  const std::vector<double> cutoffs = plant::candidate_cutoffs(o);
+  const auto above = std::find_if(cutoffs.begin(), cutoffs.end(), [&](double fc) { return !(fc < rate_hz / 2); });
+  if (above != cutoffs.end())
+    note(fmt::format("{} cut-off(s) of the range ({:g} to {:g} Hz) are at or above half the DUT's loop rate, {:g} Hz, "
+                     "and are not candidates",
+                     cutoffs.end() - above, *above, cutoffs.back(), rate_hz / 2));
   // Rank 1 of a table with no candidate in the band read as a choice (a re-test).
   if (std::none_of(c.begin(), c.end(), [](const plant::FilterCandidate& k) { return k.meets_band; }))
     note(fmt::format("no candidate is in the band (|f_0.5 - {} Hz| <= {} %): the ranks are by the distance from it, "

@@ -121,8 +121,7 @@ FilterConfig filter_by_name(const std::string& name, double rate_hz) {
   }
 }
 
-std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt) {
-  if (!(opt.f_req_hz > 0)) throw ConfigError("--f-req must be positive");
+std::vector<double> candidate_cutoffs(const FilterSelectOptions& opt) {
   if (!(opt.fc_step_hz > 0) || !std::isfinite(opt.fc_step_hz))
     throw ConfigError(fmt::format("--fc-step {}: the cut-off step must be a number of Hz > 0", opt.fc_step_hz));
   if (!(opt.fc_min_hz > 0) || !(opt.fc_max_hz >= opt.fc_min_hz) || !std::isfinite(opt.fc_max_hz))
@@ -137,16 +136,29 @@ std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const Fi
   if (count > kMaxCutoffs)
     throw ConfigError(fmt::format("--fc-min {} --fc-max {} --fc-step {}: more than {:g} cut-offs to try", opt.fc_min_hz,
                                   opt.fc_max_hz, opt.fc_step_hz, kMaxCutoffs));
-  const auto cutoffs = static_cast<std::size_t>(count);
+  std::vector<double> fc(static_cast<std::size_t>(count));
+  for (std::size_t i = 0; i < fc.size(); ++i) fc[i] = opt.fc_min_hz + static_cast<double>(i) * opt.fc_step_hz;
+  return fc;
+}
+
+std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt) {
+  if (!(opt.f_req_hz > 0)) throw ConfigError("--f-req must be positive");
+  const std::vector<double> cutoffs = candidate_cutoffs(opt);
   const DutParams p = load_dut_params(dut_cfg, opt.dut_section);
   const double rate = p.loop.loop_rate_hz;
 
+  // A Butterworth cut-off lies below half the loop rate. A range wholly above it asked for no
+  // candidate the rig can make: said, not ranked as paper and none alone (they were, silently).
+  if (!(cutoffs.front() < rate / 2))
+    throw ConfigError(fmt::format("--fc-min {}: every cut-off of the range ({:g} to {:g} Hz) is at or above half the "
+                                  "DUT's loop rate, {:g} Hz, where no low-pass cut-off lies: no Butterworth candidate",
+                                  opt.fc_min_hz, cutoffs.front(), cutoffs.back(), rate / 2));
   std::vector<FilterCandidate> c;
   if (opt.include_paper) c.push_back({"paper", filter_by_name("paper", rate)});
   if (opt.include_none) c.push_back({"none", filter_by_name("none", rate)});
   for (int order : opt.orders)
-    for (std::size_t i = 0; i < cutoffs; ++i)
-      if (const double fc = opt.fc_min_hz + static_cast<double>(i) * opt.fc_step_hz; fc < rate / 2) try {
+    for (const double fc : cutoffs)
+      if (fc < rate / 2) try {
           c.push_back({butter_name(order, fc), filter_by_name(butter_name(order, fc), rate)});
         } catch (const ConfigError& e) {  // a cut-off the user did not type: named by the option that made it
           throw ConfigError(fmt::format("--fc-min {}: a candidate of the range: {}", opt.fc_min_hz, e.what()));

@@ -39,6 +39,11 @@ struct FilterSelectOptions {
   std::string dut_section = "plant.dut";
 };
 
+// The cut-offs the options' range gives (min + i step up to max), checked; those at or above half
+// the DUT's loop rate are not candidates (select_filters leaves them out, and refuses a range
+// with none below it).
+std::vector<double> candidate_cutoffs(const FilterSelectOptions& opt);
+
 // Evaluates every candidate; returned best first (meeting the band: lowest RMS, then
 // shortest settling, a lower bound after every settled time; the rest by distance of their bandwidth from f_req).
 std::vector<FilterCandidate> select_filters(const toml::table* dut_cfg, const FilterSelectOptions& opt);

@@ -5497,6 +5497,17 @@ TEST(RigCli, FilterJsonThatCannotBeWrittenIsExitTwo) {
       << slurp(d + "/show.stderr");
   ASSERT_EQ(select_to(d + "/c.json"), 0) << slurp(d + "/sel.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/c.json"))["candidates"].size(), 3u);  // paper, none, butter2@500
+  // Cut-offs of the range at or above half the loop rate are left out and said, in the text and
+  // the JSON (they were dropped silently, a review).
+  std::vector<std::string> past = {"filter", "select", "--seconds", "0.05", "--orders", "2", "--fc-min", "4500",
+                                    "--fc-max", "5500", "--fc-step", "500", "--json", d + "/past.json"};
+  ASSERT_EQ(run(past, d + "/past"), 0) << slurp(d + "/past.stderr");
+  const std::string said = "2 cut-off(s) of the range (5000 to 5500 Hz) are at or above half the DUT's loop rate, "
+                           "5000 Hz, and are not candidates";
+  EXPECT_NE(slurp(d + "/past.stdout").find("note: " + said), std::string::npos) << slurp(d + "/past.stdout");
+  const auto pj = nlohmann::json::parse(slurp(d + "/past.json"));
+  EXPECT_EQ(pj["candidates"].size(), 3u);  // paper, none, butter2@4500
+  EXPECT_NE(pj["notes"].dump().find(said), std::string::npos) << pj["notes"].dump();
   // The orders as the help shows their default, "1,2" (it was refused, blaming a leading zero).
   std::vector<std::string> comma = quick;
   comma[5] = "1,2";
@@ -5626,7 +5637,11 @@ TEST(RigCli, FilterSelectNumbersAreCheckedBeforeAnyWork) {
       {{"--seed", "18446744073709551616"},
        "--seed: '18446744073709551616' is too large (past 64 bits)"},
       {{"--seed", "99999999999999999999999"}, "--seed: '99999999999999999999999' is too large"},
-      {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"}};
+      {{"--seconds", "abc"}, "--seconds: 'abc' is not a decimal number"},
+      // A range wholly at or above half the 10 kHz loop rate gives no low-pass cut-off: it ranked
+      // the paper's filter and none alone, without a word (a review).
+      {{"--fc-min", "5000", "--fc-max", "6000"},
+       "--fc-min 5000: every cut-off of the range (5000 to 6000 Hz) is at or above half the DUT's loop rate, 5000 Hz"}};
   for (const auto& [opts, why] : bad) {
     std::vector<std::string> args = {"filter", "select"};
     args.insert(args.end(), opts.begin(), opts.end());
