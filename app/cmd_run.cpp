@@ -21,8 +21,10 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <set>
 #include <thread>
 
@@ -641,6 +643,33 @@ std::string verdict_of(const std::string& dir) {
   return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
 }
 
+// How an ending names a run.log the disk refused lines of (LogLoss), at the start of its reason.
+constexpr std::string_view kLogShort = "run.log is short of lines";
+
+// The reason of an earlier attempt's ERROR ending whose run.log lost lines; "" otherwise. Such a
+// run has no resume: its ending would give a verdict beside a log with a hole in the account.
+std::string earlier_log_short(const std::string& dir) {
+  const std::string path = dir + "/passport.json";
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return "";
+  try {
+    std::ifstream in(path);
+    const nlohmann::json j = parse_json_unique_keys(in);
+    if (!j.is_object() || j.value("outcome", nlohmann::json()) != "ERROR") return "";
+    const nlohmann::json why = j.value("aborted_reason", nlohmann::json());
+    return why.is_string() && why.get<std::string>().starts_with(kLogShort) ? why.get<std::string>() : "";
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+void refuse_a_short_log(const std::string& dir) {
+  if (const std::string why = earlier_log_short(dir); !why.empty())
+    throw ConfigError(dir + ": its run ended ERROR: " + why +
+                      "; no resume gives those lines back, nor a verdict beside them: start a new run (the folder is "
+                      "as it was)");
+}
+
 // `dir`'s .ending-pending as `steps` (one per line), removed when none is left.
 void write_pending_steps(const std::string& dir, const std::vector<std::string>& steps) {
   std::string text;
@@ -1174,7 +1203,20 @@ void say_history_left_behind(const RunArgs& a, spdlog::logger& log) {
   if (a.quiet) std::cerr << "rig: warning: " << a.history_left_behind << "\n";
 }
 
-std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet) {
+// Lines of run.log the disk refused: the first refusal's reason and time (UTC). The run's account
+// is one of its records: a verdict whose log is short of lines is no verdict (records_lost).
+struct LogLoss {
+  std::mutex m;
+  bool lost = false;
+  std::string why, since;
+  std::string said() {
+    const std::lock_guard lock(m);
+    return lost ? fmt::format("{} from {} on (the disk refused them: {})", kLogShort, since, why) : "";
+  }
+};
+
+std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
+                                            std::shared_ptr<LogLoss> loss = std::make_shared<LogLoss>()) {
   auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
   file->set_level(spdlog::level::debug);
   auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
@@ -1183,10 +1225,16 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   // its sinks, and the console then lost the line too. The failure said once, as rig says
   // warnings, not spdlog's "[*** LOG ERROR #0001 ***]" (a technician's review).
   auto log = std::make_shared<spdlog::logger>("rig", spdlog::sinks_init_list{err, file});
-  log->set_error_handler([out_dir, said = std::make_shared<std::atomic<bool>>(false)](const std::string& msg) {
-    if (!said->exchange(true))
-      std::cerr << "rig: warning: " << out_dir << "/run.log: a line could not be written (" << msg
-                << "); the run's log is short of what follows while that lasts\n";
+  log->set_error_handler([out_dir, loss](const std::string& msg) {
+    {
+      const std::lock_guard lock(loss->m);
+      if (loss->lost) return;
+      loss->lost = true;
+      loss->why = msg;
+      loss->since = iso8601_utc_now();
+    }
+    std::cerr << "rig: warning: " << out_dir << "/run.log: a line could not be written (" << msg
+              << "); the run's log is short of what follows while that lasts\n";
   });
   log->set_level(spdlog::level::debug);
   // UTC, marked so, as every other time the run writes (passport, run.json, history): local
@@ -1560,6 +1608,7 @@ std::string resume_refusal(const std::string& dir) {
            " (the folder removed or moved while the run went on): a folder moved whole resumes where it is now "
            "(rig run --resume NEW-PLACE); else start a new run";
   try {
+    refuse_a_short_log(dir);
     refuse_records_without_checkpoint(dir);
     RunArgs again;
     again.db = "(the resume's own)";  // a masked --db is given again, not a refusal
@@ -1767,6 +1816,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
       if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
+      refuse_a_short_log(a.resume);
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
     }
     TerminalView plan_view(stdout);
@@ -1872,13 +1922,15 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
+  const auto log_loss = std::make_shared<LogLoss>();  // lines of run.log the disk refused
   Resumption resumed;
   const std::vector<std::string>& completed = resumed.completed;
   if (!a.resume.empty()) {
     // A finished run's folder is left as it is, its log included (a refused resume wrote into a
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
     if (!key) refuse_a_final_verdict(a.out);
-    log = make_logger(a.out, a.quiet);
+    refuse_a_short_log(a.out);
+    log = make_logger(a.out, a.quiet, log_loss);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
     try {
@@ -1944,7 +1996,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (!drops.empty()) invocation["faults"] = drops;
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
     if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
-    log = make_logger(a.out, a.quiet);
+    log = make_logger(a.out, a.quiet, log_loss);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
   }
@@ -2065,12 +2117,14 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       log->warn("the run's records in {} were touched after they were written ({}), but hold what was recorded: "
                 "the verdict stands on them",
                 a.out, fmt::join(touched, ", "));
-    records_lost = !gone.empty() || !changed.empty();
+    const std::string log_short = log_loss->said();
+    records_lost = !gone.empty() || !changed.empty() || !log_short.empty();
     std::vector<std::string> why;
     if (!gone.empty())
       why.push_back(fmt::format("the run's records are gone from {} (removed while it ran): {}", a.out, fmt::join(gone, ", ")));
     if (!changed.empty())
       why.push_back(fmt::format("the run's records in {} changed after they were written: {}", a.out, fmt::join(changed, ", ")));
+    if (!log_short.empty()) why.push_back(log_short);
     if (records_lost) {
       res.outcome = RunOutcome::Error;
       res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));
@@ -2175,8 +2229,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
   if (records_lost) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
     const bool gone = res.message.find("records are gone") != std::string::npos;
-    say_no_resume("the run's records " + (gone ? "are gone from " + shown_text(a.out)
-                                               : "in " + shown_text(a.out) + " changed after they were written"),
+    const bool changed = res.message.find("changed after they were written") != std::string::npos;
+    say_no_resume(gone || changed ? "the run's records " + (gone ? "are gone from " + shown_text(a.out)
+                                                                 : "in " + shown_text(a.out) + " changed after they were written")
+                                  : "the run's log " + shown_text(a.out + "/run.log") + " is short of lines the disk refused",
                   *log);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
     // An emulated run's injected sample losses are repeated by its resume (run.json's faults):

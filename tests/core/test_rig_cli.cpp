@@ -5379,6 +5379,47 @@ std::string rig_line(const std::vector<std::string>& args) {
 }
 }  // namespace
 
+// run.log is one of the run's records: a run whose log the disk refused lines of (ENOSPC, here
+// injected by strace into run.log's writes alone) ended PASS, exit 0, with a warning on stderr (a
+// review). It ends ERROR, exit 4, naming the log and when its lines stopped; no resume is offered
+// and none is taken (its ending would give a verdict beside a log with a hole in the account).
+TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
+  if (std::system("strace -V > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace";
+  const std::string d = tmp("log-refused");
+  fs::create_directories(d);
+  const std::string cmd = "strace -f -qq -o /dev/null -P " + d + "/run/run.log -e trace=write " +
+                          "-e inject=write:error=ENOSPC:when=10+ " +
+                          rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run"}) +
+                          " > " + d + "/io.stdout 2> " + d + "/io.stderr";
+  const int rc = shell(cmd);
+  if (!fs::exists(d + "/run/passport.json")) GTEST_SKIP() << "strace cannot trace here: " << slurp(d + "/io.stderr");
+  EXPECT_EQ(rc, 4) << slurp(d + "/io.stderr");
+  const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ERROR");
+  const std::string why = p["aborted_reason"].get<std::string>();
+  EXPECT_EQ(why.rfind("run.log is short of lines from ", 0), 0u) << why;
+  EXPECT_NE(why.find("No space left on device"), std::string::npos) << why;
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("run.log is short of lines"), std::string::npos);
+  EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: ERROR"), std::string::npos) << slurp(d + "/io.stdout");
+  const std::string err = slurp(d + "/io.stderr");
+  EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
+  EXPECT_NE(err.find("no resume: the run's log " + d + "/run/run.log is short of lines the disk refused; start a new "
+                     "run"),
+            std::string::npos)
+      << err;
+  // Its resume is refused before anything is done, the folder as it was.
+  const std::string log_before = slurp(d + "/run/run.log");
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> resume = {"run", "--resume", d + "/run", "--yes", "--no-history"};
+    if (dry) resume.push_back("--dry-run");
+    EXPECT_EQ(run(resume, d + "/resume"), 2) << slurp(d + "/resume.stderr");
+    EXPECT_NE(slurp(d + "/resume.stderr").find("no resume gives those lines back"), std::string::npos)
+        << slurp(d + "/resume.stderr");
+  }
+  EXPECT_EQ(slurp(d + "/run/run.log"), log_before);
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "ERROR");
+}
+
 // An emulated run's injected losses are repeated by its resume (run.json's faults): a loss that
 // ended the run in ERROR is said to end the resume so too (a line integrator's review: "to
 // continue" was offered, and each resume added another ERROR ending).
