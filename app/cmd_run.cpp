@@ -699,7 +699,25 @@ std::string owed_interrupted_ending(const std::string& dir) {
 // a file of the name it writes that something else left there (a review: a report.html was
 // replaced without a word, where a stray capture is kept aside): the run's outputs, its seals,
 // an ending's list, and a profile.toml that is not the profile the run copies there.
+// A run stopped while it started (a kill between profile.toml and run.json, or in its first seal)
+// left only the files of its start: profile.toml, run.json, their staging files, no log, no seal,
+// nothing recorded. Neither resumable (with the station's key: not sealed) nor reusable, that
+// folder was lost (a review); a new run takes it over.
+bool only_a_start(const std::string& dir) {
+  static const std::set<std::string> start = {"profile.toml", "run.json", "profile.toml.tmp", "run.json.tmp",
+                                              "seal.json.tmp"};
+  std::error_code ec;
+  bool any = false;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (!start.contains(e.path().filename().string()) || !fs::is_regular_file(fs::symlink_status(e.path(), ec)))
+      return false;
+    any = true;
+  }
+  return any && !ec;
+}
+
 void refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
+  if (only_a_start(dir)) return;
   const std::string v = verdict_of(dir);
   if (!v.empty()) throw ConfigError(dir + " holds a finished run (its passport says " + v + "): choose another --out");
   std::error_code ec;
@@ -1911,6 +1929,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
     // which then failed on the same lock: a review).
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
+    if (only_a_start(a.out) && !a.quiet)
+      std::cerr << "rig: note: " << a.out << " holds only the start of an earlier run, stopped before its log began "
+                << "(profile.toml, run.json; nothing recorded): this run takes the folder over\n";
     refuse_an_earlier_run(a.out, p.source);
   }
   prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");

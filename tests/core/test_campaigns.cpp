@@ -870,6 +870,49 @@ std::string write_key(const std::string& path, char fill, unsigned mode = 0600) 
 
 }  // namespace
 
+// A run killed while it started (between profile.toml and run.json, or in its first seal) left a
+// folder that was neither resumable (with the station's key: not sealed) nor reusable (a review).
+// A new run takes over a folder that holds only the files of such a start; one whose log began
+// is an earlier run still, resumed and never taken over.
+TEST(Campaign, AFolderWithOnlyAStoppedStartIsTakenOverByANewRun) {
+  const std::string d = tmp("campaign-start-only");
+  fs::create_directories(d);
+  const std::string key = write_key(d + "/station.key", 'k');
+  (void)uninterrupted(d, "ci");
+  // Killed before run.json: the profile it wrote, a half-written run.json staged.
+  const std::string before = d + "/before-run-json";
+  fs::create_directories(before);
+  fs::copy_file(d + "/whole/profile.toml", before + "/profile.toml");
+  std::ofstream(before + "/run.json.tmp") << "{\"pla";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", before}, before + "-io"), 0)
+      << slurp(before + "-io.stderr");
+  EXPECT_NE(slurp(before + "-io.stderr").find("holds only the start of an earlier run"), std::string::npos)
+      << slurp(before + "-io.stderr");
+  EXPECT_EQ(read_json(before + "/passport.json")["outcome"], "PASS");
+  EXPECT_FALSE(fs::exists(before + "/run.json.tmp"));
+  // Killed in its first seal (another profile's start, the seal staged): a sealed run takes it
+  // over, and the station's key verifies the folder.
+  const std::string in_seal = d + "/in-first-seal";
+  fs::create_directories(in_seal);
+  fs::copy_file(d + "/whole/run.json", in_seal + "/run.json");
+  std::ofstream(in_seal + "/profile.toml") << "# an earlier start's profile\n";
+  std::ofstream(in_seal + "/seal.json.tmp") << "{";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--seal-key", key, "--out", in_seal}, in_seal + "-io"),
+            0)
+      << slurp(in_seal + "-io.stderr");
+  EXPECT_EQ(run({"verify", in_seal, "--seal-key", key}, in_seal + "-verify"), 0) << slurp(in_seal + "-verify.stdout");
+  EXPECT_EQ(read_json(in_seal + "/passport.json")["values"], read_json(d + "/whole/passport.json")["values"]);
+  // A start whose log began is a run: resumed, not taken over.
+  const std::string logged = d + "/logged";
+  fs::create_directories(logged);
+  fs::copy_file(d + "/whole/run.json", logged + "/run.json");
+  fs::copy_file(d + "/whole/profile.toml", logged + "/profile.toml");
+  std::ofstream(logged + "/run.log") << "2026-12-06T00:00:00.000Z info  rig run: ...\n";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", logged}, logged + "-io"), 2);
+  EXPECT_NE(slurp(logged + "-io.stderr").find("holds an earlier run (run.json): use --resume"), std::string::npos)
+      << slurp(logged + "-io.stderr");
+}
+
 // The station's seal (docs/seal.md): a sealed run verifies; an edited passport does not; a
 // sealed run resumes only with its key and only while the folder is as sealed, so the review's
 // F7 (profile.toml's limits loosened and its digest copied into the checkpoint) is refused; a
