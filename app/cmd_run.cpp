@@ -699,21 +699,27 @@ std::string owed_interrupted_ending(const std::string& dir) {
 // a file of the name it writes that something else left there (a review: a report.html was
 // replaced without a word, where a stray capture is kept aside): the run's outputs, its seals,
 // an ending's list, and a profile.toml that is not the profile the run copies there.
-// A run stopped while it started (a kill between profile.toml and run.json, or in its first seal)
-// left only the files of its start: profile.toml, run.json, their staging files, no log, no seal,
-// nothing recorded. Neither resumable (with the station's key: not sealed) nor reusable, that
-// folder was lost (a review); a new run takes it over.
+// A run stopped while it started (a kill after its run.json, or in its first seal) left only the
+// files of its start: its run.json (the rig's: it names the software), profile.toml, staging files;
+// no log, no seal, nothing recorded. Neither resumable with the station's key (never sealed) nor
+// reusable, that folder was lost (a review); a new run takes it over. (A profile.toml alone may
+// be anybody's: refused with the advice to move it, as before.)
 bool only_a_start(const std::string& dir) {
   static const std::set<std::string> start = {"profile.toml", "run.json", "profile.toml.tmp", "run.json.tmp",
                                               "seal.json.tmp"};
   std::error_code ec;
-  bool any = false;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
+  for (const auto& e : fs::directory_iterator(dir, ec))
     if (!start.contains(e.path().filename().string()) || !fs::is_regular_file(fs::symlink_status(e.path(), ec)))
       return false;
-    any = true;
+  if (ec || !fs::is_regular_file(fs::symlink_status(fs::path(dir) / "run.json", ec))) return false;
+  try {
+    std::ifstream in(fs::path(dir) / "run.json");
+    const nlohmann::json j = parse_json_unique_keys(in);
+    return j.is_object() && j.contains("software") && j["software"].is_string() &&
+           j["software"].get<std::string>().starts_with("rig ");
+  } catch (const std::exception&) {
+    return false;
   }
-  return any && !ec;
 }
 
 void refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
@@ -1931,7 +1937,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
     if (only_a_start(a.out) && !a.quiet)
       std::cerr << "rig: note: " << a.out << " holds only the start of an earlier run, stopped before its log began "
-                << "(profile.toml, run.json; nothing recorded): this run takes the folder over\n";
+                << "(run.json, profile.toml; nothing recorded): this run takes the folder over\n";
     refuse_an_earlier_run(a.out, p.source);
   }
   prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");

@@ -870,26 +870,27 @@ std::string write_key(const std::string& path, char fill, unsigned mode = 0600) 
 
 }  // namespace
 
-// A run killed while it started (between profile.toml and run.json, or in its first seal) left a
-// folder that was neither resumable (with the station's key: not sealed) nor reusable (a review).
-// A new run takes over a folder that holds only the files of such a start; one whose log began
-// is an earlier run still, resumed and never taken over.
+// A run killed while it started (after its run.json, or in its first seal) left a folder that was
+// neither resumable (with the station's key: never sealed) nor reusable (a review). A new run
+// takes over a folder that holds only the files of such a start; one whose log began is an
+// earlier run still, resumed and never taken over.
 TEST(Campaign, AFolderWithOnlyAStoppedStartIsTakenOverByANewRun) {
   const std::string d = tmp("campaign-start-only");
   fs::create_directories(d);
   const std::string key = write_key(d + "/station.key", 'k');
   (void)uninterrupted(d, "ci");
-  // Killed before run.json: the profile it wrote, a half-written run.json staged.
-  const std::string before = d + "/before-run-json";
-  fs::create_directories(before);
-  fs::copy_file(d + "/whole/profile.toml", before + "/profile.toml");
-  std::ofstream(before + "/run.json.tmp") << "{\"pla";
-  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", before}, before + "-io"), 0)
-      << slurp(before + "-io.stderr");
-  EXPECT_NE(slurp(before + "-io.stderr").find("holds only the start of an earlier run"), std::string::npos)
-      << slurp(before + "-io.stderr");
-  EXPECT_EQ(read_json(before + "/passport.json")["outcome"], "PASS");
-  EXPECT_FALSE(fs::exists(before + "/run.json.tmp"));
+  // Killed after its run.json (before the seal and the log), a profile.toml staged beside.
+  const std::string after = d + "/after-run-json";
+  fs::create_directories(after);
+  fs::copy_file(d + "/whole/run.json", after + "/run.json");
+  fs::copy_file(d + "/whole/profile.toml", after + "/profile.toml");
+  std::ofstream(after + "/profile.toml.tmp") << "# half";
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", after}, after + "-io"), 0)
+      << slurp(after + "-io.stderr");
+  EXPECT_NE(slurp(after + "-io.stderr").find("holds only the start of an earlier run"), std::string::npos)
+      << slurp(after + "-io.stderr");
+  EXPECT_EQ(read_json(after + "/passport.json")["outcome"], "PASS");
+  EXPECT_FALSE(fs::exists(after + "/profile.toml.tmp"));
   // Killed in its first seal (another profile's start, the seal staged): a sealed run takes it
   // over, and the station's key verifies the folder.
   const std::string in_seal = d + "/in-first-seal";
@@ -902,6 +903,11 @@ TEST(Campaign, AFolderWithOnlyAStoppedStartIsTakenOverByANewRun) {
       << slurp(in_seal + "-io.stderr");
   EXPECT_EQ(run({"verify", in_seal, "--seal-key", key}, in_seal + "-verify"), 0) << slurp(in_seal + "-verify.stdout");
   EXPECT_EQ(read_json(in_seal + "/passport.json")["values"], read_json(d + "/whole/passport.json")["values"]);
+  // A run.json that is not the rig's is not a start it can take over.
+  const std::string foreign = d + "/foreign";
+  fs::create_directories(foreign);
+  std::ofstream(foreign + "/run.json") << R"({"software": "someone else's"})";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", foreign}, foreign + "-io"), 2);
   // A start whose log began is a run: resumed, not taken over.
   const std::string logged = d + "/logged";
   fs::create_directories(logged);
