@@ -692,13 +692,6 @@ std::string owed_interrupted_ending(const std::string& dir) {
   return o == "ABORTED" || o == "ERROR" ? o : "";
 }
 
-// A new run never lands on an earlier one, whatever state it stopped in: run.json is written
-// before any device opens, checkpoint.json after the first phase, passport.json at every ending
-// (a hardware run that could not open its devices has the first and the last, no checkpoint).
-// A finished run's folder is left alone; an unfinished one is resumed. Nor does a new run replace
-// a file of the name it writes that something else left there (a review: a report.html was
-// replaced without a word, where a stray capture is kept aside): the run's outputs, its seals,
-// an ending's list, and a profile.toml that is not the profile the run copies there.
 // A run stopped while it started (a kill after its run.json, or in its first seal) left only the
 // files of its start: its run.json (the rig's: it names the software), profile.toml, staging files;
 // no log, no seal, nothing recorded. Neither resumable with the station's key (never sealed) nor
@@ -722,6 +715,13 @@ bool only_a_start(const std::string& dir) {
   }
 }
 
+// A new run never lands on an earlier one, whatever state it stopped in: run.json is written
+// before any device opens, checkpoint.json after the first phase, passport.json at every ending
+// (a hardware run that could not open its devices has the first and the last, no checkpoint).
+// A finished run's folder is left alone; an unfinished one is resumed. Nor does a new run replace
+// a file of the name it writes that something else left there (a review: a report.html was
+// replaced without a word, where a stray capture is kept aside): the run's outputs, its seals,
+// an ending's list, and a profile.toml that is not the profile the run copies there.
 void refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
   if (only_a_start(dir)) return;
   const std::string v = verdict_of(dir);

@@ -123,18 +123,18 @@ void Writer::write_block(const Sample* s, uint32_t n) {
   put_u32(buf_.data() + 12, crc(buf_.data(), 12));
   write_all(buf_.data(), buf_.size());
   total_ += n;
-  // Bound what a power loss can take: about a minute of samples at 1 kHz, and, where the samples
-  // come faster than the wall clock (the emulated plant records a minute in about 30 ms), a
-  // second of the rig's work: a sync a device minute there was 90 of them in a `paper` run, a
-  // tenth of its wall time (2026-12-06). A phase the loss cuts is recorded again on resume.
   bytes_ += buf_.size();
-  // Start the disk's write of every whole page so far without waiting for it (only the pages
-  // not yet started: a page under writeback would hold up the next write into it), so the
-  // sync below and close()'s find little left to wait for.
+  // The disk's write of every whole page so far started without waiting for it (only pages not
+  // yet started: a page under writeback would hold up the next write into it), so the syncs find
+  // little left to wait for: a `paper` run's main thread spent 0.38 s in them before, 0.20 s
+  // with this and the once-a-second rule below (strace -T, 2026-12-06).
   if (const uint64_t whole = bytes_ & ~uint64_t{4095}; whole > started_ + (uint64_t{1} << 17)) {
     ::sync_file_range(fd_, static_cast<off_t>(started_), static_cast<off_t>(whole - started_), SYNC_FILE_RANGE_WRITE);
     started_ = whole;
   }
+  // Bound what a power loss can take: about a minute of samples at 1 kHz, and where the samples
+  // come faster than the wall clock (the emulated plant records a minute in about 30 ms: 90 syncs
+  // in a `paper` run) a second of the rig's work. A phase the loss cuts is recorded again on resume.
   if (++blocks_since_sync_ >= 60) {
     const auto now = std::chrono::steady_clock::now();
     if (now - last_sync_ >= std::chrono::seconds(1)) {
