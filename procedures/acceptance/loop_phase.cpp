@@ -38,6 +38,28 @@ std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
   return m;
 }
 
+// The settling time is discontinuous where the overshoot meets the settling band: a peak inside
+// the band settles at the rise's crossing, one just outside it after the peak, a jump of the time
+// from the rise to the peak (this loop: overshoot 5.0-5.3 % against the 5 % band, 2.8 ms against
+// 3.2 ms; a metrologist's review). Said, with the steps' spread, where any step's peak lies within
+// half a point of the band; "" elsewhere.
+std::string settling_near_the_band(const nlohmann::json& per_step) {
+  constexpr double kNear = 0.005;
+  const double band = analysis::kStepSettlingBand;
+  double o_lo = 1e300, o_hi = -1e300, t_lo = 1e300, t_hi = -1e300;
+  bool near = false;
+  for (const auto& st : per_step) {
+    const double o = st["overshoot"].get<double>(), t = st["settling_time_s"].get<double>();
+    near = near || std::abs(o - band) < kNear;
+    o_lo = std::min(o_lo, o), o_hi = std::max(o_hi, o), t_lo = std::min(t_lo, t), t_hi = std::max(t_hi, t);
+  }
+  if (!near) return "";
+  return fmt::format("; the overshoot ({:.2f}-{:.2f} % over the steps) lies within {:g} points of the {:g} % band: "
+                     "a peak inside it settles at the rise, one outside it after the peak, so a small change of the "
+                     "overshoot moves this figure by the time between them (the steps read {:.4g}-{:.4g} s)",
+                     o_lo * 100, o_hi * 100, kNear * 100, band * 100, t_lo, t_hi);
+}
+
 }  // namespace
 
 nlohmann::json loop_test_figures(const LoopTestResponse& r) {
@@ -217,7 +239,8 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
     ctx.values.set("bandwidth_0p5", std::nullopt,
                    what + ": the amplitude response stays above 0.5 up to half the loop rate in some step");
   ctx.values.set("settling_time", f["settling_time_s"].get<double>(),
-                 what + fmt::format(", {:g} % band; 95 % interval", analysis::kStepSettlingBand * 100),
+                 what + fmt::format(", {:g} % band; 95 % interval", analysis::kStepSettlingBand * 100) +
+                     settling_near_the_band(f["per_step"]),
                  f["settling_time_interval_s"][0].get<double>(), f["settling_time_interval_s"][1].get<double>());
   ctx.log->info("loop test: settling time {:.4g} s, bandwidth (0.5) {:.1f} Hz over {} steps", f["settling_time_s"].get<double>(),
                 f["bandwidth_0p5_hz"].get<double>(), r.steps.size());
