@@ -643,11 +643,11 @@ std::string verdict_of(const std::string& dir) {
   return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
 }
 
-// How an ending names a run.log the disk refused lines of (LogLoss), at the start of its reason.
-constexpr std::string_view kLogShort = "run.log is short of lines";
+// How an ending names a run.log the disk refused lines of (LogLoss), in its reason.
+constexpr std::string_view kLogShort = "run.log is missing lines";
 
-// The reason of an earlier attempt's ERROR ending whose run.log lost lines; "" otherwise. Such a
-// run has no resume: its ending would give a verdict beside a log with a hole in the account.
+// The reason of an earlier attempt's ERROR or ABORTED ending whose run.log lost lines; "" otherwise.
+// Such a run has no resume: its ending would give a verdict beside a log with a hole in the account.
 std::string earlier_log_short(const std::string& dir) {
   const std::string path = dir + "/passport.json";
   struct stat st {};
@@ -655,9 +655,10 @@ std::string earlier_log_short(const std::string& dir) {
   try {
     std::ifstream in(path);
     const nlohmann::json j = parse_json_unique_keys(in);
-    if (!j.is_object() || j.value("outcome", nlohmann::json()) != "ERROR") return "";
-    const nlohmann::json why = j.value("aborted_reason", nlohmann::json());
-    return why.is_string() && why.get<std::string>().starts_with(kLogShort) ? why.get<std::string>() : "";
+    if (!j.is_object()) return "";
+    const nlohmann::json outcome = j.value("outcome", nlohmann::json()), why = j.value("aborted_reason", nlohmann::json());
+    if (outcome != "ERROR" && outcome != "ABORTED") return "";
+    return why.is_string() && why.get<std::string>().find(kLogShort) != std::string::npos ? why.get<std::string>() : "";
   } catch (const std::exception&) {
     return "";
   }
@@ -665,7 +666,7 @@ std::string earlier_log_short(const std::string& dir) {
 
 void refuse_a_short_log(const std::string& dir) {
   if (const std::string why = earlier_log_short(dir); !why.empty())
-    throw ConfigError(dir + ": its run ended ERROR: " + why +
+    throw ConfigError(dir + ": its run ended without a verdict: " + why +
                       "; no resume gives those lines back, nor a verdict beside them: start a new run (the folder is "
                       "as it was)");
 }
@@ -693,17 +694,20 @@ std::string owed_interrupted_ending(const std::string& dir) {
 }
 
 // A run stopped while it started (a kill after its run.json, or in its first seal) left only the
-// files of its start: its run.json (the rig's: it names the software), profile.toml, staging files;
-// no log, no seal, nothing recorded. Neither resumable with the station's key (never sealed) nor
+// files of its start: its run.json (the rig's: it names the software), profile.toml, staging files,
+// at most an empty run.log; no seal, nothing recorded. Neither resumable with the station's key (never sealed) nor
 // reusable, that folder was lost (a review); a new run takes it over. (A profile.toml alone may
 // be anybody's: refused with the advice to move it, as before.)
 bool only_a_start(const std::string& dir) {
   static const std::set<std::string> start = {"profile.toml", "run.json", "profile.toml.tmp", "run.json.tmp",
                                               "seal.json.tmp"};
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (!start.contains(e.path().filename().string()) || !fs::is_regular_file(fs::symlink_status(e.path(), ec)))
-      return false;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (!fs::is_regular_file(fs::symlink_status(e.path(), ec))) return false;
+    // A log opened and killed before its first line: empty.
+    if (!start.contains(name) && !(name == "run.log" && fs::file_size(e.path(), ec) == 0 && !ec)) return false;
+  }
   if (ec || !fs::is_regular_file(fs::symlink_status(fs::path(dir) / "run.json", ec))) return false;
   try {
     std::ifstream in(fs::path(dir) / "run.json");
@@ -722,6 +726,11 @@ bool only_a_start(const std::string& dir) {
 // a file of the name it writes that something else left there (a review: a report.html was
 // replaced without a word, where a stray capture is kept aside): the run's outputs, its seals,
 // an ending's list, and a profile.toml that is not the profile the run copies there.
+std::string taken_over_note(const std::string& dir) {
+  return dir + " holds only the start of an earlier run, stopped before its log began (run.json, profile.toml; "
+               "nothing recorded): this run takes the folder over";
+}
+
 void refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
   if (only_a_start(dir)) return;
   const std::string v = verdict_of(dir);
@@ -1228,16 +1237,24 @@ void say_history_left_behind(const RunArgs& a, spdlog::logger& log) {
 }
 
 // Lines of run.log the disk refused: the first refusal's reason and time (UTC). The run's account
-// is one of its records: a verdict whose log is short of lines is no verdict (records_lost).
+// is one of its records: a verdict whose log is missing lines is no verdict (records_lost).
 struct LogLoss {
   std::mutex m;
-  bool lost = false;
-  std::string why, since;
+  std::size_t lines = 0;  // refused so far
+  std::string why, first;
   std::string said() {
     const std::lock_guard lock(m);
-    return lost ? fmt::format("{} from {} on (the disk refused them: {})", kLogShort, since, why) : "";
+    return lines ? fmt::format("{}: the disk refused {} line(s), the first at {} ({})", kLogShort, lines, first, why) : "";
   }
 };
+
+// Now in UTC to the millisecond, as run.log stamps its lines.
+std::string utc_now_ms() {
+  const auto now = std::chrono::system_clock::now();
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  const std::string s = iso8601_utc_now();  // ...THH:MM:SSZ
+  return fmt::format("{}.{:03d}Z", s.substr(0, s.size() - 1), ms);
+}
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
                                             std::shared_ptr<LogLoss> loss = std::make_shared<LogLoss>()) {
@@ -1252,10 +1269,9 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   log->set_error_handler([out_dir, loss](const std::string& msg) {
     {
       const std::lock_guard lock(loss->m);
-      if (loss->lost) return;
-      loss->lost = true;
+      if (loss->lines++ > 0) return;
       loss->why = msg;
-      loss->since = iso8601_utc_now();
+      loss->first = utc_now_ms();
     }
     std::cerr << "rig: warning: " << out_dir << "/run.log: a line could not be written (" << msg
               << "); the run's log is short of what follows while that lasts\n";
@@ -1831,6 +1847,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
     check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
                      a.resume.empty() ? "--out" : "--resume", p.source);
+    const bool taken_over = a.resume.empty() && !a.out.empty() && only_a_start(a.out);
     const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
                                         a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
@@ -1852,6 +1869,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // them was found only at the prompt, or not at all with --yes (a technician's review).
     const toml::table* pr = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
     if (!unjudged.empty()) std::cout << "Note: " << unjudged << "\n";
+    if (taken_over) std::cout << "Note: " << taken_over_note(a.out) << "\n";
     std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
                              pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                            : std::string("the profile's"));
@@ -1935,9 +1953,11 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
     // which then failed on the same lock: a review).
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
-    if (only_a_start(a.out) && !a.quiet)
-      std::cerr << "rig: note: " << a.out << " holds only the start of an earlier run, stopped before its log began "
-                << "(run.json, profile.toml; nothing recorded): this run takes the folder over\n";
+    if (only_a_start(a.out)) {
+      if (!a.quiet) std::cerr << "rig: note: " << taken_over_note(a.out) << "\n";
+      // Its staging files go: a seal.json.tmp stayed beside an unsealed run's records (a review).
+      for (const char* f : {"profile.toml.tmp", "run.json.tmp", "seal.json.tmp"}) fs::remove(fs::path(a.out) / f, ec);
+    }
     refuse_an_earlier_run(a.out, p.source);
   }
   prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
@@ -2136,6 +2156,15 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
   // ERROR (exit 4) naming them, never a PASS nobody can check.
   bool records_lost = res.records_changed;  // then no resume either: it would refuse the folder (exit 2)
+  // A stopped run whose log lost lines has no resume either: its ending would give a verdict beside
+  // the hole (a review). Lines refused after this point (the closing lines) leave the verdict as it
+  // stands, as a signal after the passport does.
+  if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error)
+    if (const std::string log_short = log_loss->said(); !log_short.empty()) {
+      res.message += "; " + log_short;
+      records_lost = true;
+      log->error("{}", log_short);
+    }
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
     std::vector<std::string> touched;
@@ -2259,7 +2288,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     const bool changed = res.message.find("changed after they were written") != std::string::npos;
     say_no_resume(gone || changed ? "the run's records " + (gone ? "are gone from " + shown_text(a.out)
                                                                  : "in " + shown_text(a.out) + " changed after they were written")
-                                  : "the run's log " + shown_text(a.out + "/run.log") + " is short of lines the disk refused",
+                                  : "the run's log " + shown_text(a.out + "/run.log") + " is missing lines the disk refused",
                   *log);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
     // An emulated run's injected sample losses are repeated by its resume (run.json's faults):

@@ -38,6 +38,8 @@ std::vector<double> mean_of(const std::vector<std::vector<double>>& rows) {
   return m;
 }
 
+}  // namespace
+
 // The settling time is discontinuous where the overshoot meets the settling band: a peak inside
 // the band settles at the rise's crossing, one just outside it after the peak, a jump of the time
 // from the rise to the peak (this loop: overshoot 5.0-5.3 % against the 5 % band, 2.8 ms against
@@ -59,8 +61,6 @@ std::string settling_near_the_band(const nlohmann::json& per_step) {
                      "overshoot moves this figure by the time between them (the steps read {:.4g}-{:.4g} s)",
                      o_lo * 100, o_hi * 100, kNear * 100, band * 100, t_lo, t_hi);
 }
-
-}  // namespace
 
 nlohmann::json loop_test_figures(const LoopTestResponse& r) {
   using namespace rig::analysis;

@@ -36,4 +36,9 @@ std::optional<Profile::DesignModel> read_design_model(const toml::table& dut);
 // step and amplitude curves), with the two passport values' intervals.
 nlohmann::json loop_test_figures(const LoopTestResponse& r);
 
+// The settling time's note where a step's overshoot lies within half a point of the settling band
+// (the figure jumps there between the rise and the peak), from loop_test_figures' `per_step`;
+// "" where none does.
+std::string settling_near_the_band(const nlohmann::json& per_step);
+
 }  // namespace rig::acceptance

@@ -132,17 +132,21 @@ void Writer::write_block(const Sample* s, uint32_t n) {
     ::sync_file_range(fd_, static_cast<off_t>(started_), static_cast<off_t>(whole - started_), SYNC_FILE_RANGE_WRITE);
     started_ = whole;
   }
+  ++blocks_since_sync_;
+}
+
+void Writer::sync_if_due() {
   // Bound what a power loss can take: about a minute of samples at 1 kHz, and where the samples
   // come faster than the wall clock (the emulated plant records a minute in about 30 ms: 90 syncs
   // in a `paper` run) a second of the rig's work. A phase the loss cuts is recorded again on resume.
-  if (++blocks_since_sync_ >= 60) {
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_sync_ >= std::chrono::seconds(1)) {
-      sync("fdatasync");
-      last_sync_ = now;
-      blocks_since_sync_ = 0;
-    }
-  }
+  // Called once the written block has left pending_: a sync that fails must not leave it there
+  // for close() to write a second time (a review).
+  if (blocks_since_sync_ < 60) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_sync_ < std::chrono::seconds(1)) return;
+  last_sync_ = now;
+  blocks_since_sync_ = 0;
+  sync("fdatasync");
 }
 
 void Writer::sync(const char* what) {
@@ -161,12 +165,14 @@ void Writer::append(std::span<const Sample> samples) {
   while (pending_.empty() && samples.size() - i >= block_samples_) {
     write_block(samples.data() + i, block_samples_);
     i += block_samples_;
+    sync_if_due();
   }
   for (; i < samples.size(); ++i) {
     pending_.push_back(samples[i]);
     if (pending_.size() == block_samples_) {
       write_block(pending_.data(), block_samples_);
       pending_.clear();
+      sync_if_due();
     }
   }
 }

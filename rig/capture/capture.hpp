@@ -84,6 +84,7 @@ class Writer {
   void write_block(const Sample* s, uint32_t n);
   void write_all(const void* p, std::size_t n);
   void sync(const char* what);  // "fsync" or "fdatasync"; throws on failure
+  void sync_if_due();           // the minute's fdatasync (write_block counts the blocks)
   std::string path_, set_aside_;
   int fd_ = -1;
   uint32_t block_samples_;

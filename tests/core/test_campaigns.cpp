@@ -898,9 +898,16 @@ TEST(Campaign, AFolderWithOnlyAStoppedStartIsTakenOverByANewRun) {
   fs::copy_file(d + "/whole/run.json", in_seal + "/run.json");
   std::ofstream(in_seal + "/profile.toml") << "# an earlier start's profile\n";
   std::ofstream(in_seal + "/seal.json.tmp") << "{";
+  std::ofstream(in_seal + "/run.log");  // opened, killed before its first line
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--dry-run", "--out", in_seal}, in_seal + "-dry"), 0)
+      << slurp(in_seal + "-dry.stderr");
+  EXPECT_NE(slurp(in_seal + "-dry.stdout").find("Note: " + in_seal + " holds only the start of an earlier run"),
+            std::string::npos)
+      << slurp(in_seal + "-dry.stdout");
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--seal-key", key, "--out", in_seal}, in_seal + "-io"),
             0)
       << slurp(in_seal + "-io.stderr");
+  EXPECT_FALSE(fs::exists(in_seal + "/seal.json.tmp"));
   EXPECT_EQ(run({"verify", in_seal, "--seal-key", key}, in_seal + "-verify"), 0) << slurp(in_seal + "-verify.stdout");
   EXPECT_EQ(read_json(in_seal + "/passport.json")["values"], read_json(d + "/whole/passport.json")["values"]);
   // A run.json that is not the rig's is not a start it can take over.

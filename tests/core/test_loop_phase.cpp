@@ -137,6 +137,26 @@ TEST(LoopPhase, PaperRunMeasuresTheModelFiguresWithinTheStatedIntervals) {
   fs::remove_all(out);
 }
 
+// The settling time's note, on steps made up for it: said where a step's peak lies within half a
+// point of the 5 % band, on either side, with the steps' spread; not said elsewhere.
+TEST(LoopPhase, TheSettlingNoteIsSaidOnlyNearTheBand) {
+  auto steps = [](std::initializer_list<std::pair<double, double>> os_ts) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& [o, t] : os_ts) a.push_back({{"overshoot", o}, {"settling_time_s", t}});
+    return a;
+  };
+  EXPECT_EQ(acceptance::settling_near_the_band(steps({{0.030, 0.0021}, {0.031, 0.0022}})), "");
+  EXPECT_EQ(acceptance::settling_near_the_band(steps({{0.0551, 0.0033}, {0.060, 0.0034}})), "");
+  EXPECT_EQ(acceptance::settling_near_the_band(steps({{0.0449, 0.0028}})), "");
+  const std::string below = acceptance::settling_near_the_band(steps({{0.0460, 0.0028}, {0.030, 0.0027}}));
+  EXPECT_NE(below.find("the overshoot (3.00-4.60 % over the steps) lies within 0.5 points of the 5 % band"),
+            std::string::npos)
+      << below;
+  const std::string straddle = acceptance::settling_near_the_band(steps({{0.0500, 0.0028}, {0.0524, 0.0033}}));
+  EXPECT_NE(straddle.find("(5.00-5.24 % over the steps)"), std::string::npos) << straddle;
+  EXPECT_NE(straddle.find("(the steps read 0.0028-0.0033 s)"), std::string::npos) << straddle;
+}
+
 // loop-test.csv holds every value as the shortest decimal that reads back to the same double, so
 // the figures a resume computes from the file are those of the records as the DUT sent them.
 TEST(LoopPhase, TheRecordsReadBackBitForBitAndGiveTheSameFigures) {

@@ -5381,8 +5381,8 @@ std::string rig_line(const std::vector<std::string>& args) {
 
 // run.log is one of the run's records: a run whose log the disk refused lines of (ENOSPC, here
 // injected by strace into run.log's writes alone) ended PASS, exit 0, with a warning on stderr (a
-// review). It ends ERROR, exit 4, naming the log and when its lines stopped; no resume is offered
-// and none is taken (its ending would give a verdict beside a log with a hole in the account).
+// review). It ends ERROR, exit 4, naming the log, how many lines and the first's time; no resume
+// is offered and none is taken (its ending would give a verdict beside a hole in the account).
 TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   if (std::system("strace -V > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace";
   const std::string d = tmp("log-refused");
@@ -5397,13 +5397,13 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "ERROR");
   const std::string why = p["aborted_reason"].get<std::string>();
-  EXPECT_EQ(why.rfind("run.log is short of lines from ", 0), 0u) << why;
+  EXPECT_EQ(why.rfind("run.log is missing lines: the disk refused ", 0), 0u) << why;
   EXPECT_NE(why.find("No space left on device"), std::string::npos) << why;
-  EXPECT_NE(slurp(d + "/run/junit.xml").find("run.log is short of lines"), std::string::npos);
+  EXPECT_NE(slurp(d + "/run/junit.xml").find("run.log is missing lines"), std::string::npos);
   EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: ERROR"), std::string::npos) << slurp(d + "/io.stdout");
   const std::string err = slurp(d + "/io.stderr");
   EXPECT_EQ(err.find("to continue"), std::string::npos) << err;
-  EXPECT_NE(err.find("no resume: the run's log " + d + "/run/run.log is short of lines the disk refused; start a new "
+  EXPECT_NE(err.find("no resume: the run's log " + d + "/run/run.log is missing lines the disk refused; start a new "
                      "run"),
             std::string::npos)
       << err;
@@ -5418,6 +5418,22 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   }
   EXPECT_EQ(slurp(d + "/run/run.log"), log_before);
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "ERROR");
+  // A run stopped by a signal whose log lost a line has no resume either: its ending would give a
+  // verdict beside the hole (a review: "to continue" was offered, and the resume ended PASS).
+  const std::string stopped = "strace -f -qq -o /dev/null -P " + d + "/stop/run.log -e trace=write " +
+                              "-e inject=write:error=ENOSPC:when=10 " +
+                              rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject",
+                                        "sigint@100", "--out", d + "/stop"}) +
+                              " > " + d + "/stop.stdout 2> " + d + "/stop.stderr";
+  EXPECT_EQ(shell(stopped), 3) << slurp(d + "/stop.stderr");
+  const nlohmann::json sp = nlohmann::json::parse(slurp(d + "/stop/passport.json"));
+  EXPECT_EQ(sp["outcome"], "ABORTED");
+  EXPECT_NE(sp["aborted_reason"].get<std::string>().find("; run.log is missing lines: the disk refused 1 line(s)"),
+            std::string::npos)
+      << sp["aborted_reason"];
+  EXPECT_EQ(slurp(d + "/stop.stderr").find("to continue"), std::string::npos) << slurp(d + "/stop.stderr");
+  EXPECT_EQ(run({"run", "--resume", d + "/stop", "--yes", "--no-history"}, d + "/stop-resume"), 2)
+      << slurp(d + "/stop-resume.stderr");
 }
 
 // An emulated run's injected losses are repeated by its resume (run.json's faults): a loss that
