@@ -644,28 +644,21 @@ std::string verdict_of(const std::string& dir) {
 }
 
 // How an ending names a run.log the disk refused lines of (LogLoss), in its reason.
-constexpr std::string_view kLogShort = "run.log is missing lines";
+constexpr std::string_view kLogMissingLines = "run.log is missing lines";
 
 // The reason of an earlier attempt's ERROR or ABORTED ending whose run.log lost lines; "" otherwise.
 // Such a run has no resume: its ending would give a verdict beside a log with a hole in the account.
-std::string earlier_log_short(const std::string& dir) {
-  const std::string path = dir + "/passport.json";
-  struct stat st {};
-  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return "";
-  try {
-    std::ifstream in(path);
-    const nlohmann::json j = parse_json_unique_keys(in);
-    if (!j.is_object()) return "";
-    const nlohmann::json outcome = j.value("outcome", nlohmann::json()), why = j.value("aborted_reason", nlohmann::json());
-    if (outcome != "ERROR" && outcome != "ABORTED") return "";
-    return why.is_string() && why.get<std::string>().find(kLogShort) != std::string::npos ? why.get<std::string>() : "";
-  } catch (const std::exception&) {
-    return "";
-  }
+std::string earlier_log_missing_lines(const std::string& dir) {
+  const std::optional<nlohmann::json> j = read_passport(dir);
+  if (!j) return "";
+  const nlohmann::json outcome = j->value("outcome", nlohmann::json()), why = j->value("aborted_reason", nlohmann::json());
+  if (outcome != "ERROR" && outcome != "ABORTED") return "";
+  return why.is_string() && why.get<std::string>().find(kLogMissingLines) != std::string::npos ? why.get<std::string>()
+                                                                                                : "";
 }
 
-void refuse_a_short_log(const std::string& dir) {
-  if (const std::string why = earlier_log_short(dir); !why.empty())
+void refuse_a_log_missing_lines(const std::string& dir) {
+  if (const std::string why = earlier_log_missing_lines(dir); !why.empty())
     throw ConfigError(dir + ": its run ended without a verdict: " + why +
                       "; no resume gives those lines back, nor a verdict beside them: start a new run (the folder is "
                       "as it was)");
@@ -731,8 +724,9 @@ std::string taken_over_note(const std::string& dir) {
                "nothing recorded): this run takes the folder over";
 }
 
-void refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
-  if (only_a_start(dir)) return;
+// True when the folder holds only a stopped start (only_a_start), which the run takes over.
+bool refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
+  if (only_a_start(dir)) return true;
   const std::string v = verdict_of(dir);
   if (!v.empty()) throw ConfigError(dir + " holds a finished run (its passport says " + v + "): choose another --out");
   std::error_code ec;
@@ -772,6 +766,7 @@ void refuse_an_earlier_run(const std::string& dir, const std::string& profile_so
                                   "{}; move {} or choose another --out",
                                   dir, fmt::join(would_replace, ", "), would_replace.size() == 1 ? "it" : "them",
                                   would_replace.size() == 1 ? "it" : "them"));
+  return false;
 }
 
 // `p` itself, or its nearest ancestor that exists: where a folder that is not there yet would be
@@ -824,7 +819,8 @@ void check_history_can_record(const std::string& url, bool resume) {
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
-void check_run_folder(const std::string& dir, bool new_run_here, const std::string& option,
+// True when the run would take over a stopped start there (refuse_an_earlier_run).
+bool check_run_folder(const std::string& dir, bool new_run_here, const std::string& option,
                       const std::string& profile_source) {
   std::error_code ec;
   refuse_a_name_too_long(dir, option);
@@ -836,7 +832,7 @@ void check_run_folder(const std::string& dir, bool new_run_here, const std::stri
   // touched); a filesystem without it gets a named probe, removed at once.
   if (!can_create_file_in(p))
     throw ConfigError(option + " " + dir + ": the run folder is not writable (" + p.string() + ")");
-  if (new_run_here) refuse_an_earlier_run(dir, profile_source);
+  return new_run_here && refuse_an_earlier_run(dir, profile_source);
 }
 
 // What the run's recordings take on disk: every sample is a 16-byte record of its capture
@@ -1244,16 +1240,19 @@ struct LogLoss {
   std::string why, first;
   std::string said() {
     const std::lock_guard lock(m);
-    return lines ? fmt::format("{}: the disk refused {} line(s), the first at {} ({})", kLogShort, lines, first, why) : "";
+    return lines ? fmt::format("{}: the disk refused {} line(s), the first at {} ({})", kLogMissingLines, lines, first, why) : "";
   }
 };
 
 // Now in UTC to the millisecond, as run.log stamps its lines.
+// Seconds and milliseconds from one reading of the clock (two readings put a stamp taken at a
+// second's turn almost a second early).
 std::string utc_now_ms() {
-  const auto now = std::chrono::system_clock::now();
-  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
-  const std::string s = iso8601_utc_now();  // ...THH:MM:SSZ
-  return fmt::format("{}.{:03d}Z", s.substr(0, s.size() - 1), ms);
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                      std::chrono::system_clock::now().time_since_epoch())
+                      .count();
+  const std::string s = iso8601_utc(static_cast<std::time_t>(ms / 1000));  // ...THH:MM:SSZ
+  return fmt::format("{}.{:03d}Z", s.substr(0, s.size() - 1), ms % 1000);
 }
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
@@ -1648,7 +1647,7 @@ std::string resume_refusal(const std::string& dir) {
            " (the folder removed or moved while the run went on): a folder moved whole resumes where it is now "
            "(rig run --resume NEW-PLACE); else start a new run";
   try {
-    refuse_a_short_log(dir);
+    refuse_a_log_missing_lines(dir);
     refuse_records_without_checkpoint(dir);
     RunArgs again;
     again.db = "(the resume's own)";  // a masked --db is given again, not a refusal
@@ -1845,9 +1844,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
-    check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
-                     a.resume.empty() ? "--out" : "--resume", p.source);
-    const bool taken_over = a.resume.empty() && !a.out.empty() && only_a_start(a.out);
+    const bool taken_over = check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
+                                             a.resume.empty() ? "--out" : "--resume", p.source);
     const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
                                         a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
     // A resume's checkpoint is checked as the run would check it (its captures read, nothing
@@ -1857,7 +1855,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (!a.resume.empty()) {
       spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
       if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
-      refuse_a_short_log(a.resume);
+      refuse_a_log_missing_lines(a.resume);
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
     }
     TerminalView plan_view(stdout);
@@ -1953,12 +1951,11 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
     // which then failed on the same lock: a review).
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
-    if (only_a_start(a.out)) {
+    if (refuse_an_earlier_run(a.out, p.source)) {
       if (!a.quiet) std::cerr << "rig: note: " << taken_over_note(a.out) << "\n";
       // Its staging files go: a seal.json.tmp stayed beside an unsealed run's records (a review).
       for (const char* f : {"profile.toml.tmp", "run.json.tmp", "seal.json.tmp"}) fs::remove(fs::path(a.out) / f, ec);
     }
-    refuse_an_earlier_run(a.out, p.source);
   }
   prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
   if (a.resume.empty()) {
@@ -1976,7 +1973,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // A finished run's folder is left as it is, its log included (a refused resume wrote into a
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
     if (!key) refuse_a_final_verdict(a.out);
-    refuse_a_short_log(a.out);
+    refuse_a_log_missing_lines(a.out);
     log = make_logger(a.out, a.quiet, log_loss);
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
@@ -2160,10 +2157,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // the hole (a review). Lines refused after this point (the closing lines) leave the verdict as it
   // stands, as a signal after the passport does.
   if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error)
-    if (const std::string log_short = log_loss->said(); !log_short.empty()) {
-      res.message += "; " + log_short;
+    if (const std::string log_missing = log_loss->said(); !log_missing.empty()) {
+      res.message += "; " + log_missing;
       records_lost = true;
-      log->error("{}", log_short);
+      log->error("{}", log_missing);
     }
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
     const std::vector<std::string> gone = records_gone(a.out, state.slot());
@@ -2173,14 +2170,14 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       log->warn("the run's records in {} were touched after they were written ({}), but hold what was recorded: "
                 "the verdict stands on them",
                 a.out, fmt::join(touched, ", "));
-    const std::string log_short = log_loss->said();
-    records_lost = !gone.empty() || !changed.empty() || !log_short.empty();
+    const std::string log_missing = log_loss->said();
+    records_lost = !gone.empty() || !changed.empty() || !log_missing.empty();
     std::vector<std::string> why;
     if (!gone.empty())
       why.push_back(fmt::format("the run's records are gone from {} (removed while it ran): {}", a.out, fmt::join(gone, ", ")));
     if (!changed.empty())
       why.push_back(fmt::format("the run's records in {} changed after they were written: {}", a.out, fmt::join(changed, ", ")));
-    if (!log_short.empty()) why.push_back(log_short);
+    if (!log_missing.empty()) why.push_back(log_missing);
     if (records_lost) {
       res.outcome = RunOutcome::Error;
       res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));

@@ -194,18 +194,24 @@ bool check_seal_before_resume(const std::string& dir, const std::optional<seal::
                                : "the folder was changed outside the rig; start a new run"));
 }
 
-std::optional<std::string> passport_outcome(const std::string& dir) {
+std::optional<nlohmann::json> read_passport(const std::string& dir) {
   const std::string path = dir + "/passport.json";
   struct stat st {};
   if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
   try {
     std::ifstream in(path);
-    const nlohmann::json j = parse_json_unique_keys(in);
-    if (!j.is_object() || !j.contains("outcome") || !j["outcome"].is_string()) return std::nullopt;
-    return j["outcome"].get<std::string>();
+    nlohmann::json j = parse_json_unique_keys(in);
+    if (!j.is_object()) return std::nullopt;
+    return j;
   } catch (const std::exception&) {
     return std::nullopt;
   }
+}
+
+std::optional<std::string> passport_outcome(const std::string& dir) {
+  const std::optional<nlohmann::json> j = read_passport(dir);
+  if (!j || !j->contains("outcome") || !(*j)["outcome"].is_string()) return std::nullopt;
+  return (*j)["outcome"].get<std::string>();
 }
 
 bool outside_the_seal(const std::string& rel) {

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "rig/seal/seal.hpp"
 
 namespace rig::cli {
@@ -76,8 +78,11 @@ inline std::optional<std::vector<std::string>> pending_steps(const std::string& 
   return steps;
 }
 
-// The outcome passport.json states; nullopt when it is missing, not a regular file (a FIFO is
-// never opened) or not a passport.
+// `dir`'s passport.json as parsed; nullopt when it is missing, not a regular file (a FIFO is
+// never opened), not JSON or not an object.
+std::optional<nlohmann::json> read_passport(const std::string& dir);
+
+// The outcome passport.json states; nullopt when read_passport has none or it names none.
 std::optional<std::string> passport_outcome(const std::string& dir);
 
 // The seal `dir` holds: "seal.json", else "seal.prev.json" (a stop between two seals may leave

@@ -146,16 +146,17 @@ void Writer::sync_if_due() {
   if (now - last_sync_ < std::chrono::seconds(1)) return;
   last_sync_ = now;
   blocks_since_sync_ = 0;
-  sync("fdatasync");
+  sync(Sync::kData);
 }
 
-void Writer::sync(const char* what) {
+void Writer::sync(Sync what) {
   // A disk that fails to keep the samples says so here (EIO; NFS and some FUSE filesystems report
   // a full disk only now): a capture is never called recorded on an unchecked sync. EINVAL: a file
   // that cannot be synced (not a disk's), where there is nothing to wait for.
-  const int rc = std::string_view(what) == "fsync" ? ::fsync(fd_) : ::fdatasync(fd_);
+  const int rc = what == Sync::kAll ? ::fsync(fd_) : ::fdatasync(fd_);
   if (rc != 0 && errno != EINVAL)
-    throw std::runtime_error("write to capture " + path_ + " failed (" + what + "): " + errno_text());
+    throw std::runtime_error("write to capture " + path_ + " failed (" + (what == Sync::kAll ? "fsync" : "fdatasync") +
+                             "): " + errno_text());
 }
 
 void Writer::append(std::span<const Sample> samples) {
@@ -202,7 +203,7 @@ void Writer::close() {
     put_u32(end + 8, static_cast<uint32_t>(total_ >> 32));
     put_u32(end + 12, crc(end, 12));
     write_all(end, sizeof end);
-    sync("fsync");
+    sync(Sync::kAll);
   } catch (...) {  // closed all the same: the destructor's second close() would write a second end
     ::close(fd_);
     fd_ = -1;

@@ -83,7 +83,8 @@ class Writer {
  private:
   void write_block(const Sample* s, uint32_t n);
   void write_all(const void* p, std::size_t n);
-  void sync(const char* what);  // "fsync" or "fdatasync"; throws on failure
+  enum class Sync { kData, kAll };  // fdatasync (the samples), fsync (and the file's times)
+  void sync(Sync what);             // throws on failure
   void sync_if_due();           // the minute's fdatasync (write_block counts the blocks)
   std::string path_, set_aside_;
   int fd_ = -1;
