@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <charconv>
 #include <climits>
+#include <cstdlib>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -660,8 +661,8 @@ std::string earlier_log_missing_lines(const std::string& dir) {
 void refuse_a_log_missing_lines(const std::string& dir) {
   if (const std::string why = earlier_log_missing_lines(dir); !why.empty())
     throw ConfigError(dir + ": its run ended without a verdict: " + why +
-                      "; no resume gives those lines back, nor a verdict beside them: start a new run (the folder is "
-                      "as it was)");
+                      "; no resume gives those lines back, nor a verdict beside them: start a new run with another "
+                      "--out (this folder stays as it was)");
 }
 
 // `dir`'s .ending-pending as `steps` (one per line), removed when none is left.
@@ -724,6 +725,8 @@ std::string taken_over_note(const std::string& dir) {
                "nothing recorded): this run takes the folder over";
 }
 
+std::string resume_refusal(const std::string& dir);
+
 // True when the folder holds only a stopped start (only_a_start), which the run takes over.
 bool refuse_an_earlier_run(const std::string& dir, const std::string& profile_source) {
   if (only_a_start(dir)) return true;
@@ -733,9 +736,15 @@ bool refuse_an_earlier_run(const std::string& dir, const std::string& profile_so
   // Only a folder with run.json can be resumed (it holds the invocation a resume repeats).
   const bool resumable = fs::exists(fs::path(dir) / "run.json", ec);
   for (const char* f : {"checkpoint.json", "run.json", "passport.json"})
-    if (fs::exists(fs::path(dir) / f, ec))
+    if (fs::exists(fs::path(dir) / f, ec)) {
+      // Its resume offered only where it would start (a technician's review: "start a new run",
+      // then here "use --resume", which was refused again).
+      const std::string no_resume = resumable ? resume_refusal(dir) : "";
       throw ConfigError(dir + " holds an earlier run (" + f + "): " +
-                        (resumable ? "use --resume " + dir + " or another --out" : "choose another --out"));
+                        (!resumable           ? std::string("choose another --out")
+                         : no_resume.empty() ? "use --resume " + dir + " or another --out"
+                                             : "choose another --out (it has no resume: " + no_resume + ")"));
+    }
   // (A folder in such a place is refuse_non_files' to name.)
   auto there = [&](const fs::path& f) {
     const fs::file_status st = fs::symlink_status(f, ec);
@@ -1233,7 +1242,7 @@ void say_history_left_behind(const RunArgs& a, spdlog::logger& log) {
 }
 
 // Lines of run.log the disk refused: the first refusal's reason and time (UTC). The run's account
-// is one of its records: a verdict whose log is missing lines is no verdict (records_lost).
+// is one of its records: a verdict whose log is missing lines is no verdict (no_resume_why).
 struct LogLoss {
   std::mutex m;
   std::size_t lines = 0;  // refused so far
@@ -1577,12 +1586,13 @@ void refuse_records_without_checkpoint(const std::string& dir) {
 }
 
 // After a stop, what is kept and how to go on, where the technician looks: stderr and run.log.
+// `key_words`: what the resume's line needs to name the station's key (resume_key_words).
 void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t phases, const std::string& why,
-                         spdlog::logger& log) {
+                         const std::string& key_words, spdlog::logger& log) {
   const std::string hint = fmt::format(
-      "to continue: rig run --resume {} ({} of {} phases kept{}; `rig run --dry-run --resume {}` shows what a resume "
-      "repeats)",
-      shell_word(out), kept, phases, why, shell_word(out));
+      "to continue: rig run --resume {}{} ({} of {} phases kept{}; `rig run --dry-run --resume {}{}` shows what a "
+      "resume repeats)",
+      shell_word(out), key_words, kept, phases, why, shell_word(out), key_words);
   std::cerr << hint << "\n";
   log.info("{}", hint);
 }
@@ -1673,7 +1683,9 @@ std::string resume_refusal(const std::string& dir) {
 
 // "no resume: why; start a new run" on stderr and in run.log.
 void say_no_resume(const std::string& why, spdlog::logger& log) {
-  const std::string no = "no resume: " + why + (why.find("start a new run") == std::string::npos ? "; start a new run" : "");
+  // "another --out": a new run into this folder is refused, its run kept as it ended.
+  const std::string no =
+      "no resume: " + why + (why.find("start a new run") == std::string::npos ? "; start a new run (another --out)" : "");
   std::cerr << no << "\n";
   log.info("{}", no);
 }
@@ -1681,7 +1693,7 @@ void say_no_resume(const std::string& why, spdlog::logger& log) {
 // After an ABORTED or ERROR ending: how to go on (say_how_to_continue), or, where the folder would
 // refuse its resume now (resume_refusal), "no resume: why; start a new run".
 void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_t phases, const std::string& why,
-                    spdlog::logger& log) {
+                    const std::string& key_words, spdlog::logger& log) {
   if (const std::string refused = resume_refusal(out); !refused.empty()) {
     say_no_resume(refused, log);
     return;
@@ -1689,10 +1701,20 @@ void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_
   // Kept: the phases the checkpoint holds, as `--dry-run --resume` counts them (a review: a
   // resume stopped before computing its kept records again said 13 of 19, its dry run 15).
   std::error_code ec;
-  say_how_to_continue(out, fs::exists(Executive::checkpoint_path(out), ec) ? checkpointed : 0, phases, why, log);
+  say_how_to_continue(out, fs::exists(Executive::checkpoint_path(out), ec) ? checkpointed : 0, phases, why, key_words,
+                      log);
 }
 
 int do_run_watched(RunArgs a, CancelSource& cancel);
+
+// A sealed run resumes only with its key: the line that offers the resume names it, as this run
+// was given it (a technician's review: the hint, followed as printed, was refused, exit 2). Taken
+// from RIG_SEAL_KEY, it is there for the resume too.
+std::string resume_key_words(const RunArgs& a, bool sealed) {
+  if (!sealed) return "";
+  const char* env = std::getenv("RIG_SEAL_KEY");
+  return env && a.seal_key == env ? std::string() : " --seal-key " + shell_word(a.seal_key);
+}
 
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
@@ -1941,6 +1963,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // made_here: the folder is this run's own (the default one it claimed, or one it creates), so
   // a "no" at the prompts may remove it; a folder the user made stays.
   bool made_here = a.out.empty();
+  bool taken_over = false;  // a stopped start's folder (only_a_start), taken over
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
   (void)check_room(a.out, a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
   // Before the operator is asked anything, and before prepare_run_folder's write probe touches
@@ -1951,7 +1974,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
     // which then failed on the same lock: a review).
     if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
-    if (refuse_an_earlier_run(a.out, p.source)) {
+    taken_over = refuse_an_earlier_run(a.out, p.source);
+    if (taken_over) {
       if (!a.quiet) std::cerr << "rig: note: " << taken_over_note(a.out) << "\n";
       // Its staging files go: a seal.json.tmp stayed beside an unsealed run's records (a review).
       for (const char* f : {"profile.toml.tmp", "run.json.tmp", "seal.json.tmp"}) fs::remove(fs::path(a.out) / f, ec);
@@ -2043,6 +2067,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     log = make_logger(a.out, a.quiet, log_loss);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
+    // The earlier start's run.json is replaced: its taking over is on the record (a review: said on
+    // the terminal only, and not at all with --quiet).
+    if (taken_over) log->info("{}", taken_over_note(a.out));
   }
   for (const std::string& q : confirmed) log->info("operator confirmed: {} yes", q);
   if (table_lock && !table_lock->held())
@@ -2063,7 +2090,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // The folder stays for a resume once the devices can be opened (a new run into it is refused
     // "use --resume"), so it is said as after any stop (a review: no hint). A configuration
     // error is fixed and started anew.
-    if (!config_error) say_how_to_continue(a.out, completed.size(), phases.size(), ": the devices did not open", *log);
+    if (!config_error)
+      say_how_to_continue(a.out, completed.size(), phases.size(), ": the devices did not open",
+                          resume_key_words(a, key.has_value()), *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
@@ -2152,14 +2181,19 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (res.outcome == RunOutcome::Aborted || cancel.requested()) history::set_lock_wait_ms(history::kStoppedLockWaitMs);
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
   // ERROR (exit 4) naming them, never a PASS nobody can check.
-  bool records_lost = res.records_changed;  // then no resume either: it would refuse the folder (exit 2)
+  // Why the run has no resume, said after its ending ("" while it has one): a resume would refuse
+  // the folder (exit 2). Kept as said, not read back out of the reason's text (a review: a record
+  // changed mid-run was named as lines missing from run.log).
+  const std::string records_changed_why = "the run's records in " + shown_text(a.out) + " changed after they were written";
+  const std::string log_missing_why = "the run's log " + shown_text(a.out + "/run.log") + " is missing lines the disk refused";
+  std::string no_resume_why = res.records_changed ? records_changed_why : "";
   // A stopped run whose log lost lines has no resume either: its ending would give a verdict beside
   // the hole (a review). Lines refused after this point (the closing lines) leave the verdict as it
   // stands, as a signal after the passport does.
   if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error)
     if (const std::string log_missing = log_loss->said(); !log_missing.empty()) {
       res.message += "; " + log_missing;
-      records_lost = true;
+      if (no_resume_why.empty()) no_resume_why = log_missing_why;
       log->error("{}", log_missing);
     }
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
@@ -2171,14 +2205,17 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                 "the verdict stands on them",
                 a.out, fmt::join(touched, ", "));
     const std::string log_missing = log_loss->said();
-    records_lost = !gone.empty() || !changed.empty() || !log_missing.empty();
+    no_resume_why = !gone.empty()      ? "the run's records are gone from " + shown_text(a.out)
+                    : !changed.empty()   ? records_changed_why
+                    : !log_missing.empty() ? log_missing_why
+                                           : "";
     std::vector<std::string> why;
     if (!gone.empty())
       why.push_back(fmt::format("the run's records are gone from {} (removed while it ran): {}", a.out, fmt::join(gone, ", ")));
     if (!changed.empty())
       why.push_back(fmt::format("the run's records in {} changed after they were written: {}", a.out, fmt::join(changed, ", ")));
     if (!log_missing.empty()) why.push_back(log_missing);
-    if (records_lost) {
+    if (!no_resume_why.empty()) {
       res.outcome = RunOutcome::Error;
       res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));
       log->error("{}", res.message);
@@ -2255,8 +2292,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     }
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
-    if (!records_lost && !res.config_error)
-      offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files", *log);
+    if (no_resume_why.empty() && !res.config_error)
+      offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
+                     resume_key_words(a, key.has_value()), *log);
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);
@@ -2280,13 +2318,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   log->info("outcome {} (exit {})", to_string(res.outcome), res.exit_code());
   // After a stop, what is kept and how to go on, where the technician looks (a review: only
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
-  if (records_lost) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
-    const bool gone = res.message.find("records are gone") != std::string::npos;
-    const bool changed = res.message.find("changed after they were written") != std::string::npos;
-    say_no_resume(gone || changed ? "the run's records " + (gone ? "are gone from " + shown_text(a.out)
-                                                                 : "in " + shown_text(a.out) + " changed after they were written")
-                                  : "the run's log " + shown_text(a.out + "/run.log") + " is missing lines the disk refused",
-                  *log);
+  if (!no_resume_why.empty()) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
+    say_no_resume(no_resume_why, *log);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
     // An emulated run's injected sample losses are repeated by its resume (run.json's faults):
     // one that ended the run in ERROR ends the resume the same way (a line integrator's review:
@@ -2299,7 +2332,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                        ? "; its resume repeats run.json's faults (" + drops + "), so a loss that ended this run in "
                          "ERROR ends it so again"
                        : std::string(),
-                   *log);
+                   resume_key_words(a, key.has_value()), *log);
   }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),

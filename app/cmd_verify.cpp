@@ -116,10 +116,21 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                                                                  : "NOT-FILE",
                              f);
   for (const std::string& p : c.problems) std::cout << "  problem: " << p << "\n";
+  // A run stopped before its ending (a kill, a power cut) holds a checkpoint's seal: what it
+  // sealed holds, what it recorded since is not sealed yet. Said as such, with the way on, not as a
+  // folder changed behind the station's back (a technician's review read tampering into it).
+  const bool every_file_holds = std::all_of(c.files.begin(), c.files.end(),
+                                            [](const auto& e) { return e.second == seal::FileState::Ok; });
+  const bool not_ended = !c.ok && c.outcome.empty() && !c.files.empty() && every_file_holds && !pending_steps(dir);
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)
-                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
+                : not_ended
+                    ? fmt::format("NOT verified: the run has not ended (its last seal is a checkpoint's, not a final "
+                                  "one): the {} files it sealed hold, what was recorded after it is not sealed; `rig "
+                                  "run --resume {} --seal-key FILE` goes on with the run\n",
+                                  c.files.size(), shell_word(dir))
+                    : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).
   // The key only where the folder is sealed: a resume of an unsealed folder refuses one (a review).

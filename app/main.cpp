@@ -239,7 +239,9 @@ void standard_descriptors_open(bool console_may_go) {
 // history, capture, verify) is exit 3 as every aborted subcommand's (docs/contracts.md): they
 // ended with the shell's 130, 143 or 129 (a review). `run`, `table`, `dut` and `plant` take
 // the signals on their SignalWatcher's thread (blocked there, so this handler never runs). A
-// signal the process started with ignored (`nohup`, a background job's SIGINT) stays ignored.
+// signal the process started with ignored (`nohup`, a background job's SIGINT) stays ignored,
+// but for the SIGINT, SIGTERM and SIGQUIT of those four, which their watcher takes regardless:
+// this handler takes them until it exists (takes_ignored_signals).
 extern "C" void abort_on_signal(int sig) {
   // `rig run` past its verdict: its exit code stands (what is left is its closing table's write).
   if (const int verdict = rig::cli::g_verdict_exit.load(); verdict >= 0) {
@@ -264,18 +266,31 @@ extern "C" void abort_on_signal(int sig) {
   ::_exit(rig::kExitAborted);
 }
 
-void aborted_by_signals() {
-  // A file size limit (`ulimit -f`) is a write that fails (EFBIG), said and handled as a full disk
-  // is, not a kill that leaves staged files and says nothing (a re-test: exit 153).
-  ::signal(SIGXFSZ, SIG_IGN);
+// `rig run`, `table`, `dut` and `plant`: their SignalWatcher takes SIGINT, SIGTERM and SIGQUIT even
+// when the process started with them ignored (a script's `rig run ... &`), but only from the moment
+// it exists: one that came in the few milliseconds before was dropped, and the run went on to PASS
+// (a technician's review, `kill -INT` 0-5 ms after the start). Taken here from the first moment.
+bool takes_ignored_signals(int argc, char** argv) {
+  if (argc < 2) return false;
+  const std::string_view first = argv[1];
+  return first == "run" || first == "table" || first == "dut" || first == "plant";
+}
+
+void aborted_by_signals(bool take_ignored) {
   for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
     struct sigaction was {};
-    if (::sigaction(sig, nullptr, &was) != 0 || was.sa_handler == SIG_IGN) continue;
+    if (::sigaction(sig, nullptr, &was) != 0) continue;
+    // SIGHUP ignored is nohup's request, which every subcommand keeps.
+    if (was.sa_handler == SIG_IGN && (sig == SIGHUP || !take_ignored)) continue;
     struct sigaction now {};
     now.sa_handler = abort_on_signal;
     sigemptyset(&now.sa_mask);
     ::sigaction(sig, &now, nullptr);
   }
+  // A file size limit (`ulimit -f`) is a write that fails (EFBIG), said and handled as a full disk
+  // is, not a kill that leaves staged files and says nothing (a re-test: exit 153). Last: a test
+  // reads it in /proc as the sign that the abort signals are taken.
+  ::signal(SIGXFSZ, SIG_IGN);
 }
 
 // Edits (insertions, deletions, substitutions, adjacent swaps) that turn a into b: the optimal
@@ -344,7 +359,7 @@ bool standard_output_failed() {
 
 int main(int argc, char** argv) {
   standard_descriptors_open(console_may_go(argc, argv));
-  aborted_by_signals();
+  aborted_by_signals(takes_ignored_signals(argc, argv));
   // A wait for another process's lock on the history is said while it lasts, not only when it
   // ends 10 s later (a `rig history` sat silent: a review).
   rig::history::set_lock_wait_notice([](const std::string& where, int limit_ms) {

@@ -49,17 +49,19 @@ std::string settling_near_the_band(const nlohmann::json& per_step) {
   constexpr double kNear = 0.005;
   const double band = analysis::kStepSettlingBand;
   double o_lo = 1e300, o_hi = -1e300, t_lo = 1e300, t_hi = -1e300;
-  bool near = false;
+  std::size_t near = 0;
   for (const auto& st : per_step) {
     const double o = st["overshoot"].get<double>(), t = st["settling_time_s"].get<double>();
-    near = near || std::abs(o - band) < kNear;
+    near += std::abs(o - band) < kNear;
     o_lo = std::min(o_lo, o), o_hi = std::max(o_hi, o), t_lo = std::min(t_lo, t), t_hi = std::max(t_hi, t);
   }
-  if (!near) return "";
-  return fmt::format("; the overshoot ({:.2f}-{:.2f} % over the steps) lies within {:g} points of the {:g} % band: "
-                     "a peak inside it settles at the rise, one outside it after the peak, so a small change of the "
-                     "overshoot moves this figure by the time between them (the steps read {:.4g}-{:.4g} s)",
-                     o_lo * 100, o_hi * 100, kNear * 100, band * 100, t_lo, t_hi);
+  if (near == 0) return "";
+  // How many steps: the spread alone read as if every peak were there (a review).
+  return fmt::format("; {} of the {} steps' peaks (overshoot {:.2f}-{:.2f} % over the steps) {} within {:g} points of "
+                     "the {:g} % band: a peak inside it settles at the rise, one outside it after the peak, so a small "
+                     "change of the overshoot moves this figure by the time between them (the steps read {:.4g}-{:.4g} s)",
+                     near, per_step.size(), o_lo * 100, o_hi * 100, near == 1 ? "lies" : "lie", kNear * 100,
+                     band * 100, t_lo, t_hi);
 }
 
 nlohmann::json loop_test_figures(const LoopTestResponse& r) {

@@ -53,10 +53,10 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   Recorded r;
   r.capture = rel;
   ctx.dev.dut.reset_stats();
-  ctx.dev.dut.start_stream(ctx.cancel);
   std::vector<Sample> buf(static_cast<std::size_t>(std::max(1.0, p.rate_hz / 10)));  // 100 ms chunks
   double sx = 0, sy = 0;
   try {
+    ctx.dev.dut.start_stream(ctx.cancel);  // inside: a stop here leaves the capture's header, named too
     while (r.samples < n_total) {
       const std::size_t want = static_cast<std::size_t>(std::min<uint64_t>(buf.size(), n_total - r.samples));
       const std::size_t got = ctx.dev.dut.read(std::span<Sample>(buf.data(), want), ctx.cancel);
@@ -69,13 +69,29 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
       ctx.report(static_cast<double>(r.samples) / static_cast<double>(n_total));
     }
   } catch (...) {
-    ctx.dev.dut.stop_stream();
-    w.close();  // keep what was recorded; the retry renames it aside
+    // Named first, and the first failure is the one that goes on: a close that failed too (a disk
+    // that refused the samples refuses their sync) replaced it and left the capture out of the
+    // seal (a review: an ERROR folder sealed so failed `rig verify`).
     if (partial) partial->push_back(rel);
+    try {
+      ctx.dev.dut.stop_stream();
+    } catch (const std::exception& e) {  // the safe state stops it again
+      ctx.log->warn("{}: stopping the DUT's stream after the failure: {}", name, e.what());
+    }
+    try {
+      w.close();  // keep what was recorded; the retry renames it aside
+    } catch (const std::exception& e) {
+      ctx.log->warn("{}: {}", name, e.what());
+    }
     throw;
   }
   ctx.dev.dut.stop_stream();
-  w.close();
+  try {
+    w.close();
+  } catch (...) {  // recorded in full, but not kept: a partial capture as a stopped one is
+    if (partial) partial->push_back(rel);
+    throw;
+  }
   // The capture's name too: the checkpoint about to name it must not outlive it in a power cut.
   fsync_folder(std::filesystem::path(ctx.out_dir + "/" + rel).parent_path().string());
   r.written = stamp_of(ctx.out_dir + "/" + rel);

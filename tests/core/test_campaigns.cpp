@@ -908,6 +908,8 @@ TEST(Campaign, AFolderWithOnlyAStoppedStartIsTakenOverByANewRun) {
             0)
       << slurp(in_seal + "-io.stderr");
   EXPECT_FALSE(fs::exists(in_seal + "/seal.json.tmp"));
+  // On the record too, not only on the terminal (its run.json was replaced).
+  EXPECT_NE(slurp(in_seal + "/run.log").find("holds only the start of an earlier run"), std::string::npos);
   EXPECT_EQ(run({"verify", in_seal, "--seal-key", key}, in_seal + "-verify"), 0) << slurp(in_seal + "-verify.stdout");
   EXPECT_EQ(read_json(in_seal + "/passport.json")["values"], read_json(d + "/whole/passport.json")["values"]);
   // A run.json that is not the rig's is not a start it can take over.

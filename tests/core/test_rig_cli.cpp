@@ -23,6 +23,7 @@
 #include <iomanip>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -2790,8 +2791,9 @@ TEST(RigCli, ANewRunNeverTakesOverAnEarlierRunsFolder) {
     std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--out", d + "/stopped"};
     if (dry) args.push_back("--dry-run");
     EXPECT_EQ(run(args, d + "/io"), 2) << slurp(d + "/io.stderr");
-    EXPECT_NE(slurp(d + "/io.stderr").find(d + "/stopped holds an earlier run (run.json): use --resume " + d +
-                                           "/stopped or another --out"),
+    // This run.json names no profile a resume could read: its resume is not offered either.
+    EXPECT_NE(slurp(d + "/io.stderr").find(d + "/stopped holds an earlier run (run.json): choose another --out (it "
+                                           "has no resume: "),
               std::string::npos)
         << slurp(d + "/io.stderr");
   }
@@ -5384,7 +5386,8 @@ std::string rig_line(const std::vector<std::string>& args) {
 // review). It ends ERROR, exit 4, naming the log, how many lines and the first's time; no resume
 // is offered and none is taken (its ending would give a verdict beside a hole in the account).
 TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
-  if (std::system("strace -V > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace";
+  // strace itself, asked first: a rig that crashed before its passport must fail the test, not skip it.
+  if (std::system("strace -f -qq -o /dev/null true > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace that can trace here";
   const std::string d = tmp("log-refused");
   fs::create_directories(d);
   // LeakSanitizer cannot run under ptrace (the sanitizer build's rig aborted at exit, 134): off for
@@ -5395,7 +5398,7 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
                           rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run"}) +
                           " > " + d + "/io.stdout 2> " + d + "/io.stderr";
   const int rc = shell(cmd);
-  if (!fs::exists(d + "/run/passport.json")) GTEST_SKIP() << "strace cannot trace here: " << slurp(d + "/io.stderr");
+  ASSERT_TRUE(fs::exists(d + "/run/passport.json")) << rc << ": " << slurp(d + "/io.stderr");
   EXPECT_EQ(rc, 4) << slurp(d + "/io.stderr");
   const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "ERROR");
@@ -5419,6 +5422,13 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
     EXPECT_NE(slurp(d + "/resume.stderr").find("no resume gives those lines back"), std::string::npos)
         << slurp(d + "/resume.stderr");
   }
+  // Nor does a new run there send it back to --resume (a technician's review: the advice went round).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/run"}, d + "/again"), 2);
+  EXPECT_NE(slurp(d + "/again.stderr").find(d + "/run holds an earlier run (checkpoint.json): choose another --out (it "
+                                            "has no resume: " + d + "/run: its run ended without a verdict: run.log is "
+                                            "missing lines"),
+            std::string::npos)
+      << slurp(d + "/again.stderr");
   EXPECT_EQ(slurp(d + "/run/run.log"), log_before);
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "ERROR");
   // A run stopped by a signal whose log lost a line has no resume either: its ending would give a
@@ -5437,6 +5447,79 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   EXPECT_EQ(slurp(d + "/stop.stderr").find("to continue"), std::string::npos) << slurp(d + "/stop.stderr");
   EXPECT_EQ(run({"run", "--resume", d + "/stop", "--yes", "--no-history"}, d + "/stop-resume"), 2)
       << slurp(d + "/stop-resume.stderr");
+}
+
+// A capture whose sync the disk refused (EIO at its fsync) ends the run in ERROR, exit 4, and is
+// named among the partial captures the final seal vouches for: it was left out, and the sealed
+// ERROR folder failed `rig verify` ("not sealed (added after the seal)": a review).
+TEST(RigCli, ACaptureTheDiskRefusedToSyncIsSealedWithTheStoppedRun) {
+  if (std::system("strace -f -qq -o /dev/null true > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("capture-sync-refused");
+  const std::string key = station_key_in(d);
+  const std::string no_lsan = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" ";
+  const std::string cmd = no_lsan + "strace -f -qq -o /dev/null -P " + d + "/run/captures/run02-U20.cap -e trace=fsync " +
+                          "-e inject=fsync:error=EIO " +
+                          rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--seal-key", key,
+                                    "--out", d + "/run"}) +
+                          " > " + d + "/io.stdout 2> " + d + "/io.stderr";
+  EXPECT_EQ(shell(cmd), 4) << slurp(d + "/io.stderr");
+  const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
+  EXPECT_EQ(p["outcome"], "ERROR");
+  EXPECT_NE(p["aborted_reason"].get<std::string>().find("run02-U20.cap failed (fsync)"), std::string::npos)
+      << p["aborted_reason"];
+  EXPECT_EQ(run({"verify", d + "/run", "--seal-key", key}, d + "/verify"), 0) << slurp(d + "/verify.stdout");
+  EXPECT_NE(slurp(d + "/verify.stdout").find("ok       captures/run02-U20.cap"), std::string::npos)
+      << slurp(d + "/verify.stdout");
+  // Its resume records that capture again and ends as the run would have.
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--seal-key", key, "--yes", "--no-history"}, d + "/resume"), 0)
+      << slurp(d + "/resume.stderr");
+}
+
+// A sealed run resumes only with its key: the line offering the resume names it as the run was
+// given it (a technician's review: followed as printed, it was refused, exit 2), and from
+// RIG_SEAL_KEY it is there for the resume too.
+TEST(RigCli, ASealedRunsResumeLineNamesItsKey) {
+  const std::string d = tmp("sealed-resume-line");
+  const std::string key = station_key_in(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--seal-key", key, "--inject", "sigint@100", "--out",
+                 d + "/run"},
+                d + "/io"),
+            3)
+      << slurp(d + "/io.stderr");
+  const std::string line = "to continue: rig run --resume " + d + "/run --seal-key " + key + " (";
+  EXPECT_NE(slurp(d + "/io.stderr").find(line), std::string::npos) << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stderr").find("`rig run --dry-run --resume " + d + "/run --seal-key " + key + "`"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/run/run.log").find(line), std::string::npos);
+  // Followed as printed.
+  EXPECT_EQ(run({"run", "--resume", d + "/run", "--seal-key", key, "--yes", "--no-history"}, d + "/resume"), 0)
+      << slurp(d + "/resume.stderr");
+  // Killed mid-run, its folder holds a checkpoint's seal: `rig verify` says the run has not ended and
+  // how it goes on, not that the folder was changed behind the station (a technician's review).
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--seal-key", key, "--inject", "sigkill@150",
+                 "--out", d + "/killed"},
+                d + "/killed-io"),
+            128 + SIGKILL);
+  EXPECT_EQ(run({"verify", d + "/killed", "--seal-key", key}, d + "/killed-verify"), 1);
+  EXPECT_NE(slurp(d + "/killed-verify.stdout").find("NOT verified: the run has not ended (its last seal is a "
+                                                     "checkpoint's, not a final one)"),
+            std::string::npos)
+      << slurp(d + "/killed-verify.stdout");
+  // The key from the environment: the line as for an unsealed run.
+  ::setenv("RIG_SEAL_KEY", key.c_str(), 1);
+  const int rc = run({"run", "--profile", "ci", "--yes", "--no-history", "--inject", "sigint@100", "--out", d + "/env"},
+                     d + "/env-io");
+  ::unsetenv("RIG_SEAL_KEY");
+  EXPECT_EQ(rc, 3) << slurp(d + "/env-io.stderr");
+  EXPECT_NE(slurp(d + "/env-io.stderr").find("to continue: rig run --resume " + d + "/env ("), std::string::npos)
+      << slurp(d + "/env-io.stderr");
+  // Unsealed: no key named.
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--inject", "sigint@100", "--out", d + "/plain"},
+                d + "/plain-io"),
+            3);
+  EXPECT_NE(slurp(d + "/plain-io.stderr").find("to continue: rig run --resume " + d + "/plain ("), std::string::npos)
+      << slurp(d + "/plain-io.stderr");
 }
 
 // An emulated run's injected losses are repeated by its resume (run.json's faults): a loss that
@@ -6225,6 +6308,46 @@ TEST(RigCli, ASignalEndsEverySubcommandWithExitThree) {
     EXPECT_EQ(wait_exit(c), 3) << name;
     EXPECT_NE(slurp(d + "/" + name + ".stderr").find("rig: aborted: " + name), std::string::npos)
         << slurp(d + "/" + name + ".stderr");
+  }
+}
+
+// Started with SIGINT ignored (a script's `rig run ... &`), a run takes SIGINT, but only from its
+// watcher on: one sent in the milliseconds before was dropped, and the run went on to PASS, exit 0
+// (a technician's review). Sent the moment main has set its signals up (SIGXFSZ ignored, the last
+// of them, read in /proc), it ends the run, exit 3, whether the watcher exists yet or not.
+TEST(RigCli, ARunStartedWithSigintIgnoredTakesItFromItsFirstMoment) {
+  const std::string d = tmp("sigint-ignored");
+  fs::create_directories(d);
+  const auto ignored_mask = [](pid_t pid) -> std::optional<unsigned long long> {
+    std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("SigIgn:", 0) == 0) return std::stoull(line.substr(7), nullptr, 16);
+    return std::nullopt;
+  };
+  for (int i = 0; i < 5; ++i) {
+    struct sigaction ignore {}, was {};
+    ignore.sa_handler = SIG_IGN;
+    ASSERT_EQ(::sigaction(SIGINT, &ignore, &was), 0);
+    const std::string out = d + "/run" + std::to_string(i);
+    const Child c = spawn({"run", "--profile", "ci", "--yes", "--no-history", "--out", out}, out + "-io");
+    ::sigaction(SIGINT, &was, nullptr);  // posix_spawn has exec'd: the child keeps its own
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    bool set_up = false;
+    while (!set_up && std::chrono::steady_clock::now() < deadline) {
+      const std::optional<unsigned long long> m = ignored_mask(c.pid);
+      if (!m) break;  // ended already
+      set_up = (*m >> (SIGXFSZ - 1)) & 1u;
+      if (!set_up) std::this_thread::sleep_for(std::chrono::microseconds(50));
+    }
+    ASSERT_TRUE(set_up) << "rig never set its signals up";
+    ASSERT_EQ(::kill(c.pid, SIGINT), 0);
+    EXPECT_EQ(wait_exit(c), 3) << i << ": " << slurp(out + "-io.stderr");
+    const std::string err = slurp(out + "-io.stderr");
+    EXPECT_TRUE(err.find("SIGINT") != std::string::npos) << err;
+    // Nothing to take for a verdict: no folder yet, or a run ABORTED.
+    if (fs::exists(out + "/passport.json")) {
+      EXPECT_NE(slurp(out + "/passport.json").find("\"ABORTED\""), std::string::npos) << i;
+    }
   }
 }
 
