@@ -2085,12 +2085,18 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     const bool config_error = dynamic_cast<const ConfigError*>(&e) != nullptr;
-    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()), e.what(), config_error, key,
-                                *log);
+    // A log the disk refused lines of stops this ending's resume as any stopped run's (a review:
+    // this path alone offered it).
+    const std::string log_missing = config_error ? std::string() : log_loss->said();
+    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()),
+                                log_missing.empty() ? std::string(e.what()) : e.what() + std::string("; ") + log_missing,
+                                config_error, key, *log);
     // The folder stays for a resume once the devices can be opened (a new run into it is refused
     // "use --resume"), so it is said as after any stop (a review: no hint). A configuration
     // error is fixed and started anew.
-    if (!config_error)
+    if (!log_missing.empty())
+      say_no_resume("the run's log " + shown_text(a.out + "/run.log") + " is missing lines the disk refused", *log);
+    else if (!config_error)
       say_how_to_continue(a.out, completed.size(), phases.size(), ": the devices did not open",
                           resume_key_words(a, key.has_value()), *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)

@@ -5447,6 +5447,31 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   EXPECT_EQ(slurp(d + "/stop.stderr").find("to continue"), std::string::npos) << slurp(d + "/stop.stderr");
   EXPECT_EQ(run({"run", "--resume", d + "/stop", "--yes", "--no-history"}, d + "/stop-resume"), 2)
       << slurp(d + "/stop-resume.stderr");
+  // Nor a run whose devices did not open (a review: that ending alone offered the resume).
+  std::ofstream(d + "/hw.toml") << "[rig]\nname = \"bench-without-gpio\"\n"
+                                   "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  const std::string unopened = no_lsan + "strace -f -qq -o /dev/null -P " + d + "/hw/run.log -e trace=write " +
+                               "-e inject=write:error=ENOSPC " +
+                               rig_line({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial",
+                                         "HW-1", "--no-history", "--out", d + "/hw"}) +
+                               " > " + d + "/hw.stdout 2> " + d + "/hw.stderr";
+  EXPECT_EQ(shell(unopened), 4) << slurp(d + "/hw.stderr");
+  const nlohmann::json hp = nlohmann::json::parse(slurp(d + "/hw/passport.json"));
+  EXPECT_EQ(hp["outcome"], "ERROR");
+  EXPECT_NE(hp["aborted_reason"].get<std::string>().find("; run.log is missing lines: the disk refused"),
+            std::string::npos)
+      << hp["aborted_reason"];
+  EXPECT_EQ(slurp(d + "/hw.stderr").find("to continue"), std::string::npos) << slurp(d + "/hw.stderr");
+  EXPECT_NE(slurp(d + "/hw.stderr").find("no resume: the run's log " + d + "/hw/run.log is missing lines"),
+            std::string::npos)
+      << slurp(d + "/hw.stderr");
+  EXPECT_EQ(run({"run", "--resume", d + "/hw", "--yes", "--no-history"}, d + "/hw-resume"), 2)
+      << slurp(d + "/hw-resume.stderr");
+  EXPECT_NE(slurp(d + "/hw-resume.stderr").find("no resume gives those lines back"), std::string::npos)
+      << slurp(d + "/hw-resume.stderr");
 }
 
 // A capture whose sync the disk refused (EIO at its fsync) ends the run in ERROR, exit 4, and is
