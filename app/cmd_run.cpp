@@ -947,6 +947,23 @@ std::vector<std::string> files_of_the_run(const acceptance::DutState& st) {
   return f;
 }
 
+// The records in `dir` its checkpoint does not keep (captures/*.cap, loop-test.csv): what an
+// interruption left partial, set aside as NAME.interrupted-N when its phase records again.
+std::vector<std::string> partial_records(const std::string& dir, const acceptance::DutState& st) {
+  const std::vector<std::string> kept = files_of_the_run(st);
+  std::vector<std::string> candidates = {acceptance::kLoopTestFile};
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "captures", ec))
+    if (e.path().extension() == ".cap") candidates.push_back("captures/" + e.path().filename().string());
+  std::vector<std::string> partial;
+  for (const std::string& f : candidates)
+    if (fs::is_regular_file(fs::symlink_status(fs::path(dir) / f, ec)) &&
+        std::find(kept.begin(), kept.end(), f) == kept.end())
+      partial.push_back(f);
+  std::sort(partial.begin(), partial.end());
+  return partial;
+}
+
 // The run's records that are no longer in its folder (removed while the run went on: a clean-up
 // script, a folder deleted by hand; a review ended such a run PASS with its captures and run.log
 // gone): the files a seal would vouch for and run.log, the account of the run.
@@ -1918,9 +1935,11 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       std::string left;
       for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
       std::cout << "  still to run: "
-                << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)"
-                                 : left + " (a capture the interruption left partial is kept as <capture>.interrupted-N)")
-                << "\n";
+                << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left) << "\n";
+      // Named, not only the rule (a technician's review): which file the resume sets aside.
+      for (const std::string& f : partial_records(a.resume, state.slot()))
+        std::cout << "  left partial by the interruption: " << f << " (kept as " << f
+                  << ".interrupted-N when its phase records again)\n";
     }
     // Where the run will be recorded: a typo in --db or [history] url would create a database
     // (and its folders) that the station's history never reads (a technician's review).
