@@ -266,17 +266,31 @@ extern "C" void abort_on_signal(int sig) {
   ::_exit(rig::kExitAborted);
 }
 
-// `rig run`, `table`, `dut` and `plant`: their SignalWatcher takes SIGINT, SIGTERM and SIGQUIT even
-// when the process started with them ignored (a script's `rig run ... &`), but only from the moment
-// it exists: one that came in the few milliseconds before was dropped, and the run went on to PASS
-// (a technician's review, `kill -INT` 0-5 ms after the start). Taken here from the first moment.
+// The commands that take SIGINT, SIGTERM and SIGQUIT on a SignalWatcher (`rig run`, `table home`
+// and `move`, `dut stream` and `loop-test`, `plant serve`) take them even when the process started
+// with them ignored (a script's `rig run ... &`), but only from the moment the watcher exists:
+// one that came in the milliseconds before was dropped, and the run went on to PASS (a
+// technician's review, `kill -INT` 2-5 ms after the start). Taken by this handler until then. The
+// others (a `rig table quick-stop` a script guards with `trap '' INT`) keep an ignored signal
+// ignored (a code review). A word scan, before anything is parsed: a word that merely looks like
+// one of these actions errs towards taking the signal.
 bool takes_ignored_signals(int argc, char** argv) {
   if (argc < 2) return false;
   const std::string_view first = argv[1];
-  return first == "run" || first == "table" || first == "dut" || first == "plant";
+  if (first == "run") return true;
+  for (int i = 2; i < argc; ++i) {
+    const std::string_view w = argv[i];
+    if ((first == "table" && (w == "home" || w == "move")) || (first == "dut" && (w == "stream" || w == "loop-test")) ||
+        (first == "plant" && w == "serve"))
+      return true;
+  }
+  return false;
 }
 
 void aborted_by_signals(bool take_ignored) {
+  // A file size limit (`ulimit -f`) is a write that fails (EFBIG), said and handled as a full disk
+  // is, not a kill that leaves staged files and says nothing (a re-test: exit 153).
+  ::signal(SIGXFSZ, SIG_IGN);
   for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
     struct sigaction was {};
     if (::sigaction(sig, nullptr, &was) != 0) continue;
@@ -287,11 +301,17 @@ void aborted_by_signals(bool take_ignored) {
     sigemptyset(&now.sa_mask);
     ::sigaction(sig, &now, nullptr);
   }
-  // A file size limit (`ulimit -f`) is a write that fails (EFBIG), said and handled as a full disk
-  // is, not a kill that leaves staged files and says nothing (a re-test: exit 153). Last: a test
-  // reads it in /proc as the sign that the abort signals are taken.
-  ::signal(SIGXFSZ, SIG_IGN);
 }
+
+// As early as a program can: the executable's .preinit_array runs once the loader has mapped and
+// relocated every library, before any library's or this program's static initialisers (about
+// 10 ms of a `rig` start here went to those, before main). What comes before it, the kernel's
+// exec and the loader's own work, no program can shorten: an ignored signal sent then is gone.
+extern "C" void rig_take_signals_early(int argc, char** argv, char**) {
+  aborted_by_signals(takes_ignored_signals(argc, argv));
+}
+[[gnu::section(".preinit_array"), gnu::used]] void (*const rig_preinit_signals)(int, char**,
+                                                                                 char**) = rig_take_signals_early;
 
 // Edits (insertions, deletions, substitutions, adjacent swaps) that turn a into b: the optimal
 // string alignment distance, enough to catch a typed option's slip ("--moddbus", "--porfile").
@@ -359,7 +379,7 @@ bool standard_output_failed() {
 
 int main(int argc, char** argv) {
   standard_descriptors_open(console_may_go(argc, argv));
-  aborted_by_signals(takes_ignored_signals(argc, argv));
+  // The abort signals are taken already (rig_take_signals_early, before main).
   // A wait for another process's lock on the history is said while it lasts, not only when it
   // ends 10 s later (a `rig history` sat silent: a review).
   rig::history::set_lock_wait_notice([](const std::string& where, int limit_ms) {

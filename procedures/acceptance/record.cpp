@@ -85,11 +85,16 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
     }
     throw;
   }
-  ctx.dev.dut.stop_stream();
   try {
+    ctx.dev.dut.stop_stream();
     w.close();
-  } catch (...) {  // recorded in full, but not kept: a partial capture as a stopped one is
+  } catch (...) {  // recorded in full, but the stop or the close failed: named as a stopped one's is
     if (partial) partial->push_back(rel);
+    try {
+      w.close();  // after a failed stop (after a failed close: nothing left to do)
+    } catch (const std::exception& e) {
+      ctx.log->warn("{}: {}", name, e.what());
+    }
     throw;
   }
   // The capture's name too: the checkpoint about to name it must not outlive it in a power cut.

@@ -7,6 +7,8 @@
 #include <poll.h>
 #include <pty.h>
 #include <sys/wait.h>
+#include <sys/socket.h>
+#include <netinet/in.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -6338,15 +6340,17 @@ TEST(RigCli, ASignalEndsEverySubcommandWithExitThree) {
 
 // Started with SIGINT ignored (a script's `rig run ... &`), a run takes SIGINT, but only from its
 // watcher on: one sent in the milliseconds before was dropped, and the run went on to PASS, exit 0
-// (a technician's review). Sent the moment main has set its signals up (SIGXFSZ ignored, the last
-// of them, read in /proc), it ends the run, exit 3, whether the watcher exists yet or not.
+// (a technician's review). Sent the moment the program has its handler (SIGINT caught, read in
+// /proc: before any static initialiser, app/main.cpp), it ends the run, exit 3, whether the
+// watcher exists yet or not. (On the old code SIGINT was never caught, only blocked: the wait
+// for the handler fails.)
 TEST(RigCli, ARunStartedWithSigintIgnoredTakesItFromItsFirstMoment) {
   const std::string d = tmp("sigint-ignored");
   fs::create_directories(d);
-  const auto ignored_mask = [](pid_t pid) -> std::optional<unsigned long long> {
+  const auto caught_mask = [](pid_t pid) -> std::optional<unsigned long long> {
     std::ifstream in("/proc/" + std::to_string(pid) + "/status");
     for (std::string line; std::getline(in, line);)
-      if (line.rfind("SigIgn:", 0) == 0) return std::stoull(line.substr(7), nullptr, 16);
+      if (line.rfind("SigCgt:", 0) == 0) return std::stoull(line.substr(7), nullptr, 16);
     return std::nullopt;
   };
   for (int i = 0; i < 5; ++i) {
@@ -6359,12 +6363,12 @@ TEST(RigCli, ARunStartedWithSigintIgnoredTakesItFromItsFirstMoment) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
     bool set_up = false;
     while (!set_up && std::chrono::steady_clock::now() < deadline) {
-      const std::optional<unsigned long long> m = ignored_mask(c.pid);
+      const std::optional<unsigned long long> m = caught_mask(c.pid);
       if (!m) break;  // ended already
-      set_up = (*m >> (SIGXFSZ - 1)) & 1u;
+      set_up = (*m >> (SIGINT - 1)) & 1u;
       if (!set_up) std::this_thread::sleep_for(std::chrono::microseconds(50));
     }
-    ASSERT_TRUE(set_up) << "rig never set its signals up";
+    ASSERT_TRUE(set_up) << "rig never caught SIGINT";
     ASSERT_EQ(::kill(c.pid, SIGINT), 0);
     EXPECT_EQ(wait_exit(c), 3) << i << ": " << slurp(out + "-io.stderr");
     const std::string err = slurp(out + "-io.stderr");
@@ -6374,6 +6378,39 @@ TEST(RigCli, ARunStartedWithSigintIgnoredTakesItFromItsFirstMoment) {
       EXPECT_NE(slurp(out + "/passport.json").find("\"ABORTED\""), std::string::npos) << i;
     }
   }
+  // A command without a watcher keeps an ignored SIGINT ignored: a script's `trap '' INT` guards
+  // its `rig table quick-stop` (a code review: the stop died unsent, exit 3). Here the stop waits
+  // on a drive that takes the connection and never answers.
+  const int listener = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(listener, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  ASSERT_EQ(::listen(listener, 4), 0);
+  socklen_t len = sizeof addr;
+  ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&addr), &len), 0);
+  const std::string drive = "127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+  struct sigaction ignore {}, was {};
+  ignore.sa_handler = SIG_IGN;
+  ASSERT_EQ(::sigaction(SIGINT, &ignore, &was), 0);
+  const Child stop = spawn({"table", "quick-stop", "--modbus", drive}, d + "/stop");
+  ::sigaction(SIGINT, &was, nullptr);
+  const auto mask = [](pid_t pid, const char* field) -> unsigned long long {
+    std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind(field, 0) == 0) return std::stoull(line.substr(7), nullptr, 16);
+    return 0;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!((mask(stop.pid, "SigCgt:") >> (SIGTERM - 1)) & 1u) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(50));
+  EXPECT_TRUE((mask(stop.pid, "SigIgn:") >> (SIGINT - 1)) & 1u) << "SIGINT ignored, as it started";
+  EXPECT_FALSE((mask(stop.pid, "SigCgt:") >> (SIGINT - 1)) & 1u);
+  ::kill(stop.pid, SIGINT);
+  EXPECT_NE(wait_exit(stop), 3) << slurp(d + "/stop.stderr");
+  EXPECT_EQ(slurp(d + "/stop.stderr").find("aborted: SIGINT"), std::string::npos) << slurp(d + "/stop.stderr");
+  ::close(listener);
 }
 
 TEST(RigCli, AFolderHoldingWhatTheRigWritesInTheWrongKindIsRefusedFirst) {
