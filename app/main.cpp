@@ -240,7 +240,7 @@ void standard_descriptors_open(bool console_may_go) {
 // ended with the shell's 130, 143 or 129 (a review). `run`, `table`, `dut` and `plant` take
 // the signals on their SignalWatcher's thread (blocked there, so this handler never runs). A
 // signal the process started with ignored (`nohup`, a background job's SIGINT) stays ignored,
-// but for the SIGINT, SIGTERM and SIGQUIT of those four, which their watcher takes regardless:
+// but for the SIGINT, SIGTERM and SIGQUIT of the actions whose watcher takes them regardless:
 // this handler takes them until it exists (takes_ignored_signals).
 extern "C" void abort_on_signal(int sig) {
   // `rig run` past its verdict: its exit code stands (what is left is its closing table's write).
@@ -272,17 +272,22 @@ extern "C" void abort_on_signal(int sig) {
 // one that came in the milliseconds before was dropped, and the run went on to PASS (a
 // technician's review, `kill -INT` 2-5 ms after the start). Taken by this handler until then. The
 // others (a `rig table quick-stop` a script guards with `trap '' INT`) keep an ignored signal
-// ignored (a code review). A word scan, before anything is parsed: a word that merely looks like
-// one of these actions errs towards taking the signal.
+// ignored (a code review). A word scan, before anything is parsed: the action is the first word
+// that is not an option nor the value of one (`--hardware move` names a file: a review found the
+// guard lost so); an option that takes no value before the action makes the scan miss it, which
+// costs only the watcher's few milliseconds, as before.
 bool takes_ignored_signals(int argc, char** argv) {
   if (argc < 2) return false;
   const std::string_view first = argv[1];
   if (first == "run") return true;
   for (int i = 2; i < argc; ++i) {
     const std::string_view w = argv[i];
-    if ((first == "table" && (w == "home" || w == "move")) || (first == "dut" && (w == "stream" || w == "loop-test")) ||
-        (first == "plant" && w == "serve"))
-      return true;
+    if (w.starts_with("-")) {
+      if (w.find('=') == std::string_view::npos) ++i;  // its value
+      continue;
+    }
+    return (first == "table" && (w == "home" || w == "move")) || (first == "dut" && (w == "stream" || w == "loop-test")) ||
+           (first == "plant" && w == "serve");
   }
   return false;
 }
@@ -303,10 +308,11 @@ void aborted_by_signals(bool take_ignored) {
   }
 }
 
-// As early as a program can: the executable's .preinit_array runs once the loader has mapped and
-// relocated every library, before any library's or this program's static initialisers (about
-// 10 ms of a `rig` start here went to those, before main). What comes before it, the kernel's
-// exec and the loader's own work, no program can shorten: an ignored signal sent then is gone.
+// As early as a dynamically linked program can: the executable's .preinit_array runs once the
+// loader has mapped and relocated every library, before any library's or this program's static
+// initialisers (about 10 ms of a `rig` start here went to those, before main). What comes before
+// it, the kernel's exec and the loader's own work, is the window left: an ignored signal sent
+// then is gone.
 extern "C" void rig_take_signals_early(int argc, char** argv, char**) {
   aborted_by_signals(takes_ignored_signals(argc, argv));
 }
