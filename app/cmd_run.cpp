@@ -647,6 +647,11 @@ std::string verdict_of(const std::string& dir) {
 // How an ending names a run.log the disk refused lines of (LogLoss), in its reason.
 constexpr std::string_view kLogMissingLines = "run.log is missing lines";
 
+// Why such a run has no resume, as `no resume:` says it.
+std::string log_missing_lines_why(const std::string& out) {
+  return "the run's log " + shown_text(out + "/run.log") + " is missing lines the disk refused";
+}
+
 // The reason of an earlier attempt's ERROR or ABORTED ending whose run.log lost lines; "" otherwise.
 // Such a run has no resume: its ending would give a verdict beside a log with a hole in the account.
 std::string earlier_log_missing_lines(const std::string& dir) {
@@ -1758,6 +1763,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   history::set_lock_wait_stop([stop = cancel.token()] { return stop.requested(); });
   // The station's key, and a resumed folder's seal, before anything in the folder is read.
   const std::optional<seal::Key> key = station_key(a.seal_key, a.seal_key_given);
+  const std::string resume_key = resume_key_words(a, key.has_value());  // in every `to continue:` line
   require_utf8_paths(a);
   // One process per run folder (two runs or resumes of one folder would interleave their files):
   // held from here to the end of the run; a new run's folder is taken once it exists (below).
@@ -2114,10 +2120,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // "use --resume"), so it is said as after any stop (a review: no hint). A configuration
     // error is fixed and started anew.
     if (!log_missing.empty())
-      say_no_resume("the run's log " + shown_text(a.out + "/run.log") + " is missing lines the disk refused", *log);
+      say_no_resume(log_missing_lines_why(a.out), *log);
     else if (!config_error)
       say_how_to_continue(a.out, completed.size(), phases.size(), ": the devices did not open",
-                          resume_key_words(a, key.has_value()), *log);
+                          resume_key, *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
@@ -2210,7 +2216,6 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // the folder (exit 2). Kept as said, not read back out of the reason's text (a review: a record
   // changed mid-run was named as lines missing from run.log).
   const std::string records_changed_why = "the run's records in " + shown_text(a.out) + " changed after they were written";
-  const std::string log_missing_why = "the run's log " + shown_text(a.out + "/run.log") + " is missing lines the disk refused";
   std::string no_resume_why = res.records_changed ? records_changed_why : "";
   // A stopped run whose log lost lines has no resume either: its ending would give a verdict beside
   // the hole (a review). Lines refused after this point (the closing lines) leave the verdict as it
@@ -2218,7 +2223,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error)
     if (const std::string log_missing = log_loss->said(); !log_missing.empty()) {
       res.message += "; " + log_missing;
-      if (no_resume_why.empty()) no_resume_why = log_missing_why;
+      if (no_resume_why.empty()) no_resume_why = log_missing_lines_why(a.out);
       log->error("{}", log_missing);
     }
   if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
@@ -2232,7 +2237,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     const std::string log_missing = log_loss->said();
     no_resume_why = !gone.empty()      ? "the run's records are gone from " + shown_text(a.out)
                     : !changed.empty()   ? records_changed_why
-                    : !log_missing.empty() ? log_missing_why
+                    : !log_missing.empty() ? log_missing_lines_why(a.out)
                                            : "";
     std::vector<std::string> why;
     if (!gone.empty())
@@ -2319,7 +2324,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // only "write failed", though the folder resumed to the same passport).
     if (no_resume_why.empty() && !res.config_error)
       offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
-                     resume_key_words(a, key.has_value()), *log);
+                     resume_key, *log);
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);
@@ -2357,7 +2362,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                        ? "; its resume repeats run.json's faults (" + drops + "), so a loss that ended this run in "
                          "ERROR ends it so again"
                        : std::string(),
-                   resume_key_words(a, key.has_value()), *log);
+                   resume_key, *log);
   }
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),
