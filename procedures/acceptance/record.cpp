@@ -55,8 +55,10 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   ctx.dev.dut.reset_stats();
   std::vector<Sample> buf(static_cast<std::size_t>(std::max(1.0, p.rate_hz / 10)));  // 100 ms chunks
   double sx = 0, sy = 0;
+  bool streaming = false;
   try {
     ctx.dev.dut.start_stream(ctx.cancel);  // inside: a stop here leaves the capture's header, named too
+    streaming = true;
     while (r.samples < n_total) {
       const std::size_t want = static_cast<std::size_t>(std::min<uint64_t>(buf.size(), n_total - r.samples));
       const std::size_t got = ctx.dev.dut.read(std::span<Sample>(buf.data(), want), ctx.cancel);
@@ -68,30 +70,24 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
       r.samples += got;
       ctx.report(static_cast<double>(r.samples) / static_cast<double>(n_total));
     }
+    streaming = false;  // stopped once, whatever the stop says
+    ctx.dev.dut.stop_stream();
+    w.close();
   } catch (...) {
     // Named first, and the first failure is the one that goes on: a close that failed too (a disk
     // that refused the samples refuses their sync) replaced it and left the capture out of the
-    // seal (a review: an ERROR folder sealed so failed `rig verify`).
+    // seal (a review: an ERROR folder sealed so failed `rig verify`). So is a capture recorded in
+    // full whose stop or close failed.
     if (partial) partial->push_back(rel);
-    try {
-      ctx.dev.dut.stop_stream();
-    } catch (const std::exception& e) {  // the safe state stops it again
-      ctx.log->warn("{}: stopping the DUT's stream after the failure: {}", name, e.what());
+    if (streaming) {
+      try {
+        ctx.dev.dut.stop_stream();
+      } catch (const std::exception& e) {  // the safe state stops it again
+        ctx.log->warn("{}: stopping the DUT's stream after the failure: {}", name, e.what());
+      }
     }
     try {
-      w.close();  // keep what was recorded; the retry renames it aside
-    } catch (const std::exception& e) {
-      ctx.log->warn("{}: {}", name, e.what());
-    }
-    throw;
-  }
-  try {
-    ctx.dev.dut.stop_stream();
-    w.close();
-  } catch (...) {  // recorded in full, but the stop or the close failed: named as a stopped one's is
-    if (partial) partial->push_back(rel);
-    try {
-      w.close();  // after a failed stop (after a failed close: nothing left to do)
+      w.close();  // keep what was recorded; the retry renames it aside (after a failed close: nothing to do)
     } catch (const std::exception& e) {
       ctx.log->warn("{}: {}", name, e.what());
     }
