@@ -1992,16 +1992,20 @@ TEST(RigCli, UnwritableOutIsAConfigurationErrorNamingTheFolder) {
   EXPECT_EQ(err.find("safe state"), std::string::npos) << "no device may open before --out is checked:\n" << err;
 }
 
+// A station whose GPIO chip does not exist: a hardware run on it ends before any device opens.
+constexpr const char* kHardwareWithoutGpio =
+    "[rig]\nname = \"bench-without-gpio\"\n"
+    "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
+    "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
+    "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
+    "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+
 // A hardware run whose GPIO chip does not exist ends before any device opens (exit 4), and
 // still leaves the files the README promises for every ending.
 TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   const std::string d = tmp("nogpio");
   fs::create_directories(d);
-  std::ofstream(d + "/hw.toml") << "[rig]\nname = \"bench-without-gpio\"\n"
-                                   "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
-                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
-                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
-                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
+  std::ofstream(d + "/hw.toml") << kHardwareWithoutGpio;
   EXPECT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "HW-1", "--out",
                  d + "/run"},
                 d + "/io"),
@@ -5381,6 +5385,20 @@ std::string rig_line(const std::vector<std::string>& args) {
   for (const std::string& a : args) line += " '" + a + "'";
   return line;
 }
+
+// strace, able to trace here: asked first, so that a rig that crashed before its passport fails
+// its test rather than skipping it.
+bool strace_can_trace() { return std::system("strace -f -qq -o /dev/null true > /dev/null 2>&1") == 0; }
+
+// rig with `args` under strace, `inject` (strace's -e inject=...) into the `syscall`s on `path`
+// alone; stdout and stderr to io.stdout / io.stderr; the exit code. LeakSanitizer cannot run
+// under ptrace (the sanitizer build's rig aborted at exit, 134): off for these traced runs.
+int rig_traced(const std::string& path, const std::string& syscall, const std::string& inject,
+               const std::vector<std::string>& args, const std::string& io) {
+  return shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " + path +
+               " -e trace=" + syscall + " -e inject=" + inject + " " + rig_line(args) + " > " + io + ".stdout 2> " + io +
+               ".stderr");
+}
 }  // namespace
 
 // run.log is one of the run's records: a run whose log the disk refused lines of (ENOSPC, here
@@ -5388,18 +5406,11 @@ std::string rig_line(const std::vector<std::string>& args) {
 // review). It ends ERROR, exit 4, naming the log, how many lines and the first's time; no resume
 // is offered and none is taken (its ending would give a verdict beside a hole in the account).
 TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
-  // strace itself, asked first: a rig that crashed before its passport must fail the test, not skip it.
-  if (std::system("strace -f -qq -o /dev/null true > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace that can trace here";
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
   const std::string d = tmp("log-refused");
   fs::create_directories(d);
-  // LeakSanitizer cannot run under ptrace (the sanitizer build's rig aborted at exit, 134): off for
-  // these traced runs; the exit codes are what is tested.
-  const std::string no_lsan = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" ";
-  const std::string cmd = no_lsan + "strace -f -qq -o /dev/null -P " + d + "/run/run.log -e trace=write " +
-                          "-e inject=write:error=ENOSPC:when=10+ " +
-                          rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run"}) +
-                          " > " + d + "/io.stdout 2> " + d + "/io.stderr";
-  const int rc = shell(cmd);
+  const int rc = rig_traced(d + "/run/run.log", "write", "write:error=ENOSPC:when=10+",
+                            {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io");
   ASSERT_TRUE(fs::exists(d + "/run/passport.json")) << rc << ": " << slurp(d + "/io.stderr");
   EXPECT_EQ(rc, 4) << slurp(d + "/io.stderr");
   const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
@@ -5435,12 +5446,12 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "ERROR");
   // A run stopped by a signal whose log lost a line has no resume either: its ending would give a
   // verdict beside the hole (a review: "to continue" was offered, and the resume ended PASS).
-  const std::string stopped = no_lsan + "strace -f -qq -o /dev/null -P " + d + "/stop/run.log -e trace=write " +
-                              "-e inject=write:error=ENOSPC:when=10 " +
-                              rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject",
-                                        "sigint@100", "--out", d + "/stop"}) +
-                              " > " + d + "/stop.stdout 2> " + d + "/stop.stderr";
-  EXPECT_EQ(shell(stopped), 3) << slurp(d + "/stop.stderr");
+  EXPECT_EQ(rig_traced(d + "/stop/run.log", "write", "write:error=ENOSPC:when=10",
+                       {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject", "sigint@100", "--out",
+                        d + "/stop"},
+                       d + "/stop"),
+            3)
+      << slurp(d + "/stop.stderr");
   const nlohmann::json sp = nlohmann::json::parse(slurp(d + "/stop/passport.json"));
   EXPECT_EQ(sp["outcome"], "ABORTED");
   EXPECT_NE(sp["aborted_reason"].get<std::string>().find("; run.log is missing lines: the disk refused 1 line(s)"),
@@ -5450,17 +5461,13 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   EXPECT_EQ(run({"run", "--resume", d + "/stop", "--yes", "--no-history"}, d + "/stop-resume"), 2)
       << slurp(d + "/stop-resume.stderr");
   // Nor a run whose devices did not open (a review: that ending alone offered the resume).
-  std::ofstream(d + "/hw.toml") << "[rig]\nname = \"bench-without-gpio\"\n"
-                                   "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\n"
-                                   "[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"DUT_POWER\"\n"
-                                   "estop = \"ESTOP\"\nlamp_ready = \"LR\"\nlamp_running = \"LN\"\n"
-                                   "lamp_pass = \"LP\"\nlamp_fail = \"LF\"\n";
-  const std::string unopened = no_lsan + "strace -f -qq -o /dev/null -P " + d + "/hw/run.log -e trace=write " +
-                               "-e inject=write:error=ENOSPC " +
-                               rig_line({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial",
-                                         "HW-1", "--no-history", "--out", d + "/hw"}) +
-                               " > " + d + "/hw.stdout 2> " + d + "/hw.stderr";
-  EXPECT_EQ(shell(unopened), 4) << slurp(d + "/hw.stderr");
+  std::ofstream(d + "/hw.toml") << kHardwareWithoutGpio;
+  EXPECT_EQ(rig_traced(d + "/hw/run.log", "write", "write:error=ENOSPC",
+                       {"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--yes", "--serial", "HW-1",
+                        "--no-history", "--out", d + "/hw"},
+                       d + "/hw"),
+            4)
+      << slurp(d + "/hw.stderr");
   const nlohmann::json hp = nlohmann::json::parse(slurp(d + "/hw/passport.json"));
   EXPECT_EQ(hp["outcome"], "ERROR");
   EXPECT_NE(hp["aborted_reason"].get<std::string>().find("; run.log is missing lines: the disk refused"),
@@ -5480,16 +5487,15 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
 // named among the partial captures the final seal vouches for: it was left out, and the sealed
 // ERROR folder failed `rig verify` ("not sealed (added after the seal)": a review).
 TEST(RigCli, ACaptureTheDiskRefusedToSyncIsSealedWithTheStoppedRun) {
-  if (std::system("strace -f -qq -o /dev/null true > /dev/null 2>&1") != 0) GTEST_SKIP() << "no strace that can trace here";
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
   const std::string d = tmp("capture-sync-refused");
   const std::string key = station_key_in(d);
-  const std::string no_lsan = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" ";
-  const std::string cmd = no_lsan + "strace -f -qq -o /dev/null -P " + d + "/run/captures/run02-U20.cap -e trace=fsync " +
-                          "-e inject=fsync:error=EIO " +
-                          rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--seal-key", key,
-                                    "--out", d + "/run"}) +
-                          " > " + d + "/io.stdout 2> " + d + "/io.stderr";
-  EXPECT_EQ(shell(cmd), 4) << slurp(d + "/io.stderr");
+  EXPECT_EQ(rig_traced(d + "/run/captures/run02-U20.cap", "fsync", "fsync:error=EIO",
+                       {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--seal-key", key, "--out",
+                        d + "/run"},
+                       d + "/io"),
+            4)
+      << slurp(d + "/io.stderr");
   const nlohmann::json p = nlohmann::json::parse(slurp(d + "/run/passport.json"));
   EXPECT_EQ(p["outcome"], "ERROR");
   EXPECT_NE(p["aborted_reason"].get<std::string>().find("run02-U20.cap failed (fsync)"), std::string::npos)
