@@ -663,6 +663,17 @@ std::string earlier_log_missing_lines(const std::string& dir) {
                                                                                                 : "";
 }
 
+// A run's final outcome: its verdict (verdict_of), or the ERROR or ABORTED ending of a run whose
+// log is missing lines, which has no resume (earlier_log_missing_lines): its passport stands, and
+// what its ending left undone (report.html, junit.xml, the history row: a full disk) is finished
+// by `rig run --resume` as a verdict's is (finish_pending_ending), nothing measured or computed
+// again (a code review: that ending said "rig run --resume writes it", and the resume was refused).
+// "" when the run can still go on.
+std::string final_outcome_of(const std::string& dir) {
+  if (std::string v = verdict_of(dir); !v.empty()) return v;
+  return earlier_log_missing_lines(dir).empty() ? "" : passport_outcome(dir).value_or("");
+}
+
 void refuse_a_log_missing_lines(const std::string& dir) {
   if (const std::string why = earlier_log_missing_lines(dir); !why.empty())
     throw ConfigError(dir + ": its run ended without a verdict: " + why +
@@ -1315,11 +1326,12 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 }
 
 // A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
-// write_run_outputs): its verdict is final, so nothing is measured or computed again; what is
-// missing is done: a staged junit.xml put in place, report.html drawn if it is not there, the
-// history row recorded (the same row, under the same id). A sealed run finishes here only when
-// its final seal is written (`final_seal`); before it, its resume computes the ending again.
-// The verdict's exit code; nullopt when there is no such ending. A dry run says what it would do.
+// write_run_outputs): its outcome is final (final_outcome_of: a verdict, or an ending with no
+// resume), so nothing is measured or computed again; what is missing is done: a staged junit.xml
+// put in place, report.html drawn if it is not there, the history row recorded (the same row,
+// under the same id). A sealed run finishes here only when its final seal is written
+// (`final_seal`); before it, its resume computes the ending again.
+// The passport's exit code; nullopt when there is no such ending. A dry run says what it would do.
 std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw, const std::optional<seal::Key>& key,
                                          bool final_seal, const MeasurementSet& declared) {
   const std::string dir = a.out, pending = a.out + "/" + kEndingPending;
@@ -1330,14 +1342,21 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   // so the ending is computed again.
   if (std::find(steps.begin(), steps.end(), kStepEnding) != steps.end()) return std::nullopt;
   const bool sealed = key.has_value();
-  const std::string v = verdict_of(dir);
+  const std::string v = final_outcome_of(dir);
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
+  // How the run stands, as each line below says it: a verdict is complete; an ending without one
+  // stopped the run for good.
+  const bool verdict = v == "PASS" || v == "FAIL";
+  const std::string stands = verdict ? fmt::format("complete (its passport says {})", v)
+                                     : fmt::format("ended for good (its passport says {}: its run.log is missing lines; "
+                                                   "no resume continues it)",
+                                                   v);
   if (!sealed)  // a sealed one's final seal, checked before, vouches for the passport
     if (const std::string why = passport_unlike_its_run(dir, report::read_passport(dir), declared, a.profile_sha256);
         !why.empty())
       throw ConfigError(dir + "/passport.json: " + why + ": the passport was changed after its run wrote it; "
                         "nothing done (the folder is as it was)");
-  const int rc = v == "PASS" ? kExitPass : kExitFail;
+  const int rc = v == "PASS" ? kExitPass : v == "FAIL" ? kExitFail : v == "ABORTED" ? kExitAborted : kExitHardware;
   const bool junit_staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
   // The ending could not write report.html (a page there is another ending's).
   const bool report_listed = std::find(steps.begin(), steps.end(), kStepReport) != steps.end();
@@ -1348,15 +1367,14 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   if (!a.no_history) left.emplace_back("the history row recorded");
   const std::string what = left.empty() ? std::string("nothing left") : fmt::format("{}", fmt::join(left, ", "));
   if (a.dry_run) {
-    std::cout << fmt::format("rig run --dry-run: {} is complete (its passport says {}); its ending stopped before it "
-                             "finished: a resume does what is left ({}); nothing is measured or computed again.\n",
-                             shown_text(dir), v, what);
+    std::cout << fmt::format("rig run --dry-run: {} is {}; its ending stopped before it finished: a resume does what "
+                             "is left ({}); nothing is measured or computed again.\n",
+                             shown_text(dir), stands, what);
     if (!a.no_history && !a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
     return kExitPass;
   }
   auto log = make_logger(dir, a.quiet);
-  log->info("rig {} run: out {}: the run is complete (its passport says {}); finishing its ending ({})", RIG_VERSION,
-            shown_text(dir), v, what);
+  log->info("rig {} run: out {}: the run is {}; finishing its ending ({})", RIG_VERSION, shown_text(dir), stands, what);
   if (!a.no_history) say_history_left_behind(a, *log);  // another --db: the run's own database never gets this row
   // What this resume did and what is still owed, each said as it came out (a line integrator's
   // review: a history row the database refused was said "recorded").
@@ -1404,11 +1422,12 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     if (sealed) drop_previous_seal(dir);
   }
   const std::string line =
-      done ? fmt::format("{}: the run was complete (its passport says {}); its ending is finished: {}", shown_text(dir),
-                         v, did.empty() ? std::string("nothing was left") : fmt::format("{}", fmt::join(did, ", ")))
-           : fmt::format("{}: the run was complete (its passport says {}); its ending is not finished yet: {}still "
-                         "to do: {} (a later rig run --resume {} does it{})",
-                         shown_text(dir), v, did.empty() ? std::string() : fmt::format("{} done; ", fmt::join(did, ", ")),
+      done ? fmt::format("{}: the run was {}; its ending is finished: {}", shown_text(dir), stands,
+                         did.empty() ? std::string("nothing was left") : fmt::format("{}", fmt::join(did, ", ")))
+           : fmt::format("{}: the run was {}; its ending is not finished yet: {}still to do: {} (a later rig run "
+                         "--resume {} does it{})",
+                         shown_text(dir), stands,
+                         did.empty() ? std::string() : fmt::format("{} done; ", fmt::join(did, ", ")),
                          fmt::join(owed, ", "), shell_word(dir),
                          a.no_history ? ", without --no-history; or " + a.record_command : std::string());
   log->info("{} (exit {})", line, rc);
@@ -1712,6 +1731,22 @@ void say_no_resume(const std::string& why, spdlog::logger& log) {
   log.info("{}", no);
 }
 
+// An ending with no resume whose own files a full disk kept out (.ending-pending: report.html,
+// junit.xml, the history row) is finished by `rig run --resume` (finish_pending_ending): said after
+// "no resume", which alone sent the technician away from the steps left (a code review). Not where
+// the final seal is among them: the resume of a sealed run finishes only under its final seal.
+void say_how_to_finish(const std::string& out, const std::string& key_words, spdlog::logger& log) {
+  const std::vector<std::string> steps = pending_steps(out).value_or(std::vector<std::string>{});
+  if (steps.empty() || final_outcome_of(out).empty()) return;
+  for (const char* unfinishable : {kStepEnding, kStepSeal})
+    if (std::find(steps.begin(), steps.end(), unfinishable) != steps.end()) return;
+  const std::string line = fmt::format("its ending is not finished ({} lists: {}): rig run --resume {}{} finishes it "
+                                       "once the cause is mended (nothing is measured or computed again)",
+                                       kEndingPending, fmt::join(steps, ", "), shell_word(out), key_words);
+  std::cerr << line << "\n";
+  log.info("{}", line);
+}
+
 // After an ABORTED or ERROR ending: how to go on (say_how_to_continue), or, where the folder would
 // refuse its resume now (resume_refusal), "no resume: why; start a new run".
 void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_t phases, const std::string& why,
@@ -1768,12 +1803,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // One process per run folder (two runs or resumes of one folder would interleave their files):
   // held from here to the end of the run; a new run's folder is taken once it exists (below).
   std::optional<FolderLock> folder_lock;
-  bool final_seal = false;  // a sealed PASS/FAIL whose ending stopped after its seal
+  bool final_seal = false;  // a sealed final outcome (final_outcome_of) whose ending stopped after its seal
   if (!a.resume.empty()) {
     if (a.dry_run) FolderLock::check_free(a.resume, "--resume " + a.resume);
     else if (path_kind(a.resume, "--resume") == PathKind::directory) folder_lock.emplace(a.resume, "--resume " + a.resume);
     refuse_non_files(a.resume, true);
-    final_seal = check_seal_before_resume(a.resume, key, fs::exists(a.resume + "/" + kEndingPending));
+    final_seal = check_seal_before_resume(a.resume, key, fs::exists(a.resume + "/" + kEndingPending),
+                                          !earlier_log_missing_lines(a.resume).empty());
     refuse_records_without_checkpoint(a.resume);
   }
 
@@ -2350,6 +2386,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
   if (!no_resume_why.empty()) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
     say_no_resume(no_resume_why, *log);
+    say_how_to_finish(a.out, resume_key, *log);
   } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
     // An emulated run's injected sample losses are repeated by its resume (run.json's faults):
     // one that ended the run in ERROR ends the resume the same way (a line integrator's review:

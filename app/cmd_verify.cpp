@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.hpp"
+#include "app/folder_lock.hpp"
 #include "rig/core/json_unique.hpp"
 #include "app/run_seal.hpp"
 #include "procedures/acceptance/state.hpp"
@@ -122,14 +123,24 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   const bool every_file_holds = std::all_of(c.files.begin(), c.files.end(),
                                             [](const auto& e) { return e.second == seal::FileState::Ok; });
   const bool not_ended = !c.ok && c.outcome.empty() && !c.files.empty() && every_file_holds && !pending_steps(dir);
+  // A run going on now (its process holds the folder's lock) is not sent a resume it would refuse
+  // (a code review: "goes on with the run" was said of a live run's folder).
+  bool live = false;
+  try {
+    FolderLock::check_free(dir, dir);
+  } catch (const ConfigError&) {
+    live = true;
+  }
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)
                 : not_ended
                     ? fmt::format("NOT verified: the run has not ended (its last seal is a checkpoint's, not a final "
-                                  "one): the {} files it sealed hold, what was recorded after it is not sealed; `rig "
-                                  "run --resume {} --seal-key FILE` goes on with the run\n",
-                                  c.files.size(), shell_word(dir))
+                                  "one): the {} files it sealed hold, what was recorded after it is not sealed; {}\n",
+                                  c.files.size(),
+                                  live ? "a rig process is running it now (it holds the folder's lock): verify it "
+                                         "once that run has ended"
+                                       : "`rig run --resume " + shell_word(dir) + " --seal-key FILE` goes on with the run")
                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).
@@ -143,8 +154,13 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                              "verdict does not rest on them): {}\n",
                              fmt::join(outside, ", "));
   if (const auto steps = pending_steps(dir))
-    std::cout << fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes it\n",
-                             kEndingPending, fmt::join(*steps, ", "), shell_word(dir), seal_in(dir) ? " --seal-key FILE" : "");
+    std::cout << (live ? fmt::format("note: the run's ending is not finished ({}: {}): a rig process is at it now (it "
+                                     "holds the folder's lock)\n",
+                                     kEndingPending, fmt::join(*steps, ", "))
+                       : fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes "
+                                     "it\n",
+                                     kEndingPending, fmt::join(*steps, ", "), shell_word(dir),
+                                     seal_in(dir) ? " --seal-key FILE" : ""));
   return c.ok ? kExitPass : kExitFail;
 }
 

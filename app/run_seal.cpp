@@ -147,7 +147,8 @@ std::optional<std::string> seal_in(const std::string& dir) {
   return std::nullopt;
 }
 
-bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending) {
+bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending,
+                              bool ended_for_good) {
   const std::optional<std::string> seal_there = seal_in(dir);
   const bool sealed = seal_there.has_value();
   if (!k) {
@@ -174,17 +175,18 @@ bool check_seal_before_resume(const std::string& dir, const std::optional<seal::
     const seal::Check c = seal::check_seal(dir, path, *k, must);
     std::string w;
     if (holds_for_resume(c, w)) {
+      // Its ending stopped after the seal: the history row (or the page) is what is left, done
+      // from the passport the seal vouches for.
+      const bool passport_sealed = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
+        return e.first == "passport.json" && e.second == seal::FileState::Ok;
+      });
+      const bool finish = pending_ending && name == std::string("seal.json") && passport_sealed;
       if (c.outcome == "PASS" || c.outcome == "FAIL") {
-        // Its ending stopped after the seal: the history row is what is left, recorded from the
-        // passport the seal vouches for.
-        const bool passport_sealed = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
-          return e.first == "passport.json" && e.second == seal::FileState::Ok;
-        });
-        if (pending_ending && name == std::string("seal.json") && passport_sealed) return true;
+        if (finish) return true;
         throw ConfigError(dir + ": the run is complete: its seal states the outcome " + c.outcome +
                           " (whatever passport.json says now); nothing to resume");
       }
-      return false;
+      return finish && ended_for_good && (c.outcome == "ERROR" || c.outcome == "ABORTED");
     }
     why += (why.empty() ? "" : "; ") + std::string(name) + ": " + w;
   }

@@ -98,8 +98,11 @@ std::optional<std::string> seal_in(const std::string& dir);
 // verdict stands, whatever passport.json says now). Without a key a sealed folder is refused (a
 // resume would leave it unsealed). ConfigError naming what does not hold. A sealed PASS or FAIL
 // whose ending was stopped after the seal (`pending_ending`: .ending-pending in the folder) is
-// not refused: true is returned, and the caller finishes that ending (its history row).
-bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending);
+// not refused: true is returned, and the caller finishes that ending (its history row). So is a
+// sealed ERROR or ABORTED ending that stopped the run for good (`ended_for_good`: its run.log is
+// missing lines, so it has no resume), whose report or history row is what is left.
+bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending,
+                              bool ended_for_good = false);
 
 // The files of `dir` no seal is asked to cover: run.log (appended to after the last seal), the
 // seals, hidden and temporary files, and a capture a resume set aside

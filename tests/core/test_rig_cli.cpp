@@ -5483,6 +5483,59 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
       << slurp(d + "/hw-resume.stderr");
 }
 
+// An ending with no resume (run.log lost lines) whose own page the full disk kept out too
+// (.ending-pending lists `report`) is finished by `rig run --resume`, nothing measured again, the
+// passport's ERROR and exit 4 kept: that ending said "rig run --resume writes it" and the resume
+// was refused, `rig history --record` advised the same resume (a code review). Sealed, the page
+// is sealed with the rest. Its resume is refused afterwards as before.
+TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("log-refused-ending");
+  const std::string key = station_key_in(d);
+  for (const bool sealed : {false, true}) {
+    const std::string out = d + (sealed ? "/sealed" : "/plain");
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out};
+    std::vector<std::string> resume = {"run", "--resume", out, "--yes", "--no-history"};
+    if (sealed) {
+      for (auto* v : {&args, &resume}) v->insert(v->end(), {"--seal-key", key});
+    }
+    // run.log's writes from the tenth on, and the page's file, refused as a full disk refuses them.
+    EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " +
+                    out + "/run.log -P " + out + "/report.html.tmp -e trace=write,openat -e "
+                    "inject=write:error=ENOSPC:when=10+ -e inject=openat:error=ENOSPC:when=2+ " + rig_line(args) +
+                    " > " + out + ".stdout 2> " + out + ".stderr"),
+              4)
+        << slurp(out + ".stderr");
+    ASSERT_EQ(slurp(out + "/.ending-pending"), "report\n") << slurp(out + ".stderr");
+    EXPECT_FALSE(fs::exists(out + "/report.html"));
+    const std::string err = slurp(out + ".stderr");
+    EXPECT_NE(err.find("no resume: the run's log " + out + "/run.log is missing lines"), std::string::npos) << err;
+    EXPECT_NE(err.find("its ending is not finished (.ending-pending lists: report): rig run --resume " + out +
+                       (sealed ? " --seal-key " + key : std::string()) + " finishes it"),
+              std::string::npos)
+        << err;
+    const std::string passport = slurp(out + "/passport.json"), junit = slurp(out + "/junit.xml");
+    EXPECT_EQ(run(resume, out + "-finish"), 4) << slurp(out + "-finish.stderr");
+    EXPECT_NE(slurp(out + "-finish.stderr").find(": the run was ended for good (its passport says ERROR: its run.log is "
+                                                 "missing lines; no resume continues it); its ending is finished: "
+                                                 "report.html written"),
+              std::string::npos)
+        << slurp(out + "-finish.stderr");
+    EXPECT_FALSE(fs::exists(out + "/.ending-pending"));
+    EXPECT_NE(slurp(out + "/report.html").find("ERROR"), std::string::npos);
+    EXPECT_EQ(slurp(out + "/passport.json"), passport);  // nothing computed again
+    EXPECT_EQ(slurp(out + "/junit.xml"), junit);
+    if (sealed) {
+      EXPECT_EQ(run({"verify", out, "--seal-key", key}, out + "-verify"), 0) << slurp(out + "-verify.stdout");
+      EXPECT_NE(slurp(out + "-verify.stdout").find("ok       report.html"), std::string::npos)
+          << slurp(out + "-verify.stdout");
+    }
+    EXPECT_EQ(run(resume, out + "-again"), 2) << slurp(out + "-again.stderr");
+    EXPECT_NE(slurp(out + "-again.stderr").find("no resume gives those lines back"), std::string::npos)
+        << slurp(out + "-again.stderr");
+  }
+}
+
 // A capture whose sync the disk refused (EIO at its fsync) ends the run in ERROR, exit 4, and is
 // named among the partial captures the final seal vouches for: it was left out, and the sealed
 // ERROR folder failed `rig verify` ("not sealed (added after the seal)": a review).
@@ -5539,6 +5592,25 @@ TEST(RigCli, ASealedRunsResumeLineNamesItsKey) {
                                                      "checkpoint's, not a final one)"),
             std::string::npos)
       << slurp(d + "/killed-verify.stdout");
+  EXPECT_NE(slurp(d + "/killed-verify.stdout").find("`rig run --resume " + d + "/killed --seal-key FILE` goes on with "
+                                                     "the run"),
+            std::string::npos)
+      << slurp(d + "/killed-verify.stdout");
+  // While a run holds the folder (its lock, taken here as a running rig takes it), the resume it
+  // would refuse is not offered (a code review: "goes on with the run" of a live run's folder).
+  {
+    const int fd = ::open((d + "/killed").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    EXPECT_EQ(run({"verify", d + "/killed", "--seal-key", key}, d + "/live-verify"), 1);
+    ::close(fd);
+    const std::string out = slurp(d + "/live-verify.stdout");
+    EXPECT_NE(out.find("is not sealed; a rig process is running it now (it holds the folder's lock): verify it once "
+                       "that run has ended"),
+              std::string::npos)
+        << out;
+    EXPECT_EQ(out.find("--resume"), std::string::npos) << out;
+  }
   // The key from the environment: the line as for an unsealed run.
   ::setenv("RIG_SEAL_KEY", key.c_str(), 1);
   const int rc = run({"run", "--profile", "ci", "--yes", "--no-history", "--inject", "sigint@100", "--out", d + "/env"},
