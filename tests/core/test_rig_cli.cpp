@@ -5483,6 +5483,45 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
       << slurp(d + "/hw-resume.stderr");
 }
 
+// A capture recorded faster than the wall clock (the emulated plant: a device minute in about 30 ms)
+// is synced at most once a wall second, not once a device minute (90 fdatasyncs held up a `paper`
+// run), and its written pages are handed to the disk as they fill (sync_file_range), so the sync
+// at its close finds little left: counted on a 15-minute raw capture under strace. The old rule
+// (a sync each minute of samples) gives 15 however fast the run.
+TEST(RigCli, ACaptureFasterThanTheWallClockIsSyncedOnceAWallSecond) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("capture-syncs");
+  fs::create_directories(d);
+  std::string profile = slurp(std::string(RIG_SOURCE_DIR) + "/profiles/ci.toml");
+  const std::string raw = "raw_s = 60.0";
+  ASSERT_NE(profile.find(raw), std::string::npos);
+  profile.replace(profile.find(raw), raw.size(), "raw_s = 900.0");
+  const std::string name = "name = \"ci\"";  // the built-in's name is refused on a profile that differs from it
+  ASSERT_NE(profile.find(name), std::string::npos);
+  profile.replace(profile.find(name), name.size(), "name = \"ci-long-raw\"");
+  std::ofstream(d + "/long-raw.toml") << profile;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o " + d +
+                  "/trace -P " + d + "/run/captures/raw-U10.cap -e trace=fdatasync,fsync,sync_file_range " +
+                  rig_line({"run", "--profile", d + "/long-raw.toml", "--yes", "--quiet", "--no-history", "--out",
+                            d + "/run"}) +
+                  " > " + d + "/io.stdout 2> " + d + "/io.stderr"),
+            0)
+      << slurp(d + "/io.stderr");
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string trace = slurp(d + "/trace");
+  const auto count = [&trace](const std::string& call) {
+    std::size_t n = 0;
+    for (std::size_t at = trace.find(call + "("); at != std::string::npos; at = trace.find(call + "(", at + 1)) ++n;
+    return n;
+  };
+  const std::size_t fdatasyncs = count("fdatasync");
+  EXPECT_LE(static_cast<double>(fdatasyncs), 1 + wall_s) << trace;
+  EXPECT_LT(fdatasyncs, 15u) << "the run took " << wall_s << " s\n" << trace;
+  EXPECT_GE(count("sync_file_range"), 10u) << trace;  // 900 blocks of about 16 KiB, handed over per 128 KiB
+  EXPECT_EQ(count("fsync"), 1u) << trace;              // the close's
+}
+
 // An ending with no resume (run.log lost lines) whose own page the full disk kept out too
 // (.ending-pending lists `report`) is finished by `rig run --resume`, nothing measured again, the
 // passport's ERROR and exit 4 kept: that ending said "rig run --resume writes it" and the resume
