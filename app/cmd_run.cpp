@@ -636,42 +636,9 @@ bool can_create_file_in(const fs::path& d) {
   return true;
 }
 
-// A run's verdict is final once its passport says PASS or FAIL. A run whose phases are all
-// recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
-// none (killed before it was written), is finished by a resume that only computes.
-std::string verdict_of(const std::string& dir) {
-  const std::optional<std::string> o = passport_outcome(dir);
-  return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
-}
-
-// How an ending names a run.log the disk refused lines of (LogLoss), in its reason.
-constexpr std::string_view kLogMissingLines = "run.log is missing lines";
-
-// Why such a run has no resume, as `no resume:` says it.
+// Why a run whose log is missing lines has no resume, as `no resume:` says it.
 std::string log_missing_lines_why(const std::string& out) {
   return "the run's log " + shown_text(out + "/run.log") + " is missing lines the disk refused";
-}
-
-// The reason of an earlier attempt's ERROR or ABORTED ending whose run.log lost lines; "" otherwise.
-// Such a run has no resume: its ending would give a verdict beside a log with a hole in the account.
-std::string earlier_log_missing_lines(const std::string& dir) {
-  const std::optional<nlohmann::json> j = read_passport(dir);
-  if (!j) return "";
-  const nlohmann::json outcome = j->value("outcome", nlohmann::json()), why = j->value("aborted_reason", nlohmann::json());
-  if (outcome != "ERROR" && outcome != "ABORTED") return "";
-  return why.is_string() && why.get<std::string>().find(kLogMissingLines) != std::string::npos ? why.get<std::string>()
-                                                                                                : "";
-}
-
-// A run's final outcome: its verdict (verdict_of), or the ERROR or ABORTED ending of a run whose
-// log is missing lines, which has no resume (earlier_log_missing_lines): its passport stands, and
-// what its ending left undone (report.html, junit.xml, the history row: a full disk) is finished
-// by `rig run --resume` as a verdict's is (finish_pending_ending), nothing measured or computed
-// again (a code review: that ending said "rig run --resume writes it", and the resume was refused).
-// "" when the run can still go on.
-std::string final_outcome_of(const std::string& dir) {
-  if (std::string v = verdict_of(dir); !v.empty()) return v;
-  return earlier_log_missing_lines(dir).empty() ? "" : passport_outcome(dir).value_or("");
 }
 
 void refuse_a_log_missing_lines(const std::string& dir) {
@@ -1734,12 +1701,10 @@ void say_no_resume(const std::string& why, spdlog::logger& log) {
 // An ending with no resume whose own files a full disk kept out (.ending-pending: report.html,
 // junit.xml, the history row) is finished by `rig run --resume` (finish_pending_ending): said after
 // "no resume", which alone sent the technician away from the steps left (a code review). Not where
-// the final seal is among them: the resume of a sealed run finishes only under its final seal.
+// the final seal is among them (a_resume_finishes): a sealed run finishes only under its final seal.
 void say_how_to_finish(const std::string& out, const std::string& key_words, spdlog::logger& log) {
   const std::vector<std::string> steps = pending_steps(out).value_or(std::vector<std::string>{});
-  if (steps.empty() || final_outcome_of(out).empty()) return;
-  for (const char* unfinishable : {kStepEnding, kStepSeal})
-    if (std::find(steps.begin(), steps.end(), unfinishable) != steps.end()) return;
+  if (steps.empty() || final_outcome_of(out).empty() || !a_resume_finishes(out, steps)) return;
   const std::string line = fmt::format("its ending is not finished ({} lists: {}): rig run --resume {}{} finishes it "
                                        "once the cause is mended (nothing is measured or computed again)",
                                        kEndingPending, fmt::join(steps, ", "), shell_word(out), key_words);
@@ -2358,9 +2323,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     }
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
-    if (no_resume_why.empty() && !res.config_error)
+    if (!no_resume_why.empty()) {  // as the ending in full says it (a code review: nothing was said here)
+      say_no_resume(no_resume_why, *log);
+      say_how_to_finish(a.out, resume_key, *log);
+    } else if (!res.config_error) {
       offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
                      resume_key, *log);
+    }
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);

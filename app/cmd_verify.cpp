@@ -123,8 +123,9 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   const bool every_file_holds = std::all_of(c.files.begin(), c.files.end(),
                                             [](const auto& e) { return e.second == seal::FileState::Ok; });
   const bool not_ended = !c.ok && c.outcome.empty() && !c.files.empty() && every_file_holds && !pending_steps(dir);
-  // A run going on now (its process holds the folder's lock) is not sent a resume it would refuse
-  // (a code review: "goes on with the run" was said of a live run's folder).
+  // A folder a rig process holds now (a run or resume, or a report or history record being
+  // written: the folder's lock) is not sent a resume it would refuse (a code review: "goes on with
+  // the run" was said of a live run's folder).
   bool live = false;
   try {
     FolderLock::check_free(dir, dir);
@@ -138,8 +139,8 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                     ? fmt::format("NOT verified: the run has not ended (its last seal is a checkpoint's, not a final "
                                   "one): the {} files it sealed hold, what was recorded after it is not sealed; {}\n",
                                   c.files.size(),
-                                  live ? "a rig process is running it now (it holds the folder's lock): verify it "
-                                         "once that run has ended"
+                                  live ? "a rig process holds the folder now (a run or resume, a report or a "
+                                         "history record: its lock): verify it once that process has ended"
                                        : "`rig run --resume " + shell_word(dir) + " --seal-key FILE` goes on with the run")
                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
@@ -154,13 +155,18 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                              "verdict does not rest on them): {}\n",
                              fmt::join(outside, ", "));
   if (const auto steps = pending_steps(dir))
-    std::cout << (live ? fmt::format("note: the run's ending is not finished ({}: {}): a rig process is at it now (it "
-                                     "holds the folder's lock)\n",
+    std::cout << (live ? fmt::format("note: the run's ending is not finished ({}: {}): a rig process holds the folder "
+                                     "now (its lock)\n",
                                      kEndingPending, fmt::join(*steps, ", "))
-                       : fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes "
-                                     "it\n",
-                                     kEndingPending, fmt::join(*steps, ", "), shell_word(dir),
-                                     seal_in(dir) ? " --seal-key FILE" : ""));
+                  : a_resume_finishes(dir, *steps)
+                      ? fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes "
+                                    "it\n",
+                                    kEndingPending, fmt::join(*steps, ", "), shell_word(dir),
+                                    seal_in(dir) ? " --seal-key FILE" : "")
+                      : fmt::format("note: the run's ending is not finished ({}: {}), and nothing finishes it: the "
+                                    "run has no resume (its run.log is missing lines); what the seal vouches for "
+                                    "stands as said above\n",
+                                    kEndingPending, fmt::join(*steps, ", ")));
   return c.ok ? kExitPass : kExitFail;
 }
 

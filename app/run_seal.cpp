@@ -10,6 +10,8 @@
 
 #include <sys/stat.h>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
@@ -181,12 +183,22 @@ bool check_seal_before_resume(const std::string& dir, const std::optional<seal::
         return e.first == "passport.json" && e.second == seal::FileState::Ok;
       });
       const bool finish = pending_ending && name == std::string("seal.json") && passport_sealed;
+      const bool final_outcome = c.outcome == "PASS" || c.outcome == "FAIL" ||
+                                 (ended_for_good && (c.outcome == "ERROR" || c.outcome == "ABORTED"));
+      // A final ending is finished from the files its seal vouches for, and sealed again with the
+      // page: every one must be as sealed, the ending's own too, which a resume that computes
+      // would write again (a code review: a junit.xml edited to PASS beside an ERROR passport
+      // was sealed again, and `rig verify` then vouched for it).
+      if (finish && final_outcome && !c.problems.empty())
+        throw ConfigError(fmt::format("{}: its ending is final, and what its seal vouches for does not hold ({}): "
+                                      "nothing done (the folder was changed outside the rig)",
+                                      dir, fmt::join(c.problems, "; ")));
       if (c.outcome == "PASS" || c.outcome == "FAIL") {
         if (finish) return true;
         throw ConfigError(dir + ": the run is complete: its seal states the outcome " + c.outcome +
                           " (whatever passport.json says now); nothing to resume");
       }
-      return finish && ended_for_good && (c.outcome == "ERROR" || c.outcome == "ABORTED");
+      return finish && final_outcome;
     }
     why += (why.empty() ? "" : "; ") + std::string(name) + ": " + w;
   }
@@ -214,6 +226,40 @@ std::optional<std::string> passport_outcome(const std::string& dir) {
   const std::optional<nlohmann::json> j = read_passport(dir);
   if (!j || !j->contains("outcome") || !(*j)["outcome"].is_string()) return std::nullopt;
   return (*j)["outcome"].get<std::string>();
+}
+
+std::string verdict_of(const std::string& dir) {
+  const std::optional<std::string> o = passport_outcome(dir);
+  return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
+}
+
+std::string earlier_log_missing_lines(const std::string& dir) {
+  const std::optional<nlohmann::json> j = read_passport(dir);
+  if (!j) return "";
+  const nlohmann::json outcome = j->value("outcome", nlohmann::json()), why = j->value("aborted_reason", nlohmann::json());
+  if (outcome != "ERROR" && outcome != "ABORTED") return "";
+  return why.is_string() && why.get<std::string>().find(kLogMissingLines) != std::string::npos ? why.get<std::string>()
+                                                                                                : "";
+}
+
+std::string final_outcome_of(const std::string& dir) {
+  if (std::string v = verdict_of(dir); !v.empty()) return v;
+  return earlier_log_missing_lines(dir).empty() ? "" : passport_outcome(dir).value_or("");
+}
+
+bool a_resume_finishes(const std::string& dir, const std::vector<std::string>& steps) {
+  if (earlier_log_missing_lines(dir).empty()) return true;
+  const auto listed = [&steps](const char* step) { return std::find(steps.begin(), steps.end(), step) != steps.end(); };
+  if (listed(kStepEnding)) return false;
+  if (!listed(kStepSeal)) return true;
+  // `seal` listed beside a final seal in place (a stop before the list was brought up to date):
+  // done already; the resume holds the folder to that seal before it trusts it.
+  std::error_code ec;
+  if (!fs::is_regular_file(fs::path(dir) / "seal.json", ec)) return false;
+  std::ifstream in(fs::path(dir) / "seal.json");
+  const nlohmann::json seal = nlohmann::json::parse(in, nullptr, false);
+  return seal.is_object() && seal.contains("outcome") && seal["outcome"].is_string() &&
+         !seal["outcome"].get<std::string>().empty();
 }
 
 bool outside_the_seal(const std::string& rel) {

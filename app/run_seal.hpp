@@ -6,6 +6,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -84,6 +85,32 @@ std::optional<nlohmann::json> read_passport(const std::string& dir);
 
 // The outcome passport.json states; nullopt when read_passport has none or it names none.
 std::optional<std::string> passport_outcome(const std::string& dir);
+
+// A run's verdict, once its passport says PASS or FAIL; "" otherwise. A run whose phases are all
+// recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
+// none (killed before it was written), is finished by a resume that only computes.
+std::string verdict_of(const std::string& dir);
+
+// How an ending names a run.log the disk refused lines of, in its reason (aborted_reason).
+inline constexpr std::string_view kLogMissingLines = "run.log is missing lines";
+
+// The reason of an ERROR or ABORTED ending whose run.log lost lines; "" otherwise. Such a run has
+// no resume: its ending would give a verdict beside a log with a hole in the account.
+std::string earlier_log_missing_lines(const std::string& dir);
+
+// A run's final outcome: its verdict (verdict_of), or the ERROR or ABORTED ending of a run whose
+// log is missing lines, which has no resume (earlier_log_missing_lines): its passport stands, and
+// what its ending left undone (report.html, junit.xml, the history row: a full disk) is finished
+// by `rig run --resume` as a verdict's is, nothing measured or computed again (a code review: that
+// ending said "rig run --resume writes it", and the resume was refused). "" when the run can
+// still go on.
+std::string final_outcome_of(const std::string& dir);
+
+// Whether `rig run --resume` takes up the ending `dir`'s .ending-pending lists (`steps`): every
+// run's but one with no resume (its log missing lines) whose list names its own files (`ending`)
+// or a final seal not written, which only computing the ending again would give (a code review:
+// `rig verify` advised that resume, and it was refused).
+bool a_resume_finishes(const std::string& dir, const std::vector<std::string>& steps);
 
 // The seal `dir` holds: "seal.json", else "seal.prev.json" (a stop between two seals may leave
 // only the previous one), else none. A link or any other entry of that name counts: the rig makes

@@ -5500,7 +5500,6 @@ TEST(RigCli, ACaptureFasterThanTheWallClockIsSyncedOnceAWallSecond) {
   ASSERT_NE(profile.find(name), std::string::npos);
   profile.replace(profile.find(name), name.size(), "name = \"ci-long-raw\"");
   std::ofstream(d + "/long-raw.toml") << profile;
-  const auto t0 = std::chrono::steady_clock::now();
   EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o " + d +
                   "/trace -P " + d + "/run/captures/raw-U10.cap -e trace=fdatasync,fsync,sync_file_range " +
                   rig_line({"run", "--profile", d + "/long-raw.toml", "--yes", "--quiet", "--no-history", "--out",
@@ -5508,7 +5507,17 @@ TEST(RigCli, ACaptureFasterThanTheWallClockIsSyncedOnceAWallSecond) {
                   " > " + d + "/io.stdout 2> " + d + "/io.stderr"),
             0)
       << slurp(d + "/io.stderr");
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // The capture's own wall time, from run.log's stamps (ms): the rule allows one sync per second of it.
+  const std::string log = slurp(d + "/run/run.log");
+  const auto stamp_s = [&log](const std::string& line) {
+    const std::size_t at = log.find(line);
+    if (at == std::string::npos) return std::nan("");
+    const std::size_t bol = log.rfind('\n', at) + 1;  // "2026-12-06T08:16:03.356Z info  phase raw start"
+    return std::stod(log.substr(bol + 11, 2)) * 3600 + std::stod(log.substr(bol + 14, 2)) * 60 +
+           std::stod(log.substr(bol + 17, 6));
+  };
+  const double wall_s = std::fmod(stamp_s("phase raw done") - stamp_s("phase raw start") + 86400, 86400);
+  ASSERT_TRUE(std::isfinite(wall_s)) << log;
   const std::string trace = slurp(d + "/trace");
   const auto count = [&trace](const std::string& call) {
     std::size_t n = 0;
@@ -5516,8 +5525,11 @@ TEST(RigCli, ACaptureFasterThanTheWallClockIsSyncedOnceAWallSecond) {
     return n;
   };
   const std::size_t fdatasyncs = count("fdatasync");
-  EXPECT_LE(static_cast<double>(fdatasyncs), 1 + wall_s) << trace;
-  EXPECT_LT(fdatasyncs, 15u) << "the run took " << wall_s << " s\n" << trace;
+  EXPECT_LE(static_cast<double>(fdatasyncs), 1 + wall_s) << "the capture took " << wall_s << " s\n" << trace;
+  // Fewer than the old rule's 15, where the capture took less than those 15 s (here about 0.5 s).
+  if (wall_s < 14) {
+    EXPECT_LT(fdatasyncs, 15u) << "the capture took " << wall_s << " s\n" << trace;
+  }
   EXPECT_GE(count("sync_file_range"), 10u) << trace;  // 900 blocks of about 16 KiB, handed over per 128 KiB
   EXPECT_EQ(count("fsync"), 1u) << trace;              // the close's
 }
@@ -5554,6 +5566,27 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
               std::string::npos)
         << err;
     const std::string passport = slurp(out + "/passport.json"), junit = slurp(out + "/junit.xml");
+    // Nothing is finished from files changed since the run wrote them (a code review: an edited
+    // junit.xml was sealed again with the page; an edited value drawn into it): refused, exit 2.
+    if (sealed) {
+      std::ofstream(out + "/junit.xml", std::ios::app) << "<!-- PASS -->\n";
+      EXPECT_EQ(run(resume, out + "-edited"), 2) << slurp(out + "-edited.stderr");
+      EXPECT_NE(slurp(out + "-edited.stderr").find(": its ending is final, and what its seal vouches for does not hold "
+                                                   "(junit.xml: "),
+                std::string::npos)
+          << slurp(out + "-edited.stderr");
+      std::ofstream(out + "/junit.xml", std::ios::trunc) << junit;
+    } else {
+      nlohmann::json edited = nlohmann::json::parse(passport);
+      for (const char* k : {"value", "lo", "hi"})  // together: each alone fails an earlier check
+        edited["values"]["bias"][k] = edited["values"]["bias"][k].get<double>() * 1.5;
+      std::ofstream(out + "/passport.json", std::ios::trunc) << edited.dump(1);
+      EXPECT_EQ(run(resume, out + "-edited"), 2) << slurp(out + "-edited.stderr");
+      EXPECT_NE(slurp(out + "-edited.stderr").find("values.bias.value is "), std::string::npos)
+          << slurp(out + "-edited.stderr");
+      std::ofstream(out + "/passport.json", std::ios::trunc) << passport;
+    }
+    EXPECT_FALSE(fs::exists(out + "/report.html"));
     EXPECT_EQ(run(resume, out + "-finish"), 4) << slurp(out + "-finish.stderr");
     EXPECT_NE(slurp(out + "-finish.stderr").find(": the run was ended for good (its passport says ERROR: its run.log is "
                                                  "missing lines; no resume continues it); its ending is finished: "
@@ -5644,8 +5677,8 @@ TEST(RigCli, ASealedRunsResumeLineNamesItsKey) {
     EXPECT_EQ(run({"verify", d + "/killed", "--seal-key", key}, d + "/live-verify"), 1);
     ::close(fd);
     const std::string out = slurp(d + "/live-verify.stdout");
-    EXPECT_NE(out.find("is not sealed; a rig process is running it now (it holds the folder's lock): verify it once "
-                       "that run has ended"),
+    EXPECT_NE(out.find("is not sealed; a rig process holds the folder now (a run or resume, a report or a history "
+                       "record: its lock): verify it once that process has ended"),
               std::string::npos)
         << out;
     EXPECT_EQ(out.find("--resume"), std::string::npos) << out;
