@@ -69,9 +69,10 @@ std::string junit_unlike_passport(std::string junit, const nlohmann::json& passp
 std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::json& passport,
                                      const nlohmann::json* read = nullptr) {
   // A verdict's values are all its checkpoint's. A stopped run's (ERROR, ABORTED) may hold a value
-  // a phase set before the stop and never checkpointed; every value the checkpoint does hold is
-  // held to it still (a code review: a bias edited into an ERROR passport was drawn into its page
-  // and history row by the resume that finished its ending).
+  // a phase set before the stop and never checkpointed, and lack one a later attempt's checkpoint
+  // holds; every value it states that the checkpoint holds is held to it still (a code review: a
+  // bias edited into an ERROR passport was drawn into its page and history row by the resume
+  // that finished its ending).
   const std::string outcome = passport.value("outcome", "");
   const bool verdict = outcome == "PASS" || outcome == "FAIL";
   if (!verdict && outcome != "ERROR" && outcome != "ABORTED") return "";
@@ -95,6 +96,10 @@ std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::jso
   for (const auto& [name, v] : passport["values"].items()) {
     if (!v.is_object()) continue;  // the shape is the reader's to refuse
     const nlohmann::json value = v.value("value", nlohmann::json());
+    // A stopped run's unmeasured value beside a checkpoint that holds it: a later attempt's (a
+    // resume killed before its ending checkpointed what the stopped one had not measured; a
+    // review: `rig report` called that untouched folder's passport edited).
+    if (!verdict && value.is_null()) continue;
     if (!measured.contains(name) || !measured[name].is_object() ||
         (measured[name].value("value", nlohmann::json()).is_null() && !value.is_null())) {
       if (value.is_null() || !verdict) continue;  // not measured, and not said to be; or measured after the last checkpoint

@@ -25,6 +25,7 @@
 #include <iomanip>
 #include <functional>
 #include <limits>
+#include <map>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -5481,6 +5482,37 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
       << slurp(d + "/hw-resume.stderr");
   EXPECT_NE(slurp(d + "/hw-resume.stderr").find("no resume gives those lines back"), std::string::npos)
       << slurp(d + "/hw-resume.stderr");
+}
+
+// A stopped run's passport beside a later attempt's checkpoint (its resume killed before its
+// ending, which checkpointed what the stopped one had not measured) is its run's as written:
+// `rig report` and `rig history --record` take it (a review: "values.accuracy_class.value is
+// null, but its run measured 2.0", the passport called edited). A number edited into it is not.
+TEST(RigCli, AStoppedRunsPassportBesideALaterCheckpointIsItsRuns) {
+  const std::string d = tmp("stopped-later-checkpoint");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--inject", "sigint@200", "--out", d + "/run"},
+                d + "/io"),
+            3)
+      << slurp(d + "/io.stderr");
+  std::map<std::string, std::string> ending;  // the stopped run's ending, as it wrote it
+  for (const char* f : {"passport.json", "junit.xml", "analysis.json"}) ending[f] = slurp(d + "/run/" + f);
+  // The resume to its end (its checkpoint then holds every value), its ending put back as a kill
+  // before it would have left it.
+  ASSERT_EQ(run({"run", "--resume", d + "/run", "--yes", "--no-history"}, d + "/resume"), 0)
+      << slurp(d + "/resume.stderr");
+  for (const auto& [f, text] : ending) std::ofstream(d + "/run/" + f, std::ios::trunc) << text;
+  fs::remove(d + "/run/report.html");
+  EXPECT_EQ(run({"report", d + "/run"}, d + "/report"), 0) << slurp(d + "/report.stderr");
+  EXPECT_EQ(run({"history", "--record", d + "/run", "--db", "sqlite:" + d + "/h.sqlite"}, d + "/record"), 0)
+      << slurp(d + "/record.stderr");
+  // A measured value edited (with its bounds, which an earlier check holds it to) is refused.
+  nlohmann::json edited = nlohmann::json::parse(ending["passport.json"]);
+  ASSERT_FALSE(edited["values"]["bias"]["value"].is_null());
+  for (const char* k : {"value", "lo", "hi"}) edited["values"]["bias"][k] = edited["values"]["bias"][k].get<double>() * 1.5;
+  std::ofstream(d + "/run/passport.json", std::ios::trunc) << edited.dump(1);
+  EXPECT_EQ(run({"report", d + "/run"}, d + "/edited"), 2) << slurp(d + "/edited.stderr");
+  EXPECT_NE(slurp(d + "/edited.stderr").find("values.bias.value is "), std::string::npos) << slurp(d + "/edited.stderr");
 }
 
 // A capture recorded faster than the wall clock (the emulated plant: a device minute in about 30 ms)
