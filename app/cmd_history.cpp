@@ -294,8 +294,16 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
   if (only_history && own && !fs::exists(fs::path(dir) / "junit.xml.tmp", ec) &&
       fs::is_regular_file(fs::path(dir) / "report.html", ec) && fs::remove(list, ec))
     return;
-  std::cerr << "rig history: note: " << dir << "'s ending is not finished yet (" << kEndingPending
-            << (own ? "" : "; " + why_not) << "): rig run --resume " << shell_word(dir) << " finishes it in the run's own database\n";
+  // The resume named only where it takes the ending up (a_resume_finishes; a code review: this
+  // advised a resume that was refused, as `rig verify` did).
+  if (a_resume_finishes(dir, *steps))
+    std::cerr << "rig history: note: " << dir << "'s ending is not finished yet (" << kEndingPending
+              << (own ? "" : "; " + why_not) << "): rig run --resume " << shell_word(dir)
+              << " finishes it in the run's own database\n";
+  else
+    std::cerr << "rig history: note: " << dir << "'s ending is not finished (" << kEndingPending << ": "
+              << fmt::format("{}", fmt::join(*steps, ", "))
+              << "), and nothing finishes it: the run has no resume (its run.log is missing lines)\n";
 }
 
 // A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL

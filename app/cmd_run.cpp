@@ -1316,14 +1316,14 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   const bool verdict = v == "PASS" || v == "FAIL";
   const std::string stands = verdict ? fmt::format("complete (its passport says {})", v)
                                      : fmt::format("ended for good (its passport says {}: its run.log is missing lines; "
-                                                   "no resume continues it)",
+                                                   "no resume continues the run, one only finishes its ending)",
                                                    v);
   if (!sealed)  // a sealed one's final seal, checked before, vouches for the passport
     if (const std::string why = passport_unlike_its_run(dir, report::read_passport(dir), declared, a.profile_sha256);
         !why.empty())
       throw ConfigError(dir + "/passport.json: " + why + ": the passport was changed after its run wrote it; "
                         "nothing done (the folder is as it was)");
-  const int rc = v == "PASS" ? kExitPass : v == "FAIL" ? kExitFail : v == "ABORTED" ? kExitAborted : kExitHardware;
+  const int rc = exit_code_of(outcome_named(v).value_or(RunOutcome::Error));
   const bool junit_staged = fs::is_regular_file(dir + "/junit.xml.tmp", ec);
   // The ending could not write report.html (a page there is another ending's).
   const bool report_listed = std::find(steps.begin(), steps.end(), kStepReport) != steps.end();
@@ -2275,8 +2275,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // reports", a review). A resume, once the folder can take the files, writes the ending again.
     RunResult unwritten = res;
     unwritten.outcome = RunOutcome::Error;
-    unwritten.message = was_error ? fmt::format("{}; its ending not written in full to the run folder: {}", res.message, e.what())
-                                  : fmt::format("outcome {} not written to the run folder: {}", to_string(res.outcome), e.what());
+    // A stopped run's reason goes with it (SIGINT received; run.log is missing lines: ...): without
+    // it an ABORTED run whose log lost lines read as resumable, and its resume ended PASS beside the
+    // hole (a code review).
+    unwritten.message =
+        was_error ? fmt::format("{}; its ending not written in full to the run folder: {}", res.message, e.what())
+                  : fmt::format("outcome {} not written to the run folder: {}{}", to_string(res.outcome), e.what(),
+                                res.outcome == RunOutcome::Aborted && !res.message.empty() ? "; " + res.message : "");
     const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
     // Replaced too where it is an earlier ending's (a review: an ABORTED passport, resumed, stayed
     // beside a history row saying ERROR); kept where it is this ending's own, put in place before

@@ -126,12 +126,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // A folder a rig process holds now (a run or resume, or a report or history record being
   // written: the folder's lock) is not sent a resume it would refuse (a code review: "goes on with
   // the run" was said of a live run's folder).
-  bool live = false;
-  try {
-    FolderLock::check_free(dir, dir);
-  } catch (const ConfigError&) {
-    live = true;
-  }
+  const bool live = FolderLock::held_elsewhere(dir);
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)

@@ -51,13 +51,17 @@ FolderLock::~FolderLock() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void FolderLock::check_free(const std::string& dir, const std::string& what) {
+bool FolderLock::held_elsewhere(const std::string& dir) {
   const int fd = open_dir(dir);
-  if (fd < 0) return;
+  if (fd < 0) return false;
   // A shared lock is refused only while someone holds the exclusive one; released at close.
   const bool busy = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
   ::close(fd);
-  if (busy) throw in_use(what);
+  return busy;
+}
+
+void FolderLock::check_free(const std::string& dir, const std::string& what) {
+  if (held_elsewhere(dir)) throw in_use(what);
 }
 
 }  // namespace rig::cli

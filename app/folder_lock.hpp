@@ -28,6 +28,9 @@ class FolderLock {
   // For --dry-run, which takes nothing: throws the same ConfigError when another process holds
   // the lock of `dir` now (nothing when `dir` does not exist).
   static void check_free(const std::string& dir, const std::string& what);
+  // Whether another process holds the lock of `dir` now (false when `dir` does not exist or its
+  // filesystem has no flock).
+  static bool held_elsewhere(const std::string& dir);
 
  private:
   int fd_ = -1;

@@ -1,5 +1,7 @@
 #include "app/passport_held.hpp"
 
+#include <algorithm>
+
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -58,28 +60,45 @@ std::string junit_unlike_passport(std::string junit, const nlohmann::json& passp
   return "";
 }
 
-// A PASS or FAIL passport gives what its run measured. Such a run ran every phase and wrote its
+// A passport gives what its run measured. A PASS or FAIL run ran every phase and wrote its
 // checkpoint after each (a checkpoint that cannot be written ends the run ERROR), so
 // checkpoint.json holds every value the passport gives a number to, with the same value, bounds
-// and unit (only the outcome is judged after it). "" when it does, else what does not. Another
-// run's passport and junit.xml copied into a stopped run's folder whose run started in the same
-// second passed every other check (a technician's re-test). Missing or unreadable: said, for a
-// passport written beside one (its profile_sha256, since 2026-12-03); an older folder's is not held.
-// `read`: the checkpoint as a caller has parsed it already (passport_unlike_its_folder), else read here.
+// and unit (only the outcome is judged after it). A stopped run's (ERROR, ABORTED) may hold a
+// value a phase set before the stop and never checkpointed: each value it states that the
+// checkpoint holds is held to it, where the checkpoint is that attempt's (a later attempt's, a
+// resume killed before its ending, may have measured again: a review found such an untouched
+// passport called edited). "" when it holds, else what does not. Another run's passport and
+// junit.xml copied into a stopped run's folder whose run started in the same second passed
+// every other check (a technician's re-test); a bias edited into an ERROR passport was drawn
+// into its page and history row by the resume that finished its ending (a code review).
+// A verdict's checkpoint missing or unreadable: said, for a passport written beside one (its
+// profile_sha256, since 2026-12-03); an older folder's is not held. `read`: the checkpoint as a
+// caller has parsed it already (passport_unlike_its_folder), else read here.
+// Whether `checkpoint` is a later attempt's than the stopped run's `passport`: it holds a phase
+// completed that the passport does not state done (its resume went on, and was killed before its
+// own ending replaced the passport).
+bool later_attempts_checkpoint(const nlohmann::json& passport, const nlohmann::json& checkpoint) {
+  const nlohmann::json completed = checkpoint.value("completed", nlohmann::json::array());
+  const nlohmann::json phases = passport.value("phases", nlohmann::json::array());
+  if (!completed.is_array() || !phases.is_array()) return false;
+  for (const nlohmann::json& id : completed) {
+    const bool done = std::any_of(phases.begin(), phases.end(), [&id](const nlohmann::json& ph) {
+      return ph.is_object() && ph.value("id", nlohmann::json()) == id && ph.value("status", nlohmann::json()) == "done";
+    });
+    if (!done) return true;
+  }
+  return false;
+}
+
 std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::json& passport,
                                      const nlohmann::json* read = nullptr) {
-  // A verdict's values are all its checkpoint's. A stopped run's (ERROR, ABORTED) may hold a value
-  // a phase set before the stop and never checkpointed, and lack one a later attempt's checkpoint
-  // holds; every value it states that the checkpoint holds is held to it still (a code review: a
-  // bias edited into an ERROR passport was drawn into its page and history row by the resume
-  // that finished its ending).
   const std::string outcome = passport.value("outcome", "");
   const bool verdict = outcome == "PASS" || outcome == "FAIL";
   if (!verdict && outcome != "ERROR" && outcome != "ABORTED") return "";
-  nlohmann::json measured;
+  nlohmann::json checkpoint;
   try {
     if (read) {
-      measured = read->at("values");
+      checkpoint = *read;
     } else {
       const std::string at = Executive::checkpoint_path(dir);
       std::error_code ec;
@@ -87,19 +106,19 @@ std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::jso
         return verdict && passport.contains("profile_sha256")
                    ? "its run's checkpoint.json, which holds what the run measured, is missing"
                    : "";
-      measured = parse_json_unique_keys(file_text(at)).at("values");
+      checkpoint = parse_json_unique_keys(file_text(at));
     }
   } catch (const std::exception& e) {
     return std::string("its run's checkpoint.json cannot be read (") + e.what() + ")";
   }
-  if (!measured.is_object()) return "its run's checkpoint.json holds no values";
+  if (!checkpoint.is_object() || !checkpoint.contains("values") || !checkpoint["values"].is_object())
+    return "its run's checkpoint.json holds no values";
+  if (!verdict && later_attempts_checkpoint(passport, checkpoint)) return "";
+  const nlohmann::json& measured = checkpoint["values"];
   for (const auto& [name, v] : passport["values"].items()) {
     if (!v.is_object()) continue;  // the shape is the reader's to refuse
     const nlohmann::json value = v.value("value", nlohmann::json());
-    // A stopped run's unmeasured value beside a checkpoint that holds it: a later attempt's (a
-    // resume killed before its ending checkpointed what the stopped one had not measured; a
-    // review: `rig report` called that untouched folder's passport edited).
-    if (!verdict && value.is_null()) continue;
+    if (!verdict && value.is_null()) continue;  // a stopped run's unmeasured value claims nothing
     if (!measured.contains(name) || !measured[name].is_object() ||
         (measured[name].value("value", nlohmann::json()).is_null() && !value.is_null())) {
       if (value.is_null() || !verdict) continue;  // not measured, and not said to be; or measured after the last checkpoint

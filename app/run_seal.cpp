@@ -192,8 +192,8 @@ bool check_seal_before_resume(const std::string& dir, const std::optional<seal::
       // The page aside: drawn from the passport, sealed again only where the finish draws it, and
       // a technician's `rig report --force` redraws it (its warning says `rig verify` then names it).
       std::vector<std::string> changed;
-      for (const std::string& p : c.problems)
-        if (p.rfind("report.html:", 0) != 0) changed.push_back(p);
+      for (const auto& [rel, state] : c.files)
+        if (state != seal::FileState::Ok && rel != "report.html") changed.push_back(rel + ": " + seal::to_string(state));
       if (finish && final_outcome && !changed.empty())
         throw ConfigError(fmt::format("{}: its ending is final, and what its seal vouches for does not hold ({}): "
                                       "nothing done (the folder was changed outside the rig)",
@@ -257,14 +257,17 @@ bool a_resume_finishes(const std::string& dir, const std::vector<std::string>& s
   const auto listed = [&steps](const char* step) { return std::find(steps.begin(), steps.end(), step) != steps.end(); };
   if (listed(kStepEnding)) return false;
   if (!listed(kStepSeal)) return true;
-  // `seal` listed beside a final seal in place (a stop before the list was brought up to date):
-  // done already; the resume holds the folder to that seal before it trusts it.
+  // `seal` listed beside this ending's final seal in place (a stop before the list was brought up
+  // to date): done already. This ending's: it states the passport's outcome and lists the
+  // passport (an earlier attempt's final seal does not take it); the resume holds the folder to
+  // it before it trusts it.
   std::error_code ec;
   if (!fs::is_regular_file(fs::path(dir) / "seal.json", ec)) return false;
   std::ifstream in(fs::path(dir) / "seal.json");
   const nlohmann::json seal = nlohmann::json::parse(in, nullptr, false);
   return seal.is_object() && seal.contains("outcome") && seal["outcome"].is_string() &&
-         !seal["outcome"].get<std::string>().empty();
+         seal["outcome"].get<std::string>() == passport_outcome(dir).value_or("") && seal.contains("files") &&
+         seal["files"].is_object() && seal["files"].contains("passport.json");
 }
 
 bool outside_the_seal(const std::string& rel) {

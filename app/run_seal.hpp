@@ -127,7 +127,9 @@ std::optional<std::string> seal_in(const std::string& dir);
 // whose ending was stopped after the seal (`pending_ending`: .ending-pending in the folder) is
 // not refused: true is returned, and the caller finishes that ending (its history row). So is a
 // sealed ERROR or ABORTED ending that stopped the run for good (`ended_for_good`: its run.log is
-// missing lines, so it has no resume), whose report or history row is what is left.
+// missing lines, so it has no resume), whose report or history row is what is left. Such a final
+// ending is finished only where every file its seal lists but report.html (which the finish may
+// draw again) is as sealed, the ending's own junit.xml and analysis.json too: else ConfigError.
 bool check_seal_before_resume(const std::string& dir, const std::optional<seal::Key>& k, bool pending_ending,
                               bool ended_for_good = false);
 

@@ -31,8 +31,8 @@ const char* to_string(RunOutcome o) {
   return "ERROR";
 }
 
-int RunResult::exit_code() const {
-  switch (outcome) {
+int exit_code_of(RunOutcome o, bool config_error) {
+  switch (o) {
     case RunOutcome::Pass: return kExitPass;
     case RunOutcome::Fail: return kExitFail;
     case RunOutcome::Aborted: return kExitAborted;
@@ -40,6 +40,14 @@ int RunResult::exit_code() const {
   }
   return kExitHardware;
 }
+
+std::optional<RunOutcome> outcome_named(std::string_view name) {
+  for (const RunOutcome o : {RunOutcome::Pass, RunOutcome::Fail, RunOutcome::Aborted, RunOutcome::Error})
+    if (name == to_string(o)) return o;
+  return std::nullopt;
+}
+
+int RunResult::exit_code() const { return exit_code_of(outcome, config_error); }
 
 void write_file_atomic(const std::string& path, const std::string& content) {
   write_file_staged(path, content);

@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,10 @@ struct PhaseRecord {
 
 enum class RunOutcome { Pass, Fail, Aborted, Error };
 const char* to_string(RunOutcome o);
+// The exit code of a run that ended so (docs/contracts.md); an ERROR of bad configuration is 2.
+int exit_code_of(RunOutcome o, bool config_error = false);
+// The outcome a passport names, as to_string writes it; nullopt for any other text.
+std::optional<RunOutcome> outcome_named(std::string_view name);
 
 struct RunResult {
   RunOutcome outcome = RunOutcome::Error;

@@ -5484,11 +5484,14 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
       << slurp(d + "/hw-resume.stderr");
 }
 
-// A stopped run's passport beside a later attempt's checkpoint (its resume killed before its
-// ending, which checkpointed what the stopped one had not measured) is its run's as written:
-// `rig report` and `rig history --record` take it (a review: "values.accuracy_class.value is
-// null, but its run measured 2.0", the passport called edited). A number edited into it is not.
-TEST(RigCli, AStoppedRunsPassportBesideALaterCheckpointIsItsRuns) {
+// A stopped run's passport is held to its checkpoint where that is the same attempt's: a number
+// edited into it is refused (a code review: the resume that finished an ERROR ending drew an
+// edited bias into its page and history row). Beside a later attempt's checkpoint (its resume
+// killed before its own ending, which checkpointed what the stopped one had not measured, or
+// measured a value again) it is its run's as written: `rig report` and `rig history --record`
+// take it (a review: "values.accuracy_class.value is null, but its run measured 2.0", the
+// untouched passport called edited).
+TEST(RigCli, AStoppedRunsPassportIsHeldToItsOwnAttemptsCheckpoint) {
   const std::string d = tmp("stopped-later-checkpoint");
   fs::create_directories(d);
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--inject", "sigint@200", "--out", d + "/run"},
@@ -5497,15 +5500,6 @@ TEST(RigCli, AStoppedRunsPassportBesideALaterCheckpointIsItsRuns) {
       << slurp(d + "/io.stderr");
   std::map<std::string, std::string> ending;  // the stopped run's ending, as it wrote it
   for (const char* f : {"passport.json", "junit.xml", "analysis.json"}) ending[f] = slurp(d + "/run/" + f);
-  // The resume to its end (its checkpoint then holds every value), its ending put back as a kill
-  // before it would have left it.
-  ASSERT_EQ(run({"run", "--resume", d + "/run", "--yes", "--no-history"}, d + "/resume"), 0)
-      << slurp(d + "/resume.stderr");
-  for (const auto& [f, text] : ending) std::ofstream(d + "/run/" + f, std::ios::trunc) << text;
-  fs::remove(d + "/run/report.html");
-  EXPECT_EQ(run({"report", d + "/run"}, d + "/report"), 0) << slurp(d + "/report.stderr");
-  EXPECT_EQ(run({"history", "--record", d + "/run", "--db", "sqlite:" + d + "/h.sqlite"}, d + "/record"), 0)
-      << slurp(d + "/record.stderr");
   // A measured value edited (with its bounds, which an earlier check holds it to) is refused.
   nlohmann::json edited = nlohmann::json::parse(ending["passport.json"]);
   ASSERT_FALSE(edited["values"]["bias"]["value"].is_null());
@@ -5513,6 +5507,56 @@ TEST(RigCli, AStoppedRunsPassportBesideALaterCheckpointIsItsRuns) {
   std::ofstream(d + "/run/passport.json", std::ios::trunc) << edited.dump(1);
   EXPECT_EQ(run({"report", d + "/run"}, d + "/edited"), 2) << slurp(d + "/edited.stderr");
   EXPECT_NE(slurp(d + "/edited.stderr").find("values.bias.value is "), std::string::npos) << slurp(d + "/edited.stderr");
+  std::ofstream(d + "/run/passport.json", std::ios::trunc) << ending["passport.json"];
+  // The resume to its end (its checkpoint then holds every value), its ending put back as a kill
+  // before it would have left it; a value that attempt measured again differs.
+  ASSERT_EQ(run({"run", "--resume", d + "/run", "--yes", "--no-history"}, d + "/resume"), 0)
+      << slurp(d + "/resume.stderr");
+  for (const auto& [f, text] : ending) std::ofstream(d + "/run/" + f, std::ios::trunc) << text;
+  fs::remove(d + "/run/report.html");
+  nlohmann::json cp = nlohmann::json::parse(slurp(d + "/run/checkpoint.json"));
+  cp["values"]["bias"]["value"] = cp["values"]["bias"]["value"].get<double>() * 1.001;
+  std::ofstream(d + "/run/checkpoint.json", std::ios::trunc) << cp.dump();
+  EXPECT_EQ(run({"report", d + "/run"}, d + "/report"), 0) << slurp(d + "/report.stderr");
+  EXPECT_EQ(run({"history", "--record", d + "/run", "--db", "sqlite:" + d + "/h.sqlite"}, d + "/record"), 0)
+      << slurp(d + "/record.stderr");
+}
+
+// A sealed PASS whose history row is still owed (the database refused it at the ending) is
+// finished by its resume only where every file its seal lists holds: a junit.xml edited since is
+// refused, nothing done (a code review: the finish sealed such files again); report.html is left
+// aside, drawn from the passport (a technician's `rig report --force` redraws it), and `rig
+// verify` still names it changed.
+TEST(RigCli, ASealedVerdictsEndingIsFinishedOnlyFromFilesAsSealed) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("sealed-finish-held");
+  const std::string key = station_key_in(d);
+  // SQLite's journal refused: the row is not recorded, the ending lists `history`.
+  EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " + d +
+                  "/h.sqlite-journal -P " + d + "/h.sqlite-wal -e trace=openat -e inject=openat:error=ENOSPC " +
+                  rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite",
+                            "--seal-key", key, "--out", d + "/a"}) +
+                  " > " + d + "/io.stdout 2> " + d + "/io.stderr"),
+            0)
+      << slurp(d + "/io.stderr");
+  ASSERT_EQ(slurp(d + "/a/.ending-pending"), "history\n") << slurp(d + "/io.stderr");
+  fs::copy(d + "/a", d + "/b", fs::copy_options::recursive);
+  std::ofstream(d + "/a/junit.xml", std::ios::app) << "<!-- PASS -->\n";
+  EXPECT_EQ(run({"run", "--resume", d + "/a", "--yes", "--seal-key", key}, d + "/a-resume"), 2)
+      << slurp(d + "/a-resume.stderr");
+  EXPECT_NE(slurp(d + "/a-resume.stderr").find(": its ending is final, and what its seal vouches for does not hold "
+                                               "(junit.xml: changed"),
+            std::string::npos)
+      << slurp(d + "/a-resume.stderr");
+  EXPECT_TRUE(fs::exists(d + "/a/.ending-pending"));
+  std::ofstream(d + "/b/report.html", std::ios::app) << "<!-- redrawn -->\n";
+  EXPECT_EQ(run({"run", "--resume", d + "/b", "--yes", "--seal-key", key}, d + "/b-resume"), 0)
+      << slurp(d + "/b-resume.stderr");
+  EXPECT_NE(slurp(d + "/b-resume.stderr").find("its ending is finished: the history row recorded"), std::string::npos)
+      << slurp(d + "/b-resume.stderr");
+  EXPECT_FALSE(fs::exists(d + "/b/.ending-pending"));
+  EXPECT_EQ(run({"verify", d + "/b", "--seal-key", key}, d + "/b-verify"), 1);
+  EXPECT_NE(slurp(d + "/b-verify.stdout").find("CHANGED  report.html"), std::string::npos) << slurp(d + "/b-verify.stdout");
 }
 
 // A capture recorded faster than the wall clock (the emulated plant: a device minute in about 30 ms)
@@ -5621,8 +5665,8 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
     EXPECT_FALSE(fs::exists(out + "/report.html"));
     EXPECT_EQ(run(resume, out + "-finish"), 4) << slurp(out + "-finish.stderr");
     EXPECT_NE(slurp(out + "-finish.stderr").find(": the run was ended for good (its passport says ERROR: its run.log is "
-                                                 "missing lines; no resume continues it); its ending is finished: "
-                                                 "report.html written"),
+                                                 "missing lines; no resume continues the run, one only finishes its "
+                                                 "ending); its ending is finished: report.html written"),
               std::string::npos)
         << slurp(out + "-finish.stderr");
     EXPECT_FALSE(fs::exists(out + "/.ending-pending"));
@@ -5638,6 +5682,27 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
     EXPECT_NE(slurp(out + "-again.stderr").find("no resume gives those lines back"), std::string::npos)
         << slurp(out + "-again.stderr");
   }
+  // Stopped (SIGINT) with its log short, and analysis.json refused too: the smaller ERROR ending
+  // keeps the stop's reason, the lost lines with it, so it has no resume either (a code review:
+  // its reason dropped them, and the resume went on to PASS beside the hole).
+  const std::string out = d + "/stopped";
+  EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " +
+                  out + "/run.log -P " + out + "/analysis.json.tmp -e trace=write,openat -e "
+                  "inject=write:error=ENOSPC:when=10+ -e inject=openat:error=ENOSPC:when=2+ " +
+                  rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject", "sigint@100",
+                            "--out", out}) +
+                  " > " + out + ".stdout 2> " + out + ".stderr"),
+            4)
+      << slurp(out + ".stderr");
+  const std::string why = nlohmann::json::parse(slurp(out + "/passport.json"))["aborted_reason"].get<std::string>();
+  EXPECT_NE(why.find("outcome ABORTED not written to the run folder: "), std::string::npos) << why;
+  EXPECT_NE(why.find("; aborted: SIGINT received; run.log is missing lines: the disk refused "), std::string::npos) << why;
+  EXPECT_NE(slurp(out + ".stderr").find("no resume: the run's log " + out + "/run.log is missing lines"),
+            std::string::npos)
+      << slurp(out + ".stderr");
+  EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history"}, out + "-resume"), 2) << slurp(out + "-resume.stderr");
+  EXPECT_NE(slurp(out + "-resume.stderr").find("no resume gives those lines back"), std::string::npos)
+      << slurp(out + "-resume.stderr");
 }
 
 // A capture whose sync the disk refused (EIO at its fsync) ends the run in ERROR, exit 4, and is

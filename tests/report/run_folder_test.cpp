@@ -22,9 +22,12 @@ void passport(const TempDir& d, const std::string& outcome, const std::string& w
   write(d.path / "passport.json", p.dump());
 }
 
-// A seal.json stating `outcome` ("" : a checkpoint's seal), as far as a_resume_finishes reads it.
-void seal(const TempDir& d, const std::string& outcome) {
-  write(d.path / "seal.json", json{{"schema", "rig.seal/1"}, {"outcome", outcome}, {"files", json::object()}}.dump());
+// A seal.json stating `outcome` ("" : a checkpoint's seal) over `files`, as far as a_resume_finishes
+// reads it.
+void seal(const TempDir& d, const std::string& outcome, const std::vector<std::string>& files = {"passport.json"}) {
+  json listed = json::object();
+  for (const std::string& f : files) listed[f] = "0";
+  write(d.path / "seal.json", json{{"schema", "rig.seal/1"}, {"outcome", outcome}, {"files", listed}}.dump());
 }
 }  // namespace
 
@@ -67,6 +70,11 @@ TEST(RunFolder, AResumeFinishesAnEndingWithNoResumeOnlyUnderItsFinalSeal) {
   EXPECT_FALSE(rig::cli::a_resume_finishes(dir, {"seal", "history"}));
   seal(d, "ERROR");  // the final seal written, the list not yet brought up to date
   EXPECT_TRUE(rig::cli::a_resume_finishes(dir, {"seal", "history"}));
+  // An earlier attempt's final seal is not this ending's: another outcome, or no passport sealed.
+  seal(d, "ABORTED");
+  EXPECT_FALSE(rig::cli::a_resume_finishes(dir, {"seal", "history"}));
+  seal(d, "ERROR", {"run.json", "checkpoint.json"});
+  EXPECT_FALSE(rig::cli::a_resume_finishes(dir, {"seal", "history"}));
   write(d.path / "seal.json", "{not json");
   EXPECT_FALSE(rig::cli::a_resume_finishes(dir, {"seal"}));
 }
