@@ -302,8 +302,7 @@ void finish_ending_list(const std::string& dir, const std::string& db) {
               << " finishes it in the run's own database\n";
   else
     std::cerr << "rig history: note: " << dir << "'s ending is not finished (" << kEndingPending << ": "
-              << fmt::format("{}", fmt::join(*steps, ", "))
-              << "), and nothing finishes it: the run has no resume (its run.log is missing lines)\n";
+              << fmt::format("{}", fmt::join(*steps, ", ")) << "), and " << kNothingFinishesIt << "\n";
 }
 
 // A sealed folder goes into the history only as the station sealed it (a review: a sealed FAIL

@@ -1313,7 +1313,7 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   if (v.empty() || (sealed && !final_seal)) return std::nullopt;
   // How the run stands, as each line below says it: a verdict is complete; an ending without one
   // stopped the run for good.
-  const bool verdict = v == "PASS" || v == "FAIL";
+  const bool verdict = is_verdict(v);
   const std::string stands = verdict ? fmt::format("complete (its passport says {})", v)
                                      : fmt::format("ended for good (its passport says {}: its run.log is missing lines; "
                                                    "no resume continues the run, one only finishes its ending)",

@@ -158,10 +158,9 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                                     "it\n",
                                     kEndingPending, fmt::join(*steps, ", "), shell_word(dir),
                                     seal_in(dir) ? " --seal-key FILE" : "")
-                      : fmt::format("note: the run's ending is not finished ({}: {}), and nothing finishes it: the "
-                                    "run has no resume (its run.log is missing lines); what the seal vouches for "
-                                    "stands as said above\n",
-                                    kEndingPending, fmt::join(*steps, ", ")));
+                      : fmt::format("note: the run's ending is not finished ({}: {}), and {}; what the seal vouches "
+                                    "for stands as said above\n",
+                                    kEndingPending, fmt::join(*steps, ", "), kNothingFinishesIt));
   return c.ok ? kExitPass : kExitFail;
 }
 

@@ -93,7 +93,7 @@ bool later_attempts_checkpoint(const nlohmann::json& passport, const nlohmann::j
 std::string values_unlike_checkpoint(const std::string& dir, const nlohmann::json& passport,
                                      const nlohmann::json* read = nullptr) {
   const std::string outcome = passport.value("outcome", "");
-  const bool verdict = outcome == "PASS" || outcome == "FAIL";
+  const bool verdict = is_verdict(outcome);
   if (!verdict && outcome != "ERROR" && outcome != "ABORTED") return "";
   nlohmann::json checkpoint;
   try {

@@ -183,7 +183,7 @@ bool check_seal_before_resume(const std::string& dir, const std::optional<seal::
         return e.first == "passport.json" && e.second == seal::FileState::Ok;
       });
       const bool finish = pending_ending && name == std::string("seal.json") && passport_sealed;
-      const bool final_outcome = c.outcome == "PASS" || c.outcome == "FAIL" ||
+      const bool final_outcome = is_verdict(c.outcome) ||
                                  (ended_for_good && (c.outcome == "ERROR" || c.outcome == "ABORTED"));
       // A final ending is finished from the files its seal vouches for, and sealed again with the
       // page: every one must be as sealed, the ending's own too, which a resume that computes
@@ -198,7 +198,7 @@ bool check_seal_before_resume(const std::string& dir, const std::optional<seal::
         throw ConfigError(fmt::format("{}: its ending is final, and what its seal vouches for does not hold ({}): "
                                       "nothing done (the folder was changed outside the rig)",
                                       dir, fmt::join(changed, "; ")));
-      if (c.outcome == "PASS" || c.outcome == "FAIL") {
+      if (is_verdict(c.outcome)) {
         if (finish) return true;
         throw ConfigError(dir + ": the run is complete: its seal states the outcome " + c.outcome +
                           " (whatever passport.json says now); nothing to resume");
@@ -235,7 +235,7 @@ std::optional<std::string> passport_outcome(const std::string& dir) {
 
 std::string verdict_of(const std::string& dir) {
   const std::optional<std::string> o = passport_outcome(dir);
-  return o && (*o == "PASS" || *o == "FAIL") ? *o : "";
+  return o && is_verdict(*o) ? *o : "";
 }
 
 std::string earlier_log_missing_lines(const std::string& dir) {
@@ -249,7 +249,7 @@ std::string earlier_log_missing_lines(const std::string& dir) {
 
 std::string final_outcome_of(const std::string& dir) {
   const std::string o = passport_outcome(dir).value_or("");
-  if (o == "PASS" || o == "FAIL") return o;
+  if (is_verdict(o)) return o;
   return earlier_log_missing_lines(dir).empty() ? "" : o;
 }
 

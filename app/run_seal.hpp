@@ -86,6 +86,9 @@ std::optional<nlohmann::json> read_passport(const std::string& dir);
 // The outcome passport.json states; nullopt when read_passport has none or it names none.
 std::optional<std::string> passport_outcome(const std::string& dir);
 
+// Whether an outcome is a verdict (PASS or FAIL), as against a stopped run's ABORTED or ERROR.
+inline bool is_verdict(std::string_view outcome) { return outcome == "PASS" || outcome == "FAIL"; }
+
 // A run's verdict, once its passport says PASS or FAIL; "" otherwise. A run whose phases are all
 // recorded but whose passport says ABORTED or ERROR (a signal after the last phase), or that has
 // none (killed before it was written), is finished by a resume that only computes.
@@ -111,6 +114,9 @@ std::string final_outcome_of(const std::string& dir);
 // or a final seal not written, which only computing the ending again would give (a code review:
 // `rig verify` advised that resume, and it was refused).
 bool a_resume_finishes(const std::string& dir, const std::vector<std::string>& steps);
+// What `rig verify` and `rig history --record` say of such an ending instead of the resume.
+inline constexpr std::string_view kNothingFinishesIt =
+    "nothing finishes it: the run has no resume (its run.log is missing lines)";
 
 // The seal `dir` holds: "seal.json", else "seal.prev.json" (a stop between two seals may leave
 // only the previous one), else none. A link or any other entry of that name counts: the rig makes
