@@ -5391,14 +5391,25 @@ std::string rig_line(const std::vector<std::string>& args) {
 // its test rather than skipping it.
 bool strace_can_trace() { return std::system("strace -f -qq -o /dev/null true > /dev/null 2>&1") == 0; }
 
-// rig with `args` under strace, `inject` (strace's -e inject=...) into the `syscall`s on `path`
-// alone; stdout and stderr to io.stdout / io.stderr; the exit code. LeakSanitizer cannot run
+// rig with `args` under strace with `options` (its output, the paths and calls traced, what is
+// injected); stdout and stderr to io.stdout / io.stderr; the exit code. LeakSanitizer cannot run
 // under ptrace (the sanitizer build's rig aborted at exit, 134): off for these traced runs.
+int rig_under_strace(const std::string& options, const std::vector<std::string>& args, const std::string& io) {
+  return shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq " + options + " " +
+               rig_line(args) + " > " + io + ".stdout 2> " + io + ".stderr");
+}
+
+// rig with `args`, `inject` (strace's -e inject=...) into the `syscall`s on `path` alone.
 int rig_traced(const std::string& path, const std::string& syscall, const std::string& inject,
                const std::vector<std::string>& args, const std::string& io) {
-  return shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " + path +
-               " -e trace=" + syscall + " -e inject=" + inject + " " + rig_line(args) + " > " + io + ".stdout 2> " + io +
-               ".stderr");
+  return rig_under_strace("-o /dev/null -P " + path + " -e trace=" + syscall + " -e inject=" + inject, args, io);
+}
+
+// A disk that fills while the run in `out` writes: its run.log refused from the tenth line on, and
+// `also` (a file of its ending, by its staging name) refused when opened.
+std::string full_disk_for(const std::string& out, const std::string& also) {
+  return "-o /dev/null -P " + out + "/run.log -P " + out + "/" + also +
+         " -e trace=write,openat -e inject=write:error=ENOSPC:when=10+ -e inject=openat:error=ENOSPC:when=2+";
 }
 }  // namespace
 
@@ -5532,11 +5543,11 @@ TEST(RigCli, ASealedVerdictsEndingIsFinishedOnlyFromFilesAsSealed) {
   const std::string d = tmp("sealed-finish-held");
   const std::string key = station_key_in(d);
   // SQLite's journal refused: the row is not recorded, the ending lists `history`.
-  EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " + d +
-                  "/h.sqlite-journal -P " + d + "/h.sqlite-wal -e trace=openat -e inject=openat:error=ENOSPC " +
-                  rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite",
-                            "--seal-key", key, "--out", d + "/a"}) +
-                  " > " + d + "/io.stdout 2> " + d + "/io.stderr"),
+  EXPECT_EQ(rig_under_strace("-o /dev/null -P " + d + "/h.sqlite-journal -P " + d +
+                                 "/h.sqlite-wal -e trace=openat -e inject=openat:error=ENOSPC",
+                             {"run", "--profile", "ci", "--yes", "--quiet", "--db", "sqlite:" + d + "/h.sqlite",
+                              "--seal-key", key, "--out", d + "/a"},
+                             d + "/io"),
             0)
       << slurp(d + "/io.stderr");
   ASSERT_EQ(slurp(d + "/a/.ending-pending"), "history\n") << slurp(d + "/io.stderr");
@@ -5576,11 +5587,11 @@ TEST(RigCli, ACaptureFasterThanTheWallClockIsSyncedOnceAWallSecond) {
   ASSERT_NE(profile.find(name), std::string::npos);
   profile.replace(profile.find(name), name.size(), "name = \"ci-long-raw\"");
   std::ofstream(d + "/long-raw.toml") << profile;
-  EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o " + d +
-                  "/trace -P " + d + "/run/captures/raw-U10.cap -e trace=fdatasync,fsync,sync_file_range " +
-                  rig_line({"run", "--profile", d + "/long-raw.toml", "--yes", "--quiet", "--no-history", "--out",
-                            d + "/run"}) +
-                  " > " + d + "/io.stdout 2> " + d + "/io.stderr"),
+  EXPECT_EQ(rig_under_strace("-o " + d + "/trace -P " + d +
+                                 "/run/captures/raw-U10.cap -e trace=fdatasync,fsync,sync_file_range",
+                             {"run", "--profile", d + "/long-raw.toml", "--yes", "--quiet", "--no-history", "--out",
+                              d + "/run"},
+                             d + "/io"),
             0)
       << slurp(d + "/io.stderr");
   // The capture's own wall time, from run.log's stamps (ms): the rule allows one sync per second of it.
@@ -5627,11 +5638,7 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
       for (auto* v : {&args, &resume}) v->insert(v->end(), {"--seal-key", key});
     }
     // run.log's writes from the tenth on, and the page's file, refused as a full disk refuses them.
-    EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " +
-                    out + "/run.log -P " + out + "/report.html.tmp -e trace=write,openat -e "
-                    "inject=write:error=ENOSPC:when=10+ -e inject=openat:error=ENOSPC:when=2+ " + rig_line(args) +
-                    " > " + out + ".stdout 2> " + out + ".stderr"),
-              4)
+    EXPECT_EQ(rig_under_strace(full_disk_for(out, "report.html.tmp"), args, out), 4)
         << slurp(out + ".stderr");
     ASSERT_EQ(slurp(out + "/.ending-pending"), "report\n") << slurp(out + ".stderr");
     EXPECT_FALSE(fs::exists(out + "/report.html"));
@@ -5686,12 +5693,10 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
   // keeps the stop's reason, the lost lines with it, so it has no resume either (a code review:
   // its reason dropped them, and the resume went on to PASS beside the hole).
   const std::string out = d + "/stopped";
-  EXPECT_EQ(shell("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null -P " +
-                  out + "/run.log -P " + out + "/analysis.json.tmp -e trace=write,openat -e "
-                  "inject=write:error=ENOSPC:when=10+ -e inject=openat:error=ENOSPC:when=2+ " +
-                  rig_line({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject", "sigint@100",
-                            "--out", out}) +
-                  " > " + out + ".stdout 2> " + out + ".stderr"),
+  EXPECT_EQ(rig_under_strace(full_disk_for(out, "analysis.json.tmp"),
+                             {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject", "sigint@100",
+                              "--out", out},
+                             out),
             4)
       << slurp(out + ".stderr");
   const std::string why = nlohmann::json::parse(slurp(out + "/passport.json"))["aborted_reason"].get<std::string>();
