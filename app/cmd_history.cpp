@@ -328,8 +328,11 @@ void check_seal_before_recording(const HistoryArgs& a) {
                                     "(--seal-key FILE or RIG_SEAL_KEY); nothing recorded");
   const seal::Check c = check_run_folder_seal(a.record, *key);
   if (!c.ok)
-    throw NotTheDatabase(fmt::format("{} is not as the station sealed it ({}); nothing recorded (rig verify {} says more)",
-                                     a.record, fmt::join(c.problems, "; "), a.record));
+    // The key as given, where the line alone would be refused without it (not RIG_SEAL_KEY's: set already).
+    throw NotTheDatabase(fmt::format("{} is not as the station sealed it ({}); nothing recorded (rig verify {}{} says "
+                                     "more)",
+                                     a.record, fmt::join(c.problems, "; "), shell_word(a.record),
+                                     a.seal_key_given ? " --seal-key " + shell_word(a.seal_key) : std::string()));
 }
 
 // The captures the passport names that are not in the folder, said once ("" when all are there):

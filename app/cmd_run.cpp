@@ -642,10 +642,12 @@ std::string log_missing_lines_why(const std::string& out) {
 }
 
 void refuse_a_log_missing_lines(const std::string& dir) {
+  constexpr const char* kNoResume = "; no resume gives those lines back, nor a verdict beside them: start a new run "
+                                    "with another --out (this folder stays as it was)";
   if (const std::string why = earlier_log_missing_lines(dir); !why.empty())
-    throw ConfigError(dir + ": its run ended without a verdict: " + why +
-                      "; no resume gives those lines back, nor a verdict beside them: start a new run with another "
-                      "--out (this folder stays as it was)");
+    throw ConfigError(dir + ": its run ended without a verdict: " + why + kNoResume);
+  if (const std::string why = checkpoint_log_missing_lines(dir); !why.empty())
+    throw ConfigError(dir + ": its checkpoint records that " + why + kNoResume);
 }
 
 // `dir`'s .ending-pending as `steps` (one per line), removed when none is left.
@@ -1132,7 +1134,12 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       sealed_now = true;
       log.info("run folder sealed (seal.json, key {})", key->id);
     } catch (const std::exception& e) {
-      log.error("seal.json not written: {}", e.what());
+      // With the way on (a technician's review: the run ended PASS with no word of it). The resume
+      // brings the devices up and computes the ending again from the kept records: nothing is
+      // measured again.
+      log.error("seal.json not written: {} (rig run --resume {} --seal-key FILE seals it: the ending computed again "
+                "from the kept records, nothing measured again)",
+                e.what(), shell_word(a.out));
     }
   }
   // The list keeps only what is still to do, rewritten as each step is done (it kept steps
@@ -2136,6 +2143,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
   Executive exec(dev, a.out, log, &view);
+  exec.log_loss_from([log_loss] { return log_loss->said(); });
   if (!unjudged.empty()) log->warn("{}", unjudged);
   say_history_left_behind(a, *log);
   if (key)  // each checkpoint sealed with the captures beside it, before it replaces the last
@@ -2252,6 +2260,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       log->error("{}", res.message);
     }
   }
+  // Lines the ending refused so far are the checkpoint's word too: the passport that says it may be
+  // refused next.
+  exec.record_the_log_loss();
   nlohmann::ordered_json passport;
   // An earlier ending's files (an ABORTED one, resumed) as they were before this ending: what it
   // cannot replace must not stand beside its ERROR ending.

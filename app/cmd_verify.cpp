@@ -127,6 +127,16 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // written: the folder's lock) is not sent a resume it would refuse (a code review: "goes on with
   // the run" was said of a live run's folder).
   const bool live = FolderLock::held_elsewhere(dir);
+  // A run whose checkpoint records that its log lost lines has no resume (a technician's review:
+  // verify advised one, and it was refused).
+  const std::string log_short = checkpoint_log_missing_lines(dir);
+  // A final seal the disk refused (the ending lists `seal`, no seal.json) is an ending not finished,
+  // not a folder changed behind the station (a technician's review read tampering into it).
+  const std::vector<std::string> listed = pending_steps(dir).value_or(std::vector<std::string>{});
+  std::error_code ec;
+  const bool seal_owed = !c.ok && c.files.empty() &&
+                         std::find(listed.begin(), listed.end(), kStepSeal) != listed.end() &&
+                         !std::filesystem::exists(std::filesystem::path(dir) / "seal.json", ec);
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)
@@ -136,7 +146,12 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                                   c.files.size(),
                                   live ? "a rig process holds the folder now (a run or resume, a report or a "
                                          "history record: its lock): verify it once that process has ended"
-                                       : "`rig run --resume " + shell_word(dir) + " --seal-key FILE` goes on with the run")
+                                  : !log_short.empty()
+                                      ? "its checkpoint records that " + log_short +
+                                            ": no resume goes on with it (start a new run)"
+                                      : "`rig run --resume " + shell_word(dir) + " --seal-key FILE` goes on with the run")
+                : seal_owed ? std::string("NOT verified: the run's final seal was not written (its ending lists it as "
+                                          "still to do; the last checkpoint's seal is seal.prev.json)\n")
                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).

@@ -247,6 +247,15 @@ std::string earlier_log_missing_lines(const std::string& dir) {
                                                                                                 : "";
 }
 
+std::string checkpoint_log_missing_lines(const std::string& dir) {
+  std::ifstream in(Executive::checkpoint_path(dir));
+  if (!in) return "";
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_object() && j.contains(kLogMissingLinesKey) && j[kLogMissingLinesKey].is_string()
+             ? j[kLogMissingLinesKey].get<std::string>()
+             : "";
+}
+
 std::string final_outcome_of(const std::string& dir) {
   const std::string o = passport_outcome(dir).value_or("");
   if (is_verdict(o)) return o;
@@ -254,7 +263,9 @@ std::string final_outcome_of(const std::string& dir) {
 }
 
 bool a_resume_finishes(const std::string& dir, const std::vector<std::string>& steps) {
-  if (earlier_log_missing_lines(dir).empty()) return true;
+  // Only the checkpoint says the log is short (the passport in place is none, or an earlier
+  // attempt's): the resume is refused, and no ending is final to finish.
+  if (earlier_log_missing_lines(dir).empty()) return checkpoint_log_missing_lines(dir).empty();
   const auto listed = [&steps](const char* step) { return std::find(steps.begin(), steps.end(), step) != steps.end(); };
   if (listed(kStepEnding)) return false;
   if (!listed(kStepSeal)) return true;

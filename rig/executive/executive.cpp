@@ -135,7 +135,7 @@ void Executive::safe_state(Devices& dev, spdlog::logger& log, bool abnormal) {
 
 void Executive::write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
                                  const PhaseState& state, const nlohmann::json& identity,
-                                 const std::vector<PhaseRecord>& records) const {
+                                 const std::vector<PhaseRecord>& records) {
   nlohmann::ordered_json j;
   j["schema"] = "rig.checkpoint/1";
   j["identity"] = identity;
@@ -149,9 +149,15 @@ void Executive::write_checkpoint(const std::vector<std::string>& done, const Mea
     if (std::find(done.begin(), done.end(), r.id) != done.end() && !r.started.empty())
       times[r.id] = {{"started", r.started}, {"finished", r.finished}};
   j["phase_times"] = times;
+  if (const std::string lost = log_loss_ ? log_loss_() : ""; !lost.empty()) j[kLogMissingLinesKey] = lost;
+  write_checkpoint_text(j);
+}
+
+void Executive::write_checkpoint_text(const nlohmann::ordered_json& j) {
   const std::string text = j.dump(1);
   if (on_checkpoint_) on_checkpoint_(text);
   write_file_atomic(checkpoint_path(out_dir_), text);
+  last_checkpoint_ = j;
 }
 
 namespace {
@@ -203,8 +209,13 @@ Resumption Executive::read_checkpoint(const std::string& out_dir, const std::vec
     throw ConfigError(cp + ": unreadable checkpoint: " + e.what());
   }
   if (!j.is_object()) throw bad("(top level)", std::string("expected an object, found ") + j.type_name());
-  static constexpr std::string_view kKeys[] = {"schema", "identity", "completed", "values", "state", "phase_times"};
+  static constexpr std::string_view kKeys[] = {"schema", "identity", "completed",         "values",
+                                               "state",  "phase_times", kLogMissingLinesKey};
   if (const auto k = first_unknown_key(j, kKeys)) throw bad(*k, std::string(kNotACheckpointKey));
+  // A run whose log lost lines is never resumed (app/cmd_run.cpp refuses the folder before it
+  // reads the checkpoint); here only its form is checked.
+  if (j.contains(kLogMissingLinesKey) && !j[kLogMissingLinesKey].is_string())
+    throw bad(std::string(kLogMissingLinesKey), "expected a string");
   if (!j.contains("schema") || j["schema"] != "rig.checkpoint/1")
     throw bad("schema", "expected \"rig.checkpoint/1\", found " + (j.contains("schema") ? j["schema"].dump() : "nothing"));
   if (j.value("identity", nlohmann::json()) != identity) {
@@ -315,6 +326,23 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
                          const nlohmann::json& identity) {
   const Resumption resumed = resume ? read_checkpoint(out_dir_, phases, values, state, identity, *log_) : Resumption{};
   return run(bring_up, phases, values, state, cancel, resumed, identity);
+}
+
+// The last checkpoint again, with the log's loss as it stands now, where lines were refused after
+// it was written (the last phase's `done`, the safe state's): the ending's passport may be refused too, and
+// the checkpoint is then the only file that says the log is short. A write the disk refuses
+// leaves the checkpoint as it was, said in the log's own words (it may reach the console only).
+void Executive::record_the_log_loss() {
+  if (!log_loss_ || !last_checkpoint_) return;
+  const std::string lost = log_loss_();
+  if (lost.empty() || last_checkpoint_->value(kLogMissingLinesKey, std::string()) == lost) return;
+  nlohmann::ordered_json j = *last_checkpoint_;
+  j[kLogMissingLinesKey] = lost;
+  try {
+    write_checkpoint_text(j);
+  } catch (const std::exception& e) {
+    log_->error("{} not recorded in the checkpoint: {}", lost, e.what());
+  }
 }
 
 namespace {
@@ -434,6 +462,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   }
   result.checkpointed = checkpointed;
   safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
+  record_the_log_loss();
   return result;
 }
 

@@ -137,6 +137,9 @@ struct Resumption {
   std::map<std::string, Times> times;
 };
 
+// The checkpoint's key for what the run's log is missing (Executive::log_loss_from).
+inline constexpr const char* kLogMissingLinesKey = "log_missing_lines";
+
 class Executive {
  public:
   Executive(Devices& dev, std::string out_dir, std::shared_ptr<spdlog::logger> log, ProgressSink* progress);
@@ -187,10 +190,25 @@ class Executive {
   // that still holds for one of the two checkpoints.
   void on_checkpoint(std::function<void(const std::string& text)> f) { on_checkpoint_ = std::move(f); }
 
+  // What the run's log is missing (lines the disk refused), "" while it is whole. A checkpoint
+  // written while it says something records it (`log_missing_lines`), and so does the last
+  // checkpoint again once the run has ended: the loss is kept where the disk still took it, even
+  // when the ending's passport is refused too, and a resume refuses that folder (a verdict beside a
+  // hole in the account is no verdict). A checkpoint holding it is never resumed from.
+  void log_loss_from(std::function<std::string()> f) { log_loss_ = std::move(f); }
+  // The last checkpoint written again with the log's loss as it stands now, where it does not say
+  // so already (run() calls it as it ends; the run's ending again before its passport, whose lines
+  // may be refused too). A write the disk refuses leaves the checkpoint as it was.
+  void record_the_log_loss();
+
  private:
   void write_checkpoint(const std::vector<std::string>& done, const MeasurementSet& values,
                         const PhaseState& state, const nlohmann::json& identity,
-                        const std::vector<PhaseRecord>& records) const;
+                        const std::vector<PhaseRecord>& records);
+  void write_checkpoint_text(const nlohmann::ordered_json& j);
+  // The last checkpoint written, kept so that the end of the run can add the log's loss to it.
+  std::optional<nlohmann::ordered_json> last_checkpoint_;
+  std::function<std::string()> log_loss_;
   Devices& dev_;
   std::string out_dir_;
   std::shared_ptr<spdlog::logger> log_;

@@ -795,6 +795,25 @@ TEST(Campaign, DamagedCheckpointSet) {
       std::ofstream(f + "/checkpoint.json") << j.dump();
       refused(f, "bogus: not a key of a checkpoint");
     }
+    // What the log is missing is a string (a resume refuses a folder whose checkpoint records it).
+    j = cp;
+    j["log_missing_lines"] = 1;
+    f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    refused(f, "log_missing_lines: expected a string");
+    j = cp;
+    j["log_missing_lines"] = "run.log is missing lines: the disk refused 3 line(s)";
+    f = copy();
+    std::ofstream(f + "/checkpoint.json") << j.dump();
+    for (const bool dry : {true, false}) {  // not a damage: the folder's own word that its log is short
+      const std::string io = f + (dry ? "-dry" : "-io");
+      EXPECT_EQ(run({"run", "--resume", f, dry ? "--dry-run" : "--yes", "--no-history"}, io), 2);
+      EXPECT_NE(slurp(io + ".stderr").find(f + ": its checkpoint records that run.log is missing lines: the disk "
+                                               "refused 3 line(s); no resume gives those lines back"),
+                std::string::npos)
+          << slurp(io + ".stderr");
+    }
+    EXPECT_FALSE(fs::exists(f + "/passport.json"));
   }
   {  // A capture whose sequence counter skips samples the record does not count as lost.
     json j = cp;

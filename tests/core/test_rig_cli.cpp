@@ -5100,6 +5100,10 @@ TEST(RigCli, HistoryRecordTakesASealedFolderOnlyAsSealed) {
   EXPECT_NE(slurp(d + "/edited.stderr").find("/run is not as the station sealed it (passport.json: changed since it was sealed"),
             std::string::npos)
       << slurp(d + "/edited.stderr");
+  // The line it hands over runs as printed: with the key it was given (it said `rig verify DIR`).
+  EXPECT_NE(slurp(d + "/edited.stderr").find("nothing recorded (rig verify " + d + "/run --seal-key " + key + " says more)"),
+            std::string::npos)
+      << slurp(d + "/edited.stderr");
   EXPECT_FALSE(fs::exists(db)) << "nothing recorded";
   // Its seal renamed to seal.prev.json (a re-test): still a sealed folder, refused without the key.
   fs::rename(d + "/run/seal.json", d + "/run/seal.prev.json");
@@ -5708,6 +5712,102 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
   EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history"}, out + "-resume"), 2) << slurp(out + "-resume.stderr");
   EXPECT_NE(slurp(out + "-resume.stderr").find("no resume gives those lines back"), std::string::npos)
       << slurp(out + "-resume.stderr");
+}
+
+// The log's loss is kept in the checkpoint too: where the full disk refused the passport as well
+// (`nor an ERROR passport`), nothing else said run.log is short, and `rig run --resume` went on to
+// PASS, exit 0, beside the hole; `rig verify` advised that resume (a technician's review). The
+// resume, its dry run and verify now read the checkpoint's `log_missing_lines`.
+TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("log-refused-passport");
+  const std::string key = station_key_in(d);
+  for (const bool sealed : {false, true}) {
+    const std::string out = d + (sealed ? "/sealed" : "/plain");
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out};
+    std::vector<std::string> resume = {"run", "--resume", out, "--yes", "--no-history"};
+    if (sealed)
+      for (auto* v : {&args, &resume}) v->insert(v->end(), {"--seal-key", key});
+    EXPECT_EQ(rig_under_strace(full_disk_for(out, "passport.json.tmp"), args, out), 4) << slurp(out + ".stderr");
+    ASSERT_FALSE(fs::exists(out + "/passport.json")) << slurp(out + ".stderr");
+    EXPECT_NE(slurp(out + ".stderr").find("nor an ERROR passport"), std::string::npos) << slurp(out + ".stderr");
+    const nlohmann::json cp = nlohmann::json::parse(slurp(out + "/checkpoint.json"));
+    ASSERT_TRUE(cp.contains("log_missing_lines")) << cp.dump(1).substr(0, 400);
+    const std::string lost = cp["log_missing_lines"].get<std::string>();
+    EXPECT_EQ(lost.rfind("run.log is missing lines: the disk refused ", 0), 0u) << lost;
+    // The count as the ending stood before its passport (the last checkpoint written again), not
+    // as at the last phase: at least what the ending's reason said (its own line refused after).
+    const auto refused_lines = [](const std::string& text) {
+      const std::size_t at = text.find("the disk refused ");
+      return at == std::string::npos ? 0ul : std::stoul(text.substr(at + 17));
+    };
+    EXPECT_GE(refused_lines(lost), refused_lines(slurp(out + ".stderr"))) << lost;
+    EXPECT_GT(refused_lines(slurp(out + ".stderr")), 60u) << slurp(out + ".stderr");
+    const std::string log = slurp(out + "/run.log");
+    for (const bool dry : {true, false}) {
+      std::vector<std::string> r = resume;
+      if (dry) r.push_back("--dry-run");
+      const std::string io = out + (dry ? "-dry" : "-resume");
+      EXPECT_EQ(run(r, io), 2) << slurp(io + ".stdout");
+      EXPECT_NE(slurp(io + ".stderr").find(out + ": its checkpoint records that " + lost +
+                                           "; no resume gives those lines back"),
+                std::string::npos)
+          << slurp(io + ".stderr");
+    }
+    EXPECT_EQ(slurp(out + "/run.log"), log);  // the refused resume wrote nothing
+    EXPECT_FALSE(fs::exists(out + "/passport.json"));
+    if (sealed) {
+      EXPECT_EQ(run({"verify", out, "--seal-key", key}, out + "-verify"), 1);
+      const std::string said = slurp(out + "-verify.stdout");
+      EXPECT_NE(said.find("its checkpoint records that " + lost + ": no resume goes on with it"), std::string::npos)
+          << said;
+      EXPECT_EQ(said.find("goes on with the run"), std::string::npos) << said;
+    }
+  }
+}
+
+// A final seal the disk refused: the run's verdict stands (PASS, exit 0) and its ending lists the
+// seal as still to do. It said only "seal.json not written", and `rig verify` read the folder as
+// changed behind the station (a technician's review): the run now names the resume that seals it,
+// verify says the final seal was not written, and that resume seals the verdict, nothing measured.
+TEST(RigCli, ARefusedFinalSealSaysWhatSealsIt) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("final-seal-refused");
+  const std::string key = station_key_in(d);
+  const auto args = [&key](const std::string& out) {
+    return std::vector<std::string>{"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out,
+                                    "--seal-key", key};
+  };
+  // How many seals the run writes (each through seal.json.tmp): the last is the final one.
+  ASSERT_EQ(rig_under_strace("-o " + d + "/trace -P " + d + "/count/seal.json.tmp -e trace=openat", args(d + "/count"),
+                             d + "/count"),
+            0)
+      << slurp(d + "/count.stderr");
+  std::size_t seals = 0;
+  for (std::size_t at = 0; (at = slurp(d + "/trace").find("openat(", at)) != std::string::npos; ++at) ++seals;
+  ASSERT_GT(seals, 2u) << slurp(d + "/trace");
+  const std::string out = d + "/run";
+  EXPECT_EQ(rig_traced(out + "/seal.json.tmp", "openat", "openat:error=ENOSPC:when=" + std::to_string(seals), args(out),
+                       out),
+            0)
+      << slurp(out + ".stderr");
+  EXPECT_NE(slurp(out + ".stderr").find("seal.json not written: "), std::string::npos) << slurp(out + ".stderr");
+  EXPECT_NE(slurp(out + ".stderr").find("(rig run --resume " + out + " --seal-key FILE seals it: "), std::string::npos)
+      << slurp(out + ".stderr");
+  EXPECT_EQ(slurp(out + "/.ending-pending"), "seal\n");
+  const std::string passport = slurp(out + "/passport.json");
+  EXPECT_EQ(nlohmann::json::parse(passport)["outcome"], "PASS");
+  EXPECT_EQ(run({"verify", out, "--seal-key", key}, out + "-verify"), 1);
+  const std::string said = slurp(out + "-verify.stdout");
+  EXPECT_NE(said.find("NOT verified: the run's final seal was not written"), std::string::npos) << said;
+  EXPECT_EQ(said.find("not as the station sealed it"), std::string::npos) << said;
+  EXPECT_NE(said.find("`rig run --resume " + out + " --seal-key FILE` finishes it"), std::string::npos) << said;
+  EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history", "--seal-key", key}, out + "-resume"), 0)
+      << slurp(out + "-resume.stderr");
+  EXPECT_EQ(run({"verify", out, "--seal-key", key}, out + "-verified"), 0) << slurp(out + "-verified.stdout");
+  EXPECT_NE(slurp(out + "-verified.stdout").find("outcome PASS"), std::string::npos);
+  // The passport computed again from the kept records: the same values.
+  EXPECT_EQ(nlohmann::json::parse(slurp(out + "/passport.json"))["values"], nlohmann::json::parse(passport)["values"]);
 }
 
 // A capture whose sync the disk refused (EIO at its fsync) ends the run in ERROR, exit 4, and is
