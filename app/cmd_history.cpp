@@ -1,6 +1,7 @@
 // `rig history`: lists recorded runs, or trends one measurement across DUTs or across the
 // runs of one DUT; also records a run folder into the database (--record).
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -327,12 +328,24 @@ void check_seal_before_recording(const HistoryArgs& a) {
     throw NotTheDatabase(a.record + " is sealed (" + *seal_there + "): --record checks it with the station's key first "
                                     "(--seal-key FILE or RIG_SEAL_KEY); nothing recorded");
   const seal::Check c = check_run_folder_seal(a.record, *key);
+  // A final seal the disk refused: an ending not finished, not a folder changed (a review).
+  if (final_seal_owed(a.record, c)) {
+    const std::vector<std::string> steps = pending_steps(a.record).value_or(std::vector<std::string>{});
+    throw NotTheDatabase(fmt::format("{}: its final seal was not written ({} lists: {}); nothing recorded ({})",
+                                     a.record, kEndingPending, fmt::join(steps, ", "),
+                                     a_resume_finishes(a.record, steps)
+                                         ? "rig run --resume " + shell_word(a.record) + " --seal-key FILE seals it"
+                                         : std::string(kNothingFinishesIt)));
+  }
+  // The key as given, where the line alone would be refused without it (not RIG_SEAL_KEY's: set
+  // already, and CLI11 counts an option taken from its variable as given).
+  const char* env = std::getenv("RIG_SEAL_KEY");
+  const bool key_from_env = env && a.seal_key == env;
   if (!c.ok)
-    // The key as given, where the line alone would be refused without it (not RIG_SEAL_KEY's: set already).
     throw NotTheDatabase(fmt::format("{} is not as the station sealed it ({}); nothing recorded (rig verify {}{} says "
                                      "more)",
                                      a.record, fmt::join(c.problems, "; "), shell_word(a.record),
-                                     a.seal_key_given ? " --seal-key " + shell_word(a.seal_key) : std::string()));
+                                     key_from_env ? std::string() : " --seal-key " + shell_word(a.seal_key)));
 }
 
 // The captures the passport names that are not in the folder, said once ("" when all are there):

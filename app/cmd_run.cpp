@@ -22,6 +22,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <regex>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -650,6 +651,29 @@ void refuse_a_log_missing_lines(const std::string& dir) {
     throw ConfigError(dir + ": its checkpoint records that " + why + kNoResume);
 }
 
+// Where the last attempt in `dir`'s run.log stopped without an account of its ending (none of an
+// ending's last lines after its first), the time of its last line; "" otherwise. A kill, a
+// power cut or a full disk that refused the ending's lines leave such an account; the resume says
+// so before it goes on, so the log does not run on from the last line as if nothing was lost (a
+// technician's review: a first ending's lines refused left no mark in the resumed log).
+std::string earlier_attempt_unended(const std::string& dir) {
+  static const std::regex first(R"(^\S+Z info +rig \S+ run: profile )");
+  // Every ending's last words: its outcome line, or the way on after an ending short of files
+  // (`to continue: `, `no resume: `), a refused resume's, devices that did not open.
+  static const std::regex ending(R"(^\S+Z (info|warning|error) +(outcome (PASS|FAIL|ABORTED|ERROR) \(exit [0-9]+\)$|)"
+                                 R"(to continue: |no resume: |resume refused: |devices not opened: ))");
+  std::ifstream in(dir + "/run.log");
+  std::string line, last;
+  bool ended = true;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    last = line;
+    if (std::regex_search(line, first)) ended = false;  // an attempt's first line
+    else if (std::regex_search(line, ending)) ended = true;
+  }
+  return ended || last.size() < 24 ? "" : last.substr(0, 24);
+}
+
 // `dir`'s .ending-pending as `steps` (one per line), removed when none is left.
 void write_pending_steps(const std::string& dir, const std::vector<std::string>& steps) {
   std::string text;
@@ -1137,9 +1161,14 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       // With the way on (a technician's review: the run ended PASS with no word of it). The resume
       // brings the devices up and computes the ending again from the kept records: nothing is
       // measured again.
-      log.error("seal.json not written: {} (rig run --resume {} --seal-key FILE seals it: the ending computed again "
-                "from the kept records, nothing measured again)",
-                e.what(), shell_word(a.out));
+      // Not an ending with no resume (its log missing lines: said after it): only computing the
+      // ending again would seal it, and its resume is refused (a review).
+      if (res.message.find(kLogMissingLines) != std::string::npos)
+        log.error("seal.json not written: {}", e.what());
+      else
+        log.error("seal.json not written: {} (rig run --resume {} --seal-key FILE seals it: the ending computed "
+                  "again from the kept records, nothing measured again)",
+                  e.what(), shell_word(a.out));
     }
   }
   // The list keeps only what is still to do, rewritten as each step is done (it kept steps
@@ -2032,8 +2061,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (!key) refuse_a_final_verdict(a.out);
     refuse_a_log_missing_lines(a.out);
     log = make_logger(a.out, a.quiet, log_loss);
+    const std::string unended = earlier_attempt_unended(a.out);  // read before this attempt's first line
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
+    if (!unended.empty())
+      log->warn("the earlier attempt's account above ends at {} without its ending (stopped by a kill or a power cut, or "
+                "its last lines refused by the disk): what it did after that line is not in this log",
+                unended);
     try {
       resumed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
     } catch (const std::exception& e) {  // the log says why the resume did not happen (it said only "resuming")
@@ -2279,6 +2313,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     else
       log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
                  to_string(res.outcome), e.what());
+    // Lines lost since the checkpoint last said so (the ending's own, these two): recorded there
+    // too, where the disk takes it, so the resume offered below is refused (a review: lost late in
+    // the ending, beside a refused passport, the resume ended PASS).
+    exec.record_the_log_loss();
     // An ERROR ending saying which outcome could not be written, never that outcome: in the
     // history (it promises every run; a folder deleted mid-run left no row, a review), and in the
     // folder where its passport and JUnit report still fit (a full disk refused the 600 kB
@@ -2339,10 +2377,20 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     }
     // What is kept goes on once the folder can take the files (a review: a full disk ended with
     // only "write failed", though the folder resumed to the same passport).
-    if (!no_resume_why.empty()) {  // as the ending in full says it (a code review: nothing was said here)
+    // "No resume" only where the folder says so to the resume (the passport or the checkpoint took
+    // the reason): where the disk refused both, the resume goes on, and saying otherwise sent the
+    // technician away from a folder that then resumed to PASS (a review).
+    if (!no_resume_why.empty() && !resume_refusal(a.out).empty()) {  // as the ending in full says it
       say_no_resume(no_resume_why, *log);
       say_how_to_finish(a.out, resume_key, *log);
     } else if (!res.config_error) {
+      if (!no_resume_why.empty()) {  // on stderr with --quiet too, as `no resume:` is
+        const std::string line = no_resume_why + "; with the passport refused, nothing the disk took keeps a resume "
+                                                 "from going on: it does, and its log says where this attempt's "
+                                                 "account breaks off";
+        std::cerr << line << "\n";
+        log->info("{}", line);
+      }
       offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
                      resume_key, *log);
     }

@@ -132,11 +132,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   const std::string log_short = checkpoint_log_missing_lines(dir);
   // A final seal the disk refused (the ending lists `seal`, no seal.json) is an ending not finished,
   // not a folder changed behind the station (a technician's review read tampering into it).
-  const std::vector<std::string> listed = pending_steps(dir).value_or(std::vector<std::string>{});
-  std::error_code ec;
-  const bool seal_owed = !c.ok && c.files.empty() &&
-                         std::find(listed.begin(), listed.end(), kStepSeal) != listed.end() &&
-                         !std::filesystem::exists(std::filesystem::path(dir) / "seal.json", ec);
+  const bool seal_owed = final_seal_owed(dir, c);
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)
@@ -151,7 +147,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                                             ": no resume goes on with it (start a new run)"
                                       : "`rig run --resume " + shell_word(dir) + " --seal-key FILE` goes on with the run")
                 : seal_owed ? std::string("NOT verified: the run's final seal was not written (its ending lists it as "
-                                          "still to do; the last checkpoint's seal is seal.prev.json)\n")
+                                          "still to do; the seal that stands is its last checkpoint's)\n")
                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).

@@ -2,6 +2,7 @@
 // use it: where the key comes from, which files a run seals when, and the checks a resume makes
 // before it trusts the folder.
 #pragma once
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -77,6 +78,20 @@ inline std::optional<std::vector<std::string>> pending_steps(const std::string& 
   for (std::string line; std::getline(in, line);)
     if (!line.empty()) steps.push_back(line);
   return steps;
+}
+
+// Whether `dir`'s final seal was refused (a full disk), as `c` (check_run_folder_seal) found it:
+// its ending lists the seal as still to do, and either no seal.json stands (seal.prev.json is the
+// last checkpoint's) or the one there is a checkpoint's whose files all hold (its rotation was
+// refused). Said as an ending not finished, not as a folder changed behind the station (a
+// technician's review).
+inline bool final_seal_owed(const std::string& dir, const seal::Check& c) {
+  const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
+  if (c.ok || std::find(steps.begin(), steps.end(), kStepSeal) == steps.end()) return false;
+  std::error_code ec;
+  if (c.files.empty()) return !std::filesystem::exists(std::filesystem::path(dir) / "seal.json", ec) && !ec;
+  return c.outcome.empty() &&
+         std::all_of(c.files.begin(), c.files.end(), [](const auto& e) { return e.second == seal::FileState::Ok; });
 }
 
 // `dir`'s passport.json as parsed; nullopt when it is missing, not a regular file (a FIFO is

@@ -155,8 +155,10 @@ void Executive::write_checkpoint(const std::vector<std::string>& done, const Mea
 
 void Executive::write_checkpoint_text(const nlohmann::ordered_json& j) {
   const std::string text = j.dump(1);
+  checkpoint_write_failed_ = true;  // until both the seal and the file are written
   if (on_checkpoint_) on_checkpoint_(text);
   write_file_atomic(checkpoint_path(out_dir_), text);
+  checkpoint_write_failed_ = false;
   last_checkpoint_ = j;
 }
 
@@ -333,12 +335,25 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
 // the checkpoint is then the only file that says the log is short. A write the disk refuses
 // leaves the checkpoint as it was, said in the log's own words (it may reach the console only).
 void Executive::record_the_log_loss() {
-  if (!log_loss_ || !last_checkpoint_) return;
+  // Not after a checkpoint write that failed: each write seals its text first, and a second
+  // failure would leave neither seal holding the checkpoint on disk (a review).
+  if (!log_loss_ || checkpoint_write_failed_) return;
   const std::string lost = log_loss_();
-  if (lost.empty() || last_checkpoint_->value(kLogMissingLinesKey, std::string()) == lost) return;
-  nlohmann::ordered_json j = *last_checkpoint_;
-  j[kLogMissingLinesKey] = lost;
+  if (lost.empty() || (last_checkpoint_ && last_checkpoint_->value(kLogMissingLinesKey, std::string()) == lost)) return;
   try {
+    // A resume stopped before its first checkpoint: the earlier attempt's, as it lies (a review:
+    // a resume that lost lines and stopped there left nothing saying so). None at all: nothing
+    // was kept, and the resume starts from bring-up.
+    if (!last_checkpoint_) {
+      const std::string cp = checkpoint_path(out_dir_);
+      if (path_kind(cp, "checkpoint") != PathKind::file) return;
+      std::ifstream in(cp);
+      nlohmann::ordered_json j = nlohmann::ordered_json::parse(in, nullptr, false);
+      if (!j.is_object()) return;
+      last_checkpoint_ = std::move(j);
+    }
+    nlohmann::ordered_json j = *last_checkpoint_;
+    j[kLogMissingLinesKey] = lost;
     write_checkpoint_text(j);
   } catch (const std::exception& e) {
     log_->error("{} not recorded in the checkpoint: {}", lost, e.what());

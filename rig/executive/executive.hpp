@@ -209,6 +209,7 @@ class Executive {
   // The last checkpoint written, kept so that the end of the run can add the log's loss to it.
   std::optional<nlohmann::ordered_json> last_checkpoint_;
   std::function<std::string()> log_loss_;
+  bool checkpoint_write_failed_ = false;  // the last write of the checkpoint (or its seal) threw
   Devices& dev_;
   std::string out_dir_;
   std::shared_ptr<spdlog::logger> log_;

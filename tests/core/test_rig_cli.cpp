@@ -5764,6 +5764,106 @@ TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
       EXPECT_EQ(said.find("goes on with the run"), std::string::npos) << said;
     }
   }
+  // The disk refuses the checkpoint too (its first write, in the first phase): nothing it took
+  // says the log is short, so nothing keeps the resume from going on. The run says so (it said
+  // `no resume`, and the resume went on to PASS: a review), and the resume's log marks where the
+  // first attempt's account breaks off.
+  const std::string out = d + "/no-checkpoint";
+  EXPECT_EQ(rig_under_strace("-o /dev/null -P " + out + "/run.log -P " + out + "/passport.json.tmp -P " + out +
+                                 "/checkpoint.json.tmp -e trace=write,openat -e inject=write:error=ENOSPC:when=5+ -e "
+                                 "inject=openat:error=ENOSPC:when=2+",
+                             {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out}, out),
+            4)
+      << slurp(out + ".stderr");
+  ASSERT_FALSE(fs::exists(out + "/checkpoint.json"));
+  const std::string err = slurp(out + ".stderr");
+  EXPECT_NE(err.find("the run's log " + out + "/run.log is missing lines the disk refused; with the passport refused, "
+                     "nothing the disk took keeps a resume from going on: it does, and its log says where this "
+                     "attempt's account breaks off"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("no resume: "), std::string::npos) << err;
+  EXPECT_NE(err.find("to continue: rig run --resume " + out), std::string::npos) << err;
+  EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history"}, out + "-resume"), 0) << slurp(out + "-resume.stderr");
+  EXPECT_NE(slurp(out + "/run.log").find("warning the earlier attempt's account above ends at "), std::string::npos);
+}
+
+// Lines lost late in the ending, beside a refused passport (a review: with the loss kept only in
+// the passport, the resume ended PASS and the log ran on as if nothing was lost). Lost from the
+// ending's `outcome PASS not written` on, the checkpoint records it and the resume is refused;
+// lost only after that record was made, nothing the disk took keeps the resume from going on: the
+// run says so, and the resume's log marks where the earlier account breaks off.
+TEST(RigCli, ALogLossLateInTheEndingIsRecordedOrMarked) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("log-refused-late");
+  fs::create_directories(d);
+  const auto args = [](const std::string& out) {
+    return std::vector<std::string>{"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out};
+  };
+  const auto refusing = [](const std::string& out, const std::string& log_writes) {
+    return "-P " + out + "/run.log -P " + out + "/passport.json.tmp -e trace=write,openat -e inject=openat:error=ENOSPC:when=2+" +
+           log_writes;
+  };
+  // The run.log lines of that ending, counted: its last three are `outcome PASS not written`, `nor
+  // an ERROR passport` and `to continue`.
+  ASSERT_EQ(rig_under_strace("-s 64 -o " + d + "-trace " + refusing(d + "/count", ""), args(d + "/count"), d + "/count"), 4)
+      << slurp(d + "/count.stderr");
+  std::vector<std::string> writes;
+  {
+    std::istringstream trace(slurp(d + "-trace"));
+    for (std::string line; std::getline(trace, line);)
+      if (line.find("write(") != std::string::npos) writes.push_back(line);
+  }
+  ASSERT_GT(writes.size(), 3u);
+  const std::size_t n = writes.size();
+  ASSERT_NE(writes[n - 3].find("error outcome PASS not wri"), std::string::npos) << writes[n - 3];
+  ASSERT_NE(writes[n - 1].find("info  to continue: "), std::string::npos) << writes[n - 1];
+  for (const std::size_t from : {n - 2, n - 1}) {  // the nth write is writes[n - 1]
+    const bool recorded = from == n - 2;
+    const std::string out = d + "/from-" + std::to_string(from);
+    EXPECT_EQ(rig_under_strace("-o /dev/null " +
+                                   refusing(out, " -e inject=write:error=ENOSPC:when=" + std::to_string(from) + "+"),
+                               args(out), out),
+              4)
+        << slurp(out + ".stderr");
+    const std::string err = slurp(out + ".stderr");
+    EXPECT_EQ(nlohmann::json::parse(slurp(out + "/checkpoint.json")).contains("log_missing_lines"), recorded) << err;
+    EXPECT_EQ(err.find("; with the passport refused, nothing the disk took keeps a resume from going on") !=
+                  std::string::npos,
+              false)
+        << err;  // its reason (a stopped run's or a verdict's) was not yet the log's when the passport failed
+    EXPECT_NE(err.find(recorded ? "no resume: " : "to continue: rig run --resume " + out), std::string::npos) << err;
+    EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history"}, out + "-resume"), recorded ? 2 : 0)
+        << slurp(out + "-resume.stderr");
+    const std::string log = slurp(out + "/run.log");
+    EXPECT_EQ(log.find("warning the earlier attempt's account above ends at ") != std::string::npos, !recorded) << log;
+  }
+}
+
+// A resume says where the earlier attempt's account breaks off, where it has no ending (a kill, a
+// power cut, lines the disk refused): the log ran from that attempt's last line straight to the
+// resume's (a technician's review). An attempt that ended (ABORTED, its outcome line) is not marked.
+TEST(RigCli, AResumeMarksAnEarlierAccountWithoutItsEnding) {
+  const std::string d = tmp("unended-attempt");
+  fs::create_directories(d);
+  for (const char* stop : {"sigkill@100", "sigint@100"}) {
+    const bool killed = std::string(stop) == "sigkill@100";
+    const std::string out = d + "/" + stop;
+    EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--inject", stop, "--out", out},
+                  out + "-first"),
+              killed ? 128 + SIGKILL : 3)
+        << slurp(out + "-first.stderr");
+    const std::string before = slurp(out + "/run.log");
+    std::string last = before.substr(0, before.size() - 1);
+    last = last.substr(last.rfind('\n') + 1);
+    EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history"}, out + "-resume"), 0) << slurp(out + "-resume.stderr");
+    const std::string log = slurp(out + "/run.log");
+    const std::string mark = "warning the earlier attempt's account above ends at " + last.substr(0, 24) +
+                             " without its ending (stopped by a kill or a power cut, or its last lines refused by "
+                             "the disk)";
+    EXPECT_EQ(log.find(mark) != std::string::npos, killed) << log.substr(before.size());
+    EXPECT_EQ(log.find("the earlier attempt's account") != std::string::npos, killed) << log.substr(before.size());
+  }
 }
 
 // A final seal the disk refused: the run's verdict stands (PASS, exit 0) and its ending lists the
@@ -5802,6 +5902,11 @@ TEST(RigCli, ARefusedFinalSealSaysWhatSealsIt) {
   EXPECT_NE(said.find("NOT verified: the run's final seal was not written"), std::string::npos) << said;
   EXPECT_EQ(said.find("not as the station sealed it"), std::string::npos) << said;
   EXPECT_NE(said.find("`rig run --resume " + out + " --seal-key FILE` finishes it"), std::string::npos) << said;
+  EXPECT_EQ(run({"history", "--db", d + "/h.sqlite", "--record", out, "--seal-key", key}, out + "-record"), 2);
+  EXPECT_NE(slurp(out + "-record.stderr").find(out + ": its final seal was not written (.ending-pending lists: seal); "
+                                                     "nothing recorded (rig run --resume " + out + " --seal-key FILE seals it)"),
+            std::string::npos)
+      << slurp(out + "-record.stderr");
   EXPECT_EQ(run({"run", "--resume", out, "--yes", "--no-history", "--seal-key", key}, out + "-resume"), 0)
       << slurp(out + "-resume.stderr");
   EXPECT_EQ(run({"verify", out, "--seal-key", key}, out + "-verified"), 0) << slurp(out + "-verified.stdout");
