@@ -1,9 +1,9 @@
 // `rig history`: lists recorded runs, or trends one measurement across DUTs or across the
 // runs of one DUT; also records a run folder into the database (--record).
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -329,7 +329,7 @@ void check_seal_before_recording(const HistoryArgs& a) {
                                     "(--seal-key FILE or RIG_SEAL_KEY); nothing recorded");
   const seal::Check c = check_run_folder_seal(a.record, *key);
   // A final seal the disk refused: an ending not finished, not a folder changed (a review).
-  if (final_seal_owed(a.record, c)) {
+  if (final_seal_owed(a.record, c, *key)) {
     const std::vector<std::string> steps = pending_steps(a.record).value_or(std::vector<std::string>{});
     throw NotTheDatabase(fmt::format("{}: its final seal was not written ({} lists: {}); nothing recorded ({})",
                                      a.record, kEndingPending, fmt::join(steps, ", "),

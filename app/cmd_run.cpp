@@ -22,9 +22,9 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
-#include <regex>
 #include <mutex>
 #include <optional>
+#include <regex>
 #include <sstream>
 #include <string_view>
 #include <set>
@@ -651,17 +651,20 @@ void refuse_a_log_missing_lines(const std::string& dir) {
     throw ConfigError(dir + ": its checkpoint records that " + why + kNoResume);
 }
 
-// Where the last attempt in `dir`'s run.log stopped without an account of its ending (none of an
-// ending's last lines after its first), the time of its last line; "" otherwise. A kill, a
-// power cut or a full disk that refused the ending's lines leave such an account; the resume says
-// so before it goes on, so the log does not run on from the last line as if nothing was lost (a
-// technician's review: a first ending's lines refused left no mark in the resumed log).
+// Every attempt's last line in run.log (rig run writes it as it returns, whatever the ending:
+// AttemptEnd). An attempt without it was stopped by a kill or a power cut, or the disk refused its
+// last lines: a resume says so (earlier_attempt_unended). One line every ending writes, rather
+// than a list of each ending's last words, which missed some and took others for none (a review).
+constexpr std::string_view kAttemptEnds = "rig run: this attempt ends here";
+
+// The run.log this process opened for its run (make_logger): where AttemptEnd writes.
+std::string g_attempt_log;  // NOLINT: one run per process
+
+// Where the last attempt in `dir`'s run.log has no kAttemptEnds line after its first line, the
+// time of its last line; "" otherwise. Read before the resume writes its own first line.
 std::string earlier_attempt_unended(const std::string& dir) {
-  static const std::regex first(R"(^\S+Z info +rig \S+ run: profile )");
-  // Every ending's last words: its outcome line, or the way on after an ending short of files
-  // (`to continue: `, `no resume: `), a refused resume's, devices that did not open.
-  static const std::regex ending(R"(^\S+Z (info|warning|error) +(outcome (PASS|FAIL|ABORTED|ERROR) \(exit [0-9]+\)$|)"
-                                 R"(to continue: |no resume: |resume refused: |devices not opened: ))");
+  constexpr std::size_t kStamp = 24;  // 2026-12-06T12:09:24.486Z, as make_logger stamps a line
+  static const std::regex first(R"(^\S+Z info +rig \S+ run: )");
   std::ifstream in(dir + "/run.log");
   std::string line, last;
   bool ended = true;
@@ -669,9 +672,17 @@ std::string earlier_attempt_unended(const std::string& dir) {
     if (line.empty()) continue;
     last = line;
     if (std::regex_search(line, first)) ended = false;  // an attempt's first line
-    else if (std::regex_search(line, ending)) ended = true;
+    else if (line.ends_with(kAttemptEnds)) ended = true;
   }
-  return ended || last.size() < 24 ? "" : last.substr(0, 24);
+  return ended || last.size() < kStamp ? "" : last.substr(0, kStamp);
+}
+
+// The resume's second line, where the earlier attempt's account has no end (earlier_attempt_unended).
+void say_where_the_account_broke_off(const std::string& unended, spdlog::logger& log) {
+  if (!unended.empty())
+    log.warn("the earlier attempt's account above ends at {} without its ending (stopped by a kill or a power cut, or "
+             "its last lines refused by the disk): what it did after that line is not in this log",
+             unended);
 }
 
 // `dir`'s .ending-pending as `steps` (one per line), removed when none is left.
@@ -1161,9 +1172,10 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       // With the way on (a technician's review: the run ended PASS with no word of it). The resume
       // brings the devices up and computes the ending again from the kept records: nothing is
       // measured again.
-      // Not an ending with no resume (its log missing lines: said after it): only computing the
-      // ending again would seal it, and its resume is refused (a review).
-      if (res.message.find(kLogMissingLines) != std::string::npos)
+      // A verdict's alone: its resume computes the ending again and seals it. A stopped run's
+      // resume goes on with the run, or is refused (a log missing lines, records changed), as the
+      // lines after this one say (a review: the hint came beside `no resume`).
+      if (res.outcome != RunOutcome::Pass && res.outcome != RunOutcome::Fail)
         log.error("seal.json not written: {}", e.what());
       else
         log.error("seal.json not written: {} (rig run --resume {} --seal-key FILE seals it: the ending computed "
@@ -1303,6 +1315,7 @@ std::string utc_now_ms() {
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
                                             std::shared_ptr<LogLoss> loss = std::make_shared<LogLoss>()) {
   auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
+  g_attempt_log = out_dir + "/run.log";
   file->set_level(spdlog::level::debug);
   auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
   err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
@@ -1376,8 +1389,10 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     if (!a.no_history && !a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
     return kExitPass;
   }
+  const std::string unended = earlier_attempt_unended(dir);  // before this attempt's first line
   auto log = make_logger(dir, a.quiet);
   log->info("rig {} run: out {}: the run is {}; finishing its ending ({})", RIG_VERSION, shown_text(dir), stands, what);
+  say_where_the_account_broke_off(unended, *log);
   if (!a.no_history) say_history_left_behind(a, *log);  // another --db: the run's own database never gets this row
   // What this resume did and what is still owed, each said as it came out (a line integrator's
   // review: a history row the database refused was said "recorded").
@@ -1781,6 +1796,14 @@ int do_run(RunArgs a) {
   ::signal(SIGPIPE, SIG_IGN);
   CancelSource cancel;
   SignalWatcher signals(cancel);  // before any backend thread exists
+  // This attempt's last line in its run.log, however it ends (returned, or thrown to main), once
+  // its loggers are gone; a line the disk refuses is left out, and the next resume says so.
+  struct AttemptEnd {
+    ~AttemptEnd() {
+      if (g_attempt_log.empty()) return;  // refused before any run.log was opened
+      std::ofstream(g_attempt_log, std::ios::app) << utc_now_ms() << " info  " << kAttemptEnds << "\n";
+    }
+  } attempt_end;
   return do_run_watched(std::move(a), cancel);
 }
 
@@ -2064,10 +2087,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     const std::string unended = earlier_attempt_unended(a.out);  // read before this attempt's first line
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
-    if (!unended.empty())
-      log->warn("the earlier attempt's account above ends at {} without its ending (stopped by a kill or a power cut, or "
-                "its last lines refused by the disk): what it did after that line is not in this log",
-                unended);
+    say_where_the_account_broke_off(unended, *log);
     try {
       resumed = Executive::read_checkpoint(a.out, phases, values, state, identity, *log, true);
     } catch (const std::exception& e) {  // the log says why the resume did not happen (it said only "resuming")
@@ -2296,7 +2316,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   }
   // Lines the ending refused so far are the checkpoint's word too: the passport that says it may be
   // refused next.
-  exec.record_the_log_loss();
+  if (!res.config_error) exec.record_the_log_loss();  // a configuration error's ending leaves the loss out (above)
   nlohmann::ordered_json passport;
   // An earlier ending's files (an ABORTED one, resumed) as they were before this ending: what it
   // cannot replace must not stand beside its ERROR ending.
@@ -2316,7 +2336,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // Lines lost since the checkpoint last said so (the ending's own, these two): recorded there
     // too, where the disk takes it, so the resume offered below is refused (a review: lost late in
     // the ending, beside a refused passport, the resume ended PASS).
-    exec.record_the_log_loss();
+    if (!res.config_error) exec.record_the_log_loss();
     // An ERROR ending saying which outcome could not be written, never that outcome: in the
     // history (it promises every run; a folder deleted mid-run left no row, a review), and in the
     // folder where its passport and JUnit report still fit (a full disk refused the 600 kB
@@ -2385,9 +2405,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       say_how_to_finish(a.out, resume_key, *log);
     } else if (!res.config_error) {
       if (!no_resume_why.empty()) {  // on stderr with --quiet too, as `no resume:` is
-        const std::string line = no_resume_why + "; with the passport refused, nothing the disk took keeps a resume "
-                                                 "from going on: it does, and its log says where this attempt's "
-                                                 "account breaks off";
+        const std::string lost = log_loss->said();
+        const std::string line = no_resume_why +
+                                 "; with the passport refused, nothing the disk took keeps a resume from going on" +
+                                 (lost.empty() ? std::string() : ": run.log stays short of the lines refused (" + lost + ")");
         std::cerr << line << "\n";
         log->info("{}", line);
       }

@@ -132,7 +132,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   const std::string log_short = checkpoint_log_missing_lines(dir);
   // A final seal the disk refused (the ending lists `seal`, no seal.json) is an ending not finished,
   // not a folder changed behind the station (a technician's review read tampering into it).
-  const bool seal_owed = final_seal_owed(dir, c);
+  const bool seal_owed = final_seal_owed(dir, c, *key);
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)

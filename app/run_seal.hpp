@@ -80,18 +80,25 @@ inline std::optional<std::vector<std::string>> pending_steps(const std::string& 
   return steps;
 }
 
-// Whether `dir`'s final seal was refused (a full disk), as `c` (check_run_folder_seal) found it:
-// its ending lists the seal as still to do, and either no seal.json stands (seal.prev.json is the
-// last checkpoint's) or the one there is a checkpoint's whose files all hold (its rotation was
-// refused). Said as an ending not finished, not as a folder changed behind the station (a
-// technician's review).
-inline bool final_seal_owed(const std::string& dir, const seal::Check& c) {
+// Whether `dir`'s final seal was refused (a full disk), as `c` (check_run_folder_seal with `key`)
+// found it: its ending lists the seal as still to do, and the seal that stands is the last
+// checkpoint's with every file it sealed holding: seal.prev.json where no seal.json stands, or a
+// seal.json its rotation left (the rename refused). Said as an ending not finished, not as a
+// folder changed behind the station; a record changed since is said as that (a review).
+inline bool final_seal_owed(const std::string& dir, const seal::Check& c, const seal::Key& key) {
   const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
   if (c.ok || std::find(steps.begin(), steps.end(), kStepSeal) == steps.end()) return false;
+  const auto all_hold = [](const seal::Check& k) {
+    return !k.files.empty() &&
+           std::all_of(k.files.begin(), k.files.end(), [](const auto& e) { return e.second == seal::FileState::Ok; });
+  };
   std::error_code ec;
-  if (c.files.empty()) return !std::filesystem::exists(std::filesystem::path(dir) / "seal.json", ec) && !ec;
-  return c.outcome.empty() &&
-         std::all_of(c.files.begin(), c.files.end(), [](const auto& e) { return e.second == seal::FileState::Ok; });
+  if (c.files.empty()) {
+    if (std::filesystem::exists(std::filesystem::path(dir) / "seal.json", ec) || ec) return false;
+    const seal::Check prev = seal::check_seal(dir, dir + "/seal.prev.json", key, {});
+    return prev.outcome.empty() && all_hold(prev);
+  }
+  return c.outcome.empty() && all_hold(c);
 }
 
 // `dir`'s passport.json as parsed; nullopt when it is missing, not a regular file (a FIFO is

@@ -477,7 +477,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   }
   result.checkpointed = checkpointed;
   safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
-  record_the_log_loss();
+  if (!result.config_error) record_the_log_loss();  // a configuration error is started anew, not resumed
   return result;
 }
 
