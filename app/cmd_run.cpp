@@ -1801,7 +1801,10 @@ int do_run(RunArgs a) {
   struct AttemptEnd {
     ~AttemptEnd() {
       if (g_attempt_log.empty()) return;  // refused before any run.log was opened
-      std::ofstream(g_attempt_log, std::ios::app) << utc_now_ms() << " info  " << kAttemptEnds << "\n";
+      std::ofstream out(g_attempt_log, std::ios::app);
+      out << utc_now_ms() << " info  " << kAttemptEnds << "\n" << std::flush;
+      if (!out)  // said, as any line the disk refuses is (make_logger); the next resume marks it
+        std::cerr << "rig: warning: " << g_attempt_log << ": its closing line could not be written\n";
     }
   } attempt_end;
   return do_run_watched(std::move(a), cancel);

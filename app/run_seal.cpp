@@ -247,15 +247,6 @@ std::string earlier_log_missing_lines(const std::string& dir) {
                                                                                                 : "";
 }
 
-std::string checkpoint_log_missing_lines(const std::string& dir) {
-  std::ifstream in(Executive::checkpoint_path(dir));
-  if (!in) return "";
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  return j.is_object() && j.contains(kLogMissingLinesKey) && j[kLogMissingLinesKey].is_string()
-             ? j[kLogMissingLinesKey].get<std::string>()
-             : "";
-}
-
 std::string final_outcome_of(const std::string& dir) {
   const std::string o = passport_outcome(dir).value_or("");
   if (is_verdict(o)) return o;

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rig/core/log_loss.hpp"
 #include "rig/seal/seal.hpp"
 
 namespace rig::cli {
@@ -122,12 +123,6 @@ inline constexpr std::string_view kLogMissingLines = "run.log is missing lines";
 // The reason of an ERROR or ABORTED ending whose run.log lost lines; "" otherwise. Such a run has
 // no resume: its ending would give a verdict beside a log with a hole in the account.
 std::string earlier_log_missing_lines(const std::string& dir);
-
-// What the run's checkpoint records its log is missing (Executive::log_loss_from); "" when it
-// records nothing. It outlives a passport the full disk refused too (a technician's review: the
-// loss was kept only in the passport, and with the passport refused the resume ended PASS beside
-// the hole). Such a run has no resume.
-std::string checkpoint_log_missing_lines(const std::string& dir);
 
 // A run's final outcome: its verdict (verdict_of), or the ERROR or ABORTED ending of a run whose
 // log is missing lines, which has no resume (earlier_log_missing_lines): its passport stands, and

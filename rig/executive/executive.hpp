@@ -19,6 +19,7 @@
 #include "rig/core/clock.hpp"
 #include "rig/core/dut_link.hpp"
 #include "rig/core/gpio.hpp"
+#include "rig/core/log_loss.hpp"
 #include "rig/core/table.hpp"
 #include "rig/executive/measurement.hpp"
 
@@ -136,9 +137,6 @@ struct Resumption {
   std::vector<std::string> completed;
   std::map<std::string, Times> times;
 };
-
-// The checkpoint's key for what the run's log is missing (Executive::log_loss_from).
-inline constexpr const char* kLogMissingLinesKey = "log_missing_lines";
 
 class Executive {
  public:

@@ -9,6 +9,7 @@
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
 #include "rig/core/json_unique.hpp"
+#include "rig/core/log_loss.hpp"
 #include "rig/core/path_kind.hpp"
 #include "rig/report/passport_check.hpp"
 #include "rig/report/timefmt.hpp"
@@ -177,10 +178,15 @@ json read_passport(const std::string& run_dir) {
       // folder exist?" for a folder that exists).
       if (path_kind(run_dir, "") == PathKind::directory) {
         // A run killed before it wrote its passport is a run to finish, not "not a run folder".
-        if (path_kind(run_dir + "/run.json", "") == PathKind::file)
+        if (path_kind(run_dir + "/run.json", "") == PathKind::file) {
+          // Not where its checkpoint says its log is short: that resume is refused (a review).
+          if (const std::string lost = checkpoint_log_missing_lines(run_dir); !lost.empty())
+            throw ConfigError(path + ": not there: the run in " + run_dir + " stopped before its end, and its "
+                              "checkpoint records that " + lost + ": no resume finishes it; start a new run");
           throw ConfigError(path + ": not there: the run in " + run_dir + " has not finished (run.json, no passport: "
                             "still running, or stopped before its end); `rig run --resume " + run_dir +
                             "` finishes a stopped one");
+        }
         throw ConfigError(path + ": not there: " + run_dir + " is a folder but not a run folder (no passport.json)");
       }
       throw ConfigError(path + ": cannot read the file (does the run folder exist?)");

@@ -5756,6 +5756,12 @@ TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
     }
     EXPECT_EQ(slurp(out + "/run.log"), log);  // the refused resume wrote nothing
     EXPECT_FALSE(fs::exists(out + "/passport.json"));
+    // rig report and history --record advised that resume (a technician's review).
+    EXPECT_EQ(run({"report", out}, out + "-report"), 2);
+    EXPECT_NE(slurp(out + "-report.stderr").find("stopped before its end, and its checkpoint records that " + lost +
+                                                 ": no resume finishes it; start a new run"),
+              std::string::npos)
+        << slurp(out + "-report.stderr");
     if (sealed) {
       EXPECT_EQ(run({"verify", out, "--seal-key", key}, out + "-verify"), 1);
       const std::string said = slurp(out + "-verify.stdout");
