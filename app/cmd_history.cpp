@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -337,15 +336,12 @@ void check_seal_before_recording(const HistoryArgs& a) {
                                          ? "rig run --resume " + shell_word(a.record) + " --seal-key FILE seals it"
                                          : std::string(kNothingFinishesIt)));
   }
-  // The key as given, where the line alone would be refused without it (not RIG_SEAL_KEY's: set
-  // already, and CLI11 counts an option taken from its variable as given).
-  const char* env = std::getenv("RIG_SEAL_KEY");
-  const bool key_from_env = env && a.seal_key == env;
+  // With the key, where the line alone would be refused without it.
   if (!c.ok)
     throw NotTheDatabase(fmt::format("{} is not as the station sealed it ({}); nothing recorded (rig verify {}{} says "
                                      "more)",
                                      a.record, fmt::join(c.problems, "; "), shell_word(a.record),
-                                     key_from_env ? std::string() : " --seal-key " + shell_word(a.seal_key)));
+                                     seal_key_words(a.seal_key)));
 }
 
 // The captures the passport names that are not in the folder, said once ("" when all are there):

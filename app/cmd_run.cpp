@@ -1169,12 +1169,11 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       sealed_now = true;
       log.info("run folder sealed (seal.json, key {})", key->id);
     } catch (const std::exception& e) {
-      // With the way on (a technician's review: the run ended PASS with no word of it). The resume
-      // brings the devices up and computes the ending again from the kept records: nothing is
-      // measured again.
-      // A verdict's alone: its resume computes the ending again and seals it. A stopped run's
-      // resume goes on with the run, or is refused (a log missing lines, records changed), as the
-      // lines after this one say (a review: the hint came beside `no resume`).
+      // With the way on (a technician's review: the run ended PASS with no word of it), for a
+      // verdict alone: its resume brings the devices up, computes the ending again from the kept
+      // records (nothing measured again) and seals it. A stopped run's resume goes on with the run,
+      // or is refused (a log missing lines, records changed), as the lines after this one say (a
+      // review: the hint came beside `no resume`).
       if (res.outcome != RunOutcome::Pass && res.outcome != RunOutcome::Fail)
         log.error("seal.json not written: {}", e.what());
       else
@@ -1765,9 +1764,12 @@ void say_how_to_finish(const std::string& out, const std::string& key_words, spd
 
 // After an ABORTED or ERROR ending: how to go on (say_how_to_continue), or, where the folder would
 // refuse its resume now (resume_refusal), "no resume: why; start a new run".
+// `refused`: resume_refusal(out) where the caller has it already (it reads the checkpoint and
+// every capture it names).
 void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_t phases, const std::string& why,
-                    const std::string& key_words, spdlog::logger& log) {
-  if (const std::string refused = resume_refusal(out); !refused.empty()) {
+                    const std::string& key_words, spdlog::logger& log,
+                    const std::optional<std::string>& refused_already = std::nullopt) {
+  if (const std::string refused = refused_already ? *refused_already : resume_refusal(out); !refused.empty()) {
     say_no_resume(refused, log);
     return;
   }
@@ -1783,11 +1785,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel);
 // A sealed run resumes only with its key: the line that offers the resume names it, as this run
 // was given it (a technician's review: the hint, followed as printed, was refused, exit 2). Taken
 // from RIG_SEAL_KEY, it is there for the resume too.
-std::string resume_key_words(const RunArgs& a, bool sealed) {
-  if (!sealed) return "";
-  const char* env = std::getenv("RIG_SEAL_KEY");
-  return env && a.seal_key == env ? std::string() : " --seal-key " + shell_word(a.seal_key);
-}
+std::string resume_key_words(const RunArgs& a, bool sealed) { return sealed ? seal_key_words(a.seal_key) : ""; }
 
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
@@ -2403,7 +2401,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // "No resume" only where the folder says so to the resume (the passport or the checkpoint took
     // the reason): where the disk refused both, the resume goes on, and saying otherwise sent the
     // technician away from a folder that then resumed to PASS (a review).
-    if (!no_resume_why.empty() && !resume_refusal(a.out).empty()) {  // as the ending in full says it
+    const std::optional<std::string> refused =
+        no_resume_why.empty() ? std::nullopt : std::optional<std::string>(resume_refusal(a.out));
+    if (refused && !refused->empty()) {  // as the ending in full says it
       say_no_resume(no_resume_why, *log);
       say_how_to_finish(a.out, resume_key, *log);
     } else if (!res.config_error) {
@@ -2416,7 +2416,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
         log->info("{}", line);
       }
       offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
-                     resume_key, *log);
+                     resume_key, *log, refused);
     }
     throw;
   }

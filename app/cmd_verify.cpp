@@ -120,9 +120,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // A run stopped before its ending (a kill, a power cut) holds a checkpoint's seal: what it
   // sealed holds, what it recorded since is not sealed yet. Said as such, with the way on, not as a
   // folder changed behind the station's back (a technician's review read tampering into it).
-  const bool every_file_holds = std::all_of(c.files.begin(), c.files.end(),
-                                            [](const auto& e) { return e.second == seal::FileState::Ok; });
-  const bool not_ended = !c.ok && c.outcome.empty() && !c.files.empty() && every_file_holds && !pending_steps(dir);
+  const bool not_ended = !c.ok && c.outcome.empty() && all_files_hold(c) && !pending_steps(dir);
   // A folder a rig process holds now (a run or resume, or a report or history record being
   // written: the folder's lock) is not sent a resume it would refuse (a code review: "goes on with
   // the run" was said of a live run's folder).

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/file_stamp.hpp"
 #include "rig/executive/executive.hpp"
 
@@ -271,6 +272,26 @@ bool a_resume_finishes(const std::string& dir, const std::vector<std::string>& s
   return seal.is_object() && seal.contains("outcome") && seal["outcome"].is_string() &&
          seal["outcome"].get<std::string>() == passport_outcome(dir).value_or("") && seal.contains("files") &&
          seal["files"].is_object() && seal["files"].contains("passport.json");
+}
+
+bool all_files_hold(const seal::Check& c) {
+  return !c.files.empty() &&
+         std::all_of(c.files.begin(), c.files.end(), [](const auto& e) { return e.second == seal::FileState::Ok; });
+}
+
+bool final_seal_owed(const std::string& dir, const seal::Check& c, const seal::Key& key) {
+  const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
+  if (c.ok || std::find(steps.begin(), steps.end(), kStepSeal) == steps.end()) return false;
+  if (!c.files.empty()) return c.outcome.empty() && all_files_hold(c);
+  std::error_code ec;
+  if (fs::exists(fs::path(dir) / "seal.json", ec) || ec) return false;
+  const seal::Check prev = seal::check_seal(dir, dir + "/seal.prev.json", key, {});
+  return prev.outcome.empty() && all_files_hold(prev);
+}
+
+std::string seal_key_words(const std::string& seal_key) {
+  const char* env = std::getenv("RIG_SEAL_KEY");
+  return env && seal_key == env ? std::string() : " --seal-key " + shell_word(seal_key);
 }
 
 bool outside_the_seal(const std::string& rel) {

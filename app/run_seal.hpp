@@ -2,7 +2,6 @@
 // use it: where the key comes from, which files a run seals when, and the checks a resume makes
 // before it trusts the folder.
 #pragma once
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -81,26 +80,19 @@ inline std::optional<std::vector<std::string>> pending_steps(const std::string& 
   return steps;
 }
 
+// Whether every file the seal `c` read holds as sealed (false where it read none).
+bool all_files_hold(const seal::Check& c);
+
 // Whether `dir`'s final seal was refused (a full disk), as `c` (check_run_folder_seal with `key`)
 // found it: its ending lists the seal as still to do, and the seal that stands is the last
 // checkpoint's with every file it sealed holding: seal.prev.json where no seal.json stands, or a
 // seal.json its rotation left (the rename refused). Said as an ending not finished, not as a
 // folder changed behind the station; a record changed since is said as that (a review).
-inline bool final_seal_owed(const std::string& dir, const seal::Check& c, const seal::Key& key) {
-  const std::vector<std::string> steps = pending_steps(dir).value_or(std::vector<std::string>{});
-  if (c.ok || std::find(steps.begin(), steps.end(), kStepSeal) == steps.end()) return false;
-  const auto all_hold = [](const seal::Check& k) {
-    return !k.files.empty() &&
-           std::all_of(k.files.begin(), k.files.end(), [](const auto& e) { return e.second == seal::FileState::Ok; });
-  };
-  std::error_code ec;
-  if (c.files.empty()) {
-    if (std::filesystem::exists(std::filesystem::path(dir) / "seal.json", ec) || ec) return false;
-    const seal::Check prev = seal::check_seal(dir, dir + "/seal.prev.json", key, {});
-    return prev.outcome.empty() && all_hold(prev);
-  }
-  return c.outcome.empty() && all_hold(c);
-}
+bool final_seal_owed(const std::string& dir, const seal::Check& c, const seal::Key& key);
+
+// What a command line handed over names of the station's key: ` --seal-key FILE` as given, or
+// nothing where it came from RIG_SEAL_KEY (set already where the line is run).
+std::string seal_key_words(const std::string& seal_key);
 
 // `dir`'s passport.json as parsed; nullopt when it is missing, not a regular file (a FIFO is
 // never opened), not JSON or not an object.

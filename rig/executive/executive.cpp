@@ -159,7 +159,6 @@ void Executive::write_checkpoint_text(const nlohmann::ordered_json& j) {
   if (on_checkpoint_) on_checkpoint_(text);
   write_file_atomic(checkpoint_path(out_dir_), text);
   checkpoint_write_failed_ = false;
-  last_checkpoint_ = j;
 }
 
 namespace {
@@ -330,29 +329,25 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   return run(bring_up, phases, values, state, cancel, resumed, identity);
 }
 
-// The last checkpoint again, with the log's loss as it stands now, where lines were refused after
-// it was written (the last phase's `done`, the safe state's): the ending's passport may be refused too, and
-// the checkpoint is then the only file that says the log is short. A write the disk refuses
-// leaves the checkpoint as it was, said in the log's own words (it may reach the console only).
+// The checkpoint on disk again, with the log's loss as it stands now, where lines were refused
+// after it was written (the last phase's `done`, the safe state's): the ending's passport may be
+// refused too, and the checkpoint is then the only file that says the log is short. Read back
+// rather than kept from its write: this runs only where lines were lost, and a resume stopped
+// before its first checkpoint records it in the earlier attempt's (a review: nothing said so).
+// A write the disk refuses leaves the checkpoint as it was, said in the log's own words (it may
+// reach the console only).
 void Executive::record_the_log_loss() {
   // Not after a checkpoint write that failed: each write seals its text first, and a second
   // failure would leave neither seal holding the checkpoint on disk (a review).
   if (!log_loss_ || checkpoint_write_failed_) return;
   const std::string lost = log_loss_();
-  if (lost.empty() || (last_checkpoint_ && last_checkpoint_->value(kLogMissingLinesKey, std::string()) == lost)) return;
+  if (lost.empty()) return;
   try {
-    // A resume stopped before its first checkpoint: the earlier attempt's, as it lies (a review:
-    // a resume that lost lines and stopped there left nothing saying so). None at all: nothing
-    // was kept, and the resume starts from bring-up.
-    if (!last_checkpoint_) {
-      const std::string cp = checkpoint_path(out_dir_);
-      if (path_kind(cp, "checkpoint") != PathKind::file) return;
-      std::ifstream in(cp);
-      nlohmann::ordered_json j = nlohmann::ordered_json::parse(in, nullptr, false);
-      if (!j.is_object()) return;
-      last_checkpoint_ = std::move(j);
-    }
-    nlohmann::ordered_json j = *last_checkpoint_;
+    const std::string cp = checkpoint_path(out_dir_);
+    if (path_kind(cp, "checkpoint") != PathKind::file) return;  // none: nothing kept, a resume starts anew
+    std::ifstream in(cp);
+    nlohmann::ordered_json j = nlohmann::ordered_json::parse(in, nullptr, false);
+    if (!j.is_object() || j.value(kLogMissingLinesKey, std::string()) == lost) return;
     j[kLogMissingLinesKey] = lost;
     write_checkpoint_text(j);
   } catch (const std::exception& e) {

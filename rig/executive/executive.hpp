@@ -194,9 +194,9 @@ class Executive {
   // when the ending's passport is refused too, and a resume refuses that folder (a verdict beside a
   // hole in the account is no verdict). A checkpoint holding it is never resumed from.
   void log_loss_from(std::function<std::string()> f) { log_loss_ = std::move(f); }
-  // The last checkpoint written again with the log's loss as it stands now, where it does not say
-  // so already (run() calls it as it ends; the run's ending again before its passport, whose lines
-  // may be refused too). A write the disk refuses leaves the checkpoint as it was.
+  // The checkpoint on disk written again with the log's loss as it stands now, where it does not
+  // say so already (run() calls it as it ends; the run's ending again before its passport, whose
+  // lines may be refused too). A write the disk refuses leaves the checkpoint as it was.
   void record_the_log_loss();
 
  private:
@@ -204,8 +204,6 @@ class Executive {
                         const PhaseState& state, const nlohmann::json& identity,
                         const std::vector<PhaseRecord>& records);
   void write_checkpoint_text(const nlohmann::ordered_json& j);
-  // The last checkpoint written, kept so that the end of the run can add the log's loss to it.
-  std::optional<nlohmann::ordered_json> last_checkpoint_;
   std::function<std::string()> log_loss_;
   bool checkpoint_write_failed_ = false;  // the last write of the checkpoint (or its seal) threw
   Devices& dev_;

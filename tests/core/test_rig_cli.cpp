@@ -5409,6 +5409,17 @@ int rig_traced(const std::string& path, const std::string& syscall, const std::s
   return rig_under_strace("-o /dev/null -P " + path + " -e trace=" + syscall + " -e inject=" + inject, args, io);
 }
 
+// A quiet `ci` run into `out` without the history, and its resume: sealed with `key` where one is
+// given.
+std::pair<std::vector<std::string>, std::vector<std::string>> ci_run_and_resume(const std::string& out,
+                                                                                const std::string& key) {
+  std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out};
+  std::vector<std::string> resume = {"run", "--resume", out, "--yes", "--no-history"};
+  if (!key.empty())
+    for (auto* v : {&args, &resume}) v->insert(v->end(), {"--seal-key", key});
+  return {args, resume};
+}
+
 // A disk that fills while the run in `out` writes: its run.log refused from the tenth line on, and
 // `also` (a file of its ending, by its staging name) refused when opened.
 std::string full_disk_for(const std::string& out, const std::string& also) {
@@ -5636,11 +5647,7 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
   const std::string key = station_key_in(d);
   for (const bool sealed : {false, true}) {
     const std::string out = d + (sealed ? "/sealed" : "/plain");
-    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out};
-    std::vector<std::string> resume = {"run", "--resume", out, "--yes", "--no-history"};
-    if (sealed) {
-      for (auto* v : {&args, &resume}) v->insert(v->end(), {"--seal-key", key});
-    }
+    const auto [args, resume] = ci_run_and_resume(out, sealed ? key : "");
     // run.log's writes from the tenth on, and the page's file, refused as a full disk refuses them.
     EXPECT_EQ(rig_under_strace(full_disk_for(out, "report.html.tmp"), args, out), 4)
         << slurp(out + ".stderr");
@@ -5724,10 +5731,7 @@ TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
   const std::string key = station_key_in(d);
   for (const bool sealed : {false, true}) {
     const std::string out = d + (sealed ? "/sealed" : "/plain");
-    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", out};
-    std::vector<std::string> resume = {"run", "--resume", out, "--yes", "--no-history"};
-    if (sealed)
-      for (auto* v : {&args, &resume}) v->insert(v->end(), {"--seal-key", key});
+    const auto [args, resume] = ci_run_and_resume(out, sealed ? key : "");
     EXPECT_EQ(rig_under_strace(full_disk_for(out, "passport.json.tmp"), args, out), 4) << slurp(out + ".stderr");
     ASSERT_FALSE(fs::exists(out + "/passport.json")) << slurp(out + ".stderr");
     EXPECT_NE(slurp(out + ".stderr").find("nor an ERROR passport"), std::string::npos) << slurp(out + ".stderr");
