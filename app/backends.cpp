@@ -1,6 +1,8 @@
 #include "app/backends.hpp"
 #include "app/station_stop.hpp"
 
+#include <stdexcept>
+
 #include "firmware_link/connect.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "plant/emulated/world.hpp"
@@ -37,9 +39,6 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p, const std:
   b.plant = "hardware";
   b.clock = std::make_unique<RealClock>();
   b.clock_ptr = b.clock.get();
-  // [dut.design]: the DUT type's loop, the loop figures' labelled fallback without a loop test
-  // (checked with the whole hardware file before any device opens: app/hardware_file).
-  p.design_model = acceptance::read_design_model(*cfg::get_table(hw, "dut", true));
   // GPIO first: the e-stop watch must be live before anything moves.
   b.io = gpio::connect_gpio(*cfg::get_table(hw, "gpio", true));
   b.io_ptr = b.io.get();
@@ -49,6 +48,56 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p, const std:
   b.table_ptr = b.table.get();
   b.dut = link::connect_dut(*cfg::get_table(hw, "dut", true), *b.clock);
   b.dut_ptr = b.dut.get();
+  return b;
+}
+
+namespace {
+// One object behind the four seams: none of them is open.
+class Unopened final : public RotaryTable, public DutLink, public RigIo, public Clock {
+ public:
+  explicit Unopened(double device_time_s) : device_time_s_(device_time_s) {}
+  [[noreturn]] static void refuse(const char* what) {
+    throw std::logic_error(std::string(what) + ": no device is open (every phase left computes from the run's records)");
+  }
+  TableStatus status() override { refuse("table status"); }
+  void home(const CancelToken&) override { refuse("table homing"); }
+  void move_to(double, const CancelToken&) override { refuse("table move"); }
+  void stop() noexcept override {}
+  void quick_stop() noexcept override {}
+  DutInfo info(const CancelToken&) override { refuse("DUT identification"); }
+  void start_stream(const CancelToken&) override { refuse("DUT stream"); }
+  void stop_stream() noexcept override {}
+  std::size_t read(std::span<Sample>, const CancelToken&) override { refuse("DUT stream"); }
+  void set_filter(const FilterConfig&, const CancelToken&) override { refuse("DUT filter"); }
+  FilterConfig get_filter(const CancelToken&) override { refuse("DUT filter"); }
+  LinkStats stats() const override { return {}; }
+  void reset_stats() override {}
+  void set_dut_power(bool on) override {
+    if (on) refuse("DUT power");
+  }
+  bool dut_power() const override { return false; }
+  bool estop_active() const override { return false; }
+  void set_lamp(Lamp, bool) override {}
+  void on_estop(std::function<void()>) override {}
+  std::string describe() const override { return "not opened"; }
+  // Where the run left it: a phase that computes reports its progress against it.
+  double now_s() const override { return device_time_s_; }
+  void sleep_for(double, const CancelToken&) override { refuse("device clock"); }
+
+ private:
+  double device_time_s_;
+};
+}  // namespace
+
+Backends make_unopened(const std::string& plant, double device_time_s) {
+  Backends b;
+  b.plant = plant;
+  auto none = std::make_shared<Unopened>(device_time_s);
+  b.unopened = none;
+  b.clock_ptr = none.get();
+  b.table_ptr = none.get();
+  b.dut_ptr = none.get();
+  b.io_ptr = none.get();
   return b;
 }
 

@@ -23,6 +23,7 @@ struct Backends {
   std::unique_ptr<RotaryTable> table;
   std::unique_ptr<DutLink> dut;
   std::unique_ptr<RigIo> io;
+  std::shared_ptr<void> unopened;  // make_unopened's stand-in behind all four seams
   Clock* clock_ptr = nullptr;
   RotaryTable* table_ptr = nullptr;
   DutLink* dut_ptr = nullptr;
@@ -46,5 +47,13 @@ Backends make_emulated(const toml::table& plant_cfg, const std::string& serial =
 // u10_deg/u20_deg replace the profile's table angles with the mount's calibration. `table_id`:
 // modbus::table_identity of [table], as the run's table lock took it.
 Backends make_hardware(const toml::table& hw, acceptance::Profile& p, const std::string& table_id);
+
+// No device opened, for a resume with nothing left to measure (every phase left computes from the
+// run's records; Executive::without_devices): a technician finishing a verdict's ending need not
+// have the DUT mounted, the table free or the station reachable, and nothing is powered or moved.
+// Any command to these devices is a programming error (std::logic_error); a stop and a lamp are
+// no-ops (nothing moved, no GPIO line held); the clock stands at `device_time_s`, where the run
+// left it.
+Backends make_unopened(const std::string& plant, double device_time_s);
 
 }  // namespace rig::cli

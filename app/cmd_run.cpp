@@ -1452,6 +1452,18 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
   return rc;
 }
 
+// Whether a phase after the first `completed` uses the devices (records, moves, steps the loop):
+// a resume with none left (a run stopped at its ending, or in a phase that only computes from its
+// records) opens no device, asks no operator question and takes no table lock. A new run always
+// has some.
+bool devices_left(const std::vector<Phase>& phases, std::size_t completed) {
+  return std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed), phases.end(),
+                     [](const Phase& ph) { return !ph.from_records; });
+}
+constexpr const char* kNoDeviceNeeded =
+    "every phase left computes from the run's records: nothing is powered or moved, and the DUT need not be "
+    "mounted";
+
 // The interrupted ending a resume would record first (record_an_interrupted_ending) has no
 // database to go to under --no-history, and this attempt's ending replaces its passport: it would
 // be lost for good (a re-test: `--resume --no-history` removed the list, the ABORTED ending
@@ -1885,7 +1897,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (!injections.empty() && a.plant != "emulated") throw ConfigError("--inject works with the emulated plant only");
 
   // The mount's angles before the phases are planned: each move's planned time follows them.
-  if (a.plant == "hardware") apply_procedure_angles(hw, p);
+  if (a.plant == "hardware") {
+    apply_procedure_angles(hw, p);
+    // [dut.design]: the DUT type's loop, the loop figures' labelled fallback without a loop test.
+    // Before the phases are planned (the loop figures' title names it: the plan said "no
+    // [dut.design]" beside one) and whether or not a device opens (a resume may only compute).
+    p.design_model = acceptance::read_design_model(*cfg::get_table(hw, "dut", true));
+  }
   check_procedure_angles_in_travel(a, hw, plant_cfg, p);
   const DutLinkOptions dut = dut_link_options(a, hw, plant_cfg);
   check_stream_rate(a, dut.stream, p);
@@ -1945,8 +1963,6 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     refuse_to_drop_an_interrupted_ending(a);
   }
   if (a.dry_run) {
-    // A table another rig process commands now is said, as the run would say it (a review).
-    if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
@@ -1964,6 +1980,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       refuse_a_log_missing_lines(a.resume);
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
     }
+    const bool devices_needed = devices_left(phases, completed.size());
+    // A table another rig process commands now is said, as the run would say it (a review).
+    if (a.plant == "hardware" && devices_needed)
+      TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
                              shown_text(p.source),
@@ -1977,7 +1997,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
                              pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                            : std::string("the profile's"));
-    if (a.plant == "hardware")
+    if (!devices_needed)
+      std::cout << "Devices: none opened: " << kNoDeviceNeeded << "\n";
+    else if (a.plant == "hardware")
       for (const std::string& line : hardware_plan(hw, planned_table_timing(a, hw, plant_cfg), dut))
         std::cout << line << "\n";
     plan_view.plan(phases, completed.size());
@@ -2028,10 +2050,11 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (!room.empty()) std::cout << room << "\n";
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
-    std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
-                             "table's homing, which depends on where the table stands) and any retries\n",
-                             completed.empty() ? "" : " of what is left", TerminalView::hms(total),
-                             a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
+    if (devices_needed)
+      std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
+                               "table's homing, which depends on where the table stands) and any retries\n",
+                               completed.empty() ? "" : " of what is left", TerminalView::hms(total),
+                               a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
     return history_locked ? kExitUsage : kExitPass;
   }
   // The table next, before a folder is made: one process at a time commands a station's table,
@@ -2039,12 +2062,16 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // the DUT during a recording).
   // The drive's identity is looked up once (a host name resolves): the lock and the backends'
   // stop watch use the same key.
+  // A resume takes it once its checkpoint says a phase left uses the devices (below).
   std::string table_id;
   std::optional<TableLock> table_lock;
-  if (a.plant == "hardware")
-    table_lock.emplace(table_id = modbus::table_identity(*cfg::get_table(hw, "table", true)),
-                       a.resume.empty() ? "rig run" + (a.out.empty() ? std::string() : " --out " + shown_text(a.out))
-                                        : "rig run --resume " + shown_text(a.resume));
+  auto lock_the_table = [&] {
+    if (a.plant == "hardware")
+      table_lock.emplace(table_id = modbus::table_identity(*cfg::get_table(hw, "table", true)),
+                         a.resume.empty() ? "rig run" + (a.out.empty() ? std::string() : " --out " + shown_text(a.out))
+                                          : "rig run --resume " + shown_text(a.resume));
+  };
+  if (a.resume.empty()) lock_the_table();
   // The folder first: an operator should not answer the prompts of a run that cannot start.
   // made_here: the folder is this run's own (the default one it claimed, or one it creates), so
   // a "no" at the prompts may remove it; a folder the user made stays.
@@ -2102,6 +2129,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       throw;
     }
   }
+  const bool devices_needed = devices_left(phases, completed.size());
+  if (!a.resume.empty() && devices_needed) lock_the_table();
   double planned_s = 0;
   for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
   // The plan first: the operator answers knowing what the run will do (it came after the answers,
@@ -2109,7 +2138,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   view.plan(phases, completed.size());
   std::vector<std::string> confirmed;
   try {
-    confirmed = operator_prompts(a, p, planned_s, completed.size(), cancel.token());
+    if (devices_needed) confirmed = operator_prompts(a, p, planned_s, completed.size(), cancel.token());
   } catch (const std::exception& e) {
     // Declined (or no terminal to ask on, and no --yes) before the run started: nothing was
     // written, and a new run's folder goes too (a refusal for want of a terminal left it: a review).
@@ -2169,7 +2198,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
 
   Backends b;
   try {
-    b = a.plant == "hardware" ? make_hardware(hw, p, table_id) : make_emulated(plant_cfg, a.serial);
+    b = !devices_needed            ? make_unopened(a.plant, state.slot().device_time_s.value_or(0.0))
+        : a.plant == "hardware" ? make_hardware(hw, p, table_id)
+                                : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
     log->error("devices not opened: {}", e.what());
     const bool config_error = dynamic_cast<const ConfigError*>(&e) != nullptr;
@@ -2198,6 +2229,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
   Executive exec(dev, a.out, log, &view);
+  if (!devices_needed) exec.without_devices(kNoDeviceNeeded);
   exec.log_loss_from([log_loss] { return log_loss->said(); });
   if (!unjudged.empty()) log->warn("{}", unjudged);
   say_history_left_behind(a, *log);
@@ -2207,13 +2239,11 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // In emulation a resume rebuilds the plant as the checkpoint left it (app/fast_forward.hpp):
   // bring-up on a fresh plant, then the completed recordings replayed, so the resumed
   // passport equals the uninterrupted run's bit for bit. Hardware is only brought up again.
-  // Not where no phase left uses the devices (a run stopped at its ending: only phases computed
-  // from records, or none): nothing would meet the rebuilt plant, and the replay needs room for
-  // its captures beside the run's (a line integrator's review: a run stopped after its last
-  // phase, on a disk with less than that free, failed every resume with ERROR).
-  const bool devices_left = std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed.size()), phases.end(),
-                                        [](const Phase& ph) { return !ph.from_records; });
-  const bool fast_forward = b.emulated && !a.resume.empty() && devices_left;
+  // Where no phase left uses the devices no plant is made (make_unopened): nothing would meet the
+  // rebuilt plant, and the replay needs room for its captures beside the run's (a line
+  // integrator's review: a run stopped after its last phase, on a disk with less than that free,
+  // failed every resume with ERROR).
+  const bool fast_forward = b.emulated && !a.resume.empty();
   double replayed_s = 0;  // of the plant's figures below, what rebuilt it (nothing measured)
   std::uint64_t replayed_samples = 0;
   RunResult res = exec.run(

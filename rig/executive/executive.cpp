@@ -383,8 +383,16 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   std::size_t current = phases.size();
   bool every_phase_ran = false;  // the loop below went through its last phase
   try {
-    log_->info("bring-up");
-    bring_up(ctx);
+    if (unopened_.empty()) {
+      log_->info("bring-up");
+      bring_up(ctx);
+    } else {
+      log_->info("no device opened: {}", unopened_);
+      if (progress_) progress_->log("  no device opened: " + unopened_);  // where bring-up says "DUT power on"
+      for (std::size_t i = 0; i < phases.size(); ++i)
+        if (!phases[i].from_records && !kept(i))
+          throw std::logic_error("phase " + phases[i].id + " uses the devices, but none is open");
+    }
     for (std::size_t i = 0; i < phases.size(); ++i) {
       const Phase& p = phases[i];
       PhaseRecord& rec = result.phases[i];
@@ -471,7 +479,8 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     if (progress_) progress_->phase_finished(rec.id, rec.status, rec.message);
   }
   result.checkpointed = checkpointed;
-  safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
+  if (unopened_.empty())  // nothing opened, nothing moved or powered: no safe state to reach
+    safe_state(dev_, *log_, result.outcome == RunOutcome::Aborted || result.outcome == RunOutcome::Error);
   if (!result.config_error) record_the_log_loss();  // a configuration error is started anew, not resumed
   return result;
 }

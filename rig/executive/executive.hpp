@@ -143,7 +143,7 @@ class Executive {
   Executive(Devices& dev, std::string out_dir, std::shared_ptr<spdlog::logger> log, ProgressSink* progress);
 
   // Bring-up runs on every start, resume included (power, homing: hardware
-  // state is never taken from a checkpoint). Phases already in the checkpoint
+  // state is never taken from a checkpoint), unless without_devices() said none is open. Phases already in the checkpoint
   // are skipped when `resume` is set, except those computed from records (Phase::from_records),
   // which run again; a run folder without a checkpoint (stopped before its first phase
   // completed) resumes from bring-up. `identity` (profile digest, serial, plant) must match the
@@ -177,6 +177,12 @@ class Executive {
                                                   const nlohmann::json& identity, spdlog::logger& log,
                                                   bool allow_complete = false);
 
+  // The devices are not open: every phase left computes from the run's records (a resume of a run
+  // stopped at its ending, or in a phase that only computes). run() then neither brings them up
+  // nor puts them in the safe state, and says `why` in the log; a phase left that would use them
+  // is a programming error (the caller opens them where one is left).
+  void without_devices(std::string why) { unopened_ = std::move(why); }
+
   // The safe-state sequence; public so signal paths and tests can call it.
   // `abnormal` (abort or fault) logs the steps as warnings, otherwise as info.
   static void safe_state(Devices& dev, spdlog::logger& log, bool abnormal = true);
@@ -205,6 +211,7 @@ class Executive {
                         const std::vector<PhaseRecord>& records);
   void write_checkpoint_text(const nlohmann::ordered_json& j);
   std::function<std::string()> log_loss_;
+  std::string unopened_;  // why no device is open ("" while they are)
   bool checkpoint_write_failed_ = false;  // the last write of the checkpoint (or its seal) threw
   Devices& dev_;
   std::string out_dir_;

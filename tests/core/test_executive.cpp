@@ -434,6 +434,61 @@ TEST(Executive, AResumeStoppedWhileComputingAgainKeepsTheCheckpointsPhases) {
             "not computed again: the resume stopped before phase calc, which computes it from the kept records");
 }
 
+// Without devices (a resume with only computing phases left: app/backends.hpp make_unopened),
+// nothing is brought up nor put in the safe state, and the log says why; a phase left that would
+// use the devices is refused as a programming error, before any phase runs.
+TEST(Executive, WithoutDevicesNothingIsBroughtUpOrMadeSafe) {
+  Fixture f("no-devices");
+  JsonState st;
+  int computes = 0;
+  std::vector<Phase> phases{{"rec", "record", 1, [](PhaseContext&) {}},
+                            {"calc", "compute", 0,
+                             [&](PhaseContext& c) {
+                               ++computes;
+                               c.values.set("v", 2.0);
+                             },
+                             {{"v", "g", ""}}, true}};
+  {
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    MeasurementSet v;
+    declare(phases, v);
+    ASSERT_EQ(ex.run(power_on, phases, v, st, CancelToken{}, false, {}).outcome, RunOutcome::Pass);
+  }
+  f.logtext.str("");
+  f.world->io().set_dut_power(true);  // as the safe state would find it, were it run
+  int brought_up = 0;
+  Devices d = f.dev();
+  {
+    Executive ex(d, f.out, f.log, nullptr);
+    ex.without_devices("only computing is left");
+    MeasurementSet v;
+    declare(phases, v);
+    spdlog::logger quiet("quiet");
+    const Resumption from = Executive::read_checkpoint(f.out, phases, v, st, {}, quiet, true);  // all complete
+    const auto r = ex.run([&](PhaseContext&) { ++brought_up; }, phases, v, st, CancelToken{}, from, {});
+    EXPECT_EQ(r.outcome, RunOutcome::Pass) << r.message;
+    EXPECT_EQ(computes, 2);
+    EXPECT_EQ(brought_up, 0);
+    EXPECT_TRUE(f.world->io().dut_power()) << "no safe state: nothing was opened";
+    EXPECT_NE(f.logtext.str().find("no device opened: only computing is left"), std::string::npos) << f.logtext.str();
+    EXPECT_EQ(f.logtext.str().find("safe state"), std::string::npos) << f.logtext.str();
+  }
+  // A checkpoint that no longer holds the recording: that phase would use the devices.
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(Executive::checkpoint_path(f.out)));
+  j["completed"] = nlohmann::json::array();
+  std::ofstream(Executive::checkpoint_path(f.out)) << j.dump();
+  Executive ex(d, f.out, f.log, nullptr);
+  ex.without_devices("only computing is left");
+  MeasurementSet v;
+  declare(phases, v);
+  const auto r = ex.run([&](PhaseContext&) { ++brought_up; }, phases, v, st, CancelToken{}, true, {});
+  EXPECT_EQ(r.outcome, RunOutcome::Error);
+  EXPECT_EQ(r.message, "error: phase rec uses the devices, but none is open");
+  EXPECT_EQ(computes, 2);
+  EXPECT_EQ(brought_up, 0);
+}
+
 TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {
   Fixture f("estop");
   Devices d = f.dev();

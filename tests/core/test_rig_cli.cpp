@@ -4069,6 +4069,49 @@ TEST(RigCli, ASignalAfterTheLastPhaseStillAborts) {
   EXPECT_NE(log.find("outcome ABORTED (exit 3)"), std::string::npos) << log;
 }
 
+// A resume with nothing left to measure (a signal after the last phase: every phase left computes
+// from the records) opens no device: it asks nothing, powers nothing, homes nothing (session 66's
+// list: the DUT powered and the table homed only to compute the ending). On a station it need not
+// reach: a hardware run's folder (the emulated run's, relabelled) resumes to its verdict with the
+// hardware file's devices all absent and no --yes; the dry run says it before.
+TEST(RigCli, AResumeWithNothingLeftToMeasureOpensNoDevice) {
+  const std::string d = tmp("no-device-resume");
+  fs::create_directories(d);
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "-q", "--out", d + "/run", "--inject", "sigint@end"},
+                d + "/io"),
+            3)
+      << slurp(d + "/io.stderr");
+  fs::copy(d + "/run", d + "/hw", fs::copy_options::recursive);
+  const std::string before = slurp(d + "/run/run.log");
+  ASSERT_EQ(run({"run", "--resume", d + "/run", "--no-history"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
+  const std::string resumed = slurp(d + "/run/run.log").substr(before.size());
+  const std::string why = "no device opened: every phase left computes from the run's records: nothing is powered or "
+                          "moved, and the DUT need not be mounted";
+  EXPECT_NE(resumed.find(why), std::string::npos) << resumed;
+  EXPECT_NE(slurp(d + "/io2.stderr").find("  " + why + "\n"), std::string::npos) << slurp(d + "/io2.stderr");
+  for (const char* step : {"bring-up", "DUT power on", "homing table", "safe state"})
+    EXPECT_EQ(resumed.find(step), std::string::npos) << step << "\n" << resumed;
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "PASS");
+  // The same folder as a hardware run's, on a station with no device there.
+  std::ofstream(d + "/hw.toml") << kHardwareWithoutGpio;
+  nlohmann::json inv = nlohmann::json::parse(slurp(d + "/hw/run.json"));
+  inv["plant"] = "hardware", inv["hardware"] = d + "/hw.toml";
+  std::ofstream(d + "/hw/run.json") << inv.dump();
+  nlohmann::json cp = nlohmann::json::parse(slurp(d + "/hw/checkpoint.json"));
+  cp["identity"]["plant"] = "hardware";
+  std::ofstream(d + "/hw/checkpoint.json") << cp.dump();
+  ASSERT_EQ(run({"run", "--resume", d + "/hw", "--no-history", "--dry-run"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
+  const std::string plan = slurp(d + "/dry.stdout");
+  EXPECT_NE(plan.find("\nDevices: none opened: every phase left computes from the run's records"), std::string::npos)
+      << plan;
+  EXPECT_EQ(plan.find("Estimated duration"), std::string::npos) << plan;
+  EXPECT_EQ(run({"run", "--resume", d + "/hw", "--no-history"}, d + "/io3"), 0) << slurp(d + "/io3.stderr");
+  const auto p = nlohmann::json::parse(slurp(d + "/hw/passport.json"));
+  EXPECT_EQ(p["outcome"], "PASS");
+  EXPECT_EQ(p["plant"], "hardware");
+  EXPECT_EQ(p["values"]["bias"], nlohmann::json::parse(slurp(d + "/run/passport.json"))["values"]["bias"]);
+}
+
 // A signal after the last phase of a run whose B exceeds every accuracy class: the class (null) stays
 // FAIL as in the complete run, and the run's own passport gets its report (a review: report.html was
 // not written and `rig report` refused rig's own passport, exit 2).
@@ -4657,6 +4700,22 @@ TEST(RigCli, HardwareDesignModelMistakeIsAConfigurationErrorBeforeAnyDeviceOpens
   const std::string err = slurp(d + "/io.stderr");
   EXPECT_NE(err.find("hw.toml:6"), std::string::npos) << err;
   EXPECT_NE(err.find("pendulosity_kg"), std::string::npos) << err;
+}
+
+// The loop figures' title names the hardware file's [dut.design] in the plan (and so in the
+// passport's phase list): it was read only as the devices opened, after the phases were planned,
+// and the plan said "no [dut.design]" beside one.
+TEST(RigCli, TheLoopFiguresTitleNamesTheDesignModel) {
+  const std::string d = tmp("design-title");
+  fs::create_directories(d);
+  std::ofstream(d + "/hw.toml") << "[table]\nmodbus = \"tcp:127.0.0.1:1\"\n[dut]\ncan = \"vcan-none\"\ncommands = false\n"
+                                   "[dut.design]\n[gpio]\nchip = \"/dev/rig-no-such-gpiochip\"\npower = \"P\"\nestop = \"E\"\n";
+  ASSERT_EQ(run({"run", "--hardware", d + "/hw.toml", "--profile", "ci", "--serial", "X-1", "--dry-run"}, d + "/io"), 0)
+      << slurp(d + "/io.stderr");
+  EXPECT_NE(slurp(d + "/io.stdout").find("loop-figures    00:00:00  closed-loop bandwidth and settling time: the DUT "
+                                         "type's design model (" + d + "/hw.toml:6:1), not measured (no loop test)\n"),
+            std::string::npos)
+      << slurp(d + "/io.stdout");
 }
 
 // ---- One validation of hardware files and profiles (issue 13, item 5): every key of every
