@@ -79,6 +79,9 @@ class Unopened final : public RotaryTable, public DutLink, public RigIo, public 
   bool estop_active() const override { return false; }
   void set_lamp(Lamp, bool) override {}
   void on_estop(std::function<void()>) override {}
+  LoopTestResponse loop_test(const LoopTestRequest&, const CancelToken&) override { refuse("DUT loop test"); }
+  DutCommandChannel command_channel() const override { refuse("DUT command channel"); }
+  std::optional<std::pair<double, double>> travel_deg(const CancelToken&) override { refuse("table travel"); }
   std::string describe() const override { return "not opened"; }
   // Where the run left it: a phase that computes reports its progress against it.
   double now_s() const override { return device_time_s_; }

@@ -1460,9 +1460,10 @@ bool devices_left(const std::vector<Phase>& phases, std::size_t completed) {
   return std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed), phases.end(),
                      [](const Phase& ph) { return !ph.from_records; });
 }
-constexpr const char* kNoDeviceNeeded =
-    "every phase left computes from the run's records: nothing is powered or moved, and the DUT need not be "
-    "mounted";
+std::string no_device_needed(const std::string& plant) {
+  return std::string("every phase left computes from the run's records: nothing is powered or moved") +
+         (plant == "hardware" ? ", and the DUT need not be mounted" : "");
+}
 
 // The interrupted ending a resume would record first (record_an_interrupted_ending) has no
 // database to go to under --no-history, and this attempt's ending replaces its passport: it would
@@ -1998,12 +1999,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                              pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                            : std::string("the profile's"));
     if (!devices_needed)
-      std::cout << "Devices: none opened: " << kNoDeviceNeeded << "\n";
+      std::cout << "Devices: none opened: " << no_device_needed(a.plant) << "\n";
     else if (a.plant == "hardware")
       for (const std::string& line : hardware_plan(hw, planned_table_timing(a, hw, plant_cfg), dut))
         std::cout << line << "\n";
     plan_view.plan(phases, completed.size());
-    for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
+    if (devices_needed)  // bring-up's own steps among them: none happens without devices
+      for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
     if (!a.resume.empty()) {
       std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
       for (std::size_t i = 0; i < completed.size(); ++i) {
@@ -2050,7 +2052,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     if (!room.empty()) std::cout << room << "\n";
     double total = 0;
     for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
-    if (devices_needed)
+    if (!devices_needed)
+      std::cout << "Estimated duration of what is left: no device time: the phases left only compute (seconds of wall "
+                   "time)\n";
+    else
       std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
                                "table's homing, which depends on where the table stands) and any retries\n",
                                completed.empty() ? "" : " of what is left", TerminalView::hms(total),
@@ -2130,7 +2135,12 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     }
   }
   const bool devices_needed = devices_left(phases, completed.size());
-  if (!a.resume.empty() && devices_needed) lock_the_table();
+  if (!a.resume.empty() && devices_needed) try {
+      lock_the_table();
+    } catch (const std::exception& e) {  // the resume's log says why it did not start (it said only "resuming")
+      log->info("resume not started: {}; the folder is as it was", e.what());
+      throw;
+    }
   double planned_s = 0;
   for (std::size_t i = completed.size(); i < phases.size(); ++i) planned_s += phases[i].planned_s;
   // The plan first: the operator answers knowing what the run will do (it came after the answers,
@@ -2229,7 +2239,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
   Executive exec(dev, a.out, log, &view);
-  if (!devices_needed) exec.without_devices(kNoDeviceNeeded);
+  if (!devices_needed) exec.without_devices(no_device_needed(a.plant));
   exec.log_loss_from([log_loss] { return log_loss->said(); });
   if (!unjudged.empty()) log->warn("{}", unjudged);
   say_history_left_behind(a, *log);

@@ -4076,8 +4076,12 @@ TEST(RigCli, ASignalAfterTheLastPhaseStillAborts) {
 // hardware file's devices all absent and no --yes; the dry run says it before.
 TEST(RigCli, AResumeWithNothingLeftToMeasureOpensNoDevice) {
   const std::string d = tmp("no-device-resume");
-  fs::create_directories(d);
+  fs::create_directories(d + "/locks");
   ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "-q", "--out", d + "/run", "--inject", "sigint@end"},
+                d + "/io"),
+            3)
+      << slurp(d + "/io.stderr");
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "-q", "--out", d + "/early", "--inject", "sigint@30"},
                 d + "/io"),
             3)
       << slurp(d + "/io.stderr");
@@ -4086,30 +4090,50 @@ TEST(RigCli, AResumeWithNothingLeftToMeasureOpensNoDevice) {
   ASSERT_EQ(run({"run", "--resume", d + "/run", "--no-history"}, d + "/io2"), 0) << slurp(d + "/io2.stderr");
   const std::string resumed = slurp(d + "/run/run.log").substr(before.size());
   const std::string why = "no device opened: every phase left computes from the run's records: nothing is powered or "
-                          "moved, and the DUT need not be mounted";
-  EXPECT_NE(resumed.find(why), std::string::npos) << resumed;
+                          "moved";
+  EXPECT_NE(resumed.find(why + "\n"), std::string::npos) << resumed;
   EXPECT_NE(slurp(d + "/io2.stderr").find("  " + why + "\n"), std::string::npos) << slurp(d + "/io2.stderr");
   for (const char* step : {"bring-up", "DUT power on", "homing table", "safe state"})
     EXPECT_EQ(resumed.find(step), std::string::npos) << step << "\n" << resumed;
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "PASS");
-  // The same folder as a hardware run's, on a station with no device there.
+  // The same folders as a hardware run's, on a station with no device there, whose table another
+  // process holds locked (app/table_lock.hpp).
   std::ofstream(d + "/hw.toml") << kHardwareWithoutGpio;
-  nlohmann::json inv = nlohmann::json::parse(slurp(d + "/hw/run.json"));
-  inv["plant"] = "hardware", inv["hardware"] = d + "/hw.toml";
-  std::ofstream(d + "/hw/run.json") << inv.dump();
-  nlohmann::json cp = nlohmann::json::parse(slurp(d + "/hw/checkpoint.json"));
-  cp["identity"]["plant"] = "hardware";
-  std::ofstream(d + "/hw/checkpoint.json") << cp.dump();
+  for (const std::string& f : {d + "/hw", d + "/early"}) {
+    nlohmann::json inv = nlohmann::json::parse(slurp(f + "/run.json"));
+    inv["plant"] = "hardware", inv["hardware"] = d + "/hw.toml";
+    std::ofstream(f + "/run.json", std::ios::trunc) << inv.dump();
+    nlohmann::json cp = nlohmann::json::parse(slurp(f + "/checkpoint.json"));
+    cp["identity"]["plant"] = "hardware";
+    std::ofstream(f + "/checkpoint.json", std::ios::trunc) << cp.dump();
+  }
+  ::setenv("RIG_LOCK_DIR", (d + "/locks").c_str(), 1);
+  const int lock = ::open((d + "/locks/rig-table-tcp_127.0.0.1_1_unit_1.lock").c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  ASSERT_GE(lock, 0);
+  ASSERT_EQ(::flock(lock, LOCK_EX | LOCK_NB), 0);
   ASSERT_EQ(run({"run", "--resume", d + "/hw", "--no-history", "--dry-run"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
   const std::string plan = slurp(d + "/dry.stdout");
-  EXPECT_NE(plan.find("\nDevices: none opened: every phase left computes from the run's records"), std::string::npos)
+  EXPECT_NE(plan.find("\nDevices: none opened: " + why.substr(std::string("no device opened: ").size()) +
+                      ", and the DUT need not be mounted\n"),
+            std::string::npos)
       << plan;
-  EXPECT_EQ(plan.find("Estimated duration"), std::string::npos) << plan;
+  EXPECT_NE(plan.find("\nEstimated duration of what is left: no device time: the phases left only compute"),
+            std::string::npos)
+      << plan;
   EXPECT_EQ(run({"run", "--resume", d + "/hw", "--no-history"}, d + "/io3"), 0) << slurp(d + "/io3.stderr");
   const auto p = nlohmann::json::parse(slurp(d + "/hw/passport.json"));
   EXPECT_EQ(p["outcome"], "PASS");
   EXPECT_EQ(p["plant"], "hardware");
   EXPECT_EQ(p["values"]["bias"], nlohmann::json::parse(slurp(d + "/run/passport.json"))["values"]["bias"]);
+  // With recordings left the resume needs the table: refused while another process holds it, and
+  // its log says why it did not start.
+  const std::string early = slurp(d + "/early/run.log");
+  EXPECT_EQ(run({"run", "--resume", d + "/early", "--no-history", "--yes"}, d + "/io4"), 2) << slurp(d + "/io4.stderr");
+  EXPECT_NE(slurp(d + "/early/run.log").substr(early.size()).find(" resume not started: table tcp:127.0.0.1:1"),
+            std::string::npos)
+      << slurp(d + "/early/run.log").substr(early.size());
+  ::close(lock);
+  ::unsetenv("RIG_LOCK_DIR");
 }
 
 // A signal after the last phase of a run whose B exceeds every accuracy class: the class (null) stays
