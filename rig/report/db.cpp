@@ -108,6 +108,18 @@ int wait_for_lock(void* wait_ptr, int count) {
 }
 
 // ---------------------------------------------------------------- SQLite
+// SQLite's message, with the system's reason where one lies under it: a full disk refusing the
+// journal reads "unable to open database file" alone (session 65's list), and that reads as a
+// missing file, not as the disk to free.
+std::string sqlite_said(sqlite3* db) {
+  std::string said = sqlite3_errmsg(db);
+  // Only for the errors SQLite records it with (it stays from an earlier failure otherwise).
+  const int rc = sqlite3_errcode(db);
+  if (const int e = sqlite3_system_errno(db); e != 0 && (rc == SQLITE_CANTOPEN || rc == SQLITE_IOERR))
+    said += std::string(" (") + std::strerror(e) + ")";
+  return said;
+}
+
 class SqliteDb final : public Db {
  public:
   SqliteDb(const std::string& path, Access access) {
@@ -142,7 +154,7 @@ class SqliteDb final : public Db {
                         "that may write " + path + " and its folder can roll it back (rig history --record DIR, or "
                         "sqlite3 " + path + " 'PRAGMA integrity_check', run by that account)");
     if (sqlite3_open_v2(path.c_str(), &db_, mode | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
-      std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+      std::string msg = db_ ? sqlite_said(db_) : "out of memory";
       sqlite3_close(db_);
       db_ = nullptr;
       throw ConfigError(where_ + ": cannot open the history database: " + msg);
@@ -206,7 +218,7 @@ class SqliteDb final : public Db {
                                     (word == "SELECT" || word == "PRAGMA" ? "read it" : "write it") +
                                     "; try again once it is done");
     }
-    throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite3_errmsg(db_));
+    throw ConfigError(where_ + ": cannot " + what + " " + kind + " statement: " + sqlite_said(db_));
   }
   static void bind(sqlite3_stmt* st, int i, const Value& v) {
     if (const auto* x = std::get_if<int64_t>(&v)) sqlite3_bind_int64(st, i, *x);
