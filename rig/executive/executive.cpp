@@ -450,7 +450,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
     result.outcome = RunOutcome::Error;
     result.message = std::string("error: ") + e.what();
     result.records_changed = true;
-    log_->error("{}", result.message);
+    log_->error("{}", e.what());  // the level says "error" (it read "error error: ...")
   } catch (const HardwareError& e) {
     result.outcome = RunOutcome::Error;
     result.message = std::string("hardware fault: ") + e.what();
@@ -463,7 +463,7 @@ RunResult Executive::run(const std::function<void(PhaseContext&)>& bring_up, con
   } catch (const std::exception& e) {
     result.outcome = RunOutcome::Error;
     result.message = std::string("error: ") + e.what();
-    log_->error("{}", result.message);
+    log_->error("{}", e.what());
   }
   values.set_scope({}, {});
   // Stopped early: what was measured is judged, the rest stays UNSET. Stopped after every phase

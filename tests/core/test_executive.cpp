@@ -485,6 +485,9 @@ TEST(Executive, WithoutDevicesNothingIsBroughtUpOrMadeSafe) {
   const auto r = ex.run([&](PhaseContext&) { ++brought_up; }, phases, v, st, CancelToken{}, true, {});
   EXPECT_EQ(r.outcome, RunOutcome::Error);
   EXPECT_EQ(r.message, "error: phase rec uses the devices, but none is open");
+  // The log's level says it is an error once (it read "error error: ...").
+  EXPECT_NE(f.logtext.str().find("\nerror phase rec uses the devices, but none is open\n"), std::string::npos)
+      << f.logtext.str();
   EXPECT_EQ(computes, 2);
   EXPECT_EQ(brought_up, 0);
 }
