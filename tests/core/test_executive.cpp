@@ -492,6 +492,42 @@ TEST(Executive, WithoutDevicesNothingIsBroughtUpOrMadeSafe) {
   EXPECT_EQ(brought_up, 0);
 }
 
+// Lines of run.log the disk refused after the last checkpoint (the safe state's, the ending's)
+// are written into it as the run ends (Executive::record_the_log_loss): the passport that says so
+// may be refused too. Not after a checkpoint write that failed: each write seals its text first,
+// and a second failure would leave no seal holding the checkpoint on disk (session 66's review).
+TEST(Executive, ALogLossAfterTheLastCheckpointIsWrittenIntoItButNotAfterAFailedWrite) {
+  const std::string lost = "run.log is missing lines: the disk refused 2 line(s)";
+  for (const bool refuse_second : {false, true}) {
+    Fixture f(refuse_second ? "log-loss-refused" : "log-loss");
+    std::vector<Phase> phases{{"a", "a", 0, [](PhaseContext& c) { c.values.set("v", 1.0); }, {{"v", "g", ""}}},
+                              {"b", "b", 0, [](PhaseContext&) {}}};
+    MeasurementSet v;
+    declare(phases, v);
+    JsonState st;
+    Devices d = f.dev();
+    Executive ex(d, f.out, f.log, nullptr);
+    int seals = 0;
+    ex.on_checkpoint([&](const std::string&) {
+      if (++seals == 2 && refuse_second) throw std::runtime_error("seal.json.tmp: No space left on device");
+    });
+    ex.log_loss_from([&] { return seals >= 2 ? lost : std::string(); });  // lines refused after the first write
+    const RunResult r = ex.run(power_on, phases, v, st, CancelToken{}, false, {});
+    const nlohmann::json cp = nlohmann::json::parse(std::ifstream(Executive::checkpoint_path(f.out)));
+    if (!refuse_second) {
+      EXPECT_EQ(r.outcome, RunOutcome::Pass) << r.message;
+      EXPECT_EQ(seals, 3) << "the two phases' checkpoints and the re-write";
+      EXPECT_EQ(cp.value("log_missing_lines", ""), lost) << cp.dump();
+      EXPECT_EQ(cp["completed"], (nlohmann::json{"a", "b"}));
+    } else {
+      EXPECT_EQ(r.outcome, RunOutcome::Error) << r.message;
+      EXPECT_EQ(seals, 2) << "no re-write after the failed one";
+      EXPECT_FALSE(cp.contains("log_missing_lines")) << cp.dump();
+      EXPECT_EQ(cp["completed"], (nlohmann::json{"a"})) << "the first checkpoint, as its seal holds it";
+    }
+  }
+}
+
 TEST(Executive, EstopEdgeInTheEmulatedPlantAbortsTheRun) {
   Fixture f("estop");
   Devices d = f.dev();
