@@ -48,6 +48,8 @@
 #include "procedures/acceptance/procedure.hpp"
 #include "app/abort_cleanup.hpp"
 #include "app/backends.hpp"
+#include "app/injections.hpp"
+#include "app/run_folder.hpp"
 #include "app/run_seal.hpp"
 #include "app/passport_held.hpp"
 #include "app/folder_lock.hpp"
@@ -107,94 +109,14 @@ struct RunArgs {
   std::string history_left_behind;  // the warning, "" when the resume records where its run does
   bool history_owed = false;        // --no-history over a run that records: the row is owed
   std::string record_command;       // how to record the folder into the run's database (a resume's, from run.json)
+  // run.json's station: where the run was measured. Its resume's passport and history row keep it,
+  // wherever the resume runs (one that opens no device may run on another machine, whose host name
+  // the station fell back to: two rows for one run). "" for an older run.json: the station as now.
+  std::string station;
   // SHA-256 of the profile's text as the run copies it to profile.toml, taken when the run starts
   // (the file named by --profile may change while the run goes on): passport.json's profile_sha256.
   std::string profile_sha256;
 };
-
-// A signal --inject can send this process, by name.
-int injected_signal(const std::string& kind) {
-  if (kind == "sigint") return SIGINT;
-  if (kind == "sigterm") return SIGTERM;
-  if (kind == "sigkill") return SIGKILL;
-  return 0;
-}
-
-// Emulated-plant fault injection (tests, campaigns and technicians' training):
-// estop@T, sigint@T / sigterm@T / sigkill@T (a real signal to this process at device time T:
-// the campaigns' random points, reproducible to the sample), drop@SEQ:COUNT, and
-// sigint@end / sigterm@end: the signal after the last phase, before the passport is written
-// (the late signal of issue 13).
-struct Injection {
-  enum class Kind { Estop, Signal, Drop, SignalAtEnd } kind = Kind::Estop;
-  double at_s = 0;  // Estop, Signal: device time
-  int signal = 0;   // Signal, SignalAtEnd
-  uint32_t seq = 0, count = 0;  // Drop
-  std::string text;             // as given
-};
-
-// Every --inject checked before anything is written or any device opens (--dry-run included):
-// a typo must not surface after the run folder exists, or after the hardware has opened.
-std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
-  // The whole text, decimal (std::from_chars: no blanks, no sign, no hex), finite.
-  auto number = [](const std::string& s, const std::string& text) {
-    double v = -1;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v) || v < 0)
-      throw ConfigError("--inject '" + s + "': '" + text + "' is not a device time in seconds (a decimal number >= 0)");
-    return v;
-  };
-  auto count = [](const std::string& s, const std::string& text, std::uint32_t least) {
-    const auto v = whole_number(text, least, std::numeric_limits<std::uint32_t>::max());
-    if (!v)
-      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number in [" + std::to_string(least) +
-                        ", " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
-                        "] (decimal, no leading zero: drop@SEQ:COUNT)");
-    return static_cast<std::uint32_t>(*v);
-  };
-  std::vector<Injection> out;
-  for (const std::string& s : inj) {
-    const auto at = s.find('@');
-    if (at == std::string::npos) throw ConfigError("--inject '" + s + "': expected KIND@ARG");
-    const std::string kind = s.substr(0, at), arg = s.substr(at + 1);
-    Injection j;
-    j.text = s;
-    if ((kind == "sigint" || kind == "sigterm") && arg == "end") {
-      j.kind = Injection::Kind::SignalAtEnd;
-      j.signal = injected_signal(kind);
-    } else if (kind == "estop") {
-      j.at_s = number(s, arg);
-    } else if (const int sig = injected_signal(kind)) {
-      j.kind = Injection::Kind::Signal;
-      j.signal = sig;
-      j.at_s = number(s, arg);
-    } else if (kind == "drop") {
-      const auto c = arg.find(':');
-      if (c == std::string::npos) throw ConfigError("--inject '" + s + "': expected drop@SEQ:COUNT");
-      j.kind = Injection::Kind::Drop;
-      j.seq = count(s, arg.substr(0, c), 0);
-      j.count = count(s, arg.substr(c + 1), 1);
-    } else {
-      throw ConfigError("--inject '" + s +
-                        "': unknown fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, sigterm@end, "
-                        "drop@SEQ:COUNT)");
-    }
-    out.push_back(j);
-  }
-  return out;
-}
-
-// Arms the faults on the plant. Returns the signal asked for at the end, or 0.
-int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj) {
-  int signal_at_end = 0;
-  for (const Injection& j : inj) switch (j.kind) {
-      case Injection::Kind::SignalAtEnd: signal_at_end = j.signal; break;
-      case Injection::Kind::Estop: w.trip_estop_at(j.at_s); break;
-      case Injection::Kind::Signal: w.at(j.at_s, [sig = j.signal] { ::kill(::getpid(), sig); }); break;
-      case Injection::Kind::Drop: w.inject_drop(j.seq, j.count); break;
-    }
-  return signal_at_end;
-}
 
 // run.json of a run folder, checked before it is trusted: each field has its type, the
 // plant is one rig knows, and a hardware run names its hardware file.
@@ -218,7 +140,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   // an unknown one is a hand edit or another program's.
   static const std::set<std::string> kFields = {"plant",   "hardware",   "serial", "profile", "profile_source",
                                                 "software", "started", "no_history", "db", "faults", "profile_digest",
-                                                "profile_folder", "history_db"};
+                                                "profile_folder", "history_db", "station"};
   for (const auto& [key, v] : inv.items())
     if (!kFields.count(key)) throw ConfigError(path + ": field '" + key + "': not a field rig writes");
   (void)str("profile", "");  // its type here; its value against profile.toml's once that is read
@@ -227,6 +149,7 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   (void)str("profile_folder", "");
   a.plant = str("plant", "emulated");
   a.hardware = str("hardware", "");
+  a.station = str("station", "");
   a.serial = str("serial", "");
   if (a.plant != "emulated" && a.plant != "hardware")
     throw ConfigError(path + ": field 'plant': \"" + a.plant + "\" is neither \"emulated\" nor \"hardware\"");
@@ -556,6 +479,12 @@ std::string cfg_station(const toml::table& hw) {
   return host;
 }
 
+// The passport's station: the run's (run.json's, for a resume), else this machine's for the plant.
+std::string station_of(const RunArgs& a, const toml::table& hw) {
+  if (!a.station.empty()) return a.station;
+  return a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
+}
+
 // --db, else the hardware file's [history] url, else the rig config's default.
 std::string history_url(const RunArgs& a, const toml::table& hw) {
   if (!a.db.empty()) return a.db;
@@ -571,70 +500,6 @@ std::string history_url(const RunArgs& a, const toml::table& hw) {
       return url;
     }
   return default_history().url;  // RIG_HISTORY's and the rig config's mistakes named as theirs
-}
-
-// The default run folder's time stamp: ISO 8601 basic time, UTC, e.g. 2026-11-23T205900Z.
-// No colons, so a run folder copies to FAT and Windows shares; still sorts by time.
-std::string folder_time_utc() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  ::gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H%M%SZ", &tm);
-  return buf;
-}
-
-// The run folder must be creatable and writable before any device opens: a bad --out is
-// the operator's configuration (exit 2), not a fault of the rig (exit 4).
-// `option`: the option that named the folder (--out, or --resume: a read-only folder's resume
-// said "--out DIR", an option it was not given, a review).
-// A folder name longer than a file system takes (NAME_MAX, 255 bytes): said as such by the dry
-// run too, which passed it before (a review).
-// The whole path too: with the run's own files in it (captures/in-run-U10.cap.interrupted-12 and
-// the like, up to kRunFileRoom bytes) it must stay under PATH_MAX (a re-test: a 4266-byte --out
-// passed the dry run; one of 4080 bytes was created, then called "not writable").
-constexpr std::size_t kRunFileRoom = 64;
-void refuse_a_name_too_long(const std::string& dir, const std::string& option) {
-  const std::size_t cut = dir.size() <= 80 ? dir.size() : utf8_cut(dir, 80);
-  const std::string shown = shown_text(dir.substr(0, cut)) + (cut < dir.size() ? "..." : "");
-  for (const fs::path& part : fs::path(dir))
-    if (part.native().size() > 255)
-      throw ConfigError(fmt::format("{} {}: a folder name of {} bytes; a file system takes 255 at most", option, shown,
-                                    part.native().size()));
-  std::error_code ec;
-  const std::size_t whole = fs::absolute(dir, ec).native().size();
-  if (whole + kRunFileRoom >= PATH_MAX)
-    throw ConfigError(fmt::format("{} {}: a path of {} bytes; with the run's own files in it ({} bytes more) it must "
-                                  "stay under {} (PATH_MAX)",
-                                  option, shown, whole, kRunFileRoom, PATH_MAX));
-}
-
-void prepare_run_folder(const std::string& dir, const std::string& option) {
-  std::error_code ec;
-  refuse_a_name_too_long(dir, option);
-  fs::create_directories(dir, ec);
-  if (ec) throw ConfigError(option + " " + dir + ": cannot create the run folder: " + ec.message());
-  const std::string probe = dir + "/.rig-write-check-" + std::to_string(::getpid());
-  std::ofstream(probe) << "rig\n";
-  const bool writable = fs::file_size(probe, ec) == 4 && !ec;
-  fs::remove(probe, ec);
-  if (!writable) throw ConfigError(option + " " + dir + ": the run folder is not writable");
-}
-
-// Whether this process can create a file in the existing directory `d`.
-bool can_create_file_in(const fs::path& d) {
-  int fd = ::open(d.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);
-  if (fd >= 0) {
-    ::close(fd);
-    return true;
-  }
-  if (errno != EOPNOTSUPP && errno != EISDIR) return false;  // EISDIR: a kernel without O_TMPFILE
-  const fs::path probe = d / (".rig-write-check-" + std::to_string(::getpid()));
-  fd = ::open(probe.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0600);
-  if (fd < 0) return false;
-  ::close(fd);
-  ::unlink(probe.c_str());
-  return true;
 }
 
 // Why a run whose log is missing lines has no resume, as `no resume:` says it.
@@ -798,14 +663,6 @@ bool refuse_an_earlier_run(const std::string& dir, const std::string& profile_so
   return false;
 }
 
-// `p` itself, or its nearest ancestor that exists: where a folder that is not there yet would be
-// created.
-fs::path nearest_existing(fs::path p) {
-  std::error_code ec;
-  while (!fs::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) p = p.parent_path();
-  return p;
-}
-
 // The history the run will record into, checked as far as it can be without writing: a URL of
 // the right form; an SQLite file that exists must be a database (junk bytes passed, and the run's
 // row was lost at its end, logged only: a review), one that does not must be creatable in a
@@ -864,48 +721,6 @@ bool check_run_folder(const std::string& dir, bool new_run_here, const std::stri
   return new_run_here && refuse_an_earlier_run(dir, profile_source);
 }
 
-// What the run's recordings take on disk: every sample is a 16-byte record of its capture
-// (docs/capture-format.md); analysis.json and checkpoint.json grow with them (a tenth), and they,
-// report.html and loop-test.csv take about 2 MB on the shortest profile (the `paper` profile: 103
-// MB of captures, 109-114 MB in all; ci 2 MB, 3.8 MB: a re-test found 1.1x + 1 MB short there).
-// Retries of a capture are not counted.
-double recorded_seconds(const acceptance::Profile& p) {
-  return static_cast<double>(p.order.size()) * p.run_s + p.in_run_s + p.raw_s;
-}
-std::uint64_t recordings_bytes(const acceptance::Profile& p) {
-  return static_cast<std::uint64_t>(16 * p.rate_hz * recorded_seconds(p) * 1.1) + 3'000'000;
-}
-
-// The room the run folder has: free bytes for this process on the file system of `dir` (its
-// nearest existing ancestor), compared with the profile's recordings. A new run that cannot fit
-// is refused before anything opens (a technician's review: a `paper` run into a folder with
-// 100 MB free stopped at its 30-minute capture, 50 minutes of bench time lost); a resume (which
-// records less) is warned. Returns the line the dry run prints.
-std::string check_room(const std::string& dir, const std::string& option, const acceptance::Profile& p, bool resume) {
-  std::error_code ec;
-  const fs::path at = nearest_existing(fs::absolute(dir, ec));
-  struct statvfs v {};
-  if (::statvfs(at.c_str(), &v) != 0) return "";
-  // Root writes into the blocks a file system reserves for it (the run would fit there).
-  const std::uint64_t free = static_cast<std::uint64_t>(::geteuid() == 0 ? v.f_bfree : v.f_bavail) * v.f_frsize,
-                      need = recordings_bytes(p);
-  // The need rounded up, the room down: "4 MB free ... take about 4 MB ... would stop" read as a
-  // contradiction (a re-test).
-  auto mb_up = [](std::uint64_t b) { return fmt::format("{:.0f} MB", std::ceil(static_cast<double>(b) / 1e6)); };
-  auto mb_down = [](std::uint64_t b) { return fmt::format("{:.0f} MB", std::floor(static_cast<double>(b) / 1e6)); };
-  const std::string line = fmt::format("Disk: the recordings take about {}{}; {} free on the file system of {}",
-                                       mb_up(need), resume ? " for a whole run (a resume records only what is left)" : "",
-                                       mb_down(free), at.string());
-  if (free >= need) return line;
-  const std::string why = fmt::format(
-      "{} {}: {} free on its file system ({}), and the profile's recordings take about {} ({:.0f} s of samples at {:g} "
-      "Hz, 16 bytes each, and the analysis): the run would stop when the disk is full",
-      option, shown_text(dir), mb_down(free), at.string(), mb_up(need), recorded_seconds(p), p.rate_hz);
-  if (!resume) throw ConfigError(why + "; free space, or give --out on another file system");
-  std::cerr << "rig: warning: " << why << " if it records all of it\n";
-  return line;
-}
-
 // The paths the run writes into its JSON files (run.json, passport.json, the history row) must be
 // UTF-8 text, as JSON is: a folder named in Latin-1 ran all its phases and then lost the run,
 // its passport, JUnit report and history row refused by the JSON writer, exit 4, and every
@@ -945,7 +760,7 @@ PassportInfo passport_info(const RunArgs& a, const acceptance::Profile& p, const
   info.profile = p.name;
   info.profile_sha256 = a.profile_sha256;
   info.plant = a.plant;
-  info.station = a.plant == "hardware" ? cfg_station(hw) : "emulated plant";
+  info.station = station_of(a, hw);
   info.started = started;
   info.finished = iso8601_utc_now();
   info.software = std::string("rig ") + RIG_VERSION;
@@ -1453,9 +1268,9 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
 }
 
 // Whether a phase after the first `completed` uses the devices (records, moves, steps the loop):
-// a resume with none left (a run stopped at its ending, or in a phase that only computes from its
-// records) opens no device, asks no operator question and takes no table lock. A new run always
-// has some.
+// a resume with none left (a run stopped at its ending, or in `loop-figures`; read_checkpoint
+// puts a loop test the DUT did not run back among them, as the DUT is asked again) opens no
+// device, asks no operator question and takes no table lock. A new run always has some.
 bool devices_left(const std::vector<Phase>& phases, std::size_t completed) {
   return std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed), phases.end(),
                      [](const Phase& ph) { return !ph.from_records; });
@@ -1590,34 +1405,6 @@ std::vector<std::string> hardware_plan(const toml::table& hw, const acceptance::
     out.push_back(fmt::format("GPIO: {}: DUT power {}, e-stop {}", cfg::get_string(*g, "chip"), cfg::get_string(*g, "power"),
                               cfg::get_string(*g, "estop")));
   return out;
-}
-
-// A serial or profile name as one component of the default run folder's name: a '/' or a
-// leading '.' ('../../x') would put the run outside runs/; those and other characters a shell
-// or a file system treats specially become '_'. At most kFolderNamePart bytes: a file name
-// holds 255 (NAME_MAX), and a long UTF-8 profile name passed the dry run, then the run ended
-// "File name too long" with an empty runs/ (a review); the time and a -N follow it.
-constexpr std::size_t kFolderNamePart = 128;
-std::string folder_name_part(std::string s) {
-  for (char& c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
-  if (s.empty() || s[0] == '.') s.insert(s.begin(), '_');
-  if (s.size() > kFolderNamePart) s.resize(kFolderNamePart);
-  return s;
-}
-
-// runs/<name>-<UTC time to the second>; a second run started in the same second (a script, a
-// line's next DUT with the same profile, two started at once) gets -2, -3, ..., not the first
-// run's folder: each name is claimed by creating it (create_directory is atomic), not by looking.
-std::string default_run_folder(const std::string& name) {
-  const std::string base = fmt::format("runs/{}-{}", name, folder_time_utc());
-  std::error_code ec;
-  fs::create_directories("runs", ec);  // (a runs/ that cannot be made is named by prepare_run_folder)
-  for (int i = 1; i < 10000; ++i) {
-    const std::string dir = i == 1 ? base : fmt::format("{}-{}", base, i);
-    if (fs::create_directory(dir, ec) || ec) return dir;  // claimed, or a cause prepare_run_folder names
-  }
-  return base;  // 10000 runs in one second: the guard refuses the first one's folder
 }
 
 // The serial the run's DUT reported (checkpoint.json's state.dut.serial), empty when no DUT has
@@ -1964,6 +1751,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     refuse_to_drop_an_interrupted_ending(a);
   }
   if (a.dry_run) {
+    // A table another rig process commands now is said, as the run would say it, first (a review):
+    // a resume's only where a phase left uses the devices (below).
+    if (a.plant == "hardware" && a.resume.empty())
+      TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
@@ -1982,8 +1773,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
     }
     const bool devices_needed = devices_left(phases, completed.size());
-    // A table another rig process commands now is said, as the run would say it (a review).
-    if (a.plant == "hardware" && devices_needed)
+    if (a.plant == "hardware" && !a.resume.empty() && devices_needed)
       TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
@@ -2168,7 +1958,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     write_file_atomic(a.out + "/profile.toml", profile_text);
     invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
                   {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source}, {"profile_digest", p.digest},
-                  {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()}};
+                  {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()},
+                  {"station", station_of(a, hw)}};
     // Where the profile's relative paths resolve, for its resume (it reads the folder's copy).
     if (p.source.rfind("builtin:", 0) != 0) {
       std::error_code ec;

@@ -178,7 +178,7 @@ class Executive {
                                                   bool allow_complete = false);
 
   // The devices are not open: every phase left computes from the run's records (a resume of a run
-  // stopped at its ending, or in a phase that only computes). run() then neither brings them up
+  // stopped at its ending). run() then neither brings them up
   // nor puts them in the safe state, and says `why` in the log; a phase left that would use them
   // is a programming error (the caller opens them where one is left).
   void without_devices(std::string why) { unopened_ = std::move(why); }

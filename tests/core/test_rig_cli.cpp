@@ -4101,7 +4101,8 @@ TEST(RigCli, AResumeWithNothingLeftToMeasureOpensNoDevice) {
   std::ofstream(d + "/hw.toml") << kHardwareWithoutGpio;
   for (const std::string& f : {d + "/hw", d + "/early"}) {
     nlohmann::json inv = nlohmann::json::parse(slurp(f + "/run.json"));
-    inv["plant"] = "hardware", inv["hardware"] = d + "/hw.toml";
+    EXPECT_EQ(inv["station"], "emulated plant");
+    inv["plant"] = "hardware", inv["hardware"] = d + "/hw.toml", inv["station"] = "bench-7";
     std::ofstream(f + "/run.json", std::ios::trunc) << inv.dump();
     nlohmann::json cp = nlohmann::json::parse(slurp(f + "/checkpoint.json"));
     cp["identity"]["plant"] = "hardware";
@@ -4124,6 +4125,9 @@ TEST(RigCli, AResumeWithNothingLeftToMeasureOpensNoDevice) {
   const auto p = nlohmann::json::parse(slurp(d + "/hw/passport.json"));
   EXPECT_EQ(p["outcome"], "PASS");
   EXPECT_EQ(p["plant"], "hardware");
+  // The station the run was measured at (run.json's), not the one the hardware file or this
+  // machine names now: the resume may run elsewhere, and the history keys a run by its station.
+  EXPECT_EQ(p["station"], "bench-7");
   EXPECT_EQ(p["values"]["bias"], nlohmann::json::parse(slurp(d + "/run/passport.json"))["values"]["bias"]);
   // With recordings left the resume needs the table: refused while another process holds it, and
   // its log says why it did not start.

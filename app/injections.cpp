@@ -1,0 +1,86 @@
+#include "app/injections.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <charconv>
+#include <cmath>
+#include <limits>
+
+#include "app/whole_number.hpp"
+#include "plant/emulated/world.hpp"
+#include "rig/core/errors.hpp"
+
+namespace rig::cli {
+
+namespace {
+// A signal --inject can send this process, by name.
+int injected_signal(const std::string& kind) {
+  if (kind == "sigint") return SIGINT;
+  if (kind == "sigterm") return SIGTERM;
+  if (kind == "sigkill") return SIGKILL;
+  return 0;
+}
+}  // namespace
+
+std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
+  // The whole text, decimal (std::from_chars: no blanks, no sign, no hex), finite.
+  auto number = [](const std::string& s, const std::string& text) {
+    double v = -1;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v) || v < 0)
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a device time in seconds (a decimal number >= 0)");
+    return v;
+  };
+  auto count = [](const std::string& s, const std::string& text, std::uint32_t least) {
+    const auto v = whole_number(text, least, std::numeric_limits<std::uint32_t>::max());
+    if (!v)
+      throw ConfigError("--inject '" + s + "': '" + text + "' is not a whole number in [" + std::to_string(least) +
+                        ", " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
+                        "] (decimal, no leading zero: drop@SEQ:COUNT)");
+    return static_cast<std::uint32_t>(*v);
+  };
+  std::vector<Injection> out;
+  for (const std::string& s : inj) {
+    const auto at = s.find('@');
+    if (at == std::string::npos) throw ConfigError("--inject '" + s + "': expected KIND@ARG");
+    const std::string kind = s.substr(0, at), arg = s.substr(at + 1);
+    Injection j;
+    j.text = s;
+    if ((kind == "sigint" || kind == "sigterm") && arg == "end") {
+      j.kind = Injection::Kind::SignalAtEnd;
+      j.signal = injected_signal(kind);
+    } else if (kind == "estop") {
+      j.at_s = number(s, arg);
+    } else if (const int sig = injected_signal(kind)) {
+      j.kind = Injection::Kind::Signal;
+      j.signal = sig;
+      j.at_s = number(s, arg);
+    } else if (kind == "drop") {
+      const auto c = arg.find(':');
+      if (c == std::string::npos) throw ConfigError("--inject '" + s + "': expected drop@SEQ:COUNT");
+      j.kind = Injection::Kind::Drop;
+      j.seq = count(s, arg.substr(0, c), 0);
+      j.count = count(s, arg.substr(c + 1), 1);
+    } else {
+      throw ConfigError("--inject '" + s +
+                        "': unknown fault (estop@T, sigint@T, sigterm@T, sigkill@T, sigint@end, sigterm@end, "
+                        "drop@SEQ:COUNT)");
+    }
+    out.push_back(j);
+  }
+  return out;
+}
+
+int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj) {
+  int signal_at_end = 0;
+  for (const Injection& j : inj) switch (j.kind) {
+      case Injection::Kind::SignalAtEnd: signal_at_end = j.signal; break;
+      case Injection::Kind::Estop: w.trip_estop_at(j.at_s); break;
+      case Injection::Kind::Signal: w.at(j.at_s, [sig = j.signal] { ::kill(::getpid(), sig); }); break;
+      case Injection::Kind::Drop: w.inject_drop(j.seq, j.count); break;
+    }
+  return signal_at_end;
+}
+
+}  // namespace rig::cli
