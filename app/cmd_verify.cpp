@@ -116,7 +116,19 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                              : state == seal::FileState::Missing ? "MISSING"
                                                                  : "NOT-FILE",
                              f);
-  for (const std::string& p : c.problems) std::cout << "  problem: " << p << "\n";
+  // A final seal the disk refused (the ending lists `seal`, no seal.json) is an ending not finished,
+  // not a folder changed behind the station (a technician's review read tampering into it).
+  const bool seal_owed = final_seal_owed(dir, c, *key);
+  // Its missing seal.json said as that, not as a folder never sealed (session 66's list).
+  const std::string never_sealed = ": missing: the folder is not sealed";
+  for (const std::string& p : c.problems)
+    std::cout << "  problem: "
+              << (seal_owed && p.ends_with(never_sealed)
+                      ? p.substr(0, p.size() - never_sealed.size()) +
+                            ": missing: the final seal was not written (seal.prev.json, the last checkpoint's seal, "
+                            "holds what it sealed)"
+                      : p)
+              << "\n";
   // A run stopped before its ending (a kill, a power cut) holds a checkpoint's seal: what it
   // sealed holds, what it recorded since is not sealed yet. Said as such, with the way on, not as a
   // folder changed behind the station's back (a technician's review read tampering into it).
@@ -128,9 +140,6 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // A run whose checkpoint records that its log lost lines has no resume (a technician's review:
   // verify advised one, and it was refused).
   const std::string log_short = checkpoint_log_missing_lines(dir);
-  // A final seal the disk refused (the ending lists `seal`, no seal.json) is an ending not finished,
-  // not a folder changed behind the station (a technician's review read tampering into it).
-  const bool seal_owed = final_seal_owed(dir, c, *key);
   std::cout << (c.ok ? fmt::format("verified: {} files as the station sealed them, outcome {} (the seal says who wrote "
                                    "them; the outcome is the passport's)\n",
                                    c.files.size(), c.outcome)

@@ -6031,6 +6031,13 @@ TEST(RigCli, ARefusedFinalSealSaysWhatSealsIt) {
   const std::string said = slurp(out + "-verify.stdout");
   EXPECT_NE(said.find("NOT verified: the run's final seal was not written"), std::string::npos) << said;
   EXPECT_EQ(said.find("not as the station sealed it"), std::string::npos) << said;
+  // The checkpoint's seal rotated aside (seal.prev.json): the missing seal.json is the final seal
+  // not written, not a folder never sealed.
+  EXPECT_NE(said.find("  problem: " + out + "/seal.json: missing: the final seal was not written (seal.prev.json, the "
+                      "last checkpoint's seal, holds what it sealed)\n"),
+            std::string::npos)
+      << said;
+  EXPECT_EQ(said.find("the folder is not sealed"), std::string::npos) << said;
   EXPECT_NE(said.find("`rig run --resume " + out + " --seal-key FILE` finishes it"), std::string::npos) << said;
   EXPECT_EQ(run({"history", "--db", d + "/h.sqlite", "--record", out, "--seal-key", key}, out + "-record"), 2);
   EXPECT_NE(slurp(out + "-record.stderr").find(out + ": its final seal was not written (.ending-pending lists: seal); "
