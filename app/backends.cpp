@@ -55,7 +55,8 @@ namespace {
 // One object behind the four seams: none of them is open.
 class Unopened final : public RotaryTable, public DutLink, public RigIo, public Clock {
  public:
-  explicit Unopened(double device_time_s) : device_time_s_(device_time_s) {}
+  Unopened(double device_time_s, std::string loop_test_refusal)
+      : device_time_s_(device_time_s), loop_test_refusal_(std::move(loop_test_refusal)) {}
   [[noreturn]] static void refuse(const char* what) {
     throw std::logic_error(std::string(what) + ": no device is open (every phase left computes from the run's records)");
   }
@@ -79,7 +80,12 @@ class Unopened final : public RotaryTable, public DutLink, public RigIo, public 
   bool estop_active() const override { return false; }
   void set_lamp(Lamp, bool) override {}
   void on_estop(std::function<void()>) override {}
-  LoopTestResponse loop_test(const LoopTestRequest&, const CancelToken&) override { refuse("DUT loop test"); }
+  LoopTestResponse loop_test(const LoopTestRequest&, const CancelToken&) override {
+    if (loop_test_refusal_.empty()) refuse("DUT loop test");
+    LoopTestResponse r;  // as the link answers it, from its options alone
+    r.reason = loop_test_refusal_;
+    return r;
+  }
   DutCommandChannel command_channel() const override { refuse("DUT command channel"); }
   std::optional<std::pair<double, double>> travel_deg(const CancelToken&) override { refuse("table travel"); }
   std::string describe() const override { return "not opened"; }
@@ -89,13 +95,14 @@ class Unopened final : public RotaryTable, public DutLink, public RigIo, public 
 
  private:
   double device_time_s_;
+  std::string loop_test_refusal_;
 };
 }  // namespace
 
-Backends make_unopened(const std::string& plant, double device_time_s) {
+Backends make_unopened(const std::string& plant, double device_time_s, const std::string& loop_test_refusal) {
   Backends b;
   b.plant = plant;
-  auto none = std::make_shared<Unopened>(device_time_s);
+  auto none = std::make_shared<Unopened>(device_time_s, loop_test_refusal);
   b.unopened = none;
   b.clock_ptr = none.get();
   b.table_ptr = none.get();

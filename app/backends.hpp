@@ -53,7 +53,8 @@ Backends make_hardware(const toml::table& hw, acceptance::Profile& p, const std:
 // have the DUT mounted, the table free or the station reachable, and nothing is powered or moved.
 // Any command to these devices is a programming error (std::logic_error); a stop and a lamp are
 // no-ops (nothing moved, no GPIO line held); the clock stands at `device_time_s`, where the run
-// left it.
-Backends make_unopened(const std::string& plant, double device_time_s);
+// left it. `loop_test_refusal`: the DUT link's own refusal of the loop test
+// (link::loop_test_refused_by), given as the link gives it; "" refuses the call as any other.
+Backends make_unopened(const std::string& plant, double device_time_s, const std::string& loop_test_refusal);
 
 }  // namespace rig::cli

@@ -435,14 +435,21 @@ void check_emulated_rate(const toml::table& profile_table, const std::string& so
 struct DutLinkOptions {
   acceptance::DutAbilities can;
   std::shared_ptr<const link::DbcStreamDecoder> stream;  // hardware with a DBC-described stream
+  std::string loop_test_refusal;  // the link's own refusal of the loop test (link::loop_test_refused_by), or ""
 };
 DutLinkOptions dut_link_options(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
   if (a.plant == "hardware") {
     const link::LinkOptions o = link::link_options(*cfg::get_table(hw, "dut", true));
-    return {{o.commands, o.loop_test}, o.stream};
+    const std::string refusal = link::loop_test_refused_by(o);
+    return {{o.commands, o.loop_test, !refusal.empty()}, o.stream, refusal};
   }
+  // The emulated link takes the firmware's command channel and asks the firmware for the loop
+  // test (plant/emulated/world.cpp): a firmware without one refuses it over the bus.
   const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
-  return {{o.commands, o.loop_test}, nullptr};
+  link::LinkOptions lo;
+  lo.commands = o.commands;
+  const std::string refusal = link::loop_test_refused_by(lo);
+  return {{o.commands, o.loop_test, !refusal.empty()}, nullptr, refusal};
 }
 
 // What the plan cannot do on this DUT, said before the run (the run says it again, with the
@@ -1269,15 +1276,20 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
 
 // Whether a phase after the first `completed` uses the devices (records, moves, steps the loop):
 // a resume with none left (a run stopped at its ending, or in `loop-figures`; read_checkpoint
-// puts a loop test the DUT did not run back among them, as the DUT is asked again) opens no
-// device, asks no operator question and takes no table lock. A new run always has some.
+// puts a loop test the DUT did not run back among them, as the DUT is asked again, which uses the
+// devices unless the link refuses it unasked: Phase::uses_devices) opens no device, asks no
+// operator question and takes no table lock. A new run always has some.
 bool devices_left(const std::vector<Phase>& phases, std::size_t completed) {
   return std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed), phases.end(),
-                     [](const Phase& ph) { return !ph.from_records; });
+                     [](const Phase& ph) { return !ph.from_records && ph.uses_devices; });
 }
-std::string no_device_needed(const std::string& plant) {
-  return std::string("every phase left computes from the run's records: nothing is powered or moved") +
-         (plant == "hardware" ? ", and the DUT need not be mounted" : "");
+// Why a resume opens no device, as its log and its dry run say it.
+std::string no_device_needed(const std::string& plant, const std::vector<Phase>& phases, std::size_t completed) {
+  const bool loop_left = std::any_of(phases.begin() + static_cast<std::ptrdiff_t>(completed), phases.end(),
+                                        [](const Phase& ph) { return !ph.from_records; });
+  return std::string("every phase left computes from the run's records") +
+         (loop_left ? " or is the loop test the DUT's link refuses without asking it" : "") +
+         ": nothing is powered or moved" + (plant == "hardware" ? ", and the DUT need not be mounted" : "");
 }
 
 // The interrupted ending a resume would record first (record_an_interrupted_ending) has no
@@ -1789,7 +1801,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                              pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                            : std::string("the profile's"));
     if (!devices_needed)
-      std::cout << "Devices: none opened: " << no_device_needed(a.plant) << "\n";
+      std::cout << "Devices: none opened: " << no_device_needed(a.plant, phases, completed.size()) << "\n";
     else if (a.plant == "hardware")
       for (const std::string& line : hardware_plan(hw, planned_table_timing(a, hw, plant_cfg), dut))
         std::cout << line << "\n";
@@ -1999,7 +2011,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
 
   Backends b;
   try {
-    b = !devices_needed            ? make_unopened(a.plant, state.slot().device_time_s.value_or(0.0))
+    b = !devices_needed            ? make_unopened(a.plant, state.slot().device_time_s.value_or(0.0), dut.loop_test_refusal)
         : a.plant == "hardware" ? make_hardware(hw, p, table_id)
                                 : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
@@ -2030,7 +2042,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (!a.serial.empty()) ro.expected_serial = a.serial;
 
   Executive exec(dev, a.out, log, &view);
-  if (!devices_needed) exec.without_devices(no_device_needed(a.plant));
+  if (!devices_needed) exec.without_devices(no_device_needed(a.plant, phases, completed.size()));
   exec.log_loss_from([log_loss] { return log_loss->said(); });
   if (!unjudged.empty()) log->warn("{}", unjudged);
   say_history_left_behind(a, *log);

@@ -329,16 +329,15 @@ FilterConfig CanDutLink::get_filter(const CancelToken& cancel) {
   return f;
 }
 
+std::string loop_test_refused_by(const LinkOptions& o) {
+  if (!o.commands) return std::string("no loop test: ") + kNoCommands;
+  if (!o.loop_test) return "loop test switched off for this DUT ([dut] loop_test = false in the hardware file)";
+  return "";
+}
+
 LoopTestResponse CanDutLink::loop_test(const LoopTestRequest& rq, const CancelToken& cancel) {
   LoopTestResponse out;
-  if (!opts_.commands) {
-    out.reason = std::string("no loop test: ") + kNoCommands;
-    return out;
-  }
-  if (!opts_.loop_test) {
-    out.reason = "loop test switched off for this DUT ([dut] loop_test = false in the hardware file)";
-    return out;
-  }
+  if (out.reason = loop_test_refused_by(opts_); !out.reason.empty()) return out;
   if (!(std::abs(rq.amplitude_g) > 0) || std::abs(rq.amplitude_g) > loop_cmd::kMaxAmplitudeG)
     throw ConfigError("loop test amplitude " + std::to_string(rq.amplitude_g) + " g: must be non-zero and at most " +
                       std::to_string(loop_cmd::kMaxAmplitudeG) + " g");

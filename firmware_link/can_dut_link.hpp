@@ -38,6 +38,11 @@ struct LinkOptions {
   std::shared_ptr<const DbcStreamDecoder> stream;
 };
 
+// Why the link refuses the loop test from its options alone, without asking the DUT (no command
+// channel, or [dut] loop_test = false); "" where it asks the DUT. CanDutLink::loop_test answers
+// with it, and a resume that opens no device gives the same answer (app/backends.hpp).
+std::string loop_test_refused_by(const LinkOptions& o);
+
 class CanDutLink final : public DutLink {
  public:
   CanDutLink(std::unique_ptr<CanTransport> transport, Clock& clock, LinkOptions opts = {});

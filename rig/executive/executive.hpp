@@ -72,6 +72,10 @@ struct Phase {
   // passport is then always computed from the kept captures, never read back from a file
   // anyone could have edited.
   bool from_records = false;
+  // Whether a phase that is not from_records uses the devices here: false for one whose only device
+  // call is answered without them (the loop test a DUT's link refuses from its options). A resume
+  // left with only such phases and from_records ones opens none (without_devices).
+  bool uses_devices = true;
 };
 
 // What the phases hand on to each other (typed by the procedure), saved with

@@ -4140,6 +4140,47 @@ TEST(RigCli, AResumeWithNothingLeftToMeasureOpensNoDevice) {
   ::unsetenv("RIG_LOCK_DIR");
 }
 
+// A DUT whose link refuses the loop test from its own options (no command channel; [dut] loop_test =
+// false) is asked nothing by that phase: a resume left with it and the computing phases opens no
+// device either (review 2 of session 67: it brought the devices up to repeat the link's refusal),
+// and gives the uninterrupted run's values. A firmware that refuses it itself (an emulated
+// [plant.firmware] loop_test = false) is asked again, over the devices.
+TEST(RigCli, ALoopTestTheLinkRefusesUnaskedNeedsNoDeviceOnResume) {
+  const std::string d = tmp("no-device-loop");
+  fs::create_directories(d);
+  std::ofstream(d + "/nc.toml") << "base = \"ci\"\n[profile]\nname = \"ci-nocmd\"\n[plant.firmware]\ncommands = false\n";
+  std::ofstream(d + "/nl.toml") << "base = \"ci\"\n[profile]\nname = \"ci-noloop\"\n[plant.firmware]\nloop_test = false\n";
+  auto start = [&](const std::string& profile, const std::string& out, bool stop) {
+    std::vector<std::string> args{"run", "--profile", d + "/" + profile, "--serial", "NC-1", "--yes", "--no-history",
+                                  "-q", "--out", d + "/" + out};
+    if (stop) args.insert(args.end(), {"--inject", "sigint@end"});
+    return run(args, d + "/" + out + "-io");
+  };
+  ASSERT_EQ(start("nc.toml", "whole", false), 1) << slurp(d + "/whole-io.stderr");  // bandwidth_0p5 required, null
+  ASSERT_EQ(start("nc.toml", "stopped", true), 3) << slurp(d + "/stopped-io.stderr");
+  const std::string before = slurp(d + "/stopped/run.log");
+  ASSERT_EQ(run({"run", "--resume", d + "/stopped", "--no-history"}, d + "/resume"), 1) << slurp(d + "/resume.stderr");
+  const std::string resumed = slurp(d + "/stopped/run.log").substr(before.size());
+  EXPECT_NE(resumed.find("no device opened: every phase left computes from the run's records or is the loop test the "
+                         "DUT's link refuses without asking it: nothing is powered or moved\n"),
+            std::string::npos)
+      << resumed;
+  for (const char* step : {"bring-up", "DUT power on", "safe state"})
+    EXPECT_EQ(resumed.find(step), std::string::npos) << step << "\n" << resumed;
+  EXPECT_NE(resumed.find("phase loop start"), std::string::npos) << resumed;
+  const auto whole = nlohmann::json::parse(slurp(d + "/whole/passport.json"));
+  const auto again = nlohmann::json::parse(slurp(d + "/stopped/passport.json"));
+  EXPECT_EQ(again["values"], whole["values"]);
+  EXPECT_EQ(again["skipped"], whole["skipped"]);
+  // The firmware's own refusal: asked again, so the devices come up.
+  ASSERT_EQ(start("nl.toml", "firmware", true), 3) << slurp(d + "/firmware-io.stderr");
+  ASSERT_EQ(run({"run", "--resume", d + "/firmware", "--no-history", "--dry-run"}, d + "/fw-dry"), 0)
+      << slurp(d + "/fw-dry.stderr");
+  EXPECT_EQ(slurp(d + "/fw-dry.stdout").find("Devices: none opened"), std::string::npos) << slurp(d + "/fw-dry.stdout");
+  EXPECT_NE(slurp(d + "/fw-dry.stdout").find("still to run: loop, loop-figures"), std::string::npos)
+      << slurp(d + "/fw-dry.stdout");
+}
+
 // A signal after the last phase of a run whose B exceeds every accuracy class: the class (null) stays
 // FAIL as in the complete run, and the run's own passport gets its report (a review: report.html was
 // not written and `rig report` refused rig's own passport, exit 2).
