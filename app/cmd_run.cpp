@@ -435,21 +435,18 @@ void check_emulated_rate(const toml::table& profile_table, const std::string& so
 struct DutLinkOptions {
   acceptance::DutAbilities can;
   std::shared_ptr<const link::DbcStreamDecoder> stream;  // hardware with a DBC-described stream
-  std::string loop_test_refusal;  // the link's own refusal of the loop test (link::loop_test_refused_by), or ""
 };
 DutLinkOptions dut_link_options(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg) {
   if (a.plant == "hardware") {
     const link::LinkOptions o = link::link_options(*cfg::get_table(hw, "dut", true));
-    const std::string refusal = link::loop_test_refused_by(o);
-    return {{o.commands, o.loop_test, !refusal.empty()}, o.stream, refusal};
+    return {{o.commands, o.loop_test, link::loop_test_refused_by(o)}, o.stream};
   }
   // The emulated link takes the firmware's command channel and asks the firmware for the loop
   // test (plant/emulated/world.cpp): a firmware without one refuses it over the bus.
   const plant::FirmwareOptions o = plant::firmware_options(cfg::get_table(plant_cfg, "firmware"));
   link::LinkOptions lo;
   lo.commands = o.commands;
-  const std::string refusal = link::loop_test_refused_by(lo);
-  return {{o.commands, o.loop_test, !refusal.empty()}, nullptr, refusal};
+  return {{o.commands, o.loop_test, link::loop_test_refused_by(lo)}, nullptr};
 }
 
 // What the plan cannot do on this DUT, said before the run (the run says it again, with the
@@ -992,8 +989,8 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       log.info("run folder sealed (seal.json, key {})", key->id);
     } catch (const std::exception& e) {
       // With the way on (a technician's review: the run ended PASS with no word of it), for a
-      // verdict alone: its resume brings the devices up, computes the ending again from the kept
-      // records (nothing measured again) and seals it. A stopped run's resume goes on with the run,
+      // verdict alone: its resume computes the ending again from the kept records (no device
+      // opened, nothing measured again) and seals it. A stopped run's resume goes on with the run,
       // or is refused (a log missing lines, records changed), as the lines after this one say (a
       // review: the hint came beside `no resume`).
       if (res.outcome != RunOutcome::Pass && res.outcome != RunOutcome::Fail)
@@ -1765,8 +1762,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (a.dry_run) {
     // A table another rig process commands now is said, as the run would say it, first (a review):
     // a resume's only where a phase left uses the devices (below).
-    if (a.plant == "hardware" && a.resume.empty())
-      TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
+    auto check_the_table = [&] {
+      if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
+    };
+    if (a.resume.empty()) check_the_table();
     // Without --out the run makes its own new folder under runs/, which holds no earlier run.
     // A live run's folder says so first, as the run itself would.
     if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
@@ -1785,8 +1784,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
       completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
     }
     const bool devices_needed = devices_left(phases, completed.size());
-    if (a.plant == "hardware" && !a.resume.empty() && devices_needed)
-      TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
+    if (!a.resume.empty() && devices_needed) check_the_table();
     TerminalView plan_view(stdout);
     std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
                              shown_text(p.source),
@@ -2011,7 +2009,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
 
   Backends b;
   try {
-    b = !devices_needed            ? make_unopened(a.plant, state.slot().device_time_s.value_or(0.0), dut.loop_test_refusal)
+    b = !devices_needed            ? make_unopened(a.plant, state.slot().device_time_s.value_or(0.0), dut.can.link_loop_test_refusal)
         : a.plant == "hardware" ? make_hardware(hw, p, table_id)
                                 : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {

@@ -120,11 +120,10 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
   // not a folder changed behind the station (a technician's review read tampering into it).
   const bool seal_owed = final_seal_owed(dir, c, *key);
   // Its missing seal.json said as that, not as a folder never sealed (session 66's list).
-  const std::string never_sealed = ": missing: the folder is not sealed";
   for (const std::string& p : c.problems)
     std::cout << "  problem: "
-              << (seal_owed && p.ends_with(never_sealed)
-                      ? p.substr(0, p.size() - never_sealed.size()) +
+              << (seal_owed && p.ends_with(seal::kSealMissing)
+                      ? p.substr(0, p.size() - seal::kSealMissing.size()) +
                             ": missing: the final seal was not written (seal.prev.json, the last checkpoint's seal, "
                             "holds what it sealed)"
                       : p)

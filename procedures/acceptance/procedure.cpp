@@ -450,7 +450,7 @@ std::vector<Phase> build_phases(const Profile& p, ProcedureState& state, const T
                 : p.loop_steps * loop_step_nominal_s(p.loop_record_s,
                                                    static_cast<std::size_t>(std::lround(p.loop_record_s * p.filter.rate_hz))),
                 [&p, &st](PhaseContext& c) { phase_loop_test(c, p, st); }});
-  ph.back().uses_devices = !dut.link_refuses_loop_test;
+  ph.back().uses_devices = dut.link_loop_test_refusal.empty();
   ph.push_back({"loop-figures",
                 dut.runs_loop_test() ? "closed-loop bandwidth and settling time with the output filter, from the loop "
                                        "test's records"

@@ -48,9 +48,10 @@ struct TableTiming {
 struct DutAbilities {
   bool commands = true;   // a command channel: identify, set output filter, loop test
   bool loop_test = true;  // the firmware runs the loop test
-  // The rig's link refuses the loop test from its own options, asking the DUT nothing (no command
-  // channel, [dut] loop_test = false): that phase then uses no device (Phase::uses_devices).
-  bool link_refuses_loop_test = false;
+  // Why the rig's link refuses the loop test from its own options, asking the DUT nothing (no
+  // command channel, [dut] loop_test = false; link::loop_test_refused_by), "" where it asks the
+  // DUT: that phase then uses no device (Phase::uses_devices).
+  std::string link_loop_test_refusal = {};
   bool runs_loop_test() const { return commands && loop_test; }
 };
 

@@ -185,7 +185,7 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
   Check c;
   bool exists = false;
   if (!regular_file(seal_path, exists)) {
-    c.problems.push_back(seal_path + (exists ? ": not a regular file" : ": missing: the folder is not sealed"));
+    c.problems.push_back(seal_path + (exists ? std::string(": not a regular file") : std::string(kSealMissing)));
     return c;
   }
   std::ifstream in(seal_path, std::ios::binary);

@@ -62,6 +62,10 @@ struct Check {
   std::string outcome;                // the sealed outcome (PASS, FAIL, ABORTED, ERROR; empty: not final)
 };
 
+// The end of check_seal's problem for a seal file that is not there (after its path): `rig verify`
+// words it otherwise where the final seal is owed.
+inline constexpr std::string_view kSealMissing = ": missing: the folder is not sealed";
+
 // Checks `seal_path` (a seal.json) against the folder's files and the key; every file in
 // `must_cover` must be among those sealed. Neither the seal nor a sealed file is opened unless it
 // is a regular file (a FIFO put in its place cannot stall the check).
