@@ -1110,10 +1110,10 @@ void say_history_left_behind(const RunArgs& a, spdlog::logger& log) {
 // Lines of run.log the disk refused: the first refusal's reason and time (UTC). The run's account
 // is one of its records: a verdict whose log is missing lines is no verdict (no_resume_why).
 struct LogLoss {
-  std::mutex m;
+  mutable std::mutex m;
   std::size_t lines = 0;  // refused so far
   std::string why, first;
-  std::string said() {
+  std::string said() const {
     const std::lock_guard lock(m);
     return lines ? fmt::format("{}: the disk refused {} line(s), the first at {} ({})", kLogMissingLines, lines, first, why) : "";
   }
@@ -1130,10 +1130,23 @@ std::string utc_now_ms() {
   return fmt::format("{}.{:03d}Z", s.substr(0, s.size() - 1), ms % 1000);
 }
 
+// A run.log this process cannot open (main: "rig: error:", exit 4).
+struct RunLogUnopened : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
                                             std::shared_ptr<LogLoss> loss = std::make_shared<LogLoss>()) {
-  auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
-  g_attempt_log = out_dir + "/run.log";
+  std::shared_ptr<spdlog::sinks::basic_file_sink_mt> file;
+  try {
+    file = std::make_shared<spdlog::sinks::basic_file_sink_mt>(out_dir + "/run.log", false);
+  } catch (const spdlog::spdlog_ex& e) {  // "Failed opening file X for writing: <the system's reason>"
+    const std::string said = e.what();
+    const std::size_t colon = said.rfind(": ");
+    throw RunLogUnopened(fmt::format("{}/run.log: cannot be opened to write the run's account ({})", out_dir,
+                                    colon == std::string::npos ? said : said.substr(colon + 2)));
+  }
+  g_attempt_log = out_dir + "/run.log";  // only once open: an attempt that never wrote there closes nothing
   file->set_level(spdlog::level::debug);
   auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
   err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
@@ -1626,6 +1639,464 @@ int the_passports_exit(int rc) {
   return rc;
 }
 
+// `rig run --dry-run`: the run's plan as the run would make it, every check the run makes before
+// a device opens, and nothing written or opened. Its exit code: 2 where the history is locked.
+int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& plant_cfg, const acceptance::Profile& p,
+                  const DutLinkOptions& dut, const std::vector<Phase>& phases, MeasurementSet& values,
+                  acceptance::ProcedureState& state, const nlohmann::json& identity, bool sealed,
+                  const std::string& unjudged, bool history_locked) {
+  // A table another rig process commands now is said, as the run would say it, first (a review):
+  // a resume's only where a phase left uses the devices (below).
+  auto check_the_table = [&] {
+    if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
+  };
+  if (a.resume.empty()) check_the_table();
+  // Without --out the run makes its own new folder under runs/, which holds no earlier run.
+  // A live run's folder says so first, as the run itself would.
+  if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
+  const bool taken_over = check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
+                                           a.resume.empty() ? "--out" : "--resume", p.source);
+  const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
+                                      a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
+  // A resume's checkpoint is checked as the run would check it (its captures read, nothing
+  // opened), before the plan is printed, so the plan says what the resume keeps, computes
+  // again and still records.
+  std::vector<std::string> completed;
+  if (!a.resume.empty()) {
+    spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
+    if (!sealed) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
+    refuse_a_log_missing_lines(a.resume);
+    completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
+  }
+  const bool devices_needed = devices_left(phases, completed.size());
+  if (!a.resume.empty() && devices_needed) check_the_table();
+  TerminalView plan_view(stdout);
+  std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
+                           shown_text(p.source),
+                           a.plant == "hardware" ? "the hardware of " + shown_text(a.hardware)
+                                                 : std::string("the emulated plant (a simulated DUT, table and GPIO)"));
+  // The angles the run turns to, and whose they are: a mount's calibration that never reached
+  // them was found only at the prompt, or not at all with --yes (a technician's review).
+  const toml::table* pr = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
+  if (!unjudged.empty()) std::cout << "Note: " << unjudged << "\n";
+  if (taken_over) std::cout << "Note: " << taken_over_note(a.out) << "\n";
+  std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
+                           pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
+                                                         : std::string("the profile's"));
+  if (!devices_needed)
+    std::cout << "Devices: none opened: " << no_device_needed(a.plant, phases, completed.size()) << "\n";
+  else if (a.plant == "hardware")
+    for (const std::string& line : hardware_plan(hw, planned_table_timing(a, hw, plant_cfg), dut))
+      std::cout << line << "\n";
+  plan_view.plan(phases, completed.size());
+  if (devices_needed)  // bring-up's own steps among them: none happens without devices
+    for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
+  if (!a.resume.empty()) {
+    std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
+    for (std::size_t i = 0; i < completed.size(); ++i) {
+      std::string& list = phases[i].from_records ? again : kept;
+      list += (list.empty() ? "" : ", ") + completed[i];
+    }
+    if (fs::exists(Executive::checkpoint_path(a.resume)))
+      std::cout << fmt::format("Resume: {} checked with the records it names (captures, loop-test.csv){}; {} of {} "
+                               "phases complete.\n",
+                               Executive::checkpoint_path(a.resume), sealed ? " and the station's seal" : "",
+                               completed.size(), phases.size());
+    else  // stopped before its first checkpoint (or the file is gone): nothing of it is trusted
+      std::cout << fmt::format("Resume: {} has no checkpoint (the run stopped before its first phase completed){}; "
+                               "0 of {} phases complete: every phase runs again from bring-up.\n",
+                               a.resume, sealed ? "; the station's seal checked" : "", phases.size());
+    if (!kept.empty()) std::cout << "  kept (not recorded again): " << kept << "\n";
+    if (!again.empty()) std::cout << "  computed again from the kept records: " << again << "\n";
+    std::string left;
+    for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
+    std::cout << "  still to run: "
+              << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left) << "\n";
+    // Named, not only the rule (a technician's review): which file the resume sets aside.
+    for (const std::string& f : partial_records(a.resume, state.slot()))
+      std::cout << "  left partial by the interruption: " << f << " (kept as " << f
+                << ".interrupted-N when its phase records again)\n";
+  }
+  // Where the run will be recorded: a typo in --db or [history] url would create a database
+  // (and its folders) that the station's history never reads (a technician's review).
+  if (a.no_history) {
+    std::cout << "History: not recorded (--no-history)\n";
+  } else {
+    const std::string url = history_url(a, hw);
+    std::string fresh;
+    if (const std::optional<history::SqliteFile> file = history::sqlite_file(url); file && !file->exists)
+      fresh = file->missing_folder.empty()
+                  ? " (not there yet: the run creates it)"
+                  : " (not there yet: the run creates it and the folder " + file->missing_folder +
+                        ", the built-in default's)";
+    std::cout << "History: " << history::mask_password(url) << fresh
+              << (history_locked ? " (locked by another process now: said above)" : "") << "\n";
+  }
+  // What a resume leaves in the run's own database, said before it runs as the resume will say it.
+  if (!a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
+  if (!room.empty()) std::cout << room << "\n";
+  double total = 0;
+  for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
+  if (!devices_needed)
+    std::cout << "Estimated duration of what is left: no device time: the phases left only compute (seconds of wall "
+                 "time)\n";
+  else
+    std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
+                             "table's homing, which depends on where the table stands) and any retries\n",
+                             completed.empty() ? "" : " of what is left", TerminalView::hms(total),
+                             a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
+  return history_locked ? kExitUsage : kExitPass;
+}
+
+// A new run's run.json: what its resume needs to go on as the run started (read_invocation).
+nlohmann::json new_run_invocation(const RunArgs& a, const toml::table& hw, const acceptance::Profile& p) {
+  nlohmann::json invocation = {
+      {"plant", a.plant},         {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
+      {"serial", a.serial},       {"profile", p.name},
+      {"profile_source", p.source}, {"profile_digest", p.digest},
+      {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()},
+      {"station", station_of(a, hw)}};
+  // Where the profile's relative paths resolve, for its resume (it reads the folder's copy).
+  if (p.source.rfind("builtin:", 0) != 0) {
+    std::error_code ec;
+    // (lexically normal, and without the trailing '/' "./x.toml" left)
+    const fs::path folder = fs::absolute(p.source, ec).lexically_normal().parent_path();
+    if (!ec) invocation["profile_folder"] = folder.string();
+  }
+  // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
+  // carries a password, which run.json never holds; the resume must then give it again).
+  if (a.no_history) {
+    invocation["no_history"] = true;
+  } else if (!a.db.empty()) {  // an SQLite file made absolute: a resume may start elsewhere
+    invocation["db"] = history::kept_form(a.db);
+  } else {  // as it resolved now: the resume records there too (read_invocation)
+    invocation["history_db"] = history::kept_form(history_url(a, hw));
+  }
+  std::vector<std::string> drops;  // repeated by a resume (read_invocation)
+  for (const std::string& f : a.inject)
+    if (f.rfind("drop@", 0) == 0) drops.push_back(f);
+  if (!drops.empty()) invocation["faults"] = drops;
+  return invocation;
+}
+
+// Judges the records a verdict stands on, after the phases, and turns an outcome that cannot stand
+// into ERROR with its reason in res. Returns why the run has no resume ("" while it has one).
+std::string judge_the_records(const std::string& out, RunResult& res, acceptance::ProcedureState& state,
+                              const std::optional<seal::Key>& key, const LogLoss& loss, spdlog::logger& log) {
+  // A verdict stands on its records: one whose captures or log were removed meanwhile is an
+  // ERROR (exit 4) naming them, never a PASS nobody can check.
+  // Why the run has no resume, said after its ending ("" while it has one): a resume would refuse
+  // the folder (exit 2). Kept as said, not read back out of the reason's text (a review: a record
+  // changed mid-run was named as lines missing from run.log).
+  const std::string records_changed_why = "the run's records in " + shown_text(out) + " changed after they were written";
+  std::string no_resume_why = res.records_changed ? records_changed_why : "";
+  // A stopped run whose log lost lines has no resume either: its ending would give a verdict beside
+  // the hole (a review). Lines refused after this point (the closing lines) leave the verdict as it
+  // stands, as a signal after the passport does.
+  if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error)
+    if (const std::string log_missing = loss.said(); !log_missing.empty()) {
+      res.message += "; " + log_missing;
+      if (no_resume_why.empty()) no_resume_why = log_missing_lines_why(out);
+      log.error("{}", log_missing);
+    }
+  if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
+    const std::vector<std::string> gone = records_gone(out, state.slot());
+    std::vector<std::string> touched;
+    const std::vector<std::string> changed = records_changed(out, state, key, touched);
+    if (!touched.empty())
+      log.warn("the run's records in {} were touched after they were written ({}), but hold what was recorded: "
+               "the verdict stands on them",
+               out, fmt::join(touched, ", "));
+    const std::string log_missing = loss.said();
+    no_resume_why = !gone.empty()      ? "the run's records are gone from " + shown_text(out)
+                    : !changed.empty()   ? records_changed_why
+                    : !log_missing.empty() ? log_missing_lines_why(out)
+                                           : "";
+    std::vector<std::string> why;
+    if (!gone.empty())
+      why.push_back(fmt::format("the run's records are gone from {} (removed while it ran): {}", out, fmt::join(gone, ", ")));
+    if (!changed.empty())
+      why.push_back(fmt::format("the run's records in {} changed after they were written: {}", out, fmt::join(changed, ", ")));
+    if (!log_missing.empty()) why.push_back(log_missing);
+    if (!no_resume_why.empty()) {
+      res.outcome = RunOutcome::Error;
+      res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));
+      log.error("{}", res.message);
+    }
+  }
+  return no_resume_why;
+}
+
+// An ending the run folder refused (write_run_outputs threw `e`: a full disk, a folder made
+// read-only or removed): said in run.log, recorded as ERROR where it still fits (the folder, the
+// history), the lamps and stdout's OUTCOME line for the ending that stands, and whether and how
+// the run goes on. The caller rethrows `e` (main's exit 4). earlier_*: the folder's passport.json
+// and analysis.json as they were before this ending (an ABORTED ending's, resumed).
+void end_short_of_files(const std::exception& e, const RunArgs& a, const toml::table& hw, const PassportInfo& info,
+                        const RunResult& res, const MeasurementSet& values, Executive& exec,
+                        const std::optional<FileStamp>& earlier_passport,
+                        const std::optional<FileStamp>& earlier_analysis, RigIo& io, const std::string& no_resume_why,
+                        const LogLoss& loss, const std::string& resume_key, spdlog::logger& log) {
+  // An ERROR ending is that ending still, short of files: said so, not as an outcome that "could
+  // not be" written beside the ERROR that was (a review read the two as contradicting).
+  const bool was_error = res.outcome == RunOutcome::Error;
+  if (was_error)
+    log.error("the ERROR ending not written in full: {} (exit 4: the run folder cannot hold the run's records)", e.what());
+  else
+    log.error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
+               to_string(res.outcome), e.what());
+  // Lines lost since the checkpoint last said so (the ending's own, these two): recorded there
+  // too, where the disk takes it, so the resume offered below is refused (a review: lost late in
+  // the ending, beside a refused passport, the resume ended PASS).
+  if (!res.config_error) exec.record_the_log_loss();
+  // An ERROR ending saying which outcome could not be written, never that outcome: in the
+  // history (it promises every run; a folder deleted mid-run left no row, a review), and in the
+  // folder where its passport and JUnit report still fit (a full disk refused the 600 kB
+  // analysis.json and then nothing was written, though 300 kB were free: a CI job read "no test
+  // reports", a review). A resume, once the folder can take the files, writes the ending again.
+  RunResult unwritten = res;
+  unwritten.outcome = RunOutcome::Error;
+  // A stopped run's reason goes with it (SIGINT received; run.log is missing lines: ...): without
+  // it an ABORTED run whose log lost lines read as resumable, and its resume ended PASS beside the
+  // hole (a code review).
+  unwritten.message =
+      was_error ? fmt::format("{}; its ending not written in full to the run folder: {}", res.message, e.what())
+                : fmt::format("outcome {} not written to the run folder: {}{}", to_string(res.outcome), e.what(),
+                              res.outcome == RunOutcome::Aborted && !res.message.empty() ? "; " + res.message : "");
+  const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
+  // Replaced too where it is an earlier ending's (a review: an ABORTED passport, resumed, stayed
+  // beside a history row saying ERROR); kept where it is this ending's own, put in place before
+  // what failed. Neither page nor an earlier analysis.json may stand beside the ERROR: the page
+  // is drawn from a passport that is not (or no longer) the folder's, and both come again with
+  // the resume's ending.
+  const auto earlier = [](const std::optional<FileStamp>& then, const std::string& path) {
+    const std::optional<FileStamp> now = stamp_of(path);
+    return !now || (then && now->inode == then->inode && now->device == then->device);
+  };
+  std::error_code ec;
+  fs::remove(a.out + "/report.html", ec);
+  if (earlier_analysis && earlier(earlier_analysis, a.out + "/analysis.json")) fs::remove(a.out + "/analysis.json", ec);
+  bool error_passport_written = false;
+  if (earlier(earlier_passport, a.out + "/passport.json")) try {
+      write_file_staged(a.out + "/junit.xml", junit_xml(info, unwritten, values));
+      write_file_staged(a.out + "/passport.json", passport_text(error_passport));
+      commit_staged(a.out + "/passport.json");
+      commit_staged(a.out + "/junit.xml");
+      error_passport_written = true;
+      if (was_error) log.error("passport.json and junit.xml written with outcome ERROR (its ending not written in full)");
+      else log.error("passport.json and junit.xml written with outcome ERROR (the outcome {} could not be)",
+                      to_string(res.outcome));
+    } catch (const std::exception& also) {
+      for (const char* f : {"/junit.xml.tmp", "/passport.json.tmp"}) fs::remove(a.out + f, ec);
+      log.error("nor an ERROR passport: {}", also.what());
+    }
+  if (!a.no_history) record_in_history(a, hw, error_passport, a.out, log);
+  io.set_lamp(Lamp::Running, false);
+  io.set_lamp(Lamp::Fail, true);  // no passport, no pass
+  // The closing table and OUTCOME line of the ending that stands, as every other ending prints
+  // them (a review: an empty stdout beside the ERROR passport a full disk left).
+  // Only where that passport is in place: a table for a passport the folder does not hold misled
+  // (a re-test: "OUTCOME: ERROR" beside an ABORTED passport.json).
+  if (error_passport_written) {
+    say_the_passport(error_passport, info.out_dir);
+  } else if (std::error_code pe; !fs::exists(a.out + "/passport.json", pe)) {
+    // No passport at all (the folder gone, or a full disk before any ending): the outcome line
+    // still, which a station reads from stdout (a line integrator's review: stdout was empty),
+    // and no table for a passport nobody can read. Beside an earlier ending's passport nothing.
+    std::cout << "passport.json not written: the run folder could not take it (stderr says why)\n"
+              << "OUTCOME: ERROR\n"
+              << std::flush;
+  }
+  // What is kept goes on once the folder can take the files (a review: a full disk ended with
+  // only "write failed", though the folder resumed to the same passport).
+  // "No resume" only where the folder says so to the resume (the passport or the checkpoint took
+  // the reason): where the disk refused both, the resume goes on, and saying otherwise sent the
+  // technician away from a folder that then resumed to PASS (a review).
+  const std::optional<std::string> refused =
+      no_resume_why.empty() ? std::nullopt : std::optional<std::string>(resume_refusal(a.out));
+  if (refused && !refused->empty()) {  // as the ending in full says it
+    say_no_resume(no_resume_why, log);
+    say_how_to_finish(a.out, resume_key, log);
+  } else if (!res.config_error) {
+    if (!no_resume_why.empty()) {  // on stderr with --quiet too, as `no resume:` is
+      const std::string lost = loss.said();
+      const std::string line = no_resume_why +
+                               "; with the passport refused, nothing the disk took keeps a resume from going on" +
+                               (lost.empty() ? std::string() : ": run.log stays short of the lines refused (" + lost + ")");
+      std::cerr << line << "\n";
+      log.info("{}", line);
+    }
+    offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
+                   resume_key, log, refused);
+  }
+}
+
+// The emulation's own speed, as measured on this run (the replay that rebuilt the plant for a
+// resume named apart: nothing of it was measured). wall_s: the run's wall time from after the
+// operator's answers.
+void say_the_plants_speed(plant::EmulatedPlant& w, double wall_s, double replayed_s, std::uint64_t replayed_samples,
+                          spdlog::logger& log) {
+  const double device = w.clock().now_s();
+  const auto samples = w.samples_generated();
+  const std::string replay =
+      replayed_samples ? fmt::format(" ({:.1f} min and {} samples of them replayed the kept recordings)",
+                                     replayed_s / 60, replayed_samples)
+                       : std::string();
+  const std::string line = fmt::format(
+      "emulated plant: {:.1f} min of device time, {} DUT samples{}, in {:.2f} s wall: {:.0f}x real time, {:.2f} M "
+      "samples/s",
+      device / 60, samples, replay, wall_s, device / wall_s, static_cast<double>(samples) / wall_s / 1e6);
+  std::cout << line << "\n";
+  log.info("{}", line);
+}
+
+// The history the run records into, checked before anything opens: one this rig cannot open or
+// write is said now, not after the DUT was measured. Returns true where a dry run found it locked.
+// A dry run's history held locked by another process now: said, and the dry run goes on to its
+// plan (a technician's re-test: a resume's dry run waited 10 s and printed only the lock); it
+// exits 2 as the run would, whatever else it finds (a code review: a later error replaced the
+// lock, and a resume's unfinished ending exited 0).
+bool check_the_history(const RunArgs& a, const toml::table& hw, CancelSource& cancel) {
+  if (a.no_history) return false;
+  const std::string url = history_url(a, hw);
+  try {
+    check_history_can_record(url, !a.resume.empty());
+  } catch (const ConfigError& e) {  // $RIG_HISTORY's database is the environment's mistake: said so
+    // A stop while it waited for a lock ended the wait (set_lock_wait_stop): the run was stopped.
+    if (cancel.requested())
+      throw AbortedError("aborted before anything was powered or moved: " + cancel.token().reason() + " (" + e.what() + ")");
+    std::string why = e.what();
+    const char* env = std::getenv("RIG_HISTORY");
+    if (a.db.empty() && env && url == env) why = "RIG_HISTORY: " + why;
+    // A resume's database is the one its run started with (a re-test: "a typo?" for a folder
+    // removed since, with no word of where the name came from or what overrides it).
+    else if (a.db_from_run_json)
+      why += " (the database the run started with, from " + a.resume +
+             "/run.json; --db URL with --resume records into another, --no-history into none)";
+    if (!a.dry_run || !dynamic_cast<const history::LockedError*>(&e)) throw ConfigError(why);
+    std::cerr << error_prefix(e) << why << " (the dry run goes on with its other checks and its plan, "
+              << "and exits 2: a " << (a.resume.empty() ? "run" : "resume")
+              << " started now would stop here, before anything opens)\n";
+    return true;
+  }
+  return false;
+}
+
+// --serial with --resume guards the resume: it must name the run's DUT, the one given when the
+// run started or, without that, the one its DUT reported (the checkpoint's). After read_run_json.
+void check_the_resumes_serial(const RunArgs& a) {
+  if (a.resume_serial.empty()) return;
+  const std::string runs_dut = a.serial.empty() ? reported_serial(a.resume) : a.serial;
+  if (runs_dut.empty())
+    throw ConfigError(fmt::format("--serial {}: the run in {} was started without --serial and no DUT has "
+                                  "reported its serial yet; the serial is checked at bring-up",
+                                  a.resume_serial, a.resume));
+  if (runs_dut != a.resume_serial)
+    throw ConfigError(fmt::format("--serial {}: the run in {} is of DUT '{}'", a.resume_serial, a.resume, runs_dut));
+}
+
+// Devices that did not open (make_hardware or make_emulated threw `e`): the run's files say so
+// (write_files_of_unopened_run) and the technician is told how the run goes on; a configuration
+// error is fixed and started anew. The caller rethrows `e` (main: exit 4 hardware, 2 configuration).
+// kept, planned: phases complete (a resume's) and in the plan.
+void end_with_devices_unopened(const std::exception& e, const RunArgs& a, const acceptance::Profile& p,
+                               const toml::table& hw, const std::string& started, const std::optional<seal::Key>& key,
+                               std::size_t kept, std::size_t planned, const LogLoss& loss,
+                               const std::string& resume_key, spdlog::logger& log) {
+  log.error("devices not opened: {}", e.what());
+  const bool config_error = dynamic_cast<const ConfigError*>(&e) != nullptr;
+  // A log the disk refused lines of stops this ending's resume as any stopped run's (a review:
+  // this path alone offered it).
+  const std::string log_missing = config_error ? std::string() : loss.said();
+  write_files_of_unopened_run(a, p, hw, started,
+                              log_missing.empty() ? std::string(e.what()) : e.what() + std::string("; ") + log_missing,
+                              config_error, key, log);
+  // The folder stays for a resume once the devices can be opened (a new run into it is refused
+  // "use --resume"), so it is said as after any stop (a review: no hint). A configuration
+  // error is fixed and started anew.
+  if (!log_missing.empty())
+    say_no_resume(log_missing_lines_why(a.out), log);
+  else if (!config_error)
+    say_how_to_continue(a.out, kept, planned, ": the devices did not open", resume_key, log);
+}
+
+// The ending's last words: why the run has no resume and how its ending is finished, or after a
+// stop how the run goes on (what is kept, what its resume repeats).
+void say_what_follows(const RunArgs& a, const RunResult& res, bool emulated, const std::string& no_resume_why,
+                      const std::string& resume_key, spdlog::logger& log) {
+  // After a stop, what is kept and how to go on, where the technician looks (a review: only
+  // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
+  if (!no_resume_why.empty()) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
+    say_no_resume(no_resume_why, log);
+    say_how_to_finish(a.out, resume_key, log);
+  } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
+    // An emulated run's injected sample losses are repeated by its resume (run.json's faults):
+    // one that ended the run in ERROR ends the resume the same way (a line integrator's review:
+    // each resume offered "to continue" and added another ERROR ending).
+    std::string drops;
+    for (const std::string& f : a.inject)
+      if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
+    offer_a_resume(a.out, res.checkpointed, res.phases.size(),
+                   res.outcome == RunOutcome::Error && emulated && !drops.empty()
+                       ? "; its resume repeats run.json's faults (" + drops + "), so a loss that ended this run in "
+                         "ERROR ends it so again"
+                       : std::string(),
+                   resume_key, log);
+  }
+}
+
+// The run's logger (make_logger), or a run.log that cannot be opened (a file made immutable, a
+// permission taken away, too many open files) said as what it means for the run: `what` (it did
+// not start) and how to go on; exit 4 (a run folder that cannot hold the run's records). It said
+// only spdlog's "Failed opening file ... for writing".
+std::shared_ptr<spdlog::logger> run_log_or_say(const RunArgs& a, const std::shared_ptr<LogLoss>& loss,
+                                               const std::string& what, const std::string& resume_key) {
+  try {
+    return make_logger(a.out, a.quiet, loss);
+  } catch (const RunLogUnopened& e) {  // "rig: error:" and exit 4, as a folder that refuses a record
+    throw RunLogUnopened(fmt::format("{}: {}; to continue once it can be written: rig run --resume {}{}", e.what(), what,
+                                    shell_word(a.out), resume_key));
+  }
+}
+
+struct TakenFolder {
+  // The folder is this run's own (the default one it claimed, or one it creates), so a "no" at
+  // the prompts may remove it; a folder the user made stays.
+  bool made_here = false;
+  bool taken_over = false;  // a stopped start's folder (only_a_start), taken over
+};
+// The run's folder (a.out; made under runs/ when not given) made ready for the run or its resume,
+// with its lock (`folder_lock`): an earlier run there refused, a stopped start taken over.
+// Before the operator is asked anything: no one should answer the prompts of a run that cannot start.
+TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optional<FolderLock>& folder_lock) {
+  TakenFolder taken;
+  taken.made_here = a.out.empty();
+  if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
+  (void)check_room(a.out, a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
+  // Before the operator is asked anything, and before prepare_run_folder's write probe touches
+  // the earlier run's folder (nor a folder another run holds: its lock is taken first).
+  if (a.resume.empty()) {
+    std::error_code ec;
+    taken.made_here = taken.made_here || !fs::exists(a.out, ec);
+    // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
+    // which then failed on the same lock: a review).
+    if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
+    taken.taken_over = refuse_an_earlier_run(a.out, p.source);
+    if (taken.taken_over) {
+      if (!a.quiet) std::cerr << "rig: note: " << taken_over_note(a.out) << "\n";
+      // Its staging files go: a seal.json.tmp stayed beside an unsealed run's records (a review).
+      for (const char* f : {"profile.toml.tmp", "run.json.tmp", "seal.json.tmp"}) fs::remove(fs::path(a.out) / f, ec);
+    }
+  }
+  prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
+  if (a.resume.empty()) {
+    if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
+    refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since
+  }
+  refuse_non_files(a.out, !a.resume.empty());
+  return taken;
+}
+
 int do_run_watched(RunArgs a, CancelSource& cancel) {
   // A stop that comes while the history database waits for another writer's lock ends that wait
   // 2 s after it began (a review: a SIGTERM in the ending's wait held the exit 10 s).
@@ -1649,24 +2120,13 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
 
   // A resumed run takes its profile and invocation from the run folder.
   nlohmann::json invocation;
-  std::string profile_text_path;
   if (!a.resume.empty()) {
     const std::string inv_path = a.resume + "/run.json";
     if (path_kind(inv_path, "--resume") == PathKind::missing) throw ConfigError(inv_path + ": not a run folder (no run.json)");
     a.out = a.resume;
     invocation = read_run_json(a.resume, a);
     a.profile = a.resume + "/profile.toml";
-    // --serial with --resume guards the resume: it must name the run's DUT, the one given when
-    // the run started or, without that, the one its DUT reported (the checkpoint's).
-    if (!a.resume_serial.empty()) {
-      const std::string runs_dut = a.serial.empty() ? reported_serial(a.resume) : a.serial;
-      if (runs_dut.empty())
-        throw ConfigError(fmt::format("--serial {}: the run in {} was started without --serial and no DUT has "
-                                      "reported its serial yet; the serial is checked at bring-up",
-                                      a.resume_serial, a.resume));
-      if (runs_dut != a.resume_serial)
-        throw ConfigError(fmt::format("--serial {}: the run in {} is of DUT '{}'", a.resume_serial, a.resume, runs_dut));
-    }
+    check_the_resumes_serial(a);
   }
   std::string profile_source;
   std::vector<std::string> dropped_limits;
@@ -1726,142 +2186,15 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
         "($RIG_HISTORY, the rig config or the default here): {} keeps the earlier ending; give --db with that URL "
         "(its password too) to record there",
         a.run_history_db, history::mask_password(history_url(a, hw)), a.run_history_db);
-  // A dry run's history held locked by another process now: said, and the dry run goes on to its
-  // plan (a technician's re-test: a resume's dry run waited 10 s and printed only the lock); it
-  // exits 2 as the run would, whatever else it finds (a code review: a later error replaced the
-  // lock, and a resume's unfinished ending exited 0).
-  bool history_locked = false;
-  if (!a.no_history) {
-    const std::string url = history_url(a, hw);
-    try {
-      check_history_can_record(url, !a.resume.empty());
-    } catch (const ConfigError& e) {  // $RIG_HISTORY's database is the environment's mistake: said so
-      // A stop while it waited for a lock ended the wait (set_lock_wait_stop): the run was stopped.
-      if (cancel.requested())
-        throw AbortedError("aborted before anything was powered or moved: " + cancel.token().reason() + " (" + e.what() + ")");
-      std::string why = e.what();
-      const char* env = std::getenv("RIG_HISTORY");
-      if (a.db.empty() && env && url == env) why = "RIG_HISTORY: " + why;
-      // A resume's database is the one its run started with (a re-test: "a typo?" for a folder
-      // removed since, with no word of where the name came from or what overrides it).
-      else if (a.db_from_run_json)
-        why += " (the database the run started with, from " + a.resume +
-               "/run.json; --db URL with --resume records into another, --no-history into none)";
-      if (!a.dry_run || !dynamic_cast<const history::LockedError*>(&e)) throw ConfigError(why);
-      history_locked = true;
-      std::cerr << error_prefix(e) << why << " (the dry run goes on with its other checks and its plan, "
-                << "and exits 2: a " << (a.resume.empty() ? "run" : "resume")
-                << " started now would stop here, before anything opens)\n";
-    }
-  }
+  const bool history_locked = check_the_history(a, hw, cancel);
   if (!a.resume.empty()) {
     if (const auto rc = finish_pending_ending(a, hw, key, final_seal, values))
       return a.dry_run ? (history_locked ? kExitUsage : *rc) : the_passports_exit(*rc);
     refuse_to_drop_an_interrupted_ending(a);
   }
-  if (a.dry_run) {
-    // A table another rig process commands now is said, as the run would say it, first (a review):
-    // a resume's only where a phase left uses the devices (below).
-    auto check_the_table = [&] {
-      if (a.plant == "hardware") TableLock::check_free(modbus::table_identity(*cfg::get_table(hw, "table", true)));
-    };
-    if (a.resume.empty()) check_the_table();
-    // Without --out the run makes its own new folder under runs/, which holds no earlier run.
-    // A live run's folder says so first, as the run itself would.
-    if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
-    const bool taken_over = check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
-                                             a.resume.empty() ? "--out" : "--resume", p.source);
-    const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
-                                        a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
-    // A resume's checkpoint is checked as the run would check it (its captures read, nothing
-    // opened), before the plan is printed, so the plan says what the resume keeps, computes
-    // again and still records.
-    std::vector<std::string> completed;
-    if (!a.resume.empty()) {
-      spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
-      if (!key) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
-      refuse_a_log_missing_lines(a.resume);
-      completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
-    }
-    const bool devices_needed = devices_left(phases, completed.size());
-    if (!a.resume.empty() && devices_needed) check_the_table();
-    TerminalView plan_view(stdout);
-    std::cout << fmt::format("rig run --dry-run: profile '{}' ({}) on {}; nothing is touched.\n", p.name,
-                             shown_text(p.source),
-                             a.plant == "hardware" ? "the hardware of " + shown_text(a.hardware)
-                                                   : std::string("the emulated plant (a simulated DUT, table and GPIO)"));
-    // The angles the run turns to, and whose they are: a mount's calibration that never reached
-    // them was found only at the prompt, or not at all with --yes (a technician's review).
-    const toml::table* pr = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
-    if (!unjudged.empty()) std::cout << "Note: " << unjudged << "\n";
-    if (taken_over) std::cout << "Note: " << taken_over_note(a.out) << "\n";
-    std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
-                             pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
-                                                           : std::string("the profile's"));
-    if (!devices_needed)
-      std::cout << "Devices: none opened: " << no_device_needed(a.plant, phases, completed.size()) << "\n";
-    else if (a.plant == "hardware")
-      for (const std::string& line : hardware_plan(hw, planned_table_timing(a, hw, plant_cfg), dut))
-        std::cout << line << "\n";
-    plan_view.plan(phases, completed.size());
-    if (devices_needed)  // bring-up's own steps among them: none happens without devices
-      for (const std::string& s : planned_skips(a, hw, dut.can, p)) std::cout << "  skipped: " << s << "\n";
-    if (!a.resume.empty()) {
-      std::string kept, again;  // completed is a prefix of phases (read_checkpoint checks it)
-      for (std::size_t i = 0; i < completed.size(); ++i) {
-        std::string& list = phases[i].from_records ? again : kept;
-        list += (list.empty() ? "" : ", ") + completed[i];
-      }
-      if (fs::exists(Executive::checkpoint_path(a.resume)))
-        std::cout << fmt::format("Resume: {} checked with the records it names (captures, loop-test.csv){}; {} of {} "
-                                 "phases complete.\n",
-                                 Executive::checkpoint_path(a.resume), key ? " and the station's seal" : "",
-                                 completed.size(), phases.size());
-      else  // stopped before its first checkpoint (or the file is gone): nothing of it is trusted
-        std::cout << fmt::format("Resume: {} has no checkpoint (the run stopped before its first phase completed){}; "
-                                 "0 of {} phases complete: every phase runs again from bring-up.\n",
-                                 a.resume, key ? "; the station's seal checked" : "", phases.size());
-      if (!kept.empty()) std::cout << "  kept (not recorded again): " << kept << "\n";
-      if (!again.empty()) std::cout << "  computed again from the kept records: " << again << "\n";
-      std::string left;
-      for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
-      std::cout << "  still to run: "
-                << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left) << "\n";
-      // Named, not only the rule (a technician's review): which file the resume sets aside.
-      for (const std::string& f : partial_records(a.resume, state.slot()))
-        std::cout << "  left partial by the interruption: " << f << " (kept as " << f
-                  << ".interrupted-N when its phase records again)\n";
-    }
-    // Where the run will be recorded: a typo in --db or [history] url would create a database
-    // (and its folders) that the station's history never reads (a technician's review).
-    if (a.no_history) {
-      std::cout << "History: not recorded (--no-history)\n";
-    } else {
-      const std::string url = history_url(a, hw);
-      std::string fresh;
-      if (const std::optional<history::SqliteFile> file = history::sqlite_file(url); file && !file->exists)
-        fresh = file->missing_folder.empty()
-                    ? " (not there yet: the run creates it)"
-                    : " (not there yet: the run creates it and the folder " + file->missing_folder +
-                          ", the built-in default's)";
-      std::cout << "History: " << history::mask_password(url) << fresh
-                << (history_locked ? " (locked by another process now: said above)" : "") << "\n";
-    }
-    // What a resume leaves in the run's own database, said before it runs as the resume will say it.
-    if (!a.history_left_behind.empty()) std::cout << "  warning: " << a.history_left_behind << "\n";
-    if (!room.empty()) std::cout << room << "\n";
-    double total = 0;
-    for (std::size_t i = completed.size(); i < phases.size(); ++i) total += phases[i].planned_s;
-    if (!devices_needed)
-      std::cout << "Estimated duration of what is left: no device time: the phases left only compute (seconds of wall "
-                   "time)\n";
-    else
-      std::cout << fmt::format("Estimated duration{}: {} of device time{}, plus bring-up (the DUT's power-up and the "
-                               "table's homing, which depends on where the table stands) and any retries\n",
-                               completed.empty() ? "" : " of what is left", TerminalView::hms(total),
-                               a.plant == "emulated" ? " (emulated: seconds of wall time)" : ", the same in wall time");
-    return history_locked ? kExitUsage : kExitPass;
-  }
+  if (a.dry_run)
+    return print_dry_run(a, hw, plant_cfg, p, dut, phases, values, state, identity, key.has_value(), unjudged,
+                         history_locked);
   // The table next, before a folder is made: one process at a time commands a station's table,
   // held to the run's end (app/table_lock.hpp; a `rig table move` from another terminal turned
   // the DUT during a recording).
@@ -1877,34 +2210,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                                           : "rig run --resume " + shown_text(a.resume));
   };
   if (a.resume.empty()) lock_the_table();
-  // The folder first: an operator should not answer the prompts of a run that cannot start.
-  // made_here: the folder is this run's own (the default one it claimed, or one it creates), so
-  // a "no" at the prompts may remove it; a folder the user made stays.
-  bool made_here = a.out.empty();
-  bool taken_over = false;  // a stopped start's folder (only_a_start), taken over
-  if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
-  (void)check_room(a.out, a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
-  // Before the operator is asked anything, and before prepare_run_folder's write probe touches
-  // the earlier run's folder (nor a folder another run holds: its lock is taken first).
-  if (a.resume.empty()) {
-    std::error_code ec;
-    made_here = made_here || !fs::exists(a.out, ec);
-    // A folder a live run holds says so first (it said "holds an earlier run: use --resume",
-    // which then failed on the same lock: a review).
-    if (fs::is_directory(a.out, ec)) folder_lock.emplace(a.out, "--out " + a.out);
-    taken_over = refuse_an_earlier_run(a.out, p.source);
-    if (taken_over) {
-      if (!a.quiet) std::cerr << "rig: note: " << taken_over_note(a.out) << "\n";
-      // Its staging files go: a seal.json.tmp stayed beside an unsealed run's records (a review).
-      for (const char* f : {"profile.toml.tmp", "run.json.tmp", "seal.json.tmp"}) fs::remove(fs::path(a.out) / f, ec);
-    }
-  }
-  prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
-  if (a.resume.empty()) {
-    if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
-    refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since
-  }
-  refuse_non_files(a.out, !a.resume.empty());
+  const TakenFolder folder = take_the_folder(a, p, folder_lock);
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
@@ -1916,7 +2222,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
     if (!key) refuse_a_final_verdict(a.out);
     refuse_a_log_missing_lines(a.out);
-    log = make_logger(a.out, a.quiet, log_loss);
+    log = run_log_or_say(a, log_loss, "the resume did not start: nothing was powered or moved, the folder is as it was",
+                         resume_key);
     const std::string unended = earlier_attempt_unended(a.out);  // read before this attempt's first line
     log->info("rig {} run: profile {} ({}), plant {}, out {}: resuming", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
@@ -1955,7 +2262,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // A resume's log says the resume did not start (it ended at "resuming").
     if (log) log->info("resume not started: {}; the folder is as it was", e.what());
     std::error_code ec;
-    if (a.resume.empty() && made_here) fs::remove(a.out, ec);  // only while empty
+    if (a.resume.empty() && folder.made_here) fs::remove(a.out, ec);  // only while empty
     throw;
   }
   if (!a.resume.empty()) record_an_interrupted_ending(a, hw, *log);
@@ -1966,38 +2273,15 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (a.resume.empty()) {
     // The folder carries everything a resume needs.
     write_file_atomic(a.out + "/profile.toml", profile_text);
-    invocation = {{"plant", a.plant}, {"hardware", a.hardware.empty() ? "" : fs::absolute(a.hardware).string()},
-                  {"serial", a.serial}, {"profile", p.name}, {"profile_source", p.source}, {"profile_digest", p.digest},
-                  {"software", std::string("rig ") + RIG_VERSION}, {"started", iso8601_utc_now()},
-                  {"station", station_of(a, hw)}};
-    // Where the profile's relative paths resolve, for its resume (it reads the folder's copy).
-    if (p.source.rfind("builtin:", 0) != 0) {
-      std::error_code ec;
-      // (lexically normal, and without the trailing '/' "./x.toml" left)
-      const fs::path folder = fs::absolute(p.source, ec).lexically_normal().parent_path();
-      if (!ec) invocation["profile_folder"] = folder.string();
-    }
-    // Where the run is recorded, for its resume: --no-history, or a --db URL (masked when it
-    // carries a password, which run.json never holds; the resume must then give it again).
-    if (a.no_history) {
-      invocation["no_history"] = true;
-    } else if (!a.db.empty()) {  // an SQLite file made absolute: a resume may start elsewhere
-      invocation["db"] = history::kept_form(a.db);
-    } else {  // as it resolved now: the resume records there too (read_invocation)
-      invocation["history_db"] = history::kept_form(history_url(a, hw));
-    }
-    std::vector<std::string> drops;  // repeated by a resume (read_invocation)
-    for (const std::string& f : a.inject)
-      if (f.rfind("drop@", 0) == 0) drops.push_back(f);
-    if (!drops.empty()) invocation["faults"] = drops;
+    invocation = new_run_invocation(a, hw, p);
     write_file_atomic(a.out + "/run.json", invocation.dump(2));
     if (key) seal_run_folder(a.out, *key, files_of_the_run(state.slot()));  // a stop before the first phase resumes too
-    log = make_logger(a.out, a.quiet, log_loss);
+    log = run_log_or_say(a, log_loss, "the run did not start: nothing was powered or moved", resume_key);
     log->info("rig {} run: profile {} ({}), plant {}, out {}", RIG_VERSION, p.name, shown_text(p.source), a.plant,
               shown_text(a.out));
     // The earlier start's run.json is replaced: its taking over is on the record (a review: said on
     // the terminal only, and not at all with --quiet).
-    if (taken_over) log->info("{}", taken_over_note(a.out));
+    if (folder.taken_over) log->info("{}", taken_over_note(a.out));
   }
   for (const std::string& q : confirmed) log->info("operator confirmed: {} yes", q);
   if (table_lock && !table_lock->held())
@@ -2013,22 +2297,8 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
         : a.plant == "hardware" ? make_hardware(hw, p, table_id)
                                 : make_emulated(plant_cfg, a.serial);
   } catch (const std::exception& e) {
-    log->error("devices not opened: {}", e.what());
-    const bool config_error = dynamic_cast<const ConfigError*>(&e) != nullptr;
-    // A log the disk refused lines of stops this ending's resume as any stopped run's (a review:
-    // this path alone offered it).
-    const std::string log_missing = config_error ? std::string() : log_loss->said();
-    write_files_of_unopened_run(a, p, hw, invocation.value("started", iso8601_utc_now()),
-                                log_missing.empty() ? std::string(e.what()) : e.what() + std::string("; ") + log_missing,
-                                config_error, key, *log);
-    // The folder stays for a resume once the devices can be opened (a new run into it is refused
-    // "use --resume"), so it is said as after any stop (a review: no hint). A configuration
-    // error is fixed and started anew.
-    if (!log_missing.empty())
-      say_no_resume(log_missing_lines_why(a.out), *log);
-    else if (!config_error)
-      say_how_to_continue(a.out, completed.size(), phases.size(), ": the devices did not open",
-                          resume_key, *log);
+    end_with_devices_unopened(e, a, p, hw, invocation.value("started", iso8601_utc_now()), key, completed.size(),
+                              phases.size(), *log_loss, resume_key, *log);
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
@@ -2069,29 +2339,11 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
         }
       },
       phases, values, state, cancel.token(), resumed, identity);
-  // A fault timed past the run's end never fired: said, or a test of it passes for nothing (a
-  // review: sigint@229 on a run of 228 s of device time, exit 0 without a word). As an error line:
-  // a test harness running with --quiet sees it too (a warning went to run.log alone: a review).
   // Not where the resume replayed nothing (no phase left used the devices): its device time and
   // its drops are then only bring-up's, and the faults fired in the run that recorded them (a
   // code review: "run.json's fault drop@1000:5 did not fire" on such a resume).
-  const bool device_time_whole = a.resume.empty() || fast_forward;
-  if (b.emulated && res.outcome != RunOutcome::Aborted && device_time_whole)
-    for (const Injection& j : injections)
-      if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > b.emulated->clock().now_s())
-        log->error("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, b.emulated->clock().now_s());
-  // A loss in samples the DUT never streamed (between recordings, or past the run's last) took
-  // nothing from any record: said, as a late signal is (a review: drop@1000:5 passed silently).
-  if (b.emulated && res.outcome != RunOutcome::Aborted && device_time_whole) {
-    const std::vector<std::uint64_t> hits = b.emulated->drop_hits();
-    std::size_t k = 0;  // the plant's drops are the Drop injections, in order
-    for (const Injection& j : injections)
-      if (j.kind == Injection::Kind::Drop && k++ < hits.size() && hits[k - 1] == 0)
-        log->error("{} {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
-                  "a recording or the loop test runs; the run's records say which sequence numbers they hold)",
-                  a.resume.empty() ? "--inject" : "run.json's fault", j.text, j.seq,
-                  static_cast<std::uint64_t>(j.seq) + j.count - 1);
-  }
+  if (b.emulated && res.outcome != RunOutcome::Aborted && (a.resume.empty() || fast_forward))
+    say_faults_that_did_not_fire(*b.emulated, injections, !a.resume.empty(), *log);
   if (signal_at_end) {
     ::kill(::getpid(), signal_at_end);
     for (int i = 0; i < 500 && !cancel.requested(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -2115,47 +2367,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   // process holds locked (rig/report/db.hpp set_lock_wait_ms); a row it cannot record is owed to
   // the resume (a line integrator's review: a SIGTERM'd run held its exit 10 s).
   if (res.outcome == RunOutcome::Aborted || cancel.requested()) history::set_lock_wait_ms(history::kStoppedLockWaitMs);
-  // A verdict stands on its records: one whose captures or log were removed meanwhile is an
-  // ERROR (exit 4) naming them, never a PASS nobody can check.
-  // Why the run has no resume, said after its ending ("" while it has one): a resume would refuse
-  // the folder (exit 2). Kept as said, not read back out of the reason's text (a review: a record
-  // changed mid-run was named as lines missing from run.log).
-  const std::string records_changed_why = "the run's records in " + shown_text(a.out) + " changed after they were written";
-  std::string no_resume_why = res.records_changed ? records_changed_why : "";
-  // A stopped run whose log lost lines has no resume either: its ending would give a verdict beside
-  // the hole (a review). Lines refused after this point (the closing lines) leave the verdict as it
-  // stands, as a signal after the passport does.
-  if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error)
-    if (const std::string log_missing = log_loss->said(); !log_missing.empty()) {
-      res.message += "; " + log_missing;
-      if (no_resume_why.empty()) no_resume_why = log_missing_lines_why(a.out);
-      log->error("{}", log_missing);
-    }
-  if (res.outcome == RunOutcome::Pass || res.outcome == RunOutcome::Fail) {
-    const std::vector<std::string> gone = records_gone(a.out, state.slot());
-    std::vector<std::string> touched;
-    const std::vector<std::string> changed = records_changed(a.out, state, key, touched);
-    if (!touched.empty())
-      log->warn("the run's records in {} were touched after they were written ({}), but hold what was recorded: "
-                "the verdict stands on them",
-                a.out, fmt::join(touched, ", "));
-    const std::string log_missing = log_loss->said();
-    no_resume_why = !gone.empty()      ? "the run's records are gone from " + shown_text(a.out)
-                    : !changed.empty()   ? records_changed_why
-                    : !log_missing.empty() ? log_missing_lines_why(a.out)
-                                           : "";
-    std::vector<std::string> why;
-    if (!gone.empty())
-      why.push_back(fmt::format("the run's records are gone from {} (removed while it ran): {}", a.out, fmt::join(gone, ", ")));
-    if (!changed.empty())
-      why.push_back(fmt::format("the run's records in {} changed after they were written: {}", a.out, fmt::join(changed, ", ")));
-    if (!log_missing.empty()) why.push_back(log_missing);
-    if (!no_resume_why.empty()) {
-      res.outcome = RunOutcome::Error;
-      res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));
-      log->error("{}", res.message);
-    }
-  }
+  const std::string no_resume_why = judge_the_records(a.out, res, state, key, *log_loss, *log);
   // Lines the ending refused so far are the checkpoint's word too: the passport that says it may be
   // refused next.
   if (!res.config_error) exec.record_the_log_loss();  // a configuration error's ending leaves the loss out (above)
@@ -2167,138 +2379,18 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   try {
     passport = write_run_outputs(a, hw, info, res, values, state.slot(), key, *log);
   } catch (const std::exception& e) {  // a full disk, a folder made read-only: the log says how it ended
-    // An ERROR ending is that ending still, short of files: said so, not as an outcome that "could
-    // not be" written beside the ERROR that was (a review read the two as contradicting).
-    const bool was_error = res.outcome == RunOutcome::Error;
-    if (was_error)
-      log->error("the ERROR ending not written in full: {} (exit 4: the run folder cannot hold the run's records)", e.what());
-    else
-      log->error("outcome {} not written: {} (exit 4: the run folder cannot hold the run's records)",
-                 to_string(res.outcome), e.what());
-    // Lines lost since the checkpoint last said so (the ending's own, these two): recorded there
-    // too, where the disk takes it, so the resume offered below is refused (a review: lost late in
-    // the ending, beside a refused passport, the resume ended PASS).
-    if (!res.config_error) exec.record_the_log_loss();
-    // An ERROR ending saying which outcome could not be written, never that outcome: in the
-    // history (it promises every run; a folder deleted mid-run left no row, a review), and in the
-    // folder where its passport and JUnit report still fit (a full disk refused the 600 kB
-    // analysis.json and then nothing was written, though 300 kB were free: a CI job read "no test
-    // reports", a review). A resume, once the folder can take the files, writes the ending again.
-    RunResult unwritten = res;
-    unwritten.outcome = RunOutcome::Error;
-    // A stopped run's reason goes with it (SIGINT received; run.log is missing lines: ...): without
-    // it an ABORTED run whose log lost lines read as resumable, and its resume ended PASS beside the
-    // hole (a code review).
-    unwritten.message =
-        was_error ? fmt::format("{}; its ending not written in full to the run folder: {}", res.message, e.what())
-                  : fmt::format("outcome {} not written to the run folder: {}{}", to_string(res.outcome), e.what(),
-                                res.outcome == RunOutcome::Aborted && !res.message.empty() ? "; " + res.message : "");
-    const nlohmann::ordered_json error_passport = make_passport(info, unwritten, values);
-    // Replaced too where it is an earlier ending's (a review: an ABORTED passport, resumed, stayed
-    // beside a history row saying ERROR); kept where it is this ending's own, put in place before
-    // what failed. Neither page nor an earlier analysis.json may stand beside the ERROR: the page
-    // is drawn from a passport that is not (or no longer) the folder's, and both come again with
-    // the resume's ending.
-    const auto earlier = [](const std::optional<FileStamp>& then, const std::string& path) {
-      const std::optional<FileStamp> now = stamp_of(path);
-      return !now || (then && now->inode == then->inode && now->device == then->device);
-    };
-    std::error_code ec;
-    fs::remove(a.out + "/report.html", ec);
-    if (earlier_analysis && earlier(earlier_analysis, a.out + "/analysis.json")) fs::remove(a.out + "/analysis.json", ec);
-    bool error_passport_written = false;
-    if (earlier(earlier_passport, a.out + "/passport.json")) try {
-        write_file_staged(a.out + "/junit.xml", junit_xml(info, unwritten, values));
-        write_file_staged(a.out + "/passport.json", passport_text(error_passport));
-        commit_staged(a.out + "/passport.json");
-        commit_staged(a.out + "/junit.xml");
-        error_passport_written = true;
-        if (was_error) log->error("passport.json and junit.xml written with outcome ERROR (its ending not written in full)");
-        else log->error("passport.json and junit.xml written with outcome ERROR (the outcome {} could not be)",
-                        to_string(res.outcome));
-      } catch (const std::exception& also) {
-        for (const char* f : {"/junit.xml.tmp", "/passport.json.tmp"}) fs::remove(a.out + f, ec);
-        log->error("nor an ERROR passport: {}", also.what());
-      }
-    if (!a.no_history) record_in_history(a, hw, error_passport, a.out, *log);
-    dev.io.set_lamp(Lamp::Running, false);
-    dev.io.set_lamp(Lamp::Fail, true);  // no passport, no pass
-    // The closing table and OUTCOME line of the ending that stands, as every other ending prints
-    // them (a review: an empty stdout beside the ERROR passport a full disk left).
-    // Only where that passport is in place: a table for a passport the folder does not hold misled
-    // (a re-test: "OUTCOME: ERROR" beside an ABORTED passport.json).
-    if (error_passport_written) {
-      say_the_passport(error_passport, info.out_dir);
-    } else if (std::error_code pe; !fs::exists(a.out + "/passport.json", pe)) {
-      // No passport at all (the folder gone, or a full disk before any ending): the outcome line
-      // still, which a station reads from stdout (a line integrator's review: stdout was empty),
-      // and no table for a passport nobody can read. Beside an earlier ending's passport nothing.
-      std::cout << "passport.json not written: the run folder could not take it (stderr says why)\n"
-                << "OUTCOME: ERROR\n"
-                << std::flush;
-    }
-    // What is kept goes on once the folder can take the files (a review: a full disk ended with
-    // only "write failed", though the folder resumed to the same passport).
-    // "No resume" only where the folder says so to the resume (the passport or the checkpoint took
-    // the reason): where the disk refused both, the resume goes on, and saying otherwise sent the
-    // technician away from a folder that then resumed to PASS (a review).
-    const std::optional<std::string> refused =
-        no_resume_why.empty() ? std::nullopt : std::optional<std::string>(resume_refusal(a.out));
-    if (refused && !refused->empty()) {  // as the ending in full says it
-      say_no_resume(no_resume_why, *log);
-      say_how_to_finish(a.out, resume_key, *log);
-    } else if (!res.config_error) {
-      if (!no_resume_why.empty()) {  // on stderr with --quiet too, as `no resume:` is
-        const std::string lost = log_loss->said();
-        const std::string line = no_resume_why +
-                                 "; with the passport refused, nothing the disk took keeps a resume from going on" +
-                                 (lost.empty() ? std::string() : ": run.log stays short of the lines refused (" + lost + ")");
-        std::cerr << line << "\n";
-        log->info("{}", line);
-      }
-      offer_a_resume(a.out, res.checkpointed, res.phases.size(), "; once the folder can take the run's files",
-                     resume_key, *log, refused);
-    }
+    end_short_of_files(e, a, hw, info, res, values, exec, earlier_passport, earlier_analysis, dev.io, no_resume_why,
+                       *log_loss, resume_key, *log);
     throw;
   }
   dev.io.set_lamp(Lamp::Running, false);
   dev.io.set_lamp(res.outcome == RunOutcome::Pass ? Lamp::Pass : Lamp::Fail, true);
   say_the_passport(passport, info.out_dir);
-  if (b.emulated) {  // the emulation's own speed, as measured on this run
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    const double device = b.emulated->clock().now_s();
-    const auto samples = b.emulated->samples_generated();
-    const std::string replay =
-        replayed_samples ? fmt::format(" ({:.1f} min and {} samples of them replayed the kept recordings)",
-                                       replayed_s / 60, replayed_samples)
-                         : std::string();
-    const std::string line = fmt::format(
-        "emulated plant: {:.1f} min of device time, {} DUT samples{}, in {:.2f} s wall: {:.0f}x real time, {:.2f} M "
-        "samples/s",
-        device / 60, samples, replay, wall, device / wall, static_cast<double>(samples) / wall / 1e6);
-    std::cout << line << "\n";
-    log->info("{}", line);
-  }
+  if (b.emulated)
+    say_the_plants_speed(*b.emulated, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(),
+                         replayed_s, replayed_samples, *log);
   log->info("outcome {} (exit {})", to_string(res.outcome), res.exit_code());
-  // After a stop, what is kept and how to go on, where the technician looks (a review: only
-  // `--dry-run --resume` said so). A configuration error is fixed and started anew, not resumed.
-  if (!no_resume_why.empty()) {  // the hint said "19 of 19 phases kept", and that resume was exit 2 (a review)
-    say_no_resume(no_resume_why, *log);
-    say_how_to_finish(a.out, resume_key, *log);
-  } else if ((res.outcome == RunOutcome::Aborted || res.outcome == RunOutcome::Error) && !res.config_error) {
-    // An emulated run's injected sample losses are repeated by its resume (run.json's faults):
-    // one that ended the run in ERROR ends the resume the same way (a line integrator's review:
-    // each resume offered "to continue" and added another ERROR ending).
-    std::string drops;
-    for (const std::string& f : a.inject)
-      if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
-    offer_a_resume(a.out, res.checkpointed, res.phases.size(),
-                   res.outcome == RunOutcome::Error && b.emulated && !drops.empty()
-                       ? "; its resume repeats run.json's faults (" + drops + "), so a loss that ended this run in "
-                         "ERROR ends it so again"
-                       : std::string(),
-                   resume_key, *log);
-  }
+  say_what_follows(a, res, b.emulated != nullptr, no_resume_why, resume_key, *log);
   if (cancel.requested() && res.outcome != RunOutcome::Aborted)
     log->warn("{} after the passport was final: outcome {} stands (exit {})", cancel.token().reason(),
               to_string(res.outcome), res.exit_code());

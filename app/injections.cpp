@@ -7,6 +7,9 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+#include <spdlog/logger.h>
+
 #include "app/whole_number.hpp"
 #include "plant/emulated/world.hpp"
 #include "rig/core/errors.hpp"
@@ -81,6 +84,22 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj)
       case Injection::Kind::Drop: w.inject_drop(j.seq, j.count); break;
     }
   return signal_at_end;
+}
+
+void say_faults_that_did_not_fire(plant::EmulatedPlant& w, const std::vector<Injection>& inj, bool from_run_json,
+                                  spdlog::logger& log) {
+  const double end_s = w.clock().now_s();
+  for (const Injection& j : inj)
+    if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > end_s)
+      log.error("--inject {} did not fire: the run ended at {:.3f} s of device time", j.text, end_s);
+  const std::vector<std::uint64_t> hits = w.drop_hits();
+  std::size_t k = 0;  // the plant's drops are the Drop injections, in order
+  for (const Injection& j : inj)
+    if (j.kind == Injection::Kind::Drop && k++ < hits.size() && hits[k - 1] == 0)
+      log.error("{} {} did not fire: the DUT streamed none of samples {}..{} (the stream is on only while "
+                "a recording or the loop test runs; the run's records say which sequence numbers they hold)",
+                from_run_json ? "run.json's fault" : "--inject", j.text, j.seq,
+                static_cast<std::uint64_t>(j.seq) + j.count - 1);
 }
 
 }  // namespace rig::cli

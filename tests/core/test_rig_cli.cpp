@@ -5856,6 +5856,41 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
 // (`nor an ERROR passport`), nothing else said run.log is short, and `rig run --resume` went on to
 // PASS, exit 0, beside the hole; `rig verify` advised that resume (a technician's review). The
 // resume, its dry run and verify now read the checkpoint's `log_missing_lines`.
+// A run.log that cannot be opened (a permission taken away, a file made immutable; here strace
+// refuses its openat with EACCES) was spdlog's "Failed opening file ... for writing" alone. It is
+// exit 4 naming the file and the system's reason, saying that nothing started and how to go on;
+// the folder keeps the start, which resumes once the log can be written.
+TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
+  if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
+  const std::string d = tmp("log-unopened");
+  fs::create_directories(d);
+  const auto [args, resume] = ci_run_and_resume(d + "/run", "");
+  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", args, d + "/new"), 4)
+      << slurp(d + "/new.stderr");
+  EXPECT_EQ(slurp(d + "/new.stderr"),
+            "rig: error: " + d + "/run/run.log: cannot be opened to write the run's account (Permission denied): the "
+            "run did not start: nothing was powered or moved; to continue once it can be written: rig run --resume " +
+                d + "/run\n");
+  EXPECT_FALSE(fs::exists(d + "/run/run.log"));
+  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  EXPECT_FALSE(fs::exists(d + "/run/captures"));
+  EXPECT_TRUE(fs::exists(d + "/run/run.json"));
+  // Its resume, refused the same way, leaves the folder as it was.
+  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", resume, d + "/again"), 4)
+      << slurp(d + "/again.stderr");
+  EXPECT_NE(slurp(d + "/again.stderr")
+                .find("run.log: cannot be opened to write the run's account (Permission denied): the resume did not "
+                      "start: nothing was powered or moved, the folder is as it was; to continue once it can be "
+                      "written: rig run --resume " + d + "/run\n"),
+            std::string::npos)
+      << slurp(d + "/again.stderr");
+  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  EXPECT_EQ(slurp(d + "/again.stdout"), "");
+  // Once it can be written, the resume runs the whole procedure.
+  EXPECT_EQ(run(resume, d + "/resumed"), 0) << slurp(d + "/resumed.stderr");
+  EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "PASS");
+}
+
 TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
   if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
   const std::string d = tmp("log-refused-passport");
