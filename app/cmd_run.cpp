@@ -1172,6 +1172,22 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   return log;
 }
 
+// The run's logger (make_logger), or a run.log that cannot be opened (a file made immutable, a
+// permission taken away, too many open files) said as what it means for the run: `what` (it did
+// not start) and how to go on; exit 4 (a run folder that cannot hold the run's records). It said
+// only spdlog's "Failed opening file ... for writing".
+std::shared_ptr<spdlog::logger> run_log_or_say(const RunArgs& a, const std::shared_ptr<LogLoss>& loss,
+                                               const std::string& what, const std::string& resume_key) {
+  try {
+    return make_logger(a.out, a.quiet, loss);
+  } catch (const RunLogUnopened& e) {  // "rig: error:" and exit 4, as a folder that refuses a record
+    throw RunLogUnopened(fmt::format("{}: {}; to continue once it can be written: rig run --resume {}{}", e.what(), what,
+                                    shell_word(a.out), resume_key));
+  }
+}
+
+std::string resume_key_words(const RunArgs& a, bool sealed);
+
 // A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
 // write_run_outputs): its outcome is final (final_outcome_of: a verdict, or an ending with no
 // resume), so nothing is measured or computed again; what is missing is done: a staged junit.xml
@@ -1221,7 +1237,9 @@ std::optional<int> finish_pending_ending(const RunArgs& a, const toml::table& hw
     return kExitPass;
   }
   const std::string unended = earlier_attempt_unended(dir);  // before this attempt's first line
-  auto log = make_logger(dir, a.quiet);
+  auto log = run_log_or_say(a, std::make_shared<LogLoss>(),
+                            "its ending was not finished: nothing was done, the folder is as it was",
+                            resume_key_words(a, sealed));
   log->info("rig {} run: out {}: the run is {}; finishing its ending ({})", RIG_VERSION, shown_text(dir), stands, what);
   say_where_the_account_broke_off(unended, *log);
   if (!a.no_history) say_history_left_behind(a, *log);  // another --db: the run's own database never gets this row
@@ -2042,20 +2060,6 @@ void say_what_follows(const RunArgs& a, const RunResult& res, bool emulated, con
                          "ERROR ends it so again"
                        : std::string(),
                    resume_key, log);
-  }
-}
-
-// The run's logger (make_logger), or a run.log that cannot be opened (a file made immutable, a
-// permission taken away, too many open files) said as what it means for the run: `what` (it did
-// not start) and how to go on; exit 4 (a run folder that cannot hold the run's records). It said
-// only spdlog's "Failed opening file ... for writing".
-std::shared_ptr<spdlog::logger> run_log_or_say(const RunArgs& a, const std::shared_ptr<LogLoss>& loss,
-                                               const std::string& what, const std::string& resume_key) {
-  try {
-    return make_logger(a.out, a.quiet, loss);
-  } catch (const RunLogUnopened& e) {  // "rig: error:" and exit 4, as a folder that refuses a record
-    throw RunLogUnopened(fmt::format("{}: {}; to continue once it can be written: rig run --resume {}{}", e.what(), what,
-                                    shell_word(a.out), resume_key));
   }
 }
 

@@ -5889,6 +5889,22 @@ TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   // Once it can be written, the resume runs the whole procedure.
   EXPECT_EQ(run(resume, d + "/resumed"), 0) << slurp(d + "/resumed.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "PASS");
+  // A resume that only finishes an ending (its history row owed) does nothing without its log.
+  const std::string station = "sqlite:" + d + "/station.sqlite";
+  std::ofstream(d + "/run/.ending-pending") << "history\n";
+  const std::vector<std::string> finish = {"run", "--resume", d + "/run", "--yes", "--db", station};
+  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", finish, d + "/finish"), 4)
+      << slurp(d + "/finish.stderr");
+  EXPECT_NE(slurp(d + "/finish.stderr")
+                .find("run.log: cannot be opened to write the run's account (Permission denied): its ending was not "
+                      "finished: nothing was done, the folder is as it was; to continue once it can be written: rig run "
+                      "--resume " + d + "/run\n"),
+            std::string::npos)
+      << slurp(d + "/finish.stderr");
+  EXPECT_EQ(slurp(d + "/run/.ending-pending"), "history\n");
+  EXPECT_FALSE(fs::exists(d + "/station.sqlite"));
+  EXPECT_EQ(run(finish, d + "/finished"), 0) << slurp(d + "/finished.stderr");
+  EXPECT_FALSE(fs::exists(d + "/run/.ending-pending"));
 }
 
 TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
