@@ -270,8 +270,8 @@ void TableServer::run() {
       int failed = 0;
       const int rc = read_rtu_request(s.port_fd, query.data(), static_cast<int>(query.size()), failed);
       if (rc > 0 && (query[0] == unit_ || query[0] == MODBUS_BROADCAST_ADDRESS)) {
+        ++served_;  // before the reply, as below
         serve_request(s.ctx, s.map, emu_, query.data(), rc);
-        ++served_;
         said_down = said_open = false;
       } else if (rc == -2) {
         // Said once, not retried every 10 ms in silence (a review: EIO forever after socat
@@ -300,8 +300,11 @@ void TableServer::run() {
       if (rc > 0 && query[6] != unit_ && query[6] != 0xFF && query[6] != 0) {
         modbus_reply_exception(s.ctx, query.data(), 0x0B);
       } else if (rc > 0) {
-        serve_request(s.ctx, s.map, emu_, query.data(), rc);
+        // Counted before the reply goes out: a client holding its answer finds its request
+        // counted (counted after, a stop's two requests read as three now and then: the last
+        // request of the command before it was counted after that command had exited).
         ++served_;
+        serve_request(s.ctx, s.map, emu_, query.data(), rc);
       } else if (rc < 0) {
         closed.push_back(fd);
       }

@@ -36,6 +36,7 @@ class TableServer {
   void stop();
   // The canonical endpoint, with the bound port: "tcp:127.0.0.1:40123".
   std::string endpoint() const;
+  // Requests answered for this unit, each counted before its reply is sent.
   uint64_t requests_served() const { return served_.load(); }
   // What the serving thread has to say (an RTU port that failed, reopened); set before start().
   void on_notice(std::function<void(const std::string&)> fn) { notice_ = std::move(fn); }
