@@ -1797,8 +1797,9 @@ nlohmann::json new_run_invocation(const RunArgs& a, const toml::table& hw, const
   return invocation;
 }
 
-// Judges the records a verdict stands on, after the phases, and turns an outcome that cannot stand
-// into ERROR with its reason in res. Returns why the run has no resume ("" while it has one).
+// After the phases: a verdict (PASS, FAIL) whose records are gone, changed or short of log lines
+// becomes ERROR with its reason in res; a stopped run (ABORTED, ERROR) whose log lost lines has
+// that loss added to its reason. Returns why the run has no resume ("" while it has one).
 std::string judge_the_records(const std::string& out, RunResult& res, acceptance::ProcedureState& state,
                               const std::optional<seal::Key>& key, const LogLoss& loss, spdlog::logger& log) {
   // A verdict stands on its records: one whose captures or log were removed meanwhile is an
@@ -2038,8 +2039,8 @@ void end_with_devices_unopened(const std::exception& e, const RunArgs& a, const 
     say_how_to_continue(a.out, kept, planned, ": the devices did not open", resume_key, log);
 }
 
-// The ending's last words: why the run has no resume and how its ending is finished, or after a
-// stop how the run goes on (what is kept, what its resume repeats).
+// After the passport: why the run has no resume and how its ending is finished, or after a stop
+// how the run goes on (what is kept, what its resume repeats).
 void say_what_follows(const RunArgs& a, const RunResult& res, bool emulated, const std::string& no_resume_why,
                       const std::string& resume_key, spdlog::logger& log) {
   // After a stop, what is kept and how to go on, where the technician looks (a review: only
@@ -2069,8 +2070,9 @@ struct TakenFolder {
   bool made_here = false;
   bool taken_over = false;  // a stopped start's folder (only_a_start), taken over
 };
-// The run's folder (a.out; made under runs/ when not given) made ready for the run or its resume,
-// with its lock (`folder_lock`): an earlier run there refused, a stopped start taken over.
+// The run's folder (a.out; made under runs/ when not given) made ready for the run or its resume:
+// a new run's takes its lock (`folder_lock`; a resume's was taken before its folder was read), an
+// earlier run there refused, a stopped start taken over.
 // Before the operator is asked anything: no one should answer the prompts of a run that cannot start.
 TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optional<FolderLock>& folder_lock) {
   TakenFolder taken;
@@ -2343,9 +2345,10 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
         }
       },
       phases, values, state, cancel.token(), resumed, identity);
-  // Not where the resume replayed nothing (no phase left used the devices): its device time and
-  // its drops are then only bring-up's, and the faults fired in the run that recorded them (a
-  // code review: "run.json's fault drop@1000:5 did not fire" on such a resume).
+  // Faults that never met the run, said after a run that was not stopped; not where the resume
+  // replayed nothing (no phase left used the devices): its device time and its drops are then only
+  // bring-up's, and the faults fired in the run that recorded them (a code review: "run.json's
+  // fault drop@1000:5 did not fire" on such a resume).
   if (b.emulated && res.outcome != RunOutcome::Aborted && (a.resume.empty() || fast_forward))
     say_faults_that_did_not_fire(*b.emulated, injections, !a.resume.empty(), *log);
   if (signal_at_end) {

@@ -35,11 +35,12 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj);
 // Arms the faults on the plant. Returns the signal asked for at the end, or 0.
 int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj);
 
-// After a run that was not stopped, each fault that never met the run, as an error line (a test
-// harness running with --quiet sees it too): one timed past the run's end, or a loss in samples
-// the DUT never streamed. Otherwise a test of it passes for nothing (reviews: sigint@229 on a run
-// of 228 s of device time, drop@1000:5 between recordings, both exit 0 without a word).
-// from_run_json: a resume's faults, repeated from run.json.
+// Each fault that never met the run, as an error line (a test harness running with --quiet sees
+// it too): one timed past the run's end, or a loss in samples the DUT never streamed. Otherwise a
+// test of it passes for nothing (reviews: sigint@229 on a run of 228 s of device time,
+// drop@1000:5 between recordings, both exit 0 without a word). The caller's to call only after a
+// run that was not stopped and whose device time is whole. from_run_json: a resume's faults,
+// repeated from run.json.
 void say_faults_that_did_not_fire(plant::EmulatedPlant& w, const std::vector<Injection>& inj, bool from_run_json,
                                   spdlog::logger& log);
 

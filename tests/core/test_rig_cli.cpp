@@ -5852,10 +5852,6 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
       << slurp(out + "-resume.stderr");
 }
 
-// The log's loss is kept in the checkpoint too: where the full disk refused the passport as well
-// (`nor an ERROR passport`), nothing else said run.log is short, and `rig run --resume` went on to
-// PASS, exit 0, beside the hole; `rig verify` advised that resume (a technician's review). The
-// resume, its dry run and verify now read the checkpoint's `log_missing_lines`.
 // A run.log that cannot be opened (a permission taken away, a file made immutable; here strace
 // refuses its openat with EACCES) was spdlog's "Failed opening file ... for writing" alone. It is
 // exit 4 naming the file and the system's reason, saying that nothing started and how to go on;
@@ -5907,6 +5903,10 @@ TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   EXPECT_FALSE(fs::exists(d + "/run/.ending-pending"));
 }
 
+// The log's loss is kept in the checkpoint too: where the full disk refused the passport as well
+// (`nor an ERROR passport`), nothing else said run.log is short, and `rig run --resume` went on to
+// PASS, exit 0, beside the hole; `rig verify` advised that resume (a technician's review). The
+// resume, its dry run and verify now read the checkpoint's `log_missing_lines`.
 TEST(RigCli, ALogLossOutlivesARefusedPassportInTheCheckpoint) {
   if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
   const std::string d = tmp("log-refused-passport");
