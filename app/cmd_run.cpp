@@ -2308,7 +2308,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     throw;  // main() reports it with its exit code (4 hardware, 2 configuration)
   }
   int signal_at_end = 0;
-  if (b.emulated) signal_at_end = apply_injections(*b.emulated, injections);
+  if (b.emulated) signal_at_end = apply_injections(*b.emulated, injections, cancel.token());
   Devices dev = b.devices();
   dev.io.on_estop([&cancel] { cancel.request("e-stop line opened"); });
 

@@ -3,9 +3,11 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include <fmt/format.h>
 #include <spdlog/logger.h>
@@ -75,12 +77,20 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
   return out;
 }
 
-int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj) {
+int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj, const CancelToken& taken) {
   int signal_at_end = 0;
+  // The plant holds its device time until the process has taken the signal (the signal watcher's
+  // thread trips `taken`), so the run stops at the same sample every time: it ran on for a few
+  // milliseconds of wall time, seconds of device time, and sigint@20 kept 1 or 2 phases (a
+  // technician's review). Bounded: a signal nobody takes leaves the plant going after 2 s.
+  const auto signal_and_wait = [taken](int sig) {
+    ::kill(::getpid(), sig);
+    for (int i = 0; i < 20000 && !taken.requested(); ++i) std::this_thread::sleep_for(std::chrono::microseconds(100));
+  };
   for (const Injection& j : inj) switch (j.kind) {
       case Injection::Kind::SignalAtEnd: signal_at_end = j.signal; break;
       case Injection::Kind::Estop: w.trip_estop_at(j.at_s); break;
-      case Injection::Kind::Signal: w.at(j.at_s, [sig = j.signal] { ::kill(::getpid(), sig); }); break;
+      case Injection::Kind::Signal: w.at(j.at_s, [signal_and_wait, sig = j.signal] { signal_and_wait(sig); }); break;
       case Injection::Kind::Drop: w.inject_drop(j.seq, j.count); break;
     }
   return signal_at_end;

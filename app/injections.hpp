@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "rig/core/cancel.hpp"
+
 namespace rig::plant {
 class EmulatedPlant;
 }
@@ -32,8 +34,10 @@ struct Injection {
 // ConfigError naming the value.
 std::vector<Injection> parse_injections(const std::vector<std::string>& inj);
 
-// Arms the faults on the plant. Returns the signal asked for at the end, or 0.
-int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj);
+// Arms the faults on the plant. Returns the signal asked for at the end, or 0. `taken`: the run's
+// cancel token, which the process's signal watcher trips; a signal at T holds the plant at T
+// until it is taken.
+int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj, const CancelToken& taken);
 
 // Each fault that never met the run, as an error line (a test harness running with --quiet sees
 // it too): one timed past the run's end, or a loss in samples the DUT never streamed. Otherwise a
