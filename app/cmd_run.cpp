@@ -1130,9 +1130,10 @@ std::string utc_now_ms() {
   return fmt::format("{}.{:03d}Z", s.substr(0, s.size() - 1), ms % 1000);
 }
 
-// A run.log this process cannot open (main: "rig: error:", exit 4).
-struct RunLogUnopened : std::runtime_error {
-  using std::runtime_error::runtime_error;
+// A run.log this process cannot open: found before anything started, as a run folder that is not
+// writable is (main: exit 2).
+struct RunLogUnopened : ConfigError {
+  using ConfigError::ConfigError;
 };
 
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
@@ -1174,13 +1175,14 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
 
 // The run's logger (make_logger), or a run.log that cannot be opened (a file made immutable, a
 // permission taken away, too many open files) said as what it means for the run: `what` (it did
-// not start) and how to go on; exit 4 (a run folder that cannot hold the run's records). It said
-// only spdlog's "Failed opening file ... for writing".
+// not start) and how to go on; exit 2, as a run folder found not writable. It said only spdlog's
+// "Failed opening file ... for writing", exit 4. (refuse_a_run_log_it_cannot_write finds most
+// before the operator is asked anything; this is what is left: a new run's log, a race.)
 std::shared_ptr<spdlog::logger> run_log_or_say(const RunArgs& a, const std::shared_ptr<LogLoss>& loss,
                                                const std::string& what, const std::string& resume_key) {
   try {
     return make_logger(a.out, a.quiet, loss);
-  } catch (const RunLogUnopened& e) {  // "rig: error:" and exit 4, as a folder that refuses a record
+  } catch (const RunLogUnopened& e) {
     throw RunLogUnopened(fmt::format("{}: {}; to continue once it can be written: rig run --resume {}{}", e.what(), what,
                                     shell_word(a.out), resume_key));
   }
@@ -1674,6 +1676,9 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
   if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
   const bool taken_over = check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
                                            a.resume.empty() ? "--out" : "--resume", p.source);
+  // A run.log the run could not open (a stopped run's, a stopped start's it would take over).
+  if (!a.resume.empty()) refuse_a_run_log_it_cannot_write(a.resume);
+  else if (!a.out.empty()) refuse_a_run_log_it_cannot_write(a.out);
   const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
                                       a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
   // A resume's checkpoint is checked as the run would check it (its captures read, nothing
@@ -2100,6 +2105,7 @@ TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optio
     refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since
   }
   refuse_non_files(a.out, !a.resume.empty());
+  refuse_a_run_log_it_cannot_write(a.out);
   return taken;
 }
 

@@ -1,12 +1,14 @@
 #include "app/run_folder.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <cctype>
 #include <ctime>
 #include <fstream>
@@ -70,6 +72,22 @@ void prepare_run_folder(const std::string& dir, const std::string& option) {
   const bool writable = fs::file_size(probe, ec) == 4 && !ec;
   fs::remove(probe, ec);
   if (!writable) throw ConfigError(option + " " + dir + ": the run folder is not writable");
+}
+
+void refuse_a_run_log_it_cannot_write(const std::string& dir) {
+  const std::string path = dir + "/run.log";
+  struct stat st {};
+  // None (the run makes it), or not a file (refuse_non_files names it; a FIFO would block the open).
+  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  // Opened as the run opens it, and closed unwritten: its contents and times stay as they were.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC | O_NOCTTY);
+  if (fd >= 0) {
+    ::close(fd);
+    return;
+  }
+  throw ConfigError(fmt::format("{}: cannot be opened to write the run's account ({}): nothing was started or "
+                                "changed; run the command again once it can be written",
+                                path, std::strerror(errno)));
 }
 
 // Whether this process can create a file in the existing directory `d`.

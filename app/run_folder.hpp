@@ -23,6 +23,10 @@ std::string folder_name_part(std::string s);
 void refuse_a_name_too_long(const std::string& dir, const std::string& option);
 // Creates `dir` and checks that a file can be written in it.
 void prepare_run_folder(const std::string& dir, const std::string& option);
+// A run.log already in `dir` (a stopped run's, a stopped start's) that this process cannot open
+// to append to (the file made immutable, its permission taken away): a ConfigError naming it and
+// the system's reason, before anything starts; the dry run's check too (touches nothing).
+void refuse_a_run_log_it_cannot_write(const std::string& dir);
 // Whether this process can create a file in the existing directory `d` (touches nothing).
 bool can_create_file_in(const std::filesystem::path& d);
 // `p` itself, or its nearest ancestor that exists: where a folder not there yet would be created.

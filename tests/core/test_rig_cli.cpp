@@ -5883,18 +5883,19 @@ TEST(RigCli, AnEndingWithNoResumeIsFinishedByItsResume) {
 }
 
 // A run.log that cannot be opened (a permission taken away, a file made immutable; here strace
-// refuses its openat with EACCES) was spdlog's "Failed opening file ... for writing" alone. It is
-// exit 4 naming the file and the system's reason, saying that nothing started and how to go on;
-// the folder keeps the start, which resumes once the log can be written.
+// refuses its openat with EACCES) was spdlog's "Failed opening file ... for writing" alone, exit 4.
+// It is exit 2, as a folder found not writable, naming the file and the system's reason, saying
+// that nothing started and how to go on; the folder keeps the start, which resumes once the log
+// can be written.
 TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   if (!strace_can_trace()) GTEST_SKIP() << "no strace that can trace here";
   const std::string d = tmp("log-unopened");
   fs::create_directories(d);
   const auto [args, resume] = ci_run_and_resume(d + "/run", "");
-  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", args, d + "/new"), 4)
+  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", args, d + "/new"), 2)
       << slurp(d + "/new.stderr");
   EXPECT_EQ(slurp(d + "/new.stderr"),
-            "rig: error: " + d + "/run/run.log: cannot be opened to write the run's account (Permission denied): the "
+            "rig: configuration error: " + d + "/run/run.log: cannot be opened to write the run's account (Permission denied): the "
             "run did not start: nothing was powered or moved; to continue once it can be written: rig run --resume " +
                 d + "/run\n");
   EXPECT_FALSE(fs::exists(d + "/run/run.log"));
@@ -5902,16 +5903,14 @@ TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   EXPECT_FALSE(fs::exists(d + "/run/captures"));
   EXPECT_TRUE(fs::exists(d + "/run/run.json"));
   // Its resume, refused the same way, leaves the folder as it was.
-  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", resume, d + "/again"), 4)
+  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", resume, d + "/again"), 2)
       << slurp(d + "/again.stderr");
-  EXPECT_NE(slurp(d + "/again.stderr")
-                .find("run.log: cannot be opened to write the run's account (Permission denied): the resume did not "
-                      "start: nothing was powered or moved, the folder is as it was; to continue once it can be "
-                      "written: rig run --resume " + d + "/run\n"),
-            std::string::npos)
-      << slurp(d + "/again.stderr");
-  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
+  EXPECT_EQ(slurp(d + "/again.stderr"),
+            "rig: configuration error: " + d + "/run/run.log: cannot be opened to write the run's account (Permission "
+            "denied): the resume did not start: nothing was powered or moved, the folder is as it was; to continue once "
+            "it can be written: rig run --resume " + d + "/run\n");
   EXPECT_EQ(slurp(d + "/again.stdout"), "");
+  EXPECT_FALSE(fs::exists(d + "/run/passport.json"));
   // Once it can be written, the resume runs the whole procedure.
   EXPECT_EQ(run(resume, d + "/resumed"), 0) << slurp(d + "/resumed.stderr");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/run/passport.json"))["outcome"], "PASS");
@@ -5919,7 +5918,7 @@ TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   const std::string station = "sqlite:" + d + "/station.sqlite";
   std::ofstream(d + "/run/.ending-pending") << "history\n";
   const std::vector<std::string> finish = {"run", "--resume", d + "/run", "--yes", "--db", station};
-  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", finish, d + "/finish"), 4)
+  EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", finish, d + "/finish"), 2)
       << slurp(d + "/finish.stderr");
   EXPECT_NE(slurp(d + "/finish.stderr")
                 .find("run.log: cannot be opened to write the run's account (Permission denied): its ending was not "
@@ -5931,6 +5930,25 @@ TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   EXPECT_FALSE(fs::exists(d + "/station.sqlite"));
   EXPECT_EQ(run(finish, d + "/finished"), 0) << slurp(d + "/finished.stderr");
   EXPECT_FALSE(fs::exists(d + "/run/.ending-pending"));
+  // A stopped run's log, there already: its resume and the resume's dry run find it before the
+  // operator is asked anything (the dry run passed it, and the resume was refused: a technician's
+  // review), the folder as it was.
+  const auto [stop, stopped_resume] = ci_run_and_resume(d + "/stopped", "");
+  std::vector<std::string> stopping = stop;
+  stopping.insert(stopping.end(), {"--inject", "sigint@20"});
+  ASSERT_EQ(run(stopping, d + "/stop"), 3) << slurp(d + "/stop.stderr");
+  const std::string log_before = slurp(d + "/stopped/run.log");
+  std::vector<std::string> dry = stopped_resume;
+  dry.push_back("--dry-run");
+  for (const auto& [cmd, io] : {std::pair{stopped_resume, d + "/refused"}, std::pair{dry, d + "/dry"}}) {
+    EXPECT_EQ(rig_traced(d + "/stopped/run.log", "openat", "openat:error=EACCES", cmd, io), 2) << slurp(io + ".stderr");
+    EXPECT_EQ(slurp(io + ".stderr"), "rig: configuration error: " + d + "/stopped/run.log: cannot be opened to write "
+                                     "the run's account (Permission denied): nothing was started or changed; run the "
+                                     "command again once it can be written\n");
+    EXPECT_EQ(slurp(io + ".stdout"), "");
+  }
+  EXPECT_EQ(slurp(d + "/stopped/run.log"), log_before);
+  EXPECT_EQ(run(stopped_resume, d + "/stopped-resumed"), 0) << slurp(d + "/stopped-resumed.stderr");
 }
 
 // The log's loss is kept in the checkpoint too: where the full disk refused the passport as well
