@@ -1162,8 +1162,11 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
       loss->why = msg;
       loss->first = utc_now_ms();
     }
+    // What it costs, said now: the run goes on for hours after it (a technician's review read
+    // "while that lasts" as passing).
     std::cerr << "rig: warning: " << out_dir << "/run.log: a line could not be written (" << msg
-              << "); the run's log is short of what follows while that lasts\n";
+              << "); the run's log is short of what follows while that lasts, and a run whose log misses lines "
+                 "before its verdict ends ERROR, with no resume (what it records is kept)\n";
   });
   log->set_level(spdlog::level::debug);
   // UTC, marked so, as every other time the run writes (passport, run.json, history): local
@@ -1844,7 +1847,9 @@ std::string judge_the_records(const std::string& out, RunResult& res, acceptance
     if (!log_missing.empty()) why.push_back(log_missing);
     if (!no_resume_why.empty()) {
       res.outcome = RunOutcome::Error;
-      res.message = fmt::format("{}; no verdict without the records as measured", fmt::join(why, "; "));
+      res.message = fmt::format("{}; no verdict {}", fmt::join(why, "; "),
+                                gone.empty() && changed.empty() ? "beside a hole in the run's account"
+                                                                : "without the records as measured");
       log.error("{}", res.message);
     }
   }

@@ -5603,6 +5603,11 @@ TEST(RigCli, ARunWhoseLogTheDiskRefusedHasNoVerdict) {
   const std::string why = p["aborted_reason"].get<std::string>();
   EXPECT_EQ(why.rfind("run.log is missing lines: the disk refused ", 0), 0u) << why;
   EXPECT_NE(why.find("No space left on device"), std::string::npos) << why;
+  EXPECT_NE(why.find("; no verdict beside a hole in the run's account"), std::string::npos) << why;
+  // Said when it happens, with what it costs (a technician's review read "while that lasts" as passing).
+  EXPECT_NE(slurp(d + "/io.stderr").find("a run whose log misses lines before its verdict ends ERROR, with no resume"),
+            std::string::npos)
+      << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/run/junit.xml").find("run.log is missing lines"), std::string::npos);
   EXPECT_NE(slurp(d + "/io.stdout").find("OUTCOME: ERROR"), std::string::npos) << slurp(d + "/io.stdout");
   const std::string err = slurp(d + "/io.stderr");
