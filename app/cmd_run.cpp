@@ -1738,6 +1738,14 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
     for (std::size_t i = completed.size(); i < phases.size(); ++i) left += (left.empty() ? "" : ", ") + phases[i].id;
     std::cout << "  still to run: "
               << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left) << "\n";
+    // The losses the resume plays again, named where the `to continue` hint sends the technician
+    // (a review: that hint said they repeat, the dry run did not).
+    std::string drops;
+    for (const std::string& f : a.inject)
+      if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
+    if (!drops.empty())
+      std::cout << "  repeated from run.json's faults: " << drops << " (samples the emulated DUT lost are part of its "
+                << "history: a loss that ended the run in ERROR ends the resume so again)\n";
     // Named, not only the rule (a technician's review): which file the resume sets aside.
     for (const std::string& f : partial_records(a.resume, state.slot()))
       std::cout << "  left partial by the interruption: " << f << " (kept as " << f

@@ -6316,6 +6316,13 @@ TEST(RigCli, AResumeOfARunEndedByItsInjectedLossesSaysTheyRepeat) {
                                          "this run in ERROR ends it so again"),
             std::string::npos)
       << slurp(d + "/io.stderr");
+  // The dry run the hint names says so too (a technician's review: it never named them).
+  EXPECT_EQ(run({"run", "--resume", d + "/r", "--dry-run", "--no-history"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
+  EXPECT_NE(slurp(d + "/dry.stdout").find("  repeated from run.json's faults: drop@9000:10, drop@12500:10 (samples "
+                                          "the emulated DUT lost are part of its history: a loss that ended the run in "
+                                          "ERROR ends the resume so again)\n"),
+            std::string::npos)
+      << slurp(d + "/dry.stdout");
   EXPECT_EQ(run({"run", "--resume", d + "/r", "--yes", "--quiet", "--no-history"}, d + "/resume"), 4);
   EXPECT_NE(slurp(d + "/resume.stderr").find("its resume repeats run.json's faults (drop@9000:10, drop@12500:10)"),
             std::string::npos)
