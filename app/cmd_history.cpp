@@ -333,7 +333,8 @@ void check_seal_before_recording(const HistoryArgs& a) {
     throw NotTheDatabase(fmt::format("{}: its final seal was not written ({} lists: {}); nothing recorded ({})",
                                      a.record, kEndingPending, fmt::join(steps, ", "),
                                      a_resume_finishes(a.record, steps)
-                                         ? "rig run --resume " + shell_word(a.record) + " --seal-key FILE seals it"
+                                         ? "rig run --resume " + shell_word(a.record) + seal_key_words(a.seal_key) +
+                                               " seals it"
                                          : std::string(kNothingFinishesIt)));
   }
   // With the key, where the line alone would be refused without it.

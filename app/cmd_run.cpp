@@ -954,7 +954,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       fs::remove(a.out + "/report.html", gone);
       steps.insert(steps.find('\n') + 1, std::string(kStepReport) + "\n");
       log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shell_word(a.out),
-                key ? " --seal-key FILE" : "", key ? " and seals it" : "");
+                key ? seal_key_words(a.seal_key) : "", key ? " and seals it" : "");
     }
     write_file_atomic(pending, steps);  // what follows this passport, the mark gone
     commit_staged(pass);
@@ -996,9 +996,9 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       if (res.outcome != RunOutcome::Pass && res.outcome != RunOutcome::Fail)
         log.error("seal.json not written: {}", e.what());
       else
-        log.error("seal.json not written: {} (rig run --resume {} --seal-key FILE seals it: the ending computed "
-                  "again from the kept records, nothing measured again)",
-                  e.what(), shell_word(a.out));
+        log.error("seal.json not written: {} (rig run --resume {}{} seals it: the ending computed again from the "
+                  "kept records, nothing measured again)",
+                  e.what(), shell_word(a.out), seal_key_words(a.seal_key));
     }
   }
   // The list keeps only what is still to do, rewritten as each step is done (it kept steps

@@ -151,7 +151,8 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                                   : !log_short.empty()
                                       ? "its checkpoint records that " + log_short +
                                             ": no resume goes on with it (start a new run)"
-                                      : "`rig run --resume " + shell_word(dir) + " --seal-key FILE` goes on with the run")
+                                      : "`rig run --resume " + shell_word(dir) + seal_key_words(key_path) +
+                                            "` goes on with the run")
                 : seal_owed ? std::string("NOT verified: the run's final seal was not written (its ending lists it as "
                                           "still to do; the seal that stands is its last checkpoint's)\n")
                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
@@ -174,7 +175,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                       ? fmt::format("note: the run's ending is not finished ({}: {}): `rig run --resume {}{}` finishes "
                                     "it\n",
                                     kEndingPending, fmt::join(*steps, ", "), shell_word(dir),
-                                    seal_in(dir) ? " --seal-key FILE" : "")
+                                    seal_in(dir) ? seal_key_words(key_path) : "")
                       : fmt::format("note: the run's ending is not finished ({}: {}), and {}; what the seal vouches "
                                     "for stands as said above\n",
                                     kEndingPending, fmt::join(*steps, ", "), kNothingFinishesIt));

@@ -1383,7 +1383,7 @@ TEST(Campaign, AReportTheEndingCouldNotWriteIsWrittenByTheResume) {
     EXPECT_FALSE(fs::exists(r + "/report.html")) << "the earlier page went";
     const std::string err = slurp(r + "-io.stderr");
     EXPECT_NE(err.find("report.html not written: "), std::string::npos) << err;
-    EXPECT_NE(err.find("(rig run --resume " + r + (sealed ? " --seal-key FILE writes it and seals it)" : " writes it)")),
+    EXPECT_NE(err.find("(rig run --resume " + r + (sealed ? " --seal-key " + key + " writes it and seals it)" : std::string(" writes it)"))),
               std::string::npos)
         << err;
     EXPECT_NE(slurp(r + "/.ending-pending").find("report\n"), std::string::npos);

@@ -6167,7 +6167,7 @@ TEST(RigCli, ARefusedFinalSealSaysWhatSealsIt) {
             0)
       << slurp(out + ".stderr");
   EXPECT_NE(slurp(out + ".stderr").find("seal.json not written: "), std::string::npos) << slurp(out + ".stderr");
-  EXPECT_NE(slurp(out + ".stderr").find("(rig run --resume " + out + " --seal-key FILE seals it: "), std::string::npos)
+  EXPECT_NE(slurp(out + ".stderr").find("(rig run --resume " + out + " --seal-key " + key + " seals it: "), std::string::npos)
       << slurp(out + ".stderr");
   EXPECT_EQ(slurp(out + "/.ending-pending"), "seal\n");
   const std::string passport = slurp(out + "/passport.json");
@@ -6183,10 +6183,10 @@ TEST(RigCli, ARefusedFinalSealSaysWhatSealsIt) {
             std::string::npos)
       << said;
   EXPECT_EQ(said.find("the folder is not sealed"), std::string::npos) << said;
-  EXPECT_NE(said.find("`rig run --resume " + out + " --seal-key FILE` finishes it"), std::string::npos) << said;
+  EXPECT_NE(said.find("`rig run --resume " + out + " --seal-key " + key + "` finishes it"), std::string::npos) << said;
   EXPECT_EQ(run({"history", "--db", d + "/h.sqlite", "--record", out, "--seal-key", key}, out + "-record"), 2);
   EXPECT_NE(slurp(out + "-record.stderr").find(out + ": its final seal was not written (.ending-pending lists: seal); "
-                                                     "nothing recorded (rig run --resume " + out + " --seal-key FILE seals it)"),
+                                                     "nothing recorded (rig run --resume " + out + " --seal-key " + key + " seals it)"),
             std::string::npos)
       << slurp(out + "-record.stderr");
   // A record changed since the checkpoint's seal is said as that, not as a seal still to write (a
@@ -6265,7 +6265,7 @@ TEST(RigCli, ASealedRunsResumeLineNamesItsKey) {
                                                      "checkpoint's, not a final one)"),
             std::string::npos)
       << slurp(d + "/killed-verify.stdout");
-  EXPECT_NE(slurp(d + "/killed-verify.stdout").find("`rig run --resume " + d + "/killed --seal-key FILE` goes on with "
+  EXPECT_NE(slurp(d + "/killed-verify.stdout").find("`rig run --resume " + d + "/killed --seal-key " + key + "` goes on with "
                                                      "the run"),
             std::string::npos)
       << slurp(d + "/killed-verify.stdout");
