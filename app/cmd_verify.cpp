@@ -156,6 +156,13 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                 : seal_owed ? std::string("NOT verified: the run's final seal was not written (its ending lists it as "
                                           "still to do; the seal that stands is its last checkpoint's)\n")
                     : std::string("NOT verified: the folder is not as the station sealed it\n"));
+  // A stopped run's ending (ABORTED, ERROR) verifies as sealed: what was kept holds, and the run
+  // may go on. Said, with the command that tells whether and how (a technician's review: verify
+  // said "verified ... outcome ABORTED" and no more).
+  if (c.ok && !live && !is_verdict(c.outcome))
+    std::cout << fmt::format("note: the run stopped before its verdict (outcome {}): `rig run --dry-run --resume {}{}` "
+                             "says whether and how it goes on\n",
+                             c.outcome, shell_word(dir), seal_key_words(key_path));
   // What the seal holds may be whole while the ending is not (report.html a full disk kept out,
   // the history row): said, with how to finish it (a review: verify was silent on it).
   // The key only where the folder is sealed: a resume of an unsealed folder refuses one (a review).

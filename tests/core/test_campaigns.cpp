@@ -1123,6 +1123,13 @@ TEST(Campaign, SealedRunFolders) {
     ASSERT_FALSE(partial.empty()) << "sigint@150 stops a recording: " << sealed.dump(1);
     EXPECT_EQ(run({"verify", ab, "--seal-key", key}, ab + "-verify"), 0) << slurp(ab + "-verify.stdout");
     EXPECT_NE(slurp(ab + "-verify.stdout").find("ok       " + partial), std::string::npos) << slurp(ab + "-verify.stdout");
+    // ... and says the run may go on, with the command that tells how (a technician's review: it
+    // said "verified ... outcome ABORTED" and no more).
+    EXPECT_NE(slurp(ab + "-verify.stdout")
+                  .find("note: the run stopped before its verdict (outcome ABORTED): `rig run --dry-run --resume " + ab +
+                        " --seal-key " + key + "` says whether and how it goes on\n"),
+              std::string::npos)
+        << slurp(ab + "-verify.stdout");
     EXPECT_EQ(run({"history", "--db", "sqlite:" + db, "--record", ab, "--seal-key", key}, ab + "-record"), 0)
         << slurp(ab + "-record.stderr");
     ASSERT_EQ(run({"run", "--resume", ab, "--yes", "--no-history", "--seal-key", key}, ab + "-resume"), 0)
