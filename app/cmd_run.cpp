@@ -311,7 +311,7 @@ std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Pr
   std::cerr << fmt::format(
       "Profile '{}': {}\nDevice time {}{}. After your answers rig powers the DUT, homes the table and turns it between "
       "U10 ({:g} deg) and U20 ({:g} deg); Ctrl-C at any point stops the table and powers the DUT off.\n",
-      p.name, p.description, TerminalView::hms(planned_s), kept ? fmt::format(" left ({} phases kept)", kept) : "",
+      p.name, p.description, TerminalView::hms(planned_s), kept ? fmt::format(" left ({} phases complete)", kept) : "",
       p.u10_deg, p.u20_deg);
   std::vector<std::string> confirmed;
   auto ask = [&](const std::string& question, const char* declined) {
@@ -1493,7 +1493,7 @@ void refuse_records_without_checkpoint(const std::string& dir) {
 void say_how_to_continue(const std::string& out, std::size_t kept, std::size_t phases, const std::string& why,
                          const std::string& key_words, spdlog::logger& log) {
   const std::string hint = fmt::format(
-      "to continue: rig run --resume {}{} ({} of {} phases kept{}; `rig run --dry-run --resume {}{}` shows what a "
+      "to continue: rig run --resume {}{} ({} of {} phases complete{}; `rig run --dry-run --resume {}{}` shows what a "
       "resume repeats)",
       shell_word(out), key_words, kept, phases, why, shell_word(out), key_words);
   std::cerr << hint << "\n";

@@ -48,7 +48,7 @@ void TerminalView::plan(const std::vector<Phase>& phases, std::size_t kept) {
   // A resume's prompt gives the time left; the plan says both, so the two do not seem to disagree
   // (a technician's review: "Device time 01:44:10", then "Plan: 19 phases, 01:53:50").
   if (kept > 0 && kept <= phases.size())
-    put("Plan: {} phases, {} of device time; {} kept, {} left\n", phases.size(), hms(total), kept, hms(left));
+    put("Plan: {} phases, {} of device time; {} complete, {} left\n", phases.size(), hms(total), kept, hms(left));
   else
     put("Plan: {} phases, {} of device time\n", phases.size(), hms(total));
   for (std::size_t i = 0; i < phases.size(); ++i)

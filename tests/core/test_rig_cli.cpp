@@ -2030,7 +2030,7 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   EXPECT_NE(slurp(d + "/io.stdout").find("run folder: " + d + "/run\n"), std::string::npos) << slurp(d + "/io.stdout");
   // The folder stays for a resume once the devices open, and the run says how, as after any stop
   // (a review: a new run into it said "use --resume", the failed run nothing).
-  const std::string hint = "to continue: rig run --resume " + d + "/run (0 of 19 phases kept: the devices did not open;";
+  const std::string hint = "to continue: rig run --resume " + d + "/run (0 of 19 phases complete: the devices did not open;";
   EXPECT_NE(slurp(d + "/io.stderr").find(hint), std::string::npos) << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/run/run.log").find(hint), std::string::npos) << slurp(d + "/run/run.log");
   // Recorded like any other run (spawn() points RIG_HISTORY at d/io.history.sqlite).
@@ -6311,7 +6311,7 @@ TEST(RigCli, AResumeOfARunEndedByItsInjectedLossesSaysTheyRepeat) {
                 d + "/io"),
             4)
       << slurp(d + "/io.stderr");
-  EXPECT_NE(slurp(d + "/io.stderr").find("to continue: rig run --resume " + d + "/r (0 of 19 phases kept; its resume "
+  EXPECT_NE(slurp(d + "/io.stderr").find("to continue: rig run --resume " + d + "/r (0 of 19 phases complete; its resume "
                                          "repeats run.json's faults (drop@9000:10, drop@12500:10), so a loss that ended "
                                          "this run in ERROR ends it so again"),
             std::string::npos)
@@ -6948,13 +6948,13 @@ TEST(RigCli, AtTheOperatorsPromptsASignalEndsTheRunBeforeAnythingIsPowered) {
   EXPECT_NE(log.find("to continue: rig run --resume " + d + "/run ("), std::string::npos) << log;
   EXPECT_EQ(seen.find("aborted: aborted:"), std::string::npos) << seen;
   // The resume's prompt declined: run.log says the resume did not start (it ended at "resuming").
-  // The prompt gives the time left with the phases kept, as the dry run's plan does.
+  // The prompt gives the time left with the phases complete, as the dry run's plan does.
   EXPECT_EQ(on_a_terminal({"run", "--resume", d + "/run"}, {{"[y/N]", "n\n", 0}}, seen), 3) << seen;
   EXPECT_NE(seen.find(" left ("), std::string::npos) << seen;
-  EXPECT_NE(seen.find(" phases kept). After your answers"), std::string::npos) << seen;
+  EXPECT_NE(seen.find(" phases complete). After your answers"), std::string::npos) << seen;
   ASSERT_EQ(run({"run", "--dry-run", "--resume", d + "/run"}, d + "/dry"), 0) << slurp(d + "/dry.stderr");
   EXPECT_NE(slurp(d + "/dry.stdout").find(" of device time; "), std::string::npos) << slurp(d + "/dry.stdout");
-  EXPECT_NE(slurp(d + "/dry.stdout").find(" kept, "), std::string::npos) << slurp(d + "/dry.stdout");
+  EXPECT_NE(slurp(d + "/dry.stdout").find(" complete, "), std::string::npos) << slurp(d + "/dry.stdout");
   EXPECT_NE(slurp(d + "/run/run.log").find("resume not started: operator did not confirm the DUT is mounted"),
             std::string::npos)
       << slurp(d + "/run/run.log");
