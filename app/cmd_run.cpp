@@ -1679,9 +1679,9 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
   if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
   const bool taken_over = check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
                                            a.resume.empty() ? "--out" : "--resume", p.source);
-  // A run.log the run could not open (a stopped run's, a stopped start's it would take over).
-  if (!a.resume.empty()) refuse_a_run_log_it_cannot_write(a.resume);
-  else if (!a.out.empty()) refuse_a_run_log_it_cannot_write(a.out);
+  // A run.log the run could not open: a stopped start's it would take over (a resume's below, after
+  // the refusals that say the folder has no resume at all).
+  if (a.resume.empty() && !a.out.empty()) refuse_a_run_log_it_cannot_write(a.out);
   const std::string room = check_room(a.resume.empty() ? (a.out.empty() ? "runs" : a.out) : a.resume,
                                       a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
   // A resume's checkpoint is checked as the run would check it (its captures read, nothing
@@ -1692,6 +1692,7 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
     spdlog::logger quiet("dry-run");  // no sinks: a dry run writes nothing
     if (!sealed) refuse_a_final_verdict(a.resume);  // a sealed folder's verdict is its seal's (checked above)
     refuse_a_log_missing_lines(a.resume);
+    refuse_a_run_log_it_cannot_write(a.resume);
     completed = Executive::read_checkpoint(a.resume, phases, values, state, identity, quiet, true).completed;
   }
   const bool devices_needed = devices_left(phases, completed.size());
@@ -1743,7 +1744,7 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
     std::string drops;
     for (const std::string& f : a.inject)
       if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
-    if (!drops.empty())
+    if (!drops.empty() && devices_needed)  // with no device opened nothing is replayed (a review)
       std::cout << "  repeated from run.json's faults: " << drops << " (samples the emulated DUT lost are part of its "
                 << "history: a loss that ended the run in ERROR ends the resume so again)\n";
     // Named, not only the rule (a technician's review): which file the resume sets aside.
@@ -2118,7 +2119,6 @@ TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optio
     refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since
   }
   refuse_non_files(a.out, !a.resume.empty());
-  refuse_a_run_log_it_cannot_write(a.out);
   return taken;
 }
 
@@ -2236,6 +2236,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   };
   if (a.resume.empty()) lock_the_table();
   const TakenFolder folder = take_the_folder(a, p, folder_lock);
+  if (a.resume.empty()) refuse_a_run_log_it_cannot_write(a.out);  // a stopped start's, taken over
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
   std::shared_ptr<spdlog::logger> log;
@@ -2247,6 +2248,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
     // PASS run's log, a review); a sealed folder's verdict is its seal's (checked above).
     if (!key) refuse_a_final_verdict(a.out);
     refuse_a_log_missing_lines(a.out);
+    // After those: a finished run's or a log-loss ending's folder is refused as such, not sent to
+    // make its run.log writable for a resume it has not (a review).
+    refuse_a_run_log_it_cannot_write(a.out);
     log = run_log_or_say(a, log_loss, "the resume did not start: nothing was powered or moved, the folder is as it was",
                          resume_key);
     const std::string unended = earlier_attempt_unended(a.out);  // read before this attempt's first line

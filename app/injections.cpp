@@ -84,8 +84,10 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj,
   // milliseconds of wall time, seconds of device time, and sigint@20 kept 1 or 2 phases (a
   // technician's review). Bounded: a signal nobody takes leaves the plant going after 2 s.
   const auto signal_and_wait = [taken](int sig) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
     ::kill(::getpid(), sig);
-    for (int i = 0; i < 20000 && !taken.requested(); ++i) std::this_thread::sleep_for(std::chrono::microseconds(100));
+    while (!taken.requested() && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
   };
   for (const Injection& j : inj) switch (j.kind) {
       case Injection::Kind::SignalAtEnd: signal_at_end = j.signal; break;

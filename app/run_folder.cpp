@@ -79,8 +79,9 @@ void refuse_a_run_log_it_cannot_write(const std::string& dir) {
   struct stat st {};
   // None (the run makes it), or not a file (refuse_non_files names it; a FIFO would block the open).
   if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
-  // Opened as the run opens it, and closed unwritten: its contents and times stay as they were.
-  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC | O_NOCTTY);
+  // Opened as the run opens it, and closed unwritten: its contents and times stay as they were
+  // (O_NONBLOCK: a FIFO put there since the lstat does not hold the open).
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
   if (fd >= 0) {
     ::close(fd);
     return;

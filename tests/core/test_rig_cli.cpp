@@ -5935,6 +5935,17 @@ TEST(RigCli, ARunLogThatCannotBeOpenedStartsNothingAndSaysHowToGoOn) {
   EXPECT_FALSE(fs::exists(d + "/station.sqlite"));
   EXPECT_EQ(run(finish, d + "/finished"), 0) << slurp(d + "/finished.stderr");
   EXPECT_FALSE(fs::exists(d + "/run/.ending-pending"));
+  // A finished run's folder is refused as finished, its run.log refused or not: an archive made
+  // read-only is not sent to make its log writable for a resume it has not (a review).
+  std::vector<std::string> dry_finished = resume;
+  dry_finished.push_back("--dry-run");
+  for (const auto& [cmd, io] : {std::pair{resume, d + "/done"}, std::pair{dry_finished, d + "/done-dry"}}) {
+    EXPECT_EQ(rig_traced(d + "/run/run.log", "openat", "openat:error=EACCES", cmd, io), 2) << slurp(io + ".stderr");
+    EXPECT_NE(slurp(io + ".stderr").find("the run is complete (its passport says PASS): nothing to resume"),
+              std::string::npos)
+        << slurp(io + ".stderr");
+    EXPECT_EQ(slurp(io + ".stderr").find("cannot be opened"), std::string::npos) << slurp(io + ".stderr");
+  }
   // A stopped run's log, there already: its resume and the resume's dry run find it before the
   // operator is asked anything (the dry run passed it, and the resume was refused: a technician's
   // review), the folder as it was.
@@ -6327,6 +6338,17 @@ TEST(RigCli, AResumeOfARunEndedByItsInjectedLossesSaysTheyRepeat) {
   EXPECT_NE(slurp(d + "/resume.stderr").find("its resume repeats run.json's faults (drop@9000:10, drop@12500:10)"),
             std::string::npos)
       << slurp(d + "/resume.stderr");
+  // Not where the resume opens no device (nothing left to record, nothing replayed: a review).
+  ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/end", "--inject",
+                 "drop@5000:1", "--inject", "sigint@end"},
+                d + "/end"),
+            3)
+      << slurp(d + "/end.stderr");
+  ASSERT_EQ(run({"run", "--resume", d + "/end", "--dry-run", "--no-history"}, d + "/end-dry"), 0)
+      << slurp(d + "/end-dry.stderr");
+  EXPECT_NE(slurp(d + "/end-dry.stdout").find("Devices: none opened"), std::string::npos) << slurp(d + "/end-dry.stdout");
+  EXPECT_EQ(slurp(d + "/end-dry.stdout").find("repeated from run.json's faults"), std::string::npos)
+      << slurp(d + "/end-dry.stdout");
 }
 
 // A subcommand's printed output that could not be written (`rig analyze ... > /dev/full`) ended in
