@@ -898,6 +898,11 @@ bool record_in_history(const RunArgs& a, const toml::table& hw, const nlohmann::
   }
 }
 
+// A sealed run resumes only with its key: the line that offers the resume names it, as this run
+// was given it (a technician's review: the hint, followed as printed, was refused, exit 2). Taken
+// from RIG_SEAL_KEY, it is there for the resume too.
+std::string resume_key_words(const RunArgs& a, bool sealed) { return sealed ? seal_key_words(a.seal_key) : ""; }
+
 // What every ending of a run leaves: passport.json, junit.xml, analysis.json, report.html and
 // the history row (a report or history failure is logged, never the run's outcome).
 // The list of what is left (.ending-pending) comes first, then analysis.json and report.html,
@@ -954,7 +959,7 @@ nlohmann::ordered_json write_run_outputs(const RunArgs& a, const toml::table& hw
       fs::remove(a.out + "/report.html", gone);
       steps.insert(steps.find('\n') + 1, std::string(kStepReport) + "\n");
       log.error("report.html not written: {} (rig run --resume {}{} writes it{})", e.what(), shell_word(a.out),
-                key ? seal_key_words(a.seal_key) : "", key ? " and seals it" : "");
+                resume_key_words(a, key.has_value()), key ? " and seals it" : "");
     }
     write_file_atomic(pending, steps);  // what follows this passport, the mark gone
     commit_staged(pass);
@@ -1190,8 +1195,6 @@ std::shared_ptr<spdlog::logger> run_log_or_say(const RunArgs& a, const std::shar
                                     shell_word(a.out), resume_key));
   }
 }
-
-std::string resume_key_words(const RunArgs& a, bool sealed);
 
 // A run stopped after its passport was in place, before the rest of its ending (.ending-pending,
 // write_run_outputs): its outcome is final (final_outcome_of: a verdict, or an ending with no
@@ -1627,11 +1630,6 @@ void offer_a_resume(const std::string& out, std::size_t checkpointed, std::size_
 
 int do_run_watched(RunArgs a, CancelSource& cancel);
 
-// A sealed run resumes only with its key: the line that offers the resume names it, as this run
-// was given it (a technician's review: the hint, followed as printed, was refused, exit 2). Taken
-// from RIG_SEAL_KEY, it is there for the resume too.
-std::string resume_key_words(const RunArgs& a, bool sealed) { return sealed ? seal_key_words(a.seal_key) : ""; }
-
 int do_run(RunArgs a) {
   // A reader that went away (a dead tee, `| head -1`) must not end a run between a move and the
   // safe state: writes to it fail with EPIPE instead, and the run's files carry what it did.
@@ -1741,9 +1739,7 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
               << (left.empty() ? "nothing (every phase is recorded; the verdict is what is left)" : left) << "\n";
     // The losses the resume plays again, named where the `to continue` hint sends the technician
     // (a review: that hint said they repeat, the dry run did not).
-    std::string drops;
-    for (const std::string& f : a.inject)
-      if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
+    const std::string drops = fmt::format("{}", fmt::join(sample_losses(a.inject), ", "));
     if (!drops.empty() && devices_needed)  // with no device opened nothing is replayed (a review)
       std::cout << "  repeated from run.json's faults: " << drops << " (samples the emulated DUT lost are part of its "
                 << "history: a loss that ended the run in ERROR ends the resume so again)\n";
@@ -1807,10 +1803,8 @@ nlohmann::json new_run_invocation(const RunArgs& a, const toml::table& hw, const
   } else {  // as it resolved now: the resume records there too (read_invocation)
     invocation["history_db"] = history::kept_form(history_url(a, hw));
   }
-  std::vector<std::string> drops;  // repeated by a resume (read_invocation)
-  for (const std::string& f : a.inject)
-    if (f.rfind("drop@", 0) == 0) drops.push_back(f);
-  if (!drops.empty()) invocation["faults"] = drops;
+  // Repeated by a resume (read_invocation).
+  if (const std::vector<std::string> drops = sample_losses(a.inject); !drops.empty()) invocation["faults"] = drops;
   return invocation;
 }
 
@@ -2071,9 +2065,7 @@ void say_what_follows(const RunArgs& a, const RunResult& res, bool emulated, con
     // An emulated run's injected sample losses are repeated by its resume (run.json's faults):
     // one that ended the run in ERROR ends the resume the same way (a line integrator's review:
     // each resume offered "to continue" and added another ERROR ending).
-    std::string drops;
-    for (const std::string& f : a.inject)
-      if (f.rfind("drop@", 0) == 0) drops += (drops.empty() ? "" : ", ") + f;
+    const std::string drops = fmt::format("{}", fmt::join(sample_losses(a.inject), ", "));
     offer_a_resume(a.out, res.checkpointed, res.phases.size(),
                    res.outcome == RunOutcome::Error && emulated && !drops.empty()
                        ? "; its resume repeats run.json's faults (" + drops + "), so a loss that ended this run in "

@@ -77,6 +77,13 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj) {
   return out;
 }
 
+std::vector<std::string> sample_losses(const std::vector<std::string>& inject) {
+  std::vector<std::string> drops;
+  for (const std::string& f : inject)
+    if (f.rfind("drop@", 0) == 0) drops.push_back(f);
+  return drops;
+}
+
 int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj, const CancelToken& taken) {
   int signal_at_end = 0;
   // The plant holds its device time until the process has taken the signal (the signal watcher's

@@ -34,6 +34,10 @@ struct Injection {
 // ConfigError naming the value.
 std::vector<Injection> parse_injections(const std::vector<std::string>& inj);
 
+// The sample losses (drop@SEQ:COUNT) among --inject's values, in order: the faults run.json keeps
+// and a resume repeats; signals and e-stops are never repeated.
+std::vector<std::string> sample_losses(const std::vector<std::string>& inject);
+
 // Arms the faults on the plant. Returns the signal asked for at the end, or 0. `taken`: the run's
 // cancel token, which the process's signal watcher trips; a signal at T holds the plant at T
 // until it is taken.
