@@ -251,7 +251,7 @@ std::string Cia402Table::at(const Cia402Reading& r) const {
          ", statusword " + hex4(r.statusword) + ")";
 }
 
-void Cia402Table::fail_on_fault(const std::string& doing, const Cia402Reading& r) const {
+void Cia402Table::fail_on_fault(const std::string& doing, const Cia402Reading& r, const char* after) const {
   const State st = r.state();
   if (st != State::kFault && st != State::kFaultReactionActive) return;
   // A fault with no error code is what a statusword read from the wrong register looks like (a
@@ -262,7 +262,7 @@ void Cia402Table::fail_on_fault(const std::string& doing, const Cia402Reading& r
                       (r.error_code == 0 ? "; with no error code, check the map's statusword address too: " +
                                                map_.describe(Obj::kStatusword)
                                          : std::string()) +
-                      ")");
+                      ")" + after);
 }
 
 // Waits (bounded by the acknowledge timeout) for the state a command leads to;
@@ -537,8 +537,10 @@ void Cia402Table::move_to(double deg, const CancelToken& cancel) {
   {
     const Cia402Reading r = detail::read_before_motion([&] { return read(cancel); },
                                                        [&](auto body) { guarded(doing, body); });
-    // A fault first: "not homed" sent a technician to homing, which then failed on the fault (a review).
-    fail_on_fault(doing, r);
+    // A fault first: "not homed" sent a technician to homing, which then failed on the fault (a
+    // review). Nothing is written yet, and the message says so (a fuzz run: a drive in Fault
+    // reaction active refused the move without a word on the halt, which it is not owed).
+    fail_on_fault(doing, r, "; nothing sent");
     if (map_.homed_bit && !r.has(static_cast<uint16_t>(1u << *map_.homed_bit)))
       throw NotReadyError(doing + ": table not homed (run `rig table home` first)" + at(r) + "; nothing sent");
     refuse_outside_travel(doing, r);

@@ -79,7 +79,8 @@ class Cia402Table final : public RotaryTable {
   void wait_at_rest(const std::string& doing, const CancelToken& cancel);
   Cia402Reading await_state(const std::string& doing, const char* command, cia402::State want,
                             const CancelToken& cancel);
-  void fail_on_fault(const std::string& doing, const Cia402Reading& r) const;
+  // `after` ends the message: "; nothing sent" where the check comes before any write.
+  void fail_on_fault(const std::string& doing, const Cia402Reading& r, const char* after = "") const;
   std::string at(const Cia402Reading& r) const;
   void identify(const Cia402Reading& r, const CancelToken& cancel);
   // `is_402`, when given, is set where the device is a CiA 402 drive whatever the problem (its
