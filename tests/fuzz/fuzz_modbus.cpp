@@ -83,7 +83,7 @@ void motion(F f) {
   } catch (const rig::HardwareError& e) {
     const std::string m = e.what();
     if (std::getenv("FUZZ_MODBUS_VERBOSE")) std::fprintf(stderr, "%s\n", m.c_str());
-    const bool refused_first = m.size() >= 14 && m.compare(m.size() - 14, 14, "; nothing sent") == 0;
+    const bool refused_first = m.ends_with("; nothing sent");
     RIG_FUZZ_CHECK(m.find("halt delivered to the drive") != std::string::npos ||
                    m.find(" not delivered (") != std::string::npos || m.find(" not confirmed (") != std::string::npos || m.find(" not sent: ") != std::string::npos || m.find(" not sent (") != std::string::npos ||
                    m.find("; no halt needed: ") != std::string::npos ||

@@ -1911,7 +1911,7 @@ TEST(Cia402ClientRefusals, UnexpectedStatesAreReportedNotGuessed) {
               has(e, "with no error code, check the map's statusword address too: statusword (0x6041)"))
       << e;
   EXPECT_FALSE(has(e, "not homed")) << e;
-  EXPECT_TRUE(e.size() > 14 && e.compare(e.size() - 14, 14, "; nothing sent") == 0) << e;
+  EXPECT_TRUE(e.ends_with("; nothing sent")) << e;
 }
 
 // Counts the writes that reach a device; reads can be overridden register by register.
