@@ -29,6 +29,10 @@ struct TauGrid {
   int log_n = 100;  // points per full span for Kind::Log (log-spaced, duplicates merged)
 };
 TauGrid parse_tau_grid(const std::string& s);  // "octave|decade|all|log:N", throws std::invalid_argument
+// The `all` grid asks for every averaging factor up to max_factor, each a sum over the record:
+// about max_factor * N term sums, growing as N^2 (1e6 values ran past 10 min). `rig analyze` and
+// a profile's [analysis] taus refuse more term sums than this (about 5 s on the rig's machines).
+inline constexpr double kAllTermSums = 4e9;
 
 // Largest averaging factor Stable32 evaluates for this deviation on N phase points:
 // ADEV, HDEV (N-1)/5; OADEV, MDEV, TDEV, OHDEV (N-1)/4; TOTDEV (N-1)/2.

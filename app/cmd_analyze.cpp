@@ -559,10 +559,9 @@ int run(const Args& a) {
     }
   }
   // --taus all asks for every factor up to T/4 (T/2 for TOTDEV), each a sum over the record:
-  // work grows as N^2, and 1e6 values ran past 10 min without a word (a review). Refused beyond
-  // kAllTermSums (about 5 s here), naming the grids that cover the same taus.
+  // refused beyond kAllTermSums (allan.hpp), naming the grids that cover the same taus.
   if (listed.empty() && base.taus.kind == an::TauGrid::All && !a.no_work_limit) {
-    constexpr double kAllTermSums = 4e9;
+    using an::kAllTermSums;
     const std::uint64_t n_phase = base.data == an::DataKind::Frequency ? n + 1 : n;
     // Every statistic's factor count (the long-tau ones at n/2, a floor) times the record.
     double factors = static_cast<double>(long_taus.size()) * static_cast<double>(n_phase) / 2;

@@ -394,11 +394,18 @@ int cmd_loop_test(DutArgs a) {
                 s["final_value"].get<double>(), s["overshoot"].get<double>() * 100,
                 s["saturated"].get<bool>() ? ", SATURATED" : "");
   }
-  std::printf("settling time (5 %% band): %.3f ms [%.3f, %.3f]\nbandwidth (0.5 level):    %.1f Hz [%.1f, %.1f]\n",
-              fig["settling_time_s"].get<double>() * 1e3, fig["settling_time_interval_s"][0].get<double>() * 1e3,
-              fig["settling_time_interval_s"][1].get<double>() * 1e3, fig["bandwidth_0p5_hz"].get<double>(),
-              fig["bandwidth_0p5_interval_hz"][0].get<double>(), fig["bandwidth_0p5_interval_hz"][1].get<double>());
-  std::printf("(%zu steps of %g g at %g Hz; 95 %% intervals over the steps)\n", r.steps.size(), r.amplitude_g, r.rate_hz);
+  // One step has no interval (loop_test_figures): its figures are printed alone.
+  auto interval = [&fig](const char* key, double scale, const char* format) {
+    const auto& iv = fig[key];
+    return iv.is_null() ? std::string() : fmt::format(fmt::runtime(format), iv[0].get<double>() * scale, iv[1].get<double>() * scale);
+  };
+  std::printf("settling time (5 %% band): %.3f ms%s\nbandwidth (0.5 level):    %.1f Hz%s\n",
+              fig["settling_time_s"].get<double>() * 1e3, interval("settling_time_interval_s", 1e3, " [{:.3f}, {:.3f}]").c_str(),
+              fig["bandwidth_0p5_hz"].get<double>(), interval("bandwidth_0p5_interval_hz", 1, " [{:.1f}, {:.1f}]").c_str());
+  if (r.steps.size() >= 2)
+    std::printf("(%zu steps of %g g at %g Hz; 95 %% intervals over the steps)\n", r.steps.size(), r.amplitude_g, r.rate_hz);
+  else
+    std::printf("(1 step of %g g at %g Hz: no interval, its repeatability is not measured)\n", r.amplitude_g, r.rate_hz);
   return kExitPass;
 }
 

@@ -263,8 +263,18 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
 // answer where poll() does not see it.
 // An answer is y or yes, n or no (any case, blanks around), or Enter (the default, no); anything
 // else is asked again: "yet to fasten" confirmed a mount, and run.log said "yes" (a review).
+// Where the operator reads the questions: stderr, or the controlling terminal when stderr goes to
+// a file (a technician's `rig run ... > run.txt 2>&1` waited on questions only the file held,
+// a review); null without either.
+std::ostream* prompt_out() {
+  if (::isatty(STDERR_FILENO)) return &std::cerr;
+  static std::ofstream tty("/dev/tty");
+  return tty.is_open() ? &tty : nullptr;
+}
+
 bool confirm(const std::string& question, const CancelToken& cancel) {
-  std::cerr << question << " [y/N] " << std::flush;
+  std::ostream& out = *prompt_out();
+  out << question << " [y/N] " << std::flush;
   std::string line;
   for (;;) {
     cancel.throw_if_requested();
@@ -286,7 +296,7 @@ bool confirm(const std::string& question, const CancelToken& cancel) {
     for (char& ch : word) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     if (word == "y" || word == "yes") return true;
     if (word.empty() || word == "n" || word == "no") return false;
-    std::cerr << "Answer y (yes) or n (no). " << question << " [y/N] " << std::flush;
+    out << "Answer y (yes) or n (no). " << question << " [y/N] " << std::flush;
     line.clear();
   }
 }
@@ -297,7 +307,7 @@ bool confirm(const std::string& question, const CancelToken& cancel) {
 std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Profile& p, double planned_s,
                                           std::size_t kept, const CancelToken& cancel) {
   if (a.yes) return {};
-  if (!::isatty(STDIN_FILENO)) {
+  if (!::isatty(STDIN_FILENO) || !prompt_out()) {
     if (a.plant == "emulated") return {};  // nothing to mount: unattended emulated runs need no confirmation
     throw ConfigError("operator confirmation needed (mount the DUT, confirm the table is clear): run with --yes "
                       "for unattended runs");
@@ -305,10 +315,11 @@ std::vector<std::string> operator_prompts(const RunArgs& a, const acceptance::Pr
   // What the answers start: the operator agrees to it, not to a question alone. A run typed
   // without --hardware measures the emulated plant: said first, in capitals, since its passport
   // passes under the serial typed (a technician's review).
+  std::ostream& out = *prompt_out();
   if (a.plant == "emulated")
-    std::cerr << "EMULATED PLANT: no device on the bench is touched; the DUT, the table and the GPIO are simulated "
-                 "and the passport describes the simulation (give --hardware FILE to test a real DUT).\n";
-  std::cerr << fmt::format(
+    out << "EMULATED PLANT: no device on the bench is touched; the DUT, the table and the GPIO are simulated "
+           "and the passport describes the simulation (give --hardware FILE to test a real DUT).\n";
+  out << fmt::format(
       "Profile '{}': {}\nDevice time {}{}. After your answers rig powers the DUT, homes the table and turns it between "
       "U10 ({:g} deg) and U20 ({:g} deg); Ctrl-C at any point stops the table and powers the DUT off.\n",
       p.name, p.description, TerminalView::hms(planned_s), kept ? fmt::format(" left ({} phases complete)", kept) : "",
@@ -704,6 +715,13 @@ void check_history_can_record(const std::string& url, bool resume) {
   if (!fs::is_directory(p, ec) || !can_create_file_in(p))
     throw ConfigError(shown + ": cannot be created (" + p.string() + " is not a writable folder)");
   history::refuse_a_new_database_without_its_folder(url);
+}
+
+// The plan's device time: every phase's own estimate, the table's timing included.
+double planned_device_s(const std::vector<Phase>& phases) {
+  double total = 0;
+  for (const Phase& ph : phases) total += ph.planned_s;
+  return total;
 }
 
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
@@ -1141,6 +1159,20 @@ struct RunLogUnopened : ConfigError {
   using ConfigError::ConfigError;
 };
 
+// The console's log lines on a terminal clear the line first: the progress bar is drawn in place
+// without a newline, and an error line was glued onto it ("wall 00:00:032026-...Z error aborted:
+// SIGINT received", a technician's review). The bar is drawn again at its next update.
+class ConsoleSink final : public spdlog::sinks::stderr_color_sink_mt {
+ public:
+  void log(const spdlog::details::log_msg& msg) override {
+    if (tty_ && should_log(msg.level)) std::fputs("\r\033[K", stderr);
+    spdlog::sinks::stderr_color_sink_mt::log(msg);
+  }
+
+ private:
+  const bool tty_ = ::isatty(STDERR_FILENO) != 0;
+};
+
 std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool quiet,
                                             std::shared_ptr<LogLoss> loss = std::make_shared<LogLoss>()) {
   std::shared_ptr<spdlog::sinks::basic_file_sink_mt> file;
@@ -1154,7 +1186,7 @@ std::shared_ptr<spdlog::logger> make_logger(const std::string& out_dir, bool qui
   }
   g_attempt_log = out_dir + "/run.log";  // only once open: an attempt that never wrote there closes nothing
   file->set_level(spdlog::level::debug);
-  auto err = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  auto err = std::make_shared<ConsoleSink>();
   err->set_level(quiet ? spdlog::level::err : spdlog::level::warn);
   // The console first: a sink that throws (run.log on a full disk) ends the logger's loop over
   // its sinks, and the console then lost the line too. The failure said once, as rig says
@@ -1677,6 +1709,9 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
   if (a.resume.empty() && !a.out.empty()) FolderLock::check_free(a.out, "--out " + a.out);
   const bool taken_over = check_run_folder(a.out.empty() ? "runs" : a.out, a.resume.empty() && !a.out.empty(),
                                            a.resume.empty() ? "--out" : "--resume", p.source);
+  // The run's own new folder under runs/ is empty; only its place is checked.
+  if (a.resume.empty())
+    refuse_a_folder_a_new_run_cannot_own(a.out.empty() ? "runs" : a.out, "--out", sealed && !a.out.empty(), taken_over);
   // A run.log the run could not open: a stopped start's it would take over (a resume's below, after
   // the refusals that say the folder has no resume at all).
   if (a.resume.empty() && !a.out.empty()) refuse_a_run_log_it_cannot_write(a.out);
@@ -1705,6 +1740,8 @@ int print_dry_run(const RunArgs& a, const toml::table& hw, const toml::table& pl
   const toml::table* pr = a.plant == "hardware" ? cfg::get_table(hw, "procedure") : nullptr;
   if (!unjudged.empty()) std::cout << "Note: " << unjudged << "\n";
   if (taken_over) std::cout << "Note: " << taken_over_note(a.out) << "\n";
+  for (const std::string& n : faults_past_the_plan(parse_injections(a.inject), planned_device_s(phases)))
+    std::cout << "Note: " << n << "\n";
   std::cout << fmt::format("Orientations: U10 at {:g}°, U20 at {:g}° ({})\n", p.u10_deg, p.u20_deg,
                            pr && pr->contains("u10_deg") ? "[procedure] of " + shown_text(a.hardware)
                                                          : std::string("the profile's"));
@@ -1937,6 +1974,7 @@ void end_short_of_files(const std::exception& e, const RunArgs& a, const toml::t
     // and no table for a passport nobody can read. Beside an earlier ending's passport nothing.
     std::cout << "passport.json not written: the run folder could not take it (stderr says why)\n"
               << "OUTCOME: ERROR\n"
+              << (a.plant == "emulated" ? kEmulatedPlantLine : "")
               << std::flush;
   }
   // What is kept goes on once the folder can take the files (a review: a full disk ended with
@@ -2050,6 +2088,10 @@ void end_with_devices_unopened(const std::exception& e, const RunArgs& a, const 
     say_no_resume(log_missing_lines_why(a.out), log);
   else if (!config_error)
     say_how_to_continue(a.out, kept, planned, ": the devices did not open", resume_key, log);
+  // The closing line every other ending has (a technician's review: this one went from "to
+  // continue" to the attempt's end), with main()'s exit code for the error thrown on.
+  const bool aborted = dynamic_cast<const AbortedError*>(&e) != nullptr;
+  log.info("outcome ERROR (exit {})", config_error ? kExitUsage : aborted ? kExitAborted : kExitHardware);
 }
 
 // After the passport: why the run has no resume and how its ending is finished, or after a stop
@@ -2085,7 +2127,8 @@ struct TakenFolder {
 // a new run's takes its lock (`folder_lock`; a resume's was taken before its folder was read), an
 // earlier run there refused, a stopped start taken over.
 // Before the operator is asked anything: no one should answer the prompts of a run that cannot start.
-TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optional<FolderLock>& folder_lock) {
+TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optional<FolderLock>& folder_lock,
+                            bool sealed) {
   TakenFolder taken;
   taken.made_here = a.out.empty();
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
@@ -2104,6 +2147,7 @@ TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optio
       // Its staging files go: a seal.json.tmp stayed beside an unsealed run's records (a review).
       for (const char* f : {"profile.toml.tmp", "run.json.tmp", "seal.json.tmp"}) fs::remove(fs::path(a.out) / f, ec);
     }
+    refuse_a_folder_a_new_run_cannot_own(a.out, "--out", sealed, taken.taken_over);
   }
   prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
   if (a.resume.empty()) {
@@ -2212,6 +2256,9 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
   if (a.dry_run)
     return print_dry_run(a, hw, plant_cfg, p, dut, phases, values, state, identity, key.has_value(), unjudged,
                          history_locked);
+  if (!a.quiet)
+    for (const std::string& n : faults_past_the_plan(injections, planned_device_s(phases)))
+      std::cerr << "rig: note: " << n << "\n";
   // The table next, before a folder is made: one process at a time commands a station's table,
   // held to the run's end (app/table_lock.hpp; a `rig table move` from another terminal turned
   // the DUT during a recording).
@@ -2227,7 +2274,7 @@ int do_run_watched(RunArgs a, CancelSource& cancel) {
                                           : "rig run --resume " + shown_text(a.resume));
   };
   if (a.resume.empty()) lock_the_table();
-  const TakenFolder folder = take_the_folder(a, p, folder_lock);
+  const TakenFolder folder = take_the_folder(a, p, folder_lock, key.has_value());
   if (a.resume.empty()) refuse_a_run_log_it_cannot_write(a.out);  // a stopped start's, taken over
   // A resume's checkpoint, with the captures it names, is checked before the operator is asked
   // anything and before any device opens.
@@ -2425,7 +2472,8 @@ void add_run(CLI::App& app, int& rc) {
   auto* sub = app.add_subcommand("run", "Run the U10/U20 acceptance procedure and write the passport");
   // The codes a script branches on, in the help as in `rig report --help` (a technician's review).
   sub->footer("Exit codes: 0 PASS; 1 FAIL (a value outside its limits, or a limited value not measured); 2 usage or "
-              "configuration error, found before any device opens (file, line and value named), or a table or run "
+              "configuration error, found before any device opens (file, line and value named) or at bring-up (a DUT "
+              "reporting another --serial, U10/U20 outside the table's travel once homed), or a table or run "
               "folder another rig process holds; 3 aborted (a signal, the e-stop input, the operator); 4 hardware or "
               "link fault, or a run folder that cannot hold the run's records. A verdict is final once the run "
               "folder holds no .ending-pending (README, \"On a production line\").");

@@ -105,6 +105,16 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj,
   return signal_at_end;
 }
 
+std::vector<std::string> faults_past_the_plan(const std::vector<Injection>& inj, double planned_s) {
+  std::vector<std::string> notes;
+  for (const Injection& j : inj)
+    if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > planned_s)
+      notes.push_back(fmt::format("--inject {} lies past the plan's {:.0f} s of device time: it fires only if the run "
+                                  "takes longer than planned (the run says whether it fired)",
+                                  j.text, planned_s));
+  return notes;
+}
+
 void say_faults_that_did_not_fire(plant::EmulatedPlant& w, const std::vector<Injection>& inj, bool from_run_json,
                                   spdlog::logger& log) {
   const double end_s = w.clock().now_s();

@@ -38,6 +38,12 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj);
 // and a resume repeats; signals and e-stops are never repeated.
 std::vector<std::string> sample_losses(const std::vector<std::string>& inject);
 
+// The timed faults (estop@T, sigint@T, ...) at a device time past `planned_s`, the plan's device
+// time, each as a note: such a fault fires only if the run takes longer than planned (a review:
+// estop@1e9 ran to PASS, exit 0, the dry run silent). Said before the run; the run says after it
+// whether the fault fired (say_faults_that_did_not_fire).
+std::vector<std::string> faults_past_the_plan(const std::vector<Injection>& inj, double planned_s);
+
 // Arms the faults on the plant. Returns the signal asked for at the end, or 0. `taken`: the run's
 // cancel token, which the process's signal watcher trips; a signal at T holds the plant at T
 // until it is taken.

@@ -13,6 +13,7 @@
 #include <ctime>
 #include <fstream>
 #include <iostream>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -89,6 +90,31 @@ void refuse_a_run_log_it_cannot_write(const std::string& dir) {
   throw ConfigError(fmt::format("{}: cannot be opened to write the run's account ({}): nothing was started or "
                                 "changed; run the command again once it can be written",
                                 path, std::strerror(errno)));
+}
+
+void refuse_a_folder_a_new_run_cannot_own(const std::string& dir, const std::string& option, bool sealed,
+                                          bool taken_over) {
+  std::error_code ec;
+  const fs::path here = fs::absolute(dir, ec).lexically_normal();
+  for (fs::path up = here.parent_path(); !up.empty(); up = up.parent_path()) {
+    if (fs::is_regular_file(up / "run.json", ec))
+      throw ConfigError(fmt::format("{} {}: inside the run folder {} (it holds run.json): a run there adds its files "
+                                    "to that run's, which rig verify then names as not sealed; choose an {} outside it",
+                                    option, shown_text(dir), shown_text(up.string()), option));
+    if (up == up.root_path()) break;
+  }
+  if (!sealed || taken_over || !fs::is_directory(here, ec)) return;
+  std::vector<std::string> names;
+  std::size_t count = 0;
+  for (const auto& e : fs::directory_iterator(here, ec))
+    if (++count <= 5) names.push_back(shown_text(e.path().filename().string()));
+  if (count == 0) return;
+  throw ConfigError(fmt::format("{} {} holds {}{}, which the run does not write: a sealed run's folder holds its own "
+                                "files only (rig verify names any other as not sealed); move {} or choose a new or "
+                                "empty {}",
+                                option, shown_text(dir), fmt::join(names, ", "),
+                                count > names.size() ? fmt::format(" and {} more", count - names.size()) : "",
+                                count == 1 ? "it" : "them", option));
 }
 
 // Whether this process can create a file in the existing directory `d`.

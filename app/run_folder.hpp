@@ -27,6 +27,13 @@ void prepare_run_folder(const std::string& dir, const std::string& option);
 // to append to (the file made immutable, its permission taken away): a ConfigError naming it and
 // the system's reason, before anything starts; the dry run's check too (touches nothing).
 void refuse_a_run_log_it_cannot_write(const std::string& dir);
+// A new run's folder must be one the run owns whole: not inside another run's folder (an
+// ancestor holding run.json: the new run's files would be that run's "added after the seal" for
+// rig verify), and, for a sealed run, holding nothing the run does not write (verify names every
+// other entry; a sealed PASS that could never verify, a technician's review). `taken_over`: a
+// stopped start's files are there, the run's own. ConfigError before anything is written.
+void refuse_a_folder_a_new_run_cannot_own(const std::string& dir, const std::string& option, bool sealed,
+                                          bool taken_over);
 // Whether this process can create a file in the existing directory `d` (touches nothing).
 bool can_create_file_in(const std::filesystem::path& d);
 // `p` itself, or its nearest ancestor that exists: where a folder not there yet would be created.

@@ -32,7 +32,7 @@ class LoopModel {
     Eigen::Vector3d s = Eigen::Vector3d::Zero();  // pendulum angle (rad), rate (rad/s), coil current (A)
     double i_cmd = 0;                             // PWM current applied in this period (A)
     double w1 = 0, w2 = 0;                        // regulator (DF-II-T biquad) state
-    bool saturated = false;
+    bool saturated = false;                       // this period: pick-off ADC clipped or PWM duty clipped
   };
 
   LoopModel(const LoopParams& lp, const RegulatorParams& rp);
@@ -43,15 +43,18 @@ class LoopModel {
   [[gnu::always_inline]] double step(State& st, double q_g, double pickoff_v = 0) const {
     const double th = st.s(0), om = st.s(1), cur = st.s(2);
     const double x = x_per_amp_ * cur;
-    // ADC of the pick-off voltage (mid-tread, clipped to its range).
+    // ADC of the pick-off voltage (mid-tread, clipped to its range). A clipped pick-off leaves
+    // the loop as nonlinear as a clipped duty (a strong step then slews instead of settling), so
+    // both count as saturated: the loop test's figures are not read from such a step.
     double v = kpick_ * th + pickoff_v;
+    const bool clipped = v > adc_range_ || v < -adc_range_;
     v = std::clamp(v, -adc_range_, adc_range_);
     v = adc_lsb_ * round_half_even(v * adc_inv_lsb_);
     // W_рег(z): one DF-II-T biquad.
     const double u = df2t_step(reg_, st.w1, st.w2, v);
     // PWM: duty clipped to +-1 and quantised to the timer's counts.
     double duty = u * inv_pwm_fs_;
-    st.saturated = duty > 1 || duty < -1;
+    st.saturated = clipped || duty > 1 || duty < -1;
     duty = std::clamp(duty, -1.0, 1.0);
     const double i_new = pwm_fs_ * round_half_even(duty * pwm_counts_) * inv_pwm_counts_;
     const double i_used = delay_ ? st.i_cmd : i_new;

@@ -93,7 +93,7 @@ inline constexpr uint8_t kMaxRecordMs = 200;
 inline constexpr uint8_t kDefaultRecordMs = 100;
 inline constexpr float kMaxAmplitudeG = 5.0f;  // |value|: half the range, so the loop never saturates by design
 // End marker status bits.
-inline constexpr uint8_t kSaturated = 1u << 0;  // the PWM saturated during the record
+inline constexpr uint8_t kSaturated = 1u << 0;  // the loop saturated during the record (PWM duty or pick-off ADC)
 inline constexpr uint8_t kAborted = 1u << 1;    // the test was cut short (power, stream start)
 }  // namespace loop_cmd
 

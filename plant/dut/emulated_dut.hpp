@@ -75,7 +75,7 @@ class EmulatedDut final : public DutSource {
   FilterConfig filter_cfg_;
   std::vector<design::Section> filt_;
   double carry_x_ = 0, carry_y_ = 0;
-  bool tap_saturated_ = false;  // the PWM saturated during a loop-test period
+  bool tap_saturated_ = false;  // the loop saturated (ADC or PWM) during a loop-test period
 };
 
 }  // namespace rig::plant

@@ -32,7 +32,7 @@ class DutSource {
   // it returns its loop periods per output period (0: no loop, the firmware has no loop test)
   // and, in next_under_test(), advances one output period with a test torque equivalent to
   // `torque_g` of input acceleration inside the loop, writing the loop-rate x and y of the
-  // period (loop_steps_per_output() values each). Returns whether the PWM saturated.
+  // period (loop_steps_per_output() values each). Returns whether the loop saturated (pick-off ADC or PWM duty clipped).
   virtual int loop_steps_per_output() const { return 0; }
   virtual bool next_under_test(double /*torque_g*/, std::span<float> /*x_loop*/, std::span<float> /*y_loop*/) {
     return false;

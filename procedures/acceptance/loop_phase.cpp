@@ -95,6 +95,12 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
   // on a 1 Hz grid, so its resolution term is 1 Hz (conservative).
   const RepeatedFigure T = repeated_figure(ts, 1.0 / r.rate_hz);
   const RepeatedFigure B = repeated_figure(bw, 1.0);
+  // One step measures no repeatability: its figure has no interval (the resolution's +-half alone
+  // was called a 95 % interval, a review of 2026-12-07).
+  const bool repeated = r.steps.size() >= 2;
+  auto interval = [repeated](const RepeatedFigure& f) {
+    return repeated ? nlohmann::json::array({f.lo, f.hi}) : nlohmann::json(nullptr);
+  };
   const std::vector<double> my = mean_of(hy), mx = mean_of(hx), may = mean_of(ay), max = mean_of(ax);
   std::vector<double> t_s(my.size());
   for (std::size_t i = 0; i < t_s.size(); ++i) t_s[i] = static_cast<double>(i) / r.rate_hz;
@@ -106,11 +112,12 @@ nlohmann::json loop_test_figures(const LoopTestResponse& r) {
           {"rate_hz", r.rate_hz},
           {"settling_band", band},
           {"settling_time_s", T.value},
-          {"settling_time_interval_s", {T.lo, T.hi}},
+          {"settling_time_interval_s", interval(T)},
           {"bandwidth_0p5_hz", B.value},
-          {"bandwidth_0p5_interval_hz", {B.lo, B.hi}},
-          {"interval", "Student's 95 % interval of the mean over the steps (GOST R 8.736), widened in "
-                       "quadrature by +-half the resolution (one loop period; 1 Hz)"},
+          {"bandwidth_0p5_interval_hz", interval(B)},
+          {"interval", repeated ? "Student's 95 % interval of the mean over the steps (GOST R 8.736), widened in "
+                                  "quadrature by +-half the resolution (one loop period; 1 Hz)"
+                                : "none: one step measures no repeatability (Student's interval needs two)"},
           {"dc_gain", repeated_figure(finals, 0).value},
           {"overshoot", repeated_figure(overs, 0).value},
           {"per_step", per_step},
@@ -200,7 +207,8 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
   }
   const LoopTestResponse r = read_loop_test_csv(ctx.out_dir + "/" + rec.file, rec);
   ctx.report(0.5);
-  const std::string what = fmt::format("measured on the DUT (loop test, {} steps of {:g} g)", r.steps.size(), r.amplitude_g);
+  const std::string what = fmt::format("measured on the DUT (loop test, {} step{} of {:g} g)", r.steps.size(),
+                                       r.steps.size() == 1 ? "" : "s", r.amplitude_g);
   std::size_t saturated = 0;
   for (const LoopStepRecord& st : r.steps) saturated += st.saturated;
   if (saturated > 0) {
@@ -234,16 +242,25 @@ void phase_loop_figures(PhaseContext& ctx, const Profile& p, DutState& dut) {
   }
   bool crossed = true;  // a step whose response never falls to 0.5 below Nyquist has no bandwidth to average
   for (const auto& st : f["per_step"]) crossed = crossed && st["bandwidth_0p5_hz"].get<double>() > 0;
+  const bool repeated = !f["settling_time_interval_s"].is_null();
+  const std::string interval_note = repeated ? "; 95 % interval" : "; one step: no interval (its repeatability is not measured)";
+  auto bound = [](const nlohmann::json& iv, std::size_t i) {
+    return iv.is_null() ? std::nullopt : std::optional<double>(iv[i].get<double>());
+  };
+  // The output filter is on y unless the profile's preset is none (a review: "output filter on y"
+  // beside preset = "none").
+  const bool filtered = p.filter.enabled && !p.filter.sections.empty();
+  const std::string on_y = filtered ? ", output filter on y" : ", y without an output filter";
   if (crossed)
-    ctx.values.set("bandwidth_0p5", f["bandwidth_0p5_hz"].get<double>(), what + ", output filter on y, 0.5 level; 95 % interval",
-                   f["bandwidth_0p5_interval_hz"][0].get<double>(), f["bandwidth_0p5_interval_hz"][1].get<double>());
+    ctx.values.set("bandwidth_0p5", f["bandwidth_0p5_hz"].get<double>(), what + on_y + ", 0.5 level" + interval_note,
+                   bound(f["bandwidth_0p5_interval_hz"], 0), bound(f["bandwidth_0p5_interval_hz"], 1));
   else
     ctx.values.set("bandwidth_0p5", std::nullopt,
                    what + ": the amplitude response stays above 0.5 up to half the loop rate in some step");
   ctx.values.set("settling_time", f["settling_time_s"].get<double>(),
-                 what + fmt::format(", {:g} % band; 95 % interval", analysis::kStepSettlingBand * 100) +
+                 what + fmt::format(", {:g} % band", analysis::kStepSettlingBand * 100) + interval_note +
                      settling_near_the_band(f["per_step"]),
-                 f["settling_time_interval_s"][0].get<double>(), f["settling_time_interval_s"][1].get<double>());
+                 bound(f["settling_time_interval_s"], 0), bound(f["settling_time_interval_s"], 1));
   ctx.log->info("loop test: settling time {:.4g} s, bandwidth (0.5) {:.1f} Hz over {} steps", f["settling_time_s"].get<double>(),
                 f["bandwidth_0p5_hz"].get<double>(), r.steps.size());
   dut.loop = f;

@@ -17,7 +17,9 @@ namespace rig::acceptance {
 namespace {
 
 constexpr const char* kFirstLine = "# rig loop test: ";
-constexpr const char* kSaturatedLine = "# steps in which the DUT's PWM saturated: ";
+constexpr const char* kSaturatedLine = "# steps in which the DUT's loop saturated: ";
+// The same line as written before 2026-12-07 (a run folder of then is resumed and verified).
+constexpr std::string_view kSaturatedLineBefore = "# steps in which the DUT's PWM saturated: ";
 
 // The saturation line's list: the 1-based steps flagged, "none" without any.
 std::string saturated_steps(const std::vector<bool>& flags) {
@@ -150,10 +152,11 @@ LoopTestResponse parse_loop_test_csv(const std::string& text, const std::string&
       stated = true;
       continue;
     }
-    if (!header && line.rfind(kSaturatedLine, 0) == 0) {
-      const std::string listed = line.substr(std::string_view(kSaturatedLine).size());
+    const std::string_view sat_line = line.starts_with(kSaturatedLineBefore) ? kSaturatedLineBefore : kSaturatedLine;
+    if (!header && line.starts_with(sat_line)) {
+      const std::string listed = line.substr(sat_line.size());
       if (listed != saturated_steps(rec.saturated))
-        throw bad(fmt::format("the file states the PWM saturated in steps '{}'; the loop test recorded '{}'", listed,
+        throw bad(fmt::format("the file states the loop saturated in steps '{}'; the loop test recorded '{}'", listed,
                               saturated_steps(rec.saturated)));
       saturation_stated = true;
       continue;

@@ -22,7 +22,7 @@ struct LoopRecord {
   std::string file;        // relative to the run folder, when supported
   double rate_hz = 0, amplitude_g = 0;
   std::vector<std::size_t> samples, pre_samples;  // per step
-  std::vector<bool> saturated;                    // per step: the DUT's PWM saturated
+  std::vector<bool> saturated;                    // per step: the DUT's loop saturated
   uint32_t crc32 = 0;                             // of the file's bytes as written (zlib's CRC-32)
 };
 
@@ -30,7 +30,7 @@ nlohmann::json to_json(const LoopRecord& r);
 uint32_t crc32_of(const std::string& bytes);  // zlib's CRC-32
 
 // The raw records as loop-test.csv: comment lines stating the steps, the amplitude, the loop
-// rate and the steps in which the DUT's PWM saturated, the header, then one line per sample:
+// rate and the steps in which the DUT's loop saturated ("PWM saturated" before 2026-12-07, read too), the header, then one line per sample:
 // step, index, t_s (from the step), x_g, y_g. Every number the figures depend on is written as
 // the shortest decimal that reads back to the same double.
 std::string loop_test_csv(const LoopTestResponse& r);

@@ -236,11 +236,32 @@ Profile parse_profile_table(const toml::table& t, const std::string& source) {
     cfg::check_keys(*a, {"taus", "confidence", "r_min_record_s", "b_allan"}, "analysis");
     p.taus = cfg::get_string(*a, "taus", p.taus);
     // Checked here, not first in the allan phase after the whole recording (issue 13).
-    if (const toml::node* n = a->get("taus")) try {
-        analysis::parse_tau_grid(p.taus);
+    if (const toml::node* n = a->get("taus")) {
+      analysis::TauGrid grid;
+      try {
+        grid = analysis::parse_tau_grid(p.taus);
       } catch (const std::invalid_argument& e) {
         cfg::reject(*n, "taus", e.what());
       }
+      // "all" on the raw capture's two channels is refused where `rig analyze --taus all` would
+      // refuse it: a review's 200-s capture spent 26 s in the allan phase, the paper's hour
+      // would spend hours there, after the whole procedure.
+      if (grid.kind == analysis::TauGrid::All) {
+        const std::uint64_t n_phase = planned_samples(p, p.raw_s) + 1;
+        const double per_value = static_cast<double>(analysis::max_factor(analysis::Deviation::OADEV, n_phase)) /
+                                 static_cast<double>(n_phase);
+        const double work = 2 * per_value * static_cast<double>(n_phase) * static_cast<double>(n_phase);
+        if (work > analysis::kAllTermSums)
+          cfg::reject(*n, "taus",
+                      fmt::format("\"all\" on the raw capture's {} samples asks for every averaging factor ({:.2g} "
+                                  "term sums over its two channels, more than the {:.2g} rig analyze runs): give "
+                                  "\"log:N\" (log:100000 the finest) or \"octave\", or \"all\" with raw_s of at "
+                                  "most {:g} s at rate_hz = {:g}",
+                                  n_phase - 1, work, analysis::kAllTermSums,
+                                  std::floor(std::sqrt(analysis::kAllTermSums / (2 * per_value))) / p.rate_hz,
+                                  p.rate_hz));
+      }
+    }
     p.confidence = cfg::get_number(*a, "confidence", p.confidence, 0.01, 0.9999);
     p.r_min_record_s = cfg::get_number(*a, "r_min_record_s", p.r_min_record_s, 0.0);
     p.b_allan = cfg::get_string(*a, "b_allan", p.b_allan);

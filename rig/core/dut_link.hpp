@@ -54,7 +54,7 @@ inline double loop_step_nominal_s(double record_s, std::size_t samples) {
 struct LoopStepRecord {
   std::vector<double> x, y;
   std::size_t pre_samples = 0;
-  bool saturated = false;  // the DUT's PWM saturated during the record
+  bool saturated = false;  // the DUT's loop saturated during the record (its PWM duty or, in the emulated firmware, its pick-off ADC clipped)
 };
 struct LoopTestResponse {
   bool supported = false;  // false: the DUT (or the rig's configuration) has no loop test

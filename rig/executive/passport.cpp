@@ -131,7 +131,7 @@ std::string passport_table(const nlohmann::ordered_json& p) {
   o << "OUTCOME: " << p.value("outcome", "") << "\n";
   // The emulated plant's passport passes under whatever serial was typed: never read as a DUT's
   // (on a line of its own: scripts match "OUTCOME: PASS" as the whole line).
-  if (p.value("plant", "") == "emulated") o << "(emulated plant: a simulated DUT, not a device on the bench)\n";
+  if (p.value("plant", "") == "emulated") o << kEmulatedPlantLine;
   if (p.contains("aborted_reason")) o << "reason: " << p["aborted_reason"].get<std::string>() << "\n";
   return o.str();
 }

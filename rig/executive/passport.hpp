@@ -27,5 +27,7 @@ std::string passport_text(const nlohmann::ordered_json& passport);
 std::string junit_xml(const PassportInfo& info, const RunResult& result, const MeasurementSet& values);
 // A fixed-width pass/fail table for the terminal.
 std::string passport_table(const nlohmann::ordered_json& passport);
+// The line after an emulated run's OUTCOME line (its passport passes under whatever serial was typed).
+inline constexpr const char* kEmulatedPlantLine = "(emulated plant: a simulated DUT, not a device on the bench)\n";
 
 }  // namespace rig

@@ -415,7 +415,7 @@ TEST(Campaign, LateSignalsAfterTheLastPhaseStillAbort) {
   const std::string s =
       killed_at_the_end("edited-state", [](json& cp) { cp["state"]["loop_test"]["saturated"][0] = true; });
   EXPECT_EQ(run({"run", "--resume", s, "--yes", "--no-history"}, s + "-io"), 2);
-  EXPECT_NE(slurp(s + "-io.stderr").find("state.loop_test: " + s + "/loop-test.csv:3: the file states the PWM saturated in steps 'none'; the loop test recorded '1'"),
+  EXPECT_NE(slurp(s + "-io.stderr").find("state.loop_test: " + s + "/loop-test.csv:3: the file states the loop saturated in steps 'none'; the loop test recorded '1'"),
             std::string::npos)
       << slurp(s + "-io.stderr");
   // A loop test marked "not supported" in a folder that holds its records (with a hardware
@@ -1275,19 +1275,22 @@ TEST(Campaign, SealedRunFolders) {
   }
   {
     // A FIFO where the rig writes a temporary file (it once stalled the run, so the stop fell
-    // between seals): the FIFO is replaced, the run is stopped, and its folder does not verify.
+    // between seals): the FIFO was replaced and the run's folder did not verify. Since
+    // 2026-12-07 a sealed run's --out that holds anything is refused first (exit 2, the FIFO as
+    // it was, nothing written): a sealed PASS beside a file it did not write never verified.
     const std::string f = d + "/fifo-tmp";
     fs::create_directories(f);
     ASSERT_EQ(::mkfifo((f + "/checkpoint.json.tmp").c_str(), 0600), 0);
     ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--inject", "sigkill@150",
                    "--seal-key", key},
                   f + "-io"),
-              128 + SIGKILL)
+              2)
         << slurp(f + "-io.stderr");
-    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 1);
-    const std::string v = slurp(f + "-verify.stdout");
-    EXPECT_NE(v.find("not a final seal"), std::string::npos) << v;
-    EXPECT_NE(v.find("passport.json: not sealed (the folder has none)"), std::string::npos) << v;
+    EXPECT_NE(slurp(f + "-io.stderr").find(f + " holds checkpoint.json.tmp, which the run does not write"),
+              std::string::npos)
+        << slurp(f + "-io.stderr");
+    EXPECT_TRUE(fs::is_fifo(f + "/checkpoint.json.tmp"));
+    EXPECT_FALSE(fs::exists(f + "/run.json"));
   }
   {
     // FIFOs where the rig writes the report's temporary file and the profile (the third review:
@@ -1302,14 +1305,24 @@ TEST(Campaign, SealedRunFolders) {
     EXPECT_NE(slurp(f + "-io0.stderr").find("holds profile.toml, which a run writes, but no run"), std::string::npos)
         << slurp(f + "-io0.stderr");
     fs::remove(f + "/profile.toml");
-    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--seal-key", key}, f + "-io"), 0)
-        << slurp(f + "-io.stderr");
-    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-verify"), 0) << slurp(f + "-verify.stdout");
+    // A sealed run refuses the folder that holds a file it did not write (since 2026-12-07); an
+    // unsealed run replaces the FIFO and does not stall.
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f, "--seal-key", key}, f + "-io1"), 2)
+        << slurp(f + "-io1.stderr");
+    EXPECT_NE(slurp(f + "-io1.stderr").find("holds report.html.tmp, which the run does not write"), std::string::npos)
+        << slurp(f + "-io1.stderr");
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", f}, f + "-io"), 0) << slurp(f + "-io.stderr");
+    EXPECT_TRUE(fs::is_regular_file(f + "/report.html"));
+    EXPECT_FALSE(fs::exists(f + "/report.html.tmp"));
+    const std::string g = d + "/sealed-then-edited";
+    ASSERT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", g, "--seal-key", key}, g + "-io"), 0)
+        << slurp(g + "-io.stderr");
+    EXPECT_EQ(run({"verify", g, "--seal-key", key}, g + "-verify"), 0) << slurp(g + "-verify.stdout");
     // A passport whose outcome is not the sealed one does not verify, even before its MAC is read.
-    std::string p = slurp(f + "/passport.json");
+    std::string p = slurp(g + "/passport.json");
     p.replace(p.find("\"outcome\": \"PASS\""), 17, "\"outcome\": \"FAIL\"");
-    std::ofstream(f + "/passport.json") << p;
-    EXPECT_EQ(run({"verify", f, "--seal-key", key}, f + "-edited"), 1);
+    std::ofstream(g + "/passport.json") << p;
+    EXPECT_EQ(run({"verify", g, "--seal-key", key}, g + "-edited"), 1);
   }
   // An empty key is not "no key".
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--no-history", "--out", d + "/empty", "--seal-key", ""},

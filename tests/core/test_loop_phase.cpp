@@ -201,7 +201,17 @@ TEST(LoopPhase, TheRecordsReadBackBitForBitAndGiveTheSameFigures) {
     EXPECT_EQ(back.steps[k].saturated, r.steps[k].saturated);
   }
   EXPECT_EQ(acceptance::loop_test_figures(back).dump(), acceptance::loop_test_figures(r).dump());
-  EXPECT_NE(slurp(path).find("# steps in which the DUT's PWM saturated: 2\n"), std::string::npos);
+  EXPECT_NE(slurp(path).find("# steps in which the DUT's loop saturated: 2\n"), std::string::npos);
+  // A folder written before 2026-12-07 says "PWM saturated" on that line: it still reads (its
+  // checkpoint's CRC is of that text).
+  std::string before = acceptance::loop_test_csv(r);
+  const std::string now_line = "# steps in which the DUT's loop saturated: ";
+  before.replace(before.find(now_line), now_line.size(), "# steps in which the DUT's PWM saturated: ");
+  write(path, before);
+  rec.crc32 = acceptance::crc32_of(before);
+  const LoopTestResponse old = acceptance::read_loop_test_csv(path, rec);
+  ASSERT_EQ(old.steps.size(), r.steps.size());
+  for (std::size_t k = 0; k < r.steps.size(); ++k) EXPECT_EQ(old.steps[k].saturated, r.steps[k].saturated);
   fs::remove_all(dir);
 }
 
@@ -285,9 +295,9 @@ TEST(LoopPhase, ADamagedRecordFileIsRefusedNamingFileLineAndValue) {
   acceptance::LoopRecord unsaturated = rec;
   r.steps[1].saturated = true;
   EXPECT_EQ(refused(acceptance::loop_test_csv(r), unsaturated),
-            path + ":3: the file states the PWM saturated in steps '2'; the loop test recorded 'none'");
+            path + ":3: the file states the loop saturated in steps '2'; the loop test recorded 'none'");
   EXPECT_NE(refused(replace(good, "# steps in which", "# Steps in which"), rec)
-                .find("the comment lines '# rig loop test: ...' and '# steps in which the DUT's PWM saturated: ...' are missing"),
+                .find("the comment lines '# rig loop test: ...' and '# steps in which the DUT's loop saturated: ...' are missing"),
             std::string::npos);
   EXPECT_EQ(refused(replace(good, "1000 Hz", "1000 Hz!"), rec), path + ":1: unexpected '!' after the rate");
   fs::remove_all(dir);

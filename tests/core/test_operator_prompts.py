@@ -11,9 +11,11 @@ import sys
 import tempfile
 
 
-def run_with_answers(rig, args, answers, env, timeout=120):
+def run_with_answers(rig, args, answers, env, timeout=120, stderr_file=None):
     pid, fd = pty.fork()
     if pid == 0:
+        if stderr_file:  # `rig run ... 2> FILE` typed at the terminal
+            os.dup2(os.open(stderr_file, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644), 2)
         os.execve(rig, [rig] + args, env)
     out, sent = b"", 0
     while True:
@@ -71,6 +73,21 @@ def main():
             else:
                 failed += 1
                 print(out[-3000:])
+        # stderr sent to a file at the terminal: the questions still reach the operator, on the
+        # controlling terminal (they went to the file, and the run waited on answers nobody saw).
+        err = os.path.join(d, "stderr.txt")
+        rc, out = run_with_answers(rig, ["run", "--profile", "ci", "--serial", "EMU-QPA-0001", "--out",
+                                         os.path.join(d, "run-stderr-to-file")], ["y", "y", "y"], env, stderr_file=err)
+        with open(err) as f:
+            logged = f.read()
+        ok = rc == 0 and out.count("[y/N]") == 3 and "EMULATED PLANT" in out and "OUTCOME: PASS" in out
+        ok = ok and "[y/N]" not in logged and "Plan: " in logged
+        print(f"{'ok' if ok else 'FAIL'}: stderr to a file -> exit {rc}, questions on the terminal")
+        if ok:
+            passed += 1
+        else:
+            failed += 1
+            print(out[-3000:], logged[-2000:])
     finally:
         shutil.rmtree(d, ignore_errors=True)
     print(f"{passed} passed, {failed} failed")

@@ -2033,6 +2033,8 @@ TEST(RigCli, RunEndingBeforeItsDevicesOpenStillWritesPassportJunitAndReport) {
   const std::string hint = "to continue: rig run --resume " + d + "/run (0 of 19 phases complete: the devices did not open;";
   EXPECT_NE(slurp(d + "/io.stderr").find(hint), std::string::npos) << slurp(d + "/io.stderr");
   EXPECT_NE(slurp(d + "/run/run.log").find(hint), std::string::npos) << slurp(d + "/run/run.log");
+  // And it closes with the outcome line every other ending logs (a technician's review: none).
+  EXPECT_NE(slurp(d + "/run/run.log").find("outcome ERROR (exit 4)"), std::string::npos) << slurp(d + "/run/run.log");
   // Recorded like any other run (spawn() points RIG_HISTORY at d/io.history.sqlite).
   const std::string db = d + "/io.history.sqlite";
   ASSERT_EQ(run({"history", "--db", db, "--csv"}, d + "/list"), 0) << slurp(d + "/list.stderr");
@@ -4993,6 +4995,28 @@ TEST(ProfileValidation, BadTausIsRefusedByTheDryRun) {
       << slurp(d + "/io.stderr");
 }
 
+// "all" is refused where rig analyze --taus all would refuse the raw capture (a review: 200 s of
+// raw capture spent 26 s in the allan phase, after the whole procedure, and the dry run said
+// nothing); the ci profile's 60 s is within the limit.
+TEST(ProfileValidation, AllTausOnALongRawCaptureIsRefusedByTheDryRun) {
+  const std::string d = tmp("taus-all");
+  fs::create_directories(d);
+  std::ofstream(d + "/short.toml") << "base = \"ci\"\n[profile]\nname = \"t\"\n[analysis]\ntaus = \"all\"\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/short.toml", "--dry-run", "--out", d + "/run"}, d + "/s"), 0)
+      << slurp(d + "/s.stderr");
+  std::ofstream(d + "/long.toml") << "base = \"ci\"\n[profile]\nname = \"t\"\n[procedure]\nraw_s = 200.0\n"
+                                     "[analysis]\ntaus = \"all\"\n";
+  EXPECT_EQ(run({"run", "--profile", d + "/long.toml", "--dry-run", "--out", d + "/run"}, d + "/l"), 2)
+      << slurp(d + "/l.stderr");
+  EXPECT_NE(slurp(d + "/l.stderr").find("long.toml:7:8: 'taus' = 'all': \"all\" on the raw capture's 200000 samples "
+                                        "asks for every averaging factor (2e+10 term sums over its two channels"),
+            std::string::npos)
+      << slurp(d + "/l.stderr");
+  EXPECT_NE(slurp(d + "/l.stderr").find("or \"all\" with raw_s of at most 89.442 s at rate_hz = 1000"),
+            std::string::npos)
+      << slurp(d + "/l.stderr");
+}
+
 TEST(DryRun, OutMustBeWritable) {
   const std::string d = tmp("dry-out");
   fs::create_directories(d);
@@ -5098,8 +5122,10 @@ TEST(RigCli, ARunWhoseRecordsWereRemovedMeanwhileHasNoVerdict) {
   ASSERT_TRUE(wait_for_file(g, d + "/gone/captures/run01-U10.cap")) << slurp(d + "/gone.stderr");
   fs::remove_all(d + "/gone");
   EXPECT_EQ(wait_exit(g), 4) << slurp(d + "/gone.stderr");
+  // ... and, after it, the line every emulated run's OUTCOME line has (a technician's review: missing here).
   EXPECT_EQ(slurp(d + "/gone.stdout"),
-            "passport.json not written: the run folder could not take it (stderr says why)\nOUTCOME: ERROR\n");
+            "passport.json not written: the run folder could not take it (stderr says why)\nOUTCOME: ERROR\n"
+            "(emulated plant: a simulated DUT, not a device on the bench)\n");
 }
 
 // A profile's relative path ([plant.firmware] dbc = "qpa-counts.dbc", relative to the profile, as
@@ -5481,9 +5507,10 @@ TEST(RigCli, AnEndingTheFolderCannotTakeReplacesAnEarlierEndingsPassport) {
 }
 
 // A seal the folder cannot take: before the first phase the run folder is the configuration's
-// --out (exit 2, nothing run); at a checkpoint the folder stopped holding the run's records
-// mid-run, exit 4 like a checkpoint or passport it cannot take (it was exit 2 there). A directory
-// squats on the seal's temporary name.
+// --out (exit 2, nothing run: a sealed run's --out that holds anything is refused before it is
+// written to, since 2026-12-07 naming what it holds); at a checkpoint the folder stopped holding
+// the run's records mid-run, exit 4 like a checkpoint or passport it cannot take (it was exit 2
+// there). A directory squats on the seal's temporary name.
 TEST(RigCli, ASealTheFolderCannotTakeIsExitTwoAtTheStartAndFourAtACheckpoint) {
   const std::string d = tmp("seal-not-written");
   const std::string key = station_key_in(d);
@@ -5492,9 +5519,11 @@ TEST(RigCli, ASealTheFolderCannotTakeIsExitTwoAtTheStartAndFourAtACheckpoint) {
                 d + "/io1"),
             2)
       << slurp(d + "/io1.stderr");
-  EXPECT_NE(slurp(d + "/io1.stderr").find(d + "/start/seal.json: cannot be written"), std::string::npos)
+  EXPECT_NE(slurp(d + "/io1.stderr").find("--out " + d + "/start holds seal.json.tmp, which the run does not write"),
+            std::string::npos)
       << slurp(d + "/io1.stderr");
   EXPECT_FALSE(fs::exists(d + "/start/checkpoint.json"));
+  EXPECT_FALSE(fs::exists(d + "/start/run.json"));
   // Killed after some sealed checkpoints; a directory squats on the seal's temporary name before
   // the resume, whose first checkpoint then cannot seal (a resume writes no start seal).
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/checkpoint", "--seal-key",
@@ -5508,6 +5537,81 @@ TEST(RigCli, ASealTheFolderCannotTakeIsExitTwoAtTheStartAndFourAtACheckpoint) {
   EXPECT_NE(slurp(d + "/checkpoint/run.log").find(d + "/checkpoint/seal.json: cannot be written"), std::string::npos)
       << slurp(d + "/checkpoint/run.log");
   EXPECT_EQ(nlohmann::json::parse(slurp(d + "/checkpoint/passport.json"))["outcome"], "ERROR");
+}
+
+// One loop-test step measures no repeatability: its figures have no interval (a review: the
+// resolution's +-half was called a 95 % interval), and a profile without an output filter is not
+// said to read its bandwidth "with the output filter on y".
+TEST(RigCli, OneLoopTestStepHasNoIntervalAndNoFilterIsNotCalledOne) {
+  const std::string d = tmp("one-step");
+  fs::create_directories(d);
+  std::ofstream(d + "/p.toml") << "base = \"ci\"\n[profile]\nname = \"one-step\"\n[loop]\nsteps = 1\n"
+                                  "[filter]\npreset = \"none\"\n";
+  // FAIL: without the output filter the bandwidth is the loop's own, about 700 Hz, above ci's limits.
+  ASSERT_EQ(run({"run", "--profile", d + "/p.toml", "--yes", "--quiet", "--no-history", "--out", d + "/run"}, d + "/io"), 1)
+      << slurp(d + "/io.stderr") << slurp(d + "/io.stdout");
+  const auto v = nlohmann::json::parse(slurp(d + "/run/passport.json"))["values"];
+  EXPECT_NE(v["settling_time"]["reason"].get<std::string>().find("(loop test, 1 step of 1 g)"), std::string::npos)
+      << v["settling_time"].dump();
+  for (const char* name : {"bandwidth_0p5", "settling_time"}) {
+    EXPECT_TRUE(v[name]["value"].is_number()) << v[name].dump();
+    EXPECT_TRUE(v[name]["lo"].is_null() && v[name]["hi"].is_null()) << v[name].dump();
+    EXPECT_NE(v[name]["reason"].get<std::string>().find("one step: no interval"), std::string::npos) << v[name].dump();
+    EXPECT_EQ(v[name]["reason"].get<std::string>().find("95 % interval"), std::string::npos) << v[name].dump();
+  }
+  EXPECT_NE(v["bandwidth_0p5"]["reason"].get<std::string>().find("y without an output filter"), std::string::npos)
+      << v["bandwidth_0p5"].dump();
+  const auto loop = nlohmann::json::parse(slurp(d + "/run/analysis.json"))["loop"];
+  EXPECT_TRUE(loop["bandwidth_0p5_interval_hz"].is_null()) << loop.dump().substr(0, 600);
+}
+
+// A new run's folder is one the run owns whole (a technician's review: a sealed run into a folder
+// holding notes.txt ended PASS, exit 0, and rig verify failed it at once, "added after the seal";
+// a run into a finished run's subfolder made that run's folder fail verify). Refused before
+// anything is written, by the dry run too; an empty folder, and an unsealed run beside a
+// stranger's file (as the README allows), still run.
+TEST(RigCli, ANewRunsFolderIsOneItCanOwnWhole) {
+  const std::string d = tmp("own-whole");
+  const std::string key = station_key_in(d);
+  fs::create_directories(d + "/notes");
+  std::ofstream(d + "/notes/notes.txt") << "hi\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out",
+                                     d + "/notes", "--seal-key", key};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/sealed"), 2) << slurp(d + "/sealed.stderr");
+    EXPECT_NE(slurp(d + "/sealed.stderr").find("--out " + d + "/notes holds notes.txt, which the run does not write: a "
+                                               "sealed run's folder holds its own files only"),
+              std::string::npos)
+        << slurp(d + "/sealed.stderr");
+    EXPECT_EQ(std::distance(fs::directory_iterator(d + "/notes"), fs::directory_iterator{}), 1);
+  }
+  // A folder holding a run (run.json) takes no new run below it, sealed or not.
+  fs::create_directories(d + "/earlier");
+  std::ofstream(d + "/earlier/run.json") << "{}\n";
+  for (const bool dry : {true, false}) {
+    std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out",
+                                     d + "/earlier/sub/run"};
+    if (dry) args.push_back("--dry-run");
+    EXPECT_EQ(run(args, d + "/nested"), 2) << slurp(d + "/nested.stderr");
+    EXPECT_NE(slurp(d + "/nested.stderr").find("--out " + d + "/earlier/sub/run: inside the run folder " + d +
+                                               "/earlier (it holds run.json)"),
+              std::string::npos)
+        << slurp(d + "/nested.stderr");
+    EXPECT_FALSE(fs::exists(d + "/earlier/sub"));
+  }
+  // An empty folder made beforehand takes a sealed run, which verifies; an unsealed run beside
+  // a stranger's file runs as before.
+  fs::create_directories(d + "/empty");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/empty", "--seal-key", key},
+                d + "/empty-io"),
+            0)
+      << slurp(d + "/empty-io.stderr");
+  EXPECT_EQ(run({"verify", d + "/empty", "--seal-key", key}, d + "/empty-verify"), 0) << slurp(d + "/empty-verify.stdout");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/notes", "--dry-run"},
+                d + "/unsealed"),
+            0)
+      << slurp(d + "/unsealed.stderr");
 }
 
 // The history a run will record into is checked before anything runs, --dry-run included: an

@@ -70,6 +70,23 @@ TEST(Loop, SaturatesBeyondRange) {
   EXPECT_LT(x, 12.01);
 }
 
+// A step strong enough to drive the pendulum's pick-off past the ADC's range leaves the loop as
+// nonlinear as a clipped duty (it slews: 59 Hz instead of 495 Hz read off a 5-g step, a review
+// of 2026-12-07), so it is flagged too; a 1-g step, the method's, never is.
+TEST(Loop, AStepThatClipsThePickOffIsSaturated) {
+  const LoopModel m = default_loop();
+  for (double q : {1.0, 5.0}) {
+    LoopModel::State st;
+    bool any = false;
+    for (int k = 0; k < 2000; ++k) {
+      m.step(st, q);
+      any = any || st.saturated;
+    }
+    EXPECT_EQ(any, q > 3) << q << " g";
+    EXPECT_FALSE(st.saturated) << q << " g: settled";
+  }
+}
+
 TEST(Loop, SimulatedStepMatchesLinearModel) {
   const LoopModel m = default_loop();
   const std::vector<double> lin = loop_step(m.linear(), 300);
