@@ -794,6 +794,20 @@ int run(const Args& a) {
     }
     timer.mark("long tau");
   }
+  // MTOT's and TTOT's bounds at short tau are not a `confidence` interval: SP 1065's bias factor
+  // and EDF are large-m values (white FM, an outside check: 0 % held at m = 1, 23.5 % at m = 4,
+  // 54-56 % at m = 8..32, docs/analysis.md). Said where the record has such points (an
+  // instrument engineer's review: only the docs said it).
+  for (std::size_t k = 0; bounded && k < longs.size(); ++k) {
+    if (long_taus[k] != an::LongTau::MTOT && long_taus[k] != an::LongTau::TTOT) continue;
+    const auto short_m = std::count_if(longs[k].begin(), longs[k].end(), [](const an::LongTauPoint& p) { return p.m < 64; });
+    if (short_m > 0)
+      notes.push_back(fmt::format("{}: the bounds at its {} tau{} with m < 64 do not hold {:.3g} % (SP 1065's bias "
+                                  "factor and EDF are large-m values: on white FM they held 0 % at m = 1, 24 % at m = 4, "
+                                  "55 % at m = 8..32); read {}'s bounds there",
+                                  an::to_string(long_taus[k]), short_m, short_m == 1 ? "" : "s", 100 * a.confidence,
+                                  long_taus[k] == an::LongTau::MTOT ? "mdev" : "tdev"));
+  }
 
   json j;
   j["n"] = n;

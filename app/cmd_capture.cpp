@@ -39,6 +39,8 @@
 #include "firmware_link/dbc_stream.hpp"
 #include "rig/capture/capture.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
+#include "rig/core/path_kind.hpp"
 #include "rig/core/toml_util.hpp"
 
 namespace rig::cli {
@@ -265,6 +267,13 @@ int cmd_import(const ImportArgs& a) {
     throw ConfigError("rig capture import: --rate " + fmt::format("{}", *a.rate_hz) + ": must be in [" +
                       fmt::format("{}", capture::kMinRateHz) + ", " +
                       fmt::format("{}", capture::kMaxRateHz) + "] Hz");
+  // A folder as the log opened fine and failed at its first read, exit 4 without its name (an
+  // instrument engineer's review); a FIFO or a pipe's /dev/fd path is still read.
+  switch (path_kind(a.log, "candump log")) {
+    case PathKind::missing: throw ConfigError(shown_text(a.log) + ": no such candump log");
+    case PathKind::directory: throw ConfigError(shown_text(a.log) + ": is a folder, not a candump log (give one file)");
+    default: break;
+  }
   check_new_file(a.out, "rig capture import: --out");
   const toml::table hw = load_hardware_file(a.hardware, {"dut"});
   const toml::table& dut = *cfg::get_table(hw, "dut", true);

@@ -21,6 +21,7 @@
 #include "plant/dut/loop_figures.hpp"
 #include "plant/dut/params.hpp"
 #include "plant/emulated/world.hpp"
+#include "app/analyze_input.hpp"
 #include "app/commands.hpp"
 #include "app/existing_path.hpp"
 #include "app/number_option.hpp"
@@ -65,24 +66,12 @@ void load_dut(const std::string& path, DutConfig& c) {
   c.section.clear();
 }
 
-// One value per line, '#' comments (the `rig analyze --input text` format).
-std::vector<double> read_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open");
-  std::vector<double> v;
-  std::string line;
-  for (std::size_t no = 1; std::getline(in, line); ++no) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.erase(hash);
-    std::istringstream is(line);
-    double d;
-    if (!(is >> d)) {
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      throw ConfigError(path + ":" + std::to_string(no) + ": not a number: '" + line + "'");
-    }
-    if (!std::isfinite(d)) throw ConfigError(path + ":" + std::to_string(no) + ": not a finite number");
-    v.push_back(d);
-  }
+// The recording: the `rig analyze --input text` format, read by its reader (this one took the
+// number a line starts with and dropped the rest: a decimal comma read every value as 0, an
+// instrument engineer's review).
+std::vector<double> read_recording(const std::string& path) {
+  check_input_path(path, "text");
+  std::vector<double> v = read_text(path);
   if (v.empty()) throw ConfigError(path + ": no values");
   return v;
 }
@@ -198,7 +187,7 @@ void run_select(SelectArgs a) {
   o.seed = a.seed;
   std::vector<double> rec;
   if (!a.recorded.empty()) {
-    rec = read_text(a.recorded);
+    rec = read_recording(a.recorded);
     o.recorded_x = &rec;
   }
   o.dut_section = dc.section;

@@ -35,7 +35,9 @@ bool all_hex(std::string_view s) {
 
 uint8_t hex_byte(std::string_view two) { return static_cast<uint8_t>(std::strtoul(std::string(two).c_str(), nullptr, 16)); }
 
-std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
+// Shown as rig shows any value from a file: control and non-UTF-8 bytes as \xNN (a review: an
+// identifier's bytes reached the terminal raw, a newline and 0x1E among them).
+std::string quoted(std::string_view s) { return "'" + shown_text(s) + "'"; }
 
 // candump prints identifiers as 3 (standard) or 8 (extended) hex digits; an extended id
 // with bit 29 set is an error frame (CAN_ERR_FLAG), its class bits below.

@@ -304,6 +304,12 @@ TEST(RigCli, HelpOnEverySubcommand) {
                                               "them\n"),
             std::string::npos)
       << slurp(d + "/sel-rec.stdout");
+  // The recording is read as rig analyze reads text: a decimal comma, or a second column, is
+  // refused naming file and line (an instrument engineer's review: every value read as 0, exit 0).
+  std::ofstream(d + "/comma.txt") << "0,5\n0,25\n";
+  EXPECT_EQ(run({"filter", "select", "--recorded", d + "/comma.txt"}, d + "/comma"), 2) << slurp(d + "/comma.stdout");
+  EXPECT_NE(slurp(d + "/comma.stderr").find(d + "/comma.txt:1: not a decimal number: '0,5'"), std::string::npos)
+      << slurp(d + "/comma.stderr");
   // A recording's offset does not rank the filters: each starts from rest, and its start-up on
   // the offset rang into the RMS (1 g moved butter4@500 from rank 1 to 3: a metrologist's review).
   {
@@ -1409,6 +1415,13 @@ TEST(RigCli, AnalyzeLongTauStatisticsOnTheNbs14TenPointSet) {
     for (const auto& pt : j[key])
       for (const char* field : {"m", "tau_s", "n_terms", "dev", "lo", "hi", "edf", "alpha", "edf_alpha"})
         EXPECT_TRUE(pt.contains(field)) << key << " point lacks " << field;
+  // MTOT's and TTOT's short-tau bounds are said not to hold their confidence (an instrument
+  // engineer's review: only docs/analysis.md said so); HTOT's are not named.
+  const std::string notes = j["notes"].dump();
+  EXPECT_NE(notes.find("mtot: the bounds at its 3 taus with m < 64 do not hold 68.3 %"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("ttot: the bounds at its 3 taus with m < 64"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("read tdev's bounds there"), std::string::npos) << notes;
+  EXPECT_EQ(notes.find("htot: the bounds"), std::string::npos) << notes;
   ASSERT_TRUE(j.contains("theo1"));
   EXPECT_EQ(j["theo1"][0]["m"], 2);
   EXPECT_DOUBLE_EQ(j["theo1"][0]["tau_s"].get<double>(), 1.5);

@@ -122,6 +122,8 @@ TEST(CandumpLog, EmptyLinesAndUnreadableLinesWithTheirReason) {
       {"hello\x01 w\xB5rld\r", "BYTES): 'hello\\x01 w\\xB5rld'"},
       {"(1.0) can0 800#00", "standard identifier out of range"},
       {"(1.0) can0 CFFFFFFF#00", "extended identifier out of range"},  // found by fuzz_candump
+      // An identifier's control bytes too (a review: 0x1E reached the terminal as it was).
+      {"(1.0) can0 1\x1e""0#00", "not a CAN identifier (3 or 8 hex digits): '1\\x1E0'"},
   };
   const std::string zs(100, 'z');
   EXPECT_NE(read_candump_line(zs).problem.find("BYTES): '" + std::string(57, 'z') + "...'"), std::string::npos);

@@ -142,6 +142,17 @@ TEST(CaptureImport, OptionsAreCheckedBeforeTheLogIsRead) {
   EXPECT_NE(slurp(dir() / "opts1.err").find("kept.rigcap: the file exists"), std::string::npos) << slurp(dir() / "opts1.err");
   EXPECT_EQ(slurp(dir() / "kept.rigcap"), "an earlier capture");
 
+  // A folder as the log is named as such, exit 2 (it was exit 4, "basic_filebuf::underflow error
+  // reading the file: Is a directory", the path not named: a review).
+  fs::create_directories(dir() / "a-folder");
+  EXPECT_EQ(run_rig("capture import " + (dir() / "a-folder").string() + " --hardware " + (dir() / "opts-hw.toml").string() +
+                        " --out " + (dir() / "folder.rigcap").string(),
+                    "opts-folder"),
+            2);
+  EXPECT_NE(slurp(dir() / "opts-folder.err").find((dir() / "a-folder").string() + ": is a folder, not a candump log"),
+            std::string::npos)
+      << slurp(dir() / "opts-folder.err");
+
   EXPECT_EQ(run_rig(head + (dir() / "no-such-folder" / "x.rigcap").string(), "opts2"), 2);
   EXPECT_NE(slurp(dir() / "opts2.err").find("does not exist"), std::string::npos) << slurp(dir() / "opts2.err");
 
