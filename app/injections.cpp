@@ -108,9 +108,11 @@ int apply_injections(plant::EmulatedPlant& w, const std::vector<Injection>& inj,
 std::vector<std::string> faults_past_the_plan(const std::vector<Injection>& inj, double planned_s) {
   std::vector<std::string> notes;
   for (const Injection& j : inj)
-    if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > planned_s)
-      notes.push_back(fmt::format("--inject {} lies past the plan's {:.0f} s of device time: it fires only if the run "
-                                  "takes longer than planned (the run says whether it fired)",
+    // Well past: bring-up and the table's settling add seconds the plan does not count (a review:
+    // estop@225 on ci's plan of 221 s was said not to fire, and fired at 225 s).
+    if ((j.kind == Injection::Kind::Signal || j.kind == Injection::Kind::Estop) && j.at_s > 1.25 * planned_s + 60)
+      notes.push_back(fmt::format("--inject {} lies well past the plan's {:.0f} s of device time: it fires only if the "
+                                  "run takes that much longer (the run says whether it fired)",
                                   j.text, planned_s));
   return notes;
 }

@@ -38,8 +38,8 @@ std::vector<Injection> parse_injections(const std::vector<std::string>& inj);
 // and a resume repeats; signals and e-stops are never repeated.
 std::vector<std::string> sample_losses(const std::vector<std::string>& inject);
 
-// The timed faults (estop@T, sigint@T, ...) at a device time past `planned_s`, the plan's device
-// time, each as a note: such a fault fires only if the run takes longer than planned (a review:
+// The timed faults (estop@T, sigint@T, ...) at a device time well past `planned_s`, the plan's
+// device time (over 1.25 times it and a minute: bring-up is not in it), each as a note: such a fault fires only if the run takes longer than planned (a review:
 // estop@1e9 ran to PASS, exit 0, the dry run silent). Said before the run; the run says after it
 // whether the fault fired (say_faults_that_did_not_fire).
 std::vector<std::string> faults_past_the_plan(const std::vector<Injection>& inj, double planned_s);

@@ -99,7 +99,7 @@ void refuse_a_folder_a_new_run_cannot_own(const std::string& dir, const std::str
   for (fs::path up = here.parent_path(); !up.empty(); up = up.parent_path()) {
     if (fs::is_regular_file(up / "run.json", ec))
       throw ConfigError(fmt::format("{} {}: inside the run folder {} (it holds run.json): a run there adds its files "
-                                    "to that run's, which rig verify then names as not sealed; choose an {} outside it",
+                                    "to that run's (a sealed one then fails rig verify); choose an {} outside it",
                                     option, shown_text(dir), shown_text(up.string()), option));
     if (up == up.root_path()) break;
   }

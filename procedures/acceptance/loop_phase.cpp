@@ -56,6 +56,11 @@ std::string settling_near_the_band(const nlohmann::json& per_step) {
     o_lo = std::min(o_lo, o), o_hi = std::max(o_hi, o), t_lo = std::min(t_lo, t), t_hi = std::max(t_hi, t);
   }
   if (near == 0) return "";
+  if (per_step.size() == 1)  // one step: no spread to give (it read "1 of the 1 steps' peaks (5.00-5.00 %)")
+    return fmt::format("; the step's peak (overshoot {:.2f} %) lies within {:g} points of the {:g} % band: a peak "
+                       "inside it settles at the rise, one outside it after the peak, so a small change of the "
+                       "overshoot moves this figure by the time between them",
+                       o_lo * 100, kNear * 100, band * 100);
   // How many steps: the spread alone read as if every peak were there (a review).
   return fmt::format("; {} of the {} steps' peaks (overshoot {:.2f}-{:.2f} % over the steps) {} within {:g} points of "
                      "the {:g} % band: a peak inside it settles at the rise, one outside it after the peak, so a small "

@@ -67,7 +67,8 @@ std::string loop_test_csv(const LoopTestResponse& r) {
   for (const LoopStepRecord& st : r.steps) saturated.push_back(st.saturated);
   std::string s = fmt::format(
       "{}{} step(s) of {} g test torque inside the DUT's loop, recorded at {} Hz\n"
-      "# x_g: the loop's output; y_g: the same through the DUT's output filter; t_s from the step\n"
+      "# x_g: the loop's output; y_g: the same through the DUT's output filter while it is on (else as x_g); t_s "
+      "from the step\n"
       "{}{}\n"
       "step,index,t_s,x_g,y_g\n",
       kFirstLine, r.steps.size(), r.amplitude_g, r.rate_hz, kSaturatedLine, saturated_steps(saturated));

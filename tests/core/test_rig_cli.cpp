@@ -5578,6 +5578,21 @@ TEST(RigCli, OneLoopTestStepHasNoIntervalAndNoFilterIsNotCalledOne) {
   EXPECT_TRUE(loop["bandwidth_0p5_interval_hz"].is_null()) << loop.dump().substr(0, 600);
 }
 
+// A timed fault far past the plan is said before the run (a review: estop@1e9 ran to PASS with the
+// dry run silent); one within reach of it is not (estop@225 on ci's 221-s plan fires: bring-up is
+// not in the plan).
+TEST(RigCli, AnInjectionWellPastThePlanIsNotedBeforeTheRun) {
+  const std::string d = tmp("inject-past");
+  fs::create_directories(d);
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", "estop@1e9", "--out", d + "/run"}, d + "/far"), 0)
+      << slurp(d + "/far.stderr");
+  EXPECT_NE(slurp(d + "/far.stdout").find("Note: --inject estop@1e9 lies well past the plan's 221 s of device time"),
+            std::string::npos)
+      << slurp(d + "/far.stdout");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--inject", "sigint@225", "--out", d + "/run"}, d + "/near"), 0);
+  EXPECT_EQ(slurp(d + "/near.stdout").find("lies well past"), std::string::npos) << slurp(d + "/near.stdout");
+}
+
 // A new run's folder is one the run owns whole (a technician's review: a sealed run into a folder
 // holding notes.txt ended PASS, exit 0, and rig verify failed it at once, "added after the seal";
 // a run into a finished run's subfolder made that run's folder fail verify). Refused before
