@@ -285,7 +285,7 @@ class AngleLine {
 // and whether it is still homed, on stderr before the abort's own line. "rig: aborted: SIGINT
 // received" alone left a technician guessing (a review: the homed flag was gone, which nothing
 // said). Waits up to 10 s for the axis to stop; says so when it cannot read it.
-void say_where_it_stopped(RotaryTable& t, const std::string& halt_error, const std::string& halted_by = "") {
+void say_where_it_stopped(RotaryTable& t, bool homing, const std::string& halt_error, const std::string& halted_by = "") {
   try {
     TableStatus s = t.status();
     for (int i = 0; i < 100 && s.moving; ++i) {
@@ -297,8 +297,10 @@ void say_where_it_stopped(RotaryTable& t, const std::string& halt_error, const s
               << (!halted_by.empty()     ? " (halted by " + halted_by + ")"
                   : halt_error.empty() ? " (halt delivered to the drive)"
                                        : " (" + halt_error + ")")
-              << (!s.homed_known ? "; whether it is still homed the drive cannot say (its map has no homed_bit): "
-                                   "`rig table home` before the next move if the homing was interrupted"
+              << (!s.homed_known ? std::string("; whether it is still homed the drive cannot say (its map has no "
+                                               "homed_bit): ") +
+                                       (homing ? "the homing was interrupted: `rig table home` before the next move"
+                                               : "`rig table home` before the next move if in doubt")
                   : s.homed    ? "; it is still homed"
                                : "; it is not homed now: `rig table home` before the next move")
               << "\n";
@@ -325,7 +327,7 @@ void run_motion(RotaryTable& t, const TableUse& use, const std::string& doing, M
     AngleLine line(t, doing);
     motion_stoppable_from_this_station(use.id(), doing, motion, [&](const std::string& who) { by = who; });
   } catch (const AbortedError&) {  // the angle line cleared first
-    say_where_it_stopped(t, by.empty() ? last_stop_error(t) : "", by.empty() ? "" : by + " on this station");
+    say_where_it_stopped(t, doing == "homing", by.empty() ? last_stop_error(t) : "", by.empty() ? "" : by + " on this station");
     throw;
   }
 }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
 #include "rig/core/escape.hpp"
@@ -92,12 +93,29 @@ void refuse_a_run_log_it_cannot_write(const std::string& dir) {
                                 path, std::strerror(errno)));
 }
 
+namespace {
+// Whether `d` holds a rig run: its run.json written by rig (another tool's run.json, in a project
+// folder that holds run folders, is not one).
+bool holds_a_rig_run(const fs::path& d) {
+  std::error_code ec;
+  if (!fs::is_regular_file(d / "run.json", ec)) return false;
+  try {
+    std::ifstream in(d / "run.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    return j.is_object() && j.contains("software") && j["software"].is_string() &&
+           j["software"].get<std::string>().starts_with("rig ");
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+}  // namespace
+
 void refuse_a_folder_a_new_run_cannot_own(const std::string& dir, const std::string& option, bool sealed,
                                           bool taken_over) {
   std::error_code ec;
   const fs::path here = fs::absolute(dir, ec).lexically_normal();
   for (fs::path up = here.parent_path(); !up.empty(); up = up.parent_path()) {
-    if (fs::is_regular_file(up / "run.json", ec))
+    if (holds_a_rig_run(up))
       throw ConfigError(fmt::format("{} {}: inside the run folder {} (it holds run.json): a run there adds its files "
                                     "to that run's (a sealed one then fails rig verify); choose an {} outside it",
                                     option, shown_text(dir), shown_text(up.string()), option));

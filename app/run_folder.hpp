@@ -28,7 +28,7 @@ void prepare_run_folder(const std::string& dir, const std::string& option);
 // the system's reason, before anything starts; the dry run's check too (touches nothing).
 void refuse_a_run_log_it_cannot_write(const std::string& dir);
 // A new run's folder must be one the run owns whole: not inside another run's folder (an
-// ancestor holding run.json: the new run's files would be that run's "added after the seal" for
+// ancestor holding rig's run.json: the new run's files would be that run's "added after the seal" for
 // rig verify), and, for a sealed run, holding nothing the run does not write (verify names every
 // other entry; a sealed PASS that could never verify, a technician's review). `taken_over`: a
 // stopped start's files are there, the run's own. ConfigError before anything is written.

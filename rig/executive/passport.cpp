@@ -114,10 +114,16 @@ std::string passport_table(const nlohmann::ordered_json& p) {
     std::string out = m.value("outcome", "UNSET");
     // A failed value and its limits with the digits that put it outside (the table's short
     // forms read "0.00314 ... [0, 0.00314] FAIL": a review).
-    if (out == "FAIL" && m["value"].is_number() && m["limits"].is_array()) {
-      const ShownOutside so = shown_outside(m["value"].get<double>(), m["limits"][0].get<double>(),
-                                            m["limits"][1].get<double>());
-      value = so.value, lim = "[" + so.lo + ", " + so.hi + "]";
+    // Any other value beside its limits likewise where the short forms put it on the wrong side
+    // (a PASS read 0.0024224 beside [0, 0.00242]: a metrologist's review).
+    if (m["value"].is_number() && m["limits"].is_array()) {
+      const double v = m["value"].get<double>(), lo = m["limits"][0].get<double>(), hi = m["limits"][1].get<double>();
+      const bool in_order =
+          shown_in_order({value, fmt::format("{:.3g}", lo), fmt::format("{:.3g}", hi)}, v, lo, hi);
+      if (out == "FAIL" || !in_order) {
+        const ShownOutside so = shown_against_limits(v, lo, hi);
+        value = so.value, lim = "[" + so.lo + ", " + so.hi + "]";
+      }
     }
     const std::string reason = m.value("reason", "");
     if (!reason.empty() && (out != "PASS" || m["value"].is_null() || it.key() == "accuracy_class")) out += "  " + reason;

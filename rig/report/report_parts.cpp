@@ -437,8 +437,11 @@ std::string Page::passport_table() const {
       limits = "[" + (std::isfinite(a) ? fmt_num(a) : "−∞") + ", " + (std::isfinite(b) ? fmt_num(b) : "+∞") + "]";
       // A failed value with the digits that put it outside its limits, not those its bounds
       // support (the page read 0.00314 against [0, 0.00314]: a review), as the console and JUnit.
-      if (outcome == "FAIL" && val && val->is_number() && std::isfinite(a) && std::isfinite(b)) {
-        const ShownOutside so = shown_outside(val->get<double>(), a, b, 5);
+      // Any other value too where its rounding and the limits' put it on the wrong side (a PASS
+      // read 0.0024224 beside [0, 0.002422]: a metrologist's review).
+      if (val && val->is_number() && std::isfinite(a) && std::isfinite(b) &&
+          (outcome == "FAIL" || !shown_in_order({cells.value, fmt_num(a), fmt_num(b)}, val->get<double>(), a, b))) {
+        const ShownOutside so = shown_against_limits(val->get<double>(), a, b, 5);
         cells.value = html_escape(so.value);
         limits = "[" + so.lo + ", " + so.hi + "]";
       }

@@ -700,6 +700,23 @@ TEST(Measurements, AFailureShowsTheDigitsThatPutTheValueOutside) {
   EXPECT_EQ(n.value, "nan");
 }
 
+// A passing value beside its limits is shown so that it reads as inside them: the table's short
+// forms put 0.0024224 beside [0, 0.00242] (a metrologist's review); far from a limit they stay.
+TEST(Measurements, APassNearALimitShowsTheDigitsThatPutTheValueInside) {
+  MeasurementSet v;
+  v.declare({"rms_unfiltered", "g", "rms"}, std::make_pair(0.0, 0.0024224));
+  v.declare({"bias", "g", "bias"}, std::make_pair(-1e-3, 1e-3));
+  v.set("rms_unfiltered", 0.00242236);
+  v.set("bias", -4.98316e-4);
+  v.judge_all(true);
+  ASSERT_EQ(v.find("rms_unfiltered")->outcome, Outcome::Pass);
+  const std::string table = passport_table(make_passport(PassportInfo{}, RunResult{}, v));
+  EXPECT_NE(table.find(" 0.00242236 "), std::string::npos) << table;
+  EXPECT_NE(table.find("[0, 0.0024224]"), std::string::npos) << table;
+  EXPECT_NE(table.find(" -0.00049832 "), std::string::npos) << table;  // the short forms where they are in order
+  EXPECT_NE(table.find("[-0.001, 0.001]"), std::string::npos) << table;
+}
+
 TEST(Executive, OutcomesAreJudgedOnceTheSameAfterAResume) {
   // A required value without limits (the accuracy class with a class table): null fails.
   Fixture f("judge-resume");

@@ -5614,9 +5614,14 @@ TEST(RigCli, ANewRunsFolderIsOneItCanOwnWhole) {
         << slurp(d + "/sealed.stderr");
     EXPECT_EQ(std::distance(fs::directory_iterator(d + "/notes"), fs::directory_iterator{}), 1);
   }
-  // A folder holding a run (run.json) takes no new run below it, sealed or not.
+  // A folder holding a run (rig's run.json) takes no new run below it, sealed or not; another
+  // tool's run.json does not make one.
+  fs::create_directories(d + "/project");
+  std::ofstream(d + "/project/run.json") << "{\"name\": \"not rig\"}\n";
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--out", d + "/project/run"}, d + "/project"), 0)
+      << slurp(d + "/project.stderr");
   fs::create_directories(d + "/earlier");
-  std::ofstream(d + "/earlier/run.json") << "{}\n";
+  std::ofstream(d + "/earlier/run.json") << "{\"software\": \"rig 0.1.0\"}\n";
   for (const bool dry : {true, false}) {
     std::vector<std::string> args = {"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out",
                                      d + "/earlier/sub/run"};

@@ -286,6 +286,23 @@ TEST(Report, AFailedValueShowsTheDigitsThatPutItOutside) {
   EXPECT_NE(row.find(">[0, 0.00314]<"), std::string::npos) << row;
 }
 
+// A passing value whose rounding puts it beside its limits on the wrong side is shown with the
+// digits that put it inside (the page read 0.0024224 against [0, 0.002422]: a metrologist's review).
+TEST(Report, APassingValueNearItsLimitReadsAsInside) {
+  json p = rig::test::fixture_passport();
+  p["values"]["settling_time"]["value"] = 0.00242236;
+  p["values"]["settling_time"]["lo"] = nullptr;
+  p["values"]["settling_time"]["hi"] = nullptr;
+  p["values"]["settling_time"]["limits"] = json::array({0.0, 0.0024224});
+  p["values"]["settling_time"]["outcome"] = "PASS";
+  const std::string h = rig::report::render_report(p, rig::test::fixture_analysis());
+  const std::size_t at = h.find("<code>settling_time</code>");
+  ASSERT_NE(at, std::string::npos);
+  const std::string row = h.substr(at, h.find("</tr>", at) - at);
+  EXPECT_NE(row.find(">0.0024224<"), std::string::npos) << row;  // 5 digits, and the limit with its own
+  EXPECT_NE(row.find(">[0, 0.0024224]<"), std::string::npos) << row;
+}
+
 // Page 1 quotes a value with bounds to the digits the bounds support (two significant digits
 // of the half-width, the value and both bounds to the same digit); a value without bounds keeps
 // its five significant digits; passport.json is not touched (the page reads it).
