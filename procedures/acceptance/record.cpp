@@ -20,6 +20,22 @@ std::string capture_rel(const std::string& phase_id) { return "captures/" + phas
 
 namespace {
 
+// The stream's pace against the profile's rate: a DUT that streams at another rate than the one
+// the run stamps on its captures (a [dut.stream] rate_hz left at its default beside a 500 Hz DUT
+// without a command channel, which cannot declare its own) gives every tau and PSD frequency off
+// by the ratio, and nothing else would say so (an integrator's review). Judged on records of 10 s
+// or more, where the stream's start (a command, the first frame) is a small part; a fifth off and
+// a second beyond is no crystal's error. ConfigError: the rate is the configuration's.
+void check_stream_pace(const std::string& name, uint64_t samples, double took_s, double rate_hz) {
+  const double expected_s = static_cast<double>(samples) / rate_hz;
+  if (expected_s < 10 || (took_s <= 1.2 * expected_s + 1 && took_s >= 0.8 * expected_s - 1)) return;
+  throw ConfigError(fmt::format(
+      "{}: {} samples took {:.4g} s of the rig's clock, {:.4g} s at the profile's rate_hz = {:g}: the DUT streams at "
+      "about {:.4g} Hz, and every tau and PSD frequency of this run would be off by {:.3g}; the profile's rate_hz and "
+      "the hardware file's [dut.stream] rate_hz must be the rate the DUT streams at",
+      name, samples, took_s, expected_s, rate_hz, static_cast<double>(samples) / took_s, took_s / expected_s));
+}
+
 Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double seconds, const std::string& name,
                      const std::string& serial, std::vector<std::string>* partial, int attempt) {
   const uint64_t n_total = planned_samples(p, seconds);
@@ -54,11 +70,12 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   r.capture = rel;
   ctx.dev.dut.reset_stats();
   std::vector<Sample> buf(static_cast<std::size_t>(std::max(1.0, p.rate_hz / 10)));  // 100 ms chunks
-  double sx = 0, sy = 0;
+  double sx = 0, sy = 0, started_s = 0, ended_s = 0;
   bool streaming = false;
   try {
     ctx.dev.dut.start_stream(ctx.cancel);  // inside: a stop here leaves the capture's header, named too
     streaming = true;
+    started_s = ctx.dev.clock.now_s();
     while (r.samples < n_total) {
       const std::size_t want = static_cast<std::size_t>(std::min<uint64_t>(buf.size(), n_total - r.samples));
       const std::size_t got = ctx.dev.dut.read(std::span<Sample>(buf.data(), want), ctx.cancel);
@@ -70,6 +87,7 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
       r.samples += got;
       ctx.report(static_cast<double>(r.samples) / static_cast<double>(n_total));
     }
+    ended_s = ctx.dev.clock.now_s();
     streaming = false;  // stopped once, whatever the stop says
     ctx.dev.dut.stop_stream();
     w.close();
@@ -102,6 +120,7 @@ Recorded record_once(PhaseContext& ctx, const Profile& p, Orientation o, double 
   r.duplicates = st.duplicates;
   r.mean_x = r.samples ? sx / static_cast<double>(r.samples) : 0;
   r.mean_y = r.samples ? sy / static_cast<double>(r.samples) : 0;
+  check_stream_pace(name, r.samples + r.lost, ended_s - started_s, p.rate_hz);  // lost samples took their time too
   return r;
 }
 

@@ -16,6 +16,7 @@
 #include "design/loop_figures.hpp"
 #include "procedures/acceptance/loop_phase.hpp"
 #include "procedures/acceptance/procedure.hpp"
+#include "procedures/acceptance/record.hpp"
 #include "tests/core/idle_table.hpp"
 #include "procedures/acceptance/state.hpp"
 #include "rig/capture/capture.hpp"
@@ -406,5 +407,70 @@ TEST(ProcedureWithoutPlant, ACaptureChangedAfterItsRecordingIsNotAnalysed) {
     EXPECT_NE(m.find("its recording wrote 2000 samples"), std::string::npos) << m;
   }
   for (const Measurement& m : values.all()) EXPECT_FALSE(m.value) << m.name << ": no value from it";
+  fs::remove_all(out);
+}
+
+namespace {
+
+// A DUT without a command channel that streams at `hz` on the rig's clock: each read takes the
+// time its samples take.
+class PacedDut final : public DutLink {
+ public:
+  PacedDut(SimClock& clock, double hz) : clock_(clock), hz_(hz) {}
+  DutInfo info(const CancelToken&) override { return {}; }
+  void start_stream(const CancelToken&) override {}
+  void stop_stream() noexcept override {}
+  std::size_t read(std::span<Sample> out, const CancelToken& c) override {
+    clock_.sleep_for(static_cast<double>(out.size()) / hz_, c);
+    return out.size();
+  }
+  void set_filter(const FilterConfig&, const CancelToken&) override {}
+  FilterConfig get_filter(const CancelToken&) override { return {}; }
+  LinkStats stats() const override { return {}; }
+  void reset_stats() override {}
+  std::string describe() const override { return "paced fake DUT"; }
+  DutCommandChannel command_channel() const override { return {false, "no command channel (fake)"}; }
+
+ private:
+  SimClock& clock_;
+  double hz_;
+};
+
+}  // namespace
+
+// A DUT that streams at another rate than the profile's (500 Hz under ci's 1000 Hz), with no
+// command channel to declare its own: the recording's pace on the rig's clock says so and stops
+// the run as a configuration error, instead of stamping every capture with the wrong rate (an
+// integrator's review); at its rate, or 2 % off, it records.
+TEST(ProcedureWithoutPlant, ADutStreamingAtAnotherRateThanTheProfilesIsFoundByItsPace) {
+  const acceptance::Profile p = acceptance::load_profile("ci");
+  const std::string out = fs::temp_directory_path() / ("rignoplant-" + std::to_string(::getpid()) + "-pace");
+  fs::create_directories(out);
+  for (const double hz : {1000.0, 980.0, 500.0}) {
+    IdleTable table;
+    QuietIo io;
+    SimClock clock;
+    PacedDut dut(clock, hz);
+    Devices dev{table, dut, io, clock, "hardware"};
+    MeasurementSet values;
+    std::ostringstream logtext;
+    auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(logtext));
+    PhaseContext ctx{dev, CancelToken{}, values, out, log, nullptr, {}};
+    const std::string name = "in-run-U10-" + std::to_string(static_cast<int>(hz));
+    if (hz != 500.0) {
+      EXPECT_NO_THROW(acceptance::position_and_record(ctx, p, Orientation::U10, p.in_run_s, name, "SN"))
+          << hz << " Hz";
+      continue;
+    }
+    try {
+      acceptance::position_and_record(ctx, p, Orientation::U10, p.in_run_s, name, "SN");
+      ADD_FAILURE() << "a 500 Hz stream recorded as 1000 Hz";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(name + ": 40000 samples took 80 s of the rig's clock, 40 s at the "
+                                           "profile's rate_hz = 1000: the DUT streams at about 500 Hz"),
+                std::string::npos)
+          << e.what();
+    }
+  }
   fs::remove_all(out);
 }
