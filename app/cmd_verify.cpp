@@ -79,7 +79,7 @@ seal::Check check_run_folder_seal(const std::string& dir, const seal::Key& key) 
     };
     for (const std::string& f : entries_in(dir))
       if (std::none_of(c.files.begin(), c.files.end(), [&](const auto& s) { return s.first == f; }) && !named(f))
-        c.problems.push_back(f + ": not sealed (added after the seal)");
+        c.problems.push_back(shown_text(f) + ": not sealed (added after the seal)");  // a newline in a name is seen
     if (c.outcome.empty()) c.problems.push_back("seal.json: not a final seal (the run has not ended)");
     const bool passport_ok = std::any_of(c.files.begin(), c.files.end(), [](const auto& e) {
       return e.first == "passport.json" && e.second == seal::FileState::Ok;  // a regular file, as sealed
@@ -115,7 +115,7 @@ int do_verify(const std::string& dir, const std::string& key_path, bool given) {
                              : state == seal::FileState::Changed ? "CHANGED"
                              : state == seal::FileState::Missing ? "MISSING"
                                                                  : "NOT-FILE",
-                             f);
+                             shown_text(f));
   // A final seal the disk refused (the ending lists `seal`, no seal.json) is an ending not finished,
   // not a folder changed behind the station (a technician's review read tampering into it).
   const bool seal_owed = final_seal_owed(dir, c, *key);

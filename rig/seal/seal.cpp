@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/escape.hpp"
 #include "rig/core/lazy_library.hpp"
 
 namespace rig::seal {
@@ -207,10 +208,40 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
                          "; " + k.path + " is " + k.id + ")");
     return c;
   }
+  // The text the seal's MAC covers lists "path TAB mac NL": only a seal whose paths and outcome
+  // hold no control character and whose MACs are 64 hex digits reads back to one list. Without
+  // this, two entries could be folded into one whose path held "TAB mac NL" (the same text, the
+  // same MAC, no key needed) and both files deleted: rig verify said "verified" (an auditor's
+  // review). Nor does a seal carry a field rig does not write, or another algorithm's name.
+  const auto plain = [](const std::string& t) {
+    return std::none_of(t.begin(), t.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7F; });
+  };
+  const auto a_mac = [](const std::string& t) {
+    return t.size() == 64 && std::all_of(t.begin(), t.end(), [](char ch) { return (ch >= '0' && ch <= '9') || (ch >= 'a' && ch <= 'f'); });
+  };
+  for (const auto& [field, value] : j.items())
+    if (field != "schema" && field != "algorithm" && field != "key_id" && field != "outcome" && field != "files" &&
+        field != "seal") {
+      c.problems.push_back(seal_path + ": field '" + shown_text(field) + "' is not a rig.seal/1 field");
+      return c;
+    }
+  if (j.contains("algorithm") && j["algorithm"] != "HMAC-SHA256") {
+    c.problems.push_back(seal_path + ": algorithm " + shown_text(j["algorithm"].dump()) + ": rig seals with HMAC-SHA256");
+    return c;
+  }
+  if (!plain(j["outcome"].get<std::string>())) {
+    c.problems.push_back(seal_path + ": outcome '" + shown_text(j["outcome"].get<std::string>()) +
+                         "': a control character, which rig never writes");
+    return c;
+  }
   std::vector<std::pair<std::string, std::string>> files;
   for (const auto& [rel, mac] : j["files"].items()) {
-    if (!mac.is_string()) {
-      c.problems.push_back(seal_path + ": files." + rel + ": not a MAC");
+    if (!mac.is_string() || !a_mac(mac.get<std::string>())) {
+      c.problems.push_back(seal_path + ": files." + shown_text(rel) + ": not a MAC (64 hex digits)");
+      return c;
+    }
+    if (rel.empty() || !plain(rel)) {
+      c.problems.push_back(seal_path + ": files.'" + shown_text(rel) + "': not a path rig seals (a control character)");
       return c;
     }
     files.emplace_back(rel, mac.get<std::string>());

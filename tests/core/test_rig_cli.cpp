@@ -5633,9 +5633,10 @@ TEST(RigCli, ANewRunsFolderIsOneItCanOwnWhole) {
         << slurp(d + "/nested.stderr");
     EXPECT_FALSE(fs::exists(d + "/earlier/sub"));
   }
-  // An empty folder made beforehand takes a sealed run, which verifies; an unsealed run beside
-  // a stranger's file runs as before.
+  // An empty folder made beforehand takes a sealed run, which verifies (a hidden file there is
+  // left alone, as verify leaves it); an unsealed run beside a stranger's file runs as before.
   fs::create_directories(d + "/empty");
+  std::ofstream(d + "/empty/.gitkeep") << "";
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/empty", "--seal-key", key},
                 d + "/empty-io"),
             0)

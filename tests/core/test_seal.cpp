@@ -94,6 +94,59 @@ TEST(Seal, ACheckNamesWhatChangedWhatIsMissingAndWhatIsNotSealed) {
   fs::remove_all(d);
 }
 
+// Two entries folded into one whose path holds "TAB mac NL" give the same text under the seal's
+// MAC: without the key a forger dropped both files from the list and deleted them, and the check
+// said ok (an auditor's review). Paths and outcomes with control characters, MACs that are not 64
+// hex digits, fields rig does not write and another algorithm's name are refused.
+TEST(Seal, ASealWhoseListReadsBackTwoWaysIsRefused) {
+  const std::string d = folder("fold");
+  std::ofstream(d + "/a.txt") << "alpha";
+  std::ofstream(d + "/b.txt") << "beta";
+  std::ofstream(d + "/c.txt") << "gamma";
+  const Key k = key_of(std::string(32, 'k'));
+  const std::string text =
+      rig::seal::make_seal(d, k, {{"a.txt", "", false, ""}, {"b.txt", "", false, ""}, {"c.txt", "", false, ""}}, "PASS");
+  ASSERT_TRUE(rig::seal::check_seal(d, d + "/seal.json", k).problems.size() == 1u);  // no seal.json yet
+  const auto check = [&](const nlohmann::json& j) {
+    std::ofstream(d + "/seal.json") << j.dump();
+    return rig::seal::check_seal(d, d + "/seal.json", k);
+  };
+  const nlohmann::json good = nlohmann::json::parse(text);
+  EXPECT_TRUE(check(good).ok);
+  // a.txt and b.txt folded into one entry; the file of that name holds b.txt's bytes, both gone.
+  nlohmann::json folded = good;
+  const std::string ma = folded["files"]["a.txt"], mb = folded["files"]["b.txt"];
+  folded["files"].erase("a.txt");
+  folded["files"].erase("b.txt");
+  const std::string name = "a.txt\t" + ma + "\nb.txt";
+  folded["files"][name] = mb;
+  std::ofstream(d + "/" + name) << "beta";
+  fs::remove(d + "/a.txt");
+  fs::remove(d + "/b.txt");
+  const auto f = check(folded);
+  EXPECT_FALSE(f.ok);
+  ASSERT_EQ(f.problems.size(), 1u);
+  EXPECT_NE(f.problems[0].find("not a path rig seals (a control character)"), std::string::npos) << f.problems[0];
+  EXPECT_NE(f.problems[0].find("a.txt\\x09"), std::string::npos) << "shown, not sent: " << f.problems[0];
+  fs::remove(d + "/" + name);
+  std::ofstream(d + "/a.txt") << "alpha";
+  std::ofstream(d + "/b.txt") << "beta";
+  EXPECT_TRUE(check(good).ok);
+  nlohmann::json bad = good;
+  bad["files"]["c.txt"] = std::string(64, 'A');
+  EXPECT_NE(check(bad).problems.at(0).find("files.c.txt: not a MAC (64 hex digits)"), std::string::npos);
+  bad = good;
+  bad["outcome"] = "PASS\nc.txt";
+  EXPECT_NE(check(bad).problems.at(0).find("a control character, which rig never writes"), std::string::npos);
+  bad = good;
+  bad["note"] = "forged";
+  EXPECT_NE(check(bad).problems.at(0).find("field 'note' is not a rig.seal/1 field"), std::string::npos);
+  bad = good;
+  bad["algorithm"] = "NONE";
+  EXPECT_NE(check(bad).problems.at(0).find("rig seals with HMAC-SHA256"), std::string::npos);
+  fs::remove_all(d);
+}
+
 // A MAC already taken (`Entry::mac`, a record sealed once and carried) is sealed as it is: an
 // edit after it taken is never vouched for.
 TEST(Seal, AMacCarriedFromAnEarlierSealKeepsAnEditOut) {
