@@ -124,10 +124,13 @@ void refuse_a_folder_a_new_run_cannot_own(const std::string& dir, const std::str
   if (!sealed || taken_over || !fs::is_directory(here, ec)) return;
   std::vector<std::string> names;
   std::size_t count = 0;
-  // Hidden entries (.gitkeep) are left alone, as rig verify leaves them (a note, not a failure).
-  for (const auto& e : fs::directory_iterator(here, ec))
-    if (!e.path().filename().string().starts_with(".") && ++count <= 5)
-      names.push_back(shown_text(e.path().filename().string()));
+  // A hidden file (.gitkeep) is left alone, as rig verify leaves it (a note, not a failure); not a
+  // hidden link or folder, which a sealed run's resume refuses (a link there, or in it).
+  for (const auto& e : fs::directory_iterator(here, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.starts_with(".") && fs::is_regular_file(fs::symlink_status(e.path(), ec))) continue;
+    if (++count <= 5) names.push_back(shown_text(name));
+  }
   if (count == 0) return;
   throw ConfigError(fmt::format("{} {} holds {}{}, which the run does not write: a sealed run's folder holds its own "
                                 "files only (rig verify names any other as not sealed); move {} or choose a new or "

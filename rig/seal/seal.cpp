@@ -197,7 +197,7 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
     c.problems.push_back(seal_path + ": unreadable: " + e.what());
     return c;
   }
-  if (!j.is_object() || j.value("schema", "") != kSchema || !j.contains("files") || !j["files"].is_object() ||
+  if (!j.is_object() || !j.contains("schema") || j["schema"] != kSchema || !j.contains("files") || !j["files"].is_object() ||
       !j.contains("seal") || !j["seal"].is_string() || !j.contains("key_id") || !j["key_id"].is_string() ||
       !j.contains("outcome") || !j["outcome"].is_string()) {
     c.problems.push_back(seal_path + ": not a rig.seal/1 seal");
@@ -241,7 +241,8 @@ Check check_seal(const std::string& dir, const std::string& seal_path, const Key
       return c;
     }
     if (rel.empty() || !plain(rel)) {
-      c.problems.push_back(seal_path + ": files.'" + shown_text(rel) + "': not a path rig seals (a control character)");
+      c.problems.push_back(seal_path + ": files.'" + shown_text(rel) + "': not a path rig seals (" +
+                           (rel.empty() ? "empty" : "a control character") + ")");
       return c;
     }
     files.emplace_back(rel, mac.get<std::string>());

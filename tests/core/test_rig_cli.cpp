@@ -5637,6 +5637,12 @@ TEST(RigCli, ANewRunsFolderIsOneItCanOwnWhole) {
   // left alone, as verify leaves it); an unsealed run beside a stranger's file runs as before.
   fs::create_directories(d + "/empty");
   std::ofstream(d + "/empty/.gitkeep") << "";
+  // ... but not a hidden link, which the sealed run's resume would refuse (a re-check).
+  fs::create_directories(d + "/hidden-link");
+  fs::create_symlink("/etc", d + "/hidden-link/.cfg");
+  EXPECT_EQ(run({"run", "--profile", "ci", "--dry-run", "--out", d + "/hidden-link", "--seal-key", key}, d + "/hl"), 2);
+  EXPECT_NE(slurp(d + "/hl.stderr").find("holds .cfg, which the run does not write"), std::string::npos)
+      << slurp(d + "/hl.stderr");
   EXPECT_EQ(run({"run", "--profile", "ci", "--yes", "--quiet", "--no-history", "--out", d + "/empty", "--seal-key", key},
                 d + "/empty-io"),
             0)

@@ -142,6 +142,9 @@ TEST(Seal, ASealWhoseListReadsBackTwoWaysIsRefused) {
   bad["note"] = "forged";
   EXPECT_NE(check(bad).problems.at(0).find("field 'note' is not a rig.seal/1 field"), std::string::npos);
   bad = good;
+  bad["schema"] = 1;  // it ended rig verify with exit 4 and a JSON library's words (a re-check)
+  EXPECT_NE(check(bad).problems.at(0).find("not a rig.seal/1 seal"), std::string::npos);
+  bad = good;
   bad["algorithm"] = "NONE";
   EXPECT_NE(check(bad).problems.at(0).find("rig seals with HMAC-SHA256"), std::string::npos);
   fs::remove_all(d);
