@@ -255,14 +255,6 @@ void read_invocation(const std::string& path, const nlohmann::json& inv, RunArgs
   }
 }
 
-// On stderr, as the plan and the progress: stdout carries only the passport table, for scripts.
-// The signals are taken by SignalWatcher's thread (blocked here), so a plain read of the answer
-// never returned on Ctrl-C: the prompt kept waiting, and a "y" typed after it powered the DUT
-// (a technician's review). stdin is polled, and a signal ends the prompt as it ends a run.
-// The line is read from the descriptor byte by byte: a buffered reader could hold the next
-// answer where poll() does not see it.
-// An answer is y or yes, n or no (any case, blanks around), or Enter (the default, no); anything
-// else is asked again: "yet to fasten" confirmed a mount, and run.log said "yes" (a review).
 // Where the operator reads the questions: stderr, or the controlling terminal when stderr goes to
 // a file (a technician's `rig run ... > run.txt 2>&1` waited on questions only the file held,
 // a review); null without either.
@@ -272,6 +264,14 @@ std::ostream* prompt_out() {
   return tty.is_open() ? &tty : nullptr;
 }
 
+// On stderr (prompt_out), as the plan and the progress: stdout carries only the passport table, for scripts.
+// The signals are taken by SignalWatcher's thread (blocked here), so a plain read of the answer
+// never returned on Ctrl-C: the prompt kept waiting, and a "y" typed after it powered the DUT
+// (a technician's review). stdin is polled, and a signal ends the prompt as it ends a run.
+// The line is read from the descriptor byte by byte: a buffered reader could hold the next
+// answer where poll() does not see it.
+// An answer is y or yes, n or no (any case, blanks around), or Enter (the default, no); anything
+// else is asked again: "yet to fasten" confirmed a mount, and run.log said "yes" (a review).
 bool confirm(const std::string& question, const CancelToken& cancel) {
   std::ostream& out = *prompt_out();
   out << question << " [y/N] " << std::flush;
@@ -2473,7 +2473,8 @@ void add_run(CLI::App& app, int& rc) {
   // The codes a script branches on, in the help as in `rig report --help` (a technician's review).
   sub->footer("Exit codes: 0 PASS; 1 FAIL (a value outside its limits, or a limited value not measured); 2 usage or "
               "configuration error, found before any device opens (file, line and value named) or at bring-up (a DUT "
-              "reporting another --serial, U10/U20 outside the table's travel once homed), or a table or run "
+              "reporting another --serial, U10/U20 outside the table's travel once homed) or in a recording (a DUT "
+              "streaming at another rate than rate_hz), or a table or run "
               "folder another rig process holds; 3 aborted (a signal, the e-stop input, the operator); 4 hardware or "
               "link fault, or a run folder that cannot hold the run's records. A verdict is final once the run "
               "folder holds no .ending-pending (README, \"On a production line\").");
