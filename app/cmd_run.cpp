@@ -602,15 +602,7 @@ bool only_a_start(const std::string& dir) {
     // A log opened and killed before its first line: empty.
     if (!start.contains(name) && !(name == "run.log" && fs::file_size(e.path(), ec) == 0 && !ec)) return false;
   }
-  if (ec || !fs::is_regular_file(fs::symlink_status(fs::path(dir) / "run.json", ec))) return false;
-  try {
-    std::ifstream in(fs::path(dir) / "run.json");
-    const nlohmann::json j = parse_json_unique_keys(in);
-    return j.is_object() && j.contains("software") && j["software"].is_string() &&
-           j["software"].get<std::string>().starts_with("rig ");
-  } catch (const std::exception&) {
-    return false;
-  }
+  return !ec && holds_a_rig_run(dir);
 }
 
 // A new run never lands on an earlier one, whatever state it stopped in: run.json is written

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/core/errors.hpp"
+#include "rig/core/json_unique.hpp"
 #include "rig/core/escape.hpp"
 
 namespace rig::cli {
@@ -93,22 +94,18 @@ void refuse_a_run_log_it_cannot_write(const std::string& dir) {
                                 path, std::strerror(errno)));
 }
 
-namespace {
-// Whether `d` holds a rig run: its run.json written by rig (another tool's run.json, in a project
-// folder that holds run folders, is not one).
 bool holds_a_rig_run(const fs::path& d) {
   std::error_code ec;
-  if (!fs::is_regular_file(d / "run.json", ec)) return false;
+  if (!fs::is_regular_file(fs::symlink_status(d / "run.json", ec))) return false;
   try {
     std::ifstream in(d / "run.json");
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j = parse_json_unique_keys(in);
     return j.is_object() && j.contains("software") && j["software"].is_string() &&
            j["software"].get<std::string>().starts_with("rig ");
   } catch (const std::exception&) {
     return false;
   }
 }
-}  // namespace
 
 void refuse_a_folder_a_new_run_cannot_own(const std::string& dir, const std::string& option, bool sealed,
                                           bool taken_over) {

@@ -27,6 +27,9 @@ void prepare_run_folder(const std::string& dir, const std::string& option);
 // to append to (the file made immutable, its permission taken away): a ConfigError naming it and
 // the system's reason, before anything starts; the dry run's check too (touches nothing).
 void refuse_a_run_log_it_cannot_write(const std::string& dir);
+// Whether `d` holds a rig run: a regular run.json that rig wrote (its `software` "rig ..."; another
+// tool's run.json, in a project folder that holds run folders, is not one).
+bool holds_a_rig_run(const std::filesystem::path& d);
 // A new run's folder must be one the run owns whole: not inside another run's folder (an
 // ancestor holding rig's run.json: the new run's files would be that run's "added after the seal" for
 // rig verify), and, for a sealed run, holding nothing the run does not write (verify names every
