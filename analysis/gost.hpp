@@ -1,5 +1,7 @@
-// GOST R 8.736-2011 "direct multiple measurements": processing of the 100 s means
-// (bias, base error) and the in-run random component B by the (max - min)/2 rule (docs/method.md).
+// GOST R 8.736-2011 "direct multiple measurements": processing of the 100 s means (bias, base
+// error: mean, standard deviation, Student's interval, outliers). The in-run random component
+// B = (max - min)/2 is the Russian enterprises' practice the paper gives as conforming to that
+// standard; the standard itself has no half-range statistic (docs/method.md).
 #pragma once
 #include <cstddef>
 #include <span>

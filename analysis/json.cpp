@@ -92,12 +92,13 @@ json noise_terms_to_json(const an::NoiseTerms& t) {
   j["B_paper"] = term(t.B);
   j["B_lsq"] = term(t.wls.B);
   // The one model (noise_model.hpp): which terms the data support, the octave points it fitted
-  // with the model's EDF, its AICc, and every term's upper limit. Values come from the widest
-  // non-negative model; a term is reported when AICc selects it or its interval excludes 0.
+  // with the model's EDF, its AICc, and every term's upper limit. A term is reported when AICc
+  // selects it or the widest non-negative model's interval excludes 0; the values are those terms'
+  // model, fitted together.
   {
     json m{{"ok", t.model.ok},
-           {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance; values from the widest "
-                      "non-negative model, terms reported where AICc selects them or their interval excludes 0"},
+           {"method", "GLS on ln OADEV^2 at octave taus, model EDF and covariance; terms reported where AICc selects "
+                      "them or the widest non-negative model's interval excludes 0, their values fitted together"},
            {"aicc", t.model.aicc}, {"chi2_per_dof", t.model.chi2_per_dof}, {"gof_p", t.model.gof_p},
            {"dropped_short", t.model.dropped_short}, {"long_tau_misfit", t.model.long_tau_misfit},
            {"model_error", t.model.model_error},

@@ -11,10 +11,12 @@
 // octave points is each power law's (measured, kOctaveCorr in the .cpp) mixed by the terms'
 // shares. Every subset of the five terms is fitted (non-negative) and the least AICc (Akaike's
 // criterion with the small-sample correction) is the model the goodness of fit is tested on. The
-// VALUES and bounds come from the widest non-negative model on the points (all five terms,
-// theta >= 0, NNLS over the subsets: a term the AICc model leaves out would land in its
-// neighbours, R on 6 h read 1.6x with K left out), with the covariance of the model plus every
-// term left out at its upper limit (a term the data cannot exclude still scatters the points).
+// widest non-negative model on the points (all five terms, theta >= 0, NNLS over the subsets: a
+// term the AICc model leaves out would land in its neighbours, R on 6 h read 1.6x with K left
+// out) says which terms are reported, with the covariance of the model plus every term left out
+// at its upper limit (a term the data cannot exclude still scatters the points); the VALUES are
+// the reported terms' model refitted on that covariance (a term the widest model holds but cannot
+// tell from 0, Q on a record without it, took a share of N there), and the bounds theirs.
 // The bounds hold over every plausible model too (AICc within 2 of the least, Burnham &
 // Anderson): a term one of them does without has 0 as its lower bound, and a null's upper limit
 // covers what they read for it (collinear terms, K against B + R on one hour, otherwise give
@@ -43,7 +45,7 @@ struct NoiseModelFit {
   std::string reason;
   // per term Q, N, B, K, R (the order of theta above)
   std::array<bool, 5> in_model{};      // reported: selected by AICc or its interval excludes 0
-  std::array<double, 5> value{};       // sqrt(theta) of the widest model (0 when not reported)
+  std::array<double, 5> value{};       // sqrt(theta) of the reported terms' model (0 when not reported)
   std::array<double, 5> lo{}, hi{};    // bounds at `confidence` (in the model)
   std::array<double, 5> upper{};       // every term: upper limit (the interval's upper end)
   std::array<double, 5> upper_method{};  // a null's upper limit at one sigma, whatever `confidence`:

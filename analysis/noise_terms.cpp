@@ -150,7 +150,7 @@ WlsFit wls_from_model(const NoiseModelFit& m) {
       t.value = m.value[k];
       t.lo = m.lo[k];
       t.hi = m.hi[k];
-      t.reason = std::string("model (GLS on the octave Allan points, widest non-negative model; AICc or interval excludes 0)") + range;
+      t.reason = std::string("model (GLS on the octave Allan points; the terms AICc or the widest non-negative model's interval supports, fitted together)") + range;
     } else {
       null_with_limit(t, k, "not supported by the data (AICc; interval includes 0)" + range, m.upper[k]);
     }

@@ -23,6 +23,7 @@
 
 #include "rig/core/escape.hpp"
 #include "rig/core/errors.hpp"
+#include "rig/core/number_text.hpp"
 
 namespace rig::cli {
 
@@ -30,15 +31,27 @@ namespace an = rig::analysis;
 
 namespace {
 
-std::string shown(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.17g", x);
-  return b;
-}
+// The shortest text that reads back as x ("1e+300", not "1.0000000000000001e+300": a review).
+std::string shown(double x) { return shortest_text(x); }
 
 // Why a value the checks refused is refused.
 std::string refusal(double x) {
   return std::isfinite(x) ? shown(x) + " is beyond +-2^333 = 1.7e100 (not a measurement)" : shown(x) + " is not a finite number";
+}
+
+// What a refused binary file may be instead, by its first bytes: said only beside a refusal (a
+// raw float file may start with any bytes), where "value 1 is 1.07e+202" sent a capture given
+// --input f64 nowhere (a review).
+std::string another_format(std::string_view head) {
+  if (head.starts_with(std::string_view(capture::kMagic, sizeof capture::kMagic)))
+    return "; the file starts as a capture file (rig.capture/1): read it with --input capture";
+  if (head.starts_with("\x1F\x8B")) return "; the file starts as gzip does: decompress it first (zcat FILE > record)";
+  return "";
+}
+std::string another_format(int fd) {
+  char b[8] = {};
+  const ssize_t got = ::pread(fd, b, sizeof b, 0);
+  return got > 0 ? another_format(std::string_view(b, static_cast<std::size_t>(got))) : "";
 }
 
 }  // namespace
@@ -162,8 +175,8 @@ void F64File::check_new(std::uint64_t pos, std::span<const double> v) const {
 
 void F64File::check(std::uint64_t pos, std::span<const double> v) const {
   if (const auto bad = an::first_unusable(v))
-    throw InputError(path_ + ": value " + std::to_string(pos + *bad) + " (byte " + std::to_string((pos + *bad) * 8) +
-                     ") " + refusal(v[*bad]));
+    throw InputError(path_ + ": value " + std::to_string(pos + *bad) + " (counted from 0; byte " + std::to_string((pos + *bad) * 8) +
+                     ") " + refusal(v[*bad]) + another_format(fd_));
 }
 
 std::vector<double> read_f32(const std::string& path) {
@@ -180,8 +193,10 @@ std::vector<double> read_f32(const std::string& path) {
   static_assert(std::endian::native == std::endian::little, "float32 files are little-endian, as this host");
   std::vector<double> v(raw.begin(), raw.end());  // every float is a double exactly
   if (const auto bad = an::first_unusable(v))
-    throw InputError(path + ": value " + std::to_string(*bad) + " (byte " + std::to_string(*bad * 4) + ") " +
-                     refusal(v[*bad]));
+    throw InputError(path + ": value " + std::to_string(*bad) + " (counted from 0; byte " + std::to_string(*bad * 4) + ") " +
+                     refusal(v[*bad]) +
+                     another_format(std::string_view(reinterpret_cast<const char*>(raw.data()),
+                                                     std::min<std::size_t>(8, raw.size() * 4))));
   return v;
 }
 
@@ -376,13 +391,17 @@ bool underflows(std::string_view num) {
 // shows as nothing as \xNN.
 std::string quoted_bytes(std::string_view s) { return shown_text(s); }
 
+namespace {
+std::vector<double> read_lines(std::istream& in, const std::string& path, bool from_stdin, std::size_t* blank_between);
+}  // namespace
+
 std::vector<double> read_text(const std::string& path, std::size_t* blank_between) {
   if (path == "-") {
     // An ifstream on the descriptor, not std::cin: cin, synced with C stdio, reads a third as fast.
     if (::isatty(STDIN_FILENO)) std::cerr << "rig analyze: reading values from standard input (end with Ctrl-D)\n";
     std::ifstream in("/dev/stdin");
     if (!in) throw InputError(std::string("stdin: cannot open: ") + std::strerror(errno));
-    return read_text(in, "stdin", blank_between);
+    return read_lines(in, "stdin", true, blank_between);
   }
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
@@ -435,11 +454,19 @@ bool si_grouped(std::string_view tok) {
 
 // Why a line that is not a decimal number is refused: the value quoted (an excerpt), and what
 // the line looks like where it says more than the value (a binary file, a byte-order mark).
-std::string not_a_number(std::string_view line, std::string_view tok) {
+std::string not_a_number(std::string_view line, std::string_view tok, bool from_stdin) {
   std::string why = "not a decimal number: " + excerpt(tok);
   const auto lookalike = std::find_if(std::begin(kLookalikes), std::end(kLookalikes),
                                       [tok](const auto& l) { return tok.find(l.first) != std::string_view::npos; });
-  if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)";
+  // Standard input carries text only: the hint is the file's path (a review: "- --input f64",
+  // as the file's hint said, is refused).
+  if (looks_binary(line) && from_stdin)
+    why += "; the input looks binary: raw float64 or float32 is read from its file (give the file's path with --input "
+           "f64 or --input f32; standard input carries text only)";
+  else if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)";
+  // Lines ended by CR alone (classic Mac OS) read as one line holding every value (a review).
+  else if (tok.find('\r') != std::string_view::npos)
+    why += "; its lines end in CR alone (classic Mac OS): end them in LF first, e.g. tr '\\r' '\\n' < FILE > record";
   else if (lookalike != std::end(kLookalikes))
     why += std::string("; it holds ") + std::string(lookalike->second) +
            ", which spreadsheets and word processors write in numbers: the record's numbers take ASCII digits, "
@@ -491,6 +518,12 @@ std::string not_a_number(std::string_view line, std::string_view tok) {
 }  // namespace
 
 std::vector<double> read_text(std::istream& in, const std::string& path, std::size_t* blank_between) {
+  return read_lines(in, path, false, blank_between);
+}
+
+namespace {
+// `from_stdin`: the lines are standard input's, whose hints name a file instead (it carries text only).
+std::vector<double> read_lines(std::istream& in, const std::string& path, bool from_stdin, std::size_t* blank_between) {
   std::vector<double> v;
   std::string buffer;
   std::size_t blank = 0, blank_run = 0;  // blank lines since the last value (a comment line is not one)
@@ -499,6 +532,9 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
     // A capture file given without --input capture: say so, not "not a decimal number: 'RIGCAP1'".
     if (lineno == 1 && line == std::string_view(capture::kMagic, sizeof capture::kMagic - 1))
       throw InputError(path + ": a capture file (rig.capture/1): read it with --input capture");
+    // gzip's magic: no text starts with it (said as such, not as a binary float file: a review).
+    if (lineno == 1 && line.starts_with("\x1F\x8B"))
+      throw InputError(path + ": a gzip file: decompress it first (zcat FILE > record, or zcat FILE | rig analyze -)");
     // A UTF-8 byte-order mark, which Windows editors write at the start, is no part of the data.
     if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
     // UTF-16's byte-order mark: bytes no UTF-8 text starts with, so the mark alone says it (a file
@@ -538,13 +574,14 @@ std::vector<double> read_text(std::istream& in, const std::string& path, std::si
       throw InputError(where() + excerpt(tok) +
                        (underflows(num) ? " is nearer 0 than the smallest double, 4.9e-324 (not a measurement)"
                                          : " is beyond the range of a double"));
-    if (ec != std::errc() || end != num.data() + num.size()) throw InputError(where() + not_a_number(buffer, tok));
+    if (ec != std::errc() || end != num.data() + num.size()) throw InputError(where() + not_a_number(buffer, tok, from_stdin));
     if (!(std::fabs(x) < an::kMaxMagnitude)) throw InputError(where() + excerpt(tok) + ": " + refusal(x));
     v.push_back(x);
   }
   if (blank_between) *blank_between = blank;
   return v;
 }
+}  // namespace
 
 // The capture reader's own refusals (not a capture, a header CRC mismatch) are the record's
 // (a re-test: they still read "configuration error").
@@ -589,7 +626,7 @@ CaptureData read_capture(const std::string& path, const std::string& channel) {
     std::string where;
     for (const auto& note : c.recovery.notes)  // the reader located the first ones by file offset
       if (note.find(": sample " + std::to_string(*bad) + " ") != std::string::npos) where = " (" + note + ")";
-    throw InputError(path + ": sample " + std::to_string(*bad) + " of channel " + channel + " " +
+    throw InputError(path + ": sample " + std::to_string(*bad) + " (counted from 0) of channel " + channel + " " +
                      refusal(c.values[*bad]) + where + "; " + std::to_string(c.recovery.non_finite) +
                      " sample(s) with a non-finite value in the capture" +
                      (c.recovery.y_absent ? ", " + std::to_string(c.recovery.y_absent) + " with y NaN" : ""));

@@ -716,6 +716,18 @@ double planned_device_s(const std::vector<Phase>& phases) {
   return total;
 }
 
+// The nearest existing ancestor of the run folder must take a new file. access() says yes to root
+// on any directory of a writable mount, /proc's included; a file actually made there does not.
+// O_TMPFILE makes one with no name, gone at close (nothing touched); a filesystem without it gets
+// a named probe, removed at once. The run and its dry run say it alike, before the disk's room (a
+// run into /proc was told "0 MB free", its dry run "not writable": a review).
+void refuse_an_unwritable_place(const std::string& dir, const std::string& option) {
+  std::error_code ec;
+  const fs::path p = nearest_existing(fs::absolute(dir, ec));
+  if (fs::is_directory(p, ec) && !can_create_file_in(p))
+    throw ConfigError(option + " " + dir + ": the run folder is not writable (" + p.string() + ")");
+}
+
 // --dry-run touches nothing, yet says whether the run could write its folder: the nearest
 // existing ancestor of --out must be a directory this process may write into, and a new run
 // must not land on an earlier one (the checks prepare_run_folder and do_run make for real).
@@ -727,11 +739,7 @@ bool check_run_folder(const std::string& dir, bool new_run_here, const std::stri
   const fs::path p = nearest_existing(fs::absolute(dir, ec));
   if (!fs::is_directory(p, ec))
     throw ConfigError(option + " " + dir + ": cannot create the run folder: " + p.string() + " is not a directory");
-  // access() says yes to root on any directory of a writable mount, /proc's included; a file
-  // actually made there does not. O_TMPFILE makes one with no name, gone at close (nothing
-  // touched); a filesystem without it gets a named probe, removed at once.
-  if (!can_create_file_in(p))
-    throw ConfigError(option + " " + dir + ": the run folder is not writable (" + p.string() + ")");
+  refuse_an_unwritable_place(dir, option);
   return new_run_here && refuse_an_earlier_run(dir, profile_source);
 }
 
@@ -2124,6 +2132,7 @@ TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optio
   TakenFolder taken;
   taken.made_here = a.out.empty();
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
+  refuse_an_unwritable_place(a.out, a.resume.empty() ? "--out" : "--resume");
   (void)check_room(a.out, a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
   // Before the operator is asked anything, and before prepare_run_folder's write probe touches
   // the earlier run's folder (nor a folder another run holds: its lock is taken first).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 
@@ -71,6 +72,11 @@ nlohmann::ordered_json to_json(const Measurement& m) {
                    {"limits", nullptr}, {"outcome", to_string(m.outcome)}, {"reason", m.shown_reason()}};
   if (m.limits) j["limits"] = {m.limits->first, m.limits->second};
   if (!m.description.empty()) j["description"] = m.description;
+  // A class index is an integer (docs/contracts.md): 2, not 2.0, which a reader typed for an
+  // integer (Go's encoding/json into int) refuses (an automation engineer's review).
+  if (m.name == "accuracy_class" && j["value"].is_number_float() && j["value"].get<double>() == std::floor(j["value"].get<double>()) &&
+      std::abs(j["value"].get<double>()) < 1e9)
+    j["value"] = static_cast<std::int64_t>(j["value"].get<double>());
   return j;
 }
 

@@ -459,6 +459,10 @@ TEST(RigCli, CiProfileEndToEnd) {
   }
   EXPECT_FALSE(p["values"].contains("in_run_b_gost_100s")) << "the ci profile has no 100 s blocks";
   EXPECT_TRUE(p["values"]["bias"]["value"].is_number());
+  // The class index is a JSON integer (docs/contracts.md), "2" in the text, not "2.0".
+  EXPECT_TRUE(p["values"]["accuracy_class"]["value"].is_number_integer()) << p["values"]["accuracy_class"].dump();
+  EXPECT_NE(slurp(d + "/run/passport.json").find("\"value\": " + p["values"]["accuracy_class"]["value"].dump() + ","),
+            std::string::npos);
   EXPECT_TRUE(p["values"]["r"]["value"].is_null()) << "R cannot be identified from 60 s";
   EXPECT_FALSE(p["values"]["r"]["reason"].get<std::string>().empty());
   const std::string junit = slurp(d + "/run/junit.xml");
@@ -855,7 +859,7 @@ TEST(RigCli, AnalyzeReadsFloat32Files) {
   y[77] = std::numeric_limits<float>::quiet_NaN();
   write(d + "/bad.f32", y.data(), y.size() * 4);
   EXPECT_EQ(run({"analyze", d + "/bad.f32"}, d + "/bad"), 2);
-  EXPECT_NE(slurp(d + "/bad.stderr").find("bad.f32: value 77 (byte 308) nan is not a finite number"), std::string::npos)
+  EXPECT_NE(slurp(d + "/bad.stderr").find("bad.f32: value 77 (counted from 0; byte 308) nan is not a finite number"), std::string::npos)
       << slurp(d + "/bad.stderr");
   write(d + "/odd.f32", y.data(), 10);
   EXPECT_EQ(run({"analyze", d + "/odd.f32"}, d + "/odd"), 2);
@@ -1185,7 +1189,7 @@ TEST(RigCli, AnalyzeF64FileOptionsAndBadValues) {
   EXPECT_EQ(run({"analyze", d + "/ok.f64", "--confidence", "1.5"}, d + "/cf"), 2);
   EXPECT_NE(slurp(d + "/cf.stderr").find("--confidence"), std::string::npos) << slurp(d + "/cf.stderr");
   EXPECT_EQ(run({"analyze", d + "/inf.f64"}, d + "/nf"), 2);
-  EXPECT_NE(slurp(d + "/nf.stderr").find("value 31337 (byte 250696)"), std::string::npos) << slurp(d + "/nf.stderr");
+  EXPECT_NE(slurp(d + "/nf.stderr").find("value 31337 (counted from 0; byte 250696)"), std::string::npos) << slurp(d + "/nf.stderr");
 }
 
 // A mapped file of 2^19 values or more is populated and checked in two halves on two threads:
@@ -1203,9 +1207,9 @@ TEST(RigCli, AnalyzeLargeF64FileReportsItsFirstBadValueFromEitherHalf) {
   v[17] = 1e200;  // and one in the lower half, which comes first
   write("both.f64");
   EXPECT_EQ(run({"analyze", d + "/upper.f64", "--no-psd"}, d + "/u"), 2);
-  EXPECT_NE(slurp(d + "/u.stderr").find("value 900001 (byte 7200008) nan"), std::string::npos) << slurp(d + "/u.stderr");
+  EXPECT_NE(slurp(d + "/u.stderr").find("value 900001 (counted from 0; byte 7200008) nan"), std::string::npos) << slurp(d + "/u.stderr");
   EXPECT_EQ(run({"analyze", d + "/both.f64", "--no-psd"}, d + "/b"), 2);
-  EXPECT_NE(slurp(d + "/b.stderr").find("value 17 (byte 136)"), std::string::npos) << slurp(d + "/b.stderr");
+  EXPECT_NE(slurp(d + "/b.stderr").find("value 17 (counted from 0; byte 136)"), std::string::npos) << slurp(d + "/b.stderr");
 }
 
 // --no-oadev: the requested deviation alone, the same values as with OADEV beside it; no "oadev",
@@ -1271,7 +1275,7 @@ TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
         .write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 8));
   }
   EXPECT_EQ(run({"analyze", d + "/big.f64", "--no-psd"}, d + "/bf"), 2);
-  EXPECT_NE(slurp(d + "/bf.stderr").find("value 4321 (byte 34568)"), std::string::npos) << slurp(d + "/bf.stderr");
+  EXPECT_NE(slurp(d + "/bf.stderr").find("value 4321 (counted from 0; byte 34568)"), std::string::npos) << slurp(d + "/bf.stderr");
   // Fewer values than the default PSD segment (256): analysed, no PSD, a note says why (issue 12,
   // 7); a --segment the record cannot fill is refused before the analysis, saying what would do.
   text("short.txt", "1", 100);
@@ -1301,7 +1305,7 @@ TEST(RigCli, AnalyzeReadersRefuseUnusableValuesAndReadDecimalNumbers) {
     w.close();
   }
   EXPECT_EQ(run({"analyze", d + "/nan.cap", "--input", "capture", "--no-psd"}, d + "/nc"), 2);
-  EXPECT_NE(slurp(d + "/nc.stderr").find("sample 2500 of channel x"), std::string::npos) << slurp(d + "/nc.stderr");
+  EXPECT_NE(slurp(d + "/nc.stderr").find("sample 2500 (counted from 0) of channel x"), std::string::npos) << slurp(d + "/nc.stderr");
   EXPECT_NE(slurp(d + "/nc.stderr").find("offset "), std::string::npos) << slurp(d + "/nc.stderr");
   // The other channel is clean: analysed, the capture's count reported.
   ASSERT_EQ(run({"analyze", d + "/nan.cap", "--input", "capture", "--no-psd", "--channel", "y", "--json", d + "/y.json"},
@@ -1513,7 +1517,8 @@ TEST(RigCli, AnalyzeNoBoundsChangesNoValue) {
             std::string::npos)
       << unbounded["notes"].dump();
   // Under B, how it was read: here the model's own, no curve reading to compare it with.
-  EXPECT_NE(slurp(d + "/b.stdout").find("  B = 7.9787e-06 g  [0.0000e+00, 9.9862e-06]\n      read by the model's (least "
+  // (7.9787e-06 [0, 9.9862e-06] until the reported terms' values were refitted alone, 2026-12-07.)
+  EXPECT_NE(slurp(d + "/b.stdout").find("  B = 8.2257e-06 g  [0.0000e+00, 9.1692e-06]\n      read by the model's (least "
                                         "squares)\n"),
             std::string::npos)
       << slurp(d + "/b.stdout");
@@ -1661,7 +1666,10 @@ TEST(RigCli, AnalyzeShowsEveryValueAsTyped) {
       {{"--rate", "1000000.4"}, "--rate 1000000.4: the sample rate must be in [1e-06, 1e+06] Hz"},
       {{"--rate", "2000000"}, "--rate 2000000: the sample rate must be in [1e-06, 1e+06] Hz"},
       {{"--overlap", "0.9500001"}, "--overlap 0.9500001: the PSD segment overlap must be in [0, 0.95]"},
-      {{"--confidence", "1.0000001"}, "--confidence 1.0000001: must be in (0, 1)"}};
+      {{"--confidence", "1.0000001"}, "--confidence 1.0000001: must be in (0, 0.999999999]"},
+      // Nearer 1 the long-tau statistics' chi-square quantiles overflowed: exit 4 (a review).
+      {{"--confidence", "0.9999999999999999", "--dev", "theoh"},
+       "--confidence 0.9999999999999999: must be in (0, 0.999999999]"}};
   int i = 0;
   for (const auto& [opt, expect] : cases) {
     const std::string err = analyze_refused(d + "/v.txt", opt, d + "/io" + std::to_string(i++));
@@ -1669,6 +1677,13 @@ TEST(RigCli, AnalyzeShowsEveryValueAsTyped) {
   }
   ASSERT_EQ(run({"analyze", d + "/v.txt", "--rate", "1", "--confidence", "0.9999999", "--dev", "mtot"}, d + "/c"), 0)
       << slurp(d + "/c.stderr");
+  {
+    std::ofstream w(d + "/w.txt");  // TheoH needs 90 phase points
+    for (int k = 0; k < 200; ++k) w << std::sin(0.7 * k * k) << "\n";
+  }
+  for (const char* dev : {"totdev", "theo1", "theoh", "mtot", "htot"})  // the highest level taken
+    EXPECT_EQ(run({"analyze", d + "/w.txt", "--rate", "1", "--confidence", "0.999999999", "--dev", dev}, d + "/top"), 0)
+        << dev << slurp(d + "/top.stderr");
   EXPECT_NE(slurp(d + "/c.stdout").find("oadev (bounds 0.9999999):"), std::string::npos) << slurp(d + "/c.stdout");
   EXPECT_NE(slurp(d + "/c.stdout").find("mtot (bounds 0.9999999):"), std::string::npos) << slurp(d + "/c.stdout");
   ASSERT_EQ(run({"analyze", d + "/v.txt", "--rate", "1"}, d + "/one"), 0) << slurp(d + "/one.stderr");
@@ -1867,6 +1882,30 @@ TEST(RigCli, AnalyzeInputMessagesSayWhatIsWrongWithTheLine) {
   EXPECT_NE(err.find("...' ("), std::string::npos) << err;
   EXPECT_NE(err.find("the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)"), std::string::npos) << err;
   EXPECT_LT(err.size(), 400u) << err;
+  // Other formats said as what they are (an instrument engineer's review): standard input's hint
+  // is the file (it carries text only), a gzip file is decompressed first, CR-only lines are
+  // converted, a capture given --input f64 is read with --input capture.
+  EXPECT_EQ(run({"analyze", "-", "--rate", "1"}, d + "/bin-in", d + "/w.f64"), 2);
+  EXPECT_NE(slurp(d + "/bin-in.stderr").find("the input looks binary: raw float64 or float32 is read from its file"),
+            std::string::npos)
+      << slurp(d + "/bin-in.stderr");
+  std::ofstream(d + "/g.txt.gz", std::ios::binary) << std::string("\x1F\x8B\x08\x00\x00\x00\x00\x00\x00\x03", 10) << "x";
+  EXPECT_EQ(run({"analyze", d + "/g.txt.gz", "--input", "text"}, d + "/gz"), 2);
+  EXPECT_NE(slurp(d + "/gz.stderr").find("g.txt.gz: a gzip file: decompress it first"), std::string::npos)
+      << slurp(d + "/gz.stderr");
+  std::ofstream(d + "/mac.txt") << "1\r2\r3\r4\r";
+  EXPECT_EQ(run({"analyze", d + "/mac.txt"}, d + "/mac"), 2);
+  EXPECT_NE(slurp(d + "/mac.stderr").find("its lines end in CR alone (classic Mac OS)"), std::string::npos)
+      << slurp(d + "/mac.stderr");
+  {  // a capture's header, then values no record holds: read as float64, the refusal says what it is
+    std::ofstream c(d + "/c.cap", std::ios::binary);
+    c.write(rig::capture::kMagic, sizeof rig::capture::kMagic);
+    for (const double x : {1e202, 1.0, 2.0}) c.write(reinterpret_cast<const char*>(&x), sizeof x);
+  }
+  EXPECT_EQ(run({"analyze", d + "/c.cap", "--input", "f64", "--rate", "1"}, d + "/capf64"), 2);
+  EXPECT_NE(slurp(d + "/capf64.stderr").find("the file starts as a capture file (rig.capture/1): read it with --input capture"),
+            std::string::npos)
+      << slurp(d + "/capf64.stderr");
 }
 
 TEST(RigCli, SigintAbortsIntoTheSafeStateAndKeepsMeasurements) {
@@ -2722,7 +2761,7 @@ TEST(RigCli, ARunStoppedAtItsEndingIsFinishedByItsResume) {
     rj["started"] = whole["started"];
     std::ofstream(f + "/run.json") << rj.dump(1);
     const std::string why = fs::exists(f + "/checkpoint.json")
-                                ? "values.accuracy_class.value is 2.0, but its run's checkpoint.json holds no measurement"
+                                ? "values.accuracy_class.value is 2, but its run's checkpoint.json holds no measurement"
                                 : "its run's checkpoint.json, which holds what the run measured, is missing";
     EXPECT_EQ(run({"run", "--resume", f, "--yes", "--quiet"}, f + "-io"), 2) << stopped;
     EXPECT_NE(slurp(f + "-io.stderr").find(f + "/passport.json: " + why), std::string::npos) << slurp(f + "-io.stderr");
@@ -5050,6 +5089,12 @@ TEST(DryRun, OutMustBeWritable) {
     EXPECT_NE(slurp(d + "/io3.stderr").find("--out /proc/rig-run: the run folder is not writable"),
               std::string::npos)
         << slurp(d + "/io3.stderr");
+    // The run itself says the same, not "0 MB free" (its room check came first: a review).
+    EXPECT_EQ(run({"run", "--profile", "ci", "-y", "--no-history", "--out", "/proc/rig-run"}, d + "/io4"), 2)
+        << slurp(d + "/io4.stderr");
+    EXPECT_NE(slurp(d + "/io4.stderr").find("--out /proc/rig-run: the run folder is not writable"),
+              std::string::npos)
+        << slurp(d + "/io4.stderr");
   }
 }
 
@@ -6999,7 +7044,8 @@ TEST(RigCli, AsAUserWithoutRootPermissionsAreCheckedAndNamed) {
   says("history", "history database " + d + "/secret/h.sqlite" + denied);
   // Writing: judged by the user's permissions, before anything runs.
   EXPECT_EQ(as_user(home, "run --profile ci --yes --no-history --out " + d + "/ro/run", "out"), 2);
-  says("out", "--out " + d + "/ro/run: cannot create the run folder: Permission denied");
+  // As its dry run says it (before the disk's room: a review found /proc's "0 MB free").
+  says("out", "--out " + d + "/ro/run: the run folder is not writable (" + d + "/ro)");
   EXPECT_EQ(as_user(home, "run --profile ci --yes --dry-run --db sqlite:" + d + "/ro/h.sqlite", "db"), 2);
   says("db", "history database " + d + "/ro/h.sqlite: cannot be created (" + d + "/ro is not a writable folder)");
   EXPECT_EQ(as_user(home, "analyze " + d + "/rw/y.txt --rate 100 --json " + d + "/ro/a.json", "json-folder"), 2);
