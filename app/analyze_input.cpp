@@ -48,10 +48,19 @@ std::string another_format(std::string_view head) {
   if (head.starts_with("\x1F\x8B")) return "; the file starts as gzip does: decompress it first (zcat FILE > record)";
   return "";
 }
-std::string another_format(int fd) {
+std::string head_of(int fd) {
   char b[8] = {};
   const ssize_t got = ::pread(fd, b, sizeof b, 0);
-  return got > 0 ? another_format(std::string_view(b, static_cast<std::size_t>(got))) : "";
+  return got > 0 ? std::string(b, static_cast<std::size_t>(got)) : std::string();
+}
+std::string another_format(int fd) { return another_format(head_of(fd)); }
+
+// A raw float file that starts with the capture's eight magic bytes ("RIGCAP1\n") is a capture:
+// as float32 its header and blocks read as finite nonsense, exit 0 (a newcomer's review). No
+// record of measurements starts with those bytes.
+void refuse_a_capture_read_raw(const std::string& path, std::string_view head, const char* as) {
+  if (head.starts_with(std::string_view(capture::kMagic, sizeof capture::kMagic)))
+    throw InputError(path + ": a capture file (rig.capture/1), not raw " + as + ": read it with --input capture");
 }
 
 }  // namespace
@@ -80,8 +89,10 @@ void F64File::open_and_check(std::size_t map_limit_bytes, bool check_in_pass) {
   if (fd_ < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
   struct stat st {};
   if (::fstat(fd_, &st) != 0) throw InputError(path + ": cannot stat: " + std::strerror(errno));
+  refuse_a_capture_read_raw(path, head_of(fd_), "float64");
   if (st.st_size % 8 != 0)
-    throw InputError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)");
+    throw InputError(path + ": size " + std::to_string(st.st_size) + " bytes is not a multiple of 8 (float64)" +
+                     another_format(fd_));
   n_ = static_cast<std::uint64_t>(st.st_size) / 8;
   const std::size_t bytes = static_cast<std::size_t>(st.st_size);
   if (bytes > 0 && bytes <= map_limit_bytes) {
@@ -185,8 +196,15 @@ std::vector<double> read_f32(const std::string& path) {
   in.seekg(0, std::ios::end);
   const auto size = static_cast<std::uint64_t>(in.tellg());
   in.seekg(0);
+  char head[8] = {};
+  in.read(head, sizeof head);
+  const std::string_view first(head, static_cast<std::size_t>(in.gcount()));
+  in.clear();
+  in.seekg(0);
+  refuse_a_capture_read_raw(path, first, "float32");
   if (size % 4 != 0)
-    throw InputError(path + ": size " + std::to_string(size) + " bytes is not a multiple of 4 (float32)");
+    throw InputError(path + ": size " + std::to_string(size) + " bytes is not a multiple of 4 (float32)" +
+                     another_format(first));
   std::vector<float> raw(size / 4);
   if (!in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(size)))
     throw InputError(path + ": cannot read: " + std::strerror(errno));
@@ -464,9 +482,6 @@ std::string not_a_number(std::string_view line, std::string_view tok, bool from_
     why += "; the input looks binary: raw float64 or float32 is read from its file (give the file's path with --input "
            "f64 or --input f32; standard input carries text only)";
   else if (looks_binary(line)) why += "; the file looks binary (raw float64 is read with --input f64, raw float32 with --input f32)";
-  // Lines ended by CR alone (classic Mac OS) read as one line holding every value (a review).
-  else if (tok.find('\r') != std::string_view::npos)
-    why += "; its lines end in CR alone (classic Mac OS): end them in LF first, e.g. tr '\\r' '\\n' < FILE > record";
   else if (lookalike != std::end(kLookalikes))
     why += std::string("; it holds ") + std::string(lookalike->second) +
            ", which spreadsheets and word processors write in numbers: the record's numbers take ASCII digits, "
@@ -541,6 +556,13 @@ std::vector<double> read_lines(std::istream& in, const std::string& path, bool f
     // whose first line is blank has nothing after the mark on this line to look at: a code review).
     if (lineno == 1 && (line.starts_with("\xFF\xFE") || line.starts_with("\xFE\xFF")))
       throw InputError(utf16_refusal(path, line[0] == '\xFF' ? "\\xFF\\xFE" : "\\xFE\\xFF"));
+    // A CR before the line's end: lines ended by CR alone (classic Mac OS), read as one line, or a
+    // comment that would swallow every value after it (a newcomer's review: "# x\r4\r5\r" lost
+    // two values, exit 0). Refused, naming the line, before a comment is cut.
+    if (const auto cr = line.find('\r'); cr != std::string_view::npos && cr + 1 < line.size())
+      throw InputError(path + ":" + std::to_string(lineno) + ": a CR inside the line (" + excerpt(line) +
+                       "): its lines end in CR alone (classic Mac OS)? end them in LF first, e.g. tr '\\r' "
+                       "'\\n' < FILE > record");
     const auto hash = line.find('#');
     const bool comment = hash != std::string_view::npos;
     if (comment) line = line.substr(0, hash);
