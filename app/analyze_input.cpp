@@ -39,14 +39,10 @@ std::string refusal(double x) {
   return std::isfinite(x) ? shown(x) + " is beyond +-2^333 = 1.7e100 (not a measurement)" : shown(x) + " is not a finite number";
 }
 
-// What a refused binary file may be instead, by its first bytes: said only beside a refusal (a
-// raw float file may start with any bytes), where "value 1 is 1.07e+202" sent a capture given
-// --input f64 nowhere (a review).
+// What a refused raw file may be instead, by its first bytes: said only beside a refusal (a raw
+// float file may start with any two bytes; a capture is refused at its magic before, below).
 std::string another_format(std::string_view head) {
-  if (head.starts_with(std::string_view(capture::kMagic, sizeof capture::kMagic)))
-    return "; the file starts as a capture file (rig.capture/1): read it with --input capture";
-  if (head.starts_with("\x1F\x8B")) return "; the file starts as gzip does: decompress it first (zcat FILE > record)";
-  return "";
+  return head.starts_with("\x1F\x8B") ? "; the file starts as gzip does: decompress it first (zcat FILE > record)" : "";
 }
 std::string head_of(int fd) {
   char b[8] = {};
@@ -212,9 +208,7 @@ std::vector<double> read_f32(const std::string& path) {
   std::vector<double> v(raw.begin(), raw.end());  // every float is a double exactly
   if (const auto bad = an::first_unusable(v))
     throw InputError(path + ": value " + std::to_string(*bad) + " (counted from 0; byte " + std::to_string(*bad * 4) + ") " +
-                     refusal(v[*bad]) +
-                     another_format(std::string_view(reinterpret_cast<const char*>(raw.data()),
-                                                     std::min<std::size_t>(8, raw.size() * 4))));
+                     refusal(v[*bad]) + another_format(first));
   return v;
 }
 

@@ -2132,8 +2132,9 @@ TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optio
   TakenFolder taken;
   taken.made_here = a.out.empty();
   if (a.out.empty()) a.out = default_run_folder(folder_name_part(a.serial.empty() ? p.name : a.serial));
-  refuse_an_unwritable_place(a.out, a.resume.empty() ? "--out" : "--resume");
-  (void)check_room(a.out, a.resume.empty() ? "--out" : "--resume", p, !a.resume.empty());
+  const char* option = a.resume.empty() ? "--out" : "--resume";
+  refuse_an_unwritable_place(a.out, option);
+  (void)check_room(a.out, option, p, !a.resume.empty());
   // Before the operator is asked anything, and before prepare_run_folder's write probe touches
   // the earlier run's folder (nor a folder another run holds: its lock is taken first).
   if (a.resume.empty()) {
@@ -2150,7 +2151,7 @@ TakenFolder take_the_folder(RunArgs& a, const acceptance::Profile& p, std::optio
     }
     refuse_a_folder_a_new_run_cannot_own(a.out, "--out", sealed, taken.taken_over);
   }
-  prepare_run_folder(a.out, a.resume.empty() ? "--out" : "--resume");
+  prepare_run_folder(a.out, option);
   if (a.resume.empty()) {
     if (!folder_lock) folder_lock.emplace(a.out, "--out " + a.out);
     refuse_an_earlier_run(a.out, p.source);  // again, now that no other run can start here: one may have ended since

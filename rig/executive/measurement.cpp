@@ -74,9 +74,9 @@ nlohmann::ordered_json to_json(const Measurement& m) {
   if (!m.description.empty()) j["description"] = m.description;
   // A class index is an integer (docs/contracts.md): 2, not 2.0, which a reader typed for an
   // integer (Go's encoding/json into int) refuses (an automation engineer's review).
-  if (m.name == "accuracy_class" && j["value"].is_number_float() && j["value"].get<double>() == std::floor(j["value"].get<double>()) &&
-      std::abs(j["value"].get<double>()) < 1e9)
-    j["value"] = static_cast<std::int64_t>(j["value"].get<double>());
+  if (m.name == "accuracy_class" && m.value && std::isfinite(*m.value) && *m.value == std::floor(*m.value) &&
+      std::abs(*m.value) < 1e9)
+    j["value"] = static_cast<std::int64_t>(*m.value);
   return j;
 }
 
